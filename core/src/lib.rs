@@ -1,0 +1,41 @@
+//! # halfray-core
+//!
+//! A `#![no_std]`, allocation-free ray/mesh geometry core on `f32`.
+//!
+//! * [`ray`]: rays with a half-open parametric interval `(t_min, t_max]`.
+//! * [`float`]: the floating-point error model (`gamma(n)`) every tolerance derives from.
+//! * [`tolerance`]: the named, documented tolerances of the intersectors that need one.
+//! * [`hit`]: the hit record shared by every primitive, with a conservative error bound on the
+//!   hit point, and [`hit::spawn_ray`] for self-intersection-free secondary rays.
+//! * [`aabb`]: axis-aligned boxes and the robust (Ize 2013) slab test.
+//! * [`triangle`]: ray–triangle tests behind one trait, the watertight one by default.
+//! * [`plane`], [`sphere`], [`quadric`], [`polygon`], [`transform`]: the other primitives.
+//! * [`bvh`]: a binned-SAH BVH built into caller storage, traversed with a fixed stack.
+//! * [`halfedge`]: fixed-capacity half-edge mesh arenas and their editing operations.
+//!
+//! Nothing in this crate panics on any input, NaN and infinity included: intersectors are
+//! total functions that report "no hit" for invalid rays, and constructors that can reject
+//! input return a typed error ([`error`]).
+#![no_std]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+#[cfg(test)]
+extern crate std;
+
+pub mod aabb;
+pub mod bvh;
+pub mod error;
+pub mod float;
+pub mod halfedge;
+pub mod hit;
+pub mod plane;
+pub mod polygon;
+pub mod quadric;
+pub mod ray;
+pub mod sphere;
+pub mod tolerance;
+pub mod transform;
+pub mod triangle;
+
+pub use glam::{Mat3, Mat4, Vec2, Vec3};
