@@ -1,1 +1,111 @@
-//! TODO
+//! The floating-point error model every bound in halfray derives from.
+//!
+//! We follow the standard model of IEEE-754 arithmetic (Higham; pbrt-v4 §6.8): for each basic
+//! operation `fl(a ∘ b) = (a ∘ b)(1 + δ)` with `|δ| ≤ u`, where `u` is the unit roundoff. A
+//! chain of `n` roundings is bounded by `gamma(n) = n·u / (1 − n·u)`.
+//!
+//! Nothing here is a tuned tolerance: each value is a property of binary32 arithmetic.
+
+/// Unit roundoff of `f32`: `u = 2⁻²⁴` (half of [`f32::EPSILON`]), unitless (relative).
+pub const F32_UNIT_ROUNDOFF: f32 = 1.0 / 16_777_216.0;
+
+/// Unit roundoff of `f64`: `2⁻⁵³`, unitless (relative).
+pub const F64_UNIT_ROUNDOFF: f64 = 1.0 / 9_007_199_254_740_992.0;
+
+/// `gamma(n) = n·u / (1 − n·u)` for `f32`: the relative error bound of `n` successive
+/// roundings. Unitless. Valid for `n·u < 1`, which holds for every `n` used in this crate.
+#[inline]
+#[must_use]
+pub const fn gamma(n: u32) -> f32 {
+    let nu = n as f32 * F32_UNIT_ROUNDOFF;
+    nu / (1.0 - nu)
+}
+
+/// `gamma(n)` for `f64` arithmetic, relative.
+#[inline]
+#[must_use]
+pub const fn gamma_f64(n: u32) -> f64 {
+    let nu = n as f64 * F64_UNIT_ROUNDOFF;
+    nu / (1.0 - nu)
+}
+
+/// The next representable `f32` towards `+∞` (`+∞` and NaN are returned unchanged, `-0.0`
+/// becomes the smallest positive subnormal).
+#[inline]
+#[must_use]
+pub fn next_up(x: f32) -> f32 {
+    x.next_up()
+}
+
+/// The next representable `f32` towards `−∞`.
+#[inline]
+#[must_use]
+pub fn next_down(x: f32) -> f32 {
+    x.next_down()
+}
+
+/// `true` when all three components are finite (neither NaN nor ±∞).
+#[inline]
+#[must_use]
+pub fn is_finite3(v: glam::Vec3) -> bool {
+    v.x.is_finite() && v.y.is_finite() && v.z.is_finite()
+}
+
+/// Square root usable in `no_std` (through `libm`).
+#[inline]
+#[must_use]
+pub fn sqrt(x: f32) -> f32 {
+    libm::sqrtf(x)
+}
+
+/// Square root of an `f64`, usable in `no_std`.
+#[inline]
+#[must_use]
+pub fn sqrt_f64(x: f64) -> f64 {
+    libm::sqrt(x)
+}
+
+/// `a·b − c·d` evaluated with one rounding of exact `f64` products of `f32` inputs: the sign of
+/// the result is the exact sign of `a·b − c·d` for every finite `f32` input (each product of two
+/// `f32` fits exactly in an `f64`), and it is zero only when the exact value is zero.
+///
+/// This is the orientation predicate of the watertight triangle and polygon tests. It must never
+/// be written with a fused multiply-add (see `docs/robustness` in the README): fusing breaks the
+/// antisymmetry `e(a, b) = −e(b, a)` that makes shared edges consistent.
+#[inline]
+#[must_use]
+pub fn diff_of_products_exact_sign(a: f32, b: f32, c: f32, d: f32) -> f64 {
+    (a as f64) * (b as f64) - (c as f64) * (d as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gamma_matches_definition() {
+        let u = F32_UNIT_ROUNDOFF as f64;
+        for n in [1u32, 3, 5, 7, 16] {
+            let expect = n as f64 * u / (1.0 - n as f64 * u);
+            assert!(
+                ((gamma(n) as f64) - expect).abs() <= expect * 1e-6,
+                "n = {n}"
+            );
+        }
+        assert_eq!(F32_UNIT_ROUNDOFF, f32::EPSILON / 2.0);
+    }
+
+    #[test]
+    fn exact_sign_predicate_is_antisymmetric_and_exact() {
+        // 1 + 2^-23 squared minus 1 + 2^-22 is 2^-46 exactly, lost entirely in f32.
+        let a = 1.0 + f32::EPSILON;
+        let f32_result = a * a - (1.0 + 2.0 * f32::EPSILON);
+        assert_eq!(f32_result, 0.0);
+        let exact = diff_of_products_exact_sign(a, a, 1.0 + 2.0 * f32::EPSILON, 1.0);
+        assert_eq!(exact, 2f64.powi(-46));
+        assert_eq!(
+            diff_of_products_exact_sign(1.5, 2.25, 3.0, 7.0),
+            -diff_of_products_exact_sign(3.0, 7.0, 1.5, 2.25)
+        );
+    }
+}

@@ -1,1 +1,131 @@
-//! TODO
+//! The hit record shared by every primitive, and spawning secondary rays from it.
+//!
+//! Secondary rays (shadow, reflection, refraction) start at a hit point that is only known up
+//! to rounding error. Instead of a global scene epsilon, every [`Hit`] carries a conservative
+//! per-component bound `point_error` on `|point − exact surface point|`, and [`spawn_ray`]
+//! moves the origin along the geometric normal just far enough to leave that error box
+//! (pbrt-v4's `OffsetRayOrigin`), then one more ulp per component to cover the rounding of the
+//! move itself. The offset scales with the magnitude of the coordinates, so it is correct at
+//! `|p| = 1` and at `|p| = 1e7` alike.
+
+use crate::ray::Ray;
+use glam::{Vec2, Vec3};
+
+/// Where a ray meets a primitive.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit, inside the ray's `(t_min, t_max]`.
+    pub t: f32,
+    /// Hit point, reconstructed on the primitive (barycentric interpolation for triangles,
+    /// re-projection for quadrics), not `origin + t·direction`.
+    pub point: Vec3,
+    /// Conservative absolute error bound on each component of `point`, world units.
+    pub point_error: Vec3,
+    /// Unit geometric normal. For triangles it is `(v1 − v0) × (v2 − v0)` normalised
+    /// (counter-clockwise vertices face the viewer); for closed surfaces it points outward.
+    /// It is *not* flipped towards the ray: see `front_face`.
+    pub normal: Vec3,
+    /// Surface parameters: barycentrics `(b1, b2)` of `v1`, `v2` for triangles (`b0 = 1 − b1 − b2`),
+    /// otherwise primitive-specific (documented by each intersector).
+    pub uv: Vec2,
+    /// `true` when the ray arrives against the normal (`direction · normal < 0`).
+    pub front_face: bool,
+}
+
+impl Hit {
+    /// The normal facing the incoming ray (flipped when the back face was hit).
+    #[inline]
+    #[must_use]
+    pub fn facing_normal(&self) -> Vec3 {
+        if self.front_face {
+            self.normal
+        } else {
+            -self.normal
+        }
+    }
+
+    /// The origin for a ray leaving this hit in direction `w`: see [`offset_ray_origin`].
+    #[inline]
+    #[must_use]
+    pub fn spawn_origin(&self, w: Vec3) -> Vec3 {
+        offset_ray_origin(self.point, self.point_error, self.normal, w)
+    }
+}
+
+/// Moves `p` off the surface with normal `n` to the side `w` points to, by the distance
+/// `|n|·p_error` (the extent of the error box along `n`), then pushes each moved component one
+/// ulp further away from `p`.
+///
+/// Contract: if the exact surface point lies in the box `p ± p_error` and the surface is locally
+/// the plane with normal `n`, the returned point lies strictly on `w`'s side of that plane.
+/// `n` need not be unit length; a zero or non-finite `n` leaves `p` unchanged except for the
+/// one-ulp push.
+#[must_use]
+pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
+    let d = n.abs().dot(p_error);
+    let mut offset = n * d;
+    if w.dot(n) < 0.0 {
+        offset = -offset;
+    }
+    let mut po = p + offset;
+    for i in 0..3 {
+        if offset[i] > 0.0 {
+            po[i] = po[i].next_up();
+        } else if offset[i] < 0.0 {
+            po[i] = po[i].next_down();
+        }
+    }
+    po
+}
+
+/// A secondary ray leaving `hit` in direction `w` over `(0, +∞]`, with its origin offset by
+/// the hit's error bound ([`offset_ray_origin`]). Reflection rays pass the reflected direction,
+/// refraction rays the transmitted one (the offset then goes to the far side).
+#[must_use]
+pub fn spawn_ray(hit: &Hit, w: Vec3) -> Ray {
+    Ray::new(hit.spawn_origin(w), w)
+}
+
+/// A shadow ray from `hit` towards the point `target` (a light position), over `(0, 1]` with
+/// direction `target − origin`: anything strictly between the offset origin and the target,
+/// or exactly at the target, blocks it. For a target that is itself a surface point, offset it
+/// first with [`offset_ray_origin`] so that its own surface does not block the ray.
+#[must_use]
+pub fn spawn_ray_to(hit: &Hit, target: Vec3) -> Ray {
+    let origin = hit.spawn_origin(target - hit.point);
+    Ray::with_interval(origin, target - origin, 0.0, 1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn offset_leaves_the_error_box_on_the_requested_side() {
+        let p = Vec3::new(1.0e5, 2.0, -3.0);
+        let err = Vec3::splat(0.01);
+        let n = Vec3::new(0.0, 1.0, 0.0);
+        let up = offset_ray_origin(p, err, n, Vec3::new(0.3, 1.0, 0.0));
+        let down = offset_ray_origin(p, err, n, Vec3::new(0.3, -1.0, 0.0));
+        assert!(up.y > p.y + err.y, "{up:?}");
+        assert!(down.y < p.y - err.y, "{down:?}");
+        assert_eq!(up.x, p.x);
+        assert_eq!(up.z, p.z);
+    }
+
+    #[test]
+    fn spawn_ray_to_spans_zero_to_one() {
+        let hit = Hit {
+            t: 1.0,
+            point: Vec3::ZERO,
+            point_error: Vec3::ZERO,
+            normal: Vec3::Z,
+            uv: Vec2::ZERO,
+            front_face: true,
+        };
+        let r = spawn_ray_to(&hit, Vec3::new(0.0, 0.0, 5.0));
+        assert_eq!(r.t_min, 0.0);
+        assert_eq!(r.t_max, 1.0);
+        assert_eq!(r.at(1.0), Vec3::new(0.0, 0.0, 5.0));
+    }
+}

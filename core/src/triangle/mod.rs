@@ -1,1 +1,247 @@
-//! TODO
+//! Ray–triangle intersection: several algorithms behind one trait, so they can be swapped in
+//! the BVH and compared in the accuracy benchmark.
+//!
+//! | type | name | edges | epsilon |
+//! |---|---|---|---|
+//! | [`Watertight`] (default) | `watertight` | closed, exact signs (`f64` products) | none |
+//! | [`WatertightF32`] | `watertight-f32` | closed, `f32` signs, exact `f64` recomputation of zeros | none |
+//! | [`MollerTrumbore`] | `moller-trumbore` / `moller-trumbore-noeps` | not watertight | [`crate::tolerance::MOLLER_TRUMBORE_DET_EPSILON`] or 0 |
+//! | [`Cramer`] | `cramer` | not watertight | none (`det = 0` only) |
+//! | [`F64Reference`] | `f64-reference` | closed, all in `f64` | none |
+//!
+//! Common contract of every variant:
+//! * A hit has `t` in the ray's `(t_min, t_max]` and barycentrics `(b1, b2)` of `v1`, `v2`
+//!   (`b0 = 1 − b1 − b2`), each in `[0, 1]` up to [`crate::tolerance::BARYCENTRIC_SLACK`].
+//! * Rays lying in the triangle's plane, degenerate (zero-area) triangles, invalid rays
+//!   ([`Ray::validate`]) and non-finite vertices give no hit. No input panics.
+//! * Both faces are hit; [`TriangleHit::front_face`] tells which one
+//!   (counter-clockwise `v0, v1, v2` seen from the ray's origin is the front).
+//!
+//! **Watertightness** ([`Watertight`], [`WatertightF32`], [`F64Reference`]): on a mesh with
+//! shared, bit-identical vertices, a ray crossing the surface through an edge or vertex hits at
+//! least one of the incident triangles, never none (edges are closed; possibly several hit at
+//! the same `t`). The proof needs the edge functions' signs to be exact and the per-vertex shear
+//! to be a deterministic function of the vertex: never evaluate them with a fused multiply-add.
+
+mod cramer;
+mod moller_trumbore;
+mod reference;
+mod watertight;
+
+pub use cramer::Cramer;
+pub use moller_trumbore::MollerTrumbore;
+pub use reference::F64Reference;
+pub use watertight::{Watertight, WatertightF32, WatertightRay};
+
+use crate::float::gamma;
+use crate::hit::Hit;
+use crate::ray::Ray;
+use glam::{Vec2, Vec3};
+
+/// The result of a ray–triangle test.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleHit {
+    /// Ray parameter, in `(t_min, t_max]`.
+    pub t: f32,
+    /// Barycentric weight of `v1`.
+    pub b1: f32,
+    /// Barycentric weight of `v2`.
+    pub b2: f32,
+    /// Unnormalised geometric normal `(v1 − v0) × (v2 − v0)` (Embree's `Ng` convention).
+    pub ng: Vec3,
+    /// `true` when the ray arrives against `ng` (the counter-clockwise side).
+    pub front_face: bool,
+}
+
+impl TriangleHit {
+    /// Barycentric weight of `v0`.
+    #[inline]
+    #[must_use]
+    pub fn b0(&self) -> f32 {
+        1.0 - self.b1 - self.b2
+    }
+
+    /// The full [`Hit`] record: the point reconstructed by barycentric interpolation (not
+    /// `o + t·d`) with pbrt-v4's bound `gamma(7)·Σ|b_i·v_i|` per component, and the unit normal.
+    #[must_use]
+    pub fn to_hit(&self, v: &[Vec3; 3]) -> Hit {
+        let b0 = self.b0();
+        let (p0, p1, p2) = (v[0] * b0, v[1] * self.b1, v[2] * self.b2);
+        let point = p0 + p1 + p2;
+        let point_error = (p0.abs() + p1.abs() + p2.abs()) * gamma(7);
+        Hit {
+            t: self.t,
+            point,
+            point_error,
+            normal: self.ng.normalize_or_zero(),
+            uv: Vec2::new(self.b1, self.b2),
+            front_face: self.front_face,
+        }
+    }
+}
+
+/// A ray–triangle intersection algorithm.
+///
+/// `prepare` does the per-ray work once (for example the watertight test's axis permutation and
+/// shear); `intersect_prepared` is then called per triangle, with the current interval taken
+/// from `ray` (BVH traversal shrinks `ray.t_max` as it finds closer hits).
+pub trait TriangleIntersector: Copy + Send + Sync {
+    /// Per-ray precomputed data.
+    type Prepared: Copy;
+
+    /// The variant's name, as used on the command line and in reports.
+    fn name(&self) -> &'static str;
+
+    /// Per-ray setup; `None` when the ray is invalid ([`Ray::validate`]).
+    fn prepare(&self, ray: &Ray) -> Option<Self::Prepared>;
+
+    /// Tests one triangle against a prepared ray, over `(ray.t_min, ray.t_max]`.
+    fn intersect_prepared(
+        &self,
+        pre: &Self::Prepared,
+        ray: &Ray,
+        v: &[Vec3; 3],
+    ) -> Option<TriangleHit>;
+
+    /// Convenience: [`TriangleIntersector::prepare`] then
+    /// [`TriangleIntersector::intersect_prepared`].
+    #[inline]
+    fn intersect(&self, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
+        let pre = self.prepare(ray)?;
+        self.intersect_prepared(&pre, ray, v)
+    }
+}
+
+/// Every variant by its command-line name, for dynamic selection in tools and benchmarks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TriangleVariant {
+    /// [`Watertight`] (`watertight`).
+    Watertight,
+    /// [`WatertightF32`] (`watertight-f32`).
+    WatertightF32,
+    /// [`MollerTrumbore::CLASSIC`] (`moller-trumbore`).
+    MollerTrumbore,
+    /// [`MollerTrumbore::NO_EPSILON`] (`moller-trumbore-noeps`).
+    MollerTrumboreNoEps,
+    /// [`Cramer`] (`cramer`).
+    Cramer,
+    /// [`F64Reference`] (`f64-reference`).
+    F64Reference,
+}
+
+impl TriangleVariant {
+    /// All variants, default first.
+    pub const ALL: [Self; 6] = [
+        Self::Watertight,
+        Self::WatertightF32,
+        Self::MollerTrumbore,
+        Self::MollerTrumboreNoEps,
+        Self::Cramer,
+        Self::F64Reference,
+    ];
+
+    /// The command-line name.
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Watertight => "watertight",
+            Self::WatertightF32 => "watertight-f32",
+            Self::MollerTrumbore => "moller-trumbore",
+            Self::MollerTrumboreNoEps => "moller-trumbore-noeps",
+            Self::Cramer => "cramer",
+            Self::F64Reference => "f64-reference",
+        }
+    }
+
+    /// Parses a command-line name.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|v| v.name() == name)
+    }
+
+    /// `true` for the variants with the watertight guarantee.
+    #[must_use]
+    pub const fn is_watertight(self) -> bool {
+        matches!(
+            self,
+            Self::Watertight | Self::WatertightF32 | Self::F64Reference
+        )
+    }
+
+    /// Tests one triangle with this variant (dispatching per call; hot loops should be generic
+    /// over [`TriangleIntersector`] instead).
+    #[must_use]
+    pub fn intersect(self, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
+        match self {
+            Self::Watertight => Watertight.intersect(ray, v),
+            Self::WatertightF32 => WatertightF32.intersect(ray, v),
+            Self::MollerTrumbore => MollerTrumbore::CLASSIC.intersect(ray, v),
+            Self::MollerTrumboreNoEps => MollerTrumbore::NO_EPSILON.intersect(ray, v),
+            Self::Cramer => Cramer.intersect(ray, v),
+            Self::F64Reference => F64Reference.intersect(ray, v),
+        }
+    }
+}
+
+/// Checks the common post-conditions and builds the hit; shared by the `f32` variants.
+#[inline]
+fn finish(ray: &Ray, t: f32, b1: f32, b2: f32, ng: Vec3, front_face: bool) -> Option<TriangleHit> {
+    (ray.contains(t) && b1.is_finite() && b2.is_finite()).then_some(TriangleHit {
+        t,
+        b1,
+        b2,
+        ng,
+        front_face,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri() -> [Vec3; 3] {
+        [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ]
+    }
+
+    #[test]
+    fn every_variant_agrees_on_a_plain_hit() {
+        let ray = Ray::new(Vec3::new(0.25, 0.5, 5.0), Vec3::new(0.0, 0.0, -1.0));
+        for v in TriangleVariant::ALL {
+            let h = v
+                .intersect(&ray, &tri())
+                .unwrap_or_else(|| panic!("{}", v.name()));
+            assert!((h.t - 5.0).abs() < 1e-6, "{}: {h:?}", v.name());
+            assert!(
+                (h.b1 - 0.25).abs() < 1e-6 && (h.b2 - 0.5).abs() < 1e-6,
+                "{}",
+                v.name()
+            );
+            assert!(
+                h.front_face,
+                "{}: ray against +z normal is the front",
+                v.name()
+            );
+            assert_eq!(h.ng, Vec3::Z, "{}", v.name());
+            let back = Ray::new(Vec3::new(0.25, 0.5, -5.0), Vec3::Z);
+            assert!(
+                !v.intersect(&back, &tri()).unwrap().front_face,
+                "{}",
+                v.name()
+            );
+            assert_eq!(TriangleVariant::from_name(v.name()), Some(v));
+        }
+    }
+
+    #[test]
+    fn to_hit_reconstructs_point_with_error_bound() {
+        let ray = Ray::new(Vec3::new(0.25, 0.5, 5.0), Vec3::new(0.0, 0.0, -1.0));
+        let h = Watertight.intersect(&ray, &tri()).unwrap().to_hit(&tri());
+        assert!((h.point - Vec3::new(0.25, 0.5, 0.0)).abs().max_element() <= 1e-7);
+        assert!(h.point_error.max_element() > 0.0 && h.point_error.max_element() < 1e-6);
+        assert_eq!(h.normal, Vec3::Z);
+    }
+}

@@ -1,0 +1,77 @@
+//! Möller–Trumbore 1997, in `f32`.
+
+use super::{TriangleHit, TriangleIntersector, finish};
+use crate::ray::Ray;
+use crate::tolerance::MOLLER_TRUMBORE_DET_EPSILON;
+use glam::Vec3;
+
+/// Möller–Trumbore ("Fast, minimum storage ray/triangle intersection", 1997).
+///
+/// Valid hit: `|det| > det_epsilon`, `t ∈ (t_min, t_max]`, `b1 ≥ 0`, `b2 ≥ 0`, `b1 + b2 ≤ 1`.
+/// **Not watertight:** the third edge is tested as a rounded sum and neighbouring triangles
+/// evaluate a shared edge from different base vertices, so rays through shared edges and
+/// vertices can miss both triangles (the test suite counts these leaks).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MollerTrumbore {
+    /// Determinant threshold: `|det| ≤ det_epsilon` means "parallel or degenerate". Absolute,
+    /// in length² × |direction|. `0.0` rejects only an exactly zero (or NaN) determinant.
+    pub det_epsilon: f32,
+}
+
+impl MollerTrumbore {
+    /// The paper's variant, with [`MOLLER_TRUMBORE_DET_EPSILON`] (`moller-trumbore`).
+    pub const CLASSIC: Self = Self {
+        det_epsilon: MOLLER_TRUMBORE_DET_EPSILON,
+    };
+    /// No epsilon: only `det = 0` is rejected (`moller-trumbore-noeps`).
+    pub const NO_EPSILON: Self = Self { det_epsilon: 0.0 };
+}
+
+impl Default for MollerTrumbore {
+    fn default() -> Self {
+        Self::CLASSIC
+    }
+}
+
+impl TriangleIntersector for MollerTrumbore {
+    type Prepared = ();
+
+    fn name(&self) -> &'static str {
+        if self.det_epsilon > 0.0 {
+            "moller-trumbore"
+        } else {
+            "moller-trumbore-noeps"
+        }
+    }
+
+    #[inline]
+    fn prepare(&self, ray: &Ray) -> Option<()> {
+        ray.is_valid().then_some(())
+    }
+
+    #[inline]
+    fn intersect_prepared(&self, _: &(), ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
+        let e1 = v[1] - v[0];
+        let e2 = v[2] - v[0];
+        let p = ray.direction.cross(e2);
+        let det = e1.dot(p);
+        // Negated comparison so that a NaN determinant is rejected too.
+        if !(det.abs() > self.det_epsilon) {
+            return None;
+        }
+        let inv_det = 1.0 / det;
+        let s = ray.origin - v[0];
+        let b1 = s.dot(p) * inv_det;
+        if !(0.0..=1.0).contains(&b1) {
+            return None;
+        }
+        let q = s.cross(e1);
+        let b2 = ray.direction.dot(q) * inv_det;
+        if !(b2 >= 0.0 && b1 + b2 <= 1.0) {
+            return None;
+        }
+        let t = e2.dot(q) * inv_det;
+        // det = e1·(d × e2) = −d·(e1 × e2): positive when d opposes ng.
+        finish(ray, t, b1, b2, e1.cross(e2), det > 0.0)
+    }
+}
