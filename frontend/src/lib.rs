@@ -1,4 +1,18 @@
-//! halfray frontend library: everything the `halfray` binary does, callable from tests.
+//! # halfray (frontend)
+//!
+//! Everything the `halfray` binary does, as a library so that tests can call it:
+//! scene files ([`scene`]), the renderer ([`render`]), mesh tools ([`mesh_tools`]),
+//! benchmarks ([`bench`]) and the Embree cross-check ([`crosscheck`]).
 
+pub mod atomic;
+pub mod bench;
+pub mod crosscheck;
 #[cfg(feature = "embree")]
 pub mod embree;
+pub mod error;
+pub mod mesh_tools;
+pub mod obj;
+pub mod render;
+pub mod scene;
+
+pub use error::{Error, Location, Result};

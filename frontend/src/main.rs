@@ -1,1 +1,49 @@
-fn main() {}
+//! The `halfray` command line. Exit codes: 0 success, 1 error in input data or I/O,
+//! 2 usage error, 3 cross-check found more genuine mismatches than allowed.
+
+use clap::{Parser, Subcommand};
+use halfray::{bench, crosscheck, mesh_tools, render};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "halfray",
+    version,
+    about = "Watertight ray/mesh geometry: render scenes, edit meshes, benchmark, cross-check against Embree",
+    after_help = "Exit codes: 0 success, 1 bad input or I/O error, 2 usage error, 3 cross-check mismatches."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene file to PNG.
+    Render(render::RenderArgs),
+    /// Half-edge mesh tools.
+    #[command(subcommand)]
+    Mesh(mesh_tools::MeshCommand),
+    /// Benchmarks.
+    #[command(subcommand)]
+    Bench(bench::BenchCommand),
+    /// Compare halfray's hits with Embree 4, ray by ray.
+    Crosscheck(crosscheck::CrosscheckArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => render::run(&args),
+        Command::Mesh(cmd) => mesh_tools::run(&cmd),
+        Command::Bench(cmd) => bench::run(&cmd),
+        Command::Crosscheck(args) => crosscheck::run(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(e.exit_code())
+        }
+    }
+}

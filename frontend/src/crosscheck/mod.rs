@@ -1,0 +1,16 @@
+//! `halfray crosscheck` (in progress).
+
+use crate::error::{Error, Result};
+use std::path::PathBuf;
+
+/// Arguments of `halfray crosscheck`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct CrosscheckArgs {
+    /// Mesh to cross-check.
+    pub mesh: PathBuf,
+}
+
+/// Runs the cross-check.
+pub fn run(_args: &CrosscheckArgs) -> Result<()> {
+    Err(Error::Other("crosscheck: in progress".into()))
+}
