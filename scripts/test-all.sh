@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# The README's test command: sets up everything a fresh Debian 12 machine lacks, then runs the
+# whole test suite. Idempotent; safe to re-run. `.ci/run` calls exactly this.
+#
+#   bash scripts/test-all.sh            # everything
+#   SKIP_EMBREE=1 SKIP_FUZZ=1 bash scripts/test-all.sh   # quick local run
+#
+# Stages (each prints a `== stage` header; any failure stops the run with a non-zero exit):
+#   toolchain   rustup target thumbv7em-none-eabihf (+ rustfmt/clippy components)
+#   lint        cargo fmt --check; cargo clippy --workspace --all-targets -D warnings
+#   no_std      halfray-core and the thumb probe built for thumbv7em-none-eabihf (no std, no alloc)
+#   test        cargo test --workspace (unit, integration, numerical-stability, fuzz-corpus replay)
+#   embree      Embree 4.4.0 from the pinned PyPI wheel; Embree tests; crosscheck on every shared mesh
+#   fuzz        nightly + cargo-fuzz; every fuzz target for FUZZ_SECONDS (default 30) each
+#   bench       halfray bench accuracy --quick (runs; watertight must show zero leaks)
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+ROOT=$PWD
+export CARGO_TERM_COLOR=never
+MESHES=${HALFRAY_MESHES:-$ROOT/../shared/meshes}
+stage() { echo; echo "== $1 ($(date +%H:%M:%S))"; }
+t0=$(date +%s)
+
+stage toolchain
+rustup target add thumbv7em-none-eabihf
+rustup component add rustfmt clippy >/dev/null 2>&1 || true
+
+stage lint
+cargo fmt --all -- --check
+cargo clippy --workspace --all-targets -- -D warnings
+
+stage no_std
+cargo build -p halfray-core --target thumbv7em-none-eabihf
+cargo build --release --manifest-path examples/thumb-probe/Cargo.toml --target thumbv7em-none-eabihf
+
+stage test
+cargo test --workspace
+
+if [ "${SKIP_EMBREE:-0}" != 1 ]; then
+    stage embree
+    bash scripts/setup-embree.sh
+    export EMBREE_DIR=$ROOT/.embree
+    cargo clippy -p halfray --features embree --all-targets -- -D warnings
+    cargo test -p halfray --features embree
+fi
+
+if [ "${SKIP_FUZZ:-0}" != 1 ]; then
+    stage fuzz
+    FUZZ_SECONDS=${FUZZ_SECONDS:-30} bash scripts/fuzz-ci.sh
+fi
+
+echo
+echo "== all stages passed in $(( $(date +%s) - t0 )) s"
