@@ -40,4 +40,8 @@ pub mod tolerance;
 pub mod transform;
 pub mod triangle;
 
+pub use aabb::Aabb;
+pub use error::{GeometryError, RayError};
 pub use glam::{Mat3, Mat4, Vec2, Vec3};
+pub use hit::{Hit, spawn_ray, spawn_ray_to};
+pub use ray::Ray;
