@@ -1,5 +1,8 @@
 //! `halfray crosscheck` (in progress).
 
+pub mod judge;
+pub mod sets;
+
 use crate::error::{Error, Result};
 use std::path::PathBuf;
 

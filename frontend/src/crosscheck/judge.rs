@@ -1,0 +1,233 @@
+//! Judging a disagreement between halfray and Embree against an `f64` reference, never by
+//! trusting either side (robustness brief, section 5).
+
+use crate::obj::ObjMesh;
+use halfray_core::Ray;
+
+/// One side's closest-hit answer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Answer {
+    /// Primitive (triangle index).
+    pub prim: u32,
+    /// Ray parameter.
+    pub t: f32,
+    /// Barycentric of `v1` (Embree's `u`).
+    pub u: f32,
+    /// Barycentric of `v2` (Embree's `v`).
+    pub v: f32,
+}
+
+/// How one ray's two answers relate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// Same hit/miss, same primitive, `t` within [`t_tolerance`].
+    Agree,
+    /// Different primitives at the same `t` (a shared edge or vertex, or coplanar duplicates):
+    /// both answers are valid.
+    Tie,
+    /// The difference is inside the reference's own uncertainty: the contested hit lies within
+    /// [`boundary_margin`] of a triangle's edge, or `t` differs by less than the grazing-scaled
+    /// tolerance.
+    WithinTolerance,
+    /// Embree contradicts the reference beyond the bounds (halfray agrees with it).
+    EmbreeWrong,
+    /// halfray contradicts the reference beyond the bounds: a genuine mismatch.
+    Genuine,
+}
+
+/// Relative `t` agreement required of two `f32` answers, in ulps (`2⁻²³`) of the
+/// magnitude the hit is computed from. Embree uses an approximate reciprocal refined by one
+/// Newton step (≈ 2 ulps), Möller's or Plücker's algebra (≈ 10–100 ulps in the tails, robustness
+/// brief 4.3) and possibly FMA; 64 ulps covers these for non-grazing rays.
+pub const T_TOLERANCE_ULPS: f64 = 64.0;
+
+/// Floor on `|cos θ|` (ray against face normal) when scaling tolerances for grazing rays:
+/// the `t` error grows as `1/|cos θ|`; below 1e-4 (0.006° from the plane) we stop trusting
+/// either side and the tolerance stops growing.
+pub const COS_FLOOR: f64 = 1.0e-4;
+
+/// Distance from an edge, in ulps (`2⁻²³`) of the coordinates' magnitude divided by the
+/// triangle's smallest altitude, below which a point counts as "on the boundary": each side's
+/// edge decision may legitimately differ there. The `f32` translation and shear of a vertex
+/// each round (≈ 3 roundings, robustness brief A4), and Embree's Plücker/Möller algebra adds a
+/// few more; 64 ulps covers both with margin.
+pub const BOUNDARY_ULPS: f64 = 64.0;
+
+const EPS: f64 = f32::EPSILON as f64;
+
+/// Signed barycentrics `(b0, b1, b2)` and `t` of the intersection of the ray's line with the
+/// triangle's plane, in `f64` from the `f32` inputs; `None` when the ray is parallel to the
+/// plane or the triangle is degenerate. Negative barycentrics mean outside.
+pub fn plane_barycentrics(ray: &Ray, tri: &[glam::Vec3; 3]) -> Option<(f64, [f64; 3], f64)> {
+    let o = ray.origin.as_dvec3();
+    let d = ray.direction.as_dvec3();
+    let [a, b, c] = tri.map(|p| p.as_dvec3());
+    let (e1, e2) = (b - a, c - a);
+    let n = e1.cross(e2);
+    let denom = d.dot(n);
+    if denom == 0.0 || !denom.is_finite() {
+        return None;
+    }
+    let s = o - a;
+    let t = -s.dot(n) / denom;
+    let p = o + d * t;
+    let area2 = n.length_squared();
+    let b1 = (p - a).cross(e2).dot(n) / area2;
+    let b2 = e1.cross(p - a).dot(n) / area2;
+    let cos = (denom / (d.length() * n.length())).abs();
+    Some((t, [1.0 - b1 - b2, b1, b2], cos))
+}
+
+/// The boundary margin of a triangle for a ray: see [`BOUNDARY_ULPS`].
+pub fn boundary_margin(ray: &Ray, tri: &[glam::Vec3; 3]) -> f64 {
+    let o = ray.origin.as_dvec3();
+    let [a, b, c] = tri.map(|p| p.as_dvec3());
+    let scale = [a - o, b - o, c - o]
+        .iter()
+        .map(|v| v.abs().max_element())
+        .fold(0.0, f64::max);
+    let n2 = (b - a).cross(c - a).length();
+    let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+    let min_altitude = n2 / longest.max(f64::MIN_POSITIVE);
+    BOUNDARY_ULPS * EPS * scale / min_altitude.max(f64::MIN_POSITIVE)
+}
+
+/// The `t` tolerance for a hit at `t` on a face at angle `cos` to the ray: see
+/// [`T_TOLERANCE_ULPS`], [`COS_FLOOR`]. Absolute, in ray-parameter units.
+pub fn t_tolerance(ray: &Ray, t: f64, cos: f64) -> f64 {
+    let d = ray.direction.as_dvec3().length().max(f64::MIN_POSITIVE);
+    let o = ray.origin.as_dvec3().abs().max_element();
+    T_TOLERANCE_ULPS * EPS * (t.abs() + o / d) / cos.abs().max(COS_FLOOR)
+}
+
+/// Whether `answer` is consistent with the exact geometry of its own triangle: its triangle is
+/// hit by the reference within the boundary margin, at a `t` within tolerance.
+pub fn answer_is_valid(mesh: &ObjMesh, ray: &Ray, a: &Answer) -> bool {
+    let Some(tri) = mesh
+        .triangles
+        .get(a.prim as usize)
+        .map(|_| mesh.triangle(a.prim as usize))
+    else {
+        return false;
+    };
+    let Some((t, b, cos)) = plane_barycentrics(ray, &tri) else {
+        return false;
+    };
+    let margin = boundary_margin(ray, &tri);
+    b.iter().all(|&x| x >= -margin) && (t - a.t as f64).abs() <= t_tolerance(ray, t, cos)
+}
+
+/// Classifies one ray. `reference` is the `f64` reference's closest hit (watertight, closed
+/// edges), used only when the two sides disagree.
+pub fn judge(
+    mesh: &ObjMesh,
+    ray: &Ray,
+    ours: Option<Answer>,
+    embree: Option<Answer>,
+    reference: Option<Answer>,
+) -> Verdict {
+    let tol_between = |x: &Answer, y: &Answer| {
+        let tri = mesh.triangle(x.prim as usize);
+        let cos = plane_barycentrics(ray, &tri).map_or(COS_FLOOR, |p| p.2);
+        (x.t as f64 - y.t as f64).abs() <= t_tolerance(ray, x.t as f64, cos)
+    };
+    match (&ours, &embree) {
+        (None, None) => return Verdict::Agree,
+        (Some(h), Some(e)) if tol_between(h, e) => {
+            return if h.prim == e.prim {
+                Verdict::Agree
+            } else {
+                Verdict::Tie
+            };
+        }
+        _ => {}
+    }
+    // They disagree on hit/miss or on t: is each side consistent with the reference?
+    let ok = |x: &Option<Answer>| match (x, &reference) {
+        (None, None) => true,
+        (Some(a), Some(r)) => tol_between(a, r) && answer_is_valid(mesh, ray, a),
+        // A hit the reference does not report: valid only if it lies within the boundary
+        // margin of its triangle (the reference may have missed at an edge it rounds past).
+        (Some(a), None) => answer_is_valid(mesh, ray, a),
+        // A miss where the reference hits: excusable only if the reference's hit is itself on
+        // a boundary (within the margin of an edge of its triangle).
+        (None, Some(r)) => {
+            let tri = mesh.triangle(r.prim as usize);
+            plane_barycentrics(ray, &tri).is_some_and(|(_, b, _)| {
+                let m = boundary_margin(ray, &tri);
+                b.iter().any(|&x| x.abs() <= m)
+            })
+        }
+    };
+    let (ours_ok, embree_ok) = (ok(&ours), ok(&embree));
+    match (ours_ok, embree_ok) {
+        (true, true) => Verdict::WithinTolerance,
+        (true, false) => Verdict::EmbreeWrong,
+        (false, _) => Verdict::Genuine,
+    }
+}
+
+/// `true` when `answer` (or a miss) lets a ray aimed at an edge or vertex through: it misses,
+/// or its hit lies beyond the target (`t > target_t` by more than the tolerance).
+pub fn is_leak(ray: &Ray, answer: Option<&Answer>, target_t: f32) -> bool {
+    match answer {
+        None => true,
+        Some(a) => {
+            (a.t as f64 - target_t as f64) > t_tolerance(ray, target_t as f64, COS_FLOOR.sqrt())
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    fn quad() -> ObjMesh {
+        ObjMesh {
+            positions: vec![
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+            ],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        }
+    }
+
+    fn ans(prim: u32, t: f32) -> Answer {
+        Answer {
+            prim,
+            t,
+            u: 0.0,
+            v: 0.0,
+        }
+    }
+
+    #[test]
+    fn verdicts() {
+        let m = quad();
+        let diag = Ray::new(Vec3::new(0.5, 0.5, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        assert_eq!(
+            judge(&m, &diag, Some(ans(0, 1.0)), Some(ans(0, 1.0)), None),
+            Verdict::Agree
+        );
+        assert_eq!(
+            judge(&m, &diag, Some(ans(0, 1.0)), Some(ans(1, 1.0)), None),
+            Verdict::Tie
+        );
+        // Interior of triangle 0; Embree misses: Embree is wrong.
+        let inner = Ray::new(Vec3::new(0.7, 0.2, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        let r = Some(ans(0, 1.0));
+        assert_eq!(judge(&m, &inner, r, None, r), Verdict::EmbreeWrong);
+        // halfray misses an interior hit: genuine.
+        assert_eq!(judge(&m, &inner, None, r, r), Verdict::Genuine);
+        // On the diagonal, a miss is excusable (boundary).
+        assert_eq!(judge(&m, &diag, None, r, r), Verdict::WithinTolerance);
+        // Wrong t far beyond tolerance: genuine.
+        assert_eq!(judge(&m, &inner, Some(ans(0, 1.1)), r, r), Verdict::Genuine);
+        assert!(is_leak(&diag, None, 1.0));
+        assert!(!is_leak(&diag, Some(&ans(1, 1.0)), 1.0));
+        assert!(is_leak(&diag, Some(&ans(1, 1.5)), 1.0));
+    }
+}

@@ -1,0 +1,343 @@
+//! The cross-check's named ray sets, deterministic for a given seed.
+//!
+//! | set | rays |
+//! |---|---|
+//! | `primary` | a pinhole camera framing the mesh's bounding box, pixel centres `(i+½, j+½)` |
+//! | `random` | incoherent: origins on a sphere twice the bounding sphere, aimed at random points in the box |
+//! | `edges` | aimed at the midpoint of a random shared (two-face) edge, from a random outside origin |
+//! | `vertices` | aimed exactly at a random vertex with a closed fan, from a random outside origin |
+//! | `grazing` | nearly parallel to a random face (0.06°–0.6° off its plane), through an interior point |
+//! | `surface` | starting on a random face (barycentric point, offset by the core's spawn rule), random direction |
+//!
+//! `edges` and `vertices` rays carry the incident triangles, so that a miss or a hit beyond the
+//! target can be recognised as a leak when the ray crosses the surface there transversally.
+
+use crate::obj::ObjMesh;
+use glam::{DVec2, DVec3, Vec3};
+use halfray_core::Ray;
+use halfray_core::triangle::TriangleHit;
+use std::collections::HashMap;
+
+/// The names of every set, in report order.
+pub const SET_NAMES: [&str; 6] = [
+    "primary", "random", "edges", "vertices", "grazing", "surface",
+];
+
+/// Smallest angle between a grazing ray and its face's plane, radians.
+pub const GRAZING_MIN_RAD: f64 = 1.0e-3;
+/// Largest angle between a grazing ray and its face's plane, radians.
+pub const GRAZING_MAX_RAD: f64 = 1.0e-2;
+
+/// A ray of a set, with what is known about where it was aimed.
+#[derive(Clone, Debug)]
+pub struct SetRay {
+    /// The ray (`t_max = ∞` except where stated).
+    pub ray: Ray,
+    /// For `edges`/`vertices`: the triangles incident to the target and the target's `t`
+    /// (1.0: the direction is `target − origin`). Set only when the crossing is transversal.
+    pub target: Option<Target>,
+}
+
+/// The aimed-at edge or vertex of a ray.
+#[derive(Clone, Debug)]
+pub struct Target {
+    /// Triangles incident to the edge or vertex.
+    pub incident: Vec<u32>,
+    /// Ray parameter of the target point.
+    pub t: f32,
+}
+
+/// SplitMix64: a small, fast, deterministic generator (no dependency needed).
+#[derive(Clone, Debug)]
+pub struct Rng(u64);
+
+impl Rng {
+    /// A generator from a seed.
+    pub fn new(seed: u64) -> Self {
+        Self(seed ^ 0x9E37_79B9_7F4A_7C15)
+    }
+    /// Next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in `[0, 1)`.
+    pub fn f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+    /// Uniform index in `0..n` (`n > 0`).
+    pub fn below(&mut self, n: usize) -> usize {
+        ((self.next_u64() >> 32) * n as u64 >> 32) as usize
+    }
+    /// Uniform direction on the unit sphere.
+    pub fn unit_vector(&mut self) -> DVec3 {
+        let z = 2.0 * self.f64() - 1.0;
+        let phi = std::f64::consts::TAU * self.f64();
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        DVec3::new(r * phi.cos(), r * phi.sin(), z)
+    }
+}
+
+/// Mesh adjacency needed by the sets: triangles per undirected edge and per vertex.
+pub struct Adjacency {
+    /// Edges with exactly two incident triangles: `(a, b, [f0, f1])`.
+    pub shared_edges: Vec<(u32, u32, [u32; 2])>,
+    /// Triangles around each vertex.
+    pub vertex_faces: Vec<Vec<u32>>,
+    /// Vertices whose fan is closed (every edge at the vertex has two faces).
+    pub closed_fan_vertices: Vec<u32>,
+}
+
+impl Adjacency {
+    /// Builds the adjacency of `mesh`.
+    pub fn new(mesh: &ObjMesh) -> Self {
+        let mut edge_faces: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+        let mut vertex_faces = vec![Vec::new(); mesh.positions.len()];
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                edge_faces
+                    .entry((a.min(b), a.max(b)))
+                    .or_default()
+                    .push(f as u32);
+                vertex_faces[a as usize].push(f as u32);
+            }
+        }
+        let mut open_vertex = vec![false; mesh.positions.len()];
+        let mut shared_edges = Vec::new();
+        for (&(a, b), faces) in &edge_faces {
+            if faces.len() == 2 && a != b {
+                shared_edges.push((a, b, [faces[0], faces[1]]));
+            } else {
+                open_vertex[a as usize] = true;
+                open_vertex[b as usize] = true;
+            }
+        }
+        shared_edges.sort_unstable();
+        let closed_fan_vertices = (0..mesh.positions.len() as u32)
+            .filter(|&v| !open_vertex[v as usize] && vertex_faces[v as usize].len() >= 3)
+            .collect();
+        Self {
+            shared_edges,
+            vertex_faces,
+            closed_fan_vertices,
+        }
+    }
+}
+
+fn bounds(mesh: &ObjMesh) -> (DVec3, f64) {
+    let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
+    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+    (
+        (lo + hi) * 0.5,
+        ((hi - lo).length() * 0.5).max(f64::MIN_POSITIVE),
+    )
+}
+
+fn random_origin(rng: &mut Rng, center: DVec3, radius: f64) -> Vec3 {
+    (center + rng.unit_vector() * (2.0 * radius)).as_vec3()
+}
+
+/// Generates `count` rays of the named set (fewer if the mesh has no suitable feature, e.g. no
+/// shared edges). Unknown names give `None`.
+pub fn generate(
+    name: &str,
+    mesh: &ObjMesh,
+    adj: &Adjacency,
+    count: usize,
+    seed: u64,
+) -> Option<Vec<SetRay>> {
+    let mut rng = Rng::new(seed ^ fxhash(name));
+    let (center, radius) = bounds(mesh);
+    let plain = |ray| SetRay { ray, target: None };
+    let rays = match name {
+        "primary" => {
+            let side = (count as f64).sqrt().ceil().max(1.0) as usize;
+            primary_rays(center, radius, side, side)
+                .into_iter()
+                .take(count)
+                .map(plain)
+                .collect()
+        }
+        "random" => {
+            let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
+            (0..count)
+                .map(|_| {
+                    let o = random_origin(&mut rng, center, radius);
+                    let u = DVec3::new(rng.f64(), rng.f64(), rng.f64());
+                    let p = lo.as_dvec3() + (hi - lo).as_dvec3() * u;
+                    plain(Ray::new(o, p.as_vec3() - o))
+                })
+                .collect()
+        }
+        "edges" if !adj.shared_edges.is_empty() => (0..count)
+            .map(|_| {
+                let (a, b, faces) = adj.shared_edges[rng.below(adj.shared_edges.len())];
+                let target = (mesh.positions[a as usize] + mesh.positions[b as usize]) * 0.5;
+                aimed(mesh, &mut rng, center, radius, target, &faces)
+            })
+            .collect(),
+        "vertices" if !adj.closed_fan_vertices.is_empty() => (0..count)
+            .map(|_| {
+                let v = adj.closed_fan_vertices[rng.below(adj.closed_fan_vertices.len())];
+                let faces = &adj.vertex_faces[v as usize];
+                aimed(
+                    mesh,
+                    &mut rng,
+                    center,
+                    radius,
+                    mesh.positions[v as usize],
+                    faces,
+                )
+            })
+            .collect(),
+        "grazing" => grazing(mesh, &mut rng, radius, count),
+        "surface" => surface(mesh, &mut rng, count),
+        "edges" | "vertices" => Vec::new(),
+        _ => return None,
+    };
+    Some(rays)
+}
+
+fn fxhash(s: &str) -> u64 {
+    s.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
+    })
+}
+
+/// Pinhole camera rays for a `w × h` image framing the sphere `(center, radius)` from the
+/// `+z`/`+y` diagonal, 45° vertical field of view, pixel centres at `(i + ½, j + ½)`.
+pub fn primary_rays(center: DVec3, radius: f64, w: usize, h: usize) -> Vec<Ray> {
+    let fov = 45f64.to_radians();
+    let dist = radius / (fov * 0.5).sin();
+    let eye = center + DVec3::new(0.3, 0.4, 1.0).normalize() * dist;
+    let forward = (center - eye).normalize();
+    let right = forward.cross(DVec3::Y).normalize();
+    let up = right.cross(forward);
+    let half = (fov * 0.5).tan();
+    let aspect = w as f64 / h as f64;
+    let mut rays = Vec::with_capacity(w * h);
+    for j in 0..h {
+        for i in 0..w {
+            let sx = (2.0 * (i as f64 + 0.5) / w as f64 - 1.0) * half * aspect;
+            let sy = (1.0 - 2.0 * (j as f64 + 0.5) / h as f64) * half;
+            let d = forward + right * sx + up * sy;
+            rays.push(Ray::new(eye.as_vec3(), d.as_vec3()));
+        }
+    }
+    rays
+}
+
+/// A ray from a random outside origin through `target` (`t = 1` there), with the target's
+/// incident faces recorded when the crossing is transversal.
+fn aimed(
+    mesh: &ObjMesh,
+    rng: &mut Rng,
+    center: DVec3,
+    radius: f64,
+    target: Vec3,
+    faces: &[u32],
+) -> SetRay {
+    let o = random_origin(rng, center, radius);
+    let ray = Ray::new(o, target - o);
+    let transversal = crosses_transversally(mesh, &ray, faces, target);
+    SetRay {
+        ray,
+        target: transversal.then(|| Target {
+            incident: faces.to_vec(),
+            t: 1.0,
+        }),
+    }
+}
+
+/// `true` when the projections of the incident triangles along the ray all have the same
+/// orientation and are non-degenerate (the fan, or the two triangles of an edge, then cover a
+/// neighbourhood of the target, so the ray must cross one of them) — judged in `f64`.
+pub fn crosses_transversally(mesh: &ObjMesh, ray: &Ray, faces: &[u32], target: Vec3) -> bool {
+    let d = ray.direction.as_dvec3().normalize();
+    let u = d.any_orthonormal_vector();
+    let w = d.cross(u);
+    let proj = |p: Vec3| {
+        let q = p.as_dvec3() - target.as_dvec3();
+        DVec2::new(q.dot(u), q.dot(w))
+    };
+    let mut sign = 0.0;
+    for &f in faces {
+        let [a, b, c] = mesh.triangle(f as usize).map(proj);
+        let area = (b - a).perp_dot(c - a);
+        let scale = (b - a).length() * (c - a).length();
+        // Reject near-edge-on faces: |sin| of the projected corner below 1e-6.
+        if !(area.abs() > 1.0e-6 * scale) {
+            return false;
+        }
+        if sign == 0.0 {
+            sign = area.signum();
+        } else if area.signum() != sign {
+            return false;
+        }
+    }
+    sign != 0.0
+}
+
+fn grazing(mesh: &ObjMesh, rng: &mut Rng, radius: f64, count: usize) -> Vec<SetRay> {
+    let mut out = Vec::with_capacity(count);
+    let mut guard = 0;
+    while out.len() < count && !mesh.triangles.is_empty() && guard < count * 4 {
+        guard += 1;
+        let f = rng.below(mesh.triangles.len());
+        let [a, b, c] = mesh.triangle(f).map(|p| p.as_dvec3());
+        let n = (b - a).cross(c - a);
+        if n.length_squared() == 0.0 {
+            continue;
+        }
+        let n = n.normalize();
+        let (r1, r2) = (rng.f64(), rng.f64());
+        let s = r1.sqrt();
+        let p = a * (1.0 - s) + b * (s * (1.0 - r2)) + c * (s * r2);
+        let in_plane = n.cross(rng.unit_vector()).normalize_or_zero();
+        if in_plane == DVec3::ZERO {
+            continue;
+        }
+        let angle = GRAZING_MIN_RAD + (GRAZING_MAX_RAD - GRAZING_MIN_RAD) * rng.f64();
+        let d = in_plane * angle.cos() - n * angle.sin();
+        let o = p - d * radius;
+        out.push(SetRay {
+            ray: Ray::new(o.as_vec3(), d.as_vec3()),
+            target: None,
+        });
+    }
+    out
+}
+
+fn surface(mesh: &ObjMesh, rng: &mut Rng, count: usize) -> Vec<SetRay> {
+    let mut out = Vec::with_capacity(count);
+    let mut guard = 0;
+    while out.len() < count && !mesh.triangles.is_empty() && guard < count * 4 {
+        guard += 1;
+        let f = rng.below(mesh.triangles.len());
+        let v = mesh.triangle(f);
+        let (r1, r2) = (rng.f64(), rng.f64());
+        let s = r1.sqrt();
+        let (b1, b2) = ((s * (1.0 - r2)) as f32, (s * r2) as f32);
+        let hit = TriangleHit {
+            t: 1.0,
+            b1,
+            b2,
+            ng: (v[1] - v[0]).cross(v[2] - v[0]),
+            front_face: true,
+        }
+        .to_hit(&v);
+        if hit.normal == Vec3::ZERO {
+            continue;
+        }
+        let w = rng.unit_vector().as_vec3();
+        out.push(SetRay {
+            ray: halfray_core::spawn_ray(&hit, w),
+            target: None,
+        });
+    }
+    out
+}
