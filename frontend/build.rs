@@ -26,19 +26,31 @@ fn main() {
     let embree_dir = match env::var_os("EMBREE_DIR") {
         Some(dir) if !dir.is_empty() => {
             let dir = PathBuf::from(dir);
-            if dir.is_absolute() { dir } else { workspace_root.join(dir) }
+            if dir.is_absolute() {
+                dir
+            } else {
+                workspace_root.join(dir)
+            }
         }
         _ => workspace_root.join(".embree"),
     };
 
-    let candidates = [embree_dir.join("embreex.libs"), embree_dir.clone(), embree_dir.join("lib")];
+    let candidates = [
+        embree_dir.join("embreex.libs"),
+        embree_dir.clone(),
+        embree_dir.join("lib"),
+    ];
     let Some(lib_dir) = candidates.iter().find(|d| has_library(d)) else {
         fail(&format!(
             "the `embree` feature is on, but no libembree4.so was found in {} (looked in {}).\n\
              Run `bash scripts/setup-embree.sh` from the repository root, then build with\n\
              `EMBREE_DIR=$PWD/.embree cargo ... --features embree`.",
             embree_dir.display(),
-            candidates.iter().map(|d| d.display().to_string()).collect::<Vec<_>>().join(", ")
+            candidates
+                .iter()
+                .map(|d| d.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
         ));
     };
     let lib_dir = lib_dir.canonicalize().unwrap_or_else(|_| lib_dir.clone());
@@ -49,7 +61,10 @@ fn main() {
         ));
     };
 
-    println!("cargo:rerun-if-changed={}", lib_dir.join("libembree4.so").display());
+    println!(
+        "cargo:rerun-if-changed={}",
+        lib_dir.join("libembree4.so").display()
+    );
     println!("cargo:rustc-link-search=native={lib_dir_str}");
     // rustc-link-arg applies to every target this package links (it does not propagate to
     // dependent crates: those need their own rpath or LD_LIBRARY_PATH).
@@ -64,6 +79,9 @@ fn has_library(dir: &Path) -> bool {
 /// Fail the build with a readable message instead of a panic backtrace.
 fn fail(message: &str) -> ! {
     eprintln!("error: {message}");
-    println!("cargo:warning={}", message.lines().next().unwrap_or(message));
+    println!(
+        "cargo:warning={}",
+        message.lines().next().unwrap_or(message)
+    );
     exit(1);
 }
