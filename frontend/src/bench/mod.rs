@@ -1,5 +1,6 @@
 //! Benchmarks: `halfray bench bvh` and `halfray bench accuracy`.
 
+pub mod accuracy;
 pub mod bvh;
 
 use crate::error::Result;
@@ -9,11 +10,14 @@ use crate::error::Result;
 pub enum BenchCommand {
     /// BVH build time, size and traversal throughput.
     Bvh(bvh::BvhArgs),
+    /// Cost against accuracy of every intersector variant and robustness choice.
+    Accuracy(accuracy::AccuracyArgs),
 }
 
 /// Runs a benchmark subcommand.
 pub fn run(cmd: &BenchCommand) -> Result<()> {
     match cmd {
         BenchCommand::Bvh(args) => bvh::run(args),
+        BenchCommand::Accuracy(args) => accuracy::run(args),
     }
 }

@@ -28,6 +28,11 @@ pub const GRAZING_MIN_RAD: f64 = 1.0e-3;
 /// Largest angle between a grazing ray and its face's plane, radians.
 pub const GRAZING_MAX_RAD: f64 = 1.0e-2;
 
+/// Projected faces whose corner angle has `|sin|` at most this (unitless) count as edge-on:
+/// an edge or vertex ray through them is not counted as transversal, because the `f32` ray
+/// (rounded from the `f64` construction) may pass on either side of such a sliver.
+pub const EDGE_ON_SIN: f64 = 1.0e-6;
+
 /// A ray of a set, with what is known about where it was aimed.
 #[derive(Clone, Debug)]
 pub struct SetRay {
@@ -70,7 +75,7 @@ impl Rng {
     }
     /// Uniform index in `0..n` (`n > 0`).
     pub fn below(&mut self, n: usize) -> usize {
-        ((self.next_u64() >> 32) * n as u64 >> 32) as usize
+        ((self.next_u64() as u128 * n as u128) >> 64) as usize
     }
     /// Uniform direction on the unit sphere.
     pub fn unit_vector(&mut self) -> DVec3 {
@@ -269,8 +274,7 @@ pub fn crosses_transversally(mesh: &ObjMesh, ray: &Ray, faces: &[u32], target: V
         let [a, b, c] = mesh.triangle(f as usize).map(proj);
         let area = (b - a).perp_dot(c - a);
         let scale = (b - a).length() * (c - a).length();
-        // Reject near-edge-on faces: |sin| of the projected corner below 1e-6.
-        if !(area.abs() > 1.0e-6 * scale) {
+        if area.is_nan() || area.abs() <= EDGE_ON_SIN * scale {
             return false;
         }
         if sign == 0.0 {

@@ -1,0 +1,253 @@
+//! `halfray bench accuracy`: what accuracy costs in time, every variant measured on the same
+//! rays in the same run.
+
+pub mod chart;
+pub mod choices;
+pub mod triangles;
+
+use crate::atomic::write_bytes_atomic;
+use crate::error::{Error, Result};
+use crate::obj::{ObjMesh, read_obj};
+use halfray_core::triangle::TriangleVariant;
+use std::path::{Path, PathBuf};
+use triangles::Workload;
+
+/// Where the shared test meshes live (beside the repository), unless `HALFRAY_MESHES` says.
+pub fn shared_meshes_dir() -> PathBuf {
+    std::env::var_os("HALFRAY_MESHES")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/meshes"))
+}
+
+/// Arguments of `halfray bench accuracy`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct AccuracyArgs {
+    /// Meshes (OBJ). Default: the closed shared meshes (tetrahedron, cube, octahedron, spot,
+    /// torus) for the accuracy figures, plus the bunny and the dragon for BVH throughput.
+    pub meshes: Vec<PathBuf>,
+    /// Small workloads (under a minute), for CI.
+    #[arg(long)]
+    pub quick: bool,
+    /// Write the results as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Write a cost-against-error chart (PNG).
+    #[arg(long)]
+    pub chart: Option<PathBuf>,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// One variant's row of the report.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct VariantRow {
+    /// Variant name.
+    pub name: String,
+    /// Median ns per ray–triangle test (hot loop, mostly misses).
+    pub ns_per_test: Option<f64>,
+    /// Single-threaded Mrays/s through the BVH, primary rays (bunny).
+    pub mrays_bvh_primary: Option<f64>,
+    /// Single-threaded Mrays/s through the BVH, incoherent rays (bunny).
+    pub mrays_bvh_incoherent: Option<f64>,
+    /// Single-threaded Mrays/s through the BVH, primary rays, largest mesh.
+    pub mrays_bvh_primary_largest: Option<f64>,
+    /// Single-threaded Mrays/s through the BVH, incoherent rays, largest mesh.
+    pub mrays_bvh_incoherent_largest: Option<f64>,
+    /// Edge and vertex rays that hit none of the incident triangles, per million.
+    pub leaks_per_million: f64,
+    /// Rays aimed just outside a triangle that hit it, per million.
+    pub false_hits_per_million: f64,
+    /// Largest relative error of `t` against the `f64` reference.
+    pub max_rel_t_error: f64,
+    /// Median relative error of `t` against the `f64` reference.
+    pub median_rel_t_error: f64,
+    /// Hit/miss disagreements with the `f64` reference, per million rays.
+    pub reference_disagreements_per_million: f64,
+    /// Rays behind the leak figure.
+    pub leak_rays: usize,
+}
+
+/// The whole report.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Report {
+    /// Per triangle variant.
+    pub variants: Vec<VariantRow>,
+    /// Slab test: plain vs conservative.
+    pub slab: Vec<choices::ChoiceRow>,
+    /// Secondary-ray offsets: fixed epsilon vs error bound.
+    pub offsets: Vec<choices::ChoiceRow>,
+    /// Sphere quadratic: naive vs stable.
+    pub sphere: Vec<choices::ChoiceRow>,
+    /// Whether `--quick` was used.
+    pub quick: bool,
+}
+
+fn is_closed(m: &ObjMesh) -> bool {
+    let mut edges = std::collections::HashMap::<(u32, u32), u32>::new();
+    for t in &m.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    !edges.is_empty() && edges.values().all(|&n| n == 2)
+}
+
+/// Runs the benchmark and returns the report (printing nothing).
+pub fn measure(args: &AccuracyArgs) -> Result<Report> {
+    let dir = shared_meshes_dir();
+    let paths: Vec<PathBuf> = if args.meshes.is_empty() {
+        let mut names = vec![
+            "tetrahedron",
+            "cube",
+            "octahedron",
+            "spot",
+            "torus",
+            "bunny",
+        ];
+        if !args.quick {
+            names.push("dragon");
+        }
+        names.iter().map(|n| dir.join(format!("{n}.obj"))).collect()
+    } else {
+        args.meshes.clone()
+    };
+    let meshes: Vec<(PathBuf, ObjMesh)> = paths
+        .iter()
+        .map(|p| read_obj(p).map(|m| (p.clone(), m)))
+        .collect::<Result<_>>()?;
+    let closed: Vec<ObjMesh> = meshes
+        .iter()
+        .filter(|(_, m)| is_closed(m))
+        .map(|(_, m)| m.clone())
+        .collect();
+    if closed.is_empty() {
+        return Err(Error::Usage(
+            "bench accuracy needs at least one closed mesh for the leak figures".into(),
+        ));
+    }
+    let (n, reps) = if args.quick {
+        (20_000, 3)
+    } else {
+        (200_000, 9)
+    };
+    let small: Vec<ObjMesh> = closed.clone();
+    let workload = Workload::new(&small, &closed, n, args.seed);
+    let mut variants = Vec::new();
+    for v in TriangleVariant::ALL {
+        let (acc, ns) = triangles::measure(v, &workload, reps);
+        variants.push(VariantRow {
+            name: v.name().into(),
+            ns_per_test: Some(ns),
+            mrays_bvh_primary: None,
+            mrays_bvh_incoherent: None,
+            mrays_bvh_primary_largest: None,
+            mrays_bvh_incoherent_largest: None,
+            leaks_per_million: acc.leaks_per_million(),
+            false_hits_per_million: acc.false_hits_per_million(),
+            max_rel_t_error: acc.max_rel_t_error(),
+            median_rel_t_error: acc.median_rel_t_error(),
+            reference_disagreements_per_million: acc.disagreements_per_million(),
+            leak_rays: acc.leak_rays,
+        });
+    }
+    let choice_n = n / 4;
+    Ok(Report {
+        variants,
+        slab: choices::slab_rows(choice_n, args.seed, reps),
+        offsets: choices::offset_rows(choice_n, args.seed, reps),
+        sphere: Vec::new(),
+        quick: args.quick,
+    })
+}
+
+fn opt(x: Option<f64>, digits: usize) -> String {
+    x.map_or_else(|| "–".into(), |v| format!("{v:.digits$}"))
+}
+
+/// The report as markdown tables.
+pub fn markdown(r: &Report) -> String {
+    let mut s = String::new();
+    s.push_str("| variant | ns/test | Mrays/s BVH primary | Mrays/s BVH incoherent | leaks / M edge+vertex rays | false hits / M | max rel t err | median rel t err | hit/miss ≠ f64 ref / M |\n");
+    s.push_str("|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    for v in &r.variants {
+        s.push_str(&format!(
+            "| {} | {} | {} | {} | {:.1} | {:.1} | {:.2e} | {:.2e} | {:.1} |\n",
+            v.name,
+            opt(v.ns_per_test, 2),
+            opt(v.mrays_bvh_primary, 2),
+            opt(v.mrays_bvh_incoherent, 2),
+            v.leaks_per_million,
+            v.false_hits_per_million,
+            v.max_rel_t_error,
+            v.median_rel_t_error,
+            v.reference_disagreements_per_million,
+        ));
+    }
+    for (title, rows, what, err) in [
+        (
+            "Slab test (thin boxes at distance)",
+            &r.slab,
+            "false rejects / M",
+            "–",
+        ),
+        (
+            "Secondary-ray offsets",
+            &r.offsets,
+            "self-hits / M",
+            "mean gap / |p|",
+        ),
+        (
+            "Sphere quadratic (small spheres far away)",
+            &r.sphere,
+            "false misses / M",
+            "max rel t err",
+        ),
+    ] {
+        if rows.is_empty() {
+            continue;
+        }
+        s.push_str(&format!(
+            "\n{title}\n\n| choice | trials | {what} | {err} | ns |\n|---|---:|---:|---:|---:|\n"
+        ));
+        for c in rows {
+            s.push_str(&format!(
+                "| {} | {} | {:.1} | {:.2e} | {:.2} |\n",
+                c.name, c.trials, c.failures_per_million, c.error, c.ns
+            ));
+        }
+    }
+    s
+}
+
+/// Runs `halfray bench accuracy`.
+pub fn run(args: &AccuracyArgs) -> Result<()> {
+    let report = measure(args)?;
+    print!("{}", markdown(&report));
+    if let Some(path) = &args.json {
+        let json = serde_json::to_vec_pretty(&report).map_err(|e| Error::Other(e.to_string()))?;
+        write_bytes_atomic(path, &json)?;
+    }
+    if let Some(path) = &args.chart {
+        let points: Vec<chart::Point> = report
+            .variants
+            .iter()
+            .filter_map(|v| {
+                Some(chart::Point {
+                    label: v.name.clone(),
+                    x: v.ns_per_test?,
+                    y: v.leaks_per_million + v.false_hits_per_million,
+                })
+            })
+            .collect();
+        chart::write_chart(
+            path,
+            "ray-triangle variants: cost against error",
+            "ns per test",
+            "leaks + false hits per million rays",
+            &points,
+        )?;
+    }
+    Ok(())
+}

@@ -1,0 +1,290 @@
+//! Cost and accuracy of each ray–triangle variant, measured on the same rays in one run.
+
+use crate::crosscheck::judge::{boundary_margin, plane_barycentrics};
+use crate::crosscheck::sets::{self, Adjacency, Rng};
+use crate::obj::ObjMesh;
+use glam::{DVec3, Vec3};
+use halfray_core::Ray;
+use halfray_core::triangle::{
+    Cramer, F64Reference, MollerTrumbore, TriangleIntersector, TriangleVariant, Watertight,
+    WatertightF32,
+};
+use std::hint::black_box;
+use std::time::Instant;
+
+/// How far outside a triangle the "just outside" rays aim, in ulps (`2⁻²³`) of the largest
+/// vertex coordinate relative to the ray origin (the magnitude the `f32` tests round), measured
+/// perpendicular to the edge in the triangle's plane. The watertight test's only error is the
+/// rounding of the translated and sheared vertices (≤ 3 roundings, `gamma(3)` ≈ 1.5 ulps), so
+/// 16 ulps is clearly outside for a correct test, while a test with sloppy edges (epsilons,
+/// rounded sums) still reports hits there.
+pub const OUTSIDE_OFFSET_ULPS: f64 = 16.0;
+
+/// Accuracy figures of one variant.
+#[derive(Clone, Debug, Default)]
+pub struct Accuracy {
+    /// Transversal edge and vertex rays tested.
+    pub leak_rays: usize,
+    /// Of those, rays that hit none of the incident triangles.
+    pub leaks: usize,
+    /// Rays aimed just outside a triangle (by [`OUTSIDE_OFFSET_ULPS`]).
+    pub outside_rays: usize,
+    /// Of those, rays the variant reports as hitting that triangle.
+    pub false_hits: usize,
+    /// Relative `t` error against the `f64` reference over hits both report: sorted samples.
+    pub rel_t_errors: Vec<f64>,
+    /// Rays where the variant and the reference disagree on hit/miss, counted over rays whose
+    /// reference barycentrics are farther from every edge than
+    /// [`crate::crosscheck::judge::boundary_margin`] (closer than that, both answers are valid).
+    pub hit_miss_disagreements: usize,
+    /// Rays in the hit/miss comparison.
+    pub hit_miss_rays: usize,
+}
+
+impl Accuracy {
+    /// Leaks per million edge/vertex rays.
+    pub fn leaks_per_million(&self) -> f64 {
+        per_million(self.leaks, self.leak_rays)
+    }
+    /// False hits per million just-outside rays.
+    pub fn false_hits_per_million(&self) -> f64 {
+        per_million(self.false_hits, self.outside_rays)
+    }
+    /// Largest relative `t` error.
+    pub fn max_rel_t_error(&self) -> f64 {
+        self.rel_t_errors.last().copied().unwrap_or(0.0)
+    }
+    /// Median relative `t` error.
+    pub fn median_rel_t_error(&self) -> f64 {
+        self.rel_t_errors
+            .get(self.rel_t_errors.len() / 2)
+            .copied()
+            .unwrap_or(0.0)
+    }
+    /// Hit/miss disagreements with the reference per million rays.
+    pub fn disagreements_per_million(&self) -> f64 {
+        per_million(self.hit_miss_disagreements, self.hit_miss_rays)
+    }
+}
+
+fn per_million(n: usize, of: usize) -> f64 {
+    if of == 0 {
+        0.0
+    } else {
+        n as f64 * 1.0e6 / of as f64
+    }
+}
+
+/// The workloads shared by every variant (generated once, so every variant sees the same rays).
+pub struct Workload {
+    /// Edge/vertex rays with their incident triangles (transversal crossings only).
+    pub leak_rays: Vec<(Ray, Vec<[Vec3; 3]>)>,
+    /// Rays aimed just outside one triangle, with that triangle.
+    pub outside_rays: Vec<(Ray, [Vec3; 3])>,
+    /// Rays aimed at a random point of one triangle (interior or edge), with that triangle.
+    pub pair_rays: Vec<(Ray, [Vec3; 3])>,
+    /// Rays for the cost loop and the triangles they are all tested against.
+    pub cost_rays: Vec<Ray>,
+    /// Triangles of the cost loop.
+    pub cost_tris: Vec<[Vec3; 3]>,
+}
+
+impl Workload {
+    /// Builds the workloads from `meshes` (`leak_meshes` are used for edge/vertex rays, normally
+    /// the closed ones), with `n` rays per kind in total.
+    pub fn new(meshes: &[ObjMesh], leak_meshes: &[ObjMesh], n: usize, seed: u64) -> Self {
+        let mut leak_rays = Vec::new();
+        let per = n / (2 * leak_meshes.len().max(1));
+        for (i, m) in leak_meshes.iter().enumerate() {
+            let adj = Adjacency::new(m);
+            for set in ["edges", "vertices"] {
+                for r in sets::generate(set, m, &adj, per, seed + i as u64).unwrap_or_default() {
+                    if let Some(t) = r.target {
+                        let tris = t.incident.iter().map(|&f| m.triangle(f as usize)).collect();
+                        leak_rays.push((r.ray, tris));
+                    }
+                }
+            }
+        }
+        let mut rng = Rng::new(seed ^ 0xACC);
+        let all: Vec<[Vec3; 3]> = meshes
+            .iter()
+            .flat_map(|m| (0..m.triangles.len()).map(move |f| m.triangle(f)))
+            .filter(|t| (t[1] - t[0]).cross(t[2] - t[0]) != Vec3::ZERO)
+            .collect();
+        let mut outside_rays = Vec::with_capacity(n);
+        let mut pair_rays = Vec::with_capacity(n);
+        if !all.is_empty() {
+            while outside_rays.len() < n {
+                let tri = all[rng.below(all.len())];
+                if let Some(r) = just_outside(&mut rng, &tri) {
+                    outside_rays.push((r, tri));
+                }
+            }
+            while pair_rays.len() < n {
+                let tri = all[rng.below(all.len())];
+                pair_rays.push((aim_at_triangle(&mut rng, &tri), tri));
+            }
+        }
+        let cost_tris: Vec<[Vec3; 3]> = (0..64.min(all.len()))
+            .map(|_| all[rng.below(all.len())])
+            .collect();
+        let cost_rays = pair_rays.iter().take(4096).map(|(r, _)| *r).collect();
+        Self {
+            leak_rays,
+            outside_rays,
+            pair_rays,
+            cost_rays,
+            cost_tris,
+        }
+    }
+}
+
+fn random_origin_for(rng: &mut Rng, target: DVec3, scale: f64, n: DVec3) -> DVec3 {
+    // From the front or back side, at least 10° off the plane.
+    loop {
+        let d = rng.unit_vector();
+        if d.dot(n).abs() > 0.17 {
+            return target + d * scale * (1.0 + 4.0 * rng.f64());
+        }
+    }
+}
+
+fn aim_at_triangle(rng: &mut Rng, tri: &[Vec3; 3]) -> Ray {
+    let [a, b, c] = tri.map(|p| p.as_dvec3());
+    let n = (b - a).cross(c - a).normalize();
+    let (r1, r2) = (rng.f64(), rng.f64());
+    let s = r1.sqrt();
+    // Push a tenth of the targets exactly onto an edge midpoint-ish line, the rest inside.
+    let p = if rng.below(10) == 0 {
+        a + (b - a) * r2
+    } else {
+        a * (1.0 - s) + b * (s * (1.0 - r2)) + c * (s * r2)
+    };
+    let scale = (b - a).length().max((c - a).length());
+    let o = random_origin_for(rng, p, scale, n);
+    Ray::new(o.as_vec3(), (p - o).as_vec3())
+}
+
+fn just_outside(rng: &mut Rng, tri: &[Vec3; 3]) -> Option<Ray> {
+    let v = tri.map(|p| p.as_dvec3());
+    let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+    let k = rng.below(3);
+    let (a, b, c) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
+    let e = b - a;
+    let mut out = n.cross(e).normalize();
+    if out.dot(c - a) > 0.0 {
+        out = -out;
+    }
+    let p_edge = a + e * (0.05 + 0.9 * rng.f64());
+    let scale = e.length();
+    let o = random_origin_for(rng, p_edge, scale, n);
+    let mag = v
+        .iter()
+        .map(|x| (*x - o).abs().max_element())
+        .fold(0.0, f64::max);
+    let p = p_edge + out * (OUTSIDE_OFFSET_ULPS * f32::EPSILON as f64 * mag);
+    let ray = Ray::new(o.as_vec3(), (p - o).as_vec3());
+    // Keep only rays the f64 reference places clearly outside (after rounding to f32).
+    let (_, bary, _) = plane_barycentrics(&ray, tri)?;
+    (bary.iter().copied().fold(f64::INFINITY, f64::min) < 0.0).then_some(ray)
+}
+
+/// Runs the accuracy workloads through one intersector.
+pub fn accuracy<I: TriangleIntersector>(isect: &I, w: &Workload) -> Accuracy {
+    let mut acc = Accuracy {
+        leak_rays: w.leak_rays.len(),
+        outside_rays: w.outside_rays.len(),
+        ..Accuracy::default()
+    };
+    for (ray, tris) in &w.leak_rays {
+        if !tris.iter().any(|t| isect.intersect(ray, t).is_some()) {
+            acc.leaks += 1;
+        }
+    }
+    for (ray, tri) in &w.outside_rays {
+        if isect.intersect(ray, tri).is_some() {
+            acc.false_hits += 1;
+        }
+    }
+    for (ray, tri) in &w.pair_rays {
+        let ours = isect.intersect(ray, tri);
+        let reference = F64Reference::solve(ray, tri).filter(|(t, _)| *t > 0.0);
+        let clear_of_edges = plane_barycentrics(ray, tri)
+            .is_some_and(|(_, b, _)| b.iter().all(|x| x.abs() > boundary_margin(ray, tri)));
+        if clear_of_edges {
+            acc.hit_miss_rays += 1;
+            if ours.is_some() != reference.is_some() {
+                acc.hit_miss_disagreements += 1;
+            }
+        }
+        if let (Some(h), Some((t, _))) = (ours, reference) {
+            acc.rel_t_errors.push(((h.t as f64 - t) / t).abs());
+        }
+    }
+    acc.rel_t_errors.sort_by(f64::total_cmp);
+    acc
+}
+
+/// Median ns per ray–triangle test over `reps` repetitions of every cost ray against every
+/// cost triangle (mostly misses, as inside a BVH leaf).
+pub fn ns_per_test<I: TriangleIntersector>(isect: &I, w: &Workload, reps: usize) -> f64 {
+    let mut samples = Vec::with_capacity(reps);
+    for _ in 0..reps {
+        let start = Instant::now();
+        let mut hits = 0u32;
+        for ray in &w.cost_rays {
+            let Some(pre) = isect.prepare(ray) else {
+                continue;
+            };
+            for tri in &w.cost_tris {
+                hits += isect
+                    .intersect_prepared(&pre, ray, black_box(tri))
+                    .is_some() as u32;
+            }
+        }
+        black_box(hits);
+        let tests = (w.cost_rays.len() * w.cost_tris.len()).max(1);
+        samples.push(start.elapsed().as_secs_f64() * 1.0e9 / tests as f64);
+    }
+    samples.sort_by(f64::total_cmp);
+    samples.get(samples.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// Calls `f` with the intersector of `variant` (monomorphised per variant).
+#[macro_export]
+macro_rules! with_intersector {
+    ($variant:expr, |$i:ident| $body:expr) => {
+        match $variant {
+            TriangleVariant::Watertight => {
+                let $i = &Watertight;
+                $body
+            }
+            TriangleVariant::WatertightF32 => {
+                let $i = &WatertightF32;
+                $body
+            }
+            TriangleVariant::MollerTrumbore => {
+                let $i = &MollerTrumbore::CLASSIC;
+                $body
+            }
+            TriangleVariant::MollerTrumboreNoEps => {
+                let $i = &MollerTrumbore::NO_EPSILON;
+                $body
+            }
+            TriangleVariant::Cramer => {
+                let $i = &Cramer;
+                $body
+            }
+            TriangleVariant::F64Reference => {
+                let $i = &F64Reference;
+                $body
+            }
+        }
+    };
+}
+
+/// Accuracy and per-test cost of `variant` on `w`.
+pub fn measure(variant: TriangleVariant, w: &Workload, reps: usize) -> (Accuracy, f64) {
+    with_intersector!(variant, |i| (accuracy(i, w), ns_per_test(i, w, reps)))
+}
