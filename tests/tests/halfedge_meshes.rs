@@ -1,0 +1,354 @@
+//! Half-edge meshes on the shared test meshes (`../shared/meshes`), plus property tests of
+//! random edit sequences.
+//!
+//! Large meshes live in `Vec`-backed [`SliceMesh`]es so nothing big is on the stack.
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+
+use glam::{DVec3, Vec3};
+use halfray_core::halfedge::{
+    BuildError, CollapseAt, Counts, EdgeId, EdgeRec, FaceRec, HalfedgeMesh, LoopWeights, Mesh,
+    MeshStorage, SliceMesh, VertexId, VertexRec, build_scratch_len, loop_beta,
+};
+use proptest::prelude::*;
+
+/// Relative tolerance for comparing the mesh's f32 Loop positions with the f64 reference:
+/// a few f32 ulps (2⁻²³ ≈ 1.2e-7) of the coordinate magnitude, times the ~10 terms summed.
+const LOOP_REL_TOL: f64 = 4e-6;
+
+fn mesh_dir() -> PathBuf {
+    let here = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    for cand in [here.join("../../shared/meshes"), PathBuf::from("/work/shared/meshes")] {
+        if cand.exists() {
+            return cand;
+        }
+    }
+    panic!("shared meshes not found");
+}
+
+/// Parses the `v`/`f` lines of a shared OBJ (1-based indices).
+fn load(name: &str) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let text = std::fs::read_to_string(mesh_dir().join(name)).unwrap();
+    let (mut p, mut t) = (Vec::new(), Vec::new());
+    for line in text.lines() {
+        let mut it = line.split_whitespace();
+        match it.next() {
+            Some("v") => {
+                let c: Vec<f32> = it.map(|x| x.parse().unwrap()).collect();
+                p.push(Vec3::new(c[0], c[1], c[2]));
+            }
+            Some("f") => {
+                let c: Vec<u32> = it.map(|x| x.parse::<u32>().unwrap() - 1).collect();
+                t.push([c[0], c[1], c[2]]);
+            }
+            _ => {}
+        }
+    }
+    (p, t)
+}
+
+/// Owned buffers for a [`SliceMesh`].
+struct Buffers {
+    v: Vec<VertexRec>,
+    e: Vec<EdgeRec>,
+    f: Vec<FaceRec>,
+}
+
+impl Buffers {
+    fn new(c: Counts) -> Self {
+        Self {
+            v: vec![VertexRec::EMPTY; c.vertices],
+            e: vec![EdgeRec::EMPTY; c.edges],
+            f: vec![FaceRec::EMPTY; c.faces],
+        }
+    }
+    fn mesh(&mut self) -> SliceMesh<'_> {
+        Mesh::from_slices(&mut self.v, &mut self.e, &mut self.f)
+    }
+}
+
+/// Capacity that any build of `p`, `t` fits in (E ≤ 3F).
+fn caps(p: &[Vec3], t: &[[u32; 3]]) -> Counts {
+    Counts { vertices: p.len(), edges: 3 * t.len(), faces: t.len() }
+}
+
+fn build_into<'a>(
+    b: &'a mut Buffers,
+    p: &[Vec3],
+    t: &[[u32; 3]],
+) -> Result<SliceMesh<'a>, BuildError> {
+    let mut m = b.mesh();
+    let mut scratch = vec![0u32; build_scratch_len(t.len())];
+    m.build(p, t, &mut scratch)?;
+    Ok(m)
+}
+
+fn euler<S: MeshStorage>(m: &Mesh<S>) -> i64 {
+    let referenced = m.vertices().filter(|&v| !m.is_isolated(v)).count() as i64;
+    referenced - m.len().edges as i64 + m.len().faces as i64
+}
+
+fn boundary_edges<S: MeshStorage>(m: &Mesh<S>) -> usize {
+    m.edges().filter(|&e| m.is_boundary_edge(e)).count()
+}
+
+/// (file, χ, boundary edges, boundary loops, unreferenced vertices) from the README.
+const GOOD: &[(&str, i64, usize, usize, usize)] = &[
+    ("tetrahedron.obj", 2, 0, 0, 0),
+    ("cube.obj", 2, 0, 0, 0),
+    ("octahedron.obj", 2, 0, 0, 0),
+    ("spot.obj", 2, 0, 0, 0),
+    ("torus.obj", 0, 0, 0, 0),
+    ("demosthenes.obj", 1, 67, 1, 0),
+    ("bunny.obj", -3, 223, 5, 1113),
+];
+
+#[test]
+fn shared_meshes_build_validate_and_round_trip() {
+    for &(name, chi, bedges, loops, unref) in GOOD {
+        let (p, t) = load(name);
+        let mut buf = Buffers::new(caps(&p, &t));
+        let m = build_into(&mut buf, &p, &t).unwrap_or_else(|e| panic!("{name}: {e}"));
+        m.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(m.len().vertices, p.len(), "{name}");
+        assert_eq!(m.len().faces, t.len(), "{name}");
+        assert_eq!(euler(&m), chi, "{name}: V - E + F");
+        assert_eq!(boundary_edges(&m), bedges, "{name}: boundary edges");
+        assert_eq!(m.boundary_loops().count(), loops, "{name}: boundary loops");
+        assert_eq!(m.vertices().filter(|&v| m.is_isolated(v)).count(), unref, "{name}");
+        // Every boundary vertex stores a boundary halfedge; one-rings terminate.
+        for v in m.vertices() {
+            let n = m.valence(v);
+            assert!(n < 64, "{name}: valence {n}");
+            if let Some(h) = m.vertex_halfedge(v) {
+                let on_boundary = m.outgoing_halfedges(v).any(|g| m.face(g).is_none());
+                assert_eq!(m.is_boundary_halfedge(h), on_boundary, "{name}");
+            }
+        }
+        let mut pos = vec![Vec3::ZERO; p.len()];
+        let mut tri = vec![[0u32; 3]; t.len()];
+        assert_eq!(m.export(&mut pos, &mut tri), Ok((p.len(), t.len())), "{name}");
+        assert_eq!(pos, p, "{name}: positions round trip");
+        assert_eq!(tri, t, "{name}: triangles round trip");
+    }
+}
+
+#[test]
+fn non_manifold_meshes_are_rejected_by_name() {
+    let (p, t) = load("teapot.obj");
+    let mut buf = Buffers::new(caps(&p, &t));
+    let err = build_into(&mut buf, &p, &t).unwrap_err();
+    assert!(matches!(err, BuildError::NonManifoldVertex { .. }), "teapot: {err:?}");
+    assert!(buf.mesh().is_empty());
+
+    let (p, t) = load("beetle.obj");
+    let mut buf = Buffers::new(caps(&p, &t));
+    let err = build_into(&mut buf, &p, &t).unwrap_err();
+    assert!(matches!(err, BuildError::NonManifoldEdge { .. }), "beetle: {err:?}");
+    // The named edge really has three or more faces.
+    if let BuildError::NonManifoldEdge { a, b } = err {
+        let uses = t
+            .iter()
+            .filter(|tri| tri.contains(&a.raw()) && tri.contains(&b.raw()))
+            .count();
+        assert!(uses >= 3, "beetle edge {a:?}-{b:?} used {uses} times");
+    }
+}
+
+/// Independent Loop reference straight from the triangle list (f64, hash maps).
+fn loop_reference(
+    p: &[Vec3],
+    t: &[[u32; 3]],
+    beta: impl Fn(usize) -> f64,
+) -> (Vec<DVec3>, HashMap<(u32, u32), DVec3>) {
+    let key = |a: u32, b: u32| (a.min(b), a.max(b));
+    let mut opp: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+    for tri in t {
+        for k in 0..3 {
+            opp.entry(key(tri[k], tri[(k + 1) % 3])).or_default().push(tri[(k + 2) % 3]);
+        }
+    }
+    let mut nbrs: Vec<Vec<u32>> = vec![Vec::new(); p.len()];
+    let mut bnbrs: Vec<Vec<u32>> = vec![Vec::new(); p.len()];
+    for (&(a, b), o) in &opp {
+        nbrs[a as usize].push(b);
+        nbrs[b as usize].push(a);
+        if o.len() == 1 {
+            bnbrs[a as usize].push(b);
+            bnbrs[b as usize].push(a);
+        }
+    }
+    let d = |i: u32| p[i as usize].as_dvec3();
+    let even = (0..p.len())
+        .map(|v| {
+            let x = d(v as u32);
+            if !bnbrs[v].is_empty() {
+                0.75 * x + 0.125 * (d(bnbrs[v][0]) + d(bnbrs[v][1]))
+            } else if nbrs[v].is_empty() {
+                x
+            } else {
+                let n = nbrs[v].len();
+                let s: DVec3 = nbrs[v].iter().map(|&w| d(w)).sum();
+                (1.0 - n as f64 * beta(n)) * x + beta(n) * s
+            }
+        })
+        .collect();
+    let odd = opp
+        .iter()
+        .map(|(&(a, b), o)| {
+            let q = if o.len() == 1 {
+                0.5 * (d(a) + d(b))
+            } else {
+                0.375 * (d(a) + d(b)) + 0.125 * (d(o[0]) + d(o[1]))
+            };
+            ((a, b), q)
+        })
+        .collect();
+    (even, odd)
+}
+
+fn assert_close(got: Vec3, want: DVec3, what: &str) {
+    let scale = want.abs().max_element().max(1.0);
+    let err = (got.as_dvec3() - want).abs().max_element();
+    assert!(err <= LOOP_REL_TOL * scale, "{what}: {got} vs {want} (err {err:e})");
+}
+
+fn check_loop(name: &str, weights: LoopWeights) {
+    let (p, t) = load(name);
+    let mut buf = Buffers::new(caps(&p, &t));
+    let m = build_into(&mut buf, &p, &t).unwrap();
+    let need = m.len().after_loop();
+    let mut out_buf = Buffers::new(need);
+    let mut out = out_buf.mesh();
+    m.subdivide_loop(&mut out, weights).unwrap();
+    out.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
+    assert_eq!(out.len(), need);
+    assert_eq!(euler(&out), euler(&m), "{name}: χ preserved");
+    assert_eq!(boundary_edges(&out), 2 * boundary_edges(&m), "{name}: boundary edges double");
+    assert_eq!(out.boundary_loops().count(), m.boundary_loops().count(), "{name}");
+    let (even, odd) = loop_reference(&p, &t, |n| loop_beta(n, weights) as f64);
+    for v in 0..p.len() as u32 {
+        assert_close(out.position(VertexId::new(v)).unwrap(), even[v as usize], name);
+    }
+    let nv = p.len() as u32;
+    for e in m.edges() {
+        let [a, b] = m.edge_vertices(e).unwrap();
+        let key = (a.raw().min(b.raw()), a.raw().max(b.raw()));
+        assert_close(out.position(VertexId::new(nv + e.raw())).unwrap(), odd[&key], name);
+    }
+}
+
+#[test]
+fn loop_subdivision_matches_reference_on_shared_meshes() {
+    for name in ["octahedron.obj", "cube.obj", "spot.obj", "torus.obj", "demosthenes.obj"] {
+        check_loop(name, LoopWeights::Warren);
+    }
+    check_loop("spot.obj", LoopWeights::Loop);
+    check_loop("bunny.obj", LoopWeights::Warren);
+}
+
+#[test]
+fn loop_two_levels_on_spot() {
+    let (p, t) = load("spot.obj");
+    let mut b0 = Buffers::new(caps(&p, &t));
+    let m0 = build_into(&mut b0, &p, &t).unwrap();
+    let c1 = m0.len().after_loop();
+    let mut b1 = Buffers::new(c1);
+    let mut m1 = b1.mesh();
+    m0.subdivide_loop(&mut m1, LoopWeights::Warren).unwrap();
+    let mut b2 = Buffers::new(c1.after_loop());
+    let mut m2 = b2.mesh();
+    m1.subdivide_loop(&mut m2, LoopWeights::Warren).unwrap();
+    m2.validate().unwrap();
+    assert_eq!(m2.len().faces, 16 * t.len());
+    assert_eq!(euler(&m2), 2);
+    assert_eq!(m2.boundary_loops().count(), 0);
+}
+
+#[test]
+fn edits_on_a_real_mesh_keep_invariants() {
+    // Flip / split / collapse sweeps over demosthenes (open), then compact and export.
+    let (p, t) = load("demosthenes.obj");
+    let mut c = caps(&p, &t);
+    c.vertices += 4000;
+    c.edges += 12000;
+    c.faces += 8000;
+    let mut buf = Buffers::new(c);
+    let mut m = build_into(&mut buf, &p, &t).unwrap();
+    let chi = euler(&m);
+    let ne = m.slots().edges as u32;
+    let (mut flips, mut splits, mut collapses) = (0, 0, 0);
+    for e in (0..ne).step_by(7) {
+        flips += m.flip_edge(EdgeId::new(e)).is_ok() as usize;
+    }
+    m.validate().unwrap();
+    for e in (0..ne).step_by(11) {
+        splits += m.split_edge(EdgeId::new(e)).is_ok() as usize;
+    }
+    m.validate().unwrap();
+    for e in (0..ne).step_by(5) {
+        collapses +=
+            m.collapse_edge(EdgeId::new(e).halfedge(0), CollapseAt::Midpoint).is_ok() as usize;
+    }
+    m.validate().unwrap();
+    assert!(flips > 100 && splits > 100 && collapses > 100, "{flips} {splits} {collapses}");
+    assert_eq!(euler(&m), chi);
+    assert_eq!(m.boundary_loops().count(), 1);
+    m.compact(|_| {});
+    m.validate().unwrap();
+    let n = m.len();
+    let mut pos = vec![Vec3::ZERO; n.vertices];
+    let mut tri = vec![[0u32; 3]; n.faces];
+    m.export(&mut pos, &mut tri).unwrap();
+    let mut b2 = Buffers::new(caps(&pos, &tri));
+    let again = build_into(&mut b2, &pos, &tri).unwrap();
+    again.validate().unwrap();
+    assert_eq!(again.len(), n);
+}
+
+/// One random edit: (kind, element, parameter).
+fn op_strategy() -> impl Strategy<Value = (u8, u32, u8)> {
+    (0u8..4, any::<u32>(), 0u8..6)
+}
+
+type Small = HalfedgeMesh<600, 1800, 1200>;
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    /// Random flip / split / collapse / smooth sequences on the (once subdivided)
+    /// octahedron: `validate()` after every op, refused ops leave the mesh bit-for-bit
+    /// unchanged, χ is preserved.
+    #[test]
+    fn random_edit_sequences(ops in proptest::collection::vec(op_strategy(), 1..120)) {
+        let (p, t) = load("octahedron.obj");
+        let mut base = Box::new(Small::new());
+        let mut scratch = vec![0u32; build_scratch_len(t.len())];
+        base.build(&p, &t, &mut scratch).unwrap();
+        let mut m = Box::new(Small::new());
+        base.subdivide_loop(&mut *m, LoopWeights::Warren).unwrap();
+        for (kind, x, k) in ops {
+            let snap = m.clone();
+            let e = EdgeId::new(x % m.slots().edges.max(1) as u32);
+            let ok = match kind {
+                0 => m.flip_edge(e).is_ok(),
+                1 => m.split_edge(e).is_ok(),
+                2 => {
+                    let at = [CollapseAt::Head, CollapseAt::Tail, CollapseAt::Midpoint][k as usize % 3];
+                    m.collapse_edge(e.halfedge(k as u32), at).is_ok()
+                }
+                _ => {
+                    let v = VertexId::new(x % m.slots().vertices.max(1) as u32);
+                    m.diffuse_vertex(v, 0.5).is_ok()
+                }
+            };
+            prop_assert_eq!(m.validate(), Ok(()));
+            if !ok {
+                prop_assert!(*m == *snap, "refused op changed the mesh");
+            }
+            prop_assert_eq!(euler(&*m), 2);
+            prop_assert_eq!(m.boundary_loops().count(), 0);
+        }
+    }
+}
