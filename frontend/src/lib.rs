@@ -4,6 +4,7 @@
 //! scene files ([`scene`]), the renderer ([`render`]), mesh tools ([`mesh_tools`]),
 //! benchmarks ([`bench`]) and the Embree cross-check ([`crosscheck`]).
 
+pub mod accel;
 pub mod atomic;
 pub mod bench;
 pub mod crosscheck;

@@ -26,7 +26,7 @@ pub enum Verdict {
     /// both answers are valid.
     Tie,
     /// The difference is inside the reference's own uncertainty: the contested hit lies within
-    /// [`boundary_margin`] of a triangle's edge, or `t` differs by less than the grazing-scaled
+    /// the boundary margin ([`ray_space_barycentrics`]) of a triangle's edge, or `t` differs by less than the grazing-scaled
     /// tolerance.
     WithinTolerance,
     /// Embree contradicts the reference beyond the bounds (halfray agrees with it).
@@ -78,18 +78,56 @@ pub fn plane_barycentrics(ray: &Ray, tri: &[glam::Vec3; 3]) -> Option<(f64, [f64
     Some((t, [1.0 - b1 - b2, b1, b2], cos))
 }
 
-/// The boundary margin of a triangle for a ray: see [`BOUNDARY_ULPS`].
-pub fn boundary_margin(ray: &Ray, tri: &[glam::Vec3; 3]) -> f64 {
+/// Barycentrics of the ray's line in the triangle, measured in the plane perpendicular to the
+/// ray (the space where the watertight test decides inside/outside), in `f64` from the `f32`
+/// inputs, with the boundary margin of that space: `(b, margin)`. A point is on the boundary
+/// when some `|b_i| ≤ margin`. `None` when the projected triangle is degenerate (edge-on to the
+/// ray, or a degenerate triangle): then every answer about it is on the boundary.
+///
+/// The margin is [`BOUNDARY_ULPS`] ulps of the largest vertex coordinate relative to the origin
+/// (the magnitude the `f32` tests round), divided by the projected triangle's smallest altitude:
+/// the change of a barycentric caused by moving a projected vertex by that much.
+pub fn ray_space_barycentrics(ray: &Ray, tri: &[glam::Vec3; 3]) -> Option<([f64; 3], f64)> {
     let o = ray.origin.as_dvec3();
-    let [a, b, c] = tri.map(|p| p.as_dvec3());
-    let scale = [a - o, b - o, c - o]
+    let d = ray.direction.as_dvec3().normalize_or_zero();
+    if d == glam::DVec3::ZERO {
+        return None;
+    }
+    let u = d.any_orthonormal_vector();
+    let w = d.cross(u);
+    let rel = tri.map(|p| p.as_dvec3() - o);
+    let q = rel.map(|v| glam::DVec2::new(v.dot(u), v.dot(w)));
+    let area = (q[1] - q[0]).perp_dot(q[2] - q[0]);
+    let longest = (q[1] - q[0])
+        .length()
+        .max((q[2] - q[1]).length())
+        .max((q[0] - q[2]).length());
+    if !(area.abs() > 0.0) || !(longest > 0.0) {
+        return None;
+    }
+    let b = [
+        q[1].perp_dot(q[2]) / area,
+        q[2].perp_dot(q[0]) / area,
+        q[0].perp_dot(q[1]) / area,
+    ];
+    let scale = rel
         .iter()
         .map(|v| v.abs().max_element())
         .fold(0.0, f64::max);
-    let n2 = (b - a).cross(c - a).length();
-    let longest = (b - a).length().max((c - b).length()).max((a - c).length());
-    let min_altitude = n2 / longest.max(f64::MIN_POSITIVE);
-    BOUNDARY_ULPS * EPS * scale / min_altitude.max(f64::MIN_POSITIVE)
+    let altitude = area.abs() / longest;
+    Some((b, BOUNDARY_ULPS * EPS * scale / altitude))
+}
+
+/// `true` when the ray passes within the boundary margin of an edge of `tri` (or `tri` is
+/// edge-on): see [`ray_space_barycentrics`].
+pub fn near_boundary(ray: &Ray, tri: &[glam::Vec3; 3]) -> bool {
+    ray_space_barycentrics(ray, tri).is_none_or(|(b, m)| b.iter().any(|x| x.abs() <= m))
+}
+
+/// `true` when the ray passes through `tri` or within the boundary margin of it.
+pub fn inside_or_near(ray: &Ray, tri: &[glam::Vec3; 3]) -> bool {
+    ray_space_barycentrics(ray, tri)
+        .is_none_or(|(b, m)| b.iter().all(|&x| x >= -m) || b.iter().all(|&x| x <= m))
 }
 
 /// The `t` tolerance for a hit at `t` on a face at angle `cos` to the ray: see
@@ -100,8 +138,9 @@ pub fn t_tolerance(ray: &Ray, t: f64, cos: f64) -> f64 {
     T_TOLERANCE_ULPS * EPS * (t.abs() + o / d) / cos.abs().max(COS_FLOOR)
 }
 
-/// Whether `answer` is consistent with the exact geometry of its own triangle: its triangle is
-/// hit by the reference within the boundary margin, at a `t` within tolerance.
+/// Whether `answer` is consistent with the exact geometry of its own triangle: the ray passes
+/// through it or within the boundary margin ([`ray_space_barycentrics`]), at a `t` within
+/// tolerance of the triangle's plane.
 pub fn answer_is_valid(mesh: &ObjMesh, ray: &Ray, a: &Answer) -> bool {
     let Some(tri) = mesh
         .triangles
@@ -110,11 +149,10 @@ pub fn answer_is_valid(mesh: &ObjMesh, ray: &Ray, a: &Answer) -> bool {
     else {
         return false;
     };
-    let Some((t, b, cos)) = plane_barycentrics(ray, &tri) else {
+    let Some((t, _, cos)) = plane_barycentrics(ray, &tri) else {
         return false;
     };
-    let margin = boundary_margin(ray, &tri);
-    b.iter().all(|&x| x >= -margin) && (t - a.t as f64).abs() <= t_tolerance(ray, t, cos)
+    inside_or_near(ray, &tri) && (t - a.t as f64).abs() <= t_tolerance(ray, t, cos)
 }
 
 /// Classifies one ray. `reference` is the `f64` reference's closest hit (watertight, closed
@@ -143,21 +181,22 @@ pub fn judge(
         _ => {}
     }
     // They disagree on hit/miss or on t: is each side consistent with the reference?
+    let on_boundary = |r: &Answer| near_boundary(ray, &mesh.triangle(r.prim as usize));
     let ok = |x: &Option<Answer>| match (x, &reference) {
         (None, None) => true,
-        (Some(a), Some(r)) => tol_between(a, r) && answer_is_valid(mesh, ray, a),
-        // A hit the reference does not report: valid only if it lies within the boundary
-        // margin of its triangle (the reference may have missed at an edge it rounds past).
-        (Some(a), None) => answer_is_valid(mesh, ray, a),
         // A miss where the reference hits: excusable only if the reference's hit is itself on
         // a boundary (within the margin of an edge of its triangle).
-        (None, Some(r)) => {
-            let tri = mesh.triangle(r.prim as usize);
-            plane_barycentrics(ray, &tri).is_some_and(|(_, b, _)| {
-                let m = boundary_margin(ray, &tri);
-                b.iter().any(|&x| x.abs() <= m)
-            })
+        (None, Some(r)) => on_boundary(r),
+        // A hit the reference does not report, or one closer than the reference's: valid when
+        // its own triangle is hit within the boundary margin at that `t` (the reference rounded
+        // past an edge this side counted as inside).
+        (Some(a), None) => answer_is_valid(mesh, ray, a),
+        (Some(a), Some(r)) if a.t as f64 <= r.t as f64 || tol_between(a, r) => {
+            answer_is_valid(mesh, ray, a)
         }
+        // Farther than the reference: it skipped the reference's hit, which must be on a
+        // boundary for that to be excusable.
+        (Some(a), Some(r)) => on_boundary(r) && answer_is_valid(mesh, ray, a),
     };
     let (ours_ok, embree_ok) = (ok(&ours), ok(&embree));
     match (ours_ok, embree_ok) {

@@ -1,6 +1,6 @@
 //! Cost and accuracy of each ray–triangle variant, measured on the same rays in one run.
 
-use crate::crosscheck::judge::{boundary_margin, plane_barycentrics};
+use crate::crosscheck::judge::{near_boundary, plane_barycentrics};
 use crate::crosscheck::sets::{self, Adjacency, Rng};
 use crate::obj::ObjMesh;
 use glam::{DVec3, Vec3};
@@ -35,7 +35,8 @@ pub struct Accuracy {
     pub rel_t_errors: Vec<f64>,
     /// Rays where the variant and the reference disagree on hit/miss, counted over rays whose
     /// reference barycentrics are farther from every edge than
-    /// [`crate::crosscheck::judge::boundary_margin`] (closer than that, both answers are valid).
+    /// [`crate::crosscheck::judge::ray_space_barycentrics`]' margin (closer than that, both
+    /// answers are valid).
     pub hit_miss_disagreements: usize,
     /// Rays in the hit/miss comparison.
     pub hit_miss_rays: usize,
@@ -210,8 +211,7 @@ pub fn accuracy<I: TriangleIntersector>(isect: &I, w: &Workload) -> Accuracy {
     for (ray, tri) in &w.pair_rays {
         let ours = isect.intersect(ray, tri);
         let reference = F64Reference::solve(ray, tri).filter(|(t, _)| *t > 0.0);
-        let clear_of_edges = plane_barycentrics(ray, tri)
-            .is_some_and(|(_, b, _)| b.iter().all(|x| x.abs() > boundary_margin(ray, tri)));
+        let clear_of_edges = !near_boundary(ray, tri);
         if clear_of_edges {
             acc.hit_miss_rays += 1;
             if ours.is_some() != reference.is_some() {

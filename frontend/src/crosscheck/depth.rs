@@ -1,0 +1,109 @@
+//! Depth-image mode: the depth of a camera framing the mesh, rendered by halfray and by Embree
+//! (robust), written side by side with a difference panel.
+
+use super::sets::primary_rays;
+use crate::accel::MeshAccel;
+use crate::atomic::write_bytes_atomic;
+use crate::embree::EmbreeScene;
+use crate::error::{Error, Result};
+use halfray_core::triangle::TriangleVariant;
+use image::{ImageEncoder, Rgb, RgbImage};
+use std::path::Path;
+
+/// Writes `halfray | Embree | difference` (`3·size × size` pixels). Depth panels map the nearest
+/// hit to white and the farthest to dark grey, misses black. The difference panel is black where
+/// both agree within the cross-check's `t` tolerance, red where only halfray hits, blue where
+/// only Embree hits, and yellow where both hit at different depths. Prints the pixel counts.
+pub fn write_depth_diff(
+    out: &Path,
+    accel: &MeshAccel,
+    scene: &EmbreeScene,
+    variant: TriangleVariant,
+    size: usize,
+) -> Result<()> {
+    let (lo, hi) = accel.mesh.bounds().unwrap_or_default();
+    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+    let rays = primary_rays(
+        (lo + hi) * 0.5,
+        ((hi - lo).length() * 0.5).max(f64::MIN_POSITIVE),
+        size,
+        size,
+    );
+    let ours: Vec<Option<f32>> = rays
+        .iter()
+        .map(|r| accel.closest_variant(variant, r).map(|h| h.1.t))
+        .collect();
+    let emb: Vec<Option<f32>> = rays
+        .iter()
+        .map(|r| {
+            scene
+                .intersect(
+                    r.origin.to_array(),
+                    r.direction.to_array(),
+                    r.t_min,
+                    r.t_max,
+                )
+                .map(|h| h.t)
+        })
+        .collect();
+    let ts = ours.iter().chain(&emb).flatten().copied();
+    let (tmin, tmax) = ts.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), t| {
+        (a.min(t), b.max(t))
+    });
+    let shade = |t: Option<f32>| match t {
+        None => Rgb([0, 0, 0]),
+        Some(t) => {
+            let k = if tmax > tmin {
+                (t - tmin) / (tmax - tmin)
+            } else {
+                0.0
+            };
+            let g = (255.0f32 - 191.0 * k).round() as u8;
+            Rgb([g, g, g])
+        }
+    };
+    let mut img = RgbImage::new((3 * size) as u32, size as u32);
+    let mut counts = [0usize; 3];
+    for (i, r) in rays.iter().enumerate() {
+        let (x, y) = ((i % size) as u32, (i / size) as u32);
+        img.put_pixel(x, y, shade(ours[i]));
+        img.put_pixel(x + size as u32, y, shade(emb[i]));
+        let diff = match (ours[i], emb[i]) {
+            (Some(_), None) => {
+                counts[0] += 1;
+                Rgb([255, 0, 0])
+            }
+            (None, Some(_)) => {
+                counts[1] += 1;
+                Rgb([0, 96, 255])
+            }
+            (Some(a), Some(b))
+                if (a as f64 - b as f64).abs() > super::judge::t_tolerance(r, a as f64, 1.0) =>
+            {
+                counts[2] += 1;
+                Rgb([255, 220, 0])
+            }
+            _ => Rgb([0, 0, 0]),
+        };
+        img.put_pixel(x + 2 * size as u32, y, diff);
+    }
+    eprintln!(
+        "depth image {}: {}x{} px; only halfray hits: {}, only Embree hits: {}, depth differs: {}",
+        out.display(),
+        size,
+        size,
+        counts[0],
+        counts[1],
+        counts[2]
+    );
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| Error::Other(format!("encoding depth image: {e}")))?;
+    write_bytes_atomic(out, &png)
+}
