@@ -29,7 +29,14 @@ fn load(path: &str) -> (Vec<Vec3>, Vec<[u32; 3]>) {
             Some("f") => {
                 let c: Vec<u32> = it
                     .take(3)
-                    .map(|x| x.split('/').next().unwrap_or("").parse::<u32>().expect("bad index") - 1)
+                    .map(|x| {
+                        x.split('/')
+                            .next()
+                            .unwrap_or("")
+                            .parse::<u32>()
+                            .expect("bad index")
+                            - 1
+                    })
                     .collect();
                 t.push([c[0], c[1], c[2]]);
             }
@@ -53,12 +60,16 @@ fn ms(t: Instant) -> f64 {
 }
 
 fn bytes(n: Counts) -> usize {
-    n.vertices * size_of::<VertexRec>() + n.edges * size_of::<EdgeRec>() + n.faces * size_of::<FaceRec>()
+    n.vertices * size_of::<VertexRec>()
+        + n.edges * size_of::<EdgeRec>()
+        + n.faces * size_of::<FaceRec>()
 }
 
 fn main() {
     let mut args = std::env::args().skip(1);
-    let path = args.next().unwrap_or_else(|| "/work/shared/meshes/bunny.obj".into());
+    let path = args
+        .next()
+        .unwrap_or_else(|| "/work/shared/meshes/bunny.obj".into());
     let levels: usize = args.next().map_or(2, |s| s.parse().expect("levels"));
     let (p, t) = load(&path);
     println!("mesh {path}: {} vertices, {} triangles", p.len(), t.len());
@@ -70,7 +81,11 @@ fn main() {
         size_of::<FaceRec>()
     );
 
-    let mut m = mesh_with(Counts { vertices: p.len(), edges: 3 * t.len(), faces: t.len() });
+    let mut m = mesh_with(Counts {
+        vertices: p.len(),
+        edges: 3 * t.len(),
+        faces: t.len(),
+    });
     let mut scratch = vec![0u32; build_scratch_len(t.len())];
     let mut best = f64::INFINITY;
     for _ in 0..REPS {
@@ -97,7 +112,8 @@ fn main() {
         let mut best = f64::INFINITY;
         for _ in 0..REPS {
             let t0 = Instant::now();
-            m.subdivide_loop(&mut out, LoopWeights::Warren).expect("subdivide");
+            m.subdivide_loop(&mut out, LoopWeights::Warren)
+                .expect("subdivide");
             best = best.min(ms(t0));
         }
         let t0 = Instant::now();

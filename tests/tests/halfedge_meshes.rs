@@ -19,7 +19,10 @@ const LOOP_REL_TOL: f64 = 4e-6;
 
 fn mesh_dir() -> PathBuf {
     let here = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    for cand in [here.join("../../shared/meshes"), PathBuf::from("/work/shared/meshes")] {
+    for cand in [
+        here.join("../../shared/meshes"),
+        PathBuf::from("/work/shared/meshes"),
+    ] {
         if cand.exists() {
             return cand;
         }
@@ -70,7 +73,11 @@ impl Buffers {
 
 /// Capacity that any build of `p`, `t` fits in (E ≤ 3F).
 fn caps(p: &[Vec3], t: &[[u32; 3]]) -> Counts {
-    Counts { vertices: p.len(), edges: 3 * t.len(), faces: t.len() }
+    Counts {
+        vertices: p.len(),
+        edges: 3 * t.len(),
+        faces: t.len(),
+    }
 }
 
 fn build_into<'a>(
@@ -116,7 +123,11 @@ fn shared_meshes_build_validate_and_round_trip() {
         assert_eq!(euler(&m), chi, "{name}: V - E + F");
         assert_eq!(boundary_edges(&m), bedges, "{name}: boundary edges");
         assert_eq!(m.boundary_loops().count(), loops, "{name}: boundary loops");
-        assert_eq!(m.vertices().filter(|&v| m.is_isolated(v)).count(), unref, "{name}");
+        assert_eq!(
+            m.vertices().filter(|&v| m.is_isolated(v)).count(),
+            unref,
+            "{name}"
+        );
         // Every boundary vertex stores a boundary halfedge; one-rings terminate.
         for v in m.vertices() {
             let n = m.valence(v);
@@ -128,7 +139,11 @@ fn shared_meshes_build_validate_and_round_trip() {
         }
         let mut pos = vec![Vec3::ZERO; p.len()];
         let mut tri = vec![[0u32; 3]; t.len()];
-        assert_eq!(m.export(&mut pos, &mut tri), Ok((p.len(), t.len())), "{name}");
+        assert_eq!(
+            m.export(&mut pos, &mut tri),
+            Ok((p.len(), t.len())),
+            "{name}"
+        );
         assert_eq!(pos, p, "{name}: positions round trip");
         assert_eq!(tri, t, "{name}: triangles round trip");
     }
@@ -139,13 +154,19 @@ fn non_manifold_meshes_are_rejected_by_name() {
     let (p, t) = load("teapot.obj");
     let mut buf = Buffers::new(caps(&p, &t));
     let err = build_into(&mut buf, &p, &t).unwrap_err();
-    assert!(matches!(err, BuildError::NonManifoldVertex { .. }), "teapot: {err:?}");
+    assert!(
+        matches!(err, BuildError::NonManifoldVertex { .. }),
+        "teapot: {err:?}"
+    );
     assert!(buf.mesh().is_empty());
 
     let (p, t) = load("beetle.obj");
     let mut buf = Buffers::new(caps(&p, &t));
     let err = build_into(&mut buf, &p, &t).unwrap_err();
-    assert!(matches!(err, BuildError::NonManifoldEdge { .. }), "beetle: {err:?}");
+    assert!(
+        matches!(err, BuildError::NonManifoldEdge { .. }),
+        "beetle: {err:?}"
+    );
     // The named edge really has three or more faces.
     if let BuildError::NonManifoldEdge { a, b } = err {
         let uses = t
@@ -166,7 +187,9 @@ fn loop_reference(
     let mut opp: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
     for tri in t {
         for k in 0..3 {
-            opp.entry(key(tri[k], tri[(k + 1) % 3])).or_default().push(tri[(k + 2) % 3]);
+            opp.entry(key(tri[k], tri[(k + 1) % 3]))
+                .or_default()
+                .push(tri[(k + 2) % 3]);
         }
     }
     let mut nbrs: Vec<Vec<u32>> = vec![Vec::new(); p.len()];
@@ -211,7 +234,10 @@ fn loop_reference(
 fn assert_close(got: Vec3, want: DVec3, what: &str) {
     let scale = want.abs().max_element().max(1.0);
     let err = (got.as_dvec3() - want).abs().max_element();
-    assert!(err <= LOOP_REL_TOL * scale, "{what}: {got} vs {want} (err {err:e})");
+    assert!(
+        err <= LOOP_REL_TOL * scale,
+        "{what}: {got} vs {want} (err {err:e})"
+    );
 }
 
 fn check_loop(name: &str, weights: LoopWeights) {
@@ -225,23 +251,45 @@ fn check_loop(name: &str, weights: LoopWeights) {
     out.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
     assert_eq!(out.len(), need);
     assert_eq!(euler(&out), euler(&m), "{name}: χ preserved");
-    assert_eq!(boundary_edges(&out), 2 * boundary_edges(&m), "{name}: boundary edges double");
-    assert_eq!(out.boundary_loops().count(), m.boundary_loops().count(), "{name}");
+    assert_eq!(
+        boundary_edges(&out),
+        2 * boundary_edges(&m),
+        "{name}: boundary edges double"
+    );
+    assert_eq!(
+        out.boundary_loops().count(),
+        m.boundary_loops().count(),
+        "{name}"
+    );
     let (even, odd) = loop_reference(&p, &t, |n| loop_beta(n, weights) as f64);
     for v in 0..p.len() as u32 {
-        assert_close(out.position(VertexId::new(v)).unwrap(), even[v as usize], name);
+        assert_close(
+            out.position(VertexId::new(v)).unwrap(),
+            even[v as usize],
+            name,
+        );
     }
     let nv = p.len() as u32;
     for e in m.edges() {
         let [a, b] = m.edge_vertices(e).unwrap();
         let key = (a.raw().min(b.raw()), a.raw().max(b.raw()));
-        assert_close(out.position(VertexId::new(nv + e.raw())).unwrap(), odd[&key], name);
+        assert_close(
+            out.position(VertexId::new(nv + e.raw())).unwrap(),
+            odd[&key],
+            name,
+        );
     }
 }
 
 #[test]
 fn loop_subdivision_matches_reference_on_shared_meshes() {
-    for name in ["octahedron.obj", "cube.obj", "spot.obj", "torus.obj", "demosthenes.obj"] {
+    for name in [
+        "octahedron.obj",
+        "cube.obj",
+        "spot.obj",
+        "torus.obj",
+        "demosthenes.obj",
+    ] {
         check_loop(name, LoopWeights::Warren);
     }
     check_loop("spot.obj", LoopWeights::Loop);
@@ -288,11 +336,15 @@ fn edits_on_a_real_mesh_keep_invariants() {
     }
     m.validate().unwrap();
     for e in (0..ne).step_by(5) {
-        collapses +=
-            m.collapse_edge(EdgeId::new(e).halfedge(0), CollapseAt::Midpoint).is_ok() as usize;
+        collapses += m
+            .collapse_edge(EdgeId::new(e).halfedge(0), CollapseAt::Midpoint)
+            .is_ok() as usize;
     }
     m.validate().unwrap();
-    assert!(flips > 100 && splits > 100 && collapses > 100, "{flips} {splits} {collapses}");
+    assert!(
+        flips > 100 && splits > 100 && collapses > 100,
+        "{flips} {splits} {collapses}"
+    );
     assert_eq!(euler(&m), chi);
     assert_eq!(m.boundary_loops().count(), 1);
     m.compact(|_| {});

@@ -73,7 +73,11 @@ impl<S: MeshStorage> Mesh<S> {
         let (nv, nf) = (positions.len(), tris.len());
         let cap = self.capacity();
         let too_many = |kind, needed, available| {
-            BuildError::Capacity(CapacityError { kind, needed, available })
+            BuildError::Capacity(CapacityError {
+                kind,
+                needed,
+                available,
+            })
         };
         if nv > cap.vertices {
             return Err(too_many(ElementKind::Vertex, nv, cap.vertices));
@@ -84,10 +88,15 @@ impl<S: MeshStorage> Mesh<S> {
         let ns = nf * 3;
         let needed = build_scratch_len(nf);
         if scratch.len() < needed {
-            return Err(BuildError::ScratchTooSmall { needed, provided: scratch.len() });
+            return Err(BuildError::ScratchTooSmall {
+                needed,
+                provided: scratch.len(),
+            });
         }
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
-            return Err(BuildError::NonFinitePosition { vertex: VertexId(i as u32) });
+            return Err(BuildError::NonFinitePosition {
+                vertex: VertexId(i as u32),
+            });
         }
         for (f, t) in tris.iter().enumerate() {
             let face = FaceId(f as u32);
@@ -95,10 +104,16 @@ impl<S: MeshStorage> Mesh<S> {
                 return Err(BuildError::IndexOutOfRange { face, index });
             }
             if t[0] == t[1] || t[0] == t[2] {
-                return Err(BuildError::RepeatedIndex { face, vertex: VertexId(t[0]) });
+                return Err(BuildError::RepeatedIndex {
+                    face,
+                    vertex: VertexId(t[0]),
+                });
             }
             if t[1] == t[2] {
-                return Err(BuildError::RepeatedIndex { face, vertex: VertexId(t[1]) });
+                return Err(BuildError::RepeatedIndex {
+                    face,
+                    vertex: VertexId(t[1]),
+                });
             }
         }
 
@@ -120,7 +135,10 @@ impl<S: MeshStorage> Mesh<S> {
             }
             let (lo, hi) = ((k >> 32) as u32, k as u32);
             if j - i > 2 {
-                return Err(BuildError::NonManifoldEdge { a: VertexId(lo), b: VertexId(hi) });
+                return Err(BuildError::NonManifoldEdge {
+                    a: VertexId(lo),
+                    b: VertexId(hi),
+                });
             }
             if j - i == 2 {
                 let s2 = order.get(i + 1).map_or(0, |&s| s as usize);
@@ -150,7 +168,9 @@ impl<S: MeshStorage> Mesh<S> {
         while i < ns {
             let s1 = order.get(i).map_or(0, |&s| s as usize);
             let paired = i + 1 < ns
-                && order.get(i + 1).is_some_and(|&s| key(tris, s as usize) == key(tris, s1));
+                && order
+                    .get(i + 1)
+                    .is_some_and(|&s| key(tris, s as usize) == key(tris, s1));
             let e = self.alloc_edge();
             let (h0, h1) = (e << 1, (e << 1) | 1);
             let (a, b) = side(tris, s1);
@@ -191,7 +211,9 @@ impl<S: MeshStorage> Mesh<S> {
             }
             let v = self.tail_raw(b);
             if self.face_raw(self.out_raw(v)) == NONE {
-                return Err(BuildError::NonManifoldVertex { vertex: VertexId(v) });
+                return Err(BuildError::NonManifoldVertex {
+                    vertex: VertexId(v),
+                });
             }
             self.set_out(v, b);
         }
@@ -202,7 +224,9 @@ impl<S: MeshStorage> Mesh<S> {
             let w = self.head_raw(b);
             let n = self.out_raw(w);
             if self.face_raw(n) != NONE {
-                return Err(BuildError::NonManifoldVertex { vertex: VertexId(w) });
+                return Err(BuildError::NonManifoldVertex {
+                    vertex: VertexId(w),
+                });
             }
             self.link(b, n);
         }
@@ -231,9 +255,13 @@ impl<S: MeshStorage> Mesh<S> {
             }
         }
         for h in 0..nh {
-            let marked = bits.get((h / 32) as usize).is_some_and(|w| w & (1 << (h % 32)) != 0);
+            let marked = bits
+                .get((h / 32) as usize)
+                .is_some_and(|w| w & (1 << (h % 32)) != 0);
             if !marked {
-                return Err(BuildError::NonManifoldVertex { vertex: VertexId(self.tail_raw(h)) });
+                return Err(BuildError::NonManifoldVertex {
+                    vertex: VertexId(self.tail_raw(h)),
+                });
             }
         }
         Ok(())

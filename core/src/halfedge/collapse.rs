@@ -52,8 +52,16 @@ impl<S: MeshStorage> Mesh<S> {
             return Err(CE::NonFinitePosition);
         }
         let (f0, f1) = (self.face_raw(h), self.face_raw(t));
-        let vl = if f0 != NONE { self.head_raw(self.next_raw(h)) } else { NONE };
-        let vr = if f1 != NONE { self.head_raw(self.next_raw(t)) } else { NONE };
+        let vl = if f0 != NONE {
+            self.head_raw(self.next_raw(h))
+        } else {
+            NONE
+        };
+        let vr = if f1 != NONE {
+            self.head_raw(self.next_raw(t))
+        } else {
+            NONE
+        };
         if f0 != NONE && f1 != NONE && vl == vr {
             return Err(CE::WingsCoincide);
         }
@@ -70,10 +78,7 @@ impl<S: MeshStorage> Mesh<S> {
             return Err(CE::InteriorEdgeJoinsBoundaries);
         }
         for w in self.vertex_neighbors(VertexId(v0)) {
-            if w.0 != v1
-                && w.0 != vl
-                && w.0 != vr
-                && self.find_halfedge(VertexId(v1), w).is_some()
+            if w.0 != v1 && w.0 != vl && w.0 != vr && self.find_halfedge(VertexId(v1), w).is_some()
             {
                 return Err(CE::LinkCondition(w));
             }
@@ -92,7 +97,11 @@ impl<S: MeshStorage> Mesh<S> {
                 let old = (b - a).cross(c - a);
                 let vs = self.face_vertices(f).unwrap_or([VertexId(NONE); 3]);
                 let moved = vs.map(|x| {
-                    if x.0 == v || x.0 == other { target } else { self.pos_raw(x.0) }
+                    if x.0 == v || x.0 == other {
+                        target
+                    } else {
+                        self.pos_raw(x.0)
+                    }
                 });
                 let new = (moved[1] - moved[0]).cross(moved[2] - moved[0]);
                 if old != Vec3::ZERO && old.dot(new) <= 0.0 {

@@ -28,17 +28,24 @@ impl<S: MeshStorage> Mesh<S> {
         let np = self.s.vertices().len();
         let nt = self.live.faces;
         if positions.len() < np || triangles.len() < nt {
-            return Err(ExportError::BufferTooSmall { positions: np, triangles: nt });
+            return Err(ExportError::BufferTooSmall {
+                positions: np,
+                triangles: nt,
+            });
         }
         for (out, r) in positions.iter_mut().zip(self.s.vertices()) {
-            *out = if self.v_live_rec(r) { r.pos } else { Vec3::ZERO };
+            *out = if self.v_live_rec(r) {
+                r.pos
+            } else {
+                Vec3::ZERO
+            };
         }
         let mut t = triangles.iter_mut();
         for f in 0..self.s.faces().len() as u32 {
-            if let Some(vs) = self.face_vertices(super::FaceId(f)) {
-                if let Some(out) = t.next() {
-                    *out = vs.map(|v| v.0);
-                }
+            if let Some(vs) = self.face_vertices(super::FaceId(f))
+                && let Some(out) = t.next()
+            {
+                *out = vs.map(|v| v.0);
             }
         }
         Ok((np, nt))

@@ -77,7 +77,11 @@ impl<const V: usize, const E: usize, const F: usize> Mesh<InlineStorage<V, E, F>
     pub const fn new() -> Self {
         Self {
             s: InlineStorage::new(),
-            live: Counts { vertices: 0, edges: 0, faces: 0 },
+            live: Counts {
+                vertices: 0,
+                edges: 0,
+                faces: 0,
+            },
             free_v: NONE,
             free_e: NONE,
             free_f: NONE,
@@ -130,7 +134,13 @@ impl<S: MeshStorage> Mesh<S> {
     /// An empty mesh over the given storage (its previous contents are discarded).
     pub fn with_storage(mut s: S) -> Self {
         s.truncate(Counts::default());
-        Self { s, live: Counts::default(), free_v: NONE, free_e: NONE, free_f: NONE }
+        Self {
+            s,
+            live: Counts::default(),
+            free_v: NONE,
+            free_e: NONE,
+            free_f: NONE,
+        }
     }
 
     /// Removes everything; capacity is unchanged.
@@ -195,7 +205,11 @@ impl<S: MeshStorage> Mesh<S> {
             (ElementKind::Face, need.faces, a.faces),
         ] {
             if n > av {
-                return Err(CapacityError { kind, needed: n, available: av });
+                return Err(CapacityError {
+                    kind,
+                    needed: n,
+                    available: av,
+                });
             }
         }
         Ok(())
@@ -213,12 +227,19 @@ impl<S: MeshStorage> Mesh<S> {
 
     #[inline]
     pub(crate) fn hr_mut(&mut self, h: u32) -> Option<&mut HalfedgeRec> {
-        self.s.edges_mut().get_mut((h >> 1) as usize).map(|e| &mut e.h[(h & 1) as usize])
+        self.s
+            .edges_mut()
+            .get_mut((h >> 1) as usize)
+            .map(|e| &mut e.h[(h & 1) as usize])
     }
 
     #[inline]
     pub(crate) fn vr(&self, v: u32) -> VertexRec {
-        self.s.vertices().get(v as usize).copied().unwrap_or(VertexRec::EMPTY)
+        self.s
+            .vertices()
+            .get(v as usize)
+            .copied()
+            .unwrap_or(VertexRec::EMPTY)
     }
 
     #[inline]
@@ -229,7 +250,10 @@ impl<S: MeshStorage> Mesh<S> {
     /// Stored halfedge of face `f` (dead-marked value for dead/out-of-range faces).
     #[inline]
     pub(crate) fn fh(&self, f: u32) -> u32 {
-        self.s.faces().get(f as usize).map_or(DEAD_BIT | FREE_END, |r| r.h)
+        self.s
+            .faces()
+            .get(f as usize)
+            .map_or(DEAD_BIT | FREE_END, |r| r.h)
     }
 
     #[inline]
@@ -305,11 +329,17 @@ impl<S: MeshStorage> Mesh<S> {
 
     #[inline]
     pub(crate) fn v_live(&self, v: u32) -> bool {
-        self.s.vertices().get(v as usize).is_some_and(|r| r.out == NONE || r.out < DEAD_BIT)
+        self.s
+            .vertices()
+            .get(v as usize)
+            .is_some_and(|r| r.out == NONE || r.out < DEAD_BIT)
     }
     #[inline]
     pub(crate) fn e_live(&self, e: u32) -> bool {
-        self.s.edges().get(e as usize).is_some_and(|r| r.h[0].head != NONE)
+        self.s
+            .edges()
+            .get(e as usize)
+            .is_some_and(|r| r.h[0].head != NONE)
     }
     #[inline]
     pub(crate) fn h_live(&self, h: u32) -> bool {
@@ -317,7 +347,10 @@ impl<S: MeshStorage> Mesh<S> {
     }
     #[inline]
     pub(crate) fn f_live(&self, f: u32) -> bool {
-        self.s.faces().get(f as usize).is_some_and(|r| r.h < DEAD_BIT)
+        self.s
+            .faces()
+            .get(f as usize)
+            .is_some_and(|r| r.h < DEAD_BIT)
     }
 
     /// Counter-clockwise rotation of an outgoing halfedge around its tail: `twin(prev(h))`.
@@ -376,7 +409,12 @@ impl<S: MeshStorage> Mesh<S> {
     }
 
     pub(crate) fn alloc_edge(&mut self) -> u32 {
-        let fresh = HalfedgeRec { next: NONE, prev: NONE, head: 0, face: NONE };
+        let fresh = HalfedgeRec {
+            next: NONE,
+            prev: NONE,
+            head: 0,
+            face: NONE,
+        };
         let rec = EdgeRec { h: [fresh; 2] };
         if self.free_e != NONE {
             let e = self.free_e;
@@ -415,9 +453,16 @@ impl<S: MeshStorage> Mesh<S> {
     }
 
     pub(crate) fn free_vertex(&mut self, v: u32) {
-        let link = if self.free_v == NONE { FREE_END } else { self.free_v };
+        let link = if self.free_v == NONE {
+            FREE_END
+        } else {
+            self.free_v
+        };
         if let Some(r) = self.vr_mut(v) {
-            *r = VertexRec { pos: Vec3::ZERO, out: DEAD_BIT | link };
+            *r = VertexRec {
+                pos: Vec3::ZERO,
+                out: DEAD_BIT | link,
+            };
             self.free_v = v;
             self.live.vertices -= 1;
         }
@@ -434,7 +479,11 @@ impl<S: MeshStorage> Mesh<S> {
     }
 
     pub(crate) fn free_face(&mut self, f: u32) {
-        let link = if self.free_f == NONE { FREE_END } else { self.free_f };
+        let link = if self.free_f == NONE {
+            FREE_END
+        } else {
+            self.free_f
+        };
         if let Some(r) = self.s.faces_mut().get_mut(f as usize) {
             r.h = DEAD_BIT | link;
             self.free_f = f;
@@ -536,8 +585,12 @@ impl<S: MeshStorage> Mesh<S> {
     }
     /// Endpoints `[tail, head]` of halfedge `2e`.
     pub fn edge_vertices(&self, e: EdgeId) -> Option<[VertexId; 2]> {
-        self.e_live(e.0)
-            .then(|| [VertexId(self.tail_raw(e.0 << 1)), VertexId(self.head_raw(e.0 << 1))])
+        self.e_live(e.0).then(|| {
+            [
+                VertexId(self.tail_raw(e.0 << 1)),
+                VertexId(self.head_raw(e.0 << 1)),
+            ]
+        })
     }
     /// The face's corners in counter-clockwise order, starting at the tail of its stored
     /// halfedge. For a freshly built mesh this is exactly the input triangle.
@@ -547,7 +600,11 @@ impl<S: MeshStorage> Mesh<S> {
         }
         let h = self.fh(f.0);
         let n = self.next_raw(h);
-        Some([VertexId(self.tail_raw(h)), VertexId(self.head_raw(h)), VertexId(self.head_raw(n))])
+        Some([
+            VertexId(self.tail_raw(h)),
+            VertexId(self.head_raw(h)),
+            VertexId(self.head_raw(n)),
+        ])
     }
 
     /// Corner positions of a live face (internal; dead faces give zeros).
@@ -608,7 +665,10 @@ impl<S: MeshStorage> Mesh<S> {
                     }
                 }
             }
-            on_move(Moved::Vertex { from: VertexId(from), to: VertexId(to) });
+            on_move(Moved::Vertex {
+                from: VertexId(from),
+                to: VertexId(to),
+            });
             i += 1;
             j -= 1;
         }
@@ -625,8 +685,19 @@ impl<S: MeshStorage> Mesh<S> {
                 break;
             }
             let (to, from) = (i as u32, (j - 1) as u32);
-            let map = |x: u32| if x >> 1 == from { (to << 1) | (x & 1) } else { x };
-            let mut rec = self.s.edges().get(from as usize).copied().unwrap_or(EdgeRec::EMPTY);
+            let map = |x: u32| {
+                if x >> 1 == from {
+                    (to << 1) | (x & 1)
+                } else {
+                    x
+                }
+            };
+            let mut rec = self
+                .s
+                .edges()
+                .get(from as usize)
+                .copied()
+                .unwrap_or(EdgeRec::EMPTY);
             for r in &mut rec.h {
                 r.next = map(r.next);
                 r.prev = map(r.prev);
@@ -650,7 +721,10 @@ impl<S: MeshStorage> Mesh<S> {
                     self.set_out(tail, new);
                 }
             }
-            on_move(Moved::Edge { from: EdgeId(from), to: EdgeId(to) });
+            on_move(Moved::Edge {
+                from: EdgeId(from),
+                to: EdgeId(to),
+            });
             i += 1;
             j -= 1;
         }
@@ -675,7 +749,10 @@ impl<S: MeshStorage> Mesh<S> {
                 self.set_face(h, to);
                 h = self.next_raw(h);
             }
-            on_move(Moved::Face { from: FaceId(from), to: FaceId(to) });
+            on_move(Moved::Face {
+                from: FaceId(from),
+                to: FaceId(to),
+            });
             i += 1;
             j -= 1;
         }

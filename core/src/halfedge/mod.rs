@@ -55,7 +55,7 @@ pub use handles::{EdgeId, FaceId, HalfedgeId, VertexId};
 pub use mesh::{HalfedgeMesh, Mesh, Moved, SliceMesh};
 pub use smooth::DiffuseBoundary;
 pub use storage::{
-    Counts, EdgeRec, FaceRec, HalfedgeRec, InlineStorage, MAX_ELEMENTS, MeshStorage,
-    SliceStorage, VertexRec,
+    Counts, EdgeRec, FaceRec, HalfedgeRec, InlineStorage, MAX_ELEMENTS, MeshStorage, SliceStorage,
+    VertexRec,
 };
 pub use subdivide::{LoopWeights, loop_beta};

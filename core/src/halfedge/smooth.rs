@@ -31,7 +31,11 @@ impl<S: MeshStorage> Mesh<S> {
             sum += self.pos_raw(w.0);
             n += 1;
         }
-        Some(if n == 0 { Vec3::ZERO } else { sum / n as f32 - x })
+        Some(if n == 0 {
+            Vec3::ZERO
+        } else {
+            sum / n as f32 - x
+        })
     }
 
     /// Moves one vertex: `x' = x + k·L(v)` (units of `k`: dimensionless; `k = 1` moves the

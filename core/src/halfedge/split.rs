@@ -37,8 +37,12 @@ impl<S: MeshStorage> Mesh<S> {
         let (h, t) = (e.0 << 1, (e.0 << 1) | 1);
         let (f0, f1) = (self.face_raw(h), self.face_raw(t));
         let sides = (f0 != NONE) as usize + (f1 != NONE) as usize;
-        self.check_room(Counts { vertices: 1, edges: 1 + sides, faces: sides })
-            .map_err(SplitError::Capacity)?;
+        self.check_room(Counts {
+            vertices: 1,
+            edges: 1 + sides,
+            faces: sides,
+        })
+        .map_err(SplitError::Capacity)?;
 
         let (hn, hp) = (self.next_raw(h), self.prev_raw(h));
         let (tn, tp) = (self.next_raw(t), self.prev_raw(t));

@@ -48,7 +48,10 @@ pub struct VertexRec {
 
 impl VertexRec {
     /// An empty (dead) record, for initialising caller buffers.
-    pub const EMPTY: Self = Self { pos: Vec3::ZERO, out: DEAD_BIT | FREE_END };
+    pub const EMPTY: Self = Self {
+        pos: Vec3::ZERO,
+        out: DEAD_BIT | FREE_END,
+    };
 }
 
 impl Default for VertexRec {
@@ -68,7 +71,12 @@ pub struct HalfedgeRec {
 
 impl HalfedgeRec {
     /// A dead record (also what internal reads of an out-of-range slot return).
-    pub(crate) const DEAD: Self = Self { next: NONE, prev: NONE, head: NONE, face: NONE };
+    pub(crate) const DEAD: Self = Self {
+        next: NONE,
+        prev: NONE,
+        head: NONE,
+        face: NONE,
+    };
 }
 
 /// An edge record: its two halfedges (`2e`, `2e + 1`). 32 bytes.
@@ -79,7 +87,9 @@ pub struct EdgeRec {
 
 impl EdgeRec {
     /// An empty (dead) record, for initialising caller buffers.
-    pub const EMPTY: Self = Self { h: [HalfedgeRec::DEAD; 2] };
+    pub const EMPTY: Self = Self {
+        h: [HalfedgeRec::DEAD; 2],
+    };
 }
 
 impl Default for EdgeRec {
@@ -96,7 +106,9 @@ pub struct FaceRec {
 
 impl FaceRec {
     /// An empty (dead) record, for initialising caller buffers.
-    pub const EMPTY: Self = Self { h: DEAD_BIT | FREE_END };
+    pub const EMPTY: Self = Self {
+        h: DEAD_BIT | FREE_END,
+    };
 }
 
 impl Default for FaceRec {
@@ -127,7 +139,10 @@ impl Counts {
     pub const fn after_loop(&self) -> Counts {
         Counts {
             vertices: self.vertices.saturating_add(self.edges),
-            edges: self.edges.saturating_mul(2).saturating_add(self.faces.saturating_mul(3)),
+            edges: self
+                .edges
+                .saturating_mul(2)
+                .saturating_add(self.faces.saturating_mul(3)),
             faces: self.faces.saturating_mul(4),
         }
     }
@@ -185,7 +200,11 @@ pub struct InlineStorage<const V: usize, const E: usize, const F: usize> {
 impl<const V: usize, const E: usize, const F: usize> InlineStorage<V, E, F> {
     /// Empty storage (`const`, so it can initialise a `static`).
     pub const fn new() -> Self {
-        Self { v: heapless::Vec::new(), e: heapless::Vec::new(), f: heapless::Vec::new() }
+        Self {
+            v: heapless::Vec::new(),
+            e: heapless::Vec::new(),
+            f: heapless::Vec::new(),
+        }
     }
 }
 
@@ -217,7 +236,11 @@ impl<const V: usize, const E: usize, const F: usize> MeshStorage for InlineStora
         &mut self.f
     }
     fn capacity(&self) -> Counts {
-        Counts { vertices: V, edges: E, faces: F }
+        Counts {
+            vertices: V,
+            edges: E,
+            faces: F,
+        }
     }
     fn push_vertex(&mut self, r: VertexRec) -> bool {
         self.v.push(r).is_ok()
@@ -254,7 +277,14 @@ impl<'a> SliceStorage<'a> {
         edges: &'a mut [EdgeRec],
         faces: &'a mut [FaceRec],
     ) -> Self {
-        Self { v: vertices, nv: 0, e: edges, ne: 0, f: faces, nf: 0 }
+        Self {
+            v: vertices,
+            nv: 0,
+            e: edges,
+            ne: 0,
+            f: faces,
+            nf: 0,
+        }
     }
 }
 
@@ -291,7 +321,11 @@ impl MeshStorage for SliceStorage<'_> {
         self.f.get_mut(..self.nf).unwrap_or(&mut [])
     }
     fn capacity(&self) -> Counts {
-        Counts { vertices: self.v.len(), edges: self.e.len(), faces: self.f.len() }
+        Counts {
+            vertices: self.v.len(),
+            edges: self.e.len(),
+            faces: self.f.len(),
+        }
     }
     fn push_vertex(&mut self, r: VertexRec) -> bool {
         push_into(self.v, &mut self.nv, r)

@@ -38,7 +38,11 @@ pub fn loop_beta(n: usize, weights: LoopWeights) -> f32 {
 #[inline]
 fn children(h: u32) -> (u32, u32) {
     let e = h >> 1;
-    if h & 1 == 0 { (4 * e, 4 * e + 2) } else { (4 * e + 3, 4 * e + 1) }
+    if h & 1 == 0 {
+        (4 * e, 4 * e + 2)
+    } else {
+        (4 * e + 3, 4 * e + 1)
+    }
 }
 
 impl<S: MeshStorage> Mesh<S> {
@@ -126,13 +130,23 @@ impl<S: MeshStorage> Mesh<S> {
                 }));
             }
         }
-        let (nv, ne, nf) = (self.live.vertices as u32, self.live.edges as u32, self.live.faces as u32);
+        let (nv, ne, nf) = (
+            self.live.vertices as u32,
+            self.live.edges as u32,
+            self.live.faces as u32,
+        );
         out.clear();
         for v in 0..nv {
-            out.alloc_vertex(self.loop_vertex_position(VertexId(v), weights).unwrap_or(Vec3::ZERO));
+            out.alloc_vertex(
+                self.loop_vertex_position(VertexId(v), weights)
+                    .unwrap_or(Vec3::ZERO),
+            );
         }
         for e in 0..ne {
-            out.alloc_vertex(self.loop_edge_position(super::EdgeId(e)).unwrap_or(Vec3::ZERO));
+            out.alloc_vertex(
+                self.loop_edge_position(super::EdgeId(e))
+                    .unwrap_or(Vec3::ZERO),
+            );
         }
         for _ in 0..need.edges {
             out.alloc_edge();
@@ -186,7 +200,11 @@ impl<S: MeshStorage> Mesh<S> {
         }
         for e in 0..ne {
             let (h, t) = (e << 1, (e << 1) | 1);
-            let o = if self.face_raw(t) == NONE { children(t).1 } else { children(h).1 };
+            let o = if self.face_raw(t) == NONE {
+                children(t).1
+            } else {
+                children(h).1
+            };
             out.set_out(nv + e, o);
         }
         Ok(())

@@ -29,7 +29,12 @@ fn close(a: Vec3, b: Vec3) -> bool {
 }
 
 fn tetra() -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let p = vec![vec3(1., 1., 1.), vec3(1., -1., -1.), vec3(-1., 1., -1.), vec3(-1., -1., 1.)];
+    let p = vec![
+        vec3(1., 1., 1.),
+        vec3(1., -1., -1.),
+        vec3(-1., 1., -1.),
+        vec3(-1., -1., 1.),
+    ];
     let t = vec![[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]];
     (p, t)
 }
@@ -75,7 +80,11 @@ fn icosa() -> (Vec<Vec3>, Vec<[u32; 3]>) {
             for c in b + 1..12 {
                 if adj(a, b) && adj(b, c) && adj(a, c) {
                     let n = (p[b] - p[a]).cross(p[c] - p[a]);
-                    let tri = if n.dot(p[a] + p[b] + p[c]) > 0.0 { [a, b, c] } else { [a, c, b] };
+                    let tri = if n.dot(p[a] + p[b] + p[c]) > 0.0 {
+                        [a, b, c]
+                    } else {
+                        [a, c, b]
+                    };
                     t.push(tri.map(|x| x as u32));
                 }
             }
@@ -141,10 +150,20 @@ fn build_small_meshes() {
     let (p, t) = tetra();
     let m: M = build(&p, &t).unwrap();
     m.validate().unwrap();
-    assert_eq!(m.len(), Counts { vertices: 4, edges: 6, faces: 4 });
+    assert_eq!(
+        m.len(),
+        Counts {
+            vertices: 4,
+            edges: 6,
+            faces: 4
+        }
+    );
     assert_eq!(euler(&m), 2);
     assert_eq!(m.boundary_loops().count(), 0);
-    assert!(m.vertices().all(|v| m.valence(v) == 3 && !m.is_boundary_vertex(v)));
+    assert!(
+        m.vertices()
+            .all(|v| m.valence(v) == 3 && !m.is_boundary_vertex(v))
+    );
 
     let (p, t) = grid(3);
     let m: M = build(&p, &t).unwrap();
@@ -156,7 +175,10 @@ fn build_small_meshes() {
     // The boundary convention: boundary vertices store a boundary halfedge.
     for v in m.vertices() {
         let h = m.vertex_halfedge(v).unwrap();
-        assert_eq!(m.is_boundary_halfedge(h), m.outgoing_halfedges(v).any(|g| m.face(g).is_none()));
+        assert_eq!(
+            m.is_boundary_halfedge(h),
+            m.outgoing_halfedges(v).any(|g| m.face(g).is_none())
+        );
     }
 }
 
@@ -168,7 +190,14 @@ fn build_single_triangle_and_isolated_vertex() {
     assert!(m.is_isolated(VertexId(3)));
     assert_eq!(m.vertex_halfedge(VertexId(3)), None);
     assert_eq!(m.valence(VertexId(3)), 0);
-    assert_eq!(m.len(), Counts { vertices: 4, edges: 3, faces: 1 });
+    assert_eq!(
+        m.len(),
+        Counts {
+            vertices: 4,
+            edges: 3,
+            faces: 1
+        }
+    );
     for v in 0..3 {
         assert!(m.is_boundary_vertex(VertexId(v)));
         assert_eq!(m.valence(VertexId(v)), 2);
@@ -179,33 +208,55 @@ fn build_single_triangle_and_isolated_vertex() {
     assert_eq!(m.export(&mut pos, &mut tri), Ok((4, 1)));
     assert_eq!(pos, p);
     assert_eq!(tri, [[0, 1, 2]]);
-    assert!(matches!(m.export(&mut pos[..3], &mut tri), Err(ExportError::BufferTooSmall { .. })));
+    assert!(matches!(
+        m.export(&mut pos[..3], &mut tri),
+        Err(ExportError::BufferTooSmall { .. })
+    ));
 }
 
 #[test]
 fn build_errors_name_the_element() {
-    let p: Vec<Vec3> = (0..8).map(|i| vec3(i as f32, (i * i) as f32, 0.0)).collect();
+    let p: Vec<Vec3> = (0..8)
+        .map(|i| vec3(i as f32, (i * i) as f32, 0.0))
+        .collect();
     let e = |t: &[[u32; 3]]| build::<8, 32, 16>(&p, t).err();
     // Bowtie: two triangles sharing only vertex 0.
     assert_eq!(
         e(&[[0, 1, 2], [0, 3, 4]]),
-        Some(BuildError::NonManifoldVertex { vertex: VertexId(0) })
+        Some(BuildError::NonManifoldVertex {
+            vertex: VertexId(0)
+        })
     );
     // Edge 0–1 used by three triangles.
     assert_eq!(
         e(&[[0, 1, 2], [1, 0, 3], [0, 1, 4]]),
-        Some(BuildError::NonManifoldEdge { a: VertexId(0), b: VertexId(1) })
+        Some(BuildError::NonManifoldEdge {
+            a: VertexId(0),
+            b: VertexId(1)
+        })
     );
     // Directed edge 0→1 twice.
     assert_eq!(
         e(&[[0, 1, 2], [0, 1, 3]]),
-        Some(BuildError::InconsistentOrientation { a: VertexId(0), b: VertexId(1) })
+        Some(BuildError::InconsistentOrientation {
+            a: VertexId(0),
+            b: VertexId(1)
+        })
     );
     assert_eq!(
         e(&[[0, 1, 2], [4, 5, 4]]),
-        Some(BuildError::RepeatedIndex { face: FaceId(1), vertex: VertexId(4) })
+        Some(BuildError::RepeatedIndex {
+            face: FaceId(1),
+            vertex: VertexId(4)
+        })
     );
-    assert_eq!(e(&[[0, 1, 9]]), Some(BuildError::IndexOutOfRange { face: FaceId(0), index: 9 }));
+    assert_eq!(
+        e(&[[0, 1, 9]]),
+        Some(BuildError::IndexOutOfRange {
+            face: FaceId(0),
+            index: 9
+        })
+    );
     // Two tetrahedra sharing one vertex: closed fans, no boundary, still a bowtie.
     let (mut tp, tt) = tetra();
     tp.extend(tp.clone().iter().skip(1).map(|v| *v + vec3(5., 0., 0.)));
@@ -213,30 +264,44 @@ fn build_errors_name_the_element() {
     t2.extend(tt.iter().map(|t| t.map(|i| if i == 0 { 0 } else { i + 3 })));
     assert_eq!(
         build::<8, 32, 16>(&tp, &t2).err(),
-        Some(BuildError::NonManifoldVertex { vertex: VertexId(0) })
+        Some(BuildError::NonManifoldVertex {
+            vertex: VertexId(0)
+        })
     );
     // Non-finite position.
     let mut bad = p.clone();
     bad[2].y = f32::NAN;
     assert_eq!(
         build::<8, 32, 16>(&bad, &[[0, 1, 2]]).err(),
-        Some(BuildError::NonFinitePosition { vertex: VertexId(2) })
+        Some(BuildError::NonFinitePosition {
+            vertex: VertexId(2)
+        })
     );
     // Capacity and scratch.
     let (p, t) = tetra();
     assert!(matches!(
         build::<4, 5, 4>(&p, &t),
-        Err(BuildError::Capacity(CapacityError { kind: ElementKind::Edge, needed: 6, .. }))
+        Err(BuildError::Capacity(CapacityError {
+            kind: ElementKind::Edge,
+            needed: 6,
+            ..
+        }))
     ));
     assert!(matches!(
         build::<3, 6, 4>(&p, &t),
-        Err(BuildError::Capacity(CapacityError { kind: ElementKind::Vertex, .. }))
+        Err(BuildError::Capacity(CapacityError {
+            kind: ElementKind::Vertex,
+            ..
+        }))
     ));
     let mut m = M::new();
     let mut small = [0u32; 5];
     assert_eq!(
         m.build(&p, &t, &mut small),
-        Err(BuildError::ScratchTooSmall { needed: 24, provided: 5 })
+        Err(BuildError::ScratchTooSmall {
+            needed: 24,
+            provided: 5
+        })
     );
     // A failed build leaves the mesh empty.
     let mut scratch = vec![0u32; 64];
@@ -294,15 +359,24 @@ fn traversal_around_interior_and_boundary_vertices() {
     assert_eq!(m.opposite_edges(a).count(), 2);
     // Face traversal.
     let f = FaceId(0);
-    assert_eq!(m.face_vertex_iter(f).map(|v| v.0).collect::<Vec<_>>(), vec![3, 4, 5]);
-    assert_eq!(m.face_vertices(f), Some([VertexId(3), VertexId(4), VertexId(5)]));
+    assert_eq!(
+        m.face_vertex_iter(f).map(|v| v.0).collect::<Vec<_>>(),
+        vec![3, 4, 5]
+    );
+    assert_eq!(
+        m.face_vertices(f),
+        Some([VertexId(3), VertexId(4), VertexId(5)])
+    );
     assert_eq!(m.face_edges(f).count(), 3);
     let nb: Vec<FaceId> = m.face_neighbors(f).collect();
     assert_eq!(nb.len(), 2);
     assert!(nb.contains(&FaceId(1)) && nb.contains(&FaceId(4)));
     assert!(m.find_halfedge(VertexId(0), VertexId(2)).is_none());
     let h = m.find_halfedge(VertexId(3), VertexId(1)).unwrap();
-    assert_eq!((m.tail(h), m.head(h)), (Some(VertexId(3)), Some(VertexId(1))));
+    assert_eq!(
+        (m.tail(h), m.head(h)),
+        (Some(VertexId(3)), Some(VertexId(1)))
+    );
 }
 
 #[test]
@@ -312,7 +386,11 @@ fn junk_handles_never_panic() {
     let before = m.clone();
     for raw in [100, 1 << 20, u32::MAX - 1, u32::MAX] {
         let (v, e, f, h) = (VertexId(raw), EdgeId(raw), FaceId(raw), HalfedgeId(raw));
-        let (v, f) = if raw == 100 { (VertexId(6), FaceId(5)) } else { (v, f) };
+        let (v, f) = if raw == 100 {
+            (VertexId(6), FaceId(5))
+        } else {
+            (v, f)
+        };
         assert_eq!(m.position(v), None);
         assert_eq!(m.next(h), None);
         assert_eq!(m.face_vertices(f), None);
@@ -323,12 +401,21 @@ fn junk_handles_never_panic() {
         assert_eq!(m.laplacian(v), None);
         assert_eq!(m.flip_edge(e), Err(FlipError::Dead));
         assert_eq!(m.split_edge(e), Err(SplitError::Dead));
-        assert_eq!(m.collapse_edge(h, CollapseAt::Midpoint), Err(CollapseError::Dead));
+        assert_eq!(
+            m.collapse_edge(h, CollapseAt::Midpoint),
+            Err(CollapseError::Dead)
+        );
         assert_eq!(m.set_position(v, Vec3::ONE), Err(PositionError::Dead));
         assert_eq!(m.diffuse_vertex(v, 0.5), Err(DiffuseError::Dead));
     }
-    assert_eq!(m.set_position(VertexId(0), Vec3::NAN), Err(PositionError::NonFinite));
-    assert_eq!(m.split_edge_at(EdgeId(0), Vec3::INFINITY), Err(SplitError::NonFinitePosition));
+    assert_eq!(
+        m.set_position(VertexId(0), Vec3::NAN),
+        Err(PositionError::NonFinite)
+    );
+    assert_eq!(
+        m.split_edge_at(EdgeId(0), Vec3::INFINITY),
+        Err(SplitError::NonFinitePosition)
+    );
     assert_eq!(m, before);
 }
 
@@ -339,10 +426,15 @@ fn loop_worked_examples_on_the_issue_fan() {
     let (a, b, c, d, e, f) = (p[0], p[1], p[2], p[3], p[4], p[5]);
     // New vertex on BD: 3/8 (B + D) + 1/8 (A + C) = (4.5, 4.25, 0).
     let bd = m.find_halfedge(VertexId(1), VertexId(3)).unwrap().edge();
-    assert!(close(m.loop_edge_position(bd).unwrap(), vec3(4.5, 4.25, 0.0)));
+    assert!(close(
+        m.loop_edge_position(bd).unwrap(),
+        vec3(4.5, 4.25, 0.0)
+    ));
     // D (n = 5, Warren β = 3/40): 25/40 D + 3/40 (A+B+C+E+F) = (4.375, 2.375, 0).
     assert_eq!(loop_beta(5, LoopWeights::Warren), 3.0 / 40.0);
-    let dw = m.loop_vertex_position(VertexId(3), LoopWeights::Warren).unwrap();
+    let dw = m
+        .loop_vertex_position(VertexId(3), LoopWeights::Warren)
+        .unwrap();
     assert!(close(dw, vec3(4.375, 2.375, 0.0)), "{dw}");
     // Loop's original β from the formula, in f64.
     let cos = (2.0 * std::f64::consts::PI / 5.0).cos();
@@ -350,32 +442,54 @@ fn loop_worked_examples_on_the_issue_fan() {
     assert!((loop_beta(5, LoopWeights::Loop) as f64 - beta).abs() < 1e-7);
     let sum = (a + b + c + e + f).as_dvec3();
     let expect = (1.0 - 5.0 * beta) * d.as_dvec3() + beta * sum;
-    let dl = m.loop_vertex_position(VertexId(3), LoopWeights::Loop).unwrap();
+    let dl = m
+        .loop_vertex_position(VertexId(3), LoopWeights::Loop)
+        .unwrap();
     assert!(close(dl, expect.as_vec3()), "{dl} vs {expect}");
-    assert!((dl - dw).length() > 0.01, "the weightings must differ at n = 5");
+    assert!(
+        (dl - dw).length() > 0.01,
+        "the weightings must differ at n = 5"
+    );
     // Through the full subdivision: the numbering is old vertices, then one per edge.
     let mut out = HalfedgeMesh::<64, 128, 64>::new();
     m.subdivide_loop(&mut out, LoopWeights::Warren).unwrap();
     out.validate().unwrap();
-    assert!(close(out.position(VertexId(3)).unwrap(), vec3(4.375, 2.375, 0.0)));
-    assert!(close(out.position(VertexId(6 + bd.0)).unwrap(), vec3(4.5, 4.25, 0.0)));
+    assert!(close(
+        out.position(VertexId(3)).unwrap(),
+        vec3(4.375, 2.375, 0.0)
+    ));
+    assert!(close(
+        out.position(VertexId(6 + bd.0)).unwrap(),
+        vec3(4.5, 4.25, 0.0)
+    ));
     // Boundary rules: A is a boundary vertex with boundary neighbours B and E.
     let ap = out.position(VertexId(0)).unwrap();
     assert!(close(ap, 0.75 * a + 0.125 * (b + e)));
     let ab = m.find_halfedge(VertexId(0), VertexId(1)).unwrap().edge();
-    assert!(close(out.position(VertexId(6 + ab.0)).unwrap(), 0.5 * (a + b)));
+    assert!(close(
+        out.position(VertexId(6 + ab.0)).unwrap(),
+        0.5 * (a + b)
+    ));
 }
 
 #[test]
 fn loop_parallelogram_edge_vertex_is_the_midpoint() {
     // ABCD parallelogram; triangles (B, D, A)... edge BD with wings A and C.
-    let p = vec![vec3(0., 0., 0.), vec3(4., 1., 0.), vec3(5., 4., 0.), vec3(1., 3., 0.)];
+    let p = vec![
+        vec3(0., 0., 0.),
+        vec3(4., 1., 0.),
+        vec3(5., 4., 0.),
+        vec3(1., 3., 0.),
+    ];
     // A0 B1 C2 D3: triangles (A,B,D) and (B,C,D) share BD.
     let t = vec![[0, 1, 3], [1, 2, 3]];
     let m: M = build(&p, &t).unwrap();
     let bd = m.find_halfedge(VertexId(1), VertexId(3)).unwrap().edge();
     assert!(!m.is_boundary_edge(bd));
-    assert!(close(m.loop_edge_position(bd).unwrap(), 0.5 * (p[1] + p[3])));
+    assert!(close(
+        m.loop_edge_position(bd).unwrap(),
+        0.5 * (p[1] + p[3])
+    ));
 }
 
 fn check_loop_on_closed(p: &[Vec3], t: &[[u32; 3]], valence: usize) {
@@ -408,9 +522,16 @@ fn check_loop_on_closed(p: &[Vec3], t: &[[u32; 3]], valence: usize) {
         assert_eq!(euler(&out2), 2);
         assert_eq!(out2.len(), out.len().after_loop());
     }
-    let w = m.loop_vertex_position(VertexId(0), LoopWeights::Warren).unwrap();
-    let l = m.loop_vertex_position(VertexId(0), LoopWeights::Loop).unwrap();
-    assert!((w - l).length() > 0.01, "weightings differ at valence {valence}");
+    let w = m
+        .loop_vertex_position(VertexId(0), LoopWeights::Warren)
+        .unwrap();
+    let l = m
+        .loop_vertex_position(VertexId(0), LoopWeights::Loop)
+        .unwrap();
+    assert!(
+        (w - l).length() > 0.01,
+        "weightings differ at valence {valence}"
+    );
 }
 
 #[test]
@@ -419,8 +540,12 @@ fn loop_octahedron_and_icosahedron_weightings_differ() {
     check_loop_on_closed(&p, &t, 4);
     // Octahedron vertex (1,0,0): neighbours sum to 0, so x' = (1 − 4β)·x.
     let m: M = build(&p, &t).unwrap();
-    let w = m.loop_vertex_position(VertexId(0), LoopWeights::Warren).unwrap();
-    let l = m.loop_vertex_position(VertexId(0), LoopWeights::Loop).unwrap();
+    let w = m
+        .loop_vertex_position(VertexId(0), LoopWeights::Warren)
+        .unwrap();
+    let l = m
+        .loop_vertex_position(VertexId(0), LoopWeights::Loop)
+        .unwrap();
     assert!(close(w, vec3(0.625, 0., 0.)));
     assert!(close(l, vec3(1.0 - 4.0 * 31.0 / 256.0, 0., 0.)));
     let (p, t) = icosa();
@@ -431,7 +556,10 @@ fn loop_octahedron_and_icosahedron_weightings_differ() {
 #[test]
 fn loop_weights_agree_at_3_and_6() {
     for n in [3, 6] {
-        let (w, l) = (loop_beta(n, LoopWeights::Warren), loop_beta(n, LoopWeights::Loop));
+        let (w, l) = (
+            loop_beta(n, LoopWeights::Warren),
+            loop_beta(n, LoopWeights::Loop),
+        );
         assert!((w - l).abs() < 1e-7);
     }
     assert_eq!(loop_beta(3, LoopWeights::Warren), 3.0 / 16.0);
@@ -446,7 +574,11 @@ fn loop_refusals() {
     let r = m.subdivide_loop(&mut small, LoopWeights::Warren);
     assert!(matches!(
         r,
-        Err(SubdivideError::Capacity(CapacityError { kind: ElementKind::Edge, needed: 48, .. }))
+        Err(SubdivideError::Capacity(CapacityError {
+            kind: ElementKind::Edge,
+            needed: 48,
+            ..
+        }))
     ));
     assert!(small.is_empty());
     let mut ok = HalfedgeMesh::<18, 48, 32>::new();
@@ -457,7 +589,10 @@ fn loop_refusals() {
     let v = holey.vertices().last().unwrap();
     let h = holey.vertex_halfedge(v).unwrap();
     holey.collapse_edge(h, CollapseAt::Head).unwrap();
-    assert_eq!(holey.subdivide_loop(&mut ok, LoopWeights::Warren), Err(SubdivideError::NotCompact));
+    assert_eq!(
+        holey.subdivide_loop(&mut ok, LoopWeights::Warren),
+        Err(SubdivideError::NotCompact)
+    );
 }
 
 #[test]
@@ -478,11 +613,19 @@ fn loop_open_grid_boundary_rules() {
         if out.is_boundary_vertex(v) && ![0, 2, 6, 8].contains(&v.0) {
             // Off the corners (which the 3/4, 1/8, 1/8 rule rounds off), boundary vertices
             // stay on the boundary lines.
-            assert!(q.x.abs() < TOL || (q.x - 2.0).abs() < TOL || q.y.abs() < TOL || (q.y - 2.0).abs() < TOL);
+            assert!(
+                q.x.abs() < TOL
+                    || (q.x - 2.0).abs() < TOL
+                    || q.y.abs() < TOL
+                    || (q.y - 2.0).abs() < TOL
+            );
         }
     }
     // Corner (0,0) with boundary neighbours (1,0) and (0,1).
-    assert!(close(out.position(VertexId(0)).unwrap(), vec3(0.125, 0.125, 0.0)));
+    assert!(close(
+        out.position(VertexId(0)).unwrap(),
+        vec3(0.125, 0.125, 0.0)
+    ));
 }
 
 #[test]
@@ -498,10 +641,16 @@ fn flip_rules_and_valence_bookkeeping() {
     let before = [a, b, c, d].map(|v| val(&m, v));
     m.flip_edge(e).unwrap();
     m.validate().unwrap();
-    assert_eq!([a, b, c, d].map(|v| val(&m, v)), [before[0] - 1, before[1] - 1, before[2] + 1, before[3] + 1]);
+    assert_eq!(
+        [a, b, c, d].map(|v| val(&m, v)),
+        [before[0] - 1, before[1] - 1, before[2] + 1, before[3] + 1]
+    );
     assert_eq!(m.edge_vertices(e), Some([d, c]));
     // Flipping back is refused: a and b now have valence 3.
-    assert_eq!(m.flip_edge(e), Err(FlipError::DegreeTooLow(a)).or(m.flip_edge(e)));
+    assert_eq!(
+        m.flip_edge(e),
+        Err(FlipError::DegreeTooLow(a)).or(m.flip_edge(e))
+    );
     // Tetrahedron: every flip would duplicate an edge.
     let (p, t) = tetra();
     let mut m: M = build(&p, &t).unwrap();
@@ -529,8 +678,18 @@ fn split_interior_and_boundary_edges() {
     let [a, b] = m.edge_vertices(e).unwrap();
     let v = m.split_edge(e).unwrap();
     m.validate().unwrap();
-    assert_eq!(m.len(), Counts { vertices: before.vertices + 1, edges: before.edges + 3, faces: before.faces + 2 });
-    assert!(close(m.position(v).unwrap(), 0.5 * (p[a.index()] + p[b.index()])));
+    assert_eq!(
+        m.len(),
+        Counts {
+            vertices: before.vertices + 1,
+            edges: before.edges + 3,
+            faces: before.faces + 2
+        }
+    );
+    assert!(close(
+        m.position(v).unwrap(),
+        0.5 * (p[a.index()] + p[b.index()])
+    ));
     assert_eq!(m.edge_vertices(e), Some([a, v]));
     assert_eq!(m.valence(v), 4);
     assert!(!m.is_boundary_vertex(v));
@@ -539,7 +698,14 @@ fn split_interior_and_boundary_edges() {
     let before = m.len();
     let v = m.split_edge_at(e, vec3(3.0, 6.0, 0.0)).unwrap();
     m.validate().unwrap();
-    assert_eq!(m.len(), Counts { vertices: before.vertices + 1, edges: before.edges + 2, faces: before.faces + 1 });
+    assert_eq!(
+        m.len(),
+        Counts {
+            vertices: before.vertices + 1,
+            edges: before.edges + 2,
+            faces: before.faces + 1
+        }
+    );
     assert!(m.is_boundary_vertex(v));
     assert_eq!(m.valence(v), 3);
     assert_eq!(m.position(v), Some(vec3(3.0, 6.0, 0.0)));
@@ -556,14 +722,21 @@ fn split_capacity_exact_and_one_short() {
     m.split_edge(e).unwrap();
     m.validate().unwrap();
     let again = m.clone();
-    assert!(matches!(m.split_edge(EdgeId(1)), Err(SplitError::Capacity(_))));
+    assert!(matches!(
+        m.split_edge(EdgeId(1)),
+        Err(SplitError::Capacity(_))
+    ));
     assert_eq!(m, again);
     // One edge short.
     let mut m = build::<5, 8, 6>(&p, &t).unwrap();
     let short = m.clone();
     assert_eq!(
         m.split_edge(e),
-        Err(SplitError::Capacity(CapacityError { kind: ElementKind::Edge, needed: 3, available: 2 }))
+        Err(SplitError::Capacity(CapacityError {
+            kind: ElementKind::Edge,
+            needed: 3,
+            available: 2
+        }))
     );
     assert_eq!(m, short);
     let _ = snap;
@@ -576,7 +749,10 @@ fn collapse_rules() {
     let mut m: M = build(&p, &t).unwrap();
     let snap = m.clone();
     for h in snap.halfedges() {
-        assert!(matches!(m.collapse_edge(h, CollapseAt::Midpoint), Err(CollapseError::WingValence(_))));
+        assert!(matches!(
+            m.collapse_edge(h, CollapseAt::Midpoint),
+            Err(CollapseError::WingValence(_))
+        ));
     }
     assert_eq!(m, snap);
     // Octahedron: the common neighbours of an edge are exactly its wings, so it collapses
@@ -586,16 +762,39 @@ fn collapse_rules() {
     let h = m.find_halfedge(VertexId(0), VertexId(2)).unwrap();
     m.collapse_edge(h, CollapseAt::Midpoint).unwrap();
     m.validate().unwrap();
-    assert_eq!(m.len(), Counts { vertices: 5, edges: 9, faces: 6 });
+    assert_eq!(
+        m.len(),
+        Counts {
+            vertices: 5,
+            edges: 9,
+            faces: 6
+        }
+    );
     // Triangular bipyramid: equator a0 b1 c2, poles n3 s4. Edge a–b has wings n, s; c is a
     // common neighbour of a and b but a–b–c is not a face: the link condition fails.
-    let p = vec![vec3(1., 0., 0.), vec3(-0.5, 0.8, 0.), vec3(-0.5, -0.8, 0.), Vec3::Z, -Vec3::Z];
-    let t = vec![[3, 0, 1], [3, 1, 2], [3, 2, 0], [4, 1, 0], [4, 2, 1], [4, 0, 2]];
+    let p = vec![
+        vec3(1., 0., 0.),
+        vec3(-0.5, 0.8, 0.),
+        vec3(-0.5, -0.8, 0.),
+        Vec3::Z,
+        -Vec3::Z,
+    ];
+    let t = vec![
+        [3, 0, 1],
+        [3, 1, 2],
+        [3, 2, 0],
+        [4, 1, 0],
+        [4, 2, 1],
+        [4, 0, 2],
+    ];
     let mut m: M = build(&p, &t).unwrap();
     m.validate().unwrap();
     let snap = m.clone();
     let h = m.find_halfedge(VertexId(0), VertexId(1)).unwrap();
-    assert_eq!(m.collapse_edge(h, CollapseAt::Midpoint), Err(CollapseError::LinkCondition(VertexId(2))));
+    assert_eq!(
+        m.collapse_edge(h, CollapseAt::Midpoint),
+        Err(CollapseError::LinkCondition(VertexId(2)))
+    );
     assert_eq!(m, snap);
     // Grid: interior edge between two boundary vertices is refused.
     let (p, t) = grid(2);
@@ -603,20 +802,37 @@ fn collapse_rules() {
     // Vertex ids: id(i,j) = 3j + i. Edge (1,0)–(1,1)... (1,0) boundary, (1,1) interior.
     let h = m.find_halfedge(VertexId(0), VertexId(4)).unwrap(); // (0,0)→(1,1): (0,0) boundary, (1,1) interior
     assert!(m.can_collapse_edge(h, CollapseAt::Head).is_ok());
-    let h = m.find_halfedge(VertexId(1), VertexId(3)).or_else(|| m.find_halfedge(VertexId(3), VertexId(1)));
+    let h = m
+        .find_halfedge(VertexId(1), VertexId(3))
+        .or_else(|| m.find_halfedge(VertexId(3), VertexId(1)));
     assert!(h.is_none());
     let h = m.find_halfedge(VertexId(1), VertexId(5)).unwrap(); // (1,0)→(2,1): both boundary, interior edge
     assert!(!m.is_boundary_edge(h.edge()));
     // ... but the face (1, 2, 5) there is an ear (corner triangle), which is checked first.
-    assert_eq!(m.collapse_edge(h, CollapseAt::Midpoint), Err(CollapseError::Ear(FaceId(2))));
+    assert_eq!(
+        m.collapse_edge(h, CollapseAt::Midpoint),
+        Err(CollapseError::Ear(FaceId(2)))
+    );
     {
         // A 1 × 3 strip: bottom 0..4, top 4..8; the rung 1–5 is interior, both ends boundary.
-        let p: Vec<Vec3> = (0..8).map(|i| vec3((i % 4) as f32, (i / 4) as f32, 0.0)).collect();
-        let t = vec![[0, 1, 5], [0, 5, 4], [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6]];
+        let p: Vec<Vec3> = (0..8)
+            .map(|i| vec3((i % 4) as f32, (i / 4) as f32, 0.0))
+            .collect();
+        let t = vec![
+            [0, 1, 5],
+            [0, 5, 4],
+            [1, 2, 6],
+            [1, 6, 5],
+            [2, 3, 7],
+            [2, 7, 6],
+        ];
         let mut s: M = build(&p, &t).unwrap();
         let h = s.find_halfedge(VertexId(1), VertexId(5)).unwrap();
         assert!(!s.is_boundary_edge(h.edge()));
-        assert_eq!(s.collapse_edge(h, CollapseAt::Midpoint), Err(CollapseError::InteriorEdgeJoinsBoundaries));
+        assert_eq!(
+            s.collapse_edge(h, CollapseAt::Midpoint),
+            Err(CollapseError::InteriorEdgeJoinsBoundaries)
+        );
         // A boundary edge of the strip collapses fine.
         let h = s.find_halfedge(VertexId(2), VertexId(1)).unwrap();
         s.collapse_edge(h, CollapseAt::Midpoint).unwrap();
@@ -645,7 +861,10 @@ fn collapse_rules() {
     // Accepted boundary-edge collapse on a strip.
     let (p, t) = grid(3);
     let mut m: M = build(&p, &t).unwrap();
-    let h = m.find_halfedge(VertexId(1), VertexId(2)).or_else(|| m.find_halfedge(VertexId(2), VertexId(1))).unwrap();
+    let h = m
+        .find_halfedge(VertexId(1), VertexId(2))
+        .or_else(|| m.find_halfedge(VertexId(2), VertexId(1)))
+        .unwrap();
     assert!(m.is_boundary_edge(h.edge()));
     let before = m.len();
     m.collapse_edge(h, CollapseAt::Midpoint).unwrap();
@@ -665,23 +884,37 @@ fn diffuse_uses_old_positions() {
     let q = c.diffuse_vertex(VertexId(3), 0.5).unwrap();
     assert!(close(q, p[3] + 0.5 * (mean - p[3])));
     // Whole mesh, Jacobi: every vertex from the old positions.
-    let expect: Vec<Vec3> = m.vertices().map(|v| m.position(v).unwrap() + 0.25 * m.laplacian(v).unwrap()).collect();
+    let expect: Vec<Vec3> = m
+        .vertices()
+        .map(|v| m.position(v).unwrap() + 0.25 * m.laplacian(v).unwrap())
+        .collect();
     let mut scratch = vec![Vec3::ZERO; 6];
-    m.diffuse(0.25, DiffuseBoundary::Free, &mut scratch).unwrap();
+    m.diffuse(0.25, DiffuseBoundary::Free, &mut scratch)
+        .unwrap();
     for (v, e) in m.vertices().zip(&expect) {
         assert!(close(m.position(v).unwrap(), *e));
     }
     m.validate().unwrap();
     // Fixed boundary keeps the rim.
     let mut m: M = build(&p, &t).unwrap();
-    m.diffuse(1.0, DiffuseBoundary::Fixed, &mut scratch).unwrap();
+    m.diffuse(1.0, DiffuseBoundary::Fixed, &mut scratch)
+        .unwrap();
     assert_eq!(m.position(VertexId(0)), Some(p[0]));
     assert!(close(m.position(VertexId(3)).unwrap(), mean));
     // Refusals leave the mesh unchanged.
     let snap = m.clone();
-    assert_eq!(m.diffuse(f32::NAN, DiffuseBoundary::Free, &mut scratch), Err(DiffuseError::NonFinite));
-    assert_eq!(m.diffuse(f32::MAX, DiffuseBoundary::Free, &mut scratch), Err(DiffuseError::NonFinite));
-    assert_eq!(m.diffuse(0.5, DiffuseBoundary::Free, &mut scratch[..2]), Err(DiffuseError::ScratchTooSmall { needed: 6 }));
+    assert_eq!(
+        m.diffuse(f32::NAN, DiffuseBoundary::Free, &mut scratch),
+        Err(DiffuseError::NonFinite)
+    );
+    assert_eq!(
+        m.diffuse(f32::MAX, DiffuseBoundary::Free, &mut scratch),
+        Err(DiffuseError::NonFinite)
+    );
+    assert_eq!(
+        m.diffuse(0.5, DiffuseBoundary::Free, &mut scratch[..2]),
+        Err(DiffuseError::ScratchTooSmall { needed: 6 })
+    );
     assert_eq!(m, snap);
     // Isolated vertex unchanged.
     let mut m: M = build(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE], &[[0, 1, 2]]).unwrap();
@@ -694,7 +927,10 @@ fn face_set<S: MeshStorage>(m: &Mesh<S>) -> Vec<[[u32; 3]; 3]> {
     let mut v: Vec<[[u32; 3]; 3]> = m
         .faces()
         .map(|f| {
-            let c = m.face_vertices(f).unwrap().map(|v| m.position(v).unwrap().to_array().map(f32::to_bits));
+            let c = m
+                .face_vertices(f)
+                .unwrap()
+                .map(|v| m.position(v).unwrap().to_array().map(f32::to_bits));
             let k = (0..3).min_by_key(|&k| c[k]).unwrap();
             [c[k], c[(k + 1) % 3], c[(k + 2) % 3]]
         })
@@ -732,20 +968,30 @@ fn random_ops(seed: u64, p: &[Vec3], t: &[[u32; 3]], steps: usize) {
         let r: Result<(), ()> = match rng.below(9) {
             0 | 1 => m.flip_edge(e).map_err(|_| ()),
             2 | 3 => m.split_edge(e).map(|_| ()).map_err(|_| ()),
-            4 | 5 | 6 => {
+            4..=6 => {
                 let at = [CollapseAt::Head, CollapseAt::Tail, CollapseAt::Midpoint][rng.below(3)];
-                m.collapse_edge(e.halfedge(rng.below(2) as u32), at).map(|_| ()).map_err(|_| ())
+                m.collapse_edge(e.halfedge(rng.below(2) as u32), at)
+                    .map(|_| ())
+                    .map_err(|_| ())
             }
-            7 => m.diffuse_vertex(VertexId(rng.below(nv) as u32), 0.5).map(|_| ()).map_err(|_| ()),
+            7 => m
+                .diffuse_vertex(VertexId(rng.below(nv) as u32), 0.5)
+                .map(|_| ())
+                .map_err(|_| ()),
             _ => {
                 if rng.below(4) == 0 {
                     let faces = face_set(&m);
                     m.compact(|_| {});
                     assert!(m.is_compact());
-                    assert_eq!(face_set(&m), faces, "seed {seed} step {step}: compact changed geometry");
+                    assert_eq!(
+                        face_set(&m),
+                        faces,
+                        "seed {seed} step {step}: compact changed geometry"
+                    );
                     Ok(())
                 } else {
-                    m.diffuse(0.25, DiffuseBoundary::Free, &mut scratch).map_err(|_| ())
+                    m.diffuse(0.25, DiffuseBoundary::Free, &mut scratch)
+                        .map_err(|_| ())
                 }
             }
         };
@@ -756,7 +1002,10 @@ fn random_ops(seed: u64, p: &[Vec3], t: &[[u32; 3]], steps: usize) {
             Ok(()) => ok += 1,
             Err(()) => {
                 refused += 1;
-                assert!(m == snap, "seed {seed} step {step}: refused op changed the mesh");
+                assert!(
+                    m == snap,
+                    "seed {seed} step {step}: refused op changed the mesh"
+                );
             }
         }
         assert_eq!(euler(&m), chi, "seed {seed} step {step}");
@@ -790,7 +1039,10 @@ fn random_operation_sequences_keep_invariants() {
 fn compact_reports_moves_and_reuses_slots() {
     let (p, t) = grid(3);
     let mut m: M = build(&p, &t).unwrap();
-    let h = m.find_halfedge(VertexId(5), VertexId(6)).or_else(|| m.find_halfedge(VertexId(6), VertexId(5))).unwrap();
+    let h = m
+        .find_halfedge(VertexId(5), VertexId(6))
+        .or_else(|| m.find_halfedge(VertexId(6), VertexId(5)))
+        .unwrap();
     m.collapse_edge(h, CollapseAt::Midpoint).unwrap();
     assert!(!m.is_compact());
     let slots = m.slots();
@@ -799,7 +1051,10 @@ fn compact_reports_moves_and_reuses_slots() {
     m.split_edge(e).unwrap();
     assert_eq!(m.slots(), slots);
     m.validate().unwrap();
-    let h = m.find_halfedge(VertexId(9), VertexId(10)).or_else(|| m.find_halfedge(VertexId(10), VertexId(9))).unwrap();
+    let h = m
+        .find_halfedge(VertexId(9), VertexId(10))
+        .or_else(|| m.find_halfedge(VertexId(10), VertexId(9)))
+        .unwrap();
     m.collapse_edge(h, CollapseAt::Head).unwrap();
     let faces = face_set(&m);
     let mut moves = Vec::new();

@@ -56,29 +56,47 @@ impl<S: MeshStorage> Iterator for FaceHalfedges<'_, S> {
 impl<S: MeshStorage> Mesh<S> {
     /// Live vertices in slot order.
     pub fn vertices(&self) -> impl Iterator<Item = VertexId> + '_ {
-        (0..self.s.vertices().len() as u32).filter(|&v| self.v_live(v)).map(VertexId)
+        (0..self.s.vertices().len() as u32)
+            .filter(|&v| self.v_live(v))
+            .map(VertexId)
     }
     /// Live edges in slot order.
     pub fn edges(&self) -> impl Iterator<Item = EdgeId> + '_ {
-        (0..self.s.edges().len() as u32).filter(|&e| self.e_live(e)).map(EdgeId)
+        (0..self.s.edges().len() as u32)
+            .filter(|&e| self.e_live(e))
+            .map(EdgeId)
     }
     /// Live faces in slot order.
     pub fn faces(&self) -> impl Iterator<Item = FaceId> + '_ {
-        (0..self.s.faces().len() as u32).filter(|&f| self.f_live(f)).map(FaceId)
+        (0..self.s.faces().len() as u32)
+            .filter(|&f| self.f_live(f))
+            .map(FaceId)
     }
     /// Live halfedges in slot order.
     pub fn halfedges(&self) -> impl Iterator<Item = HalfedgeId> + '_ {
-        (0..self.s.edges().len() as u32 * 2).filter(|&h| self.h_live(h)).map(HalfedgeId)
+        (0..self.s.edges().len() as u32 * 2)
+            .filter(|&h| self.h_live(h))
+            .map(HalfedgeId)
     }
 
     /// Outgoing halfedges of `v`, counter-clockwise (see [`Outgoing`]).
     pub fn outgoing_halfedges(&self, v: VertexId) -> Outgoing<'_, S> {
-        let start = if self.v_live(v.0) { self.out_raw(v.0) } else { NONE };
-        Outgoing { mesh: self, start, cur: start, left: self.walk_bound() }
+        let start = if self.v_live(v.0) {
+            self.out_raw(v.0)
+        } else {
+            NONE
+        };
+        Outgoing {
+            mesh: self,
+            start,
+            cur: start,
+            left: self.walk_bound(),
+        }
     }
     /// Neighbouring vertices of `v` (heads of its outgoing halfedges), counter-clockwise.
     pub fn vertex_neighbors(&self, v: VertexId) -> impl Iterator<Item = VertexId> + '_ {
-        self.outgoing_halfedges(v).map(|h| VertexId(self.head_raw(h.0)))
+        self.outgoing_halfedges(v)
+            .map(|h| VertexId(self.head_raw(h.0)))
     }
     /// Faces around `v`, counter-clockwise (boundary gaps skipped).
     pub fn vertex_faces(&self, v: VertexId) -> impl Iterator<Item = FaceId> + '_ {
@@ -105,7 +123,11 @@ impl<S: MeshStorage> Mesh<S> {
     /// The three halfedges of `f` (empty for a dead face).
     pub fn face_halfedges(&self, f: FaceId) -> FaceHalfedges<'_, S> {
         let live = self.f_live(f.0);
-        FaceHalfedges { mesh: self, cur: self.fh(f.0), left: if live { 3 } else { 0 } }
+        FaceHalfedges {
+            mesh: self,
+            cur: self.fh(f.0),
+            left: if live { 3 } else { 0 },
+        }
     }
     /// Vertices of `f` in counter-clockwise order (as [`Mesh::face_vertices`]).
     pub fn face_vertex_iter(&self, f: FaceId) -> impl Iterator<Item = VertexId> + '_ {
@@ -122,7 +144,8 @@ impl<S: MeshStorage> Mesh<S> {
 
     /// The halfedge from `a` to `b`, if the edge exists.
     pub fn find_halfedge(&self, a: VertexId, b: VertexId) -> Option<HalfedgeId> {
-        self.outgoing_halfedges(a).find(|h| self.head_raw(h.0) == b.0)
+        self.outgoing_halfedges(a)
+            .find(|h| self.head_raw(h.0) == b.0)
     }
 
     /// Halfedges of the boundary loop (or face) containing `h`, following `next`.

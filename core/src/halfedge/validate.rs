@@ -62,12 +62,18 @@ impl<S: MeshStorage> Mesh<S> {
     fn check_free_lists(&self) -> Result<(), IE> {
         let slots = self.slots();
         // Vertices.
-        let live_v = (0..slots.vertices as u32).filter(|&v| self.v_live(v)).count();
+        let live_v = (0..slots.vertices as u32)
+            .filter(|&v| self.v_live(v))
+            .count();
         let mut n = 0usize;
         let mut v = self.free_v;
         while v != NONE {
             let out = self.out_raw(v);
-            if n > slots.vertices || v as usize >= slots.vertices || out & DEAD_BIT == 0 || out == NONE {
+            if n > slots.vertices
+                || v as usize >= slots.vertices
+                || out & DEAD_BIT == 0
+                || out == NONE
+            {
                 return Err(IE::FreeList(ElementKind::Vertex));
             }
             n += 1;
