@@ -11,6 +11,15 @@ use super::*;
 /// Absolute tolerance for f32 results whose inputs are exact small numbers (|x| ≤ 10): a
 /// handful of f32 ulps at that magnitude (ulp(8) ≈ 9.5e-7).
 const TOL: f32 = 1e-5;
+/// Tolerance for β values (≤ 0.2) computed in f32 against f64: one f32 ulp at 0.2 is 1.5e-8,
+/// plus the f64 → f32 rounding of the cosine term.
+const BETA_TOL: f64 = 1e-7;
+/// Icosahedron edges have length 2; other vertex distances are ≥ 2.47. Half a unit of
+/// slack separates the two cleanly.
+const ICOSA_EDGE_SLACK: f32 = 0.25;
+/// Minimum distance by which the Warren and Loop results must differ for the test to count
+/// as distinguishing them (the actual gaps are ≥ 0.03 on these unit-size meshes).
+const WEIGHTINGS_GAP: f32 = 0.01;
 
 type M = HalfedgeMesh<256, 768, 512>;
 
@@ -73,7 +82,7 @@ fn icosa() -> (Vec<Vec3>, Vec<[u32; 3]>) {
             p.push(vec3(s2 * phi, 0.0, s1));
         }
     }
-    let adj = |a: usize, b: usize| ((p[a] - p[b]).length() - 2.0).abs() < 1e-3;
+    let adj = |a: usize, b: usize| ((p[a] - p[b]).length() - 2.0).abs() < ICOSA_EDGE_SLACK;
     let mut t = Vec::new();
     for a in 0..12 {
         for b in a + 1..12 {
@@ -439,7 +448,7 @@ fn loop_worked_examples_on_the_issue_fan() {
     // Loop's original β from the formula, in f64.
     let cos = (2.0 * std::f64::consts::PI / 5.0).cos();
     let beta = (0.625 - (0.375 + cos / 4.0).powi(2)) / 5.0;
-    assert!((loop_beta(5, LoopWeights::Loop) as f64 - beta).abs() < 1e-7);
+    assert!((loop_beta(5, LoopWeights::Loop) as f64 - beta).abs() < BETA_TOL);
     let sum = (a + b + c + e + f).as_dvec3();
     let expect = (1.0 - 5.0 * beta) * d.as_dvec3() + beta * sum;
     let dl = m
@@ -447,7 +456,7 @@ fn loop_worked_examples_on_the_issue_fan() {
         .unwrap();
     assert!(close(dl, expect.as_vec3()), "{dl} vs {expect}");
     assert!(
-        (dl - dw).length() > 0.01,
+        (dl - dw).length() > WEIGHTINGS_GAP,
         "the weightings must differ at n = 5"
     );
     // Through the full subdivision: the numbering is old vertices, then one per edge.
@@ -529,7 +538,7 @@ fn check_loop_on_closed(p: &[Vec3], t: &[[u32; 3]], valence: usize) {
         .loop_vertex_position(VertexId(0), LoopWeights::Loop)
         .unwrap();
     assert!(
-        (w - l).length() > 0.01,
+        (w - l).length() > WEIGHTINGS_GAP,
         "weightings differ at valence {valence}"
     );
 }
@@ -560,10 +569,10 @@ fn loop_weights_agree_at_3_and_6() {
             loop_beta(n, LoopWeights::Warren),
             loop_beta(n, LoopWeights::Loop),
         );
-        assert!((w - l).abs() < 1e-7);
+        assert!(((w - l).abs() as f64) < BETA_TOL);
     }
     assert_eq!(loop_beta(3, LoopWeights::Warren), 3.0 / 16.0);
-    assert!((loop_beta(4, LoopWeights::Loop) - 31.0 / 256.0).abs() < 1e-7);
+    assert!(((loop_beta(4, LoopWeights::Loop) - 31.0 / 256.0).abs() as f64) < BETA_TOL);
 }
 
 #[test]
@@ -1063,4 +1072,59 @@ fn compact_reports_moves_and_reuses_slots() {
     assert!(m.is_compact());
     assert!(!moves.is_empty());
     assert_eq!(face_set(&m), faces);
+}
+
+#[test]
+fn validate_names_the_broken_invariant() {
+    use super::error::InvariantError as IE;
+    let (p, t) = fan5();
+    let good: M = build(&p, &t).unwrap();
+    good.validate().unwrap();
+
+    let mut m = good.clone();
+    let h = m.find_halfedge(VertexId(3), VertexId(1)).unwrap().0;
+    let n = m.next_raw(h);
+    let pv = m.prev_raw(h);
+    if let Some(r) = m.hr_mut(h) {
+        r.next = pv;
+    }
+    assert!(
+        matches!(m.validate(), Err(IE::NextPrev(_))),
+        "{:?} {n}",
+        m.validate()
+    );
+
+    let mut m = good.clone();
+    m.set_pos(2, Vec3::NAN);
+    assert_eq!(m.validate(), Err(IE::NonFinitePosition(VertexId(2))));
+
+    // Boundary vertex A storing an interior halfedge breaks the boundary convention.
+    let mut m = good.clone();
+    let a_int = m
+        .outgoing_halfedges(VertexId(0))
+        .find(|&g| m.face(g).is_some())
+        .unwrap();
+    m.set_out(0, a_int.0);
+    assert_eq!(m.validate(), Err(IE::BoundaryVertexConvention(VertexId(0))));
+
+    // A vertex whose halfedge starts elsewhere.
+    let mut m = good.clone();
+    m.set_out(3, h ^ 1);
+    assert_eq!(m.validate(), Err(IE::VertexHalfedge(VertexId(3))));
+
+    // A face pointing at a halfedge of another face.
+    let mut m = good.clone();
+    let other = m.fh(1);
+    m.set_fh(0, other);
+    assert_eq!(m.validate(), Err(IE::FaceCycle(FaceId(0))));
+
+    // A halfedge whose face is a dead slot (halfedge 0 is checked first).
+    let mut m = good.clone();
+    m.set_face(0, 77);
+    assert_eq!(m.validate(), Err(IE::DanglingLink(HalfedgeId(0))));
+
+    // A wrong live count.
+    let mut m = good.clone();
+    m.live.faces += 1;
+    assert_eq!(m.validate(), Err(IE::FreeList(ElementKind::Face)));
 }
