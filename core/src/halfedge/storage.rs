@@ -36,7 +36,8 @@ pub(crate) const DEAD_BIT: u32 = 1 << 31;
 /// Free-list terminator stored (with [`DEAD_BIT`]) in the last dead vertex or face slot.
 pub(crate) const FREE_END: u32 = 0x7FFF_FFFE;
 /// Largest number of vertices, edges or faces any mesh can hold (2³⁰ − 1), whatever the
-/// storage: halfedge indices must stay below [`DEAD_BIT`] and distinct from the sentinels.
+/// storage: halfedge indices must stay below 2³¹ (the dead-slot marker bit) and distinct from
+/// the sentinels.
 pub const MAX_ELEMENTS: usize = (1 << 30) - 1;
 
 /// A vertex record: position and one outgoing halfedge. 16 bytes.
