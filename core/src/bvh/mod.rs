@@ -1,1 +1,251 @@
-//! TODO
+//! A binned-SAH bounding volume hierarchy built into **caller storage** and traversed with a
+//! **fixed-size stack**: no allocation, no recursion, no panics.
+//!
+//! # Overview
+//!
+//! * Primitives come from a [`PrimitiveSource`] (`N` primitives by index: bounds and centroid).
+//!   [`TriangleMesh`] is the main one; any slice of [`Primitive`]s (for example `[Aabb]` or
+//!   `[[Vec3; 3]]`) is one too, so spheres, quadrics and instances can live in a BVH: the
+//!   intersection itself is supplied at query time as a closure.
+//! * [`Bvh::build`] writes into node storage and primitive-index storage that the caller
+//!   passes in (`Vec`s, arrays, `&mut [T]`, `heapless::Vec` — anything `AsRef + AsMut` of a
+//!   slice; the slice's **length** is the capacity). Reserve [`node_capacity`]`(N)` nodes and
+//!   [`index_capacity`]`(N)` indices. Too little storage is a typed error returned **before
+//!   anything is written**.
+//! * Queries: [`Bvh::closest_hit`], [`Bvh::any_hit`] (and their `_triangles` conveniences,
+//!   which call [`TriangleIntersector::prepare`](crate::triangle::TriangleIntersector::prepare)
+//!   once per ray), [`Bvh::query_box`] (all primitives whose box overlaps a box) and
+//!   [`Bvh::clearance`] (nearest hit along each vertex normal: the hangar/drone query).
+//! * [`Bvh::refit`] recomputes every box after the primitives moved, without a rebuild.
+//!
+//! # Construction (binned SAH)
+//!
+//! Each node's primitives are binned by centroid into [`BIN_COUNT`] bins along each axis whose
+//! centroid extent is non-zero, and the split minimising the surface-area heuristic
+//!
+//! `cost = TRAVERSAL_COST + INTERSECTION_COST · (A_L·N_L + A_R·N_R) / A`
+//!
+//! is taken if it beats the leaf cost `INTERSECTION_COST · N` (or the node holds more than
+//! [`BuildOptions::max_leaf_size`] primitives). When every centroid coincides (no axis can be
+//! binned) a node with too many primitives is split by **count** (first half / second half of
+//! its index range). Nodes at depth [`MAX_DEPTH`] become leaves whatever their size, which is
+//! what bounds the traversal stack: see below. Degenerate inputs — 10⁵ coincident triangles,
+//! zero-area triangles, points — build and traverse correctly.
+//!
+//! Primitives whose bounds are not finite (NaN or infinite vertices, out-of-range vertex
+//! indices in a [`TriangleMesh`]) are an error naming the primitive
+//! ([`BvhError::NonFinitePrimitive`]) or, with [`BuildOptions::exclude_non_finite`], left out of
+//! the tree. Empty input gives a valid empty BVH that hits nothing.
+//!
+//! # Layout and size
+//!
+//! A [`BvhNode`] is **32 bytes** (`min: [f32; 3]`, one `u32`, `max: [f32; 3]`, one `u32`;
+//! 32-byte aligned so a node never straddles a cache line). The two children of an inner node
+//! are adjacent. A leaf refers to a run of the index array. The whole structure takes
+//! `32·nodes + 4·N` bytes; with leaves of one primitive that is at most `32·(2N − 1) + 4N < 68`
+//! bytes per primitive, with the default SAH leaves typically 25–35 bytes per triangle
+//! ([`BvhStats::bytes_per_primitive`]). The vertex and triangle arrays are the caller's and are
+//! not counted.
+//!
+//! # Traversal
+//!
+//! Closest hit shrinks `t_max` to each accepted hit; boxes are tested with the robust,
+//! conservative, NaN-absorbing slab test ([`Aabb::intersect_slab`]) over the closed interval
+//! `[t_min, t_max·(1 + CULL_REL_SLACK)]`, the nearer child is visited first (ties: the first
+//! child) and the farther one is pushed with its entry distance, which is re-checked when it is
+//! popped. **Tie rule:** of two primitives reporting the same `t`, the one with the **smaller
+//! primitive index** is returned, so the result does not depend on the tree's shape and equals
+//! a brute-force loop over all primitives with the same rule. Invalid rays ([`Ray::validate`])
+//! return no hit without testing any node.
+//!
+//! **Stack bound:** the stack holds [`TRAVERSAL_STACK_SIZE`] = 64 entries of 8 bytes (node
+//! index, entry distance): 512 bytes. At most one entry is pushed per inner node on the path
+//! from the root, and the builder never creates an inner node at depth ≥ [`MAX_DEPTH`] = 64, so
+//! at most 64 entries are ever live. Traversal never overflows the stack and never recurses.
+//!
+//! [`Aabb::intersect_slab`]: crate::aabb::Aabb::intersect_slab
+//! [`Ray::validate`]: crate::ray::Ray::validate
+
+mod build;
+mod clearance;
+mod error;
+mod node;
+mod primitive;
+mod query;
+mod refit;
+mod stats;
+mod traverse;
+
+#[cfg(test)]
+mod tests;
+
+pub use build::BuildOptions;
+pub use error::BvhError;
+pub use node::{BvhNode, NODE_SIZE};
+pub use primitive::{Primitive, PrimitiveSource, TriangleMesh};
+pub use stats::{BvhStats, TraversalStats};
+
+use crate::aabb::Aabb;
+
+/// Number of centroid bins per axis of the binned SAH. 16 is within a fraction of a percent of
+/// a full sweep's tree quality on scanned meshes and keeps the builder's bin arrays at about
+/// 1.3 KiB of stack (3 axes × 16 bins × 28 bytes).
+pub const BIN_COUNT: usize = 16;
+
+/// SAH cost of visiting an inner node (testing its two child boxes), in units where one
+/// primitive test costs [`INTERSECTION_COST`]. Unitless.
+pub const TRAVERSAL_COST: f32 = 1.0;
+
+/// SAH cost of one primitive intersection test. Unitless. The watertight triangle test (exact
+/// `f64` edge functions) costs about as much as two box tests, hence 1.0 against a traversal
+/// step (two boxes) of 1.0 gives leaves of a few triangles.
+pub const INTERSECTION_COST: f32 = 1.0;
+
+/// Default [`BuildOptions::max_leaf_size`]: nodes with more primitives are always split (when
+/// the depth limit allows), smaller ones only when the SAH says a split pays.
+pub const DEFAULT_MAX_LEAF_SIZE: u32 = 4;
+
+/// Depth of the deepest possible node (the root has depth 0). Nodes at this depth become leaves
+/// whatever their primitive count; it bounds the traversal stack (see the module docs).
+pub const MAX_DEPTH: usize = 64;
+
+/// Entries of the fixed traversal stack (node index `u32` + entry distance `f32`, 8 bytes
+/// each). Equal to [`MAX_DEPTH`]: one entry per inner node on the path from the root.
+pub const TRAVERSAL_STACK_SIZE: usize = MAX_DEPTH;
+
+/// Relative slack on the closest hit's `t` when culling boxes: a box whose entry distance is
+/// at most `t·(1 + CULL_REL_SLACK)` is still visited. The slab test's entry distance is rounded
+/// (up to `gamma(3)` relative) and so is the primitive's `t` (a few ulps for well-conditioned
+/// hits), so a box holding a primitive that reports the same — or a one-ulp-smaller — `t` as
+/// the current hit could otherwise be culled, and the tie rule would depend on the tree. 64
+/// ulps (`64·2⁻²³`, [`crate::tolerance::T_REL_TOLERANCE_WELL_CONDITIONED`]) covers both; it
+/// costs a handful of extra box tests per ray. Unitless.
+pub const CULL_REL_SLACK: f32 = crate::tolerance::T_REL_TOLERANCE_WELL_CONDITIONED;
+
+/// Nodes to reserve for `prim_count` primitives: `2·N − 1` (a binary tree whose every leaf
+/// holds at least one primitive), `0` for no primitives. Saturates instead of overflowing.
+#[must_use]
+pub const fn node_capacity(prim_count: usize) -> usize {
+    if prim_count == 0 {
+        0
+    } else {
+        prim_count.saturating_mul(2).saturating_sub(1)
+    }
+}
+
+/// Primitive indices to reserve for `prim_count` primitives: `N`.
+#[must_use]
+pub const fn index_capacity(prim_count: usize) -> usize {
+    prim_count
+}
+
+/// Largest number of primitives a BVH can index: node indices are `u32`, and
+/// [`node_capacity`] of it must fit.
+pub const MAX_PRIMITIVES: usize = (u32::MAX / 2) as usize;
+
+/// A BVH over caller storage `N` (nodes) and `I` (primitive indices).
+///
+/// Typical storage: `Vec<BvhNode>` / `Vec<u32>` in a std program, `&mut [BvhNode]` /
+/// `&mut [u32]` or fixed arrays `[BvhNode; K]` / `[u32; M]` on a microcontroller. Only the first
+/// [`Bvh::node_count`] nodes and [`Bvh::primitive_count`] indices are used.
+#[derive(Clone, Debug)]
+pub struct Bvh<N, I> {
+    nodes: N,
+    indices: I,
+    node_count: u32,
+    prim_count: u32,
+    source_len: usize,
+}
+
+impl<N, I> Bvh<N, I>
+where
+    N: AsRef<[BvhNode]> + AsMut<[BvhNode]>,
+    I: AsRef<[u32]> + AsMut<[u32]>,
+{
+    /// Builds a BVH over `source` into `nodes` and `indices`.
+    ///
+    /// Errors, all returned before any storage is written:
+    /// [`BvhError::TooManyPrimitives`] (more than [`MAX_PRIMITIVES`]),
+    /// [`BvhError::NodeStorageTooSmall`] (fewer than [`node_capacity`]`(N)` nodes),
+    /// [`BvhError::IndexStorageTooSmall`] (fewer than `N` indices), and
+    /// [`BvhError::NonFinitePrimitive`] for the first primitive with non-finite bounds unless
+    /// [`BuildOptions::exclude_non_finite`] is set.
+    pub fn build<S: PrimitiveSource + ?Sized>(
+        source: &S,
+        mut nodes: N,
+        mut indices: I,
+        options: &BuildOptions,
+    ) -> Result<Self, BvhError> {
+        let (node_count, prim_count) =
+            build::build(source, nodes.as_mut(), indices.as_mut(), options)?;
+        Ok(Self {
+            nodes,
+            indices,
+            node_count,
+            prim_count,
+            source_len: source.primitive_count(),
+        })
+    }
+}
+
+impl<N, I> Bvh<N, I>
+where
+    N: AsRef<[BvhNode]>,
+    I: AsRef<[u32]>,
+{
+    /// The used nodes; node 0 is the root (empty slice for an empty BVH).
+    #[inline]
+    #[must_use]
+    pub fn nodes(&self) -> &[BvhNode] {
+        let all = self.nodes.as_ref();
+        all.get(..self.node_count as usize).unwrap_or(all)
+    }
+
+    /// The used primitive indices, in leaf order.
+    #[inline]
+    #[must_use]
+    pub fn indices(&self) -> &[u32] {
+        let all = self.indices.as_ref();
+        all.get(..self.prim_count as usize).unwrap_or(all)
+    }
+
+    /// Number of nodes in use (≤ [`node_capacity`] of the primitive count).
+    #[inline]
+    #[must_use]
+    pub fn node_count(&self) -> usize {
+        self.node_count as usize
+    }
+
+    /// Number of primitives in the tree (the source's count minus excluded ones).
+    #[inline]
+    #[must_use]
+    pub fn primitive_count(&self) -> usize {
+        self.prim_count as usize
+    }
+
+    /// Number of primitives the source had at build time (what [`Bvh::refit`] expects).
+    #[inline]
+    #[must_use]
+    pub fn source_len(&self) -> usize {
+        self.source_len
+    }
+
+    /// `true` when the tree holds no primitive (every query misses).
+    #[inline]
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.node_count == 0
+    }
+
+    /// Bounds of everything in the tree ([`Aabb::EMPTY`] when empty).
+    #[must_use]
+    pub fn bounds(&self) -> Aabb {
+        self.nodes().first().map_or(Aabb::EMPTY, BvhNode::bounds)
+    }
+
+    /// Gives the storage back.
+    #[must_use]
+    pub fn into_storage(self) -> (N, I) {
+        (self.nodes, self.indices)
+    }
+}

@@ -1,0 +1,372 @@
+//! Binned-SAH construction into caller storage, without allocation or recursion.
+
+use super::node::BvhNode;
+use super::primitive::{PrimitiveSource, is_usable};
+use super::{
+    BIN_COUNT, BvhError, DEFAULT_MAX_LEAF_SIZE, INTERSECTION_COST, MAX_DEPTH, MAX_PRIMITIVES,
+    TRAVERSAL_COST, index_capacity, node_capacity,
+};
+use crate::aabb::Aabb;
+use glam::Vec3;
+
+/// Options of [`super::Bvh::build`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BuildOptions {
+    /// Nodes with more primitives than this are always split while the depth limit allows;
+    /// smaller nodes are split only when the SAH says it pays. Values below 1 count as 1.
+    /// Default [`DEFAULT_MAX_LEAF_SIZE`].
+    pub max_leaf_size: u32,
+    /// `false` (default): a primitive with non-finite or empty bounds is an error
+    /// ([`BvhError::NonFinitePrimitive`]). `true`: such primitives are left out of the tree
+    /// (no query ever reports them).
+    pub exclude_non_finite: bool,
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        Self {
+            max_leaf_size: DEFAULT_MAX_LEAF_SIZE,
+            exclude_non_finite: false,
+        }
+    }
+}
+
+/// A node waiting to be split: its index range, depth and centroid bounds (its own box is
+/// already written into the node).
+#[derive(Clone, Copy)]
+struct Task {
+    node: u32,
+    start: u32,
+    end: u32,
+    depth: u32,
+    centroids: Aabb,
+}
+
+const EMPTY_TASK: Task = Task {
+    node: 0,
+    start: 0,
+    end: 0,
+    depth: 0,
+    centroids: Aabb::EMPTY,
+};
+
+/// Maps a centroid coordinate to its bin along one axis. Shared by binning and partitioning so
+/// both agree bit for bit. NaN maps to bin 0 (cannot happen for usable primitives).
+#[derive(Clone, Copy)]
+struct Binner {
+    lo: f32,
+    scale: f32,
+}
+
+impl Binner {
+    /// `None` when the centroid extent along the axis is zero (nothing to bin).
+    fn new(lo: f32, hi: f32) -> Option<Self> {
+        let extent = hi - lo;
+        (extent > 0.0).then(|| Self {
+            lo,
+            scale: BIN_COUNT as f32 / extent,
+        })
+    }
+
+    #[inline]
+    fn bin(&self, c: f32) -> usize {
+        // `as usize` saturates (negative and NaN give 0), the `min` keeps `hi` in the last bin.
+        (((c - self.lo) * self.scale) as usize).min(BIN_COUNT - 1)
+    }
+}
+
+#[derive(Clone, Copy)]
+struct Bin {
+    bounds: Aabb,
+    count: u32,
+}
+
+const EMPTY_BIN: Bin = Bin {
+    bounds: Aabb::EMPTY,
+    count: 0,
+};
+
+/// The chosen SAH split: `bin(centroid[axis]) < split` goes left.
+#[derive(Clone, Copy)]
+struct Split {
+    axis: usize,
+    binner: Binner,
+    split: usize,
+    cost: f32,
+    left: Aabb,
+    right: Aabb,
+}
+
+/// Builds into `nodes`/`indices`; returns `(node_count, prim_count)`.
+pub(super) fn build<S: PrimitiveSource + ?Sized>(
+    source: &S,
+    nodes: &mut [BvhNode],
+    indices: &mut [u32],
+    options: &BuildOptions,
+) -> Result<(u32, u32), BvhError> {
+    let n = source.primitive_count();
+    if n > MAX_PRIMITIVES {
+        return Err(BvhError::TooManyPrimitives { count: n });
+    }
+    if nodes.len() < node_capacity(n) {
+        return Err(BvhError::NodeStorageTooSmall {
+            needed: node_capacity(n),
+            available: nodes.len(),
+        });
+    }
+    if indices.len() < index_capacity(n) {
+        return Err(BvhError::IndexStorageTooSmall {
+            needed: index_capacity(n),
+            available: indices.len(),
+        });
+    }
+    // Validation pass: nothing is written until every primitive has been checked.
+    let mut root_bounds = Aabb::EMPTY;
+    let mut root_centroids = Aabb::EMPTY;
+    let mut count = 0u32;
+    for i in 0..n {
+        let b = source.primitive_bounds(i);
+        let c = source.primitive_centroid(i);
+        if is_usable(&b) && c.is_finite() {
+            root_bounds = root_bounds.union(b);
+            root_centroids = root_centroids.grow(c);
+            count += 1;
+        } else if !options.exclude_non_finite {
+            return Err(BvhError::NonFinitePrimitive { index: i });
+        }
+    }
+    if count == 0 {
+        return Ok((0, 0));
+    }
+    let mut k = 0usize;
+    for i in 0..n {
+        if options.exclude_non_finite {
+            let b = source.primitive_bounds(i);
+            if !(is_usable(&b) && source.primitive_centroid(i).is_finite()) {
+                continue;
+            }
+        }
+        if let Some(slot) = indices.get_mut(k) {
+            *slot = i as u32;
+        }
+        k += 1;
+    }
+
+    let max_leaf = options.max_leaf_size.max(1);
+    let mut node_count = 1u32;
+    if let Some(root) = nodes.first_mut() {
+        root.set_bounds(&root_bounds);
+    }
+    let mut stack = [EMPTY_TASK; MAX_DEPTH + 1];
+    let mut sp = 0usize;
+    let mut task = Task {
+        node: 0,
+        start: 0,
+        end: count,
+        depth: 0,
+        centroids: root_centroids,
+    };
+    loop {
+        match split_node(source, nodes, indices, &task, max_leaf, &mut node_count) {
+            Some((left, right)) => {
+                // Continue with the left child, keep the right one for later. The stack holds at
+                // most one pending child per level, and levels stop at MAX_DEPTH.
+                if let Some(slot) = stack.get_mut(sp) {
+                    *slot = right;
+                    sp += 1;
+                    task = left;
+                } else {
+                    // Unreachable by the depth limit; recover by finishing both as leaves.
+                    make_leaf(nodes, &left);
+                    make_leaf(nodes, &right);
+                    if sp == 0 {
+                        break;
+                    }
+                    sp -= 1;
+                    task = stack[sp];
+                }
+            }
+            None => {
+                if sp == 0 {
+                    break;
+                }
+                sp -= 1;
+                task = stack[sp];
+            }
+        }
+    }
+    Ok((node_count, count))
+}
+
+fn make_leaf(nodes: &mut [BvhNode], task: &Task) {
+    if let Some(node) = nodes.get_mut(task.node as usize) {
+        node.set_leaf(task.start, task.end - task.start);
+    }
+}
+
+/// Splits `task`'s node in two, writing the parent and both children's boxes, or makes it a
+/// leaf (returns `None`).
+fn split_node<S: PrimitiveSource + ?Sized>(
+    source: &S,
+    nodes: &mut [BvhNode],
+    indices: &mut [u32],
+    task: &Task,
+    max_leaf: u32,
+    node_count: &mut u32,
+) -> Option<(Task, Task)> {
+    let count = task.end - task.start;
+    let parent_bounds = nodes.get(task.node as usize)?.bounds();
+    if count <= 1 || task.depth as usize >= MAX_DEPTH || nodes.len() < *node_count as usize + 2 {
+        make_leaf(nodes, task);
+        return None;
+    }
+    let range = task.start as usize..task.end as usize;
+    let split = best_sah_split(
+        source,
+        &indices[range.clone()],
+        &task.centroids,
+        parent_bounds.surface_area(),
+    );
+    let leaf_cost = INTERSECTION_COST * count as f32 * parent_bounds.surface_area();
+    let (mid, left_b, right_b, left_c, right_c) = match split {
+        Some(s) if s.cost < leaf_cost || count > max_leaf => {
+            let (mid, lc, rc) = partition(source, &mut indices[range.clone()], &s);
+            (task.start + mid, s.left, s.right, lc, rc)
+        }
+        _ if count > max_leaf => {
+            // All centroids coincide: split by count, in index order.
+            let mid = count / 2;
+            let (l, r) = indices[range].split_at(mid as usize);
+            let (lb, lc) = range_bounds(source, l);
+            let (rb, rc) = range_bounds(source, r);
+            (task.start + mid, lb, rb, lc, rc)
+        }
+        _ => {
+            make_leaf(nodes, task);
+            return None;
+        }
+    };
+    let first = *node_count;
+    *node_count += 2;
+    nodes[task.node as usize].set_inner(first);
+    nodes[first as usize].set_bounds(&left_b);
+    nodes[first as usize + 1].set_bounds(&right_b);
+    let depth = task.depth + 1;
+    Some((
+        Task {
+            node: first,
+            start: task.start,
+            end: mid,
+            depth,
+            centroids: left_c,
+        },
+        Task {
+            node: first + 1,
+            start: mid,
+            end: task.end,
+            depth,
+            centroids: right_c,
+        },
+    ))
+}
+
+/// Box and centroid box of a run of primitives.
+fn range_bounds<S: PrimitiveSource + ?Sized>(source: &S, idx: &[u32]) -> (Aabb, Aabb) {
+    idx.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), &i| {
+        (
+            b.union(source.primitive_bounds(i as usize)),
+            c.grow(source.primitive_centroid(i as usize)),
+        )
+    })
+}
+
+/// Bins the primitives along every axis with a non-zero centroid extent and returns the
+/// cheapest split with both sides non-empty. The cost is the SAH numerator (not divided by the
+/// parent's area, so that zero-area parents need no special case):
+/// `TRAVERSAL_COST·A + INTERSECTION_COST·(A_L·N_L + A_R·N_R)`.
+fn best_sah_split<S: PrimitiveSource + ?Sized>(
+    source: &S,
+    idx: &[u32],
+    centroids: &Aabb,
+    parent_area: f32,
+) -> Option<Split> {
+    let binners: [Option<Binner>; 3] =
+        core::array::from_fn(|a| Binner::new(centroids.min[a], centroids.max[a]));
+    if binners.iter().all(Option::is_none) {
+        return None;
+    }
+    let mut bins = [[EMPTY_BIN; BIN_COUNT]; 3];
+    for &i in idx {
+        let b = source.primitive_bounds(i as usize);
+        let c = source.primitive_centroid(i as usize);
+        for axis in 0..3 {
+            if let Some(binner) = &binners[axis] {
+                let bin = &mut bins[axis][binner.bin(c[axis])];
+                bin.bounds = bin.bounds.union(b);
+                bin.count += 1;
+            }
+        }
+    }
+    let mut best: Option<Split> = None;
+    for axis in 0..3 {
+        let Some(binner) = binners[axis] else {
+            continue;
+        };
+        let bins = &bins[axis];
+        // Right-to-left sweep: area·count of bins[k..].
+        let mut right_cost = [0.0f32; BIN_COUNT];
+        let mut right_box = [Aabb::EMPTY; BIN_COUNT];
+        let (mut acc_b, mut acc_n) = (Aabb::EMPTY, 0u32);
+        for k in (1..BIN_COUNT).rev() {
+            acc_b = acc_b.union(bins[k].bounds);
+            acc_n += bins[k].count;
+            right_cost[k] = acc_b.surface_area() * acc_n as f32;
+            right_box[k] = acc_b;
+        }
+        let (mut left_b, mut left_n) = (Aabb::EMPTY, 0u32);
+        let total: u32 = bins.iter().map(|b| b.count).sum();
+        for k in 1..BIN_COUNT {
+            left_b = left_b.union(bins[k - 1].bounds);
+            left_n += bins[k - 1].count;
+            if left_n == 0 || left_n == total {
+                continue;
+            }
+            let cost = TRAVERSAL_COST * parent_area
+                + INTERSECTION_COST * (left_b.surface_area() * left_n as f32 + right_cost[k]);
+            // Strict `<`: ties keep the first (lowest axis, lowest bin) split, deterministic.
+            if best.as_ref().is_none_or(|b| cost < b.cost) {
+                best = Some(Split {
+                    axis,
+                    binner,
+                    split: k,
+                    cost,
+                    left: left_b,
+                    right: right_box[k],
+                });
+            }
+        }
+    }
+    best
+}
+
+/// Partitions `idx` in place by the split; returns the left count and both centroid boxes.
+fn partition<S: PrimitiveSource + ?Sized>(
+    source: &S,
+    idx: &mut [u32],
+    split: &Split,
+) -> (u32, Aabb, Aabb) {
+    let (mut lc, mut rc) = (Aabb::EMPTY, Aabb::EMPTY);
+    let (mut i, mut j) = (0usize, idx.len());
+    while i < j {
+        let c: Vec3 = source.primitive_centroid(idx[i] as usize);
+        if split.binner.bin(c[split.axis]) < split.split {
+            lc = lc.grow(c);
+            i += 1;
+        } else {
+            rc = rc.grow(c);
+            j -= 1;
+            idx.swap(i, j);
+        }
+    }
+    (i as u32, lc, rc)
+}

@@ -1,0 +1,85 @@
+//! Errors of BVH construction, refitting and queries.
+
+use core::fmt;
+
+/// Why a BVH operation was refused. Every variant is returned before any caller storage is
+/// written, except [`BvhError::NonFinitePrimitive`] from [`super::Bvh::refit`] (see there).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BvhError {
+    /// The node storage holds fewer nodes than [`super::node_capacity`] requires.
+    NodeStorageTooSmall {
+        /// Nodes required.
+        needed: usize,
+        /// Nodes available.
+        available: usize,
+    },
+    /// The index storage holds fewer entries than there are primitives.
+    IndexStorageTooSmall {
+        /// Indices required.
+        needed: usize,
+        /// Indices available.
+        available: usize,
+    },
+    /// More primitives than [`super::MAX_PRIMITIVES`].
+    TooManyPrimitives {
+        /// Primitives in the source.
+        count: usize,
+    },
+    /// A primitive's bounds are NaN, infinite or empty (non-finite vertex, out-of-range vertex
+    /// index).
+    NonFinitePrimitive {
+        /// The primitive's index in the source.
+        index: usize,
+    },
+    /// [`super::Bvh::refit`] was given a source with a different primitive count than the build.
+    SourceLengthMismatch {
+        /// Primitive count at build time.
+        expected: usize,
+        /// Primitive count of the source passed now.
+        found: usize,
+    },
+    /// Slices that must have the same length do not (clearance: points, normals, output).
+    LengthMismatch {
+        /// Length of the first slice (points).
+        expected: usize,
+        /// Length of the mismatching slice.
+        found: usize,
+    },
+}
+
+impl fmt::Display for BvhError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::NodeStorageTooSmall { needed, available } => {
+                write!(
+                    f,
+                    "BVH node storage too small: {needed} needed, {available} available"
+                )
+            }
+            Self::IndexStorageTooSmall { needed, available } => write!(
+                f,
+                "BVH index storage too small: {needed} needed, {available} available"
+            ),
+            Self::TooManyPrimitives { count } => write!(
+                f,
+                "too many primitives for a BVH: {count} (max {})",
+                super::MAX_PRIMITIVES
+            ),
+            Self::NonFinitePrimitive { index } => {
+                write!(f, "primitive {index} has non-finite or empty bounds")
+            }
+            Self::SourceLengthMismatch { expected, found } => write!(
+                f,
+                "refit source has {found} primitives, the BVH was built over {expected}"
+            ),
+            Self::LengthMismatch { expected, found } => {
+                write!(
+                    f,
+                    "slice length mismatch: expected {expected}, found {found}"
+                )
+            }
+        }
+    }
+}
+
+impl core::error::Error for BvhError {}

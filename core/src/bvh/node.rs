@@ -1,0 +1,95 @@
+//! The 32-byte BVH node.
+
+use crate::aabb::Aabb;
+use core::ops::Range;
+use glam::Vec3;
+
+/// A BVH node: a box and either two adjacent children or a run of primitive indices.
+///
+/// Layout (`repr(C)`, 32 bytes, 32-byte aligned): `min: [f32; 3]`, `start: u32`,
+/// `max: [f32; 3]`, `count: u32`. An inner node has `count = 0` and its children at `start`
+/// and `start + 1`; a leaf has `count ≥ 1` primitives at `indices[start..start + count]`.
+/// Nodes are only created by the builder; fields are private so the invariants that bound the
+/// traversal (children after their parent, depth ≤ [`super::MAX_DEPTH`]) cannot be broken.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+pub struct BvhNode {
+    min: [f32; 3],
+    start: u32,
+    max: [f32; 3],
+    count: u32,
+}
+
+/// Size of a [`BvhNode`] in bytes.
+pub const NODE_SIZE: usize = core::mem::size_of::<BvhNode>();
+const _: () = assert!(NODE_SIZE == 32);
+
+impl Default for BvhNode {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
+impl BvhNode {
+    /// An unused node (empty box, empty leaf), for initialising storage:
+    /// `[BvhNode::EMPTY; K]`.
+    pub const EMPTY: Self = Self {
+        min: [f32::INFINITY; 3],
+        start: 0,
+        max: [f32::NEG_INFINITY; 3],
+        count: 0,
+    };
+
+    #[inline]
+    pub(super) fn set_bounds(&mut self, b: &Aabb) {
+        self.min = b.min.to_array();
+        self.max = b.max.to_array();
+    }
+
+    #[inline]
+    pub(super) fn set_leaf(&mut self, start: u32, count: u32) {
+        self.start = start;
+        self.count = count;
+    }
+
+    #[inline]
+    pub(super) fn set_inner(&mut self, first_child: u32) {
+        self.start = first_child;
+        self.count = 0;
+    }
+
+    /// The node's box.
+    #[inline]
+    #[must_use]
+    pub fn bounds(&self) -> Aabb {
+        Aabb::new(Vec3::from_array(self.min), Vec3::from_array(self.max))
+    }
+
+    /// `true` for a leaf.
+    #[inline]
+    #[must_use]
+    pub fn is_leaf(&self) -> bool {
+        self.count != 0
+    }
+
+    /// Indices of the two children of an inner node (`None` for a leaf).
+    #[inline]
+    #[must_use]
+    pub fn children(&self) -> Option<(u32, u32)> {
+        (self.count == 0).then(|| (self.start, self.start.wrapping_add(1)))
+    }
+
+    /// The range of the index array a leaf covers (`None` for an inner node).
+    #[inline]
+    #[must_use]
+    pub fn primitive_range(&self) -> Option<Range<usize>> {
+        (self.count != 0)
+            .then(|| self.start as usize..(self.start as usize).saturating_add(self.count as usize))
+    }
+
+    /// Raw `(start, count)` fields.
+    #[inline]
+    pub(super) fn raw(&self) -> (u32, u32) {
+        (self.start, self.count)
+    }
+}

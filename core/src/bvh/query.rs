@@ -1,0 +1,68 @@
+//! Box queries: every primitive whose box overlaps a query box.
+
+use super::node::BvhNode;
+use super::primitive::PrimitiveSource;
+use super::{Bvh, MAX_DEPTH};
+use crate::aabb::Aabb;
+
+impl<N, I> Bvh<N, I>
+where
+    N: AsRef<[BvhNode]>,
+    I: AsRef<[u32]>,
+{
+    /// Calls `found(prim)` for every primitive of `source` (the source the tree was built or
+    /// last refitted over) whose bounds overlap `query` (closed boxes: touching counts, see
+    /// [`Aabb::overlaps`]). `found` returns `true` to continue, `false` to stop early.
+    /// Returns the number of primitives reported. An empty or NaN query box reports nothing.
+    ///
+    /// This is the broad phase of a collision query: the exact primitive–primitive test is the
+    /// caller's. Primitives are visited in tree order, not index order.
+    pub fn query_box<S: PrimitiveSource + ?Sized>(
+        &self,
+        source: &S,
+        query: &Aabb,
+        mut found: impl FnMut(u32) -> bool,
+    ) -> usize {
+        let nodes = self.nodes();
+        let indices = self.indices();
+        let mut reported = 0usize;
+        if !query.is_valid() {
+            return 0;
+        }
+        // One pending sibling per level at most: MAX_DEPTH + 1 entries suffice.
+        let mut stack = [0u32; MAX_DEPTH + 1];
+        let mut sp = 0usize;
+        let mut node = nodes.first().filter(|r| r.bounds().overlaps(query));
+        while let Some(n) = node {
+            node = None;
+            if let Some(range) = n.primitive_range() {
+                for &p in indices.get(range).unwrap_or(&[]) {
+                    if source.primitive_bounds(p as usize).overlaps(query) {
+                        reported += 1;
+                        if !found(p) {
+                            return reported;
+                        }
+                    }
+                }
+            } else if let Some((l, r)) = n.children() {
+                let left = nodes.get(l as usize).filter(|c| c.bounds().overlaps(query));
+                let right = nodes.get(r as usize).filter(|c| c.bounds().overlaps(query));
+                match (left, right) {
+                    (Some(a), Some(_)) => {
+                        if let Some(slot) = stack.get_mut(sp) {
+                            *slot = r;
+                            sp += 1;
+                        }
+                        node = Some(a);
+                    }
+                    (a, b) => node = a.or(b),
+                }
+            }
+            if node.is_none() && sp > 0 {
+                sp -= 1;
+                node = nodes.get(stack[sp] as usize);
+            }
+        }
+        reported
+    }
+}

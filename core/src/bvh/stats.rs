@@ -1,0 +1,100 @@
+//! Per-ray traversal counters and whole-tree statistics.
+
+use super::node::{BvhNode, NODE_SIZE};
+use super::{Bvh, MAX_DEPTH};
+
+/// Traversal counters. Queries **add** to the counters they are given, so one value can
+/// accumulate a whole ray set (divide by the ray count for averages).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraversalStats {
+    /// Node boxes tested (the root counts once, each inner node's two children twice).
+    pub nodes_visited: u64,
+    /// Primitive intersection tests.
+    pub primitives_tested: u64,
+}
+
+impl TraversalStats {
+    /// Adds `other`'s counters to these.
+    #[inline]
+    pub fn add(&mut self, other: &Self) {
+        self.nodes_visited += other.nodes_visited;
+        self.primitives_tested += other.primitives_tested;
+    }
+}
+
+/// Shape and size of a built tree ([`Bvh::stats`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BvhStats {
+    /// Nodes in use.
+    pub nodes: usize,
+    /// Leaves.
+    pub leaves: usize,
+    /// Primitives in the tree.
+    pub primitives: usize,
+    /// Depth of the deepest leaf (root = 0); at most [`MAX_DEPTH`].
+    pub max_depth: usize,
+    /// Largest leaf, in primitives.
+    pub max_leaf_size: usize,
+    /// Bytes of the structure: `32·nodes + 4·primitives`.
+    pub bytes: usize,
+    /// `bytes / primitives` (0 for an empty tree).
+    pub bytes_per_primitive: f64,
+    /// SAH cost of the tree relative to its root area, with [`super::TRAVERSAL_COST`] and
+    /// [`super::INTERSECTION_COST`] (a quality figure for comparing builds).
+    pub sah_cost: f64,
+}
+
+impl<N, I> Bvh<N, I>
+where
+    N: AsRef<[BvhNode]>,
+    I: AsRef<[u32]>,
+{
+    /// Walks the tree once (with the same fixed stack bound as traversal) and reports its
+    /// shape and size.
+    #[must_use]
+    pub fn stats(&self) -> BvhStats {
+        let nodes = self.nodes();
+        let mut s = BvhStats {
+            nodes: nodes.len(),
+            primitives: self.primitive_count(),
+            bytes: nodes.len() * NODE_SIZE + self.primitive_count() * 4,
+            ..BvhStats::default()
+        };
+        if s.primitives > 0 {
+            s.bytes_per_primitive = s.bytes as f64 / s.primitives as f64;
+        }
+        let Some(root) = nodes.first() else {
+            return s;
+        };
+        let root_area = f64::from(root.bounds().surface_area());
+        let mut stack = [(0u32, 0usize); MAX_DEPTH + 1];
+        let mut sp = 1usize;
+        let mut cost = 0.0f64;
+        while sp > 0 {
+            sp -= 1;
+            let (i, depth) = stack[sp];
+            let Some(n) = nodes.get(i as usize) else {
+                continue;
+            };
+            let area = f64::from(n.bounds().surface_area());
+            s.max_depth = s.max_depth.max(depth);
+            if let Some(r) = n.primitive_range() {
+                s.leaves += 1;
+                s.max_leaf_size = s.max_leaf_size.max(r.len());
+                cost += f64::from(super::INTERSECTION_COST) * area * r.len() as f64;
+            } else if let Some((l, r)) = n.children() {
+                cost += f64::from(super::TRAVERSAL_COST) * area;
+                for c in [r, l] {
+                    if let Some(slot) = stack.get_mut(sp) {
+                        *slot = (c, depth + 1);
+                        sp += 1;
+                    }
+                }
+            }
+        }
+        if root_area > 0.0 {
+            s.sah_cost = cost / root_area;
+        }
+        s
+    }
+}

@@ -1,0 +1,428 @@
+//! Unit tests of the BVH (the mesh-scale comparisons with brute force live in
+//! `tests/tests/bvh_vs_bruteforce.rs`).
+
+use super::*;
+use crate::ray::Ray;
+use crate::triangle::{TriangleIntersector, Watertight};
+use glam::Vec3;
+use std::vec;
+use std::vec::Vec;
+
+type VecBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
+
+fn build<S: PrimitiveSource + ?Sized>(src: &S, opts: &BuildOptions) -> Result<VecBvh, BvhError> {
+    let n = src.primitive_count();
+    Bvh::build(
+        src,
+        vec![BvhNode::EMPTY; node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        opts,
+    )
+}
+
+/// A small deterministic generator for the tests.
+struct Lcg(u64);
+impl Lcg {
+    fn f(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+    fn v(&mut self, s: f32) -> Vec3 {
+        Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5) * s
+    }
+}
+
+fn brute(mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, f32)> {
+    let mut best: Option<(u32, f32)> = None;
+    for i in 0..mesh.len() {
+        let Some(v) = mesh.triangle(i) else { continue };
+        if let Some(h) = Watertight.intersect(ray, &v)
+            && best.is_none_or(|(_, t)| h.t < t)
+        {
+            best = Some((i as u32, h.t));
+        }
+    }
+    best
+}
+
+fn soup(n: usize, seed: u64) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut r = Lcg(seed);
+    let mut pos = Vec::new();
+    let mut tris = Vec::new();
+    for i in 0..n {
+        let c = r.v(10.0);
+        pos.extend([c + r.v(1.0), c + r.v(1.0), c + r.v(1.0)]);
+        let b = 3 * i as u32;
+        tris.push([b, b + 1, b + 2]);
+    }
+    (pos, tris)
+}
+
+#[test]
+fn node_is_32_bytes_and_capacity_is_2n_minus_1() {
+    assert_eq!(core::mem::size_of::<BvhNode>(), 32);
+    assert_eq!(NODE_SIZE, 32);
+    assert_eq!(node_capacity(0), 0);
+    assert_eq!(node_capacity(1), 1);
+    assert_eq!(node_capacity(10), 19);
+    assert_eq!(node_capacity(usize::MAX), usize::MAX - 1, "saturates");
+    assert_eq!(index_capacity(7), 7);
+}
+
+#[test]
+fn empty_input_gives_an_empty_bvh_that_hits_nothing() {
+    let mesh = TriangleMesh::new(&[], &[]);
+    let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+    assert!(bvh.is_empty());
+    assert_eq!(bvh.bounds(), crate::aabb::Aabb::EMPTY);
+    let ray = Ray::new(Vec3::ZERO, Vec3::X);
+    assert!(
+        bvh.closest_hit_triangles(&mesh, &Watertight, &ray, None)
+            .is_none()
+    );
+    assert!(
+        bvh.any_hit_triangles(&mesh, &Watertight, &ray, None)
+            .is_none()
+    );
+    let mut arr_nodes: [BvhNode; 0] = [];
+    let mut arr_idx: [u32; 0] = [];
+    assert!(
+        Bvh::build(
+            &mesh,
+            &mut arr_nodes[..],
+            &mut arr_idx[..],
+            &BuildOptions::default()
+        )
+        .is_ok()
+    );
+}
+
+#[test]
+fn too_small_storage_is_an_error_before_writing() {
+    let (pos, tris) = soup(10, 1);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let mut nodes = [BvhNode::EMPTY; 18];
+    let mut idx = [7u32; 10];
+    let err = Bvh::build(
+        &mesh,
+        &mut nodes[..],
+        &mut idx[..],
+        &BuildOptions::default(),
+    )
+    .unwrap_err();
+    assert_eq!(
+        err,
+        BvhError::NodeStorageTooSmall {
+            needed: 19,
+            available: 18
+        }
+    );
+    assert!(nodes.iter().all(|n| *n == BvhNode::EMPTY));
+    assert!(idx.iter().all(|&i| i == 7));
+    let mut nodes = [BvhNode::EMPTY; 19];
+    let mut idx = [7u32; 9];
+    let err = Bvh::build(
+        &mesh,
+        &mut nodes[..],
+        &mut idx[..],
+        &BuildOptions::default(),
+    )
+    .unwrap_err();
+    assert!(matches!(
+        err,
+        BvhError::IndexStorageTooSmall { needed: 10, .. }
+    ));
+    assert!(nodes.iter().all(|n| *n == BvhNode::EMPTY));
+    // Fixed arrays work as storage.
+    let mut idx = [0u32; 10];
+    let bvh = Bvh::build(&mesh, nodes, &mut idx, &BuildOptions::default()).unwrap();
+    assert_eq!(bvh.primitive_count(), 10);
+}
+
+#[test]
+fn non_finite_primitives_are_named_or_excluded() {
+    let (mut pos, mut tris) = soup(8, 2);
+    pos[7].y = f32::NAN; // triangle 2
+    tris[5] = [0, 1, 999]; // triangle 5: index out of range
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let mut nodes = vec![BvhNode::EMPTY; node_capacity(8)];
+    let err = Bvh::build(
+        &mesh,
+        &mut nodes[..],
+        vec![0u32; 8],
+        &BuildOptions::default(),
+    )
+    .unwrap_err();
+    assert_eq!(err, BvhError::NonFinitePrimitive { index: 2 });
+    assert!(nodes.iter().all(|n| *n == BvhNode::EMPTY));
+    let opts = BuildOptions {
+        exclude_non_finite: true,
+        ..BuildOptions::default()
+    };
+    let bvh = build(&mesh, &opts).unwrap();
+    assert_eq!(bvh.primitive_count(), 6);
+    assert!(bvh.bounds().is_finite());
+    assert!(!bvh.indices().contains(&2) && !bvh.indices().contains(&5));
+    // Infinite vertex too.
+    pos[0] = Vec3::new(f32::INFINITY, 0.0, 0.0);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    assert_eq!(
+        build(&mesh, &BuildOptions::default()).unwrap_err(),
+        BvhError::NonFinitePrimitive { index: 0 }
+    );
+}
+
+#[test]
+fn closest_and_any_hit_match_brute_force_on_a_random_soup() {
+    let (pos, tris) = soup(500, 3);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    for leaf in [1, 4, 16] {
+        let bvh = build(
+            &mesh,
+            &BuildOptions {
+                max_leaf_size: leaf,
+                ..BuildOptions::default()
+            },
+        )
+        .unwrap();
+        assert!(bvh.node_count() <= node_capacity(500));
+        let mut r = Lcg(99);
+        let mut hits = 0;
+        for _ in 0..2000 {
+            let o = r.v(30.0);
+            let ray = Ray::new(o, r.v(10.0) - o);
+            let got = bvh
+                .closest_hit_triangles(&mesh, &Watertight, &ray, None)
+                .map(|(p, h)| (p, h.t));
+            assert_eq!(got, brute(&mesh, &ray), "leaf {leaf} {ray:?}");
+            let any = bvh.any_hit_triangles(&mesh, &Watertight, &ray, None);
+            assert_eq!(any.is_some(), got.is_some());
+            hits += usize::from(got.is_some());
+        }
+        assert!(hits > 100, "{hits}");
+    }
+}
+
+#[test]
+fn coincident_triangles_build_within_the_depth_limit_and_tie_to_the_smallest_index() {
+    let n = 100_000;
+    let pos = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    ];
+    let tris = vec![[0u32, 1, 2]; n];
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+    let s = bvh.stats();
+    assert!(s.max_depth <= MAX_DEPTH, "{s:?}");
+    assert!(s.max_leaf_size <= DEFAULT_MAX_LEAF_SIZE as usize, "{s:?}");
+    let ray = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
+    let mut st = TraversalStats::default();
+    let (p, h) = bvh
+        .closest_hit_triangles(&mesh, &Watertight, &ray, Some(&mut st))
+        .unwrap();
+    assert_eq!((p, h.t), (0, 1.0));
+    assert!(st.primitives_tested >= n as u64);
+    assert!(
+        bvh.any_hit_triangles(&mesh, &Watertight, &ray, None)
+            .is_some()
+    );
+}
+
+#[test]
+fn depth_cap_holds_for_exponentially_spaced_primitives() {
+    // Boxes at 2^-k: the SAH peels one primitive per level, so the cap must stop it.
+    let boxes: Vec<crate::aabb::Aabb> = (0..200)
+        .map(|k| {
+            let x = 2f32.powi(-(k as i32) / 2) * if k % 2 == 0 { 1.0 } else { -1.0 };
+            let c = Vec3::new(x, 0.0, 0.0);
+            crate::aabb::Aabb::new(
+                c - Vec3::splat(1e-3 * x.abs()),
+                c + Vec3::splat(1e-3 * x.abs()),
+            )
+        })
+        .collect();
+    let bvh = build(&boxes[..], &BuildOptions::default()).unwrap();
+    let s = bvh.stats();
+    assert!(s.max_depth <= MAX_DEPTH, "{s:?}");
+    // Every box can still be found.
+    for (i, b) in boxes.iter().enumerate() {
+        let mut found = false;
+        bvh.query_box(&boxes[..], b, |p| {
+            found |= p as usize == i;
+            true
+        });
+        assert!(found, "box {i}");
+    }
+}
+
+#[test]
+fn zero_area_and_point_triangles_build_and_miss_cleanly() {
+    let pos = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(2.0, 0.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    ];
+    let tris = [[0u32, 1, 2], [0, 0, 0], [1, 1, 1], [0, 1, 3], [3, 3, 3]];
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+    let ray = Ray::new(Vec3::new(0.2, 0.2, -1.0), Vec3::Z);
+    let (p, _) = bvh
+        .closest_hit_triangles(&mesh, &Watertight, &ray, None)
+        .unwrap();
+    assert_eq!(p, 3);
+    let ray = Ray::new(Vec3::new(0.5, 0.0, -1.0), Vec3::Z);
+    assert_eq!(
+        bvh.closest_hit_triangles(&mesh, &Watertight, &ray, None)
+            .map(|x| x.0),
+        Some(3),
+        "edge point of triangle 3 (closed edges), not the degenerate ones"
+    );
+}
+
+#[test]
+fn invalid_rays_test_no_node() {
+    let (pos, tris) = soup(100, 4);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+    let bad = [
+        Ray::new(Vec3::NAN, Vec3::X),
+        Ray::new(Vec3::ZERO, Vec3::new(f32::NAN, 1.0, 0.0)),
+        Ray::new(Vec3::ZERO, Vec3::ZERO),
+        Ray::new(Vec3::splat(f32::INFINITY), Vec3::X),
+        Ray::with_interval(Vec3::ZERO, Vec3::X, f32::NAN, 1.0),
+        Ray::with_interval(Vec3::ZERO, Vec3::X, 2.0, 1.0),
+    ];
+    for ray in bad {
+        let mut st = TraversalStats::default();
+        let hit = bvh.closest_hit(&ray, |_, _| Some((1.0, ())), Some(&mut st));
+        assert!(hit.is_none());
+        assert!(
+            bvh.any_hit(&ray, |_, _| Some((1.0, ())), Some(&mut st))
+                .is_none()
+        );
+        assert!(st.nodes_visited <= 1 && st.primitives_tested == 0, "{st:?}");
+    }
+}
+
+#[test]
+fn misbehaving_callbacks_cannot_break_the_interval() {
+    let (pos, tris) = soup(50, 5);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+    let ray = Ray::with_interval(Vec3::splat(-30.0), Vec3::ONE, 0.0, 100.0);
+    for t in [f32::NAN, -1.0, 0.0, 1e30, f32::INFINITY] {
+        assert!(bvh.closest_hit(&ray, |_, _| Some((t, ())), None).is_none());
+    }
+}
+
+#[test]
+fn refit_follows_moved_vertices() {
+    let (mut pos, tris) = soup(300, 6);
+    let bvh0 = {
+        let mesh = TriangleMesh::new(&pos, &tris);
+        build(&mesh, &BuildOptions::default()).unwrap()
+    };
+    let mut bvh = bvh0.clone();
+    for p in &mut pos {
+        *p = *p * 1.5 + Vec3::new(3.0, -2.0, 0.5);
+    }
+    let mesh = TriangleMesh::new(&pos, &tris);
+    bvh.refit(&mesh).unwrap();
+    let fresh = build(&mesh, &BuildOptions::default()).unwrap();
+    assert_eq!(bvh.bounds(), fresh.bounds());
+    let mut r = Lcg(7);
+    for _ in 0..2000 {
+        let o = r.v(40.0);
+        let ray = Ray::new(o, r.v(10.0) - o);
+        let got = bvh
+            .closest_hit_triangles(&mesh, &Watertight, &ray, None)
+            .map(|(p, h)| (p, h.t));
+        assert_eq!(got, brute(&mesh, &ray));
+    }
+    // Wrong length: refused before writing.
+    let short = TriangleMesh::new(&pos, &tris[..10]);
+    assert!(matches!(
+        bvh.refit(&short),
+        Err(BvhError::SourceLengthMismatch { .. })
+    ));
+    // A NaN vertex: named, tree stays usable.
+    pos[4] = Vec3::NAN;
+    let mesh = TriangleMesh::new(&pos, &tris);
+    assert_eq!(
+        bvh.refit(&mesh),
+        Err(BvhError::NonFinitePrimitive { index: 1 })
+    );
+    assert!(bvh.bounds().is_finite());
+}
+
+#[test]
+fn box_query_finds_exactly_the_overlapping_primitives() {
+    let (pos, tris) = soup(400, 8);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+    let mut r = Lcg(11);
+    for _ in 0..100 {
+        let c = r.v(12.0);
+        let q = crate::aabb::Aabb::new(c, c + Vec3::new(r.f(), r.f(), r.f()) * 3.0);
+        let mut got = Vec::new();
+        let n = bvh.query_box(&mesh, &q, |p| {
+            got.push(p);
+            true
+        });
+        got.sort_unstable();
+        let want: Vec<u32> = (0..400u32)
+            .filter(|&i| mesh.primitive_bounds(i as usize).overlaps(&q))
+            .collect();
+        assert_eq!(got, want);
+        assert_eq!(n, want.len());
+    }
+    let mut calls = 0;
+    let everything = crate::aabb::Aabb::new(Vec3::splat(-100.0), Vec3::splat(100.0));
+    assert_eq!(
+        bvh.query_box(&mesh, &everything, |_| {
+            calls += 1;
+            calls < 3
+        }),
+        3
+    );
+    assert_eq!(bvh.query_box(&mesh, &crate::aabb::Aabb::EMPTY, |_| true), 0);
+}
+
+#[test]
+fn clearance_rejects_mismatched_lengths_and_reports_infinity_for_misses() {
+    let pos = [
+        Vec3::new(-1.0, -1.0, 5.0),
+        Vec3::new(3.0, -1.0, 5.0),
+        Vec3::new(-1.0, 3.0, 5.0),
+    ];
+    let tris = [[0u32, 1, 2]];
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+    let pts = [Vec3::ZERO, Vec3::ZERO, Vec3::ZERO];
+    let nrm = [Vec3::Z * 2.0, -Vec3::Z, Vec3::ZERO];
+    let mut out = [0.0f32; 3];
+    let min = bvh
+        .clearance_triangles(&mesh, &Watertight, &pts, &nrm, &mut out)
+        .unwrap();
+    assert_eq!(out, [5.0, f32::INFINITY, f32::INFINITY]);
+    assert_eq!(min, 5.0);
+    let mut short = [0.0f32; 2];
+    assert!(matches!(
+        bvh.clearance_triangles(&mesh, &Watertight, &pts, &nrm, &mut short),
+        Err(BvhError::LengthMismatch { .. })
+    ));
+    let min = bvh
+        .clearance(&pts, &nrm, &mut out, |p, r| {
+            Watertight
+                .intersect(r, &mesh.triangle(p as usize)?)
+                .map(|h| h.t)
+        })
+        .unwrap();
+    assert_eq!(min, 5.0);
+}

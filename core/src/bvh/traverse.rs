@@ -1,0 +1,206 @@
+//! Closest-hit and any-hit traversal on a fixed-size stack.
+
+use super::node::BvhNode;
+use super::primitive::TriangleMesh;
+use super::stats::TraversalStats;
+use super::{Bvh, CULL_REL_SLACK, TRAVERSAL_STACK_SIZE};
+use crate::aabb::SlabRay;
+use crate::ray::Ray;
+use crate::triangle::{TriangleHit, TriangleIntersector};
+
+/// `t` padded by [`CULL_REL_SLACK`] for box culling (`+∞` stays `+∞`).
+#[inline]
+fn cull_bound(t: f32) -> f32 {
+    t + t.abs() * CULL_REL_SLACK
+}
+
+/// One stack entry: a node still to visit and the distance at which the ray enters its box.
+#[derive(Clone, Copy)]
+struct Entry {
+    node: u32,
+    t_enter: f32,
+}
+
+impl<N, I> Bvh<N, I>
+where
+    N: AsRef<[BvhNode]>,
+    I: AsRef<[u32]>,
+{
+    /// The closest hit of `ray`, as `(primitive index, intersect's payload)`.
+    ///
+    /// `intersect(prim, ray)` tests one primitive against `ray`, whose `t_max` is the current
+    /// closest `t` (inclusive), and returns `(t, payload)` for a hit in `(t_min, t_max]`. Hits
+    /// outside the interval are ignored. Of equal `t`, the smaller primitive index wins (see the
+    /// module docs), so the result equals a brute-force loop with the same rule. `stats`, when
+    /// given, is **added to**. An invalid ray returns `None` without testing any node.
+    pub fn closest_hit<H>(
+        &self,
+        ray: &Ray,
+        intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, H)> {
+        self.traverse::<H, false>(ray, intersect, stats)
+    }
+
+    /// Any hit of `ray` (occlusion / shadow rays): traversal stops at the first primitive for
+    /// which `intersect` reports a `t` in `(t_min, t_max]`. Which one is found first depends on
+    /// the tree; hit/miss does not.
+    pub fn any_hit<H>(
+        &self,
+        ray: &Ray,
+        intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, H)> {
+        self.traverse::<H, true>(ray, intersect, stats)
+    }
+
+    /// [`Bvh::closest_hit`] over a triangle mesh with the intersector `isect` (prepared once
+    /// per ray). Returns the triangle index and its hit.
+    #[inline]
+    pub fn closest_hit_triangles<T: TriangleIntersector>(
+        &self,
+        mesh: &TriangleMesh<'_>,
+        isect: &T,
+        ray: &Ray,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, TriangleHit)> {
+        let pre = isect.prepare(ray)?;
+        self.closest_hit(
+            ray,
+            |prim, r| {
+                let v = mesh.triangle(prim as usize)?;
+                isect.intersect_prepared(&pre, r, &v).map(|h| (h.t, h))
+            },
+            stats,
+        )
+    }
+
+    /// [`Bvh::any_hit`] over a triangle mesh with the intersector `isect`.
+    #[inline]
+    pub fn any_hit_triangles<T: TriangleIntersector>(
+        &self,
+        mesh: &TriangleMesh<'_>,
+        isect: &T,
+        ray: &Ray,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, TriangleHit)> {
+        let pre = isect.prepare(ray)?;
+        self.any_hit(
+            ray,
+            |prim, r| {
+                let v = mesh.triangle(prim as usize)?;
+                isect.intersect_prepared(&pre, r, &v).map(|h| (h.t, h))
+            },
+            stats,
+        )
+    }
+
+    fn traverse<H, const ANY: bool>(
+        &self,
+        ray: &Ray,
+        mut intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, H)> {
+        let slab = SlabRay::new(ray)?;
+        let nodes = self.nodes();
+        let indices = self.indices();
+        let root = nodes.first()?;
+        let mut local = TraversalStats::default();
+        let mut cur = *ray;
+        let mut best: Option<(u32, H)> = None;
+        let mut stack = [Entry {
+            node: 0,
+            t_enter: 0.0,
+        }; TRAVERSAL_STACK_SIZE];
+        let mut sp = 0usize;
+
+        local.nodes_visited += 1;
+        let mut node = if root
+            .bounds()
+            .intersect_slab(&slab, ray.t_min, cull_bound(ray.t_max))
+            .is_some()
+        {
+            Some(root)
+        } else {
+            None
+        };
+        'walk: while let Some(n) = node {
+            let (start, count) = n.raw();
+            if count != 0 {
+                let first = start as usize;
+                let prims = indices
+                    .get(first..first.saturating_add(count as usize))
+                    .unwrap_or(&[]);
+                for &prim in prims {
+                    local.primitives_tested += 1;
+                    let Some((t, h)) = intersect(prim, &cur) else {
+                        continue;
+                    };
+                    let better = match &best {
+                        None => cur.contains(t),
+                        Some((bp, _)) => {
+                            t > cur.t_min && (t < cur.t_max || (t == cur.t_max && prim < *bp))
+                        }
+                    };
+                    if better {
+                        cur.t_max = t;
+                        best = Some((prim, h));
+                        if ANY {
+                            break 'walk;
+                        }
+                    }
+                }
+            } else {
+                let bound = cull_bound(cur.t_max);
+                let left = nodes.get(start as usize);
+                let right = nodes.get(start as usize + 1);
+                let hit_l = left.and_then(|c| c.bounds().intersect_slab(&slab, cur.t_min, bound));
+                let hit_r = right.and_then(|c| c.bounds().intersect_slab(&slab, cur.t_min, bound));
+                local.nodes_visited += 2;
+                match (hit_l, hit_r) {
+                    (Some((tl, _)), Some((tr, _))) => {
+                        // Near child first; equal entries keep the first child first.
+                        let (near, far, t_far) = if tr < tl {
+                            (right, start, tl)
+                        } else {
+                            (left, start + 1, tr)
+                        };
+                        if let Some(slot) = stack.get_mut(sp) {
+                            *slot = Entry {
+                                node: far,
+                                t_enter: t_far,
+                            };
+                            sp += 1;
+                        }
+                        node = near;
+                        continue;
+                    }
+                    (Some(_), None) => {
+                        node = left;
+                        continue;
+                    }
+                    (None, Some(_)) => {
+                        node = right;
+                        continue;
+                    }
+                    (None, None) => {}
+                }
+            }
+            // Pop the next entry still within the (shrunk) interval.
+            node = None;
+            let bound = cull_bound(cur.t_max);
+            while sp > 0 {
+                sp -= 1;
+                let e = stack[sp];
+                if e.t_enter <= bound {
+                    node = nodes.get(e.node as usize);
+                    break;
+                }
+            }
+        }
+        if let Some(s) = stats {
+            s.add(&local);
+        }
+        best
+    }
+}
