@@ -1,55 +1,63 @@
-//! A triangle mesh with its acceleration structure, owned (std), for the frontend's tools:
-//! closest-hit and any-hit queries with any triangle intersector variant.
+//! A triangle mesh with its BVH, owned (std), for the frontend's tools: closest-hit and any-hit
+//! queries with any triangle intersector variant.
 
+use crate::error::{Error, Result};
 use crate::obj::ObjMesh;
 use halfray_core::Ray;
+use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TraversalStats, TriangleMesh, index_capacity, node_capacity};
 use halfray_core::triangle::{
-    Cramer, F64Reference, MollerTrumbore, TriangleHit, TriangleIntersector, TriangleVariant,
-    Watertight, WatertightF32,
+    Cramer, F64Reference, MollerTrumbore, TriangleHit, TriangleIntersector, TriangleVariant, Watertight,
+    WatertightF32,
 };
 
 /// A mesh ready for ray queries.
 pub struct MeshAccel {
     /// The mesh.
     pub mesh: ObjMesh,
-    tris: Vec<[glam::Vec3; 3]>,
+    bvh: Bvh<Vec<BvhNode>, Vec<u32>>,
 }
 
 impl MeshAccel {
-    /// Builds the acceleration structure over `mesh`.
-    pub fn new(mesh: ObjMesh) -> crate::Result<Self> {
-        let tris = (0..mesh.triangles.len())
-            .map(|i| mesh.triangle(i))
-            .collect();
-        Ok(Self { mesh, tris })
+    /// Builds the BVH over `mesh` (binned SAH, default options).
+    pub fn new(mesh: ObjMesh) -> Result<Self> {
+        let n = mesh.triangles.len();
+        let bvh = Bvh::build(
+            &TriangleMesh::new(&mesh.positions, &mesh.triangles),
+            vec![BvhNode::default(); node_capacity(n)],
+            vec![0u32; index_capacity(n)],
+            &BuildOptions::default(),
+        )
+        .map_err(|e| Error::Other(format!("building the BVH: {e}")))?;
+        Ok(Self { mesh, bvh })
+    }
+
+    /// The BVH.
+    pub fn bvh(&self) -> &Bvh<Vec<BvhNode>, Vec<u32>> {
+        &self.bvh
+    }
+
+    fn tri_mesh(&self) -> TriangleMesh<'_> {
+        TriangleMesh::new(&self.mesh.positions, &self.mesh.triangles)
     }
 
     /// Closest hit with `isect`: `(triangle index, hit)`.
-    pub fn closest<I: TriangleIntersector>(
+    pub fn closest<I: TriangleIntersector>(&self, isect: &I, ray: &Ray) -> Option<(u32, TriangleHit)> {
+        self.bvh.closest_hit_triangles(&self.tri_mesh(), isect, ray, None)
+    }
+
+    /// Closest hit with traversal statistics added to `stats`.
+    pub fn closest_with_stats<I: TriangleIntersector>(
         &self,
         isect: &I,
         ray: &Ray,
+        stats: &mut TraversalStats,
     ) -> Option<(u32, TriangleHit)> {
-        let pre = isect.prepare(ray)?;
-        let mut r = *ray;
-        let mut best = None;
-        for (i, t) in self.tris.iter().enumerate() {
-            if let Some(h) = isect.intersect_prepared(&pre, &r, t) {
-                r.t_max = h.t;
-                best = Some((i as u32, h));
-            }
-        }
-        best
+        self.bvh.closest_hit_triangles(&self.tri_mesh(), isect, ray, Some(stats))
     }
 
     /// Whether anything is hit in the ray's interval.
     pub fn any<I: TriangleIntersector>(&self, isect: &I, ray: &Ray) -> bool {
-        let Some(pre) = isect.prepare(ray) else {
-            return false;
-        };
-        self.tris
-            .iter()
-            .any(|t| isect.intersect_prepared(&pre, ray, t).is_some())
+        self.bvh.any_hit_triangles(&self.tri_mesh(), isect, ray, None).is_some()
     }
 
     /// Closest hit with a variant chosen at run time.

@@ -196,6 +196,12 @@ fn compare_set(
             row.leaks_embree += le as usize;
             row.leaks_embree_default +=
                 judge::is_leak(&r.ray, emb_fast[i].as_ref(), target.t) as usize;
+            if lh && std::env::var_os("HALFRAY_CROSSCHECK_DEBUG").is_some() {
+                eprintln!(
+                    "halfray leak: ray {:?} incident {:?} ours {h:?} embree {e:?}",
+                    r.ray, target.incident
+                );
+            }
             if lh != le {
                 // A leak is its own category; counted above, not judged again.
                 continue;

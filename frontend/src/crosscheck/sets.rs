@@ -33,6 +33,11 @@ pub const GRAZING_MAX_RAD: f64 = 1.0e-2;
 /// (rounded from the `f64` construction) may pass on either side of such a sliver.
 pub const EDGE_ON_SIN: f64 = 1.0e-6;
 
+/// Largest ray-space boundary margin (barycentric units) an incident triangle may have for an
+/// edge or vertex ray to count as robustly transversal: a margin of ½ means the projected
+/// altitude is twice the rounding displacement, so the projected orientation cannot flip.
+pub const ROBUST_MARGIN: f64 = 0.5;
+
 /// A ray of a set, with what is known about where it was aimed.
 #[derive(Clone, Debug)]
 pub struct SetRay {
@@ -260,7 +265,11 @@ fn aimed(
 
 /// `true` when the projections of the incident triangles along the ray all have the same
 /// orientation and are non-degenerate (the fan, or the two triangles of an edge, then cover a
-/// neighbourhood of the target, so the ray must cross one of them) — judged in `f64`.
+/// neighbourhood of the target, so the ray must cross one of them) — judged in `f64` — and
+/// every projected triangle is thick enough that moving its vertices by the `f32` rounding of
+/// the ray-space coordinates cannot flip its orientation: its ray-space boundary margin
+/// ([`crate::crosscheck::judge::ray_space_barycentrics`]) is below [`ROBUST_MARGIN`]. Only such
+/// crossings are decidable in `f32`, and only they count towards leaks.
 pub fn crosses_transversally(mesh: &ObjMesh, ray: &Ray, faces: &[u32], target: Vec3) -> bool {
     let d = ray.direction.as_dvec3().normalize();
     let u = d.any_orthonormal_vector();
@@ -275,6 +284,10 @@ pub fn crosses_transversally(mesh: &ObjMesh, ray: &Ray, faces: &[u32], target: V
         let area = (b - a).perp_dot(c - a);
         let scale = (b - a).length() * (c - a).length();
         if area.is_nan() || area.abs() <= EDGE_ON_SIN * scale {
+            return false;
+        }
+        let tri = mesh.triangle(f as usize);
+        if super::judge::ray_space_barycentrics(ray, &tri).is_none_or(|(_, m)| m >= ROBUST_MARGIN) {
             return false;
         }
         if sign == 0.0 {
