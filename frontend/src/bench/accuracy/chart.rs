@@ -74,16 +74,21 @@ pub fn write_chart(
     }
     hline(&mut img, LEFT, LEFT + pw, TOP + ph, black);
     vline(&mut img, LEFT, TOP, TOP + ph, black);
-    text(&mut img, LEFT, 12, title, black);
+    text(&mut img, 8, 4, title, black);
     text(&mut img, LEFT + pw / 2 - 60, H as i32 - 30, x_label, black);
-    text(&mut img, 8, TOP - 30, y_label, black);
+    text(&mut img, 8, 24, y_label, black);
+    // Legend in the plot's upper-left corner; points drawn largest-first so none hides.
+    let legend_x = LEFT + 16;
     for (i, p) in points.iter().enumerate() {
         let c = Rgb(PALETTE[i % PALETTE.len()]);
+        let ly = TOP + 14 + i as i32 * 20;
+        disc(&mut img, legend_x, ly + 6, 5, c);
+        text(&mut img, legend_x + 12, ly, &p.label, c);
+    }
+    for (i, p) in points.iter().enumerate().rev() {
+        let c = Rgb(PALETTE[i % PALETTE.len()]);
         let px = LEFT + (pw as f64 * p.x / x_max) as i32;
-        let py = y_of(p.y);
-        disc(&mut img, px, py, 6, c);
-        let dy = if i % 2 == 0 { -22 } else { 10 };
-        text(&mut img, px + 9, py + dy, &p.label, c);
+        disc(&mut img, px, y_of(p.y), 7 - (i as i32 % 3), c);
     }
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)

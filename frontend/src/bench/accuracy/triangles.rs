@@ -288,3 +288,34 @@ macro_rules! with_intersector {
 pub fn measure(variant: TriangleVariant, w: &Workload, reps: usize) -> (Accuracy, f64) {
     with_intersector!(variant, |i| (accuracy(i, w), ns_per_test(i, w, reps)))
 }
+
+/// Single-threaded closest-hit throughput through the BVH, Mrays/s (median of `reps` passes).
+pub fn mrays_bvh<I: TriangleIntersector>(
+    isect: &I,
+    accel: &crate::accel::MeshAccel,
+    rays: &[Ray],
+    reps: usize,
+) -> f64 {
+    let mut samples = Vec::with_capacity(reps);
+    for _ in 0..reps {
+        let start = Instant::now();
+        let mut hits = 0u32;
+        for r in rays {
+            hits += accel.closest(isect, black_box(r)).is_some() as u32;
+        }
+        black_box(hits);
+        samples.push(rays.len() as f64 / start.elapsed().as_secs_f64().max(1e-12) / 1.0e6);
+    }
+    samples.sort_by(f64::total_cmp);
+    samples.get(samples.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// [`mrays_bvh`] for a variant chosen at run time.
+pub fn mrays_bvh_variant(
+    variant: TriangleVariant,
+    accel: &crate::accel::MeshAccel,
+    rays: &[Ray],
+    reps: usize,
+) -> f64 {
+    with_intersector!(variant, |i| mrays_bvh(i, accel, rays, reps))
+}
