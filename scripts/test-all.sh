@@ -50,6 +50,20 @@ if [ "${SKIP_EMBREE:-0}" != 1 ]; then
         --depth-image target/ci/crosscheck-depth.png
 fi
 
+stage bench
+mkdir -p target/ci
+cargo run --release -p halfray -- bench accuracy --quick --json target/ci/accuracy.json --chart target/ci/accuracy.png
+python3 - target/ci/accuracy.json <<'PY'
+import json, sys
+report = json.load(open(sys.argv[1]))
+rows = {v["name"]: v for v in report["variants"]}
+for name in ("watertight", "watertight-f32", "f64-reference"):
+    leaks = rows[name]["leaks_per_million"]
+    assert leaks == 0, f"{name}: {leaks} leaks per million edge/vertex rays"
+    assert rows[name]["leak_rays"] > 0, f"{name}: no edge/vertex rays were tested"
+print("bench accuracy --quick: watertight variants have zero leaks")
+PY
+
 if [ "${SKIP_FUZZ:-0}" != 1 ]; then
     stage fuzz
     FUZZ_SECONDS=${FUZZ_SECONDS:-30} bash scripts/fuzz-ci.sh
