@@ -13,6 +13,7 @@ pub mod embree;
 pub mod error;
 pub mod mesh_tools;
 pub mod obj;
+pub mod raysets;
 pub mod render;
 pub mod scene;
 

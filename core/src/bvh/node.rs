@@ -6,17 +6,17 @@ use glam::Vec3;
 
 /// A BVH node: a box and either two adjacent children or a run of primitive indices.
 ///
-/// Layout (`repr(C)`, 32 bytes, 32-byte aligned): `min: [f32; 3]`, `start: u32`,
-/// `max: [f32; 3]`, `count: u32`. An inner node has `count = 0` and its children at `start`
+/// Layout (`repr(C)`, 32 bytes, 32-byte aligned): `bounds: [min, max]` as `[[f32; 3]; 2]`
+/// (24 bytes; indexed by the ray's direction sign bit during traversal), `start: u32`,
+/// `count: u32`. An inner node has `count = 0` and its children at `start`
 /// and `start + 1`; a leaf has `count ≥ 1` primitives at `indices[start..start + count]`.
 /// Nodes are only created by the builder; fields are private so the invariants that bound the
 /// traversal (children after their parent, depth ≤ [`super::MAX_DEPTH`]) cannot be broken.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(32))]
 pub struct BvhNode {
-    min: [f32; 3],
+    pub(super) bounds: [[f32; 3]; 2],
     start: u32,
-    max: [f32; 3],
     count: u32,
 }
 
@@ -34,16 +34,14 @@ impl BvhNode {
     /// An unused node (empty box, empty leaf), for initialising storage:
     /// `[BvhNode::EMPTY; K]`.
     pub const EMPTY: Self = Self {
-        min: [f32::INFINITY; 3],
+        bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
         start: 0,
-        max: [f32::NEG_INFINITY; 3],
         count: 0,
     };
 
     #[inline]
     pub(super) fn set_bounds(&mut self, b: &Aabb) {
-        self.min = b.min.to_array();
-        self.max = b.max.to_array();
+        self.bounds = [b.min.to_array(), b.max.to_array()];
     }
 
     #[inline]
@@ -62,7 +60,10 @@ impl BvhNode {
     #[inline]
     #[must_use]
     pub fn bounds(&self) -> Aabb {
-        Aabb::new(Vec3::from_array(self.min), Vec3::from_array(self.max))
+        Aabb::new(
+            Vec3::from_array(self.bounds[0]),
+            Vec3::from_array(self.bounds[1]),
+        )
     }
 
     /// `true` for a leaf.

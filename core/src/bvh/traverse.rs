@@ -4,14 +4,59 @@ use super::node::BvhNode;
 use super::primitive::TriangleMesh;
 use super::stats::TraversalStats;
 use super::{Bvh, CULL_REL_SLACK, TRAVERSAL_STACK_SIZE};
-use crate::aabb::SlabRay;
+use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
 
-/// `t` padded by [`CULL_REL_SLACK`] for box culling (`+∞` stays `+∞`).
+/// `t` padded by [`CULL_REL_SLACK`] for box culling (infinities are kept as they are).
 #[inline]
 fn cull_bound(t: f32) -> f32 {
-    t + t.abs() * CULL_REL_SLACK
+    if t.is_finite() {
+        t + t.abs() * CULL_REL_SLACK
+    } else {
+        t
+    }
+}
+
+/// The ray as the node test wants it: origin, reciprocal direction and, per axis, which of
+/// the node's `[min, max]` corners is the near one (the direction's sign bit).
+#[derive(Clone, Copy)]
+pub(super) struct NodeRay {
+    origin: [f32; 3],
+    inv_dir: [f32; 3],
+    near: [usize; 3],
+}
+
+impl NodeRay {
+    #[inline]
+    pub(super) fn new(slab: &SlabRay) -> Self {
+        Self {
+            origin: slab.origin.to_array(),
+            inv_dir: slab.inv_dir.to_array(),
+            near: slab.negative.map(usize::from),
+        }
+    }
+
+    /// Exactly [`crate::aabb::Aabb::intersect_slab`] (same operations in the same order, so the
+    /// same robust, conservative, NaN-absorbing result) on the node's raw corners, with the
+    /// near/far corner picked by index instead of by branch. `t_enter` and `t_exit` are never
+    /// NaN (the ray was validated), so `a > b ? a : b` absorbs a NaN slab value exactly like
+    /// `f32::max` does. Returns the entry distance on a hit.
+    #[inline(always)]
+    pub(super) fn hit(&self, node: &BvhNode, t_min: f32, t_max: f32) -> Option<f32> {
+        let mut t_enter = t_min;
+        let mut t_exit = t_max;
+        for axis in 0..3 {
+            let n = self.near[axis];
+            let lo = node.bounds[n][axis];
+            let hi = node.bounds[1 - n][axis];
+            let t_near = (lo - self.origin[axis]) * self.inv_dir[axis];
+            let t_far = (hi - self.origin[axis]) * self.inv_dir[axis] * SLAB_FAR_SCALE;
+            t_enter = if t_near > t_enter { t_near } else { t_enter };
+            t_exit = if t_far < t_exit { t_far } else { t_exit };
+        }
+        (t_enter <= t_exit).then_some(t_enter)
+    }
 }
 
 /// One stack entry: a node still to visit and the distance at which the ray enters its box.
@@ -114,12 +159,9 @@ where
         }; TRAVERSAL_STACK_SIZE];
         let mut sp = 0usize;
 
+        let nray = NodeRay::new(&slab);
         local.nodes_visited += 1;
-        let mut node = if root
-            .bounds()
-            .intersect_slab(&slab, ray.t_min, cull_bound(ray.t_max))
-            .is_some()
-        {
+        let mut node = if nray.hit(root, ray.t_min, cull_bound(ray.t_max)).is_some() {
             Some(root)
         } else {
             None
@@ -154,11 +196,11 @@ where
                 let bound = cull_bound(cur.t_max);
                 let left = nodes.get(start as usize);
                 let right = nodes.get(start as usize + 1);
-                let hit_l = left.and_then(|c| c.bounds().intersect_slab(&slab, cur.t_min, bound));
-                let hit_r = right.and_then(|c| c.bounds().intersect_slab(&slab, cur.t_min, bound));
+                let hit_l = left.and_then(|c| nray.hit(c, cur.t_min, bound));
+                let hit_r = right.and_then(|c| nray.hit(c, cur.t_min, bound));
                 local.nodes_visited += 2;
                 match (hit_l, hit_r) {
-                    (Some((tl, _)), Some((tr, _))) => {
+                    (Some(tl), Some(tr)) => {
                         // Near child first; equal entries keep the first child first.
                         let (near, far, t_far) = if tr < tl {
                             (right, start, tl)

@@ -1,0 +1,193 @@
+//! Deterministic ray sets shared by the benchmarks, the cross-check and the tests.
+//!
+//! * [`Camera`]: a pinhole camera framing an axis-aligned box; [`Camera::ray`] gives the primary
+//!   ray through the centre `(i + ½, j + ½)` of pixel `(i, j)` (row `j = 0` at the top).
+//! * [`random_rays`]: incoherent rays, origins uniform on a sphere of twice the bounding-sphere
+//!   radius around the box, aimed at uniform random points inside the box.
+//!
+//! Both are pure functions of their inputs (and seed): the same rays on every machine. The
+//! arithmetic is done in `f64` and rounded once to `f32`.
+
+use glam::{DVec3, Vec3};
+use halfray_core::Ray;
+
+/// SplitMix64 (Steele, Lea, Flood 2014): small, fast, deterministic, no dependency.
+#[derive(Clone, Debug)]
+pub struct Rng(u64);
+
+impl Rng {
+    /// A generator from a seed.
+    #[must_use]
+    pub fn new(seed: u64) -> Self {
+        Self(seed ^ 0x9E37_79B9_7F4A_7C15)
+    }
+
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in `[0, 1)` (53 random bits).
+    pub fn f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// Uniform in `[lo, hi)`.
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.f64()
+    }
+
+    /// Uniform index in `0..n` (0 when `n = 0`).
+    pub fn below(&mut self, n: usize) -> usize {
+        ((u128::from(self.next_u64()) * n as u128) >> 64) as usize
+    }
+
+    /// Uniform direction on the unit sphere.
+    pub fn unit_vector(&mut self) -> DVec3 {
+        let z = 2.0 * self.f64() - 1.0;
+        let phi = std::f64::consts::TAU * self.f64();
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        DVec3::new(r * phi.cos(), r * phi.sin(), z)
+    }
+}
+
+/// Vertical field of view of [`Camera::framing`], degrees.
+pub const CAMERA_FOV_DEG: f64 = 45.0;
+
+/// Direction from the box centre to the eye of [`Camera::framing`] (normalised on use): above,
+/// to the right and in front (`+z`), so that no face of an axis-aligned box is seen edge-on.
+pub const CAMERA_VIEW_DIR: [f64; 3] = [0.3, 0.4, 1.0];
+
+/// A pinhole camera.
+#[derive(Clone, Copy, Debug)]
+pub struct Camera {
+    /// Eye position.
+    pub eye: DVec3,
+    /// Unit view direction.
+    pub forward: DVec3,
+    /// Unit right vector.
+    pub right: DVec3,
+    /// Unit up vector.
+    pub up: DVec3,
+    /// `tan(fov/2)`.
+    pub half_height: f64,
+    /// Image width, pixels.
+    pub width: usize,
+    /// Image height, pixels.
+    pub height: usize,
+}
+
+impl Camera {
+    /// A camera looking at the box `[lo, hi]` from [`CAMERA_VIEW_DIR`], far enough that the
+    /// bounding sphere fits the vertical [`CAMERA_FOV_DEG`] field of view, for a `width ×
+    /// height` image. A degenerate box is treated as a unit-radius sphere at its centre.
+    #[must_use]
+    pub fn framing(lo: Vec3, hi: Vec3, width: usize, height: usize) -> Self {
+        let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+        let center = (lo + hi) * 0.5;
+        let mut radius = (hi - lo).length() * 0.5;
+        if !(radius > 0.0 && radius.is_finite()) {
+            radius = 1.0;
+        }
+        let fov = CAMERA_FOV_DEG.to_radians();
+        let dist = radius / (fov * 0.5).sin();
+        let eye = center + DVec3::from_array(CAMERA_VIEW_DIR).normalize() * dist;
+        let forward = (center - eye).normalize();
+        let right = forward.cross(DVec3::Y).normalize();
+        let up = right.cross(forward);
+        Self {
+            eye,
+            forward,
+            right,
+            up,
+            half_height: (fov * 0.5).tan(),
+            width: width.max(1),
+            height: height.max(1),
+        }
+    }
+
+    /// The primary ray through the centre of pixel `(i, j)` (`i` to the right, `j` down),
+    /// over `(0, ∞]`, direction not normalised.
+    #[must_use]
+    pub fn ray(&self, i: usize, j: usize) -> Ray {
+        let aspect = self.width as f64 / self.height as f64;
+        let sx = (2.0 * (i as f64 + 0.5) / self.width as f64 - 1.0) * self.half_height * aspect;
+        let sy = (1.0 - 2.0 * (j as f64 + 0.5) / self.height as f64) * self.half_height;
+        let d = self.forward + self.right * sx + self.up * sy;
+        Ray::new(self.eye.as_vec3(), d.as_vec3())
+    }
+
+    /// All `width × height` primary rays, row by row from the top.
+    #[must_use]
+    pub fn rays(&self) -> Vec<Ray> {
+        let mut out = Vec::with_capacity(self.width * self.height);
+        for j in 0..self.height {
+            for i in 0..self.width {
+                out.push(self.ray(i, j));
+            }
+        }
+        out
+    }
+}
+
+/// `count` incoherent rays for the box `[lo, hi]`: origin uniform on the sphere of radius
+/// `2 × (half the diagonal)` around the centre, direction towards a uniform point in the box
+/// (so `t = 1` at that point). Deterministic for a given `seed`.
+#[must_use]
+pub fn random_rays(lo: Vec3, hi: Vec3, count: usize, seed: u64) -> Vec<Ray> {
+    let mut rng = Rng::new(seed);
+    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+    let center = (lo + hi) * 0.5;
+    let mut radius = (hi - lo).length() * 0.5;
+    if !(radius > 0.0 && radius.is_finite()) {
+        radius = 1.0;
+    }
+    (0..count)
+        .map(|_| {
+            let o = (center + rng.unit_vector() * (2.0 * radius)).as_vec3();
+            let u = DVec3::new(rng.f64(), rng.f64(), rng.f64());
+            let p = (lo + (hi - lo) * u).as_vec3();
+            Ray::new(o, p - o)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn camera_centre_pixel_looks_at_the_box_centre() {
+        let cam = Camera::framing(Vec3::splat(-1.0), Vec3::splat(1.0), 2, 2);
+        // The four pixel centres are symmetric around the view axis.
+        let d: Vec<Vec3> = cam.rays().iter().map(|r| r.direction).collect();
+        let mean = (d[0] + d[1] + d[2] + d[3]) * 0.25;
+        let f = cam.forward.as_vec3();
+        assert!((mean.normalize() - f).length() < 1e-6, "{mean:?} {f:?}");
+        assert!(
+            cam.ray(0, 0).direction.dot(cam.up.as_vec3()) > 0.0,
+            "row 0 is the top"
+        );
+    }
+
+    #[test]
+    fn random_rays_are_deterministic_and_aim_into_the_box() {
+        let (lo, hi) = (Vec3::new(-1.0, 0.0, 2.0), Vec3::new(1.0, 3.0, 4.0));
+        let a = random_rays(lo, hi, 1000, 7);
+        assert_eq!(a, random_rays(lo, hi, 1000, 7));
+        assert_ne!(a, random_rays(lo, hi, 1000, 8));
+        let b = halfray_core::Aabb::new(lo, hi);
+        for r in &a {
+            assert!(r.is_valid());
+            let p = r.at(1.0);
+            assert!(
+                b.contains_point(p) || (p - p.clamp(lo, hi)).length() < 1e-5,
+                "{p:?}"
+            );
+        }
+    }
+}
