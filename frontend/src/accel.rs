@@ -4,10 +4,12 @@
 use crate::error::{Error, Result};
 use crate::obj::ObjMesh;
 use halfray_core::Ray;
-use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TraversalStats, TriangleMesh, index_capacity, node_capacity};
+use halfray_core::bvh::{
+    BuildOptions, Bvh, BvhNode, TraversalStats, TriangleMesh, index_capacity, node_capacity,
+};
 use halfray_core::triangle::{
-    Cramer, F64Reference, MollerTrumbore, TriangleHit, TriangleIntersector, TriangleVariant, Watertight,
-    WatertightF32,
+    Cramer, F64Reference, MollerTrumbore, TriangleHit, TriangleIntersector, TriangleVariant,
+    Watertight, WatertightF32,
 };
 
 /// A mesh ready for ray queries.
@@ -41,8 +43,13 @@ impl MeshAccel {
     }
 
     /// Closest hit with `isect`: `(triangle index, hit)`.
-    pub fn closest<I: TriangleIntersector>(&self, isect: &I, ray: &Ray) -> Option<(u32, TriangleHit)> {
-        self.bvh.closest_hit_triangles(&self.tri_mesh(), isect, ray, None)
+    pub fn closest<I: TriangleIntersector>(
+        &self,
+        isect: &I,
+        ray: &Ray,
+    ) -> Option<(u32, TriangleHit)> {
+        self.bvh
+            .closest_hit_triangles(&self.tri_mesh(), isect, ray, None)
     }
 
     /// Closest hit with traversal statistics added to `stats`.
@@ -52,12 +59,15 @@ impl MeshAccel {
         ray: &Ray,
         stats: &mut TraversalStats,
     ) -> Option<(u32, TriangleHit)> {
-        self.bvh.closest_hit_triangles(&self.tri_mesh(), isect, ray, Some(stats))
+        self.bvh
+            .closest_hit_triangles(&self.tri_mesh(), isect, ray, Some(stats))
     }
 
     /// Whether anything is hit in the ray's interval.
     pub fn any<I: TriangleIntersector>(&self, isect: &I, ray: &Ray) -> bool {
-        self.bvh.any_hit_triangles(&self.tri_mesh(), isect, ray, None).is_some()
+        self.bvh
+            .any_hit_triangles(&self.tri_mesh(), isect, ray, None)
+            .is_some()
     }
 
     /// Closest hit with a variant chosen at run time.

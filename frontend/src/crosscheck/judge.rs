@@ -102,7 +102,7 @@ pub fn ray_space_barycentrics(ray: &Ray, tri: &[glam::Vec3; 3]) -> Option<([f64;
         .length()
         .max((q[2] - q[1]).length())
         .max((q[0] - q[2]).length());
-    if !(area.abs() > 0.0) || !(longest > 0.0) {
+    if area.is_nan() || area == 0.0 || longest.is_nan() || longest <= 0.0 {
         return None;
     }
     let b = [
