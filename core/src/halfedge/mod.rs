@@ -35,6 +35,7 @@ mod export;
 mod flip;
 mod handles;
 mod mesh;
+pub mod normals;
 mod smooth;
 mod split;
 pub mod storage;
