@@ -236,9 +236,9 @@ fn coincident_triangles_build_within_the_depth_limit_and_tie_to_the_smallest_ind
 #[test]
 fn depth_cap_holds_for_exponentially_spaced_primitives() {
     // Boxes at 2^-k: the SAH peels one primitive per level, so the cap must stop it.
-    let boxes: Vec<crate::aabb::Aabb> = (0..200)
+    let boxes: Vec<crate::aabb::Aabb> = (0..200i32)
         .map(|k| {
-            let x = 2f32.powi(-(k as i32) / 2) * if k % 2 == 0 { 1.0 } else { -1.0 };
+            let x = 2f32.powi(-k / 2) * if k % 2 == 0 { 1.0 } else { -1.0 };
             let c = Vec3::new(x, 0.0, 0.0);
             crate::aabb::Aabb::new(
                 c - Vec3::splat(1e-3 * x.abs()),
