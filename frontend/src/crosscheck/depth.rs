@@ -1,7 +1,6 @@
 //! Depth-image mode: the depth of a camera framing the mesh, rendered by halfray and by Embree
 //! (robust), written side by side with a difference panel.
 
-use super::sets::primary_rays;
 use crate::accel::MeshAccel;
 use crate::atomic::write_bytes_atomic;
 use crate::embree::EmbreeScene;
@@ -22,13 +21,7 @@ pub fn write_depth_diff(
     size: usize,
 ) -> Result<()> {
     let (lo, hi) = accel.mesh.bounds().unwrap_or_default();
-    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
-    let rays = primary_rays(
-        (lo + hi) * 0.5,
-        ((hi - lo).length() * 0.5).max(f64::MIN_POSITIVE),
-        size,
-        size,
-    );
+    let rays = crate::raysets::Camera::framing(lo, hi, size, size).rays();
     let ours: Vec<Option<f32>> = rays
         .iter()
         .map(|r| accel.closest_variant(variant, r).map(|h| h.1.t))

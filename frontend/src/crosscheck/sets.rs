@@ -2,8 +2,8 @@
 //!
 //! | set | rays |
 //! |---|---|
-//! | `primary` | a pinhole camera framing the mesh's bounding box, pixel centres `(i+½, j+½)` |
-//! | `random` | incoherent: origins on a sphere twice the bounding sphere, aimed at random points in the box |
+//! | `primary` | [`Camera::framing`] the mesh's bounding box, pixel centres `(i+½, j+½)` |
+//! | `random` | [`random_rays`]: incoherent, origins on a sphere twice the bounding sphere, aimed at random points in the box |
 //! | `edges` | aimed at the midpoint of a random shared (two-face) edge, from a random outside origin |
 //! | `vertices` | aimed exactly at a random vertex with a closed fan, from a random outside origin |
 //! | `grazing` | nearly parallel to a random face (0.06°–0.6° off its plane), through an interior point |
@@ -13,6 +13,8 @@
 //! target can be recognised as a leak when the ray crosses the surface there transversally.
 
 use crate::obj::ObjMesh;
+pub use crate::raysets::Rng;
+use crate::raysets::{Camera, random_rays};
 use glam::{DVec2, DVec3, Vec3};
 use halfray_core::Ray;
 use halfray_core::triangle::TriangleHit;
@@ -55,40 +57,6 @@ pub struct Target {
     pub incident: Vec<u32>,
     /// Ray parameter of the target point.
     pub t: f32,
-}
-
-/// SplitMix64: a small, fast, deterministic generator (no dependency needed).
-#[derive(Clone, Debug)]
-pub struct Rng(u64);
-
-impl Rng {
-    /// A generator from a seed.
-    pub fn new(seed: u64) -> Self {
-        Self(seed ^ 0x9E37_79B9_7F4A_7C15)
-    }
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in `[0, 1)`.
-    pub fn f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-    /// Uniform index in `0..n` (`n > 0`).
-    pub fn below(&mut self, n: usize) -> usize {
-        ((self.next_u64() as u128 * n as u128) >> 64) as usize
-    }
-    /// Uniform direction on the unit sphere.
-    pub fn unit_vector(&mut self) -> DVec3 {
-        let z = 2.0 * self.f64() - 1.0;
-        let phi = std::f64::consts::TAU * self.f64();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        DVec3::new(r * phi.cos(), r * phi.sin(), z)
-    }
 }
 
 /// Mesh adjacency needed by the sets: triangles per undirected edge and per vertex.
@@ -166,7 +134,9 @@ pub fn generate(
     let rays = match name {
         "primary" => {
             let side = (count as f64).sqrt().ceil().max(1.0) as usize;
-            primary_rays(center, radius, side, side)
+            let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
+            Camera::framing(lo, hi, side, side)
+                .rays()
                 .into_iter()
                 .take(count)
                 .map(plain)
@@ -174,13 +144,9 @@ pub fn generate(
         }
         "random" => {
             let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
-            (0..count)
-                .map(|_| {
-                    let o = random_origin(&mut rng, center, radius);
-                    let u = DVec3::new(rng.f64(), rng.f64(), rng.f64());
-                    let p = lo.as_dvec3() + (hi - lo).as_dvec3() * u;
-                    plain(Ray::new(o, p.as_vec3() - o))
-                })
+            random_rays(lo, hi, count, seed ^ fxhash(name))
+                .into_iter()
+                .map(plain)
                 .collect()
         }
         "edges" if !adj.shared_edges.is_empty() => (0..count)
@@ -216,29 +182,6 @@ fn fxhash(s: &str) -> u64 {
     s.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
         (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
     })
-}
-
-/// Pinhole camera rays for a `w × h` image framing the sphere `(center, radius)` from the
-/// `+z`/`+y` diagonal, 45° vertical field of view, pixel centres at `(i + ½, j + ½)`.
-pub fn primary_rays(center: DVec3, radius: f64, w: usize, h: usize) -> Vec<Ray> {
-    let fov = 45f64.to_radians();
-    let dist = radius / (fov * 0.5).sin();
-    let eye = center + DVec3::new(0.3, 0.4, 1.0).normalize() * dist;
-    let forward = (center - eye).normalize();
-    let right = forward.cross(DVec3::Y).normalize();
-    let up = right.cross(forward);
-    let half = (fov * 0.5).tan();
-    let aspect = w as f64 / h as f64;
-    let mut rays = Vec::with_capacity(w * h);
-    for j in 0..h {
-        for i in 0..w {
-            let sx = (2.0 * (i as f64 + 0.5) / w as f64 - 1.0) * half * aspect;
-            let sy = (1.0 - 2.0 * (j as f64 + 0.5) / h as f64) * half;
-            let d = forward + right * sx + up * sy;
-            rays.push(Ray::new(eye.as_vec3(), d.as_vec3()));
-        }
-    }
-    rays
 }
 
 /// A ray from a random outside origin through `target` (`t = 1` there), with the target's
