@@ -1,0 +1,313 @@
+//! `halfray mesh subdivide | smooth | collapse`: edit a mesh through the half-edge core and
+//! write it back as OBJ (atomically).
+
+use super::{
+    CollapseArgs, MeshBuffers, SmoothArgs, SubdivideArgs, Vef, build_mesh, export, ms_since,
+};
+use crate::error::{Error, Location, Result};
+use crate::obj::{read_obj, write_obj};
+use glam::Vec3;
+use halfray_core::halfedge::{
+    CollapseAt, CollapseError, DiffuseBoundary, EdgeId, LoopWeights, MAX_ELEMENTS, Mesh,
+    MeshStorage, SubdivideError,
+};
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// What an editing command did.
+#[derive(Clone, Debug, Default)]
+pub struct EditReport {
+    /// `subdivide`, `smooth` or `collapse`.
+    pub command: &'static str,
+    /// Input file.
+    pub input: PathBuf,
+    /// Output file.
+    pub output: PathBuf,
+    /// Counts of the input.
+    pub before: Vef,
+    /// Counts of the output.
+    pub after: Vef,
+    /// `subdivide`: counts and milliseconds after each level.
+    pub levels: Vec<(Vef, f64)>,
+    /// `smooth`: mean length of the uniform Laplacian `|L(v)|` over vertices with neighbours,
+    /// before and after (a roughness measure in model units).
+    pub roughness: Option<(f64, f64)>,
+    /// `collapse`: edges collapsed.
+    pub collapsed: usize,
+    /// `collapse`: passes over the short edges (the last one collapses nothing).
+    pub passes: usize,
+    /// `collapse`: edges still shorter than the limit at the end, each refused by the core;
+    /// counted by the rule that refused it.
+    pub refusals: BTreeMap<&'static str, usize>,
+    /// Reading and building, ms.
+    pub read_ms: f64,
+    /// The edit itself, ms.
+    pub edit_ms: f64,
+    /// Export and write, ms.
+    pub write_ms: f64,
+}
+
+impl EditReport {
+    /// Edges still shorter than the collapse limit (all refused).
+    pub fn remaining_short(&self) -> usize {
+        self.refusals.values().sum()
+    }
+}
+
+impl fmt::Display for EditReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "mesh {}: {} -> {}",
+            self.command,
+            self.input.display(),
+            self.output.display()
+        )?;
+        writeln!(f, "  before  {}", self.before)?;
+        for (i, (c, ms)) in self.levels.iter().enumerate() {
+            writeln!(f, "  level {}  {c}  ({ms:.1} ms)", i + 1)?;
+        }
+        if let Some((a, b)) = self.roughness {
+            writeln!(f, "  roughness (mean |L(v)|)  {a:.6e} -> {b:.6e}")?;
+        }
+        if self.command == "collapse" {
+            writeln!(
+                f,
+                "  collapsed {} edges in {} passes; {} short edges left",
+                self.collapsed,
+                self.passes,
+                self.remaining_short()
+            )?;
+            for (reason, n) in &self.refusals {
+                writeln!(f, "    refused ({reason}): {n}")?;
+            }
+        }
+        writeln!(f, "  after   {}", self.after)?;
+        writeln!(
+            f,
+            "  time    read+build {:.1} ms, {} {:.1} ms, export+write {:.1} ms",
+            self.read_ms, self.command, self.edit_ms, self.write_ms
+        )
+    }
+}
+
+fn core_error(path: &Path, what: impl fmt::Display) -> Error {
+    Error::input(Location::file(path), what.to_string())
+}
+
+/// `mesh subdivide`: `levels` levels of Loop subdivision. Vertex `i < V` of the output is input
+/// vertex `i` moved by the vertex rule (unreferenced vertices stay put); vertex `V + e` is the
+/// new vertex on edge `e` of the level's input, so each level has V + E vertices, 2E + 3F
+/// edges and 4F faces (the core's numbering, see `Mesh::subdivide_loop`).
+pub fn subdivide(args: &SubdivideArgs) -> Result<EditReport> {
+    let t0 = Instant::now();
+    let obj = read_obj(&args.input)?;
+    let mut buffers = MeshBuffers::for_obj(&obj);
+    let mesh = build_mesh(&obj, &args.input, &mut buffers)?;
+    let mut report = EditReport {
+        command: "subdivide",
+        input: args.input.clone(),
+        output: args.output.clone(),
+        before: mesh.len().into(),
+        read_ms: ms_since(t0),
+        ..EditReport::default()
+    };
+    // Refuse before allocating anything when a level would exceed what the core can index.
+    let mut c = mesh.len();
+    for level in 1..=args.levels {
+        c = c.after_loop();
+        if c.vertices > MAX_ELEMENTS || c.edges > MAX_ELEMENTS || c.faces > MAX_ELEMENTS {
+            return Err(Error::Usage(format!(
+                "--levels {}: level {level} would need {c:?} elements, more than the half-edge core's {MAX_ELEMENTS}",
+                args.levels
+            )));
+        }
+    }
+    let t1 = Instant::now();
+    let mut export_ms = 0.0;
+    let (p, t) = subdivide_levels(
+        &mesh,
+        args.levels,
+        args.weights.into(),
+        &mut report.levels,
+        &mut export_ms,
+    )
+    .map_err(|e| core_error(&args.input, e))?;
+    report.edit_ms = ms_since(t1) - export_ms;
+    report.after = report.levels.last().map_or(report.before, |l| l.0);
+    let t2 = Instant::now();
+    write_obj(&args.output, &p, &t)?;
+    report.write_ms = export_ms + ms_since(t2);
+    Ok(report)
+}
+
+/// Subdivides `levels` times (each level in fresh buffers of exactly the needed size) and
+/// exports the result.
+fn subdivide_levels<S: MeshStorage>(
+    m: &Mesh<S>,
+    levels: u32,
+    weights: LoopWeights,
+    stats: &mut Vec<(Vef, f64)>,
+    export_ms: &mut f64,
+) -> std::result::Result<(Vec<Vec3>, Vec<[u32; 3]>), SubdivideError> {
+    if levels == 0 {
+        let t = Instant::now();
+        let out = export(m);
+        *export_ms = ms_since(t);
+        return Ok(out);
+    }
+    let mut buffers = MeshBuffers::new(m.len().after_loop());
+    let mut out = buffers.mesh();
+    let t = Instant::now();
+    m.subdivide_loop(&mut out, weights)?;
+    stats.push((out.len().into(), ms_since(t)));
+    subdivide_levels(&out, levels - 1, weights, stats, export_ms)
+}
+
+/// Mean `|L(v)|` over live vertices with at least one neighbour.
+fn roughness<S: MeshStorage>(m: &Mesh<S>) -> f64 {
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for v in m.vertices() {
+        if m.is_isolated(v) {
+            continue;
+        }
+        sum += f64::from(m.laplacian(v).unwrap_or(Vec3::ZERO).length());
+        n += 1;
+    }
+    if n == 0 { 0.0 } else { sum / n as f64 }
+}
+
+/// `mesh smooth`: `iterations` Jacobi steps `x' = x + k·L(x)` (uniform Laplacian over the
+/// one-ring), each computed entirely from the previous step's positions. Boundary vertices move
+/// like the others unless `fix_boundary`; unreferenced vertices never move. Vertex and face
+/// order are unchanged.
+pub fn smooth(args: &SmoothArgs) -> Result<EditReport> {
+    if !args.step.is_finite() {
+        return Err(Error::Usage(format!(
+            "--step {}: must be a finite number",
+            args.step
+        )));
+    }
+    let t0 = Instant::now();
+    let obj = read_obj(&args.input)?;
+    let mut buffers = MeshBuffers::for_obj(&obj);
+    let mut mesh = build_mesh(&obj, &args.input, &mut buffers)?;
+    let mut report = EditReport {
+        command: "smooth",
+        input: args.input.clone(),
+        output: args.output.clone(),
+        before: mesh.len().into(),
+        read_ms: ms_since(t0),
+        ..EditReport::default()
+    };
+    let boundary = if args.fix_boundary {
+        DiffuseBoundary::Fixed
+    } else {
+        DiffuseBoundary::Free
+    };
+    let t1 = Instant::now();
+    let before = roughness(&mesh);
+    let mut scratch = vec![Vec3::ZERO; mesh.slots().vertices];
+    for i in 0..args.iterations {
+        mesh.diffuse(args.step, boundary, &mut scratch)
+            .map_err(|e| core_error(&args.input, format!("smoothing step {}: {e}", i + 1)))?;
+    }
+    report.roughness = Some((before, roughness(&mesh)));
+    report.edit_ms = ms_since(t1);
+    report.after = mesh.len().into();
+    let t2 = Instant::now();
+    let (p, t) = export(&mesh);
+    write_obj(&args.output, &p, &t)?;
+    report.write_ms = ms_since(t2);
+    Ok(report)
+}
+
+/// The rule that refused a collapse, as a short name for the report.
+pub fn refusal_name(e: &CollapseError) -> &'static str {
+    match e {
+        CollapseError::Dead => "dead edge",
+        CollapseError::LinkCondition(_) => "link condition",
+        CollapseError::WingsCoincide => "wings coincide",
+        CollapseError::Ear(_) => "ear (two boundary edges)",
+        CollapseError::InteriorEdgeJoinsBoundaries => "interior edge joins two boundaries",
+        CollapseError::WingValence(_) => "wing valence 3",
+        CollapseError::FoldOver(_) => "fold-over",
+        CollapseError::NonFinitePosition => "non-finite position",
+    }
+}
+
+fn edge_length<S: MeshStorage>(m: &Mesh<S>, e: EdgeId) -> Option<f32> {
+    let [a, b] = m.edge_vertices(e)?;
+    Some(m.position(a)?.distance(m.position(b)?))
+}
+
+/// `mesh collapse`: collapses every edge strictly shorter than `shorter_than` into its
+/// midpoint. Each pass visits the short edges shortest first (re-measured when visited, since
+/// earlier collapses move vertices) and collapses those the core allows; passes repeat until
+/// one collapses nothing. The edges still short after that pass were all refused; they are
+/// counted by the refusing rule. The mesh is then validated, compacted (vertices renumbered)
+/// and written.
+pub fn collapse(args: &CollapseArgs) -> Result<EditReport> {
+    let limit = args.shorter_than;
+    if !(limit.is_finite() && limit > 0.0) {
+        return Err(Error::Usage(format!(
+            "--shorter-than {limit}: must be a finite positive length"
+        )));
+    }
+    let t0 = Instant::now();
+    let obj = read_obj(&args.input)?;
+    let mut buffers = MeshBuffers::for_obj(&obj);
+    let mut mesh = build_mesh(&obj, &args.input, &mut buffers)?;
+    let mut report = EditReport {
+        command: "collapse",
+        input: args.input.clone(),
+        output: args.output.clone(),
+        before: mesh.len().into(),
+        read_ms: ms_since(t0),
+        ..EditReport::default()
+    };
+    let t1 = Instant::now();
+    loop {
+        report.passes += 1;
+        let mut short: Vec<(f32, EdgeId)> = mesh
+            .edges()
+            .filter_map(|e| edge_length(&mesh, e).map(|l| (l, e)))
+            .filter(|&(l, _)| l < limit)
+            .collect();
+        short.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let mut refusals = BTreeMap::new();
+        let mut collapsed = 0;
+        for (_, e) in short {
+            // Earlier collapses in this pass may have removed or stretched the edge.
+            match edge_length(&mesh, e) {
+                Some(l) if l < limit => {}
+                _ => continue,
+            }
+            match mesh.collapse_edge(e.halfedge(0), CollapseAt::Midpoint) {
+                Ok(_) => collapsed += 1,
+                Err(err) => *refusals.entry(refusal_name(&err)).or_insert(0) += 1,
+            }
+        }
+        report.collapsed += collapsed;
+        if collapsed == 0 {
+            report.refusals = refusals;
+            break;
+        }
+    }
+    mesh.validate().map_err(|e| {
+        Error::Other(format!(
+            "{}: internal error: mesh invalid after collapsing: {e}",
+            args.input.display()
+        ))
+    })?;
+    mesh.compact(|_| {});
+    report.edit_ms = ms_since(t1);
+    report.after = mesh.len().into();
+    let t2 = Instant::now();
+    let (p, t) = export(&mesh);
+    write_obj(&args.output, &p, &t)?;
+    report.write_ms = ms_since(t2);
+    Ok(report)
+}

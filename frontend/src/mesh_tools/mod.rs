@@ -1,0 +1,407 @@
+//! `halfray mesh ...`: mesh tools over the half-edge core (`halfray_core::halfedge`).
+//!
+//! | command | what it does |
+//! |---|---|
+//! | `mesh check IN.obj [--json FILE]` | counts, manifoldness, boundary, Euler characteristic, components, genus ([`check`]) |
+//! | `mesh subdivide IN.obj -o OUT.obj --levels N [--weights warren\|loop]` | Loop subdivision ([`edit::subdivide`]) |
+//! | `mesh smooth IN.obj -o OUT.obj --step K --iterations N [--fix-boundary]` | uniform Laplacian diffusion ([`edit::smooth`]) |
+//! | `mesh collapse IN.obj -o OUT.obj --shorter-than L` | short-edge collapse ([`edit::collapse`]) |
+//!
+//! Input goes through the strict, order-preserving reader [`crate::obj::read_obj`] (vertex `i`
+//! of the file is vertex `i` of the mesh; unreferenced vertices are kept as isolated vertices)
+//! into a [`SliceMesh`] over `Vec`s sized from the input ([`MeshBuffers`]). A mesh the
+//! half-edge core rejects (non-manifold edge or vertex, inconsistent orientation, a triangle
+//! repeating a vertex) is an input error naming the file, the line of the offending `v` or `f`
+//! statement, and the offending vertices by their **1-based OBJ vertex numbers**
+//! ([`build_mesh`]). Outputs are written atomically ([`crate::obj::write_obj`]); every command
+//! reports V/E/F before and after and its timing. Errors exit with status 1 (see `main.rs`).
+
+pub mod check;
+pub mod edit;
+
+use crate::error::{Error, Location, Result};
+use crate::obj::ObjMesh;
+use halfray_core::halfedge::{
+    BuildError, Counts, EdgeRec, FaceRec, MAX_ELEMENTS, MeshStorage, SliceMesh, VertexRec,
+    build_scratch_len,
+};
+use std::path::{Path, PathBuf};
+
+pub use check::{CheckReport, check};
+pub use edit::{EditReport, collapse, smooth, subdivide};
+
+/// `halfray mesh ...`.
+#[derive(clap::Subcommand, Debug, Clone)]
+pub enum MeshCommand {
+    /// Check manifoldness, boundary loops, Euler characteristic and genus. Exits with status 1
+    /// and the reason when the half-edge core rejects the mesh.
+    Check(CheckArgs),
+    /// Loop subdivision: original vertices keep their indices, one new vertex per edge is
+    /// appended (V' = V + E per level).
+    Subdivide(SubdivideArgs),
+    /// Uniform Laplacian smoothing (diffusion), every step from the previous step's positions.
+    Smooth(SmoothArgs),
+    /// Collapse edges shorter than a length (into their midpoints) until none can be collapsed.
+    Collapse(CollapseArgs),
+}
+
+/// `halfray mesh check`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct CheckArgs {
+    /// Input OBJ.
+    pub input: PathBuf,
+    /// Also write the report as JSON to this file (written even when the mesh is rejected).
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}
+
+/// Vertex weights of Loop subdivision (`--weights`).
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Weights {
+    /// Warren's β = 3/(8n) (n > 3), 3/16 (n = 3).
+    #[default]
+    Warren,
+    /// Loop's original β = (5/8 − (3/8 + cos(2π/n)/4)²)/n.
+    Loop,
+}
+
+impl From<Weights> for halfray_core::halfedge::LoopWeights {
+    fn from(w: Weights) -> Self {
+        match w {
+            Weights::Warren => Self::Warren,
+            Weights::Loop => Self::Loop,
+        }
+    }
+}
+
+/// `halfray mesh subdivide`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct SubdivideArgs {
+    /// Input OBJ.
+    pub input: PathBuf,
+    /// Output OBJ (written atomically).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Number of subdivision levels (each multiplies the face count by 4).
+    #[arg(long, default_value_t = 1)]
+    pub levels: u32,
+    /// Vertex weights.
+    #[arg(long, value_enum, default_value_t = Weights::Warren)]
+    pub weights: Weights,
+}
+
+/// `halfray mesh smooth`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct SmoothArgs {
+    /// Input OBJ.
+    pub input: PathBuf,
+    /// Output OBJ (written atomically).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Step k of x' = x + k·L(x), with L the uniform Laplacian (1 moves every vertex to its
+    /// neighbours' centroid; 0 < k ≤ 1 is stable).
+    #[arg(long, default_value_t = 0.5)]
+    pub step: f32,
+    /// Number of diffusion steps.
+    #[arg(long, default_value_t = 1)]
+    pub iterations: u32,
+    /// Keep boundary vertices in place (by default they move towards all their neighbours,
+    /// which shrinks open rims).
+    #[arg(long)]
+    pub fix_boundary: bool,
+}
+
+/// `halfray mesh collapse`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct CollapseArgs {
+    /// Input OBJ.
+    pub input: PathBuf,
+    /// Output OBJ (written atomically), compacted.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Collapse every edge strictly shorter than this length (in model units).
+    #[arg(long, value_name = "L")]
+    pub shorter_than: f32,
+}
+
+/// Runs a mesh subcommand, printing its report to stdout.
+pub fn run(cmd: &MeshCommand) -> Result<()> {
+    match cmd {
+        MeshCommand::Check(args) => check::run(args),
+        MeshCommand::Subdivide(args) => edit::subdivide(args).map(|r| print!("{r}")),
+        MeshCommand::Smooth(args) => edit::smooth(args).map(|r| print!("{r}")),
+        MeshCommand::Collapse(args) => edit::collapse(args).map(|r| print!("{r}")),
+    }
+}
+
+/// Owned record buffers for a [`SliceMesh`]; their lengths are the mesh's capacity.
+#[derive(Debug, Default)]
+pub struct MeshBuffers {
+    vertices: Vec<VertexRec>,
+    edges: Vec<EdgeRec>,
+    faces: Vec<FaceRec>,
+}
+
+impl MeshBuffers {
+    /// Buffers for `capacity` vertices, edges and faces.
+    pub fn new(capacity: Counts) -> Self {
+        Self {
+            vertices: vec![VertexRec::EMPTY; capacity.vertices],
+            edges: vec![EdgeRec::EMPTY; capacity.edges],
+            faces: vec![FaceRec::EMPTY; capacity.faces],
+        }
+    }
+
+    /// Buffers large enough to build `obj`: its vertices, faces, and 3 edges per face (an
+    /// upper bound; a closed mesh uses 1.5).
+    pub fn for_obj(obj: &ObjMesh) -> Self {
+        let f = obj.triangles.len();
+        Self::new(Counts {
+            vertices: obj.positions.len(),
+            edges: f.saturating_mul(3),
+            faces: f,
+        })
+    }
+
+    /// An empty mesh over these buffers.
+    pub fn mesh(&mut self) -> SliceMesh<'_> {
+        SliceMesh::from_slices(&mut self.vertices, &mut self.edges, &mut self.faces)
+    }
+}
+
+/// V/E/F of a mesh, for reports.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Vef {
+    /// Vertices (including unreferenced ones).
+    pub vertices: usize,
+    /// Edges.
+    pub edges: usize,
+    /// Faces.
+    pub faces: usize,
+}
+
+impl From<Counts> for Vef {
+    fn from(c: Counts) -> Self {
+        Self {
+            vertices: c.vertices,
+            edges: c.edges,
+            faces: c.faces,
+        }
+    }
+}
+
+impl std::fmt::Display for Vef {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "V {} E {} F {}", self.vertices, self.edges, self.faces)
+    }
+}
+
+/// Builds `obj` (read from `path`) into a half-edge mesh over `buffers` (sized by
+/// [`MeshBuffers::for_obj`]). The core's rejection becomes an [`Error::Input`] naming `path`,
+/// the line of the offending statement and the offending vertices by 1-based OBJ numbers; see
+/// [`describe_build_error`].
+pub fn build_mesh<'b>(
+    obj: &ObjMesh,
+    path: &Path,
+    buffers: &'b mut MeshBuffers,
+) -> Result<SliceMesh<'b>> {
+    if obj.positions.len() > MAX_ELEMENTS || obj.triangles.len() > MAX_ELEMENTS {
+        return Err(Error::input(
+            Location::file(path),
+            format!(
+                "too large for the half-edge core: {} vertices, {} triangles (at most {MAX_ELEMENTS} each)",
+                obj.positions.len(),
+                obj.triangles.len()
+            ),
+        ));
+    }
+    let mut mesh = buffers.mesh();
+    let mut scratch = vec![0u32; build_scratch_len(obj.triangles.len())];
+    match mesh.build(&obj.positions, &obj.triangles, &mut scratch) {
+        Ok(()) => Ok(mesh),
+        Err(e) => {
+            let (at, message) = describe_build_error(&e, obj, path);
+            Err(Error::input(at, message))
+        }
+    }
+}
+
+/// Line numbers of the `v` and `f` statements of an OBJ file, by vertex and by (fan-
+/// triangulated) triangle, read again from the file for error messages only.
+struct ObjLines {
+    vertex: Vec<usize>,
+    triangle: Vec<usize>,
+}
+
+impl ObjLines {
+    fn read(path: &Path) -> Option<Self> {
+        let text = std::fs::read_to_string(path).ok()?;
+        let mut lines = Self {
+            vertex: Vec::new(),
+            triangle: Vec::new(),
+        };
+        for (i, line) in text.lines().enumerate() {
+            let content = line.split('#').next().unwrap_or("");
+            let mut tokens = content.split_ascii_whitespace();
+            match tokens.next() {
+                Some("v") => lines.vertex.push(i + 1),
+                Some("f") => {
+                    let n = tokens.count();
+                    lines
+                        .triangle
+                        .extend(std::iter::repeat_n(i + 1, n.saturating_sub(2)));
+                }
+                _ => {}
+            }
+        }
+        Some(lines)
+    }
+}
+
+/// The location and message for a build error: the file, the line of the offending `v`
+/// statement (vertex errors) or of the first `f` statement using the offending edge (edge
+/// errors), and a message with 1-based OBJ vertex numbers and triangle numbers (triangles
+/// counted after fan triangulation, which for all-triangle files is the `f` line order).
+pub fn describe_build_error(e: &BuildError, obj: &ObjMesh, path: &Path) -> (Location, String) {
+    let lines = ObjLines::read(path);
+    let vertex_at = |v: usize| {
+        let at = Location::file(path);
+        match lines.as_ref().and_then(|l| l.vertex.get(v)) {
+            Some(&line) => at.line(line),
+            None => at,
+        }
+    };
+    let triangle_at = |t: usize| {
+        let at = Location::file(path);
+        match lines.as_ref().and_then(|l| l.triangle.get(t)) {
+            Some(&line) => at.line(line),
+            None => at,
+        }
+    };
+    let pos = |v: usize| {
+        obj.positions.get(v).map_or(String::new(), |p| {
+            format!(" at ({}, {}, {})", p.x, p.y, p.z)
+        })
+    };
+    // Triangles (0-based) having `a` and `b` as corners, i.e. using the edge a–b.
+    let using_edge = |a: usize, b: usize| -> Vec<usize> {
+        let (a, b) = (a as u32, b as u32);
+        obj.triangles
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.contains(&a) && t.contains(&b))
+            .map(|(i, _)| i)
+            .collect()
+    };
+    let list = |ts: &[usize]| {
+        let mut s: Vec<String> = ts.iter().take(8).map(|t| (t + 1).to_string()).collect();
+        if ts.len() > 8 {
+            s.push("…".into());
+        }
+        s.join(", ")
+    };
+    match *e {
+        BuildError::NonManifoldEdge { a, b } => {
+            let ts = using_edge(a.index(), b.index());
+            (
+                triangle_at(ts.first().copied().unwrap_or(usize::MAX)),
+                format!(
+                    "non-manifold edge between vertices {} and {}: used by {} triangles ({}); the half-edge mesh allows at most 2",
+                    a.index() + 1,
+                    b.index() + 1,
+                    ts.len(),
+                    list(&ts)
+                ),
+            )
+        }
+        BuildError::InconsistentOrientation { a, b } => {
+            let (a, b) = (a.index(), b.index());
+            let ts: Vec<usize> = using_edge(a, b)
+                .into_iter()
+                .filter(|&t| {
+                    let [x, y, z] = obj.triangles[t];
+                    [(x, y), (y, z), (z, x)].contains(&(a as u32, b as u32))
+                })
+                .collect();
+            (
+                triangle_at(ts.get(1).or(ts.first()).copied().unwrap_or(usize::MAX)),
+                format!(
+                    "inconsistent orientation: triangles {} both run from vertex {} to vertex {} (neighbouring triangles must traverse a shared edge in opposite directions)",
+                    list(&ts),
+                    a + 1,
+                    b + 1
+                ),
+            )
+        }
+        BuildError::NonManifoldVertex { vertex } => {
+            let v = vertex.index();
+            let n = obj
+                .triangles
+                .iter()
+                .filter(|t| t.contains(&(v as u32)))
+                .count();
+            (
+                vertex_at(v),
+                format!(
+                    "non-manifold vertex {}{}: its {n} triangles form more than one fan (a pinch or bowtie vertex)",
+                    v + 1,
+                    pos(v)
+                ),
+            )
+        }
+        BuildError::RepeatedIndex { face, vertex } => {
+            let t = face.index();
+            let corners = obj.triangles.get(t).map_or(String::new(), |c| {
+                format!(" (vertices {} {} {})", c[0] + 1, c[1] + 1, c[2] + 1)
+            });
+            (
+                triangle_at(t),
+                format!(
+                    "triangle {}{corners} uses vertex {} twice",
+                    t + 1,
+                    vertex.index() + 1
+                ),
+            )
+        }
+        BuildError::IndexOutOfRange { face, index } => (
+            triangle_at(face.index()),
+            format!(
+                "triangle {} refers to vertex {}, out of range (1..={})",
+                face.index() + 1,
+                u64::from(index) + 1,
+                obj.positions.len()
+            ),
+        ),
+        BuildError::NonFinitePosition { vertex } => (
+            vertex_at(vertex.index()),
+            format!("vertex {} has a non-finite position", vertex.index() + 1),
+        ),
+        BuildError::Capacity(c) => (
+            Location::file(path),
+            format!(
+                "too large for the half-edge core: needs {} {:?} slots, {} available",
+                c.needed, c.kind, c.available
+            ),
+        ),
+        BuildError::ScratchTooSmall { needed, provided } => (
+            Location::file(path),
+            format!("internal error: build scratch {provided} < {needed}"),
+        ),
+    }
+}
+
+/// Exports a compact-or-not mesh to positions and triangles (one position per vertex slot).
+pub(crate) fn export<S: MeshStorage>(
+    mesh: &halfray_core::halfedge::Mesh<S>,
+) -> (Vec<glam::Vec3>, Vec<[u32; 3]>) {
+    let mut p = vec![glam::Vec3::ZERO; mesh.slots().vertices];
+    let mut t = vec![[0u32; 3]; mesh.len().faces];
+    // The buffers are sized exactly as `export` asks, so it cannot fail.
+    let _ = mesh.export(&mut p, &mut t);
+    (p, t)
+}
+
+/// Milliseconds since `start`.
+pub(crate) fn ms_since(start: std::time::Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1e3
+}
