@@ -1,1 +1,681 @@
-//! In progress.
+//! General quadrics `f(x) = xᵀAx + 2bᵀx + c = 0`, solved in `f64`, and axis-aligned ellipsoids.
+//!
+//! **Representation.** A quadric is stored in *centred form* around a reference point `x_c`:
+//! `f(x) = yᵀAy + 2b_cᵀy + k`, `y = x − x_c`, with `b_c = A·x_c + b` and `k = f(x_c)`. This is
+//! an identity for *any* `x_c`; choosing `x_c` at the quadric's centre (`A·x_c = −b`, so
+//! `b_c = 0`) removes the cancellation of `xᵀAx + 2bᵀx + c` for points far from the world origin
+//! but near the quadric. The ellipsoid, cylinder and cone constructors set the centre (or an axis
+//! point, or the apex) exactly; [`Quadric::new`] computes `−A⁻¹b` when `A` is well conditioned
+//! ([`crate::tolerance::QUADRIC_CENTER_MIN_REL_DET`]) and uses the world origin otherwise;
+//! [`Quadric::recentered`] moves the reference point anywhere (e.g. a paraboloid's vertex).
+//!
+//! **Solve** (robustness brief A8), all in `f64` from the `f32` ray: with `f₀ = o − x_c`,
+//! `qa = dᵀAd`, `qb = dᵀ(Af₀ + b_c)`, `qc = f(o)`, the ray gives `qa·t² + 2qb·t + qc = 0`.
+//! 1. The origin is shifted along the ray to `o' = o + t_c·d`, `t_c = −qb/qa` (the point of the
+//!    line closest to the centre in the metric of `A`), and the discriminant is evaluated there
+//!    as `Δ = qb² − qa·qc = −qa·f(o')`: no cancellation between `qb²` and `qa·qc`.
+//! 2. The stable root pair `q = −(qb + sign(qb)·√Δ)`, roots `qc/q` and `q/qa`.
+//! 3. `qa = 0` (a direction along which the quadric is flat: a cylinder's axis, a paraboloid's
+//!    axis, a cone's generator) leaves the linear equation: one root `−qc/(2qb)`, reported twice;
+//!    `qa = qb = 0` is a ray that never crosses the surface (or lies in it): no root.
+//!
+//! **Hits.** The root nearest in `(t_min, t_max]` (comparing the `f32`-rounded roots with the
+//! interval). The point `o + t·d` is computed in `f64`, moved by one Newton step along the
+//! gradient onto the surface, and rounded to `f32`; `point_error` (all components) is
+//! `gamma(1)·|p_i|` for that rounding plus `QUADRIC_DISTANCE_SLACK·(|f(x)| + γ₁₀·F(x))/|∇f(x)|`,
+//! a bound on the distance of the `f64` point to the surface (`F` = `f` with absolute values,
+//! `γ₁₀` the `f64` gamma covering its evaluation). The normal is `∇f = 2(A·y + b_c)`
+//! normalised: it points to where `f > 0` (outward for the ellipsoid, cylinder and cone
+//! constructors). At a singular point (`∇f = 0`, a cone's apex) the normal is `−d/|d|` and the
+//! distance bound uses `√(|f|/‖A‖)`. `uv = (0, 0)` for general quadrics (no natural
+//! parameterisation); [`Ellipsoid`] hits carry spherical `uv`.
+//!
+//! Every function is total: invalid rays, NaN and infinity give `None`, never a panic.
+
+use crate::error::GeometryError;
+use crate::float::{gamma, gamma_f64, is_finite3};
+use crate::hit::Hit;
+use crate::ray::Ray;
+use crate::tolerance::{QUADRIC_CENTER_MIN_REL_DET, QUADRIC_DISTANCE_SLACK};
+use core::f64::consts::{PI, TAU};
+use glam::{DMat3, DMat4, DVec3, Vec2, Vec3};
+
+/// A quadric surface `f(x) = 0` in centred form (module documentation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quadric {
+    a: DMat3,
+    center: DVec3,
+    bc: DVec3,
+    k: f64,
+}
+
+fn mat_is_finite(m: &DMat3) -> bool {
+    m.x_axis.is_finite() && m.y_axis.is_finite() && m.z_axis.is_finite()
+}
+
+fn frobenius(m: &DMat3) -> f64 {
+    libm::sqrt(m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared())
+}
+
+fn abs_mat(m: &DMat3) -> DMat3 {
+    DMat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs())
+}
+
+fn symmetrize(m: DMat3) -> DMat3 {
+    (m + m.transpose()) * 0.5
+}
+
+fn outer(v: DVec3) -> DMat3 {
+    DMat3::from_cols(v * v.x, v * v.y, v * v.z)
+}
+
+impl Quadric {
+    /// The quadric `xᵀAx + 2bᵀx + c = 0`. `A` is symmetrised (`(A + Aᵀ)/2`: only the symmetric
+    /// part enters `xᵀAx`, and the gradient formula needs it).
+    ///
+    /// Errors: [`GeometryError::NonFinite`] for a non-finite entry,
+    /// [`GeometryError::Degenerate`] when `A = 0` and `b = 0` (`f` is constant).
+    pub fn new(a: DMat3, b: DVec3, c: f64) -> Result<Self, GeometryError> {
+        if !mat_is_finite(&a) || !b.is_finite() || !c.is_finite() {
+            return Err(GeometryError::NonFinite);
+        }
+        let a = symmetrize(a);
+        if a == DMat3::ZERO && b == DVec3::ZERO {
+            return Err(GeometryError::Degenerate);
+        }
+        let fro = frobenius(&a);
+        let det = a.determinant();
+        let mut center = DVec3::ZERO;
+        if fro > 0.0 && det.abs() >= QUADRIC_CENTER_MIN_REL_DET * fro * fro * fro {
+            let xc = -(a.inverse() * b);
+            if xc.is_finite() {
+                center = xc;
+            }
+        }
+        let bc = a * center + b;
+        let k = center.dot(a * center + b * 2.0) + c;
+        if !bc.is_finite() || !k.is_finite() {
+            return Err(GeometryError::NonFinite);
+        }
+        Ok(Self { a, center, bc, k })
+    }
+
+    /// The quadric `x̄ᵀQx̄ = 0` with `x̄ = (x, 1)`: `A` is the upper-left 3×3 block, `b` the
+    /// average of the last column and the last row (so a non-symmetric `Q` is symmetrised),
+    /// `c = Q₃₃`. Errors as [`Quadric::new`].
+    pub fn from_mat4(q: DMat4) -> Result<Self, GeometryError> {
+        let a = DMat3::from_cols(
+            q.x_axis.truncate(),
+            q.y_axis.truncate(),
+            q.z_axis.truncate(),
+        );
+        let b = (q.w_axis.truncate() + q.row(3).truncate()) * 0.5;
+        Self::new(a, b, q.w_axis.w)
+    }
+
+    /// The quadric `(x − center)ᵀA(x − center) + k = 0`, exactly (no centre computation).
+    ///
+    /// Errors: [`GeometryError::NonFinite`], or [`GeometryError::Degenerate`] for `A = 0`.
+    pub fn from_center_form(a: DMat3, center: DVec3, k: f64) -> Result<Self, GeometryError> {
+        if !mat_is_finite(&a) || !center.is_finite() || !k.is_finite() {
+            return Err(GeometryError::NonFinite);
+        }
+        let a = symmetrize(a);
+        if a == DMat3::ZERO {
+            return Err(GeometryError::Degenerate);
+        }
+        Ok(Self {
+            a,
+            center,
+            bc: DVec3::ZERO,
+            k,
+        })
+    }
+
+    /// The axis-aligned ellipsoid `Σ ((x_i − center_i)/radii_i)² − 1 = 0` (see [`Ellipsoid`]).
+    pub fn ellipsoid(center: Vec3, radii: Vec3) -> Result<Self, GeometryError> {
+        Ellipsoid::new(center, radii).map(|e| e.quadric)
+    }
+
+    /// The infinite circular cylinder of `radius` around the line through `axis_point` with
+    /// direction `axis_dir` (any non-zero length): `|y|² − (y·â)² − r² = 0`, `y = x − axis_point`.
+    /// `f > 0` outside.
+    ///
+    /// Errors: [`GeometryError::NonFinite`]; [`GeometryError::Degenerate`] for a zero axis or
+    /// `radius ≤ 0`.
+    pub fn cylinder(axis_point: Vec3, axis_dir: Vec3, radius: f32) -> Result<Self, GeometryError> {
+        if !is_finite3(axis_point) || !is_finite3(axis_dir) || !radius.is_finite() {
+            return Err(GeometryError::NonFinite);
+        }
+        let axis = axis_dir.as_dvec3();
+        let len = axis.length();
+        if !(len > 0.0) || !(radius > 0.0) {
+            return Err(GeometryError::Degenerate);
+        }
+        let u = axis / len;
+        let r = radius as f64;
+        Self::from_center_form(DMat3::IDENTITY - outer(u), axis_point.as_dvec3(), -(r * r))
+    }
+
+    /// The infinite double cone with apex `apex`, axis direction `axis_dir` (any non-zero
+    /// length) and half-angle `atan(tan_half_angle)`: `|y|² − (1 + τ²)(y·â)² = 0`,
+    /// `y = x − apex` (both nappes). `f > 0` outside.
+    ///
+    /// Errors: [`GeometryError::NonFinite`]; [`GeometryError::Degenerate`] for a zero axis or
+    /// `tan_half_angle ≤ 0`.
+    pub fn cone(apex: Vec3, axis_dir: Vec3, tan_half_angle: f32) -> Result<Self, GeometryError> {
+        if !is_finite3(apex) || !is_finite3(axis_dir) || !tan_half_angle.is_finite() {
+            return Err(GeometryError::NonFinite);
+        }
+        let axis = axis_dir.as_dvec3();
+        let len = axis.length();
+        if !(len > 0.0) || !(tan_half_angle > 0.0) {
+            return Err(GeometryError::Degenerate);
+        }
+        let u = axis / len;
+        let tau = tan_half_angle as f64;
+        Self::from_center_form(
+            DMat3::IDENTITY - outer(u) * (1.0 + tau * tau),
+            apex.as_dvec3(),
+            0.0,
+        )
+    }
+
+    /// The same quadric with reference point `p` (exact identity up to the rounding of the new
+    /// `b_c = A(p − x_c) + b_c` and `k = f(p)`). Choose `p` near the surface's region of
+    /// interest when `A` is singular. Errors: [`GeometryError::NonFinite`].
+    pub fn recentered(&self, p: DVec3) -> Result<Self, GeometryError> {
+        if !p.is_finite() {
+            return Err(GeometryError::NonFinite);
+        }
+        let bc = self.a * (p - self.center) + self.bc;
+        let k = self.eval(p);
+        if !bc.is_finite() || !k.is_finite() {
+            return Err(GeometryError::NonFinite);
+        }
+        Ok(Self {
+            a: self.a,
+            center: p,
+            bc,
+            k,
+        })
+    }
+
+    /// The symmetric matrix `A`.
+    #[inline]
+    #[must_use]
+    pub fn matrix(&self) -> DMat3 {
+        self.a
+    }
+
+    /// The reference point `x_c` of the centred form.
+    #[inline]
+    #[must_use]
+    pub fn reference_point(&self) -> DVec3 {
+        self.center
+    }
+
+    /// `f(x)`, evaluated in the centred form.
+    #[inline]
+    #[must_use]
+    pub fn eval(&self, x: DVec3) -> f64 {
+        let y = x - self.center;
+        y.dot(self.a * y + self.bc * 2.0) + self.k
+    }
+
+    /// `F(x)`: `f(x)` with every term replaced by its absolute value; `|fl(f(x)) − f(x)|` is at
+    /// most `gamma_f64(10)·F(x)` (subtraction, 3×3 product, additions, dot product).
+    #[inline]
+    #[must_use]
+    pub fn eval_abs(&self, x: DVec3) -> f64 {
+        let y = (x - self.center).abs();
+        y.dot(abs_mat(&self.a) * y + self.bc.abs() * 2.0) + self.k.abs()
+    }
+
+    /// The gradient `∇f(x) = 2(A·y + b_c)`.
+    #[inline]
+    #[must_use]
+    pub fn gradient(&self, x: DVec3) -> DVec3 {
+        (self.a * (x - self.center) + self.bc) * 2.0
+    }
+
+    /// Both roots `t0 ≤ t1` of `f(o + t·d) = 0` in `f64` (not clipped to the ray's interval;
+    /// a double or single root is reported twice). `None` for no real root, a ray along which
+    /// `f` is constant or linear with zero slope, an invalid ray, or overflow.
+    #[must_use]
+    pub fn roots(&self, ray: &Ray) -> Option<(f64, f64)> {
+        if !ray.is_valid() {
+            return None;
+        }
+        let o = ray.origin.as_dvec3();
+        let d = ray.direction.as_dvec3();
+        let f0 = o - self.center;
+        let g0 = self.a * f0 + self.bc;
+        let qa = d.dot(self.a * d);
+        let qb = d.dot(g0);
+        let qc = f0.dot(g0 + self.bc) + self.k;
+        if !(qa.is_finite() && qb.is_finite() && qc.is_finite()) {
+            return None;
+        }
+        let (t0, t1) = if qa == 0.0 {
+            if qb == 0.0 {
+                return None;
+            }
+            let t = -qc / (2.0 * qb);
+            (t, t)
+        } else {
+            let tc = -qb / qa;
+            let l = f0 + d * tc;
+            let disc = -qa * (l.dot(self.a * l + self.bc * 2.0) + self.k);
+            if !(disc >= 0.0) {
+                return None;
+            }
+            let q = -(qb + libm::copysign(libm::sqrt(disc), qb));
+            if q == 0.0 {
+                (tc, tc)
+            } else {
+                let (x, y) = (qc / q, q / qa);
+                if x <= y { (x, y) } else { (y, x) }
+            }
+        };
+        (t0.is_finite() && t1.is_finite()).then_some((t0, t1))
+    }
+
+    /// The nearest hit in `(t_min, t_max]` (module documentation: point, error bound, normal).
+    #[must_use]
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let (t0, t1) = self.roots(ray)?;
+        let t = [t0, t1].into_iter().find(|&t| ray.contains(t as f32))?;
+        self.hit_at(ray, t)
+    }
+
+    fn hit_at(&self, ray: &Ray, t: f64) -> Option<Hit> {
+        let d = ray.direction.as_dvec3();
+        let mut x = ray.origin.as_dvec3() + d * t;
+        let g = self.gradient(x);
+        let gg = g.length_squared();
+        let fx = self.eval(x);
+        if gg > 0.0 && gg.is_finite() {
+            let x1 = x - g * (fx / gg);
+            if x1.is_finite() && self.eval(x1).abs() <= fx.abs() {
+                x = x1;
+            }
+        }
+        let fx = self.eval(x);
+        let g = self.gradient(x);
+        let gl = g.length();
+        let slop = fx.abs() + gamma_f64(10) * self.eval_abs(x);
+        let (dist, normal) = if gl > 0.0 && gl.is_finite() {
+            (QUADRIC_DISTANCE_SLACK * slop / gl, g / gl)
+        } else {
+            let fro = frobenius(&self.a);
+            (
+                QUADRIC_DISTANCE_SLACK * libm::sqrt(slop / fro),
+                -d / d.length(),
+            )
+        };
+        let point = x.as_vec3();
+        let dist32 = (dist as f32).next_up();
+        if !is_finite3(point) || !dist32.is_finite() || !normal.is_finite() {
+            return None;
+        }
+        let point_error = point.abs() * gamma(1) + Vec3::splat(dist32);
+        Some(Hit {
+            t: t as f32,
+            point,
+            point_error,
+            normal: normal.as_vec3(),
+            uv: Vec2::ZERO,
+            front_face: d.dot(normal) < 0.0,
+        })
+    }
+}
+
+/// An axis-aligned ellipsoid `Σ ((x_i − center_i)/radii_i)² = 1`, intersected through its
+/// [`Quadric`] (`A = diag(1/radii²)`, centre exact, `k = −1`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ellipsoid {
+    center: Vec3,
+    radii: Vec3,
+    quadric: Quadric,
+}
+
+impl Ellipsoid {
+    /// Errors: [`GeometryError::NonFinite`] for non-finite input,
+    /// [`GeometryError::Degenerate`] for a radius `≤ 0`.
+    pub fn new(center: Vec3, radii: Vec3) -> Result<Self, GeometryError> {
+        if !is_finite3(center) || !is_finite3(radii) {
+            return Err(GeometryError::NonFinite);
+        }
+        if !(radii.min_element() > 0.0) {
+            return Err(GeometryError::Degenerate);
+        }
+        let r = radii.as_dvec3();
+        let inv = DVec3::ONE / (r * r);
+        let quadric =
+            Quadric::from_center_form(DMat3::from_diagonal(inv), center.as_dvec3(), -1.0)?;
+        Ok(Self {
+            center,
+            radii,
+            quadric,
+        })
+    }
+
+    /// Centre, world units.
+    #[inline]
+    #[must_use]
+    pub fn center(&self) -> Vec3 {
+        self.center
+    }
+
+    /// Semi-axes along x, y, z, world units.
+    #[inline]
+    #[must_use]
+    pub fn radii(&self) -> Vec3 {
+        self.radii
+    }
+
+    /// The quadric `Σ ((x_i − c_i)/r_i)² − 1`.
+    #[inline]
+    #[must_use]
+    pub fn quadric(&self) -> &Quadric {
+        &self.quadric
+    }
+
+    /// Both roots, as [`Quadric::roots`].
+    #[must_use]
+    pub fn roots(&self, ray: &Ray) -> Option<(f64, f64)> {
+        self.quadric.roots(ray)
+    }
+
+    /// As [`Quadric::intersect`], with `uv = (φ/2π, θ/π)` of the hit mapped to the unit sphere
+    /// (`y = (p − c)/radii`, `φ = atan2(y_y, y_x) ∈ [0, 2π)`, `θ = acos(y_z)`).
+    #[must_use]
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let mut h = self.quadric.intersect(ray)?;
+        let y = (h.point.as_dvec3() - self.center.as_dvec3()) / self.radii.as_dvec3();
+        let y = y.normalize_or_zero();
+        let mut phi = libm::atan2(y.y, y.x);
+        if phi < 0.0 {
+            phi += TAU;
+        }
+        let theta = libm::acos(y.z.clamp(-1.0, 1.0));
+        h.uv = Vec2::new((phi / TAU) as f32, (theta / PI) as f32);
+        Some(h)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hit::spawn_ray;
+    use crate::tolerance::QUADRIC_ROOT_RESIDUAL_REL;
+
+    fn lcg(state: &mut u64) -> f32 {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((*state >> 40) as f32) / ((1u64 << 24) as f32)
+    }
+
+    fn unit_vec(s: &mut u64) -> Vec3 {
+        loop {
+            let v = Vec3::new(lcg(s) * 2.0 - 1.0, lcg(s) * 2.0 - 1.0, lcg(s) * 2.0 - 1.0);
+            let l = v.length();
+            if l > 0.1 && l <= 1.0 {
+                return v / l;
+            }
+        }
+    }
+
+    /// `|f(o + t·d)| / (|∇f|·|t·d| + F)`: compared with `QUADRIC_ROOT_RESIDUAL_REL`.
+    fn residual_ratio(q: &Quadric, ray: &Ray, t: f64) -> f64 {
+        let d = ray.direction.as_dvec3();
+        let x = ray.origin.as_dvec3() + d * t;
+        let scale = q.gradient(x).length() * (d * t).length() + q.eval_abs(x);
+        q.eval(x).abs() / scale
+    }
+
+    /// The worked example of issue 2, in all three constructions.
+    fn worked_example_quadrics() -> [Quadric; 3] {
+        // f = (x−2)²/4 + (y−2)² + z²/4 − 1 = x²/4 + y² + z²/4 − x − 4y + 4.
+        let a = DMat3::from_diagonal(DVec3::new(0.25, 1.0, 0.25));
+        let b = DVec3::new(-0.5, -2.0, 0.0);
+        let c = 4.0;
+        let q4 = DMat4::from_cols(
+            a.x_axis.extend(b.x),
+            a.y_axis.extend(b.y),
+            a.z_axis.extend(b.z),
+            b.extend(c),
+        );
+        [
+            *Ellipsoid::new(Vec3::new(2.0, 2.0, 0.0), Vec3::new(2.0, 1.0, 2.0))
+                .unwrap()
+                .quadric(),
+            Quadric::new(a, b, c).unwrap(),
+            Quadric::from_mat4(q4).unwrap(),
+        ]
+    }
+
+    #[test]
+    fn worked_example_from_issue_2() {
+        // Ray o = (0,0,0), d = (1,1,0): (5/4)(t−2)² = 1, t = 2 ± √(4/5).
+        let s = (4.0f64 / 5.0).sqrt();
+        let ray = Ray::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0));
+        for q in worked_example_quadrics() {
+            // The general form found the same centre.
+            assert_eq!(q.reference_point(), DVec3::new(2.0, 2.0, 0.0));
+            let (t0, t1) = q.roots(&ray).unwrap();
+            assert!((t0 - (2.0 - s)).abs() <= 4.0 * f64::EPSILON, "{t0}");
+            assert!((t1 - (2.0 + s)).abs() <= 4.0 * f64::EPSILON, "{t1}");
+            let h = q.intersect(&ray).unwrap();
+            assert_eq!(h.t, (2.0 - s) as f32);
+            let exact = DVec3::new(2.0 - s, 2.0 - s, 0.0);
+            let err = (h.point.as_dvec3() - exact).abs();
+            assert!(err.x <= h.point_error.x as f64 && err.y <= h.point_error.y as f64);
+            assert_eq!(
+                h.point,
+                exact.as_vec3(),
+                "first hit (2 − √(4/5), 2 − √(4/5), 0)"
+            );
+            // Normal ∝ gradient ((x−2)/2, 2(y−2), z/2) = −s·(1/2, 2, 0) ∝ (−1, −4, 0).
+            let n = Vec3::new(-1.0, -4.0, 0.0) / 17f32.sqrt();
+            assert!(
+                (h.normal - n).length() <= 2.0 * f32::EPSILON,
+                "{:?}",
+                h.normal
+            );
+            assert!(h.front_face);
+            // The second hit, from just past the first.
+            let exit = q
+                .intersect(&Ray::with_interval(
+                    ray.origin,
+                    ray.direction,
+                    1.5,
+                    f32::INFINITY,
+                ))
+                .unwrap();
+            assert_eq!(exit.t, (2.0 + s) as f32);
+            assert_eq!(exit.point, DVec3::new(2.0 + s, 2.0 + s, 0.0).as_vec3());
+            assert!((exit.normal + n).length() <= 2.0 * f32::EPSILON);
+            assert!(!exit.front_face);
+            for t in [t0, t1] {
+                assert!(residual_ratio(&q, &ray, t) <= QUADRIC_ROOT_RESIDUAL_REL);
+            }
+        }
+    }
+
+    #[test]
+    fn ellipsoid_uv_and_constructor_errors() {
+        let e = Ellipsoid::new(Vec3::new(2.0, 2.0, 0.0), Vec3::new(2.0, 1.0, 2.0)).unwrap();
+        let h = e
+            .intersect(&Ray::new(Vec3::new(2.0, 2.0, 10.0), -Vec3::Z))
+            .unwrap();
+        assert_eq!(h.t, 8.0);
+        assert_eq!(h.normal, Vec3::Z);
+        assert_eq!(h.uv.y, 0.0);
+        assert_eq!(
+            Ellipsoid::new(Vec3::ZERO, Vec3::new(1.0, 0.0, 1.0)),
+            Err(GeometryError::Degenerate)
+        );
+        assert_eq!(
+            Ellipsoid::new(Vec3::ZERO, Vec3::new(1.0, f32::NAN, 1.0)),
+            Err(GeometryError::NonFinite)
+        );
+        assert_eq!(
+            Quadric::new(DMat3::ZERO, DVec3::ZERO, 1.0),
+            Err(GeometryError::Degenerate)
+        );
+        assert_eq!(
+            Quadric::new(DMat3::IDENTITY, DVec3::new(f64::INFINITY, 0.0, 0.0), 1.0),
+            Err(GeometryError::NonFinite)
+        );
+        assert_eq!(
+            Quadric::cylinder(Vec3::ZERO, Vec3::ZERO, 1.0),
+            Err(GeometryError::Degenerate)
+        );
+        assert_eq!(
+            Quadric::cone(Vec3::ZERO, Vec3::Z, 0.0),
+            Err(GeometryError::Degenerate)
+        );
+    }
+
+    #[test]
+    fn misses_and_degenerate_directions() {
+        let e = Quadric::ellipsoid(Vec3::new(2.0, 2.0, 0.0), Vec3::new(2.0, 1.0, 2.0)).unwrap();
+        // Pointing away, and passing beside.
+        assert!(
+            e.intersect(&Ray::new(Vec3::ZERO, Vec3::new(-1.0, -1.0, 0.0)))
+                .is_none()
+        );
+        assert!(
+            e.roots(&Ray::new(Vec3::new(0.0, 5.0, 0.0), Vec3::X))
+                .is_none()
+        );
+        // Cylinder: along the axis (qa = qb = 0), outside and inside: no root.
+        let cyl = Quadric::cylinder(Vec3::ZERO, Vec3::Z, 1.0).unwrap();
+        assert!(
+            cyl.roots(&Ray::new(Vec3::new(2.0, 0.0, 0.0), Vec3::Z))
+                .is_none()
+        );
+        assert!(
+            cyl.roots(&Ray::new(Vec3::new(0.5, 0.0, 0.0), Vec3::Z))
+                .is_none()
+        );
+        // Invalid rays.
+        for b in [f32::NAN, f32::INFINITY] {
+            let mut r = Ray::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0));
+            r.origin.y = b;
+            assert!(e.intersect(&r).is_none());
+            let mut r = Ray::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0));
+            r.direction.z = b;
+            assert!(e.intersect(&r).is_none());
+        }
+        assert!(e.intersect(&Ray::new(Vec3::ZERO, Vec3::ZERO)).is_none());
+        let _ = e.intersect(&Ray::new(Vec3::splat(f32::MAX), Vec3::splat(-f32::MAX)));
+    }
+
+    #[test]
+    fn paraboloid_linear_case() {
+        // z = x² + y²: A = diag(1, 1, 0), b = (0, 0, −1/2), c = 0 (A singular: no centre).
+        let p = Quadric::new(
+            DMat3::from_diagonal(DVec3::new(1.0, 1.0, 0.0)),
+            DVec3::new(0.0, 0.0, -0.5),
+            0.0,
+        )
+        .unwrap();
+        assert_eq!(p.reference_point(), DVec3::ZERO);
+        // Along the axis direction qa = 0: one root, z = 0.25 → t = 9.75.
+        let ray = Ray::new(Vec3::new(0.5, 0.0, 10.0), -Vec3::Z);
+        assert_eq!(p.roots(&ray), Some((9.75, 9.75)));
+        let h = p.intersect(&ray).unwrap();
+        assert_eq!(h.point, Vec3::new(0.5, 0.0, 0.25));
+        // Gradient (2x, 2y, −1) = (1, 0, −1): outward is below the bowl (f > 0 outside).
+        assert!((h.normal - Vec3::new(1.0, 0.0, -1.0).normalize()).length() < 1e-6);
+        // Recentred at the vertex: same answers.
+        let pr = p.recentered(DVec3::new(0.0, 0.0, 0.0)).unwrap();
+        assert_eq!(pr.roots(&ray), Some((9.75, 9.75)));
+    }
+
+    /// Rays from near the world origin aimed at a quadric far away: every root satisfies the
+    /// residual bound, hits are found, and spawned rays leave without re-hitting nearby.
+    fn far_quadric_suite(q: &Quadric, target: Vec3, spread: f32, seed: u64) -> (usize, f64) {
+        let mut st = seed;
+        let mut hits = 0;
+        let mut worst = 0.0f64;
+        for _ in 0..4000 {
+            let o = unit_vec(&mut st) * 10.0;
+            let aim = target + unit_vec(&mut st) * spread;
+            let ray = Ray::new(o, aim - o);
+            let Some((t0, t1)) = q.roots(&ray) else {
+                continue;
+            };
+            for t in [t0, t1] {
+                let r = residual_ratio(q, &ray, t);
+                worst = worst.max(r);
+                assert!(r <= QUADRIC_ROOT_RESIDUAL_REL, "residual {r:e}");
+            }
+            let Some(h) = q.intersect(&ray) else {
+                continue;
+            };
+            hits += 1;
+            // The point is within its bound of the surface: |f(p)| / |∇f| ≤ error along n.
+            let x = h.point.as_dvec3();
+            let dist = q.eval(x).abs() / q.gradient(x).length();
+            let along = h.point_error.as_dvec3().dot(h.normal.abs().as_dvec3());
+            assert!(dist <= along * 1.01, "dist {dist} > {along}");
+            // Spawned rays, both sides: no hit within a small neighbourhood of the origin
+            // (a cylinder or cone can be legitimately re-hit far away).
+            let near = 1.0e-3 * spread;
+            for w in [h.normal, -h.normal, ray.direction, -ray.direction] {
+                let sr = spawn_ray(&h, w);
+                if let Some(h2) = q.intersect(&sr) {
+                    assert!(h2.t * w.length() > near, "self-hit at t = {}", h2.t);
+                }
+            }
+        }
+        (hits, worst)
+    }
+
+    #[test]
+    fn far_cylinder_and_cone() {
+        // S9: a cylinder 3e4 away, tilted; a cone 9e3 away.
+        let axis_point = Vec3::new(1.0e4, -3.0e4, 0.0);
+        let cyl = Quadric::cylinder(axis_point, Vec3::new(0.3, 0.1, 1.0), 2.0).unwrap();
+        let (hits, worst_c) = far_quadric_suite(&cyl, axis_point, 2.5, 21);
+        assert!(hits > 2000, "{hits}");
+        let apex = Vec3::new(-5.0e3, 2.0e3, 7.0e3);
+        let axis = Vec3::new(1.0, 1.0, 0.0);
+        let cone = Quadric::cone(apex, axis, 0.5).unwrap();
+        let target = apex + axis.normalize() * 20.0;
+        let (hits, worst_k) = far_quadric_suite(&cone, target, 12.0, 22);
+        assert!(hits > 2000, "{hits}");
+        // A far ellipsoid given in the general (uncentred) matrix form.
+        let c = Vec3::new(3.0e4, 1.0e4, -2.0e4);
+        let r = Vec3::new(1.0, 0.5, 2.0);
+        let e = Quadric::ellipsoid(c, r).unwrap();
+        let a = e.matrix();
+        let cd = c.as_dvec3();
+        let b = -(a * cd);
+        let general = Quadric::new(a, b, cd.dot(a * cd) - 1.0).unwrap();
+        let (hits, worst_e) = far_quadric_suite(&general, c, 1.5, 23);
+        assert!(hits > 1000, "{hits}");
+        std::eprintln!(
+            "worst residual ratio: cylinder {worst_c:e}, cone {worst_k:e}, ellipsoid {worst_e:e}"
+        );
+    }
+
+    #[test]
+    fn cone_apex_hit_is_finite() {
+        let cone = Quadric::cone(Vec3::ZERO, Vec3::Z, 1.0).unwrap();
+        let h = cone
+            .intersect(&Ray::new(
+                Vec3::new(1.0, 2.0, 3.0),
+                Vec3::new(-1.0, -2.0, -3.0),
+            ))
+            .unwrap();
+        assert_eq!(h.t, 1.0);
+        assert_eq!(h.point, Vec3::ZERO);
+        assert!(is_finite3(h.normal) && is_finite3(h.point_error));
+    }
+}

@@ -37,3 +37,50 @@ pub const PLANARITY_REL: f32 = 1.0e-5;
 /// error by a few ulps of the *coordinates*, which for a ray that starts near its target is a
 /// few ulps of `t` as well; the slack covers the `1/cos θ` growth up to 60°.
 pub const T_REL_TOLERANCE_WELL_CONDITIONED: f32 = 64.0 * f32::EPSILON;
+
+/// Smallest accepted scaled determinant `|det L| / ‖L‖_F³` of the linear part `L` of a
+/// [`crate::transform::Transform`]; below it [`crate::transform::Transform::new`] returns
+/// [`crate::error::GeometryError::SingularTransform`].
+///
+/// Unit: relative (scale-invariant: the ratio does not change when `L` is multiplied by a
+/// scalar, and it is 3^(−3/2) ≈ 0.19 for a rotation). Why this measure: with singular values
+/// `σ₁ ≥ σ₂ ≥ σ₃`, `|det L| = σ₁σ₂σ₃ ≤ σ₁²σ₃` and `σ₁ ≤ ‖L‖_F`, so the condition number obeys
+/// `κ₂(L) = σ₁/σ₃ ≤ ‖L‖_F³ / |det L|`. The threshold `2⁻²⁰` guarantees `κ₂ ≤ 2²⁰`, i.e.
+/// `κ·u ≤ 2⁻⁴`: a point taken to object space and back still has ≥ 4 correct bits in its worst
+/// direction. A non-uniform scale with axis ratio `1e-4` (brief S6) has ratio ≈ 3.5e-5 and is
+/// accepted; anything flatter than `~1e-6` is numerically singular in `f32` and refused.
+pub const TRANSFORM_MIN_REL_DET: f64 = 1.0 / 1_048_576.0;
+
+/// Smallest scaled determinant `|det A| / ‖A‖_F³` (same measure and bound on `κ(A)` as
+/// [`TRANSFORM_MIN_REL_DET`]) for which [`crate::quadric::Quadric::new`] uses the quadric's
+/// centre `−A⁻¹b` as the reference point of its centred form. Below it (cylinders, cones with a
+/// tiny angle, paraboloids, planes) the centre is absent or far away and the world origin is
+/// used instead; the representation is exact either way (see the quadric module), only the
+/// cancellation it avoids differs. Unit: relative.
+pub const QUADRIC_CENTER_MIN_REL_DET: f64 = 1.0 / 1_048_576.0;
+
+/// Safety factor on the first-order distance estimate `|f(x)| / |∇f(x)|` from a quadric hit
+/// point (computed in `f64`) to the surface. Unitless. The estimate is exact for planes and
+/// its relative error is `O(dist · curvature)`; at the `~1e-16`-relative distances the `f64`
+/// solve leaves, any factor above 1 is conservative, and 2 is used.
+pub const QUADRIC_DISTANCE_SLACK: f64 = 2.0;
+
+/// Bound on the residual of a quadric root, relative to the scale of the terms it cancels:
+/// `|f(o + t·d)| ≤ QUADRIC_ROOT_RESIDUAL_REL · (|∇f(x)|·|t·d| + F(x))`, where `F(x)` is `f`
+/// evaluated with every term replaced by its absolute value. Unit: relative.
+///
+/// Why this form: a root with relative error `δ` leaves a residual `≈ (∇f·d)·t·δ`, and the
+/// evaluation of `f` itself rounds at `≈ u₆₄·F`. The `f64` solve has `δ` of a few `u₆₄`
+/// (`u₆₄ = 2⁻⁵³`) for every ray, near-tangent ones included (the discriminant is evaluated at
+/// the shifted origin without cancellation). `2⁻⁴⁴` = 512 `u₆₄` leaves a margin of ~100 over the
+/// worst case measured by the quadric tests, and is still ~2⁻²⁰ below `f32` resolution.
+pub const QUADRIC_ROOT_RESIDUAL_REL: f64 = 1.0 / 17_592_186_044_416.0;
+
+/// Smallest twice-area of a polygon relative to the square of its bounding-box diagonal,
+/// `|Σ (v_i − c) × (v_{i+1} − c)| / diag²` (Newell's normal, computed in `f64`); below it
+/// [`crate::polygon::Polygon::new`] returns [`crate::error::GeometryError::Degenerate`].
+///
+/// Unit: relative. `gamma(8)` ≈ 4.8e-7: a polygon that thin is a sliver narrower than a few
+/// `f32` ulps of its own size, whose plane (and so the ray–plane hit and the projection axis)
+/// is determined by rounding alone.
+pub const POLYGON_MIN_AREA_REL: f32 = gamma(8);
