@@ -194,3 +194,94 @@ pub fn offset_rows(n: usize, seed: u64, reps: usize) -> Vec<ChoiceRow> {
     }
     rows
 }
+
+/// The `f64` nearest root of a ray against a sphere (the reference), or `None` for a miss.
+fn sphere_reference(ray: &Ray, center: DVec3, r: f64) -> Option<f64> {
+    let (o, d) = (ray.origin.as_dvec3(), ray.direction.as_dvec3());
+    let f = o - center;
+    let a = d.dot(d);
+    let b = f.dot(d);
+    let l = f - d * (b / a);
+    let disc = a * (r * r - l.dot(l));
+    if disc < 0.0 {
+        return None;
+    }
+    let q = -(b + b.signum() * disc.sqrt());
+    let t0 = (f.dot(f) - r * r) / q;
+    let t1 = q / a;
+    let (lo, hi) = if t0 < t1 { (t0, t1) } else { (t1, t0) };
+    [lo, hi].into_iter().find(|&t| t > 0.0)
+}
+
+/// Small spheres far from the ray origin (distance / radius `D/r = 10 … 1e5`), rays aimed at a
+/// random point of the sphere's silhouette disc (well inside: at most 0.9 r off-centre), from
+/// the origin's neighbourhood. Failures are false misses; `error` is the largest relative `t`
+/// error against the `f64` reference.
+pub fn sphere_rows(n: usize, seed: u64, reps: usize) -> Vec<ChoiceRow> {
+    use halfray_core::sphere::Sphere;
+    let mut rows = Vec::new();
+    for ratio in [1.0e1f64, 1.0e3, 1.0e4, 1.0e5] {
+        let mut rng = Rng::new(seed ^ ratio.to_bits() ^ 0x5_9E7E);
+        let mut cases: Vec<(Ray, Sphere, f64)> = Vec::with_capacity(n);
+        while cases.len() < n {
+            let r = 0.5 + rng.f64();
+            let c = rng.unit_vector() * (ratio * r);
+            let Ok(s) = Sphere::new(c.as_vec3(), r as f32) else {
+                continue;
+            };
+            let (c64, r64) = (s.center().as_dvec3(), s.radius() as f64);
+            let o = rng.unit_vector() * rng.f64();
+            let toward = (c64 - o).normalize();
+            let side = toward.any_orthonormal_vector();
+            let up = toward.cross(side);
+            let (u, v) = (rng.f64() * 2.0 - 1.0, rng.f64() * 2.0 - 1.0);
+            if u * u + v * v > 0.81 {
+                continue;
+            }
+            let target = c64 + (side * u + up * v) * r64;
+            let ray = Ray::new(o.as_vec3(), (target - o).as_vec3());
+            let Some(t_ref) = sphere_reference(&ray, c64, r64) else {
+                continue;
+            };
+            cases.push((ray, s, t_ref));
+        }
+        for (label, naive) in [("sphere-naive", true), ("sphere-stable", false)] {
+            let hit = |ray: &Ray, s: &Sphere| {
+                if naive {
+                    s.intersect_naive(ray)
+                } else {
+                    s.intersect(ray)
+                }
+            };
+            let mut misses = 0usize;
+            let mut max_err = 0.0f64;
+            for (ray, s, t_ref) in &cases {
+                match hit(ray, s) {
+                    None => misses += 1,
+                    Some(h) => max_err = max_err.max(((h.t as f64 - t_ref) / t_ref).abs()),
+                }
+            }
+            let ns = median(
+                (0..reps)
+                    .map(|_| {
+                        let start = Instant::now();
+                        let mut k = 0u32;
+                        for (ray, s, _) in &cases {
+                            k += hit(black_box(ray), black_box(s)).is_some() as u32;
+                        }
+                        black_box(k);
+                        start.elapsed().as_secs_f64() * 1.0e9 / cases.len().max(1) as f64
+                    })
+                    .collect(),
+            );
+            rows.push(ChoiceRow {
+                name: format!("{label} @ D/r={ratio:e}"),
+                trials: cases.len(),
+                failures_per_million: cases_per_million(misses, cases.len()),
+                error: max_err,
+                ns,
+            });
+        }
+    }
+    rows
+}

@@ -197,7 +197,7 @@ pub fn measure(args: &AccuracyArgs) -> Result<Report> {
         variants,
         slab: choices::slab_rows(choice_n, args.seed, reps),
         offsets: choices::offset_rows(choice_n, args.seed, reps),
-        sphere: Vec::new(),
+        sphere: choices::sphere_rows(choice_n, args.seed, reps),
         quick: args.quick,
     })
 }
