@@ -1,1 +1,510 @@
-//! In progress.
+//! Affine transforms for instancing: intersect an object placed by `M` by taking the ray to
+//! object space with `M⁻¹`, and the hit back with `M`.
+//!
+//! * **Rays** ([`Transform::ray_to_object`]): origin and direction by `M⁻¹`; the direction is
+//!   **not normalised**, so `o' + t·d' = M⁻¹(o + t·d)` for every `t`: the parameter `t` and the
+//!   interval `(t_min, t_max]` are the same in both spaces, and closest-hit searches can mix
+//!   hits from differently transformed objects.
+//! * **Points** ([`Transform::point_to_world`]): `M·p`, each row summed pairwise
+//!   `(m₀x + m₁y) + (m₂z + m₃)` so every term carries at most three roundings (pbrt's
+//!   `gamma(3)` per row term).
+//! * **Normals** ([`Transform::normal_to_world`]): by the inverse transpose `M⁻ᵀ`, normalised.
+//!   This is the gradient rule `∇(f∘M⁻¹) = M⁻ᵀ·∇f`: correct under non-uniform scale and shear,
+//!   and it keeps "outward" (`f > 0` side) outward even for mirroring transforms. (A triangle's
+//!   winding-based normal `(v1 − v0) × (v2 − v0)` of the *transformed* vertices is `det(M)·M⁻ᵀn`:
+//!   under a mirror it is the opposite of [`Transform::hit_to_world`]'s normal.)
+//! * **Hits** ([`Transform::hit_to_world`]): point by `M` with the error bound grown as in pbrt
+//!   (`Transform::operator()(Point3fi)`): for row `r`,
+//!   `(1 + gamma(3))·Σ_c |m_rc|·e_c + gamma(3)·(Σ_c |m_rc·p_c| + |m_r3|)`, where `e` is the
+//!   object-space bound. The world surface is by definition the image of the object surface by
+//!   the stored `f32` matrix `M`, so this bounds the distance to the world surface; `t`, `uv`
+//!   and `front_face` are unchanged (`(M·d)·(M⁻ᵀn) = d·n`). The bound also covers the
+//!   rounding of taking a spawned origin back to object space (see
+//!   [`Transform::hit_to_world`]), so spawned rays do not re-hit through the round trip.
+//!
+//! Only affine matrices (last row `(0, 0, 0, 1)`) are accepted; the inverse is computed in `f64`
+//! and rounded once. Nothing panics: a transform that overflows produces a non-finite ray, which
+//! every intersector treats as hitting nothing.
+
+use crate::error::GeometryError;
+use crate::float::{gamma, is_finite3};
+use crate::hit::Hit;
+use crate::ray::Ray;
+use crate::tolerance::TRANSFORM_MIN_REL_DET;
+use glam::{DMat3, DVec3, Mat4, Vec3, Vec4};
+
+/// An invertible affine transform and its inverse.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform {
+    m: Mat4,
+    inv: Mat4,
+}
+
+/// Row `r` of the 3×4 affine part: `(linear row, translation)`.
+#[inline]
+fn row(m: &Mat4, r: usize) -> (Vec3, f32) {
+    (
+        Vec3::new(m.x_axis[r], m.y_axis[r], m.z_axis[r]),
+        m.w_axis[r],
+    )
+}
+
+/// `M·(p, w)` for `w ∈ {0, 1}`, summed pairwise (at most three roundings per term).
+#[inline]
+fn apply(m: &Mat4, p: Vec3, w: f32) -> Vec3 {
+    let mut out = Vec3::ZERO;
+    for r in 0..3 {
+        let (l, t) = row(m, r);
+        out[r] = (l.x * p.x + l.y * p.y) + (l.z * p.z + t * w);
+    }
+    out
+}
+
+fn linear_f64(m: &Mat4) -> DMat3 {
+    DMat3::from_cols(
+        m.x_axis.truncate().as_dvec3(),
+        m.y_axis.truncate().as_dvec3(),
+        m.z_axis.truncate().as_dvec3(),
+    )
+}
+
+impl Transform {
+    /// The identity.
+    pub const IDENTITY: Self = Self {
+        m: Mat4::IDENTITY,
+        inv: Mat4::IDENTITY,
+    };
+
+    /// The transform with matrix `m` (column-major, glam's convention; points are `M·(p, 1)`).
+    ///
+    /// Errors: [`GeometryError::NonFinite`] for a non-finite entry;
+    /// [`GeometryError::Degenerate`] for a non-affine matrix (last row not exactly
+    /// `(0, 0, 0, 1)`: a projective map does not preserve `t`);
+    /// [`GeometryError::SingularTransform`] when the linear part `L` has
+    /// `|det L| < TRANSFORM_MIN_REL_DET · ‖L‖_F³` (see
+    /// [`crate::tolerance::TRANSFORM_MIN_REL_DET`]: condition number above 2²⁰) or when the
+    /// inverse overflows `f32`.
+    pub fn new(m: Mat4) -> Result<Self, GeometryError> {
+        if !m.is_finite() {
+            return Err(GeometryError::NonFinite);
+        }
+        if m.row(3) != Vec4::W {
+            return Err(GeometryError::Degenerate);
+        }
+        let l = linear_f64(&m);
+        let fro = libm::sqrt(
+            l.x_axis.length_squared() + l.y_axis.length_squared() + l.z_axis.length_squared(),
+        );
+        let det = l.determinant();
+        if !(det.abs() >= TRANSFORM_MIN_REL_DET * fro * fro * fro) {
+            return Err(GeometryError::SingularTransform);
+        }
+        let li = l.inverse();
+        let ti: DVec3 = -(li * m.w_axis.truncate().as_dvec3());
+        let inv = Mat4::from_cols(
+            li.x_axis.as_vec3().extend(0.0),
+            li.y_axis.as_vec3().extend(0.0),
+            li.z_axis.as_vec3().extend(0.0),
+            ti.as_vec3().extend(1.0),
+        );
+        if !inv.is_finite() {
+            return Err(GeometryError::SingularTransform);
+        }
+        Ok(Self { m, inv })
+    }
+
+    /// Translation by `v`. Errors: [`GeometryError::NonFinite`].
+    pub fn translate(v: Vec3) -> Result<Self, GeometryError> {
+        Self::new(Mat4::from_translation(v))
+    }
+
+    /// Scale by `s` per axis (negative components mirror). Errors as [`Transform::new`]
+    /// (a zero or relatively tiny component is singular).
+    pub fn scale(s: Vec3) -> Result<Self, GeometryError> {
+        Self::new(Mat4::from_scale(s))
+    }
+
+    /// Rotation by `angle` radians (counter-clockwise looking down `axis`) about `axis` (any
+    /// non-zero length). Errors: [`GeometryError::NonFinite`], [`GeometryError::Degenerate`]
+    /// for a zero axis.
+    pub fn rotate(axis: Vec3, angle: f32) -> Result<Self, GeometryError> {
+        if !is_finite3(axis) || !angle.is_finite() {
+            return Err(GeometryError::NonFinite);
+        }
+        let a = axis.as_dvec3();
+        let len = a.length();
+        if !(len > 0.0) {
+            return Err(GeometryError::Degenerate);
+        }
+        Self::new(Mat4::from_axis_angle((a / len).as_vec3(), angle))
+    }
+
+    /// `self` followed by `next` (matrix `next.M · self.M`, inverse recomputed in `f64`).
+    /// Errors as [`Transform::new`].
+    pub fn then(&self, next: &Self) -> Result<Self, GeometryError> {
+        Self::new(next.m * self.m)
+    }
+
+    /// The inverse transform.
+    #[inline]
+    #[must_use]
+    pub fn inverse(&self) -> Self {
+        Self {
+            m: self.inv,
+            inv: self.m,
+        }
+    }
+
+    /// The matrix `M` (object → world).
+    #[inline]
+    #[must_use]
+    pub fn matrix(&self) -> Mat4 {
+        self.m
+    }
+
+    /// The matrix `M⁻¹` (world → object).
+    #[inline]
+    #[must_use]
+    pub fn inverse_matrix(&self) -> Mat4 {
+        self.inv
+    }
+
+    /// The ray in object space: `(M⁻¹o, M⁻¹d)`, direction not normalised, interval unchanged
+    /// (module documentation). A non-finite result is returned as is (it fails
+    /// [`Ray::validate`], so intersectors report no hit).
+    #[inline]
+    #[must_use]
+    pub fn ray_to_object(&self, ray: &Ray) -> Ray {
+        Ray::with_interval(
+            apply(&self.inv, ray.origin, 1.0),
+            apply(&self.inv, ray.direction, 0.0),
+            ray.t_min,
+            ray.t_max,
+        )
+    }
+
+    /// `M·p`.
+    #[inline]
+    #[must_use]
+    pub fn point_to_world(&self, p: Vec3) -> Vec3 {
+        apply(&self.m, p, 1.0)
+    }
+
+    /// `M⁻¹·p`.
+    #[inline]
+    #[must_use]
+    pub fn point_to_object(&self, p: Vec3) -> Vec3 {
+        apply(&self.inv, p, 1.0)
+    }
+
+    /// `M·v` for a direction (no translation).
+    #[inline]
+    #[must_use]
+    pub fn vector_to_world(&self, v: Vec3) -> Vec3 {
+        apply(&self.m, v, 0.0)
+    }
+
+    /// `M·p` and the conservative bound on its error given the bound `p_error` on `p`
+    /// (module documentation).
+    #[must_use]
+    pub fn point_to_world_with_error(&self, p: Vec3, p_error: Vec3) -> (Vec3, Vec3) {
+        let out = self.point_to_world(p);
+        let mut err = Vec3::ZERO;
+        for r in 0..3 {
+            let (l, t) = row(&self.m, r);
+            let la = l.abs();
+            err[r] = (1.0 + gamma(3)) * la.dot(p_error)
+                + gamma(3) * ((l * p).abs().element_sum() + t.abs());
+        }
+        (out, err)
+    }
+
+    /// `M⁻ᵀ·n`, normalised (zero if `n` is zero or the result is not finite).
+    #[must_use]
+    pub fn normal_to_world(&self, n: Vec3) -> Vec3 {
+        let li = &self.inv;
+        let w = Vec3::new(
+            li.x_axis.truncate().dot(n),
+            li.y_axis.truncate().dot(n),
+            li.z_axis.truncate().dot(n),
+        );
+        let w = w.normalize_or_zero();
+        if is_finite3(w) { w } else { Vec3::ZERO }
+    }
+
+    /// An object-space hit in world space: point by `M` with the grown error bound, normal by
+    /// `M⁻ᵀ` (normalised), `t`, `uv`, `front_face` unchanged (module documentation).
+    ///
+    /// **Round trip.** A ray spawned from the world hit is intersected again *in object space*,
+    /// through [`Transform::ray_to_object`], whose origin `M⁻¹·o` is rounded again (by up to
+    /// `e_back = gamma(3)·(|M⁻¹|·|o| + |M⁻¹ translation|)` per component, large when the
+    /// translation is large compared with the object). `point_error` therefore also includes
+    /// `|L|·e_back` (with `L` the linear part of `M`), which is exactly enough for the world
+    /// offset along `M⁻ᵀn` to map to an object-space offset along `n` that clears `e_back`
+    /// (`|n_w|ᵀ|L| ≥ |Lᵀn_w| = |n|/|M⁻ᵀn|`). It stays a valid (larger) bound on the point.
+    #[must_use]
+    pub fn hit_to_world(&self, hit: &Hit) -> Hit {
+        let (point, mut point_error) = self.point_to_world_with_error(hit.point, hit.point_error);
+        let mut back = Vec3::ZERO;
+        for r in 0..3 {
+            let (l, t) = row(&self.inv, r);
+            back[r] = gamma(4) * ((l * point).abs().element_sum() + t.abs());
+        }
+        for r in 0..3 {
+            let (l, _) = row(&self.m, r);
+            point_error[r] += (1.0 + gamma(3)) * l.abs().dot(back);
+        }
+        Hit {
+            t: hit.t,
+            point,
+            point_error,
+            normal: self.normal_to_world(hit.normal),
+            uv: hit.uv,
+            front_face: hit.front_face,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hit::spawn_ray;
+    use crate::quadric::Quadric;
+    use crate::sphere::Sphere;
+    use crate::triangle::{TriangleIntersector, Watertight};
+
+    fn lcg(state: &mut u64) -> f32 {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((*state >> 40) as f32) / ((1u64 << 24) as f32)
+    }
+
+    fn unit_vec(s: &mut u64) -> Vec3 {
+        loop {
+            let v = Vec3::new(lcg(s) * 2.0 - 1.0, lcg(s) * 2.0 - 1.0, lcg(s) * 2.0 - 1.0);
+            let l = v.length();
+            if l > 0.1 && l <= 1.0 {
+                return v / l;
+            }
+        }
+    }
+
+    /// Translate · shear · non-uniform scale.
+    fn sheared_ellipsoid_transform() -> Transform {
+        let scale = Transform::scale(Vec3::new(2.0, 0.5, 3.0)).unwrap();
+        let shear = Transform::new(Mat4::from_cols(
+            Vec4::new(1.0, 0.0, -0.4, 0.0),
+            Vec4::new(0.7, 1.0, 0.0, 0.0),
+            Vec4::new(0.0, 0.3, 1.0, 0.0),
+            Vec4::W,
+        ))
+        .unwrap();
+        let tr = Transform::translate(Vec3::new(1.0e3, -20.0, 5.0)).unwrap();
+        scale.then(&shear).unwrap().then(&tr).unwrap()
+    }
+
+    #[test]
+    fn constructor_validation() {
+        assert_eq!(
+            Transform::scale(Vec3::new(1.0, 0.0, 1.0)),
+            Err(GeometryError::SingularTransform)
+        );
+        assert_eq!(
+            Transform::scale(Vec3::new(1.0, 1.0, 1.0e-7)),
+            Err(GeometryError::SingularTransform)
+        );
+        assert!(
+            Transform::scale(Vec3::new(1.0, 1.0, 1.0e-4)).is_ok(),
+            "S6 axis ratio 1e-4"
+        );
+        assert!(
+            Transform::scale(Vec3::splat(1.0e-20)).is_ok(),
+            "uniform scale is fine"
+        );
+        assert_eq!(
+            Transform::translate(Vec3::new(f32::NAN, 0.0, 0.0)),
+            Err(GeometryError::NonFinite)
+        );
+        let mut proj = Mat4::IDENTITY;
+        proj.x_axis.w = 0.5;
+        assert_eq!(Transform::new(proj), Err(GeometryError::Degenerate));
+        assert_eq!(
+            Transform::rotate(Vec3::ZERO, 1.0),
+            Err(GeometryError::Degenerate)
+        );
+        assert_eq!(
+            Transform::rotate(Vec3::X, f32::INFINITY),
+            Err(GeometryError::NonFinite)
+        );
+        // A rank-2 matrix with a rounding-level third direction.
+        let m = Mat4::from_cols(
+            Vec4::new(1.0, 2.0, 3.0, 0.0),
+            Vec4::new(2.0, 4.0, 6.0 + 1.0e-6, 0.0),
+            Vec4::new(0.0, 0.0, 1.0, 0.0),
+            Vec4::W,
+        );
+        assert_eq!(Transform::new(m), Err(GeometryError::SingularTransform));
+        // The inverse is an inverse.
+        let t = sheared_ellipsoid_transform();
+        let prod = t.matrix() * t.inverse_matrix();
+        assert!(prod.abs_diff_eq(Mat4::IDENTITY, 1.0e-5), "{prod:?}");
+        let p = Vec3::new(0.3, -0.7, 0.2);
+        assert!((t.point_to_object(t.point_to_world(p)) - p).length() < 1.0e-4);
+        assert_eq!(t.inverse().inverse(), t);
+    }
+
+    #[test]
+    fn ray_to_object_keeps_t_and_interval() {
+        let t = sheared_ellipsoid_transform();
+        let ray = Ray::with_interval(
+            Vec3::new(990.0, -25.0, 1.0),
+            Vec3::new(3.0, 2.0, 1.0),
+            0.25,
+            7.5,
+        );
+        let r = t.ray_to_object(&ray);
+        assert_eq!((r.t_min, r.t_max), (0.25, 7.5));
+        for s in [0.0f32, 0.5, 2.0, 7.5] {
+            let w = t.point_to_world(r.at(s));
+            assert!(
+                (w - ray.at(s)).length() <= 1.0e-3,
+                "{s}: {w} vs {}",
+                ray.at(s)
+            );
+        }
+        assert_eq!(Transform::IDENTITY.ray_to_object(&ray), ray);
+        let mut bad = ray;
+        bad.origin.y = f32::NAN;
+        assert!(!t.ray_to_object(&bad).is_valid());
+    }
+
+    #[test]
+    fn sheared_sphere_normal_matches_the_analytic_ellipsoid() {
+        // World ellipsoid = M(unit sphere): f(x) = |L⁻¹(x − T)|² − 1, ∇f ∝ L⁻ᵀL⁻¹(x − T),
+        // with L⁻¹ the exact (f64) inverse of the stored f32 matrix.
+        let tf = sheared_ellipsoid_transform();
+        let sphere = Sphere::new(Vec3::ZERO, 1.0).unwrap();
+        let l = linear_f64(&tf.matrix());
+        let li = l.inverse();
+        let a = li.transpose() * li;
+        let center = tf.matrix().w_axis.truncate().as_dvec3();
+        let world = Quadric::from_center_form(a, center, -1.0).unwrap();
+        let mut st = 9u64;
+        let (mut worst_angle, mut worst_t, mut hits) = (0.0f64, 0.0f64, 0);
+        for _ in 0..5000 {
+            let target = tf.point_to_world(unit_vec(&mut st) * 0.95);
+            let o = target + unit_vec(&mut st) * 10.0;
+            let ray = Ray::new(o, target - o);
+            let Some(h) = sphere.intersect(&tf.ray_to_object(&ray)) else {
+                continue;
+            };
+            hits += 1;
+            let hw = tf.hit_to_world(&h);
+            let x = hw.point.as_dvec3();
+            // The analytic normal at the exact image (f64) of the object-space hit point, so
+            // that the rounding of the world point (ulps of |x| ≈ 1e3, times the curvature)
+            // does not mask the normal transform's own error.
+            let x_exact = l * h.point.as_dvec3() + center;
+            let analytic = world.gradient(x_exact).normalize();
+            let angle = (hw.normal.as_dvec3() - analytic).length();
+            worst_angle = worst_angle.max(angle);
+            // M⁻ᵀ in f32 (entries rounded once), a dot product and a normalisation, amplified
+            // by the anisotropy of L (κ ≈ 8): a few 1e-7.
+            assert!(angle <= 1.0e-6, "normal off by {angle}");
+            // Same t in both spaces: the object-space root is the world-space root.
+            let (t0, _) = world.roots(&ray).unwrap();
+            // Compared as a distance along the normal (the well-conditioned quantity) in ulps
+            // of the world coordinates (|x| ≈ 1e3): the f32 ray itself is known to that.
+            let cos = (ray.direction.normalize().dot(hw.normal)).abs() as f64;
+            let along_n = (h.t as f64 - t0).abs() * ray.direction.length() as f64 * cos;
+            let ulps = along_n / (f32::EPSILON as f64 * x.abs().max_element());
+            worst_t = worst_t.max(ulps);
+            assert!(ulps <= 16.0, "t {} vs {t0}: {ulps} ulps", h.t);
+            // The world point is within its bound of the world surface.
+            let dist = world.eval(x).abs() / world.gradient(x).length();
+            let along = hw.point_error.as_dvec3().dot(hw.normal.abs().as_dvec3());
+            assert!(dist <= along, "dist {dist} > bound {along}");
+            assert_eq!(hw.front_face, ray.direction.dot(hw.normal) < 0.0);
+            // Spawned rays, taken back to object space: outward misses, inward hits far side.
+            let out = spawn_ray(&hw, hw.normal);
+            assert!(sphere.intersect(&tf.ray_to_object(&out)).is_none());
+            let inward = spawn_ray(&hw, -hw.normal);
+            let far = sphere.intersect(&tf.ray_to_object(&inward)).unwrap();
+            assert!(far.t > 0.1, "{}", far.t);
+        }
+        assert!(hits > 4000);
+        std::eprintln!(
+            "sheared ellipsoid: worst normal error {worst_angle:e}, worst t error along n {worst_t:.2} ulps of |x|"
+        );
+    }
+
+    #[test]
+    fn rotated_translated_triangle_matches_transformed_vertices() {
+        let tf = Transform::rotate(Vec3::new(1.0, 2.0, 3.0), 0.7)
+            .unwrap()
+            .then(&Transform::translate(Vec3::new(100.0, -50.0, 20.0)).unwrap())
+            .unwrap();
+        let obj = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(2.0, 0.5, 0.0),
+            Vec3::new(0.3, 1.5, 0.4),
+        ];
+        let world = obj.map(|v| tf.point_to_world(v));
+        let mut st = 4u64;
+        let mut n = 0;
+        for _ in 0..2000 {
+            let (b1, b2) = (lcg(&mut st), lcg(&mut st));
+            if b1 + b2 > 0.98 || b1 < 0.01 || b2 < 0.01 {
+                continue;
+            }
+            let target = world[0] * (1.0 - b1 - b2) + world[1] * b1 + world[2] * b2;
+            let o = target + unit_vec(&mut st) * 5.0;
+            let ray = Ray::new(o, target - o);
+            let hw = Watertight.intersect(&ray, &world).expect("world hit");
+            let ho = Watertight
+                .intersect(&tf.ray_to_object(&ray), &obj)
+                .expect("object hit");
+            n += 1;
+            // t agrees as a distance along the normal, within ulps of the coordinates (the
+            // world vertices and the object-space ray are each rounded once at |x| ≈ 100).
+            let nrm = (world[1] - world[0]).cross(world[2] - world[0]).normalize();
+            let along_n = (hw.t - ho.t).abs() * ray.direction.dot(nrm).abs();
+            assert!(
+                along_n <= 16.0 * f32::EPSILON * 120.0,
+                "{} vs {}",
+                hw.t,
+                ho.t
+            );
+            if ray.direction.normalize().dot(nrm).abs() > 0.2 {
+                assert!((hw.b1 - ho.b1).abs() <= 1.0e-4 && (hw.b2 - ho.b2).abs() <= 1.0e-4);
+            }
+            assert_eq!(hw.front_face, ho.front_face);
+            let pw = hw.to_hit(&world);
+            let po = tf.hit_to_world(&ho.to_hit(&obj));
+            assert!((pw.point - po.point).length() <= 1.0e-3);
+            // World vertices are rounded at |v| ≈ 100 (ulp 7.6e-6) on edges of ~2: the two
+            // normals legitimately differ by a few 1e-6.
+            assert!(
+                (pw.normal - po.normal).length() <= 2.0e-5,
+                "{} vs {}",
+                pw.normal,
+                po.normal
+            );
+            assert_eq!(pw.front_face, po.front_face);
+        }
+        assert!(n > 800, "{n}");
+    }
+
+    #[test]
+    fn mirror_keeps_gradient_normals_outward() {
+        let tf = Transform::scale(Vec3::new(-1.0, 2.0, 1.0)).unwrap();
+        let sphere = Sphere::new(Vec3::ZERO, 1.0).unwrap();
+        let ray = Ray::new(Vec3::new(-5.0, 0.0, 0.0), Vec3::X);
+        let h = tf.hit_to_world(&sphere.intersect(&tf.ray_to_object(&ray)).unwrap());
+        assert_eq!(h.point, Vec3::new(-1.0, 0.0, 0.0));
+        assert_eq!(h.normal, Vec3::new(-1.0, 0.0, 0.0));
+        assert!(h.front_face);
+        assert_eq!(h.t, 4.0);
+    }
+}
