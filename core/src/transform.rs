@@ -507,4 +507,85 @@ mod tests {
         assert!(h.front_face);
         assert_eq!(h.t, 4.0);
     }
+
+    #[test]
+    fn random_bit_pattern_rays_never_panic() {
+        // NaN, ±inf, subnormals, huge and tiny values in every field, against every primitive
+        // of this crate's non-triangle intersectors: no panic, and every reported hit is
+        // finite with t in the interval.
+        use crate::plane::Plane;
+        use crate::polygon::Polygon;
+        use crate::quadric::Ellipsoid;
+        let tf = sheared_ellipsoid_transform();
+        let plane = Plane::new(Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.2, -0.3, 1.0)).unwrap();
+        let sphere = Sphere::new(Vec3::new(0.5, 0.0, -1.0), 2.0).unwrap();
+        let ell = Ellipsoid::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 0.5)).unwrap();
+        let cone = Quadric::cone(Vec3::ZERO, Vec3::Z, 0.5).unwrap();
+        let poly = Polygon::<8>::new(&[
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ])
+        .unwrap();
+        let specials = [
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            0.0,
+            -0.0,
+            f32::MAX,
+            -f32::MAX,
+            f32::MIN_POSITIVE,
+            1.0e-45,
+            1.0,
+            -1.0,
+            0.5,
+        ];
+        let mut st = 99u64;
+        let pick = |st: &mut u64| -> f32 {
+            let r = lcg(st);
+            if r < 0.3 {
+                specials[(lcg(st) * specials.len() as f32) as usize % specials.len()]
+            } else if r < 0.5 {
+                f32::from_bits((lcg(st) * 4.0e9) as u32)
+            } else {
+                (lcg(st) - 0.5) * 8.0
+            }
+        };
+        let check = |ray: &Ray, h: Option<Hit>| {
+            if let Some(h) = h {
+                assert!(ray.contains(h.t), "{ray:?} {h:?}");
+                assert!(is_finite3(h.point) && is_finite3(h.point_error) && is_finite3(h.normal));
+            }
+        };
+        for _ in 0..50_000 {
+            let ray = Ray::with_interval(
+                Vec3::new(pick(&mut st), pick(&mut st), pick(&mut st)),
+                Vec3::new(pick(&mut st), pick(&mut st), pick(&mut st)),
+                if lcg(&mut st) < 0.8 {
+                    0.0
+                } else {
+                    pick(&mut st)
+                },
+                if lcg(&mut st) < 0.8 {
+                    f32::INFINITY
+                } else {
+                    pick(&mut st)
+                },
+            );
+            check(&ray, plane.intersect(&ray));
+            check(&ray, sphere.intersect(&ray));
+            let _ = sphere.intersect_naive(&ray);
+            check(&ray, ell.intersect(&ray));
+            check(&ray, cone.intersect(&ray));
+            check(&ray, poly.intersect(&ray));
+            let obj = tf.ray_to_object(&ray);
+            if let Some(h) = sphere.intersect(&obj) {
+                let w = tf.hit_to_world(&h);
+                let _ = w.normal;
+            }
+        }
+    }
 }
