@@ -2,7 +2,7 @@
 //!
 //! | command | what it does |
 //! |---|---|
-//! | `mesh check IN.obj [--json FILE]` | counts, manifoldness, boundary, Euler characteristic, components, genus ([`check`]) |
+//! | `mesh check IN.obj [--json FILE]` | counts, manifoldness, boundary, Euler characteristic, components, genus ([`check()`], [`check`](mod@check)) |
 //! | `mesh subdivide IN.obj -o OUT.obj --levels N [--weights warren\|loop]` | Loop subdivision ([`edit::subdivide`]) |
 //! | `mesh smooth IN.obj -o OUT.obj --step K --iterations N [--fix-boundary]` | uniform Laplacian diffusion ([`edit::smooth`]) |
 //! | `mesh collapse IN.obj -o OUT.obj --shorter-than L` | short-edge collapse ([`edit::collapse`]) |
