@@ -1,19 +1,343 @@
-//! The renderer (in progress).
+//! The renderer: `halfray render SCENE.toml -o OUT.png`.
+//!
+//! One sample per pixel through the pixel centre, Whitted shading ([`trace`]) under an effect
+//! plan ([`plan`]), all cores through rayon, an indicatif progress bar on a terminal, and an
+//! 8-bit sRGB RGBA PNG written atomically ([`output`]). Every render ends with a summary line
+//! of rays cast per kind, time and Mrays/s.
 
+// `!(x > eps)` rejects NaN along with small values: the negation is the point.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod geom;
+pub mod output;
+pub mod plan;
+pub mod trace;
+pub mod xform;
+
+use crate::atomic::write_bytes_atomic;
 use crate::error::{Error, Result};
+use crate::scene::{self, Scene};
+use glam::{Vec3, Vec4};
+use indicatif::{ParallelProgressIterator, ProgressBar, ProgressDrawTarget, ProgressStyle};
+use plan::EffectPlan;
+use rayon::prelude::*;
+use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::time::Instant;
+use trace::{RayCounts, Tracer};
+
+/// What each pixel shows.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Mode {
+    /// Whitted shading (sRGB).
+    #[default]
+    Color,
+    /// Distance from the eye along the primary ray, normalised to the nearest (white) and
+    /// farthest (black) hit of the image.
+    Depth,
+    /// World-space outward geometric normal as `n·½ + ½`.
+    Normal,
+    /// Triangle barycentrics `(b0, b1, b2)` as RGB (grey on non-triangle primitives).
+    Barycentric,
+    /// BVH nodes visited by the primary ray, on a fixed logarithmic ramp (1023 nodes = red).
+    Heatmap,
+}
 
 /// `halfray render SCENE.toml -o OUT.png`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Scene file (TOML).
+    /// Scene file (TOML; format in scenes/README.md).
     pub scene: PathBuf,
-    /// Output PNG.
+    /// Output PNG (written atomically).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// What to render.
+    #[arg(long, value_enum, default_value_t = Mode::Color)]
+    pub mode: Mode,
+    /// Print the effect plan before rendering.
+    #[arg(long)]
+    pub explain: bool,
+    /// Write ray counts per kind and the time as JSON (keys primary, shadow, reflection,
+    /// refraction, seconds).
+    #[arg(long, value_name = "FILE")]
+    pub stats_json: Option<PathBuf>,
+    /// Composite the render over this image (Porter–Duff "over"; same size as the render).
+    #[arg(long, value_name = "IMG.png")]
+    pub background: Option<PathBuf>,
+    /// Turn every effect on (for comparison with the plan; the picture is the same).
+    #[arg(long)]
+    pub force_all_effects: bool,
+    /// Override the scene's image width.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Override the scene's image height.
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// No progress bar and no settings line (the summary line is still printed).
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Render settings of the library entry point.
+#[derive(Clone, Debug, Default)]
+pub struct RenderOptions {
+    /// Mode.
+    pub mode: Mode,
+    /// `--force-all-effects`.
+    pub force_all: bool,
+    /// Show a progress bar (only drawn when stderr is a terminal).
+    pub progress: bool,
+}
+
+/// A finished render.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// Per pixel, row-major from the top: linear RGB radiance (colour mode) or the debug
+    /// value in `[0, 1]`, and coverage alpha (1 hit, 0 miss).
+    pub pixels: Vec<Vec4>,
+    /// BVH nodes visited per pixel by the primary ray.
+    pub nodes: Vec<u64>,
+    /// Rays cast per kind.
+    pub counts: RayCounts,
+    /// Wall-clock seconds of the render loop.
+    pub seconds: f64,
+    /// The plan used.
+    pub plan: EffectPlan,
+}
+
+impl Rendered {
+    /// Pixel `(i, j)`.
+    pub fn pixel(&self, i: u32, j: u32) -> Vec4 {
+        self.pixels[(j * self.width + i) as usize]
+    }
+
+    /// Number of covered pixels.
+    pub fn coverage(&self) -> usize {
+        self.pixels.iter().filter(|p| p.w > 0.0).count()
+    }
+
+    /// 8-bit RGBA: sRGB-encoded in colour mode, the value as is in debug modes.
+    pub fn to_rgba8(&self, mode: Mode) -> Vec<u8> {
+        let enc: fn(f32) -> u8 = if mode == Mode::Color {
+            |x| output::to_u8(output::linear_to_srgb(x))
+        } else {
+            output::to_u8
+        };
+        self.pixels
+            .iter()
+            .flat_map(|p| [enc(p.x), enc(p.y), enc(p.z), output::to_u8(p.w)])
+            .collect()
+    }
+
+    /// Composites the render over a background (linear straight RGBA, same size).
+    pub fn composite_over(&mut self, background: &[Vec4]) {
+        for (p, b) in self.pixels.iter_mut().zip(background) {
+            *p = output::over(*p, *b);
+        }
+    }
+}
+
+/// Per-pixel record before the debug-mode mapping.
+#[derive(Clone, Copy, Default)]
+struct PixelOut {
+    value: Vec3,
+    alpha: f32,
+    depth: f32,
+    nodes: u64,
+}
+
+/// Renders a scene (library entry point; the CLI adds files and printing).
+pub fn render(scene: &Scene, opts: &RenderOptions) -> Rendered {
+    let plan = EffectPlan::derive(scene, opts.force_all);
+    let tracer = Tracer { scene, plan: &plan };
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let bar = if opts.progress && std::io::stderr().is_terminal() {
+        let b = ProgressBar::with_draw_target(Some(u64::from(h)), ProgressDrawTarget::stderr());
+        if let Ok(style) =
+            ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} rows {eta}")
+        {
+            b.set_style(style.progress_chars("=> "));
+        }
+        b
+    } else {
+        ProgressBar::hidden()
+    };
+    let start = Instant::now();
+    let rows: Vec<(Vec<PixelOut>, RayCounts)> = (0..h)
+        .into_par_iter()
+        .progress_with(bar.clone())
+        .map(|j| {
+            let mut counts = RayCounts::default();
+            let row = (0..w)
+                .map(|i| pixel(&tracer, opts.mode, i, j, &mut counts))
+                .collect();
+            (row, counts)
+        })
+        .collect();
+    let seconds = start.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+
+    let mut counts = RayCounts::default();
+    let mut px = Vec::with_capacity((w * h) as usize);
+    for (row, c) in rows {
+        counts.add(&c);
+        px.extend(row);
+    }
+    let (mut dmin, mut dmax) = (f32::INFINITY, f32::NEG_INFINITY);
+    for p in px.iter().filter(|p| p.alpha > 0.0) {
+        dmin = dmin.min(p.depth);
+        dmax = dmax.max(p.depth);
+    }
+    let pixels = px
+        .iter()
+        .map(|p| {
+            let v = match opts.mode {
+                Mode::Depth if p.alpha > 0.0 => {
+                    let span = dmax - dmin;
+                    Vec3::splat(if span > 0.0 {
+                        1.0 - (p.depth - dmin) / span
+                    } else {
+                        1.0
+                    })
+                }
+                Mode::Heatmap => output::heat(p.nodes),
+                _ => p.value,
+            };
+            v.extend(p.alpha)
+        })
+        .collect();
+    Rendered {
+        width: w,
+        height: h,
+        pixels,
+        nodes: px.iter().map(|p| p.nodes).collect(),
+        counts,
+        seconds,
+        plan,
+    }
+}
+
+fn pixel(tracer: &Tracer<'_>, mode: Mode, i: u32, j: u32, counts: &mut RayCounts) -> PixelOut {
+    let ray = tracer.scene.camera.pixel_ray(i, j);
+    counts.primary += 1;
+    let mut ctx = tracer.ctx();
+    let hit = tracer.closest(&ray, &mut ctx);
+    let nodes = ctx.stats.nodes_visited;
+    let Some(sh) = hit else {
+        return PixelOut {
+            value: if mode == Mode::Color {
+                tracer.scene.background
+            } else {
+                Vec3::ZERO
+            },
+            nodes,
+            ..PixelOut::default()
+        };
+    };
+    let value = match mode {
+        Mode::Color => tracer.shade(&ray, &sh, 0, &mut ctx, counts),
+        Mode::Normal => sh.hit.normal * 0.5 + 0.5,
+        Mode::Barycentric => sh.bary.unwrap_or(Vec3::splat(0.5)),
+        Mode::Depth | Mode::Heatmap => Vec3::ZERO,
+    };
+    PixelOut {
+        value,
+        alpha: 1.0,
+        depth: sh.hit.t * ray.direction.length(),
+        nodes,
+    }
+}
+
+/// The JSON written by `--stats-json`.
+#[derive(serde::Serialize)]
+struct StatsJson {
+    primary: u64,
+    shadow: u64,
+    reflection: u64,
+    refraction: u64,
+    seconds: f64,
+}
+
+/// The summary line printed after every render.
+pub fn summary(r: &Rendered) -> String {
+    let c = &r.counts;
+    let total = c.total();
+    let mrays = if r.seconds > 0.0 {
+        total as f64 / r.seconds / 1e6
+    } else {
+        0.0
+    };
+    format!(
+        "rays: primary {} shadow {} reflection {} refraction {} (total {total}) in {:.3} s, {mrays:.2} Mrays/s",
+        c.primary, c.shadow, c.reflection, c.refraction, r.seconds
+    )
 }
 
 /// Runs `halfray render`.
-pub fn run(_args: &RenderArgs) -> Result<()> {
-    Err(Error::Other("render: in progress".into()))
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let mut scene = scene::load(&args.scene)?;
+    for (v, name) in [(args.width, "--width"), (args.height, "--height")] {
+        if v.is_some_and(|x| x == 0 || x > scene::MAX_IMAGE_SIDE) {
+            return Err(Error::Usage(format!(
+                "{name} must be in 1..={}",
+                scene::MAX_IMAGE_SIDE
+            )));
+        }
+    }
+    if let Some(x) = args.width {
+        scene.camera.width = x;
+    }
+    if let Some(y) = args.height {
+        scene.camera.height = y;
+    }
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let background = match &args.background {
+        Some(p) => Some(output::read_background(p, w, h)?),
+        None => None,
+    };
+    let opts = RenderOptions {
+        mode: args.mode,
+        force_all: args.force_all_effects,
+        progress: !args.quiet,
+    };
+    if args.explain {
+        print!(
+            "{}",
+            EffectPlan::derive(&scene, opts.force_all).explain(&scene)
+        );
+    }
+    if !args.quiet {
+        eprintln!(
+            "rendering {} ({w}×{h}, mode {:?}, {} threads)",
+            args.scene.display(),
+            args.mode,
+            rayon::current_num_threads()
+        );
+    }
+    let mut out = render(&scene, &opts);
+    if let Some(bg) = &background {
+        out.composite_over(bg);
+    }
+    output::write_png(&args.output, w, h, &out.to_rgba8(args.mode))?;
+    if let Some(p) = &args.stats_json {
+        let c = &out.counts;
+        let json = serde_json::to_string_pretty(&StatsJson {
+            primary: c.primary,
+            shadow: c.shadow,
+            reflection: c.reflection,
+            refraction: c.refraction,
+            seconds: out.seconds,
+        })
+        .map_err(|e| Error::Other(format!("stats JSON: {e}")))?;
+        write_bytes_atomic(p, format!("{json}\n").as_bytes())?;
+    }
+    println!("{}", summary(&out));
+    if !args.quiet {
+        eprintln!("wrote {}", args.output.display());
+    }
+    Ok(())
 }

@@ -1,0 +1,877 @@
+//! Scene geometry: primitives, transformed nodes and CSG, with closest-hit, any-hit and
+//! "all crossings along the line" (interval) queries.
+//!
+//! Every closest-hit query returns a world-space [`Hit`] whose point comes with a conservative
+//! error bound, so that secondary rays can start with [`halfray_core::spawn_ray`] and no scene
+//! epsilon.
+//!
+//! **CSG** is evaluated on intervals: each operand reports every crossing of its boundary along
+//! the whole line `t ∈ (−∞, +∞)` ([`Node::events`]) with a flag saying whether the ray enters
+//! or leaves the solid, plus whether the line starts inside (`t → −∞`). Winding counts per
+//! operand (so duplicate hits on shared mesh edges do not break parity) give the operand's
+//! inside/outside state between crossings; the boolean operation combines the two states and
+//! every change of the combined state is a crossing of the result.
+
+use crate::accel::MeshAccel;
+use crate::render::xform::Transform;
+use glam::{DVec3, Vec2, Vec3};
+use halfray_core::aabb::SlabRay;
+use halfray_core::bvh::{TraversalStats, TriangleMesh};
+use halfray_core::float::gamma;
+use halfray_core::triangle::{TriangleIntersector, Watertight};
+use halfray_core::{Aabb, Hit, Ray};
+use std::sync::Arc;
+
+/// A hit with what shading needs besides the geometry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceHit {
+    /// World-space hit.
+    pub hit: Hit,
+    /// Material index.
+    pub material: u32,
+    /// Barycentrics `(b0, b1, b2)` for triangle hits.
+    pub bary: Option<Vec3>,
+}
+
+/// One boundary crossing along a line.
+#[derive(Clone, Copy, Debug)]
+pub struct Event {
+    /// Ray parameter.
+    pub t: f32,
+    /// `true` when the line enters the solid here.
+    pub enter: bool,
+    /// The hit (normal pointing out of the solid).
+    pub hit: SurfaceHit,
+}
+
+/// A sphere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    /// Centre.
+    pub center: Vec3,
+    /// Radius (> 0).
+    pub radius: f32,
+}
+
+/// An axis-aligned ellipsoid `Σ ((x − c)/r)² = 1`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ellipsoid {
+    /// Centre.
+    pub center: Vec3,
+    /// Semi-axes (> 0).
+    pub radii: Vec3,
+}
+
+/// A general quadric `F(p) = pᵀAp + b·p + c = 0`, solid where `F < 0`, optionally clipped to
+/// a box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quadric {
+    /// Symmetric matrix `A` (rows).
+    pub a: [[f64; 3]; 3],
+    /// Linear part.
+    pub b: [f64; 3],
+    /// Constant.
+    pub c: f64,
+    /// Clip box (hits outside are dropped); `None` for the whole surface.
+    pub clip: Option<Aabb>,
+}
+
+/// A planar polygon (any simple or self-intersecting outline, even–odd rule).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Polygon {
+    /// Vertices.
+    pub vertices: Vec<Vec3>,
+    /// Unit normal (Newell), counter-clockwise vertices face the viewer.
+    pub normal: Vec3,
+    /// Dominant normal axis, dropped for the 2-D inside test.
+    pub drop_axis: usize,
+}
+
+/// A mesh primitive (shared by all its instances).
+pub struct MeshShape {
+    /// Name in the scene file.
+    pub name: String,
+    /// Triangles and BVH.
+    pub accel: MeshAccel,
+    /// Boundary (unpaired) directed edges; 0 for a closed, consistently oriented mesh.
+    pub boundary_edges: usize,
+}
+
+impl std::fmt::Debug for MeshShape {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "MeshShape({:?}, {} triangles, {} boundary edges)",
+            self.name,
+            self.accel.mesh.triangles.len(),
+            self.boundary_edges
+        )
+    }
+}
+
+/// Boolean operation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CsgOp {
+    /// A ∪ B.
+    Union,
+    /// A ∩ B.
+    Intersection,
+    /// A − B.
+    Difference,
+}
+
+impl CsgOp {
+    #[inline]
+    fn apply(self, a: bool, b: bool) -> bool {
+        match self {
+            Self::Union => a || b,
+            Self::Intersection => a && b,
+            Self::Difference => a && !b,
+        }
+    }
+}
+
+/// A primitive or a CSG combination.
+#[derive(Debug)]
+pub enum Shape {
+    /// Sphere.
+    Sphere(Sphere),
+    /// Ellipsoid.
+    Ellipsoid(Ellipsoid),
+    /// General quadric.
+    Quadric(Quadric),
+    /// Axis-aligned box (a solid).
+    Box(Aabb),
+    /// Infinite plane through `point` with unit `normal` (as a CSG operand: the half-space
+    /// behind the normal).
+    Plane {
+        /// A point on the plane.
+        point: Vec3,
+        /// Unit normal.
+        normal: Vec3,
+    },
+    /// Single triangle (counter-clockwise faces the viewer).
+    Triangle([Vec3; 3]),
+    /// Planar polygon.
+    Polygon(Polygon),
+    /// Triangle mesh instance.
+    Mesh(Arc<MeshShape>),
+    /// CSG.
+    Csg(CsgOp, Box<Node>, Box<Node>),
+}
+
+/// A shape with its material and optional transform.
+#[derive(Debug)]
+pub struct Node {
+    /// The shape in object space.
+    pub shape: Shape,
+    /// Material index (CSG operands without one inherit the parent's).
+    pub material: u32,
+    /// Object → world (parent) transform.
+    pub transform: Option<Transform>,
+    /// Bounds in the parent's space (`None`: unbounded).
+    pub bounds: Option<Aabb>,
+}
+
+/// Per-query scratch and counters.
+#[derive(Default)]
+pub struct QueryCtx {
+    /// BVH traversal counters (the heat map).
+    pub stats: TraversalStats,
+    /// When set, solids are intersected through the interval (CSG) path too
+    /// (`--force-all-effects`).
+    pub force_intervals: bool,
+}
+
+// ---------------------------------------------------------------------------------------------
+// Primitives
+
+/// Roots `t0 ≤ t1` of `a t² + 2 b' t + c` in f64 (`b` is the half coefficient), stable form.
+#[inline]
+fn quadratic_half(a: f64, bh: f64, c: f64) -> Option<(f64, f64)> {
+    if a == 0.0 {
+        if bh == 0.0 {
+            return None;
+        }
+        let t = -c / (2.0 * bh);
+        return Some((t, t));
+    }
+    let disc = bh * bh - a * c;
+    if !(disc >= 0.0) {
+        return None;
+    }
+    let q = -(bh + disc.sqrt().copysign(bh));
+    let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (q / a, c / q) };
+    Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
+}
+
+impl Sphere {
+    /// Both roots of the ray's line (f64, then rounded).
+    pub fn roots(&self, ray: &Ray) -> Option<(f32, f32)> {
+        let oc = ray.origin.as_dvec3() - self.center.as_dvec3();
+        let d = ray.direction.as_dvec3();
+        let r = f64::from(self.radius);
+        let (t0, t1) = quadratic_half(d.dot(d), oc.dot(d), oc.dot(oc) - r * r)?;
+        Some((t0 as f32, t1 as f32))
+    }
+
+    /// The hit at `t`, reprojected onto the sphere.
+    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        let p = ray.origin.as_dvec3() + ray.direction.as_dvec3() * f64::from(t);
+        let c = self.center.as_dvec3();
+        let n = (p - c).normalize_or_zero();
+        let point = (c + n * f64::from(self.radius)).as_vec3();
+        let normal = n.as_vec3();
+        Hit {
+            t,
+            point,
+            point_error: (self.center.abs() + Vec3::splat(self.radius)) * gamma(6),
+            normal,
+            uv: Vec2::ZERO,
+            front_face: ray.direction.dot(normal) < 0.0,
+        }
+    }
+}
+
+impl Ellipsoid {
+    fn unit_ray(&self, ray: &Ray) -> Ray {
+        Ray::with_interval(
+            (ray.origin - self.center) / self.radii,
+            ray.direction / self.radii,
+            ray.t_min,
+            ray.t_max,
+        )
+    }
+
+    /// Both roots of the ray's line.
+    pub fn roots(&self, ray: &Ray) -> Option<(f32, f32)> {
+        UNIT_SPHERE.roots(&self.unit_ray(ray))
+    }
+
+    /// The hit at `t`: point reprojected, normal `∇F ∝ (p − c)/r²`.
+    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        let u = self.unit_ray(ray);
+        let h = UNIT_SPHERE.hit_at(&u, t);
+        let point = self.center + h.point * self.radii;
+        let normal = (h.normal / self.radii).normalize_or_zero();
+        Hit {
+            t,
+            point,
+            point_error: (self.center.abs() + self.radii) * gamma(8),
+            normal,
+            uv: Vec2::ZERO,
+            front_face: ray.direction.dot(normal) < 0.0,
+        }
+    }
+}
+
+const UNIT_SPHERE: Sphere = Sphere {
+    center: Vec3::ZERO,
+    radius: 1.0,
+};
+
+impl Quadric {
+    fn eval(&self, p: DVec3) -> f64 {
+        let a = &self.a;
+        let ap = DVec3::new(
+            a[0][0] * p.x + a[0][1] * p.y + a[0][2] * p.z,
+            a[1][0] * p.x + a[1][1] * p.y + a[1][2] * p.z,
+            a[2][0] * p.x + a[2][1] * p.y + a[2][2] * p.z,
+        );
+        p.dot(ap) + DVec3::from(self.b).dot(p) + self.c
+    }
+
+    fn grad(&self, p: DVec3) -> DVec3 {
+        let a = &self.a;
+        DVec3::new(
+            2.0 * (a[0][0] * p.x + a[0][1] * p.y + a[0][2] * p.z) + self.b[0],
+            2.0 * (a[1][0] * p.x + a[1][1] * p.y + a[1][2] * p.z) + self.b[1],
+            2.0 * (a[2][0] * p.x + a[2][1] * p.y + a[2][2] * p.z) + self.b[2],
+        )
+    }
+
+    /// Coefficients `(a, b/2, c)` of `F(o + t d)`.
+    fn line_coefs(&self, ray: &Ray) -> (f64, f64, f64) {
+        let o = ray.origin.as_dvec3();
+        let d = ray.direction.as_dvec3();
+        let a = &self.a;
+        let ad = DVec3::new(
+            a[0][0] * d.x + a[0][1] * d.y + a[0][2] * d.z,
+            a[1][0] * d.x + a[1][1] * d.y + a[1][2] * d.z,
+            a[2][0] * d.x + a[2][1] * d.y + a[2][2] * d.z,
+        );
+        (
+            d.dot(ad),
+            o.dot(ad) + 0.5 * DVec3::from(self.b).dot(d),
+            self.eval(o),
+        )
+    }
+
+    /// Roots of the ray's line, and whether the line is inside (`F < 0`) at `t → −∞`.
+    pub fn roots(&self, ray: &Ray) -> (Option<(f32, f32)>, bool) {
+        let (a, bh, c) = self.line_coefs(ray);
+        let inside_start = if a != 0.0 {
+            a < 0.0
+        } else if bh != 0.0 {
+            bh > 0.0
+        } else {
+            c < 0.0
+        };
+        let roots = quadratic_half(a, bh, c).map(|(t0, t1)| (t0 as f32, t1 as f32));
+        (roots, inside_start)
+    }
+
+    /// The hit at `t`: one Newton step onto the surface (f64), normal `∇F`.
+    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        let mut p = ray.origin.as_dvec3() + ray.direction.as_dvec3() * f64::from(t);
+        let g = self.grad(p);
+        let gg = g.dot(g);
+        if gg > 0.0 {
+            p -= g * (self.eval(p) / gg);
+        }
+        let g = self.grad(p);
+        let gl = g.length();
+        let residual = if gl > 0.0 {
+            self.eval(p).abs() / gl
+        } else {
+            0.0
+        };
+        let point = p.as_vec3();
+        let normal = (g / gl.max(f64::MIN_POSITIVE)).as_vec3();
+        Hit {
+            t,
+            point,
+            point_error: point.abs() * gamma(4) + Vec3::splat(residual as f32 * 2.0),
+            normal,
+            uv: Vec2::ZERO,
+            front_face: ray.direction.dot(normal) < 0.0,
+        }
+    }
+
+    fn clipped_ok(&self, h: &Hit) -> bool {
+        self.clip.is_none_or(|b| b.contains_point(h.point))
+    }
+}
+
+/// Hit on an axis-aligned box at `t` entering (`enter`) or leaving, face snapped exactly.
+fn box_hits(b: &Aabb, ray: &Ray) -> Option<(Hit, Hit)> {
+    let o = ray.origin.as_dvec3();
+    let d = ray.direction.as_dvec3();
+    let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+    let (mut a0, mut a1) = (0usize, 0usize);
+    for axis in 0..3 {
+        let (lo, hi) = (f64::from(b.min[axis]), f64::from(b.max[axis]));
+        if d[axis] == 0.0 {
+            if o[axis] < lo || o[axis] > hi {
+                return None;
+            }
+            continue;
+        }
+        let (mut n, mut f) = ((lo - o[axis]) / d[axis], (hi - o[axis]) / d[axis]);
+        if n > f {
+            std::mem::swap(&mut n, &mut f);
+        }
+        if n > t0 {
+            t0 = n;
+            a0 = axis;
+        }
+        if f < t1 {
+            t1 = f;
+            a1 = axis;
+        }
+    }
+    if !(t0 <= t1) || !t0.is_finite() || !t1.is_finite() {
+        return None;
+    }
+    let mk = |t: f64, axis: usize, enter: bool| {
+        let mut p = o + d * t;
+        let mut normal = Vec3::ZERO;
+        // Entering through the face the ray moves into: the near face.
+        let to_max = (d[axis] < 0.0) == enter;
+        p[axis] = if to_max {
+            f64::from(b.max[axis])
+        } else {
+            f64::from(b.min[axis])
+        };
+        normal[axis] = if to_max { 1.0 } else { -1.0 };
+        let point = p.as_vec3().clamp(b.min, b.max);
+        let mut err = point.abs() * gamma(3);
+        err[axis] = 0.0;
+        Hit {
+            t: t as f32,
+            point,
+            point_error: err,
+            normal,
+            uv: Vec2::ZERO,
+            front_face: ray.direction.dot(normal) < 0.0,
+        }
+    };
+    Some((mk(t0, a0, true), mk(t1, a1, false)))
+}
+
+fn plane_hit(point: Vec3, normal: Vec3, ray: &Ray) -> Option<Hit> {
+    let n = normal.as_dvec3();
+    let dn = ray.direction.as_dvec3().dot(n);
+    if dn == 0.0 || !dn.is_finite() {
+        return None;
+    }
+    let t = (point.as_dvec3() - ray.origin.as_dvec3()).dot(n) / dn;
+    let tf = t as f32;
+    if !tf.is_finite() {
+        return None;
+    }
+    let mut p = ray.origin.as_dvec3() + ray.direction.as_dvec3() * t;
+    p -= n * (p - point.as_dvec3()).dot(n);
+    let pf = p.as_vec3();
+    Some(Hit {
+        t: tf,
+        point: pf,
+        point_error: (pf.abs() + point.abs()) * gamma(4),
+        normal,
+        uv: Vec2::ZERO,
+        front_face: dn < 0.0,
+    })
+}
+
+impl Polygon {
+    fn contains(&self, p: Vec3) -> bool {
+        let (i, j) = match self.drop_axis {
+            0 => (1, 2),
+            1 => (2, 0),
+            _ => (0, 1),
+        };
+        let (px, py) = (f64::from(p[i]), f64::from(p[j]));
+        let mut inside = false;
+        let n = self.vertices.len();
+        for k in 0..n {
+            let a = self.vertices[k];
+            let b = self.vertices[(k + 1) % n];
+            let (ax, ay, bx, by) = (
+                f64::from(a[i]),
+                f64::from(a[j]),
+                f64::from(b[i]),
+                f64::from(b[j]),
+            );
+            if (ay > py) != (by > py) {
+                let x = ax + (py - ay) * (bx - ax) / (by - ay);
+                if px < x {
+                    inside = !inside;
+                }
+            }
+        }
+        inside
+    }
+
+    fn hit(&self, ray: &Ray) -> Option<Hit> {
+        let h = plane_hit(self.vertices[0], self.normal, ray)?;
+        (ray.contains(h.t) && self.contains(h.point)).then_some(h)
+    }
+}
+
+fn tri_hit(v: &[Vec3; 3], ray: &Ray) -> Option<(Hit, Vec3)> {
+    let th = Watertight.intersect(ray, v)?;
+    Some((th.to_hit(v), Vec3::new(th.b0(), th.b1, th.b2)))
+}
+
+impl MeshShape {
+    fn tri_mesh(&self) -> TriangleMesh<'_> {
+        TriangleMesh::new(&self.accel.mesh.positions, &self.accel.mesh.triangles)
+    }
+
+    fn closest(&self, ray: &Ray, stats: &mut TraversalStats) -> Option<(Hit, Vec3)> {
+        let (i, th) = self.accel.closest_with_stats(&Watertight, ray, stats)?;
+        let v = self.accel.mesh.triangle(i as usize);
+        Some((th.to_hit(&v), Vec3::new(th.b0(), th.b1, th.b2)))
+    }
+
+    /// Every triangle crossing on the ray's interval, with its triangle index.
+    fn all_hits(&self, ray: &Ray, stats: &mut TraversalStats, out: &mut Vec<(u32, Hit, Vec3)>) {
+        let mesh = self.tri_mesh();
+        let Some(pre) = Watertight.prepare(ray) else {
+            return;
+        };
+        let _ = self.accel.bvh().closest_hit::<()>(
+            ray,
+            |prim, r| {
+                let v = mesh.triangle(prim as usize)?;
+                // `r.t_max` never shrinks: we never report a hit, so every crossing is seen.
+                if let Some(th) = Watertight.intersect_prepared(&pre, r, &v) {
+                    out.push((prim, th.to_hit(&v), Vec3::new(th.b0(), th.b1, th.b2)));
+                }
+                None
+            },
+            Some(stats),
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Nodes
+
+impl Shape {
+    /// `true` for shapes that bound a solid (usable as CSG operands).
+    pub fn is_solid(&self) -> bool {
+        match self {
+            Self::Sphere(_) | Self::Ellipsoid(_) | Self::Box(_) | Self::Plane { .. } => true,
+            Self::Csg(..) => true,
+            Self::Quadric(q) => q.clip.is_none(),
+            Self::Mesh(m) => m.boundary_edges == 0,
+            Self::Triangle(_) | Self::Polygon(_) => false,
+        }
+    }
+
+    /// Object-space bounds (`None`: unbounded).
+    pub fn bounds(&self) -> Option<Aabb> {
+        match self {
+            Self::Sphere(s) => Some(Aabb::new(
+                s.center - Vec3::splat(s.radius),
+                s.center + Vec3::splat(s.radius),
+            )),
+            Self::Ellipsoid(e) => Some(Aabb::new(e.center - e.radii, e.center + e.radii)),
+            Self::Quadric(q) => q.clip,
+            Self::Box(b) => Some(*b),
+            Self::Plane { .. } => None,
+            Self::Triangle(v) => Some(Aabb::from_points(v)),
+            Self::Polygon(p) => Some(Aabb::from_points(&p.vertices)),
+            Self::Mesh(m) => m.accel.mesh.bounds().map(|(lo, hi)| Aabb::new(lo, hi)),
+            Self::Csg(op, a, b) => match op {
+                CsgOp::Union => match (a.bounds, b.bounds) {
+                    (Some(x), Some(y)) => Some(x.union(y)),
+                    _ => None,
+                },
+                CsgOp::Intersection => match (a.bounds, b.bounds) {
+                    (Some(x), Some(y)) => Some(Aabb::new(x.min.max(y.min), x.max.min(y.max))),
+                    (x, y) => x.or(y),
+                },
+                CsgOp::Difference => a.bounds,
+            },
+        }
+    }
+}
+
+/// Pads a box outward by a relative amount so curved primitives' rounding stays inside.
+fn pad(b: Aabb) -> Aabb {
+    let e = (b.min.abs().max(b.max.abs()) + b.extent()) * gamma(8);
+    Aabb::new(b.min - e, b.max + e)
+}
+
+impl Node {
+    /// A node; bounds are computed from the shape and transform.
+    pub fn new(shape: Shape, material: u32, transform: Option<Transform>) -> Self {
+        let bounds = shape.bounds().map(|b| {
+            let b = pad(b);
+            match &transform {
+                Some(t) => t.bounds_to_world(&b),
+                None => b,
+            }
+        });
+        Self {
+            shape,
+            material,
+            transform,
+            bounds,
+        }
+    }
+
+    /// `true` when the ray's interval can touch the bounds.
+    #[inline]
+    fn may_hit(&self, ray: &Ray) -> bool {
+        match &self.bounds {
+            None => true,
+            Some(b) => SlabRay::new(ray)
+                .and_then(|s| b.intersect_slab(&s, ray.t_min, ray.t_max))
+                .is_some(),
+        }
+    }
+
+    /// Closest hit in `(t_min, t_max]`, in the parent's space.
+    pub fn closest(&self, ray: &Ray, ctx: &mut QueryCtx) -> Option<SurfaceHit> {
+        if !self.may_hit(ray) {
+            return None;
+        }
+        match &self.transform {
+            Some(t) => {
+                let local = t.ray_to_object(ray);
+                let mut h = self.closest_local(&local, ctx)?;
+                h.hit = t.hit_to_world(&h.hit);
+                Some(h)
+            }
+            None => self.closest_local(ray, ctx),
+        }
+    }
+
+    /// Whether anything is hit in `(t_min, t_max]` (shadow rays).
+    pub fn occludes(&self, ray: &Ray, ctx: &mut QueryCtx) -> bool {
+        if !self.may_hit(ray) {
+            return false;
+        }
+        if let Shape::Mesh(m) = &self.shape {
+            let local = match &self.transform {
+                Some(t) => t.ray_to_object(ray),
+                None => *ray,
+            };
+            return m.accel.any(&Watertight, &local);
+        }
+        self.closest(ray, ctx).is_some()
+    }
+
+    fn surf(&self, hit: Hit, bary: Option<Vec3>) -> SurfaceHit {
+        SurfaceHit {
+            hit,
+            material: self.material,
+            bary,
+        }
+    }
+
+    fn closest_local(&self, ray: &Ray, ctx: &mut QueryCtx) -> Option<SurfaceHit> {
+        let via_intervals =
+            matches!(self.shape, Shape::Csg(..)) || (ctx.force_intervals && self.shape.is_solid());
+        if via_intervals {
+            let mut events = Vec::new();
+            let line =
+                Ray::with_interval(ray.origin, ray.direction, f32::NEG_INFINITY, f32::INFINITY);
+            self.events_local(&line, ctx, &mut events);
+            return events
+                .into_iter()
+                .find(|e| ray.contains(e.t))
+                .map(|e| e.hit);
+        }
+        let pick = |h: Hit| ray.contains(h.t).then_some(h);
+        match &self.shape {
+            Shape::Sphere(s) => {
+                let (t0, t1) = s.roots(ray)?;
+                let t = [t0, t1].into_iter().find(|&t| ray.contains(t))?;
+                Some(self.surf(s.hit_at(ray, t), None))
+            }
+            Shape::Ellipsoid(e) => {
+                let (t0, t1) = e.roots(ray)?;
+                let t = [t0, t1].into_iter().find(|&t| ray.contains(t))?;
+                Some(self.surf(e.hit_at(ray, t), None))
+            }
+            Shape::Quadric(q) => {
+                let (t0, t1) = q.roots(ray).0?;
+                [t0, t1]
+                    .into_iter()
+                    .filter(|&t| ray.contains(t))
+                    .map(|t| q.hit_at(ray, t))
+                    .find(|h| q.clipped_ok(h))
+                    .map(|h| self.surf(h, None))
+            }
+            Shape::Box(b) => {
+                let (h0, h1) = box_hits(b, ray)?;
+                let h = pick(h0).or_else(|| pick(h1))?;
+                Some(self.surf(h, None))
+            }
+            Shape::Plane { point, normal } => {
+                let h = pick(plane_hit(*point, *normal, ray)?)?;
+                Some(self.surf(h, None))
+            }
+            Shape::Triangle(v) => {
+                let (h, b) = tri_hit(v, ray)?;
+                Some(self.surf(h, Some(b)))
+            }
+            Shape::Polygon(p) => Some(self.surf(p.hit(ray)?, None)),
+            Shape::Mesh(m) => {
+                let (h, b) = m.closest(ray, &mut ctx.stats)?;
+                Some(self.surf(h, Some(b)))
+            }
+            Shape::Csg(..) => None,
+        }
+    }
+
+    /// Every boundary crossing along the ray's line (the ray's interval is ignored: the whole
+    /// line is used), sorted by `t`, in the parent's space, and whether the line starts inside.
+    pub fn events(&self, ray: &Ray, ctx: &mut QueryCtx, out: &mut Vec<Event>) -> bool {
+        match &self.transform {
+            Some(t) => {
+                let local = t.ray_to_object(ray);
+                let start = out.len();
+                let inside = self.events_local(&local, ctx, out);
+                for e in &mut out[start..] {
+                    e.hit.hit = t.hit_to_world(&e.hit.hit);
+                }
+                inside
+            }
+            None => self.events_local(ray, ctx, out),
+        }
+    }
+
+    fn event(&self, hit: Hit, bary: Option<Vec3>) -> Event {
+        Event {
+            t: hit.t,
+            enter: hit.front_face,
+            hit: self.surf(hit, bary),
+        }
+    }
+
+    fn events_local(&self, ray: &Ray, ctx: &mut QueryCtx, out: &mut Vec<Event>) -> bool {
+        let line = Ray::with_interval(ray.origin, ray.direction, f32::NEG_INFINITY, f32::INFINITY);
+        match &self.shape {
+            Shape::Sphere(s) => {
+                if let Some((t0, t1)) = s.roots(&line) {
+                    out.push(self.event(s.hit_at(&line, t0), None));
+                    out.push(self.event(s.hit_at(&line, t1), None));
+                }
+                false
+            }
+            Shape::Ellipsoid(e) => {
+                if let Some((t0, t1)) = e.roots(&line) {
+                    out.push(self.event(e.hit_at(&line, t0), None));
+                    out.push(self.event(e.hit_at(&line, t1), None));
+                }
+                false
+            }
+            Shape::Quadric(q) => {
+                let (roots, inside) = q.roots(&line);
+                if let Some((t0, t1)) = roots {
+                    out.push(self.event(q.hit_at(&line, t0), None));
+                    if t1 != t0 {
+                        out.push(self.event(q.hit_at(&line, t1), None));
+                    }
+                }
+                inside
+            }
+            Shape::Box(b) => {
+                if let Some((h0, h1)) = box_hits(b, &line) {
+                    out.push(self.event(h0, None));
+                    out.push(self.event(h1, None));
+                }
+                false
+            }
+            Shape::Plane { point, normal } => match plane_hit(*point, *normal, &line) {
+                Some(h) => {
+                    let inside = !h.front_face;
+                    out.push(self.event(h, None));
+                    inside
+                }
+                None => (line.origin - *point).dot(*normal) < 0.0,
+            },
+            Shape::Triangle(v) => {
+                if let Some((h, b)) = tri_hit(v, &line) {
+                    out.push(self.event(h, Some(b)));
+                }
+                false
+            }
+            Shape::Polygon(p) => {
+                if let Some(h) = p.hit(&line) {
+                    out.push(self.event(h, None));
+                }
+                false
+            }
+            Shape::Mesh(m) => {
+                let mut hits = Vec::new();
+                m.all_hits(&line, &mut ctx.stats, &mut hits);
+                // Ties go to the smaller triangle index, as in the BVH's closest hit.
+                hits.sort_by(|a, b| a.1.t.total_cmp(&b.1.t).then(a.0.cmp(&b.0)));
+                out.extend(hits.into_iter().map(|(_, h, b)| self.event(h, Some(b))));
+                false
+            }
+            Shape::Csg(op, a, b) => {
+                let mut ea = Vec::new();
+                let mut eb = Vec::new();
+                let ia = a.events(&line, ctx, &mut ea);
+                let ib = b.events(&line, ctx, &mut eb);
+                combine(*op, &ea, ia, &eb, ib, out)
+            }
+        }
+    }
+}
+
+/// Combines two sorted crossing lists with a boolean operation; appends the result's
+/// crossings to `out` and returns whether the result starts inside.
+pub fn combine(
+    op: CsgOp,
+    a: &[Event],
+    a_inside: bool,
+    b: &[Event],
+    b_inside: bool,
+    out: &mut Vec<Event>,
+) -> bool {
+    let mut ca = i32::from(a_inside);
+    let mut cb = i32::from(b_inside);
+    let start = op.apply(a_inside, b_inside);
+    let mut state = start;
+    let (mut i, mut j) = (0usize, 0usize);
+    while i < a.len() || j < b.len() {
+        let take_a = j >= b.len() || (i < a.len() && a[i].t <= b[j].t);
+        let (e, from_b) = if take_a {
+            i += 1;
+            (a[i - 1], false)
+        } else {
+            j += 1;
+            (b[j - 1], true)
+        };
+        let c = if from_b { &mut cb } else { &mut ca };
+        *c += if e.enter { 1 } else { -1 };
+        let now = op.apply(ca > 0, cb > 0);
+        if now != state {
+            state = now;
+            let mut hit = e.hit;
+            if from_b && op == CsgOp::Difference {
+                hit.hit.normal = -hit.hit.normal;
+                hit.hit.front_face = !hit.hit.front_face;
+            }
+            out.push(Event {
+                t: e.t,
+                enter: now,
+                hit,
+            });
+        }
+    }
+    start
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn node(shape: Shape) -> Node {
+        Node::new(shape, 0, None)
+    }
+
+    #[test]
+    fn sphere_difference_carves_a_hole() {
+        let a = node(Shape::Sphere(Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        }));
+        let b = node(Shape::Sphere(Sphere {
+            center: Vec3::new(0.0, 0.0, 1.0),
+            radius: 0.5,
+        }));
+        let csg = node(Shape::Csg(CsgOp::Difference, Box::new(a), Box::new(b)));
+        let ray = Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, -1.0));
+        let h = csg.closest(&ray, &mut QueryCtx::default()).unwrap();
+        // Hits the inside of the small sphere at z = 0.5, normal pointing out of the result (+z).
+        assert!((h.hit.t - 4.5).abs() < 1e-5, "{h:?}");
+        assert!((h.hit.normal - Vec3::Z).length() < 1e-5);
+        assert!(h.hit.front_face);
+    }
+
+    #[test]
+    fn forced_intervals_give_identical_hits() {
+        for shape in [
+            Shape::Sphere(Sphere {
+                center: Vec3::new(0.1, 0.2, 0.0),
+                radius: 1.0,
+            }),
+            Shape::Box(Aabb::new(Vec3::splat(-1.0), Vec3::ONE)),
+            Shape::Ellipsoid(Ellipsoid {
+                center: Vec3::ZERO,
+                radii: Vec3::new(1.0, 2.0, 0.5),
+            }),
+        ] {
+            let n = node(shape);
+            for o in [Vec3::new(0.3, 0.1, 5.0), Vec3::new(0.0, 0.0, 0.0)] {
+                let ray = Ray::new(o, Vec3::new(0.01, -0.02, -1.0));
+                let a = n.closest(&ray, &mut QueryCtx::default());
+                let mut ctx = QueryCtx {
+                    force_intervals: true,
+                    ..QueryCtx::default()
+                };
+                let b = n.closest(&ray, &mut ctx);
+                assert_eq!(a, b);
+            }
+        }
+    }
+}

@@ -1,0 +1,117 @@
+//! Pixels to PNG: sRGB encoding, coverage alpha, Porter–Duff "over" onto a background image,
+//! atomic write; colour ramps of the debug modes.
+
+use crate::atomic::write_atomic;
+use crate::error::{Error, Location, Result};
+use glam::{Vec3, Vec4};
+use image::{ImageEncoder, codecs::png::PngEncoder};
+use std::path::Path;
+
+/// Linear → sRGB transfer function (IEC 61966-2-1), input clamped to `[0, 1]`.
+pub fn linear_to_srgb(x: f32) -> f32 {
+    let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// sRGB → linear.
+pub fn srgb_to_linear(x: f32) -> f32 {
+    if x <= 0.040_45 {
+        x / 12.92
+    } else {
+        ((x + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// A `[0, 1]` value to 8 bits, rounded.
+#[inline]
+pub fn to_u8(x: f32) -> u8 {
+    let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+    (x * 255.0 + 0.5) as u8
+}
+
+/// Porter–Duff `src over dst` on straight (non-premultiplied) linear RGBA.
+pub fn over(src: Vec4, dst: Vec4) -> Vec4 {
+    let a = src.w + dst.w * (1.0 - src.w);
+    if a <= 0.0 {
+        return Vec4::ZERO;
+    }
+    let rgb = (src.truncate() * src.w + dst.truncate() * dst.w * (1.0 - src.w)) / a;
+    rgb.extend(a)
+}
+
+/// Reads a background image as linear straight RGBA, checking its size.
+pub fn read_background(path: &Path, width: u32, height: u32) -> Result<Vec<Vec4>> {
+    let img = image::ImageReader::open(path)
+        .map_err(|e| Error::io(path, e))?
+        .with_guessed_format()
+        .map_err(|e| Error::io(path, e))?
+        .decode()
+        .map_err(|e| Error::input(Location::file(path), format!("cannot decode image: {e}")))?
+        .into_rgba8();
+    if img.width() != width || img.height() != height {
+        return Err(Error::input(
+            Location::file(path),
+            format!(
+                "background is {}×{} but the render is {width}×{height}",
+                img.width(),
+                img.height()
+            ),
+        ));
+    }
+    Ok(img
+        .pixels()
+        .map(|p| {
+            let c = |k: usize| srgb_to_linear(f32::from(p.0[k]) / 255.0);
+            Vec4::new(c(0), c(1), c(2), f32::from(p.0[3]) / 255.0)
+        })
+        .collect())
+}
+
+/// Writes 8-bit RGBA atomically as PNG.
+pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
+    write_atomic(path, |w| {
+        PngEncoder::new(w)
+            .write_image(rgba, width, height, image::ExtendedColorType::Rgba8)
+            .map_err(std::io::Error::other)
+    })
+}
+
+/// Heat-map colour of a count: `log2(1 + n) / 10` (1023 nodes → 1) through black, blue, cyan,
+/// green, yellow, red. Fixed, so images of different scenes compare.
+pub fn heat(n: u64) -> Vec3 {
+    let t = ((1.0 + n as f32).log2() / 10.0).clamp(0.0, 1.0);
+    const STOPS: [Vec3; 6] = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(0.0, 1.0, 1.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+    ];
+    let x = t * (STOPS.len() - 1) as f32;
+    let i = (x.floor() as usize).min(STOPS.len() - 2);
+    STOPS[i].lerp(STOPS[i + 1], x - i as f32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_round_trips_and_over_composites() {
+        for k in 0..=255u8 {
+            let x = f32::from(k) / 255.0;
+            assert_eq!(to_u8(linear_to_srgb(srgb_to_linear(x))), k);
+        }
+        let red = Vec4::new(1.0, 0.0, 0.0, 1.0);
+        let blue = Vec4::new(0.0, 0.0, 1.0, 1.0);
+        assert_eq!(over(red, blue), red);
+        assert_eq!(over(Vec4::ZERO, blue), blue);
+        let half = over(Vec4::new(1.0, 0.0, 0.0, 0.5), blue);
+        assert!((half - Vec4::new(0.5, 0.0, 0.5, 1.0)).length() < 1e-6);
+    }
+}

@@ -1,0 +1,205 @@
+//! The effect plan: which effects the scene calls for, derived before rendering, so that the
+//! renderer simulates only those. `--force-all-effects` switches everything on (the results of
+//! effects the scene does not use are computed and then weighted by zero, so the picture is the
+//! same; only the work differs).
+
+use crate::scene::{LightKind, Scene};
+use std::fmt::Write as _;
+
+/// What the renderer will simulate.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct EffectPlan {
+    /// Per light: cast shadow rays towards it.
+    pub shadow_rays: Vec<bool>,
+    /// Per material: evaluate the Blinn–Phong specular term.
+    pub specular: Vec<bool>,
+    /// Per material: cast reflection rays (mirror > 0, or transparent: total internal
+    /// reflection).
+    pub reflect: Vec<bool>,
+    /// Per material: cast refraction rays (transparency > 0).
+    pub refract: Vec<bool>,
+    /// Largest recursion depth used (0 when no material reflects or refracts).
+    pub max_depth: u32,
+    /// Evaluate every solid through the CSG interval path (only with `force_all`).
+    pub intervals_everywhere: bool,
+    /// Labels of the CSG objects (always interval-evaluated).
+    pub csg_objects: Vec<String>,
+    /// `--force-all-effects`.
+    pub forced: bool,
+}
+
+impl EffectPlan {
+    /// The plan the scene calls for, or everything when `force_all`.
+    pub fn derive(scene: &Scene, force_all: bool) -> Self {
+        let mats = &scene.materials;
+        let reflect: Vec<bool> = mats
+            .iter()
+            .map(|m| force_all || m.mirror > 0.0 || m.transparency > 0.0)
+            .collect();
+        let refract: Vec<bool> = mats
+            .iter()
+            .map(|m| force_all || m.transparency > 0.0)
+            .collect();
+        let recursive = reflect.iter().chain(&refract).any(|&b| b);
+        Self {
+            shadow_rays: scene
+                .lights
+                .iter()
+                .map(|l| force_all || l.cast_shadows)
+                .collect(),
+            specular: mats.iter().map(|m| force_all || m.has_specular()).collect(),
+            reflect,
+            refract,
+            max_depth: if recursive { scene.max_depth } else { 0 },
+            intervals_everywhere: force_all,
+            csg_objects: scene.csg_objects().iter().map(|s| s.to_string()).collect(),
+            forced: force_all,
+        }
+    }
+
+    /// Any reflection rays at all.
+    pub fn any_reflection(&self) -> bool {
+        self.max_depth > 0 && self.reflect.iter().any(|&b| b)
+    }
+
+    /// Any refraction rays at all.
+    pub fn any_refraction(&self) -> bool {
+        self.max_depth > 0 && self.refract.iter().any(|&b| b)
+    }
+
+    /// The human-readable plan (`--explain`).
+    pub fn explain(&self, scene: &Scene) -> String {
+        let mut s = String::new();
+        let cam = &scene.camera;
+        let _ = writeln!(
+            s,
+            "effect plan for {}{}:",
+            scene.path.display(),
+            if self.forced {
+                " (--force-all-effects: every effect on)"
+            } else {
+                ""
+            }
+        );
+        let _ = writeln!(
+            s,
+            "  primary rays     {} × {} = {} (one per pixel, through its centre)",
+            cam.width,
+            cam.height,
+            u64::from(cam.width) * u64::from(cam.height)
+        );
+        let names = |pick: &dyn Fn(usize) -> bool, n: usize, label: &dyn Fn(usize) -> String| {
+            (0..n).filter(|&i| pick(i)).map(label).collect::<Vec<_>>()
+        };
+        let light_label = |i: usize| {
+            let l = &scene.lights[i];
+            let kind = match l.kind {
+                LightKind::Point { .. } => "point",
+                LightKind::Directional { .. } => "directional",
+            };
+            format!("{} ({kind})", l.name)
+        };
+        let nl = scene.lights.len();
+        let on = names(&|i| self.shadow_rays[i], nl, &light_label);
+        let off = names(&|i| !self.shadow_rays[i], nl, &light_label);
+        let _ = writeln!(
+            s,
+            "  shadow rays      {}{}",
+            if on.is_empty() {
+                "none".to_string()
+            } else {
+                format!("towards {}", on.join(", "))
+            },
+            if off.is_empty() {
+                String::new()
+            } else {
+                format!("; skipped for {} (cast_shadows = false)", off.join(", "))
+            }
+        );
+        let nm = scene.materials.len();
+        let mat = |i: usize| scene.materials[i].name.clone();
+        let list = |v: Vec<String>| {
+            if v.is_empty() {
+                "none".to_string()
+            } else {
+                v.join(", ")
+            }
+        };
+        let _ = writeln!(
+            s,
+            "  specular term    {}",
+            list(names(&|i| self.specular[i], nm, &mat))
+                + &if self.forced {
+                    String::new()
+                } else {
+                    format!(
+                        " (skipped where ks = 0: {})",
+                        list(names(&|i| !self.specular[i], nm, &mat))
+                    )
+                }
+        );
+        let reflect_label = |i: usize| {
+            let m = &scene.materials[i];
+            if m.mirror > 0.0 {
+                format!("{} (mirror {})", m.name, m.mirror)
+            } else if m.transparency > 0.0 {
+                format!("{} (total internal reflection only)", m.name)
+            } else {
+                format!("{} (forced, weight 0)", m.name)
+            }
+        };
+        let refract_label = |i: usize| {
+            let m = &scene.materials[i];
+            if m.transparency > 0.0 {
+                format!(
+                    "{} (transparency {}, ior {})",
+                    m.name, m.transparency, m.ior
+                )
+            } else {
+                format!("{} (forced, weight 0)", m.name)
+            }
+        };
+        let _ = writeln!(
+            s,
+            "  reflection rays  {}",
+            if self.max_depth == 0 {
+                "none".to_string()
+            } else {
+                list(names(&|i| self.reflect[i], nm, &reflect_label))
+            }
+        );
+        let _ = writeln!(
+            s,
+            "  refraction rays  {}",
+            if self.max_depth == 0 {
+                "none".to_string()
+            } else {
+                list(names(&|i| self.refract[i], nm, &refract_label))
+            }
+        );
+        let _ = writeln!(
+            s,
+            "  recursion depth  {}",
+            if self.max_depth == 0 {
+                format!(
+                    "0 (no mirror or transparent material; scene max_depth {})",
+                    scene.max_depth
+                )
+            } else {
+                format!("{} (scene max_depth)", self.max_depth)
+            }
+        );
+        let _ = writeln!(
+            s,
+            "  CSG intervals    {}",
+            if self.intervals_everywhere {
+                "every solid (forced)".to_string()
+            } else if self.csg_objects.is_empty() {
+                "none (no CSG objects)".to_string()
+            } else {
+                self.csg_objects.join(", ")
+            }
+        );
+        s
+    }
+}

@@ -1,0 +1,206 @@
+//! The scene file as written: serde types with spans, `deny_unknown_fields` everywhere.
+//! Semantic checks (required fields per type, ranges, names) happen in `build`.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use toml::Spanned;
+
+/// A spanned value.
+pub type S<T> = Spanned<T>;
+/// A spanned 3-vector.
+pub type V3 = S<[f32; 3]>;
+
+/// The whole file.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneDef {
+    pub ambient: Option<V3>,
+    pub background: Option<V3>,
+    pub max_depth: Option<S<u32>>,
+    pub camera: S<CameraDef>,
+    #[serde(default)]
+    pub light: Vec<S<LightDef>>,
+    #[serde(default)]
+    pub material: BTreeMap<String, S<MaterialDef>>,
+    #[serde(default)]
+    pub mesh: BTreeMap<String, S<MeshDef>>,
+    #[serde(default)]
+    pub object: Vec<S<ObjectDef>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDef {
+    #[serde(rename = "type")]
+    pub kind: Option<S<String>>,
+    pub eye: V3,
+    pub look_at: V3,
+    pub up: Option<V3>,
+    pub fov: Option<S<f32>>,
+    pub view_size: Option<S<f32>>,
+    pub width: S<u32>,
+    pub height: S<u32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightDef {
+    #[serde(rename = "type")]
+    pub kind: S<String>,
+    pub position: Option<V3>,
+    pub direction: Option<V3>,
+    pub color: Option<V3>,
+    pub intensity: Option<S<f32>>,
+    pub cast_shadows: Option<bool>,
+    pub name: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDef {
+    pub ambient: Option<V3>,
+    pub diffuse: Option<V3>,
+    pub specular: Option<V3>,
+    pub shininess: Option<S<f32>>,
+    pub mirror: Option<S<f32>>,
+    pub transparency: Option<S<f32>>,
+    pub ior: Option<S<f32>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshDef {
+    pub file: S<String>,
+    pub subdivide: Option<S<u32>>,
+    pub smooth: Option<S<SmoothDef>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SmoothDef {
+    pub step: S<f32>,
+    pub iterations: S<u32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct QuadricDef {
+    pub xx: Option<S<f32>>,
+    pub yy: Option<S<f32>>,
+    pub zz: Option<S<f32>>,
+    pub xy: Option<S<f32>>,
+    pub xz: Option<S<f32>>,
+    pub yz: Option<S<f32>>,
+    pub x: Option<S<f32>>,
+    pub y: Option<S<f32>>,
+    pub z: Option<S<f32>>,
+    pub c: Option<S<f32>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RotateDef {
+    pub axis: V3,
+    pub degrees: S<f32>,
+}
+
+/// `scale = 2` or `scale = [sx, sy, sz]`.
+pub struct ScaleDef(pub [f32; 3]);
+
+impl<'de> Deserialize<'de> for ScaleDef {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = ScaleDef;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a number or an array of 3 numbers")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<ScaleDef, E> {
+                Ok(ScaleDef([v as f32; 3]))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<ScaleDef, E> {
+                Ok(ScaleDef([v as f32; 3]))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<ScaleDef, E> {
+                Ok(ScaleDef([v as f32; 3]))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut a: A,
+            ) -> Result<ScaleDef, A::Error> {
+                let mut out = [0.0f32; 3];
+                for (k, slot) in out.iter_mut().enumerate() {
+                    *slot = a
+                        .next_element()?
+                        .ok_or_else(|| serde::de::Error::invalid_length(k, &self))?;
+                }
+                if a.next_element::<f32>()?.is_some() {
+                    return Err(serde::de::Error::invalid_length(4, &self));
+                }
+                Ok(ScaleDef(out))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// One step of a transform list; exactly one field is set.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransformDef {
+    pub translate: Option<V3>,
+    pub rotate: Option<S<RotateDef>>,
+    pub scale: Option<S<ScaleDef>>,
+    pub matrix: Option<S<[[f32; 4]; 4]>>,
+}
+
+/// An object (or CSG operand). Which fields are required or allowed depends on `type`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDef {
+    #[serde(rename = "type")]
+    pub kind: S<String>,
+    pub material: Option<S<String>>,
+    pub center: Option<V3>,
+    pub radius: Option<S<f32>>,
+    pub radii: Option<V3>,
+    pub point: Option<V3>,
+    pub normal: Option<V3>,
+    pub vertices: Option<S<Vec<[f32; 3]>>>,
+    pub min: Option<V3>,
+    pub max: Option<V3>,
+    pub coefficients: Option<S<QuadricDef>>,
+    pub mesh: Option<S<String>>,
+    pub op: Option<S<String>>,
+    pub operands: Option<S<Vec<S<ObjectDef>>>>,
+    pub transform: Option<S<Vec<S<TransformDef>>>>,
+}
+
+impl ObjectDef {
+    /// `(name, span)` of every type-specific field that is present.
+    pub fn present_fields(&self) -> Vec<(&'static str, std::ops::Range<usize>)> {
+        let mut v = Vec::new();
+        macro_rules! f {
+            ($($name:ident),*) => {$(
+                if let Some(x) = &self.$name {
+                    v.push((stringify!($name), x.span()));
+                }
+            )*};
+        }
+        f!(
+            center,
+            radius,
+            radii,
+            point,
+            normal,
+            vertices,
+            min,
+            max,
+            coefficients,
+            mesh,
+            op,
+            operands
+        );
+        v
+    }
+}

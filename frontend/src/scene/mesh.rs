@@ -1,0 +1,131 @@
+//! Mesh objects: OBJ loading, optional Laplacian smoothing and Loop subdivision through the
+//! half-edge core, the BVH, and the closedness check CSG needs.
+
+use crate::accel::MeshAccel;
+use crate::error::{Error, Location, Result};
+use crate::obj::{ObjMesh, read_obj};
+use crate::render::geom::MeshShape;
+use glam::Vec3;
+use halfray_core::halfedge::{
+    DiffuseBoundary, EdgeRec, FaceRec, LoopWeights, SliceMesh, VertexRec, build_scratch_len,
+};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Number of directed edges without an opposite partner, plus directed edges used more than
+/// once. 0 means every edge is shared by exactly two consistently oriented triangles: the mesh
+/// bounds a solid.
+pub fn boundary_edge_count(triangles: &[[u32; 3]]) -> usize {
+    let mut directed: HashMap<(u32, u32), u32> = HashMap::with_capacity(triangles.len() * 3);
+    for t in triangles {
+        for k in 0..3 {
+            *directed.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
+        }
+    }
+    directed
+        .iter()
+        .map(|(&(a, b), &n)| {
+            let back = directed.get(&(b, a)).copied().unwrap_or(0);
+            usize::from(n != 1 || back != 1)
+        })
+        .sum()
+}
+
+fn he_error(path: &Path, what: &str, e: impl std::fmt::Display) -> Error {
+    Error::input(Location::file(path), format!("{what}: {e}"))
+}
+
+/// One smoothing pass set: `iterations` Jacobi steps `x += step·L(x)`, boundary fixed.
+fn smooth(path: &Path, mesh: &mut ObjMesh, step: f32, iterations: u32) -> Result<()> {
+    let nf = mesh.triangles.len();
+    let mut v = vec![VertexRec::default(); mesh.positions.len()];
+    let mut e = vec![EdgeRec::default(); nf.saturating_mul(3)];
+    let mut f = vec![FaceRec::default(); nf];
+    let mut m = SliceMesh::from_slices(&mut v, &mut e, &mut f);
+    let mut scratch = vec![0u32; build_scratch_len(nf)];
+    m.build(&mesh.positions, &mesh.triangles, &mut scratch)
+        .map_err(|e| he_error(path, "the half-edge core rejects this mesh", e))?;
+    let mut tmp = vec![Vec3::ZERO; m.slots().vertices];
+    for _ in 0..iterations {
+        m.diffuse(step, DiffuseBoundary::Fixed, &mut tmp)
+            .map_err(|e| he_error(path, "smoothing failed", e))?;
+    }
+    let (np, nt) = m
+        .export(&mut mesh.positions, &mut mesh.triangles)
+        .map_err(|e| he_error(path, "export failed", e))?;
+    mesh.positions.truncate(np);
+    mesh.triangles.truncate(nt);
+    Ok(())
+}
+
+/// One level of Loop subdivision (Warren weights).
+fn subdivide(path: &Path, mesh: &ObjMesh) -> Result<ObjMesh> {
+    let nf = mesh.triangles.len();
+    let mut v = vec![VertexRec::default(); mesh.positions.len()];
+    let mut e = vec![EdgeRec::default(); nf.saturating_mul(3)];
+    let mut f = vec![FaceRec::default(); nf];
+    let mut m = SliceMesh::from_slices(&mut v, &mut e, &mut f);
+    let mut scratch = vec![0u32; build_scratch_len(nf)];
+    m.build(&mesh.positions, &mesh.triangles, &mut scratch)
+        .map_err(|e| he_error(path, "the half-edge core rejects this mesh", e))?;
+    let need = m.len().after_loop();
+    let mut v2 = vec![VertexRec::default(); need.vertices];
+    let mut e2 = vec![EdgeRec::default(); need.edges];
+    let mut f2 = vec![FaceRec::default(); need.faces];
+    let mut out = SliceMesh::from_slices(&mut v2, &mut e2, &mut f2);
+    m.subdivide_loop(&mut out, LoopWeights::Warren)
+        .map_err(|e| he_error(path, "Loop subdivision failed", e))?;
+    let mut positions = vec![Vec3::ZERO; out.slots().vertices];
+    let mut triangles = vec![[0u32; 3]; out.len().faces];
+    let (np, nt) = out
+        .export(&mut positions, &mut triangles)
+        .map_err(|e| he_error(path, "export failed", e))?;
+    positions.truncate(np);
+    triangles.truncate(nt);
+    Ok(ObjMesh {
+        positions,
+        triangles,
+    })
+}
+
+/// Loads an OBJ, applies smoothing (`(step, iterations)`) then `subdivide` Loop levels, and
+/// builds the BVH.
+pub fn load_mesh(
+    name: &str,
+    path: &Path,
+    smoothing: Option<(f32, u32)>,
+    levels: u32,
+) -> Result<MeshShape> {
+    let mut mesh = read_obj(path)?;
+    if mesh.triangles.is_empty() {
+        return Err(Error::input(Location::file(path), "mesh has no triangles"));
+    }
+    if let Some((step, iterations)) = smoothing {
+        smooth(path, &mut mesh, step, iterations)?;
+    }
+    for _ in 0..levels {
+        mesh = subdivide(path, &mesh)?;
+    }
+    let boundary_edges = boundary_edge_count(&mesh.triangles);
+    let accel = MeshAccel::new(mesh)?;
+    Ok(MeshShape {
+        name: name.to_string(),
+        accel,
+        boundary_edges,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn boundary_edges_of_open_and_closed_meshes() {
+        assert_eq!(boundary_edge_count(&[[0, 1, 2]]), 3);
+        let tet = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]];
+        assert_eq!(boundary_edge_count(&tet), 0);
+        // One face flipped: its three directed edges now repeat their neighbours'.
+        let bad = [[0, 1, 2], [0, 1, 3], [1, 2, 3], [2, 0, 3]];
+        assert!(boundary_edge_count(&bad) > 0);
+    }
+}
