@@ -1,0 +1,299 @@
+//! Analytic checks of the renderer: shading against the closed-form formulas, shadows, mirror
+//! reflection, Snell refraction through a slab, and transformed normals.
+
+use glam::{Vec3, Vec4};
+use halfray::render::plan::EffectPlan;
+use halfray::render::trace::{RayCounts, Tracer, refract};
+use halfray::render::{Mode, RenderOptions, render};
+use halfray::scene::{Scene, parse};
+use halfray_core::{Ray, spawn_ray};
+use std::path::Path;
+
+fn scene(text: &str) -> Scene {
+    parse(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
+    (a - b).abs().max_element() <= tol * (1.0 + b.abs().max_element())
+}
+
+const ORTHO: &str = r#"
+[camera]
+type = "orthographic"
+eye = [0, 0, 5]
+look_at = [0, 0, 0]
+view_size = 2.5
+width = 41
+height = 41
+"#;
+
+#[test]
+fn lit_sphere_pixel_equals_lambert_plus_blinn_phong() {
+    let text = format!(
+        r#"ambient = [0.1, 0.2, 0.3]
+{ORTHO}
+[[light]]
+type = "point"
+position = [3, 4, 6]
+intensity = 30
+color = [1.0, 0.9, 0.8]
+
+[material.m]
+ambient = [0.5, 0.5, 0.5]
+diffuse = [0.7, 0.3, 0.2]
+specular = [0.4, 0.4, 0.4]
+shininess = 25
+
+[[object]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1
+material = "m"
+"#
+    );
+    let s = scene(&text);
+    let out = render(&s, &RenderOptions::default());
+    let mut checked = 0;
+    for (i, j) in [(20, 20), (25, 14), (12, 27), (28, 22), (20, 5)] {
+        let ray = s.camera.pixel_ray(i, j);
+        let (x, y) = (ray.origin.x, ray.origin.y);
+        let z2 = 1.0 - x * x - y * y;
+        assert!(z2 > 0.0, "pixel ({i}, {j}) misses the sphere");
+        let p = Vec3::new(x, y, z2.sqrt());
+        let n = p;
+        let light = Vec3::new(3.0, 4.0, 6.0);
+        let intensity = Vec3::new(1.0, 0.9, 0.8) * 30.0;
+        let to = light - p;
+        let e = intensity / to.length_squared();
+        let l = to.normalize();
+        let v = Vec3::Z;
+        let h = (l + v).normalize();
+        let expected = Vec3::splat(0.5) * Vec3::new(0.1, 0.2, 0.3)
+            + Vec3::new(0.7, 0.3, 0.2) * e * n.dot(l).max(0.0)
+            + Vec3::splat(0.4) * e * n.dot(h).max(0.0).powf(25.0);
+        let got = out.pixel(i, j);
+        assert_eq!(got.w, 1.0);
+        assert!(
+            close(got.truncate(), expected, 1e-4),
+            "pixel ({i}, {j}): got {got:?}, expected {expected:?}"
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, 5);
+    // Corners miss: alpha 0.
+    assert_eq!(out.pixel(0, 0).w, 0.0);
+    // And the PNG bytes are the sRGB encoding of the same value.
+    let rgba = out.to_rgba8(Mode::Color);
+    let k = (20 * 41 + 20) * 4;
+    let want = out.pixel(20, 20);
+    for c in 0..3 {
+        let enc = halfray::render::output::to_u8(halfray::render::output::linear_to_srgb(want[c]));
+        assert_eq!(rgba[k + c], enc);
+    }
+    assert_eq!(rgba[k + 3], 255);
+}
+
+#[test]
+fn point_in_shadow_gets_ambient_only() {
+    let text = format!(
+        r#"ambient = [0.2, 0.2, 0.2]
+{ORTHO}
+[[light]]
+type = "point"
+position = [0, 0, 4]
+intensity = 20
+
+[material.floor]
+ambient = [0.6, 0.5, 0.4]
+diffuse = [0.9, 0.9, 0.9]
+specular = [0.5, 0.5, 0.5]
+
+[material.blocker]
+diffuse = [0.1, 0.1, 0.1]
+
+[[object]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 0, 1]
+material = "floor"
+
+# A small sphere between the light and the floor's centre, seen edge-on by no pixel we test.
+[[object]]
+type = "sphere"
+center = [0, 0, 2]
+radius = 0.05
+material = "blocker"
+"#
+    );
+    let s = scene(&text);
+    let plan = EffectPlan::derive(&s, false);
+    let tracer = Tracer {
+        scene: &s,
+        plan: &plan,
+    };
+    // A ray hitting the floor right under the blocker, from the side (so it misses the blocker).
+    let ray = Ray::new(Vec3::new(-1.0, 0.0, 1.0), Vec3::new(1.0, 0.0, -1.0));
+    let mut ctx = tracer.ctx();
+    let mut n = RayCounts::default();
+    let hit = tracer.closest(&ray, &mut ctx).expect("floor");
+    assert!(hit.hit.point.length() < 1e-6, "{:?}", hit.hit.point);
+    let c = tracer.shade(&ray, &hit, 0, &mut ctx, &mut n);
+    assert_eq!(c, Vec3::new(0.6, 0.5, 0.4) * 0.2, "ambient only");
+    assert_eq!(n.shadow, 1);
+    // A lit floor point nearby is brighter than ambient.
+    let ray = Ray::new(Vec3::new(0.5, 0.5, 1.0), Vec3::new(0.0, 0.0, -1.0));
+    let hit = tracer.closest(&ray, &mut ctx).unwrap();
+    let lit = tracer.shade(&ray, &hit, 0, &mut ctx, &mut n);
+    assert!(lit.x > 0.6 * 0.2 + 0.1, "{lit:?}");
+}
+
+#[test]
+fn mirror_facing_coloured_plane_returns_colour_times_reflectance() {
+    let text = format!(
+        r#"ambient = [1, 1, 1]
+{ORTHO}
+[material.mirror]
+ambient = [0, 0, 0]
+diffuse = [0, 0, 0]
+mirror = 0.6
+
+[material.paint]
+ambient = [0.2, 0.7, 0.4]
+diffuse = [0, 0, 0]
+
+[[object]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 0, 1]
+material = "mirror"
+
+# Behind the camera, facing the mirror.
+[[object]]
+type = "plane"
+point = [0, 0, 10]
+normal = [0, 0, -1]
+material = "paint"
+"#
+    );
+    let s = scene(&text);
+    let out = render(&s, &RenderOptions::default());
+    let want = Vec3::new(0.2, 0.7, 0.4) * 0.6;
+    for p in &out.pixels {
+        assert!(close(p.truncate(), want, 1e-6), "{p:?} vs {want:?}");
+        assert_eq!(p.w, 1.0);
+    }
+    assert_eq!(out.counts.reflection, 41 * 41);
+    assert_eq!(out.counts.shadow, 0);
+}
+
+#[test]
+fn refracting_slab_shifts_a_ray_as_snell_predicts() {
+    let ior = 1.5f32;
+    let text = format!(
+        r#"{ORTHO}
+[material.glass]
+transparency = 1.0
+ior = {ior}
+
+[[object]]
+type = "box"
+min = [-100, -100, -1]
+max = [100, 100, 0]
+material = "glass"
+"#
+    );
+    let s = scene(&text);
+    let plan = EffectPlan::derive(&s, false);
+    let tracer = Tracer {
+        scene: &s,
+        plan: &plan,
+    };
+    let mut ctx = tracer.ctx();
+    for deg in [0.0f32, 10.0, 30.0, 60.0] {
+        let th = deg.to_radians();
+        let d = Vec3::new(th.sin(), 0.0, -th.cos());
+        let ray = Ray::new(-d / d.z.abs(), d);
+        let h1 = tracer.closest(&ray, &mut ctx).unwrap();
+        assert!(h1.hit.front_face);
+        let t1 = refract(d, h1.hit.facing_normal(), 1.0 / ior).unwrap();
+        // Snell: sin θt = sin θi / n.
+        let sin_t = th.sin() / ior;
+        assert!((t1.x - sin_t).abs() < 1e-6, "{deg}°: {t1:?}");
+        let inner = spawn_ray(&h1.hit, t1);
+        let h2 = tracer.closest(&inner, &mut ctx).unwrap();
+        assert!(!h2.hit.front_face, "leaves the slab");
+        // Lateral position on the far face: x = tan θt · thickness.
+        let tan_t = sin_t / (1.0 - sin_t * sin_t).sqrt();
+        assert!((h2.hit.point.z + 1.0).abs() < 1e-6);
+        assert!(
+            (h2.hit.point.x - tan_t).abs() < 1e-5,
+            "{deg}°: exit x {} vs {tan_t}",
+            h2.hit.point.x
+        );
+        // Leaving: parallel to the incoming ray, displaced sideways by
+        // t·sin(θi − θt)/cos θt (t = 1).
+        let out = refract(t1, h2.hit.facing_normal(), ior).unwrap();
+        assert!((out - d).length() < 1e-5, "{deg}°: {out:?} vs {d:?}");
+        let straight_x = th.tan();
+        let shift = (straight_x - h2.hit.point.x) * th.cos();
+        let th_t = sin_t.asin();
+        let predicted = (th - th_t).sin() / th_t.cos();
+        assert!(
+            (shift - predicted).abs() < 1e-5,
+            "{deg}°: {shift} vs {predicted}"
+        );
+    }
+    // Total internal reflection from inside at a grazing angle.
+    assert!(refract(Vec3::new(0.9, 0.0, -0.435_889_9), Vec3::Z, ior).is_none());
+}
+
+#[test]
+fn scaled_sphere_normal_is_the_analytic_ellipsoid_normal() {
+    let text = format!(
+        r#"{ORTHO}
+[material.m]
+diffuse = [1, 1, 1]
+
+[[object]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1
+material = "m"
+transform = [{{ scale = [1.0, 0.5, 0.8] }}, {{ rotate = {{ axis = [0, 0, 1], degrees = 0 }} }}]
+"#
+    );
+    let s = scene(&text);
+    let plan = EffectPlan::derive(&s, false);
+    let tracer = Tracer {
+        scene: &s,
+        plan: &plan,
+    };
+    let (a, b, c) = (1.0f32, 0.5f32, 0.8f32);
+    let mut ctx = tracer.ctx();
+    for (x, y) in [(0.0, 0.0), (0.5, 0.2), (-0.7, 0.3), (0.3, -0.4), (0.9, 0.1)] {
+        let ray = Ray::new(Vec3::new(x, y, 5.0), Vec3::new(0.0, 0.0, -1.0));
+        let h = tracer.closest(&ray, &mut ctx).unwrap().hit;
+        let p = h.point;
+        let z = c * (1.0 - (x / a).powi(2) - (y / b).powi(2)).sqrt();
+        assert!((p - Vec3::new(x, y, z)).length() < 1e-5, "{p:?}");
+        let analytic = Vec3::new(p.x / (a * a), p.y / (b * b), p.z / (c * c)).normalize();
+        assert!(
+            (h.normal - analytic).length() < 1e-5,
+            "({x}, {y}): {:?} vs {analytic:?}",
+            h.normal
+        );
+    }
+    // The normal debug mode shows the same normal, encoded n·½ + ½.
+    let out = render(
+        &s,
+        &RenderOptions {
+            mode: Mode::Normal,
+            ..RenderOptions::default()
+        },
+    );
+    let ray = s.camera.pixel_ray(27, 17);
+    let h = tracer.closest(&ray, &mut ctx).unwrap().hit;
+    let want = (h.normal * 0.5 + 0.5).extend(1.0);
+    assert!((out.pixel(27, 17) - want).length() < 1e-6);
+    assert_eq!(out.pixel(0, 0), Vec4::ZERO);
+}

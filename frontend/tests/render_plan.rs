@@ -1,0 +1,179 @@
+//! The effect plan: only what the scene calls for is simulated, and the picture is the same as
+//! with every effect forced on.
+
+use halfray::render::plan::EffectPlan;
+use halfray::render::trace::Tracer;
+use halfray::render::{Mode, RenderOptions, render};
+use halfray::scene::{Scene, load, parse};
+use std::path::{Path, PathBuf};
+
+fn scene(text: &str) -> Scene {
+    parse(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+const MATTE: &str = r#"
+ambient = [0.1, 0.1, 0.1]
+
+[camera]
+eye = [0, 2, 6]
+look_at = [0, 0.5, 0]
+fov = 50
+width = 64
+height = 48
+
+[[light]]
+type = "point"
+position = [2, 5, 3]
+intensity = 30
+cast_shadows = false
+
+[[light]]
+type = "directional"
+direction = [-1, -1, -1]
+intensity = 0.5
+cast_shadows = false
+
+[material.matte]
+diffuse = [0.7, 0.7, 0.7]
+
+[material.red]
+diffuse = [0.8, 0.1, 0.1]
+
+[[object]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 1, 0]
+material = "matte"
+
+[[object]]
+type = "sphere"
+center = [-1.2, 0.6, 0]
+radius = 0.6
+material = "red"
+"#;
+
+const MIRROR_SPHERE: &str = r#"
+[material.mirror]
+diffuse = [0.1, 0.1, 0.1]
+mirror = 0.8
+
+[[object]]
+type = "sphere"
+center = [1.0, 0.7, 0.2]
+radius = 0.7
+material = "mirror"
+"#;
+
+#[test]
+fn matte_scene_without_shadow_lights_casts_one_ray_per_pixel() {
+    let s = scene(MATTE);
+    let plan = EffectPlan::derive(&s, false);
+    assert_eq!(plan.max_depth, 0);
+    assert!(plan.shadow_rays.iter().all(|&b| !b));
+    assert!(plan.specular.iter().all(|&b| !b));
+    let out = render(&s, &RenderOptions::default());
+    assert_eq!(out.counts.total(), 64 * 48);
+    assert_eq!(out.counts.primary, 64 * 48);
+    let explain = plan.explain(&s);
+    assert!(explain.contains("shadow rays      none"), "{explain}");
+    assert!(explain.contains("recursion depth  0"), "{explain}");
+}
+
+#[test]
+fn one_mirror_sphere_adds_reflection_rays_only_where_it_is_seen() {
+    let s = scene(&format!("{MATTE}{MIRROR_SPHERE}"));
+    let plan = EffectPlan::derive(&s, false);
+    assert_eq!(plan.max_depth, s.max_depth);
+    let out = render(&s, &RenderOptions::default());
+    // Pixels whose primary ray hits the mirror sphere.
+    let tracer = Tracer {
+        scene: &s,
+        plan: &plan,
+    };
+    let mirror = s.materials.iter().position(|m| m.name == "mirror").unwrap() as u32;
+    let mut ctx = tracer.ctx();
+    let mut seen = 0u64;
+    for j in 0..48 {
+        for i in 0..64 {
+            let ray = s.camera.pixel_ray(i, j);
+            if tracer
+                .closest(&ray, &mut ctx)
+                .is_some_and(|h| h.material == mirror)
+            {
+                seen += 1;
+            }
+        }
+    }
+    assert!(seen > 100, "the mirror sphere covers {seen} pixels");
+    assert_eq!(out.counts.primary, 64 * 48);
+    assert_eq!(out.counts.reflection, seen);
+    assert_eq!(out.counts.shadow, 0);
+    assert_eq!(out.counts.refraction, 0);
+}
+
+fn assert_same_picture(s: &Scene, what: &str) {
+    for mode in [Mode::Color, Mode::Normal, Mode::Depth] {
+        let opts = RenderOptions {
+            mode,
+            ..RenderOptions::default()
+        };
+        let planned = render(s, &opts);
+        let forced = render(
+            s,
+            &RenderOptions {
+                force_all: true,
+                ..opts.clone()
+            },
+        );
+        let a = planned.to_rgba8(mode);
+        let b = forced.to_rgba8(mode);
+        let worst = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| x.abs_diff(*y))
+            .max()
+            .unwrap_or(0);
+        assert!(
+            worst <= 1,
+            "{what} ({mode:?}): plan vs forced differ by {worst}/255"
+        );
+        if mode == Mode::Color {
+            assert!(
+                forced.counts.total() >= planned.counts.total(),
+                "{what}: forcing cast fewer rays"
+            );
+        }
+    }
+}
+
+#[test]
+fn plan_never_changes_the_picture_on_test_scenes() {
+    assert_same_picture(&scene(MATTE), "matte");
+    assert_same_picture(&scene(&format!("{MATTE}{MIRROR_SPHERE}")), "mirror");
+}
+
+fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
+}
+
+#[test]
+fn plan_never_changes_the_picture_on_example_scenes() {
+    let mut n = 0;
+    for entry in std::fs::read_dir(scenes_dir()).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let mut s = match load(&path) {
+            Ok(s) => s,
+            // bunny.toml needs ../shared/meshes beside the checkout.
+            Err(e) if e.to_string().contains("not found") => continue,
+            Err(e) => panic!("{e}"),
+        };
+        s.camera.width = 48;
+        s.camera.height = 36;
+        assert_same_picture(&s, &path.display().to_string());
+        n += 1;
+    }
+    assert!(n >= 6, "only {n} example scenes");
+}
