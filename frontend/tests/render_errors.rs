@@ -1,0 +1,256 @@
+//! Bad scene files: every message names the file, line, column and field; exit code 1; never a
+//! panic.
+
+use halfray::scene::load;
+use std::path::Path;
+use std::process::Command;
+
+const BASE: &str = r#"[camera]
+eye = [0, 0, 5]
+look_at = [0, 0, 0]
+fov = 40
+width = 8
+height = 6
+
+[material.m]
+diffuse = [1, 0, 0]
+"#;
+
+/// Writes `text` as `name` in a fresh folder (plus an open one-triangle OBJ) and loads it.
+fn load_err(name: &str, text: &str) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("open.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, text).unwrap();
+    match load(&path) {
+        Ok(_) => panic!("{name} loaded but should not"),
+        Err(e) => {
+            let msg = e.to_string();
+            let shown = msg.replace(&format!("{}/", dir.path().display()), "");
+            assert!(
+                shown.starts_with(name),
+                "message does not start with the file: {msg}"
+            );
+            assert_eq!(e.exit_code(), 1);
+            shown
+        }
+    }
+}
+
+fn sphere_with(extra: &str) -> String {
+    format!("{BASE}\n[[object]]\ntype = \"sphere\"\n{extra}\n")
+}
+
+#[track_caller]
+fn check(name: &str, text: &str, line_col: &str, field: &str, what: &str) {
+    let msg = load_err(name, text);
+    let want = format!("{name}:{line_col}: field `{field}`");
+    assert!(msg.starts_with(&want), "want `{want}`, got: {msg}");
+    assert!(msg.contains(what), "want `{what}` in: {msg}");
+}
+
+#[test]
+fn unknown_key() {
+    check(
+        "unknown.toml",
+        &sphere_with("center = [0, 0, 0]\nradiuss = 1\nmaterial = \"m\""),
+        "14:1",
+        "radiuss",
+        "unknown field `radiuss`",
+    );
+    check(
+        "unknown_top.toml",
+        &format!("ambiant = [1, 1, 1]\n{BASE}"),
+        "1:1",
+        "ambiant",
+        "unknown field `ambiant`",
+    );
+}
+
+#[test]
+fn missing_fields() {
+    check(
+        "missing.toml",
+        &sphere_with("center = [0, 0, 0]\nmaterial = \"m\""),
+        "11:1",
+        "object[0].radius",
+        "missing field `radius` for type `sphere`",
+    );
+    check(
+        "nocam.toml",
+        "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\n",
+        "1:1",
+        "height",
+        "missing field `height`",
+    );
+    check(
+        "nomat.toml",
+        &sphere_with("center = [0, 0, 0]\nradius = 1"),
+        "11:1",
+        "object[0].material",
+        "missing field `material`",
+    );
+}
+
+#[test]
+fn unknown_material_and_mesh_names() {
+    check(
+        "mat.toml",
+        &sphere_with("center = [0, 0, 0]\nradius = 1\nmaterial = \"nope\""),
+        "15:12",
+        "object[0].material",
+        "no material named `nope` (defined: m)",
+    );
+    check(
+        "mesh.toml",
+        &format!("{BASE}\n[[object]]\ntype = \"mesh\"\nmesh = \"bun\"\nmaterial = \"m\"\n"),
+        "13:8",
+        "object[0].mesh",
+        "no mesh named `bun`",
+    );
+}
+
+#[test]
+fn missing_obj_file() {
+    check(
+        "obj.toml",
+        &format!(
+            "{BASE}\n[mesh.bun]\nfile = \"meshes/nothere.obj\"\n\n[[object]]\ntype = \"mesh\"\nmesh = \"bun\"\nmaterial = \"m\"\n"
+        ),
+        "12:8",
+        "mesh.bun.file",
+        "mesh file `meshes/nothere.obj` not found",
+    );
+}
+
+#[test]
+fn non_finite_numbers() {
+    check(
+        "nan.toml",
+        &sphere_with("center = [0, nan, 0]\nradius = 1\nmaterial = \"m\""),
+        "13:10",
+        "object[0].center",
+        "non-finite",
+    );
+    check(
+        "inf.toml",
+        &sphere_with("center = [0, 0, 0]\nradius = inf\nmaterial = \"m\""),
+        "14:10",
+        "object[0].radius",
+        "inf is not a finite number",
+    );
+    check(
+        "camnan.toml",
+        &BASE.replace("fov = 40", "fov = -nan"),
+        "4:7",
+        "camera.fov",
+        "not a finite number",
+    );
+}
+
+#[test]
+fn type_errors_and_wrong_fields() {
+    check(
+        "type.toml",
+        &sphere_with("center = [0, 0, 0]\nradius = \"big\"\nmaterial = \"m\""),
+        "14:10",
+        "radius",
+        "invalid type: string \"big\"",
+    );
+    check(
+        "extra.toml",
+        &sphere_with("center = [0, 0, 0]\nradius = 1\nradii = [1, 1, 1]\nmaterial = \"m\""),
+        "15:9",
+        "object[0].radii",
+        "not used by type `sphere`",
+    );
+    check(
+        "kind.toml",
+        &sphere_with("material = \"m\"").replace("\"sphere\"", "\"cone\""),
+        "12:8",
+        "object[0].type",
+        "unknown object type `cone`",
+    );
+}
+
+#[test]
+fn csg_operand_not_closed() {
+    let csg = |operand: &str, mesh: &str| {
+        format!(
+            "{BASE}{mesh}\n[[object]]\ntype = \"csg\"\nop = \"union\"\nmaterial = \"m\"\noperands = [\n  {{ type = \"sphere\", center = [0, 0, 0], radius = 1 }},\n  {operand},\n]\n"
+        )
+    };
+    let tri = csg(
+        "{ type = \"triangle\", vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]] }",
+        "",
+    );
+    check(
+        "csgtri.toml",
+        &tri,
+        "17:12",
+        "object[0].operands[1]",
+        "a triangle is not closed",
+    );
+    let open = csg(
+        "{ type = \"mesh\", mesh = \"o\" }",
+        "\n[mesh.o]\nfile = \"open.obj\"\n",
+    );
+    check(
+        "csgmesh.toml",
+        &open,
+        "20:12",
+        "object[0].operands[1]",
+        "mesh `o` is not closed (3 boundary or unpaired edges)",
+    );
+}
+
+#[test]
+fn singular_transform() {
+    check(
+        "sing.toml",
+        &sphere_with(
+            "center = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = [{ translate = [1, 0, 0] }, { scale = [1, 0, 1] }]",
+        ),
+        "16:51",
+        "object[0].transform[1].scale",
+        "singular",
+    );
+    check(
+        "singm.toml",
+        &sphere_with(
+            "center = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = [{ matrix = [[1, 2, 0, 0], [2, 4, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]] }]",
+        ),
+        "16:25",
+        "object[0].transform[0].matrix",
+        "singular",
+    );
+}
+
+#[test]
+fn cli_exits_with_code_1_and_the_location() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("bad.toml");
+    std::fs::write(
+        &scene,
+        sphere_with("center = [0, 0, 0]\nradius = -1\nmaterial = \"m\""),
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_halfray"))
+        .args(["render", scene.to_str().unwrap(), "-o"])
+        .arg(dir.path().join("o.png"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.toml:14:10: field `object[0].radius`: must be > 0"),
+        "{err}"
+    );
+    assert!(!dir.path().join("o.png").exists());
+    assert!(!err.contains("panicked"));
+    assert!(Path::new(&scene).exists());
+}
