@@ -13,11 +13,15 @@
 //! every change of the combined state is a crossing of the result.
 
 use crate::accel::MeshAccel;
-use crate::render::xform::Transform;
-use glam::{DVec3, Vec2, Vec3};
+use crate::render::xform::bounds_to_world;
+use glam::{Vec2, Vec3};
 use halfray_core::aabb::SlabRay;
 use halfray_core::bvh::{TraversalStats, TriangleMesh};
 use halfray_core::float::gamma;
+use halfray_core::plane::Plane;
+use halfray_core::quadric::{Ellipsoid, Quadric};
+use halfray_core::sphere::Sphere;
+use halfray_core::transform::Transform;
 use halfray_core::triangle::{TriangleIntersector, Watertight};
 use halfray_core::{Aabb, Hit, Ray};
 use std::sync::Arc;
@@ -44,47 +48,19 @@ pub struct Event {
     pub hit: SurfaceHit,
 }
 
-/// A sphere.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sphere {
-    /// Centre.
-    pub center: Vec3,
-    /// Radius (> 0).
-    pub radius: f32,
-}
+/// Largest polygon the scene format accepts (the core's polygons have a fixed capacity).
+pub const POLYGON_MAX_VERTICES: usize = 64;
 
-/// An axis-aligned ellipsoid `Σ ((x − c)/r)² = 1`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Ellipsoid {
-    /// Centre.
-    pub center: Vec3,
-    /// Semi-axes (> 0).
-    pub radii: Vec3,
-}
+/// A planar polygon (the core's, even–odd rule).
+pub type Polygon = halfray_core::polygon::Polygon<POLYGON_MAX_VERTICES>;
 
-/// A general quadric `F(p) = pᵀAp + b·p + c = 0`, solid where `F < 0`, optionally clipped to
-/// a box.
+/// A general quadric (solid where `f < 0`), optionally clipped to a box.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Quadric {
-    /// Symmetric matrix `A` (rows).
-    pub a: [[f64; 3]; 3],
-    /// Linear part.
-    pub b: [f64; 3],
-    /// Constant.
-    pub c: f64,
+pub struct ClippedQuadric {
+    /// The surface.
+    pub quadric: Quadric,
     /// Clip box (hits outside are dropped); `None` for the whole surface.
     pub clip: Option<Aabb>,
-}
-
-/// A planar polygon (any simple or self-intersecting outline, even–odd rule).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Polygon {
-    /// Vertices.
-    pub vertices: Vec<Vec3>,
-    /// Unit normal (Newell), counter-clockwise vertices face the viewer.
-    pub normal: Vec3,
-    /// Dominant normal axis, dropped for the 2-D inside test.
-    pub drop_axis: usize,
 }
 
 /// A mesh primitive (shared by all its instances).
@@ -139,17 +115,12 @@ pub enum Shape {
     /// Ellipsoid.
     Ellipsoid(Ellipsoid),
     /// General quadric.
-    Quadric(Quadric),
+    Quadric(ClippedQuadric),
     /// Axis-aligned box (a solid).
     Box(Aabb),
     /// Infinite plane through `point` with unit `normal` (as a CSG operand: the half-space
     /// behind the normal).
-    Plane {
-        /// A point on the plane.
-        point: Vec3,
-        /// Unit normal.
-        normal: Vec3,
-    },
+    Plane(Plane),
     /// Single triangle (counter-clockwise faces the viewer).
     Triangle([Vec3; 3]),
     /// Planar polygon.
@@ -186,170 +157,50 @@ pub struct QueryCtx {
 // ---------------------------------------------------------------------------------------------
 // Primitives
 
-/// Roots `t0 ≤ t1` of `a t² + 2 b' t + c` in f64 (`b` is the half coefficient), stable form.
+/// The hit of `intersect` at the root `t` of the ray's line: the interval is narrowed to
+/// `(t⁻, t]` (one ulp below `t`), so an intersector that takes the nearest root in the interval
+/// returns exactly this root, computed as in a plain query.
 #[inline]
-fn quadratic_half(a: f64, bh: f64, c: f64) -> Option<(f64, f64)> {
-    if a == 0.0 {
-        if bh == 0.0 {
-            return None;
-        }
-        let t = -c / (2.0 * bh);
-        return Some((t, t));
-    }
-    let disc = bh * bh - a * c;
-    if !(disc >= 0.0) {
-        return None;
-    }
-    let q = -(bh + disc.sqrt().copysign(bh));
-    let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (q / a, c / q) };
-    Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
+fn hit_at_root(ray: &Ray, t: f32, intersect: impl Fn(&Ray) -> Option<Hit>) -> Option<Hit> {
+    intersect(&Ray::with_interval(
+        ray.origin,
+        ray.direction,
+        t.next_down(),
+        t,
+    ))
 }
 
-impl Sphere {
-    /// Both roots of the ray's line (f64, then rounded).
-    pub fn roots(&self, ray: &Ray) -> Option<(f32, f32)> {
-        let oc = ray.origin.as_dvec3() - self.center.as_dvec3();
-        let d = ray.direction.as_dvec3();
-        let r = f64::from(self.radius);
-        let (t0, t1) = quadratic_half(d.dot(d), oc.dot(d), oc.dot(oc) - r * r)?;
-        Some((t0 as f32, t1 as f32))
-    }
-
-    /// The hit at `t`, reprojected onto the sphere.
-    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
-        let p = ray.origin.as_dvec3() + ray.direction.as_dvec3() * f64::from(t);
-        let c = self.center.as_dvec3();
-        let n = (p - c).normalize_or_zero();
-        let point = (c + n * f64::from(self.radius)).as_vec3();
-        let normal = n.as_vec3();
-        Hit {
-            t,
-            point,
-            point_error: (self.center.abs() + Vec3::splat(self.radius)) * gamma(6),
-            normal,
-            uv: Vec2::ZERO,
-            front_face: ray.direction.dot(normal) < 0.0,
-        }
+/// Whether the line `o + t·d` is inside (`f < 0`) the quadric as `t → −∞`: the sign of the
+/// leading coefficient of `f(o + t·d)`.
+fn quadric_inside_at_start(q: &Quadric, ray: &Ray) -> bool {
+    let o = ray.origin.as_dvec3();
+    let d = ray.direction.as_dvec3();
+    let qa = d.dot(q.matrix() * d);
+    let qb = d.dot(q.gradient(o));
+    if qa != 0.0 {
+        qa < 0.0
+    } else if qb != 0.0 {
+        qb > 0.0
+    } else {
+        q.eval(o) < 0.0
     }
 }
 
-impl Ellipsoid {
-    fn unit_ray(&self, ray: &Ray) -> Ray {
-        Ray::with_interval(
-            (ray.origin - self.center) / self.radii,
-            ray.direction / self.radii,
-            ray.t_min,
-            ray.t_max,
-        )
-    }
-
-    /// Both roots of the ray's line.
-    pub fn roots(&self, ray: &Ray) -> Option<(f32, f32)> {
-        UNIT_SPHERE.roots(&self.unit_ray(ray))
-    }
-
-    /// The hit at `t`: point reprojected, normal `∇F ∝ (p − c)/r²`.
-    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
-        let u = self.unit_ray(ray);
-        let h = UNIT_SPHERE.hit_at(&u, t);
-        let point = self.center + h.point * self.radii;
-        let normal = (h.normal / self.radii).normalize_or_zero();
-        Hit {
-            t,
-            point,
-            point_error: (self.center.abs() + self.radii) * gamma(8),
-            normal,
-            uv: Vec2::ZERO,
-            front_face: ray.direction.dot(normal) < 0.0,
-        }
-    }
-}
-
-const UNIT_SPHERE: Sphere = Sphere {
-    center: Vec3::ZERO,
-    radius: 1.0,
-};
-
-impl Quadric {
-    fn eval(&self, p: DVec3) -> f64 {
-        let a = &self.a;
-        let ap = DVec3::new(
-            a[0][0] * p.x + a[0][1] * p.y + a[0][2] * p.z,
-            a[1][0] * p.x + a[1][1] * p.y + a[1][2] * p.z,
-            a[2][0] * p.x + a[2][1] * p.y + a[2][2] * p.z,
-        );
-        p.dot(ap) + DVec3::from(self.b).dot(p) + self.c
-    }
-
-    fn grad(&self, p: DVec3) -> DVec3 {
-        let a = &self.a;
-        DVec3::new(
-            2.0 * (a[0][0] * p.x + a[0][1] * p.y + a[0][2] * p.z) + self.b[0],
-            2.0 * (a[1][0] * p.x + a[1][1] * p.y + a[1][2] * p.z) + self.b[1],
-            2.0 * (a[2][0] * p.x + a[2][1] * p.y + a[2][2] * p.z) + self.b[2],
-        )
-    }
-
-    /// Coefficients `(a, b/2, c)` of `F(o + t d)`.
-    fn line_coefs(&self, ray: &Ray) -> (f64, f64, f64) {
-        let o = ray.origin.as_dvec3();
-        let d = ray.direction.as_dvec3();
-        let a = &self.a;
-        let ad = DVec3::new(
-            a[0][0] * d.x + a[0][1] * d.y + a[0][2] * d.z,
-            a[1][0] * d.x + a[1][1] * d.y + a[1][2] * d.z,
-            a[2][0] * d.x + a[2][1] * d.y + a[2][2] * d.z,
-        );
-        (
-            d.dot(ad),
-            o.dot(ad) + 0.5 * DVec3::from(self.b).dot(d),
-            self.eval(o),
-        )
-    }
-
-    /// Roots of the ray's line, and whether the line is inside (`F < 0`) at `t → −∞`.
-    pub fn roots(&self, ray: &Ray) -> (Option<(f32, f32)>, bool) {
-        let (a, bh, c) = self.line_coefs(ray);
-        let inside_start = if a != 0.0 {
-            a < 0.0
-        } else if bh != 0.0 {
-            bh > 0.0
-        } else {
-            c < 0.0
-        };
-        let roots = quadratic_half(a, bh, c).map(|(t0, t1)| (t0 as f32, t1 as f32));
-        (roots, inside_start)
-    }
-
-    /// The hit at `t`: one Newton step onto the surface (f64), normal `∇F`.
-    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
-        let mut p = ray.origin.as_dvec3() + ray.direction.as_dvec3() * f64::from(t);
-        let g = self.grad(p);
-        let gg = g.dot(g);
-        if gg > 0.0 {
-            p -= g * (self.eval(p) / gg);
-        }
-        let g = self.grad(p);
-        let gl = g.length();
-        let residual = if gl > 0.0 {
-            self.eval(p).abs() / gl
-        } else {
-            0.0
-        };
-        let point = p.as_vec3();
-        let normal = (g / gl.max(f64::MIN_POSITIVE)).as_vec3();
-        Hit {
-            t,
-            point,
-            point_error: point.abs() * gamma(4) + Vec3::splat(residual as f32 * 2.0),
-            normal,
-            uv: Vec2::ZERO,
-            front_face: ray.direction.dot(normal) < 0.0,
-        }
-    }
-
-    fn clipped_ok(&self, h: &Hit) -> bool {
+impl ClippedQuadric {
+    fn in_clip(&self, h: &Hit) -> bool {
         self.clip.is_none_or(|b| b.contains_point(h.point))
+    }
+
+    fn closest(&self, ray: &Ray) -> Option<Hit> {
+        if self.clip.is_none() {
+            return self.quadric.intersect(ray);
+        }
+        let (t0, t1) = self.quadric.roots(ray)?;
+        [t0 as f32, t1 as f32]
+            .into_iter()
+            .filter(|&t| ray.contains(t))
+            .filter_map(|t| hit_at_root(ray, t, |r| self.quadric.intersect(r)))
+            .find(|h| self.in_clip(h))
     }
 }
 
@@ -409,65 +260,6 @@ fn box_hits(b: &Aabb, ray: &Ray) -> Option<(Hit, Hit)> {
     Some((mk(t0, a0, true), mk(t1, a1, false)))
 }
 
-fn plane_hit(point: Vec3, normal: Vec3, ray: &Ray) -> Option<Hit> {
-    let n = normal.as_dvec3();
-    let dn = ray.direction.as_dvec3().dot(n);
-    if dn == 0.0 || !dn.is_finite() {
-        return None;
-    }
-    let t = (point.as_dvec3() - ray.origin.as_dvec3()).dot(n) / dn;
-    let tf = t as f32;
-    if !tf.is_finite() {
-        return None;
-    }
-    let mut p = ray.origin.as_dvec3() + ray.direction.as_dvec3() * t;
-    p -= n * (p - point.as_dvec3()).dot(n);
-    let pf = p.as_vec3();
-    Some(Hit {
-        t: tf,
-        point: pf,
-        point_error: (pf.abs() + point.abs()) * gamma(4),
-        normal,
-        uv: Vec2::ZERO,
-        front_face: dn < 0.0,
-    })
-}
-
-impl Polygon {
-    fn contains(&self, p: Vec3) -> bool {
-        let (i, j) = match self.drop_axis {
-            0 => (1, 2),
-            1 => (2, 0),
-            _ => (0, 1),
-        };
-        let (px, py) = (f64::from(p[i]), f64::from(p[j]));
-        let mut inside = false;
-        let n = self.vertices.len();
-        for k in 0..n {
-            let a = self.vertices[k];
-            let b = self.vertices[(k + 1) % n];
-            let (ax, ay, bx, by) = (
-                f64::from(a[i]),
-                f64::from(a[j]),
-                f64::from(b[i]),
-                f64::from(b[j]),
-            );
-            if (ay > py) != (by > py) {
-                let x = ax + (py - ay) * (bx - ax) / (by - ay);
-                if px < x {
-                    inside = !inside;
-                }
-            }
-        }
-        inside
-    }
-
-    fn hit(&self, ray: &Ray) -> Option<Hit> {
-        let h = plane_hit(self.vertices[0], self.normal, ray)?;
-        (ray.contains(h.t) && self.contains(h.point)).then_some(h)
-    }
-}
-
 fn tri_hit(v: &[Vec3; 3], ray: &Ray) -> Option<(Hit, Vec3)> {
     let th = Watertight.intersect(ray, v)?;
     Some((th.to_hit(v), Vec3::new(th.b0(), th.b1, th.b2)))
@@ -512,7 +304,7 @@ impl Shape {
     /// `true` for shapes that bound a solid (usable as CSG operands).
     pub fn is_solid(&self) -> bool {
         match self {
-            Self::Sphere(_) | Self::Ellipsoid(_) | Self::Box(_) | Self::Plane { .. } => true,
+            Self::Sphere(_) | Self::Ellipsoid(_) | Self::Box(_) | Self::Plane(_) => true,
             Self::Csg(..) => true,
             Self::Quadric(q) => q.clip.is_none(),
             Self::Mesh(m) => m.boundary_edges == 0,
@@ -524,15 +316,15 @@ impl Shape {
     pub fn bounds(&self) -> Option<Aabb> {
         match self {
             Self::Sphere(s) => Some(Aabb::new(
-                s.center - Vec3::splat(s.radius),
-                s.center + Vec3::splat(s.radius),
+                s.center() - Vec3::splat(s.radius()),
+                s.center() + Vec3::splat(s.radius()),
             )),
-            Self::Ellipsoid(e) => Some(Aabb::new(e.center - e.radii, e.center + e.radii)),
+            Self::Ellipsoid(e) => Some(Aabb::new(e.center() - e.radii(), e.center() + e.radii())),
             Self::Quadric(q) => q.clip,
             Self::Box(b) => Some(*b),
-            Self::Plane { .. } => None,
+            Self::Plane(_) => None,
             Self::Triangle(v) => Some(Aabb::from_points(v)),
-            Self::Polygon(p) => Some(Aabb::from_points(&p.vertices)),
+            Self::Polygon(p) => Some(Aabb::from_points(p.vertices())),
             Self::Mesh(m) => m.accel.mesh.bounds().map(|(lo, hi)| Aabb::new(lo, hi)),
             Self::Csg(op, a, b) => match op {
                 CsgOp::Union => match (a.bounds, b.bounds) {
@@ -561,7 +353,7 @@ impl Node {
         let bounds = shape.bounds().map(|b| {
             let b = pad(b);
             match &transform {
-                Some(t) => t.bounds_to_world(&b),
+                Some(t) => bounds_to_world(t, &b),
                 None => b,
             }
         });
@@ -638,39 +430,20 @@ impl Node {
         }
         let pick = |h: Hit| ray.contains(h.t).then_some(h);
         match &self.shape {
-            Shape::Sphere(s) => {
-                let (t0, t1) = s.roots(ray)?;
-                let t = [t0, t1].into_iter().find(|&t| ray.contains(t))?;
-                Some(self.surf(s.hit_at(ray, t), None))
-            }
-            Shape::Ellipsoid(e) => {
-                let (t0, t1) = e.roots(ray)?;
-                let t = [t0, t1].into_iter().find(|&t| ray.contains(t))?;
-                Some(self.surf(e.hit_at(ray, t), None))
-            }
-            Shape::Quadric(q) => {
-                let (t0, t1) = q.roots(ray).0?;
-                [t0, t1]
-                    .into_iter()
-                    .filter(|&t| ray.contains(t))
-                    .map(|t| q.hit_at(ray, t))
-                    .find(|h| q.clipped_ok(h))
-                    .map(|h| self.surf(h, None))
-            }
+            Shape::Sphere(s) => Some(self.surf(s.intersect(ray)?, None)),
+            Shape::Ellipsoid(e) => Some(self.surf(e.intersect(ray)?, None)),
+            Shape::Quadric(q) => Some(self.surf(q.closest(ray)?, None)),
             Shape::Box(b) => {
                 let (h0, h1) = box_hits(b, ray)?;
                 let h = pick(h0).or_else(|| pick(h1))?;
                 Some(self.surf(h, None))
             }
-            Shape::Plane { point, normal } => {
-                let h = pick(plane_hit(*point, *normal, ray)?)?;
-                Some(self.surf(h, None))
-            }
+            Shape::Plane(p) => Some(self.surf(p.intersect(ray)?, None)),
             Shape::Triangle(v) => {
                 let (h, b) = tri_hit(v, ray)?;
                 Some(self.surf(h, Some(b)))
             }
-            Shape::Polygon(p) => Some(self.surf(p.hit(ray)?, None)),
+            Shape::Polygon(p) => Some(self.surf(p.intersect(ray)?, None)),
             Shape::Mesh(m) => {
                 let (h, b) = m.closest(ray, &mut ctx.stats)?;
                 Some(self.surf(h, Some(b)))
@@ -704,32 +477,50 @@ impl Node {
         }
     }
 
+    /// Events at both roots of a closed quadric surface (a double root, a tangent line, gives
+    /// no crossing).
+    fn push_roots(
+        &self,
+        line: &Ray,
+        roots: [f32; 2],
+        intersect: impl Fn(&Ray) -> Option<Hit>,
+        out: &mut Vec<Event>,
+    ) {
+        if roots[0] == roots[1] {
+            return;
+        }
+        for t in roots {
+            if let Some(h) = hit_at_root(line, t, &intersect) {
+                out.push(self.event(h, None));
+            }
+        }
+    }
+
     fn events_local(&self, ray: &Ray, ctx: &mut QueryCtx, out: &mut Vec<Event>) -> bool {
         let line = Ray::with_interval(ray.origin, ray.direction, f32::NEG_INFINITY, f32::INFINITY);
         match &self.shape {
             Shape::Sphere(s) => {
                 if let Some((t0, t1)) = s.roots(&line) {
-                    out.push(self.event(s.hit_at(&line, t0), None));
-                    out.push(self.event(s.hit_at(&line, t1), None));
+                    self.push_roots(&line, [t0, t1], |r| s.intersect(r), out);
                 }
                 false
             }
             Shape::Ellipsoid(e) => {
                 if let Some((t0, t1)) = e.roots(&line) {
-                    out.push(self.event(e.hit_at(&line, t0), None));
-                    out.push(self.event(e.hit_at(&line, t1), None));
+                    self.push_roots(&line, [t0 as f32, t1 as f32], |r| e.intersect(r), out);
                 }
                 false
             }
             Shape::Quadric(q) => {
-                let (roots, inside) = q.roots(&line);
-                if let Some((t0, t1)) = roots {
-                    out.push(self.event(q.hit_at(&line, t0), None));
-                    if t1 != t0 {
-                        out.push(self.event(q.hit_at(&line, t1), None));
-                    }
+                if let Some((t0, t1)) = q.quadric.roots(&line) {
+                    self.push_roots(
+                        &line,
+                        [t0 as f32, t1 as f32],
+                        |r| q.quadric.intersect(r),
+                        out,
+                    );
                 }
-                inside
+                quadric_inside_at_start(&q.quadric, &line)
             }
             Shape::Box(b) => {
                 if let Some((h0, h1)) = box_hits(b, &line) {
@@ -738,13 +529,13 @@ impl Node {
                 }
                 false
             }
-            Shape::Plane { point, normal } => match plane_hit(*point, *normal, &line) {
+            Shape::Plane(p) => match p.intersect(&line) {
                 Some(h) => {
                     let inside = !h.front_face;
                     out.push(self.event(h, None));
                     inside
                 }
-                None => (line.origin - *point).dot(*normal) < 0.0,
+                None => (line.origin - p.point()).dot(p.normal()) < 0.0,
             },
             Shape::Triangle(v) => {
                 if let Some((h, b)) = tri_hit(v, &line) {
@@ -753,7 +544,7 @@ impl Node {
                 false
             }
             Shape::Polygon(p) => {
-                if let Some(h) = p.hit(&line) {
+                if let Some(h) = p.intersect(&line) {
                     out.push(self.event(h, None));
                 }
                 false
@@ -831,14 +622,8 @@ mod tests {
 
     #[test]
     fn sphere_difference_carves_a_hole() {
-        let a = node(Shape::Sphere(Sphere {
-            center: Vec3::ZERO,
-            radius: 1.0,
-        }));
-        let b = node(Shape::Sphere(Sphere {
-            center: Vec3::new(0.0, 0.0, 1.0),
-            radius: 0.5,
-        }));
+        let a = node(Shape::Sphere(Sphere::new(Vec3::ZERO, 1.0).unwrap()));
+        let b = node(Shape::Sphere(Sphere::new(Vec3::Z, 0.5).unwrap()));
         let csg = node(Shape::Csg(CsgOp::Difference, Box::new(a), Box::new(b)));
         let ray = Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, -1.0));
         let h = csg.closest(&ray, &mut QueryCtx::default()).unwrap();
@@ -851,15 +636,9 @@ mod tests {
     #[test]
     fn forced_intervals_give_identical_hits() {
         for shape in [
-            Shape::Sphere(Sphere {
-                center: Vec3::new(0.1, 0.2, 0.0),
-                radius: 1.0,
-            }),
+            Shape::Sphere(Sphere::new(Vec3::new(0.1, 0.2, 0.0), 1.0).unwrap()),
             Shape::Box(Aabb::new(Vec3::splat(-1.0), Vec3::ONE)),
-            Shape::Ellipsoid(Ellipsoid {
-                center: Vec3::ZERO,
-                radii: Vec3::new(1.0, 2.0, 0.5),
-            }),
+            Shape::Ellipsoid(Ellipsoid::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 0.5)).unwrap()),
         ] {
             let n = node(shape);
             for o in [Vec3::new(0.3, 0.1, 5.0), Vec3::new(0.0, 0.0, 0.0)] {

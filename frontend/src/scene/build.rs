@@ -6,11 +6,16 @@ use super::{
     Source,
 };
 use crate::error::{Error, Result};
-use crate::render::geom::{CsgOp, Ellipsoid, MeshShape, Node, Polygon, Quadric, Shape, Sphere};
-use crate::render::xform::{self, Transform};
-use glam::{Mat4, Vec3, Vec4};
-use halfray_core::Aabb;
-use halfray_core::tolerance::PLANARITY_REL;
+use crate::render::geom::{
+    ClippedQuadric, CsgOp, MeshShape, Node, POLYGON_MAX_VERTICES, Polygon, Shape,
+};
+use crate::render::xform;
+use glam::{DMat3, DVec3, Mat4, Vec3, Vec4};
+use halfray_core::plane::Plane;
+use halfray_core::quadric::{Ellipsoid, Quadric};
+use halfray_core::sphere::Sphere;
+use halfray_core::transform::Transform;
+use halfray_core::{Aabb, GeometryError};
 use std::collections::{BTreeMap, HashMap};
 use std::ops::Range;
 use std::sync::Arc;
@@ -398,10 +403,12 @@ fn object(ctx: &mut Ctx<'_>, o: &S<ObjectDef>, p: &str, inherited: Option<u32>) 
         "sphere" => {
             let c = ctx.need(&o.center, &span, &f("center"), kind)?;
             let r = ctx.need(&o.radius, &span, &f("radius"), kind)?;
-            Shape::Sphere(Sphere {
-                center: ctx.v3(c, &f("center"))?,
-                radius: ctx.positive(r, &f("radius"))?,
-            })
+            let center = ctx.v3(c, &f("center"))?;
+            let radius = ctx.positive(r, &f("radius"))?;
+            Shape::Sphere(
+                Sphere::new(center, radius)
+                    .map_err(|e| ctx.err(&r.span(), &f("radius"), e.to_string()))?,
+            )
         }
         "ellipsoid" => {
             let c = ctx.need(&o.center, &span, &f("center"), kind)?;
@@ -410,10 +417,11 @@ fn object(ctx: &mut Ctx<'_>, o: &S<ObjectDef>, p: &str, inherited: Option<u32>) 
             if !(radii.min_element() > 0.0) {
                 return Err(ctx.err(&r.span(), &f("radii"), "every radius must be > 0"));
             }
-            Shape::Ellipsoid(Ellipsoid {
-                center: ctx.v3(c, &f("center"))?,
-                radii,
-            })
+            let center = ctx.v3(c, &f("center"))?;
+            Shape::Ellipsoid(
+                Ellipsoid::new(center, radii)
+                    .map_err(|e| ctx.err(&r.span(), &f("radii"), e.to_string()))?,
+            )
         }
         "quadric" => {
             let q = ctx.need(&o.coefficients, &span, &f("coefficients"), kind)?;
@@ -428,19 +436,21 @@ fn object(ctx: &mut Ctx<'_>, o: &S<ObjectDef>, p: &str, inherited: Option<u32>) 
                 g(&qd.xz, "xz")? / 2.0,
                 g(&qd.yz, "yz")? / 2.0,
             );
-            let a = [
-                [g(&qd.xx, "xx")?, xy, xz],
-                [xy, g(&qd.yy, "yy")?, yz],
-                [xz, yz, g(&qd.zz, "zz")?],
-            ];
-            let b = [g(&qd.x, "x")?, g(&qd.y, "y")?, g(&qd.z, "z")?];
-            if a.iter().flatten().chain(&b).all(|&x| x == 0.0) {
-                return Err(ctx.err(
+            // The core's form is xᵀAx + 2bᵀx + c.
+            let a = DMat3::from_cols(
+                DVec3::new(g(&qd.xx, "xx")?, xy, xz),
+                DVec3::new(xy, g(&qd.yy, "yy")?, yz),
+                DVec3::new(xz, yz, g(&qd.zz, "zz")?),
+            );
+            let b = DVec3::new(g(&qd.x, "x")?, g(&qd.y, "y")?, g(&qd.z, "z")?) / 2.0;
+            let quadric = Quadric::new(a, b, g(&qd.c, "c")?).map_err(|e| match e {
+                GeometryError::Degenerate => ctx.err(
                     &q.span(),
                     &f("coefficients"),
                     "all quadratic and linear coefficients are 0",
-                ));
-            }
+                ),
+                other => ctx.err(&q.span(), &f("coefficients"), other.to_string()),
+            })?;
             let clip = match (&o.min, &o.max) {
                 (Some(lo), Some(hi)) => Some(box_of(ctx, lo, hi, p)?),
                 (None, None) => None,
@@ -452,12 +462,7 @@ fn object(ctx: &mut Ctx<'_>, o: &S<ObjectDef>, p: &str, inherited: Option<u32>) 
                     ));
                 }
             };
-            Shape::Quadric(Quadric {
-                a,
-                b,
-                c: g(&qd.c, "c")?,
-                clip,
-            })
+            Shape::Quadric(ClippedQuadric { quadric, clip })
         }
         "box" => {
             let lo = ctx.need(&o.min, &span, &f("min"), kind)?;
@@ -467,10 +472,12 @@ fn object(ctx: &mut Ctx<'_>, o: &S<ObjectDef>, p: &str, inherited: Option<u32>) 
         "plane" => {
             let pt = ctx.need(&o.point, &span, &f("point"), kind)?;
             let n = ctx.need(&o.normal, &span, &f("normal"), kind)?;
-            Shape::Plane {
-                point: ctx.v3(pt, &f("point"))?,
-                normal: ctx.dir(n, &f("normal"))?,
-            }
+            let point = ctx.v3(pt, &f("point"))?;
+            let normal = ctx.dir(n, &f("normal"))?;
+            Shape::Plane(
+                Plane::new(point, normal)
+                    .map_err(|e| ctx.err(&n.span(), &f("normal"), e.to_string()))?,
+            )
         }
         "triangle" | "polygon" => {
             let vs = ctx.need(&o.vertices, &span, &f("vertices"), kind)?;
@@ -588,57 +595,20 @@ fn box_of(ctx: &Ctx<'_>, lo: &V3, hi: &V3, p: &str) -> Result<Aabb> {
 }
 
 fn polygon(ctx: &Ctx<'_>, pts: Vec<Vec3>, span: &Span, field: &str) -> Result<Polygon> {
-    if pts.len() < 3 {
-        return Err(ctx.err(
-            span,
-            field,
-            format!("a polygon needs at least 3 vertices, got {}", pts.len()),
-        ));
-    }
-    // Newell's normal.
-    let mut n = Vec3::ZERO;
-    for k in 0..pts.len() {
-        let (a, b) = (pts[k], pts[(k + 1) % pts.len()]);
-        n += Vec3::new(
-            (a.y - b.y) * (a.z + b.z),
-            (a.z - b.z) * (a.x + b.x),
-            (a.x - b.x) * (a.y + b.y),
-        );
-    }
-    let n = n.normalize_or_zero();
-    if n == Vec3::ZERO {
-        return Err(ctx.err(span, field, "degenerate polygon (zero area)"));
-    }
-    let bb = Aabb::from_points(&pts);
-    let diam = bb.extent().length();
-    let centroid = pts.iter().copied().sum::<Vec3>() / pts.len() as f32;
-    if let Some((k, d)) = pts
-        .iter()
-        .map(|p| (*p - centroid).dot(n).abs())
-        .enumerate()
-        .find(|(_, d)| *d > PLANARITY_REL * diam)
-    {
-        return Err(ctx.err(
-            span,
-            field,
-            format!(
-                "polygon is not planar: vertex {k} is {d} from the plane (allowed {})",
-                PLANARITY_REL * diam
+    Polygon::new(&pts).map_err(|e| {
+        let msg = match e {
+            GeometryError::VertexCount => format!(
+                "a polygon needs 3 to {POLYGON_MAX_VERTICES} vertices, got {}",
+                pts.len()
             ),
-        ));
-    }
-    let a = n.abs();
-    let drop_axis = if a.x >= a.y && a.x >= a.z {
-        0
-    } else if a.y >= a.z {
-        1
-    } else {
-        2
-    };
-    Ok(Polygon {
-        vertices: pts,
-        normal: n,
-        drop_axis,
+            GeometryError::NonPlanar => {
+                "polygon is not planar (a vertex is farther than 1e-5 × its size from the plane)"
+                    .to_string()
+            }
+            GeometryError::Degenerate => "degenerate polygon (zero area)".to_string(),
+            other => other.to_string(),
+        };
+        ctx.err(span, field, msg)
     })
 }
 
