@@ -9,6 +9,7 @@
 //! `|p| = 1` and at `|p| = 1e7` alike.
 
 use crate::ray::Ray;
+use crate::tolerance::SHADOW_SEGMENT_END_SLACK;
 use glam::{Vec2, Vec3};
 
 /// Where a ray meets a primitive.
@@ -86,14 +87,24 @@ pub fn spawn_ray(hit: &Hit, w: Vec3) -> Ray {
     Ray::new(hit.spawn_origin(w), w)
 }
 
-/// A shadow ray from `hit` towards the point `target` (a light position), over `(0, 1]` with
-/// direction `target − origin`: anything strictly between the offset origin and the target,
-/// or exactly at the target, blocks it. For a target that is itself a surface point, offset it
-/// first with [`offset_ray_origin`] so that its own surface does not block the ray.
+/// A shadow ray from `hit` towards the point `target` (a light position), with direction
+/// `target − origin` over `(0, 1 − SHADOW_SEGMENT_END_SLACK]`
+/// ([`crate::tolerance::SHADOW_SEGMENT_END_SLACK`]): anything between the offset origin and the
+/// target blocks it, except within that sliver at the target's end. For a target that is
+/// itself a surface point use [`spawn_ray_between`], which offsets it off its own surface.
 #[must_use]
 pub fn spawn_ray_to(hit: &Hit, target: Vec3) -> Ray {
     let origin = hit.spawn_origin(target - hit.point);
-    Ray::with_interval(origin, target - origin, 0.0, 1.0)
+    Ray::with_interval(origin, target - origin, 0.0, 1.0 - SHADOW_SEGMENT_END_SLACK)
+}
+
+/// A shadow ray between two surface points (pbrt's `SpawnRayTo(from, to)`): both ends are
+/// offset off their surfaces towards each other by their error bounds, so the segment hits
+/// neither its source's nor its target's surface.
+#[must_use]
+pub fn spawn_ray_between(from: &Hit, to: &Hit) -> Ray {
+    let target = to.spawn_origin(from.point - to.point);
+    spawn_ray_to(from, target)
 }
 
 #[cfg(test)]
@@ -114,7 +125,7 @@ mod tests {
     }
 
     #[test]
-    fn spawn_ray_to_spans_zero_to_one() {
+    fn spawn_ray_to_ends_just_short_of_the_target() {
         let hit = Hit {
             t: 1.0,
             point: Vec3::ZERO,
@@ -125,7 +136,7 @@ mod tests {
         };
         let r = spawn_ray_to(&hit, Vec3::new(0.0, 0.0, 5.0));
         assert_eq!(r.t_min, 0.0);
-        assert_eq!(r.t_max, 1.0);
+        assert_eq!(r.t_max, 1.0 - SHADOW_SEGMENT_END_SLACK);
         assert_eq!(r.at(1.0), Vec3::new(0.0, 0.0, 5.0));
     }
 }

@@ -43,5 +43,5 @@ pub mod triangle;
 pub use aabb::Aabb;
 pub use error::{GeometryError, RayError};
 pub use glam::{Mat3, Mat4, Vec2, Vec3};
-pub use hit::{Hit, spawn_ray, spawn_ray_to};
+pub use hit::{Hit, spawn_ray, spawn_ray_between, spawn_ray_to};
 pub use ray::Ray;

@@ -95,11 +95,12 @@ impl Ray {
         self.validate().is_ok()
     }
 
-    /// `true` when `t` lies in `(t_min, t_max]` (false for NaN).
+    /// `true` when `t` lies in `(t_min, t_max]` and is finite: a "hit" at `t = ±∞` (an
+    /// overflowed intersection) is no hit, even for `t_max = +∞`. False for NaN.
     #[inline]
     #[must_use]
     pub fn contains(&self, t: f32) -> bool {
-        t > self.t_min && t <= self.t_max
+        t > self.t_min && t <= self.t_max && t != f32::INFINITY
     }
 
     /// The point at parameter `t`. Note: for hit points prefer the primitive's own
@@ -123,6 +124,9 @@ mod tests {
         assert!(r.contains(2.0));
         assert!(!r.contains(2.0f32.next_up()));
         assert!(!r.contains(f32::NAN));
+        let open = Ray::new(Vec3::ZERO, Vec3::X);
+        assert!(open.contains(f32::MAX));
+        assert!(!open.contains(f32::INFINITY), "a hit at infinity is no hit");
     }
 
     #[test]

@@ -84,3 +84,14 @@ pub const QUADRIC_ROOT_RESIDUAL_REL: f64 = 1.0 / 17_592_186_044_416.0;
 /// `f32` ulps of its own size, whose plane (and so the ray–plane hit and the projection axis)
 /// is determined by rounding alone.
 pub const POLYGON_MIN_AREA_REL: f32 = gamma(8);
+
+/// How far short of its target a shadow segment from [`crate::hit::spawn_ray_to`] ends:
+/// `t_max = 1 − SHADOW_SEGMENT_END_SLACK`, relative to the segment length (unitless).
+///
+/// The target (a light, or a surface point offset off its surface by its error bound) sits at
+/// `t = 1`. When the offset is smaller than the `f32` resolution of `t` near 1 (`2⁻²⁴`), the
+/// target's own surface can be computed at exactly `t = 1.0` or a few ulps below; 16 ulps of
+/// `t` covers the watertight test's rounding of `t` for segments comparable in length to their
+/// coordinates. The cost: an occluder within `1e-6` of the segment length from the target is
+/// not seen.
+pub const SHADOW_SEGMENT_END_SLACK: f32 = 16.0 * crate::float::F32_UNIT_ROUNDOFF;

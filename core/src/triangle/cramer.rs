@@ -43,6 +43,6 @@ impl TriangleIntersector for Cramer {
             return None;
         }
         let t = ng.dot(s) / det;
-        finish(ray, t, b1, b2, ng, det > 0.0)
+        finish(ray, t, b1, b2, ng, det > 0.0, v)
     }
 }

@@ -13,7 +13,9 @@
 //! * A hit has `t` in the ray's `(t_min, t_max]` and barycentrics `(b1, b2)` of `v1`, `v2`
 //!   (`b0 = 1 − b1 − b2`), each in `[0, 1]` up to [`crate::tolerance::BARYCENTRIC_SLACK`].
 //! * Rays lying in the triangle's plane, degenerate (zero-area) triangles, invalid rays
-//!   ([`Ray::validate`]) and non-finite vertices give no hit. No input panics.
+//!   ([`Ray::validate`]) and non-finite vertices give no hit, and neither does a `t` that
+//!   overflows to infinity. "In the plane" and "zero area" are decided in `f64` (see
+//!   `degenerate_or_coplanar`), exactly for all but extreme coordinate ranges. No input panics.
 //! * Both faces are hit; [`TriangleHit::front_face`] tells which one
 //!   (counter-clockwise `v0, v1, v2` seen from the ray's origin is the front).
 //!
@@ -183,16 +185,43 @@ impl TriangleVariant {
     }
 }
 
+/// `true` when the triangle has exactly zero area, or the ray lies exactly in its plane, as
+/// decided in `f64` from the `f32` inputs: `n = (v1 − v0) × (v2 − v0)` and `d·n` are evaluated
+/// in `f64`, which is exact whenever the coordinate differences and their products fit in 53
+/// bits (every exactly collinear or coplanar configuration of moderately ranged `f32` data) and
+/// otherwise off by ~2⁻⁵⁰ relative, never by enough to call a clearly non-degenerate case
+/// degenerate.
+///
+/// Why the watertight test needs it: its shear is rounded to `f32`, which can turn the exact
+/// projection of such a triangle (a segment) into a thin sliver with a non-zero determinant,
+/// and a ray on that sliver's closed edge would then report a hit. Evaluated only for rays that
+/// passed the edge tests, so it costs nothing on misses.
+#[inline]
+pub(crate) fn degenerate_or_coplanar(ray: &Ray, v: &[Vec3; 3]) -> bool {
+    let (a, b, c) = (v[0].as_dvec3(), v[1].as_dvec3(), v[2].as_dvec3());
+    let n = (b - a).cross(c - a);
+    n == glam::DVec3::ZERO || ray.direction.as_dvec3().dot(n) == 0.0
+}
+
 /// Checks the common post-conditions and builds the hit; shared by the `f32` variants.
 #[inline]
-fn finish(ray: &Ray, t: f32, b1: f32, b2: f32, ng: Vec3, front_face: bool) -> Option<TriangleHit> {
-    (ray.contains(t) && b1.is_finite() && b2.is_finite()).then_some(TriangleHit {
-        t,
-        b1,
-        b2,
-        ng,
-        front_face,
-    })
+fn finish(
+    ray: &Ray,
+    t: f32,
+    b1: f32,
+    b2: f32,
+    ng: Vec3,
+    front_face: bool,
+    v: &[Vec3; 3],
+) -> Option<TriangleHit> {
+    (ray.contains(t) && b1.is_finite() && b2.is_finite() && !degenerate_or_coplanar(ray, v))
+        .then_some(TriangleHit {
+            t,
+            b1,
+            b2,
+            ng,
+            front_face,
+        })
 }
 
 #[cfg(test)]

@@ -72,6 +72,6 @@ impl TriangleIntersector for MollerTrumbore {
         }
         let t = e2.dot(q) * inv_det;
         // det = e1·(d × e2) = −d·(e1 × e2): positive when d opposes ng.
-        finish(ray, t, b1, b2, e1.cross(e2), det > 0.0)
+        finish(ray, t, b1, b2, e1.cross(e2), det > 0.0, v)
     }
 }

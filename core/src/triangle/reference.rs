@@ -92,7 +92,7 @@ impl TriangleIntersector for F64Reference {
     fn intersect_prepared(&self, pre: &F64Ray, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
         let (t, b) = Self::solve_prepared(pre, ray, v)?;
         let t32 = t as f32;
-        ray.contains(t32).then(|| TriangleHit {
+        (ray.contains(t32) && !super::degenerate_or_coplanar(ray, v)).then(|| TriangleHit {
             t: t32,
             b1: b[1] as f32,
             b2: b[2] as f32,

@@ -94,7 +94,7 @@ fn finish_exact(ray: &Ray, edges: [f64; 3], z: [f32; 3], v: &[Vec3; 3]) -> Optio
     }
     let t_scaled = e0 * z[0] as f64 + e1 * z[1] as f64 + e2 * z[2] as f64;
     let t = (t_scaled / det) as f32;
-    if !ray.contains(t) {
+    if !ray.contains(t) || super::degenerate_or_coplanar(ray, v) {
         return None;
     }
     let inv = 1.0 / det;
@@ -181,7 +181,11 @@ impl TriangleIntersector for WatertightF32 {
         let inv = 1.0 / det;
         let t = t_scaled * inv;
         let (b1, b2) = (w * inv, s * inv);
-        (ray.contains(t) && b1.is_finite() && b2.is_finite()).then(|| TriangleHit {
+        (ray.contains(t)
+            && b1.is_finite()
+            && b2.is_finite()
+            && !super::degenerate_or_coplanar(ray, v))
+        .then(|| TriangleHit {
             t,
             b1,
             b2,
