@@ -123,8 +123,8 @@ pub enum Shape {
     Plane(Plane),
     /// Single triangle (counter-clockwise faces the viewer).
     Triangle([Vec3; 3]),
-    /// Planar polygon.
-    Polygon(Polygon),
+    /// Planar polygon (boxed: 64 inline vertices).
+    Polygon(Box<Polygon>),
     /// Triangle mesh instance.
     Mesh(Arc<MeshShape>),
     /// CSG.

@@ -506,7 +506,7 @@ fn object(ctx: &mut Ctx<'_>, o: &S<ObjectDef>, p: &str, inherited: Option<u32>) 
                 }
                 Shape::Triangle([a, b, c])
             } else {
-                Shape::Polygon(polygon(ctx, pts, &vs.span(), &f("vertices"))?)
+                Shape::Polygon(Box::new(polygon(ctx, pts, &vs.span(), &f("vertices"))?))
             }
         }
         "mesh" => {
