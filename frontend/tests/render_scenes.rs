@@ -344,3 +344,19 @@ fn debug_modes() {
         assert_eq!(r.stats["shadow"], 0, "debug modes cast primary rays only");
     }
 }
+
+#[test]
+fn readme_example_parses_and_renders() {
+    let readme = std::fs::read_to_string(scenes_dir().join("README.md")).unwrap();
+    let start = readme.find("```toml\n").expect("a toml example") + "```toml\n".len();
+    let len = readme[start..].find("```").unwrap();
+    let text = &readme[start..start + len];
+    // Parsed as if it lived in scenes/, so that `meshes/cube.obj` resolves.
+    let mut s = halfray::scene::parse(text, &scenes_dir().join("readme-example.toml"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    s.camera.width = 32;
+    s.camera.height = 24;
+    let out = halfray::render::render(&s, &halfray::render::RenderOptions::default());
+    assert!(out.coverage() > 0);
+    assert_eq!(out.plan.csg_objects, ["object[1] (csg)"]);
+}
