@@ -59,8 +59,15 @@ fn unknown_key() {
         "unknown.toml",
         &sphere_with("center = [0, 0, 0]\nradiuss = 1\nmaterial = \"m\""),
         "14:1",
-        "radiuss",
+        "object[0].radiuss",
         "unknown field `radiuss`",
+    );
+    check(
+        "unknown_mat.toml",
+        &BASE.replace("diffuse = [1, 0, 0]", "difuse = [1, 0, 0]"),
+        "9:1",
+        "material.m.difuse",
+        "unknown field `difuse`",
     );
     check(
         "unknown_top.toml",
@@ -84,7 +91,7 @@ fn missing_fields() {
         "nocam.toml",
         "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\n",
         "1:1",
-        "height",
+        "camera.height",
         "missing field `height`",
     );
     check(
@@ -158,7 +165,7 @@ fn type_errors_and_wrong_fields() {
         "type.toml",
         &sphere_with("center = [0, 0, 0]\nradius = \"big\"\nmaterial = \"m\""),
         "14:10",
-        "radius",
+        "object[0].radius",
         "invalid type: string \"big\"",
     );
     check(

@@ -168,8 +168,7 @@ pub struct Material {
 }
 
 impl Material {
-    /// The default material's values (used when an object names none is not allowed; this is
-    /// the value of omitted fields).
+    /// A material with the format's defaults (the values of omitted fields).
     pub fn with_name(name: &str) -> Self {
         Self {
             name: name.to_string(),
@@ -275,7 +274,12 @@ impl Source<'_> {
     fn toml_error(&self, e: &toml::de::Error) -> Error {
         let msg = e.message().trim().to_string();
         let span = e.span().unwrap_or(0..0);
-        let field = backticked_field(&msg).or_else(|| self.key_before(span.start));
+        let field = backticked_field(&msg)
+            .or_else(|| self.key_before(span.start))
+            .map(|f| match self.table_path(span.start) {
+                Some(t) => format!("{t}.{f}"),
+                None => f,
+            });
         let mut at = Location::file(self.path);
         if e.span().is_some() {
             let (line, col) = self.line_col(span.start);
@@ -285,6 +289,41 @@ impl Source<'_> {
             at = at.field(f);
         }
         Error::input(at, msg)
+    }
+
+    /// The table holding byte offset `at`: the last `[table]` or `[[array]]` header at or
+    /// before it, with the element index for arrays of tables (`object[2]`, `material.red`).
+    fn table_path(&self, at: usize) -> Option<String> {
+        let at = floor_boundary(self.text, at);
+        let mut counts: std::collections::HashMap<String, usize> = Default::default();
+        let mut current = None;
+        let mut offset = 0usize;
+        for line in self.text.split_inclusive('\n') {
+            if offset > at {
+                break;
+            }
+            offset += line.len();
+            let t = line.split('#').next().unwrap_or("").trim();
+            let is_name = |n: &str| {
+                !n.is_empty()
+                    && n.chars()
+                        .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.' | '"'))
+            };
+            if let Some(name) = t.strip_prefix("[[").and_then(|r| r.strip_suffix("]]")) {
+                let name = name.trim();
+                if is_name(name) {
+                    let k = counts.entry(name.to_string()).or_insert(0);
+                    current = Some(format!("{name}[{k}]"));
+                    *k += 1;
+                }
+            } else if let Some(name) = t.strip_prefix('[').and_then(|r| r.strip_suffix(']')) {
+                let name = name.trim();
+                if is_name(name) {
+                    current = Some(name.to_string());
+                }
+            }
+        }
+        current
     }
 
     /// The key of a `key = value` line whose value starts at `at`.
