@@ -3,6 +3,8 @@
 
 pub mod chart;
 pub mod choices;
+#[cfg(feature = "embree")]
+pub mod embree_rows;
 pub mod triangles;
 
 use crate::atomic::write_bytes_atomic;
@@ -24,6 +26,7 @@ pub fn shared_meshes_dir() -> PathBuf {
 pub struct AccuracyArgs {
     /// Meshes (OBJ). Default: the closed shared meshes (tetrahedron, cube, octahedron, spot,
     /// torus) for the accuracy figures, plus the bunny and the dragon for BVH throughput.
+    /// With the `embree` feature, `embree` and `embree-robust` rows are added.
     pub meshes: Vec<PathBuf>,
     /// Small workloads (under a minute), for CI.
     #[arg(long)]
@@ -160,38 +163,28 @@ pub fn measure(args: &AccuracyArgs) -> Result<Report> {
     let bunny = by_name("bunny").or_else(|| meshes.first());
     let largest = meshes.iter().max_by_key(|(_, m)| m.triangles.len());
     let bvh_rays = if args.quick { 20_000 } else { 200_000 };
-    let throughput =
-        |entry: Option<&(PathBuf, ObjMesh)>, primary: bool| -> Result<Vec<Option<f64>>> {
-            let Some((_, mesh)) = entry else {
-                return Ok(vec![None; TriangleVariant::ALL.len()]);
-            };
-            let adj = crate::crosscheck::sets::Adjacency::new(mesh);
-            let set = if primary { "primary" } else { "random" };
-            let rays: Vec<halfray_core::Ray> =
-                crate::crosscheck::sets::generate(set, mesh, &adj, bvh_rays, args.seed)
-                    .unwrap_or_default()
-                    .into_iter()
-                    .map(|r| r.ray)
-                    .collect();
-            let accel = crate::accel::MeshAccel::new(mesh.clone())?;
-            Ok(TriangleVariant::ALL
-                .iter()
-                .map(|&v| Some(triangles::mrays_bvh_variant(v, &accel, &rays, reps.min(3))))
-                .collect())
-        };
     let other = largest.filter(|l| !bunny.is_some_and(|b| std::ptr::eq(*l, b)));
-    let cols = [
-        throughput(bunny, true)?,
-        throughput(bunny, false)?,
-        throughput(other, true)?,
-        throughput(other, false)?,
+    let sets = [
+        ray_set(bunny, true, bvh_rays, args.seed),
+        ray_set(bunny, false, bvh_rays, args.seed),
+        ray_set(other, true, bvh_rays, args.seed),
+        ray_set(other, false, bvh_rays, args.seed),
     ];
-    for (i, row) in variants.iter_mut().enumerate() {
-        row.mrays_bvh_primary = cols[0][i];
-        row.mrays_bvh_incoherent = cols[1][i];
-        row.mrays_bvh_primary_largest = cols[2][i];
-        row.mrays_bvh_incoherent_largest = cols[3][i];
+    for (c, entry) in sets.iter().enumerate() {
+        let Some((mesh, rays)) = entry else { continue };
+        let accel = crate::accel::MeshAccel::new((*mesh).clone())?;
+        for (row, &v) in variants.iter_mut().zip(TriangleVariant::ALL.iter()) {
+            let m = Some(triangles::mrays_bvh_variant(v, &accel, rays, reps.min(3)));
+            match c {
+                0 => row.mrays_bvh_primary = m,
+                1 => row.mrays_bvh_incoherent = m,
+                2 => row.mrays_bvh_primary_largest = m,
+                _ => row.mrays_bvh_incoherent_largest = m,
+            }
+        }
     }
+    #[cfg(feature = "embree")]
+    variants.extend(embree_rows::rows(&closed, &workload, &sets, reps.min(3))?);
     let choice_n = n / 4;
     Ok(Report {
         variants,
@@ -200,6 +193,24 @@ pub fn measure(args: &AccuracyArgs) -> Result<Report> {
         sphere: choices::sphere_rows(choice_n, args.seed, reps),
         quick: args.quick,
     })
+}
+
+/// The primary (camera) or incoherent rays of the throughput columns for one mesh.
+fn ray_set(
+    entry: Option<&(PathBuf, ObjMesh)>,
+    primary: bool,
+    count: usize,
+    seed: u64,
+) -> Option<(&ObjMesh, Vec<halfray_core::Ray>)> {
+    let (_, mesh) = entry?;
+    let adj = crate::crosscheck::sets::Adjacency::new(mesh);
+    let set = if primary { "primary" } else { "random" };
+    let rays = crate::crosscheck::sets::generate(set, mesh, &adj, count, seed)
+        .unwrap_or_default()
+        .into_iter()
+        .map(|r| r.ray)
+        .collect();
+    Some((mesh, rays))
 }
 
 fn opt(x: Option<f64>, digits: usize) -> String {

@@ -88,6 +88,12 @@ pub struct Workload {
     pub cost_rays: Vec<Ray>,
     /// Triangles of the cost loop.
     pub cost_tris: Vec<[Vec3; 3]>,
+    /// For each leak ray, the index of its mesh in `leak_meshes`.
+    pub leak_mesh: Vec<usize>,
+    /// For each outside ray, its `(mesh index, triangle index)` in `meshes`.
+    pub outside_ids: Vec<(usize, u32)>,
+    /// For each pair ray, its `(mesh index, triangle index)` in `meshes`.
+    pub pair_ids: Vec<(usize, u32)>,
 }
 
 impl Workload {
@@ -95,6 +101,7 @@ impl Workload {
     /// the closed ones), with `n` rays per kind in total.
     pub fn new(meshes: &[ObjMesh], leak_meshes: &[ObjMesh], n: usize, seed: u64) -> Self {
         let mut leak_rays = Vec::new();
+        let mut leak_mesh = Vec::new();
         let per = n / (2 * leak_meshes.len().max(1));
         for (i, m) in leak_meshes.iter().enumerate() {
             let adj = Adjacency::new(m);
@@ -103,32 +110,38 @@ impl Workload {
                     if let Some(t) = r.target {
                         let tris = t.incident.iter().map(|&f| m.triangle(f as usize)).collect();
                         leak_rays.push((r.ray, tris));
+                        leak_mesh.push(i);
                     }
                 }
             }
         }
         let mut rng = Rng::new(seed ^ 0xACC);
-        let all: Vec<[Vec3; 3]> = meshes
+        let all: Vec<(usize, u32, [Vec3; 3])> = meshes
             .iter()
-            .flat_map(|m| (0..m.triangles.len()).map(move |f| m.triangle(f)))
-            .filter(|t| (t[1] - t[0]).cross(t[2] - t[0]) != Vec3::ZERO)
+            .enumerate()
+            .flat_map(|(mi, m)| (0..m.triangles.len()).map(move |f| (mi, f as u32, m.triangle(f))))
+            .filter(|(_, _, t)| (t[1] - t[0]).cross(t[2] - t[0]) != Vec3::ZERO)
             .collect();
         let mut outside_rays = Vec::with_capacity(n);
         let mut pair_rays = Vec::with_capacity(n);
+        let mut outside_ids = Vec::with_capacity(n);
+        let mut pair_ids = Vec::with_capacity(n);
         if !all.is_empty() {
             while outside_rays.len() < n {
-                let tri = all[rng.below(all.len())];
+                let (mi, f, tri) = all[rng.below(all.len())];
                 if let Some(r) = just_outside(&mut rng, &tri) {
                     outside_rays.push((r, tri));
+                    outside_ids.push((mi, f));
                 }
             }
             while pair_rays.len() < n {
-                let tri = all[rng.below(all.len())];
+                let (mi, f, tri) = all[rng.below(all.len())];
                 pair_rays.push((aim_at_triangle(&mut rng, &tri), tri));
+                pair_ids.push((mi, f));
             }
         }
         let cost_tris: Vec<[Vec3; 3]> = (0..64.min(all.len()))
-            .map(|_| all[rng.below(all.len())])
+            .map(|_| all[rng.below(all.len())].2)
             .collect();
         let cost_rays = pair_rays.iter().take(4096).map(|(r, _)| *r).collect();
         Self {
@@ -137,6 +150,9 @@ impl Workload {
             pair_rays,
             cost_rays,
             cost_tris,
+            leak_mesh,
+            outside_ids,
+            pair_ids,
         }
     }
 }
