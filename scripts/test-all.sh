@@ -52,7 +52,9 @@ fi
 
 stage bench
 mkdir -p target/ci
-cargo run --release -p halfray -- bench accuracy --quick --json target/ci/accuracy.json --chart target/ci/accuracy.png
+features=""
+[ "${SKIP_EMBREE:-0}" != 1 ] && features="--features embree"   # adds the Embree rows
+cargo run --release -p halfray $features -- bench accuracy --quick --json target/ci/accuracy.json --chart target/ci/accuracy.png
 python3 - target/ci/accuracy.json <<'PY'
 import json, sys
 report = json.load(open(sys.argv[1]))
