@@ -1,6 +1,6 @@
 //! Cost and accuracy of each ray–triangle variant, measured on the same rays in one run.
 
-use crate::crosscheck::judge::{near_boundary, plane_barycentrics};
+use crate::crosscheck::judge::{near_boundary, ray_space_barycentrics};
 use crate::crosscheck::sets::{self, Adjacency, Rng};
 use crate::obj::ObjMesh;
 use glam::{DVec3, Vec3};
@@ -14,11 +14,13 @@ use std::time::Instant;
 
 /// How far outside a triangle the "just outside" rays aim, in ulps (`2⁻²³`) of the largest
 /// vertex coordinate relative to the ray origin (the magnitude the `f32` tests round), measured
-/// perpendicular to the edge in the triangle's plane. The watertight test's only error is the
-/// rounding of the translated and sheared vertices (≤ 3 roundings, `gamma(3)` ≈ 1.5 ulps), so
-/// 16 ulps is clearly outside for a correct test, while a test with sloppy edges (epsilons,
-/// rounded sums) still reports hits there.
-pub const OUTSIDE_OFFSET_ULPS: f64 = 16.0;
+/// perpendicular to the edge in the triangle's plane and divided by `|cos θ|` (ray against
+/// normal) so that the offset survives the projection along the ray. Rays are then kept only
+/// if the ray-space test ([`crate::crosscheck::judge::ray_space_barycentrics`]) puts them
+/// outside by more than its boundary margin (64 ulps): outside beyond every variant's rounding,
+/// so a correct test never hits them, while tests with sloppy edges (epsilons, rounded sums
+/// evaluated from a different base vertex) still can.
+pub const OUTSIDE_OFFSET_ULPS: f64 = 96.0;
 
 /// Accuracy figures of one variant.
 #[derive(Clone, Debug, Default)]
@@ -202,9 +204,11 @@ fn just_outside(rng: &mut Rng, tri: &[Vec3; 3]) -> Option<Ray> {
         .fold(0.0, f64::max);
     let p = p_edge + out * (OUTSIDE_OFFSET_ULPS * f32::EPSILON as f64 * mag);
     let ray = Ray::new(o.as_vec3(), (p - o).as_vec3());
-    // Keep only rays the f64 reference places clearly outside (after rounding to f32).
-    let (_, bary, _) = plane_barycentrics(&ray, tri)?;
-    (bary.iter().copied().fold(f64::INFINITY, f64::min) < 0.0).then_some(ray)
+    // Keep only rays clearly outside in ray space (after rounding to f32).
+    let (bary, margin) = ray_space_barycentrics(&ray, tri)?;
+    let outside = bary.iter().copied().fold(f64::INFINITY, f64::min) < -margin
+        || bary.iter().copied().fold(f64::NEG_INFINITY, f64::max) > 1.0 + margin;
+    outside.then_some(ray)
 }
 
 /// Runs the accuracy workloads through one intersector.
