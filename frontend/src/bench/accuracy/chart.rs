@@ -75,7 +75,13 @@ pub fn write_chart(
     hline(&mut img, LEFT, LEFT + pw, TOP + ph, black);
     vline(&mut img, LEFT, TOP, TOP + ph, black);
     text(&mut img, 8, 4, title, black);
-    text(&mut img, LEFT + pw / 2 - 60, H as i32 - 30, x_label, black);
+    text(
+        &mut img,
+        LEFT + pw / 2 - 6 * x_label.len() as i32,
+        H as i32 - 30,
+        x_label,
+        black,
+    );
     text(&mut img, 8, 24, y_label, black);
     // Legend in the plot's upper-left corner; points drawn largest-first so none hides.
     let legend_x = LEFT + 16;
