@@ -1,0 +1,135 @@
+//! The `embree` and `embree-robust` rows of the accuracy benchmark (feature `embree`): the same
+//! workloads through Embree 4's `rtcIntersect1` on scenes of the whole meshes.
+//!
+//! Embree has no per-triangle entry point, so `ns_per_test` is not reported, and every query
+//! runs against a whole mesh: a leak is a miss or a hit beyond the aimed-at edge or vertex
+//! (what [`crate::crosscheck::judge::is_leak`] decides), a false hit is the aimed-at triangle
+//! itself reported as the closest hit, and `t` errors are taken where the closest hit is the
+//! aimed-at triangle.
+
+use super::VariantRow;
+use super::triangles::{Accuracy, Workload};
+use crate::crosscheck::judge::{is_leak, near_boundary};
+use crate::embree::{EmbreeDevice, EmbreeScene, ray_is_valid};
+use crate::error::{Error, Result};
+use crate::obj::ObjMesh;
+use halfray_core::Ray;
+use halfray_core::triangle::F64Reference;
+use std::hint::black_box;
+use std::time::Instant;
+
+fn scene(device: &EmbreeDevice, m: &ObjMesh, robust: bool) -> Result<EmbreeScene> {
+    let pos: Vec<[f32; 3]> = m.positions.iter().map(|p| p.to_array()).collect();
+    EmbreeScene::new(device, &pos, &m.triangles, robust)
+        .map_err(|e| Error::Other(format!("embree: {e}")))
+}
+
+fn closest(s: &EmbreeScene, r: &Ray) -> Option<(u32, f32)> {
+    if !ray_is_valid(
+        r.origin.to_array(),
+        r.direction.to_array(),
+        r.t_min,
+        r.t_max,
+    ) {
+        return None;
+    }
+    s.intersect(
+        r.origin.to_array(),
+        r.direction.to_array(),
+        r.t_min,
+        r.t_max,
+    )
+    .map(|h| (h.prim_id, h.t))
+}
+
+/// Median Mrays/s of Embree closest-hit queries over `rays`.
+fn mrays(s: &EmbreeScene, rays: &[Ray], reps: usize) -> f64 {
+    let mut v: Vec<f64> = (0..reps)
+        .map(|_| {
+            let start = Instant::now();
+            let mut k = 0u32;
+            for r in rays {
+                k += closest(s, black_box(r)).is_some() as u32;
+            }
+            black_box(k);
+            rays.len() as f64 / start.elapsed().as_secs_f64().max(1e-12) / 1.0e6
+        })
+        .collect();
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// The two Embree rows. `throughput_sets` are the ray sets and meshes of the BVH columns, in
+/// column order (`None` where a column is not measured).
+pub fn rows(
+    meshes: &[ObjMesh],
+    w: &Workload,
+    throughput_sets: &[Option<(&ObjMesh, Vec<Ray>)>; 4],
+    reps: usize,
+) -> Result<Vec<VariantRow>> {
+    let device = EmbreeDevice::new().map_err(|e| Error::Other(format!("embree: {e}")))?;
+    let mut out = Vec::new();
+    for (name, robust) in [("embree", false), ("embree-robust", true)] {
+        let scenes: Vec<EmbreeScene> = meshes
+            .iter()
+            .map(|m| scene(&device, m, robust))
+            .collect::<Result<_>>()?;
+        let mut acc = Accuracy {
+            leak_rays: w.leak_rays.len(),
+            outside_rays: w.outside_rays.len(),
+            ..Accuracy::default()
+        };
+        for ((ray, _), &mi) in w.leak_rays.iter().zip(&w.leak_mesh) {
+            let hit = closest(&scenes[mi], ray).map(|(prim, t)| crate::crosscheck::judge::Answer {
+                prim,
+                t,
+                u: 0.0,
+                v: 0.0,
+            });
+            acc.leaks += is_leak(ray, hit.as_ref(), 1.0) as usize;
+        }
+        for ((ray, _), &(mi, f)) in w.outside_rays.iter().zip(&w.outside_ids) {
+            acc.false_hits += closest(&scenes[mi], ray).is_some_and(|(p, _)| p == f) as usize;
+        }
+        for ((ray, tri), &(mi, f)) in w.pair_rays.iter().zip(&w.pair_ids) {
+            let got = closest(&scenes[mi], ray);
+            let reference = F64Reference::solve(ray, tri).filter(|(t, _)| *t > 0.0);
+            if !near_boundary(ray, tri) {
+                // Hit/miss of the aimed-at triangle, where it is not occluded by another one.
+                let hits_it = got.is_some_and(|(p, _)| p == f);
+                let other_first = got.is_some_and(|(p, _)| p != f);
+                if !other_first {
+                    acc.hit_miss_rays += 1;
+                    acc.hit_miss_disagreements += (hits_it != reference.is_some()) as usize;
+                }
+            }
+            if let (Some((p, t)), Some((tr, _))) = (got, reference)
+                && p == f
+            {
+                acc.rel_t_errors.push(((t as f64 - tr) / tr).abs());
+            }
+        }
+        acc.rel_t_errors.sort_by(f64::total_cmp);
+        let mut cols = [None; 4];
+        for (c, entry) in throughput_sets.iter().enumerate() {
+            if let Some((m, rays)) = entry {
+                cols[c] = Some(mrays(&scene(&device, m, robust)?, rays, reps));
+            }
+        }
+        out.push(VariantRow {
+            name: name.into(),
+            ns_per_test: None,
+            mrays_bvh_primary: cols[0],
+            mrays_bvh_incoherent: cols[1],
+            mrays_bvh_primary_largest: cols[2],
+            mrays_bvh_incoherent_largest: cols[3],
+            leaks_per_million: acc.leaks_per_million(),
+            false_hits_per_million: acc.false_hits_per_million(),
+            max_rel_t_error: acc.max_rel_t_error(),
+            median_rel_t_error: acc.median_rel_t_error(),
+            reference_disagreements_per_million: acc.disagreements_per_million(),
+            leak_rays: acc.leak_rays,
+        });
+    }
+    Ok(out)
+}
