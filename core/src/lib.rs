@@ -36,6 +36,8 @@ pub mod polygon;
 pub mod quadric;
 pub mod ray;
 pub mod sphere;
+#[cfg(test)]
+mod test_util;
 pub mod tolerance;
 pub mod transform;
 pub mod triangle;

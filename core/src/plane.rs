@@ -182,13 +182,7 @@ fn axis_of(n: Vec3) -> Option<usize> {
 mod tests {
     use super::*;
     use crate::hit::spawn_ray;
-
-    fn lcg(state: &mut u64) -> f32 {
-        *state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((*state >> 40) as f32) / ((1u64 << 24) as f32)
-    }
+    use crate::test_util::lcg;
 
     #[test]
     fn constructor_rejects_bad_input() {

@@ -409,24 +409,8 @@ impl Ellipsoid {
 mod tests {
     use super::*;
     use crate::hit::spawn_ray;
+    use crate::test_util::unit_vec;
     use crate::tolerance::QUADRIC_ROOT_RESIDUAL_REL;
-
-    fn lcg(state: &mut u64) -> f32 {
-        *state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((*state >> 40) as f32) / ((1u64 << 24) as f32)
-    }
-
-    fn unit_vec(s: &mut u64) -> Vec3 {
-        loop {
-            let v = Vec3::new(lcg(s) * 2.0 - 1.0, lcg(s) * 2.0 - 1.0, lcg(s) * 2.0 - 1.0);
-            let l = v.length();
-            if l > 0.1 && l <= 1.0 {
-                return v / l;
-            }
-        }
-    }
 
     /// `|f(o + t·d)| / (|∇f|·|t·d| + F)`: compared with `QUADRIC_ROOT_RESIDUAL_REL`.
     fn residual_ratio(q: &Quadric, ray: &Ray, t: f64) -> f64 {

@@ -219,25 +219,9 @@ impl Sphere {
 mod tests {
     use super::*;
     use crate::hit::spawn_ray;
+    use crate::test_util::{lcg, unit_vec};
     use glam::DVec3;
     use std::vec::Vec;
-
-    fn lcg(state: &mut u64) -> f32 {
-        *state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((*state >> 40) as f32) / ((1u64 << 24) as f32)
-    }
-
-    fn unit_vec(s: &mut u64) -> Vec3 {
-        loop {
-            let v = Vec3::new(lcg(s) * 2.0 - 1.0, lcg(s) * 2.0 - 1.0, lcg(s) * 2.0 - 1.0);
-            let l = v.length();
-            if l > 0.1 && l <= 1.0 {
-                return v / l;
-            }
-        }
-    }
 
     /// Reference roots of the exact `f32` inputs, in `f64` (stable form; the `f64` rounding is
     /// ~2⁻²⁹ of an `f32` ulp for these inputs).

@@ -271,24 +271,8 @@ mod tests {
     use crate::hit::spawn_ray;
     use crate::quadric::Quadric;
     use crate::sphere::Sphere;
+    use crate::test_util::{lcg, unit_vec};
     use crate::triangle::{TriangleIntersector, Watertight};
-
-    fn lcg(state: &mut u64) -> f32 {
-        *state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((*state >> 40) as f32) / ((1u64 << 24) as f32)
-    }
-
-    fn unit_vec(s: &mut u64) -> Vec3 {
-        loop {
-            let v = Vec3::new(lcg(s) * 2.0 - 1.0, lcg(s) * 2.0 - 1.0, lcg(s) * 2.0 - 1.0);
-            let l = v.length();
-            if l > 0.1 && l <= 1.0 {
-                return v / l;
-            }
-        }
-    }
 
     /// Translate · shear · non-uniform scale.
     fn sheared_ellipsoid_transform() -> Transform {

@@ -41,6 +41,21 @@ impl Rng {
         lo + (hi - lo) * self.f64()
     }
 
+    /// Log-uniform in `[lo, hi)` (both positive).
+    pub fn log_range(&mut self, lo: f64, hi: f64) -> f64 {
+        (lo.ln() + (hi.ln() - lo.ln()) * self.f64()).exp()
+    }
+
+    /// `true` with probability `p`.
+    pub fn chance(&mut self, p: f64) -> bool {
+        self.f64() < p
+    }
+
+    /// A random `f32` with a full random mantissa, uniform-ish in `[lo, hi)`.
+    pub fn f32_in(&mut self, lo: f32, hi: f32) -> f32 {
+        self.range(f64::from(lo), f64::from(hi)) as f32
+    }
+
     /// Uniform index in `0..n` (0 when `n = 0`).
     pub fn below(&mut self, n: usize) -> usize {
         ((u128::from(self.next_u64()) * n as u128) >> 64) as usize

@@ -182,64 +182,8 @@ impl Mesh {
 // Deterministic random numbers
 // ---------------------------------------------------------------------------------------------
 
-/// SplitMix64 (Steele, Lea, Flood 2014): the same stream on every machine.
-#[derive(Clone, Debug)]
-pub struct Rng(u64);
-
-impl Rng {
-    /// A generator from a seed.
-    #[must_use]
-    pub fn new(seed: u64) -> Self {
-        Self(seed ^ 0x5DEE_CE66_D1CE_4E5B)
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[0, 1)`, 53 random bits.
-    pub fn f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// Uniform in `[lo, hi)`.
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.f64()
-    }
-
-    /// Log-uniform in `[lo, hi)` (both positive).
-    pub fn log_range(&mut self, lo: f64, hi: f64) -> f64 {
-        (lo.ln() + (hi.ln() - lo.ln()) * self.f64()).exp()
-    }
-
-    /// Uniform index in `0..n` (`n > 0`).
-    pub fn below(&mut self, n: usize) -> usize {
-        ((u128::from(self.next_u64()) * n as u128) >> 64) as usize
-    }
-
-    /// `true` with probability `p`.
-    pub fn chance(&mut self, p: f64) -> bool {
-        self.f64() < p
-    }
-
-    /// Uniform direction on the unit sphere.
-    pub fn unit_vector(&mut self) -> DVec3 {
-        let z = 2.0 * self.f64() - 1.0;
-        let phi = std::f64::consts::TAU * self.f64();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        DVec3::new(r * phi.cos(), r * phi.sin(), z)
-    }
-
-    /// A random `f32` with a full random mantissa, uniform-ish in `[lo, hi)`.
-    pub fn f32_in(&mut self, lo: f32, hi: f32) -> f32 {
-        self.range(f64::from(lo), f64::from(hi)) as f32
-    }
-}
+/// The deterministic SplitMix64 generator shared with the frontend's ray sets.
+pub use halfray::raysets::Rng;
 
 // ---------------------------------------------------------------------------------------------
 // Exact predicates

@@ -45,6 +45,15 @@ impl WatertightRay {
         })
     }
 
+    /// The three vertices projected with [`WatertightRay::project`]: `([x'], [y'], [z'])`.
+    #[inline]
+    fn project_triangle(&self, origin: Vec3, v: &[Vec3; 3]) -> ([f32; 3], [f32; 3], [f32; 3]) {
+        let (ax, ay, az) = self.project(origin, v[0]);
+        let (bx, by, bz) = self.project(origin, v[1]);
+        let (cx, cy, cz) = self.project(origin, v[2]);
+        ([ax, bx, cx], [ay, by, cy], [az, bz, cz])
+    }
+
     /// The sheared 2-D coordinates of `p − o` and its scaled depth `(x', y', z')`. Plain `f32`
     /// operations (never fused), so the result is a deterministic function of the vertex: a
     /// vertex shared by several triangles projects to the same point in all of them.
@@ -128,15 +137,13 @@ impl TriangleIntersector for Watertight {
         ray: &Ray,
         v: &[Vec3; 3],
     ) -> Option<TriangleHit> {
-        let (ax, ay, az) = pre.project(ray.origin, v[0]);
-        let (bx, by, bz) = pre.project(ray.origin, v[1]);
-        let (cx, cy, cz) = pre.project(ray.origin, v[2]);
+        let ([ax, bx, cx], [ay, by, cy], z) = pre.project_triangle(ray.origin, v);
         let edges = [
             diff_of_products_exact_sign(cx, by, cy, bx),
             diff_of_products_exact_sign(ax, cy, ay, cx),
             diff_of_products_exact_sign(bx, ay, by, ax),
         ];
-        finish_exact(ray, edges, [az, bz, cz], v)
+        finish_exact(ray, edges, z, v)
     }
 }
 
@@ -159,9 +166,7 @@ impl TriangleIntersector for WatertightF32 {
         ray: &Ray,
         v: &[Vec3; 3],
     ) -> Option<TriangleHit> {
-        let (ax, ay, az) = pre.project(ray.origin, v[0]);
-        let (bx, by, bz) = pre.project(ray.origin, v[1]);
-        let (cx, cy, cz) = pre.project(ray.origin, v[2]);
+        let ([ax, bx, cx], [ay, by, cy], [az, bz, cz]) = pre.project_triangle(ray.origin, v);
         let mut u = cx * by - cy * bx;
         let mut w = ax * cy - ay * cx;
         let mut s = bx * ay - by * ax;
