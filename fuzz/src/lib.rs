@@ -1,0 +1,2091 @@
+//! Property checks behind the `halfray` fuzz targets.
+//!
+//! Every fuzz target in `fuzz/fuzz_targets/` is a one-line call into this file, and the stable
+//! test `tests/tests/fuzz_replay.rs` includes this same file (`#[path]`) to replay the
+//! checked-in corpora (`fuzz/corpus/<target>/`) and regression inputs
+//! (`fuzz/regressions/<target>/`) with a plain `cargo test`. So this file depends only on
+//! `halfray-core`, `halfray` (frontend) and `glam`, and never names `crate::`.
+//!
+//! Each check **panics** with a message naming the input (decimal and bit patterns) when a
+//! property is broken; that is what libFuzzer records as a crash.
+//!
+//! Inputs are raw bytes decoded into `f32` bit patterns (`f32::from_bits(u32::from_le_bytes)`),
+//! so NaN, ±∞, ±0, subnormals and huge values all occur; missing bytes read as zero. The byte
+//! layout of every target is documented on its function, and [`seeds`] builds the hard-case
+//! seed corpus from readable values.
+
+use std::path::Path;
+
+use glam::{DVec3, Vec3};
+use halfray_core::aabb::{Aabb, SlabRay};
+use halfray_core::float::{F32_UNIT_ROUNDOFF, F64_UNIT_ROUNDOFF, gamma};
+use halfray_core::ray::Ray;
+use halfray_core::tolerance::BARYCENTRIC_SLACK;
+use halfray_core::triangle::{F64Reference, TriangleHit, TriangleVariant};
+
+/// Every target this file implements, by fuzz-target (and corpus directory) name.
+pub const TARGETS: &[&str] = &["ray_triangle", "ray_box", "obj_file", "bvh", "halfedge_ops"];
+
+/// Runs target `name` on `data`; `false` when no such target exists.
+pub fn run(name: &str, data: &[u8]) -> bool {
+    match name {
+        "ray_triangle" => ray_triangle(data),
+        "ray_box" => ray_box(data),
+        "obj_file" => obj_file(data),
+        "bvh" => bvh::bvh(data),
+        "halfedge_ops" => halfedge::halfedge_ops(data),
+        _ => return false,
+    }
+    true
+}
+
+// ---------------------------------------------------------------------------------------------
+// Byte decoding and encoding
+// ---------------------------------------------------------------------------------------------
+
+/// Reads little-endian values from fuzz bytes; past the end every byte reads as 0.
+#[derive(Clone, Debug)]
+pub struct Input<'a> {
+    data: &'a [u8],
+}
+
+impl<'a> Input<'a> {
+    /// A reader over `data`.
+    pub fn new(data: &'a [u8]) -> Self {
+        Self { data }
+    }
+
+    /// `true` when every byte has been read.
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
+    }
+
+    /// One byte (0 past the end).
+    pub fn u8(&mut self) -> u8 {
+        match self.data.split_first() {
+            Some((&b, rest)) => {
+                self.data = rest;
+                b
+            }
+            None => 0,
+        }
+    }
+
+    /// A little-endian `u16`.
+    pub fn u16(&mut self) -> u16 {
+        u16::from_le_bytes([self.u8(), self.u8()])
+    }
+
+    /// A little-endian `u32`.
+    pub fn u32(&mut self) -> u32 {
+        u32::from_le_bytes([self.u8(), self.u8(), self.u8(), self.u8()])
+    }
+
+    /// An `f32` from its little-endian bit pattern (any pattern: NaN payloads included).
+    pub fn f32(&mut self) -> f32 {
+        f32::from_bits(self.u32())
+    }
+
+    /// Three `f32`s.
+    pub fn vec3(&mut self) -> Vec3 {
+        let x = self.f32();
+        let y = self.f32();
+        let z = self.f32();
+        Vec3::new(x, y, z)
+    }
+
+    /// A small "quantized" coordinate: a signed byte divided by 4 (exact dyadic values in
+    /// `[-32, 31.75]`), so that shared vertices, coplanar faces and exact edge points occur.
+    pub fn q(&mut self) -> f32 {
+        f32::from(self.u8() as i8) * 0.25
+    }
+
+    /// Three quantized coordinates.
+    pub fn qvec3(&mut self) -> Vec3 {
+        let x = self.q();
+        let y = self.q();
+        let z = self.q();
+        Vec3::new(x, y, z)
+    }
+}
+
+/// Builds fuzz inputs (the inverse of [`Input`]), for seeds and regression tests.
+#[derive(Clone, Debug, Default)]
+pub struct Enc(pub Vec<u8>);
+
+impl Enc {
+    /// An empty input.
+    pub fn new() -> Self {
+        Self(Vec::new())
+    }
+    /// Appends a byte.
+    pub fn u8(mut self, b: u8) -> Self {
+        self.0.push(b);
+        self
+    }
+    /// Appends a little-endian `u16`.
+    pub fn u16(mut self, x: u16) -> Self {
+        self.0.extend_from_slice(&x.to_le_bytes());
+        self
+    }
+    /// Appends an `f32`'s bits.
+    pub fn f32(mut self, x: f32) -> Self {
+        self.0.extend_from_slice(&x.to_bits().to_le_bytes());
+        self
+    }
+    /// Appends three `f32`s.
+    pub fn vec3(self, v: Vec3) -> Self {
+        self.f32(v.x).f32(v.y).f32(v.z)
+    }
+    /// Appends a quantized coordinate (`4·x` must be an integer in `-128..=127`).
+    pub fn q(self, x: f32) -> Self {
+        self.u8(((x * 4.0) as i8) as u8)
+    }
+    /// Appends three quantized coordinates.
+    pub fn qvec3(self, v: Vec3) -> Self {
+        self.q(v.x).q(v.y).q(v.z)
+    }
+    /// Appends raw bytes.
+    pub fn bytes(mut self, b: &[u8]) -> Self {
+        self.0.extend_from_slice(b);
+        self
+    }
+    /// The bytes.
+    pub fn done(self) -> Vec<u8> {
+        self.0
+    }
+}
+
+fn fmt_f32(x: f32) -> String {
+    format!("{x:e} ({:#010x})", x.to_bits())
+}
+
+fn fmt_vec3(v: Vec3) -> String {
+    format!("[{}, {}, {}]", fmt_f32(v.x), fmt_f32(v.y), fmt_f32(v.z))
+}
+
+/// A ray, printed exactly (value and bits of every field).
+pub fn fmt_ray(r: &Ray) -> String {
+    format!(
+        "Ray {{ origin: {}, direction: {}, t_min: {}, t_max: {} }}",
+        fmt_vec3(r.origin),
+        fmt_vec3(r.direction),
+        fmt_f32(r.t_min),
+        fmt_f32(r.t_max)
+    )
+}
+
+// ---------------------------------------------------------------------------------------------
+// ray_triangle
+// ---------------------------------------------------------------------------------------------
+
+/// Flag bits of the first byte of a `ray_triangle` / `ray_box` input.
+pub mod flags {
+    /// `ray_triangle`: the direction is `target − origin` with
+    /// `target = v0 + u·(v1 − v0) + w·(v2 − v0)`, `(u, w)` = the first two direction floats
+    /// (so `u, w ∈ {0, ½, 1}` aim at vertices and edge midpoints). `ray_box`: the direction is
+    /// `min + (u, v, w)·(max − min) − origin`, aiming at box corners, edges and faces.
+    pub const AIM: u8 = 1;
+    /// The interval is `(0, +∞]`; the two interval floats are ignored.
+    pub const DEFAULT_INTERVAL: u8 = 2;
+    /// `ray_box`: the box is `[min(a, b), max(a, b)]` instead of `[a, b]`.
+    pub const ORDERED: u8 = 4;
+}
+
+/// Decodes a `ray_triangle` input: `flags: u8` ([`flags`]), `origin: 3×f32`,
+/// `direction: 3×f32`, `t_min: f32`, `t_max: f32`, `v0, v1, v2: 3×f32 each` (69 bytes).
+pub fn decode_ray_triangle(data: &[u8]) -> (Ray, [Vec3; 3]) {
+    let mut i = Input::new(data);
+    let fl = i.u8();
+    let origin = i.vec3();
+    let dir = i.vec3();
+    let (t_min, t_max) = (i.f32(), i.f32());
+    let v = [i.vec3(), i.vec3(), i.vec3()];
+    let direction = if fl & flags::AIM != 0 {
+        v[0] + (v[1] - v[0]) * dir.x + (v[2] - v[0]) * dir.y - origin
+    } else {
+        dir
+    };
+    let (t_min, t_max) = if fl & flags::DEFAULT_INTERVAL != 0 {
+        (0.0, f32::INFINITY)
+    } else {
+        (t_min, t_max)
+    };
+    (Ray::with_interval(origin, direction, t_min, t_max), v)
+}
+
+/// Encodes a `ray_triangle` input (see [`decode_ray_triangle`]).
+pub fn encode_ray_triangle(fl: u8, o: Vec3, d: Vec3, t: (f32, f32), v: [Vec3; 3]) -> Vec<u8> {
+    Enc::new()
+        .u8(fl)
+        .vec3(o)
+        .vec3(d)
+        .f32(t.0)
+        .f32(t.1)
+        .vec3(v[0])
+        .vec3(v[1])
+        .vec3(v[2])
+        .done()
+}
+
+/// Fuzz target `ray_triangle`: [`check_ray_triangle`] on [`decode_ray_triangle`]`(data)`, and
+/// again with the triangle's vertices rotated and with the winding reversed (same surface).
+pub fn ray_triangle(data: &[u8]) {
+    let (ray, v) = decode_ray_triangle(data);
+    check_ray_triangle(&ray, &v);
+    check_ray_triangle(&ray, &[v[1], v[2], v[0]]);
+    check_ray_triangle(&ray, &[v[0], v[2], v[1]]);
+}
+
+fn tri_context(ray: &Ray, v: &[Vec3; 3]) -> String {
+    format!(
+        "{}\n  v0 = {}\n  v1 = {}\n  v2 = {}",
+        fmt_ray(ray),
+        fmt_vec3(v[0]),
+        fmt_vec3(v[1]),
+        fmt_vec3(v[2])
+    )
+}
+
+/// The properties of every triangle variant on one ray and triangle:
+///
+/// 1. **Contract** (all inputs, all [`TriangleVariant`]s): an invalid ray, a non-finite vertex
+///    or a triangle with two equal vertices never hits; a hit has `t` finite and in
+///    `(t_min, t_max]`, barycentrics `b0 = 1 − b1 − b2`, `b1`, `b2` finite and within
+///    [`BARYCENTRIC_SLACK`] of `[0, 1]`, `front_face` agreeing with the sign of `d·ng` when
+///    that sign is clear (`|cos| > 10⁻³`), and [`TriangleHit::to_hit`]'s point within its own
+///    error bound of `Σ bᵢ·vᵢ` (when nothing overflows).
+/// 2. **Agreement with the f64 reference** (`watertight` and `watertight-f32`, in the domain
+///    of [`WatertightBound`]): when every reference edge function is farther from zero than
+///    its error bound (equivalently, every reference barycentric `|bᵢ|` exceeds
+///    `errᵢ/|det|`) and the reference `t` is farther from `t_min` and `t_max` than the `t`
+///    bound, the variant hits exactly when [`F64Reference::solve`] hits in the interval, and
+///    then its `t` and barycentrics are within the bounds of the reference's.
+pub fn check_ray_triangle(ray: &Ray, v: &[Vec3; 3]) {
+    let valid = ray.is_valid();
+    let finite = v.iter().all(|p| p.is_finite());
+    let repeated = v[0] == v[1] || v[1] == v[2] || v[2] == v[0];
+    let mut got = [None; TriangleVariant::ALL.len()];
+    for (k, var) in TriangleVariant::ALL.into_iter().enumerate() {
+        let h = var.intersect(ray, v);
+        if let Some(h) = h {
+            let ctx = || format!("variant {}: {h:?}\n{}", var.name(), tri_context(ray, v));
+            assert!(valid, "invalid ray hit\n{}", ctx());
+            assert!(finite, "triangle with a non-finite vertex hit\n{}", ctx());
+            assert!(
+                !repeated,
+                "degenerate triangle (repeated vertex) hit\n{}",
+                ctx()
+            );
+            check_hit_contract(ray, v, &h, &ctx);
+        }
+        got[k] = h;
+    }
+    if !(valid && finite) {
+        return;
+    }
+    let Some(bound) = WatertightBound::new(ray, v) else {
+        return;
+    };
+    for (k, var) in TriangleVariant::ALL.into_iter().enumerate() {
+        let eval = match var {
+            TriangleVariant::Watertight => EdgeEval::ExactF64,
+            TriangleVariant::WatertightF32 => EdgeEval::F32,
+            _ => continue,
+        };
+        bound.check_agreement(var.name(), eval, ray, v, got[k]);
+    }
+}
+
+fn check_hit_contract(ray: &Ray, v: &[Vec3; 3], h: &TriangleHit, ctx: &dyn Fn() -> String) {
+    assert!(ray.contains(h.t), "t outside (t_min, t_max]\n{}", ctx());
+    assert!(h.t.is_finite(), "non-finite t\n{}", ctx());
+    let (b0, b1, b2) = (h.b0(), h.b1, h.b2);
+    for (name, b) in [("b0", b0), ("b1", b1), ("b2", b2)] {
+        assert!(
+            b.is_finite() && (-BARYCENTRIC_SLACK..=1.0 + BARYCENTRIC_SLACK).contains(&b),
+            "{name} = {b:e} is not within BARYCENTRIC_SLACK = {BARYCENTRIC_SLACK:e} of [0, 1]\n{}",
+            ctx()
+        );
+    }
+    // Orientation: the sign of d·ng computed in f64 from the f32 inputs (the edge differences
+    // are exact or nearly so), trusted only when it is clearly non-zero.
+    let e1 = v[1].as_dvec3() - v[0].as_dvec3();
+    let e2 = v[2].as_dvec3() - v[0].as_dvec3();
+    let n = e1.cross(e2);
+    let d = ray.direction.as_dvec3();
+    let dn = d.dot(n);
+    if dn.is_finite() && dn.abs() > 1e-3 * d.length() * n.length() {
+        assert_eq!(
+            h.front_face,
+            dn < 0.0,
+            "front_face disagrees with d·ng\n{}",
+            ctx()
+        );
+    }
+    // Hit-point reconstruction: |point − Σ bᵢvᵢ| ≤ point_error (+ subnormal slack).
+    let hit = h.to_hit(v);
+    if hit.point.is_finite() && hit.point_error.is_finite() {
+        let exact = v[0].as_dvec3() * f64::from(b0)
+            + v[1].as_dvec3() * f64::from(b1)
+            + v[2].as_dvec3() * f64::from(b2);
+        let err = (hit.point.as_dvec3() - exact).abs();
+        let allowed = hit.point_error.as_dvec3() * (1.0 + 1e-6) + DVec3::splat(UNDERFLOW_ABS);
+        assert!(
+            err.cmple(allowed).all(),
+            "Hit::point farther than point_error from Σ bᵢvᵢ: error {err:?}, bound {:?}\n{}",
+            hit.point_error,
+            ctx()
+        );
+    }
+}
+
+/// Relative error of one sheared `f32` coordinate of the watertight test,
+/// `x' = fl(fl(p − o)_kx − fl(fl(d_kx/d_kz) · fl(p − o)_kz))`, with respect to the magnitude
+/// `X = |(p − o)_kx| + |(d_kx/d_kz)·(p − o)_kz|`: the first term carries two roundings (the
+/// subtraction `p − o` and the final subtraction), the second four (`p − o`, the shear
+/// division, the product, the final subtraction), so `|x' − x| ≤ gamma(4)·X` (standard model,
+/// no underflow; see [`UNDERFLOW_ABS`]). Same for `y'`.
+pub const PROJ_REL: f64 = gamma(4) as f64;
+
+/// Relative error of the scaled depth `z' = fl(fl(1/d_kz) · fl(p − o)_kz)`: three roundings,
+/// relative to `Z = |(p − o)_kz / d_kz|`.
+pub const DEPTH_REL: f64 = gamma(3) as f64;
+
+/// Absolute error allowance per `f32` coordinate for gradual underflow: an operation whose
+/// result is subnormal has an absolute error of at most `2⁻¹⁵⁰` instead of a relative one;
+/// the four operations of a projection contribute at most `4·2⁻¹⁵⁰ < 2⁻¹⁴⁶` (the later
+/// roundings scale it by at most `1 + gamma(4)`).
+pub const UNDERFLOW_ABS: f64 = f32::MIN_POSITIVE as f64 / 1_048_576.0; // 2^-146
+
+/// Relative allowance for the reference's own error (and this file's `f64` recomputation of
+/// the same edge functions): the `f64` shear, products and sums carry a few roundings of
+/// `2⁻⁵³ ≈ 1.1·10⁻¹⁶` each; `10⁻¹³` is a thousand times that.
+pub const REF_REL: f64 = 1e-13;
+
+/// Factor applied on top of the first-order bounds: covers the second-order terms dropped in
+/// the derivations and the rounding of the bound's own `f64` evaluation.
+pub const BOUND_SAFETY: f64 = 2.0;
+
+/// Domain of the agreement check: every sheared magnitude `X`, `Y`, `Z` (see [`PROJ_REL`]) is
+/// at most `2⁶⁰`, so no `f32` product of two of them (`watertight-f32` edge functions) and no
+/// projection overflows. Beyond it (about 10¹⁸ from the ray origin) only the contract is
+/// checked.
+pub const DOMAIN_MAX: f64 = 1_152_921_504_606_846_976.0; // 2^60
+
+/// Domain of the agreement check: the dominant direction component satisfies
+/// `|d_kz| ≥ 2⁻¹⁰⁰`, so the `f32` shear `1/d_kz` is finite and normal.
+pub const DOMAIN_MIN_DOMINANT_DIRECTION: f64 = 7.888_609_052_210_118e-31; // 2^-100
+
+/// How a variant evaluates its edge functions from the sheared `f32` coordinates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EdgeEval {
+    /// `watertight`: `f64` difference of exact `f64` products (one rounding, `2⁻⁵³` of the
+    /// products), `det`, `t` and barycentrics in `f64`, rounded once to `f32`.
+    ExactF64,
+    /// `watertight-f32`: `f32` products and difference (`gamma(2)` of the products; signs are
+    /// still exact by monotone rounding, zeros recomputed exactly), `det`, `t` and the
+    /// barycentrics in `f32` (a further `gamma(3)`–`gamma(5)`).
+    F32,
+}
+
+/// The error bound of the watertight test against the exact result, for one ray and triangle.
+///
+/// Derivation. With `(xᵢ, yᵢ, zᵢ)` the exact sheared coordinates of vertex `i` and
+/// `(Xᵢ, Yᵢ, Zᵢ)` their magnitudes ([`PROJ_REL`], [`DEPTH_REL`]), the `f32` coordinates are
+/// within `dXᵢ = PROJ_REL·Xᵢ + UNDERFLOW_ABS` (same for `y`, `z` with `DEPTH_REL`). An edge
+/// function `e = x_p·y_q − y_p·x_q` evaluated on perturbed coordinates moves by at most
+/// `D = (X_p + dX_p)·dY_q + Y_q·dX_p + (Y_p + dY_p)·dX_q + X_q·dY_p`; its evaluation adds
+/// `eval·P` with `P = (X_p + dX_p)(Y_q + dY_q) + (Y_p + dY_p)(X_q + dX_q)`, and the reference
+/// `REF_REL·P`. So `errᵢ = BOUND_SAFETY·(D + (eval + REF_REL)·P)`.
+///
+/// * If every exact `|eᵢ| > errᵢ`, the variant's edge signs equal the exact ones, so it is
+///   inside exactly when the reference is (reference barycentric `|bᵢ| = |eᵢ/det|` farther
+///   than `errᵢ/|det|` from an edge; `det = Σ eᵢ`).
+/// * Then `t = Σ eᵢzᵢ / Σ eᵢ` moves by at most
+///   `(Σ |eᵢ|·dZᵢ + Σ errᵢ·(|zᵢ| + dZᵢ) + |t|·Σ errᵢ) / (|det| − Σ errᵢ)`, plus the
+///   evaluation of `t` and its rounding to `f32`; a barycentric `bᵢ = eᵢ/det` by at most
+///   `(errᵢ + |bᵢ|·Σ errᵢ) / (|det| − Σ errᵢ)` plus its rounding.
+///
+/// Domain ([`WatertightBound::new`] returns `None` outside it): valid ray, finite vertices,
+/// every `X, Y, Z ≤` [`DOMAIN_MAX`], `|d_kz| ≥` [`DOMAIN_MIN_DOMINANT_DIRECTION`]; for
+/// `watertight-f32` also `2⁻¹⁰⁰ ≤ |det|`, `Σ |eᵢ·zᵢ| ≤ 2¹²⁰` (its `f32` `det`, `1/det` and
+/// `t` neither underflow nor overflow), and for both `|t| ≤ 2¹²⁰`.
+#[derive(Clone, Copy, Debug)]
+pub struct WatertightBound {
+    /// Exact-ish (`f64`) sheared coordinates `x, y, z` per vertex.
+    pub x: [f64; 3],
+    /// `y` per vertex.
+    pub y: [f64; 3],
+    /// `z` per vertex.
+    pub z: [f64; 3],
+    /// Magnitudes `X` per vertex.
+    pub mx: [f64; 3],
+    /// Magnitudes `Y` per vertex.
+    pub my: [f64; 3],
+    /// Magnitudes `Z` per vertex.
+    pub mz: [f64; 3],
+}
+
+/// The edge functions in the watertight test's order: `e0 = e(v2, v1)`, `e1 = e(v0, v2)`,
+/// `e2 = e(v1, v0)` with `e(p, q) = x_p·y_q − y_p·x_q`; `bᵢ = eᵢ / Σ e`.
+const EDGE_PAIRS: [(usize, usize); 3] = [(2, 1), (0, 2), (1, 0)];
+
+impl WatertightBound {
+    /// The sheared coordinates (same axis permutation as the watertight test: `kz` is the
+    /// largest `|dᵢ|`, ties to the lower index), or `None` outside the domain.
+    pub fn new(ray: &Ray, v: &[Vec3; 3]) -> Option<Self> {
+        if !ray.is_valid() || !v.iter().all(|p| p.is_finite()) {
+            return None;
+        }
+        let d = ray.direction.as_dvec3();
+        let o = ray.origin.as_dvec3();
+        let a = d.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let kx = (kz + 1) % 3;
+        let ky = (kx + 1) % 3;
+        if a[kz] < DOMAIN_MIN_DOMINANT_DIRECTION {
+            return None;
+        }
+        let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+        let mut b = Self {
+            x: [0.0; 3],
+            y: [0.0; 3],
+            z: [0.0; 3],
+            mx: [0.0; 3],
+            my: [0.0; 3],
+            mz: [0.0; 3],
+        };
+        for i in 0..3 {
+            let p = v[i].as_dvec3() - o;
+            b.x[i] = p[kx] - sx * p[kz];
+            b.y[i] = p[ky] - sy * p[kz];
+            b.z[i] = sz * p[kz];
+            b.mx[i] = p[kx].abs() + (sx * p[kz]).abs();
+            b.my[i] = p[ky].abs() + (sy * p[kz]).abs();
+            b.mz[i] = b.z[i].abs();
+        }
+        let max =
+            b.mx.iter()
+                .chain(&b.my)
+                .chain(&b.mz)
+                .fold(0.0f64, |m, &x| m.max(x));
+        (max <= DOMAIN_MAX).then_some(b)
+    }
+
+    /// Edge functions `eᵢ` (`f64`, error `≤ REF_REL·P`).
+    pub fn edges(&self) -> [f64; 3] {
+        EDGE_PAIRS.map(|(p, q)| self.x[p] * self.y[q] - self.y[p] * self.x[q])
+    }
+
+    /// Error bounds `errᵢ` of the variant's edge functions (see the type's docs).
+    pub fn edge_errors(&self, eval: EdgeEval) -> [f64; 3] {
+        let (eval_rel, eval_abs) = match eval {
+            EdgeEval::ExactF64 => (F64_UNIT_ROUNDOFF, 0.0),
+            EdgeEval::F32 => (f64::from(gamma(2)), 2.0 * UNDERFLOW_ABS),
+        };
+        let dx = self.mx.map(|m| PROJ_REL * m + UNDERFLOW_ABS);
+        let dy = self.my.map(|m| PROJ_REL * m + UNDERFLOW_ABS);
+        EDGE_PAIRS.map(|(p, q)| {
+            let d = (self.mx[p] + dx[p]) * dy[q]
+                + self.my[q] * dx[p]
+                + (self.my[p] + dy[p]) * dx[q]
+                + self.mx[q] * dy[p];
+            let prod = (self.mx[p] + dx[p]) * (self.my[q] + dy[q])
+                + (self.my[p] + dy[p]) * (self.mx[q] + dx[q]);
+            BOUND_SAFETY * (d + (eval_rel + REF_REL) * prod + eval_abs)
+        })
+    }
+
+    /// Property 2 of [`check_ray_triangle`] for one variant's result `got`.
+    pub fn check_agreement(
+        &self,
+        name: &str,
+        eval: EdgeEval,
+        ray: &Ray,
+        v: &[Vec3; 3],
+        got: Option<TriangleHit>,
+    ) {
+        let e = self.edges();
+        let err = self.edge_errors(eval);
+        if (0..3).any(|i| !(e[i].abs() > err[i])) {
+            return; // within the error bound of an edge (or det = 0): either answer is right
+        }
+        let inside = e.iter().all(|&x| x > 0.0) || e.iter().all(|&x| x < 0.0);
+        let reference = F64Reference::solve(ray, v);
+        let ctx = || {
+            format!(
+                "variant {name}: got {got:?}\n  reference {reference:?}\n  edges {e:?}\n  \
+                 edge error bounds {err:?}\n{}",
+                tri_context(ray, v)
+            )
+        };
+        if !inside {
+            assert!(
+                got.is_none(),
+                "hit although the reference is outside by more than the bound\n{}",
+                ctx()
+            );
+            return;
+        }
+        let Some((t_ref, b_ref)) = reference else {
+            panic!(
+                "F64Reference::solve reports no hit for a point clearly inside\n{}",
+                ctx()
+            );
+        };
+        let det: f64 = e.iter().sum();
+        let sum_err: f64 = err.iter().sum();
+        let denom = det.abs() - sum_err;
+        let ez: f64 = (0..3).map(|i| (e[i] * self.z[i]).abs()).sum();
+        if eval == EdgeEval::F32 && !(det.abs() >= 7.9e-31 && ez <= 1.3e36) {
+            return; // outside the f32 variant's domain (2^-100 ≤ |det|, Σ|e·z| ≤ 2^120)
+        }
+        if !(t_ref.abs() <= 1.3e36) {
+            return;
+        }
+        let dz = self.mz.map(|m| DEPTH_REL * m + UNDERFLOW_ABS);
+        let mut dt = ((0..3)
+            .map(|i| e[i].abs() * dz[i] + err[i] * (self.z[i].abs() + dz[i]))
+            .sum::<f64>()
+            + t_ref.abs() * sum_err)
+            / denom;
+        let (t_eval, b_eval) = match eval {
+            EdgeEval::ExactF64 => (REF_REL, F64_UNIT_ROUNDOFF),
+            EdgeEval::F32 => (f64::from(gamma(6)), f64::from(gamma(3))),
+        };
+        dt += t_eval * ez / det.abs();
+        dt += f64::from(F32_UNIT_ROUNDOFF) * t_ref.abs() + 1.5e-45;
+        dt *= BOUND_SAFETY;
+        let (t_min, t_max) = (f64::from(ray.t_min), f64::from(ray.t_max));
+        if !((t_ref - t_min).abs() > dt && (t_ref - t_max).abs() > dt) {
+            return; // within the t bound of an interval end: either answer is right
+        }
+        let expect_hit = t_ref > t_min && t_ref <= t_max;
+        match got {
+            None => assert!(
+                !expect_hit,
+                "missed: the reference hits at t = {t_ref:e} (bound {dt:e}) with every \
+                 barycentric farther from an edge than the bound\n{}",
+                ctx()
+            ),
+            Some(h) => {
+                assert!(
+                    expect_hit,
+                    "hit although the reference t = {t_ref:e} is outside the interval by more \
+                     than the bound {dt:e}\n{}",
+                    ctx()
+                );
+                assert!(
+                    (f64::from(h.t) - t_ref).abs() <= dt,
+                    "t = {:e} differs from the reference {t_ref:e} by more than the bound \
+                     {dt:e}\n{}",
+                    h.t,
+                    ctx()
+                );
+                for (i, b) in [(1, h.b1), (2, h.b2)] {
+                    let db = BOUND_SAFETY
+                        * ((err[i] + b_ref[i].abs() * sum_err) / denom
+                            + b_eval * b_ref[i].abs()
+                            + 1.5e-45);
+                    assert!(
+                        (f64::from(b) - b_ref[i]).abs() <= db,
+                        "b{i} = {b:e} differs from the reference {:e} by more than the bound \
+                         {db:e}\n{}",
+                        b_ref[i],
+                        ctx()
+                    );
+                }
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// ray_box
+// ---------------------------------------------------------------------------------------------
+
+/// Decodes a `ray_box` input: `flags: u8` ([`flags`]), `origin: 3×f32`, `direction: 3×f32`,
+/// `t_min: f32`, `t_max: f32`, `a: 3×f32`, `b: 3×f32` (the box `[a, b]`, or
+/// `[min(a, b), max(a, b)]` with [`flags::ORDERED`]); 57 bytes.
+pub fn decode_ray_box(data: &[u8]) -> (Ray, Aabb) {
+    let mut i = Input::new(data);
+    let fl = i.u8();
+    let origin = i.vec3();
+    let dir = i.vec3();
+    let (t_min, t_max) = (i.f32(), i.f32());
+    let (a, b) = (i.vec3(), i.vec3());
+    let bx = if fl & flags::ORDERED != 0 {
+        Aabb::new(a.min(b), a.max(b))
+    } else {
+        Aabb::new(a, b)
+    };
+    let direction = if fl & flags::AIM != 0 {
+        bx.min + (bx.max - bx.min) * dir - origin
+    } else {
+        dir
+    };
+    let (t_min, t_max) = if fl & flags::DEFAULT_INTERVAL != 0 {
+        (0.0, f32::INFINITY)
+    } else {
+        (t_min, t_max)
+    };
+    (Ray::with_interval(origin, direction, t_min, t_max), bx)
+}
+
+/// Encodes a `ray_box` input (see [`decode_ray_box`]).
+pub fn encode_ray_box(fl: u8, o: Vec3, d: Vec3, t: (f32, f32), a: Vec3, b: Vec3) -> Vec<u8> {
+    Enc::new()
+        .u8(fl)
+        .vec3(o)
+        .vec3(d)
+        .f32(t.0)
+        .f32(t.1)
+        .vec3(a)
+        .vec3(b)
+        .done()
+}
+
+/// Fuzz target `ray_box`: [`check_ray_box`] on [`decode_ray_box`]`(data)`.
+pub fn ray_box(data: &[u8]) {
+    let (ray, bx) = decode_ray_box(data);
+    check_ray_box(&ray, &bx);
+}
+
+/// Relative error of the `f64` oracle's slab distances `(bound − o)/d`: the difference of two
+/// `f32` values and the quotient are each rounded once in `f64` (`2·2⁻⁵³`), so the overlap
+/// `exit − enter` is known to within `≈ 4.4·10⁻¹⁶·max(|enter|, |exit|)`. The slab test claims
+/// to be exactly conservative (Ize's padding), so the only slack the miss check needs is the
+/// oracle's; `10⁻¹²` is over a thousand times that.
+pub const SLAB_ORACLE_REL: f64 = 1e-12;
+
+/// How far (relative to the distances involved) the exact interval may be empty and the `f32`
+/// slab test still report a hit: its near distances carry `gamma(3)` and its far distances
+/// are padded by `2·gamma(3)` ([`halfray_core::aabb::SLAB_FAR_SCALE`]), about `5·10⁻⁷` in all;
+/// `2⁻¹⁶ ≈ 1.5·10⁻⁵` leaves a wide margin. Checked only in the "tame" domain of
+/// [`check_ray_box`].
+pub const SLAB_FALSE_HIT_REL: f64 = 1.0 / 65_536.0;
+
+/// The exact slab interval, computed in `f64`: `(enter, exit)`, empty when `enter > exit`.
+/// A zero direction component constrains nothing when the origin lies in the closed slab and
+/// empties the interval otherwise; for `d > 0` the near plane is `min`, for `d < 0` it is
+/// `max`, so an inverted box (`min > max`) is empty.
+pub fn exact_slab_interval(ray: &Ray, bx: &Aabb) -> (f64, f64) {
+    let mut enter = f64::from(ray.t_min);
+    let mut exit = f64::from(ray.t_max);
+    for k in 0..3 {
+        let o = f64::from(ray.origin[k]);
+        let d = f64::from(ray.direction[k]);
+        let (lo, hi) = (f64::from(bx.min[k]), f64::from(bx.max[k]));
+        if d == 0.0 {
+            if !(lo <= o && o <= hi) {
+                return (f64::INFINITY, f64::NEG_INFINITY);
+            }
+            continue;
+        }
+        let (near, far) = if d > 0.0 { (lo, hi) } else { (hi, lo) };
+        enter = enter.max((near - o) / d);
+        exit = exit.min((far - o) / d);
+    }
+    (enter, exit)
+}
+
+fn opt_bits(r: Option<(f32, f32)>) -> Option<(u32, u32)> {
+    r.map(|(a, b)| (a.to_bits(), b.to_bits()))
+}
+
+/// The properties of [`Aabb::intersect_ray`]:
+///
+/// 1. **Defined answers:** an invalid ray (NaN or infinite origin/direction, zero direction,
+///    NaN or inverted interval) gives `None`; the result is deterministic; a hit has
+///    `t_min ≤ t_enter ≤ t_exit ≤ t_max`; the plain (unpadded) slab test never hits where the
+///    padded one misses. NaN *box* coordinates are allowed and only need a deterministic
+///    answer (the BVH never builds such boxes).
+/// 2. **±0:** flipping the sign of any zero direction component gives the bit-identical result
+///    (module docs of [`halfray_core::aabb`]).
+/// 3. **Never a false miss:** for a finite box, when the exact (`f64`) interval overlap
+///    `exit − enter` exceeds `SLAB_ORACLE_REL·max(|enter|, |exit|)` (or is infinite), the test
+///    hits. Domain: every `|bound − origin|` on an axis with non-zero direction is at most
+///    `f32::MAX` (beyond it the `f32` distances cannot be represented).
+/// 4. **No gross false hit:** in the tame domain (every non-zero `|dᵢ| ∈ [2⁻¹²⁰, 2¹²⁰]`,
+///    every finite slab distance zero or of magnitude in `[2⁻¹²⁰, 2¹²⁰]`), when the exact
+///    interval is empty because a zero-direction axis excludes the origin, or by a gap of more
+///    than [`SLAB_FALSE_HIT_REL`] of the distances, the test misses.
+pub fn check_ray_box(ray: &Ray, bx: &Aabb) {
+    let got = bx.intersect_ray(ray);
+    let ctx = || {
+        format!(
+            "got {got:?}\n{}\n  box min {}\n  box max {}",
+            fmt_ray(ray),
+            fmt_vec3(bx.min),
+            fmt_vec3(bx.max)
+        )
+    };
+    assert_eq!(
+        opt_bits(got),
+        opt_bits(bx.intersect_ray(ray)),
+        "not deterministic\n{}",
+        ctx()
+    );
+    if !ray.is_valid() {
+        assert!(got.is_none(), "invalid ray hits a box\n{}", ctx());
+        return;
+    }
+    if let Some((te, tx)) = got {
+        assert!(
+            ray.t_min <= te && te <= tx && tx <= ray.t_max,
+            "returned interval not inside [t_min, t_max] or inverted\n{}",
+            ctx()
+        );
+    }
+    if let Some(slab) = SlabRay::new(ray)
+        && bx
+            .intersect_slab_plain(&slab, ray.t_min, ray.t_max)
+            .is_some()
+    {
+        assert!(
+            got.is_some(),
+            "plain slab test hits, padded one misses\n{}",
+            ctx()
+        );
+    }
+    for k in 0..3 {
+        if ray.direction[k] == 0.0 {
+            let mut flipped = *ray;
+            flipped.direction[k] = -ray.direction[k];
+            let other = bx.intersect_ray(&flipped);
+            assert_eq!(
+                opt_bits(got),
+                opt_bits(other),
+                "result depends on the sign of the zero direction component {k}: \
+                 flipped gives {other:?}\n{}",
+                ctx()
+            );
+        }
+    }
+    if !bx.is_finite() {
+        return;
+    }
+    let representable = (0..3).all(|k| {
+        ray.direction[k] == 0.0
+            || [bx.min[k], bx.max[k]]
+                .iter()
+                .all(|&b| (f64::from(b) - f64::from(ray.origin[k])).abs() <= f64::from(f32::MAX))
+    });
+    if !representable {
+        return;
+    }
+    let (enter, exit) = exact_slab_interval(ray, bx);
+    let must_hit = enter < exit
+        && (enter.is_infinite()
+            || exit.is_infinite()
+            || exit - enter > SLAB_ORACLE_REL * enter.abs().max(exit.abs()));
+    if must_hit {
+        assert!(
+            got.is_some(),
+            "missed a box the exact ray crosses: exact interval [{enter:e}, {exit:e}]\n{}",
+            ctx()
+        );
+    }
+    // Property 4, in the tame domain.
+    const LO: f64 = 7.52316384526264e-37; // 2^-120
+    const HI: f64 = 1.329227995784916e36; // 2^120
+    let tame_dir = (0..3).all(|k| {
+        let d = f64::from(ray.direction[k]).abs();
+        d == 0.0 || (LO..=HI).contains(&d)
+    });
+    let tame_t = (0..3).all(|k| {
+        let d = f64::from(ray.direction[k]);
+        d == 0.0
+            || [bx.min[k], bx.max[k]].iter().all(|&b| {
+                let t = ((f64::from(b) - f64::from(ray.origin[k])) / d).abs();
+                t == 0.0 || (LO..=HI).contains(&t)
+            })
+    });
+    if tame_dir && tame_t {
+        let excluded_by_zero_axis = enter == f64::INFINITY && exit == f64::NEG_INFINITY;
+        let gap_exceeds = enter.is_finite()
+            && exit.is_finite()
+            && enter - exit > SLAB_FALSE_HIT_REL * enter.abs().max(exit.abs());
+        if excluded_by_zero_axis || gap_exceeds {
+            assert!(
+                got.is_none(),
+                "hit a box the exact ray misses: exact interval [{enter:e}, {exit:e}]\n{}",
+                ctx()
+            );
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// obj_file
+// ---------------------------------------------------------------------------------------------
+
+/// The path handed to the OBJ parser; every error message must start with it.
+pub const OBJ_PATH: &str = "fuzz/input.obj";
+
+/// Fuzz target `obj_file`: the bytes as lossy UTF-8 text (and, when they are valid UTF-8,
+/// as-is) through [`check_obj`].
+pub fn obj_file(data: &[u8]) {
+    let text = String::from_utf8_lossy(data);
+    check_obj(&text);
+}
+
+/// Properties of `halfray::obj::parse_obj` on any text: never a panic; `Ok` has every
+/// position finite and every triangle index in range, and writing it back in the canonical
+/// form (`v x y z` with Rust's shortest round-trip floats, `f a b c` 1-based) and parsing
+/// again gives the same mesh bit for bit; `Err`'s message starts with the path.
+pub fn check_obj(text: &str) {
+    let path = Path::new(OBJ_PATH);
+    match halfray::obj::parse_obj(text, path) {
+        Ok(m) => {
+            let n = m.positions.len();
+            for p in &m.positions {
+                assert!(
+                    p.is_finite(),
+                    "non-finite position {p:?} accepted\n{text:?}"
+                );
+            }
+            for t in &m.triangles {
+                assert!(
+                    t.iter().all(|&i| (i as usize) < n),
+                    "triangle {t:?} indexes past {n} positions\n{text:?}"
+                );
+            }
+            let mut canon = String::new();
+            for p in &m.positions {
+                canon.push_str(&format!("v {} {} {}\n", p.x, p.y, p.z));
+            }
+            for t in &m.triangles {
+                canon.push_str(&format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1));
+            }
+            let again = halfray::obj::parse_obj(&canon, path)
+                .unwrap_or_else(|e| panic!("canonical re-write does not parse: {e}\n{canon}"));
+            let bits = |m: &halfray::obj::ObjMesh| {
+                m.positions
+                    .iter()
+                    .map(|p| p.to_array().map(f32::to_bits))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(
+                bits(&again),
+                bits(&m),
+                "positions do not round-trip\n{text:?}"
+            );
+            assert_eq!(again.triangles, m.triangles, "triangles do not round-trip");
+        }
+        Err(e) => {
+            let msg = e.to_string();
+            assert!(
+                msg.starts_with(OBJ_PATH) && msg.len() > OBJ_PATH.len() + 2,
+                "error message does not start with the path: {msg:?}\n{text:?}"
+            );
+        }
+    }
+}
+
+pub mod bvh {
+    //! The `bvh` target: small arbitrary triangle soups and rays, BVH against brute force.
+    //!
+    //! Layout: `flags: u8` (bit 0: quantized vertex coordinates ([`Input::q`]), else raw
+    //! `f32`; bit 1: [`BuildOptions::exclude_non_finite`]; bit 2: leaves of one primitive),
+    //! `vertex count: u8` (mod 25), `triangle count: u8` (mod 17), the vertices, the
+    //! triangles (three `u8` vertex indices each, taken mod `vertex count + 2` so that some are
+    //! out of range), then rays until the input ends (at most 8), each `flags: u8` (bit 0:
+    //! quantized origin and direction; bit 1: aim at `p_i + s·(p_j − p_i)` for two vertex bytes
+    //! and `s = byte mod 9 / 8`; bit 2: interval from two `f32`s, else `(0, +∞]`), origin,
+    //! direction, then the aim or interval bytes.
+
+    use super::{Enc, Input, fmt_ray, fmt_vec3};
+    use glam::Vec3;
+    use halfray_core::aabb::Aabb;
+    use halfray_core::bvh::{
+        BuildOptions, Bvh, BvhError, BvhNode, PrimitiveSource, TriangleMesh, index_capacity,
+        node_capacity,
+    };
+    use halfray_core::ray::Ray;
+    use halfray_core::triangle::{MollerTrumbore, TriangleHit, TriangleIntersector, Watertight};
+
+    /// The decoded input.
+    #[derive(Clone, Debug)]
+    pub struct Soup {
+        /// Vertex positions.
+        pub positions: Vec<Vec3>,
+        /// Triangles (indices may be out of range).
+        pub triangles: Vec<[u32; 3]>,
+        /// Build options.
+        pub options: BuildOptions,
+        /// Rays.
+        pub rays: Vec<Ray>,
+    }
+
+    /// Decodes a `bvh` input (see the module docs).
+    pub fn decode(data: &[u8]) -> Soup {
+        let mut i = Input::new(data);
+        let fl = i.u8();
+        let nv = usize::from(i.u8()) % 25;
+        let nt = usize::from(i.u8()) % 17;
+        let positions: Vec<Vec3> = (0..nv)
+            .map(|_| if fl & 1 != 0 { i.qvec3() } else { i.vec3() })
+            .collect();
+        let m = nv as u32 + 2;
+        let triangles = (0..nt)
+            .map(|_| {
+                [
+                    u32::from(i.u8()) % m,
+                    u32::from(i.u8()) % m,
+                    u32::from(i.u8()) % m,
+                ]
+            })
+            .collect();
+        let options = BuildOptions {
+            max_leaf_size: if fl & 4 != 0 { 1 } else { 4 },
+            exclude_non_finite: fl & 2 != 0,
+        };
+        let mut rays = Vec::new();
+        while !i.is_empty() && rays.len() < 8 {
+            let rf = i.u8();
+            let (o, d) = if rf & 1 != 0 {
+                (i.qvec3(), i.qvec3())
+            } else {
+                (i.vec3(), i.vec3())
+            };
+            let mut ray = Ray::new(o, d);
+            if rf & 2 != 0 && !positions.is_empty() {
+                let a = positions[usize::from(i.u8()) % nv];
+                let b = positions[usize::from(i.u8()) % nv];
+                let s = f32::from(i.u8() % 9) / 8.0;
+                ray.direction = a + (b - a) * s - o;
+            }
+            if rf & 4 != 0 {
+                ray.t_min = i.f32();
+                ray.t_max = i.f32();
+            }
+            rays.push(ray);
+        }
+        Soup {
+            positions,
+            triangles,
+            options,
+            rays,
+        }
+    }
+
+    /// Encodes a quantized soup with default options and `(origin, direction)` rays aimed by
+    /// vertex pairs: `aims[k] = (origin, i, j, s8)` (aim at `p_i + s8/8·(p_j − p_i)`).
+    pub fn encode_quantized(
+        positions: &[Vec3],
+        triangles: &[[u8; 3]],
+        aims: &[(Vec3, u8, u8, u8)],
+    ) -> Vec<u8> {
+        let mut e = Enc::new()
+            .u8(1)
+            .u8(positions.len() as u8)
+            .u8(triangles.len() as u8);
+        for p in positions {
+            e = e.qvec3(*p);
+        }
+        for t in triangles {
+            e = e.u8(t[0]).u8(t[1]).u8(t[2]);
+        }
+        for &(o, a, b, s) in aims {
+            e = e.u8(3).qvec3(o).qvec3(Vec3::ZERO).u8(a).u8(b).u8(s);
+        }
+        e.done()
+    }
+
+    /// Fuzz target `bvh`: [`check`] on [`decode`]`(data)`.
+    pub fn bvh(data: &[u8]) {
+        check(&decode(data));
+    }
+
+    fn usable(b: &Aabb) -> bool {
+        b.is_finite() && b.is_valid()
+    }
+
+    /// Brute force with the BVH's rule: the smallest `t` in the ray's interval, ties to the
+    /// smaller primitive index, over the primitives in the tree.
+    fn brute<T: TriangleIntersector>(
+        mesh: &TriangleMesh<'_>,
+        isect: &T,
+        ray: &Ray,
+        in_tree: &[bool],
+    ) -> Option<(u32, TriangleHit)> {
+        let mut best: Option<(u32, TriangleHit)> = None;
+        for (i, &live) in in_tree.iter().enumerate() {
+            let Some(v) = mesh.triangle(i).filter(|_| live) else {
+                continue;
+            };
+            if let Some(h) = isect.intersect(ray, &v)
+                && best.is_none_or(|(_, b)| h.t < b.t)
+            {
+                best = Some((i as u32, h));
+            }
+        }
+        best
+    }
+
+    /// Properties of the BVH on one soup:
+    ///
+    /// 1. Building with exactly [`node_capacity`] / [`index_capacity`] storage succeeds, unless a
+    ///    primitive has unusable bounds (non-finite vertex, out-of-range index) and
+    ///    `exclude_non_finite` is off: then the error is `NonFinitePrimitive` naming the first.
+    /// 2. One node or one index too few gives `NodeStorageTooSmall` / `IndexStorageTooSmall`
+    ///    with the right counts, and the storage is left untouched.
+    /// 3. Refitting over the same source leaves every node bit-for-bit unchanged.
+    /// 4. For every ray and for `watertight` and `moller-trumbore`: the closest hit equals the
+    ///    brute-force loop (same primitive, same hit record); any-hit agrees on hit/miss and its
+    ///    primitive really is hit in the interval.
+    /// 5. A box query (the box spanned by each ray's origin and origin + direction) reports
+    ///    exactly the primitives whose bounds overlap it.
+    pub fn check(s: &Soup) {
+        let mesh = TriangleMesh::new(&s.positions, &s.triangles);
+        let n = mesh.primitive_count();
+        let ctx = || {
+            format!(
+                "options {:?}\n  positions {}\n  triangles {:?}",
+                s.options,
+                s.positions
+                    .iter()
+                    .map(|p| fmt_vec3(*p))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                s.triangles
+            )
+        };
+        let valid: Vec<bool> = (0..n).map(|i| usable(&mesh.primitive_bounds(i))).collect();
+        let first_bad = valid.iter().position(|&ok| !ok);
+
+        // 2. Too-small storage.
+        if n > 0 {
+            let sentinel = BvhNode::default();
+            let nodes = vec![sentinel; node_capacity(n) - 1];
+            let idx = vec![u32::MAX; index_capacity(n)];
+            let r = Bvh::build(&mesh, nodes, idx, &s.options);
+            match r {
+                Err(BvhError::NodeStorageTooSmall { needed, available }) => {
+                    assert_eq!(
+                        (needed, available),
+                        (node_capacity(n), node_capacity(n) - 1)
+                    );
+                }
+                other => panic!("one node too few gave {other:?}\n{}", ctx()),
+            }
+            let mut nodes = vec![sentinel; node_capacity(n)];
+            let mut idx = vec![u32::MAX; index_capacity(n) - 1];
+            let r = Bvh::build(&mesh, &mut nodes[..], &mut idx[..], &s.options);
+            match r {
+                Err(BvhError::IndexStorageTooSmall { needed, available }) => {
+                    assert_eq!((needed, available), (n, n - 1));
+                }
+                other => panic!("one index too few gave {other:?}\n{}", ctx()),
+            }
+            assert!(
+                nodes.iter().all(|x| *x == sentinel) && idx.iter().all(|&x| x == u32::MAX),
+                "refused build wrote into the storage\n{}",
+                ctx()
+            );
+        }
+
+        // 1. Build.
+        let nodes = vec![BvhNode::default(); node_capacity(n)];
+        let idx = vec![u32::MAX; index_capacity(n)];
+        let mut bvh = match (Bvh::build(&mesh, nodes, idx, &s.options), first_bad) {
+            (Ok(b), None) => b,
+            (Ok(b), Some(_)) if s.options.exclude_non_finite => b,
+            (Err(BvhError::NonFinitePrimitive { index }), Some(bad))
+                if !s.options.exclude_non_finite =>
+            {
+                assert_eq!(
+                    index,
+                    bad,
+                    "NonFinitePrimitive names the wrong primitive\n{}",
+                    ctx()
+                );
+                return;
+            }
+            (r, _) => panic!(
+                "build gave {:?} (first unusable primitive {first_bad:?})\n{}",
+                r.err(),
+                ctx()
+            ),
+        };
+        let expected_count = valid.iter().filter(|&&ok| ok).count();
+        assert_eq!(
+            bvh.primitive_count(),
+            expected_count,
+            "primitive count\n{}",
+            ctx()
+        );
+        let mut in_tree = vec![false; n];
+        for &p in bvh.indices() {
+            let p = p as usize;
+            assert!(
+                p < n && valid[p] && !in_tree[p],
+                "bad index {p} in the tree\n{}",
+                ctx()
+            );
+            in_tree[p] = true;
+        }
+
+        // 3. Refit over the same source.
+        let before: Vec<BvhNode> = bvh.nodes().to_vec();
+        assert_eq!(
+            bvh.refit(&mesh),
+            Ok(()),
+            "refit over the same source\n{}",
+            ctx()
+        );
+        assert_eq!(
+            bvh.nodes(),
+            &before[..],
+            "refit changed the boxes\n{}",
+            ctx()
+        );
+
+        // 4, 5. Rays.
+        for ray in &s.rays {
+            let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
+            check_ray(&bvh, &mesh, &Watertight, ray, &in_tree, &rctx);
+            check_ray(&bvh, &mesh, &MollerTrumbore::CLASSIC, ray, &in_tree, &rctx);
+            let q = Aabb::new(ray.origin, ray.origin).grow(ray.origin + ray.direction);
+            let mut found = Vec::new();
+            let reported = bvh.query_box(&mesh, &q, |p| {
+                found.push(p);
+                true
+            });
+            found.sort_unstable();
+            let expect: Vec<u32> = (0..n)
+                .filter(|&i| in_tree[i] && mesh.primitive_bounds(i).overlaps(&q))
+                .map(|i| i as u32)
+                .collect();
+            assert_eq!(reported, found.len());
+            assert_eq!(
+                found,
+                expect,
+                "query_box({q:?}) differs from brute force\n{}",
+                rctx()
+            );
+        }
+    }
+
+    fn check_ray<T: TriangleIntersector>(
+        bvh: &Bvh<Vec<BvhNode>, Vec<u32>>,
+        mesh: &TriangleMesh<'_>,
+        isect: &T,
+        ray: &Ray,
+        in_tree: &[bool],
+        ctx: &dyn Fn() -> String,
+    ) {
+        let want = brute(mesh, isect, ray, in_tree);
+        let got = bvh.closest_hit_triangles(mesh, isect, ray, None);
+        assert_eq!(
+            got,
+            want,
+            "{}: BVH closest hit differs from brute force\n{}",
+            isect.name(),
+            ctx()
+        );
+        let any = bvh.any_hit_triangles(mesh, isect, ray, None);
+        assert_eq!(
+            any.is_some(),
+            want.is_some(),
+            "{}: any-hit {any:?} disagrees with brute force {want:?}\n{}",
+            isect.name(),
+            ctx()
+        );
+        if let Some((p, h)) = any {
+            let v = mesh.triangle(p as usize).expect("any-hit primitive exists");
+            assert_eq!(
+                isect.intersect(ray, &v),
+                Some(h),
+                "any-hit record\n{}",
+                ctx()
+            );
+            assert!(ray.contains(h.t));
+        }
+    }
+}
+
+pub mod halfedge {
+    //! The `halfedge_ops` target: arbitrary edit sequences on small half-edge meshes.
+    //!
+    //! Layout: `start: u8` (mod 6: tetrahedron, octahedron, open 3×3 grid, one triangle,
+    //! hexagon fan, or a raw mesh: `vertex count: u8` mod 13, `triangle count: u8` mod 17,
+    //! quantized positions, triangles of three index bytes mod `vertex count + 1`), then
+    //! operations until the input ends (at most 24), each an opcode byte (mod 10, see [`Op`])
+    //! followed by its arguments.
+
+    use super::Input;
+    use glam::Vec3;
+    use halfray_core::halfedge::{
+        CollapseAt, Counts, DiffuseBoundary, EdgeId, ExportError, HalfedgeId, HalfedgeMesh,
+        LoopWeights, VertexId, build_scratch_len,
+    };
+
+    /// The mesh type fuzzed: room for two Loop levels of a tetrahedron or one of an
+    /// octahedron, and for some dozens of splits.
+    pub type FuzzMesh = HalfedgeMesh<64, 192, 128>;
+
+    /// Opcodes (the first byte of an operation, mod 10).
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    #[repr(u8)]
+    pub enum Op {
+        /// `flip_edge(edge: u8)`.
+        Flip = 0,
+        /// `split_edge(edge: u8)`.
+        Split = 1,
+        /// `split_edge_at(edge: u8, raw: u8, point)`: quantized point if `raw` is even, else
+        /// three raw `f32`s.
+        SplitAt = 2,
+        /// `collapse_edge(halfedge: u16, at: u8)`: `at` mod 4 = head, tail, midpoint, point
+        /// (quantized).
+        Collapse = 3,
+        /// `diffuse_vertex(vertex: u8, k: f32)`.
+        DiffuseVertex = 4,
+        /// `diffuse(k: u8 / 16, boundary: u8, short scratch: u8)`.
+        Diffuse = 5,
+        /// `subdivide_loop(weights: u8)` into a fresh mesh, which replaces the mesh on success.
+        Loop = 6,
+        /// `compact`.
+        Compact = 7,
+        /// `set_position(vertex: u8, raw: u8, point)` (point as for `SplitAt`).
+        SetPosition = 8,
+        /// `export` (also into a too-small buffer), `build` from the export, re-export.
+        ExportRebuild = 9,
+    }
+
+    fn euler(c: Counts) -> i64 {
+        c.vertices as i64 - c.edges as i64 + c.faces as i64
+    }
+
+    /// The start meshes (positions, triangles), indexed by the start byte mod 5.
+    pub fn start_mesh(k: u8) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        match k % 5 {
+            0 => (
+                vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+                vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+            ),
+            1 => (
+                vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z],
+                vec![
+                    [0, 2, 4],
+                    [2, 1, 4],
+                    [1, 3, 4],
+                    [3, 0, 4],
+                    [2, 0, 5],
+                    [1, 2, 5],
+                    [3, 1, 5],
+                    [0, 3, 5],
+                ],
+            ),
+            2 => {
+                let p = (0..9)
+                    .map(|i| Vec3::new((i % 3) as f32, (i / 3) as f32, 0.0))
+                    .collect();
+                let mut t = Vec::new();
+                for j in 0..2u32 {
+                    for i in 0..2u32 {
+                        let (a, b, c, d) = (i + 3 * j, i + 1 + 3 * j, i + 4 + 3 * j, i + 3 + 3 * j);
+                        t.push([a, b, c]);
+                        t.push([a, c, d]);
+                    }
+                }
+                (p, t)
+            }
+            3 => (vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]),
+            _ => {
+                let mut p = vec![Vec3::ZERO];
+                for k in 0..6 {
+                    let a = k as f32 * core::f32::consts::FRAC_PI_3;
+                    p.push(Vec3::new(a.cos(), a.sin(), 0.0));
+                }
+                let t = (1..=6u32).map(|k| [0, k, k % 6 + 1]).collect();
+                (p, t)
+            }
+        }
+    }
+
+    fn point(i: &mut Input<'_>) -> Vec3 {
+        if i.u8() % 2 == 0 { i.qvec3() } else { i.vec3() }
+    }
+
+    /// Fuzz target `halfedge_ops`.
+    ///
+    /// Properties: no panic; a build either succeeds with `validate()` Ok or fails leaving the
+    /// mesh empty; after every successful operation `validate()` is Ok and the Euler
+    /// characteristic `V − E + F` is unchanged; an operation that refuses leaves the mesh
+    /// bit-for-bit unchanged (`Mesh: PartialEq` compares every slot and the free lists);
+    /// `can_flip_edge` / `can_collapse_edge` predict `flip_edge` / `collapse_edge` exactly and
+    /// the collapse survivor sits at the predicted point; Loop subdivision produces the
+    /// documented counts and leaves its output untouched when it refuses; a refused export
+    /// writes nothing; build(export(mesh)) validates and re-exports identically.
+    pub fn halfedge_ops(data: &[u8]) {
+        let mut i = Input::new(data);
+        let start = i.u8() % 6;
+        let (positions, triangles) = if start == 5 {
+            let nv = usize::from(i.u8()) % 13;
+            let nt = usize::from(i.u8()) % 17;
+            let p: Vec<Vec3> = (0..nv).map(|_| i.qvec3()).collect();
+            let m = nv as u32 + 1;
+            let t = (0..nt)
+                .map(|_| {
+                    [
+                        u32::from(i.u8()) % m,
+                        u32::from(i.u8()) % m,
+                        u32::from(i.u8()) % m,
+                    ]
+                })
+                .collect();
+            (p, t)
+        } else {
+            start_mesh(start)
+        };
+        let mut log = vec![format!("build {positions:?} {triangles:?}")];
+        let mut mesh = FuzzMesh::new();
+        let mut scratch = vec![0u32; build_scratch_len(triangles.len())];
+        match mesh.build(&positions, &triangles, &mut scratch) {
+            Ok(()) => assert_eq!(mesh.validate(), Ok(()), "built mesh invalid: {log:?}"),
+            Err(_) => {
+                assert!(mesh.is_empty(), "failed build left elements: {log:?}");
+                assert_eq!(mesh, FuzzMesh::new(), "failed build left state: {log:?}");
+            }
+        }
+
+        for _ in 0..24 {
+            if i.is_empty() {
+                break;
+            }
+            let before = mesh.clone();
+            let slots = mesh.slots();
+            let chi = euler(mesh.len());
+            let edge =
+                |i: &mut Input<'_>| EdgeId::new(u32::from(i.u8()) % (slots.edges as u32 + 2));
+            let vertex =
+                |i: &mut Input<'_>| VertexId::new(u32::from(i.u8()) % (slots.vertices as u32 + 2));
+            let op = i.u8() % 10;
+            // `Ok(keep_chi)` on success, `Err(())` when refused.
+            let outcome: Result<bool, String> = match op {
+                0 => {
+                    let e = edge(&mut i);
+                    let can = mesh.can_flip_edge(e);
+                    let r = mesh.flip_edge(e);
+                    log.push(format!("flip {e:?} -> {r:?}"));
+                    assert_eq!(can, r, "can_flip_edge disagrees: {log:?}");
+                    r.map(|()| true).map_err(|e| format!("{e:?}"))
+                }
+                1 => {
+                    let e = edge(&mut i);
+                    let r = mesh.split_edge(e);
+                    log.push(format!("split {e:?} -> {r:?}"));
+                    r.map(|_| true).map_err(|e| format!("{e:?}"))
+                }
+                2 => {
+                    let e = edge(&mut i);
+                    let p = point(&mut i);
+                    let r = mesh.split_edge_at(e, p);
+                    log.push(format!("split_at {e:?} {p:?} -> {r:?}"));
+                    if let Ok(m) = r {
+                        assert_eq!(mesh.position(m), Some(p), "split point: {log:?}");
+                    }
+                    r.map(|_| true).map_err(|e| format!("{e:?}"))
+                }
+                3 => {
+                    let h = HalfedgeId::new(u32::from(i.u16()) % (2 * slots.edges as u32 + 2));
+                    let at = match i.u8() % 4 {
+                        0 => CollapseAt::Head,
+                        1 => CollapseAt::Tail,
+                        2 => CollapseAt::Midpoint,
+                        _ => CollapseAt::Point(i.qvec3()),
+                    };
+                    let can = mesh.can_collapse_edge(h, at);
+                    let r = mesh.collapse_edge(h, at);
+                    log.push(format!(
+                        "collapse {h:?} {at:?} -> {r:?} (predicted {can:?})"
+                    ));
+                    assert_eq!(
+                        can.is_ok(),
+                        r.is_ok(),
+                        "can_collapse_edge disagrees: {log:?}"
+                    );
+                    if let (Ok(p), Ok(v)) = (can, r) {
+                        assert_eq!(mesh.position(v), Some(p), "survivor position: {log:?}");
+                    }
+                    r.map(|_| true).map_err(|e| format!("{e:?}"))
+                }
+                4 => {
+                    let v = vertex(&mut i);
+                    let k = i.f32();
+                    let r = mesh.diffuse_vertex(v, k);
+                    log.push(format!("diffuse_vertex {v:?} {k:e} -> {r:?}"));
+                    r.map(|_| true).map_err(|e| format!("{e:?}"))
+                }
+                5 => {
+                    let k = f32::from(i.u8()) / 16.0;
+                    let boundary = if i.u8() % 2 == 0 {
+                        DiffuseBoundary::Free
+                    } else {
+                        DiffuseBoundary::Fixed
+                    };
+                    let short = usize::from(i.u8() % 2 == 1 && slots.vertices > 0);
+                    let mut sc = vec![Vec3::ZERO; slots.vertices - short];
+                    let r = mesh.diffuse(k, boundary, &mut sc);
+                    log.push(format!("diffuse {k} {boundary:?} short={short} -> {r:?}"));
+                    r.map(|()| true).map_err(|e| format!("{e:?}"))
+                }
+                6 => {
+                    let weights = if i.u8() % 2 == 0 {
+                        LoopWeights::Warren
+                    } else {
+                        LoopWeights::Loop
+                    };
+                    let mut out = FuzzMesh::new();
+                    let r = mesh.subdivide_loop(&mut out, weights);
+                    log.push(format!("loop {weights:?} -> {r:?}"));
+                    match r {
+                        Ok(()) => {
+                            assert_eq!(out.len(), mesh.len().after_loop(), "Loop counts: {log:?}");
+                            mesh = out;
+                            Ok(true)
+                        }
+                        Err(e) => {
+                            assert_eq!(out, FuzzMesh::new(), "refused Loop wrote output: {log:?}");
+                            Err(format!("{e:?}"))
+                        }
+                    }
+                }
+                7 => {
+                    let mut moves = 0usize;
+                    mesh.compact(|_| moves += 1);
+                    log.push(format!("compact ({moves} moves)"));
+                    assert!(mesh.is_compact(), "not compact after compact: {log:?}");
+                    assert_eq!(mesh.len(), before.len(), "compact changed counts: {log:?}");
+                    Ok(true)
+                }
+                8 => {
+                    let v = vertex(&mut i);
+                    let p = point(&mut i);
+                    let r = mesh.set_position(v, p);
+                    log.push(format!("set_position {v:?} {p:?} -> {r:?}"));
+                    r.map(|()| true).map_err(|e| format!("{e:?}"))
+                }
+                _ => {
+                    let (np, nt) = (slots.vertices, mesh.len().faces);
+                    if np + nt > 0 {
+                        let mut sp = vec![Vec3::splat(7.0); np.saturating_sub(1)];
+                        let mut st = vec![[9u32; 3]; nt];
+                        let r = mesh.export(&mut sp, &mut st);
+                        assert_eq!(
+                            r,
+                            Err(ExportError::BufferTooSmall {
+                                positions: np,
+                                triangles: nt
+                            }),
+                            "short export: {log:?}"
+                        );
+                        assert!(
+                            sp.iter().all(|p| *p == Vec3::splat(7.0))
+                                && st.iter().all(|t| *t == [9; 3]),
+                            "refused export wrote: {log:?}"
+                        );
+                    }
+                    let mut p = vec![Vec3::ZERO; np];
+                    let mut t = vec![[0u32; 3]; nt];
+                    let r = mesh.export(&mut p, &mut t);
+                    assert_eq!(r, Ok((np, nt)), "export: {log:?}");
+                    let mut rebuilt = FuzzMesh::new();
+                    let mut sc = vec![0u32; build_scratch_len(nt)];
+                    let b = rebuilt.build(&p, &t, &mut sc);
+                    log.push(format!("export+rebuild -> {b:?}"));
+                    assert_eq!(
+                        b,
+                        Ok(()),
+                        "the export of a valid mesh does not build: {log:?}"
+                    );
+                    assert_eq!(rebuilt.validate(), Ok(()), "rebuilt mesh: {log:?}");
+                    let mut p2 = vec![Vec3::ZERO; np];
+                    let mut t2 = vec![[0u32; 3]; nt];
+                    assert_eq!(rebuilt.export(&mut p2, &mut t2), Ok((np, nt)));
+                    assert!(p == p2 && t == t2, "export does not round-trip: {log:?}");
+                    assert_eq!(mesh, before, "export changed the mesh: {log:?}");
+                    Ok(true)
+                }
+            };
+            match outcome {
+                Ok(keep_chi) => {
+                    if let Err(e) = mesh.validate() {
+                        panic!("validate() = {e:?} after a successful operation: {log:#?}");
+                    }
+                    if keep_chi {
+                        assert_eq!(euler(mesh.len()), chi, "V − E + F changed: {log:#?}");
+                    }
+                }
+                Err(_) => assert!(
+                    mesh == before,
+                    "refused operation changed the mesh: {log:#?}"
+                ),
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Seeds
+// ---------------------------------------------------------------------------------------------
+
+/// One seed input: `(target, file name, bytes)`.
+pub type Seed = (&'static str, String, Vec<u8>);
+
+/// Regression inputs written from code, checked in as `fuzz/regressions/<target>/<name>`
+/// (crash files found by the fuzzers are copied there as they are). A name starting with
+/// `open-` is a reported bug not fixed yet: the replay test requires it to **still fail**
+/// and asks for the prefix to be dropped once it passes.
+pub fn regressions() -> Vec<Seed> {
+    let b = |name: &str, bytes: Vec<u8>| ("ray_box", name.to_string(), bytes);
+    let (lo, hi) = (Vec3::ZERO, Vec3::ONE);
+    let df = flags::DEFAULT_INTERVAL;
+    let dflt = (0.0, f32::INFINITY);
+    vec![
+        // +0 direction component with the origin below the slab, and a subnormal component
+        // whose reciprocal overflows: Some((inf, inf)) for +0, None for -0 (the ray misses).
+        b(
+            "open-zero-sign-subnormal-dir",
+            encode_ray_box(
+                df,
+                Vec3::new(-1.0, 0.5, 0.5),
+                Vec3::new(0.0, 0.0, 1e-40),
+                dflt,
+                lo,
+                hi,
+            ),
+        ),
+        b(
+            "open-zero-sign-neg-subnormal-dir",
+            encode_ray_box(
+                df,
+                Vec3::new(-1.0, 0.5, 0.5),
+                Vec3::new(0.0, 0.0, -1e-40),
+                dflt,
+                lo,
+                hi,
+            ),
+        ),
+    ]
+}
+
+/// The hard-case seed corpus, checked in as `fuzz/corpus/<target>/seed-<name>` (the replay test
+/// verifies the files match; `HALFRAY_WRITE_SEEDS=1` rewrites them).
+pub fn seeds() -> Vec<Seed> {
+    let mut s = Vec::new();
+    seeds_ray_triangle(&mut s);
+    seeds_ray_box(&mut s);
+    seeds_obj(&mut s);
+    seeds_bvh(&mut s);
+    seeds_halfedge(&mut s);
+    s
+}
+
+fn seeds_bvh(s: &mut Vec<Seed>) {
+    let t = |name: &str, bytes: Vec<u8>| ("bvh", format!("seed-{name}"), bytes);
+    let quad = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(4.0, 0.0, 0.0),
+        Vec3::new(4.0, 4.0, 0.0),
+        Vec3::new(0.0, 4.0, 0.0),
+        Vec3::new(2.0, 2.0, 3.0),
+    ];
+    let o = Vec3::new(1.25, -2.5, 7.0);
+    // Two triangles sharing the diagonal; rays at the shared edge, a shared vertex, interior.
+    s.push(t(
+        "quad-shared-edge",
+        bvh::encode_quantized(
+            &quad,
+            &[[0, 1, 2], [0, 2, 3]],
+            &[(o, 0, 2, 4), (o, 0, 2, 1), (o, 0, 0, 0), (o, 1, 3, 3)],
+        ),
+    ));
+    // Pyramid (closed fan around the apex) with rays at the apex and the ridges.
+    s.push(t(
+        "pyramid",
+        bvh::encode_quantized(
+            &quad,
+            &[
+                [0, 1, 4],
+                [1, 2, 4],
+                [2, 3, 4],
+                [3, 0, 4],
+                [0, 2, 1],
+                [0, 3, 2],
+            ],
+            &[
+                (o, 4, 4, 0),
+                (o, 0, 4, 4),
+                (Vec3::new(-3.0, 1.0, 0.5), 2, 4, 2),
+            ],
+        ),
+    ));
+    // Duplicated coplanar triangles (tie rule), a degenerate one and a collinear one.
+    s.push(t(
+        "duplicates-degenerate",
+        bvh::encode_quantized(
+            &quad,
+            &[
+                [0, 1, 2],
+                [0, 1, 2],
+                [1, 2, 0],
+                [3, 3, 3],
+                [0, 1, 1],
+                [0, 2, 3],
+            ],
+            &[
+                (o, 0, 2, 2),
+                (o, 0, 1, 4),
+                (Vec3::new(-1.0, 0.0, 0.0), 1, 1, 0),
+            ],
+        ),
+    ));
+    // Out-of-range vertex index (unusable primitive): the build must name it.
+    s.push(t(
+        "out-of-range-index",
+        bvh::encode_quantized(&quad[..3], &[[0, 1, 2], [0, 1, 4]], &[(o, 0, 1, 4)]),
+    ));
+    // Same with exclude_non_finite, and a NaN vertex (raw coordinates).
+    let mut raw = Enc::new().u8(2).u8(4).u8(3);
+    for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(f32::NAN, 0.0, 0.0)] {
+        raw = raw.vec3(p);
+    }
+    let raw = raw
+        .bytes(&[0, 1, 2, 0, 1, 3, 2, 1, 0])
+        .u8(0)
+        .vec3(Vec3::new(0.25, 0.25, 1.0))
+        .vec3(-Vec3::Z)
+        .u8(4)
+        .vec3(Vec3::new(0.25, 0.25, 1.0))
+        .vec3(-Vec3::Z)
+        .f32(0.0)
+        .f32(1.0);
+    s.push(t("nan-vertex-excluded", raw.done()));
+    s.push(t("empty", Enc::new().u8(1).u8(0).u8(0).u8(0).done()));
+}
+
+fn seeds_halfedge(s: &mut Vec<Seed>) {
+    let t = |name: &str, bytes: Vec<u8>| ("halfedge_ops", format!("seed-{name}"), bytes);
+    // Opcodes: 0 flip e, 1 split e, 2 split_at e raw p, 3 collapse h16 at, 4 diffuse_vertex v k,
+    // 5 diffuse k b short, 6 loop w, 7 compact, 8 set_position v raw p, 9 export+rebuild.
+    let q0 = [0u8, 0, 0];
+    s.push(t(
+        "tetra-loop-loop",
+        Enc::new()
+            .u8(0)
+            .bytes(&[6, 0, 6, 1, 0, 3, 3, 0, 0, 9])
+            .done(),
+    ));
+    s.push(t(
+        "tetra-flip-collapse-refused",
+        Enc::new()
+            .u8(0)
+            .bytes(&[0, 0, 0, 1, 3, 0, 0, 0, 3, 5, 0, 2])
+            .done(),
+    ));
+    s.push(t(
+        "octa-split-flip-collapse-compact",
+        Enc::new()
+            .u8(1)
+            .bytes(&[
+                1, 0, 1, 5, 0, 12, 0, 13, 3, 24, 0, 2, 3, 7, 0, 1, 7, 9, 6, 1,
+            ])
+            .done(),
+    ));
+    s.push(t(
+        "grid-boundary-ops",
+        Enc::new()
+            .u8(2)
+            .bytes(&[0, 0, 3, 0, 0, 0, 3, 1, 0, 1, 1, 2, 4, 0])
+            .bytes(&q0)
+            .bytes(&[5, 8, 1, 0, 5, 8, 0, 1, 7, 9])
+            .done(),
+    ));
+    s.push(t(
+        "triangle-everything",
+        Enc::new()
+            .u8(3)
+            .bytes(&[0, 0, 1, 0, 3, 2, 0, 1, 6, 0, 9, 7])
+            .done(),
+    ));
+    s.push(t(
+        "fan-nonfinite-refusals",
+        Enc::new()
+            .u8(4)
+            .u8(4)
+            .u8(0)
+            .f32(f32::INFINITY)
+            .u8(2)
+            .u8(0)
+            .u8(1)
+            .vec3(Vec3::new(f32::NAN, 0.0, 0.0))
+            .u8(8)
+            .u8(1)
+            .u8(1)
+            .vec3(Vec3::new(0.0, f32::INFINITY, 0.0))
+            .u8(4)
+            .u8(0)
+            .f32(1e38)
+            .u8(3)
+            .u16(0)
+            .u8(3)
+            .qvec3(Vec3::new(0.0, 0.0, 5.0))
+            .done(),
+    ));
+    // Raw builds: a bowtie (non-manifold vertex), an inconsistent orientation, an edge
+    // shared by three faces, a repeated index: every one must fail and leave the mesh empty.
+    for (name, nv, tris) in [
+        ("raw-bowtie", 5u8, vec![[0u8, 1, 2], [0, 3, 4]]),
+        ("raw-flipped", 4, vec![[0, 1, 2], [0, 1, 3]]),
+        ("raw-three-faces", 5, vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]]),
+        ("raw-repeated-index", 3, vec![[0, 0, 1]]),
+        ("raw-out-of-range", 3, vec![[0, 1, 3]]),
+        ("raw-two-triangles", 4, vec![[0, 1, 2], [0, 2, 3]]),
+    ] {
+        let mut e = Enc::new().u8(5).u8(nv).u8(tris.len() as u8);
+        for k in 0..nv {
+            e = e.qvec3(Vec3::new(
+                f32::from(k),
+                f32::from(k * k % 5),
+                f32::from(k % 2),
+            ));
+        }
+        for tri in &tris {
+            e = e.bytes(tri);
+        }
+        s.push(t(name, e.bytes(&[1, 0, 0, 0, 7, 9]).done()));
+    }
+}
+
+fn seeds_ray_triangle(s: &mut Vec<Seed>) {
+    let t = |name: &str, bytes: Vec<u8>| ("ray_triangle", format!("seed-{name}"), bytes);
+    let unit = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let dflt = (0.0, f32::INFINITY);
+    let aim = flags::AIM | flags::DEFAULT_INTERVAL;
+    let o = Vec3::new(0.3, -0.7, 5.0);
+    // Plain hit, front and back.
+    s.push(t(
+        "plain",
+        encode_ray_triangle(2, Vec3::new(0.25, 0.25, 5.0), -Vec3::Z, dflt, unit),
+    ));
+    s.push(t(
+        "back",
+        encode_ray_triangle(2, Vec3::new(0.25, 0.25, -5.0), Vec3::Z, dflt, unit),
+    ));
+    // Rays through vertices, edge midpoints and the centroid (exact targets).
+    for (name, u, w) in [
+        ("vertex0", 0.0, 0.0),
+        ("vertex1", 1.0, 0.0),
+        ("vertex2", 0.0, 1.0),
+        ("edge01", 0.5, 0.0),
+        ("edge12", 0.5, 0.5),
+        ("edge20", 0.0, 0.5),
+        ("centroid", 1.0 / 3.0, 1.0 / 3.0),
+        ("outside", 0.75, 0.75),
+    ] {
+        s.push(t(
+            &format!("aim-{name}"),
+            encode_ray_triangle(aim, o, Vec3::new(u, w, 0.0), dflt, unit),
+        ));
+    }
+    // A skinny, far triangle hit near its long edge (grazing, T8) and at 1e7 (T12).
+    let skinny = [
+        Vec3::new(1e7, 0.0, 0.0),
+        Vec3::new(1e7 + 11.2, 0.1, 0.0),
+        Vec3::new(1e7 + 1.4, 9.7, 0.3),
+    ];
+    s.push(t(
+        "far-skinny-edge",
+        encode_ray_triangle(aim, Vec3::ZERO, Vec3::new(0.5, 0.0, 0.0), dflt, skinny),
+    ));
+    // In-plane ray (T6) and ray parallel one ulp above (T7).
+    s.push(t(
+        "in-plane",
+        encode_ray_triangle(2, Vec3::new(-1.0, 0.25, 0.0), Vec3::X, dflt, unit),
+    ));
+    s.push(t(
+        "parallel-ulp-above",
+        encode_ray_triangle(
+            2,
+            Vec3::new(-1.0, 0.25, f32::from_bits(1)),
+            Vec3::X,
+            dflt,
+            unit,
+        ),
+    ));
+    // Degenerate triangles (T9).
+    s.push(t(
+        "collinear",
+        encode_ray_triangle(
+            2,
+            Vec3::new(0.5, 0.0, 1.0),
+            -Vec3::Z,
+            dflt,
+            [Vec3::ZERO, Vec3::X, Vec3::X * 2.0],
+        ),
+    ));
+    s.push(t(
+        "point",
+        encode_ray_triangle(2, Vec3::new(1.0, 1.0, 2.0), -Vec3::Z, dflt, [Vec3::ONE; 3]),
+    ));
+    // Tiny and huge triangles (T10, T11).
+    for (name, k) in [("tiny", 1e-20f32), ("huge", 1e19), ("subnormal", 1e-40)] {
+        let v = [Vec3::ZERO, Vec3::new(k, 0.0, 0.0), Vec3::new(0.0, k, 0.0)];
+        s.push(t(
+            name,
+            encode_ray_triangle(aim, Vec3::new(k, k, k), Vec3::new(0.25, 0.25, 0.0), dflt, v),
+        ));
+    }
+    // Origin on the triangle (T13), hit exactly at t_max (T14), tiny t interval.
+    s.push(t(
+        "origin-on-triangle",
+        encode_ray_triangle(2, Vec3::new(0.25, 0.25, 0.0), Vec3::Z, dflt, unit),
+    ));
+    s.push(t(
+        "hit-at-tmax",
+        encode_ray_triangle(0, Vec3::new(0.25, 0.25, 2.0), -Vec3::Z, (0.0, 2.0), unit),
+    ));
+    s.push(t(
+        "tmax-just-short",
+        encode_ray_triangle(
+            0,
+            Vec3::new(0.25, 0.25, 2.0),
+            -Vec3::Z,
+            (0.0, 2.0f32.next_down()),
+            unit,
+        ),
+    ));
+    // Unnormalised directions (T16), ±0 components (T17), dominant-axis ties (T18).
+    for (name, d) in [
+        ("dir-1e-10", Vec3::new(0.0, 0.0, -1e-10)),
+        ("dir-1e10", Vec3::new(0.0, 0.0, -1e10)),
+        ("neg-zero", Vec3::new(-0.0, -0.0, -1.0)),
+        ("tie-xyz", Vec3::new(-1.0, -1.0, -1.0)),
+    ] {
+        s.push(t(
+            name,
+            encode_ray_triangle(2, Vec3::new(0.5, 0.4, 1.0), d, dflt, unit),
+        ));
+    }
+    // Invalid rays (T19) and non-finite vertices (T20).
+    for (name, o, d, iv) in [
+        ("nan-origin", Vec3::new(f32::NAN, 0.0, 1.0), -Vec3::Z, dflt),
+        (
+            "inf-direction",
+            Vec3::new(0.2, 0.2, 1.0),
+            Vec3::new(0.0, 0.0, f32::NEG_INFINITY),
+            dflt,
+        ),
+        ("zero-direction", Vec3::new(0.2, 0.2, 1.0), Vec3::ZERO, dflt),
+        (
+            "nan-tmax",
+            Vec3::new(0.2, 0.2, 1.0),
+            -Vec3::Z,
+            (0.0, f32::NAN),
+        ),
+        (
+            "inverted-interval",
+            Vec3::new(0.2, 0.2, 1.0),
+            -Vec3::Z,
+            (2.0, 1.0),
+        ),
+    ] {
+        s.push(t(name, encode_ray_triangle(0, o, d, iv, unit)));
+    }
+    s.push(t(
+        "inf-vertex",
+        encode_ray_triangle(
+            2,
+            Vec3::new(0.2, 0.2, 1.0),
+            -Vec3::Z,
+            dflt,
+            [Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::Y],
+        ),
+    ));
+}
+
+fn seeds_ray_box(s: &mut Vec<Seed>) {
+    let t = |name: &str, bytes: Vec<u8>| ("ray_box", format!("seed-{name}"), bytes);
+    let (lo, hi) = (Vec3::ZERO, Vec3::ONE);
+    let dflt = (0.0, f32::INFINITY);
+    let df = flags::DEFAULT_INTERVAL;
+    s.push(t(
+        "plain",
+        encode_ray_box(df, Vec3::new(0.5, 0.5, -1.0), Vec3::Z, dflt, lo, hi),
+    ));
+    // Origin on each slab plane with ±0 direction components (B1) and one ulp outside (B2).
+    for axis in 0..3 {
+        for (face_name, face) in [("min", 0.0f32), ("max", 1.0)] {
+            for (zname, zero) in [("pz", 0.0f32), ("nz", -0.0)] {
+                let mut o = Vec3::splat(0.5);
+                o[axis] = face;
+                let along = (axis + 1) % 3;
+                o[along] = -1.0;
+                let mut d = Vec3::ZERO;
+                d[axis] = zero;
+                d[along] = 1.0;
+                s.push(t(
+                    &format!("on-plane-{axis}-{face_name}-{zname}"),
+                    encode_ray_box(df, o, d, dflt, lo, hi),
+                ));
+                o[axis] = if face == 0.0 {
+                    face.next_down()
+                } else {
+                    face.next_up()
+                };
+                s.push(t(
+                    &format!("ulp-outside-{axis}-{face_name}-{zname}"),
+                    encode_ray_box(df, o, d, dflt, lo, hi),
+                ));
+            }
+        }
+    }
+    // Along a box edge (B4), flat box (B3), subnormal / tiny directions (B5), far thin box (B6).
+    s.push(t(
+        "along-edge",
+        encode_ray_box(df, Vec3::new(0.0, 0.0, -1.0), Vec3::Z, dflt, lo, hi),
+    ));
+    s.push(t(
+        "flat-box",
+        encode_ray_box(
+            df,
+            Vec3::new(0.5, 0.5, 0.0),
+            Vec3::Z,
+            dflt,
+            Vec3::new(0.0, 0.0, 2.0),
+            Vec3::new(1.0, 1.0, 2.0),
+        ),
+    ));
+    for (name, tiny) in [
+        ("1e-30", 1e-30f32),
+        ("subnormal", 1e-40),
+        ("neg-subnormal", -1e-40),
+    ] {
+        s.push(t(
+            &format!("tiny-dir-{name}"),
+            encode_ray_box(
+                df,
+                Vec3::new(0.5, 0.5, -1.0),
+                Vec3::new(tiny, 0.0, 1.0),
+                dflt,
+                lo,
+                hi,
+            ),
+        ));
+        if tiny.abs() < f32::MIN_POSITIVE {
+            continue; // origin outside + subnormal direction: see regressions()
+        }
+        s.push(t(
+            &format!("tiny-dir-outside-{name}"),
+            encode_ray_box(
+                df,
+                Vec3::new(-1.0, 0.5, 0.5),
+                Vec3::new(0.0, 0.0, tiny),
+                dflt,
+                lo,
+                hi,
+            ),
+        ));
+    }
+    let x = 1e7f32;
+    let far_lo = Vec3::new(x, -1.0, -1.0);
+    let far_hi = Vec3::new(x.next_up(), 1.0, 1.0);
+    s.push(t(
+        "far-thin",
+        encode_ray_box(
+            df | flags::AIM,
+            Vec3::new(0.0, 0.3, 0.2),
+            Vec3::new(0.0, 0.5, 0.5),
+            dflt,
+            far_lo,
+            far_hi,
+        ),
+    ));
+    // Entry exactly at t_max (B7), aimed at corners, NaN ray (B8), inverted and NaN boxes.
+    s.push(t(
+        "entry-at-tmax",
+        encode_ray_box(0, Vec3::new(0.5, 0.5, -2.0), Vec3::Z, (0.0, 2.0), lo, hi),
+    ));
+    s.push(t(
+        "aim-corner",
+        encode_ray_box(
+            df | flags::AIM,
+            Vec3::new(-3.0, 2.0, 7.0),
+            Vec3::new(1.0, 0.0, 1.0),
+            dflt,
+            lo,
+            hi,
+        ),
+    ));
+    s.push(t(
+        "nan-origin",
+        encode_ray_box(df, Vec3::new(f32::NAN, 0.5, -1.0), Vec3::Z, dflt, lo, hi),
+    ));
+    s.push(t(
+        "inverted-box",
+        encode_ray_box(df, Vec3::new(0.5, 0.5, -1.0), Vec3::Z, dflt, hi, lo),
+    ));
+    s.push(t(
+        "nan-box",
+        encode_ray_box(
+            df,
+            Vec3::new(0.5, 0.5, -1.0),
+            Vec3::Z,
+            dflt,
+            Vec3::new(f32::NAN, 0.0, 0.0),
+            hi,
+        ),
+    ));
+    s.push(t(
+        "negative-interval",
+        encode_ray_box(
+            0,
+            Vec3::new(0.5, 0.5, 3.0),
+            Vec3::Z,
+            (f32::NEG_INFINITY, -1.5),
+            lo,
+            hi,
+        ),
+    ));
+}
+
+fn seeds_obj(s: &mut Vec<Seed>) {
+    let t = |name: &str, text: &str| ("obj_file", format!("seed-{name}"), text.as_bytes().to_vec());
+    s.push(t(
+        "quad",
+        "# quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+    ));
+    s.push(t(
+        "slashes-negative",
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvn 0 0 1\nf 1/1/1 2//1 3/1\nf -3 -2 -1\n",
+    ));
+    s.push(t(
+        "crlf-comments",
+        "o thing\r\ng g\r\nv 0 0 0 1\r\nv 1 0 0 # c\r\nv 0 1 0\r\ns off\r\nf 1 2 3\r\n",
+    ));
+    s.push(t(
+        "extreme-floats",
+        "v 3.4028235e38 -1e-45 1.17549435e-38\nv -0 0 inf\nv nan 0 0\nf 1 2 3\n",
+    ));
+    s.push(t("overflowing-float", "v 1e39 0 0\n"));
+    s.push(t("index-zero", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"));
+    s.push(t("index-out-of-range", "v 0 0 0\nf 1 2 3\nf -4 1 1\n"));
+    s.push(t(
+        "big-index",
+        "v 0 0 0\nf 99999999999999999999 1 1\nf 4294967297 1 1\n",
+    ));
+    s.push(t("short-face", "v 0 0 0\nf 1 1\n"));
+    s.push(t("unknown", "bogus 1 2\n"));
+    s.push(t("unicode", "v 0 0 0 \u{00e9}\nv\u{3000}1 0 0\nf 1 1 1\n"));
+    s.push(t("empty", ""));
+}

@@ -1,0 +1,140 @@
+//! Replays the fuzz corpora on stable: every file under `fuzz/corpus/<target>/` and
+//! `fuzz/regressions/<target>/` goes through the same property checks the cargo-fuzz targets
+//! run (`fuzz/src/lib.rs`, included here as a module), so a plain `cargo test` catches a
+//! regression of any crash the fuzzers ever found, without nightly or libFuzzer.
+//!
+//! A regression file whose name starts with `open-` is a reported, unfixed bug: it must still
+//! fail (strict expected failure); once it passes the test asks for the prefix to be dropped.
+//!
+//! `HALFRAY_WRITE_SEEDS=1 cargo test -p halfray-tests --test fuzz_replay` rewrites the seed
+//! and code-defined regression files from `props::seeds()` and `props::regressions()`.
+
+#[path = "../../fuzz/src/lib.rs"]
+#[allow(dead_code)]
+mod props;
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::{Path, PathBuf};
+
+fn fuzz_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz")
+}
+
+/// `(target, file)` for every file under `fuzz/<kind>/<target>/`.
+fn inputs(kind: &str) -> Vec<(String, PathBuf)> {
+    let mut out = Vec::new();
+    let Ok(dirs) = std::fs::read_dir(fuzz_dir().join(kind)) else {
+        return out;
+    };
+    for dir in dirs.flatten() {
+        if !dir.path().is_dir() {
+            continue;
+        }
+        let target = dir.file_name().to_string_lossy().into_owned();
+        assert!(
+            props::TARGETS.contains(&target.as_str()),
+            "fuzz/{kind}/{target}: no such fuzz target (known: {:?})",
+            props::TARGETS
+        );
+        for f in std::fs::read_dir(dir.path()).unwrap().flatten() {
+            if f.path().is_file() {
+                out.push((target.clone(), f.path()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+fn replay(kind: &str) -> usize {
+    let files = inputs(kind);
+    let mut failures = Vec::new();
+    for (target, path) in &files {
+        let data = std::fs::read(path).unwrap();
+        let r = catch_unwind(AssertUnwindSafe(|| props::run(target, &data)));
+        let open = path
+            .file_name()
+            .is_some_and(|n| n.to_string_lossy().starts_with("open-"));
+        if open {
+            if matches!(r, Ok(true)) {
+                failures.push(format!(
+                    "{}: passes now: drop the `open-` prefix (the bug it reports is fixed)",
+                    path.display()
+                ));
+            }
+            continue;
+        }
+        match r {
+            Ok(true) => {}
+            Ok(false) => failures.push(format!("{}: unknown target", path.display())),
+            Err(e) => {
+                let msg = e
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_default();
+                failures.push(format!("{}:\n{msg}", path.display()));
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} fuzz/{kind} inputs fail:\n\n{}",
+        failures.len(),
+        files.len(),
+        failures.join("\n\n")
+    );
+    files.len()
+}
+
+#[test]
+fn corpus_replays_clean() {
+    let n = replay("corpus");
+    assert!(
+        n > 0,
+        "no corpus files found under {}",
+        fuzz_dir().display()
+    );
+}
+
+#[test]
+fn regressions_replay_clean() {
+    replay("regressions");
+}
+
+#[test]
+fn seed_files_match_their_definitions() {
+    let write = std::env::var_os("HALFRAY_WRITE_SEEDS").is_some();
+    let mut stale = Vec::new();
+    let all = props::seeds()
+        .into_iter()
+        .map(|s| ("corpus", s))
+        .chain(props::regressions().into_iter().map(|s| ("regressions", s)));
+    for (kind, (target, name, bytes)) in all {
+        let path = fuzz_dir().join(kind).join(target).join(&name);
+        if write {
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(&path, &bytes).unwrap();
+        } else if std::fs::read(&path).ok().as_deref() != Some(&bytes[..]) {
+            stale.push(path.display().to_string());
+        }
+    }
+    assert!(
+        stale.is_empty(),
+        "seed files missing or stale (rerun with HALFRAY_WRITE_SEEDS=1): {stale:#?}"
+    );
+}
+
+/// Every seed passes its own target (also covered by the corpus replay; this one works before
+/// the files are written).
+#[test]
+fn seeds_pass() {
+    let mut failed = Vec::new();
+    for (target, name, bytes) in props::seeds() {
+        let r = catch_unwind(AssertUnwindSafe(|| props::run(target, &bytes)));
+        if !matches!(r, Ok(true)) {
+            failed.push(format!("{target}/{name}"));
+        }
+    }
+    assert!(failed.is_empty(), "seeds failing: {failed:#?}");
+}
