@@ -13,8 +13,8 @@
 
 use glam::Vec3;
 use halfray_core::hit::offset_ray_origin;
-use halfray_core::triangle::{TriangleIntersector, Watertight};
 use halfray_core::tolerance::SHADOW_SEGMENT_END_SLACK;
+use halfray_core::triangle::{TriangleIntersector, Watertight};
 use halfray_core::{Hit, Ray, spawn_ray, spawn_ray_between, spawn_ray_to};
 use halfray_tests::Rng;
 
@@ -178,7 +178,10 @@ fn shadow_rays_between_surface_points_hit_neither_end() {
                 hit_a.point - hit_b.point,
             );
             let ray = spawn_ray_to(&hit_a, target);
-            assert_eq!((ray.t_min, ray.t_max), (0.0, 1.0 - SHADOW_SEGMENT_END_SLACK));
+            assert_eq!(
+                (ray.t_min, ray.t_max),
+                (0.0, 1.0 - SHADOW_SEGMENT_END_SLACK)
+            );
             // The same segment through the public two-hit helper.
             assert_eq!(spawn_ray_between(&hit_a, &hit_b), ray);
             rays += 1;
