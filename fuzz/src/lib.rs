@@ -308,14 +308,35 @@ fn check_hit_contract(ray: &Ray, v: &[Vec3; 3], h: &TriangleHit, ctx: &dyn Fn() 
             ctx()
         );
     }
-    // Orientation: the sign of d·ng computed in f64 from the f32 inputs (the edge differences
-    // are exact or nearly so), trusted only when it is clearly non-zero.
+    // Orientation, for well-conditioned configurations only: the sign of d·n (f64, with a
+    // rigorous bound on its own rounding, since the f64 differences of far-apart f32 values are
+    // not exact) is clear, the angle is not grazing (|cos| > 1e-3), and the triangle is not a
+    // sliver relative to its distance from the origin (|n| ≥ 1e-2·M², M = max |vᵢ − o|), so
+    // that f32 rounding of any variant (≈ 6u·M²·|d|) cannot flip it.
+    let u64 = F64_UNIT_ROUNDOFF;
     let e1 = v[1].as_dvec3() - v[0].as_dvec3();
     let e2 = v[2].as_dvec3() - v[0].as_dvec3();
     let n = e1.cross(e2);
+    let (a, b) = (e1.abs(), e2.abs());
+    let n_err = DVec3::new(
+        a.y * b.z + a.z * b.y,
+        a.z * b.x + a.x * b.z,
+        a.x * b.y + a.y * b.x,
+    ) * (4.0 * u64);
     let d = ray.direction.as_dvec3();
     let dn = d.dot(n);
-    if dn.is_finite() && dn.abs() > 1e-3 * d.length() * n.length() {
+    let dn_err = d.abs().dot(n_err) + 3.0 * u64 * d.abs().dot(n.abs()) + 1e-300;
+    let o = ray.origin.as_dvec3();
+    let m = v
+        .iter()
+        .map(|p| (p.as_dvec3() - o).length())
+        .fold(0.0, f64::max);
+    let tame = (1e-18..=1e18).contains(&m) && (1e-18..=1e18).contains(&d.length());
+    if tame
+        && dn.abs() > 2.0 * dn_err
+        && dn.abs() > 1e-3 * d.length() * n.length()
+        && n.length() >= 1e-2 * m * m
+    {
         assert_eq!(
             h.front_face,
             dn < 0.0,
@@ -429,6 +450,14 @@ pub struct WatertightBound {
 
 /// The edge functions in the watertight test's order: `e0 = e(v2, v1)`, `e1 = e(v0, v2)`,
 /// `e2 = e(v1, v0)` with `e(p, q) = x_p·y_q − y_p·x_q`; `bᵢ = eᵢ / Σ e`.
+/// Smallest `|det|` (sum of the sheared edge functions) inside the `f32` variant's domain:
+/// 2^-100 rounded down, where its `f32` products stay clear of the subnormal range.
+pub const F32_DET_MIN: f64 = 7.9e-31;
+
+/// Largest `Σ|eᵢ·zᵢ|` (and `|t|`) inside the `f32` variant's domain: 2^120 ≈ 1.33e36 rounded
+/// down, so the scaled depth sum cannot overflow `f32` (max ≈ 2^128).
+pub const F32_DEPTH_SUM_MAX: f64 = 1.3e36;
+
 const EDGE_PAIRS: [(usize, usize); 3] = [(2, 1), (0, 2), (1, 0)];
 
 impl WatertightBound {
@@ -462,8 +491,8 @@ impl WatertightBound {
             my: [0.0; 3],
             mz: [0.0; 3],
         };
-        for i in 0..3 {
-            let p = v[i].as_dvec3() - o;
+        for (i, vi) in v.iter().enumerate() {
+            let p = vi.as_dvec3() - o;
             b.x[i] = p[kx] - sx * p[kz];
             b.y[i] = p[ky] - sy * p[kz];
             b.z[i] = sz * p[kz];
@@ -514,7 +543,7 @@ impl WatertightBound {
     ) {
         let e = self.edges();
         let err = self.edge_errors(eval);
-        if (0..3).any(|i| !(e[i].abs() > err[i])) {
+        if (0..3).any(|i| e[i].abs().partial_cmp(&err[i]) != Some(core::cmp::Ordering::Greater)) {
             return; // within the error bound of an edge (or det = 0): either answer is right
         }
         let inside = e.iter().all(|&x| x > 0.0) || e.iter().all(|&x| x < 0.0);
@@ -544,10 +573,10 @@ impl WatertightBound {
         let sum_err: f64 = err.iter().sum();
         let denom = det.abs() - sum_err;
         let ez: f64 = (0..3).map(|i| (e[i] * self.z[i]).abs()).sum();
-        if eval == EdgeEval::F32 && !(det.abs() >= 7.9e-31 && ez <= 1.3e36) {
+        if eval == EdgeEval::F32 && !(det.abs() >= F32_DET_MIN && ez <= F32_DEPTH_SUM_MAX) {
             return; // outside the f32 variant's domain (2^-100 ≤ |det|, Σ|e·z| ≤ 2^120)
         }
-        if !(t_ref.abs() <= 1.3e36) {
+        if t_ref.is_nan() || t_ref.abs() > F32_DEPTH_SUM_MAX {
             return;
         }
         let dz = self.mz.map(|m| DEPTH_REL * m + UNDERFLOW_ABS);
@@ -1313,7 +1342,11 @@ pub mod halfedge {
     }
 
     fn point(i: &mut Input<'_>) -> Vec3 {
-        if i.u8() % 2 == 0 { i.qvec3() } else { i.vec3() }
+        if i.u8().is_multiple_of(2) {
+            i.qvec3()
+        } else {
+            i.vec3()
+        }
     }
 
     /// Fuzz target `halfedge_ops`.
@@ -1428,7 +1461,7 @@ pub mod halfedge {
                 }
                 5 => {
                     let k = f32::from(i.u8()) / 16.0;
-                    let boundary = if i.u8() % 2 == 0 {
+                    let boundary = if i.u8().is_multiple_of(2) {
                         DiffuseBoundary::Free
                     } else {
                         DiffuseBoundary::Fixed
@@ -1440,7 +1473,7 @@ pub mod halfedge {
                     r.map(|()| true).map_err(|e| format!("{e:?}"))
                 }
                 6 => {
-                    let weights = if i.u8() % 2 == 0 {
+                    let weights = if i.u8().is_multiple_of(2) {
                         LoopWeights::Warren
                     } else {
                         LoopWeights::Loop
