@@ -24,14 +24,26 @@ use halfray_core::tolerance::BARYCENTRIC_SLACK;
 use halfray_core::triangle::{F64Reference, TriangleHit, TriangleVariant};
 
 /// Every target this file implements, by fuzz-target (and corpus directory) name.
-pub const TARGETS: &[&str] = &["ray_triangle", "ray_box", "obj_file", "bvh", "halfedge_ops"];
+pub const TARGETS: &[&str] = &[
+    "ray_triangle",
+    "ray_box",
+    "ray_sphere",
+    "ray_quadric",
+    "obj_file",
+    "scene_file",
+    "bvh",
+    "halfedge_ops",
+];
 
 /// Runs target `name` on `data`; `false` when no such target exists.
 pub fn run(name: &str, data: &[u8]) -> bool {
     match name {
         "ray_triangle" => ray_triangle(data),
         "ray_box" => ray_box(data),
+        "ray_sphere" => sphere::ray_sphere(data),
+        "ray_quadric" => quadric::ray_quadric(data),
         "obj_file" => obj_file(data),
+        "scene_file" => scene::scene_file(data),
         "bvh" => bvh::bvh(data),
         "halfedge_ops" => halfedge::halfedge_ops(data),
         _ => return false,
@@ -1618,7 +1630,10 @@ pub fn seeds() -> Vec<Seed> {
     let mut s = Vec::new();
     seeds_ray_triangle(&mut s);
     seeds_ray_box(&mut s);
+    seeds_sphere(&mut s);
+    seeds_quadric(&mut s);
     seeds_obj(&mut s);
+    seeds_scene(&mut s);
     seeds_bvh(&mut s);
     seeds_halfedge(&mut s);
     s
@@ -2121,4 +2136,742 @@ fn seeds_obj(s: &mut Vec<Seed>) {
     s.push(t("unknown", "bogus 1 2\n"));
     s.push(t("unicode", "v 0 0 0 \u{00e9}\nv\u{3000}1 0 0\nf 1 1 1\n"));
     s.push(t("empty", ""));
+}
+
+pub mod sphere {
+    //! The `ray_sphere` target: the stable quadratic against an `f64` evaluation of the same
+    //! `f32` inputs, and against the textbook (naive) form where both are well conditioned.
+    //!
+    //! Layout: `flags: u8` (bit 0: quantized centre/radius/origin ([`Input::q`]), else raw
+    //! `f32`; bit 1: interval `(0, ∞]`), `center`, `radius`, `origin`, `direction`, `t_min`,
+    //! `t_max`. Missing bytes read as zero.
+
+    use super::{Enc, Input, fmt_ray};
+    use glam::Vec3;
+    use halfray_core::float::F32_UNIT_ROUNDOFF;
+    use halfray_core::ray::Ray;
+    use halfray_core::sphere::Sphere;
+
+    /// Multiple of `u = 2⁻²⁴` in the residual and `t` bounds below. The first-order analyses
+    /// (module docs of `halfray_core::sphere`) give constants under 20; 64 leaves room for the
+    /// second-order terms without hiding a real error, which is orders of magnitude larger.
+    pub const K: f64 = 64.0;
+
+    /// Inputs whose magnitudes (`|o − C|`, `r`, `|t·d|`) lie outside `[DOMAIN_MIN, DOMAIN_MAX]`
+    /// are only checked for totality: outside it `f32` squares under- or overflow and the
+    /// relative bounds do not apply (the intersector then answers `None`, documented).
+    pub const DOMAIN_MIN: f64 = 1e-15;
+    /// See [`DOMAIN_MIN`].
+    pub const DOMAIN_MAX: f64 = 1e15;
+
+    /// Decodes a `ray_sphere` input.
+    pub fn decode(data: &[u8]) -> (Vec3, f32, Ray) {
+        let mut i = Input::new(data);
+        let fl = i.u8();
+        let q = fl & 1 != 0;
+        let center = if q { i.qvec3() } else { i.vec3() };
+        let radius = if q { i.q() } else { i.f32() };
+        let origin = if q { i.qvec3() } else { i.vec3() };
+        let direction = i.vec3();
+        let (t_min, t_max) = if fl & 2 != 0 {
+            (0.0, f32::INFINITY)
+        } else {
+            (i.f32(), i.f32())
+        };
+        (
+            center,
+            radius,
+            Ray::with_interval(origin, direction, t_min, t_max),
+        )
+    }
+
+    /// Encodes a raw (`f32`) `ray_sphere` input with the default interval.
+    pub fn encode(center: Vec3, radius: f32, o: Vec3, d: Vec3) -> Vec<u8> {
+        Enc::new()
+            .u8(2)
+            .vec3(center)
+            .f32(radius)
+            .vec3(o)
+            .vec3(d)
+            .done()
+    }
+
+    /// Fuzz target `ray_sphere`.
+    pub fn ray_sphere(data: &[u8]) {
+        let (c, r, ray) = decode(data);
+        check(c, r, &ray);
+    }
+
+    /// The properties:
+    /// 1. `Sphere::new` is `Ok` exactly for a finite centre and a finite radius `> 0`.
+    /// 2. Every root from `roots()` satisfies the implicit equation: with
+    ///    `F(t) = |o + t·d − C|² − r²` in `f64`, `|F(t)| ≤ K·u·(|o − C|² + r² + (t·|d|)²)`.
+    /// 3. A hit has `t` in `(t_min, t_max]`, a unit normal along `point − C`, and a point within
+    ///    its own `point_error` of the sphere.
+    /// 4. Against the `f64` roots of the same inputs: where the ray clearly crosses
+    ///    (`|l| < r − margin`) and a root is clearly inside (or both clearly outside) the
+    ///    interval, the hit (or miss) agrees and `t` is within the bound; a ray that clearly
+    ///    misses (`|l| > r + margin`) gives no hit.
+    /// 5. Where both forms are well conditioned (`|l| ≤ r/2`, `|o − C| ≤ 10·r`,
+    ///    `|d| ∈ [1e-10, 1e10]`), the naive roots agree with the stable ones.
+    pub fn check(c: Vec3, r: f32, ray: &Ray) {
+        let ctx = || {
+            format!(
+                "sphere C = {c:?} ({:x?}), r = {r:e} ({:#x})\n{}",
+                c.to_array().map(f32::to_bits),
+                r.to_bits(),
+                fmt_ray(ray)
+            )
+        };
+        let s = match Sphere::new(c, r) {
+            Ok(s) => {
+                assert!(
+                    c.is_finite() && r.is_finite() && r > 0.0,
+                    "accepted\n{}",
+                    ctx()
+                );
+                s
+            }
+            Err(_) => {
+                assert!(
+                    !(c.is_finite() && r.is_finite() && r > 0.0),
+                    "rejected a valid sphere\n{}",
+                    ctx()
+                );
+                return;
+            }
+        };
+        let roots = s.roots(ray);
+        let hit = s.intersect(ray);
+        let naive = s.roots_naive(ray);
+        let _ = s.intersect_naive(ray);
+        if !ray.is_valid() {
+            assert!(
+                roots.is_none() && hit.is_none() && naive.is_none(),
+                "{}",
+                ctx()
+            );
+            return;
+        }
+        let u = f64::from(F32_UNIT_ROUNDOFF);
+        let (o, d, cc, rr) = (
+            ray.origin.as_dvec3(),
+            ray.direction.as_dvec3(),
+            c.as_dvec3(),
+            f64::from(r),
+        );
+        let f = o - cc;
+        let (fl, dl) = (f.length(), d.length());
+        let in_domain = |x: f64| x == 0.0 || (DOMAIN_MIN..=DOMAIN_MAX).contains(&x);
+        let domain = in_domain(fl) && in_domain(rr) && fl + rr >= DOMAIN_MIN;
+        let resid = |t: f64| (o + d * t - cc).length_squared() - rr * rr;
+        // 2. Residuals.
+        if let Some((t0, t1)) = roots {
+            assert!(t0 <= t1, "roots out of order\n{}", ctx());
+            for t in [f64::from(t0), f64::from(t1)] {
+                if domain && in_domain(t.abs() * dl) {
+                    let bound = K * u * (fl * fl + rr * rr + (t * dl).powi(2));
+                    assert!(
+                        resid(t).abs() <= bound,
+                        "root t = {t:e} has residual {:e} > {bound:e}\n{}",
+                        resid(t),
+                        ctx()
+                    );
+                }
+            }
+        }
+        // 3. Hit contract.
+        if let Some(h) = hit {
+            assert!(
+                ray.contains(h.t),
+                "t = {:e} outside the interval\n{}",
+                h.t,
+                ctx()
+            );
+            let n = h.normal.as_dvec3();
+            assert!(
+                (n.length() - 1.0).abs() <= 1e-5,
+                "normal not unit\n{}",
+                ctx()
+            );
+            let p = h.point.as_dvec3();
+            if domain && p.is_finite() {
+                let dist = ((p - cc).length() - rr).abs();
+                let e = h.point_error.as_dvec3().length();
+                assert!(
+                    dist <= e + 1e-300,
+                    "hit point {:?} is {dist:e} from the sphere, bound {e:e}\n{}",
+                    h.point,
+                    ctx()
+                );
+                // The stored point is rounded to f32 near C: its direction from C is only
+                // meaningful when that rounding is small against r.
+                let radial = (p - cc) / (p - cc).length();
+                assert!(
+                    e > 1e-3 * rr || radial.dot(n) > 0.999,
+                    "normal {n:?} not along point − C\n{}",
+                    ctx()
+                );
+            }
+        }
+        if !domain || dl == 0.0 {
+            return;
+        }
+        // 4. Against the f64 roots.
+        let a = d.dot(d);
+        let b = f.dot(d);
+        let l = f - d * (b / a);
+        let ll = l.length();
+        let margin = 16.0 * u * (fl + rr) + 1e-3 * rr;
+        if ll > rr + margin {
+            assert!(
+                hit.is_none(),
+                "clear miss (|l| = {ll:e}) reported as a hit\n{}",
+                ctx()
+            );
+            return;
+        }
+        if ll >= rr - margin {
+            return; // near-tangent: either answer is right
+        }
+        let cos = (rr * rr - ll * ll).sqrt() / rr;
+        let disc = a * (rr - ll) * (rr + ll);
+        let qq = -(b + disc.sqrt().copysign(b));
+        let cq = f.dot(f) - rr * rr;
+        let (x, y) = (cq / qq, qq / a);
+        let (r0, r1) = if x <= y { (x, y) } else { (y, x) };
+        let tol =
+            |t: f64| K * u * ((fl * fl + rr * rr) / qq.abs() + (fl + rr) / (dl * cos) + t.abs());
+        if !(in_domain(r0.abs() * dl) && in_domain(r1.abs() * dl)) {
+            return;
+        }
+        let (t_min, t_max) = (f64::from(ray.t_min), f64::from(ray.t_max));
+        let status = |t: f64| {
+            let e = tol(t);
+            if t > t_min + e && t < t_max - e {
+                Some(true)
+            } else if t < t_min - e || t > t_max + e {
+                Some(false)
+            } else {
+                None
+            }
+        };
+        let expect = match (status(r0), status(r1)) {
+            (Some(true), _) => Some(Some(r0)),
+            (Some(false), Some(true)) if r1 - r0 > 2.0 * (tol(r0) + tol(r1)) => Some(Some(r1)),
+            (Some(false), Some(false)) => Some(None),
+            _ => None,
+        };
+        match expect {
+            Some(Some(t_ref)) => {
+                let Some(h) = hit else {
+                    panic!(
+                        "missed: the f64 root {t_ref:e} is clearly inside the interval\n{}",
+                        ctx()
+                    );
+                };
+                let t = f64::from(h.t);
+                assert!(
+                    (t - t_ref).abs() <= tol(t_ref),
+                    "t = {t:e}, f64 reference {t_ref:e}, bound {:e}\n{}",
+                    tol(t_ref),
+                    ctx()
+                );
+            }
+            Some(None) => assert!(
+                hit.is_none(),
+                "hit at {:?} although both f64 roots ({r0:e}, {r1:e}) are clearly outside \
+                 the interval\n{}",
+                hit.map(|h| h.t),
+                ctx()
+            ),
+            None => {}
+        }
+        // 5. Naive against stable where both are well conditioned.
+        if ll <= 0.5 * rr && fl <= 10.0 * rr && (1e-10..=1e10).contains(&dl) && rr >= 1e-10 {
+            let (Some((s0, s1)), Some((n0, n1))) = (roots, naive) else {
+                panic!(
+                    "well-conditioned crossing: stable {roots:?}, naive {naive:?}\n{}",
+                    ctx()
+                );
+            };
+            let tol = (fl + rr) / dl / 512.0;
+            let close = |p: f32, q: f32| (f64::from(p) - f64::from(q)).abs() <= tol;
+            assert!(
+                close(s0, n0) && close(s1, n1),
+                "stable ({s0:e}, {s1:e}) and naive ({n0:e}, {n1:e}) disagree beyond {tol:e}\n{}",
+                ctx()
+            );
+        }
+    }
+}
+
+pub mod quadric {
+    //! The `ray_quadric` target: general quadrics (matrix form), ellipsoids, cylinders and
+    //! cones from fuzz bytes; roots against the implicit equation, hits against their own
+    //! error bound.
+    //!
+    //! Layout: `flags: u8` (bits 0–1: 0 general, 1 ellipsoid, 2 cylinder, 3 cone; bit 2:
+    //! quantized parameters; bit 3: interval `(0, ∞]`), then the ray (`origin`, `direction`,
+    //! `t_min`, `t_max` unless bit 3), then the parameters: general `A` (6 upper-triangle
+    //! entries `xx xy xz yy yz zz`), `b` (3), `c`; ellipsoid centre and radii; cylinder axis
+    //! point, axis direction, radius; cone apex, axis, tan of the half angle.
+
+    use super::{Enc, Input, fmt_ray};
+    use glam::{DMat3, DVec3, Vec3};
+    use halfray_core::float::F64_UNIT_ROUNDOFF;
+    use halfray_core::quadric::{Ellipsoid, Quadric};
+    use halfray_core::ray::Ray;
+
+    /// Multiple of the `f64` unit roundoff in the residual bound. The roots come from the
+    /// stable formulation in `f64` (module docs of `halfray_core::quadric`), whose first-order
+    /// residual constant is below 20.
+    pub const K: f64 = 64.0;
+
+    /// Decodes a `ray_quadric` input: the surface (or the constructor's error) and the ray.
+    pub fn decode(data: &[u8]) -> (Result<Quadric, halfray_core::error::GeometryError>, Ray) {
+        let mut i = Input::new(data);
+        let fl = i.u8();
+        let q = fl & 4 != 0;
+        let origin = if q { i.qvec3() } else { i.vec3() };
+        let direction = i.vec3();
+        let (t_min, t_max) = if fl & 8 != 0 {
+            (0.0, f32::INFINITY)
+        } else {
+            (i.f32(), i.f32())
+        };
+        let ray = Ray::with_interval(origin, direction, t_min, t_max);
+        let mut s = || if q { i.q() } else { i.f32() };
+        let mut v = || Vec3::new(s(), s(), s());
+        let surface = match fl & 3 {
+            0 => {
+                let e: [f64; 10] = core::array::from_fn(|_| f64::from(s()));
+                let a =
+                    DMat3::from_cols_array(&[e[0], e[1], e[2], e[1], e[3], e[4], e[2], e[4], e[5]]);
+                Quadric::new(a, DVec3::new(e[6], e[7], e[8]), e[9])
+            }
+            1 => {
+                let (c, r) = (v(), v());
+                Ellipsoid::new(c, r).map(|e| *e.quadric())
+            }
+            2 => {
+                let (p, a) = (v(), v());
+                Quadric::cylinder(p, a, s())
+            }
+            _ => {
+                let (p, a) = (v(), v());
+                Quadric::cone(p, a, s())
+            }
+        };
+        (surface, ray)
+    }
+
+    /// Encodes a raw general-quadric input with the default interval.
+    pub fn encode_general(o: Vec3, d: Vec3, e: [f32; 10]) -> Vec<u8> {
+        let mut enc = Enc::new().u8(8).vec3(o).vec3(d);
+        for x in e {
+            enc = enc.f32(x);
+        }
+        enc.done()
+    }
+
+    /// Encodes a raw ellipsoid (`kind` 1), cylinder (2) or cone (3) input, default interval.
+    pub fn encode_shape(kind: u8, o: Vec3, d: Vec3, p: Vec3, q: Vec3, s: f32) -> Vec<u8> {
+        let enc = Enc::new().u8(8 | kind).vec3(o).vec3(d).vec3(p).vec3(q);
+        if kind == 1 {
+            enc.done()
+        } else {
+            enc.f32(s).done()
+        }
+    }
+
+    /// Fuzz target `ray_quadric`.
+    pub fn ray_quadric(data: &[u8]) {
+        let (surface, ray) = decode(data);
+        if let Ok(q) = surface {
+            check(&q, &ray);
+        }
+    }
+
+    /// `(|f|(x), ‖A‖)`: `f` evaluated with absolute values (the scale of its rounding error).
+    fn scale(q: &Quadric, x: DVec3) -> f64 {
+        q.eval_abs(x)
+    }
+
+    /// The properties:
+    /// 1. Every root from `roots()` satisfies `|f(o + t·d)| ≤ K·u·(|qa|·t² + 2|qb|·|t| + |qc|)`
+    ///    where the `|q·|` are the ray polynomial's coefficients with absolute values
+    ///    (the scale of their rounding error), evaluated in `f64`.
+    /// 2. A hit has `t` in `(t_min, t_max]`, a unit normal, and a point within its
+    ///    `point_error` of the surface: `|f(p)| ≤ |∇f(p)|·e + 3‖A‖·e² + γ·|f|(p)`, `e = |point_error|`.
+    /// 3. A ray whose `f64` roots are both clearly outside the interval gets no hit; one whose
+    ///    near root is clearly inside gets a hit at that root.
+    pub fn check(q: &Quadric, ray: &Ray) {
+        let ctx = || format!("quadric {q:?}\n{}", fmt_ray(ray));
+        let roots = q.roots(ray);
+        let hit = q.intersect(ray);
+        if !ray.is_valid() {
+            assert!(roots.is_none() && hit.is_none(), "{}", ctx());
+            return;
+        }
+        let u = F64_UNIT_ROUNDOFF;
+        let o = ray.origin.as_dvec3();
+        let d = ray.direction.as_dvec3();
+        let am = q.matrix();
+        let aa = DMat3::from_cols(am.x_axis.abs(), am.y_axis.abs(), am.z_axis.abs());
+        let xc = q.reference_point();
+        let f0 = o - xc;
+        // Coefficient scales: |qa| = |d|ᵀ|A||d|, |qb| = |d|ᵀ(|A||f₀| + |b_c|),
+        // |qc| = |f|(o) (the same bound eval_abs documents).
+        let qa_abs = d.abs().dot(aa * d.abs());
+        let g_abs = q.gradient(xc).abs() * 0.5; // |b_c|
+        let qb_abs = d.abs().dot(aa * f0.abs() + g_abs);
+        let qc_abs = scale(q, o);
+        if let Some((t0, t1)) = roots {
+            assert!(t0 <= t1, "roots out of order\n{}", ctx());
+            for t in [t0, t1] {
+                let bound = K * u * (qa_abs * t * t + 2.0 * qb_abs * t.abs() + qc_abs);
+                let fx = q.eval(o + d * t);
+                if bound.is_finite() && fx.is_finite() {
+                    assert!(
+                        fx.abs() <= bound + 1e-300,
+                        "root t = {t:e}: f = {fx:e} > bound {bound:e}\n{}",
+                        ctx()
+                    );
+                }
+            }
+        }
+        if let Some(h) = hit {
+            assert!(
+                ray.contains(h.t),
+                "t = {:e} outside the interval\n{}",
+                h.t,
+                ctx()
+            );
+            let n = h.normal.as_dvec3();
+            assert!(
+                (n.length() - 1.0).abs() <= 1e-5,
+                "normal not unit\n{}",
+                ctx()
+            );
+            let p = h.point.as_dvec3();
+            let e = h.point_error.as_dvec3().length();
+            let fx = q.eval(p);
+            let gl = q.gradient(p).length();
+            let a_norm = (am.x_axis.length_squared()
+                + am.y_axis.length_squared()
+                + am.z_axis.length_squared())
+            .sqrt();
+            let bound = gl * e + 3.0 * a_norm * e * e + 32.0 * u * scale(q, p);
+            if bound.is_finite() && fx.is_finite() {
+                assert!(
+                    fx.abs() <= bound * (1.0 + 1e-9) + 1e-300,
+                    "hit point {:?}: f = {fx:e} > {bound:e} (point_error {:?})\n{}",
+                    h.point,
+                    h.point_error,
+                    ctx()
+                );
+            }
+            let Some((t0, t1)) = roots else {
+                panic!("a hit without roots\n{}", ctx())
+            };
+            assert!(
+                h.t == t0 as f32 || h.t == t1 as f32,
+                "hit t = {:e} is neither root ({t0:e}, {t1:e})\n{}",
+                h.t,
+                ctx()
+            );
+        }
+        // 3. Interval logic against the roots themselves (the f32 rounding of each root is
+        // what `contains` sees).
+        if let Some((t0, t1)) = roots {
+            let c0 = ray.contains(t0 as f32);
+            let c1 = ray.contains(t1 as f32);
+            match (c0, c1, hit) {
+                (true, _, Some(h)) => assert_eq!(h.t, t0 as f32, "near root skipped\n{}", ctx()),
+                (false, true, Some(h)) => assert_eq!(h.t, t1 as f32, "{}", ctx()),
+                (false, false, Some(_)) => panic!("hit with both roots outside\n{}", ctx()),
+                _ => {} // a hit may be dropped only when its point is not representable
+            }
+        }
+    }
+}
+
+pub mod scene {
+    //! The `scene_file` target: arbitrary bytes as a scene file. Never a panic; an error names
+    //! the scene file (and a line for errors inside it); an accepted scene has a usable camera,
+    //! and the centre pixel's ray through every object answers inside its interval.
+    //!
+    //! The file is parsed as if it lived in `fuzz/scene_dir/` (small meshes only, so the target
+    //! stays fast): `meshes/cube.obj` and friends resolve there.
+
+    use halfray::error::Error;
+    use halfray::render::geom::QueryCtx;
+    use halfray::render::plan::EffectPlan;
+    use std::path::Path;
+
+    /// Where the fuzzed scene pretends to live (absolute at compile time: the fuzz crate and
+    /// the replay test both sit one folder below the project root).
+    pub const SCENE_PATH: &str =
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../fuzz/scene_dir/input.toml");
+
+    /// Fuzz target `scene_file`: lossy UTF-8 text through [`check`].
+    pub fn scene_file(data: &[u8]) {
+        check(&String::from_utf8_lossy(data));
+    }
+
+    /// The properties (module documentation).
+    pub fn check(text: &str) {
+        // A fuzzed path could name a device or a huge file outside the sandbox folder; parse
+        // only files the target controls.
+        if text.contains("..") || text.contains("\"/") || text.contains("'/") {
+            return;
+        }
+        let path = Path::new(SCENE_PATH);
+        match halfray::scene::parse(text, path) {
+            Ok(scene) => {
+                let cam = &scene.camera;
+                assert!(
+                    cam.width >= 1 && cam.height >= 1,
+                    "empty image accepted\n{text}"
+                );
+                for v in [cam.eye, cam.forward, cam.right, cam.up] {
+                    assert!(v.is_finite(), "non-finite camera {cam:?}\n{text}");
+                }
+                for v in [cam.forward, cam.right, cam.up] {
+                    assert!(
+                        (v.length() - 1.0).abs() < 1e-3,
+                        "camera frame not unit {cam:?}\n{text}"
+                    );
+                }
+                let ray = cam.pixel_ray(cam.width / 2, cam.height / 2);
+                assert!(ray.is_valid(), "invalid centre ray {ray:?}\n{text}");
+                let plan = EffectPlan::derive(&scene, false);
+                let _ = plan.explain(&scene);
+                let mut qc = QueryCtx::default();
+                for o in &scene.objects {
+                    if let Some(h) = o.closest(&ray, &mut qc) {
+                        assert!(
+                            ray.contains(h.hit.t),
+                            "object hit at t = {} outside the ray interval\n{text}",
+                            h.hit.t
+                        );
+                    }
+                    let _ = o.occludes(&ray, &mut qc);
+                }
+            }
+            Err(e) => {
+                let msg = e.to_string();
+                match &e {
+                    Error::Input { at, .. } if at.file == path => assert!(
+                        at.line.is_some() && msg.starts_with(SCENE_PATH),
+                        "scene error without a line: {msg:?}\n{text}"
+                    ),
+                    Error::Input { .. } | Error::Io { .. } => {
+                        assert!(!msg.is_empty(), "empty message\n{text}")
+                    }
+                    other => panic!("unexpected error kind {other:?}\n{text}"),
+                }
+            }
+        }
+    }
+}
+
+fn seeds_sphere(s: &mut Vec<Seed>) {
+    let t = |name: &str, b: Vec<u8>| ("ray_sphere", format!("seed-{name}"), b);
+    let c = Vec3::new(1.0, 2.0, 3.0);
+    let x = Vec3::X;
+    s.push(t("through-centre", sphere::encode(c, 1.0, c - 5.0 * x, x)));
+    s.push(t(
+        "tangent",
+        sphere::encode(c, 1.0, c + Vec3::new(-5.0, 1.0, 0.0), x),
+    ));
+    s.push(t(
+        "inside",
+        sphere::encode(c, 1.0, c, Vec3::new(0.3, -0.2, 0.9)),
+    ));
+    s.push(t("on-surface-inward", sphere::encode(c, 1.0, c + x, -x)));
+    s.push(t("on-surface-outward", sphere::encode(c, 1.0, c + x, x)));
+    // Small far spheres (where the textbook discriminant cancels).
+    let far = Vec3::new(1e4, 0.0, 0.0);
+    s.push(t(
+        "far-small",
+        sphere::encode(far, 1.0, Vec3::ZERO, far + Vec3::new(0.0, 0.7, 0.0)),
+    ));
+    let far = Vec3::new(3e6, -2e6, 1e6);
+    s.push(t("very-far", sphere::encode(far, 0.5, Vec3::ZERO, far)));
+    s.push(t(
+        "tiny-direction",
+        sphere::encode(c, 1.0, c - 5.0 * x, x * 1e-30),
+    ));
+    s.push(t(
+        "huge-direction",
+        sphere::encode(c, 1.0, c - 5.0 * x, x * 1e30),
+    ));
+    s.push(t("zero-radius", sphere::encode(c, 0.0, c - 5.0 * x, x)));
+    s.push(t("nan-radius", sphere::encode(c, f32::NAN, c - 5.0 * x, x)));
+    s.push(t(
+        "inf-origin",
+        sphere::encode(c, 1.0, Vec3::splat(f32::INFINITY), -x),
+    ));
+    s.push(t(
+        "subnormal-radius",
+        sphere::encode(Vec3::ZERO, 1e-40, -x, x),
+    ));
+}
+
+fn seeds_quadric(s: &mut Vec<Seed>) {
+    let t = |name: &str, b: Vec<u8>| ("ray_quadric", format!("seed-{name}"), b);
+    let o = Vec3::new(-5.0, 0.25, 0.5);
+    let x = Vec3::X;
+    // The specification's ellipsoid x²/4 + y²/9 + z² = 1 and a ray along x.
+    s.push(t(
+        "ellipsoid",
+        quadric::encode_shape(1, o, x, Vec3::ZERO, Vec3::new(2.0, 3.0, 1.0), 0.0),
+    ));
+    s.push(t(
+        "ellipsoid-far",
+        quadric::encode_shape(
+            1,
+            Vec3::ZERO,
+            Vec3::new(1e5, 1.0, 0.0),
+            Vec3::new(1e5, 0.0, 0.0),
+            Vec3::new(2.0, 3.0, 1.0),
+            0.0,
+        ),
+    ));
+    s.push(t(
+        "cylinder-along-axis",
+        quadric::encode_shape(2, Vec3::ZERO, Vec3::Z, Vec3::ZERO, Vec3::Z, 1.0),
+    ));
+    s.push(t(
+        "cylinder-across",
+        quadric::encode_shape(2, o, x, Vec3::ZERO, Vec3::Z, 1.0),
+    ));
+    s.push(t(
+        "cone-apex",
+        quadric::encode_shape(3, Vec3::new(-1.0, 0.0, 0.0), x, Vec3::ZERO, Vec3::Z, 0.5),
+    ));
+    s.push(t(
+        "cone-generator",
+        quadric::encode_shape(
+            3,
+            Vec3::new(-1.0, 0.0, -2.0),
+            Vec3::new(1.0, 0.0, 2.0),
+            Vec3::ZERO,
+            Vec3::Z,
+            0.5,
+        ),
+    ));
+    // General forms: hyperboloid x² + y² − z² − 1, paraboloid x² + y² − z, plane-like 2x − 1.
+    s.push(t(
+        "hyperboloid",
+        quadric::encode_general(o, x, [1.0, 0.0, 0.0, 1.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0]),
+    ));
+    s.push(t(
+        "paraboloid-axis",
+        quadric::encode_general(
+            Vec3::new(0.0, 0.0, 5.0),
+            -Vec3::Z,
+            [1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -0.5, 0.0],
+        ),
+    ));
+    s.push(t(
+        "linear",
+        quadric::encode_general(
+            o,
+            x,
+            [0.0; 6]
+                .into_iter()
+                .chain([1.0, 0.0, 0.0, -1.0])
+                .collect::<Vec<_>>()
+                .try_into()
+                .unwrap(),
+        ),
+    ));
+    s.push(t(
+        "nan-entry",
+        quadric::encode_general(
+            o,
+            x,
+            [1.0, f32::NAN, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0],
+        ),
+    ));
+}
+
+fn seeds_scene(s: &mut Vec<Seed>) {
+    let t = |name: &str, text: &str| {
+        (
+            "scene_file",
+            format!("seed-{name}"),
+            text.as_bytes().to_vec(),
+        )
+    };
+    s.push(t("shadows", include_str!("../../scenes/shadows.toml")));
+    s.push(t("mirror", include_str!("../../scenes/mirror.toml")));
+    s.push(t("glass", include_str!("../../scenes/glass.toml")));
+    s.push(t("csg", include_str!("../../scenes/csg.toml")));
+    s.push(t(
+        "subdivision",
+        include_str!("../../scenes/subdivision.toml"),
+    ));
+    let small = r#"ambient = [0.1, 0.1, 0.1]
+max_depth = 3
+
+[camera]
+eye = [0, 1, 6]
+look_at = [0, 0, 0]
+width = 8
+height = 6
+fov = 45
+
+[[light]]
+type = "point"
+position = [4, 5, 6]
+intensity = 40
+cast_shadows = true
+
+[material.m]
+diffuse = [0.8, 0.2, 0.2]
+
+[mesh.cube]
+file = "meshes/cube.obj"
+smooth = { step = 0.5, iterations = 2 }
+subdivide = 1
+
+[mesh.octa]
+file = "meshes/octahedron.obj"
+
+[[object]]
+type = "mesh"
+mesh = "cube"
+material = "m"
+transform = [{ scale = [0.5, 0.5, 0.5] }, { rotate = { axis = [0, 1, 0], degrees = 30 } }]
+
+[[object]]
+type = "csg"
+op = "difference"
+material = "m"
+operands = [
+  { type = "mesh", mesh = "octa", material = "m" },
+  { type = "sphere", center = [0, 0, 0], radius = 0.6, material = "m" },
+]
+"#;
+    s.push(t("small-meshes", small));
+    s.push(t("unknown-key", "bogus = 1\n"));
+    s.push(t("not-toml", "[camera\nwidth = "));
+    s.push(t("empty", ""));
+    s.push(t(
+        "open-mesh-in-csg",
+        &small.replace("meshes/octahedron.obj", "meshes/open.obj"),
+    ));
+    s.push(t(
+        "missing-mesh",
+        &small.replace("meshes/cube.obj", "meshes/none.obj"),
+    ));
+    s.push(t("nan", &small.replace("fov = 45", "fov = nan")));
+    s.push(t(
+        "singular-transform",
+        &small.replace("scale = [0.5, 0.5, 0.5]", "scale = [0.5, 0, 0.5]"),
+    ));
 }

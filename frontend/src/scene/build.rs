@@ -648,6 +648,13 @@ fn mesh(ctx: &mut Ctx<'_>, name: &S<String>, field: &str) -> Result<Arc<MeshShap
         Some(s) => {
             let sd = s.get_ref();
             let step = ctx.f(&sd.step, &format!("{p}.smooth.step"))?;
+            if *sd.iterations.get_ref() > super::MAX_SMOOTH_ITERATIONS {
+                return Err(ctx.err(
+                    &sd.iterations.span(),
+                    &format!("{p}.smooth.iterations"),
+                    format!("at most {} iterations", super::MAX_SMOOTH_ITERATIONS),
+                ));
+            }
             Some((step, *sd.iterations.get_ref()))
         }
         None => None,

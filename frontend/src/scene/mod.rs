@@ -26,6 +26,10 @@ pub const DEFAULT_MAX_DEPTH: u32 = 5;
 /// Largest accepted image side, in pixels.
 pub const MAX_IMAGE_SIDE: u32 = 16_384;
 
+/// Most Laplacian smoothing steps a mesh may ask for: each is a pass over every vertex, and
+/// far fewer already flatten any mesh (a bound keeps a typo from hanging the loader).
+pub const MAX_SMOOTH_ITERATIONS: u32 = 10_000;
+
 /// Camera projection.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Projection {
