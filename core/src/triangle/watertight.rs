@@ -76,7 +76,12 @@ impl WatertightRay {
 /// edge. `det`, `t` and the barycentrics are computed in `f64` and rounded once.
 ///
 /// Edges and vertices are **closed**: a point exactly on an edge is inside. Mixed signs or
-/// `det = 0` (ray in the triangle's plane, or a degenerate triangle) give no hit. This is the
+/// `det = 0` (ray in the triangle's plane, or a degenerate triangle) give no hit. Only the
+/// edge tests use the sheared coordinates: `t` is `((v0 − o)·n)/(d·n)` with
+/// `n = (v1 − v0) × (v2 − v0)`, all in `f64` from the `f32` inputs, so it keeps ~15 digits
+/// even when the origin is near the triangle's plane (where the sheared `Σ eᵢzᵢ / det`
+/// cancels: its `f32` depths round by `u·max|zᵢ|`, which can exceed `t` itself and put a hit
+/// ahead of an origin that is behind the plane). This is the
 /// default intersector; it handles triangles from `1e-20` to `1e20` (f64 has the range).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Watertight;
@@ -84,13 +89,15 @@ pub struct Watertight;
 /// The watertight test as in pbrt-v3: edge functions in `f32`, recomputed in `f64` only when one
 /// of them is exactly zero. Sound by monotone rounding (an `f32` difference of rounded products
 /// has the correct sign or is zero), provided no product overflows or underflows: very large
-/// (≳ 1e19) or very small (≲ 1e-19) triangles can be missed. Kept for the cost/accuracy
-/// comparison (`watertight-f32`).
+/// (≳ 1e19) or very small (≲ 1e-19) triangles can be missed. `t = Σ eᵢzᵢ / det` in `f32`, so
+/// for an origin near the triangle's plane `t`'s rounding can exceed `t` itself (pbrt-v3
+/// guards `t > 0` with an error bound `δt`, which in turn refuses genuine grazing hits; this
+/// variant has neither). Kept for the cost/accuracy comparison (`watertight-f32`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct WatertightF32;
 
 #[inline]
-fn finish_exact(ray: &Ray, edges: [f64; 3], z: [f32; 3], v: &[Vec3; 3]) -> Option<TriangleHit> {
+fn finish_exact(ray: &Ray, edges: [f64; 3], v: &[Vec3; 3]) -> Option<TriangleHit> {
     let [e0, e1, e2] = edges;
     let has_neg = e0 < 0.0 || e1 < 0.0 || e2 < 0.0;
     let has_pos = e0 > 0.0 || e1 > 0.0 || e2 > 0.0;
@@ -101,9 +108,16 @@ fn finish_exact(ray: &Ray, edges: [f64; 3], z: [f32; 3], v: &[Vec3; 3]) -> Optio
     if !(det != 0.0 && det.is_finite()) {
         return None;
     }
-    let t_scaled = e0 * z[0] as f64 + e1 * z[1] as f64 + e2 * z[2] as f64;
-    let t = (t_scaled / det) as f32;
-    if !ray.contains(t) || super::degenerate_or_coplanar(ray, v) {
+    // t from the plane through the f32 vertices, in f64 (see `Watertight`): free of the sheared
+    // depths' f32 rounding, which swamps t for origins near the plane.
+    let (a, b, c) = (v[0].as_dvec3(), v[1].as_dvec3(), v[2].as_dvec3());
+    let n = (b - a).cross(c - a);
+    let dn = ray.direction.as_dvec3().dot(n);
+    if n == glam::DVec3::ZERO || dn == 0.0 {
+        return None; // degenerate triangle, or ray in its plane
+    }
+    let t = ((a - ray.origin.as_dvec3()).dot(n) / dn) as f32;
+    if !ray.contains(t) {
         return None;
     }
     let inv = 1.0 / det;
@@ -137,13 +151,13 @@ impl TriangleIntersector for Watertight {
         ray: &Ray,
         v: &[Vec3; 3],
     ) -> Option<TriangleHit> {
-        let ([ax, bx, cx], [ay, by, cy], z) = pre.project_triangle(ray.origin, v);
+        let ([ax, bx, cx], [ay, by, cy], _) = pre.project_triangle(ray.origin, v);
         let edges = [
             diff_of_products_exact_sign(cx, by, cy, bx),
             diff_of_products_exact_sign(ax, cy, ay, cx),
             diff_of_products_exact_sign(bx, ay, by, ax),
         ];
-        finish_exact(ray, edges, z, v)
+        finish_exact(ray, edges, v)
     }
 }
 
@@ -239,6 +253,34 @@ mod tests {
             assert!(((h.t - s) / s).abs() < 1e-6, "s = {s}: t = {}", h.t);
             assert!(h.t.is_finite());
         }
+    }
+
+    /// Found by the `bvh` fuzz target: the origin is 4e-34 above the plane `z = 0` and the ray
+    /// leaves it (`d_z > 0`), but the dominant axis is `y`, so the sheared depths are ~1e36 and
+    /// `Σ eᵢzᵢ / det` rounds to ~6e27 instead of the true −3548. The plane-equation `t` in `f64`
+    /// gets it right: behind the origin, no hit.
+    #[test]
+    fn origin_near_plane_with_other_dominant_axis_is_not_hit_from_behind() {
+        let tri = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let o = Vec3::new(
+            f32::from_bits(0x3e80_0021),
+            0.25,
+            f32::from_bits(0x0808_0000),
+        );
+        let d = Vec3::new(
+            f32::from_bits(0x0201_000c),
+            f32::from_bits(0x0303_0200),
+            f32::from_bits(0x021c_f605),
+        );
+        assert_eq!(Watertight.intersect(&Ray::new(o, d), &tri), None);
+        // Reversed, it hits at t = 4.092601e-34 / 1.1531674e-37 ≈ 3548.99 (f64 of the inputs).
+        let h = Watertight.intersect(&Ray::new(o, -d), &tri).expect("hit");
+        let t_ref = f64::from(o.z) / f64::from(d.z);
+        assert!(
+            (f64::from(h.t) - t_ref).abs() <= 1e-6 * t_ref,
+            "t = {}",
+            h.t
+        );
     }
 
     #[test]
