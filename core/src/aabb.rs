@@ -8,6 +8,11 @@
 //! slab value is merged with `f32::max`/`f32::min` *against the running interval*, which
 //! returns the non-NaN operand, so such a slab does not constrain the interval. The result is
 //! the same for `+0.0` and `−0.0` and for every axis.
+//!
+//! A direction component below `1/f32::MAX ≈ 2.9e-39` in magnitude (subnormal, not zero) has
+//! no finite reciprocal; a ray with one is tested by division, `(bound − o)/d` (at most two
+//! roundings, so the same padding covers it), instead of multiplication by `1/d`, which would
+//! turn a tiny distance over a tiny component into `∞` and cull a box the ray passes through.
 
 use crate::float::gamma;
 use crate::ray::Ray;
@@ -161,8 +166,8 @@ impl Aabb {
             } else {
                 (self.min[axis], self.max[axis])
             };
-            let t_near = (lo - ray.origin[axis]) * ray.inv_dir[axis];
-            let t_far = (hi - ray.origin[axis]) * ray.inv_dir[axis] * SLAB_FAR_SCALE;
+            let (t_near, t_far) = ray.slab_distances(axis, lo, hi);
+            let t_far = t_far * SLAB_FAR_SCALE;
             // `max`/`min` return the non-NaN operand: a NaN slab leaves the interval as it is.
             t_enter = t_near.max(t_enter);
             t_exit = t_far.min(t_exit);
@@ -189,8 +194,9 @@ impl Aabb {
             } else {
                 (self.min[axis], self.max[axis])
             };
-            t_enter = ((lo - ray.origin[axis]) * ray.inv_dir[axis]).max(t_enter);
-            t_exit = ((hi - ray.origin[axis]) * ray.inv_dir[axis]).min(t_exit);
+            let (t_near, t_far) = ray.slab_distances(axis, lo, hi);
+            t_enter = t_near.max(t_enter);
+            t_exit = t_far.min(t_exit);
         }
         (t_enter <= t_exit).then_some((t_enter, t_exit))
     }
@@ -215,6 +221,11 @@ pub struct SlabRay {
     pub inv_dir: Vec3,
     /// Sign bit of each direction component.
     pub negative: [bool; 3],
+    /// Ray direction (used instead of `inv_dir` when `divide` is set).
+    pub direction: Vec3,
+    /// `true` when a non-zero direction component has an infinite reciprocal (module docs):
+    /// slab distances are then computed by division.
+    pub divide: bool,
 }
 
 impl SlabRay {
@@ -223,15 +234,39 @@ impl SlabRay {
     #[inline]
     #[must_use]
     pub fn new(ray: &Ray) -> Option<Self> {
-        ray.is_valid().then(|| Self {
+        if !ray.is_valid() {
+            return None;
+        }
+        let d = ray.direction;
+        let inv_dir = Vec3::ONE / d;
+        let overflow = |i: usize| d[i] != 0.0 && inv_dir[i].is_infinite();
+        Some(Self {
             origin: ray.origin,
-            inv_dir: Vec3::ONE / ray.direction,
+            inv_dir,
             negative: [
-                ray.direction.x.is_sign_negative(),
-                ray.direction.y.is_sign_negative(),
-                ray.direction.z.is_sign_negative(),
+                d.x.is_sign_negative(),
+                d.y.is_sign_negative(),
+                d.z.is_sign_negative(),
             ],
+            direction: d,
+            divide: overflow(0) || overflow(1) || overflow(2),
         })
+    }
+
+    /// `((near − o_axis)/d_axis, (far − o_axis)/d_axis)`, unpadded: by the reciprocal, or by
+    /// division when [`SlabRay::divide`] is set. `±0` components give `±∞` (or NaN for an
+    /// origin on the plane) either way.
+    #[inline(always)]
+    #[must_use]
+    pub fn slab_distances(&self, axis: usize, near: f32, far: f32) -> (f32, f32) {
+        let o = self.origin[axis];
+        if self.divide {
+            let d = self.direction[axis];
+            ((near - o) / d, (far - o) / d)
+        } else {
+            let inv = self.inv_dir[axis];
+            ((near - o) * inv, (far - o) * inv)
+        }
     }
 }
 
@@ -307,6 +342,28 @@ mod tests {
                 Vec3::new(tiny, 0.0, 1.0)
             ));
         }
+    }
+
+    /// Found by the `bvh` fuzz target: a ray whose direction components are subnormal aims at
+    /// the corner of a flat box (`z = 0`) from `z = 2.77e-40`; `1/d_z` overflows to `−∞`, and
+    /// by reciprocal the `z` slab became `[∞, ∞]`. By division it is `[1, 1]`.
+    #[test]
+    fn subnormal_components_whose_reciprocal_overflows() {
+        let flat = Aabb::new(Vec3::ZERO, Vec3::new(4.0, 4.0, 0.0));
+        let o = Vec3::new(1.628_021e-21, 0.0, f32::from_bits(0x0003_0401));
+        let ray = Ray::new(o, -o);
+        let slab = SlabRay::new(&ray).unwrap();
+        assert!(slab.divide);
+        let (t0, t1) = flat.intersect_ray(&ray).expect("hits the corner at t = 1");
+        assert!(t0 <= 1.0 && 1.0 <= t1, "({t0}, {t1})");
+        assert!(
+            flat.intersect_slab_plain(&slab, 0.0, f32::INFINITY)
+                .is_some()
+        );
+        // Moving away from the box: still a miss.
+        assert_eq!(flat.intersect_ray(&Ray::new(o, o)), None);
+        // Ordinary rays keep the reciprocal path.
+        assert!(!SlabRay::new(&Ray::new(o, Vec3::Z)).unwrap().divide);
     }
 
     #[test]

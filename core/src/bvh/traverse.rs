@@ -25,6 +25,7 @@ pub(super) struct NodeRay {
     origin: [f32; 3],
     inv_dir: [f32; 3],
     near: [usize; 3],
+    slab: SlabRay,
 }
 
 impl NodeRay {
@@ -34,6 +35,7 @@ impl NodeRay {
             origin: slab.origin.to_array(),
             inv_dir: slab.inv_dir.to_array(),
             near: slab.negative.map(usize::from),
+            slab: *slab,
         }
     }
 
@@ -44,6 +46,9 @@ impl NodeRay {
     /// `f32::max` does. Returns the entry distance on a hit.
     #[inline(always)]
     pub(super) fn hit(&self, node: &BvhNode, t_min: f32, t_max: f32) -> Option<f32> {
+        if self.slab.divide {
+            return self.hit_by_division(node, t_min, t_max);
+        }
         let mut t_enter = t_min;
         let mut t_exit = t_max;
         for axis in 0..3 {
@@ -56,6 +61,15 @@ impl NodeRay {
             t_exit = if t_far < t_exit { t_far } else { t_exit };
         }
         (t_enter <= t_exit).then_some(t_enter)
+    }
+
+    /// [`NodeRay::hit`] for rays with a subnormal direction component whose reciprocal
+    /// overflows (see [`crate::aabb`]): [`crate::aabb::Aabb::intersect_slab`] itself.
+    #[cold]
+    #[inline(never)]
+    fn hit_by_division(&self, node: &BvhNode, t_min: f32, t_max: f32) -> Option<f32> {
+        let b = crate::aabb::Aabb::new(node.bounds[0].into(), node.bounds[1].into());
+        b.intersect_slab(&self.slab, t_min, t_max).map(|(t, _)| t)
     }
 }
 
