@@ -100,11 +100,13 @@ impl Aabb {
         self.max - self.min
     }
 
-    /// Centre of the box.
+    /// Centre of the box, `min/2 + max/2`: finite for every finite box (`(min + max)/2`
+    /// overflows when both corners are beyond `f32::MAX/2`, which made the BVH builder treat
+    /// such a primitive as non-finite; found by the `bvh` fuzz target).
     #[inline]
     #[must_use]
     pub fn center(&self) -> Vec3 {
-        (self.min + self.max) * 0.5
+        self.min * 0.5 + self.max * 0.5
     }
 
     /// Surface area (0 for an empty box), used by the SAH.
@@ -364,6 +366,15 @@ mod tests {
         assert_eq!(flat.intersect_ray(&Ray::new(o, o)), None);
         // Ordinary rays keep the reciprocal path.
         assert!(!SlabRay::new(&Ray::new(o, Vec3::Z)).unwrap().divide);
+    }
+
+    #[test]
+    fn center_of_far_boxes_is_finite() {
+        let b = Aabb::new(Vec3::splat(-1.741e38), Vec3::new(-1.741e38, 3.0e38, 3.4e38));
+        let c = b.center();
+        assert!(c.is_finite(), "{c:?}");
+        assert_eq!(c.x, -1.741e38);
+        assert!(b.contains_point(c));
     }
 
     #[test]
