@@ -1046,6 +1046,16 @@ pub mod bvh {
         check(&decode(data));
     }
 
+    /// `true` when a non-zero direction component is more than `2^126` times smaller than the
+    /// dominant one, so that the watertight test's shear `d_i/d_kz` underflows (the `Watertight`
+    /// docs' domain limit): the intersector then sees a slightly different ray than the box
+    /// test, and a vertex or edge hit can differ between BVH and brute force.
+    pub fn shear_underflows(ray: &Ray) -> bool {
+        let d = ray.direction.abs();
+        let m = d.max_element();
+        (0..3).any(|i| d[i] != 0.0 && d[i] / m < f32::MIN_POSITIVE)
+    }
+
     fn usable(b: &Aabb) -> bool {
         b.is_finite() && b.is_valid()
     }
@@ -1226,6 +1236,18 @@ pub mod bvh {
     ) {
         let want = brute(mesh, isect, ray, in_tree);
         let got = bvh.closest_hit_triangles(mesh, isect, ray, None);
+        if shear_underflows(ray) {
+            // Outside the documented domain of exact agreement (`Watertight` docs): the
+            // BVH's answer must still be a genuine hit of the intersector, no nearer than
+            // brute force's.
+            if let Some((p, h)) = got {
+                let v = mesh.triangle(p as usize).expect("hit primitive exists");
+                assert_eq!(isect.intersect(ray, &v), Some(h), "{}", ctx());
+                let (_, w) = want.expect("brute force finds every BVH hit");
+                assert!(w.t <= h.t, "{}", ctx());
+            }
+            return;
+        }
         assert_eq!(
             got,
             want,

@@ -82,7 +82,14 @@ impl WatertightRay {
 /// even when the origin is near the triangle's plane (where the sheared `Σ eᵢzᵢ / det`
 /// cancels: its `f32` depths round by `u·max|zᵢ|`, which can exceed `t` itself and put a hit
 /// ahead of an origin that is behind the plane). This is the
-/// default intersector; it handles triangles from `1e-20` to `1e20` (f64 has the range).
+/// default intersector;
+///
+/// Domain of the exact edge signs: the sheared coordinates are exact functions of the `f32`
+/// inputs only while the shear `d_i/d_kz` is a normal number. A direction component more than
+/// `2^126` times smaller than the dominant one underflows in the shear, and the test then
+/// sees the ray displaced by up to `2^-126·|t·d|` across its path (still the same ray for every
+/// triangle, so still watertight, but a BVH's exact box test may cull a vertex or edge hit that
+/// a brute-force loop reports). it handles triangles from `1e-20` to `1e20` (f64 has the range).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Watertight;
 
