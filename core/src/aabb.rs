@@ -1,8 +1,8 @@
 //! Axis-aligned boxes and the robust slab test.
 //!
 //! The slab test is **closed** (a ray touching a face, edge or corner hits; flat boxes of zero
-//! thickness are hit), **conservative** (Ize 2013: the far distance is scaled by
-//! `1 + 2·gamma(3)`, so a box that contains a point the exact ray passes through is never
+//! thickness are hit), **conservative** (Ize 2013: the far distance is padded outward by
+//! `2·gamma(3)` relative ([`pad_far`]), so a box that contains a point the exact ray passes through is never
 //! culled because of rounding), and **NaN-absorbing**: with a direction component of `±0` the
 //! reciprocal is `±∞`, and an origin exactly on that slab's plane gives `0·∞ = NaN`; every
 //! slab value is merged with `f32::max`/`f32::min` *against the running interval*, which
@@ -23,6 +23,24 @@ use glam::Vec3;
 /// far one by `1 + 2·gamma(3)` keeps `t_near ≤ t_far` whenever the exact interval is non-empty
 /// (Ize, "Robust BVH Ray Traversal", JCGT 2013). Unitless.
 pub const SLAB_FAR_SCALE: f32 = 1.0 + 2.0 * gamma(3);
+
+/// The factor for a *negative* far distance (an interval with `t_min < 0`): `1 − 2·gamma(3)`,
+/// which moves it away from the near distance just as [`SLAB_FAR_SCALE`] does for a positive
+/// one. (Scaling a negative far distance by `SLAB_FAR_SCALE` would shrink the slab instead;
+/// found by the `bvh` fuzz target with `t_min = −3e36`.) Unitless.
+pub const SLAB_FAR_SCALE_NEGATIVE: f32 = 1.0 - 2.0 * gamma(3);
+
+/// A far slab distance padded outward: `t·(1 ± 2·gamma(3))`, the sign chosen so the result is
+/// never less than `t` (the far end only grows). `±∞` and NaN pass through unchanged.
+#[inline(always)]
+#[must_use]
+pub fn pad_far(t: f32) -> f32 {
+    t * if t < 0.0 {
+        SLAB_FAR_SCALE_NEGATIVE
+    } else {
+        SLAB_FAR_SCALE
+    }
+}
 
 /// An axis-aligned box `[min, max]` (closed). `min > max` on any axis means empty.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -169,7 +187,7 @@ impl Aabb {
                 (self.min[axis], self.max[axis])
             };
             let (t_near, t_far) = ray.slab_distances(axis, lo, hi);
-            let t_far = t_far * SLAB_FAR_SCALE;
+            let t_far = pad_far(t_far);
             // `max`/`min` return the non-NaN operand: a NaN slab leaves the interval as it is.
             t_enter = t_near.max(t_enter);
             t_exit = t_far.min(t_exit);
@@ -375,6 +393,18 @@ mod tests {
         assert!(c.is_finite(), "{c:?}");
         assert_eq!(c.x, -1.741e38);
         assert!(b.contains_point(c));
+    }
+
+    /// Negative intervals: a hit at `t = −1` on a flat box's corner, with `t_min = −3e36`.
+    #[test]
+    fn negative_interval_flat_box_corner() {
+        let flat = Aabb::new(Vec3::ZERO, Vec3::new(4.0, 4.0, 0.0));
+        let o = Vec3::splat(5.25);
+        let ray = Ray::with_interval(o, o, -3.096_319_3e36, f32::from_bits(0x400));
+        let (t0, t1) = flat.intersect_ray(&ray).expect("corner at t = −1");
+        assert!(t0 <= -1.0 && -1.0 <= t1, "({t0}, {t1})");
+        assert_eq!(pad_far(f32::NEG_INFINITY), f32::NEG_INFINITY);
+        assert!(pad_far(-1.0) > -1.0 && pad_far(1.0) > 1.0 && pad_far(0.0) == 0.0);
     }
 
     #[test]

@@ -4,7 +4,7 @@ use super::node::BvhNode;
 use super::primitive::TriangleMesh;
 use super::stats::TraversalStats;
 use super::{Bvh, CULL_REL_SLACK, TRAVERSAL_STACK_SIZE};
-use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
+use crate::aabb::{SlabRay, pad_far};
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
 
@@ -56,7 +56,7 @@ impl NodeRay {
             let lo = node.bounds[n][axis];
             let hi = node.bounds[1 - n][axis];
             let t_near = (lo - self.origin[axis]) * self.inv_dir[axis];
-            let t_far = (hi - self.origin[axis]) * self.inv_dir[axis] * SLAB_FAR_SCALE;
+            let t_far = pad_far((hi - self.origin[axis]) * self.inv_dir[axis]);
             t_enter = if t_near > t_enter { t_near } else { t_enter };
             t_exit = if t_far < t_exit { t_far } else { t_exit };
         }
