@@ -1056,6 +1056,37 @@ pub mod bvh {
         (0..3).any(|i| d[i] != 0.0 && d[i] / m < f32::MIN_POSITIVE)
     }
 
+    /// `true` when, for some triangle in the tree, a quantity of the watertight projection
+    /// (`p − o`, `s·(p − o)_kz`, the sheared `x'`, `y'`) is a non-zero subnormal: its rounding is
+    /// then absolute, not relative, and the projected ray is no longer the exact one up to
+    /// `f32` rounding (the `Watertight` docs' domain limit).
+    pub fn projection_underflows(mesh: &TriangleMesh<'_>, ray: &Ray, in_tree: &[bool]) -> bool {
+        let d = ray.direction;
+        let a = d.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+        let sub = |x: f32| x != 0.0 && x.abs() < f32::MIN_POSITIVE;
+        (0..in_tree.len()).filter(|&i| in_tree[i]).any(|i| {
+            let Some(v) = mesh.triangle(i) else {
+                return false;
+            };
+            v.iter().any(|p| {
+                let q = *p - ray.origin;
+                let (px, py, pz) = (sx * q[kz], sy * q[kz], sz * q[kz]);
+                [q.x, q.y, q.z, px, py, pz, q[kx] - px, q[ky] - py]
+                    .into_iter()
+                    .any(sub)
+            })
+        })
+    }
+
     fn usable(b: &Aabb) -> bool {
         b.is_finite() && b.is_valid()
     }
@@ -1236,7 +1267,7 @@ pub mod bvh {
     ) {
         let want = brute(mesh, isect, ray, in_tree);
         let got = bvh.closest_hit_triangles(mesh, isect, ray, None);
-        if shear_underflows(ray) {
+        if shear_underflows(ray) || projection_underflows(mesh, ray, in_tree) {
             // Outside the documented domain of exact agreement (`Watertight` docs): the
             // BVH's answer must still be a genuine hit of the intersector, no nearer than
             // brute force's.

@@ -84,12 +84,13 @@ impl WatertightRay {
 /// ahead of an origin that is behind the plane). This is the
 /// default intersector;
 ///
-/// Domain of the exact edge signs: the sheared coordinates are exact functions of the `f32`
-/// inputs only while the shear `d_i/d_kz` is a normal number. A direction component more than
-/// `2^126` times smaller than the dominant one underflows in the shear, and the test then
-/// sees the ray displaced by up to `2^-126·|t·d|` across its path (still the same ray for every
-/// triangle, so still watertight, but a BVH's exact box test may cull a vertex or edge hit that
-/// a brute-force loop reports). it handles triangles from `1e-20` to `1e20` (f64 has the range).
+/// Domain of the exact edge signs: the sheared coordinates carry only relative `f32` rounding
+/// while every quantity of the projection (`p − o`, the shear `d_i/d_kz`, its products and the
+/// sheared `x'`, `y'`) is a normal number or zero. A direction component more than `2^126`
+/// times smaller than the dominant one, or a configuration at the subnormal scale (`≲ 1e-38`),
+/// rounds absolutely instead: the test then sees a slightly displaced ray (still the same ray
+/// for every triangle, so still watertight, but a BVH's exact box test may cull a vertex or
+/// edge hit that a brute-force loop reports). it handles triangles from `1e-20` to `1e20` (f64 has the range).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Watertight;
 
