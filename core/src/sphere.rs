@@ -90,19 +90,29 @@ impl Sphere {
     /// Both roots `t0 ≤ t1` of the ray's line against the sphere (not clipped to the ray's
     /// interval), by the stable formulation (module documentation). A tangent line (`Δ' = 0`)
     /// gives the double root twice, `t0 == t1`. `None` for a miss (`Δ' < 0`), an invalid ray,
-    /// or when the arithmetic overflows (coordinates beyond ~1e19 from the centre).
+    /// or when a root overflows `f32`.
     #[must_use]
     pub fn roots(&self, ray: &Ray) -> Option<(f32, f32)> {
         if !ray.is_valid() {
             return None;
         }
         let (d, e) = normalize_scale(ray.direction);
+        // The origin offset and the radius share one power-of-two scale (exact), so that
+        // `|l|`, `r² − |l|²` and `f·f` neither underflow for tiny spheres nor overflow for
+        // huge distances; `t` scales by the same factor.
         let f = ray.origin - self.center;
+        let (_, ef) = libm::frexpf(f.abs().max_element().max(self.radius));
+        let f = Vec3::new(
+            libm::ldexpf(f.x, -ef),
+            libm::ldexpf(f.y, -ef),
+            libm::ldexpf(f.z, -ef),
+        );
+        let r = libm::ldexpf(self.radius, -ef);
+        let e = e - ef;
         let a = d.dot(d);
         let b = f.dot(d);
         let l = f - d * (b / a);
         let ll = l.length();
-        let r = self.radius;
         let disc = a * ((r + ll) * (r - ll));
         if !(disc >= 0.0) || !disc.is_finite() {
             return None;
@@ -182,7 +192,10 @@ impl Sphere {
 
     fn hit_at(&self, ray: &Ray, t: f32, reproject: bool) -> Option<Hit> {
         let p = ray.origin + ray.direction * t;
-        let v = p - self.center;
+        // Scaled by a power of two before `length()`, so that a tiny sphere's `|v|²` does not
+        // underflow (a non-unit normal; found by the `ray_sphere` fuzz target) and a huge one's
+        // does not overflow.
+        let (v, _) = normalize_scale(p - self.center);
         let len = v.length();
         // `len = 0` would need the hit to be the centre: impossible for a real hit, but the
         // function stays total.
@@ -247,6 +260,29 @@ mod tests {
 
     fn ulps_rel(t: f32, reference: f64) -> f64 {
         ((t as f64 - reference) / reference).abs() / f32::EPSILON as f64
+    }
+
+    /// Normals stay unit from `r = 1e-21` to `1e18` (`|p − C|²` under- or overflows `f32` at
+    /// the ends without the scaling).
+    #[test]
+    fn unit_normals_for_tiny_and_huge_spheres() {
+        for r in [2.079_382_8e-21f32, 1e-10, 1.0, 1e18] {
+            let s = Sphere::new(Vec3::splat(r), r).unwrap();
+            let ray = Ray::new(Vec3::new(-3.0 * r, 1.3 * r, 0.8 * r), Vec3::X);
+            let h = s
+                .intersect(&ray)
+                .unwrap_or_else(|| panic!("r = {r}: roots {:?}", s.roots(&ray)));
+            assert!(
+                (h.normal.length() - 1.0).abs() < 1e-6,
+                "r = {r}: {:?}",
+                h.normal
+            );
+            let dist = (h.point.as_dvec3() - s.center().as_dvec3()).length();
+            assert!(
+                (dist / f64::from(r) - 1.0).abs() < 1e-5,
+                "r = {r}: {dist:e}"
+            );
+        }
     }
 
     #[test]

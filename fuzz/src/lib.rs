@@ -2217,6 +2217,10 @@ pub mod sphere {
     /// See [`DOMAIN_MIN`].
     pub const DOMAIN_MAX: f64 = 1e15;
 
+    /// Largest `|t|` checked against the reference: well inside `f32` (a root that overflows
+    /// `f32` gives no hit, documented).
+    pub const MAX_T: f64 = 1e30;
+
     /// Decodes a `ray_sphere` input.
     pub fn decode(data: &[u8]) -> (Vec3, f32, Ray) {
         let mut i = Input::new(data);
@@ -2395,7 +2399,9 @@ pub mod sphere {
         let (r0, r1) = if x <= y { (x, y) } else { (y, x) };
         let tol =
             |t: f64| K * u * ((fl * fl + rr * rr) / qq.abs() + (fl + rr) / (dl * cos) + t.abs());
-        if !(in_domain(r0.abs() * dl) && in_domain(r1.abs() * dl)) {
+        // Both roots and their distances in range (a root beyond f32::MAX is no hit, documented).
+        if !(in_domain(r0.abs() * dl) && in_domain(r1.abs() * dl)) || r0.abs().max(r1.abs()) > MAX_T
+        {
             return;
         }
         let (t_min, t_max) = (f64::from(ray.t_min), f64::from(ray.t_max));
