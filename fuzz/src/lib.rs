@@ -2327,7 +2327,11 @@ pub mod sphere {
             assert!(t0 <= t1, "roots out of order\n{}", ctx());
             for t in [f64::from(t0), f64::from(t1)] {
                 if domain && in_domain(t.abs() * dl) {
-                    let bound = K * u * (fl * fl + rr * rr + (t * dl).powi(2));
+                    // Plus the f32 rounding of t itself (relative u, absolute 2⁻¹⁴⁹ below the
+                    // normal range) times |F'(t)| ≤ 2|d|·|o + t·d − C|.
+                    let dt = u * t.abs() + f64::from(f32::from_bits(1));
+                    let bound = K * u * (fl * fl + rr * rr + (t * dl).powi(2))
+                        + 2.0 * dl * (fl + t.abs() * dl) * dt;
                     assert!(
                         resid(t).abs() <= bound,
                         "root t = {t:e} has residual {:e} > {bound:e}\n{}",
@@ -2397,8 +2401,11 @@ pub mod sphere {
         let cq = f.dot(f) - rr * rr;
         let (x, y) = (cq / qq, qq / a);
         let (r0, r1) = if x <= y { (x, y) } else { (y, x) };
-        let tol =
-            |t: f64| K * u * ((fl * fl + rr * rr) / qq.abs() + (fl + rr) / (dl * cos) + t.abs());
+        // The last term: f32 rounding of a subnormal t.
+        let tol = |t: f64| {
+            K * u * ((fl * fl + rr * rr) / qq.abs() + (fl + rr) / (dl * cos) + t.abs())
+                + 4.0 * f64::from(f32::from_bits(1))
+        };
         // Both roots and their distances in range (a root beyond f32::MAX is no hit, documented).
         if !(in_domain(r0.abs() * dl) && in_domain(r1.abs() * dl)) || r0.abs().max(r1.abs()) > MAX_T
         {
