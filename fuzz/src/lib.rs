@@ -2270,7 +2270,7 @@ pub mod sphere {
     ///    interval, the hit (or miss) agrees and `t` is within the bound; a ray that clearly
     ///    misses (`|l| > r + margin`) gives no hit.
     /// 5. Where both forms are well conditioned (`|l| ≤ r/2`, `|o − C| ≤ 10·r`,
-    ///    `|d| ∈ [1e-10, 1e10]`), the naive roots agree with the stable ones.
+    ///    `|d|·(|o − C| + r) ∈ [1e-18, 1e18]`), the naive roots agree with the stable ones.
     pub fn check(c: Vec3, r: f32, ray: &Ray) {
         let ctx = || {
             format!(
@@ -2454,7 +2454,9 @@ pub mod sphere {
             None => {}
         }
         // 5. Naive against stable where both are well conditioned.
-        if ll <= 0.5 * rr && fl <= 10.0 * rr && (1e-10..=1e10).contains(&dl) && rr >= 1e-10 {
+        // The naive form has no scaling: b² and 4ac must stay inside f32 (|d|·(|f| + r)
+        // between 1e-18 and 1e18).
+        if ll <= 0.5 * rr && fl <= 10.0 * rr && (1e-18..=1e18).contains(&(dl * (fl + rr))) {
             let (Some((s0, s1)), Some((n0, n1))) = (roots, naive) else {
                 panic!(
                     "well-conditioned crossing: stable {roots:?}, naive {naive:?}\n{}",
