@@ -195,7 +195,10 @@ impl Sphere {
         // Scaled by a power of two before `length()`, so that a tiny sphere's `|v|²` does not
         // underflow (a non-unit normal; found by the `ray_sphere` fuzz target) and a huge one's
         // does not overflow.
-        let (v, _) = normalize_scale(p - self.center);
+        // `(o − C) + t·d`, not `p − C`: when the origin is near the centre relative to their
+        // magnitudes, `o + t·d` can round to the centre itself (found by the `ray_sphere` fuzz
+        // target: r = 1e10 at |C| = 3.7e28, origin at the centre).
+        let (v, _) = normalize_scale((ray.origin - self.center) + ray.direction * t);
         let len = v.length();
         // `len = 0` would need the hit to be the centre: impossible for a real hit, but the
         // function stays total.

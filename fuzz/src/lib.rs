@@ -2270,7 +2270,8 @@ pub mod sphere {
     ///    interval, the hit (or miss) agrees and `t` is within the bound; a ray that clearly
     ///    misses (`|l| > r + margin`) gives no hit.
     /// 5. Where both forms are well conditioned (`|l| ≤ r/2`, `|o − C| ≤ 10·r`,
-    ///    `|d|·(|o − C| + r) ∈ [1e-18, 1e18]`), the naive roots agree with the stable ones.
+    ///    `|d|`, `|o − C| + r` and their product in `[1e-15, 1e15]`), the naive roots agree
+    ///    with the stable ones.
     pub fn check(c: Vec3, r: f32, ray: &Ray) {
         let ctx = || {
             format!(
@@ -2321,7 +2322,7 @@ pub mod sphere {
         let (fl, dl) = (f.length(), d.length());
         let in_domain = |x: f64| x == 0.0 || (DOMAIN_MIN..=DOMAIN_MAX).contains(&x);
         let domain = in_domain(fl) && in_domain(rr) && fl + rr >= DOMAIN_MIN;
-        let resid = |t: f64| (o + d * t - cc).length_squared() - rr * rr;
+        let resid = |t: f64| (f + d * t).length_squared() - rr * rr;
         // 2. Residuals.
         if let Some((t0, t1)) = roots {
             assert!(t0 <= t1, "roots out of order\n{}", ctx());
@@ -2454,9 +2455,11 @@ pub mod sphere {
             None => {}
         }
         // 5. Naive against stable where both are well conditioned.
-        // The naive form has no scaling: b² and 4ac must stay inside f32 (|d|·(|f| + r)
-        // between 1e-18 and 1e18).
-        if ll <= 0.5 * rr && fl <= 10.0 * rr && (1e-18..=1e18).contains(&(dl * (fl + rr))) {
+        // The naive form has no scaling: a = d·d, c and b², 4ac must stay normal f32 numbers.
+        let naive_range = (1e-15..=1e15).contains(&dl)
+            && (1e-15..=1e15).contains(&(fl + rr))
+            && (1e-15..=1e15).contains(&(dl * (fl + rr)));
+        if ll <= 0.5 * rr && fl <= 10.0 * rr && naive_range {
             let (Some((s0, s1)), Some((n0, n1))) = (roots, naive) else {
                 panic!(
                     "well-conditioned crossing: stable {roots:?}, naive {naive:?}\n{}",
@@ -2598,8 +2601,12 @@ pub mod quadric {
         if let Some((t0, t1)) = roots {
             assert!(t0 <= t1, "roots out of order\n{}", ctx());
             for t in [t0, t1] {
-                let bound = K * u * (qa_abs * t * t + 2.0 * qb_abs * t.abs() + qc_abs);
-                let fx = q.eval(o + d * t);
+                let x = o + d * t;
+                // Plus the rounding of the point x = o + t·d itself (≤ u·(|o| + |t·d|) per
+                // component) times the gradient.
+                let bound = K * u * (qa_abs * t * t + 2.0 * qb_abs * t.abs() + qc_abs)
+                    + 2.0 * u * q.gradient(x).length() * (o.length() + t.abs() * d.length());
+                let fx = q.eval(x);
                 if bound.is_finite() && fx.is_finite() {
                     assert!(
                         fx.abs() <= bound + 1e-300,
