@@ -2329,10 +2329,11 @@ pub mod sphere {
             for t in [f64::from(t0), f64::from(t1)] {
                 if domain && in_domain(t.abs() * dl) {
                     // Plus the f32 rounding of t itself (relative u, absolute 2⁻¹⁴⁹ below the
-                    // normal range) times |F'(t)| ≤ 2|d|·|o + t·d − C|.
+                    // normal range) times |F'| ≤ 2|d|·(|o − C| + r + |t·d|) between the
+                    // computed and the exact root.
                     let dt = u * t.abs() + f64::from(f32::from_bits(1));
                     let bound = K * u * (fl * fl + rr * rr + (t * dl).powi(2))
-                        + 2.0 * dl * (fl + t.abs() * dl) * dt;
+                        + 2.0 * dl * (fl + rr + t.abs() * dl) * dt;
                     assert!(
                         resid(t).abs() <= bound,
                         "root t = {t:e} has residual {:e} > {bound:e}\n{}",
