@@ -271,7 +271,11 @@ impl Quadric {
                 return None;
             }
             let q = -(qb + libm::copysign(libm::sqrt(disc), qb));
-            if q == 0.0 {
+            // Δ = 0 is the double root tc (like the sphere's tangent case). `qc/q` would give
+            // `−qc/(2qb)` instead, whose `qc = f(o)` rounds independently of `f(o')`: for an
+            // origin on the surface within rounding the two disagree (found by the
+            // `ray_quadric` fuzz target).
+            if q == 0.0 || disc == 0.0 {
                 (tc, tc)
             } else {
                 let (x, y) = (qc / q, q / qa);

@@ -2599,6 +2599,10 @@ pub mod quadric {
         let g_abs = q.gradient(xc).abs() * 0.5; // |b_c|
         let qb_abs = d.abs().dot(aa * f0.abs() + g_abs);
         let qc_abs = scale(q, o);
+        // The near root `qc/q` inherits qc's rounding: forward error δ = K·u·|qc|/|q| with
+        // |q| ≥ |qb|, which adds qa·δ² + |F'|·δ to the residual.
+        let qb = d.dot(q.gradient(o) * 0.5);
+        let delta = K * u * qc_abs / qb.abs();
         if let Some((t0, t1)) = roots {
             assert!(t0 <= t1, "roots out of order\n{}", ctx());
             for t in [t0, t1] {
@@ -2606,7 +2610,9 @@ pub mod quadric {
                 // Plus the rounding of the point x = o + t·d itself (≤ u·(|o| + |t·d|) per
                 // component) times the gradient.
                 let bound = K * u * (qa_abs * t * t + 2.0 * qb_abs * t.abs() + qc_abs)
-                    + 2.0 * u * q.gradient(x).length() * (o.length() + t.abs() * d.length());
+                    + 2.0 * u * q.gradient(x).length() * (o.length() + t.abs() * d.length())
+                    + qa_abs * delta * delta
+                    + 2.0 * (qb_abs + qa_abs * t.abs()) * delta;
                 let fx = q.eval(x);
                 if bound.is_finite() && fx.is_finite() {
                     assert!(
