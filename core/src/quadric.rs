@@ -13,7 +13,9 @@
 //! `qa = dᵀAd`, `qb = dᵀ(Af₀ + b_c)`, `qc = f(o)`, the ray gives `qa·t² + 2qb·t + qc = 0`.
 //! 1. The origin is shifted along the ray to `o' = o + t_c·d`, `t_c = −qb/qa` (the point of the
 //!    line closest to the centre in the metric of `A`), and the discriminant is evaluated there
-//!    as `Δ = qb² − qa·qc = −qa·f(o')`: no cancellation between `qb²` and `qa·qc`.
+//!    as `Δ = qb² − qa·qc = −qa·f(o')`: no cancellation between `qb²` and `qa·qc`. When `o'` is
+//!    far from `o` (a direction nearly along the surface, small `qa`), `f(o')` cancels instead;
+//!    the form with the smaller rounding bound (`|qa|·|f|(o')` against `qb² + |qa·qc|`) is used.
 //! 2. The stable root pair `q = −(qb + sign(qb)·√Δ)`, roots `qc/q` and `q/qa`.
 //! 3. `qa = 0` (a direction along which the quadric is flat: a cylinder's axis, a paraboloid's
 //!    axis, a cone's generator) leaves the linear equation: one root `−qc/(2qb)`, reported twice;
@@ -266,7 +268,20 @@ impl Quadric {
         } else {
             let tc = -qb / qa;
             let l = f0 + d * tc;
-            let disc = -qa * (l.dot(self.a * l + self.bc * 2.0) + self.k);
+            let shifted = -qa * (l.dot(self.a * l + self.bc * 2.0) + self.k);
+            // The shifted form cancels inside f(o') when o' is far from o (qa small against
+            // qb: a direction nearly along the surface, e.g. a cone's generator); then the
+            // plain form qb² − qa·qc is the accurate one. Take the form with the smaller
+            // rounding bound (both as multiples of the same unit roundoff).
+            let la = l.abs();
+            let shifted_err =
+                qa.abs() * (la.dot(abs_mat(&self.a) * la + self.bc.abs() * 2.0) + self.k.abs());
+            let plain_err = qb * qb + (qa * qc).abs();
+            let disc = if shifted_err <= plain_err {
+                shifted
+            } else {
+                qb * qb - qa * qc
+            };
             if !(disc >= 0.0) {
                 return None;
             }
