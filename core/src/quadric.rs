@@ -322,10 +322,15 @@ impl Quadric {
         }
         let fx = self.eval(x);
         let g = self.gradient(x);
-        let gl = g.length();
+        // |g| from g scaled by its largest component: near a singular point |g|² can
+        // underflow even f64 (a non-unit normal; found by the `ray_quadric` fuzz target).
+        let gm = g.abs().max_element();
+        let gs = g / gm;
+        let gsl = gs.length();
+        let gl = gsl * gm;
         let slop = fx.abs() + gamma_f64(10) * self.eval_abs(x);
-        let (dist, normal) = if gl > 0.0 && gl.is_finite() {
-            (QUADRIC_DISTANCE_SLACK * slop / gl, g / gl)
+        let (dist, normal) = if gm > 0.0 && gl > 0.0 && gl.is_finite() {
+            (QUADRIC_DISTANCE_SLACK * slop / gl, gs / gsl)
         } else {
             let fro = frobenius(&self.a);
             (
