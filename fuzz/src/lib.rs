@@ -2596,7 +2596,9 @@ pub mod quadric {
         // Coefficient scales: |qa| = |d|ᵀ|A||d|, |qb| = |d|ᵀ(|A||f₀| + |b_c|),
         // |qc| = |f|(o) (the same bound eval_abs documents).
         let qa_abs = d.abs().dot(aa * d.abs());
-        let g_abs = q.gradient(xc).abs() * 0.5; // |b_c|
+        let bc = q.gradient(xc) * 0.5;
+        let k = q.eval(xc);
+        let g_abs = bc.abs(); // |b_c|
         let qb_abs = d.abs().dot(aa * f0.abs() + g_abs);
         let qc_abs = scale(q, o);
         // The near root `qc/q` inherits qc's rounding: forward error δ = K·u·|qc|/|q| with
@@ -2606,14 +2608,16 @@ pub mod quadric {
         if let Some((t0, t1)) = roots {
             assert!(t0 <= t1, "roots out of order\n{}", ctx());
             for t in [t0, t1] {
-                let x = o + d * t;
-                // Plus the rounding of the point x = o + t·d itself (≤ u·(|o| + |t·d|) per
-                // component) times the gradient.
-                let bound = K * u * (qa_abs * t * t + 2.0 * qb_abs * t.abs() + qc_abs)
-                    + 2.0 * u * q.gradient(x).length() * (o.length() + t.abs() * d.length())
+                // f in the quadric's centred coordinates, y = (o − x_c) + t·d: a world point
+                // o + t·d would round away a displacement that a large curvature still sees.
+                let y = f0 + d * t;
+                let fx = y.dot(am * y + bc * 2.0) + k;
+                let ya = y.abs();
+                let f_abs = ya.dot(aa * ya + bc.abs() * 2.0) + k.abs();
+                // Plus the rounding of y itself (≤ u·|y| per component).
+                let bound = K * u * (qa_abs * t * t + 2.0 * qb_abs * t.abs() + qc_abs + f_abs)
                     + qa_abs * delta * delta
                     + 2.0 * (qb_abs + qa_abs * t.abs()) * delta;
-                let fx = q.eval(x);
                 if bound.is_finite() && fx.is_finite() {
                     assert!(
                         fx.abs() <= bound + 1e-300,
