@@ -460,6 +460,35 @@ pub struct WatertightBound {
     pub mz: [f64; 3],
 }
 
+/// `true` when a quantity of the watertight projection of `v` (`p − o`, the shear products
+/// `s·(p − o)_kz`, the sheared `x'`, `y'`) is a non-zero subnormal, or the shear `d_i/d_kz`
+/// itself underflows: its rounding is then absolute, not relative, and the projected ray is no
+/// longer the exact one up to `f32` rounding (the `Watertight` docs' domain limit).
+pub fn projection_underflows(ray: &Ray, v: &[Vec3; 3]) -> bool {
+    let d = ray.direction;
+    let a = d.abs();
+    let kz = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    let sub = |x: f32| x != 0.0 && x.abs() < f32::MIN_POSITIVE;
+    let shear_under = |di: f32, s: f32| di != 0.0 && s.abs() < f32::MIN_POSITIVE;
+    shear_under(d[kx], sx)
+        || shear_under(d[ky], sy)
+        || v.iter().any(|p| {
+            let q = *p - ray.origin;
+            let (px, py, pz) = (sx * q[kz], sy * q[kz], sz * q[kz]);
+            [q.x, q.y, q.z, px, py, pz, q[kx] - px, q[ky] - py]
+                .into_iter()
+                .any(sub)
+        })
+}
+
 /// The edge functions in the watertight test's order: `e0 = e(v2, v1)`, `e1 = e(v0, v2)`,
 /// `e2 = e(v1, v0)` with `e(p, q) = x_p·y_q − y_p·x_q`; `bᵢ = eᵢ / Σ e`.
 /// Smallest `|det|` (sum of the sheared edge functions) inside the `f32` variant's domain:
@@ -553,6 +582,9 @@ impl WatertightBound {
         v: &[Vec3; 3],
         got: Option<TriangleHit>,
     ) {
+        if projection_underflows(ray, v) {
+            return; // outside the documented domain of the sheared test
+        }
         let e = self.edges();
         let err = self.edge_errors(eval);
         if (0..3).any(|i| e[i].abs().partial_cmp(&err[i]) != Some(core::cmp::Ordering::Greater)) {
@@ -1056,35 +1088,12 @@ pub mod bvh {
         (0..3).any(|i| d[i] != 0.0 && d[i] / m < f32::MIN_POSITIVE)
     }
 
-    /// `true` when, for some triangle in the tree, a quantity of the watertight projection
-    /// (`p − o`, `s·(p − o)_kz`, the sheared `x'`, `y'`) is a non-zero subnormal: its rounding is
-    /// then absolute, not relative, and the projected ray is no longer the exact one up to
-    /// `f32` rounding (the `Watertight` docs' domain limit).
+    /// [`super::projection_underflows`] for any triangle in the tree.
     pub fn projection_underflows(mesh: &TriangleMesh<'_>, ray: &Ray, in_tree: &[bool]) -> bool {
-        let d = ray.direction;
-        let a = d.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
-        let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
-        let sub = |x: f32| x != 0.0 && x.abs() < f32::MIN_POSITIVE;
-        (0..in_tree.len()).filter(|&i| in_tree[i]).any(|i| {
-            let Some(v) = mesh.triangle(i) else {
-                return false;
-            };
-            v.iter().any(|p| {
-                let q = *p - ray.origin;
-                let (px, py, pz) = (sx * q[kz], sy * q[kz], sz * q[kz]);
-                [q.x, q.y, q.z, px, py, pz, q[kx] - px, q[ky] - py]
-                    .into_iter()
-                    .any(sub)
-            })
-        })
+        (0..in_tree.len())
+            .filter(|&i| in_tree[i])
+            .filter_map(|i| mesh.triangle(i))
+            .any(|v| super::projection_underflows(ray, &v))
     }
 
     fn usable(b: &Aabb) -> bool {
