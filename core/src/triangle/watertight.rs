@@ -1,9 +1,9 @@
 //! Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection" (JCGT 2013).
 
 use super::{TriangleHit, TriangleIntersector};
-use crate::float::diff_of_products_exact_sign;
+use crate::float::{diff_of_products_exact_sign, gamma, gamma_f64};
 use crate::ray::Ray;
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 /// Per-ray data of the watertight test: the axis permutation that makes the largest direction
 /// component `z`, and the shear that maps the ray to the `+z` axis through the origin.
@@ -76,12 +76,16 @@ impl WatertightRay {
 /// edge. `det`, `t` and the barycentrics are computed in `f64` and rounded once.
 ///
 /// Edges and vertices are **closed**: a point exactly on an edge is inside. Mixed signs or
-/// `det = 0` (ray in the triangle's plane, or a degenerate triangle) give no hit. Only the
-/// edge tests use the sheared coordinates: `t` is `((v0 − o)·n)/(d·n)` with
-/// `n = (v1 − v0) × (v2 − v0)`, all in `f64` from the `f32` inputs, so it keeps ~15 digits
-/// even when the origin is near the triangle's plane (where the sheared `Σ eᵢzᵢ / det`
-/// cancels: its `f32` depths round by `u·max|zᵢ|`, which can exceed `t` itself and put a hit
-/// ahead of an origin that is behind the plane). This is the
+/// `det = 0` (ray in the triangle's plane, or a degenerate triangle) give no hit.
+///
+/// `t` comes from whichever of two forms has the smaller rounding bound: the sheared
+/// `Σ eᵢzᵢ / det` (accurate relative to the vertices' depth span along the ray, but its `f32`
+/// depths can swamp `t` when that span is huge against `t`: an origin near the plane, seen
+/// along a dominant axis the triangle extends in), or the plane equation
+/// `((v0 − o)·n)/(d·n)` in `f64` (accurate unless `|v0 − o|` dwarfs the distance to the plane
+/// or the `f64` differences of the vertices round). A hit is reported only when
+/// `t − bound > t_min`, so it is certainly beyond `t_min`: a ray starting on, or within
+/// rounding distance of, the triangle gets no hit from it. This is the
 /// default intersector;
 ///
 /// Domain of the exact edge signs: the sheared coordinates carry only relative `f32` rounding
@@ -104,8 +108,75 @@ pub struct Watertight;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct WatertightF32;
 
+/// `t` of a hit that passed the edge tests, with an absolute error bound, by whichever of two
+/// forms has the smaller bound (see [`Watertight`]):
+///
+/// * **sheared**: `Σ eᵢzᵢ / det`, a convex combination of the vertices' sheared depths, with
+///   pbrt-v3's bound `δt` (*Physically Based Rendering* 3rd ed., §3.9.6), its shear term scaled
+///   by the unscaled depth `max|(p − o)_kz|` so that any direction length is covered;
+/// * **plane**: `((v0 − o)·n)/(d·n)`, `n = (v1 − v0) × (v2 − v0)`, all in `f64`, with the
+///   bound `γ₈·(|v0 − o|·N + |t|·|d|·N)/|d·n|`, `N = |v1 − v0| × |v2 − v0|` taken with
+///   absolute values (the rounding of the `f64` differences, the cross and dot products).
+///
+/// `None` for a degenerate triangle or a ray in its plane (`n = 0` or `d·n = 0`).
 #[inline]
-fn finish_exact(ray: &Ray, edges: [f64; 3], v: &[Vec3; 3]) -> Option<TriangleHit> {
+fn hit_t(
+    ray: &Ray,
+    d_kz: f32,
+    sheared: ([f32; 3], [f32; 3], [f32; 3]),
+    edges: [f64; 3],
+    det: f64,
+    v: &[Vec3; 3],
+) -> Option<(f64, f64)> {
+    let (x, y, z) = sheared;
+    let (a, b, c) = (v[0].as_dvec3(), v[1].as_dvec3(), v[2].as_dvec3());
+    let (e1, e2) = (b - a, c - a);
+    let n = e1.cross(e2);
+    let d = ray.direction.as_dvec3();
+    let dn = d.dot(n);
+    if n == DVec3::ZERO || dn == 0.0 {
+        return None;
+    }
+    let w = a - ray.origin.as_dvec3();
+    let t_plane = w.dot(n) / dn;
+    let (p, q) = (e1.abs(), e2.abs());
+    let nn = DVec3::new(
+        p.y * q.z + p.z * q.y,
+        p.z * q.x + p.x * q.z,
+        p.x * q.y + p.y * q.x,
+    );
+    let err_plane = gamma_f64(8) * (w.abs().dot(nn) + t_plane.abs() * d.abs().dot(nn)) / dn.abs();
+
+    let max = |u: [f32; 3]| f64::from(u[0].abs().max(u[1].abs()).max(u[2].abs()));
+    let (max_x, max_y, max_z) = (max(x), max(y), max(z));
+    // |(p − o)_kz| = |z'|·|d_kz| up to the three roundings of z'.
+    let max_depth = max_z * f64::from(d_kz).abs() * (1.0 + f64::from(gamma(3)));
+    let delta_z = f64::from(gamma(3)) * max_z;
+    let delta_x = f64::from(gamma(5)) * (max_x + max_depth);
+    let delta_y = f64::from(gamma(5)) * (max_y + max_depth);
+    let delta_e = 2.0 * (gamma_f64(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    let max_e = edges[0].abs().max(edges[1].abs()).max(edges[2].abs());
+    let t_sheared =
+        (edges[0] * f64::from(z[0]) + edges[1] * f64::from(z[1]) + edges[2] * f64::from(z[2]))
+            / det;
+    let err_sheared =
+        3.0 * (gamma_f64(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) / det.abs();
+
+    if err_plane <= err_sheared {
+        Some((t_plane, err_plane))
+    } else {
+        Some((t_sheared, err_sheared))
+    }
+}
+
+#[inline]
+fn finish_exact(
+    ray: &Ray,
+    pre: &WatertightRay,
+    sheared: ([f32; 3], [f32; 3], [f32; 3]),
+    edges: [f64; 3],
+    v: &[Vec3; 3],
+) -> Option<TriangleHit> {
     let [e0, e1, e2] = edges;
     let has_neg = e0 < 0.0 || e1 < 0.0 || e2 < 0.0;
     let has_pos = e0 > 0.0 || e1 > 0.0 || e2 > 0.0;
@@ -116,16 +187,11 @@ fn finish_exact(ray: &Ray, edges: [f64; 3], v: &[Vec3; 3]) -> Option<TriangleHit
     if !(det != 0.0 && det.is_finite()) {
         return None;
     }
-    // t from the plane through the f32 vertices, in f64 (see `Watertight`): free of the sheared
-    // depths' f32 rounding, which swamps t for origins near the plane.
-    let (a, b, c) = (v[0].as_dvec3(), v[1].as_dvec3(), v[2].as_dvec3());
-    let n = (b - a).cross(c - a);
-    let dn = ray.direction.as_dvec3().dot(n);
-    if n == glam::DVec3::ZERO || dn == 0.0 {
-        return None; // degenerate triangle, or ray in its plane
-    }
-    let t = ((a - ray.origin.as_dvec3()).dot(n) / dn) as f32;
-    if !ray.contains(t) {
+    let (t64, err) = hit_t(ray, ray.direction[pre.k[2]], sheared, edges, det, v)?;
+    let t = t64 as f32;
+    // In the interval, and certainly beyond t_min: a hit whose error bound reaches back to
+    // t_min (an origin on or within rounding distance of the plane) is refused.
+    if !ray.contains(t) || !(t64 - err > f64::from(ray.t_min)) {
         return None;
     }
     let inv = 1.0 / det;
@@ -159,13 +225,13 @@ impl TriangleIntersector for Watertight {
         ray: &Ray,
         v: &[Vec3; 3],
     ) -> Option<TriangleHit> {
-        let ([ax, bx, cx], [ay, by, cy], _) = pre.project_triangle(ray.origin, v);
+        let ([ax, bx, cx], [ay, by, cy], z) = pre.project_triangle(ray.origin, v);
         let edges = [
             diff_of_products_exact_sign(cx, by, cy, bx),
             diff_of_products_exact_sign(ax, cy, ay, cx),
             diff_of_products_exact_sign(bx, ay, by, ax),
         ];
-        finish_exact(ray, edges, v)
+        finish_exact(ray, pre, ([ax, bx, cx], [ay, by, cy], z), edges, v)
     }
 }
 
