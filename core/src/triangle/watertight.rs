@@ -83,9 +83,7 @@ impl WatertightRay {
 /// depths can swamp `t` when that span is huge against `t`: an origin near the plane, seen
 /// along a dominant axis the triangle extends in), or the plane equation
 /// `((v0 − o)·n)/(d·n)` in `f64` (accurate unless `|v0 − o|` dwarfs the distance to the plane
-/// or the `f64` differences of the vertices round). A hit is reported only when
-/// `t − bound > t_min`, so it is certainly beyond `t_min`: a ray starting on, or within
-/// rounding distance of, the triangle gets no hit from it. This is the
+/// or the `f64` differences of the vertices round). This is the
 /// default intersector;
 ///
 /// Domain of the exact edge signs: the sheared coordinates carry only relative `f32` rounding
@@ -108,12 +106,13 @@ pub struct Watertight;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct WatertightF32;
 
-/// `t` of a hit that passed the edge tests, with an absolute error bound, by whichever of two
-/// forms has the smaller bound (see [`Watertight`]):
+/// `t` of a hit that passed the edge tests, by whichever of two forms has the smaller absolute
+/// rounding bound (see [`Watertight`]):
 ///
 /// * **sheared**: `Σ eᵢzᵢ / det`, a convex combination of the vertices' sheared depths, with
-///   pbrt-v3's bound `δt` (*Physically Based Rendering* 3rd ed., §3.9.6), its shear term scaled
-///   by the unscaled depth `max|(p − o)_kz|` so that any direction length is covered;
+///   the smaller of their span and pbrt-v3's bound `δt` (*Physically Based Rendering* 3rd ed.,
+///   §3.9.6), its shear term scaled by the unscaled depth `max|(p − o)_kz|` so that any
+///   direction length is covered;
 /// * **plane**: `((v0 − o)·n)/(d·n)`, `n = (v1 − v0) × (v2 − v0)`, all in `f64`, with the
 ///   bound `γ₈·(|v0 − o|·N + |t|·|d|·N)/|d·n|`, `N = |v1 − v0| × |v2 − v0|` taken with
 ///   absolute values (the rounding of the `f64` differences, the cross and dot products).
@@ -127,7 +126,7 @@ fn hit_t(
     edges: [f64; 3],
     det: f64,
     v: &[Vec3; 3],
-) -> Option<(f64, f64)> {
+) -> Option<f64> {
     let (x, y, z) = sheared;
     let (a, b, c) = (v[0].as_dvec3(), v[1].as_dvec3(), v[2].as_dvec3());
     let (e1, e2) = (b - a, c - a);
@@ -159,14 +158,18 @@ fn hit_t(
     let t_sheared =
         (edges[0] * f64::from(z[0]) + edges[1] * f64::from(z[1]) + edges[2] * f64::from(z[2]))
             / det;
-    let err_sheared =
-        3.0 * (gamma_f64(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) / det.abs();
+    // A convex combination of the depths (the edge functions share one sign) cannot leave
+    // their range, whatever the rounding of the barycentrics: the depth span also bounds it.
+    let min_z = f64::from(z[0].min(z[1]).min(z[2]));
+    let span = f64::from(z[0].max(z[1]).max(z[2])) - min_z + 2.0 * delta_z;
+    let err_sheared = span
+        .min(3.0 * (gamma_f64(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) / det.abs());
 
-    if err_plane <= err_sheared {
-        Some((t_plane, err_plane))
+    Some(if err_plane <= err_sheared {
+        t_plane
     } else {
-        Some((t_sheared, err_sheared))
-    }
+        t_sheared
+    })
 }
 
 #[inline]
@@ -187,11 +190,9 @@ fn finish_exact(
     if !(det != 0.0 && det.is_finite()) {
         return None;
     }
-    let (t64, err) = hit_t(ray, ray.direction[pre.k[2]], sheared, edges, det, v)?;
+    let t64 = hit_t(ray, ray.direction[pre.k[2]], sheared, edges, det, v)?;
     let t = t64 as f32;
-    // In the interval, and certainly beyond t_min: a hit whose error bound reaches back to
-    // t_min (an origin on or within rounding distance of the plane) is refused.
-    if !ray.contains(t) || !(t64 - err > f64::from(ray.t_min)) {
+    if !ray.contains(t) {
         return None;
     }
     let inv = 1.0 / det;
