@@ -106,13 +106,19 @@ pub struct Watertight;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct WatertightF32;
 
+/// Absolute floor of the projection error bounds: the `f32` subnormal spacing `2⁻¹⁴⁹`, times 4
+/// (each projected value carries up to three roundings that may be absolute below the normal
+/// range). World units (sheared).
+const TINY: f64 = 4.0 * 1.401_298_464_324_817e-45;
+
 /// `t` of a hit that passed the edge tests, by whichever of two forms has the smaller absolute
 /// rounding bound (see [`Watertight`]):
 ///
 /// * **sheared**: `Σ eᵢzᵢ / det`, a convex combination of the vertices' sheared depths, with
-///   the smaller of their span and pbrt-v3's bound `δt` (*Physically Based Rendering* 3rd ed.,
-///   §3.9.6), its shear term scaled by the unscaled depth `max|(p − o)_kz|` so that any
-///   direction length is covered;
+///   the smaller of their span and a first-order bound in the manner of pbrt-v3's `δt`
+///   (*Physically Based Rendering* 3rd ed., §3.9.6) but per vertex and per edge (a sliver's
+///   long coordinate does not inflate the error of its short one), with the projection's
+///   rounding measured against the unscaled depth `|(p − o)_kz|` so any direction length works;
 /// * **plane**: `((v0 − o)·n)/(d·n)`, `n = (v1 − v0) × (v2 − v0)`, all in `f64`, with the
 ///   bound `γ₈·(|v0 − o|·N + |t|·|d|·N)/|d·n|`, `N = |v1 − v0| × |v2 − v0|` taken with
 ///   absolute values (the rounding of the `f64` differences, the cross and dot products).
@@ -121,6 +127,7 @@ pub struct WatertightF32;
 #[inline]
 fn hit_t(
     ray: &Ray,
+    shear: Vec3,
     d_kz: f32,
     sheared: ([f32; 3], [f32; 3], [f32; 3]),
     edges: [f64; 3],
@@ -146,24 +153,56 @@ fn hit_t(
     );
     let err_plane = gamma_f64(8) * (w.abs().dot(nn) + t_plane.abs() * d.abs().dot(nn)) / dn.abs();
 
-    let max = |u: [f32; 3]| f64::from(u[0].abs().max(u[1].abs()).max(u[2].abs()));
-    let (max_x, max_y, max_z) = (max(x), max(y), max(z));
-    // |(p − o)_kz| = |z'|·|d_kz| up to the three roundings of z'.
-    let max_depth = max_z * f64::from(d_kz).abs() * (1.0 + f64::from(gamma(3)));
-    let delta_z = f64::from(gamma(3)) * max_z;
-    let delta_x = f64::from(gamma(5)) * (max_x + max_depth);
-    let delta_y = f64::from(gamma(5)) * (max_y + max_depth);
-    let delta_e = 2.0 * (gamma_f64(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-    let max_e = edges[0].abs().max(edges[1].abs()).max(edges[2].abs());
+    // Sheared form. Per vertex: the magnitudes that the projection x' = a_kx − s_x·a_kz rounds
+    // against (|a_kx| ≤ |x'| + |s_x·a_kz|, and |a_kz| = |z'|·|d_kz| up to z′'s roundings), the
+    // resulting errors of x', y', z', then each edge function's error from them (first order,
+    // plus the f64 evaluation), and finally t's (the edge errors also perturb det).
+    let g3 = 1.0 + f64::from(gamma(3));
+    let proj = f64::from(gamma(4));
+    let (sx, sy) = (f64::from(shear.x).abs(), f64::from(shear.y).abs());
+    let dkz = f64::from(d_kz).abs();
+    let mut dx = [0.0f64; 3];
+    let mut dy = [0.0f64; 3];
+    let mut dz = [0.0f64; 3];
+    for i in 0..3 {
+        let az = f64::from(z[i]).abs() * dkz * g3;
+        dx[i] = proj * (f64::from(x[i]).abs() + 2.0 * sx * az) + TINY;
+        dy[i] = proj * (f64::from(y[i]).abs() + 2.0 * sy * az) + TINY;
+        dz[i] = f64::from(gamma(3)) * f64::from(z[i]).abs() + TINY;
+    }
+    let mut sum_err = 0.0;
+    let mut num_err = 0.0;
+    for (i, &(p, q)) in [(2usize, 1usize), (0, 2), (1, 0)].iter().enumerate() {
+        let (xp, yp, xq, yq) = (
+            f64::from(x[p]).abs(),
+            f64::from(y[p]).abs(),
+            f64::from(x[q]).abs(),
+            f64::from(y[q]).abs(),
+        );
+        let err = (xp + dx[p]) * dy[q]
+            + yq * dx[p]
+            + (yp + dy[p]) * dx[q]
+            + xq * dy[p]
+            + gamma_f64(1) * (xp * yq + yp * xq);
+        sum_err += err;
+        let zi = f64::from(z[i]).abs();
+        num_err += edges[i].abs() * dz[i] + err * (zi + dz[i]);
+    }
     let t_sheared =
         (edges[0] * f64::from(z[0]) + edges[1] * f64::from(z[1]) + edges[2] * f64::from(z[2]))
             / det;
+    let denom = det.abs() - sum_err;
+    let first_order = if denom > 0.0 {
+        (num_err + t_sheared.abs() * sum_err) / denom + gamma_f64(4) * t_sheared.abs()
+    } else {
+        f64::INFINITY
+    };
     // A convex combination of the depths (the edge functions share one sign) cannot leave
     // their range, whatever the rounding of the barycentrics: the depth span also bounds it.
     let min_z = f64::from(z[0].min(z[1]).min(z[2]));
-    let span = f64::from(z[0].max(z[1]).max(z[2])) - min_z + 2.0 * delta_z;
-    let err_sheared = span
-        .min(3.0 * (gamma_f64(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) / det.abs());
+    let max_dz = dz[0].max(dz[1]).max(dz[2]);
+    let span = f64::from(z[0].max(z[1]).max(z[2])) - min_z + 2.0 * max_dz;
+    let err_sheared = span.min(first_order);
 
     Some(if err_plane <= err_sheared {
         t_plane
@@ -190,7 +229,15 @@ fn finish_exact(
     if !(det != 0.0 && det.is_finite()) {
         return None;
     }
-    let t64 = hit_t(ray, ray.direction[pre.k[2]], sheared, edges, det, v)?;
+    let t64 = hit_t(
+        ray,
+        pre.shear,
+        ray.direction[pre.k[2]],
+        sheared,
+        edges,
+        det,
+        v,
+    )?;
     let t = t64 as f32;
     if !ray.contains(t) {
         return None;
