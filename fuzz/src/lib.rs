@@ -634,6 +634,10 @@ impl WatertightBound {
             EdgeEval::F32 => (f64::from(gamma(6)), f64::from(gamma(3))),
         };
         dt += t_eval * ez / det.abs();
+        if eval == EdgeEval::F32 {
+            // The f32 products eᵢ·zᵢ round absolutely (2⁻¹⁴⁹) when they are subnormal.
+            dt += 3.0 * f64::from(f32::from_bits(1)) / det.abs();
+        }
         dt += f64::from(F32_UNIT_ROUNDOFF) * t_ref.abs() + 1.5e-45;
         dt *= BOUND_SAFETY;
         let (t_min, t_max) = (f64::from(ray.t_min), f64::from(ray.t_max));
