@@ -198,9 +198,38 @@ impl TriangleVariant {
 /// passed the edge tests, so it costs nothing on misses.
 #[inline]
 pub(crate) fn degenerate_or_coplanar(ray: &Ray, v: &[Vec3; 3]) -> bool {
-    let (a, b, c) = (v[0].as_dvec3(), v[1].as_dvec3(), v[2].as_dvec3());
-    let n = (b - a).cross(c - a);
+    let (n, _) = normal_f64(v);
     n == glam::DVec3::ZERO || ray.direction.as_dvec3().dot(n) == 0.0
+}
+
+/// The (unnormalised) normal `(v1 − v0) × (v2 − v0)` in `f64`, computed from the vertex
+/// opposite the longest edge (a cyclic rotation, so the orientation is the same): the two edges
+/// it spans are the shorter ones, so their `f64` differences keep the short edge's digits.
+/// From `v0` of a sliver whose other two vertices are tiny against it, both differences round
+/// to `−v0` and the cross product is exactly zero (found by the `ray_triangle` fuzz target).
+/// Also returns `|e1| × |e2|` taken with absolute values (the scale of `n`'s rounding).
+#[inline]
+pub(crate) fn normal_f64(v: &[Vec3; 3]) -> (glam::DVec3, glam::DVec3) {
+    let p = [v[0].as_dvec3(), v[1].as_dvec3(), v[2].as_dvec3()];
+    // Edge opposite vertex i: p[i+1] → p[i+2].
+    let len2 = |i: usize| (p[(i + 2) % 3] - p[(i + 1) % 3]).length_squared();
+    let (l0, l1, l2) = (len2(0), len2(1), len2(2));
+    let base = if l0 >= l1 && l0 >= l2 {
+        0
+    } else if l1 >= l2 {
+        1
+    } else {
+        2
+    };
+    let (a, b, c) = (p[base], p[(base + 1) % 3], p[(base + 2) % 3]);
+    let (e1, e2) = (b - a, c - a);
+    let (x, y) = (e1.abs(), e2.abs());
+    let scale = glam::DVec3::new(
+        x.y * y.z + x.z * y.y,
+        x.z * y.x + x.x * y.z,
+        x.x * y.y + x.y * y.x,
+    );
+    (e1.cross(e2), scale)
 }
 
 /// Checks the common post-conditions and builds the hit; shared by the `f32` variants.

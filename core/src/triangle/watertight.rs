@@ -135,22 +135,14 @@ fn hit_t(
     v: &[Vec3; 3],
 ) -> Option<f64> {
     let (x, y, z) = sheared;
-    let (a, b, c) = (v[0].as_dvec3(), v[1].as_dvec3(), v[2].as_dvec3());
-    let (e1, e2) = (b - a, c - a);
-    let n = e1.cross(e2);
+    let (n, nn) = super::normal_f64(v);
     let d = ray.direction.as_dvec3();
     let dn = d.dot(n);
     if n == DVec3::ZERO || dn == 0.0 {
         return None;
     }
-    let w = a - ray.origin.as_dvec3();
+    let w = v[0].as_dvec3() - ray.origin.as_dvec3();
     let t_plane = w.dot(n) / dn;
-    let (p, q) = (e1.abs(), e2.abs());
-    let nn = DVec3::new(
-        p.y * q.z + p.z * q.y,
-        p.z * q.x + p.x * q.z,
-        p.x * q.y + p.y * q.x,
-    );
     let err_plane = gamma_f64(8) * (w.abs().dot(nn) + t_plane.abs() * d.abs().dot(nn)) / dn.abs();
 
     // Sheared form. Per vertex: the magnitudes that the projection x' = a_kx − s_x·a_kz rounds
