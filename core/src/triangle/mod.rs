@@ -49,7 +49,10 @@ pub struct TriangleHit {
     pub b1: f32,
     /// Barycentric weight of `v2`.
     pub b2: f32,
-    /// Unnormalised geometric normal `(v1 − v0) × (v2 − v0)` (Embree's `Ng` convention).
+    /// Unnormalised geometric normal `(v1 − v0) × (v2 − v0)` (Embree's `Ng` convention). When
+    /// that `f32` product overflows or underflows to zero (triangles beyond ~1e19 or below
+    /// ~1e-23 in size), the same direction from the `f64` product, scaled so that its largest
+    /// component is `±1`: always finite and non-zero.
     pub ng: Vec3,
     /// `true` when the ray arrives against `ng` (the counter-clockwise side).
     pub front_face: bool,
@@ -232,6 +235,23 @@ pub(crate) fn normal_f64(v: &[Vec3; 3]) -> (glam::DVec3, glam::DVec3) {
     (e1.cross(e2), scale)
 }
 
+/// [`TriangleHit::ng`]: `ng32` (the `f32` cross product) when it is finite and non-zero,
+/// otherwise the `f64` normal scaled by its largest component (found by the `bvh` fuzz target:
+/// an overflowing `f32` cross product gave a NaN normal).
+#[inline]
+pub(crate) fn geometric_normal(v: &[Vec3; 3], ng32: Vec3) -> Vec3 {
+    if ng32.is_finite() && ng32 != Vec3::ZERO {
+        return ng32;
+    }
+    let (n, _) = normal_f64(v);
+    let m = n.abs().max_element();
+    if m > 0.0 && m.is_finite() {
+        (n / m).as_vec3()
+    } else {
+        Vec3::ZERO
+    }
+}
+
 /// Checks the common post-conditions and builds the hit; shared by the `f32` variants.
 #[inline]
 fn finish(
@@ -243,14 +263,15 @@ fn finish(
     front_face: bool,
     v: &[Vec3; 3],
 ) -> Option<TriangleHit> {
-    (ray.contains(t) && b1.is_finite() && b2.is_finite() && !degenerate_or_coplanar(ray, v))
-        .then_some(TriangleHit {
+    (ray.contains(t) && b1.is_finite() && b2.is_finite() && !degenerate_or_coplanar(ray, v)).then(
+        || TriangleHit {
             t,
             b1,
             b2,
-            ng,
+            ng: geometric_normal(v, ng),
             front_face,
-        })
+        },
+    )
 }
 
 #[cfg(test)]
@@ -263,6 +284,20 @@ mod tests {
             Vec3::new(1.0, 0.0, 0.0),
             Vec3::new(0.0, 1.0, 0.0),
         ]
+    }
+
+    /// Huge and tiny triangles: the f32 cross product overflows (NaN from ∞ − ∞) or underflows
+    /// to zero; `ng` falls back to the scaled f64 normal, same direction.
+    #[test]
+    fn geometric_normal_of_huge_and_tiny_triangles() {
+        for s in [1e25f32, 1e-30] {
+            let v = [Vec3::ZERO, Vec3::new(s, 0.0, 0.0), Vec3::new(0.0, s, 0.0)];
+            let h = TriangleVariant::Watertight
+                .intersect(&Ray::new(Vec3::new(s / 4.0, s / 4.0, s), -Vec3::Z), &v)
+                .unwrap_or_else(|| panic!("{s}"));
+            assert!(h.ng.is_finite() && h.ng != Vec3::ZERO, "{s}: {:?}", h.ng);
+            assert_eq!(h.ng.normalize(), Vec3::Z, "{s}");
+        }
     }
 
     #[test]

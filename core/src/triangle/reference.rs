@@ -96,7 +96,7 @@ impl TriangleIntersector for F64Reference {
             t: t32,
             b1: b[1] as f32,
             b2: b[2] as f32,
-            ng: (v[1] - v[0]).cross(v[2] - v[0]),
+            ng: super::geometric_normal(v, (v[1] - v[0]).cross(v[2] - v[0])),
             front_face: {
                 let n = (v[1] - v[0]).as_dvec3().cross((v[2] - v[0]).as_dvec3());
                 n.dot(ray.direction.as_dvec3()) < 0.0

@@ -239,7 +239,7 @@ fn finish_exact(
         t,
         b1: (e1 * inv) as f32,
         b2: (e2 * inv) as f32,
-        ng: (v[1] - v[0]).cross(v[2] - v[0]),
+        ng: super::geometric_normal(v, (v[1] - v[0]).cross(v[2] - v[0])),
         // det = −2·(signed area of the projected triangle): positive when the triangle is
         // clockwise in the sheared plane, i.e. when its normal opposes the ray.
         front_face: det > 0.0,
@@ -322,7 +322,7 @@ impl TriangleIntersector for WatertightF32 {
             t,
             b1,
             b2,
-            ng: (v[1] - v[0]).cross(v[2] - v[0]),
+            ng: super::geometric_normal(v, (v[1] - v[0]).cross(v[2] - v[0])),
             front_face: det > 0.0,
         })
     }
