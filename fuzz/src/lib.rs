@@ -1247,8 +1247,18 @@ pub mod bvh {
         // 4, 5. Rays.
         for ray in &s.rays {
             let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
-            check_ray(&bvh, &mesh, &Watertight, ray, &in_tree, &rctx);
-            check_ray(&bvh, &mesh, &MollerTrumbore::CLASSIC, ray, &in_tree, &rctx);
+            check_ray(&bvh, &mesh, &Watertight, ray, &in_tree, true, &rctx);
+            // Möller–Trumbore's inexact edge tests can report a hit slightly outside the
+            // triangle, hence outside its box: only the weak form holds for it.
+            check_ray(
+                &bvh,
+                &mesh,
+                &MollerTrumbore::CLASSIC,
+                ray,
+                &in_tree,
+                false,
+                &rctx,
+            );
             let q = Aabb::new(ray.origin, ray.origin).grow(ray.origin + ray.direction);
             let mut found = Vec::new();
             let reported = bvh.query_box(&mesh, &q, |p| {
@@ -1276,11 +1286,12 @@ pub mod bvh {
         isect: &T,
         ray: &Ray,
         in_tree: &[bool],
+        exact: bool,
         ctx: &dyn Fn() -> String,
     ) {
         let want = brute(mesh, isect, ray, in_tree);
         let got = bvh.closest_hit_triangles(mesh, isect, ray, None);
-        if shear_underflows(ray) || projection_underflows(mesh, ray, in_tree) {
+        if !exact || shear_underflows(ray) || projection_underflows(mesh, ray, in_tree) {
             // Outside the documented domain of exact agreement (`Watertight` docs): the
             // BVH's answer must still be a genuine hit of the intersector, no nearer than
             // brute force's.
