@@ -475,17 +475,31 @@ pub fn projection_underflows(ray: &Ray, v: &[Vec3; 3]) -> bool {
         2
     };
     let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    // Each quantity in f64 from the f32 values the test actually rounds: below the f32 normal
+    // range (and not exactly zero), its f32 rounding is absolute, or it vanishes.
+    let sub = |x: f64| x != 0.0 && x.abs() < f64::from(f32::MIN_POSITIVE);
     let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
-    let sub = |x: f32| x != 0.0 && x.abs() < f32::MIN_POSITIVE;
-    let shear_under = |di: f32, s: f32| di != 0.0 && s.abs() < f32::MIN_POSITIVE;
-    shear_under(d[kx], sx)
-        || shear_under(d[ky], sy)
+    let dk = f64::from(d[kz]);
+    sub(f64::from(d[kx]) / dk)
+        || sub(f64::from(d[ky]) / dk)
         || v.iter().any(|p| {
             let q = *p - ray.origin;
-            let (px, py, pz) = (sx * q[kz], sy * q[kz], sz * q[kz]);
-            [q.x, q.y, q.z, px, py, pz, q[kx] - px, q[ky] - py]
-                .into_iter()
-                .any(sub)
+            let q64 = p.as_dvec3() - ray.origin.as_dvec3();
+            let qz = f64::from(q[kz]);
+            let (px, py, pz) = (f64::from(sx) * qz, f64::from(sy) * qz, f64::from(sz) * qz);
+            let (px32, py32) = (sx * q[kz], sy * q[kz]);
+            [
+                q64.x,
+                q64.y,
+                q64.z,
+                px,
+                py,
+                pz,
+                f64::from(q[kx]) - f64::from(px32),
+                f64::from(q[ky]) - f64::from(py32),
+            ]
+            .into_iter()
+            .any(sub)
         })
 }
 
