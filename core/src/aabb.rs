@@ -7,7 +7,9 @@
 //! reciprocal is `±∞`, and an origin exactly on that slab's plane gives `0·∞ = NaN`; every
 //! slab value is merged with `f32::max`/`f32::min` *against the running interval*, which
 //! returns the non-NaN operand, so such a slab does not constrain the interval. The result is
-//! the same for `+0.0` and `−0.0` and for every axis.
+//! the same for `+0.0` and `−0.0` and for every axis. An entry at `t = +∞` is no hit (a ray
+//! parallel to a slab and outside it with a `−0.0` component gets `[+∞, +∞]` from that slab;
+//! found by the `ray_box` fuzz target).
 //!
 //! A direction component below `1/f32::MAX ≈ 2.9e-39` in magnitude (subnormal, not zero) has
 //! no finite reciprocal; a ray with one is tested by division, `(bound − o)/d` (at most two
@@ -192,7 +194,7 @@ impl Aabb {
             t_enter = t_near.max(t_enter);
             t_exit = t_far.min(t_exit);
         }
-        (t_enter <= t_exit).then_some((t_enter, t_exit))
+        (t_enter <= t_exit && t_enter < f32::INFINITY).then_some((t_enter, t_exit))
     }
 
     /// The plain (non-conservative) slab test: the same NaN handling, without the
@@ -218,7 +220,7 @@ impl Aabb {
             t_enter = t_near.max(t_enter);
             t_exit = t_far.min(t_exit);
         }
-        (t_enter <= t_exit).then_some((t_enter, t_exit))
+        (t_enter <= t_exit && t_enter < f32::INFINITY).then_some((t_enter, t_exit))
     }
 
     /// Slab test of a ray over its closed interval `[t_min, t_max]`; `None` for an invalid ray
@@ -405,6 +407,20 @@ mod tests {
         assert!(t0 <= -1.0 && -1.0 <= t1, "({t0}, {t1})");
         assert_eq!(pad_far(f32::NEG_INFINITY), f32::NEG_INFINITY);
         assert!(pad_far(-1.0) > -1.0 && pad_far(1.0) > 1.0 && pad_far(0.0) == 0.0);
+    }
+
+    #[test]
+    fn parallel_outside_with_negative_zero_misses() {
+        let b = Aabb::new(Vec3::new(0.0, -0.0, 0.0), Vec3::new(1.0, 2.278e-41, 1.0));
+        for dy in [0.0f32, -0.0] {
+            let ray = Ray::new(
+                Vec3::new(0.5, 0.5, -1.0),
+                Vec3::new(1.35e-43, dy, 2.278e-41),
+            );
+            assert_eq!(b.intersect_ray(&ray), None, "d_y = {dy:?}");
+            let ray = Ray::new(Vec3::new(0.5, 0.5, -1.0), Vec3::new(0.0, dy, 1.0));
+            assert_eq!(b.intersect_ray(&ray), None, "d_y = {dy:?}");
+        }
     }
 
     #[test]
