@@ -7,9 +7,9 @@
 //! reciprocal is `±∞`, and an origin exactly on that slab's plane gives `0·∞ = NaN`; every
 //! slab value is merged with `f32::max`/`f32::min` *against the running interval*, which
 //! returns the non-NaN operand, so such a slab does not constrain the interval. The result is
-//! the same for `+0.0` and `−0.0` and for every axis. An entry at `t = +∞` is no hit (a ray
-//! parallel to a slab and outside it with a `−0.0` component gets `[+∞, +∞]` from that slab;
-//! found by the `ray_box` fuzz target).
+//! the same for `+0.0` and `−0.0` and for every axis. An entry at `t = +∞` or an exit at
+//! `t = −∞` is no hit (a ray parallel to a slab and outside it gets `[+∞, +∞]` or `[−∞, −∞]`
+//! from that slab, depending on the zero's sign; found by the `ray_box` fuzz target).
 //!
 //! A direction component below `1/f32::MAX ≈ 2.9e-39` in magnitude (subnormal, not zero) has
 //! no finite reciprocal; a ray with one is tested by division, `(bound − o)/d` (at most two
@@ -194,7 +194,8 @@ impl Aabb {
             t_enter = t_near.max(t_enter);
             t_exit = t_far.min(t_exit);
         }
-        (t_enter <= t_exit && t_enter < f32::INFINITY).then_some((t_enter, t_exit))
+        (t_enter <= t_exit && t_enter < f32::INFINITY && t_exit > f32::NEG_INFINITY)
+            .then_some((t_enter, t_exit))
     }
 
     /// The plain (non-conservative) slab test: the same NaN handling, without the
@@ -220,7 +221,8 @@ impl Aabb {
             t_enter = t_near.max(t_enter);
             t_exit = t_far.min(t_exit);
         }
-        (t_enter <= t_exit && t_enter < f32::INFINITY).then_some((t_enter, t_exit))
+        (t_enter <= t_exit && t_enter < f32::INFINITY && t_exit > f32::NEG_INFINITY)
+            .then_some((t_enter, t_exit))
     }
 
     /// Slab test of a ray over its closed interval `[t_min, t_max]`; `None` for an invalid ray

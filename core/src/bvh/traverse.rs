@@ -60,7 +60,8 @@ impl NodeRay {
             t_enter = if t_near > t_enter { t_near } else { t_enter };
             t_exit = if t_far < t_exit { t_far } else { t_exit };
         }
-        (t_enter <= t_exit && t_enter < f32::INFINITY).then_some(t_enter)
+        (t_enter <= t_exit && t_enter < f32::INFINITY && t_exit > f32::NEG_INFINITY)
+            .then_some(t_enter)
     }
 
     /// [`NodeRay::hit`] for rays with a subnormal direction component whose reciprocal
