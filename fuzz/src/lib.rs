@@ -873,9 +873,11 @@ pub fn check_ray_box(ray: &Ray, bx: &Aabb) {
         return;
     }
     let (enter, exit) = exact_slab_interval(ray, bx);
-    // An entry beyond f32::MAX rounds to +∞, which is no hit (module docs of the slab test).
+    // An entry beyond f32::MAX rounds to +∞ (an exit below −f32::MAX to −∞), which is no hit
+    // (module docs of the slab test).
     let must_hit = enter < exit
         && enter <= f64::from(f32::MAX)
+        && exit >= -f64::from(f32::MAX)
         && (enter.is_infinite()
             || exit.is_infinite()
             || exit - enter > SLAB_ORACLE_REL * enter.abs().max(exit.abs()));
