@@ -143,6 +143,9 @@ pub enum SplitError {
     NonFinitePosition,
     /// Not enough free slots.
     Capacity(CapacityError),
+    /// Both faces on the edge have the same opposite vertex (two triangles glued along all
+    /// three edges): the two new edges would join the same pair of vertices.
+    WingsCoincide,
 }
 
 /// Why [`super::Mesh::collapse_edge`] refused: the rule that failed.

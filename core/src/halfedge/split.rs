@@ -26,7 +26,8 @@ impl<S: MeshStorage> Mesh<S> {
     ///   fold faces over, which is the caller's choice).
     ///
     /// # Errors
-    /// `Dead`, `NonFinitePosition`, or `Capacity` (checked before anything changes).
+    /// `Dead`, `NonFinitePosition`, `WingsCoincide` (both faces have the same opposite vertex),
+    /// or `Capacity`; all checked before anything changes.
     pub fn split_edge_at(&mut self, e: EdgeId, p: Vec3) -> Result<VertexId, SplitError> {
         if !self.e_live(e.0) {
             return Err(SplitError::Dead);
@@ -36,6 +37,12 @@ impl<S: MeshStorage> Mesh<S> {
         }
         let (h, t) = (e.0 << 1, (e.0 << 1) | 1);
         let (f0, f1) = (self.face_raw(h), self.face_raw(t));
+        if f0 != NONE
+            && f1 != NONE
+            && self.head_raw(self.next_raw(h)) == self.head_raw(self.next_raw(t))
+        {
+            return Err(SplitError::WingsCoincide); // found by the halfedge_ops fuzz target
+        }
         let sides = (f0 != NONE) as usize + (f1 != NONE) as usize;
         self.check_room(Counts {
             vertices: 1,

@@ -1128,3 +1128,19 @@ fn validate_names_the_broken_invariant() {
     m.live.faces += 1;
     assert_eq!(m.validate(), Err(IE::FreeList(ElementKind::Face)));
 }
+
+/// Two triangles glued along all three edges (a "pillow"): splitting any edge would join the
+/// new vertex to the shared opposite vertex twice. Refused, mesh unchanged (found by the
+/// `halfedge_ops` fuzz target).
+#[test]
+fn split_refuses_when_wings_coincide() {
+    let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let t = [[0, 1, 2], [0, 2, 1]];
+    let mut m = build::<8, 16, 8>(&p, &t).unwrap();
+    m.validate().unwrap();
+    let before = m.clone();
+    for e in 0..3 {
+        assert_eq!(m.split_edge(EdgeId(e)), Err(SplitError::WingsCoincide));
+        assert_eq!(m, before);
+    }
+}
