@@ -176,6 +176,9 @@ pub enum SubdivideError {
     NotCompact,
     /// The output mesh is too small.
     Capacity(CapacityError),
+    /// A subdivided position would not be finite (coordinates near `f32::MAX` overflow the
+    /// weighted sums).
+    NonFinitePosition,
 }
 
 /// Why [`super::Mesh::export`] failed.

@@ -106,7 +106,8 @@ impl<S: MeshStorage> Mesh<S> {
     ///
     /// # Errors
     /// `NotCompact` if this mesh has tombstoned slots ([`Mesh::compact`] first);
-    /// `Capacity` if `out` cannot hold the result. `out` is unchanged on error.
+    /// `Capacity` if `out` cannot hold the result; `NonFinitePosition` if a new position
+    /// overflows. `out` is unchanged on error.
     pub fn subdivide_loop<T: MeshStorage>(
         &self,
         out: &mut Mesh<T>,
@@ -135,6 +136,24 @@ impl<S: MeshStorage> Mesh<S> {
             self.live.edges as u32,
             self.live.faces as u32,
         );
+        // Every new position is a weighted average (weights of magnitude ≤ 1) of at most
+        // `valence + 1 ≤ E + 1` old ones: with `max|x|·(E + 2)` finite nothing can overflow.
+        // Otherwise compute them all once and check (found by the `halfedge_ops` fuzz
+        // target: a vertex at −1.6e38 made Loop positions infinite).
+        let max_abs = (0..nv).fold(0.0f32, |m, v| m.max(self.pos_raw(v).abs().max_element()));
+        if !(max_abs * (ne as f32 + 2.0)).is_finite() {
+            let vertex_ok = (0..nv).all(|v| {
+                self.loop_vertex_position(VertexId(v), weights)
+                    .is_none_or(|p| p.is_finite())
+            });
+            let edge_ok = (0..ne).all(|e| {
+                self.loop_edge_position(super::EdgeId(e))
+                    .is_none_or(|p| p.is_finite())
+            });
+            if !(vertex_ok && edge_ok) {
+                return Err(SubdivideError::NonFinitePosition);
+            }
+        }
         out.clear();
         for v in 0..nv {
             out.alloc_vertex(

@@ -1144,3 +1144,20 @@ fn split_refuses_when_wings_coincide() {
         assert_eq!(m, before);
     }
 }
+
+/// Loop subdivision of a mesh with a vertex near `−f32::MAX`: the weighted sums overflow, so it
+/// is refused and the output left as it was (found by the `halfedge_ops` fuzz target).
+#[test]
+fn subdivide_refuses_overflowing_positions() {
+    let (mut p, t) = tetra();
+    p[0] = Vec3::splat(-3.0e38);
+    p[1] = Vec3::splat(-3.0e38);
+    let m = build::<4, 6, 4>(&p, &t).unwrap();
+    let mut out = HalfedgeMesh::<16, 48, 32>::new();
+    let before = out.clone();
+    assert_eq!(
+        m.subdivide_loop(&mut out, LoopWeights::Warren),
+        Err(SubdivideError::NonFinitePosition)
+    );
+    assert_eq!(out, before);
+}
