@@ -179,6 +179,9 @@ pub enum SubdivideError {
     /// A subdivided position would not be finite (coordinates near `f32::MAX` overflow the
     /// weighted sums).
     NonFinitePosition,
+    /// The two faces on this edge have the same three vertices (two triangles glued along all
+    /// their edges): their middle triangles would share all three edges (duplicate edges).
+    CoincidentFaces(super::EdgeId),
 }
 
 /// Why [`super::Mesh::export`] failed.

@@ -106,8 +106,9 @@ impl<S: MeshStorage> Mesh<S> {
     ///
     /// # Errors
     /// `NotCompact` if this mesh has tombstoned slots ([`Mesh::compact`] first);
-    /// `Capacity` if `out` cannot hold the result; `NonFinitePosition` if a new position
-    /// overflows. `out` is unchanged on error.
+    /// `Capacity` if `out` cannot hold the result; `CoincidentFaces` if two faces share all
+    /// three vertices; `NonFinitePosition` if a new position overflows. `out` is unchanged on
+    /// error.
     pub fn subdivide_loop<T: MeshStorage>(
         &self,
         out: &mut Mesh<T>,
@@ -136,6 +137,16 @@ impl<S: MeshStorage> Mesh<S> {
             self.live.edges as u32,
             self.live.faces as u32,
         );
+        for e in 0..ne {
+            let (h, t) = (e << 1, (e << 1) | 1);
+            if self.face_raw(h) != NONE
+                && self.face_raw(t) != NONE
+                && self.head_raw(self.next_raw(h)) == self.head_raw(self.next_raw(t))
+            {
+                // Found by the `halfedge_ops` fuzz target.
+                return Err(SubdivideError::CoincidentFaces(super::EdgeId(e)));
+            }
+        }
         // Every new position is a weighted average (weights of magnitude ≤ 1) of at most
         // `valence + 1 ≤ E + 1` old ones: with `max|x|·(E + 2)` finite nothing can overflow.
         // Otherwise compute them all once and check (found by the `halfedge_ops` fuzz

@@ -1161,3 +1161,16 @@ fn subdivide_refuses_overflowing_positions() {
     );
     assert_eq!(out, before);
 }
+
+/// A pillow (two faces on the same three vertices) cannot be Loop-subdivided: the two middle
+/// triangles would be the same triangle twice (found by the `halfedge_ops` fuzz target).
+#[test]
+fn subdivide_refuses_coincident_faces() {
+    let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let m = build::<8, 16, 8>(&p, &[[0, 1, 2], [0, 2, 1]]).unwrap();
+    let mut out = HalfedgeMesh::<16, 48, 32>::new();
+    assert!(matches!(
+        m.subdivide_loop(&mut out, LoopWeights::Warren),
+        Err(SubdivideError::CoincidentFaces(_))
+    ));
+}
