@@ -2286,6 +2286,10 @@ pub mod sphere {
     /// `f32` gives no hit, documented).
     pub const MAX_T: f64 = 1e30;
 
+    /// Smallest `|t|` checked against the reference: a root near the `f32` subnormal range
+    /// rounds to a `t` from which the hit point cannot be rebuilt.
+    pub const MIN_T: f64 = 1e-30;
+
     /// Decodes a `ray_sphere` input.
     pub fn decode(data: &[u8]) -> (Vec3, f32, Ray) {
         let mut i = Input::new(data);
@@ -2474,8 +2478,8 @@ pub mod sphere {
                 + 4.0 * f64::from(f32::from_bits(1))
         };
         // Both roots and their distances in range (a root beyond f32::MAX is no hit, documented).
-        if !(in_domain(r0.abs() * dl) && in_domain(r1.abs() * dl)) || r0.abs().max(r1.abs()) > MAX_T
-        {
+        let (lo, hi) = (r0.abs().min(r1.abs()), r0.abs().max(r1.abs()));
+        if !(in_domain(lo * dl) && in_domain(hi * dl)) || hi > MAX_T || lo < MIN_T {
             return;
         }
         let (t_min, t_max) = (f64::from(ray.t_min), f64::from(ray.t_max));
