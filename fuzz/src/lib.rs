@@ -2564,6 +2564,10 @@ pub mod quadric {
     use halfray_core::quadric::{Ellipsoid, Quadric};
     use halfray_core::ray::Ray;
 
+    /// Below this the discriminant's terms are close to the `f64` subnormal range (`2.2e-308`)
+    /// and round absolutely; residuals are not checked there.
+    pub const F64_NEAR_UNDERFLOW: f64 = 1e-290;
+
     /// Multiple of the `f64` unit roundoff in the residual bound. The roots come from the
     /// stable formulation in `f64` (module docs of `halfray_core::quadric`), whose first-order
     /// residual constant is below 20.
@@ -2674,7 +2678,10 @@ pub mod quadric {
         // |q| ≥ |qb|, which adds qa·δ² + |F'|·δ to the residual.
         let qb = d.dot(q.gradient(o) * 0.5);
         let delta = K * u * qc_abs / qb.abs();
-        if let Some((t0, t1)) = roots {
+        // The discriminant's scale qb² (or qa·qc) near the f64 subnormal range loses relative
+        // precision: roots there are checked for order only.
+        let underflows = (qb_abs * qb_abs).max(qa_abs * qc_abs) < F64_NEAR_UNDERFLOW;
+        if let Some((t0, t1)) = roots.filter(|_| !underflows) {
             assert!(t0 <= t1, "roots out of order\n{}", ctx());
             for t in [t0, t1] {
                 // f in the quadric's centred coordinates, y = (o − x_c) + t·d: a world point
