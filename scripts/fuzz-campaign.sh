@@ -16,14 +16,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 SECONDS_EACH=${FUZZ_SECONDS:-1200}
 JOBS=${JOBS:-2}
 
-if ! cargo +nightly --version >/dev/null 2>&1; then
-    rustup toolchain install nightly --profile minimal
-fi
-if ! cargo fuzz --version >/dev/null 2>&1; then
-    cargo install cargo-fuzz --locked
-fi
-cargo +nightly fuzz build
-if [ $# -gt 0 ]; then targets=("$@"); else mapfile -t targets < <(cargo +nightly fuzz list); fi
+source scripts/fuzz-tools.sh "$@"
 
 out=target/fuzz-campaign
 mkdir -p "$out/bin"

@@ -2256,6 +2256,22 @@ fn seeds_obj(s: &mut Vec<Seed>) {
     s.push(t("empty", ""));
 }
 
+/// The contract every curved-surface hit shares: `t` in the ray's interval, a unit normal
+/// (within `1e-5`: one `f32` normalisation).
+fn check_hit_basics(ray: &Ray, h: &halfray_core::hit::Hit, ctx: &dyn Fn() -> String) {
+    assert!(
+        ray.contains(h.t),
+        "t = {:e} outside the interval\n{}",
+        h.t,
+        ctx()
+    );
+    assert!(
+        (h.normal.length() - 1.0).abs() <= 1e-5,
+        "normal not unit\n{}",
+        ctx()
+    );
+}
+
 pub mod sphere {
     //! The `ray_sphere` target: the stable quadratic against an `f64` evaluation of the same
     //! `f32` inputs, and against the textbook (naive) form where both are well conditioned.
@@ -2414,18 +2430,8 @@ pub mod sphere {
         }
         // 3. Hit contract.
         if let Some(h) = hit {
-            assert!(
-                ray.contains(h.t),
-                "t = {:e} outside the interval\n{}",
-                h.t,
-                ctx()
-            );
+            super::check_hit_basics(ray, &h, &ctx);
             let n = h.normal.as_dvec3();
-            assert!(
-                (n.length() - 1.0).abs() <= 1e-5,
-                "normal not unit\n{}",
-                ctx()
-            );
             let p = h.point.as_dvec3();
             if domain && p.is_finite() {
                 let dist = ((p - cc).length() - rr).abs();
@@ -2704,18 +2710,7 @@ pub mod quadric {
             }
         }
         if let Some(h) = hit {
-            assert!(
-                ray.contains(h.t),
-                "t = {:e} outside the interval\n{}",
-                h.t,
-                ctx()
-            );
-            let n = h.normal.as_dvec3();
-            assert!(
-                (n.length() - 1.0).abs() <= 1e-5,
-                "normal not unit\n{}",
-                ctx()
-            );
+            super::check_hit_basics(ray, &h, &ctx);
             let p = h.point.as_dvec3();
             let e = h.point_error.as_dvec3().length();
             let fx = q.eval(p);
