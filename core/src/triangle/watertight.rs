@@ -111,6 +111,11 @@ pub struct WatertightF32;
 /// range). World units (sheared).
 const TINY: f64 = 4.0 * 1.401_298_464_324_817e-45;
 
+/// Relative bound below which the plane-form `t` is returned without evaluating the sheared
+/// form: `2⁻²⁶`, a quarter of the `f32` unit roundoff, so the final rounding to `f32` dominates
+/// whatever the other form could gain. Unitless.
+const PLANE_EXACT_ENOUGH: f64 = 1.0 / 67_108_864.0;
+
 /// `t` of a hit that passed the edge tests, by whichever of two forms has the smaller absolute
 /// rounding bound (see [`Watertight`]):
 ///
@@ -144,6 +149,9 @@ fn hit_t(
     let w = v[0].as_dvec3() - ray.origin.as_dvec3();
     let t_plane = w.dot(n) / dn;
     let err_plane = gamma_f64(8) * (w.abs().dot(nn) + t_plane.abs() * d.abs().dot(nn)) / dn.abs();
+    if err_plane <= PLANE_EXACT_ENOUGH * t_plane.abs() {
+        return Some(t_plane); // the common case: nothing can beat it once rounded to f32
+    }
 
     // Sheared form. Per vertex: the magnitudes that the projection x' = a_kx − s_x·a_kz rounds
     // against (|a_kx| ≤ |x'| + |s_x·a_kz|, and |a_kz| = |z'|·|d_kz| up to z′'s roundings), the
