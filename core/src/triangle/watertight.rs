@@ -129,7 +129,8 @@ const PLANE_EXACT_ENOUGH: f64 = 1.0 / 67_108_864.0;
 ///   absolute values (the rounding of the `f64` differences, the cross and dot products).
 ///
 /// `None` for a degenerate triangle or a ray in its plane (`n = 0` or `d·n = 0`).
-#[inline]
+// Only hits get here: kept out of line so the miss path (the edge tests) stays small.
+#[inline(never)]
 fn hit_t(
     ray: &Ray,
     shear: Vec3,
