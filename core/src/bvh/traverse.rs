@@ -4,7 +4,7 @@ use super::node::BvhNode;
 use super::primitive::TriangleMesh;
 use super::stats::TraversalStats;
 use super::{Bvh, CULL_REL_SLACK, TRAVERSAL_STACK_SIZE};
-use crate::aabb::{SlabRay, pad_far};
+use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
 
@@ -39,15 +39,23 @@ impl NodeRay {
         }
     }
 
-    /// Exactly [`crate::aabb::Aabb::intersect_slab`] (same operations in the same order, so the
-    /// same robust, conservative, NaN-absorbing result) on the node's raw corners, with the
-    /// near/far corner picked by index instead of by branch. `t_enter` and `t_exit` are never
+    /// [`crate::aabb::Aabb::intersect_slab`] on the node's raw corners, with the near/far
+    /// corner picked by index instead of by branch. The common path (`GENERAL = false`: no
+    /// overflowing reciprocal, `t_min ≥ 0`) pads far distances by the plain factor
+    /// [`SLAB_FAR_SCALE`]: a far distance is negative only when the exact one is (monotone
+    /// rounding), and then the box ends before `t_min ≥ 0` whatever the padding, so the
+    /// hit/miss answer and the entry distance are those of `intersect_slab`. `t_enter` and `t_exit` are never
     /// NaN (the ray was validated), so `a > b ? a : b` absorbs a NaN slab value exactly like
     /// `f32::max` does. Returns the entry distance on a hit.
     #[inline(always)]
-    pub(super) fn hit(&self, node: &BvhNode, t_min: f32, t_max: f32) -> Option<f32> {
-        if self.slab.divide {
-            return self.hit_by_division(node, t_min, t_max);
+    pub(super) fn hit<const GENERAL: bool>(
+        &self,
+        node: &BvhNode,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<f32> {
+        if GENERAL {
+            return self.hit_general(node, t_min, t_max);
         }
         let mut t_enter = t_min;
         let mut t_exit = t_max;
@@ -56,7 +64,7 @@ impl NodeRay {
             let lo = node.bounds[n][axis];
             let hi = node.bounds[1 - n][axis];
             let t_near = (lo - self.origin[axis]) * self.inv_dir[axis];
-            let t_far = pad_far((hi - self.origin[axis]) * self.inv_dir[axis]);
+            let t_far = (hi - self.origin[axis]) * self.inv_dir[axis] * SLAB_FAR_SCALE;
             t_enter = if t_near > t_enter { t_near } else { t_enter };
             t_exit = if t_far < t_exit { t_far } else { t_exit };
         }
@@ -65,10 +73,11 @@ impl NodeRay {
     }
 
     /// [`NodeRay::hit`] for rays with a subnormal direction component whose reciprocal
-    /// overflows (see [`crate::aabb`]): [`crate::aabb::Aabb::intersect_slab`] itself.
+    /// overflows, or with `t_min < 0` (a negative far distance must be padded towards `+∞`):
+    /// [`crate::aabb::Aabb::intersect_slab`] itself.
     #[cold]
     #[inline(never)]
-    fn hit_by_division(&self, node: &BvhNode, t_min: f32, t_max: f32) -> Option<f32> {
+    fn hit_general(&self, node: &BvhNode, t_min: f32, t_max: f32) -> Option<f32> {
         let b = crate::aabb::Aabb::new(node.bounds[0].into(), node.bounds[1].into());
         b.intersect_slab(&self.slab, t_min, t_max).map(|(t, _)| t)
     }
@@ -158,10 +167,27 @@ where
     fn traverse<H, const ANY: bool>(
         &self,
         ray: &Ray,
-        mut intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
+        intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
         let slab = SlabRay::new(ray)?;
+        // The general node test (division for subnormal direction components, outward
+        // padding of negative far distances) is needed only for rare rays: decided once per
+        // ray, so the common path's node test carries no branch for it.
+        if slab.divide || ray.t_min < 0.0 {
+            self.walk::<H, ANY, true>(ray, &slab, intersect, stats)
+        } else {
+            self.walk::<H, ANY, false>(ray, &slab, intersect, stats)
+        }
+    }
+
+    fn walk<H, const ANY: bool, const GENERAL: bool>(
+        &self,
+        ray: &Ray,
+        slab: &SlabRay,
+        mut intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, H)> {
         let nodes = self.nodes();
         let indices = self.indices();
         let root = nodes.first()?;
@@ -174,9 +200,12 @@ where
         }; TRAVERSAL_STACK_SIZE];
         let mut sp = 0usize;
 
-        let nray = NodeRay::new(&slab);
+        let nray = NodeRay::new(slab);
         local.nodes_visited += 1;
-        let mut node = if nray.hit(root, ray.t_min, cull_bound(ray.t_max)).is_some() {
+        let mut node = if nray
+            .hit::<GENERAL>(root, ray.t_min, cull_bound(ray.t_max))
+            .is_some()
+        {
             Some(root)
         } else {
             None
@@ -211,8 +240,8 @@ where
                 let bound = cull_bound(cur.t_max);
                 let left = nodes.get(start as usize);
                 let right = nodes.get(start as usize + 1);
-                let hit_l = left.and_then(|c| nray.hit(c, cur.t_min, bound));
-                let hit_r = right.and_then(|c| nray.hit(c, cur.t_min, bound));
+                let hit_l = left.and_then(|c| nray.hit::<GENERAL>(c, cur.t_min, bound));
+                let hit_r = right.and_then(|c| nray.hit::<GENERAL>(c, cur.t_min, bound));
                 local.nodes_visited += 2;
                 match (hit_l, hit_r) {
                     (Some(tl), Some(tr)) => {
