@@ -116,6 +116,11 @@ const TINY: f64 = 4.0 * 1.401_298_464_324_817e-45;
 /// whatever the other form could gain. Unitless.
 const PLANE_EXACT_ENOUGH: f64 = 1.0 / 67_108_864.0;
 
+/// How closely the two forms must agree for the fast path, relative to `|t| + max|zᵢ|`:
+/// `2⁻²⁰` (16 `f32` ulps), far above the rounding of either form in a well-conditioned
+/// case and far below any disagreement that signals a grazing ray. Unitless.
+const AGREE_REL: f64 = 1.0 / 1_048_576.0;
+
 /// `t` of a hit that passed the edge tests, by whichever of two forms has the smaller absolute
 /// rounding bound (see [`Watertight`]):
 ///
@@ -150,8 +155,30 @@ fn hit_t(
     let w = v[0].as_dvec3() - ray.origin.as_dvec3();
     let t_plane = w.dot(n) / dn;
     let err_plane = gamma_f64(8) * (w.abs().dot(nn) + t_plane.abs() * d.abs().dot(nn)) / dn.abs();
-    if err_plane <= PLANE_EXACT_ENOUGH * t_plane.abs() {
-        return Some(t_plane); // the common case: nothing can beat it once rounded to f32
+    let t_sheared =
+        (edges[0] * f64::from(z[0]) + edges[1] * f64::from(z[1]) + edges[2] * f64::from(z[2]))
+            / det;
+    let max_abs_z = f64::from(z[0].abs().max(z[1].abs()).max(z[2].abs()));
+    // The plane crossing must lie in the triangle's box (up to rounding). If it does not, the
+    // edge tests decided "inside" within the projection's rounding while the exact line
+    // crosses the plane elsewhere (a grazing ray; found by the `bvh` fuzz target): then the
+    // sheared `t`, consistent with those edge decisions (and with the neighbours', which keeps
+    // a closed mesh closed), is the one.
+    let p = ray.origin.as_dvec3() + d * t_plane;
+    let lo = v[0].min(v[1]).min(v[2]).as_dvec3();
+    let hi = v[0].max(v[1]).max(v[2]).as_dvec3();
+    let slack =
+        f64::from(gamma(8)) * (lo.abs().max(hi.abs()).max_element() + p.abs().max_element()) + TINY;
+    let in_box = p.cmpge(lo - slack).all() && p.cmple(hi + slack).all();
+    if !in_box {
+        return Some(t_sheared);
+    }
+    // The common case: both forms agree to well within f32 rounding, and the plane form's
+    // own bound is below it too; nothing can beat it once rounded to f32.
+    if err_plane <= PLANE_EXACT_ENOUGH * t_plane.abs()
+        && (t_plane - t_sheared).abs() <= AGREE_REL * (t_sheared.abs() + max_abs_z)
+    {
+        return Some(t_plane);
     }
 
     // Sheared form. Per vertex: the magnitudes that the projection x' = a_kx − s_x·a_kz rounds
@@ -189,9 +216,6 @@ fn hit_t(
         let zi = f64::from(z[i]).abs();
         num_err += edges[i].abs() * dz[i] + err * (zi + dz[i]);
     }
-    let t_sheared =
-        (edges[0] * f64::from(z[0]) + edges[1] * f64::from(z[1]) + edges[2] * f64::from(z[2]))
-            / det;
     let denom = det.abs() - sum_err;
     let first_order = if denom > 0.0 {
         (num_err + t_sheared.abs() * sum_err) / denom + gamma_f64(4) * t_sheared.abs()
@@ -205,7 +229,11 @@ fn hit_t(
     let span = f64::from(z[0].max(z[1]).max(z[2])) - min_z + 2.0 * max_dz;
     let err_sheared = span.min(first_order);
 
-    Some(if err_plane <= err_sheared {
+    // The plane form only refines the sheared one: it must lie within the sheared form's
+    // first-order bound (else the edge decisions were within rounding and the exact line
+    // crosses the plane away from the reported barycentrics), and be the tighter of the two.
+    let consistent = (t_plane - t_sheared).abs() <= first_order + err_plane;
+    Some(if consistent && err_plane <= err_sheared {
         t_plane
     } else {
         t_sheared
