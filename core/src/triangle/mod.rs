@@ -214,6 +214,12 @@ pub(crate) fn degenerate_or_coplanar(ray: &Ray, v: &[Vec3; 3]) -> bool {
 #[inline]
 pub(crate) fn normal_f64(v: &[Vec3; 3]) -> (glam::DVec3, glam::DVec3) {
     let p = [v[0].as_dvec3(), v[1].as_dvec3(), v[2].as_dvec3()];
+    // From v0 first; only when that cancels (a component well below its rounding scale
+    // times 2²⁰, or zero) is the base vertex chosen (the common case skips three lengths).
+    let (n, scale) = cross_with_scale(p[1] - p[0], p[2] - p[0]);
+    if n.abs().max_element() > NORMAL_CANCEL_REL * scale.max_element() {
+        return (n, scale);
+    }
     // Edge opposite vertex i: p[i+1] → p[i+2].
     let len2 = |i: usize| (p[(i + 2) % 3] - p[(i + 1) % 3]).length_squared();
     let (l0, l1, l2) = (len2(0), len2(1), len2(2));
@@ -225,7 +231,16 @@ pub(crate) fn normal_f64(v: &[Vec3; 3]) -> (glam::DVec3, glam::DVec3) {
         2
     };
     let (a, b, c) = (p[base], p[(base + 1) % 3], p[(base + 2) % 3]);
-    let (e1, e2) = (b - a, c - a);
+    cross_with_scale(b - a, c - a)
+}
+
+/// Relative size below which the `v0`-based normal is recomputed from the best base vertex:
+/// `2⁻²⁰` of its rounding scale (`|e1| × |e2|` with absolute values). Unitless.
+const NORMAL_CANCEL_REL: f64 = 1.0 / 1_048_576.0;
+
+/// `(e1 × e2, |e1| × |e2|)`, the second taken with absolute values.
+#[inline]
+fn cross_with_scale(e1: glam::DVec3, e2: glam::DVec3) -> (glam::DVec3, glam::DVec3) {
     let (x, y) = (e1.abs(), e2.abs());
     let scale = glam::DVec3::new(
         x.y * y.z + x.z * y.y,
