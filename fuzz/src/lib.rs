@@ -1110,6 +1110,21 @@ pub mod bvh {
         (0..3).any(|i| d[i] != 0.0 && d[i] / m < f32::MIN_POSITIVE)
     }
 
+    /// `true` when every in-tree vertex lies within [`super::DOMAIN_MAX`] (2⁶⁰) of the origin
+    /// in every coordinate, the range the watertight test documents (triangles up to ~1e20):
+    /// beyond it the projected coordinates' products leave the range where the `f64` edge
+    /// functions and the `t` forms keep their bounds.
+    pub fn within_domain(mesh: &TriangleMesh<'_>, ray: &Ray, in_tree: &[bool]) -> bool {
+        (0..in_tree.len())
+            .filter(|&i| in_tree[i])
+            .filter_map(|i| mesh.triangle(i))
+            .all(|v| {
+                v.iter().all(|p| {
+                    (p.as_dvec3() - ray.origin.as_dvec3()).abs().max_element() <= super::DOMAIN_MAX
+                })
+            })
+    }
+
     /// [`super::projection_underflows`] for any triangle in the tree.
     pub fn projection_underflows(mesh: &TriangleMesh<'_>, ray: &Ray, in_tree: &[bool]) -> bool {
         (0..in_tree.len())
@@ -1328,6 +1343,7 @@ pub mod bvh {
         let want = brute(mesh, isect, ray, in_tree);
         let got = bvh.closest_hit_triangles(mesh, isect, ray, None);
         if !exact
+            || !within_domain(mesh, ray, in_tree)
             || shear_underflows(ray)
             || projection_underflows(mesh, ray, in_tree)
             || grazes_a_box(mesh, ray, in_tree)
