@@ -48,7 +48,7 @@ done
 wait
 
 {
-    echo "| target | seconds | executions | coverage (edges) | features | corpus | crashes / timeouts / OOMs |"
+    echo "| target | seconds | executions | coverage (edges) | features | corpus | OOMs / timeouts / crashes |"
     echo "|---|---|---|---|---|---|---|"
     for t in "${targets[@]}"; do
         # Fork mode's status lines: `#EXECS: cov: C ft: F corp: N exec/s: E oom/timeout/crash: a/b/c time: T ...`
