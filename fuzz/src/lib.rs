@@ -1100,16 +1100,6 @@ pub mod bvh {
         check(&decode(data));
     }
 
-    /// `true` when a non-zero direction component is more than `2^126` times smaller than the
-    /// dominant one, so that the watertight test's shear `d_i/d_kz` underflows (the `Watertight`
-    /// docs' domain limit): the intersector then sees a slightly different ray than the box
-    /// test, and a vertex or edge hit can differ between BVH and brute force.
-    pub fn shear_underflows(ray: &Ray) -> bool {
-        let d = ray.direction.abs();
-        let m = d.max_element();
-        (0..3).any(|i| d[i] != 0.0 && d[i] / m < f32::MIN_POSITIVE)
-    }
-
     /// `true` when every in-tree vertex lies within [`super::DOMAIN_MAX`] (2⁶⁰) of the origin
     /// in every coordinate, the range the watertight test documents (triangles up to ~1e20):
     /// beyond it the projected coordinates' products leave the range where the `f64` edge
@@ -1344,7 +1334,6 @@ pub mod bvh {
         let got = bvh.closest_hit_triangles(mesh, isect, ray, None);
         if !exact
             || !within_domain(mesh, ray, in_tree)
-            || shear_underflows(ray)
             || projection_underflows(mesh, ray, in_tree)
             || grazes_a_box(mesh, ray, in_tree)
         {

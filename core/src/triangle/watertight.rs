@@ -78,21 +78,21 @@ impl WatertightRay {
 /// Edges and vertices are **closed**: a point exactly on an edge is inside. Mixed signs or
 /// `det = 0` (ray in the triangle's plane, or a degenerate triangle) give no hit.
 ///
-/// `t` comes from whichever of two forms has the smaller rounding bound: the sheared
-/// `Σ eᵢzᵢ / det` (accurate relative to the vertices' depth span along the ray, but its `f32`
-/// depths can swamp `t` when that span is huge against `t`: an origin near the plane, seen
-/// along a dominant axis the triangle extends in), or the plane equation
-/// `((v0 − o)·n)/(d·n)` in `f64` (accurate unless `|v0 − o|` dwarfs the distance to the plane
-/// or the `f64` differences of the vertices round). This is the
-/// default intersector;
+/// `t` is the sheared `Σ eᵢzᵢ / det` (consistent with the edge decisions, accurate relative to
+/// the vertices' depth span along the ray) unless the plane equation `((v0 − o)·n)/(d·n)` in
+/// `f64` is the tighter of the two and agrees with it: its crossing lies in the triangle's box
+/// and within the sheared form's bound. That fixes the case where the `f32` depths swamp `t`
+/// (an origin near the plane, seen along a dominant axis the triangle extends in) without
+/// trusting the plane form for grazing rays whose edge decisions were within rounding.
 ///
-/// Domain of the exact edge signs: the sheared coordinates carry only relative `f32` rounding
-/// while every quantity of the projection (`p − o`, the shear `d_i/d_kz`, its products and the
-/// sheared `x'`, `y'`) is a normal number or zero. A direction component more than `2^126`
-/// times smaller than the dominant one, or a configuration at the subnormal scale (`≲ 1e-38`),
-/// rounds absolutely instead: the test then sees a slightly displaced ray (still the same ray
-/// for every triangle, so still watertight, but a BVH's exact box test may cull a vertex or
-/// edge hit that a brute-force loop reports). it handles triangles from `1e-20` to `1e20` (f64 has the range).
+/// This is the default intersector; it handles triangles from `1e-20` to `1e20` (`f64` has the
+/// range). Domain of the exact edge signs: the sheared coordinates carry only relative `f32`
+/// rounding while every quantity of the projection (`p − o`, the shear `d_i/d_kz`, its
+/// products and the sheared `x'`, `y'`) is a normal number or zero. A direction component more
+/// than `2^126` times smaller than the dominant one, or a configuration at the subnormal scale
+/// (`≲ 1e-38`), rounds absolutely instead: the test then sees a slightly displaced ray (still
+/// the same ray for every triangle, so still watertight, but a BVH's exact box test may cull a
+/// vertex or edge hit that a brute-force loop reports).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Watertight;
 
@@ -121,8 +121,9 @@ const PLANE_EXACT_ENOUGH: f64 = 1.0 / 67_108_864.0;
 /// case and far below any disagreement that signals a grazing ray. Unitless.
 const AGREE_REL: f64 = 1.0 / 1_048_576.0;
 
-/// `t` of a hit that passed the edge tests, by whichever of two forms has the smaller absolute
-/// rounding bound (see [`Watertight`]):
+/// `t` of a hit that passed the edge tests (see [`Watertight`]): the plane form when its
+/// crossing lies in the triangle's box, it agrees with the sheared form within their bounds and
+/// its own bound is the smaller; the sheared form otherwise. The two forms and their bounds:
 ///
 /// * **sheared**: `Σ eᵢzᵢ / det`, a convex combination of the vertices' sheared depths, with
 ///   the smaller of their span and a first-order bound in the manner of pbrt-v3's `δt`
