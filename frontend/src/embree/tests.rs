@@ -70,8 +70,15 @@ fn embree_device_is_4_4_with_the_assumed_layout() {
     assert!(SUPPORTED_VERSIONS.contains(&info.version), "{info:?}");
     assert!(info.version_string().starts_with("4.4."), "{info:?}");
     assert!(info.ray_mask_supported, "{info:?}");
-    // The probe saw exactly one word written past the 4.2 layout: instPrimID[0] at byte 80.
-    assert_eq!(info.probe_words_past_42_layout, vec![20], "{info:?}");
+    // What the wrapper relies on: the library writes nothing at or past byte 96 (the 4.4
+    // `RTCRayHit` it allocates). Which words past the 4.2 layout it writes (instPrimID[0] at
+    // byte 80 on the machines measured) is reported, not asserted.
+    assert!(
+        info.probe_words_past_42_layout
+            .iter()
+            .all(|&w| (20..RAYHIT_BYTES / 4).contains(&w)),
+        "{info:?}"
+    );
     assert_eq!(RAYHIT_BYTES, 96);
     assert_eq!(
         std::mem::size_of::<sys::RTCRayHit>(),
@@ -147,11 +154,21 @@ fn embree_sentinel_no_write_past_the_44_rayhit() {
             changed.iter().all(|&w| w == 8 || (12..=20).contains(&w)),
             "{changed:?}"
         );
+        // instPrimID[0] (20) is written (as invalid: no instance) by the 4.4 library on the
+        // machines measured; the wrapper resets it itself, so that is reported, not relied on.
         assert!(
-            changed.contains(&20),
-            "the 4.4 library writes instPrimID: {changed:?}"
+            [SENTINEL, INVALID_ID].contains(&hit.after[20]),
+            "instPrimID[0]: {:#x}",
+            hit.after[20]
         );
-        assert_eq!(hit.after[20], INVALID_ID);
+        eprintln!(
+            "robust={robust}: instPrimID[0] {}",
+            if changed.contains(&20) {
+                "written"
+            } else {
+                "untouched"
+            }
+        );
         assert!(
             hit.after[21..].iter().all(|&w| w == SENTINEL),
             "write past 84 bytes"
@@ -184,7 +201,7 @@ fn embree_sentinel_no_write_past_the_44_rayhit() {
                 ptr::null_mut(),
             )
         };
-        assert_eq!(slot.rayhit.hit.inst_prim_id, [INVALID_ID]);
+        assert!([[SENTINEL], [INVALID_ID]].contains(&slot.rayhit.hit.inst_prim_id));
         assert_eq!(slot.rayhit.hit.prim_id, 0);
         assert!(slot.guard_intact() && slot.guard.len() == GUARD_WORDS);
     }
@@ -213,20 +230,32 @@ fn embree_cube_known_ray_robust_and_default() {
             close(enter.u, 0.625, 1e-6) && close(enter.v, 0.125, 1e-6),
             "{enter:?}"
         );
-        // tnear = t of the entry hit: exclusive in the default mode, inclusive in robust mode
-        // (robustness.md, E3), measured here.
+        // tnear = t of the entry hit: whether the entry face is reported again is not documented
+        // and differs between Embree's run-time kernels (the default mode excluded it on an
+        // AVX-512 Xeon and kept it on an AVX2 EPYC). Either answer is one of the two faces the
+        // ray meets from there on: the entry face at exactly that t, or the exit face.
         let again = scene.intersect(o, dir, enter.t, f32::INFINITY).unwrap();
-        assert_eq!(
-            again.prim_id,
-            if robust { 11 } else { 8 },
-            "robust={robust}: {again:?}"
+        match again.prim_id {
+            11 => assert_eq!(again.t, enter.t, "robust={robust}: {again:?}"),
+            8 => assert!(close(again.t, 6.0, 6.0 * 8.0 * f32::EPSILON), "{again:?}"),
+            other => panic!("robust={robust}: face {other} is not on the ray: {again:?}"),
+        }
+        eprintln!(
+            "robust={robust}: tnear = entry t {} the entry face",
+            if again.prim_id == 11 {
+                "keeps"
+            } else {
+                "excludes"
+            }
         );
         let exit = scene
             .intersect(o, dir, enter.t.next_up(), f32::INFINITY)
             .unwrap();
         assert_eq!(exit.prim_id, 8, "robust={robust}: {exit:?}");
         assert!(close(exit.t, 6.0, 6.0 * 8.0 * f32::EPSILON), "{exit:?}");
-        assert!(scene.occluded(o, dir, 0.0, 4.0));
+        // tfar a few ulps either side of the entry t: whether tfar = t itself counts is,
+        // like tnear, not something the tests rely on.
+        assert!(scene.occluded(o, dir, 0.0, 4.0 * (1.0 + 8.0 * f32::EPSILON)));
         assert!(!scene.occluded(o, dir, 0.0, 3.99));
         // From inside: the exit face only.
         let inside = scene
