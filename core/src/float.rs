@@ -78,6 +78,27 @@ pub fn diff_of_products_exact_sign(a: f32, b: f32, c: f32, d: f32) -> f64 {
     (a as f64) * (b as f64) - (c as f64) * (d as f64)
 }
 
+/// `a·b − c·d` in plain `f32` (two products, one difference; never fused): a **filter** for
+/// [`diff_of_products_exact_sign`]. Rounding is monotone, so `a·b > c·d` gives
+/// `fl(a·b) ≥ fl(c·d)` and a non-negative difference (and symmetrically): whenever the result
+/// is neither zero nor NaN, its sign is the exact sign of `a·b − c·d`, including when one
+/// product overflows to `±∞`. A zero (the exact value is zero, or the products underflow or
+/// round together) or a NaN (both products overflow alike, or a non-finite input) decides
+/// nothing: the caller falls back to the exact predicate. No tolerance is involved.
+#[inline(always)]
+#[must_use]
+pub fn diff_of_products_sign_filter(a: f32, b: f32, c: f32, d: f32) -> f32 {
+    a * b - c * d
+}
+
+/// `true` when `e` (a result of [`diff_of_products_sign_filter`]) has a certain sign: neither
+/// zero nor NaN.
+#[inline(always)]
+#[must_use]
+pub fn sign_is_certain(e: f32) -> bool {
+    e > 0.0 || e < 0.0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -93,6 +114,42 @@ mod tests {
             );
         }
         assert_eq!(F32_UNIT_ROUNDOFF, f32::EPSILON / 2.0);
+    }
+
+    /// The filter never contradicts the exact predicate: on products that cancel to the last
+    /// bit, overflow and underflow, it is either undecided or agrees (oracle: `f64` products,
+    /// exact for `f32` inputs, and integer arithmetic for the first case).
+    #[test]
+    fn sign_filter_is_exact_or_undecided() {
+        let a = 1.0 + f32::EPSILON;
+        let b = 1.0 + 2.0 * f32::EPSILON;
+        // a² − b = 2⁻⁴⁶ exactly ((2²³+1)² − (2⁴⁶ + 2²⁴) = 1 in units of 2⁻⁴⁶): f32 loses it.
+        assert!(!sign_is_certain(diff_of_products_sign_filter(a, a, b, 1.0)));
+        let cases = [
+            (a, a, b, 1.0),
+            (3.0e38, 10.0, 1.0, 1.0),
+            (3.0e38, 10.0, 3.0e38, 9.0),
+            (1.0e-30, 1.0e-20, 1.0e-25, 1.0e-25),
+            (1.0e-30, 1.0e-20, 2.0e-30, 1.0e-20),
+            (-2.5, 4.0, 1.0, -10.0),
+            (0.1, 0.3, 0.3, 0.1),
+            (f32::NAN, 1.0, 0.0, 0.0),
+            (2.0, 3.0, 1.0, 1.0),
+            (1.0, 1.0, 2.0, 3.0),
+            (1.0e20, 1.0e20, 1.0, 1.0),
+            (0.1, 0.3, 0.3, 0.1000001),
+        ];
+        let mut decided = 0;
+        for (a, b, c, d) in cases {
+            let f = diff_of_products_sign_filter(a, b, c, d);
+            let exact = f64::from(a) * f64::from(b) - f64::from(c) * f64::from(d);
+            if sign_is_certain(f) {
+                decided += 1;
+                assert_eq!(f > 0.0, exact > 0.0, "{a} {b} {c} {d}: {f} vs {exact}");
+                assert!(exact != 0.0);
+            }
+        }
+        assert!(decided >= 4, "the filter decides the clear cases: {decided}");
     }
 
     #[test]

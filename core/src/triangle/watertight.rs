@@ -1,7 +1,9 @@
 //! Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection" (JCGT 2013).
 
 use super::{TriangleHit, TriangleIntersector};
-use crate::float::{diff_of_products_exact_sign, gamma, gamma_f64};
+use crate::float::{
+    diff_of_products_exact_sign, diff_of_products_sign_filter, gamma, gamma_f64, sign_is_certain,
+};
 use crate::ray::Ray;
 use glam::{DVec3, Vec3};
 
@@ -304,6 +306,19 @@ impl TriangleIntersector for Watertight {
         v: &[Vec3; 3],
     ) -> Option<TriangleHit> {
         let ([ax, bx, cx], [ay, by, cy], z) = pre.project_triangle(ray.origin, v);
+        // Most triangles are missed with certain signs: decide those in f32 (exact whenever
+        // the filter is certain) and compute the exact f64 edges only for the rest.
+        let f = [
+            diff_of_products_sign_filter(cx, by, cy, bx),
+            diff_of_products_sign_filter(ax, cy, ay, cx),
+            diff_of_products_sign_filter(bx, ay, by, ax),
+        ];
+        if f.iter().all(|&e| sign_is_certain(e))
+            && f.iter().any(|&e| e < 0.0)
+            && f.iter().any(|&e| e > 0.0)
+        {
+            return None;
+        }
         let edges = [
             diff_of_products_exact_sign(cx, by, cy, bx),
             diff_of_products_exact_sign(ax, cy, ay, cx),
