@@ -149,7 +149,10 @@ mod tests {
                 assert!(exact != 0.0);
             }
         }
-        assert!(decided >= 4, "the filter decides the clear cases: {decided}");
+        assert!(
+            decided >= 4,
+            "the filter decides the clear cases: {decided}"
+        );
     }
 
     #[test]

@@ -9,6 +9,10 @@ use super::{
 use crate::aabb::Aabb;
 use glam::Vec3;
 
+/// Depth from which nodes are split by count rather than by SAH: `MAX_DEPTH − 32`, so that the
+/// remaining 32 levels can halve any node of up to `2³¹` primitives down to one.
+const MEDIAN_DEPTH: u32 = (MAX_DEPTH - 32) as u32;
+
 /// Options of [`super::Bvh::build`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BuildOptions {
@@ -238,13 +242,17 @@ fn split_node<S: PrimitiveSource + ?Sized>(
         parent_bounds.surface_area(),
     );
     let leaf_cost = INTERSECTION_COST * count as f32 * parent_bounds.surface_area();
+    // Deep in the tree, split by count: from MEDIAN_DEPTH on every split halves the node, so
+    // no node reaches MAX_DEPTH with more than `max_leaf` primitives (N < 2³¹ halves to one in
+    // 31 levels) and leaves never exceed the requested size.
+    let split = split.filter(|_| task.depth < MEDIAN_DEPTH);
     let (mid, left_b, right_b, left_c, right_c) = match split {
         Some(s) if s.cost < leaf_cost || count > max_leaf => {
             let (mid, lc, rc) = partition(source, &mut indices[range.clone()], &s);
             (task.start + mid, s.left, s.right, lc, rc)
         }
         _ if count > max_leaf => {
-            // All centroids coincide: split by count, in index order.
+            // All centroids coincide, or the node is deep: split by count, in index order.
             let mid = count / 2;
             let (l, r) = indices[range].split_at(mid as usize);
             let (lb, lc) = range_bounds(source, l);

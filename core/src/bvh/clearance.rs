@@ -61,23 +61,35 @@ where
         out: &mut [f32],
         mut cast: impl FnMut(&Self, &Ray) -> Option<f32>,
     ) -> Result<f32, BvhError> {
-        for len in [normals.len(), out.len()] {
-            if len != points.len() {
-                return Err(BvhError::LengthMismatch {
-                    expected: points.len(),
-                    found: len,
-                });
-            }
-        }
-        let mut min = f32::INFINITY;
-        for ((&p, &n), o) in points.iter().zip(normals).zip(out.iter_mut()) {
-            let dist = match cast(self, &Ray::new(p, n)) {
-                Some(t) => t * sqrt(n.length_squared()),
-                None => f32::INFINITY,
-            };
-            *o = dist;
-            min = min.min(dist);
-        }
-        Ok(min)
+        clearance_loop(points, normals, out, |ray| cast(self, ray))
     }
+}
+
+/// The clearance loop shared by the binary and the wide tree: `cast` gives the hit `t` of the
+/// ray `points[i] + t·normals[i]`; writes `t·|normals[i]|` (or `+∞`) into `out[i]` and returns
+/// the minimum. Errors (nothing written): [`BvhError::LengthMismatch`].
+pub(super) fn clearance_loop(
+    points: &[Vec3],
+    normals: &[Vec3],
+    out: &mut [f32],
+    mut cast: impl FnMut(&Ray) -> Option<f32>,
+) -> Result<f32, BvhError> {
+    for len in [normals.len(), out.len()] {
+        if len != points.len() {
+            return Err(BvhError::LengthMismatch {
+                expected: points.len(),
+                found: len,
+            });
+        }
+    }
+    let mut min = f32::INFINITY;
+    for ((&p, &n), o) in points.iter().zip(normals).zip(out.iter_mut()) {
+        let dist = match cast(&Ray::new(p, n)) {
+            Some(t) => t * sqrt(n.length_squared()),
+            None => f32::INFINITY,
+        };
+        *o = dist;
+        min = min.min(dist);
+    }
+    Ok(min)
 }

@@ -38,6 +38,26 @@ pub enum BvhError {
         /// Primitive count of the source passed now.
         found: usize,
     },
+    /// The triangle storage of a wide BVH holds fewer entries than the tree has triangles.
+    TriangleStorageTooSmall {
+        /// Triangle records required.
+        needed: usize,
+        /// Triangle records available.
+        available: usize,
+    },
+    /// A wide BVH was asked for more triangles than its leaf references can address
+    /// ([`super::wide::MAX_TRIANGLES`]).
+    TooManyTriangles {
+        /// Triangles in the tree.
+        count: usize,
+    },
+    /// A leaf of the binary tree holds more primitives than a wide leaf can
+    /// ([`super::wide::MAX_LEAF_TRIANGLES`]): build the binary tree with
+    /// [`super::BuildOptions::max_leaf_size`] at most that.
+    LeafTooLarge {
+        /// Primitives in the leaf.
+        count: usize,
+    },
     /// Slices that must have the same length do not (clearance: points, normals, output).
     LengthMismatch {
         /// Length of the first slice (points).
@@ -71,6 +91,20 @@ impl fmt::Display for BvhError {
             Self::SourceLengthMismatch { expected, found } => write!(
                 f,
                 "refit source has {found} primitives, the BVH was built over {expected}"
+            ),
+            Self::TriangleStorageTooSmall { needed, available } => write!(
+                f,
+                "wide BVH triangle storage too small: {needed} needed, {available} available"
+            ),
+            Self::TooManyTriangles { count } => write!(
+                f,
+                "too many triangles for a wide BVH: {count} (max {})",
+                super::wide::MAX_TRIANGLES
+            ),
+            Self::LeafTooLarge { count } => write!(
+                f,
+                "a BVH leaf holds {count} primitives, a wide BVH leaf at most {}",
+                super::wide::MAX_LEAF_TRIANGLES
             ),
             Self::LengthMismatch { expected, found } => {
                 write!(

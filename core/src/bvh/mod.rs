@@ -28,8 +28,9 @@
 //! is taken if it beats the leaf cost `INTERSECTION_COST · N` (or the node holds more than
 //! [`BuildOptions::max_leaf_size`] primitives). When every centroid coincides (no axis can be
 //! binned) a node with too many primitives is split by **count** (first half / second half of
-//! its index range). Nodes at depth [`MAX_DEPTH`] become leaves whatever their size, which is
-//! what bounds the traversal stack: see below. Degenerate inputs — 10⁵ coincident triangles,
+//! its index range); so is every node at depth `MAX_DEPTH − 32` or more, which halves any node
+//! to at most `max_leaf_size` primitives before depth [`MAX_DEPTH`] (`N < 2³¹`). Nodes at
+//! depth `MAX_DEPTH` are leaves, which is what bounds the traversal stack: see below. Degenerate inputs — 10⁵ coincident triangles,
 //! zero-area triangles, points — build and traverse correctly.
 //!
 //! Primitives whose bounds are not finite (NaN or infinite vertices, out-of-range vertex
@@ -74,8 +75,9 @@ mod node;
 mod primitive;
 mod query;
 mod refit;
-mod stats;
+pub(crate) mod stats;
 mod traverse;
+pub mod wide;
 
 #[cfg(test)]
 mod tests;
@@ -122,6 +124,16 @@ pub const TRAVERSAL_STACK_SIZE: usize = MAX_DEPTH;
 /// ulps (`64·2⁻²³`, [`crate::tolerance::T_REL_TOLERANCE_WELL_CONDITIONED`]) covers both; it
 /// costs a handful of extra box tests per ray. Unitless.
 pub const CULL_REL_SLACK: f32 = crate::tolerance::T_REL_TOLERANCE_WELL_CONDITIONED;
+
+/// `t` padded by [`CULL_REL_SLACK`] for box culling (infinities are kept as they are).
+#[inline(always)]
+pub(crate) fn cull_bound(t: f32) -> f32 {
+    if t.is_finite() {
+        t + t.abs() * CULL_REL_SLACK
+    } else {
+        t
+    }
+}
 
 /// Nodes to reserve for `prim_count` primitives: `2·N − 1` (a binary tree whose every leaf
 /// holds at least one primitive), `0` for no primitives. Saturates instead of overflowing.

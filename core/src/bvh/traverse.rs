@@ -3,20 +3,10 @@
 use super::node::BvhNode;
 use super::primitive::TriangleMesh;
 use super::stats::TraversalStats;
-use super::{Bvh, CULL_REL_SLACK, TRAVERSAL_STACK_SIZE};
+use super::{Bvh, TRAVERSAL_STACK_SIZE, cull_bound};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
-
-/// `t` padded by [`CULL_REL_SLACK`] for box culling (infinities are kept as they are).
-#[inline]
-fn cull_bound(t: f32) -> f32 {
-    if t.is_finite() {
-        t + t.abs() * CULL_REL_SLACK
-    } else {
-        t
-    }
-}
 
 /// The ray as the node test wants it: origin, reciprocal direction and, per axis, which of
 /// the node's `[min, max]` corners is the near one (the direction's sign bit).

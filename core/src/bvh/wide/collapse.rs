@@ -1,0 +1,226 @@
+//! Collapsing a binary tree into a wide one (see the module docs of [`super`]).
+
+use super::node::{ChildRef, LeafTriangle, WideNode};
+use super::{MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh, stack_size};
+use crate::bvh::{Bvh, BvhError, BvhNode, TriangleMesh};
+
+/// The binary nodes that become the children of the wide node made from binary node `b`: start
+/// with `b`'s two children and, while fewer than `W`, replace the inner one with the largest
+/// surface area (ties: the first) by its two children. A leaf `b` gives itself, alone.
+fn child_list<const W: usize>(nodes: &[BvhNode], b: u32) -> ([u32; W], usize) {
+    let mut list = [0u32; W];
+    let Some((l, r)) = nodes.get(b as usize).and_then(BvhNode::children) else {
+        list[0] = b;
+        return (list, 1);
+    };
+    list[0] = l;
+    list[1] = r;
+    let mut len = 2;
+    while len < W {
+        let mut best: Option<(usize, f32)> = None;
+        for (i, &c) in list[..len].iter().enumerate() {
+            if let Some(node) = nodes.get(c as usize).filter(|n| !n.is_leaf()) {
+                let area = node.bounds().surface_area();
+                if best.is_none_or(|(_, a)| area > a) {
+                    best = Some((i, area));
+                }
+            }
+        }
+        let Some((i, _)) = best else { break };
+        let Some((cl, cr)) = nodes.get(list[i] as usize).and_then(BvhNode::children) else {
+            break;
+        };
+        list[i] = cl;
+        list[len] = cr;
+        len += 1;
+    }
+    (list, len)
+}
+
+/// Pending wide nodes of the depth-first walk: `(binary node, wide node)`. At most `W − 1`
+/// per level are pending besides the one being expanded, over at most `MAX_DEPTH` levels.
+struct Pending<const W: usize> {
+    items: [(u32, u32); 8 * crate::bvh::MAX_DEPTH + 1],
+    len: usize,
+}
+
+impl<const W: usize> Pending<W> {
+    fn new() -> Self {
+        Self {
+            items: [(0, 0); 8 * crate::bvh::MAX_DEPTH + 1],
+            len: 0,
+        }
+    }
+    fn push(&mut self, item: (u32, u32)) -> bool {
+        match self.items.get_mut(self.len) {
+            Some(slot) => {
+                *slot = item;
+                self.len += 1;
+                true
+            }
+            None => false,
+        }
+    }
+    fn pop(&mut self) -> Option<(u32, u32)> {
+        self.len = self.len.checked_sub(1)?;
+        Some(self.items[self.len])
+    }
+}
+
+/// Walks the collapse without writing: the wide node count, or the first reason it cannot be
+/// built (a leaf too large, a broken binary tree).
+fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<usize, BvhError> {
+    if nodes.is_empty() {
+        return Ok(0);
+    }
+    const { assert!(W >= 2 && W <= 8) };
+    let _ = stack_size(W);
+    let mut pending = Pending::<W>::new();
+    let mut count = 1usize;
+    if !pending.push((0, 0)) {
+        return Err(BvhError::LeafTooLarge { count: 0 });
+    }
+    while let Some((b, _)) = pending.pop() {
+        let (list, len) = child_list::<W>(nodes, b);
+        for &c in &list[..len] {
+            let node = nodes
+                .get(c as usize)
+                .ok_or(BvhError::LeafTooLarge { count: 0 })?;
+            if let Some(range) = node.primitive_range() {
+                if range.len() > MAX_LEAF_TRIANGLES {
+                    return Err(BvhError::LeafTooLarge { count: range.len() });
+                }
+            } else if c != b {
+                count += 1;
+                if !pending.push((c, 0)) {
+                    return Err(BvhError::LeafTooLarge { count: 0 });
+                }
+            }
+        }
+    }
+    Ok(count)
+}
+
+impl<const W: usize, N, T> WideBvh<W, N, T>
+where
+    N: AsRef<[WideNode<W>]> + AsMut<[WideNode<W>]>,
+    T: AsRef<[LeafTriangle]> + AsMut<[LeafTriangle]>,
+{
+    /// Exact number of wide nodes [`WideBvh::from_binary`] needs for `binary` (0 for an empty
+    /// tree). Errors as `from_binary` for a leaf of more than [`MAX_LEAF_TRIANGLES`].
+    pub fn node_count_for<BN, BI>(binary: &Bvh<BN, BI>) -> Result<usize, BvhError>
+    where
+        BN: AsRef<[BvhNode]>,
+        BI: AsRef<[u32]>,
+    {
+        plan::<W>(binary.nodes())
+    }
+
+    /// Collapses `binary`, built over `mesh`, into `nodes` and `triangles` (see the module
+    /// docs).
+    ///
+    /// Errors, all returned before any storage is written:
+    /// [`BvhError::SourceLengthMismatch`] (`mesh` has another triangle count than `binary`'s
+    /// source), [`BvhError::TooManyTriangles`], [`BvhError::LeafTooLarge`],
+    /// [`BvhError::NodeStorageTooSmall`] (fewer than [`WideBvh::node_count_for`] nodes),
+    /// [`BvhError::TriangleStorageTooSmall`] (fewer records than the tree has triangles),
+    /// [`BvhError::NonFinitePrimitive`] (a triangle of the tree no longer has finite vertices).
+    pub fn from_binary<BN, BI>(
+        binary: &Bvh<BN, BI>,
+        mesh: &TriangleMesh<'_>,
+        mut nodes: N,
+        mut triangles: T,
+    ) -> Result<Self, BvhError>
+    where
+        BN: AsRef<[BvhNode]>,
+        BI: AsRef<[u32]>,
+    {
+        if mesh.len() != binary.source_len() {
+            return Err(BvhError::SourceLengthMismatch {
+                expected: binary.source_len(),
+                found: mesh.len(),
+            });
+        }
+        let indices = binary.indices();
+        if indices.len() > MAX_TRIANGLES {
+            return Err(BvhError::TooManyTriangles {
+                count: indices.len(),
+            });
+        }
+        let bnodes = binary.nodes();
+        let needed = plan::<W>(bnodes)?;
+        if nodes.as_ref().len() < needed {
+            return Err(BvhError::NodeStorageTooSmall {
+                needed,
+                available: nodes.as_ref().len(),
+            });
+        }
+        if triangles.as_ref().len() < indices.len() {
+            return Err(BvhError::TriangleStorageTooSmall {
+                needed: indices.len(),
+                available: triangles.as_ref().len(),
+            });
+        }
+        for &p in indices {
+            let ok = mesh
+                .triangle(p as usize)
+                .is_some_and(|v| v.iter().all(|x| x.is_finite()));
+            if !ok {
+                return Err(BvhError::NonFinitePrimitive { index: p as usize });
+            }
+        }
+
+        // Triangles in the binary index order, so a binary leaf's run is the wide leaf's run.
+        let out = triangles.as_mut();
+        for (slot, &p) in out.iter_mut().zip(indices) {
+            if let Some(v) = mesh.triangle(p as usize) {
+                *slot = LeafTriangle {
+                    v: [v[0].to_array(), v[1].to_array(), v[2].to_array()],
+                    prim: p,
+                };
+            }
+        }
+
+        let wide = nodes.as_mut();
+        let mut next = 0u32;
+        if needed > 0 {
+            wide[0] = WideNode::EMPTY;
+            next = 1;
+            let mut pending = Pending::<W>::new();
+            pending.push((0, 0));
+            while let Some((b, slot)) = pending.pop() {
+                let (list, len) = child_list::<W>(bnodes, b);
+                let mut node = WideNode::<W>::EMPTY;
+                for (i, &c) in list[..len].iter().enumerate() {
+                    let Some(bn) = bnodes.get(c as usize) else {
+                        continue;
+                    };
+                    let reference = if let Some(range) = bn.primitive_range() {
+                        // Checked by `plan`: count ≤ MAX_LEAF_TRIANGLES, start < MAX_TRIANGLES.
+                        ChildRef::leaf(range.start as u32, range.len() as u32)
+                            .unwrap_or(ChildRef::EMPTY)
+                    } else {
+                        let child = next;
+                        next += 1;
+                        if let Some(n) = wide.get_mut(child as usize) {
+                            *n = WideNode::EMPTY;
+                        }
+                        pending.push((c, child));
+                        child
+                    };
+                    node.set_child(i, &bn.bounds(), reference);
+                }
+                if let Some(n) = wide.get_mut(slot as usize) {
+                    *n = node;
+                }
+            }
+        }
+        Ok(Self {
+            nodes,
+            triangles,
+            node_count: next,
+            triangle_count: indices.len() as u32,
+            source_len: mesh.len(),
+        })
+    }
+}

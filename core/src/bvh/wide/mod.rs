@@ -1,0 +1,222 @@
+//! A **wide** BVH over a triangle mesh: `W` children per node (4 or 8; [`Bvh8`], [`Bvh4`])
+//! whose boxes are stored side by side so that one node test covers all of them, and the
+//! triangles copied into leaf order. Built by collapsing a binary [`Bvh`](super::Bvh), in
+//! **caller storage**, traversed with a **fixed-size stack**; no allocation, no recursion, no
+//! panics.
+//!
+//! # Building
+//!
+//! [`WideBvh::from_binary`] collapses a built binary tree over a [`TriangleMesh`]: each wide
+//! node takes its binary node's two children and, while it has fewer than `W`, replaces the
+//! inner child with the largest surface area by that child's two children (ties: the first).
+//! Binary leaves become wide leaf slots unchanged. The caller passes node storage of at least
+//! [`WideBvh::node_count_for`]`(binary)` nodes (exact; [`node_capacity`] is a bound that needs
+//! no binary tree) and triangle storage of at least [`triangle_capacity`]`(N)` records. Too
+//! little storage, a binary leaf of more than [`MAX_LEAF_TRIANGLES`] primitives, more than
+//! [`MAX_TRIANGLES`] triangles, or a mesh that is not the binary tree's source is a typed
+//! error returned **before anything is written**.
+//!
+//! # Layout and size
+//!
+//! A [`WideNode`] holds, per axis, the `W` lower and the `W` upper bounds (`[[[f32; W]; 3]; 2]`,
+//! structure of arrays) and `W` child references: 224 bytes for `W = 8`, 112 for `W = 4`.
+//! A child reference is an inner node's index, a leaf (a run of at most
+//! [`MAX_LEAF_TRIANGLES`] triangle records), or empty (an empty box, never hit). A
+//! [`LeafTriangle`] is the triangle's three vertices and its index in the mesh: 40 bytes.
+//! Everything the structure adds, copied triangles included, is
+//! `224·nodes + 40·N` bytes ([`WideStats::bytes_per_triangle`]); the caller's mesh is not
+//! needed by queries.
+//!
+//! # Traversal
+//!
+//! As in the binary tree: the robust, conservative, NaN-absorbing slab test on every child box
+//! at once, over `[t_min, t_max·(1 + CULL_REL_SLACK)]`; children hit are visited nearest first
+//! (the others pushed with their entry distance, re-checked when popped); the **tie rule** (of
+//! equal `t`, the smaller primitive index) makes the closest hit equal a brute-force loop with
+//! the same intersector; invalid rays test nothing.
+//!
+//! **Stack bound:** a node pushes at most `W − 1` entries (all hit children but the nearest),
+//! and the entries live at any time are children of the inner nodes on the path from the root
+//! to the current node. Every wide inner node is a binary inner node, and a wide child is a
+//! binary descendant of its parent, so a wide path has at most as many inner nodes as a
+//! binary path: at most [`MAX_DEPTH`](super::MAX_DEPTH) (binary inner nodes have depth
+//! `< MAX_DEPTH`). Hence at most `(W − 1)·MAX_DEPTH` live entries: [`stack_size`]`(W)`
+//! = 448 for `W = 8` (3.5 KiB of 8-byte entries). Traversal never overflows it.
+
+mod collapse;
+mod node;
+mod query;
+mod refit;
+mod traverse;
+
+#[cfg(test)]
+mod tests;
+
+pub use node::{ChildRef, LeafTriangle, WideNode};
+
+use super::stats::TraversalStats;
+use crate::aabb::Aabb;
+
+/// Most triangles one wide leaf slot can hold (the binary tree's leaves must not be larger).
+pub const MAX_LEAF_TRIANGLES: usize = 16;
+
+/// Most triangles a wide BVH can hold: leaf references address triangle records with 27 bits.
+pub const MAX_TRIANGLES: usize = 1 << 27;
+
+/// Entries of the fixed traversal stack of a `W`-wide tree: `(W − 1)·MAX_DEPTH` (module docs).
+#[must_use]
+pub const fn stack_size(width: usize) -> usize {
+    (width - 1) * super::MAX_DEPTH
+}
+
+/// Wide nodes that always suffice for `triangles` triangles, whatever the binary tree: one per
+/// binary inner node at most, `N − 1`, and at least 1 (the root). Prefer the exact
+/// [`WideBvh::node_count_for`] when the binary tree is at hand: trees of scanned meshes use
+/// about `N / 12` nodes.
+#[must_use]
+pub const fn node_capacity(triangles: usize) -> usize {
+    if triangles <= 1 { 1 } else { triangles - 1 }
+}
+
+/// Triangle records to reserve for `triangles` triangles: `N`.
+#[must_use]
+pub const fn triangle_capacity(triangles: usize) -> usize {
+    triangles
+}
+
+/// A `W`-wide BVH over caller storage `N` (nodes) and `T` (triangle records).
+#[derive(Clone, Debug)]
+pub struct WideBvh<const W: usize, N, T> {
+    nodes: N,
+    triangles: T,
+    node_count: u32,
+    triangle_count: u32,
+    source_len: usize,
+}
+
+/// An 8-wide BVH (one AVX2 register per bound array).
+pub type Bvh8<N, T> = WideBvh<8, N, T>;
+/// A 4-wide BVH (one SSE / NEON register per bound array).
+pub type Bvh4<N, T> = WideBvh<4, N, T>;
+
+/// Shape and size of a built wide tree ([`WideBvh::stats`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WideStats {
+    /// Nodes in use.
+    pub nodes: usize,
+    /// Leaf slots.
+    pub leaves: usize,
+    /// Child slots in use (inner and leaf) over all nodes: `children / nodes` is the fill.
+    pub children: usize,
+    /// Triangles in the tree.
+    pub triangles: usize,
+    /// Bytes the structure adds: nodes and triangle records.
+    pub bytes: usize,
+    /// `bytes / triangles` (0 for an empty tree).
+    pub bytes_per_triangle: f64,
+}
+
+impl<const W: usize, N, T> WideBvh<W, N, T>
+where
+    N: AsRef<[WideNode<W>]>,
+    T: AsRef<[LeafTriangle]>,
+{
+    /// The used nodes; node 0 is the root (empty slice for an empty tree).
+    #[inline]
+    #[must_use]
+    pub fn nodes(&self) -> &[WideNode<W>] {
+        let all = self.nodes.as_ref();
+        all.get(..self.node_count as usize).unwrap_or(all)
+    }
+
+    /// The triangle records in leaf order.
+    #[inline]
+    #[must_use]
+    pub fn triangles(&self) -> &[LeafTriangle] {
+        let all = self.triangles.as_ref();
+        all.get(..self.triangle_count as usize).unwrap_or(all)
+    }
+
+    /// Number of nodes in use.
+    #[inline]
+    #[must_use]
+    pub fn node_count(&self) -> usize {
+        self.node_count as usize
+    }
+
+    /// Number of triangles in the tree.
+    #[inline]
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.triangle_count as usize
+    }
+
+    /// Number of triangles of the mesh at build time (what [`WideBvh::refit`] expects).
+    #[inline]
+    #[must_use]
+    pub fn source_len(&self) -> usize {
+        self.source_len
+    }
+
+    /// `true` when the tree holds no triangle (every query misses).
+    #[inline]
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.triangle_count == 0
+    }
+
+    /// Bounds of everything in the tree ([`Aabb::EMPTY`] when empty).
+    #[must_use]
+    pub fn bounds(&self) -> Aabb {
+        self.nodes().first().map_or(Aabb::EMPTY, |n| {
+            (0..W).fold(Aabb::EMPTY, |b, i| b.union(n.child_bounds(i)))
+        })
+    }
+
+    /// Shape and size.
+    #[must_use]
+    pub fn stats(&self) -> WideStats {
+        let nodes = self.nodes();
+        let (mut leaves, mut children) = (0, 0);
+        for n in nodes {
+            for &c in &n.child {
+                match ChildRef::decode(c) {
+                    ChildRef::Empty => {}
+                    ChildRef::Leaf { .. } => {
+                        leaves += 1;
+                        children += 1;
+                    }
+                    ChildRef::Inner(_) => children += 1,
+                }
+            }
+        }
+        let triangles = self.triangle_count();
+        let bytes = core::mem::size_of_val(nodes) + core::mem::size_of_val(self.triangles());
+        WideStats {
+            nodes: nodes.len(),
+            leaves,
+            children,
+            triangles,
+            bytes,
+            bytes_per_triangle: if triangles == 0 {
+                0.0
+            } else {
+                bytes as f64 / triangles as f64
+            },
+        }
+    }
+
+    /// Gives the storage back.
+    #[must_use]
+    pub fn into_storage(self) -> (N, T) {
+        (self.nodes, self.triangles)
+    }
+}
+
+/// Adds `local` to the caller's counters, if any.
+#[inline]
+fn add_stats(stats: Option<&mut TraversalStats>, local: &TraversalStats) {
+    if let Some(s) = stats {
+        s.add(local);
+    }
+}

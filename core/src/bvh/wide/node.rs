@@ -1,0 +1,166 @@
+//! The wide node (child boxes side by side) and the triangle record of its leaves.
+
+use crate::aabb::Aabb;
+use glam::Vec3;
+
+/// A node of a `W`-wide BVH: the boxes of its `W` children, stored as arrays of lanes
+/// (`bounds[0]` the lower corners, `bounds[1]` the upper ones, then the axis, then the child),
+/// and `W` child references ([`ChildRef`]). Unused slots have an empty box (`+∞` lower,
+/// `−∞` upper bounds), which no ray hits, and the reference [`ChildRef::EMPTY`].
+///
+/// Nodes are only created by [`super::WideBvh::from_binary`]: fields are private so that the
+/// invariants traversal relies on (children stored after their parent, leaf runs in range)
+/// cannot be broken.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(16))]
+pub struct WideNode<const W: usize> {
+    pub(super) bounds: [[[f32; W]; 3]; 2],
+    pub(super) child: [u32; W],
+}
+
+impl<const W: usize> WideNode<W> {
+    /// A node with every slot empty, for initialising storage: `[WideNode::EMPTY; K]`.
+    pub const EMPTY: Self = Self {
+        bounds: [[[f32::INFINITY; W]; 3], [[f32::NEG_INFINITY; W]; 3]],
+        child: [ChildRef::EMPTY; W],
+    };
+
+    /// The box of slot `i` (empty for an unused slot or `i ≥ W`).
+    #[must_use]
+    pub fn child_bounds(&self, i: usize) -> Aabb {
+        if i >= W {
+            return Aabb::EMPTY;
+        }
+        let [lo, hi] = &self.bounds;
+        Aabb::new(
+            Vec3::new(lo[0][i], lo[1][i], lo[2][i]),
+            Vec3::new(hi[0][i], hi[1][i], hi[2][i]),
+        )
+    }
+
+    /// The reference of slot `i` ([`ChildRef::Empty`] for `i ≥ W`).
+    #[must_use]
+    pub fn child(&self, i: usize) -> ChildRef {
+        self.child
+            .get(i)
+            .map_or(ChildRef::Empty, |&c| ChildRef::decode(c))
+    }
+
+    #[inline]
+    pub(super) fn set_child(&mut self, i: usize, b: &Aabb, child: u32) {
+        if i < W {
+            for axis in 0..3 {
+                self.bounds[0][axis][i] = b.min[axis];
+                self.bounds[1][axis][i] = b.max[axis];
+            }
+            self.child[i] = child;
+        }
+    }
+}
+
+impl<const W: usize> Default for WideNode<W> {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
+/// What a child slot refers to. Encoded in a `u32`: an inner node's index (below `2³¹`), a
+/// leaf (bit 31 set; bits 27–30 the triangle count minus one; bits 0–26 the first triangle
+/// record), or `u32::MAX` for an empty slot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ChildRef {
+    /// An unused slot.
+    Empty,
+    /// An inner node, by index.
+    Inner(u32),
+    /// A run of triangle records.
+    Leaf {
+        /// First record.
+        start: u32,
+        /// Records in the run, `1..=MAX_LEAF_TRIANGLES`.
+        count: u32,
+    },
+}
+
+const LEAF_BIT: u32 = 1 << 31;
+const COUNT_SHIFT: u32 = 27;
+const START_MASK: u32 = (1 << COUNT_SHIFT) - 1;
+
+impl ChildRef {
+    /// The encoding of an empty slot.
+    pub const EMPTY: u32 = u32::MAX;
+
+    /// Decodes a slot.
+    #[inline(always)]
+    #[must_use]
+    pub fn decode(c: u32) -> Self {
+        if c == Self::EMPTY {
+            Self::Empty
+        } else if c & LEAF_BIT == 0 {
+            Self::Inner(c)
+        } else {
+            Self::Leaf {
+                start: c & START_MASK,
+                count: ((c >> COUNT_SHIFT) & 0xF) + 1,
+            }
+        }
+    }
+
+    /// Encodes a leaf; `None` when `start` needs more than 27 bits or `count` is not in
+    /// `1..=MAX_LEAF_TRIANGLES`.
+    #[must_use]
+    pub fn leaf(start: u32, count: u32) -> Option<u32> {
+        let ok = start <= START_MASK
+            && (1..=super::MAX_LEAF_TRIANGLES as u32).contains(&count)
+            && !(start == START_MASK && count == 16);
+        ok.then(|| LEAF_BIT | ((count - 1) << COUNT_SHIFT) | start)
+    }
+}
+
+/// A triangle as a leaf stores it: its vertices (copied from the mesh, in the mesh's order)
+/// and its index in the mesh. 40 bytes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct LeafTriangle {
+    /// `v0`, `v1`, `v2`.
+    pub v: [[f32; 3]; 3],
+    /// Index of the triangle in the mesh the tree was built over.
+    pub prim: u32,
+}
+
+impl LeafTriangle {
+    /// A record for initialising storage (NaN vertices: never hit).
+    pub const EMPTY: Self = Self {
+        v: [[f32::NAN; 3]; 3],
+        prim: u32::MAX,
+    };
+
+    /// The vertices as vectors.
+    #[inline(always)]
+    #[must_use]
+    pub fn vertices(&self) -> [Vec3; 3] {
+        [
+            Vec3::from_array(self.v[0]),
+            Vec3::from_array(self.v[1]),
+            Vec3::from_array(self.v[2]),
+        ]
+    }
+
+    /// The vertices' box.
+    #[inline]
+    #[must_use]
+    pub fn bounds(&self) -> Aabb {
+        let v = self.vertices();
+        Aabb::new(v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]))
+    }
+}
+
+impl Default for LeafTriangle {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
+const _: () = assert!(core::mem::size_of::<WideNode<8>>() == 224);
+const _: () = assert!(core::mem::size_of::<WideNode<4>>() == 112);
+const _: () = assert!(core::mem::size_of::<LeafTriangle>() == 40);

@@ -1,0 +1,79 @@
+//! Refitting a wide tree after the mesh's vertices moved.
+
+use super::WideBvh;
+use super::node::{ChildRef, LeafTriangle, WideNode};
+use crate::aabb::Aabb;
+use crate::bvh::{BvhError, TriangleMesh};
+
+impl<const W: usize, N, T> WideBvh<W, N, T>
+where
+    N: AsRef<[WideNode<W>]> + AsMut<[WideNode<W>]>,
+    T: AsRef<[LeafTriangle]> + AsMut<[LeafTriangle]>,
+{
+    /// Copies the moved vertices of `mesh` (the same triangles, moved) into the triangle
+    /// records and recomputes every child box bottom-up, in one reverse pass over the nodes
+    /// (children are stored after their parent), with no stack and no rebuild.
+    ///
+    /// Errors: [`BvhError::SourceLengthMismatch`] (nothing written) when `mesh` has another
+    /// triangle count than at build time. [`BvhError::NonFinitePrimitive`] names the first
+    /// triangle whose new vertices are not finite (or whose indices are out of range): the
+    /// refit is still completed with that triangle's record made unhittable (NaN vertices)
+    /// and its box empty, so queries stay valid and never report it.
+    pub fn refit(&mut self, mesh: &TriangleMesh<'_>) -> Result<(), BvhError> {
+        if mesh.len() != self.source_len {
+            return Err(BvhError::SourceLengthMismatch {
+                expected: self.source_len,
+                found: mesh.len(),
+            });
+        }
+        let mut bad: Option<usize> = None;
+        let count = self.triangle_count as usize;
+        let tris = self.triangles.as_mut();
+        let tris = match tris.get_mut(..count) {
+            Some(t) => t,
+            None => tris,
+        };
+        for rec in tris.iter_mut() {
+            let p = rec.prim as usize;
+            match mesh.triangle(p).filter(|v| v.iter().all(|x| x.is_finite())) {
+                Some(v) => rec.v = [v[0].to_array(), v[1].to_array(), v[2].to_array()],
+                None => {
+                    rec.v = LeafTriangle::EMPTY.v;
+                    bad = Some(bad.map_or(p, |q| q.min(p)));
+                }
+            }
+        }
+        let tris: &[LeafTriangle] = tris;
+        let count = self.node_count as usize;
+        let nodes = self.nodes.as_mut();
+        let nodes = match nodes.get_mut(..count) {
+            Some(n) => n,
+            None => nodes,
+        };
+        for i in (0..nodes.len()).rev() {
+            for slot in 0..W {
+                let b = match ChildRef::decode(nodes[i].child[slot]) {
+                    ChildRef::Empty => continue,
+                    ChildRef::Leaf { start, count } => tris
+                        .get(start as usize..(start + count) as usize)
+                        .unwrap_or(&[])
+                        .iter()
+                        .filter(|t| t.v.iter().flatten().all(|x| x.is_finite()))
+                        .fold(Aabb::EMPTY, |b, t| b.union(t.bounds())),
+                    ChildRef::Inner(c) => nodes
+                        .get(c as usize)
+                        .filter(|_| c as usize > i)
+                        .map_or(Aabb::EMPTY, |n| {
+                            (0..W).fold(Aabb::EMPTY, |b, k| b.union(n.child_bounds(k)))
+                        }),
+                };
+                let reference = nodes[i].child[slot];
+                nodes[i].set_child(slot, &b, reference);
+            }
+        }
+        match bad {
+            Some(index) => Err(BvhError::NonFinitePrimitive { index }),
+            None => Ok(()),
+        }
+    }
+}

@@ -1,0 +1,360 @@
+//! Unit tests of the wide BVH: every query against an independent brute-force loop.
+
+use super::*;
+use crate::aabb::Aabb;
+use crate::bvh::{BuildOptions, Bvh, BvhError, BvhNode, TriangleMesh, index_capacity};
+use crate::ray::Ray;
+use crate::test_util::{lcg, unit_vec};
+use crate::triangle::{MollerTrumbore, TriangleIntersector, Watertight};
+use glam::Vec3;
+use std::vec;
+use std::vec::Vec;
+
+type VecBinary = Bvh<Vec<BvhNode>, Vec<u32>>;
+type VecWide<const W: usize> = WideBvh<W, Vec<WideNode<W>>, Vec<LeafTriangle>>;
+
+fn binary(mesh: &TriangleMesh<'_>, max_leaf: u32) -> VecBinary {
+    let n = mesh.len();
+    Bvh::build(
+        mesh,
+        vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        &BuildOptions {
+            max_leaf_size: max_leaf,
+            exclude_non_finite: false,
+        },
+    )
+    .unwrap()
+}
+
+fn wide<const W: usize>(mesh: &TriangleMesh<'_>, max_leaf: u32) -> VecWide<W> {
+    let b = binary(mesh, max_leaf);
+    let count = VecWide::<W>::node_count_for(&b).unwrap();
+    VecWide::<W>::from_binary(
+        &b,
+        mesh,
+        vec![WideNode::EMPTY; count],
+        vec![LeafTriangle::EMPTY; triangle_capacity(mesh.len())],
+    )
+    .unwrap()
+}
+
+/// Random triangles of size ~1 in a cube of side 10.
+fn soup(n: usize, seed: u64) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut s = seed;
+    let mut pos = Vec::new();
+    let mut tris = Vec::new();
+    for i in 0..n {
+        let c = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 10.0 - 5.0;
+        for _ in 0..3 {
+            pos.push(c + unit_vec(&mut s) * lcg(&mut s));
+        }
+        let b = 3 * i as u32;
+        tris.push([b, b + 1, b + 2]);
+    }
+    (pos, tris)
+}
+
+/// Closest hit by testing every triangle: smallest `t`, ties to the smaller index.
+fn brute<I: TriangleIntersector>(
+    mesh: &TriangleMesh<'_>,
+    isect: &I,
+    ray: &Ray,
+) -> Option<(u32, f32)> {
+    let mut best: Option<(u32, f32)> = None;
+    for i in 0..mesh.len() {
+        let Some(v) = mesh.triangle(i) else { continue };
+        if let Some(h) = isect.intersect(ray, &v)
+            && best.is_none_or(|(_, t)| h.t < t)
+        {
+            best = Some((i as u32, h.t));
+        }
+    }
+    best
+}
+
+fn rays(n: usize, seed: u64) -> Vec<Ray> {
+    let mut s = seed;
+    (0..n)
+        .map(|i| {
+            let o = unit_vec(&mut s) * 12.0;
+            let target = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 8.0 - 4.0;
+            let mut r = Ray::new(o, target - o);
+            if i % 5 == 0 {
+                r.t_max = lcg(&mut s) * 1.5;
+            }
+            if i % 7 == 0 {
+                r.t_min = -lcg(&mut s);
+            }
+            r
+        })
+        .collect()
+}
+
+fn check_against_brute<const W: usize>(n: usize, seed: u64, max_leaf: u32) {
+    let (pos, tris) = soup(n, seed);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let w = wide::<W>(&mesh, max_leaf);
+    let mut hits = 0;
+    for ray in rays(3000, seed ^ 0xABCD) {
+        let got = w
+            .closest_hit_triangles(&Watertight, &ray, None)
+            .map(|(p, h)| (p, h.t));
+        assert_eq!(got, brute(&mesh, &Watertight, &ray), "W={W} {ray:?}");
+        let got_mt = w
+            .closest_hit_triangles(&MollerTrumbore::NO_EPSILON, &ray, None)
+            .map(|(p, h)| (p, h.t));
+        assert_eq!(got_mt, brute(&mesh, &MollerTrumbore::NO_EPSILON, &ray));
+        let any = w.any_hit_triangles(&Watertight, &ray, None);
+        assert_eq!(any.is_some(), got.is_some(), "{ray:?}");
+        if let Some((p, h)) = any {
+            let v = mesh.triangle(p as usize).unwrap();
+            assert_eq!(Watertight.intersect(&ray, &v).map(|x| x.t), Some(h.t));
+        }
+        hits += usize::from(got.is_some());
+    }
+    let want = if n >= 300 { 500 } else { 1 };
+    assert!(hits >= want, "the rays must hit something: {hits} of 3000");
+}
+
+#[test]
+fn closest_and_any_hit_equal_brute_force_for_both_widths() {
+    for (n, seed) in [(1, 1), (3, 2), (17, 3), (300, 4), (2000, 5)] {
+        check_against_brute::<8>(n, seed, 4);
+        check_against_brute::<4>(n, seed, 4);
+    }
+    check_against_brute::<8>(500, 9, 1);
+    check_against_brute::<8>(500, 10, 16);
+}
+
+#[test]
+fn node_sizes_and_counts() {
+    assert_eq!(core::mem::size_of::<WideNode<8>>(), 224);
+    assert_eq!(core::mem::size_of::<LeafTriangle>(), 40);
+    let (pos, tris) = soup(2000, 7);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let b = binary(&mesh, 4);
+    let w = wide::<8>(&mesh, 4);
+    // Every binary inner node is a wide node or was merged into one; leaves carry over.
+    let binary_leaves = b.nodes().iter().filter(|n| n.is_leaf()).count();
+    let st = w.stats();
+    assert_eq!(st.leaves, binary_leaves);
+    assert_eq!(st.triangles, 2000);
+    assert_eq!(st.children, st.nodes - 1 + st.leaves);
+    assert!(st.nodes <= node_capacity(2000));
+    assert!(
+        st.children >= 4 * st.nodes,
+        "the collapse fills nodes: {st:?}"
+    );
+    assert_eq!(st.bytes, 224 * st.nodes + 40 * 2000);
+    // Every triangle appears once, with its own vertices.
+    let mut seen = vec![false; 2000];
+    for t in w.triangles() {
+        assert!(!seen[t.prim as usize]);
+        seen[t.prim as usize] = true;
+        let v = mesh.triangle(t.prim as usize).unwrap();
+        assert_eq!(t.vertices(), v);
+    }
+}
+
+#[test]
+fn storage_too_small_and_bad_leaves_are_refused_before_writing() {
+    let (pos, tris) = soup(100, 11);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let b = binary(&mesh, 4);
+    let count = VecWide::<8>::node_count_for(&b).unwrap();
+    let marker = LeafTriangle {
+        v: [[7.0; 3]; 3],
+        prim: 7,
+    };
+    let mut nodes = vec![WideNode::<8>::EMPTY; count - 1];
+    let mut recs = vec![marker; 100];
+    let r = WideBvh::<8, _, _>::from_binary(&b, &mesh, &mut nodes[..], &mut recs[..]);
+    assert_eq!(
+        r.err(),
+        Some(BvhError::NodeStorageTooSmall {
+            needed: count,
+            available: count - 1
+        })
+    );
+    let mut nodes = vec![WideNode::<8>::EMPTY; count];
+    let mut recs = vec![marker; 99];
+    let r = WideBvh::<8, _, _>::from_binary(&b, &mesh, &mut nodes[..], &mut recs[..]);
+    assert_eq!(
+        r.err(),
+        Some(BvhError::TriangleStorageTooSmall {
+            needed: 100,
+            available: 99
+        })
+    );
+    assert!(nodes.iter().all(|n| *n == WideNode::EMPTY) && recs.iter().all(|r| *r == marker));
+    // Another mesh than the tree's source.
+    let other = TriangleMesh::new(&pos, &tris[..50]);
+    let r = WideBvh::<8, _, _>::from_binary(&b, &other, &mut nodes[..], &mut recs[..]);
+    assert!(matches!(
+        r.err(),
+        Some(BvhError::SourceLengthMismatch { .. })
+    ));
+    // Leaves larger than a wide leaf.
+    let coincident: Vec<[u32; 3]> = vec![[0, 1, 2]; 40];
+    let same = TriangleMesh::new(&pos, &coincident);
+    let b40 = binary(&same, 40);
+    assert!(matches!(
+        VecWide::<8>::node_count_for(&b40),
+        Err(BvhError::LeafTooLarge { count: 40 })
+    ));
+}
+
+#[test]
+fn empty_mesh_and_single_triangle() {
+    let mesh = TriangleMesh::new(&[], &[]);
+    let w = wide::<8>(&mesh, 4);
+    assert!(w.is_empty());
+    let ray = Ray::new(Vec3::ZERO, Vec3::X);
+    assert!(w.closest_hit_triangles(&Watertight, &ray, None).is_none());
+    assert_eq!(
+        w.query_box(&Aabb::new(Vec3::splat(-1e9), Vec3::splat(1e9)), |_| true),
+        0
+    );
+    let pos = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let tris = [[0, 1, 2]];
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let w = wide::<8>(&mesh, 4);
+    let r = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
+    let (p, h) = w.closest_hit_triangles(&Watertight, &r, None).unwrap();
+    assert_eq!((p, h.t), (0, 1.0));
+}
+
+#[test]
+fn deep_unbalanced_input_stays_within_the_stack_and_finds_everything() {
+    // Triangles at 2^-k: the SAH peels one per level; the count split below MEDIAN_DEPTH keeps
+    // leaves small, and traversal still finds every triangle.
+    let mut pos = Vec::new();
+    let mut tris = Vec::new();
+    for k in 0..300i32 {
+        let x = 2f32.powi(-k / 3) * if k % 2 == 0 { 1.0 } else { -1.0 };
+        let s = 1e-3 * x.abs();
+        let b = pos.len() as u32;
+        pos.extend([
+            Vec3::new(x - s, -s, 0.0),
+            Vec3::new(x + s, -s, 0.0),
+            Vec3::new(x, s, 0.0),
+        ]);
+        tris.push([b, b + 1, b + 2]);
+    }
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let b = binary(&mesh, 4);
+    assert!(b.stats().max_leaf_size <= 4, "{:?}", b.stats());
+    let w = wide::<8>(&mesh, 4);
+    for (i, t) in tris.iter().enumerate() {
+        let c = (pos[t[0] as usize] + pos[t[1] as usize] + pos[t[2] as usize]) / 3.0;
+        let ray = Ray::new(c + Vec3::Z, -Vec3::Z);
+        let got = w
+            .closest_hit_triangles(&Watertight, &ray, None)
+            .map(|(p, _)| p);
+        assert_eq!(
+            got,
+            brute(&mesh, &Watertight, &ray).map(|(p, _)| p),
+            "triangle {i}"
+        );
+        assert!(got.is_some());
+    }
+}
+
+#[test]
+fn box_query_and_clearance_equal_brute_force_and_the_binary_tree() {
+    let (pos, tris) = soup(800, 21);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let w = wide::<8>(&mesh, 4);
+    let b = binary(&mesh, 4);
+    let mut s = 99u64;
+    for _ in 0..200 {
+        let c = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 12.0 - 6.0;
+        let q = Aabb::new(c, c + Vec3::splat(lcg(&mut s) * 2.0));
+        let mut got = Vec::new();
+        w.query_box(&q, |p| {
+            got.push(p);
+            true
+        });
+        got.sort_unstable();
+        let expect: Vec<u32> = (0..800u32)
+            .filter(|&i| {
+                let v = mesh.triangle(i as usize).unwrap();
+                Aabb::new(v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2])).overlaps(&q)
+            })
+            .collect();
+        assert_eq!(got, expect);
+    }
+    let points: Vec<Vec3> = (0..100).map(|_| unit_vec(&mut s) * 9.0).collect();
+    let normals: Vec<Vec3> = points.iter().map(|p| -*p * 0.5).collect();
+    let mut a = vec![0.0; 100];
+    let mut c = vec![0.0; 100];
+    let ma = w
+        .clearance_triangles(&Watertight, &points, &normals, &mut a)
+        .unwrap();
+    let mc = b
+        .clearance_triangles(&mesh, &Watertight, &points, &normals, &mut c)
+        .unwrap();
+    assert_eq!((ma, &a), (mc, &c));
+    assert!(ma.is_finite());
+    assert_eq!(
+        w.clearance_triangles(&Watertight, &points, &normals[..99], &mut a),
+        Err(BvhError::LengthMismatch {
+            expected: 100,
+            found: 99
+        })
+    );
+}
+
+#[test]
+fn refit_follows_moved_vertices_and_drops_non_finite_ones() {
+    let (mut pos, tris) = soup(500, 31);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let mut w = wide::<8>(&mesh, 4);
+    let before = w.nodes().to_vec();
+    assert_eq!(w.refit(&mesh), Ok(()));
+    assert_eq!(
+        w.nodes(),
+        &before[..],
+        "refit over the same mesh changes nothing"
+    );
+    for p in &mut pos {
+        *p = *p * 1.5 + Vec3::new(0.5, -2.0, 0.25);
+    }
+    pos[4] = Vec3::NAN;
+    let moved = TriangleMesh::new(&pos, &tris);
+    assert_eq!(
+        w.refit(&moved),
+        Err(BvhError::NonFinitePrimitive { index: 1 })
+    );
+    for ray in rays(2000, 5) {
+        let got = w
+            .closest_hit_triangles(&Watertight, &ray, None)
+            .map(|(p, h)| (p, h.t));
+        assert_eq!(got, brute(&moved, &Watertight, &ray), "{ray:?}");
+    }
+    let short = TriangleMesh::new(&pos, &tris[..10]);
+    assert!(matches!(
+        w.refit(&short),
+        Err(BvhError::SourceLengthMismatch { .. })
+    ));
+}
+
+#[test]
+fn invalid_rays_test_nothing() {
+    let (pos, tris) = soup(50, 41);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let w = wide::<8>(&mesh, 4);
+    for ray in [
+        Ray::new(Vec3::NAN, Vec3::X),
+        Ray::new(Vec3::ZERO, Vec3::ZERO),
+        Ray::new(Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0)),
+    ] {
+        let mut st = crate::bvh::TraversalStats::default();
+        assert!(
+            w.closest_hit(&ray, |_, _, _| Some((1.0, ())), Some(&mut st))
+                .is_none()
+        );
+        assert_eq!(st, crate::bvh::TraversalStats::default());
+    }
+}

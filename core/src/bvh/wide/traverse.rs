@@ -1,0 +1,300 @@
+//! Closest-hit and any-hit traversal of a wide tree on a fixed-size stack.
+
+use super::node::{ChildRef, LeafTriangle, WideNode};
+use super::{WideBvh, add_stats};
+use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
+use crate::bvh::stats::TraversalStats;
+use crate::bvh::{MAX_DEPTH, cull_bound};
+use crate::ray::Ray;
+use crate::triangle::{TriangleHit, TriangleIntersector};
+use glam::Vec3;
+
+/// Stack entries of the traversal: `(W − 1)·MAX_DEPTH` for the widest supported tree
+/// (`W = 8`), which bounds every narrower one (module docs of [`super`]).
+const STACK: usize = 7 * MAX_DEPTH;
+
+/// The ray as the node test wants it: origin, reciprocal direction, and per axis the index
+/// (`0` lower, `1` upper) of the near bound (the direction's sign bit).
+#[derive(Clone, Copy)]
+struct WideRay {
+    origin: [f32; 3],
+    inv_dir: [f32; 3],
+    near: [usize; 3],
+    slab: SlabRay,
+}
+
+impl WideRay {
+    fn new(slab: &SlabRay) -> Self {
+        Self {
+            origin: slab.origin.to_array(),
+            inv_dir: slab.inv_dir.to_array(),
+            near: slab.negative.map(usize::from),
+            slab: *slab,
+        }
+    }
+
+    /// Entry distance of every child box (`+∞` for a miss), over `[t_min, t_max]`: the robust
+    /// slab test of [`crate::aabb::Aabb::intersect_slab`] lane by lane, written branch-free so
+    /// that it compiles to a few vector instructions per axis. The common path
+    /// (`GENERAL = false`: every reciprocal finite or a zero's `±∞`, `t_min ≥ 0`) pads far
+    /// distances by the plain factor [`SLAB_FAR_SCALE`] (a negative far distance means the box
+    /// ends before `t_min ≥ 0` whatever the padding); `a > b ? a : b` absorbs a NaN slab
+    /// value (`0·∞`) exactly like `f32::max`. An entry at `+∞` is a miss (nothing is accepted
+    /// at `t = ∞`).
+    #[inline(always)]
+    fn hit<const W: usize, const GENERAL: bool>(
+        &self,
+        node: &WideNode<W>,
+        t_min: f32,
+        t_max: f32,
+    ) -> [f32; W] {
+        if GENERAL {
+            return self.hit_general(node, t_min, t_max);
+        }
+        let mut t_enter = [t_min; W];
+        let mut t_exit = [t_max; W];
+        for axis in 0..3 {
+            let n = self.near[axis];
+            let lo = &node.bounds[n][axis];
+            let hi = &node.bounds[1 - n][axis];
+            let (o, inv) = (self.origin[axis], self.inv_dir[axis]);
+            for i in 0..W {
+                let t_near = (lo[i] - o) * inv;
+                let t_far = (hi[i] - o) * inv * SLAB_FAR_SCALE;
+                t_enter[i] = if t_near > t_enter[i] {
+                    t_near
+                } else {
+                    t_enter[i]
+                };
+                t_exit[i] = if t_far < t_exit[i] { t_far } else { t_exit[i] };
+            }
+        }
+        let mut out = [f32::INFINITY; W];
+        for i in 0..W {
+            out[i] = if t_enter[i] <= t_exit[i] {
+                t_enter[i]
+            } else {
+                f32::INFINITY
+            };
+        }
+        out
+    }
+
+    /// [`WideRay::hit`] for rays with an overflowing reciprocal or `t_min < 0`:
+    /// [`crate::aabb::Aabb::intersect_slab`] on each child box.
+    #[cold]
+    #[inline(never)]
+    fn hit_general<const W: usize>(&self, node: &WideNode<W>, t_min: f32, t_max: f32) -> [f32; W] {
+        let mut out = [f32::INFINITY; W];
+        for (i, o) in out.iter_mut().enumerate() {
+            if let Some((t, _)) = node
+                .child_bounds(i)
+                .intersect_slab(&self.slab, t_min, t_max)
+            {
+                *o = t;
+            }
+        }
+        out
+    }
+}
+
+/// One stack entry: a child reference still to visit and the distance at which the ray enters
+/// its box.
+#[derive(Clone, Copy)]
+struct Entry {
+    child: u32,
+    t_enter: f32,
+}
+
+impl<const W: usize, N, T> WideBvh<W, N, T>
+where
+    N: AsRef<[WideNode<W>]>,
+    T: AsRef<[LeafTriangle]>,
+{
+    /// The closest hit of `ray`, as `(triangle index in the mesh, intersect's payload)`.
+    ///
+    /// `intersect(prim, vertices, ray)` tests one triangle against `ray`, whose `t_max` is the
+    /// current closest `t` (inclusive), and returns `(t, payload)` for a hit in
+    /// `(t_min, t_max]`. Of equal `t`, the smaller triangle index wins, so the result equals a
+    /// brute-force loop with the same rule. `stats`, when given, is **added to**. An invalid
+    /// ray returns `None` without testing any node.
+    #[inline]
+    pub fn closest_hit<H>(
+        &self,
+        ray: &Ray,
+        intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, H)> {
+        self.traverse::<H, false>(ray, intersect, stats)
+    }
+
+    /// Any hit of `ray`: traversal stops at the first triangle for which `intersect` reports a
+    /// `t` in `(t_min, t_max]`. Which one is found first depends on the tree; hit/miss does
+    /// not.
+    #[inline]
+    pub fn any_hit<H>(
+        &self,
+        ray: &Ray,
+        intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, H)> {
+        self.traverse::<H, true>(ray, intersect, stats)
+    }
+
+    /// [`WideBvh::closest_hit`] with the intersector `isect` (prepared once per ray).
+    #[inline(always)]
+    pub fn closest_hit_triangles<I: TriangleIntersector>(
+        &self,
+        isect: &I,
+        ray: &Ray,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, TriangleHit)> {
+        let pre = isect.prepare(ray)?;
+        self.traverse::<TriangleHit, false>(
+            ray,
+            |_, v, r| isect.intersect_prepared(&pre, r, v).map(|h| (h.t, h)),
+            stats,
+        )
+    }
+
+    /// [`WideBvh::any_hit`] with the intersector `isect`.
+    #[inline(always)]
+    pub fn any_hit_triangles<I: TriangleIntersector>(
+        &self,
+        isect: &I,
+        ray: &Ray,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, TriangleHit)> {
+        let pre = isect.prepare(ray)?;
+        self.traverse::<TriangleHit, true>(
+            ray,
+            |_, v, r| isect.intersect_prepared(&pre, r, v).map(|h| (h.t, h)),
+            stats,
+        )
+    }
+
+    #[inline(always)]
+    fn traverse<H, const ANY: bool>(
+        &self,
+        ray: &Ray,
+        intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, H)> {
+        let slab = SlabRay::new(ray)?;
+        if slab.divide || ray.t_min < 0.0 {
+            self.walk::<H, ANY, true>(ray, &slab, intersect, stats)
+        } else {
+            self.walk::<H, ANY, false>(ray, &slab, intersect, stats)
+        }
+    }
+
+    #[inline(always)]
+    fn walk<H, const ANY: bool, const GENERAL: bool>(
+        &self,
+        ray: &Ray,
+        slab: &SlabRay,
+        mut intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, H)> {
+        let nodes = self.nodes();
+        let tris = self.triangles();
+        if nodes.is_empty() {
+            return None;
+        }
+        let wray = WideRay::new(slab);
+        let mut local = TraversalStats::default();
+        let mut cur = *ray;
+        let mut best: Option<(u32, H)> = None;
+        let mut stack = [Entry {
+            child: 0,
+            t_enter: 0.0,
+        }; STACK];
+        let mut sp = 0usize;
+        // The root is node 0 (its own box is the union of its children's: not tested).
+        let mut next = 0u32;
+        'walk: loop {
+            match ChildRef::decode(next) {
+                ChildRef::Inner(index) => {
+                    if let Some(node) = nodes.get(index as usize) {
+                        local.nodes_visited += 1;
+                        let dist = wray.hit::<W, GENERAL>(node, cur.t_min, cull_bound(cur.t_max));
+                        // Hit children, sorted nearest last (ties: the later slot first, so
+                        // the earlier slot is visited first).
+                        let mut hits = [Entry {
+                            child: 0,
+                            t_enter: 0.0,
+                        }; W];
+                        let mut k = 0usize;
+                        for i in 0..W {
+                            if dist[i] < f32::INFINITY {
+                                let e = Entry {
+                                    child: node.child[i],
+                                    t_enter: dist[i],
+                                };
+                                let mut j = k;
+                                while j > 0 && hits[j - 1].t_enter <= e.t_enter {
+                                    hits[j] = hits[j - 1];
+                                    j -= 1;
+                                }
+                                hits[j] = e;
+                                k += 1;
+                            }
+                        }
+                        if k > 0 {
+                            for &e in &hits[..k - 1] {
+                                if let Some(slot) = stack.get_mut(sp) {
+                                    *slot = e;
+                                    sp += 1;
+                                }
+                            }
+                            next = hits[k - 1].child;
+                            continue;
+                        }
+                    }
+                }
+                ChildRef::Leaf { start, count } => {
+                    let first = start as usize;
+                    let run = tris
+                        .get(first..first.saturating_add(count as usize))
+                        .unwrap_or(&[]);
+                    for tri in run {
+                        local.primitives_tested += 1;
+                        let prim = tri.prim;
+                        let Some((t, h)) = intersect(prim, &tri.vertices(), &cur) else {
+                            continue;
+                        };
+                        let better = match &best {
+                            None => cur.contains(t),
+                            Some((bp, _)) => {
+                                t > cur.t_min && (t < cur.t_max || (t == cur.t_max && prim < *bp))
+                            }
+                        };
+                        if better {
+                            cur.t_max = t;
+                            best = Some((prim, h));
+                            if ANY {
+                                break 'walk;
+                            }
+                        }
+                    }
+                }
+                ChildRef::Empty => {}
+            }
+            // Pop the next entry still within the (shrunk) interval.
+            let bound = cull_bound(cur.t_max);
+            loop {
+                if sp == 0 {
+                    break 'walk;
+                }
+                sp -= 1;
+                let e = stack[sp];
+                if e.t_enter <= bound {
+                    next = e.child;
+                    break;
+                }
+            }
+        }
+        add_stats(stats, &local);
+        best
+    }
+}
