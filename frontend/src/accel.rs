@@ -1,55 +1,77 @@
-//! A triangle mesh with its BVH, owned (std), for the frontend's tools: closest-hit and any-hit
-//! queries with any triangle intersector variant.
+//! A triangle mesh with its 8-wide BVH, owned (std), for the frontend's tools: closest-hit and
+//! any-hit queries with any triangle intersector variant, on the widest SIMD level the CPU has
+//! ([`crate::simd`]).
 
 use crate::error::{Error, Result};
 use crate::obj::ObjMesh;
 use halfray_core::Ray;
+use halfray_core::bvh::wide::{Bvh8, LeafTriangle, WideNode, WideStack, triangle_capacity};
 use halfray_core::bvh::{
-    BuildOptions, Bvh, BvhNode, TraversalStats, TriangleMesh, index_capacity, node_capacity,
+    BuildOptions, Bvh, BvhError, BvhNode, TraversalStats, TriangleMesh, index_capacity,
+    node_capacity,
 };
 use halfray_core::triangle::{
     Cramer, F64Reference, MollerTrumbore, TriangleHit, TriangleIntersector, TriangleVariant,
     Watertight, WatertightF32,
 };
 
+/// The wide BVH with owned storage.
+pub type VecBvh8 = Bvh8<Vec<WideNode<8>>, Vec<LeafTriangle>>;
+/// The binary BVH with owned storage.
+pub type VecBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
+
+/// Builds the binary BVH over `mesh` (binned SAH, `options`).
+pub fn build_binary(mesh: &TriangleMesh<'_>, options: &BuildOptions) -> std::result::Result<VecBvh, BvhError> {
+    let n = mesh.len();
+    Bvh::build(
+        mesh,
+        vec![BvhNode::EMPTY; node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        options,
+    )
+}
+
+/// Collapses `binary` (built over `mesh`) into an 8-wide BVH in exactly sized storage.
+pub fn build_wide(mesh: &TriangleMesh<'_>, binary: &VecBvh) -> std::result::Result<VecBvh8, BvhError> {
+    let nodes = VecBvh8::node_count_for(binary)?;
+    Bvh8::from_binary(
+        binary,
+        mesh,
+        vec![WideNode::EMPTY; nodes],
+        vec![LeafTriangle::EMPTY; triangle_capacity(binary.primitive_count())],
+    )
+}
+
 /// A mesh ready for ray queries.
 pub struct MeshAccel {
     /// The mesh.
     pub mesh: ObjMesh,
-    bvh: Bvh<Vec<BvhNode>, Vec<u32>>,
+    wide: VecBvh8,
 }
 
 impl MeshAccel {
-    /// Builds the BVH over `mesh` (binned SAH, default options).
+    /// Builds the BVH over `mesh` (binned SAH with default options, collapsed to 8 wide).
     pub fn new(mesh: ObjMesh) -> Result<Self> {
-        let n = mesh.triangles.len();
-        let bvh = Bvh::build(
-            &TriangleMesh::new(&mesh.positions, &mesh.triangles),
-            vec![BvhNode::default(); node_capacity(n)],
-            vec![0u32; index_capacity(n)],
-            &BuildOptions::default(),
-        )
-        .map_err(|e| Error::Other(format!("building the BVH: {e}")))?;
-        Ok(Self { mesh, bvh })
+        let tri = TriangleMesh::new(&mesh.positions, &mesh.triangles);
+        let wide = build_binary(&tri, &BuildOptions::default())
+            .and_then(|b| build_wide(&tri, &b))
+            .map_err(|e| Error::Other(format!("building the BVH: {e}")))?;
+        Ok(Self { mesh, wide })
     }
 
-    /// The BVH.
-    pub fn bvh(&self) -> &Bvh<Vec<BvhNode>, Vec<u32>> {
-        &self.bvh
-    }
-
-    fn tri_mesh(&self) -> TriangleMesh<'_> {
-        TriangleMesh::new(&self.mesh.positions, &self.mesh.triangles)
+    /// The wide BVH.
+    pub fn bvh(&self) -> &VecBvh8 {
+        &self.wide
     }
 
     /// Closest hit with `isect`: `(triangle index, hit)`.
+    #[inline]
     pub fn closest<I: TriangleIntersector>(
         &self,
         isect: &I,
         ray: &Ray,
     ) -> Option<(u32, TriangleHit)> {
-        self.bvh
-            .closest_hit_triangles(&self.tri_mesh(), isect, ray, None)
+        closest_simd(&self.wide, isect, ray, None)
     }
 
     /// Closest hit with traversal statistics added to `stats`.
@@ -59,15 +81,12 @@ impl MeshAccel {
         ray: &Ray,
         stats: &mut TraversalStats,
     ) -> Option<(u32, TriangleHit)> {
-        self.bvh
-            .closest_hit_triangles(&self.tri_mesh(), isect, ray, Some(stats))
+        closest_simd(&self.wide, isect, ray, Some(stats))
     }
 
     /// Whether anything is hit in the ray's interval.
     pub fn any<I: TriangleIntersector>(&self, isect: &I, ray: &Ray) -> bool {
-        self.bvh
-            .any_hit_triangles(&self.tri_mesh(), isect, ray, None)
-            .is_some()
+        any_simd(&self.wide, isect, ray).is_some()
     }
 
     /// Closest hit with a variant chosen at run time.
@@ -92,5 +111,80 @@ impl MeshAccel {
             TriangleVariant::Cramer => self.any(&Cramer, ray),
             TriangleVariant::F64Reference => self.any(&F64Reference, ray),
         }
+    }
+}
+
+thread_local! {
+    /// One traversal stack per thread, kept across rays (creating one writes 3.5 KiB).
+    static STACK: std::cell::RefCell<WideStack> = const { std::cell::RefCell::new(WideStack::new()) };
+}
+
+/// [`Bvh8::closest_hit_triangles`] compiled for AVX2 + FMA when the CPU has them
+/// ([`crate::simd::x86_avx2_fma`]), for the baseline target otherwise, on this thread's kept
+/// stack. Same answers either way: the core never fuses a multiply-add (its exactness
+/// arguments need plain roundings) and Rust does not contract `a·b + c`, so the wider vectors
+/// change only the speed.
+#[inline]
+pub fn closest_simd<I: TriangleIntersector>(
+    bvh: &VecBvh8,
+    isect: &I,
+    ray: &Ray,
+    stats: Option<&mut TraversalStats>,
+) -> Option<(u32, TriangleHit)> {
+    STACK.with_borrow_mut(|stack| {
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::x86_avx2_fma() {
+            // SAFETY: the CPU supports AVX2 and FMA (checked at run time just above), which is
+            // the only requirement of calling a `#[target_feature(enable = "avx2,fma")]` fn.
+            return unsafe { x86::closest(bvh, stack, isect, ray, stats) };
+        }
+        bvh.closest_hit_triangles_with(stack, isect, ray, stats)
+    })
+}
+
+/// [`Bvh8::any_hit_triangles`] on the widest SIMD level, as [`closest_simd`].
+#[inline]
+pub fn any_simd<I: TriangleIntersector>(
+    bvh: &VecBvh8,
+    isect: &I,
+    ray: &Ray,
+) -> Option<(u32, TriangleHit)> {
+    STACK.with_borrow_mut(|stack| {
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::x86_avx2_fma() {
+            // SAFETY: as in `closest_simd`: AVX2 and FMA were detected at run time.
+            return unsafe { x86::any(bvh, stack, isect, ray) };
+        }
+        bvh.any_hit_triangles_with(stack, isect, ray, None)
+    })
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use super::VecBvh8;
+    use halfray_core::Ray;
+    use halfray_core::bvh::TraversalStats;
+    use halfray_core::bvh::wide::WideStack;
+    use halfray_core::triangle::{TriangleHit, TriangleIntersector};
+
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn closest<I: TriangleIntersector>(
+        bvh: &VecBvh8,
+        stack: &mut WideStack,
+        isect: &I,
+        ray: &Ray,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, TriangleHit)> {
+        bvh.closest_hit_triangles_with(stack, isect, ray, stats)
+    }
+
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn any<I: TriangleIntersector>(
+        bvh: &VecBvh8,
+        stack: &mut WideStack,
+        isect: &I,
+        ray: &Ray,
+    ) -> Option<(u32, TriangleHit)> {
+        bvh.any_hit_triangles_with(stack, isect, ray, None)
     }
 }

@@ -16,5 +16,6 @@ pub mod obj;
 pub mod raysets;
 pub mod render;
 pub mod scene;
+pub mod simd;
 
 pub use error::{Error, Location, Result};

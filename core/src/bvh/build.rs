@@ -129,8 +129,7 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
     let mut root_centroids = Aabb::EMPTY;
     let mut count = 0u32;
     for i in 0..n {
-        let b = source.primitive_bounds(i);
-        let c = source.primitive_centroid(i);
+        let (b, c) = source.primitive_bounds_and_centroid(i);
         if is_usable(&b) && c.is_finite() {
             root_bounds = root_bounds.union(b);
             root_centroids = root_centroids.grow(c);
@@ -291,10 +290,8 @@ fn split_node<S: PrimitiveSource + ?Sized>(
 /// Box and centroid box of a run of primitives.
 fn range_bounds<S: PrimitiveSource + ?Sized>(source: &S, idx: &[u32]) -> (Aabb, Aabb) {
     idx.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), &i| {
-        (
-            b.union(source.primitive_bounds(i as usize)),
-            c.grow(source.primitive_centroid(i as usize)),
-        )
+        let (pb, pc) = source.primitive_bounds_and_centroid(i as usize);
+        (b.union(pb), c.grow(pc))
     })
 }
 
@@ -315,8 +312,7 @@ fn best_sah_split<S: PrimitiveSource + ?Sized>(
     }
     let mut bins = [[EMPTY_BIN; BIN_COUNT]; 3];
     for &i in idx {
-        let b = source.primitive_bounds(i as usize);
-        let c = source.primitive_centroid(i as usize);
+        let (b, c) = source.primitive_bounds_and_centroid(i as usize);
         for axis in 0..3 {
             if let Some(binner) = &binners[axis] {
                 let bin = &mut bins[axis][binner.bin(c[axis])];

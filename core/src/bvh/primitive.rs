@@ -34,6 +34,14 @@ pub trait PrimitiveSource {
     fn primitive_centroid(&self, index: usize) -> Vec3 {
         self.primitive_bounds(index).center()
     }
+
+    /// [`PrimitiveSource::primitive_bounds`] and [`PrimitiveSource::primitive_centroid`]
+    /// together (the builder needs both; a source whose centroid is its box centre computes
+    /// the box once). Must equal the two calls.
+    #[inline]
+    fn primitive_bounds_and_centroid(&self, index: usize) -> (Aabb, Vec3) {
+        (self.primitive_bounds(index), self.primitive_centroid(index))
+    }
 }
 
 /// Bounds reported for an index that does not name a valid primitive: all NaN, so the builder
@@ -142,6 +150,12 @@ impl PrimitiveSource for TriangleMesh<'_> {
     fn primitive_bounds(&self, index: usize) -> Aabb {
         self.triangle(index)
             .map_or(INVALID_BOUNDS, |v| Primitive::bounds(&v))
+    }
+
+    #[inline]
+    fn primitive_bounds_and_centroid(&self, index: usize) -> (Aabb, Vec3) {
+        let b = self.primitive_bounds(index);
+        (b, b.center())
     }
 }
 

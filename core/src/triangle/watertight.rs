@@ -48,7 +48,7 @@ impl WatertightRay {
     }
 
     /// The three vertices projected with [`WatertightRay::project`]: `([x'], [y'], [z'])`.
-    #[inline]
+    #[inline(always)]
     fn project_triangle(&self, origin: Vec3, v: &[Vec3; 3]) -> ([f32; 3], [f32; 3], [f32; 3]) {
         let (ax, ay, az) = self.project(origin, v[0]);
         let (bx, by, bz) = self.project(origin, v[1]);
@@ -59,7 +59,7 @@ impl WatertightRay {
     /// The sheared 2-D coordinates of `p − o` and its scaled depth `(x', y', z')`. Plain `f32`
     /// operations (never fused), so the result is a deterministic function of the vertex: a
     /// vertex shared by several triangles projects to the same point in all of them.
-    #[inline]
+    #[inline(always)]
     fn project(&self, origin: Vec3, p: Vec3) -> (f32, f32, f32) {
         let a = p - origin;
         let [kx, ky, kz] = self.k;
@@ -298,14 +298,15 @@ impl TriangleIntersector for Watertight {
         WatertightRay::new(ray)
     }
 
-    #[inline]
+    #[inline(always)]
     fn intersect_prepared(
         &self,
         pre: &WatertightRay,
         ray: &Ray,
         v: &[Vec3; 3],
     ) -> Option<TriangleHit> {
-        let ([ax, bx, cx], [ay, by, cy], z) = pre.project_triangle(ray.origin, v);
+        let sheared = pre.project_triangle(ray.origin, v);
+        let ([ax, bx, cx], [ay, by, cy], _) = sheared;
         // Most triangles are missed with certain signs: decide those in f32 (exact whenever
         // the filter is certain) and compute the exact f64 edges only for the rest.
         let f = [
@@ -313,19 +314,32 @@ impl TriangleIntersector for Watertight {
             diff_of_products_sign_filter(ax, cy, ay, cx),
             diff_of_products_sign_filter(bx, ay, by, ax),
         ];
-        if f.iter().all(|&e| sign_is_certain(e))
-            && f.iter().any(|&e| e < 0.0)
-            && f.iter().any(|&e| e > 0.0)
-        {
+        let certain = sign_is_certain(f[0]) & sign_is_certain(f[1]) & sign_is_certain(f[2]);
+        let neg = (f[0] < 0.0) | (f[1] < 0.0) | (f[2] < 0.0);
+        let pos = (f[0] > 0.0) | (f[1] > 0.0) | (f[2] > 0.0);
+        if certain & neg & pos {
             return None;
         }
-        let edges = [
-            diff_of_products_exact_sign(cx, by, cy, bx),
-            diff_of_products_exact_sign(ax, cy, ay, cx),
-            diff_of_products_exact_sign(bx, ay, by, ax),
-        ];
-        finish_exact(ray, pre, ([ax, bx, cx], [ay, by, cy], z), edges, v)
+        exact_candidate(ray, pre, sheared, v)
     }
+}
+
+/// The rest of [`Watertight`] for a triangle the `f32` filter did not reject: exact `f64`
+/// edge functions, then [`finish_exact`]. Out of line: most tested triangles never get here.
+#[inline(never)]
+fn exact_candidate(
+    ray: &Ray,
+    pre: &WatertightRay,
+    sheared: ([f32; 3], [f32; 3], [f32; 3]),
+    v: &[Vec3; 3],
+) -> Option<TriangleHit> {
+    let ([ax, bx, cx], [ay, by, cy], _) = sheared;
+    let edges = [
+        diff_of_products_exact_sign(cx, by, cy, bx),
+        diff_of_products_exact_sign(ax, cy, ay, cx),
+        diff_of_products_exact_sign(bx, ay, by, ax),
+    ];
+    finish_exact(ray, pre, sheared, edges, v)
 }
 
 impl TriangleIntersector for WatertightF32 {

@@ -12,8 +12,8 @@ use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
 use crate::raysets::{Camera, random_rays};
 use halfray_core::Ray;
-use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TraversalStats, TriangleMesh};
-use halfray_core::bvh::{DEFAULT_MAX_LEAF_SIZE, index_capacity, node_capacity};
+use crate::accel::{any_simd, build_binary, build_wide, closest_simd};
+use halfray_core::bvh::{BuildOptions, DEFAULT_MAX_LEAF_SIZE, TraversalStats, TriangleMesh};
 use halfray_core::triangle::{
     Cramer, F64Reference, MollerTrumbore, TriangleIntersector, TriangleVariant, Watertight,
     WatertightF32,
@@ -51,26 +51,33 @@ pub struct BvhArgs {
     pub leaf_size: u32,
 }
 
-/// Everything measured, as written to the JSON file.
+/// Everything measured, as written to the JSON file. The top-level figures are those of the
+/// default structure (the 8-wide BVH, the fastest watertight one); `binary` has the binary
+/// tree's on the same rays, and the `embree_*` keys (with `--features embree`) Embree 4's
+/// default and robust modes on the same rays in the same run.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct BvhReport {
     /// Mesh path.
     pub mesh: String,
     /// Intersector name.
     pub intersector: String,
+    /// The structure the top-level figures describe (`bvh8`).
+    pub structure: String,
+    /// SIMD level the queries ran with (`avx2+fma`, `sse2`, `portable`).
+    pub simd: String,
     /// Triangles in the mesh.
     pub triangles: usize,
-    /// Build time, milliseconds (best of the timed builds).
+    /// Build time, milliseconds (best of the timed builds; binary build + collapse).
     pub build_ms: f64,
     /// Nodes in use.
     pub nodes: usize,
     /// Leaves.
     pub leaves: usize,
-    /// Depth of the deepest leaf.
+    /// Depth of the deepest leaf of the binary tree it was collapsed from.
     pub max_depth: usize,
-    /// SAH cost relative to the root area.
+    /// SAH cost of the binary tree, relative to the root area.
     pub sah_cost: f64,
-    /// Bytes of nodes + indices per triangle.
+    /// Bytes the structure adds per triangle (wide: nodes + copied triangles).
     pub bytes_per_triangle: f64,
     /// Primary rays per set.
     pub primary_rays: usize,
@@ -88,11 +95,11 @@ pub struct BvhReport {
     pub hit_rate_primary: f64,
     /// Share of incoherent rays that hit.
     pub hit_rate_incoherent: f64,
-    /// Mean node boxes tested per primary closest-hit ray.
+    /// Mean nodes visited per primary closest-hit ray.
     pub nodes_per_ray_primary: f64,
     /// Mean triangle tests per primary closest-hit ray.
     pub triangles_per_ray_primary: f64,
-    /// Mean node boxes tested per incoherent closest-hit ray.
+    /// Mean nodes visited per incoherent closest-hit ray.
     pub nodes_per_ray_incoherent: f64,
     /// Mean triangle tests per incoherent closest-hit ray.
     pub triangles_per_ray_incoherent: f64,
@@ -102,8 +109,56 @@ pub struct BvhReport {
     pub mrays_brute_force: f64,
     /// `mrays_closest_incoherent / mrays_brute_force`.
     pub speedup_over_brute_force: f64,
-    /// Sample rays where the BVH and brute force disagree (must be 0).
+    /// Sample rays where the wide BVH, the binary BVH and brute force do not all agree (must
+    /// be 0).
     pub brute_force_mismatches: usize,
+    /// The binary BVH on the same rays.
+    pub binary: StructureReport,
+    /// Embree 4 build time (default mode, one thread), ms.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub embree_build_ms: Option<f64>,
+    /// Embree 4 default mode, closest hit, primary rays, Mrays/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub embree_mrays_closest_primary: Option<f64>,
+    /// Embree 4 default mode, closest hit, incoherent rays, Mrays/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub embree_mrays_closest_incoherent: Option<f64>,
+    /// Embree 4 robust mode build time, ms.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub embree_robust_build_ms: Option<f64>,
+    /// Embree 4 robust mode, closest hit, primary rays, Mrays/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub embree_robust_mrays_closest_primary: Option<f64>,
+    /// Embree 4 robust mode, closest hit, incoherent rays, Mrays/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub embree_robust_mrays_closest_incoherent: Option<f64>,
+}
+
+/// One structure's figures.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct StructureReport {
+    /// Build time, ms.
+    pub build_ms: f64,
+    /// Nodes in use.
+    pub nodes: usize,
+    /// Bytes the structure adds per triangle.
+    pub bytes_per_triangle: f64,
+    /// Closest hit, primary rays, Mrays/s.
+    pub mrays_closest_primary: f64,
+    /// Any hit, primary rays, Mrays/s.
+    pub mrays_any_primary: f64,
+    /// Closest hit, incoherent rays, Mrays/s.
+    pub mrays_closest_incoherent: f64,
+    /// Any hit, incoherent rays, Mrays/s.
+    pub mrays_any_incoherent: f64,
+    /// Mean nodes visited per primary closest-hit ray.
+    pub nodes_per_ray_primary: f64,
+    /// Mean triangle tests per primary closest-hit ray.
+    pub triangles_per_ray_primary: f64,
+    /// Mean nodes visited per incoherent closest-hit ray.
+    pub nodes_per_ray_incoherent: f64,
+    /// Mean triangle tests per incoherent closest-hit ray.
+    pub triangles_per_ray_incoherent: f64,
 }
 
 /// Runs the BVH benchmark.
@@ -126,16 +181,50 @@ pub fn run(args: &BvhArgs) -> Result<()> {
         TriangleVariant::Cramer => bench(args, &Cramer)?,
         TriangleVariant::F64Reference => bench(args, &F64Reference)?,
     };
-    print_report(&report);
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&report)
             .map_err(|e| Error::Other(format!("JSON encoding failed: {e}")))?;
         write_bytes_atomic(path, text.as_bytes())?;
     }
+    print_report(&report);
     Ok(())
 }
 
-type VecBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
+/// Closest/any-hit throughput and per-ray counts of one structure on both ray sets.
+fn measure(
+    primary: &[Ray],
+    incoherent: &[Ray],
+    closest: impl Fn(&Ray, Option<&mut TraversalStats>) -> bool,
+    any: impl Fn(&Ray) -> bool,
+    rep: &mut StructureReport,
+) -> Result<(usize, usize)> {
+    let (c_p, hits_p) = throughput(primary, |r| closest(r, None));
+    let (a_p, any_p) = throughput(primary, &any);
+    let (c_i, hits_i) = throughput(incoherent, |r| closest(r, None));
+    let (a_i, any_i) = throughput(incoherent, &any);
+    if hits_p != any_p || hits_i != any_i {
+        return Err(Error::Other(format!(
+            "any-hit disagrees with closest-hit on hit/miss: primary {hits_p} vs {any_p}, incoherent {hits_i} vs {any_i}"
+        )));
+    }
+    let per_ray = |rays: &[Ray]| {
+        let mut st = TraversalStats::default();
+        for r in rays {
+            closest(r, Some(&mut st));
+        }
+        let k = rays.len().max(1) as f64;
+        (st.nodes_visited as f64 / k, st.primitives_tested as f64 / k)
+    };
+    (rep.nodes_per_ray_primary, rep.triangles_per_ray_primary) = per_ray(primary);
+    (rep.nodes_per_ray_incoherent, rep.triangles_per_ray_incoherent) = per_ray(incoherent);
+    (
+        rep.mrays_closest_primary,
+        rep.mrays_any_primary,
+        rep.mrays_closest_incoherent,
+        rep.mrays_any_incoherent,
+    ) = (c_p, a_p, c_i, a_i);
+    Ok((hits_p, hits_i))
+}
 
 fn bench<T: TriangleIntersector>(args: &BvhArgs, isect: &T) -> Result<BvhReport> {
     let obj = read_obj(&args.mesh)?;
@@ -145,45 +234,53 @@ fn bench<T: TriangleIntersector>(args: &BvhArgs, isect: &T) -> Result<BvhReport>
         max_leaf_size: args.leaf_size,
         exclude_non_finite: false,
     };
-    let mut build_s = f64::INFINITY;
-    let mut bvh: Option<VecBvh> = None;
+    let build_err = |e: halfray_core::bvh::BvhError| Error::input(Location::file(&args.mesh), e.to_string());
+    let mut binary_s = f64::INFINITY;
+    let mut wide_s = f64::INFINITY;
+    let mut built = None;
     for _ in 0..TIMED_PASSES {
-        let nodes = vec![BvhNode::EMPTY; node_capacity(n) + 1];
-        let indices = vec![0u32; index_capacity(n)];
         let t0 = Instant::now();
-        let built = Bvh::build(&mesh, nodes, indices, &options)
-            .map_err(|e| Error::input(Location::file(&args.mesh), e.to_string()))?;
-        build_s = build_s.min(t0.elapsed().as_secs_f64());
-        bvh = Some(built);
+        let b = build_binary(&mesh, &options).map_err(build_err)?;
+        let t1 = Instant::now();
+        let w = build_wide(&mesh, &b).map_err(build_err)?;
+        binary_s = binary_s.min((t1 - t0).as_secs_f64());
+        wide_s = wide_s.min(t0.elapsed().as_secs_f64());
+        built = Some((b, w));
     }
-    let bvh = bvh.ok_or_else(|| Error::Other("no build".into()))?;
+    let (bvh, wide) = built.ok_or_else(|| Error::Other("no build".into()))?;
     let stats = bvh.stats();
+    let wstats = wide.stats();
 
     let (lo, hi) = obj.bounds().unwrap_or((glam::Vec3::ZERO, glam::Vec3::ONE));
     let primary = Camera::framing(lo, hi, args.width, args.width).rays();
     let incoherent = random_rays(lo, hi, args.rays, INCOHERENT_SEED);
 
-    let closest = |r: &Ray| bvh.closest_hit_triangles(&mesh, isect, r, None).is_some();
-    let any = |r: &Ray| bvh.any_hit_triangles(&mesh, isect, r, None).is_some();
-    let (mrays_closest_primary, hits_p) = throughput(&primary, closest);
-    let (mrays_any_primary, any_p) = throughput(&primary, any);
-    let (mrays_closest_incoherent, hits_i) = throughput(&incoherent, closest);
-    let (mrays_any_incoherent, any_i) = throughput(&incoherent, any);
-    if hits_p != any_p || hits_i != any_i {
-        return Err(Error::Other(format!(
-            "any-hit disagrees with closest-hit on hit/miss: primary {hits_p} vs {any_p}, incoherent {hits_i} vs {any_i}"
-        )));
-    }
-    let per_ray = |rays: &[Ray]| {
-        let mut st = TraversalStats::default();
-        for r in rays {
-            let _ = bvh.closest_hit_triangles(&mesh, isect, r, Some(&mut st));
-        }
-        let k = rays.len().max(1) as f64;
-        (st.nodes_visited as f64 / k, st.primitives_tested as f64 / k)
+    let mut binary = StructureReport {
+        build_ms: binary_s * 1e3,
+        nodes: stats.nodes,
+        bytes_per_triangle: stats.bytes_per_primitive,
+        ..StructureReport::default()
     };
-    let (nodes_p, tris_p) = per_ray(&primary);
-    let (nodes_i, tris_i) = per_ray(&incoherent);
+    measure(
+        &primary,
+        &incoherent,
+        |r, st| bvh.closest_hit_triangles(&mesh, isect, r, st).is_some(),
+        |r| bvh.any_hit_triangles(&mesh, isect, r, None).is_some(),
+        &mut binary,
+    )?;
+    let mut top = StructureReport {
+        build_ms: wide_s * 1e3,
+        nodes: wstats.nodes,
+        bytes_per_triangle: wstats.bytes_per_triangle,
+        ..StructureReport::default()
+    };
+    let (hits_p, hits_i) = measure(
+        &primary,
+        &incoherent,
+        |r, st| closest_simd(&wide, isect, r, st).is_some(),
+        |r| any_simd(&wide, isect, r).is_some(),
+        &mut top,
+    )?;
 
     let sample_len = (BRUTE_FORCE_TESTS / n.max(1))
         .clamp(16, 20_000)
@@ -199,40 +296,104 @@ fn bench<T: TriangleIntersector>(args: &BvhArgs, isect: &T) -> Result<BvhReport>
         .iter()
         .zip(&brute)
         .filter(|(r, b)| {
-            bvh.closest_hit_triangles(&mesh, isect, r, None)
-                .map(|(p, h)| (p, h.t))
-                != **b
+            let w = closest_simd(&wide, isect, r, None).map(|(p, h)| (p, h.t));
+            let bin = bvh
+                .closest_hit_triangles(&mesh, isect, r, None)
+                .map(|(p, h)| (p, h.t));
+            w != **b || bin != **b
         })
         .count();
     let mrays_brute = sample_len as f64 / brute_s.max(1e-9) / 1e6;
+    let embree = embree_figures(&obj, &primary, &incoherent)?;
 
     Ok(BvhReport {
         mesh: args.mesh.display().to_string(),
         intersector: isect.name().to_string(),
+        structure: "bvh8".into(),
+        simd: crate::simd::level_name().into(),
         triangles: n,
-        build_ms: build_s * 1e3,
-        nodes: stats.nodes,
-        leaves: stats.leaves,
+        build_ms: top.build_ms,
+        nodes: wstats.nodes,
+        leaves: wstats.leaves,
         max_depth: stats.max_depth,
         sah_cost: stats.sah_cost,
-        bytes_per_triangle: stats.bytes_per_primitive,
+        bytes_per_triangle: wstats.bytes_per_triangle,
         primary_rays: primary.len(),
         incoherent_rays: incoherent.len(),
-        mrays_closest_primary,
-        mrays_any_primary,
-        mrays_closest_incoherent,
-        mrays_any_incoherent,
+        mrays_closest_primary: top.mrays_closest_primary,
+        mrays_any_primary: top.mrays_any_primary,
+        mrays_closest_incoherent: top.mrays_closest_incoherent,
+        mrays_any_incoherent: top.mrays_any_incoherent,
         hit_rate_primary: hits_p as f64 / primary.len().max(1) as f64,
         hit_rate_incoherent: hits_i as f64 / incoherent.len().max(1) as f64,
-        nodes_per_ray_primary: nodes_p,
-        triangles_per_ray_primary: tris_p,
-        nodes_per_ray_incoherent: nodes_i,
-        triangles_per_ray_incoherent: tris_i,
+        nodes_per_ray_primary: top.nodes_per_ray_primary,
+        triangles_per_ray_primary: top.triangles_per_ray_primary,
+        nodes_per_ray_incoherent: top.nodes_per_ray_incoherent,
+        triangles_per_ray_incoherent: top.triangles_per_ray_incoherent,
         brute_force_rays: sample_len,
         mrays_brute_force: mrays_brute,
-        speedup_over_brute_force: mrays_closest_incoherent / mrays_brute.max(1e-12),
+        speedup_over_brute_force: top.mrays_closest_incoherent / mrays_brute.max(1e-12),
         brute_force_mismatches: mismatches,
+        binary,
+        embree_build_ms: embree.map(|e| e.build_ms[0]),
+        embree_mrays_closest_primary: embree.map(|e| e.primary[0]),
+        embree_mrays_closest_incoherent: embree.map(|e| e.incoherent[0]),
+        embree_robust_build_ms: embree.map(|e| e.build_ms[1]),
+        embree_robust_mrays_closest_primary: embree.map(|e| e.primary[1]),
+        embree_robust_mrays_closest_incoherent: embree.map(|e| e.incoherent[1]),
     })
+}
+
+/// Embree's build times and closest-hit throughputs, `[default, robust]`.
+#[derive(Clone, Copy)]
+struct EmbreeFigures {
+    build_ms: [f64; 2],
+    primary: [f64; 2],
+    incoherent: [f64; 2],
+}
+
+#[cfg(feature = "embree")]
+fn embree_figures(
+    obj: &crate::obj::ObjMesh,
+    primary: &[Ray],
+    incoherent: &[Ray],
+) -> Result<Option<EmbreeFigures>> {
+    use crate::embree::{EmbreeDevice, EmbreeScene};
+    let err = |e: crate::embree::EmbreeError| Error::Other(format!("embree: {e}"));
+    let device = EmbreeDevice::new().map_err(err)?;
+    let positions: Vec<[f32; 3]> = obj.positions.iter().map(|p| p.to_array()).collect();
+    let mut f = EmbreeFigures {
+        build_ms: [f64::INFINITY; 2],
+        primary: [0.0; 2],
+        incoherent: [0.0; 2],
+    };
+    for (k, robust) in [false, true].into_iter().enumerate() {
+        let mut scene = None;
+        for _ in 0..TIMED_PASSES {
+            let t0 = Instant::now();
+            let s = EmbreeScene::new(&device, &positions, &obj.triangles, robust).map_err(err)?;
+            f.build_ms[k] = f.build_ms[k].min(t0.elapsed().as_secs_f64() * 1e3);
+            scene = Some(s);
+        }
+        let scene = scene.ok_or_else(|| Error::Other("no Embree build".into()))?;
+        let hit = |r: &Ray| {
+            scene
+                .intersect(r.origin.to_array(), r.direction.to_array(), r.t_min, r.t_max)
+                .is_some()
+        };
+        f.primary[k] = throughput(primary, hit).0;
+        f.incoherent[k] = throughput(incoherent, hit).0;
+    }
+    Ok(Some(f))
+}
+
+#[cfg(not(feature = "embree"))]
+fn embree_figures(
+    _obj: &crate::obj::ObjMesh,
+    _primary: &[Ray],
+    _incoherent: &[Ray],
+) -> Result<Option<EmbreeFigures>> {
+    Ok(None)
 }
 
 /// Best-of-[`TIMED_PASSES`] throughput of `f` over `rays` in Mrays/s, and the hit count.
@@ -270,40 +431,74 @@ fn brute_force<T: TriangleIntersector>(
 
 fn print_report(r: &BvhReport) {
     println!(
-        "bench bvh: {} ({} triangles, {})",
-        r.mesh, r.triangles, r.intersector
+        "bench bvh: {} ({} triangles, {}, {} on {})",
+        r.mesh, r.triangles, r.intersector, r.structure, r.simd
     );
     println!(
-        "  build            {:9.1} ms   nodes {}  leaves {}  depth {}  SAH {:.1}",
-        r.build_ms, r.nodes, r.leaves, r.max_depth, r.sah_cost
+        "  {:<22} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "1 thread", "build ms", "B/tri", "closest", "any", "closest", "any"
     );
     println!(
-        "  size             {:9.1} bytes/triangle (nodes 32 B + indices 4 B)",
-        r.bytes_per_triangle
+        "  {:<22} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "", "", "", "primary", "primary", "incoh.", "incoh."
     );
-    println!(
-        "  {:<16} {:>9} {:>9} {:>9} {:>11} {:>10}",
-        "rays (1 thread)", "closest", "any", "hit rate", "nodes/ray", "tris/ray"
+    let row = |name: &str, s: &StructureReport| {
+        println!(
+            "  {:<22} {:>9.1} {:>9.1} {:>9.2} {:>9.2} {:>9.2} {:>9.2}",
+            name,
+            s.build_ms,
+            s.bytes_per_triangle,
+            s.mrays_closest_primary,
+            s.mrays_any_primary,
+            s.mrays_closest_incoherent,
+            s.mrays_any_incoherent
+        );
+    };
+    row(
+        "halfray bvh8",
+        &StructureReport {
+            build_ms: r.build_ms,
+            nodes: r.nodes,
+            bytes_per_triangle: r.bytes_per_triangle,
+            mrays_closest_primary: r.mrays_closest_primary,
+            mrays_any_primary: r.mrays_any_primary,
+            mrays_closest_incoherent: r.mrays_closest_incoherent,
+            mrays_any_incoherent: r.mrays_any_incoherent,
+            ..StructureReport::default()
+        },
     );
+    row("halfray binary", &r.binary);
+    for (name, b, p, i) in [
+        (
+            "embree default",
+            r.embree_build_ms,
+            r.embree_mrays_closest_primary,
+            r.embree_mrays_closest_incoherent,
+        ),
+        (
+            "embree robust",
+            r.embree_robust_build_ms,
+            r.embree_robust_mrays_closest_primary,
+            r.embree_robust_mrays_closest_incoherent,
+        ),
+    ] {
+        if let (Some(b), Some(p), Some(i)) = (b, p, i) {
+            println!(
+                "  {:<22} {:>9.1} {:>9} {:>9.2} {:>9} {:>9.2} {:>9}",
+                name, b, "88", p, "-", i, "-"
+            );
+        }
+    }
     println!(
-        "  {:<16} {:>9.2} {:>9.2} {:>8.1}% {:>11.1} {:>10.1}   Mrays/s, {} rays",
-        "primary",
-        r.mrays_closest_primary,
-        r.mrays_any_primary,
+        "  rays: {} primary ({:.1}% hit), {} incoherent ({:.1}% hit); bvh8 nodes/ray {:.1} / {:.1}, tris/ray {:.1} / {:.1}",
+        r.primary_rays,
         100.0 * r.hit_rate_primary,
-        r.nodes_per_ray_primary,
-        r.triangles_per_ray_primary,
-        r.primary_rays
-    );
-    println!(
-        "  {:<16} {:>9.2} {:>9.2} {:>8.1}% {:>11.1} {:>10.1}   Mrays/s, {} rays",
-        "incoherent",
-        r.mrays_closest_incoherent,
-        r.mrays_any_incoherent,
+        r.incoherent_rays,
         100.0 * r.hit_rate_incoherent,
+        r.nodes_per_ray_primary,
         r.nodes_per_ray_incoherent,
-        r.triangles_per_ray_incoherent,
-        r.incoherent_rays
+        r.triangles_per_ray_primary,
+        r.triangles_per_ray_incoherent
     );
     println!(
         "  brute force      {:9.1} rays/s on {} incoherent rays: BVH is {:.0}x faster; mismatches {}",

@@ -16,7 +16,7 @@ use crate::accel::MeshAccel;
 use crate::render::xform::bounds_to_world;
 use glam::{Vec2, Vec3};
 use halfray_core::aabb::SlabRay;
-use halfray_core::bvh::{TraversalStats, TriangleMesh};
+use halfray_core::bvh::TraversalStats;
 use halfray_core::float::gamma;
 use halfray_core::plane::Plane;
 use halfray_core::quadric::{Ellipsoid, Quadric};
@@ -266,10 +266,6 @@ fn tri_hit(v: &[Vec3; 3], ray: &Ray) -> Option<(Hit, Vec3)> {
 }
 
 impl MeshShape {
-    fn tri_mesh(&self) -> TriangleMesh<'_> {
-        TriangleMesh::new(&self.accel.mesh.positions, &self.accel.mesh.triangles)
-    }
-
     fn closest(&self, ray: &Ray, stats: &mut TraversalStats) -> Option<(Hit, Vec3)> {
         let (i, th) = self.accel.closest_with_stats(&Watertight, ray, stats)?;
         let v = self.accel.mesh.triangle(i as usize);
@@ -278,17 +274,15 @@ impl MeshShape {
 
     /// Every triangle crossing on the ray's interval, with its triangle index.
     fn all_hits(&self, ray: &Ray, stats: &mut TraversalStats, out: &mut Vec<(u32, Hit, Vec3)>) {
-        let mesh = self.tri_mesh();
         let Some(pre) = Watertight.prepare(ray) else {
             return;
         };
         let _ = self.accel.bvh().closest_hit::<()>(
             ray,
-            |prim, r| {
-                let v = mesh.triangle(prim as usize)?;
+            |prim, v, r| {
                 // `r.t_max` never shrinks: we never report a hit, so every crossing is seen.
-                if let Some(th) = Watertight.intersect_prepared(&pre, r, &v) {
-                    out.push((prim, th.to_hit(&v), Vec3::new(th.b0(), th.b1, th.b2)));
+                if let Some(th) = Watertight.intersect_prepared(&pre, r, v) {
+                    out.push((prim, th.to_hit(v), Vec3::new(th.b0(), th.b1, th.b2)));
                 }
                 None
             },

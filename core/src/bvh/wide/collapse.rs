@@ -1,15 +1,51 @@
 //! Collapsing a binary tree into a wide one (see the module docs of [`super`]).
 
 use super::node::{ChildRef, LeafTriangle, WideNode};
-use super::{MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh, stack_size};
+use super::{LEAF_MERGE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh, stack_size};
 use crate::bvh::{Bvh, BvhError, BvhNode, TriangleMesh};
+
+/// The index range of binary node `b`'s subtree (its primitives are contiguous): from its
+/// leftmost leaf's start to its rightmost leaf's end. `None` for a broken tree.
+fn subtree_range(nodes: &[BvhNode], b: u32) -> Option<core::ops::Range<usize>> {
+    let (mut lo, mut hi) = (b, b);
+    for _ in 0..=crate::bvh::MAX_DEPTH {
+        match nodes.get(lo as usize)?.children() {
+            Some((l, _)) => lo = l,
+            None => break,
+        }
+    }
+    for _ in 0..=crate::bvh::MAX_DEPTH {
+        match nodes.get(hi as usize)?.children() {
+            Some((_, r)) => hi = r,
+            None => break,
+        }
+    }
+    let start = nodes.get(lo as usize)?.primitive_range()?.start;
+    let end = nodes.get(hi as usize)?.primitive_range()?.end;
+    (start < end).then_some(start..end)
+}
+
+/// The leaf run binary node `b` becomes, if it becomes one: a binary leaf, or an inner node
+/// whose subtree holds at most [`LEAF_MERGE`] primitives (one wide leaf tests them in a row,
+/// cheaper than a node visit).
+fn as_leaf(nodes: &[BvhNode], b: u32) -> Option<core::ops::Range<usize>> {
+    let node = nodes.get(b as usize)?;
+    if let Some(r) = node.primitive_range() {
+        return Some(r);
+    }
+    subtree_range(nodes, b).filter(|r| r.len() <= LEAF_MERGE)
+}
 
 /// The binary nodes that become the children of the wide node made from binary node `b`: start
 /// with `b`'s two children and, while fewer than `W`, replace the inner one with the largest
 /// surface area (ties: the first) by its two children. A leaf `b` gives itself, alone.
 fn child_list<const W: usize>(nodes: &[BvhNode], b: u32) -> ([u32; W], usize) {
     let mut list = [0u32; W];
-    let Some((l, r)) = nodes.get(b as usize).and_then(BvhNode::children) else {
+    let Some((l, r)) = nodes
+        .get(b as usize)
+        .and_then(BvhNode::children)
+        .filter(|_| as_leaf(nodes, b).is_none())
+    else {
         list[0] = b;
         return (list, 1);
     };
@@ -19,7 +55,10 @@ fn child_list<const W: usize>(nodes: &[BvhNode], b: u32) -> ([u32; W], usize) {
     while len < W {
         let mut best: Option<(usize, f32)> = None;
         for (i, &c) in list[..len].iter().enumerate() {
-            if let Some(node) = nodes.get(c as usize).filter(|n| !n.is_leaf()) {
+            if let Some(node) = nodes
+                .get(c as usize)
+                .filter(|_| as_leaf(nodes, c).is_none())
+            {
                 let area = node.bounds().surface_area();
                 if best.is_none_or(|(_, a)| area > a) {
                     best = Some((i, area));
@@ -195,7 +234,7 @@ where
                     let Some(bn) = bnodes.get(c as usize) else {
                         continue;
                     };
-                    let reference = if let Some(range) = bn.primitive_range() {
+                    let reference = if let Some(range) = as_leaf(bnodes, c) {
                         // Checked by `plan`: count ≤ MAX_LEAF_TRIANGLES, start < MAX_TRIANGLES.
                         ChildRef::leaf(range.start as u32, range.len() as u32)
                             .unwrap_or(ChildRef::EMPTY)

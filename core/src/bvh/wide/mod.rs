@@ -53,12 +53,19 @@ mod traverse;
 mod tests;
 
 pub use node::{ChildRef, LeafTriangle, WideNode};
+pub use traverse::WideStack;
 
 use super::stats::TraversalStats;
 use crate::aabb::Aabb;
 
 /// Most triangles one wide leaf slot can hold (the binary tree's leaves must not be larger).
 pub const MAX_LEAF_TRIANGLES: usize = 16;
+
+/// Binary subtrees of at most this many triangles become one wide leaf (their triangles are
+/// contiguous in leaf order): testing a few triangles in a row costs less than visiting a node
+/// for them. Chosen by measurement (`halfray bench bvh`, README). At most
+/// [`MAX_LEAF_TRIANGLES`].
+pub const LEAF_MERGE: usize = 4;
 
 /// Most triangles a wide BVH can hold: leaf references address triangle records with 27 bits.
 pub const MAX_TRIANGLES: usize = 1 << 27;

@@ -100,10 +100,38 @@ impl WideRay {
 
 /// One stack entry: a child reference still to visit and the distance at which the ray enters
 /// its box.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 struct Entry {
     child: u32,
     t_enter: f32,
+}
+
+/// The traversal stack of a wide tree: `7·MAX_DEPTH` entries of 8 bytes (3.5 KiB), enough for
+/// any tree up to 8 wide (module docs of [`super`]). Creating one means writing all of it, so
+/// a caller tracing many rays keeps one and passes it to the `_with` queries; the plain
+/// queries make a fresh one per ray. Its contents between queries mean nothing.
+#[derive(Clone, Debug)]
+pub struct WideStack {
+    entries: [Entry; STACK],
+}
+
+impl WideStack {
+    /// A stack for any wide tree.
+    #[must_use]
+    pub const fn new() -> Self {
+        Self {
+            entries: [Entry {
+                child: 0,
+                t_enter: 0.0,
+            }; STACK],
+        }
+    }
+}
+
+impl Default for WideStack {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl<const W: usize, N, T> WideBvh<W, N, T>
@@ -117,7 +145,8 @@ where
     /// current closest `t` (inclusive), and returns `(t, payload)` for a hit in
     /// `(t_min, t_max]`. Of equal `t`, the smaller triangle index wins, so the result equals a
     /// brute-force loop with the same rule. `stats`, when given, is **added to**. An invalid
-    /// ray returns `None` without testing any node.
+    /// ray returns `None` without testing any node. Makes a fresh [`WideStack`]; see
+    /// [`WideBvh::closest_hit_with`] for many rays.
     #[inline]
     pub fn closest_hit<H>(
         &self,
@@ -125,7 +154,19 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, false>(ray, intersect, stats)
+        self.traverse::<H, false>(&mut WideStack::new(), ray, intersect, stats)
+    }
+
+    /// [`WideBvh::closest_hit`] on a stack the caller keeps across rays.
+    #[inline(always)]
+    pub fn closest_hit_with<H>(
+        &self,
+        stack: &mut WideStack,
+        ray: &Ray,
+        intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, H)> {
+        self.traverse::<H, false>(stack, ray, intersect, stats)
     }
 
     /// Any hit of `ray`: traversal stops at the first triangle for which `intersect` reports a
@@ -138,19 +179,44 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, true>(ray, intersect, stats)
+        self.traverse::<H, true>(&mut WideStack::new(), ray, intersect, stats)
+    }
+
+    /// [`WideBvh::any_hit`] on a stack the caller keeps across rays.
+    #[inline(always)]
+    pub fn any_hit_with<H>(
+        &self,
+        stack: &mut WideStack,
+        ray: &Ray,
+        intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, H)> {
+        self.traverse::<H, true>(stack, ray, intersect, stats)
     }
 
     /// [`WideBvh::closest_hit`] with the intersector `isect` (prepared once per ray).
-    #[inline(always)]
+    #[inline]
     pub fn closest_hit_triangles<I: TriangleIntersector>(
         &self,
         isect: &I,
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
+        self.closest_hit_triangles_with(&mut WideStack::new(), isect, ray, stats)
+    }
+
+    /// [`WideBvh::closest_hit_triangles`] on a stack the caller keeps across rays.
+    #[inline(always)]
+    pub fn closest_hit_triangles_with<I: TriangleIntersector>(
+        &self,
+        stack: &mut WideStack,
+        isect: &I,
+        ray: &Ray,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, TriangleHit)> {
         let pre = isect.prepare(ray)?;
         self.traverse::<TriangleHit, false>(
+            stack,
             ray,
             |_, v, r| isect.intersect_prepared(&pre, r, v).map(|h| (h.t, h)),
             stats,
@@ -158,15 +224,28 @@ where
     }
 
     /// [`WideBvh::any_hit`] with the intersector `isect`.
-    #[inline(always)]
+    #[inline]
     pub fn any_hit_triangles<I: TriangleIntersector>(
         &self,
         isect: &I,
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
+        self.any_hit_triangles_with(&mut WideStack::new(), isect, ray, stats)
+    }
+
+    /// [`WideBvh::any_hit_triangles`] on a stack the caller keeps across rays.
+    #[inline(always)]
+    pub fn any_hit_triangles_with<I: TriangleIntersector>(
+        &self,
+        stack: &mut WideStack,
+        isect: &I,
+        ray: &Ray,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, TriangleHit)> {
         let pre = isect.prepare(ray)?;
         self.traverse::<TriangleHit, true>(
+            stack,
             ray,
             |_, v, r| isect.intersect_prepared(&pre, r, v).map(|h| (h.t, h)),
             stats,
@@ -176,21 +255,23 @@ where
     #[inline(always)]
     fn traverse<H, const ANY: bool>(
         &self,
+        stack: &mut WideStack,
         ray: &Ray,
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
         let slab = SlabRay::new(ray)?;
         if slab.divide || ray.t_min < 0.0 {
-            self.walk::<H, ANY, true>(ray, &slab, intersect, stats)
+            self.walk::<H, ANY, true>(&mut stack.entries, ray, &slab, intersect, stats)
         } else {
-            self.walk::<H, ANY, false>(ray, &slab, intersect, stats)
+            self.walk::<H, ANY, false>(&mut stack.entries, ray, &slab, intersect, stats)
         }
     }
 
     #[inline(always)]
     fn walk<H, const ANY: bool, const GENERAL: bool>(
         &self,
+        stack: &mut [Entry; STACK],
         ray: &Ray,
         slab: &SlabRay,
         mut intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
@@ -205,10 +286,6 @@ where
         let mut local = TraversalStats::default();
         let mut cur = *ray;
         let mut best: Option<(u32, H)> = None;
-        let mut stack = [Entry {
-            child: 0,
-            t_enter: 0.0,
-        }; STACK];
         let mut sp = 0usize;
         // The root is node 0 (its own box is the union of its children's: not tested).
         let mut next = 0u32;
