@@ -21,7 +21,10 @@ pub type VecBvh8 = Bvh8<Vec<WideNode<8>>, Vec<LeafTriangle>>;
 pub type VecBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
 
 /// Builds the binary BVH over `mesh` (binned SAH, `options`).
-pub fn build_binary(mesh: &TriangleMesh<'_>, options: &BuildOptions) -> std::result::Result<VecBvh, BvhError> {
+pub fn build_binary(
+    mesh: &TriangleMesh<'_>,
+    options: &BuildOptions,
+) -> std::result::Result<VecBvh, BvhError> {
     let n = mesh.len();
     Bvh::build(
         mesh,
@@ -32,7 +35,10 @@ pub fn build_binary(mesh: &TriangleMesh<'_>, options: &BuildOptions) -> std::res
 }
 
 /// Collapses `binary` (built over `mesh`) into an 8-wide BVH in exactly sized storage.
-pub fn build_wide(mesh: &TriangleMesh<'_>, binary: &VecBvh) -> std::result::Result<VecBvh8, BvhError> {
+pub fn build_wide(
+    mesh: &TriangleMesh<'_>,
+    binary: &VecBvh,
+) -> std::result::Result<VecBvh8, BvhError> {
     let nodes = VecBvh8::node_count_for(binary)?;
     Bvh8::from_binary(
         binary,

@@ -1000,6 +1000,7 @@ pub mod bvh {
     use super::{Enc, Input, fmt_ray, fmt_vec3};
     use glam::Vec3;
     use halfray_core::aabb::Aabb;
+    use halfray_core::bvh::wide::{Bvh8, LeafTriangle, WideNode};
     use halfray_core::bvh::{
         BuildOptions, Bvh, BvhError, BvhNode, PrimitiveSource, TriangleMesh, index_capacity,
         node_capacity,
@@ -1285,10 +1286,32 @@ pub mod bvh {
             ctx()
         );
 
+        // 6. The 8-wide tree collapsed from it: exactly sized storage builds, and every ray
+        // below gives the binary tree's answers.
+        let wide_nodes = Bvh8::<Vec<WideNode<8>>, Vec<LeafTriangle>>::node_count_for(&bvh)
+            .unwrap_or_else(|e| panic!("wide node count: {e}\n{}", ctx()));
+        let wide = Bvh8::from_binary(
+            &bvh,
+            &mesh,
+            vec![WideNode::<8>::EMPTY; wide_nodes],
+            vec![LeafTriangle::EMPTY; bvh.primitive_count()],
+        )
+        .unwrap_or_else(|e| panic!("wide collapse: {e}\n{}", ctx()));
+
         // 4, 5. Rays.
         for ray in &s.rays {
             let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
             check_ray(&bvh, &mesh, &Watertight, ray, &in_tree, true, &rctx);
+            check_wide(&wide, &mesh, &Watertight, ray, &in_tree, true, &rctx);
+            check_wide(
+                &wide,
+                &mesh,
+                &MollerTrumbore::CLASSIC,
+                ray,
+                &in_tree,
+                false,
+                &rctx,
+            );
             // Möller–Trumbore's inexact edge tests can report a hit slightly outside the
             // triangle, hence outside its box: only the weak form holds for it.
             check_ray(
@@ -1319,6 +1342,56 @@ pub mod bvh {
                 rctx()
             );
         }
+    }
+
+    /// [`check_ray`]'s properties for the 8-wide tree: closest hit equal to brute force in the
+    /// same domain, a genuine hit no nearer than brute force's elsewhere; any-hit agreement.
+    fn check_wide<T: TriangleIntersector>(
+        wide: &Bvh8<Vec<WideNode<8>>, Vec<LeafTriangle>>,
+        mesh: &TriangleMesh<'_>,
+        isect: &T,
+        ray: &Ray,
+        in_tree: &[bool],
+        exact: bool,
+        ctx: &dyn Fn() -> String,
+    ) {
+        let want = brute(mesh, isect, ray, in_tree);
+        let got = wide.closest_hit_triangles(isect, ray, None);
+        let any = wide.any_hit_triangles(isect, ray, None);
+        for (p, h) in got.iter().chain(any.iter()) {
+            let v = mesh.triangle(*p as usize).expect("hit primitive exists");
+            assert_eq!(
+                isect.intersect(ray, &v),
+                Some(*h),
+                "wide hit record\n{}",
+                ctx()
+            );
+        }
+        if !exact
+            || !within_domain(mesh, ray, in_tree)
+            || projection_underflows(mesh, ray, in_tree)
+            || grazes_a_box(mesh, ray, in_tree)
+        {
+            if let Some((_, h)) = got {
+                let (_, w) = want.expect("brute force finds every BVH hit");
+                assert!(w.t <= h.t, "wide: nearer than brute force\n{}", ctx());
+            }
+            return;
+        }
+        assert_eq!(
+            got,
+            want,
+            "{}: wide BVH closest hit differs from brute force\n{}",
+            isect.name(),
+            ctx()
+        );
+        assert_eq!(
+            any.is_some(),
+            want.is_some(),
+            "{}: wide any-hit {any:?} disagrees with brute force {want:?}\n{}",
+            isect.name(),
+            ctx()
+        );
     }
 
     fn check_ray<T: TriangleIntersector>(

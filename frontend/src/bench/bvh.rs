@@ -7,12 +7,12 @@
 //! every ray) runs on a sample of the incoherent rays sized to about [`BRUTE_FORCE_TESTS`]
 //! triangle tests, as a baseline ratio; the BVH's answers on that sample are checked against it.
 
+use crate::accel::{any_simd, build_binary, build_wide, closest_simd};
 use crate::atomic::write_bytes_atomic;
 use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
 use crate::raysets::{Camera, random_rays};
 use halfray_core::Ray;
-use crate::accel::{any_simd, build_binary, build_wide, closest_simd};
 use halfray_core::bvh::{BuildOptions, DEFAULT_MAX_LEAF_SIZE, TraversalStats, TriangleMesh};
 use halfray_core::triangle::{
     Cramer, F64Reference, MollerTrumbore, TriangleIntersector, TriangleVariant, Watertight,
@@ -216,7 +216,10 @@ fn measure(
         (st.nodes_visited as f64 / k, st.primitives_tested as f64 / k)
     };
     (rep.nodes_per_ray_primary, rep.triangles_per_ray_primary) = per_ray(primary);
-    (rep.nodes_per_ray_incoherent, rep.triangles_per_ray_incoherent) = per_ray(incoherent);
+    (
+        rep.nodes_per_ray_incoherent,
+        rep.triangles_per_ray_incoherent,
+    ) = per_ray(incoherent);
     (
         rep.mrays_closest_primary,
         rep.mrays_any_primary,
@@ -234,7 +237,8 @@ fn bench<T: TriangleIntersector>(args: &BvhArgs, isect: &T) -> Result<BvhReport>
         max_leaf_size: args.leaf_size,
         exclude_non_finite: false,
     };
-    let build_err = |e: halfray_core::bvh::BvhError| Error::input(Location::file(&args.mesh), e.to_string());
+    let build_err =
+        |e: halfray_core::bvh::BvhError| Error::input(Location::file(&args.mesh), e.to_string());
     let mut binary_s = f64::INFINITY;
     let mut wide_s = f64::INFINITY;
     let mut built = None;
@@ -378,7 +382,12 @@ fn embree_figures(
         let scene = scene.ok_or_else(|| Error::Other("no Embree build".into()))?;
         let hit = |r: &Ray| {
             scene
-                .intersect(r.origin.to_array(), r.direction.to_array(), r.t_min, r.t_max)
+                .intersect(
+                    r.origin.to_array(),
+                    r.direction.to_array(),
+                    r.t_min,
+                    r.t_max,
+                )
                 .is_some()
         };
         f.primary[k] = throughput(primary, hit).0;

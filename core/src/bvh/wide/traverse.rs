@@ -24,6 +24,7 @@ struct WideRay {
 }
 
 impl WideRay {
+    #[inline(always)]
     fn new(slab: &SlabRay) -> Self {
         Self {
             origin: slab.origin.to_array(),
