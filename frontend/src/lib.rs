@@ -7,12 +7,14 @@
 pub mod accel;
 pub mod atomic;
 pub mod bench;
+pub mod console;
 pub mod crosscheck;
 #[cfg(feature = "embree")]
 pub mod embree;
 pub mod error;
 pub mod mesh_tools;
 pub mod obj;
+pub mod outputs;
 pub mod raysets;
 pub mod render;
 pub mod scene;

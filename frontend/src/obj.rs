@@ -12,8 +12,8 @@
 //! non-finite or malformed coordinates, faces with fewer than three vertices, index 0 or out
 //! of range, unknown statements.
 
-use crate::atomic::write_atomic;
 use crate::error::{Error, Location, Result};
+use crate::outputs::OutputFile;
 use glam::Vec3;
 use std::path::Path;
 
@@ -140,7 +140,12 @@ fn tokens_with_columns(s: &str) -> impl Iterator<Item = (usize, &str)> {
 /// written with Rust's shortest round-trip formatting, so reading the file back gives the
 /// same `f32` values bit for bit.
 pub fn write_obj(path: &Path, positions: &[Vec3], triangles: &[[u32; 3]]) -> Result<()> {
-    write_atomic(path, |w| {
+    write_obj_to(OutputFile::reserve(path, false)?, positions, triangles)
+}
+
+/// [`write_obj`] to an output reserved before the work.
+pub fn write_obj_to(out: OutputFile, positions: &[Vec3], triangles: &[[u32; 3]]) -> Result<()> {
+    out.write(|w| {
         for p in positions {
             writeln!(w, "v {} {} {}", p.x, p.y, p.z)?;
         }

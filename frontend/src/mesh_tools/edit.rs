@@ -3,9 +3,10 @@
 
 use super::{
     CollapseArgs, MeshBuffers, SmoothArgs, SubdivideArgs, Vef, build_mesh, export, ms_since,
+    reserve_output,
 };
 use crate::error::{Error, Location, Result};
-use crate::obj::{read_obj, write_obj};
+use crate::obj::{read_obj, write_obj_to};
 use glam::Vec3;
 use halfray_core::halfedge::{
     CollapseAt, CollapseError, DiffuseBoundary, EdgeId, LoopWeights, MAX_ELEMENTS, Mesh,
@@ -102,6 +103,7 @@ fn core_error(path: &Path, what: impl fmt::Display) -> Error {
 /// new vertex on edge `e` of the level's input, so each level has V + E vertices, 2E + 3F
 /// edges and 4F faces (the core's numbering, see `Mesh::subdivide_loop`).
 pub fn subdivide(args: &SubdivideArgs) -> Result<EditReport> {
+    let out = reserve_output(&args.input, &args.output, args.force)?;
     let t0 = Instant::now();
     let obj = read_obj(&args.input)?;
     let mut buffers = MeshBuffers::for_obj(&obj);
@@ -138,7 +140,7 @@ pub fn subdivide(args: &SubdivideArgs) -> Result<EditReport> {
     report.edit_ms = ms_since(t1) - export_ms;
     report.after = report.levels.last().map_or(report.before, |l| l.0);
     let t2 = Instant::now();
-    write_obj(&args.output, &p, &t)?;
+    write_obj_to(out, &p, &t)?;
     report.write_ms = export_ms + ms_since(t2);
     Ok(report)
 }
@@ -190,6 +192,7 @@ pub fn smooth(args: &SmoothArgs) -> Result<EditReport> {
             args.step
         )));
     }
+    let out = reserve_output(&args.input, &args.output, args.force)?;
     let t0 = Instant::now();
     let obj = read_obj(&args.input)?;
     let mut buffers = MeshBuffers::for_obj(&obj);
@@ -219,7 +222,7 @@ pub fn smooth(args: &SmoothArgs) -> Result<EditReport> {
     report.after = mesh.len().into();
     let t2 = Instant::now();
     let (p, t) = export(&mesh);
-    write_obj(&args.output, &p, &t)?;
+    write_obj_to(out, &p, &t)?;
     report.write_ms = ms_since(t2);
     Ok(report)
 }
@@ -256,6 +259,7 @@ pub fn collapse(args: &CollapseArgs) -> Result<EditReport> {
             "--shorter-than {limit}: must be a finite positive length"
         )));
     }
+    let out = reserve_output(&args.input, &args.output, args.force)?;
     let t0 = Instant::now();
     let obj = read_obj(&args.input)?;
     let mut buffers = MeshBuffers::for_obj(&obj);
@@ -307,7 +311,7 @@ pub fn collapse(args: &CollapseArgs) -> Result<EditReport> {
     report.after = mesh.len().into();
     let t2 = Instant::now();
     let (p, t) = export(&mesh);
-    write_obj(&args.output, &p, &t)?;
+    write_obj_to(out, &p, &t)?;
     report.write_ms = ms_since(t2);
     Ok(report)
 }

@@ -14,8 +14,9 @@ pub mod plan;
 pub mod trace;
 pub mod xform;
 
-use crate::atomic::write_bytes_atomic;
+use crate::console::print_out;
 use crate::error::{Error, Result};
+use crate::outputs::{Named, refuse_inputs, reserve_outputs};
 use crate::scene::{self, Scene};
 use glam::{Vec3, Vec4};
 use indicatif::{ParallelProgressIterator, ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -73,6 +74,9 @@ pub struct RenderArgs {
     /// Override the scene's image height.
     #[arg(long)]
     pub height: Option<u32>,
+    /// Replace outputs that are read-only or hard-linked (keeping their mode).
+    #[arg(long)]
+    pub force: bool,
     /// No progress bar and no settings line (the summary line is still printed).
     #[arg(short, long)]
     pub quiet: bool,
@@ -277,9 +281,10 @@ pub fn summary(r: &Rendered) -> String {
     )
 }
 
-/// Runs `halfray render`.
+/// Runs `halfray render`: checks the options and reserves every output, loads the scene
+/// (refusing outputs that are among its files), renders, writes `--stats-json` then the PNG,
+/// and prints the summary last (a closed stdout loses nothing).
 pub fn run(args: &RenderArgs) -> Result<()> {
-    let mut scene = scene::load(&args.scene)?;
     for (v, name) in [(args.width, "--width"), (args.height, "--height")] {
         if v.is_some_and(|x| x == 0 || x > scene::MAX_IMAGE_SIDE) {
             return Err(Error::Usage(format!(
@@ -288,6 +293,22 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             )));
         }
     }
+    let mut outputs = vec![Named::new("-o", &args.output)];
+    if let Some(p) = &args.stats_json {
+        outputs.push(Named::new("--stats-json", p));
+    }
+    let mut inputs = vec![Named::new("scene", &args.scene)];
+    if let Some(p) = &args.background {
+        inputs.push(Named::new("--background", p));
+    }
+    let reserved = reserve_outputs(&outputs, &inputs, args.force)?;
+    let mut scene = scene::load(&args.scene)?;
+    let mesh_inputs: Vec<Named<'_>> = scene
+        .mesh_files
+        .iter()
+        .map(|p| Named::new("mesh file", p))
+        .collect();
+    refuse_inputs(&reserved, &outputs, &mesh_inputs)?;
     if let Some(x) = args.width {
         scene.camera.width = x;
     }
@@ -305,10 +326,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         progress: !args.quiet,
     };
     if args.explain {
-        print!(
-            "{}",
-            EffectPlan::derive(&scene, opts.force_all).explain(&scene)
-        );
+        print_out(&EffectPlan::derive(&scene, opts.force_all).explain(&scene))?;
     }
     if !args.quiet {
         eprintln!(
@@ -322,8 +340,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if let Some(bg) = &background {
         out.composite_over(bg);
     }
-    output::write_png(&args.output, w, h, &out.to_rgba8(args.mode))?;
-    if let Some(p) = &args.stats_json {
+    let mut reserved = reserved.into_iter();
+    let png = reserved.next().expect("-o is reserved first");
+    if let Some(stats) = reserved.next() {
         let c = &out.counts;
         let json = serde_json::to_string_pretty(&StatsJson {
             primary: c.primary,
@@ -333,11 +352,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             seconds: out.seconds,
         })
         .map_err(|e| Error::Other(format!("stats JSON: {e}")))?;
-        write_bytes_atomic(p, format!("{json}\n").as_bytes())?;
+        stats.write(|w| w.write_all(format!("{json}\n").as_bytes()))?;
     }
-    println!("{}", summary(&out));
+    output::write_png(png, w, h, &out.to_rgba8(args.mode))?;
     if !args.quiet {
         eprintln!("wrote {}", args.output.display());
     }
-    Ok(())
+    print_out(&format!("{}\n", summary(&out)))
 }
