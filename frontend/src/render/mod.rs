@@ -25,7 +25,7 @@ use rayon::prelude::*;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::Instant;
-use trace::{RayCounts, Tracer};
+use trace::{PathBound, RayCounts, Tracer};
 
 /// What each pixel shows.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -91,6 +91,8 @@ pub struct RenderOptions {
     pub force_all: bool,
     /// Show a progress bar (only drawn when stderr is a terminal).
     pub progress: bool,
+    /// How far each pixel's ray tree is followed.
+    pub bound: PathBound,
 }
 
 /// A finished render.
@@ -177,7 +179,7 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Rendered {
         .map(|j| {
             let mut counts = RayCounts::default();
             let row = (0..w)
-                .map(|i| pixel(&tracer, opts.mode, i, j, &mut counts))
+                .map(|i| pixel(&tracer, opts, i, j, &mut counts))
                 .collect();
             (row, counts)
         })
@@ -225,7 +227,14 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Rendered {
     }
 }
 
-fn pixel(tracer: &Tracer<'_>, mode: Mode, i: u32, j: u32, counts: &mut RayCounts) -> PixelOut {
+fn pixel(
+    tracer: &Tracer<'_>,
+    opts: &RenderOptions,
+    i: u32,
+    j: u32,
+    counts: &mut RayCounts,
+) -> PixelOut {
+    let mode = opts.mode;
     let ray = tracer.scene.camera.pixel_ray(i, j);
     counts.primary += 1;
     let mut ctx = tracer.ctx();
@@ -243,7 +252,7 @@ fn pixel(tracer: &Tracer<'_>, mode: Mode, i: u32, j: u32, counts: &mut RayCounts
         };
     };
     let value = match mode {
-        Mode::Color => tracer.shade(&ray, &sh, 0, &mut ctx, counts),
+        Mode::Color => tracer.shade_bounded(&ray, &sh, 0, opts.bound, &mut ctx, counts),
         Mode::Normal => sh.hit.normal * 0.5 + 0.5,
         Mode::Barycentric => sh.bary.unwrap_or(Vec3::splat(0.5)),
         Mode::Depth | Mode::Heatmap => Vec3::ZERO,
@@ -324,6 +333,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         mode: args.mode,
         force_all: args.force_all_effects,
         progress: !args.quiet,
+        bound: PathBound::RENDER,
     };
     if args.explain {
         print_out(&EffectPlan::derive(&scene, opts.force_all).explain(&scene))?;
