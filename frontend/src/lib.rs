@@ -12,6 +12,7 @@ pub mod crosscheck;
 #[cfg(feature = "embree")]
 pub mod embree;
 pub mod error;
+pub mod limits;
 pub mod mesh_tools;
 pub mod obj;
 pub mod outputs;

@@ -6,11 +6,12 @@ use super::{
     reserve_output,
 };
 use crate::error::{Error, Location, Result};
+use crate::limits::check_memory;
 use crate::obj::{read_obj, write_obj_to};
 use glam::Vec3;
 use halfray_core::halfedge::{
-    CollapseAt, CollapseError, DiffuseBoundary, EdgeId, LoopWeights, MAX_ELEMENTS, Mesh,
-    MeshStorage, SubdivideError,
+    CollapseAt, CollapseError, Counts, DiffuseBoundary, EdgeId, EdgeRec, FaceRec, LoopWeights,
+    MAX_ELEMENTS, Mesh, MeshStorage, SubdivideError, VertexRec,
 };
 use std::collections::BTreeMap;
 use std::fmt;
@@ -116,17 +117,21 @@ pub fn subdivide(args: &SubdivideArgs) -> Result<EditReport> {
         read_ms: ms_since(t0),
         ..EditReport::default()
     };
-    // Refuse before allocating anything when a level would exceed what the core can index.
+    // Refuse before allocating anything when a level would exceed what the core can index
+    // or the memory limit (every level's buffers stay alive until the export).
     let mut c = mesh.len();
+    let mut bytes = Some(0u64);
     for level in 1..=args.levels {
         c = c.after_loop();
         if c.vertices > MAX_ELEMENTS || c.edges > MAX_ELEMENTS || c.faces > MAX_ELEMENTS {
             return Err(Error::Usage(format!(
-                "--levels {}: level {level} would need {c:?} elements, more than the half-edge core's {MAX_ELEMENTS}",
-                args.levels
+                "--levels {}: level {level} would need {} vertices, {} edges and {} faces, more than the half-edge core's {MAX_ELEMENTS} each",
+                args.levels, c.vertices, c.edges, c.faces
             )));
         }
+        bytes = bytes.and_then(|b| b.checked_add(level_bytes(c)?));
     }
+    check_memory(&format!("--levels {}", args.levels), bytes)?;
     let t1 = Instant::now();
     let mut export_ms = 0.0;
     let (p, t) = subdivide_levels(
@@ -143,6 +148,16 @@ pub fn subdivide(args: &SubdivideArgs) -> Result<EditReport> {
     write_obj_to(out, &p, &t)?;
     report.write_ms = export_ms + ms_since(t2);
     Ok(report)
+}
+
+/// Bytes of one subdivision level's half-edge records plus its export (positions and
+/// triangles), `None` on overflow.
+fn level_bytes(c: Counts) -> Option<u64> {
+    use std::mem::size_of;
+    let v = (c.vertices as u64).checked_mul((size_of::<VertexRec>() + size_of::<Vec3>()) as u64)?;
+    let e = (c.edges as u64).checked_mul(size_of::<EdgeRec>() as u64)?;
+    let f = (c.faces as u64).checked_mul((size_of::<FaceRec>() + size_of::<[u32; 3]>()) as u64)?;
+    v.checked_add(e)?.checked_add(f)
 }
 
 /// Subdivides `levels` times (each level in fresh buffers of exactly the needed size) and

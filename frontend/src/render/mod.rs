@@ -16,6 +16,7 @@ pub mod xform;
 
 use crate::console::print_out;
 use crate::error::{Error, Result};
+use crate::limits::check_memory;
 use crate::outputs::{Named, refuse_inputs, reserve_outputs};
 use crate::scene::{self, Scene};
 use glam::{Vec3, Vec4};
@@ -265,6 +266,24 @@ fn pixel(
     }
 }
 
+/// Memory a `w`×`h` render holds at its peak, in bytes (`None` on overflow): the per-row
+/// records, the final pixels, the node counts and the 8-bit image, plus the decoded
+/// background when there is one.
+pub fn render_bytes(w: u32, h: u32, background: bool) -> Option<u64> {
+    let per_pixel = std::mem::size_of::<PixelOut>()
+        + std::mem::size_of::<Vec4>()
+        + std::mem::size_of::<u64>()
+        + 4
+        + if background {
+            std::mem::size_of::<Vec4>()
+        } else {
+            0
+        };
+    u64::from(w)
+        .checked_mul(u64::from(h))?
+        .checked_mul(per_pixel as u64)
+}
+
 /// The JSON written by `--stats-json`.
 #[derive(serde::Serialize)]
 struct StatsJson {
@@ -325,6 +344,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         scene.camera.height = y;
     }
     let (w, h) = (scene.camera.width, scene.camera.height);
+    check_memory(
+        &format!("an image of {w}×{h} pixels (scene size or --width/--height)"),
+        render_bytes(w, h, args.background.is_some()),
+    )?;
     let background = match &args.background {
         Some(p) => Some(output::read_background(p, w, h)?),
         None => None,

@@ -136,7 +136,7 @@ pub fn measure(args: &AccuracyArgs) -> Result<Report> {
     } else {
         (200_000, 9)
     };
-    let workload = Workload::new(&closed, &closed, n, args.seed);
+    let workload = Workload::new(&closed, &closed, n, args.seed).map_err(Error::Other)?;
     let mut variants = Vec::new();
     for v in TriangleVariant::ALL {
         let (acc, ns) = triangles::measure(v, &workload, reps);
