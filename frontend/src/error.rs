@@ -2,6 +2,13 @@
 //! and field, and maps to a process exit code.
 
 use std::fmt;
+
+/// A message as shown: control characters escaped, at most [`MAX_MESSAGE_CHARS`] characters.
+fn bounded(m: &str) -> String {
+    crate::text::bounded_lines(m, MAX_MESSAGE_CHARS, true)
+}
+
+use crate::text::MAX_MESSAGE_CHARS;
 use std::path::{Path, PathBuf};
 
 /// Exit code for errors in input data or I/O.
@@ -132,9 +139,11 @@ impl Error {
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::Input { at, message } => write!(f, "{at}: {message}"),
+            Self::Input { at, message } => write!(f, "{at}: {}", bounded(message)),
             Self::Io { path, source } => write!(f, "{}: {source}", path.display()),
-            Self::Usage(m) | Self::Mismatch(m) | Self::Other(m) => f.write_str(m),
+            Self::Usage(m) => f.write_str(&bounded(m)),
+            // Reports halfray composes itself, shown whole.
+            Self::Mismatch(m) | Self::Other(m) => f.write_str(m),
             Self::BrokenPipe => f.write_str("stdout is a closed pipe"),
         }
     }

@@ -19,5 +19,6 @@ pub mod outputs;
 pub mod raysets;
 pub mod render;
 pub mod scene;
+pub mod text;
 
 pub use error::{Error, Location, Result};

@@ -7,7 +7,7 @@ use super::{
 };
 use crate::error::{Error, Location, Result};
 use crate::limits::check_memory;
-use crate::obj::{read_obj, write_obj_to};
+use crate::obj::{NotCarried, read_obj_noting, write_obj_to};
 use glam::Vec3;
 use halfray_core::halfedge::{
     CollapseAt, CollapseError, Counts, DiffuseBoundary, EdgeId, EdgeRec, FaceRec, LoopWeights,
@@ -95,6 +95,18 @@ impl fmt::Display for EditReport {
     }
 }
 
+/// Says on stderr what the input held that the output OBJ (positions and triangles only)
+/// will not: never a silent loss.
+fn warn_not_carried(input: &Path, output: &Path, dropped: &NotCarried) {
+    if !dropped.is_empty() {
+        eprintln!(
+            "note: {} -> {}: not carried over (the output holds vertices and triangles only): {dropped}",
+            input.display(),
+            output.display()
+        );
+    }
+}
+
 fn core_error(path: &Path, what: impl fmt::Display) -> Error {
     Error::input(Location::file(path), what.to_string())
 }
@@ -106,7 +118,8 @@ fn core_error(path: &Path, what: impl fmt::Display) -> Error {
 pub fn subdivide(args: &SubdivideArgs) -> Result<EditReport> {
     let out = reserve_output(&args.input, &args.output, args.force)?;
     let t0 = Instant::now();
-    let obj = read_obj(&args.input)?;
+    let (obj, dropped) = read_obj_noting(&args.input)?;
+    warn_not_carried(&args.input, &args.output, &dropped);
     let mut buffers = MeshBuffers::for_obj(&obj);
     let mesh = build_mesh(&obj, &args.input, &mut buffers)?;
     let mut report = EditReport {
@@ -209,7 +222,8 @@ pub fn smooth(args: &SmoothArgs) -> Result<EditReport> {
     }
     let out = reserve_output(&args.input, &args.output, args.force)?;
     let t0 = Instant::now();
-    let obj = read_obj(&args.input)?;
+    let (obj, dropped) = read_obj_noting(&args.input)?;
+    warn_not_carried(&args.input, &args.output, &dropped);
     let mut buffers = MeshBuffers::for_obj(&obj);
     let mut mesh = build_mesh(&obj, &args.input, &mut buffers)?;
     let mut report = EditReport {
@@ -276,7 +290,8 @@ pub fn collapse(args: &CollapseArgs) -> Result<EditReport> {
     }
     let out = reserve_output(&args.input, &args.output, args.force)?;
     let t0 = Instant::now();
-    let obj = read_obj(&args.input)?;
+    let (obj, dropped) = read_obj_noting(&args.input)?;
+    warn_not_carried(&args.input, &args.output, &dropped);
     let mut buffers = MeshBuffers::for_obj(&obj);
     let mut mesh = build_mesh(&obj, &args.input, &mut buffers)?;
     let mut report = EditReport {

@@ -260,13 +260,14 @@ struct ObjLines {
 
 impl ObjLines {
     fn read(path: &Path) -> Option<Self> {
-        let text = std::fs::read_to_string(path).ok()?;
+        let bytes = std::fs::read(path).ok()?;
         let mut lines = Self {
             vertex: Vec::new(),
             triangle: Vec::new(),
         };
-        for (i, line) in text.lines().enumerate() {
-            let content = line.split('#').next().unwrap_or("");
+        // The reader's own line splitting, so numbers agree for CR and CRLF files.
+        for (i, line) in crate::obj::lines(&bytes).enumerate() {
+            let content = String::from_utf8_lossy(crate::obj::statement(line).0);
             let mut tokens = content.split_ascii_whitespace();
             match tokens.next() {
                 Some("v") => lines.vertex.push(i + 1),
