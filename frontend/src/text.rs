@@ -16,8 +16,7 @@ pub fn bounded(s: &str, max: usize) -> String {
 /// [`bounded`], keeping line breaks when `keep_newlines` (for whole multi-line messages).
 pub fn bounded_lines(s: &str, max: usize, keep_newlines: bool) -> String {
     let mut out = String::new();
-    let mut chars = 0;
-    for c in s.chars() {
+    for (chars, c) in s.chars().enumerate() {
         if chars >= max {
             out.push_str(&format!("… ({} bytes in all)", s.len()));
             return out;
@@ -27,7 +26,6 @@ pub fn bounded_lines(s: &str, max: usize, keep_newlines: bool) -> String {
         } else {
             out.push(c);
         }
-        chars += 1;
     }
     out
 }
