@@ -2,6 +2,13 @@
 //! and field, and maps to a process exit code.
 
 use std::fmt;
+
+/// A message as shown: control characters escaped, at most [`MAX_MESSAGE_CHARS`] characters.
+fn bounded(m: &str) -> String {
+    crate::text::bounded_lines(m, MAX_MESSAGE_CHARS, true)
+}
+
+use crate::text::MAX_MESSAGE_CHARS;
 use std::path::{Path, PathBuf};
 
 /// Exit code for errors in input data or I/O.
@@ -10,6 +17,9 @@ pub const EXIT_ERROR: u8 = 1;
 pub const EXIT_USAGE: u8 = 2;
 /// Exit code when a cross-check finds more genuine mismatches than allowed.
 pub const EXIT_MISMATCH: u8 = 3;
+/// Exit code when stdout is a closed pipe: 128 + SIGPIPE (13), what a shell reports for
+/// `ls | head` when `ls` is killed by the signal, so `set -o pipefail` scripts see the same.
+pub const EXIT_BROKEN_PIPE: u8 = 141;
 
 /// Where in an input file an error is.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -94,6 +104,8 @@ pub enum Error {
     Mismatch(String),
     /// Anything else (for example an unavailable optional backend).
     Other(String),
+    /// Stdout is a closed pipe (the reader is gone): nothing to report, stop quietly.
+    BrokenPipe,
 }
 
 impl Error {
@@ -118,6 +130,7 @@ impl Error {
         match self {
             Self::Usage(_) => EXIT_USAGE,
             Self::Mismatch(_) => EXIT_MISMATCH,
+            Self::BrokenPipe => EXIT_BROKEN_PIPE,
             _ => EXIT_ERROR,
         }
     }
@@ -126,9 +139,12 @@ impl Error {
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::Input { at, message } => write!(f, "{at}: {message}"),
+            Self::Input { at, message } => write!(f, "{at}: {}", bounded(message)),
             Self::Io { path, source } => write!(f, "{}: {source}", path.display()),
-            Self::Usage(m) | Self::Mismatch(m) | Self::Other(m) => f.write_str(m),
+            Self::Usage(m) => f.write_str(&bounded(m)),
+            // Reports halfray composes itself, shown whole.
+            Self::Mismatch(m) | Self::Other(m) => f.write_str(m),
+            Self::BrokenPipe => f.write_str("stdout is a closed pipe"),
         }
     }
 }

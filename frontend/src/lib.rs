@@ -7,15 +7,19 @@
 pub mod accel;
 pub mod atomic;
 pub mod bench;
+pub mod console;
 pub mod crosscheck;
 #[cfg(feature = "embree")]
 pub mod embree;
 pub mod error;
+pub mod limits;
 pub mod mesh_tools;
 pub mod obj;
+pub mod outputs;
 pub mod raysets;
 pub mod render;
 pub mod scene;
 pub mod simd;
+pub mod text;
 
 pub use error::{Error, Location, Result};

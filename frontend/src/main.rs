@@ -1,5 +1,7 @@
 //! The `halfray` command line. Exit codes: 0 success, 1 error in input data or I/O,
-//! 2 usage error, 3 cross-check found more genuine mismatches than allowed.
+//! 2 usage error, 3 cross-check found more genuine mismatches than allowed, 141 stdout closed
+//! (a broken pipe ends the program quietly). SIGINT/SIGTERM/SIGHUP remove temporary output
+//! files and exit with 128 + the signal number.
 
 use clap::{Parser, Subcommand};
 use halfray::{bench, crosscheck, mesh_tools, render};
@@ -10,7 +12,7 @@ use std::process::ExitCode;
     name = "halfray",
     version,
     about = "Watertight ray/mesh geometry: render scenes, edit meshes, benchmark, cross-check against Embree",
-    after_help = "Exit codes: 0 success, 1 bad input or I/O error, 2 usage error, 3 cross-check mismatches."
+    after_help = "Exit codes: 0 success, 1 bad input or I/O error, 2 usage error, 3 cross-check mismatches, 141 stdout closed."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -32,6 +34,10 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    halfray::console::install_print_panic_guard();
+    if let Err(e) = halfray::outputs::temp::install_signal_cleanup() {
+        eprintln!("warning: no signal handler (temporary files may stay after Ctrl-C): {e}");
+    }
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render::run(&args),
@@ -41,6 +47,7 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(halfray::Error::BrokenPipe) => ExitCode::from(halfray::error::EXIT_BROKEN_PIPE),
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(e.exit_code())

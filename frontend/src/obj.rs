@@ -6,17 +6,97 @@
 //! object and drop unreferenced ones. The reader keeps the file's vertex order, welds nothing,
 //! and reports errors with the file, line and column.
 //!
-//! Accepted: `v x y z [w]`, `f a b c ...` with `a`, `a/t`, `a//n`, `a/t/n` tokens and negative
-//! (relative) indices; polygons are fan-triangulated `(v0, vi, vi+1)`. Ignored: comments, `vt`,
-//! `vn`, `vp`, `o`, `g`, `s`, `usemtl`, `mtllib`, `l`, `p`. Rejected with a located error:
-//! non-finite or malformed coordinates, faces with fewer than three vertices, index 0 or out
-//! of range, unknown statements.
+//! Accepted (what Blender and MeshLab accept): LF, CRLF and old-Mac CR line ends; a UTF-8
+//! byte-order mark; any bytes in comments (statements must be UTF-8); `v x y z`, `v x y z w`
+//! and `v x y z r g b` (w and colours are read and not kept); `f a b c ...` with `a`, `a/t`,
+//! `a//n`, `a/t/n` tokens and negative (relative) indices; polygons are fan-triangulated
+//! `(v0, vi, vi+1)`. Ignored (and counted in [`NotCarried`], so that tools writing OBJ can say
+//! what they drop): comments, `vt`, `vn`, `vp`, `o`, `g`, `s`, `usemtl`, `mtllib`, `l`, `p`.
+//! Rejected with a located error (`file:line:column`): non-finite or malformed coordinates,
+//! a vertex with other than 3, 4 or 6 values, faces with fewer than three vertices, index 0 or
+//! out of range, non-UTF-8 statements, unknown statements.
 
-use crate::atomic::write_atomic;
 use crate::error::{Error, Location, Result};
+use crate::outputs::OutputFile;
 use glam::Vec3;
+use std::collections::BTreeMap;
 use std::path::Path;
 
+/// What a file held that [`ObjMesh`] does not keep: statements by keyword (`vt`, `usemtl`,
+/// `#` for comments, `v w` / `v rgb` for vertex weights and colours) and polygons split into
+/// triangles.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct NotCarried {
+    /// Statements (and comments, as `#`) not kept, by keyword.
+    pub statements: BTreeMap<String, usize>,
+    /// Faces with more than three vertices, fan-triangulated.
+    pub polygons_split: usize,
+}
+
+impl NotCarried {
+    /// Nothing was dropped.
+    pub fn is_empty(&self) -> bool {
+        self.statements.is_empty() && self.polygons_split == 0
+    }
+
+    fn note(&mut self, what: &str) {
+        *self.statements.entry(what.to_string()).or_insert(0) += 1;
+    }
+}
+
+impl std::fmt::Display for NotCarried {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut parts: Vec<String> = self
+            .statements
+            .iter()
+            .map(|(k, n)| match k.as_str() {
+                "#" => format!("{n} comment line(s)"),
+                _ => format!("{n} `{k}`"),
+            })
+            .collect();
+        if self.polygons_split > 0 {
+            parts.push(format!(
+                "{} polygon(s) split into triangles",
+                self.polygons_split
+            ));
+        }
+        f.write_str(&parts.join(", "))
+    }
+}
+
+/// The lines of a file: LF, CRLF and lone CR all end a line.
+pub(crate) fn lines(bytes: &[u8]) -> impl Iterator<Item = &[u8]> {
+    let mut rest = Some(bytes);
+    std::iter::from_fn(move || {
+        let r = rest?;
+        match r.iter().position(|&b| b == b'\n' || b == b'\r') {
+            Some(i) => {
+                let skip = if r[i] == b'\r' && r.get(i + 1) == Some(&b'\n') {
+                    2
+                } else {
+                    1
+                };
+                rest = Some(&r[i + skip..]);
+                Some(&r[..i])
+            }
+            None => {
+                rest = None;
+                Some(r)
+            }
+        }
+    })
+}
+
+/// The UTF-8 byte-order mark, skipped at the start of a file.
+const BOM: &[u8] = b"\xEF\xBB\xBF";
+
+/// The statement part of a line (before `#`) and whether there was a comment.
+pub(crate) fn statement(line: &[u8]) -> (&[u8], bool) {
+    match line.iter().position(|&b| b == b'#') {
+        Some(i) => (&line[..i], true),
+        None => (line, false),
+    }
+}
 /// A triangle mesh as read from an OBJ file.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ObjMesh {
@@ -51,54 +131,100 @@ impl ObjMesh {
 
 /// Reads and parses an OBJ file.
 pub fn read_obj(path: &Path) -> Result<ObjMesh> {
+    read_obj_noting(path).map(|(m, _)| m)
+}
+
+/// Reads and parses an OBJ file, also saying what it held that the mesh does not keep.
+pub fn read_obj_noting(path: &Path) -> Result<(ObjMesh, NotCarried)> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let text = String::from_utf8(bytes)
-        .map_err(|e| Error::input(Location::file(path), format!("not UTF-8 text: {e}")))?;
-    parse_obj(&text, path)
+    parse_obj_bytes(&bytes, path)
 }
 
 /// Parses OBJ text; `path` is used only in error messages.
 pub fn parse_obj(text: &str, path: &Path) -> Result<ObjMesh> {
+    parse_obj_bytes(text.as_bytes(), path).map(|(m, _)| m)
+}
+
+/// Parses OBJ bytes (see the module docs); `path` is used only in error messages.
+pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<(ObjMesh, NotCarried)> {
+    let bytes = bytes.strip_prefix(BOM).unwrap_or(bytes);
     let mut mesh = ObjMesh::default();
+    let mut dropped = NotCarried::default();
     let mut face: Vec<u32> = Vec::new();
-    for (line_no, line) in text.lines().enumerate() {
+    for (line_no, raw) in lines(bytes).enumerate() {
         let line_no = line_no + 1;
         let at =
             |col: usize, field: &str| Location::file(path).line(line_no).column(col).field(field);
-        let content = line.split('#').next().unwrap_or("");
+        let (content, comment) = statement(raw);
+        if comment {
+            dropped.note("#");
+        }
+        let content = std::str::from_utf8(content).map_err(|e| {
+            Error::input(
+                at(e.valid_up_to() + 1, "text"),
+                "not UTF-8 (only comments may hold other bytes)",
+            )
+        })?;
         let mut tokens = tokens_with_columns(content);
         let Some((_, keyword)) = tokens.next() else {
             continue;
         };
         match keyword {
             "v" => {
-                let mut p = [0.0f32; 3];
-                for (k, name) in ["x", "y", "z"].iter().enumerate() {
-                    let Some((col, tok)) = tokens.next() else {
+                let mut values = [0.0f32; 6];
+                let mut count = 0;
+                for (col, tok) in tokens {
+                    let name = ["x", "y", "z", "w|r", "g", "b"].get(count).copied();
+                    let Some(name) = name else {
                         return Err(Error::input(
-                            at(line.len() + 1, name),
-                            "vertex needs 3 coordinates",
+                            at(col, "v"),
+                            format!(
+                                "unexpected `{}`: a vertex is `v x y z`, `v x y z w` or `v x y z r g b`",
+                                crate::text::excerpt(tok)
+                            ),
                         ));
                     };
                     let v: f32 = tok.parse().map_err(|_| {
-                        Error::input(at(col, name), format!("`{tok}` is not a number"))
+                        Error::input(
+                            at(col, name),
+                            format!("`{}` is not a number", crate::text::excerpt(tok)),
+                        )
                     })?;
                     if !v.is_finite() {
                         return Err(Error::input(
                             at(col, name),
-                            format!("`{tok}` is not finite"),
+                            format!("`{}` is not finite", crate::text::excerpt(tok)),
                         ));
                     }
-                    p[k] = v;
+                    values[count] = v;
+                    count += 1;
                 }
-                mesh.positions.push(Vec3::from_array(p));
+                match count {
+                    3 => {}
+                    4 => dropped.note("v w"),
+                    6 => dropped.note("v rgb"),
+                    _ => {
+                        let name = ["x", "y", "z", "w|r", "g", "b"][count.min(5)];
+                        let msg = if count < 3 {
+                            "vertex needs 3 coordinates"
+                        } else {
+                            "a vertex is `v x y z`, `v x y z w` or `v x y z r g b`"
+                        };
+                        return Err(Error::input(at(content.len() + 1, name), msg));
+                    }
+                }
+                mesh.positions
+                    .push(Vec3::new(values[0], values[1], values[2]));
             }
             "f" => {
                 face.clear();
                 for (col, tok) in tokens {
                     let idx_text = tok.split('/').next().unwrap_or("");
                     let idx: i64 = idx_text.parse().map_err(|_| {
-                        Error::input(at(col, "f"), format!("`{tok}` is not a vertex index"))
+                        Error::input(
+                            at(col, "f"),
+                            format!("`{}` is not a vertex index", crate::text::excerpt(tok)),
+                        )
                     })?;
                     let n = mesh.positions.len() as i64;
                     let resolved = if idx > 0 { idx - 1 } else { n + idx };
@@ -113,20 +239,25 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<ObjMesh> {
                 if face.len() < 3 {
                     return Err(Error::input(at(1, "f"), "face needs at least 3 vertices"));
                 }
+                if face.len() > 3 {
+                    dropped.polygons_split += 1;
+                }
                 for i in 1..face.len() - 1 {
                     mesh.triangles.push([face[0], face[i], face[i + 1]]);
                 }
             }
-            "vt" | "vn" | "vp" | "o" | "g" | "s" | "usemtl" | "mtllib" | "l" | "p" => {}
+            "vt" | "vn" | "vp" | "o" | "g" | "s" | "usemtl" | "mtllib" | "l" | "p" => {
+                dropped.note(keyword);
+            }
             other => {
                 return Err(Error::input(
-                    at(1, other),
-                    format!("unknown OBJ statement `{other}`"),
+                    at(1, "statement"),
+                    format!("unknown OBJ statement `{}`", crate::text::excerpt(other)),
                 ));
             }
         }
     }
-    Ok(mesh)
+    Ok((mesh, dropped))
 }
 
 fn tokens_with_columns(s: &str) -> impl Iterator<Item = (usize, &str)> {
@@ -140,7 +271,12 @@ fn tokens_with_columns(s: &str) -> impl Iterator<Item = (usize, &str)> {
 /// written with Rust's shortest round-trip formatting, so reading the file back gives the
 /// same `f32` values bit for bit.
 pub fn write_obj(path: &Path, positions: &[Vec3], triangles: &[[u32; 3]]) -> Result<()> {
-    write_atomic(path, |w| {
+    write_obj_to(OutputFile::reserve(path, false)?, positions, triangles)
+}
+
+/// [`write_obj`] to an output reserved before the work.
+pub fn write_obj_to(out: OutputFile, positions: &[Vec3], triangles: &[[u32; 3]]) -> Result<()> {
+    out.write(|w| {
         for p in positions {
             writeln!(w, "v {} {} {}", p.x, p.y, p.z)?;
         }
@@ -179,6 +315,75 @@ mod tests {
         assert!(e.to_string().contains("at least 3"), "{e}");
         let e = parse_obj("bogus 1\n", Path::new("e.obj")).unwrap_err();
         assert!(e.to_string().contains("unknown OBJ statement"), "{e}");
+    }
+
+    fn parse_bytes(b: &[u8]) -> Result<(ObjMesh, NotCarried)> {
+        parse_obj_bytes(b, Path::new("d.obj"))
+    }
+
+    #[test]
+    fn line_ends_bom_and_non_utf8_comments_are_accepted() {
+        let tri = vec![[0, 1, 2]];
+        for text in [
+            &b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"[..],
+            b"v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3\r\n",
+            b"v 0 0 0\rv 1 0 0\rv 0 1 0\rf 1 2 3\r",
+            b"\xEF\xBB\xBFv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3",
+            b"# caf\xe9 cr\xe8me\nv 0 0 0\nv 1 0 0 # \xff\nv 0 1 0\nf 1 2 3\n",
+        ] {
+            let (m, _) = parse_bytes(text).unwrap();
+            assert_eq!(m.positions.len(), 3, "{text:?}");
+            assert_eq!(m.triangles, tri, "{text:?}");
+        }
+        // Line numbers count CR-only and CRLF line ends.
+        for text in [&b"v 0 0 0\rv 1 x 0\r"[..], b"v 0 0 0\r\nv 1 x 0\r\n"] {
+            let e = parse_bytes(text).unwrap_err().to_string();
+            assert!(e.starts_with("d.obj:2:5: field `y`"), "{e}");
+        }
+        let e = parse_bytes(b"v 0 0 0\nv 1 \xe9 0\n")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "d.obj:2:5: field `text`: not UTF-8 (only comments may hold other bytes)"
+        );
+    }
+
+    #[test]
+    fn vertices_take_w_or_rgb_and_nothing_else() {
+        let (m, d) = parse_bytes(b"v 1 2 3 0.5\nv 4 5 6 0.1 0.2 0.3\nv 7 8 9\n").unwrap();
+        assert_eq!(m.positions[1], Vec3::new(4.0, 5.0, 6.0));
+        assert_eq!(d.statements["v w"], 1);
+        assert_eq!(d.statements["v rgb"], 1);
+        let e = parse_bytes(b"v 0 0 0 garbage\n").unwrap_err().to_string();
+        assert_eq!(e, "d.obj:1:9: field `w|r`: `garbage` is not a number");
+        let e = parse_bytes(b"v 0 0 0 1 2\n").unwrap_err().to_string();
+        assert!(
+            e.starts_with("d.obj:1:12:") && e.contains("v x y z r g b"),
+            "{e}"
+        );
+        let e = parse_bytes(b"v 0 0 0 1 2 3 4\n").unwrap_err().to_string();
+        assert!(
+            e.starts_with("d.obj:1:15: field `v`: unexpected `4`"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn dropped_statements_are_counted_and_tokens_in_messages_are_bounded() {
+        let text = b"# c\nmtllib a.mtl\no cube\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nusemtl m\ns 1\nf 1 2 3 4\n";
+        let (m, d) = parse_bytes(text).unwrap();
+        assert_eq!(m.triangles.len(), 2);
+        assert_eq!(d.polygons_split, 1);
+        assert_eq!(
+            d.to_string(),
+            "1 comment line(s), 1 `mtllib`, 1 `o`, 1 `s`, 1 `usemtl`, 1 `vn`, 1 `vt`, 1 polygon(s) split into triangles"
+        );
+        let mut hostile = b"v 0 0 \x1b[2J".to_vec();
+        hostile.extend(std::iter::repeat_n(b'9', 10_000_000));
+        let e = parse_bytes(&hostile).unwrap_err().to_string();
+        assert!(e.len() < 200, "{} bytes", e.len());
+        assert!(e.contains("\\u{1b}[2J") && !e.contains('\x1b'), "{e}");
     }
 
     #[test]

@@ -329,6 +329,7 @@ fn check_one_level(input: &Path, weights: Weights) -> ObjMesh {
     let report = mesh_tools::subdivide(&SubdivideArgs {
         input: input.to_path_buf(),
         output: out.clone(),
+        force: false,
         levels: 1,
         weights,
     })
@@ -404,6 +405,7 @@ fn subdivide_levels_multiply_and_weights_differ() {
         let r = mesh_tools::subdivide(&SubdivideArgs {
             input: mesh("octahedron.obj"),
             output: out.clone(),
+            force: false,
             levels: 2,
             weights,
         })
@@ -472,6 +474,7 @@ fn smooth_reduces_roughness_of_a_noisy_grid() {
     let r = mesh_tools::smooth(&SmoothArgs {
         input: input.clone(),
         output: fixed.clone(),
+        force: false,
         step: 0.5,
         iterations: 10,
         fix_boundary: true,
@@ -501,6 +504,7 @@ fn smooth_reduces_roughness_of_a_noisy_grid() {
     mesh_tools::smooth(&SmoothArgs {
         input,
         output: free.clone(),
+        force: false,
         step: 0.5,
         iterations: 10,
         fix_boundary: false,
@@ -548,6 +552,7 @@ fn collapse_removes_short_edges_and_keeps_the_topology() {
         let r = mesh_tools::collapse(&CollapseArgs {
             input: input.clone(),
             output: out.clone(),
+            force: false,
             shorter_than: limit,
         })
         .unwrap();
@@ -589,6 +594,7 @@ fn collapse_on_a_tetrahedron_refuses_everything_and_says_why() {
     let r = mesh_tools::collapse(&CollapseArgs {
         input: mesh("tetrahedron.obj"),
         output: out.clone(),
+        force: false,
         shorter_than: 100.0,
     })
     .unwrap();

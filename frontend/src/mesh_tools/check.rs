@@ -20,9 +20,10 @@
 //! a non-zero exit.
 
 use super::{CheckArgs, MeshBuffers, build_mesh, ms_since};
-use crate::atomic::write_bytes_atomic;
+use crate::console::print_out;
 use crate::error::{Error, Location, Result};
 use crate::obj::{ObjMesh, read_obj};
+use crate::outputs::{Named, reserve_outputs};
 use halfray_core::halfedge::{FaceId, Mesh, MeshStorage};
 use std::fmt;
 use std::path::Path;
@@ -75,16 +76,25 @@ pub struct CheckReport {
     pub analyse_ms: f64,
 }
 
-/// Runs `mesh check`: prints the report, writes `--json`, and fails with the core's reason for
-/// a rejected mesh.
+/// Runs `mesh check`: reserves `--json` (refusing the input itself), checks, writes `--json`,
+/// prints the report, and fails with the core's reason for a rejected mesh.
 pub fn run(args: &CheckArgs) -> Result<()> {
+    let json = match &args.json {
+        Some(p) => reserve_outputs(
+            &[Named::new("--json", p)],
+            &[Named::new("input", &args.input)],
+            args.force,
+        )?
+        .pop(),
+        None => None,
+    };
     let report = check(&args.input)?;
-    print!("{report}");
-    if let Some(json) = &args.json {
+    if let Some(json) = json {
         let text = serde_json::to_string_pretty(&report)
             .map_err(|e| Error::Other(format!("JSON: {e}")))?;
-        write_bytes_atomic(json, text.as_bytes())?;
+        json.write(|w| w.write_all(text.as_bytes()))?;
     }
+    print_out(&report.to_string())?;
     match (&report.reason, &report.reason_at) {
         (Some(reason), at) => Err(Error::input(
             at.clone().unwrap_or_else(|| Location::file(&args.input)),

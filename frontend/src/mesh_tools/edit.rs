@@ -3,13 +3,15 @@
 
 use super::{
     CollapseArgs, MeshBuffers, SmoothArgs, SubdivideArgs, Vef, build_mesh, export, ms_since,
+    reserve_output,
 };
 use crate::error::{Error, Location, Result};
-use crate::obj::{read_obj, write_obj};
+use crate::limits::check_memory;
+use crate::obj::{NotCarried, read_obj_noting, write_obj_to};
 use glam::Vec3;
 use halfray_core::halfedge::{
-    CollapseAt, CollapseError, DiffuseBoundary, EdgeId, LoopWeights, MAX_ELEMENTS, Mesh,
-    MeshStorage, SubdivideError,
+    CollapseAt, CollapseError, Counts, DiffuseBoundary, EdgeId, EdgeRec, FaceRec, LoopWeights,
+    MAX_ELEMENTS, Mesh, MeshStorage, SubdivideError, VertexRec,
 };
 use std::collections::BTreeMap;
 use std::fmt;
@@ -93,6 +95,18 @@ impl fmt::Display for EditReport {
     }
 }
 
+/// Says on stderr what the input held that the output OBJ (positions and triangles only)
+/// will not: never a silent loss.
+fn warn_not_carried(input: &Path, output: &Path, dropped: &NotCarried) {
+    if !dropped.is_empty() {
+        eprintln!(
+            "note: {} -> {}: not carried over (the output holds vertices and triangles only): {dropped}",
+            input.display(),
+            output.display()
+        );
+    }
+}
+
 fn core_error(path: &Path, what: impl fmt::Display) -> Error {
     Error::input(Location::file(path), what.to_string())
 }
@@ -102,8 +116,10 @@ fn core_error(path: &Path, what: impl fmt::Display) -> Error {
 /// new vertex on edge `e` of the level's input, so each level has V + E vertices, 2E + 3F
 /// edges and 4F faces (the core's numbering, see `Mesh::subdivide_loop`).
 pub fn subdivide(args: &SubdivideArgs) -> Result<EditReport> {
+    let out = reserve_output(&args.input, &args.output, args.force)?;
     let t0 = Instant::now();
-    let obj = read_obj(&args.input)?;
+    let (obj, dropped) = read_obj_noting(&args.input)?;
+    warn_not_carried(&args.input, &args.output, &dropped);
     let mut buffers = MeshBuffers::for_obj(&obj);
     let mesh = build_mesh(&obj, &args.input, &mut buffers)?;
     let mut report = EditReport {
@@ -114,17 +130,21 @@ pub fn subdivide(args: &SubdivideArgs) -> Result<EditReport> {
         read_ms: ms_since(t0),
         ..EditReport::default()
     };
-    // Refuse before allocating anything when a level would exceed what the core can index.
+    // Refuse before allocating anything when a level would exceed what the core can index
+    // or the memory limit (every level's buffers stay alive until the export).
     let mut c = mesh.len();
+    let mut bytes = Some(0u64);
     for level in 1..=args.levels {
         c = c.after_loop();
         if c.vertices > MAX_ELEMENTS || c.edges > MAX_ELEMENTS || c.faces > MAX_ELEMENTS {
             return Err(Error::Usage(format!(
-                "--levels {}: level {level} would need {c:?} elements, more than the half-edge core's {MAX_ELEMENTS}",
-                args.levels
+                "--levels {}: level {level} would need {} vertices, {} edges and {} faces, more than the half-edge core's {MAX_ELEMENTS} each",
+                args.levels, c.vertices, c.edges, c.faces
             )));
         }
+        bytes = bytes.and_then(|b| b.checked_add(level_bytes(c)?));
     }
+    check_memory(&format!("--levels {}", args.levels), bytes)?;
     let t1 = Instant::now();
     let mut export_ms = 0.0;
     let (p, t) = subdivide_levels(
@@ -138,9 +158,19 @@ pub fn subdivide(args: &SubdivideArgs) -> Result<EditReport> {
     report.edit_ms = ms_since(t1) - export_ms;
     report.after = report.levels.last().map_or(report.before, |l| l.0);
     let t2 = Instant::now();
-    write_obj(&args.output, &p, &t)?;
+    write_obj_to(out, &p, &t)?;
     report.write_ms = export_ms + ms_since(t2);
     Ok(report)
+}
+
+/// Bytes of one subdivision level's half-edge records plus its export (positions and
+/// triangles), `None` on overflow.
+fn level_bytes(c: Counts) -> Option<u64> {
+    use std::mem::size_of;
+    let v = (c.vertices as u64).checked_mul((size_of::<VertexRec>() + size_of::<Vec3>()) as u64)?;
+    let e = (c.edges as u64).checked_mul(size_of::<EdgeRec>() as u64)?;
+    let f = (c.faces as u64).checked_mul((size_of::<FaceRec>() + size_of::<[u32; 3]>()) as u64)?;
+    v.checked_add(e)?.checked_add(f)
 }
 
 /// Subdivides `levels` times (each level in fresh buffers of exactly the needed size) and
@@ -190,8 +220,10 @@ pub fn smooth(args: &SmoothArgs) -> Result<EditReport> {
             args.step
         )));
     }
+    let out = reserve_output(&args.input, &args.output, args.force)?;
     let t0 = Instant::now();
-    let obj = read_obj(&args.input)?;
+    let (obj, dropped) = read_obj_noting(&args.input)?;
+    warn_not_carried(&args.input, &args.output, &dropped);
     let mut buffers = MeshBuffers::for_obj(&obj);
     let mut mesh = build_mesh(&obj, &args.input, &mut buffers)?;
     let mut report = EditReport {
@@ -219,7 +251,7 @@ pub fn smooth(args: &SmoothArgs) -> Result<EditReport> {
     report.after = mesh.len().into();
     let t2 = Instant::now();
     let (p, t) = export(&mesh);
-    write_obj(&args.output, &p, &t)?;
+    write_obj_to(out, &p, &t)?;
     report.write_ms = ms_since(t2);
     Ok(report)
 }
@@ -256,8 +288,10 @@ pub fn collapse(args: &CollapseArgs) -> Result<EditReport> {
             "--shorter-than {limit}: must be a finite positive length"
         )));
     }
+    let out = reserve_output(&args.input, &args.output, args.force)?;
     let t0 = Instant::now();
-    let obj = read_obj(&args.input)?;
+    let (obj, dropped) = read_obj_noting(&args.input)?;
+    warn_not_carried(&args.input, &args.output, &dropped);
     let mut buffers = MeshBuffers::for_obj(&obj);
     let mut mesh = build_mesh(&obj, &args.input, &mut buffers)?;
     let mut report = EditReport {
@@ -307,7 +341,7 @@ pub fn collapse(args: &CollapseArgs) -> Result<EditReport> {
     report.after = mesh.len().into();
     let t2 = Instant::now();
     let (p, t) = export(&mesh);
-    write_obj(&args.output, &p, &t)?;
+    write_obj_to(out, &p, &t)?;
     report.write_ms = ms_since(t2);
     Ok(report)
 }

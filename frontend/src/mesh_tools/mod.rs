@@ -19,8 +19,10 @@
 pub mod check;
 pub mod edit;
 
+use crate::console::print_out;
 use crate::error::{Error, Location, Result};
 use crate::obj::ObjMesh;
+use crate::outputs::{Named, OutputFile, reserve_outputs};
 use halfray_core::halfedge::{
     BuildError, Counts, EdgeRec, FaceRec, MAX_ELEMENTS, MeshStorage, SliceMesh, VertexRec,
     build_scratch_len,
@@ -53,6 +55,9 @@ pub struct CheckArgs {
     /// Also write the report as JSON to this file (written even when the mesh is rejected).
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
+    /// Replace a `--json` file that is read-only or hard-linked (keeping its mode).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Vertex weights of Loop subdivision (`--weights`).
@@ -79,9 +84,12 @@ impl From<Weights> for halfray_core::halfedge::LoopWeights {
 pub struct SubdivideArgs {
     /// Input OBJ.
     pub input: PathBuf,
-    /// Output OBJ (written atomically).
+    /// Output OBJ (written atomically; never the input).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Replace an output that is read-only or hard-linked (keeping its mode).
+    #[arg(long)]
+    pub force: bool,
     /// Number of subdivision levels (each multiplies the face count by 4).
     #[arg(long, default_value_t = 1)]
     pub levels: u32,
@@ -95,9 +103,12 @@ pub struct SubdivideArgs {
 pub struct SmoothArgs {
     /// Input OBJ.
     pub input: PathBuf,
-    /// Output OBJ (written atomically).
+    /// Output OBJ (written atomically; never the input).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Replace an output that is read-only or hard-linked (keeping its mode).
+    #[arg(long)]
+    pub force: bool,
     /// Step k of x' = x + k·L(x), with L the uniform Laplacian (1 moves every vertex to its
     /// neighbours' centroid; 0 < k ≤ 1 is stable).
     #[arg(long, default_value_t = 0.5)]
@@ -116,22 +127,36 @@ pub struct SmoothArgs {
 pub struct CollapseArgs {
     /// Input OBJ.
     pub input: PathBuf,
-    /// Output OBJ (written atomically), compacted.
+    /// Output OBJ (written atomically; never the input), compacted.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Replace an output that is read-only or hard-linked (keeping its mode).
+    #[arg(long)]
+    pub force: bool,
     /// Collapse every edge strictly shorter than this length (in model units).
     #[arg(long, value_name = "L")]
     pub shorter_than: f32,
 }
 
-/// Runs a mesh subcommand, printing its report to stdout.
+/// Runs a mesh subcommand, printing its report to stdout (after every file is written).
 pub fn run(cmd: &MeshCommand) -> Result<()> {
     match cmd {
         MeshCommand::Check(args) => check::run(args),
-        MeshCommand::Subdivide(args) => edit::subdivide(args).map(|r| print!("{r}")),
-        MeshCommand::Smooth(args) => edit::smooth(args).map(|r| print!("{r}")),
-        MeshCommand::Collapse(args) => edit::collapse(args).map(|r| print!("{r}")),
+        MeshCommand::Subdivide(args) => print_out(&edit::subdivide(args)?.to_string()),
+        MeshCommand::Smooth(args) => print_out(&edit::smooth(args)?.to_string()),
+        MeshCommand::Collapse(args) => print_out(&edit::collapse(args)?.to_string()),
     }
+}
+
+/// Reserves an editing command's `-o` before any work (see [`reserve_outputs`]), refusing the
+/// input file itself.
+pub fn reserve_output(input: &Path, output: &Path, force: bool) -> Result<OutputFile> {
+    let mut reserved = reserve_outputs(
+        &[Named::new("-o", output)],
+        &[Named::new("input", input)],
+        force,
+    )?;
+    Ok(reserved.remove(0))
 }
 
 /// Owned record buffers for a [`SliceMesh`]; their lengths are the mesh's capacity.
@@ -235,13 +260,14 @@ struct ObjLines {
 
 impl ObjLines {
     fn read(path: &Path) -> Option<Self> {
-        let text = std::fs::read_to_string(path).ok()?;
+        let bytes = std::fs::read(path).ok()?;
         let mut lines = Self {
             vertex: Vec::new(),
             triangle: Vec::new(),
         };
-        for (i, line) in text.lines().enumerate() {
-            let content = line.split('#').next().unwrap_or("");
+        // The reader's own line splitting, so numbers agree for CR and CRLF files.
+        for (i, line) in crate::obj::lines(&bytes).enumerate() {
+            let content = String::from_utf8_lossy(crate::obj::statement(line).0);
             let mut tokens = content.split_ascii_whitespace();
             match tokens.next() {
                 Some("v") => lines.vertex.push(i + 1),

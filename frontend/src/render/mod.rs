@@ -14,8 +14,10 @@ pub mod plan;
 pub mod trace;
 pub mod xform;
 
-use crate::atomic::write_bytes_atomic;
+use crate::console::print_out;
 use crate::error::{Error, Result};
+use crate::limits::check_memory;
+use crate::outputs::{Named, refuse_inputs, reserve_outputs};
 use crate::scene::{self, Scene};
 use glam::{Vec3, Vec4};
 use indicatif::{ParallelProgressIterator, ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -24,7 +26,7 @@ use rayon::prelude::*;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::Instant;
-use trace::{RayCounts, Tracer};
+use trace::{PathBound, RayCounts, Tracer};
 
 /// What each pixel shows.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -73,6 +75,9 @@ pub struct RenderArgs {
     /// Override the scene's image height.
     #[arg(long)]
     pub height: Option<u32>,
+    /// Replace outputs that are read-only or hard-linked (keeping their mode).
+    #[arg(long)]
+    pub force: bool,
     /// No progress bar and no settings line (the summary line is still printed).
     #[arg(short, long)]
     pub quiet: bool,
@@ -87,6 +92,8 @@ pub struct RenderOptions {
     pub force_all: bool,
     /// Show a progress bar (only drawn when stderr is a terminal).
     pub progress: bool,
+    /// How far each pixel's ray tree is followed.
+    pub bound: PathBound,
 }
 
 /// A finished render.
@@ -173,7 +180,7 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Rendered {
         .map(|j| {
             let mut counts = RayCounts::default();
             let row = (0..w)
-                .map(|i| pixel(&tracer, opts.mode, i, j, &mut counts))
+                .map(|i| pixel(&tracer, opts, i, j, &mut counts))
                 .collect();
             (row, counts)
         })
@@ -221,7 +228,14 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Rendered {
     }
 }
 
-fn pixel(tracer: &Tracer<'_>, mode: Mode, i: u32, j: u32, counts: &mut RayCounts) -> PixelOut {
+fn pixel(
+    tracer: &Tracer<'_>,
+    opts: &RenderOptions,
+    i: u32,
+    j: u32,
+    counts: &mut RayCounts,
+) -> PixelOut {
+    let mode = opts.mode;
     let ray = tracer.scene.camera.pixel_ray(i, j);
     counts.primary += 1;
     let mut ctx = tracer.ctx();
@@ -239,7 +253,7 @@ fn pixel(tracer: &Tracer<'_>, mode: Mode, i: u32, j: u32, counts: &mut RayCounts
         };
     };
     let value = match mode {
-        Mode::Color => tracer.shade(&ray, &sh, 0, &mut ctx, counts),
+        Mode::Color => tracer.shade_bounded(&ray, &sh, 0, opts.bound, &mut ctx, counts),
         Mode::Normal => sh.hit.normal * 0.5 + 0.5,
         Mode::Barycentric => sh.bary.unwrap_or(Vec3::splat(0.5)),
         Mode::Depth | Mode::Heatmap => Vec3::ZERO,
@@ -250,6 +264,24 @@ fn pixel(tracer: &Tracer<'_>, mode: Mode, i: u32, j: u32, counts: &mut RayCounts
         depth: sh.hit.t * ray.direction.length(),
         nodes,
     }
+}
+
+/// Memory a `w`×`h` render holds at its peak, in bytes (`None` on overflow): the per-row
+/// records, the final pixels, the node counts and the 8-bit image, plus the decoded
+/// background when there is one.
+pub fn render_bytes(w: u32, h: u32, background: bool) -> Option<u64> {
+    let per_pixel = std::mem::size_of::<PixelOut>()
+        + std::mem::size_of::<Vec4>()
+        + std::mem::size_of::<u64>()
+        + 4
+        + if background {
+            std::mem::size_of::<Vec4>()
+        } else {
+            0
+        };
+    u64::from(w)
+        .checked_mul(u64::from(h))?
+        .checked_mul(per_pixel as u64)
 }
 
 /// The JSON written by `--stats-json`.
@@ -277,9 +309,10 @@ pub fn summary(r: &Rendered) -> String {
     )
 }
 
-/// Runs `halfray render`.
+/// Runs `halfray render`: checks the options and reserves every output, loads the scene
+/// (refusing outputs that are among its files), renders, writes `--stats-json` then the PNG,
+/// and prints the summary last (a closed stdout loses nothing).
 pub fn run(args: &RenderArgs) -> Result<()> {
-    let mut scene = scene::load(&args.scene)?;
     for (v, name) in [(args.width, "--width"), (args.height, "--height")] {
         if v.is_some_and(|x| x == 0 || x > scene::MAX_IMAGE_SIDE) {
             return Err(Error::Usage(format!(
@@ -288,6 +321,22 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             )));
         }
     }
+    let mut outputs = vec![Named::new("-o", &args.output)];
+    if let Some(p) = &args.stats_json {
+        outputs.push(Named::new("--stats-json", p));
+    }
+    let mut inputs = vec![Named::new("scene", &args.scene)];
+    if let Some(p) = &args.background {
+        inputs.push(Named::new("--background", p));
+    }
+    let reserved = reserve_outputs(&outputs, &inputs, args.force)?;
+    let mut scene = scene::load(&args.scene)?;
+    let mesh_inputs: Vec<Named<'_>> = scene
+        .mesh_files
+        .iter()
+        .map(|p| Named::new("mesh file", p))
+        .collect();
+    refuse_inputs(&reserved, &outputs, &mesh_inputs)?;
     if let Some(x) = args.width {
         scene.camera.width = x;
     }
@@ -295,6 +344,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         scene.camera.height = y;
     }
     let (w, h) = (scene.camera.width, scene.camera.height);
+    check_memory(
+        &format!("an image of {w}×{h} pixels (scene size or --width/--height)"),
+        render_bytes(w, h, args.background.is_some()),
+    )?;
     let background = match &args.background {
         Some(p) => Some(output::read_background(p, w, h)?),
         None => None,
@@ -303,12 +356,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         mode: args.mode,
         force_all: args.force_all_effects,
         progress: !args.quiet,
+        bound: PathBound::RENDER,
     };
     if args.explain {
-        print!(
-            "{}",
-            EffectPlan::derive(&scene, opts.force_all).explain(&scene)
-        );
+        print_out(&EffectPlan::derive(&scene, opts.force_all).explain(&scene))?;
     }
     if !args.quiet {
         eprintln!(
@@ -322,8 +373,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if let Some(bg) = &background {
         out.composite_over(bg);
     }
-    output::write_png(&args.output, w, h, &out.to_rgba8(args.mode))?;
-    if let Some(p) = &args.stats_json {
+    let mut reserved = reserved.into_iter();
+    let png = reserved.next().expect("-o is reserved first");
+    if let Some(stats) = reserved.next() {
         let c = &out.counts;
         let json = serde_json::to_string_pretty(&StatsJson {
             primary: c.primary,
@@ -333,11 +385,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             seconds: out.seconds,
         })
         .map_err(|e| Error::Other(format!("stats JSON: {e}")))?;
-        write_bytes_atomic(p, format!("{json}\n").as_bytes())?;
+        stats.write(|w| w.write_all(format!("{json}\n").as_bytes()))?;
     }
-    println!("{}", summary(&out));
+    output::write_png(png, w, h, &out.to_rgba8(args.mode))?;
     if !args.quiet {
         eprintln!("wrote {}", args.output.display());
     }
-    Ok(())
+    print_out(&format!("{}\n", summary(&out)))
 }

@@ -1,8 +1,8 @@
 //! Pixels to PNG: sRGB encoding, coverage alpha, Porter–Duff "over" onto a background image,
 //! atomic write; colour ramps of the debug modes.
 
-use crate::atomic::write_atomic;
 use crate::error::{Error, Location, Result};
+use crate::outputs::OutputFile;
 use glam::{Vec3, Vec4};
 use image::{ImageEncoder, codecs::png::PngEncoder};
 use std::path::Path;
@@ -71,9 +71,9 @@ pub fn read_background(path: &Path, width: u32, height: u32) -> Result<Vec<Vec4>
         .collect())
 }
 
-/// Writes 8-bit RGBA atomically as PNG.
-pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
-    write_atomic(path, |w| {
+/// Writes 8-bit RGBA as PNG to a reserved output (atomically, see [`OutputFile`]).
+pub fn write_png(out: OutputFile, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
+    out.write(|w| {
         PngEncoder::new(w)
             .write_image(rgba, width, height, image::ExtendedColorType::Rgba8)
             .map_err(std::io::Error::other)

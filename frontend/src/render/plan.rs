@@ -3,6 +3,7 @@
 //! effects the scene does not use are computed and then weighted by zero, so the picture is the
 //! same; only the work differs).
 
+use super::trace::{MAX_SECONDARY_RAYS_PER_PIXEL, MIN_PATH_WEIGHT};
 use crate::scene::{LightKind, Scene};
 use std::fmt::Write as _;
 
@@ -189,6 +190,14 @@ impl EffectPlan {
                 format!("{} (scene max_depth)", self.max_depth)
             }
         );
+        if self.max_depth > 0 {
+            let _ = writeln!(
+                s,
+                "  ray tree bound   a secondary ray is cast only while its path weight (product of mirror/transparency factors) is ≥ 1/{} (below, it cannot move an 8-bit sRGB value of display-range radiance), and at most {} reflection + refraction rays per pixel",
+                (1.0 / MIN_PATH_WEIGHT) as u32,
+                MAX_SECONDARY_RAYS_PER_PIXEL
+            );
+        }
         let _ = writeln!(
             s,
             "  CSG intervals    {}",

@@ -6,12 +6,92 @@
 //! surface faces away from it) or where a shadow ray finds an occluder (lights with
 //! `cast_shadows`). Shadow rays are any-hit queries started with the core's robust spawn
 //! ([`spawn_ray_to`] / [`spawn_ray`]), never with a scene epsilon.
+//!
+//! # What bounds the ray tree
+//! A material with both `mirror` and `transparency` casts two rays per hit, so the tree is
+//! exponential in `max_depth`. A [`PathBound`] cuts it: a secondary ray is cast only while its
+//! path weight (the product of the `mirror`/`transparency` factors from the camera) is at least
+//! [`MIN_PATH_WEIGHT`], and at most [`MAX_SECONDARY_RAYS_PER_PIXEL`] reflection and refraction
+//! rays are cast per pixel (depth first; the rest count as zero). The weight test alone keeps
+//! the tree at most `max_depth / MIN_PATH_WEIGHT` rays when `mirror + transparency ≤ 1`; the
+//! per-pixel cap bounds the rest (both factors up to 1 are accepted).
+//!
+//! Under `--force-all-effects`, the rays of effects a material does not have (weight 0) are
+//! cast from every node the plain plan expands, as leaves: they do the work, their result is
+//! discarded (not multiplied by zero: `0·∞` would be NaN), and they use none of the per-pixel
+//! budget, so the picture is the plan's, bit for bit.
 
 use super::geom::{QueryCtx, SurfaceHit};
 use super::plan::EffectPlan;
 use crate::scene::{LightKind, Scene};
 use glam::Vec3;
 use halfray_core::{Ray, spawn_ray, spawn_ray_to};
+
+/// Smallest path weight a secondary ray is cast for, 2⁻¹³. A subtree whose radiance is at
+/// most 1 (the displayable range) then moves the pixel's linear value by less than 1/8192,
+/// which after the sRGB curve (steepest at black, slope 12.92) is less than half an 8-bit step
+/// (0.5 / 255 / 12.92 ≈ 1/6590). Brighter subtrees (a strong light seen down a long mirror
+/// chain) can lose more: the bound is for display-range radiance.
+pub const MIN_PATH_WEIGHT: f32 = 1.0 / 8192.0;
+
+/// Most reflection and refraction rays per pixel: the hard bound when `mirror` and
+/// `transparency` are both near 1 and weights barely fall (4096 per pixel keeps a 640×480
+/// image under 1.3·10⁹ secondary rays).
+pub const MAX_SECONDARY_RAYS_PER_PIXEL: u32 = 4096;
+
+/// How far the ray tree of one pixel is followed (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathBound {
+    /// Secondary rays are cast only for path weights `≥ min_weight` (and `> 0`).
+    pub min_weight: f32,
+    /// Most secondary rays per pixel.
+    pub max_secondary_rays: u32,
+}
+
+impl PathBound {
+    /// The renderer's bound: [`MIN_PATH_WEIGHT`], [`MAX_SECONDARY_RAYS_PER_PIXEL`].
+    pub const RENDER: Self = Self {
+        min_weight: MIN_PATH_WEIGHT,
+        max_secondary_rays: MAX_SECONDARY_RAYS_PER_PIXEL,
+    };
+    /// The whole tree down to `max_depth` (exponential: for tests on small images).
+    pub const EXHAUSTIVE: Self = Self {
+        min_weight: 0.0,
+        max_secondary_rays: u32::MAX,
+    };
+}
+
+impl Default for PathBound {
+    fn default() -> Self {
+        Self::RENDER
+    }
+}
+
+/// Where a path is: recursion depth, weight, and the pixel's remaining secondary rays.
+struct PathState {
+    depth: u32,
+    weight: f32,
+    bound: PathBound,
+    rays_left: u32,
+}
+
+impl PathState {
+    /// Whether this node may cast secondary rays at all (forced leaves may not).
+    fn expands(&self, max_depth: u32) -> bool {
+        self.depth < max_depth && self.weight > 0.0 && self.weight >= self.bound.min_weight
+    }
+}
+
+/// What happened to a secondary ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Cast {
+    /// Not cast (weight or budget exhausted, or no such effect).
+    Skipped,
+    /// Cast for `--force-all-effects` only; its result is not used.
+    Leaf,
+    /// Traced; its radiance.
+    Traced(Vec3),
+}
 
 /// Rays cast, per kind.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -91,20 +171,58 @@ impl Tracer<'_> {
         self.scene.objects.iter().any(|o| o.occludes(ray, ctx))
     }
 
-    /// Radiance along a ray (already counted by the caller) at recursion `depth`.
-    pub fn radiance(&self, ray: &Ray, depth: u32, ctx: &mut QueryCtx, n: &mut RayCounts) -> Vec3 {
+    /// Radiance along a ray (already counted by the caller).
+    fn radiance(
+        &self,
+        ray: &Ray,
+        path: &mut PathState,
+        ctx: &mut QueryCtx,
+        n: &mut RayCounts,
+    ) -> Vec3 {
         match self.closest(ray, ctx) {
-            Some(h) => self.shade(ray, &h, depth, ctx, n),
+            Some(h) => self.shade_path(ray, &h, path, ctx, n),
             None => self.scene.background,
         }
     }
 
-    /// Local illumination plus the recursive terms at a hit.
+    /// Local illumination plus the recursive terms at a primary hit, under
+    /// [`PathBound::RENDER`], starting at recursion `depth` with weight 1.
     pub fn shade(
         &self,
         ray: &Ray,
         sh: &SurfaceHit,
         depth: u32,
+        ctx: &mut QueryCtx,
+        n: &mut RayCounts,
+    ) -> Vec3 {
+        self.shade_bounded(ray, sh, depth, PathBound::RENDER, ctx, n)
+    }
+
+    /// [`Tracer::shade`] under `bound`.
+    pub fn shade_bounded(
+        &self,
+        ray: &Ray,
+        sh: &SurfaceHit,
+        depth: u32,
+        bound: PathBound,
+        ctx: &mut QueryCtx,
+        n: &mut RayCounts,
+    ) -> Vec3 {
+        let mut path = PathState {
+            depth,
+            weight: 1.0,
+            bound,
+            rays_left: bound.max_secondary_rays,
+        };
+        self.shade_path(ray, sh, &mut path, ctx, n)
+    }
+
+    /// Local illumination plus the recursive terms at a hit.
+    fn shade_path(
+        &self,
+        ray: &Ray,
+        sh: &SurfaceHit,
+        path: &mut PathState,
         ctx: &mut QueryCtx,
         n: &mut RayCounts,
     ) -> Vec3 {
@@ -148,29 +266,71 @@ impl Tracer<'_> {
                 color += m.specular * e * nrm.dot(h).max(0.0).powf(m.shininess);
             }
         }
-        if depth >= self.plan.max_depth {
+        if !path.expands(self.plan.max_depth) {
             return color;
         }
         if self.plan.reflect[mi] && (m.mirror > 0.0 || self.plan.forced) {
             let r = reflect(d, nrm);
-            n.reflection += 1;
-            color += m.mirror * self.radiance(&spawn_ray(hit, r), depth + 1, ctx, n);
+            let cast = self.secondary(&spawn_ray(hit, r), m.mirror, path, ctx, n);
+            if cast != Cast::Skipped {
+                n.reflection += 1;
+            }
+            if let Cast::Traced(c) = cast {
+                color += m.mirror * c;
+            }
         }
         if self.plan.refract[mi] && (m.transparency > 0.0 || self.plan.forced) {
             let eta = if hit.front_face { 1.0 / m.ior } else { m.ior };
-            let t = match refract(d, nrm, eta) {
-                Some(t) => {
-                    n.refraction += 1;
-                    t
-                }
-                None => {
-                    // Total internal reflection: the transmitted share is reflected.
-                    n.reflection += 1;
-                    reflect(d, nrm)
-                }
+            let (t, refracted) = match refract(d, nrm, eta) {
+                Some(t) => (t, true),
+                // Total internal reflection: the transmitted share is reflected.
+                None => (reflect(d, nrm), false),
             };
-            color += m.transparency * self.radiance(&spawn_ray(hit, t), depth + 1, ctx, n);
+            let cast = self.secondary(&spawn_ray(hit, t), m.transparency, path, ctx, n);
+            match (cast != Cast::Skipped, refracted) {
+                (true, true) => n.refraction += 1,
+                (true, false) => n.reflection += 1,
+                (false, _) => {}
+            }
+            if let Cast::Traced(c) = cast {
+                color += m.transparency * c;
+            }
         }
         color
+    }
+
+    /// Casts a secondary ray with factor `k` from the node at `path` (the caller counts it):
+    /// traced when the bound allows it and `k > 0`, a leaf whose result is discarded when it is
+    /// a forced zero-weight ray, else skipped.
+    fn secondary(
+        &self,
+        ray: &Ray,
+        k: f32,
+        path: &mut PathState,
+        ctx: &mut QueryCtx,
+        n: &mut RayCounts,
+    ) -> Cast {
+        let weight = path.weight * k;
+        if k > 0.0 && weight >= path.bound.min_weight && path.rays_left > 0 {
+            path.rays_left -= 1;
+            let (depth, parent) = (path.depth, path.weight);
+            path.depth += 1;
+            path.weight = weight;
+            let c = self.radiance(ray, path, ctx, n);
+            path.depth = depth;
+            path.weight = parent;
+            return Cast::Traced(c);
+        }
+        if k == 0.0 && self.plan.forced {
+            let mut leaf = PathState {
+                depth: path.depth + 1,
+                weight: 0.0,
+                bound: path.bound,
+                rays_left: 0,
+            };
+            let _ = self.radiance(ray, &mut leaf, ctx, n);
+            return Cast::Leaf;
+        }
+        Cast::Skipped
     }
 }

@@ -28,6 +28,7 @@ struct Ctx<'a> {
     meshes: BTreeMap<String, (Span, Option<Arc<MeshShape>>)>,
     mesh_defs: BTreeMap<String, S<def::MeshDef>>,
     loaded: Vec<Arc<MeshShape>>,
+    mesh_files: Vec<std::path::PathBuf>,
 }
 
 impl Ctx<'_> {
@@ -109,6 +110,7 @@ pub(super) fn build(src: &Source<'_>, d: def::SceneDef) -> Result<Scene> {
         meshes: BTreeMap::new(),
         mesh_defs: d.mesh,
         loaded: Vec::new(),
+        mesh_files: Vec::new(),
     };
     let ambient = match &d.ambient {
         Some(v) => ctx.color(v, "ambient")?,
@@ -162,6 +164,7 @@ pub(super) fn build(src: &Source<'_>, d: def::SceneDef) -> Result<Scene> {
         objects,
         object_labels: labels,
         meshes: ctx.loaded,
+        mesh_files: ctx.mesh_files,
     })
 }
 
@@ -679,6 +682,7 @@ fn mesh(ctx: &mut Ctx<'_>, name: &S<String>, field: &str) -> Result<Arc<MeshShap
         })?;
     let shape = Arc::new(shape);
     ctx.loaded.push(shape.clone());
+    ctx.mesh_files.push(path);
     if let Some(entry) = ctx.meshes.get_mut(name.get_ref()) {
         entry.1 = Some(shape.clone());
     }

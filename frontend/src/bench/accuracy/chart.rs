@@ -1,10 +1,9 @@
 //! A small PNG scatter chart (cost against error), drawn directly with `image` and a built-in
 //! 5×7 bitmap font, so that no font files or plotting dependencies are needed.
 
-use crate::atomic::write_bytes_atomic;
 use crate::error::{Error, Result};
+use crate::outputs::OutputFile;
 use image::{ImageEncoder, Rgb, RgbImage};
-use std::path::Path;
 
 /// One point of the chart.
 pub struct Point {
@@ -37,9 +36,9 @@ const PALETTE: [[u8; 3]; 8] = [
     [23, 190, 207],
 ];
 
-/// Draws the chart and writes it to `path` as PNG (atomically).
+/// Draws the chart and writes it to a reserved output as PNG (atomically).
 pub fn write_chart(
-    path: &Path,
+    out: OutputFile,
     title: &str,
     x_label: &str,
     y_label: &str,
@@ -100,7 +99,7 @@ pub fn write_chart(
     image::codecs::png::PngEncoder::new(&mut png)
         .write_image(img.as_raw(), W, H, image::ExtendedColorType::Rgb8)
         .map_err(|e| Error::Other(format!("encoding chart: {e}")))?;
-    write_bytes_atomic(path, &png)
+    out.write(|w| w.write_all(&png))
 }
 
 fn put(img: &mut RgbImage, x: i32, y: i32, c: Rgb<u8>) {
@@ -221,7 +220,7 @@ mod tests {
             },
         ];
         write_chart(
-            &path,
+            OutputFile::reserve(&path, false).unwrap(),
             "cost vs error",
             "ns per test",
             "leaks per million",

@@ -7,9 +7,10 @@ pub mod choices;
 pub mod embree_rows;
 pub mod triangles;
 
-use crate::atomic::write_bytes_atomic;
+use crate::console::print_out;
 use crate::error::{Error, Result};
 use crate::obj::{ObjMesh, read_obj};
+use crate::outputs::{Named, reserve_outputs};
 use halfray_core::triangle::TriangleVariant;
 use std::path::{Path, PathBuf};
 use triangles::Workload;
@@ -135,7 +136,7 @@ pub fn measure(args: &AccuracyArgs) -> Result<Report> {
     } else {
         (200_000, 9)
     };
-    let workload = Workload::new(&closed, &closed, n, args.seed);
+    let workload = Workload::new(&closed, &closed, n, args.seed).map_err(Error::Other)?;
     let mut variants = Vec::new();
     for v in TriangleVariant::ALL {
         let (acc, ns) = triangles::measure(v, &workload, reps);
@@ -274,15 +275,26 @@ pub fn markdown(r: &Report) -> String {
     s
 }
 
-/// Runs `halfray bench accuracy`.
+/// Runs `halfray bench accuracy`: reserves `--json` and `--chart` (never one of the meshes),
+/// measures, writes the files, then prints the table.
 pub fn run(args: &AccuracyArgs) -> Result<()> {
-    let report = measure(args)?;
-    print!("{}", markdown(&report));
-    if let Some(path) = &args.json {
-        let json = serde_json::to_vec_pretty(&report).map_err(|e| Error::Other(e.to_string()))?;
-        write_bytes_atomic(path, &json)?;
+    let mut outputs = Vec::new();
+    if let Some(p) = &args.json {
+        outputs.push(Named::new("--json", p));
     }
-    if let Some(path) = &args.chart {
+    if let Some(p) = &args.chart {
+        outputs.push(Named::new("--chart", p));
+    }
+    let inputs: Vec<Named<'_>> = args.meshes.iter().map(|p| Named::new("mesh", p)).collect();
+    let mut reserved = reserve_outputs(&outputs, &inputs, false)?.into_iter();
+    let report = measure(args)?;
+    if args.json.is_some() {
+        let json = serde_json::to_vec_pretty(&report).map_err(|e| Error::Other(e.to_string()))?;
+        let out = reserved.next().expect("--json is reserved first");
+        out.write(|w| w.write_all(&json))?;
+    }
+    if args.chart.is_some() {
+        let out = reserved.next().expect("--chart is reserved after --json");
         // Cost as ns per incoherent ray through each side's BVH (bunny), so that Embree, which
         // has no per-triangle entry point, sits on the same axis.
         let points: Vec<chart::Point> = report
@@ -298,12 +310,12 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
             })
             .collect();
         chart::write_chart(
-            path,
+            out,
             "ray-triangle variants: cost against error",
             "ns per incoherent BVH ray, bunny",
             "leaks + false hits per million rays",
             &points,
         )?;
     }
-    Ok(())
+    print_out(&markdown(&report))
 }

@@ -100,8 +100,15 @@ pub struct Workload {
 
 impl Workload {
     /// Builds the workloads from `meshes` (`leak_meshes` are used for edge/vertex rays, normally
-    /// the closed ones), with `n` rays per kind in total.
-    pub fn new(meshes: &[ObjMesh], leak_meshes: &[ObjMesh], n: usize, seed: u64) -> Self {
+    /// the closed ones), with `n` rays per kind in total. Fails when the meshes do not yield
+    /// `n` usable "just outside" rays within [`MAX_CANDIDATES_PER_RAY`] candidates per ray
+    /// (coordinates near the `f32` range limit, where no offset ray survives rounding).
+    pub fn new(
+        meshes: &[ObjMesh],
+        leak_meshes: &[ObjMesh],
+        n: usize,
+        seed: u64,
+    ) -> Result<Self, String> {
         let mut leak_rays = Vec::new();
         let mut leak_mesh = Vec::new();
         let per = n / (2 * leak_meshes.len().max(1));
@@ -128,25 +135,43 @@ impl Workload {
         let mut pair_rays = Vec::with_capacity(n);
         let mut outside_ids = Vec::with_capacity(n);
         let mut pair_ids = Vec::with_capacity(n);
+        let budget = n.saturating_mul(MAX_CANDIDATES_PER_RAY);
+        let gave_up = |what: &str, got: usize| {
+            format!(
+                "could not generate {what} rays: {got} of {n} after {budget} candidates ({MAX_CANDIDATES_PER_RAY} per ray); are the meshes near the f32 range limit?"
+            )
+        };
         if !all.is_empty() {
+            let mut tries = 0usize;
             while outside_rays.len() < n {
+                tries += 1;
+                if tries > budget {
+                    return Err(gave_up("just-outside", outside_rays.len()));
+                }
                 let (mi, f, tri) = all[rng.below(all.len())];
                 if let Some(r) = just_outside(&mut rng, &tri) {
                     outside_rays.push((r, tri));
                     outside_ids.push((mi, f));
                 }
             }
+            let mut tries = 0usize;
             while pair_rays.len() < n {
+                tries += 1;
+                if tries > budget {
+                    return Err(gave_up("triangle-aimed", pair_rays.len()));
+                }
                 let (mi, f, tri) = all[rng.below(all.len())];
-                pair_rays.push((aim_at_triangle(&mut rng, &tri), tri));
-                pair_ids.push((mi, f));
+                if let Some(r) = aim_at_triangle(&mut rng, &tri) {
+                    pair_rays.push((r, tri));
+                    pair_ids.push((mi, f));
+                }
             }
         }
         let cost_tris: Vec<[Vec3; 3]> = (0..64.min(all.len()))
             .map(|_| all[rng.below(all.len())].2)
             .collect();
         let cost_rays = pair_rays.iter().take(4096).map(|(r, _)| *r).collect();
-        Self {
+        Ok(Self {
             leak_rays,
             outside_rays,
             pair_rays,
@@ -155,21 +180,28 @@ impl Workload {
             leak_mesh,
             outside_ids,
             pair_ids,
-        }
+        })
     }
 }
 
-fn random_origin_for(rng: &mut Rng, target: DVec3, scale: f64, n: DVec3) -> DVec3 {
+/// Candidates drawn per wanted ray before a generator gives up. Usable candidates are the
+/// common case on ordinary meshes (most are accepted), so this is only reached when the
+/// geometry makes acceptance (near) impossible.
+pub const MAX_CANDIDATES_PER_RAY: usize = 1000;
+
+/// Directions drawn for a ray origin before giving up: a uniform direction is accepted with
+/// probability `1 − 0.17 ≈ 0.83`, so 64 failures in a row happen with probability `0.17⁶⁴`.
+pub const MAX_ORIGIN_TRIES: usize = 64;
+
+fn random_origin_for(rng: &mut Rng, target: DVec3, scale: f64, n: DVec3) -> Option<DVec3> {
     // From the front or back side, at least 10° off the plane.
-    loop {
+    (0..MAX_ORIGIN_TRIES).find_map(|_| {
         let d = rng.unit_vector();
-        if d.dot(n).abs() > 0.17 {
-            return target + d * scale * (1.0 + 4.0 * rng.f64());
-        }
-    }
+        (d.dot(n).abs() > 0.17).then(|| target + d * scale * (1.0 + 4.0 * rng.f64()))
+    })
 }
 
-fn aim_at_triangle(rng: &mut Rng, tri: &[Vec3; 3]) -> Ray {
+fn aim_at_triangle(rng: &mut Rng, tri: &[Vec3; 3]) -> Option<Ray> {
     let [a, b, c] = tri.map(|p| p.as_dvec3());
     let n = (b - a).cross(c - a).normalize();
     let (r1, r2) = (rng.f64(), rng.f64());
@@ -181,8 +213,9 @@ fn aim_at_triangle(rng: &mut Rng, tri: &[Vec3; 3]) -> Ray {
         a * (1.0 - s) + b * (s * (1.0 - r2)) + c * (s * r2)
     };
     let scale = (b - a).length().max((c - a).length());
-    let o = random_origin_for(rng, p, scale, n);
-    Ray::new(o.as_vec3(), (p - o).as_vec3())
+    let o = random_origin_for(rng, p, scale, n)?;
+    let ray = Ray::new(o.as_vec3(), (p - o).as_vec3());
+    (ray.origin.is_finite() && ray.direction.is_finite()).then_some(ray)
 }
 
 fn just_outside(rng: &mut Rng, tri: &[Vec3; 3]) -> Option<Ray> {
@@ -197,7 +230,7 @@ fn just_outside(rng: &mut Rng, tri: &[Vec3; 3]) -> Option<Ray> {
     }
     let p_edge = a + e * (0.05 + 0.9 * rng.f64());
     let scale = e.length();
-    let o = random_origin_for(rng, p_edge, scale, n);
+    let o = random_origin_for(rng, p_edge, scale, n)?;
     let mag = v
         .iter()
         .map(|x| (*x - o).abs().max_element())

@@ -1,0 +1,43 @@
+//! Memory limits: sizes computed from input are estimated (with checked arithmetic) before
+//! anything is allocated, and refused with a message naming the option and the estimate.
+
+use crate::error::{Error, Result};
+
+/// Most memory one command may plan to allocate for its main buffers: 4 GiB, the smallest
+/// machine halfray is meant to run on (a larger request used to abort with exit 134 there).
+pub const MEMORY_LIMIT_BYTES: u64 = 4 << 30;
+
+/// Refuses `bytes` (`None`: the size computation overflowed) above [`MEMORY_LIMIT_BYTES`],
+/// as a usage error naming `what` (the options that set the size and their values).
+pub fn check_memory(what: &str, bytes: Option<u64>) -> Result<()> {
+    match bytes {
+        Some(b) if b <= MEMORY_LIMIT_BYTES => Ok(()),
+        Some(b) => Err(Error::Usage(format!(
+            "{what} needs about {:.1} GiB, more than the {} GiB limit",
+            b as f64 / f64::from(1u32 << 30),
+            MEMORY_LIMIT_BYTES >> 30
+        ))),
+        None => Err(Error::Usage(format!(
+            "{what} is too large: its size does not fit in 64 bits"
+        ))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn estimates_above_the_limit_or_overflowing_are_refused() {
+        assert!(check_memory("x", Some(MEMORY_LIMIT_BYTES)).is_ok());
+        let e = check_memory("--width 9 --height 9", Some(MEMORY_LIMIT_BYTES + 1))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("--width 9 --height 9 needs about 4.0 GiB"),
+            "{e}"
+        );
+        let e = check_memory("--levels 40", None).unwrap_err().to_string();
+        assert!(e.contains("does not fit"), "{e}");
+    }
+}

@@ -1,0 +1,369 @@
+//! One output file, reserved before the work and written after it.
+//!
+//! [`OutputFile::reserve`] checks the location (the folder exists, is a folder, takes a new
+//! file; the path is not a directory, not read-only, not hard-linked) and, for regular files,
+//! creates the temporary file the output will be written to, so every output a command
+//! will write is known to be writable before the command starts working. [`OutputFile::write`]
+//! then fills it:
+//!
+//! * a new or regular file gets the temporary file, synced, given the replaced file's
+//!   permissions, and renamed over it: readers see the old bytes or the new ones, never a
+//!   mix, and a failure at any point leaves the old file untouched and no temporary file;
+//! * a symlink is followed (to the end of its chain) and its target replaced as above, in
+//!   the target's folder: the link stays a link;
+//! * a character or block device, FIFO or socket is opened and written in place: it stays
+//!   what it was (`-o /dev/null` works; a FIFO gets the stream).
+//!
+//! A read-only file (no write bit set) or one with several hard links is refused unless
+//! `force`; with `force` it is replaced, keeping its mode (and, for a hard link, splitting it:
+//! only this name gets the new bytes).
+
+use super::identity::{FileId, file_id};
+use super::target::{Target, resolve};
+use super::temp::TempFile;
+use crate::error::{Error, Result};
+use std::fs::Permissions;
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+/// How an output reaches its file.
+#[derive(Debug)]
+enum Route {
+    /// Through a temporary file renamed over `target`.
+    Replace {
+        target: PathBuf,
+        temp: TempFile,
+        permissions: Option<Permissions>,
+    },
+    /// Written in place (device, FIFO, socket).
+    InPlace { target: PathBuf },
+}
+
+/// An output whose location was checked; see the module docs.
+#[derive(Debug)]
+pub struct OutputFile {
+    dest: PathBuf,
+    id: Option<FileId>,
+    route: Route,
+}
+
+fn refuse(dest: &Path, kind: io::ErrorKind, message: String) -> Error {
+    Error::io(dest, io::Error::new(kind, message))
+}
+
+fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+#[cfg(unix)]
+fn mode_text(p: &Permissions) -> String {
+    format!(
+        " (mode {:04o})",
+        std::os::unix::fs::PermissionsExt::mode(p) & 0o7777
+    )
+}
+
+#[cfg(not(unix))]
+fn mode_text(_: &Permissions) -> String {
+    String::new()
+}
+
+impl OutputFile {
+    /// Checks that `dest` can be written and reserves it (see the module docs). `force`
+    /// allows replacing read-only and hard-linked files.
+    pub fn reserve(dest: &Path, force: bool) -> Result<Self> {
+        let target = resolve(dest).map_err(|e| Error::io(dest, e))?;
+        let route = match target {
+            Target::Directory { .. } => {
+                return Err(refuse(
+                    dest,
+                    io::ErrorKind::IsADirectory,
+                    "is a directory, not a file".into(),
+                ));
+            }
+            Target::Special { path, .. } => Route::InPlace { target: path },
+            Target::Missing { path } => {
+                let dir = folder_of(&path);
+                match std::fs::metadata(dir) {
+                    Ok(m) if m.is_dir() => {}
+                    Ok(_) => {
+                        return Err(refuse(
+                            dest,
+                            io::ErrorKind::NotADirectory,
+                            format!("`{}` is not a folder", dir.display()),
+                        ));
+                    }
+                    Err(e) if e.kind() == io::ErrorKind::NotFound => {
+                        return Err(refuse(
+                            dest,
+                            io::ErrorKind::NotFound,
+                            format!("folder `{}` does not exist", dir.display()),
+                        ));
+                    }
+                    Err(e) => return Err(Error::io(dir, e)),
+                }
+                Route::Replace {
+                    temp: temp_in(dest, dir)?,
+                    target: path,
+                    permissions: None,
+                }
+            }
+            Target::Regular {
+                path,
+                permissions,
+                links,
+            } => {
+                if permissions.readonly() && !force {
+                    return Err(refuse(
+                        dest,
+                        io::ErrorKind::PermissionDenied,
+                        format!(
+                            "is read-only{}; pass --force to replace it",
+                            mode_text(&permissions)
+                        ),
+                    ));
+                }
+                if links > 1 && !force {
+                    return Err(refuse(
+                        dest,
+                        io::ErrorKind::AlreadyExists,
+                        format!(
+                            "has {links} hard links; replacing it would split them (pass --force to replace this name only)"
+                        ),
+                    ));
+                }
+                Route::Replace {
+                    temp: temp_in(dest, folder_of(&path))?,
+                    target: path,
+                    permissions: Some(permissions),
+                }
+            }
+        };
+        Ok(Self {
+            id: file_id(dest).ok(),
+            dest: dest.to_path_buf(),
+            route,
+        })
+    }
+
+    /// The path as given.
+    pub fn path(&self) -> &Path {
+        &self.dest
+    }
+
+    /// The identity of the file it will write (`None` when it cannot be determined).
+    pub fn id(&self) -> Option<&FileId> {
+        self.id.as_ref()
+    }
+
+    /// Writes the bytes `fill` produces (see the module docs). On error nothing at the
+    /// destination changed (except for devices and FIFOs, which get what was written) and the
+    /// temporary file is gone.
+    pub fn write(self, fill: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<()> {
+        let dest = self.dest;
+        match self.route {
+            Route::Replace {
+                target,
+                mut temp,
+                permissions,
+            } => {
+                let result = (|| {
+                    let file = temp.file()?;
+                    let mut w = io::BufWriter::new(&mut *file);
+                    fill(&mut w)?;
+                    w.flush()?;
+                    drop(w);
+                    if let Some(p) = permissions {
+                        file.set_permissions(p)?;
+                    }
+                    file.sync_all()?;
+                    temp.persist(&target)
+                })();
+                result.map_err(|e| Error::io(&dest, e))
+            }
+            Route::InPlace { target } => {
+                let result = (|| {
+                    let file = std::fs::OpenOptions::new().write(true).open(&target)?;
+                    let mut w = io::BufWriter::new(file);
+                    fill(&mut w)?;
+                    w.flush()
+                })();
+                result.map_err(|e| Error::io(&dest, e))
+            }
+        }
+    }
+}
+
+fn temp_in(dest: &Path, dir: &Path) -> Result<TempFile> {
+    TempFile::create_in(dir).map_err(|e| {
+        refuse(
+            dest,
+            e.kind(),
+            format!("cannot create a file in folder `{}`: {e}", dir.display()),
+        )
+    })
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use super::*;
+    use std::os::unix::fs::{FileTypeExt, PermissionsExt};
+
+    fn write(dest: &Path, force: bool, bytes: &[u8]) -> Result<()> {
+        OutputFile::reserve(dest, force)?.write(|w| w.write_all(bytes))
+    }
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    fn mode(p: &Path) -> u32 {
+        std::fs::metadata(p).unwrap().permissions().mode() & 0o7777
+    }
+
+    #[test]
+    fn failed_write_leaves_destination_and_folder_untouched() {
+        let dir = tempfile::tempdir().unwrap();
+        let dest = dir.path().join("out.txt");
+        std::fs::write(&dest, b"old").unwrap();
+        let out = OutputFile::reserve(&dest, false).unwrap();
+        assert_eq!(
+            names(dir.path()).len(),
+            2,
+            "reserved: temporary file exists"
+        );
+        let err = out.write(|w| {
+            w.write_all(b"partial")?;
+            Err(io::Error::other("boom"))
+        });
+        assert!(err.is_err());
+        assert_eq!(std::fs::read(&dest).unwrap(), b"old");
+        assert_eq!(names(dir.path()), ["out.txt"], "temporary file removed");
+        // Reserved but never written (the work failed): also no trace.
+        drop(OutputFile::reserve(&dest, false).unwrap());
+        assert_eq!(names(dir.path()), ["out.txt"]);
+    }
+
+    #[test]
+    fn symlinks_are_written_through_and_stay_links() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("real")).unwrap();
+        let target = dir.path().join("real/t.txt");
+        std::fs::write(&target, b"old").unwrap();
+        let link = dir.path().join("link.txt");
+        std::os::unix::fs::symlink("real/t.txt", &link).unwrap();
+        write(&link, false, b"new").unwrap();
+        assert!(std::fs::symlink_metadata(&link).unwrap().is_symlink());
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        assert_eq!(names(&dir.path().join("real")), ["t.txt"]);
+        // A dangling link gets its target created.
+        let dangling = dir.path().join("dangling.txt");
+        std::os::unix::fs::symlink("real/created.txt", &dangling).unwrap();
+        write(&dangling, false, b"made").unwrap();
+        assert!(std::fs::symlink_metadata(&dangling).unwrap().is_symlink());
+        assert_eq!(
+            std::fs::read(dir.path().join("real/created.txt")).unwrap(),
+            b"made"
+        );
+    }
+
+    #[test]
+    fn devices_and_fifos_are_written_in_place() {
+        let dir = tempfile::tempdir().unwrap();
+        // A link to /dev/null: written through, /dev/null stays a character device.
+        let null = dir.path().join("null");
+        std::os::unix::fs::symlink("/dev/null", &null).unwrap();
+        write(&null, false, b"discarded").unwrap();
+        assert!(
+            std::fs::metadata("/dev/null")
+                .unwrap()
+                .file_type()
+                .is_char_device()
+        );
+        assert_eq!(names(dir.path()), ["null"]);
+        // A FIFO gets the stream and stays a FIFO.
+        let fifo = dir.path().join("fifo");
+        let status = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .expect("mkfifo (coreutils) runs");
+        assert!(status.success());
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || std::fs::read(fifo).unwrap())
+        };
+        write(&fifo, false, b"streamed").unwrap();
+        assert_eq!(reader.join().unwrap(), b"streamed");
+        assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+        assert_eq!(names(dir.path()), ["fifo", "null"]);
+    }
+
+    #[test]
+    fn mode_is_kept_and_read_only_or_hard_linked_files_need_force() {
+        let dir = tempfile::tempdir().unwrap();
+        let private = dir.path().join("private.txt");
+        std::fs::write(&private, b"old").unwrap();
+        std::fs::set_permissions(&private, Permissions::from_mode(0o600)).unwrap();
+        write(&private, false, b"new").unwrap();
+        assert_eq!(mode(&private), 0o600);
+        assert_eq!(std::fs::read(&private).unwrap(), b"new");
+
+        let ro = dir.path().join("ro.txt");
+        std::fs::write(&ro, b"keep").unwrap();
+        std::fs::set_permissions(&ro, Permissions::from_mode(0o444)).unwrap();
+        let e = write(&ro, false, b"new").unwrap_err().to_string();
+        assert!(
+            e.contains("read-only (mode 0444)") && e.contains("--force"),
+            "{e}"
+        );
+        assert_eq!(std::fs::read(&ro).unwrap(), b"keep");
+        write(&ro, true, b"forced").unwrap();
+        assert_eq!(std::fs::read(&ro).unwrap(), b"forced");
+        assert_eq!(mode(&ro), 0o444);
+
+        let a = dir.path().join("a.txt");
+        let b = dir.path().join("b.txt");
+        std::fs::write(&a, b"shared").unwrap();
+        std::fs::hard_link(&a, &b).unwrap();
+        let e = write(&a, false, b"new").unwrap_err().to_string();
+        assert!(e.contains("2 hard links"), "{e}");
+        assert_eq!(std::fs::read(&b).unwrap(), b"shared");
+        write(&a, true, b"new").unwrap();
+        assert_eq!(std::fs::read(&a).unwrap(), b"new");
+        assert_eq!(std::fs::read(&b).unwrap(), b"shared", "forced: link split");
+        assert_eq!(
+            names(dir.path()),
+            ["a.txt", "b.txt", "private.txt", "ro.txt"]
+        );
+    }
+
+    #[test]
+    fn longest_valid_name_works_and_bad_locations_fail_at_reserve() {
+        let dir = tempfile::tempdir().unwrap();
+        let long = dir.path().join("x".repeat(254));
+        write(&long, false, b"ok").unwrap();
+        assert_eq!(std::fs::read(&long).unwrap(), b"ok");
+        assert_eq!(names(dir.path()).len(), 1);
+
+        let e = OutputFile::reserve(&dir.path().join("nodir/x.png"), false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("does not exist"), "{e}");
+        let e = OutputFile::reserve(&long.join("x.png"), false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is not a folder"), "{e}");
+        let e = OutputFile::reserve(dir.path(), false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is a directory"), "{e}");
+    }
+}

@@ -1,0 +1,95 @@
+//! Output files: where a command may write, checked before it starts working, and how the
+//! bytes get there without clobbering what is not ours ([`file`]).
+//!
+//! [`reserve_outputs`] is what every command calls first: each output location is checked
+//! (and a regular file's temporary file created, see [`OutputFile::reserve`]), and an output
+//! that is one of the inputs, or two outputs that are the same file, are refused as usage
+//! errors. "Same file" is file identity ([`identity`]: device and inode, symlinks followed;
+//! for a file not created yet, its canonical folder and name), not the spelling of the path.
+
+pub mod file;
+pub mod identity;
+pub mod target;
+pub mod temp;
+
+pub use file::OutputFile;
+pub use identity::{FileId, file_id};
+
+use crate::error::{Error, Result};
+use std::path::Path;
+
+/// A path a command reads or writes, with the option (or role) that named it, for messages
+/// (`-o`, `--stats-json`, `scene`, `mesh.bunny.file`).
+#[derive(Clone, Copy, Debug)]
+pub struct Named<'a> {
+    /// The option or role.
+    pub name: &'a str,
+    /// The path.
+    pub path: &'a Path,
+}
+
+impl<'a> Named<'a> {
+    /// `path`, named by `name`.
+    pub fn new(name: &'a str, path: &'a Path) -> Self {
+        Self { name, path }
+    }
+}
+
+/// Reserves every output (see [`OutputFile::reserve`]) and refuses outputs that are inputs or
+/// each other; `force` allows replacing read-only and hard-linked files. The outputs come
+/// back in the order given.
+pub fn reserve_outputs(
+    outputs: &[Named<'_>],
+    inputs: &[Named<'_>],
+    force: bool,
+) -> Result<Vec<OutputFile>> {
+    let mut reserved: Vec<OutputFile> = Vec::with_capacity(outputs.len());
+    for (k, out) in outputs.iter().enumerate() {
+        let file = OutputFile::reserve(out.path, force)?;
+        if let Some(id) = file.id() {
+            for (j, earlier) in reserved.iter().enumerate() {
+                if earlier.id() == Some(id) {
+                    let e = outputs[j];
+                    return Err(Error::Usage(format!(
+                        "{} `{}` and {} `{}` are the same file",
+                        e.name,
+                        e.path.display(),
+                        out.name,
+                        out.path.display()
+                    )));
+                }
+            }
+        }
+        debug_assert_eq!(reserved.len(), k);
+        reserved.push(file);
+    }
+    refuse_inputs(&reserved, outputs, inputs)?;
+    Ok(reserved)
+}
+
+/// Refuses when an output (reserved from `names`, same order) is one of `inputs`: checked
+/// again by callers that learn of more inputs later (a scene's mesh files).
+pub fn refuse_inputs(
+    reserved: &[OutputFile],
+    names: &[Named<'_>],
+    inputs: &[Named<'_>],
+) -> Result<()> {
+    for input in inputs {
+        // An input that cannot be identified cannot be opened either: reading it reports that.
+        let Ok(id) = file_id(input.path) else {
+            continue;
+        };
+        for (out, name) in reserved.iter().zip(names) {
+            if out.id() == Some(&id) {
+                return Err(Error::Usage(format!(
+                    "{} `{}` is the {} `{}`: refusing to overwrite an input",
+                    name.name,
+                    name.path.display(),
+                    input.name,
+                    input.path.display()
+                )));
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,160 @@
+//! Temporary files next to an output, and their removal on every way out: drop (errors,
+//! panics that unwind), and SIGINT/SIGTERM/SIGHUP once [`install_signal_cleanup`] ran.
+//!
+//! Names are `.halfray-<pid>-<n>.tmp`, at most [`MAX_TEMP_NAME_LEN`] bytes whatever the
+//! output is called, so an output whose own name is at the file-system limit (255 bytes on
+//! Linux) still gets a temporary file.
+
+use std::fs::File;
+use std::io;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Longest temporary file name, in bytes: `.halfray-` (9) + a `u32` pid (≤ 10) + `-` + a `u64`
+/// counter (≤ 20) + `.tmp` (4).
+pub const MAX_TEMP_NAME_LEN: usize = 9 + 10 + 1 + 20 + 4;
+
+/// Names tried before giving up when they already exist (left by another process).
+pub const MAX_TEMP_NAME_TRIES: u32 = 100;
+
+/// Temporary files that exist right now, removed by the signal handler.
+static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+static COUNTER: AtomicU64 = AtomicU64::new(0);
+
+fn live() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    // A panic while holding the lock leaves a list that is still valid.
+    LIVE.lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// A temporary file, removed when dropped unless [`TempFile::persist`]ed.
+#[derive(Debug)]
+pub struct TempFile {
+    path: PathBuf,
+    file: Option<File>,
+}
+
+impl TempFile {
+    /// Creates a new, empty temporary file in `dir` (never one that exists: `O_EXCL`).
+    pub fn create_in(dir: &Path) -> io::Result<Self> {
+        let mut last = None;
+        for _ in 0..MAX_TEMP_NAME_TRIES {
+            let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+            let name = format!(".halfray-{}-{n}.tmp", std::process::id());
+            debug_assert!(name.len() <= MAX_TEMP_NAME_LEN);
+            let path = dir.join(name);
+            let mut registry = live();
+            match std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&path)
+            {
+                Ok(file) => {
+                    registry.push(path.clone());
+                    return Ok(Self {
+                        path,
+                        file: Some(file),
+                    });
+                }
+                Err(e) if e.kind() == io::ErrorKind::AlreadyExists => last = Some(e),
+                Err(e) => return Err(e),
+            }
+        }
+        Err(last.unwrap_or_else(|| io::Error::other("no free temporary file name")))
+    }
+
+    /// Its path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The open file.
+    pub fn file(&mut self) -> io::Result<&mut File> {
+        self.file
+            .as_mut()
+            .ok_or_else(|| io::Error::other("temporary file already closed"))
+    }
+
+    /// Renames it to `dest` (same folder, so atomic) and forgets it.
+    pub fn persist(mut self, dest: &Path) -> io::Result<()> {
+        drop(self.file.take());
+        let mut registry = live();
+        std::fs::rename(&self.path, dest)?;
+        registry.retain(|p| p != &self.path);
+        self.path = PathBuf::new();
+        Ok(())
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        if self.path.as_os_str().is_empty() {
+            return;
+        }
+        drop(self.file.take());
+        let mut registry = live();
+        let _ = std::fs::remove_file(&self.path);
+        registry.retain(|p| p != &self.path);
+    }
+}
+
+/// Removes every live temporary file (what the signal handler does before exiting).
+pub fn remove_live_temp_files() {
+    for p in live().drain(..) {
+        let _ = std::fs::remove_file(p);
+    }
+}
+
+/// Starts a thread that, on SIGINT, SIGTERM or SIGHUP, removes the live temporary files and
+/// exits with status 128 + the signal number (what a shell reports for a process the signal
+/// killed). Call once, from `main`.
+#[cfg(unix)]
+pub fn install_signal_cleanup() -> io::Result<()> {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])?;
+    std::thread::Builder::new()
+        .name("signal-cleanup".into())
+        .spawn(move || {
+            if let Some(sig) = signals.forever().next() {
+                // Holding the lock while exiting keeps a rename from completing afterwards.
+                let mut registry = live();
+                for p in registry.drain(..) {
+                    let _ = std::fs::remove_file(p);
+                }
+                std::process::exit(128 + sig);
+            }
+        })?;
+    Ok(())
+}
+
+/// Signals are a Unix notion; elsewhere temporary files are removed on drop only.
+#[cfg(not(unix))]
+pub fn install_signal_cleanup() -> io::Result<()> {
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dropped_temp_files_are_removed_and_persisted_ones_renamed() {
+        let dir = tempfile::tempdir().unwrap();
+        let t = TempFile::create_in(dir.path()).unwrap();
+        let name = t.path().file_name().unwrap().len();
+        assert!(name <= MAX_TEMP_NAME_LEN, "{name}");
+        assert!(t.path().exists());
+        let p = t.path().to_path_buf();
+        assert!(live().contains(&p));
+        drop(t);
+        assert!(!p.exists());
+        assert!(!live().contains(&p));
+        let mut t = TempFile::create_in(dir.path()).unwrap();
+        io::Write::write_all(t.file().unwrap(), b"data").unwrap();
+        let dest = dir.path().join("dest");
+        t.persist(&dest).unwrap();
+        assert_eq!(std::fs::read(&dest).unwrap(), b"data");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+}

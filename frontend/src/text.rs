@@ -1,0 +1,52 @@
+//! User text in messages: offending tokens and whole messages are escaped (control characters
+//! as `\u{1b}`, so no escape sequence reaches the terminal) and truncated, so a 10 MB token
+//! gives a short message.
+
+/// Most characters of an offending token quoted in a message.
+pub const MAX_EXCERPT_CHARS: usize = 40;
+/// Most characters of a whole message (the location is not counted).
+pub const MAX_MESSAGE_CHARS: usize = 400;
+
+/// `s` with control characters escaped, cut to `max` characters (then `…` and the original
+/// length in bytes).
+pub fn bounded(s: &str, max: usize) -> String {
+    bounded_lines(s, max, false)
+}
+
+/// [`bounded`], keeping line breaks when `keep_newlines` (for whole multi-line messages).
+pub fn bounded_lines(s: &str, max: usize, keep_newlines: bool) -> String {
+    let mut out = String::new();
+    for (chars, c) in s.chars().enumerate() {
+        if chars >= max {
+            out.push_str(&format!("… ({} bytes in all)", s.len()));
+            return out;
+        }
+        if c.is_control() && !(keep_newlines && c == '\n') {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// An offending token for a message: [`bounded`] to [`MAX_EXCERPT_CHARS`].
+pub fn excerpt(s: &str) -> String {
+    bounded(s, MAX_EXCERPT_CHARS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn escapes_control_characters_and_truncates() {
+        assert_eq!(excerpt("abc"), "abc");
+        assert_eq!(excerpt("a\u{1b}[31mb\0"), "a\\u{1b}[31mb\\u{0}");
+        let long = "x".repeat(10_000_000);
+        let e = excerpt(&long);
+        assert!(e.len() < 80, "{}", e.len());
+        assert!(e.ends_with("… (10000000 bytes in all)"), "{e}");
+        assert_eq!(bounded("héllo", 2), "hé… (6 bytes in all)");
+    }
+}

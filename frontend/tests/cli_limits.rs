@@ -1,0 +1,98 @@
+//! Work that could run away (issue 12): sizes from input are estimated before allocating and
+//! refused with the option and the estimate; ray generation loops give up with an error.
+
+use glam::Vec3;
+use halfray::bench::accuracy::triangles::Workload;
+use halfray::obj::ObjMesh;
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_halfray");
+const MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes");
+/// A refusal must come before the work: well under the time the work would take.
+const REFUSAL_TIME: Duration = Duration::from_secs(20);
+
+fn run(args: &[&str]) -> (Option<i32>, String) {
+    let t0 = Instant::now();
+    let o = Command::new(BIN).args(args).output().unwrap();
+    assert!(
+        t0.elapsed() < REFUSAL_TIME,
+        "{args:?} took {:?}",
+        t0.elapsed()
+    );
+    (
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn image_and_subdivision_sizes_are_estimated_before_allocating() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("x.png");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/mirror.toml");
+    let (code, e) = run(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+        "--width",
+        "16384",
+        "--height",
+        "16384",
+    ]);
+    assert_eq!(code, Some(2), "{e}");
+    assert!(
+        e.contains("16384×16384") && e.contains("--width/--height") && e.contains("GiB"),
+        "{e}"
+    );
+    assert!(!png.exists());
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+
+    let out = dir.path().join("b.obj");
+    let bunny = Path::new(MESHES).join("bunny.obj");
+    let (code, e) = run(&[
+        "mesh",
+        "subdivide",
+        bunny.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--levels",
+        "6",
+    ]);
+    assert_eq!(code, Some(2), "{e}");
+    assert!(
+        e.contains("--levels 6 needs about") && e.contains("GiB"),
+        "{e}"
+    );
+    assert!(!e.contains("Counts {"), "no Debug forms: {e}");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
+#[test]
+fn ray_generation_on_a_mesh_near_f32_max_gives_up_with_an_error() {
+    let s = f32::MAX / 2.0;
+    let mesh = ObjMesh {
+        positions: vec![
+            Vec3::new(s, s, s),
+            Vec3::new(s, -s, -s),
+            Vec3::new(-s, s, -s),
+            Vec3::new(-s, -s, s),
+        ],
+        triangles: vec![[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]],
+    };
+    let t0 = Instant::now();
+    let r = Workload::new(
+        std::slice::from_ref(&mesh),
+        std::slice::from_ref(&mesh),
+        200,
+        1,
+    );
+    assert!(t0.elapsed() < REFUSAL_TIME);
+    let e = r.err().expect("no usable rays near f32::MAX");
+    assert!(
+        e.contains("could not generate") && e.contains("of 200"),
+        "{e}"
+    );
+}

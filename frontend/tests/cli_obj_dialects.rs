@@ -1,0 +1,52 @@
+//! OBJ dialects through the binary (issue 12): CR-only files are read line by line, and a
+//! mesh tool says on stderr what the output will not carry.
+
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_halfray");
+const CUBE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes/cube.obj");
+
+#[test]
+fn cr_only_files_are_read_as_lines_and_drops_are_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let lf = std::fs::read(CUBE).unwrap();
+    assert!(lf.contains(&b'\n') && !lf.contains(&b'\r'));
+    let cr: Vec<u8> = lf
+        .iter()
+        .map(|&b| if b == b'\n' { b'\r' } else { b })
+        .collect();
+    let path = dir.path().join("mac.obj");
+    std::fs::write(&path, &cr).unwrap();
+    let o = Command::new(BIN)
+        .args(["mesh", "check"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.contains("vertices        8 "), "{out}");
+    assert!(out.contains("faces           12"), "{out}");
+
+    let quads = dir.path().join("quads.obj");
+    std::fs::write(
+        &quads,
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nusemtl red\nf 1 2 3 4\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out.obj");
+    let o = Command::new(BIN)
+        .args(["mesh", "smooth"])
+        .arg(&quads)
+        .arg("-o")
+        .arg(&out)
+        .args(["--iterations", "0"])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("not carried over")
+            && e.contains("1 `mtllib`, 1 `usemtl`, 1 `vt`, 1 polygon(s) split into triangles"),
+        "{e}"
+    );
+}

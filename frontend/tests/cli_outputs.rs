@@ -1,0 +1,282 @@
+//! The binary's outputs (issue 12): an output that is an input or another output is refused
+//! by file identity, output locations are checked before the work, temporary files go away
+//! on SIGTERM, and stdout that is a closed pipe or a full device ends the program cleanly.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_halfray");
+const MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes");
+/// How long the SIGTERM test waits for the killed render to exit.
+const EXIT_WAIT: Duration = Duration::from_secs(30);
+
+fn scene(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scenes")
+        .join(name)
+}
+
+fn run(args: &[&std::ffi::OsStr]) -> Output {
+    Command::new(BIN).args(args).output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn files(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+macro_rules! os {
+    ($($a:expr),* $(,)?) => { &[$(std::ffi::OsStr::new($a)),*] };
+}
+
+#[test]
+fn an_output_that_is_an_input_or_another_output_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let victim = dir.path().join("victim.toml");
+    std::fs::copy(scene("mirror.toml"), &victim).unwrap();
+    let original = std::fs::read(&victim).unwrap();
+    // The scene itself, spelt three ways: same path, through `sub/..`, through a symlink.
+    std::fs::create_dir(dir.path().join("sub")).unwrap();
+    let link = dir.path().join("link.png");
+    std::os::unix::fs::symlink(&victim, &link).unwrap();
+    for out in [
+        victim.clone(),
+        dir.path().join("sub/../victim.toml"),
+        link.clone(),
+    ] {
+        let o = run(os!["render", &victim, "-o", &out, "--quiet"]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("refusing to overwrite an input"),
+            "{}",
+            stderr(&o)
+        );
+        assert_eq!(std::fs::read(&victim).unwrap(), original);
+    }
+    // Two outputs naming one file (one of them not existing yet).
+    let x = dir.path().join("x.png");
+    let o = run(os![
+        "render",
+        &victim,
+        "-o",
+        &x,
+        "--stats-json",
+        &dir.path().join("sub/../x.png"),
+        "--quiet"
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("are the same file"), "{}", stderr(&o));
+    // A mesh tool writing over its input, through a hard link.
+    let cube = dir.path().join("cube.obj");
+    std::fs::copy(Path::new(MESHES).join("cube.obj"), &cube).unwrap();
+    let hard = dir.path().join("hard.obj");
+    std::fs::hard_link(&cube, &hard).unwrap();
+    let before = std::fs::read(&cube).unwrap();
+    for out in [&cube, &hard] {
+        let o = run(os!["mesh", "smooth", &cube, "-o", out, "--force"]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert_eq!(std::fs::read(&cube).unwrap(), before);
+    }
+    // A render writing over one of the scene's mesh files.
+    let bunny_scene = dir.path().join("b.toml");
+    std::fs::write(
+        &bunny_scene,
+        "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\nheight = 8\n\
+         [mesh.c]\nfile = \"cube.obj\"\n[material.m]\ndiffuse = [1, 1, 1]\n\
+         [[object]]\ntype = \"mesh\"\nmesh = \"c\"\nmaterial = \"m\"\n",
+    )
+    .unwrap();
+    let o = run(os![
+        "render",
+        &bunny_scene,
+        "-o",
+        &cube,
+        "--quiet",
+        "--force"
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("mesh file"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&cube).unwrap(), before);
+    assert_eq!(
+        files(dir.path()),
+        [
+            "b.toml",
+            "cube.obj",
+            "hard.obj",
+            "link.png",
+            "sub",
+            "victim.toml"
+        ]
+    );
+}
+
+#[test]
+fn output_locations_are_checked_before_the_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("out.png");
+    let started = Instant::now();
+    // A big render that would take long: it must fail at once, before rendering.
+    let o = run(os![
+        "render",
+        &scene("glass.toml"),
+        "-o",
+        &png,
+        "--stats-json",
+        &dir.path().join("nodir/stats.json"),
+        "--width",
+        "16000",
+        "--height",
+        "16000"
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("nodir/stats.json") && e.contains("does not exist"),
+        "{e}"
+    );
+    assert!(!e.contains("rendering"), "failed before rendering: {e}");
+    assert!(started.elapsed() < Duration::from_secs(20));
+    assert_eq!(files(dir.path()), Vec::<String>::new(), "no PNG, no temp");
+    let o = run(os![
+        "mesh",
+        "subdivide",
+        &Path::new(MESHES).join("cube.obj"),
+        "-o",
+        &dir.path().join("nodir/x.obj")
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("does not exist"), "{}", stderr(&o));
+    let o = run(os![
+        "mesh",
+        "check",
+        &Path::new(MESHES).join("cube.obj"),
+        "--json",
+        dir.path()
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("is a directory"), "{}", stderr(&o));
+    assert!(o.stdout.is_empty(), "nothing checked, nothing printed");
+}
+
+#[test]
+fn sigterm_during_a_render_leaves_no_temporary_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("out.png");
+    std::fs::write(&png, b"previous").unwrap();
+    let mut child = Command::new(BIN)
+        .args(os![
+            "render",
+            &scene("glass.toml"),
+            "-o",
+            &png,
+            "--width",
+            "4000",
+            "--height",
+            "3000",
+            "--quiet"
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The temporary file is created when the output is reserved, before rendering.
+    let t0 = Instant::now();
+    while files(dir.path()).len() < 2 {
+        assert!(t0.elapsed() < EXIT_WAIT, "no temporary file appeared");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert!(child.try_wait().unwrap().is_none(), "still rendering");
+    let kill = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let t0 = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        assert!(t0.elapsed() < EXIT_WAIT, "did not exit after SIGTERM");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert_eq!(status.code(), Some(128 + 15));
+    assert_eq!(files(dir.path()), ["out.png"]);
+    assert_eq!(std::fs::read(&png).unwrap(), b"previous");
+}
+
+/// Runs with stdout connected to a pipe whose reader is already gone.
+fn run_into_closed_pipe(args: &[&std::ffi::OsStr]) -> Output {
+    let mut child = Command::new(BIN)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    child.wait_with_output().unwrap()
+}
+
+fn run_into_dev_full(args: &[&std::ffi::OsStr]) -> Output {
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    Command::new(BIN)
+        .args(args)
+        .stdout(full)
+        .stderr(Stdio::piped())
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn closed_pipe_exits_quietly_and_full_device_is_a_clean_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = Path::new(MESHES).join("cube.obj");
+    let json = dir.path().join("check.json");
+    let png = dir.path().join("r.png");
+    let mirror = scene("mirror.toml");
+    let cases: [&[&std::ffi::OsStr]; 3] = [
+        os!["mesh", "check", &cube, "--json", &json],
+        os![
+            "render",
+            &mirror,
+            "--explain",
+            "-o",
+            &png,
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "--quiet"
+        ],
+        // `bench bvh` prints with `println!`: the panic guard covers it.
+        os!["bench", "bvh", &cube, "--width", "16", "--rays", "100"],
+    ];
+    for args in cases {
+        let o = run_into_closed_pipe(args);
+        assert_eq!(o.status.code(), Some(141), "{args:?}: {}", stderr(&o));
+        assert!(o.stderr.is_empty(), "{args:?}: quiet, got {}", stderr(&o));
+        let o = run_into_dev_full(args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.starts_with("error: <stdout>: No space left on device") && !e.contains("panicked"),
+            "{args:?}: {e}"
+        );
+    }
+    // `--json` is written before the report is printed: it survives the closed stdout.
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["faces"], 12);
+    assert_eq!(files(dir.path()), ["check.json"], "no temporary files");
+}

@@ -1,0 +1,169 @@
+//! What bounds the work of a render (issue 12): the Whitted ray tree of mirror + transparent
+//! materials is cut by path weight and a per-pixel cap ([`PathBound`]), checked against the
+//! exhaustive tree; `--force-all-effects` stays bit-identical when radiance overflows.
+
+use halfray::render::plan::EffectPlan;
+use halfray::render::trace::{MAX_SECONDARY_RAYS_PER_PIXEL, PathBound};
+use halfray::render::{Mode, RenderOptions, render};
+use halfray::scene::{self, Scene};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// Largest difference, in 8-bit steps, between the bounded and the exhaustive tree: the
+/// weight cut is chosen to stay under half a step per skipped subtree (see `MIN_PATH_WEIGHT`);
+/// rounding of the two sums to 8 bits can still land on either side of a step.
+const MAX_STEP_DIFFERENCE: u8 = 1;
+/// Generous wall-clock limit for the max_depth 64 render that used never to finish.
+const DEEP_RENDER_LIMIT: Duration = Duration::from_secs(120);
+
+fn glass(max_depth: u32) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/glass.toml");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("max_depth = 8", &format!("max_depth = {max_depth}"))
+        .replace("width = 640", "width = 64")
+        .replace("height = 480", "height = 48");
+    assert!(text.contains(&format!("max_depth = {max_depth}")));
+    scene::parse(&text, &path).unwrap()
+}
+
+fn opts(bound: PathBound) -> RenderOptions {
+    RenderOptions {
+        bound,
+        ..RenderOptions::default()
+    }
+}
+
+fn max_step_difference(a: &[u8], b: &[u8]) -> u8 {
+    a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).max().unwrap()
+}
+
+#[test]
+fn deep_glass_finishes_and_matches_the_exhaustive_tree() {
+    let t0 = Instant::now();
+    let deep = render(&glass(64), &opts(PathBound::RENDER));
+    assert!(t0.elapsed() < DEEP_RENDER_LIMIT, "{:?}", t0.elapsed());
+    let pixels = u64::from(deep.width * deep.height);
+    let secondary = deep.counts.reflection + deep.counts.refraction;
+    assert!(secondary <= pixels * u64::from(MAX_SECONDARY_RAYS_PER_PIXEL));
+    // The oracle: every ray of the tree down to depth 24, where (issue 12) deeper trees give
+    // the same bytes.
+    let exact = render(&glass(24), &opts(PathBound::EXHAUSTIVE));
+    assert!(
+        exact.counts.total() > deep.counts.total(),
+        "the bound cut something"
+    );
+    let d = max_step_difference(&deep.to_rgba8(Mode::Color), &exact.to_rgba8(Mode::Color));
+    assert!(d <= MAX_STEP_DIFFERENCE, "bounded vs exhaustive: {d}/255");
+}
+
+/// A camera inside two nested spheres that reflect and transmit everything: weights never
+/// fall, both rays of every hit go on, the tree is 2^64 without the per-pixel cap.
+const HALL_OF_MIRRORS: &str = r#"
+max_depth = 64
+background = [0.2, 0.3, 0.4]
+[camera]
+eye = [0, 0, 0]
+look_at = [0, 0, -1]
+fov = 60
+width = 4
+height = 4
+[[light]]
+type = "point"
+position = [0, 0, 0]
+intensity = 1.0
+[material.both]
+diffuse = [0.1, 0.1, 0.1]
+mirror = 1.0
+transparency = 1.0
+ior = 1.5
+[[object]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1.0
+material = "both"
+[[object]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 2.0
+material = "both"
+"#;
+
+#[test]
+fn weights_that_never_fall_stop_at_the_per_pixel_cap() {
+    let s = scene::parse(HALL_OF_MIRRORS, Path::new("hall.toml")).unwrap();
+    let r = render(&s, &opts(PathBound::RENDER));
+    let pixels = u64::from(r.width * r.height);
+    let secondary = r.counts.reflection + r.counts.refraction;
+    let cap = pixels * u64::from(MAX_SECONDARY_RAYS_PER_PIXEL);
+    assert!(secondary <= cap, "{secondary} > {cap}");
+    assert!(
+        secondary >= cap / 2,
+        "the cap is what stopped it: {secondary}"
+    );
+}
+
+#[test]
+fn forced_effects_stay_bit_identical_when_radiance_overflows() {
+    // Three lights of 3e38 at distance ~1 from the floor: each term is finite, their sum +∞. The sphere
+    // has no mirror; forced reflection rays from its underside see the floor (0·∞ = NaN if
+    // their result were weighted by zero instead of discarded).
+    let text = r#"
+background = [0.1, 0.1, 0.1]
+[camera]
+eye = [0, 1, 5]
+look_at = [0, 0.5, 0]
+fov = 40
+width = 32
+height = 24
+[[light]]
+type = "point"
+position = [0, 1, 0]
+intensity = 3e38
+[[light]]
+type = "point"
+position = [0.2, 1, 0]
+intensity = 3e38
+[[light]]
+type = "point"
+position = [-0.2, 1, 0]
+intensity = 3e38
+[material.matte]
+diffuse = [1, 1, 1]
+[[object]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 1, 0]
+material = "matte"
+[[object]]
+type = "sphere"
+center = [1.5, 0.6, 1]
+radius = 0.5
+material = "matte"
+"#;
+    let s = scene::parse(text, Path::new("hot.toml")).unwrap();
+    let planned = render(&s, &RenderOptions::default());
+    let forced = render(
+        &s,
+        &RenderOptions {
+            force_all: true,
+            ..RenderOptions::default()
+        },
+    );
+    assert!(forced.counts.reflection > 0, "forced rays were cast");
+    assert!(
+        planned.pixels.iter().any(|p| p.x.is_infinite()),
+        "the scene overflows"
+    );
+    assert_eq!(planned.to_rgba8(Mode::Color), forced.to_rgba8(Mode::Color));
+}
+
+#[test]
+fn explain_states_the_bound() {
+    let s = glass(64);
+    let text = EffectPlan::derive(&s, false).explain(&s);
+    assert!(
+        text.contains("ray tree bound") && text.contains("1/8192") && text.contains("4096"),
+        "{text}"
+    );
+}
