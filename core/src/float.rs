@@ -96,7 +96,8 @@ pub fn diff_of_products_sign_filter(a: f32, b: f32, c: f32, d: f32) -> f32 {
 #[inline(always)]
 #[must_use]
 pub fn sign_is_certain(e: f32) -> bool {
-    e > 0.0 || e < 0.0
+    // `abs() > 0` is false for NaN, unlike `e != 0.0`.
+    e.abs() > 0.0
 }
 
 #[cfg(test)]

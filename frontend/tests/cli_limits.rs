@@ -96,3 +96,25 @@ fn ray_generation_on_a_mesh_near_f32_max_gives_up_with_an_error() {
         "{e}"
     );
 }
+
+#[test]
+fn bench_ray_sets_are_estimated_before_generating() {
+    let cube = format!("{MESHES}/cube.obj");
+    for (width, rays, what) in [
+        ("100000", "10", "--width 100000 --rays 10 needs about"),
+        (
+            "4294967296",
+            "10",
+            "--width 4294967296 --rays 10 is too large",
+        ),
+        (
+            "16",
+            "1000000000000000",
+            "--width 16 --rays 1000000000000000 needs about",
+        ),
+    ] {
+        let (code, e) = run(&["bench", "bvh", &cube, "--width", width, "--rays", rays]);
+        assert_eq!(code, Some(2), "{width} {rays}: {e}");
+        assert!(e.contains(what), "{width} {rays}: {e}");
+    }
+}

@@ -173,6 +173,16 @@ pub fn run(args: &BvhArgs) -> Result<()> {
     if args.width == 0 {
         return Err(Error::Usage("--width must be at least 1".into()));
     }
+    // The two ray sets are held in memory: estimate before generating them.
+    let ray_bytes = std::mem::size_of::<Ray>() as u64;
+    let rays = (args.width as u64)
+        .checked_mul(args.width as u64)
+        .and_then(|p| p.checked_add(args.rays as u64))
+        .and_then(|n| n.checked_mul(ray_bytes));
+    crate::limits::check_memory(
+        &format!("--width {} --rays {}", args.width, args.rays),
+        rays,
+    )?;
     let report = match variant {
         TriangleVariant::Watertight => bench(args, &Watertight)?,
         TriangleVariant::WatertightF32 => bench(args, &WatertightF32)?,

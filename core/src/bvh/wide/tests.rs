@@ -135,15 +135,46 @@ fn node_sizes_and_counts() {
     let mesh = TriangleMesh::new(&pos, &tris);
     let b = binary(&mesh, 4);
     let w = wide::<8>(&mesh, 4);
-    // Every binary inner node is a wide node or was merged into one; leaves carry over.
-    let binary_leaves = b.nodes().iter().filter(|n| n.is_leaf()).count();
+    // Leaf runs partition the triangle records, each a union of whole binary leaves, and are
+    // at most LEAF_MERGE long unless a binary leaf alone is longer.
+    let binary_leaves: Vec<_> = b
+        .nodes()
+        .iter()
+        .filter_map(|n| n.primitive_range())
+        .collect();
+    let mut runs = Vec::new();
+    for n in w.nodes() {
+        for k in 0..8 {
+            if let ChildRef::Leaf { start, count } = n.child(k) {
+                runs.push(start as usize..(start + count) as usize);
+            }
+        }
+    }
+    runs.sort_by_key(|r| r.start);
+    let mut next = 0;
+    for r in &runs {
+        assert_eq!(r.start, next, "runs must tile the records");
+        next = r.end;
+        let inside: usize = binary_leaves
+            .iter()
+            .filter(|l| l.start >= r.start && l.end <= r.end)
+            .map(|l| l.len())
+            .sum();
+        assert_eq!(inside, r.len(), "a run is a union of whole binary leaves");
+        assert!(r.len() <= LEAF_MERGE.max(4));
+    }
+    assert_eq!(next, 2000);
     let st = w.stats();
-    assert_eq!(st.leaves, binary_leaves);
+    assert_eq!(st.leaves, runs.len());
+    assert!(
+        st.leaves < binary_leaves.len(),
+        "small subtrees merge into one leaf"
+    );
     assert_eq!(st.triangles, 2000);
     assert_eq!(st.children, st.nodes - 1 + st.leaves);
     assert!(st.nodes <= node_capacity(2000));
     assert!(
-        st.children >= 4 * st.nodes,
+        st.children >= 3 * st.nodes,
         "the collapse fills nodes: {st:?}"
     );
     assert_eq!(st.bytes, 224 * st.nodes + 40 * 2000);

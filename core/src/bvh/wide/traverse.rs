@@ -42,6 +42,8 @@ impl WideRay {
     /// ends before `t_min ≥ 0` whatever the padding); `a > b ? a : b` absorbs a NaN slab
     /// value (`0·∞`) exactly like `f32::max`. An entry at `+∞` is a miss (nothing is accepted
     /// at `t = ∞`).
+    // Lane loops are indexed: the form the compiler turns into vector instructions.
+    #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn hit<const W: usize, const GENERAL: bool>(
         &self,
@@ -303,12 +305,9 @@ where
                             t_enter: 0.0,
                         }; W];
                         let mut k = 0usize;
-                        for i in 0..W {
-                            if dist[i] < f32::INFINITY {
-                                let e = Entry {
-                                    child: node.child[i],
-                                    t_enter: dist[i],
-                                };
+                        for (&t_enter, &child) in dist.iter().zip(&node.child) {
+                            if t_enter < f32::INFINITY {
+                                let e = Entry { child, t_enter };
                                 let mut j = k;
                                 while j > 0 && hits[j - 1].t_enter <= e.t_enter {
                                     hits[j] = hits[j - 1];
