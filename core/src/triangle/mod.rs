@@ -214,10 +214,14 @@ pub(crate) fn degenerate_or_coplanar(ray: &Ray, v: &[Vec3; 3]) -> bool {
 #[inline]
 pub(crate) fn normal_f64(v: &[Vec3; 3]) -> (glam::DVec3, glam::DVec3) {
     let p = [v[0].as_dvec3(), v[1].as_dvec3(), v[2].as_dvec3()];
-    // From v0 first; only when that cancels (a component well below its rounding scale
-    // times 2²⁰, or zero) is the base vertex chosen (the common case skips three lengths).
+    // From v0 first; only when a component cancels (well below its own rounding scale times
+    // 2²⁰, or zero while its scale is not) is the base vertex chosen (the common case skips
+    // three lengths). Per component: `d·n` along an axis sees only that component, and a
+    // sliver spanning 2⁶⁰ can cancel one component of the v0-based normal entirely while the
+    // others stay large (found by the `ray_triangle` fuzz target).
     let (n, scale) = cross_with_scale(p[1] - p[0], p[2] - p[0]);
-    if n.abs().max_element() > NORMAL_CANCEL_REL * scale.max_element() {
+    let cancels = |i: usize| scale[i] > 0.0 && !(n[i].abs() > NORMAL_CANCEL_REL * scale[i]);
+    if !(cancels(0) || cancels(1) || cancels(2)) {
         return (n, scale);
     }
     // Edge opposite vertex i: p[i+1] → p[i+2].
@@ -234,8 +238,9 @@ pub(crate) fn normal_f64(v: &[Vec3; 3]) -> (glam::DVec3, glam::DVec3) {
     cross_with_scale(b - a, c - a)
 }
 
-/// Relative size below which the `v0`-based normal is recomputed from the best base vertex:
-/// `2⁻²⁰` of its rounding scale (`|e1| × |e2|` with absolute values). Unitless.
+/// Relative size below which a component of the `v0`-based normal is taken as cancelled and
+/// the normal recomputed from the best base vertex: `2⁻²⁰` of that component's rounding scale
+/// (`|e1| × |e2|` with absolute values). Unitless.
 const NORMAL_CANCEL_REL: f64 = 1.0 / 1_048_576.0;
 
 /// `(e1 × e2, |e1| × |e2|)`, the second taken with absolute values.
@@ -303,6 +308,33 @@ mod tests {
 
     /// Huge and tiny triangles: the f32 cross product overflows (NaN from ∞ − ∞) or underflows
     /// to zero; `ng` falls back to the scaled f64 normal, same direction.
+    /// A sliver spanning 2⁶⁰ (vertices near 1e18, 1 and 0) whose `v0`-based `f64` normal loses
+    /// its `x` component entirely while `y` and `z` stay large: a ray along `x` was taken to lie
+    /// in the plane and missed. Expected `t` from the `ray_triangle` fuzz target's independent
+    /// `f64` reference (its own error bound there is 5 %).
+    #[test]
+    fn normal_component_cancelled_from_v0_is_recomputed() {
+        let b = f32::from_bits;
+        let v = [
+            Vec3::new(b(0x0031_3eaa), b(0x5d5d_5d5d), b(0x5d5d_5d5d)),
+            Vec3::new(b(0x5d5d_5d5d), b(0x0000_5d5d), b(0x3f80_0041)),
+            Vec3::ZERO,
+        ];
+        let ray = Ray::new(Vec3::new(0.5, b(0x3ecc_c8cd), b(0x3ecc_cccd)), Vec3::X);
+        let h = Watertight
+            .intersect(&ray, &v)
+            .expect("the ray crosses the sliver");
+        let t_ref = 3.042_389_700_453_892_6e13;
+        // Relative agreement asked of `t`: well inside the reference's 5 % bound.
+        const T_REL: f64 = 1e-3;
+        assert!(
+            ((f64::from(h.t) - t_ref) / t_ref).abs() < T_REL,
+            "t = {}",
+            h.t
+        );
+        assert!(!degenerate_or_coplanar(&ray, &v));
+    }
+
     #[test]
     fn geometric_normal_of_huge_and_tiny_triangles() {
         for s in [1e25f32, 1e-30] {
