@@ -135,6 +135,17 @@ pub(crate) fn cull_bound(t: f32) -> f32 {
     }
 }
 
+/// Whether a hit of primitive `prim` at `t` replaces the current best (`best_prim`, at
+/// `ray.t_max`, or none yet): `t` in `(t_min, t_max]`, and of equal `t` the smaller primitive
+/// index (the tie rule of the module docs). Shared by every traversal.
+#[inline(always)]
+pub(crate) fn improves(ray: &crate::ray::Ray, t: f32, prim: u32, best_prim: Option<u32>) -> bool {
+    match best_prim {
+        None => ray.contains(t),
+        Some(bp) => t > ray.t_min && (t < ray.t_max || (t == ray.t_max && prim < bp)),
+    }
+}
+
 /// Nodes to reserve for `prim_count` primitives: `2·N − 1` (a binary tree whose every leaf
 /// holds at least one primitive), `0` for no primitives. Saturates instead of overflowing.
 #[must_use]

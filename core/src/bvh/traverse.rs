@@ -3,7 +3,7 @@
 use super::node::BvhNode;
 use super::primitive::TriangleMesh;
 use super::stats::TraversalStats;
-use super::{Bvh, TRAVERSAL_STACK_SIZE, cull_bound};
+use super::{Bvh, TRAVERSAL_STACK_SIZE, cull_bound, improves};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
@@ -213,13 +213,7 @@ where
                     let Some((t, h)) = intersect(prim, &cur) else {
                         continue;
                     };
-                    let better = match &best {
-                        None => cur.contains(t),
-                        Some((bp, _)) => {
-                            t > cur.t_min && (t < cur.t_max || (t == cur.t_max && prim < *bp))
-                        }
-                    };
-                    if better {
+                    if improves(&cur, t, prim, best.as_ref().map(|b| b.0)) {
                         cur.t_max = t;
                         best = Some((prim, h));
                         if ANY {

@@ -67,42 +67,24 @@ pub struct BvhReport {
     pub simd: String,
     /// Triangles in the mesh.
     pub triangles: usize,
-    /// Build time, milliseconds (best of the timed builds; binary build + collapse).
-    pub build_ms: f64,
-    /// Nodes in use.
-    pub nodes: usize,
-    /// Leaves.
+    /// The default structure's figures, at the top level of the JSON (build time: binary build
+    /// + collapse; bytes: nodes + copied triangles).
+    #[serde(flatten)]
+    pub bvh8: StructureReport,
+    /// Leaf slots.
     pub leaves: usize,
     /// Depth of the deepest leaf of the binary tree it was collapsed from.
     pub max_depth: usize,
     /// SAH cost of the binary tree, relative to the root area.
     pub sah_cost: f64,
-    /// Bytes the structure adds per triangle (wide: nodes + copied triangles).
-    pub bytes_per_triangle: f64,
     /// Primary rays per set.
     pub primary_rays: usize,
     /// Incoherent rays per set.
     pub incoherent_rays: usize,
-    /// Closest hit, primary rays, Mrays/s.
-    pub mrays_closest_primary: f64,
-    /// Any hit, primary rays, Mrays/s.
-    pub mrays_any_primary: f64,
-    /// Closest hit, incoherent rays, Mrays/s.
-    pub mrays_closest_incoherent: f64,
-    /// Any hit, incoherent rays, Mrays/s.
-    pub mrays_any_incoherent: f64,
     /// Share of primary rays that hit.
     pub hit_rate_primary: f64,
     /// Share of incoherent rays that hit.
     pub hit_rate_incoherent: f64,
-    /// Mean nodes visited per primary closest-hit ray.
-    pub nodes_per_ray_primary: f64,
-    /// Mean triangle tests per primary closest-hit ray.
-    pub triangles_per_ray_primary: f64,
-    /// Mean nodes visited per incoherent closest-hit ray.
-    pub nodes_per_ray_incoherent: f64,
-    /// Mean triangle tests per incoherent closest-hit ray.
-    pub triangles_per_ray_incoherent: f64,
     /// Brute-force sample size (incoherent rays).
     pub brute_force_rays: usize,
     /// Brute-force closest hit, Mrays/s.
@@ -320,33 +302,24 @@ fn bench<T: TriangleIntersector>(args: &BvhArgs, isect: &T) -> Result<BvhReport>
     let mrays_brute = sample_len as f64 / brute_s.max(1e-9) / 1e6;
     let embree = embree_figures(&obj, &primary, &incoherent)?;
 
+    let speedup = top.mrays_closest_incoherent / mrays_brute.max(1e-12);
     Ok(BvhReport {
         mesh: args.mesh.display().to_string(),
         intersector: isect.name().to_string(),
         structure: "bvh8".into(),
         simd: crate::simd::level_name().into(),
         triangles: n,
-        build_ms: top.build_ms,
-        nodes: wstats.nodes,
+        bvh8: top,
         leaves: wstats.leaves,
         max_depth: stats.max_depth,
         sah_cost: stats.sah_cost,
-        bytes_per_triangle: wstats.bytes_per_triangle,
         primary_rays: primary.len(),
         incoherent_rays: incoherent.len(),
-        mrays_closest_primary: top.mrays_closest_primary,
-        mrays_any_primary: top.mrays_any_primary,
-        mrays_closest_incoherent: top.mrays_closest_incoherent,
-        mrays_any_incoherent: top.mrays_any_incoherent,
         hit_rate_primary: hits_p as f64 / primary.len().max(1) as f64,
         hit_rate_incoherent: hits_i as f64 / incoherent.len().max(1) as f64,
-        nodes_per_ray_primary: top.nodes_per_ray_primary,
-        triangles_per_ray_primary: top.triangles_per_ray_primary,
-        nodes_per_ray_incoherent: top.nodes_per_ray_incoherent,
-        triangles_per_ray_incoherent: top.triangles_per_ray_incoherent,
         brute_force_rays: sample_len,
         mrays_brute_force: mrays_brute,
-        speedup_over_brute_force: top.mrays_closest_incoherent / mrays_brute.max(1e-12),
+        speedup_over_brute_force: speedup,
         brute_force_mismatches: mismatches,
         binary,
         embree_build_ms: embree.map(|e| e.build_ms[0]),
@@ -373,8 +346,7 @@ fn embree_figures(
     incoherent: &[Ray],
 ) -> Result<Option<EmbreeFigures>> {
     use crate::embree::{EmbreeDevice, EmbreeScene};
-    let err = |e: crate::embree::EmbreeError| Error::Other(format!("embree: {e}"));
-    let device = EmbreeDevice::new().map_err(err)?;
+    let device = EmbreeDevice::new()?;
     let positions: Vec<[f32; 3]> = obj.positions.iter().map(|p| p.to_array()).collect();
     let mut f = EmbreeFigures {
         build_ms: [f64::INFINITY; 2],
@@ -385,21 +357,12 @@ fn embree_figures(
         let mut scene = None;
         for _ in 0..TIMED_PASSES {
             let t0 = Instant::now();
-            let s = EmbreeScene::new(&device, &positions, &obj.triangles, robust).map_err(err)?;
+            let s = EmbreeScene::new(&device, &positions, &obj.triangles, robust)?;
             f.build_ms[k] = f.build_ms[k].min(t0.elapsed().as_secs_f64() * 1e3);
             scene = Some(s);
         }
         let scene = scene.ok_or_else(|| Error::Other("no Embree build".into()))?;
-        let hit = |r: &Ray| {
-            scene
-                .intersect(
-                    r.origin.to_array(),
-                    r.direction.to_array(),
-                    r.t_min,
-                    r.t_max,
-                )
-                .is_some()
-        };
+        let hit = |r: &Ray| scene.intersect_ray(r).is_some();
         f.primary[k] = throughput(primary, hit).0;
         f.incoherent[k] = throughput(incoherent, hit).0;
     }
@@ -473,19 +436,7 @@ fn print_report(r: &BvhReport) {
             s.mrays_any_incoherent
         );
     };
-    row(
-        "halfray bvh8",
-        &StructureReport {
-            build_ms: r.build_ms,
-            nodes: r.nodes,
-            bytes_per_triangle: r.bytes_per_triangle,
-            mrays_closest_primary: r.mrays_closest_primary,
-            mrays_any_primary: r.mrays_any_primary,
-            mrays_closest_incoherent: r.mrays_closest_incoherent,
-            mrays_any_incoherent: r.mrays_any_incoherent,
-            ..StructureReport::default()
-        },
-    );
+    row("halfray bvh8", &r.bvh8);
     row("halfray binary", &r.binary);
     for (name, b, p, i) in [
         (
@@ -514,10 +465,10 @@ fn print_report(r: &BvhReport) {
         100.0 * r.hit_rate_primary,
         r.incoherent_rays,
         100.0 * r.hit_rate_incoherent,
-        r.nodes_per_ray_primary,
-        r.nodes_per_ray_incoherent,
-        r.triangles_per_ray_primary,
-        r.triangles_per_ray_incoherent
+        r.bvh8.nodes_per_ray_primary,
+        r.bvh8.nodes_per_ray_incoherent,
+        r.bvh8.triangles_per_ray_primary,
+        r.bvh8.triangles_per_ray_incoherent
     );
     println!(
         "  brute force      {:9.1} rays/s on {} incoherent rays: BVH is {:.0}x faster; mismatches {}",

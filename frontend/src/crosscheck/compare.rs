@@ -13,23 +13,12 @@ use halfray_core::triangle::TriangleVariant;
 use std::time::Instant;
 
 fn embree_answer(scene: &EmbreeScene, r: &Ray) -> Option<Answer> {
-    scene
-        .intersect(
-            r.origin.to_array(),
-            r.direction.to_array(),
-            r.t_min,
-            r.t_max,
-        )
-        .map(|h| Answer {
-            prim: h.prim_id,
-            t: h.t,
-            u: h.u,
-            v: h.v,
-        })
-}
-
-fn embree_err(e: impl std::fmt::Display) -> Error {
-    Error::Other(format!("embree: {e}"))
+    scene.intersect_ray(r).map(|h| Answer {
+        prim: h.prim_id,
+        t: h.t,
+        u: h.u,
+        v: h.v,
+    })
 }
 
 /// Runs every requested set on every mesh, prints the table, writes JSON, and fails with
@@ -56,7 +45,7 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
             )));
         }
     }
-    let device = EmbreeDevice::new().map_err(embree_err)?;
+    let device = EmbreeDevice::new()?;
     let mut rows = Vec::new();
     for (mi, path) in args.meshes.iter().enumerate() {
         let mesh = read_obj(path)?;
@@ -65,10 +54,8 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
             |n| n.to_string_lossy().into(),
         );
         let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
-        let robust =
-            EmbreeScene::new(&device, &positions, &mesh.triangles, true).map_err(embree_err)?;
-        let fast =
-            EmbreeScene::new(&device, &positions, &mesh.triangles, false).map_err(embree_err)?;
+        let robust = EmbreeScene::new(&device, &positions, &mesh.triangles, true)?;
+        let fast = EmbreeScene::new(&device, &positions, &mesh.triangles, false)?;
         let adj = Adjacency::new(&mesh);
         let accel = MeshAccel::new(mesh)?;
         for set in &set_names {
@@ -234,12 +221,7 @@ fn compare_set(
         }
         // Any hit over the same interval.
         let any_h = accel.any_variant(variant, &r.ray);
-        let any_e = robust.occluded(
-            r.ray.origin.to_array(),
-            r.ray.direction.to_array(),
-            r.ray.t_min,
-            r.ray.t_max,
-        );
+        let any_e = robust.occluded_ray(&r.ray);
         // Where the closest hits agree (or tie), the any-hit answers must agree too.
         row.any_hit_disagreements +=
             (matches!(verdict, Verdict::Agree | Verdict::Tie) && any_h != any_e) as usize;

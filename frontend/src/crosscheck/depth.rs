@@ -28,16 +28,7 @@ pub fn write_depth_diff(
         .collect();
     let emb: Vec<Option<f32>> = rays
         .iter()
-        .map(|r| {
-            scene
-                .intersect(
-                    r.origin.to_array(),
-                    r.direction.to_array(),
-                    r.t_min,
-                    r.t_max,
-                )
-                .map(|h| h.t)
-        })
+        .map(|r| scene.intersect_ray(r).map(|h| h.t))
         .collect();
     let ts = ours.iter().chain(&emb).flatten().copied();
     let (tmin, tmax) = ts.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), t| {

@@ -122,6 +122,12 @@ impl fmt::Display for EmbreeError {
 
 impl std::error::Error for EmbreeError {}
 
+impl From<EmbreeError> for crate::error::Error {
+    fn from(e: EmbreeError) -> Self {
+        Self::Other(format!("embree: {e}"))
+    }
+}
+
 /// What the runtime library reported at device creation.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct DeviceInfo {
@@ -529,8 +535,8 @@ impl EmbreeScene {
     /// Closest hit along `origin + t·dir` with `t` in `[tnear, tfar]` (`rtcIntersect1`), or `None`.
     ///
     /// Rays Embree cannot handle (see [`ray_is_valid`]) are not traced and give `None`: filter them
-    /// with [`ray_is_valid`] before comparing. `tnear` is exclusive in Embree's default mode and
-    /// inclusive in robust mode; `tfar` is inclusive in both (robustness.md, E3/E4).
+    /// with [`ray_is_valid`] before comparing. Whether a hit at exactly `tnear` or `tfar` is
+    /// kept depends on the kernel Embree picked at run time (docs/embree.md): do not rely on it.
     pub fn intersect(
         &self,
         origin: [f32; 3],
@@ -568,6 +574,27 @@ impl EmbreeScene {
             prim_id: hit.prim_id,
             ng: [hit.ng_x, hit.ng_y, hit.ng_z],
         })
+    }
+
+    /// [`EmbreeScene::intersect`] for a halfray [`Ray`](halfray_core::Ray) (its origin,
+    /// direction and interval).
+    pub fn intersect_ray(&self, r: &halfray_core::Ray) -> Option<EmbreeHit> {
+        self.intersect(
+            r.origin.to_array(),
+            r.direction.to_array(),
+            r.t_min,
+            r.t_max,
+        )
+    }
+
+    /// [`EmbreeScene::occluded`] for a halfray [`Ray`](halfray_core::Ray).
+    pub fn occluded_ray(&self, r: &halfray_core::Ray) -> bool {
+        self.occluded(
+            r.origin.to_array(),
+            r.direction.to_array(),
+            r.t_min,
+            r.t_max,
+        )
     }
 
     /// Whether anything is hit along `origin + t·dir` with `t` in `[tnear, tfar]` (`rtcOccluded1`,

@@ -1,7 +1,7 @@
 //! Collapsing a binary tree into a wide one (see the module docs of [`super`]).
 
 use super::node::{ChildRef, LeafTriangle, WideNode};
-use super::{LEAF_MERGE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh, stack_size};
+use super::{LEAF_MERGE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh};
 use crate::bvh::{Bvh, BvhError, BvhNode, TriangleMesh};
 
 /// The index range of binary node `b`'s subtree (its primitives are contiguous): from its
@@ -77,13 +77,14 @@ fn child_list<const W: usize>(nodes: &[BvhNode], b: u32) -> ([u32; W], usize) {
 }
 
 /// Pending wide nodes of the depth-first walk: `(binary node, wide node)`. At most `W − 1`
-/// per level are pending besides the one being expanded, over at most `MAX_DEPTH` levels.
-struct Pending<const W: usize> {
+/// per level are pending besides the one being expanded, over at most `MAX_DEPTH` levels, for
+/// `W ≤ 8`.
+struct Pending {
     items: [(u32, u32); 8 * crate::bvh::MAX_DEPTH + 1],
     len: usize,
 }
 
-impl<const W: usize> Pending<W> {
+impl Pending {
     fn new() -> Self {
         Self {
             items: [(0, 0); 8 * crate::bvh::MAX_DEPTH + 1],
@@ -113,8 +114,7 @@ fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<usize, BvhError> {
         return Ok(0);
     }
     const { assert!(W >= 2 && W <= 8) };
-    let _ = stack_size(W);
-    let mut pending = Pending::<W>::new();
+    let mut pending = Pending::new();
     let mut count = 1usize;
     if !pending.push((0, 0)) {
         return Err(BvhError::LeafTooLarge { count: 0 });
@@ -122,14 +122,11 @@ fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<usize, BvhError> {
     while let Some((b, _)) = pending.pop() {
         let (list, len) = child_list::<W>(nodes, b);
         for &c in &list[..len] {
-            let node = nodes
-                .get(c as usize)
-                .ok_or(BvhError::LeafTooLarge { count: 0 })?;
-            if let Some(range) = node.primitive_range() {
+            if let Some(range) = as_leaf(nodes, c) {
                 if range.len() > MAX_LEAF_TRIANGLES {
                     return Err(BvhError::LeafTooLarge { count: range.len() });
                 }
-            } else if c != b {
+            } else {
                 count += 1;
                 if !pending.push((c, 0)) {
                     return Err(BvhError::LeafTooLarge { count: 0 });
@@ -225,7 +222,7 @@ where
         if needed > 0 {
             wide[0] = WideNode::EMPTY;
             next = 1;
-            let mut pending = Pending::<W>::new();
+            let mut pending = Pending::new();
             pending.push((0, 0));
             while let Some((b, slot)) = pending.pop() {
                 let (list, len) = child_list::<W>(bnodes, b);

@@ -30,13 +30,15 @@ fn binary(mesh: &TriangleMesh<'_>, max_leaf: u32) -> VecBinary {
 fn wide<const W: usize>(mesh: &TriangleMesh<'_>, max_leaf: u32) -> VecWide<W> {
     let b = binary(mesh, max_leaf);
     let count = VecWide::<W>::node_count_for(&b).unwrap();
-    VecWide::<W>::from_binary(
+    let w = VecWide::<W>::from_binary(
         &b,
         mesh,
         vec![WideNode::EMPTY; count],
         vec![LeafTriangle::EMPTY; triangle_capacity(mesh.len())],
     )
-    .unwrap()
+    .unwrap();
+    assert_eq!(w.node_count(), count, "node_count_for is exact");
+    w
 }
 
 /// Random triangles of size ~1 in a cube of side 10.

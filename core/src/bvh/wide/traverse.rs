@@ -4,7 +4,7 @@ use super::node::{ChildRef, LeafTriangle, WideNode};
 use super::{WideBvh, add_stats};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::bvh::stats::TraversalStats;
-use crate::bvh::{MAX_DEPTH, cull_bound};
+use crate::bvh::{MAX_DEPTH, cull_bound, improves};
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
 use glam::Vec3;
@@ -340,13 +340,7 @@ where
                         let Some((t, h)) = intersect(prim, &tri.vertices(), &cur) else {
                             continue;
                         };
-                        let better = match &best {
-                            None => cur.contains(t),
-                            Some((bp, _)) => {
-                                t > cur.t_min && (t < cur.t_max || (t == cur.t_max && prim < *bp))
-                            }
-                        };
-                        if better {
+                        if improves(&cur, t, prim, best.as_ref().map(|b| b.0)) {
                             cur.t_max = t;
                             best = Some((prim, h));
                             if ANY {

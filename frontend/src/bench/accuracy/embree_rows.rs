@@ -11,7 +11,7 @@ use super::VariantRow;
 use super::triangles::{Accuracy, Workload};
 use crate::crosscheck::judge::{is_leak, near_boundary};
 use crate::embree::{EmbreeDevice, EmbreeScene, ray_is_valid};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::obj::ObjMesh;
 use halfray_core::Ray;
 use halfray_core::triangle::F64Reference;
@@ -20,8 +20,7 @@ use std::time::Instant;
 
 fn scene(device: &EmbreeDevice, m: &ObjMesh, robust: bool) -> Result<EmbreeScene> {
     let pos: Vec<[f32; 3]> = m.positions.iter().map(|p| p.to_array()).collect();
-    EmbreeScene::new(device, &pos, &m.triangles, robust)
-        .map_err(|e| Error::Other(format!("embree: {e}")))
+    Ok(EmbreeScene::new(device, &pos, &m.triangles, robust)?)
 }
 
 fn closest(s: &EmbreeScene, r: &Ray) -> Option<(u32, f32)> {
@@ -33,13 +32,7 @@ fn closest(s: &EmbreeScene, r: &Ray) -> Option<(u32, f32)> {
     ) {
         return None;
     }
-    s.intersect(
-        r.origin.to_array(),
-        r.direction.to_array(),
-        r.t_min,
-        r.t_max,
-    )
-    .map(|h| (h.prim_id, h.t))
+    s.intersect_ray(r).map(|h| (h.prim_id, h.t))
 }
 
 /// Median Mrays/s of Embree closest-hit queries over `rays`.
@@ -67,7 +60,7 @@ pub fn rows(
     throughput_sets: &[Option<(&ObjMesh, Vec<Ray>)>; 4],
     reps: usize,
 ) -> Result<Vec<VariantRow>> {
-    let device = EmbreeDevice::new().map_err(|e| Error::Other(format!("embree: {e}")))?;
+    let device = EmbreeDevice::new()?;
     let mut out = Vec::new();
     for (name, robust) in [("embree", false), ("embree-robust", true)] {
         let scenes: Vec<EmbreeScene> = meshes
