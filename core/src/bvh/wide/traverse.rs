@@ -1,7 +1,7 @@
 //! Closest-hit and any-hit traversal of a wide tree on a fixed-size stack.
 
 use super::node::{ChildRef, LeafTriangle, WideNode};
-use super::{WideBvh, add_stats};
+use super::{WideBvh, add_stats, prefetch};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::bvh::stats::TraversalStats;
 use crate::bvh::{MAX_DEPTH, cull_bound, improves};
@@ -98,6 +98,25 @@ impl WideRay {
             }
         }
         out
+    }
+}
+
+/// Hints that the memory of `child` (its node, or its leaf's triangle records) is read soon.
+#[inline(always)]
+fn prefetch_child<const W: usize>(nodes: &[WideNode<W>], tris: &[LeafTriangle], child: u32) {
+    match ChildRef::decode(child) {
+        ChildRef::Inner(index) => {
+            if let Some(node) = nodes.get(index as usize) {
+                prefetch::slice(core::slice::from_ref(node));
+            }
+        }
+        ChildRef::Leaf { start, count } => {
+            let first = start as usize;
+            if let Some(run) = tris.get(first..first.saturating_add(count as usize)) {
+                prefetch::slice(run);
+            }
+        }
+        ChildRef::Empty => {}
     }
 }
 
@@ -307,6 +326,7 @@ where
                         let mut k = 0usize;
                         for (&t_enter, &child) in dist.iter().zip(&node.child) {
                             if t_enter < f32::INFINITY {
+                                prefetch_child(nodes, tris, child);
                                 let e = Entry { child, t_enter };
                                 let mut j = k;
                                 while j > 0 && hits[j - 1].t_enter <= e.t_enter {
