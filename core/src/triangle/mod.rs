@@ -26,11 +26,13 @@
 //! to be a deterministic function of the vertex: never evaluate them with a fused multiply-add.
 
 mod cramer;
+mod lanes;
 mod moller_trumbore;
 mod reference;
 mod watertight;
 
 pub use cramer::Cramer;
+pub use lanes::{LANES, TriangleLanes};
 pub use moller_trumbore::MollerTrumbore;
 pub use reference::F64Reference;
 pub use watertight::{Watertight, WatertightF32, WatertightRay};
@@ -107,6 +109,18 @@ pub trait TriangleIntersector: Copy + Send + Sync {
         ray: &Ray,
         v: &[Vec3; 3],
     ) -> Option<TriangleHit>;
+
+    /// The lanes of `lanes` that this test certainly misses (bit `i` for lane `i`), decided
+    /// for all of them at once with vector instructions, so that a BVH leaf calls
+    /// [`TriangleIntersector::intersect_prepared`] only for the others. An implementation
+    /// reports a lane only when `intersect_prepared(pre, ray, triangle)` returns `None` for
+    /// that lane's triangle, whatever `ray`'s interval: results never change, only the work
+    /// does. The default reports none. Bits at and after `lanes.count` mean nothing.
+    #[inline(always)]
+    fn certain_misses(&self, pre: &Self::Prepared, ray: &Ray, lanes: &TriangleLanes) -> u32 {
+        let _ = (pre, ray, lanes);
+        0
+    }
 
     /// Convenience: [`TriangleIntersector::prepare`] then
     /// [`TriangleIntersector::intersect_prepared`].

@@ -1,6 +1,6 @@
 //! Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection" (JCGT 2013).
 
-use super::{TriangleHit, TriangleIntersector};
+use super::{LANES, TriangleHit, TriangleIntersector, TriangleLanes};
 use crate::float::{
     diff_of_products_exact_sign, diff_of_products_sign_filter, gamma, gamma_f64, sign_is_certain,
 };
@@ -45,6 +45,46 @@ impl WatertightRay {
             k: [kx, ky, kz],
             shear: Vec3::new(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]),
         })
+    }
+
+    /// The lanes of `lanes` whose three `f32` edge functions (the filter of [`Watertight`])
+    /// are all certain and of mixed signs: the triangles both watertight tests miss. The same
+    /// `f32` operations as [`WatertightRay::project`] and the scalar filter, lane by lane (no
+    /// fused multiply-add), so a lane is reported exactly when the scalar test rejects it on
+    /// its `f32` signs; NaN lanes are never reported.
+    // Lane loops are indexed: the form the compiler turns into vector instructions.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    #[must_use]
+    pub fn certain_misses(&self, origin: Vec3, lanes: &TriangleLanes) -> u32 {
+        let [kx, ky, kz] = self.k;
+        let (o, s) = (origin.to_array(), self.shear);
+        let (ox, oy, oz) = (o[kx % 3], o[ky % 3], o[kz % 3]);
+        // Sheared 2-D coordinates of each vertex, lane by lane.
+        let mut x = [[0.0f32; LANES]; 3];
+        let mut y = [[0.0f32; LANES]; 3];
+        for (j, p) in lanes.v.iter().enumerate() {
+            let (px, py, pz) = (&p[kx % 3], &p[ky % 3], &p[kz % 3]);
+            for i in 0..LANES {
+                let z = pz[i] - oz;
+                x[j][i] = (px[i] - ox) - s.x * z;
+                y[j][i] = (py[i] - oy) - s.y * z;
+            }
+        }
+        let ([ax, bx, cx], [ay, by, cy]) = (x, y);
+        let mut mask = 0u32;
+        for i in 0..LANES {
+            let f = [
+                diff_of_products_sign_filter(cx[i], by[i], cy[i], bx[i]),
+                diff_of_products_sign_filter(ax[i], cy[i], ay[i], cx[i]),
+                diff_of_products_sign_filter(bx[i], ay[i], by[i], ax[i]),
+            ];
+            let certain = sign_is_certain(f[0]) & sign_is_certain(f[1]) & sign_is_certain(f[2]);
+            let neg = (f[0] < 0.0) | (f[1] < 0.0) | (f[2] < 0.0);
+            let pos = (f[0] > 0.0) | (f[1] > 0.0) | (f[2] > 0.0);
+            mask |= u32::from(certain & neg & pos) << i;
+        }
+        mask
     }
 
     /// The three vertices projected with [`WatertightRay::project`]: `([x'], [y'], [z'])`.
@@ -322,6 +362,11 @@ impl TriangleIntersector for Watertight {
         }
         exact_candidate(ray, pre, sheared, v)
     }
+
+    #[inline(always)]
+    fn certain_misses(&self, pre: &WatertightRay, ray: &Ray, lanes: &TriangleLanes) -> u32 {
+        pre.certain_misses(ray.origin, lanes)
+    }
 }
 
 /// The rest of [`Watertight`] for a triangle the `f32` filter did not reject: exact `f64`
@@ -393,12 +438,80 @@ impl TriangleIntersector for WatertightF32 {
             front_face: det > 0.0,
         })
     }
+
+    /// All three `f32` edge functions non-zero and finite skip the exact recomputation, so
+    /// mixed certain signs are a miss here too.
+    #[inline(always)]
+    fn certain_misses(&self, pre: &WatertightRay, ray: &Ray, lanes: &TriangleLanes) -> u32 {
+        pre.certain_misses(ray.origin, lanes)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::triangle::TriangleVariant;
+
+    /// The lane cull against the scalar tests (the oracle is each variant's own one-triangle
+    /// `intersect`, which the cull must never contradict): rays aimed at vertices, at points
+    /// of edges and at random points, around quads split on their diagonal (so lanes share
+    /// edges), plus NaN and huge lanes. Every lane the cull reports must be a scalar miss, and
+    /// the cull must report most misses (else it is not doing its job).
+    #[test]
+    fn lane_cull_reports_only_scalar_misses() {
+        use crate::test_util::{lcg, unit_vec};
+        let mut s = 0x5eed_u64;
+        let (mut culled, mut misses) = (0usize, 0usize);
+        for case in 0..4000 {
+            let scale = [1e-3f32, 1.0, 1e4][case % 3];
+            let p =
+                |s: &mut u64| Vec3::new(lcg(s) - 0.5, lcg(s) - 0.5, lcg(s) - 0.5) * (2.0 * scale);
+            let (a, b, c, d) = (p(&mut s), p(&mut s), p(&mut s), p(&mut s));
+            let mut tris = [[a, b, c], [a, c, d], [b, d, c], [a, b, d]];
+            if case % 50 == 0 {
+                tris[3] = [Vec3::NAN, b, c];
+            }
+            if case % 70 == 0 {
+                tris[2] = [Vec3::splat(3e38), b, Vec3::new(-3e38, 1.0, 2.0)];
+            }
+            let target = match case % 4 {
+                0 => a,
+                1 => a + (c - a) * lcg(&mut s),
+                2 => b + (d - b) * 0.5,
+                _ => p(&mut s),
+            };
+            let origin = target - unit_vec(&mut s) * (3.0 * scale);
+            let ray = Ray::new(origin, target - origin);
+            let records = tris.map(|t| [t[0].to_array(), t[1].to_array(), t[2].to_array()]);
+            let lanes = TriangleLanes::gather(records.iter());
+            for (name, mask, scalar) in [
+                (
+                    "watertight",
+                    Watertight.certain_misses(&WatertightRay::new(&ray).unwrap(), &ray, &lanes),
+                    tris.map(|t| Watertight.intersect(&ray, &t).is_some()),
+                ),
+                (
+                    "watertight-f32",
+                    WatertightF32.certain_misses(&WatertightRay::new(&ray).unwrap(), &ray, &lanes),
+                    tris.map(|t| WatertightF32.intersect(&ray, &t).is_some()),
+                ),
+            ] {
+                for (lane, &hit) in scalar.iter().enumerate() {
+                    let reported = mask >> lane & 1 == 1;
+                    assert!(
+                        !(reported && hit),
+                        "{name}: case {case} lane {lane} culled a hit"
+                    );
+                    culled += usize::from(reported);
+                    misses += usize::from(!hit);
+                }
+            }
+        }
+        assert!(
+            culled * 10 >= misses * 9,
+            "culled {culled} of {misses} misses"
+        );
+    }
 
     #[test]
     fn shared_edge_of_two_triangles_is_closed() {

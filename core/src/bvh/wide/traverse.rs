@@ -6,7 +6,7 @@ use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::bvh::stats::TraversalStats;
 use crate::bvh::{MAX_DEPTH, cull_bound, improves};
 use crate::ray::Ray;
-use crate::triangle::{TriangleHit, TriangleIntersector};
+use crate::triangle::{LANES, TriangleHit, TriangleIntersector, TriangleLanes};
 use glam::Vec3;
 
 /// Stack entries of the traversal: `(W − 1)·MAX_DEPTH` for the widest supported tree
@@ -120,6 +120,12 @@ fn prefetch_child<const W: usize>(nodes: &[WideNode<W>], tris: &[LeafTriangle], 
     }
 }
 
+/// The cull of the closure-based queries: decides nothing, every triangle goes to `intersect`.
+#[inline(always)]
+fn no_cull(_: &TriangleLanes, _: &Ray) -> u32 {
+    0
+}
+
 /// One stack entry: a child reference still to visit and the distance at which the ray enters
 /// its box.
 #[derive(Clone, Copy, Debug)]
@@ -176,7 +182,7 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, false>(&mut WideStack::new(), ray, intersect, stats)
+        self.traverse::<H, false>(&mut WideStack::new(), ray, intersect, no_cull, stats)
     }
 
     /// [`WideBvh::closest_hit`] on a stack the caller keeps across rays.
@@ -188,7 +194,7 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, false>(stack, ray, intersect, stats)
+        self.traverse::<H, false>(stack, ray, intersect, no_cull, stats)
     }
 
     /// Any hit of `ray`: traversal stops at the first triangle for which `intersect` reports a
@@ -201,7 +207,7 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, true>(&mut WideStack::new(), ray, intersect, stats)
+        self.traverse::<H, true>(&mut WideStack::new(), ray, intersect, no_cull, stats)
     }
 
     /// [`WideBvh::any_hit`] on a stack the caller keeps across rays.
@@ -213,7 +219,7 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, true>(stack, ray, intersect, stats)
+        self.traverse::<H, true>(stack, ray, intersect, no_cull, stats)
     }
 
     /// [`WideBvh::closest_hit`] with the intersector `isect` (prepared once per ray).
@@ -241,6 +247,7 @@ where
             stack,
             ray,
             |_, v, r| isect.intersect_prepared(&pre, r, v).map(|h| (h.t, h)),
+            |lanes, r| isect.certain_misses(&pre, r, lanes),
             stats,
         )
     }
@@ -270,6 +277,7 @@ where
             stack,
             ray,
             |_, v, r| isect.intersect_prepared(&pre, r, v).map(|h| (h.t, h)),
+            |lanes, r| isect.certain_misses(&pre, r, lanes),
             stats,
         )
     }
@@ -280,14 +288,60 @@ where
         stack: &mut WideStack,
         ray: &Ray,
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
+        cull: impl Fn(&TriangleLanes, &Ray) -> u32,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
         let slab = SlabRay::new(ray)?;
         if slab.divide || ray.t_min < 0.0 {
-            self.walk::<H, ANY, true>(&mut stack.entries, ray, &slab, intersect, stats)
+            self.walk::<H, ANY, true>(&mut stack.entries, ray, &slab, intersect, cull, stats)
         } else {
-            self.walk::<H, ANY, false>(&mut stack.entries, ray, &slab, intersect, stats)
+            self.walk::<H, ANY, false>(&mut stack.entries, ray, &slab, intersect, cull, stats)
         }
+    }
+
+    /// Orders the children hit by a node (`first` and the lanes of `rest`, a non-empty lane
+    /// mask), pushes all but the nearest and returns the nearest. Of equal entry distances the
+    /// earlier slot is visited first. Prefetches every pushed child.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn order_hits(
+        &self,
+        node: &WideNode<W>,
+        dist: &[f32; W],
+        mut rest: u32,
+        first: Entry,
+        stack: &mut [Entry; STACK],
+        sp: &mut usize,
+        tris: &[LeafTriangle],
+    ) -> u32 {
+        let nodes = self.nodes();
+        // Sorted nearest last; ties: the later slot first.
+        let mut hits = [first; W];
+        let mut k = 1usize;
+        while rest != 0 {
+            let i = rest.trailing_zeros() as usize & (W - 1);
+            rest &= rest - 1;
+            let e = Entry {
+                child: node.child[i],
+                t_enter: dist[i],
+            };
+            prefetch_child(nodes, tris, e.child);
+            let mut j = k & (W - 1);
+            while j > 0 && hits[j - 1].t_enter <= e.t_enter {
+                hits[j] = hits[j - 1];
+                j -= 1;
+            }
+            hits[j] = e;
+            k += 1;
+        }
+        let k = k.min(W);
+        for &e in &hits[..k - 1] {
+            if let Some(slot) = stack.get_mut(*sp) {
+                *slot = e;
+                *sp += 1;
+            }
+        }
+        hits[k - 1].child
     }
 
     #[inline(always)]
@@ -297,6 +351,7 @@ where
         ray: &Ray,
         slab: &SlabRay,
         mut intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
+        cull: impl Fn(&TriangleLanes, &Ray) -> u32,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
         let nodes = self.nodes();
@@ -317,34 +372,26 @@ where
                     if let Some(node) = nodes.get(index as usize) {
                         local.nodes_visited += 1;
                         let dist = wray.hit::<W, GENERAL>(node, cur.t_min, cull_bound(cur.t_max));
-                        // Hit children, sorted nearest last (ties: the later slot first, so
-                        // the earlier slot is visited first).
-                        let mut hits = [Entry {
-                            child: 0,
-                            t_enter: 0.0,
-                        }; W];
-                        let mut k = 0usize;
-                        for (&t_enter, &child) in dist.iter().zip(&node.child) {
-                            if t_enter < f32::INFINITY {
-                                prefetch_child(nodes, tris, child);
-                                let e = Entry { child, t_enter };
-                                let mut j = k;
-                                while j > 0 && hits[j - 1].t_enter <= e.t_enter {
-                                    hits[j] = hits[j - 1];
-                                    j -= 1;
-                                }
-                                hits[j] = e;
-                                k += 1;
-                            }
+                        let mut mask = 0u32;
+                        for (i, &t_enter) in dist.iter().enumerate() {
+                            mask |= u32::from(t_enter < f32::INFINITY) << i;
                         }
-                        if k > 0 {
-                            for &e in &hits[..k - 1] {
-                                if let Some(slot) = stack.get_mut(sp) {
-                                    *slot = e;
-                                    sp += 1;
-                                }
-                            }
-                            next = hits[k - 1].child;
+                        if mask != 0 {
+                            // `W` is a power of two: `& (W − 1)` keeps every lane index in
+                            // range without a check.
+                            let first = mask.trailing_zeros() as usize & (W - 1);
+                            mask &= mask - 1;
+                            let near = Entry {
+                                child: node.child[first],
+                                t_enter: dist[first],
+                            };
+                            prefetch_child(nodes, tris, near.child);
+                            next = if mask == 0 {
+                                // One child hit (the common case): nothing to order or push.
+                                near.child
+                            } else {
+                                self.order_hits(node, &dist, mask, near, stack, &mut sp, tris)
+                            };
                             continue;
                         }
                     }
@@ -354,17 +401,26 @@ where
                     let run = tris
                         .get(first..first.saturating_add(count as usize))
                         .unwrap_or(&[]);
-                    for tri in run {
-                        local.primitives_tested += 1;
-                        let prim = tri.prim;
-                        let Some((t, h)) = intersect(prim, &tri.vertices(), &cur) else {
-                            continue;
-                        };
-                        if improves(&cur, t, prim, best.as_ref().map(|b| b.0)) {
-                            cur.t_max = t;
-                            best = Some((prim, h));
-                            if ANY {
-                                break 'walk;
+                    local.primitives_tested += run.len() as u64;
+                    // Four triangles at a time: the lanes the intersector certainly misses
+                    // are skipped, the others tested one by one in leaf order.
+                    for group in run.chunks(LANES) {
+                        let lanes = TriangleLanes::gather(group.iter().map(|t| &t.v));
+                        let mut todo = lanes.used() & !cull(&lanes, &cur);
+                        while todo != 0 {
+                            let lane = todo.trailing_zeros() as usize;
+                            todo &= todo - 1;
+                            let Some(tri) = group.get(lane) else { break };
+                            let prim = tri.prim;
+                            let Some((t, h)) = intersect(prim, &tri.vertices(), &cur) else {
+                                continue;
+                            };
+                            if improves(&cur, t, prim, best.as_ref().map(|b| b.0)) {
+                                cur.t_max = t;
+                                best = Some((prim, h));
+                                if ANY {
+                                    break 'walk;
+                                }
                             }
                         }
                     }
