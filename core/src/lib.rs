@@ -17,9 +17,10 @@
 //! total functions that report "no hit" for invalid rays, and constructors that can reject
 //! input return a typed error ([`error`]).
 //!
-//! `unsafe` is denied everywhere except one module, the wide traversal's cache prefetch hint
-//! (`bvh::wide::prefetch`, x86-64 only: a hint that never faults, measured at about +30 %
-//! closest-hit throughput on incoherent rays over the dragon); its blocks carry their proof.
+//! `unsafe` is denied everywhere except one module, the wide traversal's SSE intrinsics
+//! (`bvh::wide::simd`, x86-64 only: a cache prefetch hint, measured at about +30 % closest-hit
+//! throughput on incoherent rays over the dragon, and a lane-compare bit mask); its blocks
+//! carry their proofs.
 #![no_std]
 #![deny(unsafe_code)]
 #![warn(missing_docs)]

@@ -21,7 +21,7 @@ pub struct WatertightRay {
 
 impl WatertightRay {
     /// Prepares `ray`; `None` for an invalid ray.
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn new(ray: &Ray) -> Option<Self> {
         if !ray.is_valid() {

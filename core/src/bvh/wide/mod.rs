@@ -45,10 +45,10 @@
 
 mod collapse;
 mod node;
-#[allow(unsafe_code)]
-mod prefetch;
 mod query;
 mod refit;
+#[allow(unsafe_code)]
+mod simd;
 mod traverse;
 
 #[cfg(test)]

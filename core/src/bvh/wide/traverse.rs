@@ -1,7 +1,7 @@
 //! Closest-hit and any-hit traversal of a wide tree on a fixed-size stack.
 
 use super::node::{ChildRef, LeafTriangle, WideNode};
-use super::{WideBvh, add_stats, prefetch};
+use super::{WideBvh, add_stats, simd};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::bvh::stats::TraversalStats;
 use crate::bvh::{MAX_DEPTH, cull_bound, improves};
@@ -34,7 +34,8 @@ impl WideRay {
         }
     }
 
-    /// Entry distance of every child box (`+∞` for a miss), over `[t_min, t_max]`: the robust
+    /// Entry distance of every child box over `[t_min, t_max]` and the mask of the boxes hit
+    /// (bit `i` for slot `i`; the distances of the others mean nothing): the robust
     /// slab test of [`crate::aabb::Aabb::intersect_slab`] lane by lane, written branch-free so
     /// that it compiles to a few vector instructions per axis. The common path
     /// (`GENERAL = false`: every reciprocal finite or a zero's `±∞`, `t_min ≥ 0`) pads far
@@ -50,12 +51,14 @@ impl WideRay {
         node: &WideNode<W>,
         t_min: f32,
         t_max: f32,
-    ) -> [f32; W] {
+    ) -> ([f32; W], u32) {
         if GENERAL {
-            return self.hit_general(node, t_min, t_max);
+            let dist = self.hit_general(node, t_min, t_max);
+            return (dist, simd::mask_le(&dist, &[f32::MAX; W]));
         }
         let mut t_enter = [t_min; W];
-        let mut t_exit = [t_max; W];
+        // Capped at the largest finite `f32`, so that an entry at `+∞` is never hit.
+        let mut t_exit = [t_max.min(f32::MAX); W];
         for axis in 0..3 {
             let n = self.near[axis];
             let lo = &node.bounds[n][axis];
@@ -72,15 +75,7 @@ impl WideRay {
                 t_exit[i] = if t_far < t_exit[i] { t_far } else { t_exit[i] };
             }
         }
-        let mut out = [f32::INFINITY; W];
-        for i in 0..W {
-            out[i] = if t_enter[i] <= t_exit[i] {
-                t_enter[i]
-            } else {
-                f32::INFINITY
-            };
-        }
-        out
+        (t_enter, simd::mask_le(&t_enter, &t_exit))
     }
 
     /// [`WideRay::hit`] for rays with an overflowing reciprocal or `t_min < 0`:
@@ -107,13 +102,13 @@ fn prefetch_child<const W: usize>(nodes: &[WideNode<W>], tris: &[LeafTriangle], 
     match ChildRef::decode(child) {
         ChildRef::Inner(index) => {
             if let Some(node) = nodes.get(index as usize) {
-                prefetch::slice(core::slice::from_ref(node));
+                simd::slice(core::slice::from_ref(node));
             }
         }
         ChildRef::Leaf { start, count } => {
             let first = start as usize;
             if let Some(run) = tris.get(first..first.saturating_add(count as usize)) {
-                prefetch::slice(run);
+                simd::slice(run);
             }
         }
         ChildRef::Empty => {}
@@ -371,11 +366,8 @@ where
                 ChildRef::Inner(index) => {
                     if let Some(node) = nodes.get(index as usize) {
                         local.nodes_visited += 1;
-                        let dist = wray.hit::<W, GENERAL>(node, cur.t_min, cull_bound(cur.t_max));
-                        let mut mask = 0u32;
-                        for (i, &t_enter) in dist.iter().enumerate() {
-                            mask |= u32::from(t_enter < f32::INFINITY) << i;
-                        }
+                        let (dist, mut mask) =
+                            wray.hit::<W, GENERAL>(node, cur.t_min, cull_bound(cur.t_max));
                         if mask != 0 {
                             // `W` is a power of two: `& (W − 1)` keeps every lane index in
                             // range without a check.
