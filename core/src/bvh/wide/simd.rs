@@ -46,7 +46,7 @@ pub(super) fn slice<T>(items: &[T]) {
 #[inline(always)]
 pub(super) fn mask_le<const W: usize>(a: &[f32; W], b: &[f32; W]) -> u32 {
     #[cfg(target_arch = "x86_64")]
-    if W % 4 == 0 {
+    if W.is_multiple_of(4) {
         use core::arch::x86_64::{_mm_cmple_ps, _mm_loadu_ps, _mm_movemask_ps};
         let mut mask = 0u32;
         for (i, (qa, qb)) in a.chunks_exact(4).zip(b.chunks_exact(4)).enumerate() {
