@@ -296,7 +296,8 @@ where
 
     /// Orders the children hit by a node (`first` and the lanes of `rest`, a non-empty lane
     /// mask), pushes all but the nearest and returns the nearest. Of equal entry distances the
-    /// earlier slot is visited first. Prefetches every pushed child.
+    /// earlier slot is visited first. Prefetches every pushed child (the nearest is read at
+    /// once: a hint would not get ahead of the loads).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn order_hits(
@@ -320,7 +321,6 @@ where
                 child: node.child[i],
                 t_enter: dist[i],
             };
-            prefetch_child(nodes, tris, e.child);
             let mut j = k & (W - 1);
             while j > 0 && hits[j - 1].t_enter <= e.t_enter {
                 hits[j] = hits[j - 1];
@@ -331,6 +331,7 @@ where
         }
         let k = k.min(W);
         for &e in &hits[..k - 1] {
+            prefetch_child(nodes, tris, e.child);
             if let Some(slot) = stack.get_mut(*sp) {
                 *slot = e;
                 *sp += 1;
@@ -377,7 +378,6 @@ where
                                 child: node.child[first],
                                 t_enter: dist[first],
                             };
-                            prefetch_child(nodes, tris, near.child);
                             next = if mask == 0 {
                                 // One child hit (the common case): nothing to order or push.
                                 near.child
