@@ -22,12 +22,12 @@ impl TriangleIntersector for Cramer {
         "cramer"
     }
 
-    #[inline]
+    #[inline(always)]
     fn prepare(&self, ray: &Ray) -> Option<()> {
         ray.is_valid().then_some(())
     }
 
-    #[inline]
+    #[inline(always)]
     fn intersect_prepared(&self, _: &(), ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
         let e1 = v[1] - v[0];
         let e2 = v[2] - v[0];

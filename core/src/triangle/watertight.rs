@@ -333,7 +333,7 @@ impl TriangleIntersector for Watertight {
         "watertight"
     }
 
-    #[inline]
+    #[inline(always)]
     fn prepare(&self, ray: &Ray) -> Option<WatertightRay> {
         WatertightRay::new(ray)
     }
@@ -394,12 +394,12 @@ impl TriangleIntersector for WatertightF32 {
         "watertight-f32"
     }
 
-    #[inline]
+    #[inline(always)]
     fn prepare(&self, ray: &Ray) -> Option<WatertightRay> {
         WatertightRay::new(ray)
     }
 
-    #[inline]
+    #[inline(always)]
     fn intersect_prepared(
         &self,
         pre: &WatertightRay,

@@ -115,10 +115,48 @@ fn prefetch_child<const W: usize>(nodes: &[WideNode<W>], tris: &[LeafTriangle], 
     }
 }
 
-/// The cull of the closure-based queries: decides nothing, every triangle goes to `intersect`.
-#[inline(always)]
-fn no_cull(_: &TriangleLanes, _: &Ray) -> u32 {
-    0
+/// What a leaf does with its triangles: the one-triangle test and the four-lane cull. A trait
+/// with always-inlined methods rather than closures, so that the test is compiled into the
+/// traversal loop (a called closure returns its hit through memory).
+trait LeafTest<H> {
+    /// `(t, payload)` of a hit of triangle `prim` (vertices `v`) in `ray`'s interval.
+    fn intersect(&mut self, prim: u32, v: &[Vec3; 3], ray: &Ray) -> Option<(f32, H)>;
+    /// The lanes certainly missed ([`TriangleIntersector::certain_misses`]).
+    fn cull(&self, lanes: &TriangleLanes, ray: &Ray) -> u32;
+}
+
+/// The closure-based queries: every triangle goes to the closure.
+struct ClosureTest<F>(F);
+
+impl<H, F: FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>> LeafTest<H> for ClosureTest<F> {
+    #[inline(always)]
+    fn intersect(&mut self, prim: u32, v: &[Vec3; 3], ray: &Ray) -> Option<(f32, H)> {
+        (self.0)(prim, v, ray)
+    }
+
+    #[inline(always)]
+    fn cull(&self, _: &TriangleLanes, _: &Ray) -> u32 {
+        0
+    }
+}
+
+/// The intersector-based queries: `isect` with the ray prepared once.
+struct PreparedTest<'a, I: TriangleIntersector> {
+    isect: &'a I,
+    pre: I::Prepared,
+}
+
+impl<I: TriangleIntersector> LeafTest<TriangleHit> for PreparedTest<'_, I> {
+    #[inline(always)]
+    fn intersect(&mut self, _: u32, v: &[Vec3; 3], ray: &Ray) -> Option<(f32, TriangleHit)> {
+        let hit = self.isect.intersect_prepared(&self.pre, ray, v)?;
+        Some((hit.t, hit))
+    }
+
+    #[inline(always)]
+    fn cull(&self, lanes: &TriangleLanes, ray: &Ray) -> u32 {
+        self.isect.certain_misses(&self.pre, ray, lanes)
+    }
 }
 
 /// One stack entry: a child reference still to visit and the distance at which the ray enters
@@ -177,7 +215,7 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, false>(&mut WideStack::new(), ray, intersect, no_cull, stats)
+        self.traverse::<H, false>(&mut WideStack::new(), ray, ClosureTest(intersect), stats)
     }
 
     /// [`WideBvh::closest_hit`] on a stack the caller keeps across rays.
@@ -189,7 +227,7 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, false>(stack, ray, intersect, no_cull, stats)
+        self.traverse::<H, false>(stack, ray, ClosureTest(intersect), stats)
     }
 
     /// Any hit of `ray`: traversal stops at the first triangle for which `intersect` reports a
@@ -202,7 +240,7 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, true>(&mut WideStack::new(), ray, intersect, no_cull, stats)
+        self.traverse::<H, true>(&mut WideStack::new(), ray, ClosureTest(intersect), stats)
     }
 
     /// [`WideBvh::any_hit`] on a stack the caller keeps across rays.
@@ -214,7 +252,7 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, true>(stack, ray, intersect, no_cull, stats)
+        self.traverse::<H, true>(stack, ray, ClosureTest(intersect), stats)
     }
 
     /// [`WideBvh::closest_hit`] with the intersector `isect` (prepared once per ray).
@@ -238,13 +276,7 @@ where
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
         let pre = isect.prepare(ray)?;
-        self.traverse::<TriangleHit, false>(
-            stack,
-            ray,
-            |_, v, r| isect.intersect_prepared(&pre, r, v).map(|h| (h.t, h)),
-            |lanes, r| isect.certain_misses(&pre, r, lanes),
-            stats,
-        )
+        self.traverse::<TriangleHit, false>(stack, ray, PreparedTest { isect, pre }, stats)
     }
 
     /// [`WideBvh::any_hit`] with the intersector `isect`.
@@ -268,13 +300,7 @@ where
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
         let pre = isect.prepare(ray)?;
-        self.traverse::<TriangleHit, true>(
-            stack,
-            ray,
-            |_, v, r| isect.intersect_prepared(&pre, r, v).map(|h| (h.t, h)),
-            |lanes, r| isect.certain_misses(&pre, r, lanes),
-            stats,
-        )
+        self.traverse::<TriangleHit, true>(stack, ray, PreparedTest { isect, pre }, stats)
     }
 
     #[inline(always)]
@@ -282,15 +308,14 @@ where
         &self,
         stack: &mut WideStack,
         ray: &Ray,
-        intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
-        cull: impl Fn(&TriangleLanes, &Ray) -> u32,
+        leaf: impl LeafTest<H>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
         let slab = SlabRay::new(ray)?;
         if slab.divide || ray.t_min < 0.0 {
-            self.walk::<H, ANY, true>(&mut stack.entries, ray, &slab, intersect, cull, stats)
+            self.walk::<H, ANY, true>(&mut stack.entries, ray, &slab, leaf, stats)
         } else {
-            self.walk::<H, ANY, false>(&mut stack.entries, ray, &slab, intersect, cull, stats)
+            self.walk::<H, ANY, false>(&mut stack.entries, ray, &slab, leaf, stats)
         }
     }
 
@@ -346,8 +371,7 @@ where
         stack: &mut [Entry; STACK],
         ray: &Ray,
         slab: &SlabRay,
-        mut intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
-        cull: impl Fn(&TriangleLanes, &Ray) -> u32,
+        mut leaf: impl LeafTest<H>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
         let nodes = self.nodes();
@@ -398,13 +422,13 @@ where
                     // are skipped, the others tested one by one in leaf order.
                     for group in run.chunks(LANES) {
                         let lanes = TriangleLanes::gather(group.iter().map(|t| &t.v));
-                        let mut todo = lanes.used() & !cull(&lanes, &cur);
+                        let mut todo = lanes.used() & !leaf.cull(&lanes, &cur);
                         while todo != 0 {
                             let lane = todo.trailing_zeros() as usize;
                             todo &= todo - 1;
                             let Some(tri) = group.get(lane) else { break };
                             let prim = tri.prim;
-                            let Some((t, h)) = intersect(prim, &tri.vertices(), &cur) else {
+                            let Some((t, h)) = leaf.intersect(prim, &tri.vertices(), &cur) else {
                                 continue;
                             };
                             if improves(&cur, t, prim, best.as_ref().map(|b| b.0)) {
