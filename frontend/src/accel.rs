@@ -5,7 +5,7 @@
 use crate::error::{Error, Result};
 use crate::obj::ObjMesh;
 use halfray_core::Ray;
-use halfray_core::bvh::wide::{Bvh8, LeafTriangle, WideNode, WideStack, triangle_capacity};
+use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, WideStack, group_capacity};
 use halfray_core::bvh::{
     BuildOptions, Bvh, BvhError, BvhNode, TraversalStats, TriangleMesh, index_capacity,
     node_capacity,
@@ -16,7 +16,7 @@ use halfray_core::triangle::{
 };
 
 /// The wide BVH with owned storage.
-pub type VecBvh8 = Bvh8<Vec<WideNode<8>>, Vec<LeafTriangle>>;
+pub type VecBvh8 = Bvh8<Vec<WideNode<8>>, Vec<LeafGroup>>;
 /// The binary BVH with owned storage.
 pub type VecBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
 
@@ -44,7 +44,7 @@ pub fn build_wide(
         binary,
         mesh,
         vec![WideNode::EMPTY; nodes],
-        vec![LeafTriangle::EMPTY; triangle_capacity(binary.primitive_count())],
+        vec![LeafGroup::EMPTY; group_capacity(binary.primitive_count())],
     )
 }
 

@@ -1000,7 +1000,7 @@ pub mod bvh {
     use super::{Enc, Input, fmt_ray, fmt_vec3};
     use glam::Vec3;
     use halfray_core::aabb::Aabb;
-    use halfray_core::bvh::wide::{Bvh8, LeafTriangle, WideNode};
+    use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, group_capacity};
     use halfray_core::bvh::{
         BuildOptions, Bvh, BvhError, BvhNode, PrimitiveSource, TriangleMesh, index_capacity,
         node_capacity,
@@ -1288,13 +1288,13 @@ pub mod bvh {
 
         // 6. The 8-wide tree collapsed from it: exactly sized storage builds, and every ray
         // below gives the binary tree's answers.
-        let wide_nodes = Bvh8::<Vec<WideNode<8>>, Vec<LeafTriangle>>::node_count_for(&bvh)
+        let wide_nodes = Bvh8::<Vec<WideNode<8>>, Vec<LeafGroup>>::node_count_for(&bvh)
             .unwrap_or_else(|e| panic!("wide node count: {e}\n{}", ctx()));
         let wide = Bvh8::from_binary(
             &bvh,
             &mesh,
             vec![WideNode::<8>::EMPTY; wide_nodes],
-            vec![LeafTriangle::EMPTY; bvh.primitive_count()],
+            vec![LeafGroup::EMPTY; group_capacity(bvh.primitive_count())],
         )
         .unwrap_or_else(|e| panic!("wide collapse: {e}\n{}", ctx()));
 
@@ -1347,7 +1347,7 @@ pub mod bvh {
     /// [`check_ray`]'s properties for the 8-wide tree: closest hit equal to brute force in the
     /// same domain, a genuine hit no nearer than brute force's elsewhere; any-hit agreement.
     fn check_wide<T: TriangleIntersector>(
-        wide: &Bvh8<Vec<WideNode<8>>, Vec<LeafTriangle>>,
+        wide: &Bvh8<Vec<WideNode<8>>, Vec<LeafGroup>>,
         mesh: &TriangleMesh<'_>,
         isect: &T,
         ray: &Ray,

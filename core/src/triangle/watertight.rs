@@ -5,6 +5,7 @@ use crate::float::{
     diff_of_products_exact_sign, diff_of_products_sign_filter, gamma, gamma_f64, sign_is_certain,
 };
 use crate::ray::Ray;
+use crate::simd::F32x4;
 use glam::{DVec3, Vec3};
 
 /// Per-ray data of the watertight test: the axis permutation that makes the largest direction
@@ -51,40 +52,37 @@ impl WatertightRay {
     /// are all certain and of mixed signs: the triangles both watertight tests miss. The same
     /// `f32` operations as [`WatertightRay::project`] and the scalar filter, lane by lane (no
     /// fused multiply-add), so a lane is reported exactly when the scalar test rejects it on
-    /// its `f32` signs; NaN lanes are never reported.
-    // Lane loops are indexed: the form the compiler turns into vector instructions.
-    #[allow(clippy::needless_range_loop)]
+    /// its `f32` signs; NaN lanes (unused ones among them) are never reported.
     #[inline(always)]
     #[must_use]
     pub fn certain_misses(&self, origin: Vec3, lanes: &TriangleLanes) -> u32 {
-        let [kx, ky, kz] = self.k;
-        let (o, s) = (origin.to_array(), self.shear);
-        let (ox, oy, oz) = (o[kx % 3], o[ky % 3], o[kz % 3]);
-        // Sheared 2-D coordinates of each vertex, lane by lane.
-        let mut x = [[0.0f32; LANES]; 3];
-        let mut y = [[0.0f32; LANES]; 3];
-        for (j, p) in lanes.v.iter().enumerate() {
-            let (px, py, pz) = (&p[kx % 3], &p[ky % 3], &p[kz % 3]);
-            for i in 0..LANES {
-                let z = pz[i] - oz;
-                x[j][i] = (px[i] - ox) - s.x * z;
-                y[j][i] = (py[i] - oy) - s.y * z;
-            }
-        }
-        let ([ax, bx, cx], [ay, by, cy]) = (x, y);
-        let mut mask = 0u32;
-        for i in 0..LANES {
-            let f = [
-                diff_of_products_sign_filter(cx[i], by[i], cy[i], bx[i]),
-                diff_of_products_sign_filter(ax[i], cy[i], ay[i], cx[i]),
-                diff_of_products_sign_filter(bx[i], ay[i], by[i], ax[i]),
-            ];
-            let certain = sign_is_certain(f[0]) & sign_is_certain(f[1]) & sign_is_certain(f[2]);
-            let neg = (f[0] < 0.0) | (f[1] < 0.0) | (f[2] < 0.0);
-            let pos = (f[0] > 0.0) | (f[1] > 0.0) | (f[2] > 0.0);
-            mask |= u32::from(certain & neg & pos) << i;
-        }
-        mask
+        let [kx, ky, kz] = self.k.map(|k| k % 3);
+        let o = origin.to_array();
+        let (ox, oy, oz) = (
+            F32x4::splat(o[kx]),
+            F32x4::splat(o[ky]),
+            F32x4::splat(o[kz]),
+        );
+        let (sx, sy) = (F32x4::splat(self.shear.x), F32x4::splat(self.shear.y));
+        // Sheared 2-D coordinates of each vertex: (p_kx − o_kx) − s_x·(p_kz − o_kz), …
+        let project = |p: &[[f32; LANES]; 3]| {
+            let z = F32x4::load(&p[kz]).sub(oz);
+            (
+                F32x4::load(&p[kx]).sub(ox).sub(sx.mul(z)),
+                F32x4::load(&p[ky]).sub(oy).sub(sy.mul(z)),
+            )
+        };
+        let [(ax, ay), (bx, by), (cx, cy)] = lanes.v.each_ref().map(project);
+        // The filter of `intersect_prepared`, argument for argument.
+        let e = [
+            cx.mul(by).sub(cy.mul(bx)).sign_bits(),
+            ax.mul(cy).sub(ay.mul(cx)).sign_bits(),
+            bx.mul(ay).sub(by.mul(ax)).sign_bits(),
+        ];
+        let nonzero = |b: u32| (b | (b >> 4)) & 0xF;
+        let certain = nonzero(e[0]) & nonzero(e[1]) & nonzero(e[2]);
+        let any = e[0] | e[1] | e[2];
+        certain & any & (any >> 4)
     }
 
     /// The three vertices projected with [`WatertightRay::project`]: `([x'], [y'], [z'])`.
@@ -483,7 +481,7 @@ mod tests {
             let origin = target - unit_vec(&mut s) * (3.0 * scale);
             let ray = Ray::new(origin, target - origin);
             let records = tris.map(|t| [t[0].to_array(), t[1].to_array(), t[2].to_array()]);
-            let lanes = TriangleLanes::gather(records.iter());
+            let lanes = TriangleLanes::from_triangles(&records);
             for (name, mask, scalar) in [
                 (
                     "watertight",

@@ -1,8 +1,9 @@
 //! Collapsing a binary tree into a wide one (see the module docs of [`super`]).
 
-use super::node::{ChildRef, LeafTriangle, WideNode};
-use super::{LEAF_MERGE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh};
+use super::node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
+use super::{LEAF_MERGE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh, group_capacity};
 use crate::bvh::{Bvh, BvhError, BvhNode, TriangleMesh};
+use crate::triangle::LANES;
 
 /// The index range of binary node `b`'s subtree (its primitives are contiguous): from its
 /// leftmost leaf's start to its rightmost leaf's end. `None` for a broken tree.
@@ -140,7 +141,7 @@ fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<usize, BvhError> {
 impl<const W: usize, N, T> WideBvh<W, N, T>
 where
     N: AsRef<[WideNode<W>]> + AsMut<[WideNode<W>]>,
-    T: AsRef<[LeafTriangle]> + AsMut<[LeafTriangle]>,
+    T: AsRef<[LeafGroup]> + AsMut<[LeafGroup]>,
 {
     /// Exact number of wide nodes [`WideBvh::from_binary`] needs for `binary` (0 for an empty
     /// tree). Errors as `from_binary` for a leaf of more than [`MAX_LEAF_TRIANGLES`].
@@ -152,20 +153,21 @@ where
         plan::<W>(binary.nodes())
     }
 
-    /// Collapses `binary`, built over `mesh`, into `nodes` and `triangles` (see the module
+    /// Collapses `binary`, built over `mesh`, into `nodes` and `groups` (see the module
     /// docs).
     ///
     /// Errors, all returned before any storage is written:
     /// [`BvhError::SourceLengthMismatch`] (`mesh` has another triangle count than `binary`'s
     /// source), [`BvhError::TooManyTriangles`], [`BvhError::LeafTooLarge`],
     /// [`BvhError::NodeStorageTooSmall`] (fewer than [`WideBvh::node_count_for`] nodes),
-    /// [`BvhError::TriangleStorageTooSmall`] (fewer records than the tree has triangles),
+    /// [`BvhError::TriangleStorageTooSmall`] (fewer than [`group_capacity`] groups for the
+    /// tree's triangles; the error counts groups),
     /// [`BvhError::NonFinitePrimitive`] (a triangle of the tree no longer has finite vertices).
     pub fn from_binary<BN, BI>(
         binary: &Bvh<BN, BI>,
         mesh: &TriangleMesh<'_>,
         mut nodes: N,
-        mut triangles: T,
+        mut groups: T,
     ) -> Result<Self, BvhError>
     where
         BN: AsRef<[BvhNode]>,
@@ -191,10 +193,11 @@ where
                 available: nodes.as_ref().len(),
             });
         }
-        if triangles.as_ref().len() < indices.len() {
+        let needed_groups = group_capacity(indices.len());
+        if groups.as_ref().len() < needed_groups {
             return Err(BvhError::TriangleStorageTooSmall {
-                needed: indices.len(),
-                available: triangles.as_ref().len(),
+                needed: needed_groups,
+                available: groups.as_ref().len(),
             });
         }
         for &p in indices {
@@ -207,13 +210,14 @@ where
         }
 
         // Triangles in the binary index order, so a binary leaf's run is the wide leaf's run.
-        let out = triangles.as_mut();
-        for (slot, &p) in out.iter_mut().zip(indices) {
-            if let Some(v) = mesh.triangle(p as usize) {
-                *slot = LeafTriangle {
-                    v: [v[0].to_array(), v[1].to_array(), v[2].to_array()],
-                    prim: p,
-                };
+        let out = groups.as_mut();
+        for (group, chunk) in out.iter_mut().zip(indices.chunks(LANES)) {
+            *group = LeafGroup::EMPTY;
+            for (lane, &p) in chunk.iter().enumerate() {
+                if let Some(v) = mesh.triangle(p as usize) {
+                    let v = [v[0].to_array(), v[1].to_array(), v[2].to_array()];
+                    group.set(lane, &LeafTriangle { v, prim: p });
+                }
             }
         }
 
@@ -253,7 +257,7 @@ where
         }
         Ok(Self {
             nodes,
-            triangles,
+            groups,
             node_count: next,
             triangle_count: indices.len() as u32,
             source_len: mesh.len(),

@@ -11,7 +11,7 @@
 //! inner child with the largest surface area by that child's two children (ties: the first).
 //! Binary leaves become wide leaf slots unchanged. The caller passes node storage of at least
 //! [`WideBvh::node_count_for`]`(binary)` nodes (exact; [`node_capacity`] is a bound that needs
-//! no binary tree) and triangle storage of at least [`triangle_capacity`]`(N)` records. Too
+//! no binary tree) and triangle storage of at least [`group_capacity`]`(N)` groups. Too
 //! little storage, a binary leaf of more than [`MAX_LEAF_TRIANGLES`] primitives, more than
 //! [`MAX_TRIANGLES`] triangles, or a mesh that is not the binary tree's source is a typed
 //! error returned **before anything is written**.
@@ -21,16 +21,20 @@
 //! A [`WideNode`] holds, per axis, the `W` lower and the `W` upper bounds (`[[[f32; W]; 3]; 2]`,
 //! structure of arrays) and `W` child references: 224 bytes for `W = 8`, 112 for `W = 4`.
 //! A child reference is an inner node's index, a leaf (a run of at most
-//! [`MAX_LEAF_TRIANGLES`] triangle records), or empty (an empty box, never hit). A
-//! [`LeafTriangle`] is the triangle's three vertices and its index in the mesh: 40 bytes.
-//! Everything the structure adds, copied triangles included, is
-//! `224·nodes + 40·N` bytes ([`WideStats::bytes_per_triangle`]); the caller's mesh is not
-//! needed by queries.
+//! [`MAX_LEAF_TRIANGLES`] triangle slots), or empty (an empty box, never hit). The triangles
+//! (three vertices and the index in the mesh) are copied in leaf order into [`LeafGroup`]s of
+//! four, stored side by side so that a leaf is tested four triangles at a time; runs are
+//! packed with no gaps, 40 bytes per triangle. Everything the structure adds, copied
+//! triangles included, is `224·nodes + 160·⌈N/4⌉` bytes ([`WideStats::bytes_per_triangle`]);
+//! the caller's mesh is not needed by queries.
 //!
 //! # Traversal
 //!
 //! As in the binary tree: the robust, conservative, NaN-absorbing slab test on every child box
-//! at once, over `[t_min, t_max·(1 + CULL_REL_SLACK)]`; children hit are visited nearest first
+//! at once, over `[t_min, t_max·(1 + CULL_REL_SLACK)]`; in a leaf, the intersector's
+//! four-lane cull ([`crate::triangle::TriangleIntersector::certain_misses`]) skips the
+//! triangles it certainly misses and the rest are tested one by one, in leaf order; children
+//! hit are visited nearest first
 //! (the others pushed with their entry distance, re-checked when popped); the **tie rule** (of
 //! equal `t`, the smaller primitive index) makes the closest hit equal a brute-force loop with
 //! the same intersector; invalid rays test nothing.
@@ -47,14 +51,12 @@ mod collapse;
 mod node;
 mod query;
 mod refit;
-#[allow(unsafe_code)]
-mod simd;
 mod traverse;
 
 #[cfg(test)]
 mod tests;
 
-pub use node::{ChildRef, LeafTriangle, WideNode};
+pub use node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
 pub use traverse::WideStack;
 
 use super::stats::TraversalStats;
@@ -87,17 +89,17 @@ pub const fn node_capacity(triangles: usize) -> usize {
     if triangles <= 1 { 1 } else { triangles - 1 }
 }
 
-/// Triangle records to reserve for `triangles` triangles: `N`.
+/// [`LeafGroup`]s to reserve for `triangles` triangles: `⌈N / 4⌉`.
 #[must_use]
-pub const fn triangle_capacity(triangles: usize) -> usize {
-    triangles
+pub const fn group_capacity(triangles: usize) -> usize {
+    triangles.div_ceil(crate::triangle::LANES)
 }
 
-/// A `W`-wide BVH over caller storage `N` (nodes) and `T` (triangle records).
+/// A `W`-wide BVH over caller storage `N` (nodes) and `T` (triangle groups).
 #[derive(Clone, Debug)]
 pub struct WideBvh<const W: usize, N, T> {
     nodes: N,
-    triangles: T,
+    groups: T,
     node_count: u32,
     triangle_count: u32,
     source_len: usize,
@@ -119,7 +121,7 @@ pub struct WideStats {
     pub children: usize,
     /// Triangles in the tree.
     pub triangles: usize,
-    /// Bytes the structure adds: nodes and triangle records.
+    /// Bytes the structure adds: nodes and triangle groups.
     pub bytes: usize,
     /// `bytes / triangles` (0 for an empty tree).
     pub bytes_per_triangle: f64,
@@ -128,7 +130,7 @@ pub struct WideStats {
 impl<const W: usize, N, T> WideBvh<W, N, T>
 where
     N: AsRef<[WideNode<W>]>,
-    T: AsRef<[LeafTriangle]>,
+    T: AsRef<[LeafGroup]>,
 {
     /// The used nodes; node 0 is the root (empty slice for an empty tree).
     #[inline]
@@ -138,12 +140,29 @@ where
         all.get(..self.node_count as usize).unwrap_or(all)
     }
 
-    /// The triangle records in leaf order.
+    /// The used triangle groups (slots in leaf order, four per group).
     #[inline]
     #[must_use]
-    pub fn triangles(&self) -> &[LeafTriangle] {
-        let all = self.triangles.as_ref();
-        all.get(..self.triangle_count as usize).unwrap_or(all)
+    pub fn groups(&self) -> &[LeafGroup] {
+        let all = self.groups.as_ref();
+        all.get(..group_capacity(self.triangle_count as usize))
+            .unwrap_or(all)
+    }
+
+    /// The triangle in slot `slot` (leaf order), `None` past the last one.
+    #[inline]
+    #[must_use]
+    pub fn triangle(&self, slot: usize) -> Option<LeafTriangle> {
+        if slot >= self.triangle_count as usize {
+            return None;
+        }
+        let lanes = crate::triangle::LANES;
+        self.groups().get(slot / lanes)?.triangle(slot % lanes)
+    }
+
+    /// Every triangle in leaf order.
+    pub fn triangles(&self) -> impl Iterator<Item = LeafTriangle> + '_ {
+        (0..self.triangle_count as usize).filter_map(|s| self.triangle(s))
     }
 
     /// Number of nodes in use.
@@ -200,7 +219,7 @@ where
             }
         }
         let triangles = self.triangle_count();
-        let bytes = core::mem::size_of_val(nodes) + core::mem::size_of_val(self.triangles());
+        let bytes = core::mem::size_of_val(nodes) + core::mem::size_of_val(self.groups());
         WideStats {
             nodes: nodes.len(),
             leaves,
@@ -218,7 +237,7 @@ where
     /// Gives the storage back.
     #[must_use]
     pub fn into_storage(self) -> (N, T) {
-        (self.nodes, self.triangles)
+        (self.nodes, self.groups)
     }
 }
 

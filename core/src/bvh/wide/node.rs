@@ -1,6 +1,7 @@
 //! The wide node (child boxes side by side) and the triangle record of its leaves.
 
 use crate::aabb::Aabb;
+use crate::triangle::{LANES, TriangleLanes};
 use glam::Vec3;
 
 /// A node of a `W`-wide BVH: the boxes of its `W` children, stored as arrays of lanes
@@ -117,10 +118,9 @@ impl ChildRef {
     }
 }
 
-/// A triangle as a leaf stores it: its vertices (copied from the mesh, in the mesh's order)
-/// and its index in the mesh. 40 bytes.
+/// One triangle of a leaf, by value ([`super::WideBvh::triangle`]): its vertices (copied from
+/// the mesh, in the mesh's order) and its index in the mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C)]
 pub struct LeafTriangle {
     /// `v0`, `v1`, `v2`.
     pub v: [[f32; 3]; 3],
@@ -129,12 +129,6 @@ pub struct LeafTriangle {
 }
 
 impl LeafTriangle {
-    /// A record for initialising storage (NaN vertices: never hit).
-    pub const EMPTY: Self = Self {
-        v: [[f32::NAN; 3]; 3],
-        prim: u32::MAX,
-    };
-
     /// The vertices as vectors.
     #[inline(always)]
     #[must_use]
@@ -153,9 +147,63 @@ impl LeafTriangle {
         let v = self.vertices();
         Aabb::new(v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]))
     }
+
+    /// `true` when every coordinate is finite (a triangle the refit had to disable is not).
+    #[inline]
+    #[must_use]
+    pub fn is_finite(&self) -> bool {
+        self.v.iter().flatten().all(|c| c.is_finite())
+    }
 }
 
-impl Default for LeafTriangle {
+/// Four consecutive triangle slots of the leaves, stored side by side so that a leaf's
+/// triangles are tested four at a time ([`crate::triangle::TriangleIntersector::certain_misses`])
+/// straight from memory: slot `s` of the tree is lane `s % 4` of group `s / 4`. Leaves are
+/// runs of slots in leaf order, packed with no gaps (a run may start in one group and end in
+/// the next), so the groups cost exactly what one record per triangle would: 40 bytes per
+/// triangle, 160 per group. Unused lanes hold NaN vertices (never hit) and index `u32::MAX`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(16))]
+pub struct LeafGroup {
+    pub(super) lanes: TriangleLanes,
+    pub(super) prim: [u32; LANES],
+}
+
+impl LeafGroup {
+    /// A group with every lane unused, for initialising storage: `[LeafGroup::EMPTY; K]`.
+    pub const EMPTY: Self = Self {
+        lanes: TriangleLanes::EMPTY,
+        prim: [u32::MAX; LANES],
+    };
+
+    /// The coordinates, lane by lane.
+    #[inline(always)]
+    #[must_use]
+    pub fn lanes(&self) -> &TriangleLanes {
+        &self.lanes
+    }
+
+    /// Lane `lane`'s triangle (`None` for `lane ≥ 4`).
+    #[inline(always)]
+    #[must_use]
+    pub fn triangle(&self, lane: usize) -> Option<LeafTriangle> {
+        Some(LeafTriangle {
+            v: self.lanes.get(lane)?,
+            prim: *self.prim.get(lane)?,
+        })
+    }
+
+    /// Writes `tri` into lane `lane` (nothing for `lane ≥ 4`).
+    #[inline]
+    pub(super) fn set(&mut self, lane: usize, tri: &LeafTriangle) {
+        if let Some(p) = self.prim.get_mut(lane) {
+            *p = tri.prim;
+            self.lanes.set(lane, &tri.v);
+        }
+    }
+}
+
+impl Default for LeafGroup {
     fn default() -> Self {
         Self::EMPTY
     }
@@ -163,4 +211,4 @@ impl Default for LeafTriangle {
 
 const _: () = assert!(core::mem::size_of::<WideNode<8>>() == 224);
 const _: () = assert!(core::mem::size_of::<WideNode<4>>() == 112);
-const _: () = assert!(core::mem::size_of::<LeafTriangle>() == 40);
+const _: () = assert!(core::mem::size_of::<LeafGroup>() == 160);

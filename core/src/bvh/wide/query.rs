@@ -1,7 +1,7 @@
 //! Box and clearance queries on a wide tree.
 
 use super::WideBvh;
-use super::node::{ChildRef, LeafTriangle, WideNode};
+use super::node::{ChildRef, LeafGroup, WideNode};
 use crate::aabb::Aabb;
 use crate::bvh::BvhError;
 use crate::bvh::clearance::clearance_loop;
@@ -16,7 +16,7 @@ const QUERY_STACK: usize = 8 * crate::bvh::MAX_DEPTH + 8;
 impl<const W: usize, N, T> WideBvh<W, N, T>
 where
     N: AsRef<[WideNode<W>]>,
-    T: AsRef<[LeafTriangle]>,
+    T: AsRef<[LeafGroup]>,
 {
     /// Calls `found(prim)` for every triangle whose box overlaps `query` (closed boxes:
     /// touching counts, see [`Aabb::overlaps`]); `found` returns `true` to continue, `false`
@@ -24,7 +24,6 @@ where
     /// Triangles are visited in tree order.
     pub fn query_box(&self, query: &Aabb, mut found: impl FnMut(u32) -> bool) -> usize {
         let nodes = self.nodes();
-        let tris = self.triangles();
         let mut reported = 0usize;
         if !query.is_valid() || nodes.is_empty() {
             return 0;
@@ -49,10 +48,7 @@ where
                     }
                 }
                 ChildRef::Leaf { start, count } => {
-                    let run = tris
-                        .get(start as usize..(start + count) as usize)
-                        .unwrap_or(&[]);
-                    for t in run {
+                    for t in (start..start + count).filter_map(|s| self.triangle(s as usize)) {
                         if t.bounds().overlaps(query) {
                             reported += 1;
                             if !found(t.prim) {

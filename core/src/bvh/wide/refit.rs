@@ -1,17 +1,18 @@
 //! Refitting a wide tree after the mesh's vertices moved.
 
 use super::WideBvh;
-use super::node::{ChildRef, LeafTriangle, WideNode};
+use super::node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
 use crate::aabb::Aabb;
 use crate::bvh::{BvhError, TriangleMesh};
+use crate::triangle::LANES;
 
 impl<const W: usize, N, T> WideBvh<W, N, T>
 where
     N: AsRef<[WideNode<W>]> + AsMut<[WideNode<W>]>,
-    T: AsRef<[LeafTriangle]> + AsMut<[LeafTriangle]>,
+    T: AsRef<[LeafGroup]> + AsMut<[LeafGroup]>,
 {
     /// Copies the moved vertices of `mesh` (the same triangles, moved) into the triangle
-    /// records and recomputes every child box bottom-up, in one reverse pass over the nodes
+    /// groups and recomputes every child box bottom-up, in one reverse pass over the nodes
     /// (children are stored after their parent), with no stack and no rebuild.
     ///
     /// Errors: [`BvhError::SourceLengthMismatch`] (nothing written) when `mesh` has another
@@ -28,22 +29,31 @@ where
         }
         let mut bad: Option<usize> = None;
         let count = self.triangle_count as usize;
-        let tris = self.triangles.as_mut();
-        let tris = match tris.get_mut(..count) {
-            Some(t) => t,
-            None => tris,
-        };
-        for rec in tris.iter_mut() {
+        let groups = self.groups.as_mut();
+        for slot in 0..count {
+            let Some(group) = groups.get_mut(slot / LANES) else {
+                break;
+            };
+            let lane = slot % LANES;
+            let Some(mut rec) = group.triangle(lane) else {
+                continue;
+            };
             let p = rec.prim as usize;
             match mesh.triangle(p).filter(|v| v.iter().all(|x| x.is_finite())) {
                 Some(v) => rec.v = [v[0].to_array(), v[1].to_array(), v[2].to_array()],
                 None => {
-                    rec.v = LeafTriangle::EMPTY.v;
+                    rec.v = [[f32::NAN; 3]; 3];
                     bad = Some(bad.map_or(p, |q| q.min(p)));
                 }
             }
+            group.set(lane, &rec);
         }
-        let tris: &[LeafTriangle] = tris;
+        let groups: &[LeafGroup] = groups;
+        let triangle = |slot: usize| {
+            groups
+                .get(slot / LANES)
+                .and_then(|g| g.triangle(slot % LANES))
+        };
         let count = self.node_count as usize;
         let nodes = self.nodes.as_mut();
         let nodes = match nodes.get_mut(..count) {
@@ -54,11 +64,9 @@ where
             for slot in 0..W {
                 let b = match ChildRef::decode(nodes[i].child[slot]) {
                     ChildRef::Empty => continue,
-                    ChildRef::Leaf { start, count } => tris
-                        .get(start as usize..(start + count) as usize)
-                        .unwrap_or(&[])
-                        .iter()
-                        .filter(|t| t.v.iter().flatten().all(|x| x.is_finite()))
+                    ChildRef::Leaf { start, count } => (start..start + count)
+                        .filter_map(|s| triangle(s as usize))
+                        .filter(LeafTriangle::is_finite)
                         .fold(Aabb::EMPTY, |b, t| b.union(t.bounds())),
                     ChildRef::Inner(c) => nodes
                         .get(c as usize)

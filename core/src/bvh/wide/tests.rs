@@ -11,7 +11,7 @@ use std::vec;
 use std::vec::Vec;
 
 type VecBinary = Bvh<Vec<BvhNode>, Vec<u32>>;
-type VecWide<const W: usize> = WideBvh<W, Vec<WideNode<W>>, Vec<LeafTriangle>>;
+type VecWide<const W: usize> = WideBvh<W, Vec<WideNode<W>>, Vec<LeafGroup>>;
 
 fn binary(mesh: &TriangleMesh<'_>, max_leaf: u32) -> VecBinary {
     let n = mesh.len();
@@ -34,7 +34,7 @@ fn wide<const W: usize>(mesh: &TriangleMesh<'_>, max_leaf: u32) -> VecWide<W> {
         &b,
         mesh,
         vec![WideNode::EMPTY; count],
-        vec![LeafTriangle::EMPTY; triangle_capacity(mesh.len())],
+        vec![LeafGroup::EMPTY; group_capacity(mesh.len())],
     )
     .unwrap();
     assert_eq!(w.node_count(), count, "node_count_for is exact");
@@ -132,7 +132,7 @@ fn closest_and_any_hit_equal_brute_force_for_both_widths() {
 #[test]
 fn node_sizes_and_counts() {
     assert_eq!(core::mem::size_of::<WideNode<8>>(), 224);
-    assert_eq!(core::mem::size_of::<LeafTriangle>(), 40);
+    assert_eq!(core::mem::size_of::<LeafGroup>(), 160);
     let (pos, tris) = soup(2000, 7);
     let mesh = TriangleMesh::new(&pos, &tris);
     let b = binary(&mesh, 4);
@@ -179,7 +179,7 @@ fn node_sizes_and_counts() {
         st.children >= 3 * st.nodes,
         "the collapse fills nodes: {st:?}"
     );
-    assert_eq!(st.bytes, 224 * st.nodes + 40 * 2000);
+    assert_eq!(st.bytes, 224 * st.nodes + 160 * 500);
     // Every triangle appears once, with its own vertices.
     let mut seen = vec![false; 2000];
     for t in w.triangles() {
@@ -196,12 +196,14 @@ fn storage_too_small_and_bad_leaves_are_refused_before_writing() {
     let mesh = TriangleMesh::new(&pos, &tris);
     let b = binary(&mesh, 4);
     let count = VecWide::<8>::node_count_for(&b).unwrap();
-    let marker = LeafTriangle {
-        v: [[7.0; 3]; 3],
-        prim: 7,
-    };
+    // A group with every lane set (no NaN, so `==` sees whether it was written).
+    let mut marker = LeafGroup::EMPTY;
+    for lane in 0..4 {
+        let v = [[7.0 + lane as f32; 3]; 3];
+        marker.set(lane, &LeafTriangle { v, prim: 7 });
+    }
     let mut nodes = vec![WideNode::<8>::EMPTY; count - 1];
-    let mut recs = vec![marker; 100];
+    let mut recs = vec![marker; 25];
     let r = WideBvh::<8, _, _>::from_binary(&b, &mesh, &mut nodes[..], &mut recs[..]);
     assert_eq!(
         r.err(),
@@ -211,13 +213,13 @@ fn storage_too_small_and_bad_leaves_are_refused_before_writing() {
         })
     );
     let mut nodes = vec![WideNode::<8>::EMPTY; count];
-    let mut recs = vec![marker; 99];
+    let mut recs = vec![marker; 24];
     let r = WideBvh::<8, _, _>::from_binary(&b, &mesh, &mut nodes[..], &mut recs[..]);
     assert_eq!(
         r.err(),
         Some(BvhError::TriangleStorageTooSmall {
-            needed: 100,
-            available: 99
+            needed: 25,
+            available: 24
         })
     );
     assert!(nodes.iter().all(|n| *n == WideNode::EMPTY) && recs.iter().all(|r| *r == marker));
@@ -236,6 +238,27 @@ fn storage_too_small_and_bad_leaves_are_refused_before_writing() {
         VecWide::<8>::node_count_for(&b40),
         Err(BvhError::LeafTooLarge { count: 40 })
     ));
+}
+
+/// Leaf runs straddle groups: a slot's lane and group follow from its index alone, and the
+/// lanes of a run in each group are exactly its slots there.
+#[test]
+fn run_lanes_cover_exactly_the_run() {
+    for start in 0..12u32 {
+        for count in 1..=9u32 {
+            let mut covered = Vec::new();
+            for g in (start as usize / 4)..(start + count).div_ceil(4) as usize {
+                let m = super::traverse::run_lanes(g, start, count);
+                for lane in 0..4 {
+                    if m >> lane & 1 == 1 {
+                        covered.push((4 * g + lane) as u32);
+                    }
+                }
+            }
+            let expect: Vec<u32> = (start..start + count).collect();
+            assert_eq!(covered, expect, "start {start} count {count}");
+        }
+    }
 }
 
 #[test]

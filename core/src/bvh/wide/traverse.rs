@@ -1,11 +1,12 @@
 //! Closest-hit and any-hit traversal of a wide tree on a fixed-size stack.
 
-use super::node::{ChildRef, LeafTriangle, WideNode};
-use super::{WideBvh, add_stats, simd};
+use super::node::{ChildRef, LeafGroup, WideNode};
+use super::{WideBvh, add_stats};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::bvh::stats::TraversalStats;
 use crate::bvh::{MAX_DEPTH, cull_bound, improves};
 use crate::ray::Ray;
+use crate::simd;
 use crate::triangle::{LANES, TriangleHit, TriangleIntersector, TriangleLanes};
 use glam::Vec3;
 
@@ -96,21 +97,37 @@ impl WideRay {
     }
 }
 
-/// Hints that the memory of `child` (its node, or its leaf's triangle records) is read soon.
+/// The groups holding leaf slots `start .. start + count` (`count ≥ 1`), and the first
+/// group's index; an empty slice for a run out of range.
 #[inline(always)]
-fn prefetch_child<const W: usize>(nodes: &[WideNode<W>], tris: &[LeafTriangle], child: u32) {
+fn leaf_groups(groups: &[LeafGroup], start: u32, count: u32) -> (&[LeafGroup], usize) {
+    let (first, end) = (start as usize, start as usize + count as usize);
+    let g0 = first / LANES;
+    let run = groups.get(g0..end.div_ceil(LANES)).unwrap_or(&[]);
+    (run, g0)
+}
+
+/// Lanes of group `g` that hold slots of `start .. start + count`.
+#[inline(always)]
+pub(super) fn run_lanes(g: usize, start: u32, count: u32) -> u32 {
+    let base = g * LANES;
+    let lo = (start as usize).saturating_sub(base).min(LANES);
+    let hi = (start as usize + count as usize)
+        .saturating_sub(base)
+        .min(LANES);
+    ((1u32 << hi) - 1) & !((1u32 << lo) - 1)
+}
+
+/// Hints that the memory of `child` (its node, or its leaf's triangle groups) is read soon.
+#[inline(always)]
+fn prefetch_child<const W: usize>(nodes: &[WideNode<W>], groups: &[LeafGroup], child: u32) {
     match ChildRef::decode(child) {
         ChildRef::Inner(index) => {
             if let Some(node) = nodes.get(index as usize) {
                 simd::slice(core::slice::from_ref(node));
             }
         }
-        ChildRef::Leaf { start, count } => {
-            let first = start as usize;
-            if let Some(run) = tris.get(first..first.saturating_add(count as usize)) {
-                simd::slice(run);
-            }
-        }
+        ChildRef::Leaf { start, count } => simd::slice(leaf_groups(groups, start, count).0),
         ChildRef::Empty => {}
     }
 }
@@ -198,7 +215,7 @@ impl Default for WideStack {
 impl<const W: usize, N, T> WideBvh<W, N, T>
 where
     N: AsRef<[WideNode<W>]>,
-    T: AsRef<[LeafTriangle]>,
+    T: AsRef<[LeafGroup]>,
 {
     /// The closest hit of `ray`, as `(triangle index in the mesh, intersect's payload)`.
     ///
@@ -333,7 +350,7 @@ where
         first: Entry,
         stack: &mut [Entry; STACK],
         sp: &mut usize,
-        tris: &[LeafTriangle],
+        groups: &[LeafGroup],
     ) -> u32 {
         let nodes = self.nodes();
         // Sorted nearest last; ties: the later slot first.
@@ -356,7 +373,7 @@ where
         }
         let k = k.min(W);
         for &e in &hits[..k - 1] {
-            prefetch_child(nodes, tris, e.child);
+            prefetch_child(nodes, groups, e.child);
             if let Some(slot) = stack.get_mut(*sp) {
                 *slot = e;
                 *sp += 1;
@@ -375,7 +392,7 @@ where
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
         let nodes = self.nodes();
-        let tris = self.triangles();
+        let groups = self.groups();
         if nodes.is_empty() {
             return None;
         }
@@ -406,27 +423,26 @@ where
                                 // One child hit (the common case): nothing to order or push.
                                 near.child
                             } else {
-                                self.order_hits(node, &dist, mask, near, stack, &mut sp, tris)
+                                self.order_hits(node, &dist, mask, near, stack, &mut sp, groups)
                             };
                             continue;
                         }
                     }
                 }
                 ChildRef::Leaf { start, count } => {
-                    let first = start as usize;
-                    let run = tris
-                        .get(first..first.saturating_add(count as usize))
-                        .unwrap_or(&[]);
-                    local.primitives_tested += run.len() as u64;
-                    // Four triangles at a time: the lanes the intersector certainly misses
-                    // are skipped, the others tested one by one in leaf order.
-                    for group in run.chunks(LANES) {
-                        let lanes = TriangleLanes::gather(group.iter().map(|t| &t.v));
-                        let mut todo = lanes.used() & !leaf.cull(&lanes, &cur);
+                    local.primitives_tested += u64::from(count);
+                    // Four triangles at a time, straight from their group: the lanes the
+                    // intersector certainly misses are skipped, the others tested one by one
+                    // in leaf order.
+                    let (run, g0) = leaf_groups(groups, start, count);
+                    for (g, group) in (g0..).zip(run) {
+                        let mut todo = run_lanes(g, start, count) & !leaf.cull(&group.lanes, &cur);
                         while todo != 0 {
-                            let lane = todo.trailing_zeros() as usize;
+                            let lane = todo.trailing_zeros() as usize & (LANES - 1);
                             todo &= todo - 1;
-                            let Some(tri) = group.get(lane) else { break };
+                            let Some(tri) = group.triangle(lane) else {
+                                break;
+                            };
                             let prim = tri.prim;
                             let Some((t, h)) = leaf.intersect(prim, &tri.vertices(), &cur) else {
                                 continue;
