@@ -39,13 +39,15 @@
 //! equal `t`, the smaller primitive index) makes the closest hit equal a brute-force loop with
 //! the same intersector; invalid rays test nothing.
 //!
-//! **Stack bound:** a node pushes at most `W − 1` entries (all hit children but the nearest),
+//! **Stack bound:** a node leaves at most `W − 1` entries (all hit children but the nearest),
 //! and the entries live at any time are children of the inner nodes on the path from the root
 //! to the current node. Every wide inner node is a binary inner node, and a wide child is a
 //! binary descendant of its parent, so a wide path has at most as many inner nodes as a
 //! binary path: at most [`MAX_DEPTH`](super::MAX_DEPTH) (binary inner nodes have depth
-//! `< MAX_DEPTH`). Hence at most `(W − 1)·MAX_DEPTH` live entries: [`stack_size`]`(W)`
-//! = 448 for `W = 8` (3.5 KiB of 8-byte entries). Traversal never overflows it.
+//! `< MAX_DEPTH`). The current node sorts its up to `W` hit children on the stack before
+//! popping the nearest, so at most `(W − 1)·(MAX_DEPTH − 1) + W ≤ (W − 1)·MAX_DEPTH + 1`
+//! entries are ever stored: [`stack_size`]`(W)` = 449 for `W = 8` (3.5 KiB of 8-byte
+//! entries). Traversal never overflows it.
 
 mod collapse;
 mod node;
@@ -74,10 +76,11 @@ pub const LEAF_MERGE: usize = 4;
 /// Most triangles a wide BVH can hold: leaf references address triangle records with 27 bits.
 pub const MAX_TRIANGLES: usize = 1 << 27;
 
-/// Entries of the fixed traversal stack of a `W`-wide tree: `(W − 1)·MAX_DEPTH` (module docs).
+/// Entries of the fixed traversal stack of a `W`-wide tree: `(W − 1)·MAX_DEPTH + 1` (module
+/// docs).
 #[must_use]
 pub const fn stack_size(width: usize) -> usize {
-    (width - 1) * super::MAX_DEPTH
+    (width - 1) * super::MAX_DEPTH + 1
 }
 
 /// Wide nodes that always suffice for `triangles` triangles, whatever the binary tree: one per

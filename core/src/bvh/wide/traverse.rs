@@ -4,15 +4,15 @@ use super::node::{ChildRef, LeafGroup, WideNode};
 use super::{WideBvh, add_stats};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::bvh::stats::TraversalStats;
-use crate::bvh::{MAX_DEPTH, cull_bound, improves};
+use crate::bvh::{cull_bound, improves};
 use crate::ray::Ray;
 use crate::simd;
 use crate::triangle::{LANES, TriangleHit, TriangleIntersector, TriangleLanes};
 use glam::Vec3;
 
-/// Stack entries of the traversal: `(W − 1)·MAX_DEPTH` for the widest supported tree
+/// Stack entries of the traversal: [`super::stack_size`] of the widest supported tree
 /// (`W = 8`), which bounds every narrower one (module docs of [`super`]).
-const STACK: usize = 7 * MAX_DEPTH;
+const STACK: usize = super::stack_size(8);
 
 /// The ray as the node test wants it: origin, reciprocal direction, and per axis the index
 /// (`0` lower, `1` upper) of the near bound (the direction's sign bit).
@@ -184,7 +184,7 @@ struct Entry {
     t_enter: f32,
 }
 
-/// The traversal stack of a wide tree: `7·MAX_DEPTH` entries of 8 bytes (3.5 KiB), enough for
+/// The traversal stack of a wide tree: `7·MAX_DEPTH + 1` entries of 8 bytes (3.5 KiB), enough for
 /// any tree up to 8 wide (module docs of [`super`]). Creating one means writing all of it, so
 /// a caller tracing many rays keeps one and passes it to the `_with` queries; the plain
 /// queries make a fresh one per ray. Its contents between queries mean nothing.
@@ -337,9 +337,11 @@ where
     }
 
     /// Orders the children hit by a node (`first` and the lanes of `rest`, a non-empty lane
-    /// mask), pushes all but the nearest and returns the nearest. Of equal entry distances the
-    /// earlier slot is visited first. Prefetches every pushed child (the nearest is read at
-    /// once: a hint would not get ahead of the loads).
+    /// mask) nearest first, leaves all but the nearest on the stack and returns the nearest.
+    /// Of equal entry distances the earlier slot is visited first. Prefetches every child left
+    /// on the stack (the nearest is read at once: a hint would not get ahead of the loads).
+    /// The children are sorted in place on the stack (`W` entries at most, counted in the
+    /// bound of [`super::stack_size`]).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn order_hits(
@@ -353,33 +355,60 @@ where
         groups: &[LeafGroup],
     ) -> u32 {
         let nodes = self.nodes();
-        // Sorted nearest last; ties: the later slot first.
-        let mut hits = [first; W];
-        let mut k = 1usize;
-        while rest != 0 {
-            let i = rest.trailing_zeros() as usize & (W - 1);
-            rest &= rest - 1;
-            let e = Entry {
-                child: node.child[i],
-                t_enter: dist[i],
+        let entry = |i: usize| Entry {
+            child: node.child[i & (W - 1)],
+            t_enter: dist[i & (W - 1)],
+        };
+        let second = entry(rest.trailing_zeros() as usize);
+        rest &= rest - 1;
+        if rest == 0 {
+            // Two children: one compare (ties: the earlier slot, `first`, is visited first).
+            let (visit, later) = if second.t_enter < first.t_enter {
+                (second, first)
+            } else {
+                (first, second)
             };
-            let mut j = k & (W - 1);
-            while j > 0 && hits[j - 1].t_enter <= e.t_enter {
-                hits[j] = hits[j - 1];
+            prefetch_child(nodes, groups, later.child);
+            if let Some(slot) = stack.get_mut(*sp) {
+                *slot = later;
+                *sp += 1;
+            }
+            return visit.child;
+        }
+        // Three or more: insertion sort on the stack, nearest on top; an entry moves below
+        // the ones nearer than it or equally near and from an earlier slot.
+        let base = *sp;
+        for e in [first, second].into_iter().chain(core::iter::from_fn(|| {
+            (rest != 0).then(|| {
+                let e = entry(rest.trailing_zeros() as usize);
+                rest &= rest - 1;
+                e
+            })
+        })) {
+            let mut j = *sp;
+            while j > base {
+                let Some(&below) = stack.get(j - 1) else {
+                    break;
+                };
+                if below.t_enter > e.t_enter {
+                    break;
+                }
+                if let Some(slot) = stack.get_mut(j) {
+                    *slot = below;
+                }
                 j -= 1;
             }
-            hits[j] = e;
-            k += 1;
-        }
-        let k = k.min(W);
-        for &e in &hits[..k - 1] {
-            prefetch_child(nodes, groups, e.child);
-            if let Some(slot) = stack.get_mut(*sp) {
+            if let Some(slot) = stack.get_mut(j) {
                 *slot = e;
                 *sp += 1;
             }
         }
-        hits[k - 1].child
+        *sp -= 1;
+        let visit = stack.get(*sp).map_or(ChildRef::EMPTY, |e| e.child);
+        for e in stack.get(base..*sp).unwrap_or(&[]) {
+            prefetch_child(nodes, groups, e.child);
+        }
+        visit
     }
 
     #[inline(always)]
