@@ -95,3 +95,17 @@ pub const POLYGON_MIN_AREA_REL: f32 = gamma(8);
 /// coordinates. The cost: an occluder within `1e-6` of the segment length from the target is
 /// not seen.
 pub const SHADOW_SEGMENT_END_SLACK: f32 = 16.0 * crate::float::F32_UNIT_ROUNDOFF;
+
+/// Outward padding of every box a BVH traversal tests, relative to
+/// `max|ray origin| + max|scene coordinate|`: the box test then never culls a triangle that
+/// the watertight test hits, so a BVH query equals a brute-force loop with the same test.
+///
+/// Unit: relative (the padding is `BVH_PROJECTION_PAD · (max|o| + max|scene|)` world units).
+/// Why: the watertight test decides exactly on the **rounded** sheared coordinates
+/// `x' = (p_kx − o_kx) − s_x·(p_kz − o_kz)`, each within about `γ₈·(|p| + |o|)` of the exact
+/// one (a subtraction, a product and a subtraction, with `|s_x| ≤ 1`, on coordinates up to
+/// `|p| + |o|`). A hit therefore means the exact ray passes within that distance of the
+/// triangle along the two sheared axes, possibly just outside its box. `γ₁₆` doubles the
+/// bound, which also covers the rounding of the padded corners themselves. Cost: a box grows
+/// by ~2e-6 of the scene's extent from the origin, a few extra leaf visits on a grazing ray.
+pub const BVH_PROJECTION_PAD: f32 = gamma(16);

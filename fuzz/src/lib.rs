@@ -1124,24 +1124,6 @@ pub mod bvh {
             .any(|v| super::projection_underflows(ray, &v))
     }
 
-    /// `true` when the ray misses some triangle's box but passes within the watertight
-    /// projection's rounding distance of it, `γ₁₆·(max|box| + max|o|)` (the sheared
-    /// coordinates round relative to the distance along the dominant axis): the sheared test
-    /// may then report a hit on that triangle that the exact box test culls (README, known
-    /// limitations).
-    pub fn grazes_a_box(mesh: &TriangleMesh<'_>, ray: &Ray, in_tree: &[bool]) -> bool {
-        let om = ray.origin.abs().max_element();
-        (0..in_tree.len())
-            .filter(|&i| in_tree[i])
-            .map(|i| mesh.primitive_bounds(i))
-            .any(|b| {
-                let m = b.min.abs().max(b.max.abs()).max_element();
-                let eps = Vec3::splat(halfray_core::float::gamma(16) * (m + om));
-                let padded = Aabb::new(b.min - eps, b.max + eps);
-                b.intersect_ray(ray).is_none() && padded.intersect_ray(ray).is_some()
-            })
-    }
-
     fn usable(b: &Aabb) -> bool {
         b.is_finite() && b.is_valid()
     }
@@ -1367,10 +1349,7 @@ pub mod bvh {
                 ctx()
             );
         }
-        if !exact
-            || !within_domain(mesh, ray, in_tree)
-            || projection_underflows(mesh, ray, in_tree)
-            || grazes_a_box(mesh, ray, in_tree)
+        if !exact || !within_domain(mesh, ray, in_tree) || projection_underflows(mesh, ray, in_tree)
         {
             if let Some((_, h)) = got {
                 let (_, w) = want.expect("brute force finds every BVH hit");
@@ -1405,10 +1384,7 @@ pub mod bvh {
     ) {
         let want = brute(mesh, isect, ray, in_tree);
         let got = bvh.closest_hit_triangles(mesh, isect, ray, None);
-        if !exact
-            || !within_domain(mesh, ray, in_tree)
-            || projection_underflows(mesh, ray, in_tree)
-            || grazes_a_box(mesh, ray, in_tree)
+        if !exact || !within_domain(mesh, ray, in_tree) || projection_underflows(mesh, ray, in_tree)
         {
             // Outside the documented domain of exact agreement (`Watertight` docs): the
             // BVH's answer must still be a genuine hit of the intersector, no nearer than

@@ -125,6 +125,27 @@ pub const TRAVERSAL_STACK_SIZE: usize = MAX_DEPTH;
 /// costs a handful of extra box tests per ray. Unitless.
 pub const CULL_REL_SLACK: f32 = crate::tolerance::T_REL_TOLERANCE_WELL_CONDITIONED;
 
+/// The outward padding, in world units, of every box tested for a ray from `origin` in a tree
+/// whose coordinates are at most `extent` in magnitude: [`BVH_PROJECTION_PAD`]`·(max|o| +
+/// extent)` (see there). `+∞` when that overflows (every box is then hit: slower, still exact).
+///
+/// [`BVH_PROJECTION_PAD`]: crate::tolerance::BVH_PROJECTION_PAD
+#[inline(always)]
+pub(crate) fn projection_pad(origin: glam::Vec3, extent: f32) -> f32 {
+    crate::tolerance::BVH_PROJECTION_PAD * (origin.abs().max_element() + extent)
+}
+
+/// The largest coordinate magnitude of `b` (0 for an empty or non-finite box, whose
+/// children are never hit).
+#[inline]
+pub(crate) fn extent_of(b: &Aabb) -> f32 {
+    if b.is_valid() && b.is_finite() {
+        b.min.abs().max(b.max.abs()).max_element()
+    } else {
+        0.0
+    }
+}
+
 /// `t` padded by [`CULL_REL_SLACK`] for box culling (infinities are kept as they are).
 #[inline(always)]
 pub(crate) fn cull_bound(t: f32) -> f32 {

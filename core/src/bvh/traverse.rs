@@ -3,28 +3,43 @@
 use super::node::BvhNode;
 use super::primitive::TriangleMesh;
 use super::stats::TraversalStats;
-use super::{Bvh, TRAVERSAL_STACK_SIZE, cull_bound, improves};
+use super::{Bvh, TRAVERSAL_STACK_SIZE, cull_bound, extent_of, improves, projection_pad};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
+use glam::Vec3;
 
-/// The ray as the node test wants it: origin, reciprocal direction and, per axis, which of
-/// the node's `[min, max]` corners is the near one (the direction's sign bit).
+/// The ray as the node test wants it: reciprocal direction, per axis which of the node's
+/// `[min, max]` corners is the near one (the direction's sign bit), and the box padding
+/// ([`crate::tolerance::BVH_PROJECTION_PAD`]) folded into two shifted origins (moving a
+/// bound outward by `pad` is moving the origin by `pad` the other way; the rounding of
+/// `o ± pad` is within the padding's margin).
 #[derive(Clone, Copy)]
 pub(super) struct NodeRay {
-    origin: [f32; 3],
+    origin_near: [f32; 3],
+    origin_far: [f32; 3],
     inv_dir: [f32; 3],
     near: [usize; 3],
+    pad: f32,
     slab: SlabRay,
 }
 
 impl NodeRay {
+    /// `slab` with boxes padded by `pad` world units.
     #[inline]
-    pub(super) fn new(slab: &SlabRay) -> Self {
+    pub(super) fn new(slab: &SlabRay, pad: f32) -> Self {
+        let s = |negative: bool| if negative { -pad } else { pad };
+        let toward = glam::Vec3::new(
+            s(slab.negative[0]),
+            s(slab.negative[1]),
+            s(slab.negative[2]),
+        );
         Self {
-            origin: slab.origin.to_array(),
+            origin_near: (slab.origin + toward).to_array(),
+            origin_far: (slab.origin - toward).to_array(),
             inv_dir: slab.inv_dir.to_array(),
             near: slab.negative.map(usize::from),
+            pad,
             slab: *slab,
         }
     }
@@ -55,8 +70,8 @@ impl NodeRay {
             let n = self.near[axis];
             let lo = node.bounds[n][axis];
             let hi = node.bounds[1 - n][axis];
-            let t_near = (lo - self.origin[axis]) * self.inv_dir[axis];
-            let t_far = (hi - self.origin[axis]) * self.inv_dir[axis] * SLAB_FAR_SCALE;
+            let t_near = (lo - self.origin_near[axis]) * self.inv_dir[axis];
+            let t_far = (hi - self.origin_far[axis]) * self.inv_dir[axis] * SLAB_FAR_SCALE;
             t_enter = if t_near > t_enter { t_near } else { t_enter };
             t_exit = if t_far < t_exit { t_far } else { t_exit };
         }
@@ -69,7 +84,8 @@ impl NodeRay {
     #[cold]
     #[inline(never)]
     fn hit_general(&self, node: &BvhNode, t_min: f32, t_max: f32) -> Option<f32> {
-        let b = crate::aabb::Aabb::new(node.bounds[0].into(), node.bounds[1].into());
+        let (lo, hi) = (Vec3::from(node.bounds[0]), Vec3::from(node.bounds[1]));
+        let b = crate::aabb::Aabb::new(lo - self.pad, hi + self.pad);
         b.intersect_slab(&self.slab, t_min, t_max).map(|(t, _)| t)
     }
 }
@@ -191,7 +207,7 @@ where
         }; TRAVERSAL_STACK_SIZE];
         let mut sp = 0usize;
 
-        let nray = NodeRay::new(slab);
+        let nray = NodeRay::new(slab, projection_pad(slab.origin, extent_of(&root.bounds())));
         local.nodes_visited += 1;
         let mut node = if nray
             .hit::<GENERAL>(root, ray.t_min, cull_bound(ray.t_max))

@@ -261,6 +261,7 @@ where
             node_count: next,
             triangle_count: indices.len() as u32,
             source_len: mesh.len(),
+            extent: crate::bvh::extent_of(&binary.bounds()),
         })
     }
 }

@@ -106,6 +106,9 @@ pub struct WideBvh<const W: usize, N, T> {
     node_count: u32,
     triangle_count: u32,
     source_len: usize,
+    /// Largest coordinate magnitude of the tree's bounds, for the box padding
+    /// ([`crate::tolerance::BVH_PROJECTION_PAD`]).
+    extent: f32,
 }
 
 /// An 8-wide BVH (one AVX2 register per bound array).

@@ -79,6 +79,7 @@ where
                 nodes[i].set_child(slot, &b, reference);
             }
         }
+        self.extent = crate::bvh::extent_of(&self.bounds());
         match bad {
             Some(index) => Err(BvhError::NonFinitePrimitive { index }),
             None => Ok(()),

@@ -4,7 +4,7 @@ use super::node::{ChildRef, LeafGroup, WideNode};
 use super::{WideBvh, add_stats};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::bvh::stats::TraversalStats;
-use crate::bvh::{cull_bound, improves};
+use crate::bvh::{cull_bound, improves, projection_pad};
 use crate::ray::Ray;
 use crate::simd;
 use crate::triangle::{LANES, TriangleHit, TriangleIntersector, TriangleLanes};
@@ -14,23 +14,37 @@ use glam::Vec3;
 /// (`W = 8`), which bounds every narrower one (module docs of [`super`]).
 const STACK: usize = super::stack_size(8);
 
-/// The ray as the node test wants it: origin, reciprocal direction, and per axis the index
-/// (`0` lower, `1` upper) of the near bound (the direction's sign bit).
+/// The ray as the node test wants it: reciprocal direction, per axis the index (`0` lower,
+/// `1` upper) of the near bound (the direction's sign bit), and the box padding
+/// ([`crate::tolerance::BVH_PROJECTION_PAD`]) folded into two shifted origins: moving the
+/// near bound outward by `pad` is moving the origin by `pad` the other way, so
+/// `t_near = (near − origin_near)·inv`, `t_far = (far − origin_far)·inv` test the padded box at
+/// no cost per node (the rounding of `o ± pad` is within the padding's margin).
 #[derive(Clone, Copy)]
 struct WideRay {
-    origin: [f32; 3],
+    origin_near: [f32; 3],
+    origin_far: [f32; 3],
     inv_dir: [f32; 3],
     near: [usize; 3],
+    pad: f32,
     slab: SlabRay,
 }
 
 impl WideRay {
     #[inline(always)]
-    fn new(slab: &SlabRay) -> Self {
+    fn new(slab: &SlabRay, pad: f32) -> Self {
+        let s = |negative: bool| if negative { -pad } else { pad };
+        let toward = glam::Vec3::new(
+            s(slab.negative[0]),
+            s(slab.negative[1]),
+            s(slab.negative[2]),
+        );
         Self {
-            origin: slab.origin.to_array(),
+            origin_near: (slab.origin + toward).to_array(),
+            origin_far: (slab.origin - toward).to_array(),
             inv_dir: slab.inv_dir.to_array(),
             near: slab.negative.map(usize::from),
+            pad,
             slab: *slab,
         }
     }
@@ -64,10 +78,14 @@ impl WideRay {
             let n = self.near[axis];
             let lo = &node.bounds[n][axis];
             let hi = &node.bounds[1 - n][axis];
-            let (o, inv) = (self.origin[axis], self.inv_dir[axis]);
+            let (on, of, inv) = (
+                self.origin_near[axis],
+                self.origin_far[axis],
+                self.inv_dir[axis],
+            );
             for i in 0..W {
-                let t_near = (lo[i] - o) * inv;
-                let t_far = (hi[i] - o) * inv * SLAB_FAR_SCALE;
+                let t_near = (lo[i] - on) * inv;
+                let t_far = (hi[i] - of) * inv * SLAB_FAR_SCALE;
                 t_enter[i] = if t_near > t_enter[i] {
                     t_near
                 } else {
@@ -80,16 +98,15 @@ impl WideRay {
     }
 
     /// [`WideRay::hit`] for rays with an overflowing reciprocal or `t_min < 0`:
-    /// [`crate::aabb::Aabb::intersect_slab`] on each child box.
+    /// [`crate::aabb::Aabb::intersect_slab`] on each padded child box.
     #[cold]
     #[inline(never)]
     fn hit_general<const W: usize>(&self, node: &WideNode<W>, t_min: f32, t_max: f32) -> [f32; W] {
         let mut out = [f32::INFINITY; W];
         for (i, o) in out.iter_mut().enumerate() {
-            if let Some((t, _)) = node
-                .child_bounds(i)
-                .intersect_slab(&self.slab, t_min, t_max)
-            {
+            let b = node.child_bounds(i);
+            let padded = crate::aabb::Aabb::new(b.min - self.pad, b.max + self.pad);
+            if let Some((t, _)) = padded.intersect_slab(&self.slab, t_min, t_max) {
                 *o = t;
             }
         }
@@ -425,7 +442,7 @@ where
         if nodes.is_empty() {
             return None;
         }
-        let wray = WideRay::new(slab);
+        let wray = WideRay::new(slab, projection_pad(slab.origin, self.extent));
         let mut local = TraversalStats::default();
         let mut cur = *ray;
         let mut best: Option<(u32, H)> = None;
