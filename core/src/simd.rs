@@ -96,8 +96,10 @@ macro_rules! lanewise {
             return Self(core::array::from_fn(|i| lanewise!(@ $lane, self.0[i], o.0[i])));
         }
     };
+    (@ +, $a:expr, $b:expr) => { $a + $b };
     (@ -, $a:expr, $b:expr) => { $a - $b };
     (@ *, $a:expr, $b:expr) => { $a * $b };
+    (@ /, $a:expr, $b:expr) => { $a / $b };
 }
 
 impl F32x4 {
@@ -111,6 +113,20 @@ impl F32x4 {
         return Self(*a);
     }
 
+    /// Lane `i` (`i < 4`; tests read results through it).
+    #[cfg(test)]
+    pub(crate) fn lane(self, i: usize) -> f32 {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let mut out = [0.0f32; 4];
+            // SAFETY: `out` is four `f32`: the unaligned 16-byte store writes exactly them.
+            unsafe { arch::_mm_storeu_ps(out.as_mut_ptr(), self.0) };
+            out[i]
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        self.0[i]
+    }
+
     /// `x` in every lane.
     #[inline(always)]
     pub(crate) fn splat(x: f32) -> Self {
@@ -121,8 +137,40 @@ impl F32x4 {
         return Self([x; 4]);
     }
 
+    lanewise!(add, _mm_add_ps, +);
     lanewise!(sub, _mm_sub_ps, -);
     lanewise!(mul, _mm_mul_ps, *);
+    lanewise!(div, _mm_div_ps, /);
+
+    /// `|x|` lane by lane (the sign bit cleared, as `f32::abs`).
+    #[inline(always)]
+    pub(crate) fn abs(self) -> Self {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: an SSE bitwise and-not with a broadcast constant; no memory access.
+        return Self(unsafe { arch::_mm_andnot_ps(arch::_mm_set1_ps(-0.0), self.0) });
+        #[cfg(not(target_arch = "x86_64"))]
+        return Self(self.0.map(f32::abs));
+    }
+
+    /// Bit `i` set when lane `i` of `self` is `>` that of `o` (false when either is NaN).
+    #[inline(always)]
+    pub(crate) fn gt_bits(self, o: Self) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: an SSE compare and sign mask of registers; no memory access.
+        return unsafe { arch::_mm_movemask_ps(arch::_mm_cmpgt_ps(self.0, o.0)) as u32 };
+        #[cfg(not(target_arch = "x86_64"))]
+        return (0..4).fold(0u32, |m, i| m | u32::from(self.0[i] > o.0[i]) << i);
+    }
+
+    /// Bit `i` set when lane `i` of `self` is `>=` that of `o` (false when either is NaN).
+    #[inline(always)]
+    pub(crate) fn ge_bits(self, o: Self) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: an SSE compare and sign mask of registers; no memory access.
+        return unsafe { arch::_mm_movemask_ps(arch::_mm_cmpge_ps(self.0, o.0)) as u32 };
+        #[cfg(not(target_arch = "x86_64"))]
+        return (0..4).fold(0u32, |m, i| m | u32::from(self.0[i] >= o.0[i]) << i);
+    }
 
     /// Bit `i` set when lane `i` is `< 0`, and bit `4 + i` when it is `> 0` (neither for
     /// zero or NaN).
@@ -140,6 +188,64 @@ impl F32x4 {
         return (0..4).fold(0u32, |m, i| {
             m | u32::from(self.0[i] < 0.0) << i | u32::from(self.0[i] > 0.0) << (4 + i)
         });
+    }
+}
+
+/// Four 3-vectors, one [`F32x4`] per axis, with glam's `Vec3` formulas operation for
+/// operation (same order, never fused), so every lane equals the scalar `Vec3` result bit for
+/// bit.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct V3x4 {
+    pub(crate) x: F32x4,
+    pub(crate) y: F32x4,
+    pub(crate) z: F32x4,
+}
+
+impl V3x4 {
+    /// Lanes from `[axis][lane]` arrays.
+    #[inline(always)]
+    pub(crate) fn load(p: &[[f32; 4]; 3]) -> Self {
+        Self {
+            x: F32x4::load(&p[0]),
+            y: F32x4::load(&p[1]),
+            z: F32x4::load(&p[2]),
+        }
+    }
+
+    /// The same vector in every lane.
+    #[inline(always)]
+    pub(crate) fn splat(v: glam::Vec3) -> Self {
+        Self {
+            x: F32x4::splat(v.x),
+            y: F32x4::splat(v.y),
+            z: F32x4::splat(v.z),
+        }
+    }
+
+    /// `self − o`.
+    #[inline(always)]
+    pub(crate) fn sub(self, o: Self) -> Self {
+        Self {
+            x: self.x.sub(o.x),
+            y: self.y.sub(o.y),
+            z: self.z.sub(o.z),
+        }
+    }
+
+    /// `Vec3::dot`: `(x·x') + (y·y') + (z·z')`.
+    #[inline(always)]
+    pub(crate) fn dot(self, o: Self) -> F32x4 {
+        self.x.mul(o.x).add(self.y.mul(o.y)).add(self.z.mul(o.z))
+    }
+
+    /// `Vec3::cross`: `(y·z' − y'·z, z·x' − z'·x, x·y' − x'·y)`.
+    #[inline(always)]
+    pub(crate) fn cross(self, o: Self) -> Self {
+        Self {
+            x: self.y.mul(o.z).sub(o.y.mul(self.z)),
+            y: self.z.mul(o.x).sub(o.z.mul(self.x)),
+            z: self.x.mul(o.y).sub(o.x.mul(self.y)),
+        }
     }
 }
 
@@ -181,10 +287,59 @@ mod tests {
                 let expect: [f32; 4] =
                     core::array::from_fn(|i| (a4[i] - b4[i]) * 3.0 - b4[i] * a4[i]);
                 let bits = diff.sign_bits();
+                let q = va.div(vb).add(va.abs());
+                let want_q: [f32; 4] = core::array::from_fn(|i| a4[i] / b4[i] + a4[i].abs());
+                let (gt, ge) = (q.gt_bits(va), q.ge_bits(va));
+                for i in 0..4 {
+                    assert_eq!(gt >> i & 1 == 1, want_q[i] > a4[i], "{a4:?} {b4:?} gt {i}");
+                    assert_eq!(ge >> i & 1 == 1, want_q[i] >= a4[i], "{a4:?} {b4:?} ge {i}");
+                }
                 for (i, &e) in expect.iter().enumerate() {
                     assert_eq!(bits >> i & 1 == 1, e < 0.0, "{a4:?} {b4:?} lane {i}");
                     assert_eq!(bits >> (4 + i) & 1 == 1, e > 0.0, "{a4:?} {b4:?} lane {i}");
                 }
+            }
+        }
+    }
+
+    /// `V3x4::dot` and `cross` equal glam's scalar `Vec3` methods bit for bit.
+    #[test]
+    fn v3x4_matches_glam_bit_for_bit() {
+        use glam::Vec3;
+        let mut state = 0x1234_5678_u64;
+        let mut next = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1);
+            f32::from_bits((state >> 32) as u32 & 0x7fff_ffff) * 1e-30 - 3.0
+        };
+        for _ in 0..500 {
+            let a: [Vec3; 4] = core::array::from_fn(|_| Vec3::new(next(), next(), next()));
+            let b: [Vec3; 4] = core::array::from_fn(|_| Vec3::new(next(), next(), next()));
+            let lanes =
+                |v: &[Vec3; 4]| V3x4::load(&[v.map(|p| p.x), v.map(|p| p.y), v.map(|p| p.z)]);
+            let (va, vb) = (lanes(&a), lanes(&b));
+            let c = va.cross(vb);
+            let d = va.sub(vb).dot(c);
+            for i in 0..4 {
+                let want_c = a[i].cross(b[i]);
+                let want_d = (a[i] - b[i]).dot(want_c);
+                let got = |x: F32x4| {
+                    let mut out = [0.0f32; 4];
+                    for (k, o) in out.iter_mut().enumerate() {
+                        // Lane k: bit of a comparison with itself-splat is not needed; read it
+                        // through ge/gt against the scalar to stay within the module's API.
+                        *o = if x.ge_bits(F32x4::splat(f32::INFINITY)) >> k & 1 == 1 {
+                            f32::INFINITY
+                        } else {
+                            f32::NAN
+                        };
+                    }
+                    out
+                };
+                let _ = got;
+                assert_eq!(c.x.lane(i).to_bits(), want_c.x.to_bits());
+                assert_eq!(c.y.lane(i).to_bits(), want_c.y.to_bits());
+                assert_eq!(c.z.lane(i).to_bits(), want_c.z.to_bits());
+                assert_eq!(d.lane(i).to_bits(), want_d.to_bits());
             }
         }
     }

@@ -54,6 +54,88 @@ impl TriangleLanes {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ray::Ray;
+    use crate::triangle::{
+        MollerTrumbore, TriangleIntersector, Watertight, WatertightF32, WatertightRay,
+    };
+    use glam::Vec3;
+
+    /// The lane cull against the scalar tests (the oracle is each variant's own one-triangle
+    /// `intersect`, which the cull must never contradict): rays aimed at vertices, at points
+    /// of edges and at random points, around quads split on their diagonal (so lanes share
+    /// edges), plus NaN and huge lanes, for every variant with a cull. Every lane the cull
+    /// reports must be a scalar miss, and the cull must report most misses (else it is not
+    /// doing its job).
+    #[test]
+    fn lane_cull_reports_only_scalar_misses() {
+        use crate::test_util::{lcg, unit_vec};
+        let mut s = 0x5eed_u64;
+        const NAMES: [&str; 4] = [
+            "watertight",
+            "watertight-f32",
+            "moller-trumbore",
+            "moller-trumbore-noeps",
+        ];
+        let (mut culled, mut misses) = ([0usize; 4], [0usize; 4]);
+        for case in 0..4000 {
+            let scale = [1e-3f32, 1.0, 1e4][case % 3];
+            let p =
+                |s: &mut u64| Vec3::new(lcg(s) - 0.5, lcg(s) - 0.5, lcg(s) - 0.5) * (2.0 * scale);
+            let (a, b, c, d) = (p(&mut s), p(&mut s), p(&mut s), p(&mut s));
+            let mut tris = [[a, b, c], [a, c, d], [b, d, c], [a, b, d]];
+            if case % 50 == 0 {
+                tris[3] = [Vec3::NAN, b, c];
+            }
+            if case % 70 == 0 {
+                tris[2] = [Vec3::splat(3e38), b, Vec3::new(-3e38, 1.0, 2.0)];
+            }
+            let target = match case % 4 {
+                0 => a,
+                1 => a + (c - a) * lcg(&mut s),
+                2 => b + (d - b) * 0.5,
+                _ => p(&mut s),
+            };
+            let origin = target - unit_vec(&mut s) * (3.0 * scale);
+            let ray = Ray::new(origin, target - origin);
+            let records = tris.map(|t| [t[0].to_array(), t[1].to_array(), t[2].to_array()]);
+            let lanes = TriangleLanes::from_triangles(&records);
+            let wt = WatertightRay::new(&ray).unwrap();
+            let variants = [
+                (
+                    Watertight.certain_misses(&wt, &ray, &lanes),
+                    tris.map(|t| Watertight.intersect(&ray, &t).is_some()),
+                ),
+                (
+                    WatertightF32.certain_misses(&wt, &ray, &lanes),
+                    tris.map(|t| WatertightF32.intersect(&ray, &t).is_some()),
+                ),
+                (
+                    MollerTrumbore::CLASSIC.certain_misses(&(), &ray, &lanes),
+                    tris.map(|t| MollerTrumbore::CLASSIC.intersect(&ray, &t).is_some()),
+                ),
+                (
+                    MollerTrumbore::NO_EPSILON.certain_misses(&(), &ray, &lanes),
+                    tris.map(|t| MollerTrumbore::NO_EPSILON.intersect(&ray, &t).is_some()),
+                ),
+            ];
+            for (k, (mask, scalar)) in variants.iter().enumerate() {
+                for (lane, &hit) in scalar.iter().enumerate() {
+                    let reported = mask >> lane & 1 == 1;
+                    assert!(
+                        !(reported && hit),
+                        "{}: case {case} lane {lane} culled a hit",
+                        NAMES[k]
+                    );
+                    culled[k] += usize::from(reported);
+                    misses[k] += usize::from(!hit);
+                }
+            }
+        }
+        for k in 0..4 {
+            let (c, m) = (culled[k], misses[k]);
+            assert!(c * 10 >= m * 9, "{}: culled {c} of {m} misses", NAMES[k]);
+        }
+    }
 
     #[test]
     fn lanes_transpose_and_round_trip() {

@@ -115,7 +115,8 @@ pub trait TriangleIntersector: Copy + Send + Sync {
     /// [`TriangleIntersector::intersect_prepared`] only for the others. An implementation
     /// reports a lane only when `intersect_prepared(pre, ray, triangle)` returns `None` for
     /// that lane's triangle, whatever `ray`'s interval: results never change, only the work
-    /// does. Unused (NaN) lanes are never reported. The default reports none.
+    /// does. Bits of unused (NaN) lanes mean nothing: callers mask them. The default reports
+    /// none.
     #[inline(always)]
     fn certain_misses(&self, pre: &Self::Prepared, ray: &Ray, lanes: &TriangleLanes) -> u32 {
         let _ = (pre, ray, lanes);

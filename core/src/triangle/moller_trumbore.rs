@@ -1,7 +1,8 @@
 //! Möller–Trumbore 1997, in `f32`.
 
-use super::{TriangleHit, TriangleIntersector, finish};
+use super::{TriangleHit, TriangleIntersector, TriangleLanes, finish};
 use crate::ray::Ray;
+use crate::simd::{F32x4, V3x4};
 use crate::tolerance::MOLLER_TRUMBORE_DET_EPSILON;
 use glam::Vec3;
 
@@ -73,5 +74,29 @@ impl TriangleIntersector for MollerTrumbore {
         let t = e2.dot(q) * inv_det;
         // det = e1·(d × e2) = −d·(e1 × e2): positive when d opposes ng.
         finish(ray, t, b1, b2, e1.cross(e2), det > 0.0, v)
+    }
+
+    /// The determinant and barycentric rejections of `intersect_prepared`, lane by lane with
+    /// the same operations in the same order (glam's `dot`/`cross` formulas, never fused), so
+    /// a lane is reported exactly when the scalar test returns `None` before its `t` check.
+    #[inline(always)]
+    fn certain_misses(&self, _: &(), ray: &Ray, lanes: &TriangleLanes) -> u32 {
+        let [v0, v1, v2] = lanes.v.each_ref().map(V3x4::load);
+        let (e1, e2) = (v1.sub(v0), v2.sub(v0));
+        let d = V3x4::splat(ray.direction);
+        let p = d.cross(e2);
+        let det = e1.dot(p);
+        let inv_det = F32x4::splat(1.0).div(det);
+        let s = V3x4::splat(ray.origin).sub(v0);
+        let b1 = s.dot(p).mul(inv_det);
+        let q = s.cross(e1);
+        let b2 = d.dot(q).mul(inv_det);
+        let (zero, one) = (F32x4::splat(0.0), F32x4::splat(1.0));
+        let keep = det.abs().gt_bits(F32x4::splat(self.det_epsilon))
+            & b1.ge_bits(zero)
+            & one.ge_bits(b1)
+            & b2.ge_bits(zero)
+            & one.ge_bits(b1.add(b2));
+        !keep & 0xF
     }
 }

@@ -450,67 +450,6 @@ mod tests {
     use super::*;
     use crate::triangle::TriangleVariant;
 
-    /// The lane cull against the scalar tests (the oracle is each variant's own one-triangle
-    /// `intersect`, which the cull must never contradict): rays aimed at vertices, at points
-    /// of edges and at random points, around quads split on their diagonal (so lanes share
-    /// edges), plus NaN and huge lanes. Every lane the cull reports must be a scalar miss, and
-    /// the cull must report most misses (else it is not doing its job).
-    #[test]
-    fn lane_cull_reports_only_scalar_misses() {
-        use crate::test_util::{lcg, unit_vec};
-        let mut s = 0x5eed_u64;
-        let (mut culled, mut misses) = (0usize, 0usize);
-        for case in 0..4000 {
-            let scale = [1e-3f32, 1.0, 1e4][case % 3];
-            let p =
-                |s: &mut u64| Vec3::new(lcg(s) - 0.5, lcg(s) - 0.5, lcg(s) - 0.5) * (2.0 * scale);
-            let (a, b, c, d) = (p(&mut s), p(&mut s), p(&mut s), p(&mut s));
-            let mut tris = [[a, b, c], [a, c, d], [b, d, c], [a, b, d]];
-            if case % 50 == 0 {
-                tris[3] = [Vec3::NAN, b, c];
-            }
-            if case % 70 == 0 {
-                tris[2] = [Vec3::splat(3e38), b, Vec3::new(-3e38, 1.0, 2.0)];
-            }
-            let target = match case % 4 {
-                0 => a,
-                1 => a + (c - a) * lcg(&mut s),
-                2 => b + (d - b) * 0.5,
-                _ => p(&mut s),
-            };
-            let origin = target - unit_vec(&mut s) * (3.0 * scale);
-            let ray = Ray::new(origin, target - origin);
-            let records = tris.map(|t| [t[0].to_array(), t[1].to_array(), t[2].to_array()]);
-            let lanes = TriangleLanes::from_triangles(&records);
-            for (name, mask, scalar) in [
-                (
-                    "watertight",
-                    Watertight.certain_misses(&WatertightRay::new(&ray).unwrap(), &ray, &lanes),
-                    tris.map(|t| Watertight.intersect(&ray, &t).is_some()),
-                ),
-                (
-                    "watertight-f32",
-                    WatertightF32.certain_misses(&WatertightRay::new(&ray).unwrap(), &ray, &lanes),
-                    tris.map(|t| WatertightF32.intersect(&ray, &t).is_some()),
-                ),
-            ] {
-                for (lane, &hit) in scalar.iter().enumerate() {
-                    let reported = mask >> lane & 1 == 1;
-                    assert!(
-                        !(reported && hit),
-                        "{name}: case {case} lane {lane} culled a hit"
-                    );
-                    culled += usize::from(reported);
-                    misses += usize::from(!hit);
-                }
-            }
-        }
-        assert!(
-            culled * 10 >= misses * 9,
-            "culled {culled} of {misses} misses"
-        );
-    }
-
     #[test]
     fn shared_edge_of_two_triangles_is_closed() {
         // Quad split on its diagonal; rays through exact points of the diagonal.
