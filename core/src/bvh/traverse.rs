@@ -38,7 +38,11 @@ impl NodeRay {
             origin_near: (slab.origin + toward).to_array(),
             origin_far: (slab.origin - toward).to_array(),
             inv_dir: slab.inv_dir.to_array(),
-            near: slab.negative.map(usize::from),
+            near: [
+                usize::from(slab.negative[0]),
+                usize::from(slab.negative[1]),
+                usize::from(slab.negative[2]),
+            ],
             pad,
             slab: *slab,
         }

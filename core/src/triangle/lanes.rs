@@ -35,7 +35,17 @@ impl TriangleLanes {
     #[inline(always)]
     #[must_use]
     pub fn get(&self, lane: usize) -> Option<[[f32; 3]; 3]> {
-        (lane < LANES).then(|| self.v.map(|p| p.map(|axis| axis[lane & (LANES - 1)])))
+        if lane >= LANES {
+            return None;
+        }
+        // Written out: `array::map` is not always inlined, and this is on the hit path.
+        let l = lane & (LANES - 1);
+        let v = &self.v;
+        Some([
+            [v[0][0][l], v[0][1][l], v[0][2][l]],
+            [v[1][0][l], v[1][1][l], v[1][2][l]],
+            [v[2][0][l], v[2][1][l], v[2][2][l]],
+        ])
     }
 
     /// Writes `tri` into lane `lane` (nothing for `lane ≥ LANES`).

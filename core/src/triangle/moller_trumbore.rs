@@ -81,7 +81,8 @@ impl TriangleIntersector for MollerTrumbore {
     /// a lane is reported exactly when the scalar test returns `None` before its `t` check.
     #[inline(always)]
     fn certain_misses(&self, _: &(), ray: &Ray, lanes: &TriangleLanes) -> u32 {
-        let [v0, v1, v2] = lanes.v.each_ref().map(V3x4::load);
+        let [p0, p1, p2] = &lanes.v;
+        let (v0, v1, v2) = (V3x4::load(p0), V3x4::load(p1), V3x4::load(p2));
         let (e1, e2) = (v1.sub(v0), v2.sub(v0));
         let d = V3x4::splat(ray.direction);
         let p = d.cross(e2);

@@ -56,7 +56,8 @@ impl WatertightRay {
     #[inline(always)]
     #[must_use]
     pub fn certain_misses(&self, origin: Vec3, lanes: &TriangleLanes) -> u32 {
-        let [kx, ky, kz] = self.k.map(|k| k % 3);
+        let [kx, ky, kz] = self.k;
+        let (kx, ky, kz) = (kx % 3, ky % 3, kz % 3);
         let o = origin.to_array();
         let (ox, oy, oz) = (
             F32x4::splat(o[kx]),
@@ -72,7 +73,8 @@ impl WatertightRay {
                 F32x4::load(&p[ky]).sub(oy).sub(sy.mul(z)),
             )
         };
-        let [(ax, ay), (bx, by), (cx, cy)] = lanes.v.each_ref().map(project);
+        let [p0, p1, p2] = &lanes.v;
+        let ((ax, ay), (bx, by), (cx, cy)) = (project(p0), project(p1), project(p2));
         // The filter of `intersect_prepared`, argument for argument.
         let e = [
             cx.mul(by).sub(cy.mul(bx)).sign_bits(),
