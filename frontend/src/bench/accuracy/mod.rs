@@ -174,8 +174,17 @@ pub fn measure(args: &AccuracyArgs) -> Result<Report> {
     for (c, entry) in sets.iter().enumerate() {
         let Some((mesh, rays)) = entry else { continue };
         let accel = crate::accel::MeshAccel::new((*mesh).clone())?;
-        for (row, &v) in variants.iter_mut().zip(TriangleVariant::ALL.iter()) {
-            let m = Some(triangles::mrays_bvh_variant(v, &accel, rays, reps.min(3)));
+        // Rounds over all variants (one pass each), median per variant: the variants are
+        // compared on the same machine state, not one after the other.
+        let mut samples = vec![Vec::new(); TriangleVariant::ALL.len()];
+        for _ in 0..reps.clamp(1, BVH_ROUNDS) {
+            for (k, &v) in TriangleVariant::ALL.iter().enumerate() {
+                samples[k].push(triangles::mrays_bvh_variant(v, &accel, rays, 1));
+            }
+        }
+        for (row, mut s) in variants.iter_mut().zip(samples) {
+            s.sort_by(f64::total_cmp);
+            let m = s.get(s.len() / 2).copied();
             match c {
                 0 => row.mrays_bvh_primary = m,
                 1 => row.mrays_bvh_incoherent = m,
@@ -195,6 +204,9 @@ pub fn measure(args: &AccuracyArgs) -> Result<Report> {
         quick: args.quick,
     })
 }
+
+/// Interleaved rounds of the BVH throughput columns (median taken).
+const BVH_ROUNDS: usize = 5;
 
 /// The primary (camera) or incoherent rays of the throughput columns for one mesh.
 fn ray_set(
