@@ -7,8 +7,8 @@ use crate::obj::ObjMesh;
 use halfray_core::Ray;
 use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, WideStack, group_capacity};
 use halfray_core::bvh::{
-    BuildOptions, Bvh, BvhError, BvhNode, TraversalStats, TriangleMesh, index_capacity,
-    node_capacity,
+    BuildOptions, Bvh, BvhError, BvhNode, PrimRef, TraversalStats, TriangleMesh, index_capacity,
+    node_capacity, scratch_capacity,
 };
 use halfray_core::triangle::{
     Cramer, F64Reference, MollerTrumbore, TriangleHit, TriangleIntersector, TriangleVariant,
@@ -20,16 +20,18 @@ pub type VecBvh8 = Bvh8<Vec<WideNode<8>>, Vec<LeafGroup>>;
 /// The binary BVH with owned storage.
 pub type VecBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
 
-/// Builds the binary BVH over `mesh` (binned SAH, `options`).
+/// Builds the binary BVH over `mesh` (binned SAH, `options`) with the scratch builder (a
+/// temporary array of 40 bytes per triangle, freed on return).
 pub fn build_binary(
     mesh: &TriangleMesh<'_>,
     options: &BuildOptions,
 ) -> std::result::Result<VecBvh, BvhError> {
     let n = mesh.len();
-    Bvh::build(
+    Bvh::build_with_scratch(
         mesh,
         vec![BvhNode::EMPTY; node_capacity(n)],
         vec![0u32; index_capacity(n)],
+        &mut vec![PrimRef::EMPTY; scratch_capacity(n)],
         options,
     )
 }

@@ -38,11 +38,19 @@ pub enum BvhError {
         /// Primitive count of the source passed now.
         found: usize,
     },
-    /// The triangle storage of a wide BVH holds fewer entries than the tree has triangles.
+    /// The triangle storage of a wide BVH holds fewer groups than
+    /// [`super::wide::group_capacity`] requires.
     TriangleStorageTooSmall {
-        /// Triangle records required.
+        /// Triangle groups required.
         needed: usize,
-        /// Triangle records available.
+        /// Triangle groups available.
+        available: usize,
+    },
+    /// The builder's scratch holds fewer entries than [`super::scratch_capacity`] requires.
+    ScratchTooSmall {
+        /// Entries required.
+        needed: usize,
+        /// Entries available.
         available: usize,
     },
     /// A wide BVH was asked for more triangles than its leaf references can address
@@ -94,7 +102,11 @@ impl fmt::Display for BvhError {
             ),
             Self::TriangleStorageTooSmall { needed, available } => write!(
                 f,
-                "wide BVH triangle storage too small: {needed} needed, {available} available"
+                "wide BVH triangle storage too small: {needed} groups needed, {available} available"
+            ),
+            Self::ScratchTooSmall { needed, available } => write!(
+                f,
+                "BVH build scratch too small: {needed} needed, {available} available"
             ),
             Self::TooManyTriangles { count } => write!(
                 f,

@@ -82,7 +82,7 @@ pub mod wide;
 #[cfg(test)]
 mod tests;
 
-pub use build::BuildOptions;
+pub use build::{BuildOptions, PrimRef, scratch_capacity};
 pub use error::BvhError;
 pub use node::{BvhNode, NODE_SIZE};
 pub use primitive::{Primitive, PrimitiveSource, TriangleMesh};
@@ -223,6 +223,36 @@ where
     ) -> Result<Self, BvhError> {
         let (node_count, prim_count) =
             build::build(source, nodes.as_mut(), indices.as_mut(), options)?;
+        Ok(Self {
+            nodes,
+            indices,
+            node_count,
+            prim_count,
+            source_len: source.primitive_count(),
+        })
+    }
+
+
+    /// [`Bvh::build`] with a scratch array of at least [`scratch_capacity`]`(N)` [`PrimRef`]s
+    /// (40 bytes each) that the builder fills once with every primitive's box and centroid
+    /// and reorders in place, instead of reading the source through the index array at every
+    /// level: the same tree, several times faster on large meshes. The same errors, plus
+    /// [`BvhError::ScratchTooSmall`], all before `nodes` or `indices` are written; the
+    /// scratch's contents afterwards mean nothing.
+    pub fn build_with_scratch<S: PrimitiveSource + ?Sized>(
+        source: &S,
+        mut nodes: N,
+        mut indices: I,
+        scratch: &mut [PrimRef],
+        options: &BuildOptions,
+    ) -> Result<Self, BvhError> {
+        let (node_count, prim_count) = build::build_with_scratch(
+            source,
+            nodes.as_mut(),
+            indices.as_mut(),
+            scratch,
+            options,
+        )?;
         Ok(Self {
             nodes,
             indices,
