@@ -14,7 +14,7 @@ use super::{
     TRAVERSAL_COST, index_capacity, node_capacity,
 };
 use crate::aabb::Aabb;
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// Depth from which nodes are split by count rather than by SAH: `MAX_DEPTH − 32`, so that the
 /// remaining 32 levels can halve any node of up to `2³¹` primitives down to one.
@@ -67,35 +67,71 @@ const EMPTY_TASK: Task = Task {
 struct Binner {
     lo: f32,
     scale: f32,
+    /// Bins in use, `2..=BIN_COUNT`.
+    count: usize,
 }
 
 impl Binner {
-    /// `None` when the centroid extent along the axis is zero (nothing to bin).
-    fn new(lo: f32, hi: f32) -> Option<Self> {
+    /// `count` bins over `[lo, hi]`; `None` when the centroid extent along the axis is zero
+    /// (nothing to bin).
+    fn new(lo: f32, hi: f32, count: usize) -> Option<Self> {
         let extent = hi - lo;
         (extent > 0.0).then(|| Self {
             lo,
-            scale: BIN_COUNT as f32 / extent,
+            scale: count as f32 / extent,
+            count,
         })
     }
 
-    #[inline]
+    #[inline(always)]
     fn bin(&self, c: f32) -> usize {
-        // `as usize` saturates (negative and NaN give 0), the `min` keeps `hi` in the last bin.
-        (((c - self.lo) * self.scale) as usize).min(BIN_COUNT - 1)
+        // Clamped in `f32` first (NaN gives 0), so the conversion needs no saturation; the
+        // upper clamp keeps `hi` in the last bin.
+        let x = (c - self.lo) * self.scale;
+        let last = (self.count - 1) as f32;
+        let x = if x > 0.0 { x } else { 0.0 };
+        let x = if x < last { x } else { last };
+        x as u32 as usize
     }
 }
 
 #[derive(Clone, Copy)]
 struct Bin {
-    bounds: Aabb,
+    lo: Vec3A,
+    hi: Vec3A,
     count: u32,
 }
 
 const EMPTY_BIN: Bin = Bin {
-    bounds: Aabb::EMPTY,
+    lo: Vec3A::INFINITY,
+    hi: Vec3A::NEG_INFINITY,
     count: 0,
 };
+
+impl Bin {
+    /// Adds a box (`lo`, `hi`) holding `count` primitives. The builder only sees finite
+    /// coordinates (validated), so `min`/`max` are one vector instruction each.
+    #[inline(always)]
+    fn add(&mut self, lo: Vec3A, hi: Vec3A, count: u32) {
+        self.lo = self.lo.min(lo);
+        self.hi = self.hi.max(hi);
+        self.count += count;
+    }
+
+    /// Surface area of the box, 0 when empty.
+    #[inline(always)]
+    fn area(&self) -> f32 {
+        if self.count == 0 {
+            return 0.0;
+        }
+        let e = self.hi - self.lo;
+        2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+    }
+
+    fn aabb(&self) -> Aabb {
+        Aabb::new(self.lo.into(), self.hi.into())
+    }
+}
 
 /// The chosen SAH split: `bin(centroid[axis]) < split` goes left.
 #[derive(Clone, Copy)]
@@ -108,11 +144,12 @@ struct Split {
     right: Aabb,
 }
 
-/// A primitive as the scratch builder keeps it: its box, its centroid and its index in the
-/// source. 40 bytes.
+/// A primitive as the scratch builder keeps it: its box (as 16-byte vectors, so binning is
+/// one `min` and one `max` per bin), its centroid and its index in the source. 48 bytes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PrimRef {
-    bounds: Aabb,
+    lo: Vec3A,
+    hi: Vec3A,
     centroid: Vec3,
     index: u32,
 }
@@ -120,7 +157,8 @@ pub struct PrimRef {
 impl PrimRef {
     /// A record for initialising scratch storage: `[PrimRef::EMPTY; K]`.
     pub const EMPTY: Self = Self {
-        bounds: Aabb::EMPTY,
+        lo: Vec3A::INFINITY,
+        hi: Vec3A::NEG_INFINITY,
         centroid: Vec3::ZERO,
         index: 0,
     };
@@ -138,10 +176,10 @@ pub const fn scratch_capacity(prim_count: usize) -> usize {
     prim_count
 }
 
-/// The primitives being partitioned: element `k` of the current order, with its box and
-/// centroid, and swapping two elements.
+/// The primitives being partitioned: element `k` of the current order, with its box (corners
+/// as 16-byte vectors) and centroid, and swapping two elements.
 trait Refs {
-    fn get(&self, k: usize) -> (Aabb, Vec3);
+    fn get(&self, k: usize) -> (Vec3A, Vec3A, Vec3);
     fn swap(&mut self, i: usize, j: usize);
 }
 
@@ -153,9 +191,10 @@ struct Indexed<'a, S: ?Sized> {
 
 impl<S: PrimitiveSource + ?Sized> Refs for Indexed<'_, S> {
     #[inline(always)]
-    fn get(&self, k: usize) -> (Aabb, Vec3) {
+    fn get(&self, k: usize) -> (Vec3A, Vec3A, Vec3) {
         let i = self.indices.get(k).map_or(usize::MAX, |&i| i as usize);
-        self.source.primitive_bounds_and_centroid(i)
+        let (b, c) = self.source.primitive_bounds_and_centroid(i);
+        (b.min.into(), b.max.into(), c)
     }
 
     #[inline(always)]
@@ -173,10 +212,11 @@ struct Scratch<'a> {
 
 impl Refs for Scratch<'_> {
     #[inline(always)]
-    fn get(&self, k: usize) -> (Aabb, Vec3) {
-        self.refs
-            .get(k)
-            .map_or((Aabb::EMPTY, Vec3::NAN), |r| (r.bounds, r.centroid))
+    fn get(&self, k: usize) -> (Vec3A, Vec3A, Vec3) {
+        self.refs.get(k).map_or(
+            (Vec3A::INFINITY, Vec3A::NEG_INFINITY, Vec3::NAN),
+            |r| (r.lo, r.hi, r.centroid),
+        )
     }
 
     #[inline(always)]
@@ -283,7 +323,8 @@ pub(super) fn build_with_scratch<S: PrimitiveSource + ?Sized>(
         }
         if let Some(slot) = scratch.get_mut(k) {
             *slot = PrimRef {
-                bounds,
+                lo: bounds.min.into(),
+                hi: bounds.max.into(),
                 centroid,
                 index: i as u32,
             };
@@ -441,13 +482,18 @@ fn split_node<R: Refs>(
 
 /// Box and centroid box of a run of primitives.
 fn range_bounds<R: Refs>(refs: &R, range: core::ops::Range<usize>) -> (Aabb, Aabb) {
-    range.fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), k| {
-        let (pb, pc) = refs.get(k);
-        (b.union(pb), c.grow(pc))
-    })
+    let (lo, hi, c) = range.fold(
+        (Vec3A::INFINITY, Vec3A::NEG_INFINITY, Aabb::EMPTY),
+        |(lo, hi, c), k| {
+            let (plo, phi, pc) = refs.get(k);
+            (lo.min(plo), hi.max(phi), c.grow(pc))
+        },
+    );
+    (Aabb::new(lo.into(), hi.into()), c)
 }
 
-/// Bins the primitives along every axis with a non-zero centroid extent and returns the
+/// Bins the primitives (`min(count, BIN_COUNT)` bins) along every axis with a non-zero
+/// centroid extent and returns the
 /// cheapest split with both sides non-empty. The cost is the SAH numerator (not divided by the
 /// parent's area, so that zero-area parents need no special case):
 /// `TRAVERSAL_COST·A + INTERSECTION_COST·(A_L·N_L + A_R·N_R)`.
@@ -457,19 +503,27 @@ fn best_sah_split<R: Refs>(
     centroids: &Aabb,
     parent_area: f32,
 ) -> Option<Split> {
+    // As many bins as primitives, up to BIN_COUNT: a small node needs no more candidate
+    // planes than it has primitives, and the sweep costs per bin.
+    let bin_count = range.len().clamp(2, BIN_COUNT);
     let binners: [Option<Binner>; 3] =
-        core::array::from_fn(|a| Binner::new(centroids.min[a], centroids.max[a]));
+        core::array::from_fn(|a| Binner::new(centroids.min[a], centroids.max[a], bin_count));
     if binners.iter().all(Option::is_none) {
         return None;
     }
     let mut bins = [[EMPTY_BIN; BIN_COUNT]; 3];
+    // An axis without extent bins everything into bin 0 and is skipped below.
+    let b0 = Binner {
+        lo: 0.0,
+        scale: 0.0,
+        count: 1,
+    };
+    let active = binners.map(|b| b.unwrap_or(b0));
     for k in range {
-        let (b, c) = refs.get(k);
-        for axis in 0..3 {
-            if let Some(binner) = &binners[axis] {
-                let bin = &mut bins[axis][binner.bin(c[axis])];
-                bin.bounds = bin.bounds.union(b);
-                bin.count += 1;
+        let (lo, hi, c) = refs.get(k);
+        for (axis, (binner, axis_bins)) in active.iter().zip(bins.iter_mut()).enumerate() {
+            if let Some(bin) = axis_bins.get_mut(binner.bin(c[axis])) {
+                bin.add(lo, hi, 1);
             }
         }
     }
@@ -481,24 +535,22 @@ fn best_sah_split<R: Refs>(
         let bins = &bins[axis];
         // Right-to-left sweep: area·count of bins[k..].
         let mut right_cost = [0.0f32; BIN_COUNT];
-        let mut right_box = [Aabb::EMPTY; BIN_COUNT];
-        let (mut acc_b, mut acc_n) = (Aabb::EMPTY, 0u32);
-        for k in (1..BIN_COUNT).rev() {
-            acc_b = acc_b.union(bins[k].bounds);
-            acc_n += bins[k].count;
-            right_cost[k] = acc_b.surface_area() * acc_n as f32;
-            right_box[k] = acc_b;
+        let mut right_box = [EMPTY_BIN; BIN_COUNT];
+        let mut acc = EMPTY_BIN;
+        for k in (1..bin_count).rev() {
+            acc.add(bins[k].lo, bins[k].hi, bins[k].count);
+            right_cost[k] = acc.area() * acc.count as f32;
+            right_box[k] = acc;
         }
-        let (mut left_b, mut left_n) = (Aabb::EMPTY, 0u32);
+        let mut left = EMPTY_BIN;
         let total: u32 = bins.iter().map(|b| b.count).sum();
-        for k in 1..BIN_COUNT {
-            left_b = left_b.union(bins[k - 1].bounds);
-            left_n += bins[k - 1].count;
-            if left_n == 0 || left_n == total {
+        for k in 1..bin_count {
+            left.add(bins[k - 1].lo, bins[k - 1].hi, bins[k - 1].count);
+            if left.count == 0 || left.count == total {
                 continue;
             }
             let cost = TRAVERSAL_COST * parent_area
-                + INTERSECTION_COST * (left_b.surface_area() * left_n as f32 + right_cost[k]);
+                + INTERSECTION_COST * (left.area() * left.count as f32 + right_cost[k]);
             // Strict `<`: ties keep the first (lowest axis, lowest bin) split, deterministic.
             if best.as_ref().is_none_or(|b| cost < b.cost) {
                 best = Some(Split {
@@ -506,8 +558,8 @@ fn best_sah_split<R: Refs>(
                     binner,
                     split: k,
                     cost,
-                    left: left_b,
-                    right: right_box[k],
+                    left: left.aabb(),
+                    right: right_box[k].aabb(),
                 });
             }
         }
@@ -525,7 +577,7 @@ fn partition<R: Refs>(
     let (mut lc, mut rc) = (Aabb::EMPTY, Aabb::EMPTY);
     let (mut i, mut j) = (range.start, range.end);
     while i < j {
-        let (_, c) = refs.get(i);
+        let (_, _, c) = refs.get(i);
         if split.binner.bin(c[split.axis]) < split.split {
             lc = lc.grow(c);
             i += 1;

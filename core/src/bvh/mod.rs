@@ -90,9 +90,10 @@ pub use stats::{BvhStats, TraversalStats};
 
 use crate::aabb::Aabb;
 
-/// Number of centroid bins per axis of the binned SAH. 16 is within a fraction of a percent of
-/// a full sweep's tree quality on scanned meshes and keeps the builder's bin arrays at about
-/// 1.3 KiB of stack (3 axes × 16 bins × 28 bytes).
+/// Number of centroid bins per axis of the binned SAH (nodes of fewer primitives use one bin
+/// per primitive). 16 is within a fraction of a percent of a full sweep's tree quality on
+/// scanned meshes and keeps the builder's bin arrays at about 1.6 KiB of stack (3 axes × 16
+/// bins × 36 bytes).
 pub const BIN_COUNT: usize = 16;
 
 /// SAH cost of visiting an inner node (testing its two child boxes), in units where one
@@ -234,7 +235,7 @@ where
 
 
     /// [`Bvh::build`] with a scratch array of at least [`scratch_capacity`]`(N)` [`PrimRef`]s
-    /// (40 bytes each) that the builder fills once with every primitive's box and centroid
+    /// (48 bytes each) that the builder fills once with every primitive's box and centroid
     /// and reorders in place, instead of reading the source through the index array at every
     /// level: the same tree, several times faster on large meshes. The same errors, plus
     /// [`BvhError::ScratchTooSmall`], all before `nodes` or `indices` are written; the

@@ -5,36 +5,42 @@ use super::{LEAF_MERGE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh, group_capaci
 use crate::bvh::{Bvh, BvhError, BvhNode, TriangleMesh};
 use crate::triangle::LANES;
 
-/// The index range of binary node `b`'s subtree (its primitives are contiguous): from its
-/// leftmost leaf's start to its rightmost leaf's end. `None` for a broken tree.
-fn subtree_range(nodes: &[BvhNode], b: u32) -> Option<core::ops::Range<usize>> {
-    let (mut lo, mut hi) = (b, b);
-    for _ in 0..=crate::bvh::MAX_DEPTH {
-        match nodes.get(lo as usize)?.children() {
-            Some((l, _)) => lo = l,
-            None => break,
-        }
-    }
-    for _ in 0..=crate::bvh::MAX_DEPTH {
-        match nodes.get(hi as usize)?.children() {
-            Some((_, r)) => hi = r,
-            None => break,
-        }
-    }
-    let start = nodes.get(lo as usize)?.primitive_range()?.start;
-    let end = nodes.get(hi as usize)?.primitive_range()?.end;
-    (start < end).then_some(start..end)
-}
-
 /// The leaf run binary node `b` becomes, if it becomes one: a binary leaf, or an inner node
 /// whose subtree holds at most [`LEAF_MERGE`] primitives (one wide leaf tests them in a row,
-/// cheaper than a node visit).
+/// cheaper than a node visit). The subtree is walked only as far as that bound: its nodes
+/// waiting on the stack each hold a primitive, so more than `LEAF_MERGE` of them, or more
+/// than `LEAF_MERGE` primitives seen, means "no" at once. A subtree's primitives are
+/// contiguous in index order (binary build), so the run is their index range.
 fn as_leaf(nodes: &[BvhNode], b: u32) -> Option<core::ops::Range<usize>> {
     let node = nodes.get(b as usize)?;
     if let Some(r) = node.primitive_range() {
         return Some(r);
     }
-    subtree_range(nodes, b).filter(|r| r.len() <= LEAF_MERGE)
+    let mut stack = [0u32; LEAF_MERGE];
+    stack[0] = b;
+    let mut sp = 1usize;
+    let (mut lo, mut hi, mut total) = (usize::MAX, 0usize, 0usize);
+    while sp > 0 {
+        sp -= 1;
+        let n = nodes.get(stack[sp] as usize)?;
+        if let Some((l, r)) = n.children() {
+            if sp + 2 > LEAF_MERGE {
+                return None;
+            }
+            stack[sp] = r;
+            stack[sp + 1] = l;
+            sp += 2;
+        } else {
+            let run = n.primitive_range()?;
+            total += run.len();
+            if total > LEAF_MERGE {
+                return None;
+            }
+            lo = lo.min(run.start);
+            hi = hi.max(run.end);
+        }
+    }
+    (total > 0 && hi - lo == total).then_some(lo..hi)
 }
 
 /// The binary nodes that become the children of the wide node made from binary node `b`: start
