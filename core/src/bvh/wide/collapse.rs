@@ -56,20 +56,27 @@ fn child_list<const W: usize>(nodes: &[BvhNode], b: u32) -> ([u32; W], usize) {
         list[0] = b;
         return (list, 1);
     };
+    // Per entry, the area by which it competes for expansion (`None`: it stays, a leaf run),
+    // computed once when it enters the list.
+    let expandable = |c: u32| {
+        nodes
+            .get(c as usize)
+            .filter(|_| as_leaf(nodes, c).is_none())
+            .map(|n| n.bounds().surface_area())
+    };
+    let mut area: [Option<f32>; W] = [None; W];
     list[0] = l;
     list[1] = r;
+    area[0] = expandable(l);
+    area[1] = expandable(r);
     let mut len = 2;
     while len < W {
         let mut best: Option<(usize, f32)> = None;
-        for (i, &c) in list[..len].iter().enumerate() {
-            if let Some(node) = nodes
-                .get(c as usize)
-                .filter(|_| as_leaf(nodes, c).is_none())
+        for (i, a) in area[..len].iter().enumerate() {
+            if let Some(a) = *a
+                && best.is_none_or(|(_, b)| a > b)
             {
-                let area = node.bounds().surface_area();
-                if best.is_none_or(|(_, a)| area > a) {
-                    best = Some((i, area));
-                }
+                best = Some((i, a));
             }
         }
         let Some((i, _)) = best else { break };
@@ -77,7 +84,9 @@ fn child_list<const W: usize>(nodes: &[BvhNode], b: u32) -> ([u32; W], usize) {
             break;
         };
         list[i] = cl;
+        area[i] = expandable(cl);
         list[len] = cr;
+        area[len] = expandable(cr);
         len += 1;
     }
     (list, len)
