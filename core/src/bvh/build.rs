@@ -213,10 +213,11 @@ struct Scratch<'a> {
 impl Refs for Scratch<'_> {
     #[inline(always)]
     fn get(&self, k: usize) -> (Vec3A, Vec3A, Vec3) {
-        self.refs.get(k).map_or(
-            (Vec3A::INFINITY, Vec3A::NEG_INFINITY, Vec3::NAN),
-            |r| (r.lo, r.hi, r.centroid),
-        )
+        self.refs
+            .get(k)
+            .map_or((Vec3A::INFINITY, Vec3A::NEG_INFINITY, Vec3::NAN), |r| {
+                (r.lo, r.hi, r.centroid)
+            })
     }
 
     #[inline(always)]
@@ -227,13 +228,15 @@ impl Refs for Scratch<'_> {
     }
 }
 
-/// Checks the storage and every primitive (nothing written); returns the usable count and the
-/// root's box and centroid box.
+/// Checks the storage and every primitive (nothing written but what `usable` writes); calls
+/// `usable(k, i, bounds, centroid)` for the `k`-th usable primitive `i`; returns the usable
+/// count and the root's box and centroid box.
 fn validate<S: PrimitiveSource + ?Sized>(
     source: &S,
     nodes: &[BvhNode],
     indices: &[u32],
     options: &BuildOptions,
+    mut usable: impl FnMut(usize, usize, Aabb, Vec3),
 ) -> Result<(u32, Aabb, Aabb), BvhError> {
     let n = source.primitive_count();
     if n > MAX_PRIMITIVES {
@@ -259,6 +262,7 @@ fn validate<S: PrimitiveSource + ?Sized>(
         if is_usable(&b) && c.is_finite() {
             root_bounds = root_bounds.union(b);
             root_centroids = root_centroids.grow(c);
+            usable(count as usize, i, b, c);
             count += 1;
         } else if !options.exclude_non_finite {
             return Err(BvhError::NonFinitePrimitive { index: i });
@@ -274,7 +278,8 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
     indices: &mut [u32],
     options: &BuildOptions,
 ) -> Result<(u32, u32), BvhError> {
-    let (count, root_bounds, root_centroids) = validate(source, nodes, indices, options)?;
+    let (count, root_bounds, root_centroids) =
+        validate(source, nodes, indices, options, |_, _, _, _| {})?;
     if count == 0 {
         return Ok((0, 0));
     }
@@ -290,7 +295,14 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
         k += 1;
     }
     let mut refs = Indexed { source, indices };
-    let node_count = build_tree(&mut refs, nodes, count, &root_bounds, root_centroids, options);
+    let node_count = build_tree(
+        &mut refs,
+        nodes,
+        count,
+        &root_bounds,
+        root_centroids,
+        options,
+    );
     Ok((node_count, count))
 }
 
@@ -311,29 +323,32 @@ pub(super) fn build_with_scratch<S: PrimitiveSource + ?Sized>(
             available: scratch.len(),
         });
     }
-    let (count, root_bounds, root_centroids) = validate(source, nodes, indices, options)?;
+    // One pass over the source: the records are written while validating (the scratch is
+    // not output; nodes and indices are written only after the pass succeeds).
+    let (count, root_bounds, root_centroids) =
+        validate(source, nodes, indices, options, |k, i, bounds, centroid| {
+            if let Some(slot) = scratch.get_mut(k) {
+                *slot = PrimRef {
+                    lo: bounds.min.into(),
+                    hi: bounds.max.into(),
+                    centroid,
+                    index: i as u32,
+                };
+            }
+        })?;
     if count == 0 {
         return Ok((0, 0));
     }
-    let mut k = 0usize;
-    for i in 0..n {
-        let (bounds, centroid) = source.primitive_bounds_and_centroid(i);
-        if !(is_usable(&bounds) && centroid.is_finite()) {
-            continue;
-        }
-        if let Some(slot) = scratch.get_mut(k) {
-            *slot = PrimRef {
-                lo: bounds.min.into(),
-                hi: bounds.max.into(),
-                centroid,
-                index: i as u32,
-            };
-        }
-        k += 1;
-    }
     let refs = scratch.get_mut(..count as usize).unwrap_or_default();
     let mut view = Scratch { refs };
-    let node_count = build_tree(&mut view, nodes, count, &root_bounds, root_centroids, options);
+    let node_count = build_tree(
+        &mut view,
+        nodes,
+        count,
+        &root_bounds,
+        root_centroids,
+        options,
+    );
     for (slot, r) in indices.iter_mut().zip(view.refs.iter()) {
         *slot = r.index;
     }

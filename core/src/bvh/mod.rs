@@ -233,7 +233,6 @@ where
         })
     }
 
-
     /// [`Bvh::build`] with a scratch array of at least [`scratch_capacity`]`(N)` [`PrimRef`]s
     /// (48 bytes each) that the builder fills once with every primitive's box and centroid
     /// and reorders in place, instead of reading the source through the index array at every
@@ -247,13 +246,8 @@ where
         scratch: &mut [PrimRef],
         options: &BuildOptions,
     ) -> Result<Self, BvhError> {
-        let (node_count, prim_count) = build::build_with_scratch(
-            source,
-            nodes.as_mut(),
-            indices.as_mut(),
-            scratch,
-            options,
-        )?;
+        let (node_count, prim_count) =
+            build::build_with_scratch(source, nodes.as_mut(), indices.as_mut(), scratch, options)?;
         Ok(Self {
             nodes,
             indices,

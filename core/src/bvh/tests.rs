@@ -458,7 +458,11 @@ fn scratch_build_gives_the_same_tree() {
     let chain: Vec<Vec3> = (0..120)
         .flat_map(|i| {
             let x = 1.5f32.powi(i);
-            [Vec3::new(x, 0.0, 0.0), Vec3::new(x, 1.0, 0.0), Vec3::new(x, 0.0, 1.0)]
+            [
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x, 1.0, 0.0),
+                Vec3::new(x, 0.0, 1.0),
+            ]
         })
         .collect();
     let chain_tris = (0..120u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
