@@ -507,7 +507,7 @@ fn too_small_scratch_is_refused_before_writing() {
     let (pos, tris) = soup(20, 7);
     let mesh = TriangleMesh::new(&pos, &tris);
     let mut nodes = vec![BvhNode::EMPTY; node_capacity(20)];
-    let mut idx = vec![7u32; 20];
+    let mut idx = [7u32; 20];
     let mut scratch = vec![PrimRef::EMPTY; 19];
     let r = Bvh::build_with_scratch(
         &mesh,
