@@ -14,7 +14,15 @@ use super::{
     TRAVERSAL_COST, index_capacity, node_capacity,
 };
 use crate::aabb::Aabb;
-use glam::{Vec3, Vec3A};
+use glam::Vec3;
+
+/// The builder's box corners: 16-byte SIMD vectors on x86-64 (one `min`/`max` instruction per
+/// bin update), plain `Vec3` elsewhere (smaller records and a smaller stack frame on
+/// microcontrollers, where there is no SIMD to use). Same values either way.
+#[cfg(target_arch = "x86_64")]
+type Corner = glam::Vec3A;
+#[cfg(not(target_arch = "x86_64"))]
+type Corner = Vec3;
 
 /// Depth from which nodes are split by count rather than by SAH: `MAX_DEPTH − 32`, so that the
 /// remaining 32 levels can halve any node of up to `2³¹` primitives down to one.
@@ -97,14 +105,14 @@ impl Binner {
 
 #[derive(Clone, Copy)]
 struct Bin {
-    lo: Vec3A,
-    hi: Vec3A,
+    lo: Corner,
+    hi: Corner,
     count: u32,
 }
 
 const EMPTY_BIN: Bin = Bin {
-    lo: Vec3A::INFINITY,
-    hi: Vec3A::NEG_INFINITY,
+    lo: Corner::INFINITY,
+    hi: Corner::NEG_INFINITY,
     count: 0,
 };
 
@@ -112,7 +120,7 @@ impl Bin {
     /// Adds a box (`lo`, `hi`) holding `count` primitives. The builder only sees finite
     /// coordinates (validated), so `min`/`max` are one vector instruction each.
     #[inline(always)]
-    fn add(&mut self, lo: Vec3A, hi: Vec3A, count: u32) {
+    fn add(&mut self, lo: Corner, hi: Corner, count: u32) {
         self.lo = self.lo.min(lo);
         self.hi = self.hi.max(hi);
         self.count += count;
@@ -144,12 +152,13 @@ struct Split {
     right: Aabb,
 }
 
-/// A primitive as the scratch builder keeps it: its box (as 16-byte vectors, so binning is
-/// one `min` and one `max` per bin), its centroid and its index in the source. 48 bytes.
+/// A primitive as the scratch builder keeps it: its box (16-byte vectors on x86-64, so binning
+/// is one `min` and one `max` per bin), its centroid and its index in the source. 48 bytes on
+/// x86-64, 40 elsewhere.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PrimRef {
-    lo: Vec3A,
-    hi: Vec3A,
+    lo: Corner,
+    hi: Corner,
     centroid: Vec3,
     index: u32,
 }
@@ -157,8 +166,8 @@ pub struct PrimRef {
 impl PrimRef {
     /// A record for initialising scratch storage: `[PrimRef::EMPTY; K]`.
     pub const EMPTY: Self = Self {
-        lo: Vec3A::INFINITY,
-        hi: Vec3A::NEG_INFINITY,
+        lo: Corner::INFINITY,
+        hi: Corner::NEG_INFINITY,
         centroid: Vec3::ZERO,
         index: 0,
     };
@@ -179,7 +188,7 @@ pub const fn scratch_capacity(prim_count: usize) -> usize {
 /// The primitives being partitioned: element `k` of the current order, with its box (corners
 /// as 16-byte vectors) and centroid, and swapping two elements.
 trait Refs {
-    fn get(&self, k: usize) -> (Vec3A, Vec3A, Vec3);
+    fn get(&self, k: usize) -> (Corner, Corner, Vec3);
     fn swap(&mut self, i: usize, j: usize);
 }
 
@@ -191,7 +200,7 @@ struct Indexed<'a, S: ?Sized> {
 
 impl<S: PrimitiveSource + ?Sized> Refs for Indexed<'_, S> {
     #[inline(always)]
-    fn get(&self, k: usize) -> (Vec3A, Vec3A, Vec3) {
+    fn get(&self, k: usize) -> (Corner, Corner, Vec3) {
         let i = self.indices.get(k).map_or(usize::MAX, |&i| i as usize);
         let (b, c) = self.source.primitive_bounds_and_centroid(i);
         (b.min.into(), b.max.into(), c)
@@ -212,10 +221,10 @@ struct Scratch<'a> {
 
 impl Refs for Scratch<'_> {
     #[inline(always)]
-    fn get(&self, k: usize) -> (Vec3A, Vec3A, Vec3) {
+    fn get(&self, k: usize) -> (Corner, Corner, Vec3) {
         self.refs
             .get(k)
-            .map_or((Vec3A::INFINITY, Vec3A::NEG_INFINITY, Vec3::NAN), |r| {
+            .map_or((Corner::INFINITY, Corner::NEG_INFINITY, Vec3::NAN), |r| {
                 (r.lo, r.hi, r.centroid)
             })
     }
@@ -498,7 +507,7 @@ fn split_node<R: Refs>(
 /// Box and centroid box of a run of primitives.
 fn range_bounds<R: Refs>(refs: &R, range: core::ops::Range<usize>) -> (Aabb, Aabb) {
     let (lo, hi, c) = range.fold(
-        (Vec3A::INFINITY, Vec3A::NEG_INFINITY, Aabb::EMPTY),
+        (Corner::INFINITY, Corner::NEG_INFINITY, Aabb::EMPTY),
         |(lo, hi, c), k| {
             let (plo, phi, pc) = refs.get(k);
             (lo.min(plo), hi.max(phi), c.grow(pc))
@@ -550,12 +559,10 @@ fn best_sah_split<R: Refs>(
         let bins = &bins[axis];
         // Right-to-left sweep: area·count of bins[k..].
         let mut right_cost = [0.0f32; BIN_COUNT];
-        let mut right_box = [EMPTY_BIN; BIN_COUNT];
         let mut acc = EMPTY_BIN;
         for k in (1..bin_count).rev() {
             acc.add(bins[k].lo, bins[k].hi, bins[k].count);
             right_cost[k] = acc.area() * acc.count as f32;
-            right_box[k] = acc;
         }
         let mut left = EMPTY_BIN;
         let total: u32 = bins.iter().map(|b| b.count).sum();
@@ -574,10 +581,18 @@ fn best_sah_split<R: Refs>(
                     split: k,
                     cost,
                     left: left.aabb(),
-                    right: right_box[k].aabb(),
+                    right: Aabb::EMPTY,
                 });
             }
         }
+    }
+    // The right box of the chosen split, from its bins (not kept per candidate: stack).
+    if let Some(b) = best.as_mut() {
+        let mut right = EMPTY_BIN;
+        for bin in bins[b.axis].get(b.split..).unwrap_or(&[]) {
+            right.add(bin.lo, bin.hi, bin.count);
+        }
+        b.right = right.aabb();
     }
     best
 }
