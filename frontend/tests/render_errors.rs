@@ -261,3 +261,67 @@ fn cli_exits_with_code_1_and_the_location() {
     assert!(!err.contains("panicked"));
     assert!(Path::new(&scene).exists());
 }
+
+/// Fixed-size arrays take exactly their length: serde's arrays read the first `N` elements and
+/// ignored the rest, so `center = [0, 0, 0, "junk"]` and a 5×5 `matrix` were accepted.
+#[test]
+fn fixed_size_arrays_refuse_extra_elements() {
+    check(
+        "center4.toml",
+        &sphere_with("center = [0, 0, 0, \"junk\"]\nradius = 1\nmaterial = \"m\""),
+        "13:10",
+        "object[0].center",
+        "invalid length 4, expected an array of exactly 3 elements",
+    );
+    check(
+        "center2.toml",
+        &sphere_with("center = [0, 0]\nradius = 1\nmaterial = \"m\""),
+        "13:10",
+        "object[0].center",
+        "invalid length 2, expected an array of exactly 3 elements",
+    );
+    let m5 = "[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1], [0, 0, 0, 1]]";
+    let msg = load_err(
+        "matrix5.toml",
+        &sphere_with(&format!(
+            "center = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = [{{ matrix = {m5} }}]"
+        )),
+    );
+    assert!(
+        msg.contains("matrix") && msg.contains("invalid length 5, expected an array of exactly 4"),
+        "{msg}"
+    );
+    let row5 = "[[1, 0, 0, 0, 9], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]";
+    let msg = load_err(
+        "row5.toml",
+        &sphere_with(&format!(
+            "center = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = [{{ matrix = {row5} }}]"
+        )),
+    );
+    assert!(
+        msg.contains("invalid length 5, expected an array of exactly 4"),
+        "{msg}"
+    );
+    let msg = load_err(
+        "vertex4.toml",
+        &format!(
+            "{BASE}\n[[object]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0, 7]]\nmaterial = \"m\"\n"
+        ),
+    );
+    assert!(
+        msg.contains("vertices") && msg.contains("invalid length 4"),
+        "{msg}"
+    );
+    // Control: the same scene with exact arrays loads.
+    let dir = tempfile::tempdir().unwrap();
+    let ok = dir.path().join("ok.toml");
+    std::fs::write(
+        &ok,
+        sphere_with(&format!(
+            "center = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = [{{ matrix = {} }}]",
+            "[[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]"
+        )),
+    )
+    .unwrap();
+    assert!(load(&ok).is_ok());
+}

@@ -61,7 +61,7 @@ impl Ctx<'_> {
     }
 
     fn v3(&self, v: &V3, field: &str) -> Result<Vec3> {
-        let a = *v.get_ref();
+        let a = **v.get_ref();
         if a.iter().any(|x| !x.is_finite()) {
             return Err(self.err(
                 &v.span(),
@@ -484,7 +484,7 @@ fn object(ctx: &mut Ctx<'_>, o: &S<ObjectDef>, p: &str, inherited: Option<u32>) 
         }
         "triangle" | "polygon" => {
             let vs = ctx.need(&o.vertices, &span, &f("vertices"), kind)?;
-            let pts: Vec<Vec3> = vs.get_ref().iter().map(|a| Vec3::from_array(*a)).collect();
+            let pts: Vec<Vec3> = vs.get_ref().iter().map(|a| Vec3::from_array(**a)).collect();
             if pts.iter().any(|v| !v.is_finite()) {
                 return Err(ctx.err(
                     &vs.span(),
@@ -731,14 +731,14 @@ fn transform(ctx: &Ctx<'_>, t: &S<Vec<S<def::TransformDef>>>, p: &str) -> Result
             (Mat4::from_scale(v), sc.span(), "scale")
         } else if let Some(mx) = &s.matrix {
             let rows = mx.get_ref();
-            if rows.iter().flatten().any(|x| !x.is_finite()) {
+            if rows.iter().flat_map(|r| r.iter()).any(|x| !x.is_finite()) {
                 return Err(ctx.err(
                     &mx.span(),
                     &format!("{f}.matrix"),
                     "non-finite matrix entry",
                 ));
             }
-            let r = |i: usize| Vec4::from_array(rows[i]);
+            let r = |i: usize| Vec4::from_array(*rows[i]);
             (
                 Mat4::from_cols(r(0), r(1), r(2), r(3)).transpose(),
                 mx.span(),

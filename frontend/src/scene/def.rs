@@ -8,7 +8,59 @@ use toml::Spanned;
 /// A spanned value.
 pub type S<T> = Spanned<T>;
 /// A spanned 3-vector.
-pub type V3 = S<[f32; 3]>;
+pub type V3 = S<Exact<f32, 3>>;
+
+/// A fixed-size array that refuses extra elements: serde's `[T; N]` reads the first `N` and
+/// ignores the rest (`center = [0, 0, 0, "junk"]` was accepted), this reports "invalid length".
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Exact<T, const N: usize>(pub [T; N]);
+
+impl<T: Copy + Default, const N: usize> Default for Exact<T, N> {
+    fn default() -> Self {
+        Self([T::default(); N])
+    }
+}
+
+impl<T, const N: usize> std::ops::Deref for Exact<T, N> {
+    type Target = [T; N];
+    fn deref(&self) -> &[T; N] {
+        &self.0
+    }
+}
+
+impl<'de, T: Deserialize<'de> + Copy + Default, const N: usize> Deserialize<'de> for Exact<T, N> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<T, const N: usize>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de> + Copy + Default, const N: usize> serde::de::Visitor<'de>
+            for V<T, N>
+        {
+            type Value = Exact<T, N>;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(f, "an array of exactly {N} elements")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut a: A,
+            ) -> Result<Exact<T, N>, A::Error> {
+                let mut out = [T::default(); N];
+                for (k, slot) in out.iter_mut().enumerate() {
+                    *slot = a
+                        .next_element()?
+                        .ok_or_else(|| serde::de::Error::invalid_length(k, &self))?;
+                }
+                let mut extra = 0usize;
+                while a.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                    extra += 1;
+                }
+                if extra > 0 {
+                    return Err(serde::de::Error::invalid_length(N + extra, &self));
+                }
+                Ok(Exact(out))
+            }
+        }
+        d.deserialize_seq(V::<T, N>(std::marker::PhantomData))
+    }
+}
 
 /// The whole file.
 #[derive(Deserialize)]
@@ -151,7 +203,7 @@ pub struct TransformDef {
     pub translate: Option<V3>,
     pub rotate: Option<S<RotateDef>>,
     pub scale: Option<S<ScaleDef>>,
-    pub matrix: Option<S<[[f32; 4]; 4]>>,
+    pub matrix: Option<S<Exact<Exact<f32, 4>, 4>>>,
 }
 
 /// An object (or CSG operand). Which fields are required or allowed depends on `type`.
@@ -166,7 +218,7 @@ pub struct ObjectDef {
     pub radii: Option<V3>,
     pub point: Option<V3>,
     pub normal: Option<V3>,
-    pub vertices: Option<S<Vec<[f32; 3]>>>,
+    pub vertices: Option<S<Vec<Exact<f32, 3>>>>,
     pub min: Option<V3>,
     pub max: Option<V3>,
     pub coefficients: Option<S<QuadricDef>>,
