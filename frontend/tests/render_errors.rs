@@ -325,3 +325,88 @@ fn fixed_size_arrays_refuse_extra_elements() {
     .unwrap();
     assert!(load(&ok).is_ok());
 }
+
+/// `[mesh.NAME]` definitions are checked whether or not an object uses them (the file is not
+/// read when unused: nothing renders it), and a directory is named as such.
+#[test]
+fn unused_mesh_definitions_are_checked() {
+    let scene = |mesh: &str| {
+        format!(
+            "{BASE}\n[mesh.ghost]\n{mesh}\n\n[[object]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n"
+        )
+    };
+    check(
+        "ghost.toml",
+        &scene("file = \"nothere.obj\""),
+        "12:8",
+        "mesh.ghost.file",
+        "not found",
+    );
+    check(
+        "ghost_dir.toml",
+        &scene("file = \".\""),
+        "12:8",
+        "mesh.ghost.file",
+        "is a directory",
+    );
+    check(
+        "ghost_levels.toml",
+        &scene("file = \"open.obj\"\nsubdivide = 9"),
+        "13:13",
+        "mesh.ghost.subdivide",
+        "at most 4 levels",
+    );
+    // Control: a valid unused definition loads.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("open.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let ok = dir.path().join("ok.toml");
+    std::fs::write(&ok, scene("file = \"open.obj\"")).unwrap();
+    assert!(load(&ok).is_ok());
+}
+
+/// Subdivision that would exceed the memory limit is refused before it starts, naming the
+/// setting and the estimate (a 60 000-triangle grid at 4 levels: 15 million triangles).
+#[test]
+fn scene_subdivision_beyond_the_memory_limit_is_refused_up_front() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = 174usize; // (n−1)² · 2 ≈ 59 858 triangles
+    let mut obj = String::new();
+    for j in 0..n {
+        for i in 0..n {
+            obj.push_str(&format!("v {i} {j} 0\n"));
+        }
+    }
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let a = j * n + i + 1;
+            obj.push_str(&format!(
+                "f {a} {} {}\nf {} {} {}\n",
+                a + 1,
+                a + n + 1,
+                a,
+                a + n + 1,
+                a + n
+            ));
+        }
+    }
+    std::fs::write(dir.path().join("grid.obj"), obj).unwrap();
+    let scene = format!(
+        "{BASE}\n[mesh.g]\nfile = \"grid.obj\"\nsubdivide = 4\n\n[[object]]\ntype = \"mesh\"\nmesh = \"g\"\nmaterial = \"m\"\n"
+    );
+    let path = dir.path().join("big.toml");
+    std::fs::write(&path, &scene).unwrap();
+    let t0 = std::time::Instant::now();
+    let msg = load(&path).err().expect("refused").to_string();
+    assert!(
+        msg.contains("`subdivide = 4` on 59858 triangles needs about") && msg.contains("GiB"),
+        "{msg}"
+    );
+    assert!(t0.elapsed().as_secs() < 20, "refused before subdividing");
+    // Control: one level fits and loads.
+    std::fs::write(&path, scene.replace("subdivide = 4", "subdivide = 1")).unwrap();
+    assert!(load(&path).is_ok());
+}

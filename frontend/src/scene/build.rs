@@ -153,6 +153,12 @@ pub(super) fn build(src: &Source<'_>, d: def::SceneDef) -> Result<Scene> {
         labels.push(format!("{field} ({})", o.get_ref().kind.get_ref()));
         objects.push(object(&mut ctx, o, &field, None)?);
     }
+    // Definitions no object uses are still checked (not read: nothing renders them).
+    for (name, (_, loaded)) in &ctx.meshes {
+        if loaded.is_none() {
+            mesh_def(&ctx, name)?;
+        }
+    }
     Ok(Scene {
         path: src.path.to_path_buf(),
         camera,
@@ -615,27 +621,28 @@ fn polygon(ctx: &Ctx<'_>, pts: Vec<Vec3>, span: &Span, field: &str) -> Result<Po
     })
 }
 
-fn mesh(ctx: &mut Ctx<'_>, name: &S<String>, field: &str) -> Result<Arc<MeshShape>> {
-    let Some((_, loaded)) = ctx.meshes.get(name.get_ref()) else {
-        let known: Vec<&str> = ctx.meshes.keys().map(String::as_str).collect();
-        return Err(ctx.err(
-            &name.span(),
-            field,
-            format!(
-                "no mesh named `{}` (defined with [mesh.NAME]: {})",
-                name.get_ref(),
-                list(&known)
-            ),
-        ));
+/// Checks `[mesh.NAME]` without reading the file: it exists and is a file, the smoothing and
+/// subdivision settings are in range. Returns the path, the smoothing `(step, iterations)` and
+/// the subdivision levels. Run for every mesh definition, used or not.
+fn mesh_def(ctx: &Ctx<'_>, name: &str) -> Result<(std::path::PathBuf, Option<(f32, u32)>, u32)> {
+    let Some(def) = ctx.mesh_defs.get(name).map(|d| d.get_ref()) else {
+        return Err(Error::Other(format!("no mesh named `{name}`")));
     };
-    if let Some(m) = loaded {
-        return Ok(m.clone());
-    }
-    let def = ctx.mesh_defs[name.get_ref()].get_ref();
-    let p = format!("mesh.{}", name.get_ref());
+    let p = format!("mesh.{name}");
     let file = std::path::Path::new(def.file.get_ref());
     let base = ctx.src.path.parent().unwrap_or(std::path::Path::new(""));
     let path = base.join(file);
+    if path.is_dir() {
+        return Err(ctx.err(
+            &def.file.span(),
+            &format!("{p}.file"),
+            format!(
+                "mesh file `{}` is a directory, not an OBJ file ({})",
+                def.file.get_ref(),
+                path.display()
+            ),
+        ));
+    }
     if !path.is_file() {
         return Err(ctx.err(
             &def.file.span(),
@@ -671,6 +678,28 @@ fn mesh(ctx: &mut Ctx<'_>, name: &S<String>, field: &str) -> Result<Arc<MeshShap
             "at most 4 levels (each multiplies the triangles by 4)",
         ));
     }
+    Ok((path, smoothing, levels))
+}
+
+fn mesh(ctx: &mut Ctx<'_>, name: &S<String>, field: &str) -> Result<Arc<MeshShape>> {
+    let Some((_, loaded)) = ctx.meshes.get(name.get_ref()) else {
+        let known: Vec<&str> = ctx.meshes.keys().map(String::as_str).collect();
+        return Err(ctx.err(
+            &name.span(),
+            field,
+            format!(
+                "no mesh named `{}` (defined with [mesh.NAME]: {})",
+                name.get_ref(),
+                list(&known)
+            ),
+        ));
+    };
+    if let Some(m) = loaded {
+        return Ok(m.clone());
+    }
+    let (path, smoothing, levels) = mesh_def(ctx, name.get_ref())?;
+    let def = ctx.mesh_defs[name.get_ref()].get_ref();
+    let p = format!("mesh.{}", name.get_ref());
     let shape =
         super::load_mesh(name.get_ref(), &path, smoothing, levels).map_err(|e| match e {
             Error::Input { at, message } if at.line.is_none() => ctx.err(

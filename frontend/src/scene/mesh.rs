@@ -88,8 +88,16 @@ fn subdivide(path: &Path, mesh: &ObjMesh) -> Result<ObjMesh> {
     })
 }
 
+/// Bytes a scene mesh costs per triangle of its final (subdivided) form, for the memory check
+/// before subdividing: the last level's half-edge buffers (~100 B per face), the exported mesh
+/// (~20 B), and the BVH build (binary nodes and indices ~68 B, scratch 48 B, wide tree ~63 B),
+/// rounded up. Bytes per triangle.
+const SCENE_MESH_BYTES_PER_TRIANGLE: u64 = 320;
+
 /// Loads an OBJ, applies smoothing (`(step, iterations)`) then `subdivide` Loop levels, and
-/// builds the BVH.
+/// builds the BVH. Subdivision is refused before it starts when the final mesh would exceed
+/// the memory limit ([`crate::limits::MEMORY_LIMIT_BYTES`]; each level multiplies the
+/// triangles by 4).
 pub fn load_mesh(
     name: &str,
     path: &Path,
@@ -99,6 +107,19 @@ pub fn load_mesh(
     let mut mesh = read_obj(path)?;
     if mesh.triangles.is_empty() {
         return Err(Error::input(Location::file(path), "mesh has no triangles"));
+    }
+    if levels > 0 {
+        let bytes = (mesh.triangles.len() as u64)
+            .checked_mul(4u64.checked_pow(levels).unwrap_or(u64::MAX))
+            .and_then(|t| t.checked_mul(SCENE_MESH_BYTES_PER_TRIANGLE));
+        crate::limits::check_memory(
+            &format!(
+                "`subdivide = {levels}` on {} triangles",
+                mesh.triangles.len()
+            ),
+            bytes,
+        )
+        .map_err(|e| Error::input(Location::file(path), e.to_string()))?;
     }
     if let Some((step, iterations)) = smoothing {
         smooth(path, &mut mesh, step, iterations)?;
