@@ -621,10 +621,14 @@ fn polygon(ctx: &Ctx<'_>, pts: Vec<Vec3>, span: &Span, field: &str) -> Result<Po
     })
 }
 
+/// A checked `[mesh.NAME]`: the file's path, the smoothing `(step, iterations)` and the
+/// subdivision levels.
+type MeshSettings = (std::path::PathBuf, Option<(f32, u32)>, u32);
+
 /// Checks `[mesh.NAME]` without reading the file: it exists and is a file, the smoothing and
 /// subdivision settings are in range. Returns the path, the smoothing `(step, iterations)` and
 /// the subdivision levels. Run for every mesh definition, used or not.
-fn mesh_def(ctx: &Ctx<'_>, name: &str) -> Result<(std::path::PathBuf, Option<(f32, u32)>, u32)> {
+fn mesh_def(ctx: &Ctx<'_>, name: &str) -> Result<MeshSettings> {
     let Some(def) = ctx.mesh_defs.get(name).map(|d| d.get_ref()) else {
         return Err(Error::Other(format!("no mesh named `{name}`")));
     };
