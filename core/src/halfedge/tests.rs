@@ -655,11 +655,29 @@ fn flip_rules_and_valence_bookkeeping() {
         [before[0] - 1, before[1] - 1, before[2] + 1, before[3] + 1]
     );
     assert_eq!(m.edge_vertices(e), Some([d, c]));
-    // Flipping back is refused: a and b now have valence 3.
-    assert_eq!(
-        m.flip_edge(e),
-        Err(FlipError::DegreeTooLow(a)).or(m.flip_edge(e))
-    );
+    // Flipping back is legal (d and c have valence 5, a and b are no longer joined) and
+    // restores the valences and the edge a–b: a flip is an involution on connectivity. (This
+    // line used to compare `flip_edge` with itself, so its expected error was never checked.)
+    assert_eq!(m.flip_edge(e), Ok(()));
+    m.validate().unwrap();
+    assert_eq!([a, b, c, d].map(|v| val(&m, v)), before);
+    let back = m.edge_vertices(e).unwrap();
+    assert!(back == [a, b] || back == [b, a], "{back:?}");
+    // An interior vertex of valence 3 (a, after flipping a–b away again) cannot lose an edge:
+    // its link is a triangle, so every edge of its fan has joined wings and is refused as a
+    // duplicate before the valence rule (which only boundary vertices reach, below).
+    m.flip_edge(e).unwrap();
+    assert_eq!(val(&m, a), 3);
+    let snap = m.clone();
+    let fan: Vec<_> = m
+        .edges()
+        .filter(|&f| f != e && m.edge_vertices(f).is_some_and(|v| v.contains(&a)))
+        .collect();
+    assert_eq!(fan.len(), 3);
+    for f in fan {
+        assert_eq!(m.flip_edge(f), Err(FlipError::DuplicateEdge));
+    }
+    assert_eq!(m, snap);
     // Tetrahedron: every flip would duplicate an edge.
     let (p, t) = tetra();
     let mut m: M = build(&p, &t).unwrap();
