@@ -656,8 +656,7 @@ fn flip_rules_and_valence_bookkeeping() {
     );
     assert_eq!(m.edge_vertices(e), Some([d, c]));
     // Flipping back is legal (d and c have valence 5, a and b are no longer joined) and
-    // restores the valences and the edge a–b: a flip is an involution on connectivity. (This
-    // line used to compare `flip_edge` with itself, so its expected error was never checked.)
+    // restores the valences and the edge a–b: a flip is an involution on connectivity.
     assert_eq!(m.flip_edge(e), Ok(()));
     m.validate().unwrap();
     assert_eq!([a, b, c, d].map(|v| val(&m, v)), before);
