@@ -413,3 +413,25 @@ fn scene_subdivision_beyond_the_memory_limit_is_refused_up_front() {
     std::fs::write(&path, scene.replace("subdivide = 4", "subdivide = 1")).unwrap();
     assert!(load(&path).is_ok());
 }
+
+/// Messages name the right field and cause: an unknown top-level table is that table (not
+/// `lights[0].lights`), a projective matrix is "not affine" (not "degenerate").
+#[test]
+fn fields_and_causes_are_named_right() {
+    check(
+        "lights.toml",
+        &format!("{BASE}\n[[lights]]\ntype = \"point\"\n"),
+        "11:3",
+        "lights",
+        "unknown field `lights`",
+    );
+    check(
+        "projective.toml",
+        &sphere_with(
+            "center = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = [{ matrix = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 1, 1]] }]",
+        ),
+        "16:25",
+        "object[0].transform[0].matrix",
+        "not an affine transform: the last row must be [0, 0, 0, 1]",
+    );
+}

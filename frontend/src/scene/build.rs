@@ -771,6 +771,16 @@ fn transform(ctx: &Ctx<'_>, t: &S<Vec<S<def::TransformDef>>>, p: &str) -> Result
                     "non-finite matrix entry",
                 ));
             }
+            if *rows[3] != [0.0, 0.0, 0.0, 1.0] {
+                return Err(ctx.err(
+                    &mx.span(),
+                    &format!("{f}.matrix"),
+                    format!(
+                        "not an affine transform: the last row must be [0, 0, 0, 1], got {:?}",
+                        *rows[3]
+                    ),
+                ));
+            }
             let r = |i: usize| Vec4::from_array(*rows[i]);
             (
                 Mat4::from_cols(r(0), r(1), r(2), r(3)).transpose(),

@@ -282,9 +282,19 @@ impl Source<'_> {
         let span = e.span().unwrap_or(0..0);
         let field = backticked_field(&msg)
             .or_else(|| self.key_before(span.start))
-            .map(|f| match self.table_path(span.start) {
-                Some(t) => format!("{t}.{f}"),
-                None => f,
+            .map(|f| {
+                // An unknown table (`[[lights]]`): the span is its header and the key is the
+                // header's own last name, so the field's parent is the header's parent.
+                let header = self.header_at(span.start);
+                let own = header.as_deref().and_then(|h| {
+                    let (parent, last) = h.rsplit_once('.').unwrap_or(("", h));
+                    (last.trim_matches('"') == f).then_some(parent)
+                });
+                match (own, self.table_path(span.start)) {
+                    (Some(""), _) | (None, None) => f,
+                    (Some(parent), _) => format!("{parent}.{f}"),
+                    (None, Some(t)) => format!("{t}.{f}"),
+                }
             });
         let mut at = Location::file(self.path);
         if e.span().is_some() {
@@ -330,6 +340,20 @@ impl Source<'_> {
             }
         }
         current
+    }
+
+    /// The dotted name of the `[table]` or `[[array]]` header on the line holding byte `at`,
+    /// if that line is one.
+    fn header_at(&self, at: usize) -> Option<String> {
+        let at = floor_boundary(self.text, at);
+        let start = self.text[..at].rfind('\n').map_or(0, |i| i + 1);
+        let rest = self.text.get(start..)?;
+        let line = rest.split('\n').next()?.split('#').next()?.trim();
+        let name = line
+            .strip_prefix("[[")
+            .and_then(|r| r.strip_suffix("]]"))
+            .or_else(|| line.strip_prefix('[').and_then(|r| r.strip_suffix(']')))?;
+        Some(name.trim().to_string())
     }
 
     /// The key of a `key = value` line whose value starts at `at`.
