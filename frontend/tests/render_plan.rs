@@ -111,6 +111,34 @@ fn one_mirror_sphere_adds_reflection_rays_only_where_it_is_seen() {
     assert_eq!(out.counts.refraction, 0);
 }
 
+/// A light of zero intensity (or colour) contributes nothing: no shadow rays are cast towards
+/// it, `--explain` says why, and the picture equals the forced one (which does cast them).
+#[test]
+fn dark_lights_cast_no_shadow_rays() {
+    let shadowed = MATTE.replacen("cast_shadows = false", "cast_shadows = true", 2);
+    let dark = shadowed.replacen("intensity = 30", "intensity = 0", 1);
+    let s = scene(&dark);
+    let plan = EffectPlan::derive(&s, false);
+    assert_eq!(plan.shadow_rays, vec![false, true]);
+    let explain = plan.explain(&s);
+    assert!(explain.contains("zero intensity"), "{explain}");
+    let out = render(&s, &RenderOptions::default());
+    // Control: the same scene with the light lit casts shadow rays towards both.
+    let lit = scene(&shadowed);
+    assert_eq!(
+        EffectPlan::derive(&lit, false).shadow_rays,
+        vec![true, true]
+    );
+    let lit_out = render(&lit, &RenderOptions::default());
+    assert!(out.counts.shadow > 0 && lit_out.counts.shadow > out.counts.shadow);
+    assert_same_picture(&s, "dark light");
+    let zero_colour = shadowed.replacen("intensity = 30", "intensity = 30\ncolor = [0, 0, 0]", 1);
+    assert_eq!(
+        EffectPlan::derive(&scene(&zero_colour), false).shadow_rays,
+        vec![false, true]
+    );
+}
+
 fn assert_same_picture(s: &Scene, what: &str) {
     for mode in [Mode::Color, Mode::Normal, Mode::Depth] {
         let opts = RenderOptions {

@@ -10,7 +10,8 @@ use std::fmt::Write as _;
 /// What the renderer will simulate.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct EffectPlan {
-    /// Per light: cast shadow rays towards it.
+    /// Per light: cast shadow rays towards it (not for `cast_shadows = false`, nor for a light
+    /// of zero intensity or colour, whose contribution is zero lit or not).
     pub shadow_rays: Vec<bool>,
     /// Per material: evaluate the Blinn–Phong specular term.
     pub specular: Vec<bool>,
@@ -46,7 +47,7 @@ impl EffectPlan {
             shadow_rays: scene
                 .lights
                 .iter()
-                .map(|l| force_all || l.cast_shadows)
+                .map(|l| force_all || (l.cast_shadows && l.intensity != glam::Vec3::ZERO))
                 .collect(),
             specular: mats.iter().map(|m| force_all || m.has_specular()).collect(),
             reflect,
@@ -102,7 +103,15 @@ impl EffectPlan {
         };
         let nl = scene.lights.len();
         let on = names(&|i| self.shadow_rays[i], nl, &light_label);
-        let off = names(&|i| !self.shadow_rays[i], nl, &light_label);
+        let off_label = |i: usize| {
+            let why = if scene.lights[i].intensity == glam::Vec3::ZERO {
+                "zero intensity or colour: contributes nothing"
+            } else {
+                "cast_shadows = false"
+            };
+            format!("{} ({why})", light_label(i))
+        };
+        let off = names(&|i| !self.shadow_rays[i], nl, &off_label);
         let _ = writeln!(
             s,
             "  shadow rays      {}{}",
@@ -114,7 +123,7 @@ impl EffectPlan {
             if off.is_empty() {
                 String::new()
             } else {
-                format!("; skipped for {} (cast_shadows = false)", off.join(", "))
+                format!("; skipped for {}", off.join(", "))
             }
         );
         let nm = scene.materials.len();
