@@ -111,6 +111,36 @@ fn one_mirror_sphere_adds_reflection_rays_only_where_it_is_seen() {
     assert_eq!(out.counts.refraction, 0);
 }
 
+/// A mirror or glass material that no object uses turns nothing on: the plan follows the
+/// objects, not the declarations.
+#[test]
+fn unused_materials_turn_no_effect_on() {
+    let extra = "\n[material.unused_mirror]\ndiffuse = [0.1, 0.1, 0.1]\nmirror = 0.9\nspecular = [1, 1, 1]\n\n[material.unused_glass]\ntransparency = 0.9\nior = 1.5\n";
+    let s = scene(&format!("{MATTE}{extra}"));
+    let plan = EffectPlan::derive(&s, false);
+    assert_eq!(plan.max_depth, 0);
+    assert!(
+        plan.reflect
+            .iter()
+            .chain(&plan.refract)
+            .chain(&plan.specular)
+            .all(|&b| !b)
+    );
+    let explain = plan.explain(&s);
+    assert!(
+        explain.contains("unused materials unused_glass, unused_mirror"),
+        "{explain}"
+    );
+    let out = render(&s, &RenderOptions::default());
+    assert_eq!(out.counts.total(), 64 * 48);
+    assert_same_picture(&s, "unused materials");
+    // Control: the same mirror material on the sphere turns reflection on.
+    let used =
+        format!("{MATTE}{extra}").replacen("material = \"red\"", "material = \"unused_mirror\"", 1);
+    let plan = EffectPlan::derive(&scene(&used), false);
+    assert!(plan.max_depth > 0 && plan.reflect.iter().any(|&b| b));
+}
+
 /// A light of zero intensity (or colour) contributes nothing: no shadow rays are cast towards
 /// it, `--explain` says why, and the picture equals the forced one (which does cast them).
 #[test]

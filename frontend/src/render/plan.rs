@@ -34,13 +34,17 @@ impl EffectPlan {
     /// The plan the scene calls for, or everything when `force_all`.
     pub fn derive(scene: &Scene, force_all: bool) -> Self {
         let mats = &scene.materials;
+        // Effects follow the materials objects use, not every material declared.
+        let used = scene.used_materials();
         let reflect: Vec<bool> = mats
             .iter()
-            .map(|m| force_all || m.mirror > 0.0 || m.transparency > 0.0)
+            .zip(&used)
+            .map(|(m, &u)| force_all || (u && (m.mirror > 0.0 || m.transparency > 0.0)))
             .collect();
         let refract: Vec<bool> = mats
             .iter()
-            .map(|m| force_all || m.transparency > 0.0)
+            .zip(&used)
+            .map(|(m, &u)| force_all || (u && m.transparency > 0.0))
             .collect();
         let recursive = reflect.iter().chain(&refract).any(|&b| b);
         Self {
@@ -49,7 +53,11 @@ impl EffectPlan {
                 .iter()
                 .map(|l| force_all || (l.cast_shadows && l.intensity != glam::Vec3::ZERO))
                 .collect(),
-            specular: mats.iter().map(|m| force_all || m.has_specular()).collect(),
+            specular: mats
+                .iter()
+                .zip(&used)
+                .map(|(m, &u)| force_all || (u && m.has_specular()))
+                .collect(),
             reflect,
             refract,
             max_depth: if recursive { scene.max_depth } else { 0 },
@@ -187,6 +195,20 @@ impl EffectPlan {
                 list(names(&|i| self.refract[i], nm, &refract_label))
             }
         );
+        let unused: Vec<String> = scene
+            .used_materials()
+            .iter()
+            .enumerate()
+            .filter(|&(_, &u)| !u)
+            .map(|(i, _)| mat(i))
+            .collect();
+        if !unused.is_empty() {
+            let _ = writeln!(
+                s,
+                "  unused materials {} (no object uses them: no effect of theirs is simulated)",
+                unused.join(", ")
+            );
+        }
         let _ = writeln!(
             s,
             "  recursion depth  {}",

@@ -220,6 +220,22 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Per material: whether some object (or CSG operand, at any depth) uses it.
+    pub fn used_materials(&self) -> Vec<bool> {
+        let mut used = vec![false; self.materials.len()];
+        let mut stack: Vec<&crate::render::geom::Node> = self.objects.iter().collect();
+        while let Some(n) = stack.pop() {
+            if let Some(u) = used.get_mut(n.material as usize) {
+                *u = true;
+            }
+            if let crate::render::geom::Shape::Csg(_, a, b) = &n.shape {
+                stack.push(a);
+                stack.push(b);
+            }
+        }
+        used
+    }
+
     /// Number of top-level CSG objects.
     pub fn csg_objects(&self) -> Vec<&str> {
         self.objects
