@@ -214,15 +214,18 @@ fn sigterm_during_a_render_leaves_no_temporary_file() {
 }
 
 /// Runs with stdout connected to a pipe whose reader is already gone.
+/// Runs with stdout a pipe whose read end is closed before the child starts, so its very first
+/// write fails (a read end closed after the spawn lets a fast command print everything into
+/// the pipe's buffer first and exit 0).
 fn run_into_closed_pipe(args: &[&std::ffi::OsStr]) -> Output {
-    let mut child = Command::new(BIN)
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    Command::new(BIN)
         .args(args)
-        .stdout(Stdio::piped())
+        .stdout(writer)
         .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    drop(child.stdout.take());
-    child.wait_with_output().unwrap()
+        .output()
+        .unwrap()
 }
 
 fn run_into_dev_full(args: &[&std::ffi::OsStr]) -> Output {
