@@ -219,26 +219,365 @@ pub enum PositionError {
     NonFinite,
 }
 
-macro_rules! display_via_debug {
-    ($($t:ty => $what:literal),* $(,)?) => {$(
-        impl fmt::Display for $t {
-            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                write!(f, concat!($what, ": {:?}"), self)
-            }
-        }
-        impl core::error::Error for $t {}
-    )*};
+impl fmt::Display for ElementKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Vertex => "vertex",
+            Self::Edge => "edge",
+            Self::Face => "face",
+        })
+    }
 }
 
-display_via_debug!(
-    CapacityError => "half-edge mesh capacity exceeded",
-    BuildError => "cannot build half-edge mesh",
-    InvariantError => "half-edge invariant broken",
-    FlipError => "edge flip refused",
-    SplitError => "edge split refused",
-    CollapseError => "edge collapse refused",
-    SubdivideError => "Loop subdivision refused",
-    ExportError => "half-edge export failed",
-    DiffuseError => "diffusion refused",
-    PositionError => "position refused",
-);
+impl fmt::Display for CapacityError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "half-edge mesh capacity exceeded: {} {} slots needed, {} available",
+            self.needed, self.kind, self.available
+        )
+    }
+}
+
+impl fmt::Display for BuildError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Capacity(c) => write!(f, "cannot build half-edge mesh: {c}"),
+            Self::ScratchTooSmall { needed, provided } => write!(
+                f,
+                "cannot build half-edge mesh: scratch of {provided} entries, {needed} needed"
+            ),
+            Self::NonFinitePosition { vertex } => {
+                write!(f, "vertex {} has a NaN or infinite coordinate", vertex.0)
+            }
+            Self::IndexOutOfRange { face, index } => {
+                write!(
+                    f,
+                    "triangle {} refers to vertex {index}, which does not exist",
+                    face.0
+                )
+            }
+            Self::RepeatedIndex { face, vertex } => {
+                write!(f, "triangle {} uses vertex {} twice", face.0, vertex.0)
+            }
+            Self::NonManifoldEdge { a, b } => write!(
+                f,
+                "edge between vertices {} and {} is shared by more than two triangles",
+                a.0, b.0
+            ),
+            Self::InconsistentOrientation { a, b } => write!(
+                f,
+                "two triangles both run from vertex {} to vertex {}: neighbours disagree on the orientation (or a face is repeated)",
+                a.0, b.0
+            ),
+            Self::NonManifoldVertex { vertex } => write!(
+                f,
+                "the triangles around vertex {} form more than one fan (a pinch or bowtie vertex)",
+                vertex.0
+            ),
+        }
+    }
+}
+
+impl fmt::Display for InvariantError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("half-edge invariant broken: ")?;
+        match *self {
+            Self::FreeList(k) => write!(f, "the {k} free list is corrupt"),
+            Self::HalfedgePair(e) => write!(f, "exactly one halfedge of edge {} is dead", e.0),
+            Self::DanglingLink(h) => {
+                write!(f, "halfedge {} links to a dead or missing element", h.0)
+            }
+            Self::NextPrev(h) => write!(f, "next/prev of halfedge {} do not match", h.0),
+            Self::SelfLoop(h) => write!(f, "halfedge {} starts and ends at the same vertex", h.0),
+            Self::HeadTail(h) => write!(f, "halfedge {} does not end where its next starts", h.0),
+            Self::FaceHalfedge(t) => write!(f, "face {} has a bad halfedge", t.0),
+            Self::FaceCycle(t) => write!(f, "face {} is not a cycle of three halfedges", t.0),
+            Self::IsolatedEdge(e) => write!(f, "edge {} has no face on either side", e.0),
+            Self::BoundaryCycle(h) => {
+                write!(f, "boundary loop through halfedge {} is not closed", h.0)
+            }
+            Self::VertexHalfedge(v) => write!(f, "vertex {} has a bad outgoing halfedge", v.0),
+            Self::VertexFan(v) => write!(f, "the fan around vertex {} does not close", v.0),
+            Self::BoundaryVertexConvention(v) => write!(
+                f,
+                "boundary vertex {} does not store its boundary halfedge",
+                v.0
+            ),
+            Self::NonManifoldVertex(v) => {
+                write!(
+                    f,
+                    "vertex {} has more than one outgoing boundary halfedge",
+                    v.0
+                )
+            }
+            Self::DuplicateEdge(v) => {
+                write!(f, "two edges join the same vertices at vertex {}", v.0)
+            }
+            Self::NonFinitePosition(v) => {
+                write!(f, "vertex {} has a NaN or infinite coordinate", v.0)
+            }
+        }
+    }
+}
+
+impl fmt::Display for FlipError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("edge flip refused: ")?;
+        match *self {
+            Self::Dead => f.write_str("the edge does not exist"),
+            Self::Boundary => f.write_str("the edge is on the boundary"),
+            Self::WingsCoincide => f.write_str("its two opposite vertices are the same vertex"),
+            Self::DuplicateEdge => {
+                f.write_str("its opposite vertices are already joined by an edge")
+            }
+            Self::DegreeTooLow(v) => {
+                write!(
+                    f,
+                    "vertex {} would be left with fewer than three edges",
+                    v.0
+                )
+            }
+        }
+    }
+}
+
+impl fmt::Display for SplitError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Dead => f.write_str("edge split refused: the edge does not exist"),
+            Self::NonFinitePosition => f.write_str("edge split refused: the point is not finite"),
+            Self::Capacity(c) => write!(f, "edge split refused: {c}"),
+            Self::WingsCoincide => f.write_str(
+                "edge split refused: both faces share their opposite vertex (the new edges would coincide)",
+            ),
+        }
+    }
+}
+
+impl fmt::Display for CollapseError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("edge collapse refused: ")?;
+        match *self {
+            Self::Dead => f.write_str("the halfedge does not exist"),
+            Self::LinkCondition(v) => write!(
+                f,
+                "link condition: vertex {} is adjacent to both endpoints but is not a wing vertex",
+                v.0
+            ),
+            Self::WingsCoincide => f.write_str("both faces have the same opposite vertex"),
+            Self::Ear(t) => write!(f, "face {} has its two other edges on the boundary", t.0),
+            Self::InteriorEdgeJoinsBoundaries => {
+                f.write_str("the edge is interior but joins two boundary vertices (would pinch)")
+            }
+            Self::WingValence(v) => {
+                write!(f, "interior wing vertex {} would drop to valence 2", v.0)
+            }
+            Self::FoldOver(t) => write!(f, "face {} would flip over", t.0),
+            Self::NonFinitePosition => f.write_str("the target position is not finite"),
+        }
+    }
+}
+
+impl fmt::Display for SubdivideError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("Loop subdivision refused: ")?;
+        match *self {
+            Self::NotCompact => f.write_str("the mesh has deleted slots (compact it first)"),
+            Self::Capacity(c) => write!(f, "{c}"),
+            Self::NonFinitePosition => {
+                f.write_str("a new position would not be finite (coordinates too large)")
+            }
+            Self::CoincidentFaces(e) => write!(
+                f,
+                "the two faces on edge {} have the same three vertices",
+                e.0
+            ),
+        }
+    }
+}
+
+impl fmt::Display for ExportError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::BufferTooSmall {
+                positions,
+                triangles,
+            } => write!(
+                f,
+                "half-edge export failed: buffers too small ({positions} positions and {triangles} triangles needed)"
+            ),
+        }
+    }
+}
+
+impl fmt::Display for DiffuseError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Dead => f.write_str("diffusion refused: the vertex does not exist"),
+            Self::NonFinite => {
+                f.write_str("diffusion refused: the step or a resulting position is not finite")
+            }
+            Self::ScratchTooSmall { needed } => write!(
+                f,
+                "diffusion refused: scratch shorter than the {needed} vertex slots in use"
+            ),
+        }
+    }
+}
+
+impl fmt::Display for PositionError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Dead => "position refused: the vertex does not exist",
+            Self::NonFinite => "position refused: not finite",
+        })
+    }
+}
+
+impl core::error::Error for CapacityError {}
+impl core::error::Error for BuildError {}
+impl core::error::Error for InvariantError {}
+impl core::error::Error for FlipError {}
+impl core::error::Error for SplitError {}
+impl core::error::Error for CollapseError {}
+impl core::error::Error for SubdivideError {}
+impl core::error::Error for ExportError {}
+impl core::error::Error for DiffuseError {}
+impl core::error::Error for PositionError {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::format;
+    use std::string::String;
+    use std::vec;
+    use std::vec::Vec;
+
+    /// Every message, as a user of the CLI sees it, is a sentence: it never falls back to
+    /// the `Debug` form (braces, `Id(..)` wrappers or the variant's Rust name).
+    #[test]
+    fn messages_are_sentences_not_debug_forms() {
+        let (v, e, h, t) = (VertexId(7), EdgeId(8), HalfedgeId(9), FaceId(10));
+        let cap = CapacityError {
+            kind: ElementKind::Edge,
+            needed: 12,
+            available: 3,
+        };
+        let mut all: Vec<(String, String)> = Vec::new();
+        let mut push = |debug: String, display: String| all.push((debug, display));
+        for x in [
+            BuildError::Capacity(cap),
+            BuildError::ScratchTooSmall {
+                needed: 5,
+                provided: 1,
+            },
+            BuildError::NonFinitePosition { vertex: v },
+            BuildError::IndexOutOfRange { face: t, index: 99 },
+            BuildError::RepeatedIndex { face: t, vertex: v },
+            BuildError::NonManifoldEdge {
+                a: v,
+                b: VertexId(3),
+            },
+            BuildError::InconsistentOrientation {
+                a: v,
+                b: VertexId(3),
+            },
+            BuildError::NonManifoldVertex { vertex: v },
+        ] {
+            push(format!("{x:?}"), format!("{x}"));
+        }
+        for x in [
+            InvariantError::FreeList(ElementKind::Face),
+            InvariantError::HalfedgePair(e),
+            InvariantError::DanglingLink(h),
+            InvariantError::NextPrev(h),
+            InvariantError::SelfLoop(h),
+            InvariantError::HeadTail(h),
+            InvariantError::FaceHalfedge(t),
+            InvariantError::FaceCycle(t),
+            InvariantError::IsolatedEdge(e),
+            InvariantError::BoundaryCycle(h),
+            InvariantError::VertexHalfedge(v),
+            InvariantError::VertexFan(v),
+            InvariantError::BoundaryVertexConvention(v),
+            InvariantError::NonManifoldVertex(v),
+            InvariantError::DuplicateEdge(v),
+            InvariantError::NonFinitePosition(v),
+        ] {
+            push(format!("{x:?}"), format!("{x}"));
+        }
+        for x in [
+            FlipError::Dead,
+            FlipError::Boundary,
+            FlipError::WingsCoincide,
+            FlipError::DuplicateEdge,
+            FlipError::DegreeTooLow(v),
+        ] {
+            push(format!("{x:?}"), format!("{x}"));
+        }
+        for x in [
+            SplitError::Dead,
+            SplitError::NonFinitePosition,
+            SplitError::Capacity(cap),
+            SplitError::WingsCoincide,
+        ] {
+            push(format!("{x:?}"), format!("{x}"));
+        }
+        for x in [
+            CollapseError::Dead,
+            CollapseError::LinkCondition(v),
+            CollapseError::WingsCoincide,
+            CollapseError::Ear(t),
+            CollapseError::InteriorEdgeJoinsBoundaries,
+            CollapseError::WingValence(v),
+            CollapseError::FoldOver(t),
+            CollapseError::NonFinitePosition,
+        ] {
+            push(format!("{x:?}"), format!("{x}"));
+        }
+        for x in [
+            SubdivideError::NotCompact,
+            SubdivideError::Capacity(cap),
+            SubdivideError::NonFinitePosition,
+            SubdivideError::CoincidentFaces(e),
+        ] {
+            push(format!("{x:?}"), format!("{x}"));
+        }
+        let x = ExportError::BufferTooSmall {
+            positions: 4,
+            triangles: 2,
+        };
+        push(format!("{x:?}"), format!("{x}"));
+        for x in [
+            DiffuseError::Dead,
+            DiffuseError::NonFinite,
+            DiffuseError::ScratchTooSmall { needed: 6 },
+        ] {
+            push(format!("{x:?}"), format!("{x}"));
+        }
+        for x in [PositionError::Dead, PositionError::NonFinite] {
+            push(format!("{x:?}"), format!("{x}"));
+        }
+        push(format!("{cap:?}"), format!("{cap}"));
+
+        let mut seen = vec![];
+        for (debug, display) in &all {
+            let variant: String = debug
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric())
+                .collect();
+            assert!(!display.contains(['{', '}']), "{debug}: {display}");
+            assert!(!display.contains("Id("), "{debug}: {display}");
+            assert!(!display.contains(&*variant), "{debug}: {display}");
+            assert!(
+                !seen.contains(display),
+                "two errors read the same: {display}"
+            );
+            seen.push(display.clone());
+        }
+        // The offending element is named by its number.
+        assert!(format!("{}", FlipError::DegreeTooLow(v)).contains(" 7 "));
+        assert!(format!("{cap}").contains("12") && format!("{cap}").contains('3'));
+    }
+}
