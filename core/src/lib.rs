@@ -55,3 +55,5 @@ pub use error::{GeometryError, RayError};
 pub use glam::{Mat3, Mat4, Vec2, Vec3};
 pub use hit::{Hit, spawn_ray, spawn_ray_between, spawn_ray_to};
 pub use ray::Ray;
+/// The SIMD level of the wide-BVH node test, chosen by the caller at run time.
+pub use simd::level as simd_level;

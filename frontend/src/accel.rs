@@ -141,10 +141,11 @@ pub fn closest_simd<I: TriangleIntersector>(
 ) -> Option<(u32, TriangleHit)> {
     STACK.with_borrow_mut(|stack| {
         #[cfg(target_arch = "x86_64")]
-        if crate::simd::x86_avx2_fma() {
-            // SAFETY: the CPU supports AVX2 and FMA (checked at run time just above), which is
-            // the only requirement of calling a `#[target_feature(enable = "avx2,fma")]` fn.
-            return unsafe { x86::closest(bvh, stack, isect, ray, stats) };
+        if let Some(level) = crate::simd::avx2_fma() {
+            // SAFETY: the token exists, so the CPU supports AVX2 and FMA (checked at run
+            // time), the only requirement of calling a `#[target_feature(enable = "avx2,fma")]`
+            // fn.
+            return unsafe { x86::closest(level, bvh, stack, isect, ray, stats) };
         }
         bvh.closest_hit_triangles_with(stack, isect, ray, stats)
     })
@@ -159,9 +160,9 @@ pub fn any_simd<I: TriangleIntersector>(
 ) -> Option<(u32, TriangleHit)> {
     STACK.with_borrow_mut(|stack| {
         #[cfg(target_arch = "x86_64")]
-        if crate::simd::x86_avx2_fma() {
+        if let Some(level) = crate::simd::avx2_fma() {
             // SAFETY: as in `closest_simd`: AVX2 and FMA were detected at run time.
-            return unsafe { x86::any(bvh, stack, isect, ray) };
+            return unsafe { x86::any(level, bvh, stack, isect, ray) };
         }
         bvh.any_hit_triangles_with(stack, isect, ray, None)
     })
@@ -173,26 +174,29 @@ mod x86 {
     use halfray_core::Ray;
     use halfray_core::bvh::TraversalStats;
     use halfray_core::bvh::wide::WideStack;
+    use halfray_core::simd_level::Avx2Fma;
     use halfray_core::triangle::{TriangleHit, TriangleIntersector};
 
     #[target_feature(enable = "avx2,fma")]
     pub(super) fn closest<I: TriangleIntersector>(
+        level: Avx2Fma,
         bvh: &VecBvh8,
         stack: &mut WideStack,
         isect: &I,
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
-        bvh.closest_hit_triangles_with(stack, isect, ray, stats)
+        bvh.closest_hit_triangles_on(level, stack, isect, ray, stats)
     }
 
     #[target_feature(enable = "avx2,fma")]
     pub(super) fn any<I: TriangleIntersector>(
+        level: Avx2Fma,
         bvh: &VecBvh8,
         stack: &mut WideStack,
         isect: &I,
         ray: &Ray,
     ) -> Option<(u32, TriangleHit)> {
-        bvh.any_hit_triangles_with(stack, isect, ray, None)
+        bvh.any_hit_triangles_on(level, stack, isect, ray, None)
     }
 }

@@ -18,6 +18,16 @@ pub fn x86_avx2_fma() -> bool {
     }
 }
 
+/// The AVX2 + FMA token of the core's node kernels when the CPU has both (x86-64 only).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[must_use]
+pub fn avx2_fma() -> Option<halfray_core::simd_level::Avx2Fma> {
+    // SAFETY: made only after the run-time check that this CPU supports AVX2 and FMA, the
+    // token's one requirement.
+    x86_avx2_fma().then(|| unsafe { halfray_core::simd_level::Avx2Fma::new_unchecked() })
+}
+
 /// The SIMD level queries run with on this CPU, for reports: `"avx2+fma"` or `"sse2"`
 /// (x86-64), or `"portable"` elsewhere.
 #[must_use]

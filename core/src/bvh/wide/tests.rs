@@ -114,9 +114,26 @@ fn check_against_brute<const W: usize>(n: usize, seed: u64, max_leaf: u32) {
             assert_eq!(Watertight.intersect(&ray, &v).map(|x| x.t), Some(h.t));
         }
         hits += usize::from(got.is_some());
+        same_at_every_level(&w, &ray);
     }
     let want = if n >= 300 { 500 } else { 1 };
     assert!(hits >= want, "the rays must hit something: {hits} of 3000");
+}
+
+/// The AVX2 node kernel (where the CPU has it) gives the portable answers and statistics.
+fn same_at_every_level<const W: usize>(w: &VecWide<W>, ray: &Ray) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(level) = crate::simd_level::Avx2Fma::detect() {
+        let mut stack = WideStack::new();
+        let (mut a, mut b) = (TraversalStats::default(), TraversalStats::default());
+        let portable = w.closest_hit_triangles_with(&mut stack, &Watertight, ray, Some(&mut a));
+        let simd = w.closest_hit_triangles_on(level, &mut stack, &Watertight, ray, Some(&mut b));
+        assert_eq!(portable, simd, "{ray:?}");
+        assert_eq!(a, b, "{ray:?}");
+        let portable = w.any_hit_triangles_with(&mut stack, &Watertight, ray, None);
+        let simd = w.any_hit_triangles_on(level, &mut stack, &Watertight, ray, None);
+        assert_eq!(portable, simd, "{ray:?}");
+    }
 }
 
 #[test]

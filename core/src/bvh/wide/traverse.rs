@@ -7,6 +7,7 @@ use crate::bvh::stats::TraversalStats;
 use crate::bvh::{cull_bound, improves, projection_pad};
 use crate::ray::Ray;
 use crate::simd;
+use crate::simd::level::{Portable, SimdLevel};
 use crate::triangle::{LANES, TriangleHit, TriangleIntersector, TriangleLanes};
 use glam::Vec3;
 
@@ -65,8 +66,9 @@ impl WideRay {
     // Lane loops are indexed: the form the compiler turns into vector instructions.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn hit<const W: usize, const GENERAL: bool>(
+    fn hit<const W: usize, const GENERAL: bool, L: SimdLevel>(
         &self,
+        level: L,
         node: &WideNode<W>,
         t_min: f32,
         t_max: f32,
@@ -75,9 +77,13 @@ impl WideRay {
             let dist = self.hit_general(node, t_min, t_max);
             return (dist, simd::mask_le(&dist, &[f32::MAX; W]));
         }
-        let mut t_enter = [t_min; W];
         // Capped at the largest finite `f32`, so that an entry at `+∞` is never hit.
-        let mut t_exit = [t_max.min(f32::MAX); W];
+        let t_max = t_max.min(f32::MAX);
+        if let Some(hit) = self.hit8(level, node, t_min, t_max) {
+            return hit;
+        }
+        let mut t_enter = [t_min; W];
+        let mut t_exit = [t_max; W];
         for axis in 0..3 {
             let n = self.near[axis];
             let lo = &node.bounds[n][axis];
@@ -99,6 +105,34 @@ impl WideRay {
             }
         }
         (t_enter, simd::mask_le(&t_enter, &t_exit))
+    }
+
+    /// [`WideRay::hit`] by `level`'s eight-lane kernel, for `W = 8` when the level has one
+    /// (same operations, same result).
+    #[inline(always)]
+    fn hit8<const W: usize, L: SimdLevel>(
+        &self,
+        level: L,
+        node: &WideNode<W>,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<([f32; W], u32)> {
+        let lanes =
+            |n: usize, axis: usize| <&[f32; 8]>::try_from(&node.bounds.get(n)?.get(axis)?[..]).ok();
+        let [nx, ny, nz] = self.near;
+        let lo = [lanes(nx, 0)?, lanes(ny, 1)?, lanes(nz, 2)?];
+        let hi = [lanes(1 - nx, 0)?, lanes(1 - ny, 1)?, lanes(1 - nz, 2)?];
+        let (dist, mask) = level.slab8(
+            lo,
+            hi,
+            self.origin_near,
+            self.origin_far,
+            self.inv_dir,
+            SLAB_FAR_SCALE,
+            t_min,
+            t_max,
+        )?;
+        Some((core::array::from_fn(|i| dist[i & 7]), mask))
     }
 
     /// [`WideRay::hit`] for rays with an overflowing reciprocal or `t_min < 0`:
@@ -253,7 +287,13 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, false>(&mut WideStack::new(), ray, ClosureTest(intersect), stats)
+        self.traverse::<H, false, _>(
+            Portable,
+            &mut WideStack::new(),
+            ray,
+            ClosureTest(intersect),
+            stats,
+        )
     }
 
     /// [`WideBvh::closest_hit`] on a stack the caller keeps across rays.
@@ -265,7 +305,7 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, false>(stack, ray, ClosureTest(intersect), stats)
+        self.traverse::<H, false, _>(Portable, stack, ray, ClosureTest(intersect), stats)
     }
 
     /// Any hit of `ray`: traversal stops at the first triangle for which `intersect` reports a
@@ -278,7 +318,13 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, true>(&mut WideStack::new(), ray, ClosureTest(intersect), stats)
+        self.traverse::<H, true, _>(
+            Portable,
+            &mut WideStack::new(),
+            ray,
+            ClosureTest(intersect),
+            stats,
+        )
     }
 
     /// [`WideBvh::any_hit`] on a stack the caller keeps across rays.
@@ -290,7 +336,7 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, true>(stack, ray, ClosureTest(intersect), stats)
+        self.traverse::<H, true, _>(Portable, stack, ray, ClosureTest(intersect), stats)
     }
 
     /// [`WideBvh::closest_hit`] with the intersector `isect` (prepared once per ray).
@@ -313,8 +359,28 @@ where
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
+        self.closest_hit_triangles_on(Portable, stack, isect, ray, stats)
+    }
+
+    /// [`WideBvh::closest_hit_triangles_with`] with the node test at SIMD `level` (see
+    /// [`crate::simd_level`]): the same answer and statistics at every level.
+    #[inline(always)]
+    pub fn closest_hit_triangles_on<I: TriangleIntersector, L: SimdLevel>(
+        &self,
+        level: L,
+        stack: &mut WideStack,
+        isect: &I,
+        ray: &Ray,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, TriangleHit)> {
         let pre = isect.prepare(ray)?;
-        self.traverse::<TriangleHit, false>(stack, ray, PreparedTest { isect, pre }, stats)
+        self.traverse::<TriangleHit, false, L>(
+            level,
+            stack,
+            ray,
+            PreparedTest { isect, pre },
+            stats,
+        )
     }
 
     /// [`WideBvh::any_hit`] with the intersector `isect`.
@@ -337,13 +403,27 @@ where
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
+        self.any_hit_triangles_on(Portable, stack, isect, ray, stats)
+    }
+
+    /// [`WideBvh::any_hit_triangles_with`] with the node test at SIMD `level`.
+    #[inline(always)]
+    pub fn any_hit_triangles_on<I: TriangleIntersector, L: SimdLevel>(
+        &self,
+        level: L,
+        stack: &mut WideStack,
+        isect: &I,
+        ray: &Ray,
+        stats: Option<&mut TraversalStats>,
+    ) -> Option<(u32, TriangleHit)> {
         let pre = isect.prepare(ray)?;
-        self.traverse::<TriangleHit, true>(stack, ray, PreparedTest { isect, pre }, stats)
+        self.traverse::<TriangleHit, true, L>(level, stack, ray, PreparedTest { isect, pre }, stats)
     }
 
     #[inline(always)]
-    fn traverse<H, const ANY: bool>(
+    fn traverse<H, const ANY: bool, L: SimdLevel>(
         &self,
+        level: L,
         stack: &mut WideStack,
         ray: &Ray,
         leaf: impl LeafTest<H>,
@@ -351,9 +431,9 @@ where
     ) -> Option<(u32, H)> {
         let slab = SlabRay::new(ray)?;
         if slab.divide || ray.t_min < 0.0 {
-            self.walk::<H, ANY, true>(&mut stack.entries, ray, &slab, leaf, stats)
+            self.walk::<H, ANY, true, L>(level, &mut stack.entries, ray, &slab, leaf, stats)
         } else {
-            self.walk::<H, ANY, false>(&mut stack.entries, ray, &slab, leaf, stats)
+            self.walk::<H, ANY, false, L>(level, &mut stack.entries, ray, &slab, leaf, stats)
         }
     }
 
@@ -433,8 +513,9 @@ where
     }
 
     #[inline(always)]
-    fn walk<H, const ANY: bool, const GENERAL: bool>(
+    fn walk<H, const ANY: bool, const GENERAL: bool, L: SimdLevel>(
         &self,
+        level: L,
         stack: &mut [Entry; STACK],
         ray: &Ray,
         slab: &SlabRay,
@@ -458,8 +539,12 @@ where
                 ChildRef::Inner(index) => {
                     if let Some(node) = nodes.get(index as usize) {
                         local.nodes_visited += 1;
-                        let (dist, mut mask) =
-                            wray.hit::<W, GENERAL>(node, cur.t_min, cull_bound(cur.t_max));
+                        let (dist, mut mask) = wray.hit::<W, GENERAL, L>(
+                            level,
+                            node,
+                            cur.t_min,
+                            cull_bound(cur.t_max),
+                        );
                         if mask != 0 {
                             // `W` is a power of two: `& (W − 1)` keeps every lane index in
                             // range without a check.

@@ -73,6 +73,8 @@ pub(crate) fn mask_le<const W: usize>(a: &[f32; W], b: &[f32; W]) -> u32 {
     mask
 }
 
+pub mod level;
+
 #[cfg(target_arch = "x86_64")]
 use core::arch::x86_64 as arch;
 

@@ -1,0 +1,261 @@
+//! The SIMD level a query runs at, chosen by the caller at run time: [`Portable`] (the
+//! baseline of the target, every CPU) or, on x86-64, [`Avx2Fma`], a token that proves the CPU
+//! has AVX2 and FMA. A `no_std` core cannot ask the CPU (`is_x86_feature_detected!` is in
+//! `std`), so the caller asks and hands in the token; the kernels behind it are
+//! `#[target_feature]` functions, which the compiler inlines into a caller compiled for the
+//! same features (the frontend's dispatched query functions) and calls otherwise.
+//!
+//! Every level computes **bit-identical** results: the same IEEE operations in the same order
+//! lane by lane, never a fused multiply-add (the padding arguments of the box test count plain
+//! roundings). Only the speed differs.
+
+/// A SIMD level for the 8-wide node test. Sealed: [`Portable`] and, on x86-64, [`Avx2Fma`].
+pub trait SimdLevel: Copy + sealed::Sealed {
+    /// The slab test of eight boxes at once, or `None` when this level has no kernel for it
+    /// (the caller then runs the portable lane loop, which gives the same result).
+    ///
+    /// `lo[axis]`/`hi[axis]` are the near/far bounds of the eight boxes along `axis` (already
+    /// swapped for a negative direction), `origin_near`/`origin_far` the ray origin shifted
+    /// by the box padding, `inv_dir` the reciprocal direction and `far_scale` the factor of
+    /// the far distances. Per lane: `t_enter = max((lo − on)·inv, …, t_min)`,
+    /// `t_exit = min((hi − of)·inv·far_scale, …, t_max)` with `max(a, b) = a > b ? a : b`
+    /// (a NaN `a` keeps `b`), and bit `i` of the mask set when `t_enter ≤ t_exit` (false for
+    /// NaN). Returns the entry distances and the mask.
+    #[allow(clippy::too_many_arguments)]
+    fn slab8(
+        self,
+        lo: [&[f32; 8]; 3],
+        hi: [&[f32; 8]; 3],
+        origin_near: [f32; 3],
+        origin_far: [f32; 3],
+        inv_dir: [f32; 3],
+        far_scale: f32,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<([f32; 8], u32)>;
+}
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for super::Portable {}
+    #[cfg(target_arch = "x86_64")]
+    impl Sealed for super::Avx2Fma {}
+}
+
+/// The baseline of the target: the portable lane loops, which the compiler vectorises for
+/// the target features of the calling function (SSE2 on plain x86-64).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Portable;
+
+impl SimdLevel for Portable {
+    #[inline(always)]
+    fn slab8(
+        self,
+        _: [&[f32; 8]; 3],
+        _: [&[f32; 8]; 3],
+        _: [f32; 3],
+        _: [f32; 3],
+        _: [f32; 3],
+        _: f32,
+        _: f32,
+        _: f32,
+    ) -> Option<([f32; 8], u32)> {
+        None
+    }
+}
+
+/// Proof that the CPU running the program has AVX2 and FMA: eight-lane node tests in one
+/// 256-bit register per plane. Only [`Avx2Fma::new_unchecked`] makes one.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Avx2Fma(());
+
+#[cfg(target_arch = "x86_64")]
+impl Avx2Fma {
+    /// The token.
+    ///
+    /// # Safety
+    /// Every CPU that runs code holding the token must support AVX2 and FMA (in `std`:
+    /// `is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")`); the kernels
+    /// execute those instructions unconditionally.
+    #[must_use]
+    pub const unsafe fn new_unchecked() -> Self {
+        Self(())
+    }
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+impl Avx2Fma {
+    /// The token when this CPU has AVX2 and FMA (tests run with `std`).
+    pub(crate) fn detect() -> Option<Self> {
+        let yes = std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("fma");
+        // SAFETY: made only after the run-time check above.
+        yes.then(|| unsafe { Self::new_unchecked() })
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl SimdLevel for Avx2Fma {
+    #[inline(always)]
+    fn slab8(
+        self,
+        lo: [&[f32; 8]; 3],
+        hi: [&[f32; 8]; 3],
+        origin_near: [f32; 3],
+        origin_far: [f32; 3],
+        inv_dir: [f32; 3],
+        far_scale: f32,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<([f32; 8], u32)> {
+        // SAFETY: the token exists, so the CPU supports AVX2 and FMA (the contract of
+        // `Avx2Fma::new_unchecked`), the only requirement of calling a function compiled for
+        // them.
+        Some(unsafe {
+            slab8_avx2(
+                lo,
+                hi,
+                origin_near,
+                origin_far,
+                inv_dir,
+                far_scale,
+                t_min,
+                t_max,
+            )
+        })
+    }
+}
+
+/// [`SimdLevel::slab8`] in 256-bit registers.
+#[cfg(target_arch = "x86_64")]
+#[allow(clippy::too_many_arguments)]
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+fn slab8_avx2(
+    lo: [&[f32; 8]; 3],
+    hi: [&[f32; 8]; 3],
+    origin_near: [f32; 3],
+    origin_far: [f32; 3],
+    inv_dir: [f32; 3],
+    far_scale: f32,
+    t_min: f32,
+    t_max: f32,
+) -> ([f32; 8], u32) {
+    use core::arch::x86_64::{
+        _CMP_LE_OQ, _mm256_cmp_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps,
+        _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_storeu_ps, _mm256_sub_ps,
+    };
+    let scale = _mm256_set1_ps(far_scale);
+    let mut t_enter = _mm256_set1_ps(t_min);
+    let mut t_exit = _mm256_set1_ps(t_max);
+    for axis in 0..3 {
+        // SAFETY: `lo[axis]` and `hi[axis]` are arrays of eight `f32`: each unaligned 32-byte
+        // load reads exactly their elements.
+        let (l, h) = unsafe {
+            (
+                _mm256_loadu_ps(lo[axis].as_ptr()),
+                _mm256_loadu_ps(hi[axis].as_ptr()),
+            )
+        };
+        let inv = _mm256_set1_ps(inv_dir[axis]);
+        let t_near = _mm256_mul_ps(_mm256_sub_ps(l, _mm256_set1_ps(origin_near[axis])), inv);
+        let t_far = _mm256_mul_ps(
+            _mm256_mul_ps(_mm256_sub_ps(h, _mm256_set1_ps(origin_far[axis])), inv),
+            scale,
+        );
+        // `maxps(a, b)` is `a > b ? a : b` and `minps(a, b)` is `a < b ? a : b`: the
+        // portable loop's selects, NaN handling included.
+        t_enter = _mm256_max_ps(t_near, t_enter);
+        t_exit = _mm256_min_ps(t_far, t_exit);
+    }
+    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t_enter, t_exit)) as u32;
+    let mut out = [0.0f32; 8];
+    // SAFETY: `out` is eight `f32`: the unaligned 32-byte store writes exactly them.
+    unsafe { _mm256_storeu_ps(out.as_mut_ptr(), t_enter) };
+    (out, mask)
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use super::*;
+    use crate::test_util::lcg;
+
+    /// The AVX2 kernel against the documented lane formula, bit for bit, on values with NaN,
+    /// `±∞`, `±0` and subnormals mixed in. Runs where the CPU has AVX2 and FMA (every CI
+    /// machine here); elsewhere there is no AVX2 code to run and the test says so.
+    #[test]
+    fn avx2_slab_equals_the_lane_formula() {
+        let Some(level) = Avx2Fma::detect() else {
+            std::eprintln!("no AVX2+FMA on this CPU: the AVX2 kernel cannot run here");
+            return;
+        };
+        let specials = [
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            0.0,
+            -0.0,
+            1e-40,
+            -3.0e38,
+        ];
+        let mut s = 7u64;
+        let value = |s: &mut u64| {
+            let r = lcg(s);
+            if r < 0.08 {
+                specials[(lcg(s) * specials.len() as f32) as usize % specials.len()]
+            } else {
+                (lcg(s) - 0.5) * 20.0
+            }
+        };
+        let mut hits = 0;
+        for _ in 0..20_000 {
+            let mut planes = [[0.0f32; 8]; 6];
+            for p in &mut planes {
+                for x in p.iter_mut() {
+                    *x = value(&mut s);
+                }
+            }
+            let on: [f32; 3] = core::array::from_fn(|_| value(&mut s));
+            let of: [f32; 3] = core::array::from_fn(|_| value(&mut s));
+            let inv: [f32; 3] = core::array::from_fn(|_| value(&mut s));
+            let (t_min, t_max) = (value(&mut s).abs(), value(&mut s).abs() * 3.0);
+            let scale = 1.0 + 1e-6;
+            let lo = [&planes[0], &planes[1], &planes[2]];
+            let hi = [&planes[3], &planes[4], &planes[5]];
+            let (dist, mask) = level
+                .slab8(lo, hi, on, of, inv, scale, t_min, t_max)
+                .unwrap();
+            for i in 0..8 {
+                let (mut enter, mut exit) = (t_min, t_max);
+                for a in 0..3 {
+                    let near = (lo[a][i] - on[a]) * inv[a];
+                    let far = (hi[a][i] - of[a]) * inv[a] * scale;
+                    enter = if near > enter { near } else { enter };
+                    exit = if far < exit { far } else { exit };
+                }
+                assert_eq!(dist[i].to_bits(), enter.to_bits(), "lane {i}");
+                let hit = enter <= exit;
+                assert_eq!(mask >> i & 1 == 1, hit, "lane {i}");
+                hits += usize::from(hit);
+            }
+        }
+        assert!(
+            (1000..150_000).contains(&hits),
+            "both outcomes must occur: {hits} hits of 160000"
+        );
+        assert_eq!(
+            Portable.slab8(
+                [&[0.0; 8]; 3],
+                [&[0.0; 8]; 3],
+                [0.0; 3],
+                [0.0; 3],
+                [0.0; 3],
+                1.0,
+                0.0,
+                1.0
+            ),
+            None
+        );
+    }
+}
