@@ -43,32 +43,40 @@ fn as_leaf(nodes: &[BvhNode], b: u32) -> Option<core::ops::Range<usize>> {
     (total > 0 && hi - lo == total).then_some(lo..hi)
 }
 
-/// The binary nodes that become the children of the wide node made from binary node `b`: start
-/// with `b`'s two children and, while fewer than `W`, replace the inner one with the largest
-/// surface area (ties: the first) by its two children. A leaf `b` gives itself, alone.
-fn child_list<const W: usize>(nodes: &[BvhNode], b: u32) -> ([u32; W], usize) {
-    let mut list = [0u32; W];
+/// The children of the wide node made from binary node `b`: start with `b`'s two children
+/// and, while fewer than `W`, replace the inner one with the largest surface area (ties: the
+/// first) by its two children; each with its leaf run when it becomes a leaf ([`as_leaf`],
+/// computed once per entry). A `b` that is itself a leaf run (only the root can be: every
+/// other `b` was a non-leaf entry of its parent's list) gives itself, alone.
+fn child_list<const W: usize>(nodes: &[BvhNode], b: u32, is_root: bool) -> ChildList<W> {
+    let mut out = ChildList {
+        node: [0u32; W],
+        leaf: [const { None }; W],
+        len: 0,
+    };
+    let root_leaf = if is_root { as_leaf(nodes, b) } else { None };
     let Some((l, r)) = nodes
         .get(b as usize)
         .and_then(BvhNode::children)
-        .filter(|_| as_leaf(nodes, b).is_none())
+        .filter(|_| root_leaf.is_none())
     else {
-        list[0] = b;
-        return (list, 1);
+        out.node[0] = b;
+        out.leaf[0] = root_leaf.or_else(|| as_leaf(nodes, b));
+        out.len = 1;
+        return out;
     };
-    // Per entry, the area by which it competes for expansion (`None`: it stays, a leaf run),
-    // computed once when it enters the list.
-    let expandable = |c: u32| {
-        nodes
-            .get(c as usize)
-            .filter(|_| as_leaf(nodes, c).is_none())
-            .map(|n| n.bounds().surface_area())
-    };
+    // Per entry, the area by which it competes for expansion (`None`: it stays, a leaf run).
     let mut area: [Option<f32>; W] = [None; W];
-    list[0] = l;
-    list[1] = r;
-    area[0] = expandable(l);
-    area[1] = expandable(r);
+    let put = |out: &mut ChildList<W>, area: &mut [Option<f32>; W], i: usize, c: u32| {
+        out.node[i] = c;
+        out.leaf[i] = as_leaf(nodes, c);
+        area[i] = match (&out.leaf[i], nodes.get(c as usize)) {
+            (None, Some(n)) => Some(n.bounds().surface_area()),
+            _ => None,
+        };
+    };
+    put(&mut out, &mut area, 0, l);
+    put(&mut out, &mut area, 1, r);
     let mut len = 2;
     while len < W {
         let mut best: Option<(usize, f32)> = None;
@@ -80,16 +88,32 @@ fn child_list<const W: usize>(nodes: &[BvhNode], b: u32) -> ([u32; W], usize) {
             }
         }
         let Some((i, _)) = best else { break };
-        let Some((cl, cr)) = nodes.get(list[i] as usize).and_then(BvhNode::children) else {
+        let Some((cl, cr)) = nodes.get(out.node[i] as usize).and_then(BvhNode::children) else {
             break;
         };
-        list[i] = cl;
-        area[i] = expandable(cl);
-        list[len] = cr;
-        area[len] = expandable(cr);
+        put(&mut out, &mut area, i, cl);
+        put(&mut out, &mut area, len, cr);
         len += 1;
     }
-    (list, len)
+    out.len = len;
+    out
+}
+
+/// The children [`child_list`] chose: binary node and, for a leaf, its run.
+struct ChildList<const W: usize> {
+    node: [u32; W],
+    leaf: [Option<core::ops::Range<usize>>; W],
+    len: usize,
+}
+
+impl<const W: usize> ChildList<W> {
+    fn iter(&self) -> impl Iterator<Item = (u32, Option<core::ops::Range<usize>>)> + '_ {
+        self.node
+            .iter()
+            .zip(&self.leaf)
+            .take(self.len)
+            .map(|(&c, l)| (c, l.clone()))
+    }
 }
 
 /// Pending wide nodes of the depth-first walk: `(binary node, wide node)`. At most `W − 1`
@@ -136,9 +160,8 @@ fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<usize, BvhError> {
         return Err(BvhError::LeafTooLarge { count: 0 });
     }
     while let Some((b, _)) = pending.pop() {
-        let (list, len) = child_list::<W>(nodes, b);
-        for &c in &list[..len] {
-            if let Some(range) = as_leaf(nodes, c) {
+        for (c, leaf) in child_list::<W>(nodes, b, b == 0).iter() {
+            if let Some(range) = leaf {
                 if range.len() > MAX_LEAF_TRIANGLES {
                     return Err(BvhError::LeafTooLarge { count: range.len() });
                 }
@@ -215,12 +238,23 @@ where
                 available: groups.as_ref().len(),
             });
         }
-        for &p in indices {
-            let ok = mesh
-                .triangle(p as usize)
-                .is_some_and(|v| v.iter().all(|x| x.is_finite()));
-            if !ok {
-                return Err(BvhError::NonFinitePrimitive { index: p as usize });
+        // Every triangle of the tree must have finite vertices. When every position is finite
+        // and every vertex index in range (two sequential passes), all of them do; only
+        // otherwise are the tree's triangles checked one by one (a random-access pass).
+        let n_pos = mesh.positions.len();
+        let all_usable = mesh.positions.iter().all(|p| p.is_finite())
+            && mesh
+                .triangles
+                .iter()
+                .all(|t| t.iter().all(|&i| (i as usize) < n_pos));
+        if !all_usable {
+            for &p in indices {
+                let ok = mesh
+                    .triangle(p as usize)
+                    .is_some_and(|v| v.iter().all(|x| x.is_finite()));
+                if !ok {
+                    return Err(BvhError::NonFinitePrimitive { index: p as usize });
+                }
             }
         }
 
@@ -244,13 +278,12 @@ where
             let mut pending = Pending::new();
             pending.push((0, 0));
             while let Some((b, slot)) = pending.pop() {
-                let (list, len) = child_list::<W>(bnodes, b);
                 let mut node = WideNode::<W>::EMPTY;
-                for (i, &c) in list[..len].iter().enumerate() {
+                for (i, (c, leaf)) in child_list::<W>(bnodes, b, b == 0).iter().enumerate() {
                     let Some(bn) = bnodes.get(c as usize) else {
                         continue;
                     };
-                    let reference = if let Some(range) = as_leaf(bnodes, c) {
+                    let reference = if let Some(range) = leaf {
                         // Checked by `plan`: count ≤ MAX_LEAF_TRIANGLES, start < MAX_TRIANGLES.
                         ChildRef::leaf(range.start as u32, range.len() as u32)
                             .unwrap_or(ChildRef::EMPTY)
