@@ -431,3 +431,72 @@ fn invalid_rays_test_nothing() {
         assert_eq!(st, crate::bvh::TraversalStats::default());
     }
 }
+
+#[test]
+fn collapse_checks_the_tree_triangles_not_the_whole_mesh() {
+    let (mut pos, tris) = soup(300, 41);
+    // An unreferenced non-finite position, and triangle 7 made non-finite: a tree built with
+    // `exclude_non_finite` leaves triangle 7 out, and the collapse accepts the mesh (the
+    // triangle-by-triangle check sees only the tree's triangles).
+    pos.push(Vec3::NAN);
+    pos[21] = Vec3::INFINITY;
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let n = mesh.len();
+    let b = Bvh::build(
+        &mesh,
+        vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        &BuildOptions {
+            max_leaf_size: 4,
+            exclude_non_finite: true,
+        },
+    )
+    .unwrap();
+    assert_eq!(b.primitive_count(), n - 1);
+    let count = VecWide::<8>::node_count_for(&b).unwrap();
+    let w = VecWide::<8>::from_binary(
+        &b,
+        &mesh,
+        vec![WideNode::EMPTY; count],
+        vec![LeafGroup::EMPTY; group_capacity(n)],
+    )
+    .unwrap();
+    assert_eq!(w.triangles().count(), n - 1);
+    assert!(w.triangles().all(|t| t.prim != 7));
+
+    // A mesh whose tree triangle lost its finite vertices since the binary build, or refers
+    // to a vertex that no longer exists: refused, with the triangle, before writing.
+    let (pos, mut tris) = soup(300, 42);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let b = binary(&mesh, 4);
+    let count = VecWide::<8>::node_count_for(&b).unwrap();
+    let mut bad = pos.clone();
+    bad[3 * 150 + 1] = Vec3::new(f32::NAN, 0.0, 0.0);
+    let mut nodes = vec![WideNode::EMPTY; count];
+    let mut groups = vec![LeafGroup::EMPTY; group_capacity(300)];
+    let err = WideBvh::<8, _, _>::from_binary(
+        &b,
+        &TriangleMesh::new(&bad, &tris),
+        &mut nodes[..],
+        &mut groups[..],
+    );
+    assert_eq!(err.err(), Some(BvhError::NonFinitePrimitive { index: 150 }));
+    assert!(
+        nodes.iter().all(|n| *n == WideNode::EMPTY),
+        "nodes untouched"
+    );
+    // (Unused lanes hold NaN, which `==` never equals: compare the printed records.)
+    let empty = std::format!("{:?}", LeafGroup::EMPTY);
+    assert!(
+        groups.iter().all(|g| std::format!("{g:?}") == empty),
+        "groups untouched"
+    );
+    tris[299][2] = 100_000;
+    let err = VecWide::<8>::from_binary(
+        &b,
+        &TriangleMesh::new(&pos, &tris),
+        vec![WideNode::EMPTY; count],
+        vec![LeafGroup::EMPTY; group_capacity(300)],
+    );
+    assert_eq!(err.err(), Some(BvhError::NonFinitePrimitive { index: 299 }));
+}
