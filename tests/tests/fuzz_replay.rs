@@ -87,19 +87,43 @@ fn replay(kind: &str) -> usize {
     files.len()
 }
 
+/// Files per target under `fuzz/<kind>/`.
+fn per_target(kind: &str) -> std::collections::BTreeMap<String, usize> {
+    let mut count = std::collections::BTreeMap::new();
+    for (target, _) in inputs(kind) {
+        *count.entry(target).or_insert(0) += 1;
+    }
+    count
+}
+
 #[test]
 fn corpus_replays_clean() {
     let n = replay("corpus");
+    // A missing or emptied folder must fail, not pass with nothing replayed: every target
+    // has its corpus.
+    let count = per_target("corpus");
+    let empty: Vec<_> = props::TARGETS
+        .iter()
+        .filter(|t| count.get(**t).copied().unwrap_or(0) == 0)
+        .collect();
     assert!(
-        n > 0,
-        "no corpus files found under {}",
+        empty.is_empty(),
+        "targets without corpus files under {}: {empty:?}",
         fuzz_dir().display()
     );
+    assert!(n >= props::TARGETS.len());
 }
 
 #[test]
 fn regressions_replay_clean() {
-    replay("regressions");
+    let n = replay("regressions");
+    // Every code-defined regression is a file here, and nothing vanished: the replay covered
+    // at least those.
+    let defined = props::regressions().len();
+    assert!(
+        n >= defined.max(1),
+        "{n} regression files replayed, {defined} defined in fuzz/src/lib.rs"
+    );
 }
 
 #[test]

@@ -240,6 +240,38 @@ fn assert_close(got: Vec3, want: DVec3, what: &str) {
     );
 }
 
+/// β of an interior vertex of valence `n`, from the published formulas in `f64` (not the
+/// core's `loop_beta`): Loop (1987) `(5/8 − (3/8 + cos(2π/n)/4)²)/n`; Warren (1995) `3/16`
+/// for `n = 3`, else `3/(8n)`.
+fn reference_beta(n: usize, weights: LoopWeights) -> f64 {
+    let nf = n as f64;
+    match weights {
+        LoopWeights::Loop => {
+            let c = 0.375 + 0.25 * (2.0 * std::f64::consts::PI / nf).cos();
+            (0.625 - c * c) / nf
+        }
+        LoopWeights::Warren if n == 3 => 3.0 / 16.0,
+        LoopWeights::Warren => 3.0 / (8.0 * nf),
+    }
+}
+
+#[test]
+fn core_loop_beta_matches_the_published_formulas() {
+    for weights in [LoopWeights::Loop, LoopWeights::Warren] {
+        for n in 3..40 {
+            let got = f64::from(loop_beta(n, weights));
+            let want = reference_beta(n, weights);
+            assert!(
+                (got - want).abs() <= 1e-7 * want,
+                "{weights:?} n={n}: {got} vs {want}"
+            );
+        }
+    }
+    // The worked values: Loop's β(6) = 1/16, Warren's β(3) = 3/16.
+    assert_eq!(loop_beta(6, LoopWeights::Loop), 0.0625);
+    assert_eq!(loop_beta(3, LoopWeights::Warren), 0.1875);
+}
+
 fn check_loop(name: &str, weights: LoopWeights) {
     let (p, t) = load(name);
     let mut buf = Buffers::new(caps(&p, &t));
@@ -261,7 +293,7 @@ fn check_loop(name: &str, weights: LoopWeights) {
         m.boundary_loops().count(),
         "{name}"
     );
-    let (even, odd) = loop_reference(&p, &t, |n| loop_beta(n, weights) as f64);
+    let (even, odd) = loop_reference(&p, &t, |n| reference_beta(n, weights));
     for v in 0..p.len() as u32 {
         assert_close(
             out.position(VertexId::new(v)).unwrap(),
@@ -366,15 +398,22 @@ fn op_strategy() -> impl Strategy<Value = (u8, u32, u8)> {
 
 type Small = HalfedgeMesh<600, 1800, 1200>;
 
-proptest! {
-    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
-
-    /// Random flip / split / collapse / smooth sequences on the (once subdivided)
-    /// octahedron: `validate()` after every op, refused ops leave the mesh bit-for-bit
-    /// unchanged, χ is preserved.
-    #[test]
-    fn random_edit_sequences(ops in proptest::collection::vec(op_strategy(), 1..120)) {
-        let (p, t) = load("octahedron.obj");
+/// Random flip / split / collapse / smooth sequences on the (once subdivided) octahedron:
+/// `validate()` after every op, refused ops leave the mesh bit-for-bit unchanged, χ is
+/// preserved. Run through proptest's runner (shrinking kept) so that the test can also count
+/// what was exercised: a run where every operation of a kind was refused proves nothing about
+/// that kind, so each kind must have been applied many times.
+#[test]
+fn random_edit_sequences() {
+    use proptest::test_runner::{Config, TestRunner};
+    use std::cell::Cell;
+    let applied: [Cell<usize>; 4] = Default::default();
+    let mut runner = TestRunner::new(Config {
+        cases: 48,
+        ..Config::default()
+    });
+    let (p, t) = load("octahedron.obj");
+    let result = runner.run(&proptest::collection::vec(op_strategy(), 1..120), |ops| {
         let mut base = Box::new(Small::new());
         let mut scratch = vec![0u32; build_scratch_len(t.len())];
         base.build(&p, &t, &mut scratch).unwrap();
@@ -387,7 +426,8 @@ proptest! {
                 0 => m.flip_edge(e).is_ok(),
                 1 => m.split_edge(e).is_ok(),
                 2 => {
-                    let at = [CollapseAt::Head, CollapseAt::Tail, CollapseAt::Midpoint][k as usize % 3];
+                    let at =
+                        [CollapseAt::Head, CollapseAt::Tail, CollapseAt::Midpoint][k as usize % 3];
                     m.collapse_edge(e.halfedge(k as u32), at).is_ok()
                 }
                 _ => {
@@ -396,11 +436,23 @@ proptest! {
                 }
             };
             prop_assert_eq!(m.validate(), Ok(()));
-            if !ok {
+            if ok {
+                let c = &applied[kind as usize % 4];
+                c.set(c.get() + 1);
+            } else {
                 prop_assert!(*m == *snap, "refused op changed the mesh");
             }
             prop_assert_eq!(euler(&*m), 2);
             prop_assert_eq!(m.boundary_loops().count(), 0);
         }
+        Ok(())
+    });
+    if let Err(e) = result {
+        panic!("{e}");
     }
+    let counts = applied.map(|c| c.get());
+    assert!(
+        counts.iter().all(|&c| c >= 50),
+        "applied ops per kind (flip, split, collapse, smooth): {counts:?}"
+    );
 }
