@@ -31,9 +31,12 @@ pub const BRUTE_FORCE_TESTS: usize = 150_000_000;
 /// Arguments of `halfray bench bvh`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct BvhArgs {
-    /// Mesh to benchmark (OBJ).
-    pub mesh: PathBuf,
-    /// Also write the results as JSON to this file (atomically).
+    /// Meshes to benchmark (OBJ), one after another in this run; a summary table of the
+    /// ratios to Embree closes the output.
+    #[arg(required = true)]
+    pub meshes: Vec<PathBuf>,
+    /// Also write the results as JSON to this file (atomically): the report object for one
+    /// mesh, an array of them for several.
     #[arg(long)]
     pub json: Option<PathBuf>,
     /// Camera image width and height for the primary rays.
@@ -165,21 +168,82 @@ pub fn run(args: &BvhArgs) -> Result<()> {
         &format!("--width {} --rays {}", args.width, args.rays),
         rays,
     )?;
-    let report = match variant {
-        TriangleVariant::Watertight => bench(args, &Watertight)?,
-        TriangleVariant::WatertightF32 => bench(args, &WatertightF32)?,
-        TriangleVariant::MollerTrumbore => bench(args, &MollerTrumbore::CLASSIC)?,
-        TriangleVariant::MollerTrumboreNoEps => bench(args, &MollerTrumbore::NO_EPSILON)?,
-        TriangleVariant::Cramer => bench(args, &Cramer)?,
-        TriangleVariant::F64Reference => bench(args, &F64Reference)?,
-    };
+    // Every mesh must be readable before the first one is measured (minutes of work are not
+    // spent on a run that then fails on a misspelt last path).
+    for mesh in &args.meshes {
+        std::fs::File::open(mesh).map_err(|e| Error::io(mesh, e))?;
+    }
+    let mut reports = Vec::with_capacity(args.meshes.len());
+    for mesh in &args.meshes {
+        let report = match variant {
+            TriangleVariant::Watertight => bench(args, mesh, &Watertight)?,
+            TriangleVariant::WatertightF32 => bench(args, mesh, &WatertightF32)?,
+            TriangleVariant::MollerTrumbore => bench(args, mesh, &MollerTrumbore::CLASSIC)?,
+            TriangleVariant::MollerTrumboreNoEps => bench(args, mesh, &MollerTrumbore::NO_EPSILON)?,
+            TriangleVariant::Cramer => bench(args, mesh, &Cramer)?,
+            TriangleVariant::F64Reference => bench(args, mesh, &F64Reference)?,
+        };
+        reports.push(report);
+    }
     if let Some(path) = &args.json {
-        let text = serde_json::to_string_pretty(&report)
-            .map_err(|e| Error::Other(format!("JSON encoding failed: {e}")))?;
+        let text = match &reports[..] {
+            [one] => serde_json::to_string_pretty(one),
+            all => serde_json::to_string_pretty(all),
+        }
+        .map_err(|e| Error::Other(format!("JSON encoding failed: {e}")))?;
         write_bytes_atomic(path, text.as_bytes())?;
     }
-    print_report(&report);
+    for r in &reports {
+        print_report(r);
+    }
+    print_summary(&reports);
     Ok(())
+}
+
+/// The ratios of the run as one Markdown table (the README's performance table): halfray's
+/// default structure against Embree robust and default, per mesh, from this run's figures.
+fn print_summary(reports: &[BvhReport]) {
+    let ratio = |a: f64, b: Option<f64>| b.map_or("-".to_string(), |b| format!("{:.2}", a / b));
+    let fig = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.2}"));
+    println!();
+    println!(
+        "| mesh | triangles | closest primary, Mrays/s: halfray / Embree robust / default | ratio robust | ratio default | closest incoherent: halfray / robust / default | ratio robust | ratio default | build ms: halfray / Embree | build ratio | B/tri |"
+    );
+    println!("|---|---:|---|---:|---:|---|---:|---:|---|---:|---:|");
+    for r in reports {
+        let name = std::path::Path::new(&r.mesh)
+            .file_name()
+            .map_or(r.mesh.clone(), |n| n.to_string_lossy().into_owned());
+        let b = &r.bvh8;
+        println!(
+            "| {name} | {} | {:.2} / {} / {} | {} | {} | {:.2} / {} / {} | {} | {} | {:.0} / {} | {} | {:.1} |",
+            r.triangles,
+            b.mrays_closest_primary,
+            fig(r.embree_robust_mrays_closest_primary),
+            fig(r.embree_mrays_closest_primary),
+            ratio(
+                b.mrays_closest_primary,
+                r.embree_robust_mrays_closest_primary
+            ),
+            ratio(b.mrays_closest_primary, r.embree_mrays_closest_primary),
+            b.mrays_closest_incoherent,
+            fig(r.embree_robust_mrays_closest_incoherent),
+            fig(r.embree_mrays_closest_incoherent),
+            ratio(
+                b.mrays_closest_incoherent,
+                r.embree_robust_mrays_closest_incoherent
+            ),
+            ratio(
+                b.mrays_closest_incoherent,
+                r.embree_mrays_closest_incoherent
+            ),
+            b.build_ms,
+            r.embree_build_ms
+                .map_or("-".to_string(), |x| format!("{x:.0}")),
+            ratio(b.build_ms, r.embree_build_ms),
+            b.bytes_per_triangle,
+        );
+    }
 }
 
 /// Closest/any-hit throughput and per-ray counts of one structure on both ray sets.
@@ -221,8 +285,12 @@ fn measure(
     Ok((hits_p, hits_i))
 }
 
-fn bench<T: TriangleIntersector>(args: &BvhArgs, isect: &T) -> Result<BvhReport> {
-    let obj = read_obj(&args.mesh)?;
+fn bench<T: TriangleIntersector>(
+    args: &BvhArgs,
+    mesh_path: &std::path::Path,
+    isect: &T,
+) -> Result<BvhReport> {
+    let obj = read_obj(mesh_path)?;
     let mesh = TriangleMesh::new(&obj.positions, &obj.triangles);
     let n = mesh.len();
     let options = BuildOptions {
@@ -230,7 +298,7 @@ fn bench<T: TriangleIntersector>(args: &BvhArgs, isect: &T) -> Result<BvhReport>
         exclude_non_finite: false,
     };
     let build_err =
-        |e: halfray_core::bvh::BvhError| Error::input(Location::file(&args.mesh), e.to_string());
+        |e: halfray_core::bvh::BvhError| Error::input(Location::file(mesh_path), e.to_string());
     let mut binary_s = f64::INFINITY;
     let mut wide_s = f64::INFINITY;
     let mut built = None;
@@ -304,7 +372,7 @@ fn bench<T: TriangleIntersector>(args: &BvhArgs, isect: &T) -> Result<BvhReport>
 
     let speedup = top.mrays_closest_incoherent / mrays_brute.max(1e-12);
     Ok(BvhReport {
-        mesh: args.mesh.display().to_string(),
+        mesh: mesh_path.display().to_string(),
         intersector: isect.name().to_string(),
         structure: "bvh8".into(),
         simd: crate::simd::level_name().into(),

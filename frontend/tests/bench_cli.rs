@@ -1,0 +1,92 @@
+//! `halfray bench bvh` as a user runs it: several meshes in one run (the README's performance
+//! table comes from one such run), the JSON shape, and a bad path refused before any work.
+//! Only the output's structure and the correctness columns are checked: speed figures belong
+//! to benchmarks, not tests.
+
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_halfray");
+const SCENE_MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/meshes");
+
+#[test]
+fn several_meshes_give_one_report_each_and_a_summary_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let meshes = ["tetrahedron.obj", "torus.obj"].map(|m| format!("{SCENE_MESHES}/{m}"));
+    let o = Command::new(BIN)
+        .args(["bench", "bvh", &meshes[0], &meshes[1]])
+        .args(["--width", "24", "--rays", "500", "--json"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{out}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let reports = v.as_array().expect("an array for several meshes");
+    assert_eq!(reports.len(), 2);
+    for (r, m) in reports.iter().zip(&meshes) {
+        assert_eq!(r["mesh"], m.as_str());
+        assert_eq!(r["brute_force_mismatches"], 0, "{m}");
+        assert_eq!(r["primary_rays"], 24 * 24);
+        assert_eq!(r["incoherent_rays"], 500);
+        assert!(r["mrays_closest_primary"].as_f64().unwrap() > 0.0);
+    }
+    assert_eq!(reports[0]["triangles"], 4);
+    // The summary: a Markdown header, its rule, one row per mesh in order.
+    let lines: Vec<&str> = out.lines().collect();
+    let head = lines
+        .iter()
+        .position(|l| l.starts_with("| mesh | triangles |"))
+        .expect("summary table");
+    assert!(lines[head + 1].starts_with("|---|"));
+    assert!(
+        lines[head + 2].starts_with("| tetrahedron.obj | 4 |"),
+        "{}",
+        lines[head + 2]
+    );
+    assert!(
+        lines[head + 3].starts_with("| torus.obj |"),
+        "{}",
+        lines[head + 3]
+    );
+
+    // One mesh: the report object itself (the JSON files under docs/ have this shape).
+    let o = Command::new(BIN)
+        .args([
+            "bench", "bvh", &meshes[0], "--width", "8", "--rays", "50", "--json",
+        ])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(v["triangles"], 4);
+}
+
+#[test]
+fn a_missing_mesh_is_refused_before_any_measurement() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let good = format!("{SCENE_MESHES}/torus.obj");
+    let missing = dir.path().join("missing.obj");
+    let o = Command::new(BIN)
+        .args(["bench", "bvh", &good])
+        .arg(&missing)
+        .args(["--width", "8", "--rays", "50", "--json"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("missing.obj"), "{err}");
+    assert!(
+        o.stdout.is_empty(),
+        "nothing measured: {}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert!(!json.exists());
+}
