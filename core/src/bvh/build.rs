@@ -52,16 +52,16 @@ impl Default for BuildOptions {
 
 /// A node waiting to be split: its index range, depth and centroid bounds (its own box is
 /// already written into the node).
-#[derive(Clone, Copy)]
-struct Task {
-    node: u32,
-    start: u32,
-    end: u32,
-    depth: u32,
-    centroids: Aabb,
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Task {
+    pub(super) node: u32,
+    pub(super) start: u32,
+    pub(super) end: u32,
+    pub(super) depth: u32,
+    pub(super) centroids: Aabb,
 }
 
-const EMPTY_TASK: Task = Task {
+pub(super) const EMPTY_TASK: Task = Task {
     node: 0,
     start: 0,
     end: 0,
@@ -187,7 +187,7 @@ pub const fn scratch_capacity(prim_count: usize) -> usize {
 
 /// The primitives being partitioned: element `k` of the current order, with its box (corners
 /// as 16-byte vectors) and centroid, and swapping two elements.
-trait Refs {
+pub(super) trait Refs {
     fn get(&self, k: usize) -> (Corner, Corner, Vec3);
     fn swap(&mut self, i: usize, j: usize);
 }
@@ -214,16 +214,18 @@ impl<S: PrimitiveSource + ?Sized> Refs for Indexed<'_, S> {
     }
 }
 
-/// The scratch records.
-struct Scratch<'a> {
-    refs: &'a mut [PrimRef],
+/// The scratch records `offset ..` (a job's run holds the records of its primitive range
+/// only; positions stay global).
+pub(super) struct Scratch<'a> {
+    pub(super) refs: &'a mut [PrimRef],
+    pub(super) offset: usize,
 }
 
 impl Refs for Scratch<'_> {
     #[inline(always)]
     fn get(&self, k: usize) -> (Corner, Corner, Vec3) {
-        self.refs
-            .get(k)
+        k.checked_sub(self.offset)
+            .and_then(|k| self.refs.get(k))
             .map_or((Corner::INFINITY, Corner::NEG_INFINITY, Vec3::NAN), |r| {
                 (r.lo, r.hi, r.centroid)
             })
@@ -231,8 +233,69 @@ impl Refs for Scratch<'_> {
 
     #[inline(always)]
     fn swap(&mut self, i: usize, j: usize) {
+        let (Some(i), Some(j)) = (i.checked_sub(self.offset), j.checked_sub(self.offset)) else {
+            return;
+        };
         if i < self.refs.len() && j < self.refs.len() {
             self.refs.swap(i, j);
+        }
+    }
+}
+
+/// The nodes a build writes, by global index: `nodes[k]` is node `base + k`, and `root`, when
+/// set, stands for one node outside the slice (a job's root, allocated by the split above it).
+pub(super) struct NodeView<'a> {
+    pub(super) nodes: &'a mut [BvhNode],
+    pub(super) base: u32,
+    pub(super) root: Option<(u32, &'a mut BvhNode)>,
+}
+
+impl NodeView<'_> {
+    #[inline(always)]
+    fn get_mut(&mut self, g: u32) -> Option<&mut BvhNode> {
+        if let Some((r, rec)) = &mut self.root
+            && *r == g
+        {
+            return Some(rec);
+        }
+        self.nodes.get_mut(g.checked_sub(self.base)? as usize)
+    }
+
+    #[inline(always)]
+    fn bounds(&mut self, g: u32) -> Option<Aabb> {
+        self.get_mut(g).map(|n| n.bounds())
+    }
+
+    /// Whether two more nodes fit when `next` is the next free global index.
+    #[inline(always)]
+    fn has_pair(&self, next: u32) -> bool {
+        next.checked_sub(self.base)
+            .is_some_and(|k| k as usize + 2 <= self.nodes.len())
+    }
+}
+
+/// Where the top of a split build leaves subtrees (see [`super::jobs`]): a child task of at
+/// most `job_size` primitives (and more than a leaf's) becomes a job while there is room.
+pub(super) struct JobSink<'a> {
+    pub(super) jobs: &'a mut [super::jobs::BuildJob],
+    pub(super) len: usize,
+    pub(super) job_size: u32,
+}
+
+impl JobSink<'_> {
+    /// Takes `task` as a job (true) or leaves it to the caller (false).
+    fn take(&mut self, task: &Task, max_leaf: u32) -> bool {
+        let n = task.end - task.start;
+        if n <= max_leaf || n > self.job_size {
+            return false;
+        }
+        match self.jobs.get_mut(self.len) {
+            Some(slot) => {
+                *slot = super::jobs::BuildJob::new(*task);
+                self.len += 1;
+                true
+            }
+            None => false,
         }
     }
 }
@@ -304,13 +367,14 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
         k += 1;
     }
     let mut refs = Indexed { source, indices };
-    let node_count = build_tree(
+    let node_count = build_top(
         &mut refs,
         nodes,
         count,
         &root_bounds,
         root_centroids,
         options,
+        None,
     );
     Ok((node_count, count))
 }
@@ -325,6 +389,45 @@ pub(super) fn build_with_scratch<S: PrimitiveSource + ?Sized>(
     scratch: &mut [PrimRef],
     options: &BuildOptions,
 ) -> Result<(u32, u32), BvhError> {
+    // One pass over the source: the records are written while validating (the scratch is
+    // not output; nodes and indices are written only after the pass succeeds).
+    let (count, root_bounds, root_centroids) =
+        prepare_scratch(source, nodes, indices, scratch, options)?;
+    if count == 0 {
+        return Ok((0, 0));
+    }
+    let refs = scratch.get_mut(..count as usize).unwrap_or_default();
+    let mut view = Scratch { refs, offset: 0 };
+    let node_count = build_top(
+        &mut view,
+        nodes,
+        count,
+        &root_bounds,
+        root_centroids,
+        options,
+        None,
+    );
+    fill_indices(indices, view.refs);
+    Ok((node_count, count))
+}
+
+/// `indices[k]` = the source index of record `k` (the final leaf order).
+pub(super) fn fill_indices(indices: &mut [u32], refs: &[PrimRef]) {
+    for (slot, r) in indices.iter_mut().zip(refs) {
+        *slot = r.index;
+    }
+}
+
+/// Validates `source` and the storage, fills `scratch`: the first pass of
+/// [`build_with_scratch`], for the split build. Returns the usable count and the root's box
+/// and centroid box.
+pub(super) fn prepare_scratch<S: PrimitiveSource + ?Sized>(
+    source: &S,
+    nodes: &[BvhNode],
+    indices: &[u32],
+    scratch: &mut [PrimRef],
+    options: &BuildOptions,
+) -> Result<(u32, Aabb, Aabb), BvhError> {
     let n = source.primitive_count();
     if scratch.len() < scratch_capacity(n) {
         return Err(BvhError::ScratchTooSmall {
@@ -332,48 +435,30 @@ pub(super) fn build_with_scratch<S: PrimitiveSource + ?Sized>(
             available: scratch.len(),
         });
     }
-    // One pass over the source: the records are written while validating (the scratch is
-    // not output; nodes and indices are written only after the pass succeeds).
-    let (count, root_bounds, root_centroids) =
-        validate(source, nodes, indices, options, |k, i, bounds, centroid| {
-            if let Some(slot) = scratch.get_mut(k) {
-                *slot = PrimRef {
-                    lo: bounds.min.into(),
-                    hi: bounds.max.into(),
-                    centroid,
-                    index: i as u32,
-                };
-            }
-        })?;
-    if count == 0 {
-        return Ok((0, 0));
-    }
-    let refs = scratch.get_mut(..count as usize).unwrap_or_default();
-    let mut view = Scratch { refs };
-    let node_count = build_tree(
-        &mut view,
-        nodes,
-        count,
-        &root_bounds,
-        root_centroids,
-        options,
-    );
-    for (slot, r) in indices.iter_mut().zip(view.refs.iter()) {
-        *slot = r.index;
-    }
-    Ok((node_count, count))
+    validate(source, nodes, indices, options, |k, i, bounds, centroid| {
+        if let Some(slot) = scratch.get_mut(k) {
+            *slot = PrimRef {
+                lo: bounds.min.into(),
+                hi: bounds.max.into(),
+                centroid,
+                index: i as u32,
+            };
+        }
+    })
 }
 
-/// The split loop shared by both builders, over `count` usable primitives in `refs`.
-fn build_tree<R: Refs>(
+/// The top of every build: the root, the optional cache-line pad, then [`grow`] from the
+/// root (leaving subtrees to `jobs` when given). Returns the next free node index.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn build_top<R: Refs>(
     refs: &mut R,
     nodes: &mut [BvhNode],
     count: u32,
     root_bounds: &Aabb,
     root_centroids: Aabb,
     options: &BuildOptions,
+    jobs: Option<&mut JobSink<'_>>,
 ) -> u32 {
-    let max_leaf = options.max_leaf_size.max(1);
     let mut node_count = 1u32;
     if let Some(root) = nodes.first_mut() {
         root.set_bounds(root_bounds);
@@ -388,28 +473,59 @@ fn build_tree<R: Refs>(
         }
         node_count = 2;
     }
-    let mut stack = [EMPTY_TASK; MAX_DEPTH + 1];
-    let mut sp = 0usize;
-    let mut task = Task {
+    let task = Task {
         node: 0,
         start: 0,
         end: count,
         depth: 0,
         centroids: root_centroids,
     };
+    let mut view = NodeView {
+        nodes,
+        base: 0,
+        root: None,
+    };
+    grow(refs, &mut view, task, &mut node_count, options, jobs);
+    node_count
+}
+
+/// The split loop shared by all builders: splits `task`'s node and its descendants, allocating
+/// node pairs from `*next` on (global indices of `view`). A child task that `jobs` takes is
+/// left for later (its node holds its box).
+pub(super) fn grow<R: Refs>(
+    refs: &mut R,
+    view: &mut NodeView<'_>,
+    task: Task,
+    next: &mut u32,
+    options: &BuildOptions,
+    mut jobs: Option<&mut JobSink<'_>>,
+) {
+    let max_leaf = options.max_leaf_size.max(1);
+    let mut stack = [EMPTY_TASK; MAX_DEPTH + 1];
+    let mut sp = 0usize;
+    let mut task = task;
     loop {
-        match split_node(refs, nodes, &task, max_leaf, &mut node_count) {
-            Some((left, right)) => {
-                // Continue with the left child, keep the right one for later. The stack holds at
-                // most one pending child per level, and levels stop at MAX_DEPTH.
+        let mut pending = split_node(refs, view, &task, max_leaf, next);
+        if let (Some((left, right)), Some(sink)) = (pending, jobs.as_deref_mut()) {
+            pending = match (sink.take(&left, max_leaf), sink.take(&right, max_leaf)) {
+                (false, false) => Some((left, right)),
+                (true, false) => Some((right, EMPTY_TASK)),
+                (false, true) => Some((left, EMPTY_TASK)),
+                (true, true) => None,
+            };
+        }
+        match pending {
+            Some((left, right)) if right.end > right.start => {
+                // Continue with the left child, keep the right one for later. The stack holds
+                // at most one pending child per level, and levels stop at MAX_DEPTH.
                 if let Some(slot) = stack.get_mut(sp) {
                     *slot = right;
                     sp += 1;
                     task = left;
                 } else {
                     // Unreachable by the depth limit; recover by finishing both as leaves.
-                    make_leaf(nodes, &left);
-                    make_leaf(nodes, &right);
+                    make_leaf(view, &left);
+                    make_leaf(view, &right);
                     if sp == 0 {
                         break;
                     }
@@ -417,6 +533,7 @@ fn build_tree<R: Refs>(
                     task = stack[sp];
                 }
             }
+            Some((only, _)) => task = only,
             None => {
                 if sp == 0 {
                     break;
@@ -426,11 +543,10 @@ fn build_tree<R: Refs>(
             }
         }
     }
-    node_count
 }
 
-fn make_leaf(nodes: &mut [BvhNode], task: &Task) {
-    if let Some(node) = nodes.get_mut(task.node as usize) {
+fn make_leaf(view: &mut NodeView<'_>, task: &Task) {
+    if let Some(node) = view.get_mut(task.node) {
         node.set_leaf(task.start, task.end - task.start);
     }
 }
@@ -439,14 +555,14 @@ fn make_leaf(nodes: &mut [BvhNode], task: &Task) {
 /// leaf (returns `None`).
 fn split_node<R: Refs>(
     refs: &mut R,
-    nodes: &mut [BvhNode],
+    nodes: &mut NodeView<'_>,
     task: &Task,
     max_leaf: u32,
     node_count: &mut u32,
 ) -> Option<(Task, Task)> {
     let count = task.end - task.start;
-    let parent_bounds = nodes.get(task.node as usize)?.bounds();
-    if count <= 1 || task.depth as usize >= MAX_DEPTH || nodes.len() < *node_count as usize + 2 {
+    let parent_bounds = nodes.bounds(task.node)?;
+    if count <= 1 || task.depth as usize >= MAX_DEPTH || !nodes.has_pair(*node_count) {
         make_leaf(nodes, task);
         return None;
     }
@@ -482,9 +598,14 @@ fn split_node<R: Refs>(
     };
     let first = *node_count;
     *node_count += 2;
-    nodes[task.node as usize].set_inner(first);
-    nodes[first as usize].set_bounds(&left_b);
-    nodes[first as usize + 1].set_bounds(&right_b);
+    for (g, b) in [(first, &left_b), (first + 1, &right_b)] {
+        if let Some(n) = nodes.get_mut(g) {
+            n.set_bounds(b);
+        }
+    }
+    if let Some(n) = nodes.get_mut(task.node) {
+        n.set_inner(first);
+    }
     let depth = task.depth + 1;
     Some((
         Task {

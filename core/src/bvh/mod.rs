@@ -71,6 +71,7 @@
 mod build;
 mod clearance;
 mod error;
+mod jobs;
 mod node;
 mod primitive;
 mod query;
@@ -84,6 +85,7 @@ mod tests;
 
 pub use build::{BuildOptions, PrimRef, scratch_capacity};
 pub use error::BvhError;
+pub use jobs::{BuildJob, JobPart, JobParts};
 pub use node::{BvhNode, NODE_SIZE};
 pub use primitive::{Primitive, PrimitiveSource, TriangleMesh};
 pub use stats::{BvhStats, TraversalStats};

@@ -525,3 +525,134 @@ fn too_small_scratch_is_refused_before_writing() {
     );
     assert!(nodes.iter().all(|n| *n == BvhNode::EMPTY) && idx.iter().all(|&i| i == 7));
 }
+
+#[test]
+fn build_in_jobs_gives_the_scratch_build_tree_without_gaps() {
+    let mut cases: Vec<(Vec<Vec3>, Vec<[u32; 3]>)> = vec![
+        soup(1, 11),
+        soup(2, 12),
+        soup(37, 13),
+        soup(1000, 14),
+        soup(3000, 15),
+    ];
+    let (pos, _) = soup(1, 16);
+    cases.push((pos, vec![[0, 1, 2]; 50]));
+    let (mut pos, tris) = soup(300, 17);
+    pos[10] = Vec3::NAN;
+    cases.push((pos, tris));
+    let mut parts_built = 0usize;
+    for (k, (pos, tris)) in cases.iter().enumerate() {
+        let mesh = TriangleMesh::new(pos, tris);
+        let n = mesh.len();
+        for max_leaf in [1, 4] {
+            let opts = BuildOptions {
+                max_leaf_size: max_leaf,
+                exclude_non_finite: true,
+            };
+            let mut scratch = vec![PrimRef::EMPTY; scratch_capacity(n)];
+            let reference = Bvh::build_with_scratch(
+                &mesh,
+                vec![BvhNode::EMPTY; node_capacity(n)],
+                vec![0u32; index_capacity(n)],
+                &mut scratch,
+                &opts,
+            )
+            .unwrap();
+            for (job_size, slots, order) in [
+                (0, 8, 0),
+                (2, 8, 0),
+                (8, 64, 1),
+                (50, 64, 2),
+                (50, 3, 0),
+                (400, 64, 1),
+                (100_000, 64, 0),
+            ] {
+                let mut jobs = vec![BuildJob::EMPTY; slots];
+                let mut seen = 0usize;
+                let split = Bvh::build_in_jobs(
+                    &mesh,
+                    vec![BvhNode::EMPTY; node_capacity(n)],
+                    vec![0u32; index_capacity(n)],
+                    &mut scratch,
+                    &mut jobs,
+                    job_size,
+                    &opts,
+                    |parts| {
+                        let parts: Vec<JobPart<'_>> = parts.collect();
+                        seen = parts.len();
+                        assert!(parts.iter().all(|p| p.primitives() <= job_size.max(1)));
+                        match order {
+                            // In reverse, as threads may finish.
+                            1 => parts.into_iter().rev().for_each(JobPart::build),
+                            // Every other one dropped: the build finishes those itself.
+                            2 => parts.into_iter().step_by(2).for_each(JobPart::build),
+                            _ => parts.into_iter().for_each(JobPart::build),
+                        }
+                    },
+                )
+                .unwrap();
+                parts_built += seen;
+                let what = std::format!("case {k} leaf {max_leaf} jobs {job_size}/{slots}");
+                assert_eq!(preorder(&split), preorder(&reference), "{what}");
+                assert_eq!(split.indices(), reference.indices(), "{what}");
+                // No gaps: every node but the optional cache-line pad slot is in the tree.
+                let reachable = preorder(&split).len();
+                assert!(
+                    split.node_count() == reachable || split.node_count() == reachable + 1,
+                    "{what}: {} nodes, {reachable} in the tree",
+                    split.node_count()
+                );
+                let (a, b) = (split.stats(), reference.stats());
+                assert_eq!(
+                    (a.leaves, a.max_depth, a.max_leaf_size, a.sah_cost),
+                    (b.leaves, b.max_depth, b.max_leaf_size, b.sah_cost),
+                    "{what}"
+                );
+                assert!(seen <= slots, "{what}");
+            }
+        }
+    }
+    assert!(
+        parts_built > 100,
+        "the job path must be exercised: {parts_built} parts"
+    );
+}
+
+#[test]
+fn build_in_jobs_refuses_bad_storage_before_running_jobs() {
+    let (pos, tris) = soup(40, 18);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let mut scratch = vec![PrimRef::EMPTY; 39];
+    let mut jobs = vec![BuildJob::EMPTY; 4];
+    let mut ran = false;
+    let r = Bvh::build_in_jobs(
+        &mesh,
+        vec![BvhNode::EMPTY; node_capacity(40)],
+        vec![0u32; 40],
+        &mut scratch,
+        &mut jobs,
+        8,
+        &BuildOptions::default(),
+        |_| ran = true,
+    );
+    assert_eq!(
+        r.err(),
+        Some(BvhError::ScratchTooSmall {
+            needed: 40,
+            available: 39
+        })
+    );
+    let mut scratch = vec![PrimRef::EMPTY; 40];
+    let r = Bvh::build_in_jobs(
+        &mesh,
+        vec![BvhNode::EMPTY; node_capacity(40) - 1],
+        vec![0u32; 40],
+        &mut scratch,
+        &mut jobs,
+        8,
+        &BuildOptions::default(),
+        |_| ran = true,
+    );
+    assert!(matches!(r, Err(BvhError::NodeStorageTooSmall { .. })));
+    assert!(!ran, "no job runs on refused storage");
+}

@@ -7,7 +7,7 @@
 //! every ray) runs on a sample of the incoherent rays sized to about [`BRUTE_FORCE_TESTS`]
 //! triangle tests, as a baseline ratio; the BVH's answers on that sample are checked against it.
 
-use crate::accel::{any_simd, build_binary, build_wide, closest_simd};
+use crate::accel::{any_simd, build_binary, build_binary_parallel, build_wide, closest_simd};
 use crate::atomic::write_bytes_atomic;
 use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
@@ -74,6 +74,12 @@ pub struct BvhReport {
     /// + collapse; bytes: nodes + copied triangles).
     #[serde(flatten)]
     pub bvh8: StructureReport,
+    /// Build time of the default structure on all `build_threads` threads (the binary build's
+    /// subtrees in parallel, [`build_binary_parallel`]; the collapse on one), ms. The
+    /// top-level `build_ms` is one thread, the figure compared with Embree's.
+    pub build_ms_threads: f64,
+    /// Threads of `build_ms_threads`.
+    pub build_threads: usize,
     /// Leaf slots.
     pub leaves: usize,
     /// Depth of the deepest leaf of the binary tree it was collapsed from.
@@ -312,6 +318,18 @@ fn bench<T: TriangleIntersector>(
         built = Some((b, w));
     }
     let (bvh, wide) = built.ok_or_else(|| Error::Other("no build".into()))?;
+    let mut threads_s = f64::INFINITY;
+    for _ in 0..TIMED_PASSES {
+        let t0 = Instant::now();
+        let b = build_binary_parallel(&mesh, &options).map_err(build_err)?;
+        let w = build_wide(&mesh, &b).map_err(build_err)?;
+        threads_s = threads_s.min(t0.elapsed().as_secs_f64());
+        if w.nodes() != wide.nodes() {
+            return Err(Error::Other(
+                "the parallel build gave another tree than the one-thread build".into(),
+            ));
+        }
+    }
     let stats = bvh.stats();
     let wstats = wide.stats();
 
@@ -378,6 +396,8 @@ fn bench<T: TriangleIntersector>(
         simd: crate::simd::level_name().into(),
         triangles: n,
         bvh8: top,
+        build_ms_threads: threads_s * 1e3,
+        build_threads: rayon::current_num_threads(),
         leaves: wstats.leaves,
         max_depth: stats.max_depth,
         sah_cost: stats.sah_cost,
@@ -527,6 +547,10 @@ fn print_report(r: &BvhReport) {
             );
         }
     }
+    println!(
+        "  bvh8 build on {} threads: {:.1} ms (the same tree)",
+        r.build_threads, r.build_ms_threads
+    );
     println!(
         "  rays: {} primary ({:.1}% hit), {} incoherent ({:.1}% hit); bvh8 nodes/ray {:.1} / {:.1}, tris/ray {:.1} / {:.1}",
         r.primary_rays,
