@@ -9,6 +9,8 @@
 #   toolchain   rustup target thumbv7em-none-eabihf (+ rustfmt/clippy components)
 #   lint        cargo fmt --check; cargo clippy --workspace --all-targets -D warnings
 #   no_std      halfray-core and the thumb probe built for thumbv7em-none-eabihf (no std, no alloc)
+#   crate       halfray-core as crates.io gets it: docs with -D warnings, publish --dry-run,
+#               and a build with the rust-version toolchain (MSRV)
 #   test        cargo test --workspace (unit, integration, numerical-stability, fuzz-corpus replay)
 #   embree      Embree 4.4.0 from the pinned PyPI wheel; Embree tests; crosscheck on every shared mesh
 #   fuzz        nightly + cargo-fuzz; every fuzz target for FUZZ_SECONDS (default 30) each
@@ -32,6 +34,13 @@ cargo clippy --workspace --all-targets -- -D warnings
 stage no_std
 cargo build -p halfray-core --target thumbv7em-none-eabihf
 cargo build --release --manifest-path examples/thumb-probe/Cargo.toml --target thumbv7em-none-eabihf
+
+stage crate
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p halfray-core
+cargo publish --dry-run --allow-dirty -p halfray-core
+msrv=$(sed -n 's/^rust-version = "\(.*\)"/\1/p' Cargo.toml)
+rustup toolchain install "$msrv" --profile minimal
+cargo "+$msrv" build -p halfray-core
 
 stage test
 cargo test --workspace

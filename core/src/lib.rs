@@ -24,12 +24,18 @@
 //! written portably). Its blocks carry their proofs.
 #![no_std]
 #![deny(unsafe_code)]
-#![warn(missing_docs)]
+#![deny(missing_docs)]
+#![deny(clippy::missing_errors_doc)]
 // `!(x > eps)` is how this crate rejects NaN along with small values: the negation is the point.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 #[cfg(test)]
 extern crate std;
+
+/// The README's quick start, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeQuickStart;
 
 pub mod aabb;
 pub mod bvh;

@@ -41,7 +41,9 @@ impl Plane {
     /// the exact unit vector, so `|N·N − 1| ≤ gamma(3)`). A normal with exactly two zero
     /// components is stored as the exact axis vector `±e_k`.
     ///
-    /// Errors: [`GeometryError::NonFinite`] for a non-finite point or normal,
+    /// # Errors
+    ///
+    /// [`GeometryError::NonFinite`] for a non-finite point or normal,
     /// [`GeometryError::Degenerate`] for a zero normal (or one whose length underflows in
     /// `f64`, which cannot happen for finite `f32` input other than zero).
     pub fn new(point: Vec3, normal: Vec3) -> Result<Self, GeometryError> {

@@ -51,7 +51,11 @@ pub struct Polygon<const N: usize> {
 
 impl<const N: usize> Polygon<N> {
     /// Validates and stores `vertices` (in order; counter-clockwise seen from the side the
-    /// normal points to). Errors: [`GeometryError::VertexCount`] for fewer than 3 or more than
+    /// normal points to).
+    ///
+    /// # Errors
+    ///
+    /// [`GeometryError::VertexCount`] for fewer than 3 or more than
     /// `N` vertices, [`GeometryError::NonFinite`], [`GeometryError::Degenerate`],
     /// [`GeometryError::NonPlanar`] (module documentation).
     pub fn new(vertices: &[Vec3]) -> Result<Self, GeometryError> {

@@ -75,7 +75,9 @@ impl Quadric {
     /// The quadric `xᵀAx + 2bᵀx + c = 0`. `A` is symmetrised (`(A + Aᵀ)/2`: only the symmetric
     /// part enters `xᵀAx`, and the gradient formula needs it).
     ///
-    /// Errors: [`GeometryError::NonFinite`] for a non-finite entry,
+    /// # Errors
+    ///
+    /// [`GeometryError::NonFinite`] for a non-finite entry,
     /// [`GeometryError::Degenerate`] when `A = 0` and `b = 0` (`f` is constant).
     pub fn new(a: DMat3, b: DVec3, c: f64) -> Result<Self, GeometryError> {
         if !mat_is_finite(&a) || !b.is_finite() || !c.is_finite() {
@@ -104,7 +106,11 @@ impl Quadric {
 
     /// The quadric `x̄ᵀQx̄ = 0` with `x̄ = (x, 1)`: `A` is the upper-left 3×3 block, `b` the
     /// average of the last column and the last row (so a non-symmetric `Q` is symmetrised),
-    /// `c = Q₃₃`. Errors as [`Quadric::new`].
+    /// `c = Q₃₃`.
+    ///
+    /// # Errors
+    ///
+    /// As [`Quadric::new`].
     pub fn from_mat4(q: DMat4) -> Result<Self, GeometryError> {
         let a = DMat3::from_cols(
             q.x_axis.truncate(),
@@ -117,7 +123,9 @@ impl Quadric {
 
     /// The quadric `(x − center)ᵀA(x − center) + k = 0`, exactly (no centre computation).
     ///
-    /// Errors: [`GeometryError::NonFinite`], or [`GeometryError::Degenerate`] for `A = 0`.
+    /// # Errors
+    ///
+    /// [`GeometryError::NonFinite`], or [`GeometryError::Degenerate`] for `A = 0`.
     pub fn from_center_form(a: DMat3, center: DVec3, k: f64) -> Result<Self, GeometryError> {
         if !mat_is_finite(&a) || !center.is_finite() || !k.is_finite() {
             return Err(GeometryError::NonFinite);
@@ -135,6 +143,11 @@ impl Quadric {
     }
 
     /// The axis-aligned ellipsoid `Σ ((x_i − center_i)/radii_i)² − 1 = 0` (see [`Ellipsoid`]).
+    ///
+    /// # Errors
+    ///
+    /// As [`Ellipsoid::new`]: [`GeometryError::NonFinite`], [`GeometryError::Degenerate`] for a
+    /// radius `≤ 0`.
     pub fn ellipsoid(center: Vec3, radii: Vec3) -> Result<Self, GeometryError> {
         Ellipsoid::new(center, radii).map(|e| e.quadric)
     }
@@ -143,7 +156,9 @@ impl Quadric {
     /// direction `axis_dir` (any non-zero length): `|y|² − (y·â)² − r² = 0`, `y = x − axis_point`.
     /// `f > 0` outside.
     ///
-    /// Errors: [`GeometryError::NonFinite`]; [`GeometryError::Degenerate`] for a zero axis or
+    /// # Errors
+    ///
+    /// [`GeometryError::NonFinite`]; [`GeometryError::Degenerate`] for a zero axis or
     /// `radius ≤ 0`.
     pub fn cylinder(axis_point: Vec3, axis_dir: Vec3, radius: f32) -> Result<Self, GeometryError> {
         if !is_finite3(axis_point) || !is_finite3(axis_dir) || !radius.is_finite() {
@@ -163,7 +178,9 @@ impl Quadric {
     /// length) and half-angle `atan(tan_half_angle)`: `|y|² − (1 + τ²)(y·â)² = 0`,
     /// `y = x − apex` (both nappes). `f > 0` outside.
     ///
-    /// Errors: [`GeometryError::NonFinite`]; [`GeometryError::Degenerate`] for a zero axis or
+    /// # Errors
+    ///
+    /// [`GeometryError::NonFinite`]; [`GeometryError::Degenerate`] for a zero axis or
     /// `tan_half_angle ≤ 0`.
     pub fn cone(apex: Vec3, axis_dir: Vec3, tan_half_angle: f32) -> Result<Self, GeometryError> {
         if !is_finite3(apex) || !is_finite3(axis_dir) || !tan_half_angle.is_finite() {
@@ -185,7 +202,11 @@ impl Quadric {
 
     /// The same quadric with reference point `p` (exact identity up to the rounding of the new
     /// `b_c = A(p − x_c) + b_c` and `k = f(p)`). Choose `p` near the surface's region of
-    /// interest when `A` is singular. Errors: [`GeometryError::NonFinite`].
+    /// interest when `A` is singular.
+    ///
+    /// # Errors
+    ///
+    /// [`GeometryError::NonFinite`].
     pub fn recentered(&self, p: DVec3) -> Result<Self, GeometryError> {
         if !p.is_finite() {
             return Err(GeometryError::NonFinite);
@@ -365,7 +386,10 @@ pub struct Ellipsoid {
 }
 
 impl Ellipsoid {
-    /// Errors: [`GeometryError::NonFinite`] for non-finite input,
+    ///
+    /// # Errors
+    ///
+    /// [`GeometryError::NonFinite`] for non-finite input,
     /// [`GeometryError::Degenerate`] for a radius `≤ 0`.
     pub fn new(center: Vec3, radii: Vec3) -> Result<Self, GeometryError> {
         if !is_finite3(center) || !is_finite3(radii) {

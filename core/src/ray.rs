@@ -55,6 +55,10 @@ impl Ray {
     }
 
     /// A checked ray: see [`Ray::validate`].
+    ///
+    /// # Errors
+    ///
+    /// As [`Ray::validate`].
     pub fn try_new(
         origin: Vec3,
         direction: Vec3,
@@ -69,6 +73,10 @@ impl Ray {
     /// Checks the ray: finite origin, finite non-zero direction, `t_min` not NaN and not `+∞`,
     /// `t_max` not NaN, and `t_min ≤ t_max`. (`t_min < t_max` is not required: an empty
     /// interval is valid and simply hits nothing.)
+    ///
+    /// # Errors
+    ///
+    /// The first check that fails, as a [`RayError`].
     pub fn validate(&self) -> Result<(), RayError> {
         if !is_finite3(self.origin) {
             return Err(RayError::NonFiniteOrigin);

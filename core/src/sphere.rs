@@ -61,7 +61,9 @@ fn normalize_scale(d: Vec3) -> (Vec3, i32) {
 impl Sphere {
     /// A sphere of `radius` around `center`.
     ///
-    /// Errors: [`GeometryError::NonFinite`] for a non-finite centre or radius,
+    /// # Errors
+    ///
+    /// [`GeometryError::NonFinite`] for a non-finite centre or radius,
     /// [`GeometryError::Degenerate`] for `radius ≤ 0`.
     pub fn new(center: Vec3, radius: f32) -> Result<Self, GeometryError> {
         if !is_finite3(center) || !radius.is_finite() {

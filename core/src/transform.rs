@@ -77,7 +77,9 @@ impl Transform {
 
     /// The transform with matrix `m` (column-major, glam's convention; points are `M·(p, 1)`).
     ///
-    /// Errors: [`GeometryError::NonFinite`] for a non-finite entry;
+    /// # Errors
+    ///
+    /// [`GeometryError::NonFinite`] for a non-finite entry;
     /// [`GeometryError::Degenerate`] for a non-affine matrix (last row not exactly
     /// `(0, 0, 0, 1)`: a projective map does not preserve `t`);
     /// [`GeometryError::SingularTransform`] when the linear part `L` has
@@ -113,19 +115,31 @@ impl Transform {
         Ok(Self { m, inv })
     }
 
-    /// Translation by `v`. Errors: [`GeometryError::NonFinite`].
+    /// Translation by `v`.
+    ///
+    /// # Errors
+    ///
+    /// [`GeometryError::NonFinite`].
     pub fn translate(v: Vec3) -> Result<Self, GeometryError> {
         Self::new(Mat4::from_translation(v))
     }
 
-    /// Scale by `s` per axis (negative components mirror). Errors as [`Transform::new`]
+    /// Scale by `s` per axis (negative components mirror).
+    ///
+    /// # Errors
+    ///
+    /// As [`Transform::new`]
     /// (a zero or relatively tiny component is singular).
     pub fn scale(s: Vec3) -> Result<Self, GeometryError> {
         Self::new(Mat4::from_scale(s))
     }
 
     /// Rotation by `angle` radians (counter-clockwise looking down `axis`) about `axis` (any
-    /// non-zero length). Errors: [`GeometryError::NonFinite`], [`GeometryError::Degenerate`]
+    /// non-zero length).
+    ///
+    /// # Errors
+    ///
+    /// [`GeometryError::NonFinite`], [`GeometryError::Degenerate`]
     /// for a zero axis.
     pub fn rotate(axis: Vec3, angle: f32) -> Result<Self, GeometryError> {
         if !is_finite3(axis) || !angle.is_finite() {
@@ -140,7 +154,10 @@ impl Transform {
     }
 
     /// `self` followed by `next` (matrix `next.M · self.M`, inverse recomputed in `f64`).
-    /// Errors as [`Transform::new`].
+    ///
+    /// # Errors
+    ///
+    /// As [`Transform::new`].
     pub fn then(&self, next: &Self) -> Result<Self, GeometryError> {
         Self::new(next.m * self.m)
     }

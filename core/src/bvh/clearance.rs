@@ -24,7 +24,9 @@ where
     /// Typical use: area-weighted vertex normals of the moving body (from the half-edge mesh)
     /// against a BVH of the environment; the body itself is not in the tree.
     ///
-    /// Errors (nothing written): [`BvhError::LengthMismatch`] when `normals` or `out` do not
+    /// # Errors
+    ///
+    /// Nothing written: [`BvhError::LengthMismatch`] when `normals` or `out` do not
     /// have `points.len()` entries.
     pub fn clearance(
         &self,
@@ -40,6 +42,10 @@ where
     }
 
     /// [`Bvh::clearance`] against a triangle mesh with the intersector `isect`.
+    ///
+    /// # Errors
+    ///
+    /// As [`Bvh::clearance`]: [`BvhError::LengthMismatch`], nothing written.
     pub fn clearance_triangles<T: TriangleIntersector>(
         &self,
         mesh: &TriangleMesh<'_>,

@@ -156,9 +156,12 @@ where
     /// it drops is built here afterwards); then the parts are joined into one tree, the same
     /// tree as [`Bvh::build_with_scratch`]'s with another node numbering.
     ///
-    /// The same errors as [`Bvh::build_with_scratch`], all returned before `run` is called and
-    /// before `nodes` or `indices` are written. `job_size = 0` or an empty `jobs` builds
-    /// everything here.
+    /// `job_size = 0` or an empty `jobs` builds everything here.
+    ///
+    /// # Errors
+    ///
+    /// As [`Bvh::build_with_scratch`], all returned before `run` is called and before `nodes` or
+    /// `indices` are written.
     // The storage of `build_with_scratch`, the job slots and their size, and the runner.
     #[allow(clippy::too_many_arguments)]
     pub fn build_in_jobs<S: PrimitiveSource + ?Sized>(

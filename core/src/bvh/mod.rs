@@ -212,7 +212,9 @@ where
 {
     /// Builds a BVH over `source` into `nodes` and `indices`.
     ///
-    /// Errors, all returned before any storage is written:
+    /// # Errors
+    ///
+    /// All returned before any storage is written:
     /// [`BvhError::TooManyPrimitives`] (more than [`MAX_PRIMITIVES`]),
     /// [`BvhError::NodeStorageTooSmall`] (fewer than [`node_capacity`]`(N)` nodes),
     /// [`BvhError::IndexStorageTooSmall`] (fewer than `N` indices), and
@@ -241,6 +243,11 @@ where
     /// level: the same tree, several times faster on large meshes. The same errors, plus
     /// [`BvhError::ScratchTooSmall`], all before `nodes` or `indices` are written; the
     /// scratch's contents afterwards mean nothing.
+    ///
+    /// # Errors
+    ///
+    /// As [`Bvh::build`], plus [`BvhError::ScratchTooSmall`] (fewer than
+    /// [`scratch_capacity`]`(N)` records), all before `nodes` or `indices` are written.
     pub fn build_with_scratch<S: PrimitiveSource + ?Sized>(
         source: &S,
         mut nodes: N,

@@ -17,7 +17,9 @@ where
     ///
     /// Tree quality degrades as primitives move far; rebuild when queries slow down.
     ///
-    /// Errors: [`BvhError::SourceLengthMismatch`] (nothing written) when `source` has a
+    /// # Errors
+    ///
+    /// [`BvhError::SourceLengthMismatch`] (nothing written) when `source` has a
     /// different primitive count than at build time. [`BvhError::NonFinitePrimitive`] names the
     /// first primitive whose new bounds are non-finite: the refit is still completed, with
     /// that primitive's box treated as empty, so queries stay valid and never report it

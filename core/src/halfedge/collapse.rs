@@ -35,6 +35,10 @@ impl<S: MeshStorage> Mesh<S> {
     /// 7. `FoldOver(f)`: with the survivor at the target, a remaining face around either
     ///    endpoint would get a normal pointing against (or perpendicular to) its old one. Exact
     ///    sign test on unnormalised normals; faces that were already degenerate are skipped.
+    ///
+    /// # Errors
+    ///
+    /// The first rule broken, as a [`CE`] variant (the list above); nothing is changed.
     pub fn can_collapse_edge(&self, h: HalfedgeId, at: CollapseAt) -> Result<Vec3, CE> {
         if !self.h_live(h.0) {
             return Err(CE::Dead);

@@ -11,6 +11,10 @@ impl<S: MeshStorage> Mesh<S> {
     /// Refused: a dead edge; a boundary edge; equal wing vertices; wing vertices already
     /// joined by an edge (this also rules out tetrahedra and interior valence-3 endpoints);
     /// an endpoint whose valence would drop below 3.
+    ///
+    /// # Errors
+    ///
+    /// The first refusal, as a [`FlipError`]; nothing is changed.
     pub fn can_flip_edge(&self, e: EdgeId) -> Result<(), FlipError> {
         if !self.e_live(e.0) {
             return Err(FlipError::Dead);
@@ -41,6 +45,10 @@ impl<S: MeshStorage> Mesh<S> {
     /// `(d, b, c)`. Afterwards halfedge `2e` runs `d → c`; the two faces keep their handles.
     /// No new elements; capacity is irrelevant. Refusals as [`Mesh::can_flip_edge`], with
     /// the mesh unchanged.
+    ///
+    /// # Errors
+    ///
+    /// As [`Mesh::can_flip_edge`]; the mesh is unchanged.
     pub fn flip_edge(&mut self, e: EdgeId) -> Result<(), FlipError> {
         self.can_flip_edge(e)?;
         let (h, t) = (e.0 << 1, (e.0 << 1) | 1);

@@ -516,6 +516,11 @@ impl<S: MeshStorage> Mesh<S> {
     }
 
     /// Moves `v` to `p`. Refuses non-finite positions (the mesh stays unchanged).
+    ///
+    /// # Errors
+    ///
+    /// [`PositionError::Dead`] for a dead or out-of-range vertex, [`PositionError::NonFinite`]
+    /// for a non-finite `p`; the mesh is unchanged.
     pub fn set_position(&mut self, v: VertexId, p: Vec3) -> Result<(), PositionError> {
         if !self.v_live(v.0) {
             return Err(PositionError::Dead);

@@ -9,6 +9,10 @@ use super::storage::{Counts, MeshStorage};
 
 impl<S: MeshStorage> Mesh<S> {
     /// Splits `e` at its midpoint; see [`Mesh::split_edge_at`].
+    ///
+    /// # Errors
+    ///
+    /// As [`Mesh::split_edge_at`]; the mesh is unchanged.
     pub fn split_edge(&mut self, e: EdgeId) -> Result<VertexId, SplitError> {
         let [a, b] = self.edge_vertices(e).ok_or(SplitError::Dead)?;
         let mid = self.pos_raw(a.0) * 0.5 + self.pos_raw(b.0) * 0.5;

@@ -19,6 +19,10 @@ impl<S: MeshStorage> Mesh<S> {
     ///
     /// Cost O(H + Σ valence²). Every walk is bounded by the slot count, so corrupt data
     /// cannot hang it.
+    ///
+    /// # Errors
+    ///
+    /// The first invariant broken, as an [`IE`] naming the element.
     pub fn validate(&self) -> Result<(), IE> {
         self.check_free_lists()?;
         let ne = self.s.edges().len() as u32;

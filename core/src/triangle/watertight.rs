@@ -50,7 +50,7 @@ impl WatertightRay {
 
     /// The lanes of `lanes` whose three `f32` edge functions (the filter of [`Watertight`])
     /// are all certain and of mixed signs: the triangles both watertight tests miss. The same
-    /// `f32` operations as [`WatertightRay::project`] and the scalar filter, lane by lane (no
+    /// `f32` operations as the projection and the scalar filter, lane by lane (no
     /// fused multiply-add), so a lane is reported exactly when the scalar test rejects it on
     /// its `f32` signs; NaN lanes (unused ones among them) are never reported.
     #[inline(always)]

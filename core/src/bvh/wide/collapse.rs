@@ -182,7 +182,11 @@ where
     T: AsRef<[LeafGroup]> + AsMut<[LeafGroup]>,
 {
     /// Exact number of wide nodes [`WideBvh::from_binary`] needs for `binary` (0 for an empty
-    /// tree). Errors as `from_binary` for a leaf of more than [`MAX_LEAF_TRIANGLES`].
+    /// tree).
+    ///
+    /// # Errors
+    ///
+    /// As `from_binary` for a leaf of more than [`MAX_LEAF_TRIANGLES`].
     pub fn node_count_for<BN, BI>(binary: &Bvh<BN, BI>) -> Result<usize, BvhError>
     where
         BN: AsRef<[BvhNode]>,
@@ -194,7 +198,9 @@ where
     /// Collapses `binary`, built over `mesh`, into `nodes` and `groups` (see the module
     /// docs).
     ///
-    /// Errors, all returned before any storage is written:
+    /// # Errors
+    ///
+    /// All returned before any storage is written:
     /// [`BvhError::SourceLengthMismatch`] (`mesh` has another triangle count than `binary`'s
     /// source), [`BvhError::TooManyTriangles`], [`BvhError::LeafTooLarge`],
     /// [`BvhError::NodeStorageTooSmall`] (fewer than [`WideBvh::node_count_for`] nodes),

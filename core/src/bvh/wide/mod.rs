@@ -6,7 +6,7 @@
 //!
 //! # Building
 //!
-//! [`WideBvh::from_binary`] collapses a built binary tree over a [`TriangleMesh`]: each wide
+//! [`WideBvh::from_binary`] collapses a built binary tree over a [`TriangleMesh`](crate::bvh::TriangleMesh): each wide
 //! node takes its binary node's two children and, while it has fewer than `W`, replaces the
 //! inner child with the largest surface area by that child's two children (ties: the first).
 //! Binary leaves become wide leaf slots unchanged. The caller passes node storage of at least

@@ -65,7 +65,11 @@ where
 
     /// The clearance query of [`crate::bvh::Bvh::clearance_triangles`] on this tree: for each
     /// point, the distance to the nearest hit along its normal (`+∞` for none or an invalid
-    /// ray), into `out`; returns the minimum. Errors (nothing written):
+    /// ray), into `out`; returns the minimum.
+    ///
+    /// # Errors
+    ///
+    /// Nothing written:
     /// [`BvhError::LengthMismatch`].
     pub fn clearance_triangles<I: TriangleIntersector>(
         &self,

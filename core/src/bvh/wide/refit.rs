@@ -15,7 +15,9 @@ where
     /// groups and recomputes every child box bottom-up, in one reverse pass over the nodes
     /// (children are stored after their parent), with no stack and no rebuild.
     ///
-    /// Errors: [`BvhError::SourceLengthMismatch`] (nothing written) when `mesh` has another
+    /// # Errors
+    ///
+    /// [`BvhError::SourceLengthMismatch`] (nothing written) when `mesh` has another
     /// triangle count than at build time. [`BvhError::NonFinitePrimitive`] names the first
     /// triangle whose new vertices are not finite (or whose indices are out of range): the
     /// refit is still completed with that triangle's record made unhittable (NaN vertices)
