@@ -42,9 +42,11 @@ impl WatertightRay {
         if d[kz] < 0.0 {
             core::mem::swap(&mut kx, &mut ky);
         }
+        // The three quotients in one four-lane division (each lane the same IEEE quotient).
+        let shear = glam::Vec3A::new(d[kx], d[ky], 1.0) / glam::Vec3A::splat(d[kz]);
         Some(Self {
             k: [kx, ky, kz],
-            shear: Vec3::new(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]),
+            shear: shear.into(),
         })
     }
 
