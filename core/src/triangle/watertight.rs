@@ -89,6 +89,70 @@ impl WatertightRay {
         certain & any & (any >> 4)
     }
 
+    /// How the ray crosses triangle `v` when **each point of the plane is counted once**: `+1`
+    /// or `−1` (the sign of the watertight test's `det`, `+1` when the triangle faces the ray,
+    /// as [`TriangleHit::front_face`]) when the ray, moved by an infinitesimal `(ε, ε²)` in
+    /// the sheared plane, passes strictly inside the triangle; `0` otherwise.
+    ///
+    /// Where the closed test ([`Watertight`]) reports a ray through an edge shared by two
+    /// triangles for both, and through a vertex for its whole fan, this rule (symbolic
+    /// perturbation: the half-open "top-left" rule of rasterisers) keeps exactly one of them,
+    /// and counts a silhouette edge (one triangle facing the ray, its neighbour facing away)
+    /// for both or neither: summed over a closed, consistently oriented mesh, the signs are
+    /// the change of its winding number along the line, exactly, whatever edge or vertex the
+    /// line passes through. Exact: the edge functions are the exact `f64` differences of
+    /// exact products of the sheared coordinates, and a zero one is decided by the sign of an
+    /// `f32` coordinate difference, which rounding cannot change. `0` for a triangle whose
+    /// projection is degenerate (`det = 0`). A non-zero result implies that the closed test
+    /// reports the crossing (when its `t` lies in the interval).
+    #[must_use]
+    pub fn crossing_sign(&self, origin: Vec3, v: &[Vec3; 3]) -> i8 {
+        let ([ax, bx, cx], [ay, by, cy], _) = self.project_triangle(origin, v);
+        // Edge functions at the ray (the sheared origin) of the edges C→B, A→C, B→A, the
+        // operands of `Watertight`'s edges, and each edge's direction T − S.
+        let edges = [
+            (
+                diff_of_products_exact_sign(cx, by, cy, bx),
+                bx - cx,
+                by - cy,
+            ),
+            (
+                diff_of_products_exact_sign(ax, cy, ay, cx),
+                cx - ax,
+                cy - ay,
+            ),
+            (
+                diff_of_products_exact_sign(bx, ay, by, ax),
+                ax - bx,
+                ay - by,
+            ),
+        ];
+        // E_ST(p + (ε, ε²)) = E_ST(p) + d_x·ε² − d_y·ε: when E is exactly zero its sign is
+        // −sign(d_y), or sign(d_x) for a horizontal edge (d = 0 only for a degenerate
+        // projection, whose det is 0).
+        let perturbed = |(e, dx, dy): (f64, f32, f32)| -> i8 {
+            if e > 0.0 {
+                1
+            } else if e < 0.0 {
+                -1
+            } else if dy != 0.0 {
+                if dy > 0.0 { -1 } else { 1 }
+            } else if dx > 0.0 {
+                1
+            } else if dx < 0.0 {
+                -1
+            } else {
+                0
+            }
+        };
+        let s = edges.map(perturbed);
+        if s[0] != 0 && s[0] == s[1] && s[1] == s[2] {
+            s[0]
+        } else {
+            0
+        }
+    }
+
     /// The three vertices projected with [`WatertightRay::project`]: `([x'], [y'], [z'])`.
     #[inline(always)]
     fn project_triangle(&self, origin: Vec3, v: &[Vec3; 3]) -> ([f32; 3], [f32; 3], [f32; 3]) {
@@ -530,5 +594,166 @@ mod tests {
             assert!(v.intersect(&through, &line).is_none(), "{}", v.name());
             assert!(v.intersect(&through, &point).is_none(), "{}", v.name());
         }
+    }
+
+    /// `(Σ crossing_sign, number of non-zero signs, number of closed-test hits)` of `line`
+    /// over `tris` (the whole line: the interval is unbounded).
+    fn crossings(tris: &[[Vec3; 3]], origin: Vec3, dir: Vec3) -> (i32, usize, usize) {
+        let line = Ray::with_interval(origin, dir, f32::NEG_INFINITY, f32::INFINITY);
+        let pre = WatertightRay::new(&line).unwrap();
+        let mut sum = 0;
+        let mut counted = 0;
+        let mut closed = 0;
+        for t in tris {
+            let s = pre.crossing_sign(origin, t);
+            sum += i32::from(s);
+            counted += usize::from(s != 0);
+            let hit = Watertight.intersect(&line, t);
+            closed += usize::from(hit.is_some());
+            if s != 0 {
+                // A counted crossing is one the closed test reports, with the same facing.
+                assert_eq!(
+                    hit.map(|h| h.front_face),
+                    Some(s > 0),
+                    "{t:?} {origin} {dir}"
+                );
+            }
+        }
+        (sum, counted, closed)
+    }
+
+    #[test]
+    fn crossing_sign_counts_a_shared_edge_or_vertex_once() {
+        // The unit square split on its diagonal, seen from above (both triangles face the ray).
+        let [a, b, c, d] = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ];
+        let square = [[a, b, c], [a, c, d]];
+        let down = Vec3::new(0.0, 0.0, -1.0);
+        let mut on_diagonal_closed = 0;
+        for i in 1..64 {
+            let s = i as f32 / 64.0;
+            // On the shared diagonal: the closed test reports both, the rule one.
+            let (sum, counted, closed) = crossings(&square, Vec3::new(s, s, 1.0), down);
+            assert_eq!((sum, counted), (1, 1), "diagonal at {s}");
+            on_diagonal_closed += closed;
+            // Inside one triangle only.
+            let (sum, counted, _) = crossings(&square, Vec3::new(s, s * 0.5, 1.0), down);
+            assert_eq!((sum, counted), (1, 1), "inside at {s}");
+        }
+        assert_eq!(
+            on_diagonal_closed,
+            2 * 63,
+            "the closed test reports both triangles"
+        );
+        // From below, both face away: −1, once.
+        let (sum, counted, _) = crossings(&square, Vec3::new(0.5, 0.5, -1.0), -down);
+        assert_eq!((sum, counted), (-1, 1));
+
+        // A fan of eight triangles around the origin (rim on the square of side 2): a ray
+        // through the centre vertex, and through every spoke, is counted once.
+        let rim = [
+            (1.0, 0.0),
+            (1.0, 1.0),
+            (0.0, 1.0),
+            (-1.0, 1.0),
+            (-1.0, 0.0),
+            (-1.0, -1.0),
+            (0.0, -1.0),
+            (1.0, -1.0),
+        ]
+        .map(|(x, y)| Vec3::new(x, y, 0.0));
+        let fan: std::vec::Vec<[Vec3; 3]> = (0..8)
+            .map(|k| [Vec3::ZERO, rim[k], rim[(k + 1) % 8]])
+            .collect();
+        let (sum, counted, closed) = crossings(&fan, Vec3::new(0.0, 0.0, 1.0), down);
+        assert_eq!((sum, counted, closed), (1, 1, 8), "centre vertex");
+        for (k, &r) in rim.iter().enumerate() {
+            let mid = r * 0.5 + Vec3::Z;
+            let (sum, counted, closed) = crossings(&fan, mid, down);
+            assert_eq!((sum, counted, closed), (1, 1, 2), "spoke {k}");
+            // Oblique rays through the centre, from every side.
+            let oblique = -(r * 0.25 + Vec3::Z);
+            let (sum, counted, _) = crossings(&fan, r * 0.25 + Vec3::Z, oblique);
+            assert_eq!((sum, counted), (1, 1), "oblique {k}");
+        }
+    }
+
+    #[test]
+    fn crossing_sign_keeps_a_closed_mesh_closed_through_every_edge_and_vertex() {
+        // The octahedron (vertices ±e_i, faces outward): every line through a vertex or an
+        // edge point enters as often as it leaves, and a transversal one crosses exactly
+        // twice; a line touching only a vertex or an edge from outside counts nothing.
+        let e = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+        let mut tris = std::vec::Vec::new();
+        for sx in [0usize, 1] {
+            for sy in [2usize, 3] {
+                for sz in [4usize, 5] {
+                    let (x, y, z) = (e[sx], e[sy], e[sz]);
+                    // Outward normal = sign pattern; order the face counter-clockwise.
+                    let n = x + y + z;
+                    let tri = if (y - x).cross(z - x).dot(n) > 0.0 {
+                        [x, y, z]
+                    } else {
+                        [x, z, y]
+                    };
+                    tris.push(tri);
+                }
+            }
+        }
+        let mut s = 0x5EED_u64;
+        let mut transversal = 0;
+        let mut points: std::vec::Vec<Vec3> = e.to_vec();
+        for i in 0..6 {
+            for j in i + 1..6 {
+                if e[i] != -e[j] {
+                    points.push((e[i] + e[j]) * 0.5);
+                    points.push(e[i] * 0.25 + e[j] * 0.75);
+                }
+            }
+        }
+        for p in &points {
+            for _ in 0..200 {
+                let dir = crate::test_util::unit_vec(&mut s);
+                let (sum, counted, _) = crossings(&tris, *p - dir * 3.0, dir);
+                assert_eq!(sum, 0, "through {p} along {dir}");
+                assert!(
+                    counted == 0 || counted == 2,
+                    "through {p} along {dir}: {counted}"
+                );
+                // Independent oracle, in f64: the line meets the interior of |x|+|y|+|z| ≤ 1
+                // iff that convex piecewise-linear function drops below 1 on it; its minimum
+                // is at a breakpoint (a coordinate crossing zero).
+                let (o, d) = ((*p - dir * 3.0).as_dvec3(), dir.as_dvec3());
+                let f = |t: f64| (o + d * t).abs().element_sum();
+                let min = (0..3)
+                    .filter(|&k| d[k] != 0.0)
+                    .map(|k| f(-o[k] / d[k]))
+                    .fold(f64::INFINITY, f64::min);
+                // Within the projection's f32 rounding of the surface (~1e-7 here; 1e-5 is
+                // far outside it) the test sees a slightly displaced line: only the sum and
+                // the parity are promised there.
+                if min < 1.0 - 1e-5 {
+                    assert_eq!(counted, 2, "through {p} along {dir}: enters the solid");
+                    transversal += 1;
+                } else if min > 1.0 + 1e-5 {
+                    assert_eq!(counted, 0, "through {p} along {dir}: misses the solid");
+                }
+            }
+        }
+        assert!(transversal > 1000, "{transversal}");
+        // Tangent at a vertex and along an edge, from outside: nothing is counted.
+        let (sum, counted, _) = crossings(&tris, Vec3::new(1.0, 0.0, -2.0), Vec3::Z);
+        assert_eq!((sum, counted), (0, 0));
+        let (sum, counted, _) = crossings(
+            &tris,
+            Vec3::new(0.5, 0.5, -2.0) + Vec3::new(0.5, 0.5, 0.0),
+            Vec3::Z,
+        );
+        assert_eq!(sum, 0);
+        assert!(counted == 0 || counted == 2);
     }
 }

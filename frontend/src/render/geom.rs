@@ -7,10 +7,11 @@
 //!
 //! **CSG** is evaluated on intervals: each operand reports every crossing of its boundary along
 //! the whole line `t ∈ (−∞, +∞)` ([`Node::events`]) with a flag saying whether the ray enters
-//! or leaves the solid, plus whether the line starts inside (`t → −∞`). Winding counts per
-//! operand (so duplicate hits on shared mesh edges do not break parity) give the operand's
-//! inside/outside state between crossings; the boolean operation combines the two states and
-//! every change of the combined state is a crossing of the result.
+//! or leaves the solid, plus whether the line starts inside (`t → −∞`). A mesh reports each
+//! crossing of its surface once, whatever edge or vertex the line passes through
+//! (`mesh_events`); winding counts per operand give its inside/outside state between
+//! crossings; the boolean operation combines the two states and every change of the combined
+//! state is a crossing of the result.
 
 use crate::accel::MeshAccel;
 use crate::render::xform::bounds_to_world;
@@ -272,8 +273,10 @@ impl MeshShape {
         Some((th.to_hit(&v), Vec3::new(th.b0(), th.b1, th.b2)))
     }
 
-    /// Every triangle crossing on the ray's interval, with its triangle index.
-    fn all_hits(&self, ray: &Ray, stats: &mut TraversalStats, out: &mut Vec<(u32, Hit, Vec3)>) {
+    /// Every triangle the closed watertight test hits on the ray's interval, with its index
+    /// and [`halfray_core::triangle::WatertightRay::crossing_sign`] (0 for a triangle that the
+    /// rule does not count: the second triangle of an edge, the rest of a vertex's fan).
+    fn all_hits(&self, ray: &Ray, stats: &mut TraversalStats, out: &mut Vec<MeshHit>) {
         let Some(pre) = Watertight.prepare(ray) else {
             return;
         };
@@ -282,13 +285,69 @@ impl MeshShape {
             |prim, v, r| {
                 // `r.t_max` never shrinks: we never report a hit, so every crossing is seen.
                 if let Some(th) = Watertight.intersect_prepared(&pre, r, v) {
-                    out.push((prim, th.to_hit(v), Vec3::new(th.b0(), th.b1, th.b2)));
+                    out.push(MeshHit {
+                        prim,
+                        hit: th.to_hit(v),
+                        bary: Vec3::new(th.b0(), th.b1, th.b2),
+                        sign: pre.crossing_sign(r.origin, v),
+                    });
                 }
                 None
             },
             Some(stats),
         );
     }
+}
+
+/// One triangle hit of [`MeshShape::all_hits`].
+struct MeshHit {
+    prim: u32,
+    hit: Hit,
+    bary: Vec3,
+    sign: i8,
+}
+
+/// The crossings of a closed mesh along a whole line, from its triangle hits: **one per
+/// surface crossing**, whatever edge or vertex the line passes through. Hits at equal `t` form
+/// one point of the line; there the crossings [`WatertightRay::crossing_sign`] counts (those
+/// of the line moved infinitesimally off the edge) become events, alternating from the state
+/// before the point, so the winding count changes by exactly their sum. A point where the
+/// closed test hits but the rule counts nothing (the line grazes an edge or vertex) becomes an
+/// empty interval, two events at the same `t`: the surface is still seen there, as a plain
+/// closest hit sees it. Each point's first event carries the hit of its smallest triangle
+/// index, the closest-hit rule, so a mesh traced through this path shows the same picture
+/// (`--force-all-effects`).
+///
+/// [`WatertightRay::crossing_sign`]: halfray_core::triangle::WatertightRay::crossing_sign
+fn mesh_events(mut hits: Vec<MeshHit>, event: impl Fn(Hit, Vec3, bool) -> Event) -> Vec<Event> {
+    hits.sort_by(|a, b| a.hit.t.total_cmp(&b.hit.t).then(a.prim.cmp(&b.prim)));
+    let mut out = Vec::with_capacity(hits.len());
+    let mut inside = false;
+    let mut i = 0;
+    while i < hits.len() {
+        let t = hits[i].hit.t;
+        let group = hits[i..].iter().take_while(|h| h.hit.t == t).count();
+        let point = &hits[i..i + group];
+        let counted = point.iter().filter(|h| h.sign != 0).count();
+        // An empty interval where nothing is counted; else one event per counted crossing.
+        let n = if counted == 0 { 2 } else { counted };
+        for k in 0..n {
+            inside = !inside;
+            // The first event: the closest-hit record; later ones: a counted triangle.
+            let h = if k == 0 {
+                &point[0]
+            } else {
+                point
+                    .iter()
+                    .filter(|h| h.sign != 0)
+                    .nth(k)
+                    .unwrap_or(&point[0])
+            };
+            out.push(event(h.hit, h.bary, inside));
+        }
+        i += group;
+    }
+    out
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -546,9 +605,10 @@ impl Node {
             Shape::Mesh(m) => {
                 let mut hits = Vec::new();
                 m.all_hits(&line, &mut ctx.stats, &mut hits);
-                // Ties go to the smaller triangle index, as in the BVH's closest hit.
-                hits.sort_by(|a, b| a.1.t.total_cmp(&b.1.t).then(a.0.cmp(&b.0)));
-                out.extend(hits.into_iter().map(|(_, h, b)| self.event(h, Some(b))));
+                out.extend(mesh_events(hits, |h, b, enter| Event {
+                    enter,
+                    ..self.event(h, Some(b))
+                }));
                 false
             }
             Shape::Csg(op, a, b) => {
