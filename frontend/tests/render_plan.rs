@@ -242,3 +242,60 @@ fn plan_never_changes_the_picture_on_example_scenes() {
         "{n} of {tomls} example scenes checked"
     );
 }
+
+/// `--stats-json` reports the plan, one boolean per effect, beside the ray counts it explains.
+#[test]
+fn stats_json_reports_the_plan_next_to_the_ray_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene_path = dir.path().join("matte.toml");
+    std::fs::write(&scene_path, MATTE).unwrap();
+    let run = |scene: &Path, extra: &[&str]| -> serde_json::Value {
+        let json = dir.path().join("stats.json");
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_halfray"))
+            .arg("render")
+            .arg(scene)
+            .arg("-o")
+            .arg(dir.path().join("out.png"))
+            .args(["--width", "24", "--height", "16", "-q", "--stats-json"])
+            .arg(&json)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap()
+    };
+    // Matte, no shadow-casting light: every effect off, and no ray of any of them.
+    let v = run(&scene_path, &[]);
+    let plan = &v["plan"];
+    for effect in [
+        "shadow",
+        "reflection",
+        "refraction",
+        "specular",
+        "antialias",
+        "csg_intervals",
+    ] {
+        assert_eq!(plan[effect], false, "{effect}: {v}");
+    }
+    for rays in ["shadow", "reflection", "refraction"] {
+        assert_eq!(v[rays], 0, "{rays}: {v}");
+    }
+    assert_eq!(v["primary"], 24 * 16);
+    // Forced: everything the renderer can simulate is on (and costs rays).
+    let v = run(&scene_path, &["--force-all-effects"]);
+    for effect in [
+        "shadow",
+        "reflection",
+        "refraction",
+        "specular",
+        "csg_intervals",
+    ] {
+        assert_eq!(v["plan"][effect], true, "{effect}: {v}");
+    }
+    assert!(v["shadow"].as_u64().unwrap() > 0);
+    // The glass scene: refraction and reflection on, because its objects use glass.
+    let v = run(&scenes_dir().join("glass.toml"), &[]);
+    assert_eq!(v["plan"]["refraction"], true, "{v}");
+    assert_eq!(v["plan"]["reflection"], true, "{v}");
+    assert!(v["refraction"].as_u64().unwrap() > 0);
+}

@@ -35,6 +35,12 @@ fn run(scene: &str, extra: &[&str]) -> Run {
             &H.to_string(),
             "--quiet",
         ])
+        // Coverage is read from alpha (a background image is composited instead).
+        .args(
+            (!extra.contains(&"--background"))
+                .then_some("--transparent-background")
+                .as_slice(),
+        )
         .arg("--stats-json")
         .arg(&json)
         .args(extra)
@@ -361,4 +367,34 @@ fn readme_example_parses_and_renders() {
     let out = halfray::render::render(&s, &halfray::render::RenderOptions::default());
     assert!(out.coverage() > 0);
     assert_eq!(out.plan.csg_objects, ["object[1] (csg)"]);
+}
+
+/// The background colour is written opaque unless a transparent background is asked for.
+#[test]
+fn background_is_opaque_unless_asked_for_transparency() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("out.png");
+    let render = |extra: &[&str]| -> RgbaImage {
+        let o = Command::new(env!("CARGO_BIN_EXE_halfray"))
+            .arg("render")
+            .arg(scenes_dir().join("mirror.toml"))
+            .arg("-o")
+            .arg(&png)
+            .args(["--width", "32", "--height", "24", "--quiet"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        image::open(&png).unwrap().to_rgba8()
+    };
+    let opaque = render(&[]);
+    let transparent = render(&["--transparent-background"]);
+    assert!(opaque.pixels().all(|p| p.0[3] == 255), "every pixel opaque");
+    let clear = transparent.pixels().filter(|p| p.0[3] == 0).count();
+    assert!(clear > 0, "the scene shows some background");
+    // Same colours; only the alpha of the background pixels differs.
+    for (a, b) in opaque.pixels().zip(transparent.pixels()) {
+        assert_eq!(a.0[..3], b.0[..3]);
+        assert!(b.0[3] == 255 || b.0[3] == 0);
+    }
 }

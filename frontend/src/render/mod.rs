@@ -59,13 +59,17 @@ pub struct RenderArgs {
     /// Print the effect plan before rendering.
     #[arg(long)]
     pub explain: bool,
-    /// Write ray counts per kind and the time as JSON (keys primary, shadow, reflection,
-    /// refraction, seconds).
+    /// Write ray counts per kind, the time and the effect plan as JSON (keys primary, shadow,
+    /// reflection, refraction, seconds, plan).
     #[arg(long, value_name = "FILE")]
     pub stats_json: Option<PathBuf>,
     /// Composite the render over this image (Porter–Duff "over"; same size as the render).
     #[arg(long, value_name = "IMG.png")]
     pub background: Option<PathBuf>,
+    /// Write the pixels where no object is hit with alpha 0 (colour mode; for compositing
+    /// elsewhere). By default the scene's background colour is written opaque.
+    #[arg(long, conflicts_with = "background")]
+    pub transparent_background: bool,
     /// Turn every effect on (for comparison with the plan; the picture is the same).
     #[arg(long)]
     pub force_all_effects: bool,
@@ -138,6 +142,13 @@ impl Rendered {
             .iter()
             .flat_map(|p| [enc(p.x), enc(p.y), enc(p.z), output::to_u8(p.w)])
             .collect()
+    }
+
+    /// Makes every pixel opaque (alpha 1): the background colour where nothing was hit.
+    pub fn make_opaque(&mut self) {
+        for p in &mut self.pixels {
+            p.w = 1.0;
+        }
     }
 
     /// Composites the render over a background (linear straight RGBA, same size).
@@ -292,6 +303,8 @@ struct StatsJson {
     reflection: u64,
     refraction: u64,
     seconds: f64,
+    /// Which effects the renderer simulated ([`plan::PlanFlags`]).
+    plan: plan::PlanFlags,
 }
 
 /// The summary line printed after every render.
@@ -372,6 +385,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let mut out = render(&scene, &opts);
     if let Some(bg) = &background {
         out.composite_over(bg);
+    } else if args.mode == Mode::Color && !args.transparent_background {
+        out.make_opaque();
     }
     let mut reserved = reserved.into_iter();
     let png = reserved.next().expect("-o is reserved first");
@@ -383,6 +398,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             reflection: c.reflection,
             refraction: c.refraction,
             seconds: out.seconds,
+            plan: EffectPlan::derive(&scene, opts.force_all).flags(),
         })
         .map_err(|e| Error::Other(format!("stats JSON: {e}")))?;
         stats.write(|w| w.write_all(format!("{json}\n").as_bytes()))?;

@@ -30,7 +30,37 @@ pub struct EffectPlan {
     pub forced: bool,
 }
 
+/// The plan as `--stats-json` reports it: one boolean per effect, `true` when the renderer
+/// simulates it for some light, material or object.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct PlanFlags {
+    /// Shadow rays towards at least one light.
+    pub shadow: bool,
+    /// Reflection rays for at least one material.
+    pub reflection: bool,
+    /// Refraction rays for at least one material.
+    pub refraction: bool,
+    /// The specular term for at least one material.
+    pub specular: bool,
+    /// More than one sample per pixel (the renderer takes one: always `false` today).
+    pub antialias: bool,
+    /// CSG interval evaluation (CSG objects, or every solid when forced).
+    pub csg_intervals: bool,
+}
+
 impl EffectPlan {
+    /// One flag per effect, for `--stats-json`.
+    pub fn flags(&self) -> PlanFlags {
+        PlanFlags {
+            shadow: self.shadow_rays.iter().any(|&b| b),
+            reflection: self.reflect.iter().any(|&b| b),
+            refraction: self.refract.iter().any(|&b| b),
+            specular: self.specular.iter().any(|&b| b),
+            antialias: false,
+            csg_intervals: self.intervals_everywhere || !self.csg_objects.is_empty(),
+        }
+    }
+
     /// The plan the scene calls for, or everything when `force_all`.
     pub fn derive(scene: &Scene, force_all: bool) -> Self {
         let mats = &scene.materials;
