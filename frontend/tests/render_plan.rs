@@ -299,3 +299,88 @@ fn stats_json_reports_the_plan_next_to_the_ray_counts() {
     assert_eq!(v["plan"]["reflection"], true, "{v}");
     assert!(v["refraction"].as_u64().unwrap() > 0);
 }
+
+/// A floor lit by a point light straight above it, seen from above; `pane` adds a large
+/// horizontal triangle of the given transparency between them (one surface crossing).
+fn pane_scene(pane: Option<f32>) -> Scene {
+    let mut text = String::from(
+        r#"
+ambient = [0, 0, 0]
+
+[camera]
+eye = [0, 10, 0.001]
+look_at = [0, 0, 0]
+fov = 10
+width = 9
+height = 9
+
+[[light]]
+type = "point"
+position = [0, 4, 0]
+intensity = 16
+
+[material.floor]
+diffuse = [1, 1, 1]
+specular = [0, 0, 0]
+
+[material.glass]
+diffuse = [0, 0, 0]
+specular = [0, 0, 0]
+transparency = 0.5
+ior = 1.0
+
+[[object]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 1, 0]
+material = "floor"
+"#,
+    );
+    if let Some(t) = pane {
+        text = text.replace("transparency = 0.5", &format!("transparency = {t}"));
+        text.push_str(
+            r#"
+[[object]]
+type = "triangle"
+vertices = [[-50, 2, -50], [0, 2, 80], [50, 2, -50]]
+material = "glass"
+"#,
+        );
+    }
+    scene(&text)
+}
+
+/// Shadows through glass: the light reaching the floor under a pane of transparency `τ` is
+/// `τ` times the light without it (the analytic expectation: one crossing, Lambert otherwise
+/// unchanged); an opaque pane (`τ = 0`) blocks it; and a scene with no transparent material
+/// casts exactly one shadow ray per lit point, as before.
+#[test]
+fn shadows_through_glass_are_attenuated_by_the_transmission() {
+    let floor_only = render(&pane_scene(None), &RenderOptions::default());
+    let plan = EffectPlan::derive(&pane_scene(None), false);
+    assert!(
+        !plan.shadow_transmission,
+        "no transparent material: no transmission walk"
+    );
+    assert_eq!(floor_only.counts.shadow, 81, "one shadow ray per pixel");
+    let centre = floor_only.pixel(4, 4);
+    assert!(centre.x > 0.1, "{centre}");
+    for tau in [0.25f32, 0.5, 0.8] {
+        let s = pane_scene(Some(tau));
+        assert!(EffectPlan::derive(&s, false).shadow_transmission);
+        let lit = render(&s, &RenderOptions::default());
+        // The camera looks through the pane too: the floor is seen through it (refraction
+        // with ior 1, weight τ), lit through it (τ): τ² of the bare floor at the centre.
+        let got = lit.pixel(4, 4);
+        let want = centre.x * tau * tau;
+        assert!(
+            (got.x - want).abs() <= 1e-4 * centre.x,
+            "τ = {tau}: {} vs {want}",
+            got.x
+        );
+        // Two shadow segments per floor point under the pane (pane, then the light).
+        assert!(lit.counts.shadow >= 2 * 81, "{:?}", lit.counts);
+    }
+    let opaque = render(&pane_scene(Some(0.0)), &RenderOptions::default());
+    assert_eq!(opaque.pixel(4, 4).x, 0.0);
+}

@@ -22,6 +22,10 @@ pub struct EffectPlan {
     pub refract: Vec<bool>,
     /// Largest recursion depth used (0 when no material reflects or refracts).
     pub max_depth: u32,
+    /// Shadow rays pass through transparent surfaces, each crossing multiplying the light by
+    /// the material's `transparency` (on when an object with a transparent material can
+    /// shadow something: some light casts shadows; else shadow rays stop at the first hit).
+    pub shadow_transmission: bool,
     /// Evaluate every solid through the CSG interval path (only with `force_all`).
     pub intervals_everywhere: bool,
     /// Labels of the CSG objects (always interval-evaluated).
@@ -42,6 +46,8 @@ pub struct PlanFlags {
     pub refraction: bool,
     /// The specular term for at least one material.
     pub specular: bool,
+    /// Shadow rays through transparent surfaces ([`EffectPlan::shadow_transmission`]).
+    pub shadow_transmission: bool,
     /// More than one sample per pixel (the renderer takes one: always `false` today).
     pub antialias: bool,
     /// CSG interval evaluation (CSG objects, or every solid when forced).
@@ -56,6 +62,7 @@ impl EffectPlan {
             reflection: self.reflect.iter().any(|&b| b),
             refraction: self.refract.iter().any(|&b| b),
             specular: self.specular.iter().any(|&b| b),
+            shadow_transmission: self.shadow_transmission,
             antialias: false,
             csg_intervals: self.intervals_everywhere || !self.csg_objects.is_empty(),
         }
@@ -77,12 +84,18 @@ impl EffectPlan {
             .map(|(m, &u)| force_all || (u && m.transparency > 0.0))
             .collect();
         let recursive = reflect.iter().chain(&refract).any(|&b| b);
+        let shadow_rays: Vec<bool> = scene
+            .lights
+            .iter()
+            .map(|l| force_all || (l.cast_shadows && l.intensity != glam::Vec3::ZERO))
+            .collect();
+        let transparent_used = mats
+            .iter()
+            .zip(&used)
+            .any(|(m, &u)| u && m.transparency > 0.0);
         Self {
-            shadow_rays: scene
-                .lights
-                .iter()
-                .map(|l| force_all || (l.cast_shadows && l.intensity != glam::Vec3::ZERO))
-                .collect(),
+            shadow_transmission: force_all || (transparent_used && shadow_rays.iter().any(|&b| b)),
+            shadow_rays,
             specular: mats
                 .iter()
                 .zip(&used)
@@ -162,6 +175,17 @@ impl EffectPlan {
                 String::new()
             } else {
                 format!("; skipped for {}", off.join(", "))
+            }
+        );
+        let _ = writeln!(
+            s,
+            "  shadow transmission {}",
+            if self.shadow_transmission {
+                "on: shadow rays continue through transparent surfaces, light × transparency per crossing"
+            } else if on.is_empty() {
+                "off: no shadow rays"
+            } else {
+                "off: no object uses a transparent material (shadow rays stop at the first hit)"
             }
         );
         let nm = scene.materials.len();
