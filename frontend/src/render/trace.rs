@@ -158,22 +158,15 @@ impl Tracer<'_> {
         }
     }
 
-    /// Closest hit over every object.
+    /// Closest hit over every object (the scene's top-level BVH, [`crate::scene::top`]).
     pub fn closest(&self, ray: &Ray, ctx: &mut QueryCtx) -> Option<SurfaceHit> {
-        let mut r = *ray;
-        let mut best = None;
-        for o in &self.scene.objects {
-            if let Some(h) = o.closest(&r, ctx) {
-                r.t_max = h.hit.t;
-                best = Some(h);
-            }
-        }
-        best
+        let objects = &self.scene.objects;
+        self.scene.top.closest(objects, ray, ctx).map(|(_, h)| h)
     }
 
     /// Whether anything blocks `ray` in its interval.
     pub fn occluded(&self, ray: &Ray, ctx: &mut QueryCtx) -> bool {
-        self.scene.objects.iter().any(|o| o.occludes(ray, ctx))
+        self.scene.top.occluded(&self.scene.objects, ray, ctx)
     }
 
     /// The fraction of light that reaches the end of the shadow ray `ray` (towards `light`):

@@ -167,6 +167,7 @@ pub(super) fn build(src: &Source<'_>, d: def::SceneDef) -> Result<Scene> {
         max_depth,
         lights,
         materials,
+        top: super::top::TopLevel::new(&objects),
         objects,
         object_labels: labels,
         meshes: ctx.loaded,

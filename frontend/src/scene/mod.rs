@@ -10,6 +10,7 @@
 mod build;
 pub mod def;
 mod mesh;
+pub mod top;
 
 use crate::error::{Error, Location, Result};
 use crate::render::geom::{MeshShape, Node};
@@ -211,6 +212,8 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Top-level objects.
     pub objects: Vec<Node>,
+    /// The objects arranged for queries (a BVH over the bounded ones), built with them.
+    pub top: top::TopLevel,
     /// `object[i] (type)` labels, parallel to `objects`.
     pub object_labels: Vec<String>,
     /// Named meshes (shared by their instances).

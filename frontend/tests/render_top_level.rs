@@ -1,0 +1,111 @@
+//! The scene's top-level BVH (`scene::top`) against the plain loop over every object it
+//! replaced: the same closest object (ties: the object declared last), the same `t`, the same
+//! occlusion, on every example scene and on 10 000 spheres with duplicates.
+
+use halfray::render::geom::QueryCtx;
+use halfray::scene::{Scene, load, parse};
+use halfray_core::{Ray, Vec3};
+use std::path::Path;
+
+fn lcg(s: &mut u64) -> f32 {
+    *s = s
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    ((*s >> 40) as f32) / (1u64 << 24) as f32
+}
+
+/// The reference: every object in declaration order, a later one winning an equal `t`.
+fn closest_by_loop(s: &Scene, ray: &Ray, ctx: &mut QueryCtx) -> Option<(u32, f32)> {
+    let mut r = *ray;
+    let mut best = None;
+    for (i, o) in s.objects.iter().enumerate() {
+        if let Some(h) = o.closest(&r, ctx) {
+            r.t_max = h.hit.t;
+            best = Some((i as u32, h.hit.t));
+        }
+    }
+    best
+}
+
+fn check(s: &Scene, what: &str, lo: Vec3, hi: Vec3, rays: usize) -> usize {
+    let mut seed = 0x70_u64;
+    let mut hits = 0;
+    for k in 0..rays {
+        let o = lo + (hi - lo) * Vec3::new(lcg(&mut seed), lcg(&mut seed), lcg(&mut seed));
+        let d = Vec3::new(lcg(&mut seed), lcg(&mut seed), lcg(&mut seed)) - 0.5;
+        let mut ray = Ray::new(o, d);
+        if k % 3 == 0 {
+            ray.t_max = lcg(&mut seed) * 4.0;
+        }
+        let mut ctx = QueryCtx::default();
+        let want = closest_by_loop(s, &ray, &mut ctx);
+        let got = s
+            .top
+            .closest(&s.objects, &ray, &mut ctx)
+            .map(|(i, h)| (i, h.hit.t));
+        assert_eq!(got, want, "{what}: {ray:?}");
+        let blocked = s.objects.iter().any(|o| o.occludes(&ray, &mut ctx));
+        assert_eq!(
+            s.top.occluded(&s.objects, &ray, &mut ctx),
+            blocked,
+            "{what}: {ray:?}"
+        );
+        hits += usize::from(want.is_some());
+    }
+    hits
+}
+
+#[test]
+fn top_level_equals_the_object_loop_on_every_example_scene() {
+    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes"));
+    let mut n = 0;
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_none_or(|x| x != "toml") || p.ends_with("bunny.toml") {
+            continue;
+        }
+        let s = load(&p).unwrap_or_else(|e| panic!("{e}"));
+        let hits = check(
+            &s,
+            &p.display().to_string(),
+            Vec3::splat(-6.0),
+            Vec3::splat(6.0),
+            3000,
+        );
+        assert!(hits > 300, "{}: {hits}", p.display());
+        n += 1;
+    }
+    assert!(n >= 7);
+}
+
+#[test]
+fn top_level_equals_the_object_loop_on_ten_thousand_spheres_with_ties() {
+    let mut text = String::from(
+        "[camera]\neye = [0, 0, 30]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\nheight = 8\n\n\
+         [material.a]\ndiffuse = [1, 0, 0]\n\n[material.b]\ndiffuse = [0, 1, 0]\n\n\
+         [[object]]\ntype = \"plane\"\npoint = [0, -11, 0]\nnormal = [0, 1, 0]\nmaterial = \"a\"\n",
+    );
+    for i in 0..10_000 {
+        let (x, y, z) = (i % 25, (i / 25) % 20, i / 500);
+        text.push_str(&format!(
+            "\n[[object]]\ntype = \"sphere\"\ncenter = [{}, {}, {}]\nradius = 0.3\nmaterial = \"{}\"\n",
+            x as f32 - 12.0,
+            y as f32 - 10.0,
+            z as f32 - 10.0,
+            if i % 2 == 0 { "a" } else { "b" }
+        ));
+        // Every 97th sphere twice: equal `t`, the later one must win.
+        if i % 97 == 0 {
+            text.push_str(&format!(
+                "\n[[object]]\ntype = \"sphere\"\ncenter = [{}, {}, {}]\nradius = 0.3\nmaterial = \"b\"\n",
+                x as f32 - 12.0,
+                y as f32 - 10.0,
+                z as f32 - 10.0
+            ));
+        }
+    }
+    let s = parse(&text, Path::new("spheres.toml")).unwrap_or_else(|e| panic!("{e}"));
+    assert!(s.objects.len() > 10_000);
+    let hits = check(&s, "spheres", Vec3::splat(-14.0), Vec3::splat(14.0), 3000);
+    assert!(hits > 1000, "{hits}");
+}
