@@ -7,6 +7,7 @@
 pub mod accel;
 pub mod atomic;
 pub mod bench;
+pub mod cli_values;
 pub mod console;
 pub mod crosscheck;
 #[cfg(feature = "embree")]

@@ -45,10 +45,9 @@ pub struct BvhArgs {
     /// Number of incoherent random rays.
     #[arg(long, default_value_t = 1_000_000)]
     pub rays: usize,
-    /// Triangle intersector (watertight, watertight-f32, moller-trumbore,
-    /// moller-trumbore-noeps, cramer, f64-reference).
-    #[arg(long, default_value = "watertight")]
-    pub intersector: String,
+    /// Triangle intersector.
+    #[arg(long, value_enum, default_value_t)]
+    pub intersector: crate::cli_values::Intersector,
     /// Maximum leaf size of the build.
     #[arg(long, default_value_t = DEFAULT_MAX_LEAF_SIZE)]
     pub leaf_size: u32,
@@ -154,13 +153,7 @@ pub struct StructureReport {
 
 /// Runs the BVH benchmark.
 pub fn run(args: &BvhArgs) -> Result<()> {
-    let variant = TriangleVariant::from_name(&args.intersector).ok_or_else(|| {
-        Error::Usage(format!(
-            "unknown intersector `{}` (expected one of: {})",
-            args.intersector,
-            TriangleVariant::ALL.map(TriangleVariant::name).join(", ")
-        ))
-    })?;
+    let variant = args.intersector.0;
     if args.width == 0 {
         return Err(Error::Usage("--width must be at least 1".into()));
     }

@@ -24,14 +24,7 @@ fn embree_answer(scene: &EmbreeScene, r: &Ray) -> Option<Answer> {
 /// Runs every requested set on every mesh, prints the table, writes JSON, and fails with
 /// [`Error::Mismatch`] past `--max-mismatch` genuine mismatches or on any watertight leak.
 pub fn run(args: &CrosscheckArgs) -> Result<()> {
-    let variant = TriangleVariant::from_name(&args.intersector).ok_or_else(|| {
-        let names: Vec<_> = TriangleVariant::ALL.iter().map(|v| v.name()).collect();
-        Error::Usage(format!(
-            "unknown intersector `{}` (one of: {})",
-            args.intersector,
-            names.join(", ")
-        ))
-    })?;
+    let variant = args.intersector.0;
     let set_names: Vec<String> = if args.sets.is_empty() {
         SET_NAMES.iter().map(|s| s.to_string()).collect()
     } else {

@@ -33,8 +33,8 @@ pub struct CrosscheckArgs {
     #[arg(long, value_delimiter = ',')]
     pub sets: Vec<String>,
     /// halfray's triangle intersector.
-    #[arg(long, default_value = "watertight")]
-    pub intersector: String,
+    #[arg(long, value_enum, default_value_t)]
+    pub intersector: crate::cli_values::Intersector,
     /// Write the results as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
