@@ -29,8 +29,12 @@ pub struct CrosscheckArgs {
     /// Seed of the ray sets.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Comma-separated ray sets (primary, random, edges, vertices, grazing, surface); all by default.
-    #[arg(long, value_delimiter = ',')]
+    /// Comma-separated ray sets; all by default.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        value_parser = clap::builder::PossibleValuesParser::new(sets::SET_NAMES)
+    )]
     pub sets: Vec<String>,
     /// halfray's triangle intersector.
     #[arg(long, value_enum, default_value_t)]
