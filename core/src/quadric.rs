@@ -604,7 +604,10 @@ mod tests {
             assert!(e.intersect(&r).is_none());
         }
         assert!(e.intersect(&Ray::new(Vec3::ZERO, Vec3::ZERO)).is_none());
-        let _ = e.intersect(&Ray::new(Vec3::splat(f32::MAX), Vec3::splat(-f32::MAX)));
+        let huge = Ray::new(Vec3::splat(f32::MAX), Vec3::splat(-f32::MAX));
+        if let Some(h) = e.intersect(&huge) {
+            assert!(huge.contains(h.t) && h.point.is_finite(), "{h:?}");
+        }
     }
 
     #[test]

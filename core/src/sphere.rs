@@ -512,7 +512,10 @@ mod tests {
             }
             let mut r = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z);
             r.t_min = b;
-            let _ = s.intersect(&r);
+            // Any hit reported lies in the interval and is finite.
+            if let Some(h) = s.intersect(&r) {
+                assert!(r.contains(h.t) && is_finite3(h.point), "{r:?} {h:?}");
+            }
         }
         // Extreme but finite values: no panic, no non-finite hit.
         let huge = Ray::new(Vec3::splat(f32::MAX), Vec3::splat(-f32::MAX));
@@ -520,7 +523,9 @@ mod tests {
             assert!(is_finite3(h.point));
         }
         let far = Sphere::new(Vec3::splat(3.0e38), 1.0e38).unwrap();
-        let _ = far.intersect(&Ray::new(Vec3::splat(-3.0e38), Vec3::ONE));
+        if let Some(h) = far.intersect(&Ray::new(Vec3::splat(-3.0e38), Vec3::ONE)) {
+            assert!(h.t.is_finite() && is_finite3(h.point), "{h:?}");
+        }
     }
 
     #[test]

@@ -578,14 +578,18 @@ mod tests {
             );
             check(&ray, plane.intersect(&ray));
             check(&ray, sphere.intersect(&ray));
-            let _ = sphere.intersect_naive(&ray);
+            check(&ray, sphere.intersect_naive(&ray));
             check(&ray, ell.intersect(&ray));
             check(&ray, cone.intersect(&ray));
             check(&ray, poly.intersect(&ray));
             let obj = tf.ray_to_object(&ray);
             if let Some(h) = sphere.intersect(&obj) {
+                // The world hit of an object-space hit: a finite unit normal, and the same
+                // side of the surface as the object-space normal says (`front_face` kept).
                 let w = tf.hit_to_world(&h);
-                let _ = w.normal;
+                assert!(is_finite3(w.normal) && is_finite3(w.point), "{w:?}");
+                assert!((w.normal.length() - 1.0).abs() < 1e-3, "{w:?}");
+                assert_eq!(w.front_face, h.front_face);
             }
         }
     }
