@@ -1,16 +1,49 @@
-//! The Embree side of the cross-check (feature `embree`).
+//! The Embree side of the cross-check (feature `embree`): every mesh of the run, each set's
+//! rays through both sides, the single-thread timed passes, then every ray classified on all
+//! worker threads.
 
+use super::corpus::{ResultLog, read_mesh_list};
 use super::judge::{self, Answer, Verdict};
+use super::report::{DetailKind, Disagreement, MeshResult, Report, RunConfig, SetReport};
 use super::sets::{self, Adjacency, SET_NAMES, SetRay};
-use super::{CrosscheckArgs, SetReport, markdown};
+use super::{CrosscheckArgs, finish};
 use crate::accel::MeshAccel;
-use crate::atomic::write_bytes_atomic;
 use crate::embree::{EmbreeDevice, EmbreeScene, ray_is_valid};
 use crate::error::{Error, Result};
 use crate::obj::read_obj;
+use crate::outputs::{Named, OutputFile, file_id, reserve_outputs};
 use halfray_core::Ray;
 use halfray_core::triangle::TriangleVariant;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+/// The two sides of one mesh: halfray's BVH and Embree's robust and default scenes.
+struct Sides<'a> {
+    accel: &'a MeshAccel,
+    robust: &'a EmbreeScene,
+    fast: &'a EmbreeScene,
+    variant: TriangleVariant,
+}
+
+impl Sides<'_> {
+    fn halfray(&self, r: &Ray) -> Option<Answer> {
+        answer_of(self.accel.closest_variant(self.variant, r))
+    }
+
+    fn reference(&self, r: &Ray) -> Option<Answer> {
+        answer_of(self.accel.closest_variant(TriangleVariant::F64Reference, r))
+    }
+}
+
+fn answer_of(hit: Option<(u32, halfray_core::triangle::TriangleHit)>) -> Option<Answer> {
+    hit.map(|(prim, h)| Answer {
+        prim,
+        t: h.t,
+        u: h.b1,
+        v: h.b2,
+    })
+}
 
 fn embree_answer(scene: &EmbreeScene, r: &Ray) -> Option<Answer> {
     scene.intersect_ray(r).map(|h| Answer {
@@ -21,198 +54,313 @@ fn embree_answer(scene: &EmbreeScene, r: &Ray) -> Option<Answer> {
     })
 }
 
-/// Runs every requested set on every mesh, prints the table, writes JSON, and fails with
-/// [`Error::Mismatch`] past `--max-mismatch` genuine mismatches or on any watertight leak.
+/// The meshes of the run: the arguments, then the list's.
+fn mesh_paths(args: &CrosscheckArgs) -> Result<Vec<PathBuf>> {
+    let mut meshes = args.meshes.clone();
+    if let Some(list) = &args.mesh_list {
+        meshes.extend(read_mesh_list(list)?);
+    }
+    if meshes.is_empty() {
+        return Err(Error::Usage("no meshes to cross-check".into()));
+    }
+    Ok(meshes)
+}
+
+/// Runs every requested set on every mesh (see [`finish`] for the exit status).
 pub fn run(args: &CrosscheckArgs) -> Result<()> {
-    let variant = args.intersector.0;
-    let set_names: Vec<String> = if args.sets.is_empty() {
-        SET_NAMES.iter().map(|s| s.to_string()).collect()
-    } else {
-        args.sets.clone()
+    let meshes = mesh_paths(args)?;
+    let config = RunConfig {
+        intersector: args.intersector.0.name().into(),
+        seed: args.seed,
+        rays: args.rays,
+        ray_sets: if args.sets.is_empty() {
+            SET_NAMES.iter().map(|s| s.to_string()).collect()
+        } else {
+            args.sets.clone()
+        },
+        shard: args.shard,
     };
-    // clap accepts only names of `SET_NAMES` (`CrosscheckArgs::sets`).
+    // Outputs are checked before any work, and none may be an input.
+    let mut inputs: Vec<Named<'_>> = meshes.iter().map(|p| Named::new("mesh", p)).collect();
+    inputs.extend(args.mesh_list.iter().map(|p| Named::new("--mesh-list", p)));
+    let mut outputs = Vec::new();
+    outputs.extend(args.json.iter().map(|p| Named::new("--json", p)));
+    outputs.extend(
+        args.depth_image
+            .iter()
+            .map(|p| Named::new("--depth-image", p)),
+    );
+    let mut reserved = reserve_outputs(&outputs, &inputs, false)?.into_iter();
+    let json_out = args.json.as_ref().and_then(|_| reserved.next());
+    let mut depth_out = args.depth_image.as_ref().and_then(|_| reserved.next());
+    if let Some(log) = &args.jsonl {
+        refuse_log_clash(log, &inputs, &outputs)?;
+    }
+    let mut log = args
+        .jsonl
+        .as_ref()
+        .map(|p| ResultLog::open(p, args.resume, &config))
+        .transpose()?;
+
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.map_or(0, usize::from))
+        .build()
+        .map_err(|e| Error::Other(format!("starting the worker threads: {e}")))?;
     let device = EmbreeDevice::new()?;
-    let mut rows = Vec::new();
-    for (mi, path) in args.meshes.iter().enumerate() {
-        let mesh = read_obj(path)?;
-        let name = path.file_name().map_or_else(
-            || path.display().to_string(),
-            |n| n.to_string_lossy().into(),
-        );
-        let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
-        let robust = EmbreeScene::new(&device, &positions, &mesh.triangles, true)?;
-        let fast = EmbreeScene::new(&device, &positions, &mesh.triangles, false)?;
-        let adj = Adjacency::new(&mesh);
-        let accel = MeshAccel::new(mesh)?;
-        for set in &set_names {
-            let rays = sets::generate(
-                set,
-                &accel.mesh,
-                &adj,
-                args.rays,
-                args.seed.wrapping_add(mi as u64),
-            )
-            .unwrap_or_default();
-            let rays: Vec<SetRay> = rays
-                .into_iter()
-                .filter(|r| {
-                    ray_is_valid(
-                        r.ray.origin.to_array(),
-                        r.ray.direction.to_array(),
-                        r.ray.t_min,
-                        r.ray.t_max,
-                    )
-                })
-                .collect();
-            let mut row = compare_set(&accel, &robust, &fast, variant, &rays);
-            row.mesh = name.clone();
-            row.name = set.clone();
-            eprintln!(
-                "crosscheck {name} {set}: {} rays, {} genuine, {} leaks halfray, {} leaks embree",
-                row.rays, row.genuine_mismatches, row.leaks_halfray, row.leaks_embree
-            );
-            rows.push(row);
+    let start = Instant::now();
+    let mut results = Vec::with_capacity(meshes.len());
+    for path in &meshes {
+        let shown = path.display().to_string();
+        if let Some(done) = log.as_ref().and_then(|l| l.done(&shown)) {
+            eprintln!("crosscheck {shown}: already in the results log, skipped (--resume)");
+            results.push(done.clone());
+            continue;
         }
-        if mi == 0
-            && let Some(out) = &args.depth_image
-        {
-            super::depth::write_depth_diff(out, &accel, &robust, variant, args.depth_size)?;
+        let checked = pool.install(|| check_mesh(&device, path, &config, args, &mut depth_out));
+        let result = MeshResult {
+            path: shown.clone(),
+            config: config.clone(),
+            error: checked.as_ref().err().map(|e| e.to_string()),
+            sets: checked.unwrap_or_else(|e| {
+                eprintln!("crosscheck {shown}: {e} (counted as failed; the run goes on)");
+                Vec::new()
+            }),
+        };
+        if let Some(log) = &mut log {
+            log.append(&result)?;
         }
+        results.push(result);
     }
-    print!("{}", markdown(&rows));
-    let total_h: f64 = rows
-        .iter()
-        .map(|r| r.rays as f64 / r.mrays_halfray.max(1e-12))
-        .sum();
-    let total_e: f64 = rows
-        .iter()
-        .map(|r| r.rays as f64 / r.mrays_embree.max(1e-12))
-        .sum();
-    if total_h > 0.0 {
-        println!(
-            "\nthroughput ratio halfray / Embree robust (time-weighted over all sets): {:.2}",
-            total_e / total_h
-        );
+    if depth_out.is_some() {
+        eprintln!("crosscheck: no mesh was checked in this run, so no depth image was written");
     }
-    if let Some(path) = &args.json {
-        let json = serde_json::json!({ "intersector": variant.name(), "sets": rows });
-        let bytes = serde_json::to_vec_pretty(&json).map_err(|e| Error::Other(e.to_string()))?;
-        write_bytes_atomic(path, &bytes)?;
-    }
-    let genuine: usize = rows.iter().map(|r| r.genuine_mismatches).sum();
-    let leaks: usize = rows.iter().map(|r| r.leaks_halfray).sum();
-    if genuine > args.max_mismatch {
-        return Err(Error::Mismatch(format!(
-            "{genuine} genuine mismatches (allowed: {})",
-            args.max_mismatch
-        )));
-    }
-    if variant.is_watertight() && leaks > 0 {
-        return Err(Error::Mismatch(format!(
-            "{leaks} leaks through the watertight intersector"
-        )));
+    let wall = start.elapsed().as_secs_f64();
+    let report = Report::new(config, pool.current_num_threads(), wall, &results);
+    finish(&report, json_out, args.max_mismatch)
+}
+
+/// Refuses a results log that is an input or another output (by file identity).
+fn refuse_log_clash(log: &Path, inputs: &[Named<'_>], outputs: &[Named<'_>]) -> Result<()> {
+    let Ok(id) = file_id(log) else {
+        return Ok(()); // Not created yet: it cannot be any existing file.
+    };
+    for other in inputs.iter().chain(outputs) {
+        if file_id(other.path).is_ok_and(|o| o == id) {
+            return Err(Error::Usage(format!(
+                "--jsonl `{}` is the {} `{}`",
+                log.display(),
+                other.name,
+                other.path.display()
+            )));
+        }
     }
     Ok(())
 }
 
-fn compare_set(
-    accel: &MeshAccel,
-    robust: &EmbreeScene,
-    fast: &EmbreeScene,
-    variant: TriangleVariant,
-    rays: &[SetRay],
-) -> SetReport {
-    let mut row = SetReport {
-        rays: rays.len(),
-        ..SetReport::default()
+/// One mesh's rows; writes the depth image (once, for the first mesh checked) when asked.
+fn check_mesh(
+    device: &EmbreeDevice,
+    path: &Path,
+    config: &RunConfig,
+    args: &CrosscheckArgs,
+    depth_out: &mut Option<OutputFile>,
+) -> Result<Vec<SetReport>> {
+    let mesh = read_obj(path)?;
+    let name = path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into(),
+    );
+    let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
+    let in_file = |e: Error| Error::Other(format!("{}: {e}", path.display()));
+    let robust = EmbreeScene::new(device, &positions, &mesh.triangles, true)
+        .map_err(|e| in_file(e.into()))?;
+    let fast = EmbreeScene::new(device, &positions, &mesh.triangles, false)
+        .map_err(|e| in_file(e.into()))?;
+    let adj = Adjacency::new(&mesh);
+    let accel = MeshAccel::new(mesh).map_err(in_file)?;
+    let sides = Sides {
+        accel: &accel,
+        robust: &robust,
+        fast: &fast,
+        variant: args.intersector.0,
     };
-    // Timed passes, one thread each, same rays.
-    let start = Instant::now();
-    let ours: Vec<Option<Answer>> = rays
-        .iter()
-        .map(|r| {
-            accel
-                .closest_variant(variant, &r.ray)
-                .map(|(prim, h)| Answer {
-                    prim,
-                    t: h.t,
-                    u: h.b1,
-                    v: h.b2,
-                })
-        })
-        .collect();
-    let secs_h = start.elapsed().as_secs_f64();
-    let start = Instant::now();
-    let emb: Vec<Option<Answer>> = rays.iter().map(|r| embree_answer(robust, &r.ray)).collect();
-    let secs_e = start.elapsed().as_secs_f64();
-    let start = Instant::now();
-    let emb_fast: Vec<Option<Answer>> = rays.iter().map(|r| embree_answer(fast, &r.ray)).collect();
-    let secs_f = start.elapsed().as_secs_f64();
-    let mrays = |s: f64| {
-        if s > 0.0 {
-            rays.len() as f64 / s / 1.0e6
-        } else {
-            0.0
-        }
-    };
-    row.mrays_halfray = mrays(secs_h);
-    row.mrays_embree = mrays(secs_e);
-    row.mrays_embree_default = mrays(secs_f);
+    let seed = sets::mesh_seed(config.seed, &name);
+    let mut rows = Vec::with_capacity(config.ray_sets.len());
+    for set in &config.ray_sets {
+        let rays = sets::generate(set, &accel.mesh, &adj, config.rays, seed).unwrap_or_default();
+        let rays: Vec<(usize, SetRay)> = config
+            .shard
+            .select(rays)
+            .into_iter()
+            .filter(|(_, r)| {
+                ray_is_valid(
+                    r.ray.origin.to_array(),
+                    r.ray.direction.to_array(),
+                    r.ray.t_min,
+                    r.ray.t_max,
+                )
+            })
+            .collect();
+        let mut row = compare_set(&sides, &rays, args.timing_rays);
+        row.mesh = name.clone();
+        row.path = path.display().to_string();
+        row.name = set.clone();
+        eprintln!(
+            "crosscheck {name} {set}: {} rays, {} genuine, {} leaks halfray, {} leaks embree",
+            row.rays, row.genuine_mismatches, row.leaks_halfray, row.leaks_embree
+        );
+        rows.push(row);
+    }
+    if let Some(out) = depth_out.take() {
+        let png =
+            super::depth::depth_diff_png(&accel, &robust, args.intersector.0, args.depth_size)?;
+        out.write(|w| w.write_all(&png))?;
+    }
+    Ok(rows)
+}
 
-    for (i, r) in rays.iter().enumerate() {
-        let (h, e) = (ours[i], emb[i]);
-        if let Some(target) = &r.target {
-            row.leak_rays += 1;
-            let lh = judge::is_leak(&r.ray, h.as_ref(), target.t);
-            let le = judge::is_leak(&r.ray, e.as_ref(), target.t);
-            row.leaks_halfray += lh as usize;
-            row.leaks_embree += le as usize;
-            row.leaks_embree_default +=
-                judge::is_leak(&r.ray, emb_fast[i].as_ref(), target.t) as usize;
-            if lh && std::env::var_os("HALFRAY_CROSSCHECK_DEBUG").is_some() {
+/// Times `pass` once on the calling thread: its result and seconds.
+fn timed<T>(pass: impl FnOnce() -> T) -> (T, f64) {
+    let start = Instant::now();
+    let out = pass();
+    (out, start.elapsed().as_secs_f64())
+}
+
+/// What one ray contributes to its set's row.
+#[derive(Default)]
+struct Outcome {
+    /// `None`: a leak on one side only (counted as such, not judged again).
+    verdict: Option<Verdict>,
+    leak_ray: bool,
+    leaks: [bool; 3],
+    any_hit: bool,
+    any_vs_closest: usize,
+    details: Vec<Disagreement>,
+}
+
+/// Classifies one ray (index `index` in its set) from the three sides' closest hits.
+fn classify(
+    sides: &Sides<'_>,
+    index: usize,
+    r: &SetRay,
+    h: Option<Answer>,
+    e: Option<Answer>,
+    f: Option<Answer>,
+) -> Outcome {
+    let mut out = Outcome::default();
+    let record = |out: &mut Outcome, kind| {
+        out.details
+            .push(Disagreement::new(index, kind, &r.ray, h, e));
+    };
+    if let Some(target) = &r.target {
+        out.leak_ray = true;
+        let lh = judge::is_leak(&r.ray, h.as_ref(), target.t);
+        let le = judge::is_leak(&r.ray, e.as_ref(), target.t);
+        out.leaks = [lh, le, judge::is_leak(&r.ray, f.as_ref(), target.t)];
+        if lh {
+            record(&mut out, DetailKind::LeakHalfray);
+            if std::env::var_os("HALFRAY_CROSSCHECK_DEBUG").is_some() {
                 eprintln!(
                     "halfray leak: ray {:?} incident {:?} ours {h:?} embree {e:?}",
                     r.ray, target.incident
                 );
             }
-            if lh != le {
-                // A leak is its own category; counted above, not judged again.
-                continue;
-            }
         }
-        let verdict = if h == e {
-            Verdict::Agree
-        } else {
-            let reference = accel
-                .closest_variant(TriangleVariant::F64Reference, &r.ray)
-                .map(|(prim, hit)| Answer {
-                    prim,
-                    t: hit.t,
-                    u: hit.b1,
-                    v: hit.b2,
-                });
-            judge::judge(&accel.mesh, &r.ray, h, e, reference)
-        };
-        if std::env::var_os("HALFRAY_CROSSCHECK_DEBUG").is_some()
-            && !matches!(verdict, Verdict::Agree | Verdict::Tie)
-        {
-            eprintln!("{verdict:?}: ray {:?} ours {h:?} embree {e:?}", r.ray);
+        if lh != le {
+            // A leak is its own category; counted above, not judged again.
+            return out;
         }
-        match verdict {
-            Verdict::Agree => row.agree += 1,
-            Verdict::Tie => row.ties += 1,
-            Verdict::WithinTolerance => row.within_tolerance += 1,
-            Verdict::EmbreeWrong => row.embree_wrong += 1,
-            Verdict::Genuine => row.genuine_mismatches += 1,
+    }
+    let verdict = if h == e {
+        Verdict::Agree
+    } else {
+        judge::judge(&sides.accel.mesh, &r.ray, h, e, sides.reference(&r.ray))
+    };
+    if std::env::var_os("HALFRAY_CROSSCHECK_DEBUG").is_some()
+        && !matches!(verdict, Verdict::Agree | Verdict::Tie)
+    {
+        eprintln!("{verdict:?}: ray {:?} ours {h:?} embree {e:?}", r.ray);
+    }
+    match verdict {
+        Verdict::Genuine => record(&mut out, DetailKind::Genuine),
+        Verdict::EmbreeWrong => record(&mut out, DetailKind::EmbreeWrong),
+        _ => {}
+    }
+    // Any hit over the same interval. Where the closest hits agree (or tie), the any-hit
+    // answers must agree too.
+    let any_h = sides.accel.any_variant(sides.variant, &r.ray);
+    let any_e = sides.robust.occluded_ray(&r.ray);
+    out.any_hit = matches!(verdict, Verdict::Agree | Verdict::Tie) && any_h != any_e;
+    out.any_vs_closest = (any_h != h.is_some()) as usize + (any_e != e.is_some()) as usize;
+    if out.any_hit {
+        record(&mut out, DetailKind::AnyHit);
+    }
+    if out.any_vs_closest > 0 {
+        record(&mut out, DetailKind::AnyVsClosest);
+    }
+    out.verdict = Some(verdict);
+    out
+}
+
+/// One set's row: the single-thread timed passes over the first `timing_rays` rays (the same
+/// rays for every side), then every ray classified on the worker threads.
+fn compare_set(sides: &Sides<'_>, rays: &[(usize, SetRay)], timing_rays: usize) -> SetReport {
+    let head = &rays[..rays.len().min(timing_rays)];
+    let (ours, secs_h) = timed(|| {
+        head.iter()
+            .map(|(_, r)| sides.halfray(&r.ray))
+            .collect::<Vec<_>>()
+    });
+    let (emb, secs_e) = timed(|| {
+        head.iter()
+            .map(|(_, r)| embree_answer(sides.robust, &r.ray))
+            .collect::<Vec<_>>()
+    });
+    let (emb_fast, secs_f) = timed(|| {
+        head.iter()
+            .map(|(_, r)| embree_answer(sides.fast, &r.ray))
+            .collect::<Vec<_>>()
+    });
+    let outcomes: Vec<Outcome> = rays
+        .par_iter()
+        .enumerate()
+        .map(|(j, (index, r))| {
+            let (h, e, f) = match (ours.get(j), emb.get(j), emb_fast.get(j)) {
+                (Some(&h), Some(&e), Some(&f)) => (h, e, f),
+                _ => (
+                    sides.halfray(&r.ray),
+                    embree_answer(sides.robust, &r.ray),
+                    embree_answer(sides.fast, &r.ray),
+                ),
+            };
+            classify(sides, *index, r, h, e, f)
+        })
+        .collect();
+    let mut row = SetReport {
+        rays: rays.len(),
+        timed_rays: head.len(),
+        secs_halfray: secs_h,
+        secs_embree: secs_e,
+        secs_embree_default: secs_f,
+        ..SetReport::default()
+    };
+    row.update_throughput();
+    for o in outcomes {
+        row.leak_rays += o.leak_ray as usize;
+        row.leaks_halfray += o.leaks[0] as usize;
+        row.leaks_embree += o.leaks[1] as usize;
+        row.leaks_embree_default += o.leaks[2] as usize;
+        match o.verdict {
+            None => {}
+            Some(Verdict::Agree) => row.agree += 1,
+            Some(Verdict::Tie) => row.ties += 1,
+            Some(Verdict::WithinTolerance) => row.within_tolerance += 1,
+            Some(Verdict::EmbreeWrong) => row.embree_wrong += 1,
+            Some(Verdict::Genuine) => row.genuine_mismatches += 1,
         }
-        // Any hit over the same interval.
-        let any_h = accel.any_variant(variant, &r.ray);
-        let any_e = robust.occluded_ray(&r.ray);
-        // Where the closest hits agree (or tie), the any-hit answers must agree too.
-        row.any_hit_disagreements +=
-            (matches!(verdict, Verdict::Agree | Verdict::Tie) && any_h != any_e) as usize;
-        row.any_vs_closest_inconsistent +=
-            (any_h != h.is_some()) as usize + (any_e != e.is_some()) as usize;
+        row.any_hit_disagreements += o.any_hit as usize;
+        row.any_vs_closest_inconsistent += o.any_vs_closest;
+        row.disagreements.extend(o.details);
     }
     row
 }

@@ -2,24 +2,21 @@
 //! (robust), written side by side with a difference panel.
 
 use crate::accel::MeshAccel;
-use crate::atomic::write_bytes_atomic;
 use crate::embree::EmbreeScene;
 use crate::error::{Error, Result};
 use halfray_core::triangle::TriangleVariant;
 use image::{ImageEncoder, Rgb, RgbImage};
-use std::path::Path;
 
-/// Writes `halfray | Embree | difference` (`3·size × size` pixels). Depth panels map the nearest
+/// The PNG of `halfray | Embree | difference` (`3·size × size` pixels). Depth panels map the nearest
 /// hit to white and the farthest to dark grey, misses black. The difference panel is black where
 /// both agree within the cross-check's `t` tolerance, red where only halfray hits, blue where
 /// only Embree hits, and yellow where both hit at different depths. Prints the pixel counts.
-pub fn write_depth_diff(
-    out: &Path,
+pub fn depth_diff_png(
     accel: &MeshAccel,
     scene: &EmbreeScene,
     variant: TriangleVariant,
     size: usize,
-) -> Result<()> {
+) -> Result<Vec<u8>> {
     let (lo, hi) = accel.mesh.bounds().unwrap_or_default();
     let rays = crate::raysets::Camera::framing(lo, hi, size, size).rays();
     let ours: Vec<Option<f32>> = rays
@@ -72,13 +69,8 @@ pub fn write_depth_diff(
         img.put_pixel(x + 2 * size as u32, y, diff);
     }
     eprintln!(
-        "depth image {}: {}x{} px; only halfray hits: {}, only Embree hits: {}, depth differs: {}",
-        out.display(),
-        size,
-        size,
-        counts[0],
-        counts[1],
-        counts[2]
+        "depth image: {}x{} px; only halfray hits: {}, only Embree hits: {}, depth differs: {}",
+        size, size, counts[0], counts[1], counts[2]
     );
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)
@@ -89,5 +81,5 @@ pub fn write_depth_diff(
             image::ExtendedColorType::Rgb8,
         )
         .map_err(|e| Error::Other(format!("encoding depth image: {e}")))?;
-    write_bytes_atomic(out, &png)
+    Ok(png)
 }

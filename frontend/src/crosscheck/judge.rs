@@ -5,7 +5,7 @@ use crate::obj::ObjMesh;
 use halfray_core::Ray;
 
 /// One side's closest-hit answer.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Answer {
     /// Primitive (triangle index).
     pub prim: u32,

@@ -6,26 +6,57 @@
 //! the one halfray's answers are classified against (the default mode leaks by design, and its
 //! leaks are reported separately). Needs the `embree` feature (see the README).
 
+pub mod corpus;
 pub mod judge;
+pub mod merge;
+pub mod report;
 pub mod sets;
+pub mod shard;
 
 #[cfg(feature = "embree")]
 mod compare;
 #[cfg(feature = "embree")]
 mod depth;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
+pub use report::{SetReport, markdown};
 use std::path::PathBuf;
 
 /// Arguments of `halfray crosscheck`.
 #[derive(clap::Args, Debug, Clone)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct CrosscheckArgs {
+    /// `merge`: combine shards' reports.
+    #[command(subcommand)]
+    pub command: Option<CrosscheckCommand>,
     /// Meshes to cross-check (OBJ).
-    #[arg(required = true)]
+    #[arg(required_unless_present = "mesh_list")]
     pub meshes: Vec<PathBuf>,
-    /// Rays per set.
+    /// A file of mesh paths, one per line (blank lines and `#` comments skipped; relative
+    /// paths are relative to the current directory); checked after the MESHES arguments.
+    #[arg(long)]
+    pub mesh_list: Option<PathBuf>,
+    /// Rays per set (before sharding).
     #[arg(long, default_value_t = 100_000)]
     pub rays: usize,
+    /// Worker threads for the checks [default: every core]. The throughput figures stay
+    /// single-thread passes over the first `--timing-rays` rays of each set.
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    pub threads: Option<u16>,
+    /// Rays of each set (of this shard) in the single-thread timed passes.
+    #[arg(long, default_value_t = 100_000)]
+    pub timing_rays: usize,
+    /// Check only shard K of N (zero-based, 0 <= K < N): the rays whose index in their set is
+    /// K mod N. The N shards together are the unsharded run, ray for ray.
+    #[arg(long, value_name = "K/N", default_value = "0/1")]
+    pub shard: shard::Shard,
+    /// Append each mesh's result to this JSON-lines file as soon as it is done.
+    #[arg(long)]
+    pub jsonl: Option<PathBuf>,
+    /// Continue the run in `--jsonl`: skip the meshes it already holds (failed ones are tried
+    /// again).
+    #[arg(long, requires = "jsonl")]
+    pub resume: bool,
     /// Seed of the ray sets.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -54,49 +85,33 @@ pub struct CrosscheckArgs {
     pub depth_size: usize,
 }
 
-/// One ray set's results.
-#[derive(Clone, Debug, Default, serde::Serialize)]
-pub struct SetReport {
-    /// Mesh file name.
-    pub mesh: String,
-    /// Set name.
-    pub name: String,
-    /// Rays traced (invalid rays for Embree are dropped first).
-    pub rays: usize,
-    /// Same answer (hit/miss, primitive, `t` within tolerance).
-    pub agree: usize,
-    /// halfray contradicts the reference beyond its bound.
-    pub genuine_mismatches: usize,
-    /// Different primitive at the same `t`.
-    pub ties: usize,
-    /// Disagreement inside the reference's uncertainty (edge within the boundary margin,
-    /// grazing `t`).
-    pub within_tolerance: usize,
-    /// Embree (robust) contradicts the reference, halfray does not.
-    pub embree_wrong: usize,
-    /// Edge/vertex rays halfray lets through.
-    pub leaks_halfray: usize,
-    /// Edge/vertex rays Embree robust lets through.
-    pub leaks_embree: usize,
-    /// Edge/vertex rays Embree default mode lets through.
-    pub leaks_embree_default: usize,
-    /// Edge/vertex rays crossing transversally (the leak denominator).
-    pub leak_rays: usize,
-    /// Any-hit disagreements (halfray any-hit vs Embree robust `rtcOccluded1`) on rays whose
-    /// closest hits agree or tie (elsewhere a boundary case explains them).
-    pub any_hit_disagreements: usize,
-    /// Rays whose any-hit answer contradicts the same side's closest-hit answer (either side).
-    pub any_vs_closest_inconsistent: usize,
-    /// halfray closest-hit throughput, one thread.
-    pub mrays_halfray: f64,
-    /// Embree robust closest-hit throughput, one thread.
-    pub mrays_embree: f64,
-    /// Embree default-mode closest-hit throughput, one thread.
-    pub mrays_embree_default: f64,
+/// Subcommands of `halfray crosscheck`.
+#[derive(clap::Subcommand, Debug, Clone)]
+pub enum CrosscheckCommand {
+    /// Merge the shards of one run (`--json` reports or `--jsonl` logs) into the unsharded
+    /// report: counts add, every disagreement is kept; a missing or repeated shard is an error.
+    Merge(MergeArgs),
 }
 
-/// Runs `halfray crosscheck`.
+/// Arguments of `halfray crosscheck merge`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct MergeArgs {
+    /// The parts: one report or results log per shard.
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
+    /// Write the merged report as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Exit with code 3 when genuine mismatches exceed this.
+    #[arg(long, default_value_t = 0)]
+    pub max_mismatch: usize,
+}
+
+/// Runs `halfray crosscheck` (or `crosscheck merge`).
 pub fn run(args: &CrosscheckArgs) -> Result<()> {
+    if let Some(CrosscheckCommand::Merge(m)) = &args.command {
+        return run_merge(m);
+    }
     #[cfg(feature = "embree")]
     {
         compare::run(args)
@@ -112,39 +127,76 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     }
 }
 
-/// The per-set table as markdown.
-pub fn markdown(rows: &[SetReport]) -> String {
-    let mut s = String::from(
-        "| mesh | set | rays | agree | ties | within tol | genuine | Embree wrong | leaks halfray | leaks Embree robust | leaks Embree default | any-hit ≠ | Mrays/s halfray | Mrays/s Embree robust | ratio |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
-    );
-    for r in rows {
-        let ratio = if r.mrays_embree > 0.0 {
-            r.mrays_halfray / r.mrays_embree
-        } else {
-            0.0
-        };
-        s.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {}/{} | {}/{} | {}/{} | {} | {:.2} | {:.2} | {:.2} |\n",
-            r.mesh,
-            r.name,
-            r.rays,
-            r.agree,
-            r.ties,
-            r.within_tolerance,
-            r.genuine_mismatches,
-            r.embree_wrong,
-            r.leaks_halfray,
-            r.leak_rays,
-            r.leaks_embree,
-            r.leak_rays,
-            r.leaks_embree_default,
-            r.leak_rays,
-            r.any_hit_disagreements,
-            r.mrays_halfray,
-            r.mrays_embree,
-            ratio
-        ));
+/// `halfray crosscheck merge`.
+fn run_merge(args: &MergeArgs) -> Result<()> {
+    use crate::outputs::{Named, reserve_outputs};
+    let inputs: Vec<Named<'_>> = args.parts.iter().map(|p| Named::new("part", p)).collect();
+    let outputs: Vec<Named<'_>> = args.json.iter().map(|p| Named::new("--json", p)).collect();
+    let reserved = reserve_outputs(&outputs, &inputs, false)?;
+    let parts = args
+        .parts
+        .iter()
+        .map(|p| merge::read_part(p))
+        .collect::<Result<Vec<_>>>()?;
+    let report = merge::merge(&parts)?;
+    finish(&report, reserved.into_iter().next(), args.max_mismatch)
+}
+
+/// Prints `report`'s table and totals, writes it to `json`, and turns it into the exit status:
+/// [`Error::Mismatch`] past `max_mismatch` genuine mismatches or on any leak through a
+/// watertight intersector, an error naming every mesh that could not be checked.
+pub fn finish(
+    report: &report::Report,
+    json: Option<crate::outputs::OutputFile>,
+    max_mismatch: usize,
+) -> Result<()> {
+    print!("{}", markdown(&report.sets));
+    if let Some(ratio) = report.throughput_ratio() {
+        println!(
+            "\nthroughput ratio halfray / Embree robust (time-weighted over all sets): {ratio:.2}"
+        );
     }
-    s
+    let rays: usize = report.sets.iter().map(|r| r.rays).sum();
+    println!(
+        "{rays} rays on {} meshes ({} failed) in {:.1} s wall, {:.0} rays/s, {} threads{}",
+        report.meshes,
+        report.failed.len(),
+        report.wall_seconds,
+        report.rays_per_second,
+        report.threads,
+        report
+            .merged_shards
+            .map_or(String::new(), |n| format!(" (sums over {n} shards)"))
+    );
+    if let Some(out) = json {
+        let bytes = serde_json::to_vec_pretty(report).map_err(|e| Error::Other(e.to_string()))?;
+        out.write(|w| w.write_all(&bytes))?;
+    }
+    let (genuine, leaks) = (report.genuine(), report.leaks());
+    let watertight = halfray_core::triangle::TriangleVariant::from_name(&report.config.intersector)
+        .is_some_and(|v| v.is_watertight());
+    if genuine > max_mismatch {
+        return Err(Error::Mismatch(format!(
+            "{genuine} genuine mismatches (allowed: {max_mismatch})"
+        )));
+    }
+    if watertight && leaks > 0 {
+        return Err(Error::Mismatch(format!(
+            "{leaks} leaks through the watertight intersector"
+        )));
+    }
+    if !report.failed.is_empty() {
+        let list: Vec<String> = report
+            .failed
+            .iter()
+            .map(|f| format!("{}: {}", f.path, f.error))
+            .collect();
+        return Err(Error::Other(format!(
+            "{} of {} meshes could not be checked:\n  {}",
+            report.failed.len(),
+            report.meshes,
+            list.join("\n  ")
+        )));
+    }
+    Ok(())
 }

@@ -178,6 +178,13 @@ pub fn generate(
     Some(rays)
 }
 
+/// The seed of one mesh's ray sets in a run seeded with `run_seed`: derived from the mesh's
+/// file name (not its folder or its place in a list), so that a mesh gets the same rays in a
+/// sharded, listed or resumed run.
+pub fn mesh_seed(run_seed: u64, file_name: &str) -> u64 {
+    run_seed.wrapping_add(fxhash(file_name))
+}
+
 fn fxhash(s: &str) -> u64 {
     s.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
         (h ^ b as u64).wrapping_mul(0x100_0000_01b3)

@@ -1,0 +1,334 @@
+//! `halfray crosscheck merge PART… --json ALL.json`: the shards of one run combined into the
+//! report of the unsharded run.
+//!
+//! A part is a `--json` report or a `--jsonl` results log of one shard. The parts must belong
+//! to one run (same intersector, seed, rays and sets, same shard count `N`), and every mesh must
+//! come with each shard `0..N` exactly once: a missing or repeated shard is an error naming the
+//! mesh and the files, never a silently partial sum. Counts, timed rays and timed seconds add;
+//! every disagreement is kept. A mesh that failed on any shard is failed in the merge.
+
+use super::corpus::parse_log;
+use super::report::{MeshResult, Report, RunConfig, SetReport};
+use super::shard::Shard;
+use crate::error::{Error, Location, Result};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// One part file, read.
+#[derive(Clone, Debug)]
+pub struct Part {
+    /// The file.
+    pub path: PathBuf,
+    /// Its results, one per mesh.
+    pub results: Vec<MeshResult>,
+    /// The wall-clock seconds it reports (0 for a results log).
+    pub wall_seconds: f64,
+    /// Its worker threads (0 for a results log).
+    pub threads: usize,
+}
+
+/// Reads a part: a JSON report (one object with `sets`) or a JSON-lines results log.
+pub fn read_part(path: &Path) -> Result<Part> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let not_a_report = match serde_json::from_str::<Report>(&text) {
+        Ok(report) => {
+            return Ok(Part {
+                path: path.to_path_buf(),
+                results: report.mesh_results(),
+                wall_seconds: report.wall_seconds,
+                threads: report.threads,
+            });
+        }
+        Err(e) => e,
+    };
+    match parse_log(path, &text) {
+        Ok(results) => Ok(Part {
+            path: path.to_path_buf(),
+            results,
+            wall_seconds: 0.0,
+            threads: 0,
+        }),
+        // One JSON document that is not a report: say why as a report.
+        Err(_) if serde_json::from_str::<serde_json::Value>(&text).is_ok() => Err(Error::input(
+            Location::file(path)
+                .line(not_a_report.line())
+                .column(not_a_report.column()),
+            format!("not a cross-check report: {not_a_report}"),
+        )),
+        Err(e) => Err(e),
+    }
+}
+
+/// Merges the parts (see the module docs).
+pub fn merge(parts: &[Part]) -> Result<Report> {
+    let mut first: Option<(&Path, &RunConfig)> = None;
+    // Per mesh path (in order of first appearance): shard index -> (file, result).
+    let mut order: Vec<&str> = Vec::new();
+    let mut by_mesh: HashMap<&str, HashMap<usize, (&Path, &MeshResult)>> = HashMap::new();
+    for part in parts {
+        for result in &part.results {
+            let config = &result.config;
+            match first {
+                None => first = Some((&part.path, config)),
+                Some((p0, c0)) => {
+                    let diff = c0.difference(config).or_else(|| {
+                        (c0.shard.count != config.shard.count).then(|| {
+                            format!("shard count {} vs {}", c0.shard.count, config.shard.count)
+                        })
+                    });
+                    if let Some(diff) = diff {
+                        return Err(Error::Usage(format!(
+                            "`{}` and `{}` are not parts of one run ({diff})",
+                            p0.display(),
+                            part.path.display()
+                        )));
+                    }
+                }
+            }
+            let shards = by_mesh.entry(&result.path).or_default();
+            if shards.is_empty() {
+                order.push(&result.path);
+            }
+            if let Some((other, _)) = shards.insert(config.shard.index, (&part.path, result)) {
+                return Err(Error::Usage(format!(
+                    "mesh `{}`: shard {} is in both `{}` and `{}`",
+                    result.path,
+                    config.shard,
+                    other.display(),
+                    part.path.display()
+                )));
+            }
+        }
+    }
+    let Some((_, config)) = first else {
+        return Err(Error::Usage("the parts hold no results".into()));
+    };
+    let n = config.shard.count;
+    let mut merged = Vec::with_capacity(order.len());
+    for path in order {
+        let shards = &by_mesh[path];
+        let mut rows: Vec<SetReport> = Vec::new();
+        let mut errors = Vec::new();
+        for k in 0..n {
+            let Some((_, result)) = shards.get(&k) else {
+                return Err(Error::Usage(format!(
+                    "mesh `{path}`: shard {k}/{n} is missing from the parts"
+                )));
+            };
+            if let Some(e) = &result.error {
+                errors.push(format!("shard {k}/{n}: {e}"));
+                continue;
+            }
+            if k == 0 || rows.is_empty() {
+                rows = result.sets.clone();
+                continue;
+            }
+            let names =
+                |sets: &[SetReport]| sets.iter().map(|s| s.name.clone()).collect::<Vec<_>>();
+            if names(&rows) != names(&result.sets) {
+                return Err(Error::Usage(format!(
+                    "mesh `{path}`: shard {k}/{n} has sets {:?}, shard 0 {:?}",
+                    names(&result.sets),
+                    names(&rows)
+                )));
+            }
+            for (sum, row) in rows.iter_mut().zip(&result.sets) {
+                sum.absorb(row);
+            }
+        }
+        merged.push(MeshResult {
+            path: path.to_string(),
+            config: RunConfig {
+                shard: Shard::WHOLE,
+                ..config.clone()
+            },
+            error: (!errors.is_empty()).then(|| errors.join("; ")),
+            sets: if errors.is_empty() { rows } else { Vec::new() },
+        });
+    }
+    let wall: f64 = parts.iter().map(|p| p.wall_seconds).sum();
+    let threads = parts.iter().map(|p| p.threads).max().unwrap_or(0);
+    let mut report = Report::new(
+        RunConfig {
+            shard: Shard::WHOLE,
+            ..config.clone()
+        },
+        threads,
+        wall,
+        &merged,
+    );
+    report.merged_shards = Some(n);
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::crosscheck::judge::Answer;
+    use crate::crosscheck::report::{DetailKind, Disagreement};
+
+    fn config(shard: Shard) -> RunConfig {
+        RunConfig {
+            intersector: "watertight".into(),
+            seed: 7,
+            rays: 9,
+            ray_sets: vec!["primary".into(), "edges".into()],
+            shard,
+        }
+    }
+
+    fn detail(index: usize) -> Disagreement {
+        Disagreement {
+            index,
+            kind: DetailKind::Genuine,
+            origin: [0.0, 0.0, 1.0],
+            direction: [0.0, 0.0, -1.0],
+            t_min: 0.0,
+            t_max: None,
+            halfray: None,
+            embree: Some(Answer {
+                prim: 3,
+                t: 1.0,
+                u: 0.25,
+                v: 0.5,
+            }),
+        }
+    }
+
+    /// Shard `k` of `n` of a made-up run where ray `i` of a set is genuine when `i % 4 == 1`,
+    /// agrees otherwise, and took `i` microseconds on halfray's side.
+    fn shard_result(path: &str, k: usize, n: usize) -> MeshResult {
+        let shard = Shard::new(k, n).unwrap();
+        let sets = ["primary", "edges"]
+            .iter()
+            .map(|&name| {
+                let mut row = SetReport {
+                    mesh: path.into(),
+                    path: path.into(),
+                    name: name.into(),
+                    ..SetReport::default()
+                };
+                for i in (0..9).filter(|&i| shard.contains(i)) {
+                    row.rays += 1;
+                    row.timed_rays += 1;
+                    row.secs_halfray += i as f64 * 1e-6;
+                    row.secs_embree += 1e-6;
+                    if i % 4 == 1 {
+                        row.genuine_mismatches += 1;
+                        row.disagreements.push(detail(i));
+                    } else {
+                        row.agree += 1;
+                    }
+                }
+                row.update_throughput();
+                row
+            })
+            .collect();
+        MeshResult {
+            path: path.into(),
+            config: config(shard),
+            error: None,
+            sets,
+        }
+    }
+
+    fn part(name: &str, results: Vec<MeshResult>) -> Part {
+        Part {
+            path: PathBuf::from(name),
+            results,
+            wall_seconds: 1.0,
+            threads: 2,
+        }
+    }
+
+    #[test]
+    fn merged_shards_equal_the_unsharded_counts() {
+        let whole = merge(&[part("all", vec![shard_result("a.obj", 0, 1)])]).unwrap();
+        for n in [2, 3, 7] {
+            // Parts given in reverse order: the merge does not depend on it.
+            let parts: Vec<Part> = (0..n)
+                .rev()
+                .map(|k| part(&format!("p{k}"), vec![shard_result("a.obj", k, n)]))
+                .collect();
+            let merged = merge(&parts).unwrap();
+            assert_eq!(merged.merged_shards, Some(n));
+            assert_eq!(merged.config, whole.config);
+            for (m, w) in merged.sets.iter().zip(&whole.sets) {
+                assert_eq!(
+                    (m.rays, m.agree, m.genuine_mismatches),
+                    (w.rays, w.agree, w.genuine_mismatches)
+                );
+                assert_eq!(m.disagreements, w.disagreements, "N = {n}");
+                assert!((m.secs_halfray - w.secs_halfray).abs() < 1e-12);
+                assert!((m.mrays_halfray - w.mrays_halfray).abs() < 1e-6 * w.mrays_halfray);
+            }
+            assert_eq!(merged.sets.len(), whole.sets.len());
+            assert_eq!(merged.genuine(), 2 * 2, "rays 1 and 5 of both sets");
+        }
+    }
+
+    #[test]
+    fn a_missing_or_repeated_shard_is_refused() {
+        let e = merge(&[
+            part("p0", vec![shard_result("a.obj", 0, 3)]),
+            part("p2", vec![shard_result("a.obj", 2, 3)]),
+        ])
+        .unwrap_err();
+        assert!(e.to_string().contains("shard 1/3 is missing"), "{e}");
+        let e = merge(&[
+            part("p0", vec![shard_result("a.obj", 0, 2)]),
+            part("q0", vec![shard_result("a.obj", 0, 2)]),
+        ])
+        .unwrap_err();
+        assert!(e.to_string().contains("`p0` and `q0`"), "{e}");
+        let mut other = shard_result("a.obj", 1, 2);
+        other.config.seed = 8;
+        let e = merge(&[
+            part("p0", vec![shard_result("a.obj", 0, 2)]),
+            part("p1", vec![other]),
+        ])
+        .unwrap_err();
+        assert!(e.to_string().contains("seed 7 vs 8"), "{e}");
+    }
+
+    #[test]
+    fn a_mesh_failed_on_one_shard_is_failed_in_the_merge() {
+        let mut bad = shard_result("b.obj", 1, 2);
+        bad.error = Some("b.obj:4:7: field `y`: `nan` is not finite".into());
+        bad.sets.clear();
+        let merged = merge(&[
+            part(
+                "p0",
+                vec![shard_result("a.obj", 0, 2), shard_result("b.obj", 0, 2)],
+            ),
+            part("p1", vec![shard_result("a.obj", 1, 2), bad]),
+        ])
+        .unwrap();
+        assert_eq!(merged.meshes, 2);
+        assert_eq!(merged.failed.len(), 1);
+        assert_eq!(merged.failed[0].path, "b.obj");
+        assert!(merged.failed[0].error.contains("shard 1/2: b.obj:4:7"));
+        assert!(merged.sets.iter().all(|s| s.path == "a.obj"));
+    }
+
+    #[test]
+    fn reports_and_logs_read_back_as_parts() {
+        let dir = tempfile::tempdir().unwrap();
+        let result = shard_result("a.obj", 0, 1);
+        let report = Report::new(config(Shard::WHOLE), 2, 3.0, std::slice::from_ref(&result));
+        let json = dir.path().join("r.json");
+        std::fs::write(&json, serde_json::to_vec_pretty(&report).unwrap()).unwrap();
+        let part = read_part(&json).unwrap();
+        assert_eq!(part.results, vec![result.clone()]);
+        assert_eq!((part.wall_seconds, part.threads), (3.0, 2));
+        let log = dir.path().join("r.jsonl");
+        std::fs::write(&log, serde_json::to_string(&result).unwrap() + "\n").unwrap();
+        assert_eq!(read_part(&log).unwrap().results, vec![result]);
+        std::fs::write(&json, "{\"sets\": 3}").unwrap();
+        let e = read_part(&json).unwrap_err().to_string();
+        assert!(
+            e.contains("r.json:1:") && e.contains("not a cross-check report"),
+            "{e}"
+        );
+    }
+}

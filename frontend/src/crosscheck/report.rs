@@ -1,0 +1,384 @@
+//! What a cross-check run reports: per mesh and set counts ([`SetReport`]), the detail of every
+//! disagreement that matters ([`Disagreement`]), one mesh's result as a JSON line
+//! ([`MeshResult`]) and the whole run ([`Report`]).
+//!
+//! Counts add up across shards ([`SetReport::absorb`]); throughput is kept as single-thread
+//! seconds on a counted number of timed rays, so merged throughput is total timed rays over
+//! total seconds on each side, still single-thread and on the same rays for every side.
+
+use super::judge::Answer;
+use super::shard::Shard;
+use halfray_core::Ray;
+use serde::{Deserialize, Serialize};
+
+/// What fixes a run's rays and answers. The parts of one run (shards, resumed runs) agree on
+/// all of it except the shard.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RunConfig {
+    /// halfray's triangle intersector (`TriangleVariant::name`).
+    pub intersector: String,
+    /// Seed of the ray sets.
+    pub seed: u64,
+    /// Rays per set before sharding.
+    pub rays: usize,
+    /// The ray sets, in report order.
+    pub ray_sets: Vec<String>,
+    /// Which shard of the rays this is.
+    pub shard: Shard,
+}
+
+impl RunConfig {
+    /// `None` when `other` belongs to the same run (same everything but the shard), else a
+    /// description of the first difference.
+    pub fn difference(&self, other: &Self) -> Option<String> {
+        if self.intersector != other.intersector {
+            return Some(format!(
+                "intersector {} vs {}",
+                self.intersector, other.intersector
+            ));
+        }
+        if self.seed != other.seed {
+            return Some(format!("seed {} vs {}", self.seed, other.seed));
+        }
+        if self.rays != other.rays {
+            return Some(format!("rays {} vs {}", self.rays, other.rays));
+        }
+        if self.ray_sets != other.ray_sets {
+            return Some(format!(
+                "ray sets {} vs {}",
+                self.ray_sets.join(","),
+                other.ray_sets.join(",")
+            ));
+        }
+        None
+    }
+}
+
+/// Kind of a recorded disagreement.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DetailKind {
+    /// halfray contradicts the `f64` reference beyond its bound.
+    Genuine,
+    /// Embree robust contradicts the reference, halfray does not.
+    EmbreeWrong,
+    /// An edge/vertex ray halfray lets through.
+    LeakHalfray,
+    /// Any-hit answers differ where the closest hits agree or tie.
+    AnyHit,
+    /// One side's any-hit answer contradicts its own closest-hit answer.
+    AnyVsClosest,
+}
+
+/// One ray on which the two sides disagree in a way that matters: everything needed to replay
+/// it. Ties, differences within tolerance and Embree's own leaks (documented behaviour of the
+/// library) are counted, not recorded.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Disagreement {
+    /// The ray's index in its generated set (the same in every shard).
+    pub index: usize,
+    /// What the disagreement is.
+    pub kind: DetailKind,
+    /// Ray origin.
+    pub origin: [f32; 3],
+    /// Ray direction (not normalised).
+    pub direction: [f32; 3],
+    /// Start of the ray interval.
+    pub t_min: f32,
+    /// End of the ray interval; `null` for an unbounded ray.
+    pub t_max: Option<f32>,
+    /// halfray's closest hit.
+    pub halfray: Option<Answer>,
+    /// Embree robust's closest hit.
+    pub embree: Option<Answer>,
+}
+
+impl Disagreement {
+    /// A record of `ray` (index `index` in its set) with both sides' answers.
+    pub fn new(
+        index: usize,
+        kind: DetailKind,
+        ray: &Ray,
+        halfray: Option<Answer>,
+        embree: Option<Answer>,
+    ) -> Self {
+        Self {
+            index,
+            kind,
+            origin: ray.origin.to_array(),
+            direction: ray.direction.to_array(),
+            t_min: ray.t_min,
+            t_max: ray.t_max.is_finite().then_some(ray.t_max),
+            halfray,
+            embree,
+        }
+    }
+}
+
+/// One ray set's results on one mesh (one shard of it, or all shards merged).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SetReport {
+    /// Mesh file name.
+    pub mesh: String,
+    /// Mesh path as given on the command line or in the mesh list.
+    pub path: String,
+    /// Set name.
+    pub name: String,
+    /// Rays traced (invalid rays for Embree are dropped first).
+    pub rays: usize,
+    /// Same answer (hit/miss, primitive, `t` within tolerance).
+    pub agree: usize,
+    /// halfray contradicts the reference beyond its bound.
+    pub genuine_mismatches: usize,
+    /// Different primitive at the same `t`.
+    pub ties: usize,
+    /// Disagreement inside the reference's uncertainty (edge within the boundary margin,
+    /// grazing `t`).
+    pub within_tolerance: usize,
+    /// Embree (robust) contradicts the reference, halfray does not.
+    pub embree_wrong: usize,
+    /// Edge/vertex rays halfray lets through.
+    pub leaks_halfray: usize,
+    /// Edge/vertex rays Embree robust lets through.
+    pub leaks_embree: usize,
+    /// Edge/vertex rays Embree default mode lets through.
+    pub leaks_embree_default: usize,
+    /// Edge/vertex rays crossing transversally (the leak denominator).
+    pub leak_rays: usize,
+    /// Any-hit disagreements (halfray any-hit vs Embree robust `rtcOccluded1`) on rays whose
+    /// closest hits agree or tie (elsewhere a boundary case explains them).
+    pub any_hit_disagreements: usize,
+    /// Rays whose any-hit answer contradicts the same side's closest-hit answer (either side).
+    pub any_vs_closest_inconsistent: usize,
+    /// Rays in the single-thread timed passes (the first rays of the set, the same for every
+    /// side).
+    pub timed_rays: usize,
+    /// Seconds of halfray's timed closest-hit pass, one thread.
+    pub secs_halfray: f64,
+    /// Seconds of Embree robust's timed closest-hit pass, one thread.
+    pub secs_embree: f64,
+    /// Seconds of Embree default mode's timed closest-hit pass, one thread.
+    pub secs_embree_default: f64,
+    /// halfray closest-hit throughput, one thread, Mrays/s (`timed_rays / secs_halfray`).
+    pub mrays_halfray: f64,
+    /// Embree robust closest-hit throughput, one thread, Mrays/s.
+    pub mrays_embree: f64,
+    /// Embree default-mode closest-hit throughput, one thread, Mrays/s.
+    pub mrays_embree_default: f64,
+    /// Every recorded disagreement, by ray index.
+    pub disagreements: Vec<Disagreement>,
+}
+
+fn mrays(rays: usize, secs: f64) -> f64 {
+    if secs > 0.0 {
+        rays as f64 / secs / 1.0e6
+    } else {
+        0.0
+    }
+}
+
+impl SetReport {
+    /// Recomputes the throughput fields from the timed rays and seconds.
+    pub fn update_throughput(&mut self) {
+        self.mrays_halfray = mrays(self.timed_rays, self.secs_halfray);
+        self.mrays_embree = mrays(self.timed_rays, self.secs_embree);
+        self.mrays_embree_default = mrays(self.timed_rays, self.secs_embree_default);
+    }
+
+    /// Adds another shard's results of the same mesh and set: counts, timed rays and seconds
+    /// add; disagreements are kept, ordered by ray index.
+    pub fn absorb(&mut self, other: &SetReport) {
+        let counts = [
+            (&mut self.rays, other.rays),
+            (&mut self.agree, other.agree),
+            (&mut self.genuine_mismatches, other.genuine_mismatches),
+            (&mut self.ties, other.ties),
+            (&mut self.within_tolerance, other.within_tolerance),
+            (&mut self.embree_wrong, other.embree_wrong),
+            (&mut self.leaks_halfray, other.leaks_halfray),
+            (&mut self.leaks_embree, other.leaks_embree),
+            (&mut self.leaks_embree_default, other.leaks_embree_default),
+            (&mut self.leak_rays, other.leak_rays),
+            (&mut self.any_hit_disagreements, other.any_hit_disagreements),
+            (
+                &mut self.any_vs_closest_inconsistent,
+                other.any_vs_closest_inconsistent,
+            ),
+            (&mut self.timed_rays, other.timed_rays),
+        ];
+        for (sum, add) in counts {
+            *sum += add;
+        }
+        self.secs_halfray += other.secs_halfray;
+        self.secs_embree += other.secs_embree;
+        self.secs_embree_default += other.secs_embree_default;
+        self.disagreements
+            .extend(other.disagreements.iter().cloned());
+        self.disagreements.sort_by_key(|d| (d.index, d.kind));
+        self.update_throughput();
+    }
+}
+
+/// One mesh's result: a JSON line of `--jsonl`, and the unit [`super::merge`] combines.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MeshResult {
+    /// Mesh path as given.
+    pub path: String,
+    /// The run it belongs to.
+    #[serde(flatten)]
+    pub config: RunConfig,
+    /// Why the mesh could not be checked (unreadable, non-finite, …); then `sets` is empty.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+    /// One row per ray set.
+    #[serde(default)]
+    pub sets: Vec<SetReport>,
+}
+
+/// A mesh that could not be checked.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Failure {
+    /// Mesh path as given.
+    pub path: String,
+    /// The error, naming the file (and line and field where known).
+    pub error: String,
+}
+
+/// The whole run (`--json`), or the merge of its shards.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// The run; a merged report has shard `0/1` and `merged_shards` set.
+    #[serde(flatten)]
+    pub config: RunConfig,
+    /// Number of shards merged into this report (absent for a single run).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub merged_shards: Option<usize>,
+    /// Worker threads of the run (the largest among merged parts).
+    pub threads: usize,
+    /// Wall-clock seconds of the whole run (summed over merged parts).
+    pub wall_seconds: f64,
+    /// Rays checked per wall-clock second (every ray of every set, all threads).
+    pub rays_per_second: f64,
+    /// Meshes checked or attempted.
+    pub meshes: usize,
+    /// Meshes that could not be checked.
+    pub failed: Vec<Failure>,
+    /// One row per mesh and set.
+    pub sets: Vec<SetReport>,
+}
+
+impl Report {
+    /// The report of `results` (in order) under `config`.
+    pub fn new(
+        config: RunConfig,
+        threads: usize,
+        wall_seconds: f64,
+        results: &[MeshResult],
+    ) -> Self {
+        let mut failed = Vec::new();
+        let mut sets = Vec::new();
+        for r in results {
+            match &r.error {
+                Some(error) => failed.push(Failure {
+                    path: r.path.clone(),
+                    error: error.clone(),
+                }),
+                None => sets.extend(r.sets.iter().cloned()),
+            }
+        }
+        let rays: usize = sets.iter().map(|s| s.rays).sum();
+        Self {
+            config,
+            merged_shards: None,
+            threads,
+            wall_seconds,
+            rays_per_second: if wall_seconds > 0.0 {
+                rays as f64 / wall_seconds
+            } else {
+                0.0
+            },
+            meshes: results.len(),
+            failed,
+            sets,
+        }
+    }
+
+    /// Total genuine mismatches.
+    pub fn genuine(&self) -> usize {
+        self.sets.iter().map(|r| r.genuine_mismatches).sum()
+    }
+
+    /// Total halfray leaks.
+    pub fn leaks(&self) -> usize {
+        self.sets.iter().map(|r| r.leaks_halfray).sum()
+    }
+
+    /// halfray / Embree robust single-thread throughput, time-weighted over all sets (`None`
+    /// without timed rays).
+    pub fn throughput_ratio(&self) -> Option<f64> {
+        let h: f64 = self.sets.iter().map(|r| r.secs_halfray).sum();
+        let e: f64 = self.sets.iter().map(|r| r.secs_embree).sum();
+        (h > 0.0).then(|| e / h)
+    }
+
+    /// The results per mesh (inverse of [`Report::new`]): rows grouped by path in order of
+    /// first appearance, then the failures.
+    pub fn mesh_results(&self) -> Vec<MeshResult> {
+        let mut out: Vec<MeshResult> = Vec::new();
+        for row in &self.sets {
+            match out.iter_mut().find(|m| m.path == row.path) {
+                Some(m) => m.sets.push(row.clone()),
+                None => out.push(MeshResult {
+                    path: row.path.clone(),
+                    config: self.config.clone(),
+                    error: None,
+                    sets: vec![row.clone()],
+                }),
+            }
+        }
+        out.extend(self.failed.iter().map(|f| MeshResult {
+            path: f.path.clone(),
+            config: self.config.clone(),
+            error: Some(f.error.clone()),
+            sets: Vec::new(),
+        }));
+        out
+    }
+}
+
+/// The per-set table as markdown.
+pub fn markdown(rows: &[SetReport]) -> String {
+    let mut s = String::from(
+        "| mesh | set | rays | agree | ties | within tol | genuine | Embree wrong | leaks halfray | leaks Embree robust | leaks Embree default | any-hit ≠ | Mrays/s halfray | Mrays/s Embree robust | ratio |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for r in rows {
+        let ratio = if r.mrays_embree > 0.0 {
+            r.mrays_halfray / r.mrays_embree
+        } else {
+            0.0
+        };
+        s.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {}/{} | {}/{} | {}/{} | {} | {:.2} | {:.2} | {:.2} |\n",
+            r.mesh,
+            r.name,
+            r.rays,
+            r.agree,
+            r.ties,
+            r.within_tolerance,
+            r.genuine_mismatches,
+            r.embree_wrong,
+            r.leaks_halfray,
+            r.leak_rays,
+            r.leaks_embree,
+            r.leak_rays,
+            r.leaks_embree_default,
+            r.leak_rays,
+            r.any_hit_disagreements,
+            r.mrays_halfray,
+            r.mrays_embree,
+            ratio
+        ));
+    }
+    s
+}

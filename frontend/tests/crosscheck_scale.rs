@@ -1,0 +1,261 @@
+//! `halfray crosscheck` at scale, as a user runs it: sharded runs merged equal the unsharded
+//! run ray for ray; a mesh list with a bad mesh is reported and the run goes on; `--resume`
+//! skips exactly the meshes already done. Needs the `embree` feature (the CI's embree stage
+//! runs it); `crosscheck merge` alone needs no Embree and is tested in `crosscheck::merge`.
+#![cfg(feature = "embree")]
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_halfray");
+const SCENE_MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/meshes");
+
+fn mesh(name: &str) -> String {
+    format!("{SCENE_MESHES}/{name}")
+}
+
+fn run(args: &[&str], extra: &[&Path]) -> Output {
+    Command::new(BIN)
+        .arg("crosscheck")
+        .args(args)
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+fn read(path: &Path) -> Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
+}
+
+/// Every field of every row except the timing ones.
+fn counts(report: &Value) -> Vec<Value> {
+    report["sets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|row| {
+            let mut row = row.clone();
+            let obj = row.as_object_mut().unwrap();
+            obj.retain(|k, _| !k.starts_with("secs_") && !k.starts_with("mrays_"));
+            row
+        })
+        .collect()
+}
+
+/// The Möller–Trumbore test leaks on edge rays, so the runs have disagreements to keep.
+const RUN: [&str; 6] = [
+    "--rays",
+    "1500",
+    "--intersector",
+    "moller-trumbore",
+    "--sets",
+    "primary,edges,vertices",
+];
+
+#[test]
+fn merged_shards_equal_the_unsharded_run_ray_for_ray() {
+    let dir = tempfile::tempdir().unwrap();
+    let meshes = [mesh("octahedron.obj"), mesh("torus.obj")];
+    let whole = dir.path().join("whole.json");
+    let o = run(
+        &[
+            &[meshes[0].as_str(), meshes[1].as_str()][..],
+            &RUN[..],
+            &["--json"],
+        ]
+        .concat(),
+        &[&whole],
+    );
+    // Leaks through a non-watertight intersector do not fail the run; mismatches would.
+    assert!(o.status.success(), "{}", text(&o));
+    let whole = read(&whole);
+    let details: usize = whole["sets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["disagreements"].as_array().unwrap().len())
+        .sum();
+    assert!(details > 0, "the Möller–Trumbore run should record leaks");
+    for n in [1usize, 2, 3, 7] {
+        let mut parts: Vec<PathBuf> = Vec::new();
+        for k in 0..n {
+            let part = dir.path().join(format!("part-{k}-of-{n}.json"));
+            let shard = format!("{k}/{n}");
+            let o = run(
+                &[
+                    &[meshes[0].as_str(), meshes[1].as_str()][..],
+                    &RUN[..],
+                    &["--threads", "2", "--shard", &shard, "--json"],
+                ]
+                .concat(),
+                &[&part],
+            );
+            assert!(o.status.success(), "shard {shard}: {}", text(&o));
+            // Each shard holds about 1/n of each set.
+            let part_rays = read(&part)["sets"][0]["rays"].as_u64().unwrap();
+            let all_rays = whole["sets"][0]["rays"].as_u64().unwrap();
+            assert!(part_rays.abs_diff(all_rays / n as u64) <= 1, "{shard}");
+            parts.push(part);
+        }
+        let merged = dir.path().join(format!("merged-{n}.json"));
+        let part_refs: Vec<&Path> = parts.iter().map(PathBuf::as_path).rev().collect();
+        let o = Command::new(BIN)
+            .args(["crosscheck", "merge"])
+            .args(&part_refs)
+            .arg("--json")
+            .arg(&merged)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "merge of {n}: {}", text(&o));
+        let merged = read(&merged);
+        assert_eq!(merged["merged_shards"], n);
+        assert_eq!(counts(&merged), counts(&whole), "N = {n}");
+    }
+    // A shard missing from the merge is an error, not a partial sum.
+    let o = Command::new(BIN)
+        .args(["crosscheck", "merge"])
+        .arg(dir.path().join("part-0-of-3.json"))
+        .arg(dir.path().join("part-2-of-3.json"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("shard 1/3 is missing"), "{}", text(&o));
+}
+
+#[test]
+fn a_bad_mesh_in_a_list_is_reported_and_the_run_goes_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let nan = dir.path().join("nan.obj");
+    std::fs::write(&nan, "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n").unwrap();
+    let missing = dir.path().join("missing.obj");
+    let list = dir.path().join("list.txt");
+    std::fs::write(
+        &list,
+        format!(
+            "# a corpus\n{}\n{}\n{}\n\n{}\n",
+            mesh("tetrahedron.obj"),
+            nan.display(),
+            missing.display(),
+            mesh("cube.obj")
+        ),
+    )
+    .unwrap();
+    let (log, json) = (dir.path().join("out.jsonl"), dir.path().join("out.json"));
+    let o = run(
+        &["--rays", "300", "--mesh-list"],
+        &[
+            &list,
+            Path::new("--jsonl"),
+            &log,
+            Path::new("--json"),
+            &json,
+        ],
+    );
+    let all = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{all}");
+    assert!(all.contains("2 of 4 meshes could not be checked"), "{all}");
+    assert!(all.contains(&format!("{}:3", nan.display())), "{all}");
+    assert!(all.contains(&missing.display().to_string()), "{all}");
+    let lines: Vec<Value> = std::fs::read_to_string(&log)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 4, "one line per mesh, failed ones included");
+    assert!(lines[1]["error"].as_str().unwrap().contains("not finite"));
+    assert!(
+        lines[3]["error"].is_null(),
+        "the run went on past the bad meshes"
+    );
+    let report = read(&json);
+    assert_eq!(report["meshes"], 4);
+    assert_eq!(report["failed"].as_array().unwrap().len(), 2);
+    assert_eq!(report["sets"].as_array().unwrap().len(), 2 * 6);
+}
+
+#[test]
+fn resume_skips_exactly_the_meshes_already_done() {
+    let dir = tempfile::tempdir().unwrap();
+    let later = dir.path().join("later.obj");
+    let list = dir.path().join("list.txt");
+    std::fs::write(
+        &list,
+        format!("{}\n{}\n", mesh("tetrahedron.obj"), later.display()),
+    )
+    .unwrap();
+    let log = dir.path().join("out.jsonl");
+    let args = ["--rays", "300", "--sets", "primary,edges"];
+    let o = run(
+        &args,
+        &[Path::new("--mesh-list"), &list, Path::new("--jsonl"), &log],
+    );
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "later.obj is missing: {}",
+        text(&o)
+    );
+    // Without --resume an existing log is not overwritten.
+    let o = run(
+        &args,
+        &[Path::new("--mesh-list"), &list, Path::new("--jsonl"), &log],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert_eq!(std::fs::read_to_string(&log).unwrap().lines().count(), 2);
+    // The missing mesh appears; a third is added to the list; the run is resumed.
+    std::fs::copy(mesh("octahedron.obj"), &later).unwrap();
+    std::fs::write(
+        &list,
+        format!(
+            "{}\n{}\n{}\n",
+            mesh("tetrahedron.obj"),
+            later.display(),
+            mesh("cube.obj")
+        ),
+    )
+    .unwrap();
+    let json = dir.path().join("out.json");
+    let o = run(
+        &args,
+        &[
+            Path::new("--mesh-list"),
+            &list,
+            Path::new("--jsonl"),
+            &log,
+            Path::new("--resume"),
+            Path::new("--json"),
+            &json,
+        ],
+    );
+    let all = text(&o);
+    assert!(o.status.success(), "{all}");
+    assert_eq!(all.matches("skipped (--resume)").count(), 1, "{all}");
+    assert!(
+        all.contains("tetrahedron.obj: already in the results log"),
+        "{all}"
+    );
+    assert!(all.contains("crosscheck later.obj primary"), "{all}");
+    assert!(all.contains("crosscheck cube.obj edges"), "{all}");
+    assert_eq!(std::fs::read_to_string(&log).unwrap().lines().count(), 4);
+    let report = read(&json);
+    assert_eq!(report["meshes"], 3);
+    assert!(report["failed"].as_array().unwrap().is_empty());
+    assert_eq!(report["sets"].as_array().unwrap().len(), 3 * 2);
+    // A resumed run's report equals a fresh run's, counts for counts.
+    let fresh = dir.path().join("fresh.json");
+    let o = run(
+        &args,
+        &[Path::new("--mesh-list"), &list, Path::new("--json"), &fresh],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(counts(&read(&fresh)), counts(&report));
+}
