@@ -12,7 +12,8 @@
 #   crate       halfray-core as crates.io gets it: docs with -D warnings, publish --dry-run,
 #               and a build with the rust-version toolchain (MSRV)
 #   test        cargo test --workspace (unit, integration, numerical-stability, fuzz-corpus replay)
-#   embree      Embree 4.4.0 from the pinned PyPI wheel; Embree tests; crosscheck on every shared mesh
+#   embree      Embree 4.4.0 from the pinned PyPI wheel; Embree tests; crosscheck on every shared mesh;
+#               the same sharded (local runner, Slurm script) and merged equals it unsharded
 #   fuzz        nightly + cargo-fuzz; every fuzz target for FUZZ_SECONDS (default 30) each
 #   bench       halfray bench accuracy --quick (runs; watertight must show zero leaks)
 set -euo pipefail
@@ -57,6 +58,9 @@ if [ "${SKIP_EMBREE:-0}" != 1 ]; then
     cargo run --release -p halfray --features embree -- crosscheck "$MESHES"/*.obj \
         --rays "${CROSSCHECK_RAYS:-100000}" --json target/ci/crosscheck.json \
         --depth-image target/ci/crosscheck-depth.png
+    # The same meshes as 4 shards through the local runner (xargs -P) and as 3 tasks of the
+    # Slurm array script merge to the unsharded run, count for count.
+    bash scripts/crosscheck-verify-shards.sh target/ci/shards "$MESHES"/*.obj --rays 10000
 fi
 
 stage bench
