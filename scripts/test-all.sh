@@ -6,9 +6,10 @@
 #   SKIP_EMBREE=1 SKIP_FUZZ=1 bash scripts/test-all.sh   # quick local run
 #
 # Stages (each prints a `== stage` header; any failure stops the run with a non-zero exit):
-#   toolchain   rustup target thumbv7em-none-eabihf (+ rustfmt/clippy components)
+#   toolchain   rustup targets for the embedded builds (+ rustfmt/clippy components)
 #   lint        cargo fmt --check; cargo clippy --workspace --all-targets -D warnings
-#   no_std      halfray-core and the thumb probe built for thumbv7em-none-eabihf (no std, no alloc)
+#   no_std      halfray-core built for thumbv7em-none-eabihf, thumbv7m-none-eabi, thumbv6m-none-eabi and
+#               riscv32imac-unknown-none-elf; the thumb probe for thumbv7em-none-eabihf (no std, no alloc)
 #   crate       halfray-core as crates.io gets it: docs with -D warnings, publish --dry-run,
 #               and a build with the rust-version toolchain (MSRV)
 #   test        cargo test --workspace (unit, integration, numerical-stability, fuzz-corpus replay)
@@ -25,7 +26,7 @@ stage() { echo; echo "== $1 ($(date +%H:%M:%S))"; }
 t0=$(date +%s)
 
 stage toolchain
-rustup target add thumbv7em-none-eabihf
+rustup target add thumbv7em-none-eabihf thumbv7m-none-eabi thumbv6m-none-eabi riscv32imac-unknown-none-elf
 rustup component add rustfmt clippy >/dev/null 2>&1 || true
 
 stage lint
@@ -33,7 +34,10 @@ cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
 
 stage no_std
-cargo build -p halfray-core --target thumbv7em-none-eabihf
+# Cortex-M4F, Cortex-M3 (soft float), Cortex-M0+ (no FPU, no atomic CAS), RISC-V RV32IMAC.
+for target in thumbv7em-none-eabihf thumbv7m-none-eabi thumbv6m-none-eabi riscv32imac-unknown-none-elf; do
+    cargo build -p halfray-core --target "$target"
+done
 cargo build --release --manifest-path examples/thumb-probe/Cargo.toml --target thumbv7em-none-eabihf
 
 stage crate

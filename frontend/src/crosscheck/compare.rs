@@ -302,43 +302,43 @@ fn classify(
     out
 }
 
-/// One set's row: the single-thread timed passes over the first `timing_rays` rays (the same
-/// rays for every side), then every ray classified on the worker threads.
+/// One set's row: the single-thread timed passes over `timing_rays` rays spread evenly over
+/// the set (every `stride`-th ray, the same rays for every side, so that a camera's empty
+/// first rows do not stand for the whole image), then every ray classified on the worker
+/// threads.
 fn compare_set(sides: &Sides<'_>, rays: &[(usize, SetRay)], timing_rays: usize) -> SetReport {
-    let head = &rays[..rays.len().min(timing_rays)];
-    let (ours, secs_h) = timed(|| {
-        head.iter()
-            .map(|(_, r)| sides.halfray(&r.ray))
-            .collect::<Vec<_>>()
-    });
+    let stride = rays.len().div_ceil(timing_rays.max(1)).max(1);
+    let sample = || rays.iter().step_by(stride).map(|(_, r)| &r.ray);
+    let (ours, secs_h) = timed(|| sample().map(|r| sides.halfray(r)).collect::<Vec<_>>());
     let (emb, secs_e) = timed(|| {
-        head.iter()
-            .map(|(_, r)| embree_answer(sides.robust, &r.ray))
+        sample()
+            .map(|r| embree_answer(sides.robust, r))
             .collect::<Vec<_>>()
     });
     let (emb_fast, secs_f) = timed(|| {
-        head.iter()
-            .map(|(_, r)| embree_answer(sides.fast, &r.ray))
+        sample()
+            .map(|r| embree_answer(sides.fast, r))
             .collect::<Vec<_>>()
     });
     let outcomes: Vec<Outcome> = rays
         .par_iter()
         .enumerate()
         .map(|(j, (index, r))| {
-            let (h, e, f) = match (ours.get(j), emb.get(j), emb_fast.get(j)) {
-                (Some(&h), Some(&e), Some(&f)) => (h, e, f),
-                _ => (
+            let (h, e, f) = if j % stride == 0 {
+                (ours[j / stride], emb[j / stride], emb_fast[j / stride])
+            } else {
+                (
                     sides.halfray(&r.ray),
                     embree_answer(sides.robust, &r.ray),
                     embree_answer(sides.fast, &r.ray),
-                ),
+                )
             };
             classify(sides, *index, r, h, e, f)
         })
         .collect();
     let mut row = SetReport {
         rays: rays.len(),
-        timed_rays: head.len(),
+        timed_rays: ours.len(),
         secs_halfray: secs_h,
         secs_embree: secs_e,
         secs_embree_default: secs_f,

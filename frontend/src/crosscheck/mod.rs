@@ -40,10 +40,11 @@ pub struct CrosscheckArgs {
     #[arg(long, default_value_t = 100_000)]
     pub rays: usize,
     /// Worker threads for the checks [default: every core]. The throughput figures stay
-    /// single-thread passes over the first `--timing-rays` rays of each set.
+    /// single-thread passes over `--timing-rays` rays of each set.
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
     pub threads: Option<u16>,
-    /// Rays of each set (of this shard) in the single-thread timed passes.
+    /// Rays of each set (of this shard) in the single-thread timed passes, spread evenly over
+    /// the set (every k-th ray); the same rays for halfray and both Embree modes.
     #[arg(long, default_value_t = 100_000)]
     pub timing_rays: usize,
     /// Check only shard K of N (zero-based, 0 <= K < N): the rays whose index in their set is
