@@ -10,6 +10,8 @@
 #   lint        cargo fmt --check; cargo clippy --workspace --all-targets -D warnings
 #   no_std      halfray-core built for thumbv7em-none-eabihf, thumbv7m-none-eabi, thumbv6m-none-eabi and
 #               riscv32imac-unknown-none-elf; the thumb probe for thumbv7em-none-eabihf (no std, no alloc)
+#   mcu         the core under QEMU on a Cortex-M4F and a Cortex-M3, results bit-identical to the host
+#               (scripts/test-mcu.sh; installs qemu-system-arm)
 #   crate       halfray-core as crates.io gets it: docs with -D warnings, publish --dry-run,
 #               and a build with the rust-version toolchain (MSRV)
 #   test        cargo test --workspace (unit, integration, numerical-stability, fuzz-corpus replay)
@@ -39,6 +41,10 @@ for target in thumbv7em-none-eabihf thumbv7m-none-eabi thumbv6m-none-eabi riscv3
     cargo build -p halfray-core --target "$target"
 done
 cargo build --release --manifest-path examples/thumb-probe/Cargo.toml --target thumbv7em-none-eabihf
+
+stage mcu
+# The core on emulated Cortex-M4F and Cortex-M3 (QEMU), bit-identical to the host.
+bash scripts/test-mcu.sh
 
 stage crate
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p halfray-core

@@ -1,0 +1,79 @@
+//! Prints, for each machine, the line its image prints under QEMU
+//! (`mcu: <machine> <queries> queries hash <hex> hits <n> leaks <n>`), computed on the host
+//! with the same `mcu-check` code and buffers of the same sizes.
+
+use halfray_core::Vec3;
+use halfray_core::bvh::{BvhNode, node_capacity};
+use halfray_core::halfedge::{EdgeRec, FaceRec, VertexRec, build_scratch_len};
+use mcu_check::{
+    Config, Fnv, HalfedgeStorage, M3, M4F, RayStorage, edge_count, halfedge_checks, ray_checks,
+    triangle_count, vertex_count,
+};
+
+fn line(machine: &str, c: Config) -> Result<String, mcu_check::CheckError> {
+    let mut hash = Fnv::new();
+    let (nv, nt) = (vertex_count(c.grid), triangle_count(c.grid));
+    let r = ray_checks(
+        c.grid,
+        c.rays_per_set,
+        RayStorage {
+            positions: &mut vec![Vec3::ZERO; nv],
+            triangles: &mut vec![[0; 3]; nt],
+            nodes: &mut vec![BvhNode::EMPTY; node_capacity(nt)],
+            indices: &mut vec![0; nt],
+        },
+        &mut hash,
+    )?;
+    let (hv, he, hf) = (
+        vertex_count(c.halfedge_grid),
+        edge_count(c.halfedge_grid),
+        triangle_count(c.halfedge_grid),
+    );
+    let h = halfedge_checks(
+        c.halfedge_grid,
+        HalfedgeStorage {
+            positions: &mut vec![Vec3::ZERO; hv],
+            triangles: &mut vec![[0; 3]; hf],
+            mesh: (
+                &mut vec![VertexRec::EMPTY; hv],
+                &mut vec![EdgeRec::EMPTY; he],
+                &mut vec![FaceRec::EMPTY; hf],
+            ),
+            fine: (
+                &mut vec![VertexRec::EMPTY; hv + he],
+                &mut vec![EdgeRec::EMPTY; 2 * he + 3 * hf],
+                &mut vec![FaceRec::EMPTY; 4 * hf],
+            ),
+            scratch: &mut vec![0; build_scratch_len(hf)],
+            out_positions: &mut vec![Vec3::ZERO; hv + he],
+            out_triangles: &mut vec![[0; 3]; 4 * hf],
+        },
+        &mut hash,
+    )?;
+    let s = r.plus(h);
+    Ok(format!(
+        "mcu: {machine} {} queries hash {:016x} hits {} leaks {}",
+        s.queries,
+        hash.value(),
+        s.hits,
+        s.leaks
+    ))
+}
+
+fn main() -> std::process::ExitCode {
+    let mut ok = true;
+    for (machine, config) in [("mps2-an386", M4F), ("lm3s6965evb", M3)] {
+        match line(machine, config) {
+            Ok(l) => println!("{l}"),
+            Err(e) => {
+                eprintln!("mcu-host: {machine}: {e:?}");
+                ok = false;
+            }
+        }
+    }
+    if ok {
+        std::process::ExitCode::SUCCESS
+    } else {
+        std::process::ExitCode::FAILURE
+    }
+}

@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# The core on emulated microcontrollers (issue 14, item 1): the `mcu-check` image
+# (examples/mcu) runs under QEMU on a Cortex-M4F (`mps2-an386`, thumbv7em-none-eabihf, hardware
+# single precision, `f64` in software) and a Cortex-M3 (`lm3s6965evb`, thumbv7m-none-eabi, all
+# floating point in software), and its result hash (every closest/any-hit answer's primitive,
+# `t` and barycentric bits; the Loop-subdivided mesh's positions) must equal the hash of the
+# same code run on the host. Prints one line per machine:
+#
+#   mcu: N queries bit-identical to host (MACHINE)
+#
+# and exits 0 only if every machine matches and no aimed ray leaked. Installs what it needs
+# (qemu-system-arm from Debian, the rustup targets). Called by scripts/test-all.sh.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+as_root() {
+    if [ "$(id -u)" -eq 0 ]; then "$@"
+    elif command -v sudo >/dev/null 2>&1; then sudo -n "$@"
+    else echo "test-mcu: need root (or sudo) to run: $*" >&2; return 1
+    fi
+}
+if ! command -v qemu-system-arm >/dev/null 2>&1; then
+    echo "test-mcu: installing qemu-system-arm" >&2
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get update -qq
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends qemu-system-arm >/dev/null
+fi
+rustup target add thumbv7em-none-eabihf thumbv7m-none-eabi >/dev/null 2>&1
+
+manifest=examples/mcu/Cargo.toml
+host=$(cargo run -q --release --manifest-path "$manifest" -p mcu-host)
+
+status=0
+check() { # machine target cpu
+    local machine=$1 target=$2 cpu=$3
+    cargo build -q --release --manifest-path "$manifest" -p mcu-firmware --target "$target"
+    local image=examples/mcu/target/$target/release/mcu-firmware
+    local out rc=0
+    out=$(timeout 600 qemu-system-arm -machine "$machine" -cpu "$cpu" -nographic -monitor none \
+        -serial none -semihosting-config enable=on,target=native -kernel "$image" 2>&1) || rc=$?
+    local got want
+    got=$(grep "^mcu: $machine " <<<"$out" || true)
+    want=$(grep "^mcu: $machine " <<<"$host" || true)
+    if [ "$rc" -ne 0 ] || [ -z "$got" ] || [ "$got" != "$want" ]; then
+        echo "test-mcu: $machine differs from the host (qemu exit $rc)" >&2
+        echo "  target: ${got:-$out}" >&2
+        echo "  host:   $want" >&2
+        status=1
+        return
+    fi
+    # got: mcu: MACHINE QUERIES queries hash HEX hits N leaks N
+    read -r _ _ queries _ _ hash _ hits _ leaks <<<"$got"
+    echo "mcu: $queries queries bit-identical to host ($machine: $cpu, $target; hash $hash, $hits hits, $leaks leaks)"
+}
+check mps2-an386 thumbv7em-none-eabihf cortex-m4
+check lm3s6965evb thumbv7m-none-eabi cortex-m3
+exit "$status"
