@@ -10,8 +10,9 @@ use glam::Vec3;
 /// (24 bytes; indexed by the ray's direction sign bit during traversal), `start: u32`,
 /// `count: u32`. An inner node has `count = 0` and its children at `start`
 /// and `start + 1`; a leaf has `count ≥ 1` primitives at `indices[start..start + count]`.
-/// Nodes are only created by the builder; fields are private so the invariants that bound the
-/// traversal (children after their parent, depth ≤ [`super::MAX_DEPTH`]) cannot be broken.
+/// Fields are private: nodes come from the builder, or from [`BvhNode::from_raw`] through
+/// [`super::Bvh::from_parts`], which checks the invariants that bound the traversal (children
+/// after their parent, depth ≤ [`super::MAX_DEPTH`]) before any query.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(32))]
 pub struct BvhNode {
@@ -38,6 +39,26 @@ impl BvhNode {
         start: 0,
         count: 0,
     };
+
+    /// A node from its raw fields: `bounds` as `[min, max]`, then `start` and `count` (an
+    /// inner node has `count = 0` and its children at `start`, `start + 1`; a leaf covers
+    /// `indices[start..start + count]`). For BVHs baked elsewhere: a tree of such nodes is
+    /// only queried after [`super::Bvh::from_parts`] has checked it.
+    #[must_use]
+    pub const fn from_raw(bounds: [[f32; 3]; 2], start: u32, count: u32) -> Self {
+        Self {
+            bounds,
+            start,
+            count,
+        }
+    }
+
+    /// The raw fields `(bounds, start, count)` (see [`BvhNode::from_raw`]), for writing a
+    /// baked BVH.
+    #[must_use]
+    pub const fn to_raw(&self) -> ([[f32; 3]; 2], u32, u32) {
+        (self.bounds, self.start, self.count)
+    }
 
     #[inline]
     pub(super) fn set_bounds(&mut self, b: &Aabb) {

@@ -1,0 +1,589 @@
+//! A BVH from nodes and indices made elsewhere (baked on a host into `static` arrays, read
+//! from flash or from a file), checked before it is trusted: [`Bvh::from_parts`].
+//!
+//! Baked data is input, not trusted memory. [`Bvh::from_parts`] walks the tree once, in
+//! `O(nodes + primitives)` time with a fixed stack and a caller-provided bitset, and accepts it
+//! only if traversal over it terminates within its fixed stack and gives the answers a freshly
+//! built tree over the same mesh would give (those of a brute-force loop, with the same tie
+//! rule):
+//!
+//! * **child order**: an inner node's children `c, c + 1` come after it (`c > node`) and lie
+//!   inside the node array (so no walk can cycle);
+//! * **depth**: no inner node at depth ≥ [`MAX_DEPTH`] (the traversal stack's bound), and no
+//!   node reached twice (at most as many node visits as nodes);
+//! * **index ranges**: leaves are non-empty and, in depth-first (first child first) order,
+//!   cover `indices` exactly once from the start; every index names a triangle of the mesh,
+//!   each triangle once (the bitset), and the tree holds every triangle;
+//! * **boxes**: every reached box is finite with `min ≤ max`, contains its children's boxes and,
+//!   for a leaf, the vertices of its triangles, whose indices and coordinates must be valid and
+//!   finite.
+//!
+//! Nodes that no walk reaches (the builder's alignment padding) are never read by a query and
+//! are not checked.
+
+use super::node::BvhNode;
+use super::primitive::TriangleMesh;
+use super::{Bvh, MAX_DEPTH, node_capacity};
+use core::fmt;
+
+/// Words of the bitset [`Bvh::from_parts`] needs for `triangles` triangles: one bit each.
+#[must_use]
+pub const fn load_scratch_len(triangles: usize) -> usize {
+    triangles.div_ceil(32)
+}
+
+/// Why [`Bvh::from_parts`] refused its input. Node and position numbers are indices into the
+/// arrays as given.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LoadError {
+    /// The index array's length is not the mesh's triangle count.
+    IndexCount {
+        /// Entries in `indices`.
+        indices: usize,
+        /// Triangles in the mesh.
+        triangles: usize,
+    },
+    /// More nodes than a tree over the mesh can have (`node_capacity + 1` with the builder's
+    /// alignment slot), or none for a non-empty mesh.
+    NodeCount {
+        /// Nodes given.
+        nodes: usize,
+        /// Triangles in the mesh.
+        triangles: usize,
+    },
+    /// The bitset holds fewer than [`load_scratch_len`] words.
+    ScratchTooSmall {
+        /// Words required.
+        needed: usize,
+        /// Words available.
+        available: usize,
+    },
+    /// An inner node's children are not after it, or lie past the node array.
+    ChildOutOfRange {
+        /// The inner node.
+        node: usize,
+    },
+    /// An inner node at depth [`MAX_DEPTH`] or deeper.
+    TooDeep {
+        /// The inner node.
+        node: usize,
+    },
+    /// A node is reached by more than one path (the tree is not a tree).
+    SharedNode {
+        /// The node reached again.
+        node: usize,
+    },
+    /// A box is not finite, has `min > max`, or does not contain its children's boxes or its
+    /// triangles.
+    BadBox {
+        /// The node.
+        node: usize,
+    },
+    /// A leaf's range is not the next run of `indices` in depth-first order, or runs past it.
+    LeafRange {
+        /// The leaf.
+        node: usize,
+    },
+    /// `indices[position]` names no triangle of the mesh, or a triangle already listed.
+    BadIndex {
+        /// Position in `indices`.
+        position: usize,
+    },
+    /// A triangle's vertex index is out of range or its vertex is not finite.
+    BadTriangle {
+        /// The triangle.
+        triangle: usize,
+    },
+    /// The leaves cover only the first `covered` of the indices.
+    Uncovered {
+        /// Indices covered by leaves.
+        covered: usize,
+        /// Indices given.
+        indices: usize,
+    },
+}
+
+impl fmt::Display for LoadError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::IndexCount { indices, triangles } => write!(
+                f,
+                "{indices} primitive indices for a mesh of {triangles} triangles"
+            ),
+            Self::NodeCount { nodes, triangles } => write!(
+                f,
+                "{nodes} nodes cannot form a tree over {triangles} triangles"
+            ),
+            Self::ScratchTooSmall { needed, available } => write!(
+                f,
+                "the load bitset holds {available} words, {needed} are needed"
+            ),
+            Self::ChildOutOfRange { node } => write!(
+                f,
+                "node {node}: children are not after it or lie past the node array"
+            ),
+            Self::TooDeep { node } => write!(
+                f,
+                "node {node}: an inner node at depth {MAX_DEPTH} or deeper"
+            ),
+            Self::SharedNode { node } => write!(f, "node {node} is reached by two paths"),
+            Self::BadBox { node } => write!(
+                f,
+                "node {node}: box not finite, inverted, or not containing its children or triangles"
+            ),
+            Self::LeafRange { node } => write!(
+                f,
+                "leaf {node}: its index range is empty, out of order or past the index array"
+            ),
+            Self::BadIndex { position } => write!(
+                f,
+                "index {position} names no triangle of the mesh, or one already listed"
+            ),
+            Self::BadTriangle { triangle } => write!(
+                f,
+                "triangle {triangle}: vertex index out of range or vertex not finite"
+            ),
+            Self::Uncovered { covered, indices } => write!(
+                f,
+                "the leaves cover {covered} of {indices} primitive indices"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for LoadError {}
+
+/// `true` when `b` is finite with `min ≤ max` on every axis.
+fn finite_box(b: &[[f32; 3]; 2]) -> bool {
+    (0..3).all(|k| b[0][k].is_finite() && b[1][k].is_finite() && b[0][k] <= b[1][k])
+}
+
+/// `true` when box `outer` contains box `inner`.
+fn contains_box(outer: &[[f32; 3]; 2], inner: &[[f32; 3]; 2]) -> bool {
+    (0..3).all(|k| outer[0][k] <= inner[0][k] && inner[1][k] <= outer[1][k])
+}
+
+impl<N, I> Bvh<N, I>
+where
+    N: AsRef<[BvhNode]>,
+    I: AsRef<[u32]>,
+{
+    /// A BVH over `mesh` from `nodes` (node 0 the root; every element is used) and `indices`
+    /// (one per triangle), checked as the module docs list; `scratch` is a bitset of at least
+    /// [`load_scratch_len`]`(mesh.len())` words (contents ignored, overwritten). Nothing is
+    /// copied: the result borrows or owns the storage as given (`&'static [BvhNode]` for
+    /// arrays in flash).
+    ///
+    /// # Errors
+    ///
+    /// A [`LoadError`] naming the first violation found; the storage is handed back only on
+    /// success (it is dropped with the error).
+    pub fn from_parts(
+        nodes: N,
+        indices: I,
+        mesh: &TriangleMesh<'_>,
+        scratch: &mut [u32],
+    ) -> Result<Self, LoadError> {
+        check(nodes.as_ref(), indices.as_ref(), mesh, scratch)?;
+        let (node_count, prim_count) = (nodes.as_ref().len(), indices.as_ref().len());
+        Ok(Self {
+            nodes,
+            indices,
+            // `check` bounds both by `node_capacity(MAX_PRIMITIVES)`, which fits in `u32`.
+            node_count: node_count as u32,
+            prim_count: prim_count as u32,
+            source_len: mesh.len(),
+        })
+    }
+}
+
+/// The checks of [`Bvh::from_parts`].
+fn check(
+    nodes: &[BvhNode],
+    indices: &[u32],
+    mesh: &TriangleMesh<'_>,
+    scratch: &mut [u32],
+) -> Result<(), LoadError> {
+    let triangles = mesh.len();
+    if indices.len() != triangles || triangles > super::MAX_PRIMITIVES {
+        return Err(LoadError::IndexCount {
+            indices: indices.len(),
+            triangles,
+        });
+    }
+    let max_nodes = node_capacity(triangles) + usize::from(triangles > 0);
+    if nodes.len() > max_nodes || (nodes.is_empty() != (triangles == 0)) {
+        return Err(LoadError::NodeCount {
+            nodes: nodes.len(),
+            triangles,
+        });
+    }
+    let needed = load_scratch_len(triangles);
+    let Some(seen) = scratch.get_mut(..needed) else {
+        return Err(LoadError::ScratchTooSmall {
+            needed,
+            available: scratch.len(),
+        });
+    };
+    seen.fill(0);
+    if nodes.is_empty() {
+        return Ok(());
+    }
+    // Depth-first, first child first: the pending second children, with their depths. One per
+    // level at most, so `MAX_DEPTH + 1` entries suffice once depths are bounded.
+    let mut stack = [(0u32, 0u8); MAX_DEPTH + 1];
+    let mut sp = 1usize;
+    let mut visits = 0usize;
+    let mut covered = 0usize;
+    while sp > 0 {
+        sp -= 1;
+        let (node, depth) = stack[sp];
+        let node = node as usize;
+        visits += 1;
+        if visits > nodes.len() {
+            return Err(LoadError::SharedNode { node });
+        }
+        let n = &nodes[node];
+        let b = &n.bounds;
+        if !finite_box(b) {
+            return Err(LoadError::BadBox { node });
+        }
+        match n.children() {
+            Some((first, _)) => {
+                let first = first as usize;
+                if first <= node || first.saturating_add(1) >= nodes.len() {
+                    return Err(LoadError::ChildOutOfRange { node });
+                }
+                if usize::from(depth) >= MAX_DEPTH {
+                    return Err(LoadError::TooDeep { node });
+                }
+                for child in [first, first + 1] {
+                    if !contains_box(b, &nodes[child].bounds) {
+                        return Err(LoadError::BadBox { node });
+                    }
+                }
+                // Second child below the first, so the first is walked first.
+                stack[sp] = ((first + 1) as u32, depth + 1);
+                stack[sp + 1] = (first as u32, depth + 1);
+                sp += 2;
+            }
+            None => {
+                let (start, count) = n.raw();
+                let (start, count) = (start as usize, count as usize);
+                if start != covered || count > indices.len() - covered {
+                    return Err(LoadError::LeafRange { node });
+                }
+                for (position, &prim) in indices.iter().enumerate().skip(start).take(count) {
+                    let prim = prim as usize;
+                    let (word, bit) = (prim / 32, 1u32 << (prim % 32));
+                    if prim >= triangles || seen[word] & bit != 0 {
+                        return Err(LoadError::BadIndex { position });
+                    }
+                    seen[word] |= bit;
+                    let Some(v) = mesh.triangle(prim) else {
+                        return Err(LoadError::BadTriangle { triangle: prim });
+                    };
+                    if !v.iter().all(|p| p.is_finite()) {
+                        return Err(LoadError::BadTriangle { triangle: prim });
+                    }
+                    for p in v {
+                        if !contains_box(b, &[p.to_array(), p.to_array()]) {
+                            return Err(LoadError::BadBox { node });
+                        }
+                    }
+                }
+                covered += count;
+            }
+        }
+    }
+    if covered != indices.len() {
+        return Err(LoadError::Uncovered {
+            covered,
+            indices: indices.len(),
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::BuildOptions;
+    use crate::ray::Ray;
+    use crate::test_util::lcg;
+    use crate::triangle::Watertight;
+    use glam::Vec3;
+    use std::vec;
+    use std::vec::Vec;
+
+    /// A grid of `n × n` quads with jittered heights.
+    fn grid(n: usize, rng: &mut u64) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let mut p = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                p.push(Vec3::new(i as f32, j as f32, lcg(rng) * 0.5));
+            }
+        }
+        let v = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        let mut t = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                t.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+                t.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+            }
+        }
+        (p, t)
+    }
+
+    fn built(mesh: &TriangleMesh<'_>) -> (Vec<BvhNode>, Vec<u32>) {
+        let mut nodes = vec![BvhNode::EMPTY; node_capacity(mesh.len()) + 1];
+        let mut idx = vec![0u32; mesh.len()];
+        let n = Bvh::build(mesh, &mut nodes[..], &mut idx[..], &BuildOptions::default())
+            .unwrap()
+            .node_count();
+        nodes.truncate(n);
+        (nodes, idx)
+    }
+
+    fn load<'a>(
+        nodes: &'a [BvhNode],
+        idx: &'a [u32],
+        mesh: &TriangleMesh<'_>,
+    ) -> Result<Bvh<&'a [BvhNode], &'a [u32]>, LoadError> {
+        let mut scratch = vec![0u32; load_scratch_len(mesh.len())];
+        Bvh::from_parts(nodes, idx, mesh, &mut scratch)
+    }
+
+    /// Closest hit by brute force over every triangle, smaller index on equal `t`: the oracle.
+    fn brute(mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, u32)> {
+        let mut best: Option<(u32, f32)> = None;
+        for i in 0..mesh.len() {
+            let v = mesh.triangle(i).unwrap();
+            if let Some(h) = crate::triangle::TriangleIntersector::intersect(&Watertight, ray, &v)
+                && best.is_none_or(|(_, t)| h.t < t)
+            {
+                best = Some((i as u32, h.t));
+            }
+        }
+        best.map(|(i, t)| (i, t.to_bits()))
+    }
+
+    #[test]
+    fn a_built_tree_loads_and_answers_like_brute_force() {
+        let mut rng = 5u64;
+        let (p, t) = grid(12, &mut rng);
+        let mesh = TriangleMesh::new(&p, &t);
+        let (nodes, idx) = built(&mesh);
+        let bvh = load(&nodes, &idx, &mesh).unwrap();
+        assert_eq!(bvh.primitive_count(), t.len());
+        for _ in 0..2000 {
+            let o = Vec3::new(lcg(&mut rng) * 14.0 - 1.0, lcg(&mut rng) * 14.0 - 1.0, 3.0);
+            let d = Vec3::new(lcg(&mut rng) - 0.5, lcg(&mut rng) - 0.5, -1.0);
+            let ray = Ray::new(o, d);
+            let got = bvh
+                .closest_hit_triangles(&mesh, &Watertight, &ray, None)
+                .map(|(i, h)| (i, h.t.to_bits()));
+            assert_eq!(got, brute(&mesh, &ray));
+        }
+        // The empty mesh loads as the empty tree.
+        let empty = TriangleMesh::new(&[], &[]);
+        assert!(load(&[], &[], &empty).unwrap().is_empty());
+    }
+
+    #[test]
+    fn each_broken_invariant_is_refused_with_its_error() {
+        let mut rng = 9u64;
+        let (p, t) = grid(6, &mut rng);
+        let mesh = TriangleMesh::new(&p, &t);
+        let (nodes, idx) = built(&mesh);
+        let inner = nodes.iter().position(|n| !n.is_leaf()).unwrap();
+        let leaf = nodes.iter().rposition(BvhNode::is_leaf).unwrap();
+        let parent = nodes
+            .iter()
+            .position(|n| {
+                n.children()
+                    .is_some_and(|(a, b)| a as usize == leaf || b as usize == leaf)
+            })
+            .unwrap();
+        let with = |i: usize, n: BvhNode| {
+            let mut v = nodes.clone();
+            v[i] = n;
+            v
+        };
+        let raw = |n: &BvhNode| {
+            let (s, c) = n.raw();
+            (n.bounds, s, c)
+        };
+        let (b, s, c) = raw(&nodes[leaf]);
+        let (ib, _, _) = raw(&nodes[inner]);
+        let cases: Vec<(Vec<BvhNode>, Vec<u32>, LoadError)> = vec![
+            // A child pointing back at the root: a cycle.
+            (
+                with(inner, BvhNode::from_raw(ib, 0, 0)),
+                idx.clone(),
+                LoadError::ChildOutOfRange { node: inner },
+            ),
+            // Children past the array.
+            (
+                with(inner, BvhNode::from_raw(ib, nodes.len() as u32 - 1, 0)),
+                idx.clone(),
+                LoadError::ChildOutOfRange { node: inner },
+            ),
+            // A NaN box: refused at its parent, which no longer contains it.
+            (
+                with(leaf, BvhNode::from_raw([[f32::NAN; 3], b[1]], s, c)),
+                idx.clone(),
+                LoadError::BadBox { node: parent },
+            ),
+            // A leaf box shrunk off its triangles.
+            (
+                with(leaf, BvhNode::from_raw([b[0], b[0]], s, c)),
+                idx.clone(),
+                LoadError::BadBox { node: leaf },
+            ),
+            // A leaf range moved past the index array.
+            (
+                with(leaf, BvhNode::from_raw(b, idx.len() as u32, c)),
+                idx.clone(),
+                LoadError::LeafRange { node: leaf },
+            ),
+            // A repeated index (so another triangle is never tested).
+            (
+                nodes.clone(),
+                {
+                    let mut v = idx.clone();
+                    v[1] = v[0];
+                    v
+                },
+                LoadError::BadIndex { position: 1 },
+            ),
+        ];
+        for (k, (n, i, want)) in cases.into_iter().enumerate() {
+            assert_eq!(load(&n, &i, &mesh).err(), Some(want), "case {k}");
+        }
+        // Truncated arrays.
+        assert!(matches!(
+            load(&nodes, &idx[..idx.len() - 1], &mesh),
+            Err(LoadError::IndexCount { .. })
+        ));
+        assert!(matches!(
+            load(&nodes[..nodes.len() - 1], &idx, &mesh),
+            Err(LoadError::ChildOutOfRange { .. }
+                | LoadError::LeafRange { .. }
+                | LoadError::Uncovered { .. })
+        ));
+        let mut small = [0u32; 1];
+        assert_eq!(
+            Bvh::from_parts(&nodes[..], &idx[..], &mesh, &mut small).err(),
+            Some(LoadError::ScratchTooSmall {
+                needed: load_scratch_len(t.len()),
+                available: 1
+            })
+        );
+    }
+
+    /// Random corruptions of a built tree (a field of a node set to a random value, an index
+    /// replaced, a vertex moved): the loader either refuses the input, or every answer over it
+    /// equals brute force. Most corruptions must be refused.
+    #[test]
+    fn a_corrupted_tree_is_refused_or_still_exact() {
+        let mut rng = 17u64;
+        let (p, t) = grid(5, &mut rng);
+        let (nodes, idx) = built(&TriangleMesh::new(&p, &t));
+        let mut refused = 0;
+        let trials = 400;
+        for trial in 0..trials {
+            let (mut n, mut i, mut q) = (nodes.clone(), idx.clone(), p.clone());
+            let pick = |r: &mut u64, len: usize| ((lcg(r) * len as f32) as usize).min(len - 1);
+            let word = (lcg(&mut rng) * 4096.0) as u32;
+            match trial % 4 {
+                0 => {
+                    let k = pick(&mut rng, n.len());
+                    let (mut b, s, c) = n[k].to_raw();
+                    b[pick(&mut rng, 2)][pick(&mut rng, 3)] = lcg(&mut rng) * 8.0 - 2.0;
+                    n[k] = BvhNode::from_raw(b, s, c);
+                }
+                1 => {
+                    let k = pick(&mut rng, n.len());
+                    let (b, s, c) = n[k].to_raw();
+                    n[k] = if trial % 8 == 1 {
+                        BvhNode::from_raw(b, word % 64, c)
+                    } else {
+                        BvhNode::from_raw(b, s, word % 8)
+                    };
+                }
+                2 => {
+                    let k = pick(&mut rng, i.len());
+                    i[k] = word % 64;
+                }
+                _ => {
+                    let k = pick(&mut rng, q.len());
+                    q[k].z = lcg(&mut rng) * 2.0 - 0.5;
+                }
+            }
+            let mesh = TriangleMesh::new(&q, &t);
+            let Ok(bvh) = load(&n, &i, &mesh) else {
+                refused += 1;
+                continue;
+            };
+            for _ in 0..200 {
+                let o = Vec3::new(lcg(&mut rng) * 7.0 - 1.0, lcg(&mut rng) * 7.0 - 1.0, 3.0);
+                let d = Vec3::new(lcg(&mut rng) - 0.5, lcg(&mut rng) - 0.5, -1.0);
+                let ray = Ray::new(o, d);
+                let got = bvh
+                    .closest_hit_triangles(&mesh, &Watertight, &ray, None)
+                    .map(|(i, h)| (i, h.t.to_bits()));
+                assert_eq!(got, brute(&mesh, &ray), "trial {trial}");
+            }
+        }
+        assert!(
+            refused > trials / 3,
+            "only {refused} of {trials} corruptions refused"
+        );
+    }
+
+    /// A caterpillar tree over `n` triangles stacked along z: the inner node at depth `k` is
+    /// node `2k`, with the leaf of triangle `k` and the next inner node as children; the last
+    /// inner node's children are two leaves.
+    fn caterpillar(n: usize) -> (Vec<Vec3>, Vec<[u32; 3]>, Vec<BvhNode>) {
+        let p: Vec<Vec3> = (0..n)
+            .flat_map(|k| {
+                let z = k as f32;
+                [
+                    Vec3::new(0.0, 0.0, z),
+                    Vec3::new(1.0, 0.0, z),
+                    Vec3::new(0.0, 1.0, z),
+                ]
+            })
+            .collect();
+        let t: Vec<[u32; 3]> = (0..n as u32)
+            .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
+            .collect();
+        let slab = |lo: usize, hi: usize| [[0.0, 0.0, lo as f32], [1.0, 1.0, hi as f32]];
+        let mut nodes = vec![BvhNode::EMPTY; 2 * n - 1];
+        for k in 0..n - 1 {
+            nodes[2 * k] = BvhNode::from_raw(slab(k, n - 1), 2 * k as u32 + 1, 0);
+            nodes[2 * k + 1] = BvhNode::from_raw(slab(k, k), k as u32, 1);
+        }
+        nodes[2 * n - 2] = BvhNode::from_raw(slab(n - 1, n - 1), n as u32 - 1, 1);
+        (p, t, nodes)
+    }
+
+    #[test]
+    fn a_chain_deeper_than_the_stack_bound_is_refused() {
+        // Deepest inner node at depth n − 2: 62 is accepted, 64 and more are not.
+        let (p, t, nodes) = caterpillar(64);
+        let mesh = TriangleMesh::new(&p, &t);
+        let idx: Vec<u32> = (0..t.len() as u32).collect();
+        assert!(load(&nodes, &idx, &mesh).is_ok());
+        let (p, t, nodes) = caterpillar(70);
+        let mesh = TriangleMesh::new(&p, &t);
+        let idx: Vec<u32> = (0..t.len() as u32).collect();
+        assert_eq!(
+            load(&nodes, &idx, &mesh).err(),
+            Some(LoadError::TooDeep {
+                node: 2 * MAX_DEPTH
+            })
+        );
+    }
+}
