@@ -6,6 +6,7 @@
 
 pub mod accel;
 pub mod atomic;
+pub mod bake;
 pub mod bench;
 pub mod cli_values;
 pub mod console;

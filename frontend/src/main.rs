@@ -4,7 +4,7 @@
 //! files and exit with 128 + the signal number.
 
 use clap::{Parser, Subcommand};
-use halfray::{bench, crosscheck, mesh_tools, render};
+use halfray::{bake, bench, crosscheck, mesh_tools, render};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -31,6 +31,8 @@ enum Command {
     Bench(bench::BenchCommand),
     /// Compare halfray's hits with Embree 4, ray by ray.
     Crosscheck(crosscheck::CrosscheckArgs),
+    /// Build a mesh's BVH here and write it as Rust `static` arrays for a no_std firmware.
+    Bake(bake::BakeArgs),
 }
 
 fn main() -> ExitCode {
@@ -44,6 +46,7 @@ fn main() -> ExitCode {
         Command::Mesh(cmd) => mesh_tools::run(&cmd),
         Command::Bench(cmd) => bench::run(&cmd),
         Command::Crosscheck(args) => crosscheck::run(&args),
+        Command::Bake(args) => bake::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1488,7 +1488,7 @@ pub mod bvh_load {
         for &(kind, at, value) in mutations {
             let at = usize::from(at);
             match kind % 8 {
-                0 | 1 | 2 if !nodes.is_empty() => {
+                0..=2 if !nodes.is_empty() => {
                     let k = at % nodes.len();
                     let (mut b, mut start, mut count) = nodes[k].to_raw();
                     match kind % 8 {

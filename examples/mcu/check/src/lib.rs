@@ -8,6 +8,9 @@
 //!   the midpoints of shared edges and at interior vertices. Each ray's closest hit (primitive,
 //!   `t`, barycentric bits) and any-hit answer go into the hash. Edge and vertex rays come from
 //!   above the surface and cross it, so a miss is a leak: they are counted, and must be zero.
+//! * **Baked BVH** ([`baked_checks`]): a mesh and BVH baked on the host by `halfray bake`
+//!   into `static` arrays (in flash on the target), loaded by `Bvh::from_parts` (which checks
+//!   them), queried with four ray sets like the above.
 //! * **Half-edge** ([`halfedge_checks`]): a smaller heightfield built into fixed arenas, one
 //!   Loop level (Warren weights), `validate()` on both, and the subdivided positions' bits into
 //!   the hash.
@@ -303,6 +306,87 @@ pub fn ray_checks(
                 rng.range(1.0, 2.0),
             );
         query(&Ray::new(o, target - o), true, &mut summary);
+    }
+    Ok(summary)
+}
+
+/// Queries on a BVH baked on the host (`halfray bake`) and loaded with
+/// [`Bvh::from_parts`] from `static` arrays: `rays_per_set` rays of each of four sets — a
+/// pinhole camera framing the mesh, random rays through its box, rays aimed exactly at
+/// vertices and at edge midpoints from outside the box — each with a closest- and an any-hit
+/// query folded into `hash`. Fails with [`CheckError::Build`] when the baked data does not load.
+pub fn baked_checks(
+    nodes: &[BvhNode],
+    indices: &[u32],
+    mesh: &TriangleMesh<'_>,
+    scratch: &mut [u32],
+    rays_per_set: usize,
+    hash: &mut Fnv,
+) -> Result<Summary, CheckError> {
+    let bvh = Bvh::from_parts(nodes, indices, mesh, scratch).map_err(|_| CheckError::Build)?;
+    let b = bvh.bounds();
+    let (lo, hi) = (b.min, b.max);
+    let (center, size) = ((lo + hi) * 0.5, hi - lo);
+    let reach = size.x.max(size.y).max(size.z);
+    let mut summary = Summary::default();
+    let mut rng = Rng(0x2545_f491);
+    let mut query = |ray: &Ray, summary: &mut Summary| {
+        let closest = bvh.closest_hit_triangles(mesh, &Watertight, ray, None);
+        let any = bvh.any_hit_triangles(mesh, &Watertight, ray, None);
+        summary.queries += 2;
+        match closest {
+            Some((prim, hit)) => {
+                summary.hits += 1;
+                for w in [prim, hit.t.to_bits(), hit.b1.to_bits(), hit.b2.to_bits()] {
+                    hash.word(w);
+                }
+            }
+            None => hash.word(u32::MAX),
+        }
+        hash.word(any.is_some() as u32);
+    };
+    let eye = center + Vec3::new(0.3, -0.4, 1.0) * (1.5 * reach);
+    let side = (1..=rays_per_set)
+        .take_while(|s| s * s <= rays_per_set)
+        .last()
+        .unwrap_or(0);
+    for y in 0..side {
+        for x in 0..side {
+            let u = ((x as f32 + 0.5) / side as f32 - 0.5) * reach;
+            let v = ((y as f32 + 0.5) / side as f32 - 0.5) * reach;
+            let target = center + Vec3::new(u, v, 0.0);
+            query(&Ray::new(eye, target - eye), &mut summary);
+        }
+    }
+    let outside = |rng: &mut Rng| {
+        center
+            + Vec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            ) * (2.0 * reach)
+    };
+    for _ in 0..rays_per_set {
+        let o = outside(&mut rng);
+        let p = lo + size * Vec3::new(rng.unit(), rng.unit(), rng.unit());
+        query(&Ray::new(o, p - o), &mut summary);
+    }
+    if mesh.positions.is_empty() || mesh.triangles.is_empty() {
+        return Ok(summary);
+    }
+    for _ in 0..rays_per_set {
+        let o = outside(&mut rng);
+        let p = mesh.positions[rng.below(mesh.positions.len())];
+        query(&Ray::new(o, p - o), &mut summary);
+    }
+    for _ in 0..rays_per_set {
+        let o = outside(&mut rng);
+        let Some(v) = mesh.triangle(rng.below(mesh.len())) else {
+            continue;
+        };
+        let k = rng.below(3);
+        let p = (v[k] + v[(k + 1) % 3]) * 0.5;
+        query(&Ray::new(o, p - o), &mut summary);
     }
     Ok(summary)
 }

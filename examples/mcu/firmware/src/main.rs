@@ -8,12 +8,18 @@
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use halfray_core::Vec3;
-use halfray_core::bvh::{BvhNode, node_capacity};
+use halfray_core::bvh::{BvhNode, TriangleMesh, node_capacity};
 use halfray_core::halfedge::{EdgeRec, FaceRec, VertexRec, build_scratch_len};
 use mcu_check::{
-    CheckError, Config, Fnv, HalfedgeStorage, RayStorage, Summary, edge_count, halfedge_checks,
-    ray_checks, triangle_count, vertex_count,
+    CheckError, Config, Fnv, HalfedgeStorage, RayStorage, Summary, baked_checks, edge_count,
+    halfedge_checks, ray_checks, triangle_count, vertex_count,
 };
+
+/// The mesh and BVH baked by `halfray bake` (path in `MCU_BAKED`, set by scripts/test-mcu.sh):
+/// `static` arrays in flash.
+mod baked {
+    include!(env!("MCU_BAKED"));
+}
 
 #[cfg(target_abi = "eabihf")]
 const MACHINE: &str = "mps2-an386";
@@ -50,6 +56,20 @@ fn rays(hash: &mut Fnv) -> Result<Summary, CheckError> {
 }
 
 #[inline(never)]
+fn flash(hash: &mut Fnv) -> Result<Summary, CheckError> {
+    let mesh = TriangleMesh::new(&baked::POSITIONS, &baked::TRIANGLES);
+    let mut scratch = [0u32; baked::LOAD_SCRATCH_WORDS];
+    baked_checks(
+        &baked::NODES,
+        &baked::INDICES,
+        &mesh,
+        &mut scratch,
+        CONFIG.rays_per_set,
+        hash,
+    )
+}
+
+#[inline(never)]
 fn halfedge(hash: &mut Fnv) -> Result<Summary, CheckError> {
     let mut positions = [Vec3::ZERO; HV];
     let mut triangles = [[0u32; 3]; HF];
@@ -80,7 +100,9 @@ fn halfedge(hash: &mut Fnv) -> Result<Summary, CheckError> {
 #[entry]
 fn main() -> ! {
     let mut hash = Fnv::new();
-    let result = rays(&mut hash).and_then(|r| halfedge(&mut hash).map(|h| r.plus(h)));
+    let result = rays(&mut hash)
+        .and_then(|r| flash(&mut hash).map(|f| r.plus(f)))
+        .and_then(|r| halfedge(&mut hash).map(|h| r.plus(h)));
     let ok = match result {
         Ok(s) => {
             hprintln!(

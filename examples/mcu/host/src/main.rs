@@ -3,14 +3,32 @@
 //! with the same `mcu-check` code and buffers of the same sizes.
 
 use halfray_core::Vec3;
-use halfray_core::bvh::{BvhNode, node_capacity};
+use halfray_core::bvh::{BvhNode, TriangleMesh, node_capacity};
 use halfray_core::halfedge::{EdgeRec, FaceRec, VertexRec, build_scratch_len};
 use mcu_check::{
     Config, Fnv, HalfedgeStorage, M3, M4F, RayStorage, edge_count, halfedge_checks, ray_checks,
     triangle_count, vertex_count,
 };
 
-fn line(machine: &str, c: Config) -> Result<String, mcu_check::CheckError> {
+/// What each image includes from `halfray bake` (paths set by scripts/test-mcu.sh).
+#[allow(dead_code)]
+mod baked_m4f {
+    include!(env!("MCU_BAKED_M4F"));
+}
+#[allow(dead_code)]
+mod baked_m3 {
+    include!(env!("MCU_BAKED_M3"));
+}
+
+/// A baked mesh and BVH: positions, triangles, nodes, indices.
+type Baked = (
+    &'static [Vec3],
+    &'static [[u32; 3]],
+    &'static [BvhNode],
+    &'static [u32],
+);
+
+fn line(machine: &str, c: Config, baked: Baked) -> Result<String, mcu_check::CheckError> {
     let mut hash = Fnv::new();
     let (nv, nt) = (vertex_count(c.grid), triangle_count(c.grid));
     let r = ray_checks(
@@ -22,6 +40,16 @@ fn line(machine: &str, c: Config) -> Result<String, mcu_check::CheckError> {
             nodes: &mut vec![BvhNode::EMPTY; node_capacity(nt)],
             indices: &mut vec![0; nt],
         },
+        &mut hash,
+    )?;
+    let (positions, triangles, nodes, indices) = baked;
+    let mesh = TriangleMesh::new(positions, triangles);
+    let f = mcu_check::baked_checks(
+        nodes,
+        indices,
+        &mesh,
+        &mut vec![0; halfray_core::bvh::load_scratch_len(triangles.len())],
+        c.rays_per_set,
         &mut hash,
     )?;
     let (hv, he, hf) = (
@@ -50,7 +78,7 @@ fn line(machine: &str, c: Config) -> Result<String, mcu_check::CheckError> {
         },
         &mut hash,
     )?;
-    let s = r.plus(h);
+    let s = r.plus(f).plus(h);
     Ok(format!(
         "mcu: {machine} {} queries hash {:016x} hits {} leaks {}",
         s.queries,
@@ -62,8 +90,20 @@ fn line(machine: &str, c: Config) -> Result<String, mcu_check::CheckError> {
 
 fn main() -> std::process::ExitCode {
     let mut ok = true;
-    for (machine, config) in [("mps2-an386", M4F), ("lm3s6965evb", M3)] {
-        match line(machine, config) {
+    let m4f: Baked = (
+        &baked_m4f::POSITIONS,
+        &baked_m4f::TRIANGLES,
+        &baked_m4f::NODES,
+        &baked_m4f::INDICES,
+    );
+    let m3: Baked = (
+        &baked_m3::POSITIONS,
+        &baked_m3::TRIANGLES,
+        &baked_m3::NODES,
+        &baked_m3::INDICES,
+    );
+    for (machine, config, baked) in [("mps2-an386", M4F, m4f), ("lm3s6965evb", M3, m3)] {
+        match line(machine, config, baked) {
             Ok(l) => println!("{l}"),
             Err(e) => {
                 eprintln!("mcu-host: {machine}: {e:?}");

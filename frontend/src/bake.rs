@@ -1,0 +1,166 @@
+//! `halfray bake MESH -o OUT.rs`: the BVH built on the host, written as a Rust source of
+//! `static` arrays that a `no_std` firmware includes and queries from flash, with no copy and
+//! no allocation.
+//!
+//! The file defines, with the `f32` values as exact bit patterns:
+//!
+//! | item | type |
+//! |---|---|
+//! | `POSITIONS` | `[halfray_core::Vec3; V]` |
+//! | `TRIANGLES` | `[[u32; 3]; T]` |
+//! | `NODES` | `[halfray_core::bvh::BvhNode; K]` (node 0 the root) |
+//! | `INDICES` | `[u32; T]` |
+//! | `LOAD_SCRATCH_WORDS` | `usize`: the bitset [`halfray_core::bvh::Bvh::from_parts`] needs |
+//!
+//! and is loaded with
+//! `Bvh::from_parts(&NODES[..], &INDICES[..], &TriangleMesh::new(&POSITIONS, &TRIANGLES), &mut [0u32; LOAD_SCRATCH_WORDS])`,
+//! which checks it as untrusted input (`halfray_core::bvh::LoadError`). The bake runs that check
+//! itself before writing.
+
+use crate::accel::build_binary;
+use crate::error::{Error, Location, Result};
+use crate::mesh_tools::reserve_output;
+use crate::obj::read_obj;
+use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, load_scratch_len};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `halfray bake`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct BakeArgs {
+    /// Input OBJ.
+    pub input: PathBuf,
+    /// Output Rust source (written atomically; never the input).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Replace an output that is read-only or hard-linked (keeping its mode).
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Runs `halfray bake`: prints one line with the counts and sizes.
+pub fn run(args: &BakeArgs) -> Result<()> {
+    let out = reserve_output(&args.input, &args.output, args.force)?;
+    let mesh = read_obj(&args.input)?;
+    let tri = TriangleMesh::new(&mesh.positions, &mesh.triangles);
+    let bvh = build_binary(&tri, &BuildOptions::default()).map_err(|e| {
+        Error::input(
+            Location::file(&args.input),
+            format!("building the BVH: {e}"),
+        )
+    })?;
+    // The loader's own check: what is written loads.
+    let mut scratch = vec![0u32; load_scratch_len(tri.len())];
+    Bvh::from_parts(bvh.nodes(), bvh.indices(), &tri, &mut scratch).map_err(|e| {
+        Error::Other(format!(
+            "{}: the built BVH fails its load check ({e}); please report this",
+            args.input.display()
+        ))
+    })?;
+    let source = source(
+        &args.input,
+        &mesh.positions,
+        &mesh.triangles,
+        bvh.nodes(),
+        bvh.indices(),
+    );
+    out.write(|w| w.write_all(source.as_bytes()))?;
+    let flash = std::mem::size_of_val(&mesh.positions[..])
+        + std::mem::size_of_val(&mesh.triangles[..])
+        + std::mem::size_of_val(bvh.nodes())
+        + std::mem::size_of_val(bvh.indices());
+    crate::console::print_out(&format!(
+        "baked {}: {} vertices, {} triangles, {} nodes, {} bytes of static data -> {}\n",
+        args.input.display(),
+        mesh.positions.len(),
+        mesh.triangles.len(),
+        bvh.nodes().len(),
+        flash,
+        args.output.display()
+    ))
+}
+
+/// `f32::from_bits(0x…)`: exact, and valid in a `static` initialiser.
+fn bits(x: f32) -> String {
+    format!("f32::from_bits(0x{:08x})", x.to_bits())
+}
+
+/// The Rust source of a baked BVH (see the module docs).
+pub fn source(
+    input: &Path,
+    positions: &[glam::Vec3],
+    triangles: &[[u32; 3]],
+    nodes: &[BvhNode],
+    indices: &[u32],
+) -> String {
+    let name = input.file_name().map_or_else(
+        || input.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    let mut s = String::new();
+    // `write!` into a `String` cannot fail.
+    let _ = writeln!(
+        s,
+        "// Baked by `halfray bake` from `{name}`: {} vertices, {} triangles, {} BVH nodes. Do not edit.\n\
+         // Load with `halfray_core::bvh::Bvh::from_parts(&NODES[..], &INDICES[..], &halfray_core::bvh::TriangleMesh::new(&POSITIONS, &TRIANGLES), &mut [0u32; LOAD_SCRATCH_WORDS])`.\n",
+        positions.len(),
+        triangles.len(),
+        nodes.len()
+    );
+    let _ = writeln!(
+        s,
+        "/// Words of the bitset `Bvh::from_parts` needs.\npub const LOAD_SCRATCH_WORDS: usize = {};\n",
+        load_scratch_len(triangles.len())
+    );
+    let _ = writeln!(
+        s,
+        "/// Vertex positions.\npub static POSITIONS: [halfray_core::Vec3; {}] = [",
+        positions.len()
+    );
+    for p in positions {
+        let _ = writeln!(
+            s,
+            "    halfray_core::Vec3::new({}, {}, {}),",
+            bits(p.x),
+            bits(p.y),
+            bits(p.z)
+        );
+    }
+    let _ = writeln!(
+        s,
+        "];\n\n/// Triangles (indices into `POSITIONS`).\npub static TRIANGLES: [[u32; 3]; {}] = [",
+        triangles.len()
+    );
+    for t in triangles {
+        let _ = writeln!(s, "    [{}, {}, {}],", t[0], t[1], t[2]);
+    }
+    let _ = writeln!(
+        s,
+        "];\n\n/// BVH nodes (`BvhNode::from_raw(bounds, start, count)`).\npub static NODES: [halfray_core::bvh::BvhNode; {}] = [",
+        nodes.len()
+    );
+    for n in nodes {
+        let (b, start, count) = n.to_raw();
+        let _ = writeln!(
+            s,
+            "    halfray_core::bvh::BvhNode::from_raw([[{}, {}, {}], [{}, {}, {}]], {start}, {count}),",
+            bits(b[0][0]),
+            bits(b[0][1]),
+            bits(b[0][2]),
+            bits(b[1][0]),
+            bits(b[1][1]),
+            bits(b[1][2])
+        );
+    }
+    let _ = writeln!(
+        s,
+        "];\n\n/// Primitive indices in leaf order.\npub static INDICES: [u32; {}] = [",
+        indices.len()
+    );
+    for chunk in indices.chunks(16) {
+        let line: Vec<String> = chunk.iter().map(u32::to_string).collect();
+        let _ = writeln!(s, "    {},", line.join(", "));
+    }
+    s.push_str("];\n");
+    s
+}
