@@ -8,7 +8,8 @@
 #
 #   mcu: N queries bit-identical to host (MACHINE)
 #
-# and exits 0 only if every machine matches and no aimed ray leaked. Installs what it needs
+# then the instructions per closest-hit query of every triangle variant on each machine
+# (`-icount`), and exits 0 only if every machine matches and no aimed ray leaked. Installs what it needs
 # (qemu-system-arm from Debian, the rustup targets). Called by scripts/test-all.sh.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -63,4 +64,27 @@ check() { # machine target cpu baked-source
 }
 check mps2-an386 thumbv7em-none-eabihf cortex-m4 "$MCU_BAKED_M4F"
 check lm3s6965evb thumbv7m-none-eabi cortex-m3 "$MCU_BAKED_M3"
+
+# What a ray costs there: instructions per closest-hit query for each triangle variant, on
+# the baked BVH, counted under `-icount shift=0` (1 ns of virtual time per instruction,
+# SysTick calibrated in the image). Deterministic: the same numbers on every run.
+bench() { # machine target cpu baked-source
+    local machine=$1 target=$2 cpu=$3
+    MCU_BAKED=$4 cargo build -q --release --manifest-path "$manifest" -p mcu-firmware \
+        --features bench --target "$target" --target-dir examples/mcu/target/bench
+    local out rc=0
+    out=$(timeout 600 qemu-system-arm -machine "$machine" -cpu "$cpu" -nographic -monitor none \
+        -serial none -icount shift=0 -semihosting-config enable=on,target=native \
+        -kernel "examples/mcu/target/bench/$target/release/mcu-firmware" 2>&1) || rc=$?
+    local rows
+    rows=$(grep "^mcu-bench: $machine " <<<"$out" | grep -v calibration | awk '{printf "%s %s, ", $3, $4}')
+    if [ "$rc" -ne 0 ] || [ -z "$rows" ]; then
+        echo "test-mcu: the $machine bench image failed (qemu exit $rc): $out" >&2
+        status=1
+        return
+    fi
+    echo "mcu: instructions per closest-hit query on $machine ($cpu): ${rows%, }"
+}
+bench mps2-an386 thumbv7em-none-eabihf cortex-m4 "$MCU_BAKED_M4F"
+bench lm3s6965evb thumbv7m-none-eabi cortex-m3 "$MCU_BAKED_M3"
 exit "$status"
