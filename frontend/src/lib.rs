@@ -9,6 +9,7 @@ pub mod atomic;
 pub mod bake;
 pub mod bench;
 pub mod cli_values;
+pub mod composite;
 pub mod console;
 pub mod crosscheck;
 #[cfg(feature = "embree")]

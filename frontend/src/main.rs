@@ -4,7 +4,7 @@
 //! files and exit with 128 + the signal number.
 
 use clap::{Parser, Subcommand};
-use halfray::{bake, bench, crosscheck, mesh_tools, render};
+use halfray::{bake, bench, composite, crosscheck, mesh_tools, render};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -33,6 +33,8 @@ enum Command {
     Crosscheck(crosscheck::CrosscheckArgs),
     /// Build a mesh's BVH here and write it as Rust `static` arrays for a no_std firmware.
     Bake(bake::BakeArgs),
+    /// Combine two images with a Porter–Duff operator (A the source, B the destination).
+    Composite(composite::CompositeArgs),
 }
 
 fn main() -> ExitCode {
@@ -47,6 +49,7 @@ fn main() -> ExitCode {
         Command::Bench(cmd) => bench::run(&cmd),
         Command::Crosscheck(args) => crosscheck::run(&args),
         Command::Bake(args) => bake::run(&args),
+        Command::Composite(args) => composite::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -63,9 +63,13 @@ pub struct RenderArgs {
     /// reflection, refraction, seconds, plan).
     #[arg(long, value_name = "FILE")]
     pub stats_json: Option<PathBuf>,
-    /// Composite the render over this image (Porter–Duff "over"; same size as the render).
+    /// Composite the render (source) with this image (destination) by `--op` (same size as
+    /// the render; in linear radiance, the image decoded from sRGB).
     #[arg(long, value_name = "IMG.png")]
     pub background: Option<PathBuf>,
+    /// The Porter–Duff operator for `--background`.
+    #[arg(long, value_enum, default_value_t, requires = "background")]
+    pub op: crate::composite::Operator,
     /// Write the pixels where no object is hit with alpha 0 (colour mode; for compositing
     /// elsewhere). By default the scene's background colour is written opaque.
     #[arg(long, conflicts_with = "background")]
@@ -151,10 +155,11 @@ impl Rendered {
         }
     }
 
-    /// Composites the render over a background (linear straight RGBA, same size).
-    pub fn composite_over(&mut self, background: &[Vec4]) {
+    /// Composites the render (source) with a background (destination; linear straight
+    /// RGBA, same size) by `op`.
+    pub fn composite(&mut self, background: &[Vec4], op: crate::composite::Operator) {
         for (p, b) in self.pixels.iter_mut().zip(background) {
-            *p = output::over(*p, *b);
+            *p = op.apply(*p, *b);
         }
     }
 }
@@ -384,7 +389,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     let mut out = render(&scene, &opts);
     if let Some(bg) = &background {
-        out.composite_over(bg);
+        out.composite(bg, args.op);
     } else if args.mode == Mode::Color && !args.transparent_background {
         out.make_opaque();
     }

@@ -1,5 +1,5 @@
-//! Pixels to PNG: sRGB encoding, coverage alpha, Porter–Duff "over" onto a background image,
-//! atomic write; colour ramps of the debug modes.
+//! Pixels to PNG: sRGB encoding, coverage alpha, reading a background image (composited by
+//! [`crate::composite`]), atomic write; colour ramps of the debug modes.
 
 use crate::error::{Error, Location, Result};
 use crate::outputs::OutputFile;
@@ -31,16 +31,6 @@ pub fn srgb_to_linear(x: f32) -> f32 {
 pub fn to_u8(x: f32) -> u8 {
     let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
     (x * 255.0 + 0.5) as u8
-}
-
-/// Porter–Duff `src over dst` on straight (non-premultiplied) linear RGBA.
-pub fn over(src: Vec4, dst: Vec4) -> Vec4 {
-    let a = src.w + dst.w * (1.0 - src.w);
-    if a <= 0.0 {
-        return Vec4::ZERO;
-    }
-    let rgb = (src.truncate() * src.w + dst.truncate() * dst.w * (1.0 - src.w)) / a;
-    rgb.extend(a)
 }
 
 /// Reads a background image as linear straight RGBA, checking its size.
@@ -102,16 +92,10 @@ mod tests {
     use super::*;
 
     #[test]
-    fn srgb_round_trips_and_over_composites() {
+    fn srgb_round_trips() {
         for k in 0..=255u8 {
             let x = f32::from(k) / 255.0;
             assert_eq!(to_u8(linear_to_srgb(srgb_to_linear(x))), k);
         }
-        let red = Vec4::new(1.0, 0.0, 0.0, 1.0);
-        let blue = Vec4::new(0.0, 0.0, 1.0, 1.0);
-        assert_eq!(over(red, blue), red);
-        assert_eq!(over(Vec4::ZERO, blue), blue);
-        let half = over(Vec4::new(1.0, 0.0, 0.0, 0.5), blue);
-        assert!((half - Vec4::new(0.5, 0.0, 0.5, 1.0)).length() < 1e-6);
     }
 }

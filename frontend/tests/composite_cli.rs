@@ -1,0 +1,256 @@
+//! `halfray composite A B --op OP` and `halfray render --background IMG --op OP` on exact
+//! pixel values: each of the twelve operators against Porter and Duff's table written out here
+//! in straight (non-premultiplied) closed form, independent of the code's `Fa·A + Fb·B`.
+
+use image::{Rgba, RgbaImage};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_halfray");
+
+/// Four pixels: opaque, half, a little and no coverage.
+fn image(rgb: [u8; 3], alphas: [u8; 4]) -> RgbaImage {
+    RgbaImage::from_fn(4, 1, |x, _| {
+        Rgba([rgb[0], rgb[1], rgb[2], alphas[x as usize]])
+    })
+}
+
+/// Straight-alpha result of `a OP b` (alphas in [0, 1]), from the operator's region rules:
+/// `(coverage of A only, of B only, of both)` → which colour shows there.
+fn expected(op: &str, a: [f64; 4], b: [f64; 4]) -> [u8; 4] {
+    let (aa, ab) = (a[3], b[3]);
+    // Areas of the three regions of a pixel.
+    let (only_a, only_b, both) = (aa * (1.0 - ab), ab * (1.0 - aa), aa * ab);
+    // Per region: 0 nothing, 1 A, 2 B.
+    let (ra, rb, rboth) = match op {
+        "clear" => (0, 0, 0),
+        "src" => (1, 0, 1),
+        "dst" => (0, 2, 2),
+        "over" => (1, 2, 1),
+        "dst-over" => (1, 2, 2),
+        "in" => (0, 0, 1),
+        "dst-in" => (0, 0, 2),
+        "out" => (1, 0, 0),
+        "dst-out" => (0, 2, 0),
+        "atop" => (0, 2, 1),
+        "dst-atop" => (1, 0, 2),
+        "xor" => (1, 2, 0),
+        _ => unreachable!(),
+    };
+    let mut alpha = 0.0;
+    let mut rgb = [0.0f64; 3];
+    for (area, who) in [(only_a, ra), (only_b, rb), (both, rboth)] {
+        let c = match who {
+            1 => a,
+            2 => b,
+            _ => continue,
+        };
+        alpha += area;
+        for k in 0..3 {
+            rgb[k] += area * c[k];
+        }
+    }
+    let q = |x: f64| (x * 255.0).round().clamp(0.0, 255.0) as u8;
+    if alpha <= 0.0 {
+        return [0, 0, 0, 0];
+    }
+    [
+        q(rgb[0] / alpha),
+        q(rgb[1] / alpha),
+        q(rgb[2] / alpha),
+        q(alpha),
+    ]
+}
+
+const OPS: [&str; 12] = [
+    "clear", "src", "dst", "over", "dst-over", "in", "dst-in", "out", "dst-out", "atop",
+    "dst-atop", "xor",
+];
+
+fn save(img: &RgbaImage, path: &Path) {
+    img.save(path).unwrap();
+}
+
+#[test]
+fn every_operator_gives_porter_and_duffs_pixels() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pa, pb) = (dir.path().join("a.png"), dir.path().join("b.png"));
+    let a = image([240, 30, 10], [255, 153, 40, 0]);
+    let b = image([20, 60, 200], [255, 128, 255, 77]);
+    save(&a, &pa);
+    save(&b, &pb);
+    for op in OPS {
+        let out = dir.path().join(format!("{op}.png"));
+        let o = Command::new(BIN)
+            .args(["composite"])
+            .arg(&pa)
+            .arg(&pb)
+            .args(["--op", op, "-o"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{op}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let got = image::open(&out).unwrap().into_rgba8();
+        for x in 0..4 {
+            let f = |p: &Rgba<u8>| p.0.map(|c| f64::from(c) / 255.0);
+            let want = expected(op, f(a.get_pixel(x, 0)), f(b.get_pixel(x, 0)));
+            let g = got.get_pixel(x, 0).0;
+            let close = g.iter().zip(want).all(|(&g, w)| g.abs_diff(w) <= 1);
+            // Colour is undefined where alpha is 0: compare alpha only there.
+            assert!(
+                close || (g[3] == 0 && want[3] == 0),
+                "{op} pixel {x}: {g:?}, expected {want:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn mismatched_sizes_and_an_input_as_output_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pa, pb) = (dir.path().join("a.png"), dir.path().join("b.png"));
+    save(&image([1, 2, 3], [255; 4]), &pa);
+    save(&RgbaImage::new(3, 1), &pb);
+    let out = dir.path().join("out.png");
+    let o = Command::new(BIN)
+        .arg("composite")
+        .arg(&pa)
+        .arg(&pb)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("b.png") && err.contains("3×1") && err.contains("4×1"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let o = Command::new(BIN)
+        .arg("composite")
+        .arg(&pa)
+        .arg(&pb)
+        .arg("-o")
+        .arg(&pa)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let o = Command::new(BIN)
+        .args(["composite", "--op", "plus"])
+        .arg(&pa)
+        .arg(&pb)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("dst-atop"),
+        "lists the operators"
+    );
+}
+
+fn render(dir: &Path, name: &str, extra: &[&str]) -> RgbaImage {
+    let out: PathBuf = dir.join(name);
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/bunny.toml");
+    let o = Command::new(BIN)
+        .args([
+            "render", scene, "--width", "40", "--height", "30", "--quiet", "-o",
+        ])
+        .arg(&out)
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    image::open(&out).unwrap().into_rgba8()
+}
+
+#[test]
+fn render_composites_with_the_chosen_operator() {
+    let dir = tempfile::tempdir().unwrap();
+    let bg = dir.path().join("bg.png");
+    save(
+        &RgbaImage::from_fn(40, 30, |x, y| Rgba([(x * 6) as u8, (y * 8) as u8, 90, 200])),
+        &bg,
+    );
+    let bg_img = image::open(&bg).unwrap().into_rgba8();
+    let bg_s = bg.to_str().unwrap();
+    let alone = render(dir.path(), "alone.png", &["--transparent-background"]);
+    // `dst` shows the background alone, `src` the render alone.
+    let dst = render(
+        dir.path(),
+        "dst.png",
+        &["--background", bg_s, "--op", "dst"],
+    );
+    let same = |x: &RgbaImage, y: &RgbaImage, what: &str| {
+        for (i, (p, q)) in x.pixels().zip(y.pixels()).enumerate() {
+            // Colour means nothing where alpha is 0.
+            let equal = p == q || (p.0[3] == 0 && q.0[3] == 0);
+            assert!(equal, "{what}: pixel {i}: {:?} vs {:?}", p.0, q.0);
+        }
+    };
+    same(&dst, &bg_img, "dst = the background");
+    let src = render(
+        dir.path(),
+        "src.png",
+        &["--background", bg_s, "--op", "src"],
+    );
+    same(&src, &alone, "src = the render alone");
+    // `over` (the default): the background where the render is transparent, the render where
+    // it is opaque; `dst-out` keeps the background only where the render has nothing.
+    let over = render(dir.path(), "over.png", &["--background", bg_s]);
+    let dst_out = render(
+        dir.path(),
+        "dst-out.png",
+        &["--background", bg_s, "--op", "dst-out"],
+    );
+    let (mut opaque, mut clear) = (0, 0);
+    for (i, ((p, o), d)) in alone
+        .pixels()
+        .zip(over.pixels())
+        .zip(dst_out.pixels())
+        .enumerate()
+    {
+        match p.0[3] {
+            255 => {
+                opaque += 1;
+                assert_eq!(o.0, p.0, "pixel {i}");
+                assert_eq!(d.0[3], 0, "pixel {i}");
+            }
+            0 => {
+                clear += 1;
+                let b = bg_img.get_pixel(i as u32 % 40, i as u32 / 40);
+                assert_eq!(o.0, b.0, "pixel {i}");
+                assert_eq!(d.0, b.0, "pixel {i}");
+            }
+            _ => {}
+        }
+    }
+    assert!(
+        opaque > 0 && clear > 0,
+        "{opaque} opaque, {clear} clear pixels"
+    );
+    // --op without --background is a usage error.
+    let o = Command::new(BIN)
+        .args([
+            "render",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/shadows.toml"),
+            "--op",
+            "xor",
+            "-o",
+        ])
+        .arg(dir.path().join("x.png"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+}
