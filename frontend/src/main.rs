@@ -35,6 +35,8 @@ enum Command {
     Bake(bake::BakeArgs),
     /// Combine two images with a Porter–Duff operator (A the source, B the destination).
     Composite(composite::CompositeArgs),
+    /// Find your display's gamma: a calibration chart, and γ = ln 0.5 / ln a from the match.
+    Gamma(render::gamma::GammaArgs),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +52,7 @@ fn main() -> ExitCode {
         Command::Crosscheck(args) => crosscheck::run(&args),
         Command::Bake(args) => bake::run(&args),
         Command::Composite(args) => composite::run(&args),
+        Command::Gamma(args) => render::gamma::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

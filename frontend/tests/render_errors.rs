@@ -435,3 +435,31 @@ fn fields_and_causes_are_named_right() {
         "not an affine transform: the last row must be [0, 0, 0, 1]",
     );
 }
+
+#[test]
+fn unknown_specular_model() {
+    let text = BASE.replace(
+        "diffuse = [1, 0, 0]",
+        "diffuse = [1, 0, 0]\nspecular_model = \"cook-torrance\"",
+    );
+    check(
+        "specular.toml",
+        &format!(
+            "{text}\n[[object]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n"
+        ),
+        "10:18",
+        "material.m.specular_model",
+        "expected `blinn-phong` or `phong`",
+    );
+    // Both models load.
+    for model in ["phong", "blinn-phong"] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("ok.toml");
+        let text = BASE.replace(
+            "diffuse = [1, 0, 0]",
+            &format!("diffuse = [1, 0, 0]\nspecular = [1, 1, 1]\nspecular_model = \"{model}\""),
+        );
+        std::fs::write(&path, text).unwrap();
+        assert!(load(&path).is_ok(), "{model}");
+    }
+}

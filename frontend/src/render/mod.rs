@@ -8,6 +8,7 @@
 // `!(x > eps)` rejects NaN along with small values: the negation is the point.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod gamma;
 pub mod geom;
 pub mod output;
 pub mod plan;
@@ -67,6 +68,10 @@ pub struct RenderArgs {
     /// the render; in linear radiance, the image decoded from sRGB).
     #[arg(long, value_name = "IMG.png")]
     pub background: Option<PathBuf>,
+    /// Output transfer function: `srgb`, or a display gamma `γ` (stored = linear^(1/γ); find
+    /// yours with `halfray gamma --chart`). Also decodes `--background`.
+    #[arg(long, default_value = "srgb", value_name = "srgb|GAMMA")]
+    pub gamma: gamma::Transfer,
     /// The Porter–Duff operator for `--background`.
     #[arg(long, value_enum, default_value_t, requires = "background")]
     pub op: crate::composite::Operator,
@@ -135,12 +140,14 @@ impl Rendered {
         self.pixels.iter().filter(|p| p.w > 0.0).count()
     }
 
-    /// 8-bit RGBA: sRGB-encoded in colour mode, the value as is in debug modes.
-    pub fn to_rgba8(&self, mode: Mode) -> Vec<u8> {
-        let enc: fn(f32) -> u8 = if mode == Mode::Color {
-            |x| output::to_u8(output::linear_to_srgb(x))
-        } else {
-            output::to_u8
+    /// 8-bit RGBA: encoded by `transfer` in colour mode, the value as is in debug modes.
+    pub fn to_rgba8(&self, mode: Mode, transfer: gamma::Transfer) -> Vec<u8> {
+        let enc = |x: f32| {
+            if mode == Mode::Color {
+                output::to_u8(transfer.encode(x))
+            } else {
+                output::to_u8(x)
+            }
         };
         self.pixels
             .iter()
@@ -367,7 +374,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         render_bytes(w, h, args.background.is_some()),
     )?;
     let background = match &args.background {
-        Some(p) => Some(output::read_background(p, w, h)?),
+        Some(p) => Some(output::read_background(p, w, h, args.gamma)?),
         None => None,
     };
     let opts = RenderOptions {
@@ -408,7 +415,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .map_err(|e| Error::Other(format!("stats JSON: {e}")))?;
         stats.write(|w| w.write_all(format!("{json}\n").as_bytes()))?;
     }
-    output::write_png(png, w, h, &out.to_rgba8(args.mode))?;
+    output::write_png(png, w, h, &out.to_rgba8(args.mode, args.gamma))?;
     if !args.quiet {
         eprintln!("wrote {}", args.output.display());
     }

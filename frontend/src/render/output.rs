@@ -33,8 +33,13 @@ pub fn to_u8(x: f32) -> u8 {
     (x * 255.0 + 0.5) as u8
 }
 
-/// Reads a background image as linear straight RGBA, checking its size.
-pub fn read_background(path: &Path, width: u32, height: u32) -> Result<Vec<Vec4>> {
+/// Reads a background image as linear straight RGBA (decoded by `transfer`), checking its size.
+pub fn read_background(
+    path: &Path,
+    width: u32,
+    height: u32,
+    transfer: super::gamma::Transfer,
+) -> Result<Vec<Vec4>> {
     let img = image::ImageReader::open(path)
         .map_err(|e| Error::io(path, e))?
         .with_guessed_format()
@@ -55,7 +60,7 @@ pub fn read_background(path: &Path, width: u32, height: u32) -> Result<Vec<Vec4>
     Ok(img
         .pixels()
         .map(|p| {
-            let c = |k: usize| srgb_to_linear(f32::from(p.0[k]) / 255.0);
+            let c = |k: usize| transfer.decode(f32::from(p.0[k]) / 255.0);
             Vec4::new(c(0), c(1), c(2), f32::from(p.0[3]) / 255.0)
         })
         .collect())

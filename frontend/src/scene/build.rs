@@ -332,6 +332,19 @@ fn material(ctx: &Ctx<'_>, name: &str, m: &S<def::MaterialDef>) -> Result<Materi
         }
         out.shininess = x;
     }
+    if let Some(v) = &m.specular_model {
+        out.specular_model = match v.get_ref().as_str() {
+            "blinn-phong" => super::SpecularModel::BlinnPhong,
+            "phong" => super::SpecularModel::Phong,
+            other => {
+                return Err(ctx.err(
+                    &v.span(),
+                    &format!("{p}.specular_model"),
+                    format!("unknown specular model `{other}` (expected `blinn-phong` or `phong`)"),
+                ));
+            }
+        };
+    }
     if let Some(v) = &m.mirror {
         out.mirror = ctx.unit_range(v, &format!("{p}.mirror"))?;
     }

@@ -114,6 +114,7 @@ pub struct MaterialDef {
     pub diffuse: Option<V3>,
     pub specular: Option<V3>,
     pub shininess: Option<S<f32>>,
+    pub specular_model: Option<S<String>>,
     pub mirror: Option<S<f32>>,
     pub transparency: Option<S<f32>>,
     pub ior: Option<S<f32>>,

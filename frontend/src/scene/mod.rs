@@ -151,6 +151,16 @@ pub struct Light {
     pub cast_shadows: bool,
 }
 
+/// The specular lobe of a material (`specular_model` in the scene file).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SpecularModel {
+    /// Blinn–Phong: `(n·h)^p` with the half vector `h = normalize(l + v)` (the default).
+    #[default]
+    BlinnPhong,
+    /// Phong: `(v·r)^p` with `r` the mirror reflection of `l` about `n`.
+    Phong,
+}
+
 /// A Blinn–Phong material with mirror reflection and transparency.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
@@ -162,8 +172,10 @@ pub struct Material {
     pub diffuse: Vec3,
     /// `ks`.
     pub specular: Vec3,
-    /// Blinn–Phong exponent `p`.
+    /// Specular exponent `p`.
     pub shininess: f32,
+    /// Which specular lobe `ks·(…)^p` uses.
+    pub specular_model: SpecularModel,
     /// Mirror reflectance in `[0, 1]`.
     pub mirror: f32,
     /// Transparency in `[0, 1]`.
@@ -181,6 +193,7 @@ impl Material {
             diffuse: Vec3::splat(0.8),
             specular: Vec3::ZERO,
             shininess: 32.0,
+            specular_model: SpecularModel::BlinnPhong,
             mirror: 0.0,
             transparency: 0.0,
             ior: 1.5,
