@@ -83,7 +83,7 @@ material = "m"
     // Corners miss: alpha 0.
     assert_eq!(out.pixel(0, 0).w, 0.0);
     // And the PNG bytes are the sRGB encoding of the same value.
-    let rgba = out.to_rgba8(Mode::Color);
+    let rgba = out.to_rgba8(Mode::Color, Default::default());
     let k = (20 * 41 + 20) * 4;
     let want = out.pixel(20, 20);
     for c in 0..3 {
