@@ -183,8 +183,8 @@ fn assert_same_picture(s: &Scene, what: &str) {
                 ..opts.clone()
             },
         );
-        let a = planned.to_rgba8(mode);
-        let b = forced.to_rgba8(mode);
+        let a = planned.to_rgba8(mode, Default::default());
+        let b = forced.to_rgba8(mode, Default::default());
         let worst = a
             .iter()
             .zip(&b)
