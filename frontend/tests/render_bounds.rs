@@ -53,7 +53,10 @@ fn deep_glass_finishes_and_matches_the_exhaustive_tree() {
         exact.counts.total() > deep.counts.total(),
         "the bound cut something"
     );
-    let d = max_step_difference(&deep.to_rgba8(Mode::Color, Default::default()), &exact.to_rgba8(Mode::Color, Default::default()));
+    let d = max_step_difference(
+        &deep.to_rgba8(Mode::Color, Default::default()),
+        &exact.to_rgba8(Mode::Color, Default::default()),
+    );
     assert!(d <= MAX_STEP_DIFFERENCE, "bounded vs exhaustive: {d}/255");
 }
 
@@ -155,7 +158,10 @@ material = "matte"
         planned.pixels.iter().any(|p| p.x.is_infinite()),
         "the scene overflows"
     );
-    assert_eq!(planned.to_rgba8(Mode::Color, Default::default()), forced.to_rgba8(Mode::Color, Default::default()));
+    assert_eq!(
+        planned.to_rgba8(Mode::Color, Default::default()),
+        forced.to_rgba8(Mode::Color, Default::default())
+    );
 }
 
 #[test]

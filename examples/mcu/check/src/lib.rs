@@ -199,6 +199,32 @@ pub enum CheckError {
     Halfedge,
 }
 
+/// One ray's closest and any hit with the watertight test, folded into `hash` (primitive,
+/// `t` and barycentric bits, or a miss marker; then the any-hit answer) and counted in
+/// `summary`; returns the closest hit's `t`.
+fn query_both<N: AsRef<[BvhNode]>, I: AsRef<[u32]>>(
+    bvh: &Bvh<N, I>,
+    mesh: &TriangleMesh<'_>,
+    ray: &Ray,
+    summary: &mut Summary,
+    hash: &mut Fnv,
+) -> Option<f32> {
+    let closest = bvh.closest_hit_triangles(mesh, &Watertight, ray, None);
+    let any = bvh.any_hit_triangles(mesh, &Watertight, ray, None);
+    summary.queries += 2;
+    match closest {
+        Some((prim, hit)) => {
+            summary.hits += 1;
+            for w in [prim, hit.t.to_bits(), hit.b1.to_bits(), hit.b2.to_bits()] {
+                hash.word(w);
+            }
+        }
+        None => hash.word(u32::MAX),
+    }
+    hash.word(any.is_some() as u32);
+    closest.map(|(_, hit)| hit.t)
+}
+
 /// Builds the heightfield's BVH in `storage` and makes `rays_per_set` queries of each kind on
 /// each of the four sets (see the crate docs), folding every answer into `hash`.
 pub fn ray_checks(
@@ -225,24 +251,9 @@ pub fn ray_checks(
     let mut summary = Summary::default();
     let mut rng = Rng(0x9e37_79b9);
     let mut query = |ray: &Ray, aimed: bool, summary: &mut Summary| {
-        let closest = bvh.closest_hit_triangles(&mesh, &Watertight, ray, None);
-        let any = bvh.any_hit_triangles(&mesh, &Watertight, ray, None);
-        summary.queries += 2;
-        match closest {
-            Some((prim, hit)) => {
-                summary.hits += 1;
-                for w in [prim, hit.t.to_bits(), hit.b1.to_bits(), hit.b2.to_bits()] {
-                    hash.word(w);
-                }
-                // Aimed rays reach their target at t = 1: a hit beyond it is a leak.
-                summary.leaks += (aimed && hit.t > 1.0 + 1.0e-5) as u32;
-            }
-            None => {
-                hash.word(u32::MAX);
-                summary.leaks += aimed as u32;
-            }
-        }
-        hash.word(any.is_some() as u32);
+        let t = query_both(&bvh, &mesh, ray, summary, hash);
+        // Aimed rays reach their target at t = 1: a miss or a hit beyond it is a leak.
+        summary.leaks += (aimed && t.is_none_or(|t| t > 1.0 + 1.0e-5)) as u32;
     };
     // Pinhole camera above the field.
     let side = (1..=rays_per_set)
@@ -331,19 +342,7 @@ pub fn baked_checks(
     let mut summary = Summary::default();
     let mut rng = Rng(0x2545_f491);
     let mut query = |ray: &Ray, summary: &mut Summary| {
-        let closest = bvh.closest_hit_triangles(mesh, &Watertight, ray, None);
-        let any = bvh.any_hit_triangles(mesh, &Watertight, ray, None);
-        summary.queries += 2;
-        match closest {
-            Some((prim, hit)) => {
-                summary.hits += 1;
-                for w in [prim, hit.t.to_bits(), hit.b1.to_bits(), hit.b2.to_bits()] {
-                    hash.word(w);
-                }
-            }
-            None => hash.word(u32::MAX),
-        }
-        hash.word(any.is_some() as u32);
+        query_both(&bvh, mesh, ray, summary, hash);
     };
     let eye = center + Vec3::new(0.3, -0.4, 1.0) * (1.5 * reach);
     let side = (1..=rays_per_set)
