@@ -10,10 +10,7 @@ use halfray_core::bvh::{
     BuildJob, BuildOptions, Bvh, BvhError, BvhNode, JobPart, PrimRef, TraversalStats, TriangleMesh,
     index_capacity, node_capacity, scratch_capacity,
 };
-use halfray_core::triangle::{
-    Cramer, F64Reference, MollerTrumbore, TriangleHit, TriangleIntersector, TriangleVariant,
-    Watertight, WatertightF32,
-};
+use halfray_core::triangle::{TriangleHit, TriangleIntersector, TriangleVariant, VariantVisitor};
 
 /// The wide BVH with owned storage.
 pub type VecBvh8 = Bvh8<Vec<WideNode<8>>, Vec<LeafGroup>>;
@@ -134,26 +131,26 @@ impl MeshAccel {
 
     /// Closest hit with a variant chosen at run time.
     pub fn closest_variant(&self, v: TriangleVariant, ray: &Ray) -> Option<(u32, TriangleHit)> {
-        match v {
-            TriangleVariant::Watertight => self.closest(&Watertight, ray),
-            TriangleVariant::WatertightF32 => self.closest(&WatertightF32, ray),
-            TriangleVariant::MollerTrumbore => self.closest(&MollerTrumbore::CLASSIC, ray),
-            TriangleVariant::MollerTrumboreNoEps => self.closest(&MollerTrumbore::NO_EPSILON, ray),
-            TriangleVariant::Cramer => self.closest(&Cramer, ray),
-            TriangleVariant::F64Reference => self.closest(&F64Reference, ray),
+        struct Closest<'a>(&'a MeshAccel, &'a Ray);
+        impl VariantVisitor for Closest<'_> {
+            type Output = Option<(u32, TriangleHit)>;
+            fn visit<I: TriangleIntersector>(self, isect: &I) -> Self::Output {
+                self.0.closest(isect, self.1)
+            }
         }
+        v.visit(Closest(self, ray))
     }
 
     /// Any hit with a variant chosen at run time.
     pub fn any_variant(&self, v: TriangleVariant, ray: &Ray) -> bool {
-        match v {
-            TriangleVariant::Watertight => self.any(&Watertight, ray),
-            TriangleVariant::WatertightF32 => self.any(&WatertightF32, ray),
-            TriangleVariant::MollerTrumbore => self.any(&MollerTrumbore::CLASSIC, ray),
-            TriangleVariant::MollerTrumboreNoEps => self.any(&MollerTrumbore::NO_EPSILON, ray),
-            TriangleVariant::Cramer => self.any(&Cramer, ray),
-            TriangleVariant::F64Reference => self.any(&F64Reference, ray),
+        struct Any<'a>(&'a MeshAccel, &'a Ray);
+        impl VariantVisitor for Any<'_> {
+            type Output = bool;
+            fn visit<I: TriangleIntersector>(self, isect: &I) -> bool {
+                self.0.any(isect, self.1)
+            }
         }
+        v.visit(Any(self, ray))
     }
 }
 

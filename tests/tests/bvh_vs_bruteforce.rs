@@ -278,20 +278,15 @@ fn every_intersector_variant_works_through_the_bvh() {
             assert_eq!(any, got.is_some(), "{}", isect.name());
         }
     }
-    use halfray_core::triangle::{Cramer, F64Reference, MollerTrumbore, WatertightF32};
-    for v in TriangleVariant::ALL {
-        match v {
-            TriangleVariant::Watertight => check(&Watertight, &mesh, &bvh, &spheres, &rays),
-            TriangleVariant::WatertightF32 => check(&WatertightF32, &mesh, &bvh, &spheres, &rays),
-            TriangleVariant::MollerTrumbore => {
-                check(&MollerTrumbore::CLASSIC, &mesh, &bvh, &spheres, &rays)
-            }
-            TriangleVariant::MollerTrumboreNoEps => {
-                check(&MollerTrumbore::NO_EPSILON, &mesh, &bvh, &spheres, &rays)
-            }
-            TriangleVariant::Cramer => check(&Cramer, &mesh, &bvh, &spheres, &rays),
-            TriangleVariant::F64Reference => check(&F64Reference, &mesh, &bvh, &spheres, &rays),
+    struct Check<'a>(&'a TriangleMesh<'a>, &'a VecBvh, &'a Spheres, &'a [Ray]);
+    impl halfray_core::triangle::VariantVisitor for Check<'_> {
+        type Output = ();
+        fn visit<I: TriangleIntersector>(self, isect: &I) {
+            check(isect, self.0, self.1, self.2, self.3)
         }
+    }
+    for v in TriangleVariant::ALL {
+        v.visit(Check(&mesh, &bvh, &spheres, &rays));
     }
 }
 

@@ -188,19 +188,41 @@ impl TriangleVariant {
         )
     }
 
-    /// Tests one triangle with this variant (dispatching per call; hot loops should be generic
-    /// over [`TriangleIntersector`] instead).
-    #[must_use]
-    pub fn intersect(self, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
+    /// Runs `visitor` with this variant's intersector, a concrete type (so the visitor's code
+    /// is monomorphised per variant): the one place a run-time variant becomes a type.
+    pub fn visit<V: VariantVisitor>(self, visitor: V) -> V::Output {
         match self {
-            Self::Watertight => Watertight.intersect(ray, v),
-            Self::WatertightF32 => WatertightF32.intersect(ray, v),
-            Self::MollerTrumbore => MollerTrumbore::CLASSIC.intersect(ray, v),
-            Self::MollerTrumboreNoEps => MollerTrumbore::NO_EPSILON.intersect(ray, v),
-            Self::Cramer => Cramer.intersect(ray, v),
-            Self::F64Reference => F64Reference.intersect(ray, v),
+            Self::Watertight => visitor.visit(&Watertight),
+            Self::WatertightF32 => visitor.visit(&WatertightF32),
+            Self::MollerTrumbore => visitor.visit(&MollerTrumbore::CLASSIC),
+            Self::MollerTrumboreNoEps => visitor.visit(&MollerTrumbore::NO_EPSILON),
+            Self::Cramer => visitor.visit(&Cramer),
+            Self::F64Reference => visitor.visit(&F64Reference),
         }
     }
+
+    /// Tests one triangle with this variant (dispatching per call; hot loops should be generic
+    /// over [`TriangleIntersector`] instead, through [`TriangleVariant::visit`]).
+    #[must_use]
+    pub fn intersect(self, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
+        struct One<'a>(&'a Ray, &'a [Vec3; 3]);
+        impl VariantVisitor for One<'_> {
+            type Output = Option<TriangleHit>;
+            fn visit<I: TriangleIntersector>(self, isect: &I) -> Self::Output {
+                isect.intersect(self.0, self.1)
+            }
+        }
+        self.visit(One(ray, v))
+    }
+}
+
+/// Code to run with the concrete intersector of a [`TriangleVariant`] chosen at run time
+/// ([`TriangleVariant::visit`]): a generic function that a closure cannot express.
+pub trait VariantVisitor {
+    /// What the code returns.
+    type Output;
+    /// Runs with `isect`, the variant's intersector.
+    fn visit<I: TriangleIntersector>(self, isect: &I) -> Self::Output;
 }
 
 /// `true` when the triangle has exactly zero area, or the ray lies exactly in its plane, as
@@ -312,6 +334,22 @@ fn finish(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each variant visits with its own intersector: the intersector's own name is the
+    /// variant's (a mix-up in the dispatch would show as another name).
+    #[test]
+    fn each_variant_visits_with_its_own_intersector() {
+        struct Name;
+        impl VariantVisitor for Name {
+            type Output = &'static str;
+            fn visit<I: TriangleIntersector>(self, isect: &I) -> &'static str {
+                isect.name()
+            }
+        }
+        for v in TriangleVariant::ALL {
+            assert_eq!(v.visit(Name), v.name());
+        }
+    }
 
     fn tri() -> [Vec3; 3] {
         [

@@ -14,10 +14,7 @@ use crate::obj::read_obj;
 use crate::raysets::{Camera, random_rays};
 use halfray_core::Ray;
 use halfray_core::bvh::{BuildOptions, DEFAULT_MAX_LEAF_SIZE, TraversalStats, TriangleMesh};
-use halfray_core::triangle::{
-    Cramer, F64Reference, MollerTrumbore, TriangleIntersector, TriangleVariant, Watertight,
-    WatertightF32,
-};
+use halfray_core::triangle::{TriangleIntersector, VariantVisitor};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -174,14 +171,14 @@ pub fn run(args: &BvhArgs) -> Result<()> {
     }
     let mut reports = Vec::with_capacity(args.meshes.len());
     for mesh in &args.meshes {
-        let report = match variant {
-            TriangleVariant::Watertight => bench(args, mesh, &Watertight)?,
-            TriangleVariant::WatertightF32 => bench(args, mesh, &WatertightF32)?,
-            TriangleVariant::MollerTrumbore => bench(args, mesh, &MollerTrumbore::CLASSIC)?,
-            TriangleVariant::MollerTrumboreNoEps => bench(args, mesh, &MollerTrumbore::NO_EPSILON)?,
-            TriangleVariant::Cramer => bench(args, mesh, &Cramer)?,
-            TriangleVariant::F64Reference => bench(args, mesh, &F64Reference)?,
-        };
+        struct Bench<'a>(&'a BvhArgs, &'a std::path::Path);
+        impl VariantVisitor for Bench<'_> {
+            type Output = Result<BvhReport>;
+            fn visit<I: TriangleIntersector>(self, isect: &I) -> Result<BvhReport> {
+                bench(self.0, self.1, isect)
+            }
+        }
+        let report = variant.visit(Bench(args, mesh))?;
         reports.push(report);
     }
     if let Some(path) = &args.json {

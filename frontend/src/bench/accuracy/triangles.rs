@@ -5,10 +5,7 @@ use crate::crosscheck::sets::{self, Adjacency, Rng};
 use crate::obj::ObjMesh;
 use glam::{DVec3, Vec3};
 use halfray_core::Ray;
-use halfray_core::triangle::{
-    Cramer, F64Reference, MollerTrumbore, TriangleIntersector, TriangleVariant, Watertight,
-    WatertightF32,
-};
+use halfray_core::triangle::{F64Reference, TriangleIntersector, TriangleVariant, VariantVisitor};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -304,42 +301,16 @@ pub fn ns_per_test<I: TriangleIntersector>(isect: &I, w: &Workload, reps: usize)
     samples.get(samples.len() / 2).copied().unwrap_or(0.0)
 }
 
-/// Calls `f` with the intersector of `variant` (monomorphised per variant).
-#[macro_export]
-macro_rules! with_intersector {
-    ($variant:expr, |$i:ident| $body:expr) => {
-        match $variant {
-            TriangleVariant::Watertight => {
-                let $i = &Watertight;
-                $body
-            }
-            TriangleVariant::WatertightF32 => {
-                let $i = &WatertightF32;
-                $body
-            }
-            TriangleVariant::MollerTrumbore => {
-                let $i = &MollerTrumbore::CLASSIC;
-                $body
-            }
-            TriangleVariant::MollerTrumboreNoEps => {
-                let $i = &MollerTrumbore::NO_EPSILON;
-                $body
-            }
-            TriangleVariant::Cramer => {
-                let $i = &Cramer;
-                $body
-            }
-            TriangleVariant::F64Reference => {
-                let $i = &F64Reference;
-                $body
-            }
-        }
-    };
-}
-
 /// Accuracy and per-test cost of `variant` on `w`.
 pub fn measure(variant: TriangleVariant, w: &Workload, reps: usize) -> (Accuracy, f64) {
-    with_intersector!(variant, |i| (accuracy(i, w), ns_per_test(i, w, reps)))
+    struct Measure<'a>(&'a Workload, usize);
+    impl VariantVisitor for Measure<'_> {
+        type Output = (Accuracy, f64);
+        fn visit<I: TriangleIntersector>(self, i: &I) -> Self::Output {
+            (accuracy(i, self.0), ns_per_test(i, self.0, self.1))
+        }
+    }
+    variant.visit(Measure(w, reps))
 }
 
 /// Single-threaded closest-hit throughput through the BVH, Mrays/s (median of `reps` passes).
@@ -370,5 +341,12 @@ pub fn mrays_bvh_variant(
     rays: &[Ray],
     reps: usize,
 ) -> f64 {
-    with_intersector!(variant, |i| mrays_bvh(i, accel, rays, reps))
+    struct Mrays<'a>(&'a crate::accel::MeshAccel, &'a [Ray], usize);
+    impl VariantVisitor for Mrays<'_> {
+        type Output = f64;
+        fn visit<I: TriangleIntersector>(self, i: &I) -> f64 {
+            mrays_bvh(i, self.0, self.1, self.2)
+        }
+    }
+    variant.visit(Mrays(accel, rays, reps))
 }
