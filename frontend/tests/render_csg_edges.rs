@@ -41,6 +41,7 @@ fn mesh_node(name: &str) -> (Arc<MeshShape>, Vec<Vec3>, Vec<[u32; 2]>) {
         name: name.to_string(),
         accel: MeshAccel::new(obj).unwrap(),
         boundary_edges: 0,
+        normals: None,
     };
     (Arc::new(shape), positions, edges.into_iter().collect())
 }

@@ -139,3 +139,129 @@ fn the_calibration_helper_turns_the_matching_grey_into_gamma() {
     assert_eq!((img.width(), img.height()), (7 * 96, 96));
     assert!(String::from_utf8_lossy(&o.stdout).contains("gamma is 2.2 if it matches"));
 }
+
+/// Smooth shading on the octahedron: its area-weighted vertex normals are the axis directions
+/// (every vertex sits on an axis, its four faces symmetric about it), so at each corner of
+/// each face the shading normal is the corner's position, normalised; in a face's centre it is
+/// the face normal (the three axes summed).
+#[test]
+fn octahedron_vertex_normals_are_its_axes() {
+    let path = Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenes/meshes/octahedron.obj"
+    ));
+    let mesh = halfray::scene::load_mesh("o", path, None, 0, true).unwrap();
+    let tris = mesh.accel.mesh.triangles.clone();
+    let pos = mesh.accel.mesh.positions.clone();
+    for (i, t) in tris.iter().enumerate() {
+        let v = t.map(|k| pos[k as usize]);
+        let geometric = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+        for (k, corner) in [glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z]
+            .into_iter()
+            .enumerate()
+        {
+            let n = mesh.shading_normal(i, corner, geometric).unwrap();
+            assert!(
+                (n - v[k].normalize()).length() < 1e-6,
+                "triangle {i} corner {k}: {n}"
+            );
+        }
+        let centre = mesh
+            .shading_normal(i, glam::Vec3::splat(1.0 / 3.0), geometric)
+            .unwrap();
+        assert!(
+            (centre - geometric).length() < 1e-6,
+            "triangle {i}: {centre} vs {geometric}"
+        );
+    }
+    assert!(
+        halfray::scene::load_mesh("o", path, None, 0, false)
+            .unwrap()
+            .normals
+            .is_none()
+    );
+}
+
+fn mesh_scene(dir: &Path, shading: &str) -> String {
+    let obj = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenes/meshes/octahedron.obj"
+    );
+    let _ = dir;
+    format!(
+        r#"background = [0, 0, 0]
+[camera]
+eye = [2.2, 1.6, 2.8]
+look_at = [0, 0, 0]
+fov = 22
+width = 128
+height = 128
+
+[material.m]
+diffuse = [0.9, 0.9, 0.9]
+
+[[light]]
+type = "directional"
+direction = [-1, -2, -1.5]
+
+[mesh.o]
+file = "{obj}"
+subdivide = 2
+shading = "{shading}"
+
+[[object]]
+type = "mesh"
+mesh = "o"
+material = "m"
+"#
+    )
+}
+
+/// Flat shading is constant on each face and jumps at every edge between faces; smooth shading
+/// varies continuously. Along each row, a jump is a spike of the second difference
+/// `|a − 2b + c|` of neighbouring covered pixels: many with flat shading, few with smooth.
+#[test]
+fn smooth_shading_removes_the_steps_between_faces() {
+    let dir = tempfile::tempdir().unwrap();
+    let steps = |shading: &str| {
+        let img = render(
+            dir.path(),
+            shading,
+            &mesh_scene(dir.path(), shading),
+            &["--transparent-background"],
+        );
+        let mut n = 0;
+        for y in 0..img.height() {
+            for x in 2..img.width() {
+                let p = [x - 2, x - 1, x].map(|x| img.get_pixel(x, y).0);
+                if p.iter().all(|q| q[3] == 255) {
+                    let second = i32::from(p[0][0]) - 2 * i32::from(p[1][0]) + i32::from(p[2][0]);
+                    n += usize::from(second.abs() > 6);
+                }
+            }
+        }
+        n
+    };
+    let (flat, smooth) = (steps("flat"), steps("smooth"));
+    assert!(
+        flat > 200 && smooth * 3 < flat,
+        "steps: flat {flat}, smooth {smooth}"
+    );
+    // An unknown shading is an error naming the field.
+    let text = mesh_scene(dir.path(), "phong");
+    let toml = dir.path().join("bad.toml");
+    std::fs::write(&toml, text).unwrap();
+    let o = Command::new(BIN)
+        .arg("render")
+        .arg(&toml)
+        .arg("-o")
+        .arg(dir.path().join("b.png"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("mesh.o.shading") && err.contains("`flat` or `smooth`"),
+        "{err}"
+    );
+}

@@ -36,6 +36,22 @@ pub struct SurfaceHit {
     pub material: u32,
     /// Barycentrics `(b0, b1, b2)` for triangle hits.
     pub bary: Option<Vec3>,
+    /// Unit shading normal, on the same side as `hit.normal` (interpolated vertex normals of a
+    /// mesh with `shading = "smooth"`); `None`: shade with the geometric normal. Rays are
+    /// spawned from the geometric hit either way.
+    pub shading: Option<Vec3>,
+}
+
+impl SurfaceHit {
+    /// The normal to shade with, facing the incoming ray: the shading normal when there is
+    /// one (flipped with the geometric normal for a back-face hit), else the geometric one.
+    pub fn shading_normal(&self) -> Vec3 {
+        match self.shading {
+            Some(n) if self.hit.front_face => n,
+            Some(n) => -n,
+            None => self.hit.facing_normal(),
+        }
+    }
 }
 
 /// One boundary crossing along a line.
@@ -72,6 +88,8 @@ pub struct MeshShape {
     pub accel: MeshAccel,
     /// Boundary (unpaired) directed edges; 0 for a closed, consistently oriented mesh.
     pub boundary_edges: usize,
+    /// Unit vertex normals (area-weighted) for smooth shading, one per position.
+    pub normals: Option<Vec<Vec3>>,
 }
 
 impl std::fmt::Debug for MeshShape {
@@ -267,10 +285,27 @@ fn tri_hit(v: &[Vec3; 3], ray: &Ray) -> Option<(Hit, Vec3)> {
 }
 
 impl MeshShape {
-    fn closest(&self, ray: &Ray, stats: &mut TraversalStats) -> Option<(Hit, Vec3)> {
+    fn closest(&self, ray: &Ray, stats: &mut TraversalStats) -> Option<(Hit, Vec3, Option<Vec3>)> {
         let (i, th) = self.accel.closest_with_stats(&Watertight, ray, stats)?;
         let v = self.accel.mesh.triangle(i as usize);
-        Some((th.to_hit(&v), Vec3::new(th.b0(), th.b1, th.b2)))
+        let bary = Vec3::new(th.b0(), th.b1, th.b2);
+        let hit = th.to_hit(&v);
+        Some((hit, bary, self.shading_normal(i as usize, bary, hit.normal)))
+    }
+
+    /// The interpolated vertex normal of triangle `tri` at barycentrics `bary`, turned to the
+    /// side of the geometric normal `geometric`; `None` without vertex normals or where they
+    /// cancel.
+    pub fn shading_normal(&self, tri: usize, bary: Vec3, geometric: Vec3) -> Option<Vec3> {
+        let normals = self.normals.as_ref()?;
+        let t = self.accel.mesh.triangles.get(tri)?;
+        let n = t
+            .iter()
+            .zip(bary.to_array())
+            .map(|(&k, b)| normals.get(k as usize).copied().unwrap_or(Vec3::ZERO) * b)
+            .sum::<Vec3>()
+            .try_normalize()?;
+        Some(if n.dot(geometric) < 0.0 { -n } else { n })
     }
 
     /// Every triangle the closed watertight test hits on the ray's interval, with its index
@@ -439,6 +474,12 @@ impl Node {
                 let local = t.ray_to_object(ray);
                 let mut h = self.closest_local(&local, ctx)?;
                 h.hit = t.hit_to_world(&h.hit);
+                // Kept on the geometric normal's side (a mirroring transform flips one of them).
+                let geometric = h.hit.normal;
+                h.shading = h.shading.map(|n| {
+                    let w = t.normal_to_world(n);
+                    if w.dot(geometric) < 0.0 { -w } else { w }
+                });
                 Some(h)
             }
             None => self.closest_local(ray, ctx),
@@ -465,6 +506,7 @@ impl Node {
             hit,
             material: self.material,
             bary,
+            shading: None,
         }
     }
 
@@ -498,8 +540,11 @@ impl Node {
             }
             Shape::Polygon(p) => Some(self.surf(p.intersect(ray)?, None)),
             Shape::Mesh(m) => {
-                let (h, b) = m.closest(ray, &mut ctx.stats)?;
-                Some(self.surf(h, Some(b)))
+                let (h, b, shading) = m.closest(ray, &mut ctx.stats)?;
+                Some(SurfaceHit {
+                    shading,
+                    ..self.surf(h, Some(b))
+                })
             }
             Shape::Csg(..) => None,
         }

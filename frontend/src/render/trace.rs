@@ -272,7 +272,7 @@ impl Tracer<'_> {
         let hit = &sh.hit;
         let d = ray.direction.normalize();
         let v = -d;
-        let nrm = hit.facing_normal();
+        let nrm = sh.shading_normal();
         let mut color = m.ambient * scene.ambient;
         let specular = self.plan.specular[mi];
         for (li, light) in scene.lights.iter().enumerate() {

@@ -637,7 +637,8 @@ fn polygon(ctx: &Ctx<'_>, pts: Vec<Vec3>, span: &Span, field: &str) -> Result<Po
 
 /// A checked `[mesh.NAME]`: the file's path, the smoothing `(step, iterations)` and the
 /// subdivision levels.
-type MeshSettings = (std::path::PathBuf, Option<(f32, u32)>, u32);
+/// A mesh's file, Laplacian smoothing `(step, iterations)`, Loop levels and smooth shading.
+type MeshSettings = (std::path::PathBuf, Option<(f32, u32)>, u32, bool);
 
 /// Checks `[mesh.NAME]` without reading the file: it exists and is a file, the smoothing and
 /// subdivision settings are in range. Returns the path, the smoothing `(step, iterations)` and
@@ -696,7 +697,21 @@ fn mesh_def(ctx: &Ctx<'_>, name: &str) -> Result<MeshSettings> {
             "at most 4 levels (each multiplies the triangles by 4)",
         ));
     }
-    Ok((path, smoothing, levels))
+    let smooth_shading = match &def.shading {
+        None => false,
+        Some(v) => match v.get_ref().as_str() {
+            "flat" => false,
+            "smooth" => true,
+            other => {
+                return Err(ctx.err(
+                    &v.span(),
+                    &format!("{p}.shading"),
+                    format!("unknown shading `{other}` (expected `flat` or `smooth`)"),
+                ));
+            }
+        },
+    };
+    Ok((path, smoothing, levels, smooth_shading))
 }
 
 fn mesh(ctx: &mut Ctx<'_>, name: &S<String>, field: &str) -> Result<Arc<MeshShape>> {
@@ -715,11 +730,11 @@ fn mesh(ctx: &mut Ctx<'_>, name: &S<String>, field: &str) -> Result<Arc<MeshShap
     if let Some(m) = loaded {
         return Ok(m.clone());
     }
-    let (path, smoothing, levels) = mesh_def(ctx, name.get_ref())?;
+    let (path, smoothing, levels, smooth_shading) = mesh_def(ctx, name.get_ref())?;
     let def = ctx.mesh_defs[name.get_ref()].get_ref();
     let p = format!("mesh.{}", name.get_ref());
-    let shape =
-        super::load_mesh(name.get_ref(), &path, smoothing, levels).map_err(|e| match e {
+    let shape = super::load_mesh(name.get_ref(), &path, smoothing, levels, smooth_shading)
+        .map_err(|e| match e {
             Error::Input { at, message } if at.line.is_none() => ctx.err(
                 &def.file.span(),
                 &format!("{p}.file"),

@@ -126,6 +126,7 @@ pub struct MeshDef {
     pub file: S<String>,
     pub subdivide: Option<S<u32>>,
     pub smooth: Option<S<SmoothDef>>,
+    pub shading: Option<S<String>>,
 }
 
 #[derive(Deserialize)]

@@ -31,6 +31,31 @@ pub fn boundary_edge_count(triangles: &[[u32; 3]]) -> usize {
         .sum()
 }
 
+/// Area-weighted unit vertex normals, one per position, from the half-edge core
+/// (`Mesh::vertex_normals`); a vertex without one (isolated, or whose faces cancel) gets
+/// `Vec3::ZERO`, and shading falls back to the face normal there.
+fn vertex_normals(path: &Path, mesh: &ObjMesh) -> Result<Vec<Vec3>> {
+    let nf = mesh.triangles.len();
+    let mut v = vec![VertexRec::default(); mesh.positions.len()];
+    let mut e = vec![EdgeRec::default(); nf.saturating_mul(3)];
+    let mut f = vec![FaceRec::default(); nf];
+    let mut m = SliceMesh::from_slices(&mut v, &mut e, &mut f);
+    let mut scratch = vec![0u32; build_scratch_len(nf)];
+    m.build(&mesh.positions, &mesh.triangles, &mut scratch)
+        .map_err(|e| {
+            he_error(
+                path,
+                "smooth shading needs a manifold mesh; the half-edge core rejects this one",
+                e,
+            )
+        })?;
+    let mut out = vec![Vec3::ZERO; m.slots().vertices];
+    m.vertex_normals(&mut out)
+        .map_err(|e| he_error(path, "vertex normals", e))?;
+    out.truncate(mesh.positions.len());
+    Ok(out)
+}
+
 fn he_error(path: &Path, what: &str, e: impl std::fmt::Display) -> Error {
     Error::input(Location::file(path), format!("{what}: {e}"))
 }
@@ -95,7 +120,7 @@ fn subdivide(path: &Path, mesh: &ObjMesh) -> Result<ObjMesh> {
 const SCENE_MESH_BYTES_PER_TRIANGLE: u64 = 320;
 
 /// Loads an OBJ, applies smoothing (`(step, iterations)`) then `subdivide` Loop levels, and
-/// builds the BVH. Subdivision is refused before it starts when the final mesh would exceed
+/// builds the BVH; with `smooth_shading`, also the area-weighted vertex normals. Subdivision is refused before it starts when the final mesh would exceed
 /// the memory limit ([`crate::limits::MEMORY_LIMIT_BYTES`]; each level multiplies the
 /// triangles by 4).
 pub fn load_mesh(
@@ -103,6 +128,7 @@ pub fn load_mesh(
     path: &Path,
     smoothing: Option<(f32, u32)>,
     levels: u32,
+    smooth_shading: bool,
 ) -> Result<MeshShape> {
     let mut mesh = read_obj(path)?;
     if mesh.triangles.is_empty() {
@@ -128,11 +154,17 @@ pub fn load_mesh(
         mesh = subdivide(path, &mesh)?;
     }
     let boundary_edges = boundary_edge_count(&mesh.triangles);
+    let normals = if smooth_shading {
+        Some(vertex_normals(path, &mesh)?)
+    } else {
+        None
+    };
     let accel = MeshAccel::new(mesh)?;
     Ok(MeshShape {
         name: name.to_string(),
         accel,
         boundary_edges,
+        normals,
     })
 }
 
