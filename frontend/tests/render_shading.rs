@@ -265,3 +265,105 @@ fn smooth_shading_removes_the_steps_between_faces() {
         "{err}"
     );
 }
+
+/// Renders a shipped scene at 80 × 60 with `extra`: the image and the `--stats-json`.
+fn shipped(
+    dir: &Path,
+    scene: &str,
+    name: &str,
+    extra: &[&str],
+) -> (image::RgbaImage, serde_json::Value) {
+    let png = dir.join(format!("{name}.png"));
+    let json = dir.join(format!("{name}.json"));
+    let o = Command::new(BIN)
+        .arg("render")
+        .arg(Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes")).join(scene))
+        .args(["--width", "80", "--height", "60", "--quiet", "-o"])
+        .arg(&png)
+        .arg("--stats-json")
+        .arg(&json)
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stats = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    (image::open(&png).unwrap().into_rgba8(), stats)
+}
+
+#[test]
+fn antialiasing_samples_only_where_neighbours_differ() {
+    let dir = tempfile::tempdir().unwrap();
+    let (one, s1) = shipped(
+        dir.path(),
+        "bunny.toml",
+        "one",
+        &["--transparent-background"],
+    );
+    let (aa, s8) = shipped(
+        dir.path(),
+        "bunny.toml",
+        "aa",
+        &["--transparent-background", "--samples", "8"],
+    );
+    let pixels = 80 * 60u64;
+    assert_eq!(s1["primary"], pixels);
+    assert_eq!(s1["plan"]["antialias"], false);
+    assert_eq!(s8["plan"]["antialias"], true);
+    // One centre ray per pixel plus 7 in each refined pixel: a multiple of 7 on top, and far
+    // fewer than 8 per pixel (flat regions keep one).
+    let extra = s8["primary"].as_u64().unwrap() - pixels;
+    assert!(extra > 0 && extra % 7 == 0, "{extra}");
+    let refined = extra / 7;
+    assert!(refined < pixels / 2, "{refined} of {pixels} pixels refined");
+    // Unrefined pixels are unchanged; silhouettes get partial coverage.
+    let changed = one
+        .pixels()
+        .zip(aa.pixels())
+        .filter(|(a, b)| a != b)
+        .count() as u64;
+    assert!(
+        changed > 0 && changed <= refined,
+        "{changed} changed, {refined} refined"
+    );
+    let partial = aa.pixels().filter(|p| p.0[3] > 0 && p.0[3] < 255).count();
+    assert!(partial > 10, "{partial} partly covered pixels");
+    assert_eq!(
+        one.pixels().filter(|p| p.0[3] > 0 && p.0[3] < 255).count(),
+        0
+    );
+    // Deterministic, and the same with every effect forced on.
+    let (again, _) = shipped(
+        dir.path(),
+        "bunny.toml",
+        "again",
+        &["--transparent-background", "--samples", "8"],
+    );
+    assert_eq!(again, aa);
+    let (forced, _) = shipped(
+        dir.path(),
+        "bunny.toml",
+        "forced",
+        &[
+            "--transparent-background",
+            "--samples",
+            "8",
+            "--force-all-effects",
+        ],
+    );
+    assert_eq!(forced, aa);
+    // Opaque output blends the partly covered pixels with the background colour.
+    let (opaque, _) = shipped(dir.path(), "bunny.toml", "opaque", &["--samples", "8"]);
+    assert!(opaque.pixels().all(|p| p.0[3] == 255));
+    let o = Command::new(BIN)
+        .args([
+            "render",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/bunny.toml"),
+            "--samples",
+            "65",
+            "-o",
+        ])
+        .arg(dir.path().join("x.png"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+}

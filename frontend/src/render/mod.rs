@@ -8,6 +8,7 @@
 // `!(x > eps)` rejects NaN along with small values: the negation is the point.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod antialias;
 pub mod gamma;
 pub mod geom;
 pub mod output;
@@ -68,6 +69,11 @@ pub struct RenderArgs {
     /// the render; in linear radiance, the image decoded from sRGB).
     #[arg(long, value_name = "IMG.png")]
     pub background: Option<PathBuf>,
+    /// Most samples per pixel (colour mode): one ray through each pixel's centre, then up to
+    /// N − 1 more at fixed sub-pixel positions only where a pixel differs from a neighbour
+    /// (edges, shadow boundaries, mirror rims), averaged. Deterministic.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=antialias::MAX_SAMPLES as i64))]
+    pub samples: u32,
     /// Output transfer function: `srgb`, or a display gamma `γ` (stored = linear^(1/γ); find
     /// yours with `halfray gamma --chart`). Also decodes `--background`.
     #[arg(long, default_value = "srgb", value_name = "srgb|GAMMA")]
@@ -107,6 +113,9 @@ pub struct RenderOptions {
     pub progress: bool,
     /// How far each pixel's ray tree is followed.
     pub bound: PathBound,
+    /// Most samples per pixel (colour mode; 0 and 1 mean one): adaptive anti-aliasing, see
+    /// [`antialias`].
+    pub samples: u32,
 }
 
 /// A finished render.
@@ -155,10 +164,12 @@ impl Rendered {
             .collect()
     }
 
-    /// Makes every pixel opaque (alpha 1): the background colour where nothing was hit.
-    pub fn make_opaque(&mut self) {
+    /// Makes every pixel opaque: the render over the `background` colour (linear), so a pixel
+    /// an edge covers in part blends the two.
+    pub fn make_opaque(&mut self, background: Vec3) {
+        let bg = background.extend(1.0);
         for p in &mut self.pixels {
-            p.w = 1.0;
+            *p = crate::composite::Operator::Over.apply(*p, bg);
         }
     }
 
@@ -217,6 +228,14 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Rendered {
         counts.add(&c);
         px.extend(row);
     }
+    let mut seconds = seconds;
+    if opts.samples > 1 && opts.mode == Mode::Color {
+        let start = Instant::now();
+        counts.add(&antialias::refine(&mut px, w, opts.samples, |x, y, c| {
+            sample(&tracer, opts, x, y, c)
+        }));
+        seconds += start.elapsed().as_secs_f64();
+    }
     let (mut dmin, mut dmax) = (f32::INFINITY, f32::NEG_INFINITY);
     for p in px.iter().filter(|p| p.alpha > 0.0) {
         dmin = dmin.min(p.depth);
@@ -258,8 +277,19 @@ fn pixel(
     j: u32,
     counts: &mut RayCounts,
 ) -> PixelOut {
+    sample(tracer, opts, i as f32 + 0.5, j as f32 + 0.5, counts)
+}
+
+/// One primary ray through image position `(x, y)` (pixels from the top left corner).
+fn sample(
+    tracer: &Tracer<'_>,
+    opts: &RenderOptions,
+    x: f32,
+    y: f32,
+    counts: &mut RayCounts,
+) -> PixelOut {
     let mode = opts.mode;
-    let ray = tracer.scene.camera.pixel_ray(i, j);
+    let ray = tracer.scene.camera.ray_at(x, y);
     counts.primary += 1;
     let mut ctx = tracer.ctx();
     let hit = tracer.closest(&ray, &mut ctx);
@@ -378,6 +408,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         None => None,
     };
     let opts = RenderOptions {
+        samples: args.samples,
         mode: args.mode,
         force_all: args.force_all_effects,
         progress: !args.quiet,
@@ -398,7 +429,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if let Some(bg) = &background {
         out.composite(bg, args.op);
     } else if args.mode == Mode::Color && !args.transparent_background {
-        out.make_opaque();
+        out.make_opaque(scene.background);
     }
     let mut reserved = reserved.into_iter();
     let png = reserved.next().expect("-o is reserved first");
@@ -410,7 +441,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             reflection: c.reflection,
             refraction: c.refraction,
             seconds: out.seconds,
-            plan: EffectPlan::derive(&scene, opts.force_all).flags(),
+            plan: plan::PlanFlags {
+                antialias: opts.samples > 1 && opts.mode == Mode::Color,
+                ..EffectPlan::derive(&scene, opts.force_all).flags()
+            },
         })
         .map_err(|e| Error::Other(format!("stats JSON: {e}")))?;
         stats.write(|w| w.write_all(format!("{json}\n").as_bytes()))?;

@@ -48,7 +48,8 @@ pub struct PlanFlags {
     pub specular: bool,
     /// Shadow rays through transparent surfaces ([`EffectPlan::shadow_transmission`]).
     pub shadow_transmission: bool,
-    /// More than one sample per pixel (the renderer takes one: always `false` today).
+    /// More than one sample per pixel where the image needs it (`--samples N > 1`, colour
+    /// mode; set by the renderer, not derived from the scene).
     pub antialias: bool,
     /// CSG interval evaluation (CSG objects, or every solid when forced).
     pub csg_intervals: bool,

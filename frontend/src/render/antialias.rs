@@ -1,0 +1,170 @@
+//! Adaptive anti-aliasing (`render --samples N`): one ray through every pixel's centre, then
+//! up to `N − 1` more only in pixels that differ from a 4-neighbour by more than
+//! [`CONTRAST`] — silhouettes, shadow boundaries, mirror rims — so a flat region costs one ray
+//! per pixel. The extra samples sit at fixed sub-pixel positions ([`offset`]), so a render is
+//! reproducible and `--force-all-effects` stays byte-identical.
+//!
+//! A refined pixel is the box-filtered mean of its samples, coverage included: alpha is the
+//! fraction of samples that hit, and the colour is the alpha-weighted (premultiplied) mean of
+//! the hits' colours, kept straight; a pixel no sample hits keeps its centre sample.
+
+use super::output::linear_to_srgb;
+use super::{PixelOut, RayCounts};
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Most samples per pixel `--samples` accepts.
+pub const MAX_SAMPLES: u32 = 64;
+
+/// Largest difference between a pixel and a 4-neighbour that leaves it with one sample: in
+/// sRGB-encoded units of `[0, 1]` per colour channel, and in alpha. 8/255: the steps of a
+/// smoothly lit surface between neighbouring pixels stay below it at ordinary resolutions
+/// (a ramp needs no anti-aliasing), while silhouettes, shadow boundaries and mirror rims jump
+/// by far more.
+pub const CONTRAST: f32 = 8.0 / 255.0;
+
+/// Sub-pixel position of extra sample `k ≥ 1`, in `[0, 1)²` from the pixel's corner: the R2
+/// low-discrepancy sequence (Roberts, 2018) started at the centre (`k = 0`), so every prefix
+/// covers the pixel evenly.
+pub fn offset(k: u32) -> (f32, f32) {
+    // The plastic number's reciprocals, ρ⁻¹ and ρ⁻².
+    const A1: f64 = 0.754_877_666_246_692_7;
+    const A2: f64 = 0.569_840_290_998_053_2;
+    let k = f64::from(k);
+    ((0.5 + A1 * k).fract() as f32, (0.5 + A2 * k).fract() as f32)
+}
+
+/// `true` when pixels `a` and `b` differ by more than [`CONTRAST`].
+fn differ(a: &PixelOut, b: &PixelOut) -> bool {
+    let enc = |v: Vec3| v.to_array().map(linear_to_srgb);
+    let (ca, cb) = (enc(a.value), enc(b.value));
+    (a.alpha - b.alpha).abs() > CONTRAST || ca.iter().zip(cb).any(|(x, y)| (x - y).abs() > CONTRAST)
+}
+
+/// Indices of the pixels of a `w`-wide image that differ from a 4-neighbour.
+pub(super) fn edges(px: &[PixelOut], w: u32) -> Vec<usize> {
+    let w = w as usize;
+    (0..px.len())
+        .filter(|&i| {
+            let (x, y) = (i % w, i / w);
+            let mut n = [None; 4];
+            if x > 0 {
+                n[0] = Some(i - 1);
+            }
+            if x + 1 < w {
+                n[1] = Some(i + 1);
+            }
+            if y > 0 {
+                n[2] = Some(i - w);
+            }
+            n[3] = Some(i + w).filter(|&j| j < px.len());
+            n.into_iter().flatten().any(|j| differ(&px[i], &px[j]))
+        })
+        .collect()
+}
+
+/// Refines the [`edges`] of `px` (one centre sample each) to `samples` samples with
+/// `sample(x, y, counts)` (image coordinates in pixels), in parallel; returns the rays the
+/// extra samples cast.
+pub(super) fn refine(
+    px: &mut [PixelOut],
+    w: u32,
+    samples: u32,
+    sample: impl Fn(f32, f32, &mut RayCounts) -> PixelOut + Sync,
+) -> RayCounts {
+    let todo = edges(px, w);
+    let refined: Vec<(usize, PixelOut, RayCounts)> = todo
+        .par_iter()
+        .map(|&i| {
+            let (x, y) = ((i % w as usize) as f32, (i / w as usize) as f32);
+            let centre = px[i];
+            let mut counts = RayCounts::default();
+            let (mut premult, mut alpha) = (centre.value * centre.alpha, centre.alpha);
+            for k in 1..samples.min(MAX_SAMPLES) {
+                let (dx, dy) = offset(k);
+                let s = sample(x + dx, y + dy, &mut counts);
+                premult += s.value * s.alpha;
+                alpha += s.alpha;
+            }
+            let n = samples.min(MAX_SAMPLES) as f32;
+            let mut out = centre;
+            if alpha > 0.0 {
+                out.value = premult / alpha;
+                out.alpha = alpha / n;
+            }
+            (i, out, counts)
+        })
+        .collect();
+    let mut total = RayCounts::default();
+    for (i, out, c) in refined {
+        px[i] = out;
+        total.add(&c);
+    }
+    total
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn px(value: f32, alpha: f32) -> PixelOut {
+        PixelOut {
+            value: Vec3::splat(value),
+            alpha,
+            ..PixelOut::default()
+        }
+    }
+
+    #[test]
+    fn offsets_start_at_the_centre_and_spread_over_the_pixel() {
+        assert_eq!(offset(0), (0.5, 0.5));
+        // Every quarter of the pixel gets one of the first eight samples.
+        for (qx, qy) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+            let hit = (0..8)
+                .map(offset)
+                .any(|(x, y)| (x >= 0.5) as i32 == qx && (y >= 0.5) as i32 == qy);
+            assert!(hit, "quarter ({qx}, {qy})");
+        }
+        assert!(
+            (1..64)
+                .map(offset)
+                .all(|(x, y)| (0.0..1.0).contains(&x) && (0.0..1.0).contains(&y))
+        );
+    }
+
+    #[test]
+    fn only_pixels_next_to_a_difference_are_refined() {
+        // 4 × 3: a flat image with one bright pixel at (2, 1).
+        let mut img = vec![px(0.2, 1.0); 12];
+        img[6] = px(0.9, 1.0);
+        let e = edges(&img, 4);
+        assert_eq!(e, vec![2, 5, 6, 7, 10]);
+        // A difference below the contrast threshold refines nothing.
+        let mut img = vec![px(0.2, 1.0); 12];
+        img[6] = px(0.201, 1.0);
+        assert!(edges(&img, 4).is_empty());
+    }
+
+    #[test]
+    fn a_refined_pixel_is_the_coverage_weighted_mean() {
+        // Two pixels; the first differs. Its extra samples alternate hit (0.8) and miss.
+        let mut img = vec![px(0.4, 1.0), px(0.0, 0.0)];
+        let counts = refine(&mut img, 2, 4, |x, _, c| {
+            c.primary += 1;
+            if x.fract() < 0.5 {
+                px(0.8, 1.0)
+            } else {
+                px(0.0, 0.0)
+            }
+        });
+        assert_eq!(counts.primary, 2 * 3, "both pixels differ from each other");
+        let hits: Vec<bool> = (1..4).map(|k| offset(k).0 < 0.5).collect();
+        let n_hits = hits.iter().filter(|&&h| h).count() as f32;
+        let want_alpha = (1.0 + n_hits) / 4.0;
+        let want_value = (0.4 + 0.8 * n_hits) / (1.0 + n_hits);
+        assert!((img[0].alpha - want_alpha).abs() < 1e-6);
+        assert!((img[0].value.x - want_value).abs() < 1e-6);
+        assert!((img[1].alpha - n_hits / 4.0).abs() < 1e-6);
+        assert!((img[1].value.x - 0.8).abs() < 1e-6);
+    }
+}
