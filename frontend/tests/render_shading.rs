@@ -312,7 +312,7 @@ fn antialiasing_samples_only_where_neighbours_differ() {
     // One centre ray per pixel plus 7 in each refined pixel: a multiple of 7 on top, and far
     // fewer than 8 per pixel (flat regions keep one).
     let extra = s8["primary"].as_u64().unwrap() - pixels;
-    assert!(extra > 0 && extra % 7 == 0, "{extra}");
+    assert!(extra > 0 && extra.is_multiple_of(7), "{extra}");
     let refined = extra / 7;
     assert!(refined < pixels / 2, "{refined} of {pixels} pixels refined");
     // Unrefined pixels are unchanged; silhouettes get partial coverage.
