@@ -367,3 +367,155 @@ fn antialiasing_samples_only_where_neighbours_differ() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// Two spheres of the same size at 4 and 9 units, seen against an empty background; the
+/// camera's lens focuses at `focus`.
+fn dof_scene(aperture: f32, focus: f32) -> String {
+    format!(
+        r#"background = [0, 0, 0]
+[camera]
+eye = [0, 0, 0]
+look_at = [0, 0, -1]
+fov = 50
+width = 96
+height = 64
+aperture = {aperture}
+focus_distance = {focus}
+lens_samples = 24
+
+[material.m]
+diffuse = [0.9, 0.9, 0.9]
+
+[[light]]
+type = "directional"
+direction = [0, 0, -1]
+
+[[object]]
+type = "sphere"
+center = [-1.2, 0, -4]
+radius = 0.8
+material = "m"
+
+[[object]]
+type = "sphere"
+center = [2.7, 0, -9]
+radius = 1.8
+material = "m"
+"#
+    )
+}
+
+/// Partly covered pixels (a blurred silhouette) in the left and right halves of an image.
+fn blur(img: &image::RgbaImage) -> (usize, usize) {
+    let half = img.width() / 2;
+    let mut n = (0, 0);
+    for (x, _, p) in img.enumerate_pixels() {
+        if p.0[3] > 10 && p.0[3] < 245 {
+            if x < half { n.0 += 1 } else { n.1 += 1 }
+        }
+    }
+    n
+}
+
+#[test]
+fn depth_of_field_blurs_what_is_out_of_focus() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, text: &str| {
+        let toml = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&toml, text).unwrap();
+        let (png, json) = (
+            dir.path().join(format!("{name}.png")),
+            dir.path().join(format!("{name}.json")),
+        );
+        let o = Command::new(BIN)
+            .arg("render")
+            .arg(&toml)
+            .args(["--quiet", "--transparent-background", "-o"])
+            .arg(&png)
+            .arg("--stats-json")
+            .arg(&json)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let stats: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        (image::open(&png).unwrap().into_rgba8(), stats)
+    };
+    let (near, s_near) = run("near", &dof_scene(0.15, 4.0));
+    let (far, _) = run("far", &dof_scene(0.15, 9.0));
+    let (pinhole, s_pin) = run("pinhole", &dof_scene(0.0, 4.0));
+    assert_eq!(s_near["plan"]["depth_of_field"], true);
+    assert_eq!(s_pin["plan"]["depth_of_field"], false);
+    assert_eq!(s_near["primary"], 96 * 64 * 24);
+    assert_eq!(s_pin["primary"], 96 * 64);
+    // Focused on the near sphere (left): its edge stays sharp (partly covered pixels only
+    // from the sub-pixel positions, about its perimeter), the far one (right) blurs over more
+    // than twice as many; focused on the far one, the other way round. The pinhole blurs
+    // nothing.
+    let (nl, nr) = blur(&near);
+    let (fl, fr) = blur(&far);
+    assert!(nr > 2 * nl.max(1), "focus near: left {nl}, right {nr}");
+    assert!(fl > 2 * fr.max(1), "focus far: left {fl}, right {fr}");
+    assert_eq!(blur(&pinhole), (0, 0));
+    // A lens on an orthographic camera is refused, naming the field.
+    let text = dof_scene(0.1, 4.0).replace("fov = 50", "type = \"orthographic\"\nview_size = 4");
+    let toml = dir.path().join("ortho.toml");
+    std::fs::write(&toml, text).unwrap();
+    let o = Command::new(BIN)
+        .arg("render")
+        .arg(&toml)
+        .arg("-o")
+        .arg(dir.path().join("o.png"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("camera.aperture"), "{err}");
+}
+
+/// Thin lens: every ray of a pixel starts on the lens disk (within `aperture` of the eye, in
+/// the plane across the view) and meets the pinhole ray on the plane in focus.
+#[test]
+fn lens_rays_meet_on_the_plane_in_focus() {
+    use glam::Vec3;
+    use halfray::scene::{Camera, Lens, Projection};
+    let mut cam = Camera::new(
+        Vec3::new(1.0, 2.0, 3.0),
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::Y,
+        Projection::Perspective { fov: 40.0 },
+        64,
+        48,
+    )
+    .unwrap();
+    let lens = Lens {
+        aperture: 0.3,
+        focus_distance: 5.0,
+        samples: 16,
+    };
+    cam.lens = Some(lens);
+    for (x, y) in [(0.5, 0.5), (31.7, 20.2), (63.9, 47.1)] {
+        let pin = cam.ray_at(x, y);
+        let focus =
+            pin.origin + pin.direction * (lens.focus_distance / pin.direction.dot(cam.forward));
+        for k in 0..16 {
+            let (lu, lv) = (k as f32 / 16.0, ((k * 7) % 16) as f32 / 16.0);
+            let r = cam.ray_through_lens(x, y, lu, lv);
+            let off = r.origin - cam.eye;
+            assert!(off.dot(cam.forward).abs() < 1e-6 && off.length() <= lens.aperture + 1e-6);
+            let t = lens.focus_distance / r.direction.dot(cam.forward) - off.dot(cam.forward);
+            let p = r.origin + r.direction * t;
+            assert!(
+                (p - focus).length() < 1e-4,
+                "({x}, {y}) lens ({lu}, {lv}): {p} vs {focus}"
+            );
+        }
+    }
+    // The lens centre is the pinhole.
+    let (pin, c) = (
+        cam.ray_at(10.5, 7.5),
+        cam.ray_through_lens(10.5, 7.5, 0.5, 0.5),
+    );
+    assert_eq!(pin.origin, c.origin);
+    assert!((pin.direction.normalize() - c.direction.normalize()).length() < 1e-6);
+}

@@ -34,6 +34,42 @@ pub fn offset(k: u32) -> (f32, f32) {
     ((0.5 + A1 * k).fract() as f32, (0.5 + A2 * k).fract() as f32)
 }
 
+/// Lens position of sample `k` in the unit square: the Halton sequence in bases 2 and 3
+/// (independent of [`offset`]'s R2 sequence, so lens and sub-pixel positions do not align).
+pub fn lens_offset(k: u32) -> (f32, f32) {
+    let radical = |mut n: u32, base: u32| {
+        let (mut x, mut f) = (0.0f64, 1.0f64);
+        while n > 0 {
+            f /= f64::from(base);
+            x += f * f64::from(n % base);
+            n /= base;
+        }
+        x as f32
+    };
+    (radical(k + 1, 2), radical(k + 1, 3))
+}
+
+/// The box-filtered mean of samples (the first one the reference, used alone when no sample
+/// hits): alpha the fraction that hit, colour the alpha-weighted mean of theirs.
+pub(super) fn mean(samples: impl IntoIterator<Item = PixelOut>) -> PixelOut {
+    let mut it = samples.into_iter();
+    let Some(first) = it.next() else {
+        return PixelOut::default();
+    };
+    let (mut premult, mut alpha, mut n) = (first.value * first.alpha, first.alpha, 1.0f32);
+    for s in it {
+        premult += s.value * s.alpha;
+        alpha += s.alpha;
+        n += 1.0;
+    }
+    let mut out = first;
+    if alpha > 0.0 {
+        out.value = premult / alpha;
+        out.alpha = alpha / n;
+    }
+    out
+}
+
 /// `true` when pixels `a` and `b` differ by more than [`CONTRAST`].
 fn differ(a: &PixelOut, b: &PixelOut) -> bool {
     let enc = |v: Vec3| v.to_array().map(linear_to_srgb);
@@ -77,22 +113,14 @@ pub(super) fn refine(
         .par_iter()
         .map(|&i| {
             let (x, y) = ((i % w as usize) as f32, (i / w as usize) as f32);
-            let centre = px[i];
             let mut counts = RayCounts::default();
-            let (mut premult, mut alpha) = (centre.value * centre.alpha, centre.alpha);
-            for k in 1..samples.min(MAX_SAMPLES) {
-                let (dx, dy) = offset(k);
-                let s = sample(x + dx, y + dy, &mut counts);
-                premult += s.value * s.alpha;
-                alpha += s.alpha;
-            }
-            let n = samples.min(MAX_SAMPLES) as f32;
-            let mut out = centre;
-            if alpha > 0.0 {
-                out.value = premult / alpha;
-                out.alpha = alpha / n;
-            }
-            (i, out, counts)
+            let extra: Vec<PixelOut> = (1..samples.min(MAX_SAMPLES))
+                .map(|k| {
+                    let (dx, dy) = offset(k);
+                    sample(x + dx, y + dy, &mut counts)
+                })
+                .collect();
+            (i, mean(std::iter::once(px[i]).chain(extra)), counts)
         })
         .collect();
     let mut total = RayCounts::default();

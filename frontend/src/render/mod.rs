@@ -229,10 +229,11 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Rendered {
         px.extend(row);
     }
     let mut seconds = seconds;
-    if opts.samples > 1 && opts.mode == Mode::Color {
+    // Depth of field samples every pixel already.
+    if opts.samples > 1 && opts.mode == Mode::Color && scene.camera.lens.is_none() {
         let start = Instant::now();
         counts.add(&antialias::refine(&mut px, w, opts.samples, |x, y, c| {
-            sample(&tracer, opts, x, y, c)
+            sample(&tracer, opts, scene.camera.ray_at(x, y), c)
         }));
         seconds += start.elapsed().as_secs_f64();
     }
@@ -277,19 +278,31 @@ fn pixel(
     j: u32,
     counts: &mut RayCounts,
 ) -> PixelOut {
-    sample(tracer, opts, i as f32 + 0.5, j as f32 + 0.5, counts)
+    let camera = &tracer.scene.camera;
+    let (x, y) = (i as f32, j as f32);
+    match camera.lens {
+        // Depth of field: every pixel through `samples` lens and sub-pixel positions.
+        Some(lens) if opts.mode == Mode::Color => antialias::mean((0..lens.samples).map(|k| {
+            let ((dx, dy), (lu, lv)) = (antialias::offset(k), antialias::lens_offset(k));
+            sample(
+                tracer,
+                opts,
+                camera.ray_through_lens(x + dx, y + dy, lu, lv),
+                counts,
+            )
+        })),
+        _ => sample(tracer, opts, camera.ray_at(x + 0.5, y + 0.5), counts),
+    }
 }
 
-/// One primary ray through image position `(x, y)` (pixels from the top left corner).
+/// One primary ray.
 fn sample(
     tracer: &Tracer<'_>,
     opts: &RenderOptions,
-    x: f32,
-    y: f32,
+    ray: halfray_core::Ray,
     counts: &mut RayCounts,
 ) -> PixelOut {
     let mode = opts.mode;
-    let ray = tracer.scene.camera.ray_at(x, y);
     counts.primary += 1;
     let mut ctx = tracer.ctx();
     let hit = tracer.closest(&ray, &mut ctx);
@@ -442,7 +455,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             refraction: c.refraction,
             seconds: out.seconds,
             plan: plan::PlanFlags {
-                antialias: opts.samples > 1 && opts.mode == Mode::Color,
+                antialias: opts.samples > 1
+                    && opts.mode == Mode::Color
+                    && scene.camera.lens.is_none(),
+                depth_of_field: scene.camera.lens.is_some() && opts.mode == Mode::Color,
                 ..EffectPlan::derive(&scene, opts.force_all).flags()
             },
         })

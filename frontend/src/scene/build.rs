@@ -228,7 +228,7 @@ fn camera(ctx: &Ctx<'_>, c: &S<def::CameraDef>) -> Result<Camera> {
         Some(u) => ctx.dir(u, "camera.up")?,
         None => Vec3::Y,
     };
-    Camera::new(
+    let mut camera = Camera::new(
         eye,
         look_at,
         up,
@@ -242,7 +242,45 @@ fn camera(ctx: &Ctx<'_>, c: &S<def::CameraDef>) -> Result<Camera> {
             "camera.look_at",
             "must differ from `eye`, and the view direction must not be parallel to `up`",
         )
-    })
+    })?;
+    if let Some(a) = &c.aperture {
+        if kind != "perspective" {
+            return Err(ctx.err(
+                &a.span(),
+                "camera.aperture",
+                "only for `type = \"perspective\"`",
+            ));
+        }
+        let aperture = ctx.f(a, "camera.aperture")?;
+        if !(aperture >= 0.0) {
+            return Err(ctx.err(&a.span(), "camera.aperture", "must be ≥ 0"));
+        }
+        let focus_distance = match &c.focus_distance {
+            Some(f) => ctx.positive(f, "camera.focus_distance")?,
+            None => (look_at - eye).length(),
+        };
+        let samples = match &c.lens_samples {
+            Some(n) if *n.get_ref() == 0 || *n.get_ref() > super::MAX_LENS_SAMPLES => {
+                return Err(ctx.err(
+                    &n.span(),
+                    "camera.lens_samples",
+                    format!("must be in 1..={}", super::MAX_LENS_SAMPLES),
+                ));
+            }
+            Some(n) => *n.get_ref(),
+            None => 16,
+        };
+        if aperture > 0.0 {
+            camera.lens = Some(super::Lens {
+                aperture,
+                focus_distance,
+                samples,
+            });
+        }
+    } else if let Some(f) = c.focus_distance.as_ref().or(None) {
+        return Err(ctx.err(&f.span(), "camera.focus_distance", "only with `aperture`"));
+    }
+    Ok(camera)
 }
 
 fn light(ctx: &Ctx<'_>, i: usize, l: &S<def::LightDef>) -> Result<Light> {

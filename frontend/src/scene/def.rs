@@ -92,6 +92,9 @@ pub struct CameraDef {
     pub view_size: Option<S<f32>>,
     pub width: S<u32>,
     pub height: S<u32>,
+    pub aperture: Option<S<f32>>,
+    pub focus_distance: Option<S<f32>>,
+    pub lens_samples: Option<S<u32>>,
 }
 
 #[derive(Deserialize)]

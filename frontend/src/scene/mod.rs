@@ -64,7 +64,24 @@ pub struct Camera {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
+    /// Thin lens for depth of field (perspective only); `None`: a pinhole.
+    pub lens: Option<Lens>,
 }
+
+/// A thin lens: points at `focus_distance` along the view direction are sharp, others blur
+/// in proportion to `aperture`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lens {
+    /// Lens radius, world units (> 0).
+    pub aperture: f32,
+    /// Distance of the plane in focus from the eye along the view direction, world units.
+    pub focus_distance: f32,
+    /// Rays per pixel, each through its own lens and sub-pixel position.
+    pub samples: u32,
+}
+
+/// Most `lens_samples` a camera may ask for.
+pub const MAX_LENS_SAMPLES: u32 = 256;
 
 impl Camera {
     /// Builds the camera frame; `None` when `look_at − eye` is zero or parallel to `up`.
@@ -89,7 +106,35 @@ impl Camera {
             projection,
             width,
             height,
+            lens: None,
         })
+    }
+
+    /// The ray through image position `(x, y)` (as [`Camera::ray_at`]) and lens position
+    /// `(lu, lv)` in the unit square, mapped to the lens disk (concentric mapping): the ray
+    /// starts on the lens and passes through the point of the pinhole ray on the plane in
+    /// focus. Without a lens, or for `(lu, lv)` at the disk's centre `(½, ½)`, the pinhole ray.
+    pub fn ray_through_lens(&self, x: f32, y: f32, lu: f32, lv: f32) -> Ray {
+        let pin = self.ray_at(x, y);
+        let Some(lens) = self.lens else {
+            return pin;
+        };
+        let (a, b) = (2.0 * lu - 1.0, 2.0 * lv - 1.0);
+        let (r, phi) = if a == 0.0 && b == 0.0 {
+            (0.0, 0.0)
+        } else if a.abs() > b.abs() {
+            (a, std::f32::consts::FRAC_PI_4 * (b / a))
+        } else {
+            (
+                b,
+                std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (a / b),
+            )
+        };
+        let offset = (self.right * phi.cos() + self.up * phi.sin()) * (r * lens.aperture);
+        // The pinhole direction has unit component along `forward`.
+        let focus = pin.origin + pin.direction * lens.focus_distance;
+        let origin = pin.origin + offset;
+        Ray::new(origin, focus - origin)
     }
 
     /// Half extents of the image plane (at distance 1 for perspective).
