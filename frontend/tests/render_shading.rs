@@ -519,3 +519,126 @@ fn lens_rays_meet_on_the_plane_in_focus() {
     assert_eq!(pin.origin, c.origin);
     assert!((pin.direction.normalize() - c.direction.normalize()).length() < 1e-6);
 }
+
+/// A sphere over a plane lit from above by a point light of `radius`.
+fn shadow_scene(radius: f32) -> String {
+    format!(
+        r#"background = [0, 0, 0]
+ambient = [0, 0, 0]
+[camera]
+eye = [0, 6, 6]
+look_at = [0, 0, 0]
+fov = 40
+width = 80
+height = 60
+
+[material.m]
+diffuse = [0.8, 0.8, 0.8]
+ambient = [0, 0, 0]
+
+[[light]]
+type = "point"
+position = [0, 5, 0]
+intensity = 30
+radius = {radius}
+samples = 32
+
+[[object]]
+type = "sphere"
+center = [0, 1.2, 0]
+radius = 1
+material = "m"
+
+[[object]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 1, 0]
+material = "m"
+"#
+    )
+}
+
+#[test]
+fn an_area_light_casts_soft_shadows() {
+    let dir = tempfile::tempdir().unwrap();
+    let (hard, s_hard) = {
+        let text = shadow_scene(0.0);
+        (
+            render(
+                dir.path(),
+                "hard",
+                &text,
+                &[
+                    "--stats-json",
+                    dir.path().join("hard.json").to_str().unwrap(),
+                ],
+            ),
+            serde_json::from_str::<serde_json::Value>(
+                &std::fs::read_to_string(dir.path().join("hard.json")).unwrap(),
+            )
+            .unwrap(),
+        )
+    };
+    let (soft, s_soft) = {
+        let text = shadow_scene(1.5);
+        (
+            render(
+                dir.path(),
+                "soft",
+                &text,
+                &[
+                    "--stats-json",
+                    dir.path().join("soft.json").to_str().unwrap(),
+                ],
+            ),
+            serde_json::from_str::<serde_json::Value>(
+                &std::fs::read_to_string(dir.path().join("soft.json")).unwrap(),
+            )
+            .unwrap(),
+        )
+    };
+    assert_eq!(s_hard["plan"]["area_lights"], false);
+    assert_eq!(s_soft["plan"]["area_lights"], true);
+    // 32 shadow rays per lit shading point instead of one.
+    let (sh, ss) = (
+        s_hard["shadow"].as_u64().unwrap(),
+        s_soft["shadow"].as_u64().unwrap(),
+    );
+    assert_eq!(ss, 32 * sh, "shadow rays {sh} vs {ss}");
+    // Penumbra: pixels of the plane between full shadow and full light. Along the image's
+    // middle column, below the sphere, a hard shadow jumps; a soft one passes through
+    // intermediate values.
+    let column = |img: &image::RgbaImage| -> Vec<u8> {
+        (0..img.height())
+            .map(|y| img.get_pixel(40, y).0[0])
+            .collect()
+    };
+    let jumps = |c: &[u8]| c.windows(2).map(|w| w[0].abs_diff(w[1])).max().unwrap();
+    let (ch, cs) = (column(&hard), column(&soft));
+    assert!(
+        jumps(&cs) * 2 < jumps(&ch),
+        "largest step: soft {} vs hard {}",
+        jumps(&cs),
+        jumps(&ch)
+    );
+    // Radius on a directional light is refused.
+    let bad = shadow_scene(1.0).replace(
+        "type = \"point\"\nposition = [0, 5, 0]",
+        "type = \"directional\"\ndirection = [0, -1, 0]",
+    );
+    let toml = dir.path().join("bad.toml");
+    std::fs::write(&toml, bad).unwrap();
+    let o = Command::new(BIN)
+        .arg("render")
+        .arg(&toml)
+        .arg("-o")
+        .arg(dir.path().join("b.png"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("light[0].radius") || err.contains(".radius"),
+        "{err}"
+    );
+}

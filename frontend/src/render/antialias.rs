@@ -49,6 +49,24 @@ pub fn lens_offset(k: u32) -> (f32, f32) {
     (radical(k + 1, 2), radical(k + 1, 3))
 }
 
+/// The unit square to the unit disk, area-preserving and continuous (Shirley and Chiu's
+/// concentric mapping): `(½, ½)` to the centre, the square's edges to the circle.
+pub fn concentric_disk(u: f32, v: f32) -> (f32, f32) {
+    let (a, b) = (2.0 * u - 1.0, 2.0 * v - 1.0);
+    if a == 0.0 && b == 0.0 {
+        return (0.0, 0.0);
+    }
+    let (r, phi) = if a.abs() > b.abs() {
+        (a, std::f32::consts::FRAC_PI_4 * (b / a))
+    } else {
+        (
+            b,
+            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (a / b),
+        )
+    };
+    (r * phi.cos(), r * phi.sin())
+}
+
 /// The box-filtered mean of samples (the first one the reference, used alone when no sample
 /// hits): alpha the fraction that hit, colour the alpha-weighted mean of theirs.
 pub(super) fn mean(samples: impl IntoIterator<Item = PixelOut>) -> PixelOut {

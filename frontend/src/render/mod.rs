@@ -455,6 +455,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             refraction: c.refraction,
             seconds: out.seconds,
             plan: plan::PlanFlags {
+                area_lights: {
+                    let p = EffectPlan::derive(&scene, opts.force_all);
+                    scene
+                        .lights
+                        .iter()
+                        .zip(&p.shadow_rays)
+                        .any(|(l, &on)| on && l.radius > 0.0)
+                },
                 antialias: opts.samples > 1
                     && opts.mode == Mode::Color
                     && scene.camera.lens.is_none(),

@@ -53,6 +53,8 @@ pub struct PlanFlags {
     pub antialias: bool,
     /// CSG interval evaluation (CSG objects, or every solid when forced).
     pub csg_intervals: bool,
+    /// Soft shadows: shadow rays over the disk of at least one point light with `radius > 0`.
+    pub area_lights: bool,
     /// A thin-lens camera (`aperture > 0`): every pixel through `lens_samples` lens positions
     /// (colour mode; set by the renderer from the camera).
     pub depth_of_field: bool,
@@ -68,6 +70,7 @@ impl EffectPlan {
             specular: self.specular.iter().any(|&b| b),
             shadow_transmission: self.shadow_transmission,
             antialias: false,
+            area_lights: false,
             depth_of_field: false,
             csg_intervals: self.intervals_everywhere || !self.csg_objects.is_empty(),
         }

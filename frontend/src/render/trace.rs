@@ -23,7 +23,7 @@
 
 use super::geom::{QueryCtx, SurfaceHit};
 use super::plan::EffectPlan;
-use crate::scene::{LightKind, Scene, SpecularModel};
+use crate::scene::{Light, LightKind, Scene, SpecularModel};
 use glam::Vec3;
 use halfray_core::{Ray, spawn_ray, spawn_ray_to};
 
@@ -211,6 +211,37 @@ impl Tracer<'_> {
         0.0
     }
 
+    /// The fraction of an area light's disk (facing `hit`, radius `light.radius`, around
+    /// `centre`) that `hit` sees: `light.samples` shadow rays to fixed points of the disk
+    /// (Halton positions, concentric mapping), each 0 or 1, or the transmission through
+    /// transparent surfaces when the plan follows it.
+    fn area_visibility(
+        &self,
+        hit: &halfray_core::Hit,
+        centre: Vec3,
+        light: &Light,
+        ctx: &mut QueryCtx,
+        n: &mut RayCounts,
+    ) -> f32 {
+        let axis = (centre - hit.point).normalize_or_zero();
+        let t1 = axis.any_orthonormal_vector();
+        let t2 = axis.cross(t1);
+        let mut seen = 0.0;
+        for k in 0..light.samples {
+            let (lu, lv) = super::antialias::lens_offset(k);
+            let (du, dv) = super::antialias::concentric_disk(lu, lv);
+            let p = centre + (t1 * du + t2 * dv) * light.radius;
+            let ray = spawn_ray_to(hit, p);
+            seen += if self.plan.shadow_transmission {
+                self.transmission(&ray, &LightKind::Point { position: p }, ctx, n)
+            } else {
+                n.shadow += 1;
+                if self.occluded(&ray, ctx) { 0.0 } else { 1.0 }
+            };
+        }
+        seen / light.samples.max(1) as f32
+    }
+
     /// Radiance along a ray (already counted by the caller).
     fn radiance(
         &self,
@@ -294,7 +325,17 @@ impl Tracer<'_> {
             let cast = self.plan.shadow_rays[li] && (ndotl > 0.0 || self.plan.forced);
             let mut blocked = false;
             let mut e = e;
-            if cast && self.plan.shadow_transmission {
+            let area = match light.kind {
+                LightKind::Point { position } if light.radius > 0.0 => Some(position),
+                _ => None,
+            };
+            if let (true, Some(centre)) = (cast, area) {
+                let seen = self.area_visibility(hit, centre, light, ctx, n);
+                if light.cast_shadows {
+                    blocked = !(seen > 0.0);
+                    e *= seen;
+                }
+            } else if cast && self.plan.shadow_transmission {
                 let through = self.transmission(&shadow_ray, &light.kind, ctx, n);
                 if light.cast_shadows {
                     blocked = !(through > 0.0);

@@ -341,11 +341,37 @@ fn light(ctx: &Ctx<'_>, i: usize, l: &S<def::LightDef>) -> Result<Light> {
         }
         None => 1.0,
     };
+    let radius = match &l.radius {
+        None => 0.0,
+        Some(r) if !matches!(kind, LightKind::Point { .. }) => {
+            return Err(ctx.err(&r.span(), &format!("{p}.radius"), "only for point lights"));
+        }
+        Some(r) => {
+            let x = ctx.f(r, &format!("{p}.radius"))?;
+            if !(x >= 0.0) {
+                return Err(ctx.err(&r.span(), &format!("{p}.radius"), "must be ≥ 0"));
+            }
+            x
+        }
+    };
+    let samples = match &l.samples {
+        None => 16,
+        Some(n) if *n.get_ref() == 0 || *n.get_ref() > super::MAX_LIGHT_SAMPLES => {
+            return Err(ctx.err(
+                &n.span(),
+                &format!("{p}.samples"),
+                format!("must be in 1..={}", super::MAX_LIGHT_SAMPLES),
+            ));
+        }
+        Some(n) => *n.get_ref(),
+    };
     Ok(Light {
         name: l.name.clone().unwrap_or(p),
         kind,
         intensity: color * intensity,
         cast_shadows: l.cast_shadows.unwrap_or(true),
+        radius,
+        samples,
     })
 }
 

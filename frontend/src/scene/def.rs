@@ -108,6 +108,8 @@ pub struct LightDef {
     pub intensity: Option<S<f32>>,
     pub cast_shadows: Option<bool>,
     pub name: Option<String>,
+    pub radius: Option<S<f32>>,
+    pub samples: Option<S<u32>>,
 }
 
 #[derive(Deserialize)]

@@ -194,7 +194,15 @@ pub struct Light {
     pub intensity: Vec3,
     /// Whether it casts shadows.
     pub cast_shadows: bool,
+    /// Radius of a point light's sphere, world units: `> 0` makes it an area light whose
+    /// shadows are soft (`samples` shadow rays over its disk); 0 for a true point.
+    pub radius: f32,
+    /// Shadow rays per shading point for an area light.
+    pub samples: u32,
 }
+
+/// Most `samples` an area light may ask for.
+pub const MAX_LIGHT_SAMPLES: u32 = 256;
 
 /// The specular lobe of a material (`specular_model` in the scene file).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
