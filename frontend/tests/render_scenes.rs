@@ -132,8 +132,32 @@ fn every_example_scene_is_tested() {
             "mirror.toml",
             "shadows.toml",
             "showcase.toml",
+            "soft.toml",
             "subdivision.toml"
         ]
+    );
+}
+
+/// The area light, depth-of-field and smooth-shading scene: every effect on because the scene
+/// asks, 16 lens samples per pixel, 16 shadow rays per lit point, the cow where it should be.
+#[test]
+fn soft() {
+    let r = run("soft.toml", &[]);
+    assert_eq!(r.img.dimensions(), (W, H));
+    assert_eq!(r.stats["primary"], u64::from(W * H) * 16);
+    for effect in ["area_lights", "depth_of_field", "shadow", "specular"] {
+        assert_eq!(r.stats["plan"][effect], true, "{effect}");
+    }
+    assert_eq!(r.stats["plan"]["antialias"], false);
+    let cow = px(&r.img, 0.42, 0.5);
+    let red_blue = |p: [u8; 4]| (i32::from(p[0]), i32::from(p[2]));
+    let (cr, cb) = red_blue(cow);
+    assert!(covered(cow) && cr > cb + 40, "cow pixel {cow:?}");
+    let sphere = px(&r.img, 0.6, 0.85);
+    let (sr, sb) = red_blue(sphere);
+    assert!(
+        covered(sphere) && sb > sr + 40,
+        "blue sphere pixel {sphere:?}"
     );
 }
 

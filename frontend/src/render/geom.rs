@@ -42,6 +42,19 @@ pub struct SurfaceHit {
     pub shading: Option<Vec3>,
 }
 
+/// An object-space surface hit in world space: the hit by [`Transform::hit_to_world`], the
+/// shading normal by the normal transform, kept on the geometric normal's side (a mirroring
+/// transform flips one of them).
+fn to_world(t: &Transform, mut h: SurfaceHit) -> SurfaceHit {
+    h.hit = t.hit_to_world(&h.hit);
+    let geometric = h.hit.normal;
+    h.shading = h.shading.map(|n| {
+        let w = t.normal_to_world(n);
+        if w.dot(geometric) < 0.0 { -w } else { w }
+    });
+    h
+}
+
 impl SurfaceHit {
     /// The normal to shade with, facing the incoming ray: the shading normal when there is
     /// one (flipped with the geometric normal for a back-face hit), else the geometric one.
@@ -354,7 +367,10 @@ struct MeshHit {
 /// (`--force-all-effects`).
 ///
 /// [`WatertightRay::crossing_sign`]: halfray_core::triangle::WatertightRay::crossing_sign
-fn mesh_events(mut hits: Vec<MeshHit>, event: impl Fn(Hit, Vec3, bool) -> Event) -> Vec<Event> {
+fn mesh_events(
+    mut hits: Vec<MeshHit>,
+    event: impl Fn(Hit, Vec3, u32, bool) -> Event,
+) -> Vec<Event> {
     hits.sort_by(|a, b| a.hit.t.total_cmp(&b.hit.t).then(a.prim.cmp(&b.prim)));
     let mut out = Vec::with_capacity(hits.len());
     let mut inside = false;
@@ -378,7 +394,7 @@ fn mesh_events(mut hits: Vec<MeshHit>, event: impl Fn(Hit, Vec3, bool) -> Event)
                     .nth(k)
                     .unwrap_or(&point[0])
             };
-            out.push(event(h.hit, h.bary, inside));
+            out.push(event(h.hit, h.bary, h.prim, inside));
         }
         i += group;
     }
@@ -472,15 +488,7 @@ impl Node {
         match &self.transform {
             Some(t) => {
                 let local = t.ray_to_object(ray);
-                let mut h = self.closest_local(&local, ctx)?;
-                h.hit = t.hit_to_world(&h.hit);
-                // Kept on the geometric normal's side (a mirroring transform flips one of them).
-                let geometric = h.hit.normal;
-                h.shading = h.shading.map(|n| {
-                    let w = t.normal_to_world(n);
-                    if w.dot(geometric) < 0.0 { -w } else { w }
-                });
-                Some(h)
+                Some(to_world(t, self.closest_local(&local, ctx)?))
             }
             None => self.closest_local(ray, ctx),
         }
@@ -559,7 +567,7 @@ impl Node {
                 let start = out.len();
                 let inside = self.events_local(&local, ctx, out);
                 for e in &mut out[start..] {
-                    e.hit.hit = t.hit_to_world(&e.hit.hit);
+                    e.hit = to_world(t, e.hit);
                 }
                 inside
             }
@@ -650,9 +658,13 @@ impl Node {
             Shape::Mesh(m) => {
                 let mut hits = Vec::new();
                 m.all_hits(&line, &mut ctx.stats, &mut hits);
-                out.extend(mesh_events(hits, |h, b, enter| Event {
-                    enter,
-                    ..self.event(h, Some(b))
+                out.extend(mesh_events(hits, |h, b, prim, enter| {
+                    let mut e = Event {
+                        enter,
+                        ..self.event(h, Some(b))
+                    };
+                    e.hit.shading = m.shading_normal(prim as usize, b, h.normal);
+                    e
                 }));
                 false
             }
