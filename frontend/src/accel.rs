@@ -18,7 +18,7 @@ pub type VecBvh8 = Bvh8<Vec<WideNode<8>>, Vec<LeafGroup>>;
 pub type VecBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
 
 /// Builds the binary BVH over `mesh` (binned SAH, `options`) with the scratch builder (a
-/// temporary array of 48 bytes per triangle, freed on return).
+/// temporary array of 32 bytes per triangle, freed on return).
 pub fn build_binary(
     mesh: &TriangleMesh<'_>,
     options: &BuildOptions,

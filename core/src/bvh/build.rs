@@ -17,12 +17,52 @@ use crate::aabb::Aabb;
 use glam::Vec3;
 
 /// The builder's box corners: 16-byte SIMD vectors on x86-64 (one `min`/`max` instruction per
-/// bin update), plain `Vec3` elsewhere (smaller records and a smaller stack frame on
-/// microcontrollers, where there is no SIMD to use). Same values either way.
+/// bin update; the fourth lane is spare: a [`PrimRef`] keeps its index there, bins ignore it),
+/// plain `Vec3` elsewhere (smaller records and a smaller stack frame on microcontrollers, where
+/// there is no SIMD to use). Same values either way.
 #[cfg(target_arch = "x86_64")]
-type Corner = glam::Vec3A;
+type Corner = glam::Vec4;
 #[cfg(not(target_arch = "x86_64"))]
 type Corner = Vec3;
+
+/// `v` as a corner (spare lane 0).
+#[inline(always)]
+fn corner(v: Vec3) -> Corner {
+    #[cfg(target_arch = "x86_64")]
+    return v.extend(0.0);
+    #[cfg(not(target_arch = "x86_64"))]
+    return v;
+}
+
+/// The `x, y, z` of a corner.
+#[inline(always)]
+fn point(c: Corner) -> Vec3 {
+    #[cfg(target_arch = "x86_64")]
+    return c.truncate();
+    #[cfg(not(target_arch = "x86_64"))]
+    return c;
+}
+
+/// The point a primitive is binned by: the centre of its box `lo, hi`, computed as
+/// [`Aabb::center`] does (`lo/2 + hi/2`, which cannot overflow), lane by lane.
+#[inline(always)]
+fn centre(lo: Corner, hi: Corner) -> Corner {
+    lo * 0.5 + hi * 0.5
+}
+
+/// Growing `[lo, hi]` by `p` (finite corners: one vector `min` and `max`).
+#[inline(always)]
+fn extend(lo: &mut Corner, hi: &mut Corner, p: Corner) {
+    *lo = lo.min(p);
+    *hi = hi.max(p);
+}
+
+/// Sets of bins filled alternately by the binning loop ([`best_sah_split`]): two on x86-64,
+/// one elsewhere (a microcontroller's stack is small and its loads do not overlap anyway).
+const BIN_SETS: usize = if cfg!(target_arch = "x86_64") { 2 } else { 1 };
+
+/// The bins of one node, kept by the split loop across nodes (cleared per node as far as used).
+type BinSets = [[[Bin; BIN_COUNT]; 3]; BIN_SETS];
 
 /// Depth from which nodes are split by count rather than by SAH: `MAX_DEPTH − 32`, so that the
 /// remaining 32 levels can halve any node of up to `2³¹` primitives down to one.
@@ -137,7 +177,7 @@ impl Bin {
     }
 
     fn aabb(&self) -> Aabb {
-        Aabb::new(self.lo.into(), self.hi.into())
+        Aabb::new(point(self.lo), point(self.hi))
     }
 }
 
@@ -152,14 +192,15 @@ struct Split {
     right: Aabb,
 }
 
-/// A primitive as the scratch builder keeps it: its box (16-byte vectors on x86-64, so binning
-/// is one `min` and one `max` per bin), its centroid and its index in the source. 48 bytes on
-/// x86-64, 40 elsewhere.
+/// A primitive as the scratch builder keeps it: its box and its index in the source (the
+/// centre it is binned by is computed from the box when needed). On x86-64 the corners are
+/// 16-byte vectors, so binning is one `min` and one `max` per bin, and the index lives in the
+/// lower corner's spare lane: 32 bytes. Elsewhere 28 bytes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PrimRef {
     lo: Corner,
     hi: Corner,
-    centroid: Vec3,
+    #[cfg(not(target_arch = "x86_64"))]
     index: u32,
 }
 
@@ -168,9 +209,54 @@ impl PrimRef {
     pub const EMPTY: Self = Self {
         lo: Corner::INFINITY,
         hi: Corner::NEG_INFINITY,
-        centroid: Vec3::ZERO,
+        #[cfg(not(target_arch = "x86_64"))]
         index: 0,
     };
+
+    /// The record of primitive `index` with box `b`.
+    #[inline(always)]
+    fn new(b: &Aabb, index: u32) -> Self {
+        #[cfg(target_arch = "x86_64")]
+        return Self {
+            // The bits of `index` are only stored and copied, never computed with, so any
+            // bit pattern (a NaN's included) comes back unchanged.
+            lo: b.min.extend(f32::from_bits(index)),
+            hi: corner(b.max),
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        return Self {
+            lo: b.min,
+            hi: b.max,
+            index,
+        };
+    }
+
+    /// The box's corners, spare lanes zero.
+    #[inline(always)]
+    fn corners(&self) -> (Corner, Corner) {
+        // The index's bits are a subnormal `f32` for most indices: arithmetic on them would
+        // take the processor's slow path, so the lane is cleared by a bit select first.
+        #[cfg(target_arch = "x86_64")]
+        return (
+            Corner::select(
+                glam::BVec4A::new(true, true, true, false),
+                self.lo,
+                Corner::ZERO,
+            ),
+            self.hi,
+        );
+        #[cfg(not(target_arch = "x86_64"))]
+        return (self.lo, self.hi);
+    }
+
+    /// The primitive's index in the source.
+    #[inline(always)]
+    fn index(&self) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        return self.lo.w.to_bits();
+        #[cfg(not(target_arch = "x86_64"))]
+        return self.index;
+    }
 }
 
 impl Default for PrimRef {
@@ -185,10 +271,10 @@ pub const fn scratch_capacity(prim_count: usize) -> usize {
     prim_count
 }
 
-/// The primitives being partitioned: element `k` of the current order, with its box (corners
-/// as 16-byte vectors) and centroid, and swapping two elements.
+/// The primitives being partitioned: the box of element `k` of the current order (its spare
+/// lanes mean nothing), and swapping two elements.
 pub(super) trait Refs {
-    fn get(&self, k: usize) -> (Corner, Corner, Vec3);
+    fn get(&self, k: usize) -> (Corner, Corner);
     fn swap(&mut self, i: usize, j: usize);
 }
 
@@ -200,10 +286,10 @@ struct Indexed<'a, S: ?Sized> {
 
 impl<S: PrimitiveSource + ?Sized> Refs for Indexed<'_, S> {
     #[inline(always)]
-    fn get(&self, k: usize) -> (Corner, Corner, Vec3) {
+    fn get(&self, k: usize) -> (Corner, Corner) {
         let i = self.indices.get(k).map_or(usize::MAX, |&i| i as usize);
-        let (b, c) = self.source.primitive_bounds_and_centroid(i);
-        (b.min.into(), b.max.into(), c)
+        let b = self.source.primitive_bounds(i);
+        (corner(b.min), corner(b.max))
     }
 
     #[inline(always)]
@@ -223,12 +309,10 @@ pub(super) struct Scratch<'a> {
 
 impl Refs for Scratch<'_> {
     #[inline(always)]
-    fn get(&self, k: usize) -> (Corner, Corner, Vec3) {
+    fn get(&self, k: usize) -> (Corner, Corner) {
         k.checked_sub(self.offset)
             .and_then(|k| self.refs.get(k))
-            .map_or((Corner::INFINITY, Corner::NEG_INFINITY, Vec3::NAN), |r| {
-                (r.lo, r.hi, r.centroid)
-            })
+            .map_or((Corner::NAN, Corner::NAN), PrimRef::corners)
     }
 
     #[inline(always)]
@@ -330,7 +414,8 @@ fn validate<S: PrimitiveSource + ?Sized>(
     let mut root_centroids = Aabb::EMPTY;
     let mut count = 0u32;
     for i in 0..n {
-        let (b, c) = source.primitive_bounds_and_centroid(i);
+        let b = source.primitive_bounds(i);
+        let c = b.center();
         if is_usable(&b) && c.is_finite() {
             root_bounds = root_bounds.union(b);
             root_centroids = root_centroids.grow(c);
@@ -357,8 +442,8 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
     }
     let mut k = 0usize;
     for i in 0..source.primitive_count() {
-        let (b, c) = source.primitive_bounds_and_centroid(i);
-        if !(is_usable(&b) && c.is_finite()) {
+        let b = source.primitive_bounds(i);
+        if !(is_usable(&b) && b.center().is_finite()) {
             continue;
         }
         if let Some(slot) = indices.get_mut(k) {
@@ -414,7 +499,7 @@ pub(super) fn build_with_scratch<S: PrimitiveSource + ?Sized>(
 /// `indices[k]` = the source index of record `k` (the final leaf order).
 pub(super) fn fill_indices(indices: &mut [u32], refs: &[PrimRef]) {
     for (slot, r) in indices.iter_mut().zip(refs) {
-        *slot = r.index;
+        *slot = r.index();
     }
 }
 
@@ -435,14 +520,9 @@ pub(super) fn prepare_scratch<S: PrimitiveSource + ?Sized>(
             available: scratch.len(),
         });
     }
-    validate(source, nodes, indices, options, |k, i, bounds, centroid| {
+    validate(source, nodes, indices, options, |k, i, bounds, _| {
         if let Some(slot) = scratch.get_mut(k) {
-            *slot = PrimRef {
-                lo: bounds.min.into(),
-                hi: bounds.max.into(),
-                centroid,
-                index: i as u32,
-            };
+            *slot = PrimRef::new(&bounds, i as u32);
         }
     })
 }
@@ -502,10 +582,11 @@ pub(super) fn grow<R: Refs>(
 ) {
     let max_leaf = options.max_leaf_size.max(1);
     let mut stack = [EMPTY_TASK; MAX_DEPTH + 1];
+    let mut bins: BinSets = [[[EMPTY_BIN; BIN_COUNT]; 3]; BIN_SETS];
     let mut sp = 0usize;
     let mut task = task;
     loop {
-        let mut pending = split_node(refs, view, &task, max_leaf, next);
+        let mut pending = split_node(refs, view, &task, max_leaf, next, &mut bins);
         if let (Some((left, right)), Some(sink)) = (pending, jobs.as_deref_mut()) {
             pending = match (sink.take(&left, max_leaf), sink.take(&right, max_leaf)) {
                 (false, false) => Some((left, right)),
@@ -559,6 +640,7 @@ fn split_node<R: Refs>(
     task: &Task,
     max_leaf: u32,
     node_count: &mut u32,
+    bins: &mut BinSets,
 ) -> Option<(Task, Task)> {
     let count = task.end - task.start;
     let parent_bounds = nodes.bounds(task.node)?;
@@ -569,6 +651,7 @@ fn split_node<R: Refs>(
     let range = task.start as usize..task.end as usize;
     let split = best_sah_split(
         refs,
+        bins,
         range.clone(),
         &task.centroids,
         parent_bounds.surface_area(),
@@ -627,14 +710,18 @@ fn split_node<R: Refs>(
 
 /// Box and centroid box of a run of primitives.
 fn range_bounds<R: Refs>(refs: &R, range: core::ops::Range<usize>) -> (Aabb, Aabb) {
-    let (lo, hi, c) = range.fold(
-        (Corner::INFINITY, Corner::NEG_INFINITY, Aabb::EMPTY),
-        |(lo, hi, c), k| {
-            let (plo, phi, pc) = refs.get(k);
-            (lo.min(plo), hi.max(phi), c.grow(pc))
-        },
-    );
-    (Aabb::new(lo.into(), hi.into()), c)
+    let (mut lo, mut hi) = (Corner::INFINITY, Corner::NEG_INFINITY);
+    let (mut clo, mut chi) = (Corner::INFINITY, Corner::NEG_INFINITY);
+    for k in range {
+        let (plo, phi) = refs.get(k);
+        lo = lo.min(plo);
+        hi = hi.max(phi);
+        extend(&mut clo, &mut chi, centre(plo, phi));
+    }
+    (
+        Aabb::new(point(lo), point(hi)),
+        Aabb::new(point(clo), point(chi)),
+    )
 }
 
 /// Bins the primitives (`min(count, BIN_COUNT)` bins) along every axis with a non-zero
@@ -644,6 +731,7 @@ fn range_bounds<R: Refs>(refs: &R, range: core::ops::Range<usize>) -> (Aabb, Aab
 /// `TRAVERSAL_COST·A + INTERSECTION_COST·(A_L·N_L + A_R·N_R)`.
 fn best_sah_split<R: Refs>(
     refs: &R,
+    sets: &mut BinSets,
     range: core::ops::Range<usize>,
     centroids: &Aabb,
     parent_area: f32,
@@ -656,7 +744,6 @@ fn best_sah_split<R: Refs>(
     if binners.iter().all(Option::is_none) {
         return None;
     }
-    let mut bins = [[EMPTY_BIN; BIN_COUNT]; 3];
     // An axis without extent bins everything into bin 0 and is skipped below.
     let b0 = Binner {
         lo: 0.0,
@@ -664,11 +751,30 @@ fn best_sah_split<R: Refs>(
         count: 1,
     };
     let active = binners.map(|b| b.unwrap_or(b0));
-    for k in range {
-        let (lo, hi, c) = refs.get(k);
-        for (axis, (binner, axis_bins)) in active.iter().zip(bins.iter_mut()).enumerate() {
+    // Consecutive primitives go to alternate sets of bins, merged after the loop, so that two
+    // primitives in one bin do not wait for each other's update. Only the bins in use are
+    // cleared (most nodes are small).
+    for axis_bins in sets.iter_mut().flatten() {
+        for bin in axis_bins.iter_mut().take(bin_count) {
+            *bin = EMPTY_BIN;
+        }
+    }
+    for (n, k) in range.enumerate() {
+        let (lo, hi) = refs.get(k);
+        let c = centre(lo, hi);
+        let set = &mut sets[n & (BIN_SETS - 1)];
+        for (axis, (binner, axis_bins)) in active.iter().zip(set.iter_mut()).enumerate() {
             if let Some(bin) = axis_bins.get_mut(binner.bin(c[axis])) {
                 bin.add(lo, hi, 1);
+            }
+        }
+    }
+    let (bins, rest) = sets.split_at_mut(1);
+    let bins = &mut bins[0];
+    for set in rest.iter() {
+        for (axis_bins, other) in bins.iter_mut().zip(set) {
+            for (bin, o) in axis_bins.iter_mut().zip(other).take(bin_count) {
+                bin.add(o.lo, o.hi, o.count);
             }
         }
     }
@@ -686,7 +792,7 @@ fn best_sah_split<R: Refs>(
             right_cost[k] = acc.area() * acc.count as f32;
         }
         let mut left = EMPTY_BIN;
-        let total: u32 = bins.iter().map(|b| b.count).sum();
+        let total: u32 = bins.iter().take(bin_count).map(|b| b.count).sum();
         for k in 1..bin_count {
             left.add(bins[k - 1].lo, bins[k - 1].hi, bins[k - 1].count);
             if left.count == 0 || left.count == total {
@@ -710,7 +816,7 @@ fn best_sah_split<R: Refs>(
     // The right box of the chosen split, from its bins (not kept per candidate: stack).
     if let Some(b) = best.as_mut() {
         let mut right = EMPTY_BIN;
-        for bin in bins[b.axis].get(b.split..).unwrap_or(&[]) {
+        for bin in bins[b.axis].get(b.split..bin_count).unwrap_or(&[]) {
             right.add(bin.lo, bin.hi, bin.count);
         }
         b.right = right.aabb();
@@ -718,25 +824,121 @@ fn best_sah_split<R: Refs>(
     best
 }
 
-/// Partitions `range` of `refs` in place by the split; returns the left count and both
-/// centroid boxes.
+/// Partitions `range` of `refs` in place by the split (left side first; the order within a
+/// side is not specified but deterministic); returns the left count and both centroid boxes.
+/// Each primitive is classified once; only misplaced pairs are swapped.
 fn partition<R: Refs>(
     refs: &mut R,
     range: core::ops::Range<usize>,
     split: &Split,
 ) -> (u32, Aabb, Aabb) {
-    let (mut lc, mut rc) = (Aabb::EMPTY, Aabb::EMPTY);
+    let classify = |refs: &R, k: usize| {
+        let (lo, hi) = refs.get(k);
+        let c = centre(lo, hi);
+        (split.binner.bin(c[split.axis]) < split.split, c)
+    };
+    let (mut llo, mut lhi) = (Corner::INFINITY, Corner::NEG_INFINITY);
+    let (mut rlo, mut rhi) = (Corner::INFINITY, Corner::NEG_INFINITY);
     let (mut i, mut j) = (range.start, range.end);
-    while i < j {
-        let (_, _, c) = refs.get(i);
-        if split.binner.bin(c[split.axis]) < split.split {
-            lc = lc.grow(c);
+    'outer: while i < j {
+        // The first element from the left that belongs right…
+        let right_c = loop {
+            let (left, c) = classify(refs, i);
+            if !left {
+                break c;
+            }
+            extend(&mut llo, &mut lhi, c);
             i += 1;
-        } else {
-            rc = rc.grow(c);
+            if i == j {
+                break 'outer;
+            }
+        };
+        // …and the first from the right that belongs left; `i` itself belongs right, so this
+        // stops above it.
+        let left_c = loop {
             j -= 1;
-            refs.swap(i, j);
+            if j == i {
+                extend(&mut rlo, &mut rhi, right_c);
+                break 'outer;
+            }
+            let (left, c) = classify(refs, j);
+            if left {
+                break c;
+            }
+            extend(&mut rlo, &mut rhi, c);
+        };
+        refs.swap(i, j);
+        extend(&mut llo, &mut lhi, left_c);
+        extend(&mut rlo, &mut rhi, right_c);
+        i += 1;
+    }
+    (
+        (i - range.start) as u32,
+        Aabb::new(point(llo), point(lhi)),
+        Aabb::new(point(rlo), point(rhi)),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prim_ref_keeps_every_index_and_box() {
+        // Indices whose bits are a subnormal, a NaN, infinity and the largest allowed.
+        let b = Aabb::new(Vec3::new(-1.5, 2.0, -0.0), Vec3::new(3.0, 2.0, 7.25));
+        for index in [
+            0,
+            1,
+            0x007F_FFFF,
+            0x7F80_0000,
+            0x7F80_0001,
+            MAX_PRIMITIVES as u32,
+        ] {
+            let r = PrimRef::new(&b, index);
+            let copy = [r, PrimRef::EMPTY];
+            assert_eq!(copy[0].index(), index);
+            let (lo, hi) = copy[0].corners();
+            assert_eq!(Aabb::new(point(lo), point(hi)), b);
+            // The spare lanes are zero: no subnormal or NaN reaches the arithmetic.
+            assert_eq!(centre(lo, hi), corner(b.center()));
         }
     }
-    ((i - range.start) as u32, lc, rc)
+
+    #[test]
+    fn partition_splits_by_bin_and_reports_both_centroid_boxes() {
+        // 40 unit boxes with centres at x = 0..40 in a scrambled order; split at bin 5 of
+        // 16 over [0, 39]: centres below 39·5/16 = 12.1875 go left.
+        let mut refs_store = [PrimRef::EMPTY; 40];
+        for (k, slot) in refs_store.iter_mut().enumerate() {
+            let x = ((k * 17) % 40) as f32;
+            let b = Aabb::new(Vec3::new(x - 0.5, 0.0, 0.0), Vec3::new(x + 0.5, 1.0, 1.0));
+            *slot = PrimRef::new(&b, k as u32);
+        }
+        let binner = Binner::new(0.0, 39.0, 16).unwrap();
+        let split = Split {
+            axis: 0,
+            binner,
+            split: 5,
+            cost: 0.0,
+            left: Aabb::EMPTY,
+            right: Aabb::EMPTY,
+        };
+        let mut view = Scratch {
+            refs: &mut refs_store,
+            offset: 0,
+        };
+        let (left, lc, rc) = partition(&mut view, 0..40, &split);
+        assert_eq!(left, 13, "centres 0..=12 go left");
+        let xs: [f32; 40] = core::array::from_fn(|k| view.get(k).0.x + 0.5);
+        assert!(xs[..13].iter().all(|&x| x <= 12.0), "{xs:?}");
+        assert!(xs[13..].iter().all(|&x| x >= 13.0), "{xs:?}");
+        let mut seen = [false; 40];
+        for r in view.refs.iter() {
+            seen[r.index() as usize] = true;
+        }
+        assert!(seen.iter().all(|&s| s), "a permutation");
+        assert_eq!((lc.min.x, lc.max.x), (0.0, 12.0));
+        assert_eq!((rc.min.x, rc.max.x), (13.0, 39.0));
+    }
 }

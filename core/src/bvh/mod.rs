@@ -3,7 +3,7 @@
 //!
 //! # Overview
 //!
-//! * Primitives come from a [`PrimitiveSource`] (`N` primitives by index: bounds and centroid).
+//! * Primitives come from a [`PrimitiveSource`] (`N` primitives by index and their bounds).
 //!   [`TriangleMesh`] is the main one; any slice of [`Primitive`]s (for example `[Aabb]` or
 //!   `[[Vec3; 3]]`) is one too, so spheres, quadrics and instances can live in a BVH: the
 //!   intersection itself is supplied at query time as a closure.
@@ -20,7 +20,7 @@
 //!
 //! # Construction (binned SAH)
 //!
-//! Each node's primitives are binned by centroid into [`BIN_COUNT`] bins along each axis whose
+//! Each node's primitives are binned by the centre of their box into [`BIN_COUNT`] bins along each axis whose
 //! centroid extent is non-zero, and the split minimising the surface-area heuristic
 //!
 //! `cost = TRAVERSAL_COST + INTERSECTION_COST · (A_L·N_L + A_R·N_R) / A`
@@ -97,7 +97,8 @@ use crate::aabb::Aabb;
 /// Number of centroid bins per axis of the binned SAH (nodes of fewer primitives use one bin
 /// per primitive). 16 is within a fraction of a percent of a full sweep's tree quality on
 /// scanned meshes and keeps the builder's bin arrays at about 1.3 KiB of stack on a
-/// microcontroller (3 axes × 16 bins × 28 bytes; 48-byte bins on x86-64).
+/// microcontroller (3 axes × 16 bins × 28 bytes; on x86-64 two sets of 48-byte bins, filled
+/// alternately).
 pub const BIN_COUNT: usize = 16;
 
 /// SAH cost of visiting an inner node (testing its two child boxes), in units where one
@@ -240,7 +241,7 @@ where
     }
 
     /// [`Bvh::build`] with a scratch array of at least [`scratch_capacity`]`(N)` [`PrimRef`]s
-    /// (48 bytes each) that the builder fills once with every primitive's box and centroid
+    /// (32 bytes each on x86-64, 28 elsewhere) that the builder fills once with every primitive's box and index
     /// and reorders in place, instead of reading the source through the index array at every
     /// level: the same tree, several times faster on large meshes. The same errors, plus
     /// [`BvhError::ScratchTooSmall`], all before `nodes` or `indices` are written; the

@@ -1,4 +1,5 @@
-//! What a BVH can hold: primitives with bounds and a centroid, given by index.
+//! What a BVH can hold: primitives with bounds, given by index. The builder bins each
+//! primitive by the centre of its box.
 
 use crate::aabb::Aabb;
 use glam::Vec3;
@@ -10,12 +11,6 @@ pub trait Primitive {
     /// (see [`super::BuildOptions::exclude_non_finite`]). Boxes of curved primitives computed
     /// from rounded values must be padded outward so that they contain the exact surface.
     fn bounds(&self) -> Aabb;
-
-    /// The point the SAH bins the primitive by; the box centre by default.
-    #[inline]
-    fn centroid(&self) -> Vec3 {
-        self.bounds().center()
-    }
 }
 
 /// `N` primitives by index `0..N`.
@@ -28,20 +23,6 @@ pub trait PrimitiveSource {
 
     /// Bounds of primitive `index` (see [`Primitive::bounds`]).
     fn primitive_bounds(&self, index: usize) -> Aabb;
-
-    /// Centroid of primitive `index`; the box centre by default.
-    #[inline]
-    fn primitive_centroid(&self, index: usize) -> Vec3 {
-        self.primitive_bounds(index).center()
-    }
-
-    /// [`PrimitiveSource::primitive_bounds`] and [`PrimitiveSource::primitive_centroid`]
-    /// together (the builder needs both; a source whose centroid is its box centre computes
-    /// the box once). Must equal the two calls.
-    #[inline]
-    fn primitive_bounds_and_centroid(&self, index: usize) -> (Aabb, Vec3) {
-        (self.primitive_bounds(index), self.primitive_centroid(index))
-    }
 }
 
 /// Bounds reported for an index that does not name a valid primitive: all NaN, so the builder
@@ -57,11 +38,6 @@ impl<P: Primitive> PrimitiveSource for [P] {
     #[inline]
     fn primitive_bounds(&self, index: usize) -> Aabb {
         self.get(index).map_or(INVALID_BOUNDS, P::bounds)
-    }
-
-    #[inline]
-    fn primitive_centroid(&self, index: usize) -> Vec3 {
-        self.get(index).map_or(Vec3::NAN, P::centroid)
     }
 }
 
@@ -150,12 +126,6 @@ impl PrimitiveSource for TriangleMesh<'_> {
     fn primitive_bounds(&self, index: usize) -> Aabb {
         self.triangle(index)
             .map_or(INVALID_BOUNDS, |v| Primitive::bounds(&v))
-    }
-
-    #[inline]
-    fn primitive_bounds_and_centroid(&self, index: usize) -> (Aabb, Vec3) {
-        let b = self.primitive_bounds(index);
-        (b, b.center())
     }
 }
 

@@ -115,7 +115,7 @@ fn subdivide(path: &Path, mesh: &ObjMesh) -> Result<ObjMesh> {
 
 /// Bytes a scene mesh costs per triangle of its final (subdivided) form, for the memory check
 /// before subdividing: the last level's half-edge buffers (~100 B per face), the exported mesh
-/// (~20 B), and the BVH build (binary nodes and indices ~68 B, scratch 48 B, wide tree ~63 B),
+/// (~20 B), and the BVH build (binary nodes and indices ~68 B, scratch 32 B, wide tree ~63 B),
 /// rounded up. Bytes per triangle.
 const SCENE_MESH_BYTES_PER_TRIANGLE: u64 = 320;
 
