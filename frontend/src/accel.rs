@@ -5,7 +5,7 @@
 use crate::error::{Error, Result};
 use crate::obj::ObjMesh;
 use halfray_core::Ray;
-use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, WideStack, group_capacity};
+use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, WideStack, binary_options};
 use halfray_core::bvh::{
     BuildJob, BuildOptions, Bvh, BvhError, BvhNode, JobPart, PrimRef, TraversalStats, TriangleMesh,
     index_capacity, node_capacity, scratch_capacity,
@@ -73,13 +73,9 @@ pub fn build_wide(
     mesh: &TriangleMesh<'_>,
     binary: &VecBvh,
 ) -> std::result::Result<VecBvh8, BvhError> {
-    let nodes = VecBvh8::node_count_for(binary)?;
-    Bvh8::from_binary(
-        binary,
-        mesh,
-        vec![WideNode::EMPTY; nodes],
-        vec![LeafGroup::EMPTY; group_capacity(binary.primitive_count())],
-    )
+    Bvh8::from_binary_with(binary, mesh, |nodes, groups| {
+        (vec![WideNode::EMPTY; nodes], vec![LeafGroup::EMPTY; groups])
+    })
 }
 
 /// A mesh ready for ray queries.
@@ -93,7 +89,7 @@ impl MeshAccel {
     /// Builds the BVH over `mesh` (binned SAH with default options, collapsed to 8 wide).
     pub fn new(mesh: ObjMesh) -> Result<Self> {
         let tri = TriangleMesh::new(&mesh.positions, &mesh.triangles);
-        let wide = build_binary_parallel(&tri, &BuildOptions::default())
+        let wide = build_binary_parallel(&tri, &binary_options(BuildOptions::default()))
             .and_then(|b| build_wide(&tri, &b))
             .map_err(|e| Error::Other(format!("building the BVH: {e}")))?;
         Ok(Self { mesh, wide })

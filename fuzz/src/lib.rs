@@ -1072,6 +1072,7 @@ pub mod bvh {
         let options = BuildOptions {
             max_leaf_size: if fl & 4 != 0 { 1 } else { 4 },
             exclude_non_finite: fl & 2 != 0,
+            ..BuildOptions::default()
         };
         let mut rays = Vec::new();
         while !i.is_empty() && rays.len() < 8 {

@@ -73,7 +73,7 @@ fn build(mesh: &TriangleMesh<'_>, leaf: u32) -> VecBvh {
         vec![0u32; index_capacity(n)],
         &BuildOptions {
             max_leaf_size: leaf,
-            exclude_non_finite: false,
+            ..BuildOptions::default()
         },
     )
     .unwrap()

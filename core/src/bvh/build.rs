@@ -79,6 +79,12 @@ pub struct BuildOptions {
     /// ([`BvhError::NonFinitePrimitive`]). `true`: such primitives are left out of the tree
     /// (no query ever reports them).
     pub exclude_non_finite: bool,
+    /// Nodes of at most this many primitives become leaves without trying a split (capped
+    /// at `max_leaf_size`; values below 1 count as 1). Default 1: the SAH decides for every
+    /// node of two or more. A tree that will be collapsed into a wide one is built with
+    /// [`LEAF_MERGE`](super::wide::LEAF_MERGE) here ([`super::wide::binary_options`]): the
+    /// collapse turns every subtree that small into one leaf, so splitting it is wasted work.
+    pub leaf_threshold: u32,
 }
 
 impl Default for BuildOptions {
@@ -86,6 +92,7 @@ impl Default for BuildOptions {
         Self {
             max_leaf_size: DEFAULT_MAX_LEAF_SIZE,
             exclude_non_finite: false,
+            leaf_threshold: 1,
         }
     }
 }
@@ -109,37 +116,58 @@ pub(super) const EMPTY_TASK: Task = Task {
     centroids: Aabb::EMPTY,
 };
 
-/// Maps a centroid coordinate to its bin along one axis. Shared by binning and partitioning so
-/// both agree bit for bit. NaN maps to bin 0 (cannot happen for usable primitives).
+/// Maps a centre to its bin along each axis at once. Shared by binning and partitioning so
+/// both agree bit for bit. Per axis: `(c − lo)·scale` clamped to `[0, last]` in `f32` (NaN
+/// gives 0; the upper clamp keeps the centroid box's upper bound in the last bin), then
+/// truncated, which then needs no saturation. An axis without extent has `scale = last = 0`:
+/// everything goes to bin 0 there.
 #[derive(Clone, Copy)]
 struct Binner {
-    lo: f32,
-    scale: f32,
-    /// Bins in use, `2..=BIN_COUNT`.
-    count: usize,
+    lo: Corner,
+    scale: Corner,
+    last: Corner,
+    /// Axes with a non-zero centroid extent.
+    active: [bool; 3],
 }
 
 impl Binner {
-    /// `count` bins over `[lo, hi]`; `None` when the centroid extent along the axis is zero
-    /// (nothing to bin).
-    fn new(lo: f32, hi: f32, count: usize) -> Option<Self> {
-        let extent = hi - lo;
-        (extent > 0.0).then(|| Self {
-            lo,
-            scale: count as f32 / extent,
-            count,
+    /// `count` bins (`2..=BIN_COUNT`) over the centroid box `centroids`; `None` when no axis
+    /// has extent (nothing to bin).
+    fn new(centroids: &Aabb, count: usize) -> Option<Self> {
+        let extent = centroids.max - centroids.min;
+        let active = [extent.x > 0.0, extent.y > 0.0, extent.z > 0.0];
+        let per_axis = |on: bool, v: f32| if on { v } else { 0.0 };
+        let scale = Vec3::new(
+            per_axis(active[0], count as f32 / extent.x),
+            per_axis(active[1], count as f32 / extent.y),
+            per_axis(active[2], count as f32 / extent.z),
+        );
+        let last = (count - 1) as f32;
+        let last = Vec3::new(
+            per_axis(active[0], last),
+            per_axis(active[1], last),
+            per_axis(active[2], last),
+        );
+        active.contains(&true).then(|| Self {
+            lo: corner(centroids.min),
+            scale: corner(scale),
+            last: corner(last),
+            active,
         })
     }
 
+    /// The bin of centre `c` along each axis.
     #[inline(always)]
-    fn bin(&self, c: f32) -> usize {
-        // Clamped in `f32` first (NaN gives 0), so the conversion needs no saturation; the
-        // upper clamp keeps `hi` in the last bin.
+    fn bins(&self, c: Corner) -> [usize; 3] {
         let x = (c - self.lo) * self.scale;
-        let last = (self.count - 1) as f32;
-        let x = if x > 0.0 { x } else { 0.0 };
-        let x = if x < last { x } else { last };
-        x as u32 as usize
+        #[cfg(target_arch = "x86_64")]
+        return crate::simd::truncate3(x.max(Corner::ZERO).min(self.last));
+        #[cfg(not(target_arch = "x86_64"))]
+        return core::array::from_fn(|a| {
+            let x = if x[a] > 0.0 { x[a] } else { 0.0 };
+            let x = if x < self.last[a] { x } else { self.last[a] };
+            x as u32 as usize
+        });
     }
 }
 
@@ -581,12 +609,13 @@ pub(super) fn grow<R: Refs>(
     mut jobs: Option<&mut JobSink<'_>>,
 ) {
     let max_leaf = options.max_leaf_size.max(1);
+    let threshold = options.leaf_threshold.clamp(1, max_leaf);
     let mut stack = [EMPTY_TASK; MAX_DEPTH + 1];
     let mut bins: BinSets = [[[EMPTY_BIN; BIN_COUNT]; 3]; BIN_SETS];
     let mut sp = 0usize;
     let mut task = task;
     loop {
-        let mut pending = split_node(refs, view, &task, max_leaf, next, &mut bins);
+        let mut pending = split_node(refs, view, &task, (max_leaf, threshold), next, &mut bins);
         if let (Some((left, right)), Some(sink)) = (pending, jobs.as_deref_mut()) {
             pending = match (sink.take(&left, max_leaf), sink.take(&right, max_leaf)) {
                 (false, false) => Some((left, right)),
@@ -633,18 +662,19 @@ fn make_leaf(view: &mut NodeView<'_>, task: &Task) {
 }
 
 /// Splits `task`'s node in two, writing the parent and both children's boxes, or makes it a
-/// leaf (returns `None`).
+/// leaf (returns `None`). `(max_leaf, threshold)`: larger nodes are always split, nodes of at
+/// most `threshold` never.
 fn split_node<R: Refs>(
     refs: &mut R,
     nodes: &mut NodeView<'_>,
     task: &Task,
-    max_leaf: u32,
+    (max_leaf, threshold): (u32, u32),
     node_count: &mut u32,
     bins: &mut BinSets,
 ) -> Option<(Task, Task)> {
     let count = task.end - task.start;
     let parent_bounds = nodes.bounds(task.node)?;
-    if count <= 1 || task.depth as usize >= MAX_DEPTH || !nodes.has_pair(*node_count) {
+    if count <= threshold || task.depth as usize >= MAX_DEPTH || !nodes.has_pair(*node_count) {
         make_leaf(nodes, task);
         return None;
     }
@@ -739,18 +769,8 @@ fn best_sah_split<R: Refs>(
     // As many bins as primitives, up to BIN_COUNT: a small node needs no more candidate
     // planes than it has primitives, and the sweep costs per bin.
     let bin_count = range.len().clamp(2, BIN_COUNT);
-    let binners: [Option<Binner>; 3] =
-        core::array::from_fn(|a| Binner::new(centroids.min[a], centroids.max[a], bin_count));
-    if binners.iter().all(Option::is_none) {
-        return None;
-    }
     // An axis without extent bins everything into bin 0 and is skipped below.
-    let b0 = Binner {
-        lo: 0.0,
-        scale: 0.0,
-        count: 1,
-    };
-    let active = binners.map(|b| b.unwrap_or(b0));
+    let binner = Binner::new(centroids, bin_count)?;
     // Consecutive primitives go to alternate sets of bins, merged after the loop, so that two
     // primitives in one bin do not wait for each other's update. Only the bins in use are
     // cleared (most nodes are small).
@@ -763,8 +783,8 @@ fn best_sah_split<R: Refs>(
         let (lo, hi) = refs.get(k);
         let c = centre(lo, hi);
         let set = &mut sets[n & (BIN_SETS - 1)];
-        for (axis, (binner, axis_bins)) in active.iter().zip(set.iter_mut()).enumerate() {
-            if let Some(bin) = axis_bins.get_mut(binner.bin(c[axis])) {
+        for (axis_bins, b) in set.iter_mut().zip(binner.bins(c)) {
+            if let Some(bin) = axis_bins.get_mut(b) {
                 bin.add(lo, hi, 1);
             }
         }
@@ -780,9 +800,9 @@ fn best_sah_split<R: Refs>(
     }
     let mut best: Option<Split> = None;
     for axis in 0..3 {
-        let Some(binner) = binners[axis] else {
+        if !binner.active[axis] {
             continue;
-        };
+        }
         let bins = &bins[axis];
         // Right-to-left sweep: area·count of bins[k..].
         let mut right_cost = [0.0f32; BIN_COUNT];
@@ -835,7 +855,8 @@ fn partition<R: Refs>(
     let classify = |refs: &R, k: usize| {
         let (lo, hi) = refs.get(k);
         let c = centre(lo, hi);
-        (split.binner.bin(c[split.axis]) < split.split, c)
+        let bin = split.binner.bins(c).get(split.axis).copied().unwrap_or(0);
+        (bin < split.split, c)
     };
     let (mut llo, mut lhi) = (Corner::INFINITY, Corner::NEG_INFINITY);
     let (mut rlo, mut rhi) = (Corner::INFINITY, Corner::NEG_INFINITY);
@@ -915,7 +936,8 @@ mod tests {
             let b = Aabb::new(Vec3::new(x - 0.5, 0.0, 0.0), Vec3::new(x + 0.5, 1.0, 1.0));
             *slot = PrimRef::new(&b, k as u32);
         }
-        let binner = Binner::new(0.0, 39.0, 16).unwrap();
+        let centroids = Aabb::new(Vec3::ZERO, Vec3::new(39.0, 0.0, 0.0));
+        let binner = Binner::new(&centroids, 16).unwrap();
         let split = Split {
             axis: 0,
             binner,

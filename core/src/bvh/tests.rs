@@ -473,10 +473,11 @@ fn scratch_build_gives_the_same_tree() {
     cases.push((pos, tris));
     for (k, (pos, tris)) in cases.iter().enumerate() {
         let mesh = TriangleMesh::new(pos, tris);
-        for max_leaf in [1, 4, 16] {
+        for (max_leaf, leaf_threshold) in [(1, 1), (4, 1), (4, 4), (16, 1)] {
             let opts = BuildOptions {
                 max_leaf_size: max_leaf,
                 exclude_non_finite: true,
+                leaf_threshold,
             };
             let plain = build(&mesh, &opts).unwrap();
             let n = mesh.len();
@@ -544,10 +545,11 @@ fn build_in_jobs_gives_the_scratch_build_tree_without_gaps() {
     for (k, (pos, tris)) in cases.iter().enumerate() {
         let mesh = TriangleMesh::new(pos, tris);
         let n = mesh.len();
-        for max_leaf in [1, 4] {
+        for (max_leaf, leaf_threshold) in [(1, 1), (4, 1), (4, 4)] {
             let opts = BuildOptions {
                 max_leaf_size: max_leaf,
                 exclude_non_finite: true,
+                leaf_threshold,
             };
             let mut scratch = vec![PrimRef::EMPTY; scratch_capacity(n)];
             let reference = Bvh::build_with_scratch(

@@ -73,6 +73,20 @@ pub(crate) fn mask_le<const W: usize>(a: &[f32; W], b: &[f32; W]) -> u32 {
     mask
 }
 
+/// The first three lanes of `v`, each already in `[0, 2²⁴]` (clamped by the caller), truncated
+/// to integers: one `cvttps2dq` on x86-64 (SSE2, baseline), `as` per lane elsewhere. Equal to
+/// `v[i] as u32` on that domain.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(crate) fn truncate3(v: glam::Vec4) -> [usize; 3] {
+    use core::arch::x86_64::{__m128, _mm_cvttps_epi32, _mm_storeu_si128};
+    let mut out = [0i32; 4];
+    // SAFETY: both intrinsics are SSE2, part of the x86-64 baseline; `out` is 16 writable
+    // bytes (four `i32`), which is all the unaligned store writes.
+    unsafe { _mm_storeu_si128(out.as_mut_ptr().cast(), _mm_cvttps_epi32(__m128::from(v))) };
+    [out[0] as usize, out[1] as usize, out[2] as usize]
+}
+
 pub mod level;
 
 #[cfg(target_arch = "x86_64")]

@@ -62,6 +62,7 @@ impl TopLevel {
                 max_leaf_size: 2,
                 // A degenerate box (an empty CSG intersection) is left out: nothing can hit it.
                 exclude_non_finite: true,
+                ..BuildOptions::default()
             },
         )
         .ok();

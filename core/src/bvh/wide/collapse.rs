@@ -176,6 +176,52 @@ fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<usize, BvhError> {
     Ok(count)
 }
 
+/// The checks of [`WideBvh::from_binary`] that need no storage: `mesh` is `binary`'s source,
+/// the triangle count fits, every leaf fits ([`plan`]) and every triangle of the tree has
+/// finite vertices. Returns the node count of the `W`-wide tree.
+fn check<const W: usize, BN, BI>(
+    binary: &Bvh<BN, BI>,
+    mesh: &TriangleMesh<'_>,
+) -> Result<usize, BvhError>
+where
+    BN: AsRef<[BvhNode]>,
+    BI: AsRef<[u32]>,
+{
+    if mesh.len() != binary.source_len() {
+        return Err(BvhError::SourceLengthMismatch {
+            expected: binary.source_len(),
+            found: mesh.len(),
+        });
+    }
+    let indices = binary.indices();
+    if indices.len() > MAX_TRIANGLES {
+        return Err(BvhError::TooManyTriangles {
+            count: indices.len(),
+        });
+    }
+    let needed = plan::<W>(binary.nodes())?;
+    // Every triangle of the tree must have finite vertices. When every position is finite
+    // and every vertex index in range (two sequential passes), all of them do; only
+    // otherwise are the tree's triangles checked one by one (a random-access pass).
+    let n_pos = mesh.positions.len();
+    let all_usable = mesh.positions.iter().all(|p| p.is_finite())
+        && mesh
+            .triangles
+            .iter()
+            .all(|t| t.iter().all(|&i| (i as usize) < n_pos));
+    if !all_usable {
+        for &p in indices {
+            let ok = mesh
+                .triangle(p as usize)
+                .is_some_and(|v| v.iter().all(|x| x.is_finite()));
+            if !ok {
+                return Err(BvhError::NonFinitePrimitive { index: p as usize });
+            }
+        }
+    }
+    Ok(needed)
+}
+
 impl<const W: usize, N, T> WideBvh<W, N, T>
 where
     N: AsRef<[WideNode<W>]> + AsMut<[WideNode<W>]>,
@@ -210,6 +256,47 @@ where
     pub fn from_binary<BN, BI>(
         binary: &Bvh<BN, BI>,
         mesh: &TriangleMesh<'_>,
+        nodes: N,
+        groups: T,
+    ) -> Result<Self, BvhError>
+    where
+        BN: AsRef<[BvhNode]>,
+        BI: AsRef<[u32]>,
+    {
+        let needed = check::<W, _, _>(binary, mesh)?;
+        Self::write(binary, mesh, needed, nodes, groups)
+    }
+
+    /// [`WideBvh::from_binary`] with storage the caller makes once the sizes are known:
+    /// `storage(nodes, groups)` is called, after every check on `binary` and `mesh` passed,
+    /// with the exact node count ([`WideBvh::node_count_for`]) and [`group_capacity`] of the
+    /// tree's triangles, and returns the storage (larger is fine). Plans the collapse once
+    /// where `node_count_for` followed by `from_binary` plans it twice.
+    ///
+    /// # Errors
+    ///
+    /// As [`WideBvh::from_binary`]; the storage errors only when `storage` returns less than
+    /// asked for (nothing is written then).
+    pub fn from_binary_with<BN, BI>(
+        binary: &Bvh<BN, BI>,
+        mesh: &TriangleMesh<'_>,
+        storage: impl FnOnce(usize, usize) -> (N, T),
+    ) -> Result<Self, BvhError>
+    where
+        BN: AsRef<[BvhNode]>,
+        BI: AsRef<[u32]>,
+    {
+        let needed = check::<W, _, _>(binary, mesh)?;
+        let (nodes, groups) = storage(needed, group_capacity(binary.indices().len()));
+        Self::write(binary, mesh, needed, nodes, groups)
+    }
+
+    /// The storage checks and the collapse itself, for a tree that passed [`check`] and
+    /// needs `needed` nodes.
+    fn write<BN, BI>(
+        binary: &Bvh<BN, BI>,
+        mesh: &TriangleMesh<'_>,
+        needed: usize,
         mut nodes: N,
         mut groups: T,
     ) -> Result<Self, BvhError>
@@ -217,20 +304,8 @@ where
         BN: AsRef<[BvhNode]>,
         BI: AsRef<[u32]>,
     {
-        if mesh.len() != binary.source_len() {
-            return Err(BvhError::SourceLengthMismatch {
-                expected: binary.source_len(),
-                found: mesh.len(),
-            });
-        }
         let indices = binary.indices();
-        if indices.len() > MAX_TRIANGLES {
-            return Err(BvhError::TooManyTriangles {
-                count: indices.len(),
-            });
-        }
         let bnodes = binary.nodes();
-        let needed = plan::<W>(bnodes)?;
         if nodes.as_ref().len() < needed {
             return Err(BvhError::NodeStorageTooSmall {
                 needed,
@@ -243,25 +318,6 @@ where
                 needed: needed_groups,
                 available: groups.as_ref().len(),
             });
-        }
-        // Every triangle of the tree must have finite vertices. When every position is finite
-        // and every vertex index in range (two sequential passes), all of them do; only
-        // otherwise are the tree's triangles checked one by one (a random-access pass).
-        let n_pos = mesh.positions.len();
-        let all_usable = mesh.positions.iter().all(|p| p.is_finite())
-            && mesh
-                .triangles
-                .iter()
-                .all(|t| t.iter().all(|&i| (i as usize) < n_pos));
-        if !all_usable {
-            for &p in indices {
-                let ok = mesh
-                    .triangle(p as usize)
-                    .is_some_and(|v| v.iter().all(|x| x.is_finite()));
-                if !ok {
-                    return Err(BvhError::NonFinitePrimitive { index: p as usize });
-                }
-            }
         }
 
         // Triangles in the binary index order, so a binary leaf's run is the wide leaf's run.

@@ -73,6 +73,19 @@ pub const MAX_LEAF_TRIANGLES: usize = 16;
 /// [`MAX_LEAF_TRIANGLES`].
 pub const LEAF_MERGE: usize = 4;
 
+/// The options of a binary tree built to be collapsed ([`WideBvh::from_binary`]): `options`
+/// with [`BuildOptions::leaf_threshold`](crate::bvh::BuildOptions::leaf_threshold) at
+/// [`LEAF_MERGE`], since the collapse makes every subtree of at most `LEAF_MERGE` triangles
+/// one leaf anyway. The wide tree is the one the default options give, but for the order of
+/// the triangles inside a leaf; the binary build does less work.
+#[must_use]
+pub const fn binary_options(options: crate::bvh::BuildOptions) -> crate::bvh::BuildOptions {
+    crate::bvh::BuildOptions {
+        leaf_threshold: LEAF_MERGE as u32,
+        ..options
+    }
+}
+
 /// Most triangles a wide BVH can hold: leaf references address triangle records with 27 bits.
 pub const MAX_TRIANGLES: usize = 1 << 27;
 

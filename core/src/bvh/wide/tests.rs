@@ -21,7 +21,7 @@ fn binary(mesh: &TriangleMesh<'_>, max_leaf: u32) -> VecBinary {
         vec![0u32; index_capacity(n)],
         &BuildOptions {
             max_leaf_size: max_leaf,
-            exclude_non_finite: false,
+            ..BuildOptions::default()
         },
     )
     .unwrap()
@@ -257,6 +257,97 @@ fn storage_too_small_and_bad_leaves_are_refused_before_writing() {
     ));
 }
 
+#[test]
+fn storage_made_once_the_sizes_are_known_gives_the_same_tree() {
+    let (pos, tris) = soup(300, 5);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let b = binary(&mesh, 4);
+    // The sizes asked for are the exact node count and ⌈N/4⌉ groups, computed here
+    // independently: the nodes of the two-step build and a count of the triangles.
+    let reference = wide::<8>(&mesh, 4);
+    let mut asked = None;
+    let w = VecWide::<8>::from_binary_with(&b, &mesh, |nodes, groups| {
+        asked = Some((nodes, groups));
+        (vec![WideNode::EMPTY; nodes], vec![LeafGroup::EMPTY; groups])
+    })
+    .unwrap();
+    assert_eq!(
+        asked,
+        Some((reference.node_count(), tris.len().div_ceil(4)))
+    );
+    assert_eq!(w.nodes(), reference.nodes());
+    assert_eq!(w.groups(), reference.groups());
+    // Less storage than asked for is refused, and a tree that fails a check never asks.
+    let r = VecWide::<8>::from_binary_with(&b, &mesh, |nodes, groups| {
+        (
+            vec![WideNode::EMPTY; nodes - 1],
+            vec![LeafGroup::EMPTY; groups],
+        )
+    });
+    assert!(matches!(
+        r.err(),
+        Some(BvhError::NodeStorageTooSmall { .. })
+    ));
+    let other = TriangleMesh::new(&pos, &tris[..10]);
+    let mut called = false;
+    let r = VecWide::<8>::from_binary_with(&b, &other, |nodes, groups| {
+        called = true;
+        (vec![WideNode::EMPTY; nodes], vec![LeafGroup::EMPTY; groups])
+    });
+    assert!(matches!(
+        r.err(),
+        Some(BvhError::SourceLengthMismatch { .. })
+    ));
+    assert!(!called);
+}
+
+#[test]
+fn binary_options_give_the_same_wide_tree_but_for_the_order_inside_leaves() {
+    for (n, seed) in [(1, 1), (5, 2), (300, 3), (2000, 4)] {
+        let (pos, tris) = soup(n, seed);
+        let mesh = TriangleMesh::new(&pos, &tris);
+        let full = wide::<8>(&mesh, 4);
+        let b = Bvh::build(
+            &mesh,
+            vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
+            vec![0u32; index_capacity(n)],
+            &binary_options(BuildOptions::default()),
+        )
+        .unwrap();
+        let full_binary = binary(&mesh, 4);
+        assert!(
+            b.node_count() < full_binary.node_count() || n < 8,
+            "the threshold saves splits: {} vs {}",
+            b.node_count(),
+            full_binary.node_count()
+        );
+        let short = VecWide::<8>::from_binary_with(&b, &mesh, |nodes, groups| {
+            (vec![WideNode::EMPTY; nodes], vec![LeafGroup::EMPTY; groups])
+        })
+        .unwrap();
+        // Same boxes and child references (leaf runs start and end at the same slots)…
+        assert_eq!(short.nodes(), full.nodes(), "n = {n}");
+        // …and each leaf run holds the same triangles.
+        for node in full.nodes() {
+            for i in 0..8 {
+                if let ChildRef::Leaf { start, count } = node.child(i) {
+                    let run = |w: &VecWide<8>| {
+                        let mut t: Vec<(u32, [[u32; 3]; 3])> = (start..start + count)
+                            .map(|s| {
+                                let tri = w.triangle(s as usize).unwrap();
+                                (tri.prim, tri.v.map(|v| v.map(f32::to_bits)))
+                            })
+                            .collect();
+                        t.sort_unstable();
+                        t
+                    };
+                    assert_eq!(run(&short), run(&full), "n = {n}, leaf at {start}");
+                }
+            }
+        }
+    }
+}
+
 /// Leaf runs straddle groups: a slot's lane and group follow from its index alone, and the
 /// lanes of a run in each group are exactly its slots there.
 #[test]
@@ -449,6 +540,7 @@ fn collapse_checks_the_tree_triangles_not_the_whole_mesh() {
         &BuildOptions {
             max_leaf_size: 4,
             exclude_non_finite: true,
+            ..BuildOptions::default()
         },
     )
     .unwrap();
