@@ -128,6 +128,7 @@ fn every_example_scene_is_tested() {
             "bunny.toml",
             "csg.toml",
             "glass.toml",
+            "herd.toml",
             "instancing.toml",
             "mirror.toml",
             "shadows.toml",
@@ -158,6 +159,29 @@ fn soft() {
     assert!(
         covered(sphere) && sb > sr + 40,
         "blue sphere pixel {sphere:?}"
+    );
+}
+
+/// 10 000 instanced cows: sky above the horizon, the herd and grass below, the sun's shadows
+/// (and only its: the fill light casts none).
+#[test]
+fn herd() {
+    check_scene(
+        "herd.toml",
+        (0.55, 0.85),
+        &[
+            (0.5, 0.05, empty, "sky"),
+            (0.5, 0.95, covered, "herd or grass"),
+        ],
+    );
+    let r = run("herd.toml", &[]);
+    assert_eq!(r.stats["plan"]["shadow"], true);
+    assert_eq!(r.stats["plan"]["reflection"], false);
+    let (primary, shadow) = (r.stats["primary"].as_u64(), r.stats["shadow"].as_u64());
+    let (primary, shadow) = (primary.unwrap(), shadow.unwrap());
+    assert!(
+        shadow > 0 && shadow < primary,
+        "one sun: {shadow} shadow rays, {primary} primary"
     );
 }
 

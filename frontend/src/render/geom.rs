@@ -140,7 +140,7 @@ impl CsgOp {
 }
 
 /// A primitive or a CSG combination.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub enum Shape {
     /// Sphere.
     Sphere(Sphere),
@@ -164,7 +164,7 @@ pub enum Shape {
 }
 
 /// A shape with its material and optional transform.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Node {
     /// The shape in object space.
     pub shape: Shape,

@@ -150,8 +150,30 @@ pub(super) fn build(src: &Source<'_>, d: def::SceneDef) -> Result<Scene> {
     let mut labels = Vec::new();
     for (i, o) in d.object.iter().enumerate() {
         let field = format!("object[{i}]");
-        labels.push(format!("{field} ({})", o.get_ref().kind.get_ref()));
-        objects.push(object(&mut ctx, o, &field, None)?);
+        let label = format!("{field} ({})", o.get_ref().kind.get_ref());
+        let node = object(&mut ctx, o, &field, None)?;
+        match &o.get_ref().repeat {
+            None => {
+                labels.push(label);
+                objects.push(node);
+            }
+            Some(r) => {
+                for (k, copy) in repeat(&ctx, &node, r, &field, objects.len())?
+                    .into_iter()
+                    .enumerate()
+                {
+                    labels.push(format!("{label} copy {k}"));
+                    objects.push(copy);
+                }
+            }
+        }
+        if objects.len() > MAX_OBJECTS {
+            return Err(ctx.err(
+                &o.span(),
+                &field,
+                format!("more than {MAX_OBJECTS} objects in the scene"),
+            ));
+        }
     }
     // Definitions no object uses are still checked (not read: nothing renders them).
     for (name, (_, loaded)) in &ctx.meshes {
@@ -628,6 +650,13 @@ fn object(ctx: &mut Ctx<'_>, o: &S<ObjectDef>, p: &str, inherited: Option<u32>) 
             let mut nodes = Vec::new();
             for (k, od) in ops.get_ref().iter().enumerate() {
                 let fp = format!("{p}.operands[{k}]");
+                if let Some(r) = &od.get_ref().repeat {
+                    return Err(ctx.err(
+                        &r.span(),
+                        &format!("{fp}.repeat"),
+                        "`repeat` is for top-level objects, not CSG operands",
+                    ));
+                }
                 let n = object(ctx, od, &fp, Some(material))?;
                 if !n.shape.is_solid() {
                     let why = match &n.shape {
@@ -658,6 +687,83 @@ fn object(ctx: &mut Ctx<'_>, o: &S<ObjectDef>, p: &str, inherited: Option<u32>) 
         _ => unreachable!("checked by `allowed`"),
     };
     Ok(Node::new(shape, material, transform))
+}
+
+/// Most objects a scene may hold, repeated copies included: 10⁶ (a copy costs a few hundred
+/// bytes and one top-level BVH leaf; a mesh's triangles are shared by its copies).
+pub const MAX_OBJECTS: usize = 1_000_000;
+
+/// The copies `repeat` makes of `node` (object `p`): copy `(i, j, k)`, numbered
+/// `i + nx·(j + ny·k)`, is `node` moved by `(i·dx, j·dy, k·dz)` after its own transform, with
+/// material `materials[number mod len]` when given. `before` objects exist already (for
+/// [`MAX_OBJECTS`]).
+fn repeat(
+    ctx: &Ctx<'_>,
+    node: &Node,
+    r: &S<def::RepeatDef>,
+    p: &str,
+    before: usize,
+) -> Result<Vec<Node>> {
+    let rd = r.get_ref();
+    let f = |name: &str| format!("{p}.repeat.{name}");
+    let [nx, ny, nz] = rd.count.get_ref().0;
+    let total = u64::from(nx) * u64::from(ny) * u64::from(nz);
+    if total == 0 {
+        return Err(ctx.err(&rd.count.span(), &f("count"), "every count must be ≥ 1"));
+    }
+    if total + before as u64 > MAX_OBJECTS as u64 {
+        return Err(ctx.err(
+            &rd.count.span(),
+            &f("count"),
+            format!("{total} copies: more than {MAX_OBJECTS} objects in the scene"),
+        ));
+    }
+    let step = ctx.v3(&rd.step, &f("step"))?;
+    let materials = match &rd.materials {
+        None => vec![node.material],
+        Some(names) if names.get_ref().is_empty() => {
+            return Err(ctx.err(
+                &names.span(),
+                &f("materials"),
+                "must name at least one material",
+            ));
+        }
+        Some(names) => names
+            .get_ref()
+            .iter()
+            .map(|m| {
+                ctx.materials.get(m.get_ref()).copied().ok_or_else(|| {
+                    let known: Vec<&str> = ctx.materials.keys().map(String::as_str).collect();
+                    ctx.err(
+                        &m.span(),
+                        &f("materials"),
+                        format!(
+                            "no material named `{}` (defined: {})",
+                            m.get_ref(),
+                            list(&known)
+                        ),
+                    )
+                })
+            })
+            .collect::<Result<Vec<u32>>>()?,
+    };
+    let mut out = Vec::with_capacity(total as usize);
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let offset = step * Vec3::new(i as f32, j as f32, k as f32);
+                let moved = Transform::translate(offset)
+                    .and_then(|t| match &node.transform {
+                        Some(own) => own.then(&t),
+                        None => Ok(t),
+                    })
+                    .map_err(|e| ctx.err(&rd.step.span(), &f("step"), e.to_string()))?;
+                let material = materials[out.len() % materials.len()];
+                out.push(Node::new(node.shape.clone(), material, Some(moved)));
+            }
+        }
+    }
+    Ok(out)
 }
 
 fn list(names: &[&str]) -> String {

@@ -233,6 +233,17 @@ pub struct ObjectDef {
     pub op: Option<S<String>>,
     pub operands: Option<S<Vec<S<ObjectDef>>>>,
     pub transform: Option<S<Vec<S<TransformDef>>>>,
+    pub repeat: Option<S<RepeatDef>>,
+}
+
+/// `repeat = { count = [nx, ny, nz], step = [dx, dy, dz], materials = [...] }` on a top-level
+/// object: copies on a grid.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RepeatDef {
+    pub count: S<Exact<u32, 3>>,
+    pub step: V3,
+    pub materials: Option<S<Vec<S<String>>>>,
 }
 
 impl ObjectDef {

@@ -1,0 +1,181 @@
+//! `repeat` on an object: a grid of copies, each the object moved by its grid step after its own
+//! transform, materials taken in turn; the same picture as the copies written out one by one;
+//! errors name the file, line, column and field.
+
+use halfray::render::{RenderOptions, render};
+use halfray::scene::{Scene, parse};
+use std::path::Path;
+
+const HEAD: &str = r#"
+ambient = [0.1, 0.1, 0.1]
+
+[camera]
+eye = [2, 6, 9]
+look_at = [2, 0, 1]
+fov = 50
+width = 96
+height = 72
+
+[[light]]
+type = "directional"
+direction = [-0.3, -1, -0.4]
+intensity = 0.9
+
+[material.a]
+diffuse = [0.8, 0.2, 0.2]
+
+[material.b]
+diffuse = [0.2, 0.8, 0.2]
+
+[material.c]
+diffuse = [0.2, 0.2, 0.8]
+
+[material.floor]
+diffuse = [0.6, 0.6, 0.6]
+
+[[object]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 1, 0]
+material = "floor"
+"#;
+
+fn scene(text: &str) -> Scene {
+    parse(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn err(text: &str) -> String {
+    match parse(text, Path::new("bad.toml")) {
+        Ok(_) => panic!("loaded but should not"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn repeated_copies_render_like_the_copies_written_out() {
+    // 3 × 1 × 2 boxes, each rotated then moved by its own transform, then by the grid step;
+    // materials a, b, c in turn over the copies numbered i + 3·k.
+    let repeated = format!(
+        "{HEAD}
+[[object]]
+type = \"box\"
+min = [-0.4, 0, -0.3]
+max = [0.4, 0.7, 0.3]
+material = \"a\"
+transform = [{{ rotate = {{ axis = [0, 1, 0], degrees = 30 }} }}, {{ translate = [0.5, 0, 0] }}]
+repeat = {{ count = [3, 1, 2], step = [1.5, 0, 2.0], materials = [\"a\", \"b\", \"c\"] }}
+"
+    );
+    let mut written = HEAD.to_string();
+    let names = ["a", "b", "c"];
+    for k in 0..2 {
+        for i in 0..3 {
+            let n = i + 3 * k;
+            let (x, z) = (0.5 + 1.5 * i as f32, 2.0 * k as f32);
+            written += &format!(
+                "
+[[object]]
+type = \"box\"
+min = [-0.4, 0, -0.3]
+max = [0.4, 0.7, 0.3]
+material = \"{}\"
+transform = [{{ rotate = {{ axis = [0, 1, 0], degrees = 30 }} }}, {{ translate = [{x}, 0, {z}] }}]
+",
+                names[n % 3]
+            );
+        }
+    }
+    let (r, w) = (scene(&repeated), scene(&written));
+    assert_eq!(r.objects.len(), 7);
+    assert_eq!(w.objects.len(), 7);
+    let (ir, iw) = (
+        render(&r, &RenderOptions::default()),
+        render(&w, &RenderOptions::default()),
+    );
+    assert_eq!(ir.counts.primary, iw.counts.primary);
+    assert_eq!(ir.counts.shadow, iw.counts.shadow);
+    let differing = ir
+        .pixels
+        .iter()
+        .zip(&iw.pixels)
+        .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-6)
+        .count();
+    assert_eq!(
+        differing, 0,
+        "pixels differ between repeat and written-out copies"
+    );
+    // Every material shows up: the copies are not all one colour.
+    let reds = ir
+        .pixels
+        .iter()
+        .filter(|p| p.x > 2.0 * p.y && p.x > 2.0 * p.z)
+        .count();
+    let greens = ir
+        .pixels
+        .iter()
+        .filter(|p| p.y > 2.0 * p.x && p.y > 2.0 * p.z)
+        .count();
+    let blues = ir
+        .pixels
+        .iter()
+        .filter(|p| p.z > 2.0 * p.x && p.z > 2.0 * p.y)
+        .count();
+    assert!(
+        reds > 20 && greens > 20 && blues > 20,
+        "{reds} {greens} {blues}"
+    );
+}
+
+#[test]
+fn the_herd_scene_holds_ten_thousand_cows() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/herd.toml");
+    let s = halfray::scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.objects.len(), 10_001, "the floor and 100 × 100 cows");
+    assert_eq!(s.meshes.len(), 1, "one mesh shared by every copy");
+}
+
+#[test]
+fn bad_repeats_name_their_field() {
+    let obj = |repeat: &str| {
+        format!(
+            "{HEAD}\n[[object]]\ntype = \"sphere\"\ncenter = [0, 0.5, 0]\nradius = 0.5\nmaterial = \"a\"\nrepeat = {repeat}\n"
+        )
+    };
+    let line = HEAD.lines().count() + 7;
+    let e = err(&obj("{ count = [2, 0, 2], step = [1, 0, 1] }"));
+    assert!(
+        e.starts_with(&format!("bad.toml:{line}:")) && e.contains("object[1].repeat.count"),
+        "{e}"
+    );
+    assert!(e.contains("≥ 1"), "{e}");
+    let e = err(&obj(
+        "{ count = [2, 1, 2], step = [1, 0, 1], materials = [\"a\", \"z\"] }",
+    ));
+    assert!(
+        e.contains("object[1].repeat.materials") && e.contains("`z`"),
+        "{e}"
+    );
+    let e = err(&obj(
+        "{ count = [2, 1, 2], step = [1, 0, 1], materials = [] }",
+    ));
+    assert!(e.contains("at least one material"), "{e}");
+    let e = err(&obj("{ count = [2, 1], step = [1, 0, 1] }"));
+    assert!(e.contains("bad.toml:") && e.contains("3 elements"), "{e}");
+    let e = err(&obj("{ count = [2, 1, 2], step = [1, nan, 1] }"));
+    assert!(e.contains("object[1].repeat.step"), "{e}");
+    let e = err(&obj("{ count = [2, 1, 2], step = [1, 0, 1], jitter = 1 }"));
+    assert!(e.contains("jitter"), "{e}");
+    let e = err(&obj("{ count = [1000, 1000, 2], step = [1, 1, 1] }"));
+    assert!(
+        e.contains("object[1].repeat.count") && e.contains("1000000"),
+        "{e}"
+    );
+    let csg = format!(
+        "{HEAD}\n[[object]]\ntype = \"csg\"\nop = \"union\"\nmaterial = \"a\"\noperands = [{{ type = \"sphere\", center = [0, 0, 0], radius = 1, repeat = {{ count = [2, 1, 1], step = [1, 0, 0] }} }}, {{ type = \"box\", min = [0, 0, 0], max = [1, 1, 1] }}]\n"
+    );
+    let e = err(&csg);
+    assert!(
+        e.contains("object[1].operands[0].repeat") && e.contains("top-level"),
+        "{e}"
+    );
+}
