@@ -298,6 +298,36 @@ fn stats_json_reports_the_plan_next_to_the_ray_counts() {
     assert_eq!(v["plan"]["refraction"], true, "{v}");
     assert_eq!(v["plan"]["reflection"], true, "{v}");
     assert!(v["refraction"].as_u64().unwrap() > 0);
+    // Anti-aliasing from the scene's `samples`, overridden by `--samples`.
+    let aa_path = dir.path().join("aa.toml");
+    std::fs::write(&aa_path, format!("samples = 4\n{MATTE}")).unwrap();
+    let v = run(&aa_path, &[]);
+    assert_eq!(v["plan"]["antialias"], true, "{v}");
+    assert!(
+        v["primary"].as_u64().unwrap() > 24 * 16,
+        "edges get extra samples: {v}"
+    );
+    let v = run(&aa_path, &["--samples", "1"]);
+    assert_eq!(v["plan"]["antialias"], false, "{v}");
+    assert_eq!(v["primary"], 24 * 16);
+    for bad in ["samples = 0", "samples = 65"] {
+        let bad_path = dir.path().join("bad.toml");
+        std::fs::write(&bad_path, format!("{bad}\n{MATTE}")).unwrap();
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_halfray"))
+            .arg("render")
+            .arg(&bad_path)
+            .arg("-o")
+            .arg(dir.path().join("bad.png"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{bad}: {err}");
+        assert!(
+            err.contains("bad.toml:1:11: field `samples`: must be 1 to 64"),
+            "{err}"
+        );
+        assert!(!dir.path().join("bad.png").exists());
+    }
 }
 
 /// A floor lit by a point light straight above it, seen from above; `pane` adds a large

@@ -71,9 +71,10 @@ pub struct RenderArgs {
     pub background: Option<PathBuf>,
     /// Most samples per pixel (colour mode): one ray through each pixel's centre, then up to
     /// N − 1 more at fixed sub-pixel positions only where a pixel differs from a neighbour
-    /// (edges, shadow boundaries, mirror rims), averaged. Deterministic.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=antialias::MAX_SAMPLES as i64))]
-    pub samples: u32,
+    /// (edges, shadow boundaries, mirror rims), averaged. Deterministic. Default: the scene's
+    /// `samples` (1 when it sets none).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=antialias::MAX_SAMPLES as i64))]
+    pub samples: Option<u32>,
     /// Output transfer function: `srgb`, or a display gamma `γ` (stored = linear^(1/γ); find
     /// yours with `halfray gamma --chart`). Also decodes `--background`.
     #[arg(long, default_value = "srgb", value_name = "srgb|GAMMA")]
@@ -421,7 +422,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         None => None,
     };
     let opts = RenderOptions {
-        samples: args.samples,
+        samples: args.samples.unwrap_or(scene.samples),
         mode: args.mode,
         force_all: args.force_all_effects,
         progress: !args.quiet,

@@ -128,6 +128,15 @@ pub(super) fn build(src: &Source<'_>, d: def::SceneDef) -> Result<Scene> {
         let span = d.max_depth.as_ref().map(|v| v.span()).unwrap_or_default();
         return Err(ctx.err(&span, "max_depth", "must be ≤ 64"));
     }
+    let samples = d.samples.as_ref().map_or(1, |v| *v.get_ref());
+    if !(1..=crate::render::antialias::MAX_SAMPLES).contains(&samples) {
+        let span = d.samples.as_ref().map(|v| v.span()).unwrap_or_default();
+        return Err(ctx.err(
+            &span,
+            "samples",
+            format!("must be 1 to {}", crate::render::antialias::MAX_SAMPLES),
+        ));
+    }
     let camera = camera(&ctx, &d.camera)?;
 
     let mut lights = Vec::new();
@@ -187,6 +196,7 @@ pub(super) fn build(src: &Source<'_>, d: def::SceneDef) -> Result<Scene> {
         ambient,
         background,
         max_depth,
+        samples,
         lights,
         materials,
         top: super::top::TopLevel::new(&objects),

@@ -69,6 +69,7 @@ pub struct SceneDef {
     pub ambient: Option<V3>,
     pub background: Option<V3>,
     pub max_depth: Option<S<u32>>,
+    pub samples: Option<S<u32>>,
     pub camera: S<CameraDef>,
     #[serde(default)]
     pub light: Vec<S<LightDef>>,

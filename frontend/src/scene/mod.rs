@@ -272,6 +272,9 @@ pub struct Scene {
     pub background: Vec3,
     /// Largest recursion depth the scene allows.
     pub max_depth: u32,
+    /// Most samples per pixel of the adaptive anti-aliasing (top-level `samples`, default 1;
+    /// `render --samples` overrides it).
+    pub samples: u32,
     /// Lights.
     pub lights: Vec<Light>,
     /// Materials (objects refer to them by index).
