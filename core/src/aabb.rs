@@ -140,18 +140,12 @@ impl Aabb {
         2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
     }
 
-    /// Index of the longest axis (0, 1 or 2; ties go to the lower index).
+    /// Index of the longest axis (0, 1 or 2; ties go to the lower index; 0 when the x extent
+    /// is NaN).
     #[inline]
     #[must_use]
     pub fn longest_axis(&self) -> usize {
-        let e = self.extent();
-        if e.x >= e.y && e.x >= e.z {
-            0
-        } else if e.y >= e.z {
-            1
-        } else {
-            2
-        }
+        self.extent().max_position()
     }
 
     /// `true` when the two closed boxes share at least one point (touching counts). Empty or

@@ -29,28 +29,6 @@ pub const fn gamma_f64(n: u32) -> f64 {
     nu / (1.0 - nu)
 }
 
-/// The next representable `f32` towards `+∞` (`+∞` and NaN are returned unchanged, `-0.0`
-/// becomes the smallest positive subnormal).
-#[inline]
-#[must_use]
-pub fn next_up(x: f32) -> f32 {
-    x.next_up()
-}
-
-/// The next representable `f32` towards `−∞`.
-#[inline]
-#[must_use]
-pub fn next_down(x: f32) -> f32 {
-    x.next_down()
-}
-
-/// `true` when all three components are finite (neither NaN nor ±∞).
-#[inline]
-#[must_use]
-pub fn is_finite3(v: glam::Vec3) -> bool {
-    v.x.is_finite() && v.y.is_finite() && v.z.is_finite()
-}
-
 /// Square root usable in `no_std` (through `libm`).
 #[inline]
 #[must_use]

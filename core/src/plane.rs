@@ -23,7 +23,7 @@
 //!   `N = +z` it is `(x − x₀, y − y₀)`.
 
 use crate::error::GeometryError;
-use crate::float::{gamma, is_finite3};
+use crate::float::gamma;
 use crate::hit::Hit;
 use crate::ray::Ray;
 use glam::{DVec3, Vec2, Vec3};
@@ -47,7 +47,7 @@ impl Plane {
     /// [`GeometryError::Degenerate`] for a zero normal (or one whose length underflows in
     /// `f64`, which cannot happen for finite `f32` input other than zero).
     pub fn new(point: Vec3, normal: Vec3) -> Result<Self, GeometryError> {
-        if !is_finite3(point) || !is_finite3(normal) {
+        if !point.is_finite() || !normal.is_finite() {
             return Err(GeometryError::NonFinite);
         }
         let n = normal.as_dvec3();
@@ -124,7 +124,7 @@ impl Plane {
         let t = self.intersect_t(ray)?;
         let n = self.normal;
         let p = ray.origin + ray.direction * t;
-        if !is_finite3(p) {
+        if !p.is_finite() {
             return None;
         }
         let (point, point_error) = match self.axis() {
@@ -144,7 +144,7 @@ impl Plane {
                 (q, an * (d * (1.0 + gamma(4))))
             }
         };
-        if !is_finite3(point) || !is_finite3(point_error) {
+        if !point.is_finite() || !point_error.is_finite() {
             return None;
         }
         let (tu, tv) = self.tangents();
@@ -315,7 +315,7 @@ mod tests {
             // A huge origin overflowing the point computation gives no hit, not a NaN hit.
             let r = Ray::new(Vec3::splat(f32::MAX), Vec3::splat(-f32::MAX));
             if let Some(h) = p.intersect(&r) {
-                assert!(is_finite3(h.point) && is_finite3(h.point_error));
+                assert!(h.point.is_finite() && h.point_error.is_finite());
             }
         }
     }

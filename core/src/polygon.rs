@@ -34,7 +34,6 @@
 //! classified by the even–odd rule.
 
 use crate::error::GeometryError;
-use crate::float::is_finite3;
 use crate::hit::Hit;
 use crate::plane::Plane;
 use crate::ray::Ray;
@@ -63,7 +62,7 @@ impl<const N: usize> Polygon<N> {
         if n < 3 || n > N {
             return Err(GeometryError::VertexCount);
         }
-        if !vertices.iter().all(|&v| is_finite3(v)) {
+        if !vertices.iter().all(|&v| v.is_finite()) {
             return Err(GeometryError::NonFinite);
         }
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
@@ -94,14 +93,7 @@ impl<const N: usize> Polygon<N> {
         {
             return Err(GeometryError::NonPlanar);
         }
-        let an = normal.abs();
-        let axis = if an.x >= an.y && an.x >= an.z {
-            0
-        } else if an.y >= an.z {
-            1
-        } else {
-            2
-        };
+        let axis = normal.abs().max_position();
         let plane = Plane::new(centroid.as_vec3(), normal.as_vec3())?;
         let vertices =
             heapless::Vec::from_slice(vertices).map_err(|_| GeometryError::VertexCount)?;
@@ -145,7 +137,7 @@ impl<const N: usize> Polygon<N> {
     /// the module documentation. Non-finite points are outside.
     #[must_use]
     pub fn contains_projected(&self, p: Vec3) -> bool {
-        if !is_finite3(p) {
+        if !p.is_finite() {
             return false;
         }
         let (iu, iv) = ((self.axis + 1) % 3, (self.axis + 2) % 3);

@@ -35,7 +35,7 @@
 //! Every function is total: invalid rays, NaN and infinity give `None`, never a panic.
 
 use crate::error::GeometryError;
-use crate::float::{gamma, gamma_f64, is_finite3};
+use crate::float::{gamma, gamma_f64};
 use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::tolerance::{QUADRIC_CENTER_MIN_REL_DET, QUADRIC_DISTANCE_SLACK};
@@ -161,7 +161,7 @@ impl Quadric {
     /// [`GeometryError::NonFinite`]; [`GeometryError::Degenerate`] for a zero axis or
     /// `radius ≤ 0`.
     pub fn cylinder(axis_point: Vec3, axis_dir: Vec3, radius: f32) -> Result<Self, GeometryError> {
-        if !is_finite3(axis_point) || !is_finite3(axis_dir) || !radius.is_finite() {
+        if !axis_point.is_finite() || !axis_dir.is_finite() || !radius.is_finite() {
             return Err(GeometryError::NonFinite);
         }
         let axis = axis_dir.as_dvec3();
@@ -183,7 +183,7 @@ impl Quadric {
     /// [`GeometryError::NonFinite`]; [`GeometryError::Degenerate`] for a zero axis or
     /// `tan_half_angle ≤ 0`.
     pub fn cone(apex: Vec3, axis_dir: Vec3, tan_half_angle: f32) -> Result<Self, GeometryError> {
-        if !is_finite3(apex) || !is_finite3(axis_dir) || !tan_half_angle.is_finite() {
+        if !apex.is_finite() || !axis_dir.is_finite() || !tan_half_angle.is_finite() {
             return Err(GeometryError::NonFinite);
         }
         let axis = axis_dir.as_dvec3();
@@ -361,7 +361,7 @@ impl Quadric {
         };
         let point = x.as_vec3();
         let dist32 = (dist as f32).next_up();
-        if !is_finite3(point) || !dist32.is_finite() || !normal.is_finite() {
+        if !point.is_finite() || !dist32.is_finite() || !normal.is_finite() {
             return None;
         }
         let point_error = point.abs() * gamma(1) + Vec3::splat(dist32);
@@ -392,7 +392,7 @@ impl Ellipsoid {
     /// [`GeometryError::NonFinite`] for non-finite input,
     /// [`GeometryError::Degenerate`] for a radius `≤ 0`.
     pub fn new(center: Vec3, radii: Vec3) -> Result<Self, GeometryError> {
-        if !is_finite3(center) || !is_finite3(radii) {
+        if !center.is_finite() || !radii.is_finite() {
             return Err(GeometryError::NonFinite);
         }
         if !(radii.min_element() > 0.0) {
@@ -711,6 +711,6 @@ mod tests {
             .unwrap();
         assert_eq!(h.t, 1.0);
         assert_eq!(h.point, Vec3::ZERO);
-        assert!(is_finite3(h.normal) && is_finite3(h.point_error));
+        assert!(h.normal.is_finite() && h.point_error.is_finite());
     }
 }

@@ -10,7 +10,6 @@
 //! The direction need not be unit length; `t` is measured in units of `|direction|`.
 
 use crate::error::RayError;
-use crate::float::is_finite3;
 use glam::Vec3;
 
 /// A ray `origin + t·direction`, `t ∈ (t_min, t_max]`.
@@ -78,10 +77,10 @@ impl Ray {
     ///
     /// The first check that fails, as a [`RayError`].
     pub fn validate(&self) -> Result<(), RayError> {
-        if !is_finite3(self.origin) {
+        if !self.origin.is_finite() {
             return Err(RayError::NonFiniteOrigin);
         }
-        if !is_finite3(self.direction) {
+        if !self.direction.is_finite() {
             return Err(RayError::NonFiniteDirection);
         }
         if self.direction == Vec3::ZERO {

@@ -29,7 +29,7 @@
 //! | 1e5 | 0.46 / 1.68 / 1.82 | 81 / 3467 / 4255 | 9053 / 20000 |
 
 use crate::error::GeometryError;
-use crate::float::{gamma, is_finite3, sqrt};
+use crate::float::{gamma, sqrt};
 use crate::hit::Hit;
 use crate::ray::Ray;
 use core::f32::consts::{PI, TAU};
@@ -66,7 +66,7 @@ impl Sphere {
     /// [`GeometryError::NonFinite`] for a non-finite centre or radius,
     /// [`GeometryError::Degenerate`] for `radius ≤ 0`.
     pub fn new(center: Vec3, radius: f32) -> Result<Self, GeometryError> {
-        if !is_finite3(center) || !radius.is_finite() {
+        if !center.is_finite() || !radius.is_finite() {
             return Err(GeometryError::NonFinite);
         }
         if !(radius > 0.0) {
@@ -214,7 +214,7 @@ impl Sphere {
         } else {
             (p, Vec3::ZERO)
         };
-        if !is_finite3(point) || !is_finite3(normal) {
+        if !point.is_finite() || !normal.is_finite() {
             return None;
         }
         let mut phi = libm::atan2f(normal.y, normal.x);
@@ -514,17 +514,17 @@ mod tests {
             r.t_min = b;
             // Any hit reported lies in the interval and is finite.
             if let Some(h) = s.intersect(&r) {
-                assert!(r.contains(h.t) && is_finite3(h.point), "{r:?} {h:?}");
+                assert!(r.contains(h.t) && h.point.is_finite(), "{r:?} {h:?}");
             }
         }
         // Extreme but finite values: no panic, no non-finite hit.
         let huge = Ray::new(Vec3::splat(f32::MAX), Vec3::splat(-f32::MAX));
         if let Some(h) = s.intersect(&huge) {
-            assert!(is_finite3(h.point));
+            assert!(h.point.is_finite());
         }
         let far = Sphere::new(Vec3::splat(3.0e38), 1.0e38).unwrap();
         if let Some(h) = far.intersect(&Ray::new(Vec3::splat(-3.0e38), Vec3::ONE)) {
-            assert!(h.t.is_finite() && is_finite3(h.point), "{h:?}");
+            assert!(h.t.is_finite() && h.point.is_finite(), "{h:?}");
         }
     }
 

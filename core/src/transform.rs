@@ -27,7 +27,7 @@
 //! every intersector treats as hitting nothing.
 
 use crate::error::GeometryError;
-use crate::float::{gamma, is_finite3};
+use crate::float::gamma;
 use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::tolerance::TRANSFORM_MIN_REL_DET;
@@ -142,7 +142,7 @@ impl Transform {
     /// [`GeometryError::NonFinite`], [`GeometryError::Degenerate`]
     /// for a zero axis.
     pub fn rotate(axis: Vec3, angle: f32) -> Result<Self, GeometryError> {
-        if !is_finite3(axis) || !angle.is_finite() {
+        if !axis.is_finite() || !angle.is_finite() {
             return Err(GeometryError::NonFinite);
         }
         let a = axis.as_dvec3();
@@ -246,7 +246,7 @@ impl Transform {
             li.z_axis.truncate().dot(n),
         );
         let w = w.normalize_or_zero();
-        if is_finite3(w) { w } else { Vec3::ZERO }
+        if w.is_finite() { w } else { Vec3::ZERO }
     }
 
     /// An object-space hit in world space: point by `M` with the grown error bound, normal by
@@ -558,7 +558,7 @@ mod tests {
         let check = |ray: &Ray, h: Option<Hit>| {
             if let Some(h) = h {
                 assert!(ray.contains(h.t), "{ray:?} {h:?}");
-                assert!(is_finite3(h.point) && is_finite3(h.point_error) && is_finite3(h.normal));
+                assert!(h.point.is_finite() && h.point_error.is_finite() && h.normal.is_finite());
             }
         };
         for _ in 0..50_000 {
@@ -587,7 +587,7 @@ mod tests {
                 // The world hit of an object-space hit: a finite unit normal, and the same
                 // side of the surface as the object-space normal says (`front_face` kept).
                 let w = tf.hit_to_world(&h);
-                assert!(is_finite3(w.normal) && is_finite3(w.point), "{w:?}");
+                assert!(w.normal.is_finite() && w.point.is_finite(), "{w:?}");
                 assert!((w.normal.length() - 1.0).abs() < 1e-3, "{w:?}");
                 assert_eq!(w.front_face, h.front_face);
             }

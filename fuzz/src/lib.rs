@@ -496,13 +496,7 @@ pub struct WatertightBound {
 pub fn projection_underflows(ray: &Ray, v: &[Vec3; 3]) -> bool {
     let d = ray.direction;
     let a = d.abs();
-    let kz = if a.x >= a.y && a.x >= a.z {
-        0
-    } else if a.y >= a.z {
-        1
-    } else {
-        2
-    };
+    let kz = a.max_position();
     let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
     // Each quantity in f64 from the f32 values the test actually rounds: below the f32 normal
     // range (and not exactly zero), its f32 rounding is absolute, or it vanishes.
@@ -554,13 +548,7 @@ impl WatertightBound {
         let d = ray.direction.as_dvec3();
         let o = ray.origin.as_dvec3();
         let a = d.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
+        let kz = a.max_position();
         let kx = (kz + 1) % 3;
         let ky = (kx + 1) % 3;
         if a[kz] < DOMAIN_MIN_DOMINANT_DIRECTION {

@@ -471,13 +471,7 @@ impl Projector {
     pub fn new(ray: &Ray) -> Self {
         let d = ray.direction.as_dvec3();
         let a = d.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
+        let kz = a.max_position();
         let kx = (kz + 1) % 3;
         let ky = (kx + 1) % 3;
         Self {

@@ -225,6 +225,22 @@ pub trait VariantVisitor {
     fn visit<I: TriangleIntersector>(self, isect: &I) -> Self::Output;
 }
 
+/// The axis permutation `[kx, ky, kz]` of the watertight projection for a finite, non-zero
+/// direction `d`: `kz` is the index of the largest `|dᵢ|` (ties: the lowest, glam's
+/// `max_position` rule), `kx` and `ky` the next two cyclically, swapped when `d_kz < 0` so
+/// that the permutation and the scaling by `1/d_kz` together preserve orientation. Shared by
+/// [`Watertight`] and [`F64Reference`] (which then shear in `f32` and in `f64`).
+#[inline(always)]
+#[must_use]
+pub fn projection_axes(d: Vec3) -> [usize; 3] {
+    let kz = d.abs().max_position();
+    let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    if d[kz] < 0.0 {
+        core::mem::swap(&mut kx, &mut ky);
+    }
+    [kx, ky, kz]
+}
+
 /// `true` when the triangle has exactly zero area, or the ray lies exactly in its plane, as
 /// decided in `f64` from the `f32` inputs: `n = (v1 − v0) × (v2 − v0)` and `d·n` are evaluated
 /// in `f64`, which is exact whenever the coordinate differences and their products fit in 53
@@ -334,6 +350,37 @@ fn finish(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Worked cases of the permutation (ties, signs), and for every sign pattern and
+    /// dominant axis: `kz` is dominant, the three indices are a permutation, and the
+    /// permutation's parity times the sign of `d_kz` is `+1` (orientation preserved).
+    #[test]
+    fn projection_axes_pick_the_dominant_axis_and_keep_orientation() {
+        assert_eq!(projection_axes(Vec3::new(1.0, 1.0, 1.0)), [1, 2, 0]);
+        assert_eq!(projection_axes(Vec3::new(-1.0, 0.5, 0.0)), [2, 1, 0]);
+        assert_eq!(projection_axes(Vec3::new(0.5, -2.0, 2.0)), [0, 2, 1]);
+        assert_eq!(projection_axes(Vec3::new(0.0, 0.0, -3.0)), [1, 0, 2]);
+        for dominant in 0..3 {
+            for signs in 0..8 {
+                let mut d = Vec3::new(0.25, 0.5, 0.75);
+                d[dominant] = 4.0;
+                for a in 0..3 {
+                    if signs & (1 << a) != 0 {
+                        d[a] = -d[a];
+                    }
+                }
+                let k = projection_axes(d);
+                assert_eq!(k[2], dominant, "{d:?}");
+                let mut sorted = k;
+                sorted.sort_unstable();
+                assert_eq!(sorted, [0, 1, 2]);
+                let inversions =
+                    usize::from(k[0] > k[1]) + usize::from(k[0] > k[2]) + usize::from(k[1] > k[2]);
+                let parity = if inversions % 2 == 0 { 1.0 } else { -1.0 };
+                assert_eq!(parity * d[k[2]].signum(), 1.0, "{d:?} -> {k:?}");
+            }
+        }
+    }
 
     /// Each variant visits with its own intersector: the intersector's own name is the
     /// variant's (a mix-up in the dispatch would show as another name).

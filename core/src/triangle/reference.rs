@@ -69,20 +69,8 @@ impl TriangleIntersector for F64Reference {
         if !ray.is_valid() {
             return None;
         }
+        let [kx, ky, kz] = super::projection_axes(ray.direction);
         let d = ray.direction.as_dvec3();
-        let a = d.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        if d[kz] < 0.0 {
-            core::mem::swap(&mut kx, &mut ky);
-        }
         Some(F64Ray {
             k: [kx, ky, kz],
             shear: DVec3::new(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]),

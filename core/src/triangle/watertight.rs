@@ -29,19 +29,7 @@ impl WatertightRay {
             return None;
         }
         let d = ray.direction;
-        let a = d.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        if d[kz] < 0.0 {
-            core::mem::swap(&mut kx, &mut ky);
-        }
+        let [kx, ky, kz] = super::projection_axes(d);
         // The three quotients in one four-lane division (each lane the same IEEE quotient).
         let shear = glam::Vec3A::new(d[kx], d[ky], 1.0) / glam::Vec3A::splat(d[kz]);
         Some(Self {
