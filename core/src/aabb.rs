@@ -174,22 +174,7 @@ impl Aabb {
     #[inline]
     #[must_use]
     pub fn intersect_slab(&self, ray: &SlabRay, t_min: f32, t_max: f32) -> Option<(f32, f32)> {
-        let mut t_enter = t_min;
-        let mut t_exit = t_max;
-        for axis in 0..3 {
-            let (lo, hi) = if ray.negative[axis] {
-                (self.max[axis], self.min[axis])
-            } else {
-                (self.min[axis], self.max[axis])
-            };
-            let (t_near, t_far) = ray.slab_distances(axis, lo, hi);
-            let t_far = pad_far(t_far);
-            // `max`/`min` return the non-NaN operand: a NaN slab leaves the interval as it is.
-            t_enter = t_near.max(t_enter);
-            t_exit = t_far.min(t_exit);
-        }
-        (t_enter <= t_exit && t_enter < f32::INFINITY && t_exit > f32::NEG_INFINITY)
-            .then_some((t_enter, t_exit))
+        self.slab_test(ray, t_min, t_max, pad_far)
     }
 
     /// The plain (non-conservative) slab test: the same NaN handling, without the
@@ -203,6 +188,18 @@ impl Aabb {
         t_min: f32,
         t_max: f32,
     ) -> Option<(f32, f32)> {
+        self.slab_test(ray, t_min, t_max, |t| t)
+    }
+
+    /// The slab test with the far distances mapped by `far` (the padding, or nothing).
+    #[inline(always)]
+    fn slab_test(
+        &self,
+        ray: &SlabRay,
+        t_min: f32,
+        t_max: f32,
+        far: impl Fn(f32) -> f32,
+    ) -> Option<(f32, f32)> {
         let mut t_enter = t_min;
         let mut t_exit = t_max;
         for axis in 0..3 {
@@ -212,8 +209,9 @@ impl Aabb {
                 (self.min[axis], self.max[axis])
             };
             let (t_near, t_far) = ray.slab_distances(axis, lo, hi);
+            // `max`/`min` return the non-NaN operand: a NaN slab leaves the interval as it is.
             t_enter = t_near.max(t_enter);
-            t_exit = t_far.min(t_exit);
+            t_exit = far(t_far).min(t_exit);
         }
         (t_enter <= t_exit && t_enter < f32::INFINITY && t_exit > f32::NEG_INFINITY)
             .then_some((t_enter, t_exit))
