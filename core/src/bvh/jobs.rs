@@ -12,8 +12,9 @@
 //! tree needs no more than [`super::node_capacity`] nodes, as the plain build.
 
 use super::build::{
-    EMPTY_TASK, JobSink, NodeView, Scratch, Task, build_top, fill_indices, grow, prepare_scratch,
+    EMPTY_TASK, JobSink, NodeView, Task, build_top, fill_indices, grow, prepare_scratch,
 };
+use super::scratch::Scratch;
 
 impl BuildJob {
     /// A job for `task`, not yet placed.

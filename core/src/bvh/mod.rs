@@ -77,6 +77,8 @@ mod node;
 mod primitive;
 mod query;
 mod refit;
+mod sah;
+mod scratch;
 pub(crate) mod stats;
 mod traverse;
 pub mod wide;
@@ -84,12 +86,13 @@ pub mod wide;
 #[cfg(test)]
 mod tests;
 
-pub use build::{BuildOptions, PrimRef, scratch_capacity};
+pub use build::BuildOptions;
 pub use error::BvhError;
 pub use jobs::{BuildJob, JobPart, JobParts};
 pub use load::{LoadError, load_scratch_len};
 pub use node::{BvhNode, NODE_SIZE};
 pub use primitive::{Primitive, PrimitiveSource, TriangleMesh};
+pub use scratch::{PrimRef, scratch_capacity};
 pub use stats::{BvhStats, TraversalStats};
 
 use crate::aabb::Aabb;

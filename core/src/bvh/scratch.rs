@@ -1,0 +1,210 @@
+//! The primitives as the builder reads them ([`Refs`]): through the index array from the
+//! source ([`Indexed`]), or from a scratch array of [`PrimRef`] records filled once and
+//! reordered in place ([`Scratch`]); and the box-corner vector type both use.
+
+use super::primitive::PrimitiveSource;
+use crate::aabb::Aabb;
+use glam::Vec3;
+
+/// The builder's box corners: 16-byte SIMD vectors on x86-64 (one `min`/`max` instruction per
+/// bin update; the fourth lane is spare: a [`PrimRef`] keeps its index there, bins ignore it),
+/// plain `Vec3` elsewhere (smaller records and a smaller stack frame on microcontrollers, where
+/// there is no SIMD to use). Same values either way.
+#[cfg(target_arch = "x86_64")]
+pub(super) type Corner = glam::Vec4;
+#[cfg(not(target_arch = "x86_64"))]
+pub(super) type Corner = Vec3;
+
+/// `v` as a corner (spare lane 0).
+#[inline(always)]
+pub(super) fn corner(v: Vec3) -> Corner {
+    #[cfg(target_arch = "x86_64")]
+    return v.extend(0.0);
+    #[cfg(not(target_arch = "x86_64"))]
+    return v;
+}
+
+/// The `x, y, z` of a corner.
+#[inline(always)]
+pub(super) fn point(c: Corner) -> Vec3 {
+    #[cfg(target_arch = "x86_64")]
+    return c.truncate();
+    #[cfg(not(target_arch = "x86_64"))]
+    return c;
+}
+
+/// The point a primitive is binned by: the centre of its box `lo, hi`, computed as
+/// [`Aabb::center`] does (`lo/2 + hi/2`, which cannot overflow), lane by lane.
+#[inline(always)]
+pub(super) fn centre(lo: Corner, hi: Corner) -> Corner {
+    lo * 0.5 + hi * 0.5
+}
+
+/// Growing `[lo, hi]` by `p` (finite corners: one vector `min` and `max`).
+#[inline(always)]
+pub(super) fn extend(lo: &mut Corner, hi: &mut Corner, p: Corner) {
+    *lo = lo.min(p);
+    *hi = hi.max(p);
+}
+
+/// A primitive as the scratch builder keeps it: its box and its index in the source (the
+/// centre it is binned by is computed from the box when needed). On x86-64 the corners are
+/// 16-byte vectors, so binning is one `min` and one `max` per bin, and the index lives in the
+/// lower corner's spare lane: 32 bytes. Elsewhere 28 bytes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrimRef {
+    lo: Corner,
+    hi: Corner,
+    #[cfg(not(target_arch = "x86_64"))]
+    index: u32,
+}
+
+impl PrimRef {
+    /// A record for initialising scratch storage: `[PrimRef::EMPTY; K]`.
+    pub const EMPTY: Self = Self {
+        lo: Corner::INFINITY,
+        hi: Corner::NEG_INFINITY,
+        #[cfg(not(target_arch = "x86_64"))]
+        index: 0,
+    };
+
+    /// The record of primitive `index` with box `b`.
+    #[inline(always)]
+    pub(super) fn new(b: &Aabb, index: u32) -> Self {
+        #[cfg(target_arch = "x86_64")]
+        return Self {
+            // The bits of `index` are only stored and copied, never computed with, so any
+            // bit pattern (a NaN's included) comes back unchanged.
+            lo: b.min.extend(f32::from_bits(index)),
+            hi: corner(b.max),
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        return Self {
+            lo: b.min,
+            hi: b.max,
+            index,
+        };
+    }
+
+    /// The box's corners, spare lanes zero.
+    #[inline(always)]
+    pub(super) fn corners(&self) -> (Corner, Corner) {
+        // The index's bits are a subnormal `f32` for most indices: arithmetic on them would
+        // take the processor's slow path, so the lane is cleared by a bit select first.
+        #[cfg(target_arch = "x86_64")]
+        return (
+            Corner::select(
+                glam::BVec4A::new(true, true, true, false),
+                self.lo,
+                Corner::ZERO,
+            ),
+            self.hi,
+        );
+        #[cfg(not(target_arch = "x86_64"))]
+        return (self.lo, self.hi);
+    }
+
+    /// The primitive's index in the source.
+    #[inline(always)]
+    pub(super) fn index(&self) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        return self.lo.w.to_bits();
+        #[cfg(not(target_arch = "x86_64"))]
+        return self.index;
+    }
+}
+
+impl Default for PrimRef {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
+/// Scratch entries [`super::Bvh::build_with_scratch`] needs for `prim_count` primitives: `N`.
+#[must_use]
+pub const fn scratch_capacity(prim_count: usize) -> usize {
+    prim_count
+}
+
+/// The primitives being partitioned: the box of element `k` of the current order (its spare
+/// lanes mean nothing), and swapping two elements.
+pub(super) trait Refs {
+    fn get(&self, k: usize) -> (Corner, Corner);
+    fn swap(&mut self, i: usize, j: usize);
+}
+
+/// The source read through the index array (no scratch).
+pub(super) struct Indexed<'a, S: ?Sized> {
+    pub(super) source: &'a S,
+    pub(super) indices: &'a mut [u32],
+}
+
+impl<S: PrimitiveSource + ?Sized> Refs for Indexed<'_, S> {
+    #[inline(always)]
+    fn get(&self, k: usize) -> (Corner, Corner) {
+        let i = self.indices.get(k).map_or(usize::MAX, |&i| i as usize);
+        let b = self.source.primitive_bounds(i);
+        (corner(b.min), corner(b.max))
+    }
+
+    #[inline(always)]
+    fn swap(&mut self, i: usize, j: usize) {
+        if i < self.indices.len() && j < self.indices.len() {
+            self.indices.swap(i, j);
+        }
+    }
+}
+
+/// The scratch records `offset ..` (a job's run holds the records of its primitive range
+/// only; positions stay global).
+pub(super) struct Scratch<'a> {
+    pub(super) refs: &'a mut [PrimRef],
+    pub(super) offset: usize,
+}
+
+impl Refs for Scratch<'_> {
+    #[inline(always)]
+    fn get(&self, k: usize) -> (Corner, Corner) {
+        k.checked_sub(self.offset)
+            .and_then(|k| self.refs.get(k))
+            .map_or((Corner::NAN, Corner::NAN), PrimRef::corners)
+    }
+
+    #[inline(always)]
+    fn swap(&mut self, i: usize, j: usize) {
+        let (Some(i), Some(j)) = (i.checked_sub(self.offset), j.checked_sub(self.offset)) else {
+            return;
+        };
+        if i < self.refs.len() && j < self.refs.len() {
+            self.refs.swap(i, j);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::MAX_PRIMITIVES;
+
+    #[test]
+    fn prim_ref_keeps_every_index_and_box() {
+        // Indices whose bits are a subnormal, a NaN, infinity and the largest allowed.
+        let b = Aabb::new(Vec3::new(-1.5, 2.0, -0.0), Vec3::new(3.0, 2.0, 7.25));
+        for index in [
+            0,
+            1,
+            0x007F_FFFF,
+            0x7F80_0000,
+            0x7F80_0001,
+            MAX_PRIMITIVES as u32,
+        ] {
+            let r = PrimRef::new(&b, index);
+            let copy = [r, PrimRef::EMPTY];
+            assert_eq!(copy[0].index(), index);
+            let (lo, hi) = copy[0].corners();
+            assert_eq!(Aabb::new(point(lo), point(hi)), b);
+            // The spare lanes are zero: no subnormal or NaN reaches the arithmetic.
+            assert_eq!(centre(lo, hi), corner(b.center()));
+        }
+    }
+}
