@@ -1,0 +1,124 @@
+//! `[mesh.NAME]` and the objects that name a mesh: read, smoothed, subdivided once, shared.
+
+use crate::error::{Error, Result};
+use crate::render::geom::MeshShape;
+use crate::scene::def::S;
+use std::sync::Arc;
+
+use super::Ctx;
+use super::object::list;
+
+/// A checked `[mesh.NAME]`: the file's path, the Laplacian smoothing `(step, iterations)`,
+/// the Loop levels and smooth shading.
+type MeshSettings = (std::path::PathBuf, Option<(f32, u32)>, u32, bool);
+
+/// Checks `[mesh.NAME]` without reading the file: it exists and is a file, the smoothing and
+/// subdivision settings are in range. Returns the path, the smoothing `(step, iterations)` and
+/// the subdivision levels. Run for every mesh definition, used or not.
+pub(super) fn mesh_def(ctx: &Ctx<'_>, name: &str) -> Result<MeshSettings> {
+    let Some(def) = ctx.mesh_defs.get(name).map(|d| d.get_ref()) else {
+        return Err(Error::Other(format!("no mesh named `{name}`")));
+    };
+    let p = format!("mesh.{name}");
+    let file = std::path::Path::new(def.file.get_ref());
+    let base = ctx.src.path.parent().unwrap_or(std::path::Path::new(""));
+    let path = base.join(file);
+    if path.is_dir() {
+        return Err(ctx.err(
+            &def.file.span(),
+            &format!("{p}.file"),
+            format!(
+                "mesh file `{}` is a directory, not an OBJ file ({})",
+                def.file.get_ref(),
+                path.display()
+            ),
+        ));
+    }
+    if !path.is_file() {
+        return Err(ctx.err(
+            &def.file.span(),
+            &format!("{p}.file"),
+            format!(
+                "mesh file `{}` not found (looked for {})",
+                def.file.get_ref(),
+                path.display()
+            ),
+        ));
+    }
+    let smoothing = match &def.smooth {
+        Some(s) => {
+            let sd = s.get_ref();
+            let step = ctx.f(&sd.step, &format!("{p}.smooth.step"))?;
+            if *sd.iterations.get_ref() > crate::scene::MAX_SMOOTH_ITERATIONS {
+                return Err(ctx.err(
+                    &sd.iterations.span(),
+                    &format!("{p}.smooth.iterations"),
+                    format!("at most {} iterations", crate::scene::MAX_SMOOTH_ITERATIONS),
+                ));
+            }
+            Some((step, *sd.iterations.get_ref()))
+        }
+        None => None,
+    };
+    let levels = def.subdivide.as_ref().map_or(0, |v| *v.get_ref());
+    if levels > 4 {
+        let span = def.subdivide.as_ref().map(|v| v.span()).unwrap_or_default();
+        return Err(ctx.err(
+            &span,
+            &format!("{p}.subdivide"),
+            "at most 4 levels (each multiplies the triangles by 4)",
+        ));
+    }
+    let smooth_shading = match &def.shading {
+        None => false,
+        Some(v) => match v.get_ref().as_str() {
+            "flat" => false,
+            "smooth" => true,
+            other => {
+                return Err(ctx.err(
+                    &v.span(),
+                    &format!("{p}.shading"),
+                    format!("unknown shading `{other}` (expected `flat` or `smooth`)"),
+                ));
+            }
+        },
+    };
+    Ok((path, smoothing, levels, smooth_shading))
+}
+
+pub(super) fn mesh(ctx: &mut Ctx<'_>, name: &S<String>, field: &str) -> Result<Arc<MeshShape>> {
+    let Some((_, loaded)) = ctx.meshes.get(name.get_ref()) else {
+        let known: Vec<&str> = ctx.meshes.keys().map(String::as_str).collect();
+        return Err(ctx.err(
+            &name.span(),
+            field,
+            format!(
+                "no mesh named `{}` (defined with [mesh.NAME]: {})",
+                name.get_ref(),
+                list(&known)
+            ),
+        ));
+    };
+    if let Some(m) = loaded {
+        return Ok(m.clone());
+    }
+    let (path, smoothing, levels, smooth_shading) = mesh_def(ctx, name.get_ref())?;
+    let def = ctx.mesh_defs[name.get_ref()].get_ref();
+    let p = format!("mesh.{}", name.get_ref());
+    let shape = crate::scene::load_mesh(name.get_ref(), &path, smoothing, levels, smooth_shading)
+        .map_err(|e| match e {
+        Error::Input { at, message } if at.line.is_none() => ctx.err(
+            &def.file.span(),
+            &format!("{p}.file"),
+            format!("{}: {message}", at.file.display()),
+        ),
+        other => other,
+    })?;
+    let shape = Arc::new(shape);
+    ctx.loaded.push(shape.clone());
+    ctx.mesh_files.push(path);
+    if let Some(entry) = ctx.meshes.get_mut(name.get_ref()) {
+        entry.1 = Some(shape.clone());
+    }
+    Ok(shape)
+}

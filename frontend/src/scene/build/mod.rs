@@ -1,0 +1,212 @@
+//! Checks a parsed scene and builds the render-ready [`Scene`].
+
+use super::def::{self, S, V3};
+use super::{DEFAULT_MAX_DEPTH, Scene, Source};
+use crate::error::{Error, Result};
+use crate::render::geom::MeshShape;
+use glam::Vec3;
+use std::collections::{BTreeMap, HashMap};
+use std::ops::Range;
+use std::sync::Arc;
+
+mod camera;
+mod light;
+mod material;
+mod mesh_ref;
+mod object;
+mod repeat;
+mod transform;
+
+use camera::camera;
+use light::light;
+use material::material;
+use mesh_ref::mesh_def;
+use object::object;
+use repeat::{MAX_OBJECTS, repeat};
+
+type Span = Range<usize>;
+
+struct Ctx<'a> {
+    src: &'a Source<'a>,
+    materials: HashMap<String, u32>,
+    meshes: BTreeMap<String, (Span, Option<Arc<MeshShape>>)>,
+    mesh_defs: BTreeMap<String, S<def::MeshDef>>,
+    loaded: Vec<Arc<MeshShape>>,
+    mesh_files: Vec<std::path::PathBuf>,
+}
+
+impl Ctx<'_> {
+    fn err(&self, span: &Span, field: &str, msg: impl Into<String>) -> Error {
+        self.src.err(span, field, msg)
+    }
+
+    fn f(&self, v: &S<f32>, field: &str) -> Result<f32> {
+        let x = *v.get_ref();
+        if !x.is_finite() {
+            return Err(self.err(&v.span(), field, format!("{x} is not a finite number")));
+        }
+        Ok(x)
+    }
+
+    fn positive(&self, v: &S<f32>, field: &str) -> Result<f32> {
+        let x = self.f(v, field)?;
+        if !(x > 0.0) {
+            return Err(self.err(&v.span(), field, format!("must be > 0 (got {x})")));
+        }
+        Ok(x)
+    }
+
+    fn unit_range(&self, v: &S<f32>, field: &str) -> Result<f32> {
+        let x = self.f(v, field)?;
+        if !(0.0..=1.0).contains(&x) {
+            return Err(self.err(&v.span(), field, format!("must be in [0, 1] (got {x})")));
+        }
+        Ok(x)
+    }
+
+    fn v3(&self, v: &V3, field: &str) -> Result<Vec3> {
+        let a = **v.get_ref();
+        if a.iter().any(|x| !x.is_finite()) {
+            return Err(self.err(
+                &v.span(),
+                field,
+                format!("{a:?} has a non-finite component"),
+            ));
+        }
+        Ok(Vec3::from_array(a))
+    }
+
+    fn color(&self, v: &V3, field: &str) -> Result<Vec3> {
+        let c = self.v3(v, field)?;
+        if c.min_element() < 0.0 {
+            return Err(self.err(&v.span(), field, "colour components must be ≥ 0"));
+        }
+        Ok(c)
+    }
+
+    fn dir(&self, v: &V3, field: &str) -> Result<Vec3> {
+        let d = self.v3(v, field)?.normalize_or_zero();
+        if d == Vec3::ZERO {
+            return Err(self.err(&v.span(), field, "must be a non-zero vector"));
+        }
+        Ok(d)
+    }
+
+    fn need<'b, T>(&self, v: &'b Option<T>, at: &Span, field: &str, kind: &str) -> Result<&'b T> {
+        v.as_ref().ok_or_else(|| {
+            self.err(
+                at,
+                field,
+                format!("missing field `{}` for type `{kind}`", leaf(field)),
+            )
+        })
+    }
+}
+
+fn leaf(field: &str) -> &str {
+    field.rsplit('.').next().unwrap_or(field)
+}
+
+pub(super) fn build(src: &Source<'_>, d: def::SceneDef) -> Result<Scene> {
+    let mut ctx = Ctx {
+        src,
+        materials: HashMap::new(),
+        meshes: BTreeMap::new(),
+        mesh_defs: d.mesh,
+        loaded: Vec::new(),
+        mesh_files: Vec::new(),
+    };
+    let ambient = match &d.ambient {
+        Some(v) => ctx.color(v, "ambient")?,
+        None => Vec3::ZERO,
+    };
+    let background = match &d.background {
+        Some(v) => ctx.color(v, "background")?,
+        None => Vec3::ZERO,
+    };
+    let max_depth = d
+        .max_depth
+        .as_ref()
+        .map_or(DEFAULT_MAX_DEPTH, |v| *v.get_ref());
+    if max_depth > 64 {
+        let span = d.max_depth.as_ref().map(|v| v.span()).unwrap_or_default();
+        return Err(ctx.err(&span, "max_depth", "must be ≤ 64"));
+    }
+    let samples = d.samples.as_ref().map_or(1, |v| *v.get_ref());
+    if !(1..=crate::render::antialias::MAX_SAMPLES).contains(&samples) {
+        let span = d.samples.as_ref().map(|v| v.span()).unwrap_or_default();
+        return Err(ctx.err(
+            &span,
+            "samples",
+            format!("must be 1 to {}", crate::render::antialias::MAX_SAMPLES),
+        ));
+    }
+    let camera = camera(&ctx, &d.camera)?;
+
+    let mut lights = Vec::new();
+    for (i, l) in d.light.iter().enumerate() {
+        lights.push(light(&ctx, i, l)?);
+    }
+
+    let mut materials = Vec::new();
+    for (name, m) in &d.material {
+        ctx.materials.insert(name.clone(), materials.len() as u32);
+        materials.push(material(&ctx, name, m)?);
+    }
+    let names: Vec<String> = ctx.mesh_defs.keys().cloned().collect();
+    for name in names {
+        let span = ctx.mesh_defs[&name].span();
+        ctx.meshes.insert(name, (span, None));
+    }
+
+    let mut objects = Vec::new();
+    let mut labels = Vec::new();
+    for (i, o) in d.object.iter().enumerate() {
+        let field = format!("object[{i}]");
+        let label = format!("{field} ({})", o.get_ref().kind.get_ref());
+        let node = object(&mut ctx, o, &field, None)?;
+        match &o.get_ref().repeat {
+            None => {
+                labels.push(label);
+                objects.push(node);
+            }
+            Some(r) => {
+                for (k, copy) in repeat(&ctx, &node, r, &field, objects.len())?
+                    .into_iter()
+                    .enumerate()
+                {
+                    labels.push(format!("{label} copy {k}"));
+                    objects.push(copy);
+                }
+            }
+        }
+        if objects.len() > MAX_OBJECTS {
+            return Err(ctx.err(
+                &o.span(),
+                &field,
+                format!("more than {MAX_OBJECTS} objects in the scene"),
+            ));
+        }
+    }
+    // Definitions no object uses are still checked (not read: nothing renders them).
+    for (name, (_, loaded)) in &ctx.meshes {
+        if loaded.is_none() {
+            mesh_def(&ctx, name)?;
+        }
+    }
+    Ok(Scene {
+        path: src.path.to_path_buf(),
+        camera,
+        ambient,
+        background,
+        max_depth,
+        samples,
+        lights,
+        materials,
+        top: super::top::TopLevel::new(&objects),
+        objects,
+        object_labels: labels,
+        meshes: ctx.loaded,
+        mesh_files: ctx.mesh_files,
+    })
+}

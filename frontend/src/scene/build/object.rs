@@ -1,0 +1,304 @@
+//! `[[object]]`: the object types, their fields and CSG operands.
+
+use crate::error::Result;
+use crate::render::geom::{ClippedQuadric, CsgOp, Node, POLYGON_MAX_VERTICES, Polygon, Shape};
+use crate::scene::def::{ObjectDef, S, V3};
+use glam::{DMat3, DVec3, Vec3};
+use halfray_core::plane::Plane;
+use halfray_core::quadric::{Ellipsoid, Quadric};
+use halfray_core::sphere::Sphere;
+use halfray_core::{Aabb, GeometryError};
+
+use super::mesh_ref::mesh;
+use super::transform::transform;
+use super::{Ctx, Span};
+
+/// Fields each object type may use (besides `type`, `material`, `transform`).
+pub(super) fn allowed(kind: &str) -> Option<&'static [&'static str]> {
+    Some(match kind {
+        "sphere" => &["center", "radius"],
+        "ellipsoid" => &["center", "radii"],
+        "quadric" => &["coefficients", "min", "max"],
+        "box" => &["min", "max"],
+        "plane" => &["point", "normal"],
+        "triangle" | "polygon" => &["vertices"],
+        "mesh" => &["mesh"],
+        "csg" => &["op", "operands"],
+        _ => return None,
+    })
+}
+
+pub(super) fn object(
+    ctx: &mut Ctx<'_>,
+    o: &S<ObjectDef>,
+    p: &str,
+    inherited: Option<u32>,
+) -> Result<Node> {
+    let span = o.span();
+    let o = o.get_ref();
+    let kind = o.kind.get_ref().as_str();
+    let Some(ok) = allowed(kind) else {
+        return Err(ctx.err(
+            &o.kind.span(),
+            &format!("{p}.type"),
+            format!(
+                "unknown object type `{kind}` (expected sphere, ellipsoid, quadric, box, plane, triangle, polygon, mesh or csg)"
+            ),
+        ));
+    };
+    for (name, s) in o.present_fields() {
+        if !ok.contains(&name) {
+            return Err(ctx.err(
+                &s,
+                &format!("{p}.{name}"),
+                format!(
+                    "field `{name}` is not used by type `{kind}` (it takes: {})",
+                    ok.join(", ")
+                ),
+            ));
+        }
+    }
+    let material = match &o.material {
+        Some(m) => *ctx.materials.get(m.get_ref()).ok_or_else(|| {
+            let known: Vec<&str> = ctx.materials.keys().map(String::as_str).collect();
+            ctx.err(
+                &m.span(),
+                &format!("{p}.material"),
+                format!(
+                    "no material named `{}` (defined: {})",
+                    m.get_ref(),
+                    list(&known)
+                ),
+            )
+        })?,
+        None => match inherited {
+            Some(m) => m,
+            None => {
+                return Err(ctx.err(&span, &format!("{p}.material"), "missing field `material`"));
+            }
+        },
+    };
+    let transform = match &o.transform {
+        Some(t) => Some(transform(ctx, t, &format!("{p}.transform"))?),
+        None => None,
+    };
+    let f = |name: &str| format!("{p}.{name}");
+    let shape = match kind {
+        "sphere" => {
+            let c = ctx.need(&o.center, &span, &f("center"), kind)?;
+            let r = ctx.need(&o.radius, &span, &f("radius"), kind)?;
+            let center = ctx.v3(c, &f("center"))?;
+            let radius = ctx.positive(r, &f("radius"))?;
+            Shape::Sphere(
+                Sphere::new(center, radius)
+                    .map_err(|e| ctx.err(&r.span(), &f("radius"), e.to_string()))?,
+            )
+        }
+        "ellipsoid" => {
+            let c = ctx.need(&o.center, &span, &f("center"), kind)?;
+            let r = ctx.need(&o.radii, &span, &f("radii"), kind)?;
+            let radii = ctx.v3(r, &f("radii"))?;
+            if !(radii.min_element() > 0.0) {
+                return Err(ctx.err(&r.span(), &f("radii"), "every radius must be > 0"));
+            }
+            let center = ctx.v3(c, &f("center"))?;
+            Shape::Ellipsoid(
+                Ellipsoid::new(center, radii)
+                    .map_err(|e| ctx.err(&r.span(), &f("radii"), e.to_string()))?,
+            )
+        }
+        "quadric" => {
+            let q = ctx.need(&o.coefficients, &span, &f("coefficients"), kind)?;
+            let qd = q.get_ref();
+            let g = |v: &Option<S<f32>>, n: &str| -> Result<f64> {
+                v.as_ref().map_or(Ok(0.0), |x| {
+                    ctx.f(x, &f(&format!("coefficients.{n}"))).map(f64::from)
+                })
+            };
+            let (xy, xz, yz) = (
+                g(&qd.xy, "xy")? / 2.0,
+                g(&qd.xz, "xz")? / 2.0,
+                g(&qd.yz, "yz")? / 2.0,
+            );
+            // The core's form is xᵀAx + 2bᵀx + c.
+            let a = DMat3::from_cols(
+                DVec3::new(g(&qd.xx, "xx")?, xy, xz),
+                DVec3::new(xy, g(&qd.yy, "yy")?, yz),
+                DVec3::new(xz, yz, g(&qd.zz, "zz")?),
+            );
+            let b = DVec3::new(g(&qd.x, "x")?, g(&qd.y, "y")?, g(&qd.z, "z")?) / 2.0;
+            let quadric = Quadric::new(a, b, g(&qd.c, "c")?).map_err(|e| match e {
+                GeometryError::Degenerate => ctx.err(
+                    &q.span(),
+                    &f("coefficients"),
+                    "all quadratic and linear coefficients are 0",
+                ),
+                other => ctx.err(&q.span(), &f("coefficients"), other.to_string()),
+            })?;
+            let clip = match (&o.min, &o.max) {
+                (Some(lo), Some(hi)) => Some(box_of(ctx, lo, hi, p)?),
+                (None, None) => None,
+                (Some(s), None) | (None, Some(s)) => {
+                    return Err(ctx.err(
+                        &s.span(),
+                        &f("min"),
+                        "a clip box needs both `min` and `max`",
+                    ));
+                }
+            };
+            Shape::Quadric(ClippedQuadric { quadric, clip })
+        }
+        "box" => {
+            let lo = ctx.need(&o.min, &span, &f("min"), kind)?;
+            let hi = ctx.need(&o.max, &span, &f("max"), kind)?;
+            Shape::Box(box_of(ctx, lo, hi, p)?)
+        }
+        "plane" => {
+            let pt = ctx.need(&o.point, &span, &f("point"), kind)?;
+            let n = ctx.need(&o.normal, &span, &f("normal"), kind)?;
+            let point = ctx.v3(pt, &f("point"))?;
+            let normal = ctx.dir(n, &f("normal"))?;
+            Shape::Plane(
+                Plane::new(point, normal)
+                    .map_err(|e| ctx.err(&n.span(), &f("normal"), e.to_string()))?,
+            )
+        }
+        "triangle" | "polygon" => {
+            let vs = ctx.need(&o.vertices, &span, &f("vertices"), kind)?;
+            let pts: Vec<Vec3> = vs.get_ref().iter().map(|a| Vec3::from_array(**a)).collect();
+            if pts.iter().any(|v| !v.is_finite()) {
+                return Err(ctx.err(
+                    &vs.span(),
+                    &f("vertices"),
+                    "a vertex has a non-finite coordinate",
+                ));
+            }
+            if kind == "triangle" {
+                let [a, b, c] = pts[..] else {
+                    return Err(ctx.err(
+                        &vs.span(),
+                        &f("vertices"),
+                        format!("a triangle needs 3 vertices, got {}", pts.len()),
+                    ));
+                };
+                if (b - a).cross(c - a) == Vec3::ZERO {
+                    return Err(ctx.err(
+                        &vs.span(),
+                        &f("vertices"),
+                        "degenerate triangle (zero area)",
+                    ));
+                }
+                Shape::Triangle([a, b, c])
+            } else {
+                Shape::Polygon(Box::new(polygon(ctx, pts, &vs.span(), &f("vertices"))?))
+            }
+        }
+        "mesh" => {
+            let m = ctx.need(&o.mesh, &span, &f("mesh"), kind)?;
+            Shape::Mesh(mesh(ctx, m, &f("mesh"))?)
+        }
+        "csg" => {
+            let op = ctx.need(&o.op, &span, &f("op"), kind)?;
+            let op_v = match op.get_ref().as_str() {
+                "union" => CsgOp::Union,
+                "intersection" => CsgOp::Intersection,
+                "difference" => CsgOp::Difference,
+                other => {
+                    return Err(ctx.err(
+                        &op.span(),
+                        &f("op"),
+                        format!("unknown CSG operation `{other}` (expected union, intersection or difference)"),
+                    ));
+                }
+            };
+            let ops = ctx.need(&o.operands, &span, &f("operands"), kind)?;
+            if ops.get_ref().len() != 2 {
+                return Err(ctx.err(
+                    &ops.span(),
+                    &f("operands"),
+                    format!(
+                        "a CSG object needs exactly 2 operands, got {} (nest CSG objects for more)",
+                        ops.get_ref().len()
+                    ),
+                ));
+            }
+            let mut nodes = Vec::new();
+            for (k, od) in ops.get_ref().iter().enumerate() {
+                let fp = format!("{p}.operands[{k}]");
+                if let Some(r) = &od.get_ref().repeat {
+                    return Err(ctx.err(
+                        &r.span(),
+                        &format!("{fp}.repeat"),
+                        "`repeat` is for top-level objects, not CSG operands",
+                    ));
+                }
+                let n = object(ctx, od, &fp, Some(material))?;
+                if !n.shape.is_solid() {
+                    let why = match &n.shape {
+                        Shape::Mesh(m) => format!(
+                            "mesh `{}` is not closed ({} boundary or unpaired edges): a CSG operand must bound a solid",
+                            m.name, m.boundary_edges
+                        ),
+                        Shape::Quadric(_) => {
+                            "a clipped quadric is not closed: a CSG operand must bound a solid"
+                                .to_string()
+                        }
+                        _ => format!(
+                            "a {} is not closed: a CSG operand must bound a solid",
+                            od.get_ref().kind.get_ref()
+                        ),
+                    };
+                    return Err(ctx.err(&od.get_ref().kind.span(), &fp, why));
+                }
+                nodes.push(n);
+            }
+            let b = nodes.pop().map(Box::new);
+            let a = nodes.pop().map(Box::new);
+            match (a, b) {
+                (Some(a), Some(b)) => Shape::Csg(op_v, a, b),
+                _ => unreachable!("checked: two operands"),
+            }
+        }
+        _ => unreachable!("checked by `allowed`"),
+    };
+    Ok(Node::new(shape, material, transform))
+}
+
+pub(super) fn list(names: &[&str]) -> String {
+    if names.is_empty() {
+        "none".to_string()
+    } else {
+        names.join(", ")
+    }
+}
+
+pub(super) fn box_of(ctx: &Ctx<'_>, lo: &V3, hi: &V3, p: &str) -> Result<Aabb> {
+    let a = ctx.v3(lo, &format!("{p}.min"))?;
+    let b = ctx.v3(hi, &format!("{p}.max"))?;
+    if !(a.cmplt(b).all()) {
+        return Err(ctx.err(
+            &hi.span(),
+            &format!("{p}.max"),
+            "must be > `min` on every axis",
+        ));
+    }
+    Ok(Aabb::new(a, b))
+}
+
+pub(super) fn polygon(ctx: &Ctx<'_>, pts: Vec<Vec3>, span: &Span, field: &str) -> Result<Polygon> {
+    Polygon::new(&pts).map_err(|e| {
+        let msg = match e {
+            GeometryError::VertexCount => format!(
+                "a polygon needs 3 to {POLYGON_MAX_VERTICES} vertices, got {}",
+                pts.len()
+            ),
+            GeometryError::NonPlanar => {
+                "polygon is not planar (a vertex is farther than 1e-5 × its size from the plane)"
+                    .to_string()
+            }
+            GeometryError::Degenerate => "degenerate polygon (zero area)".to_string(),
+            other => other.to_string(),
+        };
+        ctx.err(span, field, msg)
+    })
+}

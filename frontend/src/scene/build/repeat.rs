@@ -1,0 +1,87 @@
+//! `repeat` on a top-level object: a grid of copies.
+
+use crate::error::Result;
+use crate::render::geom::Node;
+use crate::scene::def::{self, S};
+use glam::Vec3;
+use halfray_core::transform::Transform;
+
+use super::Ctx;
+use super::object::list;
+
+/// Most objects a scene may hold, repeated copies included: 10⁶ (a copy costs a few hundred
+/// bytes and one top-level BVH leaf; a mesh's triangles are shared by its copies).
+pub const MAX_OBJECTS: usize = 1_000_000;
+
+/// The copies `repeat` makes of `node` (object `p`): copy `(i, j, k)`, numbered
+/// `i + nx·(j + ny·k)`, is `node` moved by `(i·dx, j·dy, k·dz)` after its own transform, with
+/// material `materials[number mod len]` when given. `before` objects exist already (for
+/// [`MAX_OBJECTS`]).
+pub(super) fn repeat(
+    ctx: &Ctx<'_>,
+    node: &Node,
+    r: &S<def::RepeatDef>,
+    p: &str,
+    before: usize,
+) -> Result<Vec<Node>> {
+    let rd = r.get_ref();
+    let f = |name: &str| format!("{p}.repeat.{name}");
+    let [nx, ny, nz] = rd.count.get_ref().0;
+    let total = u64::from(nx) * u64::from(ny) * u64::from(nz);
+    if total == 0 {
+        return Err(ctx.err(&rd.count.span(), &f("count"), "every count must be ≥ 1"));
+    }
+    if total + before as u64 > MAX_OBJECTS as u64 {
+        return Err(ctx.err(
+            &rd.count.span(),
+            &f("count"),
+            format!("{total} copies: more than {MAX_OBJECTS} objects in the scene"),
+        ));
+    }
+    let step = ctx.v3(&rd.step, &f("step"))?;
+    let materials = match &rd.materials {
+        None => vec![node.material],
+        Some(names) if names.get_ref().is_empty() => {
+            return Err(ctx.err(
+                &names.span(),
+                &f("materials"),
+                "must name at least one material",
+            ));
+        }
+        Some(names) => names
+            .get_ref()
+            .iter()
+            .map(|m| {
+                ctx.materials.get(m.get_ref()).copied().ok_or_else(|| {
+                    let known: Vec<&str> = ctx.materials.keys().map(String::as_str).collect();
+                    ctx.err(
+                        &m.span(),
+                        &f("materials"),
+                        format!(
+                            "no material named `{}` (defined: {})",
+                            m.get_ref(),
+                            list(&known)
+                        ),
+                    )
+                })
+            })
+            .collect::<Result<Vec<u32>>>()?,
+    };
+    let mut out = Vec::with_capacity(total as usize);
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let offset = step * Vec3::new(i as f32, j as f32, k as f32);
+                let moved = Transform::translate(offset)
+                    .and_then(|t| match &node.transform {
+                        Some(own) => own.then(&t),
+                        None => Ok(t),
+                    })
+                    .map_err(|e| ctx.err(&rd.step.span(), &f("step"), e.to_string()))?;
+                let material = materials[out.len() % materials.len()];
+                out.push(Node::new(node.shape.clone(), material, Some(moved)));
+            }
+        }
+    }
+    Ok(out)
+}

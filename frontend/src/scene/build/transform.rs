@@ -1,0 +1,89 @@
+//! `transform = [step, …]` on an object.
+
+use crate::error::Result;
+use crate::render::xform;
+use crate::scene::def::{self, S};
+use glam::{Mat4, Vec3, Vec4};
+use halfray_core::transform::Transform;
+
+use super::Ctx;
+
+pub(super) fn transform(
+    ctx: &Ctx<'_>,
+    t: &S<Vec<S<def::TransformDef>>>,
+    p: &str,
+) -> Result<Transform> {
+    let mut m = Mat4::IDENTITY;
+    for (k, step) in t.get_ref().iter().enumerate() {
+        let f = format!("{p}[{k}]");
+        let s = step.get_ref();
+        let set = usize::from(s.translate.is_some())
+            + usize::from(s.rotate.is_some())
+            + usize::from(s.scale.is_some())
+            + usize::from(s.matrix.is_some());
+        if set != 1 {
+            return Err(ctx.err(
+                &step.span(),
+                &f,
+                "each transform step needs exactly one of `translate`, `rotate`, `scale`, `matrix`",
+            ));
+        }
+        let (step_m, span, name) = if let Some(v) = &s.translate {
+            (
+                Mat4::from_translation(ctx.v3(v, &format!("{f}.translate"))?),
+                v.span(),
+                "translate",
+            )
+        } else if let Some(r) = &s.rotate {
+            let rd = r.get_ref();
+            let axis = ctx.v3(&rd.axis, &format!("{f}.rotate.axis"))?;
+            let deg = ctx.f(&rd.degrees, &format!("{f}.rotate.degrees"))?;
+            let rm = xform::rotation(axis, deg).ok_or_else(|| {
+                ctx.err(
+                    &rd.axis.span(),
+                    &format!("{f}.rotate.axis"),
+                    "must be a non-zero vector",
+                )
+            })?;
+            (rm, r.span(), "rotate")
+        } else if let Some(sc) = &s.scale {
+            let v = Vec3::from_array(sc.get_ref().0);
+            if !v.is_finite() {
+                return Err(ctx.err(&sc.span(), &format!("{f}.scale"), "non-finite scale"));
+            }
+            (Mat4::from_scale(v), sc.span(), "scale")
+        } else if let Some(mx) = &s.matrix {
+            let rows = mx.get_ref();
+            if rows.iter().flat_map(|r| r.iter()).any(|x| !x.is_finite()) {
+                return Err(ctx.err(
+                    &mx.span(),
+                    &format!("{f}.matrix"),
+                    "non-finite matrix entry",
+                ));
+            }
+            if *rows[3] != [0.0, 0.0, 0.0, 1.0] {
+                return Err(ctx.err(
+                    &mx.span(),
+                    &format!("{f}.matrix"),
+                    format!(
+                        "not an affine transform: the last row must be [0, 0, 0, 1], got {:?}",
+                        *rows[3]
+                    ),
+                ));
+            }
+            let r = |i: usize| Vec4::from_array(*rows[i]);
+            (
+                Mat4::from_cols(r(0), r(1), r(2), r(3)).transpose(),
+                mx.span(),
+                "matrix",
+            )
+        } else {
+            unreachable!("exactly one is set")
+        };
+        // Check each step, so the error points at the step that is singular.
+        Transform::new(step_m)
+            .map_err(|e| ctx.err(&span, &format!("{f}.{name}"), e.to_string()))?;
+        m = step_m * m;
+    }
+    Transform::new(m).map_err(|e| ctx.err(&t.span(), p, e.to_string()))
+}
