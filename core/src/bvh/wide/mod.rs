@@ -51,6 +51,7 @@
 
 mod collapse;
 mod node;
+mod node_test;
 mod query;
 mod refit;
 mod traverse;
