@@ -1,0 +1,230 @@
+//! The primitives' own queries: closest hit at a root of the line, boxes, triangles, meshes
+//! (closest hit and every counted crossing).
+
+use super::*;
+use glam::{Vec2, Vec3};
+use halfray_core::bvh::TraversalStats;
+use halfray_core::float::gamma;
+use halfray_core::quadric::Quadric;
+use halfray_core::triangle::{TriangleIntersector, Watertight};
+use halfray_core::{Aabb, Hit, Ray};
+
+/// The hit of `intersect` at the root `t` of the ray's line: the interval is narrowed to
+/// `(t⁻, t]` (one ulp below `t`), so an intersector that takes the nearest root in the interval
+/// returns exactly this root, computed as in a plain query.
+#[inline]
+pub(super) fn hit_at_root(
+    ray: &Ray,
+    t: f32,
+    intersect: impl Fn(&Ray) -> Option<Hit>,
+) -> Option<Hit> {
+    intersect(&Ray::with_interval(
+        ray.origin,
+        ray.direction,
+        t.next_down(),
+        t,
+    ))
+}
+
+/// Whether the line `o + t·d` is inside (`f < 0`) the quadric as `t → −∞`: the sign of the
+/// leading coefficient of `f(o + t·d)`.
+pub(super) fn quadric_inside_at_start(q: &Quadric, ray: &Ray) -> bool {
+    let o = ray.origin.as_dvec3();
+    let d = ray.direction.as_dvec3();
+    let qa = d.dot(q.matrix() * d);
+    let qb = d.dot(q.gradient(o));
+    if qa != 0.0 {
+        qa < 0.0
+    } else if qb != 0.0 {
+        qb > 0.0
+    } else {
+        q.eval(o) < 0.0
+    }
+}
+
+impl ClippedQuadric {
+    pub(super) fn in_clip(&self, h: &Hit) -> bool {
+        self.clip.is_none_or(|b| b.contains_point(h.point))
+    }
+
+    pub(super) fn closest(&self, ray: &Ray) -> Option<Hit> {
+        if self.clip.is_none() {
+            return self.quadric.intersect(ray);
+        }
+        let (t0, t1) = self.quadric.roots(ray)?;
+        [t0 as f32, t1 as f32]
+            .into_iter()
+            .filter(|&t| ray.contains(t))
+            .filter_map(|t| hit_at_root(ray, t, |r| self.quadric.intersect(r)))
+            .find(|h| self.in_clip(h))
+    }
+}
+
+/// Hit on an axis-aligned box at `t` entering (`enter`) or leaving, face snapped exactly.
+pub(super) fn box_hits(b: &Aabb, ray: &Ray) -> Option<(Hit, Hit)> {
+    let o = ray.origin.as_dvec3();
+    let d = ray.direction.as_dvec3();
+    let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+    let (mut a0, mut a1) = (0usize, 0usize);
+    for axis in 0..3 {
+        let (lo, hi) = (f64::from(b.min[axis]), f64::from(b.max[axis]));
+        if d[axis] == 0.0 {
+            if o[axis] < lo || o[axis] > hi {
+                return None;
+            }
+            continue;
+        }
+        let (mut n, mut f) = ((lo - o[axis]) / d[axis], (hi - o[axis]) / d[axis]);
+        if n > f {
+            std::mem::swap(&mut n, &mut f);
+        }
+        if n > t0 {
+            t0 = n;
+            a0 = axis;
+        }
+        if f < t1 {
+            t1 = f;
+            a1 = axis;
+        }
+    }
+    if !(t0 <= t1) || !t0.is_finite() || !t1.is_finite() {
+        return None;
+    }
+    let mk = |t: f64, axis: usize, enter: bool| {
+        let mut p = o + d * t;
+        let mut normal = Vec3::ZERO;
+        // Entering through the face the ray moves into: the near face.
+        let to_max = (d[axis] < 0.0) == enter;
+        p[axis] = if to_max {
+            f64::from(b.max[axis])
+        } else {
+            f64::from(b.min[axis])
+        };
+        normal[axis] = if to_max { 1.0 } else { -1.0 };
+        let point = p.as_vec3().clamp(b.min, b.max);
+        let mut err = point.abs() * gamma(3);
+        err[axis] = 0.0;
+        Hit {
+            t: t as f32,
+            point,
+            point_error: err,
+            normal,
+            uv: Vec2::ZERO,
+            front_face: ray.direction.dot(normal) < 0.0,
+        }
+    };
+    Some((mk(t0, a0, true), mk(t1, a1, false)))
+}
+
+pub(super) fn tri_hit(v: &[Vec3; 3], ray: &Ray) -> Option<(Hit, Vec3)> {
+    let th = Watertight.intersect(ray, v)?;
+    Some((th.to_hit(v), Vec3::new(th.b0(), th.b1, th.b2)))
+}
+
+impl MeshShape {
+    pub(super) fn closest(
+        &self,
+        ray: &Ray,
+        stats: &mut TraversalStats,
+    ) -> Option<(Hit, Vec3, Option<Vec3>)> {
+        let (i, th) = self.accel.closest_with_stats(&Watertight, ray, stats)?;
+        let v = self.accel.mesh.triangle(i as usize);
+        let bary = Vec3::new(th.b0(), th.b1, th.b2);
+        let hit = th.to_hit(&v);
+        Some((hit, bary, self.shading_normal(i as usize, bary, hit.normal)))
+    }
+
+    /// The interpolated vertex normal of triangle `tri` at barycentrics `bary`, turned to the
+    /// side of the geometric normal `geometric`; `None` without vertex normals or where they
+    /// cancel.
+    pub fn shading_normal(&self, tri: usize, bary: Vec3, geometric: Vec3) -> Option<Vec3> {
+        let normals = self.normals.as_ref()?;
+        let t = self.accel.mesh.triangles.get(tri)?;
+        let n = t
+            .iter()
+            .zip(bary.to_array())
+            .map(|(&k, b)| normals.get(k as usize).copied().unwrap_or(Vec3::ZERO) * b)
+            .sum::<Vec3>()
+            .try_normalize()?;
+        Some(if n.dot(geometric) < 0.0 { -n } else { n })
+    }
+
+    /// Every triangle the closed watertight test hits on the ray's interval, with its index
+    /// and [`halfray_core::triangle::WatertightRay::crossing_sign`] (0 for a triangle that the
+    /// rule does not count: the second triangle of an edge, the rest of a vertex's fan).
+    pub(super) fn all_hits(&self, ray: &Ray, stats: &mut TraversalStats, out: &mut Vec<MeshHit>) {
+        let Some(pre) = Watertight.prepare(ray) else {
+            return;
+        };
+        let _ = self.accel.bvh().closest_hit::<()>(
+            ray,
+            |prim, v, r| {
+                // `r.t_max` never shrinks: we never report a hit, so every crossing is seen.
+                if let Some(th) = Watertight.intersect_prepared(&pre, r, v) {
+                    out.push(MeshHit {
+                        prim,
+                        hit: th.to_hit(v),
+                        bary: Vec3::new(th.b0(), th.b1, th.b2),
+                        sign: pre.crossing_sign(r.origin, v),
+                    });
+                }
+                None
+            },
+            Some(stats),
+        );
+    }
+}
+
+/// One triangle hit of [`MeshShape::all_hits`].
+pub(super) struct MeshHit {
+    prim: u32,
+    hit: Hit,
+    bary: Vec3,
+    sign: i8,
+}
+
+/// The crossings of a closed mesh along a whole line, from its triangle hits: **one per
+/// surface crossing**, whatever edge or vertex the line passes through. Hits at equal `t` form
+/// one point of the line; there the crossings [`WatertightRay::crossing_sign`] counts (those
+/// of the line moved infinitesimally off the edge) become events, alternating from the state
+/// before the point, so the winding count changes by exactly their sum. A point where the
+/// closed test hits but the rule counts nothing (the line grazes an edge or vertex) becomes an
+/// empty interval, two events at the same `t`: the surface is still seen there, as a plain
+/// closest hit sees it. Each point's first event carries the hit of its smallest triangle
+/// index, the closest-hit rule, so a mesh traced through this path shows the same picture
+/// (`--force-all-effects`).
+///
+/// [`WatertightRay::crossing_sign`]: halfray_core::triangle::WatertightRay::crossing_sign
+pub(super) fn mesh_events(
+    mut hits: Vec<MeshHit>,
+    event: impl Fn(Hit, Vec3, u32, bool) -> Event,
+) -> Vec<Event> {
+    hits.sort_by(|a, b| a.hit.t.total_cmp(&b.hit.t).then(a.prim.cmp(&b.prim)));
+    let mut out = Vec::with_capacity(hits.len());
+    let mut inside = false;
+    let mut i = 0;
+    while i < hits.len() {
+        let t = hits[i].hit.t;
+        let group = hits[i..].iter().take_while(|h| h.hit.t == t).count();
+        let point = &hits[i..i + group];
+        let counted = point.iter().filter(|h| h.sign != 0).count();
+        // An empty interval where nothing is counted; else one event per counted crossing.
+        let n = if counted == 0 { 2 } else { counted };
+        for k in 0..n {
+            inside = !inside;
+            // The first event: the closest-hit record; later ones: a counted triangle.
+            let h = if k == 0 {
+                &point[0]
+            } else {
+                point
+                    .iter()
+                    .filter(|h| h.sign != 0)
+                    .nth(k)
+                    .unwrap_or(&point[0])
+            };
+            out.push(event(h.hit, h.bary, h.prim, inside));
+        }
+        i += group;
+    }
+    out
+}
