@@ -3,7 +3,11 @@
 //! Rays: the primary rays of a `width × width` camera framing the mesh
 //! ([`crate::raysets::Camera::framing`]) and `--rays` incoherent rays
 //! ([`crate::raysets::random_rays`], seed [`INCOHERENT_SEED`]). Each throughput is the best of
-//! [`TIMED_PASSES`] passes over the whole set on one thread. Brute force (every triangle for
+//! [`TIMED_PASSES`] passes over the whole set on one thread. With `--features embree` the
+//! figures compared with Embree are taken **round-robin**: each pass builds (or traces the set
+//! with) halfray's default tree, then Embree default, then Embree robust, so a slow spell of
+//! the shared machine falls on all three rather than on whichever ran then; the ratios are
+//! of the bests. Brute force (every triangle for
 //! every ray) runs on a sample of the incoherent rays sized to about [`BRUTE_FORCE_TESTS`]
 //! triangle tests, as a baseline ratio; the BVH's answers on that sample are checked against it.
 
@@ -301,7 +305,11 @@ fn bench<T: TriangleIntersector>(
     let mut binary_s = f64::INFINITY;
     let mut wide_s = f64::INFINITY;
     let mut built = None;
+    let mut rivals = Rivals::new(&obj)?;
     for _ in 0..TIMED_PASSES {
+        if let Some(r) = rivals.as_mut() {
+            r.build_pass()?;
+        }
         let t0 = Instant::now();
         let b = build_binary(&mesh, &options).map_err(build_err)?;
         binary_s = binary_s.min(t0.elapsed().as_secs_f64());
@@ -380,7 +388,24 @@ fn bench<T: TriangleIntersector>(
         })
         .count();
     let mrays_brute = sample_len as f64 / brute_s.max(1e-9) / 1e6;
-    let embree = embree_figures(&obj, &primary, &incoherent)?;
+    // The closest-hit figures compared with Embree, round-robin with Embree's two modes.
+    let embree = match &rivals {
+        Some(r) => {
+            let ours = |ray: &Ray| closest_simd(&wide, isect, ray, None).is_some();
+            let mut closest: Vec<&dyn Fn(&Ray) -> bool> = vec![&ours];
+            let theirs = r.closest();
+            closest.extend(theirs.iter().map(|f| f.as_ref()));
+            let p = interleaved(&primary, &closest);
+            let i = interleaved(&incoherent, &closest);
+            (top.mrays_closest_primary, top.mrays_closest_incoherent) = (p[0], i[0]);
+            Some(EmbreeFigures {
+                build_ms: r.build_ms(),
+                primary: [p[1], p[2]],
+                incoherent: [i[1], i[2]],
+            })
+        }
+        None => None,
+    };
 
     let speedup = top.mrays_closest_incoherent / mrays_brute.max(1e-12);
     Ok(BvhReport {
@@ -421,43 +446,100 @@ struct EmbreeFigures {
     incoherent: [f64; 2],
 }
 
-#[cfg(feature = "embree")]
-fn embree_figures(
-    obj: &crate::obj::ObjMesh,
-    primary: &[Ray],
-    incoherent: &[Ray],
-) -> Result<Option<EmbreeFigures>> {
-    use crate::embree::{EmbreeDevice, EmbreeScene};
-    let device = EmbreeDevice::new()?;
-    let positions: Vec<[f32; 3]> = obj.positions.iter().map(|p| p.to_array()).collect();
-    let mut f = EmbreeFigures {
-        build_ms: [f64::INFINITY; 2],
-        primary: [0.0; 2],
-        incoherent: [0.0; 2],
-    };
-    for (k, robust) in [false, true].into_iter().enumerate() {
-        let mut scene = None;
-        for _ in 0..TIMED_PASSES {
+/// A hit-or-miss query on a ray.
+type HitQuery<'a> = Box<dyn Fn(&Ray) -> bool + 'a>;
+
+/// Best-of-[`TIMED_PASSES`] throughputs (Mrays/s) of each of `fs` over `rays`, the passes taken
+/// round-robin (pass 1 of every function, then pass 2, …).
+fn interleaved(rays: &[Ray], fs: &[&dyn Fn(&Ray) -> bool]) -> Vec<f64> {
+    let mut best = vec![f64::INFINITY; fs.len()];
+    for _ in 0..TIMED_PASSES {
+        for (f, b) in fs.iter().zip(best.iter_mut()) {
             let t0 = Instant::now();
-            let s = EmbreeScene::new(&device, &positions, &obj.triangles, robust)?;
-            f.build_ms[k] = f.build_ms[k].min(t0.elapsed().as_secs_f64() * 1e3);
-            scene = Some(s);
+            let hits = rays.iter().filter(|r| f(std::hint::black_box(r))).count();
+            std::hint::black_box(hits);
+            *b = b.min(t0.elapsed().as_secs_f64());
         }
-        let scene = scene.ok_or_else(|| Error::Other("no Embree build".into()))?;
-        let hit = |r: &Ray| scene.intersect_ray(r).is_some();
-        f.primary[k] = throughput(primary, hit).0;
-        f.incoherent[k] = throughput(incoherent, hit).0;
     }
-    Ok(Some(f))
+    best.iter()
+        .map(|s| rays.len() as f64 / s.max(1e-9) / 1e6)
+        .collect()
 }
 
+/// Embree in its default and robust modes over the same mesh, built pass by pass beside
+/// halfray's tree.
+#[cfg(feature = "embree")]
+struct Rivals {
+    device: crate::embree::EmbreeDevice,
+    positions: Vec<[f32; 3]>,
+    triangles: Vec<[u32; 3]>,
+    /// `[default, robust]`, from the last pass.
+    scenes: Vec<crate::embree::EmbreeScene>,
+    build_ms: [f64; 2],
+}
+
+#[cfg(feature = "embree")]
+impl Rivals {
+    fn new(obj: &crate::obj::ObjMesh) -> Result<Option<Self>> {
+        Ok(Some(Self {
+            device: crate::embree::EmbreeDevice::new()?,
+            positions: obj.positions.iter().map(|p| p.to_array()).collect(),
+            triangles: obj.triangles.clone(),
+            scenes: Vec::new(),
+            build_ms: [f64::INFINITY; 2],
+        }))
+    }
+
+    /// Builds both scenes once, keeping the best times and the new scenes.
+    fn build_pass(&mut self) -> Result<()> {
+        self.scenes.clear();
+        for (k, robust) in [false, true].into_iter().enumerate() {
+            let t0 = Instant::now();
+            let s = crate::embree::EmbreeScene::new(
+                &self.device,
+                &self.positions,
+                &self.triangles,
+                robust,
+            )?;
+            self.build_ms[k] = self.build_ms[k].min(t0.elapsed().as_secs_f64() * 1e3);
+            self.scenes.push(s);
+        }
+        Ok(())
+    }
+
+    fn build_ms(&self) -> [f64; 2] {
+        self.build_ms
+    }
+
+    /// Closest-hit queries of the two scenes (hit or miss), `[default, robust]`.
+    fn closest(&self) -> Vec<HitQuery<'_>> {
+        self.scenes
+            .iter()
+            .map(|s| {
+                Box::new(move |r: &Ray| s.intersect_ray(r).is_some()) as Box<dyn Fn(&Ray) -> bool>
+            })
+            .collect()
+    }
+}
+
+/// Without the `embree` feature there is no rival.
 #[cfg(not(feature = "embree"))]
-fn embree_figures(
-    _obj: &crate::obj::ObjMesh,
-    _primary: &[Ray],
-    _incoherent: &[Ray],
-) -> Result<Option<EmbreeFigures>> {
-    Ok(None)
+struct Rivals;
+
+#[cfg(not(feature = "embree"))]
+impl Rivals {
+    fn new(_obj: &crate::obj::ObjMesh) -> Result<Option<Self>> {
+        Ok(None)
+    }
+    fn build_pass(&mut self) -> Result<()> {
+        Ok(())
+    }
+    fn build_ms(&self) -> [f64; 2] {
+        [f64::NAN; 2]
+    }
+    fn closest(&self) -> Vec<HitQuery<'_>> {
+        Vec::new()
+    }
 }
 
 /// Best-of-[`TIMED_PASSES`] throughput of `f` over `rays` in Mrays/s, and the hit count.
