@@ -1,4 +1,4 @@
-//! Fuzz target `bvh`: the property checks are `halfray_fuzz::bvh::bvh` in `fuzz/src/lib.rs`.
+//! Fuzz target `bvh`: the property checks are `halfray_fuzz_props::bvh::bvh` in the `halfray-fuzz-props` crate (`tests/fuzz-props`).
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| halfray_fuzz::bvh::bvh(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| halfray_fuzz_props::bvh::bvh(data));

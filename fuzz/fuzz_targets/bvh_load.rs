@@ -1,5 +1,5 @@
-//! Fuzz target `bvh_load`: the property checks are `halfray_fuzz::bvh_load::bvh_load` in
-//! `fuzz/src/lib.rs`.
+//! Fuzz target `bvh_load`: the property checks are `halfray_fuzz_props::bvh_load::bvh_load` in
+//! the `halfray-fuzz-props` crate (`tests/fuzz-props`).
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| halfray_fuzz::bvh_load::bvh_load(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| halfray_fuzz_props::bvh_load::bvh_load(data));

@@ -1,4 +1,4 @@
-//! Fuzz target `ray_box`: the property checks are `halfray_fuzz::ray_box` in `fuzz/src/lib.rs`.
+//! Fuzz target `ray_box`: the property checks are `halfray_fuzz_props::ray_box` in the `halfray-fuzz-props` crate (`tests/fuzz-props`).
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| halfray_fuzz::ray_box(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| halfray_fuzz_props::ray_box(data));

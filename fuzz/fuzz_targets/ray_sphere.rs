@@ -1,4 +1,4 @@
-//! Fuzz target `ray_sphere`: the property checks are `halfray_fuzz::sphere::ray_sphere` in `fuzz/src/lib.rs`.
+//! Fuzz target `ray_sphere`: the property checks are `halfray_fuzz_props::sphere::ray_sphere` in the `halfray-fuzz-props` crate (`tests/fuzz-props`).
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| halfray_fuzz::sphere::ray_sphere(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| halfray_fuzz_props::sphere::ray_sphere(data));

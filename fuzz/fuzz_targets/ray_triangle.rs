@@ -1,4 +1,4 @@
-//! Fuzz target `ray_triangle`: the property checks are `halfray_fuzz::ray_triangle` in `fuzz/src/lib.rs`.
+//! Fuzz target `ray_triangle`: the property checks are `halfray_fuzz_props::ray_triangle` in the `halfray-fuzz-props` crate (`tests/fuzz-props`).
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| halfray_fuzz::ray_triangle(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| halfray_fuzz_props::ray_triangle(data));

@@ -1,4 +1,4 @@
-//! Fuzz target `scene_file`: the property checks are `halfray_fuzz::scene::scene_file` in `fuzz/src/lib.rs`.
+//! Fuzz target `scene_file`: the property checks are `halfray_fuzz_props::scene::scene_file` in the `halfray-fuzz-props` crate (`tests/fuzz-props`).
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| halfray_fuzz::scene::scene_file(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| halfray_fuzz_props::scene::scene_file(data));

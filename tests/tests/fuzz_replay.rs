@@ -1,6 +1,6 @@
 //! Replays the fuzz corpora on stable: every file under `fuzz/corpus/<target>/` and
 //! `fuzz/regressions/<target>/` goes through the same property checks the cargo-fuzz targets
-//! run (`fuzz/src/lib.rs`, included here as a module), so a plain `cargo test` catches a
+//! run (the `halfray-fuzz-props` crate, `tests/fuzz-props`), so a plain `cargo test` catches a
 //! regression of any crash the fuzzers ever found, without nightly or libFuzzer.
 //!
 //! A regression file whose name starts with `open-` is a reported, unfixed bug: it must still
@@ -9,9 +9,7 @@
 //! `HALFRAY_WRITE_SEEDS=1 cargo test -p halfray-tests --test fuzz_replay` rewrites the seed
 //! and code-defined regression files from `props::seeds()` and `props::regressions()`.
 
-#[path = "../../fuzz/src/lib.rs"]
-#[allow(dead_code)]
-mod props;
+use halfray_fuzz_props as props;
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
@@ -122,7 +120,7 @@ fn regressions_replay_clean() {
     let defined = props::regressions().len();
     assert!(
         n >= defined.max(1),
-        "{n} regression files replayed, {defined} defined in fuzz/src/lib.rs"
+        "{n} regression files replayed, {defined} defined in halfray-fuzz-props"
     );
 }
 

@@ -1,10 +1,9 @@
-//! Property checks behind the `halfray` fuzz targets.
+//! Property checks behind the `halfray` fuzz targets (crate `halfray-fuzz-props`).
 //!
-//! Every fuzz target in `fuzz/fuzz_targets/` is a one-line call into this file, and the stable
-//! test `tests/tests/fuzz_replay.rs` includes this same file (`#[path]`) to replay the
-//! checked-in corpora (`fuzz/corpus/<target>/`) and regression inputs
-//! (`fuzz/regressions/<target>/`) with a plain `cargo test`. So this file depends only on
-//! `halfray-core`, `halfray` (frontend) and `glam`, and never names `crate::`.
+//! Every fuzz target in `fuzz/fuzz_targets/` is a one-line call into this crate, and the stable
+//! test `tests/tests/fuzz_replay.rs` uses it to replay the checked-in corpora
+//! (`fuzz/corpus/<target>/`) and regression inputs (`fuzz/regressions/<target>/`) with a plain
+//! `cargo test`. It depends only on `halfray-core`, `halfray` (frontend) and `glam`.
 //!
 //! Each check **panics** with a message naming the input (decimal and bit patterns) when a
 //! property is broken; that is what libFuzzer records as a crash.
@@ -2993,8 +2992,10 @@ pub mod scene {
 
     /// Where the fuzzed scene pretends to live (absolute at compile time: the fuzz crate and
     /// the replay test both sit one folder below the project root).
-    pub const SCENE_PATH: &str =
-        concat!(env!("CARGO_MANIFEST_DIR"), "/../fuzz/scene_dir/input.toml");
+    pub const SCENE_PATH: &str = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fuzz/scene_dir/input.toml"
+    );
 
     /// Fuzz target `scene_file`: lossy UTF-8 text through [`check`].
     pub fn scene_file(data: &[u8]) {
@@ -3188,13 +3189,13 @@ fn seeds_scene(s: &mut Vec<Seed>) {
             text.as_bytes().to_vec(),
         )
     };
-    s.push(t("shadows", include_str!("../../scenes/shadows.toml")));
-    s.push(t("mirror", include_str!("../../scenes/mirror.toml")));
-    s.push(t("glass", include_str!("../../scenes/glass.toml")));
-    s.push(t("csg", include_str!("../../scenes/csg.toml")));
+    s.push(t("shadows", include_str!("../../../scenes/shadows.toml")));
+    s.push(t("mirror", include_str!("../../../scenes/mirror.toml")));
+    s.push(t("glass", include_str!("../../../scenes/glass.toml")));
+    s.push(t("csg", include_str!("../../../scenes/csg.toml")));
     s.push(t(
         "subdivision",
-        include_str!("../../scenes/subdivision.toml"),
+        include_str!("../../../scenes/subdivision.toml"),
     ));
     let small = r#"ambient = [0.1, 0.1, 0.1]
 max_depth = 3
