@@ -1,0 +1,522 @@
+//! The `bvh` target: small arbitrary triangle soups and rays, BVH against brute force.
+//!
+//! Layout: `flags: u8` (bit 0: quantized vertex coordinates ([`Input::q`]), else raw
+//! `f32`; bit 1: [`BuildOptions::exclude_non_finite`]; bit 2: leaves of one primitive),
+//! `vertex count: u8` (mod 25), `triangle count: u8` (mod 17), the vertices, the
+//! triangles (three `u8` vertex indices each, taken mod `vertex count + 2` so that some are
+//! out of range), then rays until the input ends (at most 8), each `flags: u8` (bit 0:
+//! quantized origin and direction; bit 1: aim at `p_i + s·(p_j − p_i)` for two vertex bytes
+//! and `s = byte mod 9 / 8`; bit 2: interval from two `f32`s, else `(0, +∞]`), origin,
+//! direction, then the aim or interval bytes.
+
+use super::*;
+use super::{Enc, Input, fmt_ray, fmt_vec3};
+use glam::Vec3;
+use halfray_core::aabb::Aabb;
+use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, group_capacity};
+use halfray_core::bvh::{
+    BuildOptions, Bvh, BvhError, BvhNode, PrimitiveSource, TriangleMesh, index_capacity,
+    node_capacity,
+};
+use halfray_core::ray::Ray;
+use halfray_core::triangle::{MollerTrumbore, TriangleHit, TriangleIntersector, Watertight};
+
+/// The decoded input.
+#[derive(Clone, Debug)]
+pub struct Soup {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Triangles (indices may be out of range).
+    pub triangles: Vec<[u32; 3]>,
+    /// Build options.
+    pub options: BuildOptions,
+    /// Rays.
+    pub rays: Vec<Ray>,
+}
+
+/// Decodes a `bvh` input (see the module docs).
+pub fn decode(data: &[u8]) -> Soup {
+    let mut i = Input::new(data);
+    let fl = i.u8();
+    let nv = usize::from(i.u8()) % 25;
+    let nt = usize::from(i.u8()) % 17;
+    let positions: Vec<Vec3> = (0..nv)
+        .map(|_| if fl & 1 != 0 { i.qvec3() } else { i.vec3() })
+        .collect();
+    let m = nv as u32 + 2;
+    let triangles = (0..nt)
+        .map(|_| {
+            [
+                u32::from(i.u8()) % m,
+                u32::from(i.u8()) % m,
+                u32::from(i.u8()) % m,
+            ]
+        })
+        .collect();
+    let options = BuildOptions {
+        max_leaf_size: if fl & 4 != 0 { 1 } else { 4 },
+        exclude_non_finite: fl & 2 != 0,
+        ..BuildOptions::default()
+    };
+    let mut rays = Vec::new();
+    while !i.is_empty() && rays.len() < 8 {
+        let rf = i.u8();
+        let (o, d) = if rf & 1 != 0 {
+            (i.qvec3(), i.qvec3())
+        } else {
+            (i.vec3(), i.vec3())
+        };
+        let mut ray = Ray::new(o, d);
+        if rf & 2 != 0 && !positions.is_empty() {
+            let a = positions[usize::from(i.u8()) % nv];
+            let b = positions[usize::from(i.u8()) % nv];
+            let s = f32::from(i.u8() % 9) / 8.0;
+            ray.direction = a + (b - a) * s - o;
+        }
+        if rf & 4 != 0 {
+            ray.t_min = i.f32();
+            ray.t_max = i.f32();
+        }
+        rays.push(ray);
+    }
+    Soup {
+        positions,
+        triangles,
+        options,
+        rays,
+    }
+}
+
+/// Encodes a quantized soup with default options and `(origin, direction)` rays aimed by
+/// vertex pairs: `aims[k] = (origin, i, j, s8)` (aim at `p_i + s8/8·(p_j − p_i)`).
+pub fn encode_quantized(
+    positions: &[Vec3],
+    triangles: &[[u8; 3]],
+    aims: &[(Vec3, u8, u8, u8)],
+) -> Vec<u8> {
+    let mut e = Enc::new()
+        .u8(1)
+        .u8(positions.len() as u8)
+        .u8(triangles.len() as u8);
+    for p in positions {
+        e = e.qvec3(*p);
+    }
+    for t in triangles {
+        e = e.u8(t[0]).u8(t[1]).u8(t[2]);
+    }
+    for &(o, a, b, s) in aims {
+        e = e.u8(3).qvec3(o).qvec3(Vec3::ZERO).u8(a).u8(b).u8(s);
+    }
+    e.done()
+}
+
+/// Fuzz target `bvh`: [`check`] on [`decode`]`(data)`.
+pub fn bvh(data: &[u8]) {
+    check(&decode(data));
+}
+
+/// `true` when every in-tree vertex lies within [`super::DOMAIN_MAX`] (2⁶⁰) of the origin
+/// in every coordinate, the range the watertight test documents (triangles up to ~1e20):
+/// beyond it the projected coordinates' products leave the range where the `f64` edge
+/// functions and the `t` forms keep their bounds.
+pub fn within_domain(mesh: &TriangleMesh<'_>, ray: &Ray, in_tree: &[bool]) -> bool {
+    (0..in_tree.len())
+        .filter(|&i| in_tree[i])
+        .filter_map(|i| mesh.triangle(i))
+        .all(|v| {
+            v.iter().all(|p| {
+                (p.as_dvec3() - ray.origin.as_dvec3()).abs().max_element() <= super::DOMAIN_MAX
+            })
+        })
+}
+
+/// [`super::projection_underflows`] for any triangle in the tree.
+pub fn projection_underflows(mesh: &TriangleMesh<'_>, ray: &Ray, in_tree: &[bool]) -> bool {
+    (0..in_tree.len())
+        .filter(|&i| in_tree[i])
+        .filter_map(|i| mesh.triangle(i))
+        .any(|v| super::projection_underflows(ray, &v))
+}
+
+fn usable(b: &Aabb) -> bool {
+    b.is_finite() && b.is_valid()
+}
+
+/// Brute force with the BVH's rule: the smallest `t` in the ray's interval, ties to the
+/// smaller primitive index, over the primitives in the tree.
+fn brute<T: TriangleIntersector>(
+    mesh: &TriangleMesh<'_>,
+    isect: &T,
+    ray: &Ray,
+    in_tree: &[bool],
+) -> Option<(u32, TriangleHit)> {
+    let mut best: Option<(u32, TriangleHit)> = None;
+    for (i, &live) in in_tree.iter().enumerate() {
+        let Some(v) = mesh.triangle(i).filter(|_| live) else {
+            continue;
+        };
+        if let Some(h) = isect.intersect(ray, &v)
+            && best.is_none_or(|(_, b)| h.t < b.t)
+        {
+            best = Some((i as u32, h));
+        }
+    }
+    best
+}
+
+/// Properties of the BVH on one soup:
+///
+/// 1. Building with exactly [`node_capacity`] / [`index_capacity`] storage succeeds, unless a
+///    primitive has unusable bounds (non-finite vertex, out-of-range index) and
+///    `exclude_non_finite` is off: then the error is `NonFinitePrimitive` naming the first.
+/// 2. One node or one index too few gives `NodeStorageTooSmall` / `IndexStorageTooSmall`
+///    with the right counts, and the storage is left untouched.
+/// 3. Refitting over the same source leaves every node bit-for-bit unchanged.
+/// 4. For every ray and for `watertight` and `moller-trumbore`: the closest hit equals the
+///    brute-force loop (same primitive, same hit record); any-hit agrees on hit/miss and its
+///    primitive really is hit in the interval.
+/// 5. A box query (the box spanned by each ray's origin and origin + direction) reports
+///    exactly the primitives whose bounds overlap it.
+pub fn check(s: &Soup) {
+    let mesh = TriangleMesh::new(&s.positions, &s.triangles);
+    let n = mesh.primitive_count();
+    let ctx = || {
+        format!(
+            "options {:?}\n  positions {}\n  triangles {:?}",
+            s.options,
+            s.positions
+                .iter()
+                .map(|p| fmt_vec3(*p))
+                .collect::<Vec<_>>()
+                .join(", "),
+            s.triangles
+        )
+    };
+    let valid: Vec<bool> = (0..n).map(|i| usable(&mesh.primitive_bounds(i))).collect();
+    let first_bad = valid.iter().position(|&ok| !ok);
+
+    // 2. Too-small storage.
+    if n > 0 {
+        let sentinel = BvhNode::default();
+        let nodes = vec![sentinel; node_capacity(n) - 1];
+        let idx = vec![u32::MAX; index_capacity(n)];
+        let r = Bvh::build(&mesh, nodes, idx, &s.options);
+        match r {
+            Err(BvhError::NodeStorageTooSmall { needed, available }) => {
+                assert_eq!(
+                    (needed, available),
+                    (node_capacity(n), node_capacity(n) - 1)
+                );
+            }
+            other => panic!("one node too few gave {other:?}\n{}", ctx()),
+        }
+        let mut nodes = vec![sentinel; node_capacity(n)];
+        let mut idx = vec![u32::MAX; index_capacity(n) - 1];
+        let r = Bvh::build(&mesh, &mut nodes[..], &mut idx[..], &s.options);
+        match r {
+            Err(BvhError::IndexStorageTooSmall { needed, available }) => {
+                assert_eq!((needed, available), (n, n - 1));
+            }
+            other => panic!("one index too few gave {other:?}\n{}", ctx()),
+        }
+        assert!(
+            nodes.iter().all(|x| *x == sentinel) && idx.iter().all(|&x| x == u32::MAX),
+            "refused build wrote into the storage\n{}",
+            ctx()
+        );
+    }
+
+    // 1. Build.
+    let nodes = vec![BvhNode::default(); node_capacity(n)];
+    let idx = vec![u32::MAX; index_capacity(n)];
+    let mut bvh = match (Bvh::build(&mesh, nodes, idx, &s.options), first_bad) {
+        (Ok(b), None) => b,
+        (Ok(b), Some(_)) if s.options.exclude_non_finite => b,
+        (Err(BvhError::NonFinitePrimitive { index }), Some(bad))
+            if !s.options.exclude_non_finite =>
+        {
+            assert_eq!(
+                index,
+                bad,
+                "NonFinitePrimitive names the wrong primitive\n{}",
+                ctx()
+            );
+            return;
+        }
+        (r, _) => panic!(
+            "build gave {:?} (first unusable primitive {first_bad:?})\n{}",
+            r.err(),
+            ctx()
+        ),
+    };
+    let expected_count = valid.iter().filter(|&&ok| ok).count();
+    assert_eq!(
+        bvh.primitive_count(),
+        expected_count,
+        "primitive count\n{}",
+        ctx()
+    );
+    let mut in_tree = vec![false; n];
+    for &p in bvh.indices() {
+        let p = p as usize;
+        assert!(
+            p < n && valid[p] && !in_tree[p],
+            "bad index {p} in the tree\n{}",
+            ctx()
+        );
+        in_tree[p] = true;
+    }
+
+    // 3. Refit over the same source.
+    let before: Vec<BvhNode> = bvh.nodes().to_vec();
+    assert_eq!(
+        bvh.refit(&mesh),
+        Ok(()),
+        "refit over the same source\n{}",
+        ctx()
+    );
+    assert_eq!(
+        bvh.nodes(),
+        &before[..],
+        "refit changed the boxes\n{}",
+        ctx()
+    );
+
+    // 6. The 8-wide tree collapsed from it: exactly sized storage builds, and every ray
+    // below gives the binary tree's answers.
+    let wide_nodes = Bvh8::<Vec<WideNode<8>>, Vec<LeafGroup>>::node_count_for(&bvh)
+        .unwrap_or_else(|e| panic!("wide node count: {e}\n{}", ctx()));
+    let wide = Bvh8::from_binary(
+        &bvh,
+        &mesh,
+        vec![WideNode::<8>::EMPTY; wide_nodes],
+        vec![LeafGroup::EMPTY; group_capacity(bvh.primitive_count())],
+    )
+    .unwrap_or_else(|e| panic!("wide collapse: {e}\n{}", ctx()));
+
+    // 4, 5. Rays.
+    for ray in &s.rays {
+        let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
+        check_ray(&bvh, &mesh, &Watertight, ray, &in_tree, true, &rctx);
+        check_wide(&wide, &mesh, &Watertight, ray, &in_tree, true, &rctx);
+        check_wide(
+            &wide,
+            &mesh,
+            &MollerTrumbore::CLASSIC,
+            ray,
+            &in_tree,
+            false,
+            &rctx,
+        );
+        // Möller–Trumbore's inexact edge tests can report a hit slightly outside the
+        // triangle, hence outside its box: only the weak form holds for it.
+        check_ray(
+            &bvh,
+            &mesh,
+            &MollerTrumbore::CLASSIC,
+            ray,
+            &in_tree,
+            false,
+            &rctx,
+        );
+        let q = Aabb::new(ray.origin, ray.origin).grow(ray.origin + ray.direction);
+        let mut found = Vec::new();
+        let reported = bvh.query_box(&mesh, &q, |p| {
+            found.push(p);
+            true
+        });
+        found.sort_unstable();
+        let expect: Vec<u32> = (0..n)
+            .filter(|&i| in_tree[i] && mesh.primitive_bounds(i).overlaps(&q))
+            .map(|i| i as u32)
+            .collect();
+        assert_eq!(reported, found.len());
+        assert_eq!(
+            found,
+            expect,
+            "query_box({q:?}) differs from brute force\n{}",
+            rctx()
+        );
+    }
+}
+
+/// [`check_ray`]'s properties for the 8-wide tree: closest hit equal to brute force in the
+/// same domain, a genuine hit no nearer than brute force's elsewhere; any-hit agreement.
+fn check_wide<T: TriangleIntersector>(
+    wide: &Bvh8<Vec<WideNode<8>>, Vec<LeafGroup>>,
+    mesh: &TriangleMesh<'_>,
+    isect: &T,
+    ray: &Ray,
+    in_tree: &[bool],
+    exact: bool,
+    ctx: &dyn Fn() -> String,
+) {
+    let want = brute(mesh, isect, ray, in_tree);
+    let got = wide.closest_hit_triangles(isect, ray, None);
+    let any = wide.any_hit_triangles(isect, ray, None);
+    for (p, h) in got.iter().chain(any.iter()) {
+        let v = mesh.triangle(*p as usize).expect("hit primitive exists");
+        assert_eq!(
+            isect.intersect(ray, &v),
+            Some(*h),
+            "wide hit record\n{}",
+            ctx()
+        );
+    }
+    if !exact || !within_domain(mesh, ray, in_tree) || projection_underflows(mesh, ray, in_tree) {
+        if let Some((_, h)) = got {
+            let (_, w) = want.expect("brute force finds every BVH hit");
+            assert!(w.t <= h.t, "wide: nearer than brute force\n{}", ctx());
+        }
+        return;
+    }
+    assert_eq!(
+        got,
+        want,
+        "{}: wide BVH closest hit differs from brute force\n{}",
+        isect.name(),
+        ctx()
+    );
+    assert_eq!(
+        any.is_some(),
+        want.is_some(),
+        "{}: wide any-hit {any:?} disagrees with brute force {want:?}\n{}",
+        isect.name(),
+        ctx()
+    );
+}
+
+/// A BVH's closest and any hit on `ray` against brute force over `in_tree` (exactly,
+/// within the documented domain; elsewhere a genuine hit no nearer than brute force's).
+pub fn check_ray<N: AsRef<[BvhNode]>, I: AsRef<[u32]>, T: TriangleIntersector>(
+    bvh: &Bvh<N, I>,
+    mesh: &TriangleMesh<'_>,
+    isect: &T,
+    ray: &Ray,
+    in_tree: &[bool],
+    exact: bool,
+    ctx: &dyn Fn() -> String,
+) {
+    let want = brute(mesh, isect, ray, in_tree);
+    let got = bvh.closest_hit_triangles(mesh, isect, ray, None);
+    if !exact || !within_domain(mesh, ray, in_tree) || projection_underflows(mesh, ray, in_tree) {
+        // Outside the documented domain of exact agreement (`Watertight` docs): the
+        // BVH's answer must still be a genuine hit of the intersector, no nearer than
+        // brute force's.
+        if let Some((p, h)) = got {
+            let v = mesh.triangle(p as usize).expect("hit primitive exists");
+            assert_eq!(isect.intersect(ray, &v), Some(h), "{}", ctx());
+            let (_, w) = want.expect("brute force finds every BVH hit");
+            assert!(w.t <= h.t, "{}", ctx());
+        }
+        return;
+    }
+    assert_eq!(
+        got,
+        want,
+        "{}: BVH closest hit differs from brute force\n{}",
+        isect.name(),
+        ctx()
+    );
+    let any = bvh.any_hit_triangles(mesh, isect, ray, None);
+    assert_eq!(
+        any.is_some(),
+        want.is_some(),
+        "{}: any-hit {any:?} disagrees with brute force {want:?}\n{}",
+        isect.name(),
+        ctx()
+    );
+    if let Some((p, h)) = any {
+        let v = mesh.triangle(p as usize).expect("any-hit primitive exists");
+        assert_eq!(
+            isect.intersect(ray, &v),
+            Some(h),
+            "any-hit record\n{}",
+            ctx()
+        );
+        assert!(ray.contains(h.t));
+    }
+}
+
+pub(crate) fn seeds(s: &mut Vec<Seed>) {
+    let t = |name: &str, bytes: Vec<u8>| ("bvh", format!("seed-{name}"), bytes);
+    let quad = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(4.0, 0.0, 0.0),
+        Vec3::new(4.0, 4.0, 0.0),
+        Vec3::new(0.0, 4.0, 0.0),
+        Vec3::new(2.0, 2.0, 3.0),
+    ];
+    let o = Vec3::new(1.25, -2.5, 7.0);
+    // Two triangles sharing the diagonal; rays at the shared edge, a shared vertex, interior.
+    s.push(t(
+        "quad-shared-edge",
+        bvh::encode_quantized(
+            &quad,
+            &[[0, 1, 2], [0, 2, 3]],
+            &[(o, 0, 2, 4), (o, 0, 2, 1), (o, 0, 0, 0), (o, 1, 3, 3)],
+        ),
+    ));
+    // Pyramid (closed fan around the apex) with rays at the apex and the ridges.
+    s.push(t(
+        "pyramid",
+        bvh::encode_quantized(
+            &quad,
+            &[
+                [0, 1, 4],
+                [1, 2, 4],
+                [2, 3, 4],
+                [3, 0, 4],
+                [0, 2, 1],
+                [0, 3, 2],
+            ],
+            &[
+                (o, 4, 4, 0),
+                (o, 0, 4, 4),
+                (Vec3::new(-3.0, 1.0, 0.5), 2, 4, 2),
+            ],
+        ),
+    ));
+    // Duplicated coplanar triangles (tie rule), a degenerate one and a collinear one.
+    s.push(t(
+        "duplicates-degenerate",
+        bvh::encode_quantized(
+            &quad,
+            &[
+                [0, 1, 2],
+                [0, 1, 2],
+                [1, 2, 0],
+                [3, 3, 3],
+                [0, 1, 1],
+                [0, 2, 3],
+            ],
+            &[
+                (o, 0, 2, 2),
+                (o, 0, 1, 4),
+                (Vec3::new(-1.0, 0.0, 0.0), 1, 1, 0),
+            ],
+        ),
+    ));
+    // Out-of-range vertex index (unusable primitive): the build must name it.
+    s.push(t(
+        "out-of-range-index",
+        bvh::encode_quantized(&quad[..3], &[[0, 1, 2], [0, 1, 4]], &[(o, 0, 1, 4)]),
+    ));
+    // Same with exclude_non_finite, and a NaN vertex (raw coordinates).
+    let mut raw = Enc::new().u8(2).u8(4).u8(3);
+    for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(f32::NAN, 0.0, 0.0)] {
+        raw = raw.vec3(p);
+    }
+    let raw = raw
+        .bytes(&[0, 1, 2, 0, 1, 3, 2, 1, 0])
+        .u8(0)
+        .vec3(Vec3::new(0.25, 0.25, 1.0))
+        .vec3(-Vec3::Z)
+        .u8(4)
+        .vec3(Vec3::new(0.25, 0.25, 1.0))
+        .vec3(-Vec3::Z)
+        .f32(0.0)
+        .f32(1.0);
+    s.push(t("nan-vertex-excluded", raw.done()));
+    s.push(t("empty", Enc::new().u8(1).u8(0).u8(0).u8(0).done()));
+}

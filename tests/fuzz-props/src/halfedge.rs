@@ -1,0 +1,416 @@
+//! The `halfedge_ops` target: arbitrary edit sequences on small half-edge meshes.
+//!
+//! Layout: `start: u8` (mod 6: tetrahedron, octahedron, open 3×3 grid, one triangle,
+//! hexagon fan, or a raw mesh: `vertex count: u8` mod 13, `triangle count: u8` mod 17,
+//! quantized positions, triangles of three index bytes mod `vertex count + 1`), then
+//! operations until the input ends (at most 24), each an opcode byte (mod 10, see [`Op`])
+//! followed by its arguments.
+
+use super::Input;
+use super::*;
+use glam::Vec3;
+use halfray_core::halfedge::{
+    CollapseAt, Counts, DiffuseBoundary, EdgeId, ExportError, HalfedgeId, HalfedgeMesh,
+    LoopWeights, VertexId, build_scratch_len,
+};
+
+/// The mesh type fuzzed: room for two Loop levels of a tetrahedron or one of an
+/// octahedron, and for some dozens of splits.
+pub type FuzzMesh = HalfedgeMesh<64, 192, 128>;
+
+/// Opcodes (the first byte of an operation, mod 10).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Op {
+    /// `flip_edge(edge: u8)`.
+    Flip = 0,
+    /// `split_edge(edge: u8)`.
+    Split = 1,
+    /// `split_edge_at(edge: u8, raw: u8, point)`: quantized point if `raw` is even, else
+    /// three raw `f32`s.
+    SplitAt = 2,
+    /// `collapse_edge(halfedge: u16, at: u8)`: `at` mod 4 = head, tail, midpoint, point
+    /// (quantized).
+    Collapse = 3,
+    /// `diffuse_vertex(vertex: u8, k: f32)`.
+    DiffuseVertex = 4,
+    /// `diffuse(k: u8 / 16, boundary: u8, short scratch: u8)`.
+    Diffuse = 5,
+    /// `subdivide_loop(weights: u8)` into a fresh mesh, which replaces the mesh on success.
+    Loop = 6,
+    /// `compact`.
+    Compact = 7,
+    /// `set_position(vertex: u8, raw: u8, point)` (point as for `SplitAt`).
+    SetPosition = 8,
+    /// `export` (also into a too-small buffer), `build` from the export, re-export.
+    ExportRebuild = 9,
+}
+
+fn euler(c: Counts) -> i64 {
+    c.vertices as i64 - c.edges as i64 + c.faces as i64
+}
+
+/// The start meshes (positions, triangles), indexed by the start byte mod 5.
+pub fn start_mesh(k: u8) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    match k % 5 {
+        0 => (
+            vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+            vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        ),
+        1 => (
+            vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z],
+            vec![
+                [0, 2, 4],
+                [2, 1, 4],
+                [1, 3, 4],
+                [3, 0, 4],
+                [2, 0, 5],
+                [1, 2, 5],
+                [3, 1, 5],
+                [0, 3, 5],
+            ],
+        ),
+        2 => {
+            let p = (0..9)
+                .map(|i| Vec3::new((i % 3) as f32, (i / 3) as f32, 0.0))
+                .collect();
+            let mut t = Vec::new();
+            for j in 0..2u32 {
+                for i in 0..2u32 {
+                    let (a, b, c, d) = (i + 3 * j, i + 1 + 3 * j, i + 4 + 3 * j, i + 3 + 3 * j);
+                    t.push([a, b, c]);
+                    t.push([a, c, d]);
+                }
+            }
+            (p, t)
+        }
+        3 => (vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]),
+        _ => {
+            let mut p = vec![Vec3::ZERO];
+            for k in 0..6 {
+                let a = k as f32 * core::f32::consts::FRAC_PI_3;
+                p.push(Vec3::new(a.cos(), a.sin(), 0.0));
+            }
+            let t = (1..=6u32).map(|k| [0, k, k % 6 + 1]).collect();
+            (p, t)
+        }
+    }
+}
+
+fn point(i: &mut Input<'_>) -> Vec3 {
+    if i.u8().is_multiple_of(2) {
+        i.qvec3()
+    } else {
+        i.vec3()
+    }
+}
+
+/// Fuzz target `halfedge_ops`.
+///
+/// Properties: no panic; a build either succeeds with `validate()` Ok or fails leaving the
+/// mesh empty; after every successful operation `validate()` is Ok and the Euler
+/// characteristic `V − E + F` is unchanged; an operation that refuses leaves the mesh
+/// bit-for-bit unchanged (`Mesh: PartialEq` compares every slot and the free lists);
+/// `can_flip_edge` / `can_collapse_edge` predict `flip_edge` / `collapse_edge` exactly and
+/// the collapse survivor sits at the predicted point; Loop subdivision produces the
+/// documented counts and leaves its output untouched when it refuses; a refused export
+/// writes nothing; build(export(mesh)) validates and re-exports identically.
+pub fn halfedge_ops(data: &[u8]) {
+    let mut i = Input::new(data);
+    let start = i.u8() % 6;
+    let (positions, triangles) = if start == 5 {
+        let nv = usize::from(i.u8()) % 13;
+        let nt = usize::from(i.u8()) % 17;
+        let p: Vec<Vec3> = (0..nv).map(|_| i.qvec3()).collect();
+        let m = nv as u32 + 1;
+        let t = (0..nt)
+            .map(|_| {
+                [
+                    u32::from(i.u8()) % m,
+                    u32::from(i.u8()) % m,
+                    u32::from(i.u8()) % m,
+                ]
+            })
+            .collect();
+        (p, t)
+    } else {
+        start_mesh(start)
+    };
+    let mut log = vec![format!("build {positions:?} {triangles:?}")];
+    let mut mesh = FuzzMesh::new();
+    let mut scratch = vec![0u32; build_scratch_len(triangles.len())];
+    match mesh.build(&positions, &triangles, &mut scratch) {
+        Ok(()) => assert_eq!(mesh.validate(), Ok(()), "built mesh invalid: {log:?}"),
+        Err(_) => {
+            assert!(mesh.is_empty(), "failed build left elements: {log:?}");
+            assert_eq!(mesh, FuzzMesh::new(), "failed build left state: {log:?}");
+        }
+    }
+
+    for _ in 0..24 {
+        if i.is_empty() {
+            break;
+        }
+        let before = mesh.clone();
+        let slots = mesh.slots();
+        let chi = euler(mesh.len());
+        let edge = |i: &mut Input<'_>| EdgeId::new(u32::from(i.u8()) % (slots.edges as u32 + 2));
+        let vertex =
+            |i: &mut Input<'_>| VertexId::new(u32::from(i.u8()) % (slots.vertices as u32 + 2));
+        let op = i.u8() % 10;
+        // `Ok(keep_chi)` on success, `Err(())` when refused.
+        let outcome: Result<bool, String> = match op {
+            0 => {
+                let e = edge(&mut i);
+                let can = mesh.can_flip_edge(e);
+                let r = mesh.flip_edge(e);
+                log.push(format!("flip {e:?} -> {r:?}"));
+                assert_eq!(can, r, "can_flip_edge disagrees: {log:?}");
+                r.map(|()| true).map_err(|e| format!("{e:?}"))
+            }
+            1 => {
+                let e = edge(&mut i);
+                let r = mesh.split_edge(e);
+                log.push(format!("split {e:?} -> {r:?}"));
+                r.map(|_| true).map_err(|e| format!("{e:?}"))
+            }
+            2 => {
+                let e = edge(&mut i);
+                let p = point(&mut i);
+                let r = mesh.split_edge_at(e, p);
+                log.push(format!("split_at {e:?} {p:?} -> {r:?}"));
+                if let Ok(m) = r {
+                    assert_eq!(mesh.position(m), Some(p), "split point: {log:?}");
+                }
+                r.map(|_| true).map_err(|e| format!("{e:?}"))
+            }
+            3 => {
+                let h = HalfedgeId::new(u32::from(i.u16()) % (2 * slots.edges as u32 + 2));
+                let at = match i.u8() % 4 {
+                    0 => CollapseAt::Head,
+                    1 => CollapseAt::Tail,
+                    2 => CollapseAt::Midpoint,
+                    _ => CollapseAt::Point(i.qvec3()),
+                };
+                let can = mesh.can_collapse_edge(h, at);
+                let r = mesh.collapse_edge(h, at);
+                log.push(format!(
+                    "collapse {h:?} {at:?} -> {r:?} (predicted {can:?})"
+                ));
+                assert_eq!(
+                    can.is_ok(),
+                    r.is_ok(),
+                    "can_collapse_edge disagrees: {log:?}"
+                );
+                if let (Ok(p), Ok(v)) = (can, r) {
+                    assert_eq!(mesh.position(v), Some(p), "survivor position: {log:?}");
+                }
+                r.map(|_| true).map_err(|e| format!("{e:?}"))
+            }
+            4 => {
+                let v = vertex(&mut i);
+                let k = i.f32();
+                let r = mesh.diffuse_vertex(v, k);
+                log.push(format!("diffuse_vertex {v:?} {k:e} -> {r:?}"));
+                r.map(|_| true).map_err(|e| format!("{e:?}"))
+            }
+            5 => {
+                let k = f32::from(i.u8()) / 16.0;
+                let boundary = if i.u8().is_multiple_of(2) {
+                    DiffuseBoundary::Free
+                } else {
+                    DiffuseBoundary::Fixed
+                };
+                let short = usize::from(i.u8() % 2 == 1 && slots.vertices > 0);
+                let mut sc = vec![Vec3::ZERO; slots.vertices - short];
+                let r = mesh.diffuse(k, boundary, &mut sc);
+                log.push(format!("diffuse {k} {boundary:?} short={short} -> {r:?}"));
+                r.map(|()| true).map_err(|e| format!("{e:?}"))
+            }
+            6 => {
+                let weights = if i.u8().is_multiple_of(2) {
+                    LoopWeights::Warren
+                } else {
+                    LoopWeights::Loop
+                };
+                let mut out = FuzzMesh::new();
+                let r = mesh.subdivide_loop(&mut out, weights);
+                log.push(format!("loop {weights:?} -> {r:?}"));
+                match r {
+                    Ok(()) => {
+                        assert_eq!(out.len(), mesh.len().after_loop(), "Loop counts: {log:?}");
+                        mesh = out;
+                        Ok(true)
+                    }
+                    Err(e) => {
+                        assert_eq!(out, FuzzMesh::new(), "refused Loop wrote output: {log:?}");
+                        Err(format!("{e:?}"))
+                    }
+                }
+            }
+            7 => {
+                let mut moves = 0usize;
+                mesh.compact(|_| moves += 1);
+                log.push(format!("compact ({moves} moves)"));
+                assert!(mesh.is_compact(), "not compact after compact: {log:?}");
+                assert_eq!(mesh.len(), before.len(), "compact changed counts: {log:?}");
+                Ok(true)
+            }
+            8 => {
+                let v = vertex(&mut i);
+                let p = point(&mut i);
+                let r = mesh.set_position(v, p);
+                log.push(format!("set_position {v:?} {p:?} -> {r:?}"));
+                r.map(|()| true).map_err(|e| format!("{e:?}"))
+            }
+            _ => {
+                let (np, nt) = (slots.vertices, mesh.len().faces);
+                if np + nt > 0 {
+                    let mut sp = vec![Vec3::splat(7.0); np.saturating_sub(1)];
+                    let mut st = vec![[9u32; 3]; nt];
+                    let r = mesh.export(&mut sp, &mut st);
+                    assert_eq!(
+                        r,
+                        Err(ExportError::BufferTooSmall {
+                            positions: np,
+                            triangles: nt
+                        }),
+                        "short export: {log:?}"
+                    );
+                    assert!(
+                        sp.iter().all(|p| *p == Vec3::splat(7.0))
+                            && st.iter().all(|t| *t == [9; 3]),
+                        "refused export wrote: {log:?}"
+                    );
+                }
+                let mut p = vec![Vec3::ZERO; np];
+                let mut t = vec![[0u32; 3]; nt];
+                let r = mesh.export(&mut p, &mut t);
+                assert_eq!(r, Ok((np, nt)), "export: {log:?}");
+                let mut rebuilt = FuzzMesh::new();
+                let mut sc = vec![0u32; build_scratch_len(nt)];
+                let b = rebuilt.build(&p, &t, &mut sc);
+                log.push(format!("export+rebuild -> {b:?}"));
+                assert_eq!(
+                    b,
+                    Ok(()),
+                    "the export of a valid mesh does not build: {log:?}"
+                );
+                assert_eq!(rebuilt.validate(), Ok(()), "rebuilt mesh: {log:?}");
+                let mut p2 = vec![Vec3::ZERO; np];
+                let mut t2 = vec![[0u32; 3]; nt];
+                assert_eq!(rebuilt.export(&mut p2, &mut t2), Ok((np, nt)));
+                assert!(p == p2 && t == t2, "export does not round-trip: {log:?}");
+                assert_eq!(mesh, before, "export changed the mesh: {log:?}");
+                Ok(true)
+            }
+        };
+        match outcome {
+            Ok(keep_chi) => {
+                if let Err(e) = mesh.validate() {
+                    panic!("validate() = {e:?} after a successful operation: {log:#?}");
+                }
+                if keep_chi {
+                    assert_eq!(euler(mesh.len()), chi, "V − E + F changed: {log:#?}");
+                }
+            }
+            Err(_) => assert!(
+                mesh == before,
+                "refused operation changed the mesh: {log:#?}"
+            ),
+        }
+    }
+}
+
+pub(crate) fn seeds(s: &mut Vec<Seed>) {
+    let t = |name: &str, bytes: Vec<u8>| ("halfedge_ops", format!("seed-{name}"), bytes);
+    // Opcodes: 0 flip e, 1 split e, 2 split_at e raw p, 3 collapse h16 at, 4 diffuse_vertex v k,
+    // 5 diffuse k b short, 6 loop w, 7 compact, 8 set_position v raw p, 9 export+rebuild.
+    let q0 = [0u8, 0, 0];
+    s.push(t(
+        "tetra-loop-loop",
+        Enc::new()
+            .u8(0)
+            .bytes(&[6, 0, 6, 1, 0, 3, 3, 0, 0, 9])
+            .done(),
+    ));
+    s.push(t(
+        "tetra-flip-collapse-refused",
+        Enc::new()
+            .u8(0)
+            .bytes(&[0, 0, 0, 1, 3, 0, 0, 0, 3, 5, 0, 2])
+            .done(),
+    ));
+    s.push(t(
+        "octa-split-flip-collapse-compact",
+        Enc::new()
+            .u8(1)
+            .bytes(&[
+                1, 0, 1, 5, 0, 12, 0, 13, 3, 24, 0, 2, 3, 7, 0, 1, 7, 9, 6, 1,
+            ])
+            .done(),
+    ));
+    s.push(t(
+        "grid-boundary-ops",
+        Enc::new()
+            .u8(2)
+            .bytes(&[0, 0, 3, 0, 0, 0, 3, 1, 0, 1, 1, 2, 4, 0])
+            .bytes(&q0)
+            .bytes(&[5, 8, 1, 0, 5, 8, 0, 1, 7, 9])
+            .done(),
+    ));
+    s.push(t(
+        "triangle-everything",
+        Enc::new()
+            .u8(3)
+            .bytes(&[0, 0, 1, 0, 3, 2, 0, 1, 6, 0, 9, 7])
+            .done(),
+    ));
+    s.push(t(
+        "fan-nonfinite-refusals",
+        Enc::new()
+            .u8(4)
+            .u8(4)
+            .u8(0)
+            .f32(f32::INFINITY)
+            .u8(2)
+            .u8(0)
+            .u8(1)
+            .vec3(Vec3::new(f32::NAN, 0.0, 0.0))
+            .u8(8)
+            .u8(1)
+            .u8(1)
+            .vec3(Vec3::new(0.0, f32::INFINITY, 0.0))
+            .u8(4)
+            .u8(0)
+            .f32(1e38)
+            .u8(3)
+            .u16(0)
+            .u8(3)
+            .qvec3(Vec3::new(0.0, 0.0, 5.0))
+            .done(),
+    ));
+    // Raw builds: a bowtie (non-manifold vertex), an inconsistent orientation, an edge
+    // shared by three faces, a repeated index: every one must fail and leave the mesh empty.
+    for (name, nv, tris) in [
+        ("raw-bowtie", 5u8, vec![[0u8, 1, 2], [0, 3, 4]]),
+        ("raw-flipped", 4, vec![[0, 1, 2], [0, 1, 3]]),
+        ("raw-three-faces", 5, vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]]),
+        ("raw-repeated-index", 3, vec![[0, 0, 1]]),
+        ("raw-out-of-range", 3, vec![[0, 1, 3]]),
+        ("raw-two-triangles", 4, vec![[0, 1, 2], [0, 2, 3]]),
+    ] {
+        let mut e = Enc::new().u8(5).u8(nv).u8(tris.len() as u8);
+        for k in 0..nv {
+            e = e.qvec3(Vec3::new(
+                f32::from(k),
+                f32::from(k * k % 5),
+                f32::from(k % 2),
+            ));
+        }
+        for tri in &tris {
+            e = e.bytes(tri);
+        }
+        s.push(t(name, e.bytes(&[1, 0, 0, 0, 7, 9]).done()));
+    }
+}

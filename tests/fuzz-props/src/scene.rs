@@ -1,0 +1,157 @@
+//! The `scene_file` target: arbitrary bytes as a scene file. Never a panic; an error names
+//! the scene file (and a line for errors inside it); an accepted scene has a usable camera,
+//! and the centre pixel's ray through every object answers inside its interval.
+//!
+//! The file is parsed as if it lived in `fuzz/scene_dir/` (small meshes only, so the target
+//! stays fast): `meshes/cube.obj` and friends resolve there.
+
+use super::*;
+use halfray::error::Error;
+use halfray::render::geom::QueryCtx;
+use halfray::render::plan::EffectPlan;
+use std::path::Path;
+
+/// Where the fuzzed scene pretends to live (absolute at compile time: the fuzz crate and
+/// the replay test both sit one folder below the project root).
+pub const SCENE_PATH: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../fuzz/scene_dir/input.toml"
+);
+
+/// Fuzz target `scene_file`: lossy UTF-8 text through [`check`].
+pub fn scene_file(data: &[u8]) {
+    check(&String::from_utf8_lossy(data));
+}
+
+/// The properties (module documentation).
+pub fn check(text: &str) {
+    // A fuzzed path could name a device or a huge file outside the sandbox folder; parse
+    // only files the target controls.
+    if text.contains("..") || text.contains("\"/") || text.contains("'/") {
+        return;
+    }
+    let path = Path::new(SCENE_PATH);
+    match halfray::scene::parse(text, path) {
+        Ok(scene) => {
+            let cam = &scene.camera;
+            assert!(
+                cam.width >= 1 && cam.height >= 1,
+                "empty image accepted\n{text}"
+            );
+            for v in [cam.eye, cam.forward, cam.right, cam.up] {
+                assert!(v.is_finite(), "non-finite camera {cam:?}\n{text}");
+            }
+            for v in [cam.forward, cam.right, cam.up] {
+                assert!(
+                    (v.length() - 1.0).abs() < 1e-3,
+                    "camera frame not unit {cam:?}\n{text}"
+                );
+            }
+            let ray = cam.pixel_ray(cam.width / 2, cam.height / 2);
+            assert!(ray.is_valid(), "invalid centre ray {ray:?}\n{text}");
+            let plan = EffectPlan::derive(&scene, false);
+            let _ = plan.explain(&scene);
+            let mut qc = QueryCtx::default();
+            for o in &scene.objects {
+                if let Some(h) = o.closest(&ray, &mut qc) {
+                    assert!(
+                        ray.contains(h.hit.t),
+                        "object hit at t = {} outside the ray interval\n{text}",
+                        h.hit.t
+                    );
+                }
+                let _ = o.occludes(&ray, &mut qc);
+            }
+        }
+        Err(e) => {
+            let msg = e.to_string();
+            match &e {
+                Error::Input { at, .. } if at.file == path => assert!(
+                    at.line.is_some() && msg.starts_with(SCENE_PATH),
+                    "scene error without a line: {msg:?}\n{text}"
+                ),
+                Error::Input { .. } | Error::Io { .. } => {
+                    assert!(!msg.is_empty(), "empty message\n{text}")
+                }
+                other => panic!("unexpected error kind {other:?}\n{text}"),
+            }
+        }
+    }
+}
+
+pub(crate) fn seeds(s: &mut Vec<Seed>) {
+    let t = |name: &str, text: &str| {
+        (
+            "scene_file",
+            format!("seed-{name}"),
+            text.as_bytes().to_vec(),
+        )
+    };
+    s.push(t("shadows", include_str!("../../../scenes/shadows.toml")));
+    s.push(t("mirror", include_str!("../../../scenes/mirror.toml")));
+    s.push(t("glass", include_str!("../../../scenes/glass.toml")));
+    s.push(t("csg", include_str!("../../../scenes/csg.toml")));
+    s.push(t(
+        "subdivision",
+        include_str!("../../../scenes/subdivision.toml"),
+    ));
+    let small = r#"ambient = [0.1, 0.1, 0.1]
+max_depth = 3
+
+[camera]
+eye = [0, 1, 6]
+look_at = [0, 0, 0]
+width = 8
+height = 6
+fov = 45
+
+[[light]]
+type = "point"
+position = [4, 5, 6]
+intensity = 40
+cast_shadows = true
+
+[material.m]
+diffuse = [0.8, 0.2, 0.2]
+
+[mesh.cube]
+file = "meshes/cube.obj"
+smooth = { step = 0.5, iterations = 2 }
+subdivide = 1
+
+[mesh.octa]
+file = "meshes/octahedron.obj"
+
+[[object]]
+type = "mesh"
+mesh = "cube"
+material = "m"
+transform = [{ scale = [0.5, 0.5, 0.5] }, { rotate = { axis = [0, 1, 0], degrees = 30 } }]
+
+[[object]]
+type = "csg"
+op = "difference"
+material = "m"
+operands = [
+  { type = "mesh", mesh = "octa", material = "m" },
+  { type = "sphere", center = [0, 0, 0], radius = 0.6, material = "m" },
+]
+"#;
+    s.push(t("small-meshes", small));
+    s.push(t("unknown-key", "bogus = 1\n"));
+    s.push(t("not-toml", "[camera\nwidth = "));
+    s.push(t("empty", ""));
+    s.push(t(
+        "open-mesh-in-csg",
+        &small.replace("meshes/octahedron.obj", "meshes/open.obj"),
+    ));
+    s.push(t(
+        "missing-mesh",
+        &small.replace("meshes/cube.obj", "meshes/none.obj"),
+    ));
+    s.push(t("nan", &small.replace("fov = 45", "fov = nan")));
+    s.push(t(
+        "singular-transform",
+        &small.replace("scale = [0.5, 0.5, 0.5]", "scale = [0.5, 0, 0.5]"),
+    ));
+}
