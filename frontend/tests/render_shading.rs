@@ -37,19 +37,45 @@ material = "shiny"
 }
 
 fn render(dir: &Path, name: &str, text: &str, extra: &[&str]) -> image::RgbaImage {
+    render_stats(dir, name, text, extra).0
+}
+
+/// Writes `text` as `dir/name.toml` and renders it with `extra`: the image and the
+/// `--stats-json`.
+fn render_stats(
+    dir: &Path,
+    name: &str,
+    text: &str,
+    extra: &[&str],
+) -> (image::RgbaImage, serde_json::Value) {
     let toml = dir.join(format!("{name}.toml"));
     std::fs::write(&toml, text).unwrap();
+    run_cli(dir, &toml, name, extra)
+}
+
+/// `halfray render TOML -o dir/name.png --stats-json dir/name.json EXTRA…`: the image and the
+/// statistics; the render must succeed.
+fn run_cli(
+    dir: &Path,
+    toml: &Path,
+    name: &str,
+    extra: &[&str],
+) -> (image::RgbaImage, serde_json::Value) {
     let png = dir.join(format!("{name}.png"));
+    let json = dir.join(format!("{name}.json"));
     let o = Command::new(BIN)
         .arg("render")
-        .arg(&toml)
+        .arg(toml)
         .args(["--quiet", "-o"])
         .arg(&png)
+        .arg("--stats-json")
+        .arg(&json)
         .args(extra)
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    image::open(&png).unwrap().into_rgba8()
+    let stats = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    (image::open(&png).unwrap().into_rgba8(), stats)
 }
 
 #[test]
@@ -273,21 +299,10 @@ fn shipped(
     name: &str,
     extra: &[&str],
 ) -> (image::RgbaImage, serde_json::Value) {
-    let png = dir.join(format!("{name}.png"));
-    let json = dir.join(format!("{name}.json"));
-    let o = Command::new(BIN)
-        .arg("render")
-        .arg(Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes")).join(scene))
-        .args(["--width", "80", "--height", "60", "--quiet", "-o"])
-        .arg(&png)
-        .arg("--stats-json")
-        .arg(&json)
-        .args(extra)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let stats = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    (image::open(&png).unwrap().into_rgba8(), stats)
+    let toml = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes")).join(scene);
+    let size = ["--width", "80", "--height", "60"];
+    let args: Vec<&str> = size.iter().chain(extra).copied().collect();
+    run_cli(dir, &toml, name, &args)
 }
 
 #[test]
@@ -421,25 +436,7 @@ fn blur(img: &image::RgbaImage) -> (usize, usize) {
 fn depth_of_field_blurs_what_is_out_of_focus() {
     let dir = tempfile::tempdir().unwrap();
     let run = |name: &str, text: &str| {
-        let toml = dir.path().join(format!("{name}.toml"));
-        std::fs::write(&toml, text).unwrap();
-        let (png, json) = (
-            dir.path().join(format!("{name}.png")),
-            dir.path().join(format!("{name}.json")),
-        );
-        let o = Command::new(BIN)
-            .arg("render")
-            .arg(&toml)
-            .args(["--quiet", "--transparent-background", "-o"])
-            .arg(&png)
-            .arg("--stats-json")
-            .arg(&json)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let stats: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-        (image::open(&png).unwrap().into_rgba8(), stats)
+        render_stats(dir.path(), name, text, &["--transparent-background"])
     };
     let (near, s_near) = run("near", &dof_scene(0.15, 4.0));
     let (far, _) = run("far", &dof_scene(0.15, 9.0));
@@ -561,42 +558,8 @@ material = "m"
 #[test]
 fn an_area_light_casts_soft_shadows() {
     let dir = tempfile::tempdir().unwrap();
-    let (hard, s_hard) = {
-        let text = shadow_scene(0.0);
-        (
-            render(
-                dir.path(),
-                "hard",
-                &text,
-                &[
-                    "--stats-json",
-                    dir.path().join("hard.json").to_str().unwrap(),
-                ],
-            ),
-            serde_json::from_str::<serde_json::Value>(
-                &std::fs::read_to_string(dir.path().join("hard.json")).unwrap(),
-            )
-            .unwrap(),
-        )
-    };
-    let (soft, s_soft) = {
-        let text = shadow_scene(1.5);
-        (
-            render(
-                dir.path(),
-                "soft",
-                &text,
-                &[
-                    "--stats-json",
-                    dir.path().join("soft.json").to_str().unwrap(),
-                ],
-            ),
-            serde_json::from_str::<serde_json::Value>(
-                &std::fs::read_to_string(dir.path().join("soft.json")).unwrap(),
-            )
-            .unwrap(),
-        )
-    };
+    let (hard, s_hard) = render_stats(dir.path(), "hard", &shadow_scene(0.0), &[]);
+    let (soft, s_soft) = render_stats(dir.path(), "soft", &shadow_scene(1.5), &[]);
     assert_eq!(s_hard["plan"]["area_lights"], false);
     assert_eq!(s_soft["plan"]["area_lights"], true);
     // 32 shadow rays per lit shading point instead of one.
