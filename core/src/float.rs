@@ -78,6 +78,66 @@ pub fn sign_is_certain(e: f32) -> bool {
     e.abs() > 0.0
 }
 
+/// The exact sign of `a·b − c·d` for finite `f32` inputs, by integer arithmetic only (no
+/// floating-point operation, no `f64`): `1`, `−1` or `0`, equal to the sign of
+/// [`diff_of_products_exact_sign`] for every finite input, subnormals and the largest values
+/// included. `0` for any non-finite input (nothing is decided there).
+///
+/// Each input is `± m·2^e` with an integer `m < 2²⁴` (its significand, subnormals included),
+/// so each product is `± (m_a·m_b)·2^(e_a + e_b)` with an exact 48-bit integer `m_a·m_b`; the
+/// two products are then compared by the position of their leading bit and, when it is the
+/// same, by their significands shifted to the top of a `u64` (exact: fewer than 64 bits). On
+/// a Cortex-M the product is one `umull`; on a core without an FPU nothing falls back to
+/// software floating point. For the watertight test on targets where `f64` is emulated.
+#[inline]
+#[must_use]
+pub fn diff_of_products_sign_int(a: f32, b: f32, c: f32, d: f32) -> i32 {
+    if !(a.is_finite() && b.is_finite() && c.is_finite() && d.is_finite()) {
+        return 0;
+    }
+    let (p_neg, p) = exact_product(a, b);
+    let (q_neg, q) = exact_product(c, d);
+    // `P − Q` with `P = ±p`, `Q = ±q` (magnitudes as (leading-bit position, top-aligned bits)).
+    let sign = |neg: bool| if neg { -1 } else { 1 };
+    match (p, q) {
+        (None, None) => 0,
+        (Some(_), None) => sign(p_neg),
+        (None, Some(_)) => -sign(q_neg),
+        (Some(_), Some(_)) if p_neg != q_neg => sign(p_neg),
+        (Some(p), Some(q)) => match p.cmp(&q) {
+            core::cmp::Ordering::Greater => sign(p_neg),
+            core::cmp::Ordering::Less => -sign(p_neg),
+            core::cmp::Ordering::Equal => 0,
+        },
+    }
+}
+
+/// `x·y` exactly, as its sign and, unless it is zero, its magnitude as `(position of the
+/// leading bit, significand bits shifted so that the leading bit is bit 63)`: magnitudes
+/// compare as these pairs do. Finite inputs only.
+#[inline(always)]
+fn exact_product(x: f32, y: f32) -> (bool, Option<(i32, u64)>) {
+    // `|v| = m·2^e`: `m` the significand as an integer, `e` the exponent of its last bit.
+    let split = |v: f32| {
+        let bits = v.to_bits();
+        let exp = ((bits >> 23) & 0xFF) as i32;
+        let frac = bits & 0x007F_FFFF;
+        if exp == 0 {
+            (frac, -149)
+        } else {
+            (frac | 0x0080_0000, exp - 150)
+        }
+    };
+    let ((mx, ex), (my, ey)) = (split(x), split(y));
+    let neg = x.is_sign_negative() != y.is_sign_negative();
+    let m = u64::from(mx) * u64::from(my);
+    if m == 0 {
+        return (neg, None);
+    }
+    let lz = m.leading_zeros();
+    (neg, Some((ex + ey + (63 - lz as i32), m << lz)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -145,6 +205,86 @@ mod tests {
         assert_eq!(
             diff_of_products_exact_sign(1.5, 2.25, 3.0, 7.0),
             -diff_of_products_exact_sign(3.0, 7.0, 1.5, 2.25)
+        );
+    }
+
+    /// The integer predicate equals the sign of the `f64` one (an independent evaluation: exact
+    /// `f64` products, one rounding of their difference) on cancellations to the last bit,
+    /// subnormals, the largest finite values, signed zeros and random inputs of every scale.
+    #[test]
+    fn integer_sign_equals_the_f64_sign() {
+        let oracle = |a: f32, b: f32, c: f32, d: f32| {
+            let e = diff_of_products_exact_sign(a, b, c, d);
+            if e > 0.0 {
+                1
+            } else if e < 0.0 {
+                -1
+            } else {
+                0
+            }
+        };
+        let a = 1.0 + f32::EPSILON;
+        let b = 1.0 + 2.0 * f32::EPSILON;
+        let tiny = f32::from_bits(1);
+        let worked = [
+            (a, a, b, 1.0, 1),
+            (b, 1.0, a, a, -1),
+            (0.1, 0.3, 0.3, 0.1, 0),
+            (-0.0, 5.0, 0.0, 7.0, 0),
+            (tiny, 1.0, 0.0, 0.0, 1),
+            (tiny, tiny, 0.0, 1.0, 1),
+            (tiny, 0.5, tiny, 0.5, 0),
+            (f32::MAX, f32::MAX, f32::MAX, 1.0, 1),
+            (f32::MAX, -f32::MAX, -f32::MAX, f32::MAX, 0),
+            (f32::MIN_POSITIVE, f32::MIN_POSITIVE, tiny, 1.0, -1),
+            (3.0, 7.0, 21.0, 1.0, 0),
+            (-3.0, 7.0, 21.0, -1.0, 0),
+        ];
+        for (a, b, c, d, want) in worked {
+            assert_eq!(oracle(a, b, c, d), want, "oracle {a:e} {b:e} {c:e} {d:e}");
+            assert_eq!(
+                diff_of_products_sign_int(a, b, c, d),
+                want,
+                "{a:e} {b:e} {c:e} {d:e}"
+            );
+        }
+        assert_eq!(diff_of_products_sign_int(f32::NAN, 1.0, 0.0, 0.0), 0);
+        assert_eq!(diff_of_products_sign_int(f32::INFINITY, 1.0, 0.0, 0.0), 0);
+        // Random bit patterns (every exponent) and near-cancelling pairs.
+        let mut s = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        let mut counts = [0usize; 3];
+        for _ in 0..200_000 {
+            let (r1, r2, r3) = (next(), next(), next());
+            let f = |r: u64| f32::from_bits(r as u32);
+            let (a, b) = (f(r1), f(r1 >> 32));
+            let (c, d) = if r3 & 1 == 0 {
+                (f(r2), f(r2 >> 32))
+            } else {
+                // c·d within a few ulps of a·b.
+                let bump =
+                    |x: f32, k: u64| f32::from_bits(x.to_bits().wrapping_add((k % 3) as u32));
+                (bump(a, r3 >> 1), bump(b, r3 >> 3))
+            };
+            if !(a.is_finite() && b.is_finite() && c.is_finite() && d.is_finite()) {
+                continue;
+            }
+            let want = oracle(a, b, c, d);
+            counts[(want + 1) as usize] += 1;
+            assert_eq!(
+                diff_of_products_sign_int(a, b, c, d),
+                want,
+                "{a:e} {b:e} {c:e} {d:e}"
+            );
+        }
+        assert!(
+            counts.iter().all(|&n| n > 1000),
+            "every sign exercised: {counts:?}"
         );
     }
 }

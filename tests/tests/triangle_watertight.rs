@@ -11,7 +11,8 @@
 //! incident triangles); silhouettes and grazing views are skipped and reported as skipped.
 //!
 //! A **leak** is a counted ray that hits none of the incident triangles. The watertight variants
-//! (`watertight`, `watertight-f32`, `f64-reference`) must have zero leaks, and every hit they
+//! (`watertight`, `watertight-f32`, `f64-reference`, and `watertight-f32-exact`, the `f64`-free
+//! test, which must also hit exactly the faces `watertight` hits) must have zero leaks, and every hit they
 //! report on an incident triangle must have `t` within [`T_AT_TARGET_TOL`] of 1. Möller–Trumbore
 //! (both) and Cramer leaks are counted and printed, never asserted:
 //!
@@ -26,7 +27,9 @@
 
 use glam::{DVec3, Vec3};
 use halfray_core::Ray;
-use halfray_core::triangle::TriangleVariant;
+use halfray_core::triangle::{
+    TriangleIntersector, TriangleVariant, Watertight, WatertightF32Exact,
+};
 use halfray_tests::{
     CLEARANCE_IN_U, LeakCount, Mesh, Projector, Rng, Target, TargetKind, U32, aim_exact, classify,
     edge_target, exact, fan_normal, vertex_target,
@@ -48,10 +51,28 @@ const T_AT_TARGET_IN_U: f64 = 64.0;
 
 const VARIANTS: [TriangleVariant; 6] = TriangleVariant::ALL;
 
+/// The `t` tolerance of a hit at the target (`t = 1`) on face `tri`: its rounding error grows
+/// like `1/sin` of the angle between the ray and the face (the face's depth along the ray is
+/// ill-conditioned near edge-on views); see [`T_AT_TARGET_TOL`].
+fn t_tolerance(tri: &[Vec3; 3], ray: &Ray) -> f64 {
+    let (d, o) = (ray.direction.as_dvec3(), ray.origin.as_dvec3());
+    let [a, b, c] = tri.map(|p| p.as_dvec3());
+    let nrm = (b - a).cross(c - a);
+    let sin = (nrm.dot(d) / (nrm.length() * d.length())).abs();
+    let r = [a, b, c]
+        .iter()
+        .map(|p| (*p - o).abs().max_element())
+        .fold(0.0, f64::max);
+    T_AT_TARGET_TOL + T_AT_TARGET_IN_U * U32 * r / (d.length() * sin)
+}
+
 /// Per-variant leak tallies plus the failures of the watertight variants.
 #[derive(Default)]
 struct Tally {
     counts: [LeakCount; 6],
+    /// [`WatertightF32Exact`] (the `f64`-free test for microcontrollers), which must also agree
+    /// with `watertight` face by face (its edge signs are the same exact ones).
+    exact_f32: LeakCount,
     skipped: usize,
     failures: Vec<String>,
 }
@@ -59,8 +80,6 @@ struct Tally {
 impl Tally {
     fn test_incident(&mut self, mesh: &Mesh, target: &Target, ray: &Ray) {
         let edge = matches!(target.kind, TargetKind::Edge(..));
-        let d = ray.direction.as_dvec3();
-        let o = ray.origin.as_dvec3();
         for (vi, &v) in VARIANTS.iter().enumerate() {
             let mut n = 0;
             for &f in &target.faces {
@@ -72,17 +91,7 @@ impl Tally {
                 if !v.is_watertight() {
                     continue;
                 }
-                // t of a hit at the target is 1; its rounding error grows like 1/sin of the
-                // angle between the ray and the face (the face's depth along the ray is
-                // ill-conditioned near edge-on views).
-                let [a, b, c] = tri.map(|p| p.as_dvec3());
-                let nrm = (b - a).cross(c - a);
-                let sin = (nrm.dot(d) / (nrm.length() * d.length())).abs();
-                let r = [a, b, c]
-                    .iter()
-                    .map(|p| (*p - o).abs().max_element())
-                    .fold(0.0, f64::max);
-                let tol = T_AT_TARGET_TOL + T_AT_TARGET_IN_U * U32 * r / (d.length() * sin);
+                let tol = t_tolerance(&tri, ray);
                 if (f64::from(h.t) - 1.0).abs() > tol {
                     self.fail(format!(
                         "{}: incident face {f} hit at t = {}, expected 1 ± {tol:e}: {:?} {:?}, ray {:?}",
@@ -105,6 +114,44 @@ impl Tally {
                 ));
             }
         }
+        let mut n = 0;
+        for &f in &target.faces {
+            let tri = mesh.tri(f);
+            let ours = WatertightF32Exact.intersect(ray, &tri);
+            let exact = Watertight.intersect(ray, &tri);
+            if ours.is_some() != exact.is_some() {
+                self.fail(format!(
+                    "{} and watertight disagree on face {f}: {ours:?} vs {exact:?}, {:?} at {:?}, ray {:?}",
+                    WatertightF32Exact.name(),
+                    target.kind,
+                    target.point,
+                    ray
+                ));
+            }
+            if let (Some(h), Some(w)) = (ours, exact) {
+                n += 1;
+                let tol = t_tolerance(&tri, ray);
+                if (f64::from(h.t) - 1.0).abs() > tol {
+                    self.fail(format!(
+                        "{}: face {f} hit at t = {} (watertight: {}), expected 1 ± {tol:e}: ray {:?}",
+                        WatertightF32Exact.name(),
+                        h.t,
+                        w.t,
+                        ray
+                    ));
+                }
+            }
+        }
+        self.exact_f32.record(edge, n);
+        if n == 0 {
+            self.fail(format!(
+                "{} leak: {:?} at {:?}, ray {:?}",
+                WatertightF32Exact.name(),
+                target.kind,
+                target.point,
+                ray
+            ));
+        }
     }
 
     fn fail(&mut self, msg: String) {
@@ -123,6 +170,7 @@ impl Tally {
         for (a, b) in self.counts.iter_mut().zip(&o.counts) {
             a.add(b);
         }
+        self.exact_f32.add(&o.exact_f32);
         self.skipped += o.skipped;
         self.failures.extend(o.failures.iter().cloned());
     }
@@ -146,6 +194,12 @@ impl Tally {
                 assert_eq!(self.counts[vi].leaks(), 0, "{set}: {}", v.name());
             }
         }
+        assert_eq!(self.exact_f32.leaks(), 0, "{set}: watertight-f32-exact");
+        assert_eq!(
+            self.exact_f32.rays(),
+            self.counts[0].rays(),
+            "{set}: watertight-f32-exact saw every ray"
+        );
     }
 }
 

@@ -5,6 +5,7 @@
 //! |---|---|---|---|
 //! | [`Watertight`] (default) | `watertight` | closed, exact signs (`f64` products) | none |
 //! | [`WatertightF32`] | `watertight-f32` | closed, `f32` signs, exact `f64` recomputation of zeros | none |
+//! | [`WatertightF32Exact`] | `watertight-f32-exact` | closed, exact signs (`f32` filter, integer products), no `f64` | none |
 //! | [`MollerTrumbore`] | `moller-trumbore` / `moller-trumbore-noeps` | not watertight | [`crate::tolerance::MOLLER_TRUMBORE_DET_EPSILON`] or 0 |
 //! | [`Cramer`] | `cramer` | not watertight | none (`det = 0` only) |
 //! | [`F64Reference`] | `f64-reference` | closed, all in `f64` | none |
@@ -15,11 +16,12 @@
 //! * Rays lying in the triangle's plane, degenerate (zero-area) triangles, invalid rays
 //!   ([`Ray::validate`]) and non-finite vertices give no hit, and neither does a `t` that
 //!   overflows to infinity. "In the plane" and "zero area" are decided in `f64` (see
-//!   `degenerate_or_coplanar`), exactly for all but extreme coordinate ranges. No input panics.
+//!   `degenerate_or_coplanar`), exactly for all but extreme coordinate ranges ([`WatertightF32Exact`],
+//!   which never uses `f64`, decides them on its sheared projection instead). No input panics.
 //! * Both faces are hit; [`TriangleHit::front_face`] tells which one
 //!   (counter-clockwise `v0, v1, v2` seen from the ray's origin is the front).
 //!
-//! **Watertightness** ([`Watertight`], [`WatertightF32`], [`F64Reference`]): on a mesh with
+//! **Watertightness** ([`Watertight`], [`WatertightF32`], [`WatertightF32Exact`], [`F64Reference`]): on a mesh with
 //! shared, bit-identical vertices, a ray crossing the surface through an edge or vertex hits at
 //! least one of the incident triangles, never none (edges are closed; possibly several hit at
 //! the same `t`). The proof needs the edge functions' signs to be exact and the per-vertex shear
@@ -30,12 +32,14 @@ mod lanes;
 mod moller_trumbore;
 mod reference;
 mod watertight;
+mod watertight_f32_exact;
 
 pub use cramer::Cramer;
 pub use lanes::{LANES, TriangleLanes};
 pub use moller_trumbore::MollerTrumbore;
 pub use reference::F64Reference;
 pub use watertight::{Watertight, WatertightF32, WatertightRay};
+pub use watertight_f32_exact::WatertightF32Exact;
 
 use crate::float::gamma;
 use crate::hit::Hit;

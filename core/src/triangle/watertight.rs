@@ -143,7 +143,11 @@ impl WatertightRay {
 
     /// The three vertices projected with [`WatertightRay::project`]: `([x'], [y'], [z'])`.
     #[inline(always)]
-    fn project_triangle(&self, origin: Vec3, v: &[Vec3; 3]) -> ([f32; 3], [f32; 3], [f32; 3]) {
+    pub(super) fn project_triangle(
+        &self,
+        origin: Vec3,
+        v: &[Vec3; 3],
+    ) -> ([f32; 3], [f32; 3], [f32; 3]) {
         let (ax, ay, az) = self.project(origin, v[0]);
         let (bx, by, bz) = self.project(origin, v[1]);
         let (cx, cy, cz) = self.project(origin, v[2]);
