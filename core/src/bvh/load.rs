@@ -237,13 +237,19 @@ fn check(
     let mut covered = 0usize;
     while sp > 0 {
         sp -= 1;
-        let (node, depth) = stack[sp];
+        // `sp ≤ MAX_DEPTH + 1` by the depth check below; `get` keeps the loop panic-free.
+        let Some(&(node, depth)) = stack.get(sp) else {
+            return Err(LoadError::TooDeep { node: 0 });
+        };
         let node = node as usize;
         visits += 1;
         if visits > nodes.len() {
             return Err(LoadError::SharedNode { node });
         }
-        let n = &nodes[node];
+        // In range: the root, or a child checked against `nodes.len()` by its parent.
+        let Some(n) = nodes.get(node) else {
+            return Err(LoadError::ChildOutOfRange { node });
+        };
         let b = &n.bounds;
         if !finite_box(b) {
             return Err(LoadError::BadBox { node });
@@ -258,13 +264,16 @@ fn check(
                     return Err(LoadError::TooDeep { node });
                 }
                 for child in [first, first + 1] {
-                    if !contains_box(b, &nodes[child].bounds) {
+                    if !nodes.get(child).is_some_and(|c| contains_box(b, &c.bounds)) {
                         return Err(LoadError::BadBox { node });
                     }
                 }
                 // Second child below the first, so the first is walked first.
-                stack[sp] = ((first + 1) as u32, depth + 1);
-                stack[sp + 1] = (first as u32, depth + 1);
+                let Some([second_slot, first_slot]) = stack.get_mut(sp..sp + 2) else {
+                    return Err(LoadError::TooDeep { node });
+                };
+                *second_slot = ((first + 1) as u32, depth + 1);
+                *first_slot = (first as u32, depth + 1);
                 sp += 2;
             }
             None => {
@@ -276,10 +285,13 @@ fn check(
                 for (position, &prim) in indices.iter().enumerate().skip(start).take(count) {
                     let prim = prim as usize;
                     let (word, bit) = (prim / 32, 1u32 << (prim % 32));
-                    if prim >= triangles || seen[word] & bit != 0 {
+                    let Some(seen_word) = seen.get_mut(word).filter(|_| prim < triangles) else {
+                        return Err(LoadError::BadIndex { position });
+                    };
+                    if *seen_word & bit != 0 {
                         return Err(LoadError::BadIndex { position });
                     }
-                    seen[word] |= bit;
+                    *seen_word |= bit;
                     let Some(v) = mesh.triangle(prim) else {
                         return Err(LoadError::BadTriangle { triangle: prim });
                     };

@@ -71,9 +71,10 @@ impl NodeRay {
         let mut t_enter = t_min;
         let mut t_exit = t_max;
         for axis in 0..3 {
-            let n = self.near[axis];
+            // `near` holds 0 or 1: `& 1` states it, so the lookups need no bounds check.
+            let n = self.near[axis] & 1;
             let lo = node.bounds[n][axis];
-            let hi = node.bounds[1 - n][axis];
+            let hi = node.bounds[n ^ 1][axis];
             let t_near = (lo - self.origin_near[axis]) * self.inv_dir[axis];
             let t_far = (hi - self.origin_far[axis]) * self.inv_dir[axis] * SLAB_FAR_SCALE;
             t_enter = if t_near > t_enter { t_near } else { t_enter };
@@ -282,7 +283,7 @@ where
             let bound = cull_bound(cur.t_max);
             while sp > 0 {
                 sp -= 1;
-                let e = stack[sp];
+                let Some(&e) = stack.get(sp) else { break };
                 if e.t_enter <= bound {
                     node = nodes.get(e.node as usize);
                     break;

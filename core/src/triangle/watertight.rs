@@ -160,11 +160,13 @@ impl WatertightRay {
     #[inline(always)]
     fn project(&self, origin: Vec3, p: Vec3) -> (f32, f32, f32) {
         let a = p - origin;
+        // Indexed through a four-lane array with `& 3`: no bounds check (`k` holds axes 0–2).
+        let a = [a.x, a.y, a.z, 0.0];
         let [kx, ky, kz] = self.k;
-        let z = a[kz];
+        let z = a[kz & 3];
         (
-            a[kx] - self.shear.x * z,
-            a[ky] - self.shear.y * z,
+            a[kx & 3] - self.shear.x * z,
+            a[ky & 3] - self.shear.y * z,
             self.shear.z * z,
         )
     }

@@ -51,9 +51,9 @@ fn edges_f32(x: [f32; 3], y: [f32; 3]) -> [f32; 3] {
 
 /// The edges when the fast path cannot decide (an edge zero or NaN, or a tiny or overflowing
 /// `det`): the **signs** exact on the given coordinates ([`diff_of_products_sign_int`]), the
-/// **values** from the coordinates scaled by a power of two so that the largest is about `1`
-/// (which scales every edge by the same factor: the ratios `eᵢ/det`, hence `t` and the
-/// barycentrics, do not change). A value whose sign disagrees with the exact one (it rounded
+/// **values** from the x and the y coordinates each scaled by a power of two so that their
+/// largest is about `1` (which scales every edge by the same factor: the ratios `eᵢ/det`,
+/// hence `t` and the barycentrics, do not change). A value whose sign disagrees with the exact one (it rounded
 /// to zero, or the scaling rounded a subnormal) is replaced by the exact sign times
 /// `f32::MIN_POSITIVE`. NaN edges for non-finite coordinates. Out of line: rare.
 #[inline(never)]
@@ -67,20 +67,33 @@ fn edges_rescaled(x: [f32; 3], y: [f32; 3]) -> [f32; 3] {
         diff_of_products_sign_int(ax, cy, ay, cx),
         diff_of_products_sign_int(bx, ay, by, ax),
     ];
-    let m = x.iter().chain(&y).fold(0.0f32, |m, c| m.max(c.abs()));
-    // 2^(127 − E) for m's biased exponent E (clamped to a normal power of two): m·scale ∈ [1, 2).
-    let biased = (m.to_bits() >> 23) & 0xFF;
-    let scale = f32::from_bits(254u32.saturating_sub(biased).clamp(1, 254) << 23);
-    let value = edges_f32(x.map(|c| c * scale), y.map(|c| c * scale));
-    core::array::from_fn(|i| {
-        let (v, s) = (value[i], sign[i]);
+    // Each edge is bilinear in the x's and the y's: scaling all x by one power of two and all
+    // y by another scales the three edges alike. Separately, so that an axis far smaller than
+    // the other does not fall into the subnormal range.
+    let (sx, sy) = (unit_scale(&x), unit_scale(&y));
+    let value = edges_f32(x.map(|c| c * sx), y.map(|c| c * sy));
+    let pick = |v: f32, s: i32| {
         let agrees = (s > 0 && v > 0.0) || (s < 0 && v < 0.0) || (s == 0 && v == 0.0);
         if agrees {
             v
         } else {
             s as f32 * f32::MIN_POSITIVE
         }
-    })
+    };
+    [
+        pick(value[0], sign[0]),
+        pick(value[1], sign[1]),
+        pick(value[2], sign[2]),
+    ]
+}
+
+/// The power of two `2^(127 − E)`, `E` the biased exponent of the largest `|c|` of `c`
+/// (clamped to a normal power of two): the largest times it lies in `[1, 2)`.
+#[inline(always)]
+fn unit_scale(c: &[f32; 3]) -> f32 {
+    let m = c[0].abs().max(c[1].abs()).max(c[2].abs());
+    let biased = (m.to_bits() >> 23) & 0xFF;
+    f32::from_bits(254u32.saturating_sub(biased).clamp(1, 254) << 23)
 }
 
 /// `(v1 − v0) × (v2 − v0)` in `f32`; when that is zero or not finite, the cross product of the

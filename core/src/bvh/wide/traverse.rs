@@ -465,7 +465,7 @@ where
                     break 'walk;
                 }
                 sp -= 1;
-                let e = stack[sp];
+                let Some(&e) = stack.get(sp) else { break 'walk };
                 if e.t_enter <= bound {
                     next = e.child;
                     break;
