@@ -12,6 +12,7 @@
 //! * [`plane`], [`sphere`], [`quadric`], [`polygon`], [`transform`]: the other primitives.
 //! * [`bvh`]: a binned-SAH BVH built into caller storage, traversed with a fixed stack.
 //! * [`halfedge`]: fixed-capacity half-edge mesh arenas and their editing operations.
+//! * [`solids`]: the octahedron and the cube as index lists, for examples and tests.
 //!
 //! Nothing in this crate panics on any input, NaN and infinity included: intersectors are
 //! total functions that report "no hit" for invalid rays, and constructors that can reject
@@ -49,6 +50,7 @@ pub mod quadric;
 pub mod ray;
 #[allow(unsafe_code)]
 mod simd;
+pub mod solids;
 pub mod sphere;
 #[cfg(test)]
 mod test_util;

@@ -9,9 +9,10 @@ use halfray_core::Vec3;
 use halfray_core::bvh::{Bvh, BvhNode, TriangleMesh, load_scratch_len};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{TriangleIntersector, Watertight};
-use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_halfray");
+mod common;
+use common::{halfray, stderr};
+
 const TORUS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/meshes/torus.obj");
 
 /// The text of `static NAME: … = [ … ];`.
@@ -49,12 +50,8 @@ fn integers(text: &str) -> Vec<u32> {
 fn the_baked_source_holds_the_mesh_and_a_bvh_that_loads_and_answers_like_brute_force() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("torus_bvh.rs");
-    let o = Command::new(BIN)
-        .args(["bake", TORUS, "-o"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = halfray(&[&"bake", &TORUS, &"-o", &out]);
+    assert!(o.status.success(), "{}", stderr(&o));
     let src = std::fs::read_to_string(&out).unwrap();
     let obj = read_obj(std::path::Path::new(TORUS)).unwrap();
 
@@ -129,14 +126,8 @@ fn bad_input_and_bad_outputs_are_refused_with_nothing_written() {
     let bad = dir.path().join("bad.obj");
     std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n").unwrap();
     let out = dir.path().join("out.rs");
-    let o = Command::new(BIN)
-        .arg("bake")
-        .arg(&bad)
-        .arg("-o")
-        .arg(&out)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
+    let o = halfray(&[&"bake", &bad, &"-o", &out]);
+    let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.contains("bad.obj:3"), "{err}");
     assert!(!out.exists(), "nothing written on error");
@@ -144,30 +135,13 @@ fn bad_input_and_bad_outputs_are_refused_with_nothing_written() {
     let copy = dir.path().join("torus.obj");
     std::fs::copy(TORUS, &copy).unwrap();
     let before = std::fs::read(&copy).unwrap();
-    let o = Command::new(BIN)
-        .arg("bake")
-        .arg(&copy)
-        .arg("-o")
-        .arg(&copy)
-        .output()
-        .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(2),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let o = halfray(&[&"bake", &copy, &"-o", &copy]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert_eq!(std::fs::read(&copy).unwrap(), before);
     // A folder that does not exist.
-    let o = Command::new(BIN)
-        .arg("bake")
-        .arg(TORUS)
-        .arg("-o")
-        .arg(dir.path().join("missing/out.rs"))
-        .output()
-        .unwrap();
+    let o = halfray(&[&"bake", &TORUS, &"-o", &dir.path().join("missing/out.rs")]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("does not exist"));
+    assert!(stderr(&o).contains("does not exist"));
     let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
     assert_eq!(left.len(), 2, "no temporary files left: {left:?}");
 }

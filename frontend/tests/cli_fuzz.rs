@@ -8,6 +8,9 @@ use clap::Parser;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
+mod common;
+use common::{camera, plane, sphere};
+
 #[derive(Parser)]
 struct Cli {
     #[command(subcommand)]
@@ -178,16 +181,16 @@ fn random_obj_files_through_the_mesh_tools() {
     );
 }
 
-const SCENE: &str = r#"ambient = [0.1, 0.1, 0.1]
+/// The valid scene the mutations start from: a sphere, a plane and a glass mesh.
+fn valid_scene() -> String {
+    let camera = camera("[0, 1, 5]", "[0, 0, 0]", "40", [16, 12]);
+    let sphere = sphere("[0, 0, 0]", "1", "red");
+    let plane = plane("[0, -1, 0]", "[0, 1, 0]", "red");
+    format!(
+        r#"ambient = [0.1, 0.1, 0.1]
 max_depth = 4
 
-[camera]
-eye = [0, 1, 5]
-look_at = [0, 0, 0]
-fov = 40
-width = 16
-height = 12
-
+{camera}
 [[light]]
 type = "point"
 position = [2, 4, 3]
@@ -206,24 +209,16 @@ ior = 1.5
 [mesh.tet]
 file = "tet.obj"
 
-[[object]]
-type = "sphere"
-center = [0, 0, 0]
-radius = 1
-material = "red"
-
-[[object]]
-type = "plane"
-point = [0, -1, 0]
-normal = [0, 1, 0]
-material = "red"
-
+{sphere}
+{plane}
 [[object]]
 type = "mesh"
 mesh = "tet"
 material = "glass"
-transform = [{ translate = [1.5, 0, 0] }, { scale = 0.5 }]
-"#;
+transform = [{{ translate = [1.5, 0, 0] }}, {{ scale = 0.5 }}]
+"#
+    )
+}
 
 /// Mutations of a valid scene: a character deleted, inserted or replaced, a number replaced by
 /// an extreme or non-numeric token, a line duplicated or dropped.
@@ -305,12 +300,13 @@ fn mutated_scenes_through_render() {
     let out = dir.path().join("out.png");
     let (sc, o) = (scene.to_str().unwrap(), out.to_str().unwrap());
     // Control: the unmutated scene renders.
-    std::fs::write(&scene, SCENE).unwrap();
-    assert!(check_writer(&["render", sc, "-o", o, "-q"], &out, SCENE));
+    let valid = valid_scene();
+    std::fs::write(&scene, &valid).unwrap();
+    assert!(check_writer(&["render", sc, "-o", o, "-q"], &out, &valid));
     let mut r = Lcg(0x0005_ce7e);
     let (mut ok, mut refused) = (0, 0);
     for _ in 0..400 {
-        let text = mutate(&mut r, SCENE);
+        let text = mutate(&mut r, &valid);
         std::fs::write(&scene, &text).unwrap();
         if check_writer(&["render", sc, "-o", o, "-q"], &out, &text) {
             ok += 1;

@@ -6,15 +6,15 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-const BIN: &str = env!("CARGO_BIN_EXE_halfray");
+mod common;
+use common::{BIN, scenes_dir};
+
 const MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes");
 /// How long the SIGTERM test waits for the killed render to exit.
 const EXIT_WAIT: Duration = Duration::from_secs(30);
 
 fn scene(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../scenes")
-        .join(name)
+    scenes_dir().join(name)
 }
 
 fn run(args: &[&std::ffi::OsStr]) -> Output {

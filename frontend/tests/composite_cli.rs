@@ -3,10 +3,11 @@
 //! in straight (non-premultiplied) closed form, independent of the code's `Fa·A + Fb·B`.
 
 use image::{Rgba, RgbaImage};
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_halfray");
+mod common;
+use common::{halfray, stderr};
 
 /// Four pixels: opaque, half, a little and no coverage.
 fn image(rgb: [u8; 3], alphas: [u8; 4]) -> RgbaImage {
@@ -81,19 +82,8 @@ fn every_operator_gives_porter_and_duffs_pixels() {
     save(&b, &pb);
     for op in OPS {
         let out = dir.path().join(format!("{op}.png"));
-        let o = Command::new(BIN)
-            .args(["composite"])
-            .arg(&pa)
-            .arg(&pb)
-            .args(["--op", op, "-o"])
-            .arg(&out)
-            .output()
-            .unwrap();
-        assert!(
-            o.status.success(),
-            "{op}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        let o = halfray(&[&"composite", &pa, &pb, &"--op", &op, &"-o", &out]);
+        assert!(o.status.success(), "{op}: {}", stderr(&o));
         let got = image::open(&out).unwrap().into_rgba8();
         for x in 0..4 {
             let f = |p: &Rgba<u8>| p.0.map(|c| f64::from(c) / 255.0);
@@ -116,62 +106,38 @@ fn mismatched_sizes_and_an_input_as_output_are_refused() {
     save(&image([1, 2, 3], [255; 4]), &pa);
     save(&RgbaImage::new(3, 1), &pb);
     let out = dir.path().join("out.png");
-    let o = Command::new(BIN)
-        .arg("composite")
-        .arg(&pa)
-        .arg(&pb)
-        .arg("-o")
-        .arg(&out)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
+    let o = halfray(&[&"composite", &pa, &pb, &"-o", &out]);
+    let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(
         err.contains("b.png") && err.contains("3×1") && err.contains("4×1"),
         "{err}"
     );
     assert!(!out.exists());
-    let o = Command::new(BIN)
-        .arg("composite")
-        .arg(&pa)
-        .arg(&pb)
-        .arg("-o")
-        .arg(&pa)
-        .output()
-        .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(2),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let o = Command::new(BIN)
-        .args(["composite", "--op", "plus"])
-        .arg(&pa)
-        .arg(&pb)
-        .arg("-o")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = halfray(&[&"composite", &pa, &pb, &"-o", &pa]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let o = halfray(&[&"composite", &"--op", &"plus", &pa, &pb, &"-o", &out]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("dst-atop"),
-        "lists the operators"
-    );
+    assert!(stderr(&o).contains("dst-atop"), "lists the operators");
 }
 
 fn render(dir: &Path, name: &str, extra: &[&str]) -> RgbaImage {
     let out: PathBuf = dir.join(name);
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/bunny.toml");
-    let o = Command::new(BIN)
-        .args([
-            "render", scene, "--width", "40", "--height", "30", "--quiet", "-o",
-        ])
-        .arg(&out)
-        .args(extra)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut args: Vec<&dyn AsRef<OsStr>> = vec![
+        &"render",
+        &scene,
+        &"--width",
+        &"40",
+        &"--height",
+        &"30",
+        &"--quiet",
+        &"-o",
+        &out,
+    ];
+    args.extend(extra.iter().map(|a| a as &dyn AsRef<OsStr>));
+    let o = halfray(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
     image::open(&out).unwrap().into_rgba8()
 }
 
@@ -241,16 +207,14 @@ fn render_composites_with_the_chosen_operator() {
         "{opaque} opaque, {clear} clear pixels"
     );
     // --op without --background is a usage error.
-    let o = Command::new(BIN)
-        .args([
-            "render",
-            concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/shadows.toml"),
-            "--op",
-            "xor",
-            "-o",
-        ])
-        .arg(dir.path().join("x.png"))
-        .output()
-        .unwrap();
+    let shadows = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/shadows.toml");
+    let o = halfray(&[
+        &"render",
+        &shadows,
+        &"--op",
+        &"xor",
+        &"-o",
+        &dir.path().join("x.png"),
+    ]);
     assert_eq!(o.status.code(), Some(2));
 }

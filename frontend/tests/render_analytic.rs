@@ -5,13 +5,10 @@ use glam::{Vec3, Vec4};
 use halfray::render::plan::EffectPlan;
 use halfray::render::trace::{RayCounts, Tracer, refract};
 use halfray::render::{Mode, RenderOptions, render};
-use halfray::scene::{Scene, parse};
 use halfray_core::{Ray, spawn_ray};
-use std::path::Path;
 
-fn scene(text: &str) -> Scene {
-    parse(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
-}
+mod common;
+use common::{parse_scene, plane, point_light, sphere};
 
 fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
     (a - b).abs().max_element() <= tol * (1.0 + b.abs().max_element())
@@ -29,14 +26,12 @@ height = 41
 
 #[test]
 fn lit_sphere_pixel_equals_lambert_plus_blinn_phong() {
+    let light = point_light("[3, 4, 6]", "30");
+    let sphere = sphere("[0, 0, 0]", "1", "m");
     let text = format!(
         r#"ambient = [0.1, 0.2, 0.3]
 {ORTHO}
-[[light]]
-type = "point"
-position = [3, 4, 6]
-intensity = 30
-color = [1.0, 0.9, 0.8]
+{light}color = [1.0, 0.9, 0.8]
 
 [material.m]
 ambient = [0.5, 0.5, 0.5]
@@ -44,14 +39,9 @@ diffuse = [0.7, 0.3, 0.2]
 specular = [0.4, 0.4, 0.4]
 shininess = 25
 
-[[object]]
-type = "sphere"
-center = [0, 0, 0]
-radius = 1
-material = "m"
-"#
+{sphere}"#
     );
-    let s = scene(&text);
+    let s = parse_scene(&text);
     let out = render(&s, &RenderOptions::default());
     let mut checked = 0;
     for (i, j) in [(20, 20), (25, 14), (12, 27), (28, 22), (20, 5)] {
@@ -95,14 +85,13 @@ material = "m"
 
 #[test]
 fn point_in_shadow_gets_ambient_only() {
+    let light = point_light("[0, 0, 4]", "20");
+    let floor = plane("[0, 0, 0]", "[0, 0, 1]", "floor");
+    let blocker = sphere("[0, 0, 2]", "0.05", "blocker");
     let text = format!(
         r#"ambient = [0.2, 0.2, 0.2]
 {ORTHO}
-[[light]]
-type = "point"
-position = [0, 0, 4]
-intensity = 20
-
+{light}
 [material.floor]
 ambient = [0.6, 0.5, 0.4]
 diffuse = [0.9, 0.9, 0.9]
@@ -111,21 +100,11 @@ specular = [0.5, 0.5, 0.5]
 [material.blocker]
 diffuse = [0.1, 0.1, 0.1]
 
-[[object]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 0, 1]
-material = "floor"
-
+{floor}
 # A small sphere between the light and the floor's centre, seen edge-on by no pixel we test.
-[[object]]
-type = "sphere"
-center = [0, 0, 2]
-radius = 0.05
-material = "blocker"
-"#
+{blocker}"#
     );
-    let s = scene(&text);
+    let s = parse_scene(&text);
     let plan = EffectPlan::derive(&s, false);
     let tracer = Tracer {
         scene: &s,
@@ -149,6 +128,8 @@ material = "blocker"
 
 #[test]
 fn mirror_facing_coloured_plane_returns_colour_times_reflectance() {
+    let mirror = plane("[0, 0, 0]", "[0, 0, 1]", "mirror");
+    let paint = plane("[0, 0, 10]", "[0, 0, -1]", "paint");
     let text = format!(
         r#"ambient = [1, 1, 1]
 {ORTHO}
@@ -161,21 +142,11 @@ mirror = 0.6
 ambient = [0.2, 0.7, 0.4]
 diffuse = [0, 0, 0]
 
-[[object]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 0, 1]
-material = "mirror"
-
+{mirror}
 # Behind the camera, facing the mirror.
-[[object]]
-type = "plane"
-point = [0, 0, 10]
-normal = [0, 0, -1]
-material = "paint"
-"#
+{paint}"#
     );
-    let s = scene(&text);
+    let s = parse_scene(&text);
     let out = render(&s, &RenderOptions::default());
     let want = Vec3::new(0.2, 0.7, 0.4) * 0.6;
     for p in &out.pixels {
@@ -202,7 +173,7 @@ max = [100, 100, 0]
 material = "glass"
 "#
     );
-    let s = scene(&text);
+    let s = parse_scene(&text);
     let plan = EffectPlan::derive(&s, false);
     let tracer = Tracer {
         scene: &s,
@@ -249,20 +220,16 @@ material = "glass"
 
 #[test]
 fn scaled_sphere_normal_is_the_analytic_ellipsoid_normal() {
+    let sphere = sphere("[0, 0, 0]", "1", "m");
     let text = format!(
         r#"{ORTHO}
 [material.m]
 diffuse = [1, 1, 1]
 
-[[object]]
-type = "sphere"
-center = [0, 0, 0]
-radius = 1
-material = "m"
-transform = [{{ scale = [1.0, 0.5, 0.8] }}, {{ rotate = {{ axis = [0, 0, 1], degrees = 0 }} }}]
+{sphere}transform = [{{ scale = [1.0, 0.5, 0.8] }}, {{ rotate = {{ axis = [0, 0, 1], degrees = 0 }} }}]
 "#
     );
-    let s = scene(&text);
+    let s = parse_scene(&text);
     let plan = EffectPlan::derive(&s, false);
     let tracer = Tracer {
         scene: &s,

@@ -9,6 +9,9 @@ use halfray::scene::{self, Scene};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+mod common;
+use common::{camera, plane, point_light, scenes_dir, sphere};
+
 /// Largest difference, in 8-bit steps, between the bounded and the exhaustive tree: the
 /// weight cut is chosen to stay under half a step per skipped subtree (see `MIN_PATH_WEIGHT`);
 /// rounding of the two sums to 8 bits can still land on either side of a step.
@@ -17,7 +20,7 @@ const MAX_STEP_DIFFERENCE: u8 = 1;
 const DEEP_RENDER_LIMIT: Duration = Duration::from_secs(120);
 
 fn glass(max_depth: u32) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/glass.toml");
+    let path = scenes_dir().join("glass.toml");
     let text = std::fs::read_to_string(&path)
         .unwrap()
         .replace("max_depth = 8", &format!("max_depth = {max_depth}"))
@@ -62,39 +65,27 @@ fn deep_glass_finishes_and_matches_the_exhaustive_tree() {
 
 /// A camera inside two nested spheres that reflect and transmit everything: weights never
 /// fall, both rays of every hit go on, the tree is 2^64 without the per-pixel cap.
-const HALL_OF_MIRRORS: &str = r#"
+fn hall_of_mirrors() -> String {
+    let camera = camera("[0, 0, 0]", "[0, 0, -1]", "60", [4, 4]);
+    let light = point_light("[0, 0, 0]", "1.0");
+    let inner = sphere("[0, 0, 0]", "1.0", "both");
+    let outer = sphere("[0, 0, 0]", "2.0", "both");
+    format!(
+        r#"
 max_depth = 64
 background = [0.2, 0.3, 0.4]
-[camera]
-eye = [0, 0, 0]
-look_at = [0, 0, -1]
-fov = 60
-width = 4
-height = 4
-[[light]]
-type = "point"
-position = [0, 0, 0]
-intensity = 1.0
-[material.both]
+{camera}{light}[material.both]
 diffuse = [0.1, 0.1, 0.1]
 mirror = 1.0
 transparency = 1.0
 ior = 1.5
-[[object]]
-type = "sphere"
-center = [0, 0, 0]
-radius = 1.0
-material = "both"
-[[object]]
-type = "sphere"
-center = [0, 0, 0]
-radius = 2.0
-material = "both"
-"#;
+{inner}{outer}"#
+    )
+}
 
 #[test]
 fn weights_that_never_fall_stop_at_the_per_pixel_cap() {
-    let s = scene::parse(HALL_OF_MIRRORS, Path::new("hall.toml")).unwrap();
+    let s = scene::parse(&hall_of_mirrors(), Path::new("hall.toml")).unwrap();
     let r = render(&s, &opts(PathBound::RENDER));
     let pixels = u64::from(r.width * r.height);
     let secondary = r.counts.reflection + r.counts.refraction;
@@ -111,40 +102,16 @@ fn forced_effects_stay_bit_identical_when_radiance_overflows() {
     // Three lights of 3e38 at distance ~1 from the floor: each term is finite, their sum +∞. The sphere
     // has no mirror; forced reflection rays from its underside see the floor (0·∞ = NaN if
     // their result were weighted by zero instead of discarded).
-    let text = r#"
-background = [0.1, 0.1, 0.1]
-[camera]
-eye = [0, 1, 5]
-look_at = [0, 0.5, 0]
-fov = 40
-width = 32
-height = 24
-[[light]]
-type = "point"
-position = [0, 1, 0]
-intensity = 3e38
-[[light]]
-type = "point"
-position = [0.2, 1, 0]
-intensity = 3e38
-[[light]]
-type = "point"
-position = [-0.2, 1, 0]
-intensity = 3e38
-[material.matte]
-diffuse = [1, 1, 1]
-[[object]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 1, 0]
-material = "matte"
-[[object]]
-type = "sphere"
-center = [1.5, 0.6, 1]
-radius = 0.5
-material = "matte"
-"#;
-    let s = scene::parse(text, Path::new("hot.toml")).unwrap();
+    let lights: String = ["[0, 1, 0]", "[0.2, 1, 0]", "[-0.2, 1, 0]"]
+        .map(|p| point_light(p, "3e38"))
+        .concat();
+    let text = format!(
+        "\nbackground = [0.1, 0.1, 0.1]\n{}{lights}[material.matte]\ndiffuse = [1, 1, 1]\n{}{}",
+        camera("[0, 1, 5]", "[0, 0.5, 0]", "40", [32, 24]),
+        plane("[0, 0, 0]", "[0, 1, 0]", "matte"),
+        sphere("[1.5, 0.6, 1]", "0.5", "matte"),
+    );
+    let s = scene::parse(&text, Path::new("hot.toml")).unwrap();
     let planned = render(&s, &RenderOptions::default());
     let forced = render(
         &s,

@@ -13,6 +13,9 @@ use std::collections::BTreeSet;
 use std::path::Path;
 use std::sync::Arc;
 
+mod common;
+use common::lcg;
+
 const SCENE_MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/meshes");
 
 /// Every closed mesh the example scenes can use as a CSG operand.
@@ -72,13 +75,6 @@ fn touches_removed(events: &[(f32, bool)]) -> Vec<(f32, bool)> {
         }
     }
     proper
-}
-
-fn lcg(s: &mut u64) -> f32 {
-    *s = s
-        .wrapping_mul(6364136223846793005)
-        .wrapping_add(1442695040888963407);
-    ((*s >> 40) as f32) / (1u64 << 24) as f32
 }
 
 fn unit(s: &mut u64) -> Vec3 {

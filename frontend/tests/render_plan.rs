@@ -4,33 +4,27 @@
 use halfray::render::plan::EffectPlan;
 use halfray::render::trace::Tracer;
 use halfray::render::{Mode, RenderOptions, render};
-use halfray::scene::{Scene, load, parse};
-use std::path::{Path, PathBuf};
+use halfray::scene::{Scene, load};
+use std::path::Path;
 
-fn scene(text: &str) -> Scene {
-    parse(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
-}
+mod common;
+use common::{camera, directional_light, parse_scene, plane, point_light, scenes_dir, sphere};
 
-const MATTE: &str = r#"
+/// A floor and a red sphere, lit by two lights that cast no shadows.
+fn matte() -> String {
+    let camera = camera("[0, 2, 6]", "[0, 0.5, 0]", "50", [64, 48]);
+    let point = point_light("[2, 5, 3]", "30");
+    let directional = directional_light("[-1, -1, -1]");
+    let floor = plane("[0, 0, 0]", "[0, 1, 0]", "matte");
+    let red = sphere("[-1.2, 0.6, 0]", "0.6", "red");
+    format!(
+        r#"
 ambient = [0.1, 0.1, 0.1]
 
-[camera]
-eye = [0, 2, 6]
-look_at = [0, 0.5, 0]
-fov = 50
-width = 64
-height = 48
+{camera}
+{point}cast_shadows = false
 
-[[light]]
-type = "point"
-position = [2, 5, 3]
-intensity = 30
-cast_shadows = false
-
-[[light]]
-type = "directional"
-direction = [-1, -1, -1]
-intensity = 0.5
+{directional}intensity = 0.5
 cast_shadows = false
 
 [material.matte]
@@ -39,34 +33,20 @@ diffuse = [0.7, 0.7, 0.7]
 [material.red]
 diffuse = [0.8, 0.1, 0.1]
 
-[[object]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 1, 0]
-material = "matte"
+{floor}
+{red}"#
+    )
+}
 
-[[object]]
-type = "sphere"
-center = [-1.2, 0.6, 0]
-radius = 0.6
-material = "red"
-"#;
-
-const MIRROR_SPHERE: &str = r#"
-[material.mirror]
-diffuse = [0.1, 0.1, 0.1]
-mirror = 0.8
-
-[[object]]
-type = "sphere"
-center = [1.0, 0.7, 0.2]
-radius = 0.7
-material = "mirror"
-"#;
+/// A mirror sphere (its material and object), to add to [`matte`].
+fn mirror_sphere() -> String {
+    let mirror = sphere("[1.0, 0.7, 0.2]", "0.7", "mirror");
+    format!("\n[material.mirror]\ndiffuse = [0.1, 0.1, 0.1]\nmirror = 0.8\n\n{mirror}")
+}
 
 #[test]
 fn matte_scene_without_shadow_lights_casts_one_ray_per_pixel() {
-    let s = scene(MATTE);
+    let s = parse_scene(&matte());
     let plan = EffectPlan::derive(&s, false);
     assert_eq!(plan.max_depth, 0);
     assert!(plan.shadow_rays.iter().all(|&b| !b));
@@ -81,7 +61,7 @@ fn matte_scene_without_shadow_lights_casts_one_ray_per_pixel() {
 
 #[test]
 fn one_mirror_sphere_adds_reflection_rays_only_where_it_is_seen() {
-    let s = scene(&format!("{MATTE}{MIRROR_SPHERE}"));
+    let s = parse_scene(&format!("{}{}", matte(), mirror_sphere()));
     let plan = EffectPlan::derive(&s, false);
     assert_eq!(plan.max_depth, s.max_depth);
     let out = render(&s, &RenderOptions::default());
@@ -116,7 +96,7 @@ fn one_mirror_sphere_adds_reflection_rays_only_where_it_is_seen() {
 #[test]
 fn unused_materials_turn_no_effect_on() {
     let extra = "\n[material.unused_mirror]\ndiffuse = [0.1, 0.1, 0.1]\nmirror = 0.9\nspecular = [1, 1, 1]\n\n[material.unused_glass]\ntransparency = 0.9\nior = 1.5\n";
-    let s = scene(&format!("{MATTE}{extra}"));
+    let s = parse_scene(&format!("{}{extra}", matte()));
     let plan = EffectPlan::derive(&s, false);
     assert_eq!(plan.max_depth, 0);
     assert!(
@@ -135,9 +115,12 @@ fn unused_materials_turn_no_effect_on() {
     assert_eq!(out.counts.total(), 64 * 48);
     assert_same_picture(&s, "unused materials");
     // Control: the same mirror material on the sphere turns reflection on.
-    let used =
-        format!("{MATTE}{extra}").replacen("material = \"red\"", "material = \"unused_mirror\"", 1);
-    let plan = EffectPlan::derive(&scene(&used), false);
+    let used = format!("{}{extra}", matte()).replacen(
+        "material = \"red\"",
+        "material = \"unused_mirror\"",
+        1,
+    );
+    let plan = EffectPlan::derive(&parse_scene(&used), false);
     assert!(plan.max_depth > 0 && plan.reflect.iter().any(|&b| b));
 }
 
@@ -145,16 +128,16 @@ fn unused_materials_turn_no_effect_on() {
 /// it, `--explain` says why, and the picture equals the forced one (which does cast them).
 #[test]
 fn dark_lights_cast_no_shadow_rays() {
-    let shadowed = MATTE.replacen("cast_shadows = false", "cast_shadows = true", 2);
+    let shadowed = matte().replacen("cast_shadows = false", "cast_shadows = true", 2);
     let dark = shadowed.replacen("intensity = 30", "intensity = 0", 1);
-    let s = scene(&dark);
+    let s = parse_scene(&dark);
     let plan = EffectPlan::derive(&s, false);
     assert_eq!(plan.shadow_rays, vec![false, true]);
     let explain = plan.explain(&s);
     assert!(explain.contains("zero intensity"), "{explain}");
     let out = render(&s, &RenderOptions::default());
     // Control: the same scene with the light lit casts shadow rays towards both.
-    let lit = scene(&shadowed);
+    let lit = parse_scene(&shadowed);
     assert_eq!(
         EffectPlan::derive(&lit, false).shadow_rays,
         vec![true, true]
@@ -164,7 +147,7 @@ fn dark_lights_cast_no_shadow_rays() {
     assert_same_picture(&s, "dark light");
     let zero_colour = shadowed.replacen("intensity = 30", "intensity = 30\ncolor = [0, 0, 0]", 1);
     assert_eq!(
-        EffectPlan::derive(&scene(&zero_colour), false).shadow_rays,
+        EffectPlan::derive(&parse_scene(&zero_colour), false).shadow_rays,
         vec![false, true]
     );
 }
@@ -206,12 +189,11 @@ fn assert_same_picture(s: &Scene, what: &str) {
 
 #[test]
 fn plan_never_changes_the_picture_on_test_scenes() {
-    assert_same_picture(&scene(MATTE), "matte");
-    assert_same_picture(&scene(&format!("{MATTE}{MIRROR_SPHERE}")), "mirror");
-}
-
-fn scenes_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
+    assert_same_picture(&parse_scene(&matte()), "matte");
+    assert_same_picture(
+        &parse_scene(&format!("{}{}", matte(), mirror_sphere())),
+        "mirror",
+    );
 }
 
 #[test]
@@ -248,7 +230,7 @@ fn plan_never_changes_the_picture_on_example_scenes() {
 fn stats_json_reports_the_plan_next_to_the_ray_counts() {
     let dir = tempfile::tempdir().unwrap();
     let scene_path = dir.path().join("matte.toml");
-    std::fs::write(&scene_path, MATTE).unwrap();
+    std::fs::write(&scene_path, matte()).unwrap();
     let run = |scene: &Path, extra: &[&str]| -> serde_json::Value {
         let json = dir.path().join("stats.json");
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_halfray"))
@@ -300,7 +282,7 @@ fn stats_json_reports_the_plan_next_to_the_ray_counts() {
     assert!(v["refraction"].as_u64().unwrap() > 0);
     // Anti-aliasing from the scene's `samples`, overridden by `--samples`.
     let aa_path = dir.path().join("aa.toml");
-    std::fs::write(&aa_path, format!("samples = 4\n{MATTE}")).unwrap();
+    std::fs::write(&aa_path, format!("samples = 4\n{}", matte())).unwrap();
     let v = run(&aa_path, &[]);
     assert_eq!(v["plan"]["antialias"], true, "{v}");
     assert!(
@@ -312,7 +294,7 @@ fn stats_json_reports_the_plan_next_to_the_ray_counts() {
     assert_eq!(v["primary"], 24 * 16);
     for bad in ["samples = 0", "samples = 65"] {
         let bad_path = dir.path().join("bad.toml");
-        std::fs::write(&bad_path, format!("{bad}\n{MATTE}")).unwrap();
+        std::fs::write(&bad_path, format!("{bad}\n{}", matte())).unwrap();
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_halfray"))
             .arg("render")
             .arg(&bad_path)
@@ -333,22 +315,15 @@ fn stats_json_reports_the_plan_next_to_the_ray_counts() {
 /// A floor lit by a point light straight above it, seen from above; `pane` adds a large
 /// horizontal triangle of the given transparency between them (one surface crossing).
 fn pane_scene(pane: Option<f32>) -> Scene {
-    let mut text = String::from(
+    let camera = camera("[0, 10, 0.001]", "[0, 0, 0]", "10", [9, 9]);
+    let light = point_light("[0, 4, 0]", "16");
+    let floor = plane("[0, 0, 0]", "[0, 1, 0]", "floor");
+    let mut text = format!(
         r#"
 ambient = [0, 0, 0]
 
-[camera]
-eye = [0, 10, 0.001]
-look_at = [0, 0, 0]
-fov = 10
-width = 9
-height = 9
-
-[[light]]
-type = "point"
-position = [0, 4, 0]
-intensity = 16
-
+{camera}
+{light}
 [material.floor]
 diffuse = [1, 1, 1]
 specular = [0, 0, 0]
@@ -359,12 +334,7 @@ specular = [0, 0, 0]
 transparency = 0.5
 ior = 1.0
 
-[[object]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 1, 0]
-material = "floor"
-"#,
+{floor}"#,
     );
     if let Some(t) = pane {
         text = text.replace("transparency = 0.5", &format!("transparency = {t}"));
@@ -377,7 +347,7 @@ material = "glass"
 "#,
         );
     }
-    scene(&text)
+    parse_scene(&text)
 }
 
 /// Shadows through glass: the light reaching the floor under a pane of transparency `τ` is

@@ -3,23 +3,23 @@
 //! errors name the file, line, column and field.
 
 use halfray::render::{RenderOptions, render};
-use halfray::scene::{Scene, parse};
+use halfray::scene::parse;
 use std::path::Path;
 
-const HEAD: &str = r#"
+mod common;
+use common::{camera, directional_light, parse_scene, plane, scenes_dir};
+
+/// The lit floor the copies stand on, and their materials `a`, `b`, `c`.
+fn head() -> String {
+    let camera = camera("[2, 6, 9]", "[2, 0, 1]", "50", [96, 72]);
+    let light = directional_light("[-0.3, -1, -0.4]");
+    let floor = plane("[0, 0, 0]", "[0, 1, 0]", "floor");
+    format!(
+        r#"
 ambient = [0.1, 0.1, 0.1]
 
-[camera]
-eye = [2, 6, 9]
-look_at = [2, 0, 1]
-fov = 50
-width = 96
-height = 72
-
-[[light]]
-type = "directional"
-direction = [-0.3, -1, -0.4]
-intensity = 0.9
+{camera}
+{light}intensity = 0.9
 
 [material.a]
 diffuse = [0.8, 0.2, 0.2]
@@ -33,15 +33,8 @@ diffuse = [0.2, 0.2, 0.8]
 [material.floor]
 diffuse = [0.6, 0.6, 0.6]
 
-[[object]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 1, 0]
-material = "floor"
-"#;
-
-fn scene(text: &str) -> Scene {
-    parse(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
+{floor}"#
+    )
 }
 
 fn err(text: &str) -> String {
@@ -55,8 +48,9 @@ fn err(text: &str) -> String {
 fn repeated_copies_render_like_the_copies_written_out() {
     // 3 × 1 × 2 boxes, each rotated then moved by its own transform, then by the grid step;
     // materials a, b, c in turn over the copies numbered i + 3·k.
+    let head = head();
     let repeated = format!(
-        "{HEAD}
+        "{head}
 [[object]]
 type = \"box\"
 min = [-0.4, 0, -0.3]
@@ -66,7 +60,7 @@ transform = [{{ rotate = {{ axis = [0, 1, 0], degrees = 30 }} }}, {{ translate =
 repeat = {{ count = [3, 1, 2], step = [1.5, 0, 2.0], materials = [\"a\", \"b\", \"c\"] }}
 "
     );
-    let mut written = HEAD.to_string();
+    let mut written = head.clone();
     let names = ["a", "b", "c"];
     for k in 0..2 {
         for i in 0..3 {
@@ -85,7 +79,7 @@ transform = [{{ rotate = {{ axis = [0, 1, 0], degrees = 30 }} }}, {{ translate =
             );
         }
     }
-    let (r, w) = (scene(&repeated), scene(&written));
+    let (r, w) = (parse_scene(&repeated), parse_scene(&written));
     assert_eq!(r.objects.len(), 7);
     assert_eq!(w.objects.len(), 7);
     let (ir, iw) = (
@@ -128,7 +122,7 @@ transform = [{{ rotate = {{ axis = [0, 1, 0], degrees = 30 }} }}, {{ translate =
 
 #[test]
 fn the_herd_scene_holds_ten_thousand_cows() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/herd.toml");
+    let path = scenes_dir().join("herd.toml");
     let s = halfray::scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(s.objects.len(), 10_001, "the floor and 100 × 100 cows");
     assert_eq!(s.meshes.len(), 1, "one mesh shared by every copy");
@@ -136,12 +130,13 @@ fn the_herd_scene_holds_ten_thousand_cows() {
 
 #[test]
 fn bad_repeats_name_their_field() {
+    let head = head();
     let obj = |repeat: &str| {
         format!(
-            "{HEAD}\n[[object]]\ntype = \"sphere\"\ncenter = [0, 0.5, 0]\nradius = 0.5\nmaterial = \"a\"\nrepeat = {repeat}\n"
+            "{head}\n[[object]]\ntype = \"sphere\"\ncenter = [0, 0.5, 0]\nradius = 0.5\nmaterial = \"a\"\nrepeat = {repeat}\n"
         )
     };
-    let line = HEAD.lines().count() + 7;
+    let line = head.lines().count() + 7;
     let e = err(&obj("{ count = [2, 0, 2], step = [1, 0, 1] }"));
     assert!(
         e.starts_with(&format!("bad.toml:{line}:")) && e.contains("object[1].repeat.count"),
@@ -171,7 +166,7 @@ fn bad_repeats_name_their_field() {
         "{e}"
     );
     let csg = format!(
-        "{HEAD}\n[[object]]\ntype = \"csg\"\nop = \"union\"\nmaterial = \"a\"\noperands = [{{ type = \"sphere\", center = [0, 0, 0], radius = 1, repeat = {{ count = [2, 1, 1], step = [1, 0, 0] }} }}, {{ type = \"box\", min = [0, 0, 0], max = [1, 1, 1] }}]\n"
+        "{head}\n[[object]]\ntype = \"csg\"\nop = \"union\"\nmaterial = \"a\"\noperands = [{{ type = \"sphere\", center = [0, 0, 0], radius = 1, repeat = {{ count = [2, 1, 1], step = [1, 0, 0] }} }}, {{ type = \"box\", min = [0, 0, 0], max = [1, 1, 1] }}]\n"
     );
     let e = err(&csg);
     assert!(

@@ -3,15 +3,13 @@
 //! `--background` and the debug modes work.
 
 use image::RgbaImage;
-use std::path::{Path, PathBuf};
 use std::process::Command;
+
+mod common;
+use common::scenes_dir;
 
 const W: u32 = 64;
 const H: u32 = 48;
-
-fn scenes_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
-}
 
 struct Run {
     img: RgbaImage,

@@ -4,35 +4,24 @@
 use std::path::Path;
 use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_halfray");
+mod common;
+use common::{BIN, camera, directional_light, plane, point_light, scenes_dir, sphere};
 
 fn scene(model: &str) -> String {
+    let camera = camera("[0, 0, 4]", "[0, 0, 0]", "40", [96, 96]);
+    let light = point_light("[2, 2, 4]", "30");
+    let sphere = sphere("[0, 0, 0]", "1", "shiny");
     format!(
         r#"background = [0, 0, 0]
-[camera]
-eye = [0, 0, 4]
-look_at = [0, 0, 0]
-fov = 40
-width = 96
-height = 96
-
+{camera}
 [material.shiny]
 diffuse = [0.2, 0.2, 0.2]
 specular = [1, 1, 1]
 shininess = 20
 specular_model = "{model}"
 
-[[light]]
-type = "point"
-position = [2, 2, 4]
-intensity = 30
-
-[[object]]
-type = "sphere"
-center = [0, 0, 0]
-radius = 1
-material = "shiny"
-"#
+{light}
+{sphere}"#
     )
 }
 
@@ -51,6 +40,23 @@ fn render_stats(
     let toml = dir.join(format!("{name}.toml"));
     std::fs::write(&toml, text).unwrap();
     run_cli(dir, &toml, name, extra)
+}
+
+/// Writes `text` as `dir/bad.toml` and renders it, which must fail with exit code 1: the
+/// error output.
+fn render_refused(dir: &Path, text: &str) -> String {
+    let toml = dir.join("bad.toml");
+    std::fs::write(&toml, text).unwrap();
+    let o = Command::new(BIN)
+        .arg("render")
+        .arg(&toml)
+        .arg("-o")
+        .arg(dir.join("b.png"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    err
 }
 
 /// `halfray render TOML -o dir/name.png --stats-json dir/name.json EXTRA…`: the image and the
@@ -214,22 +220,15 @@ fn mesh_scene(dir: &Path, shading: &str) -> String {
         "/../scenes/meshes/octahedron.obj"
     );
     let _ = dir;
+    let camera = camera("[2.2, 1.6, 2.8]", "[0, 0, 0]", "22", [128, 128]);
+    let light = directional_light("[-1, -2, -1.5]");
     format!(
         r#"background = [0, 0, 0]
-[camera]
-eye = [2.2, 1.6, 2.8]
-look_at = [0, 0, 0]
-fov = 22
-width = 128
-height = 128
-
+{camera}
 [material.m]
 diffuse = [0.9, 0.9, 0.9]
 
-[[light]]
-type = "directional"
-direction = [-1, -2, -1.5]
-
+{light}
 [mesh.o]
 file = "{obj}"
 subdivide = 2
@@ -274,18 +273,7 @@ fn smooth_shading_removes_the_steps_between_faces() {
         "steps: flat {flat}, smooth {smooth}"
     );
     // An unknown shading is an error naming the field.
-    let text = mesh_scene(dir.path(), "phong");
-    let toml = dir.path().join("bad.toml");
-    std::fs::write(&toml, text).unwrap();
-    let o = Command::new(BIN)
-        .arg("render")
-        .arg(&toml)
-        .arg("-o")
-        .arg(dir.path().join("b.png"))
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    let err = render_refused(dir.path(), &mesh_scene(dir.path(), "phong"));
     assert!(
         err.contains("mesh.o.shading") && err.contains("`flat` or `smooth`"),
         "{err}"
@@ -299,7 +287,7 @@ fn shipped(
     name: &str,
     extra: &[&str],
 ) -> (image::RgbaImage, serde_json::Value) {
-    let toml = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes")).join(scene);
+    let toml = scenes_dir().join(scene);
     let size = ["--width", "80", "--height", "60"];
     let args: Vec<&str> = size.iter().chain(extra).copied().collect();
     run_cli(dir, &toml, name, &args)
@@ -386,37 +374,22 @@ fn antialiasing_samples_only_where_neighbours_differ() {
 /// Two spheres of the same size at 4 and 9 units, seen against an empty background; the
 /// camera's lens focuses at `focus`.
 fn dof_scene(aperture: f32, focus: f32) -> String {
+    let camera = camera("[0, 0, 0]", "[0, 0, -1]", "50", [96, 64]);
+    let light = directional_light("[0, 0, -1]");
+    let near = sphere("[-1.2, 0, -4]", "0.8", "m");
+    let far = sphere("[2.7, 0, -9]", "1.8", "m");
     format!(
         r#"background = [0, 0, 0]
-[camera]
-eye = [0, 0, 0]
-look_at = [0, 0, -1]
-fov = 50
-width = 96
-height = 64
-aperture = {aperture}
+{camera}aperture = {aperture}
 focus_distance = {focus}
 lens_samples = 24
 
 [material.m]
 diffuse = [0.9, 0.9, 0.9]
 
-[[light]]
-type = "directional"
-direction = [0, 0, -1]
-
-[[object]]
-type = "sphere"
-center = [-1.2, 0, -4]
-radius = 0.8
-material = "m"
-
-[[object]]
-type = "sphere"
-center = [2.7, 0, -9]
-radius = 1.8
-material = "m"
-"#
+{light}
+{near}
+{far}"#
     )
 }
 
@@ -519,39 +492,23 @@ fn lens_rays_meet_on_the_plane_in_focus() {
 
 /// A sphere over a plane lit from above by a point light of `radius`.
 fn shadow_scene(radius: f32) -> String {
+    let camera = camera("[0, 6, 6]", "[0, 0, 0]", "40", [80, 60]);
+    let light = point_light("[0, 5, 0]", "30");
+    let sphere = sphere("[0, 1.2, 0]", "1", "m");
+    let plane = plane("[0, 0, 0]", "[0, 1, 0]", "m");
     format!(
         r#"background = [0, 0, 0]
 ambient = [0, 0, 0]
-[camera]
-eye = [0, 6, 6]
-look_at = [0, 0, 0]
-fov = 40
-width = 80
-height = 60
-
+{camera}
 [material.m]
 diffuse = [0.8, 0.8, 0.8]
 ambient = [0, 0, 0]
 
-[[light]]
-type = "point"
-position = [0, 5, 0]
-intensity = 30
-radius = {radius}
+{light}radius = {radius}
 samples = 32
 
-[[object]]
-type = "sphere"
-center = [0, 1.2, 0]
-radius = 1
-material = "m"
-
-[[object]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 1, 0]
-material = "m"
-"#
+{sphere}
+{plane}"#
     )
 }
 
@@ -589,17 +546,7 @@ fn an_area_light_casts_soft_shadows() {
         "type = \"point\"\nposition = [0, 5, 0]",
         "type = \"directional\"\ndirection = [0, -1, 0]",
     );
-    let toml = dir.path().join("bad.toml");
-    std::fs::write(&toml, bad).unwrap();
-    let o = Command::new(BIN)
-        .arg("render")
-        .arg(&toml)
-        .arg("-o")
-        .arg(dir.path().join("b.png"))
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    let err = render_refused(dir.path(), &bad);
     assert!(
         err.contains("light[0].radius") || err.contains(".radius"),
         "{err}"

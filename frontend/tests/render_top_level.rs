@@ -7,12 +7,8 @@ use halfray::scene::{Scene, load, parse};
 use halfray_core::{Ray, Vec3};
 use std::path::Path;
 
-fn lcg(s: &mut u64) -> f32 {
-    *s = s
-        .wrapping_mul(6364136223846793005)
-        .wrapping_add(1442695040888963407);
-    ((*s >> 40) as f32) / (1u64 << 24) as f32
-}
+mod common;
+use common::{lcg, scenes_dir};
 
 /// The reference: every object in declaration order, a later one winning an equal `t`.
 fn closest_by_loop(s: &Scene, ray: &Ray, ctx: &mut QueryCtx) -> Option<(u32, f32)> {
@@ -57,9 +53,8 @@ fn check(s: &Scene, what: &str, lo: Vec3, hi: Vec3, rays: usize) -> usize {
 
 #[test]
 fn top_level_equals_the_object_loop_on_every_example_scene() {
-    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes"));
     let mut n = 0;
-    for e in std::fs::read_dir(dir).unwrap() {
+    for e in std::fs::read_dir(scenes_dir()).unwrap() {
         let p = e.unwrap().path();
         if p.extension().is_none_or(|x| x != "toml") || p.ends_with("bunny.toml") {
             continue;

@@ -2,6 +2,7 @@
 //!
 //! * [`Mesh`]: a tiny reader for the shared meshes (`v x y z` / `f a b c` lines, 1-based), with
 //!   [`meshes_dir`] locating `../shared/meshes` (override with the `HALFRAY_MESHES` variable).
+//! * [`min_angle_deg`]: the smallest angle of a triangle, to keep random triangles well shaped.
 //! * [`Rng`]: SplitMix64, deterministic, no dependency.
 //! * [`exact`]: error-free transformations (`two_sum`, `two_prod`) and an **exact** sign of
 //!   `det[b − a, c − a, d]` for `f32` inputs, evaluated with floating-point expansions
@@ -176,6 +177,19 @@ impl Mesh {
         }
         out
     }
+}
+
+/// The smallest interior angle of `tri`, in degrees, computed in `f64`.
+#[must_use]
+pub fn min_angle_deg(tri: &[Vec3; 3]) -> f64 {
+    let p = tri.map(|x| x.as_dvec3());
+    (0..3)
+        .map(|i| {
+            let u = p[(i + 1) % 3] - p[i];
+            let v = p[(i + 2) % 3] - p[i];
+            u.angle_between(v).to_degrees()
+        })
+        .fold(180.0, f64::min)
 }
 
 // ---------------------------------------------------------------------------------------------

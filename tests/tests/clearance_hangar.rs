@@ -8,6 +8,7 @@ use glam::{DVec3, Vec3, vec3};
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
 use halfray_core::halfedge::{DiffuseBoundary, HalfedgeMesh, VertexId, build_scratch_len};
 use halfray_core::ray::Ray;
+use halfray_core::solids::{CUBE_TRIANGLES, CUBE_VERTICES};
 use halfray_core::triangle::Watertight;
 
 /// Relative tolerance on a clearance distance against its f64 analytic value. Coordinates
@@ -242,29 +243,8 @@ fn octahedron_drone_clearance_moves_as_predicted() {
 /// The cube of `cube.obj` (the shared meshes), scaled by `h` around `c`: corner
 /// `i = 4·[x>0] + 2·[y>0] + [z>0]`, each square split on a diagonal.
 fn cube(c: Vec3, h: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let mut p = Vec::new();
-    for x in [-1.0, 1.0] {
-        for y in [-1.0, 1.0] {
-            for z in [-1.0, 1.0] {
-                p.push(c + h * vec3(x, y, z));
-            }
-        }
-    }
-    let t = vec![
-        [0, 1, 3],
-        [0, 3, 2],
-        [4, 6, 7],
-        [4, 7, 5],
-        [0, 4, 5],
-        [0, 5, 1],
-        [2, 3, 7],
-        [2, 7, 6],
-        [0, 2, 6],
-        [0, 6, 4],
-        [1, 5, 7],
-        [1, 7, 3],
-    ];
-    (p, t)
+    let p = CUBE_VERTICES.map(|v| c + h * v).to_vec();
+    (p, CUBE_TRIANGLES.to_vec())
 }
 
 /// Area-weighted normal directions of the cube's corners, by hand: every triangle has the

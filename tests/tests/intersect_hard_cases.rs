@@ -7,7 +7,7 @@ use halfray_core::aabb::{Aabb, SlabRay};
 use halfray_core::tolerance::{BARYCENTRIC_SLACK, T_REL_TOLERANCE_WELL_CONDITIONED};
 use halfray_core::triangle::{F64Reference, TriangleHit, TriangleVariant};
 use halfray_core::{Ray, Vec2};
-use halfray_tests::{CLEARANCE_IN_U, Mesh, Projector, Rng, U32};
+use halfray_tests::{CLEARANCE_IN_U, Mesh, Projector, Rng, U32, min_angle_deg};
 
 const ALL: [TriangleVariant; 6] = TriangleVariant::ALL;
 
@@ -981,17 +981,6 @@ fn f64_barycentrics(ray: &Ray, tri: &[Vec3; 3]) -> Option<(f64, [f64; 3])> {
     let w1 = (c - p).cross(a - p).dot(n) / area;
     let w2 = (a - p).cross(b - p).dot(n) / area;
     Some((t, [w0, w1, w2]))
-}
-
-fn min_angle_deg(tri: &[Vec3; 3]) -> f64 {
-    let p = tri.map(|x| x.as_dvec3());
-    (0..3)
-        .map(|i| {
-            let u = p[(i + 1) % 3] - p[i];
-            let v = p[(i + 2) % 3] - p[i];
-            u.angle_between(v).to_degrees()
-        })
-        .fold(180.0, f64::min)
 }
 
 #[test]

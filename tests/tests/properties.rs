@@ -8,6 +8,7 @@
 
 use glam::{DVec3, Vec3};
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+use halfray_core::solids::OCTAHEDRON_TRIANGLES;
 use halfray_core::triangle::{F64Reference, TriangleIntersector, Watertight};
 use halfray_core::{Ray, spawn_ray};
 use proptest::prelude::*;
@@ -24,16 +25,7 @@ fn closed_mesh(axes: DVec3, center: DVec3, scale: f64) -> (Vec<Vec3>, Vec<[u32; 
         DVec3::Z,
         -DVec3::Z,
     ];
-    let faces = [
-        [0, 2, 4],
-        [2, 1, 4],
-        [1, 3, 4],
-        [3, 0, 4],
-        [2, 0, 5],
-        [1, 2, 5],
-        [3, 1, 5],
-        [0, 3, 5],
-    ];
+    let faces = OCTAHEDRON_TRIANGLES;
     let mut dirs: Vec<DVec3> = base.to_vec();
     let mut mid = std::collections::HashMap::new();
     let mut tris = Vec::new();

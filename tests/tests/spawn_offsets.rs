@@ -16,7 +16,7 @@ use halfray_core::hit::offset_ray_origin;
 use halfray_core::tolerance::SHADOW_SEGMENT_END_SLACK;
 use halfray_core::triangle::{TriangleIntersector, Watertight};
 use halfray_core::{Hit, Ray, spawn_ray, spawn_ray_between, spawn_ray_to};
-use halfray_tests::Rng;
+use halfray_tests::{Rng, min_angle_deg};
 
 /// The scales of robustness.md §6.5 R1.
 const SCALES: [f64; 4] = [1.0, 1.0e3, 1.0e5, 1.0e7];
@@ -30,17 +30,6 @@ const TRIANGLES_PER_SCALE: usize = 1_500;
 /// Secondary rays per hit: reflection, straight transmission, and random directions on each
 /// side, some within 1e-3 rad of the tangent plane (R5, grazing).
 const DIRECTIONS_PER_HIT: usize = 10;
-
-fn min_angle_deg(tri: &[Vec3; 3]) -> f64 {
-    let p = tri.map(|x| x.as_dvec3());
-    (0..3)
-        .map(|i| {
-            let u = p[(i + 1) % 3] - p[i];
-            let v = p[(i + 2) % 3] - p[i];
-            u.angle_between(v).to_degrees()
-        })
-        .fold(180.0, f64::min)
-}
 
 /// A random well-shaped triangle at distance `scale` and a Watertight hit on it from a nearby
 /// origin: `(triangle, incoming direction, hit)`.

@@ -106,6 +106,7 @@ mod tests {
 
     use super::NormalsError;
     use crate::halfedge::{CollapseAt, HalfedgeMesh, VertexId, build_scratch_len};
+    use crate::solids::{CUBE_TRIANGLES, CUBE_VERTICES};
 
     /// Absolute tolerance per component for unit normals computed in f32 from exact small
     /// inputs: one normalisation (a square root and a division, each ≤ ½ ulp) plus the
@@ -130,29 +131,7 @@ mod tests {
 
     /// `cube.obj` of the shared meshes: [-1, 1]³, each square split on a diagonal.
     fn cube() -> (Vec<Vec3>, Vec<[u32; 3]>) {
-        let mut p = Vec::new();
-        for x in [-1.0, 1.0] {
-            for y in [-1.0, 1.0] {
-                for z in [-1.0, 1.0] {
-                    p.push(vec3(x, y, z));
-                }
-            }
-        }
-        let t = vec![
-            [0, 1, 3],
-            [0, 3, 2],
-            [4, 6, 7],
-            [4, 7, 5],
-            [0, 4, 5],
-            [0, 5, 1],
-            [2, 3, 7],
-            [2, 7, 6],
-            [0, 2, 6],
-            [0, 6, 4],
-            [1, 5, 7],
-            [1, 7, 3],
-        ];
-        (p, t)
+        (CUBE_VERTICES.to_vec(), CUBE_TRIANGLES.to_vec())
     }
 
     #[test]

@@ -7,6 +7,7 @@ use std::vec::Vec;
 use glam::{Vec3, vec3};
 
 use super::*;
+use crate::solids::{OCTAHEDRON_TRIANGLES, OCTAHEDRON_VERTICES};
 
 /// Absolute tolerance for f32 results whose inputs are exact small numbers (|x| ≤ 10): a
 /// handful of f32 ulps at that magnitude (ulp(8) ≈ 9.5e-7).
@@ -37,6 +38,27 @@ fn close(a: Vec3, b: Vec3) -> bool {
     (a - b).abs().max_element() <= TOL
 }
 
+/// `Counts` of `vertices`, `edges` and `faces`.
+fn counts(vertices: usize, edges: usize, faces: usize) -> Counts {
+    Counts {
+        vertices,
+        edges,
+        faces,
+    }
+}
+
+/// The half-edge from vertex `a` to vertex `b`, or else the one from `b` to `a`.
+fn halfedge_between<S: MeshStorage>(m: &Mesh<S>, a: u32, b: u32) -> Option<HalfedgeId> {
+    let (a, b) = (VertexId(a), VertexId(b));
+    m.find_halfedge(a, b).or_else(|| m.find_halfedge(b, a))
+}
+
+/// Vertex `v`'s Loop position with Warren's weights and with Loop's own.
+fn loop_positions<S: MeshStorage>(m: &Mesh<S>, v: VertexId) -> (Vec3, Vec3) {
+    let at = |w| m.loop_vertex_position(v, w).unwrap();
+    (at(LoopWeights::Warren), at(LoopWeights::Loop))
+}
+
 fn tetra() -> (Vec<Vec3>, Vec<[u32; 3]>) {
     let p = vec![
         vec3(1., 1., 1.),
@@ -49,25 +71,7 @@ fn tetra() -> (Vec<Vec3>, Vec<[u32; 3]>) {
 }
 
 fn octa() -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let p = vec![
-        vec3(1., 0., 0.),
-        vec3(-1., 0., 0.),
-        vec3(0., 1., 0.),
-        vec3(0., -1., 0.),
-        vec3(0., 0., 1.),
-        vec3(0., 0., -1.),
-    ];
-    let t = vec![
-        [0, 2, 4],
-        [2, 1, 4],
-        [1, 3, 4],
-        [3, 0, 4],
-        [2, 0, 5],
-        [1, 2, 5],
-        [3, 1, 5],
-        [0, 3, 5],
-    ];
-    (p, t)
+    (OCTAHEDRON_VERTICES.to_vec(), OCTAHEDRON_TRIANGLES.to_vec())
 }
 
 /// Icosahedron: vertices (0, ±1, ±φ) cyclically; faces = all triples at mutual distance 2,
@@ -159,14 +163,7 @@ fn build_small_meshes() {
     let (p, t) = tetra();
     let m: M = build(&p, &t).unwrap();
     m.validate().unwrap();
-    assert_eq!(
-        m.len(),
-        Counts {
-            vertices: 4,
-            edges: 6,
-            faces: 4
-        }
-    );
+    assert_eq!(m.len(), counts(4, 6, 4));
     assert_eq!(euler(&m), 2);
     assert_eq!(m.boundary_loops().count(), 0);
     assert!(
@@ -199,14 +196,7 @@ fn build_single_triangle_and_isolated_vertex() {
     assert!(m.is_isolated(VertexId(3)));
     assert_eq!(m.vertex_halfedge(VertexId(3)), None);
     assert_eq!(m.valence(VertexId(3)), 0);
-    assert_eq!(
-        m.len(),
-        Counts {
-            vertices: 4,
-            edges: 3,
-            faces: 1
-        }
-    );
+    assert_eq!(m.len(), counts(4, 3, 1));
     for v in 0..3 {
         assert!(m.is_boundary_vertex(VertexId(v)));
         assert_eq!(m.valence(VertexId(v)), 2);
@@ -531,12 +521,7 @@ fn check_loop_on_closed(p: &[Vec3], t: &[[u32; 3]], valence: usize) {
         assert_eq!(euler(&out2), 2);
         assert_eq!(out2.len(), out.len().after_loop());
     }
-    let w = m
-        .loop_vertex_position(VertexId(0), LoopWeights::Warren)
-        .unwrap();
-    let l = m
-        .loop_vertex_position(VertexId(0), LoopWeights::Loop)
-        .unwrap();
+    let (w, l) = loop_positions(&m, VertexId(0));
     assert!(
         (w - l).length() > WEIGHTINGS_GAP,
         "weightings differ at valence {valence}"
@@ -549,12 +534,7 @@ fn loop_octahedron_and_icosahedron_weightings_differ() {
     check_loop_on_closed(&p, &t, 4);
     // Octahedron vertex (1,0,0): neighbours sum to 0, so x' = (1 − 4β)·x.
     let m: M = build(&p, &t).unwrap();
-    let w = m
-        .loop_vertex_position(VertexId(0), LoopWeights::Warren)
-        .unwrap();
-    let l = m
-        .loop_vertex_position(VertexId(0), LoopWeights::Loop)
-        .unwrap();
+    let (w, l) = loop_positions(&m, VertexId(0));
     assert!(close(w, vec3(0.625, 0., 0.)));
     assert!(close(l, vec3(1.0 - 4.0 * 31.0 / 256.0, 0., 0.)));
     let (p, t) = icosa();
@@ -706,11 +686,7 @@ fn split_interior_and_boundary_edges() {
     m.validate().unwrap();
     assert_eq!(
         m.len(),
-        Counts {
-            vertices: before.vertices + 1,
-            edges: before.edges + 3,
-            faces: before.faces + 2
-        }
+        counts(before.vertices + 1, before.edges + 3, before.faces + 2)
     );
     assert!(close(
         m.position(v).unwrap(),
@@ -726,11 +702,7 @@ fn split_interior_and_boundary_edges() {
     m.validate().unwrap();
     assert_eq!(
         m.len(),
-        Counts {
-            vertices: before.vertices + 1,
-            edges: before.edges + 2,
-            faces: before.faces + 1
-        }
+        counts(before.vertices + 1, before.edges + 2, before.faces + 1)
     );
     assert!(m.is_boundary_vertex(v));
     assert_eq!(m.valence(v), 3);
@@ -788,14 +760,7 @@ fn collapse_rules() {
     let h = m.find_halfedge(VertexId(0), VertexId(2)).unwrap();
     m.collapse_edge(h, CollapseAt::Midpoint).unwrap();
     m.validate().unwrap();
-    assert_eq!(
-        m.len(),
-        Counts {
-            vertices: 5,
-            edges: 9,
-            faces: 6
-        }
-    );
+    assert_eq!(m.len(), counts(5, 9, 6));
     // Triangular bipyramid: equator a0 b1 c2, poles n3 s4. Edge a–b has wings n, s; c is a
     // common neighbour of a and b but a–b–c is not a face: the link condition fails.
     let p = vec![
@@ -828,9 +793,7 @@ fn collapse_rules() {
     // Vertex ids: id(i,j) = 3j + i. Edge (1,0)–(1,1)... (1,0) boundary, (1,1) interior.
     let h = m.find_halfedge(VertexId(0), VertexId(4)).unwrap(); // (0,0)→(1,1): (0,0) boundary, (1,1) interior
     assert!(m.can_collapse_edge(h, CollapseAt::Head).is_ok());
-    let h = m
-        .find_halfedge(VertexId(1), VertexId(3))
-        .or_else(|| m.find_halfedge(VertexId(3), VertexId(1)));
+    let h = halfedge_between(&m, 1, 3);
     assert!(h.is_none());
     let h = m.find_halfedge(VertexId(1), VertexId(5)).unwrap(); // (1,0)→(2,1): both boundary, interior edge
     assert!(!m.is_boundary_edge(h.edge()));
@@ -887,10 +850,7 @@ fn collapse_rules() {
     // Accepted boundary-edge collapse on a strip.
     let (p, t) = grid(3);
     let mut m: M = build(&p, &t).unwrap();
-    let h = m
-        .find_halfedge(VertexId(1), VertexId(2))
-        .or_else(|| m.find_halfedge(VertexId(2), VertexId(1)))
-        .unwrap();
+    let h = halfedge_between(&m, 1, 2).unwrap();
     assert!(m.is_boundary_edge(h.edge()));
     let before = m.len();
     m.collapse_edge(h, CollapseAt::Midpoint).unwrap();
@@ -1065,10 +1025,7 @@ fn random_operation_sequences_keep_invariants() {
 fn compact_reports_moves_and_reuses_slots() {
     let (p, t) = grid(3);
     let mut m: M = build(&p, &t).unwrap();
-    let h = m
-        .find_halfedge(VertexId(5), VertexId(6))
-        .or_else(|| m.find_halfedge(VertexId(6), VertexId(5)))
-        .unwrap();
+    let h = halfedge_between(&m, 5, 6).unwrap();
     m.collapse_edge(h, CollapseAt::Midpoint).unwrap();
     assert!(!m.is_compact());
     let slots = m.slots();
@@ -1077,10 +1034,7 @@ fn compact_reports_moves_and_reuses_slots() {
     m.split_edge(e).unwrap();
     assert_eq!(m.slots(), slots);
     m.validate().unwrap();
-    let h = m
-        .find_halfedge(VertexId(9), VertexId(10))
-        .or_else(|| m.find_halfedge(VertexId(10), VertexId(9)))
-        .unwrap();
+    let h = halfedge_between(&m, 9, 10).unwrap();
     m.collapse_edge(h, CollapseAt::Head).unwrap();
     let faces = face_set(&m);
     let mut moves = Vec::new();

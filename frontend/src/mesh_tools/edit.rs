@@ -11,7 +11,7 @@ use crate::obj::{NotCarried, read_obj_noting, write_obj_to};
 use glam::Vec3;
 use halfray_core::halfedge::{
     CollapseAt, CollapseError, Counts, DiffuseBoundary, EdgeId, EdgeRec, FaceRec, LoopWeights,
-    MAX_ELEMENTS, Mesh, MeshStorage, SubdivideError, VertexRec,
+    MAX_ELEMENTS, Mesh, MeshStorage, SliceMesh, SubdivideError, VertexRec,
 };
 use std::collections::BTreeMap;
 use std::fmt;
@@ -116,20 +116,21 @@ fn core_error(path: &Path, what: impl fmt::Display) -> Error {
 /// new vertex on edge `e` of the level's input, so each level has V + E vertices, 2E + 3F
 /// edges and 4F faces (the core's numbering, see `Mesh::subdivide_loop`).
 pub fn subdivide(args: &SubdivideArgs) -> Result<EditReport> {
-    let out = reserve_output(&args.input, &args.output, args.force)?;
-    let t0 = Instant::now();
-    let (obj, dropped) = read_obj_noting(&args.input)?;
-    warn_not_carried(&args.input, &args.output, &dropped);
-    let mut buffers = MeshBuffers::for_obj(&obj);
-    let mesh = build_mesh(&obj, &args.input, &mut buffers)?;
-    let mut report = EditReport {
-        command: "subdivide",
-        input: args.input.clone(),
-        output: args.output.clone(),
-        before: mesh.len().into(),
-        read_ms: ms_since(t0),
-        ..EditReport::default()
-    };
+    edit_file(
+        "subdivide",
+        &args.input,
+        &args.output,
+        args.force,
+        |mesh, report| subdivide_mesh(args, &mesh, report),
+    )
+}
+
+/// The `mesh subdivide` edit of a built `mesh` (see [`subdivide`]): the exported result.
+fn subdivide_mesh(
+    args: &SubdivideArgs,
+    mesh: &SliceMesh<'_>,
+    report: &mut EditReport,
+) -> Result<Exported> {
     // Refuse before allocating anything when a level would exceed what the core can index
     // or the memory limit (every level's buffers stay alive until the export).
     let mut c = mesh.len();
@@ -147,8 +148,8 @@ pub fn subdivide(args: &SubdivideArgs) -> Result<EditReport> {
     check_memory(&format!("--levels {}", args.levels), bytes)?;
     let t1 = Instant::now();
     let mut export_ms = 0.0;
-    let (p, t) = subdivide_levels(
-        &mesh,
+    let exported = subdivide_levels(
+        mesh,
         args.levels,
         args.weights.into(),
         &mut report.levels,
@@ -157,10 +158,55 @@ pub fn subdivide(args: &SubdivideArgs) -> Result<EditReport> {
     .map_err(|e| core_error(&args.input, e))?;
     report.edit_ms = ms_since(t1) - export_ms;
     report.after = report.levels.last().map_or(report.before, |l| l.0);
+    report.write_ms = export_ms;
+    Ok(exported)
+}
+
+/// A mesh exported for writing: positions and triangles.
+type Exported = (Vec<Vec3>, Vec<[u32; 3]>);
+
+/// The frame of every editing command: reserves `output` (refusing an output that is the
+/// input, or exists without `force`), reads `input` (warning about what the output will not
+/// carry) and builds the half-edge mesh, then runs `edit` and writes the mesh it returns.
+/// The report it hands `edit` has the command, paths, `before` counts and `read_ms` filled in;
+/// `edit` fills in the rest, and the time of the write is added to `write_ms`.
+fn edit_file(
+    command: &'static str,
+    input: &Path,
+    output: &Path,
+    force: bool,
+    edit: impl FnOnce(SliceMesh<'_>, &mut EditReport) -> Result<Exported>,
+) -> Result<EditReport> {
+    let out = reserve_output(input, output, force)?;
+    let t0 = Instant::now();
+    let (obj, dropped) = read_obj_noting(input)?;
+    warn_not_carried(input, output, &dropped);
+    let mut buffers = MeshBuffers::for_obj(&obj);
+    let mesh = build_mesh(&obj, input, &mut buffers)?;
+    let mut report = EditReport {
+        command,
+        input: input.to_path_buf(),
+        output: output.to_path_buf(),
+        before: mesh.len().into(),
+        read_ms: ms_since(t0),
+        ..EditReport::default()
+    };
+    let (p, t) = edit(mesh, &mut report)?;
     let t2 = Instant::now();
     write_obj_to(out, &p, &t)?;
-    report.write_ms = export_ms + ms_since(t2);
+    report.write_ms += ms_since(t2);
     Ok(report)
+}
+
+/// Ends an in-place edit begun at `t1`: records its time and the counts after it, and exports
+/// the mesh (the export's time counted in `write_ms`).
+fn export_edited<S: MeshStorage>(mesh: &Mesh<S>, report: &mut EditReport, t1: Instant) -> Exported {
+    report.edit_ms = ms_since(t1);
+    report.after = mesh.len().into();
+    let t2 = Instant::now();
+    let exported = export(mesh);
+    report.write_ms = ms_since(t2);
+    exported
 }
 
 /// Bytes of one subdivision level's half-edge records plus its export (positions and
@@ -220,40 +266,35 @@ pub fn smooth(args: &SmoothArgs) -> Result<EditReport> {
             args.step
         )));
     }
-    let out = reserve_output(&args.input, &args.output, args.force)?;
-    let t0 = Instant::now();
-    let (obj, dropped) = read_obj_noting(&args.input)?;
-    warn_not_carried(&args.input, &args.output, &dropped);
-    let mut buffers = MeshBuffers::for_obj(&obj);
-    let mut mesh = build_mesh(&obj, &args.input, &mut buffers)?;
-    let mut report = EditReport {
-        command: "smooth",
-        input: args.input.clone(),
-        output: args.output.clone(),
-        before: mesh.len().into(),
-        read_ms: ms_since(t0),
-        ..EditReport::default()
-    };
+    edit_file(
+        "smooth",
+        &args.input,
+        &args.output,
+        args.force,
+        |mut mesh, report| smooth_mesh(args, &mut mesh, report),
+    )
+}
+
+/// The `mesh smooth` edit of a built `mesh` (see [`smooth`]), in place: the exported result.
+fn smooth_mesh(
+    args: &SmoothArgs,
+    mesh: &mut SliceMesh<'_>,
+    report: &mut EditReport,
+) -> Result<Exported> {
     let boundary = if args.fix_boundary {
         DiffuseBoundary::Fixed
     } else {
         DiffuseBoundary::Free
     };
     let t1 = Instant::now();
-    let before = roughness(&mesh);
+    let before = roughness(mesh);
     let mut scratch = vec![Vec3::ZERO; mesh.slots().vertices];
     for i in 0..args.iterations {
         mesh.diffuse(args.step, boundary, &mut scratch)
             .map_err(|e| core_error(&args.input, format!("smoothing step {}: {e}", i + 1)))?;
     }
-    report.roughness = Some((before, roughness(&mesh)));
-    report.edit_ms = ms_since(t1);
-    report.after = mesh.len().into();
-    let t2 = Instant::now();
-    let (p, t) = export(&mesh);
-    write_obj_to(out, &p, &t)?;
-    report.write_ms = ms_since(t2);
-    Ok(report)
+    report.roughness = Some((before, roughness(mesh)));
+    Ok(export_edited(mesh, report, t1))
 }
 
 /// The rule that refused a collapse, as a short name for the report.
@@ -288,26 +329,28 @@ pub fn collapse(args: &CollapseArgs) -> Result<EditReport> {
             "--shorter-than {limit}: must be a finite positive length"
         )));
     }
-    let out = reserve_output(&args.input, &args.output, args.force)?;
-    let t0 = Instant::now();
-    let (obj, dropped) = read_obj_noting(&args.input)?;
-    warn_not_carried(&args.input, &args.output, &dropped);
-    let mut buffers = MeshBuffers::for_obj(&obj);
-    let mut mesh = build_mesh(&obj, &args.input, &mut buffers)?;
-    let mut report = EditReport {
-        command: "collapse",
-        input: args.input.clone(),
-        output: args.output.clone(),
-        before: mesh.len().into(),
-        read_ms: ms_since(t0),
-        ..EditReport::default()
-    };
+    edit_file(
+        "collapse",
+        &args.input,
+        &args.output,
+        args.force,
+        |mut mesh, report| collapse_mesh(args, &mut mesh, report),
+    )
+}
+
+/// The `mesh collapse` edit of a built `mesh` (see [`collapse`]), in place: the exported result.
+fn collapse_mesh(
+    args: &CollapseArgs,
+    mesh: &mut SliceMesh<'_>,
+    report: &mut EditReport,
+) -> Result<Exported> {
+    let limit = args.shorter_than;
     let t1 = Instant::now();
     loop {
         report.passes += 1;
         let mut short: Vec<(f32, EdgeId)> = mesh
             .edges()
-            .filter_map(|e| edge_length(&mesh, e).map(|l| (l, e)))
+            .filter_map(|e| edge_length(mesh, e).map(|l| (l, e)))
             .filter(|&(l, _)| l < limit)
             .collect();
         short.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -315,7 +358,7 @@ pub fn collapse(args: &CollapseArgs) -> Result<EditReport> {
         let mut collapsed = 0;
         for (_, e) in short {
             // Earlier collapses in this pass may have removed or stretched the edge.
-            match edge_length(&mesh, e) {
+            match edge_length(mesh, e) {
                 Some(l) if l < limit => {}
                 _ => continue,
             }
@@ -337,11 +380,5 @@ pub fn collapse(args: &CollapseArgs) -> Result<EditReport> {
         ))
     })?;
     mesh.compact(|_| {});
-    report.edit_ms = ms_since(t1);
-    report.after = mesh.len().into();
-    let t2 = Instant::now();
-    let (p, t) = export(&mesh);
-    write_obj_to(out, &p, &t)?;
-    report.write_ms = ms_since(t2);
-    Ok(report)
+    Ok(export_edited(mesh, report, t1))
 }

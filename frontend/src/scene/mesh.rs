@@ -3,12 +3,11 @@
 
 use crate::accel::MeshAccel;
 use crate::error::{Error, Location, Result};
+use crate::mesh_tools::{MeshBuffers, export};
 use crate::obj::{ObjMesh, read_obj};
 use crate::render::geom::MeshShape;
 use glam::Vec3;
-use halfray_core::halfedge::{
-    DiffuseBoundary, EdgeRec, FaceRec, LoopWeights, SliceMesh, VertexRec, build_scratch_len,
-};
+use halfray_core::halfedge::{DiffuseBoundary, LoopWeights, SliceMesh, build_scratch_len};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -31,24 +30,32 @@ pub fn boundary_edge_count(triangles: &[[u32; 3]]) -> usize {
         .sum()
 }
 
+/// Builds `mesh` (read from `path`) into a half-edge mesh over `buffers` (sized by
+/// [`MeshBuffers::for_obj`]); the core's rejection is an input error on `path`, `what: reason`.
+fn build_half_edge<'b>(
+    path: &Path,
+    mesh: &ObjMesh,
+    buffers: &'b mut MeshBuffers,
+    what: &str,
+) -> Result<SliceMesh<'b>> {
+    let mut m = buffers.mesh();
+    let mut scratch = vec![0u32; build_scratch_len(mesh.triangles.len())];
+    m.build(&mesh.positions, &mesh.triangles, &mut scratch)
+        .map_err(|e| he_error(path, what, e))?;
+    Ok(m)
+}
+
 /// Area-weighted unit vertex normals, one per position, from the half-edge core
 /// (`Mesh::vertex_normals`); a vertex without one (isolated, or whose faces cancel) gets
 /// `Vec3::ZERO`, and shading falls back to the face normal there.
 fn vertex_normals(path: &Path, mesh: &ObjMesh) -> Result<Vec<Vec3>> {
-    let nf = mesh.triangles.len();
-    let mut v = vec![VertexRec::default(); mesh.positions.len()];
-    let mut e = vec![EdgeRec::default(); nf.saturating_mul(3)];
-    let mut f = vec![FaceRec::default(); nf];
-    let mut m = SliceMesh::from_slices(&mut v, &mut e, &mut f);
-    let mut scratch = vec![0u32; build_scratch_len(nf)];
-    m.build(&mesh.positions, &mesh.triangles, &mut scratch)
-        .map_err(|e| {
-            he_error(
-                path,
-                "smooth shading needs a manifold mesh; the half-edge core rejects this one",
-                e,
-            )
-        })?;
+    let mut buffers = MeshBuffers::for_obj(mesh);
+    let m = build_half_edge(
+        path,
+        mesh,
+        &mut buffers,
+        "smooth shading needs a manifold mesh; the half-edge core rejects this one",
+    )?;
     let mut out = vec![Vec3::ZERO; m.slots().vertices];
     m.vertex_normals(&mut out)
         .map_err(|e| he_error(path, "vertex normals", e))?;
@@ -60,53 +67,31 @@ fn he_error(path: &Path, what: &str, e: impl std::fmt::Display) -> Error {
     Error::input(Location::file(path), format!("{what}: {e}"))
 }
 
+/// What the half-edge core says when it rejects a scene mesh for smoothing or subdivision.
+const REJECTED: &str = "the half-edge core rejects this mesh";
+
 /// One smoothing pass set: `iterations` Jacobi steps `x += step·L(x)`, boundary fixed.
 fn smooth(path: &Path, mesh: &mut ObjMesh, step: f32, iterations: u32) -> Result<()> {
-    let nf = mesh.triangles.len();
-    let mut v = vec![VertexRec::default(); mesh.positions.len()];
-    let mut e = vec![EdgeRec::default(); nf.saturating_mul(3)];
-    let mut f = vec![FaceRec::default(); nf];
-    let mut m = SliceMesh::from_slices(&mut v, &mut e, &mut f);
-    let mut scratch = vec![0u32; build_scratch_len(nf)];
-    m.build(&mesh.positions, &mesh.triangles, &mut scratch)
-        .map_err(|e| he_error(path, "the half-edge core rejects this mesh", e))?;
+    let mut buffers = MeshBuffers::for_obj(mesh);
+    let mut m = build_half_edge(path, mesh, &mut buffers, REJECTED)?;
     let mut tmp = vec![Vec3::ZERO; m.slots().vertices];
     for _ in 0..iterations {
         m.diffuse(step, DiffuseBoundary::Fixed, &mut tmp)
             .map_err(|e| he_error(path, "smoothing failed", e))?;
     }
-    let (np, nt) = m
-        .export(&mut mesh.positions, &mut mesh.triangles)
-        .map_err(|e| he_error(path, "export failed", e))?;
-    mesh.positions.truncate(np);
-    mesh.triangles.truncate(nt);
+    (mesh.positions, mesh.triangles) = export(&m);
     Ok(())
 }
 
 /// One level of Loop subdivision (Warren weights).
 fn subdivide(path: &Path, mesh: &ObjMesh) -> Result<ObjMesh> {
-    let nf = mesh.triangles.len();
-    let mut v = vec![VertexRec::default(); mesh.positions.len()];
-    let mut e = vec![EdgeRec::default(); nf.saturating_mul(3)];
-    let mut f = vec![FaceRec::default(); nf];
-    let mut m = SliceMesh::from_slices(&mut v, &mut e, &mut f);
-    let mut scratch = vec![0u32; build_scratch_len(nf)];
-    m.build(&mesh.positions, &mesh.triangles, &mut scratch)
-        .map_err(|e| he_error(path, "the half-edge core rejects this mesh", e))?;
-    let need = m.len().after_loop();
-    let mut v2 = vec![VertexRec::default(); need.vertices];
-    let mut e2 = vec![EdgeRec::default(); need.edges];
-    let mut f2 = vec![FaceRec::default(); need.faces];
-    let mut out = SliceMesh::from_slices(&mut v2, &mut e2, &mut f2);
+    let mut buffers = MeshBuffers::for_obj(mesh);
+    let m = build_half_edge(path, mesh, &mut buffers, REJECTED)?;
+    let mut out_buffers = MeshBuffers::new(m.len().after_loop());
+    let mut out = out_buffers.mesh();
     m.subdivide_loop(&mut out, LoopWeights::Warren)
         .map_err(|e| he_error(path, "Loop subdivision failed", e))?;
-    let mut positions = vec![Vec3::ZERO; out.slots().vertices];
-    let mut triangles = vec![[0u32; 3]; out.len().faces];
-    let (np, nt) = out
-        .export(&mut positions, &mut triangles)
-        .map_err(|e| he_error(path, "export failed", e))?;
-    positions.truncate(np);
-    triangles.truncate(nt);
+    let (positions, triangles) = export(&out);
     Ok(ObjMesh {
         positions,
         triangles,

@@ -297,28 +297,17 @@ pub fn check(s: &Soup) {
     // 4, 5. Rays.
     for ray in &s.rays {
         let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
-        check_ray(&bvh, &mesh, &Watertight, ray, &in_tree, true, &rctx);
-        check_wide(&wide, &mesh, &Watertight, ray, &in_tree, true, &rctx);
-        check_wide(
-            &wide,
-            &mesh,
-            &MollerTrumbore::CLASSIC,
-            ray,
-            &in_tree,
-            false,
-            &rctx,
-        );
+        let oracle = Oracle {
+            mesh: &mesh,
+            in_tree: &in_tree,
+            ctx: &rctx,
+        };
+        check_ray(&bvh, &oracle, &Watertight, ray, true);
+        check_wide(&wide, &oracle, &Watertight, ray, true);
         // Möller–Trumbore's inexact edge tests can report a hit slightly outside the
         // triangle, hence outside its box: only the weak form holds for it.
-        check_ray(
-            &bvh,
-            &mesh,
-            &MollerTrumbore::CLASSIC,
-            ray,
-            &in_tree,
-            false,
-            &rctx,
-        );
+        check_wide(&wide, &oracle, &MollerTrumbore::CLASSIC, ray, false);
+        check_ray(&bvh, &oracle, &MollerTrumbore::CLASSIC, ray, false);
         let q = Aabb::new(ray.origin, ray.origin).grow(ray.origin + ray.direction);
         let mut found = Vec::new();
         let reported = bvh.query_box(&mesh, &q, |p| {
@@ -340,101 +329,142 @@ pub fn check(s: &Soup) {
     }
 }
 
+/// What a tree's answers on one ray are checked against: brute force over the primitives
+/// `in_tree` of `mesh`.
+pub struct Oracle<'a, 'm> {
+    /// The triangles.
+    pub mesh: &'a TriangleMesh<'m>,
+    /// Which primitives the tree holds.
+    pub in_tree: &'a [bool],
+    /// The case (ray and input), for failure messages.
+    pub ctx: &'a dyn Fn() -> String,
+}
+
+impl Oracle<'_, '_> {
+    /// Brute force's closest hit of `isect` on `ray` (see [`brute`]).
+    fn closest<T: TriangleIntersector>(&self, isect: &T, ray: &Ray) -> Option<(u32, TriangleHit)> {
+        brute(self.mesh, isect, ray, self.in_tree)
+    }
+
+    /// `true` where a tree must give brute force's answers exactly: an `exact` intersector
+    /// inside its documented domain (`Watertight` docs), with no projection underflowing.
+    fn exact_on(&self, ray: &Ray, exact: bool) -> bool {
+        exact
+            && within_domain(self.mesh, ray, self.in_tree)
+            && !projection_underflows(self.mesh, ray, self.in_tree)
+    }
+
+    /// Asserts that a tree's `hit` is the intersector's own answer for that primitive.
+    fn assert_genuine<T: TriangleIntersector>(
+        &self,
+        isect: &T,
+        ray: &Ray,
+        (p, h): (u32, TriangleHit),
+        what: &str,
+    ) {
+        let v = self
+            .mesh
+            .triangle(p as usize)
+            .expect("hit primitive exists");
+        assert_eq!(
+            isect.intersect(ray, &v),
+            Some(h),
+            "{what}\n{}",
+            (self.ctx)()
+        );
+    }
+
+    /// Outside the exact domain: the tree's closest hit `got` is no nearer than brute
+    /// force's `want`.
+    fn assert_no_nearer(
+        &self,
+        got: Option<(u32, TriangleHit)>,
+        want: Option<(u32, TriangleHit)>,
+        tree: &str,
+    ) {
+        if let Some((_, h)) = got {
+            let (_, w) = want.expect("brute force finds every BVH hit");
+            assert!(
+                w.t <= h.t,
+                "{tree}: nearer than brute force\n{}",
+                (self.ctx)()
+            );
+        }
+    }
+
+    /// Inside the exact domain: the tree's closest hit `got` is brute force's `want`, and its
+    /// any-hit answer `any` finds a hit exactly when brute force does.
+    fn assert_agrees(
+        &self,
+        (name, tree): (&str, &str),
+        got: Option<(u32, TriangleHit)>,
+        any: Option<(u32, TriangleHit)>,
+        want: Option<(u32, TriangleHit)>,
+    ) {
+        let ctx = self.ctx;
+        assert_eq!(
+            got,
+            want,
+            "{name}: {tree} closest hit differs from brute force\n{}",
+            ctx()
+        );
+        assert_eq!(
+            any.is_some(),
+            want.is_some(),
+            "{name}: {tree} any-hit {any:?} disagrees with brute force {want:?}\n{}",
+            ctx()
+        );
+    }
+}
+
 /// [`check_ray`]'s properties for the 8-wide tree: closest hit equal to brute force in the
 /// same domain, a genuine hit no nearer than brute force's elsewhere; any-hit agreement.
 fn check_wide<T: TriangleIntersector>(
     wide: &Bvh8<Vec<WideNode<8>>, Vec<LeafGroup>>,
-    mesh: &TriangleMesh<'_>,
+    oracle: &Oracle<'_, '_>,
     isect: &T,
     ray: &Ray,
-    in_tree: &[bool],
     exact: bool,
-    ctx: &dyn Fn() -> String,
 ) {
-    let want = brute(mesh, isect, ray, in_tree);
+    let want = oracle.closest(isect, ray);
     let got = wide.closest_hit_triangles(isect, ray, None);
     let any = wide.any_hit_triangles(isect, ray, None);
-    for (p, h) in got.iter().chain(any.iter()) {
-        let v = mesh.triangle(*p as usize).expect("hit primitive exists");
-        assert_eq!(
-            isect.intersect(ray, &v),
-            Some(*h),
-            "wide hit record\n{}",
-            ctx()
-        );
+    for hit in got.iter().chain(any.iter()) {
+        oracle.assert_genuine(isect, ray, *hit, "wide hit record");
     }
-    if !exact || !within_domain(mesh, ray, in_tree) || projection_underflows(mesh, ray, in_tree) {
-        if let Some((_, h)) = got {
-            let (_, w) = want.expect("brute force finds every BVH hit");
-            assert!(w.t <= h.t, "wide: nearer than brute force\n{}", ctx());
-        }
-        return;
+    if oracle.exact_on(ray, exact) {
+        oracle.assert_agrees((isect.name(), "wide BVH"), got, any, want);
+    } else {
+        oracle.assert_no_nearer(got, want, "wide");
     }
-    assert_eq!(
-        got,
-        want,
-        "{}: wide BVH closest hit differs from brute force\n{}",
-        isect.name(),
-        ctx()
-    );
-    assert_eq!(
-        any.is_some(),
-        want.is_some(),
-        "{}: wide any-hit {any:?} disagrees with brute force {want:?}\n{}",
-        isect.name(),
-        ctx()
-    );
 }
 
-/// A BVH's closest and any hit on `ray` against brute force over `in_tree` (exactly,
-/// within the documented domain; elsewhere a genuine hit no nearer than brute force's).
+/// A BVH's closest and any hit on `ray` against the `oracle`'s brute force (exactly, within
+/// the documented domain of an `exact` intersector; elsewhere a genuine hit no nearer than
+/// brute force's).
 pub fn check_ray<N: AsRef<[BvhNode]>, I: AsRef<[u32]>, T: TriangleIntersector>(
     bvh: &Bvh<N, I>,
-    mesh: &TriangleMesh<'_>,
+    oracle: &Oracle<'_, '_>,
     isect: &T,
     ray: &Ray,
-    in_tree: &[bool],
     exact: bool,
-    ctx: &dyn Fn() -> String,
 ) {
-    let want = brute(mesh, isect, ray, in_tree);
-    let got = bvh.closest_hit_triangles(mesh, isect, ray, None);
-    if !exact || !within_domain(mesh, ray, in_tree) || projection_underflows(mesh, ray, in_tree) {
-        // Outside the documented domain of exact agreement (`Watertight` docs): the
-        // BVH's answer must still be a genuine hit of the intersector, no nearer than
-        // brute force's.
-        if let Some((p, h)) = got {
-            let v = mesh.triangle(p as usize).expect("hit primitive exists");
-            assert_eq!(isect.intersect(ray, &v), Some(h), "{}", ctx());
-            let (_, w) = want.expect("brute force finds every BVH hit");
-            assert!(w.t <= h.t, "{}", ctx());
+    let want = oracle.closest(isect, ray);
+    let got = bvh.closest_hit_triangles(oracle.mesh, isect, ray, None);
+    if !oracle.exact_on(ray, exact) {
+        // Outside the documented domain of exact agreement: the BVH's answer must still be a
+        // genuine hit of the intersector, no nearer than brute force's.
+        if let Some(hit) = got {
+            oracle.assert_genuine(isect, ray, hit, "hit record");
         }
+        oracle.assert_no_nearer(got, want, "BVH");
         return;
     }
-    assert_eq!(
-        got,
-        want,
-        "{}: BVH closest hit differs from brute force\n{}",
-        isect.name(),
-        ctx()
-    );
-    let any = bvh.any_hit_triangles(mesh, isect, ray, None);
-    assert_eq!(
-        any.is_some(),
-        want.is_some(),
-        "{}: any-hit {any:?} disagrees with brute force {want:?}\n{}",
-        isect.name(),
-        ctx()
-    );
-    if let Some((p, h)) = any {
-        let v = mesh.triangle(p as usize).expect("any-hit primitive exists");
-        assert_eq!(
-            isect.intersect(ray, &v),
-            Some(h),
-            "any-hit record\n{}",
-            ctx()
-        );
-        assert!(ray.contains(h.t));
+    let any = bvh.any_hit_triangles(oracle.mesh, isect, ray, None);
+    oracle.assert_agrees((isect.name(), "BVH"), got, any, want);
+    if let Some(hit) = any {
+        oracle.assert_genuine(isect, ray, hit, "any-hit record");
+        assert!(ray.contains(hit.1.t));
     }
 }
 
@@ -457,19 +487,17 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
             &[(o, 0, 2, 4), (o, 0, 2, 1), (o, 0, 0, 0), (o, 1, 3, 3)],
         ),
     ));
-    // Pyramid (closed fan around the apex) with rays at the apex and the ridges.
+    // Pyramid (closed fan around the apex) with rays at the apex and the ridges: the four
+    // sides around apex 4, then the base split on its diagonal 0–2.
+    let pyramid: Vec<[u8; 3]> = (0..4u8)
+        .map(|k| [k, (k + 1) % 4, 4])
+        .chain([[0, 2, 1], [0, 3, 2]])
+        .collect();
     s.push(t(
         "pyramid",
         bvh::encode_quantized(
             &quad,
-            &[
-                [0, 1, 4],
-                [1, 2, 4],
-                [2, 3, 4],
-                [3, 0, 4],
-                [0, 2, 1],
-                [0, 3, 2],
-            ],
+            &pyramid,
             &[
                 (o, 4, 4, 0),
                 (o, 0, 4, 4),

@@ -9,7 +9,7 @@
 //! swapped (`at`, `value`).
 
 use super::Input;
-use super::bvh::{Soup, check_ray, decode};
+use super::bvh::{Oracle, Soup, check_ray, decode};
 use super::*;
 use halfray_core::bvh::{Bvh, BvhNode, TriangleMesh, load_scratch_len};
 use halfray_core::triangle::Watertight;
@@ -97,8 +97,13 @@ pub fn check(s: &Soup, mutations: &[(u8, u16, u32)]) {
             "mutations {mutations:?}\n  nodes {nodes:?}\n  indices {indices:?}\n  positions {positions:?}"
         )
     };
+    let oracle = Oracle {
+        mesh: &mesh,
+        in_tree: &in_tree,
+        ctx: &ctx,
+    };
     for ray in &s.rays {
-        check_ray(&bvh, &mesh, &Watertight, ray, &in_tree, true, &ctx);
+        check_ray(&bvh, &oracle, &Watertight, ray, true);
     }
 }
 

@@ -13,6 +13,7 @@ use halfray_core::halfedge::{
     CollapseAt, Counts, DiffuseBoundary, EdgeId, ExportError, HalfedgeId, HalfedgeMesh,
     LoopWeights, VertexId, build_scratch_len,
 };
+use halfray_core::solids::OCTAHEDRON_TRIANGLES;
 
 /// The mesh type fuzzed: room for two Loop levels of a tetrahedron or one of an
 /// octahedron, and for some dozens of splits.
@@ -59,16 +60,7 @@ pub fn start_mesh(k: u8) -> (Vec<Vec3>, Vec<[u32; 3]>) {
         ),
         1 => (
             vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z],
-            vec![
-                [0, 2, 4],
-                [2, 1, 4],
-                [1, 3, 4],
-                [3, 0, 4],
-                [2, 0, 5],
-                [1, 2, 5],
-                [3, 1, 5],
-                [0, 3, 5],
-            ],
+            OCTAHEDRON_TRIANGLES.to_vec(),
         ),
         2 => {
             let p = (0..9)

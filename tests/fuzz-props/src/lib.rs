@@ -158,6 +158,10 @@ impl Enc {
     pub fn qvec3(self, v: Vec3) -> Self {
         self.q(v.x).q(v.y).q(v.z)
     }
+    /// Appends a [`RayHeader`]: flags, origin, direction floats and interval.
+    pub fn ray_header(self, fl: u8, o: Vec3, d: Vec3, t: (f32, f32)) -> Self {
+        self.u8(fl).vec3(o).vec3(d).f32(t.0).f32(t.1)
+    }
     /// Appends raw bytes.
     pub fn bytes(mut self, b: &[u8]) -> Self {
         self.0.extend_from_slice(b);
@@ -203,6 +207,54 @@ pub mod flags {
     pub const DEFAULT_INTERVAL: u8 = 2;
     /// `ray_box`: the box is `[min(a, b), max(a, b)]` instead of `[a, b]`.
     pub const ORDERED: u8 = 4;
+}
+
+/// The ray part that opens a `ray_triangle` and a `ray_box` input: `flags: u8` ([`flags`]),
+/// `origin: 3×f32`, `direction: 3×f32`, `t_min: f32`, `t_max: f32` (33 bytes); the target's
+/// geometry follows it.
+#[derive(Clone, Copy, Debug)]
+pub struct RayHeader {
+    /// The flag byte.
+    pub flags: u8,
+    /// The ray's origin.
+    pub origin: Vec3,
+    /// The direction floats: the direction itself, or with [`flags::AIM`] the parameters of
+    /// the point aimed at.
+    pub dir: Vec3,
+    /// `(t_min, t_max)` as read (ignored with [`flags::DEFAULT_INTERVAL`]).
+    pub interval: (f32, f32),
+}
+
+impl RayHeader {
+    /// Reads a header.
+    pub fn decode(i: &mut Input<'_>) -> Self {
+        let flags = i.u8();
+        let origin = i.vec3();
+        let dir = i.vec3();
+        let interval = (i.f32(), i.f32());
+        Self {
+            flags,
+            origin,
+            dir,
+            interval,
+        }
+    }
+
+    /// `true` when the flag bit `flag` is set.
+    pub fn has(&self, flag: u8) -> bool {
+        self.flags & flag != 0
+    }
+
+    /// The ray from the origin along `direction`, over the interval read, or `(0, +∞]` with
+    /// [`flags::DEFAULT_INTERVAL`].
+    pub fn ray(&self, direction: Vec3) -> Ray {
+        let (t_min, t_max) = if self.has(flags::DEFAULT_INTERVAL) {
+            (0.0, f32::INFINITY)
+        } else {
+            self.interval
+        };
+        Ray::with_interval(self.origin, direction, t_min, t_max)
+    }
 }
 
 mod obj;

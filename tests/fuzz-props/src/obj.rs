@@ -65,33 +65,39 @@ pub fn check_obj(text: &str) {
     }
 }
 
-pub(crate) fn seeds(s: &mut Vec<Seed>) {
-    let t = |name: &str, text: &str| ("obj_file", format!("seed-{name}"), text.as_bytes().to_vec());
-    s.push(t(
+/// The seed inputs, by name.
+const SEEDS: [(&str, &str); 12] = [
+    (
         "quad",
         "# quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
-    ));
-    s.push(t(
+    ),
+    (
         "slashes-negative",
         "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvn 0 0 1\nf 1/1/1 2//1 3/1\nf -3 -2 -1\n",
-    ));
-    s.push(t(
+    ),
+    (
         "crlf-comments",
         "o thing\r\ng g\r\nv 0 0 0 1\r\nv 1 0 0 # c\r\nv 0 1 0\r\ns off\r\nf 1 2 3\r\n",
-    ));
-    s.push(t(
+    ),
+    (
         "extreme-floats",
         "v 3.4028235e38 -1e-45 1.17549435e-38\nv -0 0 inf\nv nan 0 0\nf 1 2 3\n",
-    ));
-    s.push(t("overflowing-float", "v 1e39 0 0\n"));
-    s.push(t("index-zero", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"));
-    s.push(t("index-out-of-range", "v 0 0 0\nf 1 2 3\nf -4 1 1\n"));
-    s.push(t(
+    ),
+    ("overflowing-float", "v 1e39 0 0\n"),
+    ("index-zero", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"),
+    ("index-out-of-range", "v 0 0 0\nf 1 2 3\nf -4 1 1\n"),
+    (
         "big-index",
         "v 0 0 0\nf 99999999999999999999 1 1\nf 4294967297 1 1\n",
-    ));
-    s.push(t("short-face", "v 0 0 0\nf 1 1\n"));
-    s.push(t("unknown", "bogus 1 2\n"));
-    s.push(t("unicode", "v 0 0 0 \u{00e9}\nv\u{3000}1 0 0\nf 1 1 1\n"));
-    s.push(t("empty", ""));
+    ),
+    ("short-face", "v 0 0 0\nf 1 1\n"),
+    ("unknown", "bogus 1 2\n"),
+    ("unicode", "v 0 0 0 \u{00e9}\nv\u{3000}1 0 0\nf 1 1 1\n"),
+    ("empty", ""),
+];
+
+pub(crate) fn seeds(s: &mut Vec<Seed>) {
+    for (name, text) in SEEDS {
+        s.push(("obj_file", format!("seed-{name}"), text.as_bytes().to_vec()));
+    }
 }

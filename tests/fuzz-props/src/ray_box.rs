@@ -7,40 +7,24 @@ use super::*;
 /// `[min(a, b), max(a, b)]` with [`flags::ORDERED`]); 57 bytes.
 pub fn decode_ray_box(data: &[u8]) -> (Ray, Aabb) {
     let mut i = Input::new(data);
-    let fl = i.u8();
-    let origin = i.vec3();
-    let dir = i.vec3();
-    let (t_min, t_max) = (i.f32(), i.f32());
+    let h = RayHeader::decode(&mut i);
     let (a, b) = (i.vec3(), i.vec3());
-    let bx = if fl & flags::ORDERED != 0 {
+    let bx = if h.has(flags::ORDERED) {
         Aabb::new(a.min(b), a.max(b))
     } else {
         Aabb::new(a, b)
     };
-    let direction = if fl & flags::AIM != 0 {
-        bx.min + (bx.max - bx.min) * dir - origin
+    let direction = if h.has(flags::AIM) {
+        bx.min + (bx.max - bx.min) * h.dir - h.origin
     } else {
-        dir
+        h.dir
     };
-    let (t_min, t_max) = if fl & flags::DEFAULT_INTERVAL != 0 {
-        (0.0, f32::INFINITY)
-    } else {
-        (t_min, t_max)
-    };
-    (Ray::with_interval(origin, direction, t_min, t_max), bx)
+    (h.ray(direction), bx)
 }
 
 /// Encodes a `ray_box` input (see [`decode_ray_box`]).
 pub fn encode_ray_box(fl: u8, o: Vec3, d: Vec3, t: (f32, f32), a: Vec3, b: Vec3) -> Vec<u8> {
-    Enc::new()
-        .u8(fl)
-        .vec3(o)
-        .vec3(d)
-        .f32(t.0)
-        .f32(t.1)
-        .vec3(a)
-        .vec3(b)
-        .done()
+    Enc::new().ray_header(fl, o, d, t).vec3(a).vec3(b).done()
 }
 
 /// Fuzz target `ray_box`: [`check_ray_box`] on [`decode_ray_box`]`(data)`.
@@ -218,6 +202,17 @@ pub fn check_ray_box(ray: &Ray, bx: &Aabb) {
     }
 }
 
+/// A ray into the unit box that starts on its `face` plane (0 or 1) of `axis`, outside the box
+/// along the next axis and heading along it, with the direction's `axis` component `zero`
+/// (`±0`): origin and direction.
+fn on_face_plane(axis: usize, face: f32, zero: f32) -> (Vec3, Vec3) {
+    let along = (axis + 1) % 3;
+    let (mut o, mut d) = (Vec3::splat(0.5), Vec3::ZERO);
+    (o[axis], o[along]) = (face, -1.0);
+    (d[axis], d[along]) = (zero, 1.0);
+    (o, d)
+}
+
 pub(crate) fn seeds(s: &mut Vec<Seed>) {
     let t = |name: &str, bytes: Vec<u8>| ("ray_box", format!("seed-{name}"), bytes);
     let (lo, hi) = (Vec3::ZERO, Vec3::ONE);
@@ -231,13 +226,7 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
     for axis in 0..3 {
         for (face_name, face) in [("min", 0.0f32), ("max", 1.0)] {
             for (zname, zero) in [("pz", 0.0f32), ("nz", -0.0)] {
-                let mut o = Vec3::splat(0.5);
-                o[axis] = face;
-                let along = (axis + 1) % 3;
-                o[along] = -1.0;
-                let mut d = Vec3::ZERO;
-                d[axis] = zero;
-                d[along] = 1.0;
+                let (mut o, d) = on_face_plane(axis, face, zero);
                 s.push(t(
                     &format!("on-plane-{axis}-{face_name}-{zname}"),
                     encode_ray_box(df, o, d, dflt, lo, hi),

@@ -95,48 +95,8 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
         "subdivision",
         include_str!("../../../scenes/subdivision.toml"),
     ));
-    let small = r#"ambient = [0.1, 0.1, 0.1]
-max_depth = 3
-
-[camera]
-eye = [0, 1, 6]
-look_at = [0, 0, 0]
-width = 8
-height = 6
-fov = 45
-
-[[light]]
-type = "point"
-position = [4, 5, 6]
-intensity = 40
-cast_shadows = true
-
-[material.m]
-diffuse = [0.8, 0.2, 0.2]
-
-[mesh.cube]
-file = "meshes/cube.obj"
-smooth = { step = 0.5, iterations = 2 }
-subdivide = 1
-
-[mesh.octa]
-file = "meshes/octahedron.obj"
-
-[[object]]
-type = "mesh"
-mesh = "cube"
-material = "m"
-transform = [{ scale = [0.5, 0.5, 0.5] }, { rotate = { axis = [0, 1, 0], degrees = 30 } }]
-
-[[object]]
-type = "csg"
-op = "difference"
-material = "m"
-operands = [
-  { type = "mesh", mesh = "octa", material = "m" },
-  { type = "sphere", center = [0, 0, 0], radius = 0.6, material = "m" },
-]
-"#;
+    // Two shared meshes (one smoothed and subdivided) as an object and a CSG operand.
+    let small = include_str!("../seeds/small-meshes.toml");
     s.push(t("small-meshes", small));
     s.push(t("unknown-key", "bogus = 1\n"));
     s.push(t("not-toml", "[camera\nwidth = "));

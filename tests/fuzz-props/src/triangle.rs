@@ -2,37 +2,26 @@
 //! inside the documented domain, and the watertight error bound (the oracle).
 
 use super::*;
+use halfray_core::triangle::{TriangleIntersector, WatertightF32Exact};
 
 /// Decodes a `ray_triangle` input: `flags: u8` ([`flags`]), `origin: 3×f32`,
 /// `direction: 3×f32`, `t_min: f32`, `t_max: f32`, `v0, v1, v2: 3×f32 each` (69 bytes).
 pub fn decode_ray_triangle(data: &[u8]) -> (Ray, [Vec3; 3]) {
     let mut i = Input::new(data);
-    let fl = i.u8();
-    let origin = i.vec3();
-    let dir = i.vec3();
-    let (t_min, t_max) = (i.f32(), i.f32());
+    let h = RayHeader::decode(&mut i);
     let v = [i.vec3(), i.vec3(), i.vec3()];
-    let direction = if fl & flags::AIM != 0 {
-        v[0] + (v[1] - v[0]) * dir.x + (v[2] - v[0]) * dir.y - origin
+    let direction = if h.has(flags::AIM) {
+        v[0] + (v[1] - v[0]) * h.dir.x + (v[2] - v[0]) * h.dir.y - h.origin
     } else {
-        dir
+        h.dir
     };
-    let (t_min, t_max) = if fl & flags::DEFAULT_INTERVAL != 0 {
-        (0.0, f32::INFINITY)
-    } else {
-        (t_min, t_max)
-    };
-    (Ray::with_interval(origin, direction, t_min, t_max), v)
+    (h.ray(direction), v)
 }
 
 /// Encodes a `ray_triangle` input (see [`decode_ray_triangle`]).
 pub fn encode_ray_triangle(fl: u8, o: Vec3, d: Vec3, t: (f32, f32), v: [Vec3; 3]) -> Vec<u8> {
     Enc::new()
-        .u8(fl)
-        .vec3(o)
-        .vec3(d)
-        .f32(t.0)
-        .f32(t.1)
+        .ray_header(fl, o, d, t)
         .vec3(v[0])
         .vec3(v[1])
         .vec3(v[2])
@@ -100,6 +89,22 @@ pub fn check_ray_triangle(ray: &Ray, v: &[Vec3; 3]) {
         }
         got[k] = h;
     }
+    // The `f64`-free test for microcontrollers: not a `TriangleVariant` (it decides "in the
+    // plane" on the sheared projection, not in 3-D `f64`: see its docs), checked here the same
+    // way, with `watertight-f32`'s domain for the barycentric range (its `f32` products).
+    let exact_f32 = WatertightF32Exact.intersect(ray, v);
+    if let Some(h) = exact_f32 {
+        let ctx = || format!("watertight-f32-exact: {h:?}\n{}", tri_context(ray, v));
+        assert!(valid, "invalid ray hit\n{}", ctx());
+        assert!(finite, "triangle with a non-finite vertex hit\n{}", ctx());
+        assert!(
+            !repeated,
+            "degenerate triangle (repeated vertex) hit\n{}",
+            ctx()
+        );
+        let f32_domain = !projection_underflows(ray, v) && f32_products_in_range(ray, v);
+        check_hit_contract(ray, v, &h, f32_domain, &ctx);
+    }
     if !(valid && finite) {
         return;
     }
@@ -114,6 +119,7 @@ pub fn check_ray_triangle(ray: &Ray, v: &[Vec3; 3]) {
         };
         bound.check_agreement(var.name(), eval, ray, v, got[k]);
     }
+    bound.check_agreement("watertight-f32-exact", EdgeEval::F32, ray, v, exact_f32);
 }
 
 /// `true` when every vertex coordinate relative to the ray origin is zero or within

@@ -94,7 +94,9 @@ pub struct WatertightBound {
 /// `true` when a quantity of the watertight projection of `v` (`p − o`, the shear products
 /// `s·(p − o)_kz`, the sheared `x'`, `y'`) is a non-zero subnormal, or the shear `d_i/d_kz`
 /// itself underflows: its rounding is then absolute, not relative, and the projected ray is no
-/// longer the exact one up to `f32` rounding (the `Watertight` docs' domain limit).
+/// longer the exact one up to `f32` rounding; or when one of them exceeds `f32::MAX`, so that
+/// it overflows in `f32` (regression `crash-aa8baa4e…`: `p − o` of `±1.7e38` coordinates).
+/// Both are outside the `Watertight` docs' domain ("a normal number or zero").
 pub fn projection_underflows(ray: &Ray, v: &[Vec3; 3]) -> bool {
     let d = ray.direction;
     let a = d.abs();
@@ -102,7 +104,9 @@ pub fn projection_underflows(ray: &Ray, v: &[Vec3; 3]) -> bool {
     let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
     // Each quantity in f64 from the f32 values the test actually rounds: below the f32 normal
     // range (and not exactly zero), its f32 rounding is absolute, or it vanishes.
-    let sub = |x: f64| x != 0.0 && x.abs() < f64::from(f32::MIN_POSITIVE);
+    let sub = |x: f64| {
+        x != 0.0 && x.abs() < f64::from(f32::MIN_POSITIVE) || x.abs() > f64::from(f32::MAX)
+    };
     let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
     let dk = f64::from(d[kz]);
     sub(f64::from(d[kx]) / dk)

@@ -1,0 +1,78 @@
+//! Helpers shared by the frontend's integration tests. Every test binary compiles its own copy
+//! of this module and uses only part of it, hence the `dead_code` allowance.
+#![allow(dead_code)]
+
+use halfray::scene::{Scene, parse};
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The `halfray` binary under test.
+pub const BIN: &str = env!("CARGO_BIN_EXE_halfray");
+
+/// Runs `halfray ARGS…` to completion (arguments as strings or paths alike).
+pub fn halfray(args: &[&dyn AsRef<OsStr>]) -> Output {
+    Command::new(BIN)
+        .args(args.iter().map(|a| a.as_ref()))
+        .output()
+        .unwrap()
+}
+
+/// A 64-bit LCG (Knuth's MMIX constants) stepping `s`: an `f32` in `[0, 1)` with 24 random
+/// bits, for reproducible test inputs.
+pub fn lcg(s: &mut u64) -> f32 {
+    *s = s
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    ((*s >> 40) as f32) / (1u64 << 24) as f32
+}
+
+/// The standard error of a finished run, as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+// Scene text: the tables the test scenes are made of, written once. Values are TOML text, so a
+// scene reads as it is written (`"[0, 1.2, 0]"`, `"3e38"`), and each table ends in a newline:
+// a test appends further keys of the same table (`cast_shadows = false`) right after it.
+
+/// A `[camera]` table: `eye`, `look_at`, the vertical `fov` in degrees, `[width, height]`.
+pub fn camera(eye: &str, look_at: &str, fov: &str, [width, height]: [u32; 2]) -> String {
+    format!(
+        "[camera]\neye = {eye}\nlook_at = {look_at}\nfov = {fov}\nwidth = {width}\nheight = {height}\n"
+    )
+}
+
+/// A point `[[light]]` at `position` of `intensity`.
+pub fn point_light(position: &str, intensity: &str) -> String {
+    format!("[[light]]\ntype = \"point\"\nposition = {position}\nintensity = {intensity}\n")
+}
+
+/// A directional `[[light]]` shining along `direction`.
+pub fn directional_light(direction: &str) -> String {
+    format!("[[light]]\ntype = \"directional\"\ndirection = {direction}\n")
+}
+
+/// A sphere `[[object]]` of `material`.
+pub fn sphere(center: &str, radius: &str, material: &str) -> String {
+    format!(
+        "[[object]]\ntype = \"sphere\"\ncenter = {center}\nradius = {radius}\nmaterial = \"{material}\"\n"
+    )
+}
+
+/// A plane `[[object]]` through `point` with `normal`, of `material`.
+pub fn plane(point: &str, normal: &str, material: &str) -> String {
+    format!(
+        "[[object]]\ntype = \"plane\"\npoint = {point}\nnormal = {normal}\nmaterial = \"{material}\"\n"
+    )
+}
+
+/// The shipped example scenes, `<workspace>/scenes` (as `frontend/../scenes`).
+pub fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
+}
+
+/// Parses a test scene's `text` (as if read from `test.toml`); panics with the error.
+pub fn parse_scene(text: &str) -> Scene {
+    parse(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
+}
