@@ -7,6 +7,7 @@
 # same code run on the host. Prints one line per machine:
 #
 #   mcu: N queries bit-identical to host (MACHINE)
+#   mcu: query image .text BYTES bytes, stack BYTES bytes (MACHINE ...)
 #
 # then the instructions per closest-hit query of every triangle variant on each machine
 # (`-icount`), and exits 0 only if every machine matches and no aimed ray leaked. Installs what it needs
@@ -64,6 +65,40 @@ check() { # machine target cpu baked-source
 }
 check mps2-an386 thumbv7em-none-eabihf cortex-m4 "$MCU_BAKED_M4F"
 check lm3s6965evb thumbv7m-none-eabi cortex-m3 "$MCU_BAKED_M3"
+
+# The query path alone: the `mcu-query` image links only the baked BVH's loader and closest/any
+# hit with the f64-free watertight test (WatertightF32Exact) and a lean ray loop; its answers
+# must equal the host's, its `.text` is the query path's size and the stack its queries used
+# is measured by painting. Budget (issue 14): 8 KiB of .text, 1 KiB of stack; printed, with
+# whether it holds (the figures are the point; the exit status is the answers').
+query() { # machine target cpu baked-source
+    local machine=$1 target=$2 cpu=$3
+    MCU_BAKED=$4 cargo build -q --release --manifest-path "$manifest" -p mcu-firmware \
+        --bin mcu-query --target "$target"
+    local image=examples/mcu/target/$target/release/mcu-query
+    local out rc=0
+    out=$(timeout 600 qemu-system-arm -machine "$machine" -cpu "$cpu" -nographic -monitor none \
+        -serial none -semihosting-config enable=on,target=native -kernel "$image" 2>&1) || rc=$?
+    local got want
+    got=$(grep "^mcu-query: $machine " <<<"$out" || true)
+    want=$(grep "^mcu-query: $machine " <<<"$host" || true)
+    if [ "$rc" -ne 0 ] || [ -z "$got" ] || [ "${got% stack *}" != "$want" ]; then
+        echo "test-mcu: the $machine query image differs from the host (qemu exit $rc)" >&2
+        echo "  target: ${got:-$out}" >&2
+        echo "  host:   $want" >&2
+        status=1
+        return
+    fi
+    local text stack verdict
+    text=$(readelf -S -W "$image" | sed -n 's/.* \.text *PROGBITS *[0-9a-f]* [0-9a-f]* \([0-9a-f]*\) .*/\1/p')
+    text=$((16#${text:-0}))
+    stack=${got##* stack }
+    if [ "$text" -le 8192 ] && [ "$stack" -le 1024 ]; then verdict="within"; else verdict="over"; fi
+    read -r _ _ queries _ _ hash _ <<<"$got"
+    echo "mcu: query image .text $text bytes, stack $stack bytes ($machine: $cpu, $target; $queries queries bit-identical to host, hash $hash; $verdict the 8 KiB / 1 KiB budget)"
+}
+query mps2-an386 thumbv7em-none-eabihf cortex-m4 "$MCU_BAKED_M4F"
+query lm3s6965evb thumbv7m-none-eabi cortex-m3 "$MCU_BAKED_M3"
 
 # What a ray costs there: instructions per closest-hit query for each triangle variant, on
 # the baked BVH, counted under `-icount shift=0` (1 ns of virtual time per instruction,

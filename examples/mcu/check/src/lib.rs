@@ -11,6 +11,8 @@
 //! * **Baked BVH** ([`baked_checks`]): a mesh and BVH baked on the host by `halfray bake`
 //!   into `static` arrays (in flash on the target), loaded by `Bvh::from_parts` (which checks
 //!   them), queried with four ray sets like the above.
+//! * **Query image** ([`query_checks`]): the lean loop of the `mcu-query` image, random and
+//!   aimed rays at a baked BVH, for the size and stack of the query path alone.
 //! * **Half-edge** ([`halfedge_checks`]): a smaller heightfield built into fixed arenas, one
 //!   Loop level (Warren weights), `validate()` on both, and the subdivided positions' bits into
 //!   the hash.
@@ -20,13 +22,16 @@
 //! core's answers, not in a math library.
 #![no_std]
 
+mod query;
+pub use query::query_checks;
+
 use halfray_core::Vec3;
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh};
 use halfray_core::halfedge::{
     EdgeRec, FaceRec, LoopWeights, SliceMesh, VertexRec, build_scratch_len,
 };
 use halfray_core::ray::Ray;
-use halfray_core::triangle::Watertight;
+use halfray_core::triangle::{TriangleIntersector, Watertight};
 
 /// FNV-1a, 64-bit, over 32-bit words (little-endian bytes).
 #[derive(Clone, Copy, Debug)]
@@ -125,6 +130,24 @@ impl Rng {
     fn below(&mut self, n: usize) -> usize {
         (self.next() as usize) % n
     }
+
+    /// A point `(±0.25, ±0.25, 1..2)` away from `target`: an origin above it.
+    fn above(&mut self, target: Vec3) -> Vec3 {
+        target
+            + Vec3::new(
+                self.range(-0.25, 0.25),
+                self.range(-0.25, 0.25),
+                self.range(1.0, 2.0),
+            )
+    }
+}
+
+/// The centres of the largest square grid of at most `rays` pixels, as `(u, v)` in
+/// `(-½, ½)²`, row by row (`v` outer).
+fn pixel_grid(rays: usize) -> impl Iterator<Item = (f32, f32)> {
+    let side = (1..=rays).take_while(|s| s * s <= rays).last().unwrap_or(0);
+    let at = move |i: usize| (i as f32 + 0.5) / side as f32 - 0.5;
+    (0..side).flat_map(move |y| (0..side).map(move |x| (at(x), at(y))))
 }
 
 /// The caller's storage for [`ray_checks`] on an `n × n` heightfield: at least
@@ -202,15 +225,16 @@ pub enum CheckError {
 /// One ray's closest and any hit with the watertight test, folded into `hash` (primitive,
 /// `t` and barycentric bits, or a miss marker; then the any-hit answer) and counted in
 /// `summary`; returns the closest hit's `t`.
-fn query_both<N: AsRef<[BvhNode]>, I: AsRef<[u32]>>(
+fn query_both<N: AsRef<[BvhNode]>, I: AsRef<[u32]>, T: TriangleIntersector>(
+    isect: &T,
     bvh: &Bvh<N, I>,
     mesh: &TriangleMesh<'_>,
     ray: &Ray,
     summary: &mut Summary,
     hash: &mut Fnv,
 ) -> Option<f32> {
-    let closest = bvh.closest_hit_triangles(mesh, &Watertight, ray, None);
-    let any = bvh.any_hit_triangles(mesh, &Watertight, ray, None);
+    let closest = bvh.closest_hit_triangles(mesh, isect, ray, None);
+    let any = bvh.any_hit_triangles(mesh, isect, ray, None);
     summary.queries += 2;
     match closest {
         Some((prim, hit)) => {
@@ -251,25 +275,17 @@ pub fn ray_checks(
     let mut summary = Summary::default();
     let mut rng = Rng(0x9e37_79b9);
     let mut query = |ray: &Ray, aimed: bool, summary: &mut Summary| {
-        let t = query_both(&bvh, &mesh, ray, summary, hash);
+        let t = query_both(&Watertight, &bvh, &mesh, ray, summary, hash);
         // Aimed rays reach their target at t = 1: a miss or a hit beyond it is a leak.
         summary.leaks += (aimed && t.is_none_or(|t| t > 1.0 + 1.0e-5)) as u32;
     };
     // Pinhole camera above the field.
-    let side = (1..=rays_per_set)
-        .take_while(|s| s * s <= rays_per_set)
-        .last()
-        .unwrap_or(0);
-    for y in 0..side {
-        for x in 0..side {
-            let u = (x as f32 + 0.5) / side as f32 - 0.5;
-            let v = (y as f32 + 0.5) / side as f32 - 0.5;
-            let ray = Ray::new(
-                Vec3::new(0.0, -0.5, 2.5),
-                Vec3::new(u * 1.6, v * 1.6 + 0.2, -1.0),
-            );
-            query(&ray, false, &mut summary);
-        }
+    for (u, v) in pixel_grid(rays_per_set) {
+        let ray = Ray::new(
+            Vec3::new(0.0, -0.5, 2.5),
+            Vec3::new(u * 1.6, v * 1.6 + 0.2, -1.0),
+        );
+        query(&ray, false, &mut summary);
     }
     // Random origins around the field, aimed at random points over it.
     for _ in 0..rays_per_set {
@@ -298,24 +314,14 @@ pub fn ray_checks(
         let (p, q) = (positions[p as usize], positions[q as usize]);
         let target = (p + q) * 0.5;
         let interior = target.x.abs() < 1.0 && target.y.abs() < 1.0;
-        let o = target
-            + Vec3::new(
-                rng.range(-0.25, 0.25),
-                rng.range(-0.25, 0.25),
-                rng.range(1.0, 2.0),
-            );
+        let o = rng.above(target);
         query(&Ray::new(o, target - o), interior, &mut summary);
     }
     // Aimed exactly at an interior vertex from above.
     for _ in 0..rays_per_set {
         let (i, j) = (1 + rng.below(n - 1), 1 + rng.below(n - 1));
         let target = positions[j * (n + 1) + i];
-        let o = target
-            + Vec3::new(
-                rng.range(-0.25, 0.25),
-                rng.range(-0.25, 0.25),
-                rng.range(1.0, 2.0),
-            );
+        let o = rng.above(target);
         query(&Ray::new(o, target - o), true, &mut summary);
     }
     Ok(summary)
@@ -325,8 +331,10 @@ pub fn ray_checks(
 /// [`Bvh::from_parts`] from `static` arrays: `rays_per_set` rays of each of four sets — a
 /// pinhole camera framing the mesh, random rays through its box, rays aimed exactly at
 /// vertices and at edge midpoints from outside the box — each with a closest- and an any-hit
-/// query folded into `hash`. Fails with [`CheckError::Build`] when the baked data does not load.
-pub fn baked_checks(
+/// query with `isect` folded into `hash`. Fails with [`CheckError::Build`] when the baked data
+/// does not load.
+pub fn baked_checks<T: TriangleIntersector>(
+    isect: &T,
     nodes: &[BvhNode],
     indices: &[u32],
     mesh: &TriangleMesh<'_>,
@@ -342,20 +350,12 @@ pub fn baked_checks(
     let mut summary = Summary::default();
     let mut rng = Rng(0x2545_f491);
     let mut query = |ray: &Ray, summary: &mut Summary| {
-        query_both(&bvh, mesh, ray, summary, hash);
+        query_both(isect, &bvh, mesh, ray, summary, hash);
     };
     let eye = center + Vec3::new(0.3, -0.4, 1.0) * (1.5 * reach);
-    let side = (1..=rays_per_set)
-        .take_while(|s| s * s <= rays_per_set)
-        .last()
-        .unwrap_or(0);
-    for y in 0..side {
-        for x in 0..side {
-            let u = ((x as f32 + 0.5) / side as f32 - 0.5) * reach;
-            let v = ((y as f32 + 0.5) / side as f32 - 0.5) * reach;
-            let target = center + Vec3::new(u, v, 0.0);
-            query(&Ray::new(eye, target - eye), &mut summary);
-        }
+    for (u, v) in pixel_grid(rays_per_set) {
+        let target = center + Vec3::new(u * reach, v * reach, 0.0);
+        query(&Ray::new(eye, target - eye), &mut summary);
     }
     let outside = |rng: &mut Rng| {
         center

@@ -62,6 +62,7 @@ fn flash(hash: &mut Fnv) -> Result<Summary, CheckError> {
     let mesh = TriangleMesh::new(&baked::POSITIONS, &baked::TRIANGLES);
     let mut scratch = [0u32; baked::LOAD_SCRATCH_WORDS];
     baked_checks(
+        &halfray_core::triangle::Watertight,
         &baked::NODES,
         &baked::INDICES,
         &mesh,
@@ -155,6 +156,7 @@ mod bench {
     use halfray_core::bvh::{Bvh, TriangleMesh};
     use halfray_core::triangle::{
         Cramer, F64Reference, MollerTrumbore, TriangleIntersector, Watertight, WatertightF32,
+        WatertightF32Exact,
     };
     use halfray_core::{Ray, Vec3};
 
@@ -228,6 +230,14 @@ mod bench {
         per_query(
             "watertight-f32",
             &WatertightF32,
+            &bvh,
+            &mesh,
+            &rays,
+            per_tick,
+        );
+        per_query(
+            "watertight-f32-exact",
+            &WatertightF32Exact,
             &bvh,
             &mesh,
             &rays,

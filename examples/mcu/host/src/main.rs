@@ -1,5 +1,6 @@
-//! Prints, for each machine, the line its image prints under QEMU
-//! (`mcu: <machine> <queries> queries hash <hex> hits <n> leaks <n>`), computed on the host
+//! Prints, for each machine, the lines its images print under QEMU
+//! (`mcu: <machine> <queries> queries hash <hex> hits <n> leaks <n>` for `mcu-firmware`, the
+//! same after `mcu-query:` for `mcu-query`, without its stack figure), computed on the host
 //! with the same `mcu-check` code and buffers of the same sizes.
 
 use halfray_core::Vec3;
@@ -45,6 +46,7 @@ fn line(machine: &str, c: Config, baked: Baked) -> Result<String, mcu_check::Che
     let (positions, triangles, nodes, indices) = baked;
     let mesh = TriangleMesh::new(positions, triangles);
     let f = mcu_check::baked_checks(
+        &halfray_core::triangle::Watertight,
         nodes,
         indices,
         &mesh,
@@ -88,6 +90,31 @@ fn line(machine: &str, c: Config, baked: Baked) -> Result<String, mcu_check::Che
     ))
 }
 
+/// The line the `mcu-query` image prints (without its stack figure): [`mcu_check::query_checks`]
+/// with the `f64`-free watertight test on the baked BVH.
+fn query_line(machine: &str, c: Config, baked: Baked) -> Result<String, mcu_check::CheckError> {
+    let mut hash = Fnv::new();
+    let (positions, triangles, nodes, indices) = baked;
+    let mesh = TriangleMesh::new(positions, triangles);
+    let mut scratch = vec![0; halfray_core::bvh::load_scratch_len(triangles.len())];
+    let bvh = halfray_core::bvh::Bvh::from_parts(nodes, indices, &mesh, &mut scratch)
+        .map_err(|_| mcu_check::CheckError::Build)?;
+    let s = mcu_check::query_checks(
+        &halfray_core::triangle::WatertightF32Exact,
+        &bvh,
+        &mesh,
+        3 * c.rays_per_set,
+        &mut hash,
+    );
+    Ok(format!(
+        "mcu-query: {machine} {} queries hash {:016x} hits {} leaks {}",
+        s.queries,
+        hash.value(),
+        s.hits,
+        s.leaks
+    ))
+}
+
 fn main() -> std::process::ExitCode {
     let mut ok = true;
     let m4f: Baked = (
@@ -103,11 +130,16 @@ fn main() -> std::process::ExitCode {
         &baked_m3::INDICES,
     );
     for (machine, config, baked) in [("mps2-an386", M4F, m4f), ("lm3s6965evb", M3, m3)] {
-        match line(machine, config, baked) {
-            Ok(l) => println!("{l}"),
-            Err(e) => {
-                eprintln!("mcu-host: {machine}: {e:?}");
-                ok = false;
+        for l in [
+            line(machine, config, baked),
+            query_line(machine, config, baked),
+        ] {
+            match l {
+                Ok(l) => println!("{l}"),
+                Err(e) => {
+                    eprintln!("mcu-host: {machine}: {e:?}");
+                    ok = false;
+                }
             }
         }
     }
