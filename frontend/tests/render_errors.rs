@@ -463,3 +463,36 @@ fn unknown_specular_model() {
         assert!(load(&path).is_ok(), "{model}");
     }
 }
+
+/// A TOML syntax error (an array left open) is reported at its line and column in the scene
+/// file, counted from the text: `center = [0, 0, 0` runs into the next line, and the parser
+/// finds `radius` (line of `radius`, column 1) where a `,` or `]` must come.
+#[test]
+fn toml_syntax_error_names_line_and_column() {
+    let text = format!("{BASE}\n[[object]]\ntype = \"sphere\"\ncenter = [0, 0, 0\nradius = 1\n");
+    let line = text.lines().position(|l| l.starts_with("radius")).unwrap() + 1;
+    let msg = load_err("syntax.toml", &text);
+    assert!(msg.starts_with(&format!("syntax.toml:{line}:1: ")), "{msg}");
+    assert!(msg.contains("expected `,`"), "{msg}");
+}
+
+/// An OBJ error inside a mesh the scene references names the OBJ file, its line and column.
+#[test]
+fn obj_error_in_a_referenced_mesh_names_its_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("bad.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+    )
+    .unwrap();
+    let path = dir.path().join("objerr.toml");
+    std::fs::write(
+        &path,
+        format!("{BASE}\n[mesh.b]\nfile = \"bad.obj\"\n\n[[object]]\ntype = \"mesh\"\nmesh = \"b\"\nmaterial = \"m\"\n"),
+    )
+    .unwrap();
+    let msg = load(&path).err().expect("a bad OBJ is refused").to_string();
+    // Line 4, column 7: the `9` of `f 1 2 9`.
+    assert!(msg.contains("bad.obj:4:7: field `f`"), "{msg}");
+    assert!(msg.contains("vertex index 9 out of range"), "{msg}");
+}

@@ -350,6 +350,22 @@ fn traversal_around_interior_and_boundary_vertices() {
         let [c, dd] = m.edge_vertices(opp[(i + 1) % 5]).unwrap();
         assert!(a == c || a == dd || b == c || b == dd);
     }
+    // Counter-clockwise (the fan's faces are, seen from +z): each opposite edge's midpoint is
+    // reached from the previous one by a positive turn about D (each step spans one face,
+    // less than half a turn). A clockwise ring fails here.
+    let at = |v: VertexId| m.position(v).unwrap();
+    let mid = |e: EdgeId| {
+        let [a, b] = m.edge_vertices(e).unwrap();
+        (at(a) + at(b)) * 0.5 - at(d)
+    };
+    for i in 0..5 {
+        let (u, w) = (mid(opp[i]), mid(opp[(i + 1) % 5]));
+        assert!(
+            u.x * w.y - u.y * w.x > 0.0,
+            "opposite edges {i}, {} turn clockwise",
+            i + 1
+        );
+    }
     // Boundary vertex A: two faces, three neighbours, finite walks.
     let a = VertexId(0);
     assert!(m.is_boundary_vertex(a));
@@ -869,11 +885,25 @@ fn diffuse_uses_old_positions() {
     let mut c = m.clone();
     let q = c.diffuse_vertex(VertexId(3), 0.5).unwrap();
     assert!(close(q, p[3] + 0.5 * (mean - p[3])));
-    // Whole mesh, Jacobi: every vertex from the old positions.
-    let expect: Vec<Vec3> = m
-        .vertices()
-        .map(|v| m.position(v).unwrap() + 0.25 * m.laplacian(v).unwrap())
+    // Whole mesh, Jacobi: every vertex from the old positions. Expected values from the
+    // triangle list alone (each vertex's neighbours: the other corners of its triangles), not
+    // from the mesh's own `laplacian`.
+    let expect: Vec<Vec3> = (0..p.len() as u32)
+        .map(|i| {
+            let mut ring: Vec<u32> = t
+                .iter()
+                .filter(|tri| tri.contains(&i))
+                .flatten()
+                .copied()
+                .filter(|&j| j != i)
+                .collect();
+            ring.sort_unstable();
+            ring.dedup();
+            let mean = ring.iter().map(|&j| p[j as usize]).sum::<Vec3>() / ring.len() as f32;
+            p[i as usize] + 0.25 * (mean - p[i as usize])
+        })
         .collect();
+    assert_eq!(m.vertices().count(), expect.len());
     let mut scratch = vec![Vec3::ZERO; 6];
     m.diffuse(0.25, DiffuseBoundary::Free, &mut scratch)
         .unwrap();

@@ -53,14 +53,20 @@ pub fn check(text: &str) {
             let _ = plan.explain(&scene);
             let mut qc = QueryCtx::default();
             for o in &scene.objects {
-                if let Some(h) = o.closest(&ray, &mut qc) {
+                let closest = o.closest(&ray, &mut qc);
+                if let Some(h) = closest {
                     assert!(
                         ray.contains(h.hit.t),
                         "object hit at t = {} outside the ray interval\n{text}",
                         h.hit.t
                     );
                 }
-                let _ = o.occludes(&ray, &mut qc);
+                // The shadow query (a mesh's own any-hit traversal) agrees with closest hit.
+                assert_eq!(
+                    o.occludes(&ray, &mut qc),
+                    closest.is_some(),
+                    "occludes disagrees with closest hit on {ray:?}\n{text}"
+                );
             }
         }
         Err(e) => {
