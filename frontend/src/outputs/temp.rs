@@ -157,4 +157,36 @@ mod tests {
         assert_eq!(std::fs::read(&dest).unwrap(), b"data");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
+
+    /// Two writes to one folder from one process at the same time never share a temporary
+    /// file: 8 threads × 50 files at once, each written with its own content and persisted
+    /// under its own name; every file ends with exactly its writer's bytes and no temporary
+    /// file is left over.
+    #[test]
+    fn concurrent_temp_files_in_one_folder_never_collide() {
+        let dir = tempfile::tempdir().unwrap();
+        std::thread::scope(|s| {
+            for thread in 0..8 {
+                let dir = dir.path();
+                s.spawn(move || {
+                    for k in 0..50 {
+                        let mut t = TempFile::create_in(dir).unwrap();
+                        let body = format!("{thread}-{k}");
+                        io::Write::write_all(t.file().unwrap(), body.as_bytes()).unwrap();
+                        t.persist(&dir.join(format!("out-{thread}-{k}"))).unwrap();
+                    }
+                });
+            }
+        });
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        names.sort();
+        assert_eq!(names.len(), 400, "{names:?}");
+        for name in names {
+            let body = std::fs::read_to_string(dir.path().join(&name)).unwrap();
+            assert_eq!(Some(body.as_str()), name.strip_prefix("out-"), "{name}");
+        }
+    }
 }
