@@ -64,19 +64,11 @@ pub(crate) fn tri_context(ray: &Ray, v: &[Vec3; 3]) -> String {
 pub fn check_ray_triangle(ray: &Ray, v: &[Vec3; 3]) {
     let valid = ray.is_valid();
     let finite = v.iter().all(|p| p.is_finite());
-    let repeated = v[0] == v[1] || v[1] == v[2] || v[2] == v[0];
     let mut got = [None; TriangleVariant::ALL.len()];
     for (k, var) in TriangleVariant::ALL.into_iter().enumerate() {
         let h = var.intersect(ray, v);
         if let Some(h) = h {
             let ctx = || format!("variant {}: {h:?}\n{}", var.name(), tri_context(ray, v));
-            assert!(valid, "invalid ray hit\n{}", ctx());
-            assert!(finite, "triangle with a non-finite vertex hit\n{}", ctx());
-            assert!(
-                !repeated,
-                "degenerate triangle (repeated vertex) hit\n{}",
-                ctx()
-            );
             // `watertight-f32` computes its edge functions and barycentrics in `f32` products,
             // sound only while no product underflows or overflows (its docs: triangles of
             // ≳ 1e19 or ≲ 1e-19 and underflowing projections are outside its domain); there
@@ -95,13 +87,6 @@ pub fn check_ray_triangle(ray: &Ray, v: &[Vec3; 3]) {
     let exact_f32 = WatertightF32Exact.intersect(ray, v);
     if let Some(h) = exact_f32 {
         let ctx = || format!("watertight-f32-exact: {h:?}\n{}", tri_context(ray, v));
-        assert!(valid, "invalid ray hit\n{}", ctx());
-        assert!(finite, "triangle with a non-finite vertex hit\n{}", ctx());
-        assert!(
-            !repeated,
-            "degenerate triangle (repeated vertex) hit\n{}",
-            ctx()
-        );
         let f32_domain = !projection_underflows(ray, v) && f32_products_in_range(ray, v);
         check_hit_contract(ray, v, &h, f32_domain, &ctx);
     }
@@ -141,6 +126,17 @@ fn check_hit_contract(
     barycentric_domain: bool,
     ctx: &dyn Fn() -> String,
 ) {
+    assert!(ray.is_valid(), "invalid ray hit\n{}", ctx());
+    assert!(
+        v.iter().all(|p| p.is_finite()),
+        "triangle with a non-finite vertex hit\n{}",
+        ctx()
+    );
+    assert!(
+        !(v[0] == v[1] || v[1] == v[2] || v[2] == v[0]),
+        "degenerate triangle (repeated vertex) hit\n{}",
+        ctx()
+    );
     assert!(ray.contains(h.t), "t outside (t_min, t_max]\n{}", ctx());
     assert!(h.t.is_finite(), "non-finite t\n{}", ctx());
     let (b0, b1, b2) = (h.b0(), h.b1, h.b2);

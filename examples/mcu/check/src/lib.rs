@@ -31,7 +31,7 @@ use halfray_core::halfedge::{
     EdgeRec, FaceRec, LoopWeights, SliceMesh, VertexRec, build_scratch_len,
 };
 use halfray_core::ray::Ray;
-use halfray_core::triangle::{TriangleIntersector, Watertight};
+use halfray_core::triangle::{TriangleHit, TriangleIntersector, Watertight};
 
 /// FNV-1a, 64-bit, over 32-bit words (little-endian bytes).
 #[derive(Clone, Copy, Debug)]
@@ -235,6 +235,18 @@ fn query_both<N: AsRef<[BvhNode]>, I: AsRef<[u32]>, T: TriangleIntersector>(
 ) -> Option<f32> {
     let closest = bvh.closest_hit_triangles(mesh, isect, ray, None);
     let any = bvh.any_hit_triangles(mesh, isect, ray, None);
+    fold_answers(closest, any.is_some(), summary, hash);
+    closest.map(|(_, hit)| hit.t)
+}
+
+/// Folds one ray's closest-hit answer (primitive, `t` and barycentric bits, or a miss) and
+/// any-hit answer into `hash`, counting two queries and the hit in `summary`.
+fn fold_answers(
+    closest: Option<(u32, TriangleHit)>,
+    any: bool,
+    summary: &mut Summary,
+    hash: &mut Fnv,
+) {
     summary.queries += 2;
     match closest {
         Some((prim, hit)) => {
@@ -245,8 +257,7 @@ fn query_both<N: AsRef<[BvhNode]>, I: AsRef<[u32]>, T: TriangleIntersector>(
         }
         None => hash.word(u32::MAX),
     }
-    hash.word(any.is_some() as u32);
-    closest.map(|(_, hit)| hit.t)
+    hash.word(any as u32);
 }
 
 /// Builds the heightfield's BVH in `storage` and makes `rays_per_set` queries of each kind on

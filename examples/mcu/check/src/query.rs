@@ -2,7 +2,7 @@
 //! on a baked BVH: a lean loop (no other check's code), so that the image's size is the query
 //! path's.
 
-use super::{Fnv, Rng, Summary};
+use super::{Fnv, Rng, Summary, fold_answers};
 use halfray_core::Vec3;
 use halfray_core::bvh::{Bvh, BvhNode, TriangleMesh};
 use halfray_core::ray::Ray;
@@ -49,17 +49,7 @@ where
         let ray = Ray::new(o, target - o);
         let closest = closest_hit(isect, bvh, mesh, &ray);
         let any = any_hit(isect, bvh, mesh, &ray);
-        summary.queries += 2;
-        match closest {
-            Some((prim, hit)) => {
-                summary.hits += 1;
-                for w in [prim, hit.t.to_bits(), hit.b1.to_bits(), hit.b2.to_bits()] {
-                    hash.word(w);
-                }
-            }
-            None => hash.word(u32::MAX),
-        }
-        hash.word(any as u32);
+        fold_answers(closest, any, &mut summary, hash);
         summary.leaks += (any != closest.is_some()) as u32;
     }
     summary
