@@ -491,7 +491,10 @@ fn obj_error_in_a_referenced_mesh_names_its_line_and_column() {
         format!("{BASE}\n[mesh.b]\nfile = \"bad.obj\"\n\n[[object]]\ntype = \"mesh\"\nmesh = \"b\"\nmaterial = \"m\"\n"),
     )
     .unwrap();
-    let msg = load(&path).err().expect("a bad OBJ is refused").to_string();
+    let Err(e) = load(&path) else {
+        panic!("a bad OBJ is refused");
+    };
+    let msg = e.to_string();
     // Line 4, column 7: the `9` of `f 1 2 9`.
     assert!(msg.contains("bad.obj:4:7: field `f`"), "{msg}");
     assert!(msg.contains("vertex index 9 out of range"), "{msg}");

@@ -38,7 +38,7 @@ pub use cramer::Cramer;
 pub use lanes::{LANES, TriangleLanes};
 pub use moller_trumbore::MollerTrumbore;
 pub use reference::F64Reference;
-pub use watertight::{Watertight, WatertightF32, WatertightRay};
+pub use watertight::{ShearedTest, Watertight, WatertightF32, WatertightRay};
 pub use watertight_f32_exact::WatertightF32Exact;
 
 use crate::float::gamma;

@@ -386,11 +386,29 @@ fn finish_exact(
     })
 }
 
-impl TriangleIntersector for Watertight {
+/// The watertight family ([`Watertight`], [`WatertightF32`], [`super::WatertightF32Exact`]):
+/// the ray prepared as a [`WatertightRay`] (axis permutation and shear), and a test of one
+/// triangle that rejects every triangle whose three `f32` edge functions (the filter of
+/// [`WatertightRay::certain_misses`]) have certain, mixed signs. Each member supplies its name
+/// and its test; [`TriangleIntersector`] (preparation and the four-lane cull) comes with it.
+pub trait ShearedTest: Copy + Send + Sync {
+    /// The variant's name ([`TriangleIntersector::name`]).
+    const NAME: &'static str;
+
+    /// [`TriangleIntersector::intersect_prepared`].
+    fn intersect_sheared(
+        &self,
+        pre: &WatertightRay,
+        ray: &Ray,
+        v: &[Vec3; 3],
+    ) -> Option<TriangleHit>;
+}
+
+impl<T: ShearedTest> TriangleIntersector for T {
     type Prepared = WatertightRay;
 
     fn name(&self) -> &'static str {
-        "watertight"
+        T::NAME
     }
 
     #[inline(always)]
@@ -400,6 +418,25 @@ impl TriangleIntersector for Watertight {
 
     #[inline(always)]
     fn intersect_prepared(
+        &self,
+        pre: &WatertightRay,
+        ray: &Ray,
+        v: &[Vec3; 3],
+    ) -> Option<TriangleHit> {
+        self.intersect_sheared(pre, ray, v)
+    }
+
+    #[inline(always)]
+    fn certain_misses(&self, pre: &WatertightRay, ray: &Ray, lanes: &TriangleLanes) -> u32 {
+        pre.certain_misses(ray.origin, lanes)
+    }
+}
+
+impl ShearedTest for Watertight {
+    const NAME: &'static str = "watertight";
+
+    #[inline(always)]
+    fn intersect_sheared(
         &self,
         pre: &WatertightRay,
         ray: &Ray,
@@ -422,11 +459,6 @@ impl TriangleIntersector for Watertight {
         }
         exact_candidate(ray, pre, sheared, v)
     }
-
-    #[inline(always)]
-    fn certain_misses(&self, pre: &WatertightRay, ray: &Ray, lanes: &TriangleLanes) -> u32 {
-        pre.certain_misses(ray.origin, lanes)
-    }
 }
 
 /// The rest of [`Watertight`] for a triangle the `f32` filter did not reject: exact `f64`
@@ -447,20 +479,13 @@ fn exact_candidate(
     finish_exact(ray, pre, sheared, edges, v)
 }
 
-impl TriangleIntersector for WatertightF32 {
-    type Prepared = WatertightRay;
-
-    fn name(&self) -> &'static str {
-        "watertight-f32"
-    }
+/// All three `f32` edge functions non-zero and finite skip the exact recomputation, so mixed
+/// certain signs are a miss here too (the family's cull applies).
+impl ShearedTest for WatertightF32 {
+    const NAME: &'static str = "watertight-f32";
 
     #[inline(always)]
-    fn prepare(&self, ray: &Ray) -> Option<WatertightRay> {
-        WatertightRay::new(ray)
-    }
-
-    #[inline(always)]
-    fn intersect_prepared(
+    fn intersect_sheared(
         &self,
         pre: &WatertightRay,
         ray: &Ray,
@@ -497,13 +522,6 @@ impl TriangleIntersector for WatertightF32 {
             ng: super::geometric_normal(v, (v[1] - v[0]).cross(v[2] - v[0])),
             front_face: det > 0.0,
         })
-    }
-
-    /// All three `f32` edge functions non-zero and finite skip the exact recomputation, so
-    /// mixed certain signs are a miss here too.
-    #[inline(always)]
-    fn certain_misses(&self, pre: &WatertightRay, ray: &Ray, lanes: &TriangleLanes) -> u32 {
-        pre.certain_misses(ray.origin, lanes)
     }
 }
 

@@ -1,7 +1,7 @@
 //! The watertight test with no `f64` anywhere, for targets that emulate it (Cortex-M4F: `f32`
 //! in hardware, `f64` in software; Cortex-M3/M0+: no FPU).
 
-use super::{TriangleHit, TriangleIntersector, TriangleLanes, WatertightRay};
+use super::{ShearedTest, TriangleHit, WatertightRay};
 use crate::float::{diff_of_products_sign_filter, diff_of_products_sign_int, sign_is_certain};
 use crate::ray::Ray;
 use glam::Vec3;
@@ -113,20 +113,11 @@ fn normal_f32(v: &[Vec3; 3]) -> Vec3 {
     if n.is_finite() { n } else { Vec3::ZERO }
 }
 
-impl TriangleIntersector for WatertightF32Exact {
-    type Prepared = WatertightRay;
-
-    fn name(&self) -> &'static str {
-        "watertight-f32-exact"
-    }
+impl ShearedTest for WatertightF32Exact {
+    const NAME: &'static str = "watertight-f32-exact";
 
     #[inline(always)]
-    fn prepare(&self, ray: &Ray) -> Option<WatertightRay> {
-        WatertightRay::new(ray)
-    }
-
-    #[inline(always)]
-    fn intersect_prepared(
+    fn intersect_sheared(
         &self,
         pre: &WatertightRay,
         ray: &Ray,
@@ -167,17 +158,12 @@ impl TriangleIntersector for WatertightF32Exact {
             front_face: det > 0.0,
         })
     }
-
-    #[inline(always)]
-    fn certain_misses(&self, pre: &WatertightRay, ray: &Ray, lanes: &TriangleLanes) -> u32 {
-        pre.certain_misses(ray.origin, lanes)
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::triangle::Watertight;
+    use crate::triangle::{TriangleIntersector, Watertight};
 
     #[test]
     fn plain_hit_matches_the_exact_test() {
