@@ -74,6 +74,7 @@ mod error;
 mod jobs;
 mod load;
 mod node;
+mod padded_ray;
 mod primitive;
 mod query;
 mod refit;

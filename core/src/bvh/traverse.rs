@@ -1,6 +1,7 @@
 //! Closest-hit and any-hit traversal on a fixed-size stack.
 
 use super::node::BvhNode;
+use super::padded_ray::PaddedRay;
 use super::primitive::TriangleMesh;
 use super::stats::TraversalStats;
 use super::{Bvh, TRAVERSAL_STACK_SIZE, cull_bound, extent_of, improves, projection_pad};
@@ -9,45 +10,7 @@ use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
 use glam::Vec3;
 
-/// The ray as the node test wants it: reciprocal direction, per axis which of the node's
-/// `[min, max]` corners is the near one (the direction's sign bit), and the box padding
-/// ([`crate::tolerance::BVH_PROJECTION_PAD`]) folded into two shifted origins (moving a
-/// bound outward by `pad` is moving the origin by `pad` the other way; the rounding of
-/// `o ± pad` is within the padding's margin).
-#[derive(Clone, Copy)]
-pub(super) struct NodeRay {
-    origin_near: [f32; 3],
-    origin_far: [f32; 3],
-    inv_dir: [f32; 3],
-    near: [usize; 3],
-    pad: f32,
-    slab: SlabRay,
-}
-
-impl NodeRay {
-    /// `slab` with boxes padded by `pad` world units.
-    #[inline]
-    pub(super) fn new(slab: &SlabRay, pad: f32) -> Self {
-        let s = |negative: bool| if negative { -pad } else { pad };
-        let toward = glam::Vec3::new(
-            s(slab.negative[0]),
-            s(slab.negative[1]),
-            s(slab.negative[2]),
-        );
-        Self {
-            origin_near: (slab.origin + toward).to_array(),
-            origin_far: (slab.origin - toward).to_array(),
-            inv_dir: slab.inv_dir.to_array(),
-            near: [
-                usize::from(slab.negative[0]),
-                usize::from(slab.negative[1]),
-                usize::from(slab.negative[2]),
-            ],
-            pad,
-            slab: *slab,
-        }
-    }
-
+impl PaddedRay {
     /// [`crate::aabb::Aabb::intersect_slab`] on the node's raw corners, with the near/far
     /// corner picked by index instead of by branch. The common path (`GENERAL = false`: no
     /// overflowing reciprocal, `t_min ≥ 0`) pads far distances by the plain factor
@@ -59,14 +22,14 @@ impl NodeRay {
     /// NaN (the ray was validated), so `a > b ? a : b` absorbs a NaN slab value exactly like
     /// `f32::max` does. Returns the entry distance on a hit.
     #[inline(always)]
-    pub(super) fn hit<const GENERAL: bool>(
+    pub(super) fn hit_node<const GENERAL: bool>(
         &self,
         node: &BvhNode,
         t_min: f32,
         t_max: f32,
     ) -> Option<f32> {
         if GENERAL {
-            return self.hit_general(node, t_min, t_max);
+            return self.hit_node_general(node, t_min, t_max);
         }
         let mut t_enter = t_min;
         let mut t_exit = t_max;
@@ -83,12 +46,12 @@ impl NodeRay {
         (t_enter <= t_exit).then_some(t_enter)
     }
 
-    /// [`NodeRay::hit`] for rays with a subnormal direction component whose reciprocal
+    /// [`PaddedRay::hit_node`] for rays with a subnormal direction component whose reciprocal
     /// overflows, or with `t_min < 0` (a negative far distance must be padded towards `+∞`):
     /// [`crate::aabb::Aabb::intersect_slab`] itself.
     #[cold]
     #[inline(never)]
-    fn hit_general(&self, node: &BvhNode, t_min: f32, t_max: f32) -> Option<f32> {
+    fn hit_node_general(&self, node: &BvhNode, t_min: f32, t_max: f32) -> Option<f32> {
         let (lo, hi) = (Vec3::from(node.bounds[0]), Vec3::from(node.bounds[1]));
         let b = crate::aabb::Aabb::new(lo - self.pad, hi + self.pad);
         b.intersect_slab(&self.slab, t_min, t_max).map(|(t, _)| t)
@@ -212,10 +175,10 @@ where
         }; TRAVERSAL_STACK_SIZE];
         let mut sp = 0usize;
 
-        let nray = NodeRay::new(slab, projection_pad(slab.origin, extent_of(&root.bounds())));
+        let nray = PaddedRay::new(slab, projection_pad(slab.origin, extent_of(&root.bounds())));
         local.nodes_visited += 1;
         let mut node = if nray
-            .hit::<GENERAL>(root, ray.t_min, cull_bound(ray.t_max))
+            .hit_node::<GENERAL>(root, ray.t_min, cull_bound(ray.t_max))
             .is_some()
         {
             Some(root)
@@ -246,8 +209,8 @@ where
                 let bound = cull_bound(cur.t_max);
                 let left = nodes.get(start as usize);
                 let right = nodes.get(start as usize + 1);
-                let hit_l = left.and_then(|c| nray.hit::<GENERAL>(c, cur.t_min, bound));
-                let hit_r = right.and_then(|c| nray.hit::<GENERAL>(c, cur.t_min, bound));
+                let hit_l = left.and_then(|c| nray.hit_node::<GENERAL>(c, cur.t_min, bound));
+                let hit_r = right.and_then(|c| nray.hit_node::<GENERAL>(c, cur.t_min, bound));
                 local.nodes_visited += 2;
                 match (hit_l, hit_r) {
                     (Some(tl), Some(tr)) => {

@@ -1,49 +1,12 @@
 //! The node test of the wide traversal: the ray against all `W` child boxes of a node at once.
 
 use super::node::WideNode;
-use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
+use crate::aabb::SLAB_FAR_SCALE;
+use crate::bvh::padded_ray::PaddedRay;
 use crate::simd;
 use crate::simd::level::SimdLevel;
 
-/// The ray as the node test wants it: reciprocal direction, per axis the index (`0` lower,
-/// `1` upper) of the near bound (the direction's sign bit), and the box padding
-/// ([`crate::tolerance::BVH_PROJECTION_PAD`]) folded into two shifted origins: moving the
-/// near bound outward by `pad` is moving the origin by `pad` the other way, so
-/// `t_near = (near − origin_near)·inv`, `t_far = (far − origin_far)·inv` test the padded box at
-/// no cost per node (the rounding of `o ± pad` is within the padding's margin).
-#[derive(Clone, Copy)]
-pub(super) struct WideRay {
-    origin_near: [f32; 3],
-    origin_far: [f32; 3],
-    inv_dir: [f32; 3],
-    near: [usize; 3],
-    pad: f32,
-    slab: SlabRay,
-}
-
-impl WideRay {
-    #[inline(always)]
-    pub(super) fn new(slab: &SlabRay, pad: f32) -> Self {
-        let s = |negative: bool| if negative { -pad } else { pad };
-        let toward = glam::Vec3::new(
-            s(slab.negative[0]),
-            s(slab.negative[1]),
-            s(slab.negative[2]),
-        );
-        Self {
-            origin_near: (slab.origin + toward).to_array(),
-            origin_far: (slab.origin - toward).to_array(),
-            inv_dir: slab.inv_dir.to_array(),
-            near: [
-                usize::from(slab.negative[0]),
-                usize::from(slab.negative[1]),
-                usize::from(slab.negative[2]),
-            ],
-            pad,
-            slab: *slab,
-        }
-    }
-
+impl PaddedRay {
     /// Entry distance of every child box over `[t_min, t_max]` and the mask of the boxes hit
     /// (bit `i` for slot `i`; the distances of the others mean nothing): the robust
     /// slab test of [`crate::aabb::Aabb::intersect_slab`] lane by lane, written branch-free so
@@ -56,7 +19,7 @@ impl WideRay {
     // Lane loops are indexed: the form the compiler turns into vector instructions.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    pub(super) fn hit<const W: usize, const GENERAL: bool, L: SimdLevel>(
+    pub(in crate::bvh) fn hit_children<const W: usize, const GENERAL: bool, L: SimdLevel>(
         &self,
         level: L,
         node: &WideNode<W>,
@@ -64,7 +27,7 @@ impl WideRay {
         t_max: f32,
     ) -> ([f32; W], u32) {
         if GENERAL {
-            let dist = self.hit_general(node, t_min, t_max);
+            let dist = self.hit_children_general(node, t_min, t_max);
             return (dist, simd::mask_le(&dist, &[f32::MAX; W]));
         }
         // Capped at the largest finite `f32`, so that an entry at `+∞` is never hit.
@@ -97,7 +60,7 @@ impl WideRay {
         (t_enter, simd::mask_le(&t_enter, &t_exit))
     }
 
-    /// [`WideRay::hit`] by `level`'s eight-lane kernel, for `W = 8` when the level has one
+    /// [`PaddedRay::hit_children`] by `level`'s eight-lane kernel, for `W = 8` when the level has one
     /// (same operations, same result).
     #[inline(always)]
     fn hit8<const W: usize, L: SimdLevel>(
@@ -125,11 +88,16 @@ impl WideRay {
         Some((core::array::from_fn(|i| dist[i & 7]), mask))
     }
 
-    /// [`WideRay::hit`] for rays with an overflowing reciprocal or `t_min < 0`:
+    /// [`PaddedRay::hit_children`] for rays with an overflowing reciprocal or `t_min < 0`:
     /// [`crate::aabb::Aabb::intersect_slab`] on each padded child box.
     #[cold]
     #[inline(never)]
-    fn hit_general<const W: usize>(&self, node: &WideNode<W>, t_min: f32, t_max: f32) -> [f32; W] {
+    fn hit_children_general<const W: usize>(
+        &self,
+        node: &WideNode<W>,
+        t_min: f32,
+        t_max: f32,
+    ) -> [f32; W] {
         let mut out = [f32::INFINITY; W];
         for (i, o) in out.iter_mut().enumerate() {
             let b = node.child_bounds(i);

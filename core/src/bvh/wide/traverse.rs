@@ -1,9 +1,9 @@
 //! Closest-hit and any-hit traversal of a wide tree on a fixed-size stack.
 
 use super::node::{ChildRef, LeafGroup, WideNode};
-use super::node_test::WideRay;
 use super::{WideBvh, add_stats};
 use crate::aabb::SlabRay;
+use crate::bvh::padded_ray::PaddedRay;
 use crate::bvh::stats::TraversalStats;
 use crate::bvh::{cull_bound, improves, projection_pad};
 use crate::ray::Ray;
@@ -391,7 +391,7 @@ where
         if nodes.is_empty() {
             return None;
         }
-        let wray = WideRay::new(slab, projection_pad(slab.origin, self.extent));
+        let wray = PaddedRay::new(slab, projection_pad(slab.origin, self.extent));
         let mut local = TraversalStats::default();
         let mut cur = *ray;
         let mut best: Option<(u32, H)> = None;
@@ -403,7 +403,7 @@ where
                 ChildRef::Inner(index) => {
                     if let Some(node) = nodes.get(index as usize) {
                         local.nodes_visited += 1;
-                        let (dist, mut mask) = wray.hit::<W, GENERAL, L>(
+                        let (dist, mut mask) = wray.hit_children::<W, GENERAL, L>(
                             level,
                             node,
                             cur.t_min,
