@@ -498,17 +498,18 @@ fn front_layer(mesh: &Mesh, target: &Target, ray: &Ray) -> Option<Vec<u32>> {
 
 #[test]
 fn translated_solids_camera_at_world_origin() {
-    for offset in [1.0e5f32, 1.0e6] {
+    // Power-of-two and other scales and offsets (issue 17: leaks at non-power-of-two sizes).
+    for offset in [1.0e5f32, 123_456.7, 1.0e6] {
         let mut front_total = Tally::default();
         let mut incident_total = Tally::default();
         for (mi, name) in ["tetrahedron.obj", "cube.obj", "octahedron.obj"]
             .into_iter()
             .enumerate()
         {
-            for scale in [1.0f32, 16.0, 64.0] {
+            for scale in [1.0f32, 16.0, 64.0, 3.0, 10.0] {
                 let shift = Vec3::new(offset, 0.5 * offset, -0.75 * offset);
                 let mesh = Mesh::load(name).map(|p| p * scale + shift);
-                let mut rng = Rng::new(1000 + mi as u64 * 7 + scale as u64);
+                let mut rng = Rng::new(1000 + mi as u64 * 7 + (scale * 10.0) as u64);
                 let edges = mesh.edge_faces();
                 let vfaces = mesh.vertex_faces();
                 let (mut n, mut attempts) = (0, 0);
