@@ -386,6 +386,29 @@ fn finish_exact(
     })
 }
 
+/// The three edge functions `e0 = c_x·b_y − c_y·b_x`, `e1 = a_x·c_y − a_y·c_x`,
+/// `e2 = b_x·a_y − b_y·a_x` of the sheared 2-D vertices `x`, `y` in plain `f32`: the filter of
+/// the watertight family, whose signs are exact wherever non-zero and not NaN
+/// ([`diff_of_products_sign_filter`]).
+#[inline(always)]
+pub(super) fn filter_edges(x: [f32; 3], y: [f32; 3]) -> [f32; 3] {
+    let ([ax, bx, cx], [ay, by, cy]) = (x, y);
+    [
+        diff_of_products_sign_filter(cx, by, cy, bx),
+        diff_of_products_sign_filter(ax, cy, ay, cx),
+        diff_of_products_sign_filter(bx, ay, by, ax),
+    ]
+}
+
+/// `true` when `e` holds both a negative and a positive value (zeros and NaN count as
+/// neither): the ray passes outside the triangle.
+#[inline(always)]
+pub(super) fn mixed_signs(e: &[f32; 3]) -> bool {
+    let neg = (e[0] < 0.0) | (e[1] < 0.0) | (e[2] < 0.0);
+    let pos = (e[0] > 0.0) | (e[1] > 0.0) | (e[2] > 0.0);
+    neg & pos
+}
+
 /// The watertight family ([`Watertight`], [`WatertightF32`], [`super::WatertightF32Exact`]):
 /// the ray prepared as a [`WatertightRay`] (axis permutation and shear), and a test of one
 /// triangle that rejects every triangle whose three `f32` edge functions (the filter of
@@ -443,18 +466,11 @@ impl ShearedTest for Watertight {
         v: &[Vec3; 3],
     ) -> Option<TriangleHit> {
         let sheared = pre.project_triangle(ray.origin, v);
-        let ([ax, bx, cx], [ay, by, cy], _) = sheared;
         // Most triangles are missed with certain signs: decide those in f32 (exact whenever
         // the filter is certain) and compute the exact f64 edges only for the rest.
-        let f = [
-            diff_of_products_sign_filter(cx, by, cy, bx),
-            diff_of_products_sign_filter(ax, cy, ay, cx),
-            diff_of_products_sign_filter(bx, ay, by, ax),
-        ];
+        let f = filter_edges(sheared.0, sheared.1);
         let certain = sign_is_certain(f[0]) & sign_is_certain(f[1]) & sign_is_certain(f[2]);
-        let neg = (f[0] < 0.0) | (f[1] < 0.0) | (f[2] < 0.0);
-        let pos = (f[0] > 0.0) | (f[1] > 0.0) | (f[2] > 0.0);
-        if certain & neg & pos {
+        if certain & mixed_signs(&f) {
             return None;
         }
         exact_candidate(ray, pre, sheared, v)

@@ -1,8 +1,9 @@
 //! The watertight test with no `f64` anywhere, for targets that emulate it (Cortex-M4F: `f32`
 //! in hardware, `f64` in software; Cortex-M3/M0+: no FPU).
 
+use super::watertight::{filter_edges, mixed_signs};
 use super::{ShearedTest, TriangleHit, WatertightRay};
-use crate::float::{diff_of_products_sign_filter, diff_of_products_sign_int, sign_is_certain};
+use crate::float::{diff_of_products_sign_int, sign_is_certain};
 use crate::ray::Ray;
 use glam::Vec3;
 
@@ -37,18 +38,6 @@ pub struct WatertightF32Exact;
 /// Unitless (a power of two; any value far above the subnormal range works).
 const FAST_DET_MIN: f32 = 1.0 / 18_446_744_073_709_551_616.0;
 
-/// The three edge functions `(c·b' − c'·b, …)` of the sheared 2-D vertices `x`, `y` in plain
-/// `f32` (the filter of [`super::Watertight`]): signs exact wherever non-zero and not NaN.
-#[inline(always)]
-fn edges_f32(x: [f32; 3], y: [f32; 3]) -> [f32; 3] {
-    let ([ax, bx, cx], [ay, by, cy]) = (x, y);
-    [
-        diff_of_products_sign_filter(cx, by, cy, bx),
-        diff_of_products_sign_filter(ax, cy, ay, cx),
-        diff_of_products_sign_filter(bx, ay, by, ax),
-    ]
-}
-
 /// The edges when the fast path cannot decide (an edge zero or NaN, or a tiny or overflowing
 /// `det`): the **signs** exact on the given coordinates ([`diff_of_products_sign_int`]), the
 /// **values** from the x and the y coordinates each scaled by a power of two so that their
@@ -71,7 +60,7 @@ fn edges_rescaled(x: [f32; 3], y: [f32; 3]) -> [f32; 3] {
     // y by another scales the three edges alike. Separately, so that an axis far smaller than
     // the other does not fall into the subnormal range.
     let (sx, sy) = (unit_scale(&x), unit_scale(&y));
-    let value = edges_f32(x.map(|c| c * sx), y.map(|c| c * sy));
+    let value = filter_edges(x.map(|c| c * sx), y.map(|c| c * sy));
     let pick = |v: f32, s: i32| {
         let agrees = (s > 0 && v > 0.0) || (s < 0 && v < 0.0) || (s == 0 && v == 0.0);
         if agrees {
@@ -124,21 +113,16 @@ impl ShearedTest for WatertightF32Exact {
         v: &[Vec3; 3],
     ) -> Option<TriangleHit> {
         let (x, y, [az, bz, cz]) = pre.project_triangle(ray.origin, v);
-        let mut e = edges_f32(x, y);
+        let mut e = filter_edges(x, y);
         let certain = sign_is_certain(e[0]) & sign_is_certain(e[1]) & sign_is_certain(e[2]);
-        let mixed = |e: &[f32; 3]| {
-            let neg = (e[0] < 0.0) | (e[1] < 0.0) | (e[2] < 0.0);
-            let pos = (e[0] > 0.0) | (e[1] > 0.0) | (e[2] > 0.0);
-            neg & pos
-        };
-        if certain && mixed(&e) {
+        if certain & mixed_signs(&e) {
             return None;
         }
         // Same signs: no cancellation, so `det = 0` only when all three are exactly zero.
         let mut det = e[0] + e[1] + e[2];
         if !(certain && det.abs() >= FAST_DET_MIN && det.is_finite()) {
             e = edges_rescaled(x, y);
-            if mixed(&e) {
+            if mixed_signs(&e) {
                 return None;
             }
             det = e[0] + e[1] + e[2];

@@ -31,7 +31,7 @@ use halfray_core::halfedge::{
     EdgeRec, FaceRec, LoopWeights, SliceMesh, VertexRec, build_scratch_len,
 };
 use halfray_core::ray::Ray;
-use halfray_core::triangle::{TriangleHit, TriangleIntersector, Watertight};
+use halfray_core::triangle::{TriangleHit, Watertight};
 
 /// FNV-1a, 64-bit, over 32-bit words (little-endian bytes).
 #[derive(Clone, Copy, Debug)]
@@ -225,16 +225,15 @@ pub enum CheckError {
 /// One ray's closest and any hit with the watertight test, folded into `hash` (primitive,
 /// `t` and barycentric bits, or a miss marker; then the any-hit answer) and counted in
 /// `summary`; returns the closest hit's `t`.
-fn query_both<N: AsRef<[BvhNode]>, I: AsRef<[u32]>, T: TriangleIntersector>(
-    isect: &T,
+fn query_both<N: AsRef<[BvhNode]>, I: AsRef<[u32]>>(
     bvh: &Bvh<N, I>,
     mesh: &TriangleMesh<'_>,
     ray: &Ray,
     summary: &mut Summary,
     hash: &mut Fnv,
 ) -> Option<f32> {
-    let closest = bvh.closest_hit_triangles(mesh, isect, ray, None);
-    let any = bvh.any_hit_triangles(mesh, isect, ray, None);
+    let closest = bvh.closest_hit_triangles(mesh, &Watertight, ray, None);
+    let any = bvh.any_hit_triangles(mesh, &Watertight, ray, None);
     fold_answers(closest, any.is_some(), summary, hash);
     closest.map(|(_, hit)| hit.t)
 }
@@ -286,7 +285,7 @@ pub fn ray_checks(
     let mut summary = Summary::default();
     let mut rng = Rng(0x9e37_79b9);
     let mut query = |ray: &Ray, aimed: bool, summary: &mut Summary| {
-        let t = query_both(&Watertight, &bvh, &mesh, ray, summary, hash);
+        let t = query_both(&bvh, &mesh, ray, summary, hash);
         // Aimed rays reach their target at t = 1: a miss or a hit beyond it is a leak.
         summary.leaks += (aimed && t.is_none_or(|t| t > 1.0 + 1.0e-5)) as u32;
     };
@@ -342,10 +341,8 @@ pub fn ray_checks(
 /// [`Bvh::from_parts`] from `static` arrays: `rays_per_set` rays of each of four sets — a
 /// pinhole camera framing the mesh, random rays through its box, rays aimed exactly at
 /// vertices and at edge midpoints from outside the box — each with a closest- and an any-hit
-/// query with `isect` folded into `hash`. Fails with [`CheckError::Build`] when the baked data
-/// does not load.
-pub fn baked_checks<T: TriangleIntersector>(
-    isect: &T,
+/// query folded into `hash`. Fails with [`CheckError::Build`] when the baked data does not load.
+pub fn baked_checks(
     nodes: &[BvhNode],
     indices: &[u32],
     mesh: &TriangleMesh<'_>,
@@ -361,7 +358,7 @@ pub fn baked_checks<T: TriangleIntersector>(
     let mut summary = Summary::default();
     let mut rng = Rng(0x2545_f491);
     let mut query = |ray: &Ray, summary: &mut Summary| {
-        query_both(isect, &bvh, mesh, ray, summary, hash);
+        query_both(&bvh, mesh, ray, summary, hash);
     };
     let eye = center + Vec3::new(0.3, -0.4, 1.0) * (1.5 * reach);
     for (u, v) in pixel_grid(rays_per_set) {

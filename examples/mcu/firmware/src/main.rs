@@ -62,7 +62,6 @@ fn flash(hash: &mut Fnv) -> Result<Summary, CheckError> {
     let mesh = TriangleMesh::new(&baked::POSITIONS, &baked::TRIANGLES);
     let mut scratch = [0u32; baked::LOAD_SCRATCH_WORDS];
     baked_checks(
-        &halfray_core::triangle::Watertight,
         &baked::NODES,
         &baked::INDICES,
         &mesh,

@@ -46,7 +46,6 @@ fn line(machine: &str, c: Config, baked: Baked) -> Result<String, mcu_check::Che
     let (positions, triangles, nodes, indices) = baked;
     let mesh = TriangleMesh::new(positions, triangles);
     let f = mcu_check::baked_checks(
-        &halfray_core::triangle::Watertight,
         nodes,
         indices,
         &mesh,
