@@ -257,7 +257,7 @@ impl SlabRay {
         // One four-lane division (the same IEEE quotient per lane as three scalar ones): the
         // reciprocals head the dependency chain of every query.
         let inv_dir = Vec3::from(glam::Vec3A::ONE / glam::Vec3A::from(d));
-        let overflow = |i: usize| d[i] != 0.0 && inv_dir[i].is_infinite();
+        let overflow = |i: usize| (d[i] != 0.0) & inv_dir[i].is_infinite();
         Some(Self {
             origin: ray.origin,
             inv_dir,
@@ -267,7 +267,7 @@ impl SlabRay {
                 d.z.is_sign_negative(),
             ],
             direction: d,
-            divide: overflow(0) || overflow(1) || overflow(2),
+            divide: overflow(0) | overflow(1) | overflow(2),
         })
     }
 

@@ -99,7 +99,13 @@ impl Ray {
     #[inline]
     #[must_use]
     pub fn is_valid(&self) -> bool {
-        self.validate().is_ok()
+        // The conditions of `validate`, combined without short-circuits (one branch for the
+        // caller instead of one per field).
+        let finite = self.origin.is_finite_mask().all() & self.direction.is_finite_mask().all();
+        let nonzero = self.direction.cmpne(Vec3::ZERO).any();
+        // NaN fails both comparisons; `t_min = +∞` fails the first.
+        let interval = (self.t_min < f32::INFINITY) & (self.t_min <= self.t_max);
+        finite & nonzero & interval
     }
 
     /// `true` when `t` lies in `(t_min, t_max]` and is finite: a "hit" at `t = ±∞` (an
@@ -157,5 +163,53 @@ mod tests {
         r.t_max = 2.0;
         assert_eq!(r.validate(), Err(RayError::BadInterval));
         assert!(Ray::try_new(Vec3::ZERO, Vec3::X, 0.0, 0.0).is_ok());
+    }
+
+    #[test]
+    fn is_valid_agrees_with_validate_on_every_special_value() {
+        let special = [
+            0.0,
+            -0.0,
+            1.0,
+            -2.5,
+            f32::MIN_POSITIVE,
+            1e-45,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        let mut checked = 0;
+        for (i, &a) in special.iter().enumerate() {
+            for &b in &special {
+                for &c in &special {
+                    let rays = [
+                        Ray {
+                            origin: Vec3::new(a, 1.0, b),
+                            direction: Vec3::new(c, 0.0, 0.0),
+                            t_min: 0.0,
+                            t_max: f32::INFINITY,
+                        },
+                        Ray {
+                            origin: Vec3::ZERO,
+                            direction: Vec3::new(a, b, c),
+                            t_min: 0.0,
+                            t_max: 1.0,
+                        },
+                        Ray {
+                            origin: Vec3::ONE,
+                            direction: Vec3::new(0.0, special[(i + 3) % special.len()], 0.0),
+                            t_min: a,
+                            t_max: b,
+                        },
+                    ];
+                    for r in rays {
+                        assert_eq!(r.is_valid(), r.validate().is_ok(), "{r:?}");
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(checked, 3000);
     }
 }

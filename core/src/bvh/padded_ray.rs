@@ -22,12 +22,9 @@ impl PaddedRay {
     /// `slab` with boxes padded by `pad` world units.
     #[inline(always)]
     pub(super) fn new(slab: &SlabRay, pad: f32) -> Self {
-        let s = |negative: bool| if negative { -pad } else { pad };
-        let toward = glam::Vec3::new(
-            s(slab.negative[0]),
-            s(slab.negative[1]),
-            s(slab.negative[2]),
-        );
+        // `pad` with each direction component's sign (`negative` is that sign bit): a
+        // sign-bit copy, not a branch on a random ray's signs.
+        let toward = glam::Vec3::splat(pad).copysign(slab.direction);
         Self {
             origin_near: (slab.origin + toward).to_array(),
             origin_far: (slab.origin - toward).to_array(),

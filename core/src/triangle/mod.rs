@@ -237,12 +237,19 @@ pub trait VariantVisitor {
 #[inline(always)]
 #[must_use]
 pub fn projection_axes(d: Vec3) -> [usize; 3] {
-    let kz = d.abs().max_position();
-    let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
-    if d[kz] < 0.0 {
-        core::mem::swap(&mut kx, &mut ky);
-    }
-    [kx, ky, kz]
+    // Branch-free (comparisons as integers, selection by masks): the direction of a random
+    // ray makes every branch here a coin toss.
+    let a = d.abs();
+    let y_over_x = usize::from(a.y > a.x);
+    let larger = if a.y > a.x { a.y } else { a.x };
+    let z_over = usize::from(a.z > larger);
+    let kz = (z_over << 1) | (y_over_x & !z_over);
+    // Four-entry tables indexed with `& 3`: no bounds check (`kz` is 0, 1 or 2).
+    let (kx, ky) = ([1, 2, 0, 0][kz & 3], [2, 0, 1, 0][kz & 3]);
+    let comps = [d.x, d.y, d.z, 0.0];
+    let swap = 0usize.wrapping_sub(usize::from(comps[kz & 3] < 0.0));
+    let flip = (kx ^ ky) & swap;
+    [kx ^ flip, ky ^ flip, kz]
 }
 
 /// `true` when the triangle has exactly zero area, or the ray lies exactly in its plane, as
