@@ -23,7 +23,7 @@ use glam::Vec3;
 const MEDIAN_DEPTH: u32 = (MAX_DEPTH - 32) as u32;
 
 /// Options of [`super::Bvh::build`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BuildOptions {
     /// Nodes with more primitives than this are always split while the depth limit allows;
     /// smaller nodes are split only when the SAH says it pays. Values below 1 count as 1.
@@ -39,6 +39,26 @@ pub struct BuildOptions {
     /// [`LEAF_MERGE`](super::wide::LEAF_MERGE) here ([`super::wide::binary_options`]): the
     /// collapse turns every subtree that small into one leaf, so splitting it is wasted work.
     pub leaf_threshold: u32,
+    /// SAH cost of one primitive test against a traversal step's 1
+    /// ([`TRAVERSAL_COST`](super::TRAVERSAL_COST)); larger values give smaller leaves.
+    /// Unitless. Default [`INTERSECTION_COST`]; a tree collapsed into a wide one uses
+    /// [`WIDE_INTERSECTION_COST`](super::wide::WIDE_INTERSECTION_COST). A value that is not
+    /// positive and finite counts as the default.
+    pub intersection_cost: f32,
+}
+
+impl BuildOptions {
+    /// [`BuildOptions::intersection_cost`], the default in place of a value that is not
+    /// positive and finite.
+    #[must_use]
+    pub(super) fn primitive_cost(&self) -> f32 {
+        let c = self.intersection_cost;
+        if c > 0.0 && c.is_finite() {
+            c
+        } else {
+            INTERSECTION_COST
+        }
+    }
 }
 
 impl Default for BuildOptions {
@@ -47,6 +67,7 @@ impl Default for BuildOptions {
             max_leaf_size: DEFAULT_MAX_LEAF_SIZE,
             exclude_non_finite: false,
             leaf_threshold: 1,
+            intersection_cost: INTERSECTION_COST,
         }
     }
 }
@@ -331,7 +352,14 @@ pub(super) fn grow<R: Refs>(
     let mut sp = 0usize;
     let mut task = task;
     loop {
-        let mut pending = split_node(refs, view, &task, (max_leaf, threshold), next, &mut bins);
+        let mut pending = split_node(
+            refs,
+            view,
+            &task,
+            (max_leaf, threshold, options.primitive_cost()),
+            next,
+            &mut bins,
+        );
         if let (Some((left, right)), Some(sink)) = (pending, jobs.as_deref_mut()) {
             pending = match (sink.take(&left, max_leaf), sink.take(&right, max_leaf)) {
                 (false, false) => Some((left, right)),
@@ -378,13 +406,13 @@ fn make_leaf(view: &mut NodeView<'_>, task: &Task) {
 }
 
 /// Splits `task`'s node in two, writing the parent and both children's boxes, or makes it a
-/// leaf (returns `None`). `(max_leaf, threshold)`: larger nodes are always split, nodes of at
-/// most `threshold` never.
+/// leaf (returns `None`). `(max_leaf, threshold, cost)`: larger nodes are always split, nodes
+/// of at most `threshold` never; `cost` is the SAH's primitive cost.
 fn split_node<R: Refs>(
     refs: &mut R,
     nodes: &mut NodeView<'_>,
     task: &Task,
-    (max_leaf, threshold): (u32, u32),
+    (max_leaf, threshold, cost): (u32, u32, f32),
     node_count: &mut u32,
     bins: &mut BinSets,
 ) -> Option<(Task, Task)> {
@@ -401,8 +429,9 @@ fn split_node<R: Refs>(
         range.clone(),
         &task.centroids,
         parent_bounds.surface_area(),
+        cost,
     );
-    let leaf_cost = INTERSECTION_COST * count as f32 * parent_bounds.surface_area();
+    let leaf_cost = cost * count as f32 * parent_bounds.surface_area();
     // Deep in the tree, split by count: from MEDIAN_DEPTH on every split halves the node, so
     // no node reaches MAX_DEPTH with more than `max_leaf` primitives (N < 2³¹ halves to one in
     // 31 levels) and leaves never exceed the requested size.

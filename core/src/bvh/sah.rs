@@ -2,7 +2,7 @@
 //! boxes ([`best_sah_split`]) and partitioning them by the chosen split ([`partition`]).
 
 use super::scratch::{Corner, Refs, centre, corner, extend, point};
-use super::{BIN_COUNT, INTERSECTION_COST, TRAVERSAL_COST};
+use super::{BIN_COUNT, TRAVERSAL_COST};
 use crate::aabb::Aabb;
 use glam::Vec3;
 
@@ -140,13 +140,14 @@ pub(super) fn range_bounds<R: Refs>(refs: &R, range: core::ops::Range<usize>) ->
 /// centroid extent and returns the
 /// cheapest split with both sides non-empty. The cost is the SAH numerator (not divided by the
 /// parent's area, so that zero-area parents need no special case):
-/// `TRAVERSAL_COST·A + INTERSECTION_COST·(A_L·N_L + A_R·N_R)`.
+/// `TRAVERSAL_COST·A + primitive_cost·(A_L·N_L + A_R·N_R)`.
 pub(super) fn best_sah_split<R: Refs>(
     refs: &R,
     sets: &mut BinSets,
     range: core::ops::Range<usize>,
     centroids: &Aabb,
     parent_area: f32,
+    primitive_cost: f32,
 ) -> Option<Split> {
     // As many bins as primitives, up to BIN_COUNT: a small node needs no more candidate
     // planes than it has primitives, and the sweep costs per bin.
@@ -201,7 +202,7 @@ pub(super) fn best_sah_split<R: Refs>(
                 continue;
             }
             let cost = TRAVERSAL_COST * parent_area
-                + INTERSECTION_COST * (left.area() * left.count as f32 + right_cost[k]);
+                + primitive_cost * (left.area() * left.count as f32 + right_cost[k]);
             // Strict `<`: ties keep the first (lowest axis, lowest bin) split, deterministic.
             if best.as_ref().is_none_or(|b| cost < b.cost) {
                 best = Some(Split {

@@ -478,6 +478,7 @@ fn scratch_build_gives_the_same_tree() {
                 max_leaf_size: max_leaf,
                 exclude_non_finite: true,
                 leaf_threshold,
+                ..BuildOptions::default()
             };
             let plain = build(&mesh, &opts).unwrap();
             let n = mesh.len();
@@ -550,6 +551,7 @@ fn build_in_jobs_gives_the_scratch_build_tree_without_gaps() {
                 max_leaf_size: max_leaf,
                 exclude_non_finite: true,
                 leaf_threshold,
+                ..BuildOptions::default()
             };
             let mut scratch = vec![PrimRef::EMPTY; scratch_capacity(n)];
             let reference = Bvh::build_with_scratch(
