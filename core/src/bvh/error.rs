@@ -66,6 +66,13 @@ pub enum BvhError {
         /// Primitives in the leaf.
         count: usize,
     },
+    /// A query's traversal stack (the caller's, [`super::Bvh::closest_hit_triangles_in`]) is
+    /// too small for the path it had to keep: give it at least [`super::Bvh::stack_depth`]
+    /// entries.
+    StackTooSmall {
+        /// Entries the caller's stack has.
+        available: usize,
+    },
     /// Slices that must have the same length do not (clearance: points, normals, output).
     LengthMismatch {
         /// Length of the first slice (points).
@@ -117,6 +124,10 @@ impl fmt::Display for BvhError {
                 f,
                 "a BVH leaf holds {count} primitives, a wide BVH leaf at most {}",
                 super::wide::MAX_LEAF_TRIANGLES
+            ),
+            Self::StackTooSmall { available } => write!(
+                f,
+                "traversal stack too small: {available} entries, fewer than the tree's depth needs"
             ),
             Self::LengthMismatch { expected, found } => {
                 write!(

@@ -95,6 +95,7 @@ pub use node::{BvhNode, NODE_SIZE};
 pub use primitive::{Primitive, PrimitiveSource, TriangleMesh};
 pub use scratch::{PrimRef, scratch_capacity};
 pub use stats::{BvhStats, TraversalStats};
+pub use traverse::StackEntry;
 
 use crate::aabb::Aabb;
 

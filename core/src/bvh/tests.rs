@@ -660,3 +660,55 @@ fn build_in_jobs_refuses_bad_storage_before_running_jobs() {
     assert!(matches!(r, Err(BvhError::NodeStorageTooSmall { .. })));
     assert!(!ran, "no job runs on refused storage");
 }
+
+#[test]
+fn caller_stacks_of_the_tree_depth_answer_as_the_full_stack_and_shorter_ones_refuse() {
+    // A random soup (shallow paths) and 2 000 coincident triangles, where a ray through them
+    // keeps both children of every inner node and so needs the whole depth.
+    let coincident = (vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0u32, 1, 2]; 2000]);
+    let mut refused = 0;
+    for (k, (pos, tris)) in [soup(400, 17), coincident].iter().enumerate() {
+        let mesh = TriangleMesh::new(pos, tris);
+        let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+        let depth = bvh.stack_depth();
+        // The oracle: the statistics' own walk (depth of the deepest leaf).
+        assert_eq!(depth, bvh.stats().max_depth, "case {k}");
+        assert!(depth > 3, "case {k}: {depth}");
+        let mut r = Lcg(5 + k as u64);
+        let mut rays: Vec<Ray> = (0..500)
+            .map(|_| {
+                let o = r.v(30.0);
+                Ray::new(o, r.v(10.0) - o)
+            })
+            .collect();
+        rays.push(Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z));
+        for ray in &rays {
+            let mut full_stats = TraversalStats::default();
+            let full = bvh.closest_hit_triangles(&mesh, &Watertight, ray, Some(&mut full_stats));
+            let any = bvh.any_hit_triangles(&mesh, &Watertight, ray, None);
+            let mut stack = vec![StackEntry::EMPTY; depth];
+            let mut stats = TraversalStats::default();
+            let got =
+                bvh.closest_hit_triangles_in(&mut stack, &mesh, &Watertight, ray, Some(&mut stats));
+            assert_eq!(got, Ok(full), "case {k} {ray:?}");
+            assert_eq!(stats, full_stats, "case {k} {ray:?}");
+            let got_any = bvh.any_hit_triangles_in(&mut stack, &mesh, &Watertight, ray, None);
+            assert_eq!(got_any, Ok(any), "case {k} {ray:?}");
+            // One entry short: the right answer or a refusal, never a wrong answer.
+            let mut short = vec![StackEntry::EMPTY; depth - 1];
+            match bvh.closest_hit_triangles_in(&mut short, &mesh, &Watertight, ray, None) {
+                Ok(h) => assert_eq!(h, full, "case {k} {ray:?}"),
+                Err(e) => {
+                    assert_eq!(
+                        e,
+                        BvhError::StackTooSmall {
+                            available: depth - 1
+                        }
+                    );
+                    refused += 1;
+                }
+            }
+        }
+    }
+    assert!(refused > 0, "no ray needed the whole depth");
+}

@@ -4,7 +4,7 @@ use super::node::BvhNode;
 use super::padded_ray::PaddedRay;
 use super::primitive::TriangleMesh;
 use super::stats::TraversalStats;
-use super::{Bvh, TRAVERSAL_STACK_SIZE, cull_bound, extent_of, improves, projection_pad};
+use super::{Bvh, BvhError, TRAVERSAL_STACK_SIZE, cull_bound, extent_of, improves, projection_pad};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
@@ -12,8 +12,8 @@ use glam::Vec3;
 
 impl PaddedRay {
     /// [`crate::aabb::Aabb::intersect_slab`] on the node's raw corners, with the near/far
-    /// corner picked by index instead of by branch. The common path (`GENERAL = false`: no
-    /// overflowing reciprocal, `t_min ≥ 0`) pads far distances by the plain factor
+    /// corner picked by index instead of by branch. The common path (`general` false: no
+    /// overflowing reciprocal, `t_min ≥ 0`; `general` false) pads far distances by the plain factor
     /// [`SLAB_FAR_SCALE`]: a far distance is negative only when the exact one is (monotone
     /// rounding), and then the box ends before `t_min ≥ 0` whatever the padding, so the
     /// hit/miss answer and the entry distance are those of `intersect_slab`, except that an
@@ -22,13 +22,14 @@ impl PaddedRay {
     /// NaN (the ray was validated), so `a > b ? a : b` absorbs a NaN slab value exactly like
     /// `f32::max` does. Returns the entry distance on a hit.
     #[inline(always)]
-    pub(super) fn hit_node<const GENERAL: bool>(
+    pub(super) fn hit_node(
         &self,
+        general: bool,
         node: &BvhNode,
         t_min: f32,
         t_max: f32,
     ) -> Option<f32> {
-        if GENERAL {
+        if general {
             return self.hit_node_general(node, t_min, t_max);
         }
         let mut t_enter = t_min;
@@ -58,12 +59,27 @@ impl PaddedRay {
     }
 }
 
-/// One stack entry: a node still to visit and the distance at which the ray enters its box.
-#[derive(Clone, Copy)]
-struct Entry {
+/// One entry of a binary tree's traversal stack: a node still to visit and the distance at
+/// which the ray enters its box. Callers that bring their own stack
+/// ([`Bvh::closest_hit_triangles_in`]) make it of [`StackEntry::EMPTY`]s; its contents between
+/// queries mean nothing.
+#[derive(Clone, Copy, Debug)]
+pub struct StackEntry {
     node: u32,
     t_enter: f32,
 }
+
+impl StackEntry {
+    /// An entry to fill a stack with.
+    pub const EMPTY: Self = Self {
+        node: 0,
+        t_enter: 0.0,
+    };
+}
+
+/// The stack of the queries that make their own: [`TRAVERSAL_STACK_SIZE`] entries, enough for
+/// every tree (module docs of [`super`]).
+type FullStack = [StackEntry; TRAVERSAL_STACK_SIZE];
 
 impl<N, I> Bvh<N, I>
 where
@@ -83,7 +99,10 @@ where
         intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, false>(ray, intersect, stats)
+        let mut stack: FullStack = [StackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
+        // The full stack cannot overflow (module docs): `Err` never happens.
+        self.traverse(&mut stack, ray, intersect, stats, false)
+            .unwrap_or(None)
     }
 
     /// Any hit of `ray` (occlusion / shadow rays): traversal stops at the first primitive for
@@ -95,7 +114,10 @@ where
         intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, true>(ray, intersect, stats)
+        let mut stack: FullStack = [StackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
+        // As in `closest_hit`: `Err` never happens.
+        self.traverse(&mut stack, ray, intersect, stats, true)
+            .unwrap_or(None)
     }
 
     /// [`Bvh::closest_hit`] over a triangle mesh with the intersector `isect` (prepared once
@@ -108,15 +130,10 @@ where
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
-        let pre = isect.prepare(ray)?;
-        self.closest_hit(
-            ray,
-            |prim, r| {
-                let v = mesh.triangle(prim as usize)?;
-                isect.intersect_prepared(&pre, r, &v).map(|h| (h.t, h))
-            },
-            stats,
-        )
+        let mut stack: FullStack = [StackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
+        // As in `closest_hit`: `Err` never happens.
+        self.triangles_in(&mut stack, mesh, isect, ray, stats, false)
+            .unwrap_or(None)
     }
 
     /// [`Bvh::any_hit`] over a triangle mesh with the intersector `isect`.
@@ -128,57 +145,146 @@ where
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
-        let pre = isect.prepare(ray)?;
-        self.any_hit(
+        let mut stack: FullStack = [StackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
+        // As in `closest_hit`: `Err` never happens.
+        self.triangles_in(&mut stack, mesh, isect, ray, stats, true)
+            .unwrap_or(None)
+    }
+
+    /// [`Bvh::closest_hit_triangles`] on the caller's traversal stack, which a firmware sizes
+    /// for its trees ([`Bvh::stack_depth`] entries suffice for this one) instead of the
+    /// [`TRAVERSAL_STACK_SIZE`] entries any tree may need. The same answer and statistics.
+    ///
+    /// # Errors
+    ///
+    /// [`BvhError::StackTooSmall`] when the ray's path needed more entries than `stack` has
+    /// (never with at least [`Bvh::stack_depth`]); no partial answer is returned.
+    pub fn closest_hit_triangles_in<T: TriangleIntersector>(
+        &self,
+        stack: &mut [StackEntry],
+        mesh: &TriangleMesh<'_>,
+        isect: &T,
+        ray: &Ray,
+        stats: Option<&mut TraversalStats>,
+    ) -> Result<Option<(u32, TriangleHit)>, BvhError> {
+        self.triangles_in(stack, mesh, isect, ray, stats, false)
+    }
+
+    /// [`Bvh::any_hit_triangles`] on the caller's traversal stack (see
+    /// [`Bvh::closest_hit_triangles_in`]).
+    ///
+    /// # Errors
+    ///
+    /// [`BvhError::StackTooSmall`], as [`Bvh::closest_hit_triangles_in`].
+    pub fn any_hit_triangles_in<T: TriangleIntersector>(
+        &self,
+        stack: &mut [StackEntry],
+        mesh: &TriangleMesh<'_>,
+        isect: &T,
+        ray: &Ray,
+        stats: Option<&mut TraversalStats>,
+    ) -> Result<Option<(u32, TriangleHit)>, BvhError> {
+        self.triangles_in(stack, mesh, isect, ray, stats, true)
+    }
+
+    /// Entries of the traversal stack this tree's queries can need: the number of inner
+    /// nodes on its longest root-to-leaf path (at most [`TRAVERSAL_STACK_SIZE`]). A stack of
+    /// this many entries never makes a `_in` query fail. Walks the whole tree (linear time,
+    /// no recursion): a firmware calls it once after loading.
+    #[must_use]
+    pub fn stack_depth(&self) -> usize {
+        let nodes = self.nodes();
+        // Depth-first over (node, inner nodes above it): one pending entry per level.
+        let mut pending = [(0u32, 0u32); TRAVERSAL_STACK_SIZE + 1];
+        let mut sp = usize::from(!nodes.is_empty());
+        let mut deepest = 0u32;
+        while sp > 0 {
+            sp -= 1;
+            let Some(&(index, above)) = pending.get(sp) else {
+                break;
+            };
+            let Some(node) = nodes.get(index as usize) else {
+                continue;
+            };
+            let (start, count) = node.raw();
+            if count != 0 {
+                deepest = deepest.max(above);
+                continue;
+            }
+            // Both children one level down; a tree deeper than the bound (not one that was
+            // built or loaded) is cut off at it rather than overflowing.
+            for child in [start, start.saturating_add(1)] {
+                if let Some(slot) = pending.get_mut(sp) {
+                    *slot = (child, above + 1);
+                    sp += 1;
+                }
+            }
+        }
+        (deepest as usize).min(TRAVERSAL_STACK_SIZE)
+    }
+
+    /// The triangle queries: one closure type for closest and any hit, so that both share one
+    /// traversal (a firmware links one copy).
+    #[inline]
+    fn triangles_in<T: TriangleIntersector>(
+        &self,
+        stack: &mut [StackEntry],
+        mesh: &TriangleMesh<'_>,
+        isect: &T,
+        ray: &Ray,
+        stats: Option<&mut TraversalStats>,
+        any: bool,
+    ) -> Result<Option<(u32, TriangleHit)>, BvhError> {
+        let Some(pre) = isect.prepare(ray) else {
+            return Ok(None);
+        };
+        self.traverse(
+            stack,
             ray,
             |prim, r| {
                 let v = mesh.triangle(prim as usize)?;
                 isect.intersect_prepared(&pre, r, &v).map(|h| (h.t, h))
             },
             stats,
+            any,
         )
     }
 
-    fn traverse<H, const ANY: bool>(
+    /// Closest hit, or any hit when `any`, on `stack`. The general node test (division for
+    /// subnormal direction components, outward padding of negative far distances) is needed
+    /// only for rare rays: decided once per ray and passed down as a flag (one well-predicted
+    /// branch per node test; a copy of the walk per case would double a firmware's code).
+    /// Out of line, so that closest and any hit with the same `intersect` share one copy.
+    #[inline(never)]
+    fn traverse<H>(
         &self,
+        stack: &mut [StackEntry],
         ray: &Ray,
-        intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, H)> {
-        let slab = SlabRay::new(ray)?;
-        // The general node test (division for subnormal direction components, outward
-        // padding of negative far distances) is needed only for rare rays: decided once per
-        // ray, so the common path's node test carries no branch for it.
-        if slab.divide || ray.t_min < 0.0 {
-            self.walk::<H, ANY, true>(ray, &slab, intersect, stats)
-        } else {
-            self.walk::<H, ANY, false>(ray, &slab, intersect, stats)
-        }
-    }
-
-    fn walk<H, const ANY: bool, const GENERAL: bool>(
-        &self,
-        ray: &Ray,
-        slab: &SlabRay,
         mut intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, H)> {
+        any: bool,
+    ) -> Result<Option<(u32, H)>, BvhError> {
+        let Some(slab) = SlabRay::new(ray) else {
+            return Ok(None);
+        };
+        let general = slab.divide || ray.t_min < 0.0;
         let nodes = self.nodes();
         let indices = self.indices();
-        let root = nodes.first()?;
+        let Some(root) = nodes.first() else {
+            return Ok(None);
+        };
         let mut local = TraversalStats::default();
         let mut cur = *ray;
         let mut best: Option<(u32, H)> = None;
-        let mut stack = [Entry {
-            node: 0,
-            t_enter: 0.0,
-        }; TRAVERSAL_STACK_SIZE];
         let mut sp = 0usize;
 
-        let nray = PaddedRay::new(slab, projection_pad(slab.origin, extent_of(&root.bounds())));
+        let nray = PaddedRay::new(
+            &slab,
+            projection_pad(slab.origin, extent_of(&root.bounds())),
+        );
         local.nodes_visited += 1;
         let mut node = if nray
-            .hit_node::<GENERAL>(root, ray.t_min, cull_bound(ray.t_max))
+            .hit_node(general, root, ray.t_min, cull_bound(ray.t_max))
             .is_some()
         {
             Some(root)
@@ -200,7 +306,7 @@ where
                     if improves(&cur, t, prim, best.as_ref().map(|b| b.0)) {
                         cur.t_max = t;
                         best = Some((prim, h));
-                        if ANY {
+                        if any {
                             break 'walk;
                         }
                     }
@@ -209,10 +315,13 @@ where
                 let bound = cull_bound(cur.t_max);
                 let left = nodes.get(start as usize);
                 let right = nodes.get(start as usize + 1);
-                let hit_l = left.and_then(|c| nray.hit_node::<GENERAL>(c, cur.t_min, bound));
-                let hit_r = right.and_then(|c| nray.hit_node::<GENERAL>(c, cur.t_min, bound));
+                // Both children through one call site (the node test is inlined once).
+                let mut hits = [None; 2];
+                for (h, c) in hits.iter_mut().zip([left, right]) {
+                    *h = c.and_then(|c| nray.hit_node(general, c, cur.t_min, bound));
+                }
                 local.nodes_visited += 2;
-                match (hit_l, hit_r) {
+                match (hits[0], hits[1]) {
                     (Some(tl), Some(tr)) => {
                         // Near child first; equal entries keep the first child first.
                         let (near, far, t_far) = if tr < tl {
@@ -220,13 +329,16 @@ where
                         } else {
                             (left, start + 1, tr)
                         };
-                        if let Some(slot) = stack.get_mut(sp) {
-                            *slot = Entry {
-                                node: far,
-                                t_enter: t_far,
-                            };
-                            sp += 1;
-                        }
+                        let Some(slot) = stack.get_mut(sp) else {
+                            return Err(BvhError::StackTooSmall {
+                                available: stack.len(),
+                            });
+                        };
+                        *slot = StackEntry {
+                            node: far,
+                            t_enter: t_far,
+                        };
+                        sp += 1;
                         node = near;
                         continue;
                     }
@@ -256,6 +368,6 @@ where
         if let Some(s) = stats {
             s.add(&local);
         }
-        best
+        Ok(best)
     }
 }

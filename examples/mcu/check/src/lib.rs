@@ -23,7 +23,7 @@
 #![no_std]
 
 mod query;
-pub use query::query_checks;
+pub use query::{QUERY_STACK, any_in, closest_in, query_checks};
 
 use halfray_core::Vec3;
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh};

@@ -4,26 +4,30 @@
 
 use super::{Fnv, Rng, Summary, fold_answers};
 use halfray_core::Vec3;
-use halfray_core::bvh::{Bvh, BvhNode, TriangleMesh};
+use halfray_core::bvh::{Bvh, BvhError, BvhNode, StackEntry, TriangleMesh};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{TriangleHit, TriangleIntersector};
 
-/// `rays` rays at `bvh` (over `mesh`), each with a closest- and an any-hit query with `isect`
-/// folded into `hash`: by turns a random ray through the mesh's box, a ray aimed at a vertex
-/// and a ray aimed at an edge midpoint, from origins within twice the box's size of its
-/// centre. (Aimed through rounded directions, so not exactly through the vertex: the exact
-/// edge and vertex rays, whose misses are leaks, are [`super::ray_checks`]'.) Any hit must
-/// agree with closest hit on hit/miss; a disagreement is counted in
-/// [`Summary::leaks`].
-pub fn query_checks<T, N, I>(
-    isect: &T,
+/// Entries of the traversal stack the query image gives its queries (`8·QUERY_STACK` bytes of
+/// the caller's memory): more than the baked trees of `scripts/test-mcu.sh` need (their
+/// [`Bvh::stack_depth`] is checked against it after loading, on the host and the target).
+pub const QUERY_STACK: usize = 24;
+
+/// `rays` rays at `bvh` (over `mesh`), by turns a random ray through the mesh's box, a ray
+/// aimed at a vertex and a ray aimed at an edge midpoint, from origins within twice the box's
+/// size of its centre, each answered by `answer` (closest hit and any-hit, or `None` when the
+/// queries refused) and folded into `hash`. (Aimed through rounded directions, so not exactly
+/// through the vertex: the exact edge and vertex rays, whose misses are leaks, are
+/// [`super::ray_checks`]'.) Any hit must agree with closest hit on hit/miss; a disagreement or
+/// a refusal is counted in [`Summary::leaks`].
+pub fn query_checks<N, I>(
     bvh: &Bvh<N, I>,
     mesh: &TriangleMesh<'_>,
     rays: usize,
     hash: &mut Fnv,
+    mut answer: impl FnMut(&Ray) -> Option<(Option<(u32, TriangleHit)>, bool)>,
 ) -> Summary
 where
-    T: TriangleIntersector,
     N: AsRef<[BvhNode]>,
     I: AsRef<[u32]>,
 {
@@ -47,38 +51,57 @@ where
             _ => lo + size * Vec3::new(rng.unit(), rng.unit(), rng.unit()),
         };
         let ray = Ray::new(o, target - o);
-        let closest = closest_hit(isect, bvh, mesh, &ray);
-        let any = any_hit(isect, bvh, mesh, &ray);
+        let Some((closest, any)) = answer(&ray) else {
+            summary.leaks += 1;
+            continue;
+        };
         fold_answers(closest, any, &mut summary, hash);
         summary.leaks += (any != closest.is_some()) as u32;
     }
     summary
 }
 
-/// One closest-hit query, out of line: each query's frame (its fixed traversal stack
-/// included) is then on the stack alone, as in a firmware that makes one query at a time.
+/// One closest-hit query on the caller's traversal `stack`, out of line: each query's frame is
+/// then on the stack alone, as in a firmware that makes one query at a time.
+///
+/// # Errors
+///
+/// [`BvhError::StackTooSmall`] from [`Bvh::closest_hit_triangles_in`].
 #[inline(never)]
-fn closest_hit<T, N, I>(
+pub fn closest_in<T, N, I>(
     isect: &T,
     bvh: &Bvh<N, I>,
     mesh: &TriangleMesh<'_>,
+    stack: &mut [StackEntry],
     ray: &Ray,
-) -> Option<(u32, TriangleHit)>
+) -> Result<Option<(u32, TriangleHit)>, BvhError>
 where
     T: TriangleIntersector,
     N: AsRef<[BvhNode]>,
     I: AsRef<[u32]>,
 {
-    bvh.closest_hit_triangles(mesh, isect, ray, None)
+    bvh.closest_hit_triangles_in(stack, mesh, isect, ray, None)
 }
 
-/// One any-hit query, out of line (see [`closest_hit`]).
+/// One any-hit query on the caller's traversal `stack`, out of line (see [`closest_in`]).
+///
+/// # Errors
+///
+/// [`BvhError::StackTooSmall`] from [`Bvh::any_hit_triangles_in`].
 #[inline(never)]
-fn any_hit<T, N, I>(isect: &T, bvh: &Bvh<N, I>, mesh: &TriangleMesh<'_>, ray: &Ray) -> bool
+pub fn any_in<T, N, I>(
+    isect: &T,
+    bvh: &Bvh<N, I>,
+    mesh: &TriangleMesh<'_>,
+    stack: &mut [StackEntry],
+    ray: &Ray,
+) -> Result<bool, BvhError>
 where
     T: TriangleIntersector,
     N: AsRef<[BvhNode]>,
     I: AsRef<[u32]>,
 {
-    bvh.any_hit_triangles(mesh, isect, ray, None).is_some()
+    Ok(bvh
+        .any_hit_triangles_in(stack, mesh, isect, ray, None)?
+        .is_some())
 }

@@ -5,19 +5,22 @@
 //! numbers are printed by hand) and no panic path is linked: `scripts/test-mcu.sh` reports
 //! this image's `.text` as the query path's size.
 //!
-//! Prints `mcu-query: <machine> <queries> queries hash <hex> hits <n> leaks <n> stack <bytes>`
-//! by semihosting, where `stack` is the deepest stack the queries used (after loading: the
-//! loader's scratch is the caller's, needed only then), measured by painting the stack below
-//! the stack pointer before the queries and scanning it after. Exits QEMU with 0, or 1 when
-//! the baked data is refused or a ray leaked.
+//! Prints `mcu-query: <machine> <queries> queries hash <hex> hits <n> leaks <n> stack <bytes>
+//! traversal <bytes>` by semihosting, where `stack` is the deepest stack the queries used below
+//! the point where they are called (after loading: the loader's scratch is the caller's,
+//! needed only then), measured by painting the stack below the stack pointer before the
+//! queries and scanning it after, and `traversal` the traversal stack the image gives them
+//! ([`QUERY_STACK`] entries, checked against the loaded tree's `Bvh::stack_depth`). Exits QEMU
+//! with 0, or 1 when the baked data is refused, the tree is too deep for the traversal stack
+//! or a ray leaked.
 #![no_std]
 #![no_main]
 
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hio};
-use halfray_core::bvh::{Bvh, TriangleMesh};
+use halfray_core::bvh::{Bvh, StackEntry, TriangleMesh};
 use halfray_core::triangle::WatertightF32Exact;
-use mcu_check::Fnv;
+use mcu_check::{Fnv, QUERY_STACK};
 
 /// The mesh and BVH baked by `halfray bake` (path in `MCU_BAKED`).
 mod baked {
@@ -40,19 +43,30 @@ const PAINT_BYTES: usize = 8 * 1024;
 /// The paint pattern.
 const PAINT: u32 = 0xDEAD_BEEF;
 
-/// The queries, out of line so that their whole stack lies below the painting's start.
+/// The queries, out of line so that their whole stack lies below the painting's start. Returns
+/// the summary and the lowest stack pointer at which a query was called (the stack pointer
+/// inside the closure that calls them: every query's frames lie below it).
 #[inline(never)]
 fn queries(
     bvh: &Bvh<&[halfray_core::bvh::BvhNode], &[u32]>,
     mesh: &TriangleMesh<'_>,
     hash: &mut Fnv,
-) -> mcu_check::Summary {
-    mcu_check::query_checks(&WatertightF32Exact, bvh, mesh, RAYS, hash)
+) -> (mcu_check::Summary, usize) {
+    // The traversal stack: the caller's memory, sized for the baked tree (checked in `main`).
+    let mut stack = [StackEntry::EMPTY; QUERY_STACK];
+    let mut call_sp = usize::MAX;
+    let summary = mcu_check::query_checks(bvh, mesh, RAYS, hash, |ray| {
+        call_sp = call_sp.min(cortex_m::register::msp::read() as usize);
+        let closest =
+            mcu_check::closest_in(&WatertightF32Exact, bvh, mesh, &mut stack, ray).ok()?;
+        let any = mcu_check::any_in(&WatertightF32Exact, bvh, mesh, &mut stack, ray).ok()?;
+        Some((closest, any))
+    });
+    (summary, call_sp)
 }
 
 /// Runs `f` with the `PAINT_BYTES` below the stack pointer painted, and returns its result
-/// and the stack it used: from the stack pointer at the call down to the lowest word that no
-/// longer holds the paint.
+/// and the lowest address whose word no longer holds the paint (the deepest stack used).
 #[inline(never)]
 fn with_painted_stack<R>(f: impl FnOnce() -> R) -> (R, usize) {
     let top = cortex_m::register::msp::read() as usize;
@@ -69,7 +83,7 @@ fn with_painted_stack<R>(f: impl FnOnce() -> R) -> (R, usize) {
         .step_by(4)
         .find(|&a| unsafe { core::ptr::read_volatile(a as *const u32) } != PAINT)
         .unwrap_or(top);
-    (r, top - lowest)
+    (r, lowest)
 }
 
 /// Writes `v` in decimal.
@@ -102,9 +116,14 @@ fn main() -> ! {
     let mut scratch = [0u32; baked::LOAD_SCRATCH_WORDS];
     let loaded = Bvh::from_parts(&baked::NODES[..], &baked::INDICES[..], &mesh, &mut scratch);
     let mut hash = Fnv::new();
+    // A tree deeper than the traversal stack is refused before any query.
     let result = loaded
         .ok()
-        .map(|bvh| with_painted_stack(|| queries(&bvh, &mesh, &mut hash)));
+        .filter(|bvh| bvh.stack_depth() <= QUERY_STACK)
+        .map(|bvh| {
+            let ((s, call_sp), lowest) = with_painted_stack(|| queries(&bvh, &mesh, &mut hash));
+            (s, call_sp.saturating_sub(lowest))
+        });
     let ok = result.is_some_and(|(s, _)| s.leaks == 0);
     if let (Ok(mut out), Some((s, stack))) = (hio::hstdout(), result) {
         let _ = out.write_all(b"mcu-query: ");
@@ -119,6 +138,11 @@ fn main() -> ! {
         decimal(&mut out, s.leaks);
         let _ = out.write_all(b" stack ");
         decimal(&mut out, stack as u32);
+        let _ = out.write_all(b" traversal ");
+        decimal(
+            &mut out,
+            core::mem::size_of::<[StackEntry; QUERY_STACK]>() as u32,
+        );
         let _ = out.write_all(b"\n");
     }
     debug::exit(if ok {

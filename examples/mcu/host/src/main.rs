@@ -98,13 +98,16 @@ fn query_line(machine: &str, c: Config, baked: Baked) -> Result<String, mcu_chec
     let mut scratch = vec![0; halfray_core::bvh::load_scratch_len(triangles.len())];
     let bvh = halfray_core::bvh::Bvh::from_parts(nodes, indices, &mesh, &mut scratch)
         .map_err(|_| mcu_check::CheckError::Build)?;
-    let s = mcu_check::query_checks(
-        &halfray_core::triangle::WatertightF32Exact,
-        &bvh,
-        &mesh,
-        3 * c.rays_per_set,
-        &mut hash,
-    );
+    if bvh.stack_depth() > mcu_check::QUERY_STACK {
+        return Err(mcu_check::CheckError::Build);
+    }
+    let isect = halfray_core::triangle::WatertightF32Exact;
+    let mut stack = [halfray_core::bvh::StackEntry::EMPTY; mcu_check::QUERY_STACK];
+    let s = mcu_check::query_checks(&bvh, &mesh, 3 * c.rays_per_set, &mut hash, |ray| {
+        let closest = mcu_check::closest_in(&isect, &bvh, &mesh, &mut stack, ray).ok()?;
+        let any = mcu_check::any_in(&isect, &bvh, &mesh, &mut stack, ray).ok()?;
+        Some((closest, any))
+    });
     Ok(format!(
         "mcu-query: {machine} {} queries hash {:016x} hits {} leaks {}",
         s.queries,
