@@ -89,7 +89,8 @@ pub fn sign_is_certain(e: f32) -> bool {
 /// same, by their significands shifted to the top of a `u64` (exact: fewer than 64 bits). On
 /// a Cortex-M the product is one `umull`; on a core without an FPU nothing falls back to
 /// software floating point. For the watertight test on targets where `f64` is emulated.
-#[inline]
+/// Out of line: its callers reach it only for the rare edges the `f32` filter leaves open.
+#[inline(never)]
 #[must_use]
 pub fn diff_of_products_sign_int(a: f32, b: f32, c: f32, d: f32) -> i32 {
     if !(a.is_finite() && b.is_finite() && c.is_finite() && d.is_finite()) {

@@ -100,9 +100,16 @@ impl Ray {
     #[must_use]
     pub fn is_valid(&self) -> bool {
         // The conditions of `validate`, combined without short-circuits (one branch for the
-        // caller instead of one per field).
-        let finite = self.origin.is_finite_mask().all() & self.direction.is_finite_mask().all();
-        let nonzero = self.direction.cmpne(Vec3::ZERO).any();
+        // caller instead of one per field, and compact code on small targets).
+        // On the bits: a non-finite value has all exponent bits set; `±0` has no bit but
+        // the sign.
+        const EXP: u32 = 0x7F80_0000;
+        let (o, d) = (self.origin, self.direction);
+        let mut finite = true;
+        for v in [o.x, o.y, o.z, d.x, d.y, d.z] {
+            finite &= v.to_bits() & EXP != EXP;
+        }
+        let nonzero = (d.x.to_bits() | d.y.to_bits() | d.z.to_bits()) << 1 != 0;
         // NaN fails both comparisons; `t_min = +∞` fails the first.
         let interval = (self.t_min < f32::INFINITY) & (self.t_min <= self.t_max);
         finite & nonzero & interval

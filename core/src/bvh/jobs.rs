@@ -180,13 +180,7 @@ where
         let source_len = source.primitive_count();
         let node_slice = nodes.as_mut();
         if count == 0 {
-            return Ok(Self {
-                nodes,
-                indices,
-                node_count: 0,
-                prim_count: 0,
-                source_len,
-            });
+            return Ok(Self::assemble(nodes, indices, 0, 0, source_len));
         }
         let job_size = u32::try_from(job_size).unwrap_or(u32::MAX);
         let mut sink = JobSink {
@@ -249,13 +243,9 @@ where
             indices.as_mut(),
             scratch.get(..count as usize).unwrap_or_default(),
         );
-        Ok(Self {
-            nodes,
-            indices,
-            node_count,
-            prim_count: count,
-            source_len,
-        })
+        Ok(Self::assemble(
+            nodes, indices, node_count, count, source_len,
+        ))
     }
 }
 

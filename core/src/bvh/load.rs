@@ -186,14 +186,14 @@ where
     ) -> Result<Self, LoadError> {
         check(nodes.as_ref(), indices.as_ref(), mesh, scratch)?;
         let (node_count, prim_count) = (nodes.as_ref().len(), indices.as_ref().len());
-        Ok(Self {
+        // `check` bounds both counts by `node_capacity(MAX_PRIMITIVES)`, which fits in `u32`.
+        Ok(Self::assemble(
             nodes,
             indices,
-            // `check` bounds both by `node_capacity(MAX_PRIMITIVES)`, which fits in `u32`.
-            node_count: node_count as u32,
-            prim_count: prim_count as u32,
-            source_len: mesh.len(),
-        })
+            node_count as u32,
+            prim_count as u32,
+            mesh.len(),
+        ))
     }
 }
 

@@ -150,11 +150,16 @@ pub(crate) fn projection_pad(origin: glam::Vec3, extent: f32) -> f32 {
 /// children are never hit).
 #[inline]
 pub(crate) fn extent_of(b: &Aabb) -> f32 {
-    if b.is_valid() && b.is_finite() {
-        b.min.abs().max(b.max.abs()).max_element()
-    } else {
-        0.0
+    // One pass over the six bounds (compact on small targets): finite, ordered per axis.
+    let (lo, hi) = (b.min.to_array(), b.max.to_array());
+    let mut usable = true;
+    let mut m = 0.0f32;
+    for (l, h) in lo.into_iter().zip(hi) {
+        usable &= l.is_finite() & h.is_finite() & (l <= h);
+        let a = if l.abs() > h.abs() { l.abs() } else { h.abs() };
+        m = if a > m { a } else { m };
     }
+    if usable { m } else { 0.0 }
 }
 
 /// `t` padded by [`CULL_REL_SLACK`] for box culling (infinities are kept as they are).
@@ -211,6 +216,30 @@ pub struct Bvh<N, I> {
     node_count: u32,
     prim_count: u32,
     source_len: usize,
+    /// [`extent_of`] the root's box (0 for an empty tree): the scale of the box padding
+    /// ([`projection_pad`]), kept so that a query does not recompute it.
+    extent: f32,
+}
+
+impl<N: AsRef<[BvhNode]>, I> Bvh<N, I> {
+    /// The tree made of storage that holds a built (or checked) tree of `node_count` nodes
+    /// over `prim_count` of `source_len` primitives.
+    fn assemble(nodes: N, indices: I, node_count: u32, prim_count: u32, source_len: usize) -> Self {
+        let extent = root_extent(nodes.as_ref());
+        Self {
+            nodes,
+            indices,
+            node_count,
+            prim_count,
+            source_len,
+            extent,
+        }
+    }
+}
+
+/// [`extent_of`] the box of `nodes`' root; 0 for no nodes.
+fn root_extent(nodes: &[BvhNode]) -> f32 {
+    nodes.first().map_or(0.0, |root| extent_of(&root.bounds()))
 }
 
 impl<N, I> Bvh<N, I>
@@ -236,13 +265,13 @@ where
     ) -> Result<Self, BvhError> {
         let (node_count, prim_count) =
             build::build(source, nodes.as_mut(), indices.as_mut(), options)?;
-        Ok(Self {
+        Ok(Self::assemble(
             nodes,
             indices,
             node_count,
             prim_count,
-            source_len: source.primitive_count(),
-        })
+            source.primitive_count(),
+        ))
     }
 
     /// [`Bvh::build`] with a scratch array of at least [`scratch_capacity`]`(N)` [`PrimRef`]s
@@ -265,13 +294,13 @@ where
     ) -> Result<Self, BvhError> {
         let (node_count, prim_count) =
             build::build_with_scratch(source, nodes.as_mut(), indices.as_mut(), scratch, options)?;
-        Ok(Self {
+        Ok(Self::assemble(
             nodes,
             indices,
             node_count,
             prim_count,
-            source_len: source.primitive_count(),
-        })
+            source.primitive_count(),
+        ))
     }
 }
 

@@ -65,6 +65,7 @@ where
             };
             nodes[i].set_bounds(&b);
         }
+        self.extent = super::root_extent(self.nodes.as_ref());
         match bad {
             Some(index) => Err(BvhError::NonFinitePrimitive { index }),
             None => Ok(()),

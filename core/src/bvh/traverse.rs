@@ -4,7 +4,7 @@ use super::node::BvhNode;
 use super::padded_ray::PaddedRay;
 use super::primitive::TriangleMesh;
 use super::stats::TraversalStats;
-use super::{Bvh, BvhError, TRAVERSAL_STACK_SIZE, cull_bound, extent_of, improves, projection_pad};
+use super::{Bvh, BvhError, TRAVERSAL_STACK_SIZE, cull_bound, improves, projection_pad};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
@@ -278,19 +278,10 @@ where
         let mut best: Option<(u32, H)> = None;
         let mut sp = 0usize;
 
-        let nray = PaddedRay::new(
-            &slab,
-            projection_pad(slab.origin, extent_of(&root.bounds())),
-        );
-        local.nodes_visited += 1;
-        let mut node = if nray
-            .hit_node(general, root, ray.t_min, cull_bound(ray.t_max))
-            .is_some()
-        {
-            Some(root)
-        } else {
-            None
-        };
+        let nray = PaddedRay::new(&slab, projection_pad(slab.origin, self.extent));
+        // The root's box is not tested: it is the union of its children's, which are (and a
+        // root leaf's primitives are tested exactly).
+        let mut node = Some(root);
         'walk: while let Some(n) = node {
             let (start, count) = n.raw();
             if count != 0 {

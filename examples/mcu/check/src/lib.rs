@@ -127,8 +127,9 @@ impl Rng {
         lo + (hi - lo) * self.unit()
     }
 
+    /// A value in `0..n` (`0` for `n = 0`; no division by zero, so no panic path).
     fn below(&mut self, n: usize) -> usize {
-        (self.next() as usize) % n
+        (self.next() as usize).checked_rem(n).unwrap_or(0)
     }
 
     /// A point `(±0.25, ±0.25, 1..2)` away from `target`: an origin above it.
