@@ -7,7 +7,7 @@
 # same code run on the host. Prints one line per machine:
 #
 #   mcu: N queries bit-identical to host (MACHINE)
-#   mcu: query image .text BYTES bytes, stack BYTES bytes (MACHINE ...)
+#   mcu: query image .text BYTES bytes, stack BYTES bytes (BELOW below the query call + TRAV of traversal stack; MACHINE ...)
 #
 # then the instructions per closest-hit query of every triangle variant on each machine
 # (`-icount`), and exits 0 only if every machine matches and no aimed ray leaked. Installs what it needs

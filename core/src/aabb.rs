@@ -257,7 +257,9 @@ impl SlabRay {
         // One four-lane division (the same IEEE quotient per lane as three scalar ones): the
         // reciprocals head the dependency chain of every query.
         let inv_dir = Vec3::from(glam::Vec3A::ONE / glam::Vec3A::from(d));
-        let overflow = |i: usize| (d[i] != 0.0) & inv_dir[i].is_infinite();
+        // On the bits (compact on small targets): `dᵢ ≠ ±0` and `1/dᵢ = ±∞`.
+        let overflow =
+            |i: usize| (d[i].to_bits() << 1 != 0) & (inv_dir[i].to_bits() << 1 == 0xFF00_0000);
         Some(Self {
             origin: ray.origin,
             inv_dir,

@@ -95,8 +95,10 @@ impl Ray {
         Ok(())
     }
 
-    /// `true` when [`Ray::validate`] accepts the ray.
-    #[inline]
+    /// `true` when [`Ray::validate`] accepts the ray. Out of line on bare-metal targets
+    /// (`target_os = "none"`), where each query's preparation would otherwise carry a copy.
+    #[cfg_attr(not(target_os = "none"), inline)]
+    #[cfg_attr(target_os = "none", inline(never))]
     #[must_use]
     pub fn is_valid(&self) -> bool {
         // The conditions of `validate`, combined without short-circuits (one branch for the

@@ -10,7 +10,7 @@ use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
 use glam::Vec3;
 
-impl PaddedRay {
+impl PaddedRay<'_> {
     /// [`crate::aabb::Aabb::intersect_slab`] on the node's raw corners, with the near/far
     /// corner picked by index instead of by branch. The common path (`general` false: no
     /// overflowing reciprocal, `t_min ≥ 0`; `general` false) pads far distances by the plain factor
@@ -20,8 +20,11 @@ impl PaddedRay {
     /// entry at `+∞` (a `−0` direction component outside a slab) counts as a hit here: one
     /// wasted visit, as no primitive accepts `t = ∞`, for one comparison less per node. `t_enter` and `t_exit` are never
     /// NaN (the ray was validated), so `a > b ? a : b` absorbs a NaN slab value exactly like
-    /// `f32::max` does. Returns the entry distance on a hit.
-    #[inline(always)]
+    /// `f32::max` does. Returns the entry distance on a hit. Inlined on hosted targets (it is
+    /// the inner loop); one out-of-line copy on bare-metal ones (`target_os = "none"`), where
+    /// code size is the budget.
+    #[cfg_attr(not(target_os = "none"), inline(always))]
+    #[cfg_attr(target_os = "none", inline(never))]
     pub(super) fn hit_node(
         &self,
         general: bool,
@@ -55,7 +58,7 @@ impl PaddedRay {
     fn hit_node_general(&self, node: &BvhNode, t_min: f32, t_max: f32) -> Option<f32> {
         let (lo, hi) = (Vec3::from(node.bounds[0]), Vec3::from(node.bounds[1]));
         let b = crate::aabb::Aabb::new(lo - self.pad, hi + self.pad);
-        b.intersect_slab(&self.slab, t_min, t_max).map(|(t, _)| t)
+        b.intersect_slab(self.slab, t_min, t_max).map(|(t, _)| t)
     }
 }
 

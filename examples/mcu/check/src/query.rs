@@ -10,7 +10,8 @@ use halfray_core::triangle::{TriangleHit, TriangleIntersector};
 
 /// Entries of the traversal stack the query image gives its queries (`8·QUERY_STACK` bytes of
 /// the caller's memory): more than the baked trees of `scripts/test-mcu.sh` need (their
-/// [`Bvh::stack_depth`] is checked against it after loading, on the host and the target).
+/// [`Bvh::stack_depth`] is checked against it on the host; on the target a query that needed
+/// more would refuse, which the checks count as a failure).
 pub const QUERY_STACK: usize = 24;
 
 /// `rays` rays at `bvh` (over `mesh`), by turns a random ray through the mesh's box, a ray
