@@ -91,6 +91,41 @@ pub(super) const EMPTY_TASK: Task = Task {
     centroids: Aabb::EMPTY,
 };
 
+/// The builder's working memory: the SAH bins of the three axes ([`BIN_COUNT`] each; two sets
+/// on x86-64, filled alternately) and the stack of pending nodes (`MAX_DEPTH + 1` entries, one
+/// per level). About 3.9 KiB on a 32-bit target. [`super::Bvh::build`] keeps one on its own
+/// stack; [`super::Bvh::build_in`] takes the caller's, so that a firmware can place it where
+/// it chooses (a `static`, a scratch buffer shared with other phases) instead of the stack.
+/// Its contents between builds mean nothing.
+#[derive(Clone)]
+pub struct BuildWorkspace {
+    tasks: [Task; MAX_DEPTH + 1],
+    bins: BinSets,
+}
+
+impl BuildWorkspace {
+    /// A workspace for any build.
+    #[must_use]
+    pub const fn new() -> Self {
+        Self {
+            tasks: [EMPTY_TASK; MAX_DEPTH + 1],
+            bins: [[[EMPTY_BIN; BIN_COUNT]; 3]; BIN_SETS],
+        }
+    }
+}
+
+impl core::fmt::Debug for BuildWorkspace {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("BuildWorkspace")
+    }
+}
+
+impl Default for BuildWorkspace {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// The nodes a build writes, by global index: `nodes[k]` is node `base + k`, and `root`, when
 /// set, stands for one node outside the slice (a job's root, allocated by the split above it).
 pub(super) struct NodeView<'a> {
@@ -199,6 +234,7 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
     nodes: &mut [BvhNode],
     indices: &mut [u32],
     options: &BuildOptions,
+    work: &mut BuildWorkspace,
 ) -> Result<(u32, u32), BvhError> {
     let (count, root_bounds, root_centroids) =
         validate(source, nodes, indices, options, |_, _, _, _| {})?;
@@ -225,6 +261,7 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
         root_centroids,
         options,
         None,
+        work,
     );
     Ok((node_count, count))
 }
@@ -256,6 +293,7 @@ pub(super) fn build_with_scratch<S: PrimitiveSource + ?Sized>(
         root_centroids,
         options,
         None,
+        &mut BuildWorkspace::new(),
     );
     fill_indices(indices, view.refs);
     Ok((node_count, count))
@@ -303,6 +341,7 @@ pub(super) fn build_top<R: Refs>(
     root_centroids: Aabb,
     options: &BuildOptions,
     jobs: Option<&mut JobSink<'_>>,
+    work: &mut BuildWorkspace,
 ) -> u32 {
     let mut node_count = 1u32;
     if let Some(root) = nodes.first_mut() {
@@ -330,7 +369,7 @@ pub(super) fn build_top<R: Refs>(
         base: 0,
         root: None,
     };
-    grow(refs, &mut view, task, &mut node_count, options, jobs);
+    grow(refs, &mut view, task, &mut node_count, options, jobs, work);
     node_count
 }
 
@@ -344,11 +383,11 @@ pub(super) fn grow<R: Refs>(
     next: &mut u32,
     options: &BuildOptions,
     mut jobs: Option<&mut JobSink<'_>>,
+    work: &mut BuildWorkspace,
 ) {
     let max_leaf = options.max_leaf_size.max(1);
     let threshold = options.leaf_threshold.clamp(1, max_leaf);
-    let mut stack = [EMPTY_TASK; MAX_DEPTH + 1];
-    let mut bins: BinSets = [[[EMPTY_BIN; BIN_COUNT]; 3]; BIN_SETS];
+    let BuildWorkspace { tasks: stack, bins } = work;
     let mut sp = 0usize;
     let mut task = task;
     loop {
@@ -358,7 +397,7 @@ pub(super) fn grow<R: Refs>(
             &task,
             (max_leaf, threshold, options.primitive_cost()),
             next,
-            &mut bins,
+            bins,
         );
         if let (Some((left, right)), Some(sink)) = (pending, jobs.as_deref_mut()) {
             pending = match (sink.take(&left, max_leaf), sink.take(&right, max_leaf)) {

@@ -12,7 +12,8 @@
 //! tree needs no more than [`super::node_capacity`] nodes, as the plain build.
 
 use super::build::{
-    EMPTY_TASK, JobSink, NodeView, Task, build_top, fill_indices, grow, prepare_scratch,
+    BuildWorkspace, EMPTY_TASK, JobSink, NodeView, Task, build_top, fill_indices, grow,
+    prepare_scratch,
 };
 use super::scratch::Scratch;
 
@@ -102,7 +103,15 @@ fn build_job(
         base: job.base,
         root: Some((job.task.node, &mut job.root)),
     };
-    grow(&mut scratch, &mut view, job.task, &mut next, options, None);
+    grow(
+        &mut scratch,
+        &mut view,
+        job.task,
+        &mut next,
+        options,
+        None,
+        &mut BuildWorkspace::new(),
+    );
     job.used = next - job.base;
     job.done = true;
 }
@@ -199,6 +208,7 @@ where
             root_centroids,
             options,
             Some(&mut sink),
+            &mut BuildWorkspace::new(),
         );
         let jobs = sink.jobs.get_mut(..sink.len).unwrap_or_default();
         // Primitive order (the top meets a right child before its left sibling's descendants),

@@ -87,7 +87,7 @@ pub mod wide;
 #[cfg(test)]
 mod tests;
 
-pub use build::BuildOptions;
+pub use build::{BuildOptions, BuildWorkspace};
 pub use error::BvhError;
 pub use jobs::{BuildJob, JobPart, JobParts};
 pub use load::{LoadError, load_scratch_len};
@@ -259,12 +259,29 @@ where
     /// [`BuildOptions::exclude_non_finite`] is set.
     pub fn build<S: PrimitiveSource + ?Sized>(
         source: &S,
+        nodes: N,
+        indices: I,
+        options: &BuildOptions,
+    ) -> Result<Self, BvhError> {
+        Self::build_in(source, nodes, indices, &mut BuildWorkspace::new(), options)
+    }
+
+    /// [`Bvh::build`] with the builder's working memory (bins and pending nodes, about
+    /// 3.9 KiB on a 32-bit target) in `work`, which the caller places where it chooses,
+    /// instead of on the build's stack. The same tree and the same errors.
+    ///
+    /// # Errors
+    ///
+    /// As [`Bvh::build`].
+    pub fn build_in<S: PrimitiveSource + ?Sized>(
+        source: &S,
         mut nodes: N,
         mut indices: I,
+        work: &mut BuildWorkspace,
         options: &BuildOptions,
     ) -> Result<Self, BvhError> {
         let (node_count, prim_count) =
-            build::build(source, nodes.as_mut(), indices.as_mut(), options)?;
+            build::build(source, nodes.as_mut(), indices.as_mut(), options, work)?;
         Ok(Self::assemble(
             nodes,
             indices,

@@ -712,3 +712,45 @@ fn caller_stacks_of_the_tree_depth_answer_as_the_full_stack_and_shorter_ones_ref
     }
     assert!(refused > 0, "no ray needed the whole depth");
 }
+
+#[test]
+fn build_in_a_caller_workspace_gives_the_same_tree_and_errors() {
+    let (pos, tris) = soup(700, 23);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let n = mesh.len();
+    let mut work = BuildWorkspace::new();
+    for leaf in [1, 4] {
+        let opts = BuildOptions {
+            max_leaf_size: leaf,
+            ..BuildOptions::default()
+        };
+        let plain = build(&mesh, &opts).unwrap();
+        // The same workspace, reused: its contents between builds mean nothing.
+        for _ in 0..2 {
+            let got = Bvh::build_in(
+                &mesh,
+                vec![BvhNode::EMPTY; node_capacity(n)],
+                vec![0u32; index_capacity(n)],
+                &mut work,
+                &opts,
+            )
+            .unwrap();
+            assert_eq!(preorder(&got), preorder(&plain), "leaf {leaf}");
+            assert_eq!(got.indices(), plain.indices(), "leaf {leaf}");
+        }
+    }
+    let small = Bvh::build_in(
+        &mesh,
+        vec![BvhNode::EMPTY; node_capacity(n) - 1],
+        vec![0u32; index_capacity(n)],
+        &mut work,
+        &BuildOptions::default(),
+    );
+    assert_eq!(
+        small.err(),
+        Some(BvhError::NodeStorageTooSmall {
+            needed: node_capacity(n),
+            available: node_capacity(n) - 1
+        })
+    );
+}
