@@ -9,7 +9,7 @@
 
 use super::node::BvhNode;
 use super::primitive::{PrimitiveSource, is_usable};
-use super::sah::{BIN_SETS, BinSets, EMPTY_BIN, best_sah_split, partition, range_bounds};
+use super::sah::{BIN_SETS, BinSets, UNUSED_BIN, best_sah_split, partition, range_bounds};
 use super::scratch::{Indexed, PrimRef, Refs, Scratch, scratch_capacity};
 use super::{
     BIN_COUNT, BvhError, DEFAULT_MAX_LEAF_SIZE, INTERSECTION_COST, MAX_DEPTH, MAX_PRIMITIVES,
@@ -107,9 +107,15 @@ impl BuildWorkspace {
     /// A workspace for any build.
     #[must_use]
     pub const fn new() -> Self {
+        // All bits zero (a fresh workspace is a memset, not a copy of a constant): every task
+        // is written before it is read, every bin in use is emptied before binning.
+        const UNUSED_TASK: Task = Task {
+            centroids: Aabb::new(Vec3::ZERO, Vec3::ZERO),
+            ..EMPTY_TASK
+        };
         Self {
-            tasks: [EMPTY_TASK; MAX_DEPTH + 1],
-            bins: [[[EMPTY_BIN; BIN_COUNT]; 3]; BIN_SETS],
+            tasks: [UNUSED_TASK; MAX_DEPTH + 1],
+            bins: [[[UNUSED_BIN; BIN_COUNT]; 3]; BIN_SETS],
         }
     }
 }
@@ -293,7 +299,7 @@ pub(super) fn build_with_scratch<S: PrimitiveSource + ?Sized>(
         root_centroids,
         options,
         None,
-        &mut BuildWorkspace::new(),
+        &mut const { BuildWorkspace::new() },
     );
     fill_indices(indices, view.refs);
     Ok((node_count, count))

@@ -110,7 +110,7 @@ fn build_job(
         &mut next,
         options,
         None,
-        &mut BuildWorkspace::new(),
+        &mut const { BuildWorkspace::new() },
     );
     job.used = next - job.base;
     job.done = true;
@@ -208,7 +208,7 @@ where
             root_centroids,
             options,
             Some(&mut sink),
-            &mut BuildWorkspace::new(),
+            &mut const { BuildWorkspace::new() },
         );
         let jobs = sink.jobs.get_mut(..sink.len).unwrap_or_default();
         // Primitive order (the top meets a right child before its left sibling's descendants),

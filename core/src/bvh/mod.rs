@@ -263,7 +263,13 @@ where
         indices: I,
         options: &BuildOptions,
     ) -> Result<Self, BvhError> {
-        Self::build_in(source, nodes, indices, &mut BuildWorkspace::new(), options)
+        Self::build_in(
+            source,
+            nodes,
+            indices,
+            &mut const { BuildWorkspace::new() },
+            options,
+        )
     }
 
     /// [`Bvh::build`] with the builder's working memory (bins and pending nodes, about

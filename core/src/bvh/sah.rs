@@ -81,6 +81,15 @@ pub(super) const EMPTY_BIN: Bin = Bin {
     count: 0,
 };
 
+/// A bin's value before its first use: all bits zero (so that a fresh
+/// [`super::BuildWorkspace`] is zeroed memory, not a copy of a constant); every bin in use is
+/// set to [`EMPTY_BIN`] first.
+pub(super) const UNUSED_BIN: Bin = Bin {
+    lo: Corner::ZERO,
+    hi: Corner::ZERO,
+    count: 0,
+};
+
 impl Bin {
     /// Adds a box (`lo`, `hi`) holding `count` primitives. The builder only sees finite
     /// coordinates (validated), so `min`/`max` are one vector instruction each.
