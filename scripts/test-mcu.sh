@@ -70,9 +70,10 @@ check lm3s6965evb thumbv7m-none-eabi cortex-m3 "$MCU_BAKED_M3"
 # hit with the f64-free watertight test (WatertightF32Exact) and a lean ray loop; its answers
 # must equal the host's, its `.text` is the query path's size and the stack its queries used
 # is measured by painting. Budget (issue 14): 8 KiB of .text, 1 KiB of stack; printed, with
-# whether it holds (the figures are the point; the exit status is the answers').
-query() { # machine target cpu baked-source
-    local machine=$1 target=$2 cpu=$3
+# whether it holds. The budget is the Cortex-M4F's (the target with the FPU the core is made
+# for): over it, the script fails; the soft-float Cortex-M3 image is reported, not held to it.
+query() { # machine target cpu baked-source held-to-budget
+    local machine=$1 target=$2 cpu=$3 held=$5
     MCU_BAKED=$4 cargo build -q --release --manifest-path "$manifest" -p mcu-firmware \
         --bin mcu-query --target "$target"
     local image=examples/mcu/target/$target/release/mcu-query
@@ -100,9 +101,13 @@ query() { # machine target cpu baked-source
     if [ "$text" -le 8192 ] && [ $((stack + traversal)) -le 1024 ]; then verdict="within"; else verdict="over"; fi
     read -r _ _ queries _ _ hash _ <<<"$got"
     echo "mcu: query image .text $text bytes, stack $((stack + traversal)) bytes ($stack below the query call + $traversal of traversal stack; $machine: $cpu, $target; $queries queries bit-identical to host, hash $hash; $verdict the 8 KiB / 1 KiB budget)"
+    if [ "$held" = budget ] && [ "$verdict" != within ]; then
+        echo "test-mcu: the $machine query image is over the 8 KiB / 1 KiB budget" >&2
+        status=1
+    fi
 }
-query mps2-an386 thumbv7em-none-eabihf cortex-m4 "$MCU_BAKED_M4F"
-query lm3s6965evb thumbv7m-none-eabi cortex-m3 "$MCU_BAKED_M3"
+query mps2-an386 thumbv7em-none-eabihf cortex-m4 "$MCU_BAKED_M4F" budget
+query lm3s6965evb thumbv7m-none-eabi cortex-m3 "$MCU_BAKED_M3" report
 
 # What a ray costs there: instructions per closest-hit query for each triangle variant, on
 # the baked BVH, counted under `-icount shift=0` (1 ns of virtual time per instruction,
