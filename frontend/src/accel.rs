@@ -91,7 +91,7 @@ impl MeshAccel {
         let tri = TriangleMesh::new(&mesh.positions, &mesh.triangles);
         let wide = build_binary_parallel(&tri, &binary_options(BuildOptions::default()))
             .and_then(|b| build_wide(&tri, &b))
-            .map_err(|e| Error::Other(format!("building the BVH: {e}")))?;
+            .map_err(Error::Bvh)?;
         Ok(Self { mesh, wide })
     }
 

@@ -52,10 +52,13 @@ pub fn run(args: &BakeArgs) -> Result<()> {
     // The loader's own check: what is written loads.
     let mut scratch = vec![0u32; load_scratch_len(tri.len())];
     Bvh::from_parts(bvh.nodes(), bvh.indices(), &tri, &mut scratch).map_err(|e| {
-        Error::Other(format!(
-            "{}: the built BVH fails its load check ({e}); please report this",
-            args.input.display()
-        ))
+        Error::internal(
+            format!(
+                "{}: the built BVH fails its load check",
+                args.input.display()
+            ),
+            Some(Box::new(e)),
+        )
     })?;
     let source = source(
         &args.input,

@@ -102,13 +102,75 @@ pub enum Error {
     Usage(String),
     /// A cross-check found more genuine mismatches than allowed.
     Mismatch(String),
-    /// Anything else (for example an unavailable optional backend).
-    Other(String),
+    /// Encoding an output (JSON, PNG) failed.
+    Encode {
+        /// What was being encoded ("the JSON report").
+        what: &'static str,
+        /// The encoder's error.
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+    /// A command needs an optional backend this binary was built without.
+    Unavailable {
+        /// The cargo feature that brings it.
+        feature: &'static str,
+        /// How to build with it.
+        hint: &'static str,
+    },
+    /// Meshes of a multi-mesh run that could not be processed (the others were).
+    MeshesFailed {
+        /// Each failed mesh's path and error.
+        failed: Vec<(String, String)>,
+        /// Meshes in the run.
+        total: usize,
+    },
+    /// Building an acceleration structure failed.
+    Bvh(halfray_core::bvh::BvhError),
+    /// The worker threads could not be started.
+    Threads(rayon::ThreadPoolBuildError),
+    /// Embree refused or failed (device, scene, layout).
+    #[cfg(feature = "embree")]
+    Embree(crate::embree::EmbreeError),
+    /// An error about one input file, with the file named.
+    InFile {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong with it.
+        source: Box<Error>,
+    },
+    /// A check of halfray's own results failed: a bug to report, not bad input.
+    Internal {
+        /// What failed to hold.
+        what: String,
+        /// The error that showed it, if any.
+        source: Option<Box<dyn std::error::Error + Send + Sync>>,
+    },
     /// Stdout is a closed pipe (the reader is gone): nothing to report, stop quietly.
     BrokenPipe,
 }
 
 impl Error {
+    /// An encoding failure of `what`.
+    pub fn encode(
+        what: &'static str,
+        source: impl Into<Box<dyn std::error::Error + Send + Sync>>,
+    ) -> Self {
+        Self::Encode {
+            what,
+            source: source.into(),
+        }
+    }
+
+    /// An internal check that failed, with the error that showed it.
+    pub fn internal(
+        what: impl Into<String>,
+        source: Option<Box<dyn std::error::Error + Send + Sync>>,
+    ) -> Self {
+        Self::Internal {
+            what: what.into(),
+            source,
+        }
+    }
+
     /// An input error at `at`.
     pub fn input(at: Location, message: impl Into<String>) -> Self {
         Self::Input {
@@ -143,7 +205,37 @@ impl fmt::Display for Error {
             Self::Io { path, source } => write!(f, "{}: {source}", path.display()),
             Self::Usage(m) => f.write_str(&bounded(m)),
             // Reports halfray composes itself, shown whole.
-            Self::Mismatch(m) | Self::Other(m) => f.write_str(m),
+            Self::Mismatch(m) => f.write_str(m),
+            Self::Encode { what, source } => write!(f, "encoding {what}: {source}"),
+            Self::Unavailable { feature, hint } => {
+                write!(
+                    f,
+                    "halfray was built without the `{feature}` feature: {hint}"
+                )
+            }
+            Self::MeshesFailed { failed, total } => {
+                write!(
+                    f,
+                    "{} of {total} meshes could not be checked:",
+                    failed.len()
+                )?;
+                for (path, error) in failed {
+                    write!(f, "\n  {path}: {error}")?;
+                }
+                Ok(())
+            }
+            Self::Bvh(e) => write!(f, "building the BVH: {e}"),
+            Self::Threads(e) => write!(f, "starting the worker threads: {e}"),
+            #[cfg(feature = "embree")]
+            Self::Embree(e) => write!(f, "embree: {e}"),
+            Self::InFile { path, source } => write!(f, "{}: {source}", path.display()),
+            Self::Internal { what, source } => {
+                write!(f, "internal error: {what}")?;
+                if let Some(e) = source {
+                    write!(f, " ({e})")?;
+                }
+                f.write_str("; please report this")
+            }
             Self::BrokenPipe => f.write_str("stdout is a closed pipe"),
         }
     }
@@ -153,6 +245,13 @@ impl std::error::Error for Error {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             Self::Io { source, .. } => Some(source),
+            Self::Encode { source, .. } => Some(source.as_ref()),
+            Self::Bvh(e) => Some(e),
+            Self::Threads(e) => Some(e),
+            #[cfg(feature = "embree")]
+            Self::Embree(e) => Some(e),
+            Self::InFile { source, .. } => Some(source.as_ref()),
+            Self::Internal { source, .. } => source.as_deref().map(|e| e as _),
             _ => None,
         }
     }
@@ -164,6 +263,55 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn typed_errors_name_what_failed_and_keep_their_source() {
+        use std::error::Error as _;
+        let json = serde_json::from_str::<u32>("x").unwrap_err();
+        let e = Error::encode("the JSON report", json);
+        assert!(
+            e.to_string().starts_with("encoding the JSON report: "),
+            "{e}"
+        );
+        assert!(e.source().is_some());
+        let e = Error::InFile {
+            path: "m.obj".into(),
+            source: Box::new(Error::Bvh(halfray_core::bvh::BvhError::TooManyPrimitives {
+                count: 7,
+            })),
+        };
+        assert!(
+            e.to_string()
+                .starts_with("m.obj: building the BVH: too many primitives"),
+            "{e}"
+        );
+        assert!(e.source().and_then(|s| s.source()).is_some());
+        let e = Error::MeshesFailed {
+            failed: vec![
+                ("a.obj".into(), "bad".into()),
+                ("b.obj".into(), "worse".into()),
+            ],
+            total: 5,
+        };
+        assert_eq!(
+            e.to_string(),
+            "2 of 5 meshes could not be checked:\n  a.obj: bad\n  b.obj: worse"
+        );
+        let e = Error::internal("counts disagree", None);
+        assert_eq!(
+            e.to_string(),
+            "internal error: counts disagree; please report this"
+        );
+        assert_eq!(e.exit_code(), EXIT_ERROR);
+        let e = Error::Unavailable {
+            feature: "embree",
+            hint: "build with it",
+        };
+        assert_eq!(
+            e.to_string(),
+            "halfray was built without the `embree` feature: build with it"
+        );
+    }
 
     #[test]
     fn location_formats_file_line_column_field() {

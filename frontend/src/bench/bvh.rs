@@ -194,7 +194,7 @@ pub fn run(args: &BvhArgs) -> Result<()> {
             [one] => serde_json::to_string_pretty(one),
             all => serde_json::to_string_pretty(all),
         }
-        .map_err(|e| Error::Other(format!("JSON encoding failed: {e}")))?;
+        .map_err(|e| Error::encode("the JSON report", e))?;
         write_bytes_atomic(path, text.as_bytes())?;
     }
     for r in &reports {
@@ -263,9 +263,12 @@ fn measure(
     let (c_i, hits_i) = throughput(incoherent, |r| closest(r, None));
     let (a_i, any_i) = throughput(incoherent, &any);
     if hits_p != any_p || hits_i != any_i {
-        return Err(Error::Other(format!(
-            "any-hit disagrees with closest-hit on hit/miss: primary {hits_p} vs {any_p}, incoherent {hits_i} vs {any_i}"
-        )));
+        return Err(Error::internal(
+            format!(
+                "any-hit disagrees with closest-hit on hit/miss: primary {hits_p} vs {any_p}, incoherent {hits_i} vs {any_i}"
+            ),
+            None,
+        ));
     }
     let per_ray = |rays: &[Ray]| {
         let mut st = TraversalStats::default();
@@ -322,7 +325,7 @@ fn bench<T: TriangleIntersector>(
         wide_s = wide_s.min(t1.elapsed().as_secs_f64());
         built = Some((b, w));
     }
-    let (bvh, wide) = built.ok_or_else(|| Error::Other("no build".into()))?;
+    let (bvh, wide) = built.ok_or_else(|| Error::internal("no timed build ran", None))?;
     let mut threads_s = f64::INFINITY;
     for _ in 0..TIMED_PASSES {
         let t0 = Instant::now();
@@ -330,8 +333,9 @@ fn bench<T: TriangleIntersector>(
         let w = build_wide(&mesh, &b).map_err(build_err)?;
         threads_s = threads_s.min(t0.elapsed().as_secs_f64());
         if w.nodes() != wide.nodes() {
-            return Err(Error::Other(
-                "the parallel build gave another tree than the one-thread build".into(),
+            return Err(Error::internal(
+                "the parallel build gave another tree than the one-thread build",
+                None,
             ));
         }
     }

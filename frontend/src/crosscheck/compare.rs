@@ -105,7 +105,7 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.map_or(0, usize::from))
         .build()
-        .map_err(|e| Error::Other(format!("starting the worker threads: {e}")))?;
+        .map_err(Error::Threads)?;
     let device = EmbreeDevice::new()?;
     let start = Instant::now();
     let mut results = Vec::with_capacity(meshes.len());
@@ -171,7 +171,10 @@ fn check_mesh(
         |n| n.to_string_lossy().into(),
     );
     let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
-    let in_file = |e: Error| Error::Other(format!("{}: {e}", path.display()));
+    let in_file = |e: Error| Error::InFile {
+        path: path.to_path_buf(),
+        source: Box::new(e),
+    };
     let robust = EmbreeScene::new(device, &positions, &mesh.triangles, true)
         .map_err(|e| in_file(e.into()))?;
     let fast = EmbreeScene::new(device, &positions, &mesh.triangles, false)

@@ -139,7 +139,8 @@ impl ResultLog {
 
     /// Appends `result` as one line and flushes it to disk.
     pub fn append(&mut self, result: &MeshResult) -> Result<()> {
-        let mut line = serde_json::to_vec(result).map_err(|e| Error::Other(e.to_string()))?;
+        let mut line =
+            serde_json::to_vec(result).map_err(|e| Error::encode("a results-log line", e))?;
         line.push(b'\n');
         self.file
             .write_all(&line)

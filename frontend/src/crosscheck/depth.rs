@@ -80,6 +80,6 @@ pub fn depth_diff_png(
             img.height(),
             image::ExtendedColorType::Rgb8,
         )
-        .map_err(|e| Error::Other(format!("encoding depth image: {e}")))?;
+        .map_err(|e| Error::encode("the depth image", e))?;
     Ok(png)
 }

@@ -120,11 +120,11 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     #[cfg(not(feature = "embree"))]
     {
         let _ = args;
-        Err(crate::Error::Other(
-            "halfray was built without the `embree` feature: run `bash scripts/setup-embree.sh`, then \
-             `EMBREE_DIR=$PWD/.embree cargo run --release -p halfray --features embree -- crosscheck ...`"
-                .into(),
-        ))
+        Err(crate::Error::Unavailable {
+            feature: "embree",
+            hint: "run `bash scripts/setup-embree.sh`, then \
+                   `EMBREE_DIR=$PWD/.embree cargo run --release -p halfray --features embree -- crosscheck ...`",
+        })
     }
 }
 
@@ -170,7 +170,8 @@ pub fn finish(
             .map_or(String::new(), |n| format!(" (sums over {n} shards)"))
     );
     if let Some(out) = json {
-        let bytes = serde_json::to_vec_pretty(report).map_err(|e| Error::Other(e.to_string()))?;
+        let bytes =
+            serde_json::to_vec_pretty(report).map_err(|e| Error::encode("the JSON report", e))?;
         out.write(|w| w.write_all(&bytes))?;
     }
     let (genuine, leaks) = (report.genuine(), report.leaks());
@@ -187,17 +188,14 @@ pub fn finish(
         )));
     }
     if !report.failed.is_empty() {
-        let list: Vec<String> = report
-            .failed
-            .iter()
-            .map(|f| format!("{}: {}", f.path, f.error))
-            .collect();
-        return Err(Error::Other(format!(
-            "{} of {} meshes could not be checked:\n  {}",
-            report.failed.len(),
-            report.meshes,
-            list.join("\n  ")
-        )));
+        return Err(Error::MeshesFailed {
+            failed: report
+                .failed
+                .iter()
+                .map(|f| (f.path.clone(), f.error.clone()))
+                .collect(),
+            total: report.meshes,
+        });
     }
     Ok(())
 }

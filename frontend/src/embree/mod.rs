@@ -124,7 +124,7 @@ impl std::error::Error for EmbreeError {}
 
 impl From<EmbreeError> for crate::error::Error {
     fn from(e: EmbreeError) -> Self {
-        Self::Other(format!("embree: {e}"))
+        Self::Embree(e)
     }
 }
 

@@ -91,7 +91,7 @@ pub fn run(args: &CheckArgs) -> Result<()> {
     let report = check(&args.input)?;
     if let Some(json) = json {
         let text = serde_json::to_string_pretty(&report)
-            .map_err(|e| Error::Other(format!("JSON: {e}")))?;
+            .map_err(|e| Error::encode("the JSON report", e))?;
         json.write(|w| w.write_all(text.as_bytes()))?;
     }
     print_out(&report.to_string())?;
@@ -161,17 +161,20 @@ pub fn check(path: &Path) -> Result<CheckReport> {
 
     let t2 = Instant::now();
     mesh.validate().map_err(|e| {
-        Error::Other(format!(
-            "{}: internal error: built mesh fails validation: {e}",
-            path.display()
-        ))
+        Error::internal(
+            format!("{}: built mesh fails validation", path.display()),
+            Some(Box::new(e)),
+        )
     })?;
     let c = mesh.len();
     if c.edges != edges || c.faces != faces || c.vertices != obj.positions.len() {
-        return Err(Error::Other(format!(
-            "{}: internal error: half-edge counts {c:?} disagree with the triangle list (E {edges}, F {faces})",
-            path.display()
-        )));
+        return Err(Error::internal(
+            format!(
+                "{}: half-edge counts {c:?} disagree with the triangle list (E {edges}, F {faces})",
+                path.display()
+            ),
+            None,
+        ));
     }
     let boundary_edges = mesh.edges().filter(|&e| mesh.is_boundary_edge(e)).count();
     let loops = boundary_loop_count(&mesh);

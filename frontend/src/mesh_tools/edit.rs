@@ -374,10 +374,10 @@ fn collapse_mesh(
         }
     }
     mesh.validate().map_err(|e| {
-        Error::Other(format!(
-            "{}: internal error: mesh invalid after collapsing: {e}",
-            args.input.display()
-        ))
+        Error::internal(
+            format!("{}: mesh invalid after collapsing", args.input.display()),
+            Some(Box::new(e)),
+        )
     })?;
     mesh.compact(|_| {});
     Ok(export_edited(mesh, report, t1))

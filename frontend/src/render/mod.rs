@@ -471,7 +471,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 ..EffectPlan::derive(&scene, opts.force_all).flags()
             },
         })
-        .map_err(|e| Error::Other(format!("stats JSON: {e}")))?;
+        .map_err(|e| Error::encode("the stats JSON", e))?;
         stats.write(|w| w.write_all(format!("{json}\n").as_bytes()))?;
     }
     output::write_png(png, w, h, &out.to_rgba8(args.mode, args.gamma))?;

@@ -98,7 +98,7 @@ pub fn write_chart(
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)
         .write_image(img.as_raw(), W, H, image::ExtendedColorType::Rgb8)
-        .map_err(|e| Error::Other(format!("encoding chart: {e}")))?;
+        .map_err(|e| Error::encode("the chart", e))?;
     out.write(|w| w.write_all(&png))
 }
 

@@ -136,7 +136,8 @@ pub fn measure(args: &AccuracyArgs) -> Result<Report> {
     } else {
         (200_000, 9)
     };
-    let workload = Workload::new(&closed, &closed, n, args.seed).map_err(Error::Other)?;
+    let workload = Workload::new(&closed, &closed, n, args.seed)
+        .map_err(|e| Error::Usage(format!("bench accuracy: {e}")))?;
     let mut variants = Vec::new();
     for v in TriangleVariant::ALL {
         let (acc, ns) = triangles::measure(v, &workload, reps);
@@ -301,7 +302,8 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     let mut reserved = reserve_outputs(&outputs, &inputs, false)?.into_iter();
     let report = measure(args)?;
     if args.json.is_some() {
-        let json = serde_json::to_vec_pretty(&report).map_err(|e| Error::Other(e.to_string()))?;
+        let json =
+            serde_json::to_vec_pretty(&report).map_err(|e| Error::encode("the JSON report", e))?;
         let out = reserved.next().expect("--json is reserved first");
         out.write(|w| w.write_all(&json))?;
     }

@@ -2,7 +2,7 @@
 
 use crate::error::{Error, Result};
 use crate::render::geom::MeshShape;
-use crate::scene::def::S;
+use crate::scene::def::{MeshDef, S};
 use std::sync::Arc;
 
 use super::Ctx;
@@ -15,10 +15,7 @@ type MeshSettings = (std::path::PathBuf, Option<(f32, u32)>, u32, bool);
 /// Checks `[mesh.NAME]` without reading the file: it exists and is a file, the smoothing and
 /// subdivision settings are in range. Returns the path, the smoothing `(step, iterations)` and
 /// the subdivision levels. Run for every mesh definition, used or not.
-pub(super) fn mesh_def(ctx: &Ctx<'_>, name: &str) -> Result<MeshSettings> {
-    let Some(def) = ctx.mesh_defs.get(name).map(|d| d.get_ref()) else {
-        return Err(Error::Other(format!("no mesh named `{name}`")));
-    };
+pub(super) fn mesh_def(ctx: &Ctx<'_>, name: &str, def: &MeshDef) -> Result<MeshSettings> {
     let p = format!("mesh.{name}");
     let file = std::path::Path::new(def.file.get_ref());
     let base = ctx.src.path.parent().unwrap_or(std::path::Path::new(""));
@@ -102,8 +99,8 @@ pub(super) fn mesh(ctx: &mut Ctx<'_>, name: &S<String>, field: &str) -> Result<A
     if let Some(m) = loaded {
         return Ok(m.clone());
     }
-    let (path, smoothing, levels, smooth_shading) = mesh_def(ctx, name.get_ref())?;
     let def = ctx.mesh_defs[name.get_ref()].get_ref();
+    let (path, smoothing, levels, smooth_shading) = mesh_def(ctx, name.get_ref(), def)?;
     let p = format!("mesh.{}", name.get_ref());
     let shape = crate::scene::load_mesh(name.get_ref(), &path, smoothing, levels, smooth_shading)
         .map_err(|e| match e {

@@ -190,8 +190,8 @@ pub(super) fn build(src: &Source<'_>, d: def::SceneDef) -> Result<Scene> {
     }
     // Definitions no object uses are still checked (not read: nothing renders them).
     for (name, (_, loaded)) in &ctx.meshes {
-        if loaded.is_none() {
-            mesh_def(&ctx, name)?;
+        if let (None, Some(def)) = (loaded, ctx.mesh_defs.get(name)) {
+            mesh_def(&ctx, name, def.get_ref())?;
         }
     }
     Ok(Scene {
