@@ -3,6 +3,8 @@
 
 use super::layout::{GUARD_WORDS, INVALID_ID, RayHitSlot, SENTINEL, make_ray};
 use super::*;
+use embree4_sys as sys;
+use std::ptr;
 
 const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
 

@@ -1,0 +1,260 @@
+//! Unit tests of `quadric`.
+
+use super::*;
+use crate::hit::spawn_ray;
+use crate::test_util::unit_vec;
+use crate::tolerance::QUADRIC_ROOT_RESIDUAL_REL;
+
+/// `|f(o + t·d)| / (|∇f|·|t·d| + F)`: compared with `QUADRIC_ROOT_RESIDUAL_REL`.
+fn residual_ratio(q: &Quadric, ray: &Ray, t: f64) -> f64 {
+    let d = ray.direction.as_dvec3();
+    let x = ray.origin.as_dvec3() + d * t;
+    let scale = q.gradient(x).length() * (d * t).length() + q.eval_abs(x);
+    q.eval(x).abs() / scale
+}
+
+/// The worked example of issue 2, in all three constructions.
+fn worked_example_quadrics() -> [Quadric; 3] {
+    // f = (x−2)²/4 + (y−2)² + z²/4 − 1 = x²/4 + y² + z²/4 − x − 4y + 4.
+    let a = DMat3::from_diagonal(DVec3::new(0.25, 1.0, 0.25));
+    let b = DVec3::new(-0.5, -2.0, 0.0);
+    let c = 4.0;
+    let q4 = DMat4::from_cols(
+        a.x_axis.extend(b.x),
+        a.y_axis.extend(b.y),
+        a.z_axis.extend(b.z),
+        b.extend(c),
+    );
+    [
+        *Ellipsoid::new(Vec3::new(2.0, 2.0, 0.0), Vec3::new(2.0, 1.0, 2.0))
+            .unwrap()
+            .quadric(),
+        Quadric::new(a, b, c).unwrap(),
+        Quadric::from_mat4(q4).unwrap(),
+    ]
+}
+
+#[test]
+fn worked_example_from_issue_2() {
+    // Ray o = (0,0,0), d = (1,1,0): (5/4)(t−2)² = 1, t = 2 ± √(4/5).
+    let s = (4.0f64 / 5.0).sqrt();
+    let ray = Ray::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0));
+    for q in worked_example_quadrics() {
+        // The general form found the same centre.
+        assert_eq!(q.reference_point(), DVec3::new(2.0, 2.0, 0.0));
+        let (t0, t1) = q.roots(&ray).unwrap();
+        assert!((t0 - (2.0 - s)).abs() <= 4.0 * f64::EPSILON, "{t0}");
+        assert!((t1 - (2.0 + s)).abs() <= 4.0 * f64::EPSILON, "{t1}");
+        let h = q.intersect(&ray).unwrap();
+        assert_eq!(h.t, (2.0 - s) as f32);
+        let exact = DVec3::new(2.0 - s, 2.0 - s, 0.0);
+        let err = (h.point.as_dvec3() - exact).abs();
+        assert!(err.x <= h.point_error.x as f64 && err.y <= h.point_error.y as f64);
+        assert_eq!(
+            h.point,
+            exact.as_vec3(),
+            "first hit (2 − √(4/5), 2 − √(4/5), 0)"
+        );
+        // Normal ∝ gradient ((x−2)/2, 2(y−2), z/2) = −s·(1/2, 2, 0) ∝ (−1, −4, 0).
+        let n = Vec3::new(-1.0, -4.0, 0.0) / 17f32.sqrt();
+        assert!(
+            (h.normal - n).length() <= 2.0 * f32::EPSILON,
+            "{:?}",
+            h.normal
+        );
+        assert!(h.front_face);
+        // The second hit, from just past the first.
+        let exit = q
+            .intersect(&Ray::with_interval(
+                ray.origin,
+                ray.direction,
+                1.5,
+                f32::INFINITY,
+            ))
+            .unwrap();
+        assert_eq!(exit.t, (2.0 + s) as f32);
+        assert_eq!(exit.point, DVec3::new(2.0 + s, 2.0 + s, 0.0).as_vec3());
+        assert!((exit.normal + n).length() <= 2.0 * f32::EPSILON);
+        assert!(!exit.front_face);
+        for t in [t0, t1] {
+            assert!(residual_ratio(&q, &ray, t) <= QUADRIC_ROOT_RESIDUAL_REL);
+        }
+    }
+}
+
+#[test]
+fn ellipsoid_uv_and_constructor_errors() {
+    let e = Ellipsoid::new(Vec3::new(2.0, 2.0, 0.0), Vec3::new(2.0, 1.0, 2.0)).unwrap();
+    let h = e
+        .intersect(&Ray::new(Vec3::new(2.0, 2.0, 10.0), -Vec3::Z))
+        .unwrap();
+    assert_eq!(h.t, 8.0);
+    assert_eq!(h.normal, Vec3::Z);
+    assert_eq!(h.uv.y, 0.0);
+    assert_eq!(
+        Ellipsoid::new(Vec3::ZERO, Vec3::new(1.0, 0.0, 1.0)),
+        Err(GeometryError::Degenerate)
+    );
+    assert_eq!(
+        Ellipsoid::new(Vec3::ZERO, Vec3::new(1.0, f32::NAN, 1.0)),
+        Err(GeometryError::NonFinite)
+    );
+    assert_eq!(
+        Quadric::new(DMat3::ZERO, DVec3::ZERO, 1.0),
+        Err(GeometryError::Degenerate)
+    );
+    assert_eq!(
+        Quadric::new(DMat3::IDENTITY, DVec3::new(f64::INFINITY, 0.0, 0.0), 1.0),
+        Err(GeometryError::NonFinite)
+    );
+    assert_eq!(
+        Quadric::cylinder(Vec3::ZERO, Vec3::ZERO, 1.0),
+        Err(GeometryError::Degenerate)
+    );
+    assert_eq!(
+        Quadric::cone(Vec3::ZERO, Vec3::Z, 0.0),
+        Err(GeometryError::Degenerate)
+    );
+}
+
+#[test]
+fn misses_and_degenerate_directions() {
+    let e = Quadric::ellipsoid(Vec3::new(2.0, 2.0, 0.0), Vec3::new(2.0, 1.0, 2.0)).unwrap();
+    // Pointing away, and passing beside.
+    assert!(
+        e.intersect(&Ray::new(Vec3::ZERO, Vec3::new(-1.0, -1.0, 0.0)))
+            .is_none()
+    );
+    assert!(
+        e.roots(&Ray::new(Vec3::new(0.0, 5.0, 0.0), Vec3::X))
+            .is_none()
+    );
+    // Cylinder: along the axis (qa = qb = 0), outside and inside: no root.
+    let cyl = Quadric::cylinder(Vec3::ZERO, Vec3::Z, 1.0).unwrap();
+    assert!(
+        cyl.roots(&Ray::new(Vec3::new(2.0, 0.0, 0.0), Vec3::Z))
+            .is_none()
+    );
+    assert!(
+        cyl.roots(&Ray::new(Vec3::new(0.5, 0.0, 0.0), Vec3::Z))
+            .is_none()
+    );
+    // Invalid rays.
+    for b in [f32::NAN, f32::INFINITY] {
+        let mut r = Ray::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0));
+        r.origin.y = b;
+        assert!(e.intersect(&r).is_none());
+        let mut r = Ray::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0));
+        r.direction.z = b;
+        assert!(e.intersect(&r).is_none());
+    }
+    assert!(e.intersect(&Ray::new(Vec3::ZERO, Vec3::ZERO)).is_none());
+    let huge = Ray::new(Vec3::splat(f32::MAX), Vec3::splat(-f32::MAX));
+    if let Some(h) = e.intersect(&huge) {
+        assert!(huge.contains(h.t) && h.point.is_finite(), "{h:?}");
+    }
+}
+
+#[test]
+fn paraboloid_linear_case() {
+    // z = x² + y²: A = diag(1, 1, 0), b = (0, 0, −1/2), c = 0 (A singular: no centre).
+    let p = Quadric::new(
+        DMat3::from_diagonal(DVec3::new(1.0, 1.0, 0.0)),
+        DVec3::new(0.0, 0.0, -0.5),
+        0.0,
+    )
+    .unwrap();
+    assert_eq!(p.reference_point(), DVec3::ZERO);
+    // Along the axis direction qa = 0: one root, z = 0.25 → t = 9.75.
+    let ray = Ray::new(Vec3::new(0.5, 0.0, 10.0), -Vec3::Z);
+    assert_eq!(p.roots(&ray), Some((9.75, 9.75)));
+    let h = p.intersect(&ray).unwrap();
+    assert_eq!(h.point, Vec3::new(0.5, 0.0, 0.25));
+    // Gradient (2x, 2y, −1) = (1, 0, −1): outward is below the bowl (f > 0 outside).
+    assert!((h.normal - Vec3::new(1.0, 0.0, -1.0).normalize()).length() < 1e-6);
+    // Recentred at the vertex: same answers.
+    let pr = p.recentered(DVec3::new(0.0, 0.0, 0.0)).unwrap();
+    assert_eq!(pr.roots(&ray), Some((9.75, 9.75)));
+}
+
+/// Rays from near the world origin aimed at a quadric far away: every root satisfies the
+/// residual bound, hits are found, and spawned rays leave without re-hitting nearby.
+fn far_quadric_suite(q: &Quadric, target: Vec3, spread: f32, seed: u64) -> (usize, f64) {
+    let mut st = seed;
+    let mut hits = 0;
+    let mut worst = 0.0f64;
+    for _ in 0..4000 {
+        let o = unit_vec(&mut st) * 10.0;
+        let aim = target + unit_vec(&mut st) * spread;
+        let ray = Ray::new(o, aim - o);
+        let Some((t0, t1)) = q.roots(&ray) else {
+            continue;
+        };
+        for t in [t0, t1] {
+            let r = residual_ratio(q, &ray, t);
+            worst = worst.max(r);
+            assert!(r <= QUADRIC_ROOT_RESIDUAL_REL, "residual {r:e}");
+        }
+        let Some(h) = q.intersect(&ray) else {
+            continue;
+        };
+        hits += 1;
+        // The point is within its bound of the surface: |f(p)| / |∇f| ≤ error along n.
+        let x = h.point.as_dvec3();
+        let dist = q.eval(x).abs() / q.gradient(x).length();
+        let along = h.point_error.as_dvec3().dot(h.normal.abs().as_dvec3());
+        assert!(dist <= along * 1.01, "dist {dist} > {along}");
+        // Spawned rays, both sides: no hit within a small neighbourhood of the origin
+        // (a cylinder or cone can be legitimately re-hit far away).
+        let near = 1.0e-3 * spread;
+        for w in [h.normal, -h.normal, ray.direction, -ray.direction] {
+            let sr = spawn_ray(&h, w);
+            if let Some(h2) = q.intersect(&sr) {
+                assert!(h2.t * w.length() > near, "self-hit at t = {}", h2.t);
+            }
+        }
+    }
+    (hits, worst)
+}
+
+#[test]
+fn far_cylinder_and_cone() {
+    // S9: a cylinder 3e4 away, tilted; a cone 9e3 away.
+    let axis_point = Vec3::new(1.0e4, -3.0e4, 0.0);
+    let cyl = Quadric::cylinder(axis_point, Vec3::new(0.3, 0.1, 1.0), 2.0).unwrap();
+    let (hits, worst_c) = far_quadric_suite(&cyl, axis_point, 2.5, 21);
+    assert!(hits > 2000, "{hits}");
+    let apex = Vec3::new(-5.0e3, 2.0e3, 7.0e3);
+    let axis = Vec3::new(1.0, 1.0, 0.0);
+    let cone = Quadric::cone(apex, axis, 0.5).unwrap();
+    let target = apex + axis.normalize() * 20.0;
+    let (hits, worst_k) = far_quadric_suite(&cone, target, 12.0, 22);
+    assert!(hits > 2000, "{hits}");
+    // A far ellipsoid given in the general (uncentred) matrix form.
+    let c = Vec3::new(3.0e4, 1.0e4, -2.0e4);
+    let r = Vec3::new(1.0, 0.5, 2.0);
+    let e = Quadric::ellipsoid(c, r).unwrap();
+    let a = e.matrix();
+    let cd = c.as_dvec3();
+    let b = -(a * cd);
+    let general = Quadric::new(a, b, cd.dot(a * cd) - 1.0).unwrap();
+    let (hits, worst_e) = far_quadric_suite(&general, c, 1.5, 23);
+    assert!(hits > 1000, "{hits}");
+    std::eprintln!(
+        "worst residual ratio: cylinder {worst_c:e}, cone {worst_k:e}, ellipsoid {worst_e:e}"
+    );
+}
+
+#[test]
+fn cone_apex_hit_is_finite() {
+    let cone = Quadric::cone(Vec3::ZERO, Vec3::Z, 1.0).unwrap();
+    let h = cone
+        .intersect(&Ray::new(
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(-1.0, -2.0, -3.0),
+        ))
+        .unwrap();
+    assert_eq!(h.t, 1.0);
+    assert_eq!(h.point, Vec3::ZERO);
+    assert!(h.normal.is_finite() && h.point_error.is_finite());
+}
