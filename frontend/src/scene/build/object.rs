@@ -13,21 +13,56 @@ use super::mesh_ref::mesh;
 use super::transform::transform;
 use super::{Ctx, Span};
 
-/// Fields each object type may use (besides `type`, `material`, `transform`).
-pub(super) fn allowed(kind: &str) -> Option<&'static [&'static str]> {
-    Some(match kind {
-        "sphere" => &["center", "radius"],
-        "ellipsoid" => &["center", "radii"],
-        "quadric" => &["coefficients", "min", "max"],
-        "box" => &["min", "max"],
-        "plane" => &["point", "normal"],
-        "triangle" | "polygon" => &["vertices"],
-        "mesh" => &["mesh"],
-        "csg" => &["op", "operands"],
-        _ => return None,
-    })
+/// The object types of `[[object]]`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Sphere,
+    Ellipsoid,
+    Quadric,
+    Box,
+    Plane,
+    Triangle,
+    Polygon,
+    Mesh,
+    Csg,
 }
 
+impl Kind {
+    /// Every type with its name in a scene file.
+    const ALL: [(&'static str, Kind); 9] = [
+        ("sphere", Kind::Sphere),
+        ("ellipsoid", Kind::Ellipsoid),
+        ("quadric", Kind::Quadric),
+        ("box", Kind::Box),
+        ("plane", Kind::Plane),
+        ("triangle", Kind::Triangle),
+        ("polygon", Kind::Polygon),
+        ("mesh", Kind::Mesh),
+        ("csg", Kind::Csg),
+    ];
+
+    /// The type named `name`, if any.
+    fn parse(name: &str) -> Option<Self> {
+        Self::ALL.iter().find(|(n, _)| *n == name).map(|&(_, k)| k)
+    }
+
+    /// Fields the type may use (besides `type`, `material`, `transform`).
+    fn fields(self) -> &'static [&'static str] {
+        match self {
+            Kind::Sphere => &["center", "radius"],
+            Kind::Ellipsoid => &["center", "radii"],
+            Kind::Quadric => &["coefficients", "min", "max"],
+            Kind::Box => &["min", "max"],
+            Kind::Plane => &["point", "normal"],
+            Kind::Triangle | Kind::Polygon => &["vertices"],
+            Kind::Mesh => &["mesh"],
+            Kind::Csg => &["op", "operands"],
+        }
+    }
+}
+
+/// One object (`p` its field path, `inherited` the material of an enclosing CSG object):
+/// its type and fields checked, its shape built by the type's function.
 pub(super) fn object(
     ctx: &mut Ctx<'_>,
     o: &S<ObjectDef>,
@@ -36,23 +71,24 @@ pub(super) fn object(
 ) -> Result<Node> {
     let span = o.span();
     let o = o.get_ref();
-    let kind = o.kind.get_ref().as_str();
-    let Some(ok) = allowed(kind) else {
+    let name = o.kind.get_ref().as_str();
+    let Some(kind) = Kind::parse(name) else {
         return Err(ctx.err(
             &o.kind.span(),
             &format!("{p}.type"),
             format!(
-                "unknown object type `{kind}` (expected sphere, ellipsoid, quadric, box, plane, triangle, polygon, mesh or csg)"
+                "unknown object type `{name}` (expected sphere, ellipsoid, quadric, box, plane, triangle, polygon, mesh or csg)"
             ),
         ));
     };
-    for (name, s) in o.present_fields() {
-        if !ok.contains(&name) {
+    let ok = kind.fields();
+    for (field, s) in o.present_fields() {
+        if !ok.contains(&field) {
             return Err(ctx.err(
                 &s,
-                &format!("{p}.{name}"),
+                &format!("{p}.{field}"),
                 format!(
-                    "field `{name}` is not used by type `{kind}` (it takes: {})",
+                    "field `{field}` is not used by type `{name}` (it takes: {})",
                     ok.join(", ")
                 ),
             ));
@@ -82,186 +118,228 @@ pub(super) fn object(
         Some(t) => Some(transform(ctx, t, &format!("{p}.transform"))?),
         None => None,
     };
-    let f = |name: &str| format!("{p}.{name}");
+    let at = At {
+        span: &span,
+        p,
+        kind: name,
+    };
     let shape = match kind {
-        "sphere" => {
-            let c = ctx.need(&o.center, &span, &f("center"), kind)?;
-            let r = ctx.need(&o.radius, &span, &f("radius"), kind)?;
-            let center = ctx.v3(c, &f("center"))?;
-            let radius = ctx.positive(r, &f("radius"))?;
-            Shape::Sphere(
-                Sphere::new(center, radius)
-                    .map_err(|e| ctx.err(&r.span(), &f("radius"), e.to_string()))?,
-            )
-        }
-        "ellipsoid" => {
-            let c = ctx.need(&o.center, &span, &f("center"), kind)?;
-            let r = ctx.need(&o.radii, &span, &f("radii"), kind)?;
-            let radii = ctx.v3(r, &f("radii"))?;
-            if !(radii.min_element() > 0.0) {
-                return Err(ctx.err(&r.span(), &f("radii"), "every radius must be > 0"));
-            }
-            let center = ctx.v3(c, &f("center"))?;
-            Shape::Ellipsoid(
-                Ellipsoid::new(center, radii)
-                    .map_err(|e| ctx.err(&r.span(), &f("radii"), e.to_string()))?,
-            )
-        }
-        "quadric" => {
-            let q = ctx.need(&o.coefficients, &span, &f("coefficients"), kind)?;
-            let qd = q.get_ref();
-            let g = |v: &Option<S<f32>>, n: &str| -> Result<f64> {
-                v.as_ref().map_or(Ok(0.0), |x| {
-                    ctx.f(x, &f(&format!("coefficients.{n}"))).map(f64::from)
-                })
-            };
-            let (xy, xz, yz) = (
-                g(&qd.xy, "xy")? / 2.0,
-                g(&qd.xz, "xz")? / 2.0,
-                g(&qd.yz, "yz")? / 2.0,
-            );
-            // The core's form is xᵀAx + 2bᵀx + c.
-            let a = DMat3::from_cols(
-                DVec3::new(g(&qd.xx, "xx")?, xy, xz),
-                DVec3::new(xy, g(&qd.yy, "yy")?, yz),
-                DVec3::new(xz, yz, g(&qd.zz, "zz")?),
-            );
-            let b = DVec3::new(g(&qd.x, "x")?, g(&qd.y, "y")?, g(&qd.z, "z")?) / 2.0;
-            let quadric = Quadric::new(a, b, g(&qd.c, "c")?).map_err(|e| match e {
-                GeometryError::Degenerate => ctx.err(
-                    &q.span(),
-                    &f("coefficients"),
-                    "all quadratic and linear coefficients are 0",
-                ),
-                other => ctx.err(&q.span(), &f("coefficients"), other.to_string()),
-            })?;
-            let clip = match (&o.min, &o.max) {
-                (Some(lo), Some(hi)) => Some(box_of(ctx, lo, hi, p)?),
-                (None, None) => None,
-                (Some(s), None) | (None, Some(s)) => {
-                    return Err(ctx.err(
-                        &s.span(),
-                        &f("min"),
-                        "a clip box needs both `min` and `max`",
-                    ));
-                }
-            };
-            Shape::Quadric(ClippedQuadric { quadric, clip })
-        }
-        "box" => {
-            let lo = ctx.need(&o.min, &span, &f("min"), kind)?;
-            let hi = ctx.need(&o.max, &span, &f("max"), kind)?;
+        Kind::Sphere => sphere(ctx, o, &at)?,
+        Kind::Ellipsoid => ellipsoid(ctx, o, &at)?,
+        Kind::Quadric => quadric(ctx, o, &at)?,
+        Kind::Box => {
+            let lo = ctx.need(&o.min, &span, &at.f("min"), name)?;
+            let hi = ctx.need(&o.max, &span, &at.f("max"), name)?;
             Shape::Box(box_of(ctx, lo, hi, p)?)
         }
-        "plane" => {
-            let pt = ctx.need(&o.point, &span, &f("point"), kind)?;
-            let n = ctx.need(&o.normal, &span, &f("normal"), kind)?;
-            let point = ctx.v3(pt, &f("point"))?;
-            let normal = ctx.dir(n, &f("normal"))?;
-            Shape::Plane(
-                Plane::new(point, normal)
-                    .map_err(|e| ctx.err(&n.span(), &f("normal"), e.to_string()))?,
-            )
+        Kind::Plane => plane(ctx, o, &at)?,
+        Kind::Triangle | Kind::Polygon => vertices(ctx, o, &at, kind == Kind::Triangle)?,
+        Kind::Mesh => {
+            let m = ctx.need(&o.mesh, &span, &at.f("mesh"), name)?;
+            Shape::Mesh(mesh(ctx, m, &at.f("mesh"))?)
         }
-        "triangle" | "polygon" => {
-            let vs = ctx.need(&o.vertices, &span, &f("vertices"), kind)?;
-            let pts: Vec<Vec3> = vs.get_ref().iter().map(|a| Vec3::from_array(**a)).collect();
-            if pts.iter().any(|v| !v.is_finite()) {
-                return Err(ctx.err(
-                    &vs.span(),
-                    &f("vertices"),
-                    "a vertex has a non-finite coordinate",
-                ));
-            }
-            if kind == "triangle" {
-                let [a, b, c] = pts[..] else {
-                    return Err(ctx.err(
-                        &vs.span(),
-                        &f("vertices"),
-                        format!("a triangle needs 3 vertices, got {}", pts.len()),
-                    ));
-                };
-                if (b - a).cross(c - a) == Vec3::ZERO {
-                    return Err(ctx.err(
-                        &vs.span(),
-                        &f("vertices"),
-                        "degenerate triangle (zero area)",
-                    ));
-                }
-                Shape::Triangle([a, b, c])
-            } else {
-                Shape::Polygon(Box::new(polygon(ctx, pts, &vs.span(), &f("vertices"))?))
-            }
-        }
-        "mesh" => {
-            let m = ctx.need(&o.mesh, &span, &f("mesh"), kind)?;
-            Shape::Mesh(mesh(ctx, m, &f("mesh"))?)
-        }
-        "csg" => {
-            let op = ctx.need(&o.op, &span, &f("op"), kind)?;
-            let op_v = match op.get_ref().as_str() {
-                "union" => CsgOp::Union,
-                "intersection" => CsgOp::Intersection,
-                "difference" => CsgOp::Difference,
-                other => {
-                    return Err(ctx.err(
-                        &op.span(),
-                        &f("op"),
-                        format!("unknown CSG operation `{other}` (expected union, intersection or difference)"),
-                    ));
-                }
-            };
-            let ops = ctx.need(&o.operands, &span, &f("operands"), kind)?;
-            if ops.get_ref().len() != 2 {
-                return Err(ctx.err(
-                    &ops.span(),
-                    &f("operands"),
-                    format!(
-                        "a CSG object needs exactly 2 operands, got {} (nest CSG objects for more)",
-                        ops.get_ref().len()
-                    ),
-                ));
-            }
-            let mut nodes = Vec::new();
-            for (k, od) in ops.get_ref().iter().enumerate() {
-                let fp = format!("{p}.operands[{k}]");
-                if let Some(r) = &od.get_ref().repeat {
-                    return Err(ctx.err(
-                        &r.span(),
-                        &format!("{fp}.repeat"),
-                        "`repeat` is for top-level objects, not CSG operands",
-                    ));
-                }
-                let n = object(ctx, od, &fp, Some(material))?;
-                if !n.shape.is_solid() {
-                    let why = match &n.shape {
-                        Shape::Mesh(m) => format!(
-                            "mesh `{}` is not closed ({} boundary or unpaired edges): a CSG operand must bound a solid",
-                            m.name, m.boundary_edges
-                        ),
-                        Shape::Quadric(_) => {
-                            "a clipped quadric is not closed: a CSG operand must bound a solid"
-                                .to_string()
-                        }
-                        _ => format!(
-                            "a {} is not closed: a CSG operand must bound a solid",
-                            od.get_ref().kind.get_ref()
-                        ),
-                    };
-                    return Err(ctx.err(&od.get_ref().kind.span(), &fp, why));
-                }
-                nodes.push(n);
-            }
-            let b = nodes.pop().map(Box::new);
-            let a = nodes.pop().map(Box::new);
-            match (a, b) {
-                (Some(a), Some(b)) => Shape::Csg(op_v, a, b),
-                _ => unreachable!("checked: two operands"),
-            }
-        }
-        _ => unreachable!("checked by `allowed`"),
+        Kind::Csg => csg(ctx, o, &at, material)?,
     };
     Ok(Node::new(shape, material, transform))
+}
+
+/// Where an object's fields are reported: its span, field path and type name.
+struct At<'a> {
+    span: &'a Span,
+    p: &'a str,
+    kind: &'a str,
+}
+
+impl At<'_> {
+    /// The path of field `name`.
+    fn f(&self, name: &str) -> String {
+        format!("{}.{name}", self.p)
+    }
+}
+
+fn sphere(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Shape> {
+    let (span, kind, f) = (at.span, at.kind, |n: &str| at.f(n));
+    let c = ctx.need(&o.center, span, &f("center"), kind)?;
+    let r = ctx.need(&o.radius, span, &f("radius"), kind)?;
+    let center = ctx.v3(c, &f("center"))?;
+    let radius = ctx.positive(r, &f("radius"))?;
+    Ok(Shape::Sphere(Sphere::new(center, radius).map_err(|e| {
+        ctx.err(&r.span(), &f("radius"), e.to_string())
+    })?))
+}
+
+fn ellipsoid(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Shape> {
+    let (span, kind, f) = (at.span, at.kind, |n: &str| at.f(n));
+    let c = ctx.need(&o.center, span, &f("center"), kind)?;
+    let r = ctx.need(&o.radii, span, &f("radii"), kind)?;
+    let radii = ctx.v3(r, &f("radii"))?;
+    if !(radii.min_element() > 0.0) {
+        return Err(ctx.err(&r.span(), &f("radii"), "every radius must be > 0"));
+    }
+    let center = ctx.v3(c, &f("center"))?;
+    Ok(Shape::Ellipsoid(Ellipsoid::new(center, radii).map_err(
+        |e| ctx.err(&r.span(), &f("radii"), e.to_string()),
+    )?))
+}
+
+fn quadric(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Shape> {
+    let (span, kind, p, f) = (at.span, at.kind, at.p, |n: &str| at.f(n));
+    let q = ctx.need(&o.coefficients, span, &f("coefficients"), kind)?;
+    let qd = q.get_ref();
+    let g = |v: &Option<S<f32>>, n: &str| -> Result<f64> {
+        v.as_ref().map_or(Ok(0.0), |x| {
+            ctx.f(x, &f(&format!("coefficients.{n}"))).map(f64::from)
+        })
+    };
+    let (xy, xz, yz) = (
+        g(&qd.xy, "xy")? / 2.0,
+        g(&qd.xz, "xz")? / 2.0,
+        g(&qd.yz, "yz")? / 2.0,
+    );
+    // The core's form is xᵀAx + 2bᵀx + c.
+    let a = DMat3::from_cols(
+        DVec3::new(g(&qd.xx, "xx")?, xy, xz),
+        DVec3::new(xy, g(&qd.yy, "yy")?, yz),
+        DVec3::new(xz, yz, g(&qd.zz, "zz")?),
+    );
+    let b = DVec3::new(g(&qd.x, "x")?, g(&qd.y, "y")?, g(&qd.z, "z")?) / 2.0;
+    let quadric = Quadric::new(a, b, g(&qd.c, "c")?).map_err(|e| match e {
+        GeometryError::Degenerate => ctx.err(
+            &q.span(),
+            &f("coefficients"),
+            "all quadratic and linear coefficients are 0",
+        ),
+        other => ctx.err(&q.span(), &f("coefficients"), other.to_string()),
+    })?;
+    let clip = match (&o.min, &o.max) {
+        (Some(lo), Some(hi)) => Some(box_of(ctx, lo, hi, p)?),
+        (None, None) => None,
+        (Some(s), None) | (None, Some(s)) => {
+            return Err(ctx.err(
+                &s.span(),
+                &f("min"),
+                "a clip box needs both `min` and `max`",
+            ));
+        }
+    };
+    Ok(Shape::Quadric(ClippedQuadric { quadric, clip }))
+}
+
+fn plane(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Shape> {
+    let (span, kind, f) = (at.span, at.kind, |n: &str| at.f(n));
+    let pt = ctx.need(&o.point, span, &f("point"), kind)?;
+    let n = ctx.need(&o.normal, span, &f("normal"), kind)?;
+    let point = ctx.v3(pt, &f("point"))?;
+    let normal = ctx.dir(n, &f("normal"))?;
+    Ok(Shape::Plane(Plane::new(point, normal).map_err(|e| {
+        ctx.err(&n.span(), &f("normal"), e.to_string())
+    })?))
+}
+
+/// A triangle (`triangle`) or a polygon from `vertices`.
+fn vertices(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>, triangle: bool) -> Result<Shape> {
+    let (span, kind, f) = (at.span, at.kind, |n: &str| at.f(n));
+    let vs = ctx.need(&o.vertices, span, &f("vertices"), kind)?;
+    let pts: Vec<Vec3> = vs.get_ref().iter().map(|a| Vec3::from_array(**a)).collect();
+    if pts.iter().any(|v| !v.is_finite()) {
+        return Err(ctx.err(
+            &vs.span(),
+            &f("vertices"),
+            "a vertex has a non-finite coordinate",
+        ));
+    }
+    if triangle {
+        let [a, b, c] = pts[..] else {
+            return Err(ctx.err(
+                &vs.span(),
+                &f("vertices"),
+                format!("a triangle needs 3 vertices, got {}", pts.len()),
+            ));
+        };
+        if (b - a).cross(c - a) == Vec3::ZERO {
+            return Err(ctx.err(
+                &vs.span(),
+                &f("vertices"),
+                "degenerate triangle (zero area)",
+            ));
+        }
+        Ok(Shape::Triangle([a, b, c]))
+    } else {
+        Ok(Shape::Polygon(Box::new(polygon(
+            ctx,
+            pts,
+            &vs.span(),
+            &f("vertices"),
+        )?)))
+    }
+}
+
+/// A CSG object: its operation and its two solid operands (which inherit `material`).
+fn csg(ctx: &mut Ctx<'_>, o: &ObjectDef, at: &At<'_>, material: u32) -> Result<Shape> {
+    let (span, kind, p, f) = (at.span, at.kind, at.p, |n: &str| at.f(n));
+    let op = ctx.need(&o.op, span, &f("op"), kind)?;
+    let op_v = match op.get_ref().as_str() {
+        "union" => CsgOp::Union,
+        "intersection" => CsgOp::Intersection,
+        "difference" => CsgOp::Difference,
+        other => {
+            return Err(ctx.err(
+                &op.span(),
+                &f("op"),
+                format!(
+                    "unknown CSG operation `{other}` (expected union, intersection or difference)"
+                ),
+            ));
+        }
+    };
+    let ops = ctx.need(&o.operands, span, &f("operands"), kind)?;
+    if ops.get_ref().len() != 2 {
+        return Err(ctx.err(
+            &ops.span(),
+            &f("operands"),
+            format!(
+                "a CSG object needs exactly 2 operands, got {} (nest CSG objects for more)",
+                ops.get_ref().len()
+            ),
+        ));
+    }
+    let mut nodes = Vec::new();
+    for (k, od) in ops.get_ref().iter().enumerate() {
+        let fp = format!("{p}.operands[{k}]");
+        if let Some(r) = &od.get_ref().repeat {
+            return Err(ctx.err(
+                &r.span(),
+                &format!("{fp}.repeat"),
+                "`repeat` is for top-level objects, not CSG operands",
+            ));
+        }
+        let n = object(ctx, od, &fp, Some(material))?;
+        if !n.shape.is_solid() {
+            let why = match &n.shape {
+                Shape::Mesh(m) => format!(
+                    "mesh `{}` is not closed ({} boundary or unpaired edges): a CSG operand must bound a solid",
+                    m.name, m.boundary_edges
+                ),
+                Shape::Quadric(_) => {
+                    "a clipped quadric is not closed: a CSG operand must bound a solid".to_string()
+                }
+                _ => format!(
+                    "a {} is not closed: a CSG operand must bound a solid",
+                    od.get_ref().kind.get_ref()
+                ),
+            };
+            return Err(ctx.err(&od.get_ref().kind.span(), &fp, why));
+        }
+        nodes.push(n);
+    }
+    let [a, b]: [Node; 2] = nodes.try_into().map_err(|_| {
+        ctx.err(
+            &ops.span(),
+            &f("operands"),
+            "a CSG object needs exactly 2 operands",
+        )
+    })?;
+    Ok(Shape::Csg(op_v, Box::new(a), Box::new(b)))
 }
 
 pub(super) fn list(names: &[&str]) -> String {
