@@ -17,68 +17,65 @@ pub(super) fn transform(
     for (k, step) in t.get_ref().iter().enumerate() {
         let f = format!("{p}[{k}]");
         let s = step.get_ref();
-        let set = usize::from(s.translate.is_some())
-            + usize::from(s.rotate.is_some())
-            + usize::from(s.scale.is_some())
-            + usize::from(s.matrix.is_some());
-        if set != 1 {
-            return Err(ctx.err(
-                &step.span(),
-                &f,
-                "each transform step needs exactly one of `translate`, `rotate`, `scale`, `matrix`",
-            ));
-        }
-        let (step_m, span, name) = if let Some(v) = &s.translate {
-            (
+        let (step_m, span, name) = match (&s.translate, &s.rotate, &s.scale, &s.matrix) {
+            (Some(v), None, None, None) => (
                 Mat4::from_translation(ctx.v3(v, &format!("{f}.translate"))?),
                 v.span(),
                 "translate",
-            )
-        } else if let Some(r) = &s.rotate {
-            let rd = r.get_ref();
-            let axis = ctx.v3(&rd.axis, &format!("{f}.rotate.axis"))?;
-            let deg = ctx.f(&rd.degrees, &format!("{f}.rotate.degrees"))?;
-            let rm = xform::rotation(axis, deg).ok_or_else(|| {
-                ctx.err(
-                    &rd.axis.span(),
-                    &format!("{f}.rotate.axis"),
-                    "must be a non-zero vector",
+            ),
+            (None, Some(r), None, None) => {
+                let rd = r.get_ref();
+                let axis = ctx.v3(&rd.axis, &format!("{f}.rotate.axis"))?;
+                let deg = ctx.f(&rd.degrees, &format!("{f}.rotate.degrees"))?;
+                let rm = xform::rotation(axis, deg).ok_or_else(|| {
+                    ctx.err(
+                        &rd.axis.span(),
+                        &format!("{f}.rotate.axis"),
+                        "must be a non-zero vector",
+                    )
+                })?;
+                (rm, r.span(), "rotate")
+            }
+            (None, None, Some(sc), None) => {
+                let v = Vec3::from_array(sc.get_ref().0);
+                if !v.is_finite() {
+                    return Err(ctx.err(&sc.span(), &format!("{f}.scale"), "non-finite scale"));
+                }
+                (Mat4::from_scale(v), sc.span(), "scale")
+            }
+            (None, None, None, Some(mx)) => {
+                let rows = mx.get_ref();
+                if rows.iter().flat_map(|r| r.iter()).any(|x| !x.is_finite()) {
+                    return Err(ctx.err(
+                        &mx.span(),
+                        &format!("{f}.matrix"),
+                        "non-finite matrix entry",
+                    ));
+                }
+                if *rows[3] != [0.0, 0.0, 0.0, 1.0] {
+                    return Err(ctx.err(
+                        &mx.span(),
+                        &format!("{f}.matrix"),
+                        format!(
+                            "not an affine transform: the last row must be [0, 0, 0, 1], got {:?}",
+                            *rows[3]
+                        ),
+                    ));
+                }
+                let r = |i: usize| Vec4::from_array(*rows[i]);
+                (
+                    Mat4::from_cols(r(0), r(1), r(2), r(3)).transpose(),
+                    mx.span(),
+                    "matrix",
                 )
-            })?;
-            (rm, r.span(), "rotate")
-        } else if let Some(sc) = &s.scale {
-            let v = Vec3::from_array(sc.get_ref().0);
-            if !v.is_finite() {
-                return Err(ctx.err(&sc.span(), &format!("{f}.scale"), "non-finite scale"));
             }
-            (Mat4::from_scale(v), sc.span(), "scale")
-        } else if let Some(mx) = &s.matrix {
-            let rows = mx.get_ref();
-            if rows.iter().flat_map(|r| r.iter()).any(|x| !x.is_finite()) {
+            _ => {
                 return Err(ctx.err(
-                    &mx.span(),
-                    &format!("{f}.matrix"),
-                    "non-finite matrix entry",
+                    &step.span(),
+                    &f,
+                    "each transform step needs exactly one of `translate`, `rotate`, `scale`, `matrix`",
                 ));
             }
-            if *rows[3] != [0.0, 0.0, 0.0, 1.0] {
-                return Err(ctx.err(
-                    &mx.span(),
-                    &format!("{f}.matrix"),
-                    format!(
-                        "not an affine transform: the last row must be [0, 0, 0, 1], got {:?}",
-                        *rows[3]
-                    ),
-                ));
-            }
-            let r = |i: usize| Vec4::from_array(*rows[i]);
-            (
-                Mat4::from_cols(r(0), r(1), r(2), r(3)).transpose(),
-                mx.span(),
-                "matrix",
-            )
-        } else {
-            unreachable!("exactly one is set")
         };
         // Check each step, so the error points at the step that is singular.
         Transform::new(step_m)
