@@ -4,6 +4,7 @@ use core::fmt;
 
 /// Why a ray was rejected by [`crate::Ray::validate`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum RayError {
     /// An origin component is NaN or infinite.
     NonFiniteOrigin,
@@ -30,6 +31,7 @@ impl core::error::Error for RayError {}
 
 /// Why a primitive could not be constructed from its data.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum GeometryError {
     /// A coordinate or parameter is NaN or infinite.
     NonFinite,

@@ -5,6 +5,7 @@ use core::fmt;
 /// Why a BVH operation was refused. Every variant is returned before any caller storage is
 /// written, except [`BvhError::NonFinitePrimitive`] from [`super::Bvh::refit`] (see there).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum BvhError {
     /// The node storage holds fewer nodes than [`super::node_capacity`] requires.
     NodeStorageTooSmall {

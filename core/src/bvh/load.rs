@@ -35,6 +35,7 @@ pub const fn load_scratch_len(triangles: usize) -> usize {
 /// Why [`Bvh::from_parts`] refused its input. Node and position numbers are indices into the
 /// arrays as given.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum LoadError {
     /// The index array's length is not the mesh's triangle count.
     IndexCount {

@@ -90,7 +90,7 @@ impl<S: MeshStorage> Mesh<S> {
         if scratch.len() < needed {
             return Err(BuildError::ScratchTooSmall {
                 needed,
-                provided: scratch.len(),
+                available: scratch.len(),
             });
         }
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {

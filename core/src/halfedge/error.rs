@@ -30,6 +30,7 @@ pub struct CapacityError {
 /// Why [`super::Mesh::build`] rejected a triangle list. On any error the mesh is left
 /// empty (and valid).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum BuildError {
     /// More vertices, edges or faces than the storage holds.
     Capacity(CapacityError),
@@ -37,8 +38,8 @@ pub enum BuildError {
     ScratchTooSmall {
         /// Required length in `u32`s.
         needed: usize,
-        /// Length provided.
-        provided: usize,
+        /// Length available.
+        available: usize,
     },
     /// A position has a NaN or infinite coordinate.
     NonFinitePosition {
@@ -83,6 +84,7 @@ pub enum BuildError {
 
 /// Which invariant [`super::Mesh::validate`] found broken, and where.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum InvariantError {
     /// A free list is corrupt (cycle, live entry, or live + free ≠ used slots).
     FreeList(ElementKind),
@@ -121,6 +123,7 @@ pub enum InvariantError {
 
 /// Why [`super::Mesh::flip_edge`] refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum FlipError {
     /// The edge is dead or out of range.
     Dead,
@@ -136,6 +139,7 @@ pub enum FlipError {
 
 /// Why [`super::Mesh::split_edge`] refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum SplitError {
     /// The edge is dead or out of range.
     Dead,
@@ -150,6 +154,7 @@ pub enum SplitError {
 
 /// Why [`super::Mesh::collapse_edge`] refused: the rule that failed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum CollapseError {
     /// The halfedge is dead or out of range.
     Dead,
@@ -171,6 +176,7 @@ pub enum CollapseError {
 
 /// Why [`super::Mesh::subdivide_loop`] refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum SubdivideError {
     /// The source has tombstoned slots; call [`super::Mesh::compact`] first.
     NotCompact,
@@ -186,6 +192,7 @@ pub enum SubdivideError {
 
 /// Why [`super::Mesh::export`] failed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum ExportError {
     /// An output buffer is too short.
     BufferTooSmall {
@@ -198,6 +205,7 @@ pub enum ExportError {
 
 /// Why a smoothing step refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum DiffuseError {
     /// The vertex is dead or out of range.
     Dead,
@@ -212,6 +220,7 @@ pub enum DiffuseError {
 
 /// Why [`super::Mesh::set_position`] refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum PositionError {
     /// The vertex is dead or out of range.
     Dead,
@@ -243,9 +252,9 @@ impl fmt::Display for BuildError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             Self::Capacity(c) => write!(f, "cannot build half-edge mesh: {c}"),
-            Self::ScratchTooSmall { needed, provided } => write!(
+            Self::ScratchTooSmall { needed, available } => write!(
                 f,
-                "cannot build half-edge mesh: scratch of {provided} entries, {needed} needed"
+                "cannot build half-edge mesh: scratch of {available} entries, {needed} needed"
             ),
             Self::NonFinitePosition { vertex } => {
                 write!(f, "vertex {} has a NaN or infinite coordinate", vertex.0)
@@ -470,7 +479,7 @@ mod tests {
             BuildError::Capacity(cap),
             BuildError::ScratchTooSmall {
                 needed: 5,
-                provided: 1,
+                available: 1,
             },
             BuildError::NonFinitePosition { vertex: v },
             BuildError::IndexOutOfRange { face: t, index: 99 },

@@ -26,23 +26,24 @@ use super::storage::MeshStorage;
 
 /// Why [`Mesh::vertex_normals`] refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum NormalsError {
     /// The output slice is shorter than the number of vertex slots in use
     /// ([`Mesh::slots`]`().vertices`). Nothing was written.
     BufferTooSmall {
         /// Entries needed.
         needed: usize,
-        /// Entries provided.
-        provided: usize,
+        /// Entries available.
+        available: usize,
     },
 }
 
 impl fmt::Display for NormalsError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::BufferTooSmall { needed, provided } => write!(
+            Self::BufferTooSmall { needed, available } => write!(
                 f,
-                "vertex normal buffer too small: {needed} entries needed, {provided} provided"
+                "vertex normal buffer too small: {needed} entries needed, {available} provided"
             ),
         }
     }
@@ -77,7 +78,7 @@ impl<S: MeshStorage> Mesh<S> {
         if out.len() < needed {
             return Err(NormalsError::BufferTooSmall {
                 needed,
-                provided: out.len(),
+                available: out.len(),
             });
         }
         let mut missing = 0;
@@ -260,7 +261,7 @@ mod tests {
             m.vertex_normals(&mut out),
             Err(NormalsError::BufferTooSmall {
                 needed: 8,
-                provided: 7
+                available: 7
             })
         );
         assert_eq!(out, [Vec3::ONE; 7]);

@@ -299,7 +299,7 @@ fn build_errors_name_the_element() {
         m.build(&p, &t, &mut small),
         Err(BuildError::ScratchTooSmall {
             needed: 24,
-            provided: 5
+            available: 5
         })
     );
     // A failed build leaves the mesh empty.

@@ -308,6 +308,8 @@ pub fn refusal_name(e: &CollapseError) -> &'static str {
         CollapseError::WingValence(_) => "wing valence 3",
         CollapseError::FoldOver(_) => "fold-over",
         CollapseError::NonFinitePosition => "non-finite position",
+        // A rule added to the core after this list: its own text.
+        _ => "another rule",
     }
 }
 

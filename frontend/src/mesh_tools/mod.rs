@@ -409,10 +409,12 @@ pub fn describe_build_error(e: &BuildError, obj: &ObjMesh, path: &Path) -> (Loca
                 c.needed, c.kind, c.available
             ),
         ),
-        BuildError::ScratchTooSmall { needed, provided } => (
+        BuildError::ScratchTooSmall { needed, available } => (
             Location::file(path),
-            format!("internal error: build scratch {provided} < {needed}"),
+            format!("internal error: build scratch {available} < {needed}"),
         ),
+        // A refusal added to the core after this list: the core's own sentence.
+        _ => (Location::file(path), e.to_string()),
     }
 }
 
