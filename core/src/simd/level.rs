@@ -33,6 +33,29 @@ pub trait SimdLevel: Copy + sealed::Sealed {
         t_min: f32,
         t_max: f32,
     ) -> Option<([f32; 8], u32)>;
+
+    /// The eight [`order_key`]s of `dist` and the hit lanes `mask`, sorted ascending, or
+    /// `None` when this level has no kernel for it (the caller then sorts the same keys,
+    /// with the same result: the keys of hit lanes are distinct).
+    fn sort_keys8(self, dist: &[f32; 8], mask: u32) -> Option<[u32; 8]>;
+}
+
+/// The sort key of child slot `lane` (`< 8`) entered at distance `dist`: `dist`'s bits made
+/// monotone (an order-preserving map of `f32` to `u32`: a negative value has all bits
+/// flipped, any other its sign bit set), with the low three bits replaced by the slot, so
+/// that keys are distinct, ties go to the earlier slot and `key & 7` is the slot; `u32::MAX`
+/// for a lane the ray misses (`hit` false). Distances differing only in those three bits
+/// may be ordered by slot: only a traversal's visiting order, never an answer, depends on it.
+#[inline(always)]
+#[must_use]
+pub fn order_key(dist: f32, lane: usize, hit: bool) -> u32 {
+    let b = dist.to_bits();
+    let monotone = b ^ ((((b as i32) >> 31) as u32) | 0x8000_0000);
+    if hit {
+        (monotone & !7) | (lane as u32 & 7)
+    } else {
+        u32::MAX
+    }
 }
 
 mod sealed {
@@ -48,6 +71,11 @@ mod sealed {
 pub struct Portable;
 
 impl SimdLevel for Portable {
+    #[inline(always)]
+    fn sort_keys8(self, _: &[f32; 8], _: u32) -> Option<[u32; 8]> {
+        None
+    }
+
     #[inline(always)]
     fn slab8(
         self,
@@ -98,6 +126,12 @@ impl Avx2Fma {
 #[cfg(target_arch = "x86_64")]
 impl SimdLevel for Avx2Fma {
     #[inline(always)]
+    fn sort_keys8(self, dist: &[f32; 8], mask: u32) -> Option<[u32; 8]> {
+        // SAFETY: as in `slab8`: the token proves AVX2 and FMA.
+        Some(unsafe { sort_keys8_avx2(dist, mask) })
+    }
+
+    #[inline(always)]
     fn slab8(
         self,
         lo: [&[f32; 8]; 3],
@@ -125,6 +159,50 @@ impl SimdLevel for Avx2Fma {
             )
         })
     }
+}
+
+/// [`SimdLevel::sort_keys8`] in one 256-bit register: the keys of [`order_key`] lane by lane,
+/// then a bitonic sorting network of six compare-exchange steps (unsigned min and max, the
+/// partner lane by a shuffle, the larger kept where the network says).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+fn sort_keys8_avx2(dist: &[f32; 8], mask: u32) -> [u32; 8] {
+    use core::arch::x86_64::{
+        __m256i, _mm256_and_si256, _mm256_andnot_si256, _mm256_blend_epi32, _mm256_castps_si256,
+        _mm256_cmpeq_epi32, _mm256_loadu_ps, _mm256_max_epu32, _mm256_min_epu32, _mm256_or_si256,
+        _mm256_permute4x64_epi64, _mm256_set1_epi32, _mm256_setr_epi32, _mm256_shuffle_epi32,
+        _mm256_srai_epi32, _mm256_storeu_si256, _mm256_xor_si256,
+    };
+    // SAFETY: `dist` is eight `f32`: the unaligned 32-byte load reads exactly them.
+    let b = _mm256_castps_si256(unsafe { _mm256_loadu_ps(dist.as_ptr()) });
+    let sign = _mm256_set1_epi32(i32::MIN);
+    let monotone = _mm256_xor_si256(b, _mm256_or_si256(_mm256_srai_epi32::<31>(b), sign));
+    let lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    let keys = _mm256_or_si256(_mm256_and_si256(monotone, _mm256_set1_epi32(!7)), lanes);
+    let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    let hit = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask as i32), bits), bits);
+    // Missed lanes: all ones.
+    let mut v = _mm256_or_si256(keys, _mm256_andnot_si256(hit, _mm256_set1_epi32(-1)));
+    // Lane i and its partner i ^ d: the smaller to the lanes of `MAX_LANES` clear.
+    macro_rules! step {
+        ($partner:expr, $max_lanes:literal) => {{
+            let p: __m256i = $partner;
+            let (lo, hi) = (_mm256_min_epu32(v, p), _mm256_max_epu32(v, p));
+            v = _mm256_blend_epi32::<$max_lanes>(lo, hi);
+        }};
+    }
+    // Bitonic: sorted pairs (alternating), sorted quadruples (alternating), then the merge.
+    step!(_mm256_shuffle_epi32::<0xB1>(v), 0x66);
+    step!(_mm256_shuffle_epi32::<0x4E>(v), 0x3C);
+    step!(_mm256_shuffle_epi32::<0xB1>(v), 0x5A);
+    step!(_mm256_permute4x64_epi64::<0x4E>(v), 0xF0);
+    step!(_mm256_shuffle_epi32::<0x4E>(v), 0xCC);
+    step!(_mm256_shuffle_epi32::<0xB1>(v), 0xAA);
+    let mut out = [0u32; 8];
+    // SAFETY: `out` is eight `u32`: the unaligned 32-byte store writes exactly them.
+    unsafe { _mm256_storeu_si256(out.as_mut_ptr().cast(), v) };
+    out
 }
 
 /// [`SimdLevel::slab8`] in 256-bit registers.
@@ -184,6 +262,61 @@ mod tests {
     /// The AVX2 kernel against the documented lane formula, bit for bit, on values with NaN,
     /// `±∞`, `±0` and subnormals mixed in. Runs where the CPU has AVX2 and FMA (every CI
     /// machine here); elsewhere there is no AVX2 code to run and the test says so.
+    /// The AVX2 sort against the keys sorted in scalar code, on every hit mask and on
+    /// distances with ties, `±0`, negatives, infinities and values that differ only in the
+    /// bits the key drops.
+    #[test]
+    fn avx2_key_sort_equals_a_scalar_sort() {
+        let Some(level) = Avx2Fma::detect() else {
+            std::eprintln!("no AVX2+FMA on this CPU: the AVX2 kernel cannot run here");
+            return;
+        };
+        let specials = [
+            0.0f32,
+            -0.0,
+            1.0,
+            1.0,
+            -2.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            3.5e-41,
+        ];
+        let mut s = 11u64;
+        for case in 0..20_000u32 {
+            let dist: [f32; 8] = core::array::from_fn(|i| {
+                let r = lcg(&mut s);
+                if r < 0.3 {
+                    specials[(lcg(&mut s) * 8.0) as usize % 8]
+                } else if r < 0.4 {
+                    f32::from_bits(1.0f32.to_bits() + i as u32 % 3)
+                } else {
+                    (lcg(&mut s) - 0.3) * 100.0
+                }
+            });
+            let mask = case % 256;
+            let mut want: [u32; 8] =
+                core::array::from_fn(|i| order_key(dist[i], i, mask >> i & 1 == 1));
+            want.sort_unstable();
+            assert_eq!(
+                level.sort_keys8(&dist, mask),
+                Some(want),
+                "{dist:?} {mask:#x}"
+            );
+            // Hit lanes first, nearest first, each slot once.
+            let n = mask.count_ones() as usize;
+            let mut seen = 0u32;
+            for w in want.windows(2).take(n.saturating_sub(1)) {
+                let (a, b) = ((w[0] & 7) as usize, (w[1] & 7) as usize);
+                assert!(dist[a] <= dist[b] || (dist[a] - dist[b]).abs() <= dist[a].abs() * 1e-6);
+            }
+            for k in &want[..n] {
+                seen |= 1 << (k & 7);
+            }
+            assert_eq!(seen, mask);
+        }
+        assert_eq!(Portable.sort_keys8(&[0.0; 8], 0xFF), None);
+    }
+
     #[test]
     fn avx2_slab_equals_the_lane_formula() {
         let Some(level) = Avx2Fma::detect() else {

@@ -8,7 +8,7 @@ use crate::bvh::stats::TraversalStats;
 use crate::bvh::{cull_bound, improves, projection_pad};
 use crate::ray::Ray;
 use crate::simd;
-use crate::simd::level::{Portable, SimdLevel};
+use crate::simd::level::{Portable, SimdLevel, order_key};
 use crate::triangle::{LANES, TriangleHit, TriangleIntersector, TriangleLanes};
 use glam::Vec3;
 
@@ -49,6 +49,22 @@ fn prefetch_child<const W: usize>(nodes: &[WideNode<W>], groups: &[LeafGroup], c
         ChildRef::Leaf { start, count } => simd::slice(leaf_groups(groups, start, count).0),
         ChildRef::Empty => {}
     }
+}
+
+/// The [`order_key`]s of the lanes of `dist`, the hit lanes `hits` first, ascending: by
+/// `level`'s eight-lane sort for `W = 8` when it has one, otherwise sorted here (the same
+/// result: the keys of hit lanes are distinct).
+#[inline(always)]
+fn sorted_keys<const W: usize, L: SimdLevel>(level: L, dist: &[f32; W], hits: u32) -> [u32; W] {
+    const { assert!(W <= 8, "slots must fit the keys' three low bits") };
+    if let Ok(d8) = <&[f32; 8]>::try_from(&dist[..])
+        && let Some(k) = level.sort_keys8(d8, hits)
+    {
+        return core::array::from_fn(|i| k[i & 7]);
+    }
+    let mut keys: [u32; W] = core::array::from_fn(|i| order_key(dist[i], i, (hits >> i) & 1 != 0));
+    keys.sort_unstable();
+    keys
 }
 
 /// What a leaf does with its triangles: the one-triangle test and the four-lane cull. A trait
@@ -302,18 +318,20 @@ where
     }
 
     /// Orders the children hit by a node (`first` and the lanes of `rest`, a non-empty lane
-    /// mask) nearest first, leaves all but the nearest on the stack and returns the nearest.
-    /// Of equal entry distances the earlier slot is visited first. Prefetches every child left
-    /// on the stack (the nearest is read at once: a hint would not get ahead of the loads).
-    /// The children are sorted in place on the stack (`W` entries at most, counted in the
-    /// bound of [`super::stack_size`]).
+    /// mask) nearest first, leaves all but the nearest on the stack (farthest deepest) and
+    /// returns the nearest. Of equal entry distances the earlier slot is visited first (for
+    /// three or more, distances within the low bits [`order_key`] drops may be ordered by
+    /// slot: the visiting order only). Prefetches every child left on the stack (the nearest
+    /// is read at once: a hint would not get ahead of the loads). At most `W − 1` entries are
+    /// pushed, counted in the bound of [`super::stack_size`].
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn order_hits(
+    fn order_hits<L: SimdLevel>(
         &self,
+        level: L,
         node: &WideNode<W>,
         dist: &[f32; W],
-        mut rest: u32,
+        hits: u32,
         first: Entry,
         stack: &mut [Entry; STACK],
         sp: &mut usize,
@@ -324,6 +342,8 @@ where
             child: node.child[i & (W - 1)],
             t_enter: dist[i & (W - 1)],
         };
+        // `first` is the lowest lane of `hits`.
+        let mut rest = hits & (hits - 1);
         let second = entry(rest.trailing_zeros() as usize);
         rest &= rest - 1;
         if rest == 0 {
@@ -340,40 +360,19 @@ where
             }
             return visit.child;
         }
-        // Three or more: insertion sort on the stack, nearest on top; an entry moves below
-        // the ones nearer than it or equally near and from an earlier slot.
-        let base = *sp;
-        for e in [first, second].into_iter().chain(core::iter::from_fn(|| {
-            (rest != 0).then(|| {
-                let e = entry(rest.trailing_zeros() as usize);
-                rest &= rest - 1;
-                e
-            })
-        })) {
-            let mut j = *sp;
-            while j > base {
-                let Some(&below) = stack.get(j - 1) else {
-                    break;
-                };
-                if below.t_enter > e.t_enter {
-                    break;
-                }
-                if let Some(slot) = stack.get_mut(j) {
-                    *slot = below;
-                }
-                j -= 1;
-            }
-            if let Some(slot) = stack.get_mut(j) {
+        // Three or more: sorted by key, branch-free on the AVX2 level; the others pushed
+        // farthest first, so that the second nearest is on top.
+        let keys = sorted_keys(level, dist, hits);
+        let count = hits.count_ones() as usize;
+        for &k in keys.get(1..count).unwrap_or(&[]).iter().rev() {
+            let e = entry((k & 7) as usize);
+            if let Some(slot) = stack.get_mut(*sp) {
                 *slot = e;
                 *sp += 1;
             }
-        }
-        *sp -= 1;
-        let visit = stack.get(*sp).map_or(ChildRef::EMPTY, |e| e.child);
-        for e in stack.get(base..*sp).unwrap_or(&[]) {
             prefetch_child(nodes, groups, e.child);
         }
-        visit
+        node.child[(keys[0] & 7) as usize & (W - 1)]
     }
 
     #[inline(always)]
@@ -412,6 +411,7 @@ where
                         if mask != 0 {
                             // `W` is a power of two: `& (W − 1)` keeps every lane index in
                             // range without a check.
+                            let hits = mask;
                             let first = mask.trailing_zeros() as usize & (W - 1);
                             mask &= mask - 1;
                             let near = Entry {
@@ -422,7 +422,9 @@ where
                                 // One child hit (the common case): nothing to order or push.
                                 near.child
                             } else {
-                                self.order_hits(node, &dist, mask, near, stack, &mut sp, groups)
+                                self.order_hits(
+                                    level, node, &dist, hits, near, stack, &mut sp, groups,
+                                )
                             };
                             continue;
                         }
