@@ -9,19 +9,19 @@ use crate::aabb::SlabRay;
 /// bound outward by `pad` is moving the origin by `pad` the other way; the rounding of
 /// `o ± pad` is within the padding's margin).
 #[derive(Clone, Copy)]
-pub(super) struct PaddedRay<'a> {
+pub(super) struct PaddedRay {
     pub(super) origin_near: [f32; 3],
     pub(super) origin_far: [f32; 3],
     pub(super) inv_dir: [f32; 3],
     pub(super) near: [usize; 3],
     pub(super) pad: f32,
-    pub(super) slab: &'a SlabRay,
+    pub(super) slab: SlabRay,
 }
 
-impl<'a> PaddedRay<'a> {
+impl PaddedRay {
     /// `slab` with boxes padded by `pad` world units.
     #[inline(always)]
-    pub(super) fn new(slab: &'a SlabRay, pad: f32) -> Self {
+    pub(super) fn new(slab: &SlabRay, pad: f32) -> Self {
         // `pad` with each direction component's sign (`negative` is that sign bit): a
         // sign-bit copy, not a branch on a random ray's signs.
         let toward = glam::Vec3::splat(pad).copysign(slab.direction);
@@ -35,7 +35,7 @@ impl<'a> PaddedRay<'a> {
                 usize::from(slab.negative[2]),
             ],
             pad,
-            slab,
+            slab: *slab,
         }
     }
 }

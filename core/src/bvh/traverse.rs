@@ -10,7 +10,7 @@ use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
 use glam::Vec3;
 
-impl PaddedRay<'_> {
+impl PaddedRay {
     /// [`crate::aabb::Aabb::intersect_slab`] on the node's raw corners, with the near/far
     /// corner picked by index instead of by branch. The common path (`general` false: no
     /// overflowing reciprocal, `t_min ≥ 0`; `general` false) pads far distances by the plain factor
@@ -58,7 +58,7 @@ impl PaddedRay<'_> {
     fn hit_node_general(&self, node: &BvhNode, t_min: f32, t_max: f32) -> Option<f32> {
         let (lo, hi) = (Vec3::from(node.bounds[0]), Vec3::from(node.bounds[1]));
         let b = crate::aabb::Aabb::new(lo - self.pad, hi + self.pad);
-        b.intersect_slab(self.slab, t_min, t_max).map(|(t, _)| t)
+        b.intersect_slab(&self.slab, t_min, t_max).map(|(t, _)| t)
     }
 }
 

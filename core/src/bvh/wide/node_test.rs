@@ -6,7 +6,7 @@ use crate::bvh::padded_ray::PaddedRay;
 use crate::simd;
 use crate::simd::level::SimdLevel;
 
-impl PaddedRay<'_> {
+impl PaddedRay {
     /// Entry distance of every child box over `[t_min, t_max]` and the mask of the boxes hit
     /// (bit `i` for slot `i`; the distances of the others mean nothing): the robust
     /// slab test of [`crate::aabb::Aabb::intersect_slab`] lane by lane, written branch-free so
@@ -102,7 +102,7 @@ impl PaddedRay<'_> {
         for (i, o) in out.iter_mut().enumerate() {
             let b = node.child_bounds(i);
             let padded = crate::aabb::Aabb::new(b.min - self.pad, b.max + self.pad);
-            if let Some((t, _)) = padded.intersect_slab(self.slab, t_min, t_max) {
+            if let Some((t, _)) = padded.intersect_slab(&self.slab, t_min, t_max) {
                 *o = t;
             }
         }
