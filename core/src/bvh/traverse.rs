@@ -80,9 +80,16 @@ impl StackEntry {
     };
 }
 
-/// The stack of the queries that make their own: [`TRAVERSAL_STACK_SIZE`] entries, enough for
-/// every tree (module docs of [`super`]).
-type FullStack = [StackEntry; TRAVERSAL_STACK_SIZE];
+/// `query` on a stack of its own of [`TRAVERSAL_STACK_SIZE`] entries, enough for every tree
+/// (module docs of [`super`]): the `Err` of a stack too small never happens. Inlined, so the
+/// stack is in the calling query's frame.
+#[inline(always)]
+fn on_full_stack<R>(
+    query: impl FnOnce(&mut [StackEntry]) -> Result<Option<R>, BvhError>,
+) -> Option<R> {
+    let mut stack = [StackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
+    query(&mut stack).unwrap_or(None)
+}
 
 impl<N, I> Bvh<N, I>
 where
@@ -102,10 +109,7 @@ where
         intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        let mut stack: FullStack = [StackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
-        // The full stack cannot overflow (module docs): `Err` never happens.
-        self.traverse(&mut stack, ray, intersect, stats, false)
-            .unwrap_or(None)
+        on_full_stack(|stack| self.traverse(stack, ray, intersect, stats, false))
     }
 
     /// Any hit of `ray` (occlusion / shadow rays): traversal stops at the first primitive for
@@ -117,10 +121,7 @@ where
         intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        let mut stack: FullStack = [StackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
-        // As in `closest_hit`: `Err` never happens.
-        self.traverse(&mut stack, ray, intersect, stats, true)
-            .unwrap_or(None)
+        on_full_stack(|stack| self.traverse(stack, ray, intersect, stats, true))
     }
 
     /// [`Bvh::closest_hit`] over a triangle mesh with the intersector `isect` (prepared once
@@ -133,10 +134,7 @@ where
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
-        let mut stack: FullStack = [StackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
-        // As in `closest_hit`: `Err` never happens.
-        self.triangles_in(&mut stack, mesh, isect, ray, stats, false)
-            .unwrap_or(None)
+        on_full_stack(|stack| self.triangles_in(stack, mesh, isect, ray, stats, false))
     }
 
     /// [`Bvh::any_hit`] over a triangle mesh with the intersector `isect`.
@@ -148,10 +146,7 @@ where
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
-        let mut stack: FullStack = [StackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
-        // As in `closest_hit`: `Err` never happens.
-        self.triangles_in(&mut stack, mesh, isect, ray, stats, true)
-            .unwrap_or(None)
+        on_full_stack(|stack| self.triangles_in(stack, mesh, isect, ray, stats, true))
     }
 
     /// [`Bvh::closest_hit_triangles`] on the caller's traversal stack, which a firmware sizes
@@ -193,7 +188,8 @@ where
     /// Entries of the traversal stack this tree's queries can need: the number of inner
     /// nodes on its longest root-to-leaf path (at most [`TRAVERSAL_STACK_SIZE`]). A stack of
     /// this many entries never makes a `_in` query fail. Walks the whole tree (linear time,
-    /// no recursion): a firmware calls it once after loading.
+    /// no recursion) in integers only, so that a firmware can call it after loading without
+    /// linking [`Bvh::stats`]' `f64` area sums (whose `max_depth` is the same number).
     #[must_use]
     pub fn stack_depth(&self) -> usize {
         let nodes = self.nodes();
