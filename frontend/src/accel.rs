@@ -4,6 +4,7 @@
 
 use crate::error::{Error, Result};
 use crate::obj::ObjMesh;
+use crate::pages::PageArray;
 use halfray_core::Ray;
 use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, WideStack, binary_options};
 use halfray_core::bvh::{
@@ -13,7 +14,7 @@ use halfray_core::bvh::{
 use halfray_core::triangle::{TriangleHit, TriangleIntersector, TriangleVariant, VariantVisitor};
 
 /// The wide BVH with owned storage.
-pub type VecBvh8 = Bvh8<Vec<WideNode<8>>, Vec<LeafGroup>>;
+pub type VecBvh8 = Bvh8<PageArray<WideNode<8>>, PageArray<LeafGroup>>;
 /// The binary BVH with owned storage.
 pub type VecBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
 
@@ -74,7 +75,10 @@ pub fn build_wide(
     binary: &VecBvh,
 ) -> std::result::Result<VecBvh8, BvhError> {
     Bvh8::from_binary_with(binary, mesh, |nodes, groups| {
-        (vec![WideNode::EMPTY; nodes], vec![LeafGroup::EMPTY; groups])
+        (
+            PageArray::filled(WideNode::EMPTY, nodes),
+            PageArray::filled(LeafGroup::EMPTY, groups),
+        )
     })
 }
 

@@ -19,6 +19,7 @@ pub mod limits;
 pub mod mesh_tools;
 pub mod obj;
 pub mod outputs;
+pub mod pages;
 pub mod raysets;
 pub mod render;
 pub mod scene;
