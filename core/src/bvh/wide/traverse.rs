@@ -92,10 +92,25 @@ impl<H, F: FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>> LeafTest<H> for Clo
     }
 }
 
-/// The intersector-based queries: `isect` with the ray prepared once.
+/// The intersector-based queries: `isect` with the ray prepared once, when the walk reaches
+/// its first leaf (most camera rays reach none and never pay for the preparation).
 struct PreparedTest<'a, I: TriangleIntersector> {
     isect: &'a I,
     pre: I::Prepared,
+}
+
+impl<'a, I: TriangleIntersector> PreparedTest<'a, I> {
+    /// The factory [`WideBvh::traverse`] calls at the first leaf: `None` when `isect` refuses
+    /// the ray.
+    #[inline(always)]
+    fn of(isect: &'a I) -> impl FnOnce(&Ray) -> Option<Self> {
+        move |ray| {
+            Some(Self {
+                isect,
+                pre: isect.prepare(ray)?,
+            })
+        }
+    }
 }
 
 impl<I: TriangleIntersector> LeafTest<TriangleHit> for PreparedTest<'_, I> {
@@ -167,11 +182,11 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, false, _>(
+        self.traverse::<H, false, _, _>(
             Portable,
             &mut WideStack::new(),
             ray,
-            ClosureTest(intersect),
+            |_| Some(ClosureTest(intersect)),
             stats,
         )
     }
@@ -185,7 +200,13 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, false, _>(Portable, stack, ray, ClosureTest(intersect), stats)
+        self.traverse::<H, false, _, _>(
+            Portable,
+            stack,
+            ray,
+            |_| Some(ClosureTest(intersect)),
+            stats,
+        )
     }
 
     /// Any hit of `ray`: traversal stops at the first triangle for which `intersect` reports a
@@ -198,11 +219,11 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, true, _>(
+        self.traverse::<H, true, _, _>(
             Portable,
             &mut WideStack::new(),
             ray,
-            ClosureTest(intersect),
+            |_| Some(ClosureTest(intersect)),
             stats,
         )
     }
@@ -216,7 +237,13 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, true, _>(Portable, stack, ray, ClosureTest(intersect), stats)
+        self.traverse::<H, true, _, _>(
+            Portable,
+            stack,
+            ray,
+            |_| Some(ClosureTest(intersect)),
+            stats,
+        )
     }
 
     /// [`WideBvh::closest_hit`] with the intersector `isect` (prepared once per ray).
@@ -253,14 +280,7 @@ where
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
-        let pre = isect.prepare(ray)?;
-        self.traverse::<TriangleHit, false, L>(
-            level,
-            stack,
-            ray,
-            PreparedTest { isect, pre },
-            stats,
-        )
+        self.traverse::<TriangleHit, false, L, _>(level, stack, ray, PreparedTest::of(isect), stats)
     }
 
     /// [`WideBvh::any_hit`] with the intersector `isect`.
@@ -296,24 +316,26 @@ where
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
-        let pre = isect.prepare(ray)?;
-        self.traverse::<TriangleHit, true, L>(level, stack, ray, PreparedTest { isect, pre }, stats)
+        self.traverse::<TriangleHit, true, L, _>(level, stack, ray, PreparedTest::of(isect), stats)
     }
 
+    /// Checks `ray`, then walks the tree; `leaf` makes the leaf test from the ray when the
+    /// walk reaches its first leaf (`None`: the test refuses the ray, which then hits
+    /// nothing), so that rays that reach no leaf never pay for it.
     #[inline(always)]
-    fn traverse<H, const ANY: bool, L: SimdLevel>(
+    fn traverse<H, const ANY: bool, L: SimdLevel, LT: LeafTest<H>>(
         &self,
         level: L,
         stack: &mut WideStack,
         ray: &Ray,
-        leaf: impl LeafTest<H>,
+        leaf: impl FnOnce(&Ray) -> Option<LT>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
         let slab = SlabRay::new(ray)?;
         if slab.divide || ray.t_min < 0.0 {
-            self.walk::<H, ANY, true, L>(level, &mut stack.entries, ray, &slab, leaf, stats)
+            self.walk::<H, ANY, true, L, LT>(level, &mut stack.entries, ray, &slab, leaf, stats)
         } else {
-            self.walk::<H, ANY, false, L>(level, &mut stack.entries, ray, &slab, leaf, stats)
+            self.walk::<H, ANY, false, L, LT>(level, &mut stack.entries, ray, &slab, leaf, stats)
         }
     }
 
@@ -375,19 +397,71 @@ where
         node.child[(keys[0] & 7) as usize & (W - 1)]
     }
 
+    /// The node step of the walk: tests the children of node `index` over
+    /// `[t_min, bound]` (`bound`: [`cull_bound`] of the current `t_max`), pushes all hit ones
+    /// but the nearest ([`WideBvh::order_hits`]) and returns the nearest; `None` when no child
+    /// is hit (or `index` is out of range).
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn walk<H, const ANY: bool, const GENERAL: bool, L: SimdLevel>(
+    fn descend<const GENERAL: bool, L: SimdLevel>(
+        &self,
+        level: L,
+        wray: &PaddedRay,
+        (nodes, groups): (&[WideNode<W>], &[LeafGroup]),
+        index: u32,
+        (t_min, bound): (f32, f32),
+        stack: &mut [Entry; STACK],
+        sp: &mut usize,
+        local: &mut TraversalStats,
+    ) -> Option<u32> {
+        let node = nodes.get(index as usize)?;
+        local.nodes_visited += 1;
+        let (dist, mut mask) = wray.hit_children::<W, GENERAL, L>(level, node, t_min, bound);
+        if mask == 0 {
+            return None;
+        }
+        // `W` is a power of two: `& (W − 1)` keeps every lane index in range without a check.
+        let hits = mask;
+        let first = mask.trailing_zeros() as usize & (W - 1);
+        mask &= mask - 1;
+        let near = Entry {
+            child: node.child[first],
+            t_enter: dist[first],
+        };
+        Some(if mask == 0 {
+            // One child hit (the common case): nothing to order or push.
+            near.child
+        } else {
+            self.order_hits(level, node, &dist, hits, near, stack, sp, groups)
+        })
+    }
+
+    /// Pops the next entry still within `bound` (entries beyond it are dropped); `None` when
+    /// the stack is empty.
+    #[inline(always)]
+    fn pop(stack: &[Entry; STACK], sp: &mut usize, bound: f32) -> Option<u32> {
+        loop {
+            *sp = sp.checked_sub(1)?;
+            let e = stack.get(*sp)?;
+            if e.t_enter <= bound {
+                return Some(e.child);
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn walk<H, const ANY: bool, const GENERAL: bool, L: SimdLevel, LT: LeafTest<H>>(
         &self,
         level: L,
         stack: &mut [Entry; STACK],
         ray: &Ray,
         slab: &SlabRay,
-        mut leaf: impl LeafTest<H>,
+        make_leaf: impl FnOnce(&Ray) -> Option<LT>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        let nodes = self.nodes();
-        let groups = self.groups();
-        if nodes.is_empty() {
+        let tree = (self.nodes(), self.groups());
+        let groups = tree.1;
+        if tree.0.is_empty() {
             return None;
         }
         let wray = PaddedRay::new(slab, projection_pad(slab.origin, self.extent));
@@ -397,37 +471,50 @@ where
         let mut sp = 0usize;
         // The root is node 0 (its own box is the union of its children's: not tested).
         let mut next = 0u32;
+        // Down to the first leaf, nodes only (the interval cannot shrink before a leaf).
+        let mut bound = cull_bound(cur.t_max);
+        loop {
+            let down = match ChildRef::decode(next) {
+                ChildRef::Inner(index) => self.descend::<GENERAL, L>(
+                    level,
+                    &wray,
+                    tree,
+                    index,
+                    (cur.t_min, bound),
+                    stack,
+                    &mut sp,
+                    &mut local,
+                ),
+                ChildRef::Leaf { .. } => break,
+                ChildRef::Empty => None,
+            };
+            match down.or_else(|| Self::pop(stack, &mut sp, bound)) {
+                Some(child) => next = child,
+                None => {
+                    add_stats(stats, &local);
+                    return None;
+                }
+            }
+        }
+        let Some(mut leaf) = make_leaf(ray) else {
+            add_stats(stats, &local);
+            return None;
+        };
         'walk: loop {
             match ChildRef::decode(next) {
                 ChildRef::Inner(index) => {
-                    if let Some(node) = nodes.get(index as usize) {
-                        local.nodes_visited += 1;
-                        let (dist, mut mask) = wray.hit_children::<W, GENERAL, L>(
-                            level,
-                            node,
-                            cur.t_min,
-                            cull_bound(cur.t_max),
-                        );
-                        if mask != 0 {
-                            // `W` is a power of two: `& (W − 1)` keeps every lane index in
-                            // range without a check.
-                            let hits = mask;
-                            let first = mask.trailing_zeros() as usize & (W - 1);
-                            mask &= mask - 1;
-                            let near = Entry {
-                                child: node.child[first],
-                                t_enter: dist[first],
-                            };
-                            next = if mask == 0 {
-                                // One child hit (the common case): nothing to order or push.
-                                near.child
-                            } else {
-                                self.order_hits(
-                                    level, node, &dist, hits, near, stack, &mut sp, groups,
-                                )
-                            };
-                            continue;
-                        }
+                    if let Some(child) = self.descend::<GENERAL, L>(
+                        level,
+                        &wray,
+                        tree,
+                        index,
+                        (cur.t_min, bound),
+                        stack,
+                        &mut sp,
+                        &mut local,
+                    ) {
+                        next = child;
+                        continue;
                     }
                 }
                 ChildRef::Leaf { start, count } => {
@@ -450,6 +537,7 @@ where
                             };
                             if improves(&cur, t, prim, best.as_ref().map(|b| b.0)) {
                                 cur.t_max = t;
+                                bound = cull_bound(t);
                                 best = Some((prim, h));
                                 if ANY {
                                     break 'walk;
@@ -460,18 +548,10 @@ where
                 }
                 ChildRef::Empty => {}
             }
-            // Pop the next entry still within the (shrunk) interval.
-            let bound = cull_bound(cur.t_max);
-            loop {
-                if sp == 0 {
-                    break 'walk;
-                }
-                sp -= 1;
-                let Some(&e) = stack.get(sp) else { break 'walk };
-                if e.t_enter <= bound {
-                    next = e.child;
-                    break;
-                }
+            // The next entry still within the (shrunk) interval.
+            match Self::pop(stack, &mut sp, bound) {
+                Some(child) => next = child,
+                None => break,
             }
         }
         add_stats(stats, &local);
