@@ -1,6 +1,6 @@
 //! Edge collapse.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use super::error::CollapseError as CE;
 use super::handles::{HalfedgeId, NONE, VertexId};
@@ -33,8 +33,12 @@ impl<S: MeshStorage> Mesh<S> {
     /// 6. `WingValence(w)`: an interior wing vertex has valence 3 (it would drop to 2; this
     ///    is what refuses every edge of a tetrahedron).
     /// 7. `FoldOver(f)`: with the survivor at the target, a remaining face around either
-    ///    endpoint would get a normal pointing against (or perpendicular to) its old one. Exact
-    ///    sign test on unnormalised normals; faces that were already degenerate are skipped.
+    ///    endpoint would get a normal pointing against (or perpendicular to) its old one: the
+    ///    sign of `old·new` for the unnormalised normals `(b − a) × (c − a)`, evaluated in
+    ///    `f64` on the `f32` positions (no overflow for any finite positions; the rounding,
+    ///    relative `~1e-15` of `|b − a|·|c − a|` per normal, can decide either way only for
+    ///    normals that close to perpendicular or faces that close to degenerate); faces whose
+    ///    old normal is zero (degenerate) are skipped.
     ///
     /// # Errors
     ///
@@ -97,18 +101,18 @@ impl<S: MeshStorage> Mesh<S> {
                 if f.0 == f0 || f.0 == f1 {
                     continue;
                 }
-                let [a, b, c] = self.face_positions_raw(f.0);
+                let [a, b, c] = self.face_positions_raw(f.0).map(Vec3::as_dvec3);
                 let old = (b - a).cross(c - a);
                 let vs = self.face_vertices(f).unwrap_or([VertexId(NONE); 3]);
                 let moved = vs.map(|x| {
                     if x.0 == v || x.0 == other {
-                        target
+                        target.as_dvec3()
                     } else {
-                        self.pos_raw(x.0)
+                        self.pos_raw(x.0).as_dvec3()
                     }
                 });
                 let new = (moved[1] - moved[0]).cross(moved[2] - moved[0]);
-                if old != Vec3::ZERO && old.dot(new) <= 0.0 {
+                if old != DVec3::ZERO && old.dot(new) <= 0.0 {
                     return Err(CE::FoldOver(f));
                 }
             }

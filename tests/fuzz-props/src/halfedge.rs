@@ -7,6 +7,7 @@
 //! followed by its arguments.
 
 use super::Input;
+use super::collapse_oracle::{Faces, canonical};
 use super::*;
 use glam::Vec3;
 use halfray_core::halfedge::{
@@ -45,6 +46,15 @@ pub enum Op {
     SetPosition = 8,
     /// `export` (also into a too-small buffer), `build` from the export, re-export.
     ExportRebuild = 9,
+}
+
+/// The mesh's triangle list (positions by vertex slot, triangles by vertex id).
+fn exported(mesh: &FuzzMesh) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut p = vec![Vec3::ZERO; mesh.slots().vertices];
+    let mut t = vec![[0u32; 3]; mesh.len().faces];
+    let written = mesh.export(&mut p, &mut t);
+    assert!(written.is_ok(), "export into exact buffers: {written:?}");
+    (p, t)
 }
 
 fn euler(c: Counts) -> i64 {
@@ -104,7 +114,10 @@ fn point(i: &mut Input<'_>) -> Vec3 {
 /// characteristic `V − E + F` is unchanged; an operation that refuses leaves the mesh
 /// bit-for-bit unchanged (`Mesh: PartialEq` compares every slot and the free lists);
 /// `can_flip_edge` / `can_collapse_edge` predict `flip_edge` / `collapse_edge` exactly and
-/// the collapse survivor sits at the predicted point; Loop subdivision produces the
+/// the collapse survivor sits at the predicted point; a collapse is accepted exactly when the
+/// rules evaluated independently on the exported triangle list accept it
+/// ([`super::collapse_oracle`]; a fold-over sign within rounding is not judged), and leaves
+/// exactly the triangles that oracle predicts; Loop subdivision produces the
 /// documented counts and leaves its output untouched when it refuses; a refused export
 /// writes nothing; build(export(mesh)) validates and re-exports identically.
 pub fn halfedge_ops(data: &[u8]) {
@@ -184,18 +197,56 @@ pub fn halfedge_ops(data: &[u8]) {
                     2 => CollapseAt::Midpoint,
                     _ => CollapseAt::Point(i.qvec3()),
                 };
+                // The independent oracle, from the triangle list before the collapse.
+                let ends = mesh.tail(h).zip(mesh.head(h));
+                let (ps, ts) = exported(&mesh);
+                let faces = Faces {
+                    positions: &ps,
+                    triangles: &ts,
+                };
+                let expected = ends.and_then(|(a, b)| {
+                    let (pa, pb) = (mesh.position(a)?, mesh.position(b)?);
+                    let target = match at {
+                        CollapseAt::Head => pb,
+                        CollapseAt::Tail => pa,
+                        CollapseAt::Midpoint => pa * 0.5 + pb * 0.5,
+                        CollapseAt::Point(p) => p,
+                    };
+                    let (a, b) = (a.index() as u32, b.index() as u32);
+                    if !target.is_finite() {
+                        return Some(None);
+                    }
+                    // `None`: a fold-over sign within rounding (not judged).
+                    let ok = faces.may_collapse(a, b, target)?;
+                    Some(ok.then(|| faces.after_collapse(a, b, target)))
+                });
+                let judged = ends.is_none() || expected.is_some();
+                let expected = expected.flatten();
                 let can = mesh.can_collapse_edge(h, at);
                 let r = mesh.collapse_edge(h, at);
                 log.push(format!(
-                    "collapse {h:?} {at:?} -> {r:?} (predicted {can:?})"
+                    "collapse {h:?} {at:?} -> {r:?} (predicted {can:?}, oracle {})",
+                    expected.is_some()
                 ));
                 assert_eq!(
                     can.is_ok(),
                     r.is_ok(),
                     "can_collapse_edge disagrees: {log:?}"
                 );
+                if judged {
+                    assert_eq!(
+                        expected.is_some(),
+                        r.is_ok(),
+                        "the rules evaluated on the triangle list disagree: {log:?}"
+                    );
+                }
                 if let (Ok(p), Ok(v)) = (can, r) {
                     assert_eq!(mesh.position(v), Some(p), "survivor position: {log:?}");
+                }
+                if let Some(want) = expected.filter(|_| r.is_ok()) {
+                    let (ps, ts) = exported(&mesh);
+                    let got = canonical(ts.iter().map(|t| t.map(|v| ps[v as usize])));
+                    assert_eq!(got, want, "faces after the collapse: {log:?}");
                 }
                 r.map(|_| true).map_err(|e| format!("{e:?}"))
             }

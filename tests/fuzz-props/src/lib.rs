@@ -271,6 +271,7 @@ pub mod bvh;
 
 pub mod bvh_load;
 
+pub mod collapse_oracle;
 pub mod halfedge;
 
 // ---------------------------------------------------------------------------------------------

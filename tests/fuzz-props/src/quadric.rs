@@ -14,6 +14,8 @@ use glam::{DMat3, DVec3, Vec3};
 use halfray_core::float::F64_UNIT_ROUNDOFF;
 use halfray_core::quadric::{Ellipsoid, Quadric};
 use halfray_core::ray::Ray;
+use num_rational::BigRational;
+use num_traits::ToPrimitive;
 
 /// Below this the discriminant's terms are close to the `f64` subnormal range (`2.2e-308`)
 /// and round absolutely; residuals are not checked there.
@@ -85,6 +87,159 @@ pub fn ray_quadric(data: &[u8]) {
     let (surface, ray) = decode(data);
     if let Ok(q) = surface {
         check(&q, &ray);
+        check_against_exact(&q, &ray);
+    }
+}
+
+/// Discriminants below this multiple of `u·S` (`S = |qb|² + |qa|·|qc|`, the scale of the
+/// discriminant's rounding with absolute values) are not judged for existence: the code's
+/// discriminant carries at most a few tens of `u·S` of error (its two forms are evaluated
+/// with a handful of roundings each, and it takes the one with the smaller bound), so beyond
+/// this band its sign is the exact one. Unitless.
+pub const DISC_BAND_IN_U: f64 = 256.0;
+
+/// Discriminants below this fraction of `S` are not judged for root positions: beyond it the
+/// roots are well separated and each is within about `u·S/√Δ` of the exact one, so the
+/// relative tolerance [`ROOT_REL_TOL`] holds with orders of magnitude to spare. Unitless.
+pub const ROOT_DISC_REL: f64 = 1.0 / 1_073_741_824.0;
+
+/// Tolerance of a root against the exact one, relative to `|r| + √S/|qa|` (the root scale).
+/// Loose on purpose (10⁻⁶ against a first-order error below 10⁻¹⁰ where it is applied): it
+/// catches dropped, invented, swapped or wrong roots, not accuracy, which the residual check
+/// bounds. Unitless.
+pub const ROOT_REL_TOL: f64 = 1e-6;
+
+/// The ray polynomial `p(t) = qa·t² + 2·qb·t + qc` of `q` along `ray`, in **exact rational
+/// arithmetic** from the stored centred form (centre, `A`, `b_c`, `k`: `f(x) = yᵀA y + 2b_cᵀy +
+/// k`, `y = x − c`) and the ray's `f32` origin and direction: an oracle that shares no
+/// arithmetic with [`Quadric::roots`]. `None` when a stored value is not finite.
+fn exact_poly(q: &Quadric, ray: &Ray) -> Option<[BigRational; 3]> {
+    let r = |x: f64| BigRational::from_float(x);
+    let c = q.reference_point();
+    let am = q.matrix();
+    let bc = q.gradient(c) * 0.5;
+    let k = r(q.eval(c))?;
+    let v3 = |v: DVec3| -> Option<[BigRational; 3]> { Some([r(v.x)?, r(v.y)?, r(v.z)?]) };
+    let cols = [v3(am.x_axis)?, v3(am.y_axis)?, v3(am.z_axis)?];
+    // (A·y)_i = Σ_j A_ij y_j, column j holding A_·j.
+    let mul = |y: &[BigRational; 3]| -> [BigRational; 3] {
+        core::array::from_fn(|i| (0..3).map(|j| &cols[j][i] * &y[j]).sum())
+    };
+    let dot = |a: &[BigRational; 3], b: &[BigRational; 3]| -> BigRational {
+        (0..3).map(|i| &a[i] * &b[i]).sum()
+    };
+    let (o, d, cc, b) = (
+        v3(ray.origin.as_dvec3())?,
+        v3(ray.direction.as_dvec3())?,
+        v3(c)?,
+        v3(bc)?,
+    );
+    let f0: [BigRational; 3] = core::array::from_fn(|i| &o[i] - &cc[i]);
+    let af0 = mul(&f0);
+    let g0: [BigRational; 3] = core::array::from_fn(|i| &af0[i] + &b[i]);
+    let g0b: [BigRational; 3] = core::array::from_fn(|i| &g0[i] + &b[i]);
+    Some([dot(&d, &mul(&d)), dot(&d, &g0), dot(&f0, &g0b) + k])
+}
+
+/// The roots against the exact oracle ([`exact_poly`]), where the exact answer is decidable
+/// beyond the code's rounding:
+/// 1. a discriminant clearly positive (beyond [`DISC_BAND_IN_U`]) must give two roots, one
+///    clearly negative none (a dropped or an invented root);
+/// 2. where the roots are well separated ([`ROOT_DISC_REL`]), each reported root lies within
+///    [`ROOT_REL_TOL`] of the exact one;
+/// 3. a near exact root clearly inside the ray's interval must give a hit (a miss), unless
+///    the hit point would not be representable.
+///
+/// Judged only for a clearly quadratic polynomial (`|qa|` beyond `K·u` of its scale: the code
+/// then takes the quadratic branch) whose scales are far from `f64` overflow and underflow.
+pub fn check_against_exact(q: &Quadric, ray: &Ray) {
+    if !ray.is_valid() {
+        return;
+    }
+    let Some([qa, qb, qc]) = exact_poly(q, ray) else {
+        return;
+    };
+    let to = |x: &BigRational| x.to_f64().unwrap_or(f64::NAN);
+    let (fa, fb, fc) = (to(&qa), to(&qb), to(&qc));
+    let disc = &qb * &qb - &qa * &qc;
+    // Scales with absolute values, as the code's rounding sees them.
+    let o = ray.origin.as_dvec3();
+    let d = ray.direction.as_dvec3();
+    let am = q.matrix();
+    let aa = DMat3::from_cols(am.x_axis.abs(), am.y_axis.abs(), am.z_axis.abs());
+    let c = q.reference_point();
+    let f0 = o - c;
+    let bc = q.gradient(c) * 0.5;
+    let qa_abs = d.abs().dot(aa * d.abs());
+    let qb_abs = d.abs().dot(aa * f0.abs() + bc.abs());
+    let qc_abs = q.eval_abs(o);
+    let s = qb_abs * qb_abs + qa_abs * qc_abs;
+    let u = F64_UNIT_ROUNDOFF;
+    let judged = [fa, fb, fc, qa_abs, qb_abs, qc_abs, s]
+        .iter()
+        .all(|x| x.is_finite() && x.abs() < 1e150)
+        && s > 1e-150
+        && fa.abs() > K * u * qa_abs;
+    if !judged {
+        return;
+    }
+    let ctx = || {
+        format!(
+            "exact p(t) = {fa:e}·t² + 2·{fb:e}·t + {fc:e}, Δ = {:e}, S = {s:e}\nquadric {q:?}\n{}",
+            to(&disc),
+            fmt_ray(ray)
+        )
+    };
+    let band = BigRational::from_float(DISC_BAND_IN_U * u * s).expect("finite band");
+    let roots = q.roots(ray);
+    if disc > band {
+        assert!(
+            roots.is_some(),
+            "a clearly positive discriminant, no roots\n{}",
+            ctx()
+        );
+    } else if disc < -band {
+        assert!(
+            roots.is_none(),
+            "a clearly negative discriminant, roots {roots:?}\n{}",
+            ctx()
+        );
+    }
+    let fd = to(&disc);
+    // (A NaN discriminant is not judged either.)
+    if fd.is_nan() || fd <= ROOT_DISC_REL * s {
+        return;
+    }
+    // The exact roots to f64 accuracy (the stable form, from the exact coefficients).
+    let qq = -(fb + fd.sqrt().copysign(fb));
+    let (r0, r1) = {
+        let (x, y) = (fc / qq, qq / fa);
+        if x <= y { (x, y) } else { (y, x) }
+    };
+    let scale = s.sqrt() / fa.abs();
+    let (t0, t1) = roots.expect("checked above");
+    for (t, r) in [(t0, r0), (t1, r1)] {
+        assert!(
+            (t - r).abs() <= ROOT_REL_TOL * (r.abs() + scale),
+            "root {t:e}, exact {r:e}\n{}",
+            ctx()
+        );
+    }
+    // 3. A near root clearly inside the interval is a hit (point representable).
+    let tol = ROOT_REL_TOL * (r0.abs() + scale);
+    let (lo, hi) = (f64::from(ray.t_min), f64::from(ray.t_max));
+    let point = o + d * r0;
+    // Roots below the sphere target's `MIN_T` round to a `t` (or to 0) from which no hit
+    // can be rebuilt in `f32`, like a root beyond 1e30 (kept: `crash-0a29d96f`, a root of
+    // 8e-63).
+    let inside =
+        r0 - tol > lo && r0 + tol <= hi && (super::sphere::MIN_T..1e30).contains(&r0.abs());
+    if inside && point.abs().max_element() < 1e30 {
+        assert!(
+            q.intersect(ray).is_some(),
+            "exact root {r0:e} inside ({lo:e}, {hi:e}], no hit\n{}",
+            ctx()
+        );
     }
 }
 
@@ -273,4 +428,33 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
             [1.0, f32::NAN, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0],
         ),
     ));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The oracle's polynomial for the specification's ellipsoid `x²/4 + y²/9 + z² = 1` and the
+    /// ray `(−5, ¼, ½) + t·x`, written out by hand from the stored form (`A = diag(¼, fl(1/9),
+    /// 1)`, centre 0, `b_c = 0`, `k = −1`): `p(t) = ¼t² + 2·(−5/4)·t + (25/4 + fl(1/9)/16 + ¼ − 1)`,
+    /// roots `t = 5 ∓ 2·√(¾ − 1/144)` (where `x² /4 = 1 − y²/9 − z²`); the check passes on it
+    /// and a tangent ray at `y = 3` is left unjudged rather than failed.
+    #[test]
+    fn exact_polynomial_of_the_worked_ellipsoid() {
+        let e = Ellipsoid::new(Vec3::ZERO, Vec3::new(2.0, 3.0, 1.0)).unwrap();
+        let ray = Ray::new(Vec3::new(-5.0, 0.25, 0.5), Vec3::X);
+        let [qa, qb, qc] = exact_poly(e.quadric(), &ray).unwrap();
+        let r = |x: f64| BigRational::from_float(x).unwrap();
+        let ninth = r(e.quadric().matrix().y_axis.y);
+        assert_eq!(ninth, r(1.0 / 9.0));
+        assert_eq!(qa, r(0.25));
+        assert_eq!(qb, r(-1.25));
+        assert_eq!(qc, r(6.25) + ninth * r(0.0625) + r(0.25) - r(1.0));
+        let (t0, t1) = e.roots(&ray).unwrap();
+        let half = 2.0 * (0.75f64 - 1.0 / 144.0).sqrt();
+        assert!((t0 - (5.0 - half)).abs() < 1e-12, "{t0}");
+        assert!((t1 - (5.0 + half)).abs() < 1e-12, "{t1}");
+        check_against_exact(e.quadric(), &ray);
+        check_against_exact(e.quadric(), &Ray::new(Vec3::new(-5.0, 3.0, 0.0), Vec3::X));
+    }
 }

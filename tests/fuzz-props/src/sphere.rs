@@ -186,7 +186,11 @@ pub fn check(c: Vec3, r: f32, ray: &Ray) {
     let b = f.dot(d);
     let l = f - d * (b / a);
     let ll = l.length();
-    let margin = 16.0 * u * (fl + rr) + 1e-3 * rr;
+    // The tangency band, from the error bound: the intersector's `|l|` (the closest approach,
+    // computed from `f = o − C` and the projection `d·(f·d)/(d·d)`, each rounded relative to
+    // `|o − C|`) and its comparison with `r` carry at most a few `u·(|o − C| + r)`; `K` of them
+    // leaves the constant's room (see [`K`]), nothing more.
+    let margin = K * u * (fl + rr);
     if ll > rr + margin {
         assert!(
             hit.is_none(),
