@@ -315,27 +315,22 @@ fn classify(
 fn compare_set(sides: &Sides<'_>, rays: &[(usize, SetRay)], timing_rays: usize) -> SetReport {
     let stride = rays.len().div_ceil(timing_rays.max(1)).max(1);
     let sample = || rays.iter().step_by(stride).map(|(_, r)| &r.ray);
+    // halfray, Embree robust, Embree default.
+    let answer: [&dyn Fn(&Ray) -> Option<Answer>; 3] = [
+        &|r| sides.halfray(r),
+        &|r| embree_answer(sides.robust, r),
+        &|r| embree_answer(sides.fast, r),
+    ];
     let mut secs = [f64::INFINITY; 3];
-    let (mut ours, mut emb, mut emb_fast) = (Vec::new(), Vec::new(), Vec::new());
+    let mut answers: [Vec<Option<Answer>>; 3] = Default::default();
     for _ in 0..TIMED_PASSES {
-        let s;
-        (ours, s) = timed(|| sample().map(|r| sides.halfray(r)).collect::<Vec<_>>());
-        secs[0] = secs[0].min(s);
-        let s;
-        (emb, s) = timed(|| {
-            sample()
-                .map(|r| embree_answer(sides.robust, r))
-                .collect::<Vec<_>>()
-        });
-        secs[1] = secs[1].min(s);
-        let s;
-        (emb_fast, s) = timed(|| {
-            sample()
-                .map(|r| embree_answer(sides.fast, r))
-                .collect::<Vec<_>>()
-        });
-        secs[2] = secs[2].min(s);
+        for ((side, out), best) in answer.iter().zip(&mut answers).zip(&mut secs) {
+            let s;
+            (*out, s) = timed(|| sample().map(side).collect::<Vec<_>>());
+            *best = best.min(s);
+        }
     }
+    let [ours, emb, emb_fast] = answers;
     let [secs_h, secs_e, secs_f] = secs;
     let outcomes: Vec<Outcome> = rays
         .par_iter()

@@ -401,18 +401,13 @@ where
     /// `[t_min, bound]` (`bound`: [`cull_bound`] of the current `t_max`), pushes all hit ones
     /// but the nearest ([`WideBvh::order_hits`]) and returns the nearest; `None` when no child
     /// is hit (or `index` is out of range).
-    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn descend<const GENERAL: bool, L: SimdLevel>(
         &self,
-        level: L,
-        wray: &PaddedRay,
-        (nodes, groups): (&[WideNode<W>], &[LeafGroup]),
+        (level, wray, (nodes, groups)): (L, &PaddedRay, (&[WideNode<W>], &[LeafGroup])),
         index: u32,
         (t_min, bound): (f32, f32),
-        stack: &mut [Entry; STACK],
-        sp: &mut usize,
-        local: &mut TraversalStats,
+        (stack, sp, local): (&mut [Entry; STACK], &mut usize, &mut TraversalStats),
     ) -> Option<u32> {
         let node = nodes.get(index as usize)?;
         local.nodes_visited += 1;
@@ -476,14 +471,10 @@ where
         loop {
             let down = match ChildRef::decode(next) {
                 ChildRef::Inner(index) => self.descend::<GENERAL, L>(
-                    level,
-                    &wray,
-                    tree,
+                    (level, &wray, tree),
                     index,
                     (cur.t_min, bound),
-                    stack,
-                    &mut sp,
-                    &mut local,
+                    (stack, &mut sp, &mut local),
                 ),
                 ChildRef::Leaf { .. } => break,
                 ChildRef::Empty => None,
@@ -504,14 +495,10 @@ where
             match ChildRef::decode(next) {
                 ChildRef::Inner(index) => {
                     if let Some(child) = self.descend::<GENERAL, L>(
-                        level,
-                        &wray,
-                        tree,
+                        (level, &wray, tree),
                         index,
                         (cur.t_min, bound),
-                        stack,
-                        &mut sp,
-                        &mut local,
+                        (stack, &mut sp, &mut local),
                     ) {
                         next = child;
                         continue;
