@@ -188,3 +188,65 @@ fn mesh_operands_are_crossed_once_through_edges_and_vertices() {
     );
     assert!(compared > 2000, "{compared} crossings compared");
 }
+
+/// Light through a drilled hole (issue 17): a slab `[−3, 3]² × [−½, ½]` minus the closed cube
+/// mesh `[−1, 1]³` has a square hole. A shadow ray along `+z` is occluded exactly when its
+/// `(x, y)` lies in the slab and outside the hole (decided analytically, away from the hole's
+/// and the slab's sides). Among the rays, every one through the hole along `x = y` meets both of
+/// the cube's `z` faces exactly on their diagonal edges, where a double-counted "enter" would
+/// leave the drill inside and close the hole. `occludes` must also equal `closest` finding a hit.
+#[test]
+fn any_hit_passes_through_a_hole_drilled_by_a_mesh() {
+    let (cube, _, _) = mesh_node("cube.obj");
+    let slab = Aabb::new(Vec3::new(-3.0, -3.0, -0.5), Vec3::new(3.0, 3.0, 0.5));
+    let drilled = Node::new(
+        Shape::Csg(
+            CsgOp::Difference,
+            Box::new(Node::new(Shape::Box(slab), 0, None)),
+            Box::new(Node::new(Shape::Mesh(cube), 0, None)),
+        ),
+        0,
+        None,
+    );
+    let mut ctx = QueryCtx::default();
+    let mut seed = 0xD811_u64;
+    let (mut through_edges, mut blocked, mut open) = (0, 0, 0);
+    for i in 0..4000 {
+        let (x, y) = if i % 4 == 0 {
+            // On the diagonal edges of the cube's z faces (exact binary fractions included).
+            let s = if i % 8 == 0 {
+                (i % 64) as f32 / 64.0 - 0.5
+            } else {
+                lcg(&mut seed) * 1.8 - 0.9
+            };
+            (s, s)
+        } else {
+            (lcg(&mut seed) * 8.0 - 4.0, lcg(&mut seed) * 8.0 - 4.0)
+        };
+        let near = |v: f32, side: f32| (v.abs() - side).abs() < 1e-3;
+        if near(x, 1.0) || near(y, 1.0) || near(x, 3.0) || near(y, 3.0) {
+            continue;
+        }
+        let in_slab = x.abs() < 3.0 && y.abs() < 3.0;
+        let in_hole = x.abs() < 1.0 && y.abs() < 1.0;
+        let expected = in_slab && !in_hole;
+        let ray = Ray::with_interval(Vec3::new(x, y, -4.0), Vec3::Z, 0.0, 8.0);
+        let occluded = drilled.occludes(&ray, &mut ctx);
+        assert_eq!(
+            occluded, expected,
+            "shadow ray at ({x}, {y}): occluded {occluded}, expected {expected}"
+        );
+        assert_eq!(
+            drilled.closest(&ray, &mut ctx).is_some(),
+            occluded,
+            "closest and occludes disagree at ({x}, {y})"
+        );
+        through_edges += usize::from(in_hole && x == y);
+        blocked += usize::from(expected);
+        open += usize::from(!expected);
+    }
+    assert!(
+        through_edges >= 900 && blocked >= 1000 && open >= 1000,
+        "{through_edges} rays through the diagonal edges, {blocked} blocked, {open} open"
+    );
+}
