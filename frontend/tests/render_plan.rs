@@ -384,3 +384,36 @@ fn shadows_through_glass_are_attenuated_by_the_transmission() {
     let opaque = render(&pane_scene(Some(0.0)), &RenderOptions::default());
     assert_eq!(opaque.pixel(4, 4).x, 0.0);
 }
+
+/// Exact shadow-ray counts with mixed lights (issue 17): a floor seen from straight above fills
+/// all 9 × 9 pixels, so every pixel shades one floor point with normal `+y`. A shadow ray goes
+/// to each light that casts shadows, is not dark and lies on the lit side (`n·l > 0`): here the
+/// point light above and the downward directional light, 2 × 81 rays. Not to the light above
+/// with `cast_shadows = false`, the dark one, the point light below the floor, nor the upward
+/// directional one. The scene casts no other ray (no mirror, no glass).
+#[test]
+fn shadow_rays_are_counted_exactly_per_casting_light() {
+    let camera = camera("[0, 10, 0.001]", "[0, 0, 0]", "10", [9, 9]);
+    let floor = plane("[0, 0, 0]", "[0, 1, 0]", "floor");
+    let lights = [
+        point_light("[1, 4, 0]", "16"),
+        point_light("[-1, 4, 0]", "16") + "cast_shadows = false\n",
+        directional_light("[0.2, -1, 0.1]"),
+        point_light("[0, 3, 1]", "0"),
+        point_light("[0, -3, 0]", "16"),
+        directional_light("[0, 1, 0]"),
+    ]
+    .concat();
+    let text = format!(
+        "ambient = [0, 0, 0]\n\n{camera}\n{lights}\n[material.floor]\ndiffuse = [1, 1, 1]\n\n{floor}"
+    );
+    let s = parse_scene(&text);
+    let out = render(&s, &RenderOptions::default());
+    assert_eq!(out.counts.primary, 81);
+    assert_eq!(out.counts.shadow, 2 * 81, "{:?}", out.counts);
+    assert_eq!(out.counts.total(), 3 * 81, "{:?}", out.counts);
+    // Control: every light casting shadows (the dark one still casts none).
+    let all = text.replace("cast_shadows = false\n", "");
+    let out = render(&parse_scene(&all), &RenderOptions::default());
+    assert_eq!(out.counts.shadow, 3 * 81, "{:?}", out.counts);
+}
