@@ -264,3 +264,79 @@ diffuse = [1, 1, 1]
     assert!((out.pixel(27, 17) - want).length() < 1e-6);
     assert_eq!(out.pixel(0, 0), Vec4::ZERO);
 }
+
+/// The perspective camera against the pinhole model derived independently (issue 17): frame
+/// `forward = (look_at − eye)/|…|`, `right = forward × y/|…|`, `up = right × forward` (the
+/// scene format's world up is `+y`), vertical field of view `fov`, image `y` pointing down. A
+/// world point `P` with camera coordinates `(r, u, f)` then appears at pixel
+/// `x = w/2·(1 + r/(f·tan(fov/2)·w/h))`, `y = h/2·(1 − u/(f·tan(fov/2)))`. Small spheres at
+/// such points are rendered (radius `0.025·f`: about 1.6 pixels): the pixel under each
+/// predicted position shows the sphere, and the pixels 5 away in every direction show the
+/// background.
+#[test]
+fn spheres_appear_where_the_pinhole_model_projects_them() {
+    let (w, h, fov) = (64u32, 48u32, 40.0f64);
+    let eye = glam::DVec3::new(1.0, 2.0, 3.0);
+    let look = glam::DVec3::new(-2.0, 0.5, -1.0);
+    let forward = (look - eye).normalize();
+    let right = forward.cross(glam::DVec3::Y).normalize();
+    let up = right.cross(forward);
+    let tan = (fov.to_radians() / 2.0).tan();
+    let aspect = f64::from(w) / f64::from(h);
+    let project = |p: glam::DVec3| {
+        let q = p - eye;
+        let (r, u, f) = (q.dot(right), q.dot(up), q.dot(forward));
+        (
+            f64::from(w) / 2.0 * (1.0 + r / (f * tan * aspect)),
+            f64::from(h) / 2.0 * (1.0 - u / (f * tan)),
+        )
+    };
+    // Points across the view at depths 3–7, each kept 6 pixels inside the image.
+    let points: Vec<glam::DVec3> = [
+        (0.1, 0.05, 5.0),
+        (1.2, 0.6, 4.0),
+        (-1.5, -0.7, 6.0),
+        (0.6, -0.5, 3.0),
+        (-1.0, 1.1, 7.0),
+    ]
+    .iter()
+    .map(|&(a, b, d)| eye + forward * d + right * a + up * b)
+    .collect();
+    let spheres: String = points
+        .iter()
+        .map(|p| {
+            let radius = 0.025 * (*p - eye).dot(forward);
+            sphere(
+                &format!("[{}, {}, {}]", p.x, p.y, p.z),
+                &radius.to_string(),
+                "red",
+            )
+        })
+        .collect();
+    let text = format!(
+        "ambient = [1, 1, 1]\n[camera]\neye = [1, 2, 3]\nlook_at = [-2, 0.5, -1]\nfov = {fov}\n\
+         width = {w}\nheight = {h}\n\n[material.red]\nambient = [1, 0, 0]\ndiffuse = [0, 0, 0]\n\n{spheres}"
+    );
+    let out = render(&parse_scene(&text), &RenderOptions::default());
+    for p in &points {
+        let (x, y) = project(*p);
+        assert!(
+            (6.0..f64::from(w) - 6.0).contains(&x) && (6.0..f64::from(h) - 6.0).contains(&y),
+            "{p} projects to ({x}, {y}), too near the border for this test"
+        );
+        let (i, j) = (x as u32, y as u32);
+        assert!(
+            out.pixel(i, j).x > 0.5,
+            "{p}: predicted at ({x:.2}, {y:.2}), pixel ({i}, {j}) = {:?}",
+            out.pixel(i, j)
+        );
+        for (di, dj) in [(5, 0), (-5, 0), (0, 5), (0, -5)] {
+            let (a, b) = ((i as i32 + di) as u32, (j as i32 + dj) as u32);
+            assert_eq!(
+                out.pixel(a, b),
+                Vec4::ZERO,
+                "{p}: pixel ({a}, {b}) not background"
+            );
+        }
+    }
+}

@@ -50,7 +50,30 @@ pub fn check(text: &str) {
             let ray = cam.pixel_ray(cam.width / 2, cam.height / 2);
             assert!(ray.is_valid(), "invalid centre ray {ray:?}\n{text}");
             let plan = EffectPlan::derive(&scene, false);
-            let _ = plan.explain(&scene);
+            // The explanation states the primary rays and names every light in its shadow
+            // line, "none" exactly when no light casts shadow rays.
+            let explain = plan.explain(&scene);
+            let (w, h) = (u64::from(cam.width), u64::from(cam.height));
+            assert!(
+                explain.contains(&format!("{w} × {h} = {}", w * h)),
+                "explain: primary rays\n{explain}\n{text}"
+            );
+            let shadow_line = explain
+                .lines()
+                .find(|l| l.trim_start().starts_with("shadow rays"))
+                .unwrap_or_default();
+            for l in &scene.lights {
+                assert!(
+                    shadow_line.contains(&l.name),
+                    "explain: light {} missing\n{explain}\n{text}",
+                    l.name
+                );
+            }
+            assert_eq!(
+                shadow_line.contains("shadow rays      none"),
+                !plan.shadow_rays.contains(&true),
+                "explain: shadow line\n{explain}\n{text}"
+            );
             let mut qc = QueryCtx::default();
             for o in &scene.objects {
                 let closest = o.closest(&ray, &mut qc);

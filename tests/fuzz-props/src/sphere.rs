@@ -113,7 +113,21 @@ pub fn check(c: Vec3, r: f32, ray: &Ray) {
     let roots = s.roots(ray);
     let hit = s.intersect(ray);
     let naive = s.roots_naive(ray);
-    let _ = s.intersect_naive(ray);
+    // The naive form has no error bound (documented), but its contract on the interval holds:
+    // a hit is at the nearer of its own roots that lies in the interval (it may still give
+    // none where the hit point cannot be built).
+    let naive_hit = s.intersect_naive(ray);
+    if let Some(h) = naive_hit {
+        let (a, b) = naive.expect("a naive hit has naive roots");
+        let want = if ray.contains(a) { a } else { b };
+        assert_eq!(h.t, want, "naive hit vs its roots\n{}", ctx());
+        assert!(
+            ray.contains(h.t),
+            "naive hit t = {:e} outside the interval\n{}",
+            h.t,
+            ctx()
+        );
+    }
     if !ray.is_valid() {
         assert!(
             roots.is_none() && hit.is_none() && naive.is_none(),
