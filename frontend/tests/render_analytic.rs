@@ -340,3 +340,68 @@ fn spheres_appear_where_the_pinhole_model_projects_them() {
         }
     }
 }
+
+/// No shadow acne on transformed objects (issue 17): a convex mesh (the octahedron) and a
+/// sphere, each under a non-uniform scale, a rotation and a translation far from the origin,
+/// alone in the scene under one point light. Nothing can shadow a convex object's own
+/// surface where it faces the light, so every pixel whose surface faces both the camera and
+/// the light (`n·l > 0.05`) must be lit: brighter than its ambient term. A shadow ray that
+/// re-hit its own surface (spawned inside it by the transform's rounding) would leave it at
+/// the ambient term.
+#[test]
+fn transformed_convex_objects_do_not_shadow_themselves() {
+    let meshes = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/meshes");
+    let transform = "transform = [{ scale = [1.0, 2.5, 0.7] }, { rotate = { axis = [1, 1, 0], \
+                     degrees = 37 } }, { translate = [300.5, -120.25, 77.75] }]";
+    let objects = [
+        format!(
+            "[mesh.oct]\nfile = \"{meshes}/octahedron.obj\"\n\n[[object]]\ntype = \"mesh\"\n\
+             mesh = \"oct\"\nmaterial = \"m\"\n{transform}\n"
+        ),
+        format!(
+            "[[object]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n\
+             {transform}\n"
+        ),
+    ];
+    for object in objects {
+        let text = format!(
+            "ambient = [0.1, 0.1, 0.1]\n[camera]\neye = [306, -117, 84]\nlook_at = [300.5, -120.25, \
+             77.75]\nfov = 40\nwidth = 64\nheight = 64\n\n[[light]]\ntype = \"point\"\nposition = \
+             [304, -112, 86]\nintensity = 100\n\n[material.m]\nambient = [1, 1, 1]\n\
+             diffuse = [0.8, 0.8, 0.8]\nspecular = [0, 0, 0]\n\n{object}"
+        );
+        let s = parse_scene(&text);
+        let plan = EffectPlan::derive(&s, false);
+        assert!(plan.shadow_rays[0]);
+        let tracer = Tracer {
+            scene: &s,
+            plan: &plan,
+        };
+        let mut ctx = tracer.ctx();
+        let light = Vec3::new(304.0, -112.0, 86.0);
+        let mut lit_points = 0;
+        for j in 0..64 {
+            for i in 0..64 {
+                let ray = s.camera.pixel_ray(i, j);
+                let Some(hit) = tracer.closest(&ray, &mut ctx) else {
+                    continue;
+                };
+                let n = hit.hit.normal;
+                let l = (light - hit.hit.point).normalize();
+                if n.dot(-ray.direction) <= 0.0 || n.dot(l) <= 0.05 {
+                    continue;
+                }
+                let mut counts = RayCounts::default();
+                let c = tracer.shade(&ray, &hit, 0, &mut ctx, &mut counts);
+                assert_eq!(counts.shadow, 1);
+                assert!(
+                    c.x > 0.1 + 1e-3,
+                    "pixel ({i}, {j}) facing the light (n·l = {}) is in shadow: {c:?}\n{object}",
+                    n.dot(l)
+                );
+                lit_points += 1;
+            }
+        }
+        assert!(lit_points > 200, "{lit_points} lit points tested\n{object}");
+    }
+}
