@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Grows each fuzz target's corpus for FUZZ_SECONDS (default 120) from the checked-in files,
+# minimises it with `cargo fuzz cmin` (the smallest set with the same coverage) and checks the
+# result in as fuzz/corpus/<target>/min-<sha1> (replayed by `cargo test`, tests/tests/fuzz_replay.rs,
+# and read by every CI fuzz run). Old min-* files of the target are replaced.
+#
+#   bash scripts/fuzz-cmin.sh [TARGET...]
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+SECONDS_EACH=${FUZZ_SECONDS:-120}
+
+source scripts/fuzz-tools.sh "$@"
+
+work=target/fuzz-cmin
+for t in "${targets[@]}"; do
+    rm -rf "$work/$t" && mkdir -p "$work/$t" "$work/artifacts/$t"
+    cp fuzz/corpus/"$t"/* "$work/$t/"
+    echo "-- grow $t for ${SECONDS_EACH} s"
+    cargo +nightly fuzz run "$t" "$work/$t" -- -max_total_time="$SECONDS_EACH" -timeout=10 \
+        -rss_limit_mb=2048 -dict=fuzz/dict/floats.dict -artifact_prefix="$work/artifacts/$t/" \
+        >"$work/$t.log" 2>&1 || { tail -n 40 "$work/$t.log"; echo "fuzz-cmin: $t crashed"; exit 1; }
+    cargo +nightly fuzz cmin "$t" "$work/$t" >"$work/$t.cmin.log" 2>&1
+    rm -f fuzz/corpus/"$t"/min-*
+    for f in "$work/$t"/*; do
+        case "$(basename "$f")" in seed-*) continue ;; esac
+        cp "$f" "fuzz/corpus/$t/min-$(sha1sum "$f" | cut -c1-16)"
+    done
+    echo "$t: $(ls fuzz/corpus/"$t"/min-* 2>/dev/null | wc -l) minimised inputs"
+done
