@@ -318,6 +318,21 @@ mod tests {
         }
     }
 
+    /// The far padding is a relative `2·gamma(3)`, not more: a ray from the origin along
+    /// `(1, ½, 0)` leaves the slab `x ∈ [1, 1.5]` at `t = 1.5` and enters `y ∈ [2, 3]` at
+    /// `t = 4` (exact), a clear miss that any padding of the far distance by a factor of 8/3
+    /// or more would turn into a hit; it still hits when the `y` slab starts at `t = 1.5`
+    /// exactly (`y ∈ [0.75, 3]`), where the padding keeps the touching interval.
+    #[test]
+    fn far_padding_is_relative_rounding_only() {
+        let d = Vec3::new(1.0, 0.5, 0.0);
+        let missed = Aabb::new(Vec3::new(1.0, 2.0, -1.0), Vec3::new(1.5, 3.0, 1.0));
+        assert!(!hits(&missed, Vec3::ZERO, d));
+        let touching = Aabb::new(Vec3::new(1.0, 0.75, -1.0), Vec3::new(1.5, 3.0, 1.0));
+        assert!(hits(&touching, Vec3::ZERO, d));
+        assert!(SLAB_FAR_SCALE > 1.0 && SLAB_FAR_SCALE - 1.0 <= 2.0 * gamma(3));
+    }
+
     #[test]
     fn parallel_ray_just_outside_misses() {
         for zero in [0.0f32, -0.0] {
