@@ -306,6 +306,9 @@ fn classify(
     out
 }
 
+/// One side's answer to a ray (halfray's or an Embree mode's).
+type AnswerOf<'a> = &'a dyn Fn(&Ray) -> Option<Answer>;
+
 /// One set's row: the single-thread timed passes over `timing_rays` rays spread evenly over
 /// the set (every `stride`-th ray, the same rays for every side, so that a camera's empty
 /// first rows do not stand for the whole image), then every ray classified on the worker
@@ -316,7 +319,7 @@ fn compare_set(sides: &Sides<'_>, rays: &[(usize, SetRay)], timing_rays: usize) 
     let stride = rays.len().div_ceil(timing_rays.max(1)).max(1);
     let sample = || rays.iter().step_by(stride).map(|(_, r)| &r.ray);
     // halfray, Embree robust, Embree default.
-    let answer: [&dyn Fn(&Ray) -> Option<Answer>; 3] = [
+    let answer: [AnswerOf<'_>; 3] = [
         &|r| sides.halfray(r),
         &|r| embree_answer(sides.robust, r),
         &|r| embree_answer(sides.fast, r),
