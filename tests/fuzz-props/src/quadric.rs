@@ -165,14 +165,7 @@ pub fn check_against_exact(q: &Quadric, ray: &Ray) {
     // Scales with absolute values, as the code's rounding sees them.
     let o = ray.origin.as_dvec3();
     let d = ray.direction.as_dvec3();
-    let am = q.matrix();
-    let aa = DMat3::from_cols(am.x_axis.abs(), am.y_axis.abs(), am.z_axis.abs());
-    let c = q.reference_point();
-    let f0 = o - c;
-    let bc = q.gradient(c) * 0.5;
-    let qa_abs = d.abs().dot(aa * d.abs());
-    let qb_abs = d.abs().dot(aa * f0.abs() + bc.abs());
-    let qc_abs = q.eval_abs(o);
+    let [qa_abs, qb_abs, qc_abs] = coefficient_scales(q, ray);
     let s = qb_abs * qb_abs + qa_abs * qc_abs;
     let u = F64_UNIT_ROUNDOFF;
     let judged = [fa, fb, fc, qa_abs, qb_abs, qc_abs, s]
@@ -248,6 +241,23 @@ fn scale(q: &Quadric, x: DVec3) -> f64 {
     q.eval_abs(x)
 }
 
+/// The ray polynomial's coefficient scales `[|qa|, |qb|, |qc|]` (absolute values, the scale of
+/// their rounding): `|qa| = |d|ᵀ|A||d|`, `|qb| = |d|ᵀ(|A||f₀| + |b_c|)`, `|qc| = |f|(o)` (the
+/// bound `eval_abs` documents), `f₀ = o − x_c`.
+fn coefficient_scales(q: &Quadric, ray: &Ray) -> [f64; 3] {
+    let o = ray.origin.as_dvec3();
+    let d = ray.direction.as_dvec3();
+    let am = q.matrix();
+    let aa = DMat3::from_cols(am.x_axis.abs(), am.y_axis.abs(), am.z_axis.abs());
+    let xc = q.reference_point();
+    let bc = q.gradient(xc) * 0.5;
+    [
+        d.abs().dot(aa * d.abs()),
+        d.abs().dot(aa * (o - xc).abs() + bc.abs()),
+        scale(q, o),
+    ]
+}
+
 /// The properties:
 /// 1. Every root from `roots()` satisfies `|f(o + t·d)| ≤ K·u·(|qa|·t² + 2|qb|·|t| + |qc|)`
 ///    where the `|q·|` are the ray polynomial's coefficients with absolute values
@@ -271,14 +281,9 @@ pub fn check(q: &Quadric, ray: &Ray) {
     let aa = DMat3::from_cols(am.x_axis.abs(), am.y_axis.abs(), am.z_axis.abs());
     let xc = q.reference_point();
     let f0 = o - xc;
-    // Coefficient scales: |qa| = |d|ᵀ|A||d|, |qb| = |d|ᵀ(|A||f₀| + |b_c|),
-    // |qc| = |f|(o) (the same bound eval_abs documents).
-    let qa_abs = d.abs().dot(aa * d.abs());
+    let [qa_abs, qb_abs, qc_abs] = coefficient_scales(q, ray);
     let bc = q.gradient(xc) * 0.5;
     let k = q.eval(xc);
-    let g_abs = bc.abs(); // |b_c|
-    let qb_abs = d.abs().dot(aa * f0.abs() + g_abs);
-    let qc_abs = scale(q, o);
     // The near root `qc/q` inherits qc's rounding: forward error δ = K·u·|qc|/|q| with
     // |q| ≥ |qb|, which adds qa·δ² + |F'|·δ to the residual.
     let qb = d.dot(q.gradient(o) * 0.5);

@@ -357,9 +357,8 @@ where
         first: Entry,
         stack: &mut [Entry; STACK],
         sp: &mut usize,
-        groups: &[LeafGroup],
+        (nodes, groups): (&[WideNode<W>], &[LeafGroup]),
     ) -> u32 {
-        let nodes = self.nodes();
         let entry = |i: usize| Entry {
             child: node.child[i & (W - 1)],
             t_enter: dist[i & (W - 1)],
@@ -427,7 +426,7 @@ where
             // One child hit (the common case): nothing to order or push.
             near.child
         } else {
-            self.order_hits(level, node, &dist, hits, near, stack, sp, groups)
+            self.order_hits(level, node, &dist, hits, near, stack, sp, (nodes, groups))
         })
     }
 
