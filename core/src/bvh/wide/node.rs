@@ -159,9 +159,9 @@ impl LeafTriangle {
 /// Four consecutive triangle slots of the leaves, stored side by side so that a leaf's
 /// triangles are tested four at a time ([`crate::triangle::TriangleIntersector::certain_misses`])
 /// straight from memory: slot `s` of the tree is lane `s % 4` of group `s / 4`. Leaves are
-/// runs of slots in leaf order, packed with no gaps (a run may start in one group and end in
-/// the next), so the groups cost exactly what one record per triangle would: 40 bytes per
-/// triangle, 160 per group. Unused lanes hold NaN vertices (never hit) and index `u32::MAX`.
+/// runs of slots in leaf order, each touching the fewest groups its length allows (module
+/// docs of [`super`]): 40 bytes per slot, 160 per group. Unused lanes hold NaN vertices
+/// (never hit) and index `u32::MAX`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(16))]
 pub struct LeafGroup {

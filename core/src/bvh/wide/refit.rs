@@ -30,14 +30,15 @@ where
             });
         }
         let mut bad: Option<usize> = None;
-        let count = self.triangle_count as usize;
+        let count = self.slot_count as usize;
         let groups = self.groups.as_mut();
         for slot in 0..count {
             let Some(group) = groups.get_mut(slot / LANES) else {
                 break;
             };
             let lane = slot % LANES;
-            let Some(mut rec) = group.triangle(lane) else {
+            // Lanes skipped before a leaf run hold no triangle.
+            let Some(mut rec) = group.triangle(lane).filter(|t| t.prim != u32::MAX) else {
                 continue;
             };
             let p = rec.prim as usize;
