@@ -11,6 +11,11 @@
 //! * [`triangle`]: ray–triangle tests behind one trait, the watertight one by default.
 //! * [`plane`], [`sphere`], [`quadric`], [`polygon`], [`transform`]: the other primitives.
 //! * [`bvh`]: a binned-SAH BVH built into caller storage, traversed with a fixed stack.
+//! * [`grid`], [`kdtree`]: the uniform grid (3-D DDA) and the SAH kd-tree beside the BVH, in
+//!   caller storage, with the BVH's closest/any-hit contracts (equal to brute force).
+//! * [`volume`]: bounding spheres, oriented boxes and capsules, and conservative overlap tests.
+//! * [`collide`]: mesh-against-mesh collision (exact triangle–triangle test, BVH against BVH
+//!   under a transform) and the minimum distance between two meshes.
 //! * [`halfedge`]: fixed-capacity half-edge mesh arenas and their editing operations.
 //! * [`solids`]: the octahedron and the cube as index lists, for examples and tests.
 //!
@@ -40,10 +45,13 @@ struct ReadmeQuickStart;
 
 pub mod aabb;
 pub mod bvh;
+pub mod collide;
 pub mod error;
 pub mod float;
+pub mod grid;
 pub mod halfedge;
 pub mod hit;
+pub mod kdtree;
 pub mod plane;
 pub mod polygon;
 pub mod quadric;
@@ -57,6 +65,7 @@ mod test_util;
 pub mod tolerance;
 pub mod transform;
 pub mod triangle;
+pub mod volume;
 
 pub use aabb::Aabb;
 pub use error::{GeometryError, RayError};

@@ -90,3 +90,42 @@ fn a_missing_mesh_is_refused_before_any_measurement() {
     );
     assert!(!json.exists());
 }
+
+/// `bench accel`: one row per structure, in order, each equal to brute force on the sample.
+#[test]
+fn accel_reports_every_structure_equal_to_brute_force() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("accel.json");
+    let mesh = format!("{SCENE_MESHES}/torus.obj");
+    let o = Command::new(BIN)
+        .args([
+            "bench", "accel", &mesh, "--width", "24", "--rays", "400", "--json",
+        ])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(v["mesh"], mesh.as_str());
+    assert_eq!(v["primary_rays"], 24 * 24);
+    assert!(v["brute_force_rays"].as_u64().unwrap() >= 16);
+    let rows = v["structures"].as_array().expect("structures[]");
+    let names: Vec<&str> = rows.iter().map(|r| r["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["grid", "kdtree", "bvh", "bvh8"]);
+    for r in rows {
+        assert_eq!(r["brute_force_mismatches"], 0, "{}", r["name"]);
+        for key in [
+            "build_ms",
+            "bytes_per_triangle",
+            "mrays_closest_primary",
+            "mrays_closest_incoherent",
+        ] {
+            assert!(r[key].as_f64().unwrap() > 0.0, "{} {key}", r["name"]);
+        }
+    }
+}

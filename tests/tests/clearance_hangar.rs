@@ -3,12 +3,19 @@
 //! casts a ray from every drone vertex along its area-weighted vertex normal (from the
 //! half-edge mesh) with [`Bvh::clearance_triangles`] and keeps the nearest wall distance per
 //! vertex and the minimum. Every distance here is known analytically.
+//!
+//! A chopper (fuselage, tail boom, rotor disc, built from boxes and a polygon) then flies
+//! along a path of rigid steps towards the far wall; at every step its BVH is tested against
+//! the hangar's with the BVH-vs-BVH collision query, and the first contact step is predicted
+//! independently from the chopper's vertices moved along the path in `f64`.
 
 use glam::{DVec3, Vec3, vec3};
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+use halfray_core::collide::{Body, colliding_pairs, first_contact, min_distance};
 use halfray_core::halfedge::{DiffuseBoundary, HalfedgeMesh, VertexId, build_scratch_len};
 use halfray_core::ray::Ray;
 use halfray_core::solids::{CUBE_TRIANGLES, CUBE_VERTICES};
+use halfray_core::transform::Transform;
 use halfray_core::triangle::Watertight;
 
 /// Relative tolerance on a clearance distance against its f64 analytic value. Coordinates
@@ -316,4 +323,162 @@ fn cube_drone_casts_along_area_weighted_corner_normals() {
     }
     let min = check(&m, c + dy);
     assert_distance(min, 6f64.sqrt(), "after moving up: corners 5 and 6");
+}
+
+/// The chopper in its own frame (x forward, y up): the fuselage box, the tail boom box
+/// behind it and the rotor disc above it (a 16-gon of radius [`ROTOR_RADIUS`], fanned from
+/// its hub). Returns the positions, the triangles and the triangle range of the rotor.
+fn chopper() -> (Vec<Vec3>, Vec<[u32; 3]>, std::ops::Range<u32>) {
+    let mut p = Vec::new();
+    let mut t = Vec::new();
+    let add_box = |p: &mut Vec<Vec3>, t: &mut Vec<[u32; 3]>, c: Vec3, h: Vec3| {
+        let base = p.len() as u32;
+        p.extend(CUBE_VERTICES.iter().map(|&v| c + h * v));
+        t.extend(CUBE_TRIANGLES.iter().map(|tri| tri.map(|i| i + base)));
+    };
+    add_box(&mut p, &mut t, vec3(0.0, 0.0, 0.0), vec3(1.5, 0.8, 0.7)); // fuselage
+    add_box(&mut p, &mut t, vec3(-3.25, 0.2, 0.0), vec3(1.75, 0.2, 0.2)); // tail boom
+    let hub = p.len() as u32;
+    p.push(vec3(0.0, ROTOR_HEIGHT, 0.0));
+    let first = t.len() as u32;
+    for i in 0..ROTOR_SIDES {
+        let a = std::f64::consts::TAU * f64::from(i) / f64::from(ROTOR_SIDES);
+        p.push(vec3(
+            (ROTOR_RADIUS * a.cos()) as f32,
+            ROTOR_HEIGHT,
+            (ROTOR_RADIUS * a.sin()) as f32,
+        ));
+        t.push([hub, hub + 1 + i, hub + 1 + (i + 1) % ROTOR_SIDES]);
+    }
+    let end = t.len() as u32;
+    (p, t, first..end)
+}
+
+const ROTOR_RADIUS: f64 = 3.0;
+const ROTOR_HEIGHT: f32 = 1.2;
+const ROTOR_SIDES: u32 = 16;
+
+/// Step `k` of the flight path: the chopper's centre and its heading (yaw about +y, radians).
+fn path(k: u32) -> (DVec3, f64) {
+    let k = f64::from(k);
+    (
+        DVec3::new(6.0 + 0.3 * k, 3.5 - 0.01 * k, 6.0 + 0.04 * k),
+        0.015 * k,
+    )
+}
+
+fn placement(k: u32) -> Transform {
+    let (c, yaw) = path(k);
+    Transform::rotate(Vec3::Y, yaw as f32)
+        .unwrap()
+        .then(&Transform::translate(c.as_vec3()).unwrap())
+        .unwrap()
+}
+
+/// The chopper's vertex `v` at step `k`, in f64: a rotation by the heading about +y
+/// (x' = x·cos + z·sin, z' = −x·sin + z·cos, the right-hand rule about +y), then the centre.
+fn placed_f64(v: Vec3, k: u32) -> DVec3 {
+    let (c, yaw) = path(k);
+    let (s, co) = yaw.sin_cos();
+    let v = v.as_dvec3();
+    c + DVec3::new(v.x * co + v.z * s, v.y, -v.x * s + v.z * co)
+}
+
+/// Signed gap of `w` to the nearest wall (negative: through it), and which wall
+/// (`2·axis + [upper]`).
+fn wall_gap(w: DVec3) -> (f64, usize) {
+    let mut best = (f64::INFINITY, usize::MAX);
+    for axis in 0..3 {
+        for (upper, gap) in [(0, w[axis] - ROOM_MIN[axis]), (1, ROOM_MAX[axis] - w[axis])] {
+            if gap < best.0 {
+                best = (gap, 2 * axis + upper);
+            }
+        }
+    }
+    best
+}
+
+#[test]
+fn chopper_flying_in_first_touches_the_far_wall_with_its_rotor() {
+    let (hp, ht) = hangar();
+    let room = TriangleMesh::new(&hp, &ht);
+    let hangar_bvh = build_hangar(&hp, &ht);
+    let (cp, ct, rotor) = chopper();
+    let heli = TriangleMesh::new(&cp, &ct);
+    let heli_bvh = build_hangar(&cp, &ct);
+    let (a, b) = (
+        Body::new(&hangar_bvh, room).unwrap(),
+        Body::new(&heli_bvh, heli).unwrap(),
+    );
+
+    // The prediction: the first step at which some vertex reaches a wall (the chopper is
+    // inside the room until then, so a triangle meets a wall exactly when one of its
+    // vertices reaches the wall's plane). The f64 rotation matches the f32 matrix.
+    let gaps: Vec<(f64, usize, usize)> = (0..60)
+        .map(|k| {
+            let tf = placement(k);
+            (0..cp.len())
+                .map(|i| {
+                    let w = placed_f64(cp[i], k);
+                    assert!(
+                        (w - tf.point_to_world(cp[i]).as_dvec3())
+                            .abs()
+                            .max_element()
+                            < 1e-5
+                    );
+                    let (g, wall) = wall_gap(w);
+                    (g, wall, i)
+                })
+                .min_by(|x, y| x.0.total_cmp(&y.0))
+                .unwrap()
+        })
+        .collect();
+    let expected = gaps
+        .iter()
+        .position(|g| g.0 <= 0.0)
+        .expect("contact on the path") as u32;
+    let (pen, wall, vertex) = gaps[expected as usize];
+    let (before, _, _) = gaps[expected as usize - 1];
+    // By hand: the rotor tip at 22.5° reaches x = 20 when 6 + 0.3k + 3·cos(0.015k − 22.5°)
+    // ≥ 20: 19.77 at k = 36, 20.06 at k = 37 (the tail's end, 5 behind, is at x ≥ 1).
+    assert_eq!(expected, 37);
+    assert_eq!(wall, 1, "the x = 20 wall");
+    let hub = cp.len() - ROTOR_SIDES as usize - 1;
+    assert!(vertex > hub, "a rotor tip, not vertex {vertex}");
+    // Margins far above f32 rounding (~1e-6 at these coordinates): the step is robust.
+    assert!(pen < -1e-3 && before > 1e-3, "{pen} {before}");
+
+    for k in 0..expected + 4 {
+        let tf = placement(k);
+        let contact = first_contact(&a, &b, &tf).unwrap();
+        assert_eq!(contact.is_some(), k >= expected, "step {k}");
+        if k == expected - 1 {
+            // One step before: the distance is the predicted gap, from a rotor triangle to
+            // the far wall.
+            let c = min_distance(&a, &b, &tf, f64::INFINITY).unwrap().unwrap();
+            assert!(
+                (c.distance - before).abs() < 1e-5,
+                "{} vs {before}",
+                c.distance
+            );
+            assert!(rotor.contains(&c.b) && (2..4).contains(&c.a), "{c:?}");
+            assert_eq!(min_distance(&a, &b, &tf, before * 0.5).unwrap(), None);
+        }
+        if k == expected {
+            let mut pairs = vec![(0u32, 0u32); 64];
+            let n = colliding_pairs(&a, &b, &tf, &mut pairs).unwrap();
+            assert!(n >= 1);
+            for &(wall_tri, heli_tri) in &pairs[..n] {
+                assert!(
+                    (2..4).contains(&wall_tri),
+                    "hangar triangle {wall_tri}: the x = 20 wall"
+                );
+                assert!(
+                    rotor.contains(&heli_tri),
+                    "chopper triangle {heli_tri}: the rotor"
+                );
+            }
+            assert!(pairs[..n].contains(&contact.unwrap()));
+        }
+    }
 }

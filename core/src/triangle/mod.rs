@@ -27,6 +27,7 @@
 //! the same `t`). The proof needs the edge functions' signs to be exact and the per-vertex shear
 //! to be a deterministic function of the vertex: never evaluate them with a fused multiply-add.
 
+pub mod barycentric;
 mod cramer;
 mod lanes;
 mod moller_trumbore;

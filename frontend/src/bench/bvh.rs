@@ -22,7 +22,8 @@ use halfray_core::Ray;
 use halfray_core::bvh::wide::binary_options;
 use halfray_core::bvh::{BuildOptions, DEFAULT_MAX_LEAF_SIZE, TraversalStats, TriangleMesh};
 use halfray_core::triangle::{TriangleIntersector, VariantVisitor};
-use rivals::{Rivals, interleaved};
+use rivals::Rivals;
+pub(super) use rivals::interleaved;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -466,7 +467,7 @@ fn throughput(rays: &[Ray], f: impl Fn(&Ray) -> bool) -> (f64, usize) {
 }
 
 /// Closest hit over every triangle, ties to the smaller index (the BVH's rule).
-fn brute_force<T: TriangleIntersector>(
+pub(super) fn brute_force<T: TriangleIntersector>(
     mesh: &TriangleMesh<'_>,
     isect: &T,
     ray: &Ray,

@@ -1,5 +1,6 @@
-//! Benchmarks: `halfray bench bvh` and `halfray bench accuracy`.
+//! Benchmarks: `halfray bench bvh`, `halfray bench accel` and `halfray bench accuracy`.
 
+pub mod accel;
 pub mod accuracy;
 pub mod bvh;
 
@@ -10,6 +11,8 @@ use crate::error::Result;
 pub enum BenchCommand {
     /// BVH build time, size and traversal throughput.
     Bvh(bvh::BvhArgs),
+    /// The acceleration structures side by side: grid, kd-tree, binary and wide BVH.
+    Accel(accel::AccelArgs),
     /// Cost against accuracy of every intersector variant and robustness choice.
     Accuracy(accuracy::AccuracyArgs),
 }
@@ -18,6 +21,7 @@ pub enum BenchCommand {
 pub fn run(cmd: &BenchCommand) -> Result<()> {
     match cmd {
         BenchCommand::Bvh(args) => bvh::run(args),
+        BenchCommand::Accel(args) => accel::run(args),
         BenchCommand::Accuracy(args) => accuracy::run(args),
     }
 }

@@ -33,6 +33,9 @@ pub const TARGETS: &[&str] = &[
     "bvh",
     "bvh_load",
     "halfedge_ops",
+    "grid",
+    "kdtree",
+    "overlap",
 ];
 
 /// Runs target `name` on `data`; `false` when no such target exists.
@@ -47,6 +50,9 @@ pub fn run(name: &str, data: &[u8]) -> bool {
         "bvh" => bvh::bvh(data),
         "bvh_load" => bvh_load::bvh_load(data),
         "halfedge_ops" => halfedge::halfedge_ops(data),
+        "grid" => grid::grid(data),
+        "kdtree" => kdtree::kdtree(data),
+        "overlap" => overlap::overlap(data),
         _ => return false,
     }
     true
@@ -332,6 +338,9 @@ pub fn seeds() -> Vec<Seed> {
     bvh::seeds(&mut s);
     bvh_load::seeds(&mut s);
     halfedge::seeds(&mut s);
+    grid::seeds(&mut s);
+    kdtree::seeds(&mut s);
+    overlap::seeds(&mut s);
     s
 }
 
@@ -356,3 +365,9 @@ pub mod sphere;
 pub mod quadric;
 
 pub mod scene;
+
+pub mod grid;
+
+pub mod kdtree;
+
+pub mod overlap;

@@ -11,7 +11,7 @@ type HitQuery<'a> = Box<dyn Fn(&Ray) -> bool + 'a>;
 
 /// Best-of-[`TIMED_PASSES`] throughputs (Mrays/s) of each of `fs` over `rays`, the passes taken
 /// round-robin (pass 1 of every function, then pass 2, …).
-pub(super) fn interleaved(rays: &[Ray], fs: &[&dyn Fn(&Ray) -> bool]) -> Vec<f64> {
+pub(in crate::bench) fn interleaved(rays: &[Ray], fs: &[&dyn Fn(&Ray) -> bool]) -> Vec<f64> {
     let mut best = vec![f64::INFINITY; fs.len()];
     for _ in 0..TIMED_PASSES {
         for (f, b) in fs.iter().zip(best.iter_mut()) {

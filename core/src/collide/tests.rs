@@ -1,0 +1,490 @@
+//! Unit tests of the collision module: exact predicates, the triangle–triangle test on
+//! touching, coplanar, edge–edge, vertex–face, degenerate and just-apart cases with exact
+//! expected answers, distances with exact expected values, and the traversal against brute
+//! force on small scenes.
+
+use super::expansion::{Expansion, two_product};
+use super::predicates::orient3d_exact;
+use super::tri_tri::segment_triangle;
+use super::*;
+use crate::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+use crate::test_util::lcg;
+use crate::transform::Transform;
+use glam::{Vec3, vec3};
+use std::vec;
+use std::vec::Vec;
+
+fn det3_i64(a: [i64; 3], b: [i64; 3], c: [i64; 3], x: [i64; 3]) -> i64 {
+    let u = [a[0] - c[0], a[1] - c[1], a[2] - c[2]];
+    let v = [b[0] - c[0], b[1] - c[1], b[2] - c[2]];
+    let w = [x[0] - c[0], x[1] - c[1], x[2] - c[2]];
+    u[0] * (v[1] * w[2] - v[2] * w[1])
+        + u[1] * (v[2] * w[0] - v[0] * w[2])
+        + u[2] * (v[0] * w[1] - v[1] * w[0])
+}
+
+fn grid_point(s: &mut u64, n: f32) -> Vec3 {
+    let mut g = || (lcg(s) * (2.0 * n + 1.0)).floor() - n;
+    vec3(g(), g(), g())
+}
+
+#[test]
+fn expansion_products_are_exact() {
+    // (1 + 2⁻³⁰)² = 1 + 2⁻²⁹ + 2⁻⁶⁰: the last term is lost in one f64 product.
+    let x = 1.0 + 2f64.powi(-30);
+    let (hi, lo) = two_product(x, x);
+    assert_eq!(hi, 1.0 + 2f64.powi(-29));
+    assert_eq!(lo, 2f64.powi(-60));
+    let mut e = Expansion::<8>::ZERO;
+    e.add_product(&[x], &[x], 1.0);
+    e.grow(-1.0);
+    e.grow(-2f64.powi(-29));
+    assert_eq!(e.components(), &[2f64.powi(-60)]);
+    e.grow(-2f64.powi(-60));
+    assert_eq!(e.sign(), 0);
+    assert!(!e.overflowed());
+}
+
+/// `orient3d` equals the integer determinant on small grids (many exact zeros, which the
+/// filter cannot decide), and its filtered and exact paths agree on random points.
+#[test]
+fn orient3d_matches_integer_determinant() {
+    let mut s = 5u64;
+    let mut zeros = 0;
+    for _ in 0..20_000 {
+        let p = [(); 4].map(|_| grid_point(&mut s, 3.0));
+        let i = p.map(|v| [v.x as i64, v.y as i64, v.z as i64]);
+        let want = det3_i64(i[0], i[1], i[2], i[3]).signum() as i32;
+        zeros += usize::from(want == 0);
+        assert_eq!(orient3d(p[0], p[1], p[2], p[3]), want, "{p:?}");
+        assert_eq!(orient3d_exact(p[0], p[1], p[2], p[3]), want, "{p:?}");
+    }
+    assert!(zeros > 1000, "{zeros}");
+    for _ in 0..20_000 {
+        let p =
+            [(); 4].map(|_| vec3(lcg(&mut s) - 0.5, lcg(&mut s) - 0.5, lcg(&mut s) - 0.5) * 1.0e3);
+        assert_eq!(
+            orient3d(p[0], p[1], p[2], p[3]),
+            orient3d_exact(p[0], p[1], p[2], p[3])
+        );
+    }
+}
+
+/// Points on the plane `z = 0` with coordinates spanning 60 orders of magnitude, and a
+/// fourth point `z = ±1e-38` off it: the `f64` evaluation cannot see it (the differences are
+/// not even exact), the exact path must.
+#[test]
+fn orient3d_is_exact_across_magnitudes() {
+    let a = vec3(1.0e20, 3.0e-7, 0.0);
+    let b = vec3(-2.0e5, 1.0e20, 0.0);
+    let c = vec3(1.0e-30, 1.0e-25, 0.0);
+    // (a − c) × (b − c) has z ≈ 1e40 > 0: the normal points to +z.
+    for (z, want) in [(1.0e-38f32, 1), (-1.0e-38, -1), (0.0, 0), (-0.0, 0)] {
+        let x = vec3(7.0e10, -3.0e-3, z);
+        assert_eq!(orient3d(a, b, c, x), want, "z = {z:e}");
+    }
+    // Collinear-looking but not: x on the line through a and c, moved by one ulp.
+    let (p, q) = (vec3(1.0, 1.0, 1.0), vec3(3.0, 3.0, 3.0));
+    let r = vec3(2.0, 2.0, f32::from_bits(2.0f32.to_bits() + 1));
+    assert_eq!(orient2d(p, q, r, 0, 1), 0);
+    assert_eq!(orient2d(p, q, r, 1, 2), 1);
+    assert!(!is_degenerate(&[p, q, r]));
+    assert!(is_degenerate(&[p, q, vec3(2.0, 2.0, 2.0)]));
+    assert!(is_degenerate(&[p, p, p]));
+}
+
+const A: [Vec3; 3] = [
+    Vec3::new(0.0, 0.0, 0.0),
+    Vec3::new(1.0, 0.0, 0.0),
+    Vec3::new(0.0, 1.0, 0.0),
+];
+
+fn moved(t: [Vec3; 3], d: Vec3) -> [Vec3; 3] {
+    t.map(|v| v + d)
+}
+
+fn check(a: [Vec3; 3], b: [Vec3; 3], want: bool, what: &str) {
+    assert_eq!(triangles_intersect(&a, &b), want, "{what}");
+    assert_eq!(triangles_intersect(&b, &a), want, "{what} (swapped)");
+    let rot = [b[1], b[2], b[0]];
+    assert_eq!(triangles_intersect(&a, &rot), want, "{what} (rotated)");
+    let flip = [b[0], b[2], b[1]];
+    assert_eq!(triangles_intersect(&a, &flip), want, "{what} (flipped)");
+}
+
+#[test]
+fn vertex_face_touching_and_just_apart() {
+    let b = [
+        vec3(0.25, 0.25, 0.0),
+        vec3(0.0, 0.0, 1.0),
+        vec3(1.0, 0.0, 1.0),
+    ];
+    check(A, b, true, "vertex on face");
+    let tiny = f32::from_bits(1);
+    check(
+        A,
+        moved(b, vec3(0.0, 0.0, tiny)),
+        false,
+        "vertex one subnormal above",
+    );
+    check(
+        A,
+        moved(b, vec3(0.0, 0.0, -tiny)),
+        true,
+        "vertex one subnormal below: pierces",
+    );
+    // The vertex exactly on A's edge, on its vertex, and just outside the hypotenuse.
+    let on_edge = [
+        vec3(0.5, 0.0, 0.0),
+        vec3(0.5, -1.0, 1.0),
+        vec3(0.5, 1.0, 1.0),
+    ];
+    check(A, on_edge, true, "vertex on edge");
+    let on_vertex = [
+        vec3(1.0, 0.0, 0.0),
+        vec3(2.0, -1.0, 1.0),
+        vec3(2.0, 1.0, 1.0),
+    ];
+    check(A, on_vertex, true, "vertex on vertex");
+    let out = f32::from_bits(0.5f32.to_bits() + 1);
+    let outside = [
+        vec3(0.5, out, 0.0),
+        vec3(0.0, 0.0, 1.0),
+        vec3(1.0, 1.0, 1.0),
+    ];
+    check(A, outside, false, "vertex one ulp beyond the hypotenuse");
+}
+
+#[test]
+fn edge_edge_touching_and_just_apart() {
+    let a = [
+        vec3(-1.0, 0.0, 0.0),
+        vec3(1.0, 0.0, 0.0),
+        vec3(0.0, -1.0, 0.0),
+    ];
+    let b = [
+        vec3(0.0, 0.0, -1.0),
+        vec3(0.0, 0.0, 1.0),
+        vec3(0.0, 1.0, 0.0),
+    ];
+    check(a, b, true, "edges cross at the origin");
+    check(
+        a,
+        moved(b, vec3(0.0, 1.0e-7, 0.0)),
+        false,
+        "edges 1e-7 apart",
+    );
+    check(
+        a,
+        moved(b, vec3(0.0, -1.0e-7, 0.0)),
+        true,
+        "edges 1e-7 into each other",
+    );
+    // Crossing through each other's interiors (general position).
+    let c = [
+        vec3(0.0, -0.5, -1.0),
+        vec3(0.0, -0.5, 1.0),
+        vec3(0.0, 1.0, 0.0),
+    ];
+    check(a, c, true, "proper crossing");
+}
+
+#[test]
+fn coplanar_cases() {
+    check(A, moved(A, vec3(0.2, 0.2, 0.0)), true, "overlapping");
+    check(A, moved(A, vec3(1.0, 0.0, 0.0)), true, "sharing a vertex");
+    let mirrored = [
+        vec3(1.0, 0.0, 0.0),
+        vec3(0.0, 1.0, 0.0),
+        vec3(1.0, 1.0, 0.0),
+    ];
+    check(A, mirrored, true, "sharing the hypotenuse");
+    let e = f32::EPSILON;
+    check(
+        A,
+        moved(mirrored, vec3(e, e, 0.0)),
+        false,
+        "hypotenuse one step apart",
+    );
+    let small = [
+        vec3(0.1, 0.1, 0.0),
+        vec3(0.2, 0.1, 0.0),
+        vec3(0.1, 0.2, 0.0),
+    ];
+    check(A, small, true, "contained");
+    check(
+        A,
+        moved(A, vec3(0.6, 0.6, 0.0)),
+        false,
+        "boxes overlap, triangles do not",
+    );
+    // Coplanar in a tilted plane, with non-integer coordinates: x + y + z = 1.
+    let t = [
+        vec3(1.0, 0.0, 0.0),
+        vec3(0.0, 1.0, 0.0),
+        vec3(0.0, 0.0, 1.0),
+    ];
+    let u = [
+        vec3(0.5, 0.5, 0.0),
+        vec3(0.5, 0.0, 0.5),
+        vec3(0.75, 0.5, -0.25),
+    ];
+    check(t, u, true, "tilted coplanar, sharing an edge midpoint line");
+}
+
+#[test]
+fn degenerate_triangles() {
+    let tiny = f32::from_bits(1);
+    // A segment piercing A, a segment touching it, a point on it, a point off it.
+    let seg = [
+        vec3(0.2, 0.2, -1.0),
+        vec3(0.2, 0.2, 1.0),
+        vec3(0.2, 0.2, 0.0),
+    ];
+    check(A, seg, true, "segment through the face");
+    let seg_touch = [
+        vec3(0.2, 0.2, 0.0),
+        vec3(0.2, 0.2, 1.0),
+        vec3(0.2, 0.2, 0.5),
+    ];
+    check(A, seg_touch, true, "segment ending on the face");
+    check(
+        A,
+        moved(seg_touch, vec3(0.0, 0.0, tiny)),
+        false,
+        "segment ending just above",
+    );
+    let point = [vec3(0.3, 0.3, 0.0); 3];
+    check(A, point, true, "point on the face");
+    check(A, [vec3(0.3, 0.3, tiny); 3], false, "point just above");
+    // In-plane segment crossing an edge, and one just outside.
+    let inplane = [
+        vec3(-1.0, 0.5, 0.0),
+        vec3(0.25, 0.5, 0.0),
+        vec3(-1.0, 0.5, 0.0),
+    ];
+    check(A, inplane, true, "in-plane segment crossing the x = 0 edge");
+    check(
+        A,
+        moved(inplane, vec3(-0.25 - 1.0e-7, 0.0, 0.0)),
+        false,
+        "in-plane, short of it",
+    );
+    // Two segments: crossing, touching end to end, skew.
+    let s1 = [
+        vec3(-1.0, 0.0, 0.0),
+        vec3(1.0, 0.0, 0.0),
+        vec3(0.0, 0.0, 0.0),
+    ];
+    let s2 = [
+        vec3(0.0, -1.0, 0.0),
+        vec3(0.0, 1.0, 0.0),
+        vec3(0.0, 1.0, 0.0),
+    ];
+    check(s1, s2, true, "segments crossing");
+    check(
+        s1,
+        moved(s2, vec3(0.0, 0.0, 1.0e-30)),
+        false,
+        "skew segments",
+    );
+    let s3 = [
+        vec3(1.0, 0.0, 0.0),
+        vec3(3.0, 0.0, 0.0),
+        vec3(2.0, 0.0, 0.0),
+    ];
+    check(s1, s3, true, "collinear segments sharing an end");
+    check(
+        s1,
+        moved(s3, vec3(1.0e-7, 0.0, 0.0)),
+        false,
+        "collinear segments apart",
+    );
+    // Non-finite vertices never intersect.
+    check(
+        A,
+        [vec3(f32::NAN, 0.0, 0.0), A[1], A[2]],
+        false,
+        "NaN vertex",
+    );
+}
+
+/// Devillers–Guigue equals the edge decomposition (an edge of one triangle meets the other,
+/// [`segment_triangle`]) on random small-grid triangles: touching, coplanar and degenerate
+/// configurations in abundance.
+#[test]
+fn devillers_guigue_equals_edge_decomposition_on_grids() {
+    let mut s = 11u64;
+    let mut hits = 0;
+    for _ in 0..40_000 {
+        let a = [(); 3].map(|_| grid_point(&mut s, 2.0));
+        let b = [(); 3].map(|_| grid_point(&mut s, 2.0));
+        if is_degenerate(&a) || is_degenerate(&b) {
+            continue;
+        }
+        let edges = |t: &[Vec3; 3], o: &[Vec3; 3]| {
+            (0..3).any(|k| segment_triangle(t[k], t[(k + 1) % 3], o))
+        };
+        let want = edges(&a, &b) || edges(&b, &a);
+        hits += usize::from(want);
+        assert_eq!(triangles_intersect(&a, &b), want, "{a:?} {b:?}");
+    }
+    assert!(hits > 5000, "{hits}");
+}
+
+#[test]
+fn distances_with_exact_values() {
+    // Parallel planes 1 apart, overlapping in projection: vertex–face.
+    let up = moved(A, vec3(0.1, 0.1, 1.0));
+    assert_eq!(triangle_distance(&A, &up), 1.0);
+    // A's edge y = 0 (x in [0, 1]) and a segment-like triangle along y at x = 0.5, z = 2,
+    // y in [−3, −1]: closest points (0.5, 0, 0)–(0.5, −1, 2): √5.
+    let b = [
+        vec3(0.5, -1.0, 2.0),
+        vec3(0.5, -3.0, 2.0),
+        vec3(0.5, -2.0, 2.0),
+    ];
+    let d = triangle_distance(&A, &b);
+    assert!((d - 5f64.sqrt()).abs() <= 1e-15, "{d}");
+    // Touching: exactly zero; one subnormal apart: positive but tiny.
+    let touch = [
+        vec3(0.25, 0.25, 0.0),
+        vec3(0.0, 0.0, 1.0),
+        vec3(1.0, 0.0, 1.0),
+    ];
+    assert_eq!(triangle_distance(&A, &touch), 0.0);
+    let tiny = f32::from_bits(1);
+    let apart = moved(touch, vec3(0.0, 0.0, tiny));
+    let d = triangle_distance(&A, &apart);
+    assert!(d > 0.0 && d <= 2.0 * f64::from(tiny), "{d:e}");
+    // Edge–edge, skew, along the diagonal: the hypotenuse of A against a segment above its
+    // midpoint crossing it at right angles, 2 higher.
+    let c = [
+        vec3(0.0, 0.0, 2.0),
+        vec3(1.0, 1.0, 2.0),
+        vec3(0.5, 0.5, 2.0),
+    ];
+    assert!((triangle_distance(&A, &c) - 2.0).abs() <= 1e-15);
+    assert_eq!(
+        triangle_distance(&A, &[vec3(f32::NAN, 0.0, 0.0); 3]),
+        f64::INFINITY
+    );
+}
+
+type VBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
+
+fn soup(s: &mut u64, n: usize, spread: f32, size: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut p = Vec::new();
+    let mut t = Vec::new();
+    for i in 0..n as u32 {
+        let c = vec3(lcg(s), lcg(s), lcg(s)) * spread;
+        for _ in 0..3 {
+            p.push(c + (vec3(lcg(s), lcg(s), lcg(s)) - 0.5) * size);
+        }
+        t.push([3 * i, 3 * i + 1, 3 * i + 2]);
+    }
+    (p, t)
+}
+
+fn tree(mesh: &TriangleMesh<'_>) -> VBvh {
+    Bvh::build(
+        mesh,
+        vec![BvhNode::EMPTY; node_capacity(mesh.len())],
+        vec![0u32; index_capacity(mesh.len())],
+        &BuildOptions::default(),
+    )
+    .unwrap()
+}
+
+#[test]
+fn traversal_equals_brute_force_on_small_soups() {
+    let mut s = 3u64;
+    for round in 0..20 {
+        let (pa, ta) = soup(&mut s, 60, 4.0, 1.0);
+        let (pb, tb) = soup(&mut s, 50, 4.0, 1.0);
+        let (ma, mb) = (TriangleMesh::new(&pa, &ta), TriangleMesh::new(&pb, &tb));
+        let (ba, bb) = (tree(&ma), tree(&mb));
+        let (a, b) = (Body::new(&ba, ma).unwrap(), Body::new(&bb, mb).unwrap());
+        let tf = Transform::rotate(vec3(lcg(&mut s), 1.0, lcg(&mut s)), lcg(&mut s) * 6.0)
+            .unwrap()
+            .then(&Transform::translate(vec3(0.5, -0.3, 0.2) * round as f32 * 0.1).unwrap())
+            .unwrap();
+        let mut want = Vec::new();
+        let mut best: Option<(f64, u32, u32)> = None;
+        for i in 0..ta.len() {
+            for j in 0..tb.len() {
+                let x = ma.triangle(i).unwrap();
+                let y = mb.triangle(j).unwrap().map(|v| tf.point_to_world(v));
+                if triangles_intersect(&x, &y) {
+                    want.push((i as u32, j as u32));
+                }
+                let d = triangle_distance(&x, &y);
+                if best.is_none_or(|b| d < b.0) {
+                    best = Some((d, i as u32, j as u32));
+                }
+            }
+        }
+        let mut out = vec![(0u32, 0u32); want.len() + 3];
+        let n = colliding_pairs(&a, &b, &tf, &mut out).unwrap();
+        let mut got = out[..n].to_vec();
+        got.sort_unstable();
+        assert_eq!(got, want, "round {round}");
+        let first = first_contact(&a, &b, &tf).unwrap();
+        assert_eq!(first.is_some(), !want.is_empty());
+        assert!(first.is_none_or(|p| want.contains(&p)));
+        if want.len() > 1 {
+            let mut short = vec![(0u32, 0u32); 1];
+            assert_eq!(
+                colliding_pairs(&a, &b, &tf, &mut short),
+                Err(CollideError::OutputTooSmall {
+                    needed: want.len(),
+                    available: 1
+                })
+            );
+            assert!(want.contains(&short[0]));
+        }
+        let (d, i, j) = best.unwrap();
+        let c = min_distance(&a, &b, &tf, f64::INFINITY).unwrap().unwrap();
+        assert_eq!((c.distance, c.a, c.b), (d, i, j), "round {round}");
+        assert_eq!(min_distance(&a, &b, &tf, d).unwrap(), Some(c));
+        if d > 0.0 {
+            assert_eq!(min_distance(&a, &b, &tf, d * 0.999).unwrap(), None);
+        }
+    }
+}
+
+#[test]
+fn errors_and_empty_inputs() {
+    let mut s = 1u64;
+    let (p, t) = soup(&mut s, 10, 2.0, 1.0);
+    let mesh = TriangleMesh::new(&p, &t);
+    let bvh = tree(&mesh);
+    let fewer = TriangleMesh::new(&p, &t[..5]);
+    assert_eq!(
+        Body::new(&bvh, fewer).unwrap_err(),
+        CollideError::MeshMismatch { bvh: 10, mesh: 5 }
+    );
+    let body = Body::new(&bvh, mesh).unwrap();
+    let id = Transform::IDENTITY;
+    for bad in [f64::NAN, -1.0] {
+        assert_eq!(
+            min_distance(&body, &body, &id, bad),
+            Err(CollideError::InvalidMaxDistance)
+        );
+    }
+    // Against itself, every triangle touches itself: at least 10 pairs, counted with no room.
+    match colliding_pairs(&body, &body, &id, &mut []) {
+        Err(CollideError::OutputTooSmall {
+            needed,
+            available: 0,
+        }) => assert!(needed >= 10),
+        other => panic!("{other:?}"),
+    }
+    let empty_mesh = TriangleMesh::new(&[], &[]);
+    let empty = tree(&empty_mesh);
+    let e = Body::new(&empty, empty_mesh).unwrap();
+    assert_eq!(colliding_pairs(&e, &body, &id, &mut []), Ok(0));
+    assert_eq!(first_contact(&body, &e, &id), Ok(None));
+    assert_eq!(min_distance(&e, &body, &id, f64::INFINITY), Ok(None));
+    assert!(std::format!("{}", CollideError::TreeTooDeep).contains("stack"));
+}

@@ -1,0 +1,121 @@
+//! Filling the caller's storage: a counting pass into the offsets, a prefix sum, and a
+//! scatter pass into the references (triangles in index order, so every cell's list is
+//! sorted), without allocation or recursion.
+
+use super::overlap::for_each_cell;
+use super::plan::usable_triangle;
+use super::{Grid, GridError, GridPlan};
+use crate::bvh::TriangleMesh;
+
+impl<O, R> Grid<O, R>
+where
+    O: AsRef<[u32]> + AsMut<[u32]>,
+    R: AsRef<[u32]> + AsMut<[u32]>,
+{
+    /// Builds the grid `plan` describes over `mesh` (the mesh the plan was made for) into
+    /// `offsets` (at least [`GridPlan::required_offsets`]) and `references` (at least
+    /// [`GridPlan::required_references`]).
+    ///
+    /// # Errors
+    ///
+    /// Before anything is written: [`GridError::OffsetStorageTooSmall`],
+    /// [`GridError::ReferenceStorageTooSmall`], and [`GridError::PlanMismatch`] when `mesh`
+    /// has a different triangle count than the plan's. After the counting pass has written
+    /// the offsets (the references untouched): [`GridError::PlanMismatch`] when `mesh`'s
+    /// vertices give a different reference count than the plan's.
+    pub fn build(
+        mesh: &TriangleMesh<'_>,
+        plan: &GridPlan,
+        mut offsets: O,
+        mut references: R,
+    ) -> Result<Self, GridError> {
+        let cells = plan.layout.cell_count();
+        let refs = plan.reference_count;
+        if mesh.len() != plan.source_len {
+            return Err(GridError::PlanMismatch {
+                expected: plan.source_len,
+                found: mesh.len(),
+            });
+        }
+        let off_len = offsets.as_ref().len();
+        if off_len < cells + 1 {
+            return Err(GridError::OffsetStorageTooSmall {
+                needed: cells + 1,
+                available: off_len,
+            });
+        }
+        let ref_len = references.as_ref().len();
+        if ref_len < refs {
+            return Err(GridError::ReferenceStorageTooSmall {
+                needed: refs,
+                available: ref_len,
+            });
+        }
+        let off = offsets.as_mut().get_mut(..=cells).unwrap_or(&mut []);
+        let dst = references.as_mut().get_mut(..refs).unwrap_or(&mut []);
+        fill(mesh, plan, off, dst)?;
+        Ok(Self {
+            offsets,
+            references,
+            layout: plan.layout,
+            triangle_count: plan.triangle_count,
+            source_len: plan.source_len,
+            reference_count: refs,
+        })
+    }
+}
+
+/// The three passes into `off` (exactly `cells + 1` entries) and `dst` (exactly the plan's
+/// reference count). Counts fit `u32`: the plan checked the total.
+fn fill(
+    mesh: &TriangleMesh<'_>,
+    plan: &GridPlan,
+    off: &mut [u32],
+    dst: &mut [u32],
+) -> Result<(), GridError> {
+    let layout = &plan.layout;
+    let each = |f: &mut dyn FnMut(u32, usize)| {
+        for i in 0..mesh.len() {
+            if let Some(v) = usable_triangle(mesh, i) {
+                for_each_cell(layout, &v, plan.assignment, |c| f(i as u32, c));
+            }
+        }
+    };
+    // 1. Count cell `c`'s references into `off[c + 1]`.
+    off.fill(0);
+    let mut total = 0usize;
+    each(&mut |_, c| {
+        if let Some(slot) = off.get_mut(c + 1) {
+            *slot = slot.saturating_add(1);
+            total += 1;
+        }
+    });
+    if total != dst.len() {
+        return Err(GridError::PlanMismatch {
+            expected: dst.len(),
+            found: total,
+        });
+    }
+    // 2. Prefix sum: `off[c]` = start of cell `c`.
+    let mut sum = 0u32;
+    for o in off.iter_mut() {
+        sum = sum.saturating_add(*o);
+        *o = sum;
+    }
+    // 3. Scatter with `off[c]` as cell `c`'s cursor, which ends at the start of `c + 1`…
+    each(&mut |tri, c| {
+        if let Some(cursor) = off.get_mut(c) {
+            if let Some(slot) = dst.get_mut(*cursor as usize) {
+                *slot = tri;
+            }
+            *cursor = cursor.saturating_add(1);
+        }
+    });
+    // …so shifting every entry up by one restores the starts.
+    let n = off.len();
+    off.copy_within(..n.saturating_sub(1), 1);
+    if let Some(first) = off.first_mut() {
+        *first = 0;
+    }
+    Ok(())
+}

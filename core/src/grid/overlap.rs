@@ -1,0 +1,223 @@
+//! The cell layout and the conservative triangle-to-cell assignment (box or separating-axis).
+//!
+//! Cell `(i, j, k)` is the box `[min + i·size, min + (i+1)·size]` per axis in **real**
+//! arithmetic on the stored `f32` `min` and `size`, except that the first and last cell of
+//! each axis extend to `−∞` and `+∞`: the cells partition all of space, so a point outside
+//! the grid's box maps to the nearest border cell on each axis (by clamping) both when
+//! assigning and when traversing. Assignment is computed in `f64` with a relative slack
+//! ([`SAT_SLACK_REL`]), so it never misses a cell the padded triangle touches.
+
+use super::plan::{origin_reach, ray_pad};
+use super::{CellAssignment, MAX_CELLS_PER_AXIS, SAT_SLACK_REL};
+use crate::aabb::Aabb;
+use glam::{DVec3, Vec3};
+
+/// Geometry of the cells and the padding of the build.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Layout {
+    /// Union of the usable triangles' boxes ([`Aabb::EMPTY`] for none).
+    pub(super) bounds: Aabb,
+    /// Cells per axis.
+    pub(super) n: [u32; 3],
+    /// Lower corner of cell `(0, 0, 0)` (zero for an empty grid).
+    pub(super) min: Vec3,
+    /// Cell side per axis (0 on axes of one cell, where it is never used).
+    pub(super) size: Vec3,
+    /// Largest coordinate magnitude of `bounds` (0 when empty).
+    pub(super) extent: f32,
+    /// Origin magnitude up to which a ray needs no more padding than `pad`.
+    pub(super) reach: f32,
+    /// Padding of every triangle, world units ([`ray_pad`]`(reach, extent)`).
+    pub(super) pad: f32,
+}
+
+impl Layout {
+    /// `true` when axis `a` of `bounds` can be cut into cells: its length is finite and at
+    /// least [`MAX_CELLS_PER_AXIS`] smallest normal floats (so every cell side is a normal
+    /// `f32`, and the plane computations keep relative error bounds).
+    pub(super) fn can_split(bounds: &Aabb, a: usize) -> bool {
+        let len = bounds.max[a] - bounds.min[a];
+        len.is_finite() && len >= f32::MIN_POSITIVE * MAX_CELLS_PER_AXIS as f32
+    }
+
+    /// The layout of `n` cells over `bounds`.
+    pub(super) fn new(bounds: &Aabb, n: [u32; 3]) -> Self {
+        let usable = bounds.is_finite() && bounds.is_valid();
+        let extent = if usable {
+            crate::bvh::extent_of(bounds)
+        } else {
+            0.0
+        };
+        let mut n = n;
+        let mut size = Vec3::ZERO;
+        for a in 0..3 {
+            if !usable || !Self::can_split(bounds, a) {
+                n[a] = 1;
+            }
+            if n[a] > 1 {
+                size[a] = (bounds.max[a] - bounds.min[a]) / n[a] as f32;
+            }
+        }
+        // Both finite (`f32::MAX` at most), so that the `f64` assignment never meets `∞ − ∞`.
+        let finite = |x: f32| if x.is_finite() { x } else { f32::MAX };
+        let reach = finite(origin_reach(bounds, extent));
+        Self {
+            bounds: *bounds,
+            n,
+            min: if usable { bounds.min } else { Vec3::ZERO },
+            size,
+            extent,
+            reach,
+            pad: finite(ray_pad(reach, extent)),
+        }
+    }
+
+    /// Number of cells (at most `MAX_CELLS_PER_AXIS³ = 2³⁰`).
+    pub(super) fn cell_count(&self) -> usize {
+        self.n.iter().map(|&k| k as usize).product()
+    }
+
+    /// Linear index of cell `(i, j, k)`: `i + nx·(j + ny·k)`.
+    #[inline(always)]
+    pub(super) fn cell_id(&self, c: [u32; 3]) -> usize {
+        c[0] as usize + self.n[0] as usize * (c[1] as usize + self.n[1] as usize * c[2] as usize)
+    }
+
+    /// The cell of coordinate `x` on axis `a`, clamped into `0..n` (traversal, `f32`).
+    #[inline(always)]
+    pub(super) fn cell_of(&self, a: usize, x: f32) -> u32 {
+        let last = self.n[a] - 1;
+        if last == 0 {
+            return 0;
+        }
+        let q = (x - self.min[a]) / self.size[a];
+        // `!(q > 0)` catches NaN (not reachable for finite x); `as` floors non-negative values.
+        if !(q > 0.0) {
+            0
+        } else if q >= last as f32 {
+            last
+        } else {
+            q as u32
+        }
+    }
+
+    /// The plane `min + m·size` on axis `a`, in `f32` (traversal).
+    #[inline(always)]
+    pub(super) fn plane(&self, a: usize, m: u32) -> f32 {
+        self.min[a] + m as f32 * self.size[a]
+    }
+
+    /// The cells on axis `a` that the closed interval `[lo, hi]` (`f64`) touches, clamped:
+    /// computed in `f64` and widened by [`SAT_SLACK_REL`] of the quotients, so a cell that
+    /// the exact interval touches is never left out.
+    fn range(&self, a: usize, lo: f64, hi: f64) -> (u32, u32) {
+        let last = self.n[a] - 1;
+        if last == 0 {
+            return (0, 0);
+        }
+        let (m, s) = (f64::from(self.min[a]), f64::from(self.size[a]));
+        let clamp = |q: f64| {
+            if !(q > 0.0) {
+                0
+            } else if q >= f64::from(last) {
+                last
+            } else {
+                q as u32
+            }
+        };
+        let (q_lo, q_hi) = ((lo - m) / s, (hi - m) / s);
+        (
+            clamp(q_lo - (q_lo.abs() + 1.0) * SAT_SLACK_REL),
+            clamp(q_hi + (q_hi.abs() + 1.0) * SAT_SLACK_REL),
+        )
+    }
+
+    /// Lower and upper bound of cell `i` on axis `a` in `f64`, infinite at the border.
+    fn cell_bounds(&self, a: usize, i: u32) -> (f64, f64) {
+        let (m, s) = (f64::from(self.min[a]), f64::from(self.size[a]));
+        let lo = if i == 0 {
+            f64::NEG_INFINITY
+        } else {
+            m + f64::from(i) * s
+        };
+        let hi = if i + 1 >= self.n[a] {
+            f64::INFINITY
+        } else {
+            m + f64::from(i + 1) * s
+        };
+        (lo, hi)
+    }
+}
+
+/// Calls `found(cell)` for every cell that triangle `v` (finite), padded by the layout's
+/// `pad` on every axis, touches: by its box ([`CellAssignment::Bounds`]) or by the triangle
+/// itself ([`CellAssignment::Exact`]). Cells are visited in increasing linear index.
+pub(super) fn for_each_cell(
+    layout: &Layout,
+    v: &[Vec3; 3],
+    assignment: CellAssignment,
+    mut found: impl FnMut(usize),
+) {
+    let pad = f64::from(layout.pad);
+    let w = v.map(|p| p.as_dvec3());
+    let lo = w[0].min(w[1]).min(w[2]) - DVec3::splat(pad);
+    let hi = w[0].max(w[1]).max(w[2]) + DVec3::splat(pad);
+    let r = [0, 1, 2].map(|a| layout.range(a, lo[a], hi[a]));
+    for k in r[2].0..=r[2].1 {
+        for j in r[1].0..=r[1].1 {
+            for i in r[0].0..=r[0].1 {
+                let c = [i, j, k];
+                let keep = match assignment {
+                    CellAssignment::Bounds => true,
+                    CellAssignment::Exact => {
+                        // The cell grown by `pad`, cut to the padded triangle's box (which
+                        // holds the triangle, so nothing is lost); a cut emptied by rounding
+                        // collapses to a point instead of rejecting the cell.
+                        let mut bl = DVec3::ZERO;
+                        let mut bh = DVec3::ZERO;
+                        for a in 0..3 {
+                            let (cl, ch) = layout.cell_bounds(a, c[a]);
+                            let (l, h) = ((cl - pad).max(lo[a]), (ch + pad).min(hi[a]));
+                            let (l, h) = if l <= h { (l, h) } else { (h, l) };
+                            bl[a] = l;
+                            bh[a] = h;
+                        }
+                        triangle_overlaps_box(&w, bl, bh)
+                    }
+                };
+                if keep {
+                    found(layout.cell_id(c));
+                }
+            }
+        }
+    }
+}
+
+/// Separating-axis test of a triangle against the closed box `[lo, hi]` (Akenine-Möller
+/// 2001: the box's three face normals, the triangle's normal and the nine cross products of
+/// its edges with the axes), in `f64` on finite inputs. **Conservative:** an axis separates
+/// only when the gap exceeds [`SAT_SLACK_REL`] of the magnitudes involved, which bounds the
+/// `f64` rounding of every projection, so touching or overlapping inputs always return
+/// `true`. Degenerate triangles (segments, points) have zero axes that separate nothing,
+/// leaving the other axes to decide: still conservative.
+pub(super) fn triangle_overlaps_box(v: &[DVec3; 3], lo: DVec3, hi: DVec3) -> bool {
+    let c = (lo + hi) * 0.5;
+    let h = (hi - lo) * 0.5;
+    let p = v.map(|x| x - c);
+    // Magnitude of everything a projection's rounding is relative to.
+    let scale = v.iter().fold(c.abs().max(h).max_element(), |m, x| {
+        m.max(x.abs().max_element())
+    });
+    let separates = |axis: DVec3| {
+        let d = [axis.dot(p[0]), axis.dot(p[1]), axis.dot(p[2])];
+        let a = axis.abs();
+        let r = h.dot(a) + SAT_SLACK_REL * (a.x + a.y + a.z) * scale;
+        d[0].min(d[1]).min(d[2]) > r || d[0].max(d[1]).max(d[2]) < -r
+    };
+    let e = [p[1] - p[0], p[2] - p[1], p[0] - p[2]];
+    let units = [DVec3::X, DVec3::Y, DVec3::Z];
+    !(units.iter().any(|&u| separates(u))
+        || separates(e[0].cross(e[1]))
+        || e.iter()
+            .any(|&edge| units.iter().any(|&u| separates(edge.cross(u)))))
+}

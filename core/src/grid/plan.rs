@@ -1,0 +1,250 @@
+//! Planning a grid: bounds, resolution (`∛(λN/V)`), padding and the exact storage it needs.
+
+use super::overlap::{Layout, for_each_cell};
+use super::{
+    DEFAULT_LAMBDA, GRID_ABS_PAD, GRID_RAY_PAD, GridError, MAX_CELLS_PER_AXIS, MAX_TRIANGLES,
+    ORIGIN_REACH,
+};
+use crate::aabb::Aabb;
+use crate::bvh::{Primitive, TriangleMesh};
+use glam::Vec3;
+
+/// How triangles are assigned to cells ([`GridOptions::assignment`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum CellAssignment {
+    /// Every cell the triangle's (padded) bounding box overlaps: cheap to build, more
+    /// references (a long diagonal triangle fills its whole box).
+    Bounds,
+    /// Every cell the (padded) triangle itself overlaps, by the separating-axis test in `f64`
+    /// (conservative: see [`super::SAT_SLACK_REL`]). The default.
+    #[default]
+    Exact,
+}
+
+/// Options of [`GridPlan::new`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridOptions {
+    /// Cells per triangle, `λ` of the resolution rule `∛(λN/V)` cells per unit length
+    /// (module docs). Unitless. A value that is not positive and finite counts as
+    /// [`DEFAULT_LAMBDA`].
+    pub lambda: f32,
+    /// Largest number of cells along one axis, clamped to `1..=`[`MAX_CELLS_PER_AXIS`].
+    /// Default [`MAX_CELLS_PER_AXIS`].
+    pub max_cells_per_axis: u32,
+    /// Bounding-box or exact triangle–box cell assignment. Default [`CellAssignment::Exact`].
+    pub assignment: CellAssignment,
+    /// `false` (default): a triangle with a non-finite vertex or an out-of-range vertex index
+    /// is an error ([`GridError::NonFiniteTriangle`]). `true`: such triangles are left out of
+    /// the grid (no query ever reports them).
+    pub exclude_non_finite: bool,
+}
+
+impl Default for GridOptions {
+    fn default() -> Self {
+        Self {
+            lambda: DEFAULT_LAMBDA,
+            max_cells_per_axis: MAX_CELLS_PER_AXIS,
+            assignment: CellAssignment::Exact,
+            exclude_non_finite: false,
+        }
+    }
+}
+
+impl GridOptions {
+    /// [`GridOptions::lambda`], the default in place of a value that is not positive and
+    /// finite.
+    fn cells_per_triangle(&self) -> f64 {
+        let l = self.lambda;
+        f64::from(if l > 0.0 && l.is_finite() {
+            l
+        } else {
+            DEFAULT_LAMBDA
+        })
+    }
+}
+
+/// Everything a build needs to know before touching storage: the grid's box, resolution and
+/// padding, and the exact number of offsets and references ([`GridPlan::required_offsets`],
+/// [`GridPlan::required_references`]) for the caller to allocate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridPlan {
+    pub(super) layout: Layout,
+    pub(super) assignment: CellAssignment,
+    pub(super) source_len: usize,
+    pub(super) triangle_count: usize,
+    pub(super) reference_count: usize,
+}
+
+/// The vertices of triangle `i` when they are usable (in range and finite).
+#[inline]
+pub(super) fn usable_triangle(mesh: &TriangleMesh<'_>, i: usize) -> Option<[Vec3; 3]> {
+    let v = mesh.triangle(i)?;
+    let b = Primitive::bounds(&v);
+    (b.is_finite() && b.is_valid()).then_some(v)
+}
+
+impl GridPlan {
+    /// Plans a grid over `mesh`: one pass for the bounds (and the non-finite check), one pass
+    /// assigning every triangle to its cells to count the references. Nothing is written.
+    ///
+    /// # Errors
+    ///
+    /// [`GridError::TooManyTriangles`] (more than [`MAX_TRIANGLES`]),
+    /// [`GridError::NonFiniteTriangle`] for the first unusable triangle unless
+    /// [`GridOptions::exclude_non_finite`] is set, and [`GridError::TooManyReferences`] when
+    /// the references or the cells overflow `u32`.
+    pub fn new(mesh: &TriangleMesh<'_>, options: &GridOptions) -> Result<Self, GridError> {
+        let n = mesh.len();
+        if n > MAX_TRIANGLES {
+            return Err(GridError::TooManyTriangles { count: n });
+        }
+        let mut bounds = Aabb::EMPTY;
+        let mut usable = 0usize;
+        for i in 0..n {
+            match usable_triangle(mesh, i) {
+                Some(v) => {
+                    bounds = bounds.union(Primitive::bounds(&v));
+                    usable += 1;
+                }
+                None if options.exclude_non_finite => {}
+                None => return Err(GridError::NonFiniteTriangle { index: i }),
+            }
+        }
+        let resolution = resolution(&bounds, usable, options);
+        let layout = Layout::new(&bounds, resolution);
+        let cells = layout.cell_count();
+        if cells >= u32::MAX as usize {
+            return Err(GridError::TooManyReferences { count: cells });
+        }
+        let mut refs = 0usize;
+        for i in 0..n {
+            if let Some(v) = usable_triangle(mesh, i) {
+                for_each_cell(&layout, &v, options.assignment, |_| refs += 1);
+            }
+        }
+        if refs > u32::MAX as usize {
+            return Err(GridError::TooManyReferences { count: refs });
+        }
+        Ok(Self {
+            layout,
+            assignment: options.assignment,
+            source_len: n,
+            triangle_count: usable,
+            reference_count: refs,
+        })
+    }
+
+    /// Offsets the build needs: one per cell plus one (`u32` each).
+    #[must_use]
+    pub fn required_offsets(&self) -> usize {
+        self.layout.cell_count() + 1
+    }
+
+    /// Triangle references the build needs (`u32` each): the sum over cells of the triangles
+    /// assigned to each.
+    #[must_use]
+    pub fn required_references(&self) -> usize {
+        self.reference_count
+    }
+
+    /// Bytes of caller storage the build needs: `4·(offsets + references)`.
+    #[must_use]
+    pub fn required_bytes(&self) -> usize {
+        4 * (self.required_offsets() + self.reference_count)
+    }
+
+    /// Cells along `x`, `y`, `z` (each in `1..=`[`MAX_CELLS_PER_AXIS`]).
+    #[must_use]
+    pub fn resolution(&self) -> [u32; 3] {
+        self.layout.n
+    }
+
+    /// Number of cells.
+    #[must_use]
+    pub fn cell_count(&self) -> usize {
+        self.layout.cell_count()
+    }
+
+    /// The grid's box: the union of the usable triangles' boxes ([`Aabb::EMPTY`] for none).
+    #[must_use]
+    pub fn bounds(&self) -> Aabb {
+        self.layout.bounds
+    }
+
+    /// Usable triangles (the mesh's minus excluded ones).
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.triangle_count
+    }
+
+    /// The cell assignment the plan counted with.
+    #[must_use]
+    pub fn assignment(&self) -> CellAssignment {
+        self.assignment
+    }
+}
+
+/// Cells per axis for `count` triangles in `bounds` (module docs, "Resolution"): `λN` cells
+/// spread over the axes of non-zero extent in proportion to their lengths; an axis that
+/// would get less than one cell is made flat (one cell) and the others are recomputed
+/// without it. In `f64`, so no product of extents overflows or underflows.
+fn resolution(bounds: &Aabb, count: usize, options: &GridOptions) -> [u32; 3] {
+    let max = options.max_cells_per_axis.clamp(1, MAX_CELLS_PER_AXIS);
+    let mut n = [1u32; 3];
+    if count == 0 || !bounds.is_finite() || !bounds.is_valid() {
+        return n;
+    }
+    let cells = options.cells_per_triangle() * count as f64;
+    let len = |a: usize| f64::from(bounds.max[a]) - f64::from(bounds.min[a]);
+    let mut active = [0usize, 1, 2].map(|a| Layout::can_split(bounds, a));
+    // Each round either finishes or drops one axis: at most three rounds.
+    for _ in 0..3 {
+        let dims = active.iter().filter(|&&a| a).count();
+        if dims == 0 {
+            return [1; 3];
+        }
+        // Density of cells per unit length: (λN / Π lengths)^(1/dims).
+        let prod: f64 = (0..3).filter(|&a| active[a]).map(len).product();
+        let density = libm::pow(cells / prod, 1.0 / dims as f64);
+        let per_axis = [0, 1, 2].map(|a| if active[a] { len(a) * density } else { 1.0 });
+        // The shortest active axis below one cell becomes flat.
+        let thin = (0..3)
+            .filter(|&a| active[a] && !(per_axis[a] >= 1.0))
+            .min_by(|&a, &b| per_axis[a].total_cmp(&per_axis[b]));
+        match thin {
+            Some(a) => active[a] = false,
+            None => {
+                for a in 0..3 {
+                    // `as` saturates (and maps NaN to 0, clamped to 1).
+                    n[a] = if active[a] {
+                        (libm::round(per_axis[a]) as u32).clamp(1, max)
+                    } else {
+                        1
+                    };
+                }
+                return n;
+            }
+        }
+    }
+    n
+}
+
+/// Padding of every triangle at build time, world units (module docs, "Robustness"):
+/// [`GRID_RAY_PAD`]`·(reach + extent) + `[`GRID_ABS_PAD`], which covers every ray whose origin
+/// has `max|o_i| ≤ reach`.
+#[inline]
+pub(super) fn ray_pad(origin_mag: f32, extent: f32) -> f32 {
+    GRID_RAY_PAD * (origin_mag + extent) + GRID_ABS_PAD
+}
+
+/// The origin magnitude up to which rays need no more padding than the build's:
+/// `extent + ORIGIN_REACH·(longest side)`.
+#[inline]
+pub(super) fn origin_reach(bounds: &Aabb, extent: f32) -> f32 {
+    let side = bounds.extent().max_element();
+    if side.is_finite() && side > 0.0 {
+        extent + ORIGIN_REACH * side
+    } else {
+        extent
+    }
+}

@@ -1,0 +1,492 @@
+//! Unit tests of the grid (the mesh-scale comparisons with brute force live in
+//! `tests/tests/grid_vs_bruteforce.rs`).
+
+use super::overlap::triangle_overlaps_box;
+use super::*;
+use crate::bvh::TriangleMesh;
+use crate::ray::Ray;
+use crate::test_util::{lcg, unit_vec};
+use crate::triangle::{TriangleHit, TriangleIntersector, Watertight};
+use glam::{DVec3, Vec3};
+use std::format;
+use std::vec;
+use std::vec::Vec;
+
+type VecGrid = Grid<Vec<u32>, Vec<u32>>;
+
+fn build(mesh: &TriangleMesh<'_>, options: &GridOptions) -> Result<VecGrid, GridError> {
+    let plan = GridPlan::new(mesh, options)?;
+    Grid::build(
+        mesh,
+        &plan,
+        vec![u32::MAX; plan.required_offsets()],
+        vec![u32::MAX; plan.required_references()],
+    )
+}
+
+/// Independent oracle: every triangle with the same intersector, smaller `t` then smaller
+/// index (strict `<` keeps the first of equal `t`).
+fn brute(mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, TriangleHit)> {
+    let mut best: Option<(u32, TriangleHit)> = None;
+    for i in 0..mesh.len() {
+        let Some(v) = mesh.triangle(i) else { continue };
+        if let Some(h) = Watertight.intersect(ray, &v)
+            && best.is_none_or(|(_, b)| h.t < b.t)
+        {
+            best = Some((i as u32, h));
+        }
+    }
+    best
+}
+
+/// A soup of `n` random triangles of size about `size` in a box of side `scale`.
+fn soup(seed: u64, n: usize, scale: f32, size: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut s = seed;
+    let mut p = Vec::new();
+    let mut t = Vec::new();
+    for i in 0..n as u32 {
+        let c = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * scale;
+        for _ in 0..3 {
+            p.push(c + unit_vec(&mut s) * size);
+        }
+        t.push([3 * i, 3 * i + 1, 3 * i + 2]);
+    }
+    (p, t)
+}
+
+fn check_rays(mesh: &TriangleMesh<'_>, grid: &VecGrid, rays: &[Ray]) -> usize {
+    let mut hits = 0;
+    for ray in rays {
+        let want = brute(mesh, ray);
+        let got = grid.closest_hit_triangles(mesh, &Watertight, ray, None);
+        assert_eq!(got, want, "{ray:?}");
+        let any = grid.any_hit_triangles(mesh, &Watertight, ray, None);
+        assert_eq!(any.is_some(), want.is_some(), "{ray:?}");
+        if let Some((p, h)) = any {
+            assert!(ray.contains(h.t));
+            let v = mesh.triangle(p as usize).unwrap();
+            assert_eq!(Watertight.intersect(ray, &v), Some(h));
+        }
+        hits += usize::from(want.is_some());
+    }
+    hits
+}
+
+#[test]
+fn resolution_follows_the_cube_root_rule() {
+    let (p, t) = soup(1, 1000, 10.0, 0.2);
+    let mesh = TriangleMesh::new(&p, &t);
+    for lambda in [1.0f32, 4.0, 8.0] {
+        let plan = GridPlan::new(
+            &mesh,
+            &GridOptions {
+                lambda,
+                ..GridOptions::default()
+            },
+        )
+        .unwrap();
+        let b = plan.bounds();
+        let e = b.extent().as_dvec3();
+        let k = libm::cbrt(f64::from(lambda) * 1000.0 / (e.x * e.y * e.z));
+        for a in 0..3 {
+            let want = (e[a] * k).round() as u32;
+            assert_eq!(plan.resolution()[a], want.max(1), "λ {lambda} axis {a}");
+        }
+        let cells = plan.cell_count() as f64;
+        assert!(
+            (cells / (f64::from(lambda) * 1000.0) - 1.0).abs() < 0.25,
+            "{cells}"
+        );
+    }
+}
+
+#[test]
+fn flat_line_and_point_scenes() {
+    // A flat mesh in z = 0: one cell in z, λN cells over the plane.
+    let mut p = Vec::new();
+    let mut t = Vec::new();
+    for i in 0..20u32 {
+        for j in 0..20u32 {
+            let o = Vec3::new(i as f32, j as f32, 0.0);
+            let base = p.len() as u32;
+            p.extend([o, o + Vec3::X, o + Vec3::Y]);
+            t.push([base, base + 1, base + 2]);
+        }
+    }
+    let mesh = TriangleMesh::new(&p, &t);
+    let plan = GridPlan::new(&mesh, &GridOptions::default()).unwrap();
+    let [nx, ny, nz] = plan.resolution();
+    assert_eq!(nz, 1);
+    assert_eq!(nx, ny);
+    let want = libm::sqrt(f64::from(DEFAULT_LAMBDA) * 400.0).round() as u32;
+    assert_eq!(nx, want);
+    // A line (degenerate triangles along x): only x is cut.
+    let line: Vec<Vec3> = (0..30).map(|i| Vec3::new(i as f32, 2.0, 3.0)).collect();
+    let lt: Vec<[u32; 3]> = (0..29u32).map(|i| [i, i + 1, i]).collect();
+    let plan = GridPlan::new(&TriangleMesh::new(&line, &lt), &GridOptions::default()).unwrap();
+    assert_eq!(plan.resolution(), [(DEFAULT_LAMBDA * 29.0) as u32, 1, 1]);
+    // Coincident points: one cell.
+    let pts = [Vec3::splat(5.0); 3];
+    let tris = [[0u32, 1, 2]; 7];
+    let plan = GridPlan::new(&TriangleMesh::new(&pts, &tris), &GridOptions::default()).unwrap();
+    assert_eq!((plan.resolution(), plan.required_references()), ([1; 3], 7));
+    // A very thin slab: the thin axis gets one cell, the others share λN.
+    let thin: Vec<Vec3> = p.iter().map(|v| *v + Vec3::Z * (v.x * 1e-6)).collect();
+    let plan = GridPlan::new(&TriangleMesh::new(&thin, &t), &GridOptions::default()).unwrap();
+    assert_eq!(plan.resolution()[2], 1);
+    assert!(plan.resolution()[0] > 20);
+}
+
+#[test]
+fn per_axis_maximum_is_enforced() {
+    let line: Vec<Vec3> = (0..3000).map(|i| Vec3::new(i as f32, 0.0, 0.0)).collect();
+    let lt: Vec<[u32; 3]> = (0..2999u32).map(|i| [i, i + 1, i]).collect();
+    let mesh = TriangleMesh::new(&line, &lt);
+    let plan = GridPlan::new(&mesh, &GridOptions::default()).unwrap();
+    assert_eq!(plan.resolution(), [MAX_CELLS_PER_AXIS, 1, 1]);
+    let opts = GridOptions {
+        max_cells_per_axis: 7,
+        ..GridOptions::default()
+    };
+    assert_eq!(GridPlan::new(&mesh, &opts).unwrap().resolution(), [7, 1, 1]);
+}
+
+#[test]
+fn too_small_storage_is_refused_before_writing() {
+    let (p, t) = soup(2, 50, 4.0, 0.5);
+    let mesh = TriangleMesh::new(&p, &t);
+    let plan = GridPlan::new(&mesh, &GridOptions::default()).unwrap();
+    let (no, nr) = (plan.required_offsets(), plan.required_references());
+    let mut off = vec![7u32; no - 1];
+    let mut refs = vec![7u32; nr];
+    let r = Grid::build(&mesh, &plan, &mut off[..], &mut refs[..]);
+    assert_eq!(
+        r.err(),
+        Some(GridError::OffsetStorageTooSmall {
+            needed: no,
+            available: no - 1
+        })
+    );
+    let mut off = vec![7u32; no];
+    let mut refs = vec![7u32; nr - 1];
+    let r = Grid::build(&mesh, &plan, &mut off[..], &mut refs[..]);
+    assert_eq!(
+        r.err(),
+        Some(GridError::ReferenceStorageTooSmall {
+            needed: nr,
+            available: nr - 1
+        })
+    );
+    assert!(off.iter().chain(&refs).all(|&x| x == 7));
+    let other = TriangleMesh::new(&p, &t[..10]);
+    let r = Grid::build(&other, &plan, &mut off[..], &mut refs[..]);
+    assert!(matches!(r.err(), Some(GridError::PlanMismatch { .. })));
+    assert!(off.iter().chain(&refs).all(|&x| x == 7));
+    assert!(
+        !format!(
+            "{}",
+            GridError::PlanMismatch {
+                expected: 1,
+                found: 2
+            }
+        )
+        .is_empty()
+    );
+}
+
+#[test]
+fn non_finite_triangles_are_refused_or_excluded() {
+    let p = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(f32::NAN, 0.0, 0.0)];
+    let t = [[0, 1, 2], [0, 1, 3], [0, 1, 9], [2, 1, 0]];
+    let mesh = TriangleMesh::new(&p, &t);
+    assert_eq!(
+        GridPlan::new(&mesh, &GridOptions::default()).err(),
+        Some(GridError::NonFiniteTriangle { index: 1 })
+    );
+    let opts = GridOptions {
+        exclude_non_finite: true,
+        ..GridOptions::default()
+    };
+    let grid = build(&mesh, &opts).unwrap();
+    assert_eq!(grid.triangle_count(), 2);
+    assert!(grid.references().iter().all(|&r| r == 0 || r == 3));
+    let ray = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
+    assert_eq!(
+        grid.closest_hit_triangles(&mesh, &Watertight, &ray, None)
+            .map(|h| h.0),
+        Some(0)
+    );
+}
+
+/// Layout invariants and the oracle "each triangle is in the cell of each of its vertices",
+/// with the cell computed independently in `f64` from the documented layout.
+#[test]
+fn every_vertex_cell_references_its_triangle() {
+    let (p, t) = soup(3, 300, 8.0, 0.7);
+    let mesh = TriangleMesh::new(&p, &t);
+    for assignment in [CellAssignment::Bounds, CellAssignment::Exact] {
+        let opts = GridOptions {
+            assignment,
+            ..GridOptions::default()
+        };
+        let g = build(&mesh, &opts).unwrap();
+        let off = g.offsets();
+        assert_eq!(off.len(), g.cell_count() + 1);
+        assert_eq!(off[0], 0);
+        assert_eq!(*off.last().unwrap() as usize, g.reference_count());
+        assert!(off.windows(2).all(|w| w[0] <= w[1]));
+        let b = g.bounds();
+        let n = g.resolution();
+        for (i, tri) in t.iter().enumerate() {
+            for &vi in tri {
+                let v = p[vi as usize].as_dvec3();
+                let c = [0, 1, 2].map(|a| {
+                    let size = (f64::from(b.max[a]) - f64::from(b.min[a])) / f64::from(n[a]);
+                    let q = ((v[a] - f64::from(b.min[a])) / size).floor();
+                    (q.max(0.0) as u32).min(n[a] - 1)
+                });
+                let cell = g.cell(c);
+                assert!(
+                    cell.windows(2).all(|w| w[0] < w[1]),
+                    "sorted, no duplicates"
+                );
+                assert!(
+                    cell.contains(&(i as u32)),
+                    "{assignment:?} tri {i} cell {c:?}"
+                );
+            }
+        }
+    }
+}
+
+/// The exact assignment is a subset of the bounds one and strictly smaller on long
+/// diagonal triangles (figures for the module docs: the bunny in the cross-crate suite).
+#[test]
+fn exact_assignment_is_a_subset_of_bounds() {
+    let (p, t) = soup(4, 200, 10.0, 3.0);
+    let mesh = TriangleMesh::new(&p, &t);
+    let opts = |assignment| GridOptions {
+        assignment,
+        ..GridOptions::default()
+    };
+    let a = build(&mesh, &opts(CellAssignment::Bounds)).unwrap();
+    let e = build(&mesh, &opts(CellAssignment::Exact)).unwrap();
+    assert_eq!(a.resolution(), e.resolution());
+    assert!(e.reference_count() * 10 < a.reference_count() * 8);
+    for id in 0..a.cell_count() {
+        let c = [
+            id as u32 % a.resolution()[0],
+            (id as u32 / a.resolution()[0]) % a.resolution()[1],
+            id as u32 / (a.resolution()[0] * a.resolution()[1]),
+        ];
+        let (sa, se) = (a.cell(c), e.cell(c));
+        assert!(se.iter().all(|x| sa.contains(x)), "cell {c:?}");
+    }
+}
+
+/// The separating-axis test never separates a triangle from a box that contains one of
+/// its points (oracle: sampled barycentric points, in `f64`), including points exactly on
+/// the box's faces, edges and corners; and it does separate clearly distant pairs.
+#[test]
+fn sat_is_conservative_on_sampled_contacts() {
+    let mut s = 99u64;
+    let mut separated = 0;
+    for _ in 0..3000 {
+        let v = [0; 3].map(|_| (unit_vec(&mut s) * 2.0).as_dvec3());
+        let (b1, b2) = (f64::from(lcg(&mut s)), f64::from(lcg(&mut s)));
+        let (b1, b2) = if b1 + b2 > 1.0 {
+            (1.0 - b1, 1.0 - b2)
+        } else {
+            (b1, b2)
+        };
+        let q = v[0] + (v[1] - v[0]) * b1 + (v[2] - v[0]) * b2;
+        // A box with `q` on a corner, an edge, a face, or inside.
+        let h = DVec3::new(
+            f64::from(lcg(&mut s)),
+            f64::from(lcg(&mut s)),
+            f64::from(lcg(&mut s)),
+        ) * 0.5;
+        let kind = (lcg(&mut s) * 4.0) as usize;
+        let lo = match kind {
+            0 => q,
+            1 => q - DVec3::new(0.0, h.y, h.z),
+            2 => q - DVec3::new(h.x, 0.0, 0.0),
+            _ => q - h,
+        };
+        assert!(triangle_overlaps_box(&v, lo, lo + h * 2.0), "{v:?} {lo:?}");
+        // The same box moved away by more than the triangle's size: separated.
+        let far = lo + DVec3::splat(10.0);
+        separated += usize::from(!triangle_overlaps_box(&v, far, far + h * 2.0));
+    }
+    assert_eq!(separated, 3000);
+    // A segment and a point are handled conservatively too.
+    let seg = [DVec3::ZERO, DVec3::ONE, DVec3::ONE];
+    assert!(triangle_overlaps_box(
+        &seg,
+        DVec3::splat(0.5),
+        DVec3::splat(0.5)
+    ));
+    let pt = [DVec3::ONE; 3];
+    assert!(!triangle_overlaps_box(&pt, DVec3::ZERO, DVec3::splat(0.99)));
+}
+
+#[test]
+fn random_soups_equal_brute_force() {
+    for (seed, n, size) in [(5u64, 400usize, 0.6f32), (6, 60, 3.0), (7, 1, 1.0)] {
+        let (p, t) = soup(seed, n, 8.0, size);
+        let mesh = TriangleMesh::new(&p, &t);
+        for assignment in [CellAssignment::Bounds, CellAssignment::Exact] {
+            let opts = GridOptions {
+                assignment,
+                ..GridOptions::default()
+            };
+            let g = build(&mesh, &opts).unwrap();
+            let mut s = seed;
+            let rays: Vec<Ray> = (0..400)
+                .map(|_| {
+                    let o = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 12.0 - 2.0;
+                    Ray::new(o, unit_vec(&mut s))
+                })
+                .collect();
+            let hits = check_rays(&mesh, &g, &rays);
+            assert!(hits > 10 || n < 10, "{hits}");
+        }
+    }
+}
+
+/// Axis-parallel rays with `±0` components, rays along cell planes, from inside and
+/// outside, far origins (neighbour blocks and the every-reference fallback) and invalid rays.
+#[test]
+fn axis_parallel_far_and_invalid_rays() {
+    let (p, t) = soup(8, 500, 8.0, 0.5);
+    let mesh = TriangleMesh::new(&p, &t);
+    let g = build(&mesh, &GridOptions::default()).unwrap();
+    let b = g.bounds();
+    let mut rays = Vec::new();
+    let mut s = 11u64;
+    for _ in 0..200 {
+        let o = b.min + (b.max - b.min) * Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s));
+        for a in 0..3 {
+            for sign in [1.0f32, -1.0] {
+                let mut d = Vec3::new(0.0, -0.0, 0.0);
+                d[a] = sign;
+                rays.push(Ray::new(o, d));
+                // Along a cell plane of another axis.
+                let mut on = o;
+                let k = (a + 1) % 3;
+                let size = (b.max[k] - b.min[k]) / g.resolution()[k] as f32;
+                on[k] = b.min[k] + size * 3.0;
+                rays.push(Ray::new(on, d));
+                // From outside the box.
+                let mut out = o;
+                out[a] = if sign > 0.0 {
+                    b.min[a] - 5.0
+                } else {
+                    b.max[a] + 5.0
+                };
+                rays.push(Ray::new(out, d));
+            }
+        }
+        let d = unit_vec(&mut s);
+        for far in [40.0f32, 300.0, 1e5, 1e30] {
+            rays.push(Ray::new(o - d * far, d));
+        }
+        rays.push(Ray::with_interval(o, d, -3.0, 2.0));
+        rays.push(Ray::with_interval(o, d, f32::NEG_INFINITY, f32::INFINITY));
+    }
+    let hits = check_rays(&mesh, &g, &rays);
+    assert!(hits > rays.len() / 4, "{hits} of {}", rays.len());
+    for bad in [
+        Ray::new(Vec3::NAN, Vec3::Z),
+        Ray::new(Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0)),
+        Ray::new(Vec3::splat(4.0), Vec3::ZERO),
+        Ray::with_interval(Vec3::splat(4.0), Vec3::Z, f32::NAN, 1.0),
+    ] {
+        let mut st = GridStats::default();
+        assert_eq!(
+            g.closest_hit_triangles(&mesh, &Watertight, &bad, Some(&mut st)),
+            None
+        );
+        assert_eq!(st, GridStats::default());
+    }
+}
+
+/// Scenes at `1e20` and `1e-20` (rays scaled with them) give brute force's answers.
+#[test]
+fn huge_and_tiny_scenes() {
+    let (p, t) = soup(9, 200, 8.0, 0.6);
+    for scale in [1e20f32, 1e-20, 1e-30] {
+        let ps: Vec<Vec3> = p.iter().map(|v| *v * scale).collect();
+        let mesh = TriangleMesh::new(&ps, &t);
+        let g = build(&mesh, &GridOptions::default()).unwrap();
+        assert!(g.cell_count() > 100, "{scale}: {:?}", g.resolution());
+        let mut s = 12u64;
+        let rays: Vec<Ray> = (0..300)
+            .map(|_| {
+                let o = (Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 12.0 - 2.0) * scale;
+                Ray::new(o, unit_vec(&mut s))
+            })
+            .collect();
+        assert!(check_rays(&mesh, &g, &rays) > 10, "{scale}");
+    }
+}
+
+/// The walk visits at most `nx + ny + nz − 2` cells (the step bound), here on the diagonal.
+#[test]
+fn cells_visited_are_bounded_by_the_resolution() {
+    let (p, t) = soup(10, 2000, 8.0, 0.05);
+    let mesh = TriangleMesh::new(&p, &t);
+    let g = build(&mesh, &GridOptions::default()).unwrap();
+    let [nx, ny, nz] = g.resolution();
+    let b = g.bounds();
+    let mut st = GridStats::default();
+    let ray = Ray::new(b.min - Vec3::splat(1.0), b.max - b.min);
+    let miss = |_: u32, _: &Ray| None::<(f32, ())>;
+    assert!(g.closest_hit(&ray, miss, Some(&mut st)).is_none());
+    assert!(st.cells_visited <= u64::from(nx + ny + nz - 2), "{st:?}");
+    assert!(st.cells_visited >= u64::from(nx.max(ny).max(nz)), "{st:?}");
+    assert!(g.bytes_used() == 4 * (g.cell_count() + 1 + g.reference_count()));
+}
+
+#[test]
+fn empty_mesh_hits_nothing() {
+    let mesh = TriangleMesh::new(&[], &[]);
+    let g = build(&mesh, &GridOptions::default()).unwrap();
+    assert_eq!((g.cell_count(), g.reference_count()), (1, 0));
+    let ray = Ray::new(Vec3::ZERO, Vec3::Z);
+    assert!(
+        g.any_hit_triangles(&mesh, &Watertight, &ray, None)
+            .is_none()
+    );
+    assert_eq!(g.bytes_per_triangle(), 0.0);
+}
+
+/// Rays from far away (`|o|` from 10³ to 10⁷ scene sizes), aimed at the vertices of a dense
+/// soup: the watertight test's rounding then spans whole cells, and the neighbour blocks
+/// (or the every-reference fallback) must still find brute force's hit.
+#[test]
+fn far_origins_use_neighbour_blocks() {
+    let (p, t) = soup(13, 3000, 1.0, 0.02);
+    let mesh = TriangleMesh::new(&p, &t);
+    let g = build(&mesh, &GridOptions::default()).unwrap();
+    let mut s = 14u64;
+    let mut rays = Vec::new();
+    for far in [1e3f32, 1e5, 1e6, 1e7] {
+        for k in 0..300 {
+            let target = p[(k * 7) % p.len()];
+            let o = target + unit_vec(&mut s) * far;
+            rays.push(Ray::new(o, target - o));
+        }
+    }
+    assert!(check_rays(&mesh, &g, &rays) > 600);
+    // The blocks are in use (more cells per ray than a plain walk could visit).
+    let mut st = GridStats::default();
+    for r in &rays {
+        let _ = g.closest_hit_triangles(&mesh, &Watertight, r, Some(&mut st));
+    }
+    let [nx, ny, nz] = g.resolution();
+    assert!(
+        st.cells_visited > rays.len() as u64 * u64::from(nx + ny + nz),
+        "{st:?}"
+    );
+}

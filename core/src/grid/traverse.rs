@@ -1,0 +1,279 @@
+//! Closest-hit and any-hit queries: the Amanatides–Woo DDA with the "hit must lie in the
+//! current cell" rule (module docs of [`super`]).
+
+use super::Grid;
+use super::plan::ray_pad;
+use crate::aabb::{Aabb, SlabRay};
+use crate::bvh::{TriangleMesh, cull_bound, improves};
+use crate::ray::Ray;
+use crate::triangle::{TriangleHit, TriangleIntersector};
+use glam::Vec3;
+
+/// Traversal counters. Queries **add** to the counters they are given.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GridStats {
+    /// Cells whose references were tested (a ray that falls back to testing every reference
+    /// counts every cell).
+    pub cells_visited: u64,
+    /// Triangle intersection tests (a triangle in several cells counts each time).
+    pub triangles_tested: u64,
+}
+
+impl GridStats {
+    /// Adds `other`'s counters to these.
+    pub fn add(&mut self, other: &Self) {
+        self.cells_visited += other.cells_visited;
+        self.triangles_tested += other.triangles_tested;
+    }
+}
+
+/// The running state of one query.
+struct Search<F, H> {
+    cur: Ray,
+    best: Option<(u32, H)>,
+    any: bool,
+    intersect: F,
+    stats: GridStats,
+}
+
+impl<F: FnMut(u32, &Ray) -> Option<(f32, H)>, H> Search<F, H> {
+    /// Tests every triangle of `cell`; `true` when an any-hit query is done.
+    #[inline(always)]
+    fn test(&mut self, cell: &[u32]) -> bool {
+        self.stats.cells_visited += 1;
+        for &prim in cell {
+            self.stats.triangles_tested += 1;
+            let Some((t, h)) = (self.intersect)(prim, &self.cur) else {
+                continue;
+            };
+            if improves(&self.cur, t, prim, self.best.as_ref().map(|b| b.0)) {
+                self.cur.t_max = t;
+                self.best = Some((prim, h));
+                if self.any {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+impl<O, R> Grid<O, R>
+where
+    O: AsRef<[u32]>,
+    R: AsRef<[u32]>,
+{
+    /// The closest hit of `ray`, as `(triangle index, intersect's payload)`.
+    ///
+    /// `intersect(prim, ray)` tests one triangle against `ray`, whose `t_max` is the current
+    /// closest `t` (inclusive), and returns `(t, payload)` for a hit in `(t_min, t_max]`;
+    /// hits outside the interval are ignored. Of equal `t`, the smaller index wins, so the
+    /// result equals a brute-force loop with the same rule (module docs). `stats`, when
+    /// given, is **added to**. An invalid ray returns `None` without testing anything.
+    pub fn closest_hit<H>(
+        &self,
+        ray: &Ray,
+        intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
+        stats: Option<&mut GridStats>,
+    ) -> Option<(u32, H)> {
+        self.traverse(ray, intersect, stats, false)
+    }
+
+    /// Any hit of `ray` (shadow rays): stops at the first triangle `intersect` reports in
+    /// `(t_min, t_max]`. Which one depends on the grid; hit or miss does not.
+    pub fn any_hit<H>(
+        &self,
+        ray: &Ray,
+        intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
+        stats: Option<&mut GridStats>,
+    ) -> Option<(u32, H)> {
+        self.traverse(ray, intersect, stats, true)
+    }
+
+    /// [`Grid::closest_hit`] over `mesh` (the mesh the grid was built over) with the
+    /// intersector `isect`, prepared once per ray. Returns the triangle index and its hit.
+    #[inline]
+    pub fn closest_hit_triangles<T: TriangleIntersector>(
+        &self,
+        mesh: &TriangleMesh<'_>,
+        isect: &T,
+        ray: &Ray,
+        stats: Option<&mut GridStats>,
+    ) -> Option<(u32, TriangleHit)> {
+        self.triangles(mesh, isect, ray, stats, false)
+    }
+
+    /// [`Grid::any_hit`] over `mesh` with the intersector `isect`.
+    #[inline]
+    pub fn any_hit_triangles<T: TriangleIntersector>(
+        &self,
+        mesh: &TriangleMesh<'_>,
+        isect: &T,
+        ray: &Ray,
+        stats: Option<&mut GridStats>,
+    ) -> Option<(u32, TriangleHit)> {
+        self.triangles(mesh, isect, ray, stats, true)
+    }
+
+    #[inline]
+    fn triangles<T: TriangleIntersector>(
+        &self,
+        mesh: &TriangleMesh<'_>,
+        isect: &T,
+        ray: &Ray,
+        stats: Option<&mut GridStats>,
+        any: bool,
+    ) -> Option<(u32, TriangleHit)> {
+        let pre = isect.prepare(ray)?;
+        self.traverse(
+            ray,
+            |prim, r| {
+                let v = mesh.triangle(prim as usize)?;
+                isect.intersect_prepared(&pre, r, &v).map(|h| (h.t, h))
+            },
+            stats,
+            any,
+        )
+    }
+
+    /// Closest hit, or any hit when `any`.
+    fn traverse<H>(
+        &self,
+        ray: &Ray,
+        intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
+        stats: Option<&mut GridStats>,
+        any: bool,
+    ) -> Option<(u32, H)> {
+        let slab = SlabRay::new(ray)?;
+        if self.reference_count == 0 {
+            return None;
+        }
+        let mut s = Search {
+            cur: *ray,
+            best: None,
+            any,
+            intersect,
+            stats: GridStats::default(),
+        };
+        let l = &self.layout;
+        let o_mag = ray.origin.abs().max_element();
+        let near = o_mag <= l.reach;
+        let pad = if near {
+            l.pad
+        } else {
+            ray_pad(o_mag, l.extent)
+        };
+        // Cells around each DDA cell that cover the padding the build did not apply: a
+        // point within `pad` of a triangle lies in a cell at most ⌊pad/size⌋ + 1 away from
+        // one of the triangle's own cells (clamped border cells only shorten that).
+        let radius = [0, 1, 2].map(|a| {
+            if near || l.n[a] <= 1 {
+                0
+            } else {
+                // `as` saturates (∞ → u32::MAX).
+                ((pad / l.size[a]) as u32).saturating_add(2)
+            }
+        });
+        let block = radius
+            .iter()
+            .fold(1u64, |b, &r| b.saturating_mul(2 * u64::from(r) + 1));
+        if block >= self.cell_count() as u64 {
+            // The block would hold every cell: test every reference once.
+            s.test(self.references());
+            s.stats.cells_visited = self.cell_count() as u64;
+        } else {
+            self.walk(&slab, ray, pad.max(l.pad), radius, &mut s);
+        }
+        if let Some(out) = stats {
+            out.add(&s.stats);
+        }
+        s.best
+    }
+
+    /// The DDA from the entry into the grid's box grown by `clip`, testing the block of
+    /// `radius` cells around each cell it visits, until the rule of the module docs ends it.
+    fn walk<F: FnMut(u32, &Ray) -> Option<(f32, H)>, H>(
+        &self,
+        slab: &SlabRay,
+        ray: &Ray,
+        clip: f32,
+        radius: [u32; 3],
+        s: &mut Search<F, H>,
+    ) {
+        let l = &self.layout;
+        let grown = Aabb::new(l.bounds.min - clip, l.bounds.max + clip);
+        let Some((t0, t_end)) = grown.intersect_slab(slab, ray.t_min, ray.t_max) else {
+            return;
+        };
+        let (o, d) = (ray.origin, ray.direction);
+        let mut cell = [0, 1, 2].map(|a| {
+            let x = if d[a] == 0.0 { o[a] } else { o[a] + t0 * d[a] };
+            l.cell_of(a, x)
+        });
+        // Each step moves one axis one cell toward its end: fewer steps than this.
+        let steps = l.n.iter().map(|&k| k as usize).sum::<usize>();
+        for _ in 0..steps {
+            let mut t_exit = f32::INFINITY;
+            let mut axis = 3;
+            for (a, &i) in cell.iter().enumerate() {
+                let t = self.crossing(a, i, o, d);
+                if t < t_exit {
+                    t_exit = t;
+                    axis = a;
+                }
+            }
+            if self.visit_block(cell, radius, s) {
+                return;
+            }
+            // The hit lies in this cell (or an earlier one), or the ray has left the box.
+            if axis == 3 || !(t_exit <= t_end) || cull_bound(s.cur.t_max) < t_exit {
+                return;
+            }
+            if let Some(c) = cell.get_mut(axis) {
+                *c = if d[axis] > 0.0 {
+                    c.saturating_add(1)
+                } else {
+                    c.saturating_sub(1)
+                };
+            }
+        }
+    }
+
+    /// Distance along the ray to the plane that leaves cell index `i` on axis `a`; `+∞` when
+    /// the ray does not move along `a` (`±0`) or the cell is the last one that way.
+    #[inline(always)]
+    fn crossing(&self, a: usize, i: u32, o: Vec3, d: Vec3) -> f32 {
+        let l = &self.layout;
+        let da = d[a];
+        let plane = if da > 0.0 && i + 1 < l.n[a] {
+            l.plane(a, i + 1)
+        } else if da < 0.0 && i > 0 {
+            l.plane(a, i)
+        } else {
+            return f32::INFINITY;
+        };
+        (plane - o[a]) / da
+    }
+
+    /// Tests every cell within `radius` of `cell` (clamped); `true` when the query is done.
+    fn visit_block<F: FnMut(u32, &Ray) -> Option<(f32, H)>, H>(
+        &self,
+        cell: [u32; 3],
+        radius: [u32; 3],
+        s: &mut Search<F, H>,
+    ) -> bool {
+        let n = self.layout.n;
+        let lo = [0, 1, 2].map(|a| cell[a].saturating_sub(radius[a]));
+        let hi = [0, 1, 2].map(|a| cell[a].saturating_add(radius[a]).min(n[a] - 1));
+        for k in lo[2]..=hi[2] {
+            for j in lo[1]..=hi[1] {
+                for i in lo[0]..=hi[0] {
+                    if s.test(self.cell_by_id(self.layout.cell_id([i, j, k]))) {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
+    }
+}

@@ -1,0 +1,591 @@
+//! Unit tests of the kd-tree (the mesh-scale comparisons with brute force live in
+//! `tests/tests/kdtree_vs_bruteforce.rs`).
+
+use super::*;
+use crate::bvh::{PrimitiveSource, TraversalStats, TriangleMesh};
+use crate::ray::Ray;
+use crate::triangle::{TriangleHit, TriangleIntersector, Watertight};
+use glam::Vec3;
+use std::vec;
+use std::vec::Vec;
+
+type VecKd = KdTree<Vec<KdNode>, Vec<u32>>;
+
+fn build_with<S: PrimitiveSource + ?Sized>(
+    src: &S,
+    nodes: usize,
+    refs: usize,
+    opts: &KdBuildOptions,
+) -> Result<VecKd, KdTreeError> {
+    let mut scratch = vec![KdRef::EMPTY; refs];
+    KdTree::build(
+        src,
+        vec![KdNode::EMPTY; nodes],
+        vec![u32::MAX; refs],
+        &mut scratch,
+        opts,
+    )
+}
+
+fn build<S: PrimitiveSource + ?Sized>(src: &S) -> VecKd {
+    let n = src.primitive_count();
+    build_with(
+        src,
+        node_capacity(n).max(1),
+        reference_capacity(n),
+        &KdBuildOptions::default(),
+    )
+    .unwrap()
+}
+
+/// A small deterministic generator for the tests.
+struct Lcg(u64);
+impl Lcg {
+    fn f(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+    fn v(&mut self, s: f32) -> Vec3 {
+        Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5) * s
+    }
+}
+
+/// The oracle: every triangle, smallest `t`, ties to the smaller index.
+fn brute(mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, TriangleHit)> {
+    let mut best: Option<(u32, TriangleHit)> = None;
+    for i in 0..mesh.len() {
+        let Some(v) = mesh.triangle(i) else { continue };
+        if let Some(h) = Watertight.intersect(ray, &v)
+            && best.is_none_or(|(_, b)| h.t < b.t)
+        {
+            best = Some((i as u32, h));
+        }
+    }
+    best
+}
+
+fn soup(n: usize, seed: u64, spread: f32, size: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut r = Lcg(seed);
+    let mut pos = Vec::new();
+    let mut tris = Vec::new();
+    for i in 0..n {
+        let c = r.v(spread);
+        pos.extend([c + r.v(size), c + r.v(size), c + r.v(size)]);
+        let b = 3 * i as u32;
+        tris.push([b, b + 1, b + 2]);
+    }
+    (pos, tris)
+}
+
+/// Asserts closest hit = brute force and any hit agrees, for `ray`.
+fn check(kd: &VecKd, mesh: &TriangleMesh<'_>, ray: &Ray) {
+    let want = brute(mesh, ray);
+    let got = kd.closest_hit_triangles(mesh, &Watertight, ray, None);
+    assert_eq!(got, want, "{ray:?}");
+    let any = kd.any_hit_triangles(mesh, &Watertight, ray, None);
+    assert_eq!(any.is_some(), want.is_some(), "{ray:?}");
+    if let Some((p, h)) = any {
+        let v = mesh.triangle(p as usize).unwrap();
+        assert_eq!(Watertight.intersect(ray, &v), Some(h));
+    }
+}
+
+/// Rays of every kind over a scene of scale `s` around the origin: random, axis-parallel
+/// with both zero signs, from inside, and aimed at vertices and edge midpoints.
+fn rays(pos: &[Vec3], s: f32, seed: u64) -> Vec<Ray> {
+    let mut r = Lcg(seed);
+    let mut out = Vec::new();
+    for _ in 0..200 {
+        let o = r.v(3.0 * s);
+        out.push(Ray::new(o, r.v(1.0)));
+        out.push(Ray::new(r.v(0.5 * s), r.v(1.0)));
+    }
+    for k in 0..60 {
+        let o = r.v(1.5 * s);
+        for axis in 0..3 {
+            for sign in [1.0f32, -1.0] {
+                for zero in [0.0f32, -0.0] {
+                    let mut d = Vec3::splat(zero);
+                    d[axis] = sign;
+                    out.push(Ray::new(o, d));
+                }
+            }
+        }
+        let a = pos[(k * 7) % pos.len()];
+        let b = pos[(k * 13 + 1) % pos.len()];
+        out.push(Ray::new(o, a - o));
+        out.push(Ray::new(o, (a + b) * 0.5 - o));
+    }
+    out
+}
+
+#[test]
+fn node_is_8_bytes_and_capacities() {
+    assert_eq!(core::mem::size_of::<KdNode>(), 8);
+    assert_eq!(NODE_SIZE, 8);
+    assert_eq!(min_reference_capacity(10), 10);
+    assert_eq!(reference_capacity(10), 10 * REFERENCE_FACTOR);
+    assert_eq!(reference_capacity(usize::MAX), usize::MAX, "saturates");
+    assert_eq!(node_capacity(10), 20 * REFERENCE_FACTOR);
+    assert_eq!(max_depth_for(0), 0);
+    assert_eq!(max_depth_for(1), 8);
+    assert_eq!(max_depth_for(1 << 16), 8 + 21);
+    assert_eq!(max_depth_for(usize::MAX), MAX_DEPTH as u32);
+    assert!(max_depth_for(MAX_PRIMITIVES) as usize <= TRAVERSAL_STACK_SIZE);
+    let n = KdNode::inner(2, -1.5, 7);
+    assert_eq!(
+        n.kind(),
+        KdNodeKind::Inner {
+            axis: 2,
+            position: -1.5,
+            first: 7
+        }
+    );
+    assert_eq!(
+        KdNode::leaf(5, 3).kind(),
+        KdNodeKind::Leaf { start: 5, count: 3 }
+    );
+    assert!(KdNode::EMPTY.is_leaf());
+}
+
+#[test]
+fn empty_input_gives_an_empty_tree_that_hits_nothing() {
+    let mesh = TriangleMesh::new(&[], &[]);
+    let kd = build_with(&mesh, 0, 0, &KdBuildOptions::default()).unwrap();
+    assert!(kd.is_empty());
+    assert_eq!(kd.bytes_used(), 0);
+    let ray = Ray::new(Vec3::ZERO, Vec3::X);
+    assert_eq!(
+        kd.closest_hit_triangles(&mesh, &Watertight, &ray, None),
+        None
+    );
+}
+
+#[test]
+fn too_small_storage_is_an_error_before_writing() {
+    let (pos, tris) = soup(10, 1, 10.0, 1.0);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let opts = KdBuildOptions::default();
+    let cases = [
+        (
+            0,
+            10,
+            10,
+            KdTreeError::NodeStorageTooSmall {
+                needed: 1,
+                available: 0,
+            },
+        ),
+        (
+            5,
+            9,
+            10,
+            KdTreeError::ReferenceStorageTooSmall {
+                needed: 10,
+                available: 9,
+            },
+        ),
+        (
+            5,
+            10,
+            9,
+            KdTreeError::ScratchTooSmall {
+                needed: 10,
+                available: 9,
+            },
+        ),
+    ];
+    for (n, r, s, err) in cases {
+        let mut nodes = vec![KdNode::inner(1, 9.0, 9); n];
+        let mut refs = vec![77u32; r];
+        let mut scratch = vec![KdRef::EMPTY; s];
+        let got = KdTree::build(&mesh, &mut nodes[..], &mut refs[..], &mut scratch, &opts);
+        assert_eq!(got.err(), Some(err));
+        assert!(nodes.iter().all(|x| *x == KdNode::inner(1, 9.0, 9)));
+        assert!(refs.iter().all(|&x| x == 77));
+        assert!(scratch.iter().all(|x| *x == KdRef::EMPTY));
+        assert!(!std::format!("{err}").is_empty());
+    }
+}
+
+#[test]
+fn non_finite_primitives_are_named_or_excluded() {
+    let (mut pos, mut tris) = soup(8, 2, 10.0, 1.0);
+    pos[7].y = f32::NAN;
+    tris[5] = [0, 1, 999];
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let n = mesh.len();
+    let err = build_with(&mesh, 64, 64, &KdBuildOptions::default()).err();
+    assert_eq!(err, Some(KdTreeError::NonFinitePrimitive { index: 2 }));
+    let opts = KdBuildOptions {
+        exclude_non_finite: true,
+        ..KdBuildOptions::default()
+    };
+    let kd = build_with(&mesh, node_capacity(n), reference_capacity(n), &opts).unwrap();
+    assert_eq!(kd.primitive_count(), 6);
+    assert_eq!(kd.source_len(), 8);
+    assert!(kd.references().iter().all(|&p| p != 2 && p != 5));
+    let aim = mesh.triangle(2).map(|v| v[0]).unwrap();
+    let ray = Ray::new(aim + Vec3::new(0.0, 0.0, 30.0), -Vec3::Z);
+    assert_ne!(
+        kd.closest_hit_triangles(&mesh, &Watertight, &ray, None)
+            .map(|h| h.0),
+        Some(2)
+    );
+}
+
+#[test]
+fn closest_and_any_hit_match_brute_force_on_a_random_soup() {
+    let (pos, tris) = soup(300, 3, 10.0, 2.0);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let kd = build(&mesh);
+    assert!(kd.reference_count() >= 300);
+    assert!(kd.node_count() > 100, "the SAH splits: {}", kd.node_count());
+    assert!(!kd.budget_exhausted());
+    let mut hits = 0;
+    for ray in rays(&pos, 10.0, 4) {
+        check(&kd, &mesh, &ray);
+        hits += usize::from(brute(&mesh, &ray).is_some());
+    }
+    assert!(hits > 200, "{hits}");
+}
+
+#[test]
+fn traversal_prunes() {
+    let (pos, tris) = soup(2000, 5, 40.0, 1.0);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let kd = build(&mesh);
+    let mut stats = TraversalStats::default();
+    let mut r = Lcg(6);
+    for _ in 0..100 {
+        let ray = Ray::new(r.v(100.0), r.v(1.0));
+        let got = kd.closest_hit_triangles(&mesh, &Watertight, &ray, Some(&mut stats));
+        assert_eq!(got, brute(&mesh, &ray));
+    }
+    assert!(
+        stats.primitives_tested < 100 * 200,
+        "{} tests for 100 rays over 2000 triangles",
+        stats.primitives_tested
+    );
+}
+
+#[test]
+fn coincident_triangles_tie_to_the_smallest_index() {
+    let tri = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let pos: Vec<Vec3> = (0..100).flat_map(|_| tri).collect();
+    let tris: Vec<[u32; 3]> = (0..100u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+    let mut tris = tris;
+    tris.swap(0, 57);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let kd = build(&mesh);
+    let ray = Ray::new(Vec3::new(0.2, 0.2, 5.0), -Vec3::Z);
+    let got = kd.closest_hit_triangles(&mesh, &Watertight, &ray, None);
+    assert_eq!(got.map(|h| h.0), Some(0));
+    check(&kd, &mesh, &ray);
+}
+
+/// An axis-aligned flat grid of quads (two triangles each) at `z = 0`, with rays lying in the
+/// plane, through the shared edges and vertices, and in the tree's own split planes.
+#[test]
+fn flat_grid_shared_edges_vertices_and_split_planes() {
+    let side = 12u32;
+    let mut pos = Vec::new();
+    for j in 0..=side {
+        for i in 0..=side {
+            pos.push(Vec3::new(i as f32, j as f32, 0.0));
+        }
+    }
+    let at = |i: u32, j: u32| j * (side + 1) + i;
+    let mut tris = Vec::new();
+    for j in 0..side {
+        for i in 0..side {
+            tris.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            tris.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    // A second, slanted layer so that the tree has splits on every axis.
+    let base = pos.len() as u32;
+    for p in pos.clone() {
+        pos.push(Vec3::new(p.x, p.y * 0.5, 2.0 + p.y * 0.25));
+    }
+    let n = tris.len();
+    for k in 0..n {
+        let t = tris[k];
+        tris.push([t[0] + base, t[1] + base, t[2] + base]);
+    }
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let kd = build(&mesh);
+    let mut rays = Vec::new();
+    for j in 0..=side {
+        for i in 0..=side {
+            let v = Vec3::new(i as f32, j as f32, 0.0);
+            rays.push(Ray::new(v + Vec3::new(0.0, 0.0, 5.0), -Vec3::Z));
+            rays.push(Ray::new(v + Vec3::new(0.5, 0.0, 5.0), -Vec3::Z));
+            rays.push(Ray::new(
+                v + Vec3::new(0.5, 0.5, -5.0),
+                Vec3::new(-0.0, 0.0, 1.0),
+            ));
+            rays.push(Ray::new(
+                v + Vec3::new(0.0, 0.0, 5.0),
+                Vec3::new(0.1, 0.2, -1.0),
+            ));
+        }
+        // In the plane of the flat layer (no hit on it), along and across the grid lines.
+        rays.push(Ray::new(Vec3::new(-1.0, j as f32, 0.0), Vec3::X));
+        rays.push(Ray::new(
+            Vec3::new(-1.0, j as f32 + 0.5, 0.0),
+            Vec3::new(1.0, 0.3, 0.0),
+        ));
+    }
+    // Rays lying in every split plane of the tree.
+    let mut r = Lcg(7);
+    for node in kd.nodes() {
+        if let KdNodeKind::Inner { axis, position, .. } = node.kind() {
+            let mut o = r.v(30.0) + Vec3::splat(6.0);
+            o[axis] = position;
+            let mut d = r.v(1.0);
+            d[axis] = 0.0;
+            rays.push(Ray::new(o, d));
+            d[axis] = -0.0;
+            rays.push(Ray::new(o, d));
+            let mut target = r.v(12.0) + Vec3::splat(6.0);
+            target[axis] = position;
+            rays.push(Ray::new(o + Vec3::Z * 9.0, target - o - Vec3::Z * 9.0));
+        }
+    }
+    assert!(rays.len() > 700);
+    for ray in &rays {
+        check(&kd, &mesh, ray);
+    }
+}
+
+#[test]
+fn zero_area_and_point_triangles_build_and_answer_as_brute_force() {
+    let mut pos = vec![Vec3::ZERO, Vec3::X, Vec3::new(2.0, 0.0, 0.0), Vec3::ONE];
+    pos.extend([
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(1.0, 0.0, 1.0),
+        Vec3::new(0.0, 1.0, 1.0),
+    ]);
+    let tris = vec![
+        [0, 1, 2],
+        [3, 3, 3],
+        [0, 0, 1],
+        [4, 5, 6],
+        [3, 3, 3],
+        [0, 1, 2],
+    ];
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let kd = build(&mesh);
+    for ray in rays(&pos, 2.0, 8) {
+        check(&kd, &mesh, &ray);
+    }
+    // All points: a single point cell, nothing is hit.
+    let pts = [Vec3::ONE; 3];
+    let tris = vec![[0u32, 1, 2]; 20];
+    let mesh = TriangleMesh::new(&pts, &tris);
+    let kd = build(&mesh);
+    assert_eq!(kd.node_count(), 1);
+    check(&kd, &mesh, &Ray::new(Vec3::ZERO, Vec3::ONE));
+}
+
+#[test]
+fn invalid_rays_visit_no_node() {
+    let (pos, tris) = soup(50, 9, 10.0, 2.0);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let kd = build(&mesh);
+    let bad = [
+        Ray::new(Vec3::NAN, Vec3::X),
+        Ray::new(Vec3::ZERO, Vec3::new(f32::NAN, 1.0, 0.0)),
+        Ray::new(Vec3::ZERO, Vec3::new(0.0, -0.0, 0.0)),
+        Ray::new(Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::X),
+        Ray::new(Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0)),
+        Ray::with_interval(Vec3::ZERO, Vec3::X, f32::NAN, 1.0),
+        Ray::with_interval(Vec3::ZERO, Vec3::X, 2.0, 1.0),
+    ];
+    for ray in &bad {
+        let mut stats = TraversalStats::default();
+        assert_eq!(
+            kd.closest_hit_triangles(&mesh, &Watertight, ray, Some(&mut stats)),
+            None
+        );
+        assert_eq!(
+            kd.any_hit(ray, |_, _| Some((1.0, ())), Some(&mut stats)),
+            None
+        );
+        assert_eq!(stats.nodes_visited, 0);
+    }
+}
+
+#[test]
+fn huge_and_tiny_scenes_answer_as_brute_force() {
+    for scale in [1.0e20f32, 1.0e-20, 3.0e15, 1.0e-30] {
+        let (pos, tris) = soup(200, 10, 10.0, 2.0);
+        let pos: Vec<Vec3> = pos.iter().map(|p| *p * scale).collect();
+        let mesh = TriangleMesh::new(&pos, &tris);
+        let kd = build(&mesh);
+        for ray in rays(&pos, 10.0 * scale, 11) {
+            check(&kd, &mesh, &ray);
+        }
+    }
+}
+
+#[test]
+fn budgets_stop_splitting_and_stay_exact() {
+    let (pos, tris) = soup(400, 12, 10.0, 3.0);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let n = mesh.len();
+    let full = build(&mesh);
+    assert!(full.reference_count() > n, "long triangles straddle planes");
+    let opts = KdBuildOptions::default();
+    let tight_refs = build_with(&mesh, node_capacity(n), n, &opts).unwrap();
+    assert!(tight_refs.budget_exhausted());
+    assert_eq!(tight_refs.reference_count(), n);
+    let one_node = build_with(&mesh, 1, reference_capacity(n), &opts).unwrap();
+    assert!(one_node.budget_exhausted());
+    assert_eq!(one_node.node_count(), 1);
+    let few_nodes = build_with(&mesh, 40, reference_capacity(n), &opts).unwrap();
+    assert!(few_nodes.node_count() <= 40);
+    let mut seen = vec![false; n];
+    for &p in tight_refs.references() {
+        assert!(
+            !seen[p as usize],
+            "reference {p} twice with no budget to spare"
+        );
+        seen[p as usize] = true;
+    }
+    for ray in rays(&pos, 10.0, 13) {
+        check(&tight_refs, &mesh, &ray);
+        check(&one_node, &mesh, &ray);
+        check(&few_nodes, &mesh, &ray);
+    }
+}
+
+/// Every reference of a leaf overlaps the leaf's cell, and every primitive's box is covered
+/// by the cells of the leaves that reference it (checked on the box's corners and centre).
+#[test]
+fn leaves_cover_their_primitives() {
+    let (pos, tris) = soup(300, 14, 10.0, 3.0);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let kd = build(&mesh);
+    let mut cells = Vec::new();
+    let mut todo = vec![(0u32, kd.bounds())];
+    while let Some((i, cell)) = todo.pop() {
+        match kd.nodes()[i as usize].kind() {
+            KdNodeKind::Inner {
+                axis,
+                position,
+                first,
+            } => {
+                assert!(position > cell.min[axis] && position < cell.max[axis]);
+                let (mut b, mut a) = (cell, cell);
+                b.max[axis] = position;
+                a.min[axis] = position;
+                todo.push((first, b));
+                todo.push((first + 1, a));
+            }
+            KdNodeKind::Leaf { start, count } => {
+                let run = &kd.references()[start as usize..(start + count) as usize];
+                for &p in run {
+                    assert!(mesh.primitive_bounds(p as usize).overlaps(&cell));
+                }
+                cells.push((cell, run.to_vec()));
+            }
+        }
+    }
+    for p in 0..mesh.len() {
+        let b = mesh.primitive_bounds(p);
+        for k in 0..9 {
+            let q = if k == 8 {
+                b.center()
+            } else {
+                Vec3::new(
+                    if k & 1 == 0 { b.min.x } else { b.max.x },
+                    if k & 2 == 0 { b.min.y } else { b.max.y },
+                    if k & 4 == 0 { b.min.z } else { b.max.z },
+                )
+            };
+            assert!(
+                cells
+                    .iter()
+                    .any(|(c, run)| c.contains_point(q) && run.contains(&(p as u32))),
+                "primitive {p} point {q:?} not covered"
+            );
+        }
+    }
+}
+
+#[test]
+fn depth_limit_holds_for_exponentially_spaced_primitives() {
+    // Triangles at 2^-k: an adversarial input for median-free splitting.
+    let mut pos = Vec::new();
+    let mut tris = Vec::new();
+    for k in 0..120u32 {
+        let x = (-(k as f32)).exp2();
+        pos.extend([
+            Vec3::new(x, 0.0, 0.0),
+            Vec3::new(x, 1.0, 0.0),
+            Vec3::new(x, 0.0, 1.0),
+        ]);
+        tris.push([3 * k, 3 * k + 1, 3 * k + 2]);
+    }
+    let mesh = TriangleMesh::new(&pos, &tris);
+    for max_depth in [0u32, 3, 64, 1000] {
+        let opts = KdBuildOptions {
+            max_depth,
+            ..KdBuildOptions::default()
+        };
+        let n = mesh.len();
+        let kd = build_with(&mesh, node_capacity(n), reference_capacity(n), &opts).unwrap();
+        assert!(kd.depth() <= opts.depth_limit(n) as usize);
+        assert!(kd.depth() <= MAX_DEPTH);
+        for k in 0..120 {
+            let x = (-(k as f32)).exp2();
+            let ray = Ray::new(Vec3::new(x, 0.25, -1.0), Vec3::Z);
+            check(&kd, &mesh, &ray);
+            let ray = Ray::new(Vec3::new(-1.0, 0.25, 0.25), Vec3::X);
+            check(&kd, &mesh, &ray);
+        }
+    }
+}
+
+#[test]
+fn intervals_are_respected_inclusively() {
+    let pos = [
+        Vec3::ZERO,
+        Vec3::X,
+        Vec3::Y,
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(1.0, 0.0, 1.0),
+        Vec3::new(0.0, 1.0, 1.0),
+    ];
+    let tris = [[0, 1, 2], [3, 4, 5]];
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let kd = build(&mesh);
+    let o = Vec3::new(0.25, 0.25, 2.0);
+    for (t_min, t_max) in [
+        (0.0, 1.0),
+        (1.0, 2.0),
+        (0.0, 0.999),
+        (-5.0, f32::INFINITY),
+        (f32::NEG_INFINITY, 1.5),
+    ] {
+        let ray = Ray::with_interval(o, -Vec3::Z, t_min, t_max);
+        check(&kd, &mesh, &ray);
+    }
+    let ray = Ray::with_interval(o, -Vec3::Z, 0.0, 1.0);
+    assert_eq!(
+        kd.closest_hit_triangles(&mesh, &Watertight, &ray, None)
+            .map(|h| h.0),
+        Some(1)
+    );
+    let ray = Ray::with_interval(o, -Vec3::Z, 1.0, 2.0);
+    assert_eq!(
+        kd.closest_hit_triangles(&mesh, &Watertight, &ray, None)
+            .map(|h| h.0),
+        Some(0)
+    );
+}

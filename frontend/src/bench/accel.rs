@@ -1,0 +1,279 @@
+//! `halfray bench accel`: the core's acceleration structures side by side on one mesh — the
+//! uniform grid, the kd-tree, the binary BVH and the 8-wide BVH — built from the same
+//! triangles and traced with the same intersector ([`Watertight`]) on the same rays.
+//!
+//! Rays as in `bench bvh`: the primary rays of a `width × width` camera framing the mesh and
+//! `--rays` incoherent rays (seed [`INCOHERENT_SEED`]). Every throughput is single-threaded and
+//! the best of [`TIMED_PASSES`] passes, the structures taking turns pass by pass
+//! ([`interleaved`]) so that a slow spell of the shared machine falls on all of them. Each
+//! build is timed once per pass, best kept. `brute_force_mismatches` counts the rays of a
+//! sample of the incoherent set (about [`BRUTE_FORCE_TESTS`] triangle tests) where the
+//! structure's closest hit (triangle and `t`) differs from a loop over every triangle with
+//! the same intersector: every structure promises 0.
+
+use super::bvh::{BRUTE_FORCE_TESTS, INCOHERENT_SEED, TIMED_PASSES, brute_force, interleaved};
+use crate::accel::{VecBvh, VecBvh8, build_binary, build_wide, closest_simd};
+use crate::atomic::write_bytes_atomic;
+use crate::error::{Error, Location, Result};
+use crate::obj::read_obj;
+use crate::raysets::{Camera, random_rays};
+use halfray_core::Ray;
+use halfray_core::bvh::wide::binary_options;
+use halfray_core::bvh::{BuildOptions, TriangleMesh};
+use halfray_core::grid::{Grid, GridOptions, GridPlan};
+use halfray_core::kdtree::{
+    KdBuildOptions, KdNode, KdRef, KdTree, node_capacity, reference_capacity,
+};
+use halfray_core::triangle::Watertight;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Arguments of `halfray bench accel`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct AccelArgs {
+    /// Meshes to benchmark (OBJ), one after another.
+    #[arg(required = true)]
+    pub meshes: Vec<PathBuf>,
+    /// Also write the results as JSON to this file (atomically): the report object for one
+    /// mesh, an array of them for several.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Camera image width and height for the primary rays.
+    #[arg(long, default_value_t = 1024)]
+    pub width: usize,
+    /// Number of incoherent random rays.
+    #[arg(long, default_value_t = 1_000_000)]
+    pub rays: usize,
+}
+
+/// One mesh's figures, as written to the JSON file.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct AccelReport {
+    /// Mesh path.
+    pub mesh: String,
+    /// Triangles in the mesh.
+    pub triangles: usize,
+    /// Intersector name (`watertight`).
+    pub intersector: String,
+    /// Primary rays per set.
+    pub primary_rays: usize,
+    /// Incoherent rays per set.
+    pub incoherent_rays: usize,
+    /// Rays of the brute-force sample.
+    pub brute_force_rays: usize,
+    /// One row per structure: `grid`, `kdtree`, `bvh` (binary), `bvh8` (8 wide).
+    pub structures: Vec<StructureRow>,
+}
+
+/// One structure's figures.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct StructureRow {
+    /// `grid`, `kdtree`, `bvh` or `bvh8`.
+    pub name: String,
+    /// Build time on one thread (best of the passes), ms.
+    pub build_ms: f64,
+    /// Bytes the structure adds per triangle (the caller's mesh not counted; the wide BVH's
+    /// copied triangles counted).
+    pub bytes_per_triangle: f64,
+    /// Closest hit, primary rays, Mrays/s.
+    pub mrays_closest_primary: f64,
+    /// Closest hit, incoherent rays, Mrays/s.
+    pub mrays_closest_incoherent: f64,
+    /// Sample rays whose closest hit differs from brute force (must be 0).
+    pub brute_force_mismatches: usize,
+}
+
+/// The four structures over one mesh.
+struct Built {
+    grid: Grid<Vec<u32>, Vec<u32>>,
+    kdtree: KdTree<Vec<KdNode>, Vec<u32>>,
+    bvh: VecBvh,
+    bvh8: VecBvh8,
+}
+
+/// Runs the benchmark.
+pub fn run(args: &AccelArgs) -> Result<()> {
+    if args.width == 0 {
+        return Err(Error::Usage("--width must be at least 1".into()));
+    }
+    let ray_bytes = std::mem::size_of::<Ray>() as u64;
+    let rays = (args.width as u64)
+        .checked_mul(args.width as u64)
+        .and_then(|p| p.checked_add(args.rays as u64))
+        .and_then(|n| n.checked_mul(ray_bytes));
+    crate::limits::check_memory(
+        &format!("--width {} --rays {}", args.width, args.rays),
+        rays,
+    )?;
+    for mesh in &args.meshes {
+        std::fs::File::open(mesh).map_err(|e| Error::io(mesh, e))?;
+    }
+    let mut reports = Vec::with_capacity(args.meshes.len());
+    for mesh in &args.meshes {
+        reports.push(bench(args, mesh)?);
+    }
+    if let Some(path) = &args.json {
+        let text = match &reports[..] {
+            [one] => serde_json::to_string_pretty(one),
+            all => serde_json::to_string_pretty(all),
+        }
+        .map_err(|e| Error::encode("the JSON report", e))?;
+        write_bytes_atomic(path, text.as_bytes())?;
+    }
+    for r in &reports {
+        print_report(r);
+    }
+    Ok(())
+}
+
+/// Builds the four structures over `mesh`, each timed; `(structures, build seconds per
+/// structure in [`Built`]'s order)` of the last pass, with the best times.
+fn build_all(mesh: &TriangleMesh<'_>, path: &Path) -> Result<(Built, [f64; 4])> {
+    let err = |e: &dyn std::fmt::Display| Error::input(Location::file(path), e.to_string());
+    let n = mesh.len();
+    let mut best = [f64::INFINITY; 4];
+    let mut built = None;
+    for _ in 0..TIMED_PASSES {
+        let t = Instant::now();
+        let plan = GridPlan::new(mesh, &GridOptions::default()).map_err(|e| err(&e))?;
+        let grid = Grid::build(
+            mesh,
+            &plan,
+            vec![0u32; plan.required_offsets()],
+            vec![0u32; plan.required_references()],
+        )
+        .map_err(|e| err(&e))?;
+        best[0] = best[0].min(t.elapsed().as_secs_f64());
+
+        let t = Instant::now();
+        let mut scratch = vec![KdRef::EMPTY; reference_capacity(n)];
+        let kdtree = KdTree::build(
+            mesh,
+            vec![KdNode::EMPTY; node_capacity(n)],
+            vec![0u32; reference_capacity(n)],
+            &mut scratch,
+            &KdBuildOptions::default(),
+        )
+        .map_err(|e| err(&e))?;
+        best[1] = best[1].min(t.elapsed().as_secs_f64());
+
+        let t = Instant::now();
+        let bvh = build_binary(mesh, &BuildOptions::default()).map_err(|e| err(&e))?;
+        best[2] = best[2].min(t.elapsed().as_secs_f64());
+
+        let t = Instant::now();
+        let collapsed =
+            build_binary(mesh, &binary_options(BuildOptions::default())).map_err(|e| err(&e))?;
+        let bvh8 = build_wide(mesh, &collapsed).map_err(|e| err(&e))?;
+        best[3] = best[3].min(t.elapsed().as_secs_f64());
+        built = Some(Built {
+            grid,
+            kdtree,
+            bvh,
+            bvh8,
+        });
+    }
+    let built = built.ok_or_else(|| Error::internal("no timed build ran", None))?;
+    Ok((built, best))
+}
+
+fn bench(args: &AccelArgs, path: &Path) -> Result<AccelReport> {
+    let obj = read_obj(path)?;
+    let mesh = TriangleMesh::new(&obj.positions, &obj.triangles);
+    let n = mesh.len();
+    let isect = Watertight;
+    let (s, build_s) = build_all(&mesh, path)?;
+
+    let (lo, hi) = obj.bounds().unwrap_or((glam::Vec3::ZERO, glam::Vec3::ONE));
+    let primary = Camera::framing(lo, hi, args.width, args.width).rays();
+    let incoherent = random_rays(lo, hi, args.rays, INCOHERENT_SEED);
+
+    type Closest<'a> = Box<dyn Fn(&Ray) -> Option<(u32, f32)> + 'a>;
+    let closest: [Closest<'_>; 4] = [
+        Box::new(|r| {
+            s.grid
+                .closest_hit_triangles(&mesh, &isect, r, None)
+                .map(|(p, h)| (p, h.t))
+        }),
+        Box::new(|r| {
+            s.kdtree
+                .closest_hit_triangles(&mesh, &isect, r, None)
+                .map(|(p, h)| (p, h.t))
+        }),
+        Box::new(|r| {
+            s.bvh
+                .closest_hit_triangles(&mesh, &isect, r, None)
+                .map(|(p, h)| (p, h.t))
+        }),
+        Box::new(|r| closest_simd(&s.bvh8, &isect, r, None).map(|(p, h)| (p, h.t))),
+    ];
+    let closest = &closest;
+    let hit = |i: usize| move |r: &Ray| closest[i](r).is_some();
+    let (h0, h1, h2, h3) = (hit(0), hit(1), hit(2), hit(3));
+    let refs: [&dyn Fn(&Ray) -> bool; 4] = [&h0, &h1, &h2, &h3];
+    let mrays_primary = interleaved(&primary, &refs);
+    let mrays_incoherent = interleaved(&incoherent, &refs);
+
+    let sample_len = (BRUTE_FORCE_TESTS / n.max(1))
+        .clamp(16, 20_000)
+        .min(incoherent.len());
+    let sample = &incoherent[..sample_len];
+    let brute: Vec<Option<(u32, f32)>> = sample
+        .iter()
+        .map(|r| brute_force(&mesh, &isect, r))
+        .collect();
+
+    let bytes = [
+        s.grid.bytes_per_triangle(),
+        s.kdtree.bytes_used() as f64 / n.max(1) as f64,
+        s.bvh.stats().bytes_per_primitive,
+        s.bvh8.stats().bytes_per_triangle,
+    ];
+    let structures = ["grid", "kdtree", "bvh", "bvh8"]
+        .iter()
+        .enumerate()
+        .map(|(i, name)| StructureRow {
+            name: (*name).to_string(),
+            build_ms: build_s[i] * 1e3,
+            bytes_per_triangle: bytes[i],
+            mrays_closest_primary: mrays_primary[i],
+            mrays_closest_incoherent: mrays_incoherent[i],
+            brute_force_mismatches: sample
+                .iter()
+                .zip(&brute)
+                .filter(|(r, b)| closest[i](r) != **b)
+                .count(),
+        })
+        .collect();
+    Ok(AccelReport {
+        mesh: path.display().to_string(),
+        triangles: n,
+        intersector: "watertight".into(),
+        primary_rays: primary.len(),
+        incoherent_rays: incoherent.len(),
+        brute_force_rays: sample_len,
+        structures,
+    })
+}
+
+fn print_report(r: &AccelReport) {
+    println!(
+        "bench accel: {} ({} triangles, {}, one thread; brute-force sample {} rays)",
+        r.mesh, r.triangles, r.intersector, r.brute_force_rays
+    );
+    println!(
+        "  {:<8} {:>10} {:>8} {:>16} {:>19} {:>11}",
+        "", "build ms", "B/tri", "closest primary", "closest incoherent", "mismatches"
+    );
+    for s in &r.structures {
+        println!(
+            "  {:<8} {:>10.1} {:>8.1} {:>16.2} {:>19.2} {:>11}",
+            s.name,
+            s.build_ms,
+            s.bytes_per_triangle,
+            s.mrays_closest_primary,
+            s.mrays_closest_incoherent,
+            s.brute_force_mismatches
+        );
+    }
+}

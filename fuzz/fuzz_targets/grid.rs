@@ -1,0 +1,4 @@
+//! Fuzz target `grid`: the property checks are `halfray_fuzz_props::grid` in the `halfray-fuzz-props` crate (`tests/fuzz-props`).
+#![no_main]
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| halfray_fuzz_props::grid::grid(data));
