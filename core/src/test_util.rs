@@ -1,6 +1,10 @@
 //! Helpers shared by the unit tests of the core (compiled only for `cargo test`).
 
+use crate::bvh::TriangleMesh;
+use crate::ray::Ray;
+use crate::triangle::{TriangleHit, TriangleIntersector, Watertight};
 use glam::Vec3;
+use std::vec::Vec;
 
 /// A 64-bit LCG (Knuth's MMIX constants) giving `f32` in `[0, 1)` with 24 random bits.
 pub fn lcg(state: &mut u64) -> f32 {
@@ -19,4 +23,52 @@ pub fn unit_vec(s: &mut u64) -> Vec3 {
             return v / l;
         }
     }
+}
+
+/// A seeded generator over [`lcg`] for the acceleration structures' tests: the same
+/// sequence as calling [`lcg`] on the state.
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    /// The next `f32` in `[0, 1)` ([`lcg`]).
+    pub fn f(&mut self) -> f32 {
+        lcg(&mut self.0)
+    }
+
+    /// A vector with components drawn in x, y, z order from `[-s/2, s/2)`.
+    pub fn v(&mut self, s: f32) -> Vec3 {
+        Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5) * s
+    }
+}
+
+/// `n` random triangles from [`Lcg`]`(seed)`, three vertices of their own each: triangle
+/// `i` is `[3i, 3i + 1, 3i + 2]` around a centre `v(spread)`, each vertex the centre plus
+/// `v(size)` (centre first, then the three offsets, for every triangle in turn).
+pub fn lcg_soup(n: usize, seed: u64, spread: f32, size: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut r = Lcg(seed);
+    let mut pos = Vec::new();
+    let mut tris = Vec::new();
+    for i in 0..n {
+        let c = r.v(spread);
+        pos.extend([c + r.v(size), c + r.v(size), c + r.v(size)]);
+        let b = 3 * i as u32;
+        tris.push([b, b + 1, b + 2]);
+    }
+    (pos, tris)
+}
+
+/// The tests' oracle for the acceleration structures: [`Watertight`] on every triangle of
+/// `mesh` in index order (triangles with an index out of range skipped), keeping the
+/// smallest `t`; strict `<`, so of equal `t` the smaller index wins.
+pub fn brute_watertight(mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, TriangleHit)> {
+    let mut best: Option<(u32, TriangleHit)> = None;
+    for i in 0..mesh.len() {
+        let Some(v) = mesh.triangle(i) else { continue };
+        if let Some(h) = Watertight.intersect(ray, &v)
+            && best.is_none_or(|(_, b)| h.t < b.t)
+        {
+            best = Some((i as u32, h));
+        }
+    }
+    best
 }

@@ -12,6 +12,8 @@
 //!   point: `origin + 1·direction = target` holds exactly in real arithmetic).
 //! * [`Target`] and [`classify`]: which triangles are incident to an aimed-at edge or vertex,
 //!   and whether the exact ray crosses the surface there *robustly* (see [`classify`]).
+//! * [`brute_triangles`]: the brute-force closest hit the acceleration-structure suites
+//!   compare against, and [`par_map`] to spread their rays over the cores.
 //!
 //! ## Why the exact rays start where they start
 //!
@@ -34,10 +36,54 @@ use std::path::{Path, PathBuf};
 
 use glam::{DVec2, DVec3, Vec3};
 use halfray_core::Ray;
-use halfray_core::triangle::TriangleVariant;
+use halfray_core::bvh::TriangleMesh;
+use halfray_core::triangle::{TriangleHit, TriangleIntersector, TriangleVariant};
 
 /// Unit roundoff of `f32`, `2⁻²⁴`, as `f64`.
 pub const U32: f64 = 1.0 / 16_777_216.0;
+
+// ---------------------------------------------------------------------------------------------
+// Brute force and parallel rays
+// ---------------------------------------------------------------------------------------------
+
+/// The oracle of the grid and kd-tree suites: `isect` prepared once for `ray` (`None` when it
+/// refuses the ray), then every triangle of `mesh` in index order (indices out of range
+/// skipped), keeping the smallest `t` in the ray's interval; strict `<`, so of equal `t` the
+/// smaller index wins. Shares no code with the structures it checks.
+pub fn brute_triangles<T: TriangleIntersector>(
+    mesh: &TriangleMesh<'_>,
+    isect: &T,
+    ray: &Ray,
+) -> Option<(u32, TriangleHit)> {
+    let pre = isect.prepare(ray)?;
+    let mut best: Option<(u32, TriangleHit)> = None;
+    for i in 0..mesh.len() {
+        let Some(v) = mesh.triangle(i) else { continue };
+        if let Some(h) = isect.intersect_prepared(&pre, ray, &v)
+            && best.is_none_or(|(_, b)| h.t < b.t)
+        {
+            best = Some((i as u32, h));
+        }
+    }
+    best
+}
+
+/// `f` over `items` on every core (`available_parallelism`, 2 if unknown): contiguous chunks
+/// on scoped threads, results in the order of `items`. A panic in `f` propagates.
+pub fn par_map<A: Sync, B: Send>(items: &[A], f: impl Fn(&A) -> B + Sync) -> Vec<B> {
+    let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
+    let chunk = items.len().div_ceil(threads).max(1);
+    std::thread::scope(|s| {
+        let handles: Vec<_> = items
+            .chunks(chunk)
+            .map(|c| s.spawn(|| c.iter().map(&f).collect::<Vec<B>>()))
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().unwrap())
+            .collect()
+    })
+}
 
 // ---------------------------------------------------------------------------------------------
 // Meshes

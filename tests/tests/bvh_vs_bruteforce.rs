@@ -25,6 +25,7 @@ use halfray_core::bvh::{
     node_capacity,
 };
 use halfray_core::triangle::{TriangleIntersector, TriangleVariant, Watertight};
+use halfray_tests::par_map;
 use proptest::prelude::*;
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -145,22 +146,6 @@ fn brute<T: TriangleIntersector>(
         }
     }
     best
-}
-
-/// Runs `f` over `items` on every core, collecting results in order.
-fn par_map<A: Sync, B: Send>(items: &[A], f: impl Fn(&A) -> B + Sync) -> Vec<B> {
-    let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
-    let chunk = items.len().div_ceil(threads).max(1);
-    std::thread::scope(|s| {
-        let handles: Vec<_> = items
-            .chunks(chunk)
-            .map(|c| s.spawn(|| c.iter().map(&f).collect::<Vec<B>>()))
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().unwrap())
-            .collect()
-    })
 }
 
 /// Checks the BVH against the reference on `rays`; returns (hits, different-but-tied prims).

@@ -18,7 +18,8 @@ use halfray::raysets::{Camera, Rng, random_rays};
 use halfray_core::Ray;
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
 use halfray_core::grid::{CellAssignment, DEFAULT_LAMBDA, Grid, GridOptions, GridPlan, GridStats};
-use halfray_core::triangle::{TriangleHit, TriangleIntersector, Watertight};
+use halfray_core::triangle::Watertight;
+use halfray_tests::{brute_triangles, par_map};
 use std::path::{Path, PathBuf};
 
 const MESH_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes");
@@ -37,42 +38,14 @@ fn build(mesh: &TriangleMesh<'_>, options: &GridOptions) -> VecGrid {
     .unwrap()
 }
 
-/// Every triangle, smaller `t` then smaller index.
-fn brute(mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, TriangleHit)> {
-    let pre = Watertight.prepare(ray)?;
-    let mut best: Option<(u32, TriangleHit)> = None;
-    for i in 0..mesh.len() {
-        let Some(v) = mesh.triangle(i) else { continue };
-        if let Some(h) = Watertight.intersect_prepared(&pre, ray, &v)
-            && best.is_none_or(|(_, b)| h.t < b.t)
-        {
-            best = Some((i as u32, h));
-        }
-    }
-    best
-}
-
-/// Runs `f` over `items` on every core, results in order.
-fn par_map<A: Sync, B: Send>(items: &[A], f: impl Fn(&A) -> B + Sync) -> Vec<B> {
-    let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
-    let chunk = items.len().div_ceil(threads).max(1);
-    std::thread::scope(|s| {
-        let handles: Vec<_> = items
-            .chunks(chunk)
-            .map(|c| s.spawn(|| c.iter().map(&f).collect::<Vec<B>>()))
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().unwrap())
-            .collect()
-    })
-}
-
 /// Grid = brute force on every ray, for both assignments and `λ` ∈ {0.5, default, 16};
 /// returns the number of hits.
 fn check_scene(name: &str, p: &[Vec3], t: &[[u32; 3]], rays: &[Ray]) -> usize {
     let mesh = TriangleMesh::new(p, t);
-    let want: Vec<_> = rays.iter().map(|r| brute(&mesh, r)).collect();
+    let want: Vec<_> = rays
+        .iter()
+        .map(|r| brute_triangles(&mesh, &Watertight, r))
+        .collect();
     for assignment in [CellAssignment::Bounds, CellAssignment::Exact] {
         for lambda in [0.5, DEFAULT_LAMBDA, 16.0] {
             let g = build(
@@ -284,7 +257,7 @@ fn bunny_equals_brute_force_and_figures() {
         let any = grid
             .any_hit_triangles(&mesh, &Watertight, r, None)
             .is_some();
-        (got, any, brute(&mesh, r))
+        (got, any, brute_triangles(&mesh, &Watertight, r))
     });
     let mut hits = 0;
     for (r, (got, any, want)) in rays.iter().zip(results) {

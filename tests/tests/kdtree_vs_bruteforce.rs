@@ -19,9 +19,8 @@ use halfray_core::bvh::{PrimitiveSource, TriangleMesh};
 use halfray_core::kdtree::{
     KdBuildOptions, KdNode, KdNodeKind, KdRef, KdTree, MAX_DEPTH, node_capacity, reference_capacity,
 };
-use halfray_core::triangle::{
-    MollerTrumbore, TriangleHit, TriangleIntersector, Watertight, WatertightF32,
-};
+use halfray_core::triangle::{MollerTrumbore, TriangleIntersector, Watertight, WatertightF32};
+use halfray_tests::{brute_triangles as brute, par_map};
 use proptest::prelude::*;
 use std::path::PathBuf;
 
@@ -49,25 +48,6 @@ fn build_opts(mesh: &TriangleMesh<'_>, opts: &KdBuildOptions) -> VecKd {
 
 fn build(mesh: &TriangleMesh<'_>) -> VecKd {
     build_opts(mesh, &KdBuildOptions::default())
-}
-
-/// The oracle: every triangle, smallest `t`, ties to the smaller index.
-fn brute<T: TriangleIntersector>(
-    mesh: &TriangleMesh<'_>,
-    isect: &T,
-    ray: &Ray,
-) -> Option<(u32, TriangleHit)> {
-    let pre = isect.prepare(ray)?;
-    let mut best: Option<(u32, TriangleHit)> = None;
-    for i in 0..mesh.len() {
-        let Some(v) = mesh.triangle(i) else { continue };
-        if let Some(h) = isect.intersect_prepared(&pre, ray, &v)
-            && best.is_none_or(|(_, b)| h.t < b.t)
-        {
-            best = Some((i as u32, h));
-        }
-    }
-    best
 }
 
 /// Asserts the kd-tree's closest hit equals the oracle's and any-hit agrees; returns whether
@@ -98,22 +78,6 @@ fn check<T: TriangleIntersector>(
         assert_eq!(isect.intersect(ray, &v), Some(h), "any-hit record");
     }
     want.is_some()
-}
-
-/// Runs `f` over `items` on every core.
-fn par_map<A: Sync, B: Send>(items: &[A], f: impl Fn(&A) -> B + Sync) -> Vec<B> {
-    let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
-    let chunk = items.len().div_ceil(threads).max(1);
-    std::thread::scope(|s| {
-        let handles: Vec<_> = items
-            .chunks(chunk)
-            .map(|c| s.spawn(|| c.iter().map(&f).collect::<Vec<B>>()))
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().unwrap())
-            .collect()
-    })
 }
 
 /// Rays lying in every split plane of `kd` (both zero signs), and rays aimed at points of

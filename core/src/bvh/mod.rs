@@ -183,6 +183,53 @@ pub(crate) fn improves(ray: &crate::ray::Ray, t: f32, prim: u32, best_prim: Opti
     }
 }
 
+/// Offers the hit `(t, h)` of primitive `prim` to a closest-hit search whose current best is
+/// `best` (at `cur.t_max`): when it [`improves`] on it, it becomes `best`, `cur.t_max`
+/// shrinks to `t`, and the result is `true`; otherwise nothing changes. Shared by every
+/// traversal (binary and wide BVH, kd-tree, grid).
+#[inline(always)]
+pub(crate) fn take_if_better<H>(
+    cur: &mut crate::ray::Ray,
+    best: &mut Option<(u32, H)>,
+    prim: u32,
+    t: f32,
+    h: H,
+) -> bool {
+    if improves(cur, t, prim, best.as_ref().map(|b| b.0)) {
+        cur.t_max = t;
+        *best = Some((prim, h));
+        true
+    } else {
+        false
+    }
+}
+
+/// Tests the primitives of `run` in order with `intersect(prim, cur)`, adding one to
+/// `*tested` per primitive tested, and offers each hit to the search ([`take_if_better`]).
+/// Returns `true` when `any` and a hit was taken: the any-hit query is done and the rest of
+/// `run` is left untested. The leaf (or cell) loop of the closure-based queries of
+/// [`Bvh`], [`crate::kdtree::KdTree`] and [`crate::grid::Grid`].
+#[inline(always)]
+pub(crate) fn test_run<H>(
+    run: &[u32],
+    intersect: &mut impl FnMut(u32, &crate::ray::Ray) -> Option<(f32, H)>,
+    cur: &mut crate::ray::Ray,
+    best: &mut Option<(u32, H)>,
+    tested: &mut u64,
+    any: bool,
+) -> bool {
+    for &prim in run {
+        *tested += 1;
+        let Some((t, h)) = intersect(prim, cur) else {
+            continue;
+        };
+        if take_if_better(cur, best, prim, t, h) && any {
+            return true;
+        }
+    }
+    false
+}
+
 /// Nodes to reserve for `prim_count` primitives: `2·N − 1` (a binary tree whose every leaf
 /// holds at least one primitive), `0` for no primitives. Saturates instead of overflowing.
 #[must_use]

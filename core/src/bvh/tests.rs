@@ -4,6 +4,7 @@
 use super::*;
 use crate::aabb::Aabb;
 use crate::ray::Ray;
+use crate::test_util::{Lcg, brute_watertight, lcg_soup};
 use crate::triangle::{TriangleIntersector, Watertight};
 use glam::Vec3;
 use std::vec;
@@ -21,45 +22,14 @@ fn build<S: PrimitiveSource + ?Sized>(src: &S, opts: &BuildOptions) -> Result<Ve
     )
 }
 
-/// A small deterministic generator for the tests.
-struct Lcg(u64);
-impl Lcg {
-    fn f(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-    }
-    fn v(&mut self, s: f32) -> Vec3 {
-        Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5) * s
-    }
-}
-
+/// The tests' brute force as `(triangle, t)` ([`brute_watertight`]).
 fn brute(mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, f32)> {
-    let mut best: Option<(u32, f32)> = None;
-    for i in 0..mesh.len() {
-        let Some(v) = mesh.triangle(i) else { continue };
-        if let Some(h) = Watertight.intersect(ray, &v)
-            && best.is_none_or(|(_, t)| h.t < t)
-        {
-            best = Some((i as u32, h.t));
-        }
-    }
-    best
+    brute_watertight(mesh, ray).map(|(i, h)| (i, h.t))
 }
 
+/// `n` random triangles of size about 1 in a box of side 10 ([`lcg_soup`]).
 fn soup(n: usize, seed: u64) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let mut r = Lcg(seed);
-    let mut pos = Vec::new();
-    let mut tris = Vec::new();
-    for i in 0..n {
-        let c = r.v(10.0);
-        pos.extend([c + r.v(1.0), c + r.v(1.0), c + r.v(1.0)]);
-        let b = 3 * i as u32;
-        tris.push([b, b + 1, b + 2]);
-    }
-    (pos, tris)
+    lcg_soup(n, seed, 10.0, 1.0)
 }
 
 #[test]

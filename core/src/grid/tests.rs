@@ -5,8 +5,8 @@ use super::overlap::triangle_overlaps_box;
 use super::*;
 use crate::bvh::TriangleMesh;
 use crate::ray::Ray;
-use crate::test_util::{lcg, unit_vec};
-use crate::triangle::{TriangleHit, TriangleIntersector, Watertight};
+use crate::test_util::{brute_watertight as brute, lcg, unit_vec};
+use crate::triangle::{TriangleIntersector, Watertight};
 use glam::{DVec3, Vec3};
 use std::format;
 use std::vec;
@@ -22,21 +22,6 @@ fn build(mesh: &TriangleMesh<'_>, options: &GridOptions) -> Result<VecGrid, Grid
         vec![u32::MAX; plan.required_offsets()],
         vec![u32::MAX; plan.required_references()],
     )
-}
-
-/// Independent oracle: every triangle with the same intersector, smaller `t` then smaller
-/// index (strict `<` keeps the first of equal `t`).
-fn brute(mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, TriangleHit)> {
-    let mut best: Option<(u32, TriangleHit)> = None;
-    for i in 0..mesh.len() {
-        let Some(v) = mesh.triangle(i) else { continue };
-        if let Some(h) = Watertight.intersect(ray, &v)
-            && best.is_none_or(|(_, b)| h.t < b.t)
-        {
-            best = Some((i as u32, h));
-        }
-    }
-    best
 }
 
 /// A soup of `n` random triangles of size about `size` in a box of side `scale`.

@@ -4,7 +4,7 @@
 use super::Grid;
 use super::plan::ray_pad;
 use crate::aabb::{Aabb, SlabRay};
-use crate::bvh::{TriangleMesh, cull_bound, improves};
+use crate::bvh::{TriangleMesh, cull_bound, test_run};
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
 use glam::Vec3;
@@ -41,20 +41,14 @@ impl<F: FnMut(u32, &Ray) -> Option<(f32, H)>, H> Search<F, H> {
     #[inline(always)]
     fn test(&mut self, cell: &[u32]) -> bool {
         self.stats.cells_visited += 1;
-        for &prim in cell {
-            self.stats.triangles_tested += 1;
-            let Some((t, h)) = (self.intersect)(prim, &self.cur) else {
-                continue;
-            };
-            if improves(&self.cur, t, prim, self.best.as_ref().map(|b| b.0)) {
-                self.cur.t_max = t;
-                self.best = Some((prim, h));
-                if self.any {
-                    return true;
-                }
-            }
-        }
-        false
+        test_run(
+            cell,
+            &mut self.intersect,
+            &mut self.cur,
+            &mut self.best,
+            &mut self.stats.triangles_tested,
+            self.any,
+        )
     }
 }
 
@@ -100,7 +94,7 @@ where
         ray: &Ray,
         stats: Option<&mut GridStats>,
     ) -> Option<(u32, TriangleHit)> {
-        self.triangles(mesh, isect, ray, stats, false)
+        self.traverse(ray, mesh.prepared_intersect(isect, ray)?, stats, false)
     }
 
     /// [`Grid::any_hit`] over `mesh` with the intersector `isect`.
@@ -112,28 +106,7 @@ where
         ray: &Ray,
         stats: Option<&mut GridStats>,
     ) -> Option<(u32, TriangleHit)> {
-        self.triangles(mesh, isect, ray, stats, true)
-    }
-
-    #[inline]
-    fn triangles<T: TriangleIntersector>(
-        &self,
-        mesh: &TriangleMesh<'_>,
-        isect: &T,
-        ray: &Ray,
-        stats: Option<&mut GridStats>,
-        any: bool,
-    ) -> Option<(u32, TriangleHit)> {
-        let pre = isect.prepare(ray)?;
-        self.traverse(
-            ray,
-            |prim, r| {
-                let v = mesh.triangle(prim as usize)?;
-                isect.intersect_prepared(&pre, r, &v).map(|h| (h.t, h))
-            },
-            stats,
-            any,
-        )
+        self.traverse(ray, mesh.prepared_intersect(isect, ray)?, stats, true)
     }
 
     /// Closest hit, or any hit when `any`.

@@ -4,7 +4,8 @@
 use super::*;
 use crate::bvh::{PrimitiveSource, TraversalStats, TriangleMesh};
 use crate::ray::Ray;
-use crate::triangle::{TriangleHit, TriangleIntersector, Watertight};
+use crate::test_util::{Lcg, brute_watertight as brute, lcg_soup as soup};
+use crate::triangle::{TriangleIntersector, Watertight};
 use glam::Vec3;
 use std::vec;
 use std::vec::Vec;
@@ -38,49 +39,6 @@ fn build<S: PrimitiveSource + ?Sized>(src: &S) -> VecKd {
     .unwrap()
 }
 
-/// A small deterministic generator for the tests.
-struct Lcg(u64);
-impl Lcg {
-    fn f(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-    }
-    fn v(&mut self, s: f32) -> Vec3 {
-        Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5) * s
-    }
-}
-
-/// The oracle: every triangle, smallest `t`, ties to the smaller index.
-fn brute(mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, TriangleHit)> {
-    let mut best: Option<(u32, TriangleHit)> = None;
-    for i in 0..mesh.len() {
-        let Some(v) = mesh.triangle(i) else { continue };
-        if let Some(h) = Watertight.intersect(ray, &v)
-            && best.is_none_or(|(_, b)| h.t < b.t)
-        {
-            best = Some((i as u32, h));
-        }
-    }
-    best
-}
-
-fn soup(n: usize, seed: u64, spread: f32, size: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let mut r = Lcg(seed);
-    let mut pos = Vec::new();
-    let mut tris = Vec::new();
-    for i in 0..n {
-        let c = r.v(spread);
-        pos.extend([c + r.v(size), c + r.v(size), c + r.v(size)]);
-        let b = 3 * i as u32;
-        tris.push([b, b + 1, b + 2]);
-    }
-    (pos, tris)
-}
-
-/// Asserts closest hit = brute force and any hit agrees, for `ray`.
 fn check(kd: &VecKd, mesh: &TriangleMesh<'_>, ray: &Ray) {
     let want = brute(mesh, ray);
     let got = kd.closest_hit_triangles(mesh, &Watertight, ray, None);

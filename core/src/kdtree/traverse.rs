@@ -3,7 +3,7 @@
 use super::node::{KdNode, KdNodeKind};
 use super::{KdTree, T_WIDEN_ABS, TRAVERSAL_STACK_SIZE};
 use crate::aabb::{Aabb, SLAB_FAR_SCALE, SLAB_FAR_SCALE_NEGATIVE, SlabRay, pad_far};
-use crate::bvh::{TraversalStats, TriangleMesh, cull_bound, improves, projection_pad};
+use crate::bvh::{TraversalStats, TriangleMesh, cull_bound, projection_pad, test_run};
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
 
@@ -182,7 +182,7 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> KdTree<N, R> {
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
-        self.triangles(mesh, isect, ray, stats, false)
+        self.traverse(ray, mesh.prepared_intersect(isect, ray)?, stats, false)
     }
 
     /// [`KdTree::any_hit`] over a triangle mesh with the intersector `isect`.
@@ -193,27 +193,7 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> KdTree<N, R> {
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
-        self.triangles(mesh, isect, ray, stats, true)
-    }
-
-    fn triangles<T: TriangleIntersector>(
-        &self,
-        mesh: &TriangleMesh<'_>,
-        isect: &T,
-        ray: &Ray,
-        stats: Option<&mut TraversalStats>,
-        any: bool,
-    ) -> Option<(u32, TriangleHit)> {
-        let pre = isect.prepare(ray)?;
-        self.traverse(
-            ray,
-            |prim, r| {
-                let v = mesh.triangle(prim as usize)?;
-                isect.intersect_prepared(&pre, r, &v).map(|h| (h.t, h))
-            },
-            stats,
-            any,
-        )
+        self.traverse(ray, mesh.prepared_intersect(isect, ray)?, stats, true)
     }
 
     /// Closest hit, or any hit when `any` (module docs of [`super`]).
@@ -275,18 +255,9 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> KdTree<N, R> {
                         let run = refs
                             .get(first..first.saturating_add(count as usize))
                             .unwrap_or(&[]);
-                        for &prim in run {
-                            local.primitives_tested += 1;
-                            let Some((t, h)) = intersect(prim, &cur) else {
-                                continue;
-                            };
-                            if improves(&cur, t, prim, best.as_ref().map(|b| b.0)) {
-                                cur.t_max = t;
-                                best = Some((prim, h));
-                                if any {
-                                    break 'walk;
-                                }
-                            }
+                        let tested = &mut local.primitives_tested;
+                        if test_run(run, &mut intersect, &mut cur, &mut best, tested, any) {
+                            break 'walk;
                         }
                     }
                 }

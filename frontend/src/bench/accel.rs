@@ -13,7 +13,6 @@
 
 use super::bvh::{BRUTE_FORCE_TESTS, INCOHERENT_SEED, TIMED_PASSES, brute_force, interleaved};
 use crate::accel::{VecBvh, VecBvh8, build_binary, build_wide, closest_simd};
-use crate::atomic::write_bytes_atomic;
 use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
 use crate::raysets::{Camera, random_rays};
@@ -93,33 +92,12 @@ struct Built {
 
 /// Runs the benchmark.
 pub fn run(args: &AccelArgs) -> Result<()> {
-    if args.width == 0 {
-        return Err(Error::Usage("--width must be at least 1".into()));
-    }
-    let ray_bytes = std::mem::size_of::<Ray>() as u64;
-    let rays = (args.width as u64)
-        .checked_mul(args.width as u64)
-        .and_then(|p| p.checked_add(args.rays as u64))
-        .and_then(|n| n.checked_mul(ray_bytes));
-    crate::limits::check_memory(
-        &format!("--width {} --rays {}", args.width, args.rays),
-        rays,
-    )?;
-    for mesh in &args.meshes {
-        std::fs::File::open(mesh).map_err(|e| Error::io(mesh, e))?;
-    }
+    super::check_inputs(args.width, args.rays, &args.meshes)?;
     let mut reports = Vec::with_capacity(args.meshes.len());
     for mesh in &args.meshes {
         reports.push(bench(args, mesh)?);
     }
-    if let Some(path) = &args.json {
-        let text = match &reports[..] {
-            [one] => serde_json::to_string_pretty(one),
-            all => serde_json::to_string_pretty(all),
-        }
-        .map_err(|e| Error::encode("the JSON report", e))?;
-        write_bytes_atomic(path, text.as_bytes())?;
-    }
+    super::write_json_reports(args.json.as_deref(), &reports)?;
     for r in &reports {
         print_report(r);
     }

@@ -14,7 +14,6 @@
 mod rivals;
 
 use crate::accel::{any_simd, build_binary, build_binary_parallel, build_wide, closest_simd};
-use crate::atomic::write_bytes_atomic;
 use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
 use crate::raysets::{Camera, random_rays};
@@ -160,24 +159,8 @@ pub struct StructureReport {
 /// Runs the BVH benchmark.
 pub fn run(args: &BvhArgs) -> Result<()> {
     let variant = args.intersector.0;
-    if args.width == 0 {
-        return Err(Error::Usage("--width must be at least 1".into()));
-    }
-    // The two ray sets are held in memory: estimate before generating them.
-    let ray_bytes = std::mem::size_of::<Ray>() as u64;
-    let rays = (args.width as u64)
-        .checked_mul(args.width as u64)
-        .and_then(|p| p.checked_add(args.rays as u64))
-        .and_then(|n| n.checked_mul(ray_bytes));
-    crate::limits::check_memory(
-        &format!("--width {} --rays {}", args.width, args.rays),
-        rays,
-    )?;
-    // Every mesh must be readable before the first one is measured (minutes of work are not
-    // spent on a run that then fails on a misspelt last path).
-    for mesh in &args.meshes {
-        std::fs::File::open(mesh).map_err(|e| Error::io(mesh, e))?;
-    }
+    // The two ray sets are held in memory: estimated, and every mesh opened, before any work.
+    super::check_inputs(args.width, args.rays, &args.meshes)?;
     let mut reports = Vec::with_capacity(args.meshes.len());
     for mesh in &args.meshes {
         struct Bench<'a>(&'a BvhArgs, &'a std::path::Path);
@@ -190,14 +173,7 @@ pub fn run(args: &BvhArgs) -> Result<()> {
         let report = variant.visit(Bench(args, mesh))?;
         reports.push(report);
     }
-    if let Some(path) = &args.json {
-        let text = match &reports[..] {
-            [one] => serde_json::to_string_pretty(one),
-            all => serde_json::to_string_pretty(all),
-        }
-        .map_err(|e| Error::encode("the JSON report", e))?;
-        write_bytes_atomic(path, text.as_bytes())?;
-    }
+    super::write_json_reports(args.json.as_deref(), &reports)?;
     for r in &reports {
         print_report(r);
     }

@@ -4,7 +4,10 @@ pub mod accel;
 pub mod accuracy;
 pub mod bvh;
 
-use crate::error::Result;
+use crate::atomic::write_bytes_atomic;
+use crate::error::{Error, Result};
+use halfray_core::Ray;
+use std::path::{Path, PathBuf};
 
 /// `halfray bench ...`.
 #[derive(clap::Subcommand, Debug, Clone)]
@@ -24,4 +27,47 @@ pub fn run(cmd: &BenchCommand) -> Result<()> {
         BenchCommand::Accel(args) => accel::run(args),
         BenchCommand::Accuracy(args) => accuracy::run(args),
     }
+}
+
+/// The checks `bench bvh` and `bench accel` make before any work: `width` at least 1
+/// ([`Error::Usage`] otherwise); the `width × width` primary and `rays` incoherent rays, held
+/// in memory together, within [`crate::limits::check_memory`]'s budget; and every one of
+/// `meshes` openable ([`Error::Io`] naming the first that is not), so that minutes of work
+/// are not spent on a run that then fails on a misspelt last path.
+///
+/// # Errors
+///
+/// As listed, in that order.
+fn check_inputs(width: usize, rays: usize, meshes: &[PathBuf]) -> Result<()> {
+    if width == 0 {
+        return Err(Error::Usage("--width must be at least 1".into()));
+    }
+    let ray_bytes = std::mem::size_of::<Ray>() as u64;
+    let bytes = (width as u64)
+        .checked_mul(width as u64)
+        .and_then(|p| p.checked_add(rays as u64))
+        .and_then(|n| n.checked_mul(ray_bytes));
+    crate::limits::check_memory(&format!("--width {width} --rays {rays}"), bytes)?;
+    for mesh in meshes {
+        std::fs::File::open(mesh).map_err(|e| Error::io(mesh, e))?;
+    }
+    Ok(())
+}
+
+/// Writes `reports` as pretty JSON to `path` (atomically) when one is given: the report
+/// object itself for one mesh, an array of them for several. Nothing happens without a path.
+///
+/// # Errors
+///
+/// Encoding or writing the file.
+fn write_json_reports<T: serde::Serialize>(path: Option<&Path>, reports: &[T]) -> Result<()> {
+    if let Some(path) = path {
+        let text = match reports {
+            [one] => serde_json::to_string_pretty(one),
+            all => serde_json::to_string_pretty(all),
+        }
+        .map_err(|e| Error::encode("the JSON report", e))?;
+        write_bytes_atomic(path, text.as_bytes())?;
+    }
+    Ok(())
 }

@@ -34,6 +34,23 @@ pub struct Soup {
     pub rays: Vec<Ray>,
 }
 
+impl Soup {
+    /// The soup's vertices and triangles as the failure messages of the `bvh`, `grid` and
+    /// `kdtree` targets print them: `positions …` and, on the next line indented by two
+    /// spaces, `triangles …` (no trailing newline).
+    pub(crate) fn describe_mesh(&self) -> String {
+        format!(
+            "positions {}\n  triangles {:?}",
+            self.positions
+                .iter()
+                .map(|p| fmt_vec3(*p))
+                .collect::<Vec<_>>()
+                .join(", "),
+            self.triangles
+        )
+    }
+}
+
 /// Decodes a `bvh` input (see the module docs).
 pub fn decode(data: &[u8]) -> Soup {
     let mut i = Input::new(data);
@@ -138,13 +155,22 @@ pub fn projection_underflows(mesh: &TriangleMesh<'_>, ray: &Ray, in_tree: &[bool
         .any(|v| super::projection_underflows(ray, &v))
 }
 
-fn usable(b: &Aabb) -> bool {
-    b.is_finite() && b.is_valid()
+/// For each triangle of `mesh`, whether its bounds are usable (finite and valid): the
+/// triangles a BVH or kd-tree holds when `exclude_non_finite` is on, and the first one that
+/// is not is the one a build without it must name.
+pub(crate) fn usable_primitives(mesh: &TriangleMesh<'_>) -> Vec<bool> {
+    (0..mesh.primitive_count())
+        .map(|i| {
+            let b = mesh.primitive_bounds(i);
+            b.is_finite() && b.is_valid()
+        })
+        .collect()
 }
 
 /// Brute force with the BVH's rule: the smallest `t` in the ray's interval, ties to the
-/// smaller primitive index, over the primitives in the tree.
-fn brute<T: TriangleIntersector>(
+/// smaller primitive index, over the primitives in the tree (`in_tree[i]`), shared by the
+/// `bvh`, `grid` and `kdtree` targets.
+pub(crate) fn brute<T: TriangleIntersector>(
     mesh: &TriangleMesh<'_>,
     isect: &T,
     ray: &Ray,
@@ -180,19 +206,8 @@ fn brute<T: TriangleIntersector>(
 pub fn check(s: &Soup) {
     let mesh = TriangleMesh::new(&s.positions, &s.triangles);
     let n = mesh.primitive_count();
-    let ctx = || {
-        format!(
-            "options {:?}\n  positions {}\n  triangles {:?}",
-            s.options,
-            s.positions
-                .iter()
-                .map(|p| fmt_vec3(*p))
-                .collect::<Vec<_>>()
-                .join(", "),
-            s.triangles
-        )
-    };
-    let valid: Vec<bool> = (0..n).map(|i| usable(&mesh.primitive_bounds(i))).collect();
+    let ctx = || format!("options {:?}\n  {}", s.options, s.describe_mesh());
+    let valid = usable_primitives(&mesh);
     let first_bad = valid.iter().position(|&ok| !ok);
 
     // 2. Too-small storage.
@@ -342,20 +357,24 @@ pub struct Oracle<'a, 'm> {
 
 impl Oracle<'_, '_> {
     /// Brute force's closest hit of `isect` on `ray` (see [`brute`]).
-    fn closest<T: TriangleIntersector>(&self, isect: &T, ray: &Ray) -> Option<(u32, TriangleHit)> {
+    pub(crate) fn closest<T: TriangleIntersector>(
+        &self,
+        isect: &T,
+        ray: &Ray,
+    ) -> Option<(u32, TriangleHit)> {
         brute(self.mesh, isect, ray, self.in_tree)
     }
 
     /// `true` where a tree must give brute force's answers exactly: an `exact` intersector
     /// inside its documented domain (`Watertight` docs), with no projection underflowing.
-    fn exact_on(&self, ray: &Ray, exact: bool) -> bool {
+    pub(crate) fn exact_on(&self, ray: &Ray, exact: bool) -> bool {
         exact
             && within_domain(self.mesh, ray, self.in_tree)
             && !projection_underflows(self.mesh, ray, self.in_tree)
     }
 
     /// Asserts that a tree's `hit` is the intersector's own answer for that primitive.
-    fn assert_genuine<T: TriangleIntersector>(
+    pub(crate) fn assert_genuine<T: TriangleIntersector>(
         &self,
         isect: &T,
         ray: &Ray,
@@ -376,7 +395,7 @@ impl Oracle<'_, '_> {
 
     /// Outside the exact domain: the tree's closest hit `got` is no nearer than brute
     /// force's `want`.
-    fn assert_no_nearer(
+    pub(crate) fn assert_no_nearer(
         &self,
         got: Option<(u32, TriangleHit)>,
         want: Option<(u32, TriangleHit)>,
@@ -394,7 +413,7 @@ impl Oracle<'_, '_> {
 
     /// Inside the exact domain: the tree's closest hit `got` is brute force's `want`, and its
     /// any-hit answer `any` finds a hit exactly when brute force does.
-    fn assert_agrees(
+    pub(crate) fn assert_agrees(
         &self,
         (name, tree): (&str, &str),
         got: Option<(u32, TriangleHit)>,
@@ -415,6 +434,41 @@ impl Oracle<'_, '_> {
             ctx()
         );
     }
+
+    /// The checks a structure's closest hit `got` and any hit `any` of `ray` (with
+    /// `isect`) get in the `grid` and `kdtree` targets and for the 8-wide BVH: each is a
+    /// genuine hit of a primitive in the tree with `t` in the ray's interval; then
+    /// [`Oracle::assert_agrees`] where [`Oracle::exact_on`]`(ray, exact)`, else
+    /// [`Oracle::assert_no_nearer`]. `tree` names the structure in failure messages.
+    pub(crate) fn assert_answers<T: TriangleIntersector>(
+        &self,
+        isect: &T,
+        ray: &Ray,
+        exact: bool,
+        tree: &str,
+        got: Option<(u32, TriangleHit)>,
+        any: Option<(u32, TriangleHit)>,
+    ) {
+        let want = self.closest(isect, ray);
+        for &(p, h) in got.iter().chain(any.iter()) {
+            assert!(
+                self.in_tree.get(p as usize) == Some(&true),
+                "{tree}: hit of a primitive not in the tree\n{}",
+                (self.ctx)()
+            );
+            self.assert_genuine(isect, ray, (p, h), &format!("{tree} hit record"));
+            assert!(
+                ray.contains(h.t),
+                "{tree}: t outside the interval\n{}",
+                (self.ctx)()
+            );
+        }
+        if self.exact_on(ray, exact) {
+            self.assert_agrees((isect.name(), tree), got, any, want);
+        } else {
+            self.assert_no_nearer(got, want, tree);
+        }
+    }
 }
 
 /// [`check_ray`]'s properties for the 8-wide tree: closest hit equal to brute force in the
@@ -426,17 +480,9 @@ fn check_wide<T: TriangleIntersector>(
     ray: &Ray,
     exact: bool,
 ) {
-    let want = oracle.closest(isect, ray);
     let got = wide.closest_hit_triangles(isect, ray, None);
     let any = wide.any_hit_triangles(isect, ray, None);
-    for hit in got.iter().chain(any.iter()) {
-        oracle.assert_genuine(isect, ray, *hit, "wide hit record");
-    }
-    if oracle.exact_on(ray, exact) {
-        oracle.assert_agrees((isect.name(), "wide BVH"), got, any, want);
-    } else {
-        oracle.assert_no_nearer(got, want, "wide");
-    }
+    oracle.assert_answers(isect, ray, exact, "wide BVH", got, any);
 }
 
 /// A BVH's closest and any hit on `ray` against the `oracle`'s brute force (exactly, within
@@ -468,16 +514,33 @@ pub fn check_ray<N: AsRef<[BvhNode]>, I: AsRef<[u32]>, T: TriangleIntersector>(
     }
 }
 
+/// The five points the `bvh`, `grid` and `kdtree` seeds are built on: the corners of the
+/// 4 × 4 square in `z = 0`, counter-clockwise from the origin, then the apex `(2, 2, 3)`
+/// above its centre.
+pub(crate) const SEED_POINTS: [Vec3; 5] = [
+    Vec3::new(0.0, 0.0, 0.0),
+    Vec3::new(4.0, 0.0, 0.0),
+    Vec3::new(4.0, 4.0, 0.0),
+    Vec3::new(0.0, 4.0, 0.0),
+    Vec3::new(2.0, 2.0, 3.0),
+];
+
+/// The origin of most of the seeds' aimed rays, above and off to the side of
+/// [`SEED_POINTS`].
+pub(crate) const SEED_ORIGIN: Vec3 = Vec3::new(1.25, -2.5, 7.0);
+
+/// The closed pyramid over [`SEED_POINTS`] as vertex-index bytes: the four sides around
+/// apex 4, then the base split on its diagonal 0–2.
+pub(crate) fn seed_pyramid() -> Vec<[u8; 3]> {
+    (0..4u8)
+        .map(|k| [k, (k + 1) % 4, 4])
+        .chain([[0, 2, 1], [0, 3, 2]])
+        .collect()
+}
+
 pub(crate) fn seeds(s: &mut Vec<Seed>) {
     let t = |name: &str, bytes: Vec<u8>| ("bvh", format!("seed-{name}"), bytes);
-    let quad = [
-        Vec3::new(0.0, 0.0, 0.0),
-        Vec3::new(4.0, 0.0, 0.0),
-        Vec3::new(4.0, 4.0, 0.0),
-        Vec3::new(0.0, 4.0, 0.0),
-        Vec3::new(2.0, 2.0, 3.0),
-    ];
-    let o = Vec3::new(1.25, -2.5, 7.0);
+    let (quad, o) = (SEED_POINTS, SEED_ORIGIN);
     // Two triangles sharing the diagonal; rays at the shared edge, a shared vertex, interior.
     s.push(t(
         "quad-shared-edge",
@@ -489,10 +552,7 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
     ));
     // Pyramid (closed fan around the apex) with rays at the apex and the ridges: the four
     // sides around apex 4, then the base split on its diagonal 0–2.
-    let pyramid: Vec<[u8; 3]> = (0..4u8)
-        .map(|k| [k, (k + 1) % 4, 4])
-        .chain([[0, 2, 1], [0, 3, 2]])
-        .collect();
+    let pyramid = seed_pyramid();
     s.push(t(
         "pyramid",
         bvh::encode_quantized(

@@ -7,13 +7,13 @@
 //! bit 2 [`CellAssignment::Bounds`] (else exact), bits 3–4 `λ` ∈ {default, 0.25, 1, 64},
 //! bit 5 at most 3 cells per axis.
 
-use super::bvh::{Soup, decode, encode_quantized, projection_underflows, within_domain};
-use super::{Enc, Seed, fmt_ray, fmt_vec3};
+use super::bvh::{Oracle, SEED_ORIGIN, SEED_POINTS, Soup, decode, encode_quantized, seed_pyramid};
+use super::{Enc, Seed, fmt_ray};
 use glam::Vec3;
 use halfray_core::bvh::TriangleMesh;
 use halfray_core::grid::{CellAssignment, DEFAULT_LAMBDA, Grid, GridError, GridOptions, GridPlan};
 use halfray_core::ray::Ray;
-use halfray_core::triangle::{MollerTrumbore, TriangleHit, TriangleIntersector, Watertight};
+use halfray_core::triangle::{MollerTrumbore, TriangleIntersector, Watertight};
 
 /// The grid options the flag byte selects (module docs).
 pub fn options(flags: u8) -> GridOptions {
@@ -41,28 +41,6 @@ fn usable(mesh: &TriangleMesh<'_>, i: usize) -> bool {
         .is_some_and(|v| v.iter().all(|p| p.is_finite()))
 }
 
-/// Brute force over the usable triangles: smallest `t` in the interval, ties to the smaller
-/// index.
-fn brute<T: TriangleIntersector>(
-    mesh: &TriangleMesh<'_>,
-    isect: &T,
-    ray: &Ray,
-    live: &[bool],
-) -> Option<(u32, TriangleHit)> {
-    let mut best: Option<(u32, TriangleHit)> = None;
-    for (i, &ok) in live.iter().enumerate() {
-        let Some(v) = mesh.triangle(i).filter(|_| ok) else {
-            continue;
-        };
-        if let Some(h) = isect.intersect(ray, &v)
-            && best.is_none_or(|(_, b)| h.t < b.t)
-        {
-            best = Some((i as u32, h));
-        }
-    }
-    best
-}
-
 type VecGrid = Grid<Vec<u32>, Vec<u32>>;
 
 /// Properties of the grid on one soup:
@@ -81,17 +59,7 @@ type VecGrid = Grid<Vec<u32>, Vec<u32>>;
 pub fn check(s: &Soup, opts: &GridOptions) {
     let mesh = TriangleMesh::new(&s.positions, &s.triangles);
     let n = mesh.len();
-    let ctx = || {
-        format!(
-            "options {opts:?}\n  positions {}\n  triangles {:?}",
-            s.positions
-                .iter()
-                .map(|p| fmt_vec3(*p))
-                .collect::<Vec<_>>()
-                .join(", "),
-            s.triangles
-        )
-    };
+    let ctx = || format!("options {opts:?}\n  {}", s.describe_mesh());
     let live: Vec<bool> = (0..n).map(|i| usable(&mesh, i)).collect();
     let first_bad = live.iter().position(|&ok| !ok);
     // 1. Plan.
@@ -167,17 +135,13 @@ pub fn check(s: &Soup, opts: &GridOptions) {
     // 4. Rays.
     for ray in &s.rays {
         let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
-        let exact = within_domain(&mesh, ray, &live) && !projection_underflows(&mesh, ray, &live);
-        check_ray(&grid, &mesh, &live, &Watertight, ray, exact, &rctx);
-        check_ray(
-            &grid,
-            &mesh,
-            &live,
-            &MollerTrumbore::CLASSIC,
-            ray,
-            false,
-            &rctx,
-        );
+        let oracle = Oracle {
+            mesh: &mesh,
+            in_tree: &live,
+            ctx: &rctx,
+        };
+        check_ray(&grid, &oracle, &Watertight, ray, true);
+        check_ray(&grid, &oracle, &MollerTrumbore::CLASSIC, ray, false);
     }
 }
 
@@ -208,43 +172,19 @@ fn check_layout(grid: &VecGrid, live: &[bool], ctx: &dyn Fn() -> String) {
     assert_eq!(seen, live, "every usable triangle in some cell\n{}", ctx());
 }
 
-/// One ray, one intersector: exact agreement when `exact`, else the weak form.
+/// One ray, one intersector: closest and any hit against brute force
+/// ([`Oracle::assert_answers`]; exact agreement only for an `exact` intersector inside its
+/// documented domain).
 fn check_ray<T: TriangleIntersector>(
     grid: &VecGrid,
-    mesh: &TriangleMesh<'_>,
-    live: &[bool],
+    oracle: &Oracle<'_, '_>,
     isect: &T,
     ray: &Ray,
     exact: bool,
-    ctx: &dyn Fn() -> String,
 ) {
-    let want = brute(mesh, isect, ray, live);
-    let got = grid.closest_hit_triangles(mesh, isect, ray, None);
-    let any = grid.any_hit_triangles(mesh, isect, ray, None);
-    for (p, h) in got.iter().chain(any.iter()) {
-        let v = mesh.triangle(*p as usize).expect("hit triangle exists");
-        assert!(live[*p as usize], "excluded triangle hit\n{}", ctx());
-        assert_eq!(isect.intersect(ray, &v), Some(*h), "genuine\n{}", ctx());
-        assert!(ray.contains(h.t), "t outside\n{}", ctx());
-    }
-    if exact {
-        assert_eq!(
-            got,
-            want,
-            "{}: grid differs from brute force\n{}",
-            isect.name(),
-            ctx()
-        );
-        assert_eq!(any.is_some(), want.is_some(), "any-hit\n{}", ctx());
-    } else if let Some((_, h)) = got {
-        let (_, w) = want.expect("brute force finds every grid hit");
-        assert!(
-            w.t <= h.t,
-            "{}: grid nearer than brute force\n{}",
-            isect.name(),
-            ctx()
-        );
-    }
+    let got = grid.closest_hit_triangles(oracle.mesh, isect, ray, None);
+    let any = grid.any_hit_triangles(oracle.mesh, isect, ray, None);
+    oracle.assert_answers(isect, ray, exact, "grid", got, any);
 }
 
 pub(crate) fn seeds(s: &mut Vec<Seed>) {
@@ -255,14 +195,7 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
     };
     // A 4×4 flat quad pair in z = 0, cut into cells whose planes pass through the shared
     // diagonal's end points: rays at the shared edge, a vertex, and along a cell plane.
-    let quad = [
-        Vec3::new(0.0, 0.0, 0.0),
-        Vec3::new(4.0, 0.0, 0.0),
-        Vec3::new(4.0, 4.0, 0.0),
-        Vec3::new(0.0, 4.0, 0.0),
-        Vec3::new(2.0, 2.0, 3.0),
-    ];
-    let o = Vec3::new(1.25, -2.5, 7.0);
+    let (quad, o) = (SEED_POINTS, SEED_ORIGIN);
     let flat = encode_quantized(
         &quad[..4],
         &[[0, 1, 2], [0, 2, 3]],
@@ -279,10 +212,7 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
         with_flags(flat, 4 | 32),
     ));
     // Closed pyramid (shared edges and the apex), λ = 64: many cells, rays along ridges.
-    let pyramid: Vec<[u8; 3]> = (0..4u8)
-        .map(|k| [k, (k + 1) % 4, 4])
-        .chain([[0, 2, 1], [0, 3, 2]])
-        .collect();
+    let pyramid = seed_pyramid();
     let aims = [
         (o, 4, 4, 0),
         (o, 0, 4, 4),

@@ -6,17 +6,19 @@
 //! [`reference_capacity`] / [`node_capacity`]; bit 3 a depth limit of 2 instead of the
 //! automatic one. So the `bvh` corpus is a valid `kdtree` corpus and back.
 
-use super::bvh::{Soup, decode, encode_quantized, projection_underflows, within_domain};
-use super::{Enc, Seed, fmt_ray, fmt_vec3};
+use super::bvh::{
+    Oracle, SEED_ORIGIN, SEED_POINTS, Soup, decode, encode_quantized, seed_pyramid,
+    usable_primitives,
+};
+use super::{Enc, Seed, fmt_ray};
 use glam::Vec3;
-use halfray_core::aabb::Aabb;
 use halfray_core::bvh::{PrimitiveSource, TriangleMesh};
 use halfray_core::kdtree::{
     KdBuildOptions, KdNode, KdNodeKind, KdRef, KdTree, KdTreeError, MAX_DEPTH, node_capacity,
     reference_capacity,
 };
 use halfray_core::ray::Ray;
-use halfray_core::triangle::{MollerTrumbore, TriangleHit, TriangleIntersector, Watertight};
+use halfray_core::triangle::{MollerTrumbore, TriangleIntersector, Watertight};
 
 type VecKd = KdTree<Vec<KdNode>, Vec<u32>>;
 
@@ -24,32 +26,6 @@ type VecKd = KdTree<Vec<KdNode>, Vec<u32>>;
 pub fn kdtree(data: &[u8]) {
     let fl = data.first().copied().unwrap_or(0);
     check(&decode(data), fl & 4 != 0, fl & 8 != 0);
-}
-
-fn usable(b: &Aabb) -> bool {
-    b.is_finite() && b.is_valid()
-}
-
-/// Brute force: the smallest `t` in the interval, ties to the smaller index, over the
-/// primitives in the tree.
-fn brute<T: TriangleIntersector>(
-    mesh: &TriangleMesh<'_>,
-    isect: &T,
-    ray: &Ray,
-    in_tree: &[bool],
-) -> Option<(u32, TriangleHit)> {
-    let mut best: Option<(u32, TriangleHit)> = None;
-    for (i, &live) in in_tree.iter().enumerate() {
-        let Some(v) = mesh.triangle(i).filter(|_| live) else {
-            continue;
-        };
-        if let Some(h) = isect.intersect(ray, &v)
-            && best.is_none_or(|(_, b)| h.t < b.t)
-        {
-            best = Some((i as u32, h));
-        }
-    }
-    best
 }
 
 /// Properties of the kd-tree on one soup:
@@ -71,18 +47,8 @@ pub fn check(s: &Soup, tight: bool, shallow: bool) {
         max_depth: if shallow { 2 } else { 0 },
         ..KdBuildOptions::default()
     };
-    let ctx = || {
-        format!(
-            "options {options:?} tight {tight}\n  positions {}\n  triangles {:?}",
-            s.positions
-                .iter()
-                .map(|p| fmt_vec3(*p))
-                .collect::<Vec<_>>()
-                .join(", "),
-            s.triangles
-        )
-    };
-    let valid: Vec<bool> = (0..n).map(|i| usable(&mesh.primitive_bounds(i))).collect();
+    let ctx = || format!("options {options:?} tight {tight}\n  {}", s.describe_mesh());
+    let valid = usable_primitives(&mesh);
     let first_bad = valid.iter().position(|&ok| !ok);
 
     // 1. Too-small storage.
@@ -159,18 +125,13 @@ pub fn check(s: &Soup, tight: bool, shallow: bool) {
     // 3. Rays.
     for ray in &s.rays {
         let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
-        let exact =
-            within_domain(&mesh, ray, &in_tree) && !projection_underflows(&mesh, ray, &in_tree);
-        check_ray(&kd, &mesh, &in_tree, &Watertight, ray, exact, &rctx);
-        check_ray(
-            &kd,
-            &mesh,
-            &in_tree,
-            &MollerTrumbore::CLASSIC,
-            ray,
-            false,
-            &rctx,
-        );
+        let oracle = Oracle {
+            mesh: &mesh,
+            in_tree: &in_tree,
+            ctx: &rctx,
+        };
+        check_ray(&kd, &oracle, &Watertight, ray, true);
+        check_ray(&kd, &oracle, &MollerTrumbore::CLASSIC, ray, false);
     }
 }
 
@@ -208,77 +169,27 @@ fn check_structure(
     in_tree
 }
 
-/// The tree's closest and any hit on `ray` against brute force: exactly when `exact`,
-/// otherwise a genuine hit no nearer than brute force's.
+/// One ray, one intersector: closest and any hit against brute force
+/// ([`Oracle::assert_answers`]; exact agreement only for an `exact` intersector inside its
+/// documented domain).
 fn check_ray<T: TriangleIntersector>(
     kd: &VecKd,
-    mesh: &TriangleMesh<'_>,
-    in_tree: &[bool],
+    oracle: &Oracle<'_, '_>,
     isect: &T,
     ray: &Ray,
     exact: bool,
-    ctx: &dyn Fn() -> String,
 ) {
-    let want = brute(mesh, isect, ray, in_tree);
-    let got = kd.closest_hit_triangles(mesh, isect, ray, None);
-    let any = kd.any_hit_triangles(mesh, isect, ray, None);
-    for &(p, h) in got.iter().chain(any.iter()) {
-        let v = mesh.triangle(p as usize).expect("hit primitive exists");
-        assert_eq!(
-            isect.intersect(ray, &v),
-            Some(h),
-            "{}: kd-tree hit record is not the intersector's\n{}",
-            isect.name(),
-            ctx()
-        );
-        assert!(
-            in_tree[p as usize],
-            "hit of a primitive not in the tree\n{}",
-            ctx()
-        );
-    }
-    if exact {
-        assert_eq!(
-            got,
-            want,
-            "{}: kd-tree closest hit differs from brute force\n{}",
-            isect.name(),
-            ctx()
-        );
-        assert_eq!(
-            any.is_some(),
-            want.is_some(),
-            "{}: any-hit {any:?} vs brute force {want:?}\n{}",
-            isect.name(),
-            ctx()
-        );
-    } else if let Some((_, h)) = got {
-        let (_, w) = want.expect("brute force finds every kd-tree hit");
-        assert!(
-            w.t <= h.t,
-            "{}: nearer than brute force\n{}",
-            isect.name(),
-            ctx()
-        );
-    }
+    let got = kd.closest_hit_triangles(oracle.mesh, isect, ray, None);
+    let any = kd.any_hit_triangles(oracle.mesh, isect, ray, None);
+    oracle.assert_answers(isect, ray, exact, "kd-tree", got, any);
 }
 
 pub(crate) fn seeds(s: &mut Vec<Seed>) {
     let t = |name: &str, bytes: Vec<u8>| ("kdtree", format!("seed-{name}"), bytes);
-    let quad = [
-        Vec3::new(0.0, 0.0, 0.0),
-        Vec3::new(4.0, 0.0, 0.0),
-        Vec3::new(4.0, 4.0, 0.0),
-        Vec3::new(0.0, 4.0, 0.0),
-        Vec3::new(2.0, 2.0, 3.0),
-    ];
-    let o = Vec3::new(1.25, -2.5, 7.0);
+    let (quad, o) = (SEED_POINTS, SEED_ORIGIN);
     // Pyramid (closed fan around the apex) with rays at the apex, the ridges and the base
     // diagonal.
-    let pyramid: Vec<[u8; 3]> = (0..4u8)
-        .map(|k| [k, (k + 1) % 4, 4])
-        .chain([[0, 2, 1], [0, 3, 2]])
-        .collect();
+    let pyramid = seed_pyramid();
     let aims = [
         (o, 4, 4, 0),
         (o, 0, 4, 4),

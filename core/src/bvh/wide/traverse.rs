@@ -5,7 +5,7 @@ use super::{WideBvh, add_stats};
 use crate::aabb::SlabRay;
 use crate::bvh::padded_ray::PaddedRay;
 use crate::bvh::stats::TraversalStats;
-use crate::bvh::{cull_bound, improves, projection_pad};
+use crate::bvh::{cull_bound, projection_pad, take_if_better};
 use crate::ray::Ray;
 use crate::simd;
 use crate::simd::level::{Portable, SimdLevel, order_key};
@@ -521,10 +521,8 @@ where
                             let Some((t, h)) = leaf.intersect(prim, &tri.vertices(), &cur) else {
                                 continue;
                             };
-                            if improves(&cur, t, prim, best.as_ref().map(|b| b.0)) {
-                                cur.t_max = t;
+                            if take_if_better(&mut cur, &mut best, prim, t, h) {
                                 bound = cull_bound(t);
-                                best = Some((prim, h));
                                 if ANY {
                                     break 'walk;
                                 }
