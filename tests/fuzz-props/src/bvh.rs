@@ -11,6 +11,8 @@
 
 use super::*;
 use super::{Enc, Input, fmt_ray, fmt_vec3};
+pub use crate::tree_oracle::Oracle;
+pub(crate) use crate::tree_oracle::usable_primitives;
 use glam::Vec3;
 use halfray_core::aabb::Aabb;
 use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, group_capacity};
@@ -19,7 +21,7 @@ use halfray_core::bvh::{
     node_capacity,
 };
 use halfray_core::ray::Ray;
-use halfray_core::triangle::{MollerTrumbore, TriangleHit, TriangleIntersector, Watertight};
+use halfray_core::triangle::{MollerTrumbore, TriangleIntersector, Watertight};
 
 /// The decoded input.
 #[derive(Clone, Debug)]
@@ -153,41 +155,6 @@ pub fn projection_underflows(mesh: &TriangleMesh<'_>, ray: &Ray, in_tree: &[bool
         .filter(|&i| in_tree[i])
         .filter_map(|i| mesh.triangle(i))
         .any(|v| super::projection_underflows(ray, &v))
-}
-
-/// For each triangle of `mesh`, whether its bounds are usable (finite and valid): the
-/// triangles a BVH or kd-tree holds when `exclude_non_finite` is on, and the first one that
-/// is not is the one a build without it must name.
-pub(crate) fn usable_primitives(mesh: &TriangleMesh<'_>) -> Vec<bool> {
-    (0..mesh.primitive_count())
-        .map(|i| {
-            let b = mesh.primitive_bounds(i);
-            b.is_finite() && b.is_valid()
-        })
-        .collect()
-}
-
-/// Brute force with the BVH's rule: the smallest `t` in the ray's interval, ties to the
-/// smaller primitive index, over the primitives in the tree (`in_tree[i]`), shared by the
-/// `bvh`, `grid` and `kdtree` targets.
-pub(crate) fn brute<T: TriangleIntersector>(
-    mesh: &TriangleMesh<'_>,
-    isect: &T,
-    ray: &Ray,
-    in_tree: &[bool],
-) -> Option<(u32, TriangleHit)> {
-    let mut best: Option<(u32, TriangleHit)> = None;
-    for (i, &live) in in_tree.iter().enumerate() {
-        let Some(v) = mesh.triangle(i).filter(|_| live) else {
-            continue;
-        };
-        if let Some(h) = isect.intersect(ray, &v)
-            && best.is_none_or(|(_, b)| h.t < b.t)
-        {
-            best = Some((i as u32, h));
-        }
-    }
-    best
 }
 
 /// Properties of the BVH on one soup:
@@ -341,133 +308,6 @@ pub fn check(s: &Soup) {
             "query_box({q:?}) differs from brute force\n{}",
             rctx()
         );
-    }
-}
-
-/// What a tree's answers on one ray are checked against: brute force over the primitives
-/// `in_tree` of `mesh`.
-pub struct Oracle<'a, 'm> {
-    /// The triangles.
-    pub mesh: &'a TriangleMesh<'m>,
-    /// Which primitives the tree holds.
-    pub in_tree: &'a [bool],
-    /// The case (ray and input), for failure messages.
-    pub ctx: &'a dyn Fn() -> String,
-}
-
-impl Oracle<'_, '_> {
-    /// Brute force's closest hit of `isect` on `ray` (see [`brute`]).
-    pub(crate) fn closest<T: TriangleIntersector>(
-        &self,
-        isect: &T,
-        ray: &Ray,
-    ) -> Option<(u32, TriangleHit)> {
-        brute(self.mesh, isect, ray, self.in_tree)
-    }
-
-    /// `true` where a tree must give brute force's answers exactly: an `exact` intersector
-    /// inside its documented domain (`Watertight` docs), with no projection underflowing.
-    pub(crate) fn exact_on(&self, ray: &Ray, exact: bool) -> bool {
-        exact
-            && within_domain(self.mesh, ray, self.in_tree)
-            && !projection_underflows(self.mesh, ray, self.in_tree)
-    }
-
-    /// Asserts that a tree's `hit` is the intersector's own answer for that primitive.
-    pub(crate) fn assert_genuine<T: TriangleIntersector>(
-        &self,
-        isect: &T,
-        ray: &Ray,
-        (p, h): (u32, TriangleHit),
-        what: &str,
-    ) {
-        let v = self
-            .mesh
-            .triangle(p as usize)
-            .expect("hit primitive exists");
-        assert_eq!(
-            isect.intersect(ray, &v),
-            Some(h),
-            "{what}\n{}",
-            (self.ctx)()
-        );
-    }
-
-    /// Outside the exact domain: the tree's closest hit `got` is no nearer than brute
-    /// force's `want`.
-    pub(crate) fn assert_no_nearer(
-        &self,
-        got: Option<(u32, TriangleHit)>,
-        want: Option<(u32, TriangleHit)>,
-        tree: &str,
-    ) {
-        if let Some((_, h)) = got {
-            let (_, w) = want.expect("brute force finds every BVH hit");
-            assert!(
-                w.t <= h.t,
-                "{tree}: nearer than brute force\n{}",
-                (self.ctx)()
-            );
-        }
-    }
-
-    /// Inside the exact domain: the tree's closest hit `got` is brute force's `want`, and its
-    /// any-hit answer `any` finds a hit exactly when brute force does.
-    pub(crate) fn assert_agrees(
-        &self,
-        (name, tree): (&str, &str),
-        got: Option<(u32, TriangleHit)>,
-        any: Option<(u32, TriangleHit)>,
-        want: Option<(u32, TriangleHit)>,
-    ) {
-        let ctx = self.ctx;
-        assert_eq!(
-            got,
-            want,
-            "{name}: {tree} closest hit differs from brute force\n{}",
-            ctx()
-        );
-        assert_eq!(
-            any.is_some(),
-            want.is_some(),
-            "{name}: {tree} any-hit {any:?} disagrees with brute force {want:?}\n{}",
-            ctx()
-        );
-    }
-
-    /// The checks a structure's closest hit `got` and any hit `any` of `ray` (with
-    /// `isect`) get in the `grid` and `kdtree` targets and for the 8-wide BVH: each is a
-    /// genuine hit of a primitive in the tree with `t` in the ray's interval; then
-    /// [`Oracle::assert_agrees`] where [`Oracle::exact_on`]`(ray, exact)`, else
-    /// [`Oracle::assert_no_nearer`]. `tree` names the structure in failure messages.
-    pub(crate) fn assert_answers<T: TriangleIntersector>(
-        &self,
-        isect: &T,
-        ray: &Ray,
-        exact: bool,
-        tree: &str,
-        got: Option<(u32, TriangleHit)>,
-        any: Option<(u32, TriangleHit)>,
-    ) {
-        let want = self.closest(isect, ray);
-        for &(p, h) in got.iter().chain(any.iter()) {
-            assert!(
-                self.in_tree.get(p as usize) == Some(&true),
-                "{tree}: hit of a primitive not in the tree\n{}",
-                (self.ctx)()
-            );
-            self.assert_genuine(isect, ray, (p, h), &format!("{tree} hit record"));
-            assert!(
-                ray.contains(h.t),
-                "{tree}: t outside the interval\n{}",
-                (self.ctx)()
-            );
-        }
-        if self.exact_on(ray, exact) {
-            self.assert_agrees((isect.name(), tree), got, any, want);
-        } else {
-            self.assert_no_nearer(got, want, tree);
-        }
     }
 }
 

@@ -275,6 +275,8 @@ pub use watertight_bound::*;
 
 pub mod bvh;
 
+pub mod tree_oracle;
+
 pub mod bvh_load;
 
 pub mod collapse_oracle;
