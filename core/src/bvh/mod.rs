@@ -208,7 +208,9 @@ pub(crate) fn take_if_better<H>(
 /// `*tested` per primitive tested, and offers each hit to the search ([`take_if_better`]).
 /// Returns `true` when `any` and a hit was taken: the any-hit query is done and the rest of
 /// `run` is left untested. The leaf (or cell) loop of the closure-based queries of
-/// [`Bvh`], [`crate::kdtree::KdTree`] and [`crate::grid::Grid`].
+/// [`crate::kdtree::KdTree`] and [`crate::grid::Grid`]. ([`Bvh`] keeps its own loop: through
+/// this one the Cortex-M4F query image of `examples/mcu` grew from 8 168 to 8 208 bytes, past
+/// its 8 KiB budget.)
 #[inline(always)]
 pub(crate) fn test_run<H>(
     run: &[u32],

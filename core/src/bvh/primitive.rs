@@ -117,13 +117,13 @@ impl<'a> TriangleMesh<'a> {
         self.triangles.is_empty()
     }
 
-    /// The `intersect` closure that the closure-based queries of [`super::Bvh`],
-    /// [`crate::grid::Grid`] and [`crate::kdtree::KdTree`] take, for this mesh and the
+    /// The `intersect` closure that the closure-based queries of [`crate::grid::Grid`] and
+    /// [`crate::kdtree::KdTree`] take (and [`super::Bvh`]'s, written out there for the
+    /// microcontroller image's size), for this mesh and the
     /// intersector `isect`: `isect` is prepared once for `ray` (`None`, so no query, when it
     /// rejects the ray), and the closure tests triangle `prim` against the query's current
     /// ray with that preparation, returning `(t, hit)` as those queries expect (`None` for a
-    /// miss or a triangle index out of range). The `*_triangles` queries of all three
-    /// structures are this closure passed to their closure-based walk.
+    /// miss or a triangle index out of range).
     #[inline]
     pub(crate) fn prepared_intersect<'q, T: TriangleIntersector>(
         &'q self,

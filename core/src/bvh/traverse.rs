@@ -4,7 +4,7 @@ use super::node::BvhNode;
 use super::padded_ray::PaddedRay;
 use super::primitive::TriangleMesh;
 use super::stats::TraversalStats;
-use super::{Bvh, BvhError, TRAVERSAL_STACK_SIZE, cull_bound, projection_pad, test_run};
+use super::{Bvh, BvhError, TRAVERSAL_STACK_SIZE, cull_bound, improves, projection_pad};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
@@ -234,10 +234,19 @@ where
         stats: Option<&mut TraversalStats>,
         any: bool,
     ) -> Result<Option<(u32, TriangleHit)>, BvhError> {
-        let Some(intersect) = mesh.prepared_intersect(isect, ray) else {
+        let Some(pre) = isect.prepare(ray) else {
             return Ok(None);
         };
-        self.traverse(stack, ray, intersect, stats, any)
+        self.traverse(
+            stack,
+            ray,
+            |prim, r| {
+                let v = mesh.triangle(prim as usize)?;
+                isect.intersect_prepared(&pre, r, &v).map(|h| (h.t, h))
+            },
+            stats,
+            any,
+        )
     }
 
     /// Closest hit, or any hit when `any`, on `stack`. The general node test (division for
@@ -279,9 +288,18 @@ where
                 let prims = indices
                     .get(first..first.saturating_add(count as usize))
                     .unwrap_or(&[]);
-                let tested = &mut local.primitives_tested;
-                if test_run(prims, &mut intersect, &mut cur, &mut best, tested, any) {
-                    break 'walk;
+                for &prim in prims {
+                    local.primitives_tested += 1;
+                    let Some((t, h)) = intersect(prim, &cur) else {
+                        continue;
+                    };
+                    if improves(&cur, t, prim, best.as_ref().map(|b| b.0)) {
+                        cur.t_max = t;
+                        best = Some((prim, h));
+                        if any {
+                            break 'walk;
+                        }
+                    }
                 }
             } else {
                 let bound = cull_bound(cur.t_max);
