@@ -54,6 +54,7 @@ pub mod hit;
 pub mod kdtree;
 pub mod plane;
 pub mod polygon;
+pub mod predicates;
 pub mod quadric;
 pub mod ray;
 #[allow(unsafe_code)]

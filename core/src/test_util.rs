@@ -3,7 +3,7 @@
 use crate::bvh::TriangleMesh;
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector, Watertight};
-use glam::Vec3;
+use glam::{Vec3, vec3};
 use std::vec::Vec;
 
 /// A 64-bit LCG (Knuth's MMIX constants) giving `f32` in `[0, 1)` with 24 random bits.
@@ -12,6 +12,12 @@ pub fn lcg(state: &mut u64) -> f32 {
         .wrapping_mul(6364136223846793005)
         .wrapping_add(1442695040888963407);
     ((*state >> 40) as f32) / ((1u64 << 24) as f32)
+}
+
+/// A point with integer coordinates drawn uniformly from `[-n, n]` (`n` a whole number).
+pub fn grid_point(s: &mut u64, n: f32) -> Vec3 {
+    let mut g = || (lcg(s) * (2.0 * n + 1.0)).floor() - n;
+    vec3(g(), g(), g())
 }
 
 /// A random unit vector (rejection sampling in the unit ball).

@@ -38,21 +38,19 @@
 mod body;
 mod distance;
 mod error;
-mod expansion;
 mod nearest;
 mod pairs;
-mod predicates;
 mod tri_tri;
 
 #[cfg(test)]
 mod tests;
 
+pub use crate::predicates::{ORIENT2D_FILTER_REL, ORIENT3D_FILTER_REL, orient2d, orient3d};
 pub use body::{Body, PLACED_BOX_PAD_REL};
 pub use distance::{DISTANCE_ERR_REL, triangle_distance};
 pub use error::CollideError;
 pub use nearest::{Closest, min_distance};
 pub use pairs::{colliding_pairs, first_contact};
-pub use predicates::{ORIENT2D_FILTER_REL, ORIENT3D_FILTER_REL, orient2d, orient3d};
 pub use tri_tri::{is_degenerate, triangles_intersect};
 
 /// Entries of the fixed node-pair stack of every query: `2·MAX_DEPTH` (module docs), 8 bytes

@@ -3,87 +3,18 @@
 //! expected answers, distances with exact expected values, and the traversal against brute
 //! force on small scenes.
 
-use super::expansion::{Expansion, two_product};
-use super::predicates::orient3d_exact;
 use super::tri_tri::segment_triangle;
 use super::*;
 use crate::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
-use crate::test_util::lcg;
+use crate::test_util::{grid_point, lcg};
 use crate::transform::Transform;
 use glam::{Vec3, vec3};
 use std::vec;
 use std::vec::Vec;
 
-fn det3_i64(a: [i64; 3], b: [i64; 3], c: [i64; 3], x: [i64; 3]) -> i64 {
-    let u = [a[0] - c[0], a[1] - c[1], a[2] - c[2]];
-    let v = [b[0] - c[0], b[1] - c[1], b[2] - c[2]];
-    let w = [x[0] - c[0], x[1] - c[1], x[2] - c[2]];
-    u[0] * (v[1] * w[2] - v[2] * w[1])
-        + u[1] * (v[2] * w[0] - v[0] * w[2])
-        + u[2] * (v[0] * w[1] - v[1] * w[0])
-}
-
-fn grid_point(s: &mut u64, n: f32) -> Vec3 {
-    let mut g = || (lcg(s) * (2.0 * n + 1.0)).floor() - n;
-    vec3(g(), g(), g())
-}
-
+/// `is_degenerate` decides collinearity exactly: a point one ulp off the line is not.
 #[test]
-fn expansion_products_are_exact() {
-    // (1 + 2⁻³⁰)² = 1 + 2⁻²⁹ + 2⁻⁶⁰: the last term is lost in one f64 product.
-    let x = 1.0 + 2f64.powi(-30);
-    let (hi, lo) = two_product(x, x);
-    assert_eq!(hi, 1.0 + 2f64.powi(-29));
-    assert_eq!(lo, 2f64.powi(-60));
-    let mut e = Expansion::<8>::ZERO;
-    e.add_product(&[x], &[x], 1.0);
-    e.grow(-1.0);
-    e.grow(-2f64.powi(-29));
-    assert_eq!(e.components(), &[2f64.powi(-60)]);
-    e.grow(-2f64.powi(-60));
-    assert_eq!(e.sign(), 0);
-    assert!(!e.overflowed());
-}
-
-/// `orient3d` equals the integer determinant on small grids (many exact zeros, which the
-/// filter cannot decide), and its filtered and exact paths agree on random points.
-#[test]
-fn orient3d_matches_integer_determinant() {
-    let mut s = 5u64;
-    let mut zeros = 0;
-    for _ in 0..20_000 {
-        let p = [(); 4].map(|_| grid_point(&mut s, 3.0));
-        let i = p.map(|v| [v.x as i64, v.y as i64, v.z as i64]);
-        let want = det3_i64(i[0], i[1], i[2], i[3]).signum() as i32;
-        zeros += usize::from(want == 0);
-        assert_eq!(orient3d(p[0], p[1], p[2], p[3]), want, "{p:?}");
-        assert_eq!(orient3d_exact(p[0], p[1], p[2], p[3]), want, "{p:?}");
-    }
-    assert!(zeros > 1000, "{zeros}");
-    for _ in 0..20_000 {
-        let p =
-            [(); 4].map(|_| vec3(lcg(&mut s) - 0.5, lcg(&mut s) - 0.5, lcg(&mut s) - 0.5) * 1.0e3);
-        assert_eq!(
-            orient3d(p[0], p[1], p[2], p[3]),
-            orient3d_exact(p[0], p[1], p[2], p[3])
-        );
-    }
-}
-
-/// Points on the plane `z = 0` with coordinates spanning 60 orders of magnitude, and a
-/// fourth point `z = ±1e-38` off it: the `f64` evaluation cannot see it (the differences are
-/// not even exact), the exact path must.
-#[test]
-fn orient3d_is_exact_across_magnitudes() {
-    let a = vec3(1.0e20, 3.0e-7, 0.0);
-    let b = vec3(-2.0e5, 1.0e20, 0.0);
-    let c = vec3(1.0e-30, 1.0e-25, 0.0);
-    // (a − c) × (b − c) has z ≈ 1e40 > 0: the normal points to +z.
-    for (z, want) in [(1.0e-38f32, 1), (-1.0e-38, -1), (0.0, 0), (-0.0, 0)] {
-        let x = vec3(7.0e10, -3.0e-3, z);
-        assert_eq!(orient3d(a, b, c, x), want, "z = {z:e}");
-    }
-    // Collinear-looking but not: x on the line through a and c, moved by one ulp.
+fn is_degenerate_is_exact() {
     let (p, q) = (vec3(1.0, 1.0, 1.0), vec3(3.0, 3.0, 3.0));
     let r = vec3(2.0, 2.0, f32::from_bits(2.0f32.to_bits() + 1));
     assert_eq!(orient2d(p, q, r, 0, 1), 0);

@@ -20,7 +20,7 @@
 //!   degenerate ([`segment_segment`]).
 //! * Non-finite vertices: never intersecting (the BVH leaves such triangles out anyway).
 
-use super::predicates::{orient2d, orient3d};
+use crate::predicates::{orient2d, orient3d};
 use glam::Vec3;
 
 /// The axis pairs `(i, j)` of the three axis projections (dropping `z`, `x`, `y`).

@@ -253,12 +253,12 @@ pub fn projection_axes(d: Vec3) -> [usize; 3] {
     [kx ^ flip, ky ^ flip, kz]
 }
 
-/// `true` when the triangle has exactly zero area, or the ray lies exactly in its plane, as
-/// decided in `f64` from the `f32` inputs: `n = (v1 − v0) × (v2 − v0)` and `d·n` are evaluated
-/// in `f64`, which is exact whenever the coordinate differences and their products fit in 53
-/// bits (every exactly collinear or coplanar configuration of moderately ranged `f32` data) and
-/// otherwise off by ~2⁻⁵⁰ relative, never by enough to call a clearly non-degenerate case
-/// degenerate.
+/// `true` when the triangle has exactly zero area, or the ray's direction lies exactly in its
+/// plane: the exact sign of `d·((v1 − v0) × (v2 − v0))` of the `f32` inputs is zero
+/// ([`crate::predicates::orient_direction`]: an `f64` evaluation with a forward error filter,
+/// exact expansions when the filter cannot decide). A plain `f64` evaluation would not do:
+/// for vertices spanning more than `2²⁹` in one coordinate the differences round, and a
+/// component of the normal can cancel to zero for a triangle that is not degenerate.
 ///
 /// Why the watertight test needs it: its shear is rounded to `f32`, which can turn the exact
 /// projection of such a triangle (a segment) into a thin sliver with a non-zero determinant,
@@ -266,8 +266,7 @@ pub fn projection_axes(d: Vec3) -> [usize; 3] {
 /// passed the edge tests, so it costs nothing on misses.
 #[inline]
 pub(crate) fn degenerate_or_coplanar(ray: &Ray, v: &[Vec3; 3]) -> bool {
-    let (n, _) = normal_f64(v);
-    n == glam::DVec3::ZERO || ray.direction.as_dvec3().dot(n) == 0.0
+    crate::predicates::orient_direction(v[1], v[2], v[0], ray.direction) == 0
 }
 
 /// The (unnormalised) normal `(v1 − v0) × (v2 − v0)` in `f64`, computed from the vertex

@@ -238,7 +238,10 @@ const AGREE_REL: f64 = 1.0 / 1_048_576.0;
 ///   bound `γ₈·(|v0 − o|·N + |t|·|d|·N)/|d·n|`, `N = |v1 − v0| × |v2 − v0|` taken with
 ///   absolute values (the rounding of the `f64` differences, the cross and dot products).
 ///
-/// `None` for a degenerate triangle or a ray in its plane (`n = 0` or `d·n = 0`).
+/// `None` for a degenerate triangle or a ray in its plane, decided exactly
+/// ([`super::degenerate_or_coplanar`]). When the `f64` plane form cannot be evaluated although
+/// the exact `d·n` is not zero (its `f64` normal cancelled: vertices spanning more than `2²⁹`),
+/// the sheared form is the answer.
 // Only hits get here: kept out of line so the miss path (the edge tests) stays small.
 #[inline(never)]
 fn hit_t(
@@ -251,18 +254,21 @@ fn hit_t(
     v: &[Vec3; 3],
 ) -> Option<f64> {
     let (x, y, z) = sheared;
+    if super::degenerate_or_coplanar(ray, v) {
+        return None;
+    }
+    let t_sheared =
+        (edges[0] * f64::from(z[0]) + edges[1] * f64::from(z[1]) + edges[2] * f64::from(z[2]))
+            / det;
     let (n, nn) = super::normal_f64(v);
     let d = ray.direction.as_dvec3();
     let dn = d.dot(n);
     if n == DVec3::ZERO || dn == 0.0 {
-        return None;
+        return Some(t_sheared);
     }
     let w = v[0].as_dvec3() - ray.origin.as_dvec3();
     let t_plane = w.dot(n) / dn;
     let err_plane = gamma_f64(8) * (w.abs().dot(nn) + t_plane.abs() * d.abs().dot(nn)) / dn.abs();
-    let t_sheared =
-        (edges[0] * f64::from(z[0]) + edges[1] * f64::from(z[1]) + edges[2] * f64::from(z[2]))
-            / det;
     let max_abs_z = f64::from(z[0].abs().max(z[1].abs()).max(z[2].abs()));
     // The plane crossing must lie in the triangle's box (up to rounding). If it does not, the
     // edge tests decided "inside" within the projection's rounding while the exact line

@@ -1,7 +1,7 @@
 //! Unit tests of `watertight`.
 
 use super::*;
-use crate::triangle::TriangleVariant;
+use crate::triangle::{F64Reference, TriangleVariant};
 
 #[test]
 fn shared_edge_of_two_triangles_is_closed() {
@@ -240,4 +240,42 @@ fn crossing_sign_keeps_a_closed_mesh_closed_through_every_edge_and_vertex() {
     );
     assert_eq!(sum, 0);
     assert!(counted == 0 || counted == 2);
+}
+
+/// A sliver spanning 10⁸ in `z` and `7·10⁻²⁴` in `x`, nearly parallel to a ray along `−z`
+/// (the `ray_triangle` regression `crash-bf27ce68-underflowing-edge-product-miss`): the `f64`
+/// normal from any base vertex has `z = 0` (`0.347 + 6.6·10⁻²⁴` rounds to `0.347`), so the
+/// plane form cannot be evaluated, but the triangle is not degenerate and the exact sheared
+/// edge functions `(1.6·10⁻⁵⁸, 1.3·10⁻²⁴, 8.4·10⁻³⁶)` share one sign: a hit. `t` against the
+/// independent `f64` reference.
+#[test]
+fn hit_where_the_f64_normal_cancels() {
+    let ray = Ray::new(
+        Vec3::new(0.0, f32::from_bits(0x0600_0000), 1.0),
+        Vec3::new(-0.0, -0.0, -1.0),
+    );
+    let v = [
+        Vec3::new(
+            f32::from_bits(0x3eb1_b1b1),
+            f32::from_bits(0x3e4c_4fcd),
+            f32::from_bits(0x3f80_0045),
+        ),
+        Vec3::new(-0.0, 0.0, f32::from_bits(0x80)),
+        Vec3::new(
+            f32::from_bits(0x9900_0000),
+            0.0,
+            f32::from_bits(0x4ccc_9500),
+        ),
+    ];
+    let n64 = (v[1] - v[0]).as_dvec3().cross((v[2] - v[0]).as_dvec3());
+    assert_eq!(n64.z, 0.0, "the case needs a cancelled f64 normal");
+    let (t_ref, _) = F64Reference::solve(&ray, &v).expect("the reference hits");
+    for tri in [v, [v[1], v[2], v[0]], [v[0], v[2], v[1]]] {
+        let hit = Watertight.intersect(&ray, &tri).expect("a hit");
+        assert!(
+            (f64::from(hit.t) - t_ref).abs() <= 1e-6 * t_ref,
+            "{} vs {t_ref}",
+            hit.t
+        );
+    }
 }

@@ -1,10 +1,14 @@
-//! Exact orientation predicates on `f32` points: a fast `f64` evaluation accepted when it
+//! Exact orientation predicates on `f32` points and directions: a fast `f64` evaluation accepted when it
 //! clears a forward error bound ([`ORIENT3D_FILTER_REL`], [`ORIENT2D_FILTER_REL`]), and an
-//! exact expansion evaluation ([`super::expansion`]) otherwise. The returned sign is the
+//! exact expansion evaluation ([`expansion`]) otherwise. The returned sign is the
 //! **exact** sign of the determinant of the `f32` inputs, for every finite input.
 
-use super::expansion::{Expansion, diff};
+mod expansion;
+
 use crate::float::gamma_f64;
+#[cfg(test)]
+pub(crate) use expansion::two_product;
+pub(crate) use expansion::{Expansion, diff};
 use glam::Vec3;
 
 /// Relative error bound of the `f64` evaluation of the 3×3 orientation determinant
@@ -31,14 +35,32 @@ pub const ORIENT2D_FILTER_REL: f64 = gamma_f64(8);
 /// non-finite input (callers reject those first).
 #[must_use]
 pub fn orient3d(a: Vec3, b: Vec3, c: Vec3, x: Vec3) -> i32 {
-    let d = |p: Vec3| {
-        [
-            f64::from(p.x) - f64::from(c.x),
-            f64::from(p.y) - f64::from(c.y),
-            f64::from(p.z) - f64::from(c.z),
-        ]
-    };
-    let (u, v, w) = (d(a), d(b), d(x));
+    let d = |p: Vec3| (p.as_dvec3() - c.as_dvec3()).to_array();
+    det3_filtered([d(a), d(b), d(x)]).unwrap_or_else(|| orient3d_exact(a, b, c, x))
+}
+
+/// The sign (`1`, `−1`, `0`) of `det[a − c, b − c, dir] = dir · ((a − c) × (b − c))`, exactly:
+/// positive when the direction `dir` points to the side of the plane through `a, b, c` that
+/// the normal `(a − c) × (b − c)` points to, zero when `dir` is parallel to that plane (always,
+/// when `a, b, c` are collinear). `0` for a non-finite input. Used by the triangle tests to
+/// decide "degenerate triangle, or ray in its plane" exactly, where an `f64` cross product of
+/// `f32` vertices spanning more than `2²⁹` in one coordinate can cancel to zero.
+#[must_use]
+pub fn orient_direction(a: Vec3, b: Vec3, c: Vec3, dir: Vec3) -> i32 {
+    let d = |p: Vec3| (p.as_dvec3() - c.as_dvec3()).to_array();
+    det3_filtered([d(a), d(b), dir.as_dvec3().to_array()]).unwrap_or_else(|| {
+        let w = dir.to_array().map(|x| diff(f64::from(x), 0.0));
+        det3_exact([differences(a, c), differences(b, c), w])
+    })
+}
+
+/// The sign of `det[u, v, w]` from its `f64` evaluation when that clears
+/// [`ORIENT3D_FILTER_REL`] times its permanent (then exact); `Some(0)` for a non-finite
+/// evaluation; `None` when the exact evaluation must decide. Valid for rows that are `f32`
+/// values or `f64` differences of two `f32` values (the bound counts a rounding per
+/// difference; rows without one only have fewer).
+#[inline]
+fn det3_filtered([u, v, w]: [[f64; 3]; 3]) -> Option<i32> {
     let m = [
         v[1] * w[2] - v[2] * w[1],
         v[2] * w[0] - v[0] * w[2],
@@ -49,24 +71,26 @@ pub fn orient3d(a: Vec3, b: Vec3, c: Vec3, x: Vec3) -> i32 {
         + u[1].abs() * ((v[2] * w[0]).abs() + (v[0] * w[2]).abs())
         + u[2].abs() * ((v[0] * w[1]).abs() + (v[1] * w[0]).abs());
     if !det.is_finite() || !perm.is_finite() {
-        return 0;
+        return Some(0);
     }
-    if det.abs() > ORIENT3D_FILTER_REL * perm {
-        return if det > 0.0 { 1 } else { -1 };
-    }
-    orient3d_exact(a, b, c, x)
+    (det.abs() > ORIENT3D_FILTER_REL * perm).then_some(if det > 0.0 { 1 } else { -1 })
 }
 
 /// [`orient3d`] by expansions only (no filter).
-pub(super) fn orient3d_exact(a: Vec3, b: Vec3, c: Vec3, x: Vec3) -> i32 {
-    let d = |p: Vec3| {
-        [
-            diff(f64::from(p.x), f64::from(c.x)),
-            diff(f64::from(p.y), f64::from(c.y)),
-            diff(f64::from(p.z), f64::from(c.z)),
-        ]
-    };
-    let (u, v, w) = (d(a), d(b), d(x));
+pub(crate) fn orient3d_exact(a: Vec3, b: Vec3, c: Vec3, x: Vec3) -> i32 {
+    det3_exact([differences(a, c), differences(b, c), differences(x, c)])
+}
+
+/// `p − c` per coordinate, each as an exact two-component expansion.
+fn differences(p: Vec3, c: Vec3) -> [Expansion<2>; 3] {
+    let (p, c) = (p.to_array(), c.to_array());
+    core::array::from_fn(|i| diff(f64::from(p[i]), f64::from(c[i])))
+}
+
+/// The exact sign of `det[u, v, w]` for rows of exact two-component expansions (differences
+/// of two `f32` values, or one `f32` value); `0` if a capacity were exceeded (it cannot be:
+/// the capacities below are the proven maxima).
+fn det3_exact([u, v, w]: [[Expansion<2>; 3]; 3]) -> i32 {
     // Each 2×2 minor: two products of 2-component expansions, 8 components each: ≤ 16.
     let minor = |i: usize, j: usize| {
         let mut m = Expansion::<16>::ZERO;
@@ -109,3 +133,6 @@ pub fn orient2d(a: Vec3, b: Vec3, c: Vec3, i: usize, j: usize) -> i32 {
     e.add_product(diff(aj, cj).components(), diff(bi, ci).components(), -1.0);
     if e.overflowed() { 0 } else { e.sign() }
 }
+
+#[cfg(test)]
+mod tests;

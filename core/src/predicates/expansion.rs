@@ -16,7 +16,7 @@ const SPLITTER: f64 = 134_217_729.0;
 
 /// `(x, y)` with `x = fl(a + b)` and `x + y = a + b` exactly (Knuth's two-sum).
 #[inline]
-pub(super) fn two_sum(a: f64, b: f64) -> (f64, f64) {
+pub(crate) fn two_sum(a: f64, b: f64) -> (f64, f64) {
     let x = a + b;
     let bv = x - a;
     let av = x - bv;
@@ -25,7 +25,7 @@ pub(super) fn two_sum(a: f64, b: f64) -> (f64, f64) {
 
 /// `(x, y)` with `x = fl(a − b)` and `x + y = a − b` exactly.
 #[inline]
-pub(super) fn two_diff(a: f64, b: f64) -> (f64, f64) {
+pub(crate) fn two_diff(a: f64, b: f64) -> (f64, f64) {
     let x = a - b;
     let bv = a - x;
     let av = x + bv;
@@ -44,7 +44,7 @@ fn split(a: f64) -> (f64, f64) {
 /// `(x, y)` with `x = fl(a·b)` and `x + y = a·b` exactly (Dekker), without a fused
 /// multiply-add (Rust never contracts `a * b + c`).
 #[inline]
-pub(super) fn two_product(a: f64, b: f64) -> (f64, f64) {
+pub(crate) fn two_product(a: f64, b: f64) -> (f64, f64) {
     let x = a * b;
     let (ahi, alo) = split(a);
     let (bhi, blo) = split(b);
@@ -59,7 +59,7 @@ pub(super) fn two_product(a: f64, b: f64) -> (f64, f64) {
 /// [`Expansion::grow`] adds at most one component); a component that would not fit sets
 /// [`Expansion::overflowed`] instead of panicking.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Expansion<const N: usize> {
+pub(crate) struct Expansion<const N: usize> {
     c: [f64; N],
     len: usize,
     overflow: bool,
@@ -67,7 +67,7 @@ pub(super) struct Expansion<const N: usize> {
 
 impl<const N: usize> Expansion<N> {
     /// The expansion of zero (no component).
-    pub(super) const ZERO: Self = Self {
+    pub(crate) const ZERO: Self = Self {
         c: [0.0; N],
         len: 0,
         overflow: false,
@@ -75,21 +75,21 @@ impl<const N: usize> Expansion<N> {
 
     /// The non-zero components, smallest first.
     #[inline]
-    pub(super) fn components(&self) -> &[f64] {
+    pub(crate) fn components(&self) -> &[f64] {
         self.c.get(..self.len).unwrap_or(&self.c)
     }
 
     /// `true` when a component was dropped for lack of capacity (never, with the capacities
     /// this module's callers use).
     #[inline]
-    pub(super) fn overflowed(&self) -> bool {
+    pub(crate) fn overflowed(&self) -> bool {
         self.overflow
     }
 
     /// Adds `b` exactly (Shewchuk's GROW-EXPANSION with zero elimination): the output is
     /// non-overlapping and increasing whenever the input is, and has at most one more
     /// component. Works in place: output `k` is written after input `k` was read.
-    pub(super) fn grow(&mut self, b: f64) {
+    pub(crate) fn grow(&mut self, b: f64) {
         let mut q = b;
         let mut out = 0usize;
         for i in 0..self.len {
@@ -117,7 +117,7 @@ impl<const N: usize> Expansion<N> {
 
     /// Adds `sign · e · f` exactly, `e` and `f` being expansions given by their components
     /// (`sign` is `±1`, applied exactly). Adds at most `2·|e|·|f|` components.
-    pub(super) fn add_product(&mut self, e: &[f64], f: &[f64], sign: f64) {
+    pub(crate) fn add_product(&mut self, e: &[f64], f: &[f64], sign: f64) {
         for &x in e {
             for &y in f {
                 let (hi, lo) = two_product(x, y);
@@ -129,7 +129,7 @@ impl<const N: usize> Expansion<N> {
 
     /// The sign of the exact value: `1`, `−1` or `0` (the sign of the largest component).
     #[inline]
-    pub(super) fn sign(&self) -> i32 {
+    pub(crate) fn sign(&self) -> i32 {
         match self.components().last() {
             Some(&x) if x > 0.0 => 1,
             Some(&x) if x < 0.0 => -1,
@@ -140,7 +140,7 @@ impl<const N: usize> Expansion<N> {
 
 /// The exact difference `a − b` of two `f64` as an expansion of at most two components.
 #[inline]
-pub(super) fn diff(a: f64, b: f64) -> Expansion<2> {
+pub(crate) fn diff(a: f64, b: f64) -> Expansion<2> {
     let (x, y) = two_diff(a, b);
     let mut e = Expansion::<2>::ZERO;
     e.grow(y);
