@@ -4,6 +4,7 @@ use super::{LANES, TriangleHit, TriangleIntersector, TriangleLanes};
 use crate::float::{
     diff_of_products_exact_sign, diff_of_products_sign_filter, gamma, gamma_f64, sign_is_certain,
 };
+use crate::predicates::ORIENT3D_FILTER_REL;
 use crate::ray::Ray;
 use crate::simd::F32x4;
 use glam::{DVec3, Vec3};
@@ -254,17 +255,23 @@ fn hit_t(
     v: &[Vec3; 3],
 ) -> Option<f64> {
     let (x, y, z) = sheared;
-    if super::degenerate_or_coplanar(ray, v) {
-        return None;
-    }
     let t_sheared =
         (edges[0] * f64::from(z[0]) + edges[1] * f64::from(z[1]) + edges[2] * f64::from(z[2]))
             / det;
     let (n, nn) = super::normal_f64(v);
     let d = ray.direction.as_dvec3();
     let dn = d.dot(n);
-    if n == DVec3::ZERO || dn == 0.0 {
-        return Some(t_sheared);
+    // `d·n` is `det[v1 − v0, v2 − v0, d]` evaluated in `f64` (from the base vertex
+    // `normal_f64` chose: a cyclic rotation, the same determinant), with the forward error
+    // bound of the exact orientation predicate: beyond it its sign is exact and the triangle
+    // is neither degenerate nor parallel to the ray; within it, the exact predicate decides.
+    if !(dn.abs() > ORIENT3D_FILTER_REL * d.abs().dot(nn)) {
+        if super::degenerate_or_coplanar(ray, v) {
+            return None;
+        }
+        if n == DVec3::ZERO || dn == 0.0 {
+            return Some(t_sheared);
+        }
     }
     let w = v[0].as_dvec3() - ray.origin.as_dvec3();
     let t_plane = w.dot(n) / dn;
