@@ -11,33 +11,43 @@
 
 /// A SIMD level for the 8-wide node test. Sealed: [`Portable`] and, on x86-64, [`Avx2Fma`].
 pub trait SimdLevel: Copy + sealed::Sealed {
-    /// The slab test of eight boxes at once, or `None` when this level has no kernel for it
-    /// (the caller then runs the portable lane loop, which gives the same result).
-    ///
-    /// `lo[axis]`/`hi[axis]` are the near/far bounds of the eight boxes along `axis` (already
-    /// swapped for a negative direction), `origin_near`/`origin_far` the ray origin shifted
-    /// by the box padding, `inv_dir` the reciprocal direction and `far_scale` the factor of
-    /// the far distances. Per lane: `t_enter = max((lo − on)·inv, …, t_min)`,
-    /// `t_exit = min((hi − of)·inv·far_scale, …, t_max)` with `max(a, b) = a > b ? a : b`
-    /// (a NaN `a` keeps `b`), and bit `i` of the mask set when `t_enter ≤ t_exit` (false for
-    /// NaN). Returns the entry distances and the mask.
-    #[allow(clippy::too_many_arguments)]
-    fn slab8(
-        self,
-        lo: [&[f32; 8]; 3],
-        hi: [&[f32; 8]; 3],
-        origin_near: [f32; 3],
-        origin_far: [f32; 3],
-        inv_dir: [f32; 3],
-        far_scale: f32,
-        t_min: f32,
-        t_max: f32,
-    ) -> Option<([f32; 8], u32)>;
+    /// The slab test of eight boxes at once ([`Slab8`]: the boxes, the ray and the interval),
+    /// or `None` when this level has no kernel for it (the caller then runs the portable lane
+    /// loop, which gives the same result). Returns the entry distances and the hit mask.
+    fn slab8(self, q: &Slab8<'_>) -> Option<([f32; 8], u32)>;
 
     /// The eight [`order_key`]s of `dist` and the hit lanes `mask`, sorted ascending, or
     /// `None` when this level has no kernel for it (the caller then sorts the same keys,
     /// with the same result: the keys of hit lanes are distinct).
     fn sort_keys8(self, dist: &[f32; 8], mask: u32) -> Option<[u32; 8]>;
+}
+
+/// The inputs of [`SimdLevel::slab8`]: eight boxes and a padded ray.
+///
+/// `lo[axis]`/`hi[axis]` are the near/far bounds of the eight boxes along `axis` (already
+/// swapped for a negative direction), `origin_near`/`origin_far` the ray origin shifted by
+/// the box padding, `inv_dir` the reciprocal direction and `far_scale` the factor of the far
+/// distances. Per lane: `t_enter = max((lo − on)·inv, …, t_min)`,
+/// `t_exit = min((hi − of)·inv·far_scale, …, t_max)` with `max(a, b) = a > b ? a : b` (a NaN
+/// `a` keeps `b`), and bit `i` of the mask set when `t_enter ≤ t_exit` (false for NaN).
+#[derive(Clone, Copy, Debug)]
+pub struct Slab8<'a> {
+    /// Near bounds per axis (world units).
+    pub lo: [&'a [f32; 8]; 3],
+    /// Far bounds per axis (world units).
+    pub hi: [&'a [f32; 8]; 3],
+    /// Origin shifted by the padding toward the near bounds.
+    pub origin_near: [f32; 3],
+    /// Origin shifted by the padding toward the far bounds.
+    pub origin_far: [f32; 3],
+    /// Reciprocal direction per axis.
+    pub inv_dir: [f32; 3],
+    /// Factor applied to every far distance (unitless, ≥ 1).
+    pub far_scale: f32,
+    /// Start of the interval (ray parameter).
+    pub t_min: f32,
+    /// End of the interval (ray parameter).
+    pub t_max: f32,
 }
 
 /// The sort key of child slot `lane` (`< 8`) entered at distance `dist`: `dist`'s bits made
@@ -77,17 +87,7 @@ impl SimdLevel for Portable {
     }
 
     #[inline(always)]
-    fn slab8(
-        self,
-        _: [&[f32; 8]; 3],
-        _: [&[f32; 8]; 3],
-        _: [f32; 3],
-        _: [f32; 3],
-        _: [f32; 3],
-        _: f32,
-        _: f32,
-        _: f32,
-    ) -> Option<([f32; 8], u32)> {
+    fn slab8(self, _: &Slab8<'_>) -> Option<([f32; 8], u32)> {
         None
     }
 }
@@ -132,32 +132,11 @@ impl SimdLevel for Avx2Fma {
     }
 
     #[inline(always)]
-    fn slab8(
-        self,
-        lo: [&[f32; 8]; 3],
-        hi: [&[f32; 8]; 3],
-        origin_near: [f32; 3],
-        origin_far: [f32; 3],
-        inv_dir: [f32; 3],
-        far_scale: f32,
-        t_min: f32,
-        t_max: f32,
-    ) -> Option<([f32; 8], u32)> {
+    fn slab8(self, q: &Slab8<'_>) -> Option<([f32; 8], u32)> {
         // SAFETY: the token exists, so the CPU supports AVX2 and FMA (the contract of
         // `Avx2Fma::new_unchecked`), the only requirement of calling a function compiled for
         // them.
-        Some(unsafe {
-            slab8_avx2(
-                lo,
-                hi,
-                origin_near,
-                origin_far,
-                inv_dir,
-                far_scale,
-                t_min,
-                t_max,
-            )
-        })
+        Some(unsafe { slab8_avx2(q) })
     }
 }
 
@@ -207,23 +186,23 @@ fn sort_keys8_avx2(dist: &[f32; 8], mask: u32) -> [u32; 8] {
 
 /// [`SimdLevel::slab8`] in 256-bit registers.
 #[cfg(target_arch = "x86_64")]
-#[allow(clippy::too_many_arguments)]
 #[target_feature(enable = "avx2,fma")]
 #[inline]
-fn slab8_avx2(
-    lo: [&[f32; 8]; 3],
-    hi: [&[f32; 8]; 3],
-    origin_near: [f32; 3],
-    origin_far: [f32; 3],
-    inv_dir: [f32; 3],
-    far_scale: f32,
-    t_min: f32,
-    t_max: f32,
-) -> ([f32; 8], u32) {
+fn slab8_avx2(q: &Slab8<'_>) -> ([f32; 8], u32) {
     use core::arch::x86_64::{
         _CMP_LE_OQ, _mm256_cmp_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps,
         _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_storeu_ps, _mm256_sub_ps,
     };
+    let Slab8 {
+        lo,
+        hi,
+        origin_near,
+        origin_far,
+        inv_dir,
+        far_scale,
+        t_min,
+        t_max,
+    } = *q;
     let scale = _mm256_set1_ps(far_scale);
     let mut t_enter = _mm256_set1_ps(t_min);
     let mut t_exit = _mm256_set1_ps(t_max);
@@ -356,9 +335,17 @@ mod tests {
             let scale = 1.0 + 1e-6;
             let lo = [&planes[0], &planes[1], &planes[2]];
             let hi = [&planes[3], &planes[4], &planes[5]];
-            let (dist, mask) = level
-                .slab8(lo, hi, on, of, inv, scale, t_min, t_max)
-                .unwrap();
+            let q = Slab8 {
+                lo,
+                hi,
+                origin_near: on,
+                origin_far: of,
+                inv_dir: inv,
+                far_scale: scale,
+                t_min,
+                t_max,
+            };
+            let (dist, mask) = level.slab8(&q).unwrap();
             for i in 0..8 {
                 let (mut enter, mut exit) = (t_min, t_max);
                 for a in 0..3 {
@@ -377,18 +364,17 @@ mod tests {
             (1000..150_000).contains(&hits),
             "both outcomes must occur: {hits} hits of 160000"
         );
-        assert_eq!(
-            Portable.slab8(
-                [&[0.0; 8]; 3],
-                [&[0.0; 8]; 3],
-                [0.0; 3],
-                [0.0; 3],
-                [0.0; 3],
-                1.0,
-                0.0,
-                1.0
-            ),
-            None
-        );
+        let zero = [0.0; 8];
+        let q = Slab8 {
+            lo: [&zero; 3],
+            hi: [&zero; 3],
+            origin_near: [0.0; 3],
+            origin_far: [0.0; 3],
+            inv_dir: [0.0; 3],
+            far_scale: 1.0,
+            t_min: 0.0,
+            t_max: 1.0,
+        };
+        assert_eq!(Portable.slab8(&q), None);
     }
 }

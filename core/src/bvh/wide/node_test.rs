@@ -4,7 +4,7 @@ use super::node::WideNode;
 use crate::aabb::SLAB_FAR_SCALE;
 use crate::bvh::padded_ray::PaddedRay;
 use crate::simd;
-use crate::simd::level::SimdLevel;
+use crate::simd::level::{SimdLevel, Slab8};
 
 impl PaddedRay {
     /// Entry distance of every child box over `[t_min, t_max]` and the mask of the boxes hit
@@ -75,16 +75,16 @@ impl PaddedRay {
         let [nx, ny, nz] = self.near;
         let lo = [lanes(nx, 0)?, lanes(ny, 1)?, lanes(nz, 2)?];
         let hi = [lanes(1 - nx, 0)?, lanes(1 - ny, 1)?, lanes(1 - nz, 2)?];
-        let (dist, mask) = level.slab8(
+        let (dist, mask) = level.slab8(&Slab8 {
             lo,
             hi,
-            self.origin_near,
-            self.origin_far,
-            self.inv_dir,
-            SLAB_FAR_SCALE,
+            origin_near: self.origin_near,
+            origin_far: self.origin_far,
+            inv_dir: self.inv_dir,
+            far_scale: SLAB_FAR_SCALE,
             t_min,
             t_max,
-        )?;
+        })?;
         Some((core::array::from_fn(|i| dist[i & 7]), mask))
     }
 

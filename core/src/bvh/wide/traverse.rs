@@ -182,13 +182,7 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, false, _, _>(
-            Portable,
-            &mut WideStack::new(),
-            ray,
-            |_| Some(ClosureTest(intersect)),
-            stats,
-        )
+        self.closest_hit_with(&mut WideStack::new(), ray, intersect, stats)
     }
 
     /// [`WideBvh::closest_hit`] on a stack the caller keeps across rays.
@@ -219,13 +213,7 @@ where
         intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, H)> {
-        self.traverse::<H, true, _, _>(
-            Portable,
-            &mut WideStack::new(),
-            ray,
-            |_| Some(ClosureTest(intersect)),
-            stats,
-        )
+        self.any_hit_with(&mut WideStack::new(), ray, intersect, stats)
     }
 
     /// [`WideBvh::any_hit`] on a stack the caller keeps across rays.
