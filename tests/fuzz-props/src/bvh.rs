@@ -339,11 +339,13 @@ pub fn check_ray<N: AsRef<[BvhNode]>, I: AsRef<[u32]>, T: TriangleIntersector>(
     let got = bvh.closest_hit_triangles(oracle.mesh, isect, ray, None);
     if !oracle.exact_on(ray, exact) {
         // Outside the documented domain of exact agreement: the BVH's answer must still be a
-        // genuine hit of the intersector, no nearer than brute force's.
+        // genuine hit of the intersector, no nearer than brute force's, and find a clear one.
         if let Some(hit) = got {
             oracle.assert_genuine(isect, ray, hit, "hit record");
         }
         oracle.assert_no_nearer(got, want, "BVH");
+        let any = bvh.any_hit_triangles(oracle.mesh, isect, ray, None);
+        oracle.assert_finds_clear_hit(ray, got, Some(any), want, "BVH");
         return;
     }
     let any = bvh.any_hit_triangles(oracle.mesh, isect, ray, None);

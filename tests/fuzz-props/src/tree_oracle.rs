@@ -5,7 +5,14 @@
 use super::bvh::{projection_underflows, within_domain};
 use halfray_core::bvh::{PrimitiveSource, TriangleMesh};
 use halfray_core::ray::Ray;
-use halfray_core::triangle::{TriangleHit, TriangleIntersector};
+use halfray_core::triangle::{F64Reference, TriangleHit, TriangleIntersector};
+
+/// Smallest barycentric coordinate (of the `f64` reference solution) for which a brute-force
+/// hit counts as **clear** outside the exact domain ([`Oracle::assert_finds_clear_hit`]):
+/// `10⁻³`, far beyond any `f32` intersector's rounding on the triangles where it holds, so the
+/// ray's exact crossing lies inside the triangle and therefore inside every box that holds
+/// it. Unitless.
+pub const CLEAR_HIT_BARYCENTRIC: f64 = 1e-3;
 
 /// For each triangle of `mesh`, whether its bounds are usable (finite and valid): the
 /// triangles a BVH or kd-tree holds when `exclude_non_finite` is on, and the first one that
@@ -109,6 +116,49 @@ impl Oracle<'_, '_> {
         }
     }
 
+    /// Outside the exact domain, where the answer is still decidable: when brute force's hit
+    /// `want` is **clear** (the `f64` reference, an independent solution, puts the ray's exact
+    /// crossing of that triangle at every barycentric ≥ [`CLEAR_HIT_BARYCENTRIC`] and at
+    /// `t_ref ≤ want.t`, beyond `t_min`), every box holding the triangle is entered no later
+    /// than `t_ref`, so no cull can skip it: the tree's closest hit `got` is at `want`'s `t`
+    /// (with [`Oracle::assert_no_nearer`]), and its any hit `any` (when given) exists.
+    pub(crate) fn assert_finds_clear_hit(
+        &self,
+        ray: &Ray,
+        got: Option<(u32, TriangleHit)>,
+        any: Option<Option<(u32, TriangleHit)>>,
+        want: Option<(u32, TriangleHit)>,
+        tree: &str,
+    ) {
+        let Some((p, w)) = want else { return };
+        let Some(v) = self.mesh.triangle(p as usize) else {
+            return;
+        };
+        let Some((t_ref, b)) = F64Reference::solve(ray, &v) else {
+            return;
+        };
+        let clear = b.iter().all(|&x| x >= CLEAR_HIT_BARYCENTRIC)
+            && t_ref.is_finite()
+            && t_ref <= f64::from(w.t)
+            && t_ref > f64::from(ray.t_min);
+        if !clear {
+            return;
+        }
+        assert!(
+            got.is_some_and(|(_, h)| h.t <= w.t),
+            "{tree}: missed brute force's clear hit {want:?} (reference t = {t_ref:e}, \
+             barycentrics {b:?}), got {got:?}\n{}",
+            (self.ctx)()
+        );
+        if let Some(any) = any {
+            assert!(
+                any.is_some(),
+                "{tree}: any-hit found nothing where brute force has a clear hit {want:?}\n{}",
+                (self.ctx)()
+            );
+        }
+    }
+
     /// Inside the exact domain: the tree's closest hit `got` is brute force's `want`, and its
     /// any-hit answer `any` finds a hit exactly when brute force does.
     pub(crate) fn assert_agrees(
@@ -137,7 +187,8 @@ impl Oracle<'_, '_> {
     /// `isect`) get in the `grid` and `kdtree` targets and for the 8-wide BVH: each is a
     /// genuine hit of a primitive in the tree with `t` in the ray's interval; then
     /// [`Oracle::assert_agrees`] where [`Oracle::exact_on`]`(ray, exact)`, else
-    /// [`Oracle::assert_no_nearer`]. `tree` names the structure in failure messages.
+    /// [`Oracle::assert_no_nearer`] and [`Oracle::assert_finds_clear_hit`]. `tree` names the
+    /// structure in failure messages.
     pub(crate) fn assert_answers<T: TriangleIntersector>(
         &self,
         isect: &T,
@@ -165,6 +216,43 @@ impl Oracle<'_, '_> {
             self.assert_agrees((isect.name(), tree), got, any, want);
         } else {
             self.assert_no_nearer(got, want, tree);
+            self.assert_finds_clear_hit(ray, got, Some(any), want, tree);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use halfray_core::Vec3;
+    use halfray_core::triangle::MollerTrumbore;
+
+    /// A ray through the centroid of a unit triangle: brute force's hit is clear, so a tree
+    /// that reports nothing (or only a farther hit) fails, and one that reports it passes.
+    #[test]
+    fn a_missed_clear_hit_fails() {
+        let positions = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.0, 0.0, -1.0)];
+        let triangles = [[0, 1, 2], [3, 1, 2]];
+        let mesh = TriangleMesh::new(&positions, &triangles);
+        let in_tree = [true, true];
+        let ctx = || String::from("unit test");
+        let oracle = Oracle {
+            mesh: &mesh,
+            in_tree: &in_tree,
+            ctx: &ctx,
+        };
+        let ray = Ray::new(Vec3::new(0.3, 0.3, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        let isect = MollerTrumbore::default();
+        let want = oracle.closest(&isect, &ray);
+        assert_eq!(want.map(|(p, _)| p), Some(0));
+        oracle.assert_finds_clear_hit(&ray, want, Some(want), want, "tree");
+        let farther = brute(&mesh, &isect, &ray, &[false, true]);
+        assert!(farther.is_some_and(|(_, h)| h.t > want.unwrap().1.t));
+        for got in [None, farther] {
+            let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                oracle.assert_finds_clear_hit(&ray, got, Some(got), want, "tree");
+            }));
+            assert!(r.is_err(), "{got:?} must fail the check");
         }
     }
 }
