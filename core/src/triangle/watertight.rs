@@ -1,9 +1,7 @@
 //! Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection" (JCGT 2013).
 
 use super::{LANES, TriangleHit, TriangleIntersector, TriangleLanes};
-use crate::float::{
-    diff_of_products_exact_sign, diff_of_products_sign_filter, gamma, gamma_f64, sign_is_certain,
-};
+use crate::float::{diff_of_products_exact_sign, diff_of_products_sign_filter, gamma, gamma_f64};
 use crate::predicates::ORIENT3D_FILTER_REL;
 use crate::ray::Ray;
 use crate::simd::F32x4;
@@ -41,8 +39,9 @@ impl WatertightRay {
         })
     }
 
-    /// The lanes of `lanes` whose three `f32` edge functions (the filter of [`Watertight`])
-    /// are all certain and of mixed signs: the triangles both watertight tests miss. The same
+    /// The lanes of `lanes` among whose three `f32` edge functions (the filter of
+    /// [`Watertight`]) two have certain, opposite signs: the triangles both watertight tests
+    /// miss (the exact signs of those two already differ, whatever the third). The same
     /// `f32` operations as the projection and the scalar filter, lane by lane (no
     /// fused multiply-add), so a lane is reported exactly when the scalar test rejects it on
     /// its `f32` signs; NaN lanes (unused ones among them) are never reported.
@@ -74,10 +73,9 @@ impl WatertightRay {
             ax.mul(cy).sub(ay.mul(cx)).sign_bits(),
             bx.mul(ay).sub(by.mul(ax)).sign_bits(),
         ];
-        let nonzero = |b: u32| (b | (b >> 4)) & 0xF;
-        let certain = nonzero(e[0]) & nonzero(e[1]) & nonzero(e[2]);
+        // A zero or NaN edge sets neither bit: only certain signs count.
         let any = e[0] | e[1] | e[2];
-        certain & any & (any >> 4)
+        any & (any >> 4) & 0xF
     }
 
     /// How the ray crosses triangle `v` when **each point of the plane is counted once**: `+1`
@@ -426,8 +424,8 @@ pub(super) fn mixed_signs(e: &[f32; 3]) -> bool {
 
 /// The watertight family ([`Watertight`], [`WatertightF32`], [`super::WatertightF32Exact`]):
 /// the ray prepared as a [`WatertightRay`] (axis permutation and shear), and a test of one
-/// triangle that rejects every triangle whose three `f32` edge functions (the filter of
-/// [`WatertightRay::certain_misses`]) have certain, mixed signs. Each member supplies its name
+/// triangle that rejects every triangle two of whose three `f32` edge functions (the filter
+/// of [`WatertightRay::certain_misses`]) have certain, opposite signs. Each member supplies its name
 /// and its test; [`TriangleIntersector`] (preparation and the four-lane cull) comes with it.
 pub trait ShearedTest: Copy + Send + Sync {
     /// The variant's name ([`TriangleIntersector::name`]).
@@ -481,11 +479,9 @@ impl ShearedTest for Watertight {
         v: &[Vec3; 3],
     ) -> Option<TriangleHit> {
         let sheared = pre.project_triangle(ray.origin, v);
-        // Most triangles are missed with certain signs: decide those in f32 (exact whenever
-        // the filter is certain) and compute the exact f64 edges only for the rest.
-        let f = filter_edges(sheared.0, sheared.1);
-        let certain = sign_is_certain(f[0]) & sign_is_certain(f[1]) & sign_is_certain(f[2]);
-        if certain & mixed_signs(&f) {
+        // Most triangles are missed with two certain, opposite signs: decide those in f32
+        // (a certain sign is exact) and compute the exact f64 edges only for the rest.
+        if mixed_signs(&filter_edges(sheared.0, sheared.1)) {
             return None;
         }
         exact_candidate(ray, pre, sheared, v)

@@ -279,3 +279,24 @@ fn hit_where_the_f64_normal_cancels() {
         );
     }
 }
+
+/// A ray on the line through an edge but outside the triangle: that edge function is exactly
+/// zero and the other two have opposite signs (by hand, for the unit right triangle and the
+/// point `(2, 0)`: the edge `y = 0` gives 0, the hypotenuse `x + y = 1` the outside sign, the
+/// edge `x = 0` the inside one). Two certain opposite signs decide the miss: the four-lane
+/// cull reports the lane, and both closed tests miss; a ray at `(0.5, 0)` on the same edge
+/// line but on the edge itself is a hit and is not culled.
+#[test]
+fn two_certain_opposite_edges_are_a_miss_whatever_the_third() {
+    let tri = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let outside = Ray::new(Vec3::new(2.0, 0.0, 1.0), Vec3::new(0.0, 0.0, -1.0));
+    let on_edge = Ray::new(Vec3::new(0.5, 0.0, 1.0), Vec3::new(0.0, 0.0, -1.0));
+    let records = [tri.map(|p| p.to_array()); 1];
+    let lanes = TriangleLanes::from_triangles(&records);
+    for (ray, culled) in [(outside, true), (on_edge, false)] {
+        let pre = WatertightRay::new(&ray).unwrap();
+        assert_eq!(pre.certain_misses(ray.origin, &lanes) & 1 == 1, culled, "{ray:?}");
+        assert_eq!(Watertight.intersect(&ray, &tri).is_none(), culled, "{ray:?}");
+        assert_eq!(WatertightF32.intersect(&ray, &tri).is_none(), culled, "{ray:?}");
+    }
+}
