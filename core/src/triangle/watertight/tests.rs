@@ -295,8 +295,20 @@ fn two_certain_opposite_edges_are_a_miss_whatever_the_third() {
     let lanes = TriangleLanes::from_triangles(&records);
     for (ray, culled) in [(outside, true), (on_edge, false)] {
         let pre = WatertightRay::new(&ray).unwrap();
-        assert_eq!(pre.certain_misses(ray.origin, &lanes) & 1 == 1, culled, "{ray:?}");
-        assert_eq!(Watertight.intersect(&ray, &tri).is_none(), culled, "{ray:?}");
-        assert_eq!(WatertightF32.intersect(&ray, &tri).is_none(), culled, "{ray:?}");
+        assert_eq!(
+            pre.certain_misses(ray.origin, &lanes) & 1 == 1,
+            culled,
+            "{ray:?}"
+        );
+        assert_eq!(
+            Watertight.intersect(&ray, &tri).is_none(),
+            culled,
+            "{ray:?}"
+        );
+        assert_eq!(
+            WatertightF32.intersect(&ray, &tri).is_none(),
+            culled,
+            "{ray:?}"
+        );
     }
 }
