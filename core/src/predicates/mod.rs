@@ -1,7 +1,8 @@
-//! Exact orientation predicates on `f32` points and directions: a fast `f64` evaluation accepted when it
-//! clears a forward error bound ([`ORIENT3D_FILTER_REL`], [`ORIENT2D_FILTER_REL`]), and an
-//! exact expansion evaluation (Shewchuk's expansions, in the private `expansion` module) otherwise. The returned sign is the
-//! **exact** sign of the determinant of the `f32` inputs, for every finite input.
+//! Exact orientation predicates on `f32` points and directions: a fast `f64` evaluation
+//! accepted when it clears a forward error bound ([`ORIENT3D_FILTER_REL`],
+//! [`ORIENT2D_FILTER_REL`]), and an exact evaluation with Shewchuk's expansions (the private
+//! `expansion` module) otherwise. The returned sign is the **exact** sign of the determinant
+//! of the `f32` inputs, for every finite input.
 
 mod expansion;
 
