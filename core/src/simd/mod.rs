@@ -1,5 +1,5 @@
 //! The crate's only use of x86-64 intrinsics, with portable fallbacks elsewhere: cache
-//! prefetch hints ([`slice`]), the bit mask of a lane comparison ([`mask_le`]) and a
+//! prefetch hints ([`lines`]), the bit mask of a lane comparison ([`mask_le`]) and a
 //! four-lane `f32` vector ([`F32x4`]) for the triangle tests' lane culls. All use SSE, part
 //! of the baseline x86-64 target, so no run-time check is needed; the unsafe blocks only call
 //! intrinsics on their documented inputs. Plain IEEE operations lane by lane (never fused):
@@ -7,7 +7,7 @@
 //!
 //! A wide tree over a large mesh does not fit in the cache, and a traversal that waits for
 //! each node and leaf on first use spends most of its time in those misses. When a node test
-//! finds its hit children, [`slice`] asks for all of their memory at once, so the misses
+//! finds its hit children, [`lines`] asks for all of their memory at once, so the misses
 //! overlap instead of following one another. On x86-64 this is `prefetcht0` (SSE, part of the
 //! baseline target, and a safe intrinsic: it never faults, whatever the address); elsewhere it
 //! does nothing.
@@ -16,30 +16,25 @@
 #[cfg(target_arch = "x86_64")]
 const LINE: usize = 64;
 
-/// Hints that every cache line of `items` will be read soon.
+/// Hints that the `size_of::<T>()` bytes at `item` will be read soon: one `prefetcht0` per
+/// cache line on x86-64, nothing elsewhere. The address need not be valid (nothing is read).
 #[inline(always)]
-pub(crate) fn slice<T>(items: &[T]) {
+pub(crate) fn lines<T>(item: *const T) {
     #[cfg(target_arch = "x86_64")]
     {
         use core::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        let bytes = core::mem::size_of_val(items);
-        let start = items.as_ptr().cast::<i8>();
+        let start = item.cast::<i8>();
         let mut offset = 0;
-        while offset < bytes {
+        while offset < core::mem::size_of::<T>() {
             // SAFETY: `prefetcht0` needs SSE, which every x86-64 CPU has (baseline of the
             // target), and it never faults or reads into the program, whatever the address.
             unsafe { _mm_prefetch::<_MM_HINT_T0>(start.wrapping_add(offset)) };
             offset += LINE;
         }
-        // The last line, when the items do not start on a line boundary.
-        if bytes > 0 {
-            // SAFETY: as above.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(start.wrapping_add(bytes - 1)) };
-        }
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        let _ = items;
+        let _ = item;
     }
 }
 

@@ -83,9 +83,9 @@ pub enum ChildRef {
     },
 }
 
-const LEAF_BIT: u32 = 1 << 31;
+pub(super) const LEAF_BIT: u32 = 1 << 31;
 const COUNT_SHIFT: u32 = 27;
-const START_MASK: u32 = (1 << COUNT_SHIFT) - 1;
+pub(super) const START_MASK: u32 = (1 << COUNT_SHIFT) - 1;
 
 impl ChildRef {
     /// The encoding of an empty slot.

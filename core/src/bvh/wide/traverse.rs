@@ -1,6 +1,6 @@
 //! Closest-hit and any-hit traversal of a wide tree on a fixed-size stack.
 
-use super::node::{ChildRef, LeafGroup, WideNode};
+use super::node::{ChildRef, LEAF_BIT, LeafGroup, START_MASK, WideNode};
 use super::{WideBvh, add_stats};
 use crate::aabb::SlabRay;
 use crate::bvh::padded_ray::PaddedRay;
@@ -37,17 +37,17 @@ pub(super) fn run_lanes(g: usize, start: u32, count: u32) -> u32 {
     ((1u32 << hi) - 1) & !((1u32 << lo) - 1)
 }
 
-/// Hints that the memory of `child` (its node, or its leaf's triangle groups) is read soon.
+/// Hints that the memory of `child` (its node, or its leaf's first triangle group) is read
+/// soon. Only addresses are computed, without a bounds check or a decode (a hint never
+/// faults): 34 fewer instructions per random ray on the bunny than hinting the whole leaf
+/// run through checked slices (cachegrind), with the same cache misses.
 #[inline(always)]
 fn prefetch_child<const W: usize>(nodes: &[WideNode<W>], groups: &[LeafGroup], child: u32) {
-    match ChildRef::decode(child) {
-        ChildRef::Inner(index) => {
-            if let Some(node) = nodes.get(index as usize) {
-                simd::slice(core::slice::from_ref(node));
-            }
-        }
-        ChildRef::Leaf { start, count } => simd::slice(leaf_groups(groups, start, count).0),
-        ChildRef::Empty => {}
+    if child & LEAF_BIT == 0 {
+        simd::lines(nodes.as_ptr().wrapping_add(child as usize));
+    } else {
+        let start = (child & START_MASK) as usize;
+        simd::lines(groups.as_ptr().wrapping_add(start / LANES));
     }
 }
 
