@@ -330,20 +330,14 @@ where
     /// As [`Bvh::build`].
     pub fn build_in<S: PrimitiveSource + ?Sized>(
         source: &S,
-        mut nodes: N,
-        mut indices: I,
+        nodes: N,
+        indices: I,
         work: &mut BuildWorkspace,
         options: &BuildOptions,
     ) -> Result<Self, BvhError> {
-        let (node_count, prim_count) =
-            build::build(source, nodes.as_mut(), indices.as_mut(), options, work)?;
-        Ok(Self::assemble(
-            nodes,
-            indices,
-            node_count,
-            prim_count,
-            source.primitive_count(),
-        ))
+        Self::build_with(source, nodes, indices, |n, i| {
+            build::build(source, n, i, options, work)
+        })
     }
 
     /// [`Bvh::build`] with a scratch array of at least [`scratch_capacity`]`(N)` [`PrimRef`]s
@@ -359,13 +353,25 @@ where
     /// [`scratch_capacity`]`(N)` records), all before `nodes` or `indices` are written.
     pub fn build_with_scratch<S: PrimitiveSource + ?Sized>(
         source: &S,
-        mut nodes: N,
-        mut indices: I,
+        nodes: N,
+        indices: I,
         scratch: &mut [PrimRef],
         options: &BuildOptions,
     ) -> Result<Self, BvhError> {
-        let (node_count, prim_count) =
-            build::build_with_scratch(source, nodes.as_mut(), indices.as_mut(), scratch, options)?;
+        Self::build_with(source, nodes, indices, |n, i| {
+            build::build_with_scratch(source, n, i, scratch, options)
+        })
+    }
+
+    /// The tree `build` writes into the storage's slices over `source`: `build` returns
+    /// `(node count, primitive count)` or refuses before writing.
+    fn build_with<S: PrimitiveSource + ?Sized>(
+        source: &S,
+        mut nodes: N,
+        mut indices: I,
+        build: impl FnOnce(&mut [BvhNode], &mut [u32]) -> Result<(u32, u32), BvhError>,
+    ) -> Result<Self, BvhError> {
+        let (node_count, prim_count) = build(nodes.as_mut(), indices.as_mut())?;
         Ok(Self::assemble(
             nodes,
             indices,
