@@ -10,7 +10,7 @@
 //! direction, then the aim or interval bytes.
 
 use super::*;
-use super::{Enc, Input, fmt_ray, fmt_vec3};
+use super::{Enc, Input, fmt_vec3};
 pub use crate::tree_oracle::Oracle;
 pub(crate) use crate::tree_oracle::usable_primitives;
 use glam::Vec3;
@@ -277,19 +277,13 @@ pub fn check(s: &Soup) {
     .unwrap_or_else(|e| panic!("wide collapse: {e}\n{}", ctx()));
 
     // 4, 5. Rays.
-    for ray in &s.rays {
-        let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
-        let oracle = Oracle {
-            mesh: &mesh,
-            in_tree: &in_tree,
-            ctx: &rctx,
-        };
-        check_ray(&bvh, &oracle, &Watertight, ray, true);
-        check_wide(&wide, &oracle, &Watertight, ray, true);
+    Oracle::each_ray(&mesh, &in_tree, &ctx, &s.rays, |oracle, ray| {
+        check_ray(&bvh, oracle, &Watertight, ray, true);
+        check_wide(&wide, oracle, &Watertight, ray, true);
         // Möller–Trumbore's inexact edge tests can report a hit slightly outside the
         // triangle, hence outside its box: only the weak form holds for it.
-        check_wide(&wide, &oracle, &MollerTrumbore::CLASSIC, ray, false);
-        check_ray(&bvh, &oracle, &MollerTrumbore::CLASSIC, ray, false);
+        check_wide(&wide, oracle, &MollerTrumbore::CLASSIC, ray, false);
+        check_ray(&bvh, oracle, &MollerTrumbore::CLASSIC, ray, false);
         let q = Aabb::new(ray.origin, ray.origin).grow(ray.origin + ray.direction);
         let mut found = Vec::new();
         let reported = bvh.query_box(&mesh, &q, |p| {
@@ -306,9 +300,9 @@ pub fn check(s: &Soup) {
             found,
             expect,
             "query_box({q:?}) differs from brute force\n{}",
-            rctx()
+            (oracle.ctx)()
         );
-    }
+    });
 }
 
 /// [`check_ray`]'s properties for the 8-wide tree: closest hit equal to brute force in the

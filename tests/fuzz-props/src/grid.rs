@@ -8,7 +8,7 @@
 //! bit 5 at most 3 cells per axis.
 
 use super::bvh::{Oracle, SEED_ORIGIN, SEED_POINTS, Soup, decode, encode_quantized, seed_pyramid};
-use super::{Enc, Seed, fmt_ray};
+use super::{Enc, Seed};
 use glam::Vec3;
 use halfray_core::bvh::TriangleMesh;
 use halfray_core::grid::{CellAssignment, DEFAULT_LAMBDA, Grid, GridError, GridOptions, GridPlan};
@@ -133,16 +133,10 @@ pub fn check(s: &Soup, opts: &GridOptions) {
         }
     }
     // 4. Rays.
-    for ray in &s.rays {
-        let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
-        let oracle = Oracle {
-            mesh: &mesh,
-            in_tree: &live,
-            ctx: &rctx,
-        };
-        check_ray(&grid, &oracle, &Watertight, ray, true);
-        check_ray(&grid, &oracle, &MollerTrumbore::CLASSIC, ray, false);
-    }
+    Oracle::each_ray(&mesh, &live, &ctx, &s.rays, |oracle, ray| {
+        check_ray(&grid, oracle, &Watertight, ray, true);
+        check_ray(&grid, oracle, &MollerTrumbore::CLASSIC, ray, false);
+    });
 }
 
 /// Property 3's layout invariants.

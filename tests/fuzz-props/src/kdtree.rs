@@ -10,7 +10,7 @@ use super::bvh::{
     Oracle, SEED_ORIGIN, SEED_POINTS, Soup, decode, encode_quantized, seed_pyramid,
     usable_primitives,
 };
-use super::{Enc, Seed, fmt_ray};
+use super::{Enc, Seed};
 use glam::Vec3;
 use halfray_core::bvh::{PrimitiveSource, TriangleMesh};
 use halfray_core::kdtree::{
@@ -123,16 +123,10 @@ pub fn check(s: &Soup, tight: bool, shallow: bool) {
     let in_tree = check_structure(&kd, &valid, &options, &ctx);
 
     // 3. Rays.
-    for ray in &s.rays {
-        let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
-        let oracle = Oracle {
-            mesh: &mesh,
-            in_tree: &in_tree,
-            ctx: &rctx,
-        };
-        check_ray(&kd, &oracle, &Watertight, ray, true);
-        check_ray(&kd, &oracle, &MollerTrumbore::CLASSIC, ray, false);
-    }
+    Oracle::each_ray(&mesh, &in_tree, &ctx, &s.rays, |oracle, ray| {
+        check_ray(&kd, oracle, &Watertight, ray, true);
+        check_ray(&kd, oracle, &MollerTrumbore::CLASSIC, ray, false);
+    });
 }
 
 /// Property 2's structure checks; returns which primitives the tree holds.

@@ -3,6 +3,7 @@
 //! closest and any hit on one ray against it.
 
 use super::bvh::{projection_underflows, within_domain};
+use super::fmt_ray;
 use halfray_core::bvh::{PrimitiveSource, TriangleMesh};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{TriangleHit, TriangleIntersector};
@@ -53,7 +54,27 @@ pub struct Oracle<'a, 'm> {
     pub ctx: &'a dyn Fn() -> String,
 }
 
-impl Oracle<'_, '_> {
+impl<'m> Oracle<'_, 'm> {
+    /// Calls `check(oracle, ray)` for every ray of `rays`, the oracle's being brute force over
+    /// the primitives `in_tree` of `mesh` with the ray, then `ctx()`, as its failure context.
+    pub(crate) fn each_ray(
+        mesh: &TriangleMesh<'m>,
+        in_tree: &[bool],
+        ctx: &dyn Fn() -> String,
+        rays: &[Ray],
+        mut check: impl FnMut(&Oracle<'_, 'm>, &Ray),
+    ) {
+        for ray in rays {
+            let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
+            let oracle = Oracle {
+                mesh,
+                in_tree,
+                ctx: &rctx,
+            };
+            check(&oracle, ray);
+        }
+    }
+
     /// Brute force's closest hit of `isect` on `ray` (see [`brute`]).
     pub(crate) fn closest<T: TriangleIntersector>(
         &self,
