@@ -22,6 +22,22 @@ fn build<S: PrimitiveSource + ?Sized>(src: &S, opts: &BuildOptions) -> Result<Ve
     )
 }
 
+/// [`Bvh::build_with_scratch`] into full-capacity vectors, with the caller's `scratch`.
+fn build_scratch(
+    mesh: &TriangleMesh<'_>,
+    scratch: &mut [PrimRef],
+    opts: &BuildOptions,
+) -> Result<VecBvh, BvhError> {
+    let n = mesh.len();
+    Bvh::build_with_scratch(
+        mesh,
+        vec![BvhNode::EMPTY; node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        scratch,
+        opts,
+    )
+}
+
 /// The error of a default-options build of `mesh` into `nodes` and `idx`, which must be
 /// refused (panics on a successful build).
 fn refused(mesh: &TriangleMesh<'_>, nodes: &mut [BvhNode], idx: &mut [u32]) -> BvhError {
@@ -481,14 +497,7 @@ fn scratch_build_gives_the_same_tree() {
             let plain = build(&mesh, &opts).unwrap();
             let n = mesh.len();
             let mut scratch = vec![PrimRef::EMPTY; scratch_capacity(n)];
-            let fast = Bvh::build_with_scratch(
-                &mesh,
-                vec![BvhNode::EMPTY; node_capacity(n)],
-                vec![0u32; index_capacity(n)],
-                &mut scratch,
-                &opts,
-            )
-            .unwrap();
+            let fast = build_scratch(&mesh, &mut scratch, &opts).unwrap();
             // Node placement may differ by one padding slot (the builder aligns sibling pairs
             // to the storage's cache lines): compare the trees as trees.
             assert_eq!(
@@ -552,14 +561,7 @@ fn build_in_jobs_gives_the_scratch_build_tree_without_gaps() {
                 ..BuildOptions::default()
             };
             let mut scratch = vec![PrimRef::EMPTY; scratch_capacity(n)];
-            let reference = Bvh::build_with_scratch(
-                &mesh,
-                vec![BvhNode::EMPTY; node_capacity(n)],
-                vec![0u32; index_capacity(n)],
-                &mut scratch,
-                &opts,
-            )
-            .unwrap();
+            let reference = build_scratch(&mesh, &mut scratch, &opts).unwrap();
             for (job_size, slots, order) in [
                 (0, 8, 0),
                 (2, 8, 0),
