@@ -372,6 +372,25 @@ pub(crate) fn seed_pyramid() -> Vec<[u8; 3]> {
         .collect()
 }
 
+/// Coincident, duplicated and zero-area triangles over [`SEED_POINTS`] (the tie rule): the
+/// quad's first half twice and once rotated, a point, a segment, the quad's second half.
+pub(crate) const SEED_DUPLICATES: [[u8; 3]; 6] = [
+    [0, 1, 2],
+    [0, 1, 2],
+    [1, 2, 0],
+    [3, 3, 3],
+    [0, 1, 1],
+    [0, 2, 3],
+];
+
+/// Rays at [`SEED_DUPLICATES`] ([`encode_quantized`]'s aims): at the quad's centre and at
+/// the midpoint of edge 0–1 from [`SEED_ORIGIN`], and along the segment's line from `−x`.
+pub(crate) const SEED_DUPLICATE_AIMS: [(Vec3, u8, u8, u8); 3] = [
+    (SEED_ORIGIN, 0, 2, 2),
+    (SEED_ORIGIN, 0, 1, 4),
+    (Vec3::new(-1.0, 0.0, 0.0), 1, 1, 0),
+];
+
 pub(crate) fn seeds(s: &mut Vec<Seed>) {
     let t = |name: &str, bytes: Vec<u8>| ("bvh", format!("seed-{name}"), bytes);
     let (quad, o) = (SEED_POINTS, SEED_ORIGIN);
@@ -402,22 +421,7 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
     // Duplicated coplanar triangles (tie rule), a degenerate one and a collinear one.
     s.push(t(
         "duplicates-degenerate",
-        bvh::encode_quantized(
-            &quad,
-            &[
-                [0, 1, 2],
-                [0, 1, 2],
-                [1, 2, 0],
-                [3, 3, 3],
-                [0, 1, 1],
-                [0, 2, 3],
-            ],
-            &[
-                (o, 0, 2, 2),
-                (o, 0, 1, 4),
-                (Vec3::new(-1.0, 0.0, 0.0), 1, 1, 0),
-            ],
-        ),
+        bvh::encode_quantized(&quad, &SEED_DUPLICATES, &SEED_DUPLICATE_AIMS),
     ));
     // Out-of-range vertex index (unusable primitive): the build must name it.
     s.push(t(

@@ -7,7 +7,9 @@
 //! bit 2 [`CellAssignment::Bounds`] (else exact), bits 3–4 `λ` ∈ {default, 0.25, 1, 64},
 //! bit 5 at most 3 cells per axis.
 
-use super::bvh::{Oracle, SEED_ORIGIN, SEED_POINTS, Soup, decode, encode_quantized, seed_pyramid};
+use super::bvh::{
+    Oracle, SEED_DUPLICATES, SEED_ORIGIN, SEED_POINTS, Soup, decode, encode_quantized, seed_pyramid,
+};
 use super::{Enc, Seed};
 use glam::Vec3;
 use halfray_core::bvh::TriangleMesh;
@@ -218,17 +220,9 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
         with_flags(encode_quantized(&quad, &pyramid, &aims), 24),
     ));
     // Coincident, duplicated and zero-area triangles (tie rule), bounds assignment.
-    let dup = [
-        [0, 1, 2],
-        [0, 1, 2],
-        [1, 2, 0],
-        [3, 3, 3],
-        [0, 1, 1],
-        [0, 2, 3],
-    ];
     s.push(t(
         "duplicates-degenerate",
-        with_flags(encode_quantized(&quad, &dup, &aims), 4),
+        with_flags(encode_quantized(&quad, &SEED_DUPLICATES, &aims), 4),
     ));
     // Raw rays: axis-parallel with ±0 components along a cell plane (x = 2), from far
     // away (the neighbour-block path) and from 1e30 (every-reference path), NaN.

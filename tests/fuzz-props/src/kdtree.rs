@@ -7,8 +7,8 @@
 //! automatic one. So the `bvh` corpus is a valid `kdtree` corpus and back.
 
 use super::bvh::{
-    Oracle, SEED_ORIGIN, SEED_POINTS, Soup, decode, encode_quantized, seed_pyramid,
-    usable_primitives,
+    Oracle, SEED_DUPLICATE_AIMS, SEED_DUPLICATES, SEED_ORIGIN, SEED_POINTS, Soup, decode,
+    encode_quantized, seed_pyramid, usable_primitives,
 };
 use super::{Enc, Seed};
 use glam::Vec3;
@@ -195,26 +195,14 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
     let mut tight = encode_quantized(&quad, &pyramid, &aims);
     tight[0] |= 4 | 8;
     s.push(t("pyramid-tight-shallow", tight));
-    // Coincident triangles (tie rule), reversed copies, zero-area ones.
+    // Coincident triangles (tie rule), reversed copies, zero-area ones: the `bvh` seed's,
+    // with a reversed copy in place of the rotated one and a third copy last.
+    let mut coincident = SEED_DUPLICATES.to_vec();
+    coincident[2] = [2, 1, 0];
+    coincident.push([0, 1, 2]);
     s.push(t(
         "coincident-degenerate",
-        encode_quantized(
-            &quad,
-            &[
-                [0, 1, 2],
-                [0, 1, 2],
-                [2, 1, 0],
-                [3, 3, 3],
-                [0, 1, 1],
-                [0, 2, 3],
-                [0, 1, 2],
-            ],
-            &[
-                (o, 0, 2, 2),
-                (o, 0, 1, 4),
-                (Vec3::new(-1.0, 0.0, 0.0), 1, 1, 0),
-            ],
-        ),
+        encode_quantized(&quad, &coincident, &SEED_DUPLICATE_AIMS),
     ));
     // An axis-aligned flat 3×3 grid at z = 0 (shared edges and vertices), a slanted triangle
     // above it so that the tree splits, and rays in the plane z = 0, through grid vertices and
