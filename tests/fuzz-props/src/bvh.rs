@@ -391,6 +391,17 @@ pub(crate) const SEED_DUPLICATE_AIMS: [(Vec3, u8, u8, u8); 3] = [
     (Vec3::new(-1.0, 0.0, 0.0), 1, 1, 0),
 ];
 
+/// The start of the `nan-vertex-excluded` seeds (raw coordinates): flag bit 1
+/// (`exclude_non_finite`), four vertices (the origin, `x`, `y` and one with a NaN `x`) and
+/// the count of three triangles, whose indices come next.
+pub(crate) fn seed_nan_vertex() -> Enc {
+    let mut raw = Enc::new().u8(2).u8(4).u8(3);
+    for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(f32::NAN, 0.0, 0.0)] {
+        raw = raw.vec3(p);
+    }
+    raw
+}
+
 pub(crate) fn seeds(s: &mut Vec<Seed>) {
     let t = |name: &str, bytes: Vec<u8>| ("bvh", format!("seed-{name}"), bytes);
     let (quad, o) = (SEED_POINTS, SEED_ORIGIN);
@@ -429,11 +440,7 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
         bvh::encode_quantized(&quad[..3], &[[0, 1, 2], [0, 1, 4]], &[(o, 0, 1, 4)]),
     ));
     // Same with exclude_non_finite, and a NaN vertex (raw coordinates).
-    let mut raw = Enc::new().u8(2).u8(4).u8(3);
-    for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(f32::NAN, 0.0, 0.0)] {
-        raw = raw.vec3(p);
-    }
-    let raw = raw
+    let raw = seed_nan_vertex()
         .bytes(&[0, 1, 2, 0, 1, 3, 2, 1, 0])
         .u8(0)
         .vec3(Vec3::new(0.25, 0.25, 1.0))

@@ -8,7 +8,8 @@
 //! bit 5 at most 3 cells per axis.
 
 use super::bvh::{
-    Oracle, SEED_DUPLICATES, SEED_ORIGIN, SEED_POINTS, Soup, decode, encode_quantized, seed_pyramid,
+    Oracle, SEED_DUPLICATES, SEED_ORIGIN, SEED_POINTS, Soup, decode, encode_quantized,
+    seed_nan_vertex, seed_pyramid,
 };
 use super::{Enc, Seed};
 use glam::Vec3;
@@ -260,11 +261,7 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
         s.push(t(name, e.done()));
     }
     // A NaN vertex and an out-of-range index, excluded; and refused.
-    let mut raw = Enc::new().u8(2).u8(4).u8(3);
-    for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(f32::NAN, 0.0, 0.0)] {
-        raw = raw.vec3(p);
-    }
-    let raw = raw.bytes(&[0, 1, 2, 0, 1, 3, 2, 1, 5]);
+    let raw = seed_nan_vertex().bytes(&[0, 1, 2, 0, 1, 3, 2, 1, 5]);
     let raw = raw_ray(raw, Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
     s.push(t("nan-vertex-excluded", raw.clone().done()));
     let mut refused = raw.done();

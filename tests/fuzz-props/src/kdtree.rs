@@ -8,7 +8,7 @@
 
 use super::bvh::{
     Oracle, SEED_DUPLICATE_AIMS, SEED_DUPLICATES, SEED_ORIGIN, SEED_POINTS, Soup, decode,
-    encode_quantized, seed_pyramid, usable_primitives,
+    encode_quantized, seed_nan_vertex, seed_pyramid, usable_primitives,
 };
 use super::{Enc, Seed};
 use glam::Vec3;
@@ -264,11 +264,7 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
         s.push(t(name, e.done()));
     }
     // NaN vertex excluded (flag bit 1) and an out-of-range index; a ray with an interval.
-    let mut raw = Enc::new().u8(2).u8(4).u8(3);
-    for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(f32::NAN, 0.0, 0.0)] {
-        raw = raw.vec3(p);
-    }
-    let raw = raw
+    let raw = seed_nan_vertex()
         .bytes(&[0, 1, 2, 0, 1, 3, 2, 1, 5])
         .u8(4)
         .vec3(Vec3::new(0.25, 0.25, 1.0))
