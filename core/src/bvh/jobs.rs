@@ -207,8 +207,8 @@ where
         options: &BuildOptions,
         run: impl FnOnce(JobParts<'_>),
     ) -> Result<Self, BvhError> {
-        let (count, root_bounds, root_centroids) =
-            prepare_scratch(source, nodes.as_ref(), indices.as_ref(), scratch, options)?;
+        let root = prepare_scratch(source, nodes.as_ref(), indices.as_ref(), scratch, options)?;
+        let count = root.count;
         let source_len = source.primitive_count();
         let node_slice = nodes.as_mut();
         if count == 0 {
@@ -226,9 +226,7 @@ where
                 offset: 0,
             },
             node_slice,
-            count,
-            &root_bounds,
-            root_centroids,
+            &root,
             options,
             Some(&mut sink),
             &mut const { BuildWorkspace::new() },
