@@ -12,6 +12,7 @@
 use super::*;
 use super::{Enc, Input, fmt_vec3};
 pub use crate::tree_oracle::Oracle;
+use crate::tree_oracle::checked_build;
 pub(crate) use crate::tree_oracle::usable_primitives;
 use glam::Vec3;
 use halfray_core::aabb::Aabb;
@@ -211,25 +212,14 @@ pub fn check(s: &Soup) {
     // 1. Build.
     let nodes = vec![BvhNode::default(); node_capacity(n)];
     let idx = vec![u32::MAX; index_capacity(n)];
-    let mut bvh = match (Bvh::build(&mesh, nodes, idx, &s.options), first_bad) {
-        (Ok(b), None) => b,
-        (Ok(b), Some(_)) if s.options.exclude_non_finite => b,
-        (Err(BvhError::NonFinitePrimitive { index }), Some(bad))
-            if !s.options.exclude_non_finite =>
-        {
-            assert_eq!(
-                index,
-                bad,
-                "NonFinitePrimitive names the wrong primitive\n{}",
-                ctx()
-            );
-            return;
-        }
-        (r, _) => panic!(
-            "build gave {:?} (first unusable primitive {first_bad:?})\n{}",
-            r.err(),
-            ctx()
-        ),
+    let non_finite = |e: &BvhError| match *e {
+        BvhError::NonFinitePrimitive { index } => Some(index),
+        _ => None,
+    };
+    let built = Bvh::build(&mesh, nodes, idx, &s.options);
+    let exclude = s.options.exclude_non_finite;
+    let Some(mut bvh) = checked_build(built, non_finite, first_bad, exclude, &ctx) else {
+        return;
     };
     let expected_count = valid.iter().filter(|&&ok| ok).count();
     assert_eq!(

@@ -10,6 +10,7 @@ use super::bvh::{
     Oracle, SEED_DUPLICATE_AIMS, SEED_DUPLICATES, SEED_ORIGIN, SEED_POINTS, Soup, decode,
     encode_quantized, seed_nan_vertex, seed_pyramid, usable_primitives,
 };
+use super::tree_oracle::checked_build;
 use super::{Enc, Seed};
 use glam::Vec3;
 use halfray_core::bvh::{PrimitiveSource, TriangleMesh};
@@ -100,25 +101,13 @@ pub fn check(s: &Soup, tight: bool, shallow: bool) {
         &mut scratch,
         &options,
     );
-    let kd: VecKd = match (built, first_bad) {
-        (Ok(k), None) => k,
-        (Ok(k), Some(_)) if options.exclude_non_finite => k,
-        (Err(KdTreeError::NonFinitePrimitive { index }), Some(bad))
-            if !options.exclude_non_finite =>
-        {
-            assert_eq!(
-                index,
-                bad,
-                "NonFinitePrimitive names the wrong one\n{}",
-                ctx()
-            );
-            return;
-        }
-        (r, _) => panic!(
-            "build gave {:?} (first unusable primitive {first_bad:?})\n{}",
-            r.err(),
-            ctx()
-        ),
+    let non_finite = |e: &KdTreeError| match *e {
+        KdTreeError::NonFinitePrimitive { index } => Some(index),
+        _ => None,
+    };
+    let exclude = options.exclude_non_finite;
+    let Some(kd): Option<VecKd> = checked_build(built, non_finite, first_bad, exclude, &ctx) else {
+        return;
     };
     let in_tree = check_structure(&kd, &valid, &options, &ctx);
 

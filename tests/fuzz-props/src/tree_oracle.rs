@@ -4,6 +4,7 @@
 
 use super::bvh::{projection_underflows, within_domain};
 use super::fmt_ray;
+use core::fmt::Debug;
 use halfray_core::bvh::{PrimitiveSource, TriangleMesh};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{TriangleHit, TriangleIntersector};
@@ -41,6 +42,38 @@ pub(crate) fn brute<T: TriangleIntersector>(
         }
     }
     best
+}
+
+/// A tree build's result against the rule for unusable primitives: with none, or with
+/// `exclude` (`exclude_non_finite`) on, the build succeeds and the tree is returned; with
+/// `exclude` off it refuses, naming the first one, `first_bad`, and `None` is returned.
+/// Anything else panics, with `ctx()`. `non_finite` reads the index out of the structure's
+/// `NonFinitePrimitive` error (`None` for its other errors).
+pub(crate) fn checked_build<T, E: Debug>(
+    built: Result<T, E>,
+    non_finite: impl Fn(&E) -> Option<usize>,
+    first_bad: Option<usize>,
+    exclude: bool,
+    ctx: &dyn Fn() -> String,
+) -> Option<T> {
+    match (built, first_bad) {
+        (Ok(t), None) => Some(t),
+        (Ok(t), Some(_)) if exclude => Some(t),
+        (Err(e), Some(bad)) if !exclude && non_finite(&e).is_some() => {
+            assert_eq!(
+                non_finite(&e),
+                Some(bad),
+                "NonFinitePrimitive names the wrong primitive\n{}",
+                ctx()
+            );
+            None
+        }
+        (r, _) => panic!(
+            "build gave {:?} (first unusable primitive {first_bad:?})\n{}",
+            r.err(),
+            ctx()
+        ),
+    }
 }
 
 /// What a tree's answers on one ray are checked against: brute force over the primitives
