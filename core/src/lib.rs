@@ -51,6 +51,7 @@ pub mod float;
 pub mod grid;
 pub mod halfedge;
 pub mod hit;
+mod hit_queries;
 pub mod kdtree;
 pub mod plane;
 pub mod polygon;

@@ -9,7 +9,8 @@
 //!   (Shewchuk 1997), so the test harness classifies rays without any rounding of its own.
 //! * Exact edge and vertex rays: [`exact_edge_point`] (a representable point lying exactly on a
 //!   mesh edge) and [`aim_exact`] (an `f32` ray whose exact line passes through a given `f32`
-//!   point: `origin + 1·direction = target` holds exactly in real arithmetic).
+//!   point: `origin + 1·direction = target` holds exactly in real arithmetic);
+//!   [`vertex_and_eighth_edge_points`], the exact solids' vertices and edge points.
 //! * [`Target`] and [`classify`]: which triangles are incident to an aimed-at edge or vertex,
 //!   and whether the exact ray crosses the surface there *robustly* (see [`classify`]).
 //! * [`brute_triangles`]: the brute-force closest hit the acceleration-structure suites
@@ -419,6 +420,24 @@ pub fn exact_edge_point(a: Vec3, b: Vec3, k: u32, m: u32) -> Option<Vec3> {
         p[i] = q;
     }
     (p != a && p != b).then_some(p)
+}
+
+/// The targets of the exact solids' vertex and edge rays: every vertex of `positions`, then on
+/// each edge `a → b` of each triangle in turn the points `a + (s/8)·(b − a)`, `s = 1..=7`
+/// (an edge shared by two triangles is listed twice, once each way). The points are computed
+/// in `f32`: exact for the solids' coordinates in `{−1, 0, 1}`, not checked here.
+#[must_use]
+pub fn vertex_and_eighth_edge_points(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
+    let mut targets = positions.to_vec();
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b) = (positions[t[k] as usize], positions[t[(k + 1) % 3] as usize]);
+            for s in 1..8 {
+                targets.push(a + (b - a) * (s as f32 / 8.0));
+            }
+        }
+    }
+    targets
 }
 
 /// An `f32` ray whose exact line passes through `target` at `t = 1`: the origin is

@@ -25,7 +25,7 @@ use halfray_core::bvh::{
     node_capacity,
 };
 use halfray_core::triangle::{TriangleIntersector, TriangleVariant, Watertight};
-use halfray_tests::par_map;
+use halfray_tests::{par_map, vertex_and_eighth_edge_points};
 use proptest::prelude::*;
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -302,18 +302,7 @@ fn exact_vertex_and_edge_rays_do_not_leak_on_the_exact_solids() {
         let obj = load(name);
         let mesh = TriangleMesh::new(&obj.positions, &obj.triangles);
         let bvh = build(&mesh, 1);
-        let mut targets: Vec<Vec3> = obj.positions.clone();
-        for t in &obj.triangles {
-            for k in 0..3 {
-                let (a, b) = (
-                    obj.positions[t[k] as usize],
-                    obj.positions[t[(k + 1) % 3] as usize],
-                );
-                for s in 1..8 {
-                    targets.push(a + (b - a) * (s as f32 / 8.0));
-                }
-            }
-        }
+        let targets = vertex_and_eighth_edge_points(&obj.positions, &obj.triangles);
         let mut rng = Rng::new(0xED6E);
         let mut count = 0;
         for &p in &targets {

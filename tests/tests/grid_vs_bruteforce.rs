@@ -18,6 +18,7 @@ use halfray::raysets::{Camera, Rng, random_rays};
 use halfray_core::Ray;
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
 use halfray_core::grid::{CellAssignment, DEFAULT_LAMBDA, Grid, GridOptions, GridPlan, GridStats};
+use halfray_core::solids::{CUBE_TRIANGLES, CUBE_VERTICES};
 use halfray_core::triangle::Watertight;
 use halfray_tests::{brute_triangles, par_map};
 use std::path::{Path, PathBuf};
@@ -197,24 +198,9 @@ fn flat_meshes_shared_edges_and_grid_plane_rays() {
 /// with rays along those planes (inside the box, along faces) from inside and outside.
 #[test]
 fn rays_along_grid_planes_through_a_closed_box() {
-    let c = [0.0f32, 4.0];
-    let p: Vec<Vec3> = (0..8)
-        .map(|i| Vec3::new(c[i & 1], c[(i >> 1) & 1], c[(i >> 2) & 1]))
-        .collect();
-    let t: Vec<[u32; 3]> = vec![
-        [0, 2, 3],
-        [0, 3, 1],
-        [4, 5, 7],
-        [4, 7, 6],
-        [0, 1, 5],
-        [0, 5, 4],
-        [2, 6, 7],
-        [2, 7, 3],
-        [0, 4, 6],
-        [0, 6, 2],
-        [1, 3, 7],
-        [1, 7, 5],
-    ];
+    // The cube [-1, 1]³ scaled and moved to [0, 4]³.
+    let p: Vec<Vec3> = CUBE_VERTICES.map(|v| (v + 1.0) * 2.0).to_vec();
+    let t = CUBE_TRIANGLES.to_vec();
     let mut rays = Vec::new();
     for a in 0..3 {
         for u in 0..=8 {

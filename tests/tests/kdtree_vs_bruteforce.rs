@@ -20,7 +20,7 @@ use halfray_core::kdtree::{
     KdBuildOptions, KdNode, KdNodeKind, KdRef, KdTree, MAX_DEPTH, node_capacity, reference_capacity,
 };
 use halfray_core::triangle::{MollerTrumbore, TriangleIntersector, Watertight, WatertightF32};
-use halfray_tests::{brute_triangles as brute, par_map};
+use halfray_tests::{brute_triangles as brute, par_map, vertex_and_eighth_edge_points};
 use proptest::prelude::*;
 use std::path::PathBuf;
 
@@ -320,18 +320,7 @@ fn exact_vertex_and_edge_rays_on_the_exact_solids() {
         let obj = load(name);
         let mesh = TriangleMesh::new(&obj.positions, &obj.triangles);
         let kd = build(&mesh);
-        let mut targets = obj.positions.clone();
-        for t in &obj.triangles {
-            for k in 0..3 {
-                let (a, b) = (
-                    obj.positions[t[k] as usize],
-                    obj.positions[t[(k + 1) % 3] as usize],
-                );
-                for s in 1..8 {
-                    targets.push(a + (b - a) * (s as f32 / 8.0));
-                }
-            }
-        }
+        let targets = vertex_and_eighth_edge_points(&obj.positions, &obj.triangles);
         for p in targets {
             for jitter in [Vec3::ZERO, Vec3::new(0.125, -0.25, 0.0625)] {
                 let o = p * 3.0 + jitter;

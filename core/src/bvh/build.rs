@@ -190,16 +190,27 @@ impl JobSink<'_> {
     }
 }
 
+/// What the validating pass finds of a build's usable primitives: the root's contents.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Usable {
+    /// How many there are.
+    pub(super) count: u32,
+    /// The union of their boxes ([`Aabb::EMPTY`] for none).
+    pub(super) bounds: Aabb,
+    /// The box of their boxes' centres.
+    pub(super) centroids: Aabb,
+}
+
 /// Checks the storage and every primitive (nothing written but what `usable` writes); calls
-/// `usable(k, i, bounds, centroid)` for the `k`-th usable primitive `i`; returns the usable
-/// count and the root's box and centroid box.
+/// `usable(k, i, bounds, centroid)` for the `k`-th usable primitive `i`; returns what it
+/// found of the usable primitives.
 fn validate<S: PrimitiveSource + ?Sized>(
     source: &S,
     nodes: &[BvhNode],
     indices: &[u32],
     options: &BuildOptions,
     mut usable: impl FnMut(usize, usize, Aabb, Vec3),
-) -> Result<(u32, Aabb, Aabb), BvhError> {
+) -> Result<Usable, BvhError> {
     let n = source.primitive_count();
     if n > MAX_PRIMITIVES {
         return Err(BvhError::TooManyPrimitives { count: n });
@@ -231,7 +242,11 @@ fn validate<S: PrimitiveSource + ?Sized>(
             return Err(BvhError::NonFinitePrimitive { index: i });
         }
     }
-    Ok((count, root_bounds, root_centroids))
+    Ok(Usable {
+        count,
+        bounds: root_bounds,
+        centroids: root_centroids,
+    })
 }
 
 /// Builds into `nodes`/`indices`; returns `(node_count, prim_count)`.
@@ -242,9 +257,8 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
     options: &BuildOptions,
     work: &mut BuildWorkspace,
 ) -> Result<(u32, u32), BvhError> {
-    let (count, root_bounds, root_centroids) =
-        validate(source, nodes, indices, options, |_, _, _, _| {})?;
-    if count == 0 {
+    let root = validate(source, nodes, indices, options, |_, _, _, _| {})?;
+    if root.count == 0 {
         return Ok((0, 0));
     }
     let mut k = 0usize;
@@ -259,17 +273,8 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
         k += 1;
     }
     let mut refs = Indexed { source, indices };
-    let node_count = build_top(
-        &mut refs,
-        nodes,
-        count,
-        &root_bounds,
-        root_centroids,
-        options,
-        None,
-        work,
-    );
-    Ok((node_count, count))
+    let node_count = build_top(&mut refs, nodes, &root, options, None, work);
+    Ok((node_count, root.count))
 }
 
 /// [`build`] on a scratch array of [`PrimRef`]s (at least [`scratch_capacity`] entries, else
@@ -284,25 +289,16 @@ pub(super) fn build_with_scratch<S: PrimitiveSource + ?Sized>(
 ) -> Result<(u32, u32), BvhError> {
     // One pass over the source: the records are written while validating (the scratch is
     // not output; nodes and indices are written only after the pass succeeds).
-    let (count, root_bounds, root_centroids) =
-        prepare_scratch(source, nodes, indices, scratch, options)?;
-    if count == 0 {
+    let root = prepare_scratch(source, nodes, indices, scratch, options)?;
+    if root.count == 0 {
         return Ok((0, 0));
     }
-    let refs = scratch.get_mut(..count as usize).unwrap_or_default();
+    let refs = scratch.get_mut(..root.count as usize).unwrap_or_default();
     let mut view = Scratch { refs, offset: 0 };
-    let node_count = build_top(
-        &mut view,
-        nodes,
-        count,
-        &root_bounds,
-        root_centroids,
-        options,
-        None,
-        &mut const { BuildWorkspace::new() },
-    );
+    let work = &mut const { BuildWorkspace::new() };
+    let node_count = build_top(&mut view, nodes, &root, options, None, work);
     fill_indices(indices, view.refs);
-    Ok((node_count, count))
+    Ok((node_count, root.count))
 }
 
 /// `indices[k]` = the source index of record `k` (the final leaf order).
@@ -313,15 +309,15 @@ pub(super) fn fill_indices(indices: &mut [u32], refs: &[PrimRef]) {
 }
 
 /// Validates `source` and the storage, fills `scratch`: the first pass of
-/// [`build_with_scratch`], for the split build. Returns the usable count and the root's box
-/// and centroid box.
+/// [`build_with_scratch`], for the split build. Returns what it found of the usable
+/// primitives.
 pub(super) fn prepare_scratch<S: PrimitiveSource + ?Sized>(
     source: &S,
     nodes: &[BvhNode],
     indices: &[u32],
     scratch: &mut [PrimRef],
     options: &BuildOptions,
-) -> Result<(u32, Aabb, Aabb), BvhError> {
+) -> Result<Usable, BvhError> {
     let n = source.primitive_count();
     if scratch.len() < scratch_capacity(n) {
         return Err(BvhError::ScratchTooSmall {
@@ -337,27 +333,25 @@ pub(super) fn prepare_scratch<S: PrimitiveSource + ?Sized>(
 }
 
 /// The top of every build: the root, the optional cache-line pad, then [`grow`] from the
-/// root (leaving subtrees to `jobs` when given). Returns the next free node index.
-#[allow(clippy::too_many_arguments)]
+/// root (leaving subtrees to `jobs` when given) over the `root` primitives of `refs`.
+/// Returns the next free node index.
 pub(super) fn build_top<R: Refs>(
     refs: &mut R,
     nodes: &mut [BvhNode],
-    count: u32,
-    root_bounds: &Aabb,
-    root_centroids: Aabb,
+    root: &Usable,
     options: &BuildOptions,
     jobs: Option<&mut JobSink<'_>>,
     work: &mut BuildWorkspace,
 ) -> u32 {
     let mut node_count = 1u32;
-    if let Some(root) = nodes.first_mut() {
-        root.set_bounds(root_bounds);
+    if let Some(node) = nodes.first_mut() {
+        node.set_bounds(&root.bounds);
     }
     // Sibling pairs are allocated two by two after the root. When the storage has a spare slot,
     // start them at a 64-byte boundary (skipping node 1, left empty) so that the two boxes a
     // traversal step reads share one cache line. Only speed depends on this.
     let base_is_64_aligned = (nodes.as_ptr() as usize).is_multiple_of(64);
-    if base_is_64_aligned && nodes.len() > node_capacity(count as usize) {
+    if base_is_64_aligned && nodes.len() > node_capacity(root.count as usize) {
         if let Some(pad) = nodes.get_mut(1) {
             *pad = BvhNode::EMPTY;
         }
@@ -366,9 +360,9 @@ pub(super) fn build_top<R: Refs>(
     let task = Task {
         node: 0,
         start: 0,
-        end: count,
+        end: root.count,
         depth: 0,
-        centroids: root_centroids,
+        centroids: root.centroids,
     };
     let mut view = NodeView {
         nodes,

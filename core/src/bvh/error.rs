@@ -1,5 +1,6 @@
 //! Errors of BVH construction, refitting and queries.
 
+use crate::error::{write_non_finite_primitive, write_too_many, write_too_small};
 use core::fmt;
 
 /// Why a BVH operation was refused. Every variant is returned before any caller storage is
@@ -87,23 +88,15 @@ impl fmt::Display for BvhError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             Self::NodeStorageTooSmall { needed, available } => {
-                write!(
-                    f,
-                    "BVH node storage too small: {needed} needed, {available} available"
-                )
+                write_too_small(f, "BVH node storage", needed, available)
             }
-            Self::IndexStorageTooSmall { needed, available } => write!(
-                f,
-                "BVH index storage too small: {needed} needed, {available} available"
-            ),
-            Self::TooManyPrimitives { count } => write!(
-                f,
-                "too many primitives for a BVH: {count} (max {})",
-                super::MAX_PRIMITIVES
-            ),
-            Self::NonFinitePrimitive { index } => {
-                write!(f, "primitive {index} has non-finite or empty bounds")
+            Self::IndexStorageTooSmall { needed, available } => {
+                write_too_small(f, "BVH index storage", needed, available)
             }
+            Self::TooManyPrimitives { count } => {
+                write_too_many(f, "primitives", "a BVH", count, super::MAX_PRIMITIVES)
+            }
+            Self::NonFinitePrimitive { index } => write_non_finite_primitive(f, index),
             Self::SourceLengthMismatch { expected, found } => write!(
                 f,
                 "refit source has {found} primitives, the BVH was built over {expected}"
@@ -112,14 +105,15 @@ impl fmt::Display for BvhError {
                 f,
                 "wide BVH triangle storage too small: {needed} groups needed, {available} available"
             ),
-            Self::ScratchTooSmall { needed, available } => write!(
+            Self::ScratchTooSmall { needed, available } => {
+                write_too_small(f, "BVH build scratch", needed, available)
+            }
+            Self::TooManyTriangles { count } => write_too_many(
                 f,
-                "BVH build scratch too small: {needed} needed, {available} available"
-            ),
-            Self::TooManyTriangles { count } => write!(
-                f,
-                "too many triangles for a wide BVH: {count} (max {})",
-                super::wide::MAX_TRIANGLES
+                "triangles",
+                "a wide BVH",
+                count,
+                super::wide::MAX_TRIANGLES,
             ),
             Self::LeafTooLarge { count } => write!(
                 f,

@@ -128,6 +128,29 @@ pub struct JobParts<'a> {
     options: BuildOptions,
 }
 
+impl<'a> JobParts<'a> {
+    /// The parts of `jobs` (sorted by first record, their node reservations set) over the
+    /// nodes after the top's `top_nodes` in `nodes` and the first `count` records of
+    /// `scratch`.
+    fn new(
+        jobs: &'a mut [BuildJob],
+        nodes: &'a mut [BvhNode],
+        top_nodes: u32,
+        scratch: &'a mut [PrimRef],
+        count: u32,
+        options: BuildOptions,
+    ) -> Self {
+        Self {
+            jobs: jobs.iter_mut(),
+            nodes: nodes.get_mut(top_nodes as usize..).unwrap_or_default(),
+            node_base: top_nodes,
+            refs: scratch.get_mut(..count as usize).unwrap_or_default(),
+            ref_base: 0,
+            options,
+        }
+    }
+}
+
 impl<'a> Iterator for JobParts<'a> {
     type Item = JobPart<'a>;
 
@@ -184,8 +207,8 @@ where
         options: &BuildOptions,
         run: impl FnOnce(JobParts<'_>),
     ) -> Result<Self, BvhError> {
-        let (count, root_bounds, root_centroids) =
-            prepare_scratch(source, nodes.as_ref(), indices.as_ref(), scratch, options)?;
+        let root = prepare_scratch(source, nodes.as_ref(), indices.as_ref(), scratch, options)?;
+        let count = root.count;
         let source_len = source.primitive_count();
         let node_slice = nodes.as_mut();
         if count == 0 {
@@ -203,9 +226,7 @@ where
                 offset: 0,
             },
             node_slice,
-            count,
-            &root_bounds,
-            root_centroids,
+            &root,
             options,
             Some(&mut sink),
             &mut const { BuildWorkspace::new() },
@@ -225,25 +246,12 @@ where
                 .unwrap_or(BvhNode::EMPTY);
         }
 
-        run(JobParts {
-            jobs: jobs.iter_mut(),
-            nodes: node_slice.get_mut(top_nodes as usize..).unwrap_or_default(),
-            node_base: top_nodes,
-            refs: scratch.get_mut(..count as usize).unwrap_or_default(),
-            ref_base: 0,
-            options: *options,
-        });
+        run(JobParts::new(
+            jobs, node_slice, top_nodes, scratch, count, *options,
+        ));
 
         // Jobs the caller did not build, then the join.
-        let parts = JobParts {
-            jobs: jobs.iter_mut(),
-            nodes: node_slice.get_mut(top_nodes as usize..).unwrap_or_default(),
-            node_base: top_nodes,
-            refs: scratch.get_mut(..count as usize).unwrap_or_default(),
-            ref_base: 0,
-            options: *options,
-        };
-        for part in parts {
+        for part in JobParts::new(jobs, node_slice, top_nodes, scratch, count, *options) {
             if !part.job.done {
                 part.build();
             }

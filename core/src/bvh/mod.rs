@@ -335,7 +335,7 @@ where
         work: &mut BuildWorkspace,
         options: &BuildOptions,
     ) -> Result<Self, BvhError> {
-        Self::built_by(source, nodes, indices, |n, i| {
+        Self::build_with(source, nodes, indices, |n, i| {
             build::build(source, n, i, options, work)
         })
     }
@@ -358,14 +358,14 @@ where
         scratch: &mut [PrimRef],
         options: &BuildOptions,
     ) -> Result<Self, BvhError> {
-        Self::built_by(source, nodes, indices, |n, i| {
+        Self::build_with(source, nodes, indices, |n, i| {
             build::build_with_scratch(source, n, i, scratch, options)
         })
     }
 
-    /// The tree `build` writes into `nodes` and `indices` (returning the node and primitive
-    /// counts) over `source`; `build`'s error otherwise.
-    fn built_by<S: PrimitiveSource + ?Sized>(
+    /// The tree `build` writes into the storage's slices over `source`: `build` returns
+    /// `(node count, primitive count)` or refuses before writing.
+    fn build_with<S: PrimitiveSource + ?Sized>(
         source: &S,
         mut nodes: N,
         mut indices: I,

@@ -22,6 +22,28 @@ fn build<S: PrimitiveSource + ?Sized>(src: &S, opts: &BuildOptions) -> Result<Ve
     )
 }
 
+/// [`Bvh::build_with_scratch`] into full-capacity vectors, with the caller's `scratch`.
+fn build_scratch(
+    mesh: &TriangleMesh<'_>,
+    scratch: &mut [PrimRef],
+    opts: &BuildOptions,
+) -> Result<VecBvh, BvhError> {
+    let n = mesh.len();
+    Bvh::build_with_scratch(
+        mesh,
+        vec![BvhNode::EMPTY; node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        scratch,
+        opts,
+    )
+}
+
+/// The error of a default-options build of `mesh` into `nodes` and `idx`, which must be
+/// refused (panics on a successful build).
+fn refused(mesh: &TriangleMesh<'_>, nodes: &mut [BvhNode], idx: &mut [u32]) -> BvhError {
+    Bvh::build(mesh, nodes, idx, &BuildOptions::default()).unwrap_err()
+}
+
 /// The tests' brute force as `(triangle, t)` ([`brute_watertight`]).
 fn brute(mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, f32)> {
     brute_watertight(mesh, ray).map(|(i, h)| (i, h.t))
@@ -77,13 +99,7 @@ fn too_small_storage_is_an_error_before_writing() {
     let mesh = TriangleMesh::new(&pos, &tris);
     let mut nodes = [BvhNode::EMPTY; 18];
     let mut idx = [7u32; 10];
-    let err = Bvh::build(
-        &mesh,
-        &mut nodes[..],
-        &mut idx[..],
-        &BuildOptions::default(),
-    )
-    .unwrap_err();
+    let err = refused(&mesh, &mut nodes, &mut idx);
     assert_eq!(
         err,
         BvhError::NodeStorageTooSmall {
@@ -95,13 +111,7 @@ fn too_small_storage_is_an_error_before_writing() {
     assert!(idx.iter().all(|&i| i == 7));
     let mut nodes = [BvhNode::EMPTY; 19];
     let mut idx = [7u32; 9];
-    let err = Bvh::build(
-        &mesh,
-        &mut nodes[..],
-        &mut idx[..],
-        &BuildOptions::default(),
-    )
-    .unwrap_err();
+    let err = refused(&mesh, &mut nodes, &mut idx);
     assert!(matches!(
         err,
         BvhError::IndexStorageTooSmall { needed: 10, .. }
@@ -120,13 +130,7 @@ fn non_finite_primitives_are_named_or_excluded() {
     tris[5] = [0, 1, 999]; // triangle 5: index out of range
     let mesh = TriangleMesh::new(&pos, &tris);
     let mut nodes = vec![BvhNode::EMPTY; node_capacity(8)];
-    let err = Bvh::build(
-        &mesh,
-        &mut nodes[..],
-        vec![0u32; 8],
-        &BuildOptions::default(),
-    )
-    .unwrap_err();
+    let err = refused(&mesh, &mut nodes, &mut [0u32; 8]);
     assert_eq!(err, BvhError::NonFinitePrimitive { index: 2 });
     assert!(nodes.iter().all(|n| *n == BvhNode::EMPTY));
     let opts = BuildOptions {
@@ -493,14 +497,7 @@ fn scratch_build_gives_the_same_tree() {
             let plain = build(&mesh, &opts).unwrap();
             let n = mesh.len();
             let mut scratch = vec![PrimRef::EMPTY; scratch_capacity(n)];
-            let fast = Bvh::build_with_scratch(
-                &mesh,
-                vec![BvhNode::EMPTY; node_capacity(n)],
-                vec![0u32; index_capacity(n)],
-                &mut scratch,
-                &opts,
-            )
-            .unwrap();
+            let fast = build_scratch(&mesh, &mut scratch, &opts).unwrap();
             // Node placement may differ by one padding slot (the builder aligns sibling pairs
             // to the storage's cache lines): compare the trees as trees.
             assert_eq!(
@@ -564,14 +561,7 @@ fn build_in_jobs_gives_the_scratch_build_tree_without_gaps() {
                 ..BuildOptions::default()
             };
             let mut scratch = vec![PrimRef::EMPTY; scratch_capacity(n)];
-            let reference = Bvh::build_with_scratch(
-                &mesh,
-                vec![BvhNode::EMPTY; node_capacity(n)],
-                vec![0u32; index_capacity(n)],
-                &mut scratch,
-                &opts,
-            )
-            .unwrap();
+            let reference = build_scratch(&mesh, &mut scratch, &opts).unwrap();
             for (job_size, slots, order) in [
                 (0, 8, 0),
                 (2, 8, 0),

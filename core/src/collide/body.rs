@@ -61,12 +61,19 @@ impl<'a, N: AsRef<[BvhNode]>, I: AsRef<[u32]>> Body<'a, N, I> {
         self.bvh.nodes()
     }
 
-    /// Triangle indices of a leaf (empty for an inner node or a bad range).
-    pub(super) fn leaf(&self, node: &BvhNode) -> &'a [u32] {
-        let indices = self.bvh.indices();
-        node.primitive_range()
+    /// The triangles of a leaf with their indices, in the leaf's order, skipping any the mesh
+    /// cannot give (a vertex index out of range). Empty for an inner node or a bad range.
+    pub(super) fn leaf_triangles(
+        &self,
+        node: &BvhNode,
+    ) -> impl Iterator<Item = (u32, [Vec3; 3])> + use<'a, N, I> {
+        let (indices, mesh) = (self.bvh.indices(), self.mesh);
+        let leaf = node
+            .primitive_range()
             .and_then(|r| indices.get(r))
-            .unwrap_or(&[])
+            .unwrap_or(&[]);
+        leaf.iter()
+            .filter_map(move |&i| mesh.triangle(i as usize).map(|t| (i, t)))
     }
 }
 

@@ -125,16 +125,10 @@ fn leaf_pairs<NA, IA, NB, IB>(
     NB: AsRef<[BvhNode]>,
     IB: AsRef<[u32]>,
 {
-    let (ma, mb) = (a.mesh(), b.mesh());
-    for &q in b.leaf(y) {
-        let Some(tb) = mb.triangle(q as usize).map(|t| place.triangle(t)) else {
-            continue;
-        };
+    for (q, tb) in b.leaf_triangles(y) {
+        let tb = place.triangle(tb);
         let box_b = DBox::from_aabb(&Primitive::bounds(&tb));
-        for &p in a.leaf(x) {
-            let Some(ta) = ma.triangle(p as usize) else {
-                continue;
-            };
+        for (p, ta) in a.leaf_triangles(x) {
             let bound = best.map_or(max_distance, |c| c.distance);
             if lower(DBox::from_aabb(&Primitive::bounds(&ta)).distance(&box_b)) > bound {
                 continue;

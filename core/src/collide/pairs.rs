@@ -141,16 +141,10 @@ where
     NB: AsRef<[BvhNode]>,
     IB: AsRef<[u32]>,
 {
-    let (ma, mb) = (a.mesh(), b.mesh());
-    for &q in b.leaf(y) {
-        let Some(tb) = mb.triangle(q as usize).map(|t| place.triangle(t)) else {
-            continue;
-        };
+    for (q, tb) in b.leaf_triangles(y) {
+        let tb = place.triangle(tb);
         let box_b: Aabb = Primitive::bounds(&tb);
-        for &p in a.leaf(x) {
-            let Some(ta) = ma.triangle(p as usize) else {
-                continue;
-            };
+        for (p, ta) in a.leaf_triangles(x) {
             if Primitive::bounds(&ta).overlaps(&box_b) && triangles_intersect(&ta, &tb) {
                 found(p, q)?;
             }

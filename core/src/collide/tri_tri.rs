@@ -56,28 +56,34 @@ fn edges(t: &[Vec3; 3]) -> [(Vec3, Vec3); 3] {
     [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]
 }
 
+/// The exact sides of `t`'s vertices of the plane through `plane`'s vertices: each the sign
+/// [`orient3d`] gives (`1`, `−1`, or `0` on the plane).
+fn plane_signs(plane: &[Vec3; 3], t: &[Vec3; 3]) -> [i32; 3] {
+    let [a, b, c] = *plane;
+    t.map(|x| orient3d(a, b, c, x))
+}
+
+/// `true` when the three signs are equal and non-zero: the triangle lies strictly on one
+/// side of the plane.
+fn strictly_one_side([p, q, r]: [i32; 3]) -> bool {
+    p * q > 0 && p * r > 0
+}
+
 /// Devillers–Guigue for two non-degenerate triangles.
 fn devillers_guigue(t1: &[Vec3; 3], t2: &[Vec3; 3]) -> bool {
     let [p1, q1, r1] = *t1;
     let [p2, q2, r2] = *t2;
-    let (dp1, dq1, dr1) = (
-        orient3d(p2, q2, r2, p1),
-        orient3d(p2, q2, r2, q1),
-        orient3d(p2, q2, r2, r1),
-    );
-    if dp1 * dq1 > 0 && dp1 * dr1 > 0 {
+    let s1 = plane_signs(t2, t1);
+    if strictly_one_side(s1) {
         return false;
     }
-    let (dp2, dq2, dr2) = (
-        orient3d(p1, q1, r1, p2),
-        orient3d(p1, q1, r1, q2),
-        orient3d(p1, q1, r1, r2),
-    );
-    if dp2 * dq2 > 0 && dp2 * dr2 > 0 {
+    let s2 = plane_signs(t1, t2);
+    if strictly_one_side(s2) {
         return false;
     }
+    let [dp1, dq1, dr1] = s1;
+    let [dp2, dq2, dr2] = s2;
     // Canonical form of T1's vertices: p1 alone on its side (or the appropriate zero case).
-    let s2 = [dp2, dq2, dr2];
     let flip = [dp2, dr2, dq2];
     let (t1c, t2c, s) = if dp1 > 0 {
         if dq1 > 0 {

@@ -1,5 +1,6 @@
 //! Errors of grid planning and construction.
 
+use crate::error::{write_too_many, write_too_small};
 use core::fmt;
 
 /// Why a grid could not be planned or built. Every variant is returned before any caller
@@ -53,23 +54,19 @@ pub enum GridError {
 impl fmt::Display for GridError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            Self::OffsetStorageTooSmall { needed, available } => write!(
-                f,
-                "grid offset storage too small: {needed} needed, {available} available"
-            ),
-            Self::ReferenceStorageTooSmall { needed, available } => write!(
-                f,
-                "grid reference storage too small: {needed} needed, {available} available"
-            ),
+            Self::OffsetStorageTooSmall { needed, available } => {
+                write_too_small(f, "grid offset storage", needed, available)
+            }
+            Self::ReferenceStorageTooSmall { needed, available } => {
+                write_too_small(f, "grid reference storage", needed, available)
+            }
             Self::NonFiniteTriangle { index } => write!(
                 f,
                 "triangle {index} has a non-finite vertex or an out-of-range vertex index"
             ),
-            Self::TooManyTriangles { count } => write!(
-                f,
-                "too many triangles for a grid: {count} (max {})",
-                super::MAX_TRIANGLES
-            ),
+            Self::TooManyTriangles { count } => {
+                write_too_many(f, "triangles", "a grid", count, super::MAX_TRIANGLES)
+            }
             Self::TooManyReferences { count } => write!(
                 f,
                 "too many grid cell references: {count} (max {})",

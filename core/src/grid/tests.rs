@@ -24,6 +24,15 @@ fn build(mesh: &TriangleMesh<'_>, options: &GridOptions) -> Result<VecGrid, Grid
     )
 }
 
+/// The grid of `mesh` with default options but `assignment` (panics when refused).
+fn build_assigned(mesh: &TriangleMesh<'_>, assignment: CellAssignment) -> VecGrid {
+    let options = GridOptions {
+        assignment,
+        ..GridOptions::default()
+    };
+    build(mesh, &options).unwrap()
+}
+
 /// A soup of `n` random triangles of size about `size` in a box of side `scale`.
 fn soup(seed: u64, n: usize, scale: f32, size: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
     let mut s = seed;
@@ -210,11 +219,7 @@ fn every_vertex_cell_references_its_triangle() {
     let (p, t) = soup(3, 300, 8.0, 0.7);
     let mesh = TriangleMesh::new(&p, &t);
     for assignment in [CellAssignment::Bounds, CellAssignment::Exact] {
-        let opts = GridOptions {
-            assignment,
-            ..GridOptions::default()
-        };
-        let g = build(&mesh, &opts).unwrap();
+        let g = build_assigned(&mesh, assignment);
         let off = g.offsets();
         assert_eq!(off.len(), g.cell_count() + 1);
         assert_eq!(off[0], 0);
@@ -250,12 +255,8 @@ fn every_vertex_cell_references_its_triangle() {
 fn exact_assignment_is_a_subset_of_bounds() {
     let (p, t) = soup(4, 200, 10.0, 3.0);
     let mesh = TriangleMesh::new(&p, &t);
-    let opts = |assignment| GridOptions {
-        assignment,
-        ..GridOptions::default()
-    };
-    let a = build(&mesh, &opts(CellAssignment::Bounds)).unwrap();
-    let e = build(&mesh, &opts(CellAssignment::Exact)).unwrap();
+    let a = build_assigned(&mesh, CellAssignment::Bounds);
+    let e = build_assigned(&mesh, CellAssignment::Exact);
     assert_eq!(a.resolution(), e.resolution());
     assert!(e.reference_count() * 10 < a.reference_count() * 8);
     for id in 0..a.cell_count() {
@@ -321,11 +322,7 @@ fn random_soups_equal_brute_force() {
         let (p, t) = soup(seed, n, 8.0, size);
         let mesh = TriangleMesh::new(&p, &t);
         for assignment in [CellAssignment::Bounds, CellAssignment::Exact] {
-            let opts = GridOptions {
-                assignment,
-                ..GridOptions::default()
-            };
-            let g = build(&mesh, &opts).unwrap();
+            let g = build_assigned(&mesh, assignment);
             let mut s = seed;
             let rays: Vec<Ray> = (0..400)
                 .map(|_| {

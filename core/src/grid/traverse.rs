@@ -4,9 +4,8 @@
 use super::Grid;
 use super::plan::ray_pad;
 use crate::aabb::{Aabb, SlabRay};
-use crate::bvh::{TriangleMesh, cull_bound, test_run};
+use crate::bvh::{cull_bound, test_run};
 use crate::ray::Ray;
-use crate::triangle::{TriangleHit, TriangleIntersector};
 use glam::Vec3;
 
 /// Traversal counters. Queries **add** to the counters they are given.
@@ -57,56 +56,26 @@ where
     O: AsRef<[u32]>,
     R: AsRef<[u32]>,
 {
-    /// The closest hit of `ray`, as `(triangle index, intersect's payload)`.
-    ///
-    /// `intersect(prim, ray)` tests one triangle against `ray`, whose `t_max` is the current
-    /// closest `t` (inclusive), and returns `(t, payload)` for a hit in `(t_min, t_max]`;
-    /// hits outside the interval are ignored. Of equal `t`, the smaller index wins, so the
-    /// result equals a brute-force loop with the same rule (module docs). `stats`, when
-    /// given, is **added to**. An invalid ray returns `None` without testing anything.
-    pub fn closest_hit<H>(
-        &self,
-        ray: &Ray,
-        intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
-        stats: Option<&mut GridStats>,
-    ) -> Option<(u32, H)> {
-        self.traverse(ray, intersect, stats, false)
-    }
-
-    /// Any hit of `ray` (shadow rays): stops at the first triangle `intersect` reports in
-    /// `(t_min, t_max]`. Which one depends on the grid; hit or miss does not.
-    pub fn any_hit<H>(
-        &self,
-        ray: &Ray,
-        intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
-        stats: Option<&mut GridStats>,
-    ) -> Option<(u32, H)> {
-        self.traverse(ray, intersect, stats, true)
-    }
-
-    /// [`Grid::closest_hit`] over `mesh` (the mesh the grid was built over) with the
-    /// intersector `isect`, prepared once per ray. Returns the triangle index and its hit.
-    #[inline]
-    pub fn closest_hit_triangles<T: TriangleIntersector>(
-        &self,
-        mesh: &TriangleMesh<'_>,
-        isect: &T,
-        ray: &Ray,
-        stats: Option<&mut GridStats>,
-    ) -> Option<(u32, TriangleHit)> {
-        self.traverse(ray, mesh.prepared_intersect(isect, ray)?, stats, false)
-    }
-
-    /// [`Grid::any_hit`] over `mesh` with the intersector `isect`.
-    #[inline]
-    pub fn any_hit_triangles<T: TriangleIntersector>(
-        &self,
-        mesh: &TriangleMesh<'_>,
-        isect: &T,
-        ray: &Ray,
-        stats: Option<&mut GridStats>,
-    ) -> Option<(u32, TriangleHit)> {
-        self.traverse(ray, mesh.prepared_intersect(isect, ray)?, stats, true)
+    crate::hit_queries::hit_queries! {
+        stats: GridStats;
+        /// The closest hit of `ray`, as `(triangle index, intersect's payload)`.
+        ///
+        /// `intersect(prim, ray)` tests one triangle against `ray`, whose `t_max` is the current
+        /// closest `t` (inclusive), and returns `(t, payload)` for a hit in `(t_min, t_max]`;
+        /// hits outside the interval are ignored. Of equal `t`, the smaller index wins, so the
+        /// result equals a brute-force loop with the same rule (module docs). `stats`, when
+        /// given, is **added to**. An invalid ray returns `None` without testing anything.
+        closest_hit;
+        /// Any hit of `ray` (shadow rays): stops at the first triangle `intersect` reports in
+        /// `(t_min, t_max]`. Which one depends on the grid; hit or miss does not.
+        any_hit;
+        /// [`Grid::closest_hit`] over `mesh` (the mesh the grid was built over) with the
+        /// intersector `isect`, prepared once per ray. Returns the triangle index and its hit.
+        #[inline]
+        closest_hit_triangles;
+        /// [`Grid::any_hit`] over `mesh` with the intersector `isect`.
+        #[inline]
+        any_hit_triangles;
     }
 
     /// Closest hit, or any hit when `any`.

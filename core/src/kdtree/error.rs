@@ -1,5 +1,6 @@
 //! Errors of kd-tree construction.
 
+use crate::error::{write_non_finite_primitive, write_too_many, write_too_small};
 use core::fmt;
 
 /// Why a kd-tree build was refused. Every variant is returned before any caller storage
@@ -46,26 +47,19 @@ pub enum KdTreeError {
 impl fmt::Display for KdTreeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            Self::NodeStorageTooSmall { needed, available } => write!(
-                f,
-                "kd-tree node storage too small: {needed} needed, {available} available"
-            ),
-            Self::ReferenceStorageTooSmall { needed, available } => write!(
-                f,
-                "kd-tree reference storage too small: {needed} needed, {available} available"
-            ),
-            Self::ScratchTooSmall { needed, available } => write!(
-                f,
-                "kd-tree build scratch too small: {needed} needed, {available} available"
-            ),
-            Self::TooManyPrimitives { count } => write!(
-                f,
-                "too many primitives for a kd-tree: {count} (max {})",
-                super::MAX_PRIMITIVES
-            ),
-            Self::NonFinitePrimitive { index } => {
-                write!(f, "primitive {index} has non-finite or empty bounds")
+            Self::NodeStorageTooSmall { needed, available } => {
+                write_too_small(f, "kd-tree node storage", needed, available)
             }
+            Self::ReferenceStorageTooSmall { needed, available } => {
+                write_too_small(f, "kd-tree reference storage", needed, available)
+            }
+            Self::ScratchTooSmall { needed, available } => {
+                write_too_small(f, "kd-tree build scratch", needed, available)
+            }
+            Self::TooManyPrimitives { count } => {
+                write_too_many(f, "primitives", "a kd-tree", count, super::MAX_PRIMITIVES)
+            }
+            Self::NonFinitePrimitive { index } => write_non_finite_primitive(f, index),
         }
     }
 }

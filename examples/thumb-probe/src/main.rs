@@ -16,36 +16,15 @@
 use core::panic::PanicInfo;
 use core::sync::atomic::{AtomicU32, Ordering};
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, node_capacity};
+use halfray_core::solids::{CUBE_TRIANGLES, CUBE_VERTICES};
 use halfray_core::triangle::Watertight;
 use halfray_core::{Ray, Vec3};
 
-/// The cube `[-1, 1]³`: 8 vertices.
-static POSITIONS: [Vec3; 8] = [
-    Vec3::new(-1.0, -1.0, -1.0),
-    Vec3::new(1.0, -1.0, -1.0),
-    Vec3::new(-1.0, 1.0, -1.0),
-    Vec3::new(1.0, 1.0, -1.0),
-    Vec3::new(-1.0, -1.0, 1.0),
-    Vec3::new(1.0, -1.0, 1.0),
-    Vec3::new(-1.0, 1.0, 1.0),
-    Vec3::new(1.0, 1.0, 1.0),
-];
+/// The cube `[-1, 1]³` ([`CUBE_VERTICES`]), in a static as flash data.
+static POSITIONS: [Vec3; 8] = CUBE_VERTICES;
 
-/// Its 12 triangles, counter-clockwise seen from outside.
-static TRIANGLES: [[u32; 3]; 12] = [
-    [0, 2, 3],
-    [0, 3, 1],
-    [4, 5, 7],
-    [4, 7, 6],
-    [0, 1, 5],
-    [0, 5, 4],
-    [2, 6, 7],
-    [2, 7, 3],
-    [0, 4, 6],
-    [0, 6, 2],
-    [1, 3, 7],
-    [1, 7, 5],
-];
+/// Its 12 triangles, counter-clockwise seen from outside ([`CUBE_TRIANGLES`]).
+static TRIANGLES: [[u32; 3]; 12] = CUBE_TRIANGLES;
 
 const PRIMS: usize = TRIANGLES.len();
 

@@ -2,20 +2,20 @@
 //! uniform grid, the kd-tree, the binary BVH and the 8-wide BVH — built from the same
 //! triangles and traced with the same intersector ([`Watertight`]) on the same rays.
 //!
-//! Rays as in `bench bvh`: the primary rays of a `width × width` camera framing the mesh and
-//! `--rays` incoherent rays (seed [`INCOHERENT_SEED`]). Every throughput is single-threaded and
-//! the best of [`TIMED_PASSES`] passes, the structures taking turns pass by pass
+//! Rays as in `bench bvh` ([`super::RunArgs::ray_sets`]): the primary rays of a
+//! `width × width` camera framing the mesh and `--rays` incoherent rays (seed
+//! [`super::bvh::INCOHERENT_SEED`]). Every throughput is single-threaded and the best of
+//! [`TIMED_PASSES`] passes, the structures taking turns pass by pass
 //! ([`interleaved`]) so that a slow spell of the shared machine falls on all of them. Each
 //! build is timed once per pass, best kept. `brute_force_mismatches` counts the rays of a
 //! sample of the incoherent set (about [`BRUTE_FORCE_TESTS`] triangle tests) where the
 //! structure's closest hit (triangle and `t`) differs from a loop over every triangle with
 //! the same intersector: every structure promises 0.
 
-use super::bvh::{BRUTE_FORCE_TESTS, INCOHERENT_SEED, TIMED_PASSES, brute_force, interleaved};
+use super::bvh::{BRUTE_FORCE_TESTS, TIMED_PASSES, brute_force, interleaved};
 use crate::accel::{VecBvh, VecBvh8, build_binary, build_wide, closest_simd};
 use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
-use crate::raysets::{Camera, random_rays};
 use halfray_core::Ray;
 use halfray_core::bvh::wide::binary_options;
 use halfray_core::bvh::{BuildOptions, TriangleMesh};
@@ -33,16 +33,9 @@ pub struct AccelArgs {
     /// Meshes to benchmark (OBJ), one after another.
     #[arg(required = true)]
     pub meshes: Vec<PathBuf>,
-    /// Also write the results as JSON to this file (atomically): the report object for one
-    /// mesh, an array of them for several.
-    #[arg(long)]
-    pub json: Option<PathBuf>,
-    /// Camera image width and height for the primary rays.
-    #[arg(long, default_value_t = 1024)]
-    pub width: usize,
-    /// Number of incoherent random rays.
-    #[arg(long, default_value_t = 1_000_000)]
-    pub rays: usize,
+    /// The JSON output and the ray sets.
+    #[command(flatten)]
+    pub run: super::RunArgs,
 }
 
 /// One mesh's figures, as written to the JSON file.
@@ -92,12 +85,12 @@ struct Built {
 
 /// Runs the benchmark.
 pub fn run(args: &AccelArgs) -> Result<()> {
-    super::check_inputs(args.width, args.rays, &args.meshes)?;
+    args.run.check_inputs(&args.meshes)?;
     let mut reports = Vec::with_capacity(args.meshes.len());
     for mesh in &args.meshes {
         reports.push(bench(args, mesh)?);
     }
-    super::write_json_reports(args.json.as_deref(), &reports)?;
+    super::write_json_reports(args.run.json.as_deref(), &reports)?;
     for r in &reports {
         print_report(r);
     }
@@ -162,9 +155,7 @@ fn bench(args: &AccelArgs, path: &Path) -> Result<AccelReport> {
     let isect = Watertight;
     let (s, build_s) = build_all(&mesh, path)?;
 
-    let (lo, hi) = obj.bounds().unwrap_or((glam::Vec3::ZERO, glam::Vec3::ONE));
-    let primary = Camera::framing(lo, hi, args.width, args.width).rays();
-    let incoherent = random_rays(lo, hi, args.rays, INCOHERENT_SEED);
+    let (primary, incoherent) = args.run.ray_sets(&obj);
 
     type Closest<'a> = Box<dyn Fn(&Ray) -> Option<(u32, f32)> + 'a>;
     let closest: [Closest<'_>; 4] = [

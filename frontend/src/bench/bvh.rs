@@ -16,7 +16,6 @@ mod rivals;
 use crate::accel::{any_simd, build_binary, build_binary_parallel, build_wide, closest_simd};
 use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
-use crate::raysets::{Camera, random_rays};
 use halfray_core::Ray;
 use halfray_core::bvh::wide::binary_options;
 use halfray_core::bvh::{BuildOptions, DEFAULT_MAX_LEAF_SIZE, TraversalStats, TriangleMesh};
@@ -40,16 +39,9 @@ pub struct BvhArgs {
     /// ratios to Embree closes the output.
     #[arg(required = true)]
     pub meshes: Vec<PathBuf>,
-    /// Also write the results as JSON to this file (atomically): the report object for one
-    /// mesh, an array of them for several.
-    #[arg(long)]
-    pub json: Option<PathBuf>,
-    /// Camera image width and height for the primary rays.
-    #[arg(long, default_value_t = 1024)]
-    pub width: usize,
-    /// Number of incoherent random rays.
-    #[arg(long, default_value_t = 1_000_000)]
-    pub rays: usize,
+    /// The JSON output and the ray sets.
+    #[command(flatten)]
+    pub run: super::RunArgs,
     /// Triangle intersector.
     #[arg(long, value_enum, default_value_t)]
     pub intersector: crate::cli_values::Intersector,
@@ -160,7 +152,7 @@ pub struct StructureReport {
 pub fn run(args: &BvhArgs) -> Result<()> {
     let variant = args.intersector.0;
     // The two ray sets are held in memory: estimated, and every mesh opened, before any work.
-    super::check_inputs(args.width, args.rays, &args.meshes)?;
+    args.run.check_inputs(&args.meshes)?;
     let mut reports = Vec::with_capacity(args.meshes.len());
     for mesh in &args.meshes {
         struct Bench<'a>(&'a BvhArgs, &'a std::path::Path);
@@ -173,7 +165,7 @@ pub fn run(args: &BvhArgs) -> Result<()> {
         let report = variant.visit(Bench(args, mesh))?;
         reports.push(report);
     }
-    super::write_json_reports(args.json.as_deref(), &reports)?;
+    super::write_json_reports(args.run.json.as_deref(), &reports)?;
     for r in &reports {
         print_report(r);
     }
@@ -319,9 +311,7 @@ fn bench<T: TriangleIntersector>(
     let stats = bvh.stats();
     let wstats = wide.stats();
 
-    let (lo, hi) = obj.bounds().unwrap_or((glam::Vec3::ZERO, glam::Vec3::ONE));
-    let primary = Camera::framing(lo, hi, args.width, args.width).rays();
-    let incoherent = random_rays(lo, hi, args.rays, INCOHERENT_SEED);
+    let (primary, incoherent) = args.run.ray_sets(&obj);
 
     let mut binary = StructureReport {
         build_ms: binary_s * 1e3,

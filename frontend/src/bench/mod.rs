@@ -6,7 +6,9 @@ pub mod bvh;
 
 use crate::atomic::write_bytes_atomic;
 use crate::error::{Error, Result};
-use halfray_core::Ray;
+use crate::obj::ObjMesh;
+use crate::raysets::{Camera, random_rays};
+use halfray_core::{Ray, Vec3};
 use std::path::{Path, PathBuf};
 
 /// `halfray bench ...`.
@@ -20,6 +22,60 @@ pub enum BenchCommand {
     Accuracy(accuracy::AccuracyArgs),
 }
 
+/// The options `bench bvh` and `bench accel` share: the JSON output and the two ray sets.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RunArgs {
+    /// Also write the results as JSON to this file (atomically): the report object for one
+    /// mesh, an array of them for several.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Camera image width and height for the primary rays.
+    #[arg(long, default_value_t = 1024)]
+    pub width: usize,
+    /// Number of incoherent random rays.
+    #[arg(long, default_value_t = 1_000_000)]
+    pub rays: usize,
+}
+
+impl RunArgs {
+    /// The checks `bench bvh` and `bench accel` make before any work: `--width` at least 1
+    /// ([`Error::Usage`] otherwise); the `width × width` primary and `rays` incoherent rays,
+    /// held in memory together, within [`crate::limits::check_memory`]'s budget; and every
+    /// one of `meshes` openable ([`Error::Io`] naming the first that is not), so that minutes
+    /// of work are not spent on a run that then fails on a misspelt last path.
+    ///
+    /// # Errors
+    ///
+    /// As listed, in that order.
+    pub fn check_inputs(&self, meshes: &[PathBuf]) -> Result<()> {
+        let (width, rays) = (self.width, self.rays);
+        if width == 0 {
+            return Err(Error::Usage("--width must be at least 1".into()));
+        }
+        let ray_bytes = std::mem::size_of::<Ray>() as u64;
+        let bytes = (width as u64)
+            .checked_mul(width as u64)
+            .and_then(|p| p.checked_add(rays as u64))
+            .and_then(|n| n.checked_mul(ray_bytes));
+        crate::limits::check_memory(&format!("--width {width} --rays {rays}"), bytes)?;
+        for mesh in meshes {
+            std::fs::File::open(mesh).map_err(|e| Error::io(mesh, e))?;
+        }
+        Ok(())
+    }
+
+    /// The two ray sets over `mesh`'s box (the unit cube `[0, 1]³` for a mesh without
+    /// vertices): the primary rays of a `width × width` camera framing it
+    /// ([`Camera::framing`]), then `rays` incoherent rays ([`random_rays`], seed
+    /// [`bvh::INCOHERENT_SEED`]).
+    pub fn ray_sets(&self, mesh: &ObjMesh) -> (Vec<Ray>, Vec<Ray>) {
+        let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
+        let primary = Camera::framing(lo, hi, self.width, self.width).rays();
+        let incoherent = random_rays(lo, hi, self.rays, bvh::INCOHERENT_SEED);
+        (primary, incoherent)
+    }
+}
+
 /// Runs a benchmark subcommand.
 pub fn run(cmd: &BenchCommand) -> Result<()> {
     match cmd {
@@ -27,31 +83,6 @@ pub fn run(cmd: &BenchCommand) -> Result<()> {
         BenchCommand::Accel(args) => accel::run(args),
         BenchCommand::Accuracy(args) => accuracy::run(args),
     }
-}
-
-/// The checks `bench bvh` and `bench accel` make before any work: `width` at least 1
-/// ([`Error::Usage`] otherwise); the `width × width` primary and `rays` incoherent rays, held
-/// in memory together, within [`crate::limits::check_memory`]'s budget; and every one of
-/// `meshes` openable ([`Error::Io`] naming the first that is not), so that minutes of work
-/// are not spent on a run that then fails on a misspelt last path.
-///
-/// # Errors
-///
-/// As listed, in that order.
-fn check_inputs(width: usize, rays: usize, meshes: &[PathBuf]) -> Result<()> {
-    if width == 0 {
-        return Err(Error::Usage("--width must be at least 1".into()));
-    }
-    let ray_bytes = std::mem::size_of::<Ray>() as u64;
-    let bytes = (width as u64)
-        .checked_mul(width as u64)
-        .and_then(|p| p.checked_add(rays as u64))
-        .and_then(|n| n.checked_mul(ray_bytes));
-    crate::limits::check_memory(&format!("--width {width} --rays {rays}"), bytes)?;
-    for mesh in meshes {
-        std::fs::File::open(mesh).map_err(|e| Error::io(mesh, e))?;
-    }
-    Ok(())
 }
 
 /// Writes `reports` as pretty JSON to `path` (atomically) when one is given: the report

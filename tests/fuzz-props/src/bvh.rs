@@ -10,8 +10,9 @@
 //! direction, then the aim or interval bytes.
 
 use super::*;
-use super::{Enc, Input, fmt_ray, fmt_vec3};
+use super::{Enc, Input, fmt_vec3};
 pub use crate::tree_oracle::Oracle;
+use crate::tree_oracle::checked_build;
 pub(crate) use crate::tree_oracle::usable_primitives;
 use glam::Vec3;
 use halfray_core::aabb::Aabb;
@@ -211,25 +212,14 @@ pub fn check(s: &Soup) {
     // 1. Build.
     let nodes = vec![BvhNode::default(); node_capacity(n)];
     let idx = vec![u32::MAX; index_capacity(n)];
-    let mut bvh = match (Bvh::build(&mesh, nodes, idx, &s.options), first_bad) {
-        (Ok(b), None) => b,
-        (Ok(b), Some(_)) if s.options.exclude_non_finite => b,
-        (Err(BvhError::NonFinitePrimitive { index }), Some(bad))
-            if !s.options.exclude_non_finite =>
-        {
-            assert_eq!(
-                index,
-                bad,
-                "NonFinitePrimitive names the wrong primitive\n{}",
-                ctx()
-            );
-            return;
-        }
-        (r, _) => panic!(
-            "build gave {:?} (first unusable primitive {first_bad:?})\n{}",
-            r.err(),
-            ctx()
-        ),
+    let non_finite = |e: &BvhError| match *e {
+        BvhError::NonFinitePrimitive { index } => Some(index),
+        _ => None,
+    };
+    let built = Bvh::build(&mesh, nodes, idx, &s.options);
+    let exclude = s.options.exclude_non_finite;
+    let Some(mut bvh) = checked_build(built, non_finite, first_bad, exclude, &ctx) else {
+        return;
     };
     let expected_count = valid.iter().filter(|&&ok| ok).count();
     assert_eq!(
@@ -277,19 +267,13 @@ pub fn check(s: &Soup) {
     .unwrap_or_else(|e| panic!("wide collapse: {e}\n{}", ctx()));
 
     // 4, 5. Rays.
-    for ray in &s.rays {
-        let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
-        let oracle = Oracle {
-            mesh: &mesh,
-            in_tree: &in_tree,
-            ctx: &rctx,
-        };
-        check_ray(&bvh, &oracle, &Watertight, ray, true);
-        check_wide(&wide, &oracle, &Watertight, ray, true);
+    Oracle::each_ray(&mesh, &in_tree, &ctx, &s.rays, |oracle, ray| {
+        check_ray(&bvh, oracle, &Watertight, ray, true);
+        check_wide(&wide, oracle, &Watertight, ray, true);
         // Möller–Trumbore's inexact edge tests can report a hit slightly outside the
         // triangle, hence outside its box: only the weak form holds for it.
-        check_wide(&wide, &oracle, &MollerTrumbore::CLASSIC, ray, false);
-        check_ray(&bvh, &oracle, &MollerTrumbore::CLASSIC, ray, false);
+        check_wide(&wide, oracle, &MollerTrumbore::CLASSIC, ray, false);
+        check_ray(&bvh, oracle, &MollerTrumbore::CLASSIC, ray, false);
         let q = Aabb::new(ray.origin, ray.origin).grow(ray.origin + ray.direction);
         let mut found = Vec::new();
         let reported = bvh.query_box(&mesh, &q, |p| {
@@ -306,9 +290,9 @@ pub fn check(s: &Soup) {
             found,
             expect,
             "query_box({q:?}) differs from brute force\n{}",
-            rctx()
+            (oracle.ctx)()
         );
-    }
+    });
 }
 
 /// [`check_ray`]'s properties for the 8-wide tree: closest hit equal to brute force in the
@@ -380,6 +364,36 @@ pub(crate) fn seed_pyramid() -> Vec<[u8; 3]> {
         .collect()
 }
 
+/// Coincident, duplicated and zero-area triangles over [`SEED_POINTS`] (the tie rule): the
+/// quad's first half twice and once rotated, a point, a segment, the quad's second half.
+pub(crate) const SEED_DUPLICATES: [[u8; 3]; 6] = [
+    [0, 1, 2],
+    [0, 1, 2],
+    [1, 2, 0],
+    [3, 3, 3],
+    [0, 1, 1],
+    [0, 2, 3],
+];
+
+/// Rays at [`SEED_DUPLICATES`] ([`encode_quantized`]'s aims): at the quad's centre and at
+/// the midpoint of edge 0–1 from [`SEED_ORIGIN`], and along the segment's line from `−x`.
+pub(crate) const SEED_DUPLICATE_AIMS: [(Vec3, u8, u8, u8); 3] = [
+    (SEED_ORIGIN, 0, 2, 2),
+    (SEED_ORIGIN, 0, 1, 4),
+    (Vec3::new(-1.0, 0.0, 0.0), 1, 1, 0),
+];
+
+/// The start of the `nan-vertex-excluded` seeds (raw coordinates): flag bit 1
+/// (`exclude_non_finite`), four vertices (the origin, `x`, `y` and one with a NaN `x`) and
+/// the count of three triangles, whose indices come next.
+pub(crate) fn seed_nan_vertex() -> Enc {
+    let mut raw = Enc::new().u8(2).u8(4).u8(3);
+    for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(f32::NAN, 0.0, 0.0)] {
+        raw = raw.vec3(p);
+    }
+    raw
+}
+
 pub(crate) fn seeds(s: &mut Vec<Seed>) {
     let t = |name: &str, bytes: Vec<u8>| ("bvh", format!("seed-{name}"), bytes);
     let (quad, o) = (SEED_POINTS, SEED_ORIGIN);
@@ -410,22 +424,7 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
     // Duplicated coplanar triangles (tie rule), a degenerate one and a collinear one.
     s.push(t(
         "duplicates-degenerate",
-        bvh::encode_quantized(
-            &quad,
-            &[
-                [0, 1, 2],
-                [0, 1, 2],
-                [1, 2, 0],
-                [3, 3, 3],
-                [0, 1, 1],
-                [0, 2, 3],
-            ],
-            &[
-                (o, 0, 2, 2),
-                (o, 0, 1, 4),
-                (Vec3::new(-1.0, 0.0, 0.0), 1, 1, 0),
-            ],
-        ),
+        bvh::encode_quantized(&quad, &SEED_DUPLICATES, &SEED_DUPLICATE_AIMS),
     ));
     // Out-of-range vertex index (unusable primitive): the build must name it.
     s.push(t(
@@ -433,11 +432,7 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
         bvh::encode_quantized(&quad[..3], &[[0, 1, 2], [0, 1, 4]], &[(o, 0, 1, 4)]),
     ));
     // Same with exclude_non_finite, and a NaN vertex (raw coordinates).
-    let mut raw = Enc::new().u8(2).u8(4).u8(3);
-    for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(f32::NAN, 0.0, 0.0)] {
-        raw = raw.vec3(p);
-    }
-    let raw = raw
+    let raw = seed_nan_vertex()
         .bytes(&[0, 1, 2, 0, 1, 3, 2, 1, 0])
         .u8(0)
         .vec3(Vec3::new(0.25, 0.25, 1.0))

@@ -7,8 +7,11 @@
 //! bit 2 [`CellAssignment::Bounds`] (else exact), bits 3–4 `λ` ∈ {default, 0.25, 1, 64},
 //! bit 5 at most 3 cells per axis.
 
-use super::bvh::{Oracle, SEED_ORIGIN, SEED_POINTS, Soup, decode, encode_quantized, seed_pyramid};
-use super::{Enc, Seed, fmt_ray};
+use super::bvh::{
+    Oracle, SEED_DUPLICATES, SEED_ORIGIN, SEED_POINTS, Soup, decode, encode_quantized,
+    seed_nan_vertex, seed_pyramid,
+};
+use super::{Enc, Seed};
 use glam::Vec3;
 use halfray_core::bvh::TriangleMesh;
 use halfray_core::grid::{CellAssignment, DEFAULT_LAMBDA, Grid, GridError, GridOptions, GridPlan};
@@ -133,16 +136,10 @@ pub fn check(s: &Soup, opts: &GridOptions) {
         }
     }
     // 4. Rays.
-    for ray in &s.rays {
-        let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
-        let oracle = Oracle {
-            mesh: &mesh,
-            in_tree: &live,
-            ctx: &rctx,
-        };
-        check_ray(&grid, &oracle, &Watertight, ray, true);
-        check_ray(&grid, &oracle, &MollerTrumbore::CLASSIC, ray, false);
-    }
+    Oracle::each_ray(&mesh, &live, &ctx, &s.rays, |oracle, ray| {
+        check_ray(&grid, oracle, &Watertight, ray, true);
+        check_ray(&grid, oracle, &MollerTrumbore::CLASSIC, ray, false);
+    });
 }
 
 /// Property 3's layout invariants.
@@ -224,17 +221,9 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
         with_flags(encode_quantized(&quad, &pyramid, &aims), 24),
     ));
     // Coincident, duplicated and zero-area triangles (tie rule), bounds assignment.
-    let dup = [
-        [0, 1, 2],
-        [0, 1, 2],
-        [1, 2, 0],
-        [3, 3, 3],
-        [0, 1, 1],
-        [0, 2, 3],
-    ];
     s.push(t(
         "duplicates-degenerate",
-        with_flags(encode_quantized(&quad, &dup, &aims), 4),
+        with_flags(encode_quantized(&quad, &SEED_DUPLICATES, &aims), 4),
     ));
     // Raw rays: axis-parallel with ±0 components along a cell plane (x = 2), from far
     // away (the neighbour-block path) and from 1e30 (every-reference path), NaN.
@@ -272,11 +261,7 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
         s.push(t(name, e.done()));
     }
     // A NaN vertex and an out-of-range index, excluded; and refused.
-    let mut raw = Enc::new().u8(2).u8(4).u8(3);
-    for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(f32::NAN, 0.0, 0.0)] {
-        raw = raw.vec3(p);
-    }
-    let raw = raw.bytes(&[0, 1, 2, 0, 1, 3, 2, 1, 5]);
+    let raw = seed_nan_vertex().bytes(&[0, 1, 2, 0, 1, 3, 2, 1, 5]);
     let raw = raw_ray(raw, Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
     s.push(t("nan-vertex-excluded", raw.clone().done()));
     let mut refused = raw.done();

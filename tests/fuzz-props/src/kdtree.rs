@@ -7,10 +7,11 @@
 //! automatic one. So the `bvh` corpus is a valid `kdtree` corpus and back.
 
 use super::bvh::{
-    Oracle, SEED_ORIGIN, SEED_POINTS, Soup, decode, encode_quantized, seed_pyramid,
-    usable_primitives,
+    Oracle, SEED_DUPLICATE_AIMS, SEED_DUPLICATES, SEED_ORIGIN, SEED_POINTS, Soup, decode,
+    encode_quantized, seed_nan_vertex, seed_pyramid, usable_primitives,
 };
-use super::{Enc, Seed, fmt_ray};
+use super::tree_oracle::checked_build;
+use super::{Enc, Seed};
 use glam::Vec3;
 use halfray_core::bvh::{PrimitiveSource, TriangleMesh};
 use halfray_core::kdtree::{
@@ -100,39 +101,21 @@ pub fn check(s: &Soup, tight: bool, shallow: bool) {
         &mut scratch,
         &options,
     );
-    let kd: VecKd = match (built, first_bad) {
-        (Ok(k), None) => k,
-        (Ok(k), Some(_)) if options.exclude_non_finite => k,
-        (Err(KdTreeError::NonFinitePrimitive { index }), Some(bad))
-            if !options.exclude_non_finite =>
-        {
-            assert_eq!(
-                index,
-                bad,
-                "NonFinitePrimitive names the wrong one\n{}",
-                ctx()
-            );
-            return;
-        }
-        (r, _) => panic!(
-            "build gave {:?} (first unusable primitive {first_bad:?})\n{}",
-            r.err(),
-            ctx()
-        ),
+    let non_finite = |e: &KdTreeError| match *e {
+        KdTreeError::NonFinitePrimitive { index } => Some(index),
+        _ => None,
+    };
+    let exclude = options.exclude_non_finite;
+    let Some(kd): Option<VecKd> = checked_build(built, non_finite, first_bad, exclude, &ctx) else {
+        return;
     };
     let in_tree = check_structure(&kd, &valid, &options, &ctx);
 
     // 3. Rays.
-    for ray in &s.rays {
-        let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
-        let oracle = Oracle {
-            mesh: &mesh,
-            in_tree: &in_tree,
-            ctx: &rctx,
-        };
-        check_ray(&kd, &oracle, &Watertight, ray, true);
-        check_ray(&kd, &oracle, &MollerTrumbore::CLASSIC, ray, false);
-    }
+    Oracle::each_ray(&mesh, &in_tree, &ctx, &s.rays, |oracle, ray| {
+        check_ray(&kd, oracle, &Watertight, ray, true);
+        check_ray(&kd, oracle, &MollerTrumbore::CLASSIC, ray, false);
+    });
 }
 
 /// Property 2's structure checks; returns which primitives the tree holds.
@@ -201,26 +184,14 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
     let mut tight = encode_quantized(&quad, &pyramid, &aims);
     tight[0] |= 4 | 8;
     s.push(t("pyramid-tight-shallow", tight));
-    // Coincident triangles (tie rule), reversed copies, zero-area ones.
+    // Coincident triangles (tie rule), reversed copies, zero-area ones: the `bvh` seed's,
+    // with a reversed copy in place of the rotated one and a third copy last.
+    let mut coincident = SEED_DUPLICATES.to_vec();
+    coincident[2] = [2, 1, 0];
+    coincident.push([0, 1, 2]);
     s.push(t(
         "coincident-degenerate",
-        encode_quantized(
-            &quad,
-            &[
-                [0, 1, 2],
-                [0, 1, 2],
-                [2, 1, 0],
-                [3, 3, 3],
-                [0, 1, 1],
-                [0, 2, 3],
-                [0, 1, 2],
-            ],
-            &[
-                (o, 0, 2, 2),
-                (o, 0, 1, 4),
-                (Vec3::new(-1.0, 0.0, 0.0), 1, 1, 0),
-            ],
-        ),
+        encode_quantized(&quad, &coincident, &SEED_DUPLICATE_AIMS),
     ));
     // An axis-aligned flat 3×3 grid at z = 0 (shared edges and vertices), a slanted triangle
     // above it so that the tree splits, and rays in the plane z = 0, through grid vertices and
@@ -282,11 +253,7 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
         s.push(t(name, e.done()));
     }
     // NaN vertex excluded (flag bit 1) and an out-of-range index; a ray with an interval.
-    let mut raw = Enc::new().u8(2).u8(4).u8(3);
-    for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(f32::NAN, 0.0, 0.0)] {
-        raw = raw.vec3(p);
-    }
-    let raw = raw
+    let raw = seed_nan_vertex()
         .bytes(&[0, 1, 2, 0, 1, 3, 2, 1, 5])
         .u8(4)
         .vec3(Vec3::new(0.25, 0.25, 1.0))

@@ -3,6 +3,8 @@
 //! closest and any hit on one ray against it.
 
 use super::bvh::{projection_underflows, within_domain};
+use super::fmt_ray;
+use core::fmt::Debug;
 use halfray_core::bvh::{PrimitiveSource, TriangleMesh};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{F64Reference, TriangleHit, TriangleIntersector};
@@ -49,6 +51,38 @@ pub(crate) fn brute<T: TriangleIntersector>(
     best
 }
 
+/// A tree build's result against the rule for unusable primitives: with none, or with
+/// `exclude` (`exclude_non_finite`) on, the build succeeds and the tree is returned; with
+/// `exclude` off it refuses, naming the first one, `first_bad`, and `None` is returned.
+/// Anything else panics, with `ctx()`. `non_finite` reads the index out of the structure's
+/// `NonFinitePrimitive` error (`None` for its other errors).
+pub(crate) fn checked_build<T, E: Debug>(
+    built: Result<T, E>,
+    non_finite: impl Fn(&E) -> Option<usize>,
+    first_bad: Option<usize>,
+    exclude: bool,
+    ctx: &dyn Fn() -> String,
+) -> Option<T> {
+    match (built, first_bad) {
+        (Ok(t), None) => Some(t),
+        (Ok(t), Some(_)) if exclude => Some(t),
+        (Err(e), Some(bad)) if !exclude && non_finite(&e).is_some() => {
+            assert_eq!(
+                non_finite(&e),
+                Some(bad),
+                "NonFinitePrimitive names the wrong primitive\n{}",
+                ctx()
+            );
+            None
+        }
+        (r, _) => panic!(
+            "build gave {:?} (first unusable primitive {first_bad:?})\n{}",
+            r.err(),
+            ctx()
+        ),
+    }
+}
+
 /// What a tree's answers on one ray are checked against: brute force over the primitives
 /// `in_tree` of `mesh`.
 pub struct Oracle<'a, 'm> {
@@ -60,7 +94,27 @@ pub struct Oracle<'a, 'm> {
     pub ctx: &'a dyn Fn() -> String,
 }
 
-impl Oracle<'_, '_> {
+impl<'m> Oracle<'_, 'm> {
+    /// Calls `check(oracle, ray)` for every ray of `rays`, the oracle's being brute force over
+    /// the primitives `in_tree` of `mesh` with the ray, then `ctx()`, as its failure context.
+    pub(crate) fn each_ray(
+        mesh: &TriangleMesh<'m>,
+        in_tree: &[bool],
+        ctx: &dyn Fn() -> String,
+        rays: &[Ray],
+        mut check: impl FnMut(&Oracle<'_, 'm>, &Ray),
+    ) {
+        for ray in rays {
+            let rctx = || format!("{}\n{}", fmt_ray(ray), ctx());
+            let oracle = Oracle {
+                mesh,
+                in_tree,
+                ctx: &rctx,
+            };
+            check(&oracle, ray);
+        }
+    }
+
     /// Brute force's closest hit of `isect` on `ray` (see [`brute`]).
     pub(crate) fn closest<T: TriangleIntersector>(
         &self,

@@ -8,7 +8,7 @@
 #![cfg_attr(feature = "bench", allow(dead_code, unused_imports))]
 
 use cortex_m_rt::entry;
-use cortex_m_semihosting::{debug, hprintln};
+use cortex_m_semihosting::hprintln;
 use halfray_core::Vec3;
 use halfray_core::bvh::{BvhNode, TriangleMesh, node_capacity};
 use halfray_core::halfedge::{EdgeRec, FaceRec, VertexRec, build_scratch_len};
@@ -16,6 +16,8 @@ use mcu_check::{
     CheckError, Config, Fnv, HalfedgeStorage, RayStorage, Summary, baked_checks, edge_count,
     halfedge_checks, ray_checks, triangle_count, vertex_count,
 };
+
+mod exit;
 
 /// The mesh and BVH baked by `halfray bake` (path in `MCU_BAKED`, set by scripts/test-mcu.sh):
 /// `static` arrays in flash.
@@ -131,14 +133,7 @@ fn checks() -> ! {
             false
         }
     };
-    debug::exit(if ok {
-        debug::EXIT_SUCCESS
-    } else {
-        debug::EXIT_FAILURE
-    });
-    loop {
-        cortex_m::asm::wfi();
-    }
+    exit::exit(ok)
 }
 
 /// Instructions per closest-hit query, per triangle variant, on the baked BVH.
@@ -149,7 +144,7 @@ fn checks() -> ! {
 /// `mcu-bench: MACHINE VARIANT INSTRUCTIONS_PER_QUERY HITS` per variant, then exits.
 #[cfg(feature = "bench")]
 mod bench {
-    use super::{CONFIG, MACHINE, baked, debug, hprintln};
+    use super::{CONFIG, MACHINE, baked, hprintln};
     use cortex_m::peripheral::SYST;
     use cortex_m::peripheral::syst::SystClkSource;
     use halfray_core::bvh::{Bvh, TriangleMesh};
@@ -191,8 +186,7 @@ mod bench {
 
     pub fn run() -> ! {
         let Some(mut p) = cortex_m::Peripherals::take() else {
-            debug::exit(debug::EXIT_FAILURE);
-            loop {}
+            crate::exit::exit(false);
         };
         p.SYST.set_clock_source(SystClkSource::Core);
         p.SYST.set_reload(0x00FF_FFFF);
@@ -204,8 +198,7 @@ mod bench {
         let mut scratch = [0u32; baked::LOAD_SCRATCH_WORDS];
         let Ok(bvh) = Bvh::from_parts(&baked::NODES[..], &baked::INDICES[..], &mesh, &mut scratch)
         else {
-            debug::exit(debug::EXIT_FAILURE);
-            loop {}
+            crate::exit::exit(false);
         };
         // A pinhole camera framing the mesh's box from outside, as in `baked_checks`.
         let b = bvh.bounds();
@@ -260,16 +253,12 @@ mod bench {
         );
         per_query("cramer", &Cramer, &bvh, &mesh, &rays, per_tick);
         per_query("f64-reference", &F64Reference, &bvh, &mesh, &rays, per_tick);
-        debug::exit(debug::EXIT_SUCCESS);
-        loop {}
+        crate::exit::exit(true)
     }
 }
 
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
     hprintln!("mcu: {} panic: {}", MACHINE, info);
-    debug::exit(debug::EXIT_FAILURE);
-    loop {
-        cortex_m::asm::wfi();
-    }
+    exit::exit(false)
 }

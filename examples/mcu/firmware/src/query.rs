@@ -17,10 +17,12 @@
 #![no_main]
 
 use cortex_m_rt::entry;
-use cortex_m_semihosting::{debug, hio};
+use cortex_m_semihosting::hio;
 use halfray_core::bvh::{Bvh, StackEntry, TriangleMesh};
 use halfray_core::triangle::WatertightF32Exact;
 use mcu_check::{Fnv, QUERY_STACK};
+
+mod exit;
 
 /// The mesh and BVH baked by `halfray bake` (path in `MCU_BAKED`).
 mod baked {
@@ -143,20 +145,10 @@ fn main() -> ! {
         );
         let _ = out.write_all(b"\n");
     }
-    debug::exit(if ok {
-        debug::EXIT_SUCCESS
-    } else {
-        debug::EXIT_FAILURE
-    });
-    loop {
-        cortex_m::asm::wfi();
-    }
+    exit::exit(ok)
 }
 
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
-    debug::exit(debug::EXIT_FAILURE);
-    loop {
-        cortex_m::asm::wfi();
-    }
+    exit::exit(false)
 }

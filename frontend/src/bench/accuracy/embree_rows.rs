@@ -109,20 +109,7 @@ pub fn rows(
                 cols[c] = Some(mrays(&scene(&device, m, robust)?, rays, reps));
             }
         }
-        out.push(VariantRow {
-            name: name.into(),
-            ns_per_test: None,
-            mrays_bvh_primary: cols[0],
-            mrays_bvh_incoherent: cols[1],
-            mrays_bvh_primary_largest: cols[2],
-            mrays_bvh_incoherent_largest: cols[3],
-            leaks_per_million: acc.leaks_per_million(),
-            false_hits_per_million: acc.false_hits_per_million(),
-            max_rel_t_error: acc.max_rel_t_error(),
-            median_rel_t_error: acc.median_rel_t_error(),
-            reference_disagreements_per_million: acc.disagreements_per_million(),
-            leak_rays: acc.leak_rays,
-        });
+        out.push(VariantRow::new(name, None, cols, &acc));
     }
     Ok(out)
 }

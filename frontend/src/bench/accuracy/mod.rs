@@ -13,7 +13,7 @@ use crate::obj::{ObjMesh, read_obj};
 use crate::outputs::{Named, reserve_outputs};
 use halfray_core::triangle::TriangleVariant;
 use std::path::{Path, PathBuf};
-use triangles::Workload;
+use triangles::{Accuracy, Workload};
 
 /// Where the shared test meshes live (beside the repository), unless `HALFRAY_MESHES` says.
 pub fn shared_meshes_dir() -> PathBuf {
@@ -70,6 +70,34 @@ pub struct VariantRow {
     pub reference_disagreements_per_million: f64,
     /// Rays behind the leak figure.
     pub leak_rays: usize,
+}
+
+impl VariantRow {
+    /// The row of variant `name`: `ns_per_test`, the BVH throughputs `mrays` in the columns'
+    /// order (bunny primary, bunny incoherent, largest mesh primary, largest mesh incoherent;
+    /// `None` where not measured), and the accuracy figures of `acc`.
+    pub fn new(
+        name: &str,
+        ns_per_test: Option<f64>,
+        mrays: [Option<f64>; 4],
+        acc: &Accuracy,
+    ) -> Self {
+        let [primary, incoherent, primary_largest, incoherent_largest] = mrays;
+        Self {
+            name: name.into(),
+            ns_per_test,
+            mrays_bvh_primary: primary,
+            mrays_bvh_incoherent: incoherent,
+            mrays_bvh_primary_largest: primary_largest,
+            mrays_bvh_incoherent_largest: incoherent_largest,
+            leaks_per_million: acc.leaks_per_million(),
+            false_hits_per_million: acc.false_hits_per_million(),
+            max_rel_t_error: acc.max_rel_t_error(),
+            median_rel_t_error: acc.median_rel_t_error(),
+            reference_disagreements_per_million: acc.disagreements_per_million(),
+            leak_rays: acc.leak_rays,
+        }
+    }
 }
 
 /// The whole report.
@@ -141,20 +169,7 @@ pub fn measure(args: &AccuracyArgs) -> Result<Report> {
     let mut variants = Vec::new();
     for v in TriangleVariant::ALL {
         let (acc, ns) = triangles::measure(v, &workload, reps);
-        variants.push(VariantRow {
-            name: v.name().into(),
-            ns_per_test: Some(ns),
-            mrays_bvh_primary: None,
-            mrays_bvh_incoherent: None,
-            mrays_bvh_primary_largest: None,
-            mrays_bvh_incoherent_largest: None,
-            leaks_per_million: acc.leaks_per_million(),
-            false_hits_per_million: acc.false_hits_per_million(),
-            max_rel_t_error: acc.max_rel_t_error(),
-            median_rel_t_error: acc.median_rel_t_error(),
-            reference_disagreements_per_million: acc.disagreements_per_million(),
-            leak_rays: acc.leak_rays,
-        });
+        variants.push(VariantRow::new(v.name(), Some(ns), [None; 4], &acc));
     }
     // Throughput through the BVH: the bunny and the largest mesh given (the dragon by default).
     let by_name = |stem: &str| {
