@@ -1,4 +1,4 @@
-# Sourced by fuzz-ci.sh and fuzz-campaign.sh: installs what fuzzing needs when it is missing
+# Sourced by fuzz-ci.sh, fuzz-campaign.sh and fuzz-cmin.sh: installs what fuzzing needs when it is missing
 # (the nightly toolchain, cargo-fuzz), builds every target, and sets `targets` to the names
 # given as arguments or to every target.
 if ! cargo +nightly --version >/dev/null 2>&1; then

@@ -2,7 +2,7 @@
 //!
 //! Everything the `halfray` binary does, as a library so that tests can call it:
 //! scene files ([`scene`]), the renderer ([`render`]), mesh tools ([`mesh_tools`]),
-//! benchmarks ([`bench`]) and the Embree cross-check ([`crosscheck`]).
+//! benchmarks ([`bench`](mod@bench)) and the Embree cross-check ([`crosscheck`]).
 
 pub mod accel;
 pub mod atomic;

@@ -6,7 +6,7 @@
 //! `width × width` camera framing the mesh and `--rays` incoherent rays (seed
 //! [`super::bvh::INCOHERENT_SEED`]). Every throughput is single-threaded and the best of
 //! [`TIMED_PASSES`] passes, the structures taking turns pass by pass
-//! ([`interleaved`]) so that a slow spell of the shared machine falls on all of them. Each
+//! (`interleaved`) so that a slow spell of the shared machine falls on all of them. Each
 //! build is timed once per pass, best kept. `brute_force_mismatches` counts the rays of a
 //! sample of the incoherent set (about [`BRUTE_FORCE_TESTS`] triangle tests) where the
 //! structure's closest hit (triangle and `t`) differs from a loop over every triangle with

@@ -1,5 +1,5 @@
 //! Output files: where a command may write, checked before it starts working, and how the
-//! bytes get there without clobbering what is not ours ([`file`]).
+//! bytes get there without clobbering what is not ours ([`file`](mod@file)).
 //!
 //! [`reserve_outputs`] is what every command calls first: each output location is checked
 //! (and a regular file's temporary file created, see [`OutputFile::reserve`]), and an output

@@ -1,8 +1,8 @@
 //! Scene files: TOML (documented in `scenes/README.md`), parsed with serde into spanned
-//! definitions ([`def`]), then checked and turned into a render-ready [`Scene`] ([`build`]).
+//! definitions ([`def`]), then checked and turned into a render-ready [`Scene`] (`build`).
 //!
-//! Every error names the file, line, column and field (`scene.toml:12:10: field
-//! `object[2].radius`: must be > 0`), and none panics.
+//! Every error names the file, line, column and field (for example
+//! `scene.toml:12:10: field object[2].radius: must be > 0`), and none panics.
 
 // `!(x > eps)` rejects NaN along with small values: the negation is the point.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
