@@ -181,6 +181,29 @@ fn closest_and_any_hit_match_brute_force_on_a_random_soup() {
     }
 }
 
+/// The node test's far distances are padded by a relative factor only: for the unit box and
+/// a ray along `(1, −1, 0)` from `(−1, y₀, 0.5)`, by hand the ray is inside the box's `x` slab
+/// for `t ∈ [1, 2]` and inside its `y` slab for `t ∈ [y₀ − 1, y₀]`; with `y₀ = 2.5` they
+/// overlap on `[1.5, 2]` (a hit entered at `t = 1.5`), with `y₀ = 3.2` they miss each other by
+/// `0.2` in `t`, which no rounding padding may bridge.
+#[test]
+fn node_test_far_padding_does_not_bridge_a_gap() {
+    let tri = [Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 1.0)];
+    let mesh = TriangleMesh::new(&tri, &[[0, 1, 2]]);
+    let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+    let root = bvh.nodes()[0];
+    assert_eq!(root.bounds(), Aabb::new(Vec3::ZERO, Vec3::ONE));
+    let test = |y0: f32| {
+        let ray = Ray::new(Vec3::new(-1.0, y0, 0.5), Vec3::new(1.0, -1.0, 0.0));
+        let slab = crate::aabb::SlabRay::new(&ray).unwrap();
+        let padded = padded_ray::PaddedRay::new(&slab, projection_pad(slab.origin, 1.0));
+        padded.hit_node(false, &root, 0.0, f32::INFINITY)
+    };
+    let hit = test(2.5).expect("the slabs overlap on [1.5, 2]");
+    assert!((hit - 1.5).abs() <= 1e-5, "{hit}");
+    assert_eq!(test(3.2), None);
+}
+
 /// The node test prunes: on a 32 × 32 grid of separate unit triangles (1 024 in the plane
 /// `z = 0`), a ray straight down onto one triangle's interior tests only the leaves on its
 /// path (a few triangles, a few dozen nodes of the ~2 000), and a ray that passes beside the
