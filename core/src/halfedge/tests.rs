@@ -1175,3 +1175,29 @@ fn subdivide_refuses_coincident_faces() {
         Err(SubdivideError::CoincidentFaces(_))
     ));
 }
+
+/// The collapse target each `CollapseAt` names, checked on the octahedron's edge from vertex 0
+/// to vertex 2: the head's and the tail's positions, the midpoint `(p₀ + p₂)/2` (exact here:
+/// halves of small integers), and a given point; the collapse then leaves a vertex there.
+#[test]
+fn collapse_targets_are_the_named_points() {
+    let (p, t) = octa();
+    let m: M = build(&p, &t).unwrap();
+    let h = m.find_halfedge(VertexId(0), VertexId(2)).unwrap();
+    let mid = (p[0] + p[2]) / 2.0;
+    let given = vec3(0.25, -0.5, 0.125);
+    for (at, want) in [
+        (CollapseAt::Head, p[2]),
+        (CollapseAt::Tail, p[0]),
+        (CollapseAt::Midpoint, mid),
+        (CollapseAt::Point(given), given),
+    ] {
+        assert_eq!(m.can_collapse_edge(h, at), Ok(want), "{at:?}");
+        let mut c = m.clone();
+        c.collapse_edge(h, at).unwrap();
+        let mut positions = vec![Vec3::ZERO; p.len()];
+        let mut tris = vec![[0u32; 3]; t.len()];
+        let (n, _) = c.export(&mut positions, &mut tris).unwrap();
+        assert!(positions[..n].contains(&want), "{at:?}: {positions:?}");
+    }
+}
