@@ -188,7 +188,11 @@ fn closest_and_any_hit_match_brute_force_on_a_random_soup() {
 /// `0.2` in `t`, which no rounding padding may bridge.
 #[test]
 fn node_test_far_padding_does_not_bridge_a_gap() {
-    let tri = [Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 1.0)];
+    let tri = [
+        Vec3::ZERO,
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(0.0, 1.0, 1.0),
+    ];
     let mesh = TriangleMesh::new(&tri, &[[0, 1, 2]]);
     let bvh = build(&mesh, &BuildOptions::default()).unwrap();
     let root = bvh.nodes()[0];
