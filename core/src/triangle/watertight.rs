@@ -425,8 +425,9 @@ pub(super) fn mixed_signs(e: &[f32; 3]) -> bool {
 /// The watertight family ([`Watertight`], [`WatertightF32`], [`super::WatertightF32Exact`]):
 /// the ray prepared as a [`WatertightRay`] (axis permutation and shear), and a test of one
 /// triangle that rejects every triangle two of whose three `f32` edge functions (the filter
-/// of [`WatertightRay::certain_misses`]) have certain, opposite signs. Each member supplies its name
-/// and its test; [`TriangleIntersector`] (preparation and the four-lane cull) comes with it.
+/// of [`WatertightRay::certain_misses`]) have certain, opposite signs. Each member supplies
+/// its name and its test; [`TriangleIntersector`] (preparation and the four-lane cull) comes
+/// with it.
 pub trait ShearedTest: Copy + Send + Sync {
     /// The variant's name ([`TriangleIntersector::name`]).
     const NAME: &'static str;
