@@ -175,12 +175,12 @@ impl<'m> Oracle<'_, 'm> {
     /// crossing of that triangle at every barycentric ≥ [`CLEAR_HIT_BARYCENTRIC`] and at
     /// `t_ref ≤ want.t`, beyond `t_min`), every box holding the triangle is entered no later
     /// than `t_ref`, so no cull can skip it: the tree's closest hit `got` is at `want`'s `t`
-    /// (with [`Oracle::assert_no_nearer`]), and its any hit `any` (when given) exists.
+    /// (with [`Oracle::assert_no_nearer`]), and its any hit `any` exists.
     pub(crate) fn assert_finds_clear_hit(
         &self,
         ray: &Ray,
         got: Option<(u32, TriangleHit)>,
-        any: Option<Option<(u32, TriangleHit)>>,
+        any: Option<(u32, TriangleHit)>,
         want: Option<(u32, TriangleHit)>,
         tree: &str,
     ) {
@@ -204,13 +204,11 @@ impl<'m> Oracle<'_, 'm> {
              barycentrics {b:?}), got {got:?}\n{}",
             (self.ctx)()
         );
-        if let Some(any) = any {
-            assert!(
-                any.is_some(),
-                "{tree}: any-hit found nothing where brute force has a clear hit {want:?}\n{}",
-                (self.ctx)()
-            );
-        }
+        assert!(
+            any.is_some(),
+            "{tree}: any-hit found nothing where brute force has a clear hit {want:?}\n{}",
+            (self.ctx)()
+        );
     }
 
     /// Inside the exact domain: the tree's closest hit `got` is brute force's `want`, and its
@@ -270,7 +268,7 @@ impl<'m> Oracle<'_, 'm> {
             self.assert_agrees((isect.name(), tree), got, any, want);
         } else {
             self.assert_no_nearer(got, want, tree);
-            self.assert_finds_clear_hit(ray, got, Some(any), want, tree);
+            self.assert_finds_clear_hit(ray, got, any, want, tree);
         }
     }
 }
@@ -299,12 +297,12 @@ mod tests {
         let isect = MollerTrumbore::default();
         let want = oracle.closest(&isect, &ray);
         assert_eq!(want.map(|(p, _)| p), Some(0));
-        oracle.assert_finds_clear_hit(&ray, want, Some(want), want, "tree");
+        oracle.assert_finds_clear_hit(&ray, want, want, want, "tree");
         let farther = brute(&mesh, &isect, &ray, &[false, true]);
         assert!(farther.is_some_and(|(_, h)| h.t > want.unwrap().1.t));
         for got in [None, farther] {
             let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                oracle.assert_finds_clear_hit(&ray, got, Some(got), want, "tree");
+                oracle.assert_finds_clear_hit(&ray, got, got, want, "tree");
             }));
             assert!(r.is_err(), "{got:?} must fail the check");
         }
