@@ -11,12 +11,10 @@
 # inputs; seeded from fuzz/corpus/<target>/, which is never written), artifacts/<target>/
 # (crashes, timeouts, OOMs), and summary.md (executions, coverage and findings per target,
 # the table fuzz/README.md records). Every crash found goes to fuzz/regressions/<target>/.
-set -euo pipefail
-cd "$(dirname "${BASH_SOURCE[0]}")/.."
 SECONDS_EACH=${FUZZ_SECONDS:-1200}
 JOBS=${JOBS:-2}
 
-source scripts/fuzz-tools.sh "$@"
+source "$(dirname "${BASH_SOURCE[0]}")/fuzz-tools.sh" "$@"
 
 out=target/fuzz-campaign
 mkdir -p "$out/bin"

@@ -8,11 +8,9 @@
 #
 # New inputs go to target/fuzz-ci/corpus/<target> (the checked-in corpus is read, never
 # written); a crashing input is saved under target/fuzz-ci/artifacts/<target>/ and printed.
-set -euo pipefail
-cd "$(dirname "${BASH_SOURCE[0]}")/.."
 SECONDS_EACH=${FUZZ_SECONDS:-30}
 
-source scripts/fuzz-tools.sh "$@"
+source "$(dirname "${BASH_SOURCE[0]}")/fuzz-tools.sh" "$@"
 
 out=target/fuzz-ci
 for t in "${targets[@]}"; do

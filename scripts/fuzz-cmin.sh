@@ -5,11 +5,9 @@
 # and read by every CI fuzz run). Old min-* files of the target are replaced.
 #
 #   bash scripts/fuzz-cmin.sh [TARGET...]
-set -euo pipefail
-cd "$(dirname "${BASH_SOURCE[0]}")/.."
 SECONDS_EACH=${FUZZ_SECONDS:-120}
 
-source scripts/fuzz-tools.sh "$@"
+source "$(dirname "${BASH_SOURCE[0]}")/fuzz-tools.sh" "$@"
 
 work=target/fuzz-cmin
 for t in "${targets[@]}"; do

@@ -1,5 +1,45 @@
-//! The four public ray queries of the grid and the kd-tree, written once over each
-//! structure's private `traverse`.
+//! The closest-hit / any-hit pairs of the structures' public ray queries, each pair written
+//! once: [`closest_and_any!`] for one signature, [`hit_queries!`] for the grid's and the
+//! kd-tree's four queries over their private `traverse`.
+
+/// Expands, inside an inherent `impl` block, to two public methods with one signature and one
+/// body: the closest-hit form, then the any-hit form, each with the attributes (doc comment
+/// first) written before its name. The body sees the identifier after `const` as a
+/// `const bool`: `false` in the closest-hit form, `true` in the any-hit form. The receiver is
+/// spelled in the invocation (`&self`), so that the body may use it.
+///
+/// ```text
+/// closest_and_any! {
+///     /// The closest hit ...
+///     fn closest_hit;
+///     /// Any hit ...
+///     fn any_hit;
+///     <H>(&self, ray: &Ray, ...) -> Option<(u32, H)>, const ANY => { self.traverse(ray, ANY) }
+/// }
+/// ```
+/// (A macro: the pair differs in one constant, and two copies of a signature drift apart.)
+macro_rules! closest_and_any {
+    (
+        $(#[$closest_attr:meta])* fn $closest:ident;
+        $(#[$any_attr:meta])* fn $any:ident;
+        <$($gen:ident $(: $bound:path)?),*>
+        (&$this:ident, $($arg:ident: $ty:ty),* $(,)?) -> $ret:ty, const $flag:ident => $body:block
+    ) => {
+        $(#[$closest_attr])*
+        pub fn $closest<$($gen $(: $bound)?),*>(&$this, $($arg: $ty),*) -> $ret {
+            const $flag: bool = false;
+            $body
+        }
+
+        $(#[$any_attr])*
+        pub fn $any<$($gen $(: $bound)?),*>(&$this, $($arg: $ty),*) -> $ret {
+            const $flag: bool = true;
+            $body
+        }
+    };
+}
+
+pub(crate) use closest_and_any;
 
 /// Expands, inside an inherent `impl` block, to the public `closest_hit`, `any_hit`,
 /// `closest_hit_triangles` and `any_hit_triangles`, each with the attributes (doc comment

@@ -48,6 +48,7 @@ pub mod bvh;
 pub mod collide;
 pub mod error;
 pub mod float;
+mod getters;
 pub mod grid;
 pub mod halfedge;
 pub mod hit;
@@ -62,6 +63,7 @@ pub mod ray;
 mod simd;
 pub mod solids;
 pub mod sphere;
+mod storage;
 #[cfg(test)]
 mod test_util;
 pub mod tolerance;

@@ -36,6 +36,7 @@
 
 use crate::error::GeometryError;
 use crate::float::{gamma, gamma_f64};
+use crate::getters::getters;
 use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::tolerance::{QUADRIC_CENTER_MIN_REL_DET, QUADRIC_DISTANCE_SLACK};
@@ -386,6 +387,7 @@ pub struct Ellipsoid {
 }
 
 impl Ellipsoid {
+    /// The ellipsoid of semi-axes `radii` (world units, along x, y, z) around `center`.
     ///
     /// # Errors
     ///
@@ -409,18 +411,11 @@ impl Ellipsoid {
         })
     }
 
-    /// Centre, world units.
-    #[inline]
-    #[must_use]
-    pub fn center(&self) -> Vec3 {
-        self.center
-    }
-
-    /// Semi-axes along x, y, z, world units.
-    #[inline]
-    #[must_use]
-    pub fn radii(&self) -> Vec3 {
-        self.radii
+    getters! {
+        /// Centre, world units.
+        center: Vec3;
+        /// Semi-axes along x, y, z, world units.
+        radii: Vec3;
     }
 
     /// The quadric `Σ ((x_i − c_i)/r_i)² − 1`.

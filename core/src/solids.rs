@@ -1,6 +1,7 @@
-//! Small closed solids as index lists, for examples and tests: the vertex order is part of
-//! the contract, and every triangle is counter-clockwise seen from outside (its normal
-//! `(b − a) × (c − a)` points out of the solid).
+//! Small closed solids and a flat grid as index lists, for examples and tests: the vertex
+//! order is part of the contract, and every triangle is counter-clockwise seen from outside
+//! (its normal `(b − a) × (c − a)` points out of the solid; for the grid, towards +z when its
+//! `i` runs along +x and `j` along +y).
 
 use glam::Vec3;
 
@@ -56,3 +57,60 @@ pub const CUBE_TRIANGLES: [[u32; 3]; 12] = [
     [1, 5, 7],
     [1, 7, 3],
 ];
+
+/// The `2·nx·ny` triangles of a grid of `nx × ny` quads over `(nx + 1)·(ny + 1)` vertices
+/// numbered row by row (vertex `(i, j)`, `0 ≤ i ≤ nx`, `0 ≤ j ≤ ny`, is `j·(nx + 1) + i`):
+/// quad `(i, j)`, rows `j` in order and `i` in order within a row, is split on its diagonal
+/// from `(i, j)` to `(i + 1, j + 1)` into `[(i, j), (i + 1, j), (i + 1, j + 1)]` and
+/// `[(i, j), (i + 1, j + 1), (i, j + 1)]`. Indices are `u32`: the caller keeps
+/// `(nx + 1)·(ny + 1) ≤ 2³²`.
+pub fn grid_triangles(nx: u32, ny: u32) -> impl Iterator<Item = [u32; 3]> {
+    let at = move |i: u32, j: u32| j * (nx + 1) + i;
+    (0..ny).flat_map(move |j| {
+        (0..nx).flat_map(move |i| {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            [[a, b, c], [a, c, d]]
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every quad's two triangles cover it once: over a 3 × 2 grid at integer positions, the
+    /// signed areas (z of the cross product) are all `+1/2`, sum to the grid's area, and every
+    /// interior edge is used once in each direction.
+    #[test]
+    fn grid_triangles_tile_the_grid_counter_clockwise() {
+        let (nx, ny) = (3u32, 2u32);
+        let pos = |v: u32| ((v % (nx + 1)) as i64, (v / (nx + 1)) as i64);
+        let mut area2 = 0;
+        let mut edges = [[0i32; 12]; 12];
+        let mut count = 0;
+        for t in grid_triangles(nx, ny) {
+            let [a, b, c] = t.map(pos);
+            let cross = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
+            assert_eq!(cross, 1, "{t:?}");
+            area2 += cross;
+            for k in 0..3 {
+                edges[t[k] as usize][t[(k + 1) % 3] as usize] += 1;
+            }
+            count += 1;
+        }
+        assert_eq!((count, area2), (12, 12));
+        for (u, row) in edges.iter().enumerate() {
+            for (v, &used) in row.iter().enumerate() {
+                assert!(used <= 1, "edge {u}->{v} used twice");
+                let (pu, pv) = (pos(u as u32), pos(v as u32));
+                let on_border = |p: (i64, i64), q: (i64, i64)| {
+                    (p.0 == q.0 && (p.0 == 0 || p.0 == nx as i64))
+                        || (p.1 == q.1 && (p.1 == 0 || p.1 == ny as i64))
+                };
+                if used == 1 && !on_border(pu, pv) {
+                    assert_eq!(edges[v][u], 1, "interior edge {u}->{v} has no twin");
+                }
+            }
+        }
+    }
+}

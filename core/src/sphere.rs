@@ -30,6 +30,7 @@
 
 use crate::error::GeometryError;
 use crate::float::{gamma, sqrt};
+use crate::getters::getters;
 use crate::hit::Hit;
 use crate::ray::Ray;
 use core::f32::consts::{PI, TAU};
@@ -75,18 +76,11 @@ impl Sphere {
         Ok(Self { center, radius })
     }
 
-    /// Centre, world units.
-    #[inline]
-    #[must_use]
-    pub fn center(&self) -> Vec3 {
-        self.center
-    }
-
-    /// Radius, world units.
-    #[inline]
-    #[must_use]
-    pub fn radius(&self) -> f32 {
-        self.radius
+    getters! {
+        /// Centre, world units.
+        center: Vec3;
+        /// Radius, world units.
+        radius: f32;
     }
 
     /// Both roots `t0 ≤ t1` of the ray's line against the sphere (not clipped to the ray's

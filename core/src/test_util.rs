@@ -1,10 +1,38 @@
 //! Helpers shared by the unit tests of the core (compiled only for `cargo test`).
 
-use crate::bvh::TriangleMesh;
+use crate::bvh::{
+    BuildOptions, Bvh, BvhError, BvhNode, PrimitiveSource, TriangleMesh, index_capacity,
+    node_capacity,
+};
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector, Watertight};
 use glam::{Vec3, vec3};
+use std::vec;
 use std::vec::Vec;
+
+/// Floats that break arithmetic: NaN, the infinities, both zeros, the extremes of the normal
+/// range, subnormals, and a few ordinary values for contrast.
+pub const SPECIAL_F32: [f32; 14] = [
+    f32::NAN,
+    f32::INFINITY,
+    f32::NEG_INFINITY,
+    0.0,
+    -0.0,
+    f32::MAX,
+    -f32::MAX,
+    -3.0e38,
+    f32::MIN_POSITIVE,
+    1.0e-40,
+    1.0e-45,
+    1.0,
+    -1.0,
+    0.5,
+];
+
+/// One of [`SPECIAL_F32`], drawn with [`lcg`].
+pub fn special_f32(state: &mut u64) -> f32 {
+    SPECIAL_F32[(lcg(state) * SPECIAL_F32.len() as f32) as usize % SPECIAL_F32.len()]
+}
 
 /// A 64-bit LCG (Knuth's MMIX constants) giving `f32` in `[0, 1)` with 24 random bits.
 pub fn lcg(state: &mut u64) -> f32 {
@@ -77,4 +105,21 @@ pub fn brute_watertight(mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, Tria
         }
     }
     best
+}
+
+/// A binary BVH in vectors.
+pub type VecBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
+
+/// [`Bvh::build`] over `src` into full-capacity vectors.
+pub fn vec_bvh<S: PrimitiveSource + ?Sized>(
+    src: &S,
+    opts: &BuildOptions,
+) -> Result<VecBvh, BvhError> {
+    let n = src.primitive_count();
+    Bvh::build(
+        src,
+        vec![BvhNode::EMPTY; node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        opts,
+    )
 }

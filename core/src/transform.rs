@@ -288,7 +288,7 @@ mod tests {
     use crate::hit::spawn_ray;
     use crate::quadric::Quadric;
     use crate::sphere::Sphere;
-    use crate::test_util::{lcg, unit_vec};
+    use crate::test_util::{lcg, special_f32, unit_vec};
     use crate::triangle::{TriangleIntersector, Watertight};
 
     /// Translate · shear · non-uniform scale.
@@ -530,25 +530,11 @@ mod tests {
             Vec3::new(-1.0, 1.0, 0.0),
         ])
         .unwrap();
-        let specials = [
-            f32::NAN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            0.0,
-            -0.0,
-            f32::MAX,
-            -f32::MAX,
-            f32::MIN_POSITIVE,
-            1.0e-45,
-            1.0,
-            -1.0,
-            0.5,
-        ];
         let mut st = 99u64;
         let pick = |st: &mut u64| -> f32 {
             let r = lcg(st);
             if r < 0.3 {
-                specials[(lcg(st) * specials.len() as f32) as usize % specials.len()]
+                special_f32(st)
             } else if r < 0.5 {
                 f32::from_bits((lcg(st) * 4.0e9) as u32)
             } else {

@@ -11,6 +11,7 @@ use halfray_core::bvh::{
     BuildJob, BuildOptions, Bvh, BvhError, BvhNode, JobPart, PrimRef, TraversalStats, TriangleMesh,
     index_capacity, node_capacity, scratch_capacity,
 };
+use halfray_core::simd_level::Portable;
 use halfray_core::triangle::{TriangleHit, TriangleIntersector, TriangleVariant, VariantVisitor};
 
 /// The wide BVH with owned storage.
@@ -191,7 +192,7 @@ pub fn closest_simd<I: TriangleIntersector>(
         // the only requirement of calling a `#[target_feature(enable = "avx2,fma")]` fn.
         return unsafe { x86::closest(level, bvh, isect, ray, stats) };
     }
-    with_stack(|stack| bvh.closest_hit_triangles_with(stack, isect, ray, stats))
+    with_stack(|stack| bvh.closest_hit_triangles_on(Portable, stack, isect, ray, stats))
 }
 
 /// [`Bvh8::any_hit_triangles`] on the widest SIMD level, as [`closest_simd`].
@@ -206,7 +207,7 @@ pub fn any_simd<I: TriangleIntersector>(
         // SAFETY: as in `closest_simd`: AVX2 and FMA were detected at run time.
         return unsafe { x86::any(level, bvh, isect, ray) };
     }
-    with_stack(|stack| bvh.any_hit_triangles_with(stack, isect, ray, None))
+    with_stack(|stack| bvh.any_hit_triangles_on(Portable, stack, isect, ray, None))
 }
 
 /// The AVX2 + FMA entry points: the whole query, the thread's stack included, is one function

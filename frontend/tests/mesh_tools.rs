@@ -438,14 +438,7 @@ fn noisy_grid(n: u32, amp: f32) -> ObjMesh {
             positions.push(vec3(i as f32, j as f32, z));
         }
     }
-    let id = |i: u32, j: u32| j * (n + 1) + i;
-    let mut triangles = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
+    let triangles = halfray_core::solids::grid_triangles(n, n).collect();
     ObjMesh {
         positions,
         triangles,

@@ -569,15 +569,17 @@ impl Projector {
     }
 }
 
+/// Distance from `p` to the segment `[a, b]`, by cases: beyond either end it is the distance
+/// to that end; in between, the height of the triangle `(a, b, p)` over `ab`.
 fn segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
     let ab = b - a;
-    let len2 = ab.length_squared();
-    let t = if len2 > 0.0 {
-        ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
+    if (p - a).dot(ab) <= 0.0 {
+        p.distance(a)
+    } else if (p - b).dot(-ab) <= 0.0 {
+        p.distance(b)
     } else {
-        0.0
-    };
-    (a + ab * t - p).length()
+        ab.perp_dot(p - a).abs() / ab.length()
+    }
 }
 
 /// Decides whether the exact line of `ray` (which passes exactly through `target.point`)

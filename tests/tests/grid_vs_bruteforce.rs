@@ -18,7 +18,7 @@ use halfray::raysets::{Camera, Rng, random_rays};
 use halfray_core::Ray;
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
 use halfray_core::grid::{CellAssignment, DEFAULT_LAMBDA, Grid, GridOptions, GridPlan, GridStats};
-use halfray_core::solids::{CUBE_TRIANGLES, CUBE_VERTICES};
+use halfray_core::solids::{CUBE_TRIANGLES, CUBE_VERTICES, grid_triangles};
 use halfray_core::triangle::Watertight;
 use halfray_tests::{brute_triangles, par_map};
 use std::path::{Path, PathBuf};
@@ -80,15 +80,7 @@ fn flat_squares(k: u32, axis: usize, c: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
             p.push(v);
         }
     }
-    let id = |i: u32, j: u32| i * (k + 1) + j;
-    let mut t = Vec::new();
-    for i in 0..k {
-        for j in 0..k {
-            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    (p, t)
+    (p, grid_triangles(k, k).collect())
 }
 
 #[test]

@@ -19,6 +19,7 @@ use halfray_core::bvh::{PrimitiveSource, TriangleMesh};
 use halfray_core::kdtree::{
     KdBuildOptions, KdNode, KdNodeKind, KdRef, KdTree, MAX_DEPTH, node_capacity, reference_capacity,
 };
+use halfray_core::solids::grid_triangles;
 use halfray_core::triangle::{MollerTrumbore, TriangleIntersector, Watertight, WatertightF32};
 use halfray_tests::{brute_triangles as brute, par_map, vertex_and_eighth_edge_points};
 use proptest::prelude::*;
@@ -256,13 +257,7 @@ fn axis_aligned_flat_meshes() {
                 pos.push(p);
             }
         }
-        let at = |i: u32, j: u32| base + j * (side + 1) + i;
-        for j in 0..side {
-            for i in 0..side {
-                tris.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
-                tris.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
-            }
-        }
+        tris.extend(grid_triangles(side, side).map(|t| t.map(|v| base + v)));
     }
     let mesh = TriangleMesh::new(&pos, &tris);
     let kd = build(&mesh);

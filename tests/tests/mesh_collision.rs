@@ -11,8 +11,9 @@
 //!   boxes, independent of the BVH) over **all** pairs.
 
 use glam::{Vec3, vec3};
+use halfray::accel::{VecBvh, build_binary};
 use halfray::obj::read_obj;
-use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+use halfray_core::bvh::{BuildOptions, TriangleMesh};
 use halfray_core::collide::{
     Body, colliding_pairs, first_contact, is_degenerate, min_distance, triangle_distance,
     triangles_intersect,
@@ -180,16 +181,8 @@ fn triangle_test_equals_integer_oracle() {
     );
 }
 
-type VBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
-
-fn tree(mesh: &TriangleMesh<'_>) -> VBvh {
-    Bvh::build(
-        mesh,
-        vec![BvhNode::EMPTY; node_capacity(mesh.len())],
-        vec![0u32; index_capacity(mesh.len())],
-        &BuildOptions::default(),
-    )
-    .unwrap()
+fn tree(mesh: &TriangleMesh<'_>) -> VecBvh {
+    build_binary(mesh, &BuildOptions::default()).unwrap()
 }
 
 /// A UV sphere of radius `r` around `c` with `n` segments and `n/2` rings.

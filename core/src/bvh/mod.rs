@@ -98,6 +98,7 @@ pub use stats::{BvhStats, TraversalStats};
 pub use traverse::StackEntry;
 
 use crate::aabb::Aabb;
+use crate::getters::getters;
 
 /// Number of centroid bins per axis of the binned SAH (nodes of fewer primitives use one bin
 /// per primitive). 16 is within a fraction of a percent of a full sweep's tree quality on
@@ -391,16 +392,14 @@ where
     #[inline]
     #[must_use]
     pub fn nodes(&self) -> &[BvhNode] {
-        let all = self.nodes.as_ref();
-        all.get(..self.node_count as usize).unwrap_or(all)
+        crate::storage::used(self.nodes.as_ref(), self.node_count as usize)
     }
 
     /// The used primitive indices, in leaf order.
     #[inline]
     #[must_use]
     pub fn indices(&self) -> &[u32] {
-        let all = self.indices.as_ref();
-        all.get(..self.prim_count as usize).unwrap_or(all)
+        crate::storage::used(self.indices.as_ref(), self.prim_count as usize)
     }
 
     /// Number of nodes in use (≤ [`node_capacity`] of the primitive count).
@@ -417,11 +416,9 @@ where
         self.prim_count as usize
     }
 
-    /// Number of primitives the source had at build time (what [`Bvh::refit`] expects).
-    #[inline]
-    #[must_use]
-    pub fn source_len(&self) -> usize {
-        self.source_len
+    getters! {
+        /// Number of primitives the source had at build time (what [`Bvh::refit`] expects).
+        source_len: usize;
     }
 
     /// `true` when the tree holds no primitive (every query misses).

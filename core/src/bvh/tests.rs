@@ -4,23 +4,11 @@
 use super::*;
 use crate::aabb::Aabb;
 use crate::ray::Ray;
-use crate::test_util::{Lcg, brute_watertight, lcg_soup};
+use crate::test_util::{Lcg, VecBvh, brute_watertight, lcg_soup, vec_bvh as build};
 use crate::triangle::{TriangleIntersector, Watertight};
 use glam::Vec3;
 use std::vec;
 use std::vec::Vec;
-
-type VecBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
-
-fn build<S: PrimitiveSource + ?Sized>(src: &S, opts: &BuildOptions) -> Result<VecBvh, BvhError> {
-    let n = src.primitive_count();
-    Bvh::build(
-        src,
-        vec![BvhNode::EMPTY; node_capacity(n)],
-        vec![0u32; index_capacity(n)],
-        opts,
-    )
-}
 
 /// [`Bvh::build_with_scratch`] into full-capacity vectors, with the caller's `scratch`.
 fn build_scratch(

@@ -6,6 +6,7 @@ use super::primitive::TriangleMesh;
 use super::stats::TraversalStats;
 use super::{Bvh, BvhError, TRAVERSAL_STACK_SIZE, cull_bound, improves, projection_pad};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
+use crate::hit_queries::closest_and_any;
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector};
 use glam::Vec3;
@@ -13,16 +14,16 @@ use glam::Vec3;
 impl PaddedRay {
     /// [`crate::aabb::Aabb::intersect_slab`] on the node's raw corners, with the near/far
     /// corner picked by index instead of by branch. The common path (`general` false: no
-    /// overflowing reciprocal, `t_min ≥ 0`; `general` false) pads far distances by the plain factor
+    /// overflowing reciprocal, `t_min ≥ 0`) pads far distances by the plain factor
     /// [`SLAB_FAR_SCALE`]: a far distance is negative only when the exact one is (monotone
     /// rounding), and then the box ends before `t_min ≥ 0` whatever the padding, so the
     /// hit/miss answer and the entry distance are those of `intersect_slab`, except that an
     /// entry at `+∞` (a `−0` direction component outside a slab) counts as a hit here: one
-    /// wasted visit, as no primitive accepts `t = ∞`, for one comparison less per node. `t_enter` and `t_exit` are never
-    /// NaN (the ray was validated), so `a > b ? a : b` absorbs a NaN slab value exactly like
-    /// `f32::max` does. Returns the entry distance on a hit. Inlined on hosted targets (it is
-    /// the inner loop); one out-of-line copy on bare-metal ones (`target_os = "none"`), where
-    /// code size is the budget.
+    /// wasted visit, as no primitive accepts `t = ∞`, for one comparison less per node.
+    /// `t_enter` and `t_exit` are never NaN (the ray was validated), so `a > b ? a : b`
+    /// absorbs a NaN slab value exactly like `f32::max` does. Returns the entry distance on a
+    /// hit. Inlined on hosted targets (it is the inner loop); one out-of-line copy on
+    /// bare-metal ones (`target_os = "none"`), where code size is the budget.
     #[cfg_attr(not(target_os = "none"), inline(always))]
     #[cfg_attr(target_os = "none", inline(never))]
     pub(super) fn hit_node(
@@ -96,93 +97,77 @@ where
     N: AsRef<[BvhNode]>,
     I: AsRef<[u32]>,
 {
-    /// The closest hit of `ray`, as `(primitive index, intersect's payload)`.
-    ///
-    /// `intersect(prim, ray)` tests one primitive against `ray`, whose `t_max` is the current
-    /// closest `t` (inclusive), and returns `(t, payload)` for a hit in `(t_min, t_max]`. Hits
-    /// outside the interval are ignored. Of equal `t`, the smaller primitive index wins (see the
-    /// module docs), so the result equals a brute-force loop with the same rule. `stats`, when
-    /// given, is **added to**. An invalid ray returns `None` without testing any node.
-    pub fn closest_hit<H>(
-        &self,
-        ray: &Ray,
-        intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, H)> {
-        on_full_stack(|stack| self.traverse(stack, ray, intersect, stats, false))
+    closest_and_any! {
+        /// The closest hit of `ray`, as `(primitive index, intersect's payload)`.
+        ///
+        /// `intersect(prim, ray)` tests one primitive against `ray`, whose `t_max` is the
+        /// current closest `t` (inclusive), and returns `(t, payload)` for a hit in
+        /// `(t_min, t_max]`. Hits outside the interval are ignored. Of equal `t`, the smaller
+        /// primitive index wins (see the module docs), so the result equals a brute-force loop
+        /// with the same rule. `stats`, when given, is **added to**. An invalid ray returns
+        /// `None` without testing any node.
+        fn closest_hit;
+        /// Any hit of `ray` (occlusion / shadow rays): traversal stops at the first primitive
+        /// for which `intersect` reports a `t` in `(t_min, t_max]`. Which one is found first
+        /// depends on the tree; hit/miss does not.
+        fn any_hit;
+        <H>(
+            &self,
+            ray: &Ray,
+            intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
+            stats: Option<&mut TraversalStats>,
+        ) -> Option<(u32, H)>, const ANY => {
+            on_full_stack(|stack| self.traverse(stack, ray, intersect, stats, ANY))
+        }
     }
 
-    /// Any hit of `ray` (occlusion / shadow rays): traversal stops at the first primitive for
-    /// which `intersect` reports a `t` in `(t_min, t_max]`. Which one is found first depends on
-    /// the tree; hit/miss does not.
-    pub fn any_hit<H>(
-        &self,
-        ray: &Ray,
-        intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, H)> {
-        on_full_stack(|stack| self.traverse(stack, ray, intersect, stats, true))
+    closest_and_any! {
+        /// [`Bvh::closest_hit`] over a triangle mesh with the intersector `isect` (prepared
+        /// once per ray). Returns the triangle index and its hit.
+        #[inline]
+        fn closest_hit_triangles;
+        /// [`Bvh::any_hit`] over a triangle mesh with the intersector `isect`.
+        #[inline]
+        fn any_hit_triangles;
+        <T: TriangleIntersector>(
+            &self,
+            mesh: &TriangleMesh<'_>,
+            isect: &T,
+            ray: &Ray,
+            stats: Option<&mut TraversalStats>,
+        ) -> Option<(u32, TriangleHit)>, const ANY => {
+            on_full_stack(|stack| self.triangles_in(ANY, stack, mesh, isect, ray, stats))
+        }
     }
 
-    /// [`Bvh::closest_hit`] over a triangle mesh with the intersector `isect` (prepared once
-    /// per ray). Returns the triangle index and its hit.
-    #[inline]
-    pub fn closest_hit_triangles<T: TriangleIntersector>(
-        &self,
-        mesh: &TriangleMesh<'_>,
-        isect: &T,
-        ray: &Ray,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, TriangleHit)> {
-        on_full_stack(|stack| self.triangles_in(stack, mesh, isect, ray, stats, false))
-    }
-
-    /// [`Bvh::any_hit`] over a triangle mesh with the intersector `isect`.
-    #[inline]
-    pub fn any_hit_triangles<T: TriangleIntersector>(
-        &self,
-        mesh: &TriangleMesh<'_>,
-        isect: &T,
-        ray: &Ray,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, TriangleHit)> {
-        on_full_stack(|stack| self.triangles_in(stack, mesh, isect, ray, stats, true))
-    }
-
-    /// [`Bvh::closest_hit_triangles`] on the caller's traversal stack, which a firmware sizes
-    /// for its trees ([`Bvh::stack_depth`] entries suffice for this one) instead of the
-    /// [`TRAVERSAL_STACK_SIZE`] entries any tree may need. The same answer and statistics.
-    ///
-    /// # Errors
-    ///
-    /// [`BvhError::StackTooSmall`] when the ray's path needed more entries than `stack` has
-    /// (never with at least [`Bvh::stack_depth`]); no partial answer is returned.
-    pub fn closest_hit_triangles_in<T: TriangleIntersector>(
-        &self,
-        stack: &mut [StackEntry],
-        mesh: &TriangleMesh<'_>,
-        isect: &T,
-        ray: &Ray,
-        stats: Option<&mut TraversalStats>,
-    ) -> Result<Option<(u32, TriangleHit)>, BvhError> {
-        self.triangles_in(stack, mesh, isect, ray, stats, false)
-    }
-
-    /// [`Bvh::any_hit_triangles`] on the caller's traversal stack (see
-    /// [`Bvh::closest_hit_triangles_in`]).
-    ///
-    /// # Errors
-    ///
-    /// [`BvhError::StackTooSmall`], as [`Bvh::closest_hit_triangles_in`].
-    pub fn any_hit_triangles_in<T: TriangleIntersector>(
-        &self,
-        stack: &mut [StackEntry],
-        mesh: &TriangleMesh<'_>,
-        isect: &T,
-        ray: &Ray,
-        stats: Option<&mut TraversalStats>,
-    ) -> Result<Option<(u32, TriangleHit)>, BvhError> {
-        self.triangles_in(stack, mesh, isect, ray, stats, true)
+    closest_and_any! {
+        /// [`Bvh::closest_hit_triangles`] on the caller's traversal stack, which a firmware
+        /// sizes for its trees ([`Bvh::stack_depth`] entries suffice for this one) instead of
+        /// the [`TRAVERSAL_STACK_SIZE`] entries any tree may need. The same answer and
+        /// statistics.
+        ///
+        /// # Errors
+        ///
+        /// [`BvhError::StackTooSmall`] when the ray's path needed more entries than `stack`
+        /// has (never with at least [`Bvh::stack_depth`]); no partial answer is returned.
+        fn closest_hit_triangles_in;
+        /// [`Bvh::any_hit_triangles`] on the caller's traversal stack (see
+        /// [`Bvh::closest_hit_triangles_in`]).
+        ///
+        /// # Errors
+        ///
+        /// [`BvhError::StackTooSmall`], as [`Bvh::closest_hit_triangles_in`].
+        fn any_hit_triangles_in;
+        <T: TriangleIntersector>(
+            &self,
+            stack: &mut [StackEntry],
+            mesh: &TriangleMesh<'_>,
+            isect: &T,
+            ray: &Ray,
+            stats: Option<&mut TraversalStats>,
+        ) -> Result<Option<(u32, TriangleHit)>, BvhError>, const ANY => {
+            self.triangles_in(ANY, stack, mesh, isect, ray, stats)
+        }
     }
 
     /// Entries of the traversal stack this tree's queries can need: the number of inner
@@ -227,12 +212,12 @@ where
     #[inline]
     fn triangles_in<T: TriangleIntersector>(
         &self,
+        any: bool,
         stack: &mut [StackEntry],
         mesh: &TriangleMesh<'_>,
         isect: &T,
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
-        any: bool,
     ) -> Result<Option<(u32, TriangleHit)>, BvhError> {
         let Some(pre) = isect.prepare(ray) else {
             return Ok(None);

@@ -66,7 +66,7 @@ impl<'a, N: AsRef<[BvhNode]>, I: AsRef<[u32]>> Body<'a, N, I> {
     pub(super) fn leaf_triangles(
         &self,
         node: &BvhNode,
-    ) -> impl Iterator<Item = (u32, [Vec3; 3])> + use<'a, N, I> {
+    ) -> impl Iterator<Item = (u32, [Vec3; 3])> + Clone + use<'a, N, I> {
         let (indices, mesh) = (self.bvh.indices(), self.mesh);
         let leaf = node
             .primitive_range()

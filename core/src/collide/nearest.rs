@@ -8,6 +8,7 @@ use super::distance::{DISTANCE_ERR_REL, triangle_distance};
 use super::pairs::{PairStack, child_pairs, split_first};
 use crate::bvh::{BvhNode, Primitive};
 use crate::transform::Transform;
+use glam::Vec3;
 
 /// The closest triangle pair of two meshes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -81,7 +82,10 @@ where
             && let (Some(x), Some(y)) = (na.get(ia as usize), nb.get(ib as usize))
         {
             match split_first(x, y) {
-                None => leaf_pairs(a, b, &place, x, y, &mut best, max_distance, &lower),
+                None => {
+                    let placed = b.leaf_triangles(y).map(|(q, t)| (q, place.triangle(t)));
+                    leaf_pairs(a.leaf_triangles(x), placed, &mut best, max_distance, &lower);
+                }
                 Some(first) => {
                     let node = if first { x } else { y };
                     let [c0, c1] = child_pairs(node, ia, ib, first);
@@ -108,27 +112,18 @@ where
     Ok(best)
 }
 
-/// Every triangle pair of two leaves against the best so far (ties: smaller `(a, b)`).
-#[allow(clippy::too_many_arguments)]
-fn leaf_pairs<NA, IA, NB, IB>(
-    a: &Body<'_, NA, IA>,
-    b: &Body<'_, NB, IB>,
-    place: &Placement,
-    x: &BvhNode,
-    y: &BvhNode,
+/// Every pair of a triangle `(p, ta)` of one leaf and `(q, tb)` of the other (placed) against
+/// the best so far (ties: smaller `(a, b)`).
+fn leaf_pairs(
+    leaf_a: impl Iterator<Item = (u32, [Vec3; 3])> + Clone,
+    leaf_b: impl Iterator<Item = (u32, [Vec3; 3])>,
     best: &mut Option<Closest>,
     max_distance: f64,
     lower: &impl Fn(f64) -> f64,
-) where
-    NA: AsRef<[BvhNode]>,
-    IA: AsRef<[u32]>,
-    NB: AsRef<[BvhNode]>,
-    IB: AsRef<[u32]>,
-{
-    for (q, tb) in b.leaf_triangles(y) {
-        let tb = place.triangle(tb);
+) {
+    for (q, tb) in leaf_b {
         let box_b = DBox::from_aabb(&Primitive::bounds(&tb));
-        for (p, ta) in a.leaf_triangles(x) {
+        for (p, ta) in leaf_a.clone() {
             let bound = best.map_or(max_distance, |c| c.distance);
             if lower(DBox::from_aabb(&Primitive::bounds(&ta)).distance(&box_b)) > bound {
                 continue;

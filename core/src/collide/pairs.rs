@@ -8,6 +8,7 @@ use crate::aabb::Aabb;
 use crate::bvh::{BvhNode, Primitive};
 use crate::transform::Transform;
 use core::ops::ControlFlow;
+use glam::Vec3;
 
 /// Which tree a node pair descends into: the first when it is an inner node and either the
 /// second is a leaf or the first's box is at least as large (sum of extents); the second
@@ -101,7 +102,8 @@ where
         };
         match split_first(x, y) {
             None => {
-                if leaf_pairs(a, b, &place, x, y, &mut found).is_break() {
+                let placed = b.leaf_triangles(y).map(|(q, t)| (q, place.triangle(t)));
+                if leaf_pairs(a.leaf_triangles(x), placed, &mut found).is_break() {
                     return Ok(());
                 }
             }
@@ -126,25 +128,16 @@ where
     Ok(())
 }
 
-/// The narrow phase of two leaves: triangle boxes first (exact), then the exact test.
-fn leaf_pairs<NA, IA, NB, IB>(
-    a: &Body<'_, NA, IA>,
-    b: &Body<'_, NB, IB>,
-    place: &Placement,
-    x: &BvhNode,
-    y: &BvhNode,
+/// The narrow phase of two leaves, `(p, ta)` of one and `(q, tb)` of the other (placed):
+/// triangle boxes first (exact), then the exact test.
+fn leaf_pairs(
+    leaf_a: impl Iterator<Item = (u32, [Vec3; 3])> + Clone,
+    leaf_b: impl Iterator<Item = (u32, [Vec3; 3])>,
     found: &mut impl FnMut(u32, u32) -> ControlFlow<()>,
-) -> ControlFlow<()>
-where
-    NA: AsRef<[BvhNode]>,
-    IA: AsRef<[u32]>,
-    NB: AsRef<[BvhNode]>,
-    IB: AsRef<[u32]>,
-{
-    for (q, tb) in b.leaf_triangles(y) {
-        let tb = place.triangle(tb);
+) -> ControlFlow<()> {
+    for (q, tb) in leaf_b {
         let box_b: Aabb = Primitive::bounds(&tb);
-        for (p, ta) in a.leaf_triangles(x) {
+        for (p, ta) in leaf_a.clone() {
             if Primitive::bounds(&ta).overlaps(&box_b) && triangles_intersect(&ta, &tb) {
                 found(p, q)?;
             }

@@ -5,8 +5,8 @@
 
 use super::tri_tri::segment_triangle;
 use super::*;
-use crate::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
-use crate::test_util::{grid_point, lcg};
+use crate::bvh::{BuildOptions, TriangleMesh};
+use crate::test_util::{VecBvh, grid_point, lcg, lcg_soup, vec_bvh};
 use crate::transform::Transform;
 use glam::{Vec3, vec3};
 use std::vec;
@@ -30,6 +30,11 @@ const A: [Vec3; 3] = [
     Vec3::new(0.0, 1.0, 0.0),
 ];
 
+/// The triangle of the three points, each `[x, y, z]`.
+fn tri(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> [Vec3; 3] {
+    [a, b, c].map(Vec3::from_array)
+}
+
 fn moved(t: [Vec3; 3], d: Vec3) -> [Vec3; 3] {
     t.map(|v| v + d)
 }
@@ -45,11 +50,7 @@ fn check(a: [Vec3; 3], b: [Vec3; 3], want: bool, what: &str) {
 
 #[test]
 fn vertex_face_touching_and_just_apart() {
-    let b = [
-        vec3(0.25, 0.25, 0.0),
-        vec3(0.0, 0.0, 1.0),
-        vec3(1.0, 0.0, 1.0),
-    ];
+    let b = tri([0.25, 0.25, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 1.0]);
     check(A, b, true, "vertex on face");
     let tiny = f32::from_bits(1);
     check(
@@ -65,39 +66,19 @@ fn vertex_face_touching_and_just_apart() {
         "vertex one subnormal below: pierces",
     );
     // The vertex exactly on A's edge, on its vertex, and just outside the hypotenuse.
-    let on_edge = [
-        vec3(0.5, 0.0, 0.0),
-        vec3(0.5, -1.0, 1.0),
-        vec3(0.5, 1.0, 1.0),
-    ];
+    let on_edge = tri([0.5, 0.0, 0.0], [0.5, -1.0, 1.0], [0.5, 1.0, 1.0]);
     check(A, on_edge, true, "vertex on edge");
-    let on_vertex = [
-        vec3(1.0, 0.0, 0.0),
-        vec3(2.0, -1.0, 1.0),
-        vec3(2.0, 1.0, 1.0),
-    ];
+    let on_vertex = tri([1.0, 0.0, 0.0], [2.0, -1.0, 1.0], [2.0, 1.0, 1.0]);
     check(A, on_vertex, true, "vertex on vertex");
     let out = f32::from_bits(0.5f32.to_bits() + 1);
-    let outside = [
-        vec3(0.5, out, 0.0),
-        vec3(0.0, 0.0, 1.0),
-        vec3(1.0, 1.0, 1.0),
-    ];
+    let outside = tri([0.5, out, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]);
     check(A, outside, false, "vertex one ulp beyond the hypotenuse");
 }
 
 #[test]
 fn edge_edge_touching_and_just_apart() {
-    let a = [
-        vec3(-1.0, 0.0, 0.0),
-        vec3(1.0, 0.0, 0.0),
-        vec3(0.0, -1.0, 0.0),
-    ];
-    let b = [
-        vec3(0.0, 0.0, -1.0),
-        vec3(0.0, 0.0, 1.0),
-        vec3(0.0, 1.0, 0.0),
-    ];
+    let a = tri([-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0]);
+    let b = tri([0.0, 0.0, -1.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]);
     check(a, b, true, "edges cross at the origin");
     check(
         a,
@@ -112,11 +93,7 @@ fn edge_edge_touching_and_just_apart() {
         "edges 1e-7 into each other",
     );
     // Crossing through each other's interiors (general position).
-    let c = [
-        vec3(0.0, -0.5, -1.0),
-        vec3(0.0, -0.5, 1.0),
-        vec3(0.0, 1.0, 0.0),
-    ];
+    let c = tri([0.0, -0.5, -1.0], [0.0, -0.5, 1.0], [0.0, 1.0, 0.0]);
     check(a, c, true, "proper crossing");
 }
 
@@ -124,11 +101,7 @@ fn edge_edge_touching_and_just_apart() {
 fn coplanar_cases() {
     check(A, moved(A, vec3(0.2, 0.2, 0.0)), true, "overlapping");
     check(A, moved(A, vec3(1.0, 0.0, 0.0)), true, "sharing a vertex");
-    let mirrored = [
-        vec3(1.0, 0.0, 0.0),
-        vec3(0.0, 1.0, 0.0),
-        vec3(1.0, 1.0, 0.0),
-    ];
+    let mirrored = tri([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]);
     check(A, mirrored, true, "sharing the hypotenuse");
     let e = f32::EPSILON;
     check(
@@ -137,11 +110,7 @@ fn coplanar_cases() {
         false,
         "hypotenuse one step apart",
     );
-    let small = [
-        vec3(0.1, 0.1, 0.0),
-        vec3(0.2, 0.1, 0.0),
-        vec3(0.1, 0.2, 0.0),
-    ];
+    let small = tri([0.1, 0.1, 0.0], [0.2, 0.1, 0.0], [0.1, 0.2, 0.0]);
     check(A, small, true, "contained");
     check(
         A,
@@ -150,16 +119,8 @@ fn coplanar_cases() {
         "boxes overlap, triangles do not",
     );
     // Coplanar in a tilted plane, with non-integer coordinates: x + y + z = 1.
-    let t = [
-        vec3(1.0, 0.0, 0.0),
-        vec3(0.0, 1.0, 0.0),
-        vec3(0.0, 0.0, 1.0),
-    ];
-    let u = [
-        vec3(0.5, 0.5, 0.0),
-        vec3(0.5, 0.0, 0.5),
-        vec3(0.75, 0.5, -0.25),
-    ];
+    let t = tri([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
+    let u = tri([0.5, 0.5, 0.0], [0.5, 0.0, 0.5], [0.75, 0.5, -0.25]);
     check(t, u, true, "tilted coplanar, sharing an edge midpoint line");
 }
 
@@ -167,17 +128,9 @@ fn coplanar_cases() {
 fn degenerate_triangles() {
     let tiny = f32::from_bits(1);
     // A segment piercing A, a segment touching it, a point on it, a point off it.
-    let seg = [
-        vec3(0.2, 0.2, -1.0),
-        vec3(0.2, 0.2, 1.0),
-        vec3(0.2, 0.2, 0.0),
-    ];
+    let seg = tri([0.2, 0.2, -1.0], [0.2, 0.2, 1.0], [0.2, 0.2, 0.0]);
     check(A, seg, true, "segment through the face");
-    let seg_touch = [
-        vec3(0.2, 0.2, 0.0),
-        vec3(0.2, 0.2, 1.0),
-        vec3(0.2, 0.2, 0.5),
-    ];
+    let seg_touch = tri([0.2, 0.2, 0.0], [0.2, 0.2, 1.0], [0.2, 0.2, 0.5]);
     check(A, seg_touch, true, "segment ending on the face");
     check(
         A,
@@ -189,11 +142,7 @@ fn degenerate_triangles() {
     check(A, point, true, "point on the face");
     check(A, [vec3(0.3, 0.3, tiny); 3], false, "point just above");
     // In-plane segment crossing an edge, and one just outside.
-    let inplane = [
-        vec3(-1.0, 0.5, 0.0),
-        vec3(0.25, 0.5, 0.0),
-        vec3(-1.0, 0.5, 0.0),
-    ];
+    let inplane = tri([-1.0, 0.5, 0.0], [0.25, 0.5, 0.0], [-1.0, 0.5, 0.0]);
     check(A, inplane, true, "in-plane segment crossing the x = 0 edge");
     check(
         A,
@@ -202,16 +151,8 @@ fn degenerate_triangles() {
         "in-plane, short of it",
     );
     // Two segments: crossing, touching end to end, skew.
-    let s1 = [
-        vec3(-1.0, 0.0, 0.0),
-        vec3(1.0, 0.0, 0.0),
-        vec3(0.0, 0.0, 0.0),
-    ];
-    let s2 = [
-        vec3(0.0, -1.0, 0.0),
-        vec3(0.0, 1.0, 0.0),
-        vec3(0.0, 1.0, 0.0),
-    ];
+    let s1 = tri([-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]);
+    let s2 = tri([0.0, -1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0]);
     check(s1, s2, true, "segments crossing");
     check(
         s1,
@@ -219,11 +160,7 @@ fn degenerate_triangles() {
         false,
         "skew segments",
     );
-    let s3 = [
-        vec3(1.0, 0.0, 0.0),
-        vec3(3.0, 0.0, 0.0),
-        vec3(2.0, 0.0, 0.0),
-    ];
+    let s3 = tri([1.0, 0.0, 0.0], [3.0, 0.0, 0.0], [2.0, 0.0, 0.0]);
     check(s1, s3, true, "collinear segments sharing an end");
     check(
         s1,
@@ -270,19 +207,11 @@ fn distances_with_exact_values() {
     assert_eq!(triangle_distance(&A, &up), 1.0);
     // A's edge y = 0 (x in [0, 1]) and a segment-like triangle along y at x = 0.5, z = 2,
     // y in [−3, −1]: closest points (0.5, 0, 0)–(0.5, −1, 2): √5.
-    let b = [
-        vec3(0.5, -1.0, 2.0),
-        vec3(0.5, -3.0, 2.0),
-        vec3(0.5, -2.0, 2.0),
-    ];
+    let b = tri([0.5, -1.0, 2.0], [0.5, -3.0, 2.0], [0.5, -2.0, 2.0]);
     let d = triangle_distance(&A, &b);
     assert!((d - 5f64.sqrt()).abs() <= 1e-15, "{d}");
     // Touching: exactly zero; one subnormal apart: positive but tiny.
-    let touch = [
-        vec3(0.25, 0.25, 0.0),
-        vec3(0.0, 0.0, 1.0),
-        vec3(1.0, 0.0, 1.0),
-    ];
+    let touch = tri([0.25, 0.25, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 1.0]);
     assert_eq!(triangle_distance(&A, &touch), 0.0);
     let tiny = f32::from_bits(1);
     let apart = moved(touch, vec3(0.0, 0.0, tiny));
@@ -290,11 +219,7 @@ fn distances_with_exact_values() {
     assert!(d > 0.0 && d <= 2.0 * f64::from(tiny), "{d:e}");
     // Edge–edge, skew, along the diagonal: the hypotenuse of A against a segment above its
     // midpoint crossing it at right angles, 2 higher.
-    let c = [
-        vec3(0.0, 0.0, 2.0),
-        vec3(1.0, 1.0, 2.0),
-        vec3(0.5, 0.5, 2.0),
-    ];
+    let c = tri([0.0, 0.0, 2.0], [1.0, 1.0, 2.0], [0.5, 0.5, 2.0]);
     assert!((triangle_distance(&A, &c) - 2.0).abs() <= 1e-15);
     assert_eq!(
         triangle_distance(&A, &[vec3(f32::NAN, 0.0, 0.0); 3]),
@@ -302,37 +227,17 @@ fn distances_with_exact_values() {
     );
 }
 
-type VBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
-
-fn soup(s: &mut u64, n: usize, spread: f32, size: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let mut p = Vec::new();
-    let mut t = Vec::new();
-    for i in 0..n as u32 {
-        let c = vec3(lcg(s), lcg(s), lcg(s)) * spread;
-        for _ in 0..3 {
-            p.push(c + (vec3(lcg(s), lcg(s), lcg(s)) - 0.5) * size);
-        }
-        t.push([3 * i, 3 * i + 1, 3 * i + 2]);
-    }
-    (p, t)
-}
-
-fn tree(mesh: &TriangleMesh<'_>) -> VBvh {
-    Bvh::build(
-        mesh,
-        vec![BvhNode::EMPTY; node_capacity(mesh.len())],
-        vec![0u32; index_capacity(mesh.len())],
-        &BuildOptions::default(),
-    )
-    .unwrap()
+fn tree(mesh: &TriangleMesh<'_>) -> VecBvh {
+    vec_bvh(mesh, &BuildOptions::default()).unwrap()
 }
 
 #[test]
 fn traversal_equals_brute_force_on_small_soups() {
     let mut s = 3u64;
+    let mut pairs = 0;
     for round in 0..20 {
-        let (pa, ta) = soup(&mut s, 60, 4.0, 1.0);
-        let (pb, tb) = soup(&mut s, 50, 4.0, 1.0);
+        let (pa, ta) = lcg_soup(60, 2 * round + 3, 4.0, 1.0);
+        let (pb, tb) = lcg_soup(50, 2 * round + 4, 4.0, 1.0);
         let (ma, mb) = (TriangleMesh::new(&pa, &ta), TriangleMesh::new(&pb, &tb));
         let (ba, bb) = (tree(&ma), tree(&mb));
         let (a, b) = (Body::new(&ba, ma).unwrap(), Body::new(&bb, mb).unwrap());
@@ -355,6 +260,7 @@ fn traversal_equals_brute_force_on_small_soups() {
                 }
             }
         }
+        pairs += want.len();
         let mut out = vec![(0u32, 0u32); want.len() + 3];
         let n = colliding_pairs(&a, &b, &tf, &mut out).unwrap();
         let mut got = out[..n].to_vec();
@@ -382,12 +288,13 @@ fn traversal_equals_brute_force_on_small_soups() {
             assert_eq!(min_distance(&a, &b, &tf, d * 0.999).unwrap(), None);
         }
     }
+    // The soups are dense enough that the pair lists are not all empty.
+    assert!(pairs > 40, "only {pairs} colliding pairs in 20 rounds");
 }
 
 #[test]
 fn errors_and_empty_inputs() {
-    let mut s = 1u64;
-    let (p, t) = soup(&mut s, 10, 2.0, 1.0);
+    let (p, t) = lcg_soup(10, 1, 2.0, 1.0);
     let mesh = TriangleMesh::new(&p, &t);
     let bvh = tree(&mesh);
     let fewer = TriangleMesh::new(&p, &t[..5]);

@@ -165,24 +165,7 @@ where
     O: AsRef<[u32]>,
     R: AsRef<[u32]>,
 {
-    /// Cells along `x`, `y`, `z`.
-    #[must_use]
-    pub fn resolution(&self) -> [u32; 3] {
-        self.layout.n
-    }
-
-    /// Number of cells.
-    #[must_use]
-    pub fn cell_count(&self) -> usize {
-        self.layout.cell_count()
-    }
-
-    /// The grid's box: the union of the referenced triangles' boxes ([`Aabb::EMPTY`] when
-    /// there are none).
-    #[must_use]
-    pub fn bounds(&self) -> Aabb {
-        self.layout.bounds
-    }
+    overlap::layout_accessors!();
 
     /// The padding applied to every triangle at build time, world units.
     #[must_use]
@@ -212,15 +195,13 @@ where
     /// count).
     #[must_use]
     pub fn offsets(&self) -> &[u32] {
-        let all = self.offsets.as_ref();
-        all.get(..self.cell_count() + 1).unwrap_or(all)
+        crate::storage::used(self.offsets.as_ref(), self.cell_count() + 1)
     }
 
     /// The used references.
     #[must_use]
     pub fn references(&self) -> &[u32] {
-        let all = self.references.as_ref();
-        all.get(..self.reference_count).unwrap_or(all)
+        crate::storage::used(self.references.as_ref(), self.reference_count)
     }
 
     /// The triangles of cell `(i, j, k)`, in increasing index; empty when out of range.

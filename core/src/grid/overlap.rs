@@ -12,6 +12,34 @@ use super::{CellAssignment, MAX_CELLS_PER_AXIS, SAT_SLACK_REL};
 use crate::aabb::Aabb;
 use glam::{DVec3, Vec3};
 
+/// Expands, inside the `impl` of a type with a `layout: Layout` field (the grid and the plan
+/// it was built from, which describe the same cells), to the public `resolution`,
+/// `cell_count` and `bounds`.
+macro_rules! layout_accessors {
+    () => {
+        /// Cells along `x`, `y`, `z` (each in `1..=`[`MAX_CELLS_PER_AXIS`]).
+        #[must_use]
+        pub fn resolution(&self) -> [u32; 3] {
+            self.layout.n
+        }
+
+        /// Number of cells.
+        #[must_use]
+        pub fn cell_count(&self) -> usize {
+            self.layout.cell_count()
+        }
+
+        /// The grid's box: the union of the usable triangles' boxes ([`Aabb::EMPTY`] for
+        /// none).
+        #[must_use]
+        pub fn bounds(&self) -> Aabb {
+            self.layout.bounds
+        }
+    };
+}
+
+pub(super) use layout_accessors;
+
 /// Geometry of the cells and the padding of the build.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Layout {

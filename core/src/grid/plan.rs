@@ -153,23 +153,7 @@ impl GridPlan {
         4 * (self.required_offsets() + self.reference_count)
     }
 
-    /// Cells along `x`, `y`, `z` (each in `1..=`[`MAX_CELLS_PER_AXIS`]).
-    #[must_use]
-    pub fn resolution(&self) -> [u32; 3] {
-        self.layout.n
-    }
-
-    /// Number of cells.
-    #[must_use]
-    pub fn cell_count(&self) -> usize {
-        self.layout.cell_count()
-    }
-
-    /// The grid's box: the union of the usable triangles' boxes ([`Aabb::EMPTY`] for none).
-    #[must_use]
-    pub fn bounds(&self) -> Aabb {
-        self.layout.bounds
-    }
+    super::overlap::layout_accessors!();
 
     /// Usable triangles (the mesh's minus excluded ones).
     #[must_use]

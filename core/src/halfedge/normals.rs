@@ -199,15 +199,7 @@ mod tests {
                 p.push(vec3(i as f32 + jitter, j as f32 - jitter, z0));
             }
         }
-        let mut t = Vec::new();
-        let id = |i: u32, j: u32| j * (n + 1) + i;
-        for j in 0..n {
-            for i in 0..n {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        (p, t)
+        (p, crate::solids::grid_triangles(n, n).collect())
     }
 
     #[test]

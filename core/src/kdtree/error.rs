@@ -46,21 +46,22 @@ pub enum KdTreeError {
 
 impl fmt::Display for KdTreeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match *self {
+        let (storage, needed, available) = match *self {
             Self::NodeStorageTooSmall { needed, available } => {
-                write_too_small(f, "kd-tree node storage", needed, available)
+                ("kd-tree node storage", needed, available)
             }
             Self::ReferenceStorageTooSmall { needed, available } => {
-                write_too_small(f, "kd-tree reference storage", needed, available)
+                ("kd-tree reference storage", needed, available)
             }
             Self::ScratchTooSmall { needed, available } => {
-                write_too_small(f, "kd-tree build scratch", needed, available)
+                ("kd-tree build scratch", needed, available)
             }
             Self::TooManyPrimitives { count } => {
-                write_too_many(f, "primitives", "a kd-tree", count, super::MAX_PRIMITIVES)
+                return write_too_many(f, "primitives", "a kd-tree", count, super::MAX_PRIMITIVES);
             }
-            Self::NonFinitePrimitive { index } => write_non_finite_primitive(f, index),
-        }
+            Self::NonFinitePrimitive { index } => return write_non_finite_primitive(f, index),
+        };
+        write_too_small(f, storage, needed, available)
     }
 }
 

@@ -306,15 +306,13 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> KdTree<N, R> {
     /// The used nodes; node 0 is the root (empty for an empty tree).
     #[must_use]
     pub fn nodes(&self) -> &[KdNode] {
-        let all = self.nodes.as_ref();
-        all.get(..self.node_count as usize).unwrap_or(all)
+        crate::storage::used(self.nodes.as_ref(), self.node_count as usize)
     }
 
     /// The used references (primitive indices), leaf by leaf.
     #[must_use]
     pub fn references(&self) -> &[u32] {
-        let all = self.refs.as_ref();
-        all.get(..self.ref_count as usize).unwrap_or(all)
+        crate::storage::used(self.refs.as_ref(), self.ref_count as usize)
     }
 
     /// Number of nodes in use.

@@ -256,14 +256,7 @@ fn flat_grid_shared_edges_vertices_and_split_planes() {
             pos.push(Vec3::new(i as f32, j as f32, 0.0));
         }
     }
-    let at = |i: u32, j: u32| j * (side + 1) + i;
-    let mut tris = Vec::new();
-    for j in 0..side {
-        for i in 0..side {
-            tris.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
-            tris.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
-        }
-    }
+    let mut tris: Vec<[u32; 3]> = crate::solids::grid_triangles(side, side).collect();
     // A second, slanted layer so that the tree has splits on every axis.
     let base = pos.len() as u32;
     for p in pos.clone() {

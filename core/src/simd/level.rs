@@ -248,7 +248,7 @@ fn slab8_avx2(
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
     use super::*;
-    use crate::test_util::lcg;
+    use crate::test_util::{lcg, special_f32};
 
     /// The AVX2 kernel against the documented lane formula, bit for bit, on values with NaN,
     /// `±∞`, `±0` and subnormals mixed in. Runs where the CPU has AVX2 and FMA (every CI
@@ -314,20 +314,11 @@ mod tests {
             std::eprintln!("no AVX2+FMA on this CPU: the AVX2 kernel cannot run here");
             return;
         };
-        let specials = [
-            f32::NAN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            0.0,
-            -0.0,
-            1e-40,
-            -3.0e38,
-        ];
         let mut s = 7u64;
         let value = |s: &mut u64| {
             let r = lcg(s);
             if r < 0.08 {
-                specials[(lcg(s) * specials.len() as f32) as usize % specials.len()]
+                special_f32(s)
             } else {
                 (lcg(s) - 0.5) * 20.0
             }

@@ -433,12 +433,7 @@ pub trait ShearedTest: Copy + Send + Sync {
     const NAME: &'static str;
 
     /// [`TriangleIntersector::intersect_prepared`].
-    fn intersect_sheared(
-        &self,
-        pre: &WatertightRay,
-        ray: &Ray,
-        v: &[Vec3; 3],
-    ) -> Option<TriangleHit>;
+    fn hit_sheared(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit>;
 }
 
 impl<T: ShearedTest> TriangleIntersector for T {
@@ -460,7 +455,7 @@ impl<T: ShearedTest> TriangleIntersector for T {
         ray: &Ray,
         v: &[Vec3; 3],
     ) -> Option<TriangleHit> {
-        self.intersect_sheared(pre, ray, v)
+        self.hit_sheared(pre, ray, v)
     }
 
     #[inline(always)]
@@ -473,12 +468,7 @@ impl ShearedTest for Watertight {
     const NAME: &'static str = "watertight";
 
     #[inline(always)]
-    fn intersect_sheared(
-        &self,
-        pre: &WatertightRay,
-        ray: &Ray,
-        v: &[Vec3; 3],
-    ) -> Option<TriangleHit> {
+    fn hit_sheared(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
         let sheared = pre.project_triangle(ray.origin, v);
         // Most triangles are missed with two certain, opposite signs: decide those in f32
         // (a certain sign is exact) and compute the exact f64 edges only for the rest.
@@ -513,12 +503,7 @@ impl ShearedTest for WatertightF32 {
     const NAME: &'static str = "watertight-f32";
 
     #[inline(always)]
-    fn intersect_sheared(
-        &self,
-        pre: &WatertightRay,
-        ray: &Ray,
-        v: &[Vec3; 3],
-    ) -> Option<TriangleHit> {
+    fn hit_sheared(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
         let ([ax, bx, cx], [ay, by, cy], [az, bz, cz]) = pre.project_triangle(ray.origin, v);
         let mut u = cx * by - cy * bx;
         let mut w = ax * cy - ay * cx;

@@ -106,12 +106,7 @@ impl ShearedTest for WatertightF32Exact {
     const NAME: &'static str = "watertight-f32-exact";
 
     #[inline(always)]
-    fn intersect_sheared(
-        &self,
-        pre: &WatertightRay,
-        ray: &Ray,
-        v: &[Vec3; 3],
-    ) -> Option<TriangleHit> {
+    fn hit_sheared(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
         let (x, y, [az, bz, cz]) = pre.project_triangle(ray.origin, v);
         let mut e = filter_edges(x, y);
         let certain = sign_is_certain(e[0]) & sign_is_certain(e[1]) & sign_is_certain(e[2]);

@@ -6,6 +6,7 @@ use super::eigen::symmetric_eigen;
 use super::points::{PointSet, mean_and_covariance, points_f64, round_up_padded};
 use super::{VolumeError, contain_pad};
 use crate::float::sqrt_f64;
+use crate::getters::getters;
 use glam::{DVec3, Vec3};
 
 /// A closed capsule: every point within `radius` of the segment `[a, b]` (`a = b` is a ball,
@@ -38,25 +39,13 @@ impl Capsule {
         })
     }
 
-    /// First endpoint of the axis segment.
-    #[inline]
-    #[must_use]
-    pub fn a(&self) -> Vec3 {
-        self.a
-    }
-
-    /// Second endpoint of the axis segment.
-    #[inline]
-    #[must_use]
-    pub fn b(&self) -> Vec3 {
-        self.b
-    }
-
-    /// Radius, world units (`≥ 0`).
-    #[inline]
-    #[must_use]
-    pub fn radius(&self) -> f32 {
-        self.radius
+    getters! {
+        /// First endpoint of the axis segment.
+        a: Vec3;
+        /// Second endpoint of the axis segment.
+        b: Vec3;
+        /// Radius, world units (`≥ 0`).
+        radius: f32;
     }
 
     /// A capsule containing every point of `points` (a `&[Vec3]` or a

@@ -5,6 +5,7 @@ use super::eigen::symmetric_eigen;
 use super::points::{PointSet, mean_and_covariance, points_f64, round_up_padded};
 use super::{OBB_ORTHONORMAL_TOL, VolumeError, contain_pad};
 use crate::aabb::Aabb;
+use crate::getters::getters;
 use glam::{DVec3, Vec3};
 
 /// An oriented box: the points `x` with `|axes[i]·(x − center)| ≤ half_extents[i]` for
@@ -107,25 +108,13 @@ impl Obb {
         })
     }
 
-    /// Centre, world units.
-    #[inline]
-    #[must_use]
-    pub fn center(&self) -> Vec3 {
-        self.center
-    }
-
-    /// The three axes (unit and orthogonal within [`OBB_ORTHONORMAL_TOL`]).
-    #[inline]
-    #[must_use]
-    pub fn axes(&self) -> [Vec3; 3] {
-        self.axes
-    }
-
-    /// Half-extents along the axes, world units (`≥ 0`).
-    #[inline]
-    #[must_use]
-    pub fn half_extents(&self) -> Vec3 {
-        self.half_extents
+    getters! {
+        /// Centre, world units.
+        center: Vec3;
+        /// The three axes (unit and orthogonal within [`OBB_ORTHONORMAL_TOL`]).
+        axes: [Vec3; 3];
+        /// Half-extents along the axes, world units (`≥ 0`).
+        half_extents: Vec3;
     }
 
     /// A box containing every point of `points` (a `&[Vec3]` or a

@@ -3,6 +3,7 @@
 use super::points::{PointSet, points_f64, round_up_padded};
 use super::{VolumeError, contain_pad};
 use crate::float::sqrt_f64;
+use crate::getters::getters;
 use glam::{DVec3, Vec3};
 
 /// A closed ball: every point within `radius` of `center` (radius `0` is a single point).
@@ -32,18 +33,11 @@ impl BoundingSphere {
         })
     }
 
-    /// Centre, world units.
-    #[inline]
-    #[must_use]
-    pub fn center(&self) -> Vec3 {
-        self.center
-    }
-
-    /// Radius, world units (`≥ 0`).
-    #[inline]
-    #[must_use]
-    pub fn radius(&self) -> f32 {
-        self.radius
+    getters! {
+        /// Centre, world units.
+        center: Vec3;
+        /// Radius, world units (`≥ 0`).
+        radius: f32;
     }
 
     /// A ball containing every point of `points` (a `&[Vec3]` or a

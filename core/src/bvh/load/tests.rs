@@ -17,15 +17,10 @@ fn grid(n: usize, rng: &mut u64) -> (Vec<Vec3>, Vec<[u32; 3]>) {
             p.push(Vec3::new(i as f32, j as f32, lcg(rng) * 0.5));
         }
     }
-    let v = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    let mut t = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            t.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
-            t.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
-        }
-    }
-    (p, t)
+    (
+        p,
+        crate::solids::grid_triangles(n as u32, n as u32).collect(),
+    )
 }
 
 fn built(mesh: &TriangleMesh<'_>) -> (Vec<BvhNode>, Vec<u32>) {

@@ -67,6 +67,7 @@ pub use traverse::WideStack;
 
 use super::stats::TraversalStats;
 use crate::aabb::Aabb;
+use crate::getters::getters;
 
 /// Most triangles one wide leaf slot can hold (the binary tree's leaves must not be larger).
 pub const MAX_LEAF_TRIANGLES: usize = 16;
@@ -182,17 +183,17 @@ where
     #[inline]
     #[must_use]
     pub fn nodes(&self) -> &[WideNode<W>] {
-        let all = self.nodes.as_ref();
-        all.get(..self.node_count as usize).unwrap_or(all)
+        crate::storage::used(self.nodes.as_ref(), self.node_count as usize)
     }
 
     /// The used triangle groups (slots in leaf order, four per group).
     #[inline]
     #[must_use]
     pub fn groups(&self) -> &[LeafGroup] {
-        let all = self.groups.as_ref();
-        all.get(..(self.slot_count as usize).div_ceil(crate::triangle::LANES))
-            .unwrap_or(all)
+        crate::storage::used(
+            self.groups.as_ref(),
+            (self.slot_count as usize).div_ceil(crate::triangle::LANES),
+        )
     }
 
     /// The triangle in slot `slot` (leaf order); `None` past the last slot and for a lane
@@ -229,11 +230,9 @@ where
         self.triangle_count as usize
     }
 
-    /// Number of triangles of the mesh at build time (what [`WideBvh::refit`] expects).
-    #[inline]
-    #[must_use]
-    pub fn source_len(&self) -> usize {
-        self.source_len
+    getters! {
+        /// Number of triangles of the mesh at build time (what [`WideBvh::refit`] expects).
+        source_len: usize;
     }
 
     /// `true` when the tree holds no triangle (every query misses).

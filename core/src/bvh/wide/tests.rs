@@ -4,6 +4,7 @@ use super::*;
 use crate::aabb::Aabb;
 use crate::bvh::{BuildOptions, Bvh, BvhError, BvhNode, TriangleMesh, index_capacity};
 use crate::ray::Ray;
+use crate::simd::level::Portable;
 use crate::test_util::{lcg, unit_vec};
 use crate::triangle::{MollerTrumbore, TriangleIntersector, Watertight};
 use glam::Vec3;
@@ -126,11 +127,12 @@ fn same_at_every_level<const W: usize>(w: &VecWide<W>, ray: &Ray) {
     if let Some(level) = crate::simd_level::Avx2Fma::detect() {
         let mut stack = WideStack::new();
         let (mut a, mut b) = (TraversalStats::default(), TraversalStats::default());
-        let portable = w.closest_hit_triangles_with(&mut stack, &Watertight, ray, Some(&mut a));
+        let portable =
+            w.closest_hit_triangles_on(Portable, &mut stack, &Watertight, ray, Some(&mut a));
         let simd = w.closest_hit_triangles_on(level, &mut stack, &Watertight, ray, Some(&mut b));
         assert_eq!(portable, simd, "{ray:?}");
         assert_eq!(a, b, "{ray:?}");
-        let portable = w.any_hit_triangles_with(&mut stack, &Watertight, ray, None);
+        let portable = w.any_hit_triangles_on(Portable, &mut stack, &Watertight, ray, None);
         let simd = w.any_hit_triangles_on(level, &mut stack, &Watertight, ray, None);
         assert_eq!(portable, simd, "{ray:?}");
     }

@@ -6,6 +6,7 @@ use crate::aabb::SlabRay;
 use crate::bvh::padded_ray::PaddedRay;
 use crate::bvh::stats::TraversalStats;
 use crate::bvh::{cull_bound, projection_pad, take_if_better};
+use crate::hit_queries::closest_and_any;
 use crate::ray::Ray;
 use crate::simd;
 use crate::simd::level::{Portable, SimdLevel, order_key};
@@ -167,144 +168,91 @@ where
     N: AsRef<[WideNode<W>]>,
     T: AsRef<[LeafGroup]>,
 {
-    /// The closest hit of `ray`, as `(triangle index in the mesh, intersect's payload)`.
-    ///
-    /// `intersect(prim, vertices, ray)` tests one triangle against `ray`, whose `t_max` is the
-    /// current closest `t` (inclusive), and returns `(t, payload)` for a hit in
-    /// `(t_min, t_max]`. Of equal `t`, the smaller triangle index wins, so the result equals a
-    /// brute-force loop with the same rule. `stats`, when given, is **added to**. An invalid
-    /// ray returns `None` without testing any node. Makes a fresh [`WideStack`]; see
-    /// [`WideBvh::closest_hit_with`] for many rays.
-    #[inline]
-    pub fn closest_hit<H>(
-        &self,
-        ray: &Ray,
-        intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, H)> {
-        self.closest_hit_with(&mut WideStack::new(), ray, intersect, stats)
+    closest_and_any! {
+        /// The closest hit of `ray`, as `(triangle index in the mesh, intersect's payload)`.
+        ///
+        /// `intersect(prim, vertices, ray)` tests one triangle against `ray`, whose `t_max` is
+        /// the current closest `t` (inclusive), and returns `(t, payload)` for a hit in
+        /// `(t_min, t_max]`. Of equal `t`, the smaller triangle index wins, so the result equals
+        /// a brute-force loop with the same rule. `stats`, when given, is **added to**. An
+        /// invalid ray returns `None` without testing any node. Makes a fresh [`WideStack`];
+        /// see [`WideBvh::closest_hit_with`] for many rays.
+        #[inline]
+        fn closest_hit;
+        /// Any hit of `ray`: traversal stops at the first triangle for which `intersect`
+        /// reports a `t` in `(t_min, t_max]`. Which one is found first depends on the tree;
+        /// hit/miss does not.
+        #[inline]
+        fn any_hit;
+        <H>(
+            &self,
+            ray: &Ray,
+            intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
+            stats: Option<&mut TraversalStats>,
+        ) -> Option<(u32, H)>, const ANY => {
+            let leaf = |_: &Ray| Some(ClosureTest(intersect));
+            self.traverse::<H, ANY, _, _>(Portable, &mut WideStack::new(), ray, leaf, stats)
+        }
     }
 
-    /// [`WideBvh::closest_hit`] on a stack the caller keeps across rays.
-    #[inline(always)]
-    pub fn closest_hit_with<H>(
-        &self,
-        stack: &mut WideStack,
-        ray: &Ray,
-        intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, H)> {
-        self.traverse::<H, false, _, _>(
-            Portable,
-            stack,
-            ray,
-            |_| Some(ClosureTest(intersect)),
-            stats,
-        )
+    closest_and_any! {
+        /// [`WideBvh::closest_hit`] on a stack the caller keeps across rays.
+        #[inline(always)]
+        fn closest_hit_with;
+        /// [`WideBvh::any_hit`] on a stack the caller keeps across rays.
+        #[inline(always)]
+        fn any_hit_with;
+        <H>(
+            &self,
+            stack: &mut WideStack,
+            ray: &Ray,
+            intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
+            stats: Option<&mut TraversalStats>,
+        ) -> Option<(u32, H)>, const ANY => {
+            let leaf = |_: &Ray| Some(ClosureTest(intersect));
+            self.traverse::<H, ANY, _, _>(Portable, stack, ray, leaf, stats)
+        }
     }
 
-    /// Any hit of `ray`: traversal stops at the first triangle for which `intersect` reports a
-    /// `t` in `(t_min, t_max]`. Which one is found first depends on the tree; hit/miss does
-    /// not.
-    #[inline]
-    pub fn any_hit<H>(
-        &self,
-        ray: &Ray,
-        intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, H)> {
-        self.any_hit_with(&mut WideStack::new(), ray, intersect, stats)
+    closest_and_any! {
+        /// [`WideBvh::closest_hit`] with the intersector `isect` (prepared once per ray).
+        #[inline]
+        fn closest_hit_triangles;
+        /// [`WideBvh::any_hit`] with the intersector `isect`.
+        #[inline]
+        fn any_hit_triangles;
+        <I: TriangleIntersector>(
+            &self,
+            isect: &I,
+            ray: &Ray,
+            stats: Option<&mut TraversalStats>,
+        ) -> Option<(u32, TriangleHit)>, const ANY => {
+            let (level, stack, leaf) = (Portable, &mut WideStack::new(), PreparedTest::of(isect));
+            self.traverse::<TriangleHit, ANY, _, _>(level, stack, ray, leaf, stats)
+        }
     }
 
-    /// [`WideBvh::any_hit`] on a stack the caller keeps across rays.
-    #[inline(always)]
-    pub fn any_hit_with<H>(
-        &self,
-        stack: &mut WideStack,
-        ray: &Ray,
-        intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, H)> {
-        self.traverse::<H, true, _, _>(
-            Portable,
-            stack,
-            ray,
-            |_| Some(ClosureTest(intersect)),
-            stats,
-        )
-    }
-
-    /// [`WideBvh::closest_hit`] with the intersector `isect` (prepared once per ray).
-    #[inline]
-    pub fn closest_hit_triangles<I: TriangleIntersector>(
-        &self,
-        isect: &I,
-        ray: &Ray,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, TriangleHit)> {
-        self.closest_hit_triangles_with(&mut WideStack::new(), isect, ray, stats)
-    }
-
-    /// [`WideBvh::closest_hit_triangles`] on a stack the caller keeps across rays.
-    #[inline(always)]
-    pub fn closest_hit_triangles_with<I: TriangleIntersector>(
-        &self,
-        stack: &mut WideStack,
-        isect: &I,
-        ray: &Ray,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, TriangleHit)> {
-        self.closest_hit_triangles_on(Portable, stack, isect, ray, stats)
-    }
-
-    /// [`WideBvh::closest_hit_triangles_with`] with the node test at SIMD `level` (see
-    /// [`crate::simd_level`]): the same answer and statistics at every level.
-    #[inline(always)]
-    pub fn closest_hit_triangles_on<I: TriangleIntersector, L: SimdLevel>(
-        &self,
-        level: L,
-        stack: &mut WideStack,
-        isect: &I,
-        ray: &Ray,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, TriangleHit)> {
-        self.traverse::<TriangleHit, false, L, _>(level, stack, ray, PreparedTest::of(isect), stats)
-    }
-
-    /// [`WideBvh::any_hit`] with the intersector `isect`.
-    #[inline]
-    pub fn any_hit_triangles<I: TriangleIntersector>(
-        &self,
-        isect: &I,
-        ray: &Ray,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, TriangleHit)> {
-        self.any_hit_triangles_with(&mut WideStack::new(), isect, ray, stats)
-    }
-
-    /// [`WideBvh::any_hit_triangles`] on a stack the caller keeps across rays.
-    #[inline(always)]
-    pub fn any_hit_triangles_with<I: TriangleIntersector>(
-        &self,
-        stack: &mut WideStack,
-        isect: &I,
-        ray: &Ray,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, TriangleHit)> {
-        self.any_hit_triangles_on(Portable, stack, isect, ray, stats)
-    }
-
-    /// [`WideBvh::any_hit_triangles_with`] with the node test at SIMD `level`.
-    #[inline(always)]
-    pub fn any_hit_triangles_on<I: TriangleIntersector, L: SimdLevel>(
-        &self,
-        level: L,
-        stack: &mut WideStack,
-        isect: &I,
-        ray: &Ray,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, TriangleHit)> {
-        self.traverse::<TriangleHit, true, L, _>(level, stack, ray, PreparedTest::of(isect), stats)
+    closest_and_any! {
+        /// [`WideBvh::closest_hit_triangles`] on a stack the caller keeps across rays, with the
+        /// node test at SIMD `level` (see [`crate::simd_level`]; [`Portable`] is the scalar
+        /// one): the same answer and statistics at every level.
+        #[inline(always)]
+        fn closest_hit_triangles_on;
+        /// [`WideBvh::any_hit_triangles`] on the caller's stack with the node test at SIMD
+        /// `level`.
+        #[inline(always)]
+        fn any_hit_triangles_on;
+        <I: TriangleIntersector, L: SimdLevel>(
+            &self,
+            level: L,
+            stack: &mut WideStack,
+            isect: &I,
+            ray: &Ray,
+            stats: Option<&mut TraversalStats>,
+        ) -> Option<(u32, TriangleHit)>, const ANY => {
+            let leaf = PreparedTest::of(isect);
+            self.traverse::<TriangleHit, ANY, L, _>(level, stack, ray, leaf, stats)
+        }
     }
 
     /// Checks `ray`, then walks the tree; `leaf` makes the leaf test from the ray when the
