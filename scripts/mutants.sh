@@ -50,8 +50,11 @@ for f in "${FILES[@]}"; do
         survivors=$(cat "$m/missed.txt" "$m/timeout.txt" 2>/dev/null | sed 's/[][\\.^$*+?(){}|]/\\&/g' \
             | paste -sd'|' -)
         if [ -n "$survivors" ]; then
+            # Every mutant relinks every test binary here (~2 min): a generous test timeout,
+            # so that a slow machine is not read as a mutant's endless loop.
             cargo mutants -f "$f" -F "^($survivors)\$" --test-package "$TEST_PACKAGES" \
-                --profile mutants -o "$dir/wide" >"$dir.wide.log" 2>&1 || true
+                --profile mutants --minimum-test-timeout 180 -o "$dir/wide" \
+                >"$dir.wide.log" 2>&1 || true
             w="$dir/wide/mutants.out"
             # The wide run's verdicts replace stage one's for the survivors.
             c1=$(count "$m/caught.txt"); u1=$(count "$m/unviable.txt")

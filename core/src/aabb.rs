@@ -464,4 +464,54 @@ mod tests {
         assert!(!a.overlaps(&Aabb::EMPTY));
         assert_eq!(UNIT.surface_area(), 6.0);
     }
+
+    /// The box of three points, worked by hand: corners, extent, area, longest axis.
+    #[test]
+    fn box_of_points_worked_example() {
+        let p = [
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(-1.0, 5.0, 0.0),
+            Vec3::new(2.0, -3.0, 1.0),
+        ];
+        let b = Aabb::from_points(&p);
+        assert_eq!(b, Aabb::new(Vec3::new(-1.0, -3.0, 0.0), Vec3::new(2.0, 5.0, 3.0)));
+        assert_eq!(Aabb::EMPTY.grow(p[0]).grow(p[1]), Aabb::from_points(&p[..2]));
+        assert_eq!(Aabb::from_points(&[]), Aabb::EMPTY);
+        assert_eq!(b.extent(), Vec3::new(3.0, 8.0, 3.0));
+        // 2·(3·8 + 8·3 + 3·3)
+        assert_eq!(b.surface_area(), 114.0);
+        // Extents (2, 3, 4): 2·(6 + 12 + 8).
+        let c = Aabb::new(Vec3::new(1.0, 1.0, 1.0), Vec3::new(3.0, 4.0, 5.0));
+        assert_eq!(c.surface_area(), 52.0);
+        assert_eq!(Aabb::EMPTY.surface_area(), 0.0);
+        assert_eq!(b.longest_axis(), 1);
+        assert_eq!(c.longest_axis(), 2);
+        assert_eq!(Aabb::new(Vec3::ZERO, Vec3::new(9.0, 1.0, 2.0)).longest_axis(), 0);
+        // Ties go to the lower axis.
+        assert_eq!(Aabb::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 2.0)).longest_axis(), 1);
+    }
+
+    /// Validity, finiteness and containment fail on each axis and each corner alone.
+    #[test]
+    fn each_axis_and_corner_decides_alone() {
+        assert!(UNIT.is_valid() && UNIT.is_finite());
+        assert!(!Aabb::EMPTY.is_valid());
+        for a in 0..3 {
+            let mut inverted = UNIT;
+            inverted.min[a] = 2.0;
+            assert!(!inverted.is_valid(), "axis {a}");
+            let (mut lo, mut hi) = (UNIT, UNIT);
+            lo.min[a] = f32::NEG_INFINITY;
+            hi.max[a] = f32::NAN;
+            assert!(!lo.is_finite() && !hi.is_finite(), "axis {a}");
+            let mut below = Vec3::splat(0.5);
+            below[a] = -0.25;
+            let mut above = Vec3::splat(0.5);
+            above[a] = 1.25;
+            assert!(!UNIT.contains_point(below) && !UNIT.contains_point(above), "axis {a}");
+            let mut on_face = Vec3::splat(0.5);
+            on_face[a] = 1.0;
+            assert!(UNIT.contains_point(on_face), "closed: axis {a}");
+        }
+    }
 }

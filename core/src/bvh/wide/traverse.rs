@@ -137,7 +137,7 @@ struct Entry {
 
 /// The traversal stack of a wide tree: `7·MAX_DEPTH + 1` entries of 8 bytes (3.5 KiB), enough for
 /// any tree up to 8 wide (module docs of [`super`]). Creating one means writing all of it, so
-/// a caller tracing many rays keeps one and passes it to the `_with` queries; the plain
+/// a caller tracing many rays keeps one and passes it to the `_with` and `_on` queries; the plain
 /// queries make a fresh one per ray. Its contents between queries mean nothing.
 #[derive(Clone, Debug)]
 pub struct WideStack {
