@@ -474,8 +474,14 @@ mod tests {
             Vec3::new(2.0, -3.0, 1.0),
         ];
         let b = Aabb::from_points(&p);
-        assert_eq!(b, Aabb::new(Vec3::new(-1.0, -3.0, 0.0), Vec3::new(2.0, 5.0, 3.0)));
-        assert_eq!(Aabb::EMPTY.grow(p[0]).grow(p[1]), Aabb::from_points(&p[..2]));
+        assert_eq!(
+            b,
+            Aabb::new(Vec3::new(-1.0, -3.0, 0.0), Vec3::new(2.0, 5.0, 3.0))
+        );
+        assert_eq!(
+            Aabb::EMPTY.grow(p[0]).grow(p[1]),
+            Aabb::from_points(&p[..2])
+        );
         assert_eq!(Aabb::from_points(&[]), Aabb::EMPTY);
         assert_eq!(b.extent(), Vec3::new(3.0, 8.0, 3.0));
         // 2·(3·8 + 8·3 + 3·3)
@@ -486,9 +492,15 @@ mod tests {
         assert_eq!(Aabb::EMPTY.surface_area(), 0.0);
         assert_eq!(b.longest_axis(), 1);
         assert_eq!(c.longest_axis(), 2);
-        assert_eq!(Aabb::new(Vec3::ZERO, Vec3::new(9.0, 1.0, 2.0)).longest_axis(), 0);
+        assert_eq!(
+            Aabb::new(Vec3::ZERO, Vec3::new(9.0, 1.0, 2.0)).longest_axis(),
+            0
+        );
         // Ties go to the lower axis.
-        assert_eq!(Aabb::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 2.0)).longest_axis(), 1);
+        assert_eq!(
+            Aabb::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 2.0)).longest_axis(),
+            1
+        );
     }
 
     /// Validity, finiteness and containment fail on each axis and each corner alone.
@@ -508,7 +520,10 @@ mod tests {
             below[a] = -0.25;
             let mut above = Vec3::splat(0.5);
             above[a] = 1.25;
-            assert!(!UNIT.contains_point(below) && !UNIT.contains_point(above), "axis {a}");
+            assert!(
+                !UNIT.contains_point(below) && !UNIT.contains_point(above),
+                "axis {a}"
+            );
             let mut on_face = Vec3::splat(0.5);
             on_face[a] = 1.0;
             assert!(UNIT.contains_point(on_face), "closed: axis {a}");

@@ -194,6 +194,21 @@ fn node_test_far_padding_does_not_bridge_a_gap() {
     let hit = test(2.5).expect("the slabs overlap on [1.5, 2]");
     assert!((hit - 1.5).abs() <= 1e-5, "{hit}");
     assert_eq!(test(3.2), None);
+    // With `y₀ = 1` the slabs meet only at `t = 1` (the ray touches the box's edge x = y = 0),
+    // every distance exact: the closed test hits there, with no projection padding to help
+    // (a far distance shrunk by its padding factor instead of grown would miss).
+    let ray = Ray::new(Vec3::new(-1.0, 1.0, 0.5), Vec3::new(1.0, -1.0, 0.0));
+    let slab = crate::aabb::SlabRay::new(&ray).unwrap();
+    let unpadded = padded_ray::PaddedRay::new(&slab, 0.0);
+    assert_eq!(
+        unpadded.hit_node(false, &root, 0.0, f32::INFINITY),
+        Some(1.0)
+    );
+    assert_eq!(unpadded.hit_node(false, &root, 0.0, 1.0), Some(1.0));
+    assert_eq!(
+        unpadded.hit_node(false, &root, 0.0, 1.0f32.next_down()),
+        None
+    );
 }
 
 /// The node test prunes: on a 32 × 32 grid of separate unit triangles (1 024 in the plane

@@ -124,8 +124,10 @@ impl WatertightRay {
                 1
             } else if e < 0.0 {
                 -1
-            } else if dy != 0.0 {
-                if dy > 0.0 { -1 } else { 1 }
+            } else if dy > 0.0 {
+                -1
+            } else if dy < 0.0 {
+                1
             } else if dx > 0.0 {
                 1
             } else if dx < 0.0 {

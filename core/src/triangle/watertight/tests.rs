@@ -167,6 +167,86 @@ fn crossing_sign_counts_a_shared_edge_or_vertex_once() {
     }
 }
 
+/// Which triangle [`WatertightRay::crossing_sign`] counts is the one its documented rule
+/// names: the one containing the ray's point moved by `(ε, ε²)` in the sheared plane. On a
+/// 4 × 4 grid of unit quads in `z = 0` (vertical, horizontal and diagonal shared edges),
+/// rays along `+z` (sheared axes x, y) and `−z` (y, x: [`super::super::projection_axes`])
+/// through every interior vertex, every interior edge midpoint and a point inside each quad;
+/// the oracle moves the point by `ε = 2⁻¹⁰` and finds the triangle holding it with exact
+/// orientation signs (dyadic coordinates: every product and sum exact in `f64`).
+#[test]
+fn crossing_sign_counts_the_triangle_the_perturbation_names() {
+    let n = 4u32;
+    let pos = |v: u32| Vec3::new((v % (n + 1)) as f32, (v / (n + 1)) as f32, 0.0);
+    let tris: std::vec::Vec<[Vec3; 3]> = crate::solids::grid_triangles(n, n)
+        .map(|t| t.map(pos))
+        .collect();
+    let orient = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    };
+    let holds = |t: &[Vec3; 3], q: [f64; 2]| {
+        let [a, b, c] = t.map(|v| [f64::from(v.x), f64::from(v.y)]);
+        orient(a, b, q) > 0.0 && orient(b, c, q) > 0.0 && orient(c, a, q) > 0.0
+    };
+    let eps = 1.0 / 1024.0;
+    let mut points = std::vec::Vec::new();
+    for j in 0..=2 * n {
+        for i in 0..=2 * n {
+            // Half-unit lattice: vertices, edge midpoints, quad centres (on the diagonal).
+            points.push([f64::from(i) * 0.5, f64::from(j) * 0.5]);
+        }
+    }
+    points.extend((0..n * n).map(|q| [f64::from(q % n) + 0.75, f64::from(q / n) + 0.25]));
+    let mut checked = 0;
+    for p in points {
+        let interior = |x: f64| x > 0.0 && x < f64::from(n);
+        if !(interior(p[0]) && interior(p[1])) {
+            continue;
+        }
+        // (direction z, the world offset of (ε, ε²) in the sheared plane, expected sign)
+        for (dz, moved, sign) in [
+            (1.0f32, [p[0] + eps, p[1] + eps * eps], -1),
+            (-1.0, [p[0] + eps * eps, p[1] + eps], 1),
+        ] {
+            let origin = Vec3::new(p[0] as f32, p[1] as f32, -dz);
+            let pre = WatertightRay::new(&Ray::new(origin, Vec3::new(0.0, 0.0, dz))).unwrap();
+            let counted: std::vec::Vec<(usize, i8)> = (0..tris.len())
+                .map(|k| (k, pre.crossing_sign(origin, &tris[k])))
+                .filter(|&(_, s)| s != 0)
+                .collect();
+            let want: std::vec::Vec<(usize, i8)> = (0..tris.len())
+                .filter(|&k| holds(&tris[k], moved))
+                .map(|k| (k, sign))
+                .collect();
+            assert_eq!(want.len(), 1, "oracle at {p:?}");
+            assert_eq!(counted, want, "point {p:?}, direction z {dz}");
+            checked += 1;
+        }
+    }
+    // 7 × 7 interior lattice points and 16 quad points, two directions each.
+    assert_eq!(checked, 2 * (49 + 16));
+}
+
+/// A triangle whose projection is degenerate counts nothing, even for a ray through it: all
+/// three vertices on the ray's line (every projected edge of length zero), two of them
+/// projecting to one point, and a single point.
+#[test]
+fn crossing_sign_of_a_degenerate_projection_is_zero() {
+    let z = |h: f32| Vec3::new(0.25, 0.5, h);
+    let tris = [
+        [z(1.0), z(2.0), z(3.0)],
+        [z(1.0), z(2.0), Vec3::new(1.0, 0.5, 1.5)],
+        [z(1.0); 3],
+    ];
+    for dz in [1.0f32, -1.0] {
+        let origin = z(-5.0 * dz);
+        let pre = WatertightRay::new(&Ray::new(origin, Vec3::new(0.0, 0.0, dz))).unwrap();
+        for t in &tris {
+            assert_eq!(pre.crossing_sign(origin, t), 0, "{t:?} along z {dz}");
+        }
+    }
+}
+
 #[test]
 fn crossing_sign_keeps_a_closed_mesh_closed_through_every_edge_and_vertex() {
     // The octahedron (vertices ±e_i, faces outward): every line through a vertex or an
