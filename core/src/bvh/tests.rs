@@ -784,3 +784,46 @@ fn build_in_a_caller_workspace_gives_the_same_tree_and_errors() {
         })
     );
 }
+
+/// The node test's general path (rays with `t_min < 0`, or a direction component whose
+/// reciprocal overflows) answers like brute force: random lines through a soup (hits behind
+/// the origin count), and rays exactly through each vertex of a triangle that is its own
+/// box's extreme corner (a box shrunk by any amount misses them; the closed test hits).
+#[test]
+fn general_path_rays_equal_brute_force() {
+    let (pos, tris) = soup(300, 41);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+    let mut r = Lcg(43);
+    let mut hits = 0;
+    for k in 0..600 {
+        let o = r.v(14.0);
+        // Aimed at a triangle's centroid, so most rays hit something.
+        let [a, b, c] = mesh.triangle(k % tris.len()).unwrap();
+        let mut d = (a + b + c) / 3.0 - o;
+        if k % 3 == 0 {
+            d[k % 2] = 1.0e-40; // 1/d overflows: the division path
+        }
+        let t_min = if k % 3 == 1 { 0.5 } else { -30.0 };
+        let ray = Ray::with_interval(o, d, t_min, f32::INFINITY);
+        let got = bvh.closest_hit_triangles(&mesh, &Watertight, &ray, None);
+        assert_eq!(got.map(|(i, h)| (i, h.t)), brute(&mesh, &ray), "{ray:?}");
+        hits += usize::from(got.is_some());
+    }
+    assert!(hits > 400, "only {hits} of 600 rays hit");
+
+    let tri = [
+        Vec3::new(1.0, 1.0, 1.0),
+        Vec3::new(2.0, 1.0, 1.0),
+        Vec3::new(1.0, 2.0, 1.0),
+    ];
+    let mesh = TriangleMesh::new(&tri, &[[0, 1, 2]]);
+    let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+    for v in tri {
+        for t_min in [-5.0, 0.0] {
+            let ray = Ray::with_interval(v + Vec3::Z, -Vec3::Z, t_min, f32::INFINITY);
+            let got = bvh.closest_hit_triangles(&mesh, &Watertight, &ray, None);
+            assert_eq!(got.map(|(i, h)| (i, h.t)), Some((0, 1.0)), "{ray:?}");
+        }
+    }
+}

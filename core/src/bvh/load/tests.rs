@@ -274,3 +274,24 @@ fn a_chain_deeper_than_the_stack_bound_is_refused() {
         })
     );
 }
+
+/// The deepest tree the bound allows: a caterpillar whose last inner node is at depth 63, so
+/// 64 inner nodes sit above its deepest leaves. `stack_depth` (whose own walk keeps one
+/// pending entry per level) reports all 64, as the statistics' walk does, and a stack of 64
+/// entries answers a ray down the whole chain.
+#[test]
+fn stack_depth_of_the_deepest_loadable_chain() {
+    let (p, t, nodes) = caterpillar(65);
+    let mesh = TriangleMesh::new(&p, &t);
+    let idx: Vec<u32> = (0..t.len() as u32).collect();
+    let bvh = load(&nodes, &idx, &mesh).unwrap();
+    assert_eq!(bvh.stack_depth(), MAX_DEPTH);
+    assert_eq!(bvh.stats().max_depth, MAX_DEPTH);
+    // Down the chain from above: every level is entered before the nearest leaf, at z = 64.
+    let ray = Ray::new(Vec3::new(0.25, 0.25, 70.0), -Vec3::Z);
+    let full = bvh.closest_hit_triangles(&mesh, &Watertight, &ray, None);
+    assert_eq!(full.map(|(i, h)| (i, h.t)), Some((64, 6.0)));
+    let mut stack = [crate::bvh::StackEntry::EMPTY; MAX_DEPTH];
+    let got = bvh.closest_hit_triangles_in(&mut stack, &mesh, &Watertight, &ray, None);
+    assert_eq!(got, Ok(full));
+}
