@@ -248,7 +248,52 @@ fn node_test_prunes_the_tree() {
         bvh.closest_hit_triangles(&mesh, &Watertight, &beside, Some(&mut st))
             .is_none()
     );
-    assert!(st.primitives_tested == 0 && st.nodes_visited <= 3, "{st:?}");
+    // Both children of the root are tested (and missed): exactly two node tests.
+    assert!(st.primitives_tested == 0 && st.nodes_visited == 2, "{st:?}");
+}
+
+/// The near child is visited first: down a stack of 16 unit triangles one unit apart (one per
+/// leaf), the closest hit is the top one, found after a few triangle tests; the boxes below
+/// it are culled, not visited. Of two children entered at the same distance the first is
+/// visited first: an any-hit query through two coincident triangles in separate leaves
+/// returns the first child's.
+#[test]
+fn near_child_first_and_ties_to_the_first_child() {
+    let one_per_leaf = BuildOptions {
+        max_leaf_size: 1,
+        leaf_threshold: 1,
+        ..BuildOptions::default()
+    };
+    let mut pos = Vec::new();
+    for k in 0..16 {
+        let z = k as f32;
+        pos.extend([
+            Vec3::new(0.0, 0.0, z),
+            Vec3::X + z * Vec3::Z,
+            Vec3::Y + z * Vec3::Z,
+        ]);
+    }
+    let tris: Vec<[u32; 3]> = (0..16u32).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let bvh = build(&mesh, &one_per_leaf).unwrap();
+    for (origin, dir, want) in [(20.0, -1.0, 15u32), (-5.0, 1.0, 0)] {
+        let ray = Ray::new(Vec3::new(0.25, 0.25, origin), dir * Vec3::Z);
+        let mut st = TraversalStats::default();
+        let hit = bvh.closest_hit_triangles(&mesh, &Watertight, &ray, Some(&mut st));
+        assert_eq!(hit.map(|(p, _)| p), Some(want));
+        assert!(st.primitives_tested <= 2, "from z = {origin}: {st:?}");
+    }
+
+    let twins = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let mesh = TriangleMesh::new(&twins, &[[0, 1, 2], [0, 1, 2]]);
+    let bvh = build(&mesh, &one_per_leaf).unwrap();
+    let (left, _) = bvh.nodes()[0]
+        .children()
+        .expect("two leaves under the root");
+    let first = bvh.nodes()[left as usize].primitive_range().unwrap();
+    let ray = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
+    let any = bvh.any_hit_triangles(&mesh, &Watertight, &ray, None);
+    assert_eq!(any.map(|(p, _)| p), Some(bvh.indices()[first.start]));
 }
 
 #[test]
@@ -825,5 +870,26 @@ fn general_path_rays_equal_brute_force() {
             let got = bvh.closest_hit_triangles(&mesh, &Watertight, &ray, None);
             assert_eq!(got.map(|(i, h)| (i, h.t)), Some((0, 1.0)), "{ray:?}");
         }
+    }
+}
+
+/// The node test's general path is the closed slab test of the box padded outward by the
+/// projection pad: rays with `t_min < 0` straight down through each corner of a flat box
+/// enter it at `t ≈ 1` (the padding only widens it), and rays a thousandth beside it miss.
+#[test]
+fn general_node_test_hits_the_corners_and_misses_beside() {
+    let node = BvhNode::from_raw([[1.0, 1.0, 1.0], [2.0, 2.0, 1.0]], 0, 1);
+    let test = |x: f32, y: f32| {
+        let ray = Ray::with_interval(Vec3::new(x, y, 2.0), -Vec3::Z, -5.0, f32::INFINITY);
+        let slab = crate::aabb::SlabRay::new(&ray).unwrap();
+        let padded = padded_ray::PaddedRay::new(&slab, projection_pad(slab.origin, 2.0));
+        padded.hit_node(true, &node, ray.t_min, ray.t_max)
+    };
+    for (x, y) in [(1.0, 1.0), (2.0, 1.0), (1.0, 2.0), (2.0, 2.0), (1.5, 1.5)] {
+        let t = test(x, y).expect("a corner of the box");
+        assert!((t - 1.0).abs() <= 1e-5, "({x}, {y}): {t}");
+    }
+    for (x, y) in [(0.999, 1.5), (2.001, 1.5), (1.5, 0.999), (1.5, 2.001)] {
+        assert_eq!(test(x, y), None, "({x}, {y})");
     }
 }
