@@ -119,21 +119,14 @@ impl WatertightRay {
         // E_ST(p + (ε, ε²)) = E_ST(p) + d_x·ε² − d_y·ε: when E is exactly zero its sign is
         // −sign(d_y), or sign(d_x) for a horizontal edge (d = 0 only for a degenerate
         // projection, whose det is 0).
+        let sign = |x: f64| i8::from(x > 0.0) - i8::from(x < 0.0);
         let perturbed = |(e, dx, dy): (f64, f32, f32)| -> i8 {
-            if e > 0.0 {
-                1
-            } else if e < 0.0 {
-                -1
-            } else if dy > 0.0 {
-                -1
-            } else if dy < 0.0 {
-                1
-            } else if dx > 0.0 {
-                1
-            } else if dx < 0.0 {
-                -1
+            if e != 0.0 {
+                sign(e)
+            } else if dy != 0.0 {
+                -sign(f64::from(dy))
             } else {
-                0
+                sign(f64::from(dx))
             }
         };
         let s = edges.map(perturbed);
