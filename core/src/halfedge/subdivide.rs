@@ -98,7 +98,9 @@ impl<S: MeshStorage> Mesh<S> {
     /// [`Mesh::loop_edge_position`].
     ///
     /// **Numbering** (relied on by callers): old vertex `i` keeps index `i`; the new vertex on
-    /// old edge `e` is `V + e` (edge-id order). Old edge `e` becomes edges `2e` and `2e + 1`;
+    /// old edge `e` is `V + e` (edge-id order). Old edge `e` from `a` to `b` (its halfedge
+    /// `2e`, [`Mesh::edge_vertices`]) becomes edge `2e` from `a` to `V + e` and edge `2e + 1`
+    /// from `V + e` to `b`;
     /// old face `f` becomes faces `4f + k` (the corner at the head of its k-th halfedge,
     /// starting from its stored halfedge) and `4f + 3` (the middle triangle); the inner edges
     /// are `2E + 3f + k`. Counts: V' = V + E, E' = 2E + 3F, F' = 4F; a closed mesh stays

@@ -1201,3 +1201,29 @@ fn collapse_targets_are_the_named_points() {
         assert!(positions[..n].contains(&want), "{at:?}: {positions:?}");
     }
 }
+
+/// The documented numbering of Loop subdivision's split edges: old edge `e` from `a` to `b`
+/// (its halfedge `2e`) becomes edge `2e` from `a` to the new vertex `V + e` and edge `2e + 1`
+/// from there to `b`.
+#[test]
+fn loop_split_edges_keep_the_old_edge_direction() {
+    let m = build::<6, 12, 8>(&OCTAHEDRON_VERTICES, &OCTAHEDRON_TRIANGLES).unwrap();
+    let mut out = HalfedgeMesh::<18, 48, 32>::new();
+    m.subdivide_loop(&mut out, LoopWeights::Loop).unwrap();
+    out.validate().unwrap();
+    let v = m.vertices().count() as u32;
+    for e in m.edges() {
+        let [a, b] = m.edge_vertices(e).unwrap();
+        let mid = VertexId(v + e.0);
+        assert_eq!(
+            out.edge_vertices(EdgeId(2 * e.0)),
+            Some([a, mid]),
+            "edge {e:?}"
+        );
+        assert_eq!(
+            out.edge_vertices(EdgeId(2 * e.0 + 1)),
+            Some([mid, b]),
+            "edge {e:?}"
+        );
+    }
+}
