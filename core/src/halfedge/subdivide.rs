@@ -79,7 +79,7 @@ impl<S: MeshStorage> Mesh<S> {
         if !self.e_live(e.0) {
             return None;
         }
-        let (h, t) = (e.0 << 1, (e.0 << 1) | 1);
+        let (h, t) = (e.halfedge(0).0, e.halfedge(1).0);
         let a = self.pos_raw(self.tail_raw(h));
         let b = self.pos_raw(self.head_raw(h));
         if self.face_raw(h) == NONE || self.face_raw(t) == NONE {
