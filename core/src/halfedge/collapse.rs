@@ -70,7 +70,9 @@ impl<S: MeshStorage> Mesh<S> {
         } else {
             NONE
         };
-        if f0 != NONE && f1 != NONE && vl == vr {
+        // A valid mesh has a face on at least one side of every edge (`validate`'s
+        // `IsolatedEdge`), so equal wings are the apexes of two faces, never two `NONE`s.
+        if vl == vr {
             return Err(CE::WingsCoincide);
         }
         for (x, f) in [(h, f0), (t, f1)] {
