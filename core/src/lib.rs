@@ -32,8 +32,6 @@
 #![deny(unsafe_code)]
 #![deny(missing_docs)]
 #![deny(clippy::missing_errors_doc)]
-// `!(x > eps)` is how this crate rejects NaN along with small values: the negation is the point.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 #[cfg(test)]
 extern crate std;

@@ -1,6 +1,6 @@
 //! Infinite planes in point–normal form.
 //!
-//! `t = ((p₀ − o)·N) / (d·N)` (the point form, robustness brief A9: `p₀ − o` does not cancel
+//! `t = ((p₀ − o)·N) / (d·N)` (the point form: `p₀ − o` does not cancel
 //! when the origin is far from the world origin but near the plane's reference point).
 //!
 //! Contract of [`Plane::intersect`]:

@@ -1,6 +1,6 @@
 //! Planar simple polygons (convex or concave) with a fixed vertex capacity: the ray–plane hit
 //! ([`crate::plane`]), then a 2-D crossing-number test (Haines, "Point in Polygon Strategies",
-//! Graphics Gems IV; robustness brief A10).
+//! Graphics Gems IV).
 //!
 //! **Projection.** The hit point and the vertices are projected onto the coordinate plane where
 //! the polygon's projection is largest: the axis `k = argmax |N_k|` of the (Newell, `f64`)
@@ -24,7 +24,8 @@
 //! horizontal edge, inside when the interior lies towards `+v` (a "bottom" edge). Two coplanar
 //! polygons sharing an edge therefore claim a point of that edge exactly once *when they compute
 //! the same `P`*; since `P` is a rounded plane hit computed from each polygon's own plane, this
-//! is **not watertight** across shared edges in general (brief P4: use triangles, which are).
+//! is **not watertight** across shared edges in general (triangles are:
+//! [`crate::triangle::Watertight`]).
 //!
 //! **Validation** ([`Polygon::new`]): 3 to `N` finite vertices; twice the area (the Newell normal
 //! about the centroid, in `f64`) above [`POLYGON_MIN_AREA_REL`]` × diag²` (else

@@ -9,7 +9,7 @@
 //! ([`crate::tolerance::QUADRIC_CENTER_MIN_REL_DET`]) and uses the world origin otherwise;
 //! [`Quadric::recentered`] moves the reference point anywhere (e.g. a paraboloid's vertex).
 //!
-//! **Solve** (robustness brief A8), all in `f64` from the `f32` ray: with `f₀ = o − x_c`,
+//! **Solve** (the cancellation-free quadratic formula), all in `f64` from the `f32` ray: with `f₀ = o − x_c`,
 //! `qa = dᵀAd`, `qb = dᵀ(Af₀ + b_c)`, `qc = f(o)`, the ray gives `qa·t² + 2qb·t + qc = 0`.
 //! 1. The origin is shifted along the ray to `o' = o + t_c·d`, `t_c = −qb/qa` (the point of the
 //!    line closest to the centre in the metric of `A`), and the discriminant is evaluated there

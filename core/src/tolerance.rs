@@ -47,7 +47,7 @@ pub const T_REL_TOLERANCE_WELL_CONDITIONED: f32 = 64.0 * f32::EPSILON;
 /// `σ₁ ≥ σ₂ ≥ σ₃`, `|det L| = σ₁σ₂σ₃ ≤ σ₁²σ₃` and `σ₁ ≤ ‖L‖_F`, so the condition number obeys
 /// `κ₂(L) = σ₁/σ₃ ≤ ‖L‖_F³ / |det L|`. The threshold `2⁻²⁰` guarantees `κ₂ ≤ 2²⁰`, i.e.
 /// `κ·u ≤ 2⁻⁴`: a point taken to object space and back still has ≥ 4 correct bits in its worst
-/// direction. A non-uniform scale with axis ratio `1e-4` (brief S6) has ratio ≈ 3.5e-5 and is
+/// direction. A non-uniform scale with axis ratio `1e-4` (a flattened sphere) has ratio ≈ 3.5e-5 and is
 /// accepted; anything flatter than `~1e-6` is numerically singular in `f32` and refused.
 pub const TRANSFORM_MIN_REL_DET: f64 = 1.0 / 1_048_576.0;
 

@@ -1,5 +1,5 @@
 //! Judging a disagreement between halfray and Embree against an `f64` reference, never by
-//! trusting either side (robustness brief, section 5).
+//! trusting either side (two tracers that agree may share an error; the reference breaks ties).
 
 use crate::obj::ObjMesh;
 use halfray_core::Ray;
@@ -37,8 +37,8 @@ pub enum Verdict {
 
 /// Relative `t` agreement required of two `f32` answers, in ulps (`2⁻²³`) of the
 /// magnitude the hit is computed from. Embree uses an approximate reciprocal refined by one
-/// Newton step (≈ 2 ulps), Möller's or Plücker's algebra (≈ 10–100 ulps in the tails, robustness
-/// brief 4.3) and possibly FMA; 64 ulps covers these for non-grazing rays.
+/// Newton step (≈ 2 ulps), Möller's or Plücker's algebra (≈ 10–100 ulps in the tails: their `t` is a
+/// quotient of cancelling triple products) and possibly FMA; 64 ulps covers these for non-grazing rays.
 pub const T_TOLERANCE_ULPS: f64 = 64.0;
 
 /// Floor on `|cos θ|` (ray against face normal) when scaling tolerances for grazing rays:
@@ -49,7 +49,7 @@ pub const COS_FLOOR: f64 = 1.0e-4;
 /// Distance from an edge, in ulps (`2⁻²³`) of the coordinates' magnitude divided by the
 /// triangle's smallest altitude, below which a point counts as "on the boundary": each side's
 /// edge decision may legitimately differ there. The `f32` translation and shear of a vertex
-/// each round (≈ 3 roundings, robustness brief A4), and Embree's Plücker/Möller algebra adds a
+/// each round (≈ 3 roundings: a subtraction, a product, a subtraction), and Embree's Plücker/Möller algebra adds a
 /// few more; 64 ulps covers both with margin.
 pub const BOUNDARY_ULPS: f64 = 64.0;
 

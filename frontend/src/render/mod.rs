@@ -5,9 +5,6 @@
 //! 8-bit sRGB RGBA PNG written atomically ([`output`]). Every render ends with a summary line
 //! of rays cast per kind, time and Mrays/s.
 
-// `!(x > eps)` rejects NaN along with small values: the negation is the point.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
 pub mod antialias;
 pub mod gamma;
 pub mod geom;

@@ -4,9 +4,6 @@
 //! Every error names the file, line, column and field (for example
 //! `scene.toml:12:10: field object[2].radius: must be > 0`), and none panics.
 
-// `!(x > eps)` rejects NaN along with small values: the negation is the point.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
 mod build;
 pub mod def;
 mod mesh;
