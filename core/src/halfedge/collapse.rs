@@ -78,7 +78,8 @@ impl<S: MeshStorage> Mesh<S> {
         for (x, f) in [(h, f0), (t, f1)] {
             if f != NONE {
                 let (n, p) = (self.next_raw(x), self.prev_raw(x));
-                if self.face_raw(n ^ 1) == NONE && self.face_raw(p ^ 1) == NONE {
+                let twin = |x: u32| HalfedgeId(x).twin().0;
+                if self.face_raw(twin(n)) == NONE && self.face_raw(twin(p)) == NONE {
                     return Err(CE::Ear(super::FaceId(f)));
                 }
             }
