@@ -1227,3 +1227,29 @@ fn loop_split_edges_keep_the_old_edge_direction() {
         );
     }
 }
+
+/// Every legal collapse of every halfedge of a 4 × 4 grid (interior, boundary and corner
+/// edges; each end) leaves a mesh that passes `validate`: among its invariants, every
+/// boundary vertex stores its boundary halfedge, which the collapse must re-establish for
+/// the surviving vertex and the wings.
+#[test]
+fn every_legal_collapse_of_a_grid_leaves_a_valid_mesh() {
+    let n = 4u32;
+    let p: Vec<Vec3> = (0..(n + 1) * (n + 1))
+        .map(|v| vec3((v % (n + 1)) as f32, (v / (n + 1)) as f32, 0.0))
+        .collect();
+    let t: Vec<[u32; 3]> = crate::solids::grid_triangles(n, n).collect();
+    let m = build::<25, 56, 32>(&p, &t).unwrap();
+    let mut legal = 0;
+    for h in m.halfedges() {
+        for at in [CollapseAt::Head, CollapseAt::Midpoint] {
+            let mut c = m.clone();
+            if c.collapse_edge(h, at).is_ok() {
+                legal += 1;
+                c.validate()
+                    .unwrap_or_else(|e| panic!("collapse of {h:?} at {at:?}: {e:?}"));
+            }
+        }
+    }
+    assert!(legal > 40, "only {legal} legal collapses");
+}
