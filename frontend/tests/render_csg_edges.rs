@@ -7,7 +7,7 @@
 use glam::Vec3;
 use halfray::accel::MeshAccel;
 use halfray::obj::read_obj;
-use halfray::render::geom::{CsgOp, Event, MeshShape, Node, QueryCtx, Shape};
+use halfray::scene::geom::{CsgOp, Event, MeshShape, Node, QueryCtx, Shape};
 use halfray_core::{Aabb, Ray};
 use std::collections::BTreeSet;
 use std::path::Path;

@@ -2,7 +2,7 @@
 //! replaced: the same closest object (ties: the object declared last), the same `t`, the same
 //! occlusion, on every example scene and on 10 000 spheres with duplicates.
 
-use halfray::render::geom::QueryCtx;
+use halfray::scene::geom::QueryCtx;
 use halfray::scene::{Scene, load, parse};
 use halfray_core::{Ray, Vec3};
 use std::path::Path;

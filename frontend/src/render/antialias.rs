@@ -13,9 +13,6 @@ use super::{PixelOut, RayCounts};
 use glam::Vec3;
 use rayon::prelude::*;
 
-/// Most samples per pixel `--samples` accepts.
-pub const MAX_SAMPLES: u32 = 64;
-
 /// Largest difference between a pixel and a 4-neighbour that leaves it with one sample: in
 /// sRGB-encoded units of `[0, 1]` per colour channel, and in alpha. 8/255: the steps of a
 /// smoothly lit surface between neighbouring pixels stay below it at ordinary resolutions
@@ -132,7 +129,7 @@ pub(super) fn refine(
         .map(|&i| {
             let (x, y) = ((i % w as usize) as f32, (i / w as usize) as f32);
             let mut counts = RayCounts::default();
-            let extra: Vec<PixelOut> = (1..samples.min(MAX_SAMPLES))
+            let extra: Vec<PixelOut> = (1..samples.min(crate::scene::MAX_SAMPLES))
                 .map(|k| {
                     let (dx, dy) = offset(k);
                     sample(x + dx, y + dy, &mut counts)

@@ -7,11 +7,9 @@
 
 pub mod antialias;
 pub mod gamma;
-pub mod geom;
 pub mod output;
 pub mod plan;
 pub mod trace;
-pub mod xform;
 
 use crate::console::print_out;
 use crate::error::{Error, Result};
@@ -70,7 +68,7 @@ pub struct RenderArgs {
     /// N − 1 more at fixed sub-pixel positions only where a pixel differs from a neighbour
     /// (edges, shadow boundaries, mirror rims), averaged. Deterministic. Default: the scene's
     /// `samples` (1 when it sets none).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=antialias::MAX_SAMPLES as i64))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=scene::MAX_SAMPLES as i64))]
     pub samples: Option<u32>,
     /// Output transfer function: `srgb`, or a display gamma `γ` (stored = linear^(1/γ); find
     /// yours with `halfray gamma --chart`). Also decodes `--background`.

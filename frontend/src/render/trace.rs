@@ -21,8 +21,8 @@
 //! discarded (not multiplied by zero: `0·∞` would be NaN), and they use none of the per-pixel
 //! budget, so the picture is the plan's, bit for bit.
 
-use super::geom::{QueryCtx, SurfaceHit};
 use super::plan::EffectPlan;
+use crate::scene::geom::{QueryCtx, SurfaceHit};
 use crate::scene::{Light, LightKind, Scene, SpecularModel};
 use glam::Vec3;
 use halfray_core::{Ray, spawn_ray, spawn_ray_to};

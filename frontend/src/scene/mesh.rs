@@ -5,7 +5,7 @@ use crate::accel::MeshAccel;
 use crate::error::{Error, Location, Result};
 use crate::mesh_tools::{MeshBuffers, export};
 use crate::obj::{ObjMesh, read_obj};
-use crate::render::geom::MeshShape;
+use crate::scene::geom::MeshShape;
 use glam::Vec3;
 use halfray_core::halfedge::{DiffuseBoundary, LoopWeights, SliceMesh, build_scratch_len};
 use std::collections::HashMap;

@@ -6,11 +6,13 @@
 
 mod build;
 pub mod def;
+pub mod geom;
 mod mesh;
 pub mod top;
+pub mod xform;
 
 use crate::error::{Error, Location, Result};
-use crate::render::geom::{MeshShape, Node};
+use geom::{MeshShape, Node};
 use glam::Vec3;
 use halfray_core::Ray;
 use std::ops::Range;
@@ -18,6 +20,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 pub use mesh::{boundary_edge_count, load_mesh};
+
+/// Most samples per pixel a scene's `samples` or `--samples` may ask for.
+pub const MAX_SAMPLES: u32 = 64;
 
 /// Default recursion depth when the scene does not give `max_depth`.
 pub const DEFAULT_MAX_DEPTH: u32 = 5;
@@ -292,12 +297,12 @@ impl Scene {
     /// Per material: whether some object (or CSG operand, at any depth) uses it.
     pub fn used_materials(&self) -> Vec<bool> {
         let mut used = vec![false; self.materials.len()];
-        let mut stack: Vec<&crate::render::geom::Node> = self.objects.iter().collect();
+        let mut stack: Vec<&crate::scene::geom::Node> = self.objects.iter().collect();
         while let Some(n) = stack.pop() {
             if let Some(u) = used.get_mut(n.material as usize) {
                 *u = true;
             }
-            if let crate::render::geom::Shape::Csg(_, a, b) = &n.shape {
+            if let crate::scene::geom::Shape::Csg(_, a, b) = &n.shape {
                 stack.push(a);
                 stack.push(b);
             }
@@ -310,7 +315,7 @@ impl Scene {
         self.objects
             .iter()
             .zip(&self.object_labels)
-            .filter(|(o, _)| matches!(o.shape, crate::render::geom::Shape::Csg(..)))
+            .filter(|(o, _)| matches!(o.shape, crate::scene::geom::Shape::Csg(..)))
             .map(|(_, l)| l.as_str())
             .collect()
     }

@@ -7,7 +7,7 @@
 //! declaration order, so its own tie rule (smaller primitive index) picks the later object,
 //! and an equal `t` between the BVH and the list goes to the later object too.
 
-use crate::render::geom::{Node, QueryCtx, SurfaceHit};
+use crate::scene::geom::{Node, QueryCtx, SurfaceHit};
 use halfray_core::bvh::{
     BuildOptions, Bvh, BvhNode, PrimitiveSource, index_capacity, node_capacity,
 };

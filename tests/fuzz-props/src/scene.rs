@@ -7,8 +7,8 @@
 
 use super::*;
 use halfray::error::Error;
-use halfray::render::geom::QueryCtx;
 use halfray::render::plan::EffectPlan;
+use halfray::scene::geom::QueryCtx;
 use std::path::Path;
 
 /// Where the fuzzed scene pretends to live (absolute at compile time: the fuzz crate and

@@ -1,8 +1,8 @@
 //! `[mesh.NAME]` and the objects that name a mesh: read, smoothed, subdivided once, shared.
 
 use crate::error::{Error, Result};
-use crate::render::geom::MeshShape;
 use crate::scene::def::{MeshDef, S};
+use crate::scene::geom::MeshShape;
 use std::sync::Arc;
 
 use super::Ctx;

@@ -3,7 +3,7 @@
 use super::def::{self, S, V3};
 use super::{DEFAULT_MAX_DEPTH, Scene, Source};
 use crate::error::{Error, Result};
-use crate::render::geom::MeshShape;
+use crate::scene::geom::MeshShape;
 use glam::Vec3;
 use std::collections::{BTreeMap, HashMap};
 use std::ops::Range;
@@ -133,12 +133,12 @@ pub(super) fn build(src: &Source<'_>, d: def::SceneDef) -> Result<Scene> {
         return Err(ctx.err(&span, "max_depth", "must be ≤ 64"));
     }
     let samples = d.samples.as_ref().map_or(1, |v| *v.get_ref());
-    if !(1..=crate::render::antialias::MAX_SAMPLES).contains(&samples) {
+    if !(1..=super::MAX_SAMPLES).contains(&samples) {
         let span = d.samples.as_ref().map(|v| v.span()).unwrap_or_default();
         return Err(ctx.err(
             &span,
             "samples",
-            format!("must be 1 to {}", crate::render::antialias::MAX_SAMPLES),
+            format!("must be 1 to {}", super::MAX_SAMPLES),
         ));
     }
     let camera = camera(&ctx, &d.camera)?;

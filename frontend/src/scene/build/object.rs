@@ -1,8 +1,8 @@
 //! `[[object]]`: the object types, their fields and CSG operands.
 
 use crate::error::Result;
-use crate::render::geom::{ClippedQuadric, CsgOp, Node, POLYGON_MAX_VERTICES, Polygon, Shape};
 use crate::scene::def::{ObjectDef, S, V3};
+use crate::scene::geom::{ClippedQuadric, CsgOp, Node, POLYGON_MAX_VERTICES, Polygon, Shape};
 use glam::{DMat3, DVec3, Vec3};
 use halfray_core::plane::Plane;
 use halfray_core::quadric::{Ellipsoid, Quadric};

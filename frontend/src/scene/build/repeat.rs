@@ -1,8 +1,8 @@
 //! `repeat` on a top-level object: a grid of copies.
 
 use crate::error::Result;
-use crate::render::geom::Node;
 use crate::scene::def::{self, S};
+use crate::scene::geom::Node;
 use glam::Vec3;
 use halfray_core::transform::Transform;
 

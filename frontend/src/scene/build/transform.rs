@@ -1,8 +1,8 @@
 //! `transform = [step, …]` on an object.
 
 use crate::error::Result;
-use crate::render::xform;
 use crate::scene::def::{self, S};
+use crate::scene::xform;
 use glam::{Mat4, Vec3, Vec4};
 use halfray_core::transform::Transform;
 

@@ -20,7 +20,7 @@ pub use csg::combine;
 use primitives::*;
 
 use crate::accel::MeshAccel;
-use crate::render::xform::bounds_to_world;
+use crate::scene::xform::bounds_to_world;
 use glam::Vec3;
 use halfray_core::aabb::SlabRay;
 use halfray_core::bvh::TraversalStats;
