@@ -57,6 +57,7 @@ pub mod polygon;
 pub mod predicates;
 pub mod quadric;
 pub mod ray;
+pub mod shape;
 #[allow(unsafe_code)]
 mod simd;
 pub mod solids;

@@ -27,6 +27,7 @@ use halfray_core::bvh::TraversalStats;
 use halfray_core::float::gamma;
 use halfray_core::plane::Plane;
 use halfray_core::quadric::{Ellipsoid, Quadric};
+use halfray_core::shape::Shape as _;
 use halfray_core::sphere::Sphere;
 use halfray_core::transform::Transform;
 use halfray_core::triangle::Watertight;
@@ -207,16 +208,13 @@ impl Shape {
     /// Object-space bounds (`None`: unbounded).
     pub fn bounds(&self) -> Option<Aabb> {
         match self {
-            Self::Sphere(s) => Some(Aabb::new(
-                s.center() - Vec3::splat(s.radius()),
-                s.center() + Vec3::splat(s.radius()),
-            )),
-            Self::Ellipsoid(e) => Some(Aabb::new(e.center() - e.radii(), e.center() + e.radii())),
+            Self::Sphere(s) => Some(s.bounds()),
+            Self::Ellipsoid(e) => Some(e.bounds()),
             Self::Quadric(q) => q.clip,
             Self::Box(b) => Some(*b),
             Self::Plane(_) => None,
-            Self::Triangle(v) => Some(Aabb::from_points(v)),
-            Self::Polygon(p) => Some(Aabb::from_points(p.vertices())),
+            Self::Triangle(v) => Some(v.bounds()),
+            Self::Polygon(p) => Some(p.as_ref().bounds()),
             Self::Mesh(m) => m.accel.mesh.bounds().map(|(lo, hi)| Aabb::new(lo, hi)),
             Self::Csg(op, a, b) => match op {
                 CsgOp::Union => match (a.bounds, b.bounds) {
@@ -321,8 +319,8 @@ impl Node {
         }
         let pick = |h: Hit| ray.contains(h.t).then_some(h);
         match &self.shape {
-            Shape::Sphere(s) => Some(self.surf(s.intersect(ray)?, None)),
-            Shape::Ellipsoid(e) => Some(self.surf(e.intersect(ray)?, None)),
+            Shape::Sphere(s) => Some(self.surf(s.closest_hit(ray)?, None)),
+            Shape::Ellipsoid(e) => Some(self.surf(e.closest_hit(ray)?, None)),
             Shape::Quadric(q) => Some(self.surf(q.closest(ray)?, None)),
             Shape::Box(b) => {
                 let (h0, h1) = box_hits(b, ray)?;
@@ -334,7 +332,7 @@ impl Node {
                 let (h, b) = tri_hit(v, ray)?;
                 Some(self.surf(h, Some(b)))
             }
-            Shape::Polygon(p) => Some(self.surf(p.intersect(ray)?, None)),
+            Shape::Polygon(p) => Some(self.surf(p.closest_hit(ray)?, None)),
             Shape::Mesh(m) => {
                 let (h, b, shading) = m.closest(ray, &mut ctx.stats)?;
                 Some(SurfaceHit {
