@@ -1,4 +1,5 @@
-//! One interface for the bounded surfaces a ray can hit: [`Sphere`], [`Ellipsoid`],
+//! One interface for the bounded surfaces a ray can hit (bounds, closest hit, the crossings
+//! of a line for CSG): [`Sphere`], [`Ellipsoid`],
 //! [`Polygon`] and the triangle `[Vec3; 3]` (with [`Watertight`]). Each is also a
 //! [`crate::bvh::Primitive`], so a BVH can be built over a slice of them and queried with
 //! [`Shape::closest_hit`] as its intersector.
@@ -23,6 +24,40 @@ pub trait Shape {
     /// The closest hit of `ray` in its interval `(t_min, t_max]`; `None` for a miss or an
     /// invalid ray.
     fn closest_hit(&self, ray: &Ray) -> Option<Hit>;
+
+    /// Where the ray's whole line (`t` over all reals, the interval ignored) crosses the
+    /// surface, nearest first: a closed shape's entry and exit (neither for a tangent line,
+    /// whose double root enters and leaves at once), a flat shape's one crossing. What CSG
+    /// combines. Each hit is the one [`Shape::closest_hit`] computes at that `t`.
+    fn line_crossings(&self, ray: &Ray) -> [Option<Hit>; 2] {
+        [self.closest_hit(&whole_line(ray)), None]
+    }
+}
+
+/// `ray` with the interval of its whole line.
+fn whole_line(ray: &Ray) -> Ray {
+    Ray::with_interval(ray.origin, ray.direction, f32::NEG_INFINITY, f32::INFINITY)
+}
+
+/// The crossings of a closed quadric surface at the roots `t0 ≤ t1` of its line: the hit that
+/// `closest_hit` computes on the interval `(t⁻, t]` (one ulp below each root), so exactly that
+/// root; none for a double root.
+fn crossings_at_roots<S: Shape + ?Sized>(
+    shape: &S,
+    ray: &Ray,
+    roots: Option<(f32, f32)>,
+) -> [Option<Hit>; 2] {
+    match roots {
+        Some((t0, t1)) if t0 != t1 => [t0, t1].map(|t| {
+            shape.closest_hit(&Ray::with_interval(
+                ray.origin,
+                ray.direction,
+                t.next_down(),
+                t,
+            ))
+        }),
+        _ => [None, None],
+    }
 }
 
 /// Outward padding of a curved shape's box, relative to the largest magnitude among its
@@ -47,6 +82,10 @@ impl Shape for Sphere {
     fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         self.intersect(ray)
     }
+
+    fn line_crossings(&self, ray: &Ray) -> [Option<Hit>; 2] {
+        crossings_at_roots(self, ray, self.roots(&whole_line(ray)))
+    }
 }
 
 impl Shape for Ellipsoid {
@@ -56,6 +95,13 @@ impl Shape for Ellipsoid {
 
     fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         self.intersect(ray)
+    }
+
+    fn line_crossings(&self, ray: &Ray) -> [Option<Hit>; 2] {
+        let roots = self
+            .roots(&whole_line(ray))
+            .map(|(t0, t1)| (t0 as f32, t1 as f32));
+        crossings_at_roots(self, ray, roots)
     }
 }
 
@@ -127,6 +173,38 @@ mod tests {
                 assert!(slack <= 1e-5 * (cd.abs() + hd).max_element(), "{slack}");
             }
         }
+    }
+
+    /// The unit sphere crossed by the line `y = 0.5`, `z = 0` along `+x` from `x = −5`: by hand
+    /// at `x = ∓√0.75`, entering (outward normal against the ray) then leaving; the same
+    /// through the ellipsoid of radii 1; a tangent line crosses nothing; a triangle once,
+    /// whatever the ray's interval.
+    #[test]
+    fn line_crossings_worked_example() {
+        let ray = Ray::with_interval(Vec3::new(-5.0, 0.5, 0.0), Vec3::X, 0.0, 1.0);
+        let sphere = Sphere::new(Vec3::ZERO, 1.0).unwrap();
+        let ell = Ellipsoid::new(Vec3::ZERO, Vec3::ONE).unwrap();
+        let x = 0.75f32.sqrt();
+        for crossings in [sphere.line_crossings(&ray), ell.line_crossings(&ray)] {
+            let [Some(a), Some(b)] = crossings else {
+                panic!("{crossings:?}");
+            };
+            assert!((a.t - (5.0 - x)).abs() <= 1e-6 && (b.t - (5.0 + x)).abs() <= 1e-6);
+            assert!(a.front_face && !b.front_face);
+            assert!(
+                (a.normal - Vec3::new(-x, 0.5, 0.0)).length() <= 1e-5,
+                "{}",
+                a.normal
+            );
+        }
+        let tangent = Ray::new(Vec3::new(-5.0, 1.0, 0.0), Vec3::X);
+        assert_eq!(sphere.line_crossings(&tangent), [None, None]);
+        let tri = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let up = Ray::with_interval(Vec3::new(0.25, 0.25, 1.0), Vec3::Z, 0.0, 1.0);
+        let [Some(h), None] = tri.line_crossings(&up) else {
+            panic!("one crossing behind the origin");
+        };
+        assert_eq!(h.t, -1.0);
     }
 
     /// A BVH over a slice of spheres, queried with [`Shape::closest_hit`], answers like a loop

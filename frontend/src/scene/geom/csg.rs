@@ -4,6 +4,7 @@
 use super::primitives::*;
 use super::*;
 use glam::Vec3;
+use halfray_core::shape::Shape as _;
 use halfray_core::{Hit, Ray};
 
 impl Node {
@@ -51,19 +52,20 @@ impl Node {
         }
     }
 
+    /// One event per crossing of a core [`halfray_core::shape::Shape`].
+    fn push_crossings(&self, crossings: [Option<Hit>; 2], out: &mut Vec<Event>) {
+        out.extend(crossings.into_iter().flatten().map(|h| self.event(h, None)));
+    }
+
     pub(super) fn events_local(&self, ray: &Ray, ctx: &mut QueryCtx, out: &mut Vec<Event>) -> bool {
         let line = Ray::with_interval(ray.origin, ray.direction, f32::NEG_INFINITY, f32::INFINITY);
         match &self.shape {
             Shape::Sphere(s) => {
-                if let Some((t0, t1)) = s.roots(&line) {
-                    self.push_roots(&line, [t0, t1], |r| s.intersect(r), out);
-                }
+                self.push_crossings(s.line_crossings(&line), out);
                 false
             }
             Shape::Ellipsoid(e) => {
-                if let Some((t0, t1)) = e.roots(&line) {
-                    self.push_roots(&line, [t0 as f32, t1 as f32], |r| e.intersect(r), out);
-                }
+                self.push_crossings(e.line_crossings(&line), out);
                 false
             }
             Shape::Quadric(q) => {
@@ -99,9 +101,7 @@ impl Node {
                 false
             }
             Shape::Polygon(p) => {
-                if let Some(h) = p.intersect(&line) {
-                    out.push(self.event(h, None));
-                }
+                self.push_crossings(p.as_ref().line_crossings(&line), out);
                 false
             }
             Shape::Mesh(m) => {
