@@ -1,8 +1,7 @@
 //! One interface for the bounded surfaces a ray can hit (bounds, closest hit, the crossings
-//! of a line for CSG): [`Sphere`], [`Ellipsoid`],
-//! [`Polygon`] and the triangle `[Vec3; 3]` (with [`Watertight`]). Each is also a
-//! [`crate::bvh::Primitive`], so a BVH can be built over a slice of them and queried with
-//! [`Shape::closest_hit`] as its intersector.
+//! of a line for CSG): [`Sphere`], [`Ellipsoid`], [`Polygon`] and the triangle `[Vec3; 3]`
+//! (with [`Watertight`]). Each is also a [`crate::bvh::Primitive`], so a BVH can be built
+//! over a slice of them and queried with [`Shape::closest_hit`] as its intersector.
 
 use crate::aabb::Aabb;
 use crate::float::gamma;
