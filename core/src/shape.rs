@@ -38,23 +38,27 @@ fn whole_line(ray: &Ray) -> Ray {
     Ray::with_interval(ray.origin, ray.direction, f32::NEG_INFINITY, f32::INFINITY)
 }
 
-/// The crossings of a closed quadric surface at the roots `t0 ≤ t1` of its line: the hit that
-/// `closest_hit` computes on the interval `(t⁻, t]` (one ulp below each root), so exactly that
-/// root; none for a double root.
-fn crossings_at_roots<S: Shape + ?Sized>(
-    shape: &S,
+/// The hit `intersect` (a nearest-root intersector) gives at the root `t` of `ray`'s line: the
+/// interval narrowed to `(t⁻, t]` (one ulp below `t`), so exactly that root, computed as in a
+/// plain query.
+pub fn hit_at_root(ray: &Ray, t: f32, intersect: impl Fn(&Ray) -> Option<Hit>) -> Option<Hit> {
+    intersect(&Ray::with_interval(
+        ray.origin,
+        ray.direction,
+        t.next_down(),
+        t,
+    ))
+}
+
+/// The crossings of a closed quadric surface at the roots `t0 ≤ t1` of `ray`'s line
+/// ([`hit_at_root`] of each); none for a double root (a tangent line) or no roots.
+pub fn crossings_at_roots(
     ray: &Ray,
     roots: Option<(f32, f32)>,
+    intersect: impl Fn(&Ray) -> Option<Hit>,
 ) -> [Option<Hit>; 2] {
     match roots {
-        Some((t0, t1)) if t0 != t1 => [t0, t1].map(|t| {
-            shape.closest_hit(&Ray::with_interval(
-                ray.origin,
-                ray.direction,
-                t.next_down(),
-                t,
-            ))
-        }),
+        Some((t0, t1)) if t0 != t1 => [t0, t1].map(|t| hit_at_root(ray, t, &intersect)),
         _ => [None, None],
     }
 }
@@ -83,7 +87,7 @@ impl Shape for Sphere {
     }
 
     fn line_crossings(&self, ray: &Ray) -> [Option<Hit>; 2] {
-        crossings_at_roots(self, ray, self.roots(&whole_line(ray)))
+        crossings_at_roots(ray, self.roots(&whole_line(ray)), |r| self.intersect(r))
     }
 }
 
@@ -100,7 +104,7 @@ impl Shape for Ellipsoid {
         let roots = self
             .roots(&whole_line(ray))
             .map(|(t0, t1)| (t0 as f32, t1 as f32));
-        crossings_at_roots(self, ray, roots)
+        crossings_at_roots(ray, roots, |r| self.intersect(r))
     }
 }
 

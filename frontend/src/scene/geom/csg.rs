@@ -4,7 +4,7 @@
 use super::primitives::*;
 use super::*;
 use glam::Vec3;
-use halfray_core::shape::Shape as _;
+use halfray_core::shape::{Shape as _, crossings_at_roots};
 use halfray_core::{Hit, Ray};
 
 impl Node {
@@ -33,25 +33,6 @@ impl Node {
         }
     }
 
-    /// Events at both roots of a closed quadric surface (a double root, a tangent line, gives
-    /// no crossing).
-    fn push_roots(
-        &self,
-        line: &Ray,
-        roots: [f32; 2],
-        intersect: impl Fn(&Ray) -> Option<Hit>,
-        out: &mut Vec<Event>,
-    ) {
-        if roots[0] == roots[1] {
-            return;
-        }
-        for t in roots {
-            if let Some(h) = hit_at_root(line, t, &intersect) {
-                out.push(self.event(h, None));
-            }
-        }
-    }
-
     /// One event per crossing of a core [`halfray_core::shape::Shape`].
     fn push_crossings(&self, crossings: [Option<Hit>; 2], out: &mut Vec<Event>) {
         out.extend(crossings.into_iter().flatten().map(|h| self.event(h, None)));
@@ -69,14 +50,12 @@ impl Node {
                 false
             }
             Shape::Quadric(q) => {
-                if let Some((t0, t1)) = q.quadric.roots(&line) {
-                    self.push_roots(
-                        &line,
-                        [t0 as f32, t1 as f32],
-                        |r| q.quadric.intersect(r),
-                        out,
-                    );
-                }
+                let roots = q
+                    .quadric
+                    .roots(&line)
+                    .map(|(t0, t1)| (t0 as f32, t1 as f32));
+                let crossings = crossings_at_roots(&line, roots, |r| q.quadric.intersect(r));
+                self.push_crossings(crossings, out);
                 quadric_inside_at_start(&q.quadric, &line)
             }
             Shape::Box(b) => {

@@ -6,25 +6,9 @@ use glam::{Vec2, Vec3};
 use halfray_core::bvh::TraversalStats;
 use halfray_core::float::gamma;
 use halfray_core::quadric::Quadric;
+use halfray_core::shape::hit_at_root;
 use halfray_core::triangle::{TriangleIntersector, Watertight};
 use halfray_core::{Aabb, Hit, Ray};
-
-/// The hit of `intersect` at the root `t` of the ray's line: the interval is narrowed to
-/// `(t⁻, t]` (one ulp below `t`), so an intersector that takes the nearest root in the interval
-/// returns exactly this root, computed as in a plain query.
-#[inline]
-pub(super) fn hit_at_root(
-    ray: &Ray,
-    t: f32,
-    intersect: impl Fn(&Ray) -> Option<Hit>,
-) -> Option<Hit> {
-    intersect(&Ray::with_interval(
-        ray.origin,
-        ray.direction,
-        t.next_down(),
-        t,
-    ))
-}
 
 /// Whether the line `o + t·d` is inside (`f < 0`) the quadric as `t → −∞`: the sign of the
 /// leading coefficient of `f(o + t·d)`.
