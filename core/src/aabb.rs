@@ -12,9 +12,10 @@
 //! from that slab, depending on the zero's sign; found by the `ray_box` fuzz target).
 //!
 //! A direction component below `1/f32::MAX ≈ 2.9e-39` in magnitude (subnormal, not zero) has
-//! no finite reciprocal; a ray with one is tested by division, `(bound − o)/d` (at most two
-//! roundings, so the same padding covers it), instead of multiplication by `1/d`, which would
-//! turn a tiny distance over a tiny component into `∞` and cull a box the ray passes through.
+//! no finite reciprocal, and one above `2¹²⁶ ≈ 8.5e37` a subnormal one (fewer than 24 bits:
+//! beyond the padding's `gamma(3)`); a ray with either is tested by division, `(bound − o)/d`
+//! (at most two roundings, so the same padding covers it), instead of multiplication by `1/d`,
+//! which would cull a box the ray passes through.
 
 use crate::float::gamma;
 use crate::ray::Ray;
@@ -239,8 +240,8 @@ pub struct SlabRay {
     pub negative: [bool; 3],
     /// Ray direction (used instead of `inv_dir` when `divide` is set).
     pub direction: Vec3,
-    /// `true` when a non-zero direction component has an infinite reciprocal (module docs):
-    /// slab distances are then computed by division.
+    /// `true` when a non-zero direction component has an infinite or subnormal reciprocal
+    /// (module docs): slab distances are then computed by division.
     pub divide: bool,
 }
 
@@ -257,9 +258,13 @@ impl SlabRay {
         // One four-lane division (the same IEEE quotient per lane as three scalar ones): the
         // reciprocals head the dependency chain of every query.
         let inv_dir = Vec3::from(glam::Vec3A::ONE / glam::Vec3A::from(d));
-        // On the bits (compact on small targets): `dᵢ ≠ ±0` and `1/dᵢ = ±∞`.
-        let overflow =
-            |i: usize| (d[i].to_bits() << 1 != 0) & (inv_dir[i].to_bits() << 1 == 0xFF00_0000);
+        // On the bits (compact on small targets): `dᵢ ≠ ±0` and `1/dᵢ` infinite or subnormal
+        // (exponent field all ones or all zeros): a subnormal reciprocal (`|dᵢ| > 2¹²⁶`) has
+        // lost relative precision beyond the padding's `gamma(3)`.
+        let overflow = |i: usize| {
+            let exponent = (inv_dir[i].to_bits() >> 23) & 0xFF;
+            (d[i].to_bits() << 1 != 0) & ((exponent == 0xFF) | (exponent == 0))
+        };
         Some(Self {
             origin: ray.origin,
             inv_dir,
