@@ -534,4 +534,22 @@ mod tests {
             assert!(UNIT.contains_point(on_face), "closed: axis {a}");
         }
     }
+
+    /// A direction component above `2¹²⁶` has a subnormal reciprocal (fewer than 24 bits):
+    /// multiplying by it lost more than the padding covers and culled a box the exact ray
+    /// crosses on `[0.99999997, 1]` (the `ray_box` regression `crash-ece37715-…`).
+    #[test]
+    fn huge_direction_components_take_the_division_path() {
+        let v = |b: [u32; 3]| Vec3::from_array(b.map(f32::from_bits));
+        let ray = Ray::new(
+            v([0x0000_0000, 0x3b3f_6000, 0xff7f_ffff]),
+            v([0xff3f_0000, 0x6a0d_3fe3, 0x7f7f_9292]),
+        );
+        let b = Aabb::new(
+            v([0xff3f_0000, 0x3f1a_0000, 0xfada_dada]),
+            v([0x0001_adff, 0x6a6a_6aff, 0x0000_01ff]),
+        );
+        assert!(SlabRay::new(&ray).unwrap().divide);
+        assert!(b.intersect_ray(&ray).is_some());
+    }
 }

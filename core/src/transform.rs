@@ -317,7 +317,7 @@ mod tests {
         );
         assert!(
             Transform::scale(Vec3::new(1.0, 1.0, 1.0e-4)).is_ok(),
-            "S6 axis ratio 1e-4"
+            "a flattened sphere: axis ratio 1e-4"
         );
         assert!(
             Transform::scale(Vec3::splat(1.0e-20)).is_ok(),
