@@ -24,7 +24,14 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 ROOT=$PWD
 export CARGO_TERM_COLOR=never
 MESHES=${HALFRAY_MESHES:-$ROOT/../shared/meshes}
-stage() { echo; echo "== $1 ($(date +%H:%M:%S))"; }
+# One full run builds every profile once: incremental caches and full debug info would only cost
+# disk (a CI machine ran out of it mid-build), so this run keeps line tables for backtraces only.
+export CARGO_INCREMENTAL=0
+export CARGO_PROFILE_DEV_DEBUG=line-tables-only CARGO_PROFILE_TEST_DEBUG=line-tables-only
+export CARGO_PROFILE_RELEASE_DEBUG=line-tables-only
+stage() {
+    echo; echo "== $1 ($(date +%H:%M:%S); $(df -h --output=avail . | tail -1 | tr -d ' ') free on disk)"
+}
 t0=$(date +%s)
 
 stage toolchain
