@@ -49,7 +49,8 @@ impl WatertightRay {
     #[must_use]
     pub fn certain_misses(&self, origin: Vec3, lanes: &TriangleLanes) -> u32 {
         let [kx, ky, kz] = self.k;
-        let (kx, ky, kz) = (kx % 3, ky % 3, kz % 3);
+        // `min(2)` keeps every index in range without a check (each is 0, 1 or 2 already).
+        let (kx, ky, kz) = (kx.min(2), ky.min(2), kz.min(2));
         let o = origin.to_array();
         let (ox, oy, oz) = (
             F32x4::splat(o[kx]),

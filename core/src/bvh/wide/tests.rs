@@ -395,8 +395,9 @@ fn run_lanes_cover_exactly_the_run() {
     for start in 0..12u32 {
         for count in 1..=9u32 {
             let mut covered = Vec::new();
+            let mut lanes = super::traverse::RunLanes::new(start, count);
             for g in (start as usize / 4)..(start + count).div_ceil(4) as usize {
-                let m = super::traverse::run_lanes(g, start, count);
+                let m = lanes.next_group();
                 for lane in 0..4 {
                     if m >> lane & 1 == 1 {
                         covered.push((4 * g + lane) as u32);

@@ -17,25 +17,46 @@ use glam::Vec3;
 /// (`W = 8`), which bounds every narrower one (module docs of [`super`]).
 const STACK: usize = super::stack_size(8);
 
-/// The groups holding leaf slots `start .. start + count` (`count ≥ 1`), and the first
-/// group's index; an empty slice for a run out of range.
+/// The groups holding leaf slots `start .. start + count` (`count ≥ 1`); an empty slice for
+/// a run out of range.
 #[inline(always)]
-fn leaf_groups(groups: &[LeafGroup], start: u32, count: u32) -> (&[LeafGroup], usize) {
+fn leaf_groups(groups: &[LeafGroup], start: u32, count: u32) -> &[LeafGroup] {
     let (first, end) = (start as usize, start as usize + count as usize);
-    let g0 = first / LANES;
-    let run = groups.get(g0..end.div_ceil(LANES)).unwrap_or(&[]);
-    (run, g0)
+    groups
+        .get(first / LANES..end.div_ceil(LANES))
+        .unwrap_or(&[])
 }
 
-/// Lanes of group `g` that hold slots of `start .. start + count`.
-#[inline(always)]
-pub(super) fn run_lanes(g: usize, start: u32, count: u32) -> u32 {
-    let base = g * LANES;
-    let lo = (start as usize).saturating_sub(base).min(LANES);
-    let hi = (start as usize + count as usize)
-        .saturating_sub(base)
-        .min(LANES);
-    ((1u32 << hi) - 1) & !((1u32 << lo) - 1)
+/// The lanes that hold leaf slots `start .. start + count` in each group of their run
+/// ([`leaf_groups`]), group after group: the first group's from lane `start % LANES`, the
+/// last group's up to the run's end.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct RunLanes {
+    /// Lanes of the next group from the run's start on (all after the first group).
+    from: u32,
+    /// Lanes from the next group's lane 0 to the run's end.
+    left: u32,
+}
+
+impl RunLanes {
+    /// The run of `count` slots from slot `start`.
+    #[inline(always)]
+    pub(super) fn new(start: u32, count: u32) -> Self {
+        let lane = start % LANES as u32;
+        Self {
+            from: (0xF << lane) & 0xF,
+            left: lane.saturating_add(count),
+        }
+    }
+
+    /// The lanes of the run in the next group.
+    #[inline(always)]
+    pub(super) fn next_group(&mut self) -> u32 {
+        let lanes = self.from & ((1u32 << self.left.min(LANES as u32)) - 1);
+        self.from = 0xF;
+        self.left = self.left.saturating_sub(LANES as u32);
+        lanes
+    }
 }
 
 /// Hints that the memory of `child` (its node, or its leaf's first triangle group) is read
@@ -444,9 +465,10 @@ where
                     // Four triangles at a time, straight from their group: the lanes the
                     // intersector certainly misses are skipped, the others tested one by one
                     // in leaf order.
-                    let (run, g0) = leaf_groups(groups, start, count);
-                    for (g, group) in (g0..).zip(run) {
-                        let mut todo = run_lanes(g, start, count) & !leaf.cull(&group.lanes, &cur);
+                    let run = leaf_groups(groups, start, count);
+                    let mut lanes = RunLanes::new(start, count);
+                    for group in run {
+                        let mut todo = lanes.next_group() & !leaf.cull(&group.lanes, &cur);
                         while todo != 0 {
                             let lane = todo.trailing_zeros() as usize & (LANES - 1);
                             todo &= todo - 1;
