@@ -20,6 +20,34 @@ pub trait SimdLevel: Copy + sealed::Sealed {
     /// `None` when this level has no kernel for it (the caller then sorts the same keys,
     /// with the same result: the keys of hit lanes are distinct).
     fn sort_keys8(self, dist: &[f32; 8], mask: u32) -> Option<[u32; 8]>;
+
+    /// The watertight test's four-lane cull ([`crate::triangle::WatertightRay::certain_misses`])
+    /// of two groups at once ([`Sheared8`]): bit `i` for lane `i` of the first group, bit
+    /// `4 + i` for lane `i` of the second, set when two of the lane's `f32` edge functions
+    /// have certain, opposite signs. `None` when this level has no kernel for it (the caller
+    /// then culls each group alone, with the same result).
+    fn certain_misses8(self, q: &Sheared8<'_>) -> Option<u32>;
+}
+
+/// The inputs of [`SimdLevel::certain_misses8`]: two groups of four triangles and a ray in the
+/// watertight test's permuted axes.
+///
+/// `first[vertex][j]`/`second[vertex][j]` are the four lanes of each group's coordinate along
+/// the permuted axis `k_j` (`k_x`, `k_y`, `k_z`). Per lane, vertex by vertex:
+/// `z = p_kz − o_kz`, `x = (p_kx − o_kx) − s_x·z`, `y = (p_ky − o_ky) − s_y·z` (never fused),
+/// then the edge functions `c_x·b_y − c_y·b_x`, `a_x·c_y − a_y·c_x`, `b_x·a_y − b_y·a_x`
+/// of the vertices `a, b, c`; a lane's bit is set when one of them is `< 0` and another
+/// `> 0` (zero and NaN count as neither).
+#[derive(Clone, Copy, Debug)]
+pub struct Sheared8<'a> {
+    /// The first group's rows, vertex by vertex, in the permuted axis order (world units).
+    pub first: [[&'a [f32; 4]; 3]; 3],
+    /// The second group's rows, likewise.
+    pub second: [[&'a [f32; 4]; 3]; 3],
+    /// The ray origin in the permuted axis order `(o_kx, o_ky, o_kz)` (world units).
+    pub origin: [f32; 3],
+    /// The shear `(s_x, s_y) = (d_kx/d_kz, d_ky/d_kz)` (unitless).
+    pub shear: [f32; 2],
 }
 
 /// The inputs of [`SimdLevel::slab8`]: eight boxes and a padded ray.
@@ -90,6 +118,11 @@ impl SimdLevel for Portable {
     fn slab8(self, _: &Slab8<'_>) -> Option<([f32; 8], u32)> {
         None
     }
+
+    #[inline(always)]
+    fn certain_misses8(self, _: &Sheared8<'_>) -> Option<u32> {
+        None
+    }
 }
 
 /// Proof that the CPU running the program has AVX2 and FMA: eight-lane node tests in one
@@ -132,6 +165,12 @@ impl SimdLevel for Avx2Fma {
     }
 
     #[inline(always)]
+    fn certain_misses8(self, q: &Sheared8<'_>) -> Option<u32> {
+        // SAFETY: as in `slab8`: the token proves AVX2 and FMA.
+        Some(unsafe { certain_misses8_avx2(q.first, q.second, q.origin, q.shear) })
+    }
+
+    #[inline(always)]
     fn slab8(self, q: &Slab8<'_>) -> Option<([f32; 8], u32)> {
         // SAFETY: the token exists, so the CPU supports AVX2 and FMA (the contract of
         // `Avx2Fma::new_unchecked`), the only requirement of calling a function compiled for
@@ -149,6 +188,70 @@ impl SimdLevel for Avx2Fma {
             )
         })
     }
+}
+
+/// [`SimdLevel::certain_misses8`] in 256-bit registers: the first group's lanes in the low
+/// half, the second's in the high half, the operations of [`Sheared8`] lane by lane.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+fn certain_misses8_avx2(
+    first: [[&[f32; 4]; 3]; 3],
+    second: [[&[f32; 4]; 3]; 3],
+    origin: [f32; 3],
+    shear: [f32; 2],
+) -> u32 {
+    use core::arch::x86_64::{
+        __m256, _CMP_GT_OQ, _CMP_LT_OQ, _mm_loadu_ps, _mm256_castps128_ps256, _mm256_cmp_ps,
+        _mm256_insertf128_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_or_ps, _mm256_set1_ps,
+        _mm256_setzero_ps, _mm256_sub_ps,
+    };
+    let row = |lo: &[f32; 4], hi: &[f32; 4]| -> __m256 {
+        // SAFETY: `lo` and `hi` are four `f32` each: each unaligned 16-byte load reads exactly
+        // them (AVX, which the function's target features enable).
+        unsafe {
+            _mm256_insertf128_ps::<1>(
+                _mm256_castps128_ps256(_mm_loadu_ps(lo.as_ptr())),
+                _mm_loadu_ps(hi.as_ptr()),
+            )
+        }
+    };
+    let o = [
+        _mm256_set1_ps(origin[0]),
+        _mm256_set1_ps(origin[1]),
+        _mm256_set1_ps(origin[2]),
+    ];
+    let (sx, sy) = (_mm256_set1_ps(shear[0]), _mm256_set1_ps(shear[1]));
+    let project = |v: usize| {
+        let z = _mm256_sub_ps(row(first[v][2], second[v][2]), o[2]);
+        (
+            _mm256_sub_ps(
+                _mm256_sub_ps(row(first[v][0], second[v][0]), o[0]),
+                _mm256_mul_ps(sx, z),
+            ),
+            _mm256_sub_ps(
+                _mm256_sub_ps(row(first[v][1], second[v][1]), o[1]),
+                _mm256_mul_ps(sy, z),
+            ),
+        )
+    };
+    let ((ax, ay), (bx, by), (cx, cy)) = (project(0), project(1), project(2));
+    let edge = |p: __m256, q: __m256, r: __m256, s: __m256| {
+        _mm256_sub_ps(_mm256_mul_ps(p, q), _mm256_mul_ps(r, s))
+    };
+    let e = [
+        edge(cx, by, cy, bx),
+        edge(ax, cy, ay, cx),
+        edge(bx, ay, by, ax),
+    ];
+    let zero = _mm256_setzero_ps();
+    let (mut neg, mut pos) = (zero, zero);
+    for x in e {
+        // Ordered compares: a NaN edge is neither negative nor positive.
+        neg = _mm256_or_ps(neg, _mm256_cmp_ps::<_CMP_LT_OQ>(x, zero));
+        pos = _mm256_or_ps(pos, _mm256_cmp_ps::<_CMP_GT_OQ>(x, zero));
+    }
+    (_mm256_movemask_ps(neg) & _mm256_movemask_ps(pos)) as u32
 }
 
 /// [`SimdLevel::sort_keys8`] in one 256-bit register: the keys of [`order_key`] lane by lane,
@@ -306,6 +409,74 @@ mod tests {
             assert_eq!(seen, mask);
         }
         assert_eq!(Portable.sort_keys8(&[0.0; 8], 0xFF), None);
+    }
+
+    /// The AVX2 two-group cull against [`Sheared8`]'s lane formula written out in scalar
+    /// code, bit for bit, on coordinates with NaN, `±∞`, `±0` and subnormals mixed in; both
+    /// outcomes must occur.
+    #[test]
+    fn avx2_two_group_cull_equals_the_lane_formula() {
+        let Some(level) = Avx2Fma::detect() else {
+            std::eprintln!("no AVX2+FMA on this CPU: the AVX2 kernel cannot run here");
+            return;
+        };
+        let mut s = 23u64;
+        let value = |s: &mut u64| {
+            let r = lcg(s);
+            if r < 0.05 {
+                special_f32(s)
+            } else {
+                (lcg(s) - 0.5) * 8.0
+            }
+        };
+        let mut culled = 0;
+        for _ in 0..20_000 {
+            // rows[group][vertex][axis]: the permuted axes already.
+            let mut rows = [[[[0.0f32; 4]; 3]; 3]; 2];
+            for x in rows.iter_mut().flatten().flatten().flatten() {
+                *x = value(&mut s);
+            }
+            let origin: [f32; 3] = core::array::from_fn(|_| value(&mut s) * 0.1);
+            let shear = [lcg(&mut s) * 2.0 - 1.0, lcg(&mut s) * 2.0 - 1.0];
+            fn refs(g: &[[[f32; 4]; 3]; 3]) -> [[&[f32; 4]; 3]; 3] {
+                [0, 1, 2].map(|v| [&g[v][0], &g[v][1], &g[v][2]])
+            }
+            let q = Sheared8 {
+                first: refs(&rows[0]),
+                second: refs(&rows[1]),
+                origin,
+                shear,
+            };
+            let got = level.certain_misses8(&q).unwrap();
+            for lane in 0..8 {
+                let g = &rows[lane / 4];
+                let l = lane % 4;
+                let p = |v: usize| {
+                    let z = g[v][2][l] - origin[2];
+                    (
+                        (g[v][0][l] - origin[0]) - shear[0] * z,
+                        (g[v][1][l] - origin[1]) - shear[1] * z,
+                    )
+                };
+                let ((ax, ay), (bx, by), (cx, cy)) = (p(0), p(1), p(2));
+                let e = [cx * by - cy * bx, ax * cy - ay * cx, bx * ay - by * ax];
+                let want = e.iter().any(|&x| x < 0.0) && e.iter().any(|&x| x > 0.0);
+                assert_eq!(got >> lane & 1 == 1, want, "lane {lane}: {e:?}");
+                culled += usize::from(want);
+            }
+        }
+        assert!(
+            (10_000..150_000).contains(&culled),
+            "both outcomes must occur: {culled} culled of 160000"
+        );
+        let zero = [0.0f32; 4];
+        let q = Sheared8 {
+            first: [[&zero; 3]; 3],
+            second: [[&zero; 3]; 3],
+            origin: [0.0; 3],
+            shear: [0.0; 2],
+        };
+        assert_eq!(Portable.certain_misses8(&q), None);
     }
 
     #[test]

@@ -110,6 +110,7 @@ mod tests {
             let records = tris.map(|t| [t[0].to_array(), t[1].to_array(), t[2].to_array()]);
             let lanes = TriangleLanes::from_triangles(&records);
             let wt = WatertightRay::new(&ray).unwrap();
+            two_group_cull_equals_two_culls(&wt, &ray, &lanes, &records);
             let variants = [
                 (
                     Watertight.certain_misses(&wt, &ray, &lanes),
@@ -144,6 +145,45 @@ mod tests {
         for k in 0..4 {
             let (c, m) = (culled[k], misses[k]);
             assert!(c * 10 >= m * 9, "{}: culled {c} of {m} misses", NAMES[k]);
+        }
+    }
+
+    /// The two-group cull ([`TriangleIntersector::certain_misses2`]) at every SIMD level this
+    /// CPU has equals the one-group cull of each group (the second group: the same triangles
+    /// in reverse lane order, with an unused lane), for the watertight family's own kernel and
+    /// for the trait's default (Möller–Trumbore).
+    fn two_group_cull_equals_two_culls(
+        wt: &WatertightRay,
+        ray: &Ray,
+        first: &TriangleLanes,
+        records: &[[[f32; 3]; 3]; 4],
+    ) {
+        use crate::simd_level::{Portable, SimdLevel};
+        let reversed = [records[3], records[2], records[1]];
+        let second = TriangleLanes::from_triangles(&reversed);
+        fn check<L: SimdLevel + core::fmt::Debug>(
+            level: L,
+            wt: &WatertightRay,
+            ray: &Ray,
+            first: &TriangleLanes,
+            second: &TriangleLanes,
+        ) {
+            let want = Watertight.certain_misses(wt, ray, first)
+                | Watertight.certain_misses(wt, ray, second) << LANES;
+            assert_eq!(
+                Watertight.certain_misses2(level, wt, ray, first, second),
+                want,
+                "{level:?} {ray:?}"
+            );
+            let mt = MollerTrumbore::NO_EPSILON;
+            let want =
+                mt.certain_misses(&(), ray, first) | mt.certain_misses(&(), ray, second) << 4;
+            assert_eq!(mt.certain_misses2(level, &(), ray, first, second), want);
+        }
+        check(Portable, wt, ray, first, &second);
+        #[cfg(target_arch = "x86_64")]
+        if let Some(level) = crate::simd_level::Avx2Fma::detect() {
+            check(level, wt, ray, first, &second);
         }
     }
 

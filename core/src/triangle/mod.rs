@@ -128,6 +128,22 @@ pub trait TriangleIntersector: Copy + Send + Sync {
         0
     }
 
+    /// [`TriangleIntersector::certain_misses`] of two groups, `first` (bits 0–3) and
+    /// `second` (bits 4–7), at SIMD `level` (the same bits at every level). The default culls
+    /// each group alone.
+    #[inline(always)]
+    fn certain_misses2<L: crate::simd_level::SimdLevel>(
+        &self,
+        level: L,
+        pre: &Self::Prepared,
+        ray: &Ray,
+        first: &TriangleLanes,
+        second: &TriangleLanes,
+    ) -> u32 {
+        let _ = level;
+        self.certain_misses(pre, ray, first) | self.certain_misses(pre, ray, second) << LANES
+    }
+
     /// Convenience: [`TriangleIntersector::prepare`] then
     /// [`TriangleIntersector::intersect_prepared`].
     #[inline]

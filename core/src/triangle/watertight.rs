@@ -5,6 +5,7 @@ use crate::float::{diff_of_products_exact_sign, diff_of_products_sign_filter, ga
 use crate::predicates::ORIENT3D_FILTER_REL;
 use crate::ray::Ray;
 use crate::simd::F32x4;
+use crate::simd::level::{Sheared8, SimdLevel};
 use glam::{DVec3, Vec3};
 
 /// Per-ray data of the watertight test: the axis permutation that makes the largest direction
@@ -77,6 +78,33 @@ impl WatertightRay {
         // A zero or NaN edge sets neither bit: only certain signs count.
         let any = e[0] | e[1] | e[2];
         any & (any >> 4) & 0xF
+    }
+
+    /// [`WatertightRay::certain_misses`] of two groups, `first` (bits 0–3) and `second`
+    /// (bits 4–7), with `level`'s eight-lane kernel when it has one (the same bits either
+    /// way).
+    #[inline(always)]
+    #[must_use]
+    pub fn certain_misses2<L: SimdLevel>(
+        &self,
+        level: L,
+        origin: Vec3,
+        first: &TriangleLanes,
+        second: &TriangleLanes,
+    ) -> u32 {
+        let [kx, ky, kz] = self.k;
+        // `min(2)` keeps every index in range without a check (each is 0, 1 or 2 already).
+        let k = [kx.min(2), ky.min(2), kz.min(2)];
+        let o = origin.to_array();
+        let q = Sheared8 {
+            first: permuted_rows(first, k),
+            second: permuted_rows(second, k),
+            origin: [o[k[0]], o[k[1]], o[k[2]]],
+            shear: [self.shear.x, self.shear.y],
+        };
+        level.certain_misses8(&q).unwrap_or_else(|| {
+            self.certain_misses(origin, first) | self.certain_misses(origin, second) << LANES
+        })
     }
 
     /// How the ray crosses triangle `v` when **each point of the plane is counted once**: `+1`
@@ -458,6 +486,18 @@ impl<T: ShearedTest> TriangleIntersector for T {
     fn certain_misses(&self, pre: &WatertightRay, ray: &Ray, lanes: &TriangleLanes) -> u32 {
         pre.certain_misses(ray.origin, lanes)
     }
+
+    #[inline(always)]
+    fn certain_misses2<L: SimdLevel>(
+        &self,
+        level: L,
+        pre: &WatertightRay,
+        ray: &Ray,
+        first: &TriangleLanes,
+        second: &TriangleLanes,
+    ) -> u32 {
+        pre.certain_misses2(level, ray.origin, first, second)
+    }
 }
 
 impl ShearedTest for Watertight {
@@ -473,6 +513,19 @@ impl ShearedTest for Watertight {
         }
         exact_candidate(ray, pre, sheared, v)
     }
+}
+
+/// The rows of `lanes`, vertex by vertex, in the axis order `k` (each axis `< 3`).
+#[inline(always)]
+fn permuted_rows(lanes: &TriangleLanes, k: [usize; 3]) -> [[&[f32; LANES]; 3]; 3] {
+    // Written out: `array::map` is not always inlined, and this is on the leaf path.
+    let [a, b, c] = &lanes.v;
+    let [kx, ky, kz] = k;
+    [
+        [&a[kx], &a[ky], &a[kz]],
+        [&b[kx], &b[ky], &b[kz]],
+        [&c[kx], &c[ky], &c[kz]],
+    ]
 }
 
 /// The rest of [`Watertight`] for a triangle the `f32` filter did not reject: exact `f64`

@@ -97,6 +97,15 @@ trait LeafTest<H> {
     fn intersect(&mut self, prim: u32, v: &[Vec3; 3], ray: &Ray) -> Option<(f32, H)>;
     /// The lanes certainly missed ([`TriangleIntersector::certain_misses`]).
     fn cull(&self, lanes: &TriangleLanes, ray: &Ray) -> u32;
+    /// The lanes of two groups certainly missed, `first`'s in bits 0–3 and `second`'s in
+    /// bits 4–7 ([`TriangleIntersector::certain_misses2`]).
+    fn cull2<L: SimdLevel>(
+        &self,
+        level: L,
+        first: &TriangleLanes,
+        second: &TriangleLanes,
+        ray: &Ray,
+    ) -> u32;
 }
 
 /// The closure-based queries: every triangle goes to the closure.
@@ -110,6 +119,11 @@ impl<H, F: FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>> LeafTest<H> for Clo
 
     #[inline(always)]
     fn cull(&self, _: &TriangleLanes, _: &Ray) -> u32 {
+        0
+    }
+
+    #[inline(always)]
+    fn cull2<L: SimdLevel>(&self, _: L, _: &TriangleLanes, _: &TriangleLanes, _: &Ray) -> u32 {
         0
     }
 }
@@ -145,6 +159,18 @@ impl<I: TriangleIntersector> LeafTest<TriangleHit> for PreparedTest<'_, I> {
     #[inline(always)]
     fn cull(&self, lanes: &TriangleLanes, ray: &Ray) -> u32 {
         self.isect.certain_misses(&self.pre, ray, lanes)
+    }
+
+    #[inline(always)]
+    fn cull2<L: SimdLevel>(
+        &self,
+        level: L,
+        first: &TriangleLanes,
+        second: &TriangleLanes,
+        ray: &Ray,
+    ) -> u32 {
+        self.isect
+            .certain_misses2(level, &self.pre, ray, first, second)
     }
 }
 
@@ -462,17 +488,32 @@ where
                 }
                 ChildRef::Leaf { start, count } => {
                     local.primitives_tested += u64::from(count);
-                    // Four triangles at a time, straight from their group: the lanes the
-                    // intersector certainly misses are skipped, the others tested one by one
-                    // in leaf order.
-                    let run = leaf_groups(groups, start, count);
+                    // Eight triangles at a time (two groups), straight from their groups: the
+                    // lanes the intersector certainly misses are skipped, the others tested one
+                    // by one in leaf order. The cull does not depend on the interval, so a hit
+                    // in the first group leaves the second's cull valid.
+                    let mut rest = leaf_groups(groups, start, count);
                     let mut lanes = RunLanes::new(start, count);
-                    for group in run {
-                        let mut todo = lanes.next_group() & !leaf.cull(&group.lanes, &cur);
+                    while let Some((first, tail)) = rest.split_first() {
+                        let (pair, todo) = match tail.split_first() {
+                            Some((second, after)) => {
+                                rest = after;
+                                let run = lanes.next_group() | lanes.next_group() << LANES;
+                                let missed = leaf.cull2(level, &first.lanes, &second.lanes, &cur);
+                                ([first, second], run & !missed)
+                            }
+                            None => {
+                                rest = tail;
+                                let missed = leaf.cull(&first.lanes, &cur);
+                                ([first, first], lanes.next_group() & !missed)
+                            }
+                        };
+                        let mut todo = todo;
                         while todo != 0 {
-                            let lane = todo.trailing_zeros() as usize & (LANES - 1);
+                            let bit = todo.trailing_zeros() as usize;
                             todo &= todo - 1;
-                            let Some(tri) = group.triangle(lane) else {
+                            let group = pair[(bit / LANES) & 1];
+                            let Some(tri) = group.triangle(bit & (LANES - 1)) else {
                                 break;
                             };
                             let prim = tri.prim;
