@@ -107,6 +107,14 @@ pub trait TriangleIntersector: Copy + Send + Sync {
     /// Per-ray setup; `None` when the ray is invalid ([`Ray::validate`]).
     fn prepare(&self, ray: &Ray) -> Option<Self::Prepared>;
 
+    /// [`TriangleIntersector::prepare`] for a ray the caller has already checked
+    /// ([`Ray::is_valid`]): an implementation may skip the check (the result for another ray
+    /// is then meaningless, never unsafe). The default calls `prepare`.
+    #[inline(always)]
+    fn prepare_valid(&self, ray: &Ray) -> Option<Self::Prepared> {
+        self.prepare(ray)
+    }
+
     /// Tests one triangle against a prepared ray, over `(ray.t_min, ray.t_max]`.
     fn intersect_prepared(
         &self,

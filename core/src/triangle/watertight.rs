@@ -25,19 +25,24 @@ impl WatertightRay {
     #[inline(always)]
     #[must_use]
     pub fn new(ray: &Ray) -> Option<Self> {
-        if !ray.is_valid() {
-            return None;
-        }
+        ray.is_valid().then(|| Self::of_valid(ray))
+    }
+
+    /// Prepares `ray`, which the caller has checked ([`Ray::is_valid`]); for another ray the
+    /// result is meaningless (never undefined: no check is skipped that memory safety needs).
+    #[inline(always)]
+    #[must_use]
+    pub fn of_valid(ray: &Ray) -> Self {
         let d = ray.direction;
         let [kx, ky, kz] = super::projection_axes(d);
         // The three quotients in one four-lane division (each lane the same IEEE quotient).
         // Indexed through a four-lane array with `& 3`: no bounds check, no branch.
         let c = [d.x, d.y, d.z, 0.0];
         let shear = glam::Vec3A::new(c[kx & 3], c[ky & 3], 1.0) / glam::Vec3A::splat(c[kz & 3]);
-        Some(Self {
+        Self {
             k: [kx, ky, kz],
             shear: shear.into(),
-        })
+        }
     }
 
     /// The lanes of `lanes` among whose three `f32` edge functions (the filter of
@@ -470,6 +475,11 @@ impl<T: ShearedTest> TriangleIntersector for T {
     #[inline(always)]
     fn prepare(&self, ray: &Ray) -> Option<WatertightRay> {
         WatertightRay::new(ray)
+    }
+
+    #[inline(always)]
+    fn prepare_valid(&self, ray: &Ray) -> Option<WatertightRay> {
+        Some(WatertightRay::of_valid(ray))
     }
 
     #[inline(always)]

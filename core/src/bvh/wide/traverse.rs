@@ -136,14 +136,14 @@ struct PreparedTest<'a, I: TriangleIntersector> {
 }
 
 impl<'a, I: TriangleIntersector> PreparedTest<'a, I> {
-    /// The factory [`WideBvh::traverse`] calls at the first leaf: `None` when `isect` refuses
-    /// the ray.
+    /// The factory [`WideBvh::traverse`] calls at the first leaf, for a ray it has checked
+    /// ([`TriangleIntersector::prepare_valid`]): `None` when `isect` refuses the ray.
     #[inline(always)]
     fn of(isect: &'a I) -> impl FnOnce(&Ray) -> Option<Self> {
         move |ray| {
             Some(Self {
                 isect,
-                pre: isect.prepare(ray)?,
+                pre: isect.prepare_valid(ray)?,
             })
         }
     }

@@ -392,3 +392,23 @@ fn two_certain_opposite_edges_are_a_miss_whatever_the_third() {
         );
     }
 }
+
+/// The preparation of a checked ray skips only the check: for valid rays it equals
+/// `prepare`, for every direction octant and dominant axis; an invalid ray is still refused
+/// by `prepare`.
+#[test]
+fn prepare_valid_equals_prepare_on_valid_rays() {
+    use crate::test_util::{lcg, unit_vec};
+    let mut s = 41u64;
+    for _ in 0..2000 {
+        let o = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 100.0 - 50.0;
+        let ray = Ray::new(o, unit_vec(&mut s) * (lcg(&mut s) * 10.0 + 1e-3));
+        assert!(ray.is_valid());
+        let want = Watertight.prepare(&ray);
+        assert!(want.is_some());
+        assert_eq!(Watertight.prepare_valid(&ray), want, "{ray:?}");
+        assert_eq!(WatertightF32.prepare_valid(&ray), want, "{ray:?}");
+    }
+    let invalid = Ray::new(Vec3::ZERO, Vec3::ZERO);
+    assert_eq!(Watertight.prepare(&invalid), None);
+}
