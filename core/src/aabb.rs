@@ -258,12 +258,26 @@ impl SlabRay {
         // One four-lane division (the same IEEE quotient per lane as three scalar ones): the
         // reciprocals head the dependency chain of every query.
         let inv_dir = Vec3::from(glam::Vec3A::ONE / glam::Vec3A::from(d));
-        // On the bits (compact on small targets): `dᵢ ≠ ±0` and `1/dᵢ` infinite or subnormal
-        // (exponent field all ones or all zeros): a subnormal reciprocal (`|dᵢ| > 2¹²⁶`) has
-        // lost relative precision beyond the padding's `gamma(3)`.
-        let overflow = |i: usize| {
-            let exponent = (inv_dir[i].to_bits() >> 23) & 0xFF;
-            (d[i].to_bits() << 1 != 0) & ((exponent == 0xFF) | (exponent == 0))
+        // `dᵢ ≠ ±0` and `1/dᵢ` infinite or subnormal: a subnormal reciprocal (`|dᵢ| > 2¹²⁶`)
+        // has lost relative precision beyond the padding's `gamma(3)`.
+        #[cfg(target_arch = "x86_64")]
+        let divide = {
+            // Three lanes at once (SSE, x86-64's baseline): a valid ray has no NaN, so
+            // "infinite or subnormal" is "not in [MIN_POSITIVE, ∞)".
+            let (a, dv) = (glam::Vec3A::from(inv_dir).abs(), glam::Vec3A::from(d));
+            let normal = a.cmpge(glam::Vec3A::splat(f32::MIN_POSITIVE))
+                & a.cmplt(glam::Vec3A::splat(f32::INFINITY));
+            (dv.cmpne(glam::Vec3A::ZERO) & !normal).any()
+        };
+        // On the bits elsewhere (compact on small targets): the exponent field all ones or
+        // all zeros.
+        #[cfg(not(target_arch = "x86_64"))]
+        let divide = {
+            let overflow = |i: usize| {
+                let exponent = (inv_dir[i].to_bits() >> 23) & 0xFF;
+                (d[i].to_bits() << 1 != 0) & ((exponent == 0xFF) | (exponent == 0))
+            };
+            overflow(0) | overflow(1) | overflow(2)
         };
         Some(Self {
             origin: ray.origin,
@@ -274,7 +288,7 @@ impl SlabRay {
                 d.z.is_sign_negative(),
             ],
             direction: d,
-            divide: overflow(0) | overflow(1) | overflow(2),
+            divide,
         })
     }
 
@@ -538,6 +552,51 @@ mod tests {
     /// A direction component above `2¹²⁶` has a subnormal reciprocal (fewer than 24 bits):
     /// multiplying by it lost more than the padding covers and culled a box the exact ray
     /// crosses on `[0.99999997, 1]` (the `ray_box` regression `crash-ece37715-…`).
+    #[test]
+    /// `divide` is set exactly when a non-zero direction component has a reciprocal whose
+    /// exponent field is all ones (infinite) or all zeros (subnormal or zero), checked on the
+    /// bits against every class of component (zero, subnormal, tiny, normal, near the
+    /// reciprocal's subnormal threshold `2¹²⁶`, huge), in every position and sign.
+    #[test]
+    fn divide_flag_follows_the_reciprocal_exponent() {
+        let classes = [
+            0.0f32,
+            1e-45,
+            1e-39,
+            2.9e-39,
+            3.0e-39,
+            1e-30,
+            0.5,
+            1.0,
+            3.0,
+            1e30,
+            f32::from_bits(0x7E80_0000), // 2^126: reciprocal 2^-126, the smallest normal
+            f32::from_bits(0x7E80_0001), // just above: a subnormal reciprocal
+            1e38,
+            f32::MAX,
+        ];
+        let mut checked = 0;
+        for (i, &a) in classes.iter().enumerate() {
+            for &b in &classes[i..] {
+                for sign in [1.0f32, -1.0] {
+                    let d = Vec3::new(a * sign, b, 1.0);
+                    for d in [d, Vec3::new(d.z, d.x, d.y), Vec3::new(d.y, d.z, d.x)] {
+                        let Some(slab) = SlabRay::new(&Ray::new(Vec3::ZERO, d)) else {
+                            continue;
+                        };
+                        let want = d.to_array().iter().any(|&c| {
+                            let e = ((1.0 / c).to_bits() >> 23) & 0xFF;
+                            c != 0.0 && (e == 0xFF || e == 0)
+                        });
+                        assert_eq!(slab.divide, want, "{d:?}");
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 500, "{checked}");
+    }
+
     #[test]
     fn huge_direction_components_take_the_division_path() {
         let v = |b: [u32; 3]| Vec3::from_array(b.map(f32::from_bits));
