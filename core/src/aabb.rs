@@ -549,10 +549,6 @@ mod tests {
         }
     }
 
-    /// A direction component above `2¹²⁶` has a subnormal reciprocal (fewer than 24 bits):
-    /// multiplying by it lost more than the padding covers and culled a box the exact ray
-    /// crosses on `[0.99999997, 1]` (the `ray_box` regression `crash-ece37715-…`).
-    #[test]
     /// `divide` is set exactly when a non-zero direction component has a reciprocal whose
     /// exponent field is all ones (infinite) or all zeros (subnormal or zero), checked on the
     /// bits against every class of component (zero, subnormal, tiny, normal, near the
@@ -597,6 +593,9 @@ mod tests {
         assert!(checked > 500, "{checked}");
     }
 
+    /// A direction component above `2¹²⁶` has a subnormal reciprocal (fewer than 24 bits):
+    /// multiplying by it lost more than the padding covers and culled a box the exact ray
+    /// crosses on `[0.99999997, 1]` (the `ray_box` regression `crash-ece37715-…`).
     #[test]
     fn huge_direction_components_take_the_division_path() {
         let v = |b: [u32; 3]| Vec3::from_array(b.map(f32::from_bits));
