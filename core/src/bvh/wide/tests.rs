@@ -104,6 +104,23 @@ fn check_against_brute<const W: usize>(n: usize, seed: u64, max_leaf: u32) {
             .closest_hit_triangles(&Watertight, &ray, None)
             .map(|(p, h)| (p, h.t));
         assert_eq!(got, brute(&mesh, &Watertight, &ray), "W={W} {ray:?}");
+        // The closure queries, which cull nothing, see every lane of every leaf.
+        let by_closure = w.closest_hit(
+            &ray,
+            |_, v, r| Watertight.intersect(r, v).map(|h| (h.t, h.t)),
+            None,
+        );
+        assert_eq!(by_closure, got, "closure query, W={W} {ray:?}");
+        let any_by_closure = w.any_hit(
+            &ray,
+            |_, v, r| Watertight.intersect(r, v).map(|h| (h.t, ())),
+            None,
+        );
+        assert_eq!(
+            any_by_closure.is_some(),
+            got.is_some(),
+            "closure any-hit {ray:?}"
+        );
         let got_mt = w
             .closest_hit_triangles(&MollerTrumbore::NO_EPSILON, &ray, None)
             .map(|(p, h)| (p, h.t));
