@@ -104,13 +104,19 @@ fn check_against_brute<const W: usize>(n: usize, seed: u64, max_leaf: u32) {
             .closest_hit_triangles(&Watertight, &ray, None)
             .map(|(p, h)| (p, h.t));
         assert_eq!(got, brute(&mesh, &Watertight, &ray), "W={W} {ray:?}");
-        // The closure queries, which cull nothing, see every lane of every leaf.
+        // The closure queries, which cull nothing, see every lane of every leaf they visit:
+        // the triangles counted as tested are the closure's calls.
+        let (mut calls, mut st) = (0u64, TraversalStats::default());
         let by_closure = w.closest_hit(
             &ray,
-            |_, v, r| Watertight.intersect(r, v).map(|h| (h.t, h.t)),
-            None,
+            |_, v, r| {
+                calls += 1;
+                Watertight.intersect(r, v).map(|h| (h.t, h.t))
+            },
+            Some(&mut st),
         );
         assert_eq!(by_closure, got, "closure query, W={W} {ray:?}");
+        assert_eq!(st.primitives_tested, calls, "{ray:?}");
         let any_by_closure = w.any_hit(
             &ray,
             |_, v, r| Watertight.intersect(r, v).map(|h| (h.t, ())),
