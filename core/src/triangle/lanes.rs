@@ -5,6 +5,14 @@
 /// AVX2 one; BVH leaves hold about three triangles, so wider lanes would mostly be empty).
 pub const LANES: usize = 4;
 
+/// The lane mask of two groups side by side: `first`'s lanes in bits 0–3, `second`'s in bits
+/// 4–7 (each mask's bits above lane 3 must be clear).
+#[inline(always)]
+#[must_use]
+pub const fn pair_mask(first: u32, second: u32) -> u32 {
+    first | second << LANES
+}
+
 /// [`LANES`] triangles, lane by lane: `v[vertex][axis][lane]`. An unused lane holds NaN
 /// coordinates (never hit by any test).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -36,7 +36,7 @@ mod watertight;
 mod watertight_f32_exact;
 
 pub use cramer::Cramer;
-pub use lanes::{LANES, TriangleLanes};
+pub use lanes::{LANES, TriangleLanes, pair_mask};
 pub use moller_trumbore::MollerTrumbore;
 pub use reference::F64Reference;
 pub use watertight::{ShearedTest, Watertight, WatertightF32, WatertightRay};
@@ -149,7 +149,10 @@ pub trait TriangleIntersector: Copy + Send + Sync {
         second: &TriangleLanes,
     ) -> u32 {
         let _ = level;
-        self.certain_misses(pre, ray, first) | self.certain_misses(pre, ray, second) << LANES
+        pair_mask(
+            self.certain_misses(pre, ray, first),
+            self.certain_misses(pre, ray, second),
+        )
     }
 
     /// Convenience: [`TriangleIntersector::prepare`] then

@@ -45,6 +45,14 @@ impl WatertightRay {
         }
     }
 
+    /// `k` as indices the compiler knows are below 3: `min(2)` keeps every index in range
+    /// without a bounds check (each is 0, 1 or 2 already).
+    #[inline(always)]
+    fn axes(&self) -> [usize; 3] {
+        let [kx, ky, kz] = self.k;
+        [kx.min(2), ky.min(2), kz.min(2)]
+    }
+
     /// The lanes of `lanes` among whose three `f32` edge functions (the filter of
     /// [`Watertight`]) two have certain, opposite signs: the triangles both watertight tests
     /// miss (the exact signs of those two already differ, whatever the third). The same
@@ -54,9 +62,7 @@ impl WatertightRay {
     #[inline(always)]
     #[must_use]
     pub fn certain_misses(&self, origin: Vec3, lanes: &TriangleLanes) -> u32 {
-        let [kx, ky, kz] = self.k;
-        // `min(2)` keeps every index in range without a check (each is 0, 1 or 2 already).
-        let (kx, ky, kz) = (kx.min(2), ky.min(2), kz.min(2));
+        let [kx, ky, kz] = self.axes();
         let o = origin.to_array();
         let (ox, oy, oz) = (
             F32x4::splat(o[kx]),
@@ -97,9 +103,7 @@ impl WatertightRay {
         first: &TriangleLanes,
         second: &TriangleLanes,
     ) -> u32 {
-        let [kx, ky, kz] = self.k;
-        // `min(2)` keeps every index in range without a check (each is 0, 1 or 2 already).
-        let k = [kx.min(2), ky.min(2), kz.min(2)];
+        let k = self.axes();
         let o = origin.to_array();
         let q = Sheared8 {
             first: permuted_rows(first, k),
@@ -108,7 +112,10 @@ impl WatertightRay {
             shear: [self.shear.x, self.shear.y],
         };
         level.certain_misses8(&q).unwrap_or_else(|| {
-            self.certain_misses(origin, first) | self.certain_misses(origin, second) << LANES
+            super::pair_mask(
+                self.certain_misses(origin, first),
+                self.certain_misses(origin, second),
+            )
         })
     }
 

@@ -10,7 +10,7 @@ use crate::hit_queries::closest_and_any;
 use crate::ray::Ray;
 use crate::simd;
 use crate::simd::level::{Portable, SimdLevel, order_key};
-use crate::triangle::{LANES, TriangleHit, TriangleIntersector, TriangleLanes};
+use crate::triangle::{LANES, TriangleHit, TriangleIntersector, TriangleLanes, pair_mask};
 use glam::Vec3;
 
 /// Stack entries of the traversal: [`super::stack_size`] of the widest supported tree
@@ -495,10 +495,10 @@ where
                     let mut rest = leaf_groups(groups, start, count);
                     let mut lanes = RunLanes::new(start, count);
                     while let Some((first, tail)) = rest.split_first() {
-                        let (pair, todo) = match tail.split_first() {
+                        let (pair, mut todo) = match tail.split_first() {
                             Some((second, after)) => {
                                 rest = after;
-                                let run = lanes.next_group() | lanes.next_group() << LANES;
+                                let run = pair_mask(lanes.next_group(), lanes.next_group());
                                 let missed = leaf.cull2(level, &first.lanes, &second.lanes, &cur);
                                 ([first, second], run & !missed)
                             }
@@ -508,7 +508,6 @@ where
                                 ([first, first], lanes.next_group() & !missed)
                             }
                         };
-                        let mut todo = todo;
                         while todo != 0 {
                             let bit = todo.trailing_zeros() as usize;
                             todo &= todo - 1;
