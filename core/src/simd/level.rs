@@ -54,9 +54,9 @@ pub struct Sheared8<'a> {
 ///
 /// `lo[axis]`/`hi[axis]` are the near/far bounds of the eight boxes along `axis` (already
 /// swapped for a negative direction), `origin_near`/`origin_far` the ray origin shifted by
-/// the box padding, `inv_dir` the reciprocal direction and `far_scale` the factor of the far
-/// distances. Per lane: `t_enter = max((lo − on)·inv, …, t_min)`,
-/// `t_exit = min((hi − of)·inv·far_scale, …, t_max)` with `max(a, b) = a > b ? a : b` (a NaN
+/// the box padding, `inv_dir` the reciprocal direction and `inv_far` the reciprocal the far
+/// distances use (padded). Per lane: `t_enter = max((lo − on)·inv_dir, …, t_min)`,
+/// `t_exit = min((hi − of)·inv_far, …, t_max)` with `max(a, b) = a > b ? a : b` (a NaN
 /// `a` keeps `b`), and bit `i` of the mask set when `t_enter ≤ t_exit` (false for NaN).
 #[derive(Clone, Copy, Debug)]
 pub struct Slab8<'a> {
@@ -70,8 +70,8 @@ pub struct Slab8<'a> {
     pub origin_far: [f32; 3],
     /// Reciprocal direction per axis.
     pub inv_dir: [f32; 3],
-    /// Factor applied to every far distance (unitless, ≥ 1).
-    pub far_scale: f32,
+    /// Reciprocal direction per axis for the far distances (`inv_dir` scaled outward).
+    pub inv_far: [f32; 3],
     /// Start of the interval (ray parameter).
     pub t_min: f32,
     /// End of the interval (ray parameter).
@@ -182,7 +182,7 @@ impl SimdLevel for Avx2Fma {
                 q.origin_near,
                 q.origin_far,
                 q.inv_dir,
-                q.far_scale,
+                q.inv_far,
                 q.t_min,
                 q.t_max,
             )
@@ -310,7 +310,7 @@ fn slab8_avx2(
     origin_near: [f32; 3],
     origin_far: [f32; 3],
     inv_dir: [f32; 3],
-    far_scale: f32,
+    inv_far: [f32; 3],
     t_min: f32,
     t_max: f32,
 ) -> ([f32; 8], u32) {
@@ -318,7 +318,6 @@ fn slab8_avx2(
         _CMP_LE_OQ, _mm256_cmp_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps,
         _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_storeu_ps, _mm256_sub_ps,
     };
-    let scale = _mm256_set1_ps(far_scale);
     let mut t_enter = _mm256_set1_ps(t_min);
     let mut t_exit = _mm256_set1_ps(t_max);
     for axis in 0..3 {
@@ -333,8 +332,8 @@ fn slab8_avx2(
         let inv = _mm256_set1_ps(inv_dir[axis]);
         let t_near = _mm256_mul_ps(_mm256_sub_ps(l, _mm256_set1_ps(origin_near[axis])), inv);
         let t_far = _mm256_mul_ps(
-            _mm256_mul_ps(_mm256_sub_ps(h, _mm256_set1_ps(origin_far[axis])), inv),
-            scale,
+            _mm256_sub_ps(h, _mm256_set1_ps(origin_far[axis])),
+            _mm256_set1_ps(inv_far[axis]),
         );
         // `maxps(a, b)` is `a > b ? a : b` and `minps(a, b)` is `a < b ? a : b`: the
         // portable loop's selects, NaN handling included.
@@ -506,7 +505,7 @@ mod tests {
             let of: [f32; 3] = core::array::from_fn(|_| value(&mut s));
             let inv: [f32; 3] = core::array::from_fn(|_| value(&mut s));
             let (t_min, t_max) = (value(&mut s).abs(), value(&mut s).abs() * 3.0);
-            let scale = 1.0 + 1e-6;
+            let inv_far: [f32; 3] = core::array::from_fn(|_| value(&mut s));
             let lo = [&planes[0], &planes[1], &planes[2]];
             let hi = [&planes[3], &planes[4], &planes[5]];
             let q = Slab8 {
@@ -515,7 +514,7 @@ mod tests {
                 origin_near: on,
                 origin_far: of,
                 inv_dir: inv,
-                far_scale: scale,
+                inv_far,
                 t_min,
                 t_max,
             };
@@ -524,7 +523,7 @@ mod tests {
                 let (mut enter, mut exit) = (t_min, t_max);
                 for a in 0..3 {
                     let near = (lo[a][i] - on[a]) * inv[a];
-                    let far = (hi[a][i] - of[a]) * inv[a] * scale;
+                    let far = (hi[a][i] - of[a]) * inv_far[a];
                     enter = if near > enter { near } else { enter };
                     exit = if far < exit { far } else { exit };
                 }
@@ -545,7 +544,7 @@ mod tests {
             origin_near: [0.0; 3],
             origin_far: [0.0; 3],
             inv_dir: [0.0; 3],
-            far_scale: 1.0,
+            inv_far: [0.0; 3],
             t_min: 0.0,
             t_max: 1.0,
         };
