@@ -45,7 +45,7 @@ pub struct CrosscheckArgs {
     pub threads: Option<u16>,
     /// Rays of each set (of this shard) in the single-thread timed passes, spread evenly over
     /// the set (every k-th ray); the same rays for halfray and both Embree modes, which take
-    /// turns for three passes each (the fastest pass of each is reported).
+    /// turns for five passes each (the fastest pass of each is reported).
     #[arg(long, default_value_t = 100_000)]
     pub timing_rays: usize,
     /// Check only shard K of N (zero-based, 0 <= K < N): the rays whose index in their set is
