@@ -35,9 +35,13 @@ manifest=examples/mcu/Cargo.toml
 baked=$PWD/examples/mcu/target/baked
 mkdir -p "$baked"
 cargo build -q --release -p halfray
-./target/release/halfray bake scenes/meshes/torus.obj -o "$baked/torus.rs" >&2
-./target/release/halfray mesh subdivide scenes/meshes/octahedron.obj --levels 3 -o "$baked/octahedron-3.obj" >/dev/null
-./target/release/halfray bake "$baked/octahedron-3.obj" -o "$baked/octahedron-3.rs" >&2
+# Where cargo puts what it builds: CARGO_TARGET_DIR when set (for the workspace and for the
+# images alike), else each workspace's own target/.
+halfray=${CARGO_TARGET_DIR:-$PWD/target}/release/halfray
+images=${CARGO_TARGET_DIR:-$PWD/examples/mcu/target}
+"$halfray" bake scenes/meshes/torus.obj -o "$baked/torus.rs" >&2
+"$halfray" mesh subdivide scenes/meshes/octahedron.obj --levels 3 -o "$baked/octahedron-3.obj" >/dev/null
+"$halfray" bake "$baked/octahedron-3.obj" -o "$baked/octahedron-3.rs" >&2
 export MCU_BAKED_M4F=$baked/torus.rs MCU_BAKED_M3=$baked/octahedron-3.rs
 host=$(cargo run -q --release --manifest-path "$manifest" -p mcu-host)
 
@@ -45,7 +49,7 @@ status=0
 check() { # machine target cpu baked-source
     local machine=$1 target=$2 cpu=$3
     MCU_BAKED=$4 cargo build -q --release --manifest-path "$manifest" -p mcu-firmware --target "$target"
-    local image=examples/mcu/target/$target/release/mcu-firmware
+    local image=$images/$target/release/mcu-firmware
     local out rc=0
     out=$(timeout 600 qemu-system-arm -machine "$machine" -cpu "$cpu" -nographic -monitor none \
         -serial none -semihosting-config enable=on,target=native -kernel "$image" 2>&1) || rc=$?
@@ -76,7 +80,7 @@ query() { # machine target cpu baked-source held-to-budget
     local machine=$1 target=$2 cpu=$3 held=$5
     MCU_BAKED=$4 cargo build -q --release --manifest-path "$manifest" -p mcu-firmware \
         --bin mcu-query --target "$target"
-    local image=examples/mcu/target/$target/release/mcu-query
+    local image=$images/$target/release/mcu-query
     local out rc=0
     out=$(timeout 600 qemu-system-arm -machine "$machine" -cpu "$cpu" -nographic -monitor none \
         -serial none -semihosting-config enable=on,target=native -kernel "$image" 2>&1) || rc=$?
