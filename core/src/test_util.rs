@@ -34,6 +34,16 @@ pub fn special_f32(state: &mut u64) -> f32 {
     SPECIAL_F32[(lcg(state) * SPECIAL_F32.len() as f32) as usize % SPECIAL_F32.len()]
 }
 
+/// With probability `special` one of [`SPECIAL_F32`], otherwise uniform in
+/// `[-width/2, width/2)`; drawn with [`lcg`].
+pub fn mixed_f32(state: &mut u64, special: f32, width: f32) -> f32 {
+    if lcg(state) < special {
+        special_f32(state)
+    } else {
+        (lcg(state) - 0.5) * width
+    }
+}
+
 /// A 64-bit LCG (Knuth's MMIX constants) giving `f32` in `[0, 1)` with 24 random bits.
 pub fn lcg(state: &mut u64) -> f32 {
     *state = state

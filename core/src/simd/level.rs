@@ -350,7 +350,7 @@ fn slab8_avx2(
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
     use super::*;
-    use crate::test_util::{lcg, special_f32};
+    use crate::test_util::{lcg, mixed_f32};
 
     /// The AVX2 kernel against the documented lane formula, bit for bit, on values with NaN,
     /// `±∞`, `±0` and subnormals mixed in. Runs where the CPU has AVX2 and FMA (every CI
@@ -420,14 +420,7 @@ mod tests {
             return;
         };
         let mut s = 23u64;
-        let value = |s: &mut u64| {
-            let r = lcg(s);
-            if r < 0.05 {
-                special_f32(s)
-            } else {
-                (lcg(s) - 0.5) * 8.0
-            }
-        };
+        let value = |s: &mut u64| mixed_f32(s, 0.05, 8.0);
         let mut culled = 0;
         for _ in 0..20_000 {
             // rows[group][vertex][axis]: the permuted axes already.
@@ -485,14 +478,7 @@ mod tests {
             return;
         };
         let mut s = 7u64;
-        let value = |s: &mut u64| {
-            let r = lcg(s);
-            if r < 0.08 {
-                special_f32(s)
-            } else {
-                (lcg(s) - 0.5) * 20.0
-            }
-        };
+        let value = |s: &mut u64| mixed_f32(s, 0.08, 20.0);
         let mut hits = 0;
         for _ in 0..20_000 {
             let mut planes = [[0.0f32; 8]; 6];
