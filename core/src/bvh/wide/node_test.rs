@@ -130,6 +130,7 @@ impl PaddedRay {
 mod tests {
     use super::*;
     use crate::aabb::{Aabb, SlabRay};
+    use crate::bvh::wide::node::ChildRef;
     use crate::ray::Ray;
     use crate::simd::level::Portable;
     use crate::test_util::lcg;
@@ -198,7 +199,7 @@ mod tests {
                 }
                 node.set_child(i, &Aabb::new(lo, hi), i as u32);
             }
-            let used = node.child.iter().filter(|&&c| c != u32::MAX).count();
+            let used = node.child.iter().filter(|&&c| c != ChildRef::EMPTY).count();
             let wray = PaddedRay::new(&slab, 0.0);
             let (dist, mask) = wray.hit_children::<8, false, _>(Portable, &node, 0.0, f32::MAX);
             assert_eq!(mask.count_ones() as usize, used, "{ray:?} {node:?}");
