@@ -277,7 +277,8 @@ const AGREE_REL: f64 = 1.0 / 1_048_576.0;
 /// ([`super::degenerate_or_coplanar`]). When the `f64` plane form cannot be evaluated although
 /// the exact `d·n` is not zero (its `f64` normal cancelled: vertices spanning more than `2²⁹`),
 /// the sheared form is the answer.
-// Only hits get here. Inlined on x86-64 and out of line elsewhere: see `exact_candidate`.
+// Only hits get here. Inlined into `finish_exact` on x86-64, out of line elsewhere: see
+// `exact_candidate`.
 #[cfg_attr(target_arch = "x86_64", inline(always))]
 #[cfg_attr(not(target_arch = "x86_64"), inline(never))]
 fn hit_t(
@@ -393,7 +394,10 @@ fn hit_t(
     })
 }
 
-#[inline]
+/// The exact edge functions' verdict, then the hit: `t` ([`hit_t`]), barycentrics and normal.
+/// Out of line on x86-64, inlined elsewhere: see [`exact_candidate`].
+#[cfg_attr(target_arch = "x86_64", inline(never))]
+#[cfg_attr(not(target_arch = "x86_64"), inline)]
 fn finish_exact(
     ray: &Ray,
     pre: &WatertightRay,
@@ -549,14 +553,16 @@ fn permuted_rows(lanes: &TriangleLanes, k: [usize; 3]) -> [[&[f32; LANES]; 3]; 3
 /// The rest of [`Watertight`] for a triangle the `f32` filter did not reject: exact `f64`
 /// edge functions, then [`finish_exact`]. Most tested triangles never get here.
 ///
-/// On x86-64 this path (with [`hit_t`] and [`super::normal_f64`]) is inlined into its caller,
-/// so that it is compiled with the caller's target features: in the frontend's AVX2 + FMA
-/// traversal that means three-operand VEX code instead of the baseline's SSE2 (no fused
-/// multiply-adds either way: Rust never contracts `a·b + c`, so the answers are the same).
-/// Measured with the bunny and the dragon against out-of-line SSE2 code, interleaved with
-/// Embree: closest hit +3.7 % (bunny, random rays), +4.4 % (bunny, camera), +2.4 % (dragon,
-/// random). On other targets it stays out of line, which keeps the miss path of a
-/// microcontroller's traversal small (the Cortex-M4F image's 8 KiB budget, README).
+/// Where the hit path is split differs by target (the same code, so the same answers):
+/// - **x86-64:** one call per candidate. The exact edge functions and their sign checks are
+///   inlined into the caller (in the frontend, the AVX2 + FMA traversal), and the rest,
+///   [`finish_exact`] with [`hit_t`] and [`super::normal_f64`] inlined, is one out-of-line
+///   function. Against the former two calls (this function, then `hit_t`, each passing the
+///   sheared coordinates by value), measured interleaved with Embree on the same rays: closest
+///   hit +3.7 % (bunny, random rays), +4.4 % (bunny, camera rays), +2.4 % (dragon, random).
+///   Inlining all of it was 3 % slower than this split (the traversal loop grows).
+/// - **Elsewhere:** this function and `hit_t` out of line, which keeps the miss path of a
+///   microcontroller's traversal small (the Cortex-M4F image's 8 KiB budget, README).
 #[cfg_attr(target_arch = "x86_64", inline(always))]
 #[cfg_attr(not(target_arch = "x86_64"), inline(never))]
 fn exact_candidate(
