@@ -557,10 +557,10 @@ fn permuted_rows(lanes: &TriangleLanes, k: [usize; 3]) -> [[&[f32; LANES]; 3]; 3
 /// - **x86-64:** one call per candidate. The exact edge functions and their sign checks are
 ///   inlined into the caller (in the frontend, the AVX2 + FMA traversal), and the rest,
 ///   [`finish_exact`] with [`hit_t`] and [`super::normal_f64`] inlined, is one out-of-line
-///   function. Against the former two calls (this function, then `hit_t`, each passing the
-///   sheared coordinates by value), measured interleaved with Embree on the same rays: closest
-///   hit +3.7 % (bunny, random rays), +4.4 % (bunny, camera rays), +2.4 % (dragon, random).
-///   Inlining all of it was 3 % slower than this split (the traversal loop grows).
+///   function. Measured interleaved with Embree on the same rays, against two calls (this
+///   function and `hit_t` out of line, each passing the sheared coordinates by value): closest
+///   hit +3.7 % (bunny, random rays), +4.4 % (bunny, camera rays), +2.4 % (dragon, random);
+///   against inlining all of it (the traversal loop grows): +3 %.
 /// - **Elsewhere:** this function and `hit_t` out of line, which keeps the miss path of a
 ///   microcontroller's traversal small (the Cortex-M4F image's 8 KiB budget, README).
 #[cfg_attr(target_arch = "x86_64", inline(always))]
