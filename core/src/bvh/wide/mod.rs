@@ -74,16 +74,19 @@ pub const MAX_LEAF_TRIANGLES: usize = 16;
 
 /// Binary subtrees of at most this many triangles become one wide leaf (their triangles are
 /// contiguous in leaf order): testing a few triangles in a row costs less than visiting a node
-/// for them. Chosen by measurement with [`WIDE_INTERSECTION_COST`] (`halfray bench bvh`,
-/// README: 8 against 4 made incoherent rays 5–10 % faster on the bunny and the dragon, the
-/// build 15 % faster and the tree 11 B/triangle smaller). At most [`MAX_LEAF_TRIANGLES`].
-pub const LEAF_MERGE: usize = 8;
+/// for them. Chosen by measurement (README, "Leaf size"): 8 against 4 made incoherent rays
+/// 5–10 % faster on the bunny and the dragon; 16 against 8 (a leaf is two eight-lane culls
+/// instead of a node step and one) made them 3–4 % faster again, with camera rays unchanged,
+/// the build 15–20 % faster and the tree 6 B/triangle smaller. At most [`MAX_LEAF_TRIANGLES`].
+pub const LEAF_MERGE: usize = 16;
 
 /// SAH cost of a triangle test in a tree collapsed into a wide one, against a traversal step's
 /// 1 ([`crate::bvh::TRAVERSAL_COST`]). Unitless. Lower than the binary tree's
 /// [`crate::bvh::INTERSECTION_COST`] because a wide leaf tests four triangles per step and
-/// culls most of them in one four-lane test, while a wide node step tests eight boxes; chosen
-/// by measurement together with [`LEAF_MERGE`].
+/// culls most of them in one four-lane test, while a wide node step tests eight boxes. It
+/// decides leaf or split only for nodes between `leaf_threshold` and `max_leaf_size`;
+/// [`binary_options`] sets both to [`LEAF_MERGE`], so there it changes nothing (where a
+/// node is split does not depend on it): it matters to a caller who lowers `leaf_threshold`.
 pub const WIDE_INTERSECTION_COST: f32 = 0.3;
 
 /// The options of a binary tree built to be collapsed ([`WideBvh::from_binary`]): `options`
