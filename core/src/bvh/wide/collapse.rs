@@ -3,7 +3,7 @@
 #[cfg(doc)]
 use super::group_capacity;
 use super::node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
-use super::{LEAF_MERGE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh};
+use super::{LEAF_MERGE, LEAF_OPEN_ABOVE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh};
 use crate::bvh::{Bvh, BvhError, BvhNode, TriangleMesh};
 use crate::triangle::LANES;
 
@@ -45,18 +45,34 @@ fn as_leaf(nodes: &[BvhNode], b: u32) -> Option<core::ops::Range<usize>> {
     (total > 0 && hi - lo == total).then_some(lo..hi)
 }
 
+/// `true` when the leaf run `run` of binary node `b` may be opened into `b`'s two children: `b`
+/// is an inner node (a merged subtree, not a binary leaf) of more than [`LEAF_OPEN_ABOVE`]
+/// triangles.
+fn opens(nodes: &[BvhNode], b: u32, run: &core::ops::Range<usize>) -> bool {
+    run.len() > LEAF_OPEN_ABOVE
+        && nodes
+            .get(b as usize)
+            .is_some_and(|n| n.children().is_some())
+}
+
 /// The children of the wide node made from binary node `b`: start with `b`'s two children
-/// and, while fewer than `W`, replace the inner one with the largest surface area (ties: the
-/// first) by its two children; each with its leaf run when it becomes a leaf ([`as_leaf`],
-/// computed once per entry). A `b` that is itself a leaf run (only the root can be: every
-/// other `b` was a non-leaf entry of its parent's list) gives itself, alone.
+/// and, while fewer than `W`, replace one entry by its two children: the inner one with the
+/// largest surface area (ties: the first) while there is one, then the leaf run that
+/// [`opens`] with the largest surface area. Each entry carries its leaf run when it becomes a
+/// leaf ([`as_leaf`], computed once per entry). A `b` that is itself a leaf run that does not
+/// open (only the root can be one: every other `b` was a non-leaf entry of its parent's
+/// list) gives itself, alone.
 fn child_list<const W: usize>(nodes: &[BvhNode], b: u32, is_root: bool) -> ChildList<W> {
     let mut out = ChildList {
         node: [0u32; W],
         leaf: [const { None }; W],
         len: 0,
     };
-    let root_leaf = if is_root { as_leaf(nodes, b) } else { None };
+    let root_leaf = if is_root {
+        as_leaf(nodes, b).filter(|run| !opens(nodes, b, run))
+    } else {
+        None
+    };
     let Some((l, r)) = nodes
         .get(b as usize)
         .and_then(BvhNode::children)
@@ -67,34 +83,37 @@ fn child_list<const W: usize>(nodes: &[BvhNode], b: u32, is_root: bool) -> Child
         out.len = 1;
         return out;
     };
-    // Per entry, the area by which it competes for expansion (`None`: it stays, a leaf run).
-    let mut area: [Option<f32>; W] = [None; W];
-    let put = |out: &mut ChildList<W>, area: &mut [Option<f32>; W], i: usize, c: u32| {
+    // Per entry, its claim to be expanded (`None`: it stays): `(inner, area)`, compared
+    // lexicographically, so that every inner entry goes before any leaf run.
+    let mut claim: [Option<(bool, f32)>; W] = [None; W];
+    let put = |out: &mut ChildList<W>, claim: &mut [Option<(bool, f32)>; W], i: usize, c: u32| {
         out.node[i] = c;
         out.leaf[i] = as_leaf(nodes, c);
-        area[i] = match (&out.leaf[i], nodes.get(c as usize)) {
-            (None, Some(n)) => Some(n.bounds().surface_area()),
-            _ => None,
+        let area = || nodes.get(c as usize).map(|n| n.bounds().surface_area());
+        claim[i] = match &out.leaf[i] {
+            None => area().map(|a| (true, a)),
+            Some(run) if opens(nodes, c, run) => area().map(|a| (false, a)),
+            Some(_) => None,
         };
     };
-    put(&mut out, &mut area, 0, l);
-    put(&mut out, &mut area, 1, r);
+    put(&mut out, &mut claim, 0, l);
+    put(&mut out, &mut claim, 1, r);
     let mut len = 2;
     while len < W {
-        let mut best: Option<(usize, f32)> = None;
-        for (i, a) in area[..len].iter().enumerate() {
-            if let Some(a) = *a
-                && best.is_none_or(|(_, b)| a > b)
+        let mut best: Option<(usize, (bool, f32))> = None;
+        for (i, c) in claim[..len].iter().enumerate() {
+            if let Some(c) = *c
+                && best.is_none_or(|(_, b)| c.0 > b.0 || (c.0 == b.0 && c.1 > b.1))
             {
-                best = Some((i, a));
+                best = Some((i, c));
             }
         }
         let Some((i, _)) = best else { break };
         let Some((cl, cr)) = nodes.get(out.node[i] as usize).and_then(BvhNode::children) else {
             break;
         };
-        put(&mut out, &mut area, i, cl);
-        put(&mut out, &mut area, len, cr);
+        put(&mut out, &mut claim, i, cl);
+        put(&mut out, &mut claim, len, cr);
         len += 1;
     }
     out.len = len;

@@ -194,13 +194,24 @@ fn node_sizes_and_counts() {
         .flat_map(|(i, l)| b.indices()[l.clone()].iter().map(move |&p| (p, i)))
         .collect();
     let mut runs = Vec::new();
+    let mut opened = 0;
     for n in w.nodes() {
+        let used = (0..8).filter(|&k| n.child(k) != ChildRef::Empty).count();
         for k in 0..8 {
             if let ChildRef::Leaf { start, count } = n.child(k) {
                 runs.push(start as usize..(start + count) as usize);
+                // Binary leaves hold at most 4 here, so a longer run is a binary subtree,
+                // which a node with a slot to spare opens.
+                assert!(
+                    used == 8 || count as usize <= LEAF_OPEN_ABOVE,
+                    "a run of {count} left whole beside {} free slots",
+                    8 - used
+                );
+                opened += usize::from(count as usize <= LEAF_OPEN_ABOVE && used > 2);
             }
         }
     }
+    assert!(opened > 0, "some nodes have their leaves opened");
     runs.sort_by_key(|r| r.start);
     let groups_touched = |r: &core::ops::Range<usize>| r.end.div_ceil(4) - r.start / 4;
     let mut next = 0;
@@ -429,6 +440,36 @@ fn run_lanes_cover_exactly_the_run() {
             }
             let expect: Vec<u32> = (start..start + count).collect();
             assert_eq!(covered, expect, "start {start} count {count}");
+        }
+    }
+}
+
+/// A tree of at most `LEAF_MERGE` triangles is one leaf run, which the root opens when it is
+/// longer than `LEAF_OPEN_ABOVE`: the root then has two or more leaf children, each within
+/// the bound, together every triangle once.
+#[test]
+fn a_small_tree_is_one_leaf_or_opened_at_the_root() {
+    for n in 1..=LEAF_MERGE {
+        let (pos, tris) = soup(n, 40 + n as u64);
+        let mesh = TriangleMesh::new(&pos, &tris);
+        let w = wide::<8>(&mesh, 1);
+        assert_eq!(w.node_count(), 1, "n = {n}");
+        let runs: Vec<u32> = (0..8)
+            .filter_map(|k| match w.nodes()[0].child(k) {
+                ChildRef::Leaf { count, .. } => Some(count),
+                ChildRef::Inner(_) => panic!("n = {n}: an inner child"),
+                ChildRef::Empty => None,
+            })
+            .collect();
+        assert_eq!(runs.iter().sum::<u32>() as usize, n, "n = {n}");
+        if n > LEAF_OPEN_ABOVE {
+            assert!(runs.len() >= 2, "n = {n}: {runs:?}");
+            assert!(
+                runs.iter().all(|&c| c as usize <= LEAF_OPEN_ABOVE),
+                "{runs:?}"
+            );
+        } else {
+            assert_eq!(runs, [n as u32], "n = {n}");
         }
     }
 }
