@@ -103,7 +103,7 @@ fn child_list<const W: usize>(nodes: &[BvhNode], b: u32, is_root: bool) -> Child
         let mut best: Option<(usize, (bool, f32))> = None;
         for (i, c) in claim[..len].iter().enumerate() {
             if let Some(c) = *c
-                && best.is_none_or(|(_, b)| c.0 > b.0 || (c.0 == b.0 && c.1 > b.1))
+                && best.is_none_or(|(_, b)| (c.0 && !b.0) || (c.0 == b.0 && c.1 > b.1))
             {
                 best = Some((i, c));
             }
