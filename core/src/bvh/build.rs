@@ -36,8 +36,9 @@ pub struct BuildOptions {
     /// Nodes of at most this many primitives become leaves without trying a split (capped
     /// at `max_leaf_size`; values below 1 count as 1). Default 1: the SAH decides for every
     /// node of two or more. A tree that will be collapsed into a wide one is built with
-    /// [`LEAF_MERGE`](super::wide::LEAF_MERGE) here ([`super::wide::binary_options`]): the
-    /// collapse turns every subtree that small into one leaf, so splitting it is wasted work.
+    /// [`LEAF_OPEN_ABOVE`](super::wide::LEAF_OPEN_ABOVE) here and as `max_leaf_size`
+    /// ([`super::wide::binary_options`]): the collapse neither splits nor opens a subtree that
+    /// small, so splitting it is wasted work.
     pub leaf_threshold: u32,
     /// SAH cost of one primitive test against a traversal step's 1
     /// ([`TRAVERSAL_COST`](super::TRAVERSAL_COST)); larger values give smaller leaves.

@@ -48,7 +48,8 @@ pub struct BvhArgs {
     /// Triangle intersector.
     #[arg(long, value_enum, default_value_t)]
     pub intersector: crate::cli_values::Intersector,
-    /// Maximum leaf size of the build.
+    /// Maximum leaf size of the binary tree's build (the wide tree's binary tree is built with
+    /// `wide::binary_options`, whose leaf sizes the collapse sets).
     #[arg(long, default_value_t = DEFAULT_MAX_LEAF_SIZE)]
     pub leaf_size: u32,
 }
@@ -276,7 +277,8 @@ fn bench<T: TriangleIntersector>(
         max_leaf_size: args.leaf_size,
         ..BuildOptions::default()
     };
-    // The wide tree's binary tree stops splitting where the collapse would merge anyway.
+    // The wide tree's binary tree stops splitting where the collapse would neither split nor
+    // open a leaf.
     let wide_options = binary_options(options);
     let build_err =
         |e: halfray_core::bvh::BvhError| Error::input(Location::file(mesh_path), e.to_string());
