@@ -306,17 +306,12 @@ pub(crate) fn degenerate_or_coplanar(ray: &Ray, v: &[Vec3; 3]) -> bool {
 #[cfg_attr(target_arch = "x86_64", inline(always))]
 #[cfg_attr(not(target_arch = "x86_64"), inline)]
 pub(crate) fn normal_f64(v: &[Vec3; 3]) -> (glam::DVec3, glam::DVec3) {
-    let p = [v[0].as_dvec3(), v[1].as_dvec3(), v[2].as_dvec3()];
-    // From v0 first; only when a component cancels (well below its own rounding scale times
-    // 2²⁰, or zero while its scale is not) is the base vertex chosen (the common case skips
-    // three lengths). Per component: `d·n` along an axis sees only that component, and a
-    // sliver spanning 2⁶⁰ can cancel one component of the v0-based normal entirely while the
-    // others stay large (found by the `ray_triangle` fuzz target).
-    let (n, scale) = cross_with_scale(p[1] - p[0], p[2] - p[0]);
-    let cancels = |i: usize| scale[i] > 0.0 && !(n[i].abs() > NORMAL_CANCEL_REL * scale[i]);
-    if !(cancels(0) || cancels(1) || cancels(2)) {
-        return (n, scale);
+    // From v0 first; only when a component cancels is the base vertex chosen (the common case
+    // skips three lengths).
+    if let Some(n) = normal_f64_from_v0(v) {
+        return n;
     }
+    let p = [v[0].as_dvec3(), v[1].as_dvec3(), v[2].as_dvec3()];
     // Edge opposite vertex i: p[i+1] → p[i+2].
     let len2 = |i: usize| (p[(i + 2) % 3] - p[(i + 1) % 3]).length_squared();
     let (l0, l1, l2) = (len2(0), len2(1), len2(2));
@@ -329,6 +324,19 @@ pub(crate) fn normal_f64(v: &[Vec3; 3]) -> (glam::DVec3, glam::DVec3) {
     };
     let (a, b, c) = (p[base], p[(base + 1) % 3], p[(base + 2) % 3]);
     cross_with_scale(b - a, c - a)
+}
+
+/// [`normal_f64`] from `v0`, `(v1 − v0) × (v2 − v0)` and its scale, or `None` when a component
+/// cancels (well below its own rounding scale times 2²⁰, or zero while its scale is not;
+/// [`NORMAL_CANCEL_REL`]): per component, `d·n` along an axis sees only that component, and a
+/// sliver spanning 2⁶⁰ can cancel one component of the v0-based normal entirely while the
+/// others stay large (found by the `ray_triangle` fuzz target).
+#[inline(always)]
+pub(crate) fn normal_f64_from_v0(v: &[Vec3; 3]) -> Option<(glam::DVec3, glam::DVec3)> {
+    let p0 = v[0].as_dvec3();
+    let (n, scale) = cross_with_scale(v[1].as_dvec3() - p0, v[2].as_dvec3() - p0);
+    let cancels = |i: usize| scale[i] > 0.0 && !(n[i].abs() > NORMAL_CANCEL_REL * scale[i]);
+    (!(cancels(0) || cancels(1) || cancels(2))).then_some((n, scale))
 }
 
 /// Relative size below which a component of the `v0`-based normal is taken as cancelled and

@@ -290,11 +290,102 @@ fn hit_t(
     det: f64,
     v: &[Vec3; 3],
 ) -> Option<f64> {
+    // On x86-64 the common case runs alone, and everything else is one cold call that starts
+    // over: the hot path then keeps only its own values in registers. Elsewhere one function
+    // (the Cortex-M4F image's size).
+    #[cfg(target_arch = "x86_64")]
+    if let Some(t) = common_t(ray, sheared.2, edges, det, v) {
+        return Some(t);
+    }
+    general_t(ray, shear, d_kz, sheared, edges, det, v)
+}
+
+/// [`hit_t`]'s common case, or `None` for the others: the `v0`-based normal does not cancel,
+/// `d·n` clears its filter, the plane crossing lies in the triangle's box, and the plane form
+/// is exact enough ([`plane_exact_enough`]). Each step is the one [`general_t`] takes, so
+/// where this returns `t`, `general_t` returns the same `t`.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn common_t(ray: &Ray, z: [f32; 3], edges: [f64; 3], det: f64, v: &[Vec3; 3]) -> Option<f64> {
+    let normal = super::normal_f64_from_v0(v)?;
+    let d = ray.direction.as_dvec3();
+    let dn = d.dot(normal.0);
+    if !(dn.abs() > ORIENT3D_FILTER_REL * d.abs().dot(normal.1)) {
+        return None;
+    }
+    let plane = plane_form(ray, v, normal, d, dn);
+    let t_sheared = sheared_t(edges, z, det);
+    (plane.in_box && plane_exact_enough(&plane, t_sheared, z)).then_some(plane.t)
+}
+
+/// The sheared form of `t`: `Σ eᵢzᵢ / det` in `f64` (see [`hit_t`]).
+#[inline(always)]
+fn sheared_t(edges: [f64; 3], z: [f32; 3], det: f64) -> f64 {
+    (edges[0] * f64::from(z[0]) + edges[1] * f64::from(z[1]) + edges[2] * f64::from(z[2])) / det
+}
+
+/// The plane form of `t` ([`hit_t`]) and its error bound, and whether its crossing lies in
+/// the triangle's box up to rounding.
+struct PlaneForm {
+    /// `((v0 − o)·n)/(d·n)`, ray parameter.
+    t: f64,
+    /// Bound on the error of `t`, ray parameter.
+    err: f64,
+    /// The crossing `o + d·t` lies in the triangle's box, padded by `γ₈` of the coordinates'
+    /// magnitude and [`TINY`].
+    in_box: bool,
+}
+
+/// [`PlaneForm`] of the triangle `v` with normal `n` and its scale `nn`
+/// ([`super::normal_f64`]), for the ray direction `d` (in `f64`) with `dn = d·n ≠ 0`.
+#[inline(always)]
+fn plane_form(ray: &Ray, v: &[Vec3; 3], (n, nn): (DVec3, DVec3), d: DVec3, dn: f64) -> PlaneForm {
+    let w = v[0].as_dvec3() - ray.origin.as_dvec3();
+    let t = w.dot(n) / dn;
+    let err = gamma_f64(8) * (w.abs().dot(nn) + t.abs() * d.abs().dot(nn)) / dn.abs();
+    // The plane crossing must lie in the triangle's box (up to rounding). If it does not, the
+    // edge tests decided "inside" within the projection's rounding while the exact line
+    // crosses the plane elsewhere (a grazing ray; found by the `bvh` fuzz target): then the
+    // sheared `t`, consistent with those edge decisions (and with the neighbours', which keeps
+    // a closed mesh closed), is the one.
+    let p = ray.origin.as_dvec3() + d * t;
+    let lo = v[0].min(v[1]).min(v[2]).as_dvec3();
+    let hi = v[0].max(v[1]).max(v[2]).as_dvec3();
+    let slack =
+        f64::from(gamma(8)) * (lo.abs().max(hi.abs()).max_element() + p.abs().max_element()) + TINY;
+    PlaneForm {
+        t,
+        err,
+        in_box: p.cmpge(lo - slack).all() && p.cmple(hi + slack).all(),
+    }
+}
+
+/// The common case of [`hit_t`]: the two forms agree to well within `f32` rounding
+/// ([`AGREE_REL`] of `|t_sheared| + max|zᵢ|`), and the plane form's own bound is below it too
+/// ([`PLANE_EXACT_ENOUGH`]); nothing can beat it once rounded to `f32`.
+#[inline(always)]
+fn plane_exact_enough(plane: &PlaneForm, t_sheared: f64, z: [f32; 3]) -> bool {
+    let max_abs_z = f64::from(z[0].abs().max(z[1].abs()).max(z[2].abs()));
+    plane.err <= PLANE_EXACT_ENOUGH * plane.t.abs()
+        && (plane.t - t_sheared).abs() <= AGREE_REL * (t_sheared.abs() + max_abs_z)
+}
+
+/// [`hit_t`] in full: every case, the common one included.
+#[cfg_attr(target_arch = "x86_64", cold, inline(never))]
+#[cfg_attr(not(target_arch = "x86_64"), inline(always))]
+fn general_t(
+    ray: &Ray,
+    shear: Vec3,
+    d_kz: f32,
+    sheared: ([f32; 3], [f32; 3], [f32; 3]),
+    edges: [f64; 3],
+    det: f64,
+    v: &[Vec3; 3],
+) -> Option<f64> {
     let (x, y, z) = sheared;
-    let t_sheared =
-        (edges[0] * f64::from(z[0]) + edges[1] * f64::from(z[1]) + edges[2] * f64::from(z[2]))
-            / det;
-    let (n, nn) = super::normal_f64(v);
+    let t_sheared = sheared_t(edges, z, det);
+    let normal = super::normal_f64(v);
+    let (n, nn) = normal;
     let d = ray.direction.as_dvec3();
     let dn = d.dot(n);
     // `d·n` is `det[v1 − v0, v2 − v0, d]` evaluated in `f64` (from the base vertex
@@ -309,31 +400,14 @@ fn hit_t(
             return Some(t_sheared);
         }
     }
-    let w = v[0].as_dvec3() - ray.origin.as_dvec3();
-    let t_plane = w.dot(n) / dn;
-    let err_plane = gamma_f64(8) * (w.abs().dot(nn) + t_plane.abs() * d.abs().dot(nn)) / dn.abs();
-    let max_abs_z = f64::from(z[0].abs().max(z[1].abs()).max(z[2].abs()));
-    // The plane crossing must lie in the triangle's box (up to rounding). If it does not, the
-    // edge tests decided "inside" within the projection's rounding while the exact line
-    // crosses the plane elsewhere (a grazing ray; found by the `bvh` fuzz target): then the
-    // sheared `t`, consistent with those edge decisions (and with the neighbours', which keeps
-    // a closed mesh closed), is the one.
-    let p = ray.origin.as_dvec3() + d * t_plane;
-    let lo = v[0].min(v[1]).min(v[2]).as_dvec3();
-    let hi = v[0].max(v[1]).max(v[2]).as_dvec3();
-    let slack =
-        f64::from(gamma(8)) * (lo.abs().max(hi.abs()).max_element() + p.abs().max_element()) + TINY;
-    let in_box = p.cmpge(lo - slack).all() && p.cmple(hi + slack).all();
-    if !in_box {
+    let plane = plane_form(ray, v, normal, d, dn);
+    if !plane.in_box {
         return Some(t_sheared);
     }
-    // The common case: both forms agree to well within f32 rounding, and the plane form's
-    // own bound is below it too; nothing can beat it once rounded to f32.
-    if err_plane <= PLANE_EXACT_ENOUGH * t_plane.abs()
-        && (t_plane - t_sheared).abs() <= AGREE_REL * (t_sheared.abs() + max_abs_z)
-    {
-        return Some(t_plane);
+    if plane_exact_enough(&plane, t_sheared, z) {
+        return Some(plane.t);
     }
+    let (t_plane, err_plane) = (plane.t, plane.err);
 
     // Sheared form. Per vertex: the magnitudes that the projection x' = a_kx − s_x·a_kz rounds
     // against (|a_kx| ≤ |x'| + |s_x·a_kz|, and |a_kz| = |z'|·|d_kz| up to z′'s roundings), the
