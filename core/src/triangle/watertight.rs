@@ -260,50 +260,10 @@ const PLANE_EXACT_ENOUGH: f64 = 1.0 / 67_108_864.0;
 /// case and far below any disagreement that signals a grazing ray. Unitless.
 const AGREE_REL: f64 = 1.0 / 1_048_576.0;
 
-/// `t` of a hit that passed the edge tests (see [`Watertight`]): the plane form when its
-/// crossing lies in the triangle's box, it agrees with the sheared form within their bounds and
-/// its own bound is the smaller; the sheared form otherwise. The two forms and their bounds:
-///
-/// * **sheared**: `Σ eᵢzᵢ / det`, a convex combination of the vertices' sheared depths, with
-///   the smaller of their span and a first-order bound in the manner of pbrt-v3's `δt`
-///   (*Physically Based Rendering* 3rd ed., §3.9.6) but per vertex and per edge (a sliver's
-///   long coordinate does not inflate the error of its short one), with the projection's
-///   rounding measured against the unscaled depth `|(p − o)_kz|` so any direction length works;
-/// * **plane**: `((v0 − o)·n)/(d·n)`, `n = (v1 − v0) × (v2 − v0)`, all in `f64`, with the
-///   bound `γ₈·(|v0 − o|·N + |t|·|d|·N)/|d·n|`, `N = |v1 − v0| × |v2 − v0|` taken with
-///   absolute values (the rounding of the `f64` differences, the cross and dot products).
-///
-/// `None` for a degenerate triangle or a ray in its plane, decided exactly
-/// ([`super::degenerate_or_coplanar`]). When the `f64` plane form cannot be evaluated although
-/// the exact `d·n` is not zero (its `f64` normal cancelled: vertices spanning more than `2²⁹`),
-/// the sheared form is the answer.
-// Only hits get here. Inlined into `finish_exact` on x86-64, out of line elsewhere: see
-// `exact_candidate`.
-#[cfg_attr(target_arch = "x86_64", inline(always))]
-#[cfg_attr(not(target_arch = "x86_64"), inline(never))]
-fn hit_t(
-    ray: &Ray,
-    shear: Vec3,
-    d_kz: f32,
-    sheared: ([f32; 3], [f32; 3], [f32; 3]),
-    edges: [f64; 3],
-    det: f64,
-    v: &[Vec3; 3],
-) -> Option<f64> {
-    // On x86-64 the common case runs alone, and everything else is one cold call that starts
-    // over: the hot path then keeps only its own values in registers. Elsewhere one function
-    // (the Cortex-M4F image's size).
-    #[cfg(target_arch = "x86_64")]
-    if let Some(t) = common_t(ray, sheared.2, edges, det, v) {
-        return Some(t);
-    }
-    general_t(ray, shear, d_kz, sheared, edges, det, v)
-}
-
 /// [`hit_t`]'s common case, or `None` for the others: the `v0`-based normal does not cancel,
 /// `d·n` clears its filter, the plane crossing lies in the triangle's box, and the plane form
-/// is exact enough ([`plane_exact_enough`]). Each step is the one [`general_t`] takes, so
-/// where this returns `t`, `general_t` returns the same `t`.
+/// is exact enough ([`plane_exact_enough`]). Each step is the one [`hit_t`] takes, so where
+/// this returns `t`, `hit_t` returns the same `t`.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn common_t(ray: &Ray, z: [f32; 3], edges: [f64; 3], det: f64, v: &[Vec3; 3]) -> Option<f64> {
@@ -370,10 +330,30 @@ fn plane_exact_enough(plane: &PlaneForm, t_sheared: f64, z: [f32; 3]) -> bool {
         && (plane.t - t_sheared).abs() <= AGREE_REL * (t_sheared.abs() + max_abs_z)
 }
 
-/// [`hit_t`] in full: every case, the common one included.
+/// `t` of a hit that passed the edge tests (see [`Watertight`]): the plane form when its
+/// crossing lies in the triangle's box, it agrees with the sheared form within their bounds and
+/// its own bound is the smaller; the sheared form otherwise. The two forms and their bounds:
+///
+/// * **sheared**: `Σ eᵢzᵢ / det`, a convex combination of the vertices' sheared depths, with
+///   the smaller of their span and a first-order bound in the manner of pbrt-v3's `δt`
+///   (*Physically Based Rendering* 3rd ed., §3.9.6) but per vertex and per edge (a sliver's
+///   long coordinate does not inflate the error of its short one), with the projection's
+///   rounding measured against the unscaled depth `|(p − o)_kz|` so any direction length works;
+/// * **plane**: `((v0 − o)·n)/(d·n)`, `n = (v1 − v0) × (v2 − v0)`, all in `f64`, with the
+///   bound `γ₈·(|v0 − o|·N + |t|·|d|·N)/|d·n|`, `N = |v1 − v0| × |v2 − v0|` taken with
+///   absolute values (the rounding of the `f64` differences, the cross and dot products).
+///
+/// `None` for a degenerate triangle or a ray in its plane, decided exactly
+/// ([`super::degenerate_or_coplanar`]). When the `f64` plane form cannot be evaluated although
+/// the exact `d·n` is not zero (its `f64` normal cancelled: vertices spanning more than `2²⁹`),
+/// the sheared form is the answer.
+// Only hits get here, and on x86-64 only those whose `t` is not the common case
+// ([`common_t`], tried first by `finish_exact`): there a cold call that starts over, so the
+// hot path keeps only its own values in registers. Out of line elsewhere too: see
+// `exact_candidate`.
 #[cfg_attr(target_arch = "x86_64", cold, inline(never))]
-#[cfg_attr(not(target_arch = "x86_64"), inline(always))]
-fn general_t(
+#[cfg_attr(not(target_arch = "x86_64"), inline(never))]
+fn hit_t(
     ray: &Ray,
     shear: Vec3,
     d_kz: f32,
@@ -489,15 +469,24 @@ fn finish_exact(
     if !(det != 0.0 && det.is_finite()) {
         return None;
     }
-    let t64 = hit_t(
-        ray,
-        pre.shear,
-        ray.direction[pre.k[2]],
-        sheared,
-        edges,
-        det,
-        v,
-    )?;
+    // On x86-64 the common case of `t` first, alone (see `hit_t`); elsewhere `hit_t` only
+    // (the Cortex-M4F image's size).
+    #[cfg(target_arch = "x86_64")]
+    let common = common_t(ray, sheared.2, edges, det, v);
+    #[cfg(not(target_arch = "x86_64"))]
+    let common = None;
+    let t64 = match common {
+        Some(t) => t,
+        None => hit_t(
+            ray,
+            pre.shear,
+            ray.direction[pre.k[2]],
+            sheared,
+            edges,
+            det,
+            v,
+        )?,
+    };
     let t = t64 as f32;
     if !ray.contains(t) {
         return None;
@@ -630,8 +619,8 @@ fn permuted_rows(lanes: &TriangleLanes, k: [usize; 3]) -> [[&[f32; LANES]; 3]; 3
 /// Where the hit path is split differs by target (the same code, so the same answers):
 /// - **x86-64:** one call per candidate. The exact edge functions and their sign checks are
 ///   inlined into the caller (in the frontend, the AVX2 + FMA traversal), and the rest,
-///   [`finish_exact`] with [`hit_t`] and [`super::normal_f64`] inlined, is one out-of-line
-///   function. Measured interleaved with Embree on the same rays, against two calls (this
+///   [`finish_exact`] with the common case of `t` ([`common_t`]) inlined, is one out-of-line
+///   function ([`hit_t`] is a cold call from it for the other cases). Measured interleaved with Embree on the same rays, against two calls (this
 ///   function and `hit_t` out of line, each passing the sheared coordinates by value): closest
 ///   hit +3.7 % (bunny, random rays), +4.4 % (bunny, camera rays), +2.4 % (dragon, random);
 ///   against inlining all of it (the traversal loop grows): +3 %.

@@ -413,8 +413,8 @@ fn prepare_valid_equals_prepare_on_valid_rays() {
     assert_eq!(Watertight.prepare(&invalid), None);
 }
 
-/// On x86-64, `hit_t` returns `common_t`'s answer whenever it has one: that must be the bits
-/// `general_t` (the only path elsewhere) returns for the same inputs. Random triangles of
+/// On x86-64, `finish_exact` takes `common_t`'s answer whenever it has one: that must be the
+/// bits `hit_t` (the only path elsewhere) returns for the same inputs. Random triangles of
 /// every size from 1e-3 to 1e3 at every distance, ordinary rays and rays whose origin lies
 /// near the triangle's plane (where the two forms of `t` differ most), plus slivers; most
 /// hits take the common case, some do not.
@@ -462,7 +462,7 @@ fn the_common_case_gives_the_general_paths_bits() {
         if mixed || det == 0.0 || !det.is_finite() {
             continue;
         }
-        let general = general_t(
+        let general = hit_t(
             &ray,
             pre.shear,
             ray.direction[pre.k[2]],
