@@ -137,25 +137,15 @@ impl WatertightRay {
     /// reports the crossing (when its `t` lies in the interval).
     #[must_use]
     pub fn crossing_sign(&self, origin: Vec3, v: &[Vec3; 3]) -> i8 {
-        let ([ax, bx, cx], [ay, by, cy], _) = self.project_triangle(origin, v);
+        let (x, y, _) = self.project_triangle(origin, v);
+        let ([ax, bx, cx], [ay, by, cy]) = (x, y);
         // Edge functions at the ray (the sheared origin) of the edges C→B, A→C, B→A, the
         // operands of `Watertight`'s edges, and each edge's direction T − S.
+        let [e0, e1, e2] = exact_edges(x, y);
         let edges = [
-            (
-                diff_of_products_exact_sign(cx, by, cy, bx),
-                bx - cx,
-                by - cy,
-            ),
-            (
-                diff_of_products_exact_sign(ax, cy, ay, cx),
-                cx - ax,
-                cy - ay,
-            ),
-            (
-                diff_of_products_exact_sign(bx, ay, by, ax),
-                ax - bx,
-                ay - by,
-            ),
+            (e0, bx - cx, by - cy),
+            (e1, cx - ax, cy - ay),
+            (e2, ax - bx, ay - by),
         ];
         // E_ST(p + (ε, ε²)) = E_ST(p) + d_x·ε² − d_y·ε: when E is exactly zero its sign is
         // −sign(d_y), or sign(d_x) for a horizontal edge (d = 0 only for a degenerate
@@ -517,6 +507,18 @@ pub(super) fn filter_edges(x: [f32; 3], y: [f32; 3]) -> [f32; 3] {
     ]
 }
 
+/// The edge functions of [`filter_edges`], each the `f64` difference of exact `f64` products:
+/// exact signs, and zero exactly on the edge ([`diff_of_products_exact_sign`]).
+#[inline(always)]
+pub(super) fn exact_edges(x: [f32; 3], y: [f32; 3]) -> [f64; 3] {
+    let ([ax, bx, cx], [ay, by, cy]) = (x, y);
+    [
+        diff_of_products_exact_sign(cx, by, cy, bx),
+        diff_of_products_exact_sign(ax, cy, ay, cx),
+        diff_of_products_exact_sign(bx, ay, by, ax),
+    ]
+}
+
 /// `true` when `e` holds both a negative and a positive value (zeros and NaN count as
 /// neither): the ray passes outside the triangle.
 #[inline(always)]
@@ -620,10 +622,11 @@ fn permuted_rows(lanes: &TriangleLanes, k: [usize; 3]) -> [[&[f32; LANES]; 3]; 3
 /// - **x86-64:** one call per candidate. The exact edge functions and their sign checks are
 ///   inlined into the caller (in the frontend, the AVX2 + FMA traversal), and the rest,
 ///   [`finish_exact`] with the common case of `t` ([`common_t`]) inlined, is one out-of-line
-///   function ([`hit_t`] is a cold call from it for the other cases). Measured interleaved with Embree on the same rays, against two calls (this
-///   function and `hit_t` out of line, each passing the sheared coordinates by value): closest
-///   hit +3.7 % (bunny, random rays), +4.4 % (bunny, camera rays), +2.4 % (dragon, random);
-///   against inlining all of it (the traversal loop grows): +3 %.
+///   function ([`hit_t`] is a cold call from it for the other cases). Measured interleaved
+///   with Embree on the same rays, against two calls (this function and `hit_t` out of line,
+///   each passing the sheared coordinates by value): closest hit +3.7 % (bunny, random
+///   rays), +4.4 % (bunny, camera rays), +2.4 % (dragon, random); against inlining all of it
+///   (the traversal loop grows): +3 %.
 /// - **Elsewhere:** this function and `hit_t` out of line, which keeps the miss path of a
 ///   microcontroller's traversal small (the Cortex-M4F image's 8 KiB budget, README).
 #[cfg_attr(target_arch = "x86_64", inline(always))]
@@ -634,12 +637,7 @@ fn exact_candidate(
     sheared: ([f32; 3], [f32; 3], [f32; 3]),
     v: &[Vec3; 3],
 ) -> Option<TriangleHit> {
-    let ([ax, bx, cx], [ay, by, cy], _) = sheared;
-    let edges = [
-        diff_of_products_exact_sign(cx, by, cy, bx),
-        diff_of_products_exact_sign(ax, cy, ay, cx),
-        diff_of_products_exact_sign(bx, ay, by, ax),
-    ];
+    let edges = exact_edges(sheared.0, sheared.1);
     finish_exact(ray, pre, sheared, edges, v)
 }
 
@@ -650,14 +648,13 @@ impl ShearedTest for WatertightF32 {
 
     #[inline(always)]
     fn hit_sheared(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
-        let ([ax, bx, cx], [ay, by, cy], [az, bz, cz]) = pre.project_triangle(ray.origin, v);
+        let (x, y, [az, bz, cz]) = pre.project_triangle(ray.origin, v);
+        let ([ax, bx, cx], [ay, by, cy]) = (x, y);
         let mut u = cx * by - cy * bx;
         let mut w = ax * cy - ay * cx;
         let mut s = bx * ay - by * ax;
         if u == 0.0 || w == 0.0 || s == 0.0 {
-            u = diff_of_products_exact_sign(cx, by, cy, bx) as f32;
-            w = diff_of_products_exact_sign(ax, cy, ay, cx) as f32;
-            s = diff_of_products_exact_sign(bx, ay, by, ax) as f32;
+            [u, w, s] = exact_edges(x, y).map(|e| e as f32);
         }
         if (u < 0.0 || w < 0.0 || s < 0.0) && (u > 0.0 || w > 0.0 || s > 0.0) {
             return None;

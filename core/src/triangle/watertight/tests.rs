@@ -451,12 +451,8 @@ fn the_common_case_gives_the_general_paths_bits() {
             continue;
         };
         let sheared = pre.project_triangle(ray.origin, &v);
-        let ([ax, bx, cx], [ay, by, cy], z) = sheared;
-        let edges = [
-            diff_of_products_exact_sign(cx, by, cy, bx),
-            diff_of_products_exact_sign(ax, cy, ay, cx),
-            diff_of_products_exact_sign(bx, ay, by, ax),
-        ];
+        let z = sheared.2;
+        let edges = exact_edges(sheared.0, sheared.1);
         let mixed = edges.iter().any(|&e| e < 0.0) && edges.iter().any(|&e| e > 0.0);
         let det = edges[0] + edges[1] + edges[2];
         if mixed || det == 0.0 || !det.is_finite() {
