@@ -200,9 +200,42 @@ proptest! {
             prop_assert!(vo.contains(x, 0.0), "{p} outside {o:?}");
             prop_assert!(vc.contains(x, 0.0), "{p} outside {c:?}");
         }
-        // Not absurdly loose: the sphere is within twice the bounding box's half-diagonal.
-        let b = Aabb::from_points(&pts);
-        let half = (b.max.as_dvec3() - b.min.as_dvec3()).length() * 0.5;
-        prop_assert!(f64::from(s.radius()) <= 2.0 * half + 1e-30);
+        prop_assert!(sphere_not_loose(&pts, s), "{s:?} too loose");
     }
+}
+
+/// Not absurdly loose: the sphere's radius is within twice the bounding box's
+/// half-diagonal, plus what [`BoundingSphere::fit`]'s contract adds on top of the `f64` ball:
+/// the centre rounded to `f32` (at most `√3/2` of an `f32` ulp of the largest coordinate
+/// away), the pad [`halfray_core::volume::FIT_PAD_REL`] and one `f32` ulp of rounding up.
+fn sphere_not_loose(pts: &[Vec3], s: BoundingSphere) -> bool {
+    let b = Aabb::from_points(pts);
+    let half = (b.max.as_dvec3() - b.min.as_dvec3()).length() * 0.5;
+    let far = b.min.abs().max(b.max.abs()).max_element();
+    let centre_rounding = 3f64.sqrt() * 0.5 * f64::from(far.next_up() - far);
+    let bound = (2.0 * half + centre_rounding) * (1.0 + halfray_core::volume::FIT_PAD_REL);
+    let r = s.radius();
+    f64::from(r) <= bound.max(f64::from(f32::MIN_POSITIVE)) || f64::from(r.next_down()) < bound
+}
+
+/// The case the property once failed on (two points a tenth apart at 10⁶, where an `f32`
+/// ulp is 0.0625): the `f64` ball's centre rounds onto one of the points, so the radius is
+/// the whole distance. It must contain both points and stay within the bound above.
+#[test]
+fn sphere_fit_far_from_origin_is_contained_and_bounded() {
+    let pts = [
+        Vec3::new(-1.085_514_1 + 1e6, 0.0, 0.0),
+        Vec3::new(-0.985_390_6 + 1e6, 0.0, 0.0),
+    ];
+    let s = BoundingSphere::fit(&pts[..]).unwrap();
+    for p in pts {
+        assert!(
+            Volume::Sphere(s).contains(p.as_dvec3(), 0.0),
+            "{p} outside {s:?}"
+        );
+    }
+    assert!(sphere_not_loose(&pts, s), "{s:?} too loose");
+    // The centre's rounding is what the old bound (2·half only) missed.
+    let half = f64::from(pts[1].x - pts[0].x) * 0.5;
+    assert!(f64::from(s.radius()) > 2.0 * half, "{s:?}");
 }
