@@ -215,7 +215,7 @@ fn sphere_not_loose(pts: &[Vec3], s: BoundingSphere) -> bool {
     let centre_rounding = 3f64.sqrt() * 0.5 * f64::from(far.next_up() - far);
     let bound = (2.0 * half + centre_rounding) * (1.0 + halfray_core::volume::FIT_PAD_REL);
     let r = s.radius();
-    f64::from(r) <= bound.max(f64::from(f32::MIN_POSITIVE)) || f64::from(r.next_down()) < bound
+    f64::from(r) <= bound || f64::from(r.next_down()) < bound
 }
 
 /// The case the property once failed on (two points a tenth apart at 10⁶, where an `f32`
