@@ -103,11 +103,22 @@ pub const DISC_BAND_IN_U: f64 = 256.0;
 /// relative tolerance [`ROOT_REL_TOL`] holds with orders of magnitude to spare. Unitless.
 pub const ROOT_DISC_REL: f64 = 1.0 / 1_073_741_824.0;
 
-/// Tolerance of a root against the exact one, relative to `|r| + √S/|qa|` (the root scale).
-/// Loose on purpose (10⁻⁶ against a first-order error below 10⁻¹⁰ where it is applied): it
-/// catches dropped, invented, swapped or wrong roots, not accuracy, which the residual check
-/// bounds. Unitless.
+/// Tolerance of a root against the exact one, relative to `|r| + √S/|qa|` (the root scale),
+/// on top of the root's first-order rounding bound ([`root_rounding`]). Loose on purpose
+/// (10⁻⁶ against a discriminant rounding below 10⁻¹⁰ where it is applied): it catches
+/// dropped, invented, swapped or wrong roots, not accuracy, which the residual check bounds.
+/// Unitless.
 pub const ROOT_REL_TOL: f64 = 1e-6;
+
+/// First-order bound of how far rounding the coefficients moves root `r` of a polynomial
+/// with discriminant `disc > 0` (`t` units): each coefficient carries at most `K·u` of its
+/// absolute-value scale (`qa_abs`, `qb_abs`, `qc_abs`), which moves `p(r)` by at most
+/// `K·u·(|qa|·r² + 2·|qb|·|r| + |qc|)`, and `|p'(r)| = 2·√Δ`. Where `qa` cancels (its exact
+/// value far below `|qa|`, as for a ray along the asymptote of `y² − z²`), this term is many
+/// times [`ROOT_REL_TOL`] of the root scale (kept: `qa-cancels-root-moves`).
+fn root_rounding(r: f64, [qa_abs, qb_abs, qc_abs]: [f64; 3], disc: f64) -> f64 {
+    K * F64_UNIT_ROUNDOFF * (qa_abs * r * r + 2.0 * qb_abs * r.abs() + qc_abs) / (2.0 * disc.sqrt())
+}
 
 /// The ray polynomial `p(t) = qa·t² + 2·qb·t + qc` of `q` along `ray`, in **exact rational
 /// arithmetic** from the stored centred form (centre, `A`, `b_c`, `k`: `f(x) = yᵀA y + 2b_cᵀy +
@@ -210,16 +221,18 @@ pub fn check_against_exact(q: &Quadric, ray: &Ray) {
         if x <= y { (x, y) } else { (y, x) }
     };
     let scale = s.sqrt() / fa.abs();
+    let tol_of =
+        |r: f64| ROOT_REL_TOL * (r.abs() + scale) + root_rounding(r, [qa_abs, qb_abs, qc_abs], fd);
     let (t0, t1) = roots.expect("checked above");
     for (t, r) in [(t0, r0), (t1, r1)] {
         assert!(
-            (t - r).abs() <= ROOT_REL_TOL * (r.abs() + scale),
+            (t - r).abs() <= tol_of(r),
             "root {t:e}, exact {r:e}\n{}",
             ctx()
         );
     }
     // 3. A near root clearly inside the interval is a hit (point representable).
-    let tol = ROOT_REL_TOL * (r0.abs() + scale);
+    let tol = tol_of(r0);
     let (lo, hi) = (f64::from(ray.t_min), f64::from(ray.t_max));
     let point = o + d * r0;
     // Roots below the sphere target's `MIN_T` round to a `t` (or to 0) from which no hit
