@@ -99,8 +99,9 @@ pub fn ray_quadric(data: &[u8]) {
 pub const DISC_BAND_IN_U: f64 = 256.0;
 
 /// Discriminants below this fraction of `S` are not judged for root positions: beyond it the
-/// roots are well separated and each is within about `u·S/√Δ` of the exact one, so the
-/// relative tolerance [`ROOT_REL_TOL`] holds with orders of magnitude to spare. Unitless.
+/// roots are well separated, the discriminant's rounding moves each by about `u·S/√Δ` of
+/// `1/|qa|` (far inside [`ROOT_REL_TOL`] of the root scale) and the coefficients' rounding by
+/// at most [`root_rounding`]. Unitless.
 pub const ROOT_DISC_REL: f64 = 1.0 / 1_073_741_824.0;
 
 /// Tolerance of a root against the exact one, relative to `|r| + √S/|qa|` (the root scale),

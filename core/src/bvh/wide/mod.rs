@@ -6,18 +6,19 @@
 //!
 //! # Building
 //!
-//! [`WideBvh::from_binary`] collapses a built binary tree over a [`TriangleMesh`](crate::bvh::TriangleMesh): each wide
-//! node takes its binary node's two children and, while it has fewer than `W`, replaces the
-//! inner child with the largest surface area by that child's two children (ties: the first).
-//! A binary subtree of at most [`LEAF_MERGE`] triangles becomes one leaf slot (its triangles
-//! in a row), and slots still free then go to opening the leaf runs of more than
-//! [`LEAF_OPEN_ABOVE`] triangles into their two subtrees, largest surface area first. The
-//! caller passes node storage of at least [`WideBvh::node_count_for`]`(binary)` nodes (exact; [`node_capacity`] is a bound that needs
-//! no binary tree) and triangle storage of at least [`WideBvh::group_count_for`]`(binary)`
-//! groups (exact; [`group_capacity`]`(N)` always suffices). Too
-//! little storage, a binary leaf of more than [`MAX_LEAF_TRIANGLES`] primitives, more than
-//! [`MAX_TRIANGLES`] triangles, or a mesh that is not the binary tree's source is a typed
-//! error returned **before anything is written**.
+//! [`WideBvh::from_binary`] collapses a built binary tree over a
+//! [`TriangleMesh`](crate::bvh::TriangleMesh): each wide node takes its binary node's two
+//! children and, while it has fewer than `W`, replaces the inner child with the largest
+//! surface area by that child's two children (ties: the first). A binary subtree of at most
+//! [`LEAF_MERGE`] triangles becomes one leaf slot (its triangles in a row), and slots still
+//! free then go to opening the leaf runs of more than [`LEAF_OPEN_ABOVE`] triangles into
+//! their two subtrees, largest surface area first. The caller passes node storage of at
+//! least [`WideBvh::node_count_for`]`(binary)` nodes (exact; [`node_capacity`] is a bound
+//! that needs no binary tree) and triangle storage of at least
+//! [`WideBvh::group_count_for`]`(binary)` groups (exact; [`group_capacity`]`(N)` always
+//! suffices). Too little storage, a binary leaf of more than [`MAX_LEAF_TRIANGLES`]
+//! primitives, more than [`MAX_TRIANGLES`] triangles, or a mesh that is not the binary
+//! tree's source is a typed error returned **before anything is written**.
 //!
 //! # Layout and size
 //!
@@ -108,9 +109,9 @@ pub const WIDE_INTERSECTION_COST: f32 = 0.3;
 /// [`LEAF_OPEN_ABOVE`] (every node of more triangles is split, so that a merged leaf run of
 /// more can be opened; splitting smaller ones is wasted work, as the collapse makes every
 /// subtree of at most [`LEAF_MERGE`] triangles one leaf run and opens only larger runs), and
-/// the SAH's primitive cost at [`WIDE_INTERSECTION_COST`]. Splits are made where the SAH puts them
-/// (their position does not depend on the leaf sizes), so the collapse gives the same wide
-/// tree as from a binary tree split down to single triangles, but for the order of the
+/// the SAH's primitive cost at [`WIDE_INTERSECTION_COST`]. Splits are made where the SAH puts
+/// them (their position does not depend on the leaf sizes), so the collapse gives the same
+/// wide tree as from a binary tree split down to single triangles, but for the order of the
 /// triangles inside a leaf.
 #[must_use]
 pub const fn binary_options(options: crate::bvh::BuildOptions) -> crate::bvh::BuildOptions {
