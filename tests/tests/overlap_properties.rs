@@ -17,6 +17,7 @@ use glam::{Quat, Vec3};
 use halfray_core::aabb::Aabb;
 use halfray_core::volume::{BoundingSphere, Capsule, Obb};
 use halfray_fuzz_props::overlap::{Volume, build, check_pair, overlap_witness};
+use halfray_tests::exact::ulp;
 use proptest::prelude::*;
 
 /// Raw parameters of one volume: kind, `p`, `q`, sizes, rotation (axis, angle).
@@ -214,7 +215,7 @@ fn sphere_not_loose(pts: &[Vec3], s: BoundingSphere) -> bool {
     let b = Aabb::from_points(pts);
     let half = (b.max.as_dvec3() - b.min.as_dvec3()).length() * 0.5;
     let far = b.min.abs().max(b.max.abs()).max_element();
-    let centre_rounding = 3f64.sqrt() * 0.5 * f64::from(far.next_up() - far);
+    let centre_rounding = 3f64.sqrt() * 0.5 * ulp(far);
     let bound = (2.0 * half + centre_rounding) * (1.0 + halfray_core::volume::FIT_PAD_REL);
     f64::from(s.radius().next_down()) < bound
 }
