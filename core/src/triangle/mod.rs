@@ -39,7 +39,10 @@ pub use cramer::Cramer;
 pub use lanes::{LANES, TriangleLanes, pair_mask};
 pub use moller_trumbore::MollerTrumbore;
 pub use reference::F64Reference;
+pub(crate) use watertight::{PlaneForm, finish_exact, plane_crossing};
 pub use watertight::{ShearedTest, Watertight, WatertightF32, WatertightRay};
+#[cfg(target_arch = "x86_64")]
+pub(crate) use watertight::{TINY, finish_exact_at};
 pub use watertight_f32_exact::WatertightF32Exact;
 
 use crate::float::gamma;
@@ -122,6 +125,20 @@ pub trait TriangleIntersector: Copy + Send + Sync {
         ray: &Ray,
         v: &[Vec3; 3],
     ) -> Option<TriangleHit>;
+
+    /// [`TriangleIntersector::intersect_prepared`] at SIMD `level` (the same answer at every
+    /// level). The default ignores the level.
+    #[inline(always)]
+    fn intersect_prepared_on<L: crate::simd_level::SimdLevel>(
+        &self,
+        level: L,
+        pre: &Self::Prepared,
+        ray: &Ray,
+        v: &[Vec3; 3],
+    ) -> Option<TriangleHit> {
+        let _ = level;
+        self.intersect_prepared(pre, ray, v)
+    }
 
     /// The lanes of `lanes` that this test certainly misses (bit `i` for lane `i`), decided
     /// for all of them at once with vector instructions, so that a BVH leaf calls
@@ -342,7 +359,7 @@ pub(crate) fn normal_f64_from_v0(v: &[Vec3; 3]) -> Option<(glam::DVec3, glam::DV
 /// Relative size below which a component of the `v0`-based normal is taken as cancelled and
 /// the normal recomputed from the best base vertex: `2⁻²⁰` of that component's rounding scale
 /// (`|e1| × |e2|` with absolute values). Unitless.
-const NORMAL_CANCEL_REL: f64 = 1.0 / 1_048_576.0;
+pub(crate) const NORMAL_CANCEL_REL: f64 = 1.0 / 1_048_576.0;
 
 /// `(e1 × e2, |e1| × |e2|)`, the second taken with absolute values.
 #[inline]
@@ -359,7 +376,7 @@ fn cross_with_scale(e1: glam::DVec3, e2: glam::DVec3) -> (glam::DVec3, glam::DVe
 /// [`TriangleHit::ng`]: `ng32` (the `f32` cross product) when it is finite and non-zero,
 /// otherwise the `f64` normal scaled by its largest component (found by the `bvh` fuzz target:
 /// an overflowing `f32` cross product gave a NaN normal).
-#[inline]
+#[inline(always)]
 pub(crate) fn geometric_normal(v: &[Vec3; 3], ng32: Vec3) -> Vec3 {
     if ng32.is_finite() && ng32 != Vec3::ZERO {
         return ng32;

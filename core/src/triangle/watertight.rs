@@ -5,7 +5,7 @@ use crate::float::{diff_of_products_exact_sign, diff_of_products_sign_filter, ga
 use crate::predicates::ORIENT3D_FILTER_REL;
 use crate::ray::Ray;
 use crate::simd::F32x4;
-use crate::simd::level::{Sheared8, SimdLevel};
+use crate::simd::level::{Portable, Sheared8, SimdLevel};
 use glam::{DVec3, Vec3};
 
 /// Per-ray data of the watertight test: the axis permutation that makes the largest direction
@@ -238,7 +238,7 @@ pub struct WatertightF32;
 /// Absolute floor of the projection error bounds: the `f32` subnormal spacing `2⁻¹⁴⁹`, times 4
 /// (each projected value carries up to three roundings that may be absolute below the normal
 /// range). World units (sheared).
-const TINY: f64 = 4.0 * 1.401_298_464_324_817e-45;
+pub(crate) const TINY: f64 = 4.0 * 1.401_298_464_324_817e-45;
 
 /// Relative bound below which the plane-form `t` is returned without evaluating the sheared
 /// form: `2⁻²⁶`, a quarter of the `f32` unit roundoff, so the final rounding to `f32` dominates
@@ -251,21 +251,38 @@ const PLANE_EXACT_ENOUGH: f64 = 1.0 / 67_108_864.0;
 const AGREE_REL: f64 = 1.0 / 1_048_576.0;
 
 /// [`hit_t`]'s common case, or `None` for the others: the `v0`-based normal does not cancel,
-/// `d·n` clears its filter, the plane crossing lies in the triangle's box, and the plane form
-/// is exact enough ([`plane_exact_enough`]). Each step is the one [`hit_t`] takes, so where
-/// this returns `t`, `hit_t` returns the same `t`.
+/// `d·n` clears its filter ([`plane_crossing`], at `level`: the same bits at every level), the
+/// plane crossing lies in the triangle's box, and the plane form is exact enough
+/// ([`plane_exact_enough`]). Each step is the one [`hit_t`] takes, so where this returns `t`,
+/// `hit_t` returns the same `t`.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn common_t(ray: &Ray, z: [f32; 3], edges: [f64; 3], det: f64, v: &[Vec3; 3]) -> Option<f64> {
+fn common_t<L: SimdLevel>(
+    level: L,
+    ray: &Ray,
+    z: [f32; 3],
+    edges: [f64; 3],
+    det: f64,
+    v: &[Vec3; 3],
+) -> Option<f64> {
+    let plane = level.plane_crossing(v, ray)?;
+    let t_sheared = sheared_t(edges, z, det);
+    (plane.in_box && plane_exact_enough(&plane, t_sheared, z)).then_some(plane.t)
+}
+
+/// The plane form of `t` for the ray `ray` and the triangle `v` when the `v0`-based normal
+/// does not cancel ([`super::normal_f64_from_v0`]) and `d·n` clears the filter of the exact
+/// orientation predicate; `None` otherwise (then [`hit_t`] decides). The portable
+/// definition of [`crate::simd_level`]'s plane kernels: each level returns these bits.
+#[inline(always)]
+pub(crate) fn plane_crossing(v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {
     let normal = super::normal_f64_from_v0(v)?;
     let d = ray.direction.as_dvec3();
     let dn = d.dot(normal.0);
     if !(dn.abs() > ORIENT3D_FILTER_REL * d.abs().dot(normal.1)) {
         return None;
     }
-    let plane = plane_form(ray, v, normal, d, dn);
-    let t_sheared = sheared_t(edges, z, det);
-    (plane.in_box && plane_exact_enough(&plane, t_sheared, z)).then_some(plane.t)
+    Some(plane_form(ray, v, normal, d, dn))
 }
 
 /// The sheared form of `t`: `Σ eᵢzᵢ / det` in `f64` (see [`hit_t`]).
@@ -276,14 +293,15 @@ fn sheared_t(edges: [f64; 3], z: [f32; 3], det: f64) -> f64 {
 
 /// The plane form of `t` ([`hit_t`]) and its error bound, and whether its crossing lies in
 /// the triangle's box up to rounding.
-struct PlaneForm {
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlaneForm {
     /// `((v0 − o)·n)/(d·n)`, ray parameter.
-    t: f64,
+    pub t: f64,
     /// Bound on the error of `t`, ray parameter.
-    err: f64,
+    pub err: f64,
     /// The crossing `o + d·t` lies in the triangle's box, padded by `γ₈` of the coordinates'
     /// magnitude and [`TINY`].
-    in_box: bool,
+    pub in_box: bool,
 }
 
 /// [`PlaneForm`] of the triangle `v` with normal `n` and its scale `nn`
@@ -438,11 +456,13 @@ fn hit_t(
     })
 }
 
-/// The exact edge functions' verdict, then the hit: `t` ([`hit_t`]), barycentrics and normal.
-/// Out of line on x86-64, inlined elsewhere: see [`exact_candidate`].
-#[cfg_attr(target_arch = "x86_64", inline(never))]
-#[cfg_attr(not(target_arch = "x86_64"), inline)]
-fn finish_exact(
+/// The exact edge functions' verdict, then the hit: `t` ([`hit_t`]), barycentrics and normal,
+/// with the common case of `t` at `level` ([`common_t`], x86-64 only; the same bits at every
+/// level). Each level compiles it with its own target features
+/// ([`crate::simd_level`]'s `finish_exact`), so that its plane kernel inlines here.
+#[inline(always)]
+pub(crate) fn finish_exact_at<L: SimdLevel>(
+    level: L,
     ray: &Ray,
     pre: &WatertightRay,
     sheared: ([f32; 3], [f32; 3], [f32; 3]),
@@ -462,9 +482,12 @@ fn finish_exact(
     // On x86-64 the common case of `t` first, alone (see `hit_t`); elsewhere `hit_t` only
     // (the Cortex-M4F image's size).
     #[cfg(target_arch = "x86_64")]
-    let common = common_t(ray, sheared.2, edges, det, v);
+    let common = common_t(level, ray, sheared.2, edges, det, v);
     #[cfg(not(target_arch = "x86_64"))]
-    let common = None;
+    let common = {
+        let _ = level;
+        None
+    };
     let t64 = match common {
         Some(t) => t,
         None => hit_t(
@@ -491,6 +514,20 @@ fn finish_exact(
         // clockwise in the sheared plane, i.e. when its normal opposes the ray.
         front_face: det > 0.0,
     })
+}
+
+/// [`finish_exact_at`] at the [`Portable`] level: out of line on x86-64, inlined elsewhere
+/// (see [`exact_candidate`]).
+#[cfg_attr(target_arch = "x86_64", inline(never))]
+#[cfg_attr(not(target_arch = "x86_64"), inline)]
+pub(crate) fn finish_exact(
+    ray: &Ray,
+    pre: &WatertightRay,
+    sheared: ([f32; 3], [f32; 3], [f32; 3]),
+    edges: [f64; 3],
+    v: &[Vec3; 3],
+) -> Option<TriangleHit> {
+    finish_exact_at(Portable, ray, pre, sheared, edges, v)
 }
 
 /// The three edge functions `e0 = c_x·b_y − c_y·b_x`, `e1 = a_x·c_y − a_y·c_x`,
@@ -540,6 +577,20 @@ pub trait ShearedTest: Copy + Send + Sync {
 
     /// [`TriangleIntersector::intersect_prepared`].
     fn hit_sheared(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit>;
+
+    /// [`ShearedTest::hit_sheared`] at SIMD `level` (the same answer at every level). The
+    /// default ignores the level.
+    #[inline(always)]
+    fn hit_sheared_on<L: SimdLevel>(
+        &self,
+        level: L,
+        pre: &WatertightRay,
+        ray: &Ray,
+        v: &[Vec3; 3],
+    ) -> Option<TriangleHit> {
+        let _ = level;
+        self.hit_sheared(pre, ray, v)
+    }
 }
 
 impl<T: ShearedTest> TriangleIntersector for T {
@@ -570,6 +621,17 @@ impl<T: ShearedTest> TriangleIntersector for T {
     }
 
     #[inline(always)]
+    fn intersect_prepared_on<L: SimdLevel>(
+        &self,
+        level: L,
+        pre: &WatertightRay,
+        ray: &Ray,
+        v: &[Vec3; 3],
+    ) -> Option<TriangleHit> {
+        self.hit_sheared_on(level, pre, ray, v)
+    }
+
+    #[inline(always)]
     fn certain_misses(&self, pre: &WatertightRay, ray: &Ray, lanes: &TriangleLanes) -> u32 {
         pre.certain_misses(ray.origin, lanes)
     }
@@ -592,13 +654,24 @@ impl ShearedTest for Watertight {
 
     #[inline(always)]
     fn hit_sheared(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
+        self.hit_sheared_on(Portable, pre, ray, v)
+    }
+
+    #[inline(always)]
+    fn hit_sheared_on<L: SimdLevel>(
+        &self,
+        level: L,
+        pre: &WatertightRay,
+        ray: &Ray,
+        v: &[Vec3; 3],
+    ) -> Option<TriangleHit> {
         let sheared = pre.project_triangle(ray.origin, v);
         // Most triangles are missed with two certain, opposite signs: decide those in f32
         // (a certain sign is exact) and compute the exact f64 edges only for the rest.
         if mixed_signs(&filter_edges(sheared.0, sheared.1)) {
             return None;
         }
-        exact_candidate(ray, pre, sheared, v)
+        exact_candidate(level, ray, pre, sheared, v)
     }
 }
 
@@ -616,29 +689,32 @@ fn permuted_rows(lanes: &TriangleLanes, k: [usize; 3]) -> [[&[f32; LANES]; 3]; 3
 }
 
 /// The rest of [`Watertight`] for a triangle the `f32` filter did not reject: exact `f64`
-/// edge functions, then [`finish_exact`]. Most tested triangles never get here.
+/// edge functions, then [`finish_exact_at`] at `level`. Most tested triangles never get here.
 ///
 /// Where the hit path is split differs by target (the same code, so the same answers):
 /// - **x86-64:** one call per candidate. The exact edge functions and their sign checks are
 ///   inlined into the caller (in the frontend, the AVX2 + FMA traversal), and the rest,
-///   [`finish_exact`] with the common case of `t` ([`common_t`]) inlined, is one out-of-line
-///   function ([`hit_t`] is a cold call from it for the other cases). Measured interleaved
-///   with Embree on the same rays, against two calls (this function and `hit_t` out of line,
-///   each passing the sheared coordinates by value): closest hit +3.7 % (bunny, random
-///   rays), +4.4 % (bunny, camera rays), +2.4 % (dragon, random); against inlining all of it
-///   (the traversal loop grows): +3 %.
+///   [`finish_exact_at`] with the common case of `t` ([`common_t`]) inlined, is one
+///   out-of-line function per level ([`finish_exact`] for [`Portable`]; at the AVX2 level one
+///   compiled for AVX2 and FMA, whose `f64` plane kernel inlines into it); [`hit_t`] is a
+///   cold call from it for the other cases. Measured interleaved with Embree on the same
+///   rays, against two calls (this function and `hit_t` out of line, each passing the
+///   sheared coordinates by value): closest hit +3.7 % (bunny, random rays), +4.4 % (bunny,
+///   camera rays), +2.4 % (dragon, random); against inlining all of it (the traversal loop
+///   grows): +3 %.
 /// - **Elsewhere:** this function and `hit_t` out of line, which keeps the miss path of a
 ///   microcontroller's traversal small (the Cortex-M4F image's 8 KiB budget, README).
 #[cfg_attr(target_arch = "x86_64", inline(always))]
 #[cfg_attr(not(target_arch = "x86_64"), inline(never))]
-fn exact_candidate(
+fn exact_candidate<L: SimdLevel>(
+    level: L,
     ray: &Ray,
     pre: &WatertightRay,
     sheared: ([f32; 3], [f32; 3], [f32; 3]),
     v: &[Vec3; 3],
 ) -> Option<TriangleHit> {
     let edges = exact_edges(sheared.0, sheared.1);
-    finish_exact(ray, pre, sheared, edges, v)
+    level.finish_exact(ray, pre, sheared, edges, v)
 }
 
 /// All three `f32` edge functions non-zero and finite skip the exact recomputation, so mixed

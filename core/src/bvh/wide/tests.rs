@@ -144,7 +144,8 @@ fn check_against_brute<const W: usize>(n: usize, seed: u64, max_leaf: u32) {
     assert!(hits >= want, "the rays must hit something: {hits} of 3000");
 }
 
-/// The AVX2 node kernel (where the CPU has it) gives the portable answers and statistics.
+/// The AVX2 kernels (where the CPU has them: node test, key sort, lane cull, the hit's plane
+/// form of `t`) give the portable answers, bit for bit, and statistics.
 fn same_at_every_level<const W: usize>(w: &VecWide<W>, ray: &Ray) {
     #[cfg(target_arch = "x86_64")]
     if let Some(level) = crate::simd_level::Avx2Fma::detect() {

@@ -93,8 +93,15 @@ fn sorted_keys<const W: usize, L: SimdLevel>(level: L, dist: &[f32; W], hits: u3
 /// with always-inlined methods rather than closures, so that the test is compiled into the
 /// traversal loop (a called closure returns its hit through memory).
 trait LeafTest<H> {
-    /// `(t, payload)` of a hit of triangle `prim` (vertices `v`) in `ray`'s interval.
-    fn intersect(&mut self, prim: u32, v: &[Vec3; 3], ray: &Ray) -> Option<(f32, H)>;
+    /// `(t, payload)` of a hit of triangle `prim` (vertices `v`) in `ray`'s interval, with the
+    /// kernels of SIMD `level` where the test has them (the same answer at every level).
+    fn intersect<L: SimdLevel>(
+        &mut self,
+        level: L,
+        prim: u32,
+        v: &[Vec3; 3],
+        ray: &Ray,
+    ) -> Option<(f32, H)>;
     /// The lanes certainly missed ([`TriangleIntersector::certain_misses`]).
     fn cull(&self, lanes: &TriangleLanes, ray: &Ray) -> u32;
     /// The lanes of two groups certainly missed, `first`'s in bits 0–3 and `second`'s in
@@ -113,7 +120,13 @@ struct ClosureTest<F>(F);
 
 impl<H, F: FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>> LeafTest<H> for ClosureTest<F> {
     #[inline(always)]
-    fn intersect(&mut self, prim: u32, v: &[Vec3; 3], ray: &Ray) -> Option<(f32, H)> {
+    fn intersect<L: SimdLevel>(
+        &mut self,
+        _: L,
+        prim: u32,
+        v: &[Vec3; 3],
+        ray: &Ray,
+    ) -> Option<(f32, H)> {
         (self.0)(prim, v, ray)
     }
 
@@ -151,8 +164,14 @@ impl<'a, I: TriangleIntersector> PreparedTest<'a, I> {
 
 impl<I: TriangleIntersector> LeafTest<TriangleHit> for PreparedTest<'_, I> {
     #[inline(always)]
-    fn intersect(&mut self, _: u32, v: &[Vec3; 3], ray: &Ray) -> Option<(f32, TriangleHit)> {
-        let hit = self.isect.intersect_prepared(&self.pre, ray, v)?;
+    fn intersect<L: SimdLevel>(
+        &mut self,
+        level: L,
+        _: u32,
+        v: &[Vec3; 3],
+        ray: &Ray,
+    ) -> Option<(f32, TriangleHit)> {
+        let hit = self.isect.intersect_prepared_on(level, &self.pre, ray, v)?;
         Some((hit.t, hit))
     }
 
@@ -516,7 +535,8 @@ where
                                 break;
                             };
                             let prim = tri.prim;
-                            let Some((t, h)) = leaf.intersect(prim, &tri.vertices(), &cur) else {
+                            let Some((t, h)) = leaf.intersect(level, prim, &tri.vertices(), &cur)
+                            else {
                                 continue;
                             };
                             if take_if_better(&mut cur, &mut best, prim, t, h) {
