@@ -297,6 +297,9 @@ pub fn check(s: &Soup) {
 
 /// [`check_ray`]'s properties for the 8-wide tree: closest hit equal to brute force in the
 /// same domain, a genuine hit no nearer than brute force's elsewhere; any-hit agreement.
+/// Where the CPU has AVX2 and FMA, the queries at that SIMD level (the frontend's: node test,
+/// child sort, lane cull and the hit's `f64` plane kernel) must return the portable answers,
+/// bit for bit.
 fn check_wide<T: TriangleIntersector>(
     wide: &Bvh8<Vec<WideNode<8>>, Vec<LeafGroup>>,
     oracle: &Oracle<'_, '_>,
@@ -306,6 +309,30 @@ fn check_wide<T: TriangleIntersector>(
 ) {
     let got = wide.closest_hit_triangles(isect, ray, None);
     let any = wide.any_hit_triangles(isect, ray, None);
+    #[cfg(target_arch = "x86_64")]
+    if let Some(level) = halfray::simd::avx2_fma() {
+        let mut stack = halfray_core::bvh::wide::WideStack::new();
+        let simd = wide.closest_hit_triangles_on(level, &mut stack, isect, ray, None);
+        let bits = |h: Option<(u32, halfray_core::triangle::TriangleHit)>| {
+            h.map(|(p, h)| {
+                (
+                    p,
+                    h.t.to_bits(),
+                    h.b1.to_bits(),
+                    h.b2.to_bits(),
+                    h.ng.to_array().map(f32::to_bits),
+                    h.front_face,
+                )
+            })
+        };
+        assert_eq!(bits(simd), bits(got), "AVX2 level's closest hit: {ray:?}");
+        let simd_any = wide.any_hit_triangles_on(level, &mut stack, isect, ray, None);
+        assert_eq!(
+            simd_any.is_some(),
+            any.is_some(),
+            "AVX2 level's any hit: {ray:?}"
+        );
+    }
     oracle.assert_answers(isect, ray, exact, "wide BVH", got, any);
 }
 
