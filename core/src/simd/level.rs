@@ -238,8 +238,7 @@ fn finish_exact_avx2(
 }
 
 /// [`crate::triangle::plane_crossing`] in 256-bit registers: each 3-vector in the lanes
-/// `x, y, z` of one `f64` register (the fourth lane holds a neighbour's value and is never
-/// read back), the same IEEE operations in the same order as the portable definition —
+/// `x, y, z` of one `f64` register (the fourth lane zero, never read back), the same IEEE operations in the same order as the portable definition —
 /// products, differences and dot products summed `(x + y) + z`, never fused; `min`, `max` as
 /// `a < b ? a : b`, `a > b ? a : b` (`minps`, `maxps`, `maxsd`), NaN handling included — so
 /// the same bits.
@@ -257,9 +256,7 @@ fn plane_crossing_avx2(v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {
         _mm256_extractf128_pd, _mm256_max_pd, _mm256_movemask_pd, _mm256_mul_pd,
         _mm256_permute4x64_pd, _mm256_set1_pd, _mm256_setzero_pd, _mm256_sub_pd,
     };
-    // Built lane by lane: the caller has just stored the vertices one `f32` at a time, and a
-    // 16-byte load spanning those stores would wait for them to retire (a failed
-    // store-to-load forward, measured 4 % slower over a hot cache).
+    // Built lane by lane from the fields (no load spans two vertices, and no pointer cast).
     let lanes = |p: Vec3| _mm_setr_ps(p.x, p.y, p.z, 0.0);
     let (f0, f1, f2) = (lanes(v[0]), lanes(v[1]), lanes(v[2]));
     let (o, d) = (
