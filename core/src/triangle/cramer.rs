@@ -11,7 +11,11 @@ use glam::Vec3;
 ///
 /// Unlike Möller–Trumbore it evaluates `t` from the plane normal rather than from the reused
 /// cross product `q`, which changes its rounding behaviour, not its guarantees: **not
-/// watertight**; only `det = 0` (or NaN) is rejected, without an epsilon.
+/// watertight**; only `det = 0` (or NaN) is rejected, without an epsilon. Domain: every
+/// product is `f32`, so `det`'s sign (and [`TriangleHit::front_face`]) is the exact one's only
+/// while `|e1 × e2|` and `|d·(e1 × e2)|` stay in the normal range; below it (a configuration
+/// at the 1e-15 scale seen along a 1e-15 direction) the rounding is absolute and the sign
+/// may flip.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Cramer;
 

@@ -11,7 +11,9 @@ use glam::Vec3;
 /// Valid hit: `|det| > det_epsilon`, `t ∈ (t_min, t_max]`, `b1 ≥ 0`, `b2 ≥ 0`, `b1 + b2 ≤ 1`.
 /// **Not watertight:** the third edge is tested as a rounded sum and neighbouring triangles
 /// evaluate a shared edge from different base vertices, so rays through shared edges and
-/// vertices can miss both triangles (the test suite counts these leaks).
+/// vertices can miss both triangles (the test suite counts these leaks). Its determinant
+/// `e1·(d × e2)` is `f32` products: its sign ([`TriangleHit::front_face`]) is exact only
+/// while they stay in the normal range (as [`super::Cramer`]'s).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MollerTrumbore {
     /// Determinant threshold: `|det| ≤ det_epsilon` means "parallel or degenerate". Absolute,

@@ -119,6 +119,17 @@ pub fn f32_products_in_range(ray: &Ray, v: &[Vec3; 3]) -> bool {
     })
 }
 
+/// The smallest magnitude of the `f32` products behind an `f32` variant's orientation
+/// (`e1 × e2`, about `M²`, and `d·(e1 × e2)`, about `M²·|d|`; `M` the largest `|vᵢ − o|`) for
+/// which the orientation check holds it to the sign of the exact `d·n`: `2⁻¹⁰²`, the
+/// smallest normal `f32` times `2²⁴`. At or above it, the absolute error of an intermediate
+/// that underflows (at most `2⁻¹⁵⁰` per operation) is below `2⁻⁴⁸` of the product, inside the
+/// check's relative margin; below it, a variant's `f32` determinant can round to a subnormal
+/// of either sign (the `f32` variants' docs: products must stay in the normal range; kept:
+/// `cramer-det-underflows-front-face`, a 1e-15 triangle seen along a 1e-15 direction, whose
+/// triple product is 1e-45). Same units as `M²·|d|` (length² × |direction|).
+const ORIENTATION_PRODUCT_FLOOR: f64 = f32::MIN_POSITIVE as f64 * 16_777_216.0;
+
 fn check_hit_contract(
     ray: &Ray,
     v: &[Vec3; 3],
@@ -152,7 +163,9 @@ fn check_hit_contract(
     // rigorous bound on its own rounding, since the f64 differences of far-apart f32 values are
     // not exact) is clear, the angle is not grazing (|cos| > 1e-3), and the triangle is not a
     // sliver relative to its distance from the origin (|n| ≥ 1e-2·M², M = max |vᵢ − o|), so
-    // that f32 rounding of any variant (≈ 6u·M²·|d|) cannot flip it.
+    // that f32 rounding of any variant (≈ 6u·M²·|d|) cannot flip it; and the f32 products
+    // behind an f32 variant's determinant (M², M²·|d|) are at least
+    // `ORIENTATION_PRODUCT_FLOOR`, so that no underflow makes that rounding absolute.
     let u64 = F64_UNIT_ROUNDOFF;
     let e1 = v[1].as_dvec3() - v[0].as_dvec3();
     let e2 = v[2].as_dvec3() - v[0].as_dvec3();
@@ -171,7 +184,10 @@ fn check_hit_contract(
         .iter()
         .map(|p| (p.as_dvec3() - o).length())
         .fold(0.0, f64::max);
-    let tame = (1e-18..=1e18).contains(&m) && (1e-18..=1e18).contains(&d.length());
+    let tame = (1e-18..=1e18).contains(&m)
+        && (1e-18..=1e18).contains(&d.length())
+        && m * m >= ORIENTATION_PRODUCT_FLOOR
+        && m * m * d.length() >= ORIENTATION_PRODUCT_FLOOR;
     if tame
         && dn.abs() > 2.0 * dn_err
         && dn.abs() > 1e-3 * d.length() * n.length()
