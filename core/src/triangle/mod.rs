@@ -319,7 +319,8 @@ pub(crate) fn degenerate_or_coplanar(ray: &Ray, v: &[Vec3; 3]) -> bool {
 /// From `v0` of a sliver whose other two vertices are tiny against it, both differences round
 /// to `−v0` and the cross product is exactly zero (found by the `ray_triangle` fuzz target).
 /// Also returns `|e1| × |e2|` taken with absolute values (the scale of `n`'s rounding).
-/// Always inlined on x86-64, into the out-of-line end of the hit path (`watertight::finish_exact`).
+/// Always inlined on x86-64, into each level's out-of-line end of the hit path
+/// (`watertight::finish_exact_at`).
 #[cfg_attr(target_arch = "x86_64", inline(always))]
 #[cfg_attr(not(target_arch = "x86_64"), inline)]
 pub(crate) fn normal_f64(v: &[Vec3; 3]) -> (glam::DVec3, glam::DVec3) {

@@ -356,7 +356,7 @@ fn plane_exact_enough(plane: &PlaneForm, t_sheared: f64, z: [f32; 3]) -> bool {
 /// the exact `d·n` is not zero (its `f64` normal cancelled: vertices spanning more than `2²⁹`),
 /// the sheared form is the answer.
 // Only hits get here, and on x86-64 only those whose `t` is not the common case
-// ([`common_t`], tried first by `finish_exact`): there a cold call that starts over, so the
+// ([`common_t`], tried first by `finish_exact_at`): there a cold call that starts over, so the
 // hot path keeps only its own values in registers. Out of line elsewhere too: see
 // `exact_candidate`.
 #[cfg_attr(target_arch = "x86_64", cold, inline(never))]
