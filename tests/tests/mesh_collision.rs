@@ -15,8 +15,8 @@ use halfray::accel::{VecBvh, build_binary};
 use halfray::obj::read_obj;
 use halfray_core::bvh::{BuildOptions, TriangleMesh};
 use halfray_core::collide::{
-    Body, colliding_pairs, first_contact, is_degenerate, min_distance, triangle_distance,
-    triangles_intersect,
+    Body, DISTANCE_ERR_REL, colliding_pairs, first_contact, is_degenerate, min_distance,
+    triangle_distance, triangles_intersect,
 };
 use halfray_core::transform::Transform;
 use std::path::PathBuf;
@@ -221,8 +221,13 @@ fn soup(r: &mut Rng, n: u32, spread: f32, size: f32) -> (Vec<Vec3>, Vec<[u32; 3]
     (p, t)
 }
 
+/// The core's independent distance oracle (its unit tests' copy: one definition).
+#[path = "../../core/src/collide/tests/oracle.rs"]
+mod oracle;
+
 /// Brute force over all pairs: the sorted colliding pairs and the closest pair (ties: the
-/// smaller `(a, b)`).
+/// smaller `(a, b)`), the latter checked against the independent oracle's smallest distance
+/// within twice `DISTANCE_ERR_REL·(d + M)` (the function's bound and the oracle's rounding).
 fn brute(
     ma: &TriangleMesh<'_>,
     mb: &TriangleMesh<'_>,
@@ -230,6 +235,8 @@ fn brute(
 ) -> (Vec<(u32, u32)>, (f64, u32, u32)) {
     let mut pairs = Vec::new();
     let mut best = (f64::INFINITY, u32::MAX, u32::MAX);
+    // The oracle's smallest distance, and the largest coordinate magnitude seen.
+    let mut independent = (f64::INFINITY, 0.0f64);
     for i in 0..ma.len() {
         let x = ma.triangle(i).unwrap();
         for j in 0..mb.len() {
@@ -241,8 +248,16 @@ fn brute(
             if d < best.0 {
                 best = (d, i as u32, j as u32);
             }
+            independent.0 = independent.0.min(oracle::distance(&x, &y).0);
+            independent.1 = independent.1.max(oracle::magnitude(&x, &y));
         }
     }
+    let (o, m) = independent;
+    assert!(
+        (best.0 - o).abs() <= 2.0 * DISTANCE_ERR_REL * (o + m),
+        "brute force's {} against the oracle's {o}",
+        best.0
+    );
     (pairs, best)
 }
 

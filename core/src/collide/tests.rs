@@ -12,6 +12,9 @@ use glam::{Vec3, vec3};
 use std::vec;
 use std::vec::Vec;
 
+mod oracle;
+use oracle::Feature;
+
 /// `is_degenerate` decides collinearity exactly: a point one ulp off the line is not.
 #[test]
 fn is_degenerate_is_exact() {
@@ -247,6 +250,8 @@ fn traversal_equals_brute_force_on_small_soups() {
             .unwrap();
         let mut want = Vec::new();
         let mut best: Option<(f64, u32, u32)> = None;
+        // The oracle's smallest distance, and the largest coordinate magnitude seen.
+        let mut independent = (f64::INFINITY, 0.0f64);
         for i in 0..ta.len() {
             for j in 0..tb.len() {
                 let x = ma.triangle(i).unwrap();
@@ -258,6 +263,8 @@ fn traversal_equals_brute_force_on_small_soups() {
                 if best.is_none_or(|b| d < b.0) {
                     best = Some((d, i as u32, j as u32));
                 }
+                independent.0 = independent.0.min(oracle::distance(&x, &y).0);
+                independent.1 = independent.1.max(oracle::magnitude(&x, &y));
             }
         }
         pairs += want.len();
@@ -283,6 +290,12 @@ fn traversal_equals_brute_force_on_small_soups() {
         let (d, i, j) = best.unwrap();
         let c = min_distance(&a, &b, &tf, f64::INFINITY).unwrap().unwrap();
         assert_eq!((c.distance, c.a, c.b), (d, i, j), "round {round}");
+        let (o, m) = independent;
+        assert!(
+            (c.distance - o).abs() <= 2.0 * DISTANCE_ERR_REL * (o + m),
+            "round {round}: {} against the oracle's {o}",
+            c.distance
+        );
         assert_eq!(min_distance(&a, &b, &tf, d).unwrap(), Some(c));
         if d > 0.0 {
             assert_eq!(min_distance(&a, &b, &tf, d * 0.999).unwrap(), None);
@@ -325,4 +338,181 @@ fn errors_and_empty_inputs() {
     assert_eq!(first_contact(&body, &e, &id), Ok(None));
     assert_eq!(min_distance(&e, &body, &id, f64::INFINITY), Ok(None));
     assert!(std::format!("{}", CollideError::TreeTooDeep).contains("stack"));
+}
+
+/// `|got − want| ≤ 2·DISTANCE_ERR_REL·(want + M)`: the function's documented bound, doubled
+/// for the oracle's own `f64` rounding (of the same order).
+fn assert_near_oracle(a: &[Vec3; 3], b: &[Vec3; 3], what: &str) -> (f64, Feature) {
+    let (want, kind) = oracle::distance(a, b);
+    let bound = 2.0 * DISTANCE_ERR_REL * (want + oracle::magnitude(a, b));
+    for (x, y) in [(a, b), (b, a)] {
+        let got = triangle_distance(x, y);
+        assert!(
+            (got - want).abs() <= bound,
+            "{what}: {got:e} against the oracle's {want:e} ({kind:?}), bound {bound:e}: {x:?} {y:?}"
+        );
+    }
+    (want, kind)
+}
+
+/// The triangle's vertices in every order: three rotations, each also reversed.
+fn orders(t: [Vec3; 3]) -> [[Vec3; 3]; 6] {
+    [
+        t,
+        [t[1], t[2], t[0]],
+        [t[2], t[0], t[1]],
+        [t[0], t[2], t[1]],
+        [t[2], t[1], t[0]],
+        [t[1], t[0], t[2]],
+    ]
+}
+
+/// Two vertical triangles whose closest pair joins the interiors of two edges that are not
+/// perpendicular (53° apart): `A`'s edge `(−1, 0, 0)–(1, 0, 0)` (A below it, in `y = 0`) and
+/// `B`'s edge along `(3, 4, 0)` at `z = 1` (B above it, in a vertical plane). Every point of
+/// A has `z ≤ 0` and of B `z ≥ 1`, with equality only on those two edges, whose projections
+/// cross once: the distance is exactly 1, at edge parameters that move with B's shift. No
+/// vertex projects into the other face (all project beyond `z` range). In every vertex order
+/// of both triangles and both argument orders.
+#[test]
+fn interior_edge_edge_minimum_of_non_perpendicular_edges() {
+    let a = tri([-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]);
+    let b = tri([-1.0, -2.0, 1.0], [2.0, 2.0, 1.0], [0.5, 0.0, 2.0]);
+    for shift in [
+        vec3(0.0, 0.0, 0.0),
+        vec3(0.1, 0.3, 0.0),
+        vec3(-0.75, 0.5, 0.0),
+        vec3(-0.5, -1.0, 0.0),
+    ] {
+        let b = moved(b, shift);
+        for x in orders(a) {
+            for y in orders(b) {
+                assert_eq!(triangle_distance(&x, &y), 1.0, "{shift}: {x:?} {y:?}");
+                assert_eq!(triangle_distance(&y, &x), 1.0, "{shift}: {y:?} {x:?}");
+            }
+        }
+        assert_eq!(
+            assert_near_oracle(&a, &b, "vertical"),
+            (1.0, Feature::EdgeEdge)
+        );
+    }
+}
+
+/// A general skew case, no edge along an axis: `A`'s edge along `u = (2, 1, 2)` from the
+/// origin and `B`'s along `v = (2, −2, 1)` (`u·v = 4`, 64° apart), their common normal
+/// `n = u × v = (5, 2, −6)`. B's edge starts at `Q = u/4 − v/2 + n/8`, so the lines' closest
+/// pair is at parameters `1/4` and `1/2`, `|n|/8 = √65/8` apart; A's third vertex lies on the
+/// `−n` side of its edge, B's on the `+n` side, so the slab between the two edges' planes
+/// (normal `n`) separates the triangles and only those edges touch it: the distance is
+/// `√65/8`, at the edges' interiors. Every coordinate is dyadic, so exact in `f32`.
+#[test]
+fn interior_edge_edge_minimum_skew() {
+    let a = tri([0.0, 0.0, 0.0], [2.0, 1.0, 2.0], [-0.25, 0.0, 2.5]);
+    let b = tri(
+        [0.125, 1.5, -0.75],
+        [2.125, -0.5, 0.25],
+        [2.375, 1.0, -1.75],
+    );
+    let want = 65f64.sqrt() / 8.0;
+    for x in orders(a) {
+        for y in orders(b) {
+            for d in [triangle_distance(&x, &y), triangle_distance(&y, &x)] {
+                assert!((d - want).abs() <= 4.0 * f64::EPSILON, "{d} {want}");
+            }
+        }
+    }
+    let (d, kind) = assert_near_oracle(&a, &b, "skew");
+    assert_eq!(kind, Feature::EdgeEdge);
+    assert!((d - want).abs() <= 4.0 * f64::EPSILON);
+}
+
+/// Point-sized triangles (three equal vertices): against a triangle, the point–triangle
+/// distance (to the face, an edge's interior, a vertex; zero on it); between two points,
+/// their distance.
+#[test]
+fn point_sized_triangles() {
+    let point = |x: f32, y: f32, z: f32| [vec3(x, y, z); 3];
+    let cases = [
+        // Above the face.
+        (point(0.25, 0.25, 5.0), 5.0),
+        // Beyond the hypotenuse's interior: to (0.5, 0.5, 0), √(1.5² + 1.5² + 1).
+        (point(2.0, 2.0, 1.0), 5.5f64.sqrt()),
+        // Beyond the vertex (1, 0, 0): (3, −2, 0) away... √(4 + 4).
+        (point(3.0, -2.0, 0.0), 8f64.sqrt()),
+        // Below the leg y = 0, in the plane: 0.5.
+        (point(0.5, -0.5, 0.0), 0.5),
+        // On the face, on an edge, on a vertex: touching.
+        (point(0.25, 0.25, 0.0), 0.0),
+        (point(0.5, 0.5, 0.0), 0.0),
+        (point(0.0, 1.0, 0.0), 0.0),
+    ];
+    for (p, want) in cases {
+        for t in orders(A) {
+            for d in [triangle_distance(&p, &t), triangle_distance(&t, &p)] {
+                assert!((d - want).abs() <= 4.0 * f64::EPSILON, "{p:?}: {d} {want}");
+            }
+        }
+        assert_near_oracle(&p, &A, "point");
+    }
+    // Two points: 3-4-12 gives 13; the same point: 0.
+    let (p, q) = (point(1.0, 2.0, 3.0), point(4.0, 6.0, 15.0));
+    assert_eq!(triangle_distance(&p, &q), 13.0);
+    assert_eq!(triangle_distance(&p, &p), 0.0);
+    // A point against a segment-sized triangle: to its interior, and past its end.
+    let seg = tri([0.0, 0.0, 0.0], [4.0, 0.0, 0.0], [2.0, 0.0, 0.0]);
+    for s in orders(seg) {
+        assert_eq!(triangle_distance(&point(1.0, 3.0, 4.0), &s), 5.0);
+        assert_eq!(triangle_distance(&s, &point(7.0, 4.0, 0.0)), 5.0);
+    }
+}
+
+/// Random pairs of triangles, general and degenerate (segments, points, repeated vertices),
+/// touching, crossing, near and far, at scales 2⁻²⁰ to 2²⁰: `triangle_distance` within its
+/// documented bound of the oracle. The sample covers every kind of closest pair.
+#[test]
+fn distance_equals_the_independent_oracle_on_random_pairs() {
+    let mut s = 41u64;
+    let mut kinds = [0usize; 4];
+    let (mut skew_interior, mut degenerate, mut zero) = (0, 0, 0);
+    for k in 0..20_000 {
+        let scale = [1.0, 2f32.powi(-20), 2f32.powi(20)][k % 3];
+        // Integer vertices (exact touching and coplanar cases) or continuous ones.
+        let snapped = k % 2 == 0;
+        let mut t = |s: &mut u64| {
+            let mut v = |s: &mut u64, n: f32| {
+                if snapped {
+                    grid_point(s, n)
+                } else {
+                    vec3(lcg(s) - 0.5, lcg(s) - 0.5, lcg(s) - 0.5) * 2.0 * n
+                }
+            };
+            let c = v(s, 2.0);
+            [0; 3].map(|_| c + v(s, 1.0))
+        };
+        let (mut a, mut b) = (t(&mut s), t(&mut s));
+        match k % 7 {
+            0 => b[2] = b[1],
+            1 => a = [a[0]; 3],
+            2 => b[2] = b[0].lerp(b[1], 0.25),
+            3 => {
+                // Both points, or a point and a segment.
+                a = [a[0]; 3];
+                b = [b[0], b[1], b[1]];
+            }
+            _ => {}
+        }
+        let (a, b) = (a.map(|v| v * scale), b.map(|v| v * scale));
+        degenerate += usize::from(is_degenerate(&a) || is_degenerate(&b));
+        let (d, kind) = assert_near_oracle(&a, &b, "random");
+        zero += usize::from(d == 0.0 || triangle_distance(&a, &b) == 0.0);
+        kinds[kind as usize] += 1;
+        if kind == Feature::EdgeEdge && !is_degenerate(&a) && !is_degenerate(&b) {
+            skew_interior += 1;
+        }
+    }
+    assert!(kinds.iter().all(|&n| n > 50), "{kinds:?}");
+    assert!(
+        skew_interior > 1000 && degenerate > 5000 && zero > 100,
+        "{skew_interior} {degenerate} {zero}"
+    );
 }
