@@ -478,8 +478,8 @@ fn distance_equals_the_independent_oracle_on_random_pairs() {
         let scale = [1.0, 2f32.powi(-20), 2f32.powi(20)][k % 3];
         // Integer vertices (exact touching and coplanar cases) or continuous ones.
         let snapped = k % 2 == 0;
-        let mut t = |s: &mut u64| {
-            let mut v = |s: &mut u64, n: f32| {
+        let t = |s: &mut u64| {
+            let v = |s: &mut u64, n: f32| {
                 if snapped {
                     grid_point(s, n)
                 } else {
