@@ -30,6 +30,18 @@ pub fn bounded_lines(s: &str, max: usize, keep_newlines: bool) -> String {
     out
 }
 
+/// `s` with every control character escaped (line breaks too), whole: a name or string from
+/// input, safe to print inside a message or a table.
+pub fn escaped(s: &str) -> String {
+    bounded_lines(s, usize::MAX, false)
+}
+
+/// A path for a message: [`escaped`] (lossy UTF-8), so a file name cannot move the cursor,
+/// set the terminal title or start a line of its own.
+pub fn path(p: &std::path::Path) -> String {
+    escaped(&p.to_string_lossy())
+}
+
 /// An offending token for a message: [`bounded`] to [`MAX_EXCERPT_CHARS`].
 pub fn excerpt(s: &str) -> String {
     bounded(s, MAX_EXCERPT_CHARS)
@@ -48,5 +60,9 @@ mod tests {
         assert!(e.len() < 80, "{}", e.len());
         assert!(e.ends_with("… (10000000 bytes in all)"), "{e}");
         assert_eq!(bounded("héllo", 2), "hé… (6 bytes in all)");
+        assert_eq!(
+            path(std::path::Path::new("a\nerror: \u{1b}]0;x\u{7}")),
+            "a\\nerror: \\u{1b}]0;x\\u{7}"
+        );
     }
 }

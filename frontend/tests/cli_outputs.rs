@@ -182,19 +182,22 @@ fn sigterm_during_a_render_leaves_no_temporary_file() {
             "4000",
             "--height",
             "3000",
-            "--quiet"
         ])
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    // The temporary file is created when the output is reserved, before rendering.
-    let t0 = Instant::now();
-    while files(dir.path()).len() < 2 {
-        assert!(t0.elapsed() < EXIT_WAIT, "no temporary file appeared");
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    // The output was checked (a temporary file made and removed) before `rendering …`.
+    let mut err = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    std::io::BufRead::read_line(&mut err, &mut line).unwrap();
+    assert!(line.starts_with("rendering"), "{line}");
     assert!(child.try_wait().unwrap().is_none(), "still rendering");
+    assert_eq!(
+        files(dir.path()),
+        ["out.png"],
+        "no temporary file while working"
+    );
     let kill = Command::new("kill")
         .args(["-TERM", &child.id().to_string()])
         .status()

@@ -1,22 +1,30 @@
-//! One output file, reserved before the work and written after it.
+//! One output file, checked before the work and written after it.
 //!
 //! [`OutputFile::reserve`] checks the location (the folder exists, is a folder, takes a new
-//! file; the path is not a directory, not read-only, not hard-linked) and, for regular files,
-//! creates the temporary file the output will be written to, so every output a command
-//! will write is known to be writable before the command starts working. [`OutputFile::write`]
-//! then fills it:
+//! file: a temporary file is created there and removed at once; the path is not a directory,
+//! not read-only, not hard-linked), so every output a command will write is known to be
+//! writable before the command starts working. Nothing is left in the folder while the
+//! command works: the temporary file that will become the output is created only when
+//! writing starts. [`OutputFile::write`] then fills it:
 //!
-//! * a new or regular file gets the temporary file, synced, given the replaced file's
-//!   permissions, and renamed over it: readers see the old bytes or the new ones, never a
-//!   mix, and a failure at any point leaves the old file untouched and no temporary file;
+//! * a new or regular file gets a temporary file in its folder, synced, given the replaced
+//!   file's permissions, and renamed over it: readers see the old bytes or the new ones, never
+//!   a mix, and a failure at any point leaves the old file untouched and no temporary file;
 //! * a symlink is followed (to the end of its chain) and its target replaced as above, in
 //!   the target's folder: the link stays a link;
 //! * a character or block device, FIFO or socket is opened and written in place: it stays
-//!   what it was (`-o /dev/null` works; a FIFO gets the stream).
+//!   what it was (`-o /dev/null` works; a FIFO gets the stream);
+//! * a path naming one of this process's descriptors (`-`, `/dev/stdout`, `/dev/stderr`,
+//!   `/dev/fd/N`, `/proc/self/fd/N`, see [`super::target::stream_fd`]) is written through that
+//!   descriptor: stdout and stderr through the process's own handles (so `>> log` appends
+//!   after what was printed before), other descriptors opened for appending. Never resolved
+//!   to the file behind them and replaced.
 //!
 //! A read-only file (no write bit set) or one with several hard links is refused unless
 //! `force`; with `force` it is replaced, keeping its mode (and, for a hard link, splitting it:
 //! only this name gets the new bytes).
+//!
+//! Several outputs of one command are written all or nothing by [`write_together`].
 
 use super::identity::{FileId, file_id};
 use super::target::{Target, resolve};
@@ -29,14 +37,16 @@ use std::path::{Path, PathBuf};
 /// How an output reaches its file.
 #[derive(Debug)]
 enum Route {
-    /// Through a temporary file renamed over `target`.
+    /// Through a temporary file in `dir`, renamed over `target`.
     Replace {
         target: PathBuf,
-        temp: TempFile,
+        dir: PathBuf,
         permissions: Option<Permissions>,
     },
     /// Written in place (device, FIFO, socket).
     InPlace { target: PathBuf },
+    /// Written through this process's descriptor `fd`.
+    Stream { fd: u32 },
 }
 
 /// An output whose location was checked; see the module docs.
@@ -72,8 +82,8 @@ fn mode_text(_: &Permissions) -> String {
 }
 
 impl OutputFile {
-    /// Checks that `dest` can be written and reserves it (see the module docs). `force`
-    /// allows replacing read-only and hard-linked files.
+    /// Checks that `dest` can be written (see the module docs). `force` allows replacing
+    /// read-only and hard-linked files.
     pub fn reserve(dest: &Path, force: bool) -> Result<Self> {
         let target = resolve(dest).map_err(|e| Error::io(dest, e))?;
         let route = match target {
@@ -84,6 +94,7 @@ impl OutputFile {
                     "is a directory, not a file".into(),
                 ));
             }
+            Target::Stream { fd, .. } => Route::Stream { fd },
             Target::Special { path, .. } => Route::InPlace { target: path },
             Target::Missing { path } => {
                 let dir = folder_of(&path);
@@ -93,20 +104,21 @@ impl OutputFile {
                         return Err(refuse(
                             dest,
                             io::ErrorKind::NotADirectory,
-                            format!("`{}` is not a folder", dir.display()),
+                            format!("`{}` is not a folder", crate::text::path(dir)),
                         ));
                     }
                     Err(e) if e.kind() == io::ErrorKind::NotFound => {
                         return Err(refuse(
                             dest,
                             io::ErrorKind::NotFound,
-                            format!("folder `{}` does not exist", dir.display()),
+                            format!("folder `{}` does not exist", crate::text::path(dir)),
                         ));
                     }
                     Err(e) => return Err(Error::io(dir, e)),
                 }
+                drop(temp_in(dest, dir)?);
                 Route::Replace {
-                    temp: temp_in(dest, dir)?,
+                    dir: dir.to_path_buf(),
                     target: path,
                     permissions: None,
                 }
@@ -135,8 +147,10 @@ impl OutputFile {
                         ),
                     ));
                 }
+                let dir = folder_of(&path).to_path_buf();
+                drop(temp_in(dest, &dir)?);
                 Route::Replace {
-                    temp: temp_in(dest, folder_of(&path))?,
+                    dir,
                     target: path,
                     permissions: Some(permissions),
                 }
@@ -160,16 +174,28 @@ impl OutputFile {
     }
 
     /// Writes the bytes `fill` produces (see the module docs). On error nothing at the
-    /// destination changed (except for devices and FIFOs, which get what was written) and the
-    /// temporary file is gone.
+    /// destination changed (except for devices, FIFOs and descriptors, which get what was
+    /// written) and no temporary file is left.
     pub fn write(self, fill: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<()> {
+        match self.stage(fill)? {
+            Staged::Temp { temp, target, dest } => {
+                temp.persist(&target).map_err(|e| Error::io(&dest, e))
+            }
+            Staged::Written => Ok(()),
+        }
+    }
+
+    /// A regular file's bytes in a synced temporary file, not yet renamed; everything else
+    /// written.
+    fn stage(self, fill: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<Staged> {
         let dest = self.dest;
         match self.route {
             Route::Replace {
                 target,
-                mut temp,
+                dir,
                 permissions,
             } => {
+                let mut temp = temp_in(&dest, &dir)?;
                 let result = (|| {
                     let file = temp.file()?;
                     let mut w = io::BufWriter::new(&mut *file);
@@ -179,10 +205,10 @@ impl OutputFile {
                     if let Some(p) = permissions {
                         file.set_permissions(p)?;
                     }
-                    file.sync_all()?;
-                    temp.persist(&target)
+                    file.sync_all()
                 })();
-                result.map_err(|e| Error::io(&dest, e))
+                result.map_err(|e| Error::io(&dest, e))?;
+                Ok(Staged::Temp { temp, target, dest })
             }
             Route::InPlace { target } => {
                 let result = (|| {
@@ -191,10 +217,83 @@ impl OutputFile {
                     fill(&mut w)?;
                     w.flush()
                 })();
-                result.map_err(|e| Error::io(&dest, e))
+                result.map_err(|e| Error::io(&dest, e))?;
+                Ok(Staged::Written)
+            }
+            Route::Stream { fd } => {
+                write_stream(fd, fill).map_err(|e| match e.kind() {
+                    io::ErrorKind::BrokenPipe => Error::BrokenPipe,
+                    _ => Error::io(&dest, e),
+                })?;
+                Ok(Staged::Written)
             }
         }
     }
+}
+
+/// An output half way: see [`OutputFile::stage`].
+enum Staged {
+    Temp {
+        temp: TempFile,
+        target: PathBuf,
+        dest: PathBuf,
+    },
+    Written,
+}
+
+/// Writes to descriptor `fd`: stdout and stderr through the process's handles (locked, so
+/// the bytes land after what was printed and before what is printed next), any other
+/// descriptor opened for appending through `/dev/fd/N`.
+fn write_stream(fd: u32, fill: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> io::Result<()> {
+    match fd {
+        1 => {
+            let mut out = io::stdout().lock();
+            let mut w = io::BufWriter::new(&mut out);
+            fill(&mut w)?;
+            w.flush()?;
+            drop(w);
+            out.flush()
+        }
+        2 => {
+            let mut w = io::BufWriter::new(io::stderr().lock());
+            fill(&mut w)?;
+            w.flush()
+        }
+        _ => {
+            let file = std::fs::OpenOptions::new()
+                .append(true)
+                .open(format!("/dev/fd/{fd}"))?;
+            let mut w = io::BufWriter::new(file);
+            fill(&mut w)?;
+            w.flush()
+        }
+    }
+}
+
+/// Writes several outputs all or nothing: every regular file's bytes go to a synced
+/// temporary file first, then devices, FIFOs and descriptors are written, and only when all
+/// of that succeeded are the temporary files renamed over their targets, in order. On an
+/// error before the renames no regular output changed and no temporary file is left; a
+/// device or descriptor written before the failing one keeps what it got. (A rename failing
+/// after others succeeded is the one partial outcome; renames within a folder do not fail
+/// short of the disk disappearing.)
+pub fn write_together(outputs: Vec<(OutputFile, Vec<u8>)>) -> Result<()> {
+    let (files, streams): (Vec<_>, Vec<_>) = outputs
+        .into_iter()
+        .partition(|(o, _)| matches!(o.route, Route::Replace { .. }));
+    let mut staged = Vec::with_capacity(files.len());
+    for (out, bytes) in files {
+        staged.push(out.stage(|w| w.write_all(&bytes))?);
+    }
+    for (out, bytes) in streams {
+        out.stage(|w| w.write_all(&bytes))?;
+    }
+    for s in staged {
+        if let Staged::Temp { temp, target, dest } = s {
+            temp.persist(&target).map_err(|e| Error::io(&dest, e))?;
+        }
+    }
+    Ok(())
 }
 
 fn temp_in(dest: &Path, dir: &Path) -> Result<TempFile> {
@@ -202,7 +301,10 @@ fn temp_in(dest: &Path, dir: &Path) -> Result<TempFile> {
         refuse(
             dest,
             e.kind(),
-            format!("cannot create a file in folder `{}`: {e}", dir.display()),
+            format!(
+                "cannot create a file in folder `{}`: {e}",
+                crate::text::path(dir)
+            ),
         )
     })
 }
@@ -236,9 +338,9 @@ mod tests {
         std::fs::write(&dest, b"old").unwrap();
         let out = OutputFile::reserve(&dest, false).unwrap();
         assert_eq!(
-            names(dir.path()).len(),
-            2,
-            "reserved: temporary file exists"
+            names(dir.path()),
+            ["out.txt"],
+            "reserved: no temporary file while the command works"
         );
         let err = out.write(|w| {
             w.write_all(b"partial")?;
@@ -250,6 +352,31 @@ mod tests {
         // Reserved but never written (the work failed): also no trace.
         drop(OutputFile::reserve(&dest, false).unwrap());
         assert_eq!(names(dir.path()), ["out.txt"]);
+    }
+
+    #[test]
+    fn outputs_written_together_are_all_or_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = dir.path().join("a.json");
+        std::fs::write(&a, b"old").unwrap();
+        let b = dir.path().join("b.png");
+        let full = Path::new("/dev/full");
+        // The device fails: neither regular file changes, nothing is left in the folder.
+        let outs = vec![
+            (OutputFile::reserve(&a, false).unwrap(), b"new".to_vec()),
+            (OutputFile::reserve(full, false).unwrap(), b"x".to_vec()),
+            (OutputFile::reserve(&b, false).unwrap(), b"png".to_vec()),
+        ];
+        assert!(write_together(outs).is_err());
+        assert_eq!(std::fs::read(&a).unwrap(), b"old");
+        assert_eq!(names(dir.path()), ["a.json"]);
+        let outs = vec![
+            (OutputFile::reserve(&a, false).unwrap(), b"new".to_vec()),
+            (OutputFile::reserve(&b, false).unwrap(), b"png".to_vec()),
+        ];
+        write_together(outs).unwrap();
+        assert_eq!(std::fs::read(&a).unwrap(), b"new");
+        assert_eq!(std::fs::read(&b).unwrap(), b"png");
     }
 
     #[test]

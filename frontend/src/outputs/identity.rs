@@ -47,6 +47,8 @@ pub fn file_id(path: &Path) -> io::Result<FileId> {
                 name,
             })
         }
+        // The open file behind the descriptor (`/dev/fd/N` is this process's own table).
+        Target::Stream { fd, .. } => existing_id(Path::new(&format!("/dev/fd/{fd}"))),
         target => existing_id(target.path()),
     }
 }

@@ -12,7 +12,7 @@ pub mod identity;
 pub mod target;
 pub mod temp;
 
-pub use file::OutputFile;
+pub use file::{OutputFile, write_together};
 pub use identity::{FileId, file_id};
 
 use crate::error::{Error, Result};

@@ -34,6 +34,15 @@ pub enum Target {
         /// `character device`, `block device`, `FIFO` or `socket`.
         kind: &'static str,
     },
+    /// One of this process's open file descriptors named as a file (`-`, `/dev/stdout`,
+    /// `/dev/fd/N`, `/proc/self/fd/N`, see [`stream_fd`]): written through the descriptor,
+    /// never resolved to the file behind it and replaced.
+    Stream {
+        /// The path as named.
+        path: PathBuf,
+        /// The descriptor.
+        fd: u32,
+    },
     /// A directory: never an output.
     Directory {
         /// The directory.
@@ -48,16 +57,48 @@ impl Target {
             Self::Missing { path }
             | Self::Regular { path, .. }
             | Self::Special { path, .. }
+            | Self::Stream { path, .. }
             | Self::Directory { path } => path,
         }
     }
 }
 
+/// The descriptor a path names when it names one of this process's open files rather than a
+/// file: `-` (stdout), `/dev/stdin`, `/dev/stdout`, `/dev/stderr` (0, 1, 2), `/dev/fd/N`,
+/// `/proc/self/fd/N`, `/proc/thread-self/fd/N` and `/proc/<this pid>/fd/N`. Compared as
+/// spelt (no `..` resolution); [`resolve`] checks every hop of a symlink chain.
+pub fn stream_fd(path: &Path) -> Option<u32> {
+    let s = path.to_str()?;
+    match s {
+        "-" | "/dev/stdout" => return Some(1),
+        "/dev/stdin" => return Some(0),
+        "/dev/stderr" => return Some(2),
+        _ => {}
+    }
+    let pid = format!("/proc/{}/fd/", std::process::id());
+    let n = [
+        "/dev/fd/",
+        "/proc/self/fd/",
+        "/proc/thread-self/fd/",
+        pid.as_str(),
+    ]
+    .iter()
+    .find_map(|prefix| s.strip_prefix(prefix))?;
+    if n.is_empty() || !n.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    n.parse().ok()
+}
+
 /// Follows `dest` through at most [`MAX_SYMLINK_HOPS`] symlinks (relative links are resolved
-/// against the folder holding the link) and classifies what is at the end.
+/// against the folder holding the link) and classifies what is at the end. A path that names
+/// a descriptor ([`stream_fd`]), as given or at any hop, is a [`Target::Stream`].
 pub fn resolve(dest: &Path) -> io::Result<Target> {
     let mut path = dest.to_path_buf();
     for _ in 0..=MAX_SYMLINK_HOPS {
+        if let Some(fd) = stream_fd(&path) {
+            return Ok(Target::Stream { path, fd });
+        }
         let meta = match std::fs::symlink_metadata(&path) {
             Ok(m) => m,
             // A component that is a file (`file.txt/x`) is reported by the folder check.
@@ -159,6 +200,23 @@ mod tests {
         std::os::unix::fs::symlink("b", &a).unwrap();
         std::os::unix::fs::symlink("a", &b).unwrap();
         assert!(resolve(&a).is_err(), "a symlink loop is an error");
+        // Descriptors, named directly or through a link, are streams, not the file behind.
+        let out = dir.path().join("out");
+        std::os::unix::fs::symlink("/dev/stdout", &out).unwrap();
+        for (p, want) in [
+            (Path::new("-"), 1),
+            (Path::new("/dev/stderr"), 2),
+            (Path::new("/proc/self/fd/7"), 7),
+            (out.as_path(), 1),
+        ] {
+            assert!(
+                matches!(resolve(p).unwrap(), Target::Stream { fd, .. } if fd == want),
+                "{}",
+                p.display()
+            );
+        }
+        assert_eq!(stream_fd(Path::new("/dev/fd/x")), None);
+        assert_eq!(stream_fd(Path::new("/dev/fd/")), None);
         assert!(matches!(
             resolve(Path::new("/dev/null")).unwrap(),
             Target::Special {

@@ -4,6 +4,11 @@
 //! Names are `.halfray-<pid>-<n>.tmp`, at most [`MAX_TEMP_NAME_LEN`] bytes whatever the
 //! output is called, so an output whose own name is at the file-system limit (255 bytes on
 //! Linux) still gets a temporary file.
+//!
+//! What no handler can catch (SIGKILL, the OOM killer, an abort, SIGQUIT) leaves the file
+//! behind; the name says which process made it, so the next temporary file created in that
+//! folder removes it ([`remove_stale`]): a `.halfray-<pid>-<n>.tmp` whose process is gone and
+//! which was last modified [`STALE_TEMP_AGE`] ago or more.
 
 use std::fs::File;
 use std::io;
@@ -17,6 +22,12 @@ pub const MAX_TEMP_NAME_LEN: usize = 9 + 10 + 1 + 20 + 4;
 
 /// Names tried before giving up when they already exist (left by another process).
 pub const MAX_TEMP_NAME_TRIES: u32 = 100;
+
+/// How old a dead process's temporary file must be before [`remove_stale`] removes it: one
+/// hour. A temporary file exists only while its output is being written (seconds); the age
+/// guards a file of a process on another machine sharing the folder (whose pid means nothing
+/// here) that is still being written.
+pub const STALE_TEMP_AGE: std::time::Duration = std::time::Duration::from_secs(3600);
 
 /// Temporary files that exist right now, removed by the signal handler.
 static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
@@ -38,6 +49,7 @@ pub struct TempFile {
 impl TempFile {
     /// Creates a new, empty temporary file in `dir` (never one that exists: `O_EXCL`).
     pub fn create_in(dir: &Path) -> io::Result<Self> {
+        remove_stale(dir);
         let mut last = None;
         for _ in 0..MAX_TEMP_NAME_TRIES {
             let n = COUNTER.fetch_add(1, Ordering::Relaxed);
@@ -99,6 +111,45 @@ impl Drop for TempFile {
     }
 }
 
+/// The pid in a temporary file's name (`.halfray-<pid>-<n>.tmp`), `None` for other names.
+fn temp_pid(name: &str) -> Option<u32> {
+    let rest = name.strip_prefix(".halfray-")?.strip_suffix(".tmp")?;
+    let (pid, n) = rest.split_once('-')?;
+    n.parse::<u64>().ok()?;
+    pid.parse().ok()
+}
+
+/// Whether process `pid` is known to be gone: only where `/proc` lists processes (Linux);
+/// elsewhere nothing is known, and nothing is removed.
+fn process_gone(pid: u32) -> bool {
+    Path::new("/proc/self").exists() && !Path::new(&format!("/proc/{pid}")).exists()
+}
+
+/// Removes from `dir` the temporary files of processes that are gone (see the module docs).
+/// Best effort: errors are ignored (another run may be removing the same file).
+pub fn remove_stale(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let me = std::process::id();
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name.to_str().and_then(temp_pid) else {
+            continue;
+        };
+        let old = entry
+            .metadata()
+            .ok()
+            .filter(|m| m.is_file())
+            .and_then(|m| m.modified().ok())
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|age| age >= STALE_TEMP_AGE);
+        if pid != me && old && process_gone(pid) {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
+}
+
 /// Removes every live temporary file (what the signal handler does before exiting).
 pub fn remove_live_temp_files() {
     for p in live().drain(..) {
@@ -156,6 +207,41 @@ mod tests {
         t.persist(&dest).unwrap();
         assert_eq!(std::fs::read(&dest).unwrap(), b"data");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn stale_temp_files_of_gone_processes_are_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        // A process that has exited: its pid is free (and not reused within the test).
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let gone = child.id();
+        child.wait().unwrap();
+        let old = std::time::SystemTime::now() - STALE_TEMP_AGE - std::time::Duration::from_secs(1);
+        let make = |name: &str, aged: bool| {
+            let f = std::fs::File::create(dir.path().join(name)).unwrap();
+            if aged {
+                f.set_modified(old).unwrap();
+            }
+        };
+        make(&format!(".halfray-{gone}-3.tmp"), true);
+        make(&format!(".halfray-{gone}-4.tmp"), false);
+        make(&format!(".halfray-{}-5.tmp", std::process::id()), true);
+        make(".halfray-x-1.tmp", true);
+        make("keep.png", true);
+        drop(TempFile::create_in(dir.path()).unwrap());
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        names.sort();
+        let mut want = vec![
+            format!(".halfray-{gone}-4.tmp"),
+            format!(".halfray-{}-5.tmp", std::process::id()),
+            ".halfray-x-1.tmp".to_string(),
+            "keep.png".to_string(),
+        ];
+        want.sort();
+        assert_eq!(names, want, "only the old file of the gone process goes");
     }
 
     /// Two writes to one folder from one process at the same time never share a temporary

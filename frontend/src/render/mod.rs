@@ -14,7 +14,7 @@ pub mod trace;
 use crate::console::print_out;
 use crate::error::{Error, Result};
 use crate::limits::check_memory;
-use crate::outputs::{Named, refuse_inputs, reserve_outputs};
+use crate::outputs::{Named, refuse_inputs, reserve_outputs, write_together};
 use crate::scene::{self, Scene};
 use glam::{Vec3, Vec4};
 use indicatif::{ParallelProgressIterator, ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -374,8 +374,9 @@ pub fn summary(r: &Rendered) -> String {
 }
 
 /// Runs `halfray render`: checks the options and reserves every output, loads the scene
-/// (refusing outputs that are among its files), renders, writes `--stats-json` then the PNG,
-/// and prints the summary last (a closed stdout loses nothing).
+/// (refusing outputs that are among its files), renders, writes the PNG and `--stats-json`
+/// together (both or neither, see [`write_together`]), and prints the summary last (a closed
+/// stdout loses nothing).
 pub fn run(args: &RenderArgs) -> Result<()> {
     for (v, name) in [(args.width, "--width"), (args.height, "--height")] {
         if v.is_some_and(|x| x == 0 || x > scene::MAX_IMAGE_SIDE) {
@@ -442,6 +443,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     let mut reserved = reserved.into_iter();
     let png = reserved.next().expect("-o is reserved first");
+    let mut files = Vec::new();
     if let Some(stats) = reserved.next() {
         let c = &out.counts;
         let json = serde_json::to_string_pretty(&StatsJson {
@@ -467,9 +469,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             },
         })
         .map_err(|e| Error::encode("the stats JSON", e))?;
-        stats.write(|w| w.write_all(format!("{json}\n").as_bytes()))?;
+        files.push((stats, format!("{json}\n").into_bytes()));
     }
-    output::write_png(png, w, h, &out.to_rgba8(args.mode, args.gamma))?;
+    let mut bytes = Vec::new();
+    output::encode_png(&mut bytes, w, h, &out.to_rgba8(args.mode, args.gamma))
+        .map_err(|e| Error::encode("the PNG image", e))?;
+    files.insert(0, (png, bytes));
+    // The image and its statistics: both or neither.
+    write_together(files)?;
     if !args.quiet {
         eprintln!("wrote {}", args.output.display());
     }

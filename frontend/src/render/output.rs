@@ -68,11 +68,19 @@ pub fn read_background(
 
 /// Writes 8-bit RGBA as PNG to a reserved output (atomically, see [`OutputFile`]).
 pub fn write_png(out: OutputFile, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
-    out.write(|w| {
-        PngEncoder::new(w)
-            .write_image(rgba, width, height, image::ExtendedColorType::Rgba8)
-            .map_err(std::io::Error::other)
-    })
+    out.write(|w| encode_png(w, width, height, rgba))
+}
+
+/// 8-bit RGBA as PNG bytes.
+pub fn encode_png(
+    w: &mut dyn std::io::Write,
+    width: u32,
+    height: u32,
+    rgba: &[u8],
+) -> std::io::Result<()> {
+    PngEncoder::new(w)
+        .write_image(rgba, width, height, image::ExtendedColorType::Rgba8)
+        .map_err(std::io::Error::other)
 }
 
 /// Heat-map colour of a count: `log2(1 + n) / 10` (1023 nodes → 1) through black, blue, cyan,

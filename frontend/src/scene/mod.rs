@@ -289,7 +289,8 @@ pub struct Scene {
     pub object_labels: Vec<String>,
     /// Named meshes (shared by their instances).
     pub meshes: Vec<Arc<MeshShape>>,
-    /// The mesh files read (inputs a render must not overwrite).
+    /// Every mesh file the scene names, read or declared by an unused `[mesh.*]` (inputs a
+    /// render must not overwrite).
     pub mesh_files: Vec<PathBuf>,
 }
 

@@ -188,12 +188,15 @@ pub(super) fn build(src: &Source<'_>, d: def::SceneDef) -> Result<Scene> {
             ));
         }
     }
-    // Definitions no object uses are still checked (not read: nothing renders them).
+    // Definitions no object uses are still checked (not read: nothing renders them), and
+    // their files are inputs all the same: no output may replace them.
+    let mut unused = Vec::new();
     for (name, (_, loaded)) in &ctx.meshes {
         if let (None, Some(def)) = (loaded, ctx.mesh_defs.get(name)) {
-            mesh_def(&ctx, name, def.get_ref())?;
+            unused.push(mesh_def(&ctx, name, def.get_ref())?.0);
         }
     }
+    ctx.mesh_files.extend(unused);
     Ok(Scene {
         path: src.path.to_path_buf(),
         camera,
