@@ -48,8 +48,8 @@ pub fn sqrt_f64(x: f64) -> f64 {
 /// `f32` fits exactly in an `f64`), and it is zero only when the exact value is zero.
 ///
 /// This is the orientation predicate of the watertight triangle and polygon tests. It must never
-/// be written with a fused multiply-add (see `docs/robustness` in the README): fusing breaks the
-/// antisymmetry `e(a, b) = −e(b, a)` that makes shared edges consistent.
+/// be written with a fused multiply-add: fusing breaks the antisymmetry `e(a, b) = −e(b, a)`
+/// that makes shared edges consistent.
 #[inline]
 #[must_use]
 pub fn diff_of_products_exact_sign(a: f32, b: f32, c: f32, d: f32) -> f64 {

@@ -24,14 +24,13 @@
 //! input return a typed error ([`error`]).
 //!
 //! `unsafe` is denied everywhere except one private module of SSE intrinsics (`simd`, x86-64
-//! only, portable fallbacks elsewhere): a cache prefetch hint (measured at about +30 %
-//! closest-hit throughput on incoherent rays over the dragon), a lane-compare bit mask and a
-//! four-lane vector for the triangle tests' lane culls (the compiler scalarised both when
+//! only, portable fallbacks elsewhere): a cache prefetch hint, a lane-compare bit mask and a
+//! four-lane vector for the triangle tests' lane culls (the compiler scalarises both when
 //! written portably), and the AVX2 + FMA kernels of [`simd_level`] behind a token that
 //! proves the CPU has them (the 8-wide node test, the child sort, the two-group cull, and the
-//! `f64` plane form of a hit's `t`, whose 3-vectors the compiler kept in scalar registers:
-//! +1.6 to +2.8 % closest hit on random rays, measured in turns with Embree). Its blocks
-//! carry their proofs.
+//! `f64` plane form of a hit's `t`, whose 3-vectors the compiler keeps in scalar registers).
+//! Each is there because the portable form measured slower (`docs/performance.md`); its
+//! blocks carry their proofs.
 #![no_std]
 #![deny(unsafe_code)]
 #![deny(missing_docs)]

@@ -35,8 +35,8 @@ pub fn build_binary(
     )
 }
 
-/// Meshes below this many triangles are built on one thread: splitting the work costs more
-/// than it saves (measured: the bunny's 69k build in ~45 ms gains ~35 % on 2 threads).
+/// Meshes below this many triangles are built on one thread: below it, splitting the work
+/// costs more than it saves.
 pub const PARALLEL_BUILD_MIN: usize = 20_000;
 
 /// [`build_binary`] on rayon's threads: the core builds the top of the tree and hands out
@@ -162,10 +162,9 @@ thread_local! {
 }
 
 /// Runs `f` on this thread's kept stack: taken out of the thread-local slot and put back, so
-/// the query's result is returned by `f` directly (a `RefCell` borrow through
-/// `LocalKey::with` returned it through a closure and copied it twice, ~15–25 ns per ray
-/// measured, the copies stalling on store forwarding). A nested query (an intersector that
-/// traces rays itself) finds the slot empty and uses a stack of its own.
+/// the query's result is returned by `f` directly, never copied out through a closure. A
+/// nested query (an intersector that traces rays itself) finds the slot empty and uses a
+/// stack of its own.
 #[inline(always)]
 fn with_stack<R>(f: impl FnOnce(&mut WideStack) -> R) -> R {
     let mut stack = STACK.take().unwrap_or_else(|| Box::new(WideStack::new()));

@@ -4,7 +4,8 @@
 use crate::error::{Error, Result};
 
 /// Most memory one command may plan to allocate for its main buffers: 4 GiB, the smallest
-/// machine halfray is meant to run on (a larger request used to abort with exit 134 there).
+/// machine halfray is meant to run on (a larger request would abort there rather than fail
+/// with a message).
 pub const MEMORY_LIMIT_BYTES: u64 = 4 << 30;
 
 /// Refuses `bytes` (`None`: the size computation overflowed) above [`MEMORY_LIMIT_BYTES`],

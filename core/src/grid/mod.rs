@@ -103,12 +103,10 @@ use crate::aabb::Aabb;
 use crate::float::{gamma, gamma_f64};
 use overlap::Layout;
 
-/// Default [`GridOptions::lambda`]: cells per triangle. Unitless. Measured on the bunny
-/// (69 451 triangles, 30 000 incoherent and 16 384 primary rays, Watertight; counted work, as
-/// wall-clock times on the shared test machine were noise): λ = 1, 2, 3, 4, 8 visit 21.7,
-/// 27.4, 31.2, 34.4, 43.4 cells and test 30.0, 21.0, 17.5, 15.5, 11.4 triangles per ray, for
-/// 12.1, 17.5, 22.2, 26.9, 45.5 bytes per triangle. With a triangle test costing about two
-/// cell steps the work is flat (within 2 %) from λ = 3 to 8; 3 takes the least memory there.
+/// Default [`GridOptions::lambda`]: cells per triangle. Unitless. With a triangle test costing
+/// about two cell steps, the work per ray (cells visited + triangles tested, counted on the
+/// bunny for λ from 1 to 8) is flat from λ = 3 to 8, and 3 takes the least memory there
+/// (`docs/performance.md`).
 pub const DEFAULT_LAMBDA: f32 = 3.0;
 
 /// Largest number of cells along one axis (so at most 2³⁰ cells, whose offsets fit `u32`

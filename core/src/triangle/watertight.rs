@@ -697,13 +697,11 @@ fn permuted_rows(lanes: &TriangleLanes, k: [usize; 3]) -> [[&[f32; LANES]; 3]; 3
 ///   [`finish_exact_at`] with the common case of `t` ([`common_t`]) inlined, is one
 ///   out-of-line function per level ([`finish_exact`] for [`Portable`]; at the AVX2 level one
 ///   compiled for AVX2 and FMA, whose `f64` plane kernel inlines into it); [`hit_t`] is a
-///   cold call from it for the other cases. Measured interleaved with Embree on the same
-///   rays, against two calls (this function and `hit_t` out of line, each passing the
-///   sheared coordinates by value): closest hit +3.7 % (bunny, random rays), +4.4 % (bunny,
-///   camera rays), +2.4 % (dragon, random); against inlining all of it (the traversal loop
-///   grows): +3 %.
+///   cold call from it for the other cases. One call measured faster than two (this
+///   function and `hit_t` out of line) and than none (the traversal loop grows):
+///   `docs/performance.md`.
 /// - **Elsewhere:** this function and `hit_t` out of line, which keeps the miss path of a
-///   microcontroller's traversal small (the Cortex-M4F image's 8 KiB budget, README).
+///   microcontroller's traversal small (the Cortex-M4F image's 8 KiB budget, `docs/embedded.md`).
 #[cfg_attr(target_arch = "x86_64", inline(always))]
 #[cfg_attr(not(target_arch = "x86_64"), inline(never))]
 fn exact_candidate<L: SimdLevel>(

@@ -5,7 +5,7 @@
 //!
 //! There is no runtime crate: `_start` is the entry point (the linker's default), the build
 //! storage lives on the stack, and the result is written to a volatile static so nothing is
-//! optimised away. Build (see `README` of the repository for the size report):
+//! optimised away. Build (the size and stack report: `docs/embedded.md`):
 //!
 //! ```text
 //! cargo build --release --manifest-path examples/thumb-probe/Cargo.toml --target thumbv7em-none-eabihf

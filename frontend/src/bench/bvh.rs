@@ -27,10 +27,8 @@ use std::time::Instant;
 
 /// Seed of the incoherent ray set.
 pub const INCOHERENT_SEED: u64 = 0xB7B7_0001;
-/// Timed passes per measurement (the best is reported: the machines are noisy). Five, not
-/// three: with three, one `crosscheck` ratio moved by up to 8 % between consecutive runs of
-/// the same build on an idle 2-core machine (a pass of 100 000 bunny camera rays takes
-/// ~9 ms, short enough for one preemption to spoil it).
+/// Timed passes per measurement; the best is reported, so that one preemption of a pass (a
+/// few milliseconds for 100 000 camera rays) does not spoil a figure on a shared machine.
 pub const TIMED_PASSES: usize = 5;
 /// Target number of triangle tests of the brute-force baseline.
 pub const BRUTE_FORCE_TESTS: usize = 150_000_000;

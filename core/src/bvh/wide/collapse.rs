@@ -171,8 +171,8 @@ impl Pending {
 /// The first slot of a leaf of `count` triangles placed after slot `end` (the slots in use so
 /// far): `end` itself, unless the run would then touch more [`LeafGroup`]s than the
 /// `⌈count/4⌉` it needs, in which case the next group boundary (the lanes skipped stay
-/// empty). A leaf then reads the fewest groups possible (measured: 2.29 → 1.82 groups per leaf
-/// on the bunny) for about 6 % more groups; the padding of a leaf is at most
+/// empty). A leaf then reads the fewest groups possible, for a few more groups in the tree;
+/// the padding of a leaf is at most
 /// `4⌈count/4⌉ − 1 − count` lanes, so `7N/4` slots bound any tree ([`group_capacity`]).
 #[inline]
 pub(super) const fn place_leaf(end: usize, count: usize) -> usize {

@@ -30,7 +30,7 @@
 //! four, stored side by side so that a leaf is tested four triangles at a time, 40 bytes per
 //! triangle slot. A run starts where the previous one ended unless it would then touch more
 //! groups than the `⌈count/4⌉` it needs; it then starts at the next group (the skipped lanes
-//! stay empty: about 6 % more groups on scanned meshes, 20 % fewer groups read per leaf).
+//! stay empty: a few more groups in the tree, fewer groups read per leaf).
 //! Everything the structure adds, copied triangles included, is `224·nodes + 160·groups`
 //! bytes ([`WideStats::bytes_per_triangle`]); the caller's mesh is not needed by queries.
 //!
@@ -77,10 +77,9 @@ pub const MAX_LEAF_TRIANGLES: usize = 16;
 
 /// Binary subtrees of at most this many triangles become one wide leaf (their triangles are
 /// contiguous in leaf order): testing a few triangles in a row costs less than visiting a node
-/// for them. Chosen by measurement (README, "Leaf size"): 8 against 4 made incoherent rays
-/// 5–10 % faster on the bunny and the dragon; 16 against 8 (a leaf is two eight-lane culls
-/// instead of a node step and one) made them 3–4 % faster again, with camera rays unchanged,
-/// the build 15–20 % faster and the tree 6 B/triangle smaller. At most [`MAX_LEAF_TRIANGLES`].
+/// for them: a leaf of 16 is two eight-lane culls where a node step and one cull were needed.
+/// Chosen by measurement against 4, 6, 8 and 12 (`docs/performance.md`). At most
+/// [`MAX_LEAF_TRIANGLES`].
 pub const LEAF_MERGE: usize = 16;
 
 /// Leaf runs of more than this many triangles that are binary subtrees (not binary leaves)
@@ -88,10 +87,8 @@ pub const LEAF_MERGE: usize = 16;
 /// inner child has been expanded, largest surface area first: the node test covers the
 /// smaller boxes at no extra cost, and a ray enters only the halves it hits. Most nodes at
 /// the bottom of a collapsed tree hold two leaves of up to [`LEAF_MERGE`] and six empty slots
-/// without it. Chosen by measurement (README, "Leaf size"): against no opening, random rays
-/// 3–7 % faster on the dragon and 1–3 % on the bunny, triangles tested per ray 13.4 → 9.8
-/// (bunny); opening runs of more than 4 or 6 was slower again on the bunny (more leaves to
-/// visit), 10 in between.
+/// without it. Chosen by measurement against no opening and against 4, 6, 10 and 12
+/// (`docs/performance.md`): lower values give more leaves to visit.
 pub const LEAF_OPEN_ABOVE: usize = 8;
 
 /// SAH cost of a triangle test in a tree collapsed into a wide one, against a traversal step's
