@@ -783,3 +783,8 @@ impl LeakCount {
         )
     }
 }
+
+/// The repository README's Rust examples, compiled and run as doctests by `cargo test`.
+#[cfg(doctest)]
+#[doc = include_str!("../../README.md")]
+pub struct ReadmeDoctests;
