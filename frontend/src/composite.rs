@@ -218,13 +218,26 @@ mod tests {
         let a = Vec4::new(0.2, 0.4, 0.6, 1.0);
         let b = Vec4::new(0.9, 0.8, 0.7, 1.0);
         let clear = Vec4::new(0.3, 0.3, 0.3, 0.0);
+        // Porter and Duff's table with αa = 1, αb = 0: the operators whose source factor is 1
+        // there (1, 1 − αb) keep opaque A over a transparent destination; those whose factor
+        // is 0 or αb give nothing. With αa = 0, αb = 1, likewise for B: factor 1 or 1 − αa
+        // keeps it, 0 or αa does not.
+        use Operator::*;
+        let keeps_a = [Src, Over, DstOver, Out, DstAtop, Xor];
+        let keeps_b = [Dst, Over, DstOver, DstOut, Atop, Xor];
         for op in Operator::ALL {
-            // Over a transparent destination, the destination-side operators give nothing
-            // of it, the source side all or nothing of A.
-            let (fa, fb) = op.factors(1.0, 0.0);
-            let got = op.apply(a, clear);
-            let want = if fa > 0.0 { a } else { Vec4::ZERO };
-            assert_eq!(got, want, "{op:?} onto transparent (Fb = {fb})");
+            let want = if keeps_a.contains(&op) { a } else { Vec4::ZERO };
+            assert_eq!(
+                op.apply(a, clear),
+                want,
+                "{op:?}: opaque A onto transparent"
+            );
+            let want = if keeps_b.contains(&op) { b } else { Vec4::ZERO };
+            assert_eq!(
+                op.apply(clear, b),
+                want,
+                "{op:?}: transparent onto opaque B"
+            );
         }
         assert_eq!(Operator::Over.apply(a, b), a);
         assert_eq!(Operator::DstOver.apply(a, b), b);

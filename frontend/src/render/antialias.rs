@@ -161,6 +161,27 @@ mod tests {
     #[test]
     fn offsets_start_at_the_centre_and_spread_over_the_pixel() {
         assert_eq!(offset(0), (0.5, 0.5));
+        // R2 from its definition: ρ the real root of x³ = x + 1 (Newton from 1.5), sample k
+        // at the fractional parts of ½ + k/ρ and ½ + k/ρ²; k = 1, 2, 3 by hand:
+        // (0.2549, 0.0698), (0.0098, 0.6397), (0.7646, 0.2095).
+        let mut rho = 1.5f64;
+        for _ in 0..50 {
+            rho -= (rho * rho * rho - rho - 1.0) / (3.0 * rho * rho - 1.0);
+        }
+        let by_hand = [(0.2549, 0.0698), (0.0098, 0.6397), (0.7646, 0.2095)];
+        for k in 1..64u32 {
+            let kf = f64::from(k);
+            let want = ((0.5 + kf / rho).fract(), (0.5 + kf / (rho * rho)).fract());
+            let got = offset(k);
+            assert!(
+                (f64::from(got.0) - want.0).abs() < 1e-6
+                    && (f64::from(got.1) - want.1).abs() < 1e-6,
+                "sample {k}: {got:?}, R2 gives {want:?}"
+            );
+            if let Some(&(x, y)) = by_hand.get(k as usize - 1) {
+                assert!((f64::from(got.0) - x).abs() < 1e-4 && (f64::from(got.1) - y).abs() < 1e-4);
+            }
+        }
         // Every quarter of the pixel gets one of the first eight samples.
         for (qx, qy) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
             let hit = (0..8)
@@ -201,13 +222,17 @@ mod tests {
             }
         });
         assert_eq!(counts.primary, 2 * 3, "both pixels differ from each other");
-        let hits: Vec<bool> = (1..4).map(|k| offset(k).0 < 0.5).collect();
-        let n_hits = hits.iter().filter(|&&h| h).count() as f32;
-        let want_alpha = (1.0 + n_hits) / 4.0;
-        let want_value = (0.4 + 0.8 * n_hits) / (1.0 + n_hits);
-        assert!((img[0].alpha - want_alpha).abs() < 1e-6);
-        assert!((img[0].value.x - want_value).abs() < 1e-6);
-        assert!((img[1].alpha - n_hits / 4.0).abs() < 1e-6);
-        assert!((img[1].value.x - 0.8).abs() < 1e-6);
+        // R2's x offsets of samples 1, 2, 3 are 0.2549, 0.0098, 0.7646 (see the offsets
+        // test): two hits and a miss. Pixel 0: centre 0.4 (α 1) and two hits of 0.8 among
+        // four samples: α = 3/4, colour (0.4 + 2·0.8)/3 = 2/3. Pixel 1: a missed centre and
+        // the same two hits: α = 2/4, colour 0.8.
+        assert!((img[0].alpha - 0.75).abs() < 1e-6, "{}", img[0].alpha);
+        assert!(
+            (img[0].value.x - 2.0 / 3.0).abs() < 1e-6,
+            "{}",
+            img[0].value
+        );
+        assert!((img[1].alpha - 0.5).abs() < 1e-6, "{}", img[1].alpha);
+        assert!((img[1].value.x - 0.8).abs() < 1e-6, "{}", img[1].value);
     }
 }
