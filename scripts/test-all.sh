@@ -61,14 +61,38 @@ rustup toolchain install "$msrv" --profile minimal
 cargo "+$msrv" build -p halfray-core
 
 stage test
+# Tests that skip part of their checks (a SIMD level this CPU lacks) append a line naming
+# themselves and why to $HALFRAY_SKIP_LOG, printed below; on a CPU that lists AVX2 and FMA
+# nothing may skip (HALFRAY_REQUIRE_AVX2 makes a skip fail).
+export HALFRAY_SKIP_LOG=$ROOT/target/skipped-tests.txt
+mkdir -p target && : >"$HALFRAY_SKIP_LOG"
+if grep -qw avx2 /proc/cpuinfo && grep -qw fma /proc/cpuinfo; then
+    export HALFRAY_REQUIRE_AVX2=1
+else
+    echo "this CPU lacks AVX2 or FMA: the AVX2 comparisons are skipped (listed after the tests)"
+fi
 cargo test --workspace
+report_skips() {
+    if [ -s "$HALFRAY_SKIP_LOG" ]; then
+        echo "skipped tests ($(sort -u "$HALFRAY_SKIP_LOG" | wc -l)):"; sort -u "$HALFRAY_SKIP_LOG"
+    else
+        echo "skipped tests: none"
+    fi
+}
+report_skips
 
+[ "${SKIP_EMBREE:-0}" = 1 ] && echo "SKIPPED stage embree (SKIP_EMBREE=1): Embree tests, crosscheck_scale.rs, crosscheck runs" | tee -a "$HALFRAY_SKIP_LOG"
 if [ "${SKIP_EMBREE:-0}" != 1 ]; then
     stage embree
     bash scripts/setup-embree.sh
     export EMBREE_DIR=$ROOT/.embree
     cargo clippy -p halfray --features embree --all-targets -- -D warnings
     cargo test -p halfray --features embree
+    # frontend/tests/crosscheck_scale.rs compiles to nothing without the feature: make sure
+    # this run had its tests, and name them.
+    scale=$(cargo test -q -p halfray --features embree --test crosscheck_scale -- --list 2>/dev/null | grep -c ': test$' || true)
+    [ "$scale" -ge 1 ] || { echo "crosscheck_scale.rs: no tests under --features embree"; exit 1; }
+    echo "crosscheck_scale.rs: $scale tests ran under --features embree"
     # Every shared mesh, 100 000 rays per set: zero genuine mismatches and zero watertight
     # leaks, or a non-zero exit.
     mkdir -p target/ci
@@ -99,7 +123,10 @@ PY
 if [ "${SKIP_FUZZ:-0}" != 1 ]; then
     stage fuzz
     FUZZ_SECONDS=${FUZZ_SECONDS:-30} bash scripts/fuzz-ci.sh
+else
+    echo "SKIPPED stage fuzz (SKIP_FUZZ=1)" | tee -a "$HALFRAY_SKIP_LOG"
 fi
+echo; report_skips
 
 echo
 echo "== all stages passed in $(( $(date +%s) - t0 )) s"

@@ -133,3 +133,49 @@ pub fn vec_bvh<S: PrimitiveSource + ?Sized>(
         opts,
     )
 }
+
+/// The AVX2+FMA level for the test named `test`, when this CPU has it. Otherwise the skip is
+/// recorded once per test — `SKIPPED test: no AVX2+FMA on this CPU` on stderr and appended to
+/// the file `HALFRAY_SKIP_LOG` names (`scripts/test-all.sh` prints it after the tests, so CI
+/// names every skipped test and why) — and the answer is `None`. When `HALFRAY_REQUIRE_AVX2`
+/// is set (the script sets it when `/proc/cpuinfo` lists `avx2` and `fma`), a missing level
+/// fails the test instead: on such a CPU nothing may be skipped.
+#[cfg(target_arch = "x86_64")]
+pub fn avx2_or_skip(test: &'static str) -> Option<crate::simd::level::Avx2Fma> {
+    let level = crate::simd::level::Avx2Fma::detect();
+    if level.is_none() {
+        assert!(
+            std::env::var_os("HALFRAY_REQUIRE_AVX2").is_none(),
+            "{test}: HALFRAY_REQUIRE_AVX2 is set but the CPU reports no AVX2+FMA"
+        );
+        record_skip(
+            test,
+            "no AVX2+FMA on this CPU: the AVX2 kernels cannot run here",
+        );
+    }
+    level
+}
+
+/// Records (once per test name per process) that `test` skipped part of its checks, and why.
+pub fn record_skip(test: &'static str, why: &str) {
+    use std::io::Write;
+    static SEEN: std::sync::Mutex<Vec<&'static str>> = std::sync::Mutex::new(Vec::new());
+    let mut seen = SEEN
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    if seen.contains(&test) {
+        return;
+    }
+    seen.push(test);
+    let line = std::format!("SKIPPED halfray-core {test}: {why}");
+    std::eprintln!("{line}");
+    if let Some(path) = std::env::var_os("HALFRAY_SKIP_LOG") {
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&path);
+        if let Ok(mut f) = file {
+            let _ = writeln!(f, "{line}");
+        }
+    }
+}

@@ -534,8 +534,9 @@ mod tests {
     /// bits the key drops.
     #[test]
     fn avx2_key_sort_equals_a_scalar_sort() {
-        let Some(level) = Avx2Fma::detect() else {
-            std::eprintln!("no AVX2+FMA on this CPU: the AVX2 kernel cannot run here");
+        let Some(level) = crate::test_util::avx2_or_skip(
+            "simd::level::tests::avx2_key_sort_equals_a_scalar_sort",
+        ) else {
             return;
         };
         let specials = [
@@ -589,8 +590,9 @@ mod tests {
     /// outcomes must occur.
     #[test]
     fn avx2_two_group_cull_equals_the_lane_formula() {
-        let Some(level) = Avx2Fma::detect() else {
-            std::eprintln!("no AVX2+FMA on this CPU: the AVX2 kernel cannot run here");
+        let Some(level) = crate::test_util::avx2_or_skip(
+            "simd::level::tests::avx2_two_group_cull_equals_the_lane_formula",
+        ) else {
             return;
         };
         let mut s = 23u64;
@@ -653,8 +655,9 @@ mod tests {
     /// (cancelled normal or `d·n` within its filter), a crossing in the box and one outside.
     #[test]
     fn avx2_plane_crossing_equals_the_portable_one() {
-        let Some(level) = Avx2Fma::detect() else {
-            std::eprintln!("no AVX2+FMA on this CPU: the AVX2 kernel cannot run here");
+        let Some(level) = crate::test_util::avx2_or_skip(
+            "simd::level::tests::avx2_plane_crossing_equals_the_portable_one",
+        ) else {
             return;
         };
         let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
@@ -711,8 +714,9 @@ mod tests {
 
     #[test]
     fn avx2_slab_equals_the_lane_formula() {
-        let Some(level) = Avx2Fma::detect() else {
-            std::eprintln!("no AVX2+FMA on this CPU: the AVX2 kernel cannot run here");
+        let Some(level) =
+            crate::test_util::avx2_or_skip("simd::level::tests::avx2_slab_equals_the_lane_formula")
+        else {
             return;
         };
         let mut s = 7u64;

@@ -297,6 +297,36 @@ pub fn check(s: &Soup) {
 
 /// [`check_ray`]'s properties for the 8-wide tree: closest hit equal to brute force in the
 /// same domain, a genuine hit no nearer than brute force's elsewhere; any-hit agreement.
+/// The AVX2+FMA level, when the CPU has it; otherwise `None`, and the skip is recorded once
+/// per process, as the core's tests do (`scripts/test-all.sh` prints `HALFRAY_SKIP_LOG`;
+/// with `HALFRAY_REQUIRE_AVX2` set, a missing level is a failure).
+#[cfg(target_arch = "x86_64")]
+fn avx2_or_skip() -> Option<halfray_core::simd_level::Avx2Fma> {
+    static NOTED: std::sync::Once = std::sync::Once::new();
+    let level = halfray::simd::avx2_fma();
+    if level.is_none() {
+        NOTED.call_once(|| {
+            assert!(
+                std::env::var_os("HALFRAY_REQUIRE_AVX2").is_none(),
+                "HALFRAY_REQUIRE_AVX2 is set but the CPU reports no AVX2+FMA"
+            );
+            let line = "SKIPPED halfray-fuzz-props bvh::check_wide: the AVX2 level's answers \
+                        (no AVX2+FMA on this CPU)";
+            eprintln!("{line}");
+            if let Some(path) = std::env::var_os("HALFRAY_SKIP_LOG")
+                && let Ok(mut f) = std::fs::OpenOptions::new()
+                    .create(true)
+                    .append(true)
+                    .open(path)
+            {
+                use std::io::Write;
+                let _ = writeln!(f, "{line}");
+            }
+        });
+    }
+    level
+}
+
 /// Where the CPU has AVX2 and FMA, the queries at that SIMD level (the frontend's: node test,
 /// child sort, lane cull and the hit's `f64` plane kernel) must return the portable answers,
 /// bit for bit.
@@ -310,7 +340,7 @@ fn check_wide<T: TriangleIntersector>(
     let got = wide.closest_hit_triangles(isect, ray, None);
     let any = wide.any_hit_triangles(isect, ray, None);
     #[cfg(target_arch = "x86_64")]
-    if let Some(level) = halfray::simd::avx2_fma() {
+    if let Some(level) = avx2_or_skip() {
         let mut stack = halfray_core::bvh::wide::WideStack::new();
         let simd = wide.closest_hit_triangles_on(level, &mut stack, isect, ray, None);
         let bits = |h: Option<(u32, halfray_core::triangle::TriangleHit)>| {

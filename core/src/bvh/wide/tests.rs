@@ -148,7 +148,9 @@ fn check_against_brute<const W: usize>(n: usize, seed: u64, max_leaf: u32) {
 /// form of `t`) give the portable answers, bit for bit, and statistics.
 fn same_at_every_level<const W: usize>(w: &VecWide<W>, ray: &Ray) {
     #[cfg(target_arch = "x86_64")]
-    if let Some(level) = crate::simd_level::Avx2Fma::detect() {
+    if let Some(level) = crate::test_util::avx2_or_skip(
+        "bvh::wide::tests::closest_and_any_hit_equal_brute_force_for_both_widths (same_at_every_level)",
+    ) {
         let mut stack = WideStack::new();
         let (mut a, mut b) = (TraversalStats::default(), TraversalStats::default());
         let portable =
