@@ -12,7 +12,10 @@
 //! * [`plane`], [`sphere`], [`quadric`], [`polygon`], [`transform`]: the other primitives.
 //! * [`bvh`]: a binned-SAH BVH built into caller storage, traversed with a fixed stack.
 //! * [`grid`], [`kdtree`]: the uniform grid (3-D DDA) and the SAH kd-tree beside the BVH, in
-//!   caller storage, with the BVH's closest/any-hit contracts (equal to brute force).
+//!   caller storage.
+//! * [`query`]: one query interface over all of them ([`query::RayQuery`]: closest hit, any
+//!   hit, box query; equal to brute force), with the leaf test ([`query::LeafTest`]) and the
+//!   query context ([`query::Query`]); [`prelude`] imports the traits.
 //! * [`volume`]: bounding spheres, oriented boxes and capsules, and conservative overlap tests.
 //! * [`collide`]: mesh-against-mesh collision (exact triangle–triangle test, BVH against BVH
 //!   under a transform) and the minimum distance between two meshes.
@@ -58,7 +61,9 @@ pub mod kdtree;
 pub mod plane;
 pub mod polygon;
 pub mod predicates;
+pub mod prelude;
 pub mod quadric;
+pub mod query;
 pub mod ray;
 pub mod shape;
 #[allow(unsafe_code)]

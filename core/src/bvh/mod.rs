@@ -87,6 +87,8 @@ pub mod wide;
 #[cfg(test)]
 mod tests;
 
+pub use crate::query::StackEntry;
+pub use crate::query::TraversalStats;
 pub use build::{BuildOptions, BuildWorkspace};
 pub use error::BvhError;
 pub use jobs::{BuildJob, JobPart, JobParts};
@@ -94,8 +96,7 @@ pub use load::{LoadError, load_scratch_len};
 pub use node::{BvhNode, NODE_SIZE};
 pub use primitive::{Primitive, PrimitiveSource, TriangleMesh};
 pub use scratch::{PrimRef, scratch_capacity};
-pub use stats::{BvhStats, TraversalStats};
-pub use traverse::StackEntry;
+pub use stats::BvhStats;
 
 use crate::aabb::Aabb;
 use crate::getters::getters;

@@ -21,6 +21,16 @@ where
         &self,
         source: &S,
         query: &Aabb,
+        found: impl FnMut(u32) -> bool,
+    ) -> usize {
+        self.boxes_overlapping(source, query, found)
+    }
+
+    /// The box query ([`crate::query::RayQuery::query_box`]).
+    pub(super) fn boxes_overlapping<S: PrimitiveSource + ?Sized>(
+        &self,
+        source: &S,
+        query: &Aabb,
         mut found: impl FnMut(u32) -> bool,
     ) -> usize {
         let nodes = self.nodes();

@@ -3,25 +3,6 @@
 use super::node::{BvhNode, NODE_SIZE};
 use super::{Bvh, MAX_DEPTH};
 
-/// Traversal counters. Queries **add** to the counters they are given, so one value can
-/// accumulate a whole ray set (divide by the ray count for averages).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct TraversalStats {
-    /// Node boxes tested (the root counts once, each inner node's two children twice).
-    pub nodes_visited: u64,
-    /// Primitive intersection tests.
-    pub primitives_tested: u64,
-}
-
-impl TraversalStats {
-    /// Adds `other`'s counters to these.
-    #[inline]
-    pub fn add(&mut self, other: &Self) {
-        self.nodes_visited += other.nodes_visited;
-        self.primitives_tested += other.primitives_tested;
-    }
-}
-
 /// Shape and size of a built tree ([`Bvh::stats`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BvhStats {

@@ -3,11 +3,13 @@
 use super::node::BvhNode;
 use super::padded_ray::PaddedRay;
 use super::primitive::TriangleMesh;
-use super::stats::TraversalStats;
 use super::{Bvh, BvhError, TRAVERSAL_STACK_SIZE, cull_bound, improves, projection_pad};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::hit_queries::closest_and_any;
+use crate::query::TraversalStats;
+use crate::query::{LeafTest, Query, RayQuery, Stack, StackEntry};
 use crate::ray::Ray;
+use crate::simd_level::SimdLevel;
 use crate::triangle::{TriangleHit, TriangleIntersector};
 use glam::Vec3;
 
@@ -61,24 +63,6 @@ impl PaddedRay {
         let b = crate::aabb::Aabb::new(lo - self.pad, hi + self.pad);
         b.intersect_slab(&self.slab, t_min, t_max).map(|(t, _)| t)
     }
-}
-
-/// One entry of a binary tree's traversal stack: a node still to visit and the distance at
-/// which the ray enters its box. Callers that bring their own stack
-/// ([`Bvh::closest_hit_triangles_in`]) make it of [`StackEntry::EMPTY`]s; its contents between
-/// queries mean nothing.
-#[derive(Clone, Copy, Debug)]
-pub struct StackEntry {
-    node: u32,
-    t_enter: f32,
-}
-
-impl StackEntry {
-    /// An entry to fill a stack with.
-    pub const EMPTY: Self = Self {
-        node: 0,
-        t_enter: 0.0,
-    };
 }
 
 /// `query` on a stack of its own of [`TRAVERSAL_STACK_SIZE`] entries, enough for every tree
@@ -344,5 +328,81 @@ where
             s.add(&local);
         }
         Ok(best)
+    }
+}
+
+impl<N, I> RayQuery for Bvh<N, I>
+where
+    N: AsRef<[BvhNode]>,
+    I: AsRef<[u32]>,
+{
+    #[inline]
+    fn closest_hit<T: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        ray: &Ray,
+        leaf: &mut T,
+        ctx: &mut Query<'_, L, S>,
+    ) -> S::Out<(u32, T::Hit)> {
+        S::answer(self.leaf_query(false, ray, leaf, ctx))
+    }
+
+    #[inline]
+    fn any_hit<T: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        ray: &Ray,
+        leaf: &mut T,
+        ctx: &mut Query<'_, L, S>,
+    ) -> S::Out<(u32, T::Hit)> {
+        S::answer(self.leaf_query(true, ray, leaf, ctx))
+    }
+
+    fn query_box<P: crate::bvh::PrimitiveSource + ?Sized>(
+        &self,
+        source: &P,
+        query: &crate::aabb::Aabb,
+        found: impl FnMut(u32) -> bool,
+    ) -> usize {
+        self.boxes_overlapping(source, query, found)
+    }
+
+    fn primitive_count(&self) -> usize {
+        self.prim_count as usize
+    }
+
+    /// `32·nodes + 4·primitives` ([`super::BvhStats::bytes`]).
+    fn bytes_used(&self) -> usize {
+        self.nodes().len() * super::NODE_SIZE + self.prim_count as usize * 4
+    }
+}
+
+impl<N, I> Bvh<N, I>
+where
+    N: AsRef<[BvhNode]>,
+    I: AsRef<[u32]>,
+{
+    /// Both ray queries: the leaf test prepared once per ray (a refused ray visits nothing),
+    /// on the context's stack or one of [`TRAVERSAL_STACK_SIZE`] entries in this frame. One
+    /// closure type for closest and any hit, so that both share one traversal (a firmware
+    /// links one copy).
+    #[inline]
+    fn leaf_query<T: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        any: bool,
+        ray: &Ray,
+        leaf: &mut T,
+        ctx: &mut Query<'_, L, S>,
+    ) -> Result<Option<(u32, T::Hit)>, BvhError> {
+        let Some(pre) = leaf.prepare(ray) else {
+            return Ok(None);
+        };
+        let stats = ctx.stats.as_deref_mut();
+        let intersect = |prim, r: &Ray| leaf.intersect(&pre, prim, r);
+        match ctx.stack.entries() {
+            Some(stack) => self.traverse(stack, ray, intersect, stats, any),
+            None => {
+                let mut own = [StackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
+                self.traverse(&mut own, ray, intersect, stats, any)
+            }
+        }
     }
 }

@@ -90,6 +90,7 @@ mod build;
 mod error;
 mod overlap;
 mod plan;
+mod query;
 mod traverse;
 
 #[cfg(test)]

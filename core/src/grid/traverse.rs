@@ -79,7 +79,7 @@ where
     }
 
     /// Closest hit, or any hit when `any`.
-    fn traverse<H>(
+    pub(super) fn traverse<H>(
         &self,
         ray: &Ray,
         intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,

@@ -84,6 +84,7 @@
 mod build;
 mod error;
 mod node;
+mod query;
 mod sah;
 mod traverse;
 

@@ -166,7 +166,7 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> KdTree<N, R> {
     }
 
     /// Closest hit, or any hit when `any` (module docs of [`super`]).
-    fn traverse<H>(
+    pub(super) fn traverse<H>(
         &self,
         ray: &Ray,
         mut intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,

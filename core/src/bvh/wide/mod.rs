@@ -68,9 +68,9 @@ mod tests;
 pub use node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
 pub use traverse::WideStack;
 
-use super::stats::TraversalStats;
 use crate::aabb::Aabb;
 use crate::getters::getters;
+use crate::query::TraversalStats;
 
 /// Most triangles one wide leaf slot can hold (the binary tree's leaves must not be larger).
 pub const MAX_LEAF_TRIANGLES: usize = 16;

@@ -22,7 +22,16 @@ where
     /// touching counts, see [`Aabb::overlaps`]); `found` returns `true` to continue, `false`
     /// to stop. Returns the number reported. An empty or NaN query box reports nothing.
     /// Triangles are visited in tree order.
-    pub fn query_box(&self, query: &Aabb, mut found: impl FnMut(u32) -> bool) -> usize {
+    pub fn query_box(&self, query: &Aabb, found: impl FnMut(u32) -> bool) -> usize {
+        self.boxes_overlapping(query, found)
+    }
+
+    /// The box query ([`crate::query::RayQuery::query_box`]).
+    pub(super) fn boxes_overlapping(
+        &self,
+        query: &Aabb,
+        mut found: impl FnMut(u32) -> bool,
+    ) -> usize {
         let nodes = self.nodes();
         let mut reported = 0usize;
         if !query.is_valid() || nodes.is_empty() {

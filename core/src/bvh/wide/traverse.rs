@@ -4,18 +4,20 @@ use super::node::{ChildRef, LEAF_BIT, LeafGroup, START_MASK, WideNode};
 use super::{WideBvh, add_stats};
 use crate::aabb::SlabRay;
 use crate::bvh::padded_ray::PaddedRay;
-use crate::bvh::stats::TraversalStats;
-use crate::bvh::{cull_bound, projection_pad, take_if_better};
+use crate::bvh::{BvhError, TriangleMesh, cull_bound, projection_pad, take_if_better};
 use crate::hit_queries::closest_and_any;
+use crate::query::{
+    LeafTest, Query, QueryStack, RayQuery, Stack, StackEntry, TraversalStats, Triangles,
+};
 use crate::ray::Ray;
 use crate::simd;
 use crate::simd::level::{Portable, SimdLevel, order_key};
-use crate::triangle::{LANES, TriangleHit, TriangleIntersector, TriangleLanes, pair_mask};
+use crate::triangle::{LANES, TriangleHit, TriangleIntersector, pair_mask};
 use glam::Vec3;
 
 /// Stack entries of the traversal: [`super::stack_size`] of the widest supported tree
 /// (`W = 8`), which bounds every narrower one (module docs of [`super`]).
-const STACK: usize = super::stack_size(8);
+const STACK: usize = crate::query::QUERY_STACK_SIZE;
 
 /// The groups holding leaf slots `start .. start + count` (`count ≥ 1`); an empty slice for
 /// a run out of range.
@@ -88,143 +90,87 @@ fn sorted_keys<const W: usize, L: SimdLevel>(level: L, dist: &[f32; W], hits: u3
     keys
 }
 
-/// What a leaf does with its triangles: the one-triangle test and the four-lane cull. A trait
-/// with always-inlined methods rather than closures, so that the test is compiled into the
-/// traversal loop (a called closure returns its hit through memory).
-trait LeafTest<H> {
-    /// `(t, payload)` of a hit of triangle `prim` (vertices `v`) in `ray`'s interval, with the
-    /// kernels of SIMD `level` where the test has them (the same answer at every level).
-    fn intersect<L: SimdLevel>(
-        &mut self,
-        level: L,
-        prim: u32,
-        v: &[Vec3; 3],
-        ray: &Ray,
-    ) -> Option<(f32, H)>;
-    /// The lanes certainly missed ([`TriangleIntersector::certain_misses`]).
-    fn cull(&self, lanes: &TriangleLanes, ray: &Ray) -> u32;
-    /// The lanes of two groups certainly missed, `first`'s in bits 0–3 and `second`'s in
-    /// bits 4–7 ([`TriangleIntersector::certain_misses2`]).
-    fn cull2<L: SimdLevel>(
-        &self,
-        level: L,
-        first: &TriangleLanes,
-        second: &TriangleLanes,
-        ray: &Ray,
-    ) -> u32;
-}
+/// The old closure form of the wide queries: the triangle's stored vertices go to the
+/// closure.
+struct VertexClosure<F>(F);
 
-/// The closure-based queries: every triangle goes to the closure.
-struct ClosureTest<F>(F);
+impl<H, F: FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>> LeafTest for VertexClosure<F> {
+    type Hit = H;
+    type Prepared = ();
 
-impl<H, F: FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>> LeafTest<H> for ClosureTest<F> {
     #[inline(always)]
-    fn intersect<L: SimdLevel>(
+    fn prepare(&self, _: &Ray) -> Option<()> {
+        Some(())
+    }
+
+    #[inline(always)]
+    fn intersect(&mut self, _: &(), _: u32, _: &Ray) -> Option<(f32, H)> {
+        None
+    }
+
+    #[inline(always)]
+    fn intersect_triangle<L: SimdLevel>(
         &mut self,
         _: L,
+        _: &(),
         prim: u32,
         v: &[Vec3; 3],
         ray: &Ray,
     ) -> Option<(f32, H)> {
         (self.0)(prim, v, ray)
     }
-
-    #[inline(always)]
-    fn cull(&self, _: &TriangleLanes, _: &Ray) -> u32 {
-        0
-    }
-
-    #[inline(always)]
-    fn cull2<L: SimdLevel>(&self, _: L, _: &TriangleLanes, _: &TriangleLanes, _: &Ray) -> u32 {
-        0
-    }
 }
 
-/// The intersector-based queries: `isect` with the ray prepared once, when the walk reaches
-/// its first leaf (most camera rays reach none and never pay for the preparation).
-struct PreparedTest<'a, I: TriangleIntersector> {
-    isect: &'a I,
-    pre: I::Prepared,
-}
+/// The mesh of the old intersector forms, which read the stored vertices only.
+const NO_MESH: TriangleMesh<'static> = TriangleMesh {
+    positions: &[],
+    triangles: &[],
+};
 
-impl<'a, I: TriangleIntersector> PreparedTest<'a, I> {
-    /// The factory [`WideBvh::traverse`] calls at the first leaf, for a ray it has checked
-    /// ([`TriangleIntersector::prepare_valid`]): `None` when `isect` refuses the ray.
-    #[inline(always)]
-    fn of(isect: &'a I) -> impl FnOnce(&Ray) -> Option<Self> {
-        move |ray| {
-            Some(Self {
-                isect,
-                pre: isect.prepare_valid(ray)?,
-            })
-        }
-    }
-}
+/// The traversal stack of a wide tree (the old name of [`QueryStack`]).
+pub type WideStack = QueryStack;
 
-impl<I: TriangleIntersector> LeafTest<TriangleHit> for PreparedTest<'_, I> {
+impl<const W: usize, N, T> RayQuery for WideBvh<W, N, T>
+where
+    N: AsRef<[WideNode<W>]>,
+    T: AsRef<[LeafGroup]>,
+{
     #[inline(always)]
-    fn intersect<L: SimdLevel>(
-        &mut self,
-        level: L,
-        _: u32,
-        v: &[Vec3; 3],
-        ray: &Ray,
-    ) -> Option<(f32, TriangleHit)> {
-        let hit = self.isect.intersect_prepared_on(level, &self.pre, ray, v)?;
-        Some((hit.t, hit))
-    }
-
-    #[inline(always)]
-    fn cull(&self, lanes: &TriangleLanes, ray: &Ray) -> u32 {
-        self.isect.certain_misses(&self.pre, ray, lanes)
-    }
-
-    #[inline(always)]
-    fn cull2<L: SimdLevel>(
+    fn closest_hit<LT: LeafTest, L: SimdLevel, S: Stack>(
         &self,
-        level: L,
-        first: &TriangleLanes,
-        second: &TriangleLanes,
         ray: &Ray,
-    ) -> u32 {
-        self.isect
-            .certain_misses2(level, &self.pre, ray, first, second)
+        leaf: &mut LT,
+        ctx: &mut Query<'_, L, S>,
+    ) -> S::Out<(u32, LT::Hit)> {
+        S::answer(self.leaf_query::<LT, false, L, S>(ray, leaf, ctx))
     }
-}
 
-/// One stack entry: a child reference still to visit and the distance at which the ray enters
-/// its box.
-#[derive(Clone, Copy, Debug)]
-struct Entry {
-    child: u32,
-    t_enter: f32,
-}
-
-/// The traversal stack of a wide tree: `7·MAX_DEPTH + 1` entries of 8 bytes (3.5 KiB), enough for
-/// any tree up to 8 wide (module docs of [`super`]). Creating one means writing all of it, so
-/// a caller tracing many rays keeps one and passes it to the `_with` and `_on` queries; the plain
-/// queries make a fresh one per ray. Its contents between queries mean nothing.
-#[derive(Clone, Debug)]
-pub struct WideStack {
-    entries: [Entry; STACK],
-}
-
-impl WideStack {
-    /// A stack for any wide tree.
-    #[must_use]
-    pub const fn new() -> Self {
-        Self {
-            entries: [Entry {
-                child: 0,
-                t_enter: 0.0,
-            }; STACK],
-        }
+    #[inline(always)]
+    fn any_hit<LT: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        ray: &Ray,
+        leaf: &mut LT,
+        ctx: &mut Query<'_, L, S>,
+    ) -> S::Out<(u32, LT::Hit)> {
+        S::answer(self.leaf_query::<LT, true, L, S>(ray, leaf, ctx))
     }
-}
 
-impl Default for WideStack {
-    fn default() -> Self {
-        Self::new()
+    fn query_box<P: crate::bvh::PrimitiveSource + ?Sized>(
+        &self,
+        _: &P,
+        query: &crate::aabb::Aabb,
+        found: impl FnMut(u32) -> bool,
+    ) -> usize {
+        self.boxes_overlapping(query, found)
+    }
+
+    fn primitive_count(&self) -> usize {
+        self.triangle_count()
+    }
+
+    /// `224·nodes + 160·groups` for `W = 8` (module docs).
+    fn bytes_used(&self) -> usize {
+        core::mem::size_of_val(self.nodes()) + core::mem::size_of_val(self.groups())
     }
 }
 
@@ -255,8 +201,8 @@ where
             intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
             stats: Option<&mut TraversalStats>,
         ) -> Option<(u32, H)>, const ANY => {
-            let leaf = |_: &Ray| Some(ClosureTest(intersect));
-            self.traverse::<H, ANY, _, _>(Portable, &mut WideStack::new(), ray, leaf, stats)
+            let stack = &mut QueryStack::new().entries;
+            self.traverse::<_, ANY, _>(Portable, stack, ray, &mut VertexClosure(intersect), stats)
         }
     }
 
@@ -274,8 +220,8 @@ where
             intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
             stats: Option<&mut TraversalStats>,
         ) -> Option<(u32, H)>, const ANY => {
-            let leaf = |_: &Ray| Some(ClosureTest(intersect));
-            self.traverse::<H, ANY, _, _>(Portable, stack, ray, leaf, stats)
+            let stack = &mut stack.entries;
+            self.traverse::<_, ANY, _>(Portable, stack, ray, &mut VertexClosure(intersect), stats)
         }
     }
 
@@ -292,8 +238,8 @@ where
             ray: &Ray,
             stats: Option<&mut TraversalStats>,
         ) -> Option<(u32, TriangleHit)>, const ANY => {
-            let (level, stack, leaf) = (Portable, &mut WideStack::new(), PreparedTest::of(isect));
-            self.traverse::<TriangleHit, ANY, _, _>(level, stack, ray, leaf, stats)
+            let (stack, leaf) = (&mut QueryStack::new().entries, &mut Triangles::new(&NO_MESH, isect));
+            self.traverse::<_, ANY, _>(Portable, stack, ray, leaf, stats)
         }
     }
 
@@ -315,28 +261,58 @@ where
             ray: &Ray,
             stats: Option<&mut TraversalStats>,
         ) -> Option<(u32, TriangleHit)>, const ANY => {
-            let leaf = PreparedTest::of(isect);
-            self.traverse::<TriangleHit, ANY, L, _>(level, stack, ray, leaf, stats)
+            let (stack, leaf) = (&mut stack.entries, &mut Triangles::new(&NO_MESH, isect));
+            self.traverse::<_, ANY, L>(level, stack, ray, leaf, stats)
         }
     }
 
-    /// Checks `ray`, then walks the tree; `leaf` makes the leaf test from the ray when the
-    /// walk reaches its first leaf (`None`: the test refuses the ray, which then hits
-    /// nothing), so that rays that reach no leaf never pay for it.
+    /// Both ray queries on the context's stack (a [`QueryStack`]'s worth of its entries, or a
+    /// stack of this frame's own); a shorter caller stack is refused with
+    /// [`BvhError::StackTooSmall`].
     #[inline(always)]
-    fn traverse<H, const ANY: bool, L: SimdLevel, LT: LeafTest<H>>(
+    fn leaf_query<LT: LeafTest, const ANY: bool, L: SimdLevel, S: Stack>(
+        &self,
+        ray: &Ray,
+        leaf: &mut LT,
+        ctx: &mut Query<'_, L, S>,
+    ) -> Result<Option<(u32, LT::Hit)>, BvhError> {
+        let level = ctx.level;
+        let stats = ctx.stats.as_deref_mut();
+        match ctx.stack.entries() {
+            None => {
+                let stack = &mut QueryStack::new().entries;
+                Ok(self.traverse::<LT, ANY, L>(level, stack, ray, leaf, stats))
+            }
+            Some(entries) => {
+                let available = entries.len();
+                match entries
+                    .get_mut(..STACK)
+                    .and_then(|e| <&mut [StackEntry; STACK]>::try_from(e).ok())
+                {
+                    Some(stack) => Ok(self.traverse::<LT, ANY, L>(level, stack, ray, leaf, stats)),
+                    None => Err(BvhError::StackTooSmall { available }),
+                }
+            }
+        }
+    }
+
+    /// Checks `ray`, then walks the tree; the leaf test is prepared when the walk reaches its
+    /// first leaf (a refused ray then hits nothing), so that rays that reach no leaf never pay
+    /// for it.
+    #[inline(always)]
+    fn traverse<LT: LeafTest, const ANY: bool, L: SimdLevel>(
         &self,
         level: L,
-        stack: &mut WideStack,
+        stack: &mut [StackEntry; STACK],
         ray: &Ray,
-        leaf: impl FnOnce(&Ray) -> Option<LT>,
+        leaf: &mut LT,
         stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, H)> {
+    ) -> Option<(u32, LT::Hit)> {
         let slab = SlabRay::new(ray)?;
         if slab.divide || ray.t_min < 0.0 {
-            self.walk::<H, ANY, true, L, LT>(level, &mut stack.entries, ray, &slab, leaf, stats)
+            self.walk::<LT, ANY, true, L>(level, stack, ray, &slab, leaf, stats)
         } else {
-            self.walk::<H, ANY, false, L, LT>(level, &mut stack.entries, ray, &slab, leaf, stats)
+            self.walk::<LT, ANY, false, L>(level, stack, ray, &slab, leaf, stats)
         }
     }
 
@@ -355,13 +331,13 @@ where
         node: &WideNode<W>,
         dist: &[f32; W],
         hits: u32,
-        first: Entry,
-        stack: &mut [Entry; STACK],
+        first: StackEntry,
+        stack: &mut [StackEntry; STACK],
         sp: &mut usize,
         (nodes, groups): (&[WideNode<W>], &[LeafGroup]),
     ) -> u32 {
-        let entry = |i: usize| Entry {
-            child: node.child[i & (W - 1)],
+        let entry = |i: usize| StackEntry {
+            node: node.child[i & (W - 1)],
             t_enter: dist[i & (W - 1)],
         };
         // `first` is the lowest lane of `hits`.
@@ -375,12 +351,12 @@ where
             } else {
                 (first, second)
             };
-            prefetch_child(nodes, groups, later.child);
+            prefetch_child(nodes, groups, later.node);
             if let Some(slot) = stack.get_mut(*sp) {
                 *slot = later;
                 *sp += 1;
             }
-            return visit.child;
+            return visit.node;
         }
         // Three or more: sorted by key, branch-free on the AVX2 level; the others pushed
         // farthest first, so that the second nearest is on top.
@@ -392,7 +368,7 @@ where
                 *slot = e;
                 *sp += 1;
             }
-            prefetch_child(nodes, groups, e.child);
+            prefetch_child(nodes, groups, e.node);
         }
         node.child[(keys[0] & 7) as usize & (W - 1)]
     }
@@ -407,7 +383,7 @@ where
         (level, wray, (nodes, groups)): (L, &PaddedRay, (&[WideNode<W>], &[LeafGroup])),
         index: u32,
         (t_min, bound): (f32, f32),
-        (stack, sp, local): (&mut [Entry; STACK], &mut usize, &mut TraversalStats),
+        (stack, sp, local): (&mut [StackEntry; STACK], &mut usize, &mut TraversalStats),
     ) -> Option<u32> {
         let node = nodes.get(index as usize)?;
         local.nodes_visited += 1;
@@ -419,13 +395,13 @@ where
         let hits = mask;
         let first = mask.trailing_zeros() as usize & (W - 1);
         mask &= mask - 1;
-        let near = Entry {
-            child: node.child[first],
+        let near = StackEntry {
+            node: node.child[first],
             t_enter: dist[first],
         };
         Some(if mask == 0 {
             // One child hit (the common case): nothing to order or push.
-            near.child
+            near.node
         } else {
             self.order_hits(level, node, &dist, hits, near, stack, sp, (nodes, groups))
         })
@@ -434,26 +410,26 @@ where
     /// Pops the next entry still within `bound` (entries beyond it are dropped); `None` when
     /// the stack is empty.
     #[inline(always)]
-    fn pop(stack: &[Entry; STACK], sp: &mut usize, bound: f32) -> Option<u32> {
+    fn pop(stack: &[StackEntry; STACK], sp: &mut usize, bound: f32) -> Option<u32> {
         loop {
             *sp = sp.checked_sub(1)?;
             let e = stack.get(*sp)?;
             if e.t_enter <= bound {
-                return Some(e.child);
+                return Some(e.node);
             }
         }
     }
 
     #[inline(always)]
-    fn walk<H, const ANY: bool, const GENERAL: bool, L: SimdLevel, LT: LeafTest<H>>(
+    fn walk<LT: LeafTest, const ANY: bool, const GENERAL: bool, L: SimdLevel>(
         &self,
         level: L,
-        stack: &mut [Entry; STACK],
+        stack: &mut [StackEntry; STACK],
         ray: &Ray,
         slab: &SlabRay,
-        make_leaf: impl FnOnce(&Ray) -> Option<LT>,
+        leaf: &mut LT,
         stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, H)> {
+    ) -> Option<(u32, LT::Hit)> {
         let tree = (self.nodes(), self.groups());
         let groups = tree.1;
         if tree.0.is_empty() {
@@ -462,7 +438,7 @@ where
         let wray = PaddedRay::new(slab, projection_pad(slab.origin, self.extent));
         let mut local = TraversalStats::default();
         let mut cur = *ray;
-        let mut best: Option<(u32, H)> = None;
+        let mut best: Option<(u32, LT::Hit)> = None;
         let mut sp = 0usize;
         // The root is node 0 (its own box is the union of its children's: not tested).
         let mut next = 0u32;
@@ -487,7 +463,7 @@ where
                 }
             }
         }
-        let Some(mut leaf) = make_leaf(ray) else {
+        let Some(pre) = leaf.prepare_valid(ray) else {
             add_stats(stats, &local);
             return None;
         };
@@ -517,12 +493,18 @@ where
                             Some((second, after)) => {
                                 rest = after;
                                 let run = pair_mask(lanes.next_group(), lanes.next_group());
-                                let missed = leaf.cull2(level, &first.lanes, &second.lanes, &cur);
+                                let missed = leaf.certain_misses2(
+                                    level,
+                                    &pre,
+                                    &cur,
+                                    &first.lanes,
+                                    &second.lanes,
+                                );
                                 ([first, second], run & !missed)
                             }
                             None => {
                                 rest = tail;
-                                let missed = leaf.cull(&first.lanes, &cur);
+                                let missed = leaf.certain_misses(&pre, &cur, &first.lanes);
                                 ([first, first], lanes.next_group() & !missed)
                             }
                         };
@@ -534,7 +516,8 @@ where
                                 break;
                             };
                             let prim = tri.prim;
-                            let Some((t, h)) = leaf.intersect(level, prim, &tri.vertices(), &cur)
+                            let Some((t, h)) =
+                                leaf.intersect_triangle(level, &pre, prim, &tri.vertices(), &cur)
                             else {
                                 continue;
                             };

@@ -1,0 +1,142 @@
+//! The box query and the [`RayQuery`] implementation of the grid.
+
+use super::{Grid, GridStats};
+use crate::aabb::Aabb;
+use crate::bvh::{BvhError, PrimitiveSource};
+use crate::query::{LeafTest, Query, RayQuery, Stack, TraversalStats};
+use crate::ray::Ray;
+use crate::simd_level::SimdLevel;
+
+impl<O, R> RayQuery for Grid<O, R>
+where
+    O: AsRef<[u32]>,
+    R: AsRef<[u32]>,
+{
+    #[inline]
+    fn closest_hit<T: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        ray: &Ray,
+        leaf: &mut T,
+        ctx: &mut Query<'_, L, S>,
+    ) -> S::Out<(u32, T::Hit)> {
+        S::answer(self.leaf_query(false, ray, leaf, ctx))
+    }
+
+    #[inline]
+    fn any_hit<T: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        ray: &Ray,
+        leaf: &mut T,
+        ctx: &mut Query<'_, L, S>,
+    ) -> S::Out<(u32, T::Hit)> {
+        S::answer(self.leaf_query(true, ray, leaf, ctx))
+    }
+
+    /// Visits the cells the box touches (one more on each side, for the rounding of the cell
+    /// of a coordinate) and reports a triangle in the first of them, in scan order, that
+    /// references it.
+    fn query_box<P: PrimitiveSource + ?Sized>(
+        &self,
+        source: &P,
+        query: &Aabb,
+        mut found: impl FnMut(u32) -> bool,
+    ) -> usize {
+        if !query.is_valid() || self.reference_count == 0 {
+            return 0;
+        }
+        let (lo, hi) = self.cells_touching(query);
+        let mut reported = 0;
+        for k in lo[2]..=hi[2] {
+            for j in lo[1]..=hi[1] {
+                for i in lo[0]..=hi[0] {
+                    for &p in self.cell_by_id(self.layout.cell_id([i, j, k])) {
+                        let b = source.primitive_bounds(p as usize);
+                        if !b.overlaps(query) || self.first_holder(p, &b, (lo, hi)) != [i, j, k] {
+                            continue;
+                        }
+                        reported += 1;
+                        if !found(p) {
+                            return reported;
+                        }
+                    }
+                }
+            }
+        }
+        reported
+    }
+
+    fn primitive_count(&self) -> usize {
+        self.triangle_count
+    }
+
+    /// `4·(cells + 1) + 4·references`.
+    fn bytes_used(&self) -> usize {
+        4 * (self.cell_count() + 1 + self.reference_count)
+    }
+}
+
+impl<O, R> Grid<O, R>
+where
+    O: AsRef<[u32]>,
+    R: AsRef<[u32]>,
+{
+    /// Both ray queries: the leaf test prepared once per ray (a refused ray tests nothing).
+    #[inline]
+    fn leaf_query<T: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        any: bool,
+        ray: &Ray,
+        leaf: &mut T,
+        ctx: &mut Query<'_, L, S>,
+    ) -> Result<Option<(u32, T::Hit)>, BvhError> {
+        let Some(pre) = leaf.prepare(ray) else {
+            return Ok(None);
+        };
+        let mut local = GridStats::default();
+        let found = self.traverse(
+            ray,
+            |p, r| leaf.intersect(&pre, p, r),
+            Some(&mut local),
+            any,
+        );
+        ctx.add_stats(&TraversalStats {
+            nodes_visited: local.cells_visited,
+            primitives_tested: local.triangles_tested,
+        });
+        Ok(found)
+    }
+
+    /// The cells (lowest and highest per axis, clamped) that the closed box `b` touches, one
+    /// more on each side.
+    fn cells_touching(&self, b: &Aabb) -> ([u32; 3], [u32; 3]) {
+        let l = &self.layout;
+        let lo = [0, 1, 2].map(|a| l.cell_of(a, b.min[a]).saturating_sub(1));
+        let hi = [0, 1, 2].map(|a| l.cell_of(a, b.max[a]).saturating_add(1).min(l.n[a] - 1));
+        (lo, hi)
+    }
+
+    /// The first cell, in the box query's scan order over the cells `(lo, hi)`, that
+    /// references triangle `p` (bounds `b`): only the cells its padded box touches can.
+    /// `[u32::MAX; 3]` for none.
+    fn first_holder(&self, p: u32, b: &Aabb, (lo, hi): ([u32; 3], [u32; 3])) -> [u32; 3] {
+        let pad = self.layout.pad;
+        let (plo, phi) = self.cells_touching(&Aabb::new(b.min - pad, b.max + pad));
+        let lo = [0, 1, 2].map(|a| lo[a].max(plo[a]));
+        let hi = [0, 1, 2].map(|a| hi[a].min(phi[a]));
+        for k in lo[2]..=hi[2] {
+            for j in lo[1]..=hi[1] {
+                for i in lo[0]..=hi[0] {
+                    // Cells list their triangles in increasing index.
+                    if self
+                        .cell_by_id(self.layout.cell_id([i, j, k]))
+                        .binary_search(&p)
+                        .is_ok()
+                    {
+                        return [i, j, k];
+                    }
+                }
+            }
+        }
+        [u32::MAX; 3]
+    }
+}

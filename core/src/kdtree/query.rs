@@ -1,0 +1,149 @@
+//! The box query and the [`RayQuery`] implementation of the kd-tree.
+
+use super::KdTree;
+use super::node::{KdNode, KdNodeKind};
+use crate::aabb::Aabb;
+use crate::bvh::{BvhError, PrimitiveSource};
+use crate::query::{LeafTest, Query, RayQuery, Stack};
+use crate::ray::Ray;
+use crate::simd_level::SimdLevel;
+
+impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> RayQuery for KdTree<N, R> {
+    #[inline]
+    fn closest_hit<T: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        ray: &Ray,
+        leaf: &mut T,
+        ctx: &mut Query<'_, L, S>,
+    ) -> S::Out<(u32, T::Hit)> {
+        S::answer(self.leaf_query(false, ray, leaf, ctx))
+    }
+
+    #[inline]
+    fn any_hit<T: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        ray: &Ray,
+        leaf: &mut T,
+        ctx: &mut Query<'_, L, S>,
+    ) -> S::Out<(u32, T::Hit)> {
+        S::answer(self.leaf_query(true, ray, leaf, ctx))
+    }
+
+    /// Visits the leaves whose cells the box touches, below before above, and reports a
+    /// primitive in the first of them that references it: the first leaf found by the same
+    /// walk over its bounds within the box (which reaches a leaf holding it, as every point
+    /// of a primitive's box lies in the cell of a leaf that references it).
+    fn query_box<P: PrimitiveSource + ?Sized>(
+        &self,
+        source: &P,
+        query: &Aabb,
+        mut found: impl FnMut(u32) -> bool,
+    ) -> usize {
+        if !query.is_valid() {
+            return 0;
+        }
+        let mut reported = 0;
+        self.leaves_touching(query, |node, run| {
+            for &p in run {
+                let b = source.primitive_bounds(p as usize);
+                if !b.overlaps(query) {
+                    continue;
+                }
+                let within = Aabb::new(b.min.max(query.min), b.max.min(query.max));
+                if self.first_holder(p, &within) != node {
+                    continue;
+                }
+                reported += 1;
+                if !found(p) {
+                    return false;
+                }
+            }
+            true
+        });
+        reported
+    }
+
+    fn primitive_count(&self) -> usize {
+        KdTree::primitive_count(self)
+    }
+
+    /// `8·nodes + 4·references`.
+    fn bytes_used(&self) -> usize {
+        core::mem::size_of_val(self.nodes()) + core::mem::size_of_val(self.references())
+    }
+}
+
+impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> KdTree<N, R> {
+    /// Both ray queries: the leaf test prepared once per ray (a refused ray visits nothing).
+    #[inline]
+    fn leaf_query<T: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        any: bool,
+        ray: &Ray,
+        leaf: &mut T,
+        ctx: &mut Query<'_, L, S>,
+    ) -> Result<Option<(u32, T::Hit)>, BvhError> {
+        let Some(pre) = leaf.prepare(ray) else {
+            return Ok(None);
+        };
+        let stats = ctx.stats.as_deref_mut();
+        Ok(self.traverse(ray, |p, r| leaf.intersect(&pre, p, r), stats, any))
+    }
+
+    /// Calls `visit(leaf node index, its references)` for every leaf whose (closed) cell may
+    /// touch the closed box `b`, depth first, the child below a plane before the one above;
+    /// `visit` returns `false` to stop.
+    fn leaves_touching(&self, b: &Aabb, mut visit: impl FnMut(u32, &[u32]) -> bool) {
+        let (nodes, refs) = (self.nodes(), self.references());
+        // One pending child per level: MAX_DEPTH + 1 entries suffice.
+        let mut stack = [0u32; super::MAX_DEPTH + 1];
+        let mut sp = usize::from(!nodes.is_empty());
+        while sp > 0 {
+            sp -= 1;
+            let index = stack[sp];
+            let Some(node) = nodes.get(index as usize) else {
+                continue;
+            };
+            match node.kind() {
+                KdNodeKind::Leaf { start, count } => {
+                    let first = start as usize;
+                    let run = refs
+                        .get(first..first.saturating_add(count as usize))
+                        .unwrap_or(&[]);
+                    if !visit(index, run) {
+                        return;
+                    }
+                }
+                KdNodeKind::Inner {
+                    axis,
+                    position,
+                    first,
+                } => {
+                    // Pushed above first, so that the child below is visited first.
+                    let below = b.min[axis % 3] <= position;
+                    let above = b.max[axis % 3] >= position;
+                    for (child, go) in [(first.saturating_add(1), above), (first, below)] {
+                        if go && let Some(slot) = stack.get_mut(sp) {
+                            *slot = child;
+                            sp += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// The first leaf, in [`KdTree::leaves_touching`]'s order over `region`, that references
+    /// `p`; `u32::MAX` for none.
+    fn first_holder(&self, p: u32, region: &Aabb) -> u32 {
+        let mut holder = u32::MAX;
+        self.leaves_touching(region, |node, run| {
+            if run.contains(&p) {
+                holder = node;
+                return false;
+            }
+            true
+        });
+        holder
+    }
+}

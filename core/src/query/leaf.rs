@@ -1,0 +1,178 @@
+//! The leaf test: what a query does with one primitive, behind one trait ([`LeafTest`]),
+//! implemented by closures and by [`Triangles`] (a mesh with any triangle intersector).
+
+use crate::bvh::TriangleMesh;
+use crate::ray::Ray;
+use crate::simd_level::SimdLevel;
+use crate::triangle::{TriangleHit, TriangleIntersector, TriangleLanes, pair_mask};
+use glam::Vec3;
+
+/// The test of one primitive against a ray, called by every structure's queries
+/// ([`super::RayQuery`]).
+///
+/// One required test ([`LeafTest::intersect`]) and a per-ray setup ([`LeafTest::prepare`]);
+/// the rest is provided and only worth overriding for triangles, which the wide trees store
+/// with their vertices and cull four (eight) at a time.
+///
+/// Implemented by every closure `FnMut(prim: u32, ray: &Ray) -> Option<(t, payload)>` (no
+/// setup) and by [`Triangles`].
+pub trait LeafTest {
+    /// What a hit carries besides its `t`.
+    type Hit;
+    /// What the test precomputes once per ray.
+    type Prepared;
+
+    /// The per-ray setup, for a ray the query has not checked yet; `None` refuses the ray (an
+    /// invalid one, [`Ray::validate`]), which then hits nothing.
+    fn prepare(&self, ray: &Ray) -> Option<Self::Prepared>;
+
+    /// [`LeafTest::prepare`] for a ray the query has already checked ([`Ray::is_valid`]):
+    /// may skip the check. The default calls `prepare`.
+    #[inline(always)]
+    fn prepare_valid(&self, ray: &Ray) -> Option<Self::Prepared> {
+        self.prepare(ray)
+    }
+
+    /// `(t, payload)` of a hit of primitive `prim` with `t` in `ray`'s interval
+    /// `(t_min, t_max]`, where `t_max` is the current closest `t` (inclusive); hits outside it
+    /// are ignored by the queries. `None` for a miss.
+    fn intersect(&mut self, pre: &Self::Prepared, prim: u32, ray: &Ray)
+    -> Option<(f32, Self::Hit)>;
+
+    /// [`LeafTest::intersect`] of triangle `prim` whose vertices `v` the structure stores (the
+    /// wide trees), with the kernels of SIMD `level` where the test has them: the same answer
+    /// as `intersect`. The default ignores `v` and `level`.
+    #[inline(always)]
+    fn intersect_triangle<L: SimdLevel>(
+        &mut self,
+        level: L,
+        pre: &Self::Prepared,
+        prim: u32,
+        v: &[Vec3; 3],
+        ray: &Ray,
+    ) -> Option<(f32, Self::Hit)> {
+        let _ = (level, v);
+        self.intersect(pre, prim, ray)
+    }
+
+    /// The lanes of stored triangles `lanes` that this test certainly misses (bit `i` for lane
+    /// `i`, see [`TriangleIntersector::certain_misses`]). The default culls none.
+    #[inline(always)]
+    fn certain_misses(&self, pre: &Self::Prepared, ray: &Ray, lanes: &TriangleLanes) -> u32 {
+        let _ = (pre, ray, lanes);
+        0
+    }
+
+    /// [`LeafTest::certain_misses`] of two groups, `first` (bits 0–3) and `second` (bits
+    /// 4–7), at SIMD `level`. The default culls each group alone.
+    #[inline(always)]
+    fn certain_misses2<L: SimdLevel>(
+        &self,
+        level: L,
+        pre: &Self::Prepared,
+        ray: &Ray,
+        first: &TriangleLanes,
+        second: &TriangleLanes,
+    ) -> u32 {
+        let _ = level;
+        pair_mask(
+            self.certain_misses(pre, ray, first),
+            self.certain_misses(pre, ray, second),
+        )
+    }
+}
+
+impl<H, F: FnMut(u32, &Ray) -> Option<(f32, H)>> LeafTest for F {
+    type Hit = H;
+    type Prepared = ();
+
+    #[inline(always)]
+    fn prepare(&self, _: &Ray) -> Option<()> {
+        Some(())
+    }
+
+    #[inline(always)]
+    fn intersect(&mut self, _: &(), prim: u32, ray: &Ray) -> Option<(f32, H)> {
+        self(prim, ray)
+    }
+}
+
+/// The triangles of `mesh` tested with the intersector `isect`, prepared once per ray:
+/// a hit is the triangle's [`TriangleHit`]. Triangles whose vertex indices are out of range
+/// are missed. The wide trees test the copies of the vertices they store (made from the mesh
+/// they were built over), with the intersector's lane culls and SIMD kernels.
+#[derive(Debug)]
+pub struct Triangles<'a, I> {
+    mesh: &'a TriangleMesh<'a>,
+    isect: &'a I,
+}
+
+impl<I> Clone for Triangles<'_, I> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<I> Copy for Triangles<'_, I> {}
+
+impl<'a, I: TriangleIntersector> Triangles<'a, I> {
+    /// The triangles of `mesh` with the intersector `isect`.
+    #[inline(always)]
+    #[must_use]
+    pub const fn new(mesh: &'a TriangleMesh<'a>, isect: &'a I) -> Self {
+        Self { mesh, isect }
+    }
+}
+
+impl<I: TriangleIntersector> LeafTest for Triangles<'_, I> {
+    type Hit = TriangleHit;
+    type Prepared = I::Prepared;
+
+    #[inline(always)]
+    fn prepare(&self, ray: &Ray) -> Option<I::Prepared> {
+        self.isect.prepare(ray)
+    }
+
+    #[inline(always)]
+    fn prepare_valid(&self, ray: &Ray) -> Option<I::Prepared> {
+        self.isect.prepare_valid(ray)
+    }
+
+    #[inline(always)]
+    fn intersect(&mut self, pre: &I::Prepared, prim: u32, ray: &Ray) -> Option<(f32, TriangleHit)> {
+        let v = self.mesh.triangle(prim as usize)?;
+        self.isect
+            .intersect_prepared(pre, ray, &v)
+            .map(|h| (h.t, h))
+    }
+
+    #[inline(always)]
+    fn intersect_triangle<L: SimdLevel>(
+        &mut self,
+        level: L,
+        pre: &I::Prepared,
+        _: u32,
+        v: &[Vec3; 3],
+        ray: &Ray,
+    ) -> Option<(f32, TriangleHit)> {
+        let hit = self.isect.intersect_prepared_on(level, pre, ray, v)?;
+        Some((hit.t, hit))
+    }
+
+    #[inline(always)]
+    fn certain_misses(&self, pre: &I::Prepared, ray: &Ray, lanes: &TriangleLanes) -> u32 {
+        self.isect.certain_misses(pre, ray, lanes)
+    }
+
+    #[inline(always)]
+    fn certain_misses2<L: SimdLevel>(
+        &self,
+        level: L,
+        pre: &I::Prepared,
+        ray: &Ray,
+        first: &TriangleLanes,
+        second: &TriangleLanes,
+    ) -> u32 {
+        self.isect.certain_misses2(level, pre, ray, first, second)
+    }
+}

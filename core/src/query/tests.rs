@@ -1,0 +1,317 @@
+//! The conformance suite of [`RayQuery`]: every structure, through the trait only, against
+//! brute-force loops over all primitives that share no code with the traversals
+//! ([`brute_watertight`] for closest hit, a bounds loop for the box query).
+
+use super::*;
+use crate::bvh::wide::{Bvh4, Bvh8, LeafGroup, WideNode, binary_options, group_capacity};
+use crate::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+use crate::grid::{CellAssignment, Grid, GridOptions, GridPlan};
+use crate::kdtree::{KdBuildOptions, KdNode, KdRef, KdTree};
+use crate::solids::{CUBE_TRIANGLES, CUBE_VERTICES, grid_triangles};
+use crate::test_util::{Lcg, brute_watertight, lcg_soup};
+use crate::triangle::{TriangleIntersector, Watertight};
+use std::vec;
+use std::vec::Vec;
+
+/// The test meshes: a random soup, a closed cube (shared edges and vertices), a flat grid of
+/// quads (rays through its vertices meet six triangles at one `t`: the tie rule), four
+/// coincident copies of one triangle (every hit a tie), and nothing.
+fn meshes() -> Vec<(Vec<Vec3>, Vec<[u32; 3]>)> {
+    let mut out = vec![lcg_soup(300, 7, 10.0, 1.5)];
+    out.push((CUBE_VERTICES.to_vec(), CUBE_TRIANGLES.to_vec()));
+    let n = 8u32;
+    let flat = (0..=n)
+        .flat_map(|j| (0..=n).map(move |i| Vec3::new(i as f32 - 4.0, j as f32 - 4.0, 0.5)))
+        .collect();
+    out.push((flat, grid_triangles(n, n).collect()));
+    let one = vec![
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(2.0, -1.0, 0.0),
+        Vec3::new(0.0, 2.0, 0.0),
+    ];
+    out.push((one, vec![[0, 1, 2]; 4]));
+    out.push((Vec::new(), Vec::new()));
+    out
+}
+
+/// Rays at `mesh`: random ones through its box, ones aimed at its vertices and edge
+/// midpoints, ones with a clipped interval, and invalid ones.
+fn rays(mesh: &TriangleMesh<'_>, seed: u64) -> Vec<Ray> {
+    let mut rng = Lcg(seed);
+    let b = (0..mesh.len()).fold(Aabb::EMPTY, |b, p| b.union(mesh.primitive_bounds(p)));
+    let (lo, hi) = if b.is_valid() {
+        (b.min, b.max)
+    } else {
+        (-Vec3::ONE, Vec3::ONE)
+    };
+    let mut out = Vec::new();
+    for k in 0..400 {
+        let o = (lo + hi) * 0.5 + rng.v(3.0) * (hi - lo).max_element();
+        let target = match (k % 3, mesh.triangle(k % mesh.len().max(1))) {
+            (1, Some(v)) => v[k % 3],
+            (2, Some(v)) => (v[0] + v[1]) * 0.5,
+            _ => lo + (hi - lo) * Vec3::new(rng.f(), rng.f(), rng.f()),
+        };
+        out.push(Ray::new(o, target - o));
+        if k % 5 == 0 {
+            out.push(Ray::with_interval(o, target - o, 0.3, 0.9));
+        }
+    }
+    out.push(Ray::new(Vec3::ZERO, Vec3::ZERO));
+    out.push(Ray::new(Vec3::splat(f32::NAN), Vec3::X));
+    out
+}
+
+/// Every query of `q` (built over `mesh`) against the brute-force loops.
+fn conforms<Q: RayQuery>(name: &str, q: &Q, mesh: &TriangleMesh<'_>) {
+    let mut tris = Triangles::new(mesh, &Watertight);
+    let mut closure = |prim: u32, r: &Ray| {
+        let v = mesh.triangle(prim as usize)?;
+        Watertight.intersect(r, &v).map(|h| (h.t, h.t))
+    };
+    let mut stack = QueryStack::new();
+    let mut entries = vec![StackEntry::EMPTY; QUERY_STACK_SIZE];
+    let rays = rays(mesh, 11);
+    let hits = rays
+        .iter()
+        .filter(|r| brute_watertight(mesh, r).is_some())
+        .count();
+    assert!(
+        mesh.is_empty() || hits > rays.len() / 5,
+        "{name}: {hits} hits"
+    );
+    for (i, ray) in rays.iter().enumerate() {
+        let want = brute_watertight(mesh, ray);
+        let got = q.closest_hit(ray, &mut tris, &mut Query::new());
+        assert_eq!(got, want, "{name}: closest hit of ray {i} {ray:?}");
+        let by_closure = q.closest_hit(ray, &mut closure, &mut Query::new());
+        assert_eq!(
+            by_closure,
+            want.map(|(p, h)| (p, h.t)),
+            "{name}: closure, ray {i}"
+        );
+
+        // Every context: the same answer and the same counters.
+        let (mut a, mut b, mut c) = Default::default();
+        let own = q.closest_hit(ray, &mut tris, &mut Query::new().stats(&mut a));
+        let kept = q.closest_hit(
+            ray,
+            &mut tris,
+            &mut Query::new().stack(&mut stack).stats(&mut b),
+        );
+        let slice = Query::new().stack(&mut entries[..]).stats(&mut c);
+        let caller = q.closest_hit(ray, &mut tris, &mut { slice });
+        assert_eq!(
+            (own, kept, caller),
+            (want, want, Ok(want)),
+            "{name}: contexts, ray {i}"
+        );
+        assert_eq!((a, a), (b, c), "{name}: statistics, ray {i}");
+        assert!(
+            want.is_none() || a.primitives_tested > 0,
+            "{name}: counted, ray {i}"
+        );
+
+        let any = q.any_hit(ray, &mut tris, &mut Query::new());
+        assert_eq!(any.is_some(), want.is_some(), "{name}: any hit of ray {i}");
+        if let Some((p, h)) = any {
+            let v = mesh.triangle(p as usize).unwrap();
+            assert_eq!(
+                Watertight.intersect(ray, &v),
+                Some(h),
+                "{name}: any hit is a hit"
+            );
+        }
+    }
+
+    let mut rng = Lcg(5);
+    let b = (0..mesh.len()).fold(Aabb::EMPTY, |b, p| b.union(mesh.primitive_bounds(p)));
+    let (lo, size) = if b.is_valid() {
+        (b.min, b.max - b.min)
+    } else {
+        (Vec3::ZERO, Vec3::ONE)
+    };
+    for i in 0..60 {
+        let (c, r) = (
+            lo + (rng.v(1.0) + Vec3::splat(0.5)) * size,
+            rng.v(0.3).abs() * size,
+        );
+        let query = Aabb::new(c - r, c + r);
+        let mut got = Vec::new();
+        let n = q.query_box(mesh, &query, |p| {
+            got.push(p);
+            true
+        });
+        got.sort_unstable();
+        let want: Vec<u32> = (0..mesh.len() as u32)
+            .filter(|&p| mesh.primitive_bounds(p as usize).overlaps(&query))
+            .collect();
+        assert_eq!((n, &got), (want.len(), &want), "{name}: box {i} {query:?}");
+        if want.len() > 1 {
+            let mut calls = 0;
+            assert_eq!(
+                q.query_box(mesh, &query, |_| {
+                    calls += 1;
+                    false
+                }),
+                1,
+                "{name}: stops"
+            );
+            assert_eq!(calls, 1);
+        }
+    }
+    assert_eq!(
+        q.query_box(mesh, &Aabb::EMPTY, |_| true),
+        0,
+        "{name}: empty box"
+    );
+
+    let points: Vec<Vec3> = (0..20)
+        .map(|_| lo + (rng.v(1.0) + Vec3::splat(0.5)) * size)
+        .collect();
+    let normals: Vec<Vec3> = (0..20).map(|_| rng.v(2.0) - Vec3::ONE).collect();
+    let mut out = vec![0.0; points.len()];
+    let min = q.clearance(&mut tris, &points, &normals, &mut out).unwrap();
+    for (k, (&p, &d)) in points.iter().zip(&normals).enumerate() {
+        let want = brute_watertight(mesh, &Ray::new(p, d)).map_or(f32::INFINITY, |(_, h)| {
+            h.t * crate::float::sqrt(d.length_squared())
+        });
+        assert_eq!(out[k], want, "{name}: clearance {k}");
+    }
+    assert_eq!(min, out.iter().copied().fold(f32::INFINITY, f32::min));
+    assert_eq!(q.primitive_count(), mesh.len(), "{name}: primitives");
+    assert_eq!(
+        q.bytes_per_triangle() > 0.0,
+        !mesh.is_empty(),
+        "{name}: size"
+    );
+}
+
+#[test]
+fn every_structure_equals_brute_force_through_the_trait() {
+    for (pos, tris) in meshes() {
+        let mesh = TriangleMesh::new(&pos, &tris);
+        let n = mesh.len();
+        let bvh = |options: &BuildOptions| {
+            Bvh::build(
+                &mesh,
+                vec![BvhNode::EMPTY; node_capacity(n)],
+                vec![0u32; index_capacity(n)],
+                options,
+            )
+            .unwrap()
+        };
+        conforms("bvh", &bvh(&BuildOptions::default()), &mesh);
+        let single = BuildOptions {
+            max_leaf_size: 1,
+            ..BuildOptions::default()
+        };
+        conforms("bvh, leaves of one", &bvh(&single), &mesh);
+
+        let binary = bvh(&binary_options(BuildOptions::default()));
+        let groups = vec![LeafGroup::EMPTY; group_capacity(n)];
+        let nodes8 = vec![WideNode::EMPTY; crate::bvh::wide::node_capacity(n)];
+        conforms(
+            "bvh8",
+            &Bvh8::from_binary(&binary, &mesh, nodes8, groups.clone()).unwrap(),
+            &mesh,
+        );
+        let nodes4 = vec![WideNode::EMPTY; crate::bvh::wide::node_capacity(n)];
+        conforms(
+            "bvh4",
+            &Bvh4::from_binary(&binary, &mesh, nodes4, groups).unwrap(),
+            &mesh,
+        );
+
+        for assignment in [CellAssignment::Exact, CellAssignment::Bounds] {
+            let options = GridOptions {
+                assignment,
+                ..GridOptions::default()
+            };
+            let plan = GridPlan::new(&mesh, &options).unwrap();
+            let offsets = vec![0u32; plan.required_offsets()];
+            let refs = vec![0u32; plan.required_references()];
+            conforms(
+                "grid",
+                &Grid::build(&mesh, &plan, offsets, refs).unwrap(),
+                &mesh,
+            );
+        }
+
+        let refs = crate::kdtree::reference_capacity(n);
+        let kd = KdTree::build(
+            &mesh,
+            vec![KdNode::EMPTY; crate::kdtree::node_capacity(n).max(1)],
+            vec![0u32; refs],
+            &mut vec![KdRef::EMPTY; refs],
+            &KdBuildOptions::default(),
+        )
+        .unwrap();
+        conforms("kd-tree", &kd, &mesh);
+    }
+}
+
+#[test]
+fn a_caller_stack_too_small_is_refused_not_cut_short() {
+    let (pos, tris) = lcg_soup(200, 3, 6.0, 1.0);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let n = mesh.len();
+    let single = BuildOptions {
+        max_leaf_size: 1,
+        ..BuildOptions::default()
+    };
+    let (nodes, indices) = (
+        vec![BvhNode::EMPTY; node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+    );
+    let bvh = Bvh::build(&mesh, nodes, indices, &single).unwrap();
+    let mut tris = Triangles::new(&mesh, &Watertight);
+    let mut refused = 0;
+    for ray in rays(&mesh, 3) {
+        // Short of the tree's depth: the right answer or a refusal, never a wrong answer.
+        let mut short = vec![StackEntry::EMPTY; bvh.stack_depth() / 2];
+        match RayQuery::closest_hit(
+            &bvh,
+            &ray,
+            &mut tris,
+            &mut Query::new().stack(&mut short[..]),
+        ) {
+            Ok(found) => assert_eq!(found, brute_watertight(&mesh, &ray), "{ray:?}"),
+            Err(e) => {
+                assert_eq!(
+                    e,
+                    BvhError::StackTooSmall {
+                        available: short.len()
+                    }
+                );
+                refused += 1;
+            }
+        }
+    }
+    assert!(refused > 0, "no ray needed the whole depth");
+    let ray = Ray::new(Vec3::new(-20.0, 0.1, 0.2), Vec3::X);
+
+    let binary = Bvh::build(
+        &mesh,
+        vec![BvhNode::EMPTY; node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        &binary_options(BuildOptions::default()),
+    )
+    .unwrap();
+    let (nodes, groups) = (
+        vec![WideNode::EMPTY; crate::bvh::wide::node_capacity(n)],
+        vec![LeafGroup::EMPTY; group_capacity(n)],
+    );
+    let wide = Bvh8::from_binary(&binary, &mesh, nodes, groups).unwrap();
+    let mut less = vec![StackEntry::EMPTY; QUERY_STACK_SIZE - 1];
+    let refused = RayQuery::any_hit(
+        &wide,
+        &ray,
+        &mut tris,
+        &mut Query::new().stack(&mut less[..]),
+    );
+    assert!(
+        matches!(refused, Err(BvhError::StackTooSmall { .. })),
+        "{refused:?}"
+    );
+}
