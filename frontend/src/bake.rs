@@ -16,12 +16,16 @@
 //! `Bvh::from_parts(&NODES[..], &INDICES[..], &TriangleMesh::new(&POSITIONS, &TRIANGLES), &mut [0u32; LOAD_SCRATCH_WORDS])`,
 //! which checks it as untrusted input (`halfray_core::bvh::LoadError`). The bake runs that check
 //! itself before writing.
+//!
+//! With `--format bin`, the same mesh and BVH are written as one byte buffer in the layout of
+//! [`halfray_core::bvh::BakedLayout`], for C firmware (`halfray-ffi`'s `halfray_load`) or any
+//! reader that loads it from a file.
 
 use crate::accel::build_binary;
 use crate::error::{Error, Location, Result};
 use crate::mesh_tools::reserve_output;
 use crate::obj::read_obj;
-use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, load_scratch_len};
+use halfray_core::bvh::{BakedLayout, BuildOptions, Bvh, BvhNode, TriangleMesh, load_scratch_len};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -36,6 +40,18 @@ pub struct BakeArgs {
     /// Replace an output that is read-only or hard-linked (keeping its mode).
     #[arg(long)]
     pub force: bool,
+    /// What to write: a Rust source of `static` arrays, or the byte buffer C firmware loads.
+    #[arg(long, value_enum, default_value_t = BakeFormat::Rust)]
+    pub format: BakeFormat,
+}
+
+/// The output forms of `halfray bake`.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BakeFormat {
+    /// Rust source of `static` arrays (module docs).
+    Rust,
+    /// One little-endian byte buffer ([`halfray_core::bvh::BakedLayout`]).
+    Bin,
 }
 
 /// Runs `halfray bake`: prints one line with the counts and sizes.
@@ -60,14 +76,24 @@ pub fn run(args: &BakeArgs) -> Result<()> {
             Some(Box::new(e)),
         )
     })?;
-    let source = source(
-        &args.input,
-        &mesh.positions,
-        &mesh.triangles,
-        bvh.nodes(),
-        bvh.indices(),
-    );
-    out.write(|w| w.write_all(source.as_bytes()))?;
+    let data = match args.format {
+        BakeFormat::Rust => source(
+            &args.input,
+            &mesh.positions,
+            &mesh.triangles,
+            bvh.nodes(),
+            bvh.indices(),
+        )
+        .into_bytes(),
+        BakeFormat::Bin => bytes(
+            &args.input,
+            &mesh.positions,
+            &mesh.triangles,
+            bvh.nodes(),
+            bvh.indices(),
+        )?,
+    };
+    out.write(|w| w.write_all(&data))?;
     let flash = std::mem::size_of_val(&mesh.positions[..])
         + std::mem::size_of_val(&mesh.triangles[..])
         + std::mem::size_of_val(bvh.nodes())
@@ -81,6 +107,54 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         flash,
         args.output.display()
     ))
+}
+
+/// The byte buffer of a baked BVH ([`halfray_core::bvh::BakedLayout`]).
+///
+/// # Errors
+///
+/// An input error naming `input` when a count does not fit the format's `u32`.
+pub fn bytes(
+    input: &Path,
+    positions: &[glam::Vec3],
+    triangles: &[[u32; 3]],
+    nodes: &[BvhNode],
+    indices: &[u32],
+) -> Result<Vec<u8>> {
+    let count = |n: usize, what: &str| {
+        u32::try_from(n).map_err(|_| {
+            Error::input(
+                Location::file(input),
+                format!("{n} {what}: more than the baked format's u32 count"),
+            )
+        })
+    };
+    let layout = BakedLayout {
+        vertices: count(positions.len(), "vertices")?,
+        triangles: count(triangles.len(), "triangles")?,
+        nodes: count(nodes.len(), "BVH nodes")?,
+    };
+    let mut b = Vec::with_capacity(usize::try_from(layout.byte_len()).unwrap_or(0));
+    b.extend_from_slice(&layout.header());
+    let mut words = |ws: &[u32]| {
+        ws.iter()
+            .for_each(|w| b.extend_from_slice(&w.to_le_bytes()))
+    };
+    for n in nodes {
+        let (bounds, start, count) = n.to_raw();
+        let [lo, hi] = bounds.map(|v| v.map(f32::to_bits));
+        words(&lo);
+        words(&hi);
+        words(&[start, count]);
+    }
+    for p in positions {
+        words(&p.to_array().map(f32::to_bits));
+    }
+    for t in triangles {
+        words(t);
+    }
+    words(indices);
+    Ok(b)
 }
 
 /// `f32::from_bits(0x…)`: exact, and valid in a `static` initialiser.

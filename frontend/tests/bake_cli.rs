@@ -46,30 +46,19 @@ fn integers(text: &str) -> Vec<u32> {
         .collect()
 }
 
-#[test]
-fn the_baked_source_holds_the_mesh_and_a_bvh_that_loads_and_answers_like_brute_force() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("torus_bvh.rs");
-    let o = halfray(&[&"bake", &TORUS, &"-o", &out]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let src = std::fs::read_to_string(&out).unwrap();
-    let obj = read_obj(std::path::Path::new(TORUS)).unwrap();
+/// A baked mesh and BVH: positions, triangles, nodes, indices.
+type Baked = (Vec<Vec3>, Vec<[u32; 3]>, Vec<BvhNode>, Vec<u32>);
 
-    let p = floats(array(&src, "POSITIONS"));
+/// The arrays of a baked Rust source, read back by this file's own parser; checks that its
+/// `LOAD_SCRATCH_WORDS` is the loader's bitset length.
+fn read_source(src: &str) -> Baked {
+    let p = floats(array(src, "POSITIONS"));
     let positions: Vec<Vec3> = p.chunks(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
-    assert_eq!(positions.len(), obj.positions.len());
-    for (a, b) in positions.iter().zip(&obj.positions) {
-        assert_eq!(
-            a.to_array().map(f32::to_bits),
-            b.to_array().map(f32::to_bits)
-        );
-    }
-    let t = integers(array(&src, "TRIANGLES"));
+    let t = integers(array(src, "TRIANGLES"));
     // Each line is `[a, b, c],`: the `3` of the type is not inside the array body.
     let triangles: Vec<[u32; 3]> = t.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
-    assert_eq!(triangles, obj.triangles);
 
-    let nodes_text = array(&src, "NODES");
+    let nodes_text = array(src, "NODES");
     let boxes = floats(nodes_text);
     let fields = integers(nodes_text);
     let nodes: Vec<BvhNode> = boxes
@@ -81,7 +70,7 @@ fn the_baked_source_holds_the_mesh_and_a_bvh_that_loads_and_answers_like_brute_f
         nodes.len(),
         nodes_text.matches("BvhNode::from_raw(").count()
     );
-    let indices = integers(array(&src, "INDICES"));
+    let indices = integers(array(src, "INDICES"));
     let words: usize = src
         .split("pub const LOAD_SCRATCH_WORDS: usize = ")
         .nth(1)
@@ -90,6 +79,28 @@ fn the_baked_source_holds_the_mesh_and_a_bvh_that_loads_and_answers_like_brute_f
         .parse()
         .unwrap();
     assert_eq!(words, load_scratch_len(triangles.len()));
+    (positions, triangles, nodes, indices)
+}
+
+#[test]
+fn the_baked_source_holds_the_mesh_and_a_bvh_that_loads_and_answers_like_brute_force() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("torus_bvh.rs");
+    let o = halfray(&[&"bake", &TORUS, &"-o", &out]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let src = std::fs::read_to_string(&out).unwrap();
+    let obj = read_obj(std::path::Path::new(TORUS)).unwrap();
+
+    let (positions, triangles, nodes, indices) = read_source(&src);
+    assert_eq!(positions.len(), obj.positions.len());
+    for (a, b) in positions.iter().zip(&obj.positions) {
+        assert_eq!(
+            a.to_array().map(f32::to_bits),
+            b.to_array().map(f32::to_bits)
+        );
+    }
+    assert_eq!(triangles, obj.triangles);
+    let words = load_scratch_len(triangles.len());
 
     let mesh = TriangleMesh::new(&positions, &triangles);
     let bvh = Bvh::from_parts(&nodes[..], &indices[..], &mesh, &mut vec![0u32; words]).unwrap();
@@ -144,4 +155,47 @@ fn bad_input_and_bad_outputs_are_refused_with_nothing_written() {
     assert!(stderr(&o).contains("does not exist"));
     let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
     assert_eq!(left.len(), 2, "no temporary files left: {left:?}");
+}
+
+/// The little-endian `u32`s of `bytes`.
+fn le_words(bytes: &[u8]) -> Vec<u32> {
+    bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
+}
+
+#[test]
+fn the_baked_buffer_holds_what_the_baked_source_holds_at_the_documented_offsets() {
+    let dir = tempfile::tempdir().unwrap();
+    let (rs, bin) = (dir.path().join("torus.rs"), dir.path().join("torus.bin"));
+    let o = halfray(&[&"bake", &TORUS, &"-o", &rs]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = halfray(&[&"bake", &TORUS, &"-o", &bin, &"--format", &"bin"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (positions, triangles, nodes, indices) =
+        read_source(&std::fs::read_to_string(&rs).unwrap());
+    let b = std::fs::read(&bin).unwrap();
+    // The table of `halfray_core::bvh::BakedLayout`, decoded here by hand.
+    let (v, t, k) = (positions.len(), triangles.len(), nodes.len());
+    assert_eq!(&b[..8], b"halfray\0");
+    assert_eq!(le_words(&b[8..32]), [1, v as u32, t as u32, k as u32, 0, 0]);
+    assert_eq!(b.len(), 32 + 32 * k + 12 * v + 16 * t);
+    let node_words = le_words(&b[32..32 + 32 * k]);
+    for (n, w) in nodes.iter().zip(node_words.chunks(8)) {
+        let (bounds, start, count) = n.to_raw();
+        let f: Vec<u32> = bounds.as_flattened().iter().map(|x| x.to_bits()).collect();
+        assert_eq!(&w[..6], &f[..]);
+        assert_eq!(&w[6..], &[start, count]);
+    }
+    let at = 32 + 32 * k;
+    let p = le_words(&b[at..at + 12 * v]);
+    let want: Vec<u32> = positions
+        .iter()
+        .flat_map(|q| q.to_array().map(f32::to_bits))
+        .collect();
+    assert_eq!(p, want);
+    let at = at + 12 * v;
+    assert_eq!(le_words(&b[at..at + 12 * t]), triangles.as_flattened());
+    assert_eq!(le_words(&b[at + 12 * t..]), indices);
 }

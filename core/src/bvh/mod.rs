@@ -68,6 +68,7 @@
 //! [`Aabb::intersect_slab`]: crate::aabb::Aabb::intersect_slab
 //! [`Ray::validate`]: crate::ray::Ray::validate
 
+mod baked;
 mod build;
 mod clearance;
 mod error;
@@ -89,6 +90,9 @@ mod tests;
 
 pub use crate::query::StackEntry;
 pub use crate::query::TraversalStats;
+pub use baked::{
+    BAKED_ALIGN, BAKED_HEADER_BYTES, BAKED_MAGIC, BAKED_VERSION, BakedError, BakedLayout,
+};
 pub use build::{BuildOptions, BuildWorkspace};
 pub use error::BvhError;
 pub use jobs::{BuildJob, JobPart, JobParts};
