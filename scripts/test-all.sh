@@ -11,7 +11,8 @@
 #   no_std      halfray-core built for thumbv7em-none-eabihf, thumbv7m-none-eabi, thumbv6m-none-eabi and
 #               riscv32imac-unknown-none-elf; the thumb probe for thumbv7em-none-eabihf (no std, no alloc)
 #   mcu         the core under QEMU on a Cortex-M4F and a Cortex-M3, results bit-identical to the host
-#               (scripts/test-mcu.sh; installs qemu-system-arm)
+#               (scripts/test-mcu.sh; installs qemu-system-arm), and the C firmware on halfray-ffi
+#   ffi         halfray-ffi: lint, generated header matches, sanitized host C test (scripts/test-ffi.sh)
 #   crate       halfray-core as crates.io gets it: docs with -D warnings, publish --dry-run,
 #               and a build with the rust-version toolchain (MSRV)
 #   test        cargo test --workspace (unit, integration, numerical-stability, fuzz-corpus replay)
@@ -52,6 +53,10 @@ cargo build --release --manifest-path examples/thumb-probe/Cargo.toml --target t
 stage mcu
 # The core on emulated Cortex-M4F and Cortex-M3 (QEMU), bit-identical to the host.
 bash scripts/test-mcu.sh
+
+stage ffi
+# The C ABI: header check and the sanitized host C test (the firmware ran in the mcu stage).
+bash scripts/test-ffi.sh
 
 stage crate
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p halfray-core

@@ -10,8 +10,14 @@
 #   mcu: query image .text BYTES bytes, stack BYTES bytes (BELOW below the query call + TRAV of traversal stack; MACHINE ...)
 #
 # then the instructions per closest-hit query of every triangle variant on each machine
-# (`-icount`), and exits 0 only if every machine matches and no aimed ray leaked. Installs what it needs
-# (qemu-system-arm from Debian, the rustup targets). Called by scripts/test-all.sh.
+# (`-icount`), and the C firmware's lines (examples/mcu-c: halfray-ffi from C on the Cortex-M4F)
+#
+#   mcu-c: N queries bit-identical to host (MACHINE ...)
+#   mcu-c: query image .text BYTES bytes, stack BYTES bytes (... within the 8 KiB / 1 KiB budget)
+#
+# and exits 0 only if every machine matches and no aimed ray leaked. Installs what it needs
+# (qemu-system-arm and gcc-arm-none-eabi from Debian, the rustup targets). Called by
+# scripts/test-all.sh.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
@@ -21,29 +27,16 @@ as_root() {
     else echo "test-mcu: need root (or sudo) to run: $*" >&2; return 1
     fi
 }
-if ! command -v qemu-system-arm >/dev/null 2>&1; then
-    echo "test-mcu: installing qemu-system-arm" >&2
+if ! command -v qemu-system-arm >/dev/null 2>&1 || ! command -v arm-none-eabi-gcc >/dev/null 2>&1; then
+    echo "test-mcu: installing qemu-system-arm and gcc-arm-none-eabi" >&2
     as_root env DEBIAN_FRONTEND=noninteractive apt-get update -qq
-    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends qemu-system-arm >/dev/null
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
+        qemu-system-arm gcc-arm-none-eabi >/dev/null
 fi
 rustup target add thumbv7em-none-eabihf thumbv7m-none-eabi >/dev/null 2>&1
 
-manifest=examples/mcu/Cargo.toml
-# The meshes each image queries from flash, baked here by `halfray bake`: the torus (4 608
-# triangles) for the Cortex-M4F; for the Cortex-M3's 256 KiB of flash, the octahedron
-# subdivided three times (512 triangles).
-baked=$PWD/examples/mcu/target/baked
-mkdir -p "$baked"
-cargo build -q --release -p halfray
-# Where cargo puts what it builds: CARGO_TARGET_DIR when set (for the workspace and for the
-# images alike), else each workspace's own target/.
-halfray=${CARGO_TARGET_DIR:-$PWD/target}/release/halfray
-images=${CARGO_TARGET_DIR:-$PWD/examples/mcu/target}
-"$halfray" bake scenes/meshes/torus.obj -o "$baked/torus.rs" >&2
-"$halfray" mesh subdivide scenes/meshes/octahedron.obj --levels 3 -o "$baked/octahedron-3.obj" >/dev/null
-"$halfray" bake "$baked/octahedron-3.obj" -o "$baked/octahedron-3.rs" >&2
-export MCU_BAKED_M4F=$baked/torus.rs MCU_BAKED_M3=$baked/octahedron-3.rs
-host=$(cargo run -q --release --manifest-path "$manifest" -p mcu-host)
+# The baked meshes, and the host's lines ($host) to compare with.
+source scripts/mcu-baked.sh
 
 status=0
 check() { # machine target cpu baked-source
@@ -135,4 +128,46 @@ bench() { # machine target cpu baked-source
 }
 bench mps2-an386 thumbv7em-none-eabihf cortex-m4 "$MCU_BAKED_M4F"
 bench lm3s6965evb thumbv7m-none-eabi cortex-m3 "$MCU_BAKED_M3"
+
+# The C firmware (examples/mcu-c): halfray-ffi's static library for the Cortex-M4F, linked by
+# gcc-arm-none-eabi into a C image with the baked torus (`--format bin`) and the query image's
+# rays; its answers must be the host's (mcu-host's `mcu-c:` line), and its image is held to
+# the same 8 KiB / 1 KiB budget (the whole image's `.text`: start-up, hash and printing
+# included; the traversal stack counted as for the Rust image). Linking fails, naming
+# `halfray_ffi_error_a_panic_path_is_linked`, if any code the firmware reaches could panic.
+mcu_c() {
+    local machine=mps2-an386 target=thumbv7em-none-eabihf cpu=cortex-m4
+    cargo build -q --release --manifest-path ffi/Cargo.toml --target "$target"
+    local lib=${CARGO_TARGET_DIR:-$PWD/ffi/target}/$target/release/libhalfray_ffi.a
+    local image=$baked/mcu-c.elf
+    make -s -C examples/mcu-c LIB="$lib" BAKED="$MCU_C_BAKED" RAYS="$MCU_C_RAYS" OUT="$image"
+    local out rc=0
+    out=$(timeout 600 qemu-system-arm -machine "$machine" -cpu "$cpu" -nographic -monitor none \
+        -serial none -semihosting-config enable=on,target=native -kernel "$image" 2>&1) || rc=$?
+    local got want
+    got=$(grep "^mcu-c: $machine " <<<"$out" || true)
+    want=$(grep "^mcu-c: $machine " <<<"$host" || true)
+    if [ "$rc" -ne 0 ] || [ -z "$got" ] || [ -z "$want" ] || [ "${got% stack *}" != "$want" ]; then
+        echo "test-mcu: the C firmware differs from the host (qemu exit $rc)" >&2
+        echo "  target: ${got:-$out}" >&2
+        echo "  host:   $want" >&2
+        status=1
+        return
+    fi
+    local text stack traversal verdict queries hash hits leaks
+    text=$(readelf -S -W "$image" | sed -n 's/.* \.text *PROGBITS *[0-9a-f]* [0-9a-f]* \([0-9a-f]*\) .*/\1/p')
+    text=$((16#${text:-0}))
+    stack=${got##* stack }
+    stack=${stack%% *}
+    traversal=${got##* traversal }
+    if [ "$text" -le 8192 ] && [ $((stack + traversal)) -le 1024 ]; then verdict="within"; else verdict="over"; fi
+    read -r _ _ queries _ _ hash _ hits _ leaks _ <<<"$got"
+    echo "mcu-c: $queries queries bit-identical to host ($machine: $cpu, $target; hash $hash, $hits hits, $leaks leaks)"
+    echo "mcu-c: query image .text $text bytes, stack $((stack + traversal)) bytes ($stack below the query call + $traversal of traversal stack; $machine: $cpu, $target; $verdict the 8 KiB / 1 KiB budget)"
+    if [ "$verdict" != within ]; then
+        echo "test-mcu: the C firmware's image is over the 8 KiB / 1 KiB budget" >&2
+        status=1
+    fi
+}
+mcu_c
 exit "$status"

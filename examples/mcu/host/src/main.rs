@@ -1,11 +1,14 @@
 //! Prints, for each machine, the lines its images print under QEMU
 //! (`mcu: <machine> <queries> queries hash <hex> hits <n> leaks <n>` for `mcu-firmware`, the
 //! same after `mcu-query:` for `mcu-query`, without its stack figure), computed on the host
-//! with the same `mcu-check` code and buffers of the same sizes.
+//! with the same `mcu-check` code and buffers of the same sizes. With `MCU_C_RAYS` set, also
+//! writes the Cortex-M4F query image's rays to that file and prints the line the C firmware
+//! (examples/mcu-c) must print for them (`mcu-c:` and the query image's figures).
 
 use halfray_core::Vec3;
 use halfray_core::bvh::{BvhNode, TriangleMesh, node_capacity};
 use halfray_core::halfedge::{EdgeRec, FaceRec, VertexRec, build_scratch_len};
+use halfray_core::ray::Ray;
 use mcu_check::{
     Config, Fnv, HalfedgeStorage, M3, M4F, RayStorage, edge_count, halfedge_checks, ray_checks,
     triangle_count, vertex_count,
@@ -90,8 +93,13 @@ fn line(machine: &str, c: Config, baked: Baked) -> Result<String, mcu_check::Che
 }
 
 /// The line the `mcu-query` image prints (without its stack figure): [`mcu_check::query_checks`]
-/// with the `f64`-free watertight test on the baked BVH.
-fn query_line(machine: &str, c: Config, baked: Baked) -> Result<String, mcu_check::CheckError> {
+/// with the `f64`-free watertight test on the baked BVH. Each ray is also pushed to `rays`.
+fn query_line(
+    machine: &str,
+    c: Config,
+    baked: Baked,
+    rays: &mut Vec<Ray>,
+) -> Result<String, mcu_check::CheckError> {
     let mut hash = Fnv::new();
     let (positions, triangles, nodes, indices) = baked;
     let mesh = TriangleMesh::new(positions, triangles);
@@ -104,6 +112,7 @@ fn query_line(machine: &str, c: Config, baked: Baked) -> Result<String, mcu_chec
     let isect = halfray_core::triangle::WatertightF32Exact;
     let mut stack = [halfray_core::bvh::StackEntry::EMPTY; mcu_check::QUERY_STACK];
     let s = mcu_check::query_checks(&bvh, &mesh, 3 * c.rays_per_set, &mut hash, |ray| {
+        rays.push(*ray);
         let closest = mcu_check::closest_in(&isect, &bvh, &mesh, &mut stack, ray).ok()?;
         let any = mcu_check::any_in(&isect, &bvh, &mesh, &mut stack, ray).ok()?;
         Some((closest, any))
@@ -115,6 +124,19 @@ fn query_line(machine: &str, c: Config, baked: Baked) -> Result<String, mcu_chec
         s.hits,
         s.leaks
     ))
+}
+
+/// Writes `rays` as halfray-ffi's `HalfrayRay` records: origin, direction, `t_min`, `t_max`,
+/// eight little-endian `f32`s each.
+fn write_rays(path: &std::path::Path, rays: &[Ray]) -> std::io::Result<()> {
+    let mut b = Vec::with_capacity(32 * rays.len());
+    for r in rays {
+        let fields = [r.origin.to_array(), r.direction.to_array()];
+        for x in fields.as_flattened().iter().chain([&r.t_min, &r.t_max]) {
+            b.extend_from_slice(&x.to_bits().to_le_bytes());
+        }
+    }
+    std::fs::write(path, b)
 }
 
 fn main() -> std::process::ExitCode {
@@ -132,10 +154,22 @@ fn main() -> std::process::ExitCode {
         &baked_m3::INDICES,
     );
     for (machine, config, baked) in [("mps2-an386", M4F, m4f), ("lm3s6965evb", M3, m3)] {
-        for l in [
-            line(machine, config, baked),
-            query_line(machine, config, baked),
-        ] {
+        let mut rays = Vec::new();
+        let query = query_line(machine, config, baked, &mut rays);
+        // The C firmware (examples/mcu-c) answers the M4F query image's rays through
+        // halfray-ffi: written for it, its line is the query image's.
+        let c_line = match (machine, &query, std::env::var_os("MCU_C_RAYS")) {
+            ("mps2-an386", Ok(q), Some(path)) => Some(
+                write_rays(std::path::Path::new(&path), &rays)
+                    .map(|()| q.replacen("mcu-query:", "mcu-c:", 1))
+                    .map_err(|e| {
+                        eprintln!("mcu-host: writing {}: {e}", path.display());
+                        mcu_check::CheckError::Storage
+                    }),
+            ),
+            _ => None,
+        };
+        for l in [line(machine, config, baked), query].into_iter().chain(c_line) {
             match l {
                 Ok(l) => println!("{l}"),
                 Err(e) => {

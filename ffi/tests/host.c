@@ -1,0 +1,322 @@
+/* halfray-ffi on the host, from C, under AddressSanitizer and UndefinedBehaviorSanitizer
+ * (scripts/test-ffi.sh builds it with -Wall -Wextra -Werror -fsanitize=address,undefined):
+ * every function with good input and with bad input (NULL, short and misaligned buffers,
+ * corrupted baked BVHs, invalid rays, small stacks), each result checked against the header's
+ * contract; a query's outputs must be untouched when it fails.
+ *
+ *   host OCTAHEDRON.bin TORUS.bin RAYS.bin 'mcu-c: mps2-an386 ...'
+ *
+ * The octahedron (scenes/meshes/octahedron.obj, baked) has answers known in closed form; the
+ * torus and rays are the C firmware's, and the line this program computes from them must be
+ * the one `mcu-host` computed with halfray-core (the last argument). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../../examples/mcu-c/answers.h"
+#include "halfray.h"
+
+static int failures;
+
+#define CHECK(cond)                                                                     \
+    do {                                                                                \
+        if (!(cond)) {                                                                  \
+            fprintf(stderr, "host.c:%d: check failed: %s\n", __LINE__, #cond);          \
+            failures++;                                                                 \
+        }                                                                               \
+    } while (0)
+
+/* A file in memory, HALFRAY_BAKED_ALIGN-aligned. */
+typedef struct Buffer {
+    uint8_t *bytes;
+    size_t len;
+} Buffer;
+
+/* `size` or more bytes, HALFRAY_BAKED_ALIGN-aligned, zeroed. */
+static uint8_t *aligned_bytes(size_t size) {
+    size = (size / HALFRAY_BAKED_ALIGN + 1) * HALFRAY_BAKED_ALIGN;
+    uint8_t *p = aligned_alloc(HALFRAY_BAKED_ALIGN, size);
+    if (!p) {
+        exit(2);
+    }
+    return memset(p, 0, size);
+}
+
+static Buffer read_file(const char *path) {
+    Buffer b = {NULL, 0};
+    FILE *f = fopen(path, "rb");
+    if (!f || fseek(f, 0, SEEK_END) != 0) {
+        fprintf(stderr, "host: cannot read %s\n", path);
+        exit(2);
+    }
+    long n = ftell(f);
+    rewind(f);
+    b.bytes = aligned_bytes(n < 0 ? 0 : (size_t)n);
+    if (n < 0 || fread(b.bytes, 1, (size_t)n, f) != (size_t)n) {
+        fprintf(stderr, "host: cannot read %s\n", path);
+        exit(2);
+    }
+    fclose(f);
+    b.len = (size_t)n;
+    return b;
+}
+
+static Buffer copy(Buffer b) {
+    Buffer c = {aligned_bytes(b.len), b.len};
+    memcpy(c.bytes, b.bytes, b.len);
+    return c;
+}
+
+static void put_u32(uint8_t *at, uint32_t w) { memcpy(at, &w, 4); }
+static uint32_t get_u32(const uint8_t *at) {
+    uint32_t w;
+    memcpy(&w, at, 4);
+    return w;
+}
+
+static HalfrayRay ray(float ox, float oy, float oz, float dx, float dy, float dz) {
+    HalfrayRay r = {{ox, oy, oz}, {dx, dy, dz}, 0.0f, INFINITY};
+    return r;
+}
+
+/* `halfray_load` of a copy of `b` after `corrupt(copy)`; returns the status. */
+static HalfrayStatus load_corrupted(Buffer b, void (*corrupt)(Buffer)) {
+    Buffer c = copy(b);
+    corrupt(c);
+    uint32_t scratch[4];
+    HalfrayBvh bvh;
+    HalfrayStatus s = halfray_load(c.bytes, c.len, scratch, 4, &bvh);
+    HalfrayStackEntry stack[HALFRAY_MAX_STACK_ENTRIES];
+    HalfrayRay r = ray(0.25f, 0.25f, 5.0f, 0.0f, 0.0f, -1.0f);
+    HalfrayHit hit;
+    /* A refused buffer leaves the handle not loaded. */
+    if (s != HALFRAY_STATUS_OK) {
+        CHECK(halfray_closest_hit(&bvh, &r, stack, HALFRAY_MAX_STACK_ENTRIES, &hit) ==
+              HALFRAY_STATUS_NOT_LOADED);
+    }
+    free(c.bytes);
+    return s;
+}
+
+/* The octahedron's layout: 6 vertices, 8 triangles, K nodes (header word 5). */
+static uint32_t nodes_of(Buffer b) { return get_u32(b.bytes + 20); }
+static size_t positions_at(Buffer b) { return 32 + 32 * (size_t)nodes_of(b); }
+static size_t triangles_at(Buffer b) { return positions_at(b) + 12 * 6; }
+static size_t indices_at(Buffer b) { return triangles_at(b) + 12 * 8; }
+
+static void bad_magic(Buffer b) { b.bytes[0] ^= 1; }
+static void bad_reserved(Buffer b) { b.bytes[28] = 1; }
+static void bad_version(Buffer b) { put_u32(b.bytes + 8, 2); }
+static void root_child_before(Buffer b) { put_u32(b.bytes + 32 + 24, 0); }
+static void root_child_past(Buffer b) { put_u32(b.bytes + 32 + 24, nodes_of(b)); }
+static void root_box_nan(Buffer b) {
+    float nan = NAN;
+    memcpy(b.bytes + 32, &nan, 4);
+}
+static void root_box_inverted(Buffer b) {
+    float big = 10.0f;
+    memcpy(b.bytes + 32, &big, 4);
+}
+static void vertex_index_out_of_range(Buffer b) { put_u32(b.bytes + triangles_at(b), 6); }
+static void vertex_nan(Buffer b) {
+    float nan = NAN;
+    memcpy(b.bytes + positions_at(b), &nan, 4);
+}
+static void index_repeated(Buffer b) {
+    put_u32(b.bytes + indices_at(b) + 4, get_u32(b.bytes + indices_at(b)));
+}
+static void index_out_of_range(Buffer b) { put_u32(b.bytes + indices_at(b), 8); }
+
+static void octahedron(Buffer b) {
+    HalfrayBakedInfo info;
+    memset(&info, 0xAB, sizeof info);
+    HalfrayBakedInfo untouched = info;
+    /* halfray_baked_info: good, then NULL, short, misaligned and foreign buffers. */
+    CHECK(halfray_baked_info(b.bytes, b.len, &info) == HALFRAY_STATUS_OK);
+    CHECK(info.vertices == 6 && info.triangles == 8 && info.scratch_words == 1);
+    CHECK(info.nodes == nodes_of(b) && info.nodes >= 3);
+    CHECK(info.byte_len == b.len && b.len == 32 + 32 * info.nodes + 12 * 6 + 16 * 8);
+    HalfrayBakedInfo again = untouched;
+    CHECK(halfray_baked_info(NULL, b.len, &again) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_baked_info(b.bytes, b.len, NULL) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_baked_info(b.bytes, 31, &again) == HALFRAY_STATUS_SHORT_BUFFER);
+    CHECK(halfray_baked_info(b.bytes, b.len - 1, &again) == HALFRAY_STATUS_SHORT_BUFFER);
+    CHECK(halfray_baked_info(b.bytes, 0, &again) == HALFRAY_STATUS_SHORT_BUFFER);
+    CHECK(memcmp(&again, &untouched, sizeof again) == 0);
+    Buffer shifted = {aligned_bytes(b.len + 4), b.len};
+    memcpy(shifted.bytes + 4, b.bytes, b.len);
+    CHECK(halfray_baked_info(shifted.bytes + 4, b.len, &again) == HALFRAY_STATUS_MISALIGNED);
+
+    /* halfray_load: NULLs, misaligned input, small scratch. */
+    uint32_t scratch[1];
+    HalfrayBvh bvh;
+    memset(&bvh, 0, sizeof bvh);
+    CHECK(halfray_load(NULL, b.len, scratch, 1, &bvh) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_load(b.bytes, b.len, scratch, 1, NULL) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_load(b.bytes, b.len, NULL, 1, &bvh) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_load(b.bytes, b.len, NULL, 0, &bvh) == HALFRAY_STATUS_SCRATCH_TOO_SMALL);
+    CHECK(halfray_load(shifted.bytes + 4, b.len, scratch, 1, &bvh) == HALFRAY_STATUS_MISALIGNED);
+    CHECK(halfray_load(b.bytes, b.len - 4, scratch, 1, &bvh) == HALFRAY_STATUS_SHORT_BUFFER);
+    free(shifted.bytes);
+
+    /* Corrupted baked data: each refused with the code of what was broken. */
+    CHECK(load_corrupted(b, bad_magic) == HALFRAY_STATUS_NOT_BAKED);
+    CHECK(load_corrupted(b, bad_reserved) == HALFRAY_STATUS_NOT_BAKED);
+    CHECK(load_corrupted(b, bad_version) == HALFRAY_STATUS_VERSION);
+    CHECK(get_u32(b.bytes + 32 + 28) == 0); /* the root is an inner node */
+    CHECK(load_corrupted(b, root_child_before) == HALFRAY_STATUS_CHILD_OUT_OF_RANGE);
+    CHECK(load_corrupted(b, root_child_past) == HALFRAY_STATUS_CHILD_OUT_OF_RANGE);
+    CHECK(load_corrupted(b, root_box_nan) == HALFRAY_STATUS_BAD_BOX);
+    CHECK(load_corrupted(b, root_box_inverted) == HALFRAY_STATUS_BAD_BOX);
+    CHECK(load_corrupted(b, vertex_index_out_of_range) == HALFRAY_STATUS_BAD_TRIANGLE);
+    CHECK(load_corrupted(b, vertex_nan) == HALFRAY_STATUS_BAD_TRIANGLE);
+    CHECK(load_corrupted(b, index_repeated) == HALFRAY_STATUS_BAD_INDEX);
+    CHECK(load_corrupted(b, index_out_of_range) == HALFRAY_STATUS_BAD_INDEX);
+
+    /* Queries on an unloaded (zeroed) handle. */
+    HalfrayStackEntry stack[HALFRAY_MAX_STACK_ENTRIES];
+    HalfrayHit hit, sentinel;
+    memset(&sentinel, 0x5A, sizeof sentinel);
+    bool any = false;
+    size_t entries = 999;
+    HalfrayRay down = ray(0.25f, 0.25f, 5.0f, 0.0f, 0.0f, -1.0f);
+    memset(&bvh, 0, sizeof bvh);
+    CHECK(halfray_closest_hit(&bvh, &down, stack, 64, &hit) == HALFRAY_STATUS_NOT_LOADED);
+    CHECK(halfray_any_hit(&bvh, &down, stack, 64, &any) == HALFRAY_STATUS_NOT_LOADED);
+    CHECK(halfray_stack_entries(&bvh, &entries) == HALFRAY_STATUS_NOT_LOADED && entries == 999);
+
+    /* A good load; the stack the tree needs. */
+    CHECK(halfray_load(b.bytes, b.len, scratch, 1, &bvh) == HALFRAY_STATUS_OK);
+    CHECK(halfray_stack_entries(NULL, &entries) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_stack_entries(&bvh, NULL) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_stack_entries(&bvh, &entries) == HALFRAY_STATUS_OK);
+    CHECK(entries >= 1 && entries <= HALFRAY_MAX_STACK_ENTRIES);
+
+    /* Closed-form answers. Straight down at (1/4, 1/4): the face x + y + z = 1 of
+     * vertices +x, +y, +z (triangle 0) at z = 1/2, t = 4.5; b1 is y, b2 is z; Ng is
+     * (+y - +x) x (+z - +x) = (1, 1, 1), against the ray: front face. */
+    hit = sentinel;
+    CHECK(halfray_closest_hit(&bvh, &down, stack, entries, &hit) == HALFRAY_STATUS_OK);
+    CHECK(hit.primitive == 0);
+    CHECK(fabsf(hit.t - 4.5f) <= 4.5f * 1e-6f);
+    CHECK(fabsf(hit.b1 - 0.25f) <= 1e-6f && fabsf(hit.b2 - 0.5f) <= 1e-6f);
+    CHECK(hit.ng[0] == 1.0f && hit.ng[1] == 1.0f && hit.ng[2] == 1.0f && hit.front_face);
+    CHECK(halfray_any_hit(&bvh, &down, stack, entries, &any) == HALFRAY_STATUS_OK && any);
+    /* From the centre, out through the same face: back face, t = 1 / (0.1 + 0.2 + 0.3). */
+    HalfrayRay out = ray(0.0f, 0.0f, 0.0f, 0.1f, 0.2f, 0.3f);
+    CHECK(halfray_closest_hit(&bvh, &out, stack, entries, &hit) == HALFRAY_STATUS_OK);
+    CHECK(hit.primitive == 0 && !hit.front_face && fabsf(hit.t - 1.0f / 0.6f) <= 1e-5f);
+    /* Through the vertex +z and through the midpoint of the edge (+x, +y): watertight, so
+     * hits, and of the triangles sharing them at equal t the smallest index (0). */
+    HalfrayRay vertex = ray(0.0f, 0.0f, 5.0f, 0.0f, 0.0f, -1.0f);
+    CHECK(halfray_closest_hit(&bvh, &vertex, stack, entries, &hit) == HALFRAY_STATUS_OK);
+    CHECK(hit.primitive == 0 && hit.t == 4.0f);
+    HalfrayRay edge = ray(0.5f, 0.5f, 5.0f, 0.0f, 0.0f, -1.0f);
+    CHECK(halfray_closest_hit(&bvh, &edge, stack, entries, &hit) == HALFRAY_STATUS_OK);
+    CHECK(hit.primitive == 0 && hit.t == 5.0f);
+    CHECK(halfray_any_hit(&bvh, &edge, stack, entries, &any) == HALFRAY_STATUS_OK && any);
+    /* Misses: pointing away; stopping short (t_max 4 < 4.5); beside the octahedron. */
+    HalfrayRay away = ray(0.25f, 0.25f, 5.0f, 0.0f, 0.0f, 1.0f);
+    HalfrayRay short_ray = down;
+    short_ray.t_max = 4.0f;
+    HalfrayRay beside = ray(0.75f, 0.75f, 5.0f, 0.0f, 0.0f, -1.0f);
+    const HalfrayRay *misses[] = {&away, &short_ray, &beside};
+    for (int k = 0; k < 3; k++) {
+        hit = sentinel;
+        any = true;
+        CHECK(halfray_closest_hit(&bvh, misses[k], stack, entries, &hit) == HALFRAY_STATUS_OK);
+        CHECK(hit.primitive == HALFRAY_NO_HIT && hit.t == 0.0f);
+        CHECK(halfray_any_hit(&bvh, misses[k], stack, entries, &any) == HALFRAY_STATUS_OK && !any);
+    }
+
+    /* Bad queries: NULLs, invalid rays, too small a stack; outputs untouched. */
+    hit = sentinel;
+    any = true;
+    CHECK(halfray_closest_hit(NULL, &down, stack, entries, &hit) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_closest_hit(&bvh, NULL, stack, entries, &hit) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_closest_hit(&bvh, &down, NULL, entries, &hit) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_closest_hit(&bvh, &down, stack, entries, NULL) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_any_hit(NULL, &down, stack, entries, &any) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_any_hit(&bvh, NULL, stack, entries, &any) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_any_hit(&bvh, &down, NULL, entries, &any) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_any_hit(&bvh, &down, stack, entries, NULL) == HALFRAY_STATUS_NULL);
+    /* Along x through the whole octahedron: both children of the root are entered, so one
+     * waits on the traversal stack. */
+    HalfrayRay through = ray(-5.0f, 0.01f, 0.02f, 1.0f, 0.0f, 0.0f);
+    CHECK(halfray_closest_hit(&bvh, &through, NULL, 0, &hit) == HALFRAY_STATUS_STACK_TOO_SMALL);
+    CHECK(halfray_any_hit(&bvh, &through, stack, 0, &any) == HALFRAY_STATUS_STACK_TOO_SMALL);
+    HalfrayRay invalid[8];
+    for (int k = 0; k < 8; k++) {
+        invalid[k] = down;
+    }
+    invalid[0].origin[0] = NAN;
+    invalid[1].direction[2] = NAN;
+    invalid[2].origin[1] = INFINITY;
+    invalid[3].direction[2] = 0.0f;
+    invalid[4].t_min = NAN;
+    invalid[5].t_max = NAN;
+    invalid[6].t_min = INFINITY;
+    invalid[7].t_min = 5.0f;
+    invalid[7].t_max = 4.0f;
+    for (int k = 0; k < 8; k++) {
+        CHECK(halfray_closest_hit(&bvh, &invalid[k], stack, entries, &hit) ==
+              HALFRAY_STATUS_INVALID_RAY);
+        CHECK(halfray_any_hit(&bvh, &invalid[k], stack, entries, &any) ==
+              HALFRAY_STATUS_INVALID_RAY);
+    }
+    CHECK(memcmp(&hit, &sentinel, sizeof hit) == 0 && any);
+
+    /* A failed load into a loaded handle leaves it not loaded. */
+    CHECK(halfray_load(b.bytes, 16, scratch, 1, &bvh) == HALFRAY_STATUS_SHORT_BUFFER);
+    CHECK(halfray_closest_hit(&bvh, &down, stack, entries, &hit) == HALFRAY_STATUS_NOT_LOADED);
+}
+
+/* The firmware's rays on the torus, through the host library: the line mcu-host computed. */
+static void torus(Buffer b, Buffer rays, const char *want) {
+    HalfrayBakedInfo info;
+    CHECK(halfray_baked_info(b.bytes, b.len, &info) == HALFRAY_STATUS_OK);
+    uint32_t *scratch = calloc(info.scratch_words, sizeof *scratch);
+    HalfrayBvh bvh;
+    CHECK(halfray_load(b.bytes, b.len, scratch, info.scratch_words, &bvh) == HALFRAY_STATUS_OK);
+    free(scratch); /* needed only during the load */
+    size_t entries = 0;
+    CHECK(halfray_stack_entries(&bvh, &entries) == HALFRAY_STATUS_OK);
+    HalfrayStackEntry *stack = calloc(entries, sizeof *stack);
+    Answers a = answers_new();
+    for (size_t k = 0; k + sizeof(HalfrayRay) <= rays.len; k += sizeof(HalfrayRay)) {
+        HalfrayRay r;
+        memcpy(&r, rays.bytes + k, sizeof r);
+        answers_ray(&a, &bvh, &r, stack, entries);
+    }
+    free(stack);
+    char got[160];
+    snprintf(got, sizeof got, "mcu-c: mps2-an386 %u queries hash %016llx hits %u leaks %u",
+             (unsigned)a.queries, (unsigned long long)a.hash, (unsigned)a.hits,
+             (unsigned)a.leaks);
+    if (strcmp(got, want) != 0) {
+        fprintf(stderr, "host: the torus rays' answers differ from halfray-core's\n  ffi:  %s\n  core: %s\n",
+                got, want);
+        failures++;
+    }
+    printf("host: %s (halfray-core on the host: the same)\n", got);
+}
+
+int main(int argc, char **argv) {
+    if (argc != 5) {
+        fprintf(stderr, "usage: host OCTAHEDRON.bin TORUS.bin RAYS.bin 'mcu-c: ...'\n");
+        return 2;
+    }
+    Buffer oct = read_file(argv[1]), tor = read_file(argv[2]), rays = read_file(argv[3]);
+    octahedron(oct);
+    torus(tor, rays, argv[4]);
+    free(oct.bytes);
+    free(tor.bytes);
+    free(rays.bytes);
+    if (failures) {
+        fprintf(stderr, "host: %d checks failed\n", failures);
+        return 1;
+    }
+    printf("host: every check passed\n");
+    return 0;
+}
