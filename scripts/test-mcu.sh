@@ -163,7 +163,7 @@ mcu_c() {
     if [ "$text" -le 8192 ] && [ $((stack + traversal)) -le 1024 ]; then verdict="within"; else verdict="over"; fi
     read -r _ _ queries _ _ hash _ hits _ leaks _ <<<"$got"
     echo "mcu-c: $queries queries bit-identical to host ($machine: $cpu, $target; hash $hash, $hits hits, $leaks leaks)"
-    echo "mcu-c: query image .text $text bytes, stack $((stack + traversal)) bytes ($stack below the query call + $traversal of traversal stack; $machine: $cpu, $target; $verdict the 8 KiB / 1 KiB budget)"
+    echo "mcu-c: query image .text $text bytes, stack $((stack + traversal)) bytes ($stack below the query call + $traversal of traversal stack; $machine: $cpu, $target; $queries queries bit-identical to host, hash $hash; $verdict the 8 KiB / 1 KiB budget)"
     if [ "$verdict" != within ]; then
         echo "test-mcu: the C firmware's image is over the 8 KiB / 1 KiB budget" >&2
         status=1

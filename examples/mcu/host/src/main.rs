@@ -169,7 +169,10 @@ fn main() -> std::process::ExitCode {
             ),
             _ => None,
         };
-        for l in [line(machine, config, baked), query].into_iter().chain(c_line) {
+        for l in [line(machine, config, baked), query]
+            .into_iter()
+            .chain(c_line)
+        {
             match l {
                 Ok(l) => println!("{l}"),
                 Err(e) => {
