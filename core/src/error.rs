@@ -59,20 +59,180 @@ impl fmt::Display for GeometryError {
 
 impl core::error::Error for GeometryError {}
 
-/// Writes the message of a caller-storage-too-small error:
-/// `"{storage} too small: {needed} needed, {available} available"` (`storage` names the
-/// structure and the storage, e.g. `"kd-tree node storage"`; counts in the storage's units).
-pub(crate) fn write_too_small(
-    f: &mut fmt::Formatter<'_>,
-    storage: &str,
-    needed: usize,
-    available: usize,
-) -> fmt::Result {
-    write!(
-        f,
-        "{storage} too small: {needed} needed, {available} available"
-    )
+/// A half-edge mesh element kind, for capacity and free-list errors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ElementKind {
+    /// Vertices.
+    Vertex,
+    /// Edges (halfedge pairs).
+    Edge,
+    /// Faces.
+    Face,
 }
+
+impl fmt::Display for ElementKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Vertex => "vertex",
+            Self::Edge => "edge",
+            Self::Face => "face",
+        })
+    }
+}
+
+/// Caller-provided storage an operation can run out of, named in [`CapacityError`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Storage {
+    /// A BVH's nodes ([`crate::bvh::node_capacity`]).
+    BvhNodes,
+    /// A BVH's primitive indices (one per primitive).
+    BvhIndices,
+    /// A BVH builder's scratch ([`crate::bvh::scratch_capacity`]).
+    BvhScratch,
+    /// A wide BVH's triangle groups ([`crate::bvh::wide::group_capacity`]).
+    WideTriangleGroups,
+    /// The bitset of [`crate::bvh::Bvh::from_parts`] ([`crate::bvh::load_scratch_len`] words).
+    BvhLoadBitset,
+    /// A kd-tree's nodes.
+    KdNodes,
+    /// A kd-tree's primitive references ([`crate::kdtree::min_reference_capacity`]).
+    KdReferences,
+    /// A kd-tree builder's scratch.
+    KdScratch,
+    /// A grid's cell offsets ([`crate::grid::GridPlan::required_offsets`]).
+    GridOffsets,
+    /// A grid's cell references ([`crate::grid::GridPlan::required_references`]).
+    GridReferences,
+    /// A half-edge mesh's vertex, edge or face slots.
+    MeshSlots(ElementKind),
+    /// The scratch of [`crate::halfedge::Mesh::build`] ([`crate::halfedge::build_scratch_len`]).
+    MeshBuildScratch,
+    /// The output of [`crate::halfedge::Mesh::vertex_normals`] (one per vertex slot in use).
+    VertexNormals,
+}
+
+impl fmt::Display for Storage {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::BvhNodes => "BVH node storage",
+            Self::BvhIndices => "BVH index storage",
+            Self::BvhScratch => "BVH build scratch",
+            Self::WideTriangleGroups => "wide BVH triangle group storage",
+            Self::BvhLoadBitset => "BVH load bitset",
+            Self::KdNodes => "kd-tree node storage",
+            Self::KdReferences => "kd-tree reference storage",
+            Self::KdScratch => "kd-tree build scratch",
+            Self::GridOffsets => "grid offset storage",
+            Self::GridReferences => "grid reference storage",
+            Self::MeshSlots(ElementKind::Vertex) => "half-edge mesh vertex storage",
+            Self::MeshSlots(ElementKind::Edge) => "half-edge mesh edge storage",
+            Self::MeshSlots(ElementKind::Face) => "half-edge mesh face storage",
+            Self::MeshBuildScratch => "half-edge build scratch",
+            Self::VertexNormals => "vertex normal output",
+        })
+    }
+}
+
+/// Caller-provided storage is too small: every builder's and every fixed-capacity
+/// operation's one capacity error. Returned before anything is written unless the operation
+/// says otherwise. Counts are in the storage's own units (nodes, indices, slots, words…).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CapacityError {
+    /// Which storage.
+    pub storage: Storage,
+    /// Entries the operation needs (at least).
+    pub needed: usize,
+    /// Entries the storage has (for a half-edge mesh: free-list entries plus unused capacity).
+    pub available: usize,
+}
+
+impl CapacityError {
+    /// `Err` when `available < needed`.
+    pub(crate) const fn check(
+        storage: Storage,
+        needed: usize,
+        available: usize,
+    ) -> Result<(), Self> {
+        if available < needed {
+            Err(Self {
+                storage,
+                needed,
+                available,
+            })
+        } else {
+            Ok(())
+        }
+    }
+}
+
+impl fmt::Display for CapacityError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} too small: {} needed, {} available",
+            self.storage, self.needed, self.available
+        )
+    }
+}
+
+impl core::error::Error for CapacityError {}
+
+/// The kind of input element a [`NonFiniteError`] names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum InputElement {
+    /// A primitive of a [`crate::bvh::PrimitiveSource`]: its bounds are NaN, infinite or empty
+    /// (a non-finite vertex or an out-of-range vertex index).
+    Primitive,
+    /// A triangle of a mesh: a non-finite vertex or an out-of-range vertex index.
+    Triangle,
+    /// A point of a point set (for a mesh, the `3·triangle + corner`-th referenced corner).
+    Point,
+    /// A vertex position.
+    Vertex,
+}
+
+/// An input element is NaN or infinite: every builder's one non-finite-input error, naming
+/// the first offending element by its index in the input.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NonFiniteError {
+    /// What kind of element.
+    pub element: InputElement,
+    /// Its index in the input.
+    pub index: usize,
+}
+
+impl NonFiniteError {
+    /// Element `index` of kind `element`.
+    #[must_use]
+    pub const fn new(element: InputElement, index: usize) -> Self {
+        Self { element, index }
+    }
+
+    /// Primitive `index` of a source ([`InputElement::Primitive`]).
+    #[must_use]
+    pub const fn primitive(index: usize) -> Self {
+        Self::new(InputElement::Primitive, index)
+    }
+}
+
+impl fmt::Display for NonFiniteError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let i = self.index;
+        match self.element {
+            InputElement::Primitive => write!(f, "primitive {i} has non-finite or empty bounds"),
+            InputElement::Triangle => write!(
+                f,
+                "triangle {i} has a non-finite vertex or an out-of-range vertex index"
+            ),
+            InputElement::Point => write!(f, "point {i} has a NaN or infinite coordinate"),
+            InputElement::Vertex => write!(f, "vertex {i} has a NaN or infinite coordinate"),
+        }
+    }
+}
+
+impl core::error::Error for NonFiniteError {}
 
 /// Writes the message of a too-much-input error:
 /// `"too many {items} for {structure}: {count} (max {max})"` (`items` plural, e.g.
@@ -87,12 +247,6 @@ pub(crate) fn write_too_many(
     write!(f, "too many {items} for {structure}: {count} (max {max})")
 }
 
-/// Writes the message of a build's unusable-primitive error:
-/// `"primitive {index} has non-finite or empty bounds"`.
-pub(crate) fn write_non_finite_primitive(f: &mut fmt::Formatter<'_>, index: usize) -> fmt::Result {
-    write!(f, "primitive {index} has non-finite or empty bounds")
-}
-
 #[cfg(test)]
 mod tests {
     use crate::bvh::BvhError;
@@ -105,15 +259,20 @@ mod tests {
     fn storage_and_size_messages() {
         let cases = [
             (
-                BvhError::IndexStorageTooSmall {
+                BvhError::Capacity(crate::error::CapacityError {
+                    storage: crate::error::Storage::BvhIndices,
                     needed: 10,
                     available: 9,
-                }
+                })
                 .to_string(),
                 "BVH index storage too small: 10 needed, 9 available",
             ),
             (
-                BvhError::NonFinitePrimitive { index: 2 }.to_string(),
+                BvhError::NonFinite(crate::error::NonFiniteError {
+                    element: crate::error::InputElement::Primitive,
+                    index: 2,
+                })
+                .to_string(),
                 "primitive 2 has non-finite or empty bounds",
             ),
             (
@@ -121,10 +280,11 @@ mod tests {
                 "too many primitives for a kd-tree: 1073741824 (max 1073741823)",
             ),
             (
-                GridError::OffsetStorageTooSmall {
+                GridError::Capacity(crate::error::CapacityError {
+                    storage: crate::error::Storage::GridOffsets,
                     needed: 3,
                     available: 0,
-                }
+                })
                 .to_string(),
                 "grid offset storage too small: 3 needed, 0 available",
             ),

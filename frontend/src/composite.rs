@@ -134,11 +134,7 @@ pub fn composite_rgba8(op: Operator, a: &[u8], b: &[u8]) -> Vec<u8> {
     let px = |p: &[u8]| Vec4::from_array([p[0], p[1], p[2], p[3]].map(|c| f32::from(c) / 255.0));
     a.chunks_exact(4)
         .zip(b.chunks_exact(4))
-        .flat_map(|(pa, pb)| {
-            op.apply(px(pa), px(pb))
-                .to_array()
-                .map(crate::render::output::to_u8)
-        })
+        .flat_map(|(pa, pb)| op.apply(px(pa), px(pb)).to_array().map(crate::png::to_u8))
         .collect()
 }
 
@@ -170,7 +166,7 @@ pub fn run(args: &CompositeArgs) -> Result<()> {
         ));
     }
     let pixels = composite_rgba8(args.op, a.as_raw(), b.as_raw());
-    crate::render::output::write_png(out, a.width(), a.height(), &pixels)
+    crate::png::write_png(out, a.width(), a.height(), &pixels)
 }
 
 #[cfg(test)]

@@ -20,6 +20,7 @@ pub mod mesh_tools;
 pub mod obj;
 pub mod outputs;
 pub mod pages;
+pub mod png;
 pub mod raysets;
 pub mod render;
 pub mod scene;

@@ -77,7 +77,7 @@ shininess = 25
     let k = (20 * 41 + 20) * 4;
     let want = out.pixel(20, 20);
     for c in 0..3 {
-        let enc = halfray::render::output::to_u8(halfray::render::output::linear_to_srgb(want[c]));
+        let enc = halfray::png::to_u8(halfray::render::gamma::linear_to_srgb(want[c]));
         assert_eq!(rgba[k + c], enc);
     }
     assert_eq!(rgba[k + 3], 255);

@@ -2,8 +2,8 @@
 //! materials is cut by path weight and a per-pixel cap ([`PathBound`]), checked against the
 //! exhaustive tree; `--force-all-effects` stays bit-identical when radiance overflows.
 
+use halfray::render::bound::{MAX_SECONDARY_RAYS_PER_PIXEL, PathBound};
 use halfray::render::plan::EffectPlan;
-use halfray::render::trace::{MAX_SECONDARY_RAYS_PER_PIXEL, PathBound};
 use halfray::render::{Mode, RenderOptions, render};
 use halfray::scene::{self, Scene};
 use std::path::Path;

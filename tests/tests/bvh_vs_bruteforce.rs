@@ -640,7 +640,7 @@ proptest! {
         match first_bad {
             Some(i) => prop_assert_eq!(
                 strict.unwrap_err(),
-                halfray_core::bvh::BvhError::NonFinitePrimitive { index: i }
+                halfray_core::bvh::BvhError::NonFinite(halfray_core::error::NonFiniteError { element: halfray_core::error::InputElement::Primitive, index: i })
             ),
             None => prop_assert!(strict.is_ok()),
         }

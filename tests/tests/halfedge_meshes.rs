@@ -168,7 +168,7 @@ fn non_manifold_meshes_are_rejected_by_name() {
         "beetle: {err:?}"
     );
     // The named edge really has three or more faces.
-    if let BuildError::NonManifoldEdge { a, b } = err {
+    if let BuildError::NonManifoldEdge { a, b, .. } = err {
         let uses = t
             .iter()
             .filter(|tri| tri.contains(&a.raw()) && tri.contains(&b.raw()))

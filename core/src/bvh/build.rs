@@ -16,6 +16,7 @@ use super::{
     index_capacity, node_capacity,
 };
 use crate::aabb::Aabb;
+use crate::error::{CapacityError, NonFiniteError, Storage};
 use glam::Vec3;
 
 /// Depth from which nodes are split by count rather than by SAH: `MAX_DEPTH − 32`, so that the
@@ -30,7 +31,7 @@ pub struct BuildOptions {
     /// Default [`DEFAULT_MAX_LEAF_SIZE`].
     pub max_leaf_size: u32,
     /// `false` (default): a primitive with non-finite or empty bounds is an error
-    /// ([`BvhError::NonFinitePrimitive`]). `true`: such primitives are left out of the tree
+    /// ([`BvhError::NonFinite`]). `true`: such primitives are left out of the tree
     /// (no query ever reports them).
     pub exclude_non_finite: bool,
     /// Nodes of at most this many primitives become leaves without trying a split (capped
@@ -216,18 +217,8 @@ fn validate<S: PrimitiveSource + ?Sized>(
     if n > MAX_PRIMITIVES {
         return Err(BvhError::TooManyPrimitives { count: n });
     }
-    if nodes.len() < node_capacity(n) {
-        return Err(BvhError::NodeStorageTooSmall {
-            needed: node_capacity(n),
-            available: nodes.len(),
-        });
-    }
-    if indices.len() < index_capacity(n) {
-        return Err(BvhError::IndexStorageTooSmall {
-            needed: index_capacity(n),
-            available: indices.len(),
-        });
-    }
+    CapacityError::check(Storage::BvhNodes, node_capacity(n), nodes.len())?;
+    CapacityError::check(Storage::BvhIndices, index_capacity(n), indices.len())?;
     let mut root_bounds = Aabb::EMPTY;
     let mut root_centroids = Aabb::EMPTY;
     let mut count = 0u32;
@@ -240,7 +231,7 @@ fn validate<S: PrimitiveSource + ?Sized>(
             usable(count as usize, i, b, c);
             count += 1;
         } else if !options.exclude_non_finite {
-            return Err(BvhError::NonFinitePrimitive { index: i });
+            return Err(NonFiniteError::primitive(i).into());
         }
     }
     Ok(Usable {
@@ -279,7 +270,7 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
 }
 
 /// [`build`] on a scratch array of [`PrimRef`]s (at least [`scratch_capacity`] entries, else
-/// [`BvhError::ScratchTooSmall`] before anything is written). The scratch's contents after the
+/// [`BvhError::Capacity`] before anything is written). The scratch's contents after the
 /// call mean nothing.
 pub(super) fn build_with_scratch<S: PrimitiveSource + ?Sized>(
     source: &S,
@@ -320,12 +311,7 @@ pub(super) fn prepare_scratch<S: PrimitiveSource + ?Sized>(
     options: &BuildOptions,
 ) -> Result<Usable, BvhError> {
     let n = source.primitive_count();
-    if scratch.len() < scratch_capacity(n) {
-        return Err(BvhError::ScratchTooSmall {
-            needed: scratch_capacity(n),
-            available: scratch.len(),
-        });
-    }
+    CapacityError::check(Storage::BvhScratch, scratch_capacity(n), scratch.len())?;
     validate(source, nodes, indices, options, |k, i, bounds, _| {
         if let Some(slot) = scratch.get_mut(k) {
             *slot = PrimRef::new(&bounds, i as u32);

@@ -1,59 +1,31 @@
 //! Errors of BVH construction, refitting and queries.
 
-use crate::error::{write_non_finite_primitive, write_too_many, write_too_small};
+use crate::error::{CapacityError, NonFiniteError, write_too_many};
 use core::fmt;
 
 /// Why a BVH operation was refused. Every variant is returned before any caller storage is
-/// written, except [`BvhError::NonFinitePrimitive`] from [`super::Bvh::refit`] (see there).
+/// written, except [`BvhError::NonFinite`] from [`super::Bvh::refit`] (see there).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum BvhError {
-    /// The node storage holds fewer nodes than [`super::node_capacity`] requires.
-    NodeStorageTooSmall {
-        /// Nodes required.
-        needed: usize,
-        /// Nodes available.
-        available: usize,
-    },
-    /// The index storage holds fewer entries than there are primitives.
-    IndexStorageTooSmall {
-        /// Indices required.
-        needed: usize,
-        /// Indices available.
-        available: usize,
-    },
+    /// Caller storage is too small: nodes ([`super::node_capacity`]), indices (one per
+    /// primitive), build scratch ([`super::scratch_capacity`]) or a wide tree's triangle
+    /// groups ([`super::wide::group_capacity`]); see [`crate::error::Storage`].
+    Capacity(CapacityError),
     /// More primitives than [`super::MAX_PRIMITIVES`].
     TooManyPrimitives {
         /// Primitives in the source.
         count: usize,
     },
     /// A primitive's bounds are NaN, infinite or empty (non-finite vertex, out-of-range vertex
-    /// index).
-    NonFinitePrimitive {
-        /// The primitive's index in the source.
-        index: usize,
-    },
+    /// index): [`crate::error::InputElement::Primitive`] with its index in the source.
+    NonFinite(NonFiniteError),
     /// [`super::Bvh::refit`] was given a source with a different primitive count than the build.
     SourceLengthMismatch {
         /// Primitive count at build time.
         expected: usize,
         /// Primitive count of the source passed now.
         found: usize,
-    },
-    /// The triangle storage of a wide BVH holds fewer groups than
-    /// [`super::wide::group_capacity`] requires.
-    TriangleStorageTooSmall {
-        /// Triangle groups required.
-        needed: usize,
-        /// Triangle groups available.
-        available: usize,
-    },
-    /// The builder's scratch holds fewer entries than [`super::scratch_capacity`] requires.
-    ScratchTooSmall {
-        /// Entries required.
-        needed: usize,
-        /// Entries available.
-        available: usize,
     },
     /// A wide BVH was asked for more triangles than its leaf references can address
     /// ([`super::wide::MAX_TRIANGLES`]).
@@ -87,27 +59,15 @@ pub enum BvhError {
 impl fmt::Display for BvhError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            Self::NodeStorageTooSmall { needed, available } => {
-                write_too_small(f, "BVH node storage", needed, available)
-            }
-            Self::IndexStorageTooSmall { needed, available } => {
-                write_too_small(f, "BVH index storage", needed, available)
-            }
+            Self::Capacity(e) => e.fmt(f),
             Self::TooManyPrimitives { count } => {
                 write_too_many(f, "primitives", "a BVH", count, super::MAX_PRIMITIVES)
             }
-            Self::NonFinitePrimitive { index } => write_non_finite_primitive(f, index),
+            Self::NonFinite(e) => e.fmt(f),
             Self::SourceLengthMismatch { expected, found } => write!(
                 f,
                 "refit source has {found} primitives, the BVH was built over {expected}"
             ),
-            Self::TriangleStorageTooSmall { needed, available } => write!(
-                f,
-                "wide BVH triangle storage too small: {needed} groups needed, {available} available"
-            ),
-            Self::ScratchTooSmall { needed, available } => {
-                write_too_small(f, "BVH build scratch", needed, available)
-            }
             Self::TooManyTriangles { count } => write_too_many(
                 f,
                 "triangles",
@@ -135,3 +95,15 @@ impl fmt::Display for BvhError {
 }
 
 impl core::error::Error for BvhError {}
+
+impl From<CapacityError> for BvhError {
+    fn from(e: CapacityError) -> Self {
+        Self::Capacity(e)
+    }
+}
+
+impl From<NonFiniteError> for BvhError {
+    fn from(e: NonFiniteError) -> Self {
+        Self::NonFinite(e)
+    }
+}

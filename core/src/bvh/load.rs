@@ -24,6 +24,7 @@
 use super::node::BvhNode;
 use super::primitive::TriangleMesh;
 use super::{Bvh, MAX_DEPTH, node_capacity};
+use crate::error::{CapacityError, Storage};
 use core::fmt;
 
 /// Words of the bitset [`Bvh::from_parts`] needs for `triangles` triangles: one bit each.
@@ -52,13 +53,9 @@ pub enum LoadError {
         /// Triangles in the mesh.
         triangles: usize,
     },
-    /// The bitset holds fewer than [`load_scratch_len`] words.
-    ScratchTooSmall {
-        /// Words required.
-        needed: usize,
-        /// Words available.
-        available: usize,
-    },
+    /// The bitset holds fewer than [`load_scratch_len`] words
+    /// ([`crate::error::Storage::BvhLoadBitset`]).
+    Capacity(CapacityError),
     /// An inner node's children are not after it, or lie past the node array.
     ChildOutOfRange {
         /// The inner node.
@@ -115,10 +112,7 @@ impl fmt::Display for LoadError {
                 f,
                 "{nodes} nodes cannot form a tree over {triangles} triangles"
             ),
-            Self::ScratchTooSmall { needed, available } => write!(
-                f,
-                "the load bitset holds {available} words, {needed} are needed"
-            ),
+            Self::Capacity(e) => e.fmt(f),
             Self::ChildOutOfRange { node } => write!(
                 f,
                 "node {node}: children are not after it or lie past the node array"
@@ -221,10 +215,11 @@ fn check(
     }
     let needed = load_scratch_len(triangles);
     let Some(seen) = scratch.get_mut(..needed) else {
-        return Err(LoadError::ScratchTooSmall {
+        return Err(LoadError::Capacity(CapacityError {
+            storage: Storage::BvhLoadBitset,
             needed,
             available: scratch.len(),
-        });
+        }));
     };
     seen.fill(0);
     if nodes.is_empty() {

@@ -35,7 +35,7 @@
 //!
 //! Primitives whose bounds are not finite (NaN or infinite vertices, out-of-range vertex
 //! indices in a [`TriangleMesh`]) are an error naming the primitive
-//! ([`BvhError::NonFinitePrimitive`]) or, with [`BuildOptions::exclude_non_finite`], left out of
+//! ([`BvhError::NonFinite`]) or, with [`BuildOptions::exclude_non_finite`], left out of
 //! the tree. Empty input gives a valid empty BVH that hits nothing.
 //!
 //! # Layout and size
@@ -308,9 +308,8 @@ where
     ///
     /// All returned before any storage is written:
     /// [`BvhError::TooManyPrimitives`] (more than [`MAX_PRIMITIVES`]),
-    /// [`BvhError::NodeStorageTooSmall`] (fewer than [`node_capacity`]`(N)` nodes),
-    /// [`BvhError::IndexStorageTooSmall`] (fewer than `N` indices), and
-    /// [`BvhError::NonFinitePrimitive`] for the first primitive with non-finite bounds unless
+    /// [`BvhError::Capacity`] (fewer than [`node_capacity`]`(N)` nodes or `N` indices), and
+    /// [`BvhError::NonFinite`] for the first primitive with non-finite bounds unless
     /// [`BuildOptions::exclude_non_finite`] is set.
     pub fn build<S: PrimitiveSource + ?Sized>(
         source: &S,
@@ -350,12 +349,12 @@ where
     /// (32 bytes each on x86-64, 28 elsewhere) that the builder fills once with every primitive's box and index
     /// and reorders in place, instead of reading the source through the index array at every
     /// level: the same tree, several times faster on large meshes. The same errors, plus
-    /// [`BvhError::ScratchTooSmall`], all before `nodes` or `indices` are written; the
+    /// [`BvhError::Capacity`], all before `nodes` or `indices` are written; the
     /// scratch's contents afterwards mean nothing.
     ///
     /// # Errors
     ///
-    /// As [`Bvh::build`], plus [`BvhError::ScratchTooSmall`] (fewer than
+    /// As [`Bvh::build`], plus [`BvhError::Capacity`] (fewer than
     /// [`scratch_capacity`]`(N)` records), all before `nodes` or `indices` are written.
     pub fn build_with_scratch<S: PrimitiveSource + ?Sized>(
         source: &S,

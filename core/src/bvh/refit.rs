@@ -4,6 +4,7 @@ use super::node::BvhNode;
 use super::primitive::{PrimitiveSource, is_usable};
 use super::{Bvh, BvhError};
 use crate::aabb::Aabb;
+use crate::error::NonFiniteError;
 
 impl<N, I> Bvh<N, I>
 where
@@ -20,7 +21,7 @@ where
     /// # Errors
     ///
     /// [`BvhError::SourceLengthMismatch`] (nothing written) when `source` has a
-    /// different primitive count than at build time. [`BvhError::NonFinitePrimitive`] names the
+    /// different primitive count than at build time. [`BvhError::NonFinite`] names the
     /// first primitive whose new bounds are non-finite: the refit is still completed, with
     /// that primitive's box treated as empty, so queries stay valid and never report it
     /// while its bounds are non-finite.
@@ -67,7 +68,7 @@ where
         }
         self.extent = super::root_extent(self.nodes.as_ref());
         match bad {
-            Some(index) => Err(BvhError::NonFinitePrimitive { index }),
+            Some(index) => Err(NonFiniteError::primitive(index).into()),
             None => Ok(()),
         }
     }

@@ -90,10 +90,11 @@ fn too_small_storage_is_an_error_before_writing() {
     let err = refused(&mesh, &mut nodes, &mut idx);
     assert_eq!(
         err,
-        BvhError::NodeStorageTooSmall {
+        BvhError::Capacity(crate::error::CapacityError {
+            storage: crate::error::Storage::BvhNodes,
             needed: 19,
             available: 18
-        }
+        })
     );
     assert!(nodes.iter().all(|n| *n == BvhNode::EMPTY));
     assert!(idx.iter().all(|&i| i == 7));
@@ -102,7 +103,11 @@ fn too_small_storage_is_an_error_before_writing() {
     let err = refused(&mesh, &mut nodes, &mut idx);
     assert!(matches!(
         err,
-        BvhError::IndexStorageTooSmall { needed: 10, .. }
+        BvhError::Capacity(crate::error::CapacityError {
+            storage: crate::error::Storage::BvhIndices,
+            needed: 10,
+            ..
+        })
     ));
     assert!(nodes.iter().all(|n| *n == BvhNode::EMPTY));
     // Fixed arrays work as storage.
@@ -119,7 +124,13 @@ fn non_finite_primitives_are_named_or_excluded() {
     let mesh = TriangleMesh::new(&pos, &tris);
     let mut nodes = vec![BvhNode::EMPTY; node_capacity(8)];
     let err = refused(&mesh, &mut nodes, &mut [0u32; 8]);
-    assert_eq!(err, BvhError::NonFinitePrimitive { index: 2 });
+    assert_eq!(
+        err,
+        BvhError::NonFinite(crate::error::NonFiniteError {
+            element: crate::error::InputElement::Primitive,
+            index: 2
+        })
+    );
     assert!(nodes.iter().all(|n| *n == BvhNode::EMPTY));
     let opts = BuildOptions {
         exclude_non_finite: true,
@@ -134,7 +145,10 @@ fn non_finite_primitives_are_named_or_excluded() {
     let mesh = TriangleMesh::new(&pos, &tris);
     assert_eq!(
         build(&mesh, &BuildOptions::default()).unwrap_err(),
-        BvhError::NonFinitePrimitive { index: 0 }
+        BvhError::NonFinite(crate::error::NonFiniteError {
+            element: crate::error::InputElement::Primitive,
+            index: 0
+        })
     );
 }
 
@@ -446,7 +460,10 @@ fn refit_follows_moved_vertices() {
     let mesh = TriangleMesh::new(&pos, &tris);
     assert_eq!(
         bvh.refit(&mesh),
-        Err(BvhError::NonFinitePrimitive { index: 1 })
+        Err(BvhError::NonFinite(crate::error::NonFiniteError {
+            element: crate::error::InputElement::Primitive,
+            index: 1
+        }))
     );
     assert!(bvh.bounds().is_finite());
 }
@@ -602,10 +619,11 @@ fn too_small_scratch_is_refused_before_writing() {
     );
     assert_eq!(
         r.err(),
-        Some(BvhError::ScratchTooSmall {
+        Some(BvhError::Capacity(crate::error::CapacityError {
+            storage: crate::error::Storage::BvhScratch,
             needed: 20,
             available: 19
-        })
+        }))
     );
     assert!(nodes.iter().all(|n| *n == BvhNode::EMPTY) && idx.iter().all(|&i| i == 7));
 }
@@ -716,10 +734,11 @@ fn build_in_jobs_refuses_bad_storage_before_running_jobs() {
     );
     assert_eq!(
         r.err(),
-        Some(BvhError::ScratchTooSmall {
+        Some(BvhError::Capacity(crate::error::CapacityError {
+            storage: crate::error::Storage::BvhScratch,
             needed: 40,
             available: 39
-        })
+        }))
     );
     let mut scratch = vec![PrimRef::EMPTY; 40];
     let r = Bvh::build_in_jobs(
@@ -732,7 +751,13 @@ fn build_in_jobs_refuses_bad_storage_before_running_jobs() {
         &BuildOptions::default(),
         |_| ran = true,
     );
-    assert!(matches!(r, Err(BvhError::NodeStorageTooSmall { .. })));
+    assert!(matches!(
+        r,
+        Err(BvhError::Capacity(crate::error::CapacityError {
+            storage: crate::error::Storage::BvhNodes,
+            ..
+        }))
+    ));
     assert!(!ran, "no job runs on refused storage");
 }
 
@@ -823,10 +848,11 @@ fn build_in_a_caller_workspace_gives_the_same_tree_and_errors() {
     );
     assert_eq!(
         small.err(),
-        Some(BvhError::NodeStorageTooSmall {
+        Some(BvhError::Capacity(crate::error::CapacityError {
+            storage: crate::error::Storage::BvhNodes,
             needed: node_capacity(n),
             available: node_capacity(n) - 1
-        })
+        }))
     );
 }
 

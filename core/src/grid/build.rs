@@ -6,6 +6,7 @@ use super::overlap::for_each_cell;
 use super::plan::usable_triangle;
 use super::{Grid, GridError, GridPlan};
 use crate::bvh::TriangleMesh;
+use crate::error::{CapacityError, Storage};
 
 impl<O, R> Grid<O, R>
 where
@@ -18,8 +19,8 @@ where
     ///
     /// # Errors
     ///
-    /// Before anything is written: [`GridError::OffsetStorageTooSmall`],
-    /// [`GridError::ReferenceStorageTooSmall`], and [`GridError::PlanMismatch`] when `mesh`
+    /// Before anything is written: [`GridError::Capacity`] (offsets or references), and
+    /// [`GridError::PlanMismatch`] when `mesh`
     /// has a different triangle count than the plan's. After the counting pass has written
     /// the offsets (the references untouched): [`GridError::PlanMismatch`] when `mesh`'s
     /// vertices give a different reference count than the plan's.
@@ -38,19 +39,9 @@ where
             });
         }
         let off_len = offsets.as_ref().len();
-        if off_len < cells + 1 {
-            return Err(GridError::OffsetStorageTooSmall {
-                needed: cells + 1,
-                available: off_len,
-            });
-        }
+        CapacityError::check(Storage::GridOffsets, cells + 1, off_len)?;
         let ref_len = references.as_ref().len();
-        if ref_len < refs {
-            return Err(GridError::ReferenceStorageTooSmall {
-                needed: refs,
-                available: ref_len,
-            });
-        }
+        CapacityError::check(Storage::GridReferences, refs, ref_len)?;
         let off = offsets.as_mut().get_mut(..=cells).unwrap_or(&mut []);
         let dst = references.as_mut().get_mut(..refs).unwrap_or(&mut []);
         fill(mesh, plan, off, dst)?;

@@ -1,6 +1,6 @@
 //! Errors of grid planning and construction.
 
-use crate::error::{write_too_many, write_too_small};
+use crate::error::{CapacityError, NonFiniteError, write_too_many};
 use core::fmt;
 
 /// Why a grid could not be planned or built. Every variant is returned before any caller
@@ -8,27 +8,13 @@ use core::fmt;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum GridError {
-    /// The offset storage holds fewer entries than [`super::GridPlan::required_offsets`].
-    OffsetStorageTooSmall {
-        /// Offsets required (cells + 1).
-        needed: usize,
-        /// Offsets available.
-        available: usize,
-    },
-    /// The reference storage holds fewer entries than
-    /// [`super::GridPlan::required_references`].
-    ReferenceStorageTooSmall {
-        /// References required.
-        needed: usize,
-        /// References available.
-        available: usize,
-    },
+    /// Caller storage is too small: the offsets ([`super::GridPlan::required_offsets`], cells
+    /// + 1) or the references ([`super::GridPlan::required_references`]).
+    Capacity(CapacityError),
     /// A triangle has a non-finite vertex or an out-of-range vertex index, and
-    /// [`super::GridOptions::exclude_non_finite`] is off.
-    NonFiniteTriangle {
-        /// The triangle's index in the mesh.
-        index: usize,
-    },
+    /// [`super::GridOptions::exclude_non_finite`] is off:
+    /// [`crate::error::InputElement::Triangle`] with its index in the mesh.
+    NonFinite(NonFiniteError),
     /// More triangles than [`super::MAX_TRIANGLES`] (indices are `u32`).
     TooManyTriangles {
         /// Triangles in the mesh.
@@ -54,16 +40,8 @@ pub enum GridError {
 impl fmt::Display for GridError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            Self::OffsetStorageTooSmall { needed, available } => {
-                write_too_small(f, "grid offset storage", needed, available)
-            }
-            Self::ReferenceStorageTooSmall { needed, available } => {
-                write_too_small(f, "grid reference storage", needed, available)
-            }
-            Self::NonFiniteTriangle { index } => write!(
-                f,
-                "triangle {index} has a non-finite vertex or an out-of-range vertex index"
-            ),
+            Self::Capacity(e) => e.fmt(f),
+            Self::NonFinite(e) => e.fmt(f),
             Self::TooManyTriangles { count } => {
                 write_too_many(f, "triangles", "a grid", count, super::MAX_TRIANGLES)
             }
@@ -81,3 +59,9 @@ impl fmt::Display for GridError {
 }
 
 impl core::error::Error for GridError {}
+
+impl From<CapacityError> for GridError {
+    fn from(e: CapacityError) -> Self {
+        Self::Capacity(e)
+    }
+}

@@ -97,7 +97,8 @@ mod traverse;
 mod tests;
 
 pub use error::GridError;
-pub use plan::{CellAssignment, GridOptions, GridPlan};
+pub use overlap::CellAssignment;
+pub use plan::{GridOptions, GridPlan};
 pub use traverse::GridStats;
 
 use crate::aabb::Aabb;

@@ -1,4 +1,5 @@
-//! The cell layout and the conservative triangle-to-cell assignment (box or separating-axis).
+//! The cell layout, the triangles' padding and the conservative triangle-to-cell assignment (box
+//! or separating-axis).
 //!
 //! Cell `(i, j, k)` is the box `[min + i·size, min + (i+1)·size]` per axis in **real**
 //! arithmetic on the stored `f32` `min` and `size`, except that the first and last cell of
@@ -7,10 +8,41 @@
 //! assigning and when traversing. Assignment is computed in `f64` with a relative slack
 //! ([`SAT_SLACK_REL`]), so it never misses a cell the padded triangle touches.
 
-use super::plan::{origin_reach, ray_pad};
-use super::{CellAssignment, MAX_CELLS_PER_AXIS, SAT_SLACK_REL};
+use super::{GRID_ABS_PAD, GRID_RAY_PAD, MAX_CELLS_PER_AXIS, ORIGIN_REACH, SAT_SLACK_REL};
 use crate::aabb::Aabb;
 use glam::{DVec3, Vec3};
+
+/// How triangles are assigned to cells ([`super::GridOptions::assignment`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum CellAssignment {
+    /// Every cell the triangle's (padded) bounding box overlaps: cheap to build, more
+    /// references (a long diagonal triangle fills its whole box).
+    Bounds,
+    /// Every cell the (padded) triangle itself overlaps, by the separating-axis test in `f64`
+    /// (conservative: see [`super::SAT_SLACK_REL`]). The default.
+    #[default]
+    Exact,
+}
+
+/// Padding of every triangle at build time, world units (module docs, "Robustness"):
+/// [`GRID_RAY_PAD`]`·(reach + extent) + `[`GRID_ABS_PAD`], which covers every ray whose origin
+/// has `max|o_i| ≤ reach`.
+#[inline]
+pub(super) fn ray_pad(origin_mag: f32, extent: f32) -> f32 {
+    GRID_RAY_PAD * (origin_mag + extent) + GRID_ABS_PAD
+}
+
+/// The origin magnitude up to which rays need no more padding than the build's:
+/// `extent + ORIGIN_REACH·(longest side)`.
+#[inline]
+pub(super) fn origin_reach(bounds: &Aabb, extent: f32) -> f32 {
+    let side = bounds.extent().max_element();
+    if side.is_finite() && side > 0.0 {
+        extent + ORIGIN_REACH * side
+    } else {
+        extent
+    }
+}
 
 /// Expands, inside the `impl` of a type with a `layout: Layout` field (the grid and the plan
 /// it was built from, which describe the same cells), to the public `resolution`,

@@ -1,25 +1,11 @@
 //! Planning a grid: bounds, resolution (`∛(λN/V)`), padding and the exact storage it needs.
 
-use super::overlap::{Layout, for_each_cell};
-use super::{
-    DEFAULT_LAMBDA, GRID_ABS_PAD, GRID_RAY_PAD, GridError, MAX_CELLS_PER_AXIS, MAX_TRIANGLES,
-    ORIGIN_REACH,
-};
+use super::overlap::{CellAssignment, Layout, for_each_cell};
+use super::{DEFAULT_LAMBDA, GridError, MAX_CELLS_PER_AXIS, MAX_TRIANGLES};
 use crate::aabb::Aabb;
 use crate::bvh::{Primitive, TriangleMesh};
+use crate::error::{InputElement, NonFiniteError};
 use glam::Vec3;
-
-/// How triangles are assigned to cells ([`GridOptions::assignment`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum CellAssignment {
-    /// Every cell the triangle's (padded) bounding box overlaps: cheap to build, more
-    /// references (a long diagonal triangle fills its whole box).
-    Bounds,
-    /// Every cell the (padded) triangle itself overlaps, by the separating-axis test in `f64`
-    /// (conservative: see [`super::SAT_SLACK_REL`]). The default.
-    #[default]
-    Exact,
-}
 
 /// Options of [`GridPlan::new`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,7 +20,7 @@ pub struct GridOptions {
     /// Bounding-box or exact triangle–box cell assignment. Default [`CellAssignment::Exact`].
     pub assignment: CellAssignment,
     /// `false` (default): a triangle with a non-finite vertex or an out-of-range vertex index
-    /// is an error ([`GridError::NonFiniteTriangle`]). `true`: such triangles are left out of
+    /// is an error ([`GridError::NonFinite`]). `true`: such triangles are left out of
     /// the grid (no query ever reports them).
     pub exclude_non_finite: bool,
 }
@@ -90,7 +76,7 @@ impl GridPlan {
     /// # Errors
     ///
     /// [`GridError::TooManyTriangles`] (more than [`MAX_TRIANGLES`]),
-    /// [`GridError::NonFiniteTriangle`] for the first unusable triangle unless
+    /// [`GridError::NonFinite`] for the first unusable triangle unless
     /// [`GridOptions::exclude_non_finite`] is set, and [`GridError::TooManyReferences`] when
     /// the references or the cells overflow `u32`.
     pub fn new(mesh: &TriangleMesh<'_>, options: &GridOptions) -> Result<Self, GridError> {
@@ -107,7 +93,12 @@ impl GridPlan {
                     usable += 1;
                 }
                 None if options.exclude_non_finite => {}
-                None => return Err(GridError::NonFiniteTriangle { index: i }),
+                None => {
+                    return Err(GridError::NonFinite(NonFiniteError::new(
+                        InputElement::Triangle,
+                        i,
+                    )));
+                }
             }
         }
         let resolution = resolution(&bounds, usable, options);
@@ -211,24 +202,4 @@ fn resolution(bounds: &Aabb, count: usize, options: &GridOptions) -> [u32; 3] {
         }
     }
     n
-}
-
-/// Padding of every triangle at build time, world units (module docs, "Robustness"):
-/// [`GRID_RAY_PAD`]`·(reach + extent) + `[`GRID_ABS_PAD`], which covers every ray whose origin
-/// has `max|o_i| ≤ reach`.
-#[inline]
-pub(super) fn ray_pad(origin_mag: f32, extent: f32) -> f32 {
-    GRID_RAY_PAD * (origin_mag + extent) + GRID_ABS_PAD
-}
-
-/// The origin magnitude up to which rays need no more padding than the build's:
-/// `extent + ORIGIN_REACH·(longest side)`.
-#[inline]
-pub(super) fn origin_reach(bounds: &Aabb, extent: f32) -> f32 {
-    let side = bounds.extent().max_element();
-    if side.is_finite() && side > 0.0 {
-        extent + ORIGIN_REACH * side
-    } else {
-        extent
-    }
 }

@@ -156,20 +156,22 @@ fn too_small_storage_is_refused_before_writing() {
     let r = Grid::build(&mesh, &plan, &mut off[..], &mut refs[..]);
     assert_eq!(
         r.err(),
-        Some(GridError::OffsetStorageTooSmall {
+        Some(GridError::Capacity(crate::error::CapacityError {
+            storage: crate::error::Storage::GridOffsets,
             needed: no,
             available: no - 1
-        })
+        }))
     );
     let mut off = vec![7u32; no];
     let mut refs = vec![7u32; nr - 1];
     let r = Grid::build(&mesh, &plan, &mut off[..], &mut refs[..]);
     assert_eq!(
         r.err(),
-        Some(GridError::ReferenceStorageTooSmall {
+        Some(GridError::Capacity(crate::error::CapacityError {
+            storage: crate::error::Storage::GridReferences,
             needed: nr,
             available: nr - 1
-        })
+        }))
     );
     assert!(off.iter().chain(&refs).all(|&x| x == 7));
     let other = TriangleMesh::new(&p, &t[..10]);
@@ -195,7 +197,10 @@ fn non_finite_triangles_are_refused_or_excluded() {
     let mesh = TriangleMesh::new(&p, &t);
     assert_eq!(
         GridPlan::new(&mesh, &GridOptions::default()).err(),
-        Some(GridError::NonFiniteTriangle { index: 1 })
+        Some(GridError::NonFinite(crate::error::NonFiniteError {
+            element: crate::error::InputElement::Triangle,
+            index: 1
+        }))
     );
     let opts = GridOptions {
         exclude_non_finite: true,

@@ -2,7 +2,7 @@
 //! current cell" rule (module docs of [`super`]).
 
 use super::Grid;
-use super::plan::ray_pad;
+use super::overlap::ray_pad;
 use crate::aabb::{Aabb, SlabRay};
 use crate::bvh::{cull_bound, test_run};
 use crate::ray::Ray;

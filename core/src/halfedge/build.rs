@@ -6,6 +6,7 @@ use super::error::{BuildError, CapacityError, ElementKind};
 use super::handles::{FaceId, NONE, VertexId};
 use super::mesh::Mesh;
 use super::storage::MeshStorage;
+use crate::error::{InputElement, NonFiniteError, Storage};
 
 /// `u32`s of scratch that [`Mesh::build`] needs for `faces` triangles: 6 per triangle
 /// (3 for the sorted triangle sides, 3 for the side → halfedge map).
@@ -74,7 +75,7 @@ impl<S: MeshStorage> Mesh<S> {
         let cap = self.capacity();
         let too_many = |kind, needed, available| {
             BuildError::Capacity(CapacityError {
-                kind,
+                storage: Storage::MeshSlots(kind),
                 needed,
                 available,
             })
@@ -87,16 +88,13 @@ impl<S: MeshStorage> Mesh<S> {
         }
         let ns = nf * 3;
         let needed = build_scratch_len(nf);
-        if scratch.len() < needed {
-            return Err(BuildError::ScratchTooSmall {
-                needed,
-                available: scratch.len(),
-            });
-        }
-        if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
-            return Err(BuildError::NonFinitePosition {
-                vertex: VertexId(i as u32),
-            });
+        CapacityError::check(Storage::MeshBuildScratch, needed, scratch.len())
+            .map_err(BuildError::Capacity)?;
+        if let Some(index) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(BuildError::NonFinite(NonFiniteError {
+                element: InputElement::Vertex,
+                index,
+            }));
         }
         for (f, t) in tris.iter().enumerate() {
             let face = FaceId(f as u32);
@@ -135,9 +133,11 @@ impl<S: MeshStorage> Mesh<S> {
             }
             let (lo, hi) = ((k >> 32) as u32, k as u32);
             if j - i > 2 {
+                let first = order.get(i..j).into_iter().flatten().map(|&s| s / 3).min();
                 return Err(BuildError::NonManifoldEdge {
                     a: VertexId(lo),
                     b: VertexId(hi),
+                    face: FaceId(first.unwrap_or(0)),
                 });
             }
             if j - i == 2 {
@@ -147,6 +147,7 @@ impl<S: MeshStorage> Mesh<S> {
                     return Err(BuildError::InconsistentOrientation {
                         a: VertexId(a),
                         b: VertexId(b),
+                        face: FaceId((s1.max(s2) / 3) as u32),
                     });
                 }
             }

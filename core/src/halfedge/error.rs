@@ -4,48 +4,22 @@
 use core::fmt;
 
 use super::handles::{EdgeId, FaceId, HalfedgeId, VertexId};
-
-/// An element kind, for capacity and free-list errors.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ElementKind {
-    /// Vertices.
-    Vertex,
-    /// Edges (halfedge pairs).
-    Edge,
-    /// Faces.
-    Face,
-}
-
-/// An operation needs more slots of `kind` than the storage has free.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct CapacityError {
-    /// The kind that ran out.
-    pub kind: ElementKind,
-    /// Slots the operation needs.
-    pub needed: usize,
-    /// Slots available (free-list entries plus unused capacity).
-    pub available: usize,
-}
+use crate::error::NonFiniteError;
+pub use crate::error::{CapacityError, ElementKind};
 
 /// Why [`super::Mesh::build`] rejected a triangle list. On any error the mesh is left
-/// empty (and valid).
+/// empty (and valid). Every variant but [`BuildError::Capacity`] names an offending input
+/// element ([`BuildError::culprit`]), so a caller can point at where its input came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum BuildError {
-    /// More vertices, edges or faces than the storage holds.
+    /// More vertices, edges or faces than the storage holds
+    /// ([`crate::error::Storage::MeshSlots`]), or a scratch slice shorter than
+    /// [`super::build_scratch_len`] ([`crate::error::Storage::MeshBuildScratch`]).
     Capacity(CapacityError),
-    /// The scratch slice is shorter than [`super::build_scratch_len`].
-    ScratchTooSmall {
-        /// Required length in `u32`s.
-        needed: usize,
-        /// Length available.
-        available: usize,
-    },
-    /// A position has a NaN or infinite coordinate.
-    NonFinitePosition {
-        /// The vertex (its index in the input).
-        vertex: VertexId,
-    },
+    /// A position has a NaN or infinite coordinate
+    /// ([`crate::error::InputElement::Vertex`], the index in the input).
+    NonFinite(NonFiniteError),
     /// A triangle refers to a vertex index ≥ the number of positions.
     IndexOutOfRange {
         /// The triangle (its index in the input).
@@ -66,6 +40,8 @@ pub enum BuildError {
         a: VertexId,
         /// Larger endpoint.
         b: VertexId,
+        /// The lowest-numbered triangle using the edge.
+        face: FaceId,
     },
     /// The directed edge `a → b` is used by two triangles (neighbours disagree on the
     /// orientation).
@@ -74,12 +50,95 @@ pub enum BuildError {
         a: VertexId,
         /// Head of the repeated directed edge.
         b: VertexId,
+        /// The later of the two triangles running `a → b`.
+        face: FaceId,
     },
     /// The triangles around this vertex form more than one fan (a bowtie / pinch vertex).
     NonManifoldVertex {
         /// The vertex.
         vertex: VertexId,
     },
+}
+
+/// The input element a [`BuildError`] is about: a position or a triangle, by its index in
+/// the slices given to [`super::Mesh::build`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Culprit {
+    /// A position.
+    Vertex(VertexId),
+    /// A triangle.
+    Face(FaceId),
+}
+
+impl BuildError {
+    /// The offending input element; `None` for [`BuildError::Capacity`] (the whole input).
+    #[must_use]
+    pub fn culprit(&self) -> Option<Culprit> {
+        match *self {
+            Self::Capacity(_) => None,
+            Self::NonFinite(e) => Some(Culprit::Vertex(VertexId(e.index as u32))),
+            Self::IndexOutOfRange { face, .. }
+            | Self::RepeatedIndex { face, .. }
+            | Self::NonManifoldEdge { face, .. }
+            | Self::InconsistentOrientation { face, .. } => Some(Culprit::Face(face)),
+            Self::NonManifoldVertex { vertex } => Some(Culprit::Vertex(vertex)),
+        }
+    }
+
+    /// The error's sentence with vertices and triangles numbered from `first` instead of 0
+    /// (an OBJ file numbers from 1). `Display` is `numbered_from(0)`.
+    #[must_use]
+    pub fn numbered_from(&self, first: u32) -> impl fmt::Display + '_ {
+        Numbered(self, u64::from(first))
+    }
+}
+
+/// [`BuildError::numbered_from`].
+struct Numbered<'a>(&'a BuildError, u64);
+
+impl fmt::Display for Numbered<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let n = |i: u32| u64::from(i) + self.1;
+        match *self.0 {
+            BuildError::Capacity(c) => write!(f, "cannot build half-edge mesh: {c}"),
+            BuildError::NonFinite(e) => write!(
+                f,
+                "vertex {} has a NaN or infinite coordinate",
+                e.index as u64 + self.1
+            ),
+            BuildError::IndexOutOfRange { face, index } => write!(
+                f,
+                "triangle {} refers to vertex {}, which does not exist",
+                n(face.0),
+                n(index)
+            ),
+            BuildError::RepeatedIndex { face, vertex } => write!(
+                f,
+                "triangle {} uses vertex {} twice",
+                n(face.0),
+                n(vertex.0)
+            ),
+            BuildError::NonManifoldEdge { a, b, face } => write!(
+                f,
+                "non-manifold edge between vertices {} and {}: used by more than two triangles, the first of them triangle {}",
+                n(a.0),
+                n(b.0),
+                n(face.0)
+            ),
+            BuildError::InconsistentOrientation { a, b, face } => write!(
+                f,
+                "inconsistent orientation: triangle {} runs from vertex {} to vertex {} as an earlier triangle does (neighbours must traverse a shared edge in opposite directions; or a face is repeated)",
+                n(face.0),
+                n(a.0),
+                n(b.0)
+            ),
+            BuildError::NonManifoldVertex { vertex } => write!(
+                f,
+                "non-manifold vertex {} is a pinch: its triangles form more than one fan (a bowtie vertex)",
+                n(vertex.0)
+            ),
+        }
+    }
 }
 
 /// Which invariant [`super::Mesh::validate`] found broken, and where.
@@ -228,63 +287,9 @@ pub enum PositionError {
     NonFinite,
 }
 
-impl fmt::Display for ElementKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Self::Vertex => "vertex",
-            Self::Edge => "edge",
-            Self::Face => "face",
-        })
-    }
-}
-
-impl fmt::Display for CapacityError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "half-edge mesh capacity exceeded: {} {} slots needed, {} available",
-            self.needed, self.kind, self.available
-        )
-    }
-}
-
 impl fmt::Display for BuildError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match *self {
-            Self::Capacity(c) => write!(f, "cannot build half-edge mesh: {c}"),
-            Self::ScratchTooSmall { needed, available } => write!(
-                f,
-                "cannot build half-edge mesh: scratch of {available} entries, {needed} needed"
-            ),
-            Self::NonFinitePosition { vertex } => {
-                write!(f, "vertex {} has a NaN or infinite coordinate", vertex.0)
-            }
-            Self::IndexOutOfRange { face, index } => {
-                write!(
-                    f,
-                    "triangle {} refers to vertex {index}, which does not exist",
-                    face.0
-                )
-            }
-            Self::RepeatedIndex { face, vertex } => {
-                write!(f, "triangle {} uses vertex {} twice", face.0, vertex.0)
-            }
-            Self::NonManifoldEdge { a, b } => write!(
-                f,
-                "edge between vertices {} and {} is shared by more than two triangles",
-                a.0, b.0
-            ),
-            Self::InconsistentOrientation { a, b } => write!(
-                f,
-                "two triangles both run from vertex {} to vertex {}: neighbours disagree on the orientation (or a face is repeated)",
-                a.0, b.0
-            ),
-            Self::NonManifoldVertex { vertex } => write!(
-                f,
-                "the triangles around vertex {} form more than one fan (a pinch or bowtie vertex)",
-                vertex.0
-            ),
-        }
+        self.numbered_from(0).fmt(f)
     }
 }
 
@@ -444,7 +449,6 @@ impl fmt::Display for PositionError {
     }
 }
 
-impl core::error::Error for CapacityError {}
 impl core::error::Error for BuildError {}
 impl core::error::Error for InvariantError {}
 impl core::error::Error for FlipError {}
@@ -458,6 +462,7 @@ impl core::error::Error for PositionError {}
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::{InputElement, Storage};
     use std::format;
     use std::string::String;
     use std::vec;
@@ -469,7 +474,7 @@ mod tests {
     fn messages_are_sentences_not_debug_forms() {
         let (v, e, h, t) = (VertexId(7), EdgeId(8), HalfedgeId(9), FaceId(10));
         let cap = CapacityError {
-            kind: ElementKind::Edge,
+            storage: Storage::MeshSlots(ElementKind::Edge),
             needed: 12,
             available: 3,
         };
@@ -477,20 +482,26 @@ mod tests {
         let mut push = |debug: String, display: String| all.push((debug, display));
         for x in [
             BuildError::Capacity(cap),
-            BuildError::ScratchTooSmall {
+            BuildError::Capacity(CapacityError {
+                storage: Storage::MeshBuildScratch,
                 needed: 5,
                 available: 1,
-            },
-            BuildError::NonFinitePosition { vertex: v },
+            }),
+            BuildError::NonFinite(NonFiniteError {
+                element: InputElement::Vertex,
+                index: 7,
+            }),
             BuildError::IndexOutOfRange { face: t, index: 99 },
             BuildError::RepeatedIndex { face: t, vertex: v },
             BuildError::NonManifoldEdge {
                 a: v,
                 b: VertexId(3),
+                face: t,
             },
             BuildError::InconsistentOrientation {
                 a: v,
                 b: VertexId(3),
+                face: t,
             },
             BuildError::NonManifoldVertex { vertex: v },
         ] {

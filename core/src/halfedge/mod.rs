@@ -49,8 +49,8 @@ mod tests;
 pub use build::build_scratch_len;
 pub use collapse::CollapseAt;
 pub use error::{
-    BuildError, CapacityError, CollapseError, DiffuseError, ElementKind, ExportError, FlipError,
-    InvariantError, PositionError, SplitError, SubdivideError,
+    BuildError, CapacityError, CollapseError, Culprit, DiffuseError, ElementKind, ExportError,
+    FlipError, InvariantError, PositionError, SplitError, SubdivideError,
 };
 pub use handles::{EdgeId, FaceId, HalfedgeId, VertexId};
 pub use mesh::{HalfedgeMesh, Mesh, Moved, SliceMesh};

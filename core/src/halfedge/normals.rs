@@ -16,40 +16,12 @@
 //!
 //! Allocation-free; O(valence) per vertex.
 
-use core::fmt;
-
 use glam::Vec3;
 
 use super::handles::VertexId;
 use super::mesh::Mesh;
 use super::storage::MeshStorage;
-
-/// Why [`Mesh::vertex_normals`] refused.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum NormalsError {
-    /// The output slice is shorter than the number of vertex slots in use
-    /// ([`Mesh::slots`]`().vertices`). Nothing was written.
-    BufferTooSmall {
-        /// Entries needed.
-        needed: usize,
-        /// Entries available.
-        available: usize,
-    },
-}
-
-impl fmt::Display for NormalsError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::BufferTooSmall { needed, available } => write!(
-                f,
-                "vertex normal buffer too small: {needed} entries needed, {available} provided"
-            ),
-        }
-    }
-}
-
-impl core::error::Error for NormalsError {}
+use crate::error::{CapacityError, Storage};
 
 impl<S: MeshStorage> Mesh<S> {
     /// The area-weighted unit normal of `v`: the normalised sum of the unnormalised normals
@@ -71,16 +43,11 @@ impl<S: MeshStorage> Mesh<S> {
     /// `vertex_normal` returns. Returns the number of **live** vertices that got no normal.
     ///
     /// # Errors
-    /// [`NormalsError::BufferTooSmall`] (nothing written) when `out` is shorter than
-    /// `slots().vertices`.
-    pub fn vertex_normals(&self, out: &mut [Vec3]) -> Result<usize, NormalsError> {
+    /// [`CapacityError`] of [`Storage::VertexNormals`] (nothing written) when `out` is shorter
+    /// than `slots().vertices`.
+    pub fn vertex_normals(&self, out: &mut [Vec3]) -> Result<usize, CapacityError> {
         let needed = self.slots().vertices;
-        if out.len() < needed {
-            return Err(NormalsError::BufferTooSmall {
-                needed,
-                available: out.len(),
-            });
-        }
+        CapacityError::check(Storage::VertexNormals, needed, out.len())?;
         let mut missing = 0;
         for (i, o) in out.iter_mut().enumerate().take(needed) {
             let v = VertexId(i as u32);
@@ -105,7 +72,7 @@ mod tests {
 
     use glam::{Vec3, vec3};
 
-    use super::NormalsError;
+    use crate::error::{CapacityError, Storage};
     use crate::halfedge::{CollapseAt, HalfedgeMesh, VertexId, build_scratch_len};
     use crate::solids::{CUBE_TRIANGLES, CUBE_VERTICES};
 
@@ -251,7 +218,8 @@ mod tests {
         let mut out = [Vec3::ONE; 7];
         assert_eq!(
             m.vertex_normals(&mut out),
-            Err(NormalsError::BufferTooSmall {
+            Err(CapacityError {
+                storage: Storage::VertexNormals,
                 needed: 8,
                 available: 7
             })

@@ -128,7 +128,7 @@ impl<S: MeshStorage> Mesh<S> {
         ] {
             if n > c {
                 return Err(SubdivideError::Capacity(CapacityError {
-                    kind,
+                    storage: crate::error::Storage::MeshSlots(kind),
                     needed: n,
                     available: c,
                 }));

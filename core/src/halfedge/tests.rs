@@ -1,12 +1,14 @@
 //! Unit tests of the half-edge module (hand-made meshes; the shared OBJ meshes are exercised
 //! in `tests/tests/halfedge_meshes.rs`).
 
+use std::string::ToString;
 use std::vec;
 use std::vec::Vec;
 
 use glam::{Vec3, vec3};
 
 use super::*;
+use crate::error::{InputElement, NonFiniteError, Storage};
 use crate::solids::{OCTAHEDRON_TRIANGLES, OCTAHEDRON_VERTICES};
 
 /// Absolute tolerance for f32 results whose inputs are exact small numbers (|x| ≤ 10): a
@@ -231,7 +233,8 @@ fn build_errors_name_the_element() {
         e(&[[0, 1, 2], [1, 0, 3], [0, 1, 4]]),
         Some(BuildError::NonManifoldEdge {
             a: VertexId(0),
-            b: VertexId(1)
+            b: VertexId(1),
+            face: FaceId(0)
         })
     );
     // Directed edge 0→1 twice.
@@ -239,7 +242,8 @@ fn build_errors_name_the_element() {
         e(&[[0, 1, 2], [0, 1, 3]]),
         Some(BuildError::InconsistentOrientation {
             a: VertexId(0),
-            b: VertexId(1)
+            b: VertexId(1),
+            face: FaceId(1)
         })
     );
     assert_eq!(
@@ -272,16 +276,45 @@ fn build_errors_name_the_element() {
     bad[2].y = f32::NAN;
     assert_eq!(
         build::<8, 32, 16>(&bad, &[[0, 1, 2]]).err(),
-        Some(BuildError::NonFinitePosition {
-            vertex: VertexId(2)
-        })
+        Some(BuildError::NonFinite(NonFiniteError {
+            element: InputElement::Vertex,
+            index: 2
+        }))
+    );
+    // Every refusal but capacity names an input element, numbered as the caller counts.
+    let three = e(&[[0, 1, 2], [1, 0, 3], [0, 1, 4]]).unwrap();
+    assert_eq!(three.culprit(), Some(Culprit::Face(FaceId(0))));
+    assert_eq!(
+        three.numbered_from(1).to_string(),
+        "non-manifold edge between vertices 1 and 2: used by more than two triangles, the first of them triangle 1"
+    );
+    let twice = e(&[[0, 1, 2], [0, 1, 3]]).unwrap();
+    assert_eq!(twice.culprit(), Some(Culprit::Face(FaceId(1))));
+    assert!(
+        twice
+            .to_string()
+            .starts_with("inconsistent orientation: triangle 1 ")
+    );
+    let bowtie = e(&[[0, 1, 2], [0, 3, 4]]).unwrap();
+    assert_eq!(bowtie.culprit(), Some(Culprit::Vertex(VertexId(0))));
+    assert!(
+        bowtie
+            .numbered_from(1)
+            .to_string()
+            .starts_with("non-manifold vertex 1 ")
+    );
+    let nan = build::<8, 32, 16>(&bad, &[[0, 1, 2]]).unwrap_err();
+    assert_eq!(nan.culprit(), Some(Culprit::Vertex(VertexId(2))));
+    assert_eq!(
+        nan.numbered_from(1).to_string(),
+        "vertex 3 has a NaN or infinite coordinate"
     );
     // Capacity and scratch.
     let (p, t) = tetra();
     assert!(matches!(
         build::<4, 5, 4>(&p, &t),
         Err(BuildError::Capacity(CapacityError {
-            kind: ElementKind::Edge,
+            storage: Storage::MeshSlots(ElementKind::Edge),
             needed: 6,
             ..
         }))
@@ -289,7 +322,7 @@ fn build_errors_name_the_element() {
     assert!(matches!(
         build::<3, 6, 4>(&p, &t),
         Err(BuildError::Capacity(CapacityError {
-            kind: ElementKind::Vertex,
+            storage: Storage::MeshSlots(ElementKind::Vertex),
             ..
         }))
     ));
@@ -297,10 +330,11 @@ fn build_errors_name_the_element() {
     let mut small = [0u32; 5];
     assert_eq!(
         m.build(&p, &t, &mut small),
-        Err(BuildError::ScratchTooSmall {
+        Err(BuildError::Capacity(CapacityError {
+            storage: Storage::MeshBuildScratch,
             needed: 24,
             available: 5
-        })
+        }))
     );
     // A failed build leaves the mesh empty.
     let mut scratch = vec![0u32; 64];
@@ -580,7 +614,7 @@ fn loop_refusals() {
     assert!(matches!(
         r,
         Err(SubdivideError::Capacity(CapacityError {
-            kind: ElementKind::Edge,
+            storage: Storage::MeshSlots(ElementKind::Edge),
             needed: 48,
             ..
         }))
@@ -747,7 +781,7 @@ fn split_capacity_exact_and_one_short() {
     assert_eq!(
         m.split_edge(e),
         Err(SplitError::Capacity(CapacityError {
-            kind: ElementKind::Edge,
+            storage: Storage::MeshSlots(ElementKind::Edge),
             needed: 3,
             available: 2
         }))

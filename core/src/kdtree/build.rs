@@ -16,30 +16,13 @@
 //! is one for which no pair of nodes is left in the node storage; [`super::KdTree::budget_exhausted`]
 //! reports either.
 
+use super::kdref::KdRef;
 use super::node::{KdNode, MAX_FIELD};
 use super::sah::{Costs, Split, best_split, count_sides, partition};
 use super::{KdBuildOptions, KdTreeError, MAX_DEPTH, MAX_PRIMITIVES};
 use crate::aabb::Aabb;
 use crate::bvh::PrimitiveSource;
-
-/// One reference in the build scratch: a primitive's index and its box clipped to the cell
-/// of the node it is in (28 bytes). Callers make the scratch of [`KdRef::EMPTY`]s; its
-/// contents after a build mean nothing.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct KdRef {
-    pub(super) min: [f32; 3],
-    pub(super) max: [f32; 3],
-    pub(super) prim: u32,
-}
-
-impl KdRef {
-    /// A record to fill a scratch array with.
-    pub const EMPTY: Self = Self {
-        min: [0.0; 3],
-        max: [0.0; 3],
-        prim: 0,
-    };
-}
+use crate::error::{CapacityError, NonFiniteError, Storage};
 
 /// A node waiting to be split or made a leaf: its scratch run `start..end`, depth and cell.
 #[derive(Clone, Copy, Debug)]
@@ -106,24 +89,9 @@ fn validate<S: PrimitiveSource + ?Sized>(
     if n > MAX_PRIMITIVES {
         return Err(KdTreeError::TooManyPrimitives { count: n });
     }
-    if n > 0 && nodes.is_empty() {
-        return Err(KdTreeError::NodeStorageTooSmall {
-            needed: 1,
-            available: 0,
-        });
-    }
-    if refs.len() < n {
-        return Err(KdTreeError::ReferenceStorageTooSmall {
-            needed: n,
-            available: refs.len(),
-        });
-    }
-    if scratch.len() < n {
-        return Err(KdTreeError::ScratchTooSmall {
-            needed: n,
-            available: scratch.len(),
-        });
-    }
+    CapacityError::check(Storage::KdNodes, usize::from(n > 0), nodes.len())?;
+    CapacityError::check(Storage::KdReferences, n, refs.len())?;
+    CapacityError::check(Storage::KdScratch, n, scratch.len())?;
     let mut bounds = Aabb::EMPTY;
     let mut count = 0u32;
     for i in 0..n {
@@ -132,7 +100,7 @@ fn validate<S: PrimitiveSource + ?Sized>(
             bounds = bounds.union(b);
             count += 1;
         } else if !options.exclude_non_finite {
-            return Err(KdTreeError::NonFinitePrimitive { index: i });
+            return Err(KdTreeError::NonFinite(NonFiniteError::primitive(i)));
         }
     }
     Ok((count, bounds))

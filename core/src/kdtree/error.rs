@@ -1,6 +1,6 @@
 //! Errors of kd-tree construction.
 
-use crate::error::{write_non_finite_primitive, write_too_many, write_too_small};
+use crate::error::{CapacityError, NonFiniteError, write_too_many};
 use core::fmt;
 
 /// Why a kd-tree build was refused. Every variant is returned before any caller storage
@@ -8,61 +8,37 @@ use core::fmt;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum KdTreeError {
-    /// The node storage is empty while the source has primitives (the root needs one node).
-    NodeStorageTooSmall {
-        /// Nodes required at least.
-        needed: usize,
-        /// Nodes available.
-        available: usize,
-    },
-    /// The reference storage holds fewer entries than the source has primitives
-    /// ([`super::min_reference_capacity`]).
-    ReferenceStorageTooSmall {
-        /// References required at least.
-        needed: usize,
-        /// References available.
-        available: usize,
-    },
-    /// The build scratch holds fewer records than the source has primitives
-    /// ([`super::min_reference_capacity`]).
-    ScratchTooSmall {
-        /// Records required at least.
-        needed: usize,
-        /// Records available.
-        available: usize,
-    },
+    /// Caller storage is too small: the node storage is empty while the source has
+    /// primitives (the root needs one node), or the reference storage or the build scratch
+    /// holds fewer entries than the source has primitives ([`super::min_reference_capacity`]).
+    Capacity(CapacityError),
     /// More primitives than [`super::MAX_PRIMITIVES`].
     TooManyPrimitives {
         /// Primitives in the source.
         count: usize,
     },
     /// A primitive's bounds are NaN, infinite or empty (non-finite vertex, out-of-range vertex
-    /// index), and [`super::KdBuildOptions::exclude_non_finite`] is off.
-    NonFinitePrimitive {
-        /// The primitive's index in the source.
-        index: usize,
-    },
+    /// index), and [`super::KdBuildOptions::exclude_non_finite`] is off:
+    /// [`crate::error::InputElement::Primitive`] with its index in the source.
+    NonFinite(NonFiniteError),
 }
 
 impl fmt::Display for KdTreeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let (storage, needed, available) = match *self {
-            Self::NodeStorageTooSmall { needed, available } => {
-                ("kd-tree node storage", needed, available)
-            }
-            Self::ReferenceStorageTooSmall { needed, available } => {
-                ("kd-tree reference storage", needed, available)
-            }
-            Self::ScratchTooSmall { needed, available } => {
-                ("kd-tree build scratch", needed, available)
-            }
+        match *self {
+            Self::Capacity(e) => e.fmt(f),
             Self::TooManyPrimitives { count } => {
-                return write_too_many(f, "primitives", "a kd-tree", count, super::MAX_PRIMITIVES);
+                write_too_many(f, "primitives", "a kd-tree", count, super::MAX_PRIMITIVES)
             }
-            Self::NonFinitePrimitive { index } => return write_non_finite_primitive(f, index),
-        };
-        write_too_small(f, storage, needed, available)
+            Self::NonFinite(e) => e.fmt(f),
+        }
     }
 }
 
 impl core::error::Error for KdTreeError {}
+
+impl From<CapacityError> for KdTreeError {
+    fn from(e: CapacityError) -> Self {
+        Self::Capacity(e)
+    }
+}

@@ -44,7 +44,7 @@
 //! a cell of zero area is measured by its length, a point cell is a leaf.
 //!
 //! Primitives with non-finite or empty bounds (NaN or infinite vertices, out-of-range vertex
-//! indices) are an error naming the first ([`KdTreeError::NonFinitePrimitive`]) or, with
+//! indices) are an error naming the first ([`KdTreeError::NonFinite`]) or, with
 //! [`KdBuildOptions::exclude_non_finite`], left out. Empty input gives a valid empty tree.
 //!
 //! # Traversal and exactness
@@ -83,6 +83,7 @@
 
 mod build;
 mod error;
+mod kdref;
 mod node;
 mod query;
 mod sah;
@@ -91,8 +92,8 @@ mod traverse;
 #[cfg(test)]
 mod tests;
 
-pub use build::KdRef;
 pub use error::KdTreeError;
+pub use kdref::KdRef;
 pub use node::{KdNode, KdNodeKind, NODE_SIZE};
 
 use crate::aabb::Aabb;
@@ -183,7 +184,7 @@ pub const fn node_capacity(n: usize) -> usize {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct KdBuildOptions {
     /// `false` (default): a primitive with non-finite or empty bounds is an error
-    /// ([`KdTreeError::NonFinitePrimitive`]). `true`: such primitives are left out.
+    /// ([`KdTreeError::NonFinite`]). `true`: such primitives are left out.
     pub exclude_non_finite: bool,
     /// Nodes with at most this many references are leaves. Values below 1 count as 1.
     /// Default 1 (the SAH decides for every node of two or more).
@@ -274,10 +275,10 @@ where
     /// # Errors
     ///
     /// All returned before any storage is written: [`KdTreeError::TooManyPrimitives`] (more
-    /// than [`MAX_PRIMITIVES`]), [`KdTreeError::NodeStorageTooSmall`] (no node for a
-    /// non-empty source), [`KdTreeError::ReferenceStorageTooSmall`] and
-    /// [`KdTreeError::ScratchTooSmall`] (fewer than [`min_reference_capacity`]`(N)`), and
-    /// [`KdTreeError::NonFinitePrimitive`] for the first primitive with non-finite or empty
+    /// than [`MAX_PRIMITIVES`]), [`KdTreeError::Capacity`] (no node for a
+    /// non-empty source, or references or scratch fewer than [`min_reference_capacity`]`(N)`),
+    /// and
+    /// [`KdTreeError::NonFinite`] for the first primitive with non-finite or empty
     /// bounds unless [`KdBuildOptions::exclude_non_finite`] is set.
     pub fn build<S: crate::bvh::PrimitiveSource + ?Sized>(
         source: &S,

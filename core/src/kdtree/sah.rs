@@ -2,7 +2,7 @@
 //! node's references.
 
 use super::BIN_COUNT;
-use super::build::KdRef;
+use super::kdref::KdRef;
 use crate::aabb::Aabb;
 
 /// A chosen split: plane `axis = position`, strictly inside the node's cell, and its SAH cost.

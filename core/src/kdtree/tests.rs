@@ -132,28 +132,31 @@ fn too_small_storage_is_an_error_before_writing() {
             0,
             10,
             10,
-            KdTreeError::NodeStorageTooSmall {
+            KdTreeError::Capacity(crate::error::CapacityError {
+                storage: crate::error::Storage::KdNodes,
                 needed: 1,
                 available: 0,
-            },
+            }),
         ),
         (
             5,
             9,
             10,
-            KdTreeError::ReferenceStorageTooSmall {
+            KdTreeError::Capacity(crate::error::CapacityError {
+                storage: crate::error::Storage::KdReferences,
                 needed: 10,
                 available: 9,
-            },
+            }),
         ),
         (
             5,
             10,
             9,
-            KdTreeError::ScratchTooSmall {
+            KdTreeError::Capacity(crate::error::CapacityError {
+                storage: crate::error::Storage::KdScratch,
                 needed: 10,
                 available: 9,
-            },
+            }),
         ),
     ];
     for (n, r, s, err) in cases {
@@ -177,7 +180,13 @@ fn non_finite_primitives_are_named_or_excluded() {
     let mesh = TriangleMesh::new(&pos, &tris);
     let n = mesh.len();
     let err = build_with(&mesh, 64, 64, &KdBuildOptions::default()).err();
-    assert_eq!(err, Some(KdTreeError::NonFinitePrimitive { index: 2 }));
+    assert_eq!(
+        err,
+        Some(KdTreeError::NonFinite(crate::error::NonFiniteError {
+            element: crate::error::InputElement::Primitive,
+            index: 2
+        }))
+    );
     let opts = KdBuildOptions {
         exclude_non_finite: true,
         ..KdBuildOptions::default()

@@ -1,5 +1,6 @@
 //! Errors of the bounding-volume constructors and fits.
 
+use crate::error::NonFiniteError;
 use core::fmt;
 
 /// Why a bounding volume could not be built. Nothing is partially built: a constructor or fit
@@ -9,12 +10,10 @@ use core::fmt;
 pub enum VolumeError {
     /// The point set (or mesh) has no points.
     Empty,
-    /// Point `index` of the set has a NaN or infinite coordinate (for a mesh, the `index`-th
-    /// referenced corner: `3·triangle + corner`).
-    NonFinitePoint {
-        /// Index of the first offending point.
-        index: usize,
-    },
+    /// A point of the set has a NaN or infinite coordinate
+    /// ([`crate::error::InputElement::Point`]: for a mesh, the `index`-th referenced corner,
+    /// `3·triangle + corner`); the first such point.
+    NonFinite(NonFiniteError),
     /// Triangle `triangle` of a mesh refers to a vertex index beyond the positions.
     VertexIndexOutOfRange {
         /// Index of the first offending triangle.
@@ -37,9 +36,7 @@ impl fmt::Display for VolumeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Empty => f.write_str("no points to bound"),
-            Self::NonFinitePoint { index } => {
-                write!(f, "point {index} has a NaN or infinite coordinate")
-            }
+            Self::NonFinite(e) => e.fmt(f),
             Self::VertexIndexOutOfRange { triangle } => {
                 write!(f, "triangle {triangle} refers to a vertex out of range")
             }

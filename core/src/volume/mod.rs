@@ -36,6 +36,7 @@ mod error;
 mod obb;
 pub mod overlap;
 mod points;
+mod rescale;
 mod sat;
 mod sphere;
 #[cfg(test)]

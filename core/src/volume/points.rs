@@ -3,6 +3,7 @@
 
 use super::VolumeError;
 use crate::bvh::TriangleMesh;
+use crate::error::{InputElement, NonFiniteError};
 use glam::{DVec3, Vec3};
 
 /// Relative padding of every fitted size (radius, half-extent), applied in `f64` before the
@@ -32,7 +33,7 @@ pub trait PointSet {
     ///
     /// # Errors
     ///
-    /// [`VolumeError::Empty`], [`VolumeError::NonFinitePoint`],
+    /// [`VolumeError::Empty`], [`VolumeError::NonFinite`],
     /// [`VolumeError::VertexIndexOutOfRange`].
     fn validate(&self) -> Result<(), VolumeError> {
         if self.point_count() == 0 {
@@ -45,7 +46,12 @@ pub trait PointSet {
                         triangle: index / 3,
                     });
                 }
-                Some(p) if !p.is_finite() => return Err(VolumeError::NonFinitePoint { index }),
+                Some(p) if !p.is_finite() => {
+                    return Err(VolumeError::NonFinite(NonFiniteError::new(
+                        InputElement::Point,
+                        index,
+                    )));
+                }
                 Some(_) => {}
             }
         }

@@ -2,7 +2,7 @@
 //!
 //! Notation: box `A` has centre `c_a`, axes `aᵢ` (rows of `A`), half-extents `e_a`; box `B`
 //! likewise; `Δ = c_b − c_a`, `tᵢ = aᵢ·Δ`, `uⱼ = bⱼ·Δ`, `Rᵢⱼ = aᵢ·bⱼ`, all in `f32` after
-//! [`super::overlap::rescale_factor`]. `τ =` [`super::OBB_ORTHONORMAL_TOL`] bounds the axes'
+//! [`super::rescale::rescale_factor`]. `τ =` [`super::OBB_ORTHONORMAL_TOL`] bounds the axes'
 //! deviation from orthonormal.
 //!
 //! **Exact geometry.** An [`Obb`] is the intersection of three slabs `|aᵢ·(x − c)| ≤ eᵢ`; its
@@ -30,7 +30,7 @@
 //! that rounding invented (Ericson's classic robustness fix), and the face axes decide.
 
 use super::Obb;
-use super::overlap::{UNDERFLOW_PAD_ABS, max_abs, rescale_factor};
+use super::rescale::{UNDERFLOW_PAD_ABS, max_abs, rescale_factor};
 use crate::float::gamma;
 
 /// `ε` added to every `|Rᵢⱼ| = |aᵢ·bⱼ|` of the OBB–OBB test (the "absolute rotation matrix"),

@@ -50,7 +50,7 @@ impl BoundingSphere {
     ///
     /// # Errors
     ///
-    /// [`VolumeError::Empty`], [`VolumeError::NonFinitePoint`],
+    /// [`VolumeError::Empty`], [`VolumeError::NonFinite`],
     /// [`VolumeError::VertexIndexOutOfRange`] (see [`PointSet::validate`]);
     /// [`VolumeError::TooLarge`] when the radius exceeds `f32::MAX`.
     pub fn fit<P: PointSet + ?Sized>(points: &P) -> Result<Self, VolumeError> {

@@ -129,12 +129,18 @@ fn fit_errors_are_typed() {
     let bad = [Vec3::ZERO, Vec3::new(0.0, f32::NAN, 0.0)];
     assert_eq!(
         Obb::fit(&bad[..]),
-        Err(VolumeError::NonFinitePoint { index: 1 })
+        Err(VolumeError::NonFinite(crate::error::NonFiniteError::new(
+            crate::error::InputElement::Point,
+            1
+        )))
     );
     let inf = [Vec3::new(f32::INFINITY, 0.0, 0.0)];
     assert_eq!(
         Capsule::fit(&inf[..]),
-        Err(VolumeError::NonFinitePoint { index: 0 })
+        Err(VolumeError::NonFinite(crate::error::NonFiniteError::new(
+            crate::error::InputElement::Point,
+            0
+        )))
     );
     let pos = [Vec3::ZERO, Vec3::X, Vec3::Y];
     let tris = [[0, 1, 2], [0, 1, 3]];
@@ -158,7 +164,10 @@ fn fit_errors_are_typed() {
     // Every error has real Display text.
     for e in [
         VolumeError::Empty,
-        VolumeError::NonFinitePoint { index: 3 },
+        VolumeError::NonFinite(crate::error::NonFiniteError::new(
+            crate::error::InputElement::Point,
+            3,
+        )),
         VolumeError::VertexIndexOutOfRange { triangle: 2 },
         VolumeError::NonFiniteParameter,
         VolumeError::NegativeSize,

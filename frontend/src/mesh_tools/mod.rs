@@ -24,7 +24,7 @@ use crate::error::{Error, Location, Result};
 use crate::obj::ObjMesh;
 use crate::outputs::{Named, OutputFile, reserve_outputs};
 use halfray_core::halfedge::{
-    BuildError, Counts, EdgeRec, FaceRec, MAX_ELEMENTS, MeshStorage, SliceMesh, VertexRec,
+    BuildError, Counts, Culprit, EdgeRec, FaceRec, MAX_ELEMENTS, MeshStorage, SliceMesh, VertexRec,
     build_scratch_len,
 };
 use std::path::{Path, PathBuf};
@@ -245,7 +245,7 @@ pub fn build_mesh<'b>(
     match mesh.build(&obj.positions, &obj.triangles, &mut scratch) {
         Ok(()) => Ok(mesh),
         Err(e) => {
-            let (at, message) = describe_build_error(&e, obj, path);
+            let (at, message) = describe_build_error(&e, path);
             Err(Error::input(at, message))
         }
     }
@@ -284,138 +284,21 @@ impl ObjLines {
     }
 }
 
-/// The location and message for a build error: the file, the line of the offending `v`
-/// statement (vertex errors) or of the first `f` statement using the offending edge (edge
-/// errors), and a message with 1-based OBJ vertex numbers and triangle numbers (triangles
-/// counted after fan triangulation, which for all-triangle files is the `f` line order).
-pub fn describe_build_error(e: &BuildError, obj: &ObjMesh, path: &Path) -> (Location, String) {
-    let lines = ObjLines::read(path);
-    let vertex_at = |v: usize| {
-        let at = Location::file(path);
-        match lines.as_ref().and_then(|l| l.vertex.get(v)) {
-            Some(&line) => at.line(line),
-            None => at,
-        }
+/// The location and message for a build error: the file and the line of the offending `v` or
+/// `f` statement ([`BuildError::culprit`]), and the core's sentence with vertices and
+/// triangles numbered from 1 as in the file (triangles counted after fan triangulation, which
+/// for all-triangle files is the `f` line order).
+pub fn describe_build_error(e: &BuildError, path: &Path) -> (Location, String) {
+    let line = ObjLines::read(path).and_then(|l| match e.culprit()? {
+        Culprit::Vertex(v) => l.vertex.get(v.index()).copied(),
+        Culprit::Face(f) => l.triangle.get(f.index()).copied(),
+    });
+    let at = Location::file(path);
+    let at = match line {
+        Some(line) => at.line(line),
+        None => at,
     };
-    let triangle_at = |t: usize| {
-        let at = Location::file(path);
-        match lines.as_ref().and_then(|l| l.triangle.get(t)) {
-            Some(&line) => at.line(line),
-            None => at,
-        }
-    };
-    let pos = |v: usize| {
-        obj.positions.get(v).map_or(String::new(), |p| {
-            format!(" at ({}, {}, {})", p.x, p.y, p.z)
-        })
-    };
-    // Triangles (0-based) having `a` and `b` as corners, i.e. using the edge a–b.
-    let using_edge = |a: usize, b: usize| -> Vec<usize> {
-        let (a, b) = (a as u32, b as u32);
-        obj.triangles
-            .iter()
-            .enumerate()
-            .filter(|(_, t)| t.contains(&a) && t.contains(&b))
-            .map(|(i, _)| i)
-            .collect()
-    };
-    let list = |ts: &[usize]| {
-        let mut s: Vec<String> = ts.iter().take(8).map(|t| (t + 1).to_string()).collect();
-        if ts.len() > 8 {
-            s.push("…".into());
-        }
-        s.join(", ")
-    };
-    match *e {
-        BuildError::NonManifoldEdge { a, b } => {
-            let ts = using_edge(a.index(), b.index());
-            (
-                triangle_at(ts.first().copied().unwrap_or(usize::MAX)),
-                format!(
-                    "non-manifold edge between vertices {} and {}: used by {} triangles ({}); the half-edge mesh allows at most 2",
-                    a.index() + 1,
-                    b.index() + 1,
-                    ts.len(),
-                    list(&ts)
-                ),
-            )
-        }
-        BuildError::InconsistentOrientation { a, b } => {
-            let (a, b) = (a.index(), b.index());
-            let ts: Vec<usize> = using_edge(a, b)
-                .into_iter()
-                .filter(|&t| {
-                    let [x, y, z] = obj.triangles[t];
-                    [(x, y), (y, z), (z, x)].contains(&(a as u32, b as u32))
-                })
-                .collect();
-            (
-                triangle_at(ts.get(1).or(ts.first()).copied().unwrap_or(usize::MAX)),
-                format!(
-                    "inconsistent orientation: triangles {} both run from vertex {} to vertex {} (neighbouring triangles must traverse a shared edge in opposite directions)",
-                    list(&ts),
-                    a + 1,
-                    b + 1
-                ),
-            )
-        }
-        BuildError::NonManifoldVertex { vertex } => {
-            let v = vertex.index();
-            let n = obj
-                .triangles
-                .iter()
-                .filter(|t| t.contains(&(v as u32)))
-                .count();
-            (
-                vertex_at(v),
-                format!(
-                    "non-manifold vertex {}{}: its {n} triangles form more than one fan (a pinch or bowtie vertex)",
-                    v + 1,
-                    pos(v)
-                ),
-            )
-        }
-        BuildError::RepeatedIndex { face, vertex } => {
-            let t = face.index();
-            let corners = obj.triangles.get(t).map_or(String::new(), |c| {
-                format!(" (vertices {} {} {})", c[0] + 1, c[1] + 1, c[2] + 1)
-            });
-            (
-                triangle_at(t),
-                format!(
-                    "triangle {}{corners} uses vertex {} twice",
-                    t + 1,
-                    vertex.index() + 1
-                ),
-            )
-        }
-        BuildError::IndexOutOfRange { face, index } => (
-            triangle_at(face.index()),
-            format!(
-                "triangle {} refers to vertex {}, out of range (1..={})",
-                face.index() + 1,
-                u64::from(index) + 1,
-                obj.positions.len()
-            ),
-        ),
-        BuildError::NonFinitePosition { vertex } => (
-            vertex_at(vertex.index()),
-            format!("vertex {} has a non-finite position", vertex.index() + 1),
-        ),
-        BuildError::Capacity(c) => (
-            Location::file(path),
-            format!(
-                "too large for the half-edge core: needs {} {:?} slots, {} available",
-                c.needed, c.kind, c.available
-            ),
-        ),
-        BuildError::ScratchTooSmall { needed, available } => (
-            Location::file(path),
-            format!("internal error: build scratch {available} < {needed}"),
-        ),
-        // A refusal added to the core after this list: the core's own sentence.
-        _ => (Location::file(path), e.to_string()),
-    }
+    (at, e.numbered_from(1).to_string())
 }
 
 /// Exports a compact-or-not mesh to positions and triangles (one position per vertex slot).

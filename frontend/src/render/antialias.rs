@@ -8,7 +8,7 @@
 //! fraction of samples that hit, and the colour is the alpha-weighted (premultiplied) mean of
 //! the hits' colours, kept straight; a pixel no sample hits keeps its centre sample.
 
-use super::output::linear_to_srgb;
+use super::gamma::linear_to_srgb;
 use super::{PixelOut, RayCounts};
 use glam::Vec3;
 use rayon::prelude::*;

@@ -13,6 +13,25 @@ use std::fmt;
 use std::path::PathBuf;
 use std::str::FromStr;
 
+/// Linear → sRGB transfer function (IEC 61966-2-1), input clamped to `[0, 1]`.
+pub fn linear_to_srgb(x: f32) -> f32 {
+    let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// sRGB → linear.
+pub fn srgb_to_linear(x: f32) -> f32 {
+    if x <= 0.040_45 {
+        x / 12.92
+    } else {
+        ((x + 0.055) / 1.055).powf(2.4)
+    }
+}
+
 /// How linear radiance in `[0, 1]` is encoded into the stored value.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub enum Transfer {
@@ -31,7 +50,7 @@ impl Transfer {
     /// Linear `x` (clamped to `[0, 1]`, NaN as 0) to the stored value in `[0, 1]`.
     pub fn encode(self, x: f32) -> f32 {
         match self {
-            Self::Srgb => super::output::linear_to_srgb(x),
+            Self::Srgb => linear_to_srgb(x),
             Self::Power(g) => {
                 let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
                 x.powf(1.0 / g)
@@ -42,7 +61,7 @@ impl Transfer {
     /// Stored value `y` in `[0, 1]` back to linear.
     pub fn decode(self, y: f32) -> f32 {
         match self {
-            Self::Srgb => super::output::srgb_to_linear(y),
+            Self::Srgb => srgb_to_linear(y),
             Self::Power(g) => y.clamp(0.0, 1.0).powf(g),
         }
     }
@@ -131,7 +150,7 @@ pub fn run(args: &GammaArgs) -> Result<()> {
     if let Some(path) = &args.chart {
         let out = crate::outputs::OutputFile::reserve(path, false)?;
         let (img, greys) = chart();
-        super::output::write_png(out, img.width(), img.height(), img.as_raw())?;
+        crate::png::write_png(out, img.width(), img.height(), img.as_raw())?;
         text.push_str(&format!("wrote {}: tiles left to right\n", path.display()));
         for (g, a) in CHART_GAMMAS.iter().zip(&greys) {
             text.push_str(&format!(
@@ -156,6 +175,14 @@ pub fn run(args: &GammaArgs) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn srgb_round_trips() {
+        for k in 0..=255u8 {
+            let x = f32::from(k) / 255.0;
+            assert_eq!(crate::png::to_u8(linear_to_srgb(srgb_to_linear(x))), k);
+        }
+    }
 
     #[test]
     fn the_matching_grey_gives_the_gamma() {

@@ -6,6 +6,7 @@
 //! of rays cast per kind, time and Mrays/s.
 
 pub mod antialias;
+pub mod bound;
 pub mod gamma;
 pub mod output;
 pub mod plan;
@@ -16,6 +17,7 @@ use crate::error::{Error, Result};
 use crate::limits::check_memory;
 use crate::outputs::{Named, refuse_inputs, reserve_outputs, write_together};
 use crate::scene::{self, Scene};
+use bound::PathBound;
 use glam::{Vec3, Vec4};
 use indicatif::{ParallelProgressIterator, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use plan::EffectPlan;
@@ -23,7 +25,7 @@ use rayon::prelude::*;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::Instant;
-use trace::{PathBound, RayCounts, Tracer};
+use trace::{RayCounts, Tracer};
 
 /// What each pixel shows.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -149,14 +151,14 @@ impl Rendered {
     pub fn to_rgba8(&self, mode: Mode, transfer: gamma::Transfer) -> Vec<u8> {
         let enc = |x: f32| {
             if mode == Mode::Color {
-                output::to_u8(transfer.encode(x))
+                crate::png::to_u8(transfer.encode(x))
             } else {
-                output::to_u8(x)
+                crate::png::to_u8(x)
             }
         };
         self.pixels
             .iter()
-            .flat_map(|p| [enc(p.x), enc(p.y), enc(p.z), output::to_u8(p.w)])
+            .flat_map(|p| [enc(p.x), enc(p.y), enc(p.z), crate::png::to_u8(p.w)])
             .collect()
     }
 
@@ -472,7 +474,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         files.push((stats, format!("{json}\n").into_bytes()));
     }
     let mut bytes = Vec::new();
-    output::encode_png(&mut bytes, w, h, &out.to_rgba8(args.mode, args.gamma))
+    crate::png::encode_png(&mut bytes, w, h, &out.to_rgba8(args.mode, args.gamma))
         .map_err(|e| Error::encode("the PNG image", e))?;
     files.insert(0, (png, bytes));
     // The image and its statistics: both or neither.

@@ -1,44 +1,17 @@
-//! Pixels to PNG: sRGB encoding, coverage alpha, reading a background image (composited by
-//! [`crate::composite`]), atomic write; colour ramps of the debug modes.
+//! Reading a background image (composited by [`crate::composite`]); colour ramps of the debug
+//! modes.
 
+use super::gamma::Transfer;
 use crate::error::{Error, Location, Result};
-use crate::outputs::OutputFile;
 use glam::{Vec3, Vec4};
-use image::{ImageEncoder, codecs::png::PngEncoder};
 use std::path::Path;
-
-/// Linear → sRGB transfer function (IEC 61966-2-1), input clamped to `[0, 1]`.
-pub fn linear_to_srgb(x: f32) -> f32 {
-    let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
-    if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// sRGB → linear.
-pub fn srgb_to_linear(x: f32) -> f32 {
-    if x <= 0.040_45 {
-        x / 12.92
-    } else {
-        ((x + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-/// A `[0, 1]` value to 8 bits, rounded.
-#[inline]
-pub fn to_u8(x: f32) -> u8 {
-    let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
-    (x * 255.0 + 0.5) as u8
-}
 
 /// Reads a background image as linear straight RGBA (decoded by `transfer`), checking its size.
 pub fn read_background(
     path: &Path,
     width: u32,
     height: u32,
-    transfer: super::gamma::Transfer,
+    transfer: Transfer,
 ) -> Result<Vec<Vec4>> {
     let img = image::ImageReader::open(path)
         .map_err(|e| Error::io(path, e))?
@@ -66,23 +39,6 @@ pub fn read_background(
         .collect())
 }
 
-/// Writes 8-bit RGBA as PNG to a reserved output (atomically, see [`OutputFile`]).
-pub fn write_png(out: OutputFile, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
-    out.write(|w| encode_png(w, width, height, rgba))
-}
-
-/// 8-bit RGBA as PNG bytes.
-pub fn encode_png(
-    w: &mut dyn std::io::Write,
-    width: u32,
-    height: u32,
-    rgba: &[u8],
-) -> std::io::Result<()> {
-    PngEncoder::new(w)
-        .write_image(rgba, width, height, image::ExtendedColorType::Rgba8)
-        .map_err(std::io::Error::other)
-}
-
 /// Heat-map colour of a count: `log2(1 + n) / 10` (1023 nodes → 1) through black, blue, cyan,
 /// green, yellow, red. Fixed, so images of different scenes compare.
 pub fn heat(n: u64) -> Vec3 {
@@ -98,17 +54,4 @@ pub fn heat(n: u64) -> Vec3 {
     let x = t * (STOPS.len() - 1) as f32;
     let i = (x.floor() as usize).min(STOPS.len() - 2);
     STOPS[i].lerp(STOPS[i + 1], x - i as f32)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn srgb_round_trips() {
-        for k in 0..=255u8 {
-            let x = f32::from(k) / 255.0;
-            assert_eq!(to_u8(linear_to_srgb(srgb_to_linear(x))), k);
-        }
-    }
 }

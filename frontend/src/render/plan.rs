@@ -3,7 +3,7 @@
 //! effects the scene does not use are computed and then weighted by zero, so the picture is the
 //! same; only the work differs).
 
-use super::trace::{MAX_SECONDARY_RAYS_PER_PIXEL, MIN_PATH_WEIGHT};
+use super::bound::{MAX_SECONDARY_RAYS_PER_PIXEL, MIN_PATH_WEIGHT};
 use crate::scene::{LightKind, Scene};
 use std::fmt::Write as _;
 

@@ -11,9 +11,11 @@
 //! A material with both `mirror` and `transparency` casts two rays per hit, so the tree is
 //! exponential in `max_depth`. A [`PathBound`] cuts it: a secondary ray is cast only while its
 //! path weight (the product of the `mirror`/`transparency` factors from the camera) is at least
-//! [`MIN_PATH_WEIGHT`], and at most [`MAX_SECONDARY_RAYS_PER_PIXEL`] reflection and refraction
-//! rays are cast per pixel (depth first; the rest count as zero). The weight test alone keeps
-//! the tree at most `max_depth / MIN_PATH_WEIGHT` rays when `mirror + transparency ≤ 1`; the
+//! [`MIN_PATH_WEIGHT`](super::bound::MIN_PATH_WEIGHT), and at most
+//! [`MAX_SECONDARY_RAYS_PER_PIXEL`](super::bound::MAX_SECONDARY_RAYS_PER_PIXEL) reflection and
+//! refraction rays are cast per pixel (depth first; the rest count as zero). The weight test
+//! alone keeps the tree at most `max_depth / MIN_PATH_WEIGHT` rays when
+//! `mirror + transparency ≤ 1`; the
 //! per-pixel cap bounds the rest (both factors up to 1 are accepted).
 //!
 //! Under `--force-all-effects`, the rays of effects a material does not have (weight 0) are
@@ -21,56 +23,17 @@
 //! discarded (not multiplied by zero: `0·∞` would be NaN), and they use none of the per-pixel
 //! budget, so the picture is the plan's, bit for bit.
 
+use super::bound::PathBound;
 use super::plan::EffectPlan;
 use crate::scene::geom::{QueryCtx, SurfaceHit};
 use crate::scene::{Light, LightKind, Scene, SpecularModel};
 use glam::Vec3;
 use halfray_core::{Ray, spawn_ray, spawn_ray_to};
 
-/// Smallest path weight a secondary ray is cast for, 2⁻¹³. A subtree whose radiance is at
-/// most 1 (the displayable range) then moves the pixel's linear value by less than 1/8192,
-/// which after the sRGB curve (steepest at black, slope 12.92) is less than half an 8-bit step
-/// (0.5 / 255 / 12.92 ≈ 1/6590). Brighter subtrees (a strong light seen down a long mirror
-/// chain) can lose more: the bound is for display-range radiance.
-pub const MIN_PATH_WEIGHT: f32 = 1.0 / 8192.0;
-
-/// Most reflection and refraction rays per pixel: the hard bound when `mirror` and
-/// `transparency` are both near 1 and weights barely fall (4096 per pixel keeps a 640×480
-/// image under 1.3·10⁹ secondary rays).
-pub const MAX_SECONDARY_RAYS_PER_PIXEL: u32 = 4096;
-
 /// Surfaces a shadow ray follows through transparent materials before it counts the light as
 /// blocked: 16 crossings (8 panes of glass) transmit at most `transparency¹⁶`, below an 8-bit
 /// step for any transparency up to 0.7; the bound keeps the walk finite for any scene.
 pub const MAX_SHADOW_CROSSINGS: u32 = 16;
-
-/// How far the ray tree of one pixel is followed (see the module docs).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PathBound {
-    /// Secondary rays are cast only for path weights `≥ min_weight` (and `> 0`).
-    pub min_weight: f32,
-    /// Most secondary rays per pixel.
-    pub max_secondary_rays: u32,
-}
-
-impl PathBound {
-    /// The renderer's bound: [`MIN_PATH_WEIGHT`], [`MAX_SECONDARY_RAYS_PER_PIXEL`].
-    pub const RENDER: Self = Self {
-        min_weight: MIN_PATH_WEIGHT,
-        max_secondary_rays: MAX_SECONDARY_RAYS_PER_PIXEL,
-    };
-    /// The whole tree down to `max_depth` (exponential: for tests on small images).
-    pub const EXHAUSTIVE: Self = Self {
-        min_weight: 0.0,
-        max_secondary_rays: u32::MAX,
-    };
-}
-
-impl Default for PathBound {
-    fn default() -> Self {
-        Self::RENDER
-    }
-}
 
 /// Where a path is: recursion depth, weight, and the pixel's remaining secondary rays.
 struct PathState {

@@ -185,7 +185,11 @@ pub fn check(s: &Soup) {
         let idx = vec![u32::MAX; index_capacity(n)];
         let r = Bvh::build(&mesh, nodes, idx, &s.options);
         match r {
-            Err(BvhError::NodeStorageTooSmall { needed, available }) => {
+            Err(BvhError::Capacity(halfray_core::error::CapacityError {
+                storage: halfray_core::error::Storage::BvhNodes,
+                needed,
+                available,
+            })) => {
                 assert_eq!(
                     (needed, available),
                     (node_capacity(n), node_capacity(n) - 1)
@@ -197,7 +201,11 @@ pub fn check(s: &Soup) {
         let mut idx = vec![u32::MAX; index_capacity(n) - 1];
         let r = Bvh::build(&mesh, &mut nodes[..], &mut idx[..], &s.options);
         match r {
-            Err(BvhError::IndexStorageTooSmall { needed, available }) => {
+            Err(BvhError::Capacity(halfray_core::error::CapacityError {
+                storage: halfray_core::error::Storage::BvhIndices,
+                needed,
+                available,
+            })) => {
                 assert_eq!((needed, available), (n, n - 1));
             }
             other => panic!("one index too few gave {other:?}\n{}", ctx()),
@@ -213,7 +221,10 @@ pub fn check(s: &Soup) {
     let nodes = vec![BvhNode::default(); node_capacity(n)];
     let idx = vec![u32::MAX; index_capacity(n)];
     let non_finite = |e: &BvhError| match *e {
-        BvhError::NonFinitePrimitive { index } => Some(index),
+        BvhError::NonFinite(halfray_core::error::NonFiniteError {
+            element: halfray_core::error::InputElement::Primitive,
+            index,
+        }) => Some(index),
         _ => None,
     };
     let built = Bvh::build(&mesh, nodes, idx, &s.options);

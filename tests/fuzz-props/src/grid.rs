@@ -69,7 +69,13 @@ pub fn check(s: &Soup, opts: &GridOptions) {
     let plan = match (GridPlan::new(&mesh, opts), first_bad) {
         (Ok(p), None) => p,
         (Ok(p), Some(_)) if opts.exclude_non_finite => p,
-        (Err(GridError::NonFiniteTriangle { index }), Some(bad)) if !opts.exclude_non_finite => {
+        (
+            Err(GridError::NonFinite(halfray_core::error::NonFiniteError {
+                element: halfray_core::error::InputElement::Triangle,
+                index,
+            })),
+            Some(bad),
+        ) if !opts.exclude_non_finite => {
             assert_eq!(index, bad, "wrong NonFiniteTriangle\n{}", ctx());
             return;
         }
@@ -87,10 +93,11 @@ pub fn check(s: &Soup, opts: &GridOptions) {
     let r = Grid::build(&mesh, &plan, vec![7u32; no - 1], vec![7u32; nr]);
     assert_eq!(
         r.err(),
-        Some(GridError::OffsetStorageTooSmall {
+        Some(GridError::Capacity(halfray_core::error::CapacityError {
+            storage: halfray_core::error::Storage::GridOffsets,
             needed: no,
             available: no - 1
-        }),
+        })),
         "{}",
         ctx()
     );
@@ -99,10 +106,11 @@ pub fn check(s: &Soup, opts: &GridOptions) {
         let r = Grid::build(&mesh, &plan, &mut off[..], &mut refs[..]);
         assert_eq!(
             r.err(),
-            Some(GridError::ReferenceStorageTooSmall {
+            Some(GridError::Capacity(halfray_core::error::CapacityError {
+                storage: halfray_core::error::Storage::GridReferences,
                 needed: nr,
                 available: nr - 1
-            }),
+            })),
             "{}",
             ctx()
         );

@@ -61,20 +61,23 @@ pub fn check(s: &Soup, tight: bool, shallow: bool) {
             let mut sc = vec![KdRef::EMPTY; scratch];
             let r = KdTree::build(&mesh, &mut nd[..], &mut rf[..], &mut sc, &options);
             let want = if nodes == 0 {
-                KdTreeError::NodeStorageTooSmall {
+                KdTreeError::Capacity(halfray_core::error::CapacityError {
+                    storage: halfray_core::error::Storage::KdNodes,
                     needed: 1,
                     available: 0,
-                }
+                })
             } else if refs < n {
-                KdTreeError::ReferenceStorageTooSmall {
+                KdTreeError::Capacity(halfray_core::error::CapacityError {
+                    storage: halfray_core::error::Storage::KdReferences,
                     needed: n,
                     available: n - 1,
-                }
+                })
             } else {
-                KdTreeError::ScratchTooSmall {
+                KdTreeError::Capacity(halfray_core::error::CapacityError {
+                    storage: halfray_core::error::Storage::KdScratch,
                     needed: n,
                     available: n - 1,
-                }
+                })
             };
             assert_eq!(r.err(), Some(want), "too-small storage\n{}", ctx());
             assert!(
@@ -102,7 +105,10 @@ pub fn check(s: &Soup, tight: bool, shallow: bool) {
         &options,
     );
     let non_finite = |e: &KdTreeError| match *e {
-        KdTreeError::NonFinitePrimitive { index } => Some(index),
+        KdTreeError::NonFinite(halfray_core::error::NonFiniteError {
+            element: halfray_core::error::InputElement::Primitive,
+            index,
+        }) => Some(index),
         _ => None,
     };
     let exclude = options.exclude_non_finite;

@@ -172,10 +172,11 @@ fn each_broken_invariant_is_refused_with_its_error() {
     let mut small = [0u32; 1];
     assert_eq!(
         Bvh::from_parts(&nodes[..], &idx[..], &mesh, &mut small).err(),
-        Some(LoadError::ScratchTooSmall {
+        Some(LoadError::Capacity(crate::error::CapacityError {
+            storage: crate::error::Storage::BvhLoadBitset,
             needed: load_scratch_len(t.len()),
             available: 1
-        })
+        }))
     );
 }
 

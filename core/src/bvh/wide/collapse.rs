@@ -5,6 +5,7 @@ use super::group_capacity;
 use super::node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
 use super::{LEAF_MERGE, LEAF_OPEN_ABOVE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh};
 use crate::bvh::{Bvh, BvhError, BvhNode, TriangleMesh};
+use crate::error::{CapacityError, NonFiniteError, Storage};
 use crate::triangle::LANES;
 
 /// The leaf run binary node `b` becomes, if it becomes one: a binary leaf, or an inner node
@@ -276,7 +277,7 @@ where
                 .triangle(p as usize)
                 .is_some_and(|v| v.iter().all(|x| x.is_finite()));
             if !ok {
-                return Err(BvhError::NonFinitePrimitive { index: p as usize });
+                return Err(NonFiniteError::primitive(p as usize).into());
             }
         }
     }
@@ -324,10 +325,10 @@ where
     /// All returned before any storage is written:
     /// [`BvhError::SourceLengthMismatch`] (`mesh` has another triangle count than `binary`'s
     /// source), [`BvhError::TooManyTriangles`], [`BvhError::LeafTooLarge`],
-    /// [`BvhError::NodeStorageTooSmall`] (fewer than [`WideBvh::node_count_for`] nodes),
-    /// [`BvhError::TriangleStorageTooSmall`] (fewer than [`WideBvh::group_count_for`]
-    /// groups; [`group_capacity`] of the triangle count always suffices),
-    /// [`BvhError::NonFinitePrimitive`] (a triangle of the tree no longer has finite vertices).
+    /// [`BvhError::Capacity`] (fewer than [`WideBvh::node_count_for`] nodes or
+    /// [`WideBvh::group_count_for`] groups; [`group_capacity`] of the triangle count always
+    /// suffices),
+    /// [`BvhError::NonFinite`] (a triangle of the tree no longer has finite vertices).
     pub fn from_binary<BN, BI>(
         binary: &Bvh<BN, BI>,
         mesh: &TriangleMesh<'_>,
@@ -382,19 +383,13 @@ where
         let indices = binary.indices();
         let bnodes = binary.nodes();
         let needed = plan.nodes;
-        if nodes.as_ref().len() < needed {
-            return Err(BvhError::NodeStorageTooSmall {
-                needed,
-                available: nodes.as_ref().len(),
-            });
-        }
+        CapacityError::check(Storage::BvhNodes, needed, nodes.as_ref().len())?;
         let needed_groups = plan.groups();
-        if groups.as_ref().len() < needed_groups {
-            return Err(BvhError::TriangleStorageTooSmall {
-                needed: needed_groups,
-                available: groups.as_ref().len(),
-            });
-        }
+        CapacityError::check(
+            Storage::WideTriangleGroups,
+            needed_groups,
+            groups.as_ref().len(),
+        )?;
 
         // Leaf runs in the order the walk meets them, each placed by `place_leaf` (as `plan`).
         let out = groups.as_mut();

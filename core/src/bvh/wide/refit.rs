@@ -4,6 +4,7 @@ use super::WideBvh;
 use super::node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
 use crate::aabb::Aabb;
 use crate::bvh::{BvhError, TriangleMesh};
+use crate::error::NonFiniteError;
 use crate::triangle::LANES;
 
 impl<const W: usize, N, T> WideBvh<W, N, T>
@@ -18,7 +19,7 @@ where
     /// # Errors
     ///
     /// [`BvhError::SourceLengthMismatch`] (nothing written) when `mesh` has another
-    /// triangle count than at build time. [`BvhError::NonFinitePrimitive`] names the first
+    /// triangle count than at build time. [`BvhError::NonFinite`] names the first
     /// triangle whose new vertices are not finite (or whose indices are out of range): the
     /// refit is still completed with that triangle's record made unhittable (NaN vertices)
     /// and its box empty, so queries stay valid and never report it.
@@ -84,7 +85,7 @@ where
         }
         self.extent = crate::bvh::extent_of(&self.bounds());
         match bad {
-            Some(index) => Err(BvhError::NonFinitePrimitive { index }),
+            Some(index) => Err(NonFiniteError::primitive(index).into()),
             None => Ok(()),
         }
     }

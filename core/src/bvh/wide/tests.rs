@@ -299,20 +299,22 @@ fn storage_too_small_and_bad_leaves_are_refused_before_writing() {
     let r = WideBvh::<8, _, _>::from_binary(&b, &mesh, &mut nodes[..], &mut recs[..]);
     assert_eq!(
         r.err(),
-        Some(BvhError::NodeStorageTooSmall {
+        Some(BvhError::Capacity(crate::error::CapacityError {
+            storage: crate::error::Storage::BvhNodes,
             needed: count,
             available: count - 1
-        })
+        }))
     );
     let mut nodes = vec![WideNode::<8>::EMPTY; count];
     let mut recs = vec![marker; groups - 1];
     let r = WideBvh::<8, _, _>::from_binary(&b, &mesh, &mut nodes[..], &mut recs[..]);
     assert_eq!(
         r.err(),
-        Some(BvhError::TriangleStorageTooSmall {
+        Some(BvhError::Capacity(crate::error::CapacityError {
+            storage: crate::error::Storage::WideTriangleGroups,
             needed: groups,
             available: groups - 1
-        })
+        }))
     );
     assert!(nodes.iter().all(|n| *n == WideNode::EMPTY) && recs.iter().all(|r| *r == marker));
     // Another mesh than the tree's source.
@@ -363,7 +365,10 @@ fn storage_made_once_the_sizes_are_known_gives_the_same_tree() {
     });
     assert!(matches!(
         r.err(),
-        Some(BvhError::NodeStorageTooSmall { .. })
+        Some(BvhError::Capacity(crate::error::CapacityError {
+            storage: crate::error::Storage::BvhNodes,
+            ..
+        }))
     ));
     let other = TriangleMesh::new(&pos, &tris[..10]);
     let mut called = false;
@@ -613,7 +618,10 @@ fn refit_follows_moved_vertices_and_drops_non_finite_ones() {
     let moved = TriangleMesh::new(&pos, &tris);
     assert_eq!(
         w.refit(&moved),
-        Err(BvhError::NonFinitePrimitive { index: 1 })
+        Err(BvhError::NonFinite(crate::error::NonFiniteError {
+            element: crate::error::InputElement::Primitive,
+            index: 1
+        }))
     );
     for ray in rays(2000, 5) {
         let got = w
@@ -696,7 +704,13 @@ fn collapse_checks_the_tree_triangles_not_the_whole_mesh() {
         &mut nodes[..],
         &mut groups[..],
     );
-    assert_eq!(err.err(), Some(BvhError::NonFinitePrimitive { index: 150 }));
+    assert_eq!(
+        err.err(),
+        Some(BvhError::NonFinite(crate::error::NonFiniteError {
+            element: crate::error::InputElement::Primitive,
+            index: 150
+        }))
+    );
     assert!(
         nodes.iter().all(|n| *n == WideNode::EMPTY),
         "nodes untouched"
@@ -714,5 +728,11 @@ fn collapse_checks_the_tree_triangles_not_the_whole_mesh() {
         vec![WideNode::EMPTY; count],
         vec![LeafGroup::EMPTY; group_capacity(300)],
     );
-    assert_eq!(err.err(), Some(BvhError::NonFinitePrimitive { index: 299 }));
+    assert_eq!(
+        err.err(),
+        Some(BvhError::NonFinite(crate::error::NonFiniteError {
+            element: crate::error::InputElement::Primitive,
+            index: 299
+        }))
+    );
 }

@@ -209,7 +209,7 @@ impl<S: MeshStorage> Mesh<S> {
         ] {
             if n > av {
                 return Err(CapacityError {
-                    kind,
+                    storage: crate::error::Storage::MeshSlots(kind),
                     needed: n,
                     available: av,
                 });
