@@ -446,13 +446,14 @@ fn each_error_variant_on_a_small_tree() {
             triangles: 3
         })
     );
-    // `ScratchTooSmall`: no words for a mesh that needs one; any larger bitset works.
+    // `Capacity`: no bitset words for a mesh that needs one; any larger bitset works.
     assert_eq!(
         Bvh::from_parts(&nodes[..], &idx[..], &mesh, &mut []).err(),
-        Some(LoadError::ScratchTooSmall {
+        Some(LoadError::Capacity(crate::error::CapacityError {
+            storage: crate::error::Storage::BvhLoadBitset,
             needed: 1,
             available: 0
-        })
+        }))
     );
     assert!(Bvh::from_parts(&nodes[..], &idx[..], &mesh, &mut [u32::MAX; 3]).is_ok());
     // `ChildOutOfRange`: children at the node itself, and a pair whose second is past the end.
@@ -557,11 +558,12 @@ fn each_error_message_names_its_numbers() {
             "13 nodes cannot form a tree over 14 triangles",
         ),
         (
-            LoadError::ScratchTooSmall {
+            LoadError::Capacity(crate::error::CapacityError {
+                storage: crate::error::Storage::BvhLoadBitset,
                 needed: 15,
                 available: 16,
-            },
-            "holds 16 words, 15 are needed",
+            }),
+            "BVH load bitset too small: 15 needed, 16 available",
         ),
         (LoadError::ChildOutOfRange { node: 17 }, "node 17: children"),
         (
