@@ -16,6 +16,15 @@
 //! beyond the padding's `gamma(3)`); a ray with either is tested by division, `(bound − o)/d`
 //! (at most two roundings, so the same padding covers it), instead of multiplication by `1/d`,
 //! which would cull a box the ray passes through.
+//!
+//! **Domain.** Never a false miss while every `|bound − origin|` on an axis with a non-zero
+//! direction component is at most `f32::MAX` (beyond it the `f32` distance cannot represent
+//! the slab). The padding is relative, so a false hit is bounded (the box is at most
+//! `2·gamma(3)` of the far distance beyond the ray) only while the non-zero direction
+//! components and the finite slab distances have magnitudes in `[2⁻¹²⁰, 2¹²⁰]`; outside that
+//! range `f32` distances round absolutely and a box farther off may be reported hit
+//! (conservative: traversal then tests its contents). The fuzz property `ray_box` checks
+//! exactly these domains.
 
 use crate::float::gamma;
 use crate::ray::Ray;

@@ -266,6 +266,18 @@ impl Quadric {
     /// Both roots `t0 ≤ t1` of `f(o + t·d) = 0` in `f64` (not clipped to the ray's interval;
     /// a double or single root is reported twice). `None` for no real root, a ray along which
     /// `f` is constant or linear with zero slope, an invalid ray, or overflow.
+    ///
+    /// **Domain of the residual bound.** Each root satisfies `|f(o + t·d)|` within
+    /// `64·2⁻⁵³·(|q_a|t² + 2|q_b||t| + |q_c| + F(o + t·d))` (absolute-value scales of the ray
+    /// polynomial `q_a t² + 2 q_b t + q_c`, plus the first-order effect of `q_c`'s rounding)
+    /// while the discriminant's scale `max(q_b², |q_a|·|q_c|)` is at least `10⁻²⁹⁰`; below it
+    /// the `f64` terms are near the subnormal range and round absolutely, and only
+    /// `t0 ≤ t1` is promised. Against the exact roots: for a clearly quadratic polynomial
+    /// (`|q_a|` above `64·2⁻⁵³` of its scale) with scales in `[10⁻¹⁵⁰, 10¹⁵⁰]`, a root exists
+    /// exactly when the exact discriminant is outside the band `|Δ| ≤ 256·2⁻⁵³·S`, and where
+    /// `Δ > 2⁻³⁰·S` each root is within `10⁻⁶` of its scale plus its first-order rounding
+    /// bound of the exact one.
+    /// The fuzz property `ray_quadric` checks exactly these domains.
     #[must_use]
     pub fn roots(&self, ray: &Ray) -> Option<(f64, f64)> {
         if !ray.is_valid() {

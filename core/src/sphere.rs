@@ -13,6 +13,14 @@
 //!   largest component lies in `[0.5, 1)`; `a = d·d` then never overflows or underflows, and
 //!   `t` is scaled back exactly. `|d|` from `1e-30` to `1e30` gives the same `t·|d|`.
 //!
+//! **Domain of the bounds.** The roots satisfy `|o + t·d − C|² = r²` within their residual
+//! bound, and `t` is within its bound of the exact root, while `|o − C|`, `r` and `|t·d|` lie
+//! in `[10⁻¹⁵, 10¹⁵]` and `10⁻³⁰ ≤ |t| ≤ 10³⁰`; hit or miss is decided exactly outside the
+//! tangency band `| |l| − r | ≤ 64·2⁻²⁴·(|o − C| + r)` (inside it, the `f32` rounding of the
+//! closest approach `|l|` decides). Outside that range the `f32` squares under- or overflow:
+//! the answer is `None` or a `t` without the bound, never a panic or a NaN. The fuzz property
+//! `ray_sphere` checks exactly this domain.
+//!
 //! Hit points are re-projected onto the sphere, `C + r·(p − C)/|p − C|`, with the error bound
 //! `gamma(6)·(|C_i| + |r·(p − C)_i/|p − C||)` per component: pbrt's `gamma(5)·|p|` for its
 //! centred object-space spheres, plus one rounding for adding the centre. Like every bound in

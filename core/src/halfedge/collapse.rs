@@ -37,8 +37,10 @@ impl<S: MeshStorage> Mesh<S> {
     ///    sign of `old·new` for the unnormalised normals `(b − a) × (c − a)`, evaluated in
     ///    `f64` on the `f32` positions (no overflow for any finite positions; the rounding,
     ///    relative `~1e-15` of `|b − a|·|c − a|` per normal, can decide either way only for
-    ///    normals that close to perpendicular or faces that close to degenerate); faces whose
-    ///    old normal is zero (degenerate) are skipped.
+    ///    normals that close to perpendicular or faces that close to degenerate: the decision
+    ///    is the exact sign's whenever `|old·new| > 10⁻¹²·|b − a||c − a|·|b′ − a′||c′ − a′|`,
+    ///    the domain the `halfedge_ops` fuzz oracle checks); faces whose old normal is zero
+    ///    (degenerate) are skipped.
     ///
     /// # Errors
     ///

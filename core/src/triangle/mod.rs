@@ -64,7 +64,13 @@ pub struct TriangleHit {
     /// ~1e-23 in size), the same direction from the `f64` product, scaled so that its largest
     /// component is `±1`: always finite and non-zero.
     pub ng: Vec3,
-    /// `true` when the ray arrives against `ng` (the counter-clockwise side).
+    /// `true` when the ray arrives against `ng` (the counter-clockwise side). It is the sign
+    /// of the exact `d·n` (`n = (v1 − v0) × (v2 − v0)`), for every intersector, where that
+    /// sign is clear of rounding: `|d·n| > 10⁻³·|d|·|n|` (not grazing), `|n| ≥ 10⁻²·M²`
+    /// (not a sliver; `M` the largest `|vᵢ − o|`), `M` and `|d|` in `[10⁻¹⁸, 10¹⁸]`, and the
+    /// `f32` products `M²`, `M²·|d|` at least `2⁻¹⁰²` (so none underflows). Outside that
+    /// domain an `f32` determinant (Cramer, Möller–Trumbore) or a sheared projection may
+    /// round to the other sign; the fuzz property `ray_triangle` checks this domain.
     pub front_face: bool,
 }
 

@@ -14,6 +14,12 @@ use glam::Vec3;
 /// vertices can miss both triangles (the test suite counts these leaks). Its determinant
 /// `e1·(d × e2)` is `f32` products: its sign ([`TriangleHit::front_face`]) is exact only
 /// while they stay in the normal range (as [`super::Cramer`]'s).
+///
+/// **In an acceleration structure** (BVH, wide BVH, grid, kd-tree) only the *weak form* of
+/// agreement with a brute-force loop holds, everywhere: the structure's closest hit is a hit
+/// this test reports for that triangle, and no brute-force hit is nearer. Equal answers are
+/// not promised, since the inexact edges can report a hit outside the triangle's bounding box,
+/// which a structure (rightly) never visits for that ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MollerTrumbore {
     /// Determinant threshold: `|det| ≤ det_epsilon` means "parallel or degenerate". Absolute,

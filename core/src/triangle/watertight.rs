@@ -222,13 +222,27 @@ impl WatertightRay {
 /// (`≲ 1e-38`), rounds absolutely instead: the test then sees a slightly displaced ray (still
 /// the same ray for every triangle, so still watertight, but a BVH's exact box test may cull a
 /// vertex or edge hit that a brute-force loop reports).
+///
+/// **Domain of agreement with [`super::F64Reference`]** (hit/miss where the reference's edge
+/// functions and `t` are clear of their error bounds; then `t` and the barycentrics within
+/// those bounds; the fuzz property `ray_triangle` checks exactly this): the sheared
+/// magnitudes `X = |(p − o)_kx| + |s_x·(p − o)_kz|`, `Y` likewise and `Z = |(p − o)_kz / d_kz|`
+/// of every vertex `p` all at most `2⁶⁰` (about `10¹⁸` from the ray's origin), the dominant
+/// direction component `|d_kz| ≥ 2⁻¹⁰⁰`, and no projected quantity (`p − o`, the shear
+/// products, `x'`, `y'`) subnormal in `f32` or beyond `f32::MAX`. Outside it a hit is still a
+/// crossing of a triangle within rounding of the given one, and an acceleration structure's
+/// answer a genuine hit no nearer than a brute-force loop's, but not necessarily the same one.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Watertight;
 
 /// The watertight test as in pbrt-v3: edge functions in `f32`, recomputed in `f64` only when one
 /// of them is exactly zero. Sound by monotone rounding (an `f32` difference of rounded products
 /// has the correct sign or is zero), provided no product overflows or underflows: very large
-/// (≳ 1e19) or very small (≲ 1e-19) triangles can be missed. `t = Σ eᵢzᵢ / det` in `f32`, so
+/// (≳ 1e19) or very small (≲ 1e-19) triangles can be missed. **Domain** (where its hit/miss,
+/// `t` and barycentrics agree with [`super::F64Reference`] as [`Watertight`]'s do, and its
+/// barycentrics stay within the contract's slack of `[0, 1]`): [`Watertight`]'s domain, every
+/// vertex coordinate relative to the origin zero or in `[1e-19, 1e19]`, `|det| ≥ 2⁻¹⁰⁰` and
+/// `Σ|eᵢzᵢ| ≤ 2¹²⁰` (sheared units, `det = e₀ + e₁ + e₂`). `t = Σ eᵢzᵢ / det` in `f32`, so
 /// for an origin near the triangle's plane `t`'s rounding can exceed `t` itself (pbrt-v3
 /// guards `t > 0` with an error bound `δt`, which in turn refuses genuine grazing hits; this
 /// variant has neither). Kept for the cost/accuracy comparison (`watertight-f32`).

@@ -24,9 +24,14 @@ use glam::Vec3;
 /// * Zero area and "ray in the plane" are decided on the sheared projection: `det = 0`
 ///   exactly (all three edge signs zero). A ray within rounding of the plane may hit, at the
 ///   sheared `t`; the 3-D `f64` test of the other variants is not available.
-/// * Domain: the sheared coordinates and depths are finite; the rescaling keeps the edge
-///   products in range from the subnormal scale to `f32::MAX` (a `t` that overflows is a
-///   miss, as for every variant).
+/// * Domain: the **edge signs** are exact for all finite sheared coordinates (the rescaling
+///   keeps the edge products in range from the subnormal scale to `f32::MAX`); a `t` that
+///   overflows is a miss, as for every variant. The **values** `t = Σ eᵢzᵢ / det` and
+///   `eᵢ / det` are `f32` quotients: they carry [`super::WatertightF32`]'s error bound, and so
+///   agree with [`super::F64Reference`] as [`super::Watertight`] does, only inside
+///   [`super::WatertightF32`]'s domain (`|det| ≥ 2⁻¹⁰⁰`, `Σ|eᵢzᵢ| ≤ 2¹²⁰`, coordinates
+///   relative to the origin zero or in `[1e-19, 1e19]`, no underflowing projection); outside
+///   it they are finite but their rounding may be absolute.
 /// * [`TriangleHit::ng`]: the `f32` cross product, or, when that overflows or underflows, the
 ///   cross product of the edges each scaled to a largest component of `1` (`f32`, same
 ///   direction up to rounding).
@@ -167,6 +172,34 @@ mod tests {
         // Outside: mixed signs.
         let miss = Ray::new(Vec3::new(0.75, 0.5, 5.0), -Vec3::Z);
         assert!(WatertightF32Exact.intersect(&miss, &tri).is_none());
+    }
+
+    /// The values' domain (type docs, `2⁻¹⁰⁰ ≤ |det|`, `Σ|eᵢzᵢ| ≤ 2¹²⁰`) at both ends: a
+    /// triangle of size `s` seen from `2s` along a tilted direction, with `s` from `2⁻⁴⁹`
+    /// (`|det| = 3s²·…` just above `2⁻¹⁰⁰`) to `2³⁹` (`Σ|eᵢzᵢ|` just below `2¹²⁰`): `t` and the
+    /// barycentrics agree with `F64Reference`'s to `f32` rounding (`10⁻⁵` relative).
+    #[test]
+    fn values_agree_with_the_reference_at_both_ends_of_the_domain() {
+        for k in [-49, -30, 0, 30, 39] {
+            let s = 2f32.powi(k);
+            let tri = [
+                Vec3::new(s, 0.0, 0.25 * s),
+                Vec3::new(0.0, s, 0.0),
+                Vec3::new(-s, -s, -0.25 * s),
+            ];
+            let ray = Ray::new(
+                Vec3::new(0.125 * s, 0.0625 * s, 2.0 * s),
+                Vec3::new(0.0625, 0.0625, -1.0),
+            );
+            let h = WatertightF32Exact.intersect(&ray, &tri).expect("hit");
+            let (t, b) = crate::triangle::F64Reference::solve(&ray, &tri).expect("reference hit");
+            let near = |x: f32, y: f64, scale: f64| (f64::from(x) - y).abs() <= 1e-5 * scale;
+            assert!(near(h.t, t, t), "2^{k}: t {} against {t}", h.t);
+            assert!(
+                near(h.b1, b[1], 1.0) && near(h.b2, b[2], 1.0),
+                "2^{k}: {h:?} {b:?}"
+            );
+        }
     }
 
     /// Two triangles sharing the diagonal of a square at `1e-30` (every `f32` edge product

@@ -19,6 +19,12 @@
 //! subnormal range, whose absolute error (`≤ 2⁻¹⁵⁰` each) [`UNDERFLOW_PAD_ABS`] covers, and
 //! it keeps every square and sum finite for all finite `f32` inputs. The absolute part of
 //! every false-positive band is then at most `2⁻⁶⁹·max(m, 1)` world units.
+//!
+//! **Domain of the bands.** The conservative contract ("overlap" for volumes that share a
+//! point) holds for every valid input. The false-positive bands are promised, and fuzzed
+//! (`overlap`), for inputs whose largest magnitude `m` lies in `[2⁻⁹⁰, 2⁹⁰]`; outside it the
+//! tests still answer, conservatively, but a pair farther apart than the band may be reported
+//! overlapping.
 
 use super::rescale::max_abs;
 use super::sat;

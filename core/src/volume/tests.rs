@@ -513,3 +513,34 @@ fn rescale_factor_is_a_power_of_two_bringing_m_near_one() {
     }
     assert_eq!(UNDERFLOW_PAD_ABS, 2f32.powi(-140));
 }
+
+/// The bands' domain boundary (`overlap` module docs, `m ∈ [2⁻⁹⁰, 2⁹⁰]`): at both ends,
+/// unit spheres and boxes scaled by `m` that are apart by 1 % of their size (far beyond
+/// every band) are "apart", and touching ones "overlap".
+#[test]
+fn bands_hold_at_both_ends_of_their_domain() {
+    for m in [
+        2f32.powi(-90),
+        2f32.powi(-60),
+        1.0,
+        2f32.powi(60),
+        2f32.powi(89),
+    ] {
+        let s = |x: f32| BoundingSphere::new(Vec3::new(x * m, 0.5 * m, -m), m).unwrap();
+        assert!(sphere_sphere(&s(0.0), &s(2.0)), "touching at {m:e}");
+        assert!(!sphere_sphere(&s(0.0), &s(2.02)), "apart at {m:e}");
+        let b = |x: f32| {
+            Obb::new(
+                Vec3::new(x * m, 0.0, m),
+                [Vec3::X, Vec3::Y, Vec3::Z],
+                Vec3::splat(m),
+            )
+            .unwrap()
+        };
+        assert!(obb_obb(&b(0.0), &b(2.0)), "boxes touching at {m:e}");
+        assert!(!obb_obb(&b(0.0), &b(2.02)), "boxes apart at {m:e}");
+        let a = Aabb::new(Vec3::new(-m, -m, 0.0), Vec3::new(m, m, 2.0 * m));
+        assert!(aabb_obb(&a, &b(2.0)));
+        assert!(!aabb_obb(&a, &b(2.02)), "box–OBB apart at {m:e}");
+    }
+}
