@@ -1,5 +1,7 @@
 //! The frontend's error type: every message names the file, and where it can the line, column
-//! and field, and maps to a process exit code.
+//! and field, and maps to a process exit code. Every string from outside (paths, tokens,
+//! strings read from JSON) is escaped when shown ([`crate::text`]): no escape sequence or line
+//! break of an input reaches the terminal.
 
 use std::fmt;
 
@@ -67,7 +69,7 @@ impl Location {
 
 impl fmt::Display for Location {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.file.display())?;
+        write!(f, "{}", crate::text::path(&self.file))?;
         if let Some(line) = self.line {
             write!(f, ":{line}")?;
             if let Some(col) = self.column {
@@ -202,7 +204,12 @@ impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Input { at, message } => write!(f, "{at}: {}", bounded(message)),
-            Self::Io { path, source } => write!(f, "{}: {source}", path.display()),
+            Self::Io { path, source } => write!(
+                f,
+                "{}: {}",
+                crate::text::path(path),
+                crate::text::escaped(&source.to_string())
+            ),
             Self::Usage(m) => f.write_str(&bounded(m)),
             // Reports halfray composes itself, shown whole.
             Self::Mismatch(m) => f.write_str(m),
@@ -220,7 +227,12 @@ impl fmt::Display for Error {
                     failed.len()
                 )?;
                 for (path, error) in failed {
-                    write!(f, "\n  {path}: {error}")?;
+                    write!(
+                        f,
+                        "\n  {}: {}",
+                        crate::text::escaped(path),
+                        crate::text::escaped(error)
+                    )?;
                 }
                 Ok(())
             }
@@ -228,7 +240,7 @@ impl fmt::Display for Error {
             Self::Threads(e) => write!(f, "starting the worker threads: {e}"),
             #[cfg(feature = "embree")]
             Self::Embree(e) => write!(f, "embree: {e}"),
-            Self::InFile { path, source } => write!(f, "{}: {source}", path.display()),
+            Self::InFile { path, source } => write!(f, "{}: {source}", crate::text::path(path)),
             Self::Internal { what, source } => {
                 write!(f, "internal error: {what}")?;
                 if let Some(e) = source {

@@ -15,6 +15,7 @@ pub mod crosscheck;
 #[cfg(feature = "embree")]
 pub mod embree;
 pub mod error;
+pub mod input;
 pub mod limits;
 pub mod mesh_tools;
 pub mod obj;

@@ -8,6 +8,11 @@ use crate::error::{Error, Result};
 /// with a message).
 pub const MEMORY_LIMIT_BYTES: u64 = 4 << 30;
 
+/// Largest input file read whole (scene, OBJ, mesh list, cross-check part): 1 GiB, 30 times
+/// the largest mesh of the shared corpus (the 33 MB dragon), far below the memory limit the
+/// parsed data also needs room in. Also what stops a read from a pipe that never ends.
+pub const MAX_INPUT_BYTES: u64 = 1 << 30;
+
 /// Refuses `bytes` (`None`: the size computation overflowed) above [`MEMORY_LIMIT_BYTES`],
 /// as a usage error naming `what` (the options that set the size and their values).
 pub fn check_memory(what: &str, bytes: Option<u64>) -> Result<()> {

@@ -13,14 +13,24 @@
 //! `(v0, vi, vi+1)`. Ignored (and counted in [`NotCarried`], so that tools writing OBJ can say
 //! what they drop): comments, `vt`, `vn`, `vp`, `o`, `g`, `s`, `usemtl`, `mtllib`, `l`, `p`.
 //! Rejected with a located error (`file:line:column`): non-finite or malformed coordinates,
-//! a vertex with other than 3, 4 or 6 values, faces with fewer than three vertices, index 0 or
-//! out of range, non-UTF-8 statements, unknown statements.
+//! coordinates beyond ±[`MAX_COORDINATE`], a vertex with other than 3, 4 or 6 values, faces
+//! with fewer than three vertices, a face token of another shape (`1/x`, `1///`), a vertex,
+//! texture or normal index that is 0 or out of range (`1//0`, `1/5/7` before five `vt`),
+//! non-UTF-8 statements, unknown statements.
 
 use crate::error::{Error, Location, Result};
 use crate::outputs::OutputFile;
 use glam::Vec3;
 use std::collections::BTreeMap;
 use std::path::Path;
+
+/// Largest coordinate magnitude a mesh vertex may have: `2^125` (≈ 4.25e37), a quarter of the
+/// `f32` range. The intersection tests work on `p − o` and on the sheared `x − s·z` with
+/// `|s| ≤ 1`: with every vertex and ray origin within `±2^125`, `|p − o| ≤ 2^126` and the
+/// sheared coordinates stay within `±2^127`, below `f32::MAX` (≈ 2^128). Beyond it they can
+/// overflow to infinity and a closed mesh lets rays through (a tetrahedron at ±3e38 around
+/// the camera leaked 630 of 768 rays), so the reader refuses such vertices.
+pub const MAX_COORDINATE: f32 = 4.253_529_6e37;
 
 /// What a file held that [`ObjMesh`] does not keep: statements by keyword (`vt`, `usemtl`,
 /// `#` for comments, `v w` / `v rgb` for vertex weights and colours) and polygons split into
@@ -88,7 +98,8 @@ pub(crate) fn lines(bytes: &[u8]) -> impl Iterator<Item = &[u8]> {
 }
 
 /// The UTF-8 byte-order mark, skipped at the start of a file.
-const BOM: &[u8] = b"\xEF\xBB\xBF";
+/// The UTF-8 byte-order mark, skipped at the start of a file.
+pub const BOM: &[u8] = b"\xEF\xBB\xBF";
 
 /// The statement part of a line (before `#`) and whether there was a comment.
 pub(crate) fn statement(line: &[u8]) -> (&[u8], bool) {
@@ -136,7 +147,7 @@ pub fn read_obj(path: &Path) -> Result<ObjMesh> {
 
 /// Reads and parses an OBJ file, also saying what it held that the mesh does not keep.
 pub fn read_obj_noting(path: &Path) -> Result<(ObjMesh, NotCarried)> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::input::read_bytes(path)?;
     parse_obj_bytes(&bytes, path)
 }
 
@@ -151,6 +162,7 @@ pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<(ObjMesh, NotCarried
     let mut mesh = ObjMesh::default();
     let mut dropped = NotCarried::default();
     let mut face: Vec<u32> = Vec::new();
+    let (mut texcoords, mut normals) = (0usize, 0usize);
     for (line_no, raw) in lines(bytes).enumerate() {
         let line_no = line_no + 1;
         let at =
@@ -196,6 +208,16 @@ pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<(ObjMesh, NotCarried
                             format!("`{}` is not finite", crate::text::excerpt(tok)),
                         ));
                     }
+                    if count < 3 && v.abs() > MAX_COORDINATE {
+                        return Err(Error::input(
+                            at(col, name),
+                            format!(
+                                "vertex {}: `{}` is outside the coordinate domain ±{MAX_COORDINATE:e} (obj::MAX_COORDINATE: farther vertices overflow the intersection test)",
+                                mesh.positions.len() + 1,
+                                crate::text::excerpt(tok)
+                            ),
+                        ));
+                    }
                     values[count] = v;
                     count += 1;
                 }
@@ -219,22 +241,9 @@ pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<(ObjMesh, NotCarried
             "f" => {
                 face.clear();
                 for (col, tok) in tokens {
-                    let idx_text = tok.split('/').next().unwrap_or("");
-                    let idx: i64 = idx_text.parse().map_err(|_| {
-                        Error::input(
-                            at(col, "f"),
-                            format!("`{}` is not a vertex index", crate::text::excerpt(tok)),
-                        )
-                    })?;
-                    let n = mesh.positions.len() as i64;
-                    let resolved = if idx > 0 { idx - 1 } else { n + idx };
-                    if idx == 0 || resolved < 0 || resolved >= n {
-                        return Err(Error::input(
-                            at(col, "f"),
-                            format!("vertex index {idx} out of range (1..={n} so far)"),
-                        ));
-                    }
-                    face.push(resolved as u32);
+                    let counts = [mesh.positions.len(), texcoords, normals];
+                    let v = face_vertex(tok, counts).map_err(|m| Error::input(at(col, "f"), m))?;
+                    face.push(v);
                 }
                 if face.len() < 3 {
                     return Err(Error::input(at(1, "f"), "face needs at least 3 vertices"));
@@ -247,6 +256,8 @@ pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<(ObjMesh, NotCarried
                 }
             }
             "vt" | "vn" | "vp" | "o" | "g" | "s" | "usemtl" | "mtllib" | "l" | "p" => {
+                texcoords += usize::from(keyword == "vt");
+                normals += usize::from(keyword == "vn");
                 dropped.note(keyword);
             }
             other => {
@@ -258,6 +269,56 @@ pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<(ObjMesh, NotCarried
         }
     }
     Ok((mesh, dropped))
+}
+
+/// The vertex of a face token `v`, `v/t`, `v//n` or `v/t/n` (0-based), given how many
+/// vertices, texture coordinates and normals precede it: each index present must be a
+/// non-zero integer in range (negative ones count back from the last), the texture and
+/// normal indices too although they are not kept. The message otherwise.
+fn face_vertex(tok: &str, [vertices, texcoords, normals]: [usize; 3]) -> Result<u32, String> {
+    let parts: Vec<&str> = tok.split('/').collect();
+    let shape_ok = match parts.as_slice() {
+        [v] => !v.is_empty(),
+        [v, t] => !v.is_empty() && !t.is_empty(),
+        [v, _, n] => !v.is_empty() && !n.is_empty(),
+        _ => false,
+    };
+    if !shape_ok {
+        return Err(format!(
+            "`{}` is not a face vertex (`v`, `v/t`, `v//n` or `v/t/n`)",
+            crate::text::excerpt(tok)
+        ));
+    }
+    let mut vertex = 0;
+    for (k, (text, (count, what))) in parts
+        .iter()
+        .zip([
+            (vertices, "vertex"),
+            (texcoords, "texture coordinate"),
+            (normals, "normal"),
+        ])
+        .enumerate()
+    {
+        if text.is_empty() {
+            continue; // `v//n`: no texture coordinate.
+        }
+        let idx: i64 = text.parse().map_err(|_| {
+            format!(
+                "`{}` in `{}` is not a {what} index",
+                crate::text::excerpt(text),
+                crate::text::excerpt(tok)
+            )
+        })?;
+        let n = count as i64;
+        let resolved = if idx > 0 { idx - 1 } else { n + idx };
+        if idx == 0 || resolved < 0 || resolved >= n {
+            return Err(format!("{what} index {idx} out of range (1..={n} so far)"));
+        }
+        if k == 0 {
+            vertex = resolved as u32;
+        }
+    }
+    Ok(vertex)
 }
 
 fn tokens_with_columns(s: &str) -> impl Iterator<Item = (usize, &str)> {
@@ -292,8 +353,16 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_coordinate_domain_is_two_to_the_125() {
+        assert_eq!(MAX_COORDINATE, 2f32.powi(125));
+        // Two points at opposite ends, sheared by |s| = 1: the sum still fits in f32.
+        let d = MAX_COORDINATE - -MAX_COORDINATE;
+        assert!((d + d).is_finite());
+    }
+
+    #[test]
     fn parses_polygons_negative_indices_and_keeps_order() {
-        let text = "# c\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 9 9 9\nvn 0 0 1\nf 1/1/1 2//1 3 4\nf -5 -4 -3\n";
+        let text = "# c\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 9 9 9\nvt 0 0\nvn 0 0 1\nf 1/1/1 2//1 3 4\nf -5 -4 -3\n";
         let m = parse_obj(text, Path::new("q.obj")).unwrap();
         assert_eq!(m.positions.len(), 5, "unreferenced vertex kept");
         assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3], [0, 1, 2]]);

@@ -216,3 +216,189 @@ fn temporary_files_exist_only_while_writing_and_stale_ones_are_removed() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert_eq!(names(dir.path()), ["out.png", "s.toml"]);
 }
+
+/// One `--jsonl` line: mesh `mesh`, shard `index`/`count`, one set `primary` with
+/// `genuine` genuine mismatches on one ray (a made-up count).
+fn result_line(mesh: &str, index: u64, count: u64, genuine: u64) -> String {
+    let set = serde_json::json!({
+        "mesh": mesh, "path": mesh, "name": "primary",
+        "rays": 1, "agree": 0, "genuine_mismatches": genuine, "ties": 0,
+        "within_tolerance": 0, "embree_wrong": 0, "leaks_halfray": 0, "leaks_embree": 0,
+        "leaks_embree_default": 0, "leak_rays": 0, "any_hit_disagreements": 0,
+        "any_vs_closest_inconsistent": 0, "timed_rays": 0, "secs_halfray": 0.0,
+        "secs_embree": 0.0, "secs_embree_default": 0.0, "mrays_halfray": 0.0,
+        "mrays_embree": 0.0, "mrays_embree_default": 0.0, "disagreements": []
+    });
+    serde_json::json!({
+        "path": mesh, "intersector": "watertight", "seed": 1, "rays": 10,
+        "ray_sets": ["primary"], "shard": {"index": index, "count": count}, "sets": [set]
+    })
+    .to_string()
+}
+
+fn merge(dir: &Path, parts: &[(&str, String)]) -> Output {
+    let mut args: Vec<PathBuf> = Vec::new();
+    for (name, text) in parts {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        args.push(p);
+    }
+    let mut all: Vec<&dyn AsRef<OsStr>> = vec![&"crosscheck", &"merge"];
+    all.extend(args.iter().map(|p| p as &dyn AsRef<OsStr>));
+    all.extend([&"--max-mismatch" as &dyn AsRef<OsStr>, &"0"]);
+    run(&all)
+}
+
+/// Item 3: counts that overflow when summed are an error naming the file, never a wrapped
+/// total that passes `--max-mismatch`.
+#[test]
+fn merge_sums_that_overflow_are_errors_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let half = 1u64 << 63;
+    // Two shards of 2^63 each.
+    let o = merge(
+        dir.path(),
+        &[
+            ("p0.jsonl", result_line("a.obj", 0, 2, half) + "\n"),
+            ("p1.jsonl", result_line("a.obj", 1, 2, half) + "\n"),
+        ],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("p1.jsonl") && e.contains("genuine_mismatches") && e.contains("overflow"),
+        "{e}"
+    );
+    // Two meshes of 2^63 in one part: the total over sets overflows.
+    let o = merge(
+        dir.path(),
+        &[(
+            "one.jsonl",
+            format!(
+                "{}\n{}\n",
+                result_line("a.obj", 0, 1, half),
+                result_line("b.obj", 0, 1, half)
+            ),
+        )],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("one.jsonl"), "{}", stderr(&o));
+    // Large but representable sums are kept exactly and judged.
+    let o = merge(
+        dir.path(),
+        &[
+            ("p0.jsonl", result_line("a.obj", 0, 2, half - 1) + "\n"),
+            ("p1.jsonl", result_line("a.obj", 1, 2, half) + "\n"),
+        ],
+    );
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!("{} genuine mismatches", u64::MAX)),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// Item 4: shards read back from JSON pass the checks of `--shard`.
+#[test]
+fn merge_refuses_impossible_shards() {
+    let dir = tempfile::tempdir().unwrap();
+    for (index, count) in [(0, 0), (7, 1), (3, 2)] {
+        let o = merge(
+            dir.path(),
+            &[
+                ("p0.jsonl", result_line("a.obj", 0, 1, 0) + "\n"),
+                ("bad.jsonl", result_line("a.obj", index, count, 5) + "\n"),
+            ],
+        );
+        assert_eq!(o.status.code(), Some(1), "{index}/{count}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains("bad.jsonl:1:") && e.contains(&format!("shard {index}/{count}")),
+            "{e}"
+        );
+    }
+}
+
+/// Item 5: a vertex beyond the coordinate domain is refused at load, naming the file, line and
+/// vertex, by every command that reads meshes; inside it, a closed mesh around the camera
+/// stops every ray.
+#[test]
+fn vertices_outside_the_coordinate_domain_are_refused_and_inside_it_nothing_leaks() {
+    let dir = tempfile::tempdir().unwrap();
+    let far = dir.path().join("far.obj");
+    std::fs::write(&far, tetrahedron("3e38")).unwrap();
+    let mesh_scene = |obj: &str| {
+        small_scene(
+            dir.path(),
+            "t.toml",
+            &format!(
+                "[mesh.t]\nfile = \"{obj}\"\n[[object]]\ntype = \"mesh\"\nmesh = \"t\"\nmaterial = \"m\"\n"
+            ),
+        )
+    };
+    let scene = mesh_scene("far.obj");
+    let png = dir.path().join("o.png");
+    let rs = dir.path().join("o.rs");
+    let runs: [Vec<&dyn AsRef<OsStr>>; 3] = [
+        vec![&"mesh", &"check", &far],
+        vec![&"bake", &far, &"-o", &rs],
+        vec![&"render", &scene, &"-o", &png, &"-q"],
+    ];
+    for args in runs {
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains("far.obj:1:3") && e.contains("vertex 1") && e.contains("coordinate domain"),
+            "{e}"
+        );
+    }
+    // At the domain's edge every camera ray hits the mesh enclosing the camera: in depth
+    // mode a pixel no ray hit stays transparent.
+    let near = dir.path().join("near.obj");
+    std::fs::write(&near, tetrahedron("4e37")).unwrap();
+    let scene = mesh_scene("near.obj");
+    let o = run(&[&"render", &scene, &"-o", &png, &"-q", &"--mode", &"depth"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let img = image::open(&png).unwrap().to_rgba8();
+    let missed = img.pixels().filter(|p| p.0[3] != 255).count();
+    assert_eq!(missed, 0, "rays leaked through the closed mesh");
+}
+
+/// Item 14 (OBJ): face tokens of another shape or with out-of-range texture or normal indices
+/// are refused with `file:line:column`.
+#[test]
+fn malformed_face_tokens_are_refused_with_their_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("f.obj");
+    let head = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n";
+    for (face, want) in [
+        (
+            "f 1 2 1/x",
+            "`x` in `1/x` is not a texture coordinate index",
+        ),
+        ("f 1 2 1///", "not a face vertex"),
+        ("f 1 2 1//0", "normal index 0 out of range"),
+        (
+            "f 1 2 1/5/1",
+            "texture coordinate index 5 out of range (1..=1 so far)",
+        ),
+        ("f 1 2 1/1/7", "normal index 7 out of range"),
+        ("f 1 2 1/", "not a face vertex"),
+    ] {
+        std::fs::write(&obj, format!("{head}{face}\n")).unwrap();
+        let o = run(&[&"mesh", &"check", &obj]);
+        assert_eq!(o.status.code(), Some(1), "{face}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(e.contains("f.obj:6:7") && e.contains(want), "{face}: {e}");
+    }
+    // The valid shapes still read.
+    std::fs::write(
+        &obj,
+        format!("{head}f 1 2/1 3//1\nf 1/1/1 -1/-1/-1 2/1/1\n"),
+    )
+    .unwrap();
+    let o = run(&[&"mesh", &"check", &obj]);
+    assert_ne!(o.status.code(), Some(1), "{}", stderr(&o));
+}

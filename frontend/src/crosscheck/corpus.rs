@@ -8,6 +8,7 @@
 //! wins when a log is read.
 
 use super::report::{MeshResult, RunConfig};
+use super::shard::Shard;
 use crate::error::{Error, Location, Result};
 use std::collections::HashMap;
 use std::fs::{File, OpenOptions};
@@ -18,17 +19,7 @@ use std::path::{Path, PathBuf};
 /// lines starting with `#` skipped. Relative paths are relative to the current directory (as
 /// `find … > list` writes them), not to the list file.
 pub fn read_mesh_list(list: &Path) -> Result<Vec<PathBuf>> {
-    let bytes = std::fs::read(list).map_err(|e| Error::io(list, e))?;
-    let text = String::from_utf8(bytes).map_err(|e| {
-        let line = 1 + e.as_bytes()[..e.utf8_error().valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count();
-        Error::input(
-            Location::file(list).line(line),
-            "is not UTF-8 text (one mesh path per line)",
-        )
-    })?;
+    let text = crate::input::read_text(list, "text (one mesh path per line)")?;
     Ok(text
         .lines()
         .map(str::trim)
@@ -40,8 +31,10 @@ pub fn read_mesh_list(list: &Path) -> Result<Vec<PathBuf>> {
 /// Parses the complete lines of a results log (`text` ends at a newline or is empty).
 /// Every line must be a [`MeshResult`]; the last line of each path wins.
 pub fn parse_log(path: &Path, text: &str) -> Result<Vec<MeshResult>> {
-    let mut order: Vec<String> = Vec::new();
-    let mut latest: HashMap<String, MeshResult> = HashMap::new();
+    // Keyed by mesh and shard: a resumed log repeats a mesh of its own shard (the later line
+    // wins), a concatenation of shard logs holds each mesh once per shard (all kept).
+    let mut order: Vec<(String, Shard)> = Vec::new();
+    let mut latest: HashMap<(String, Shard), MeshResult> = HashMap::new();
     for (i, line) in text.lines().enumerate() {
         if line.trim().is_empty() {
             continue;
@@ -52,10 +45,11 @@ pub fn parse_log(path: &Path, text: &str) -> Result<Vec<MeshResult>> {
                 format!("not a cross-check result line: {e}"),
             )
         })?;
-        if !latest.contains_key(&result.path) {
-            order.push(result.path.clone());
+        let key = (result.path.clone(), result.config.shard);
+        if !latest.contains_key(&key) {
+            order.push(key.clone());
         }
-        latest.insert(result.path.clone(), result);
+        latest.insert(key, result);
     }
     Ok(order
         .into_iter()

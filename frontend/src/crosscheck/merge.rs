@@ -27,40 +27,82 @@ pub struct Part {
     pub threads: usize,
 }
 
-/// Reads a part: a JSON report (one object with `sets`) or a JSON-lines results log.
+/// Reads a part: a JSON report (one object with `threads`, as `--json` writes) or a
+/// JSON-lines results log (as `--jsonl` writes, several shards' logs concatenated included).
+/// A leading UTF-8 byte-order mark is skipped; the file is read bounded
+/// ([`crate::input::read_bytes`]).
 pub fn read_part(path: &Path) -> Result<Part> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let not_a_report = match serde_json::from_str::<Report>(&text) {
-        Ok(report) => {
-            return Ok(Part {
-                path: path.to_path_buf(),
-                results: report.mesh_results(),
-                wall_seconds: report.wall_seconds,
-                threads: report.threads,
-            });
+    let mut bytes = crate::input::read_bytes(path)?;
+    if bytes.starts_with(crate::obj::BOM) {
+        bytes.drain(..crate::obj::BOM.len());
+    }
+    let text = crate::input::utf8(path, bytes, "a cross-check report or results log")?;
+    // A report is one JSON object written over several lines (a log holds one object per
+    // line), or on one line with a report's `threads` key: a one-line log is a JSON document
+    // too, so parsing alone does not decide (a bad log line must be reported as such).
+    let is_report = match serde_json::from_str::<serde_json::Value>(&text) {
+        Ok(serde_json::Value::Object(m)) => {
+            m.contains_key("threads") || text.lines().filter(|l| !l.trim().is_empty()).count() > 1
         }
-        Err(e) => e,
+        _ => false,
     };
-    match parse_log(path, &text) {
-        Ok(results) => Ok(Part {
+    if !is_report {
+        return Ok(Part {
             path: path.to_path_buf(),
-            results,
+            results: parse_log(path, &text)?,
             wall_seconds: 0.0,
             threads: 0,
-        }),
-        // One JSON document that is not a report: say why as a report.
-        Err(_) if serde_json::from_str::<serde_json::Value>(&text).is_ok() => Err(Error::input(
-            Location::file(path)
-                .line(not_a_report.line())
-                .column(not_a_report.column()),
-            format!("not a cross-check report: {not_a_report}"),
-        )),
-        Err(e) => Err(e),
+        });
     }
+    match serde_json::from_str::<Report>(&text) {
+        Ok(report) => Ok(Part {
+            path: path.to_path_buf(),
+            results: report.mesh_results(),
+            wall_seconds: report.wall_seconds,
+            threads: report.threads,
+        }),
+        Err(e) => Err(Error::input(
+            Location::file(path).line(e.line()).column(e.column()),
+            format!("not a cross-check report: {e}"),
+        )),
+    }
+}
+
+/// Refuses parts whose counts cannot be added: every count ([`SetReport::COUNT_NAMES`])
+/// summed over every set of every part, in order, must fit in a `usize` (then every sum the
+/// merge makes does too). The error names the part at which the sum overflows, the mesh, the
+/// set and the count.
+fn check_sums(parts: &[Part]) -> Result<()> {
+    let mut totals = [0usize; SetReport::COUNT_NAMES.len()];
+    for part in parts {
+        for result in &part.results {
+            for set in &result.sets {
+                for ((total, add), name) in totals
+                    .iter_mut()
+                    .zip(set.counts())
+                    .zip(SetReport::COUNT_NAMES)
+                {
+                    *total = total.checked_add(add).ok_or_else(|| {
+                        Error::input(
+                            Location::file(&part.path).field(format!("sets.{name}")),
+                            format!(
+                                "mesh `{}` set `{}`: {name} = {add} makes the sum over the parts overflow {} bits",
+                                crate::text::escaped(&result.path),
+                                crate::text::escaped(&set.name),
+                                usize::BITS
+                            ),
+                        )
+                    })?;
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Merges the parts (see the module docs).
 pub fn merge(parts: &[Part]) -> Result<Report> {
+    check_sums(parts)?;
     let mut first: Option<(&Path, &RunConfig)> = None;
     // Per mesh path (in order of first appearance): shard index -> (file, result).
     let mut order: Vec<&str> = Vec::new();
@@ -133,7 +175,9 @@ pub fn merge(parts: &[Part]) -> Result<Report> {
                 )));
             }
             for (sum, row) in rows.iter_mut().zip(&result.sets) {
-                sum.absorb(row);
+                sum.absorb(row).map_err(|count| {
+                    Error::internal(format!("{count} overflowed after check_sums"), None)
+                })?;
             }
         }
         merged.push(MeshResult {
@@ -338,8 +382,23 @@ mod tests {
         std::fs::write(&json, "{\"sets\": 3}").unwrap();
         let e = read_part(&json).unwrap_err().to_string();
         assert!(
-            e.contains("r.json:1:") && e.contains("not a cross-check report"),
+            e.contains("r.json:1:") && e.contains("not a cross-check result line"),
             "{e}"
         );
+        std::fs::write(&json, "{\n\"sets\": 3\n}").unwrap();
+        let e = read_part(&json).unwrap_err().to_string();
+        assert!(
+            e.contains("r.json:2:") && e.contains("not a cross-check report"),
+            "{e}"
+        );
+        // A BOM is skipped; shard logs concatenated keep every shard.
+        let mut both = b"\xEF\xBB\xBF".to_vec();
+        for k in 0..2 {
+            let line = serde_json::to_string(&shard_result("a.obj", k, 2)).unwrap();
+            both.extend(line.bytes().chain([b'\n']));
+        }
+        std::fs::write(&log, both).unwrap();
+        let merged = merge(&[read_part(&log).unwrap()]).unwrap();
+        assert_eq!(merged.merged_shards, Some(2));
     }
 }

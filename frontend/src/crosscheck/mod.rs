@@ -144,7 +144,7 @@ fn run_merge(args: &MergeArgs) -> Result<()> {
     finish(&report, reserved.into_iter().next(), args.max_mismatch)
 }
 
-/// Prints `report`'s table and totals, writes it to `json`, and turns it into the exit status:
+/// Writes `report` to `json`, prints its table and totals, and turns it into the exit status:
 /// [`Error::Mismatch`] past `max_mismatch` genuine mismatches or on any leak through a
 /// watertight intersector, an error naming every mesh that could not be checked.
 pub fn finish(
@@ -152,13 +152,19 @@ pub fn finish(
     json: Option<crate::outputs::OutputFile>,
     max_mismatch: usize,
 ) -> Result<()> {
+    // The JSON first: an output that cannot be written fails before anything is printed.
+    if let Some(out) = json {
+        let bytes =
+            serde_json::to_vec_pretty(report).map_err(|e| Error::encode("the JSON report", e))?;
+        out.write(|w| w.write_all(&bytes))?;
+    }
     print!("{}", markdown(&report.sets));
     if let Some(ratio) = report.throughput_ratio() {
         println!(
             "\nthroughput ratio halfray / Embree robust (time-weighted over all sets): {ratio:.2}"
         );
     }
-    let rays: usize = report.sets.iter().map(|r| r.rays).sum();
+    let rays = report.rays();
     println!(
         "{rays} rays on {} meshes ({} failed) in {:.1} s wall, {:.0} rays/s, {} threads{}",
         report.meshes,
@@ -170,11 +176,6 @@ pub fn finish(
             .merged_shards
             .map_or(String::new(), |n| format!(" (sums over {n} shards)"))
     );
-    if let Some(out) = json {
-        let bytes =
-            serde_json::to_vec_pretty(report).map_err(|e| Error::encode("the JSON report", e))?;
-        out.write(|w| w.write_all(&bytes))?;
-    }
     let (genuine, leaks) = (report.genuine(), report.leaks());
     let watertight = halfray_core::triangle::TriangleVariant::from_name(&report.config.intersector)
         .is_some_and(|v| v.is_watertight());

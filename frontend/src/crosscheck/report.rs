@@ -185,29 +185,71 @@ impl SetReport {
         self.mrays_embree_default = mrays(self.timed_rays, self.secs_embree_default);
     }
 
+    /// Names of the counts, in the order of [`SetReport::counts`].
+    pub const COUNT_NAMES: [&'static str; 13] = [
+        "rays",
+        "agree",
+        "genuine_mismatches",
+        "ties",
+        "within_tolerance",
+        "embree_wrong",
+        "leaks_halfray",
+        "leaks_embree",
+        "leaks_embree_default",
+        "leak_rays",
+        "any_hit_disagreements",
+        "any_vs_closest_inconsistent",
+        "timed_rays",
+    ];
+
+    /// The counts, in the order of [`SetReport::COUNT_NAMES`].
+    pub fn counts(&self) -> [usize; 13] {
+        [
+            self.rays,
+            self.agree,
+            self.genuine_mismatches,
+            self.ties,
+            self.within_tolerance,
+            self.embree_wrong,
+            self.leaks_halfray,
+            self.leaks_embree,
+            self.leaks_embree_default,
+            self.leak_rays,
+            self.any_hit_disagreements,
+            self.any_vs_closest_inconsistent,
+            self.timed_rays,
+        ]
+    }
+
+    fn counts_mut(&mut self) -> [&mut usize; 13] {
+        [
+            &mut self.rays,
+            &mut self.agree,
+            &mut self.genuine_mismatches,
+            &mut self.ties,
+            &mut self.within_tolerance,
+            &mut self.embree_wrong,
+            &mut self.leaks_halfray,
+            &mut self.leaks_embree,
+            &mut self.leaks_embree_default,
+            &mut self.leak_rays,
+            &mut self.any_hit_disagreements,
+            &mut self.any_vs_closest_inconsistent,
+            &mut self.timed_rays,
+        ]
+    }
+
     /// Adds another shard's results of the same mesh and set: counts, timed rays and seconds
-    /// add; disagreements are kept, ordered by ray index.
-    pub fn absorb(&mut self, other: &SetReport) {
-        let counts = [
-            (&mut self.rays, other.rays),
-            (&mut self.agree, other.agree),
-            (&mut self.genuine_mismatches, other.genuine_mismatches),
-            (&mut self.ties, other.ties),
-            (&mut self.within_tolerance, other.within_tolerance),
-            (&mut self.embree_wrong, other.embree_wrong),
-            (&mut self.leaks_halfray, other.leaks_halfray),
-            (&mut self.leaks_embree, other.leaks_embree),
-            (&mut self.leaks_embree_default, other.leaks_embree_default),
-            (&mut self.leak_rays, other.leak_rays),
-            (&mut self.any_hit_disagreements, other.any_hit_disagreements),
-            (
-                &mut self.any_vs_closest_inconsistent,
-                other.any_vs_closest_inconsistent,
-            ),
-            (&mut self.timed_rays, other.timed_rays),
-        ];
-        for (sum, add) in counts {
-            *sum += add;
+    /// add; disagreements are kept, ordered by ray index. A count whose sum does not fit in a
+    /// `usize` is an error naming it (`genuine_mismatches`), and `self` is then unchanged.
+    pub fn absorb(&mut self, other: &SetReport) -> Result<(), &'static str> {
+        let add = other.counts();
+        let mut sums = self.counts();
+        for ((sum, add), name) in sums.iter_mut().zip(add).zip(Self::COUNT_NAMES) {
+            *sum = sum.checked_add(add).ok_or(name)?;
+        }
+        for (count, sum) in self.counts_mut().into_iter().zip(sums) {
+            *count = sum;
         }
         self.secs_halfray += other.secs_halfray;
         self.secs_embree += other.secs_embree;
@@ -216,6 +258,7 @@ impl SetReport {
             .extend(other.disagreements.iter().cloned());
         self.disagreements.sort_by_key(|d| (d.index, d.kind));
         self.update_throughput();
+        Ok(())
     }
 }
 
@@ -286,14 +329,15 @@ impl Report {
                 None => sets.extend(r.sets.iter().cloned()),
             }
         }
-        let rays: usize = sets.iter().map(|s| s.rays).sum();
+        // Throughput only: an `f64` sum cannot overflow.
+        let rays: f64 = sets.iter().map(|s| s.rays as f64).sum();
         Self {
             config,
             merged_shards: None,
             threads,
             wall_seconds,
             rays_per_second: if wall_seconds > 0.0 {
-                rays as f64 / wall_seconds
+                rays / wall_seconds
             } else {
                 0.0
             },
@@ -303,14 +347,35 @@ impl Report {
         }
     }
 
-    /// Total genuine mismatches.
-    pub fn genuine(&self) -> usize {
-        self.sets.iter().map(|r| r.genuine_mismatches).sum()
+    /// Sum of `count` over all sets; `None` when it does not fit in a `usize`.
+    pub fn total(&self, count: impl Fn(&SetReport) -> usize) -> Option<usize> {
+        self.sets
+            .iter()
+            .try_fold(0usize, |sum, r| sum.checked_add(count(r)))
     }
 
-    /// Total halfray leaks.
+    /// The first count ([`SetReport::COUNT_NAMES`]) whose total over all sets does not fit
+    /// in a `usize`.
+    pub fn overflowing_total(&self) -> Option<&'static str> {
+        (0..SetReport::COUNT_NAMES.len())
+            .find(|&k| self.total(|r| r.counts()[k]).is_none())
+            .map(|k| SetReport::COUNT_NAMES[k])
+    }
+
+    /// Total genuine mismatches; `usize::MAX` when the sum does not fit (never less than the
+    /// true total, so a verdict on it cannot pass wrongly).
+    pub fn genuine(&self) -> usize {
+        self.total(|r| r.genuine_mismatches).unwrap_or(usize::MAX)
+    }
+
+    /// Total halfray leaks; `usize::MAX` when the sum does not fit.
     pub fn leaks(&self) -> usize {
-        self.sets.iter().map(|r| r.leaks_halfray).sum()
+        self.total(|r| r.leaks_halfray).unwrap_or(usize::MAX)
+    }
+
+    /// Total rays; `usize::MAX` when the sum does not fit.
+    pub fn rays(&self) -> usize {
+        self.total(|r| r.rays).unwrap_or(usize::MAX)
     }
 
     /// halfray / Embree robust single-thread throughput, time-weighted over all sets (`None`
@@ -346,6 +411,11 @@ impl Report {
     }
 }
 
+/// A string from a report as a table cell: control characters escaped, `|` as `\|`.
+fn cell(s: &str) -> String {
+    crate::text::escaped(s).replace('|', "\\|")
+}
+
 /// The per-set table as markdown.
 pub fn markdown(rows: &[SetReport]) -> String {
     let mut s = String::from(
@@ -360,8 +430,8 @@ pub fn markdown(rows: &[SetReport]) -> String {
         };
         s.push_str(&format!(
             "| {} | {} | {} | {} | {} | {} | {} | {} | {}/{} | {}/{} | {}/{} | {} | {:.2} | {:.2} | {:.2} |\n",
-            r.mesh,
-            r.name,
+            cell(&r.mesh),
+            cell(&r.name),
             r.rays,
             r.agree,
             r.ties,

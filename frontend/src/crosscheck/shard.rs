@@ -9,13 +9,36 @@
 use std::fmt;
 use std::str::FromStr;
 
-/// One shard of a run: `index` of `count`.
+/// One shard of a run: `index` of `count`. Read back from JSON through the same check as
+/// `--shard` (`index < count`): `{"index": 0, "count": 0}` or `7/1` is refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "ShardFields")]
 pub struct Shard {
     /// Zero-based shard index, `< count`.
     pub index: usize,
     /// Number of shards, `≥ 1`.
     pub count: usize,
+}
+
+/// A shard as written, before [`Shard::new`] checks it.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ShardFields {
+    index: usize,
+    count: usize,
+}
+
+impl TryFrom<ShardFields> for Shard {
+    type Error = String;
+
+    fn try_from(f: ShardFields) -> Result<Self, String> {
+        Self::new(f.index, f.count).ok_or_else(|| {
+            format!(
+                "shard {}/{}: the index must be below the count (shards are 0/N .. N-1/N, N ≥ 1)",
+                f.index, f.count
+            )
+        })
+    }
 }
 
 impl Shard {

@@ -324,7 +324,7 @@ impl Scene {
 
 /// Reads and checks a scene file. Mesh paths are relative to the file's folder.
 pub fn load(path: &Path) -> Result<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::input::read_text(path, "a scene (TOML text)")?;
     parse(&text, path)
 }
 

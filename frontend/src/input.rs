@@ -1,0 +1,124 @@
+//! Reading an input file whole, bounded: every file a command reads in one piece (scene, OBJ,
+//! mesh list, cross-check part) comes through [`read_bytes`] or [`read_text`].
+//!
+//! A regular file is read when it holds at most [`MAX_INPUT_BYTES`]; a FIFO, socket or pipe
+//! (`<(…)`, `/dev/stdin` from a pipe) is read up to that many bytes and refused beyond; a
+//! character or block device (`/dev/zero`, `/dev/urandom`, a disk) and a directory are
+//! refused before reading anything.
+
+use crate::error::{Error, Location, Result};
+use crate::limits::MAX_INPUT_BYTES;
+use std::io::{self, Read};
+use std::path::Path;
+
+fn refuse(path: &Path, kind: io::ErrorKind, message: String) -> Error {
+    Error::io(path, io::Error::new(kind, message))
+}
+
+/// The bytes of `path` (see the module docs).
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    let ft = meta.file_type();
+    if ft.is_dir() {
+        return Err(refuse(
+            path,
+            io::ErrorKind::IsADirectory,
+            "is a directory, not a file".into(),
+        ));
+    }
+    if let Some(kind) = device_kind(&ft) {
+        return Err(refuse(
+            path,
+            io::ErrorKind::InvalidInput,
+            format!("is a {kind}, not a regular file"),
+        ));
+    }
+    let too_big = || {
+        refuse(
+            path,
+            io::ErrorKind::FileTooLarge,
+            format!(
+                "holds more than {} MiB, the input limit (limits::MAX_INPUT_BYTES)",
+                MAX_INPUT_BYTES >> 20
+            ),
+        )
+    };
+    if ft.is_file() && meta.len() > MAX_INPUT_BYTES {
+        return Err(too_big());
+    }
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut bytes = Vec::new();
+    file.take(MAX_INPUT_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 > MAX_INPUT_BYTES {
+        return Err(too_big());
+    }
+    Ok(bytes)
+}
+
+/// The text of `path` ([`read_bytes`]); bytes that are not UTF-8 are an input error at the
+/// line and column (in characters) of the first bad byte. `what` says what the text should
+/// be, for that message (`"a scene (TOML)"`).
+pub fn read_text(path: &Path, what: &str) -> Result<String> {
+    utf8(path, read_bytes(path)?, what)
+}
+
+/// `bytes` as text, or the located error of [`read_text`].
+pub fn utf8(path: &Path, bytes: Vec<u8>, what: &str) -> Result<String> {
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line_start = valid.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
+        let column = 1 + String::from_utf8_lossy(&valid[line_start..])
+            .chars()
+            .count();
+        let bad = e.as_bytes()[valid.len()];
+        Error::input(
+            Location::file(path).line(line).column(column),
+            format!("byte 0x{bad:02x} is not UTF-8: expected {what}"),
+        )
+    })
+}
+
+#[cfg(unix)]
+fn device_kind(ft: &std::fs::FileType) -> Option<&'static str> {
+    use std::os::unix::fs::FileTypeExt;
+    if ft.is_char_device() {
+        Some("character device")
+    } else if ft.is_block_device() {
+        Some("block device")
+    } else {
+        None
+    }
+}
+
+#[cfg(not(unix))]
+fn device_kind(_: &std::fs::FileType) -> Option<&'static str> {
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn devices_and_folders_are_refused_and_bad_utf8_is_located() {
+        for (p, want) in [
+            ("/dev/zero", "is a character device, not a regular file"),
+            ("/dev/null", "is a character device, not a regular file"),
+            ("/", "is a directory"),
+        ] {
+            let e = read_bytes(Path::new(p)).unwrap_err().to_string();
+            assert!(e.contains(want), "{p}: {e}");
+        }
+        let e = utf8(
+            Path::new("s.toml"),
+            b"a = 1\nb = \"x\xffy\"\n".to_vec(),
+            "TOML",
+        )
+        .unwrap_err()
+        .to_string();
+        assert_eq!(e, "s.toml:2:7: byte 0xff is not UTF-8: expected TOML");
+    }
+}
