@@ -15,5 +15,15 @@ if [ -z "$bin" ]; then
     if [ -x "$root/target/release/halfray" ]; then bin=$root/target/release/halfray; else bin=halfray; fi
 fi
 parts=()
-for ((k = 0; k < n; k++)); do parts+=("$out/part-$k-of-$n.jsonl"); done
+missing=0
+for ((k = 0; k < n; k++)); do
+    part=$out/part-$k-of-$n.jsonl
+    if [ ! -e "$part" ]; then
+        # The task never started (cancelled while pending, or OUT_DIR is not shared): say which.
+        echo "crosscheck-merge: shard $k/$n is missing: no results log $part" >&2
+        missing=1
+    fi
+    parts+=("$part")
+done
+[ "$missing" -eq 0 ] || exit 2
 exec "$bin" crosscheck merge "${parts[@]}" --json "$out/merged.json" "$@"
