@@ -37,10 +37,10 @@ export MESH_LIST=$out/meshes.txt RAYS=$rays
 submit_run() {
     export OUT=$1
     mkdir -p "$OUT"
-    array=$(submit --array=0-2 --cpus-per-task=1 --mem=2G --chdir="$OUT" \
-        "$root/docs/cluster/crosscheck.sbatch")
-    merge=$(submit --dependency=afterany:"$array" --export=ALL,SHARDS=3 --chdir="$OUT" \
-        "$root/docs/cluster/crosscheck-merge.sbatch")
+    submit array --array=0-2 --cpus-per-task=1 --mem=2G --chdir="$OUT" \
+        "$root/docs/cluster/crosscheck.sbatch"
+    submit merge --dependency=afterany:"$array" --export=ALL,SHARDS=3 --chdir="$OUT" \
+        "$root/docs/cluster/crosscheck-merge.sbatch"
 }
 
 # True once task 1 is running and its results log holds at least one mesh.

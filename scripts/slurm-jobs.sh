@@ -27,13 +27,15 @@ fail() {
     exit 1
 }
 
-# submit SBATCH_ARGS...: sbatch --parsable; prints the job id and remembers it for `fail`.
+# submit VAR SBATCH_ARGS...: sbatch --parsable; sets VAR to the job id and remembers it for
+# `fail` (a variable, not output: a command substitution would forget it).
 submit() {
-    local id
+    local var=$1 id
+    shift
     id=$(sbatch --parsable "$@") || fail "sbatch $*"
     id=${id%%;*}
     jobs_seen+=("$id")
-    echo "$id"
+    printf -v "$var" '%s' "$id"
 }
 
 # wait_for SECONDS WHAT COMMAND...: runs COMMAND every 0.2 s until it succeeds; fails naming

@@ -17,8 +17,12 @@
 #               and a build with the rust-version toolchain (MSRV)
 #   test        cargo test --workspace (unit, integration, numerical-stability, fuzz-corpus replay)
 #   embree      Embree 4.4.0 from the pinned PyPI wheel; Embree tests; crosscheck on every shared mesh;
-#               the same sharded (local runner, Slurm script) and merged equals it unsharded
+#               the same as 4 local shards merged equals it unsharded
 #   fuzz        nightly + cargo-fuzz; every fuzz target for FUZZ_SECONDS (default 30) each
+#   cluster     a real one-node Slurm cluster (Debian slurmctld/slurmd/munge, scripts/slurm-local.sh):
+#               the crosscheck array + merge (requeued task resumes, merged = unsharded, cancelled
+#               task fails the merge naming its shard); the fuzz array + merge reports a planted
+#               crash (needs the embree stage; SKIP_CLUSTER=1 skips it)
 #   bench       halfray bench accuracy --quick (runs; watertight must show zero leaks)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -104,8 +108,8 @@ if [ "${SKIP_EMBREE:-0}" != 1 ]; then
     cargo run --release -p halfray --features embree -- crosscheck "$MESHES"/*.obj \
         --rays "${CROSSCHECK_RAYS:-100000}" --json target/ci/crosscheck.json \
         --depth-image target/ci/crosscheck-depth.png
-    # The same meshes as 4 shards through the local runner (xargs -P) and as 3 tasks of the
-    # Slurm array script merge to the unsharded run, count for count.
+    # The same meshes as 4 shards through the local runner (xargs -P) merge to the unsharded
+    # run, count for count (the Slurm array: stage cluster).
     bash scripts/crosscheck-verify-shards.sh target/ci/shards "$MESHES"/*.obj --rays 10000
 fi
 
@@ -132,6 +136,13 @@ else
     echo "SKIPPED stage fuzz (SKIP_FUZZ=1)" | tee -a "$HALFRAY_SKIP_LOG"
 fi
 echo; report_skips
+
+if [ "${SKIP_EMBREE:-0}" != 1 ] && [ "${SKIP_CLUSTER:-0}" != 1 ]; then
+    stage cluster
+    # The docs/cluster Slurm files on a real Slurm cluster, torn down when the checks end.
+    bash scripts/slurm-local.sh bash -c 'bash scripts/slurm-ci-crosscheck.sh target/ci/cluster/crosscheck "$@" &&
+        bash scripts/slurm-ci-fuzz.sh target/ci/cluster/fuzz' _ "$MESHES"/*.obj
+fi
 
 echo
 echo "== all stages passed in $(( $(date +%s) - t0 )) s"

@@ -1,7 +1,8 @@
 //! The scheduler files under `docs/cluster/` stay consistent with the scripts they call: the
 //! Kubernetes shard count (`completions`) is the `N` its command passes, the merge Job merges
-//! that many shards, and every script they name exists. (`.ci/run` executes the Slurm scripts
-//! themselves through `scripts/crosscheck-verify-shards.sh`; no Kubernetes runs here.)
+//! that many shards, the fuzz Jobs name every fuzz target once, and every script they name
+//! exists. (`.ci/run`'s `cluster` stage runs the Slurm files on a real Slurm cluster,
+//! scripts/slurm-local.sh; no Kubernetes runs here.)
 
 use std::path::Path;
 
@@ -39,6 +40,60 @@ fn the_kubernetes_job_passes_its_own_shard_count() {
     assert!(merge.contains(&merged), "the merge Job merges {n} shards");
 }
 
+/// The value of the `FUZZ_TARGETS` variable a Job sets, as names.
+fn fuzz_targets(job: &str) -> Vec<String> {
+    let at = job.find("name: FUZZ_TARGETS").expect("FUZZ_TARGETS is set");
+    let value = job[at..]
+        .lines()
+        .nth(1)
+        .and_then(|l| l.trim().strip_prefix("value:"))
+        .expect("`value:` on the line after `name: FUZZ_TARGETS`");
+    value
+        .trim()
+        .trim_matches('"')
+        .split_whitespace()
+        .map(String::from)
+        .collect()
+}
+
+#[test]
+fn the_kubernetes_fuzz_jobs_run_every_fuzz_target_once() {
+    let manifest = read("fuzz/Cargo.toml");
+    let mut bins: Vec<String> = manifest
+        .split("[[bin]]")
+        .skip(1)
+        .map(|b| {
+            b.lines()
+                .find_map(|l| l.strip_prefix("name = "))
+                .unwrap()
+                .trim_matches('"')
+                .to_string()
+        })
+        .collect();
+    let job = read("docs/cluster/fuzz-job.yaml");
+    assert!(job.contains("completionMode: Indexed"));
+    let targets = fuzz_targets(&job);
+    assert_eq!(
+        field(&job, "completions"),
+        targets.len(),
+        "one completion per target"
+    );
+    assert!(job.contains("scripts/fuzz-task.sh \"$JOB_COMPLETION_INDEX\" /results/fuzz"));
+    let merge = read("docs/cluster/fuzz-merge-job.yaml");
+    assert_eq!(
+        fuzz_targets(&merge),
+        targets,
+        "the merge Job merges the same targets"
+    );
+    let mut sorted = targets.clone();
+    sorted.sort();
+    bins.sort();
+    assert_eq!(
+        sorted, bins,
+        "FUZZ_TARGETS lists every target of fuzz/Cargo.toml once"
+    );
+}
+
 #[test]
 fn every_script_the_scheduler_files_name_exists() {
     for file in [
@@ -46,6 +101,10 @@ fn every_script_the_scheduler_files_name_exists() {
         "docs/cluster/crosscheck-merge-job.yaml",
         "docs/cluster/crosscheck.sbatch",
         "docs/cluster/crosscheck-merge.sbatch",
+        "docs/cluster/fuzz-job.yaml",
+        "docs/cluster/fuzz-merge-job.yaml",
+        "docs/cluster/fuzz.sbatch",
+        "docs/cluster/fuzz-merge.sbatch",
     ] {
         let text = read(file);
         let mut named = 0;
