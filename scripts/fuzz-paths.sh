@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # Sourced by scripts/fuzz-task.sh and scripts/fuzz-merge.sh: the targets of a fuzz run and where
 # their binaries and seeds are.
 #

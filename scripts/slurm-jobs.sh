@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # Sourced by the CI cluster stage's checks (scripts/slurm-ci-*.sh): bounded waits on Slurm jobs,
 # their final states, and the scheduler's own account of a job when a check fails. Talks to the
 # cluster SLURM_CONF names (scripts/slurm-local.sh exports it). Accounting (slurmdbd) is not
