@@ -602,6 +602,15 @@ pub unsafe extern "C" fn halfray_any_hit(
     }
 }
 
+/// A function that can panic (an index out of bounds), built only with the `panic-probe`
+/// feature: `scripts/test-ffi.sh` links a C program that calls it and expects the link to fail
+/// on the panic handler's undefined symbol, so that the guard is known to work.
+#[cfg(feature = "panic-probe")]
+#[no_mangle]
+pub extern "C" fn halfray_ffi_panic_probe(i: usize) -> u8 {
+    [7u8][i]
+}
+
 // Never defined anywhere: a program that links the panic handler (because some reachable
 // code of this library could panic) fails to link, naming this symbol.
 #[cfg(not(test))]
