@@ -23,7 +23,8 @@
 #               the crosscheck array + merge (requeued task resumes, merged = unsharded, cancelled
 #               task fails the merge naming its shard); the fuzz array + merge reports a planted
 #               crash (needs the embree stage; SKIP_CLUSTER=1 skips it)
-#   bench       halfray bench accuracy --quick (runs; watertight must show zero leaks)
+#   bench       halfray bench accuracy --quick (runs; watertight must show zero leaks); the corpus
+#               (scripts/corpus.sh) through bench bvh with few rays; the three charts from the JSON
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 ROOT=$PWD
@@ -128,6 +129,18 @@ for name in ("watertight", "watertight-f32", "f64-reference"):
     assert rows[name]["leak_rays"] > 0, f"{name}: no edge/vertex rays were tested"
 print("bench accuracy --quick: watertight variants have zero leaks")
 PY
+# The corpus benchmark as docs/benchmarks.md runs it, with few rays (figures are not checked
+# here: speed belongs to benchmarks), then each chart from its run's JSON.
+bash scripts/corpus.sh $features
+cargo run --release -p halfray $features -- bench bvh --mesh-list scenes/corpus/corpus.txt \
+    --width 64 --rays 10000 --json target/ci/bench-bvh.json > target/ci/bench-bvh.txt
+tail -n 12 target/ci/bench-bvh.txt
+target/release/halfray chart accuracy target/ci/accuracy.json -o target/ci/accuracy.svg
+if [ "${SKIP_EMBREE:-0}" != 1 ]; then
+    target/release/halfray chart corpus target/ci/bench-bvh.json -o target/ci/corpus.svg
+    target/release/halfray chart corpus target/ci/bench-bvh.json -o target/ci/corpus.png
+    target/release/halfray chart disagreements target/ci/crosscheck.json -o target/ci/disagreements.svg
+fi
 
 if [ "${SKIP_FUZZ:-0}" != 1 ]; then
     stage fuzz

@@ -8,6 +8,7 @@ pub mod accel;
 pub mod atomic;
 pub mod bake;
 pub mod bench;
+pub mod charts;
 pub mod cli_values;
 pub mod composite;
 pub mod console;
@@ -27,5 +28,6 @@ pub mod render;
 pub mod scene;
 pub mod simd;
 pub mod text;
+pub mod timing;
 
 pub use error::{Error, Location, Result};

@@ -4,7 +4,7 @@
 //! files and exit with 128 + the signal number.
 
 use clap::{Parser, Subcommand};
-use halfray::{bake, bench, composite, crosscheck, mesh_tools, render};
+use halfray::{bake, bench, charts, composite, crosscheck, mesh_tools, render};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -29,6 +29,8 @@ enum Command {
     /// Benchmarks.
     #[command(subcommand)]
     Bench(bench::BenchCommand),
+    /// Draw a chart (SVG or PNG) from the JSON of a benchmark or cross-check run.
+    Chart(charts::ChartArgs),
     /// Compare halfray's hits with Embree 4, ray by ray.
     Crosscheck(crosscheck::CrosscheckArgs),
     /// Build a mesh's BVH here and write it as Rust `static` arrays for a no_std firmware.
@@ -49,6 +51,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Mesh(cmd) => mesh_tools::run(&cmd),
         Command::Bench(cmd) => bench::run(&cmd),
+        Command::Chart(args) => charts::run(&args),
         Command::Crosscheck(args) => crosscheck::run(&args),
         Command::Bake(args) => bake::run(&args),
         Command::Composite(args) => composite::run(&args),

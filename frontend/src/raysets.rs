@@ -5,8 +5,12 @@
 //! * [`random_rays`]: incoherent rays, origins uniform on a sphere of twice the bounding-sphere
 //!   radius around the box, aimed at uniform random points inside the box.
 //!
-//! Both are pure functions of their inputs (and seed): the same rays on every machine. The
+//! * [`named`]: the named ray sets of `bench bvh` and `crosscheck` built from these.
+//!
+//! All are pure functions of their inputs (and seed): the same rays on every machine. The
 //! arithmetic is done in `f64` and rounded once to `f32`.
+
+pub mod named;
 
 use glam::{DVec3, Vec3};
 use halfray_core::Ray;

@@ -31,9 +31,40 @@ fn several_meshes_give_one_report_each_and_a_summary_table() {
     for (r, m) in reports.iter().zip(&meshes) {
         assert_eq!(r["mesh"], m.as_str());
         assert_eq!(r["brute_force_mismatches"], 0, "{m}");
-        assert_eq!(r["primary_rays"], 24 * 24);
-        assert_eq!(r["incoherent_rays"], 500);
-        assert!(r["mrays_closest_primary"].as_f64().unwrap() > 0.0);
+        // Every named set, in order, with its query and ray count.
+        let sets = r["sets"].as_array().expect("sets[]");
+        let names: Vec<&str> = sets.iter().map(|s| s["name"].as_str().unwrap()).collect();
+        assert_eq!(
+            names,
+            [
+                "primary",
+                "primary-tiles",
+                "primary-stride",
+                "random",
+                "shadow",
+                "ao"
+            ]
+        );
+        for s in sets {
+            let name = s["name"].as_str().unwrap();
+            let any = matches!(name, "shadow" | "ao");
+            assert_eq!(
+                s["query"],
+                if any { "any" } else { "closest" },
+                "{m} {name}"
+            );
+            assert!(s["mrays"].as_f64().unwrap() > 0.0, "{m} {name}");
+            let rays = s["rays"].as_u64().unwrap();
+            match name {
+                "random" => assert_eq!(rays, 500),
+                // One shadow or AO ray per camera ray that hits.
+                "shadow" | "ao" => {
+                    let hit = sets[0]["hit_rate"].as_f64().unwrap() * 576.0;
+                    assert_eq!(rays as f64, hit.round(), "{m} {name}");
+                }
+                _ => assert_eq!(rays, 24 * 24),
+            }
+        }
     }
     assert_eq!(reports[0]["triangles"], 4);
     // The summary: a Markdown header, its rule, one row per mesh in order.
@@ -53,6 +84,17 @@ fn several_meshes_give_one_report_each_and_a_summary_table() {
         "{}",
         lines[head + 3]
     );
+    // Without Embree the cells are halfray's own throughput; with it, the ratio rows follow.
+    if cfg!(feature = "embree") {
+        assert!(lines[head + 4].starts_with("| **geometric mean** |"));
+        assert!(lines[head + 5].starts_with("| **worst** |"));
+    } else {
+        assert!(
+            lines[head + 2].contains(" Mrays/s |"),
+            "{}",
+            lines[head + 2]
+        );
+    }
 
     // One mesh: the report object itself (the JSON files under docs/ have this shape).
     let o = Command::new(BIN)
@@ -65,6 +107,42 @@ fn several_meshes_give_one_report_each_and_a_summary_table() {
     assert!(o.status.success());
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     assert_eq!(v["triangles"], 4);
+}
+
+/// `--mesh-list` adds the list's meshes after the positional ones; `--sets` picks sets.
+#[test]
+fn a_mesh_list_follows_the_positional_meshes() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let list = dir.path().join("corpus.txt");
+    let torus = format!("{SCENE_MESHES}/torus.obj");
+    std::fs::write(&list, format!("# corpus\n\n{torus}\n")).unwrap();
+    let o = Command::new(BIN)
+        .args(["bench", "bvh", &format!("{SCENE_MESHES}/tetrahedron.obj")])
+        .arg("--mesh-list")
+        .arg(&list)
+        .args(["--sets", "ao,primary-tiles", "--width", "8", "--rays", "50"])
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let meshes: Vec<&str> = v
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["mesh"].as_str().unwrap())
+        .collect();
+    assert_eq!(meshes[1], torus);
+    assert!(meshes[0].ends_with("tetrahedron.obj"));
+    let names: Vec<&str> = v[1]["sets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["ao", "primary-tiles"]);
 }
 
 #[test]

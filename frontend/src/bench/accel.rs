@@ -12,10 +12,11 @@
 //! structure's closest hit (triangle and `t`) differs from a loop over every triangle with
 //! the same intersector: every structure promises 0.
 
-use super::bvh::{BRUTE_FORCE_TESTS, TIMED_PASSES, brute_force, interleaved};
+use super::bvh::{BRUTE_FORCE_TESTS, brute_force};
 use crate::accel::{VecBvh, VecBvh8, build_binary, build_wide, closest_simd};
 use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
+use crate::timing::{TIMED_PASSES, interleaved};
 use halfray_core::Ray;
 use halfray_core::bvh::wide::binary_options;
 use halfray_core::bvh::{BuildOptions, TriangleMesh};

@@ -1,35 +1,40 @@
-//! `halfray bench bvh`: BVH build time, size and single-threaded traversal throughput.
+//! `halfray bench bvh`: BVH build time, size and single-threaded traversal throughput over a
+//! corpus of meshes, against Embree on the same rays in the same run.
 //!
-//! Rays: the primary rays of a `width × width` camera framing the mesh
-//! ([`crate::raysets::Camera::framing`]) and `--rays` incoherent rays
-//! ([`crate::raysets::random_rays`], seed [`INCOHERENT_SEED`]). Each throughput is the best of
-//! [`TIMED_PASSES`] passes over the whole set on one thread. With `--features embree` the
-//! figures compared with Embree are taken **round-robin**: each pass builds (or traces the set
-//! with) halfray's default tree, then Embree default, then Embree robust, so a slow spell of
-//! the shared machine falls on all three rather than on whichever ran then; the ratios are
-//! of the bests. Brute force (every triangle for
-//! every ray) runs on a sample of the incoherent rays sized to about [`BRUTE_FORCE_TESTS`]
-//! triangle tests, as a baseline ratio; the BVH's answers on that sample are checked against it.
+//! Rays: the named sets of [`crate::raysets::named`] (camera rays in scanline order, in 8×8
+//! tiles and with a stride, `width × width` of each; `--rays` incoherent rays, seed
+//! [`INCOHERENT_SEED`]; a shadow and an ambient-occlusion ray from each camera hit). Closest-hit
+//! sets are timed with halfray's closest-hit query and Embree's `rtcIntersect1`, any-hit sets
+//! with the any-hit query and `rtcOccluded1`. Each throughput is the best of
+//! [`TIMED_PASSES`] passes over the whole set on one thread, the passes taken **round-robin**
+//! (halfray, Embree default, Embree robust, then again; [`interleaved`]) so that a slow spell of
+//! the shared machine falls on all three; builds are timed the same way. The run closes with a
+//! table of the ratios per mesh and, per set, their geometric mean and the worst mesh.
+//!
+//! Brute force (every triangle for every ray) runs on a sample of the incoherent rays sized to
+//! about [`BRUTE_FORCE_TESTS`] triangle tests, as a baseline; the BVH's answers on that sample
+//! are checked against it.
 
 mod rivals;
+pub mod summary;
 
 use crate::accel::{any_simd, build_binary, build_binary_parallel, build_wide, closest_simd};
 use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
+use crate::raysets::named::{Query, RaySet, watertight_hits};
+use crate::raysets::random_rays;
+use crate::timing::{TIMED_PASSES, interleaved};
+use glam::Vec3;
 use halfray_core::Ray;
 use halfray_core::bvh::wide::binary_options;
 use halfray_core::bvh::{BuildOptions, DEFAULT_MAX_LEAF_SIZE, TraversalStats, TriangleMesh};
 use halfray_core::triangle::{TriangleIntersector, VariantVisitor};
-use rivals::Rivals;
-pub(super) use rivals::interleaved;
-use std::path::PathBuf;
+use rivals::{HitQuery, Rivals};
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Seed of the incoherent ray set.
+/// Seed of the incoherent ray set (and of the ambient-occlusion directions).
 pub const INCOHERENT_SEED: u64 = 0xB7B7_0001;
-/// Timed passes per measurement; the best is reported, so that one preemption of a pass (a
-/// few milliseconds for 100 000 camera rays) does not spoil a figure on a shared machine.
-pub const TIMED_PASSES: usize = 5;
 /// Target number of triangle tests of the brute-force baseline.
 pub const BRUTE_FORCE_TESTS: usize = 150_000_000;
 
@@ -38,11 +43,18 @@ pub const BRUTE_FORCE_TESTS: usize = 150_000_000;
 pub struct BvhArgs {
     /// Meshes to benchmark (OBJ), one after another in this run; a summary table of the
     /// ratios to Embree closes the output.
-    #[arg(required = true)]
+    #[arg(required_unless_present = "mesh_list")]
     pub meshes: Vec<PathBuf>,
-    /// The JSON output and the ray sets.
+    /// A file of mesh paths, one per line (blank lines and `#` comments skipped; relative
+    /// paths are relative to the current directory), benchmarked after the MESHES arguments.
+    #[arg(long)]
+    pub mesh_list: Option<PathBuf>,
+    /// The JSON output and the ray counts.
     #[command(flatten)]
     pub run: super::RunArgs,
+    /// Comma-separated ray sets; all by default.
+    #[arg(long, value_delimiter = ',', value_enum)]
+    pub sets: Vec<RaySet>,
     /// Triangle intersector.
     #[arg(long, value_enum, default_value_t)]
     pub intersector: crate::cli_values::Intersector,
@@ -52,220 +64,156 @@ pub struct BvhArgs {
     pub leaf_size: u32,
 }
 
-/// Everything measured, as written to the JSON file. The top-level figures are those of the
-/// default structure (the 8-wide BVH, the fastest watertight one); `binary` has the binary
-/// tree's on the same rays, and the `embree_*` keys (with `--features embree`) Embree 4's
-/// default and robust modes on the same rays in the same run.
-#[derive(Debug, Clone, serde::Serialize)]
+/// Everything measured on one mesh, as written to the JSON file. The build and size figures
+/// are those of the default structure (the 8-wide BVH, the fastest watertight one), with the
+/// binary tree's beside them; `sets` has the throughput of every ray set, with Embree 4's
+/// default and robust modes on the same rays in the same run (with `--features embree`).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct BvhReport {
     /// Mesh path.
     pub mesh: String,
     /// Intersector name.
     pub intersector: String,
-    /// The structure the top-level figures describe (`bvh8`).
+    /// The structure the figures describe (`bvh8`).
     pub structure: String,
     /// SIMD level the queries ran with (`avx2+fma`, `sse2`, `portable`).
     pub simd: String,
     /// Triangles in the mesh.
     pub triangles: usize,
-    /// The default structure's figures, at the top level of the JSON (build time: binary build
-    /// + collapse; bytes: nodes + copied triangles).
-    #[serde(flatten)]
-    pub bvh8: StructureReport,
+    /// One-thread build time of the default structure (binary build + collapse), ms.
+    pub build_ms: f64,
     /// Build time of the default structure on all `build_threads` threads (the binary build's
-    /// subtrees in parallel, [`build_binary_parallel`]; the collapse on one), ms. The
-    /// top-level `build_ms` is one thread, the figure compared with Embree's.
+    /// subtrees in parallel, [`build_binary_parallel`]; the collapse on one), ms.
     pub build_ms_threads: f64,
     /// Threads of `build_ms_threads`.
     pub build_threads: usize,
-    /// Leaf slots.
+    /// Nodes of the default structure.
+    pub nodes: usize,
+    /// Leaf slots of the default structure.
     pub leaves: usize,
-    /// Depth of the deepest leaf of the binary tree it was collapsed from.
+    /// Bytes the default structure adds per triangle (nodes + copied triangles).
+    pub bytes_per_triangle: f64,
+    /// Depth of the deepest leaf of the binary tree.
     pub max_depth: usize,
     /// SAH cost of the binary tree, relative to the root area.
     pub sah_cost: f64,
-    /// Primary rays per set.
-    pub primary_rays: usize,
-    /// Incoherent rays per set.
-    pub incoherent_rays: usize,
-    /// Share of primary rays that hit.
-    pub hit_rate_primary: f64,
-    /// Share of incoherent rays that hit.
-    pub hit_rate_incoherent: f64,
+    /// The binary tree (`--leaf-size`): one-thread build time, ms.
+    pub binary_build_ms: f64,
+    /// The binary tree's bytes per triangle (nodes + indices).
+    pub binary_bytes_per_triangle: f64,
+    /// Embree 4 build time, default mode, one thread, ms.
+    pub embree_build_ms: Option<f64>,
+    /// Embree 4 build time, robust mode, one thread, ms.
+    pub embree_robust_build_ms: Option<f64>,
+    /// Every ray set's figures, in the order asked.
+    pub sets: Vec<SetFigures>,
     /// Brute-force sample size (incoherent rays).
     pub brute_force_rays: usize,
     /// Brute-force closest hit, Mrays/s.
     pub mrays_brute_force: f64,
-    /// `mrays_closest_incoherent / mrays_brute_force`.
-    pub speedup_over_brute_force: f64,
     /// Sample rays where the wide BVH, the binary BVH and brute force do not all agree (must
     /// be 0).
     pub brute_force_mismatches: usize,
-    /// The binary BVH on the same rays.
-    pub binary: StructureReport,
-    /// Embree 4 build time (default mode, one thread), ms.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub embree_build_ms: Option<f64>,
-    /// Embree 4 default mode, closest hit, primary rays, Mrays/s.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub embree_mrays_closest_primary: Option<f64>,
-    /// Embree 4 default mode, closest hit, incoherent rays, Mrays/s.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub embree_mrays_closest_incoherent: Option<f64>,
-    /// Embree 4 robust mode build time, ms.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub embree_robust_build_ms: Option<f64>,
-    /// Embree 4 robust mode, closest hit, primary rays, Mrays/s.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub embree_robust_mrays_closest_primary: Option<f64>,
-    /// Embree 4 robust mode, closest hit, incoherent rays, Mrays/s.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub embree_robust_mrays_closest_incoherent: Option<f64>,
 }
 
-/// One structure's figures.
-#[derive(Debug, Clone, Default, serde::Serialize)]
-pub struct StructureReport {
-    /// Build time, ms.
-    pub build_ms: f64,
-    /// Nodes in use.
-    pub nodes: usize,
-    /// Bytes the structure adds per triangle.
-    pub bytes_per_triangle: f64,
-    /// Closest hit, primary rays, Mrays/s.
-    pub mrays_closest_primary: f64,
-    /// Any hit, primary rays, Mrays/s.
-    pub mrays_any_primary: f64,
-    /// Closest hit, incoherent rays, Mrays/s.
-    pub mrays_closest_incoherent: f64,
-    /// Any hit, incoherent rays, Mrays/s.
-    pub mrays_any_incoherent: f64,
-    /// Mean nodes visited per primary closest-hit ray.
-    pub nodes_per_ray_primary: f64,
-    /// Mean triangle tests per primary closest-hit ray.
-    pub triangles_per_ray_primary: f64,
-    /// Mean nodes visited per incoherent closest-hit ray.
-    pub nodes_per_ray_incoherent: f64,
-    /// Mean triangle tests per incoherent closest-hit ray.
-    pub triangles_per_ray_incoherent: f64,
+/// One ray set's figures on one mesh.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct SetFigures {
+    /// Set name ([`RaySet::name`]).
+    pub name: String,
+    /// `closest` or `any`: the query timed on both sides.
+    pub query: String,
+    /// Rays in the set.
+    pub rays: usize,
+    /// Share of the rays that hit.
+    pub hit_rate: f64,
+    /// halfray's default structure, Mrays/s.
+    pub mrays: f64,
+    /// Mean nodes visited per ray (closest-hit query).
+    pub nodes_per_ray: f64,
+    /// Mean triangle tests per ray (closest-hit query).
+    pub triangles_per_ray: f64,
+    /// Embree 4 default mode, Mrays/s.
+    pub embree_mrays: Option<f64>,
+    /// Embree 4 robust mode, Mrays/s.
+    pub embree_robust_mrays: Option<f64>,
+}
+
+impl SetFigures {
+    /// halfray's throughput over Embree default's and over Embree robust's (`None` without
+    /// Embree).
+    #[must_use]
+    pub fn ratios(&self) -> Option<[f64; 2]> {
+        Some([
+            self.mrays / self.embree_mrays?,
+            self.mrays / self.embree_robust_mrays?,
+        ])
+    }
+}
+
+/// The meshes of a run: the arguments, then the list's.
+fn mesh_paths(args: &BvhArgs) -> Result<Vec<PathBuf>> {
+    let mut meshes = args.meshes.clone();
+    if let Some(list) = &args.mesh_list {
+        meshes.extend(crate::crosscheck::corpus::read_mesh_list(list)?);
+    }
+    if meshes.is_empty() {
+        return Err(Error::Usage("no meshes to benchmark".into()));
+    }
+    Ok(meshes)
 }
 
 /// Runs the BVH benchmark.
 pub fn run(args: &BvhArgs) -> Result<()> {
     let variant = args.intersector.0;
-    // The two ray sets are held in memory: estimated, and every mesh opened, before any work.
-    args.run.check_inputs(&args.meshes)?;
-    let mut reports = Vec::with_capacity(args.meshes.len());
-    for mesh in &args.meshes {
-        struct Bench<'a>(&'a BvhArgs, &'a std::path::Path);
+    let meshes = mesh_paths(args)?;
+    let sets = if args.sets.is_empty() {
+        RaySet::ALL.to_vec()
+    } else {
+        args.sets.clone()
+    };
+    // One set is held in memory at a time: estimated, and every mesh opened, before any work.
+    args.run.check_inputs(&meshes)?;
+    let mut reports = Vec::with_capacity(meshes.len());
+    for mesh in &meshes {
+        struct Bench<'a>(&'a BvhArgs, &'a Path, &'a [RaySet]);
         impl VariantVisitor for Bench<'_> {
             type Output = Result<BvhReport>;
             fn visit<I: TriangleIntersector>(self, isect: &I) -> Result<BvhReport> {
-                bench(self.0, self.1, isect)
+                bench(self.0, self.1, self.2, isect)
             }
         }
-        let report = variant.visit(Bench(args, mesh))?;
+        let report = variant.visit(Bench(args, mesh, &sets))?;
+        eprintln!("bench bvh: {} done", mesh.display());
         reports.push(report);
     }
     super::write_json_reports(args.run.json.as_deref(), &reports)?;
     for r in &reports {
         print_report(r);
     }
-    print_summary(&reports);
+    print!("\n{}", summary::markdown(&reports));
     Ok(())
 }
 
-/// The ratios of the run as one Markdown table (the README's performance table): halfray's
-/// default structure against Embree robust and default, per mesh, from this run's figures.
-fn print_summary(reports: &[BvhReport]) {
-    let ratio = |a: f64, b: Option<f64>| b.map_or("-".to_string(), |b| format!("{:.2}", a / b));
-    let fig = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.2}"));
-    println!();
-    println!(
-        "| mesh | triangles | closest primary, Mrays/s: halfray / Embree robust / default | ratio robust | ratio default | closest incoherent: halfray / robust / default | ratio robust | ratio default | build ms: halfray / Embree | build ratio | B/tri |"
-    );
-    println!("|---|---:|---|---:|---:|---|---:|---:|---|---:|---:|");
-    for r in reports {
-        let name = std::path::Path::new(&r.mesh)
-            .file_name()
-            .map_or(r.mesh.clone(), |n| n.to_string_lossy().into_owned());
-        let b = &r.bvh8;
-        println!(
-            "| {name} | {} | {:.2} / {} / {} | {} | {} | {:.2} / {} / {} | {} | {} | {:.0} / {} | {} | {:.1} |",
-            r.triangles,
-            b.mrays_closest_primary,
-            fig(r.embree_robust_mrays_closest_primary),
-            fig(r.embree_mrays_closest_primary),
-            ratio(
-                b.mrays_closest_primary,
-                r.embree_robust_mrays_closest_primary
-            ),
-            ratio(b.mrays_closest_primary, r.embree_mrays_closest_primary),
-            b.mrays_closest_incoherent,
-            fig(r.embree_robust_mrays_closest_incoherent),
-            fig(r.embree_mrays_closest_incoherent),
-            ratio(
-                b.mrays_closest_incoherent,
-                r.embree_robust_mrays_closest_incoherent
-            ),
-            ratio(
-                b.mrays_closest_incoherent,
-                r.embree_mrays_closest_incoherent
-            ),
-            b.build_ms,
-            r.embree_build_ms
-                .map_or("-".to_string(), |x| format!("{x:.0}")),
-            ratio(b.build_ms, r.embree_build_ms),
-            b.bytes_per_triangle,
-        );
-    }
-}
-
-/// Closest/any-hit throughput and per-ray counts of one structure on both ray sets.
-fn measure(
-    primary: &[Ray],
-    incoherent: &[Ray],
-    closest: impl Fn(&Ray, Option<&mut TraversalStats>) -> bool,
-    any: impl Fn(&Ray) -> bool,
-    rep: &mut StructureReport,
-) -> Result<(usize, usize)> {
-    let (c_p, hits_p) = throughput(primary, |r| closest(r, None));
-    let (a_p, any_p) = throughput(primary, &any);
-    let (c_i, hits_i) = throughput(incoherent, |r| closest(r, None));
-    let (a_i, any_i) = throughput(incoherent, &any);
-    if hits_p != any_p || hits_i != any_i {
-        return Err(Error::internal(
-            format!(
-                "any-hit disagrees with closest-hit on hit/miss: primary {hits_p} vs {any_p}, incoherent {hits_i} vs {any_i}"
-            ),
-            None,
-        ));
-    }
-    let per_ray = |rays: &[Ray]| {
-        let mut st = TraversalStats::default();
-        for r in rays {
-            closest(r, Some(&mut st));
-        }
-        let k = rays.len().max(1) as f64;
-        (st.nodes_visited as f64 / k, st.primitives_tested as f64 / k)
+/// The rays of `set` for `args` over the box `[lo, hi]`: `width²` camera rays (and a shadow or
+/// AO ray per camera hit), `--rays` random ones.
+fn set_rays(
+    args: &BvhArgs,
+    set: RaySet,
+    (lo, hi): (Vec3, Vec3),
+    hits: &dyn Fn(&Ray) -> Option<halfray_core::Hit>,
+) -> Vec<Ray> {
+    let count = match set {
+        RaySet::Random => args.run.rays,
+        _ => args.run.width * args.run.width,
     };
-    (rep.nodes_per_ray_primary, rep.triangles_per_ray_primary) = per_ray(primary);
-    (
-        rep.nodes_per_ray_incoherent,
-        rep.triangles_per_ray_incoherent,
-    ) = per_ray(incoherent);
-    (
-        rep.mrays_closest_primary,
-        rep.mrays_any_primary,
-        rep.mrays_closest_incoherent,
-        rep.mrays_any_incoherent,
-    ) = (c_p, a_p, c_i, a_i);
-    Ok((hits_p, hits_i))
+    set.generate(lo, hi, count, INCOHERENT_SEED, hits)
 }
 
 fn bench<T: TriangleIntersector>(
     args: &BvhArgs,
-    mesh_path: &std::path::Path,
+    mesh_path: &Path,
+    sets: &[RaySet],
     isect: &T,
 ) -> Result<BvhReport> {
     let obj = read_obj(mesh_path)?;
@@ -313,40 +261,57 @@ fn bench<T: TriangleIntersector>(
     }
     let stats = bvh.stats();
     let wstats = wide.stats();
+    let bounds = obj.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
+    let hits = watertight_hits(&wide, &obj);
 
-    let (primary, incoherent) = args.run.ray_sets(&obj);
-
-    let mut binary = StructureReport {
-        build_ms: binary_s * 1e3,
-        nodes: stats.nodes,
-        bytes_per_triangle: stats.bytes_per_primitive,
-        ..StructureReport::default()
-    };
-    measure(
-        &primary,
-        &incoherent,
-        |r, st| bvh.closest_hit_triangles(&mesh, isect, r, st).is_some(),
-        |r| bvh.any_hit_triangles(&mesh, isect, r, None).is_some(),
-        &mut binary,
-    )?;
-    let mut top = StructureReport {
-        build_ms: wide_s * 1e3,
-        nodes: wstats.nodes,
-        bytes_per_triangle: wstats.bytes_per_triangle,
-        ..StructureReport::default()
-    };
-    let (hits_p, hits_i) = measure(
-        &primary,
-        &incoherent,
-        |r, st| closest_simd(&wide, isect, r, st).is_some(),
-        |r| any_simd(&wide, isect, r).is_some(),
-        &mut top,
-    )?;
+    let closest = |r: &Ray| closest_simd(&wide, isect, r, None).is_some();
+    let any = |r: &Ray| any_simd(&wide, isect, r).is_some();
+    let mut figures = Vec::with_capacity(sets.len());
+    for &set in sets {
+        let rays = set_rays(args, set, bounds, &hits);
+        let query = set.query();
+        // Hit counts of both queries (they must agree) and the closest-hit query's work.
+        let mut st = TraversalStats::default();
+        let hit_count = rays
+            .iter()
+            .filter(|r| closest_simd(&wide, isect, r, Some(&mut st)).is_some())
+            .count();
+        let any_count = rays.iter().filter(|r| any(r)).count();
+        if hit_count != any_count {
+            return Err(Error::internal(
+                format!(
+                    "{}: any-hit disagrees with closest-hit on hit/miss in set {set}: {hit_count} vs {any_count}",
+                    mesh_path.display()
+                ),
+                None,
+            ));
+        }
+        let ours: &dyn Fn(&Ray) -> bool = match query {
+            Query::Closest => &closest,
+            Query::Any => &any,
+        };
+        let theirs: Vec<HitQuery<'_>> = rivals.as_ref().map_or_else(Vec::new, |r| r.queries(query));
+        let mut sides: Vec<&dyn Fn(&Ray) -> bool> = vec![ours];
+        sides.extend(theirs.iter().map(|f| f.as_ref()));
+        let mrays = interleaved(&rays, &sides);
+        let k = rays.len().max(1) as f64;
+        figures.push(SetFigures {
+            name: set.name().into(),
+            query: query.name().into(),
+            rays: rays.len(),
+            hit_rate: hit_count as f64 / k,
+            mrays: mrays[0],
+            nodes_per_ray: st.nodes_visited as f64 / k,
+            triangles_per_ray: st.primitives_tested as f64 / k,
+            embree_mrays: mrays.get(1).copied(),
+            embree_robust_mrays: mrays.get(2).copied(),
+        });
+    }
 
     let sample_len = (BRUTE_FORCE_TESTS / n.max(1))
         .clamp(16, 20_000)
-        .min(incoherent.len());
-    let sample = &incoherent[..sample_len];
+        .min(args.run.rays);
+    let sample = random_rays(bounds.0, bounds.1, sample_len, INCOHERENT_SEED);
     let t0 = Instant::now();
     let brute: Vec<Option<(u32, f32)>> = sample
         .iter()
@@ -364,75 +329,30 @@ fn bench<T: TriangleIntersector>(
             w != **b || bin != **b
         })
         .count();
-    let mrays_brute = sample_len as f64 / brute_s.max(1e-9) / 1e6;
-    // The closest-hit figures compared with Embree, round-robin with Embree's two modes.
-    let embree = match &rivals {
-        Some(r) => {
-            let ours = |ray: &Ray| closest_simd(&wide, isect, ray, None).is_some();
-            let mut closest: Vec<&dyn Fn(&Ray) -> bool> = vec![&ours];
-            let theirs = r.closest();
-            closest.extend(theirs.iter().map(|f| f.as_ref()));
-            let p = interleaved(&primary, &closest);
-            let i = interleaved(&incoherent, &closest);
-            (top.mrays_closest_primary, top.mrays_closest_incoherent) = (p[0], i[0]);
-            Some(EmbreeFigures {
-                build_ms: r.build_ms(),
-                primary: [p[1], p[2]],
-                incoherent: [i[1], i[2]],
-            })
-        }
-        None => None,
-    };
-
-    let speedup = top.mrays_closest_incoherent / mrays_brute.max(1e-12);
+    let embree_build = rivals.as_ref().map(|r| r.build_ms());
     Ok(BvhReport {
         mesh: mesh_path.display().to_string(),
         intersector: isect.name().to_string(),
         structure: "bvh8".into(),
         simd: crate::simd::level_name().into(),
         triangles: n,
-        bvh8: top,
+        build_ms: wide_s * 1e3,
         build_ms_threads: threads_s * 1e3,
         build_threads: rayon::current_num_threads(),
+        nodes: wstats.nodes,
         leaves: wstats.leaves,
+        bytes_per_triangle: wstats.bytes_per_triangle,
         max_depth: stats.max_depth,
         sah_cost: stats.sah_cost,
-        primary_rays: primary.len(),
-        incoherent_rays: incoherent.len(),
-        hit_rate_primary: hits_p as f64 / primary.len().max(1) as f64,
-        hit_rate_incoherent: hits_i as f64 / incoherent.len().max(1) as f64,
+        binary_build_ms: binary_s * 1e3,
+        binary_bytes_per_triangle: stats.bytes_per_primitive,
+        embree_build_ms: embree_build.map(|b| b[0]),
+        embree_robust_build_ms: embree_build.map(|b| b[1]),
+        sets: figures,
         brute_force_rays: sample_len,
-        mrays_brute_force: mrays_brute,
-        speedup_over_brute_force: speedup,
+        mrays_brute_force: sample_len as f64 / brute_s.max(1e-9) / 1e6,
         brute_force_mismatches: mismatches,
-        binary,
-        embree_build_ms: embree.map(|e| e.build_ms[0]),
-        embree_mrays_closest_primary: embree.map(|e| e.primary[0]),
-        embree_mrays_closest_incoherent: embree.map(|e| e.incoherent[0]),
-        embree_robust_build_ms: embree.map(|e| e.build_ms[1]),
-        embree_robust_mrays_closest_primary: embree.map(|e| e.primary[1]),
-        embree_robust_mrays_closest_incoherent: embree.map(|e| e.incoherent[1]),
     })
-}
-
-/// Embree's build times and closest-hit throughputs, `[default, robust]`.
-#[derive(Clone, Copy)]
-struct EmbreeFigures {
-    build_ms: [f64; 2],
-    primary: [f64; 2],
-    incoherent: [f64; 2],
-}
-
-/// Best-of-[`TIMED_PASSES`] throughput of `f` over `rays` in Mrays/s, and the hit count.
-fn throughput(rays: &[Ray], f: impl Fn(&Ray) -> bool) -> (f64, usize) {
-    let mut best = f64::INFINITY;
-    let mut hits = 0;
-    for _ in 0..TIMED_PASSES {
-        let t0 = Instant::now();
-        hits = rays.iter().filter(|r| f(std::hint::black_box(r))).count();
-        best = best.min(t0.elapsed().as_secs_f64());
-    }
-    (rays.len() as f64 / best.max(1e-9) / 1e6, hits)
 }
 
 /// Closest hit over every triangle, ties to the smaller index (the BVH's rule).
@@ -457,73 +377,57 @@ pub(super) fn brute_force<T: TriangleIntersector>(
 }
 
 fn print_report(r: &BvhReport) {
+    let opt = |x: Option<f64>, p: usize| x.map_or("-".to_string(), |x| format!("{x:.p$}"));
     println!(
         "bench bvh: {} ({} triangles, {}, {} on {})",
         r.mesh, r.triangles, r.intersector, r.structure, r.simd
     );
     println!(
-        "  {:<22} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
-        "1 thread", "build ms", "B/tri", "closest", "any", "closest", "any"
+        "  build, 1 thread: bvh8 {:.1} ms ({:.1} ms on {} threads, the same tree), {:.1} B/tri; binary {:.1} ms, {:.1} B/tri; Embree default {} ms, robust {} ms",
+        r.build_ms,
+        r.build_ms_threads,
+        r.build_threads,
+        r.bytes_per_triangle,
+        r.binary_build_ms,
+        r.binary_bytes_per_triangle,
+        opt(r.embree_build_ms, 1),
+        opt(r.embree_robust_build_ms, 1),
     );
     println!(
-        "  {:<22} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
-        "", "", "", "primary", "primary", "incoh.", "incoh."
+        "  {:<15} {:<7} {:>8} {:>6} {:>8} {:>8} {:>8} {:>7} {:>7} {:>6} {:>6}",
+        "set",
+        "query",
+        "rays",
+        "hit %",
+        "halfray",
+        "E. def",
+        "E. rob",
+        "/def",
+        "/rob",
+        "nodes",
+        "tris"
     );
-    let row = |name: &str, s: &StructureReport| {
+    for s in &r.sets {
+        let [d, rb] = s.ratios().map_or([None; 2], |[d, rb]| [Some(d), Some(rb)]);
         println!(
-            "  {:<22} {:>9.1} {:>9.1} {:>9.2} {:>9.2} {:>9.2} {:>9.2}",
-            name,
-            s.build_ms,
-            s.bytes_per_triangle,
-            s.mrays_closest_primary,
-            s.mrays_any_primary,
-            s.mrays_closest_incoherent,
-            s.mrays_any_incoherent
+            "  {:<15} {:<7} {:>8} {:>6.1} {:>8.2} {:>8} {:>8} {:>7} {:>7} {:>6.1} {:>6.1}",
+            s.name,
+            s.query,
+            s.rays,
+            100.0 * s.hit_rate,
+            s.mrays,
+            opt(s.embree_mrays, 2),
+            opt(s.embree_robust_mrays, 2),
+            opt(d, 2),
+            opt(rb, 2),
+            s.nodes_per_ray,
+            s.triangles_per_ray,
         );
-    };
-    row("halfray bvh8", &r.bvh8);
-    row("halfray binary", &r.binary);
-    for (name, b, p, i) in [
-        (
-            "embree default",
-            r.embree_build_ms,
-            r.embree_mrays_closest_primary,
-            r.embree_mrays_closest_incoherent,
-        ),
-        (
-            "embree robust",
-            r.embree_robust_build_ms,
-            r.embree_robust_mrays_closest_primary,
-            r.embree_robust_mrays_closest_incoherent,
-        ),
-    ] {
-        if let (Some(b), Some(p), Some(i)) = (b, p, i) {
-            println!(
-                "  {:<22} {:>9.1} {:>9} {:>9.2} {:>9} {:>9.2} {:>9}",
-                name, b, "88", p, "-", i, "-"
-            );
-        }
     }
     println!(
-        "  bvh8 build on {} threads: {:.1} ms (the same tree)",
-        r.build_threads, r.build_ms_threads
-    );
-    println!(
-        "  rays: {} primary ({:.1}% hit), {} incoherent ({:.1}% hit); bvh8 nodes/ray {:.1} / {:.1}, tris/ray {:.1} / {:.1}",
-        r.primary_rays,
-        100.0 * r.hit_rate_primary,
-        r.incoherent_rays,
-        100.0 * r.hit_rate_incoherent,
-        r.bvh8.nodes_per_ray_primary,
-        r.bvh8.nodes_per_ray_incoherent,
-        r.bvh8.triangles_per_ray_primary,
-        r.bvh8.triangles_per_ray_incoherent
-    );
-    println!(
-        "  brute force      {:9.1} rays/s on {} incoherent rays: BVH is {:.0}x faster; mismatches {}",
+        "  brute force {:.1} rays/s on {} incoherent rays; mismatches {}",
         r.mrays_brute_force * 1e6,
         r.brute_force_rays,
-        r.speedup_over_brute_force,
         r.brute_force_mismatches
     );
 }

@@ -8,11 +8,12 @@ use super::report::{DetailKind, Disagreement, MeshResult, Report, RunConfig, Set
 use super::sets::{self, Adjacency, SET_NAMES, SetRay};
 use super::{CrosscheckArgs, finish};
 use crate::accel::MeshAccel;
-use crate::bench::bvh::TIMED_PASSES;
 use crate::embree::{EmbreeDevice, EmbreeScene, ray_is_valid};
 use crate::error::{Error, Result};
 use crate::obj::read_obj;
 use crate::outputs::{Named, OutputFile, file_id, reserve_outputs};
+use crate::raysets::named::watertight_hits;
+use crate::timing::TIMED_PASSES;
 use halfray_core::Ray;
 use halfray_core::triangle::TriangleVariant;
 use rayon::prelude::*;
@@ -189,9 +190,11 @@ fn check_mesh(
         variant: args.intersector.0,
     };
     let seed = sets::mesh_seed(config.seed, &name);
+    let hits = watertight_hits(accel.bvh(), &accel.mesh);
     let mut rows = Vec::with_capacity(config.ray_sets.len());
     for set in &config.ray_sets {
-        let rays = sets::generate(set, &accel.mesh, &adj, config.rays, seed).unwrap_or_default();
+        let rays =
+            sets::generate(set, &accel.mesh, &adj, config.rays, seed, &hits).unwrap_or_default();
         let rays: Vec<(usize, SetRay)> = config
             .shard
             .select(rays)

@@ -2,8 +2,7 @@
 //!
 //! | set | rays |
 //! |---|---|
-//! | `primary` | [`Camera::framing`] the mesh's bounding box, pixel centres `(i+½, j+½)` |
-//! | `random` | [`random_rays`]: incoherent, origins on a sphere twice the bounding sphere, aimed at random points in the box |
+//! | `primary`, `primary-tiles`, `primary-stride`, `random`, `shadow`, `ao` | the sets `bench bvh` times, [`RaySet`] (camera rays in scanline order, in 8×8 tiles, with a stride; incoherent rays; shadow and ambient-occlusion rays from the camera's hit points) |
 //! | `edges` | aimed at the midpoint of a random shared (two-face) edge, from a random outside origin |
 //! | `vertices` | aimed exactly at a random vertex with a closed fan, from a random outside origin |
 //! | `grazing` | nearly parallel to a random face (0.06°–0.6° off its plane), through an interior point |
@@ -14,15 +13,24 @@
 
 use crate::obj::ObjMesh;
 pub use crate::raysets::Rng;
-use crate::raysets::{Camera, random_rays};
+use crate::raysets::named::RaySet;
 use glam::{DVec2, DVec3, Vec3};
-use halfray_core::Ray;
 use halfray_core::triangle::TriangleHit;
+use halfray_core::{Hit, Ray};
 use std::collections::HashMap;
 
-/// The names of every set, in report order.
-pub const SET_NAMES: [&str; 6] = [
-    "primary", "random", "edges", "vertices", "grazing", "surface",
+/// The names of every set, in report order: [`RaySet::ALL`]'s, then the aimed sets.
+pub const SET_NAMES: [&str; 10] = [
+    "primary",
+    "primary-tiles",
+    "primary-stride",
+    "random",
+    "shadow",
+    "ao",
+    "edges",
+    "vertices",
+    "grazing",
+    "surface",
 ];
 
 /// Smallest angle between a grazing ray and its face's plane, radians.
@@ -120,35 +128,28 @@ fn random_origin(rng: &mut Rng, center: DVec3, radius: f64) -> Vec3 {
 }
 
 /// Generates `count` rays of the named set (fewer if the mesh has no suitable feature, e.g. no
-/// shared edges). Unknown names give `None`.
+/// shared edges; `shadow` and `ao` have one per camera ray that hits, found with `hits`).
+/// Unknown names give `None`.
 pub fn generate(
     name: &str,
     mesh: &ObjMesh,
     adj: &Adjacency,
     count: usize,
     seed: u64,
+    hits: &dyn Fn(&Ray) -> Option<Hit>,
 ) -> Option<Vec<SetRay>> {
     let mut rng = Rng::new(seed ^ fxhash(name));
     let (center, radius) = bounds(mesh);
-    let plain = |ray| SetRay { ray, target: None };
+    if let Some(set) = RaySet::from_name(name) {
+        let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
+        let rays = set.generate(lo, hi, count, seed ^ fxhash(name), hits);
+        return Some(
+            rays.into_iter()
+                .map(|ray| SetRay { ray, target: None })
+                .collect(),
+        );
+    }
     let rays = match name {
-        "primary" => {
-            let side = (count as f64).sqrt().ceil().max(1.0) as usize;
-            let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
-            Camera::framing(lo, hi, side, side)
-                .rays()
-                .into_iter()
-                .take(count)
-                .map(plain)
-                .collect()
-        }
-        "random" => {
-            let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
-            random_rays(lo, hi, count, seed ^ fxhash(name))
-                .into_iter()
-                .map(plain)
-                .collect()
-        }
         "edges" if !adj.shared_edges.is_empty() => (0..count)
             .map(|_| {
                 let (a, b, faces) = adj.shared_edges[rng.below(adj.shared_edges.len())];

@@ -6,6 +6,7 @@
 //! | `mesh subdivide IN.obj -o OUT.obj --levels N [--weights warren\|loop]` | Loop subdivision ([`edit::subdivide`]) |
 //! | `mesh smooth IN.obj -o OUT.obj --step K --iterations N [--fix-boundary]` | uniform Laplacian diffusion ([`edit::smooth`]) |
 //! | `mesh collapse IN.obj -o OUT.obj --shorter-than L` | short-edge collapse ([`edit::collapse`]) |
+//! | `mesh generate KIND --seed N -o OUT.obj [--size N]` | a generated mesh of the benchmark corpus ([`generate`](mod@generate)) |
 //!
 //! Input goes through the strict, order-preserving reader [`crate::obj::read_obj`] (vertex `i`
 //! of the file is vertex `i` of the mesh; unreferenced vertices are kept as isolated vertices)
@@ -18,6 +19,7 @@
 
 pub mod check;
 pub mod edit;
+pub mod generate;
 
 use crate::console::print_out;
 use crate::error::{Error, Location, Result};
@@ -45,6 +47,9 @@ pub enum MeshCommand {
     Smooth(SmoothArgs),
     /// Collapse edges shorter than a length (into their midpoints) until none can be collapsed.
     Collapse(CollapseArgs),
+    /// Generate a mesh of the benchmark corpus from a seed (displaced sphere, terrain, beams,
+    /// room, scatter).
+    Generate(generate::GenerateArgs),
 }
 
 /// `halfray mesh check`.
@@ -145,6 +150,7 @@ pub fn run(cmd: &MeshCommand) -> Result<()> {
         MeshCommand::Subdivide(args) => print_out(&edit::subdivide(args)?.to_string()),
         MeshCommand::Smooth(args) => print_out(&edit::smooth(args)?.to_string()),
         MeshCommand::Collapse(args) => print_out(&edit::collapse(args)?.to_string()),
+        MeshCommand::Generate(args) => generate::run(args),
     }
 }
 

@@ -1,7 +1,6 @@
 //! `halfray bench accuracy`: what accuracy costs in time, every variant measured on the same
 //! rays in the same run.
 
-pub mod chart;
 pub mod choices;
 #[cfg(feature = "embree")]
 pub mod embree_rows;
@@ -35,7 +34,8 @@ pub struct AccuracyArgs {
     /// Write the results as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
-    /// Write a cost-against-error chart (PNG).
+    /// Write the cost-against-error chart (`.svg` or `.png`; `halfray chart accuracy` draws it
+    /// from the JSON later).
     #[arg(long)]
     pub chart: Option<PathBuf>,
     /// Random seed.
@@ -234,11 +234,18 @@ fn ray_set(
     let (_, mesh) = entry?;
     let adj = crate::crosscheck::sets::Adjacency::new(mesh);
     let set = if primary { "primary" } else { "random" };
-    let rays = crate::crosscheck::sets::generate(set, mesh, &adj, count, seed)
-        .unwrap_or_default()
-        .into_iter()
-        .map(|r| r.ray)
-        .collect();
+    let rays = crate::crosscheck::sets::generate(
+        set,
+        mesh,
+        &adj,
+        count,
+        seed,
+        &crate::raysets::named::no_hits,
+    )
+    .unwrap_or_default()
+    .into_iter()
+    .map(|r| r.ray)
+    .collect();
     Some((mesh, rays))
 }
 
@@ -311,6 +318,7 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         outputs.push(Named::new("--json", p));
     }
     if let Some(p) = &args.chart {
+        crate::charts::Format::of(p)?;
         outputs.push(Named::new("--chart", p));
     }
     let inputs: Vec<Named<'_>> = args.meshes.iter().map(|p| Named::new("mesh", p)).collect();
@@ -326,24 +334,9 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         let out = reserved.next().expect("--chart is reserved after --json");
         // Cost as ns per incoherent ray through each side's BVH (bunny), so that Embree, which
         // has no per-triangle entry point, sits on the same axis.
-        let points: Vec<chart::Point> = report
-            .variants
-            .iter()
-            .filter_map(|v| {
-                let mrays = v.mrays_bvh_incoherent.filter(|m| *m > 0.0)?;
-                Some(chart::Point {
-                    label: v.name.clone(),
-                    x: 1.0e3 / mrays,
-                    y: v.leaks_per_million + v.false_hits_per_million,
-                })
-            })
-            .collect();
-        chart::write_chart(
+        crate::charts::write(
+            &crate::charts::accuracy::AccuracyChart::from_report(&report)?,
             out,
-            "ray-triangle variants: cost against error",
-            "ns per incoherent BVH ray, bunny",
-            "leaks + false hits per million rays",
-            &points,
         )?;
     }
     print_out(&markdown(&report))

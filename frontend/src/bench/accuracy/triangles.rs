@@ -3,6 +3,7 @@
 use crate::crosscheck::judge::{near_boundary, ray_space_barycentrics};
 use crate::crosscheck::sets::{self, Adjacency, Rng};
 use crate::obj::ObjMesh;
+use crate::raysets::named::no_hits;
 use glam::{DVec3, Vec3};
 use halfray_core::Ray;
 use halfray_core::triangle::{F64Reference, TriangleIntersector, TriangleVariant, VariantVisitor};
@@ -112,7 +113,9 @@ impl Workload {
         for (i, m) in leak_meshes.iter().enumerate() {
             let adj = Adjacency::new(m);
             for set in ["edges", "vertices"] {
-                for r in sets::generate(set, m, &adj, per, seed + i as u64).unwrap_or_default() {
+                for r in
+                    sets::generate(set, m, &adj, per, seed + i as u64, &no_hits).unwrap_or_default()
+                {
                     if let Some(t) = r.target {
                         let tris = t.incident.iter().map(|&f| m.triangle(f as usize)).collect();
                         leak_rays.push((r.ray, tris));

@@ -1,33 +1,15 @@
-//! Embree as the rival of `bench bvh`, and the round-robin timing that compares them fairly on a
-//! shared machine.
+//! Embree as the rival of `bench bvh`: its default and robust scenes over the same mesh, built
+//! pass by pass beside halfray's tree and queried with `rtcIntersect1` (closest hit) or
+//! `rtcOccluded1` (any hit) on the same rays.
 
-use super::TIMED_PASSES;
 use crate::error::Result;
+use crate::raysets::named::Query;
 use halfray_core::Ray;
-use std::time::Instant;
 
 /// A hit-or-miss query on a ray.
-type HitQuery<'a> = Box<dyn Fn(&Ray) -> bool + 'a>;
+pub(super) type HitQuery<'a> = Box<dyn Fn(&Ray) -> bool + 'a>;
 
-/// Best-of-[`TIMED_PASSES`] throughputs (Mrays/s) of each of `fs` over `rays`, the passes taken
-/// round-robin (pass 1 of every function, then pass 2, …).
-pub(in crate::bench) fn interleaved(rays: &[Ray], fs: &[&dyn Fn(&Ray) -> bool]) -> Vec<f64> {
-    let mut best = vec![f64::INFINITY; fs.len()];
-    for _ in 0..TIMED_PASSES {
-        for (f, b) in fs.iter().zip(best.iter_mut()) {
-            let t0 = Instant::now();
-            let hits = rays.iter().filter(|r| f(std::hint::black_box(r))).count();
-            std::hint::black_box(hits);
-            *b = b.min(t0.elapsed().as_secs_f64());
-        }
-    }
-    best.iter()
-        .map(|s| rays.len() as f64 / s.max(1e-9) / 1e6)
-        .collect()
-}
-
-/// Embree in its default and robust modes over the same mesh, built pass by pass beside
-/// halfray's tree.
+/// Embree in its default and robust modes over the same mesh.
 #[cfg(feature = "embree")]
 pub(super) struct Rivals {
     device: crate::embree::EmbreeDevice,
@@ -54,7 +36,7 @@ impl Rivals {
     pub(super) fn build_pass(&mut self) -> Result<()> {
         self.scenes.clear();
         for (k, robust) in [false, true].into_iter().enumerate() {
-            let t0 = Instant::now();
+            let t0 = std::time::Instant::now();
             let s = crate::embree::EmbreeScene::new(
                 &self.device,
                 &self.positions,
@@ -67,16 +49,20 @@ impl Rivals {
         Ok(())
     }
 
+    /// Best single-thread build times, ms, `[default, robust]`.
     pub(super) fn build_ms(&self) -> [f64; 2] {
         self.build_ms
     }
 
-    /// Closest-hit queries of the two scenes (hit or miss), `[default, robust]`.
-    pub(super) fn closest(&self) -> Vec<HitQuery<'_>> {
+    /// The two scenes' queries of kind `query` (hit or miss), `[default, robust]`.
+    pub(super) fn queries(&self, query: Query) -> Vec<HitQuery<'_>> {
         self.scenes
             .iter()
-            .map(|s| {
-                Box::new(move |r: &Ray| s.intersect_ray(r).is_some()) as Box<dyn Fn(&Ray) -> bool>
+            .map(|s| match query {
+                Query::Closest => {
+                    Box::new(move |r: &Ray| s.intersect_ray(r).is_some()) as HitQuery<'_>
+                }
+                Query::Any => Box::new(move |r: &Ray| s.occluded_ray(r)) as HitQuery<'_>,
             })
             .collect()
     }
@@ -97,7 +83,7 @@ impl Rivals {
     pub(super) fn build_ms(&self) -> [f64; 2] {
         [f64::NAN; 2]
     }
-    pub(super) fn closest(&self) -> Vec<HitQuery<'_>> {
+    pub(super) fn queries(&self, _query: Query) -> Vec<HitQuery<'_>> {
         Vec::new()
     }
 }

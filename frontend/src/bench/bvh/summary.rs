@@ -1,0 +1,236 @@
+//! The closing table of `bench bvh`: per mesh and ray set, halfray's throughput over Embree
+//! robust's and default's; per set, the geometric mean over the meshes and the worst mesh; per
+//! mesh, the build times and bytes per triangle.
+
+use super::BvhReport;
+
+/// One ray set's ratios over the corpus, `[over Embree default, over Embree robust]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SetSummary {
+    /// Set name.
+    pub name: String,
+    /// Meshes with Embree figures for the set.
+    pub meshes: usize,
+    /// Geometric mean of the per-mesh ratios.
+    pub geomean: [f64; 2],
+    /// The smallest ratio and the file name of its mesh.
+    pub worst: [(f64, String); 2],
+}
+
+/// The file name of a report's mesh (its path when it has none).
+#[must_use]
+pub fn mesh_name(r: &BvhReport) -> String {
+    std::path::Path::new(&r.mesh)
+        .file_name()
+        .map_or(r.mesh.clone(), |n| n.to_string_lossy().into_owned())
+}
+
+/// The set names of `reports`, in order of first appearance.
+#[must_use]
+pub fn set_names(reports: &[BvhReport]) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    for s in reports.iter().flat_map(|r| &r.sets) {
+        if !names.contains(&s.name) {
+            names.push(s.name.clone());
+        }
+    }
+    names
+}
+
+/// Per set (in [`set_names`] order), the geometric mean and the worst of the ratios over the
+/// meshes that have Embree figures for it; sets without any are left out.
+#[must_use]
+pub fn summarize(reports: &[BvhReport]) -> Vec<SetSummary> {
+    set_names(reports)
+        .into_iter()
+        .filter_map(|name| {
+            let ratios: Vec<([f64; 2], String)> = reports
+                .iter()
+                .filter_map(|r| {
+                    let s = r.sets.iter().find(|s| s.name == name)?;
+                    Some((s.ratios()?, mesh_name(r)))
+                })
+                .collect();
+            if ratios.is_empty() {
+                return None;
+            }
+            let k = ratios.len() as f64;
+            let geomean =
+                [0, 1].map(|m| (ratios.iter().map(|(q, _)| q[m].ln()).sum::<f64>() / k).exp());
+            let worst = [0, 1].map(|m| {
+                ratios
+                    .iter()
+                    .map(|(q, mesh)| (q[m], mesh.clone()))
+                    .min_by(|a, b| a.0.total_cmp(&b.0))
+                    .unwrap_or((f64::NAN, String::new()))
+            });
+            Some(SetSummary {
+                name,
+                meshes: ratios.len(),
+                geomean,
+                worst,
+            })
+        })
+        .collect()
+}
+
+/// The closing Markdown: one row per mesh with, per set, `ratio over Embree robust / over
+/// Embree default` (halfray's Mrays/s where Embree did not run), the build times and bytes per
+/// triangle; then the geometric-mean and worst rows, and the worst meshes by name.
+#[must_use]
+pub fn markdown(reports: &[BvhReport]) -> String {
+    let names = set_names(reports);
+    let mut s = String::new();
+    s.push_str(
+        "halfray's single-thread throughput over Embree 4's on the same rays, per set: ×robust / ×default\n\n",
+    );
+    s.push_str("| mesh | triangles |");
+    for n in &names {
+        s.push_str(&format!(" {n} |"));
+    }
+    s.push_str(" build ms: halfray / Embree | build ×Embree | B/tri |\n|---|---:|");
+    s.push_str(&"---:|".repeat(names.len() + 3));
+    s.push('\n');
+    let mut build_ratios = Vec::new();
+    for r in reports {
+        s.push_str(&format!("| {} | {} |", mesh_name(r), r.triangles));
+        for n in &names {
+            let cell = match r.sets.iter().find(|x| &x.name == n) {
+                None => "".to_string(),
+                Some(x) => match x.ratios() {
+                    Some([d, rb]) => format!("{rb:.2} / {d:.2}"),
+                    None => format!("{:.2} Mrays/s", x.mrays),
+                },
+            };
+            s.push_str(&format!(" {cell} |"));
+        }
+        let (embree, ratio) = match r.embree_build_ms {
+            Some(e) => {
+                build_ratios.push(r.build_ms / e);
+                (format!("{e:.0}"), format!("{:.2}", r.build_ms / e))
+            }
+            None => ("-".into(), "-".into()),
+        };
+        s.push_str(&format!(
+            " {:.0} / {embree} | {ratio} | {:.1} |\n",
+            r.build_ms, r.bytes_per_triangle
+        ));
+    }
+    let summary = summarize(reports);
+    if !summary.is_empty() {
+        let cell = |f: &dyn Fn(&SetSummary) -> String, n: &String| {
+            summary
+                .iter()
+                .find(|x| &x.name == n)
+                .map_or(String::new(), f)
+        };
+        let geo_build = if build_ratios.is_empty() {
+            String::new()
+        } else {
+            let k = build_ratios.len() as f64;
+            format!(
+                "{:.2}",
+                (build_ratios.iter().map(|q| q.ln()).sum::<f64>() / k).exp()
+            )
+        };
+        let max_bytes = reports
+            .iter()
+            .map(|r| r.bytes_per_triangle)
+            .fold(0.0, f64::max);
+        s.push_str("| **geometric mean** | |");
+        for n in &names {
+            let c = cell(&|x| format!("{:.2} / {:.2}", x.geomean[1], x.geomean[0]), n);
+            s.push_str(&format!(" **{c}** |"));
+        }
+        s.push_str(&format!(" | {geo_build} | |\n| **worst** | |"));
+        for n in &names {
+            let c = cell(&|x| format!("{:.2} / {:.2}", x.worst[1].0, x.worst[0].0), n);
+            s.push_str(&format!(" {c} |"));
+        }
+        let worst_build = build_ratios.iter().copied().fold(f64::NAN, f64::max);
+        s.push_str(&format!(" | {worst_build:.2} | {max_bytes:.1} |\n\n"));
+        for x in &summary {
+            s.push_str(&format!(
+                "{}: {} meshes, geometric mean {:.2}× Embree robust, {:.2}× default; worst {:.2}× robust ({}), {:.2}× default ({})\n",
+                x.name, x.meshes, x.geomean[1], x.geomean[0], x.worst[1].0, x.worst[1].1, x.worst[0].0, x.worst[0].1
+            ));
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::SetFigures;
+    use super::*;
+
+    fn report(mesh: &str, sets: &[(&str, f64, f64, f64)]) -> BvhReport {
+        BvhReport {
+            mesh: format!("dir/{mesh}"),
+            intersector: "watertight".into(),
+            structure: "bvh8".into(),
+            simd: "portable".into(),
+            triangles: 10,
+            build_ms: 2.0,
+            build_ms_threads: 1.0,
+            build_threads: 2,
+            nodes: 1,
+            leaves: 1,
+            bytes_per_triangle: 50.0,
+            max_depth: 1,
+            sah_cost: 1.0,
+            binary_build_ms: 1.0,
+            binary_bytes_per_triangle: 40.0,
+            embree_build_ms: Some(4.0),
+            embree_robust_build_ms: Some(4.0),
+            sets: sets
+                .iter()
+                .map(|&(name, ours, def, rob)| SetFigures {
+                    name: name.into(),
+                    query: "closest".into(),
+                    rays: 1,
+                    hit_rate: 1.0,
+                    mrays: ours,
+                    nodes_per_ray: 1.0,
+                    triangles_per_ray: 1.0,
+                    embree_mrays: Some(def),
+                    embree_robust_mrays: Some(rob),
+                })
+                .collect(),
+            brute_force_rays: 0,
+            mrays_brute_force: 0.0,
+            brute_force_mismatches: 0,
+        }
+    }
+
+    #[test]
+    fn geometric_mean_and_worst_per_set() {
+        // Ratios over default: a 0.5 then 2.0 (mean 1.0); over robust: a 1.0 then 4.0 (mean 2.0).
+        let reports = [
+            report(
+                "a.obj",
+                &[("primary", 1.0, 2.0, 1.0), ("ao", 3.0, 3.0, 3.0)],
+            ),
+            report("b.obj", &[("primary", 4.0, 2.0, 1.0)]),
+        ];
+        let s = summarize(&reports);
+        assert_eq!(s.len(), 2);
+        assert_eq!(s[0].name, "primary");
+        assert_eq!(s[0].meshes, 2);
+        assert!((s[0].geomean[0] - 1.0).abs() < 1e-12, "{:?}", s[0]);
+        assert!((s[0].geomean[1] - 2.0).abs() < 1e-12, "{:?}", s[0]);
+        assert_eq!(s[0].worst[0], (0.5, "a.obj".to_string()));
+        assert_eq!(s[0].worst[1], (1.0, "a.obj".to_string()));
+        assert_eq!((s[1].name.as_str(), s[1].meshes), ("ao", 1));
+        let md = markdown(&reports);
+        assert!(
+            md.contains("| a.obj | 10 | 1.00 / 0.50 | 1.00 / 1.00 | 2 / 4 | 0.50 | 50.0 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| **geometric mean** | | **2.00 / 1.00** |"),
+            "{md}"
+        );
+        assert!(md.contains("primary: 2 meshes, geometric mean 2.00× Embree robust, 1.00× default; worst 1.00× robust (a.obj), 0.50× default (a.obj)"), "{md}");
+    }
+}

@@ -1,0 +1,213 @@
+//! The accuracy-against-time chart of `bench accuracy`: per intersector variant (and Embree's
+//! two modes), the cost of an incoherent ray through the BVH against the share of rays answered
+//! wrongly.
+
+use super::{Chart, FAMILY, PALETTE, read_json};
+use crate::error::{Error, Location, Result};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::Path;
+
+/// Errors per million below this (none, in practice) are drawn on the bottom line of the log
+/// axis.
+pub const ERROR_FLOOR: f64 = 0.1;
+
+/// One variant's point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Point {
+    /// Variant name, drawn beside the point.
+    pub label: String,
+    /// ns per incoherent ray through the BVH (x).
+    pub ns_per_ray: f64,
+    /// Leaks plus false hits per million rays (y).
+    pub errors_per_million: f64,
+}
+
+/// The fields of a `bench accuracy --json` variant row the chart reads.
+#[derive(serde::Deserialize)]
+struct VariantView {
+    name: String,
+    mrays_bvh_incoherent: Option<f64>,
+    leaks_per_million: Option<f64>,
+    false_hits_per_million: Option<f64>,
+}
+
+#[derive(serde::Deserialize)]
+struct ReportView {
+    variants: Vec<VariantView>,
+}
+
+/// The chart: one point per variant with a BVH throughput.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AccuracyChart {
+    /// The points, in the report's order.
+    pub points: Vec<Point>,
+}
+
+impl AccuracyChart {
+    /// The points of `bench accuracy --json`'s variants: cost `1000 / mrays_bvh_incoherent` ns,
+    /// error `leaks_per_million + false_hits_per_million` (variants without a BVH throughput
+    /// are left out).
+    ///
+    /// # Errors
+    ///
+    /// Reading or parsing the file; an input error when no variant has a BVH throughput.
+    pub fn from_file(path: &Path) -> Result<Self> {
+        let report: ReportView = read_json(path, "`bench accuracy --json`")?;
+        Self::from_view(report).ok_or_else(|| Error::input(Location::file(path), NOTHING_TO_CHART))
+    }
+
+    /// The chart of a report in memory (`bench accuracy --chart`), read as its JSON is.
+    ///
+    /// # Errors
+    ///
+    /// An internal error when `report` does not have the JSON's shape; an input error when no
+    /// variant has a BVH throughput.
+    pub fn from_report(report: &impl serde::Serialize) -> Result<Self> {
+        let view = serde_json::to_value(report)
+            .and_then(serde_json::from_value::<ReportView>)
+            .map_err(|e| Error::internal("the accuracy report's JSON", Some(Box::new(e))))?;
+        Self::from_view(view).ok_or_else(|| Error::Usage(NOTHING_TO_CHART.into()))
+    }
+
+    fn from_view(report: ReportView) -> Option<Self> {
+        let points: Vec<Point> = report
+            .variants
+            .into_iter()
+            .filter_map(|v| {
+                let mrays = v.mrays_bvh_incoherent.filter(|m| *m > 0.0)?;
+                Some(Point {
+                    label: v.name,
+                    ns_per_ray: 1.0e3 / mrays,
+                    errors_per_million: v.leaks_per_million.unwrap_or(0.0)
+                        + v.false_hits_per_million.unwrap_or(0.0),
+                })
+            })
+            .collect();
+        (!points.is_empty()).then_some(Self { points })
+    }
+}
+
+/// Why a run without BVH throughput cannot be charted.
+const NOTHING_TO_CHART: &str = "no variant has `mrays_bvh_incoherent`: nothing to chart";
+
+impl Chart for AccuracyChart {
+    fn size(&self) -> (u32, u32) {
+        (960, 600)
+    }
+
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        root.fill(&WHITE)?;
+        let x_max = self.points.iter().map(|p| p.ns_per_ray).fold(0.0, f64::max) * 1.2;
+        let y_max = self
+            .points
+            .iter()
+            .map(|p| p.errors_per_million)
+            .fold(10.0, f64::max)
+            * 10.0;
+        let mut chart = ChartBuilder::on(root)
+            .caption("ray-triangle variants: cost against error", (FAMILY, 22))
+            .margin(16)
+            .x_label_area_size(48)
+            .y_label_area_size(72)
+            .build_cartesian_2d(0.0..x_max, (ERROR_FLOOR..y_max).log_scale())?;
+        chart
+            .configure_mesh()
+            .x_desc("ns per incoherent ray through the BVH (bunny), one thread")
+            .y_desc("leaks + false hits per million rays (none: on the bottom line)")
+            .label_style((FAMILY, 14))
+            .axis_desc_style((FAMILY, 15))
+            .draw()?;
+        for (i, p) in self.points.iter().enumerate() {
+            let colour = PALETTE[i % PALETTE.len()];
+            let at = (p.ns_per_ray, p.errors_per_million.max(ERROR_FLOOR));
+            chart
+                .draw_series(std::iter::once(Circle::new(at, 6, colour.filled())))?
+                .label(format!(
+                    "{}: {:.1} ns, {:.0} per million",
+                    p.label, p.ns_per_ray, p.errors_per_million
+                ))
+                .legend(move |(x, y)| Circle::new((x, y), 5, colour.filled()));
+            chart.draw_series(std::iter::once(Text::new(
+                p.label.clone(),
+                at,
+                (FAMILY, 13).into_font().color(&colour),
+            )))?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .label_font((FAMILY, 13))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::tests::{png_pixels_of, svg_texts};
+    use super::super::{Format, render};
+    use super::*;
+
+    #[test]
+    fn points_come_from_the_runs_json_and_are_drawn_in_both_formats() {
+        let dir = tempfile::tempdir().unwrap();
+        let json = dir.path().join("accuracy.json");
+        std::fs::write(
+            &json,
+            r#"{"variants": [
+                {"name": "watertight", "mrays_bvh_incoherent": 5.0, "leaks_per_million": 0.0, "false_hits_per_million": 0.0, "other": 1},
+                {"name": "moller-trumbore", "mrays_bvh_incoherent": 6.25, "leaks_per_million": 1200.0, "false_hits_per_million": 34.0},
+                {"name": "no-bvh", "mrays_bvh_incoherent": null, "leaks_per_million": 1.0, "false_hits_per_million": null}
+            ], "slab": []}"#,
+        )
+        .unwrap();
+        let chart = AccuracyChart::from_file(&json).unwrap();
+        assert_eq!(
+            chart.points,
+            [
+                Point {
+                    label: "watertight".into(),
+                    ns_per_ray: 200.0,
+                    errors_per_million: 0.0
+                },
+                Point {
+                    label: "moller-trumbore".into(),
+                    ns_per_ray: 160.0,
+                    errors_per_million: 1234.0
+                },
+            ]
+        );
+        let texts = svg_texts(&render(&chart, Format::Svg).unwrap(), chart.size());
+        for want in [
+            "watertight: 200.0 ns, 0 per million",
+            "moller-trumbore: 160.0 ns, 1234 per million",
+            "ray-triangle variants: cost against error",
+        ] {
+            assert!(texts.iter().any(|t| t == want), "{want} not in {texts:?}");
+        }
+        let png = render(&chart, Format::Png).unwrap();
+        assert!(png_pixels_of(&png, chart.size(), PALETTE[0]) > 50);
+        assert!(png_pixels_of(&png, chart.size(), PALETTE[1]) > 50);
+    }
+
+    #[test]
+    fn a_run_without_throughput_is_an_input_error_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let json = dir.path().join("a.json");
+        std::fs::write(&json, r#"{"variants": []}"#).unwrap();
+        let e = AccuracyChart::from_file(&json).unwrap_err().to_string();
+        assert!(
+            e.contains("a.json") && e.contains("nothing to chart"),
+            "{e}"
+        );
+        std::fs::write(&json, "{\n\"variants\": 3}").unwrap();
+        let e = AccuracyChart::from_file(&json).unwrap_err().to_string();
+        assert!(e.contains("a.json") && e.contains(":2"), "{e}");
+    }
+}

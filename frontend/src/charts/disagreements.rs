@@ -1,0 +1,229 @@
+//! The disagreement chart of `crosscheck`: per mesh (x), the count of rays in each class of
+//! disagreement with Embree (bars, log scale), summed over the run's ray sets. Agreement is
+//! left out (it is the rest of the rays; the caption gives the totals).
+
+use super::{Chart, FAMILY, PALETTE, category_label, read_json};
+use crate::crosscheck::report::{Report, SetReport};
+use crate::error::{Error, Location, Result};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::Path;
+
+/// How a set's row counts one class of disagreement.
+pub type ClassCount = fn(&SetReport) -> usize;
+
+/// The classes drawn, in order: their names and how a set's row counts them.
+pub const CLASSES: [(&str, ClassCount); 8] = [
+    ("tie", |r| r.ties),
+    ("within tolerance", |r| r.within_tolerance),
+    ("Embree wrong", |r| r.embree_wrong),
+    ("genuine mismatch", |r| r.genuine_mismatches),
+    ("leak halfray", |r| r.leaks_halfray),
+    ("leak Embree robust", |r| r.leaks_embree),
+    ("leak Embree default", |r| r.leaks_embree_default),
+    ("any-hit differs", |r| r.any_hit_disagreements),
+];
+
+/// Counts below this are not drawn (the log axis starts here).
+const COUNT_FLOOR: f64 = 0.5;
+
+/// The chart's figures, taken from a `crosscheck --json` run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DisagreementChart {
+    /// Mesh names, in report order (x).
+    pub meshes: Vec<String>,
+    /// Per mesh, the count of each of [`CLASSES`].
+    pub counts: Vec<[usize; CLASSES.len()]>,
+    /// Rays checked per mesh.
+    pub rays: Vec<usize>,
+    /// The ray sets of the run.
+    pub sets: Vec<String>,
+}
+
+impl DisagreementChart {
+    /// The chart of `report`: its rows summed per mesh.
+    #[must_use]
+    pub fn new(report: &Report) -> Self {
+        let mut chart = Self {
+            meshes: Vec::new(),
+            counts: Vec::new(),
+            rays: Vec::new(),
+            sets: report.config.ray_sets.clone(),
+        };
+        for row in &report.sets {
+            let i = match chart.meshes.iter().position(|m| *m == row.mesh) {
+                Some(i) => i,
+                None => {
+                    chart.meshes.push(row.mesh.clone());
+                    chart.counts.push([0; CLASSES.len()]);
+                    chart.rays.push(0);
+                    chart.meshes.len() - 1
+                }
+            };
+            for (c, (_, count)) in chart.counts[i].iter_mut().zip(CLASSES) {
+                *c += count(row);
+            }
+            chart.rays[i] += row.rays;
+        }
+        chart
+    }
+
+    /// The chart of a `crosscheck --json` (or `crosscheck merge --json`) file.
+    ///
+    /// # Errors
+    ///
+    /// Reading or parsing the file; an input error when it has no rows.
+    pub fn from_file(path: &Path) -> Result<Self> {
+        let report: Report = read_json(path, "`crosscheck --json`")?;
+        let chart = Self::new(&report);
+        if chart.meshes.is_empty() {
+            return Err(Error::input(
+                Location::file(path),
+                "the run checked no mesh: nothing to chart",
+            ));
+        }
+        Ok(chart)
+    }
+}
+
+impl Chart for DisagreementChart {
+    fn size(&self) -> (u32, u32) {
+        ((160 + 110 * self.meshes.len() as u32).max(900), 640)
+    }
+
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        root.fill(&WHITE)?;
+        let n = self.meshes.len();
+        let top = self.counts.iter().flatten().fold(10usize, |a, &b| a.max(b)) as f64 * 10.0;
+        let total: usize = self.rays.iter().sum();
+        let mut chart = ChartBuilder::on(root)
+            .caption(
+                format!(
+                    "cross-check against Embree 4: disagreements per mesh ({total} rays; sets {})",
+                    self.sets.join(", ")
+                ),
+                (FAMILY, 18),
+            )
+            .margin(16)
+            .x_label_area_size(40)
+            .y_label_area_size(64)
+            .build_cartesian_2d(-0.5..n as f64 - 0.5, (COUNT_FLOOR..top).log_scale())?;
+        let names = self.meshes.clone();
+        chart
+            .configure_mesh()
+            .x_labels(n)
+            .x_label_formatter(&move |v| category_label(&names, *v))
+            .disable_x_mesh()
+            .y_desc("rays (log scale; classes with none are not drawn)")
+            .label_style((FAMILY, 13))
+            .axis_desc_style((FAMILY, 15))
+            .draw()?;
+        let width = 0.8 / CLASSES.len() as f64;
+        for (c, (name, _)) in CLASSES.iter().enumerate() {
+            let colour = PALETTE[c % PALETTE.len()];
+            let x0 = |i: usize| i as f64 - 0.4 + c as f64 * width;
+            let bars = (0..n).filter(|&i| self.counts[i][c] > 0).map(|i| {
+                Rectangle::new(
+                    [
+                        (x0(i), COUNT_FLOOR),
+                        (x0(i) + width, self.counts[i][c] as f64),
+                    ],
+                    colour.filled(),
+                )
+            });
+            let total: usize = self.counts.iter().map(|m| m[c]).sum();
+            chart
+                .draw_series(bars)?
+                .label(format!("{name}: {total}"))
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x - 5, y - 5), (x + 5, y + 5)], colour.filled())
+                });
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .label_font((FAMILY, 13))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::tests::{png_pixels_of, svg_texts};
+    use super::super::{Format, render};
+    use super::*;
+
+    fn row(
+        mesh: &str,
+        set: &str,
+        ties: usize,
+        genuine: usize,
+        leaks_default: usize,
+    ) -> serde_json::Value {
+        let mut r = serde_json::to_value(SetReport::default()).unwrap();
+        r["mesh"] = mesh.into();
+        r["path"] = format!("m/{mesh}").into();
+        r["name"] = set.into();
+        r["rays"] = 1000.into();
+        r["ties"] = ties.into();
+        r["genuine_mismatches"] = genuine.into();
+        r["leaks_embree_default"] = leaks_default.into();
+        r
+    }
+
+    #[test]
+    fn classes_are_summed_per_mesh_from_the_runs_json() {
+        let json = serde_json::json!({
+            "intersector": "watertight", "seed": 1, "rays": 1000,
+            "ray_sets": ["primary", "edges"], "shard": {"index": 0, "count": 1},
+            "threads": 2, "wall_seconds": 1.0, "rays_per_second": 1.0, "meshes": 2,
+            "failed": [],
+            "sets": [row("bunny.obj", "primary", 3, 0, 0), row("bunny.obj", "edges", 4, 0, 17),
+                     row("dragon.obj", "primary", 0, 2, 0), row("dragon.obj", "edges", 1, 0, 0)]
+        });
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("crosscheck.json");
+        let report: Report = match serde_json::from_value(json.clone()) {
+            Ok(r) => r,
+            Err(e) => panic!("the test's report does not match `Report`: {e}"),
+        };
+        std::fs::write(&path, serde_json::to_vec(&report).unwrap()).unwrap();
+        let chart = DisagreementChart::from_file(&path).unwrap();
+        assert_eq!(chart.meshes, ["bunny.obj", "dragon.obj"]);
+        assert_eq!(chart.counts[0], [7, 0, 0, 0, 0, 0, 17, 0]);
+        assert_eq!(chart.counts[1], [1, 0, 0, 2, 0, 0, 0, 0]);
+        assert_eq!(chart.rays, [2000, 2000]);
+        let texts = svg_texts(&render(&chart, Format::Svg).unwrap(), chart.size());
+        for want in [
+            "bunny.obj",
+            "dragon.obj",
+            "tie: 8",
+            "genuine mismatch: 2",
+            "leak Embree default: 17",
+            "leak halfray: 0",
+        ] {
+            assert!(texts.iter().any(|t| t == want), "{want} not in {texts:?}");
+        }
+        assert!(
+            texts
+                .iter()
+                .any(|t| t.contains("4000 rays; sets primary, edges")),
+            "{texts:?}"
+        );
+        let png = render(&chart, Format::Png).unwrap();
+        assert!(
+            png_pixels_of(&png, chart.size(), PALETTE[0]) > 50,
+            "tie bars"
+        );
+        assert!(
+            png_pixels_of(&png, chart.size(), PALETTE[3]) > 20,
+            "genuine bars"
+        );
+    }
+}

@@ -1,0 +1,280 @@
+//! Charts of the benchmarks' JSON, drawn with `plotters` as SVG or PNG.
+//!
+//! | command | chart |
+//! |---|---|
+//! | `halfray chart accuracy RUN.json -o OUT` | cost against error of every intersector variant (`bench accuracy --json`; [`accuracy`]) |
+//! | `halfray chart corpus RUN.json -o OUT` | halfray over Embree default and robust per mesh and ray set (`bench bvh --json`; [`corpus`]) |
+//! | `halfray chart disagreements RUN.json -o OUT` | the cross-check's disagreement classes per mesh (`crosscheck --json`; [`disagreements`]) |
+//!
+//! The format follows `OUT`'s extension (`.svg` or `.png`). Text is laid out with the Go font
+//! embedded in the binary ([`FONT`], registered with `plotters`' `ab_glyph` backend), so no
+//! system font is looked up; SVG text names the `sans-serif` family and is drawn by the viewer.
+//! PNGs are encoded with the `image` crate the renderer uses.
+
+pub mod accuracy;
+pub mod corpus;
+pub mod disagreements;
+
+use crate::error::{Error, Location, Result};
+use crate::outputs::{Named, OutputFile, reserve_outputs};
+use image::ImageEncoder;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// The Go Regular font (BSD-3-Clause, `frontend/assets/fonts/LICENSE-Go-fonts.txt`), used for
+/// every chart's text.
+pub const FONT: &[u8] = include_bytes!("../../assets/fonts/Go-Regular.ttf");
+/// The family name the charts' text uses; [`FONT`] is registered under it.
+pub const FAMILY: &str = "sans-serif";
+
+/// The colours of series, in order (a colour-blind-safe palette, Okabe and Ito 2008).
+pub const PALETTE: [RGBColor; 8] = [
+    RGBColor(0, 114, 178),
+    RGBColor(213, 94, 0),
+    RGBColor(0, 158, 115),
+    RGBColor(204, 121, 167),
+    RGBColor(230, 159, 0),
+    RGBColor(86, 180, 233),
+    RGBColor(120, 120, 120),
+    RGBColor(0, 0, 0),
+];
+
+/// Which chart (`halfray chart KIND`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ChartKind {
+    /// `bench accuracy --json`: cost against error per intersector variant.
+    Accuracy,
+    /// `bench bvh --json`: ratios to Embree default and robust per mesh and ray set.
+    Corpus,
+    /// `crosscheck --json`: disagreement classes per mesh.
+    Disagreements,
+}
+
+/// Arguments of `halfray chart`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ChartArgs {
+    /// Which chart.
+    #[arg(value_enum)]
+    pub kind: ChartKind,
+    /// The JSON a run wrote (`--json`).
+    pub input: PathBuf,
+    /// Output image, `.svg` or `.png` (written atomically; never the input).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Replace an output that is read-only or hard-linked (keeping its mode).
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// An image format of the charts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// Scalable vector graphics (text as `<text>`).
+    Svg,
+    /// 8-bit RGB PNG.
+    Png,
+}
+
+impl Format {
+    /// The format of `path`'s extension (case-insensitive).
+    ///
+    /// # Errors
+    ///
+    /// [`Error::Usage`] for any other extension.
+    pub fn of(path: &Path) -> Result<Self> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
+            Some("svg") => Ok(Format::Svg),
+            Some("png") => Ok(Format::Png),
+            _ => Err(Error::Usage(format!(
+                "`{}`: a chart is written as .svg or .png",
+                path.display()
+            ))),
+        }
+    }
+}
+
+/// A chart that can be drawn on any `plotters` backend.
+pub trait Chart {
+    /// Width and height, pixels.
+    fn size(&self) -> (u32, u32);
+    /// Draws the whole chart on `root` (already filled white).
+    ///
+    /// # Errors
+    ///
+    /// The backend's.
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>>;
+}
+
+/// Registers [`FONT`] as [`FAMILY`] (once per process).
+fn register_font() -> Result<()> {
+    static REGISTERED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    let ok = *REGISTERED
+        .get_or_init(|| plotters::style::register_font(FAMILY, FontStyle::Normal, FONT).is_ok());
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::internal(
+            "the embedded chart font does not parse",
+            None,
+        ))
+    }
+}
+
+/// `chart` as the bytes of a `format` file.
+///
+/// # Errors
+///
+/// Drawing or encoding.
+pub fn render(chart: &impl Chart, format: Format) -> Result<Vec<u8>> {
+    register_font()?;
+    let (w, h) = chart.size();
+    let drawing = |e: &dyn std::fmt::Display| Error::encode("the chart", e.to_string());
+    match format {
+        Format::Svg => {
+            let mut svg = String::new();
+            {
+                let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
+                root.fill(&WHITE).map_err(|e| drawing(&e))?;
+                chart.draw(&root).map_err(|e| drawing(&e))?;
+                root.present().map_err(|e| drawing(&e))?;
+            }
+            Ok(svg.into_bytes())
+        }
+        Format::Png => {
+            let mut rgb = vec![255u8; w as usize * h as usize * 3];
+            {
+                let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+                chart.draw(&root).map_err(|e| drawing(&e))?;
+                root.present().map_err(|e| drawing(&e))?;
+            }
+            let mut png = Vec::new();
+            image::codecs::png::PngEncoder::new(&mut png)
+                .write_image(&rgb, w, h, image::ExtendedColorType::Rgb8)
+                .map_err(|e| Error::encode("the chart", e))?;
+            Ok(png)
+        }
+    }
+}
+
+/// Draws `chart` into a reserved output, in the format of its path.
+///
+/// # Errors
+///
+/// [`Format::of`], drawing, encoding or writing.
+pub fn write(chart: &impl Chart, out: OutputFile) -> Result<()> {
+    let bytes = render(chart, Format::of(out.path())?)?;
+    out.write(|w| w.write_all(&bytes))
+}
+
+/// Reads and parses a run's JSON file as `T`.
+///
+/// # Errors
+///
+/// [`Error::Io`] reading it; an input error naming the file, line and column where it is not
+/// JSON of that shape.
+pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path, what: &str) -> Result<T> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    serde_json::from_slice(&bytes).map_err(|e| {
+        Error::input(
+            Location::file(path).line(e.line()).column(e.column()),
+            format!("not the JSON of {what}: {e}"),
+        )
+    })
+}
+
+/// Runs `halfray chart`: checks the output's format and reserves it before reading the input.
+pub fn run(args: &ChartArgs) -> Result<()> {
+    Format::of(&args.output)?;
+    let out = reserve_outputs(
+        &[Named::new("-o", &args.output)],
+        &[Named::new("input", &args.input)],
+        args.force,
+    )?
+    .remove(0);
+    match args.kind {
+        ChartKind::Accuracy => write(&accuracy::AccuracyChart::from_file(&args.input)?, out),
+        ChartKind::Corpus => write(&corpus::CorpusChart::from_file(&args.input)?, out),
+        ChartKind::Disagreements => write(
+            &disagreements::DisagreementChart::from_file(&args.input)?,
+            out,
+        ),
+    }
+}
+
+/// `names[i]` for a coordinate within 10⁻⁶ of the integer `i`, else nothing: category labels
+/// on a continuous axis whose key points are the integers.
+fn category_label(names: &[String], v: f64) -> String {
+    let i = v.round();
+    if (v - i).abs() < 1e-6 && i >= 0.0 {
+        names.get(i as usize).cloned().unwrap_or_default()
+    } else {
+        String::new()
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// The text of every `<text>` element of an SVG, after checking it parses as XML with an
+    /// `<svg>` root of the stated size.
+    pub(crate) fn svg_texts(bytes: &[u8], size: (u32, u32)) -> Vec<String> {
+        let text = std::str::from_utf8(bytes).expect("UTF-8");
+        let doc = roxmltree::Document::parse(text).expect("well-formed XML");
+        let root = doc.root_element();
+        assert_eq!(root.tag_name().name(), "svg");
+        assert_eq!(root.attribute("width"), Some(size.0.to_string().as_str()));
+        assert_eq!(root.attribute("height"), Some(size.1.to_string().as_str()));
+        doc.descendants()
+            .filter(|n| n.has_tag_name("text"))
+            .map(|n| {
+                n.descendants()
+                    .filter(|t| t.is_text())
+                    .filter_map(|t| t.text())
+                    .collect::<String>()
+                    .trim()
+                    .to_string()
+            })
+            .collect()
+    }
+
+    /// Decodes a PNG, checks its size, and counts its pixels of `colour`.
+    pub(crate) fn png_pixels_of(bytes: &[u8], size: (u32, u32), colour: RGBColor) -> usize {
+        let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Png)
+            .expect("a PNG")
+            .to_rgb8();
+        assert_eq!(img.dimensions(), size);
+        img.pixels()
+            .filter(|p| p.0 == [colour.0, colour.1, colour.2])
+            .count()
+    }
+
+    #[test]
+    fn format_follows_the_extension() {
+        assert_eq!(Format::of(Path::new("a/b.SVG")).unwrap(), Format::Svg);
+        assert_eq!(Format::of(Path::new("b.png")).unwrap(), Format::Png);
+        assert!(matches!(
+            Format::of(Path::new("b.jpg")),
+            Err(Error::Usage(_))
+        ));
+        assert!(matches!(Format::of(Path::new("b")), Err(Error::Usage(_))));
+    }
+
+    #[test]
+    fn category_labels_only_at_integers() {
+        let names = vec!["a".to_string(), "b".to_string()];
+        assert_eq!(category_label(&names, 1.0), "b");
+        assert_eq!(category_label(&names, 0.5), "");
+        assert_eq!(category_label(&names, 2.0), "");
+        assert_eq!(category_label(&names, -1.0), "");
+    }
+}

@@ -1,0 +1,54 @@
+//! Timing shared by `bench bvh` and `crosscheck`: how many passes a throughput figure is the
+//! best of, and the round-robin passes that compare several sides on the same rays.
+
+use halfray_core::Ray;
+use std::time::Instant;
+
+/// Timed passes per measurement; the best is reported, so that one preemption of a pass (a
+/// few milliseconds for 100 000 camera rays) does not spoil a figure on a shared machine.
+pub const TIMED_PASSES: usize = 5;
+
+/// Best-of-[`TIMED_PASSES`] throughputs (Mrays/s) of each of `fs` over `rays`, the passes taken
+/// round-robin (pass 1 of every function, then pass 2, …), so that a slow spell of a shared
+/// machine falls on every side rather than on whichever ran then. Each function answers hit or
+/// miss; the answers are kept alive with [`std::hint::black_box`] and otherwise unused. An empty
+/// `rays` gives 0 for every side.
+pub fn interleaved(rays: &[Ray], fs: &[&dyn Fn(&Ray) -> bool]) -> Vec<f64> {
+    let mut best = vec![f64::INFINITY; fs.len()];
+    for _ in 0..TIMED_PASSES {
+        for (f, b) in fs.iter().zip(best.iter_mut()) {
+            let t0 = Instant::now();
+            let hits = rays.iter().filter(|r| f(std::hint::black_box(r))).count();
+            std::hint::black_box(hits);
+            *b = b.min(t0.elapsed().as_secs_f64());
+        }
+    }
+    best.iter()
+        .map(|s| rays.len() as f64 / s.max(1e-9) / 1e6)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use halfray_core::Vec3;
+
+    #[test]
+    fn every_side_is_called_once_per_ray_and_pass() {
+        let rays = vec![Ray::new(Vec3::ZERO, Vec3::X); 10];
+        let calls = [std::cell::Cell::new(0), std::cell::Cell::new(0)];
+        let a = |_: &Ray| {
+            calls[0].set(calls[0].get() + 1);
+            true
+        };
+        let b = |_: &Ray| {
+            calls[1].set(calls[1].get() + 1);
+            false
+        };
+        let m = interleaved(&rays, &[&a, &b]);
+        assert_eq!(m.len(), 2);
+        assert!(m.iter().all(|x| *x > 0.0));
+        assert_eq!([calls[0].get(), calls[1].get()], [10 * TIMED_PASSES; 2]);
+        assert_eq!(interleaved(&[], &[&a]), vec![0.0]);
+    }
+}
