@@ -183,9 +183,7 @@ pub fn run(args: &BvhArgs) -> Result<()> {
                 bench(self.0, self.1, self.2, isect)
             }
         }
-        let report = variant.visit(Bench(args, mesh, &sets))?;
-        eprintln!("bench bvh: {} done", mesh.display());
-        reports.push(report);
+        reports.push(variant.visit(Bench(args, mesh, &sets))?);
     }
     super::write_json_reports(args.run.json.as_deref(), &reports)?;
     for r in &reports {
