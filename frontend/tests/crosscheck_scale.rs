@@ -179,7 +179,11 @@ fn a_bad_mesh_in_a_list_is_reported_and_the_run_goes_on() {
     let report = read(&json);
     assert_eq!(report["meshes"], 4);
     assert_eq!(report["failed"].as_array().unwrap().len(), 2);
-    assert_eq!(report["sets"].as_array().unwrap().len(), 2 * 10, "every set");
+    assert_eq!(
+        report["sets"].as_array().unwrap().len(),
+        2 * 10,
+        "every set"
+    );
 }
 
 #[test]
