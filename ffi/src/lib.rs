@@ -261,7 +261,7 @@ impl From<LoadError> for HalfrayStatus {
         match e {
             LoadError::IndexCount { .. } => Self::IndexCount,
             LoadError::NodeCount { .. } => Self::NodeCount,
-            LoadError::ScratchTooSmall { .. } => Self::ScratchTooSmall,
+            LoadError::Capacity(_) => Self::ScratchTooSmall,
             LoadError::ChildOutOfRange { .. } => Self::ChildOutOfRange,
             LoadError::TooDeep { .. } => Self::TooDeep,
             LoadError::SharedNode { .. } => Self::SharedNode,
