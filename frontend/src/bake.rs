@@ -71,7 +71,7 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         Error::internal(
             format!(
                 "{}: the built BVH fails its load check",
-                args.input.display()
+                crate::text::path(&args.input)
             ),
             Some(Box::new(e)),
         )
@@ -100,12 +100,12 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         + std::mem::size_of_val(bvh.indices());
     crate::console::print_out(&format!(
         "baked {}: {} vertices, {} triangles, {} nodes, {} bytes of static data -> {}\n",
-        args.input.display(),
+        crate::text::path(&args.input),
         mesh.positions.len(),
         mesh.triangles.len(),
         bvh.nodes().len(),
         flash,
-        args.output.display()
+        crate::text::path(&args.output)
     ))
 }
 
@@ -162,6 +162,33 @@ fn bits(x: f32) -> String {
     format!("f32::from_bits(0x{:08x})", x.to_bits())
 }
 
+/// `s` made safe inside a Rust `//` comment: control characters (a line break would end the
+/// comment and start code), line and paragraph separators, and the bidirectional-text
+/// controls rustc refuses in comments (`text_direction_codepoint_in_comment`) are written as
+/// `\u{…}` escapes; everything else stays as is.
+pub fn comment_text(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            let unsafe_char = c.is_control()
+                || matches!(
+                    c,
+                    '\u{2028}'
+                        | '\u{2029}'
+                        | '\u{061c}'
+                        | '\u{200e}'
+                        | '\u{200f}'
+                        | '\u{202a}'..='\u{202e}'
+                        | '\u{2066}'..='\u{2069}'
+                );
+            if unsafe_char {
+                c.escape_unicode().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
+}
+
 /// The Rust source of a baked BVH (see the module docs).
 pub fn source(
     input: &Path,
@@ -170,9 +197,10 @@ pub fn source(
     nodes: &[BvhNode],
     indices: &[u32],
 ) -> String {
-    let name = input.file_name().map_or_else(
-        || input.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
+    let name = comment_text(
+        &input
+            .file_name()
+            .map_or_else(|| input.to_string_lossy(), |n| n.to_string_lossy()),
     );
     let mut s = String::new();
     // `write!` into a `String` cannot fail.

@@ -29,5 +29,6 @@ pub mod scene;
 pub mod simd;
 pub mod text;
 pub mod timing;
+pub mod workers;
 
 pub use error::{Error, Location, Result};

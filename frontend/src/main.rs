@@ -47,7 +47,7 @@ fn main() -> ExitCode {
         eprintln!("warning: no signal handler (temporary files may stay after Ctrl-C): {e}");
     }
     let cli = Cli::parse();
-    let result = match cli.command {
+    let result = halfray::workers::install_global_pool().and_then(|()| match cli.command {
         Command::Render(args) => render::run(&args),
         Command::Mesh(cmd) => mesh_tools::run(&cmd),
         Command::Bench(cmd) => bench::run(&cmd),
@@ -56,7 +56,7 @@ fn main() -> ExitCode {
         Command::Bake(args) => bake::run(&args),
         Command::Composite(args) => composite::run(&args),
         Command::Gamma(args) => render::gamma::run(&args),
-    };
+    });
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(halfray::Error::BrokenPipe) => ExitCode::from(halfray::error::EXIT_BROKEN_PIPE),

@@ -402,3 +402,186 @@ fn malformed_face_tokens_are_refused_with_their_column() {
     let o = run(&[&"mesh", &"check", &obj]);
     assert_ne!(o.status.code(), Some(1), "{}", stderr(&o));
 }
+
+/// Item 11: a hostile input name (a line break then code, a bidirectional override) stays
+/// inside `bake`'s comment: the generated source compiles (rustc, against stand-ins of the
+/// two core items it names) and holds no line the name started.
+#[test]
+fn bake_escapes_the_input_name_and_its_output_compiles() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = "evil\ncompile_error!(\"injected\");\r\n#\u{202e}x\u{2028}.obj";
+    let obj = dir.path().join(name);
+    std::fs::write(&obj, tetrahedron("1")).unwrap();
+    let rs = dir.path().join("baked.rs");
+    let o = run(&[&"bake", &obj, &"-o", &rs]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let src = std::fs::read_to_string(&rs).unwrap();
+    assert!(
+        src.lines()
+            .all(|l| !l.starts_with("compile_error!") && !l.contains('\u{202e}')),
+        "{src}"
+    );
+    // Printed without raw control characters either.
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("evil\n"));
+    let main = dir.path().join("main.rs");
+    std::fs::write(
+        &main,
+        "#![allow(dead_code)]\n\
+         mod halfray_core {\n\
+             pub struct Vec3([f32; 3]);\n\
+             impl Vec3 { pub const fn new(x: f32, y: f32, z: f32) -> Self { Self([x, y, z]) } }\n\
+             pub mod bvh {\n\
+                 pub struct BvhNode([[f32; 3]; 2], u32, u32);\n\
+                 impl BvhNode { pub const fn from_raw(b: [[f32; 3]; 2], a: u32, c: u32) -> Self { Self(b, a, c) } }\n\
+             }\n\
+         }\n\
+         include!(\"baked.rs\");\n",
+    )
+    .unwrap();
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let c = Command::new(rustc)
+        .args([
+            "--edition",
+            "2021",
+            "--crate-type",
+            "lib",
+            "--emit",
+            "metadata",
+            "-o",
+        ])
+        .arg(dir.path().join("out.rmeta"))
+        .arg(&main)
+        .output()
+        .unwrap();
+    assert!(c.status.success(), "{}", String::from_utf8_lossy(&c.stderr));
+}
+
+/// Item 7: a thread count over the bound is a usage error at once, never rayon's panic.
+#[test]
+fn a_huge_rayon_num_threads_is_refused_without_panicking() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_scene(dir.path(), "s.toml", "");
+    let png = dir.path().join("o.png");
+    for n in ["100000", "99999999999999999999999999999999999999999"] {
+        let o = Command::new(BIN)
+            .args([
+                "render".as_ref(),
+                scene.as_os_str(),
+                "-o".as_ref(),
+                png.as_os_str(),
+            ])
+            .env("RAYON_NUM_THREADS", n)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("at most 1024 worker threads") && !stderr(&o).contains("panicked"),
+            "{}",
+            stderr(&o)
+        );
+    }
+    let o = Command::new(BIN)
+        .args([
+            "render".as_ref(),
+            scene.as_os_str(),
+            "-o".as_ref(),
+            png.as_os_str(),
+            "-q".as_ref(),
+        ])
+        .env("RAYON_NUM_THREADS", "3")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+/// Item 8: devices are refused before a byte is read, by every command that reads a file
+/// whole (`/dev/zero` used to grow the process until the OOM killer came).
+#[test]
+fn devices_as_inputs_are_refused_before_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let runs: [Vec<&dyn AsRef<OsStr>>; 6] = [
+        vec![&"render", &"/dev/zero", &"-o", &out],
+        vec![&"mesh", &"check", &"/dev/zero"],
+        vec![&"bake", &"/dev/urandom", &"-o", &out],
+        vec![
+            &"bench",
+            &"bvh",
+            &"/dev/zero",
+            &"--width",
+            &"8",
+            &"--rays",
+            &"10",
+        ],
+        vec![&"crosscheck", &"merge", &"/dev/zero"],
+        vec![&"mesh", &"smooth", &"/dev/urandom", &"-o", &out],
+    ];
+    for args in runs {
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("is a character device, not a regular file"),
+            "{}",
+            stderr(&o)
+        );
+    }
+    // A pipe is read (bounded): a scene through stdin.
+    let scene = small_scene(dir.path(), "s.toml", "");
+    let o = Command::new(BIN)
+        .args([
+            "render".as_ref(),
+            "/dev/stdin".as_ref(),
+            "-o".as_ref(),
+            out.as_os_str(),
+            "-q".as_ref(),
+        ])
+        .stdin(std::fs::File::open(&scene).unwrap())
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(names(dir.path()), ["o", "s.toml"]);
+}
+
+/// Item 6: `repeat` products are checked: one beyond 2^64 (or wrapping to a small number)
+/// is over the object limit, never an allocation abort or a wrong count.
+#[test]
+fn repeat_products_that_overflow_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for (count, want) in [
+        (
+            "[2, 2147549185, 4294836226]",
+            "2 × 2147549185 × 4294836226 copies (more than 2^64)",
+        ),
+        ("[1000000000, 1000000000, 1000000000]", "(more than 2^64)"),
+        ("[4294967295, 4294967295, 1]", "18446744065119617025 copies"),
+        ("[65536, 65536, 4294967296]", "repeat.count"),
+    ] {
+        let scene = small_scene(
+            dir.path(),
+            "r.toml",
+            &format!("[object.repeat]\ncount = {count}\nstep = [1, 0, 0]\n"),
+        );
+        let o = run(&[&"render", &scene, &"-o", &dir.path().join("o.png"), &"-q"]);
+        assert_eq!(o.status.code(), Some(1), "{count}: {}", stderr(&o));
+        assert!(stderr(&o).contains(want), "{count}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("object[0].repeat.count"),
+            "{}",
+            stderr(&o)
+        );
+    }
+    // The same field path when `repeat` is an inline table (it used to be `object[0].count`).
+    let scene = small_scene(
+        dir.path(),
+        "r.toml",
+        "repeat = { count = [1, 1, 4294967296], step = [1, 0, 0] }\n",
+    );
+    let o = run(&[&"render", &scene, &"-o", &dir.path().join("o.png"), &"-q"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("field `object[0].repeat.count`"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(names(dir.path()), ["r.toml"]);
+}

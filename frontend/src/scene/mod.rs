@@ -426,7 +426,14 @@ impl Source<'_> {
             } else if let Some(name) = t.strip_prefix('[').and_then(|r| r.strip_suffix(']')) {
                 let name = name.trim();
                 if is_name(name) {
-                    current = Some(name.to_string());
+                    // `[object.repeat]` after `[[object]]` belongs to the last `object`.
+                    let parts: Vec<&str> = name.split('.').collect();
+                    let owner = (1..parts.len()).rev().find_map(|n| {
+                        let prefix = parts[..n].join(".");
+                        let k = *counts.get(&prefix)?;
+                        Some(format!("{prefix}[{}].{}", k - 1, parts[n..].join(".")))
+                    });
+                    current = Some(owner.unwrap_or_else(|| name.to_string()));
                 }
             }
         }
@@ -447,15 +454,36 @@ impl Source<'_> {
         Some(name.trim().to_string())
     }
 
-    /// The key of a `key = value` line whose value starts at `at`.
+    /// The key of a `key = value` line whose value starts at `at`, with the keys of the
+    /// inline tables it is in (`repeat.count` for `repeat = { count = … }`).
     fn key_before(&self, at: usize) -> Option<String> {
         let at = floor_boundary(self.text, at);
         let line_start = self.text[..at].rfind('\n').map_or(0, |i| i + 1);
         let head = &self.text[line_start..at];
-        let eq = head.rfind('=')?;
-        let key = head[..eq].trim();
-        let key = key.rsplit([',', '{']).next().unwrap_or(key).trim();
-        (!key.is_empty() && !key.starts_with('[')).then(|| key.trim_matches('"').to_string())
+        let key_of = |head: &str| -> Option<String> {
+            let eq = head.rfind('=')?;
+            let key = head[..eq].trim();
+            let key = key.rsplit([',', '{']).next().unwrap_or(key).trim();
+            (!key.is_empty() && !key.starts_with('[')).then(|| key.trim_matches('"').to_string())
+        };
+        let mut keys = vec![key_of(head)?];
+        // The inline tables still open at `at`, innermost first (quotes are not tracked:
+        // a brace inside a string on the same line only shortens the name).
+        let mut depth = 0i32;
+        for (i, c) in head.char_indices().rev() {
+            match c {
+                '}' => depth += 1,
+                '{' if depth > 0 => depth -= 1,
+                '{' => {
+                    if let Some(k) = key_of(&head[..i]) {
+                        keys.push(k);
+                    }
+                }
+                _ => {}
+            }
+        }
+        keys.reverse();
+        Some(keys.join("."))
     }
 }
 

@@ -27,17 +27,25 @@ pub(super) fn repeat(
     let rd = r.get_ref();
     let f = |name: &str| format!("{p}.repeat.{name}");
     let [nx, ny, nz] = rd.count.get_ref().0;
-    let total = u64::from(nx) * u64::from(ny) * u64::from(nz);
-    if total == 0 {
+    if nx == 0 || ny == 0 || nz == 0 {
         return Err(ctx.err(&rd.count.span(), &f("count"), "every count must be ≥ 1"));
     }
-    if total + before as u64 > MAX_OBJECTS as u64 {
+    // Checked: a product that does not fit in 64 bits is over the limit too.
+    let total = u64::from(nx)
+        .checked_mul(u64::from(ny))
+        .and_then(|p| p.checked_mul(u64::from(nz)));
+    let room = (MAX_OBJECTS - before.min(MAX_OBJECTS)) as u64;
+    let Some(total) = total.filter(|&t| t <= room) else {
+        let copies = total.map_or_else(
+            || format!("{nx} × {ny} × {nz} copies (more than 2^64)"),
+            |t| format!("{t} copies"),
+        );
         return Err(ctx.err(
             &rd.count.span(),
             &f("count"),
-            format!("{total} copies: more than {MAX_OBJECTS} objects in the scene"),
+            format!("{copies}: more than {MAX_OBJECTS} objects in the scene"),
         ));
-    }
+    };
     let step = ctx.v3(&rd.step, &f("step"))?;
     let materials = match &rd.materials {
         None => vec![node.material],
