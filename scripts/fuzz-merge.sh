@@ -13,8 +13,9 @@
 #     crashes, timeouts, OOMs) and each input that crashed the merge (libFuzzer's merge survives
 #     them; its control file tells which), replayed alone to show what it does. One line each:
 #       finding: target TARGET: FILE (how it was found): REPLAYED OUTCOME
-# and writes OUT_DIR/summary.md (per target: fuzzing time, executions, coverage, corpus before
-# and after the merge, findings). Exit status: 0 no findings, 1 findings, 2 a target whose task
+# and writes OUT_DIR/summary.md (per target, from the task's last fork-mode status line: fuzzing
+# time, executions, coverage, features, corpus, OOMs/timeouts/crashes; then the inputs after the
+# merge and the findings). Exit status: 0 no findings, 1 findings, 2 a target whose task
 # left no log (named: it never ran, or OUT_DIR is not shared), or a merge that failed.
 set -euo pipefail
 [ $# -eq 1 ] || { echo "usage: FUZZ_TARGETS=\"T0 T1 ...\" $0 OUT_DIR" >&2; exit 2; }
@@ -54,14 +55,14 @@ findings=0
 missing=0
 summary=$out/summary.md
 {
-    echo "| target | seconds | executions | coverage (edges) | corpus grown | merged | findings |"
-    echo "|---|---|---|---|---|---|---|"
+    echo "| target | seconds | executions | coverage (edges) | features | corpus | OOMs / timeouts / crashes | merged | findings |"
+    echo "|---|---|---|---|---|---|---|---|---|"
 } >"$summary"
 for t in "${fuzz_targets[@]}"; do
     log=$out/logs/$t.log
     if [ ! -s "$log" ]; then
         echo "fuzz-merge: target $t is missing: its task left no log $log (it never ran, or OUT_DIR is not shared)" >&2
-        echo "| \`$t\` | missing | | | | | |" >>"$summary"
+        echo "| \`$t\` | missing | | | | | | | |" >>"$summary"
         missing=1
         continue
     fi
@@ -100,15 +101,18 @@ for t in "${fuzz_targets[@]}"; do
     n=${#order[@]}
     unset first also
     findings=$((findings + n))
-    # The task's last fork-mode status line: `#EXECS: cov: C ft: F corp: N exec/s: E ... time: Ts`.
+    # The task's last fork-mode status line:
+    # `#EXECS: cov: C ft: F corp: N exec/s: E oom/timeout/crash: a/b/c time: Ts ...`.
     last=$(grep -E '^#[0-9]+: cov:' "$log" | tail -n 1 || true)
     execs=$(sed -n 's/^#\([0-9]*\):.*/\1/p' <<<"$last")
     cov=$(sed -n 's/.* cov: \([0-9]*\).*/\1/p' <<<"$last")
+    ft=$(sed -n 's/.* ft: \([0-9]*\).*/\1/p' <<<"$last")
+    corp=$(sed -n 's/.* corp: \([0-9]*\).*/\1/p' <<<"$last")
+    otc=$(sed -n 's/.* oom\/timeout\/crash: \([0-9/]*\).*/\1/p' <<<"$last")
     secs=$(sed -n 's/.* time: \([0-9]*\)s.*/\1/p' <<<"$last")
-    grown=$(find "$out/corpus/$t" -type f | wc -l)
     merged=$(find "$out/merged/$t" -type f | wc -l)
-    echo "| \`$t\` | ${secs:-?} | ${execs:-?} | ${cov:-?} | $grown | $merged | $n |" >>"$summary"
-    echo "fuzz-merge: $t: ${execs:-?} executions, coverage ${cov:-?}; corpus $grown grown + seeds -> $merged merged; $n finding(s)" >&2
+    echo "| \`$t\` | ${secs:-?} | ${execs:-?} | ${cov:-?} | ${ft:-?} | ${corp:-?} | ${otc:-?} | $merged | $n |" >>"$summary"
+    echo "fuzz-merge: $t: ${execs:-?} executions, coverage ${cov:-?}; corpus ${corp:-?} -> $merged merged; $n finding(s)" >&2
 done
 cat "$summary"
 if [ "$missing" -ne 0 ]; then exit 2; fi
