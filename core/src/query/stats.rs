@@ -2,6 +2,14 @@
 
 /// Traversal counters of ray queries. Queries **add** to the counters they are given, so one
 /// value can accumulate a whole ray set (divide by the ray count for averages).
+///
+/// **A measure of work, approximate by contract.** The counts depend on the visiting order
+/// and on how early a hit prunes the rest of the walk (and in a wide BVH on the order in
+/// which its children are sorted), none of which is part of a query's answer: two
+/// traversals that return the same hit may count differently, and the counts may change
+/// between versions. Compare them between runs of the same build, never as exact values.
+/// One exact relation holds: a wide BVH's closure query, which culls nothing, counts as
+/// tested exactly the triangles its closure is called for.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TraversalStats {
     /// Nodes whose boxes were tested, or cells visited: in a binary BVH the root counts once
