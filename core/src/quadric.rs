@@ -34,6 +34,7 @@
 //!
 //! Every function is total: invalid rays, NaN and infinity give `None`, never a panic.
 
+use crate::aabb::Aabb;
 use crate::error::GeometryError;
 use crate::float::{gamma, gamma_f64};
 use crate::getters::getters;
@@ -457,6 +458,25 @@ impl Ellipsoid {
         let theta = libm::acos(y.z.clamp(-1.0, 1.0));
         h.uv = Vec2::new((phi / TAU) as f32, (theta / PI) as f32);
         Some(h)
+    }
+}
+
+/// A general quadric (solid where `f < 0`), optionally clipped to a box: hits outside the
+/// closed box are dropped ([`crate::shape::Shape`] for the queries). A clipped quadric is an
+/// open surface, not a solid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClippedQuadric {
+    /// The surface.
+    pub quadric: Quadric,
+    /// Clip box; `None` for the whole surface.
+    pub clip: Option<Aabb>,
+}
+
+impl ClippedQuadric {
+    /// Whether `h`'s point is in the clip box (closed; always without one).
+    #[must_use]
+    pub fn in_clip(&self, h: &Hit) -> bool {
+        self.clip.is_none_or(|b| b.contains_point(h.point))
     }
 }
 

@@ -1,23 +1,31 @@
-//! One interface for the bounded surfaces a ray can hit (bounds, closest hit, the crossings
-//! of a line for CSG): [`Sphere`], [`Ellipsoid`], [`Polygon`] and the triangle `[Vec3; 3]`
-//! (with [`Watertight`]). Each is also a [`crate::bvh::Primitive`], so a BVH can be built
+//! One interface for every surface a ray can hit (bounds, closest hit, the crossings of a
+//! line and where it starts, for CSG): [`Sphere`], [`Ellipsoid`], [`Polygon`], the triangle
+//! `[Vec3; 3]` (with [`Watertight`]), the box [`Aabb`] ([`box_crossings`]), the [`Plane`],
+//! the general [`Quadric`] and the [`ClippedQuadric`]. Every one answers with the one hit
+//! type, [`Hit`]. The bounded ones are also [`crate::bvh::Primitive`]s, so a BVH can be built
 //! over a slice of them and queried with [`Shape::closest_hit`] as its intersector.
 
 use crate::aabb::Aabb;
 use crate::float::gamma;
 use crate::hit::Hit;
+use crate::plane::Plane;
 use crate::polygon::Polygon;
-use crate::quadric::Ellipsoid;
+use crate::quadric::{ClippedQuadric, Ellipsoid, Quadric};
 use crate::ray::Ray;
 use crate::sphere::Sphere;
 use crate::triangle::{TriangleIntersector, Watertight};
 use glam::Vec3;
 
-/// A bounded surface.
+mod cuboid;
+
+pub use cuboid::box_crossings;
+
+/// A surface a ray can hit.
 pub trait Shape {
     /// A box containing the exact surface. The corners of a curved shape's box come from
     /// rounded `f32` arithmetic, so they are padded outward by [`CURVED_BOUNDS_PAD`]; flat
-    /// shapes' boxes are their vertices' exact range. Non-finite for an unusable shape.
+    /// shapes' boxes are their vertices' exact range. Infinite for an unbounded surface (a
+    /// plane, a quadric without a clip box); non-finite for an unusable shape.
     fn bounds(&self) -> Aabb;
 
     /// The closest hit of `ray` in its interval `(t_min, t_max]`; `None` for a miss or an
@@ -31,7 +39,20 @@ pub trait Shape {
     fn line_crossings(&self, ray: &Ray) -> [Option<Hit>; 2] {
         [self.closest_hit(&whole_line(ray)), None]
     }
+
+    /// Whether the ray's line is inside the solid the surface bounds as `t → −∞` (the state
+    /// before its first [`Shape::line_crossings`]). `false` for a bounded shape; an unbounded
+    /// solid (the half-space behind a plane, a quadric's `f < 0` side) may start inside.
+    fn line_starts_inside(&self, _ray: &Ray) -> bool {
+        false
+    }
 }
+
+/// The box of everything: the bounds of an unbounded surface.
+const EVERYWHERE: Aabb = Aabb {
+    min: Vec3::NEG_INFINITY,
+    max: Vec3::INFINITY,
+};
 
 /// `ray` with the interval of its whole line.
 fn whole_line(ray: &Ray) -> Ray {
@@ -61,6 +82,17 @@ pub fn crossings_at_roots(
         Some((t0, t1)) if t0 != t1 => [t0, t1].map(|t| hit_at_root(ray, t, &intersect)),
         _ => [None, None],
     }
+}
+
+/// The crossings of a quadric surface: [`crossings_at_roots`] of its `f64` roots along the
+/// whole line (`roots`), rounded to `f32`.
+fn quadric_crossings(
+    ray: &Ray,
+    roots: impl Fn(&Ray) -> Option<(f64, f64)>,
+    intersect: impl Fn(&Ray) -> Option<Hit>,
+) -> [Option<Hit>; 2] {
+    let roots = roots(&whole_line(ray)).map(|(t0, t1)| (t0 as f32, t1 as f32));
+    crossings_at_roots(ray, roots, intersect)
 }
 
 /// Outward padding of a curved shape's box, relative to the largest magnitude among its
@@ -101,10 +133,7 @@ impl Shape for Ellipsoid {
     }
 
     fn line_crossings(&self, ray: &Ray) -> [Option<Hit>; 2] {
-        let roots = self
-            .roots(&whole_line(ray))
-            .map(|(t0, t1)| (t0 as f32, t1 as f32));
-        crossings_at_roots(ray, roots, |r| self.intersect(r))
+        quadric_crossings(ray, |l| self.roots(l), |r| self.intersect(r))
     }
 }
 
@@ -126,6 +155,94 @@ impl Shape for [Vec3; 3] {
     /// [`Watertight`]'s hit ([`crate::triangle::TriangleHit::to_hit`]).
     fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         Some(Watertight.intersect(ray, self)?.to_hit(self))
+    }
+}
+
+impl Shape for Plane {
+    /// Infinite.
+    fn bounds(&self) -> Aabb {
+        EVERYWHERE
+    }
+
+    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        self.intersect(ray)
+    }
+
+    /// The half-space behind the normal is the solid: a line crossing the plane starts inside
+    /// when it leaves through the plane (its hit is a back face); a parallel line (no
+    /// crossing) when its origin is strictly behind.
+    fn line_starts_inside(&self, ray: &Ray) -> bool {
+        match self.intersect(&whole_line(ray)) {
+            Some(h) => !h.front_face,
+            None => (ray.origin - self.point()).dot(self.normal()) < 0.0,
+        }
+    }
+}
+
+impl Shape for Quadric {
+    /// Infinite (a general quadric need not be bounded).
+    fn bounds(&self) -> Aabb {
+        EVERYWHERE
+    }
+
+    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        self.intersect(ray)
+    }
+
+    fn line_crossings(&self, ray: &Ray) -> [Option<Hit>; 2] {
+        quadric_crossings(ray, |l| self.roots(l), |r| self.intersect(r))
+    }
+
+    /// The solid is `f < 0`: the sign of the leading coefficient of `f(o + t·d)` (in `f64`),
+    /// `d·A·d`, then of the linear one `d·∇f(o)` (inside when it is positive: `f` falls as
+    /// `t → −∞`), then of `f(o)` for a line along which `f` is constant.
+    fn line_starts_inside(&self, ray: &Ray) -> bool {
+        let o = ray.origin.as_dvec3();
+        let d = ray.direction.as_dvec3();
+        let qa = d.dot(self.matrix() * d);
+        let qb = d.dot(self.gradient(o));
+        if qa != 0.0 {
+            qa < 0.0
+        } else if qb != 0.0 {
+            qb > 0.0
+        } else {
+            self.eval(o) < 0.0
+        }
+    }
+}
+
+impl Shape for ClippedQuadric {
+    /// The clip box; infinite without one.
+    fn bounds(&self) -> Aabb {
+        self.clip.unwrap_or(EVERYWHERE)
+    }
+
+    /// The nearest root in the ray's interval whose hit lies in the clip box (each root's hit
+    /// by [`hit_at_root`], so exactly as a plain query computes it); the quadric's own hit
+    /// without a clip box.
+    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        if self.clip.is_none() {
+            return self.quadric.intersect(ray);
+        }
+        let (t0, t1) = self.quadric.roots(ray)?;
+        [t0 as f32, t1 as f32]
+            .into_iter()
+            .filter(|&t| ray.contains(t))
+            .filter_map(|t| hit_at_root(ray, t, |r| self.quadric.intersect(r)))
+            .find(|h| self.in_clip(h))
+    }
+
+    /// The quadric's crossings whose hits lie in the clip box (a clipped quadric is open: its
+    /// crossings do not alternate between inside and outside).
+    fn line_crossings(&self, ray: &Ray) -> [Option<Hit>; 2] {
+        self.quadric
+            .line_crossings(ray)
+            .map(|h| h.filter(|h| self.in_clip(h)))
+    }
+
+    /// The quadric's, without a clip box; `false` with one (no solid).
+    fn line_starts_inside(&self, ray: &Ray) -> bool {
+        self.clip.is_none() && self.quadric.line_starts_inside(ray)
     }
 }
 
@@ -208,6 +325,66 @@ mod tests {
             panic!("one crossing behind the origin");
         };
         assert_eq!(h.t, -1.0);
+    }
+
+    /// The plane `z = 0` (normal `+z`, the solid `z < 0`): a line going down enters it at
+    /// the plane and starts outside, one going up leaves it and starts inside, a parallel line
+    /// below it is inside throughout and crosses nothing.
+    #[test]
+    fn plane_worked_example() {
+        let p = Plane::new(Vec3::ZERO, Vec3::Z).unwrap();
+        let down = Ray::new(Vec3::new(0.5, 0.0, 5.0), -Vec3::Z);
+        let [Some(h), None] = p.line_crossings(&down) else {
+            panic!("one crossing");
+        };
+        assert_eq!(
+            (h.t, h.point, h.front_face),
+            (5.0, Vec3::new(0.5, 0.0, 0.0), true)
+        );
+        assert!(!p.line_starts_inside(&down));
+        let up = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z);
+        assert!(p.line_starts_inside(&up));
+        let below = Ray::new(Vec3::new(0.0, 0.0, -1.0), Vec3::X);
+        assert_eq!(p.line_crossings(&below), [None, None]);
+        assert!(p.line_starts_inside(&below));
+        assert!(!p.line_starts_inside(&Ray::new(Vec3::Z, Vec3::X)));
+        assert!(!Shape::bounds(&p).is_finite());
+    }
+
+    /// The unit sphere as a general quadric `x² + y² + z² − 1` crossed by the line `y = 0.5`,
+    /// `z = 0` along `+x`: at `t = 5 ∓ √0.75`, as the [`Sphere`]'s, starting outside; the
+    /// half-space `z < 0` as the quadric `f = z` starts inside a line going up. Clipped to
+    /// `x ≥ 0`, the sphere keeps only the exit, which is then also the closest hit.
+    #[test]
+    fn quadric_worked_example() {
+        use glam::{DMat3, DVec3};
+        let q = Quadric::new(DMat3::IDENTITY, DVec3::ZERO, -1.0).unwrap();
+        let ray = Ray::new(Vec3::new(-5.0, 0.5, 0.0), Vec3::X);
+        let x = 0.75f32.sqrt();
+        let [Some(a), Some(b)] = q.line_crossings(&ray) else {
+            panic!("two crossings");
+        };
+        assert!((a.t - (5.0 - x)).abs() <= 1e-6 && (b.t - (5.0 + x)).abs() <= 1e-6);
+        assert!(a.front_face && !b.front_face);
+        assert!(!q.line_starts_inside(&ray));
+        let half = Quadric::new(DMat3::ZERO, DVec3::new(0.0, 0.0, 0.5), 0.0).unwrap();
+        assert!(half.line_starts_inside(&Ray::new(Vec3::ZERO, Vec3::Z)));
+        assert!(!half.line_starts_inside(&Ray::new(Vec3::ZERO, -Vec3::Z)));
+
+        let clip = Aabb::new(Vec3::new(0.0, -2.0, -2.0), Vec3::splat(2.0));
+        let clipped = ClippedQuadric {
+            quadric: q,
+            clip: Some(clip),
+        };
+        assert_eq!(clipped.line_crossings(&ray), [None, Some(b)]);
+        assert_eq!(clipped.closest_hit(&ray), Some(b));
+        assert!(!clipped.line_starts_inside(&ray));
+        assert_eq!(Shape::bounds(&clipped), clip);
+        let whole = ClippedQuadric {
+            quadric: q,
+            clip: None,
+        };
+        assert_eq!(whole.closest_hit(&ray), Some(a));
     }
 
     /// A BVH over a slice of spheres, queried with [`Shape::closest_hit`], answers like a loop

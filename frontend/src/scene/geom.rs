@@ -14,10 +14,10 @@
 //! state is a crossing of the result.
 
 mod csg;
-mod primitives;
+mod mesh;
 
 pub use csg::combine;
-use primitives::*;
+pub use halfray_core::quadric::ClippedQuadric;
 
 use crate::accel::MeshAccel;
 use crate::scene::xform::bounds_to_world;
@@ -26,8 +26,8 @@ use halfray_core::aabb::SlabRay;
 use halfray_core::bvh::TraversalStats;
 use halfray_core::float::gamma;
 use halfray_core::plane::Plane;
-use halfray_core::quadric::{Ellipsoid, Quadric};
-use halfray_core::shape::Shape as _;
+use halfray_core::quadric::Ellipsoid;
+use halfray_core::shape::Shape as CoreShape;
 use halfray_core::sphere::Sphere;
 use halfray_core::transform::Transform;
 use halfray_core::triangle::Watertight;
@@ -91,15 +91,6 @@ pub const POLYGON_MAX_VERTICES: usize = 64;
 /// A planar polygon (the core's, even–odd rule).
 pub type Polygon = halfray_core::polygon::Polygon<POLYGON_MAX_VERTICES>;
 
-/// A general quadric (solid where `f < 0`), optionally clipped to a box.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ClippedQuadric {
-    /// The surface.
-    pub quadric: Quadric,
-    /// Clip box (hits outside are dropped); `None` for the whole surface.
-    pub clip: Option<Aabb>,
-}
-
 /// A mesh primitive (shared by all its instances).
 pub struct MeshShape {
     /// Name in the scene file.
@@ -153,7 +144,7 @@ pub enum Shape {
     Sphere(Sphere),
     /// Ellipsoid.
     Ellipsoid(Ellipsoid),
-    /// General quadric.
+    /// General quadric, optionally clipped to a box.
     Quadric(ClippedQuadric),
     /// Axis-aligned box (a solid).
     Box(Aabb),
@@ -205,16 +196,37 @@ impl Shape {
         }
     }
 
+    /// The core [`CoreShape`] of a primitive, which answers its queries; `None` for a mesh
+    /// and for CSG.
+    fn primitive(&self) -> Option<&dyn CoreShape> {
+        Some(match self {
+            Self::Sphere(s) => s,
+            Self::Ellipsoid(e) => e,
+            Self::Quadric(q) => q,
+            Self::Box(b) => b,
+            Self::Plane(p) => p,
+            Self::Triangle(v) => v,
+            Self::Polygon(p) => p.as_ref(),
+            Self::Mesh(_) | Self::Csg(..) => return None,
+        })
+    }
+
+    /// The barycentrics `(b0, b1, b2)` of a single triangle's hit (the core's `uv` is
+    /// `(b1, b2)`, `b0 = 1 − b1 − b2` as the core computes it); `None` for other shapes.
+    fn barycentrics(&self, h: &Hit) -> Option<Vec3> {
+        matches!(self, Self::Triangle(_)).then(|| Vec3::new(1.0 - h.uv.x - h.uv.y, h.uv.x, h.uv.y))
+    }
+
     /// Object-space bounds (`None`: unbounded).
     pub fn bounds(&self) -> Option<Aabb> {
         match self {
-            Self::Sphere(s) => Some(s.bounds()),
-            Self::Ellipsoid(e) => Some(e.bounds()),
-            Self::Quadric(q) => q.clip,
-            Self::Box(b) => Some(*b),
             Self::Plane(_) => None,
-            Self::Triangle(v) => Some(v.bounds()),
-            Self::Polygon(p) => Some(p.as_ref().bounds()),
+            Self::Quadric(q) => q.clip,
+            Self::Sphere(_)
+            | Self::Ellipsoid(_)
+            | Self::Box(_)
+            | Self::Triangle(_)
+            | Self::Polygon(_) => self.primitive().map(|s| s.bounds()),
             Self::Mesh(m) => m.accel.mesh.bounds().map(|(lo, hi)| Aabb::new(lo, hi)),
             Self::Csg(op, a, b) => match op {
                 CsgOp::Union => match (a.bounds, b.bounds) {
@@ -317,22 +329,11 @@ impl Node {
                 .find(|e| ray.contains(e.t))
                 .map(|e| e.hit);
         }
-        let pick = |h: Hit| ray.contains(h.t).then_some(h);
+        if let Some(s) = self.shape.primitive() {
+            let h = s.closest_hit(ray)?;
+            return Some(self.surf(h, self.shape.barycentrics(&h)));
+        }
         match &self.shape {
-            Shape::Sphere(s) => Some(self.surf(s.closest_hit(ray)?, None)),
-            Shape::Ellipsoid(e) => Some(self.surf(e.closest_hit(ray)?, None)),
-            Shape::Quadric(q) => Some(self.surf(q.closest(ray)?, None)),
-            Shape::Box(b) => {
-                let (h0, h1) = box_hits(b, ray)?;
-                let h = pick(h0).or_else(|| pick(h1))?;
-                Some(self.surf(h, None))
-            }
-            Shape::Plane(p) => Some(self.surf(p.intersect(ray)?, None)),
-            Shape::Triangle(v) => {
-                let (h, b) = tri_hit(v, ray)?;
-                Some(self.surf(h, Some(b)))
-            }
-            Shape::Polygon(p) => Some(self.surf(p.closest_hit(ray)?, None)),
             Shape::Mesh(m) => {
                 let (h, b, shading) = m.closest(ray, &mut ctx.stats)?;
                 Some(SurfaceHit {
@@ -340,7 +341,7 @@ impl Node {
                     ..self.surf(h, Some(b))
                 })
             }
-            Shape::Csg(..) => None,
+            _ => None,
         }
     }
 }

@@ -1,10 +1,9 @@
 //! CSG on intervals: every crossing of a node's boundary along the whole line, and the
 //! combination of two operands' crossings by a boolean operation.
 
-use super::primitives::*;
+use super::mesh::*;
 use super::*;
 use glam::Vec3;
-use halfray_core::shape::{Shape as _, crossings_at_roots};
 use halfray_core::{Hit, Ray};
 
 impl Node {
@@ -33,56 +32,18 @@ impl Node {
         }
     }
 
-    /// One event per crossing of a core [`halfray_core::shape::Shape`].
-    fn push_crossings(&self, crossings: [Option<Hit>; 2], out: &mut Vec<Event>) {
-        out.extend(crossings.into_iter().flatten().map(|h| self.event(h, None)));
-    }
-
     pub(super) fn events_local(&self, ray: &Ray, ctx: &mut QueryCtx, out: &mut Vec<Event>) -> bool {
         let line = Ray::with_interval(ray.origin, ray.direction, f32::NEG_INFINITY, f32::INFINITY);
+        if let Some(s) = self.shape.primitive() {
+            out.extend(
+                s.line_crossings(&line)
+                    .into_iter()
+                    .flatten()
+                    .map(|h| self.event(h, self.shape.barycentrics(&h))),
+            );
+            return s.line_starts_inside(&line);
+        }
         match &self.shape {
-            Shape::Sphere(s) => {
-                self.push_crossings(s.line_crossings(&line), out);
-                false
-            }
-            Shape::Ellipsoid(e) => {
-                self.push_crossings(e.line_crossings(&line), out);
-                false
-            }
-            Shape::Quadric(q) => {
-                let roots = q
-                    .quadric
-                    .roots(&line)
-                    .map(|(t0, t1)| (t0 as f32, t1 as f32));
-                let crossings = crossings_at_roots(&line, roots, |r| q.quadric.intersect(r));
-                self.push_crossings(crossings, out);
-                quadric_inside_at_start(&q.quadric, &line)
-            }
-            Shape::Box(b) => {
-                if let Some((h0, h1)) = box_hits(b, &line) {
-                    out.push(self.event(h0, None));
-                    out.push(self.event(h1, None));
-                }
-                false
-            }
-            Shape::Plane(p) => match p.intersect(&line) {
-                Some(h) => {
-                    let inside = !h.front_face;
-                    out.push(self.event(h, None));
-                    inside
-                }
-                None => (line.origin - p.point()).dot(p.normal()) < 0.0,
-            },
-            Shape::Triangle(v) => {
-                if let Some((h, b)) = tri_hit(v, &line) {
-                    out.push(self.event(h, Some(b)));
-                }
-                false
-            }
-            Shape::Polygon(p) => {
-                self.push_crossings(p.as_ref().line_crossings(&line), out);
-                false
-            }
             Shape::Mesh(m) => {
                 let mut hits = Vec::new();
                 m.all_hits(&line, &mut ctx.stats, &mut hits);
@@ -103,6 +64,7 @@ impl Node {
                 let ib = b.events(&line, ctx, &mut eb);
                 combine(*op, &ea, ia, &eb, ib, out)
             }
+            _ => false,
         }
     }
 }

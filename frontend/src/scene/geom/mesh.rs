@@ -1,109 +1,11 @@
-//! The primitives' own queries: closest hit at a root of the line, boxes, triangles, meshes
-//! (closest hit and every counted crossing).
+//! A mesh instance's queries: the closest hit with its shading normal, and every counted
+//! crossing of a line (the other primitives are the core's [`halfray_core::shape::Shape`]s).
 
 use super::*;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use halfray_core::bvh::TraversalStats;
-use halfray_core::float::gamma;
-use halfray_core::quadric::Quadric;
-use halfray_core::shape::hit_at_root;
 use halfray_core::triangle::{TriangleIntersector, Watertight};
-use halfray_core::{Aabb, Hit, Ray};
-
-/// Whether the line `o + t·d` is inside (`f < 0`) the quadric as `t → −∞`: the sign of the
-/// leading coefficient of `f(o + t·d)`.
-pub(super) fn quadric_inside_at_start(q: &Quadric, ray: &Ray) -> bool {
-    let o = ray.origin.as_dvec3();
-    let d = ray.direction.as_dvec3();
-    let qa = d.dot(q.matrix() * d);
-    let qb = d.dot(q.gradient(o));
-    if qa != 0.0 {
-        qa < 0.0
-    } else if qb != 0.0 {
-        qb > 0.0
-    } else {
-        q.eval(o) < 0.0
-    }
-}
-
-impl ClippedQuadric {
-    pub(super) fn in_clip(&self, h: &Hit) -> bool {
-        self.clip.is_none_or(|b| b.contains_point(h.point))
-    }
-
-    pub(super) fn closest(&self, ray: &Ray) -> Option<Hit> {
-        if self.clip.is_none() {
-            return self.quadric.intersect(ray);
-        }
-        let (t0, t1) = self.quadric.roots(ray)?;
-        [t0 as f32, t1 as f32]
-            .into_iter()
-            .filter(|&t| ray.contains(t))
-            .filter_map(|t| hit_at_root(ray, t, |r| self.quadric.intersect(r)))
-            .find(|h| self.in_clip(h))
-    }
-}
-
-/// Hit on an axis-aligned box at `t` entering (`enter`) or leaving, face snapped exactly.
-pub(super) fn box_hits(b: &Aabb, ray: &Ray) -> Option<(Hit, Hit)> {
-    let o = ray.origin.as_dvec3();
-    let d = ray.direction.as_dvec3();
-    let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
-    let (mut a0, mut a1) = (0usize, 0usize);
-    for axis in 0..3 {
-        let (lo, hi) = (f64::from(b.min[axis]), f64::from(b.max[axis]));
-        if d[axis] == 0.0 {
-            if o[axis] < lo || o[axis] > hi {
-                return None;
-            }
-            continue;
-        }
-        let (mut n, mut f) = ((lo - o[axis]) / d[axis], (hi - o[axis]) / d[axis]);
-        if n > f {
-            std::mem::swap(&mut n, &mut f);
-        }
-        if n > t0 {
-            t0 = n;
-            a0 = axis;
-        }
-        if f < t1 {
-            t1 = f;
-            a1 = axis;
-        }
-    }
-    if !(t0 <= t1) || !t0.is_finite() || !t1.is_finite() {
-        return None;
-    }
-    let mk = |t: f64, axis: usize, enter: bool| {
-        let mut p = o + d * t;
-        let mut normal = Vec3::ZERO;
-        // Entering through the face the ray moves into: the near face.
-        let to_max = (d[axis] < 0.0) == enter;
-        p[axis] = if to_max {
-            f64::from(b.max[axis])
-        } else {
-            f64::from(b.min[axis])
-        };
-        normal[axis] = if to_max { 1.0 } else { -1.0 };
-        let point = p.as_vec3().clamp(b.min, b.max);
-        let mut err = point.abs() * gamma(3);
-        err[axis] = 0.0;
-        Hit {
-            t: t as f32,
-            point,
-            point_error: err,
-            normal,
-            uv: Vec2::ZERO,
-            front_face: ray.direction.dot(normal) < 0.0,
-        }
-    };
-    Some((mk(t0, a0, true), mk(t1, a1, false)))
-}
-
-pub(super) fn tri_hit(v: &[Vec3; 3], ray: &Ray) -> Option<(Hit, Vec3)> {
-    let th = Watertight.intersect(ray, v)?;
-    Some((th.to_hit(v), Vec3::new(th.b0(), th.b1, th.b2)))
-}
+use halfray_core::{Hit, Ray};
 
 impl MeshShape {
     pub(super) fn closest(
