@@ -163,8 +163,9 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
     let mesh = generate(args.kind, args.seed, args.size)?;
     write_obj_to(out, &mesh.positions, &mesh.triangles)?;
     crate::console::print_out(&format!(
-        "mesh generate {:?} --seed {}: {} vertices, {} triangles -> {} ({:.2} s)\n",
-        args.kind,
+        "mesh generate {} --seed {}: {} vertices, {} triangles -> {} ({:.2} s)\n",
+        clap::ValueEnum::to_possible_value(&args.kind)
+            .map_or_else(String::new, |v| v.get_name().to_string()),
         args.seed,
         mesh.positions.len(),
         mesh.triangles.len(),
