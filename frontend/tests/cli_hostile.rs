@@ -585,3 +585,122 @@ fn repeat_products_that_overflow_are_refused() {
     );
     assert_eq!(names(dir.path()), ["r.toml"]);
 }
+
+/// Item 9: `--explain` states the worst-case rays, coincident objects and a time estimate;
+/// a scene over the work budget is refused at once unless `--allow-long`.
+#[test]
+fn work_is_estimated_and_a_scene_over_the_budget_needs_allow_long() {
+    let dir = tempfile::tempdir().unwrap();
+    // The issue's scene: 640×480, 256 lens samples, 64 area lights × 256 samples, a mirror,
+    // max_depth 64: about 10 days.
+    let mut text = format!(
+        "max_depth = 64\n{}aperture = 0.1\nfocus_distance = 5\nlens_samples = 256\n\
+         [material.m]\ndiffuse = [1, 1, 1]\nmirror = 0.9\n{}",
+        camera("[0, 0, 5]", "[0, 0, 0]", "40", [640, 480]),
+        sphere("[0, 0, 0]", "1", "m"),
+    );
+    for k in 0..64 {
+        text.push_str(&format!(
+            "[[light]]\ntype = \"point\"\nposition = [{k}, 4, 3]\nradius = 0.5\nsamples = 256\n"
+        ));
+    }
+    let scene = dir.path().join("long.toml");
+    std::fs::write(&scene, text).unwrap();
+    let png = dir.path().join("o.png");
+    let started = std::time::Instant::now();
+    let o = run(&[&"render", &scene, &"-o", &png, &"--explain"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(started.elapsed() < std::time::Duration::from_secs(30));
+    let e = stderr(&o);
+    assert!(e.contains("--allow-long") && e.contains("days"), "{e}");
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("worst case")
+            && out.contains("256 camera rays")
+            && out.contains("16384 shadow"),
+        "{out}"
+    );
+    assert_eq!(
+        names(dir.path()),
+        ["long.toml"],
+        "nothing rendered or written"
+    );
+    // A million coincident copies: within budget for a tiny image, but explained.
+    let scene = small_scene(
+        dir.path(),
+        "c.toml",
+        "repeat = { count = [1000, 1000, 1], step = [0, 0, 0] }\n",
+    );
+    let o = run(&[
+        &"render",
+        &scene,
+        &"-o",
+        &png,
+        &"--explain",
+        &"--width",
+        &"2",
+        &"--height",
+        &"2",
+        &"-q",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("1000000 objects share one box"),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+}
+
+/// Item 13 and 12: errors name the actual problem, and untrusted strings reach the terminal
+/// escaped.
+#[test]
+fn errors_name_the_actual_problem_and_escape_what_they_quote() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("o.png");
+    // A device as a scene mesh: "not a regular file", not "not found".
+    let scene = small_scene(dir.path(), "d.toml", "[mesh.n]\nfile = \"/dev/null\"\n");
+    let o = run(&[&"render", &scene, &"-o", &png, &"-q"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("is not a regular file"),
+        "{}",
+        stderr(&o)
+    );
+    // A non-UTF-8 scene: the line and column of the bad byte.
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, b"max_depth = 2\n# caf\xe9\n").unwrap();
+    let o = run(&[&"render", &bad, &"-o", &png, &"-q"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("bad.toml:2:6: byte 0xe9 is not UTF-8"),
+        "{}",
+        stderr(&o)
+    );
+    // A file name with terminal escapes and a line break: one `error:` line, no ESC byte.
+    let evil = dir
+        .path()
+        .join("x\u{1b}]0;pwned\u{7}\nerror: forged\u{1b}[2J.toml");
+    let o = run(&[&"render", &evil, &"-o", &png, &"-q"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(!e.contains('\u{1b}') && !e.contains('\u{7}'), "{e:?}");
+    assert_eq!(e.lines().count(), 1, "{e:?}");
+    // Merge prints mesh paths from JSON escaped, and `|` cannot split the table's cells.
+    let line = result_line("a|b\u{1b}[2J.obj", 0, 1, 0);
+    let o = merge(dir.path(), &[("p.jsonl", line + "\n")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        !out.contains('\u{1b}') && out.contains("a\\|b\\u{1b}[2J.obj"),
+        "{out}"
+    );
+    // A JSONL line with a bad count: the log line's own error, not a report's missing field.
+    let line = result_line("a.obj", 0, 1, 0).replace("\"rays\":10", "\"rays\":-1");
+    let o = merge(dir.path(), &[("p.jsonl", line + "\n")]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("p.jsonl:1:") && !stderr(&o).contains("threads"),
+        "{}",
+        stderr(&o)
+    );
+}

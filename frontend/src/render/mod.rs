@@ -7,6 +7,7 @@
 
 pub mod antialias;
 pub mod bound;
+pub mod budget;
 pub mod gamma;
 pub mod output;
 pub mod plan;
@@ -95,6 +96,10 @@ pub struct RenderArgs {
     /// Replace outputs that are read-only or hard-linked (keeping their mode).
     #[arg(long)]
     pub force: bool,
+    /// Render even when the worst-case work is over the budget
+    /// (`render::budget::MAX_WORST_CASE_WORK`; `--explain` prints the estimate).
+    #[arg(long)]
+    pub allow_long: bool,
     /// No progress bar and no settings line (the summary line is still printed).
     #[arg(short, long)]
     pub quiet: bool,
@@ -426,13 +431,27 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         progress: !args.quiet,
         bound: PathBound::RENDER,
     };
+    let plan = EffectPlan::derive(&scene, opts.force_all);
+    let estimate = budget::Estimate::of(&scene, &plan, opts.samples, opts.mode == Mode::Color);
     if args.explain {
-        print_out(&EffectPlan::derive(&scene, opts.force_all).explain(&scene))?;
+        let threads = rayon::current_num_threads();
+        print_out(&(plan.explain(&scene) + &estimate.explain(threads)))?;
+    }
+    if estimate.over_budget() && !args.allow_long {
+        return Err(Error::Usage(format!(
+            "{}: the worst case is {:.3e} rays × {} coincident objects, over the budget of {:.0e}              (render::budget::MAX_WORST_CASE_WORK; at most about {} on {} threads);              --explain shows where they come from, --allow-long renders anyway",
+            crate::text::path(&args.scene),
+            estimate.rays(),
+            estimate.coincident.max(1),
+            budget::MAX_WORST_CASE_WORK,
+            budget::duration(estimate.seconds(rayon::current_num_threads())),
+            rayon::current_num_threads()
+        )));
     }
     if !args.quiet {
         eprintln!(
             "rendering {} ({w}×{h}, mode {:?}, {} threads)",
-            args.scene.display(),
+            crate::text::path(&args.scene),
             args.mode,
             rayon::current_num_threads()
         );
@@ -480,7 +499,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     // The image and its statistics: both or neither.
     write_together(files)?;
     if !args.quiet {
-        eprintln!("wrote {}", args.output.display());
+        eprintln!("wrote {}", crate::text::path(&args.output));
     }
     print_out(&format!("{}\n", summary(&out)))
 }

@@ -26,19 +26,24 @@ pub(super) fn mesh_def(ctx: &Ctx<'_>, name: &str, def: &MeshDef) -> Result<MeshS
             &format!("{p}.file"),
             format!(
                 "mesh file `{}` is a directory, not an OBJ file ({})",
-                def.file.get_ref(),
-                path.display()
+                crate::text::escaped(def.file.get_ref()),
+                crate::text::path(&path)
             ),
         ));
     }
     if !path.is_file() {
+        let why = if path.exists() {
+            "is not a regular file (a device, FIFO or socket)"
+        } else {
+            "not found"
+        };
         return Err(ctx.err(
             &def.file.span(),
             &format!("{p}.file"),
             format!(
-                "mesh file `{}` not found (looked for {})",
-                def.file.get_ref(),
-                path.display()
+                "mesh file `{}` {why} (looked for {})",
+                crate::text::escaped(def.file.get_ref()),
+                crate::text::path(&path)
             ),
         ));
     }

@@ -1,0 +1,177 @@
+//! The work a render may do, estimated before it starts: the worst-case ray count from the
+//! scene's settings, the largest group of coincident objects, and a rough time. `--explain`
+//! prints it; `render` refuses a scene whose worst case is over [`MAX_WORST_CASE_WORK`]
+//! unless `--allow-long`.
+//!
+//! The worst case per pixel is `S × (1 + R) × (1 + L)`: `S` camera rays (the lens samples
+//! with a thin lens, else the anti-aliasing samples in colour mode, else 1), each with at most
+//! `R` secondary rays ([`MAX_SECONDARY_RAYS_PER_PIXEL`] when the plan casts reflection or
+//! refraction rays, 0 otherwise) and at every one of those shading points `L` shadow rays
+//! (one per point light the plan shades with shadows, `samples` per area light). Real renders
+//! cast far fewer (adaptive anti-aliasing, path weights that fall below the bound), so the
+//! estimate is an upper bound, not a prediction.
+//!
+//! Coincident objects (copies with the same world box, as `repeat` with a zero `step` makes)
+//! cannot be told apart by the top-level BVH: a box test cannot skip one copy without skipping
+//! all, and which copy is hit first (and so which material shows) is decided only by
+//! intersecting each. So every ray that reaches such a group tests all of its objects; the
+//! estimate multiplies the rays by the size of the largest group.
+
+use super::bound::MAX_SECONDARY_RAYS_PER_PIXEL;
+use super::plan::EffectPlan;
+use crate::scene::{LightKind, Scene};
+use std::collections::HashMap;
+
+/// Largest worst-case work (rays × the largest coincident group) `render` starts without
+/// `--allow-long`: 10¹¹, about a day at [`ASSUMED_RAYS_PER_SECOND`] on one thread. The
+/// shipped scenes' worst cases are at most 2.5·10⁹ (the mirror and glass ones).
+pub const MAX_WORST_CASE_WORK: f64 = 1e11;
+
+/// Rays per second per thread the time estimate assumes: 10⁶, the order the showcase renders
+/// at (about 1 Mrays/s on one core of the development machines). A rough figure: meshes,
+/// CSG and transparency change it.
+pub const ASSUMED_RAYS_PER_SECOND: f64 = 1e6;
+
+/// A render's estimated work (see the module docs). Counts are `f64`: a worst case beyond
+/// 2⁶⁴ is still ordered right.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimate {
+    /// Pixels.
+    pub pixels: f64,
+    /// Camera rays per pixel (`S`).
+    pub camera_rays: f64,
+    /// Most secondary rays per camera ray (`R`).
+    pub secondary: f64,
+    /// Shadow rays per shading point (`L`).
+    pub shadow: f64,
+    /// Objects in the largest group sharing one world box.
+    pub coincident: usize,
+}
+
+impl Estimate {
+    /// The estimate of `scene` rendered with `plan`, `samples` anti-aliasing samples, in colour
+    /// mode or not.
+    pub fn of(scene: &Scene, plan: &EffectPlan, samples: u32, color: bool) -> Self {
+        let cam = &scene.camera;
+        let camera_rays = match (&cam.lens, color) {
+            (Some(lens), true) => lens.samples,
+            (None, true) => samples,
+            _ => 1,
+        };
+        let secondary =
+            if plan.max_depth > 0 && (plan.flags().reflection || plan.flags().refraction) {
+                MAX_SECONDARY_RAYS_PER_PIXEL
+            } else {
+                0
+            };
+        let shadow: f64 = scene
+            .lights
+            .iter()
+            .zip(&plan.shadow_rays)
+            .filter(|(_, on)| **on)
+            .map(|(l, _)| match l.kind {
+                LightKind::Point { .. } if l.radius > 0.0 => f64::from(l.samples),
+                _ => 1.0,
+            })
+            .sum();
+        let mut boxes: HashMap<[u32; 6], usize> = HashMap::new();
+        for o in &scene.objects {
+            if let Some(b) = o.bounds {
+                let key = [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z].map(f32::to_bits);
+                *boxes.entry(key).or_default() += 1;
+            }
+        }
+        Self {
+            pixels: f64::from(cam.width) * f64::from(cam.height),
+            camera_rays: f64::from(camera_rays),
+            secondary: f64::from(secondary),
+            shadow,
+            coincident: boxes.values().copied().max().unwrap_or(0),
+        }
+    }
+
+    /// Worst-case rays of the whole image.
+    pub fn rays(&self) -> f64 {
+        self.pixels * self.camera_rays * (1.0 + self.secondary) * (1.0 + self.shadow)
+    }
+
+    /// Worst-case work: rays × the largest coincident group (at least 1).
+    pub fn work(&self) -> f64 {
+        self.rays() * self.coincident.max(1) as f64
+    }
+
+    /// Rough seconds on `threads` threads at [`ASSUMED_RAYS_PER_SECOND`].
+    pub fn seconds(&self, threads: usize) -> f64 {
+        self.work() / (ASSUMED_RAYS_PER_SECOND * threads.max(1) as f64)
+    }
+
+    /// Whether the work is over [`MAX_WORST_CASE_WORK`].
+    pub fn over_budget(&self) -> bool {
+        self.work() > MAX_WORST_CASE_WORK
+    }
+
+    /// The `--explain` lines.
+    pub fn explain(&self, threads: usize) -> String {
+        let mut s = format!(
+            "  worst case       {:.3e} rays = {} pixels × {} camera rays × (1 + {} secondary) × (1 + {} shadow rays per hit)\n",
+            self.rays(),
+            self.pixels,
+            self.camera_rays,
+            self.secondary,
+            self.shadow
+        );
+        if self.coincident > 1 {
+            s.push_str(&format!(
+                "  coincident       {} objects share one box: each ray reaching them tests all (the top-level BVH cannot skip identical boxes)\n",
+                self.coincident
+            ));
+        }
+        s.push_str(&format!(
+            "  time estimate    at most about {} on {threads} threads (assuming {:.0e} rays/s per thread); budget {:.0e} (--allow-long past it)\n",
+            duration(self.seconds(threads)),
+            ASSUMED_RAYS_PER_SECOND,
+            MAX_WORST_CASE_WORK
+        ));
+        s
+    }
+}
+
+/// `seconds` in the largest fitting unit (`3.2 s`, `4.1 h`, `12.0 days`).
+pub fn duration(seconds: f64) -> String {
+    match seconds {
+        s if s < 120.0 => format!("{s:.1} s"),
+        s if s < 7200.0 => format!("{:.1} min", s / 60.0),
+        s if s < 172_800.0 => format!("{:.1} h", s / 3600.0),
+        s => format!("{:.1} days", s / 86_400.0),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_worst_case_multiplies_out() {
+        let e = Estimate {
+            pixels: 640.0 * 480.0,
+            camera_rays: 256.0,
+            secondary: 4096.0,
+            shadow: 64.0 * 256.0,
+            coincident: 1,
+        };
+        // 256 × 4097 × 16385 rays per pixel: 17.2 G, far over the budget.
+        assert_eq!(e.rays(), 307_200.0 * 256.0 * 4097.0 * 16_385.0);
+        assert!(e.over_budget());
+        assert_eq!(duration(90.0), "90.0 s");
+        assert_eq!(duration(86_400.0 * 10.0), "10.0 days");
+        let small = Estimate {
+            pixels: 768.0,
+            camera_rays: 1.0,
+            secondary: 0.0,
+            shadow: 0.0,
+            coincident: 1_000_000,
+        };
+        assert_eq!(small.work(), 768e6);
+        assert!(small.explain(2).contains("1000000 objects share one box"));
+    }
+}
