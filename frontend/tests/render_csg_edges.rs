@@ -7,7 +7,7 @@
 use glam::Vec3;
 use halfray::accel::MeshAccel;
 use halfray::obj::read_obj;
-use halfray::scene::geom::{CsgOp, Event, MeshShape, Node, QueryCtx, Shape};
+use halfray::scene::geom::{CsgOp, Event, Geometry, MeshShape, Node, QueryCtx};
 use halfray_core::{Aabb, Ray};
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -94,7 +94,7 @@ fn mesh_operands_are_crossed_once_through_edges_and_vertices() {
     let mut edge_lines = 0usize;
     for name in CLOSED {
         let (shape, positions, edges) = mesh_node(name);
-        let mesh = Node::new(Shape::Mesh(shape.clone()), 0, None);
+        let mesh = Node::new(Geometry::Mesh(shape.clone()), 0, None);
         let (lo, hi) = positions
             .iter()
             .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), p| {
@@ -162,11 +162,11 @@ fn mesh_operands_are_crossed_once_through_edges_and_vertices() {
                 for op in [CsgOp::Union, CsgOp::Intersection, CsgOp::Difference] {
                     for mesh_first in [true, false] {
                         let (a, b) = (
-                            Node::new(Shape::Mesh(shape.clone()), 0, None),
-                            Node::new(Shape::Box(cut), 0, None),
+                            Node::new(Geometry::Mesh(shape.clone()), 0, None),
+                            Node::new(Geometry::Box(cut), 0, None),
                         );
                         let (a, b) = if mesh_first { (a, b) } else { (b, a) };
-                        let csg = Node::new(Shape::Csg(op, Box::new(a), Box::new(b)), 0, None);
+                        let csg = Node::new(Geometry::Csg(op, Box::new(a), Box::new(b)), 0, None);
                         let e0 = touches_removed(&events(&csg, o, d).0);
                         let e1 = touches_removed(&events(&csg, o + side, d).0);
                         // The same crossings in the same order and direction (their `t` may
@@ -200,10 +200,10 @@ fn any_hit_passes_through_a_hole_drilled_by_a_mesh() {
     let (cube, _, _) = mesh_node("cube.obj");
     let slab = Aabb::new(Vec3::new(-3.0, -3.0, -0.5), Vec3::new(3.0, 3.0, 0.5));
     let drilled = Node::new(
-        Shape::Csg(
+        Geometry::Csg(
             CsgOp::Difference,
-            Box::new(Node::new(Shape::Box(slab), 0, None)),
-            Box::new(Node::new(Shape::Mesh(cube), 0, None)),
+            Box::new(Node::new(Geometry::Box(slab), 0, None)),
+            Box::new(Node::new(Geometry::Mesh(cube), 0, None)),
         ),
         0,
         None,

@@ -27,7 +27,7 @@ use halfray_core::bvh::TraversalStats;
 use halfray_core::float::gamma;
 use halfray_core::plane::Plane;
 use halfray_core::quadric::Ellipsoid;
-use halfray_core::shape::Shape as CoreShape;
+use halfray_core::shape::Shape;
 use halfray_core::sphere::Sphere;
 use halfray_core::transform::Transform;
 use halfray_core::triangle::Watertight;
@@ -137,9 +137,10 @@ impl CsgOp {
     }
 }
 
-/// A primitive or a CSG combination.
+/// A scene object's geometry: a primitive (answered by its core [`Shape`]), a mesh instance or a
+/// CSG combination.
 #[derive(Clone, Debug)]
-pub enum Shape {
+pub enum Geometry {
     /// Sphere.
     Sphere(Sphere),
     /// Ellipsoid.
@@ -165,7 +166,7 @@ pub enum Shape {
 #[derive(Clone, Debug)]
 pub struct Node {
     /// The shape in object space.
-    pub shape: Shape,
+    pub shape: Geometry,
     /// Material index (CSG operands without one inherit the parent's).
     pub material: u32,
     /// Object → world (parent) transform.
@@ -184,7 +185,7 @@ pub struct QueryCtx {
     pub force_intervals: bool,
 }
 
-impl Shape {
+impl Geometry {
     /// `true` for shapes that bound a solid (usable as CSG operands).
     pub fn is_solid(&self) -> bool {
         match self {
@@ -196,9 +197,9 @@ impl Shape {
         }
     }
 
-    /// The core [`CoreShape`] of a primitive, which answers its queries; `None` for a mesh
+    /// The core [`Shape`] of a primitive, which answers its queries; `None` for a mesh
     /// and for CSG.
-    fn primitive(&self) -> Option<&dyn CoreShape> {
+    fn primitive(&self) -> Option<&dyn Shape> {
         Some(match self {
             Self::Sphere(s) => s,
             Self::Ellipsoid(e) => e,
@@ -251,7 +252,7 @@ fn pad(b: Aabb) -> Aabb {
 
 impl Node {
     /// A node; bounds are computed from the shape and transform.
-    pub fn new(shape: Shape, material: u32, transform: Option<Transform>) -> Self {
+    pub fn new(shape: Geometry, material: u32, transform: Option<Transform>) -> Self {
         let bounds = shape.bounds().map(|b| {
             let b = pad(b);
             match &transform {
@@ -297,7 +298,7 @@ impl Node {
         if !self.may_hit(ray) {
             return false;
         }
-        if let Shape::Mesh(m) = &self.shape {
+        if let Geometry::Mesh(m) = &self.shape {
             let local = match &self.transform {
                 Some(t) => t.ray_to_object(ray),
                 None => *ray,
@@ -317,8 +318,8 @@ impl Node {
     }
 
     fn closest_local(&self, ray: &Ray, ctx: &mut QueryCtx) -> Option<SurfaceHit> {
-        let via_intervals =
-            matches!(self.shape, Shape::Csg(..)) || (ctx.force_intervals && self.shape.is_solid());
+        let via_intervals = matches!(self.shape, Geometry::Csg(..))
+            || (ctx.force_intervals && self.shape.is_solid());
         if via_intervals {
             let mut events = Vec::new();
             let line =
@@ -334,7 +335,7 @@ impl Node {
             return Some(self.surf(h, self.shape.barycentrics(&h)));
         }
         match &self.shape {
-            Shape::Mesh(m) => {
+            Geometry::Mesh(m) => {
                 let (h, b, shading) = m.closest(ray, &mut ctx.stats)?;
                 Some(SurfaceHit {
                     shading,

@@ -303,7 +303,7 @@ impl Scene {
             if let Some(u) = used.get_mut(n.material as usize) {
                 *u = true;
             }
-            if let crate::scene::geom::Shape::Csg(_, a, b) = &n.shape {
+            if let crate::scene::geom::Geometry::Csg(_, a, b) = &n.shape {
                 stack.push(a);
                 stack.push(b);
             }
@@ -316,7 +316,7 @@ impl Scene {
         self.objects
             .iter()
             .zip(&self.object_labels)
-            .filter(|(o, _)| matches!(o.shape, crate::scene::geom::Shape::Csg(..)))
+            .filter(|(o, _)| matches!(o.shape, crate::scene::geom::Geometry::Csg(..)))
             .map(|(_, l)| l.as_str())
             .collect()
     }

@@ -6,7 +6,7 @@ use crate::scene::geom::MeshShape;
 use std::sync::Arc;
 
 use super::Ctx;
-use super::object::list;
+use super::list;
 
 /// A checked `[mesh.NAME]`: the file's path, the Laplacian smoothing `(step, iterations)`,
 /// the Loop levels and smooth shading.

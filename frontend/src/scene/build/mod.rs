@@ -103,6 +103,15 @@ impl Ctx<'_> {
     }
 }
 
+/// Names for a message, comma-separated; `none` for no names.
+fn list(names: &[&str]) -> String {
+    if names.is_empty() {
+        "none".to_string()
+    } else {
+        names.join(", ")
+    }
+}
+
 fn leaf(field: &str) -> &str {
     field.rsplit('.').next().unwrap_or(field)
 }

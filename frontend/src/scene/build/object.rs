@@ -2,7 +2,7 @@
 
 use crate::error::Result;
 use crate::scene::def::{ObjectDef, S, V3};
-use crate::scene::geom::{ClippedQuadric, CsgOp, Node, POLYGON_MAX_VERTICES, Polygon, Shape};
+use crate::scene::geom::{ClippedQuadric, CsgOp, Geometry, Node, POLYGON_MAX_VERTICES, Polygon};
 use glam::{DMat3, DVec3, Vec3};
 use halfray_core::plane::Plane;
 use halfray_core::quadric::{Ellipsoid, Quadric};
@@ -11,7 +11,7 @@ use halfray_core::{Aabb, GeometryError};
 
 use super::mesh_ref::mesh;
 use super::transform::transform;
-use super::{Ctx, Span};
+use super::{Ctx, Span, list};
 
 /// The object types of `[[object]]`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -130,13 +130,13 @@ pub(super) fn object(
         Kind::Box => {
             let lo = ctx.need(&o.min, &span, &at.f("min"), name)?;
             let hi = ctx.need(&o.max, &span, &at.f("max"), name)?;
-            Shape::Box(box_of(ctx, lo, hi, p)?)
+            Geometry::Box(box_of(ctx, lo, hi, p)?)
         }
         Kind::Plane => plane(ctx, o, &at)?,
         Kind::Triangle | Kind::Polygon => vertices(ctx, o, &at, kind == Kind::Triangle)?,
         Kind::Mesh => {
             let m = ctx.need(&o.mesh, &span, &at.f("mesh"), name)?;
-            Shape::Mesh(mesh(ctx, m, &at.f("mesh"))?)
+            Geometry::Mesh(mesh(ctx, m, &at.f("mesh"))?)
         }
         Kind::Csg => csg(ctx, o, &at, material)?,
     };
@@ -157,18 +157,18 @@ impl At<'_> {
     }
 }
 
-fn sphere(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Shape> {
+fn sphere(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Geometry> {
     let (span, kind, f) = (at.span, at.kind, |n: &str| at.f(n));
     let c = ctx.need(&o.center, span, &f("center"), kind)?;
     let r = ctx.need(&o.radius, span, &f("radius"), kind)?;
     let center = ctx.v3(c, &f("center"))?;
     let radius = ctx.positive(r, &f("radius"))?;
-    Ok(Shape::Sphere(Sphere::new(center, radius).map_err(|e| {
-        ctx.err(&r.span(), &f("radius"), e.to_string())
-    })?))
+    Ok(Geometry::Sphere(Sphere::new(center, radius).map_err(
+        |e| ctx.err(&r.span(), &f("radius"), e.to_string()),
+    )?))
 }
 
-fn ellipsoid(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Shape> {
+fn ellipsoid(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Geometry> {
     let (span, kind, f) = (at.span, at.kind, |n: &str| at.f(n));
     let c = ctx.need(&o.center, span, &f("center"), kind)?;
     let r = ctx.need(&o.radii, span, &f("radii"), kind)?;
@@ -177,12 +177,12 @@ fn ellipsoid(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Shape> {
         return Err(ctx.err(&r.span(), &f("radii"), "every radius must be > 0"));
     }
     let center = ctx.v3(c, &f("center"))?;
-    Ok(Shape::Ellipsoid(Ellipsoid::new(center, radii).map_err(
+    Ok(Geometry::Ellipsoid(Ellipsoid::new(center, radii).map_err(
         |e| ctx.err(&r.span(), &f("radii"), e.to_string()),
     )?))
 }
 
-fn quadric(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Shape> {
+fn quadric(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Geometry> {
     let (span, kind, p, f) = (at.span, at.kind, at.p, |n: &str| at.f(n));
     let q = ctx.need(&o.coefficients, span, &f("coefficients"), kind)?;
     let qd = q.get_ref();
@@ -222,22 +222,22 @@ fn quadric(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Shape> {
             ));
         }
     };
-    Ok(Shape::Quadric(ClippedQuadric { quadric, clip }))
+    Ok(Geometry::Quadric(ClippedQuadric { quadric, clip }))
 }
 
-fn plane(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Shape> {
+fn plane(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Geometry> {
     let (span, kind, f) = (at.span, at.kind, |n: &str| at.f(n));
     let pt = ctx.need(&o.point, span, &f("point"), kind)?;
     let n = ctx.need(&o.normal, span, &f("normal"), kind)?;
     let point = ctx.v3(pt, &f("point"))?;
     let normal = ctx.dir(n, &f("normal"))?;
-    Ok(Shape::Plane(Plane::new(point, normal).map_err(|e| {
+    Ok(Geometry::Plane(Plane::new(point, normal).map_err(|e| {
         ctx.err(&n.span(), &f("normal"), e.to_string())
     })?))
 }
 
 /// A triangle (`triangle`) or a polygon from `vertices`.
-fn vertices(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>, triangle: bool) -> Result<Shape> {
+fn vertices(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>, triangle: bool) -> Result<Geometry> {
     let (span, kind, f) = (at.span, at.kind, |n: &str| at.f(n));
     let vs = ctx.need(&o.vertices, span, &f("vertices"), kind)?;
     let pts: Vec<Vec3> = vs.get_ref().iter().map(|a| Vec3::from_array(**a)).collect();
@@ -263,9 +263,9 @@ fn vertices(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>, triangle: bool) -> Result
                 "degenerate triangle (zero area)",
             ));
         }
-        Ok(Shape::Triangle([a, b, c]))
+        Ok(Geometry::Triangle([a, b, c]))
     } else {
-        Ok(Shape::Polygon(Box::new(polygon(
+        Ok(Geometry::Polygon(Box::new(polygon(
             ctx,
             pts,
             &vs.span(),
@@ -275,7 +275,7 @@ fn vertices(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>, triangle: bool) -> Result
 }
 
 /// A CSG object: its operation and its two solid operands (which inherit `material`).
-fn csg(ctx: &mut Ctx<'_>, o: &ObjectDef, at: &At<'_>, material: u32) -> Result<Shape> {
+fn csg(ctx: &mut Ctx<'_>, o: &ObjectDef, at: &At<'_>, material: u32) -> Result<Geometry> {
     let (span, kind, p, f) = (at.span, at.kind, at.p, |n: &str| at.f(n));
     let op = ctx.need(&o.op, span, &f("op"), kind)?;
     let op_v = match op.get_ref().as_str() {
@@ -316,11 +316,11 @@ fn csg(ctx: &mut Ctx<'_>, o: &ObjectDef, at: &At<'_>, material: u32) -> Result<S
         let n = object(ctx, od, &fp, Some(material))?;
         if !n.shape.is_solid() {
             let why = match &n.shape {
-                Shape::Mesh(m) => format!(
+                Geometry::Mesh(m) => format!(
                     "mesh `{}` is not closed ({} boundary or unpaired edges): a CSG operand must bound a solid",
                     m.name, m.boundary_edges
                 ),
-                Shape::Quadric(_) => {
+                Geometry::Quadric(_) => {
                     "a clipped quadric is not closed: a CSG operand must bound a solid".to_string()
                 }
                 _ => format!(
@@ -339,15 +339,7 @@ fn csg(ctx: &mut Ctx<'_>, o: &ObjectDef, at: &At<'_>, material: u32) -> Result<S
             "a CSG object needs exactly 2 operands",
         )
     })?;
-    Ok(Shape::Csg(op_v, Box::new(a), Box::new(b)))
-}
-
-pub(super) fn list(names: &[&str]) -> String {
-    if names.is_empty() {
-        "none".to_string()
-    } else {
-        names.join(", ")
-    }
+    Ok(Geometry::Csg(op_v, Box::new(a), Box::new(b)))
 }
 
 pub(super) fn box_of(ctx: &Ctx<'_>, lo: &V3, hi: &V3, p: &str) -> Result<Aabb> {

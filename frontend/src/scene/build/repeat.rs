@@ -7,7 +7,7 @@ use glam::Vec3;
 use halfray_core::transform::Transform;
 
 use super::Ctx;
-use super::object::list;
+use super::list;
 
 /// Most objects a scene may hold, repeated copies included: 10⁶ (a copy costs a few hundred
 /// bytes and one top-level BVH leaf; a mesh's triangles are shared by its copies).

@@ -44,7 +44,7 @@ impl Node {
             return s.line_starts_inside(&line);
         }
         match &self.shape {
-            Shape::Mesh(m) => {
+            Geometry::Mesh(m) => {
                 let mut hits = Vec::new();
                 m.all_hits(&line, &mut ctx.stats, &mut hits);
                 out.extend(mesh_events(hits, |h, b, prim, enter| {
@@ -57,7 +57,7 @@ impl Node {
                 }));
                 false
             }
-            Shape::Csg(op, a, b) => {
+            Geometry::Csg(op, a, b) => {
                 let mut ea = Vec::new();
                 let mut eb = Vec::new();
                 let ia = a.events(&line, ctx, &mut ea);
@@ -117,15 +117,15 @@ pub fn combine(
 mod tests {
     use super::*;
 
-    fn node(shape: Shape) -> Node {
+    fn node(shape: Geometry) -> Node {
         Node::new(shape, 0, None)
     }
 
     #[test]
     fn sphere_difference_carves_a_hole() {
-        let a = node(Shape::Sphere(Sphere::new(Vec3::ZERO, 1.0).unwrap()));
-        let b = node(Shape::Sphere(Sphere::new(Vec3::Z, 0.5).unwrap()));
-        let csg = node(Shape::Csg(CsgOp::Difference, Box::new(a), Box::new(b)));
+        let a = node(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0).unwrap()));
+        let b = node(Geometry::Sphere(Sphere::new(Vec3::Z, 0.5).unwrap()));
+        let csg = node(Geometry::Csg(CsgOp::Difference, Box::new(a), Box::new(b)));
         let ray = Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, -1.0));
         let h = csg.closest(&ray, &mut QueryCtx::default()).unwrap();
         // Hits the inside of the small sphere at z = 0.5, normal pointing out of the result (+z).
@@ -137,9 +137,9 @@ mod tests {
     #[test]
     fn forced_intervals_give_identical_hits() {
         for shape in [
-            Shape::Sphere(Sphere::new(Vec3::new(0.1, 0.2, 0.0), 1.0).unwrap()),
-            Shape::Box(Aabb::new(Vec3::splat(-1.0), Vec3::ONE)),
-            Shape::Ellipsoid(Ellipsoid::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 0.5)).unwrap()),
+            Geometry::Sphere(Sphere::new(Vec3::new(0.1, 0.2, 0.0), 1.0).unwrap()),
+            Geometry::Box(Aabb::new(Vec3::splat(-1.0), Vec3::ONE)),
+            Geometry::Ellipsoid(Ellipsoid::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 0.5)).unwrap()),
         ] {
             let n = node(shape);
             for o in [Vec3::new(0.3, 0.1, 5.0), Vec3::new(0.0, 0.0, 0.0)] {
