@@ -162,8 +162,8 @@ pub fn projection_underflows(mesh: &TriangleMesh<'_>, ray: &Ray, in_tree: &[bool
 ///
 /// 1. Building with exactly [`node_capacity`] / [`index_capacity`] storage succeeds, unless a
 ///    primitive has unusable bounds (non-finite vertex, out-of-range index) and
-///    `exclude_non_finite` is off: then the error is `NonFinitePrimitive` naming the first.
-/// 2. One node or one index too few gives `NodeStorageTooSmall` / `IndexStorageTooSmall`
+///    `exclude_non_finite` is off: then the error is `NonFinite` naming the first.
+/// 2. One node or one index too few gives `Capacity` (`BvhNodes` / `BvhIndices`)
 ///    with the right counts, and the storage is left untouched.
 /// 3. Refitting over the same source leaves every node bit-for-bit unchanged.
 /// 4. For every ray and for `watertight` and `moller-trumbore`: the closest hit equals the

@@ -49,7 +49,7 @@ type VecGrid = Grid<Vec<u32>, Vec<u32>>;
 /// Properties of the grid on one soup:
 ///
 /// 1. Planning fails exactly when a triangle is unusable and `exclude_non_finite` is off
-///    (`NonFiniteTriangle` naming the first); the resolution is within `1..=max` per axis.
+///    (`NonFinite` naming the first triangle); the resolution is within `1..=max` per axis.
 /// 2. One offset or one reference too few is refused with the right counts, storage
 ///    untouched.
 /// 3. The exactly sized build has non-decreasing offsets ending at the reference count,
@@ -76,7 +76,7 @@ pub fn check(s: &Soup, opts: &GridOptions) {
             })),
             Some(bad),
         ) if !opts.exclude_non_finite => {
-            assert_eq!(index, bad, "wrong NonFiniteTriangle\n{}", ctx());
+            assert_eq!(index, bad, "wrong NonFinite triangle\n{}", ctx());
             return;
         }
         (r, _) => panic!("plan gave {r:?} (first unusable {first_bad:?})\n{}", ctx()),

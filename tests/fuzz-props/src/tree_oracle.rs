@@ -55,7 +55,7 @@ pub(crate) fn brute<T: TriangleIntersector>(
 /// `exclude` (`exclude_non_finite`) on, the build succeeds and the tree is returned; with
 /// `exclude` off it refuses, naming the first one, `first_bad`, and `None` is returned.
 /// Anything else panics, with `ctx()`. `non_finite` reads the index out of the structure's
-/// `NonFinitePrimitive` error (`None` for its other errors).
+/// `NonFinite` error (`None` for its other errors).
 pub(crate) fn checked_build<T, E: Debug>(
     built: Result<T, E>,
     non_finite: impl Fn(&E) -> Option<usize>,
@@ -70,7 +70,7 @@ pub(crate) fn checked_build<T, E: Debug>(
             assert_eq!(
                 non_finite(&e),
                 Some(bad),
-                "NonFinitePrimitive names the wrong primitive\n{}",
+                "NonFinite names the wrong primitive\n{}",
                 ctx()
             );
             None
