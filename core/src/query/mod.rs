@@ -37,6 +37,7 @@
 //! nothing. **Box query**: every primitive whose bounds overlap a box (closed boxes), each
 //! reported once.
 
+mod batch;
 mod context;
 mod leaf;
 mod stats;
@@ -44,6 +45,7 @@ mod stats;
 #[cfg(test)]
 mod tests;
 
+pub use batch::{BATCH_CHUNK, RayBatch};
 pub use context::{OwnStack, QUERY_STACK_SIZE, Query, QueryStack, Stack, StackEntry};
 pub use leaf::{LeafTest, Triangles};
 pub use stats::TraversalStats;

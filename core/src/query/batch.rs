@@ -1,0 +1,162 @@
+//! Ray batches: [`RayBatch::closest_hits`] and [`RayBatch::any_hits`] answer a slice of rays
+//! into a caller's output slice, for every structure that implements [`RayQuery`].
+//!
+//! Each chunk of [`BATCH_CHUNK`] consecutive rays is walked in a coherent order — by
+//! direction octant, then the Morton code of the origin's cell within the chunk's origin
+//! bounds, then the Morton code of the direction's cell — and each answer is written at its
+//! ray's own index. Every ray is walked alone, by the structure's single-ray query with the
+//! caller's context, so each answer **is** the single-ray answer: closest hits bit for bit,
+//! any hits the same primitive and payload (the order changes which ray is walked when, never
+//! how). The reordering only changes which nodes and triangles are warm in the cache.
+//!
+//! Allocation-free: the order of a chunk is sorted in a fixed array of [`BATCH_CHUNK`] `u64`
+//! keys (2 KiB) in the call's frame; nothing comes from the caller but the rays and the
+//! output.
+//!
+//! ```
+//! use halfray_core::prelude::*;
+//! use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+//! use halfray_core::query::{Query, QueryStack, Triangles};
+//! use halfray_core::triangle::{TriangleHit, Watertight};
+//! use halfray_core::{Ray, Vec3};
+//!
+//! let positions = [Vec3::new(-1.0, -1.0, 2.0), Vec3::new(1.0, -1.0, 2.0), Vec3::new(0.0, 1.0, 2.0)];
+//! let mesh = TriangleMesh::new(&positions, &[[0, 1, 2]]);
+//! let (mut nodes, mut indices) = ([BvhNode::EMPTY; node_capacity(1)], [0u32; index_capacity(1)]);
+//! let bvh = Bvh::build(&mesh, &mut nodes[..], &mut indices[..], &BuildOptions::default()).unwrap();
+//! let rays = [Ray::new(Vec3::ZERO, Vec3::Z), Ray::new(Vec3::ZERO, -Vec3::Z)];
+//! let mut out: [Option<(u32, TriangleHit)>; 2] = [None; 2];
+//! let mut stack = QueryStack::new();
+//! let mut tris = Triangles::new(&mesh, &Watertight);
+//! bvh.closest_hits(&rays, &mut tris, &mut Query::new().stack(&mut stack), &mut out).unwrap();
+//! assert_eq!(out[0].map(|(p, h)| (p, h.t)), Some((0, 2.0)));
+//! assert!(out[1].is_none());
+//! ```
+
+use super::{LeafTest, Query, RayQuery, Stack};
+use crate::bvh::BvhError;
+use crate::ray::Ray;
+use crate::simd_level::SimdLevel;
+use glam::Vec3;
+
+/// Rays reordered together: a batch is cut into chunks of this many consecutive rays, each
+/// sorted on its own (the sort keys live in a `[u64; BATCH_CHUNK]`, 2 KiB of stack).
+pub const BATCH_CHUNK: usize = 256;
+
+/// Cells per axis of the origin and direction grids of the sort key (4 bits per axis).
+const CELLS: u32 = 16;
+
+/// Batch queries over any [`RayQuery`] structure (blanket implementation; bring it in with
+/// `use halfray_core::prelude::*`). See the module docs for the order and the contract.
+pub trait RayBatch: RayQuery {
+    /// Writes [`RayQuery::closest_hit`] of `rays[i]` into `out[i]`, for every `i`, through
+    /// `leaf` and the context `ctx` (its stack reused, its statistics added to). Pass a
+    /// [`super::QueryStack`] in the context (`Query::new().stack(&mut stack)`) to avoid
+    /// writing a fresh stack per ray. An empty batch is `Ok` and writes nothing.
+    ///
+    /// # Errors
+    ///
+    /// Nothing written, no ray walked: [`BvhError::LengthMismatch`] when `out` does not have
+    /// `rays.len()` entries. (A caller stack too small for one ray is that ray's answer,
+    /// `Err(StackTooSmall)`, in `out`, as for the single-ray query.)
+    fn closest_hits<T: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        rays: &[Ray],
+        leaf: &mut T,
+        ctx: &mut Query<'_, L, S>,
+        out: &mut [S::Out<(u32, T::Hit)>],
+    ) -> Result<(), BvhError> {
+        in_coherent_order(rays, out, |ray| self.closest_hit(ray, leaf, ctx))
+    }
+
+    /// Writes [`RayQuery::any_hit`] of `rays[i]` into `out[i]`, for every `i` (as
+    /// [`RayBatch::closest_hits`]); each answer is the one the single-ray walk finds.
+    ///
+    /// # Errors
+    ///
+    /// As [`RayBatch::closest_hits`]: [`BvhError::LengthMismatch`], nothing written.
+    fn any_hits<T: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        rays: &[Ray],
+        leaf: &mut T,
+        ctx: &mut Query<'_, L, S>,
+        out: &mut [S::Out<(u32, T::Hit)>],
+    ) -> Result<(), BvhError> {
+        in_coherent_order(rays, out, |ray| self.any_hit(ray, leaf, ctx))
+    }
+}
+
+impl<Q: RayQuery + ?Sized> RayBatch for Q {}
+
+/// Calls `answer` on every ray, chunk by chunk in [`chunk_order`], writing `out[i]` for
+/// `rays[i]`. [`BvhError::LengthMismatch`] (nothing written) when the lengths differ.
+fn in_coherent_order<O>(
+    rays: &[Ray],
+    out: &mut [O],
+    mut answer: impl FnMut(&Ray) -> O,
+) -> Result<(), BvhError> {
+    if out.len() != rays.len() {
+        return Err(BvhError::LengthMismatch {
+            expected: rays.len(),
+            found: out.len(),
+        });
+    }
+    let mut keys = [0u64; BATCH_CHUNK];
+    for (chunk, out) in rays.chunks(BATCH_CHUNK).zip(out.chunks_mut(BATCH_CHUNK)) {
+        for &key in chunk_order(chunk, &mut keys) {
+            // The low 32 bits of a key are the ray's index in its chunk (< BATCH_CHUNK).
+            let i = (key & 0xFFFF_FFFF) as usize;
+            if let (Some(ray), Some(o)) = (chunk.get(i), out.get_mut(i)) {
+                *o = answer(ray);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The walking order of `chunk` (at most [`BATCH_CHUNK`] rays): its keys sorted, each
+/// `(octant << 24 | origin cell << 12 | direction cell) << 32 | index`, so equal cells keep
+/// the caller's order. Any ray gets a key (NaN and infinite values fall into an edge cell);
+/// the key decides only the order.
+fn chunk_order<'k>(chunk: &[Ray], keys: &'k mut [u64; BATCH_CHUNK]) -> &'k [u64] {
+    let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    for r in chunk {
+        // `min`/`max` skip NaN; infinities widen the bounds and only coarsen the cells.
+        (lo, hi) = (lo.min(r.origin), hi.max(r.origin));
+    }
+    // Empty extents (one origin for all rays, as a camera's) map every origin to cell 0.
+    let scale = Vec3::splat(CELLS as f32) / (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
+    let n = chunk.len().min(BATCH_CHUNK);
+    for (i, (r, key)) in chunk.iter().zip(keys.iter_mut()).enumerate() {
+        let d = r.direction;
+        let octant = u32::from(d.x < 0.0) | u32::from(d.y < 0.0) << 1 | u32::from(d.z < 0.0) << 2;
+        let origin = morton3(cells((r.origin - lo) * scale));
+        // The direction scaled to the unit cube by its largest component, shifted to [0, 2].
+        let unit = d / d.abs().max_element() + Vec3::ONE;
+        let direction = morton3(cells(unit * (CELLS as f32 / 2.0)));
+        let cell = octant << 24 | origin << 12 | direction;
+        *key = u64::from(cell) << 32 | i as u64;
+    }
+    let keys = &mut keys[..n];
+    keys.sort_unstable();
+    keys
+}
+
+/// Each coordinate as a cell index in `0..CELLS` (`as` maps NaN to 0 and saturates).
+fn cells(v: Vec3) -> [u32; 3] {
+    [v.x, v.y, v.z].map(|c| (c as u32).min(CELLS - 1))
+}
+
+/// The 3D Morton code of three 4-bit cell indices (12 bits, x in the lowest).
+fn morton3(c: [u32; 3]) -> u32 {
+    let mut code = 0;
+    for bit in 0..4 {
+        for (axis, &v) in c.iter().enumerate() {
+            code |= ((v >> bit) & 1) << (3 * bit + axis);
+        }
+    }
+    code
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,248 @@
+//! Batches against per-ray [`RayQuery`] calls (bit for bit) and against a brute-force loop
+//! over all triangles ([`brute_watertight`], which shares no code with any walk), on several
+//! structures, random and camera-like rays, several chunks and a partial one.
+
+use super::*;
+use crate::bvh::wide::{Bvh4, Bvh8, LeafGroup, WideNode, binary_options, group_capacity};
+use crate::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+use crate::grid::{Grid, GridOptions, GridPlan};
+use crate::kdtree::{KdBuildOptions, KdNode, KdRef, KdTree};
+use crate::query::{QUERY_STACK_SIZE, QueryStack, StackEntry, TraversalStats, Triangles};
+use crate::test_util::{Lcg, brute_watertight, lcg_soup};
+use crate::triangle::{TriangleHit, Watertight};
+use std::vec;
+use std::vec::Vec;
+
+/// Rays in random order through the mesh's box (origins spread around it), then a camera's
+/// rays in scanline order (one origin, a 40×30 image), with invalid rays scattered among them.
+fn rays(seed: u64) -> Vec<Ray> {
+    let mut rng = Lcg(seed);
+    let mut out: Vec<Ray> = (0..600)
+        .map(|_| {
+            let o = rng.v(30.0);
+            Ray::new(o, rng.v(6.0) - o)
+        })
+        .collect();
+    let eye = Vec3::new(0.5, 1.0, -14.0);
+    for y in 0..30 {
+        for x in 0..40 {
+            let d = Vec3::new(x as f32 / 40.0 - 0.5, y as f32 / 30.0 - 0.5, 1.0) * 12.0;
+            out.push(Ray::new(eye, d));
+        }
+    }
+    for k in (0..out.len()).step_by(97) {
+        out[k] = match k % 3 {
+            0 => Ray::new(Vec3::ZERO, Vec3::ZERO),
+            1 => Ray::new(Vec3::splat(f32::NAN), Vec3::X),
+            _ => Ray::new(Vec3::INFINITY, -Vec3::X),
+        };
+    }
+    out
+}
+
+/// The bits of an answer: equal bits, not only equal values.
+fn bits(a: Option<(u32, TriangleHit)>) -> Option<(u32, [u32; 3])> {
+    a.map(|(p, h)| (p, [h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()]))
+}
+
+/// Batches of `q` against its single-ray queries and the brute-force loop.
+fn batch_equals_single<Q: RayQuery>(name: &str, q: &Q, mesh: &TriangleMesh<'_>, rays: &[Ray]) {
+    let mut tris = Triangles::new(mesh, &Watertight);
+    let mut stack = QueryStack::new();
+    let (mut batch_stats, mut single_stats) =
+        (TraversalStats::default(), TraversalStats::default());
+    let mut closest = vec![None; rays.len()];
+    let mut ctx = Query::new().stack(&mut stack).stats(&mut batch_stats);
+    q.closest_hits(rays, &mut tris, &mut ctx, &mut closest)
+        .unwrap();
+    let mut any = vec![None; rays.len()];
+    q.any_hits(rays, &mut tris, &mut Query::new(), &mut any)
+        .unwrap();
+
+    let mut hits = 0;
+    for (i, ray) in rays.iter().enumerate() {
+        let single = q.closest_hit(ray, &mut tris, &mut Query::new().stats(&mut single_stats));
+        assert_eq!(bits(closest[i]), bits(single), "{name}: closest, ray {i}");
+        let brute = brute_watertight(mesh, ray);
+        assert_eq!(closest[i], brute, "{name}: brute force, ray {i} {ray:?}");
+        let single_any = q.any_hit(ray, &mut tris, &mut Query::new());
+        assert_eq!(bits(any[i]), bits(single_any), "{name}: any, ray {i}");
+        assert_eq!(
+            any[i].is_some(),
+            brute.is_some(),
+            "{name}: any hit/miss, ray {i}"
+        );
+        hits += usize::from(brute.is_some());
+    }
+    // Every ray walked exactly once: the counters sum to the single rays'.
+    assert_eq!(batch_stats, single_stats, "{name}: statistics");
+    assert!(hits > rays.len() / 5, "{name}: only {hits} hits");
+}
+
+#[test]
+fn batches_equal_single_rays_on_every_structure() {
+    let (pos, tri) = lcg_soup(400, 9, 10.0, 1.5);
+    let mesh = TriangleMesh::new(&pos, &tri);
+    let n = mesh.len();
+    let rays = rays(4);
+    assert!(rays.len() > 4 * BATCH_CHUNK && rays.len() % BATCH_CHUNK != 0);
+
+    let bvh = Bvh::build(
+        &mesh,
+        vec![BvhNode::EMPTY; node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        &BuildOptions::default(),
+    )
+    .unwrap();
+    batch_equals_single("bvh", &bvh, &mesh, &rays);
+
+    let binary = Bvh::build(
+        &mesh,
+        vec![BvhNode::EMPTY; node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        &binary_options(BuildOptions::default()),
+    )
+    .unwrap();
+    let nodes = crate::bvh::wide::node_capacity(n);
+    let groups = || vec![LeafGroup::EMPTY; group_capacity(n)];
+    let bvh8 = Bvh8::from_binary(&binary, &mesh, vec![WideNode::EMPTY; nodes], groups()).unwrap();
+    batch_equals_single("bvh8", &bvh8, &mesh, &rays);
+    let bvh4 = Bvh4::from_binary(&binary, &mesh, vec![WideNode::EMPTY; nodes], groups()).unwrap();
+    batch_equals_single("bvh4", &bvh4, &mesh, &rays);
+
+    let plan = GridPlan::new(&mesh, &GridOptions::default()).unwrap();
+    let grid = Grid::build(
+        &mesh,
+        &plan,
+        vec![0u32; plan.required_offsets()],
+        vec![0u32; plan.required_references()],
+    )
+    .unwrap();
+    batch_equals_single("grid", &grid, &mesh, &rays);
+
+    let refs = crate::kdtree::reference_capacity(n);
+    let kd = KdTree::build(
+        &mesh,
+        vec![KdNode::EMPTY; crate::kdtree::node_capacity(n).max(1)],
+        vec![0u32; refs],
+        &mut vec![KdRef::EMPTY; refs],
+        &KdBuildOptions::default(),
+    )
+    .unwrap();
+    batch_equals_single("kd-tree", &kd, &mesh, &rays);
+}
+
+#[test]
+fn empty_batches_and_length_mismatches() {
+    let (pos, tri) = lcg_soup(20, 1, 4.0, 1.0);
+    let mesh = TriangleMesh::new(&pos, &tri);
+    let bvh = Bvh::build(
+        &mesh,
+        vec![BvhNode::EMPTY; node_capacity(mesh.len())],
+        vec![0u32; index_capacity(mesh.len())],
+        &BuildOptions::default(),
+    )
+    .unwrap();
+    let mut tris = Triangles::new(&mesh, &Watertight);
+    let mut stats = TraversalStats::default();
+    let mut none: [Option<(u32, TriangleHit)>; 0] = [];
+    let empty = bvh.closest_hits(
+        &[],
+        &mut tris,
+        &mut Query::new().stats(&mut stats),
+        &mut none,
+    );
+    assert_eq!(empty, Ok(()));
+    assert_eq!(
+        stats,
+        TraversalStats::default(),
+        "an empty batch walks nothing"
+    );
+
+    let rays = rays(2);
+    let hit = rays
+        .iter()
+        .find_map(|r| brute_watertight(&mesh, r))
+        .unwrap();
+    for len in [0, rays.len() - 1, rays.len() + 1] {
+        let mut out = vec![Some(hit); len];
+        let want = Err(BvhError::LengthMismatch {
+            expected: rays.len(),
+            found: len,
+        });
+        let mut ctx = Query::new().stats(&mut stats);
+        assert_eq!(bvh.closest_hits(&rays, &mut tris, &mut ctx, &mut out), want);
+        assert_eq!(bvh.any_hits(&rays, &mut tris, &mut ctx, &mut out), want);
+        assert!(out.iter().all(|o| *o == Some(hit)), "nothing written");
+    }
+    assert_eq!(stats, TraversalStats::default(), "no ray walked");
+}
+
+#[test]
+fn a_caller_stack_too_small_is_each_rays_answer() {
+    let (pos, tri) = lcg_soup(200, 3, 6.0, 1.0);
+    let mesh = TriangleMesh::new(&pos, &tri);
+    let n = mesh.len();
+    let single = BuildOptions {
+        max_leaf_size: 1,
+        ..BuildOptions::default()
+    };
+    let bvh = Bvh::build(
+        &mesh,
+        vec![BvhNode::EMPTY; node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        &single,
+    )
+    .unwrap();
+    let mut tris = Triangles::new(&mesh, &Watertight);
+    let rays = rays(6);
+    for len in [bvh.stack_depth() / 2, QUERY_STACK_SIZE] {
+        let mut short = vec![StackEntry::EMPTY; len];
+        let mut out = vec![Ok(None); rays.len()];
+        let mut ctx = Query::new().stack(&mut short[..]);
+        bvh.closest_hits(&rays, &mut tris, &mut ctx, &mut out)
+            .unwrap();
+        for (i, ray) in rays.iter().enumerate() {
+            let mut again = vec![StackEntry::EMPTY; len];
+            let mut ctx = Query::new().stack(&mut again[..]);
+            let one = RayQuery::closest_hit(&bvh, ray, &mut tris, &mut ctx);
+            assert_eq!(out[i], one, "ray {i}, stack of {len}");
+        }
+        let refused = out.iter().filter(|o| o.is_err()).count();
+        assert_eq!(refused > 0, len < QUERY_STACK_SIZE, "stack of {len}");
+    }
+}
+
+#[test]
+fn a_chunk_is_walked_in_a_permutation_grouped_by_octant() {
+    let rays = rays(8);
+    let mut keys = [0u64; BATCH_CHUNK];
+    for chunk in rays.chunks(BATCH_CHUNK) {
+        let order = chunk_order(chunk, &mut keys);
+        let mut seen: Vec<u64> = order.iter().map(|k| k & 0xFFFF_FFFF).collect();
+        seen.sort_unstable();
+        assert_eq!(
+            seen,
+            (0..chunk.len() as u64).collect::<Vec<_>>(),
+            "a permutation"
+        );
+        let octants: Vec<u64> = order.iter().map(|k| k >> 56).collect();
+        assert!(octants.is_sorted(), "octants first");
+        for &k in order {
+            let d = chunk[(k & 0xFFFF_FFFF) as usize].direction;
+            let want = u64::from(d.x < 0.0) | u64::from(d.y < 0.0) << 1 | u64::from(d.z < 0.0) << 2;
+            assert_eq!(k >> 56, want, "octant of {d:?}");
+        }
+    }
+}
+
+#[test]
+fn morton_codes_interleave_x_lowest() {
+    assert_eq!(morton3([1, 0, 0]), 0b001);
+    assert_eq!(morton3([0, 1, 0]), 0b010);
+    assert_eq!(morton3([0, 0, 1]), 0b100);
+    assert_eq!(morton3([2, 0, 0]), 0b001_000);
+    assert_eq!(morton3([15, 15, 15]), 0xFFF);
+    assert_eq!(morton3([8, 0, 1]), 1 << 9 | 1 << 2);
+    assert_eq!(cells(Vec3::new(f32::NAN, f32::INFINITY, -3.0)), [0, 15, 0]);
+}
