@@ -5,9 +5,12 @@
 //! ```
 //! Storage is heap `Vec`s lent to [`SliceMesh`]es, so nothing large sits on the stack.
 
+#[path = "common/obj.rs"]
+mod obj;
+
+use obj::load;
 use std::time::Instant;
 
-use halfray_core::Vec3;
 use halfray_core::halfedge::{
     Counts, EdgeRec, FaceRec, HalfedgeRec, LoopWeights, Mesh, SliceMesh, VertexRec,
     build_scratch_len,
@@ -15,36 +18,6 @@ use halfray_core::halfedge::{
 
 /// Repetitions of each timed step; the minimum time is reported.
 const REPS: usize = 5;
-
-fn load(path: &str) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    let (mut p, mut t) = (Vec::new(), Vec::new());
-    for line in text.lines() {
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("v") => {
-                let c: Vec<f32> = it.take(3).map(|x| x.parse().expect("bad float")).collect();
-                p.push(Vec3::new(c[0], c[1], c[2]));
-            }
-            Some("f") => {
-                let c: Vec<u32> = it
-                    .take(3)
-                    .map(|x| {
-                        x.split('/')
-                            .next()
-                            .unwrap_or("")
-                            .parse::<u32>()
-                            .expect("bad index")
-                            - 1
-                    })
-                    .collect();
-                t.push([c[0], c[1], c[2]]);
-            }
-            _ => {}
-        }
-    }
-    (p, t)
-}
 
 /// A mesh over leaked heap buffers (the bench process is short-lived).
 fn mesh_with(c: Counts) -> SliceMesh<'static> {

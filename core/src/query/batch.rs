@@ -54,11 +54,15 @@ pub trait RayBatch: RayQuery {
     /// [`super::QueryStack`] in the context (`Query::new().stack(&mut stack)`) to avoid
     /// writing a fresh stack per ray. An empty batch is `Ok` and writes nothing.
     ///
+    /// Inlined whole (sort and walk), so that a caller compiled for a SIMD level's target
+    /// features (as the single-ray queries are) gets the walk compiled for them too.
+    ///
     /// # Errors
     ///
     /// Nothing written, no ray walked: [`BvhError::LengthMismatch`] when `out` does not have
     /// `rays.len()` entries. (A caller stack too small for one ray is that ray's answer,
     /// `Err(StackTooSmall)`, in `out`, as for the single-ray query.)
+    #[inline(always)]
     fn closest_hits<T: LeafTest, L: SimdLevel, S: Stack>(
         &self,
         rays: &[Ray],
@@ -75,6 +79,7 @@ pub trait RayBatch: RayQuery {
     /// # Errors
     ///
     /// As [`RayBatch::closest_hits`]: [`BvhError::LengthMismatch`], nothing written.
+    #[inline(always)]
     fn any_hits<T: LeafTest, L: SimdLevel, S: Stack>(
         &self,
         rays: &[Ray],
@@ -90,6 +95,7 @@ impl<Q: RayQuery + ?Sized> RayBatch for Q {}
 
 /// Calls `answer` on every ray, chunk by chunk in [`chunk_order`], writing `out[i]` for
 /// `rays[i]`. [`BvhError::LengthMismatch`] (nothing written) when the lengths differ.
+#[inline(always)]
 fn in_coherent_order<O>(
     rays: &[Ray],
     out: &mut [O],

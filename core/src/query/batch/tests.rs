@@ -85,7 +85,7 @@ fn batches_equal_single_rays_on_every_structure() {
     let mesh = TriangleMesh::new(&pos, &tri);
     let n = mesh.len();
     let rays = rays(4);
-    assert!(rays.len() > 4 * BATCH_CHUNK && rays.len() % BATCH_CHUNK != 0);
+    assert!(rays.len() > 4 * BATCH_CHUNK && !rays.len().is_multiple_of(BATCH_CHUNK));
 
     let bvh = Bvh::build(
         &mesh,
