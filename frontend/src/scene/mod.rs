@@ -369,8 +369,19 @@ impl Source<'_> {
     /// A TOML/serde error with its location; the field is taken from the message
     /// (`unknown field`/`missing field`) or from the key in front of the span.
     fn toml_error(&self, e: &toml::de::Error) -> Error {
-        let msg = e.message().trim().to_string();
+        let mut msg = e.message().trim().to_string();
         let span = e.span().unwrap_or(0..0);
+        if msg == "duplicate key" {
+            // The span covers the repeated key (or header name): quote it.
+            if let Some(key) = self
+                .text
+                .get(span.clone())
+                .map(str::trim)
+                .filter(|k| !k.is_empty())
+            {
+                msg = format!("duplicate key `{}`", crate::text::excerpt(key));
+            }
+        }
         let field = backticked_field(&msg)
             .or_else(|| self.key_before(span.start))
             .map(|f| {
