@@ -253,6 +253,12 @@ impl fmt::Display for Error {
     }
 }
 
+impl From<crate::embree::EmbreeError> for Error {
+    fn from(e: crate::embree::EmbreeError) -> Self {
+        Self::Embree(e)
+    }
+}
+
 impl std::error::Error for Error {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {

@@ -71,9 +71,3 @@ impl fmt::Display for EmbreeError {
 }
 
 impl std::error::Error for EmbreeError {}
-
-impl From<EmbreeError> for crate::error::Error {
-    fn from(e: EmbreeError) -> Self {
-        Self::Embree(e)
-    }
-}
