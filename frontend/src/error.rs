@@ -253,6 +253,7 @@ impl fmt::Display for Error {
     }
 }
 
+#[cfg(feature = "embree")]
 impl From<crate::embree::EmbreeError> for Error {
     fn from(e: crate::embree::EmbreeError) -> Self {
         Self::Embree(e)

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
 mod common;
-use common::{BIN, camera, sphere, stderr};
+use common::{BIN, camera, file_names as names, sphere, start_long_render, stderr};
 
 /// `v`/`f` text of a closed tetrahedron with its vertices at `±s` (the origin inside).
 fn tetrahedron(s: &str) -> String {
@@ -45,15 +45,6 @@ fn run_appending(args: &[&dyn AsRef<OsStr>], log: &Path) -> Output {
         .stderr(Stdio::piped())
         .output()
         .unwrap()
-}
-
-fn names(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
 }
 
 /// Item 1: every file a scene names is an input, used by an object or not.
@@ -177,25 +168,7 @@ fn temporary_files_exist_only_while_writing_and_stale_ones_are_removed() {
     let dir = tempfile::tempdir().unwrap();
     let scene = small_scene(dir.path(), "s.toml", "");
     let png = dir.path().join("out.png");
-    let mut child = Command::new(BIN)
-        .args([
-            "render".as_ref(),
-            scene.as_os_str(),
-            "-o".as_ref(),
-            png.as_os_str(),
-            "--width".as_ref(),
-            "4000".as_ref(),
-            "--height".as_ref(),
-            "3000".as_ref(),
-        ])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut err = std::io::BufReader::new(child.stderr.take().unwrap());
-    let mut line = String::new();
-    std::io::BufRead::read_line(&mut err, &mut line).unwrap();
-    assert!(line.starts_with("rendering"), "{line}");
+    let mut child = start_long_render(&scene, &png);
     child.kill().unwrap(); // SIGKILL: no handler runs.
     child.wait().unwrap();
     assert_eq!(

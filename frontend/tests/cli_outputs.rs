@@ -7,7 +7,7 @@ use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{BIN, scenes_dir};
+use common::{BIN, file_names as files, scenes_dir, start_long_render, stderr};
 
 const MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes");
 /// How long the SIGTERM test waits for the killed render to exit.
@@ -19,19 +19,6 @@ fn scene(name: &str) -> PathBuf {
 
 fn run(args: &[&std::ffi::OsStr]) -> Output {
     Command::new(BIN).args(args).output().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn files(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
 }
 
 macro_rules! os {
@@ -172,26 +159,8 @@ fn sigterm_during_a_render_leaves_no_temporary_file() {
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("out.png");
     std::fs::write(&png, b"previous").unwrap();
-    let mut child = Command::new(BIN)
-        .args(os![
-            "render",
-            &scene("glass.toml"),
-            "-o",
-            &png,
-            "--width",
-            "4000",
-            "--height",
-            "3000",
-        ])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
     // The output was checked (a temporary file made and removed) before `rendering …`.
-    let mut err = std::io::BufReader::new(child.stderr.take().unwrap());
-    let mut line = String::new();
-    std::io::BufRead::read_line(&mut err, &mut line).unwrap();
-    assert!(line.starts_with("rendering"), "{line}");
+    let mut child = start_long_render(&scene("glass.toml"), &png);
     assert!(child.try_wait().unwrap().is_none(), "still rendering");
     assert_eq!(
         files(dir.path()),

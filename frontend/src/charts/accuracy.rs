@@ -137,14 +137,7 @@ impl Chart for AccuracyChart {
                 (FAMILY, 13).into_font().color(&colour),
             )))?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .label_font((FAMILY, 13))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()?;
-        Ok(())
+        super::draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
     }
 }
 

@@ -142,14 +142,7 @@ impl Chart for CorpusChart {
                     .map(|p| Circle::new(p, 5, colour.stroke_width(2))),
             )?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .label_font((FAMILY, 13))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()?;
-        Ok(())
+        super::draw_legend(&mut chart, SeriesLabelPosition::LowerRight)
     }
 }
 

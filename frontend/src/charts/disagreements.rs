@@ -142,14 +142,7 @@ impl Chart for DisagreementChart {
                     Rectangle::new([(x - 5, y - 5), (x + 5, y + 5)], colour.filled())
                 });
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font((FAMILY, 13))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()?;
-        Ok(())
+        super::draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
     }
 }
 

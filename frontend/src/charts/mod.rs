@@ -129,6 +129,21 @@ fn register_font() -> Result<()> {
     }
 }
 
+/// Draws `chart`'s series legend at `position`, the same on every chart: 13-point [`FAMILY`]
+/// text on a translucent white box with a black border.
+fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .label_font((FAMILY, 13))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+}
+
 /// `chart` as the bytes of a `format` file.
 ///
 /// # Errors

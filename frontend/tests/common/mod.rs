@@ -5,7 +5,7 @@
 use halfray::scene::{Scene, parse};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
 
 /// The `halfray` binary under test.
 pub const BIN: &str = env!("CARGO_BIN_EXE_halfray");
@@ -30,6 +30,38 @@ pub fn lcg(s: &mut u64) -> f32 {
 /// The standard error of a finished run, as text.
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// The names of the entries of `dir`, sorted.
+pub fn file_names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+/// Starts `halfray render SCENE -o OUT` at 4000 × 3000 (long enough to interrupt) and returns
+/// the running child once it has printed its `rendering …` line, i.e. once the outputs were
+/// checked and the work began. Its stdout is discarded; the rest of its stderr stays piped.
+pub fn start_long_render(scene: &Path, out: &Path) -> Child {
+    let mut child = Command::new(BIN)
+        .arg("render")
+        .arg(scene)
+        .arg("-o")
+        .arg(out)
+        .args(["--width", "4000", "--height", "3000"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut err = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    std::io::BufRead::read_line(&mut err, &mut line).unwrap();
+    assert!(line.starts_with("rendering"), "{line}");
+    child.stderr = Some(err.into_inner());
+    child
 }
 
 // Scene text: the tables the test scenes are made of, written once. Values are TOML text, so a
