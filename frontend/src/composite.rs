@@ -117,15 +117,10 @@ pub struct CompositeArgs {
     pub force: bool,
 }
 
-/// Reads an image as 8-bit straight RGBA.
+/// Reads an image as 8-bit straight RGBA, within the memory limit (see
+/// [`crate::png::read_rgba8`]).
 pub fn read_rgba8(path: &Path) -> Result<image::RgbaImage> {
-    Ok(image::ImageReader::open(path)
-        .map_err(|e| Error::io(path, e))?
-        .with_guessed_format()
-        .map_err(|e| Error::io(path, e))?
-        .decode()
-        .map_err(|e| Error::input(Location::file(path), format!("cannot decode image: {e}")))?
-        .into_rgba8())
+    crate::png::read_rgba8(path)
 }
 
 /// `a OP b` pixel by pixel on 8-bit straight RGBA (values scaled to `[0, 1]`, results rounded

@@ -1,8 +1,11 @@
-//! 8-bit pixels: quantisation of `[0, 1]` values and PNG encoding to a reserved output.
+//! 8-bit pixels: quantisation of `[0, 1]` values, PNG encoding to a reserved output, and
+//! reading images within the memory limit.
 
-use crate::error::Result;
+use crate::error::{Error, Location, Result};
+use crate::limits::MEMORY_LIMIT_BYTES;
 use crate::outputs::OutputFile;
 use image::{ImageEncoder, codecs::png::PngEncoder};
+use std::path::Path;
 
 /// A `[0, 1]` value to 8 bits, rounded.
 #[inline]
@@ -26,4 +29,51 @@ pub fn encode_png(
     PngEncoder::new(w)
         .write_image(rgba, width, height, image::ExtendedColorType::Rgba8)
         .map_err(std::io::Error::other)
+}
+
+/// Reads an image (format guessed from its bytes) as 8-bit straight RGBA, within
+/// [`MEMORY_LIMIT_BYTES`]: the header's size is read first and an image whose RGBA buffer
+/// would exceed the limit is refused with its size before anything is decoded; the decoder
+/// itself is given the same limit (not the `image` crate's smaller default), so the two agree.
+pub fn read_rgba8(path: &Path) -> Result<image::RgbaImage> {
+    let open = || -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>> {
+        let mut r = image::ImageReader::open(path)
+            .map_err(|e| Error::io(path, e))?
+            .with_guessed_format()
+            .map_err(|e| Error::io(path, e))?;
+        let mut limits = image::Limits::default();
+        limits.max_alloc = Some(MEMORY_LIMIT_BYTES);
+        r.limits(limits);
+        Ok(r)
+    };
+    let cannot = |e: image::ImageError| {
+        Error::input(Location::file(path), format!("cannot decode image: {e}"))
+    };
+    let (w, h) = open()?.into_dimensions().map_err(cannot)?;
+    let too_big = |bytes: Option<u64>| {
+        let size = match bytes {
+            Some(b) => format!("about {:.1} GiB", b as f64 / f64::from(1u32 << 30)),
+            None => "more memory".to_string(),
+        };
+        Error::input(
+            Location::file(path),
+            format!(
+                "image is {w}×{h}: decoding it needs {size}, more than the {} GiB limit",
+                MEMORY_LIMIT_BYTES >> 30
+            ),
+        )
+    };
+    let rgba_bytes = u64::from(w)
+        .checked_mul(u64::from(h))
+        .and_then(|n| n.checked_mul(4));
+    if !rgba_bytes.is_some_and(|b| b <= MEMORY_LIMIT_BYTES) {
+        return Err(too_big(rgba_bytes));
+    }
+    match open()?.decode() {
+        Ok(img) => Ok(img.into_rgba8()),
+        // The decoder's own buffer (e.g. 16 bits a channel) can exceed the limit where the
+        // 8-bit copy does not: still give the size and the limit.
+        Err(image::ImageError::Limits(_)) => Err(too_big(None)),
+        Err(e) => Err(cannot(e)),
+    }
 }

@@ -687,3 +687,120 @@ fn errors_name_the_actual_problem_and_escape_what_they_quote() {
         stderr(&o)
     );
 }
+
+/// Item 13: `gamma --match` never recommends a γ that `render --gamma` refuses; an extreme
+/// match is clamped to the accepted range (0.2..=5), and the message says so.
+#[test]
+fn gamma_match_recommends_only_what_render_accepts() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_scene(dir.path(), "s.toml", "");
+    let png = dir.path().join("g.png");
+    // 1/255 gives γ = ln 0.5 / ln(1/255) = 0.125; 254/255 gives 176.6: both outside.
+    for (m, expect, clamped) in [
+        ("1", "0.2", true),
+        ("254", "5", true),
+        ("186", "2.20", false),
+    ] {
+        let o = run(&[&"gamma", &"--match", &m]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let out = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert_eq!(out.contains("clamped"), clamped, "{m}: {out}");
+        let g = out
+            .trim_end()
+            .rsplit("--gamma ")
+            .next()
+            .unwrap()
+            .to_string();
+        assert_eq!(g, expect, "{m}: {out}");
+        let o = run(&[&"render", &scene, &"-o", &png, &"-q", &"--gamma", &g]);
+        assert_eq!(o.status.code(), Some(0), "--gamma {g}: {}", stderr(&o));
+    }
+}
+
+/// CRC-32 (IEEE, bitwise), to build PNG chunks by hand.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = !0u32;
+    for &b in bytes {
+        c ^= u32::from(b);
+        for _ in 0..8 {
+            c = if c & 1 == 1 {
+                (c >> 1) ^ 0xedb8_8320
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
+/// Item 13: an image whose header claims a size over the 4 GiB memory limit is refused
+/// before decoding, naming the file, its size and the limit.
+#[test]
+fn huge_images_are_refused_with_their_size_and_the_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    // A PNG header claiming 40000×40000 RGBA8 (6.0 GiB as RGBA), with no pixel data.
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend(40000u32.to_be_bytes());
+    ihdr.extend(40000u32.to_be_bytes());
+    ihdr.extend([8, 6, 0, 0, 0]);
+    let mut bytes = b"\x89PNG\r\n\x1a\n".to_vec();
+    bytes.extend(13u32.to_be_bytes());
+    bytes.extend(&ihdr);
+    bytes.extend(crc32(&ihdr).to_be_bytes());
+    // The decoder reads the header up to the first IDAT: an empty one, then IEND.
+    for chunk in [&b"IDAT"[..], &b"IEND"[..]] {
+        bytes.extend(0u32.to_be_bytes());
+        bytes.extend(chunk);
+        bytes.extend(crc32(chunk).to_be_bytes());
+    }
+    let huge = dir.path().join("huge.png");
+    std::fs::write(&huge, &bytes).unwrap();
+    let out = dir.path().join("o.png");
+    let scene = small_scene(dir.path(), "s.toml", "");
+    for o in [
+        run(&[&"composite", &huge, &huge, &"-o", &out]),
+        run(&[
+            &"render",
+            &scene,
+            &"-o",
+            &out,
+            &"-q",
+            &"--background",
+            &huge,
+        ]),
+    ] {
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains("huge.png")
+                && e.contains("image is 40000×40000: decoding it needs about 6.0 GiB, more than the 4 GiB limit"),
+            "{e}"
+        );
+        assert!(!out.exists());
+    }
+}
+
+/// Item 14: `render -o /dev/full --stats-json s.json` fails, and `s.json` (which would
+/// describe an image never written) is not written either.
+#[test]
+fn a_failed_image_write_leaves_no_stats_json() {
+    if !Path::new("/dev/full").exists() {
+        eprintln!("skipped: no /dev/full on this system");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_scene(dir.path(), "s.toml", "");
+    let stats = dir.path().join("s.json");
+    let o = run(&[
+        &"render",
+        &scene,
+        &"-o",
+        &"/dev/full",
+        &"-q",
+        &"--stats-json",
+        &stats,
+    ]);
+    assert_ne!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stats.exists(), "{}", stderr(&o));
+    assert_eq!(names(dir.path()), vec!["s.toml".to_string()]);
+}

@@ -165,9 +165,19 @@ pub fn run(args: &GammaArgs) -> Result<()> {
                 "--match {a}: the matching grey must lie strictly between black and white (0 < A < 255)"
             ))
         })?;
-        text.push_str(&format!(
-            "gamma = ln 0.5 / ln {frac:.4} = {g:.3}; render with --gamma {g:.2}\n"
-        ));
+        let (lo, hi) = GAMMA_RANGE;
+        if (f64::from(lo)..=f64::from(hi)).contains(&g) {
+            text.push_str(&format!(
+                "gamma = ln 0.5 / ln {frac:.4} = {g:.3}; render with --gamma {g:.2}\n"
+            ));
+        } else {
+            // `render --gamma` accepts only GAMMA_RANGE: recommend its nearest end, and say so.
+            text.push_str(&format!(
+                "gamma = ln 0.5 / ln {frac:.4} = {g:.3}, outside the accepted {lo}..={hi} \
+                 (no display has it: check the match); clamped: render with --gamma {}\n",
+                if g < f64::from(lo) { lo } else { hi }
+            ));
+        }
     }
     crate::console::print_out(&text)
 }

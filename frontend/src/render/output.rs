@@ -13,13 +13,7 @@ pub fn read_background(
     height: u32,
     transfer: Transfer,
 ) -> Result<Vec<Vec4>> {
-    let img = image::ImageReader::open(path)
-        .map_err(|e| Error::io(path, e))?
-        .with_guessed_format()
-        .map_err(|e| Error::io(path, e))?
-        .decode()
-        .map_err(|e| Error::input(Location::file(path), format!("cannot decode image: {e}")))?
-        .into_rgba8();
+    let img = crate::png::read_rgba8(path)?;
     if img.width() != width || img.height() != height {
         return Err(Error::input(
             Location::file(path),
