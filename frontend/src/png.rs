@@ -66,7 +66,7 @@ pub fn read_rgba8(path: &Path) -> Result<image::RgbaImage> {
     let rgba_bytes = u64::from(w)
         .checked_mul(u64::from(h))
         .and_then(|n| n.checked_mul(4));
-    if !rgba_bytes.is_some_and(|b| b <= MEMORY_LIMIT_BYTES) {
+    if rgba_bytes.is_none_or(|b| b > MEMORY_LIMIT_BYTES) {
         return Err(too_big(rgba_bytes));
     }
     match open()?.decode() {
