@@ -18,8 +18,10 @@
 //! which would cull a box the ray passes through.
 //!
 //! **Domain.** Never a false miss while every `|bound − origin|` on an axis with a non-zero
-//! direction component is at most `f32::MAX` (beyond it the `f32` distance cannot represent
-//! the slab). The padding is relative, so a false hit is bounded (the box is at most
+//! direction component is at most `f32::MAX` (beyond it the difference overflows to `±∞` and
+//! the box can be missed although the exact ray crosses it at a representable distance) and
+//! the exact entry distance is at most `f32::MAX` (an entry beyond it rounds to `+∞`, which
+//! is no hit, as is an exit below `−f32::MAX`). The padding is relative, so a false hit is bounded (the box is at most
 //! `2·gamma(3)` of the far distance beyond the ray) only while the non-zero direction
 //! components and the finite slab distances have magnitudes in `[2⁻¹²⁰, 2¹²⁰]`; outside that
 //! range `f32` distances round absolutely and a box farther off may be reported hit
@@ -618,5 +620,76 @@ mod tests {
         );
         assert!(SlabRay::new(&ray).unwrap().divide);
         assert!(b.intersect_ray(&ray).is_some());
+    }
+
+    /// The no-false-miss domain (module docs, *Domain*) at its boundary: a box whose far
+    /// bound is exactly `f32::MAX` from the origin is hit, and its interval `[0.75, 1]·MAX`
+    /// (exact, by hand) is enclosed. Just outside: from `−MAX` with `d = 2` the exact interval
+    /// is `[0.625, 0.75]·MAX`, representable, but `bound − o` overflows and the box is missed;
+    /// with `d = 0.5` the exact entry `1.5·MAX` is beyond `f32` and the box is no hit either.
+    #[test]
+    fn no_false_miss_up_to_a_slab_difference_of_f32_max() {
+        let h = f32::MAX / 2.0; // exact
+        let b = Aabb::new(Vec3::new(h / 2.0, -1.0, -1.0), Vec3::new(h, 1.0, 1.0));
+        let (te, tx) = b
+            .intersect_ray(&Ray::new(Vec3::new(-h, 0.0, 0.0), Vec3::X))
+            .expect("inside the domain: the exact ray crosses the box");
+        assert!(te <= 0.75 * f32::MAX && tx >= f32::MAX, "({te:e}, {tx:e})");
+        assert!(!hits(
+            &b,
+            Vec3::new(-f32::MAX, 0.0, 0.0),
+            Vec3::new(2.0, 0.0, 0.0)
+        ));
+        assert!(!hits(&b, Vec3::new(-h, 0.0, 0.0), Vec3::new(0.5, 0.0, 0.0)));
+    }
+
+    /// The bounded-false-hit domain (module docs, *Domain*: non-zero direction components and
+    /// slab distances in `[2⁻¹²⁰, 2¹²⁰]`) at both ends. The ray `o = 0`, `d = (s, s, 0)`
+    /// enters the box's `x` slab at `t = N` and leaves its `y` slab at `t = E` (bounds
+    /// `N·s`, `E·s`: exact, `s` a power of two): touching (`N = E`) is a hit, and a gap of
+    /// `2⁻¹⁹` of the distances (beyond the `2·gamma(3)` padding plus the near distance's
+    /// `gamma(3)`, about `5.4·10⁻⁷`) is a miss, for `N` at `2⁻¹²⁰` and `2¹¹⁹` (the far `x`
+    /// distance `2N` then at `2¹²⁰`) and `s` at `2⁻¹²⁰`, 1 and `2¹²⁰` where the bounds are
+    /// normal `f32`. Just outside (a slab distance `2⁻¹⁴⁹/3`, below the normal range, rounds
+    /// to 0): the box `[2⁻¹⁴⁹, 1] × [−1, 0]` beside the ray `(3, 1, 0)·t` (exactly, `x`
+    /// reaches it at `t = 2⁻¹⁴⁹/3` where `y` has left it at `t = 0`) is reported hit.
+    #[test]
+    fn false_hits_bounded_at_both_ends_of_the_tame_domain() {
+        let p = |e: i32| 2f32.powi(e);
+        let mut checked = 0;
+        for (n, gap_e) in [
+            (p(-120), p(-120) * (1.0 - p(-19))),
+            (p(119), p(119) * (1.0 - p(-19))),
+        ] {
+            for s in [p(-120), 1.0, p(120)] {
+                let exact = |x: f32| f64::from(x) * f64::from(s);
+                let normal = |x: f32| {
+                    let y = x * s;
+                    y.is_finite() && y.abs() >= f32::MIN_POSITIVE && f64::from(y) == exact(x)
+                };
+                if !(normal(n) && normal(2.0 * n) && normal(gap_e)) {
+                    continue;
+                }
+                let ray = Ray::new(Vec3::ZERO, Vec3::new(s, s, 0.0));
+                let bx = |e: f32| {
+                    Aabb::new(
+                        Vec3::new(n * s, -e * s, -1.0),
+                        Vec3::new(2.0 * n * s, e * s, 1.0),
+                    )
+                };
+                let (te, tx) = bx(n)
+                    .intersect_ray(&ray)
+                    .unwrap_or_else(|| panic!("touching box missed: N = {n:e}, s = {s:e}"));
+                assert!(te <= n && tx >= n, "N = {n:e}, s = {s:e}: ({te:e}, {tx:e})");
+                assert!(
+                    bx(gap_e).intersect_ray(&ray).is_none(),
+                    "false hit across a gap of 2^-19: N = {n:e}, s = {s:e}"
+                );
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 4, "the grid of boundary cases shrank");
+        let tiny = Aabb::new(Vec3::new(p(-149), -1.0, -1.0), Vec3::new(1.0, 0.0, 1.0));
+        assert!(hits(&tiny, Vec3::ZERO, Vec3::new(3.0, 1.0, 0.0)));
     }
 }

@@ -554,4 +554,63 @@ mod tests {
             }
         }
     }
+
+    /// The bounds' domain (module docs, *Domain of the bounds*) at its ends: `r` at `2⁻⁴⁹`
+    /// and `2⁴⁷` (`|o − C| ≈ 2.06·r`, `|t·d|` from `1.13·r` to `2.87·r`, all within
+    /// `[10⁻¹⁵, 10¹⁵]`) and `|d|` at `2⁵⁰`, 1 and `2⁻⁵¹`, which put the near `|t|` down to
+    /// `1.8·10⁻³⁰` and the far one up to `9.1·10²⁹` (within `[10⁻³⁰, 10³⁰]`; each of the six
+    /// combinations checked to be inside). The roots are within `64·2⁻²⁴·((|o − C| + r)/|d| + |t|)` of
+    /// the `f64` roots of the same `f32` inputs ([`reference_roots`]) and satisfy
+    /// `|o + t·d − C|² = r²` within `64·2⁻²⁴·(|o − C|² + r² + |t·d|²)` plus the effect of
+    /// `t`'s own rounding (the fuzz property's bounds, `K = 64`). Just outside (`r = 2⁻⁶⁰`,
+    /// `2⁶⁰`; `|t|` at `2⁻¹¹⁰`) the docs promise only `None` or a non-NaN `t`.
+    #[test]
+    fn bounds_hold_at_the_ends_of_their_domain() {
+        let u = f64::from(crate::float::F32_UNIT_ROUNDOFF);
+        let p = |e: i32| 2f32.powi(e);
+        let in_domain = |x: f64| (1e-15..=1e15).contains(&x);
+        let mut checked = 0;
+        for r in [p(-49), p(47)] {
+            for dl in [p(50), 1.0, p(-51)] {
+                let c = Vec3::new(0.25 * r, -r, 3.0 * r);
+                let s = Sphere::new(c, r).unwrap();
+                let ray = Ray::new(c + Vec3::new(-2.0 * r, 0.5 * r, 0.0), Vec3::X * dl);
+                let (fl, rr, d) = (
+                    (ray.origin - c).as_dvec3().length(),
+                    f64::from(r),
+                    f64::from(dl),
+                );
+                let (r0, r1) = reference_roots(&s, &ray).unwrap();
+                let inside = [fl, rr, r0 * d, r1 * d].into_iter().all(in_domain)
+                    && r0 >= 1e-30
+                    && r1 <= 1e30;
+                assert!(inside, "r = {r:e}, |d| = {dl:e}: not inside the domain");
+                let (t0, t1) = s
+                    .roots(&ray)
+                    .unwrap_or_else(|| panic!("r = {r:e}, |d| = {dl:e}: no roots"));
+                for (t, want) in [(t0, r0), (t1, r1)] {
+                    let t = f64::from(t);
+                    let tol = 64.0 * u * ((fl + rr) / d + want);
+                    assert!(
+                        (t - want).abs() <= tol,
+                        "r = {r:e}, |d| = {dl:e}: t = {t:e}, f64 root {want:e}, bound {tol:e}"
+                    );
+                    let x = (ray.origin.as_dvec3() + ray.direction.as_dvec3() * t) - c.as_dvec3();
+                    let resid = (x.length_squared() - rr * rr).abs();
+                    let bound = 64.0 * u * (fl * fl + rr * rr + (t * d).powi(2))
+                        + 2.0 * d * (fl + rr + t * d) * u * t;
+                    assert!(resid <= bound, "r = {r:e}: residual {resid:e} > {bound:e}");
+                }
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 6);
+        for (r, dl) in [(p(-60), 1.0), (p(60), 1.0), (1.0, p(110))] {
+            let c = Vec3::new(0.25 * r, -r, 3.0 * r);
+            let ray = Ray::new(c + Vec3::new(-2.0 * r, 0.5 * r, 0.0), Vec3::X * dl);
+            if let Some((t0, t1)) = Sphere::new(c, r).unwrap().roots(&ray) {
+                assert!(!t0.is_nan() && !t1.is_nan() && t0 <= t1, "r = {r:e}");
+            }
+        }
+    }
 }

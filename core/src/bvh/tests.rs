@@ -919,3 +919,144 @@ fn general_node_test_hits_the_corners_and_misses_beside() {
         assert_eq!(test(x, y), None, "({x}, {y})");
     }
 }
+
+/// The closest hit of `ray` in `bvh` with `isect`, through the query trait.
+fn closest<I: TriangleIntersector>(
+    bvh: &VecBvh,
+    mesh: &TriangleMesh<'_>,
+    isect: &I,
+    ray: &Ray,
+) -> Option<(u32, crate::triangle::TriangleHit)> {
+    use crate::query::{Query, RayQuery, Triangles};
+    RayQuery::closest_hit(
+        bvh,
+        ray,
+        &mut Triangles::new(mesh, isect),
+        &mut Query::new(),
+    )
+}
+
+/// `isect`'s own hit of triangle `prim` for the whole ray equals `hit` (a genuine hit), and no
+/// brute-force hit `want` is farther than it (the weak form: `hit` may only be farther).
+fn assert_weak<I: TriangleIntersector>(
+    mesh: &TriangleMesh<'_>,
+    isect: &I,
+    ray: &Ray,
+    got: Option<(u32, crate::triangle::TriangleHit)>,
+    want: Option<(u32, f32)>,
+) {
+    if let Some((prim, hit)) = got {
+        let own = isect.intersect(ray, &mesh.triangle(prim as usize).unwrap());
+        assert_eq!(own, Some(hit), "not a hit of triangle {prim}: {ray:?}");
+        let (_, w) = want.expect("brute force finds every hit the tree reports");
+        assert!(
+            w <= hit.t,
+            "nearer than brute force: {} < {w}, {ray:?}",
+            hit.t
+        );
+    }
+}
+
+/// `Watertight`'s *Domain of agreement* (vertices' sheared magnitudes `≤ 2⁶⁰`, dominant
+/// direction component `≥ 2⁻¹⁰⁰`, no subnormal projection) at both ends, as the fuzz
+/// targets `bvh`, `bvh_load`, `grid` and `kdtree` use it: the BVH's closest hit equals the
+/// brute-force loop's exactly. Far: 300 triangles scaled by `2⁵⁵` and origins within
+/// `8·2⁵⁵`, so every `|p − o|` component is at most `13.5·2⁵⁵ < 2⁵⁹` and, with directions
+/// whose dominant component is 1, every sheared magnitude below `2⁶⁰`. Small: the same soup
+/// scaled by `2⁻⁵⁰`, directions scaled so that the dominant component is exactly `2⁻¹⁰⁰`
+/// (sheared depths below `2⁵⁴`; vertices on a `2⁻⁷³` grid, origins on a `2⁻⁷⁰` one, so no
+/// difference is subnormal). Just outside (scaled by `2¹⁰⁰`) only the weak form is promised: the BVH's hit
+/// is one `Watertight` reports for that triangle, no nearer than brute force's.
+#[test]
+fn closest_hit_equals_brute_force_at_both_ends_of_the_watertight_domain() {
+    let p = |e: i32| 2f32.powi(e);
+    for (scale, dominant, exact) in [
+        (p(55), 1.0, true),
+        (p(-50), p(-100), true),
+        (p(100), 1.0, false),
+    ] {
+        let (mut pos, tris) = soup(300, 17);
+        for v in &mut pos {
+            *v *= scale;
+        }
+        let mesh = TriangleMesh::new(&pos, &tris);
+        let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+        let mut r = Lcg(5);
+        let mut hits = 0;
+        for _ in 0..400 {
+            let o = r.v(16.0) * scale;
+            let dir = r.v(10.0) * scale - o;
+            let d = dir / dir.abs().max_element() * dominant;
+            if exact {
+                assert!(pos.iter().all(|v| (*v - o).abs().max_element() <= p(59)));
+            }
+            let ray = Ray::new(o, d);
+            let got = closest(&bvh, &mesh, &Watertight, &ray);
+            let want = brute(&mesh, &ray);
+            if exact {
+                assert_eq!(got.map(|(i, h)| (i, h.t)), want, "scale {scale:e}: {ray:?}");
+            } else {
+                assert_weak(&mesh, &Watertight, &ray, got, want);
+            }
+            hits += usize::from(got.is_some());
+        }
+        assert!(hits > 40, "scale {scale:e}: {hits} hits");
+    }
+}
+
+/// `MollerTrumbore`'s weak form in an acceleration structure (its docs): on rays aimed at the
+/// shared vertices and edges of a fan (where its inexact edges decide) and at random soup
+/// triangles, the BVH's closest hit is one `MollerTrumbore` reports for that triangle and no
+/// nearer than the brute-force loop's (a brute-force hit outside its triangle's box can be
+/// nearer: the tree never visits it).
+#[test]
+fn moller_trumbore_in_a_bvh_keeps_the_weak_form() {
+    use crate::triangle::MollerTrumbore;
+    let brute_mt = |mesh: &TriangleMesh<'_>, ray: &Ray| {
+        let mut best: Option<(u32, f32)> = None;
+        for i in 0..mesh.len() {
+            if let Some(h) = MollerTrumbore::CLASSIC.intersect(ray, &mesh.triangle(i).unwrap())
+                && best.is_none_or(|(_, b)| h.t < b)
+            {
+                best = Some((i as u32, h.t));
+            }
+        }
+        best
+    };
+    // A fan of 16 slivers around the origin in z = 0, and the random soup.
+    let mut pos = vec![Vec3::ZERO];
+    let mut tris = Vec::new();
+    for k in 0..16u32 {
+        let a = k as f32 * core::f32::consts::TAU / 16.0;
+        pos.push(Vec3::new(a.cos(), a.sin(), 0.0) * 3.7);
+        tris.push([0, k + 1, (k + 1) % 16 + 1]);
+    }
+    let (soup_pos, soup_tris) = soup(200, 23);
+    let base = pos.len() as u32;
+    pos.extend(soup_pos);
+    tris.extend(soup_tris.iter().map(|t| t.map(|i| i + base)));
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+    let mut r = Lcg(41);
+    let mut hits = 0;
+    for i in 0..3000 {
+        let o = r.v(20.0) + Vec3::new(0.0, 0.0, 9.0);
+        // Aimed at a vertex, at the midpoint of a fan edge, or at a random point.
+        let target = match i % 3 {
+            0 => pos[(r.f() * pos.len() as f32) as usize % pos.len()],
+            1 => pos[(r.f() * 16.0) as usize % 16 + 1] * 0.5,
+            _ => r.v(10.0),
+        };
+        let ray = Ray::new(o, target - o);
+        let got = closest(&bvh, &mesh, &MollerTrumbore::CLASSIC, &ray);
+        assert_weak(
+            &mesh,
+            &MollerTrumbore::CLASSIC,
+            &ray,
+            got,
+            brute_mt(&mesh, &ray),
+        );
+        hits += usize::from(got.is_some());
+    }
+    assert!(hits > 1000, "{hits}");
+}

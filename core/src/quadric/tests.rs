@@ -258,3 +258,64 @@ fn cone_apex_hit_is_finite() {
     assert_eq!(h.point, Vec3::ZERO);
     assert!(h.normal.is_finite() && h.point_error.is_finite());
 }
+
+/// The residual bound's domain (`Quadric::roots`, *Domain of the residual bound*: the
+/// discriminant's scale `max(q_b², |q_a|·|q_c|) ≥ 10⁻²⁹⁰`) at its end: `f = λ(|x|² − 1/2)`
+/// with `λ = 2⁻⁴⁸²` puts that scale at `3.4·10⁻²⁹⁰` for the ray from `(−1, −0.6, −0.2)`
+/// along `(1, 0.7, 0.3)`. The roots agree with the `f64` roots of `|o + t·d|² = 1/2` (the
+/// `λ`-free polynomial, well conditioned) and satisfy `|f(o + t·d)| ≤ 64·2⁻⁵³·(|q_a|t² +
+/// 2|q_b||t| + |q_c| + F(o + t·d))` (`F = λ(|x|² + 1/2)`), the residual evaluated here as
+/// `λ·(|x|² − 1/2)` (its own rounding, `4·2⁻⁵³·F`, taken off the bound); likewise at
+/// `λ = 1`. Just below the domain (`λ = 2⁻⁵⁴⁰`: the scale is subnormal) only `t0 ≤ t1` is
+/// promised.
+#[test]
+fn residual_bound_holds_down_to_the_end_of_its_domain() {
+    let u = crate::float::F64_UNIT_ROUNDOFF;
+    let (o, d) = (Vec3::new(-1.0, -0.6, -0.2), Vec3::new(1.0, 0.7, 0.3));
+    let ray = Ray::new(o, d);
+    let (od, dd) = (o.as_dvec3(), d.as_dvec3());
+    // The λ-free polynomial a·t² + 2b·t + c, its roots by the stable formula.
+    let (a, b, c) = (dd.dot(dd), od.dot(dd), od.dot(od) - 0.5);
+    let q = -(b + (b * b - a * c).sqrt().copysign(b));
+    let want = ((c / q).min(q / a), (c / q).max(q / a));
+    for lambda in [1.0, 2f64.powi(-482)] {
+        let quad = Quadric::new(
+            DMat3::from_diagonal(DVec3::splat(lambda)),
+            DVec3::ZERO,
+            -0.5 * lambda,
+        )
+        .unwrap();
+        let (qa, qb, qc) = (a * lambda, b * lambda, c * lambda);
+        let scale = (qb * qb).max((qa * qc).abs());
+        assert!(
+            lambda == 1.0 || (1e-290..4e-290).contains(&scale),
+            "{scale:e}"
+        );
+        let (t0, t1) = quad.roots(&ray).expect("the ray crosses the sphere twice");
+        for (t, w) in [(t0, want.0), (t1, want.1)] {
+            assert!(
+                (t - w).abs() <= 1e-12 * w.abs(),
+                "λ = {lambda:e}: {t} vs {w}"
+            );
+            let x = od + dd * t;
+            let big_f = lambda * (x.length_squared() + 0.5);
+            let resid = (lambda * (x.length_squared() - 0.5)).abs();
+            let bound = 64.0 * u * (qa.abs() * t * t + 2.0 * qb.abs() * t.abs() + qc.abs() + big_f)
+                - 4.0 * u * big_f;
+            assert!(
+                resid <= bound,
+                "λ = {lambda:e}: residual {resid:e} > {bound:e}"
+            );
+        }
+    }
+    let tiny = 2f64.powi(-540);
+    let quad = Quadric::new(
+        DMat3::from_diagonal(DVec3::splat(tiny)),
+        DVec3::ZERO,
+        -0.5 * tiny,
+    )
+    .unwrap();
+    if let Some((t0, t1)) = quad.roots(&ray) {
+        assert!(t0 <= t1, "({t0}, {t1})");
+    }
+}

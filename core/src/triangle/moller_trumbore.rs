@@ -17,9 +17,10 @@ use glam::Vec3;
 ///
 /// **In an acceleration structure** (BVH, wide BVH, grid, kd-tree) only the *weak form* of
 /// agreement with a brute-force loop holds, everywhere: the structure's closest hit is a hit
-/// this test reports for that triangle, and no brute-force hit is nearer. Equal answers are
-/// not promised, since the inexact edges can report a hit outside the triangle's bounding box,
-/// which a structure (rightly) never visits for that ray.
+/// this test reports for that triangle, and it is no nearer than the brute-force loop's
+/// closest hit (it may be farther, or missing). Equal answers are not promised, since the
+/// inexact edges can report a hit outside the triangle's bounding box, which a structure
+/// (rightly) never visits for that ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MollerTrumbore {
     /// Determinant threshold: `|det| ≤ det_epsilon` means "parallel or degenerate". Absolute,

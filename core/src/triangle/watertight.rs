@@ -229,7 +229,9 @@ impl WatertightRay {
 /// magnitudes `X = |(p − o)_kx| + |s_x·(p − o)_kz|`, `Y` likewise and `Z = |(p − o)_kz / d_kz|`
 /// of every vertex `p` all at most `2⁶⁰` (about `10¹⁸` from the ray's origin), the dominant
 /// direction component `|d_kz| ≥ 2⁻¹⁰⁰`, and no projected quantity (`p − o`, the shear
-/// products, `x'`, `y'`) subnormal in `f32` or beyond `f32::MAX`. Outside it a hit is still a
+/// products, `x'`, `y'`) subnormal in `f32` or beyond `f32::MAX`. Inside it an acceleration
+/// structure's closest hit equals a brute-force loop's (same triangle, same hit record; the
+/// `bvh`, `bvh_load`, `grid` and `kdtree` fuzz properties check this). Outside it a hit is still a
 /// crossing of a triangle within rounding of the given one, and an acceleration structure's
 /// answer a genuine hit no nearer than a brute-force loop's, but not necessarily the same one.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
