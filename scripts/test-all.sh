@@ -149,14 +149,15 @@ if [ "${SKIP_FUZZ:-0}" != 1 ]; then
 else
     echo "SKIPPED stage fuzz (SKIP_FUZZ=1)" | tee -a "$HALFRAY_SKIP_LOG"
 fi
-echo; report_skips
-
 if [ "${SKIP_EMBREE:-0}" != 1 ] && [ "${SKIP_CLUSTER:-0}" != 1 ]; then
     stage cluster
     # The docs/cluster Slurm files on a real Slurm cluster, torn down when the checks end.
     bash scripts/slurm-local.sh bash -c 'bash scripts/slurm-ci-crosscheck.sh target/ci/cluster/crosscheck "$@" &&
         bash scripts/slurm-ci-fuzz.sh target/ci/cluster/fuzz' _ "$MESHES"/*.obj
+else
+    echo "SKIPPED stage cluster (SKIP_EMBREE=1 or SKIP_CLUSTER=1)" | tee -a "$HALFRAY_SKIP_LOG"
 fi
+echo; report_skips
 
 echo
 echo "== all stages passed in $(( $(date +%s) - t0 )) s"
