@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Mutation testing of the core's most critical files with cargo-mutants: a fixed, reproducible
-# sample of at most PER_FILE mutants per file (every n-th of the file's mutants in cargo-mutants'
-# own order, `--shard 0/n`, n = ceil(count / PER_FILE)), tested by TEST_PACKAGES. Prints one
-# table row per file: mutants in the file, sampled, caught / missed / unviable / timeout; the
-# missed ones are listed under target/mutation/<file>/mutants.out/missed.txt.
+# sample of at most PER_FILE mutants per file (in each file, the mutants whose index in
+# cargo-mutants' own `--list` order is SHARD mod n, n = ceil(count / PER_FILE): spread over the
+# whole file), tested by TEST_PACKAGES. Prints one table row per file: mutants in the file,
+# sampled, caught / missed / unviable / timeout; the sample and the verdicts are listed under
+# target/mutation/sample.s<SHARD>.p<PER_FILE>/ (sample.txt, caught.txt, missed.txt, ...).
 #
 # Two stages, one outcome: every sampled mutant is first tested by the core's own tests alone
-# (a build of one crate, seconds); only the ones those tests miss or time out on are tested
-# again by all of TEST_PACKAGES (a mutant the core's tests catch is caught by any superset).
+# (one cargo-mutants run for all files, one build of the dependencies); only the ones those
+# tests miss or time out on are tested again by all of TEST_PACKAGES (a mutant the core's tests
+# catch is caught by any superset).
 # Builds use the `mutants` profile (Cargo.toml: no debug info, opt-level 1).
 #
 #   PER_FILE=100 TEST_PACKAGES=halfray-core,halfray-tests bash scripts/mutants.sh   # the full run
@@ -17,7 +19,9 @@
 #
 # FILES: files or folders (every `.rs` under a folder except `tests.rs` and `tests/`); default
 # the five older critical files and the newer modules. SHARD: which of the n shards to sample
-# (default 0; a held-out check samples another, e.g. `SHARD=3`).
+# (default 0; a held-out check samples another, e.g. `SHARD=3`). Samples drawn before
+# 2026-11-29 used `--shard SHARD/n` per file, which in cargo-mutants 27 is a *slice* (n
+# consecutive mutants), not every n-th.
 #
 # A mutant costs ~5–20 s to build and test here (2 cores, unloaded; ~40 s with eight builds
 # sharing them), and the default files hold 3 580 mutants (~2 400 sampled at PER_FILE=100):
@@ -54,38 +58,48 @@ if [ "${1:-}" = "--in-diff" ]; then
 fi
 
 count() { if [ -f "$1" ]; then grep -c . "$1" || true; else echo 0; fi; }
+esc() { sed 's/[][\\.^$*+?(){}|]/\\&/g' | paste -sd'|' -; }
+# The sample: in each file, the mutants whose index in cargo-mutants' order is SHARD mod n.
+run="$out/sample.s$SHARD.p$PER_FILE"; mkdir -p "$run"; : >"$run/sample.txt"; : >"$run/files.txt"
+args=()
+for f in "${FILES[@]}"; do
+    cargo mutants --list -f "$f" 2>/dev/null >"$run/all.tmp" || true
+    total=$(count "$run/all.tmp")
+    [ "$total" -ge 1 ] || continue
+    n=$(( (total + PER_FILE - 1) / PER_FILE ))
+    [ "$SHARD" -lt "$n" ] || continue
+    awk -v n="$n" -v s="$SHARD" '(NR - 1) % n == s' "$run/all.tmp" >>"$run/sample.txt"
+    echo "$f $total" >>"$run/files.txt"
+    args+=(-f "$f")
+done
+rm -f "$run/all.tmp"
+[ -s "$run/sample.txt" ] || { echo "no mutants sampled"; exit 0; }
+# Stage one: every sampled mutant against the core's own tests, in one cargo-mutants run (one
+# build of the dependencies); cargo-mutants exits non-zero when a mutant is missed: the table
+# says so.
+cargo mutants "${args[@]}" -F "^($(esc <"$run/sample.txt"))\$" --test-package halfray-core \
+    --profile mutants -j1 -o "$run/core" >"$run/core.log" 2>&1 || true
+m="$run/core/mutants.out"; w="$run/wide/mutants.out"
+survivors=$(cat "$m/missed.txt" "$m/timeout.txt" 2>/dev/null | esc)
+if [ "$TEST_PACKAGES" != halfray-core ] && [ -n "$survivors" ]; then
+    # Stage two: the survivors, by name, against every test package. Every mutant relinks
+    # every test binary here (~2 min): a generous test timeout, so that a slow machine is not
+    # read as a mutant's endless loop. Its verdicts replace stage one's for the survivors.
+    cargo mutants "${args[@]}" -F "^($survivors)\$" --test-package "$TEST_PACKAGES" \
+        --profile mutants -j1 --minimum-test-timeout 180 -o "$run/wide" \
+        >"$run/wide.log" 2>&1 || true
+    cat "$m/caught.txt" "$w/caught.txt" >"$run/caught.txt" 2>/dev/null || true
+    cat "$m/unviable.txt" "$w/unviable.txt" >"$run/unviable.txt" 2>/dev/null || true
+    cat "$w/missed.txt" >"$run/missed.txt" 2>/dev/null || : >"$run/missed.txt"
+    cat "$w/timeout.txt" >"$run/timeout.txt" 2>/dev/null || : >"$run/timeout.txt"
+else
+    for k in caught missed unviable timeout; do cp "$m/$k.txt" "$run/$k.txt" 2>/dev/null || : >"$run/$k.txt"; done
+fi
+per() { grep -c "^$2:" "$run/$1.txt" || true; }
 echo "| file | mutants | sampled | caught | missed | unviable | timeout |"
 echo "|---|---:|---:|---:|---:|---:|---:|"
-for f in "${FILES[@]}"; do
-    total=$(cargo mutants --list -f "$f" 2>/dev/null | wc -l)
-    [ "$total" -ge 1 ] || continue
-    n=$(( (total + PER_FILE - 1) / PER_FILE )); [ "$n" -ge 1 ] || n=1
-    [ "$SHARD" -lt "$n" ] || continue
-    f_id=${f#core/src/}; dir="$out/${f_id//\//_}"; dir="${dir%.rs}.s$SHARD"
-    # cargo-mutants exits non-zero when a mutant is missed: the table says so.
-    cargo mutants -f "$f" --shard "$SHARD/$n" --test-package halfray-core --profile mutants \
-        -o "$dir" >"$dir.log" 2>&1 || true
-    m="$dir/mutants.out"
-    if [ "$TEST_PACKAGES" != halfray-core ]; then
-        # Stage two: the survivors, by name (regex-escaped), against every test package.
-        survivors=$(cat "$m/missed.txt" "$m/timeout.txt" 2>/dev/null | sed 's/[][\\.^$*+?(){}|]/\\&/g' \
-            | paste -sd'|' -)
-        if [ -n "$survivors" ]; then
-            # Every mutant relinks every test binary here (~2 min): a generous test timeout,
-            # so that a slow machine is not read as a mutant's endless loop.
-            cargo mutants -f "$f" -F "^($survivors)\$" --test-package "$TEST_PACKAGES" \
-                --profile mutants --minimum-test-timeout 180 -o "$dir/wide" \
-                >"$dir.wide.log" 2>&1 || true
-            w="$dir/wide/mutants.out"
-            # The wide run's verdicts replace stage one's for the survivors.
-            c1=$(count "$m/caught.txt"); u1=$(count "$m/unviable.txt")
-            c=$((c1 + $(count "$w/caught.txt"))); x=$(count "$w/missed.txt")
-            u=$((u1 + $(count "$w/unviable.txt"))); t=$(count "$w/timeout.txt")
-            echo "| \`$f\` | $total | $((c + x + u + t)) | $c | $x | $u | $t |"
-            continue
-        fi
-    fi
-    c=$(count "$m/caught.txt"); x=$(count "$m/missed.txt")
-    u=$(count "$m/unviable.txt"); t=$(count "$m/timeout.txt")
-    echo "| \`$f\` | $total | $((c + x + u + t)) | $c | $x | $u | $t |"
-done
+while read -r f total; do
+    echo "| \`$f\` | $total | $(per sample "$f") |" \
+        "$(per caught "$f") | $(per missed "$f") | $(per unviable "$f") | $(per timeout "$f") |"
+done <"$run/files.txt"
+echo "missed: $run/missed.txt; logs: $run/core.log, $run/wide.log"

@@ -516,3 +516,61 @@ fn distance_equals_the_independent_oracle_on_random_pairs() {
         "{skew_interior} {degenerate} {zero}"
     );
 }
+
+/// `segment_distance` on one worked case per branch (distances by hand): two points; a point
+/// against a segment (its foot at `t = 1/4`); a segment against a point past its end; skew
+/// segments at 45° whose closest points are both interior (`z = 0` and `z = 2` planes, `2`);
+/// the far segment's start `p2` nearest (`t < 0`: `s` recomputed for `p2`, the foot at
+/// `s = 1/2` of a segment of squared length 4), the same reversed (`t > 1`, from `q2`), and
+/// parallel segments (`denom = 0`), whose nearest points are an end of each (`√2`).
+#[test]
+fn segment_distance_worked_case_of_each_branch() {
+    use super::distance::segment_distance;
+    use glam::DVec3;
+    let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    let o = DVec3::ZERO;
+    let cases = [
+        ((o, o, v(3.0, 4.0, 0.0), v(3.0, 4.0, 0.0)), 5.0),
+        (
+            (v(1.0, 1.0, 0.0), v(1.0, 1.0, 0.0), o, v(4.0, 0.0, 0.0)),
+            1.0,
+        ),
+        (
+            (o, v(4.0, 0.0, 0.0), v(5.0, 2.0, 0.0), v(5.0, 2.0, 0.0)),
+            5f64.sqrt(),
+        ),
+        (
+            (
+                v(-1.0, 0.0, 0.0),
+                v(3.0, 0.0, 0.0),
+                v(0.0, -1.0, 2.0),
+                v(2.0, 1.0, 2.0),
+            ),
+            2.0,
+        ),
+        (
+            (o, v(2.0, 0.0, 0.0), v(1.0, 1.0, 0.0), v(1.0, 3.0, 0.0)),
+            1.0,
+        ),
+        (
+            (o, v(2.0, 0.0, 0.0), v(1.0, 3.0, 0.0), v(1.0, 1.0, 0.0)),
+            1.0,
+        ),
+        (
+            (o, v(2.0, 0.0, 0.0), v(3.0, 1.0, 0.0), v(5.0, 1.0, 0.0)),
+            2f64.sqrt(),
+        ),
+    ];
+    for (k, ((p1, q1, p2, q2), want)) in cases.into_iter().enumerate() {
+        for (d, what) in [
+            (segment_distance(p1, q1, p2, q2), "as given"),
+            (segment_distance(q1, p1, q2, p2), "both reversed"),
+            (segment_distance(p2, q2, p1, q1), "swapped"),
+        ] {
+            assert!(
+                (d - want).abs() <= 1e-15 * want,
+                "case {k} {what}: {d} against {want}"
+            );
+        }
+    }
+}
