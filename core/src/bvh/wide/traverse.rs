@@ -373,12 +373,41 @@ where
         node.child[(keys[0] & 7) as usize & (W - 1)]
     }
 
+    /// The any-hit form of [`WideBvh::order_hits`]: the children hit by a node (`hits`, at
+    /// least two lanes) in slot order, the first returned and the others pushed, unordered
+    /// and without a sort (an any-hit walk stops at its first hit, so the order of the
+    /// children changes only the work, never whether a hit is found; its interval never
+    /// shrinks, so [`WideBvh::pop_any`] needs no distances). Prefetches each child pushed. At
+    /// most `W − 1` entries are pushed, as by `order_hits`.
+    #[inline(always)]
+    fn push_hits_any(
+        node: &WideNode<W>,
+        hits: u32,
+        stack: &mut [StackEntry; STACK],
+        sp: &mut usize,
+        (nodes, groups): (&[WideNode<W>], &[LeafGroup]),
+    ) -> u32 {
+        let first = node.child[hits.trailing_zeros() as usize & (W - 1)];
+        let mut rest = hits & (hits - 1);
+        while rest != 0 {
+            let child = node.child[rest.trailing_zeros() as usize & (W - 1)];
+            rest &= rest - 1;
+            if let Some(slot) = stack.get_mut(*sp) {
+                slot.node = child;
+                *sp += 1;
+            }
+            prefetch_child(nodes, groups, child);
+        }
+        first
+    }
+
     /// The node step of the walk: tests the children of node `index` over
     /// `[t_min, bound]` (`bound`: [`cull_bound`] of the current `t_max`), pushes all hit ones
-    /// but the nearest ([`WideBvh::order_hits`]) and returns the nearest; `None` when no child
-    /// is hit (or `index` is out of range).
+    /// but the nearest ([`WideBvh::order_hits`]; for the any-hit walk, `ANY`, all but the
+    /// first in slot order: [`WideBvh::push_hits_any`]) and returns the one to visit next;
+    /// `None` when no child is hit (or `index` is out of range).
     #[inline(always)]
-    fn descend<const GENERAL: bool, L: SimdLevel>(
+    fn descend<const ANY: bool, const GENERAL: bool, L: SimdLevel>(
         &self,
         (level, wray, (nodes, groups)): (L, &PaddedRay, (&[WideNode<W>], &[LeafGroup])),
         index: u32,
@@ -390,6 +419,9 @@ where
         let (dist, mut mask) = wray.hit_children::<W, GENERAL, L>(level, node, t_min, bound);
         if mask == 0 {
             return None;
+        }
+        if ANY {
+            return Some(Self::push_hits_any(node, mask, stack, sp, (nodes, groups)));
         }
         // `W` is a power of two: `& (W − 1)` keeps every lane index in range without a check.
         let hits = mask;
@@ -420,6 +452,30 @@ where
         }
     }
 
+    /// [`WideBvh::pop`] of the any-hit walk: the top entry, unchecked (its interval has not
+    /// shrunk since the entry was pushed within it: the walk ends at its first hit); `None`
+    /// when the stack is empty.
+    #[inline(always)]
+    fn pop_any(stack: &[StackEntry; STACK], sp: &mut usize) -> Option<u32> {
+        *sp = sp.checked_sub(1)?;
+        stack.get(*sp).map(|e| e.node)
+    }
+
+    /// The next entry of the walk: [`WideBvh::pop_any`] for the any-hit walk, [`WideBvh::pop`]
+    /// otherwise.
+    #[inline(always)]
+    fn next_entry<const ANY: bool>(
+        stack: &[StackEntry; STACK],
+        sp: &mut usize,
+        bound: f32,
+    ) -> Option<u32> {
+        if ANY {
+            Self::pop_any(stack, sp)
+        } else {
+            Self::pop(stack, sp, bound)
+        }
+    }
+
     #[inline(always)]
     fn walk<LT: LeafTest, const ANY: bool, const GENERAL: bool, L: SimdLevel>(
         &self,
@@ -446,7 +502,7 @@ where
         let mut bound = cull_bound(cur.t_max);
         loop {
             let down = match ChildRef::decode(next) {
-                ChildRef::Inner(index) => self.descend::<GENERAL, L>(
+                ChildRef::Inner(index) => self.descend::<ANY, GENERAL, L>(
                     (level, &wray, tree),
                     index,
                     (cur.t_min, bound),
@@ -455,7 +511,7 @@ where
                 ChildRef::Leaf { .. } => break,
                 ChildRef::Empty => None,
             };
-            match down.or_else(|| Self::pop(stack, &mut sp, bound)) {
+            match down.or_else(|| Self::next_entry::<ANY>(stack, &mut sp, bound)) {
                 Some(child) => next = child,
                 None => {
                     add_stats(stats, &local);
@@ -470,7 +526,7 @@ where
         'walk: loop {
             match ChildRef::decode(next) {
                 ChildRef::Inner(index) => {
-                    if let Some(child) = self.descend::<GENERAL, L>(
+                    if let Some(child) = self.descend::<ANY, GENERAL, L>(
                         (level, &wray, tree),
                         index,
                         (cur.t_min, bound),
@@ -533,7 +589,7 @@ where
                 ChildRef::Empty => {}
             }
             // The next entry still within the (shrunk) interval.
-            match Self::pop(stack, &mut sp, bound) {
+            match Self::next_entry::<ANY>(stack, &mut sp, bound) {
                 Some(child) => next = child,
                 None => break,
             }
