@@ -56,7 +56,6 @@ mod getters;
 pub mod grid;
 pub mod halfedge;
 pub mod hit;
-mod hit_queries;
 pub mod kdtree;
 pub mod plane;
 pub mod polygon;

@@ -264,6 +264,8 @@ primitive_from_shape!([] Sphere, [] Ellipsoid, [const N: usize] Polygon<N>);
 mod tests {
     use super::*;
     use crate::bvh::BuildOptions;
+    use crate::prelude::*;
+    use crate::query::Query;
     use crate::test_util::{Lcg, vec_bvh};
     use std::vec::Vec;
 
@@ -401,9 +403,9 @@ mod tests {
             // Aimed at a sphere's centre: most rays hit something, many several spheres.
             let o = r.v(40.0);
             let ray = Ray::new(o, spheres[k % spheres.len()].center() - o);
-            let shape =
+            let mut shape =
                 |i: u32, ray: &Ray| spheres[i as usize].closest_hit(ray).map(|h| (h.t, h.t));
-            let got = bvh.closest_hit(&ray, shape, None);
+            let got = bvh.closest_hit(&ray, &mut shape, &mut Query::new());
             let want = spheres
                 .iter()
                 .enumerate()

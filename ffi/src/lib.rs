@@ -16,9 +16,11 @@ compile_error!("the baked format is little-endian and read in place: little-endi
 
 use core::mem::{align_of, size_of};
 use halfray_core::bvh::{
-    load_scratch_len, BakedError, BakedLayout, Bvh, BvhNode, LoadError, StackEntry, TriangleMesh,
-    BAKED_ALIGN, TRAVERSAL_STACK_SIZE,
+    load_scratch_len, BakedError, BakedLayout, Bvh, BvhNode, LoadError, TriangleMesh, BAKED_ALIGN,
+    TRAVERSAL_STACK_SIZE,
 };
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, StackEntry, Triangles};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{TriangleHit, WatertightF32Exact};
 use halfray_core::Vec3;
@@ -525,15 +527,15 @@ pub unsafe extern "C" fn halfray_closest_hit(
         Ok(v) => v,
         Err(e) => return e,
     };
-    let answer =
-        match l
-            .bvh
-            .closest_hit_triangles_in(stack, &l.mesh, &WatertightF32Exact, &ray, None)
-        {
-            Ok(a) => a,
-            // The one error of the `_in` queries.
-            Err(_) => return HalfrayStatus::StackTooSmall,
-        };
+    let answer = match l.bvh.closest_hit(
+        &ray,
+        &mut Triangles::new(&l.mesh, &WatertightF32Exact),
+        &mut Query::new().stack(stack),
+    ) {
+        Ok(a) => a,
+        // The one error of a query on the caller's stack.
+        Err(_) => return HalfrayStatus::StackTooSmall,
+    };
     let out = match answer {
         Some((primitive, h)) => hit_record(primitive, &h),
         None => HalfrayHit {
@@ -589,10 +591,11 @@ pub unsafe extern "C" fn halfray_any_hit(
         Ok(v) => v,
         Err(e) => return e,
     };
-    match l
-        .bvh
-        .any_hit_triangles_in(stack, &l.mesh, &WatertightF32Exact, &ray, None)
-    {
+    match l.bvh.any_hit(
+        &ray,
+        &mut Triangles::new(&l.mesh, &WatertightF32Exact),
+        &mut Query::new().stack(stack),
+    ) {
         Ok(a) => {
             // SAFETY: non-NULL and writable (contract); `bool` has alignment 1.
             unsafe { occluded.write(a.is_some()) };

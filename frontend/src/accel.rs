@@ -6,13 +6,15 @@ use crate::error::{Error, Result};
 use crate::obj::ObjMesh;
 use crate::pages::PageArray;
 use halfray_core::Ray;
-use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, WideStack, binary_options};
+use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, binary_options};
 use halfray_core::bvh::{
-    BuildJob, BuildOptions, Bvh, BvhError, BvhNode, JobPart, PrimRef, TraversalStats, TriangleMesh,
-    index_capacity, node_capacity, scratch_capacity,
+    BuildJob, BuildOptions, Bvh, BvhError, BvhNode, JobPart, PrimRef, TriangleMesh, index_capacity,
+    node_capacity, scratch_capacity,
 };
-use halfray_core::simd_level::Portable;
-use halfray_core::triangle::{TriangleHit, TriangleIntersector, TriangleVariant, VariantVisitor};
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, QueryStack, TraversalStats, Triangles};
+use halfray_core::simd_level::{Portable, SimdLevel};
+use halfray_core::triangle::{TriangleHit, TriangleVariant, VariantVisitor};
 
 /// The wide BVH with owned storage.
 pub type VecBvh8 = Bvh8<PageArray<WideNode<8>>, PageArray<LeafGroup>>;
@@ -105,29 +107,26 @@ impl MeshAccel {
         &self.wide
     }
 
-    /// Closest hit with `isect`: `(triangle index, hit)`.
-    #[inline]
-    pub fn closest<I: TriangleIntersector>(
-        &self,
-        isect: &I,
-        ray: &Ray,
-    ) -> Option<(u32, TriangleHit)> {
-        closest_simd(&self.wide, isect, ray, None)
+    /// The mesh as the core's queries take it.
+    pub fn triangles(&self) -> TriangleMesh<'_> {
+        TriangleMesh::new(&self.mesh.positions, &self.mesh.triangles)
     }
 
-    /// Closest hit with traversal statistics added to `stats`.
-    pub fn closest_with_stats<I: TriangleIntersector>(
+    /// Closest hit with `isect`: `(triangle index, hit)`, with traversal statistics added to
+    /// `stats` when given.
+    #[inline]
+    pub fn closest<'s, I: TriangleIntersector>(
         &self,
         isect: &I,
         ray: &Ray,
-        stats: &mut TraversalStats,
+        stats: impl Into<Option<&'s mut TraversalStats>>,
     ) -> Option<(u32, TriangleHit)> {
-        closest_simd(&self.wide, isect, ray, Some(stats))
+        closest_simd(&self.wide, &self.triangles(), isect, ray, stats.into())
     }
 
     /// Whether anything is hit in the ray's interval.
     pub fn any<I: TriangleIntersector>(&self, isect: &I, ray: &Ray) -> bool {
-        any_simd(&self.wide, isect, ray).is_some()
+        any_simd(&self.wide, &self.triangles(), isect, ray).is_some()
     }
 
     /// Closest hit with a variant chosen at run time.
@@ -136,7 +135,7 @@ impl MeshAccel {
         impl VariantVisitor for Closest<'_> {
             type Output = Option<(u32, TriangleHit)>;
             fn visit<I: TriangleIntersector>(self, isect: &I) -> Self::Output {
-                self.0.closest(isect, self.1)
+                self.0.closest(isect, self.1, None)
             }
         }
         v.visit(Closest(self, ray))
@@ -158,22 +157,24 @@ impl MeshAccel {
 thread_local! {
     /// One traversal stack per thread, kept across rays (creating one writes 3.5 KiB). Taken
     /// out for a query and put back after it ([`with_stack`]).
-    static STACK: std::cell::Cell<Option<Box<WideStack>>> = const { std::cell::Cell::new(None) };
+    static STACK: std::cell::Cell<Option<Box<QueryStack>>> = const { std::cell::Cell::new(None) };
 }
 
 /// Runs `f` on this thread's kept stack: taken out of the thread-local slot and put back, so
-/// the query's result is returned by `f` directly, never copied out through a closure. A
-/// nested query (an intersector that traces rays itself) finds the slot empty and uses a
-/// stack of its own.
+/// the query's result is returned by `f` directly (a `RefCell` borrow through
+/// `LocalKey::with` returned it through a closure and copied it twice, ~15–25 ns per ray
+/// measured, the copies stalling on store forwarding). A nested query (an intersector that
+/// traces rays itself) finds the slot empty and uses a stack of its own.
 #[inline(always)]
-fn with_stack<R>(f: impl FnOnce(&mut WideStack) -> R) -> R {
-    let mut stack = STACK.take().unwrap_or_else(|| Box::new(WideStack::new()));
+fn with_stack<R>(f: impl FnOnce(&mut QueryStack) -> R) -> R {
+    let mut stack = STACK.take().unwrap_or_else(|| Box::new(QueryStack::new()));
     let r = f(&mut stack);
     STACK.set(Some(stack));
     r
 }
 
-/// [`Bvh8::closest_hit_triangles`] compiled for AVX2 + FMA when the CPU has them
+/// The closest hit of `ray` in `bvh` over the triangles of `mesh` (the mesh the tree was
+/// built over) with `isect`, compiled for AVX2 + FMA when the CPU has them
 /// ([`crate::simd::x86_avx2_fma`]), for the baseline target otherwise, on this thread's kept
 /// stack. Same answers either way: the core never fuses a multiply-add (its exactness
 /// arguments need plain roundings) and Rust does not contract `a·b + c`, so the wider vectors
@@ -181,6 +182,7 @@ fn with_stack<R>(f: impl FnOnce(&mut WideStack) -> R) -> R {
 #[inline]
 pub fn closest_simd<I: TriangleIntersector>(
     bvh: &VecBvh8,
+    mesh: &TriangleMesh<'_>,
     isect: &I,
     ray: &Ray,
     stats: Option<&mut TraversalStats>,
@@ -189,33 +191,66 @@ pub fn closest_simd<I: TriangleIntersector>(
     if let Some(level) = crate::simd::avx2_fma() {
         // SAFETY: the token exists, so the CPU supports AVX2 and FMA (checked at run time),
         // the only requirement of calling a `#[target_feature(enable = "avx2,fma")]` fn.
-        return unsafe { x86::closest(level, bvh, isect, ray, stats) };
+        return unsafe { x86::closest(level, bvh, mesh, isect, ray, stats) };
     }
-    with_stack(|stack| bvh.closest_hit_triangles_on(Portable, stack, isect, ray, stats))
+    closest_on(Portable, bvh, mesh, isect, ray, stats)
 }
 
-/// [`Bvh8::any_hit_triangles`] on the widest SIMD level, as [`closest_simd`].
+/// Any hit of `ray`, on the widest SIMD level, as [`closest_simd`].
 #[inline]
 pub fn any_simd<I: TriangleIntersector>(
     bvh: &VecBvh8,
+    mesh: &TriangleMesh<'_>,
     isect: &I,
     ray: &Ray,
 ) -> Option<(u32, TriangleHit)> {
     #[cfg(target_arch = "x86_64")]
     if let Some(level) = crate::simd::avx2_fma() {
         // SAFETY: as in `closest_simd`: AVX2 and FMA were detected at run time.
-        return unsafe { x86::any(level, bvh, isect, ray) };
+        return unsafe { x86::any(level, bvh, mesh, isect, ray) };
     }
-    with_stack(|stack| bvh.any_hit_triangles_on(Portable, stack, isect, ray, None))
+    any_on(Portable, bvh, mesh, isect, ray)
+}
+
+/// [`closest_simd`] at SIMD `level`, on this thread's kept stack.
+#[inline(always)]
+fn closest_on<L: SimdLevel, I: TriangleIntersector>(
+    level: L,
+    bvh: &VecBvh8,
+    mesh: &TriangleMesh<'_>,
+    isect: &I,
+    ray: &Ray,
+    stats: Option<&mut TraversalStats>,
+) -> Option<(u32, TriangleHit)> {
+    with_stack(|stack| {
+        let ctx = &mut Query::new().on(level).stack(stack).stats(stats);
+        bvh.closest_hit(ray, &mut Triangles::new(mesh, isect), ctx)
+    })
+}
+
+/// [`any_simd`] at SIMD `level`, on this thread's kept stack.
+#[inline(always)]
+fn any_on<L: SimdLevel, I: TriangleIntersector>(
+    level: L,
+    bvh: &VecBvh8,
+    mesh: &TriangleMesh<'_>,
+    isect: &I,
+    ray: &Ray,
+) -> Option<(u32, TriangleHit)> {
+    with_stack(|stack| {
+        let ctx = &mut Query::new().on(level).stack(stack);
+        bvh.any_hit(ray, &mut Triangles::new(mesh, isect), ctx)
+    })
 }
 
 /// The AVX2 + FMA entry points: the whole query, the thread's stack included, is one function
 /// compiled for those features.
 #[cfg(target_arch = "x86_64")]
 mod x86 {
-    use super::{VecBvh8, with_stack};
+    use super::{VecBvh8, any_on, closest_on};
     use halfray_core::Ray;
-    use halfray_core::bvh::TraversalStats;
+    use halfray_core::bvh::TriangleMesh;
+    use halfray_core::query::TraversalStats;
     use halfray_core::simd_level::Avx2Fma;
     use halfray_core::triangle::{TriangleHit, TriangleIntersector};
 
@@ -223,20 +258,22 @@ mod x86 {
     pub(super) fn closest<I: TriangleIntersector>(
         level: Avx2Fma,
         bvh: &VecBvh8,
+        mesh: &TriangleMesh<'_>,
         isect: &I,
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
-        with_stack(|stack| bvh.closest_hit_triangles_on(level, stack, isect, ray, stats))
+        closest_on(level, bvh, mesh, isect, ray, stats)
     }
 
     #[target_feature(enable = "avx2,fma")]
     pub(super) fn any<I: TriangleIntersector>(
         level: Avx2Fma,
         bvh: &VecBvh8,
+        mesh: &TriangleMesh<'_>,
         isect: &I,
         ray: &Ray,
     ) -> Option<(u32, TriangleHit)> {
-        with_stack(|stack| bvh.any_hit_triangles_on(level, stack, isect, ray, None))
+        any_on(level, bvh, mesh, isect, ray)
     }
 }

@@ -7,6 +7,8 @@
 use halfray::obj::read_obj;
 use halfray_core::Vec3;
 use halfray_core::bvh::{Bvh, BvhNode, TriangleMesh, load_scratch_len};
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, Triangles};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{TriangleIntersector, Watertight};
 
@@ -125,7 +127,11 @@ fn the_baked_source_holds_the_mesh_and_a_bvh_that_loads_and_answers_like_brute_f
             }
         }
         let got = bvh
-            .closest_hit_triangles(&mesh, &Watertight, &ray, None)
+            .closest_hit(
+                &ray,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new(),
+            )
             .map(|(i, h)| (i, h.t.to_bits()));
         assert_eq!(got, best);
     }

@@ -21,9 +21,10 @@ use halfray::obj::{ObjMesh, read_obj};
 use halfray::raysets::{Camera, Rng, random_rays};
 use halfray_core::Ray;
 use halfray_core::bvh::{
-    BuildOptions, Bvh, BvhNode, MAX_DEPTH, TraversalStats, TriangleMesh, index_capacity,
-    node_capacity,
+    BuildOptions, Bvh, BvhNode, MAX_DEPTH, TriangleMesh, index_capacity, node_capacity,
 };
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, TraversalStats, Triangles};
 use halfray_core::triangle::{TriangleIntersector, TriangleVariant, Watertight};
 use halfray_tests::{par_map, vertex_and_eighth_edge_points};
 use proptest::prelude::*;
@@ -159,11 +160,19 @@ fn check_rays(
 ) -> (usize, usize) {
     let results = par_map(rays, |ray| {
         let got = bvh
-            .closest_hit_triangles(mesh, &Watertight, ray, None)
+            .closest_hit(
+                ray,
+                &mut Triangles::new(mesh, &Watertight),
+                &mut Query::new(),
+            )
             .map(|(p, h)| (p, h.t));
-        let any = bvh.any_hit_triangles(mesh, &Watertight, ray, None);
-        let wide_got = halfray::accel::closest_simd(wide, &Watertight, ray, None);
-        let wide_any = halfray::accel::any_simd(wide, &Watertight, ray);
+        let any = bvh.any_hit(
+            ray,
+            &mut Triangles::new(mesh, &Watertight),
+            &mut Query::new(),
+        );
+        let wide_got = halfray::accel::closest_simd(wide, mesh, &Watertight, ray, None);
+        let wide_any = halfray::accel::any_simd(wide, mesh, &Watertight, ray);
         let want = brute(mesh, Some(spheres), &Watertight, ray);
         let wide_got = wide_got.map(|(p, h)| (p, h.t));
         (got, any.is_some(), wide_got, wide_any.is_some(), want)
@@ -255,11 +264,13 @@ fn every_intersector_variant_works_through_the_bvh() {
     ) {
         for ray in rays {
             let got = bvh
-                .closest_hit_triangles(mesh, isect, ray, None)
+                .closest_hit(ray, &mut Triangles::new(mesh, isect), &mut Query::new())
                 .map(|(_, h)| h.t);
             let want = brute(mesh, Some(spheres), isect, ray).map(|(_, t)| t);
             assert_eq!(got, want, "{} {ray:?}", isect.name());
-            let any = bvh.any_hit_triangles(mesh, isect, ray, None).is_some();
+            let any = bvh
+                .any_hit(ray, &mut Triangles::new(mesh, isect), &mut Query::new())
+                .is_some();
             assert_eq!(any, got.is_some(), "{}", isect.name());
         }
     }
@@ -318,14 +329,22 @@ fn exact_vertex_and_edge_rays_do_not_leak_on_the_exact_solids() {
                 assert_eq!(d.as_dvec3(), p.as_dvec3() - o.as_dvec3(), "exact direction");
                 let ray = Ray::new(o, d);
                 let (prim, hit) = bvh
-                    .closest_hit_triangles(&mesh, &Watertight, &ray, None)
+                    .closest_hit(
+                        &ray,
+                        &mut Triangles::new(&mesh, &Watertight),
+                        &mut Query::new(),
+                    )
                     .unwrap_or_else(|| panic!("{name}: leak at {p:?} from {o:?}"));
                 assert!((hit.t - 1.0).abs() <= 1e-6, "{name}: t {} at {p:?}", hit.t);
                 let want = brute(&mesh, None, &Watertight, &ray);
                 assert_eq!(Some((prim, hit.t)), want, "{name}: {ray:?}");
                 assert!(
-                    bvh.any_hit_triangles(&mesh, &Watertight, &ray, None)
-                        .is_some()
+                    bvh.any_hit(
+                        &ray,
+                        &mut Triangles::new(&mesh, &Watertight),
+                        &mut Query::new()
+                    )
+                    .is_some()
                 );
                 count += 1;
             }
@@ -400,8 +419,12 @@ fn vertex_and_edge_rays_do_not_leak_on_the_closed_meshes() {
         );
         let results = par_map(&rays, |ray| {
             (
-                bvh.closest_hit_triangles(&mesh, &Watertight, ray, None)
-                    .map(|(p, h)| (p, h.t)),
+                bvh.closest_hit(
+                    ray,
+                    &mut Triangles::new(&mesh, &Watertight),
+                    &mut Query::new(),
+                )
+                .map(|(p, h)| (p, h.t)),
                 brute(&mesh, Some(&spheres), &Watertight, ray),
             )
         });
@@ -475,7 +498,12 @@ fn drone_in_hangar_clearance_equals_the_wall_distances() {
     }
     let mut out = vec![0.0f32; points.len()];
     let min = bvh
-        .clearance_triangles(&hangar, &Watertight, &points, &dirs, &mut out)
+        .clearance(
+            &mut Triangles::new(&hangar, &Watertight),
+            &points,
+            &dirs,
+            &mut out,
+        )
         .unwrap();
     // Expected: exit distance of each ray from the room box, in f64.
     let expect: Vec<f64> = points
@@ -542,12 +570,16 @@ fn stats_count_visits_and_nan_rays_stop_at_once() {
     let mesh = TriangleMesh::new(&obj.positions, &obj.triangles);
     let bvh = build(&mesh, 4);
     let s = bvh.stats();
-    assert!(s.bytes_per_primitive < 68.0, "{s:?}");
+    assert!(bvh.bytes_per_triangle() < 68.0, "{s:?}");
     let (lo, hi) = obj.bounds().unwrap();
     let mut st = TraversalStats::default();
     let rays = random_rays(lo, hi, 1000, 1);
     for r in &rays {
-        let _ = bvh.closest_hit_triangles(&mesh, &Watertight, r, Some(&mut st));
+        let _ = bvh.closest_hit(
+            r,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new().stats(&mut st),
+        );
     }
     assert!(
         st.nodes_visited >= 1000 && st.primitives_tested > 0,
@@ -561,8 +593,12 @@ fn stats_count_visits_and_nan_rays_stop_at_once() {
     let mut st = TraversalStats::default();
     let nan = Ray::new(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::X);
     assert!(
-        bvh.closest_hit_triangles(&mesh, &Watertight, &nan, Some(&mut st))
-            .is_none()
+        bvh.closest_hit(
+            &nan,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new().stats(&mut st)
+        )
+        .is_none()
     );
     assert!(st.nodes_visited <= 1);
 }
@@ -606,9 +642,9 @@ proptest! {
                 _ => target,
             };
             let ray = Ray::with_interval(o, d, 0.0, if kind == 3 { 2.0 } else { f32::INFINITY });
-            let got = bvh.closest_hit_triangles(&mesh, &Watertight, &ray, None).map(|(p, h)| (p, h.t));
+            let got = bvh.closest_hit(&ray, &mut Triangles::new(&mesh, &Watertight), &mut Query::new()).map(|(p, h)| (p, h.t));
             prop_assert_eq!(got, brute(&mesh, None, &Watertight, &ray), "{:?}", ray);
-            let any = bvh.any_hit_triangles(&mesh, &Watertight, &ray, None);
+            let any = bvh.any_hit(&ray, &mut Triangles::new(&mesh, &Watertight), &mut Query::new());
             prop_assert_eq!(any.is_some(), got.is_some());
         }
     }
@@ -654,7 +690,7 @@ proptest! {
         prop_assert!(bvh.bounds().is_finite() || bvh.is_empty());
         for &(o, t) in &rays {
             let ray = Ray::new(o, t - o);
-            let got = bvh.closest_hit_triangles(&mesh, &Watertight, &ray, None).map(|(p, h)| (p, h.t));
+            let got = bvh.closest_hit(&ray, &mut Triangles::new(&mesh, &Watertight), &mut Query::new()).map(|(p, h)| (p, h.t));
             prop_assert_eq!(got, brute(&mesh, None, &Watertight, &ray));
         }
     }

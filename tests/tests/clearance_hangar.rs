@@ -1,7 +1,7 @@
 //! The specification's hangar example: a drone (a small closed half-edge mesh) flies inside a
 //! hangar (a box room whose walls face inward, as a triangle list in a BVH). The controller
 //! casts a ray from every drone vertex along its area-weighted vertex normal (from the
-//! half-edge mesh) with [`Bvh::clearance_triangles`] and keeps the nearest wall distance per
+//! half-edge mesh) with [`RayQuery::clearance`](halfray_core::query::RayQuery::clearance) and keeps the nearest wall distance per
 //! vertex and the minimum. Every distance here is known analytically.
 //!
 //! A chopper (fuselage, tail boom, rotor disc, built from boxes and a polygon) then flies
@@ -13,6 +13,8 @@ use glam::{DVec3, Vec3, vec3};
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
 use halfray_core::collide::{Body, colliding_pairs, first_contact, min_distance};
 use halfray_core::halfedge::{DiffuseBoundary, HalfedgeMesh, VertexId, build_scratch_len};
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, Triangles};
 use halfray_core::ray::Ray;
 use halfray_core::solids::{CUBE_TRIANGLES, CUBE_VERTICES};
 use halfray_core::transform::Transform;
@@ -148,7 +150,12 @@ fn clearance(bvh: &Hangar, room: &TriangleMesh<'_>, m: &Drone) -> (Vec<f32>, f32
     let (points, normals) = points_and_normals(m);
     let mut out = vec![f32::NAN; points.len()];
     let min = bvh
-        .clearance_triangles(room, &Watertight, &points, &normals, &mut out)
+        .clearance(
+            &mut Triangles::new(room, &Watertight),
+            &points,
+            &normals,
+            &mut out,
+        )
         .unwrap();
     assert_eq!(
         min,
@@ -195,7 +202,11 @@ fn hangar_walls_face_inward() {
     for d in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
         let ray = Ray::new(vec3(7.0, 3.0, 5.0), d);
         let (_, hit) = bvh
-            .closest_hit_triangles(&room, &Watertight, &ray, None)
+            .closest_hit(
+                &ray,
+                &mut Triangles::new(&room, &Watertight),
+                &mut Query::new(),
+            )
             .unwrap();
         assert!(hit.front_face, "wall along {d} is seen from its front");
     }

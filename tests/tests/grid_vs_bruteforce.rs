@@ -16,7 +16,9 @@ use halfray::obj::read_obj;
 use halfray::raysets::{Camera, Rng, random_rays};
 use halfray_core::Ray;
 use halfray_core::bvh::TriangleMesh;
-use halfray_core::grid::{CellAssignment, DEFAULT_LAMBDA, Grid, GridOptions, GridPlan, GridStats};
+use halfray_core::grid::{CellAssignment, DEFAULT_LAMBDA, Grid, GridOptions, GridPlan};
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, TraversalStats, Triangles};
 use halfray_core::solids::{CUBE_TRIANGLES, CUBE_VERTICES, grid_triangles};
 use halfray_core::triangle::Watertight;
 use halfray_tests::{brute_triangles, par_map};
@@ -57,9 +59,17 @@ fn check_scene(name: &str, p: &[Vec3], t: &[[u32; 3]], rays: &[Ray]) -> usize {
                 },
             );
             for (ray, w) in rays.iter().zip(&want) {
-                let got = g.closest_hit_triangles(&mesh, &Watertight, ray, None);
+                let got = g.closest_hit(
+                    ray,
+                    &mut Triangles::new(&mesh, &Watertight),
+                    &mut Query::new(),
+                );
                 assert_eq!(got, *w, "{name} {assignment:?} λ {lambda}: {ray:?}");
-                let any = g.any_hit_triangles(&mesh, &Watertight, ray, None);
+                let any = g.any_hit(
+                    ray,
+                    &mut Triangles::new(&mesh, &Watertight),
+                    &mut Query::new(),
+                );
                 assert_eq!(any.is_some(), w.is_some(), "{name}: any-hit {ray:?}");
             }
         }
@@ -134,7 +144,11 @@ fn coincident_and_zero_area_triangles() {
     let mesh = TriangleMesh::new(&p, &t);
     let g = build(&mesh, &GridOptions::default());
     for r in &rays {
-        if let Some((i, _)) = g.closest_hit_triangles(&mesh, &Watertight, r, None) {
+        if let Some((i, _)) = g.closest_hit(
+            r,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new(),
+        ) {
             assert!(i < 4 * base.len() as u32 && i % 4 < 2, "{i}");
         }
     }
@@ -230,9 +244,17 @@ fn bunny_equals_brute_force_and_figures() {
     let mut rays = random_rays(lo, hi, 1500, 0xB0);
     rays.extend(Camera::framing(lo, hi, 32, 32).rays());
     let results = par_map(&rays, |r| {
-        let got = grid.closest_hit_triangles(&mesh, &Watertight, r, None);
+        let got = grid.closest_hit(
+            r,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new(),
+        );
         let any = grid
-            .any_hit_triangles(&mesh, &Watertight, r, None)
+            .any_hit(
+                r,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new(),
+            )
             .is_some();
         (got, any, brute_triangles(&mesh, &Watertight, r))
     });
@@ -248,7 +270,11 @@ fn bunny_equals_brute_force_and_figures() {
     many.extend(Camera::framing(lo, hi, 128, 128).rays());
     let sample: Vec<Ray> = many.iter().step_by(6).copied().collect();
     let diffs = par_map(&sample, |r| {
-        let g = grid.closest_hit_triangles(&mesh, &Watertight, r, None);
+        let g = grid.closest_hit(
+            r,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new(),
+        );
         usize::from(g != brute_triangles(&mesh, &Watertight, r))
     });
     assert_eq!(diffs.iter().sum::<usize>(), 0);
@@ -264,9 +290,13 @@ fn bunny_equals_brute_force_and_figures() {
     assert_eq!(bounds.resolution(), grid.resolution());
     assert!(grid.reference_count() < bounds.reference_count());
     assert!(grid.reference_count() >= n);
-    let mut st = GridStats::default();
+    let mut st = TraversalStats::default();
     for r in &many {
-        let _ = grid.closest_hit_triangles(&mesh, &Watertight, r, Some(&mut st));
+        let _ = grid.closest_hit(
+            r,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new().stats(&mut st),
+        );
     }
     eprintln!(
         "bunny: {n} triangles, λ {DEFAULT_LAMBDA}, cells {:?}; references exact {} / bounds {} \
@@ -277,8 +307,8 @@ fn bunny_equals_brute_force_and_figures() {
         grid.reference_count() as f64 / n as f64,
         bounds.reference_count() as f64 / n as f64,
         grid.bytes_per_triangle(),
-        st.cells_visited as f64 / many.len() as f64,
-        st.triangles_tested as f64 / many.len() as f64,
+        st.nodes_visited as f64 / many.len() as f64,
+        st.primitives_tested as f64 / many.len() as f64,
     );
     for lambda in [1.0f32, 2.0, 4.0, 8.0] {
         let g = build(
@@ -288,17 +318,21 @@ fn bunny_equals_brute_force_and_figures() {
                 ..GridOptions::default()
             },
         );
-        let mut st = GridStats::default();
+        let mut st = TraversalStats::default();
         for r in &many {
-            let _ = g.closest_hit_triangles(&mesh, &Watertight, r, Some(&mut st));
+            let _ = g.closest_hit(
+                r,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new().stats(&mut st),
+            );
         }
         eprintln!(
             "bunny λ {lambda}: cells {:?}, {:.1} bytes per triangle, per ray {:.1} cells, \
              {:.1} tests",
             g.resolution(),
             g.bytes_per_triangle(),
-            st.cells_visited as f64 / many.len() as f64,
-            st.triangles_tested as f64 / many.len() as f64,
+            st.nodes_visited as f64 / many.len() as f64,
+            st.primitives_tested as f64 / many.len() as f64,
         );
     }
 }

@@ -19,6 +19,8 @@ use halfray_core::bvh::{PrimitiveSource, TriangleMesh};
 use halfray_core::kdtree::{
     KdBuildOptions, KdNode, KdNodeKind, KdRef, KdTree, MAX_DEPTH, node_capacity, reference_capacity,
 };
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, Triangles};
 use halfray_core::solids::grid_triangles;
 use halfray_core::triangle::{MollerTrumbore, TriangleIntersector, Watertight, WatertightF32};
 use halfray_tests::{brute_triangles as brute, par_map, vertex_and_eighth_edge_points};
@@ -60,14 +62,14 @@ fn check<T: TriangleIntersector>(
     ray: &Ray,
 ) -> bool {
     let want = brute(mesh, isect, ray);
-    let got = kd.closest_hit_triangles(mesh, isect, ray, None);
+    let got = kd.closest_hit(ray, &mut Triangles::new(mesh, isect), &mut Query::new());
     assert_eq!(
         got,
         want,
         "{}: closest hit differs for {ray:?}",
         isect.name()
     );
-    let any = kd.any_hit_triangles(mesh, isect, ray, None);
+    let any = kd.any_hit(ray, &mut Triangles::new(mesh, isect), &mut Query::new());
     assert_eq!(
         any.is_some(),
         want.is_some(),
@@ -233,8 +235,12 @@ fn coincident_and_zero_area_triangles() {
     assert!(hits >= 40, "{hits}");
     let ray = Ray::new(Vec3::new(0.5, 0.5, 4.0), -Vec3::Z);
     assert_eq!(
-        kd.closest_hit_triangles(&mesh, &Watertight, &ray, None)
-            .map(|h| h.0),
+        kd.closest_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new()
+        )
+        .map(|h| h.0),
         Some(0)
     );
 }
@@ -361,7 +367,11 @@ fn bunny_equals_brute_force_on_a_sample_of_rays() {
     // Möller–Trumbore through the tree: its hits are genuine and never nearer than brute
     // force's (its inexact edges may report a hit just outside a triangle's box).
     for ray in rays.iter().take(300) {
-        let got = kd.closest_hit_triangles(&mesh, &MollerTrumbore::CLASSIC, ray, None);
+        let got = kd.closest_hit(
+            ray,
+            &mut Triangles::new(&mesh, &MollerTrumbore::CLASSIC),
+            &mut Query::new(),
+        );
         let want = brute(&mesh, &MollerTrumbore::CLASSIC, ray);
         if let Some((p, h)) = got {
             let v = mesh.triangle(p as usize).unwrap();

@@ -8,6 +8,8 @@
 
 use glam::{DVec3, Vec3};
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, Triangles};
 use halfray_core::solids::OCTAHEDRON_TRIANGLES;
 use halfray_core::triangle::{F64Reference, TriangleIntersector, Watertight};
 use halfray_core::{Ray, spawn_ray};
@@ -67,7 +69,11 @@ fn hits(positions: &[Vec3], tris: &[[u32; 3]], ray: &Ray) -> (bool, bool) {
     )
     .expect("closed mesh builds");
     let through_bvh = bvh
-        .closest_hit_triangles(&mesh, &Watertight, ray, None)
+        .closest_hit(
+            ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new(),
+        )
         .is_some();
     (brute, through_bvh)
 }

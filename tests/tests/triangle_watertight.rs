@@ -566,7 +566,9 @@ fn translated_solids_camera_at_world_origin() {
                     scratch.test_incident(&mesh, &front_target, &ray);
                     // Through the BVH, as a user traces (the default SIMD level): the ray
                     // enters the convex solid through the front layer at the target.
-                    let hit = halfray::accel::closest_simd(&wide, &Watertight, &ray, None);
+                    let tris =
+                        halfray_core::bvh::TriangleMesh::new(&mesh.positions, &mesh.triangles);
+                    let hit = halfray::accel::closest_simd(&wide, &tris, &Watertight, &ray, None);
                     let entered = hit.is_some_and(|(f, h)| {
                         front_target.faces.contains(&f)
                             && (f64::from(h.t) - 1.0).abs() <= t_tolerance(&mesh.tri(f), &ray)

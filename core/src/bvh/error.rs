@@ -40,7 +40,7 @@ pub enum BvhError {
         /// Primitives in the leaf.
         count: usize,
     },
-    /// A query's traversal stack (the caller's, [`super::Bvh::closest_hit_triangles_in`]) is
+    /// A query's traversal stack (the caller's, [`crate::query::Query::stack`]) is
     /// too small for the path it had to keep: give it at least [`super::Bvh::stack_depth`]
     /// entries.
     StackTooSmall {

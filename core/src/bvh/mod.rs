@@ -12,10 +12,10 @@
 //!   slice; the slice's **length** is the capacity). Reserve [`node_capacity`]`(N)` nodes and
 //!   [`index_capacity`]`(N)` indices. Too little storage is a typed error returned **before
 //!   anything is written**.
-//! * Queries: [`Bvh::closest_hit`], [`Bvh::any_hit`] (and their `_triangles` conveniences,
-//!   which call [`TriangleIntersector::prepare`](crate::triangle::TriangleIntersector::prepare)
-//!   once per ray), [`Bvh::query_box`] (all primitives whose box overlaps a box) and
-//!   [`Bvh::clearance`] (nearest hit along each vertex normal: the hangar/drone query).
+//! * Queries: those of every structure ([`RayQuery`](crate::query::RayQuery): closest hit,
+//!   any hit, box query, clearance), with the primitive test supplied as a
+//!   [`LeafTest`](crate::query::LeafTest) (a closure, or
+//!   [`Triangles`](crate::query::Triangles) over a mesh).
 //! * [`Bvh::refit`] recomputes every box after the primitives moved, without a rebuild.
 //!
 //! # Construction (binned SAH)
@@ -46,7 +46,7 @@
 //! `32·nodes + 4·N` bytes; with leaves of one primitive that is at most `32·(2N − 1) + 4N < 68`
 //! bytes per primitive; with the default SAH leaves (about two triangles each) it is about 39 bytes
 //! per triangle (bunny 38.5, dragon 39.2)
-//! ([`BvhStats::bytes_per_primitive`]). The vertex and triangle arrays are the caller's and are
+//! ([`RayQuery::bytes_per_triangle`](crate::query::RayQuery::bytes_per_triangle)). The vertex and triangle arrays are the caller's and are
 //! not counted.
 //!
 //! # Traversal
@@ -70,7 +70,6 @@
 
 mod baked;
 mod build;
-mod clearance;
 mod error;
 mod jobs;
 mod load;
@@ -88,8 +87,6 @@ pub mod wide;
 #[cfg(test)]
 mod tests;
 
-pub use crate::query::StackEntry;
-pub use crate::query::TraversalStats;
 pub use baked::{
     BAKED_ALIGN, BAKED_HEADER_BYTES, BAKED_MAGIC, BAKED_VERSION, BakedError, BakedLayout,
 };

@@ -2,8 +2,6 @@
 //! primitive by the centre of its box.
 
 use crate::aabb::Aabb;
-use crate::ray::Ray;
-use crate::triangle::{TriangleHit, TriangleIntersector};
 use glam::Vec3;
 
 /// One primitive as the builder sees it. Intersection is not part of the trait: it is passed
@@ -115,26 +113,6 @@ impl<'a> TriangleMesh<'a> {
     #[must_use]
     pub fn is_empty(&self) -> bool {
         self.triangles.is_empty()
-    }
-
-    /// The `intersect` closure that the closure-based queries of [`crate::grid::Grid`] and
-    /// [`crate::kdtree::KdTree`] take (and [`super::Bvh`]'s, written out there for the
-    /// microcontroller image's size), for this mesh and the
-    /// intersector `isect`: `isect` is prepared once for `ray` (`None`, so no query, when it
-    /// rejects the ray), and the closure tests triangle `prim` against the query's current
-    /// ray with that preparation, returning `(t, hit)` as those queries expect (`None` for a
-    /// miss or a triangle index out of range).
-    #[inline]
-    pub(crate) fn prepared_intersect<'q, T: TriangleIntersector>(
-        &'q self,
-        isect: &'q T,
-        ray: &Ray,
-    ) -> Option<impl FnMut(u32, &Ray) -> Option<(f32, TriangleHit)> + 'q> {
-        let pre = isect.prepare(ray)?;
-        Some(move |prim: u32, r: &Ray| {
-            let v = self.triangle(prim as usize)?;
-            isect.intersect_prepared(&pre, r, &v).map(|h| (h.t, h))
-        })
     }
 }
 

@@ -10,22 +10,6 @@ where
     N: AsRef<[BvhNode]>,
     I: AsRef<[u32]>,
 {
-    /// Calls `found(prim)` for every primitive of `source` (the source the tree was built or
-    /// last refitted over) whose bounds overlap `query` (closed boxes: touching counts, see
-    /// [`Aabb::overlaps`]). `found` returns `true` to continue, `false` to stop early.
-    /// Returns the number of primitives reported. An empty or NaN query box reports nothing.
-    ///
-    /// This is the broad phase of a collision query: the exact primitive–primitive test is the
-    /// caller's. Primitives are visited in tree order, not index order.
-    pub fn query_box<S: PrimitiveSource + ?Sized>(
-        &self,
-        source: &S,
-        query: &Aabb,
-        found: impl FnMut(u32) -> bool,
-    ) -> usize {
-        self.boxes_overlapping(source, query, found)
-    }
-
     /// The box query ([`crate::query::RayQuery::query_box`]).
     pub(super) fn boxes_overlapping<S: PrimitiveSource + ?Sized>(
         &self,

@@ -18,8 +18,6 @@ pub struct BvhStats {
     pub max_leaf_size: usize,
     /// Bytes of the structure: `32·nodes + 4·primitives`.
     pub bytes: usize,
-    /// `bytes / primitives` (0 for an empty tree).
-    pub bytes_per_primitive: f64,
     /// SAH cost of the tree relative to its root area, with [`super::TRAVERSAL_COST`] and
     /// [`super::INTERSECTION_COST`] (a quality figure for comparing builds).
     pub sah_cost: f64,
@@ -41,9 +39,6 @@ where
             bytes: nodes.len() * NODE_SIZE + self.primitive_count() * 4,
             ..BvhStats::default()
         };
-        if s.primitives > 0 {
-            s.bytes_per_primitive = s.bytes as f64 / s.primitives as f64;
-        }
         let Some(root) = nodes.first() else {
             return s;
         };

@@ -3,6 +3,8 @@
 
 use super::*;
 use crate::aabb::Aabb;
+use crate::prelude::*;
+use crate::query::{Query, StackEntry, TraversalStats, Triangles};
 use crate::ray::Ray;
 use crate::test_util::{Lcg, VecBvh, brute_watertight, lcg_soup, vec_bvh as build};
 use crate::triangle::{TriangleIntersector, Watertight};
@@ -61,12 +63,20 @@ fn empty_input_gives_an_empty_bvh_that_hits_nothing() {
     assert_eq!(bvh.bounds(), crate::aabb::Aabb::EMPTY);
     let ray = Ray::new(Vec3::ZERO, Vec3::X);
     assert!(
-        bvh.closest_hit_triangles(&mesh, &Watertight, &ray, None)
-            .is_none()
+        bvh.closest_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new()
+        )
+        .is_none()
     );
     assert!(
-        bvh.any_hit_triangles(&mesh, &Watertight, &ray, None)
-            .is_none()
+        bvh.any_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new()
+        )
+        .is_none()
     );
     let mut arr_nodes: [BvhNode; 0] = [];
     let mut arr_idx: [u32; 0] = [];
@@ -172,10 +182,18 @@ fn closest_and_any_hit_match_brute_force_on_a_random_soup() {
             let o = r.v(30.0);
             let ray = Ray::new(o, r.v(10.0) - o);
             let got = bvh
-                .closest_hit_triangles(&mesh, &Watertight, &ray, None)
+                .closest_hit(
+                    &ray,
+                    &mut Triangles::new(&mesh, &Watertight),
+                    &mut Query::new(),
+                )
                 .map(|(p, h)| (p, h.t));
             assert_eq!(got, brute(&mesh, &ray), "leaf {leaf} {ray:?}");
-            let any = bvh.any_hit_triangles(&mesh, &Watertight, &ray, None);
+            let any = bvh.any_hit(
+                &ray,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new(),
+            );
             assert_eq!(any.is_some(), got.is_some());
             hits += usize::from(got.is_some());
         }
@@ -249,7 +267,11 @@ fn node_test_prunes_the_tree() {
         Vec3::new(2.0 * 7.0 + 0.25, 2.0 * 11.0 + 0.25, 5.0),
         -Vec3::Z,
     );
-    let hit = bvh.closest_hit_triangles(&mesh, &Watertight, &down, Some(&mut st));
+    let hit = bvh.closest_hit(
+        &down,
+        &mut Triangles::new(&mesh, &Watertight),
+        &mut Query::new().stats(&mut st),
+    );
     assert_eq!(hit.map(|(p, _)| p), Some(11 * 32 + 7));
     assert!(
         st.primitives_tested <= 8 && st.nodes_visited <= 64,
@@ -259,8 +281,12 @@ fn node_test_prunes_the_tree() {
     let mut st = TraversalStats::default();
     let beside = Ray::new(Vec3::new(-5.0, 10.0, 1.0), Vec3::Y);
     assert!(
-        bvh.closest_hit_triangles(&mesh, &Watertight, &beside, Some(&mut st))
-            .is_none()
+        bvh.closest_hit(
+            &beside,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new().stats(&mut st)
+        )
+        .is_none()
     );
     // Both children of the root are tested (and missed): exactly two node tests.
     assert!(st.primitives_tested == 0 && st.nodes_visited == 2, "{st:?}");
@@ -293,7 +319,11 @@ fn near_child_first_and_ties_to_the_first_child() {
     for (origin, dir, want) in [(20.0, -1.0, 15u32), (-5.0, 1.0, 0)] {
         let ray = Ray::new(Vec3::new(0.25, 0.25, origin), dir * Vec3::Z);
         let mut st = TraversalStats::default();
-        let hit = bvh.closest_hit_triangles(&mesh, &Watertight, &ray, Some(&mut st));
+        let hit = bvh.closest_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new().stats(&mut st),
+        );
         assert_eq!(hit.map(|(p, _)| p), Some(want));
         assert!(st.primitives_tested <= 2, "from z = {origin}: {st:?}");
     }
@@ -306,7 +336,11 @@ fn near_child_first_and_ties_to_the_first_child() {
         .expect("two leaves under the root");
     let first = bvh.nodes()[left as usize].primitive_range().unwrap();
     let ray = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
-    let any = bvh.any_hit_triangles(&mesh, &Watertight, &ray, None);
+    let any = bvh.any_hit(
+        &ray,
+        &mut Triangles::new(&mesh, &Watertight),
+        &mut Query::new(),
+    );
     assert_eq!(any.map(|(p, _)| p), Some(bvh.indices()[first.start]));
 }
 
@@ -327,13 +361,21 @@ fn coincident_triangles_build_within_the_depth_limit_and_tie_to_the_smallest_ind
     let ray = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
     let mut st = TraversalStats::default();
     let (p, h) = bvh
-        .closest_hit_triangles(&mesh, &Watertight, &ray, Some(&mut st))
+        .closest_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new().stats(&mut st),
+        )
         .unwrap();
     assert_eq!((p, h.t), (0, 1.0));
     assert!(st.primitives_tested >= n as u64);
     assert!(
-        bvh.any_hit_triangles(&mesh, &Watertight, &ray, None)
-            .is_some()
+        bvh.any_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new()
+        )
+        .is_some()
     );
 }
 
@@ -377,13 +419,21 @@ fn zero_area_and_point_triangles_build_and_miss_cleanly() {
     let bvh = build(&mesh, &BuildOptions::default()).unwrap();
     let ray = Ray::new(Vec3::new(0.2, 0.2, -1.0), Vec3::Z);
     let (p, _) = bvh
-        .closest_hit_triangles(&mesh, &Watertight, &ray, None)
+        .closest_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new(),
+        )
         .unwrap();
     assert_eq!(p, 3);
     let ray = Ray::new(Vec3::new(0.5, 0.0, -1.0), Vec3::Z);
     assert_eq!(
-        bvh.closest_hit_triangles(&mesh, &Watertight, &ray, None)
-            .map(|x| x.0),
+        bvh.closest_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new()
+        )
+        .map(|x| x.0),
         Some(3),
         "edge point of triangle 3 (closed edges), not the degenerate ones"
     );
@@ -404,11 +454,19 @@ fn invalid_rays_test_no_node() {
     ];
     for ray in bad {
         let mut st = TraversalStats::default();
-        let hit = bvh.closest_hit(&ray, |_, _| Some((1.0, ())), Some(&mut st));
+        let hit = bvh.closest_hit(
+            &ray,
+            &mut |_, _: &Ray| Some((1.0, ())),
+            &mut Query::new().stats(&mut st),
+        );
         assert!(hit.is_none());
         assert!(
-            bvh.any_hit(&ray, |_, _| Some((1.0, ())), Some(&mut st))
-                .is_none()
+            bvh.any_hit(
+                &ray,
+                &mut |_, _: &Ray| Some((1.0, ())),
+                &mut Query::new().stats(&mut st)
+            )
+            .is_none()
         );
         assert!(st.nodes_visited <= 1 && st.primitives_tested == 0, "{st:?}");
     }
@@ -421,7 +479,10 @@ fn misbehaving_callbacks_cannot_break_the_interval() {
     let bvh = build(&mesh, &BuildOptions::default()).unwrap();
     let ray = Ray::with_interval(Vec3::splat(-30.0), Vec3::ONE, 0.0, 100.0);
     for t in [f32::NAN, -1.0, 0.0, 1e30, f32::INFINITY] {
-        assert!(bvh.closest_hit(&ray, |_, _| Some((t, ())), None).is_none());
+        assert!(
+            bvh.closest_hit(&ray, &mut |_, _: &Ray| Some((t, ())), &mut Query::new())
+                .is_none()
+        );
     }
 }
 
@@ -445,7 +506,11 @@ fn refit_follows_moved_vertices() {
         let o = r.v(40.0);
         let ray = Ray::new(o, r.v(10.0) - o);
         let got = bvh
-            .closest_hit_triangles(&mesh, &Watertight, &ray, None)
+            .closest_hit(
+                &ray,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new(),
+            )
             .map(|(p, h)| (p, h.t));
         assert_eq!(got, brute(&mesh, &ray));
     }
@@ -515,21 +580,35 @@ fn clearance_rejects_mismatched_lengths_and_reports_infinity_for_misses() {
     let nrm = [Vec3::Z * 2.0, -Vec3::Z, Vec3::ZERO];
     let mut out = [0.0f32; 3];
     let min = bvh
-        .clearance_triangles(&mesh, &Watertight, &pts, &nrm, &mut out)
+        .clearance(
+            &mut Triangles::new(&mesh, &Watertight),
+            &pts,
+            &nrm,
+            &mut out,
+        )
         .unwrap();
     assert_eq!(out, [5.0, f32::INFINITY, f32::INFINITY]);
     assert_eq!(min, 5.0);
     let mut short = [0.0f32; 2];
     assert!(matches!(
-        bvh.clearance_triangles(&mesh, &Watertight, &pts, &nrm, &mut short),
+        bvh.clearance(
+            &mut Triangles::new(&mesh, &Watertight),
+            &pts,
+            &nrm,
+            &mut short
+        ),
         Err(BvhError::LengthMismatch { .. })
     ));
     let min = bvh
-        .clearance(&pts, &nrm, &mut out, |p, r| {
-            Watertight
-                .intersect(r, &mesh.triangle(p as usize)?)
-                .map(|h| h.t)
-        })
+        .clearance(
+            &mut |p, r: &Ray| {
+                let h = Watertight.intersect(r, &mesh.triangle(p as usize)?)?;
+                Some((h.t, ()))
+            },
+            &pts,
+            &nrm,
+            &mut out,
+        )
         .unwrap();
     assert_eq!(min, 5.0);
 }
@@ -784,19 +863,38 @@ fn caller_stacks_of_the_tree_depth_answer_as_the_full_stack_and_shorter_ones_ref
         rays.push(Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z));
         for ray in &rays {
             let mut full_stats = TraversalStats::default();
-            let full = bvh.closest_hit_triangles(&mesh, &Watertight, ray, Some(&mut full_stats));
-            let any = bvh.any_hit_triangles(&mesh, &Watertight, ray, None);
+            let full = bvh.closest_hit(
+                ray,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new().stats(&mut full_stats),
+            );
+            let any = bvh.any_hit(
+                ray,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new(),
+            );
             let mut stack = vec![StackEntry::EMPTY; depth];
             let mut stats = TraversalStats::default();
-            let got =
-                bvh.closest_hit_triangles_in(&mut stack, &mesh, &Watertight, ray, Some(&mut stats));
+            let got = bvh.closest_hit(
+                ray,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new().stack(&mut stack[..]).stats(&mut stats),
+            );
             assert_eq!(got, Ok(full), "case {k} {ray:?}");
             assert_eq!(stats, full_stats, "case {k} {ray:?}");
-            let got_any = bvh.any_hit_triangles_in(&mut stack, &mesh, &Watertight, ray, None);
+            let got_any = bvh.any_hit(
+                ray,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new().stack(&mut stack[..]),
+            );
             assert_eq!(got_any, Ok(any), "case {k} {ray:?}");
             // One entry short: the right answer or a refusal, never a wrong answer.
             let mut short = vec![StackEntry::EMPTY; depth - 1];
-            match bvh.closest_hit_triangles_in(&mut short, &mesh, &Watertight, ray, None) {
+            match bvh.closest_hit(
+                ray,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new().stack(&mut short[..]),
+            ) {
                 Ok(h) => assert_eq!(h, full, "case {k} {ray:?}"),
                 Err(e) => {
                     assert_eq!(
@@ -877,7 +975,11 @@ fn general_path_rays_equal_brute_force() {
         }
         let t_min = if k % 3 == 1 { 0.5 } else { -30.0 };
         let ray = Ray::with_interval(o, d, t_min, f32::INFINITY);
-        let got = bvh.closest_hit_triangles(&mesh, &Watertight, &ray, None);
+        let got = bvh.closest_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new(),
+        );
         assert_eq!(got.map(|(i, h)| (i, h.t)), brute(&mesh, &ray), "{ray:?}");
         hits += usize::from(got.is_some());
     }
@@ -893,7 +995,11 @@ fn general_path_rays_equal_brute_force() {
     for v in tri {
         for t_min in [-5.0, 0.0] {
             let ray = Ray::with_interval(v + Vec3::Z, -Vec3::Z, t_min, f32::INFINITY);
-            let got = bvh.closest_hit_triangles(&mesh, &Watertight, &ray, None);
+            let got = bvh.closest_hit(
+                &ray,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new(),
+            );
             assert_eq!(got.map(|(i, h)| (i, h.t)), Some((0, 1.0)), "{ray:?}");
         }
     }

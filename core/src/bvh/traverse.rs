@@ -2,15 +2,12 @@
 
 use super::node::BvhNode;
 use super::padded_ray::PaddedRay;
-use super::primitive::TriangleMesh;
 use super::{Bvh, BvhError, TRAVERSAL_STACK_SIZE, cull_bound, improves, projection_pad};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
-use crate::hit_queries::closest_and_any;
 use crate::query::TraversalStats;
 use crate::query::{LeafTest, Query, RayQuery, Stack, StackEntry};
 use crate::ray::Ray;
 use crate::simd_level::SimdLevel;
-use crate::triangle::{TriangleHit, TriangleIntersector};
 use glam::Vec3;
 
 impl PaddedRay {
@@ -65,98 +62,14 @@ impl PaddedRay {
     }
 }
 
-/// `query` on a stack of its own of [`TRAVERSAL_STACK_SIZE`] entries, enough for every tree
-/// (module docs of [`super`]): the `Err` of a stack too small never happens. Inlined, so the
-/// stack is in the calling query's frame.
-#[inline(always)]
-fn on_full_stack<R>(
-    query: impl FnOnce(&mut [StackEntry]) -> Result<Option<R>, BvhError>,
-) -> Option<R> {
-    let mut stack = [StackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
-    query(&mut stack).unwrap_or(None)
-}
-
 impl<N, I> Bvh<N, I>
 where
     N: AsRef<[BvhNode]>,
     I: AsRef<[u32]>,
 {
-    closest_and_any! {
-        /// The closest hit of `ray`, as `(primitive index, intersect's payload)`.
-        ///
-        /// `intersect(prim, ray)` tests one primitive against `ray`, whose `t_max` is the
-        /// current closest `t` (inclusive), and returns `(t, payload)` for a hit in
-        /// `(t_min, t_max]`. Hits outside the interval are ignored. Of equal `t`, the smaller
-        /// primitive index wins (see the module docs), so the result equals a brute-force loop
-        /// with the same rule. `stats`, when given, is **added to**. An invalid ray returns
-        /// `None` without testing any node.
-        fn closest_hit;
-        /// Any hit of `ray` (occlusion / shadow rays): traversal stops at the first primitive
-        /// for which `intersect` reports a `t` in `(t_min, t_max]`. Which one is found first
-        /// depends on the tree; hit/miss does not.
-        fn any_hit;
-        <H>(
-            &self,
-            ray: &Ray,
-            intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
-            stats: Option<&mut TraversalStats>,
-        ) -> Option<(u32, H)>, const ANY => {
-            on_full_stack(|stack| self.traverse(stack, ray, intersect, stats, ANY))
-        }
-    }
-
-    closest_and_any! {
-        /// [`Bvh::closest_hit`] over a triangle mesh with the intersector `isect` (prepared
-        /// once per ray). Returns the triangle index and its hit.
-        #[inline]
-        fn closest_hit_triangles;
-        /// [`Bvh::any_hit`] over a triangle mesh with the intersector `isect`.
-        #[inline]
-        fn any_hit_triangles;
-        <T: TriangleIntersector>(
-            &self,
-            mesh: &TriangleMesh<'_>,
-            isect: &T,
-            ray: &Ray,
-            stats: Option<&mut TraversalStats>,
-        ) -> Option<(u32, TriangleHit)>, const ANY => {
-            on_full_stack(|stack| self.triangles_in(ANY, stack, mesh, isect, ray, stats))
-        }
-    }
-
-    closest_and_any! {
-        /// [`Bvh::closest_hit_triangles`] on the caller's traversal stack, which a firmware
-        /// sizes for its trees ([`Bvh::stack_depth`] entries suffice for this one) instead of
-        /// the [`TRAVERSAL_STACK_SIZE`] entries any tree may need. The same answer and
-        /// statistics.
-        ///
-        /// # Errors
-        ///
-        /// [`BvhError::StackTooSmall`] when the ray's path needed more entries than `stack`
-        /// has (never with at least [`Bvh::stack_depth`]); no partial answer is returned.
-        fn closest_hit_triangles_in;
-        /// [`Bvh::any_hit_triangles`] on the caller's traversal stack (see
-        /// [`Bvh::closest_hit_triangles_in`]).
-        ///
-        /// # Errors
-        ///
-        /// [`BvhError::StackTooSmall`], as [`Bvh::closest_hit_triangles_in`].
-        fn any_hit_triangles_in;
-        <T: TriangleIntersector>(
-            &self,
-            stack: &mut [StackEntry],
-            mesh: &TriangleMesh<'_>,
-            isect: &T,
-            ray: &Ray,
-            stats: Option<&mut TraversalStats>,
-        ) -> Result<Option<(u32, TriangleHit)>, BvhError>, const ANY => {
-            self.triangles_in(ANY, stack, mesh, isect, ray, stats)
-        }
-    }
-
     /// Entries of the traversal stack this tree's queries can need: the number of inner
-    /// nodes on its longest root-to-leaf path (at most [`TRAVERSAL_STACK_SIZE`]). A stack of
-    /// this many entries never makes a `_in` query fail. Walks the whole tree (linear time,
+    /// nodes on its longest root-to-leaf path (at most [`TRAVERSAL_STACK_SIZE`]). A caller's
+    /// stack ([`crate::query::Query::stack`]) of this many entries never makes a query fail. Walks the whole tree (linear time,
     /// no recursion) in integers only, so that a firmware can call it after loading without
     /// linking [`Bvh::stats`]' `f64` area sums (whose `max_depth` is the same number).
     #[must_use]
@@ -189,33 +102,6 @@ where
             }
         }
         (deepest as usize).min(TRAVERSAL_STACK_SIZE)
-    }
-
-    /// The triangle queries: one closure type for closest and any hit, so that both share one
-    /// traversal (a firmware links one copy).
-    #[inline]
-    fn triangles_in<T: TriangleIntersector>(
-        &self,
-        any: bool,
-        stack: &mut [StackEntry],
-        mesh: &TriangleMesh<'_>,
-        isect: &T,
-        ray: &Ray,
-        stats: Option<&mut TraversalStats>,
-    ) -> Result<Option<(u32, TriangleHit)>, BvhError> {
-        let Some(pre) = isect.prepare(ray) else {
-            return Ok(None);
-        };
-        self.traverse(
-            stack,
-            ray,
-            |prim, r| {
-                let v = mesh.triangle(prim as usize)?;
-                isect.intersect_prepared(&pre, r, &v).map(|h| (h.t, h))
-            },
-            stats,
-            any,
-        )
     }
 
     /// Closest hit, or any hit when `any`, on `stack`. The general node test (division for

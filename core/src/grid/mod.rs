@@ -9,9 +9,9 @@
 //!   `&mut [u32]`, `[u32; K]`); too-small storage is refused with a [`GridError`] before
 //!   anything is written. Cell `c` holds `references[offsets[c]..offsets[c + 1]]`, in
 //!   increasing triangle index.
-//! * [`Grid::closest_hit_triangles`] / [`Grid::any_hit_triangles`] with any
-//!   [`TriangleIntersector`] (prepared once per ray), or [`Grid::closest_hit`] /
-//!   [`Grid::any_hit`] with a closure, under the BVH's contract: `t` in `(t_min, t_max]`, of
+//! * The queries of every structure ([`crate::query::RayQuery`]), with
+//!   [`crate::query::Triangles`] (any [`TriangleIntersector`], prepared once per ray) or a
+//!   closure, under the BVH's contract: `t` in `(t_min, t_max]`, of
 //!   equal `t` the smaller triangle index. With the default [`crate::triangle::Watertight`]
 //!   the closest hit **equals a brute-force loop** over all triangles (same triangle, same
 //!   hit record) inside the watertight test's documented domain.
@@ -99,7 +99,6 @@ mod tests;
 pub use error::GridError;
 pub use overlap::CellAssignment;
 pub use plan::{GridOptions, GridPlan};
-pub use traverse::GridStats;
 
 use crate::aabb::Aabb;
 use crate::float::{gamma, gamma_f64};
@@ -224,22 +223,6 @@ where
             .as_ref()
             .get(a as usize..b as usize)
             .unwrap_or(&[])
-    }
-
-    /// Bytes of caller storage in use: `4·(cells + 1) + 4·references`.
-    #[must_use]
-    pub fn bytes_used(&self) -> usize {
-        4 * (self.cell_count() + 1 + self.reference_count)
-    }
-
-    /// [`Grid::bytes_used`] per triangle in the grid (0 for none).
-    #[must_use]
-    pub fn bytes_per_triangle(&self) -> f64 {
-        if self.triangle_count == 0 {
-            0.0
-        } else {
-            self.bytes_used() as f64 / self.triangle_count as f64
-        }
     }
 
     /// Gives the storage back.

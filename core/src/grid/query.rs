@@ -1,9 +1,9 @@
 //! The box query and the [`RayQuery`] implementation of the grid.
 
-use super::{Grid, GridStats};
+use super::Grid;
 use crate::aabb::Aabb;
 use crate::bvh::{BvhError, PrimitiveSource};
-use crate::query::{LeafTest, Query, RayQuery, Stack, TraversalStats};
+use crate::query::{LeafTest, Query, RayQuery, Stack};
 use crate::ray::Ray;
 use crate::simd_level::SimdLevel;
 
@@ -92,18 +92,8 @@ where
         let Some(pre) = leaf.prepare(ray) else {
             return Ok(None);
         };
-        let mut local = GridStats::default();
-        let found = self.traverse(
-            ray,
-            |p, r| leaf.intersect(&pre, p, r),
-            Some(&mut local),
-            any,
-        );
-        ctx.add_stats(&TraversalStats {
-            nodes_visited: local.cells_visited,
-            primitives_tested: local.triangles_tested,
-        });
-        Ok(found)
+        let stats = ctx.stats.as_deref_mut();
+        Ok(self.traverse(ray, |p, r| leaf.intersect(&pre, p, r), stats, any))
     }
 
     /// The cells (lowest and highest per axis, clamped) that the closed box `b` touches, one

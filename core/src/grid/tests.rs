@@ -4,6 +4,8 @@
 use super::overlap::triangle_overlaps_box;
 use super::*;
 use crate::bvh::TriangleMesh;
+use crate::prelude::*;
+use crate::query::{Query, TraversalStats, Triangles};
 use crate::ray::Ray;
 use crate::test_util::{brute_watertight as brute, lcg, unit_vec};
 use crate::triangle::{TriangleIntersector, Watertight};
@@ -52,9 +54,17 @@ fn check_rays(mesh: &TriangleMesh<'_>, grid: &VecGrid, rays: &[Ray]) -> usize {
     let mut hits = 0;
     for ray in rays {
         let want = brute(mesh, ray);
-        let got = grid.closest_hit_triangles(mesh, &Watertight, ray, None);
+        let got = grid.closest_hit(
+            ray,
+            &mut Triangles::new(mesh, &Watertight),
+            &mut Query::new(),
+        );
         assert_eq!(got, want, "{ray:?}");
-        let any = grid.any_hit_triangles(mesh, &Watertight, ray, None);
+        let any = grid.any_hit(
+            ray,
+            &mut Triangles::new(mesh, &Watertight),
+            &mut Query::new(),
+        );
         assert_eq!(any.is_some(), want.is_some(), "{ray:?}");
         if let Some((p, h)) = any {
             assert!(ray.contains(h.t));
@@ -211,8 +221,12 @@ fn non_finite_triangles_are_refused_or_excluded() {
     assert!(grid.references().iter().all(|&r| r == 0 || r == 3));
     let ray = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
     assert_eq!(
-        grid.closest_hit_triangles(&mesh, &Watertight, &ray, None)
-            .map(|h| h.0),
+        grid.closest_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new()
+        )
+        .map(|h| h.0),
         Some(0)
     );
 }
@@ -389,12 +403,16 @@ fn axis_parallel_far_and_invalid_rays() {
         Ray::new(Vec3::splat(4.0), Vec3::ZERO),
         Ray::with_interval(Vec3::splat(4.0), Vec3::Z, f32::NAN, 1.0),
     ] {
-        let mut st = GridStats::default();
+        let mut st = TraversalStats::default();
         assert_eq!(
-            g.closest_hit_triangles(&mesh, &Watertight, &bad, Some(&mut st)),
+            g.closest_hit(
+                &bad,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new().stats(&mut st)
+            ),
             None
         );
-        assert_eq!(st, GridStats::default());
+        assert_eq!(st, TraversalStats::default());
     }
 }
 
@@ -420,18 +438,21 @@ fn huge_and_tiny_scenes() {
 
 /// The walk visits at most `nx + ny + nz − 2` cells (the step bound), here on the diagonal.
 #[test]
-fn cells_visited_are_bounded_by_the_resolution() {
+fn nodes_visited_are_bounded_by_the_resolution() {
     let (p, t) = soup(10, 2000, 8.0, 0.05);
     let mesh = TriangleMesh::new(&p, &t);
     let g = build(&mesh, &GridOptions::default()).unwrap();
     let [nx, ny, nz] = g.resolution();
     let b = g.bounds();
-    let mut st = GridStats::default();
+    let mut st = TraversalStats::default();
     let ray = Ray::new(b.min - Vec3::splat(1.0), b.max - b.min);
-    let miss = |_: u32, _: &Ray| None::<(f32, ())>;
-    assert!(g.closest_hit(&ray, miss, Some(&mut st)).is_none());
-    assert!(st.cells_visited <= u64::from(nx + ny + nz - 2), "{st:?}");
-    assert!(st.cells_visited >= u64::from(nx.max(ny).max(nz)), "{st:?}");
+    let mut miss = |_: u32, _: &Ray| None::<(f32, ())>;
+    assert!(
+        g.closest_hit(&ray, &mut miss, &mut Query::new().stats(&mut st))
+            .is_none()
+    );
+    assert!(st.nodes_visited <= u64::from(nx + ny + nz - 2), "{st:?}");
+    assert!(st.nodes_visited >= u64::from(nx.max(ny).max(nz)), "{st:?}");
     assert!(g.bytes_used() == 4 * (g.cell_count() + 1 + g.reference_count()));
 }
 
@@ -442,8 +463,12 @@ fn empty_mesh_hits_nothing() {
     assert_eq!((g.cell_count(), g.reference_count()), (1, 0));
     let ray = Ray::new(Vec3::ZERO, Vec3::Z);
     assert!(
-        g.any_hit_triangles(&mesh, &Watertight, &ray, None)
-            .is_none()
+        g.any_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new()
+        )
+        .is_none()
     );
     assert_eq!(g.bytes_per_triangle(), 0.0);
 }
@@ -467,13 +492,17 @@ fn far_origins_use_neighbour_blocks() {
     }
     assert!(check_rays(&mesh, &g, &rays) > 600);
     // The blocks are in use (more cells per ray than a plain walk could visit).
-    let mut st = GridStats::default();
+    let mut st = TraversalStats::default();
     for r in &rays {
-        let _ = g.closest_hit_triangles(&mesh, &Watertight, r, Some(&mut st));
+        let _ = g.closest_hit(
+            r,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new().stats(&mut st),
+        );
     }
     let [nx, ny, nz] = g.resolution();
     assert!(
-        st.cells_visited > rays.len() as u64 * u64::from(nx + ny + nz),
+        st.nodes_visited > rays.len() as u64 * u64::from(nx + ny + nz),
         "{st:?}"
     );
 }

@@ -5,26 +5,9 @@ use super::Grid;
 use super::overlap::ray_pad;
 use crate::aabb::{Aabb, SlabRay};
 use crate::bvh::{cull_bound, test_run};
+use crate::query::TraversalStats;
 use crate::ray::Ray;
 use glam::Vec3;
-
-/// Traversal counters. Queries **add** to the counters they are given.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct GridStats {
-    /// Cells whose references were tested (a ray that falls back to testing every reference
-    /// counts every cell).
-    pub cells_visited: u64,
-    /// Triangle intersection tests (a triangle in several cells counts each time).
-    pub triangles_tested: u64,
-}
-
-impl GridStats {
-    /// Adds `other`'s counters to these.
-    pub fn add(&mut self, other: &Self) {
-        self.cells_visited += other.cells_visited;
-        self.triangles_tested += other.triangles_tested;
-    }
-}
 
 /// The running state of one query.
 struct Search<F, H> {
@@ -32,20 +15,20 @@ struct Search<F, H> {
     best: Option<(u32, H)>,
     any: bool,
     intersect: F,
-    stats: GridStats,
+    stats: TraversalStats,
 }
 
 impl<F: FnMut(u32, &Ray) -> Option<(f32, H)>, H> Search<F, H> {
     /// Tests every triangle of `cell`; `true` when an any-hit query is done.
     #[inline(always)]
     fn test(&mut self, cell: &[u32]) -> bool {
-        self.stats.cells_visited += 1;
+        self.stats.nodes_visited += 1;
         test_run(
             cell,
             &mut self.intersect,
             &mut self.cur,
             &mut self.best,
-            &mut self.stats.triangles_tested,
+            &mut self.stats.primitives_tested,
             self.any,
         )
     }
@@ -56,34 +39,12 @@ where
     O: AsRef<[u32]>,
     R: AsRef<[u32]>,
 {
-    crate::hit_queries::hit_queries! {
-        stats: GridStats;
-        /// The closest hit of `ray`, as `(triangle index, intersect's payload)`.
-        ///
-        /// `intersect(prim, ray)` tests one triangle against `ray`, whose `t_max` is the current
-        /// closest `t` (inclusive), and returns `(t, payload)` for a hit in `(t_min, t_max]`;
-        /// hits outside the interval are ignored. Of equal `t`, the smaller index wins, so the
-        /// result equals a brute-force loop with the same rule (module docs). `stats`, when
-        /// given, is **added to**. An invalid ray returns `None` without testing anything.
-        closest_hit;
-        /// Any hit of `ray` (shadow rays): stops at the first triangle `intersect` reports in
-        /// `(t_min, t_max]`. Which one depends on the grid; hit or miss does not.
-        any_hit;
-        /// [`Grid::closest_hit`] over `mesh` (the mesh the grid was built over) with the
-        /// intersector `isect`, prepared once per ray. Returns the triangle index and its hit.
-        #[inline]
-        closest_hit_triangles;
-        /// [`Grid::any_hit`] over `mesh` with the intersector `isect`.
-        #[inline]
-        any_hit_triangles;
-    }
-
     /// Closest hit, or any hit when `any`.
     pub(super) fn traverse<H>(
         &self,
         ray: &Ray,
         intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
-        stats: Option<&mut GridStats>,
+        stats: Option<&mut TraversalStats>,
         any: bool,
     ) -> Option<(u32, H)> {
         let slab = SlabRay::new(ray)?;
@@ -95,7 +56,7 @@ where
             best: None,
             any,
             intersect,
-            stats: GridStats::default(),
+            stats: TraversalStats::default(),
         };
         let l = &self.layout;
         let o_mag = ray.origin.abs().max_element();
@@ -122,7 +83,7 @@ where
         if block >= self.cell_count() as u64 {
             // The block would hold every cell: test every reference once.
             s.test(self.references());
-            s.stats.cells_visited = self.cell_count() as u64;
+            s.stats.nodes_visited = self.cell_count() as u64;
         } else {
             self.walk(&slab, ray, pad.max(l.pad), radius, &mut s);
         }

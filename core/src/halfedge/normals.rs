@@ -5,7 +5,7 @@
 //! normal has length twice the face's area, so the sum weights every face by its area: large
 //! faces dominate, slivers barely count, and a vertex where faces meet at a crease gets a
 //! normal that leans towards the side with more surface. This is what the clearance query
-//! ([`crate::bvh::Bvh::clearance`]) casts rays along.
+//! ([`crate::query::RayQuery::clearance`]) casts rays along.
 //!
 //! * Boundary vertices: the faces that exist are summed (the boundary gap contributes
 //!   nothing), so a vertex on the rim of a flat sheet gets the sheet's normal.

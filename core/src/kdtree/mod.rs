@@ -366,13 +366,6 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> KdTree<N, R> {
         self.exhausted
     }
 
-    /// Bytes of caller storage the tree uses: `8·nodes + 4·references` (the mesh, the unused
-    /// tail of the storage and the scratch are not counted).
-    #[must_use]
-    pub fn bytes_used(&self) -> usize {
-        self.node_count() * NODE_SIZE + self.reference_count() * core::mem::size_of::<u32>()
-    }
-
     /// Number of leaves, and of those that hold no reference.
     #[must_use]
     pub fn leaf_counts(&self) -> (usize, usize) {

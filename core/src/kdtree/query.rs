@@ -67,7 +67,8 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> RayQuery for KdTree<N, R> {
         KdTree::primitive_count(self)
     }
 
-    /// `8·nodes + 4·references`.
+    /// `8·nodes + 4·references` (the mesh, the unused tail of the storage and the scratch are
+    /// not counted).
     fn bytes_used(&self) -> usize {
         core::mem::size_of_val(self.nodes()) + core::mem::size_of_val(self.references())
     }

@@ -2,7 +2,9 @@
 //! `tests/tests/kdtree_vs_bruteforce.rs`).
 
 use super::*;
-use crate::bvh::{PrimitiveSource, TraversalStats, TriangleMesh};
+use crate::bvh::{PrimitiveSource, TriangleMesh};
+use crate::prelude::*;
+use crate::query::{Query, TraversalStats, Triangles};
 use crate::ray::Ray;
 use crate::test_util::{Lcg, brute_watertight as brute, lcg_soup as soup};
 use crate::triangle::{TriangleIntersector, Watertight};
@@ -41,9 +43,17 @@ fn build<S: PrimitiveSource + ?Sized>(src: &S) -> VecKd {
 
 fn check(kd: &VecKd, mesh: &TriangleMesh<'_>, ray: &Ray) {
     let want = brute(mesh, ray);
-    let got = kd.closest_hit_triangles(mesh, &Watertight, ray, None);
+    let got = kd.closest_hit(
+        ray,
+        &mut Triangles::new(mesh, &Watertight),
+        &mut Query::new(),
+    );
     assert_eq!(got, want, "{ray:?}");
-    let any = kd.any_hit_triangles(mesh, &Watertight, ray, None);
+    let any = kd.any_hit(
+        ray,
+        &mut Triangles::new(mesh, &Watertight),
+        &mut Query::new(),
+    );
     assert_eq!(any.is_some(), want.is_some(), "{ray:?}");
     if let Some((p, h)) = any {
         let v = mesh.triangle(p as usize).unwrap();
@@ -117,7 +127,11 @@ fn empty_input_gives_an_empty_tree_that_hits_nothing() {
     assert_eq!(kd.bytes_used(), 0);
     let ray = Ray::new(Vec3::ZERO, Vec3::X);
     assert_eq!(
-        kd.closest_hit_triangles(&mesh, &Watertight, &ray, None),
+        kd.closest_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new()
+        ),
         None
     );
 }
@@ -198,8 +212,12 @@ fn non_finite_primitives_are_named_or_excluded() {
     let aim = mesh.triangle(2).map(|v| v[0]).unwrap();
     let ray = Ray::new(aim + Vec3::new(0.0, 0.0, 30.0), -Vec3::Z);
     assert_ne!(
-        kd.closest_hit_triangles(&mesh, &Watertight, &ray, None)
-            .map(|h| h.0),
+        kd.closest_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new()
+        )
+        .map(|h| h.0),
         Some(2)
     );
 }
@@ -229,7 +247,11 @@ fn traversal_prunes() {
     let mut r = Lcg(6);
     for _ in 0..100 {
         let ray = Ray::new(r.v(100.0), r.v(1.0));
-        let got = kd.closest_hit_triangles(&mesh, &Watertight, &ray, Some(&mut stats));
+        let got = kd.closest_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new().stats(&mut stats),
+        );
         assert_eq!(got, brute(&mesh, &ray));
     }
     assert!(
@@ -249,7 +271,11 @@ fn coincident_triangles_tie_to_the_smallest_index() {
     let mesh = TriangleMesh::new(&pos, &tris);
     let kd = build(&mesh);
     let ray = Ray::new(Vec3::new(0.2, 0.2, 5.0), -Vec3::Z);
-    let got = kd.closest_hit_triangles(&mesh, &Watertight, &ray, None);
+    let got = kd.closest_hit(
+        &ray,
+        &mut Triangles::new(&mesh, &Watertight),
+        &mut Query::new(),
+    );
     assert_eq!(got.map(|h| h.0), Some(0));
     check(&kd, &mesh, &ray);
 }
@@ -369,11 +395,19 @@ fn invalid_rays_visit_no_node() {
     for ray in &bad {
         let mut stats = TraversalStats::default();
         assert_eq!(
-            kd.closest_hit_triangles(&mesh, &Watertight, ray, Some(&mut stats)),
+            kd.closest_hit(
+                ray,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new().stats(&mut stats)
+            ),
             None
         );
         assert_eq!(
-            kd.any_hit(ray, |_, _| Some((1.0, ())), Some(&mut stats)),
+            kd.any_hit(
+                ray,
+                &mut |_, _: &Ray| Some((1.0, ())),
+                &mut Query::new().stats(&mut stats)
+            ),
             None
         );
         assert_eq!(stats.nodes_visited, 0);
@@ -538,14 +572,22 @@ fn intervals_are_respected_inclusively() {
     }
     let ray = Ray::with_interval(o, -Vec3::Z, 0.0, 1.0);
     assert_eq!(
-        kd.closest_hit_triangles(&mesh, &Watertight, &ray, None)
-            .map(|h| h.0),
+        kd.closest_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new()
+        )
+        .map(|h| h.0),
         Some(1)
     );
     let ray = Ray::with_interval(o, -Vec3::Z, 1.0, 2.0);
     assert_eq!(
-        kd.closest_hit_triangles(&mesh, &Watertight, &ray, None)
-            .map(|h| h.0),
+        kd.closest_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new()
+        )
+        .map(|h| h.0),
         Some(0)
     );
 }

@@ -3,7 +3,8 @@
 use super::node::{KdNode, KdNodeKind};
 use super::{KdTree, T_WIDEN_ABS, TRAVERSAL_STACK_SIZE};
 use crate::aabb::{Aabb, SLAB_FAR_SCALE, SLAB_FAR_SCALE_NEGATIVE, SlabRay, pad_far};
-use crate::bvh::{TraversalStats, cull_bound, projection_pad, test_run};
+use crate::bvh::{cull_bound, projection_pad, test_run};
+use crate::query::TraversalStats;
 use crate::ray::Ray;
 
 /// One entry of the traversal stack (12 bytes): a node still to visit and the ray's interval
@@ -142,29 +143,6 @@ impl KdRay {
 }
 
 impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> KdTree<N, R> {
-    crate::hit_queries::hit_queries! {
-        stats: TraversalStats;
-        /// The closest hit of `ray`, as `(primitive index, intersect's payload)`.
-        ///
-        /// `intersect(prim, ray)` tests one primitive against `ray`, whose `t_max` is the current
-        /// closest `t` (inclusive), and returns `(t, payload)` for a hit in `(t_min, t_max]`. Of
-        /// equal `t`, the smaller primitive index wins, so the result equals a brute-force loop
-        /// with the same rule whenever `intersect` only reports hits within the padding of the
-        /// primitive's box (module docs). A primitive referenced by several leaves may be tested
-        /// more than once. `stats`, when given, is **added to** (`nodes_visited` counts inner
-        /// nodes and leaves). An invalid ray returns `None` without testing any node.
-        closest_hit;
-        /// Any hit of `ray` (occlusion): stops at the first primitive for which `intersect`
-        /// reports a `t` in `(t_min, t_max]`. Which one depends on the tree; hit/miss does not.
-        any_hit;
-        /// [`KdTree::closest_hit`] over a triangle mesh with the intersector `isect` (prepared
-        /// once per ray): the triangle index and its hit. With [`crate::triangle::Watertight`]
-        /// it equals a brute-force loop over every triangle (same triangle, same hit record).
-        closest_hit_triangles;
-        /// [`KdTree::any_hit`] over a triangle mesh with the intersector `isect`.
-        any_hit_triangles;
-    }
-
     /// Closest hit, or any hit when `any` (module docs of [`super`]).
     pub(super) fn traverse<H>(
         &self,

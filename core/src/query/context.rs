@@ -186,11 +186,12 @@ impl<'a, L: SimdLevel, S: Stack> Query<'a, L, S> {
         }
     }
 
-    /// This context adding every query's counters to `stats`.
+    /// This context adding every query's counters to `stats` (`&mut TraversalStats`, or an
+    /// `Option` of one: `None` counts nothing).
     #[must_use]
-    pub fn stats(self, stats: &'a mut TraversalStats) -> Self {
+    pub fn stats(self, stats: impl Into<Option<&'a mut TraversalStats>>) -> Self {
         Self {
-            stats: Some(stats),
+            stats: stats.into(),
             ..self
         }
     }
@@ -200,13 +201,5 @@ impl<'a, L: SimdLevel, S: Stack> Query<'a, L, S> {
     #[must_use]
     pub fn level(&self) -> L {
         self.level
-    }
-
-    /// Adds `local` to the caller's counters, if any.
-    #[inline(always)]
-    pub(crate) fn add_stats(&mut self, local: &TraversalStats) {
-        if let Some(s) = self.stats.as_deref_mut() {
-            s.add(local);
-        }
     }
 }

@@ -21,7 +21,7 @@
 //! let bvh = Bvh::build(&mesh, &mut nodes[..], &mut indices[..], &BuildOptions::default()).unwrap();
 //! let ray = Ray::new(Vec3::ZERO, Vec3::Z);
 //! let mut tris = Triangles::new(&mesh, &Watertight);
-//! let (prim, hit) = RayQuery::closest_hit(&bvh, &ray, &mut tris, &mut Query::new()).unwrap();
+//! let (prim, hit) = bvh.closest_hit(&ray, &mut tris, &mut Query::new()).unwrap();
 //! assert_eq!((prim, hit.t), (0, 2.0));
 //! ```
 //!

@@ -92,7 +92,7 @@ fn conforms<Q: RayQuery>(name: &str, q: &Q, mesh: &TriangleMesh<'_>) {
         );
 
         // Every context: the same answer and the same counters.
-        let (mut a, mut b, mut c) = Default::default();
+        let [mut a, mut b, mut c] = [TraversalStats::default(); 3];
         let own = q.closest_hit(ray, &mut tris, &mut Query::new().stats(&mut a));
         let kept = q.closest_hit(
             ray,
@@ -270,12 +270,8 @@ fn a_caller_stack_too_small_is_refused_not_cut_short() {
     for ray in rays(&mesh, 3) {
         // Short of the tree's depth: the right answer or a refusal, never a wrong answer.
         let mut short = vec![StackEntry::EMPTY; bvh.stack_depth() / 2];
-        match RayQuery::closest_hit(
-            &bvh,
-            &ray,
-            &mut tris,
-            &mut Query::new().stack(&mut short[..]),
-        ) {
+        let ctx = &mut Query::new().stack(&mut short[..]);
+        match bvh.closest_hit(&ray, &mut tris, ctx) {
             Ok(found) => assert_eq!(found, brute_watertight(&mesh, &ray), "{ray:?}"),
             Err(e) => {
                 assert_eq!(
@@ -304,12 +300,7 @@ fn a_caller_stack_too_small_is_refused_not_cut_short() {
     );
     let wide = Bvh8::from_binary(&binary, &mesh, nodes, groups).unwrap();
     let mut less = vec![StackEntry::EMPTY; QUERY_STACK_SIZE - 1];
-    let refused = RayQuery::any_hit(
-        &wide,
-        &ray,
-        &mut tris,
-        &mut Query::new().stack(&mut less[..]),
-    );
+    let refused = wide.any_hit(&ray, &mut tris, &mut Query::new().stack(&mut less[..]));
     assert!(
         matches!(refused, Err(BvhError::StackTooSmall { .. })),
         "{refused:?}"

@@ -24,6 +24,8 @@ use halfray_core::grid::{Grid, GridOptions, GridPlan};
 use halfray_core::kdtree::{
     KdBuildOptions, KdNode, KdRef, KdTree, node_capacity, reference_capacity,
 };
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, Triangles};
 use halfray_core::triangle::Watertight;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -162,20 +164,20 @@ fn bench(args: &AccelArgs, path: &Path) -> Result<AccelReport> {
     let closest: [Closest<'_>; 4] = [
         Box::new(|r| {
             s.grid
-                .closest_hit_triangles(&mesh, &isect, r, None)
+                .closest_hit(r, &mut Triangles::new(&mesh, &isect), &mut Query::new())
                 .map(|(p, h)| (p, h.t))
         }),
         Box::new(|r| {
             s.kdtree
-                .closest_hit_triangles(&mesh, &isect, r, None)
+                .closest_hit(r, &mut Triangles::new(&mesh, &isect), &mut Query::new())
                 .map(|(p, h)| (p, h.t))
         }),
         Box::new(|r| {
             s.bvh
-                .closest_hit_triangles(&mesh, &isect, r, None)
+                .closest_hit(r, &mut Triangles::new(&mesh, &isect), &mut Query::new())
                 .map(|(p, h)| (p, h.t))
         }),
-        Box::new(|r| closest_simd(&s.bvh8, &isect, r, None).map(|(p, h)| (p, h.t))),
+        Box::new(|r| closest_simd(&s.bvh8, &mesh, &isect, r, None).map(|(p, h)| (p, h.t))),
     ];
     let closest = &closest;
     let hit = |i: usize| move |r: &Ray| closest[i](r).is_some();
@@ -195,9 +197,9 @@ fn bench(args: &AccelArgs, path: &Path) -> Result<AccelReport> {
 
     let bytes = [
         s.grid.bytes_per_triangle(),
-        s.kdtree.bytes_used() as f64 / n.max(1) as f64,
-        s.bvh.stats().bytes_per_primitive,
-        s.bvh8.stats().bytes_per_triangle,
+        s.kdtree.bytes_per_triangle(),
+        s.bvh.bytes_per_triangle(),
+        s.bvh8.bytes_per_triangle(),
     ];
     let structures = ["grid", "kdtree", "bvh", "bvh8"]
         .iter()

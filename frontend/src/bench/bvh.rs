@@ -27,8 +27,10 @@ use crate::timing::{TIMED_PASSES, interleaved};
 use glam::Vec3;
 use halfray_core::Ray;
 use halfray_core::bvh::wide::binary_options;
-use halfray_core::bvh::{BuildOptions, DEFAULT_MAX_LEAF_SIZE, TraversalStats, TriangleMesh};
-use halfray_core::triangle::{TriangleIntersector, VariantVisitor};
+use halfray_core::bvh::{BuildOptions, DEFAULT_MAX_LEAF_SIZE, TriangleMesh};
+use halfray_core::prelude::*;
+use halfray_core::query::{TraversalStats, Triangles};
+use halfray_core::triangle::VariantVisitor;
 use rivals::{HitQuery, Rivals};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -262,8 +264,8 @@ fn bench<T: TriangleIntersector>(
     let bounds = obj.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
     let hits = watertight_hits(&wide, &obj);
 
-    let closest = |r: &Ray| closest_simd(&wide, isect, r, None).is_some();
-    let any = |r: &Ray| any_simd(&wide, isect, r).is_some();
+    let closest = |r: &Ray| closest_simd(&wide, &mesh, isect, r, None).is_some();
+    let any = |r: &Ray| any_simd(&wide, &mesh, isect, r).is_some();
     let mut figures = Vec::with_capacity(sets.len());
     for &set in sets {
         let rays = set_rays(args, set, bounds, &hits);
@@ -272,7 +274,7 @@ fn bench<T: TriangleIntersector>(
         let mut st = TraversalStats::default();
         let hit_count = rays
             .iter()
-            .filter(|r| closest_simd(&wide, isect, r, Some(&mut st)).is_some())
+            .filter(|r| closest_simd(&wide, &mesh, isect, r, Some(&mut st)).is_some())
             .count();
         let any_count = rays.iter().filter(|r| any(r)).count();
         if hit_count != any_count {
@@ -320,9 +322,13 @@ fn bench<T: TriangleIntersector>(
         .iter()
         .zip(&brute)
         .filter(|(r, b)| {
-            let w = closest_simd(&wide, isect, r, None).map(|(p, h)| (p, h.t));
+            let w = closest_simd(&wide, &mesh, isect, r, None).map(|(p, h)| (p, h.t));
             let bin = bvh
-                .closest_hit_triangles(&mesh, isect, r, None)
+                .closest_hit(
+                    r,
+                    &mut Triangles::new(&mesh, isect),
+                    &mut halfray_core::query::Query::new(),
+                )
                 .map(|(p, h)| (p, h.t));
             w != **b || bin != **b
         })
@@ -339,11 +345,11 @@ fn bench<T: TriangleIntersector>(
         build_threads: rayon::current_num_threads(),
         nodes: wstats.nodes,
         leaves: wstats.leaves,
-        bytes_per_triangle: wstats.bytes_per_triangle,
+        bytes_per_triangle: wide.bytes_per_triangle(),
         max_depth: stats.max_depth,
         sah_cost: stats.sah_cost,
         binary_build_ms: binary_s * 1e3,
-        binary_bytes_per_triangle: stats.bytes_per_primitive,
+        binary_bytes_per_triangle: bvh.bytes_per_triangle(),
         embree_build_ms: embree_build.map(|b| b[0]),
         embree_robust_build_ms: embree_build.map(|b| b[1]),
         sets: figures,

@@ -250,8 +250,10 @@ pub fn watertight_hits<'a>(
     bvh: &'a VecBvh8,
     mesh: &'a ObjMesh,
 ) -> impl Fn(&Ray) -> Option<Hit> + 'a {
+    let tris = halfray_core::bvh::TriangleMesh::new(&mesh.positions, &mesh.triangles);
     move |r| {
-        closest_simd(bvh, &Watertight, r, None).map(|(p, h)| h.to_hit(&mesh.triangle(p as usize)))
+        closest_simd(bvh, &tris, &Watertight, r, None)
+            .map(|(p, h)| h.to_hit(&mesh.triangle(p as usize)))
     }
 }
 

@@ -11,6 +11,8 @@ use crate::scene::geom::{Node, QueryCtx, SurfaceHit};
 use halfray_core::bvh::{
     BuildOptions, Bvh, BvhNode, PrimitiveSource, index_capacity, node_capacity,
 };
+use halfray_core::prelude::*;
+use halfray_core::query::Query;
 use halfray_core::{Aabb, Ray};
 
 /// The scene's objects arranged for queries.
@@ -95,12 +97,12 @@ impl TopLevel {
         let boxed = bvh
             .closest_hit(
                 &r,
-                |k, r| {
+                &mut |k, r: &Ray| {
                     let i = *self.bounded.get(k as usize)?;
                     let h = objects[i as usize].closest(r, ctx)?;
                     Some((h.hit.t, (i, h)))
                 },
-                None,
+                &mut Query::new(),
             )
             .map(|(_, x)| x);
         match (listed, boxed) {
@@ -129,13 +131,13 @@ impl TopLevel {
         };
         bvh.any_hit(
             ray,
-            |k, r| {
+            &mut |k, r: &Ray| {
                 let i = *self.bounded.get(k as usize)?;
                 // Any `t` of the interval reports "blocked" (nothing is accepted at `+∞`).
                 let t = r.t_max.min(f32::MAX);
                 objects[i as usize].occludes(r, ctx).then_some((t, ()))
             },
-            None,
+            &mut Query::new(),
         )
         .is_some()
     }

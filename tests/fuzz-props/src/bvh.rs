@@ -21,6 +21,8 @@ use halfray_core::bvh::{
     BuildOptions, Bvh, BvhError, BvhNode, PrimitiveSource, TriangleMesh, index_capacity,
     node_capacity,
 };
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, Triangles};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{MollerTrumbore, TriangleIntersector, Watertight};
 
@@ -348,12 +350,24 @@ fn check_wide<T: TriangleIntersector>(
     ray: &Ray,
     exact: bool,
 ) {
-    let got = wide.closest_hit_triangles(isect, ray, None);
-    let any = wide.any_hit_triangles(isect, ray, None);
+    let got = wide.closest_hit(
+        ray,
+        &mut Triangles::new(oracle.mesh, isect),
+        &mut Query::new(),
+    );
+    let any = wide.any_hit(
+        ray,
+        &mut Triangles::new(oracle.mesh, isect),
+        &mut Query::new(),
+    );
     #[cfg(target_arch = "x86_64")]
     if let Some(level) = avx2_or_skip() {
-        let mut stack = halfray_core::bvh::wide::WideStack::new();
-        let simd = wide.closest_hit_triangles_on(level, &mut stack, isect, ray, None);
+        let mut stack = halfray_core::query::QueryStack::new();
+        let simd = wide.closest_hit(
+            ray,
+            &mut Triangles::new(oracle.mesh, isect),
+            &mut Query::new().on(level).stack(&mut stack),
+        );
         let bits = |h: Option<(u32, halfray_core::triangle::TriangleHit)>| {
             h.map(|(p, h)| {
                 (
@@ -367,7 +381,11 @@ fn check_wide<T: TriangleIntersector>(
             })
         };
         assert_eq!(bits(simd), bits(got), "AVX2 level's closest hit: {ray:?}");
-        let simd_any = wide.any_hit_triangles_on(level, &mut stack, isect, ray, None);
+        let simd_any = wide.any_hit(
+            ray,
+            &mut Triangles::new(oracle.mesh, isect),
+            &mut Query::new().on(level).stack(&mut stack),
+        );
         assert_eq!(
             simd_any.is_some(),
             any.is_some(),
@@ -388,7 +406,11 @@ pub fn check_ray<N: AsRef<[BvhNode]>, I: AsRef<[u32]>, T: TriangleIntersector>(
     exact: bool,
 ) {
     let want = oracle.closest(isect, ray);
-    let got = bvh.closest_hit_triangles(oracle.mesh, isect, ray, None);
+    let got = bvh.closest_hit(
+        ray,
+        &mut Triangles::new(oracle.mesh, isect),
+        &mut Query::new(),
+    );
     if !oracle.exact_on(ray, exact) {
         // Outside the documented domain of exact agreement: the BVH's answer must still be a
         // genuine hit of the intersector, no nearer than brute force's, and find a clear one.
@@ -396,11 +418,19 @@ pub fn check_ray<N: AsRef<[BvhNode]>, I: AsRef<[u32]>, T: TriangleIntersector>(
             oracle.assert_genuine(isect, ray, hit, "hit record");
         }
         oracle.assert_no_nearer(got, want, "BVH");
-        let any = bvh.any_hit_triangles(oracle.mesh, isect, ray, None);
+        let any = bvh.any_hit(
+            ray,
+            &mut Triangles::new(oracle.mesh, isect),
+            &mut Query::new(),
+        );
         oracle.assert_finds_clear_hit(ray, got, any, want, "BVH");
         return;
     }
-    let any = bvh.any_hit_triangles(oracle.mesh, isect, ray, None);
+    let any = bvh.any_hit(
+        ray,
+        &mut Triangles::new(oracle.mesh, isect),
+        &mut Query::new(),
+    );
     oracle.assert_agrees((isect.name(), "BVH"), got, any, want);
     if let Some(hit) = any {
         oracle.assert_genuine(isect, ray, hit, "any-hit record");

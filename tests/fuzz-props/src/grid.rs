@@ -15,6 +15,8 @@ use super::{Enc, Seed};
 use glam::Vec3;
 use halfray_core::bvh::TriangleMesh;
 use halfray_core::grid::{CellAssignment, DEFAULT_LAMBDA, Grid, GridError, GridOptions, GridPlan};
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, Triangles};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{MollerTrumbore, TriangleIntersector, Watertight};
 
@@ -187,8 +189,16 @@ fn check_ray<T: TriangleIntersector>(
     ray: &Ray,
     exact: bool,
 ) {
-    let got = grid.closest_hit_triangles(oracle.mesh, isect, ray, None);
-    let any = grid.any_hit_triangles(oracle.mesh, isect, ray, None);
+    let got = grid.closest_hit(
+        ray,
+        &mut Triangles::new(oracle.mesh, isect),
+        &mut Query::new(),
+    );
+    let any = grid.any_hit(
+        ray,
+        &mut Triangles::new(oracle.mesh, isect),
+        &mut Query::new(),
+    );
     oracle.assert_answers(isect, ray, exact, "grid", got, any);
 }
 

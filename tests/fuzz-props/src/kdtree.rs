@@ -18,6 +18,8 @@ use halfray_core::kdtree::{
     KdBuildOptions, KdNode, KdNodeKind, KdRef, KdTree, KdTreeError, MAX_DEPTH, node_capacity,
     reference_capacity,
 };
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, Triangles};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{MollerTrumbore, TriangleIntersector, Watertight};
 
@@ -168,8 +170,16 @@ fn check_ray<T: TriangleIntersector>(
     ray: &Ray,
     exact: bool,
 ) {
-    let got = kd.closest_hit_triangles(oracle.mesh, isect, ray, None);
-    let any = kd.any_hit_triangles(oracle.mesh, isect, ray, None);
+    let got = kd.closest_hit(
+        ray,
+        &mut Triangles::new(oracle.mesh, isect),
+        &mut Query::new(),
+    );
+    let any = kd.any_hit(
+        ray,
+        &mut Triangles::new(oracle.mesh, isect),
+        &mut Query::new(),
+    );
     oracle.assert_answers(isect, ray, exact, "kd-tree", got, any);
 }
 

@@ -32,7 +32,7 @@
 //! groups than the `⌈count/4⌉` it needs; it then starts at the next group (the skipped lanes
 //! stay empty: a few more groups in the tree, fewer groups read per leaf).
 //! Everything the structure adds, copied triangles included, is `224·nodes + 160·groups`
-//! bytes ([`WideStats::bytes_per_triangle`]); the caller's mesh is not needed by queries.
+//! bytes ([`RayQuery::bytes_per_triangle`](crate::query::RayQuery::bytes_per_triangle)); the caller's mesh is not needed by queries.
 //!
 //! # Traversal
 //!
@@ -66,7 +66,6 @@ mod traverse;
 mod tests;
 
 pub use node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
-pub use traverse::WideStack;
 
 use crate::aabb::Aabb;
 use crate::getters::getters;
@@ -185,8 +184,6 @@ pub struct WideStats {
     pub triangles: usize,
     /// Bytes the structure adds: nodes and triangle groups.
     pub bytes: usize,
-    /// `bytes / triangles` (0 for an empty tree).
-    pub bytes_per_triangle: f64,
 }
 
 impl<const W: usize, N, T> WideBvh<W, N, T>
@@ -290,11 +287,6 @@ where
             children,
             triangles,
             bytes,
-            bytes_per_triangle: if triangles == 0 {
-                0.0
-            } else {
-                bytes as f64 / triangles as f64
-            },
         }
     }
 

@@ -1,12 +1,8 @@
-//! Box and clearance queries on a wide tree.
+//! The box query on a wide tree.
 
 use super::WideBvh;
 use super::node::{ChildRef, LeafGroup, WideNode};
 use crate::aabb::Aabb;
-use crate::bvh::BvhError;
-use crate::bvh::clearance::clearance_loop;
-use crate::triangle::TriangleIntersector;
-use glam::Vec3;
 
 /// Pending children of the box query: at most `W − 1` per inner node on the path, over at most
 /// `MAX_DEPTH` inner nodes (module docs of [`super`]), plus the `W` children of the node just
@@ -18,14 +14,6 @@ where
     N: AsRef<[WideNode<W>]>,
     T: AsRef<[LeafGroup]>,
 {
-    /// Calls `found(prim)` for every triangle whose box overlaps `query` (closed boxes:
-    /// touching counts, see [`Aabb::overlaps`]); `found` returns `true` to continue, `false`
-    /// to stop. Returns the number reported. An empty or NaN query box reports nothing.
-    /// Triangles are visited in tree order.
-    pub fn query_box(&self, query: &Aabb, found: impl FnMut(u32) -> bool) -> usize {
-        self.boxes_overlapping(query, found)
-    }
-
     /// The box query ([`crate::query::RayQuery::query_box`]).
     pub(super) fn boxes_overlapping(
         &self,
@@ -70,26 +58,5 @@ where
             }
         }
         reported
-    }
-
-    /// The clearance query of [`crate::bvh::Bvh::clearance_triangles`] on this tree: for each
-    /// point, the distance to the nearest hit along its normal (`+∞` for none or an invalid
-    /// ray), into `out`; returns the minimum.
-    ///
-    /// # Errors
-    ///
-    /// Nothing written:
-    /// [`BvhError::LengthMismatch`].
-    pub fn clearance_triangles<I: TriangleIntersector>(
-        &self,
-        isect: &I,
-        points: &[Vec3],
-        normals: &[Vec3],
-        out: &mut [f32],
-    ) -> Result<f32, BvhError> {
-        clearance_loop(points, normals, out, |ray| {
-            self.closest_hit_triangles(isect, ray, None)
-                .map(|(_, h)| h.t)
-        })
     }
 }

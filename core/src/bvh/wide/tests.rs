@@ -3,6 +3,8 @@
 use super::*;
 use crate::aabb::Aabb;
 use crate::bvh::{BuildOptions, Bvh, BvhError, BvhNode, TriangleMesh, index_capacity};
+use crate::prelude::*;
+use crate::query::{Query, QueryStack, TraversalStats, Triangles};
 use crate::ray::Ray;
 use crate::simd::level::Portable;
 use crate::test_util::{lcg, unit_vec};
@@ -101,7 +103,11 @@ fn check_against_brute<const W: usize>(n: usize, seed: u64, max_leaf: u32) {
     let mut hits = 0;
     for ray in rays(3000, seed ^ 0xABCD) {
         let got = w
-            .closest_hit_triangles(&Watertight, &ray, None)
+            .closest_hit(
+                &ray,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new(),
+            )
             .map(|(p, h)| (p, h.t));
         assert_eq!(got, brute(&mesh, &Watertight, &ray), "W={W} {ray:?}");
         // The closure queries, which cull nothing, see every lane of every leaf they visit:
@@ -109,18 +115,23 @@ fn check_against_brute<const W: usize>(n: usize, seed: u64, max_leaf: u32) {
         let (mut calls, mut st) = (0u64, TraversalStats::default());
         let by_closure = w.closest_hit(
             &ray,
-            |_, v, r| {
+            &mut |p, r: &Ray| {
                 calls += 1;
-                Watertight.intersect(r, v).map(|h| (h.t, h.t))
+                let v = mesh.triangle(p as usize)?;
+                Watertight.intersect(r, &v).map(|h| (h.t, h.t))
             },
-            Some(&mut st),
+            &mut Query::new().stats(&mut st),
         );
         assert_eq!(by_closure, got, "closure query, W={W} {ray:?}");
         assert_eq!(st.primitives_tested, calls, "{ray:?}");
         let any_by_closure = w.any_hit(
             &ray,
-            |_, v, r| Watertight.intersect(r, v).map(|h| (h.t, ())),
-            None,
+            &mut |p, r: &Ray| {
+                Watertight
+                    .intersect(r, &mesh.triangle(p as usize)?)
+                    .map(|h| (h.t, ()))
+            },
+            &mut Query::new(),
         );
         assert_eq!(
             any_by_closure.is_some(),
@@ -128,17 +139,25 @@ fn check_against_brute<const W: usize>(n: usize, seed: u64, max_leaf: u32) {
             "closure any-hit {ray:?}"
         );
         let got_mt = w
-            .closest_hit_triangles(&MollerTrumbore::NO_EPSILON, &ray, None)
+            .closest_hit(
+                &ray,
+                &mut Triangles::new(&mesh, &MollerTrumbore::NO_EPSILON),
+                &mut Query::new(),
+            )
             .map(|(p, h)| (p, h.t));
         assert_eq!(got_mt, brute(&mesh, &MollerTrumbore::NO_EPSILON, &ray));
-        let any = w.any_hit_triangles(&Watertight, &ray, None);
+        let any = w.any_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new(),
+        );
         assert_eq!(any.is_some(), got.is_some(), "{ray:?}");
         if let Some((p, h)) = any {
             let v = mesh.triangle(p as usize).unwrap();
             assert_eq!(Watertight.intersect(&ray, &v).map(|x| x.t), Some(h.t));
         }
         hits += usize::from(got.is_some());
-        same_at_every_level(&w, &ray);
+        same_at_every_level(&w, &mesh, &ray);
     }
     let want = if n >= 300 { 500 } else { 1 };
     assert!(hits >= want, "the rays must hit something: {hits} of 3000");
@@ -146,20 +165,35 @@ fn check_against_brute<const W: usize>(n: usize, seed: u64, max_leaf: u32) {
 
 /// The AVX2 kernels (where the CPU has them: node test, key sort, lane cull, the hit's plane
 /// form of `t`) give the portable answers, bit for bit, and statistics.
-fn same_at_every_level<const W: usize>(w: &VecWide<W>, ray: &Ray) {
+fn same_at_every_level<const W: usize>(w: &VecWide<W>, mesh: &TriangleMesh<'_>, ray: &Ray) {
     #[cfg(target_arch = "x86_64")]
     if let Some(level) = crate::test_util::avx2_or_skip(
         "bvh::wide::tests::closest_and_any_hit_equal_brute_force_for_both_widths (same_at_every_level)",
     ) {
-        let mut stack = WideStack::new();
+        let mut stack = QueryStack::new();
         let (mut a, mut b) = (TraversalStats::default(), TraversalStats::default());
-        let portable =
-            w.closest_hit_triangles_on(Portable, &mut stack, &Watertight, ray, Some(&mut a));
-        let simd = w.closest_hit_triangles_on(level, &mut stack, &Watertight, ray, Some(&mut b));
+        let portable = w.closest_hit(
+            ray,
+            &mut Triangles::new(mesh, &Watertight),
+            &mut Query::new().on(Portable).stack(&mut stack).stats(&mut a),
+        );
+        let simd = w.closest_hit(
+            ray,
+            &mut Triangles::new(mesh, &Watertight),
+            &mut Query::new().on(level).stack(&mut stack).stats(&mut b),
+        );
         assert_eq!(portable, simd, "{ray:?}");
         assert_eq!(a, b, "{ray:?}");
-        let portable = w.any_hit_triangles_on(Portable, &mut stack, &Watertight, ray, None);
-        let simd = w.any_hit_triangles_on(level, &mut stack, &Watertight, ray, None);
+        let portable = w.any_hit(
+            ray,
+            &mut Triangles::new(mesh, &Watertight),
+            &mut Query::new().on(Portable).stack(&mut stack),
+        );
+        let simd = w.any_hit(
+            ray,
+            &mut Triangles::new(mesh, &Watertight),
+            &mut Query::new().on(level).stack(&mut stack),
+        );
         assert_eq!(portable, simd, "{ray:?}");
     }
 }
@@ -488,9 +522,20 @@ fn empty_mesh_and_single_triangle() {
     let w = wide::<8>(&mesh, 4);
     assert!(w.is_empty());
     let ray = Ray::new(Vec3::ZERO, Vec3::X);
-    assert!(w.closest_hit_triangles(&Watertight, &ray, None).is_none());
+    assert!(
+        w.closest_hit(
+            &ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new()
+        )
+        .is_none()
+    );
     assert_eq!(
-        w.query_box(&Aabb::new(Vec3::splat(-1e9), Vec3::splat(1e9)), |_| true),
+        w.query_box(
+            &mesh,
+            &Aabb::new(Vec3::splat(-1e9), Vec3::splat(1e9)),
+            |_| true
+        ),
         0
     );
     let pos = [Vec3::ZERO, Vec3::X, Vec3::Y];
@@ -498,7 +543,13 @@ fn empty_mesh_and_single_triangle() {
     let mesh = TriangleMesh::new(&pos, &tris);
     let w = wide::<8>(&mesh, 4);
     let r = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
-    let (p, h) = w.closest_hit_triangles(&Watertight, &r, None).unwrap();
+    let (p, h) = w
+        .closest_hit(
+            &r,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new(),
+        )
+        .unwrap();
     assert_eq!((p, h.t), (0, 1.0));
 }
 
@@ -527,7 +578,11 @@ fn deep_unbalanced_input_stays_within_the_stack_and_finds_everything() {
         let c = (pos[t[0] as usize] + pos[t[1] as usize] + pos[t[2] as usize]) / 3.0;
         let ray = Ray::new(c + Vec3::Z, -Vec3::Z);
         let got = w
-            .closest_hit_triangles(&Watertight, &ray, None)
+            .closest_hit(
+                &ray,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new(),
+            )
             .map(|(p, _)| p);
         assert_eq!(
             got,
@@ -549,7 +604,7 @@ fn box_query_and_clearance_equal_brute_force_and_the_binary_tree() {
         let c = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 12.0 - 6.0;
         let q = Aabb::new(c, c + Vec3::splat(lcg(&mut s) * 2.0));
         let mut got = Vec::new();
-        w.query_box(&q, |p| {
+        w.query_box(&mesh, &q, |p| {
             got.push(p);
             true
         });
@@ -567,7 +622,12 @@ fn box_query_and_clearance_equal_brute_force_and_the_binary_tree() {
     let mut a = vec![0.0; 100];
     let mut c = vec![0.0; 100];
     let ma = w
-        .clearance_triangles(&Watertight, &points, &normals, &mut a)
+        .clearance(
+            &mut Triangles::new(&mesh, &Watertight),
+            &points,
+            &normals,
+            &mut a,
+        )
         .unwrap();
     // The oracle: brute force's closest `t` along each normal times the normal's length
     // (in `f64`; the query's `f32` product is within a few ulps of it).
@@ -587,11 +647,21 @@ fn box_query_and_clearance_equal_brute_force_and_the_binary_tree() {
     assert!(ma.is_finite());
     // The binary tree's query answers the same.
     let mc = b
-        .clearance_triangles(&mesh, &Watertight, &points, &normals, &mut c)
+        .clearance(
+            &mut Triangles::new(&mesh, &Watertight),
+            &points,
+            &normals,
+            &mut c,
+        )
         .unwrap();
     assert_eq!((ma, &a), (mc, &c));
     assert_eq!(
-        w.clearance_triangles(&Watertight, &points, &normals[..99], &mut a),
+        w.clearance(
+            &mut Triangles::new(&mesh, &Watertight),
+            &points,
+            &normals[..99],
+            &mut a
+        ),
         Err(BvhError::LengthMismatch {
             expected: 100,
             found: 99
@@ -625,7 +695,11 @@ fn refit_follows_moved_vertices_and_drops_non_finite_ones() {
     );
     for ray in rays(2000, 5) {
         let got = w
-            .closest_hit_triangles(&Watertight, &ray, None)
+            .closest_hit(
+                &ray,
+                &mut Triangles::new(&moved, &Watertight),
+                &mut Query::new(),
+            )
             .map(|(p, h)| (p, h.t));
         assert_eq!(got, brute(&moved, &Watertight, &ray), "{ray:?}");
     }
@@ -646,12 +720,16 @@ fn invalid_rays_test_nothing() {
         Ray::new(Vec3::ZERO, Vec3::ZERO),
         Ray::new(Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0)),
     ] {
-        let mut st = crate::bvh::TraversalStats::default();
+        let mut st = TraversalStats::default();
         assert!(
-            w.closest_hit(&ray, |_, _, _| Some((1.0, ())), Some(&mut st))
-                .is_none()
+            w.closest_hit(
+                &ray,
+                &mut |_, _: &Ray| Some((1.0, ())),
+                &mut Query::new().stats(&mut st)
+            )
+            .is_none()
         );
-        assert_eq!(st, crate::bvh::TraversalStats::default());
+        assert_eq!(st, TraversalStats::default());
     }
 }
 

@@ -4,16 +4,12 @@ use super::node::{ChildRef, LEAF_BIT, LeafGroup, START_MASK, WideNode};
 use super::{WideBvh, add_stats};
 use crate::aabb::SlabRay;
 use crate::bvh::padded_ray::PaddedRay;
-use crate::bvh::{BvhError, TriangleMesh, cull_bound, projection_pad, take_if_better};
-use crate::hit_queries::closest_and_any;
-use crate::query::{
-    LeafTest, Query, QueryStack, RayQuery, Stack, StackEntry, TraversalStats, Triangles,
-};
+use crate::bvh::{BvhError, cull_bound, projection_pad, take_if_better};
+use crate::query::{LeafTest, Query, QueryStack, RayQuery, Stack, StackEntry, TraversalStats};
 use crate::ray::Ray;
 use crate::simd;
-use crate::simd::level::{Portable, SimdLevel, order_key};
-use crate::triangle::{LANES, TriangleHit, TriangleIntersector, pair_mask};
-use glam::Vec3;
+use crate::simd::level::{SimdLevel, order_key};
+use crate::triangle::{LANES, pair_mask};
 
 /// Stack entries of the traversal: [`super::stack_size`] of the widest supported tree
 /// (`W = 8`), which bounds every narrower one (module docs of [`super`]).
@@ -90,46 +86,6 @@ fn sorted_keys<const W: usize, L: SimdLevel>(level: L, dist: &[f32; W], hits: u3
     keys
 }
 
-/// The old closure form of the wide queries: the triangle's stored vertices go to the
-/// closure.
-struct VertexClosure<F>(F);
-
-impl<H, F: FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>> LeafTest for VertexClosure<F> {
-    type Hit = H;
-    type Prepared = ();
-
-    #[inline(always)]
-    fn prepare(&self, _: &Ray) -> Option<()> {
-        Some(())
-    }
-
-    #[inline(always)]
-    fn intersect(&mut self, _: &(), _: u32, _: &Ray) -> Option<(f32, H)> {
-        None
-    }
-
-    #[inline(always)]
-    fn intersect_triangle<L: SimdLevel>(
-        &mut self,
-        _: L,
-        _: &(),
-        prim: u32,
-        v: &[Vec3; 3],
-        ray: &Ray,
-    ) -> Option<(f32, H)> {
-        (self.0)(prim, v, ray)
-    }
-}
-
-/// The mesh of the old intersector forms, which read the stored vertices only.
-const NO_MESH: TriangleMesh<'static> = TriangleMesh {
-    positions: &[],
-    triangles: &[],
-};
-
-/// The traversal stack of a wide tree (the old name of [`QueryStack`]).
-pub type WideStack = QueryStack;
-
 impl<const W: usize, N, T> RayQuery for WideBvh<W, N, T>
 where
     N: AsRef<[WideNode<W>]>,
@@ -179,93 +135,6 @@ where
     N: AsRef<[WideNode<W>]>,
     T: AsRef<[LeafGroup]>,
 {
-    closest_and_any! {
-        /// The closest hit of `ray`, as `(triangle index in the mesh, intersect's payload)`.
-        ///
-        /// `intersect(prim, vertices, ray)` tests one triangle against `ray`, whose `t_max` is
-        /// the current closest `t` (inclusive), and returns `(t, payload)` for a hit in
-        /// `(t_min, t_max]`. Of equal `t`, the smaller triangle index wins, so the result equals
-        /// a brute-force loop with the same rule. `stats`, when given, is **added to**. An
-        /// invalid ray returns `None` without testing any node. Makes a fresh [`WideStack`];
-        /// see [`WideBvh::closest_hit_with`] for many rays.
-        #[inline]
-        fn closest_hit;
-        /// Any hit of `ray`: traversal stops at the first triangle for which `intersect`
-        /// reports a `t` in `(t_min, t_max]`. Which one is found first depends on the tree;
-        /// hit/miss does not.
-        #[inline]
-        fn any_hit;
-        <H>(
-            &self,
-            ray: &Ray,
-            intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
-            stats: Option<&mut TraversalStats>,
-        ) -> Option<(u32, H)>, const ANY => {
-            let stack = &mut QueryStack::new().entries;
-            self.traverse::<_, ANY, _>(Portable, stack, ray, &mut VertexClosure(intersect), stats)
-        }
-    }
-
-    closest_and_any! {
-        /// [`WideBvh::closest_hit`] on a stack the caller keeps across rays.
-        #[inline(always)]
-        fn closest_hit_with;
-        /// [`WideBvh::any_hit`] on a stack the caller keeps across rays.
-        #[inline(always)]
-        fn any_hit_with;
-        <H>(
-            &self,
-            stack: &mut WideStack,
-            ray: &Ray,
-            intersect: impl FnMut(u32, &[Vec3; 3], &Ray) -> Option<(f32, H)>,
-            stats: Option<&mut TraversalStats>,
-        ) -> Option<(u32, H)>, const ANY => {
-            let stack = &mut stack.entries;
-            self.traverse::<_, ANY, _>(Portable, stack, ray, &mut VertexClosure(intersect), stats)
-        }
-    }
-
-    closest_and_any! {
-        /// [`WideBvh::closest_hit`] with the intersector `isect` (prepared once per ray).
-        #[inline]
-        fn closest_hit_triangles;
-        /// [`WideBvh::any_hit`] with the intersector `isect`.
-        #[inline]
-        fn any_hit_triangles;
-        <I: TriangleIntersector>(
-            &self,
-            isect: &I,
-            ray: &Ray,
-            stats: Option<&mut TraversalStats>,
-        ) -> Option<(u32, TriangleHit)>, const ANY => {
-            let (stack, leaf) = (&mut QueryStack::new().entries, &mut Triangles::new(&NO_MESH, isect));
-            self.traverse::<_, ANY, _>(Portable, stack, ray, leaf, stats)
-        }
-    }
-
-    closest_and_any! {
-        /// [`WideBvh::closest_hit_triangles`] on a stack the caller keeps across rays, with the
-        /// node test at SIMD `level` (see [`crate::simd_level`]; [`Portable`] is the scalar
-        /// one): the same answer and statistics at every level.
-        #[inline(always)]
-        fn closest_hit_triangles_on;
-        /// [`WideBvh::any_hit_triangles`] on the caller's stack with the node test at SIMD
-        /// `level`.
-        #[inline(always)]
-        fn any_hit_triangles_on;
-        <I: TriangleIntersector, L: SimdLevel>(
-            &self,
-            level: L,
-            stack: &mut WideStack,
-            isect: &I,
-            ray: &Ray,
-            stats: Option<&mut TraversalStats>,
-        ) -> Option<(u32, TriangleHit)>, const ANY => {
-            let (stack, leaf) = (&mut stack.entries, &mut Triangles::new(&NO_MESH, isect));
-            self.traverse::<_, ANY, L>(level, stack, ray, leaf, stats)
-        }
-    }
-
     /// Both ray queries on the context's stack (a [`QueryStack`]'s worth of its entries, or a
     /// stack of this frame's own); a shorter caller stack is refused with
     /// [`BvhError::StackTooSmall`].

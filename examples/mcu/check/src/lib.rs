@@ -25,6 +25,8 @@
 mod query;
 pub use query::{QUERY_STACK, any_in, closest_in, query_checks};
 
+use halfray_core::query::{Query, Triangles};
+use halfray_core::prelude::*;
 use halfray_core::Vec3;
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh};
 use halfray_core::halfedge::{
@@ -233,8 +235,8 @@ fn query_both<N: AsRef<[BvhNode]>, I: AsRef<[u32]>>(
     summary: &mut Summary,
     hash: &mut Fnv,
 ) -> Option<f32> {
-    let closest = bvh.closest_hit_triangles(mesh, &Watertight, ray, None);
-    let any = bvh.any_hit_triangles(mesh, &Watertight, ray, None);
+    let closest = bvh.closest_hit(ray, &mut Triangles::new(mesh, &Watertight), &mut Query::new());
+    let any = bvh.any_hit(ray, &mut Triangles::new(mesh, &Watertight), &mut Query::new());
     fold_answers(closest, any.is_some(), summary, hash);
     closest.map(|(_, hit)| hit.t)
 }

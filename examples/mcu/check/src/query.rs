@@ -2,9 +2,11 @@
 //! on a baked BVH: a lean loop (no other check's code), so that the image's size is the query
 //! path's.
 
+use halfray_core::query::{Query, Triangles, StackEntry};
+use halfray_core::prelude::*;
 use super::{Fnv, Rng, Summary, fold_answers};
 use halfray_core::Vec3;
-use halfray_core::bvh::{Bvh, BvhError, BvhNode, StackEntry, TriangleMesh};
+use halfray_core::bvh::{Bvh, BvhError, BvhNode, TriangleMesh};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{TriangleHit, TriangleIntersector};
 
@@ -67,7 +69,7 @@ where
 ///
 /// # Errors
 ///
-/// [`BvhError::StackTooSmall`] from [`Bvh::closest_hit_triangles_in`].
+/// [`BvhError::StackTooSmall`] from [`RayQuery::closest_hit`] on the caller's stack.
 #[inline(never)]
 pub fn closest_in<T, N, I>(
     isect: &T,
@@ -81,14 +83,14 @@ where
     N: AsRef<[BvhNode]>,
     I: AsRef<[u32]>,
 {
-    bvh.closest_hit_triangles_in(stack, mesh, isect, ray, None)
+    bvh.closest_hit(ray, &mut Triangles::new(mesh, isect), &mut Query::new().stack(stack))
 }
 
 /// One any-hit query on the caller's traversal `stack`, out of line (see [`closest_in`]).
 ///
 /// # Errors
 ///
-/// [`BvhError::StackTooSmall`] from [`Bvh::any_hit_triangles_in`].
+/// [`BvhError::StackTooSmall`] from [`RayQuery::any_hit`] on the caller's stack.
 #[inline(never)]
 pub fn any_in<T, N, I>(
     isect: &T,
@@ -103,6 +105,6 @@ where
     I: AsRef<[u32]>,
 {
     Ok(bvh
-        .any_hit_triangles_in(stack, mesh, isect, ray, None)?
+        .any_hit(ray, &mut Triangles::new(mesh, isect), &mut Query::new().stack(stack))?
         .is_some())
 }

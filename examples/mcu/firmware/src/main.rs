@@ -7,6 +7,8 @@
 // The bench image (feature `bench`) runs only `bench::run`.
 #![cfg_attr(feature = "bench", allow(dead_code, unused_imports))]
 
+use halfray_core::query::{Query, Triangles};
+use halfray_core::prelude::*;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use halfray_core::Vec3;
@@ -176,7 +178,7 @@ mod bench {
         let mut hits = 0u32;
         let t = ticks(|| {
             for r in rays {
-                hits += core::hint::black_box(bvh.closest_hit_triangles(mesh, isect, r, None))
+                hits += core::hint::black_box(bvh.closest_hit(r, &mut Triangles::new(mesh, isect), &mut Query::new()))
                     .is_some() as u32;
             }
         });

@@ -110,7 +110,7 @@ fn query_line(
         return Err(mcu_check::CheckError::Build);
     }
     let isect = halfray_core::triangle::WatertightF32Exact;
-    let mut stack = [halfray_core::bvh::StackEntry::EMPTY; mcu_check::QUERY_STACK];
+    let mut stack = [halfray_core::query::StackEntry::EMPTY; mcu_check::QUERY_STACK];
     let s = mcu_check::query_checks(&bvh, &mesh, 3 * c.rays_per_set, &mut hash, |ray| {
         rays.push(*ray);
         let closest = mcu_check::closest_in(&isect, &bvh, &mesh, &mut stack, ray).ok()?;

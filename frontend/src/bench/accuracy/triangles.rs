@@ -328,7 +328,7 @@ pub fn mrays_bvh<I: TriangleIntersector>(
         let start = Instant::now();
         let mut hits = 0u32;
         for r in rays {
-            hits += accel.closest(isect, black_box(r)).is_some() as u32;
+            hits += accel.closest(isect, black_box(r), None).is_some() as u32;
         }
         black_box(hits);
         samples.push(rays.len() as f64 / start.elapsed().as_secs_f64().max(1e-12) / 1.0e6);

@@ -3,7 +3,8 @@
 
 use super::*;
 use glam::Vec3;
-use halfray_core::bvh::TraversalStats;
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, TraversalStats};
 use halfray_core::triangle::{TriangleIntersector, Watertight};
 use halfray_core::{Hit, Ray};
 
@@ -13,7 +14,7 @@ impl MeshShape {
         ray: &Ray,
         stats: &mut TraversalStats,
     ) -> Option<(Hit, Vec3, Option<Vec3>)> {
-        let (i, th) = self.accel.closest_with_stats(&Watertight, ray, stats)?;
+        let (i, th) = self.accel.closest(&Watertight, ray, stats)?;
         let v = self.accel.mesh.triangle(i as usize);
         let bary = Vec3::new(th.b0(), th.b1, th.b2);
         let hit = th.to_hit(&v);
@@ -42,22 +43,24 @@ impl MeshShape {
         let Some(pre) = Watertight.prepare(ray) else {
             return;
         };
-        let _ = self.accel.bvh().closest_hit::<()>(
-            ray,
-            |prim, v, r| {
-                // `r.t_max` never shrinks: we never report a hit, so every crossing is seen.
-                if let Some(th) = Watertight.intersect_prepared(&pre, r, v) {
-                    out.push(MeshHit {
-                        prim,
-                        hit: th.to_hit(v),
-                        bary: Vec3::new(th.b0(), th.b1, th.b2),
-                        sign: pre.crossing_sign(r.origin, v),
-                    });
-                }
-                None
-            },
-            Some(stats),
-        );
+        let mesh = self.accel.triangles();
+        let mut leaf = |prim: u32, r: &Ray| -> Option<(f32, ())> {
+            // `r.t_max` never shrinks: we never report a hit, so every crossing is seen.
+            let v = mesh.triangle(prim as usize)?;
+            if let Some(th) = Watertight.intersect_prepared(&pre, r, &v) {
+                out.push(MeshHit {
+                    prim,
+                    hit: th.to_hit(&v),
+                    bary: Vec3::new(th.b0(), th.b1, th.b2),
+                    sign: pre.crossing_sign(r.origin, &v),
+                });
+            }
+            None
+        };
+        let _ = self
+            .accel
+            .bvh()
+            .closest_hit(ray, &mut leaf, &mut Query::new().stats(stats));
     }
 }
 
