@@ -282,7 +282,7 @@ where
             return Ok(None);
         };
         let stats = ctx.stats.as_deref_mut();
-        let intersect = |prim, r: &Ray| leaf.intersect(&pre, prim, r);
+        let intersect = leaf.with_prepared(&pre);
         match ctx.stack.entries() {
             Some(stack) => self.traverse(stack, ray, intersect, stats, any),
             None => {
