@@ -222,24 +222,24 @@ where
     N: AsRef<[BvhNode]>,
     I: AsRef<[u32]>,
 {
-    #[inline]
+    #[inline(always)]
     fn closest_hit<T: LeafTest, L: SimdLevel, S: Stack>(
         &self,
         ray: &Ray,
         leaf: &mut T,
         ctx: &mut Query<'_, L, S>,
     ) -> S::Out<(u32, T::Hit)> {
-        S::answer(self.leaf_query(false, ray, leaf, ctx))
+        self.on_stack(false, ray, leaf, ctx)
     }
 
-    #[inline]
+    #[inline(always)]
     fn any_hit<T: LeafTest, L: SimdLevel, S: Stack>(
         &self,
         ray: &Ray,
         leaf: &mut T,
         ctx: &mut Query<'_, L, S>,
     ) -> S::Out<(u32, T::Hit)> {
-        S::answer(self.leaf_query(true, ray, leaf, ctx))
+        self.on_stack(true, ray, leaf, ctx)
     }
 
     fn query_box<P: crate::bvh::PrimitiveSource + ?Sized>(
@@ -266,29 +266,43 @@ where
     N: AsRef<[BvhNode]>,
     I: AsRef<[u32]>,
 {
-    /// Both ray queries: the leaf test prepared once per ray (a refused ray visits nothing),
-    /// on the context's stack or one of [`TRAVERSAL_STACK_SIZE`] entries in this frame. One
-    /// closure type for closest and any hit, so that both share one traversal (a firmware
-    /// links one copy).
-    #[inline]
-    fn leaf_query<T: LeafTest, L: SimdLevel, S: Stack>(
+    /// Both ray queries: the context taken apart where the query is called (inlined), so that
+    /// the stack's kind and the statistics are values at the call site — the own stack of
+    /// [`TRAVERSAL_STACK_SIZE`] entries in the caller's frame, a caller's stack passed on, and
+    /// statistics a caller never asks for folded out of the walk it links.
+    #[inline(always)]
+    fn on_stack<T: LeafTest, L: SimdLevel, S: Stack>(
         &self,
         any: bool,
         ray: &Ray,
         leaf: &mut T,
         ctx: &mut Query<'_, L, S>,
-    ) -> Result<Option<(u32, T::Hit)>, BvhError> {
-        let Some(pre) = leaf.prepare(ray) else {
-            return Ok(None);
-        };
+    ) -> S::Out<(u32, T::Hit)> {
         let stats = ctx.stats.as_deref_mut();
-        let intersect = leaf.with_prepared(&pre);
         match ctx.stack.entries() {
-            Some(stack) => self.traverse(stack, ray, intersect, stats, any),
+            Some(stack) => self.leaf_query::<T, S>(any, stack, ray, leaf, stats),
             None => {
                 let mut own = [StackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
-                self.traverse(&mut own, ray, intersect, stats, any)
+                self.leaf_query::<T, S>(any, &mut own, ray, leaf, stats)
             }
         }
+    }
+
+    /// The leaf test prepared once per ray (a refused ray visits nothing), then the walk on
+    /// `stack`. One closure type for closest and any hit, so that both share one traversal (a
+    /// firmware links one copy).
+    #[inline]
+    fn leaf_query<T: LeafTest, S: Stack>(
+        &self,
+        any: bool,
+        stack: &mut [StackEntry],
+        ray: &Ray,
+        leaf: &mut T,
+        stats: Option<&mut TraversalStats>,
+    ) -> S::Out<(u32, T::Hit)> {
+        let Some(pre) = leaf.prepare(ray) else {
+            return S::answer(Ok(None));
+        };
+        S::answer(self.traverse(stack, ray, leaf.with_prepared(&pre), stats, any))
     }
 }

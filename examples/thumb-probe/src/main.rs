@@ -13,11 +13,11 @@
 #![no_std]
 #![no_main]
 
-use halfray_core::query::{Query, Triangles};
-use halfray_core::prelude::*;
 use core::panic::PanicInfo;
 use core::sync::atomic::{AtomicU32, Ordering};
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, node_capacity};
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, Triangles};
 use halfray_core::solids::{CUBE_TRIANGLES, CUBE_VERTICES};
 use halfray_core::triangle::Watertight;
 use halfray_core::{Ray, Vec3};
@@ -71,8 +71,12 @@ fn build<'a>(
 /// (fixed 64-entry traversal stack included) is reported on its own.
 #[inline(never)]
 fn closest(bvh: &ProbeBvh<'_>, mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, f32)> {
-    bvh.closest_hit(ray, &mut Triangles::new(mesh, &Watertight), &mut Query::new())
-        .map(|(prim, hit)| (prim, hit.t))
+    bvh.closest_hit(
+        ray,
+        &mut Triangles::new(mesh, &Watertight),
+        &mut Query::new(),
+    )
+    .map(|(prim, hit)| (prim, hit.t))
 }
 
 fn idle(code: u32) -> ! {

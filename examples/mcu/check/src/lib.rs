@@ -25,13 +25,13 @@
 mod query;
 pub use query::{QUERY_STACK, any_in, closest_in, query_checks};
 
-use halfray_core::query::{Query, Triangles};
-use halfray_core::prelude::*;
 use halfray_core::Vec3;
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh};
 use halfray_core::halfedge::{
     EdgeRec, FaceRec, LoopWeights, SliceMesh, VertexRec, build_scratch_len,
 };
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, Triangles};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{TriangleHit, Watertight};
 
@@ -235,8 +235,16 @@ fn query_both<N: AsRef<[BvhNode]>, I: AsRef<[u32]>>(
     summary: &mut Summary,
     hash: &mut Fnv,
 ) -> Option<f32> {
-    let closest = bvh.closest_hit(ray, &mut Triangles::new(mesh, &Watertight), &mut Query::new());
-    let any = bvh.any_hit(ray, &mut Triangles::new(mesh, &Watertight), &mut Query::new());
+    let closest = bvh.closest_hit(
+        ray,
+        &mut Triangles::new(mesh, &Watertight),
+        &mut Query::new(),
+    );
+    let any = bvh.any_hit(
+        ray,
+        &mut Triangles::new(mesh, &Watertight),
+        &mut Query::new(),
+    );
     fold_answers(closest, any.is_some(), summary, hash);
     closest.map(|(_, hit)| hit.t)
 }

@@ -2,11 +2,11 @@
 //! on a baked BVH: a lean loop (no other check's code), so that the image's size is the query
 //! path's.
 
-use halfray_core::query::{Query, Triangles, StackEntry};
-use halfray_core::prelude::*;
 use super::{Fnv, Rng, Summary, fold_answers};
 use halfray_core::Vec3;
 use halfray_core::bvh::{Bvh, BvhError, BvhNode, TriangleMesh};
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, StackEntry, Triangles};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{TriangleHit, TriangleIntersector};
 
@@ -83,7 +83,11 @@ where
     N: AsRef<[BvhNode]>,
     I: AsRef<[u32]>,
 {
-    bvh.closest_hit(ray, &mut Triangles::new(mesh, isect), &mut Query::new().stack(stack))
+    bvh.closest_hit(
+        ray,
+        &mut Triangles::new(mesh, isect),
+        &mut Query::new().stack(stack),
+    )
 }
 
 /// One any-hit query on the caller's traversal `stack`, out of line (see [`closest_in`]).
@@ -105,6 +109,10 @@ where
     I: AsRef<[u32]>,
 {
     Ok(bvh
-        .any_hit(ray, &mut Triangles::new(mesh, isect), &mut Query::new().stack(stack))?
+        .any_hit(
+            ray,
+            &mut Triangles::new(mesh, isect),
+            &mut Query::new().stack(stack),
+        )?
         .is_some())
 }

@@ -7,13 +7,13 @@
 // The bench image (feature `bench`) runs only `bench::run`.
 #![cfg_attr(feature = "bench", allow(dead_code, unused_imports))]
 
-use halfray_core::query::{Query, Triangles};
-use halfray_core::prelude::*;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use halfray_core::Vec3;
 use halfray_core::bvh::{BvhNode, TriangleMesh, node_capacity};
 use halfray_core::halfedge::{EdgeRec, FaceRec, VertexRec, build_scratch_len};
+use halfray_core::prelude::*;
+use halfray_core::query::{Query, Triangles};
 use mcu_check::{
     CheckError, Config, Fnv, HalfedgeStorage, RayStorage, Summary, baked_checks, edge_count,
     halfedge_checks, ray_checks, triangle_count, vertex_count,
@@ -178,8 +178,12 @@ mod bench {
         let mut hits = 0u32;
         let t = ticks(|| {
             for r in rays {
-                hits += core::hint::black_box(bvh.closest_hit(r, &mut Triangles::new(mesh, isect), &mut Query::new()))
-                    .is_some() as u32;
+                hits += core::hint::black_box(bvh.closest_hit(
+                    r,
+                    &mut Triangles::new(mesh, isect),
+                    &mut Query::new(),
+                ))
+                .is_some() as u32;
             }
         });
         let insns = t as f32 * per_tick / rays.len() as f32;
