@@ -26,14 +26,15 @@
 //! total functions that report "no hit" for invalid rays, and constructors that can reject
 //! input return a typed error ([`error`]).
 //!
-//! `unsafe` is denied everywhere except one private module of SSE intrinsics (`simd`, x86-64
-//! only, portable fallbacks elsewhere): a cache prefetch hint, a lane-compare bit mask and a
-//! four-lane vector for the triangle tests' lane culls (the compiler scalarises both when
-//! written portably), and the AVX2 + FMA kernels of [`simd_level`] behind a token that
-//! proves the CPU has them (the 8-wide node test, the child sort, the two-group cull, and the
-//! `f64` plane form of a hit's `t`, whose 3-vectors the compiler keeps in scalar registers).
-//! Each is there because the portable form measured slower (`docs/performance.md`); its
-//! blocks carry their proofs.
+//! `unsafe` is denied everywhere except two private modules, x86-64 only with portable
+//! fallbacks elsewhere. `simd` holds the lane kernels: a cache prefetch hint, a lane-compare
+//! bit mask and a four-lane vector for the triangle tests' lane culls (the compiler scalarises
+//! both when written portably), and the AVX2 + FMA kernels of [`simd_level`] behind a token
+//! that proves the CPU has them (the 8-wide node test, the child sort, the two-group cull).
+//! `triangle::watertight::avx2` is the AVX2 + FMA end of the watertight hit path (the `f64`
+//! plane form of a hit's `t`, whose 3-vectors the compiler keeps in scalar registers), entered
+//! on the same token. Each is there because the portable form measured slower
+//! (`docs/performance.md`); its blocks carry their proofs.
 #![no_std]
 #![deny(unsafe_code)]
 #![deny(missing_docs)]

@@ -9,12 +9,9 @@
 //! lane by lane, never a fused multiply-add (the padding arguments of the box test count plain
 //! roundings). Only the speed differs.
 
-use crate::ray::Ray;
-use crate::triangle::{PlaneForm, TriangleHit, WatertightRay};
-use glam::Vec3;
-
-/// A SIMD level for the 8-wide node test, the watertight test's lane cull and the `f64`
-/// plane form of its hits' `t`. Sealed: [`Portable`] and, on x86-64, [`Avx2Fma`].
+/// A SIMD level for the 8-wide node test and child sort and the watertight test's lane cull.
+/// Sealed: [`Portable`] and, on x86-64, [`Avx2Fma`] (whose token other modules with AVX2
+/// kernels of their own also take, such as the watertight test's hit path).
 pub trait SimdLevel: Copy + sealed::Sealed {
     /// The slab test of eight boxes at once ([`Slab8`]: the boxes, the ray and the interval),
     /// or `None` when this level has no kernel for it (the caller then runs the portable lane
@@ -102,27 +99,14 @@ pub fn order_key(dist: f32, lane: usize, hit: bool) -> u32 {
 }
 
 mod sealed {
-    use crate::ray::Ray;
-    use crate::triangle::{PlaneForm, TriangleHit, WatertightRay};
-    use glam::Vec3;
-
-    /// The kernels a level has for the crate's own hit path (not part of the public
-    /// interface): each returns the same bits at every level.
+    /// What the crate's own modules ask of a level (not part of the public interface).
     pub trait Sealed: Copy {
-        /// [`crate::triangle::plane_crossing`]: the plane form of the watertight test's `t`.
-        fn plane_crossing(self, v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm>;
-
-        /// The end of the watertight test's hit path ([`crate::triangle::finish_exact_at`]
-        /// at this level), compiled for this level's target features, so that its kernels
-        /// inline into it.
-        fn finish_exact(
-            self,
-            ray: &Ray,
-            pre: &WatertightRay,
-            sheared: ([f32; 3], [f32; 3], [f32; 3]),
-            edges: [f64; 3],
-            v: &[Vec3; 3],
-        ) -> Option<TriangleHit>;
+        /// This level as the AVX2 + FMA token when it is that level, `None` otherwise: a
+        /// module with its own AVX2 kernels (the triangle hit path's end,
+        /// `triangle/watertight/avx2.rs`) picks them per level with it, decided at compile
+        /// time (each level returns a constant).
+        #[cfg(target_arch = "x86_64")]
+        fn avx2(self) -> Option<super::Avx2Fma>;
     }
 }
 
@@ -132,21 +116,10 @@ mod sealed {
 pub struct Portable;
 
 impl sealed::Sealed for Portable {
+    #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    fn plane_crossing(self, v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {
-        crate::triangle::plane_crossing(v, ray)
-    }
-
-    #[inline(always)]
-    fn finish_exact(
-        self,
-        ray: &Ray,
-        pre: &WatertightRay,
-        sheared: ([f32; 3], [f32; 3], [f32; 3]),
-        edges: [f64; 3],
-        v: &[Vec3; 3],
-    ) -> Option<TriangleHit> {
-        crate::triangle::finish_exact(ray, pre, sheared, edges, v)
+    fn avx2(self) -> Option<Avx2Fma> {
+        None
     }
 }
 
@@ -201,132 +174,9 @@ impl Avx2Fma {
 #[cfg(target_arch = "x86_64")]
 impl sealed::Sealed for Avx2Fma {
     #[inline(always)]
-    fn plane_crossing(self, v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {
-        // SAFETY: as in `slab8`: the token proves AVX2 and FMA.
-        unsafe { plane_crossing_avx2(v, ray) }
+    fn avx2(self) -> Option<Avx2Fma> {
+        Some(self)
     }
-
-    #[inline(always)]
-    fn finish_exact(
-        self,
-        ray: &Ray,
-        pre: &WatertightRay,
-        sheared: ([f32; 3], [f32; 3], [f32; 3]),
-        edges: [f64; 3],
-        v: &[Vec3; 3],
-    ) -> Option<TriangleHit> {
-        // SAFETY: as in `slab8`: the token proves AVX2 and FMA.
-        unsafe { finish_exact_avx2(ray, pre, sheared, edges, v) }
-    }
-}
-
-/// [`crate::triangle::finish_exact_at`] at the AVX2 level, compiled for AVX2 and FMA (out of
-/// line, like the portable one: one call per candidate): its `f64` plane kernel
-/// ([`plane_crossing_avx2`]) inlines here. Its callers prove the features (the token).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-#[inline(never)]
-fn finish_exact_avx2(
-    ray: &Ray,
-    pre: &WatertightRay,
-    sheared: ([f32; 3], [f32; 3], [f32; 3]),
-    edges: [f64; 3],
-    v: &[Vec3; 3],
-) -> Option<TriangleHit> {
-    // The token is sound here: this function runs only on a CPU with AVX2 and FMA.
-    crate::triangle::finish_exact_at(Avx2Fma(()), ray, pre, sheared, edges, v)
-}
-
-/// [`crate::triangle::plane_crossing`] in 256-bit registers: each 3-vector in the lanes
-/// `x, y, z` of one `f64` register (the fourth lane zero, never read back), the same IEEE operations in the same order as the portable definition —
-/// products, differences and dot products summed `(x + y) + z`, never fused; `min`, `max` as
-/// `a < b ? a : b`, `a > b ? a : b` (`minps`, `maxps`, `maxsd`), NaN handling included — so
-/// the same bits.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-#[inline]
-fn plane_crossing_avx2(v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {
-    use crate::float::{gamma, gamma_f64};
-    use crate::predicates::ORIENT3D_FILTER_REL;
-    use crate::triangle::{NORMAL_CANCEL_REL, TINY};
-    use core::arch::x86_64::{
-        __m256d, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _mm_add_sd, _mm_cvtsd_f64, _mm_max_ps,
-        _mm_max_sd, _mm_min_ps, _mm_setr_ps, _mm_unpackhi_pd, _mm256_add_pd, _mm256_and_pd,
-        _mm256_andnot_pd, _mm256_castpd256_pd128, _mm256_cmp_pd, _mm256_cvtps_pd,
-        _mm256_extractf128_pd, _mm256_max_pd, _mm256_movemask_pd, _mm256_mul_pd,
-        _mm256_permute4x64_pd, _mm256_set1_pd, _mm256_setzero_pd, _mm256_sub_pd,
-    };
-    // Built lane by lane from the fields (no load spans two vertices, and no pointer cast).
-    let lanes = |p: Vec3| _mm_setr_ps(p.x, p.y, p.z, 0.0);
-    let (f0, f1, f2) = (lanes(v[0]), lanes(v[1]), lanes(v[2]));
-    let (o, d) = (
-        _mm256_cvtps_pd(lanes(ray.origin)),
-        _mm256_cvtps_pd(lanes(ray.direction)),
-    );
-    let (p0, p1, p2) = (
-        _mm256_cvtps_pd(f0),
-        _mm256_cvtps_pd(f1),
-        _mm256_cvtps_pd(f2),
-    );
-    // Lanes (y, z, x) and (z, x, y) of (x, y, z).
-    let yzx = |a: __m256d| _mm256_permute4x64_pd::<0b11_00_10_01>(a);
-    let zxy = |a: __m256d| _mm256_permute4x64_pd::<0b11_01_00_10>(a);
-    let sign = _mm256_set1_pd(-0.0);
-    let abs = |a: __m256d| _mm256_andnot_pd(sign, a);
-    let dot = |a: __m256d, b: __m256d| {
-        let m = _mm256_mul_pd(a, b);
-        let (xy, z) = (_mm256_castpd256_pd128(m), _mm256_extractf128_pd::<1>(m));
-        _mm_cvtsd_f64(_mm_add_sd(_mm_add_sd(xy, _mm_unpackhi_pd(xy, xy)), z))
-    };
-    // max(x, max(y, z)), as `DVec3::max_element`.
-    let max_element = |a: __m256d| {
-        let (xy, z) = (_mm256_castpd256_pd128(a), _mm256_extractf128_pd::<1>(a));
-        _mm_cvtsd_f64(_mm_max_sd(xy, _mm_max_sd(_mm_unpackhi_pd(xy, xy), z)))
-    };
-    // `normal_f64_from_v0`: the cross product, its scale, the cancellation check.
-    let (e1, e2) = (_mm256_sub_pd(p1, p0), _mm256_sub_pd(p2, p0));
-    let n = _mm256_sub_pd(
-        _mm256_mul_pd(yzx(e1), zxy(e2)),
-        _mm256_mul_pd(yzx(e2), zxy(e1)),
-    );
-    let (a1, a2) = (abs(e1), abs(e2));
-    let nn = _mm256_add_pd(
-        _mm256_mul_pd(yzx(a1), zxy(a2)),
-        _mm256_mul_pd(zxy(a1), yzx(a2)),
-    );
-    let cancels = _mm256_andnot_pd(
-        _mm256_cmp_pd::<_CMP_GT_OQ>(abs(n), _mm256_mul_pd(_mm256_set1_pd(NORMAL_CANCEL_REL), nn)),
-        _mm256_cmp_pd::<_CMP_GT_OQ>(nn, _mm256_setzero_pd()),
-    );
-    if _mm256_movemask_pd(cancels) & 7 != 0 {
-        return None;
-    }
-    // The filter of `d·n`.
-    let dn = dot(d, n);
-    let d_nn = dot(abs(d), nn);
-    if !(dn.abs() > ORIENT3D_FILTER_REL * d_nn) {
-        return None;
-    }
-    // `plane_form`.
-    let w = _mm256_sub_pd(p0, o);
-    let t = dot(w, n) / dn;
-    let err = gamma_f64(8) * (dot(abs(w), nn) + t.abs() * d_nn) / dn.abs();
-    let p = _mm256_add_pd(o, _mm256_mul_pd(d, _mm256_set1_pd(t)));
-    let lo = _mm256_cvtps_pd(_mm_min_ps(_mm_min_ps(f0, f1), f2));
-    let hi = _mm256_cvtps_pd(_mm_max_ps(_mm_max_ps(f0, f1), f2));
-    let slack = f64::from(gamma(8))
-        * (max_element(_mm256_max_pd(abs(lo), abs(hi))) + max_element(abs(p)))
-        + TINY;
-    let slack = _mm256_set1_pd(slack);
-    let inside = _mm256_and_pd(
-        _mm256_cmp_pd::<_CMP_GE_OQ>(p, _mm256_sub_pd(lo, slack)),
-        _mm256_cmp_pd::<_CMP_LE_OQ>(p, _mm256_add_pd(hi, slack)),
-    );
-    Some(PlaneForm {
-        t,
-        err,
-        in_box: _mm256_movemask_pd(inside) & 7 == 7,
-    })
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -522,7 +372,6 @@ fn slab8_avx2(
 
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
-    use super::sealed::Sealed;
     use super::*;
     use crate::test_util::{lcg, mixed_f32};
 
@@ -645,71 +494,6 @@ mod tests {
             shear: [0.0; 2],
         };
         assert_eq!(Portable.certain_misses8(&q), None);
-    }
-
-    /// The AVX2 plane kernel against the portable definition
-    /// ([`crate::triangle::plane_crossing`], scalar `glam` code), bit for bit (a NaN `t` or
-    /// bound matches any NaN: only its comparisons are used), on triangles from `1e-3` to
-    /// `1e3` at every distance, slivers, rays along the plane, and coordinates with NaN,
-    /// `±∞`, `±0` and subnormals mixed in. Every outcome must occur: a refused triangle
-    /// (cancelled normal or `d·n` within its filter), a crossing in the box and one outside.
-    #[test]
-    fn avx2_plane_crossing_equals_the_portable_one() {
-        let Some(level) = crate::test_util::avx2_or_skip(
-            "simd::level::tests::avx2_plane_crossing_equals_the_portable_one",
-        ) else {
-            return;
-        };
-        let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
-        let mut s = 29u64;
-        let (mut refused, mut inside, mut outside) = (0, 0, 0);
-        for i in 0..40_000 {
-            let scale = 10f32.powf(lcg(&mut s) * 6.0 - 3.0);
-            let c = |s: &mut u64| {
-                if i % 5 == 0 {
-                    mixed_f32(s, 0.1, 2.0) * scale
-                } else {
-                    (lcg(s) - 0.5) * scale
-                }
-            };
-            let centre = Vec3::new(c(&mut s), c(&mut s), c(&mut s)) * 100.0;
-            let mut v = [0; 3].map(|_| centre + Vec3::new(c(&mut s), c(&mut s), c(&mut s)));
-            if i % 7 == 0 {
-                v[2] = v[0] + (v[1] - v[0]) * lcg(&mut s);
-            }
-            let target =
-                v[0] + (v[1] - v[0]) * lcg(&mut s) * 0.5 + (v[2] - v[0]) * lcg(&mut s) * 0.5;
-            let origin = target + Vec3::new(c(&mut s), c(&mut s), c(&mut s)) * 50.0;
-            let mut direction = target - origin;
-            if i % 11 == 0 {
-                // Along the plane.
-                let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
-                direction -= n * n.dot(direction);
-            }
-            let ray = Ray::new(origin, direction);
-            let want = crate::triangle::plane_crossing(&v, &ray);
-            let got = level.plane_crossing(&v, &ray);
-            match (want, got) {
-                (None, None) => refused += 1,
-                (Some(w), Some(g)) => {
-                    assert!(
-                        same(w.t, g.t) && same(w.err, g.err),
-                        "{v:?} {ray:?}: {w:?} {g:?}"
-                    );
-                    assert_eq!(w.in_box, g.in_box, "{v:?} {ray:?}");
-                    if w.in_box {
-                        inside += 1;
-                    } else {
-                        outside += 1;
-                    }
-                }
-                _ => panic!("{v:?} {ray:?}: {want:?} against {got:?}"),
-            }
-        }
-        assert!(
-            refused > 100 && inside > 10_000 && outside > 100,
-            "{refused} refused, {inside} in the box, {outside} outside"
-        );
     }
 
     #[test]

@@ -39,10 +39,7 @@ pub use cramer::Cramer;
 pub use lanes::{LANES, TriangleLanes, pair_mask};
 pub use moller_trumbore::MollerTrumbore;
 pub use reference::F64Reference;
-pub(crate) use watertight::{PlaneForm, finish_exact, plane_crossing};
 pub use watertight::{ShearedTest, Watertight, WatertightF32, WatertightRay};
-#[cfg(target_arch = "x86_64")]
-pub(crate) use watertight::{TINY, finish_exact_at};
 pub use watertight_f32_exact::WatertightF32Exact;
 
 use crate::float::gamma;

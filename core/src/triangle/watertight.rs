@@ -5,8 +5,12 @@ use crate::float::{diff_of_products_exact_sign, diff_of_products_sign_filter, ga
 use crate::predicates::ORIENT3D_FILTER_REL;
 use crate::ray::Ray;
 use crate::simd::F32x4;
-use crate::simd::level::{Portable, Sheared8, SimdLevel};
+use crate::simd::level::{Sheared8, SimdLevel};
 use glam::{DVec3, Vec3};
+
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+mod avx2;
 
 /// Per-ray data of the watertight test: the axis permutation that makes the largest direction
 /// component `z`, and the shear that maps the ray to the `+z` axis through the origin.
@@ -254,7 +258,7 @@ pub struct WatertightF32;
 /// Absolute floor of the projection error bounds: the `f32` subnormal spacing `2⁻¹⁴⁹`, times 4
 /// (each projected value carries up to three roundings that may be absolute below the normal
 /// range). World units (sheared).
-pub(crate) const TINY: f64 = 4.0 * 1.401_298_464_324_817e-45;
+const TINY: f64 = 4.0 * 1.401_298_464_324_817e-45;
 
 /// Relative bound below which the plane-form `t` is returned without evaluating the sheared
 /// form: `2⁻²⁶`, a quarter of the `f32` unit roundoff, so the final rounding to `f32` dominates
@@ -266,32 +270,45 @@ const PLANE_EXACT_ENOUGH: f64 = 1.0 / 67_108_864.0;
 /// case and far below any disagreement that signals a grazing ray. Unitless.
 const AGREE_REL: f64 = 1.0 / 1_048_576.0;
 
+/// A triangle the watertight test's `f32` filter did not reject, with all the rest of its hit
+/// path reads: the ray and its preparation, the triangle, its sheared vertices `(x', y', z')`
+/// ([`WatertightRay::project_triangle`]) and its exact edge functions ([`exact_edges`]).
+/// Passed by value, so that each function on the path reads its fields where the caller put
+/// them (on x86-64, the one out-of-line call per candidate receives one copy).
+#[derive(Clone, Copy, Debug)]
+struct Candidate<'a> {
+    ray: &'a Ray,
+    pre: &'a WatertightRay,
+    v: &'a [Vec3; 3],
+    sheared: ([f32; 3], [f32; 3], [f32; 3]),
+    edges: [f64; 3],
+}
+
+/// A plane kernel: [`plane_crossing`] or a SIMD level's version of it (the same bits).
+trait PlaneKernel: Fn(&[Vec3; 3], &Ray) -> Option<PlaneForm> {}
+
+impl<F: Fn(&[Vec3; 3], &Ray) -> Option<PlaneForm>> PlaneKernel for F {}
+
 /// [`hit_t`]'s common case, or `None` for the others: the `v0`-based normal does not cancel,
-/// `d·n` clears its filter ([`plane_crossing`], at `level`: the same bits at every level), the
-/// plane crossing lies in the triangle's box, and the plane form is exact enough
+/// `d·n` clears its filter (`plane`: [`plane_crossing`] or a level's kernel with its bits),
+/// the plane crossing lies in the triangle's box, and the plane form is exact enough
 /// ([`plane_exact_enough`]). Each step is the one [`hit_t`] takes, so where this returns `t`,
 /// `hit_t` returns the same `t`.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn common_t<L: SimdLevel>(
-    level: L,
-    ray: &Ray,
-    z: [f32; 3],
-    edges: [f64; 3],
-    det: f64,
-    v: &[Vec3; 3],
-) -> Option<f64> {
-    let plane = level.plane_crossing(v, ray)?;
-    let t_sheared = sheared_t(edges, z, det);
+fn common_t(plane: impl PlaneKernel, c: Candidate<'_>, det: f64) -> Option<f64> {
+    let plane = plane(c.v, c.ray)?;
+    let z = c.sheared.2;
+    let t_sheared = sheared_t(c.edges, z, det);
     (plane.in_box && plane_exact_enough(&plane, t_sheared, z)).then_some(plane.t)
 }
 
 /// The plane form of `t` for the ray `ray` and the triangle `v` when the `v0`-based normal
 /// does not cancel ([`super::normal_f64_from_v0`]) and `d·n` clears the filter of the exact
 /// orientation predicate; `None` otherwise (then [`hit_t`] decides). The portable
-/// definition of [`crate::simd_level`]'s plane kernels: each level returns these bits.
+/// definition of the levels' plane kernels (`avx2.rs`): each returns these bits.
 #[inline(always)]
-pub(crate) fn plane_crossing(v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {
+fn plane_crossing(v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {
     let normal = super::normal_f64_from_v0(v)?;
     let d = ray.direction.as_dvec3();
     let dn = d.dot(normal.0);
@@ -310,14 +327,14 @@ fn sheared_t(edges: [f64; 3], z: [f32; 3], det: f64) -> f64 {
 /// The plane form of `t` ([`hit_t`]) and its error bound, and whether its crossing lies in
 /// the triangle's box up to rounding.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PlaneForm {
+struct PlaneForm {
     /// `((v0 − o)·n)/(d·n)`, ray parameter.
-    pub t: f64,
+    t: f64,
     /// Bound on the error of `t`, ray parameter.
-    pub err: f64,
+    err: f64,
     /// The crossing `o + d·t` lies in the triangle's box, padded by `γ₈` of the coordinates'
     /// magnitude and [`TINY`].
-    pub in_box: bool,
+    in_box: bool,
 }
 
 /// [`PlaneForm`] of the triangle `v` with normal `n` and its scale `nn`
@@ -377,16 +394,15 @@ fn plane_exact_enough(plane: &PlaneForm, t_sheared: f64, z: [f32; 3]) -> bool {
 // `exact_candidate`.
 #[cfg_attr(target_arch = "x86_64", cold, inline(never))]
 #[cfg_attr(not(target_arch = "x86_64"), inline(never))]
-fn hit_t(
-    ray: &Ray,
-    shear: Vec3,
-    d_kz: f32,
-    sheared: ([f32; 3], [f32; 3], [f32; 3]),
-    edges: [f64; 3],
-    det: f64,
-    v: &[Vec3; 3],
-) -> Option<f64> {
-    let (x, y, z) = sheared;
+fn hit_t(c: Candidate<'_>, det: f64) -> Option<f64> {
+    let Candidate {
+        ray,
+        pre,
+        v,
+        sheared: (x, y, z),
+        edges,
+    } = c;
+    let (shear, d_kz) = (pre.shear, ray.direction[pre.k[2]]);
     let t_sheared = sheared_t(edges, z, det);
     let normal = super::normal_f64(v);
     let (n, nn) = normal;
@@ -473,18 +489,13 @@ fn hit_t(
 }
 
 /// The exact edge functions' verdict, then the hit: `t` ([`hit_t`]), barycentrics and normal,
-/// with the common case of `t` at `level` ([`common_t`], x86-64 only; the same bits at every
-/// level). Each level compiles it with its own target features
-/// ([`crate::simd_level`]'s `finish_exact`), so that its plane kernel inlines here.
+/// with the common case of `t` from the plane kernel `plane` ([`common_t`], x86-64 only; the
+/// same bits from every kernel). Each level's out-of-line end of the hit path
+/// ([`finish_exact`], `avx2::finish_exact`) inlines it, compiled with that level's target
+/// features, so that its plane kernel inlines here.
 #[inline(always)]
-pub(crate) fn finish_exact_at<L: SimdLevel>(
-    level: L,
-    ray: &Ray,
-    pre: &WatertightRay,
-    sheared: ([f32; 3], [f32; 3], [f32; 3]),
-    edges: [f64; 3],
-    v: &[Vec3; 3],
-) -> Option<TriangleHit> {
+fn finish_exact_at(plane: impl PlaneKernel, c: Candidate<'_>) -> Option<TriangleHit> {
+    let Candidate { ray, v, edges, .. } = c;
     let [e0, e1, e2] = edges;
     let has_neg = e0 < 0.0 || e1 < 0.0 || e2 < 0.0;
     let has_pos = e0 > 0.0 || e1 > 0.0 || e2 > 0.0;
@@ -498,23 +509,15 @@ pub(crate) fn finish_exact_at<L: SimdLevel>(
     // On x86-64 the common case of `t` first, alone (see `hit_t`); elsewhere `hit_t` only
     // (the Cortex-M4F image's size).
     #[cfg(target_arch = "x86_64")]
-    let common = common_t(level, ray, sheared.2, edges, det, v);
+    let common = common_t(plane, c, det);
     #[cfg(not(target_arch = "x86_64"))]
     let common = {
-        let _ = level;
+        let _ = plane;
         None
     };
     let t64 = match common {
         Some(t) => t,
-        None => hit_t(
-            ray,
-            pre.shear,
-            ray.direction[pre.k[2]],
-            sheared,
-            edges,
-            det,
-            v,
-        )?,
+        None => hit_t(c, det)?,
     };
     let t = t64 as f32;
     if !ray.contains(t) {
@@ -532,18 +535,12 @@ pub(crate) fn finish_exact_at<L: SimdLevel>(
     })
 }
 
-/// [`finish_exact_at`] at the [`Portable`] level: out of line on x86-64, inlined elsewhere
-/// (see [`exact_candidate`]).
+/// [`finish_exact_at`] with the portable plane kernel ([`plane_crossing`]): out of line on
+/// x86-64, inlined elsewhere (see [`exact_candidate`]).
 #[cfg_attr(target_arch = "x86_64", inline(never))]
 #[cfg_attr(not(target_arch = "x86_64"), inline)]
-pub(crate) fn finish_exact(
-    ray: &Ray,
-    pre: &WatertightRay,
-    sheared: ([f32; 3], [f32; 3], [f32; 3]),
-    edges: [f64; 3],
-    v: &[Vec3; 3],
-) -> Option<TriangleHit> {
-    finish_exact_at(Portable, ray, pre, sheared, edges, v)
+fn finish_exact(c: Candidate<'_>) -> Option<TriangleHit> {
+    finish_exact_at(plane_crossing, c)
 }
 
 /// The three edge functions `e0 = c_x·b_y − c_y·b_x`, `e1 = a_x·c_y − a_y·c_x`,
@@ -670,7 +667,7 @@ impl ShearedTest for Watertight {
 
     #[inline(always)]
     fn hit_sheared(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
-        self.hit_sheared_on(Portable, pre, ray, v)
+        self.hit_sheared_on(crate::simd_level::Portable, pre, ray, v)
     }
 
     #[inline(always)]
@@ -705,14 +702,16 @@ fn permuted_rows(lanes: &TriangleLanes, k: [usize; 3]) -> [[&[f32; LANES]; 3]; 3
 }
 
 /// The rest of [`Watertight`] for a triangle the `f32` filter did not reject: exact `f64`
-/// edge functions, then [`finish_exact_at`] at `level`. Most tested triangles never get here.
+/// edge functions, then [`finish_exact_at`] with `level`'s plane kernel. Most tested
+/// triangles never get here.
 ///
 /// Where the hit path is split differs by target (the same code, so the same answers):
 /// - **x86-64:** one call per candidate. The exact edge functions and their sign checks are
 ///   inlined into the caller (in the frontend, the AVX2 + FMA traversal), and the rest,
 ///   [`finish_exact_at`] with the common case of `t` ([`common_t`]) inlined, is one
-///   out-of-line function per level ([`finish_exact`] for [`Portable`]; at the AVX2 level one
-///   compiled for AVX2 and FMA, whose `f64` plane kernel inlines into it); [`hit_t`] is a
+///   out-of-line function per level ([`finish_exact`] for the portable level; at the AVX2
+///   level `avx2::finish_exact`, compiled for AVX2 and FMA, whose `f64` plane kernel inlines
+///   into it); [`hit_t`] is a
 ///   cold call from it for the other cases. One call measured faster than two (this
 ///   function and `hit_t` out of line) and than none (the traversal loop grows):
 ///   `docs/performance.md`.
@@ -727,8 +726,20 @@ fn exact_candidate<L: SimdLevel>(
     sheared: ([f32; 3], [f32; 3], [f32; 3]),
     v: &[Vec3; 3],
 ) -> Option<TriangleHit> {
-    let edges = exact_edges(sheared.0, sheared.1);
-    level.finish_exact(ray, pre, sheared, edges, v)
+    let c = Candidate {
+        ray,
+        pre,
+        v,
+        sheared,
+        edges: exact_edges(sheared.0, sheared.1),
+    };
+    #[cfg(target_arch = "x86_64")]
+    if let Some(token) = level.avx2() {
+        return avx2::finish_exact(token, c);
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = level;
+    finish_exact(c)
 }
 
 /// All three `f32` edge functions non-zero and finite skip the exact recomputation, so mixed

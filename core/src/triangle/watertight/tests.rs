@@ -451,27 +451,29 @@ fn the_common_case_gives_the_general_paths_bits() {
             continue;
         };
         let sheared = pre.project_triangle(ray.origin, &v);
-        let z = sheared.2;
         let edges = exact_edges(sheared.0, sheared.1);
         let mixed = edges.iter().any(|&e| e < 0.0) && edges.iter().any(|&e| e > 0.0);
         let det = edges[0] + edges[1] + edges[2];
         if mixed || det == 0.0 || !det.is_finite() {
             continue;
         }
-        let general = hit_t(
-            &ray,
-            pre.shear,
-            ray.direction[pre.k[2]],
+        let c = Candidate {
+            ray: &ray,
+            pre: &pre,
+            v: &v,
             sheared,
             edges,
-            det,
-            &v,
-        );
-        let portable = common_t(Portable, &ray, z, edges, det, &v);
-        if let Some(level) = crate::test_util::avx2_or_skip(
+        };
+        let general = hit_t(c, det);
+        let portable = common_t(plane_crossing, c, det);
+        if let Some(token) = crate::test_util::avx2_or_skip(
             "triangle::watertight::tests::the_common_case_gives_the_general_paths_bits",
         ) {
-            let avx2 = common_t(level, &ray, z, edges, det, &v);
+            let avx2 = common_t(
+                |v: &[Vec3; 3], r: &Ray| avx2::plane_crossing(token, v, r),
+                c,
+                det,
+            );
             assert_eq!(avx2.map(f64::to_bits), portable.map(f64::to_bits));
         }
         match portable {

@@ -1,0 +1,198 @@
+//! The AVX2 + FMA end of [`super::Watertight`]'s hit path: [`finish_exact`], the rest of the
+//! test for a candidate the `f32` filter kept, compiled for AVX2 and FMA, and its `f64` plane
+//! kernel ([`plane_crossing_avx2`]), which inlines into it. Both return the portable path's
+//! bits ([`super::finish_exact`], [`super::plane_crossing`]). The one `unsafe` block enters
+//! the compiled-for-AVX2 function on the proof the [`Avx2Fma`] token carries.
+
+use super::{Candidate, PlaneForm, TINY, finish_exact_at};
+use crate::ray::Ray;
+use crate::simd_level::Avx2Fma;
+use crate::triangle::{NORMAL_CANCEL_REL, TriangleHit};
+use glam::Vec3;
+
+/// [`finish_exact_at`] with the AVX2 plane kernel, for a caller holding the token (out of
+/// line, like the portable one: one call per candidate).
+#[inline(always)]
+pub(super) fn finish_exact(token: Avx2Fma, c: Candidate<'_>) -> Option<TriangleHit> {
+    let _ = token;
+    // SAFETY: the token exists, so the CPU supports AVX2 and FMA (the contract of
+    // `Avx2Fma::new_unchecked`), the only requirement of calling a function compiled for them.
+    unsafe { finish_exact_avx2(c) }
+}
+
+/// [`finish_exact`]'s body, compiled for AVX2 and FMA: the plane kernel, a closure defined
+/// here (so it has the same target features), inlines into it.
+#[target_feature(enable = "avx2,fma")]
+#[inline(never)]
+fn finish_exact_avx2(c: Candidate<'_>) -> Option<TriangleHit> {
+    finish_exact_at(|v: &[Vec3; 3], ray: &Ray| plane_crossing_avx2(v, ray), c)
+}
+
+/// [`super::plane_crossing`] in 256-bit registers: each 3-vector in the lanes `x, y, z` of
+/// one `f64` register (the fourth lane zero, never read back), the same IEEE operations in the
+/// same order as the portable definition — products, differences and dot products summed `(x + y) + z`, never fused; `min`, `max` as
+/// `a < b ? a : b`, `a > b ? a : b` (`minps`, `maxps`, `maxsd`), NaN handling included — so
+/// the same bits.
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+fn plane_crossing_avx2(v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {
+    use crate::float::{gamma, gamma_f64};
+    use crate::predicates::ORIENT3D_FILTER_REL;
+    use core::arch::x86_64::{
+        __m256d, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _mm_add_sd, _mm_cvtsd_f64, _mm_max_ps,
+        _mm_max_sd, _mm_min_ps, _mm_setr_ps, _mm_unpackhi_pd, _mm256_add_pd, _mm256_and_pd,
+        _mm256_andnot_pd, _mm256_castpd256_pd128, _mm256_cmp_pd, _mm256_cvtps_pd,
+        _mm256_extractf128_pd, _mm256_max_pd, _mm256_movemask_pd, _mm256_mul_pd,
+        _mm256_permute4x64_pd, _mm256_set1_pd, _mm256_setzero_pd, _mm256_sub_pd,
+    };
+    // Built lane by lane from the fields (no load spans two vertices, and no pointer cast).
+    let lanes = |p: Vec3| _mm_setr_ps(p.x, p.y, p.z, 0.0);
+    let (f0, f1, f2) = (lanes(v[0]), lanes(v[1]), lanes(v[2]));
+    let (o, d) = (
+        _mm256_cvtps_pd(lanes(ray.origin)),
+        _mm256_cvtps_pd(lanes(ray.direction)),
+    );
+    let (p0, p1, p2) = (
+        _mm256_cvtps_pd(f0),
+        _mm256_cvtps_pd(f1),
+        _mm256_cvtps_pd(f2),
+    );
+    // Lanes (y, z, x) and (z, x, y) of (x, y, z).
+    let yzx = |a: __m256d| _mm256_permute4x64_pd::<0b11_00_10_01>(a);
+    let zxy = |a: __m256d| _mm256_permute4x64_pd::<0b11_01_00_10>(a);
+    let sign = _mm256_set1_pd(-0.0);
+    let abs = |a: __m256d| _mm256_andnot_pd(sign, a);
+    let dot = |a: __m256d, b: __m256d| {
+        let m = _mm256_mul_pd(a, b);
+        let (xy, z) = (_mm256_castpd256_pd128(m), _mm256_extractf128_pd::<1>(m));
+        _mm_cvtsd_f64(_mm_add_sd(_mm_add_sd(xy, _mm_unpackhi_pd(xy, xy)), z))
+    };
+    // max(x, max(y, z)), as `DVec3::max_element`.
+    let max_element = |a: __m256d| {
+        let (xy, z) = (_mm256_castpd256_pd128(a), _mm256_extractf128_pd::<1>(a));
+        _mm_cvtsd_f64(_mm_max_sd(xy, _mm_max_sd(_mm_unpackhi_pd(xy, xy), z)))
+    };
+    // `normal_f64_from_v0`: the cross product, its scale, the cancellation check.
+    let (e1, e2) = (_mm256_sub_pd(p1, p0), _mm256_sub_pd(p2, p0));
+    let n = _mm256_sub_pd(
+        _mm256_mul_pd(yzx(e1), zxy(e2)),
+        _mm256_mul_pd(yzx(e2), zxy(e1)),
+    );
+    let (a1, a2) = (abs(e1), abs(e2));
+    let nn = _mm256_add_pd(
+        _mm256_mul_pd(yzx(a1), zxy(a2)),
+        _mm256_mul_pd(zxy(a1), yzx(a2)),
+    );
+    let cancels = _mm256_andnot_pd(
+        _mm256_cmp_pd::<_CMP_GT_OQ>(abs(n), _mm256_mul_pd(_mm256_set1_pd(NORMAL_CANCEL_REL), nn)),
+        _mm256_cmp_pd::<_CMP_GT_OQ>(nn, _mm256_setzero_pd()),
+    );
+    if _mm256_movemask_pd(cancels) & 7 != 0 {
+        return None;
+    }
+    // The filter of `d·n`.
+    let dn = dot(d, n);
+    let d_nn = dot(abs(d), nn);
+    if !(dn.abs() > ORIENT3D_FILTER_REL * d_nn) {
+        return None;
+    }
+    // `plane_form`.
+    let w = _mm256_sub_pd(p0, o);
+    let t = dot(w, n) / dn;
+    let err = gamma_f64(8) * (dot(abs(w), nn) + t.abs() * d_nn) / dn.abs();
+    let p = _mm256_add_pd(o, _mm256_mul_pd(d, _mm256_set1_pd(t)));
+    let lo = _mm256_cvtps_pd(_mm_min_ps(_mm_min_ps(f0, f1), f2));
+    let hi = _mm256_cvtps_pd(_mm_max_ps(_mm_max_ps(f0, f1), f2));
+    let slack = f64::from(gamma(8))
+        * (max_element(_mm256_max_pd(abs(lo), abs(hi))) + max_element(abs(p)))
+        + TINY;
+    let slack = _mm256_set1_pd(slack);
+    let inside = _mm256_and_pd(
+        _mm256_cmp_pd::<_CMP_GE_OQ>(p, _mm256_sub_pd(lo, slack)),
+        _mm256_cmp_pd::<_CMP_LE_OQ>(p, _mm256_add_pd(hi, slack)),
+    );
+    Some(PlaneForm {
+        t,
+        err,
+        in_box: _mm256_movemask_pd(inside) & 7 == 7,
+    })
+}
+
+/// [`plane_crossing_avx2`] for a caller holding the token (the tests').
+#[cfg(test)]
+pub(super) fn plane_crossing(token: Avx2Fma, v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {
+    let _ = token;
+    // SAFETY: as in `finish_exact`: the token proves AVX2 and FMA.
+    unsafe { plane_crossing_avx2(v, ray) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_util::{lcg, mixed_f32};
+
+    /// The AVX2 plane kernel against the portable definition
+    /// ([`super::super::plane_crossing`], scalar `glam` code), bit for bit (a NaN `t` or
+    /// bound matches any NaN: only its comparisons are used), on triangles from `1e-3` to
+    /// `1e3` at every distance, slivers, rays along the plane, and coordinates with NaN,
+    /// `±∞`, `±0` and subnormals mixed in. Every outcome must occur: a refused triangle
+    /// (cancelled normal or `d·n` within its filter), a crossing in the box and one outside.
+    #[test]
+    fn avx2_plane_crossing_equals_the_portable_one() {
+        let Some(token) = crate::test_util::avx2_or_skip(
+            "triangle::watertight::avx2::tests::avx2_plane_crossing_equals_the_portable_one",
+        ) else {
+            return;
+        };
+        let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+        let mut s = 29u64;
+        let (mut refused, mut inside, mut outside) = (0, 0, 0);
+        for i in 0..40_000 {
+            let scale = 10f32.powf(lcg(&mut s) * 6.0 - 3.0);
+            let c = |s: &mut u64| {
+                if i % 5 == 0 {
+                    mixed_f32(s, 0.1, 2.0) * scale
+                } else {
+                    (lcg(s) - 0.5) * scale
+                }
+            };
+            let centre = Vec3::new(c(&mut s), c(&mut s), c(&mut s)) * 100.0;
+            let mut v = [0; 3].map(|_| centre + Vec3::new(c(&mut s), c(&mut s), c(&mut s)));
+            if i % 7 == 0 {
+                v[2] = v[0] + (v[1] - v[0]) * lcg(&mut s);
+            }
+            let target =
+                v[0] + (v[1] - v[0]) * lcg(&mut s) * 0.5 + (v[2] - v[0]) * lcg(&mut s) * 0.5;
+            let origin = target + Vec3::new(c(&mut s), c(&mut s), c(&mut s)) * 50.0;
+            let mut direction = target - origin;
+            if i % 11 == 0 {
+                // Along the plane.
+                let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+                direction -= n * n.dot(direction);
+            }
+            let ray = Ray::new(origin, direction);
+            let want = super::super::plane_crossing(&v, &ray);
+            let got = plane_crossing(token, &v, &ray);
+            match (want, got) {
+                (None, None) => refused += 1,
+                (Some(w), Some(g)) => {
+                    assert!(
+                        same(w.t, g.t) && same(w.err, g.err),
+                        "{v:?} {ray:?}: {w:?} {g:?}"
+                    );
+                    assert_eq!(w.in_box, g.in_box, "{v:?} {ray:?}");
+                    if w.in_box {
+                        inside += 1;
+                    } else {
+                        outside += 1;
+                    }
+                }
+                _ => panic!("{v:?} {ray:?}: {want:?} against {got:?}"),
+            }
+        }
+        assert!(
+            refused > 100 && inside > 10_000 && outside > 100,
+            "{refused} refused, {inside} in the box, {outside} outside"
+        );
+    }
+}
