@@ -5,7 +5,7 @@ use crate::float::{diff_of_products_exact_sign, diff_of_products_sign_filter, ga
 use crate::predicates::ORIENT3D_FILTER_REL;
 use crate::ray::Ray;
 use crate::simd::F32x4;
-use crate::simd::level::{Sheared8, SimdLevel};
+use crate::simd::level::{Portable, Sheared8, SimdLevel};
 use glam::{DVec3, Vec3};
 
 #[cfg(target_arch = "x86_64")]
@@ -667,7 +667,7 @@ impl ShearedTest for Watertight {
 
     #[inline(always)]
     fn hit_sheared(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
-        self.hit_sheared_on(crate::simd_level::Portable, pre, ray, v)
+        self.hit_sheared_on(Portable, pre, ray, v)
     }
 
     #[inline(always)]
