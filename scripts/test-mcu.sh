@@ -39,23 +39,43 @@ rustup target add thumbv7em-none-eabihf thumbv7m-none-eabi >/dev/null 2>&1
 source scripts/mcu-baked.sh
 
 status=0
+# run_image MACHINE CPU IMAGE PREFIX [compare-before-stack]: boots IMAGE in qemu, takes its line
+# starting `PREFIX: MACHINE ` into $got and the host's into $want; fails (printing both) when
+# qemu fails, the line is missing or it differs from the host's (up to " stack ..." when asked).
+run_image() {
+    local machine=$1 cpu=$2 image=$3 prefix=$4 upto=${5:-}
+    local out rc=0
+    out=$(timeout 600 qemu-system-arm -machine "$machine" -cpu "$cpu" -nographic -monitor none \
+        -serial none -semihosting-config enable=on,target=native -kernel "$image" 2>&1) || rc=$?
+    got=$(grep "^$prefix: $machine " <<<"$out" || true)
+    want=$(grep "^$prefix: $machine " <<<"$host" || true)
+    local cmp=$got
+    [ -z "$upto" ] || cmp=${got% stack *}
+    if [ "$rc" -ne 0 ] || [ -z "$got" ] || [ -z "$want" ] || [ "$cmp" != "$want" ]; then
+        echo "test-mcu: $prefix on $machine differs from the host (qemu exit $rc)" >&2
+        echo "  target: ${got:-$out}" >&2
+        echo "  host:   $want" >&2
+        status=1
+        return 1
+    fi
+}
+# budget IMAGE: from IMAGE's .text and $got's "stack N ... traversal M", sets $text, $stack,
+# $traversal and $verdict (within or over the 8 KiB / 1 KiB budget).
+budget() {
+    text=$(readelf -S -W "$1" | sed -n 's/.* \.text *PROGBITS *[0-9a-f]* [0-9a-f]* \([0-9a-f]*\) .*/\1/p')
+    text=$((16#${text:-0}))
+    # got: ... stack BYTES traversal BYTES: the queries' own stack below their call, and the
+    # traversal stack the image hands them; both count against the 1 KiB.
+    stack=${got##* stack }
+    stack=${stack%% *}
+    traversal=${got##* traversal }
+    if [ "$text" -le 8192 ] && [ $((stack + traversal)) -le 1024 ]; then verdict="within"; else verdict="over"; fi
+}
 check() { # machine target cpu baked-source
     local machine=$1 target=$2 cpu=$3
     MCU_BAKED=$4 cargo build -q --release --manifest-path "$manifest" -p mcu-firmware --target "$target"
     local image=$images/$target/release/mcu-firmware
-    local out rc=0
-    out=$(timeout 600 qemu-system-arm -machine "$machine" -cpu "$cpu" -nographic -monitor none \
-        -serial none -semihosting-config enable=on,target=native -kernel "$image" 2>&1) || rc=$?
-    local got want
-    got=$(grep "^mcu: $machine " <<<"$out" || true)
-    want=$(grep "^mcu: $machine " <<<"$host" || true)
-    if [ "$rc" -ne 0 ] || [ -z "$got" ] || [ "$got" != "$want" ]; then
-        echo "test-mcu: $machine differs from the host (qemu exit $rc)" >&2
-        echo "  target: ${got:-$out}" >&2
-        echo "  host:   $want" >&2
-        status=1
-        return
-    fi
+    run_image "$machine" "$cpu" "$image" mcu || return 0
     # got: mcu: MACHINE QUERIES queries hash HEX hits N leaks N
     read -r _ _ queries _ _ hash _ hits _ leaks <<<"$got"
     echo "mcu: $queries queries bit-identical to host ($machine: $cpu, $target; hash $hash, $hits hits, $leaks leaks)"
@@ -74,28 +94,8 @@ query() { # machine target cpu baked-source held-to-budget
     MCU_BAKED=$4 cargo build -q --release --manifest-path "$manifest" -p mcu-firmware \
         --bin mcu-query --target "$target"
     local image=$images/$target/release/mcu-query
-    local out rc=0
-    out=$(timeout 600 qemu-system-arm -machine "$machine" -cpu "$cpu" -nographic -monitor none \
-        -serial none -semihosting-config enable=on,target=native -kernel "$image" 2>&1) || rc=$?
-    local got want
-    got=$(grep "^mcu-query: $machine " <<<"$out" || true)
-    want=$(grep "^mcu-query: $machine " <<<"$host" || true)
-    if [ "$rc" -ne 0 ] || [ -z "$got" ] || [ "${got% stack *}" != "$want" ]; then
-        echo "test-mcu: the $machine query image differs from the host (qemu exit $rc)" >&2
-        echo "  target: ${got:-$out}" >&2
-        echo "  host:   $want" >&2
-        status=1
-        return
-    fi
-    local text stack verdict
-    text=$(readelf -S -W "$image" | sed -n 's/.* \.text *PROGBITS *[0-9a-f]* [0-9a-f]* \([0-9a-f]*\) .*/\1/p')
-    text=$((16#${text:-0}))
-    # got: ... stack BYTES traversal BYTES: the queries' own stack below their call, and the
-    # traversal stack the image hands them; both count against the 1 KiB.
-    stack=${got##* stack }
-    stack=${stack%% *}
-    traversal=${got##* traversal }
-    if [ "$text" -le 8192 ] && [ $((stack + traversal)) -le 1024 ]; then verdict="within"; else verdict="over"; fi
+    run_image "$machine" "$cpu" "$image" mcu-query upto-stack || return 0
+    budget "$image"
     read -r _ _ queries _ _ hash _ <<<"$got"
     echo "mcu: query image .text $text bytes, stack $((stack + traversal)) bytes ($stack below the query call + $traversal of traversal stack; $machine: $cpu, $target; $queries queries bit-identical to host, hash $hash; $verdict the 8 KiB / 1 KiB budget)"
     if [ "$held" = budget ] && [ "$verdict" != within ]; then
@@ -141,26 +141,9 @@ mcu_c() {
     local lib=${CARGO_TARGET_DIR:-$PWD/ffi/target}/$target/release/libhalfray_ffi.a
     local image=$baked/mcu-c.elf
     make -s -C examples/mcu-c LIB="$lib" BAKED="$MCU_C_BAKED" RAYS="$MCU_C_RAYS" OUT="$image"
-    local out rc=0
-    out=$(timeout 600 qemu-system-arm -machine "$machine" -cpu "$cpu" -nographic -monitor none \
-        -serial none -semihosting-config enable=on,target=native -kernel "$image" 2>&1) || rc=$?
-    local got want
-    got=$(grep "^mcu-c: $machine " <<<"$out" || true)
-    want=$(grep "^mcu-c: $machine " <<<"$host" || true)
-    if [ "$rc" -ne 0 ] || [ -z "$got" ] || [ -z "$want" ] || [ "${got% stack *}" != "$want" ]; then
-        echo "test-mcu: the C firmware differs from the host (qemu exit $rc)" >&2
-        echo "  target: ${got:-$out}" >&2
-        echo "  host:   $want" >&2
-        status=1
-        return
-    fi
-    local text stack traversal verdict queries hash hits leaks
-    text=$(readelf -S -W "$image" | sed -n 's/.* \.text *PROGBITS *[0-9a-f]* [0-9a-f]* \([0-9a-f]*\) .*/\1/p')
-    text=$((16#${text:-0}))
-    stack=${got##* stack }
-    stack=${stack%% *}
-    traversal=${got##* traversal }
-    if [ "$text" -le 8192 ] && [ $((stack + traversal)) -le 1024 ]; then verdict="within"; else verdict="over"; fi
+    run_image "$machine" "$cpu" "$image" mcu-c upto-stack || return 0
+    budget "$image"
+    local queries hash hits leaks
     read -r _ _ queries _ _ hash _ hits _ leaks _ <<<"$got"
     echo "mcu-c: $queries queries bit-identical to host ($machine: $cpu, $target; hash $hash, $hits hits, $leaks leaks)"
     echo "mcu-c: query image .text $text bytes, stack $((stack + traversal)) bytes ($stack below the query call + $traversal of traversal stack; $machine: $cpu, $target; $queries queries bit-identical to host, hash $hash; $verdict the 8 KiB / 1 KiB budget)"

@@ -7,36 +7,16 @@ use halfray::bench::bvh::{BvhReport, SetFigures};
 use halfray::crosscheck::report::{Report, RunConfig, SetReport};
 use halfray::crosscheck::shard::Shard;
 use std::path::Path;
-use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_halfray");
+mod common;
 
 fn chart(kind: &str, input: &Path, output: &Path) -> std::process::Output {
-    Command::new(BIN)
-        .args(["chart", kind])
-        .arg(input)
-        .arg("-o")
-        .arg(output)
-        .output()
-        .unwrap()
+    common::halfray(&[&"chart", &kind, &input, &"-o", &output])
 }
 
 /// The trimmed text of every `<text>` element of an SVG file, after parsing it as XML.
 fn svg_texts(path: &Path) -> Vec<String> {
-    let text = std::fs::read_to_string(path).unwrap();
-    let doc = roxmltree::Document::parse(&text).expect("well-formed XML");
-    assert_eq!(doc.root_element().tag_name().name(), "svg");
-    doc.descendants()
-        .filter(|n| n.has_tag_name("text"))
-        .map(|n| {
-            n.descendants()
-                .filter(|t| t.is_text())
-                .filter_map(|t| t.text())
-                .collect::<String>()
-                .trim()
-                .to_string()
-        })
-        .collect()
+    common::svg::svg_texts(&std::fs::read(path).unwrap(), None)
 }
 
 fn assert_png(path: &Path) {
@@ -184,17 +164,22 @@ fn a_real_bench_bvh_run_is_charted() {
     let meshes = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/meshes");
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("bench.json");
-    let o = Command::new(BIN)
-        .args([
-            "bench",
-            "bvh",
-            &format!("{meshes}/torus.obj"),
-            &format!("{meshes}/tetrahedron.obj"),
-        ])
-        .args(["--width", "16", "--rays", "200", "--json"])
-        .arg(&json)
-        .output()
-        .unwrap();
+    let (torus, tetrahedron) = (
+        format!("{meshes}/torus.obj"),
+        format!("{meshes}/tetrahedron.obj"),
+    );
+    let o = common::halfray(&[
+        &"bench",
+        &"bvh",
+        &torus,
+        &tetrahedron,
+        &"--width",
+        &"16",
+        &"--rays",
+        &"200",
+        &"--json",
+        &json,
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let out = dir.path().join("corpus.svg");
     assert!(chart("corpus", &json, &out).status.success());
@@ -202,14 +187,7 @@ fn a_real_bench_bvh_run_is_charted() {
     for want in ["torus.obj", "tetrahedron.obj"] {
         assert!(texts.iter().any(|t| t == want), "{want}: {texts:?}");
     }
-    for set in [
-        "primary",
-        "primary-tiles",
-        "primary-stride",
-        "random",
-        "shadow",
-        "ao",
-    ] {
+    for set in halfray::raysets::named::RaySet::ALL.map(|s| s.name()) {
         assert!(
             texts
                 .iter()

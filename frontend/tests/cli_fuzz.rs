@@ -299,16 +299,22 @@ fn mutate(r: &mut Lcg, s: &str) -> String {
     s
 }
 
-#[test]
-fn mutated_scenes_through_render() {
+/// A temporary directory holding `tet.obj` (the scene's mesh), with the paths of the scene
+/// and of the image to write there.
+fn scene_dir() -> (tempfile::TempDir, std::path::PathBuf, std::path::PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(
         dir.path().join("tet.obj"),
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n",
     )
     .unwrap();
-    let scene = dir.path().join("scene.toml");
-    let out = dir.path().join("out.png");
+    let (scene, out) = (dir.path().join("scene.toml"), dir.path().join("out.png"));
+    (dir, scene, out)
+}
+
+#[test]
+fn mutated_scenes_through_render() {
+    let (dir, scene, out) = scene_dir();
     let (sc, o) = (scene.to_str().unwrap(), out.to_str().unwrap());
     // Control: the unmutated scene renders.
     let valid = valid_scene();
@@ -353,14 +359,7 @@ const HOSTILE: &[&str] = &[
 
 #[test]
 fn hostile_command_lines() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(
-        dir.path().join("tet.obj"),
-        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n",
-    )
-    .unwrap();
-    let scene = dir.path().join("scene.toml");
-    let out = dir.path().join("out.png");
+    let (dir, scene, out) = scene_dir();
     let (sc, o) = (scene.to_str().unwrap(), out.to_str().unwrap());
     let mut r = Lcg(0x0037_0037);
     let small = valid_scene().replace("max_depth = 4", "max_depth = 1");

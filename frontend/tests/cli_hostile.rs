@@ -37,6 +37,16 @@ fn run(args: &[&dyn AsRef<OsStr>]) -> Output {
 }
 
 /// Runs with stdout appended to `log` (as `>> log` does).
+/// The run failed with exit 1 and its error output says `needle`.
+fn assert_refused(o: &Output, needle: &str) {
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(o));
+    assert!(
+        stderr(o).contains(needle),
+        "want {needle:?} in: {}",
+        stderr(o)
+    );
+}
+
 fn run_appending(args: &[&dyn AsRef<OsStr>], log: &Path) -> Output {
     let out = std::fs::OpenOptions::new().append(true).open(log).unwrap();
     Command::new(BIN)
@@ -254,8 +264,7 @@ fn merge_sums_that_overflow_are_errors_naming_the_file() {
             ),
         )],
     );
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(stderr(&o).contains("one.jsonl"), "{}", stderr(&o));
+    assert_refused(&o, "one.jsonl");
     // Large but representable sums are kept exactly and judged.
     let o = merge(
         dir.path(),
@@ -550,12 +559,7 @@ fn repeat_products_that_overflow_are_refused() {
         "repeat = { count = [1, 1, 4294967296], step = [1, 0, 0] }\n",
     );
     let o = run(&[&"render", &scene, &"-o", &dir.path().join("o.png"), &"-q"]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("field `object[0].repeat.count`"),
-        "{}",
-        stderr(&o)
-    );
+    assert_refused(&o, "field `object[0].repeat.count`");
     assert_eq!(names(dir.path()), ["r.toml"]);
 }
 
@@ -633,32 +637,17 @@ fn errors_name_the_actual_problem_and_escape_what_they_quote() {
     // A device as a scene mesh: "not a regular file", not "not found".
     let scene = small_scene(dir.path(), "d.toml", "[mesh.n]\nfile = \"/dev/null\"\n");
     let o = run(&[&"render", &scene, &"-o", &png, &"-q"]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("is not a regular file"),
-        "{}",
-        stderr(&o)
-    );
+    assert_refused(&o, "is not a regular file");
     // A duplicate key is named.
     let dup = dir.path().join("dup.toml");
     std::fs::write(&dup, "max_depth = 2\nmax_depth = 3\n").unwrap();
     let o = run(&[&"render", &dup, &"-o", &png, &"-q"]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("dup.toml:2:1: duplicate key `max_depth`"),
-        "{}",
-        stderr(&o)
-    );
+    assert_refused(&o, "dup.toml:2:1: duplicate key `max_depth`");
     // A non-UTF-8 scene: the line and column of the bad byte.
     let bad = dir.path().join("bad.toml");
     std::fs::write(&bad, b"max_depth = 2\n# caf\xe9\n").unwrap();
     let o = run(&[&"render", &bad, &"-o", &png, &"-q"]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("bad.toml:2:6: byte 0xe9 is not UTF-8"),
-        "{}",
-        stderr(&o)
-    );
+    assert_refused(&o, "bad.toml:2:6: byte 0xe9 is not UTF-8");
     // A file name with terminal escapes and a line break: one `error:` line, no ESC byte.
     let evil = dir
         .path()
@@ -680,12 +669,8 @@ fn errors_name_the_actual_problem_and_escape_what_they_quote() {
     // A JSONL line with a bad count: the log line's own error, not a report's missing field.
     let line = result_line("a.obj", 0, 1, 0).replace("\"rays\":10", "\"rays\":-1");
     let o = merge(dir.path(), &[("p.jsonl", line + "\n")]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("p.jsonl:1:") && !stderr(&o).contains("threads"),
-        "{}",
-        stderr(&o)
-    );
+    assert_refused(&o, "p.jsonl:1:");
+    assert!(!stderr(&o).contains("threads"), "{}", stderr(&o));
 }
 
 /// Item 13: `gamma --match` never recommends a γ that `render --gamma` refuses; an extreme

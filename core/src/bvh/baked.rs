@@ -204,6 +204,13 @@ mod tests {
     use super::*;
 
     /// A buffer of the given counts: header, then zeros.
+    /// One triangle over three vertices in a one-node tree.
+    const ONE_TRIANGLE: BakedLayout = BakedLayout {
+        vertices: 3,
+        triangles: 1,
+        nodes: 1,
+    };
+
     fn buffer(l: BakedLayout) -> [u8; 256] {
         let mut b = [0u8; 256];
         b[..32].copy_from_slice(&l.header());
@@ -212,11 +219,7 @@ mod tests {
 
     #[test]
     fn the_header_reads_back_and_the_arrays_follow_the_table() {
-        let l = BakedLayout {
-            vertices: 3,
-            triangles: 1,
-            nodes: 1,
-        };
+        let l = ONE_TRIANGLE;
         let b = buffer(l);
         // The table: magic, version 1, V, T, K, zero, then 32-byte nodes, 12-byte positions,
         // 12-byte triangles, 4-byte indices.
@@ -234,11 +237,7 @@ mod tests {
 
     #[test]
     fn short_foreign_and_future_buffers_are_refused() {
-        let l = BakedLayout {
-            vertices: 3,
-            triangles: 1,
-            nodes: 1,
-        };
+        let l = ONE_TRIANGLE;
         let b = buffer(l);
         assert_eq!(
             BakedLayout::read(&b[..115]),

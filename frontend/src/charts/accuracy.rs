@@ -100,7 +100,6 @@ impl Chart for AccuracyChart {
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-        root.fill(&WHITE)?;
         let x_max = self.points.iter().map(|p| p.ns_per_ray).fold(0.0, f64::max) * 1.2;
         let y_max = self
             .points

@@ -77,15 +77,10 @@ impl CorpusChart {
 }
 
 impl Chart for CorpusChart {
-    fn size(&self) -> (u32, u32) {
-        ((160 + 90 * self.meshes.len() as u32).max(900), 640)
-    }
-
     fn draw<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-        root.fill(&WHITE)?;
         let n = self.meshes.len();
         let y_max = self
             .sets
@@ -143,6 +138,10 @@ impl Chart for CorpusChart {
             )?;
         }
         super::draw_legend(&mut chart, SeriesLabelPosition::LowerRight)
+    }
+
+    fn size(&self) -> (u32, u32) {
+        ((160 + 90 * self.meshes.len() as u32).max(900), 640)
     }
 }
 

@@ -87,15 +87,10 @@ impl DisagreementChart {
 }
 
 impl Chart for DisagreementChart {
-    fn size(&self) -> (u32, u32) {
-        ((160 + 110 * self.meshes.len() as u32).max(900), 640)
-    }
-
     fn draw<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-        root.fill(&WHITE)?;
         let n = self.meshes.len();
         let top = self.counts.iter().flatten().fold(10usize, |a, &b| a.max(b)) as f64 * 10.0;
         let total: usize = self.rays.iter().sum();
@@ -143,6 +138,10 @@ impl Chart for DisagreementChart {
                 });
         }
         super::draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
+    }
+
+    fn size(&self) -> (u32, u32) {
+        ((160 + 110 * self.meshes.len() as u32).max(900), 640)
     }
 }
 

@@ -236,6 +236,11 @@ fn category_label(names: &[String], v: f64) -> String {
     }
 }
 
+/// The integration tests' SVG reader, shared with the unit tests below.
+#[cfg(test)]
+#[path = "../../tests/common/svg.rs"]
+mod svg;
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -243,23 +248,7 @@ pub(crate) mod tests {
     /// The text of every `<text>` element of an SVG, after checking it parses as XML with an
     /// `<svg>` root of the stated size.
     pub(crate) fn svg_texts(bytes: &[u8], size: (u32, u32)) -> Vec<String> {
-        let text = std::str::from_utf8(bytes).expect("UTF-8");
-        let doc = roxmltree::Document::parse(text).expect("well-formed XML");
-        let root = doc.root_element();
-        assert_eq!(root.tag_name().name(), "svg");
-        assert_eq!(root.attribute("width"), Some(size.0.to_string().as_str()));
-        assert_eq!(root.attribute("height"), Some(size.1.to_string().as_str()));
-        doc.descendants()
-            .filter(|n| n.has_tag_name("text"))
-            .map(|n| {
-                n.descendants()
-                    .filter(|t| t.is_text())
-                    .filter_map(|t| t.text())
-                    .collect::<String>()
-                    .trim()
-                    .to_string()
-            })
-            .collect()
+        super::svg::svg_texts(bytes, Some(size))
     }
 
     /// Decodes a PNG, checks its size, and counts its pixels of `colour`.

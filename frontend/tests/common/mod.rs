@@ -2,6 +2,8 @@
 //! of this module and uses only part of it, hence the `dead_code` allowance.
 #![allow(dead_code)]
 
+pub mod svg;
+
 use halfray::scene::{Scene, parse};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
