@@ -314,7 +314,7 @@ fn scene_dir() -> (tempfile::TempDir, std::path::PathBuf, std::path::PathBuf) {
 
 #[test]
 fn mutated_scenes_through_render() {
-    let (dir, scene, out) = scene_dir();
+    let (_dir, scene, out) = scene_dir();
     let (sc, o) = (scene.to_str().unwrap(), out.to_str().unwrap());
     // Control: the unmutated scene renders.
     let valid = valid_scene();
