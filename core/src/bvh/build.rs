@@ -166,30 +166,11 @@ impl NodeView<'_> {
     }
 }
 
-/// Where the top of a split build leaves subtrees (see [`super::jobs`]): a child task of at
-/// most `job_size` primitives (and more than a leaf's) becomes a job while there is room.
-pub(super) struct JobSink<'a> {
-    pub(super) jobs: &'a mut [super::jobs::BuildJob],
-    pub(super) len: usize,
-    pub(super) job_size: u32,
-}
-
-impl JobSink<'_> {
-    /// Takes `task` as a job (true) or leaves it to the caller (false).
-    fn take(&mut self, task: &Task, max_leaf: u32) -> bool {
-        let n = task.end - task.start;
-        if n <= max_leaf || n > self.job_size {
-            return false;
-        }
-        match self.jobs.get_mut(self.len) {
-            Some(slot) => {
-                *slot = super::jobs::BuildJob::new(*task);
-                self.len += 1;
-                true
-            }
-            None => false,
-        }
-    }
+/// Where the top of a split build leaves subtrees ([`super::jobs`] implements it): `take`
+/// keeps a child task for later (true; its node then holds only its box) or leaves it to the
+/// split loop (false).
+pub(super) trait TaskSink {
+    fn take(&mut self, task: &Task, max_leaf: u32) -> bool;
 }
 
 /// What the validating pass finds of a build's usable primitives: the root's contents.
@@ -327,7 +308,7 @@ pub(super) fn build_top<R: Refs>(
     nodes: &mut [BvhNode],
     root: &Usable,
     options: &BuildOptions,
-    jobs: Option<&mut JobSink<'_>>,
+    jobs: Option<&mut dyn TaskSink>,
     work: &mut BuildWorkspace,
 ) -> u32 {
     let mut node_count = 1u32;
@@ -369,7 +350,7 @@ pub(super) fn grow<R: Refs>(
     task: Task,
     next: &mut u32,
     options: &BuildOptions,
-    mut jobs: Option<&mut JobSink<'_>>,
+    mut jobs: Option<&mut dyn TaskSink>,
     work: &mut BuildWorkspace,
 ) {
     let max_leaf = options.max_leaf_size.max(1);

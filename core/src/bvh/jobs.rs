@@ -12,20 +12,10 @@
 //! tree needs no more than [`super::node_capacity`] nodes, as the plain build.
 
 use super::build::{
-    BuildWorkspace, EMPTY_TASK, JobSink, NodeView, Task, build_top, fill_indices, grow,
+    BuildWorkspace, EMPTY_TASK, NodeView, Task, TaskSink, build_top, fill_indices, grow,
     prepare_scratch,
 };
 use super::scratch::Scratch;
-
-impl BuildJob {
-    /// A job for `task`, not yet placed.
-    pub(super) fn new(task: Task) -> Self {
-        Self {
-            task,
-            ..Self::EMPTY
-        }
-    }
-}
 use super::{BuildOptions, Bvh, BvhError, BvhNode, PrimRef, PrimitiveSource};
 
 /// One subtree of a split build: its task, its node reservation and, once built, the nodes it
@@ -58,9 +48,44 @@ impl BuildJob {
     }
 }
 
+impl BuildJob {
+    /// A job for `task`, not yet placed.
+    fn new(task: Task) -> Self {
+        Self {
+            task,
+            ..Self::EMPTY
+        }
+    }
+}
+
 impl Default for BuildJob {
     fn default() -> Self {
         Self::EMPTY
+    }
+}
+
+/// Where the top of a split build leaves subtrees: a child task of at most `job_size`
+/// primitives (and more than a leaf's) becomes a job while there is room.
+struct JobSink<'a> {
+    jobs: &'a mut [BuildJob],
+    len: usize,
+    job_size: u32,
+}
+
+impl TaskSink for JobSink<'_> {
+    fn take(&mut self, task: &Task, max_leaf: u32) -> bool {
+        let n = task.end - task.start;
+        if n <= max_leaf || n > self.job_size {
+            return false;
+        }
+        match self.jobs.get_mut(self.len) {
+            Some(slot) => {
+                *slot = BuildJob::new(*task);
+                self.len += 1;
+                true
+            }
+            None => false,
+        }
     }
 }
 
