@@ -131,6 +131,15 @@ pub const fn scratch_capacity(prim_count: usize) -> usize {
 pub(super) trait Refs {
     fn get(&self, k: usize) -> (Corner, Corner);
     fn swap(&mut self, i: usize, j: usize);
+
+    /// `f(lo, hi)` on the box of every element of `range`, in order.
+    #[inline(always)]
+    fn for_each(&self, range: core::ops::Range<usize>, mut f: impl FnMut(Corner, Corner)) {
+        for k in range {
+            let (lo, hi) = self.get(k);
+            f(lo, hi);
+        }
+    }
 }
 
 /// The source read through the index array (no scratch).
@@ -168,6 +177,26 @@ impl Refs for Scratch<'_> {
         k.checked_sub(self.offset)
             .and_then(|k| self.refs.get(k))
             .map_or((Corner::NAN, Corner::NAN), PrimRef::corners)
+    }
+
+    /// The records of `range` as one slice (an element outside the records: `NaN` corners, as
+    /// [`Refs::get`]).
+    #[inline(always)]
+    fn for_each(&self, range: core::ops::Range<usize>, mut f: impl FnMut(Corner, Corner)) {
+        let (start, end) = (
+            range.start.wrapping_sub(self.offset),
+            range.end.wrapping_sub(self.offset),
+        );
+        match self.refs.get(start..end) {
+            Some(run) => run.iter().for_each(|r| {
+                let (lo, hi) = r.corners();
+                f(lo, hi);
+            }),
+            None => range.for_each(|k| {
+                let (lo, hi) = self.get(k);
+                f(lo, hi);
+            }),
+        }
     }
 
     #[inline(always)]

@@ -268,8 +268,8 @@ fn a_caller_stack_too_small_is_refused_not_cut_short() {
     let mut tris = Triangles::new(&mesh, &Watertight);
     let mut refused = 0;
     for ray in rays(&mesh, 3) {
-        // Short of the tree's depth: the right answer or a refusal, never a wrong answer.
-        let mut short = vec![StackEntry::EMPTY; bvh.stack_depth() / 2];
+        // A third of the tree's depth: the right answer or a refusal, never a wrong answer.
+        let mut short = vec![StackEntry::EMPTY; bvh.stack_depth() / 3];
         let ctx = &mut Query::new().stack(&mut short[..]);
         match bvh.closest_hit(&ray, &mut tris, ctx) {
             Ok(found) => assert_eq!(found, brute_watertight(&mesh, &ray), "{ray:?}"),
