@@ -82,9 +82,8 @@ fn main() {
                 })
                 .expect("collapse")
             });
-            bytes = (wide.nodes().len() * size_of::<WideNode<8>>()
-                + wide.groups().len() * size_of::<LeafGroup>()) as f64
-                / n.max(1) as f64;
+            bytes =
+                (size_of_val(wide.nodes()) + size_of_val(wide.groups())) as f64 / n.max(1) as f64;
         }
         println!(
             "{path}: {n} triangles, {bytes:.1} B/tri, binary SAH cost {sah:.3}; wall ms: binary {:.1}, collapse {:.1}, total {:.1}; CPU ms: binary {:.1}, collapse {:.1}, total {:.1}",
