@@ -12,8 +12,6 @@ use cortex_m_semihosting::hprintln;
 use halfray_core::Vec3;
 use halfray_core::bvh::{BvhNode, TriangleMesh, node_capacity};
 use halfray_core::halfedge::{EdgeRec, FaceRec, VertexRec, build_scratch_len};
-use halfray_core::prelude::*;
-use halfray_core::query::{Query, Triangles};
 use mcu_check::{
     CheckError, Config, Fnv, HalfedgeStorage, RayStorage, Summary, baked_checks, edge_count,
     halfedge_checks, ray_checks, triangle_count, vertex_count,
@@ -150,6 +148,8 @@ mod bench {
     use cortex_m::peripheral::SYST;
     use cortex_m::peripheral::syst::SystClkSource;
     use halfray_core::bvh::{Bvh, TriangleMesh};
+    use halfray_core::prelude::*;
+    use halfray_core::query::{Query, Triangles};
     use halfray_core::triangle::{
         Cramer, F64Reference, MollerTrumbore, TriangleIntersector, Watertight, WatertightF32,
         WatertightF32Exact,
