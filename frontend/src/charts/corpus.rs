@@ -2,7 +2,7 @@
 //! over Embree robust's (filled circle) and over Embree default's (hollow circle); the line at
 //! 1 is parity. The legend gives each set's geometric mean over the corpus.
 
-use super::{Chart, FAMILY, PALETTE, category_label, read_json};
+use super::{Chart, FAMILY, PALETTE, draw_category_axes, read_json};
 use crate::bench::bvh::BvhReport;
 use crate::bench::bvh::summary::{SetSummary, mesh_name, set_names, summarize};
 use crate::error::{Error, Location, Result};
@@ -97,16 +97,11 @@ impl Chart for CorpusChart {
             .x_label_area_size(40)
             .y_label_area_size(64)
             .build_cartesian_2d(-0.5..n as f64 - 0.5, 0.0..y_max)?;
-        let names = self.meshes.clone();
-        chart
-            .configure_mesh()
-            .x_labels(n)
-            .x_label_formatter(&move |v| category_label(&names, *v))
-            .disable_x_mesh()
-            .y_desc("throughput ratio, one thread, same rays")
-            .label_style((FAMILY, 13))
-            .axis_desc_style((FAMILY, 15))
-            .draw()?;
+        draw_category_axes(
+            &mut chart,
+            &self.meshes,
+            "throughput ratio, one thread, same rays",
+        )?;
         chart.draw_series(LineSeries::new(
             [(-0.5, 1.0), (n as f64 - 0.5, 1.0)],
             BLACK.stroke_width(1),

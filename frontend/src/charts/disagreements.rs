@@ -2,7 +2,7 @@
 //! disagreement with Embree (bars, log scale), summed over the run's ray sets. Agreement is
 //! left out (it is the rest of the rays; the caption gives the totals).
 
-use super::{Chart, FAMILY, PALETTE, category_label, read_json};
+use super::{Chart, FAMILY, PALETTE, draw_category_axes, read_json};
 use crate::crosscheck::report::{Report, SetReport};
 use crate::error::{Error, Location, Result};
 use plotters::coord::Shift;
@@ -106,16 +106,11 @@ impl Chart for DisagreementChart {
             .x_label_area_size(40)
             .y_label_area_size(64)
             .build_cartesian_2d(-0.5..n as f64 - 0.5, (COUNT_FLOOR..top).log_scale())?;
-        let names = self.meshes.clone();
-        chart
-            .configure_mesh()
-            .x_labels(n)
-            .x_label_formatter(&move |v| category_label(&names, *v))
-            .disable_x_mesh()
-            .y_desc("rays (log scale; classes with none are not drawn)")
-            .label_style((FAMILY, 13))
-            .axis_desc_style((FAMILY, 15))
-            .draw()?;
+        draw_category_axes(
+            &mut chart,
+            &self.meshes,
+            "rays (log scale; classes with none are not drawn)",
+        )?;
         let width = 0.8 / CLASSES.len() as f64;
         for (c, (name, _)) in CLASSES.iter().enumerate() {
             let colour = PALETTE[c % PALETTE.len()];

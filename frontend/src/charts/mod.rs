@@ -19,6 +19,8 @@ use crate::error::{Error, Location, Result};
 use crate::outputs::{Named, OutputFile, reserve_outputs};
 use image::ImageEncoder;
 use plotters::coord::Shift;
+use plotters::coord::ranged1d::{Ranged, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -141,6 +143,30 @@ fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>
         .label_font((FAMILY, 13))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
+        .draw()
+}
+
+/// Draws the axes of a chart with one category per `names` entry along x (at the integers
+/// 0..n, labelled by [`category_label`], no vertical grid lines) and `y_desc` along y, in the
+/// same fonts on every chart.
+fn draw_category_axes<'a, DB, Y>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
+    names: &[String],
+    y_desc: &str,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>>
+where
+    DB: DrawingBackend + 'a,
+    Y: Ranged + ValueFormatter<<Y as Ranged>::ValueType>,
+{
+    let names = names.to_vec();
+    chart
+        .configure_mesh()
+        .x_labels(names.len())
+        .x_label_formatter(&move |v| category_label(&names, *v))
+        .disable_x_mesh()
+        .y_desc(y_desc)
+        .label_style((FAMILY, 13))
+        .axis_desc_style((FAMILY, 15))
         .draw()
 }
 
