@@ -1,5 +1,5 @@
 //! Ray batches against single rays: the 8-wide BVH over each mesh, the same rays traced by
-//! [`RayQuery::closest_hit`] one by one (in the set's order) and by [`RayBatch::closest_hits`]
+//! [`RayQuery::closest_hit`] one by one (in the set's order) and by [`RayQuery::closest_hits`]
 //! (reordered in chunks), both on the same SIMD level and the same kept stack. Prints each
 //! set's Mrays/s and the ratio batch/single; every answer is checked equal.
 //!

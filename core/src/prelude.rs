@@ -1,4 +1,4 @@
 //! The traits a query needs in scope: `use halfray_core::prelude::*;`.
 
-pub use crate::query::{LeafTest, RayBatch, RayQuery};
+pub use crate::query::{LeafTest, RayQuery};
 pub use crate::triangle::TriangleIntersector;

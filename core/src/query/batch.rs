@@ -1,8 +1,6 @@
-//! Ray batches: [`RayBatch::closest_hits`] and [`RayBatch::any_hits`] answer a slice of rays
-//! into a caller's output slice, for every structure that implements [`RayQuery`].
-//!
-//! Each chunk of [`BATCH_CHUNK`] consecutive rays is walked in a coherent order — by
-//! direction octant, then the Morton code of the origin's cell within the chunk's origin
+//! The default walk of ray batches ([`super::RayQuery::closest_hits`] and
+//! [`super::RayQuery::any_hits`], for the structures without a packet walk): each chunk of
+//! [`BATCH_CHUNK`] consecutive rays is walked in a coherent order — by direction octant, then the Morton code of the origin's cell within the chunk's origin
 //! bounds, then the Morton code of the direction's cell — and each answer is written at its
 //! ray's own index. Every ray is walked alone, by the structure's single-ray query with the
 //! caller's context, so each answer **is** the single-ray answer: closest hits bit for bit,
@@ -33,10 +31,8 @@
 //! assert!(out[1].is_none());
 //! ```
 
-use super::{LeafTest, Query, RayQuery, Stack};
 use crate::bvh::BvhError;
 use crate::ray::Ray;
-use crate::simd_level::SimdLevel;
 use glam::Vec3;
 
 /// Rays reordered together: a batch is cut into chunks of this many consecutive rays, each
@@ -46,67 +42,28 @@ pub const BATCH_CHUNK: usize = 256;
 /// Cells per axis of the origin and direction grids of the sort key (4 bits per axis).
 const CELLS: u32 = 16;
 
-/// Batch queries over any [`RayQuery`] structure (blanket implementation; bring it in with
-/// `use halfray_core::prelude::*`). See the module docs for the order and the contract.
-pub trait RayBatch: RayQuery {
-    /// Writes [`RayQuery::closest_hit`] of `rays[i]` into `out[i]`, for every `i`, through
-    /// `leaf` and the context `ctx` (its stack reused, its statistics added to). Pass a
-    /// [`super::QueryStack`] in the context (`Query::new().stack(&mut stack)`) to avoid
-    /// writing a fresh stack per ray. An empty batch is `Ok` and writes nothing.
-    ///
-    /// Inlined whole (sort and walk), so that a caller compiled for a SIMD level's target
-    /// features (as the single-ray queries are) gets the walk compiled for them too.
-    ///
-    /// # Errors
-    ///
-    /// Nothing written, no ray walked: [`BvhError::LengthMismatch`] when `out` does not have
-    /// `rays.len()` entries. (A caller stack too small for one ray is that ray's answer,
-    /// `Err(StackTooSmall)`, in `out`, as for the single-ray query.)
-    #[inline(always)]
-    fn closest_hits<T: LeafTest, L: SimdLevel, S: Stack>(
-        &self,
-        rays: &[Ray],
-        leaf: &mut T,
-        ctx: &mut Query<'_, L, S>,
-        out: &mut [S::Out<(u32, T::Hit)>],
-    ) -> Result<(), BvhError> {
-        in_coherent_order(rays, out, |ray| self.closest_hit(ray, leaf, ctx))
-    }
-
-    /// Writes [`RayQuery::any_hit`] of `rays[i]` into `out[i]`, for every `i` (as
-    /// [`RayBatch::closest_hits`]); each answer is the one the single-ray walk finds.
-    ///
-    /// # Errors
-    ///
-    /// As [`RayBatch::closest_hits`]: [`BvhError::LengthMismatch`], nothing written.
-    #[inline(always)]
-    fn any_hits<T: LeafTest, L: SimdLevel, S: Stack>(
-        &self,
-        rays: &[Ray],
-        leaf: &mut T,
-        ctx: &mut Query<'_, L, S>,
-        out: &mut [S::Out<(u32, T::Hit)>],
-    ) -> Result<(), BvhError> {
-        in_coherent_order(rays, out, |ray| self.any_hit(ray, leaf, ctx))
+/// `Ok` when a batch of `rays` rays has `out` answers, else [`BvhError::LengthMismatch`].
+#[inline(always)]
+pub(crate) fn same_length(rays: usize, out: usize) -> Result<(), BvhError> {
+    if out == rays {
+        Ok(())
+    } else {
+        Err(BvhError::LengthMismatch {
+            expected: rays,
+            found: out,
+        })
     }
 }
-
-impl<Q: RayQuery + ?Sized> RayBatch for Q {}
 
 /// Calls `answer` on every ray, chunk by chunk in [`chunk_order`], writing `out[i]` for
 /// `rays[i]`. [`BvhError::LengthMismatch`] (nothing written) when the lengths differ.
 #[inline(always)]
-fn in_coherent_order<O>(
+pub(super) fn in_coherent_order<O>(
     rays: &[Ray],
     out: &mut [O],
     mut answer: impl FnMut(&Ray) -> O,
 ) -> Result<(), BvhError> {
-    if out.len() != rays.len() {
-        return Err(BvhError::LengthMismatch {
-            expected: rays.len(),
-            found: out.len(),
-        });
-    }
+    same_length(rays.len(), out.len())?;
     let mut keys = [0u64; BATCH_CHUNK];
     for (chunk, out) in rays.chunks(BATCH_CHUNK).zip(out.chunks_mut(BATCH_CHUNK)) {
         for &key in chunk_order(chunk, &mut keys) {

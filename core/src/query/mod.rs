@@ -38,6 +38,7 @@
 //! reported once.
 
 mod batch;
+pub(crate) use batch::same_length;
 mod context;
 mod leaf;
 mod stats;
@@ -45,7 +46,7 @@ mod stats;
 #[cfg(test)]
 mod tests;
 
-pub use batch::{BATCH_CHUNK, RayBatch};
+pub use batch::BATCH_CHUNK;
 pub use context::{OwnStack, QUERY_STACK_SIZE, Query, QueryStack, Stack, StackEntry};
 pub use leaf::{LeafTest, Triangles};
 pub use stats::TraversalStats;
@@ -84,6 +85,47 @@ pub trait RayQuery {
         leaf: &mut T,
         ctx: &mut Query<'_, L, S>,
     ) -> S::Out<(u32, T::Hit)>;
+
+    /// Writes [`RayQuery::closest_hit`] of `rays[i]` into `out[i]`, for every `i`, through
+    /// `leaf` and the context `ctx` (its stack reused, its statistics added to): each answer
+    /// is the single-ray answer, bit for bit. Pass a [`QueryStack`] in the context
+    /// (`Query::new().stack(&mut stack)`) to avoid a fresh stack per ray. An empty batch is
+    /// `Ok` and writes nothing. The wide trees walk coherent rays in packets (see
+    /// [`crate::bvh::wide`]); the other structures walk each ray alone, in a coherent order
+    /// chunk by chunk ([`BATCH_CHUNK`]).
+    ///
+    /// # Errors
+    ///
+    /// Nothing written, no ray walked: [`BvhError::LengthMismatch`] when `out` does not have
+    /// `rays.len()` entries. (A caller stack too small for one ray is that ray's answer,
+    /// `Err(StackTooSmall)`, in `out`, as for the single-ray query.)
+    #[inline(always)]
+    fn closest_hits<T: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        rays: &[Ray],
+        leaf: &mut T,
+        ctx: &mut Query<'_, L, S>,
+        out: &mut [S::Out<(u32, T::Hit)>],
+    ) -> Result<(), BvhError> {
+        batch::in_coherent_order(rays, out, |ray| self.closest_hit(ray, leaf, ctx))
+    }
+
+    /// Writes [`RayQuery::any_hit`] of `rays[i]` into `out[i]`, for every `i` (as
+    /// [`RayQuery::closest_hits`]); each answer is the one the single-ray walk finds.
+    ///
+    /// # Errors
+    ///
+    /// As [`RayQuery::closest_hits`]: [`BvhError::LengthMismatch`], nothing written.
+    #[inline(always)]
+    fn any_hits<T: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        rays: &[Ray],
+        leaf: &mut T,
+        ctx: &mut Query<'_, L, S>,
+        out: &mut [S::Out<(u32, T::Hit)>],
+    ) -> Result<(), BvhError> {
+        batch::in_coherent_order(rays, out, |ray| self.any_hit(ray, leaf, ctx))
+    }
 
     /// Calls `found(prim)` once for every primitive whose bounds in `source` (the source the
     /// structure was built over or last refitted to; the wide trees read their own copies)

@@ -58,6 +58,7 @@
 mod collapse;
 mod node;
 mod node_test;
+mod packet;
 mod query;
 mod refit;
 mod traverse;

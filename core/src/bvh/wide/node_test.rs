@@ -11,7 +11,7 @@ use crate::simd::level::{SimdLevel, Slab8};
 /// one, `≈ 2.9e-39`) is `≈ 3.4028221e38`, whose fold rounds below `f32::MAX` (tested); an
 /// infinite `inv` (a zero component) stays infinite.
 #[inline(always)]
-fn far_reciprocal(inv: f32) -> f32 {
+pub(super) fn far_reciprocal(inv: f32) -> f32 {
     inv * SLAB_FAR_SCALE
 }
 

@@ -13,12 +13,12 @@ use crate::triangle::{LANES, pair_mask};
 
 /// Stack entries of the traversal: [`super::stack_size`] of the widest supported tree
 /// (`W = 8`), which bounds every narrower one (module docs of [`super`]).
-const STACK: usize = crate::query::QUERY_STACK_SIZE;
+pub(super) const STACK: usize = crate::query::QUERY_STACK_SIZE;
 
 /// The groups holding leaf slots `start .. start + count` (`count ≥ 1`); an empty slice for
 /// a run out of range.
 #[inline(always)]
-fn leaf_groups(groups: &[LeafGroup], start: u32, count: u32) -> &[LeafGroup] {
+pub(super) fn leaf_groups(groups: &[LeafGroup], start: u32, count: u32) -> &[LeafGroup] {
     let (first, end) = (start as usize, start as usize + count as usize);
     groups
         .get(first / LANES..end.div_ceil(LANES))
@@ -61,7 +61,11 @@ impl RunLanes {
 /// soon. Only addresses are computed, without a bounds check or a decode: a hint never
 /// faults, so an address past the end is harmless.
 #[inline(always)]
-fn prefetch_child<const W: usize>(nodes: &[WideNode<W>], groups: &[LeafGroup], child: u32) {
+pub(super) fn prefetch_child<const W: usize>(
+    nodes: &[WideNode<W>],
+    groups: &[LeafGroup],
+    child: u32,
+) {
     if child & LEAF_BIT == 0 {
         simd::lines(nodes.as_ptr().wrapping_add(child as usize));
     } else {
@@ -74,7 +78,11 @@ fn prefetch_child<const W: usize>(nodes: &[WideNode<W>], groups: &[LeafGroup], c
 /// `level`'s eight-lane sort for `W = 8` when it has one, otherwise sorted here (the same
 /// result: the keys of hit lanes are distinct).
 #[inline(always)]
-fn sorted_keys<const W: usize, L: SimdLevel>(level: L, dist: &[f32; W], hits: u32) -> [u32; W] {
+pub(super) fn sorted_keys<const W: usize, L: SimdLevel>(
+    level: L,
+    dist: &[f32; W],
+    hits: u32,
+) -> [u32; W] {
     const { assert!(W <= 8, "slots must fit the keys' three low bits") };
     if let Ok(d8) = <&[f32; 8]>::try_from(&dist[..])
         && let Some(k) = level.sort_keys8(d8, hits)
@@ -109,6 +117,18 @@ where
         ctx: &mut Query<'_, L, S>,
     ) -> S::Out<(u32, LT::Hit)> {
         S::answer(self.leaf_query::<LT, true, L, S>(ray, leaf, ctx))
+    }
+
+    /// Coherent rays in packets ([`super::packet`]), the others alone: the same answers.
+    #[inline(always)]
+    fn closest_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        rays: &[Ray],
+        leaf: &mut LT,
+        ctx: &mut Query<'_, L, S>,
+        out: &mut [S::Out<(u32, LT::Hit)>],
+    ) -> Result<(), BvhError> {
+        self.closest_hits_in_packets(rays, leaf, ctx, out)
     }
 
     fn query_box<P: crate::bvh::PrimitiveSource + ?Sized>(

@@ -1,0 +1,506 @@
+//! Packet traversal of a wide tree: the closest hits of up to [`PACKET`] coherent rays walked
+//! down the tree together, one node test per node for the whole packet.
+//!
+//! A packet is the rays, of [`PACKET`] consecutive rays of a batch, whose directions lie in
+//! the first ray's octant and within [`COHERENT_COS`] of its direction, whose origins lie
+//! within [`COHERENT_ORIGIN`] of its origin, with finite reciprocals and `t_min ≥ 0` (the
+//! common path of the single-ray node test) — when they are at least three quarters of the
+//! chunk. The other rays are walked alone by the single-ray query.
+//!
+//! * **Inner nodes** are tested once for the packet with interval arithmetic: over the
+//!   packet's ranges of padded origins and reciprocals, the smallest entry and the largest
+//!   exit distance any of its rays can have, computed with the very roundings of the single-ray
+//!   test ([`super::node_test`]) at the range ends. IEEE subtraction and multiplication are
+//!   monotone in each operand, so each bound holds for every ray's own rounded distance: a
+//!   child any ray of the packet would enter is entered by the packet.
+//! * **Leaves** are tested ray by ray: each ray's own node test of the leaf's box (the same
+//!   operations as the single-ray walk) picks the rays that test its triangles, with the
+//!   single-ray leaf test (lane culls, then each triangle).
+//!
+//! Each ray's answer equals its single-ray answer bit for bit: a ray tests every leaf its
+//! single walk would need to find its closest hit (its leaf-box test and every packet test
+//! above it admit it), and the closest hit with the tie rule does not depend on the order
+//! the leaves are tested in (module docs of [`crate::query`]). The statistics count a packet's
+//! node tests once and each ray's triangle tests.
+//!
+//! Allocation-free: the packet's rays, answers and stack live in the call's frame
+//! ([`STACK`] entries of 16 bytes).
+
+use super::node::{ChildRef, LeafGroup, WideNode};
+use super::node_test::far_reciprocal;
+use super::traverse::{RunLanes, STACK, leaf_groups, prefetch_child, sorted_keys};
+use super::{WideBvh, add_stats};
+use crate::aabb::SlabRay;
+use crate::bvh::padded_ray::PaddedRay;
+use crate::bvh::{BvhError, cull_bound, projection_pad, take_if_better};
+use crate::query::{LeafTest, Query, RayQuery, Stack, TraversalStats, same_length};
+use crate::ray::Ray;
+use crate::simd;
+use crate::simd::level::SimdLevel;
+use crate::triangle::{LANES, pair_mask};
+
+/// Rays per packet (at most 32: a packet's rays are the bits of a `u32`).
+pub(super) const PACKET: usize = 16;
+
+/// A ray joins its packet when the cosine of the angle between its direction and the first
+/// ray's is at least this (about 2.5°): beyond, the interval bounds of the node test admit so
+/// many nodes that single rays are faster. Only speed depends on it, never an answer.
+pub(super) const COHERENT_COS: f32 = 0.999_05;
+
+/// A ray joins its packet when its origin lies within this share of the tree's extent
+/// ([`crate::tolerance::BVH_PROJECTION_PAD`]'s `extent`) of the first ray's, per axis (a
+/// camera's rays share one origin): beyond, the packet's interval of origins admits nodes
+/// none of its rays enters. Only speed depends on it, never an answer.
+pub(super) const COHERENT_ORIGIN: f32 = 1.0 / 256.0;
+
+/// The packet's rays side by side, lane `r` for ray `r`, as the node test wants them
+/// ([`PaddedRay`]); lanes not in the packet have `t_min = +∞` and `bound = −∞`, which no box
+/// test admits.
+struct Lanes {
+    origin_near: [[f32; PACKET]; 3],
+    origin_far: [[f32; PACKET]; 3],
+    inv: [[f32; PACKET]; 3],
+    inv_far: [[f32; PACKET]; 3],
+    t_min: [f32; PACKET],
+    /// [`cull_bound`] of the ray's current `t_max`, capped at `f32::MAX` (the single-ray
+    /// node test's interval end).
+    bound: [f32; PACKET],
+}
+
+impl Lanes {
+    const EMPTY: Self = Self {
+        origin_near: [[0.0; PACKET]; 3],
+        origin_far: [[0.0; PACKET]; 3],
+        inv: [[0.0; PACKET]; 3],
+        inv_far: [[0.0; PACKET]; 3],
+        t_min: [f32::INFINITY; PACKET],
+        bound: [f32::NEG_INFINITY; PACKET],
+    };
+
+    /// The rays of `bits` that enter slot `slot` of `node` within their own intervals: the
+    /// single-ray node test of that box ([`PaddedRay::hit_children`]), ray by ray, `near` the
+    /// packet's near corners.
+    // Lane loops are indexed: the form the compiler turns into vector instructions.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn entering<const W: usize>(&self, node: &WideNode<W>, slot: usize, near: [usize; 3]) -> u32 {
+        let slot = slot & (W - 1);
+        let mut t_enter = self.t_min;
+        let mut t_exit = self.bound;
+        for axis in 0..3 {
+            let n = near[axis] & 1;
+            let lo = node.bounds[n][axis][slot];
+            let hi = node.bounds[1 - n][axis][slot];
+            let (on, of) = (&self.origin_near[axis], &self.origin_far[axis]);
+            let (inv, inv_far) = (&self.inv[axis], &self.inv_far[axis]);
+            for r in 0..PACKET {
+                let t_near = (lo - on[r]) * inv[r];
+                let t_far = (hi - of[r]) * inv_far[r];
+                t_enter[r] = if t_near > t_enter[r] {
+                    t_near
+                } else {
+                    t_enter[r]
+                };
+                t_exit[r] = if t_far < t_exit[r] { t_far } else { t_exit[r] };
+            }
+        }
+        simd::mask_le(&t_enter, &t_exit)
+    }
+
+    /// Copies the first ray of `bits` (not empty) into every lane not in `bits`, whose
+    /// `t_min = +∞` and `bound = −∞` still admit no box: the packet's ranges are then plain
+    /// minima and maxima over all lanes.
+    #[inline(always)]
+    fn fill_idle(&mut self, bits: u32) {
+        let k = bits.trailing_zeros() as usize % PACKET;
+        for v in [
+            &mut self.origin_near,
+            &mut self.origin_far,
+            &mut self.inv,
+            &mut self.inv_far,
+        ] {
+            for axis in v.iter_mut() {
+                let x = axis[k];
+                for (i, lane) in axis.iter_mut().enumerate() {
+                    if bits >> i & 1 == 0 {
+                        *lane = x;
+                    }
+                }
+            }
+        }
+    }
+
+    /// The largest interval end of the packet (`−∞` when no ray is left).
+    #[inline(always)]
+    fn max_bound(&self) -> f32 {
+        self.bound.iter().fold(f32::NEG_INFINITY, |m, &b| m.max(b))
+    }
+}
+
+/// The packet's rays as one: per axis, the ends of the ranges of its padded origins and
+/// reciprocals that give the smallest entry and the largest exit distance.
+struct Interval {
+    /// The near corner per axis (the octant's).
+    near: [usize; 3],
+    /// Per axis, the origin giving the smallest entry: the largest near origin for a
+    /// positive direction (the entry falls with the origin), the smallest for a negative one.
+    origin_near: [f32; 3],
+    /// Per axis, the origin giving the largest exit.
+    origin_far: [f32; 3],
+    /// Per axis, the smallest and largest reciprocal.
+    inv: [[f32; 2]; 3],
+    /// Per axis, the smallest and largest far reciprocal.
+    inv_far: [[f32; 2]; 3],
+    /// The smallest `t_min`.
+    t_min: f32,
+}
+
+impl Interval {
+    /// The interval of the rays of `lanes` (its idle lanes filled, [`Lanes::fill_idle`]), all
+    /// with directions of the octant `near`.
+    #[inline(always)]
+    fn new(lanes: &Lanes, near: [usize; 3]) -> Self {
+        let range = |v: &[f32; PACKET]| {
+            v.iter().fold([f32::INFINITY, f32::NEG_INFINITY], |r, &x| {
+                [r[0].min(x), r[1].max(x)]
+            })
+        };
+        let mut out = Self {
+            near,
+            origin_near: [0.0; 3],
+            origin_far: [0.0; 3],
+            inv: [[0.0; 2]; 3],
+            inv_far: [[0.0; 2]; 3],
+            t_min: range(&lanes.t_min)[0],
+        };
+        for axis in 0..3 {
+            // `near[axis]` is 1 for a negative direction: the distances then fall as the
+            // difference `plane − origin` grows.
+            let negative = near[axis] == 1;
+            let (on, of) = (
+                range(&lanes.origin_near[axis]),
+                range(&lanes.origin_far[axis]),
+            );
+            out.origin_near[axis] = if negative { on[0] } else { on[1] };
+            out.origin_far[axis] = if negative { of[1] } else { of[0] };
+            out.inv[axis] = range(&lanes.inv[axis]);
+            out.inv_far[axis] = range(&lanes.inv_far[axis]);
+        }
+        out
+    }
+
+    /// Entry-distance bounds of every child of `node` and the mask of the children some ray
+    /// of the packet may enter over `[t_min, bound]` (see the module docs): each entry bound
+    /// is at most every ray's entry distance, each exit bound at least every ray's exit.
+    // Lane loops are indexed: the form the compiler turns into vector instructions.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn hit_children<const W: usize>(&self, node: &WideNode<W>, bound: f32) -> ([f32; W], u32) {
+        let mut t_enter = [self.t_min; W];
+        let mut t_exit = [bound; W];
+        for axis in 0..3 {
+            let n = self.near[axis] & 1;
+            let lo = &node.bounds[n][axis];
+            let hi = &node.bounds[1 - n][axis];
+            let (on, of) = (self.origin_near[axis], self.origin_far[axis]);
+            let [i0, i1] = self.inv[axis];
+            let [f0, f1] = self.inv_far[axis];
+            for i in 0..W {
+                // The difference is at its extreme for the chosen origin; the product of a
+                // fixed difference is monotone in the reciprocal, so its extremes are at the
+                // range's ends. Finite reciprocals and finite or infinite bounds: no NaN.
+                let d = lo[i] - on;
+                let (a, b) = (d * i0, d * i1);
+                let t_near = if a < b { a } else { b };
+                let e = hi[i] - of;
+                let (a, b) = (e * f0, e * f1);
+                let t_far = if a > b { a } else { b };
+                t_enter[i] = if t_near > t_enter[i] {
+                    t_near
+                } else {
+                    t_enter[i]
+                };
+                t_exit[i] = if t_far < t_exit[i] { t_far } else { t_exit[i] };
+            }
+        }
+        (t_enter, simd::mask_le(&t_enter, &t_exit))
+    }
+}
+
+/// A stacked child: its reference, its parent node and slot (for a leaf's box) and the
+/// packet's entry bound.
+#[derive(Clone, Copy)]
+struct Entry {
+    child: u32,
+    parent: u32,
+    slot: u32,
+    t_enter: f32,
+}
+
+impl Entry {
+    const ROOT: Self = Self {
+        child: 0,
+        parent: 0,
+        slot: 0,
+        t_enter: 0.0,
+    };
+}
+
+/// One ray of a packet: its interval as the walk shrinks it, its best hit so far and its
+/// leaf test's setup (made at its first leaf; `Some(None)`: refused, it hits nothing).
+struct RayState<P, H> {
+    cur: Ray,
+    best: Option<(u32, H)>,
+    pre: Option<Option<P>>,
+}
+
+impl<const W: usize, N, T> WideBvh<W, N, T>
+where
+    N: AsRef<[WideNode<W>]>,
+    T: AsRef<[LeafGroup]>,
+{
+    /// [`RayQuery::closest_hits`] of the wide trees: [`PACKET`] rays at a time, the coherent
+    /// ones walked as a packet, the others alone; on a caller stack shorter than [`STACK`],
+    /// every ray alone (so that each gets the single-ray answer, an error included).
+    #[inline(always)]
+    pub(super) fn closest_hits_in_packets<LT: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        rays: &[Ray],
+        leaf: &mut LT,
+        ctx: &mut Query<'_, L, S>,
+        out: &mut [S::Out<(u32, LT::Hit)>],
+    ) -> Result<(), BvhError> {
+        same_length(rays.len(), out.len())?;
+        let short = ctx.stack.entries().is_some_and(|e| e.len() < STACK);
+        let mut stack = [Entry::ROOT; STACK];
+        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+            let alone = if short {
+                u32::MAX
+            } else {
+                let stats = ctx.stats.as_deref_mut();
+                self.packet_closest(ctx.level, rays, leaf, (&mut stack, stats), |i, found| {
+                    if let Some(o) = out.get_mut(i) {
+                        *o = S::answer(Ok(found));
+                    }
+                })
+            };
+            for (i, (ray, o)) in rays.iter().zip(out.iter_mut()).enumerate() {
+                if alone >> i & 1 == 1 {
+                    *o = RayQuery::closest_hit(self, ray, leaf, ctx);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Walks the coherent rays of `rays` (at most [`PACKET`]) as one packet, passing each
+    /// one's closest hit to `found(index, answer)` (invalid rays: `None` at once); returns the
+    /// rays left to the single-ray walk (bit `i` for `rays[i]`). `stack` is the walk's, reused
+    /// from packet to packet.
+    #[inline(always)]
+    fn packet_closest<LT: LeafTest, L: SimdLevel>(
+        &self,
+        level: L,
+        rays: &[Ray],
+        leaf: &mut LT,
+        (stack, stats): (&mut [Entry; STACK], Option<&mut TraversalStats>),
+        mut found: impl FnMut(usize, Option<(u32, LT::Hit)>),
+    ) -> u32 {
+        let rays = rays.get(..PACKET).unwrap_or(rays);
+        let (nodes, groups) = (self.nodes(), self.groups());
+        let Some(reference) = rays.first() else {
+            return 0;
+        };
+        // The packet is the rays like the first one (module docs); the others walk alone.
+        let (o0, d0) = (reference.origin, reference.direction);
+        let near = [d0.x, d0.y, d0.z].map(|c| usize::from(c.is_sign_negative()));
+        let cone = COHERENT_COS * COHERENT_COS * d0.length_squared();
+        let near_origin = COHERENT_ORIGIN * self.extent;
+        let mut lanes = Lanes::EMPTY;
+        let (mut packet, mut alone) = (0u32, 0u32);
+        for (i, ray) in rays.iter().enumerate() {
+            let Some(slab) = SlabRay::new(ray).filter(|_| !nodes.is_empty()) else {
+                // An invalid ray, or an empty tree: no hit, as for the single-ray walk.
+                found(i, None);
+                continue;
+            };
+            let d = ray.direction;
+            let dot = d.dot(d0);
+            let joins = !slab.divide
+                & (ray.t_min >= 0.0)
+                & slab.inv_dir.is_finite()
+                & (slab.negative.map(usize::from) == near)
+                & ((ray.origin - o0).abs().max_element() <= near_origin)
+                & (dot > 0.0)
+                & (dot * dot >= cone * d.length_squared());
+            if !joins {
+                alone |= 1 << i;
+                continue;
+            }
+            let w = PaddedRay::new(&slab, projection_pad(slab.origin, self.extent));
+            for axis in 0..3 {
+                lanes.origin_near[axis][i] = w.origin_near[axis];
+                lanes.origin_far[axis][i] = w.origin_far[axis];
+                lanes.inv[axis][i] = w.inv_dir[axis];
+                lanes.inv_far[axis][i] = far_reciprocal(w.inv_dir[axis]);
+            }
+            lanes.t_min[i] = ray.t_min;
+            lanes.bound[i] = cull_bound(ray.t_max).min(f32::MAX);
+            packet |= 1 << i;
+        }
+        if packet.count_ones() * 4 < rays.len() as u32 * 3 || packet.count_ones() < 2 {
+            // Too few alike: a packet would walk nodes for few rays.
+            return alone | packet;
+        }
+        lanes.fill_idle(packet);
+        let interval = Interval::new(&lanes, near);
+
+        let mut states: [RayState<LT::Prepared, LT::Hit>; PACKET] =
+            core::array::from_fn(|i| RayState {
+                cur: rays
+                    .get(i)
+                    .copied()
+                    .unwrap_or(Ray::new(glam::Vec3::ZERO, glam::Vec3::X)),
+                best: None,
+                pre: None,
+            });
+        let mut local = TraversalStats::default();
+        let mut sp = 0usize;
+        let mut next = Entry::ROOT;
+        let mut bound = lanes.max_bound();
+        'walk: loop {
+            match ChildRef::decode(next.child) {
+                ChildRef::Inner(index) => {
+                    if let Some(node) = nodes.get(index as usize) {
+                        local.nodes_visited += 1;
+                        let (dist, mask) = interval.hit_children(node, bound);
+                        let entry = |slot: usize| Entry {
+                            child: node.child[slot & (W - 1)],
+                            parent: index,
+                            slot: slot as u32,
+                            t_enter: dist[slot & (W - 1)],
+                        };
+                        if mask != 0 && mask & (mask - 1) == 0 {
+                            next = entry(mask.trailing_zeros() as usize);
+                            continue 'walk;
+                        }
+                        if mask != 0 {
+                            let keys = sorted_keys(level, &dist, mask);
+                            let count = mask.count_ones() as usize;
+                            for &k in keys.get(1..count).unwrap_or(&[]).iter().rev() {
+                                let e = entry((k & 7) as usize);
+                                if let Some(s) = stack.get_mut(sp) {
+                                    *s = e;
+                                    sp += 1;
+                                }
+                                prefetch_child(nodes, groups, e.child);
+                            }
+                            next = entry((keys[0] & 7) as usize);
+                            continue 'walk;
+                        }
+                    }
+                }
+                ChildRef::Leaf { start, count } => {
+                    if let Some(parent) = nodes.get(next.parent as usize) {
+                        let mut todo = lanes.entering(parent, next.slot as usize, near) & packet;
+                        while todo != 0 {
+                            let r = todo.trailing_zeros() as usize;
+                            todo &= todo - 1;
+                            let (Some(ray), Some(state)) = (rays.get(r), states.get_mut(r)) else {
+                                break;
+                            };
+                            let Some(pre) =
+                                state.pre.get_or_insert_with(|| leaf.prepare_valid(ray))
+                            else {
+                                // Refused by the leaf test: no hit, as for the single-ray walk.
+                                lanes.t_min[r] = f32::INFINITY;
+                                lanes.bound[r] = f32::NEG_INFINITY;
+                                continue;
+                            };
+                            local.primitives_tested += u64::from(count);
+                            if closest_in_leaf(
+                                level,
+                                leaf,
+                                pre,
+                                leaf_groups(groups, start, count),
+                                RunLanes::new(start, count),
+                                (&mut state.cur, &mut state.best),
+                            ) {
+                                lanes.bound[r] = cull_bound(state.cur.t_max).min(f32::MAX);
+                            }
+                        }
+                        bound = lanes.max_bound();
+                    }
+                }
+                ChildRef::Empty => {}
+            }
+            // The next entry some ray may still need.
+            loop {
+                let Some(top) = sp.checked_sub(1) else {
+                    break 'walk;
+                };
+                sp = top;
+                if let Some(e) = stack.get(sp)
+                    && e.t_enter <= bound
+                {
+                    next = *e;
+                    break;
+                }
+            }
+        }
+        add_stats(stats, &local);
+        for (i, state) in states.iter_mut().enumerate() {
+            if packet >> i & 1 == 1 {
+                found(i, state.best.take());
+            }
+        }
+        alone
+    }
+}
+
+/// The single-ray leaf test of one ray over the triangle groups `run` of a leaf (`lanes` its
+/// slots): the lanes the test certainly misses skipped, the others tested in leaf order, each
+/// hit offered to the search ([`take_if_better`], which shrinks `cur.t_max`). Returns `true`
+/// when a hit was taken.
+#[inline(always)]
+fn closest_in_leaf<LT: LeafTest, L: SimdLevel>(
+    level: L,
+    leaf: &mut LT,
+    pre: &LT::Prepared,
+    mut run: &[LeafGroup],
+    mut lanes: RunLanes,
+    (cur, best): (&mut Ray, &mut Option<(u32, LT::Hit)>),
+) -> bool {
+    let mut taken = false;
+    while let Some((first, tail)) = run.split_first() {
+        let (pair, mut todo) = match tail.split_first() {
+            Some((second, after)) => {
+                run = after;
+                let run_lanes = pair_mask(lanes.next_group(), lanes.next_group());
+                let missed = leaf.certain_misses2(level, pre, cur, &first.lanes, &second.lanes);
+                ([first, second], run_lanes & !missed)
+            }
+            None => {
+                run = tail;
+                let missed = leaf.certain_misses(pre, cur, &first.lanes);
+                ([first, first], lanes.next_group() & !missed)
+            }
+        };
+        while todo != 0 {
+            let bit = todo.trailing_zeros() as usize;
+            todo &= todo - 1;
+            let group = pair[(bit / LANES) & 1];
+            let Some(tri) = group.triangle(bit & (LANES - 1)) else {
+                break;
+            };
+            let prim = tri.prim;
+            if let Some((t, h)) = leaf.intersect_triangle(level, pre, prim, &tri.vertices(), cur) {
+                taken |= take_if_better(cur, best, prim, t, h);
+            }
+        }
+    }
+    taken
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,271 @@
+//! The packet walk against the single-ray walk (bit for bit, at every SIMD level the CPU has)
+//! and against a brute-force loop over all triangles, and the packet node test against every
+//! ray's own node test.
+
+use super::*;
+use crate::aabb::Aabb;
+use crate::bvh::wide::{Bvh4, Bvh8, binary_options, group_capacity};
+use crate::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+use crate::query::{QueryStack, TraversalStats, Triangles};
+use crate::simd::level::Portable;
+use crate::test_util::{Lcg, brute_watertight, lcg_soup};
+use crate::triangle::{TriangleHit, Watertight};
+use glam::Vec3;
+use std::vec;
+use std::vec::Vec;
+
+type Answer = Option<(u32, TriangleHit)>;
+
+/// The bits of an answer: equal bits, not only equal values.
+fn bits(a: Answer) -> Option<(u32, [u32; 3])> {
+    a.map(|(p, h)| (p, [h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()]))
+}
+
+/// A pinhole camera's rays (`w × h`, one origin, a field of `fov` radians across) in
+/// scanline order, then in 4×4 tiles, then an orthographic camera's (parallel rays, one
+/// origin per pixel, `t_max` finite), then the pinhole's again with every 5th ray replaced by
+/// an odd one: another octant, an invalid ray, a zero direction component, `t_min < 0`, a
+/// short `t_max`, a tiny direction.
+fn camera_rays(eye: Vec3, (w, h): (usize, usize), fov: f32) -> Vec<Ray> {
+    let pixel = |x: usize, y: usize| {
+        let s = |i: usize, n: usize| (i as f32 / n as f32 - 0.5) * fov * n as f32 / w as f32;
+        Ray::new(eye, Vec3::new(s(x, w), s(y, h), 1.0) * 12.0)
+    };
+    let mut out: Vec<Ray> = (0..w * h).map(|k| pixel(k % w, k / w)).collect();
+    for ty in 0..h / 4 {
+        for tx in 0..w / 4 {
+            for k in 0..16 {
+                out.push(pixel(tx * 4 + k % 4, ty * 4 + k / 4));
+            }
+        }
+    }
+    for k in 0..w * h {
+        let o = Vec3::new(
+            (k % w) as f32 * 0.25 - 5.0,
+            (k / w) as f32 * 0.25 - 4.0,
+            -20.0,
+        );
+        let mut r = Ray::new(o, Vec3::new(0.01, -0.02, 1.0));
+        r.t_max = 24.0;
+        out.push(r);
+    }
+    let mut odd: Vec<Ray> = (0..w * h).map(|k| pixel(k % w, k / w)).collect();
+    for (k, r) in odd.iter_mut().enumerate().skip(3).step_by(5) {
+        *r = match k % 6 {
+            0 => Ray::new(r.origin, -r.direction),
+            1 => Ray::new(Vec3::splat(f32::NAN), Vec3::X),
+            2 => Ray::new(r.origin, Vec3::new(0.0, r.direction.y, r.direction.z)),
+            3 => Ray { t_min: -2.0, ..*r },
+            4 => Ray { t_max: 10.0, ..*r },
+            _ => Ray::new(r.origin, r.direction * 1e-3),
+        };
+    }
+    out.extend(odd);
+    out
+}
+
+/// The batch of `q` at `level` against its single-ray queries at that level and the
+/// brute-force loop; returns the hits.
+fn batch_equals_single<L: SimdLevel, Q: RayQuery>(
+    level: L,
+    name: &str,
+    q: &Q,
+    mesh: &TriangleMesh<'_>,
+    rays: &[Ray],
+) -> usize {
+    let mut tris = Triangles::new(mesh, &Watertight);
+    let mut stack = QueryStack::new();
+    let mut batch: Vec<Answer> = vec![None; rays.len()];
+    let (mut packed, mut alone) = (TraversalStats::default(), TraversalStats::default());
+    let mut ctx = Query::new().on(level).stack(&mut stack).stats(&mut packed);
+    q.closest_hits(rays, &mut tris, &mut ctx, &mut batch)
+        .unwrap();
+    let mut hits = 0;
+    for (i, ray) in rays.iter().enumerate() {
+        let single = q.closest_hit(
+            ray,
+            &mut tris,
+            &mut Query::new().on(level).stats(&mut alone),
+        );
+        assert_eq!(bits(batch[i]), bits(single), "{name}: ray {i} {ray:?}");
+        assert_eq!(
+            batch[i],
+            brute_watertight(mesh, ray),
+            "{name}: brute, ray {i}"
+        );
+        hits += usize::from(single.is_some());
+    }
+    // The packets ran: they test nodes once for many rays.
+    assert!(
+        packed.nodes_visited < alone.nodes_visited,
+        "{name}: {packed:?} in packets, {alone:?} alone"
+    );
+    hits
+}
+
+type VecWide<const W: usize> = WideBvh<W, Vec<WideNode<W>>, Vec<LeafGroup>>;
+
+fn wide<const W: usize>(mesh: &TriangleMesh<'_>, leaf: u32) -> VecWide<W> {
+    let n = mesh.len();
+    let options = BuildOptions {
+        max_leaf_size: leaf,
+        ..binary_options(BuildOptions::default())
+    };
+    let binary = Bvh::build(
+        mesh,
+        vec![BvhNode::EMPTY; node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        &options,
+    )
+    .unwrap();
+    let nodes = vec![WideNode::EMPTY; crate::bvh::wide::node_capacity(n)];
+    WideBvh::from_binary(
+        &binary,
+        mesh,
+        nodes,
+        vec![LeafGroup::EMPTY; group_capacity(n)],
+    )
+    .unwrap()
+}
+
+#[test]
+fn packets_equal_single_rays_at_every_level() {
+    let (pos, tri) = lcg_soup(1500, 21, 4.0, 1.0);
+    let mesh = TriangleMesh::new(&pos, &tri);
+    // 0.14° between neighbouring pixels: a 16-pixel row stays within the packet's cone.
+    let rays = camera_rays(Vec3::new(0.5, 0.2, -8.0), (160, 40), 0.4);
+    for leaf in [1, 4] {
+        let bvh8: Bvh8<_, _> = wide::<8>(&mesh, leaf);
+        let bvh4: Bvh4<_, _> = wide::<4>(&mesh, leaf);
+        let hits = batch_equals_single(Portable, "bvh8", &bvh8, &mesh, &rays);
+        assert!(hits > rays.len() / 4, "only {hits} hits");
+        batch_equals_single(Portable, "bvh4", &bvh4, &mesh, &rays);
+        #[cfg(target_arch = "x86_64")]
+        if let Some(level) = crate::test_util::avx2_or_skip(
+            "bvh::wide::packet::tests::packets_equal_single_rays_at_every_level",
+        ) {
+            batch_equals_single(level, "bvh8 avx2", &bvh8, &mesh, &rays);
+            batch_equals_single(level, "bvh4 avx2", &bvh4, &mesh, &rays);
+        }
+    }
+}
+
+/// Coplanar, touching triangles (a grid of squares split in two, with a duplicate of every
+/// tenth triangle): rays through shared edges and vertices and equal `t` for several
+/// triangles, where the tie rule decides.
+#[test]
+fn packets_keep_the_tie_rule_on_shared_edges() {
+    let mut pos = Vec::new();
+    let mut tri = Vec::new();
+    let n = 24u32;
+    for y in 0..=n {
+        for x in 0..=n {
+            pos.push(Vec3::new(x as f32 - 12.0, y as f32 - 12.0, 3.0));
+        }
+    }
+    for y in 0..n {
+        for x in 0..n {
+            let v = y * (n + 1) + x;
+            tri.push([v, v + 1, v + n + 2]);
+            tri.push([v, v + n + 2, v + n + 1]);
+            if (x + y) % 10 == 0 {
+                tri.push([v + n + 2, v, v + 1]);
+            }
+        }
+    }
+    let mesh = TriangleMesh::new(&pos, &tri);
+    // The eye straight over a vertex, 200 units away; pixels half a grid unit apart at the
+    // plane (0.14° between neighbours): every ray through a vertex or an edge.
+    let eye = Vec3::new(0.0, 0.0, -197.0);
+    let rays: Vec<Ray> = (0..32 * 32)
+        .map(|k| {
+            let p = Vec3::new(
+                (k % 32) as f32 * 0.5 - 8.0,
+                (k / 32) as f32 * 0.5 - 8.0,
+                3.0,
+            );
+            Ray::new(eye, p - eye)
+        })
+        .collect();
+    let bvh8 = wide::<8>(&mesh, 4);
+    let hits = batch_equals_single(Portable, "grid", &bvh8, &mesh, &rays);
+    assert_eq!(hits, rays.len(), "a closed grid under every ray");
+}
+
+/// The packet node test admits every child any ray of the packet enters, with an entry
+/// bound at most that ray's own entry distance: random packets (shared and spread origins,
+/// every octant) against random boxes, each ray's own node test
+/// ([`PaddedRay::hit_children`]) the oracle.
+#[test]
+fn the_packet_node_test_bounds_every_rays_own() {
+    let mut rng = Lcg(77);
+    let mut admitted = 0;
+    for round in 0..3000 {
+        let octant = Vec3::new(
+            if round & 1 == 0 { 1.0 } else { -1.0 },
+            if round & 2 == 0 { 1.0 } else { -1.0 },
+            if round & 4 == 0 { 1.0 } else { -1.0 },
+        );
+        let base = (rng.v(2.0).abs() + Vec3::splat(0.05)) * octant;
+        let eye = rng.v(20.0);
+        let spread = [0.0, 0.01, 0.2][round % 3];
+        let mut lanes = Lanes::EMPTY;
+        let mut rays = Vec::new();
+        for i in 0..PACKET {
+            let d = (base + rng.v(spread)).abs().max(Vec3::splat(1e-3)) * octant;
+            let o = if round % 5 == 0 {
+                eye + rng.v(1.0)
+            } else {
+                eye
+            };
+            let mut ray = Ray::new(o, d);
+            ray.t_min = [0.0, rng.f()][i % 2];
+            ray.t_max = [f32::INFINITY, 5.0 + 40.0 * rng.f()][(i / 2) % 2];
+            let slab = SlabRay::new(&ray).unwrap();
+            let w = PaddedRay::new(&slab, 1e-3);
+            for axis in 0..3 {
+                lanes.origin_near[axis][i] = w.origin_near[axis];
+                lanes.origin_far[axis][i] = w.origin_far[axis];
+                lanes.inv[axis][i] = w.inv_dir[axis];
+                lanes.inv_far[axis][i] = far_reciprocal(w.inv_dir[axis]);
+            }
+            lanes.t_min[i] = ray.t_min;
+            lanes.bound[i] = cull_bound(ray.t_max).min(f32::MAX);
+            rays.push((ray, w));
+        }
+        let near = [octant.x, octant.y, octant.z].map(|s| usize::from(s < 0.0));
+        let interval = Interval::new(&lanes, near);
+        let mut node = WideNode::<8>::EMPTY;
+        for slot in 0..7 {
+            // Along the packet (most entered by some rays), or anywhere near it.
+            let c = eye + base * (rng.f() * 20.0) + rng.v(if slot < 5 { 3.0 } else { 40.0 });
+            let h = rng.v(3.0).abs();
+            node.set_child(slot, &Aabb::new(c - h, c + h), slot as u32);
+        }
+        let (dist, mask) = interval.hit_children(&node, lanes.max_bound());
+        for (i, (ray, w)) in rays.iter().enumerate() {
+            let (own, own_mask) =
+                w.hit_children::<8, false, _>(Portable, &node, ray.t_min, lanes.bound[i]);
+            assert_eq!(own_mask & !mask, 0, "round {round}, ray {i}: a child lost");
+            for slot in 0..8 {
+                if own_mask >> slot & 1 == 1 {
+                    assert!(
+                        dist[slot] <= own[slot],
+                        "round {round}, ray {i}, slot {slot}"
+                    );
+                    admitted += 1;
+                }
+            }
+            // The leaf test of one slot is the ray's own node test.
+            for slot in 0..8 {
+                let rays_in = lanes.entering(&node, slot, near);
+                assert_eq!(
+                    rays_in >> i & 1,
+                    own_mask >> slot & 1,
+                    "round {round} ray {i}"
+                );
+            }
+        }
+    }
+    assert!(admitted > 5000, "{admitted} children entered");
+}
