@@ -196,6 +196,47 @@ pub fn closest_simd<I: TriangleIntersector>(
     closest_on(Portable, bvh, mesh, isect, ray, stats)
 }
 
+/// The closest hits of `rays` into `out` (as many entries) by the batch query
+/// ([`RayQuery::closest_hits`]: coherent rays walked in packets), on the widest SIMD level and
+/// this thread's kept stack: `out[i]` is [`closest_simd`] of `rays[i]`, bit for bit. `stats`,
+/// when given, is added to (a packet's node tests counted once).
+///
+/// # Errors
+///
+/// [`BvhError::LengthMismatch`] when `out` has not `rays.len()` entries (nothing written).
+#[inline]
+pub fn closest_batch_simd<I: TriangleIntersector>(
+    bvh: &VecBvh8,
+    mesh: &TriangleMesh<'_>,
+    isect: &I,
+    rays: &[Ray],
+    out: &mut [Option<(u32, TriangleHit)>],
+    stats: Option<&mut TraversalStats>,
+) -> std::result::Result<(), BvhError> {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(level) = crate::simd::avx2_fma() {
+        // SAFETY: as in `closest_simd`: AVX2 and FMA were detected at run time.
+        return unsafe { x86::closest_batch(level, bvh, mesh, isect, (rays, out), stats) };
+    }
+    closest_batch_on(Portable, bvh, mesh, isect, (rays, out), stats)
+}
+
+/// [`closest_batch_simd`] at SIMD `level`, on this thread's kept stack.
+#[inline(always)]
+fn closest_batch_on<L: SimdLevel, I: TriangleIntersector>(
+    level: L,
+    bvh: &VecBvh8,
+    mesh: &TriangleMesh<'_>,
+    isect: &I,
+    (rays, out): (&[Ray], &mut [Option<(u32, TriangleHit)>]),
+    stats: Option<&mut TraversalStats>,
+) -> std::result::Result<(), BvhError> {
+    with_stack(|stack| {
+        let ctx = &mut Query::new().on(level).stack(stack).stats(stats);
+        bvh.closest_hits(rays, &mut Triangles::new(mesh, isect), ctx, out)
+    })
+}
+
 /// Any hit of `ray`, on the widest SIMD level, as [`closest_simd`].
 #[inline]
 pub fn any_simd<I: TriangleIntersector>(
@@ -247,7 +288,7 @@ fn any_on<L: SimdLevel, I: TriangleIntersector>(
 /// compiled for those features.
 #[cfg(target_arch = "x86_64")]
 mod x86 {
-    use super::{VecBvh8, any_on, closest_on};
+    use super::{VecBvh8, any_on, closest_batch_on, closest_on};
     use halfray_core::Ray;
     use halfray_core::bvh::TriangleMesh;
     use halfray_core::query::TraversalStats;
@@ -264,6 +305,18 @@ mod x86 {
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
         closest_on(level, bvh, mesh, isect, ray, stats)
+    }
+
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn closest_batch<I: TriangleIntersector>(
+        level: Avx2Fma,
+        bvh: &VecBvh8,
+        mesh: &TriangleMesh<'_>,
+        isect: &I,
+        batch: (&[Ray], &mut [Option<(u32, TriangleHit)>]),
+        stats: Option<&mut TraversalStats>,
+    ) -> Result<(), halfray_core::bvh::BvhError> {
+        closest_batch_on(level, bvh, mesh, isect, batch, stats)
     }
 
     #[target_feature(enable = "avx2,fma")]

@@ -14,11 +14,25 @@ pub const TIMED_PASSES: usize = 5;
 /// miss; the answers are kept alive with [`std::hint::black_box`] and otherwise unused. An empty
 /// `rays` gives 0 for every side.
 pub fn interleaved(rays: &[Ray], fs: &[&dyn Fn(&Ray) -> bool]) -> Vec<f64> {
+    let each: Vec<Box<dyn Fn(&[Ray]) -> usize + '_>> = fs
+        .iter()
+        .map(|f| {
+            Box::new(move |rays: &[Ray]| rays.iter().filter(|r| f(std::hint::black_box(r))).count())
+                as Box<dyn Fn(&[Ray]) -> usize + '_>
+        })
+        .collect();
+    let sides: Vec<&dyn Fn(&[Ray]) -> usize> = each.iter().map(|f| f.as_ref()).collect();
+    interleaved_batches(rays, &sides)
+}
+
+/// [`interleaved`] for sides that take the whole set at once (ray batches, Embree's packet
+/// API): each function answers the number of hits in `rays`.
+pub fn interleaved_batches(rays: &[Ray], fs: &[&dyn Fn(&[Ray]) -> usize]) -> Vec<f64> {
     let mut best = vec![f64::INFINITY; fs.len()];
     for _ in 0..TIMED_PASSES {
         for (f, b) in fs.iter().zip(best.iter_mut()) {
             let t0 = Instant::now();
-            let hits = rays.iter().filter(|r| f(std::hint::black_box(r))).count();
+            let hits = f(std::hint::black_box(rays));
             std::hint::black_box(hits);
             *b = b.min(t0.elapsed().as_secs_f64());
         }

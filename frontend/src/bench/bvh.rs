@@ -11,6 +11,11 @@
 //! the shared machine falls on all three; builds are timed the same way. The run closes with a
 //! table of the ratios per mesh and, per set, their geometric mean and the worst mesh.
 //!
+//! Each camera set is also traced by the batch path ([`closest_batch_simd`]: coherent rays in
+//! packets; its answers checked equal to the single-ray query's), reported as the set
+//! `<set>+batch`: against Embree's `rtcIntersect1` as above, and against Embree's packet API,
+//! `rtcIntersect8` and `rtcIntersect16`, on the same rays in the same round-robin passes.
+//!
 //! Brute force (every triangle for every ray) runs on a sample of the incoherent rays sized to
 //! about [`BRUTE_FORCE_TESTS`] triangle tests, as a baseline; the BVH's answers on that sample
 //! are checked against it.
@@ -18,12 +23,14 @@
 mod rivals;
 pub mod summary;
 
-use crate::accel::{any_simd, build_binary, build_binary_parallel, build_wide, closest_simd};
+use crate::accel::{
+    any_simd, build_binary, build_binary_parallel, build_wide, closest_batch_simd, closest_simd,
+};
 use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
 use crate::raysets::named::{Query, RaySet, watertight_hits};
 use crate::raysets::random_rays;
-use crate::timing::{TIMED_PASSES, interleaved};
+use crate::timing::{TIMED_PASSES, interleaved, interleaved_batches};
 use glam::Vec3;
 use halfray_core::Ray;
 use halfray_core::bvh::wide::binary_options;
@@ -139,6 +146,14 @@ pub struct SetFigures {
     pub embree_mrays: Option<f64>,
     /// Embree 4 robust mode, Mrays/s.
     pub embree_robust_mrays: Option<f64>,
+    /// Batch sets (`<camera set>+batch`: halfray's batch path, Embree's `rtcIntersect1` in the
+    /// two fields above): Embree's `rtcIntersect8` on the same rays, `[default, robust]`,
+    /// Mrays/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub embree_packet8_mrays: Option<[f64; 2]>,
+    /// Batch sets: Embree's `rtcIntersect16`, `[default, robust]`, Mrays/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub embree_packet16_mrays: Option<[f64; 2]>,
 }
 
 impl SetFigures {
@@ -305,7 +320,24 @@ fn bench<T: TriangleIntersector>(
             triangles_per_ray: st.primitives_tested as f64 / k,
             embree_mrays: mrays.get(1).copied(),
             embree_robust_mrays: mrays.get(2).copied(),
+            embree_packet8_mrays: None,
+            embree_packet16_mrays: None,
         });
+        if matches!(
+            set,
+            RaySet::Primary | RaySet::PrimaryTiles | RaySet::PrimaryStride
+        ) {
+            let theirs = rivals.as_ref().map_or_else(Vec::new, |r| r.queries(query));
+            let packets = rivals
+                .as_ref()
+                .map_or_else(Vec::new, |r| r.packet_queries());
+            figures.push(batch_figures(
+                (&wide, &mesh, isect),
+                (set, &rays, hit_count),
+                &theirs,
+                &packets,
+            )?);
+        }
     }
 
     let sample_len = (BRUTE_FORCE_TESTS / n.max(1))
@@ -356,6 +388,67 @@ fn bench<T: TriangleIntersector>(
         brute_force_rays: sample_len,
         mrays_brute_force: sample_len as f64 / brute_s.max(1e-9) / 1e6,
         brute_force_mismatches: mismatches,
+    })
+}
+
+/// The batch path's figures on the camera set `set` (`rays`, `hits` of them hit): halfray's
+/// [`closest_batch_simd`] (checked equal to the single-ray query, bit for bit) against Embree's
+/// `rtcIntersect1` (`single`: default, robust) and its packet API (`packets`: default by 8 and
+/// 16 rays, robust by 8 and 16), timed round-robin on the whole set.
+fn batch_figures<T: TriangleIntersector>(
+    (wide, mesh, isect): (&crate::accel::VecBvh8, &TriangleMesh<'_>, &T),
+    (set, rays, hits): (RaySet, &[Ray], usize),
+    single: &[HitQuery<'_>],
+    packets: &[rivals::BatchQuery<'_>],
+) -> Result<SetFigures> {
+    let internal = |e: halfray_core::bvh::BvhError| Error::internal(e.to_string(), None);
+    let mut out = vec![None; rays.len()];
+    let mut st = TraversalStats::default();
+    closest_batch_simd(wide, mesh, isect, rays, &mut out, Some(&mut st)).map_err(internal)?;
+    let bits = |a: &Option<(u32, halfray_core::triangle::TriangleHit)>| {
+        a.map(|(p, h)| (p, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()))
+    };
+    let mismatches = rays
+        .iter()
+        .zip(&out)
+        .filter(|(r, b)| bits(&closest_simd(wide, mesh, isect, r, None)) != bits(b))
+        .count();
+    if mismatches > 0 {
+        return Err(Error::internal(
+            format!("set {set}: the batch path differs from single rays on {mismatches} rays"),
+            None,
+        ));
+    }
+    let out = std::cell::RefCell::new(out);
+    let ours = |rays: &[Ray]| {
+        let mut out = out.borrow_mut();
+        let done = closest_batch_simd(wide, mesh, isect, rays, &mut out, None);
+        usize::from(done.is_ok()) * out.iter().filter(|h| h.is_some()).count()
+    };
+    let each: Vec<rivals::BatchQuery<'_>> = single
+        .iter()
+        .map(|f| {
+            Box::new(move |rays: &[Ray]| rays.iter().filter(|r| f(std::hint::black_box(r))).count())
+                as rivals::BatchQuery<'_>
+        })
+        .collect();
+    let mut sides: Vec<&dyn Fn(&[Ray]) -> usize> = vec![&ours];
+    sides.extend(each.iter().chain(packets).map(|f| f.as_ref()));
+    let m = interleaved_batches(rays, &sides);
+    let k = rays.len().max(1) as f64;
+    let pair = |a: usize, b: usize| Some([*m.get(a)?, *m.get(b)?]);
+    Ok(SetFigures {
+        name: format!("{}+batch", set.name()),
+        query: Query::Closest.name().into(),
+        rays: rays.len(),
+        hit_rate: hits as f64 / k,
+        mrays: m[0],
+        nodes_per_ray: st.nodes_visited as f64 / k,
+        triangles_per_ray: st.primitives_tested as f64 / k,
+        embree_mrays: m.get(1).copied(),
+        embree_robust_mrays: m.get(2).copied(),
+        embree_packet8_mrays: pair(3, 5),
+        embree_packet16_mrays: pair(4, 6),
     })
 }
 
@@ -427,6 +520,22 @@ fn print_report(r: &BvhReport) {
             s.nodes_per_ray,
             s.triangles_per_ray,
         );
+    }
+    for s in &r.sets {
+        if let (Some(p8), Some(p16)) = (s.embree_packet8_mrays, s.embree_packet16_mrays) {
+            println!(
+                "  {:<15} Embree packets: rtcIntersect8 {:.2} / {:.2}, rtcIntersect16 {:.2} / {:.2} Mrays/s (default / robust); batch over them: x8 {:.2} / {:.2}, x16 {:.2} / {:.2}",
+                s.name,
+                p8[0],
+                p8[1],
+                p16[0],
+                p16[1],
+                s.mrays / p8[0],
+                s.mrays / p8[1],
+                s.mrays / p16[0],
+                s.mrays / p16[1],
+            );
+        }
     }
     println!(
         "  brute force {:.1} rays/s on {} incoherent rays; mismatches {}",

@@ -170,6 +170,8 @@ mod tests {
                 triangles_per_ray: 1.0,
                 embree_mrays: Some(def),
                 embree_robust_mrays: Some(rob),
+                embree_packet8_mrays: None,
+                embree_packet16_mrays: None,
             })
             .collect();
         r

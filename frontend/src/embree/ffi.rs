@@ -6,9 +6,9 @@
 //! getter (added in Embree 4.3) is not in the 4.2 bindings at all. The symbols come from the
 //! same `libembree4` that `embree4-sys` links (`-lembree4`).
 
-use std::ffi::{CStr, c_char};
+use std::ffi::{CStr, c_char, c_void};
 
-use embree4_sys::RTCDevice;
+use embree4_sys::{RTCDevice, RTCScene};
 
 // SAFETY (of the declarations): these match the Embree 4.4 C prototypes
 // `RTCError rtcGetDeviceError(RTCDevice)` (a 32-bit C enum, read as `u32`) and
@@ -18,6 +18,46 @@ unsafe extern "C" {
     fn rtc_get_device_error(device: RTCDevice) -> u32;
     #[link_name = "rtcGetDeviceLastErrorMessage"]
     fn rtc_get_device_last_error_message(device: RTCDevice) -> *const c_char;
+}
+
+// SAFETY (of the declarations): these match the Embree 4.4 C prototypes
+// `void rtcIntersect8(const int* valid, RTCScene, struct RTCRayHit8*, struct
+// RTCIntersectArguments*)` and its 16-ray twin, C calling convention; the packet is passed as
+// an address (its 4.4 layout is `packet::RayHitN`) and the arguments as null (the defaults).
+unsafe extern "C" {
+    #[link_name = "rtcIntersect8"]
+    fn rtc_intersect8_raw(
+        valid: *const i32,
+        scene: RTCScene,
+        rayhit: *mut c_void,
+        args: *mut c_void,
+    );
+    #[link_name = "rtcIntersect16"]
+    fn rtc_intersect16_raw(
+        valid: *const i32,
+        scene: RTCScene,
+        rayhit: *mut c_void,
+        args: *mut c_void,
+    );
+}
+
+/// `rtcIntersect8(valid, scene, rayhit, NULL)`.
+///
+/// # Safety
+/// `scene` is a live committed scene; `valid` points to 8 ints and `rayhit` to an
+/// `RTCRayHit8` of the 4.4 layout, both 32-byte aligned and initialised.
+pub(crate) unsafe fn rtc_intersect8(valid: *const i32, scene: RTCScene, rayhit: *mut c_void) {
+    // SAFETY: the caller's guarantees are the function's preconditions.
+    unsafe { rtc_intersect8_raw(valid, scene, rayhit, std::ptr::null_mut()) }
+}
+
+/// `rtcIntersect16(valid, scene, rayhit, NULL)`.
+///
+/// # Safety
+/// As [`rtc_intersect8`], for 16 rays and 64-byte alignment.
+pub(crate) unsafe fn rtc_intersect16(valid: *const i32, scene: RTCScene, rayhit: *mut c_void) {
+    // SAFETY: the caller's guarantees are the function's preconditions.
+    unsafe { rtc_intersect16_raw(valid, scene, rayhit, std::ptr::null_mut()) }
 }
 
 /// Human-readable name of an `RTCError` code.

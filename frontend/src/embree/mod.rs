@@ -35,6 +35,7 @@ mod device;
 mod error;
 mod ffi;
 mod layout;
+mod packet;
 mod scene;
 #[cfg(test)]
 mod tests;

@@ -1,6 +1,7 @@
 //! Embree as the rival of `bench bvh`: its default and robust scenes over the same mesh, built
 //! pass by pass beside halfray's tree and queried with `rtcIntersect1` (closest hit) or
-//! `rtcOccluded1` (any hit) on the same rays.
+//! `rtcOccluded1` (any hit) on the same rays, and with `rtcIntersect8`/`16` (the packet API)
+//! beside halfray's batch path.
 
 use crate::error::Result;
 use crate::raysets::named::Query;
@@ -8,6 +9,9 @@ use halfray_core::Ray;
 
 /// A hit-or-miss query on a ray.
 pub(super) type HitQuery<'a> = Box<dyn Fn(&Ray) -> bool + 'a>;
+
+/// A closest-hit query on a whole set of rays, answering the number of hits.
+pub(super) type BatchQuery<'a> = Box<dyn Fn(&[Ray]) -> usize + 'a>;
 
 /// Embree in its default and robust modes over the same mesh.
 #[cfg(feature = "embree")]
@@ -66,6 +70,30 @@ impl Rivals {
             })
             .collect()
     }
+
+    /// Closest hits by Embree's packet API, `[default by rtcIntersect8, default by
+    /// rtcIntersect16, robust by rtcIntersect8, robust by rtcIntersect16]`.
+    pub(super) fn packet_queries(&self) -> Vec<BatchQuery<'_>> {
+        let count = |s: &crate::embree::EmbreeScene, rays: &[Ray], wide: bool| {
+            let mut hits = 0;
+            let found =
+                |_: usize, h: Option<crate::embree::EmbreeHit>| hits += usize::from(h.is_some());
+            if wide {
+                s.intersect_packets::<16>(rays, found);
+            } else {
+                s.intersect_packets::<8>(rays, found);
+            }
+            hits
+        };
+        self.scenes
+            .iter()
+            .flat_map(|s| {
+                [false, true].map(move |wide| {
+                    Box::new(move |rays: &[Ray]| count(s, rays, wide)) as BatchQuery<'_>
+                })
+            })
+            .collect()
+    }
 }
 
 /// Without the `embree` feature there is no rival.
@@ -84,6 +112,9 @@ impl Rivals {
         [f64::NAN; 2]
     }
     pub(super) fn queries(&self, _query: Query) -> Vec<HitQuery<'_>> {
+        Vec::new()
+    }
+    pub(super) fn packet_queries(&self) -> Vec<BatchQuery<'_>> {
         Vec::new()
     }
 }
