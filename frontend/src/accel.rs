@@ -196,6 +196,9 @@ pub fn closest_simd<I: TriangleIntersector>(
     closest_on(Portable, bvh, mesh, isect, ray, stats)
 }
 
+/// One ray's closest hit: `(triangle index, hit)`.
+pub type Answer = Option<(u32, TriangleHit)>;
+
 /// The closest hits of `rays` into `out` (as many entries) by the batch query
 /// ([`RayQuery::closest_hits`]: coherent rays walked in packets), on the widest SIMD level and
 /// this thread's kept stack: `out[i]` is [`closest_simd`] of `rays[i]`, bit for bit. `stats`,
@@ -228,7 +231,7 @@ fn closest_batch_on<L: SimdLevel, I: TriangleIntersector>(
     bvh: &VecBvh8,
     mesh: &TriangleMesh<'_>,
     isect: &I,
-    (rays, out): (&[Ray], &mut [Option<(u32, TriangleHit)>]),
+    (rays, out): (&[Ray], &mut [Answer]),
     stats: Option<&mut TraversalStats>,
 ) -> std::result::Result<(), BvhError> {
     with_stack(|stack| {
@@ -313,7 +316,7 @@ mod x86 {
         bvh: &VecBvh8,
         mesh: &TriangleMesh<'_>,
         isect: &I,
-        batch: (&[Ray], &mut [Option<(u32, TriangleHit)>]),
+        batch: (&[Ray], &mut [super::Answer]),
         stats: Option<&mut TraversalStats>,
     ) -> Result<(), halfray_core::bvh::BvhError> {
         closest_batch_on(level, bvh, mesh, isect, batch, stats)

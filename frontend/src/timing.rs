@@ -8,26 +8,32 @@ use std::time::Instant;
 /// few milliseconds for 100 000 camera rays) does not spoil a figure on a shared machine.
 pub const TIMED_PASSES: usize = 5;
 
+/// A side timed on a whole set at once: answers the number of hits in the rays.
+pub type BatchSide<'a> = &'a dyn Fn(&[Ray]) -> usize;
+
+/// A [`BatchSide`] owned.
+pub type OwnedBatchSide<'a> = Box<dyn Fn(&[Ray]) -> usize + 'a>;
+
 /// Best-of-[`TIMED_PASSES`] throughputs (Mrays/s) of each of `fs` over `rays`, the passes taken
 /// round-robin (pass 1 of every function, then pass 2, …), so that a slow spell of a shared
 /// machine falls on every side rather than on whichever ran then. Each function answers hit or
 /// miss; the answers are kept alive with [`std::hint::black_box`] and otherwise unused. An empty
 /// `rays` gives 0 for every side.
 pub fn interleaved(rays: &[Ray], fs: &[&dyn Fn(&Ray) -> bool]) -> Vec<f64> {
-    let each: Vec<Box<dyn Fn(&[Ray]) -> usize + '_>> = fs
+    let each: Vec<OwnedBatchSide<'_>> = fs
         .iter()
         .map(|f| {
             Box::new(move |rays: &[Ray]| rays.iter().filter(|r| f(std::hint::black_box(r))).count())
-                as Box<dyn Fn(&[Ray]) -> usize + '_>
+                as OwnedBatchSide<'_>
         })
         .collect();
-    let sides: Vec<&dyn Fn(&[Ray]) -> usize> = each.iter().map(|f| f.as_ref()).collect();
+    let sides: Vec<BatchSide<'_>> = each.iter().map(|f| f.as_ref()).collect();
     interleaved_batches(rays, &sides)
 }
 
 /// [`interleaved`] for sides that take the whole set at once (ray batches, Embree's packet
 /// API): each function answers the number of hits in `rays`.
-pub fn interleaved_batches(rays: &[Ray], fs: &[&dyn Fn(&[Ray]) -> usize]) -> Vec<f64> {
+pub fn interleaved_batches(rays: &[Ray], fs: &[BatchSide<'_>]) -> Vec<f64> {
     let mut best = vec![f64::INFINITY; fs.len()];
     for _ in 0..TIMED_PASSES {
         for (f, b) in fs.iter().zip(best.iter_mut()) {

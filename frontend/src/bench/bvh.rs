@@ -432,7 +432,7 @@ fn batch_figures<T: TriangleIntersector>(
                 as rivals::BatchQuery<'_>
         })
         .collect();
-    let mut sides: Vec<&dyn Fn(&[Ray]) -> usize> = vec![&ours];
+    let mut sides: Vec<crate::timing::BatchSide<'_>> = vec![&ours];
     sides.extend(each.iter().chain(packets).map(|f| f.as_ref()));
     let m = interleaved_batches(rays, &sides);
     let k = rays.len().max(1) as f64;

@@ -173,10 +173,10 @@ impl Interval {
             inv_far: [[0.0; 2]; 3],
             t_min: range(&lanes.t_min)[0],
         };
-        for axis in 0..3 {
-            // `near[axis]` is 1 for a negative direction: the distances then fall as the
-            // difference `plane − origin` grows.
-            let negative = near[axis] == 1;
+        for (axis, &n) in near.iter().enumerate() {
+            // `n` is 1 for a negative direction: the distances then fall as the difference
+            // `plane − origin` grows.
+            let negative = n == 1;
             let (on, of) = (
                 range(&lanes.origin_near[axis]),
                 range(&lanes.origin_far[axis]),

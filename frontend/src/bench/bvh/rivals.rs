@@ -11,7 +11,7 @@ use halfray_core::Ray;
 pub(super) type HitQuery<'a> = Box<dyn Fn(&Ray) -> bool + 'a>;
 
 /// A closest-hit query on a whole set of rays, answering the number of hits.
-pub(super) type BatchQuery<'a> = Box<dyn Fn(&[Ray]) -> usize + 'a>;
+pub(super) type BatchQuery<'a> = crate::timing::OwnedBatchSide<'a>;
 
 /// Embree in its default and robust modes over the same mesh.
 #[cfg(feature = "embree")]
