@@ -506,3 +506,38 @@ fn far_origins_use_neighbour_blocks() {
         "{st:?}"
     );
 }
+
+/// `Grid::padding` is the documented `GRID_RAY_PAD·(reach + extent) + GRID_ABS_PAD` with
+/// `reach = extent + ORIGIN_REACH·(longest side)`, worked by hand for the box
+/// `[−1, 3] × [0, 2] × [0, 1]` of two triangles: extent 3 (the largest coordinate
+/// magnitude), longest side 4, so `reach = 67` and the padding `70·γ₆₄ + 2⁻¹²⁶` with
+/// `γ₆₄ = 64u/(1 − 64u)`, `u = 2⁻²⁴` (evaluated here in `f64`).
+#[test]
+fn padding_is_the_documented_formula_worked_by_hand() {
+    let pos = [
+        Vec3::new(-1.0, 0.0, 0.0),
+        Vec3::new(3.0, 0.0, 0.0),
+        Vec3::new(3.0, 2.0, 1.0),
+        Vec3::new(-1.0, 2.0, 1.0),
+    ];
+    let tris = [[0, 1, 2], [0, 2, 3]];
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let g = build(&mesh, &GridOptions::default()).unwrap();
+    let u = 2f64.powi(-24);
+    let want = 70.0 * (64.0 * u / (1.0 - 64.0 * u)) + 2f64.powi(-126);
+    let got = f64::from(g.padding());
+    assert!((got - want).abs() <= 1e-6 * want, "{got:e} against {want:e}");
+}
+
+/// `GridPlan::required_bytes` is its documented `4·(offsets + references)`, and the build
+/// accepts storage of exactly those counts.
+#[test]
+fn required_bytes_is_four_per_offset_and_reference() {
+    let (pos, tris) = crate::test_util::lcg_soup(50, 8, 10.0, 1.0);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let plan = GridPlan::new(&mesh, &GridOptions::default()).unwrap();
+    let (o, r) = (plan.required_offsets(), plan.required_references());
+    assert!(o > 2 && r >= 50, "{o} offsets, {r} references");
+    assert_eq!(plan.required_bytes(), 4 * (o + r));
+    assert!(build(&mesh, &GridOptions::default()).is_ok());
+}

@@ -756,3 +756,31 @@ fn best_split_worked_cost_of_a_cell_flat_in_one_axis() {
     let got = sah::best_split(&r, &seg, &c).unwrap();
     assert_eq!((got.axis, got.position, got.cost), (0, 2.0, 1.03125));
 }
+
+/// `KdTree::depth` is the depth of the deepest leaf (root 0), against a walk of the public
+/// node array (`KdNode::kind`: children `first` and `first + 1`): 0 for one triangle, and
+/// for random soups of 2 to 400 triangles whatever the walk finds (at least 2 for the
+/// larger ones).
+#[test]
+fn depth_is_the_deepest_leaf_of_the_node_array() {
+    fn deepest(nodes: &[KdNode], i: usize) -> usize {
+        match nodes[i].kind() {
+            KdNodeKind::Leaf { .. } => 0,
+            KdNodeKind::Inner { first, .. } => {
+                let f = first as usize;
+                1 + deepest(nodes, f).max(deepest(nodes, f + 1))
+            }
+        }
+    }
+    for (n, seed) in [(1, 1), (2, 2), (40, 3), (400, 4)] {
+        let (pos, tris) = crate::test_util::lcg_soup(n, seed, 10.0, 1.0);
+        let mesh = TriangleMesh::new(&pos, &tris);
+        let kd = build(&mesh);
+        let want = deepest(kd.nodes(), 0);
+        assert_eq!(kd.depth(), want, "{n} triangles");
+        assert!(n < 40 || want >= 2, "{n} triangles: depth {want}");
+        if n == 1 {
+            assert_eq!(want, 0);
+        }
+    }
+}

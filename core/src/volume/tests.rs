@@ -544,3 +544,32 @@ fn bands_hold_at_both_ends_of_their_domain() {
         assert!(!aabb_obb(&a, &b(2.02)), "box–OBB apart at {m:e}");
     }
 }
+
+/// `contains_point`'s padding is `CONTAIN_PAD_REL` (about `10⁻¹⁵`) of the compared
+/// magnitudes, nothing more: at scales `10⁻³`, 1 and `10³`, a point on the boundary of a ball
+/// (radius 1 about the origin), a capsule (radius ½ about `[0, 2]` on `x`) and a box
+/// (half-extents 1, 2, 3) is contained, and the same point moved outward by `10⁻⁵` of the
+/// size (far beyond the padding) is not. Boundaries by hand: `(1, 0, 0)`, `(1, ½, 0)`,
+/// `(1, 2, 3)` (a corner).
+#[test]
+fn contains_point_pads_by_rounding_only() {
+    let out = 1.0 + 1e-5;
+    for s in [1e-3f32, 1.0, 1e3] {
+        let ball = BoundingSphere::new(Vec3::ZERO, s).unwrap();
+        assert!(ball.contains_point(Vec3::new(s, 0.0, 0.0)), "{s}");
+        assert!(!ball.contains_point(Vec3::new(s * out, 0.0, 0.0)), "{s}");
+        let cap = Capsule::new(Vec3::ZERO, Vec3::new(2.0 * s, 0.0, 0.0), 0.5 * s).unwrap();
+        assert!(cap.contains_point(Vec3::new(s, 0.5 * s, 0.0)), "{s}");
+        assert!(!cap.contains_point(Vec3::new(s, 0.5 * s * out, 0.0)), "{s}");
+        assert!(!cap.contains_point(Vec3::new(-0.5 * s * out, 0.0, 0.0)), "{s}");
+        let obb = Obb::new(Vec3::ZERO, [Vec3::X, Vec3::Y, Vec3::Z], Vec3::new(1.0, 2.0, 3.0) * s)
+            .unwrap();
+        let corner = Vec3::new(1.0, 2.0, 3.0) * s;
+        assert!(obb.contains_point(corner), "{s}");
+        for k in 0..3 {
+            let mut p = corner;
+            p[k] *= out;
+            assert!(!obb.contains_point(p), "{s} axis {k}");
+        }
+    }
+}

@@ -814,3 +814,25 @@ fn collapse_checks_the_tree_triangles_not_the_whole_mesh() {
         }))
     );
 }
+
+/// `binary_options` sets exactly what its docs say — `leaf_threshold` and `max_leaf_size` at
+/// `LEAF_OPEN_ABOVE` (8), the primitive cost at `WIDE_INTERSECTION_COST` (0.3) — and keeps
+/// the caller's other options, from options that differ in every field.
+#[test]
+fn binary_options_are_the_documented_ones() {
+    let given = BuildOptions {
+        max_leaf_size: 2,
+        exclude_non_finite: true,
+        leaf_threshold: 1,
+        intersection_cost: 5.0,
+    };
+    let got = binary_options(given);
+    assert_eq!((got.leaf_threshold, got.max_leaf_size), (8, 8));
+    assert_eq!(got.intersection_cost, 0.3);
+    assert!(got.exclude_non_finite);
+    let got = binary_options(BuildOptions {
+        exclude_non_finite: false,
+        ..given
+    });
+    assert!(!got.exclude_non_finite);
+}
