@@ -526,7 +526,10 @@ fn padding_is_the_documented_formula_worked_by_hand() {
     let u = 2f64.powi(-24);
     let want = 70.0 * (64.0 * u / (1.0 - 64.0 * u)) + 2f64.powi(-126);
     let got = f64::from(g.padding());
-    assert!((got - want).abs() <= 1e-6 * want, "{got:e} against {want:e}");
+    assert!(
+        (got - want).abs() <= 1e-6 * want,
+        "{got:e} against {want:e}"
+    );
 }
 
 /// `GridPlan::required_bytes` is its documented `4·(offsets + references)`, and the build

@@ -561,9 +561,16 @@ fn contains_point_pads_by_rounding_only() {
         let cap = Capsule::new(Vec3::ZERO, Vec3::new(2.0 * s, 0.0, 0.0), 0.5 * s).unwrap();
         assert!(cap.contains_point(Vec3::new(s, 0.5 * s, 0.0)), "{s}");
         assert!(!cap.contains_point(Vec3::new(s, 0.5 * s * out, 0.0)), "{s}");
-        assert!(!cap.contains_point(Vec3::new(-0.5 * s * out, 0.0, 0.0)), "{s}");
-        let obb = Obb::new(Vec3::ZERO, [Vec3::X, Vec3::Y, Vec3::Z], Vec3::new(1.0, 2.0, 3.0) * s)
-            .unwrap();
+        assert!(
+            !cap.contains_point(Vec3::new(-0.5 * s * out, 0.0, 0.0)),
+            "{s}"
+        );
+        let obb = Obb::new(
+            Vec3::ZERO,
+            [Vec3::X, Vec3::Y, Vec3::Z],
+            Vec3::new(1.0, 2.0, 3.0) * s,
+        )
+        .unwrap();
         let corner = Vec3::new(1.0, 2.0, 3.0) * s;
         assert!(obb.contains_point(corner), "{s}");
         for k in 0..3 {
