@@ -88,8 +88,10 @@ pub fn markdown(reports: &[BvhReport]) -> String {
     for n in &names {
         s.push_str(&format!(" {n} |"));
     }
-    s.push_str(" build ms: halfray / Embree | build ×Embree | B/tri |\n|---|---:|");
-    s.push_str(&"---:|".repeat(names.len() + 3));
+    s.push_str(
+        " build ms: halfray / Embree | build ×Embree | all threads: halfray / Embree | B/tri |\n|---|---:|",
+    );
+    s.push_str(&"---:|".repeat(names.len() + 4));
     s.push('\n');
     let mut build_ratios = Vec::new();
     for r in reports {
@@ -111,9 +113,12 @@ pub fn markdown(reports: &[BvhReport]) -> String {
             }
             None => ("-".into(), "-".into()),
         };
+        let threads = r
+            .embree_build_ms_threads
+            .map_or("-".into(), |e| format!("{e:.0}"));
         s.push_str(&format!(
-            " {:.0} / {embree} | {ratio} | {:.1} |\n",
-            r.build_ms, r.bytes_per_triangle
+            " {:.0} / {embree} | {ratio} | {:.0} / {threads} | {:.1} |\n",
+            r.build_ms, r.build_ms_threads, r.bytes_per_triangle
         ));
     }
     let summary = summarize(reports);
@@ -142,13 +147,13 @@ pub fn markdown(reports: &[BvhReport]) -> String {
             let c = cell(&|x| format!("{:.2} / {:.2}", x.geomean[1], x.geomean[0]), n);
             s.push_str(&format!(" **{c}** |"));
         }
-        s.push_str(&format!(" | {geo_build} | |\n| **worst** | |"));
+        s.push_str(&format!(" | {geo_build} | | |\n| **worst** | |"));
         for n in &names {
             let c = cell(&|x| format!("{:.2} / {:.2}", x.worst[1].0, x.worst[0].0), n);
             s.push_str(&format!(" {c} |"));
         }
         let worst_build = build_ratios.iter().copied().fold(f64::NAN, f64::max);
-        s.push_str(&format!(" | {worst_build:.2} | {max_bytes:.1} |\n\n"));
+        s.push_str(&format!(" | {worst_build:.2} | | {max_bytes:.1} |\n\n"));
         s.push_str(&packet_lines(reports));
         for x in &summary {
             s.push_str(&format!(
@@ -215,6 +220,7 @@ mod tests {
             binary_bytes_per_triangle: 40.0,
             embree_build_ms: Some(4.0),
             embree_robust_build_ms: Some(4.0),
+            embree_build_ms_threads: Some(3.0),
             sets: sets
                 .iter()
                 .map(|&(name, ours, def, rob)| SetFigures {
@@ -258,7 +264,7 @@ mod tests {
         assert_eq!((s[1].name.as_str(), s[1].meshes), ("ao", 1));
         let md = markdown(&reports);
         assert!(
-            md.contains("| a.obj | 10 | 1.00 / 0.50 | 1.00 / 1.00 | 2 / 4 | 0.50 | 50.0 |"),
+            md.contains("| a.obj | 10 | 1.00 / 0.50 | 1.00 / 1.00 | 2 / 4 | 0.50 | 1 / 3 | 50.0 |"),
             "{md}"
         );
         assert!(
