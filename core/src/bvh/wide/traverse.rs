@@ -262,22 +262,34 @@ where
         node.child[(keys[0] & 7) as usize & (W - 1)]
     }
 
-    /// The any-hit form of [`WideBvh::order_hits`]: the children hit by a node (`hits`, at
-    /// least two lanes) in slot order, the first returned and the others pushed, unordered
-    /// and without a sort (an any-hit walk stops at its first hit, so the order of the
-    /// children changes only the work, never whether a hit is found; its interval never
-    /// shrinks, so [`WideBvh::pop_any`] needs no distances). Prefetches each child pushed. At
-    /// most `W − 1` entries are pushed, as by `order_hits`.
+    /// The any-hit form of [`WideBvh::order_hits`]: of the children hit by a node (`hits`, at
+    /// least two lanes; `dist` their entry distances) the farthest is returned (visited next)
+    /// and the others pushed in slot order, without a sort. An any-hit walk stops at its first
+    /// hit, so the order changes only the work, never whether a hit is found; its interval
+    /// never shrinks, so [`WideBvh::pop_any`] needs no distances. The farthest first: a ray
+    /// leaving a surface (shadow, ambient occlusion) enters the boxes around its origin
+    /// nearest, whose triangles rarely block it, and an occluder found first ends the walk
+    /// before they are tested. Prefetches each child pushed. At most `W − 1` entries are
+    /// pushed, as by `order_hits`.
     #[inline(always)]
     fn push_hits_any(
         node: &WideNode<W>,
+        dist: &[f32; W],
         hits: u32,
         stack: &mut [StackEntry; STACK],
         sp: &mut usize,
         (nodes, groups): (&[WideNode<W>], &[LeafGroup]),
     ) -> u32 {
-        let first = node.child[hits.trailing_zeros() as usize & (W - 1)];
+        let mut far = hits.trailing_zeros() as usize & (W - 1);
         let mut rest = hits & (hits - 1);
+        while rest != 0 {
+            let i = rest.trailing_zeros() as usize & (W - 1);
+            rest &= rest - 1;
+            if dist[i] > dist[far] {
+                far = i;
+            }
+        }
+        let mut rest = hits & !(1 << far);
         while rest != 0 {
             let child = node.child[rest.trailing_zeros() as usize & (W - 1)];
             rest &= rest - 1;
@@ -287,13 +299,14 @@ where
             }
             prefetch_child(nodes, groups, child);
         }
-        first
+        node.child[far]
     }
 
     /// The node step of the walk: tests the children of node `index` over
     /// `[t_min, bound]` (`bound`: [`cull_bound`] of the current `t_max`), pushes all hit ones
     /// but the nearest ([`WideBvh::order_hits`]; for the any-hit walk, `ANY`, all but the
-    /// first in slot order: [`WideBvh::push_hits_any`]) and returns the one to visit next;
+    /// farthest, the others in slot order: [`WideBvh::push_hits_any`]) and returns the one to
+    /// visit next;
     /// `None` when no child is hit (or `index` is out of range).
     #[inline(always)]
     fn descend<const ANY: bool, const GENERAL: bool, L: SimdLevel>(
@@ -310,7 +323,14 @@ where
             return None;
         }
         if ANY {
-            return Some(Self::push_hits_any(node, mask, stack, sp, (nodes, groups)));
+            return Some(Self::push_hits_any(
+                node,
+                &dist,
+                mask,
+                stack,
+                sp,
+                (nodes, groups),
+            ));
         }
         // `W` is a power of two: `& (W − 1)` keeps every lane index in range without a check.
         let hits = mask;
