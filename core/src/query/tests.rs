@@ -306,3 +306,84 @@ fn a_caller_stack_too_small_is_refused_not_cut_short() {
         "{refused:?}"
     );
 }
+
+/// `Watertight`'s *Domain of agreement* at its ends for every structure (the fuzz targets
+/// `grid`, `kdtree` and the wide trees of `bvh` narrow to it): a soup scaled by `2⁵⁵` (every
+/// `|p − o|` component below `2⁵⁹`, directions with dominant component 1) and by `2⁻⁵⁰`
+/// (dominant component exactly `2⁻¹⁰⁰`), as in `bvh::tests`' boundary test; the closest hit
+/// of the BVH8, the grid and the kd-tree equals the brute-force loop's exactly.
+#[test]
+fn every_structure_equals_brute_force_at_both_ends_of_the_watertight_domain() {
+    fn closest<Q: RayQuery>(q: &Q, mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, f32)> {
+        q.closest_hit(
+            ray,
+            &mut Triangles::new(mesh, &Watertight),
+            &mut Query::new(),
+        )
+        .map(|(i, h)| (i, h.t))
+    }
+    for (scale, dominant) in [(2f32.powi(55), 1.0), (2f32.powi(-50), 2f32.powi(-100))] {
+        let (mut pos, tris) = lcg_soup(200, 17, 10.0, 1.0);
+        for v in &mut pos {
+            *v *= scale;
+        }
+        let mesh = TriangleMesh::new(&pos, &tris);
+        let n = mesh.len();
+        let binary = Bvh::build(
+            &mesh,
+            vec![BvhNode::EMPTY; node_capacity(n)],
+            vec![0u32; index_capacity(n)],
+            &binary_options(BuildOptions::default()),
+        )
+        .unwrap();
+        let bvh8 = Bvh8::from_binary(
+            &binary,
+            &mesh,
+            vec![WideNode::EMPTY; crate::bvh::wide::node_capacity(n)],
+            vec![LeafGroup::EMPTY; group_capacity(n)],
+        )
+        .unwrap();
+        let plan = GridPlan::new(&mesh, &GridOptions::default()).unwrap();
+        let grid = Grid::build(
+            &mesh,
+            &plan,
+            vec![0u32; plan.required_offsets()],
+            vec![0u32; plan.required_references()],
+        )
+        .unwrap();
+        let refs = crate::kdtree::reference_capacity(n);
+        let kd = KdTree::build(
+            &mesh,
+            vec![KdNode::EMPTY; crate::kdtree::node_capacity(n).max(1)],
+            vec![0u32; refs],
+            &mut vec![KdRef::EMPTY; refs],
+            &KdBuildOptions::default(),
+        )
+        .unwrap();
+        let mut r = Lcg(5);
+        let mut hits = 0;
+        for _ in 0..300 {
+            let o = r.v(16.0) * scale;
+            let dir = r.v(10.0) * scale - o;
+            let ray = Ray::new(o, dir / dir.abs().max_element() * dominant);
+            let want = brute_watertight(&mesh, &ray).map(|(i, h)| (i, h.t));
+            assert_eq!(
+                closest(&bvh8, &mesh, &ray),
+                want,
+                "bvh8, scale {scale:e}: {ray:?}"
+            );
+            assert_eq!(
+                closest(&grid, &mesh, &ray),
+                want,
+                "grid, scale {scale:e}: {ray:?}"
+            );
+            assert_eq!(
+                closest(&kd, &mesh, &ray),
+                want,
+                "kd-tree, scale {scale:e}: {ray:?}"
+            );
+            hits += usize::from(want.is_some());
+        }
+        assert!(hits > 30, "scale {scale:e}: {hits} hits");
+    }
+}
