@@ -28,16 +28,15 @@
 
 use super::node::{ChildRef, LeafGroup, WideNode};
 use super::node_test::far_reciprocal;
-use super::traverse::{RunLanes, STACK, leaf_groups, prefetch_child, sorted_keys};
+use super::traverse::{RunLanes, STACK, leaf_groups, leaf_hits, prefetch_child, sorted_keys};
 use super::{WideBvh, add_stats};
 use crate::aabb::SlabRay;
 use crate::bvh::padded_ray::PaddedRay;
-use crate::bvh::{BvhError, cull_bound, projection_pad, take_if_better};
+use crate::bvh::{BvhError, cull_bound, projection_pad};
 use crate::query::{LeafTest, Query, RayQuery, Stack, TraversalStats, same_length};
 use crate::ray::Ray;
 use crate::simd;
 use crate::simd::level::SimdLevel;
-use crate::triangle::{LANES, pair_mask};
 
 /// Rays per packet (at most 32: a packet's rays are the bits of a `u32`).
 pub(super) const PACKET: usize = 16;
@@ -418,7 +417,7 @@ where
                                 continue;
                             };
                             local.primitives_tested += u64::from(count);
-                            if closest_in_leaf(
+                            if leaf_hits::<_, _, false>(
                                 level,
                                 leaf,
                                 pre,
@@ -456,50 +455,6 @@ where
         }
         alone
     }
-}
-
-/// The single-ray leaf test of one ray over the triangle groups `run` of a leaf (`lanes` its
-/// slots): the lanes the test certainly misses skipped, the others tested in leaf order, each
-/// hit offered to the search ([`take_if_better`], which shrinks `cur.t_max`). Returns `true`
-/// when a hit was taken.
-#[inline(always)]
-fn closest_in_leaf<LT: LeafTest, L: SimdLevel>(
-    level: L,
-    leaf: &mut LT,
-    pre: &LT::Prepared,
-    mut run: &[LeafGroup],
-    mut lanes: RunLanes,
-    (cur, best): (&mut Ray, &mut Option<(u32, LT::Hit)>),
-) -> bool {
-    let mut taken = false;
-    while let Some((first, tail)) = run.split_first() {
-        let (pair, mut todo) = match tail.split_first() {
-            Some((second, after)) => {
-                run = after;
-                let run_lanes = pair_mask(lanes.next_group(), lanes.next_group());
-                let missed = leaf.certain_misses2(level, pre, cur, &first.lanes, &second.lanes);
-                ([first, second], run_lanes & !missed)
-            }
-            None => {
-                run = tail;
-                let missed = leaf.certain_misses(pre, cur, &first.lanes);
-                ([first, first], lanes.next_group() & !missed)
-            }
-        };
-        while todo != 0 {
-            let bit = todo.trailing_zeros() as usize;
-            todo &= todo - 1;
-            let group = pair[(bit / LANES) & 1];
-            let Some(tri) = group.triangle(bit & (LANES - 1)) else {
-                break;
-            };
-            let prim = tri.prim;
-            if let Some((t, h)) = leaf.intersect_triangle(level, pre, prim, &tri.vertices(), cur) {
-                taken |= take_if_better(cur, best, prim, t, h);
-            }
-        }
-    }
-    taken
 }
 
 #[cfg(test)]

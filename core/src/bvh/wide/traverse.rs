@@ -57,6 +57,57 @@ impl RunLanes {
     }
 }
 
+/// The leaf test of one ray over the triangle groups `run` of a leaf (`lanes` its slots),
+/// eight triangles at a time (two groups) straight from their groups: the lanes the test
+/// certainly misses skipped, the others tested one by one in leaf order, each hit offered to
+/// the search ([`take_if_better`], which shrinks `cur.t_max`). The cull does not depend on the
+/// interval, so a hit in the first group leaves the second's cull valid. Returns `true` when a
+/// hit was taken (with `ANY`, at the first one, the rest untested).
+#[inline(always)]
+pub(super) fn leaf_hits<LT: LeafTest, L: SimdLevel, const ANY: bool>(
+    level: L,
+    leaf: &mut LT,
+    pre: &LT::Prepared,
+    mut run: &[LeafGroup],
+    mut lanes: RunLanes,
+    (cur, best): (&mut Ray, &mut Option<(u32, LT::Hit)>),
+) -> bool {
+    let mut taken = false;
+    while let Some((first, tail)) = run.split_first() {
+        let (pair, mut todo) = match tail.split_first() {
+            Some((second, after)) => {
+                run = after;
+                let run_lanes = pair_mask(lanes.next_group(), lanes.next_group());
+                let missed = leaf.certain_misses2(level, pre, cur, &first.lanes, &second.lanes);
+                ([first, second], run_lanes & !missed)
+            }
+            None => {
+                run = tail;
+                let missed = leaf.certain_misses(pre, cur, &first.lanes);
+                ([first, first], lanes.next_group() & !missed)
+            }
+        };
+        while todo != 0 {
+            let bit = todo.trailing_zeros() as usize;
+            todo &= todo - 1;
+            let group = pair[(bit / LANES) & 1];
+            let Some(tri) = group.triangle(bit & (LANES - 1)) else {
+                break;
+            };
+            let prim = tri.prim;
+            if let Some((t, h)) = leaf.intersect_triangle(level, pre, prim, &tri.vertices(), cur)
+                && take_if_better(cur, best, prim, t, h)
+            {
+                if ANY {
+                    return true;
+                }
+                taken = true;
+            }
+        }
+    }
+    taken
+}
+
 /// Hints that the memory of `child` (its node, or its leaf's first triangle group) is read
 /// soon. Only addresses are computed, without a bounds check or a decode: a hint never
 /// faults, so an address past the end is harmless.
@@ -447,51 +498,13 @@ where
                 }
                 ChildRef::Leaf { start, count } => {
                     local.primitives_tested += u64::from(count);
-                    // Eight triangles at a time (two groups), straight from their groups: the
-                    // lanes the intersector certainly misses are skipped, the others tested one
-                    // by one in leaf order. The cull does not depend on the interval, so a hit
-                    // in the first group leaves the second's cull valid.
-                    let mut rest = leaf_groups(groups, start, count);
-                    let mut lanes = RunLanes::new(start, count);
-                    while let Some((first, tail)) = rest.split_first() {
-                        let (pair, mut todo) = match tail.split_first() {
-                            Some((second, after)) => {
-                                rest = after;
-                                let run = pair_mask(lanes.next_group(), lanes.next_group());
-                                let missed = leaf.certain_misses2(
-                                    level,
-                                    &pre,
-                                    &cur,
-                                    &first.lanes,
-                                    &second.lanes,
-                                );
-                                ([first, second], run & !missed)
-                            }
-                            None => {
-                                rest = tail;
-                                let missed = leaf.certain_misses(&pre, &cur, &first.lanes);
-                                ([first, first], lanes.next_group() & !missed)
-                            }
-                        };
-                        while todo != 0 {
-                            let bit = todo.trailing_zeros() as usize;
-                            todo &= todo - 1;
-                            let group = pair[(bit / LANES) & 1];
-                            let Some(tri) = group.triangle(bit & (LANES - 1)) else {
-                                break;
-                            };
-                            let prim = tri.prim;
-                            let Some((t, h)) =
-                                leaf.intersect_triangle(level, &pre, prim, &tri.vertices(), &cur)
-                            else {
-                                continue;
-                            };
-                            if take_if_better(&mut cur, &mut best, prim, t, h) {
-                                bound = cull_bound(t);
-                                if ANY {
-                                    break 'walk;
-                                }
-                            }
+                    let run = leaf_groups(groups, start, count);
+                    let lanes = RunLanes::new(start, count);
+                    if leaf_hits::<LT, L, ANY>(level, leaf, &pre, run, lanes, (&mut cur, &mut best))
+                    {
+                        bound = cull_bound(cur.t_max);
+                        if ANY {
+                            break 'walk;
                         }
                     }
                 }
