@@ -193,7 +193,7 @@ pub fn closest_simd<I: TriangleIntersector>(
         // the only requirement of calling a `#[target_feature(enable = "avx2,fma")]` fn.
         return unsafe { x86::closest(level, bvh, mesh, isect, ray, stats) };
     }
-    closest_on(Portable, bvh, mesh, isect, ray, stats)
+    with_stack(|stack| closest_on(Portable, bvh, mesh, isect, ray, stats, stack))
 }
 
 /// One ray's closest hit: `(triangle index, hit)`.
@@ -221,7 +221,7 @@ pub fn closest_batch_simd<I: TriangleIntersector>(
         // SAFETY: as in `closest_simd`: AVX2 and FMA were detected at run time.
         return unsafe { x86::closest_batch(level, bvh, mesh, isect, (rays, out), stats) };
     }
-    closest_batch_on(Portable, bvh, mesh, isect, (rays, out), stats)
+    with_stack(|stack| closest_batch_on(Portable, bvh, mesh, isect, (rays, out), stats, stack))
 }
 
 /// [`closest_batch_simd`] at SIMD `level`, on this thread's kept stack.
@@ -233,11 +233,10 @@ fn closest_batch_on<L: SimdLevel, I: TriangleIntersector>(
     isect: &I,
     (rays, out): (&[Ray], &mut [Answer]),
     stats: Option<&mut TraversalStats>,
+    stack: &mut QueryStack,
 ) -> std::result::Result<(), BvhError> {
-    with_stack(|stack| {
-        let ctx = &mut Query::new().on(level).stack(stack).stats(stats);
-        bvh.closest_hits(rays, &mut Triangles::new(mesh, isect), ctx, out)
-    })
+    let ctx = &mut Query::new().on(level).stack(stack).stats(stats);
+    bvh.closest_hits(rays, &mut Triangles::new(mesh, isect), ctx, out)
 }
 
 /// Any hit of `ray`, on the widest SIMD level, as [`closest_simd`].
@@ -253,7 +252,7 @@ pub fn any_simd<I: TriangleIntersector>(
         // SAFETY: as in `closest_simd`: AVX2 and FMA were detected at run time.
         return unsafe { x86::any(level, bvh, mesh, isect, ray) };
     }
-    any_on(Portable, bvh, mesh, isect, ray)
+    with_stack(|stack| any_on(Portable, bvh, mesh, isect, ray, stack))
 }
 
 /// [`closest_simd`] at SIMD `level`, on this thread's kept stack.
@@ -265,11 +264,10 @@ fn closest_on<L: SimdLevel, I: TriangleIntersector>(
     isect: &I,
     ray: &Ray,
     stats: Option<&mut TraversalStats>,
+    stack: &mut QueryStack,
 ) -> Option<(u32, TriangleHit)> {
-    with_stack(|stack| {
-        let ctx = &mut Query::new().on(level).stack(stack).stats(stats);
-        bvh.closest_hit(ray, &mut Triangles::new(mesh, isect), ctx)
-    })
+    let ctx = &mut Query::new().on(level).stack(stack).stats(stats);
+    bvh.closest_hit(ray, &mut Triangles::new(mesh, isect), ctx)
 }
 
 /// [`any_simd`] at SIMD `level`, on this thread's kept stack.
@@ -280,18 +278,19 @@ fn any_on<L: SimdLevel, I: TriangleIntersector>(
     mesh: &TriangleMesh<'_>,
     isect: &I,
     ray: &Ray,
+    stack: &mut QueryStack,
 ) -> Option<(u32, TriangleHit)> {
-    with_stack(|stack| {
-        let ctx = &mut Query::new().on(level).stack(stack);
-        bvh.any_hit(ray, &mut Triangles::new(mesh, isect), ctx)
-    })
+    let ctx = &mut Query::new().on(level).stack(stack);
+    bvh.any_hit(ray, &mut Triangles::new(mesh, isect), ctx)
 }
 
 /// The AVX2 + FMA entry points: the whole query, the thread's stack included, is one function
-/// compiled for those features.
+/// compiled for those features. Each writes its `with_stack` closure itself: a closure takes
+/// the target features of the function it is written in, so one written in a `_on` helper
+/// would compile the walk for the baseline target, its SIMD kernels called out of line.
 #[cfg(target_arch = "x86_64")]
 mod x86 {
-    use super::{VecBvh8, any_on, closest_batch_on, closest_on};
+    use super::{VecBvh8, any_on, closest_batch_on, closest_on, with_stack};
     use halfray_core::Ray;
     use halfray_core::bvh::TriangleMesh;
     use halfray_core::query::TraversalStats;
@@ -307,7 +306,7 @@ mod x86 {
         ray: &Ray,
         stats: Option<&mut TraversalStats>,
     ) -> Option<(u32, TriangleHit)> {
-        closest_on(level, bvh, mesh, isect, ray, stats)
+        with_stack(|stack| closest_on(level, bvh, mesh, isect, ray, stats, stack))
     }
 
     #[target_feature(enable = "avx2,fma")]
@@ -319,7 +318,7 @@ mod x86 {
         batch: (&[Ray], &mut [super::Answer]),
         stats: Option<&mut TraversalStats>,
     ) -> Result<(), halfray_core::bvh::BvhError> {
-        closest_batch_on(level, bvh, mesh, isect, batch, stats)
+        with_stack(|stack| closest_batch_on(level, bvh, mesh, isect, batch, stats, stack))
     }
 
     #[target_feature(enable = "avx2,fma")]
@@ -330,6 +329,6 @@ mod x86 {
         isect: &I,
         ray: &Ray,
     ) -> Option<(u32, TriangleHit)> {
-        any_on(level, bvh, mesh, isect, ray)
+        with_stack(|stack| any_on(level, bvh, mesh, isect, ray, stack))
     }
 }
