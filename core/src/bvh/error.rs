@@ -32,6 +32,8 @@ pub enum BvhError {
     TooManyTriangles {
         /// Triangles in the tree.
         count: usize,
+        /// The most a wide BVH addresses ([`super::wide::MAX_TRIANGLES`]).
+        max: usize,
     },
     /// A leaf of the binary tree holds more primitives than a wide leaf can
     /// ([`super::wide::MAX_LEAF_TRIANGLES`]): build the binary tree with
@@ -39,6 +41,8 @@ pub enum BvhError {
     LeafTooLarge {
         /// Primitives in the leaf.
         count: usize,
+        /// The most a wide leaf holds ([`super::wide::MAX_LEAF_TRIANGLES`]).
+        max: usize,
     },
     /// A query's traversal stack (the caller's, [`crate::query::Query::stack`]) is
     /// too small for the path it had to keep: give it at least [`super::Bvh::stack_depth`]
@@ -68,17 +72,12 @@ impl fmt::Display for BvhError {
                 f,
                 "refit source has {found} primitives, the BVH was built over {expected}"
             ),
-            Self::TooManyTriangles { count } => write_too_many(
+            Self::TooManyTriangles { count, max } => {
+                write_too_many(f, "triangles", "a wide BVH", count, max)
+            }
+            Self::LeafTooLarge { count, max } => write!(
                 f,
-                "triangles",
-                "a wide BVH",
-                count,
-                super::wide::MAX_TRIANGLES,
-            ),
-            Self::LeafTooLarge { count } => write!(
-                f,
-                "a BVH leaf holds {count} primitives, a wide BVH leaf at most {}",
-                super::wide::MAX_LEAF_TRIANGLES
+                "a BVH leaf holds {count} primitives, a wide BVH leaf at most {max}"
             ),
             Self::StackTooSmall { available } => write!(
                 f,

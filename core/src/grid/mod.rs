@@ -71,8 +71,9 @@
 //!
 //! # Size
 //!
-//! `4·(cells + 1) + 4·references` bytes of caller storage ([`Grid::bytes_used`]); the
-//! vertices and triangles are the caller's and are not counted. The bunny at the default `λ`
+//! `4·(cells + 1) + 4·references` bytes of caller storage
+//! ([`RayQuery::bytes_used`](crate::query::RayQuery::bytes_used)); the vertices and triangles
+//! are the caller's and are not counted. The bunny at the default `λ`
 //! takes 22.2 bytes per triangle (the binary BVH 38.5).
 //!
 //! # Degenerate input

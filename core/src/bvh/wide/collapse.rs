@@ -210,19 +210,28 @@ fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<Plan, BvhError> {
     let mut count = 1usize;
     let mut slots = 0usize;
     if !pending.push((0, 0)) {
-        return Err(BvhError::LeafTooLarge { count: 0 });
+        return Err(BvhError::LeafTooLarge {
+            count: 0,
+            max: MAX_LEAF_TRIANGLES,
+        });
     }
     while let Some((b, _)) = pending.pop() {
         for (c, leaf) in child_list::<W>(nodes, b, b == 0).iter() {
             if let Some(range) = leaf {
                 if range.len() > MAX_LEAF_TRIANGLES {
-                    return Err(BvhError::LeafTooLarge { count: range.len() });
+                    return Err(BvhError::LeafTooLarge {
+                        count: range.len(),
+                        max: MAX_LEAF_TRIANGLES,
+                    });
                 }
                 slots = place_leaf(slots, range.len()) + range.len();
             } else {
                 count += 1;
                 if !pending.push((c, 0)) {
-                    return Err(BvhError::LeafTooLarge { count: 0 });
+                    return Err(BvhError::LeafTooLarge {
+                        count: 0,
+                        max: MAX_LEAF_TRIANGLES,
+                    });
                 }
             }
         }
@@ -254,12 +263,14 @@ where
     if indices.len() > MAX_TRIANGLES {
         return Err(BvhError::TooManyTriangles {
             count: indices.len(),
+            max: MAX_TRIANGLES,
         });
     }
     let needed = plan::<W>(binary.nodes())?;
     if needed.slots > MAX_TRIANGLES {
         return Err(BvhError::TooManyTriangles {
             count: needed.slots,
+            max: MAX_TRIANGLES,
         });
     }
     // Every triangle of the tree must have finite vertices. When every position is finite

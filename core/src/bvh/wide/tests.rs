@@ -364,7 +364,7 @@ fn storage_too_small_and_bad_leaves_are_refused_before_writing() {
     let b40 = binary(&same, 40);
     assert!(matches!(
         VecWide::<8>::node_count_for(&b40),
-        Err(BvhError::LeafTooLarge { count: 40 })
+        Err(BvhError::LeafTooLarge { count: 40, max: 16 })
     ));
 }
 

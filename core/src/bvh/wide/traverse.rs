@@ -170,7 +170,7 @@ where
         S::answer(self.leaf_query::<LT, true, L, S>(ray, leaf, ctx))
     }
 
-    /// Coherent rays in packets ([`super::packet`]), the others alone: the same answers.
+    /// Coherent rays in packets (the `packet` module), the others alone: the same answers.
     #[inline(always)]
     fn closest_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
         &self,
