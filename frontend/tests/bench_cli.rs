@@ -31,15 +31,19 @@ fn several_meshes_give_one_report_each_and_a_summary_table() {
     for (r, m) in reports.iter().zip(&meshes) {
         assert_eq!(r["mesh"], m.as_str());
         assert_eq!(r["brute_force_mismatches"], 0, "{m}");
-        // Every named set, in order, with its query and ray count.
+        // Every named set, in order, with its query and ray count; each camera set followed by
+        // its batch path (`+batch`, the same rays).
         let sets = r["sets"].as_array().expect("sets[]");
         let names: Vec<&str> = sets.iter().map(|s| s["name"].as_str().unwrap()).collect();
         assert_eq!(
             names,
             [
                 "primary",
+                "primary+batch",
                 "primary-tiles",
+                "primary-tiles+batch",
                 "primary-stride",
+                "primary-stride+batch",
                 "random",
                 "shadow",
                 "ao"
@@ -142,7 +146,8 @@ fn a_mesh_list_follows_the_positional_meshes() {
         .iter()
         .map(|s| s["name"].as_str().unwrap())
         .collect();
-    assert_eq!(names, ["ao", "primary-tiles"]);
+    // A camera set is followed by its batch path.
+    assert_eq!(names, ["ao", "primary-tiles", "primary-tiles+batch"]);
 }
 
 #[test]
