@@ -6,6 +6,34 @@ use crate::bvh::padded_ray::PaddedRay;
 use crate::simd;
 use crate::simd::level::{SimdLevel, Slab8};
 
+/// One axis of the slab test for one box and one ray: the box's near and far planes `lo`,
+/// `hi` against the padded origins `on`, `of` and the reciprocals `inv`, `inv_far`
+/// ([`far_reciprocal`]), folded into the running entry and exit distances. `t_near = (lo −
+/// on)·inv`, `t_far = (hi − of)·inv_far` (never fused), then `enter = t_near > enter ? t_near
+/// : enter` and `exit = t_far < exit ? t_far : exit`: a NaN distance (`0·∞`) keeps the running
+/// value, like `f32::max`/`min` and like `maxps`/`minps` in the SIMD kernels
+/// ([`crate::simd::level::Slab8`]). Every lane loop of the wide walks (single ray, packet
+/// interval, packet lanes) is this step; the compiler vectorises the loops around it.
+#[inline(always)]
+pub(super) fn slab_axis(
+    (lo, hi): (f32, f32),
+    (on, of): (f32, f32),
+    (inv, inv_far): (f32, f32),
+    (enter, exit): (f32, f32),
+) -> (f32, f32) {
+    fold_slab((lo - on) * inv, (hi - of) * inv_far, (enter, exit))
+}
+
+/// The fold of one axis's entry and exit distances into the running interval: the selects
+/// of [`slab_axis`].
+#[inline(always)]
+pub(super) fn fold_slab(t_near: f32, t_far: f32, (enter, exit): (f32, f32)) -> (f32, f32) {
+    (
+        if t_near > enter { t_near } else { enter },
+        if t_far < exit { t_far } else { exit },
+    )
+}
+
 /// The reciprocal of the far distances: `inv · SLAB_FAR_SCALE`, rounded once. Finite for every
 /// finite `inv`: the largest finite reciprocal of an `f32` (of the smallest subnormal with
 /// one, `≈ 2.9e-39`) is `≈ 3.4028221e38`, whose fold rounds below `f32::MAX` (tested); an
@@ -63,14 +91,12 @@ impl PaddedRay {
             );
             let inv_far = far_reciprocal(inv);
             for i in 0..W {
-                let t_near = (lo[i] - on) * inv;
-                let t_far = (hi[i] - of) * inv_far;
-                t_enter[i] = if t_near > t_enter[i] {
-                    t_near
-                } else {
-                    t_enter[i]
-                };
-                t_exit[i] = if t_far < t_exit[i] { t_far } else { t_exit[i] };
+                (t_enter[i], t_exit[i]) = slab_axis(
+                    (lo[i], hi[i]),
+                    (on, of),
+                    (inv, inv_far),
+                    (t_enter[i], t_exit[i]),
+                );
             }
         }
         (t_enter, simd::mask_le(&t_enter, &t_exit))

@@ -27,13 +27,13 @@
 //! ([`STACK`] entries of 16 bytes).
 
 use super::node::{ChildRef, LeafGroup, WideNode};
-use super::node_test::far_reciprocal;
+use super::node_test::{far_reciprocal, fold_slab, slab_axis};
 use super::traverse::{RunLanes, STACK, leaf_groups, leaf_hits, prefetch_child, sorted_keys};
 use super::{WideBvh, add_stats};
 use crate::aabb::SlabRay;
 use crate::bvh::padded_ray::PaddedRay;
-use crate::bvh::{BvhError, cull_bound, projection_pad};
-use crate::query::{LeafTest, Query, RayQuery, Stack, TraversalStats, same_length};
+use crate::bvh::{cull_bound, projection_pad};
+use crate::query::{LeafTest, TraversalStats};
 use crate::ray::Ray;
 use crate::simd;
 use crate::simd::level::SimdLevel;
@@ -76,6 +76,22 @@ impl Lanes {
         bound: [f32::NEG_INFINITY; PACKET],
     };
 
+    /// Puts `ray` (padded: `w`) into lane `i` (nothing for `i ≥ PACKET`).
+    #[inline(always)]
+    fn set(&mut self, i: usize, w: &PaddedRay, ray: &Ray) {
+        if i >= PACKET {
+            return;
+        }
+        for axis in 0..3 {
+            self.origin_near[axis][i] = w.origin_near[axis];
+            self.origin_far[axis][i] = w.origin_far[axis];
+            self.inv[axis][i] = w.inv_dir[axis];
+            self.inv_far[axis][i] = far_reciprocal(w.inv_dir[axis]);
+        }
+        self.t_min[i] = ray.t_min;
+        self.bound[i] = cull_bound(ray.t_max).min(f32::MAX);
+    }
+
     /// The rays of `bits` that enter slot `slot` of `node` within their own intervals: the
     /// single-ray node test of that box ([`PaddedRay::hit_children`]), ray by ray, `near` the
     /// packet's near corners.
@@ -93,14 +109,12 @@ impl Lanes {
             let (on, of) = (&self.origin_near[axis], &self.origin_far[axis]);
             let (inv, inv_far) = (&self.inv[axis], &self.inv_far[axis]);
             for r in 0..PACKET {
-                let t_near = (lo - on[r]) * inv[r];
-                let t_far = (hi - of[r]) * inv_far[r];
-                t_enter[r] = if t_near > t_enter[r] {
-                    t_near
-                } else {
-                    t_enter[r]
-                };
-                t_exit[r] = if t_far < t_exit[r] { t_far } else { t_exit[r] };
+                (t_enter[r], t_exit[r]) = slab_axis(
+                    (lo, hi),
+                    (on[r], of[r]),
+                    (inv[r], inv_far[r]),
+                    (t_enter[r], t_exit[r]),
+                );
             }
         }
         simd::mask_le(&t_enter, &t_exit)
@@ -214,12 +228,7 @@ impl Interval {
                 let e = hi[i] - of;
                 let (a, b) = (e * f0, e * f1);
                 let t_far = if a > b { a } else { b };
-                t_enter[i] = if t_near > t_enter[i] {
-                    t_near
-                } else {
-                    t_enter[i]
-                };
-                t_exit[i] = if t_far < t_exit[i] { t_far } else { t_exit[i] };
+                (t_enter[i], t_exit[i]) = fold_slab(t_near, t_far, (t_enter[i], t_exit[i]));
             }
         }
         (t_enter, simd::mask_le(&t_enter, &t_exit))
@@ -245,6 +254,18 @@ impl Entry {
     };
 }
 
+/// The packet walk's stack ([`STACK`] entries), made once per batch and reused from packet to
+/// packet.
+pub(super) struct PacketStack([Entry; STACK]);
+
+impl PacketStack {
+    /// An empty stack (its entries are written before they are read).
+    #[inline(always)]
+    pub(super) fn new() -> Self {
+        Self([Entry::ROOT; STACK])
+    }
+}
+
 /// One ray of a packet: its interval as the walk shrinks it, its best hit so far and its
 /// leaf test's setup (made at its first leaf; `Some(None)`: refused, it hits nothing).
 struct RayState<P, H> {
@@ -258,51 +279,17 @@ where
     N: AsRef<[WideNode<W>]>,
     T: AsRef<[LeafGroup]>,
 {
-    /// [`RayQuery::closest_hits`] of the wide trees: [`PACKET`] rays at a time, the coherent
-    /// ones walked as a packet, the others alone; on a caller stack shorter than [`STACK`],
-    /// every ray alone (so that each gets the single-ray answer, an error included).
-    #[inline(always)]
-    pub(super) fn closest_hits_in_packets<LT: LeafTest, L: SimdLevel, S: Stack>(
-        &self,
-        rays: &[Ray],
-        leaf: &mut LT,
-        ctx: &mut Query<'_, L, S>,
-        out: &mut [S::Out<(u32, LT::Hit)>],
-    ) -> Result<(), BvhError> {
-        same_length(rays.len(), out.len())?;
-        let short = ctx.stack.entries().is_some_and(|e| e.len() < STACK);
-        let mut stack = [Entry::ROOT; STACK];
-        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-            let alone = if short {
-                u32::MAX
-            } else {
-                let stats = ctx.stats.as_deref_mut();
-                self.packet_closest(ctx.level, rays, leaf, (&mut stack, stats), |i, found| {
-                    if let Some(o) = out.get_mut(i) {
-                        *o = S::answer(Ok(found));
-                    }
-                })
-            };
-            for (i, (ray, o)) in rays.iter().zip(out.iter_mut()).enumerate() {
-                if alone >> i & 1 == 1 {
-                    *o = RayQuery::closest_hit(self, ray, leaf, ctx);
-                }
-            }
-        }
-        Ok(())
-    }
-
     /// Walks the coherent rays of `rays` (at most [`PACKET`]) as one packet, passing each
     /// one's closest hit to `found(index, answer)` (invalid rays: `None` at once); returns the
     /// rays left to the single-ray walk (bit `i` for `rays[i]`). `stack` is the walk's, reused
     /// from packet to packet.
     #[inline(always)]
-    fn packet_closest<LT: LeafTest, L: SimdLevel>(
+    pub(super) fn packet_closest<LT: LeafTest, L: SimdLevel>(
         &self,
         level: L,
         rays: &[Ray],
         leaf: &mut LT,
-        (stack, stats): (&mut [Entry; STACK], Option<&mut TraversalStats>),
+        (PacketStack(stack), stats): (&mut PacketStack, Option<&mut TraversalStats>),
         mut found: impl FnMut(usize, Option<(u32, LT::Hit)>),
     ) -> u32 {
         let rays = rays.get(..PACKET).unwrap_or(rays);
@@ -337,14 +324,7 @@ where
                 continue;
             }
             let w = PaddedRay::new(&slab, projection_pad(slab.origin, self.extent));
-            for axis in 0..3 {
-                lanes.origin_near[axis][i] = w.origin_near[axis];
-                lanes.origin_far[axis][i] = w.origin_far[axis];
-                lanes.inv[axis][i] = w.inv_dir[axis];
-                lanes.inv_far[axis][i] = far_reciprocal(w.inv_dir[axis]);
-            }
-            lanes.t_min[i] = ray.t_min;
-            lanes.bound[i] = cull_bound(ray.t_max).min(f32::MAX);
+            lanes.set(i, &w, ray);
             packet |= 1 << i;
         }
         if packet.count_ones() * 4 < rays.len() as u32 * 3 || packet.count_ones() < 2 {

@@ -1,11 +1,14 @@
 //! Closest-hit and any-hit traversal of a wide tree on a fixed-size stack.
 
 use super::node::{ChildRef, LEAF_BIT, LeafGroup, START_MASK, WideNode};
+use super::packet::{PACKET, PacketStack};
 use super::{WideBvh, add_stats};
 use crate::aabb::SlabRay;
 use crate::bvh::padded_ray::PaddedRay;
 use crate::bvh::{BvhError, cull_bound, projection_pad, take_if_better};
-use crate::query::{LeafTest, Query, QueryStack, RayQuery, Stack, StackEntry, TraversalStats};
+use crate::query::{
+    LeafTest, Query, QueryStack, RayQuery, Stack, StackEntry, TraversalStats, same_length,
+};
 use crate::ray::Ray;
 use crate::simd;
 use crate::simd::level::{SimdLevel, order_key};
@@ -170,7 +173,9 @@ where
         S::answer(self.leaf_query::<LT, true, L, S>(ray, leaf, ctx))
     }
 
-    /// Coherent rays in packets (the `packet` module), the others alone: the same answers.
+    /// [`PACKET`] rays at a time, the coherent ones walked as a packet (the `packet` module),
+    /// the others alone: the same answers. On a caller stack shorter than [`STACK`], every ray
+    /// alone (so that each gets the single-ray answer, an error included).
     #[inline(always)]
     fn closest_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
         &self,
@@ -179,7 +184,27 @@ where
         ctx: &mut Query<'_, L, S>,
         out: &mut [S::Out<(u32, LT::Hit)>],
     ) -> Result<(), BvhError> {
-        self.closest_hits_in_packets(rays, leaf, ctx, out)
+        same_length(rays.len(), out.len())?;
+        let short = ctx.stack.entries().is_some_and(|e| e.len() < STACK);
+        let mut stack = PacketStack::new();
+        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+            let alone = if short {
+                u32::MAX
+            } else {
+                let stats = ctx.stats.as_deref_mut();
+                self.packet_closest(ctx.level, rays, leaf, (&mut stack, stats), |i, found| {
+                    if let Some(o) = out.get_mut(i) {
+                        *o = S::answer(Ok(found));
+                    }
+                })
+            };
+            for (i, (ray, o)) in rays.iter().zip(out.iter_mut()).enumerate() {
+                if alone >> i & 1 == 1 {
+                    *o = self.closest_hit(ray, leaf, ctx);
+                }
+            }
+        }
+        Ok(())
     }
 
     fn query_box<P: crate::bvh::PrimitiveSource + ?Sized>(

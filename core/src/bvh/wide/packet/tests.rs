@@ -6,7 +6,7 @@ use super::*;
 use crate::aabb::Aabb;
 use crate::bvh::wide::{Bvh4, Bvh8, binary_options, group_capacity};
 use crate::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
-use crate::query::{QueryStack, TraversalStats, Triangles};
+use crate::query::{Query, QueryStack, RayQuery, TraversalStats, Triangles};
 use crate::simd::level::Portable;
 use crate::test_util::{Lcg, brute_watertight, lcg_soup};
 use crate::triangle::{TriangleHit, Watertight};
@@ -223,14 +223,7 @@ fn the_packet_node_test_bounds_every_rays_own() {
             ray.t_max = [f32::INFINITY, 5.0 + 40.0 * rng.f()][(i / 2) % 2];
             let slab = SlabRay::new(&ray).unwrap();
             let w = PaddedRay::new(&slab, 1e-3);
-            for axis in 0..3 {
-                lanes.origin_near[axis][i] = w.origin_near[axis];
-                lanes.origin_far[axis][i] = w.origin_far[axis];
-                lanes.inv[axis][i] = w.inv_dir[axis];
-                lanes.inv_far[axis][i] = far_reciprocal(w.inv_dir[axis]);
-            }
-            lanes.t_min[i] = ray.t_min;
-            lanes.bound[i] = cull_bound(ray.t_max).min(f32::MAX);
+            lanes.set(i, &w, &ray);
             rays.push((ray, w));
         }
         let near = [octant.x, octant.y, octant.z].map(|s| usize::from(s < 0.0));
