@@ -173,9 +173,9 @@ where
         S::answer(self.leaf_query::<LT, true, L, S>(ray, leaf, ctx))
     }
 
-    /// [`PACKET`] rays at a time, the coherent ones walked as a packet (the `packet` module),
-    /// the others alone: the same answers. On a caller stack shorter than [`STACK`], every ray
-    /// alone (so that each gets the single-ray answer, an error included).
+    /// Sixteen rays at a time, the coherent ones walked as a packet, the others alone: the
+    /// same answers. On a caller stack shorter than [`crate::query::QUERY_STACK_SIZE`], every
+    /// ray alone (so that each gets the single-ray answer, an error included).
     #[inline(always)]
     fn closest_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
         &self,
