@@ -14,9 +14,9 @@ mod obj;
 
 use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, binary_options};
 use halfray_core::bvh::{
-    BuildOptions, Bvh, BvhNode, PrimRef, TriangleMesh, index_capacity, node_capacity,
-    scratch_capacity,
+    BuildOptions, Bvh, BvhNode, PrimRef, index_capacity, node_capacity, scratch_capacity,
 };
+use halfray_core::mesh::TriangleMesh;
 use std::time::Instant;
 
 /// Timed passes per mesh; the best of each phase is kept.

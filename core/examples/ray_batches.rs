@@ -14,7 +14,8 @@
 mod obj;
 
 use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, binary_options, group_capacity};
-use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, QueryStack, Triangles};
 use halfray_core::simd_level::{Portable, SimdLevel};

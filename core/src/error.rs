@@ -182,7 +182,7 @@ impl core::error::Error for CapacityError {}
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum InputElement {
-    /// A primitive of a [`crate::bvh::PrimitiveSource`]: its bounds are NaN, infinite or empty
+    /// A primitive of a [`crate::mesh::PrimitiveSource`]: its bounds are NaN, infinite or empty
     /// (a non-finite vertex or an out-of-range vertex index).
     Primitive,
     /// A triangle of a mesh: a non-finite vertex or an out-of-range vertex index.

@@ -10,15 +10,17 @@
 //! * [`aabb`]: axis-aligned boxes and the robust (Ize 2013) slab test.
 //! * [`triangle`]: ray–triangle tests behind one trait, the watertight one by default.
 //! * [`plane`], [`sphere`], [`quadric`], [`polygon`], [`transform`]: the other primitives.
-//! * [`bvh`]: a binned-SAH BVH built into caller storage, traversed with a fixed stack.
+//! * [`mesh`]: what every structure is built over: primitives by index with their bounds,
+//!   and the indexed triangle mesh.
+//! * [`bvh`]: a binned-SAH BVH built into caller storage, traversed with a fixed stack; and
+//!   [`bvh::collide`], mesh-against-mesh collision (exact triangle–triangle test, BVH against
+//!   BVH under a transform) and the minimum distance between two meshes.
 //! * [`grid`], [`kdtree`]: the uniform grid (3-D DDA) and the SAH kd-tree beside the BVH, in
 //!   caller storage.
 //! * [`query`]: one query interface over all of them ([`query::RayQuery`]: closest hit, any
 //!   hit, box query; equal to brute force), with the leaf test ([`query::LeafTest`]) and the
 //!   query context ([`query::Query`]); [`prelude`] imports the traits.
 //! * [`volume`]: bounding spheres, oriented boxes and capsules, and conservative overlap tests.
-//! * [`collide`]: mesh-against-mesh collision (exact triangle–triangle test, BVH against BVH
-//!   under a transform) and the minimum distance between two meshes.
 //! * [`halfedge`]: fixed-capacity half-edge mesh arenas and their editing operations.
 //! * [`solids`]: the octahedron and the cube as index lists, for examples and tests.
 //!
@@ -50,7 +52,6 @@ struct ReadmeQuickStart;
 
 pub mod aabb;
 pub mod bvh;
-pub mod collide;
 pub mod error;
 pub mod float;
 mod getters;
@@ -58,6 +59,7 @@ pub mod grid;
 pub mod halfedge;
 pub mod hit;
 pub mod kdtree;
+pub mod mesh;
 pub mod plane;
 pub mod polygon;
 pub mod predicates;

@@ -2,7 +2,7 @@
 //! line and where it starts, for CSG): [`Sphere`], [`Ellipsoid`], [`Polygon`], the triangle
 //! `[Vec3; 3]` (with [`Watertight`]), the box [`Aabb`] ([`box_crossings`]), the [`Plane`],
 //! the general [`Quadric`] and the [`ClippedQuadric`]. Every one answers with the one hit
-//! type, [`Hit`]. The bounded ones are also [`crate::bvh::Primitive`]s, so a BVH can be built
+//! type, [`Hit`]. The bounded ones are also [`crate::mesh::Primitive`]s, so a BVH can be built
 //! over a slice of them and queried with [`Shape::closest_hit`] as its intersector.
 
 use crate::aabb::Aabb;
@@ -246,10 +246,10 @@ impl Shape for ClippedQuadric {
     }
 }
 
-/// The [`crate::bvh::Primitive`] of each shape: its [`Shape::bounds`].
+/// The [`crate::mesh::Primitive`] of each shape: its [`Shape::bounds`].
 macro_rules! primitive_from_shape {
     ($([$($g:tt)*] $ty:ty),+) => {
-        $(impl<$($g)*> crate::bvh::Primitive for $ty {
+        $(impl<$($g)*> crate::mesh::Primitive for $ty {
             #[inline]
             fn bounds(&self) -> Aabb {
                 Shape::bounds(self)

@@ -1,9 +1,8 @@
 //! Helpers shared by the unit tests of the core (compiled only for `cargo test`).
 
-use crate::bvh::{
-    BuildOptions, Bvh, BvhError, BvhNode, PrimitiveSource, TriangleMesh, index_capacity,
-    node_capacity,
-};
+use crate::bvh::{BuildOptions, Bvh, BvhError, BvhNode, index_capacity, node_capacity};
+
+use crate::mesh::{PrimitiveSource, TriangleMesh};
 use crate::ray::Ray;
 use crate::triangle::{TriangleHit, TriangleIntersector, Watertight};
 use glam::{Vec3, vec3};

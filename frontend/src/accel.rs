@@ -8,9 +8,10 @@ use crate::pages::PageArray;
 use halfray_core::Ray;
 use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, binary_options};
 use halfray_core::bvh::{
-    BuildJob, BuildOptions, Bvh, BvhError, BvhNode, JobPart, PrimRef, TriangleMesh, index_capacity,
+    BuildJob, BuildOptions, Bvh, BvhError, BvhNode, JobPart, PrimRef, index_capacity,
     node_capacity, scratch_capacity,
 };
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, QueryStack, TraversalStats, Triangles};
 use halfray_core::simd_level::{Portable, SimdLevel};
@@ -292,7 +293,7 @@ fn any_on<L: SimdLevel, I: TriangleIntersector>(
 mod x86 {
     use super::{VecBvh8, any_on, closest_batch_on, closest_on, with_stack};
     use halfray_core::Ray;
-    use halfray_core::bvh::TriangleMesh;
+    use halfray_core::mesh::TriangleMesh;
     use halfray_core::query::TraversalStats;
     use halfray_core::simd_level::Avx2Fma;
     use halfray_core::triangle::{TriangleHit, TriangleIntersector};

@@ -25,7 +25,8 @@ use crate::accel::build_binary;
 use crate::error::{Error, Location, Result};
 use crate::mesh_tools::reserve_output;
 use crate::obj::read_obj;
-use halfray_core::bvh::{BakedLayout, BuildOptions, Bvh, BvhNode, TriangleMesh, load_scratch_len};
+use halfray_core::bvh::{BakedLayout, BuildOptions, Bvh, BvhNode, load_scratch_len};
+use halfray_core::mesh::TriangleMesh;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -207,7 +208,7 @@ pub fn source(
     let _ = writeln!(
         s,
         "// Baked by `halfray bake` from `{name}`: {} vertices, {} triangles, {} BVH nodes. Do not edit.\n\
-         // Load with `halfray_core::bvh::Bvh::from_parts(&NODES[..], &INDICES[..], &halfray_core::bvh::TriangleMesh::new(&POSITIONS, &TRIANGLES), &mut [0u32; LOAD_SCRATCH_WORDS])`.\n",
+         // Load with `halfray_core::bvh::Bvh::from_parts(&NODES[..], &INDICES[..], &halfray_core::mesh::TriangleMesh::new(&POSITIONS, &TRIANGLES), &mut [0u32; LOAD_SCRATCH_WORDS])`.\n",
         positions.len(),
         triangles.len(),
         nodes.len()

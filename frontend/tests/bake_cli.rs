@@ -6,7 +6,8 @@
 
 use halfray::obj::read_obj;
 use halfray_core::Vec3;
-use halfray_core::bvh::{Bvh, BvhNode, TriangleMesh, load_scratch_len};
+use halfray_core::bvh::{Bvh, BvhNode, load_scratch_len};
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, Triangles};
 use halfray_core::ray::Ray;

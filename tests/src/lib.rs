@@ -37,7 +37,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{DVec2, DVec3, Vec3};
 use halfray_core::Ray;
-use halfray_core::bvh::TriangleMesh;
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::triangle::{TriangleHit, TriangleIntersector, TriangleVariant};
 
 /// Unit roundoff of `f32`, `2⁻²⁴`, as `f64`.

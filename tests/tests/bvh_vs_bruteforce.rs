@@ -20,9 +20,8 @@ use glam::{DVec3, Vec3};
 use halfray::obj::{ObjMesh, read_obj};
 use halfray::raysets::{Camera, Rng, random_rays};
 use halfray_core::Ray;
-use halfray_core::bvh::{
-    BuildOptions, Bvh, BvhNode, MAX_DEPTH, TriangleMesh, index_capacity, node_capacity,
-};
+use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, MAX_DEPTH, index_capacity, node_capacity};
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, TraversalStats, Triangles};
 use halfray_core::triangle::{TriangleIntersector, TriangleVariant, Watertight};

@@ -15,10 +15,10 @@ use glam::Vec3;
 use halfray::obj::read_obj;
 use halfray::raysets::{Camera, random_rays};
 use halfray_core::Ray;
-use halfray_core::bvh::{PrimitiveSource, TriangleMesh};
 use halfray_core::kdtree::{
     KdBuildOptions, KdNode, KdNodeKind, KdRef, KdTree, MAX_DEPTH, node_capacity, reference_capacity,
 };
+use halfray_core::mesh::{PrimitiveSource, TriangleMesh};
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, Triangles};
 use halfray_core::solids::grid_triangles;

@@ -13,11 +13,12 @@
 use glam::{Vec3, vec3};
 use halfray::accel::{VecBvh, build_binary};
 use halfray::obj::read_obj;
-use halfray_core::bvh::{BuildOptions, TriangleMesh};
-use halfray_core::collide::{
+use halfray_core::bvh::BuildOptions;
+use halfray_core::bvh::collide::{
     Body, DISTANCE_ERR_REL, colliding_pairs, first_contact, is_degenerate, min_distance,
     triangle_distance, triangles_intersect,
 };
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::transform::Transform;
 use std::path::PathBuf;
 
@@ -222,7 +223,7 @@ fn soup(r: &mut Rng, n: u32, spread: f32, size: f32) -> (Vec<Vec3>, Vec<[u32; 3]
 }
 
 /// The core's independent distance oracle (its unit tests' copy: one definition).
-#[path = "../../core/src/collide/tests/oracle.rs"]
+#[path = "../../core/src/bvh/collide/tests/oracle.rs"]
 mod oracle;
 
 /// Brute force over all pairs: the sorted colliding pairs and the closest pair (ties: the
@@ -381,7 +382,7 @@ fn bunny_against_moved_copies_equals_sweep_brute_force() {
     for (k, tf) in transforms.iter().enumerate() {
         let sweep = Sweep::new(&mesh, tf);
         let n = colliding_pairs(&body, &body, tf, &mut []).or_else(|e| match e {
-            halfray_core::collide::CollideError::OutputTooSmall { needed, .. } => Ok(needed),
+            halfray_core::bvh::collide::CollideError::OutputTooSmall { needed, .. } => Ok(needed),
             e => Err(e),
         });
         let n = n.unwrap();

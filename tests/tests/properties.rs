@@ -7,7 +7,8 @@
 //! failure); the generators avoid nothing the properties exclude.
 
 use glam::{DVec3, Vec3};
-use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, Triangles};
 use halfray_core::solids::OCTAHEDRON_TRIANGLES;

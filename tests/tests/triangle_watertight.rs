@@ -498,7 +498,7 @@ fn front_layer(mesh: &Mesh, target: &Target, ray: &Ray) -> Option<Vec<u32>> {
 
 /// The frontend's 8-wide BVH over `mesh` (default build options).
 fn wide_bvh(mesh: &Mesh) -> halfray::accel::VecBvh8 {
-    let tris = halfray_core::bvh::TriangleMesh::new(&mesh.positions, &mesh.triangles);
+    let tris = halfray_core::mesh::TriangleMesh::new(&mesh.positions, &mesh.triangles);
     let options = halfray_core::bvh::wide::binary_options(Default::default());
     let binary = halfray::accel::build_binary(&tris, &options).expect("binary BVH");
     halfray::accel::build_wide(&tris, &binary).expect("wide BVH")
@@ -567,7 +567,7 @@ fn translated_solids_camera_at_world_origin() {
                     // Through the BVH, as a user traces (the default SIMD level): the ray
                     // enters the convex solid through the front layer at the target.
                     let tris =
-                        halfray_core::bvh::TriangleMesh::new(&mesh.positions, &mesh.triangles);
+                        halfray_core::mesh::TriangleMesh::new(&mesh.positions, &mesh.triangles);
                     let hit = halfray::accel::closest_simd(&wide, &tris, &Watertight, &ray, None);
                     let entered = hit.is_some_and(|(f, h)| {
                         front_target.faces.contains(&f)

@@ -8,7 +8,6 @@
 //! give the same tree. The split itself (binning, the SAH, partitioning) is [`super::sah`].
 
 use super::node::BvhNode;
-use super::primitive::{PrimitiveSource, is_usable};
 use super::sah::{BIN_SETS, BinSets, UNUSED_BIN, best_sah_split, partition, range_bounds};
 use super::scratch::{Indexed, PrimRef, Refs, Scratch, scratch_capacity};
 use super::{
@@ -17,6 +16,7 @@ use super::{
 };
 use crate::aabb::Aabb;
 use crate::error::{CapacityError, NonFiniteError, Storage};
+use crate::mesh::{PrimitiveSource, is_usable};
 use glam::Vec3;
 
 /// Depth from which nodes are split by count rather than by SAH: `MAX_DEPTH − 32`, so that the

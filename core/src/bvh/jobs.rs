@@ -16,7 +16,8 @@ use super::build::{
     prepare_scratch,
 };
 use super::scratch::Scratch;
-use super::{BuildOptions, Bvh, BvhError, BvhNode, PrimRef, PrimitiveSource};
+use super::{BuildOptions, Bvh, BvhError, BvhNode, PrimRef};
+use crate::mesh::PrimitiveSource;
 
 /// One subtree of a split build: its task, its node reservation and, once built, the nodes it
 /// used and the final record of its root. Opaque; storage for [`Bvh::build_in_jobs`].

@@ -22,9 +22,9 @@
 //! are not checked.
 
 use super::node::BvhNode;
-use super::primitive::TriangleMesh;
 use super::{Bvh, MAX_DEPTH, node_capacity};
 use crate::error::{CapacityError, Storage};
+use crate::mesh::TriangleMesh;
 use core::fmt;
 
 /// Words of the bitset [`Bvh::from_parts`] needs for `triangles` triangles: one bit each.

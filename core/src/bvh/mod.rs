@@ -3,7 +3,8 @@
 //!
 //! # Overview
 //!
-//! * Primitives come from a [`PrimitiveSource`] (`N` primitives by index and their bounds).
+//! * Primitives come from a [`PrimitiveSource`] (`N` primitives by index and their bounds,
+//!   [`crate::mesh`]).
 //!   [`TriangleMesh`] is the main one; any slice of [`Primitive`]s (for example `[Aabb]` or
 //!   `[[Vec3; 3]]`) is one too, so spheres, quadrics and instances can live in a BVH: the
 //!   intersection itself is supplied at query time as a closure.
@@ -67,16 +68,17 @@
 //! at most 64 entries are ever live. Traversal never overflows the stack and never recurses.
 //!
 //! [`Aabb::intersect_slab`]: crate::aabb::Aabb::intersect_slab
+//! [`Primitive`]: crate::mesh::Primitive
 //! [`Ray::validate`]: crate::ray::Ray::validate
 
 mod baked;
 mod build;
+pub mod collide;
 mod error;
 mod jobs;
 mod load;
 mod node;
 mod padded_ray;
-mod primitive;
 mod query;
 mod refit;
 mod sah;
@@ -88,6 +90,9 @@ pub mod wide;
 #[cfg(test)]
 mod tests;
 
+/// The mesh a BVH is most often built over; its home is [`crate::mesh`].
+#[doc(no_inline)]
+pub use crate::mesh::TriangleMesh;
 pub use baked::{
     BAKED_ALIGN, BAKED_HEADER_BYTES, BAKED_MAGIC, BAKED_VERSION, BakedError, BakedLayout,
 };
@@ -96,12 +101,13 @@ pub use error::BvhError;
 pub use jobs::{BuildJob, JobPart, JobParts};
 pub use load::{LoadError, load_scratch_len};
 pub use node::{BvhNode, NODE_SIZE};
-pub use primitive::{Primitive, PrimitiveSource, TriangleMesh};
 pub use scratch::{PrimRef, scratch_capacity};
 pub use stats::BvhStats;
 
 use crate::aabb::Aabb;
 use crate::getters::getters;
+use crate::mesh::PrimitiveSource;
+use crate::query::walk::extent_of;
 
 /// Number of centroid bins per axis of the binned SAH, for nodes of 96 primitives or more (a
 /// node of `N` fewer uses `4 + N/8`). 16 is within a fraction of a percent of a full sweep's
@@ -130,111 +136,6 @@ pub const MAX_DEPTH: usize = 64;
 /// Entries of the fixed traversal stack (node index `u32` + entry distance `f32`, 8 bytes
 /// each). Equal to [`MAX_DEPTH`]: one entry per inner node on the path from the root.
 pub const TRAVERSAL_STACK_SIZE: usize = MAX_DEPTH;
-
-/// Relative slack on the closest hit's `t` when culling boxes: a box whose entry distance is
-/// at most `t·(1 + CULL_REL_SLACK)` is still visited. The slab test's entry distance is rounded
-/// (up to `gamma(3)` relative) and so is the primitive's `t` (a few ulps for well-conditioned
-/// hits), so a box holding a primitive that reports the same — or a one-ulp-smaller — `t` as
-/// the current hit could otherwise be culled, and the tie rule would depend on the tree. 64
-/// ulps (`64·2⁻²³`, [`crate::tolerance::T_REL_TOLERANCE_WELL_CONDITIONED`]) covers both; it
-/// costs a handful of extra box tests per ray. Unitless.
-pub const CULL_REL_SLACK: f32 = crate::tolerance::T_REL_TOLERANCE_WELL_CONDITIONED;
-
-/// The outward padding, in world units, of every box tested for a ray from `origin` in a tree
-/// whose coordinates are at most `extent` in magnitude: [`BVH_PROJECTION_PAD`]`·(max|o| +
-/// extent)` (see there). `+∞` when that overflows (every box is then hit: slower, still exact).
-///
-/// [`BVH_PROJECTION_PAD`]: crate::tolerance::BVH_PROJECTION_PAD
-#[inline(always)]
-pub(crate) fn projection_pad(origin: glam::Vec3, extent: f32) -> f32 {
-    crate::tolerance::BVH_PROJECTION_PAD * (origin.abs().max_element() + extent)
-}
-
-/// The largest coordinate magnitude of `b` (0 for an empty or non-finite box, whose
-/// children are never hit).
-#[inline]
-pub(crate) fn extent_of(b: &Aabb) -> f32 {
-    // One pass over the six bounds (compact on small targets): finite, ordered per axis.
-    let (lo, hi) = (b.min.to_array(), b.max.to_array());
-    let mut usable = true;
-    let mut m = 0.0f32;
-    for (l, h) in lo.into_iter().zip(hi) {
-        usable &= l.is_finite() & h.is_finite() & (l <= h);
-        let a = if l.abs() > h.abs() { l.abs() } else { h.abs() };
-        m = if a > m { a } else { m };
-    }
-    if usable { m } else { 0.0 }
-}
-
-/// `t` padded by [`CULL_REL_SLACK`] for box culling (infinities are kept as they are).
-#[inline(always)]
-pub(crate) fn cull_bound(t: f32) -> f32 {
-    if t.is_finite() {
-        t + t.abs() * CULL_REL_SLACK
-    } else {
-        t
-    }
-}
-
-/// Whether a hit of primitive `prim` at `t` replaces the current best (`best_prim`, at
-/// `ray.t_max`, or none yet): `t` in `(t_min, t_max]`, and of equal `t` the smaller primitive
-/// index (the tie rule of the module docs). Shared by every traversal.
-#[inline(always)]
-pub(crate) fn improves(ray: &crate::ray::Ray, t: f32, prim: u32, best_prim: Option<u32>) -> bool {
-    match best_prim {
-        None => ray.contains(t),
-        Some(bp) => t > ray.t_min && (t < ray.t_max || (t == ray.t_max && prim < bp)),
-    }
-}
-
-/// Offers the hit `(t, h)` of primitive `prim` to a closest-hit search whose current best is
-/// `best` (at `cur.t_max`): when it [`improves`] on it, it becomes `best`, `cur.t_max`
-/// shrinks to `t`, and the result is `true`; otherwise nothing changes. Shared by every
-/// traversal (binary and wide BVH, kd-tree, grid).
-#[inline(always)]
-pub(crate) fn take_if_better<H>(
-    cur: &mut crate::ray::Ray,
-    best: &mut Option<(u32, H)>,
-    prim: u32,
-    t: f32,
-    h: H,
-) -> bool {
-    if improves(cur, t, prim, best.as_ref().map(|b| b.0)) {
-        cur.t_max = t;
-        *best = Some((prim, h));
-        true
-    } else {
-        false
-    }
-}
-
-/// Tests the primitives of `run` in order with `intersect(prim, cur)`, adding one to
-/// `*tested` per primitive tested, and offers each hit to the search ([`take_if_better`]).
-/// Returns `true` when `any` and a hit was taken: the any-hit query is done and the rest of
-/// `run` is left untested. The leaf (or cell) loop of the closure-based queries of
-/// [`crate::kdtree::KdTree`] and [`crate::grid::Grid`]. ([`Bvh`] keeps its own loop: through
-/// this one the Cortex-M4F query image of `examples/mcu` grew from 8 168 to 8 208 bytes, past
-/// its 8 KiB budget.)
-#[inline(always)]
-pub(crate) fn test_run<H>(
-    run: &[u32],
-    intersect: &mut impl FnMut(u32, &crate::ray::Ray) -> Option<(f32, H)>,
-    cur: &mut crate::ray::Ray,
-    best: &mut Option<(u32, H)>,
-    tested: &mut u64,
-    any: bool,
-) -> bool {
-    for &prim in run {
-        *tested += 1;
-        let Some((t, h)) = intersect(prim, cur) else {
-            continue;
-        };
-        if take_if_better(cur, best, prim, t, h) && any {
-            return true;
-        }
-    }
-    false
-}
 
 /// Nodes to reserve for `prim_count` primitives: `2·N − 1` (a binary tree whose every leaf
 /// holds at least one primitive), `0` for no primitives. Saturates instead of overflowing.

@@ -1,9 +1,9 @@
 //! Box queries: every primitive whose box overlaps a query box.
 
 use super::node::BvhNode;
-use super::primitive::PrimitiveSource;
 use super::{Bvh, MAX_DEPTH};
 use crate::aabb::Aabb;
+use crate::mesh::PrimitiveSource;
 
 impl<N, I> Bvh<N, I>
 where

@@ -1,10 +1,10 @@
 //! Refitting: recompute every box after the primitives moved, keeping the tree's topology.
 
 use super::node::BvhNode;
-use super::primitive::{PrimitiveSource, is_usable};
 use super::{Bvh, BvhError};
 use crate::aabb::Aabb;
 use crate::error::NonFiniteError;
+use crate::mesh::{PrimitiveSource, is_usable};
 
 impl<N, I> Bvh<N, I>
 where

@@ -2,8 +2,8 @@
 //! source ([`Indexed`]), or from a scratch array of [`PrimRef`] records filled once and
 //! reordered in place ([`Scratch`]); and the box-corner vector type both use.
 
-use super::primitive::PrimitiveSource;
 use crate::aabb::Aabb;
+use crate::mesh::PrimitiveSource;
 use glam::Vec3;
 
 /// The builder's box corners: 16-byte SIMD vectors on x86-64 (one `min`/`max` instruction per

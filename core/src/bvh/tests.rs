@@ -4,6 +4,7 @@
 use super::*;
 use crate::aabb::Aabb;
 use crate::prelude::*;
+use crate::query::walk::projection_pad;
 use crate::query::{Query, StackEntry, TraversalStats, Triangles};
 use crate::ray::Ray;
 use crate::test_util::{Lcg, VecBvh, brute_watertight, lcg_soup, vec_bvh as build};

@@ -2,9 +2,11 @@
 
 use super::node::BvhNode;
 use super::padded_ray::PaddedRay;
-use super::{Bvh, BvhError, TRAVERSAL_STACK_SIZE, cull_bound, improves, projection_pad};
+use super::{Bvh, BvhError, TRAVERSAL_STACK_SIZE};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::query::TraversalStats;
+use crate::query::forward::ray_queries;
+use crate::query::walk::{cull_bound, improves, projection_pad};
 use crate::query::{LeafTest, Query, RayQuery, Stack, StackEntry};
 use crate::ray::Ray;
 use crate::simd_level::SimdLevel;
@@ -222,27 +224,12 @@ where
     N: AsRef<[BvhNode]>,
     I: AsRef<[u32]>,
 {
-    #[inline(always)]
-    fn closest_hit<T: LeafTest, L: SimdLevel, S: Stack>(
-        &self,
-        ray: &Ray,
-        leaf: &mut T,
-        ctx: &mut Query<'_, L, S>,
-    ) -> S::Out<(u32, T::Hit)> {
-        self.on_stack(false, ray, leaf, ctx)
-    }
+    ray_queries!(
+        #[inline(always)]
+        on_stack
+    );
 
-    #[inline(always)]
-    fn any_hit<T: LeafTest, L: SimdLevel, S: Stack>(
-        &self,
-        ray: &Ray,
-        leaf: &mut T,
-        ctx: &mut Query<'_, L, S>,
-    ) -> S::Out<(u32, T::Hit)> {
-        self.on_stack(true, ray, leaf, ctx)
-    }
-
-    fn query_box<P: crate::bvh::PrimitiveSource + ?Sized>(
+    fn query_box<P: crate::mesh::PrimitiveSource + ?Sized>(
         &self,
         source: &P,
         query: &crate::aabb::Aabb,

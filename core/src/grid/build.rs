@@ -5,8 +5,8 @@
 use super::overlap::for_each_cell;
 use super::plan::usable_triangle;
 use super::{Grid, GridError, GridPlan};
-use crate::bvh::TriangleMesh;
 use crate::error::{CapacityError, Storage};
+use crate::mesh::TriangleMesh;
 
 impl<O, R> Grid<O, R>
 where

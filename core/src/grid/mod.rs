@@ -50,7 +50,7 @@
 //! cells are tested against the running interval (the best hit shrinks `t_max`), keeping the
 //! best by `t`, then by index; the walk ends after the first cell whose exit distance
 //! `t_exit` satisfies `cull_bound(t_best) < t_exit` (the best hit lies in this or an earlier
-//! cell, where [`crate::bvh::CULL_REL_SLACK`] pads `t_best` by 64 ulps), or once it leaves
+//! cell, where [`crate::query::CULL_REL_SLACK`] pads `t_best` by 64 ulps), or once it leaves
 //! the padded box. No mailbox: a triangle in several cells is tested again, which is harmless
 //! (the same `t` never replaces itself). **Why this equals brute force:** a hit of the
 //! watertight test at `t` means the exact ray point `o + t·d` lies within
@@ -85,7 +85,7 @@
 //!
 //! [`Ray::validate`]: crate::ray::Ray::validate
 //! [`TriangleIntersector`]: crate::triangle::TriangleIntersector
-//! [`TriangleMesh`]: crate::bvh::TriangleMesh
+//! [`TriangleMesh`]: crate::mesh::TriangleMesh
 
 mod build;
 mod error;

@@ -104,7 +104,7 @@ impl Layout {
     pub(super) fn new(bounds: &Aabb, n: [u32; 3]) -> Self {
         let usable = bounds.is_finite() && bounds.is_valid();
         let extent = if usable {
-            crate::bvh::extent_of(bounds)
+            crate::query::walk::extent_of(bounds)
         } else {
             0.0
         };

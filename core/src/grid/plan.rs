@@ -3,8 +3,8 @@
 use super::overlap::{CellAssignment, Layout, for_each_cell};
 use super::{DEFAULT_LAMBDA, GridError, MAX_CELLS_PER_AXIS, MAX_TRIANGLES};
 use crate::aabb::Aabb;
-use crate::bvh::{Primitive, TriangleMesh};
 use crate::error::{InputElement, NonFiniteError};
+use crate::mesh::{Primitive, TriangleMesh};
 use glam::Vec3;
 
 /// Options of [`GridPlan::new`].

@@ -2,35 +2,19 @@
 
 use super::Grid;
 use crate::aabb::Aabb;
-use crate::bvh::{BvhError, PrimitiveSource};
-use crate::query::{LeafTest, Query, RayQuery, Stack};
-use crate::ray::Ray;
-use crate::simd_level::SimdLevel;
+use crate::mesh::PrimitiveSource;
+use crate::query::RayQuery;
+use crate::query::forward::{ClosureWalk, ray_queries};
 
 impl<O, R> RayQuery for Grid<O, R>
 where
     O: AsRef<[u32]>,
     R: AsRef<[u32]>,
 {
-    #[inline]
-    fn closest_hit<T: LeafTest, L: SimdLevel, S: Stack>(
-        &self,
-        ray: &Ray,
-        leaf: &mut T,
-        ctx: &mut Query<'_, L, S>,
-    ) -> S::Out<(u32, T::Hit)> {
-        S::answer(self.leaf_query(false, ray, leaf, ctx))
-    }
-
-    #[inline]
-    fn any_hit<T: LeafTest, L: SimdLevel, S: Stack>(
-        &self,
-        ray: &Ray,
-        leaf: &mut T,
-        ctx: &mut Query<'_, L, S>,
-    ) -> S::Out<(u32, T::Hit)> {
-        S::answer(self.leaf_query(true, ray, leaf, ctx))
-    }
+    ray_queries!(
+        #[inline]
+        leaf_query
+    );
 
     /// Visits the cells the box touches (one more on each side, for the rounding of the cell
     /// of a coordinate) and reports a triangle in the first of them, in scan order, that
@@ -80,22 +64,6 @@ where
     O: AsRef<[u32]>,
     R: AsRef<[u32]>,
 {
-    /// Both ray queries: the leaf test prepared once per ray (a refused ray tests nothing).
-    #[inline]
-    fn leaf_query<T: LeafTest, L: SimdLevel, S: Stack>(
-        &self,
-        any: bool,
-        ray: &Ray,
-        leaf: &mut T,
-        ctx: &mut Query<'_, L, S>,
-    ) -> Result<Option<(u32, T::Hit)>, BvhError> {
-        let Some(pre) = leaf.prepare(ray) else {
-            return Ok(None);
-        };
-        let stats = ctx.stats.as_deref_mut();
-        Ok(self.traverse(ray, |p, r| leaf.intersect(&pre, p, r), stats, any))
-    }
-
     /// The cells (lowest and highest per axis, clamped) that the closed box `b` touches, one
     /// more on each side.
     fn cells_touching(&self, b: &Aabb) -> ([u32; 3], [u32; 3]) {

@@ -3,7 +3,7 @@
 
 use super::overlap::triangle_overlaps_box;
 use super::*;
-use crate::bvh::TriangleMesh;
+use crate::mesh::TriangleMesh;
 use crate::prelude::*;
 use crate::query::{Query, TraversalStats, Triangles};
 use crate::ray::Ray;

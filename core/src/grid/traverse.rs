@@ -4,8 +4,9 @@
 use super::Grid;
 use super::overlap::ray_pad;
 use crate::aabb::{Aabb, SlabRay};
-use crate::bvh::{cull_bound, test_run};
 use crate::query::TraversalStats;
+use crate::query::forward::ClosureWalk;
+use crate::query::walk::{cull_bound, test_run};
 use crate::ray::Ray;
 use glam::Vec3;
 
@@ -34,13 +35,12 @@ impl<F: FnMut(u32, &Ray) -> Option<(f32, H)>, H> Search<F, H> {
     }
 }
 
-impl<O, R> Grid<O, R>
+impl<O, R> ClosureWalk for Grid<O, R>
 where
     O: AsRef<[u32]>,
     R: AsRef<[u32]>,
 {
-    /// Closest hit, or any hit when `any`.
-    pub(super) fn traverse<H>(
+    fn traverse<H>(
         &self,
         ray: &Ray,
         intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
@@ -92,7 +92,13 @@ where
         }
         s.best
     }
+}
 
+impl<O, R> Grid<O, R>
+where
+    O: AsRef<[u32]>,
+    R: AsRef<[u32]>,
+{
     /// The DDA from the entry into the grid's box grown by `clip`, testing the block of
     /// `radius` cells around each cell it visits, until the rule of the module docs ends it.
     fn walk<F: FnMut(u32, &Ray) -> Option<(f32, H)>, H>(

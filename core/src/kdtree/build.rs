@@ -21,8 +21,8 @@ use super::node::{KdNode, MAX_FIELD};
 use super::sah::{Costs, Split, best_split, count_sides, partition};
 use super::{KdBuildOptions, KdTreeError, MAX_DEPTH, MAX_PRIMITIVES};
 use crate::aabb::Aabb;
-use crate::bvh::PrimitiveSource;
 use crate::error::{CapacityError, NonFiniteError, Storage};
+use crate::mesh::PrimitiveSource;
 
 /// A node waiting to be split or made a leaf: its scratch run `start..end`, depth and cell.
 #[derive(Clone, Copy, Debug)]

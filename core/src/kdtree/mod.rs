@@ -66,7 +66,7 @@
 //! referencing the triangle (the partition rule of the builder, by induction), so the ray
 //! passes through the padded cell of such a leaf, near the hit. Leaves are culled only when
 //! their entry distance exceeds the current closest `t` padded by
-//! [`crate::bvh::CULL_REL_SLACK`] (the BVH's rule, for the same reasons), never by an early
+//! [`crate::query::CULL_REL_SLACK`] (the BVH's rule, for the same reasons), never by an early
 //! exit at a leaf's far end, so an equal-`t` hit of a smaller index in a later leaf, or a hit
 //! exactly on a split plane, is still found. Hits are accepted with the BVH's tie rule
 //! ([`crate::bvh`]: `t` in `(t_min, t_max]`, equal `t` → smaller primitive index), and the
@@ -257,7 +257,7 @@ pub struct KdTree<N, R> {
     prim_count: u32,
     source_len: usize,
     bounds: Aabb,
-    /// [`crate::bvh::extent_of`] the root cell: the scale of the plane padding.
+    /// [`crate::query::walk::extent_of`] the root cell: the scale of the plane padding.
     extent: f32,
     depth: u32,
     exhausted: bool,
@@ -268,7 +268,7 @@ where
     N: AsRef<[KdNode]> + AsMut<[KdNode]>,
     R: AsRef<[u32]> + AsMut<[u32]>,
 {
-    /// Builds a kd-tree over `source` (a [`crate::bvh::TriangleMesh`], a slice of triangles or
+    /// Builds a kd-tree over `source` (a [`crate::mesh::TriangleMesh`], a slice of triangles or
     /// boxes) into `nodes` and `refs`, using `scratch` as working memory. See the module docs
     /// for the budgets.
     ///
@@ -280,7 +280,7 @@ where
     /// and
     /// [`KdTreeError::NonFinite`] for the first primitive with non-finite or empty
     /// bounds unless [`KdBuildOptions::exclude_non_finite`] is set.
-    pub fn build<S: crate::bvh::PrimitiveSource + ?Sized>(
+    pub fn build<S: crate::mesh::PrimitiveSource + ?Sized>(
         source: &S,
         mut nodes: N,
         mut refs: R,
@@ -297,7 +297,7 @@ where
             prim_count: built.prim_count,
             source_len: source.primitive_count(),
             bounds,
-            extent: crate::bvh::extent_of(&bounds),
+            extent: crate::query::walk::extent_of(&bounds),
             depth: built.depth,
             exhausted: built.exhausted,
         })

@@ -3,31 +3,15 @@
 use super::KdTree;
 use super::node::{KdNode, KdNodeKind};
 use crate::aabb::Aabb;
-use crate::bvh::{BvhError, PrimitiveSource};
-use crate::query::{LeafTest, Query, RayQuery, Stack};
-use crate::ray::Ray;
-use crate::simd_level::SimdLevel;
+use crate::mesh::PrimitiveSource;
+use crate::query::RayQuery;
+use crate::query::forward::{ClosureWalk, ray_queries};
 
 impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> RayQuery for KdTree<N, R> {
-    #[inline]
-    fn closest_hit<T: LeafTest, L: SimdLevel, S: Stack>(
-        &self,
-        ray: &Ray,
-        leaf: &mut T,
-        ctx: &mut Query<'_, L, S>,
-    ) -> S::Out<(u32, T::Hit)> {
-        S::answer(self.leaf_query(false, ray, leaf, ctx))
-    }
-
-    #[inline]
-    fn any_hit<T: LeafTest, L: SimdLevel, S: Stack>(
-        &self,
-        ray: &Ray,
-        leaf: &mut T,
-        ctx: &mut Query<'_, L, S>,
-    ) -> S::Out<(u32, T::Hit)> {
-        S::answer(self.leaf_query(true, ray, leaf, ctx))
-    }
+    ray_queries!(
+        #[inline]
+        leaf_query
+    );
 
     /// Visits the leaves whose cells the box touches, below before above, and reports a
     /// primitive in the first of them that references it: the first leaf found by the same
@@ -75,22 +59,6 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> RayQuery for KdTree<N, R> {
 }
 
 impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> KdTree<N, R> {
-    /// Both ray queries: the leaf test prepared once per ray (a refused ray visits nothing).
-    #[inline]
-    fn leaf_query<T: LeafTest, L: SimdLevel, S: Stack>(
-        &self,
-        any: bool,
-        ray: &Ray,
-        leaf: &mut T,
-        ctx: &mut Query<'_, L, S>,
-    ) -> Result<Option<(u32, T::Hit)>, BvhError> {
-        let Some(pre) = leaf.prepare(ray) else {
-            return Ok(None);
-        };
-        let stats = ctx.stats.as_deref_mut();
-        Ok(self.traverse(ray, |p, r| leaf.intersect(&pre, p, r), stats, any))
-    }
-
     /// Calls `visit(leaf node index, its references)` for every leaf whose (closed) cell may
     /// touch the closed box `b`, depth first, the child below a plane before the one above;
     /// `visit` returns `false` to stop.

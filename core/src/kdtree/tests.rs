@@ -2,7 +2,7 @@
 //! `tests/tests/kdtree_vs_bruteforce.rs`).
 
 use super::*;
-use crate::bvh::{PrimitiveSource, TriangleMesh};
+use crate::mesh::{PrimitiveSource, TriangleMesh};
 use crate::prelude::*;
 use crate::query::{Query, TraversalStats, Triangles};
 use crate::ray::Ray;

@@ -3,8 +3,9 @@
 use super::node::{KdNode, KdNodeKind};
 use super::{KdTree, T_WIDEN_ABS, TRAVERSAL_STACK_SIZE};
 use crate::aabb::{Aabb, SLAB_FAR_SCALE, SLAB_FAR_SCALE_NEGATIVE, SlabRay, pad_far};
-use crate::bvh::{cull_bound, projection_pad, test_run};
 use crate::query::TraversalStats;
+use crate::query::forward::ClosureWalk;
+use crate::query::walk::{cull_bound, projection_pad, test_run};
 use crate::ray::Ray;
 
 /// One entry of the traversal stack (12 bytes): a node still to visit and the ray's interval
@@ -142,9 +143,9 @@ impl KdRay {
     }
 }
 
-impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> KdTree<N, R> {
-    /// Closest hit, or any hit when `any` (module docs of [`super`]).
-    pub(super) fn traverse<H>(
+/// The walk of the module docs of [`super`].
+impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> ClosureWalk for KdTree<N, R> {
+    fn traverse<H>(
         &self,
         ray: &Ray,
         mut intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,

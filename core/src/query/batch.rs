@@ -13,7 +13,8 @@
 //!
 //! ```
 //! use halfray_core::prelude::*;
-//! use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+//! use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
+//! use halfray_core::mesh::TriangleMesh;
 //! use halfray_core::query::{Query, QueryStack, Triangles};
 //! use halfray_core::triangle::{TriangleHit, Watertight};
 //! use halfray_core::{Ray, Vec3};

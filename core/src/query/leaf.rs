@@ -1,7 +1,7 @@
 //! The leaf test: what a query does with one primitive, behind one trait ([`LeafTest`]),
 //! implemented by closures and by [`Triangles`] (a mesh with any triangle intersector).
 
-use crate::bvh::TriangleMesh;
+use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::simd_level::SimdLevel;
 use crate::triangle::{TriangleHit, TriangleIntersector, TriangleLanes, pair_mask};

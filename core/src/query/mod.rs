@@ -10,7 +10,8 @@
 //!
 //! ```
 //! use halfray_core::prelude::*;
-//! use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+//! use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
+//! use halfray_core::mesh::TriangleMesh;
 //! use halfray_core::query::{Query, Triangles};
 //! use halfray_core::triangle::Watertight;
 //! use halfray_core::{Ray, Vec3};
@@ -40,8 +41,10 @@
 mod batch;
 pub(crate) use batch::same_length;
 mod context;
+pub(crate) mod forward;
 mod leaf;
 mod stats;
+pub(crate) mod walk;
 
 #[cfg(test)]
 mod tests;
@@ -50,10 +53,12 @@ pub use batch::BATCH_CHUNK;
 pub use context::{OwnStack, QUERY_STACK_SIZE, Query, QueryStack, Stack, StackEntry};
 pub use leaf::{LeafTest, Triangles};
 pub use stats::TraversalStats;
+pub use walk::CULL_REL_SLACK;
 
 use crate::aabb::Aabb;
-use crate::bvh::{BvhError, PrimitiveSource};
+use crate::bvh::BvhError;
 use crate::float::sqrt;
+use crate::mesh::PrimitiveSource;
 use crate::ray::Ray;
 use crate::simd_level::SimdLevel;
 use crate::triangle::TriangleLanes;

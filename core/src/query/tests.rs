@@ -4,9 +4,10 @@
 
 use super::*;
 use crate::bvh::wide::{Bvh4, Bvh8, LeafGroup, WideNode, binary_options, group_capacity};
-use crate::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+use crate::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
 use crate::grid::{CellAssignment, Grid, GridOptions, GridPlan};
 use crate::kdtree::{KdBuildOptions, KdNode, KdRef, KdTree};
+use crate::mesh::TriangleMesh;
 use crate::solids::{CUBE_TRIANGLES, CUBE_VERTICES, grid_triangles};
 use crate::test_util::{Lcg, brute_watertight, lcg_soup};
 use crate::triangle::{TriangleIntersector, Watertight};

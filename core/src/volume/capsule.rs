@@ -49,7 +49,7 @@ impl Capsule {
     }
 
     /// A capsule containing every point of `points` (a `&[Vec3]` or a
-    /// [`crate::bvh::TriangleMesh`]), along the principal axis `u` of the points (largest
+    /// [`crate::mesh::TriangleMesh`]), along the principal axis `u` of the points (largest
     /// eigenvalue of their covariance, in `f64`) through their mean `m`: the radius is the
     /// largest distance `d_p` of a point from that line, and the segment `[m + lo·u, m + hi·u]`
     /// is the shortest that covers every point, `lo = min(t_p + s_p)`,

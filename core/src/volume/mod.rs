@@ -3,7 +3,7 @@
 //! chopper example of the specification).
 //!
 //! * **Fits** ([`BoundingSphere::fit`], [`Obb::fit`], [`Capsule::fit`]) take a slice of points
-//!   or a [`crate::bvh::TriangleMesh`] (anything implementing [`PointSet`]) and need no
+//!   or a [`crate::mesh::TriangleMesh`] (anything implementing [`PointSet`]) and need no
 //!   storage. Empty input, a non-finite coordinate or an out-of-range vertex index is a typed
 //!   [`VolumeError`]. Every fitted volume **contains every input point exactly** (not just
 //!   in `f32` arithmetic): its sizes are measured in `f64` against the stored, `f32` centre

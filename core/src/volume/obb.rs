@@ -118,7 +118,7 @@ impl Obb {
     }
 
     /// A box containing every point of `points` (a `&[Vec3]` or a
-    /// [`crate::bvh::TriangleMesh`]), oriented along the principal axes of the points:
+    /// [`crate::mesh::TriangleMesh`]), oriented along the principal axes of the points:
     /// the eigenvectors of their covariance matrix (mean and covariance in `f64`, symmetric
     /// Jacobi eigen-solver [`super::eigen::symmetric_eigen`]), rounded to `f32`. The box is
     /// the range of the points' coordinates in that frame: its centre is rounded to `f32`,

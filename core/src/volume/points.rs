@@ -2,8 +2,8 @@
 //! triangle mesh references.
 
 use super::VolumeError;
-use crate::bvh::TriangleMesh;
 use crate::error::{InputElement, NonFiniteError};
+use crate::mesh::TriangleMesh;
 use glam::{DVec3, Vec3};
 
 /// Relative padding of every fitted size (radius, half-extent), applied in `f64` before the

@@ -41,7 +41,7 @@ impl BoundingSphere {
     }
 
     /// A ball containing every point of `points` (a `&[Vec3]` or a
-    /// [`crate::bvh::TriangleMesh`]): Ritter's method (1990) in `f64`. The initial diameter is
+    /// [`crate::mesh::TriangleMesh`]): Ritter's method (1990) in `f64`. The initial diameter is
     /// the most distant pair among the extreme points along `x`, `y` and `z`; one pass then
     /// grows the ball to each point outside it. The centre is rounded to `f32` and the radius
     /// is measured again from it, in `f64`, padded by [`super::FIT_PAD_REL`] and rounded up,

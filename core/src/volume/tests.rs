@@ -10,7 +10,7 @@ use super::eigen::symmetric_eigen;
 use super::overlap::*;
 use super::*;
 use crate::aabb::Aabb;
-use crate::bvh::TriangleMesh;
+use crate::mesh::TriangleMesh;
 use crate::test_util::{lcg, unit_vec};
 use glam::{DVec3, Mat3, Quat, Vec3};
 use std::vec;

@@ -15,7 +15,8 @@
 
 use core::panic::PanicInfo;
 use core::sync::atomic::{AtomicU32, Ordering};
-use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, node_capacity};
+use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, node_capacity};
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, Triangles};
 use halfray_core::solids::{CUBE_TRIANGLES, CUBE_VERTICES};

@@ -18,12 +18,13 @@ use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
 use crate::timing::{TIMED_PASSES, interleaved};
 use halfray_core::Ray;
+use halfray_core::bvh::BuildOptions;
 use halfray_core::bvh::wide::binary_options;
-use halfray_core::bvh::{BuildOptions, TriangleMesh};
 use halfray_core::grid::{Grid, GridOptions, GridPlan};
 use halfray_core::kdtree::{
     KdBuildOptions, KdNode, KdRef, KdTree, node_capacity, reference_capacity,
 };
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, Triangles};
 use halfray_core::triangle::Watertight;

@@ -250,7 +250,7 @@ pub fn watertight_hits<'a>(
     bvh: &'a VecBvh8,
     mesh: &'a ObjMesh,
 ) -> impl Fn(&Ray) -> Option<Hit> + 'a {
-    let tris = halfray_core::bvh::TriangleMesh::new(&mesh.positions, &mesh.triangles);
+    let tris = halfray_core::mesh::TriangleMesh::new(&mesh.positions, &mesh.triangles);
     move |r| {
         closest_simd(bvh, &tris, &Watertight, r, None)
             .map(|(p, h)| h.to_hit(&mesh.triangle(p as usize)))

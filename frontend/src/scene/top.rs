@@ -8,9 +8,8 @@
 //! and an equal `t` between the BVH and the list goes to the later object too.
 
 use crate::scene::geom::{Node, QueryCtx, SurfaceHit};
-use halfray_core::bvh::{
-    BuildOptions, Bvh, BvhNode, PrimitiveSource, index_capacity, node_capacity,
-};
+use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
+use halfray_core::mesh::PrimitiveSource;
 use halfray_core::prelude::*;
 use halfray_core::query::Query;
 use halfray_core::{Aabb, Ray};

@@ -17,10 +17,8 @@ pub(crate) use crate::tree_oracle::usable_primitives;
 use glam::Vec3;
 use halfray_core::aabb::Aabb;
 use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, group_capacity};
-use halfray_core::bvh::{
-    BuildOptions, Bvh, BvhError, BvhNode, PrimitiveSource, TriangleMesh, index_capacity,
-    node_capacity,
-};
+use halfray_core::bvh::{BuildOptions, Bvh, BvhError, BvhNode, index_capacity, node_capacity};
+use halfray_core::mesh::{PrimitiveSource, TriangleMesh};
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, Triangles};
 use halfray_core::ray::Ray;

@@ -11,7 +11,8 @@
 use super::Input;
 use super::bvh::{Oracle, Soup, check_ray, decode};
 use super::*;
-use halfray_core::bvh::{Bvh, BvhNode, TriangleMesh, load_scratch_len};
+use halfray_core::bvh::{Bvh, BvhNode, load_scratch_len};
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::triangle::Watertight;
 
 /// Fuzz target `bvh_load`: [`check`] on the decoded input.

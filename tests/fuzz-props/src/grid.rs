@@ -13,8 +13,8 @@ use super::bvh::{
 };
 use super::{Enc, Seed};
 use glam::Vec3;
-use halfray_core::bvh::TriangleMesh;
 use halfray_core::grid::{CellAssignment, DEFAULT_LAMBDA, Grid, GridError, GridOptions, GridPlan};
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, Triangles};
 use halfray_core::ray::Ray;

@@ -13,11 +13,11 @@ use super::bvh::{
 use super::tree_oracle::checked_build;
 use super::{Enc, Seed};
 use glam::Vec3;
-use halfray_core::bvh::{PrimitiveSource, TriangleMesh};
 use halfray_core::kdtree::{
     KdBuildOptions, KdNode, KdNodeKind, KdRef, KdTree, KdTreeError, MAX_DEPTH, node_capacity,
     reference_capacity,
 };
+use halfray_core::mesh::{PrimitiveSource, TriangleMesh};
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, Triangles};
 use halfray_core::ray::Ray;

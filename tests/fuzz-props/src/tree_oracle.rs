@@ -5,7 +5,7 @@
 use super::bvh::{projection_underflows, within_domain};
 use super::fmt_ray;
 use core::fmt::Debug;
-use halfray_core::bvh::{PrimitiveSource, TriangleMesh};
+use halfray_core::mesh::{PrimitiveSource, TriangleMesh};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{F64Reference, TriangleHit, TriangleIntersector};
 

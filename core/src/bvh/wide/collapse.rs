@@ -4,8 +4,9 @@
 use super::group_capacity;
 use super::node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
 use super::{LEAF_MERGE, LEAF_OPEN_ABOVE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh};
-use crate::bvh::{Bvh, BvhError, BvhNode, TriangleMesh};
+use crate::bvh::{Bvh, BvhError, BvhNode};
 use crate::error::{CapacityError, NonFiniteError, Storage};
+use crate::mesh::TriangleMesh;
 use crate::triangle::LANES;
 
 /// The leaf run binary node `b` becomes, if it becomes one: a binary leaf, or an inner node
@@ -462,7 +463,7 @@ where
             triangle_count: indices.len() as u32,
             slot_count: slots as u32,
             source_len: mesh.len(),
-            extent: crate::bvh::extent_of(&binary.bounds()),
+            extent: crate::query::walk::extent_of(&binary.bounds()),
         })
     }
 }

@@ -7,7 +7,7 @@
 //! # Building
 //!
 //! [`WideBvh::from_binary`] collapses a built binary tree over a
-//! [`TriangleMesh`](crate::bvh::TriangleMesh): each wide node takes its binary node's two
+//! [`TriangleMesh`](crate::mesh::TriangleMesh): each wide node takes its binary node's two
 //! children and, while it has fewer than `W`, replaces the inner child with the largest
 //! surface area by that child's two children (ties: the first). A binary subtree of at most
 //! [`LEAF_MERGE`] triangles becomes one leaf slot (its triangles in a row), and slots still

@@ -32,7 +32,7 @@ use super::traverse::{RunLanes, STACK, leaf_groups, leaf_hits, prefetch_child, s
 use super::{WideBvh, add_stats};
 use crate::aabb::SlabRay;
 use crate::bvh::padded_ray::PaddedRay;
-use crate::bvh::{cull_bound, projection_pad};
+use crate::query::walk::{cull_bound, projection_pad};
 use crate::query::{LeafTest, TraversalStats};
 use crate::ray::Ray;
 use crate::simd;

@@ -3,8 +3,9 @@
 use super::WideBvh;
 use super::node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
 use crate::aabb::Aabb;
-use crate::bvh::{BvhError, TriangleMesh};
+use crate::bvh::BvhError;
 use crate::error::NonFiniteError;
+use crate::mesh::TriangleMesh;
 use crate::triangle::LANES;
 
 impl<const W: usize, N, T> WideBvh<W, N, T>
@@ -83,7 +84,7 @@ where
                 nodes[i].set_child(slot, &b, reference);
             }
         }
-        self.extent = crate::bvh::extent_of(&self.bounds());
+        self.extent = crate::query::walk::extent_of(&self.bounds());
         match bad {
             Some(index) => Err(NonFiniteError::primitive(index).into()),
             None => Ok(()),

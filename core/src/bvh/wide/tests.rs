@@ -2,7 +2,8 @@
 
 use super::*;
 use crate::aabb::Aabb;
-use crate::bvh::{BuildOptions, Bvh, BvhError, BvhNode, TriangleMesh, index_capacity};
+use crate::bvh::{BuildOptions, Bvh, BvhError, BvhNode, index_capacity};
+use crate::mesh::TriangleMesh;
 use crate::prelude::*;
 use crate::query::{Query, QueryStack, TraversalStats, Triangles};
 use crate::ray::Ray;

@@ -4,8 +4,9 @@ use super::node::{ChildRef, LEAF_BIT, LeafGroup, START_MASK, WideNode};
 use super::packet::{PACKET, PacketStack};
 use super::{WideBvh, add_stats};
 use crate::aabb::SlabRay;
+use crate::bvh::BvhError;
 use crate::bvh::padded_ray::PaddedRay;
-use crate::bvh::{BvhError, cull_bound, projection_pad, take_if_better};
+use crate::query::walk::{cull_bound, projection_pad, take_if_better};
 use crate::query::{
     LeafTest, Query, QueryStack, RayQuery, Stack, StackEntry, TraversalStats, same_length,
 };
@@ -207,7 +208,7 @@ where
         Ok(())
     }
 
-    fn query_box<P: crate::bvh::PrimitiveSource + ?Sized>(
+    fn query_box<P: crate::mesh::PrimitiveSource + ?Sized>(
         &self,
         _: &P,
         query: &crate::aabb::Aabb,

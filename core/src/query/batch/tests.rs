@@ -4,9 +4,10 @@
 
 use super::*;
 use crate::bvh::wide::{Bvh4, Bvh8, LeafGroup, WideNode, binary_options, group_capacity};
-use crate::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+use crate::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
 use crate::grid::{Grid, GridOptions, GridPlan};
 use crate::kdtree::{KdBuildOptions, KdNode, KdRef, KdTree};
+use crate::mesh::TriangleMesh;
 use crate::query::{
     QUERY_STACK_SIZE, Query, QueryStack, RayQuery, StackEntry, TraversalStats, Triangles,
 };

@@ -26,7 +26,8 @@ mod query;
 pub use query::{QUERY_STACK, any_in, closest_in, query_checks};
 
 use halfray_core::Vec3;
-use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh};
+use halfray_core::bvh::{BuildOptions, Bvh, BvhNode};
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::halfedge::{
     EdgeRec, FaceRec, LoopWeights, SliceMesh, VertexRec, build_scratch_len,
 };

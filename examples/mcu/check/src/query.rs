@@ -4,7 +4,8 @@
 
 use super::{Fnv, Rng, Summary, fold_answers};
 use halfray_core::Vec3;
-use halfray_core::bvh::{Bvh, BvhError, BvhNode, TriangleMesh};
+use halfray_core::bvh::{Bvh, BvhError, BvhNode};
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, StackEntry, Triangles};
 use halfray_core::ray::Ray;

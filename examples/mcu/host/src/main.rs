@@ -6,7 +6,8 @@
 //! (examples/mcu-c) must print for them (`mcu-c:` and the query image's figures).
 
 use halfray_core::Vec3;
-use halfray_core::bvh::{BvhNode, TriangleMesh, node_capacity};
+use halfray_core::bvh::{BvhNode, node_capacity};
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::halfedge::{EdgeRec, FaceRec, VertexRec, build_scratch_len};
 use halfray_core::ray::Ray;
 use mcu_check::{

@@ -5,7 +5,8 @@
 use super::*;
 use crate::aabb::Aabb;
 use crate::bvh::wide::{Bvh4, Bvh8, binary_options, group_capacity};
-use crate::bvh::{BuildOptions, Bvh, BvhNode, TriangleMesh, index_capacity, node_capacity};
+use crate::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
+use crate::mesh::TriangleMesh;
 use crate::query::{Query, QueryStack, RayQuery, TraversalStats, Triangles};
 use crate::simd::level::Portable;
 use crate::test_util::{Lcg, brute_watertight, lcg_soup};

@@ -6,7 +6,8 @@ use super::CollideError;
 use super::body::{Body, DBox, Placement};
 use super::distance::{DISTANCE_ERR_REL, triangle_distance};
 use super::pairs::{PairStack, child_pairs, split_first};
-use crate::bvh::{BvhNode, Primitive};
+use crate::bvh::BvhNode;
+use crate::mesh::Primitive;
 use crate::transform::Transform;
 use glam::Vec3;
 

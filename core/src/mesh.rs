@@ -1,5 +1,8 @@
-//! What a BVH can hold: primitives with bounds, given by index. The builder bins each
-//! primitive by the centre of its box.
+//! What every structure is built over: primitives with bounds, given by index
+//! ([`PrimitiveSource`], [`Primitive`]), and the indexed triangle mesh ([`TriangleMesh`]).
+//! The builders ([`crate::bvh::Bvh`], [`crate::kdtree::KdTree`], [`crate::grid::Grid`]) bin
+//! or clip each primitive by its box; intersection is supplied at query time
+//! ([`crate::query::LeafTest`]).
 
 use crate::aabb::Aabb;
 use glam::Vec3;
@@ -8,7 +11,7 @@ use glam::Vec3;
 /// to each query as a closure, so the same tree serves any intersector.
 pub trait Primitive {
     /// A box containing the primitive. Non-finite or empty bounds mark the primitive invalid
-    /// (see [`super::BuildOptions::exclude_non_finite`]). Boxes of curved primitives computed
+    /// (see [`crate::bvh::BuildOptions::exclude_non_finite`]). Boxes of curved primitives computed
     /// from rounded values must be padded outward so that they contain the exact surface.
     fn bounds(&self) -> Aabb;
 }
@@ -27,7 +30,7 @@ pub trait PrimitiveSource {
 
 /// Bounds reported for an index that does not name a valid primitive: all NaN, so the builder
 /// rejects or excludes it.
-pub(super) const INVALID_BOUNDS: Aabb = Aabb::new(Vec3::NAN, Vec3::NAN);
+pub(crate) const INVALID_BOUNDS: Aabb = Aabb::new(Vec3::NAN, Vec3::NAN);
 
 impl<P: Primitive> PrimitiveSource for [P] {
     #[inline]
@@ -131,6 +134,6 @@ impl PrimitiveSource for TriangleMesh<'_> {
 
 /// `true` when `b` can go into a tree: finite and non-empty.
 #[inline]
-pub(super) fn is_usable(b: &Aabb) -> bool {
+pub(crate) fn is_usable(b: &Aabb) -> bool {
     b.is_finite() && b.is_valid()
 }

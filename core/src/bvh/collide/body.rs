@@ -3,8 +3,9 @@
 
 use super::CollideError;
 use crate::aabb::Aabb;
-use crate::bvh::{Bvh, BvhNode, TriangleMesh};
+use crate::bvh::{Bvh, BvhNode};
 use crate::float::gamma;
+use crate::mesh::TriangleMesh;
 use crate::transform::Transform;
 use glam::{DVec3, Mat4, Vec3};
 

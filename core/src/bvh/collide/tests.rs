@@ -5,7 +5,8 @@
 
 use super::tri_tri::segment_triangle;
 use super::*;
-use crate::bvh::{BuildOptions, TriangleMesh};
+use crate::bvh::BuildOptions;
+use crate::mesh::TriangleMesh;
 use crate::test_util::{VecBvh, grid_point, lcg, lcg_soup, vec_bvh};
 use crate::transform::Transform;
 use glam::{Vec3, vec3};
