@@ -10,8 +10,8 @@
 //! independently from the chopper's vertices moved along the path in `f64`.
 
 use glam::{DVec3, Vec3, vec3};
-use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
 use halfray_core::bvh::collide::{Body, colliding_pairs, first_contact, min_distance};
+use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
 use halfray_core::halfedge::{DiffuseBoundary, HalfedgeMesh, VertexId, build_scratch_len};
 use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
