@@ -26,3 +26,27 @@ macro_rules! getters {
 }
 
 pub(crate) use getters;
+
+/// Expands, inside an inherent `impl` block, to one public `#[inline]`, `#[must_use]` method
+/// per entry returning a count kept in a `u32` field as `usize`, with the entry's doc comment:
+///
+/// ```text
+/// count_getters! {
+///     /// Number of primitives in the tree.
+///     primitive_count = prim_count;
+/// }
+/// ```
+macro_rules! count_getters {
+    ($($(#[$doc:meta])* $name:ident = $field:ident;)+) => {
+        $(
+            $(#[$doc])*
+            #[inline]
+            #[must_use]
+            pub fn $name(&self) -> usize {
+                self.$field as usize
+            }
+        )+
+    };
+}
+
+pub(crate) use count_getters;

@@ -1,9 +1,13 @@
 //! Helpers shared by the unit tests of the core (compiled only for `cargo test`).
 
+use crate::bvh::wide::{LeafGroup, WideBvh, WideNode, group_capacity};
 use crate::bvh::{BuildOptions, Bvh, BvhError, BvhNode, index_capacity, node_capacity};
-
+use crate::grid::{Grid, GridError, GridOptions, GridPlan};
+use crate::kdtree::{KdBuildOptions, KdNode, KdRef, KdTree, KdTreeError};
 use crate::mesh::{PrimitiveSource, TriangleMesh};
+use crate::query::{Query, RayQuery, Stack, Triangles};
 use crate::ray::Ray;
+use crate::simd_level::SimdLevel;
 use crate::triangle::{TriangleHit, TriangleIntersector, Watertight};
 use glam::{Vec3, vec3};
 use std::vec;
@@ -130,6 +134,114 @@ pub fn vec_bvh<S: PrimitiveSource + ?Sized>(
         vec![BvhNode::EMPTY; node_capacity(n)],
         vec![0u32; index_capacity(n)],
         opts,
+    )
+}
+
+/// A wide tree (`W` = 8 or 4) in vectors.
+pub type VecWide<const W: usize> = WideBvh<W, Vec<WideNode<W>>, Vec<LeafGroup>>;
+
+/// [`WideBvh::from_binary`] of `binary` (built over `mesh`) into full-capacity vectors.
+pub fn vec_wide<const W: usize>(
+    binary: &VecBvh,
+    mesh: &TriangleMesh<'_>,
+) -> Result<VecWide<W>, BvhError> {
+    let n = mesh.len();
+    WideBvh::from_binary(
+        binary,
+        mesh,
+        vec![WideNode::EMPTY; crate::bvh::wide::node_capacity(n)],
+        vec![LeafGroup::EMPTY; group_capacity(n)],
+    )
+}
+
+/// A grid in vectors.
+pub type VecGrid = Grid<Vec<u32>, Vec<u32>>;
+
+/// [`GridPlan::new`] then [`Grid::build`] of `mesh` with `options`, into vectors of exactly
+/// the planned sizes filled with `u32::MAX` (so a slot the build forgets to write shows).
+pub fn vec_grid(mesh: &TriangleMesh<'_>, options: &GridOptions) -> Result<VecGrid, GridError> {
+    let plan = GridPlan::new(mesh, options)?;
+    Grid::build(
+        mesh,
+        &plan,
+        vec![u32::MAX; plan.required_offsets()],
+        vec![u32::MAX; plan.required_references()],
+    )
+}
+
+/// A kd-tree in vectors.
+pub type VecKd = KdTree<Vec<KdNode>, Vec<u32>>;
+
+/// [`KdTree::build`] of `src` with `options` into `nodes` nodes and `refs` references (filled
+/// with `u32::MAX`) and as many scratch references.
+pub fn vec_kd_sized<S: PrimitiveSource + ?Sized>(
+    src: &S,
+    nodes: usize,
+    refs: usize,
+    options: &KdBuildOptions,
+) -> Result<VecKd, KdTreeError> {
+    let mut scratch = vec![KdRef::EMPTY; refs];
+    KdTree::build(
+        src,
+        vec![KdNode::EMPTY; nodes],
+        vec![u32::MAX; refs],
+        &mut scratch,
+        options,
+    )
+}
+
+/// [`vec_kd_sized`] at full capacity ([`crate::kdtree::node_capacity`], at least one node,
+/// and [`crate::kdtree::reference_capacity`] of the primitive count).
+pub fn vec_kd<S: PrimitiveSource + ?Sized>(
+    src: &S,
+    options: &KdBuildOptions,
+) -> Result<VecKd, KdTreeError> {
+    let n = src.primitive_count();
+    vec_kd_sized(
+        src,
+        crate::kdtree::node_capacity(n).max(1),
+        crate::kdtree::reference_capacity(n),
+        options,
+    )
+}
+
+/// The closest hit of `ray` in `accel` over [`Watertight`] triangles of `mesh` with the
+/// context `ctx`: the query call the structures' tests make (the code under test, not an
+/// oracle).
+pub fn closest_watertight_in<A, L, S>(
+    accel: &A,
+    mesh: &TriangleMesh<'_>,
+    ray: &Ray,
+    ctx: &mut Query<'_, L, S>,
+) -> S::Out<(u32, TriangleHit)>
+where
+    A: RayQuery + ?Sized,
+    L: SimdLevel,
+    S: Stack,
+{
+    accel.closest_hit(ray, &mut Triangles::new(mesh, &Watertight), ctx)
+}
+
+/// [`closest_watertight_in`] with a fresh default context.
+pub fn closest_watertight<A: RayQuery + ?Sized>(
+    accel: &A,
+    mesh: &TriangleMesh<'_>,
+    ray: &Ray,
+) -> Option<(u32, TriangleHit)> {
+    closest_watertight_in(accel, mesh, ray, &mut Query::new())
+}
+
+/// The any hit of `ray` in `accel` over [`Watertight`] triangles of `mesh`, with a fresh
+/// default context.
+pub fn any_watertight<A: RayQuery + ?Sized>(
+    accel: &A,
+    mesh: &TriangleMesh<'_>,
+    ray: &Ray,
+) -> Option<(u32, TriangleHit)> {
+    accel.any_hit(
+        ray,
+        &mut Triangles::new(mesh, &Watertight),
+        &mut Query::new(),
     )
 }
 

@@ -32,6 +32,23 @@ fn small_scene(dir: &Path, name: &str, extra: &str) -> PathBuf {
     path
 }
 
+/// The arguments `render <scene> -o <image> --stats-json <stats> -q`.
+fn render_with_stats<'a>(
+    scene: &'a dyn AsRef<OsStr>,
+    image: &'a dyn AsRef<OsStr>,
+    stats: &'a dyn AsRef<OsStr>,
+) -> [&'a dyn AsRef<OsStr>; 7] {
+    [
+        &"render",
+        scene,
+        &"-o",
+        image,
+        &"--stats-json",
+        stats,
+        &"-q",
+    ]
+}
+
 fn run(args: &[&dyn AsRef<OsStr>]) -> Output {
     common::halfray(args)
 }
@@ -75,15 +92,7 @@ fn a_declared_but_unused_mesh_file_is_never_an_output() {
         );
         assert_eq!(std::fs::read(&cube).unwrap(), before);
     }
-    let o = run(&[
-        &"render",
-        &scene,
-        &"-o",
-        &dir.path().join("x.png"),
-        &"--stats-json",
-        &cube,
-        &"-q",
-    ]);
+    let o = run(&render_with_stats(&scene, &dir.path().join("x.png"), &cube));
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert_eq!(std::fs::read(&cube).unwrap(), before);
     assert_eq!(names(dir.path()), ["cube.obj", "s.toml"]);
@@ -99,18 +108,7 @@ fn outputs_naming_stdout_append_to_it_and_never_replace_the_file_behind() {
     let log = dir.path().join("log.txt");
     for stdout in ["/dev/stdout", "/dev/fd/1", "/proc/self/fd/1", "-"] {
         std::fs::write(&log, b"earlier line\n").unwrap();
-        let o = run_appending(
-            &[
-                &"render",
-                &scene,
-                &"-o",
-                &png,
-                &"--stats-json",
-                &stdout,
-                &"-q",
-            ],
-            &log,
-        );
+        let o = run_appending(&render_with_stats(&scene, &png, &stdout), &log);
         assert_eq!(o.status.code(), Some(0), "{stdout}: {}", stderr(&o));
         let text = std::fs::read_to_string(&log).unwrap();
         let json = text.strip_prefix("earlier line\n").unwrap_or_else(|| {
@@ -133,18 +131,7 @@ fn outputs_naming_stdout_append_to_it_and_never_replace_the_file_behind() {
     let link = dir.path().join("out.json");
     std::os::unix::fs::symlink("/dev/stdout", &link).unwrap();
     std::fs::write(&log, b"earlier line\n").unwrap();
-    let o = run_appending(
-        &[
-            &"render",
-            &scene,
-            &"-o",
-            &png,
-            &"--stats-json",
-            &link,
-            &"-q",
-        ],
-        &log,
-    );
+    let o = run_appending(&render_with_stats(&scene, &png, &link), &log);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(
         std::fs::read_to_string(&log)
@@ -444,17 +431,21 @@ fn a_huge_rayon_num_threads_is_refused_without_panicking() {
     let dir = tempfile::tempdir().unwrap();
     let scene = small_scene(dir.path(), "s.toml", "");
     let png = dir.path().join("o.png");
-    for n in ["100000", "99999999999999999999999999999999999999999"] {
-        let o = Command::new(BIN)
+    let render = |threads: &str, quiet: &[&str]| {
+        Command::new(BIN)
             .args([
-                "render".as_ref(),
+                OsStr::new("render"),
                 scene.as_os_str(),
-                "-o".as_ref(),
+                OsStr::new("-o"),
                 png.as_os_str(),
             ])
-            .env("RAYON_NUM_THREADS", n)
+            .args(quiet)
+            .env("RAYON_NUM_THREADS", threads)
             .output()
-            .unwrap();
+            .unwrap()
+    };
+    for n in ["100000", "99999999999999999999999999999999999999999"] {
+        let o = render(n, &[]);
         assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
         assert!(
             stderr(&o).contains("at most 1024 worker threads") && !stderr(&o).contains("panicked"),
@@ -462,17 +453,7 @@ fn a_huge_rayon_num_threads_is_refused_without_panicking() {
             stderr(&o)
         );
     }
-    let o = Command::new(BIN)
-        .args([
-            "render".as_ref(),
-            scene.as_os_str(),
-            "-o".as_ref(),
-            png.as_os_str(),
-            "-q".as_ref(),
-        ])
-        .env("RAYON_NUM_THREADS", "3")
-        .output()
-        .unwrap();
+    let o = render("3", &["-q"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
 

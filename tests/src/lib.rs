@@ -38,6 +38,7 @@ use std::path::{Path, PathBuf};
 use glam::{DVec2, DVec3, Vec3};
 use halfray_core::Ray;
 use halfray_core::mesh::TriangleMesh;
+use halfray_core::query::{Query, RayQuery, TraversalStats, Triangles};
 use halfray_core::triangle::{TriangleHit, TriangleIntersector, TriangleVariant};
 
 /// Unit roundoff of `f32`, `2⁻²⁴`, as `f64`.
@@ -67,6 +68,31 @@ pub fn brute_triangles<T: TriangleIntersector>(
         }
     }
     best
+}
+
+/// The closest hit of `ray` in `accel` over the triangles of `mesh` tested by `isect`, with a
+/// fresh context that adds to `stats` when given: the query call the suites make (the code
+/// under test, not an oracle).
+pub fn closest_by<'s, A: RayQuery + ?Sized, I: TriangleIntersector>(
+    accel: &A,
+    mesh: &TriangleMesh<'_>,
+    isect: &I,
+    ray: &Ray,
+    stats: impl Into<Option<&'s mut TraversalStats>>,
+) -> Option<(u32, TriangleHit)> {
+    let mut ctx = Query::new().stats(stats);
+    accel.closest_hit(ray, &mut Triangles::new(mesh, isect), &mut ctx)
+}
+
+/// The any hit of `ray` in `accel` over the triangles of `mesh` tested by `isect`
+/// ([`closest_by`]'s counterpart, without statistics).
+pub fn any_by<A: RayQuery + ?Sized, I: TriangleIntersector>(
+    accel: &A,
+    mesh: &TriangleMesh<'_>,
+    isect: &I,
+    ray: &Ray,
+) -> Option<(u32, TriangleHit)> {
+    accel.any_hit(ray, &mut Triangles::new(mesh, isect), &mut Query::new())
 }
 
 /// `f` over `items` on every core (`available_parallelism`, 2 if unknown): contiguous chunks

@@ -23,9 +23,9 @@ use halfray_core::Ray;
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, MAX_DEPTH, index_capacity, node_capacity};
 use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
-use halfray_core::query::{Query, TraversalStats, Triangles};
+use halfray_core::query::{TraversalStats, Triangles};
 use halfray_core::triangle::{TriangleIntersector, TriangleVariant, Watertight};
-use halfray_tests::{par_map, vertex_and_eighth_edge_points};
+use halfray_tests::{any_by, closest_by, par_map, vertex_and_eighth_edge_points};
 use proptest::prelude::*;
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -158,18 +158,8 @@ fn check_rays(
     rays: &[Ray],
 ) -> (usize, usize) {
     let results = par_map(rays, |ray| {
-        let got = bvh
-            .closest_hit(
-                ray,
-                &mut Triangles::new(mesh, &Watertight),
-                &mut Query::new(),
-            )
-            .map(|(p, h)| (p, h.t));
-        let any = bvh.any_hit(
-            ray,
-            &mut Triangles::new(mesh, &Watertight),
-            &mut Query::new(),
-        );
+        let got = closest_by(bvh, mesh, &Watertight, ray, None).map(|(p, h)| (p, h.t));
+        let any = any_by(bvh, mesh, &Watertight, ray);
         let wide_got = halfray::accel::closest_simd(wide, mesh, &Watertight, ray, None);
         let wide_any = halfray::accel::any_simd(wide, mesh, &Watertight, ray);
         let want = brute(mesh, Some(spheres), &Watertight, ray);
@@ -262,14 +252,10 @@ fn every_intersector_variant_works_through_the_bvh() {
         rays: &[Ray],
     ) {
         for ray in rays {
-            let got = bvh
-                .closest_hit(ray, &mut Triangles::new(mesh, isect), &mut Query::new())
-                .map(|(_, h)| h.t);
+            let got = closest_by(bvh, mesh, isect, ray, None).map(|(_, h)| h.t);
             let want = brute(mesh, Some(spheres), isect, ray).map(|(_, t)| t);
             assert_eq!(got, want, "{} {ray:?}", isect.name());
-            let any = bvh
-                .any_hit(ray, &mut Triangles::new(mesh, isect), &mut Query::new())
-                .is_some();
+            let any = any_by(bvh, mesh, isect, ray).is_some();
             assert_eq!(any, got.is_some(), "{}", isect.name());
         }
     }
@@ -327,24 +313,12 @@ fn exact_vertex_and_edge_rays_do_not_leak_on_the_exact_solids() {
                 assert_eq!(o + d, p, "exact construction");
                 assert_eq!(d.as_dvec3(), p.as_dvec3() - o.as_dvec3(), "exact direction");
                 let ray = Ray::new(o, d);
-                let (prim, hit) = bvh
-                    .closest_hit(
-                        &ray,
-                        &mut Triangles::new(&mesh, &Watertight),
-                        &mut Query::new(),
-                    )
+                let (prim, hit) = closest_by(&bvh, &mesh, &Watertight, &ray, None)
                     .unwrap_or_else(|| panic!("{name}: leak at {p:?} from {o:?}"));
                 assert!((hit.t - 1.0).abs() <= 1e-6, "{name}: t {} at {p:?}", hit.t);
                 let want = brute(&mesh, None, &Watertight, &ray);
                 assert_eq!(Some((prim, hit.t)), want, "{name}: {ray:?}");
-                assert!(
-                    bvh.any_hit(
-                        &ray,
-                        &mut Triangles::new(&mesh, &Watertight),
-                        &mut Query::new()
-                    )
-                    .is_some()
-                );
+                assert!(any_by(&bvh, &mesh, &Watertight, &ray).is_some());
                 count += 1;
             }
         }
@@ -418,12 +392,7 @@ fn vertex_and_edge_rays_do_not_leak_on_the_closed_meshes() {
         );
         let results = par_map(&rays, |ray| {
             (
-                bvh.closest_hit(
-                    ray,
-                    &mut Triangles::new(&mesh, &Watertight),
-                    &mut Query::new(),
-                )
-                .map(|(p, h)| (p, h.t)),
+                closest_by(&bvh, &mesh, &Watertight, ray, None).map(|(p, h)| (p, h.t)),
                 brute(&mesh, Some(&spheres), &Watertight, ray),
             )
         });
@@ -574,11 +543,7 @@ fn stats_count_visits_and_nan_rays_stop_at_once() {
     let mut st = TraversalStats::default();
     let rays = random_rays(lo, hi, 1000, 1);
     for r in &rays {
-        let _ = bvh.closest_hit(
-            r,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new().stats(&mut st),
-        );
+        let _ = closest_by(&bvh, &mesh, &Watertight, r, &mut st);
     }
     assert!(
         st.nodes_visited >= 1000 && st.primitives_tested > 0,
@@ -591,14 +556,7 @@ fn stats_count_visits_and_nan_rays_stop_at_once() {
     );
     let mut st = TraversalStats::default();
     let nan = Ray::new(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::X);
-    assert!(
-        bvh.closest_hit(
-            &nan,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new().stats(&mut st)
-        )
-        .is_none()
-    );
+    assert!(closest_by(&bvh, &mesh, &Watertight, &nan, &mut st).is_none());
     assert!(st.nodes_visited <= 1);
 }
 
@@ -641,9 +599,9 @@ proptest! {
                 _ => target,
             };
             let ray = Ray::with_interval(o, d, 0.0, if kind == 3 { 2.0 } else { f32::INFINITY });
-            let got = bvh.closest_hit(&ray, &mut Triangles::new(&mesh, &Watertight), &mut Query::new()).map(|(p, h)| (p, h.t));
+            let got = closest_by(&bvh, &mesh, &Watertight, &ray, None).map(|(p, h)| (p, h.t));
             prop_assert_eq!(got, brute(&mesh, None, &Watertight, &ray), "{:?}", ray);
-            let any = bvh.any_hit(&ray, &mut Triangles::new(&mesh, &Watertight), &mut Query::new());
+            let any = any_by(&bvh, &mesh, &Watertight, &ray);
             prop_assert_eq!(any.is_some(), got.is_some());
         }
     }
@@ -689,7 +647,7 @@ proptest! {
         prop_assert!(bvh.bounds().is_finite() || bvh.is_empty());
         for &(o, t) in &rays {
             let ray = Ray::new(o, t - o);
-            let got = bvh.closest_hit(&ray, &mut Triangles::new(&mesh, &Watertight), &mut Query::new()).map(|(p, h)| (p, h.t));
+            let got = closest_by(&bvh, &mesh, &Watertight, &ray, None).map(|(p, h)| (p, h.t));
             prop_assert_eq!(got, brute(&mesh, None, &Watertight, &ray));
         }
     }

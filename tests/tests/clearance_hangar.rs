@@ -15,11 +15,12 @@ use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacit
 use halfray_core::halfedge::{DiffuseBoundary, HalfedgeMesh, VertexId, build_scratch_len};
 use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
-use halfray_core::query::{Query, Triangles};
+use halfray_core::query::Triangles;
 use halfray_core::ray::Ray;
 use halfray_core::solids::{CUBE_TRIANGLES, CUBE_VERTICES};
 use halfray_core::transform::Transform;
 use halfray_core::triangle::Watertight;
+use halfray_tests::closest_by;
 
 /// Relative tolerance on a clearance distance against its f64 analytic value. Coordinates
 /// are ≤ 20, so one f32 ulp is ≤ 1.9e-6 (≈ 1e-7 relative). The distance passes through the
@@ -202,13 +203,7 @@ fn hangar_walls_face_inward() {
     let bvh = build_hangar(&p, &t);
     for d in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
         let ray = Ray::new(vec3(7.0, 3.0, 5.0), d);
-        let (_, hit) = bvh
-            .closest_hit(
-                &ray,
-                &mut Triangles::new(&room, &Watertight),
-                &mut Query::new(),
-            )
-            .unwrap();
+        let (_, hit) = closest_by(&bvh, &room, &Watertight, &ray, None).unwrap();
         assert!(hit.front_face, "wall along {d} is seen from its front");
     }
 }

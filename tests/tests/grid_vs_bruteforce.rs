@@ -18,10 +18,10 @@ use halfray_core::Ray;
 use halfray_core::grid::{CellAssignment, DEFAULT_LAMBDA, Grid, GridOptions, GridPlan};
 use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
-use halfray_core::query::{Query, TraversalStats, Triangles};
+use halfray_core::query::TraversalStats;
 use halfray_core::solids::{CUBE_TRIANGLES, CUBE_VERTICES, grid_triangles};
 use halfray_core::triangle::Watertight;
-use halfray_tests::{brute_triangles, par_map};
+use halfray_tests::{any_by, brute_triangles, closest_by, par_map};
 use std::path::{Path, PathBuf};
 
 const MESH_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes");
@@ -59,17 +59,9 @@ fn check_scene(name: &str, p: &[Vec3], t: &[[u32; 3]], rays: &[Ray]) -> usize {
                 },
             );
             for (ray, w) in rays.iter().zip(&want) {
-                let got = g.closest_hit(
-                    ray,
-                    &mut Triangles::new(&mesh, &Watertight),
-                    &mut Query::new(),
-                );
+                let got = closest_by(&g, &mesh, &Watertight, ray, None);
                 assert_eq!(got, *w, "{name} {assignment:?} λ {lambda}: {ray:?}");
-                let any = g.any_hit(
-                    ray,
-                    &mut Triangles::new(&mesh, &Watertight),
-                    &mut Query::new(),
-                );
+                let any = any_by(&g, &mesh, &Watertight, ray);
                 assert_eq!(any.is_some(), w.is_some(), "{name}: any-hit {ray:?}");
             }
         }
@@ -144,11 +136,7 @@ fn coincident_and_zero_area_triangles() {
     let mesh = TriangleMesh::new(&p, &t);
     let g = build(&mesh, &GridOptions::default());
     for r in &rays {
-        if let Some((i, _)) = g.closest_hit(
-            r,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new(),
-        ) {
+        if let Some((i, _)) = closest_by(&g, &mesh, &Watertight, r, None) {
             assert!(i < 4 * base.len() as u32 && i % 4 < 2, "{i}");
         }
     }
@@ -244,18 +232,8 @@ fn bunny_equals_brute_force_and_figures() {
     let mut rays = random_rays(lo, hi, 1500, 0xB0);
     rays.extend(Camera::framing(lo, hi, 32, 32).rays());
     let results = par_map(&rays, |r| {
-        let got = grid.closest_hit(
-            r,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new(),
-        );
-        let any = grid
-            .any_hit(
-                r,
-                &mut Triangles::new(&mesh, &Watertight),
-                &mut Query::new(),
-            )
-            .is_some();
+        let got = closest_by(&grid, &mesh, &Watertight, r, None);
+        let any = any_by(&grid, &mesh, &Watertight, r).is_some();
         (got, any, brute_triangles(&mesh, &Watertight, r))
     });
     let mut hits = 0;
@@ -270,11 +248,7 @@ fn bunny_equals_brute_force_and_figures() {
     many.extend(Camera::framing(lo, hi, 128, 128).rays());
     let sample: Vec<Ray> = many.iter().step_by(6).copied().collect();
     let diffs = par_map(&sample, |r| {
-        let g = grid.closest_hit(
-            r,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new(),
-        );
+        let g = closest_by(&grid, &mesh, &Watertight, r, None);
         usize::from(g != brute_triangles(&mesh, &Watertight, r))
     });
     assert_eq!(diffs.iter().sum::<usize>(), 0);
@@ -292,11 +266,7 @@ fn bunny_equals_brute_force_and_figures() {
     assert!(grid.reference_count() >= n);
     let mut st = TraversalStats::default();
     for r in &many {
-        let _ = grid.closest_hit(
-            r,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new().stats(&mut st),
-        );
+        let _ = closest_by(&grid, &mesh, &Watertight, r, &mut st);
     }
     eprintln!(
         "bunny: {n} triangles, λ {DEFAULT_LAMBDA}, cells {:?}; references exact {} / bounds {} \
@@ -320,11 +290,7 @@ fn bunny_equals_brute_force_and_figures() {
         );
         let mut st = TraversalStats::default();
         for r in &many {
-            let _ = g.closest_hit(
-                r,
-                &mut Triangles::new(&mesh, &Watertight),
-                &mut Query::new().stats(&mut st),
-            );
+            let _ = closest_by(&g, &mesh, &Watertight, r, &mut st);
         }
         eprintln!(
             "bunny λ {lambda}: cells {:?}, {:.1} bytes per triangle, per ray {:.1} cells, \

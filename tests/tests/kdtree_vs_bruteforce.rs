@@ -20,10 +20,11 @@ use halfray_core::kdtree::{
 };
 use halfray_core::mesh::{PrimitiveSource, TriangleMesh};
 use halfray_core::prelude::*;
-use halfray_core::query::{Query, Triangles};
 use halfray_core::solids::grid_triangles;
 use halfray_core::triangle::{MollerTrumbore, TriangleIntersector, Watertight, WatertightF32};
-use halfray_tests::{brute_triangles as brute, par_map, vertex_and_eighth_edge_points};
+use halfray_tests::{
+    any_by, brute_triangles as brute, closest_by, par_map, vertex_and_eighth_edge_points,
+};
 use proptest::prelude::*;
 use std::path::PathBuf;
 
@@ -62,14 +63,14 @@ fn check<T: TriangleIntersector>(
     ray: &Ray,
 ) -> bool {
     let want = brute(mesh, isect, ray);
-    let got = kd.closest_hit(ray, &mut Triangles::new(mesh, isect), &mut Query::new());
+    let got = closest_by(kd, mesh, isect, ray, None);
     assert_eq!(
         got,
         want,
         "{}: closest hit differs for {ray:?}",
         isect.name()
     );
-    let any = kd.any_hit(ray, &mut Triangles::new(mesh, isect), &mut Query::new());
+    let any = any_by(kd, mesh, isect, ray);
     assert_eq!(
         any.is_some(),
         want.is_some(),
@@ -235,12 +236,7 @@ fn coincident_and_zero_area_triangles() {
     assert!(hits >= 40, "{hits}");
     let ray = Ray::new(Vec3::new(0.5, 0.5, 4.0), -Vec3::Z);
     assert_eq!(
-        kd.closest_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new()
-        )
-        .map(|h| h.0),
+        closest_by(&kd, &mesh, &Watertight, &ray, None).map(|h| h.0),
         Some(0)
     );
 }
@@ -367,11 +363,7 @@ fn bunny_equals_brute_force_on_a_sample_of_rays() {
     // Möller–Trumbore through the tree: its hits are genuine and never nearer than brute
     // force's (its inexact edges may report a hit just outside a triangle's box).
     for ray in rays.iter().take(300) {
-        let got = kd.closest_hit(
-            ray,
-            &mut Triangles::new(&mesh, &MollerTrumbore::CLASSIC),
-            &mut Query::new(),
-        );
+        let got = closest_by(&kd, &mesh, &MollerTrumbore::CLASSIC, ray, None);
         let want = brute(&mesh, &MollerTrumbore::CLASSIC, ray);
         if let Some((p, h)) = got {
             let v = mesh.triangle(p as usize).unwrap();

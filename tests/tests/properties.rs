@@ -9,11 +9,10 @@
 use glam::{DVec3, Vec3};
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
 use halfray_core::mesh::TriangleMesh;
-use halfray_core::prelude::*;
-use halfray_core::query::{Query, Triangles};
 use halfray_core::solids::OCTAHEDRON_TRIANGLES;
 use halfray_core::triangle::{F64Reference, TriangleIntersector, Watertight};
 use halfray_core::{Ray, spawn_ray};
+use halfray_tests::closest_by;
 use proptest::prelude::*;
 
 /// A closed convex mesh: the octahedron subdivided once and projected to the unit sphere (18
@@ -69,13 +68,7 @@ fn hits(positions: &[Vec3], tris: &[[u32; 3]], ray: &Ray) -> (bool, bool) {
         &BuildOptions::default(),
     )
     .expect("closed mesh builds");
-    let through_bvh = bvh
-        .closest_hit(
-            ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new(),
-        )
-        .is_some();
+    let through_bvh = closest_by(&bvh, &mesh, &Watertight, ray, None).is_some();
     (brute, through_bvh)
 }
 

@@ -105,7 +105,7 @@ pub use scratch::{PrimRef, scratch_capacity};
 pub use stats::BvhStats;
 
 use crate::aabb::Aabb;
-use crate::getters::getters;
+use crate::getters::{count_getters, getters};
 use crate::mesh::PrimitiveSource;
 use crate::query::walk::extent_of;
 
@@ -305,18 +305,11 @@ where
         crate::storage::used(self.indices.as_ref(), self.prim_count as usize)
     }
 
-    /// Number of nodes in use (≤ [`node_capacity`] of the primitive count).
-    #[inline]
-    #[must_use]
-    pub fn node_count(&self) -> usize {
-        self.node_count as usize
-    }
-
-    /// Number of primitives in the tree (the source's count minus excluded ones).
-    #[inline]
-    #[must_use]
-    pub fn primitive_count(&self) -> usize {
-        self.prim_count as usize
+    count_getters! {
+        /// Number of nodes in use (≤ [`node_capacity`] of the primitive count).
+        node_count = node_count;
+        /// Number of primitives in the tree (the source's count minus excluded ones).
+        primitive_count = prim_count;
     }
 
     getters! {

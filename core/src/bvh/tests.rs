@@ -7,7 +7,10 @@ use crate::prelude::*;
 use crate::query::walk::projection_pad;
 use crate::query::{Query, StackEntry, TraversalStats, Triangles};
 use crate::ray::Ray;
-use crate::test_util::{Lcg, VecBvh, brute_watertight, lcg_soup, vec_bvh as build};
+use crate::test_util::{
+    Lcg, VecBvh, any_watertight, brute_watertight, closest_watertight, closest_watertight_in,
+    lcg_soup, vec_bvh as build,
+};
 use crate::triangle::{TriangleIntersector, Watertight};
 use glam::Vec3;
 use std::vec;
@@ -63,22 +66,8 @@ fn empty_input_gives_an_empty_bvh_that_hits_nothing() {
     assert!(bvh.is_empty());
     assert_eq!(bvh.bounds(), crate::aabb::Aabb::EMPTY);
     let ray = Ray::new(Vec3::ZERO, Vec3::X);
-    assert!(
-        bvh.closest_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new()
-        )
-        .is_none()
-    );
-    assert!(
-        bvh.any_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new()
-        )
-        .is_none()
-    );
+    assert!(closest_watertight(&bvh, &mesh, &ray).is_none());
+    assert!(any_watertight(&bvh, &mesh, &ray).is_none());
     let mut arr_nodes: [BvhNode; 0] = [];
     let mut arr_idx: [u32; 0] = [];
     assert!(
@@ -182,19 +171,9 @@ fn closest_and_any_hit_match_brute_force_on_a_random_soup() {
         for _ in 0..2000 {
             let o = r.v(30.0);
             let ray = Ray::new(o, r.v(10.0) - o);
-            let got = bvh
-                .closest_hit(
-                    &ray,
-                    &mut Triangles::new(&mesh, &Watertight),
-                    &mut Query::new(),
-                )
-                .map(|(p, h)| (p, h.t));
+            let got = closest_watertight(&bvh, &mesh, &ray).map(|(p, h)| (p, h.t));
             assert_eq!(got, brute(&mesh, &ray), "leaf {leaf} {ray:?}");
-            let any = bvh.any_hit(
-                &ray,
-                &mut Triangles::new(&mesh, &Watertight),
-                &mut Query::new(),
-            );
+            let any = any_watertight(&bvh, &mesh, &ray);
             assert_eq!(any.is_some(), got.is_some());
             hits += usize::from(got.is_some());
         }
@@ -268,11 +247,7 @@ fn node_test_prunes_the_tree() {
         Vec3::new(2.0 * 7.0 + 0.25, 2.0 * 11.0 + 0.25, 5.0),
         -Vec3::Z,
     );
-    let hit = bvh.closest_hit(
-        &down,
-        &mut Triangles::new(&mesh, &Watertight),
-        &mut Query::new().stats(&mut st),
-    );
+    let hit = closest_watertight_in(&bvh, &mesh, &down, &mut Query::new().stats(&mut st));
     assert_eq!(hit.map(|(p, _)| p), Some(11 * 32 + 7));
     assert!(
         st.primitives_tested <= 8 && st.nodes_visited <= 64,
@@ -282,12 +257,7 @@ fn node_test_prunes_the_tree() {
     let mut st = TraversalStats::default();
     let beside = Ray::new(Vec3::new(-5.0, 10.0, 1.0), Vec3::Y);
     assert!(
-        bvh.closest_hit(
-            &beside,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new().stats(&mut st)
-        )
-        .is_none()
+        closest_watertight_in(&bvh, &mesh, &beside, &mut Query::new().stats(&mut st)).is_none()
     );
     // Both children of the root are tested (and missed): exactly two node tests.
     assert!(st.primitives_tested == 0 && st.nodes_visited == 2, "{st:?}");
@@ -320,11 +290,7 @@ fn near_child_first_and_ties_to_the_first_child() {
     for (origin, dir, want) in [(20.0, -1.0, 15u32), (-5.0, 1.0, 0)] {
         let ray = Ray::new(Vec3::new(0.25, 0.25, origin), dir * Vec3::Z);
         let mut st = TraversalStats::default();
-        let hit = bvh.closest_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new().stats(&mut st),
-        );
+        let hit = closest_watertight_in(&bvh, &mesh, &ray, &mut Query::new().stats(&mut st));
         assert_eq!(hit.map(|(p, _)| p), Some(want));
         assert!(st.primitives_tested <= 2, "from z = {origin}: {st:?}");
     }
@@ -337,11 +303,7 @@ fn near_child_first_and_ties_to_the_first_child() {
         .expect("two leaves under the root");
     let first = bvh.nodes()[left as usize].primitive_range().unwrap();
     let ray = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
-    let any = bvh.any_hit(
-        &ray,
-        &mut Triangles::new(&mesh, &Watertight),
-        &mut Query::new(),
-    );
+    let any = any_watertight(&bvh, &mesh, &ray);
     assert_eq!(any.map(|(p, _)| p), Some(bvh.indices()[first.start]));
 }
 
@@ -361,23 +323,11 @@ fn coincident_triangles_build_within_the_depth_limit_and_tie_to_the_smallest_ind
     assert!(s.max_leaf_size <= DEFAULT_MAX_LEAF_SIZE as usize, "{s:?}");
     let ray = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
     let mut st = TraversalStats::default();
-    let (p, h) = bvh
-        .closest_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new().stats(&mut st),
-        )
-        .unwrap();
+    let (p, h) =
+        closest_watertight_in(&bvh, &mesh, &ray, &mut Query::new().stats(&mut st)).unwrap();
     assert_eq!((p, h.t), (0, 1.0));
     assert!(st.primitives_tested >= n as u64);
-    assert!(
-        bvh.any_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new()
-        )
-        .is_some()
-    );
+    assert!(any_watertight(&bvh, &mesh, &ray).is_some());
 }
 
 #[test]
@@ -419,22 +369,11 @@ fn zero_area_and_point_triangles_build_and_miss_cleanly() {
     let mesh = TriangleMesh::new(&pos, &tris);
     let bvh = build(&mesh, &BuildOptions::default()).unwrap();
     let ray = Ray::new(Vec3::new(0.2, 0.2, -1.0), Vec3::Z);
-    let (p, _) = bvh
-        .closest_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new(),
-        )
-        .unwrap();
+    let (p, _) = closest_watertight(&bvh, &mesh, &ray).unwrap();
     assert_eq!(p, 3);
     let ray = Ray::new(Vec3::new(0.5, 0.0, -1.0), Vec3::Z);
     assert_eq!(
-        bvh.closest_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new()
-        )
-        .map(|x| x.0),
+        closest_watertight(&bvh, &mesh, &ray).map(|x| x.0),
         Some(3),
         "edge point of triangle 3 (closed edges), not the degenerate ones"
     );
@@ -506,13 +445,7 @@ fn refit_follows_moved_vertices() {
     for _ in 0..2000 {
         let o = r.v(40.0);
         let ray = Ray::new(o, r.v(10.0) - o);
-        let got = bvh
-            .closest_hit(
-                &ray,
-                &mut Triangles::new(&mesh, &Watertight),
-                &mut Query::new(),
-            )
-            .map(|(p, h)| (p, h.t));
+        let got = closest_watertight(&bvh, &mesh, &ray).map(|(p, h)| (p, h.t));
         assert_eq!(got, brute(&mesh, &ray));
     }
     // Wrong length: refused before writing.
@@ -864,21 +797,15 @@ fn caller_stacks_of_the_tree_depth_answer_as_the_full_stack_and_shorter_ones_ref
         rays.push(Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z));
         for ray in &rays {
             let mut full_stats = TraversalStats::default();
-            let full = bvh.closest_hit(
-                ray,
-                &mut Triangles::new(&mesh, &Watertight),
-                &mut Query::new().stats(&mut full_stats),
-            );
-            let any = bvh.any_hit(
-                ray,
-                &mut Triangles::new(&mesh, &Watertight),
-                &mut Query::new(),
-            );
+            let full =
+                closest_watertight_in(&bvh, &mesh, ray, &mut Query::new().stats(&mut full_stats));
+            let any = any_watertight(&bvh, &mesh, ray);
             let mut stack = vec![StackEntry::EMPTY; depth];
             let mut stats = TraversalStats::default();
-            let got = bvh.closest_hit(
+            let got = closest_watertight_in(
+                &bvh,
+                &mesh,
                 ray,
-                &mut Triangles::new(&mesh, &Watertight),
                 &mut Query::new().stack(&mut stack[..]).stats(&mut stats),
             );
             assert_eq!(got, Ok(full), "case {k} {ray:?}");
@@ -891,11 +818,7 @@ fn caller_stacks_of_the_tree_depth_answer_as_the_full_stack_and_shorter_ones_ref
             assert_eq!(got_any, Ok(any), "case {k} {ray:?}");
             // One entry short: the right answer or a refusal, never a wrong answer.
             let mut short = vec![StackEntry::EMPTY; depth - 1];
-            match bvh.closest_hit(
-                ray,
-                &mut Triangles::new(&mesh, &Watertight),
-                &mut Query::new().stack(&mut short[..]),
-            ) {
+            match closest_watertight_in(&bvh, &mesh, ray, &mut Query::new().stack(&mut short[..])) {
                 Ok(h) => assert_eq!(h, full, "case {k} {ray:?}"),
                 Err(e) => {
                     assert_eq!(
@@ -976,11 +899,7 @@ fn general_path_rays_equal_brute_force() {
         }
         let t_min = if k % 3 == 1 { 0.5 } else { -30.0 };
         let ray = Ray::with_interval(o, d, t_min, f32::INFINITY);
-        let got = bvh.closest_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new(),
-        );
+        let got = closest_watertight(&bvh, &mesh, &ray);
         assert_eq!(got.map(|(i, h)| (i, h.t)), brute(&mesh, &ray), "{ray:?}");
         hits += usize::from(got.is_some());
     }
@@ -996,11 +915,7 @@ fn general_path_rays_equal_brute_force() {
     for v in tri {
         for t_min in [-5.0, 0.0] {
             let ray = Ray::with_interval(v + Vec3::Z, -Vec3::Z, t_min, f32::INFINITY);
-            let got = bvh.closest_hit(
-                &ray,
-                &mut Triangles::new(&mesh, &Watertight),
-                &mut Query::new(),
-            );
+            let got = closest_watertight(&bvh, &mesh, &ray);
             assert_eq!(got.map(|(i, h)| (i, h.t)), Some((0, 1.0)), "{ray:?}");
         }
     }

@@ -5,26 +5,17 @@ use super::overlap::triangle_overlaps_box;
 use super::*;
 use crate::mesh::TriangleMesh;
 use crate::prelude::*;
-use crate::query::{Query, TraversalStats, Triangles};
+use crate::query::{Query, TraversalStats};
 use crate::ray::Ray;
-use crate::test_util::{brute_watertight as brute, lcg, unit_vec};
+use crate::test_util::{
+    VecGrid, any_watertight, brute_watertight as brute, closest_watertight, closest_watertight_in,
+    lcg, unit_vec, vec_grid as build,
+};
 use crate::triangle::{TriangleIntersector, Watertight};
 use glam::{DVec3, Vec3};
 use std::format;
 use std::vec;
 use std::vec::Vec;
-
-type VecGrid = Grid<Vec<u32>, Vec<u32>>;
-
-fn build(mesh: &TriangleMesh<'_>, options: &GridOptions) -> Result<VecGrid, GridError> {
-    let plan = GridPlan::new(mesh, options)?;
-    Grid::build(
-        mesh,
-        &plan,
-        vec![u32::MAX; plan.required_offsets()],
-        vec![u32::MAX; plan.required_references()],
-    )
-}
 
 /// The grid of `mesh` with default options but `assignment` (panics when refused).
 fn build_assigned(mesh: &TriangleMesh<'_>, assignment: CellAssignment) -> VecGrid {
@@ -54,17 +45,9 @@ fn check_rays(mesh: &TriangleMesh<'_>, grid: &VecGrid, rays: &[Ray]) -> usize {
     let mut hits = 0;
     for ray in rays {
         let want = brute(mesh, ray);
-        let got = grid.closest_hit(
-            ray,
-            &mut Triangles::new(mesh, &Watertight),
-            &mut Query::new(),
-        );
+        let got = closest_watertight(grid, mesh, ray);
         assert_eq!(got, want, "{ray:?}");
-        let any = grid.any_hit(
-            ray,
-            &mut Triangles::new(mesh, &Watertight),
-            &mut Query::new(),
-        );
+        let any = any_watertight(grid, mesh, ray);
         assert_eq!(any.is_some(), want.is_some(), "{ray:?}");
         if let Some((p, h)) = any {
             assert!(ray.contains(h.t));
@@ -220,15 +203,7 @@ fn non_finite_triangles_are_refused_or_excluded() {
     assert_eq!(grid.triangle_count(), 2);
     assert!(grid.references().iter().all(|&r| r == 0 || r == 3));
     let ray = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
-    assert_eq!(
-        grid.closest_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new()
-        )
-        .map(|h| h.0),
-        Some(0)
-    );
+    assert_eq!(closest_watertight(&grid, &mesh, &ray).map(|h| h.0), Some(0));
 }
 
 /// Layout invariants and the oracle "each triangle is in the cell of each of its vertices",
@@ -405,11 +380,7 @@ fn axis_parallel_far_and_invalid_rays() {
     ] {
         let mut st = TraversalStats::default();
         assert_eq!(
-            g.closest_hit(
-                &bad,
-                &mut Triangles::new(&mesh, &Watertight),
-                &mut Query::new().stats(&mut st)
-            ),
+            closest_watertight_in(&g, &mesh, &bad, &mut Query::new().stats(&mut st)),
             None
         );
         assert_eq!(st, TraversalStats::default());
@@ -462,14 +433,7 @@ fn empty_mesh_hits_nothing() {
     let g = build(&mesh, &GridOptions::default()).unwrap();
     assert_eq!((g.cell_count(), g.reference_count()), (1, 0));
     let ray = Ray::new(Vec3::ZERO, Vec3::Z);
-    assert!(
-        g.any_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new()
-        )
-        .is_none()
-    );
+    assert!(any_watertight(&g, &mesh, &ray).is_none());
     assert_eq!(g.bytes_per_triangle(), 0.0);
 }
 
@@ -494,11 +458,7 @@ fn far_origins_use_neighbour_blocks() {
     // The blocks are in use (more cells per ray than a plain walk could visit).
     let mut st = TraversalStats::default();
     for r in &rays {
-        let _ = g.closest_hit(
-            r,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new().stats(&mut st),
-        );
+        let _ = closest_watertight_in(&g, &mesh, r, &mut Query::new().stats(&mut st));
     }
     let [nx, ny, nz] = g.resolution();
     assert!(

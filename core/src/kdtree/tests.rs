@@ -4,56 +4,26 @@
 use super::*;
 use crate::mesh::{PrimitiveSource, TriangleMesh};
 use crate::prelude::*;
-use crate::query::{Query, TraversalStats, Triangles};
+use crate::query::{Query, TraversalStats};
 use crate::ray::Ray;
-use crate::test_util::{Lcg, brute_watertight as brute, lcg_soup as soup};
+use crate::test_util::{
+    Lcg, VecKd, any_watertight, brute_watertight as brute, closest_watertight,
+    closest_watertight_in, lcg_soup as soup, vec_kd, vec_kd_sized as build_with,
+};
 use crate::triangle::{TriangleIntersector, Watertight};
 use glam::Vec3;
 use std::vec;
 use std::vec::Vec;
 
-type VecKd = KdTree<Vec<KdNode>, Vec<u32>>;
-
-fn build_with<S: PrimitiveSource + ?Sized>(
-    src: &S,
-    nodes: usize,
-    refs: usize,
-    opts: &KdBuildOptions,
-) -> Result<VecKd, KdTreeError> {
-    let mut scratch = vec![KdRef::EMPTY; refs];
-    KdTree::build(
-        src,
-        vec![KdNode::EMPTY; nodes],
-        vec![u32::MAX; refs],
-        &mut scratch,
-        opts,
-    )
-}
-
 fn build<S: PrimitiveSource + ?Sized>(src: &S) -> VecKd {
-    let n = src.primitive_count();
-    build_with(
-        src,
-        node_capacity(n).max(1),
-        reference_capacity(n),
-        &KdBuildOptions::default(),
-    )
-    .unwrap()
+    vec_kd(src, &KdBuildOptions::default()).unwrap()
 }
 
 fn check(kd: &VecKd, mesh: &TriangleMesh<'_>, ray: &Ray) {
     let want = brute(mesh, ray);
-    let got = kd.closest_hit(
-        ray,
-        &mut Triangles::new(mesh, &Watertight),
-        &mut Query::new(),
-    );
+    let got = closest_watertight(kd, mesh, ray);
     assert_eq!(got, want, "{ray:?}");
-    let any = kd.any_hit(
-        ray,
-        &mut Triangles::new(mesh, &Watertight),
-        &mut Query::new(),
-    );
+    let any = any_watertight(kd, mesh, ray);
     assert_eq!(any.is_some(), want.is_some(), "{ray:?}");
     if let Some((p, h)) = any {
         let v = mesh.triangle(p as usize).unwrap();
@@ -126,14 +96,7 @@ fn empty_input_gives_an_empty_tree_that_hits_nothing() {
     assert!(kd.is_empty());
     assert_eq!(kd.bytes_used(), 0);
     let ray = Ray::new(Vec3::ZERO, Vec3::X);
-    assert_eq!(
-        kd.closest_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new()
-        ),
-        None
-    );
+    assert_eq!(closest_watertight(&kd, &mesh, &ray), None);
 }
 
 #[test]
@@ -211,15 +174,7 @@ fn non_finite_primitives_are_named_or_excluded() {
     assert!(kd.references().iter().all(|&p| p != 2 && p != 5));
     let aim = mesh.triangle(2).map(|v| v[0]).unwrap();
     let ray = Ray::new(aim + Vec3::new(0.0, 0.0, 30.0), -Vec3::Z);
-    assert_ne!(
-        kd.closest_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new()
-        )
-        .map(|h| h.0),
-        Some(2)
-    );
+    assert_ne!(closest_watertight(&kd, &mesh, &ray).map(|h| h.0), Some(2));
 }
 
 #[test]
@@ -247,11 +202,7 @@ fn traversal_prunes() {
     let mut r = Lcg(6);
     for _ in 0..100 {
         let ray = Ray::new(r.v(100.0), r.v(1.0));
-        let got = kd.closest_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new().stats(&mut stats),
-        );
+        let got = closest_watertight_in(&kd, &mesh, &ray, &mut Query::new().stats(&mut stats));
         assert_eq!(got, brute(&mesh, &ray));
     }
     assert!(
@@ -271,11 +222,7 @@ fn coincident_triangles_tie_to_the_smallest_index() {
     let mesh = TriangleMesh::new(&pos, &tris);
     let kd = build(&mesh);
     let ray = Ray::new(Vec3::new(0.2, 0.2, 5.0), -Vec3::Z);
-    let got = kd.closest_hit(
-        &ray,
-        &mut Triangles::new(&mesh, &Watertight),
-        &mut Query::new(),
-    );
+    let got = closest_watertight(&kd, &mesh, &ray);
     assert_eq!(got.map(|h| h.0), Some(0));
     check(&kd, &mesh, &ray);
 }
@@ -395,11 +342,7 @@ fn invalid_rays_visit_no_node() {
     for ray in &bad {
         let mut stats = TraversalStats::default();
         assert_eq!(
-            kd.closest_hit(
-                ray,
-                &mut Triangles::new(&mesh, &Watertight),
-                &mut Query::new().stats(&mut stats)
-            ),
+            closest_watertight_in(&kd, &mesh, ray, &mut Query::new().stats(&mut stats)),
             None
         );
         assert_eq!(
@@ -571,25 +514,9 @@ fn intervals_are_respected_inclusively() {
         check(&kd, &mesh, &ray);
     }
     let ray = Ray::with_interval(o, -Vec3::Z, 0.0, 1.0);
-    assert_eq!(
-        kd.closest_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new()
-        )
-        .map(|h| h.0),
-        Some(1)
-    );
+    assert_eq!(closest_watertight(&kd, &mesh, &ray).map(|h| h.0), Some(1));
     let ray = Ray::with_interval(o, -Vec3::Z, 1.0, 2.0);
-    assert_eq!(
-        kd.closest_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new()
-        )
-        .map(|h| h.0),
-        Some(0)
-    );
+    assert_eq!(closest_watertight(&kd, &mesh, &ray).map(|h| h.0), Some(0));
 }
 
 /// The SAH cost of splitting the cell of extents `e` on `axis` at `s` (relative to its lower

@@ -3,13 +3,15 @@
 //! ([`brute_watertight`] for closest hit, a bounds loop for the box query).
 
 use super::*;
-use crate::bvh::wide::{Bvh4, Bvh8, LeafGroup, WideNode, binary_options, group_capacity};
-use crate::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
-use crate::grid::{CellAssignment, Grid, GridOptions, GridPlan};
-use crate::kdtree::{KdBuildOptions, KdNode, KdRef, KdTree};
+use crate::bvh::BuildOptions;
+use crate::bvh::wide::binary_options;
+use crate::grid::{CellAssignment, GridOptions};
+use crate::kdtree::KdBuildOptions;
 use crate::mesh::TriangleMesh;
 use crate::solids::{CUBE_TRIANGLES, CUBE_VERTICES, grid_triangles};
-use crate::test_util::{Lcg, brute_watertight, lcg_soup};
+use crate::test_util::{
+    Lcg, brute_watertight, closest_watertight, lcg_soup, vec_bvh, vec_grid, vec_kd, vec_wide,
+};
 use crate::triangle::{TriangleIntersector, Watertight};
 use std::vec;
 use std::vec::Vec;
@@ -192,16 +194,7 @@ fn conforms<Q: RayQuery>(name: &str, q: &Q, mesh: &TriangleMesh<'_>) {
 fn every_structure_equals_brute_force_through_the_trait() {
     for (pos, tris) in meshes() {
         let mesh = TriangleMesh::new(&pos, &tris);
-        let n = mesh.len();
-        let bvh = |options: &BuildOptions| {
-            Bvh::build(
-                &mesh,
-                vec![BvhNode::EMPTY; node_capacity(n)],
-                vec![0u32; index_capacity(n)],
-                options,
-            )
-            .unwrap()
-        };
+        let bvh = |options: &BuildOptions| vec_bvh(&mesh, options).unwrap();
         conforms("bvh", &bvh(&BuildOptions::default()), &mesh);
         let single = BuildOptions {
             max_leaf_size: 1,
@@ -210,44 +203,18 @@ fn every_structure_equals_brute_force_through_the_trait() {
         conforms("bvh, leaves of one", &bvh(&single), &mesh);
 
         let binary = bvh(&binary_options(BuildOptions::default()));
-        let groups = vec![LeafGroup::EMPTY; group_capacity(n)];
-        let nodes8 = vec![WideNode::EMPTY; crate::bvh::wide::node_capacity(n)];
-        conforms(
-            "bvh8",
-            &Bvh8::from_binary(&binary, &mesh, nodes8, groups.clone()).unwrap(),
-            &mesh,
-        );
-        let nodes4 = vec![WideNode::EMPTY; crate::bvh::wide::node_capacity(n)];
-        conforms(
-            "bvh4",
-            &Bvh4::from_binary(&binary, &mesh, nodes4, groups).unwrap(),
-            &mesh,
-        );
+        conforms("bvh8", &vec_wide::<8>(&binary, &mesh).unwrap(), &mesh);
+        conforms("bvh4", &vec_wide::<4>(&binary, &mesh).unwrap(), &mesh);
 
         for assignment in [CellAssignment::Exact, CellAssignment::Bounds] {
             let options = GridOptions {
                 assignment,
                 ..GridOptions::default()
             };
-            let plan = GridPlan::new(&mesh, &options).unwrap();
-            let offsets = vec![0u32; plan.required_offsets()];
-            let refs = vec![0u32; plan.required_references()];
-            conforms(
-                "grid",
-                &Grid::build(&mesh, &plan, offsets, refs).unwrap(),
-                &mesh,
-            );
+            conforms("grid", &vec_grid(&mesh, &options).unwrap(), &mesh);
         }
 
-        let refs = crate::kdtree::reference_capacity(n);
-        let kd = KdTree::build(
-            &mesh,
-            vec![KdNode::EMPTY; crate::kdtree::node_capacity(n).max(1)],
-            vec![0u32; refs],
-            &mut vec![KdRef::EMPTY; refs],
-            &KdBuildOptions::default(),
-        )
-        .unwrap();
+        let kd = vec_kd(&mesh, &KdBuildOptions::default()).unwrap();
         conforms("kd-tree", &kd, &mesh);
     }
 }
@@ -256,16 +223,11 @@ fn every_structure_equals_brute_force_through_the_trait() {
 fn a_caller_stack_too_small_is_refused_not_cut_short() {
     let (pos, tris) = lcg_soup(200, 3, 6.0, 1.0);
     let mesh = TriangleMesh::new(&pos, &tris);
-    let n = mesh.len();
     let single = BuildOptions {
         max_leaf_size: 1,
         ..BuildOptions::default()
     };
-    let (nodes, indices) = (
-        vec![BvhNode::EMPTY; node_capacity(n)],
-        vec![0u32; index_capacity(n)],
-    );
-    let bvh = Bvh::build(&mesh, nodes, indices, &single).unwrap();
+    let bvh = vec_bvh(&mesh, &single).unwrap();
     let mut tris = Triangles::new(&mesh, &Watertight);
     let mut refused = 0;
     for ray in rays(&mesh, 3) {
@@ -288,18 +250,8 @@ fn a_caller_stack_too_small_is_refused_not_cut_short() {
     assert!(refused > 0, "no ray needed the whole depth");
     let ray = Ray::new(Vec3::new(-20.0, 0.1, 0.2), Vec3::X);
 
-    let binary = Bvh::build(
-        &mesh,
-        vec![BvhNode::EMPTY; node_capacity(n)],
-        vec![0u32; index_capacity(n)],
-        &binary_options(BuildOptions::default()),
-    )
-    .unwrap();
-    let (nodes, groups) = (
-        vec![WideNode::EMPTY; crate::bvh::wide::node_capacity(n)],
-        vec![LeafGroup::EMPTY; group_capacity(n)],
-    );
-    let wide = Bvh8::from_binary(&binary, &mesh, nodes, groups).unwrap();
+    let binary = vec_bvh(&mesh, &binary_options(BuildOptions::default())).unwrap();
+    let wide = vec_wide::<8>(&binary, &mesh).unwrap();
     let mut less = vec![StackEntry::EMPTY; QUERY_STACK_SIZE - 1];
     let refused = wide.any_hit(&ray, &mut tris, &mut Query::new().stack(&mut less[..]));
     assert!(
@@ -316,12 +268,7 @@ fn a_caller_stack_too_small_is_refused_not_cut_short() {
 #[test]
 fn every_structure_equals_brute_force_at_both_ends_of_the_watertight_domain() {
     fn closest<Q: RayQuery>(q: &Q, mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, f32)> {
-        q.closest_hit(
-            ray,
-            &mut Triangles::new(mesh, &Watertight),
-            &mut Query::new(),
-        )
-        .map(|(i, h)| (i, h.t))
+        closest_watertight(q, mesh, ray).map(|(i, h)| (i, h.t))
     }
     for (scale, dominant) in [(2f32.powi(55), 1.0), (2f32.powi(-50), 2f32.powi(-100))] {
         let (mut pos, tris) = lcg_soup(200, 17, 10.0, 1.0);
@@ -329,38 +276,10 @@ fn every_structure_equals_brute_force_at_both_ends_of_the_watertight_domain() {
             *v *= scale;
         }
         let mesh = TriangleMesh::new(&pos, &tris);
-        let n = mesh.len();
-        let binary = Bvh::build(
-            &mesh,
-            vec![BvhNode::EMPTY; node_capacity(n)],
-            vec![0u32; index_capacity(n)],
-            &binary_options(BuildOptions::default()),
-        )
-        .unwrap();
-        let bvh8 = Bvh8::from_binary(
-            &binary,
-            &mesh,
-            vec![WideNode::EMPTY; crate::bvh::wide::node_capacity(n)],
-            vec![LeafGroup::EMPTY; group_capacity(n)],
-        )
-        .unwrap();
-        let plan = GridPlan::new(&mesh, &GridOptions::default()).unwrap();
-        let grid = Grid::build(
-            &mesh,
-            &plan,
-            vec![0u32; plan.required_offsets()],
-            vec![0u32; plan.required_references()],
-        )
-        .unwrap();
-        let refs = crate::kdtree::reference_capacity(n);
-        let kd = KdTree::build(
-            &mesh,
-            vec![KdNode::EMPTY; crate::kdtree::node_capacity(n).max(1)],
-            vec![0u32; refs],
-            &mut vec![KdRef::EMPTY; refs],
-            &KdBuildOptions::default(),
-        )
-        .unwrap();
+        let binary = vec_bvh(&mesh, &binary_options(BuildOptions::default())).unwrap();
+        let bvh8 = vec_wide::<8>(&binary, &mesh).unwrap();
+        let grid = vec_grid(&mesh, &GridOptions::default()).unwrap();
+        let kd = vec_kd(&mesh, &KdBuildOptions::default()).unwrap();
         let mut r = Lcg(5);
         let mut hits = 0;
         for _ in 0..300 {

@@ -544,29 +544,30 @@ fn finish_exact(c: Candidate<'_>) -> Option<TriangleHit> {
 }
 
 /// The three edge functions `e0 = c_x·b_y − c_y·b_x`, `e1 = a_x·c_y − a_y·c_x`,
-/// `e2 = b_x·a_y − b_y·a_x` of the sheared 2-D vertices `x`, `y` in plain `f32`: the filter of
-/// the watertight family, whose signs are exact wherever non-zero and not NaN
-/// ([`diff_of_products_sign_filter`]).
+/// `e2 = b_x·a_y − b_y·a_x` of the sheared 2-D vertices `x`, `y`, each evaluated as
+/// `diff(p, q, r, s) = p·q − r·s` (the evaluation decides the precision).
 #[inline(always)]
-pub(super) fn filter_edges(x: [f32; 3], y: [f32; 3]) -> [f32; 3] {
+fn edges<T>(x: [f32; 3], y: [f32; 3], diff: impl Fn(f32, f32, f32, f32) -> T) -> [T; 3] {
     let ([ax, bx, cx], [ay, by, cy]) = (x, y);
     [
-        diff_of_products_sign_filter(cx, by, cy, bx),
-        diff_of_products_sign_filter(ax, cy, ay, cx),
-        diff_of_products_sign_filter(bx, ay, by, ax),
+        diff(cx, by, cy, bx),
+        diff(ax, cy, ay, cx),
+        diff(bx, ay, by, ax),
     ]
 }
 
-/// The edge functions of [`filter_edges`], each the `f64` difference of exact `f64` products:
+/// The edge functions of [`edges`] in plain `f32`: the filter of the watertight family, whose
+/// signs are exact wherever non-zero and not NaN ([`diff_of_products_sign_filter`]).
+#[inline(always)]
+pub(super) fn filter_edges(x: [f32; 3], y: [f32; 3]) -> [f32; 3] {
+    edges(x, y, diff_of_products_sign_filter)
+}
+
+/// The edge functions of [`edges`], each the `f64` difference of exact `f64` products:
 /// exact signs, and zero exactly on the edge ([`diff_of_products_exact_sign`]).
 #[inline(always)]
 pub(super) fn exact_edges(x: [f32; 3], y: [f32; 3]) -> [f64; 3] {
-    let ([ax, bx, cx], [ay, by, cy]) = (x, y);
-    [
-        diff_of_products_exact_sign(cx, by, cy, bx),
-        diff_of_products_exact_sign(ax, cy, ay, cx),
-        diff_of_products_exact_sign(bx, ay, by, ax),
-    ]
+    edges(x, y, diff_of_products_exact_sign)
 }
 
 /// `true` when `e` holds both a negative and a positive value (zeros and NaN count as

@@ -145,37 +145,7 @@ mod tests {
     use super::super::tests::{png_pixels_of, svg_texts};
     use super::super::{Format, render};
     use super::*;
-    use crate::bench::bvh::SetFigures;
-
-    fn report(mesh: &str, sets: &[(&str, f64, f64, f64)]) -> BvhReport {
-        let json = serde_json::json!({
-            "mesh": format!("corpus/{mesh}"), "intersector": "watertight", "structure": "bvh8",
-            "simd": "avx2+fma", "triangles": 100, "build_ms": 2.0, "build_ms_threads": 1.0,
-            "build_threads": 2, "nodes": 3, "leaves": 4, "bytes_per_triangle": 50.0,
-            "max_depth": 5, "sah_cost": 1.0, "binary_build_ms": 1.0,
-            "binary_bytes_per_triangle": 40.0, "embree_build_ms": 3.0,
-            "embree_robust_build_ms": 3.0, "sets": [], "brute_force_rays": 16,
-            "mrays_brute_force": 0.1, "brute_force_mismatches": 0
-        });
-        let mut r: BvhReport = serde_json::from_value(json).unwrap();
-        r.sets = sets
-            .iter()
-            .map(|&(name, ours, def, rob)| SetFigures {
-                name: name.into(),
-                query: "closest".into(),
-                rays: 10,
-                hit_rate: 0.5,
-                mrays: ours,
-                nodes_per_ray: 1.0,
-                triangles_per_ray: 1.0,
-                embree_mrays: Some(def),
-                embree_robust_mrays: Some(rob),
-                embree_packet8_mrays: None,
-                embree_packet16_mrays: None,
-            })
-            .collect();
-        r
-    }
+    use crate::bench::bvh::summary::tests::report;
 
     #[test]
     fn the_chart_carries_every_mesh_and_each_sets_figures_from_the_json() {

@@ -2,10 +2,9 @@
 
 use super::*;
 use crate::bvh::BuildOptions;
-use crate::prelude::*;
-use crate::query::{Query, StackEntry, Triangles};
+use crate::query::{Query, StackEntry};
 use crate::ray::Ray;
-use crate::test_util::lcg;
+use crate::test_util::{closest_watertight, closest_watertight_in, lcg};
 use crate::triangle::Watertight;
 use glam::Vec3;
 use std::vec;
@@ -70,13 +69,7 @@ fn a_built_tree_loads_and_answers_like_brute_force() {
         let o = Vec3::new(lcg(&mut rng) * 14.0 - 1.0, lcg(&mut rng) * 14.0 - 1.0, 3.0);
         let d = Vec3::new(lcg(&mut rng) - 0.5, lcg(&mut rng) - 0.5, -1.0);
         let ray = Ray::new(o, d);
-        let got = bvh
-            .closest_hit(
-                &ray,
-                &mut Triangles::new(&mesh, &Watertight),
-                &mut Query::new(),
-            )
-            .map(|(i, h)| (i, h.t.to_bits()));
+        let got = closest_watertight(&bvh, &mesh, &ray).map(|(i, h)| (i, h.t.to_bits()));
         assert_eq!(got, brute(&mesh, &ray));
     }
     // The empty mesh loads as the empty tree.
@@ -234,13 +227,7 @@ fn a_corrupted_tree_is_refused_or_still_exact() {
             let o = Vec3::new(lcg(&mut rng) * 7.0 - 1.0, lcg(&mut rng) * 7.0 - 1.0, 3.0);
             let d = Vec3::new(lcg(&mut rng) - 0.5, lcg(&mut rng) - 0.5, -1.0);
             let ray = Ray::new(o, d);
-            let got = bvh
-                .closest_hit(
-                    &ray,
-                    &mut Triangles::new(&mesh, &Watertight),
-                    &mut Query::new(),
-                )
-                .map(|(i, h)| (i, h.t.to_bits()));
+            let got = closest_watertight(&bvh, &mesh, &ray).map(|(i, h)| (i, h.t.to_bits()));
             assert_eq!(got, brute(&mesh, &ray), "trial {trial}");
         }
     }
@@ -309,18 +296,10 @@ fn stack_depth_of_the_deepest_loadable_chain() {
     assert_eq!(bvh.stats().max_depth, MAX_DEPTH);
     // Down the chain from above: every level is entered before the nearest leaf, at z = 64.
     let ray = Ray::new(Vec3::new(0.25, 0.25, 70.0), -Vec3::Z);
-    let full = bvh.closest_hit(
-        &ray,
-        &mut Triangles::new(&mesh, &Watertight),
-        &mut Query::new(),
-    );
+    let full = closest_watertight(&bvh, &mesh, &ray);
     assert_eq!(full.map(|(i, h)| (i, h.t)), Some((64, 6.0)));
     let mut stack = [StackEntry::EMPTY; MAX_DEPTH];
-    let got = bvh.closest_hit(
-        &ray,
-        &mut Triangles::new(&mesh, &Watertight),
-        &mut Query::new().stack(&mut stack[..]),
-    );
+    let got = closest_watertight_in(&bvh, &mesh, &ray, &mut Query::new().stack(&mut stack[..]));
     assert_eq!(got, Ok(full));
 }
 
@@ -645,13 +624,7 @@ fn the_builders_padded_layout_loads() {
     for _ in 0..500 {
         let o = Vec3::new(lcg(&mut rng) * 3.0 - 0.5, lcg(&mut rng) * 3.0 - 0.5, 3.0);
         let ray = Ray::new(o, Vec3::new(lcg(&mut rng) - 0.5, lcg(&mut rng) - 0.5, -1.0));
-        let got = bvh
-            .closest_hit(
-                &ray,
-                &mut Triangles::new(&mesh, &Watertight),
-                &mut Query::new(),
-            )
-            .map(|(i, h)| (i, h.t.to_bits()));
+        let got = closest_watertight(&bvh, &mesh, &ray).map(|(i, h)| (i, h.t.to_bits()));
         assert_eq!(got, brute(&mesh, &ray));
     }
     assert_eq!(
@@ -703,11 +676,7 @@ fn the_mirrored_deepest_chain_loads_and_one_level_more_is_too_deep() {
     let mut stack = [StackEntry::EMPTY; MAX_DEPTH];
     for (o, d, want) in [(70.0, -1.0, (MAX_DEPTH as u32, 6.0)), (-3.0, 1.0, (0, 3.0))] {
         let ray = Ray::new(Vec3::new(0.25, 0.25, o), Vec3::new(0.0, 0.0, d));
-        let got = bvh.closest_hit(
-            &ray,
-            &mut Triangles::new(&mesh, &Watertight),
-            &mut Query::new().stack(&mut stack[..]),
-        );
+        let got = closest_watertight_in(&bvh, &mesh, &ray, &mut Query::new().stack(&mut stack[..]));
         assert_eq!(got.map(|h| h.map(|(i, h)| (i, h.t))), Ok(Some(want)));
         assert_eq!(brute(&mesh, &ray).map(|(i, _)| i), Some(want.0));
     }

@@ -69,7 +69,7 @@ mod tests;
 pub use node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
 
 use crate::aabb::Aabb;
-use crate::getters::getters;
+use crate::getters::{count_getters, getters};
 use crate::query::TraversalStats;
 
 /// Most triangles one wide leaf slot can hold (the binary tree's leaves must not be larger).
@@ -229,18 +229,11 @@ where
         (0..self.slot_count as usize).filter_map(|s| self.triangle(s))
     }
 
-    /// Number of nodes in use.
-    #[inline]
-    #[must_use]
-    pub fn node_count(&self) -> usize {
-        self.node_count as usize
-    }
-
-    /// Number of triangles in the tree.
-    #[inline]
-    #[must_use]
-    pub fn triangle_count(&self) -> usize {
-        self.triangle_count as usize
+    count_getters! {
+        /// Number of nodes in use.
+        node_count = node_count;
+        /// Number of triangles in the tree.
+        triangle_count = triangle_count;
     }
 
     getters! {

@@ -3,15 +3,15 @@
 //! structures, random and camera-like rays, several chunks and a partial one.
 
 use super::*;
-use crate::bvh::wide::{Bvh4, Bvh8, LeafGroup, WideNode, binary_options, group_capacity};
-use crate::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
-use crate::grid::{Grid, GridOptions, GridPlan};
-use crate::kdtree::{KdBuildOptions, KdNode, KdRef, KdTree};
+use crate::bvh::BuildOptions;
+use crate::bvh::wide::binary_options;
+use crate::grid::GridOptions;
+use crate::kdtree::KdBuildOptions;
 use crate::mesh::TriangleMesh;
 use crate::query::{
     QUERY_STACK_SIZE, Query, QueryStack, RayQuery, StackEntry, TraversalStats, Triangles,
 };
-use crate::test_util::{Lcg, brute_watertight, lcg_soup};
+use crate::test_util::{Lcg, brute_watertight, lcg_soup, vec_bvh, vec_grid, vec_kd, vec_wide};
 use crate::triangle::{TriangleHit, Watertight};
 use std::vec;
 use std::vec::Vec;
@@ -97,52 +97,22 @@ fn batch_equals_single<Q: RayQuery>(
 fn batches_equal_single_rays_on_every_structure() {
     let (pos, tri) = lcg_soup(400, 9, 10.0, 1.5);
     let mesh = TriangleMesh::new(&pos, &tri);
-    let n = mesh.len();
     let rays = rays(4);
     assert!(rays.len() > 4 * BATCH_CHUNK && !rays.len().is_multiple_of(BATCH_CHUNK));
 
-    let bvh = Bvh::build(
-        &mesh,
-        vec![BvhNode::EMPTY; node_capacity(n)],
-        vec![0u32; index_capacity(n)],
-        &BuildOptions::default(),
-    )
-    .unwrap();
+    let bvh = vec_bvh(&mesh, &BuildOptions::default()).unwrap();
     batch_equals_single("bvh", &bvh, &mesh, &rays, true);
 
-    let binary = Bvh::build(
-        &mesh,
-        vec![BvhNode::EMPTY; node_capacity(n)],
-        vec![0u32; index_capacity(n)],
-        &binary_options(BuildOptions::default()),
-    )
-    .unwrap();
-    let nodes = crate::bvh::wide::node_capacity(n);
-    let groups = || vec![LeafGroup::EMPTY; group_capacity(n)];
-    let bvh8 = Bvh8::from_binary(&binary, &mesh, vec![WideNode::EMPTY; nodes], groups()).unwrap();
+    let binary = vec_bvh(&mesh, &binary_options(BuildOptions::default())).unwrap();
+    let bvh8 = vec_wide::<8>(&binary, &mesh).unwrap();
     batch_equals_single("bvh8", &bvh8, &mesh, &rays, false);
-    let bvh4 = Bvh4::from_binary(&binary, &mesh, vec![WideNode::EMPTY; nodes], groups()).unwrap();
+    let bvh4 = vec_wide::<4>(&binary, &mesh).unwrap();
     batch_equals_single("bvh4", &bvh4, &mesh, &rays, false);
 
-    let plan = GridPlan::new(&mesh, &GridOptions::default()).unwrap();
-    let grid = Grid::build(
-        &mesh,
-        &plan,
-        vec![0u32; plan.required_offsets()],
-        vec![0u32; plan.required_references()],
-    )
-    .unwrap();
+    let grid = vec_grid(&mesh, &GridOptions::default()).unwrap();
     batch_equals_single("grid", &grid, &mesh, &rays, true);
 
-    let refs = crate::kdtree::reference_capacity(n);
-    let kd = KdTree::build(
-        &mesh,
-        vec![KdNode::EMPTY; crate::kdtree::node_capacity(n).max(1)],
-        vec![0u32; refs],
-        &mut vec![KdRef::EMPTY; refs],
-        &KdBuildOptions::default(),
-    )
-    .unwrap();
+    let kd = vec_kd(&mesh, &KdBuildOptions::default()).unwrap();
     batch_equals_single("kd-tree", &kd, &mesh, &rays, true);
 }
 
@@ -150,13 +120,7 @@ fn batches_equal_single_rays_on_every_structure() {
 fn empty_batches_and_length_mismatches() {
     let (pos, tri) = lcg_soup(20, 1, 4.0, 1.0);
     let mesh = TriangleMesh::new(&pos, &tri);
-    let bvh = Bvh::build(
-        &mesh,
-        vec![BvhNode::EMPTY; node_capacity(mesh.len())],
-        vec![0u32; index_capacity(mesh.len())],
-        &BuildOptions::default(),
-    )
-    .unwrap();
+    let bvh = vec_bvh(&mesh, &BuildOptions::default()).unwrap();
     let mut tris = Triangles::new(&mesh, &Watertight);
     let mut stats = TraversalStats::default();
     let mut none: [Option<(u32, TriangleHit)>; 0] = [];
@@ -196,18 +160,11 @@ fn empty_batches_and_length_mismatches() {
 fn a_caller_stack_too_small_is_each_rays_answer() {
     let (pos, tri) = lcg_soup(200, 3, 6.0, 1.0);
     let mesh = TriangleMesh::new(&pos, &tri);
-    let n = mesh.len();
     let single = BuildOptions {
         max_leaf_size: 1,
         ..BuildOptions::default()
     };
-    let bvh = Bvh::build(
-        &mesh,
-        vec![BvhNode::EMPTY; node_capacity(n)],
-        vec![0u32; index_capacity(n)],
-        &single,
-    )
-    .unwrap();
+    let bvh = vec_bvh(&mesh, &single).unwrap();
     let mut tris = Triangles::new(&mesh, &Watertight);
     let rays = rays(6);
     for len in [bvh.stack_depth() / 2, QUERY_STACK_SIZE] {
