@@ -15,7 +15,10 @@
 compile_error!("the baked format is little-endian and read in place: little-endian targets only");
 
 use core::mem::{align_of, size_of};
-use halfray_core::bvh::{load_scratch_len, BakedError, BakedLayout, Bvh, BvhNode, LoadError, BAKED_ALIGN, TRAVERSAL_STACK_SIZE};
+use halfray_core::bvh::{
+    load_scratch_len, BakedError, BakedLayout, Bvh, BvhNode, LoadError, BAKED_ALIGN,
+    TRAVERSAL_STACK_SIZE,
+};
 use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, StackEntry, Triangles};

@@ -27,10 +27,10 @@ pub use query::{QUERY_STACK, any_in, closest_in, query_checks};
 
 use halfray_core::Vec3;
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode};
-use halfray_core::mesh::TriangleMesh;
 use halfray_core::halfedge::{
     EdgeRec, FaceRec, LoopWeights, SliceMesh, VertexRec, build_scratch_len,
 };
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, Triangles};
 use halfray_core::ray::Ray;

@@ -11,8 +11,8 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use halfray_core::Vec3;
 use halfray_core::bvh::{BvhNode, node_capacity};
-use halfray_core::mesh::TriangleMesh;
 use halfray_core::halfedge::{EdgeRec, FaceRec, VertexRec, build_scratch_len};
+use halfray_core::mesh::TriangleMesh;
 use mcu_check::{
     CheckError, Config, Fnv, HalfedgeStorage, RayStorage, Summary, baked_checks, edge_count,
     halfedge_checks, ray_checks, triangle_count, vertex_count,
@@ -148,7 +148,7 @@ mod bench {
     use super::{CONFIG, MACHINE, baked, hprintln};
     use cortex_m::peripheral::SYST;
     use cortex_m::peripheral::syst::SystClkSource;
-    use halfray_core::bvh::{Bvh};
+    use halfray_core::bvh::Bvh;
     use halfray_core::mesh::TriangleMesh;
     use halfray_core::prelude::*;
     use halfray_core::query::{Query, Triangles};

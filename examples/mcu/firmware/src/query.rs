@@ -18,7 +18,7 @@
 
 use cortex_m_rt::entry;
 use cortex_m_semihosting::hio;
-use halfray_core::bvh::{Bvh};
+use halfray_core::bvh::Bvh;
 use halfray_core::mesh::TriangleMesh;
 use halfray_core::query::StackEntry;
 use halfray_core::triangle::WatertightF32Exact;

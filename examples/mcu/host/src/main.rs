@@ -7,8 +7,8 @@
 
 use halfray_core::Vec3;
 use halfray_core::bvh::{BvhNode, node_capacity};
-use halfray_core::mesh::TriangleMesh;
 use halfray_core::halfedge::{EdgeRec, FaceRec, VertexRec, build_scratch_len};
+use halfray_core::mesh::TriangleMesh;
 use halfray_core::ray::Ray;
 use mcu_check::{
     Config, Fnv, HalfedgeStorage, M3, M4F, RayStorage, edge_count, halfedge_checks, ray_checks,
