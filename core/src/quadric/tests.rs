@@ -270,6 +270,21 @@ fn cone_apex_hit_is_finite() {
 /// promised.
 #[test]
 fn residual_bound_holds_down_to_the_end_of_its_domain() {
+    /// The end of the residual bound's domain (`Quadric::roots`' docs): the smallest
+    /// discriminant scale `max(q_b², |q_a|·|q_c|)` it covers, in the ray polynomial's squared
+    /// units (here unitless: `f` and `t` are).
+    const DOMAIN_END: f64 = 1e-290;
+    /// How far above [`DOMAIN_END`] the scaled case may sit and still test the domain's end
+    /// (a factor, unitless): `λ = 2⁻⁴⁸²` puts it at `3.4·DOMAIN_END`; asserting it below
+    /// `4·DOMAIN_END` proves the case sits at the end, not comfortably inside the domain.
+    const NEAR_END_FACTOR: f64 = 4.0;
+    /// Relative agreement of `roots` with the stable `f64` roots of the `λ`-free polynomial
+    /// (unitless). Both are `f64` roots of the same well-conditioned quadratic (roots `0.38`
+    /// and `1.49`, discriminant `b² − ac = 0.77` against `b² = 2.2`: no cancellation), each
+    /// within a few `2⁻⁵³` of the exact roots, and `λ` a power of two (scaling is exact):
+    /// `10⁻¹²` (≈ 9 000 ulps) leaves ample room and still catches any real loss at the
+    /// small scale (a subnormal coefficient or a wrong branch is off by far more).
+    const ROOT_AGREEMENT_REL: f64 = 1e-12;
     let u = crate::float::F64_UNIT_ROUNDOFF;
     let (o, d) = (Vec3::new(-1.0, -0.6, -0.2), Vec3::new(1.0, 0.7, 0.3));
     let ray = Ray::new(o, d);
@@ -288,13 +303,13 @@ fn residual_bound_holds_down_to_the_end_of_its_domain() {
         let (qa, qb, qc) = (a * lambda, b * lambda, c * lambda);
         let scale = (qb * qb).max((qa * qc).abs());
         assert!(
-            lambda == 1.0 || (1e-290..4e-290).contains(&scale),
+            lambda == 1.0 || (DOMAIN_END..NEAR_END_FACTOR * DOMAIN_END).contains(&scale),
             "{scale:e}"
         );
         let (t0, t1) = quad.roots(&ray).expect("the ray crosses the sphere twice");
         for (t, w) in [(t0, want.0), (t1, want.1)] {
             assert!(
-                (t - w).abs() <= 1e-12 * w.abs(),
+                (t - w).abs() <= ROOT_AGREEMENT_REL * w.abs(),
                 "λ = {lambda:e}: {t} vs {w}"
             );
             let x = od + dd * t;
