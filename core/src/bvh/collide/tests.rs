@@ -575,3 +575,64 @@ fn segment_distance_worked_case_of_each_branch() {
         }
     }
 }
+
+/// `min_distance`'s pruning pad `ε·M` ([`DISTANCE_ERR_REL`], `M` the largest coordinate
+/// magnitude) at work: a pair whose computed distance rounds below its box distance. `A` is a
+/// long, slightly tilted triangle listed from its far vertex (`2⁴⁶` away, so `M ≈ 7·10¹³`),
+/// its top edge `(±1, 0, 0)` at `z = 0`; `B` is small, its lowest vertex `x` at `z = 1` above
+/// A's face. The boxes overlap in `x` and `y` and are exactly `1` apart in `z`, so the exact
+/// distance is at least `1` (each triangle lies in its box); `triangle_distance`'s face
+/// candidate `|(x − a₀)·n|/|n|` cancels terms of size `2⁴⁶·θ` (`θ ≈ 1.2·10⁻³` the tilt) and
+/// rounds to `1 − 7·10⁻⁷` (found by a search; within the documented `ε·(d + M)`). With the
+/// bound at the brute-force minimum (computed in the test over every pair), `min_distance`
+/// must report that pair: a pad of `ε` (`M` taken as 1) or `ε/M` would skip it, since its box
+/// distance less that pad exceeds the bound.
+#[test]
+fn min_distance_keeps_a_pair_whose_distance_rounds_below_its_box_distance() {
+    let pa = vec![
+        vec3(0.20961452, -70368744000000.0, -83128110000.0),
+        vec3(-1.0, 0.0, 0.0),
+        vec3(1.0, 0.0, 0.0),
+    ];
+    let x = vec3(0.0591442, -0.0016899328, 1.0);
+    // B: a far copy (triangle 0) and the near triangle (1).
+    let near = [x, x + vec3(0.25, 0.0, 0.5), x + vec3(0.0, -0.25, 0.5)];
+    let mut pb: Vec<Vec3> = near.iter().map(|&v| v + vec3(0.0, 0.0, 3.0)).collect();
+    pb.extend(near);
+    let (ta, tb) = (vec![[0u32, 1, 2]], vec![[0u32, 1, 2], [3, 4, 5]]);
+    let (ma, mb) = (TriangleMesh::new(&pa, &ta), TriangleMesh::new(&pb, &tb));
+    // The boxes' distance, exactly: A's top is z = 0, the near triangle's bottom z = 1.
+    let box_distance = 1.0;
+    let mut best: Option<(f64, u32, u32)> = None;
+    for j in 0..tb.len() {
+        let d = triangle_distance(&ma.triangle(0).unwrap(), &mb.triangle(j).unwrap());
+        if best.is_none_or(|b| d < b.0) {
+            best = Some((d, 0, j as u32));
+        }
+    }
+    let (d, i, j) = best.unwrap();
+    assert_eq!((i, j), (0, 1));
+    // The case is the one described: below the box distance by more than a pad without M.
+    let eps = DISTANCE_ERR_REL;
+    assert!(d < box_distance * (1.0 - 2.0 * eps) - eps, "{d}");
+    let (o, _) = oracle::distance(&ma.triangle(0).unwrap(), &near);
+    let m = oracle::magnitude(&ma.triangle(0).unwrap(), &near);
+    assert!(
+        (d - o).abs() <= 2.0 * eps * (o + m),
+        "{d} against the oracle's {o}"
+    );
+    let (ba, bb) = (tree(&ma), tree(&mb));
+    let (a, b) = (Body::new(&ba, ma).unwrap(), Body::new(&bb, mb).unwrap());
+    let want = Some(Closest {
+        distance: d,
+        a: 0,
+        b: 1,
+    });
+    for bound in [d, f64::INFINITY] {
+        assert_eq!(
+            min_distance(&a, &b, &Transform::IDENTITY, bound).unwrap(),
+            want,
+            "bound {bound}"
+        );
+    }
+}
