@@ -50,8 +50,12 @@ pub(crate) trait ClosureWalk {
 /// share one walk; `$query` returns `S::Out<(u32, T::Hit)>`.
 macro_rules! ray_queries {
     ($(#[$attr:meta])* $query:ident) => {
+        $crate::query::forward::ray_queries!(@one closest_hit false $(#[$attr])* $query);
+        $crate::query::forward::ray_queries!(@one any_hit true $(#[$attr])* $query);
+    };
+    (@one $name:ident $any:literal $(#[$attr:meta])* $query:ident) => {
         $(#[$attr])*
-        fn closest_hit<
+        fn $name<
             T: $crate::query::LeafTest,
             L: $crate::simd_level::SimdLevel,
             S: $crate::query::Stack,
@@ -61,21 +65,7 @@ macro_rules! ray_queries {
             leaf: &mut T,
             ctx: &mut $crate::query::Query<'_, L, S>,
         ) -> S::Out<(u32, T::Hit)> {
-            self.$query(false, ray, leaf, ctx)
-        }
-
-        $(#[$attr])*
-        fn any_hit<
-            T: $crate::query::LeafTest,
-            L: $crate::simd_level::SimdLevel,
-            S: $crate::query::Stack,
-        >(
-            &self,
-            ray: &$crate::ray::Ray,
-            leaf: &mut T,
-            ctx: &mut $crate::query::Query<'_, L, S>,
-        ) -> S::Out<(u32, T::Hit)> {
-            self.$query(true, ray, leaf, ctx)
+            self.$query($any, ray, leaf, ctx)
         }
     };
 }
