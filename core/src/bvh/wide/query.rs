@@ -1,8 +1,15 @@
-//! The box query on a wide tree.
+//! The [`RayQuery`] implementation of a wide tree (its walks are in `traverse` and `packet`),
+//! and the box query.
 
 use super::WideBvh;
 use super::node::{ChildRef, LeafGroup, WideNode};
+use super::packet::{PACKET, PacketStack};
+use super::traverse::STACK;
 use crate::aabb::Aabb;
+use crate::bvh::BvhError;
+use crate::query::{LeafTest, Query, RayQuery, Stack, same_length};
+use crate::ray::Ray;
+use crate::simd::level::SimdLevel;
 
 /// Pending children of the box query: at most `W − 1` per inner node on the path, over at most
 /// `MAX_DEPTH` inner nodes (module docs of [`super`]), plus the `W` children of the node just
@@ -58,5 +65,83 @@ where
             }
         }
         reported
+    }
+}
+
+impl<const W: usize, N, T> RayQuery for WideBvh<W, N, T>
+where
+    N: AsRef<[WideNode<W>]>,
+    T: AsRef<[LeafGroup]>,
+{
+    #[inline(always)]
+    fn closest_hit<LT: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        ray: &Ray,
+        leaf: &mut LT,
+        ctx: &mut Query<'_, L, S>,
+    ) -> S::Out<(u32, LT::Hit)> {
+        S::answer(self.leaf_query::<LT, false, L, S>(ray, leaf, ctx))
+    }
+
+    #[inline(always)]
+    fn any_hit<LT: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        ray: &Ray,
+        leaf: &mut LT,
+        ctx: &mut Query<'_, L, S>,
+    ) -> S::Out<(u32, LT::Hit)> {
+        S::answer(self.leaf_query::<LT, true, L, S>(ray, leaf, ctx))
+    }
+
+    /// Sixteen rays at a time, the coherent ones walked as a packet, the others alone: the
+    /// same answers. On a caller stack shorter than [`crate::query::QUERY_STACK_SIZE`], every
+    /// ray alone (so that each gets the single-ray answer, an error included).
+    #[inline(always)]
+    fn closest_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        rays: &[Ray],
+        leaf: &mut LT,
+        ctx: &mut Query<'_, L, S>,
+        out: &mut [S::Out<(u32, LT::Hit)>],
+    ) -> Result<(), BvhError> {
+        same_length(rays.len(), out.len())?;
+        let short = ctx.stack.entries().is_some_and(|e| e.len() < STACK);
+        let mut stack = PacketStack::new();
+        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+            let alone = if short {
+                u32::MAX
+            } else {
+                let stats = ctx.stats.as_deref_mut();
+                self.packet_closest(ctx.level, rays, leaf, (&mut stack, stats), |i, found| {
+                    if let Some(o) = out.get_mut(i) {
+                        *o = S::answer(Ok(found));
+                    }
+                })
+            };
+            for (i, (ray, o)) in rays.iter().zip(out.iter_mut()).enumerate() {
+                if alone >> i & 1 == 1 {
+                    *o = self.closest_hit(ray, leaf, ctx);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn query_box<P: crate::mesh::PrimitiveSource + ?Sized>(
+        &self,
+        _: &P,
+        query: &crate::aabb::Aabb,
+        found: impl FnMut(u32) -> bool,
+    ) -> usize {
+        self.boxes_overlapping(query, found)
+    }
+
+    fn primitive_count(&self) -> usize {
+        self.triangle_count()
+    }
+
+    /// `224·nodes + 160·groups` for `W = 8` (module docs).
+    fn bytes_used(&self) -> usize {
+        core::mem::size_of_val(self.nodes()) + core::mem::size_of_val(self.groups())
     }
 }
