@@ -90,9 +90,6 @@ pub mod wide;
 #[cfg(test)]
 mod tests;
 
-/// The mesh a BVH is most often built over; its home is [`crate::mesh`].
-#[doc(no_inline)]
-pub use crate::mesh::TriangleMesh;
 pub use baked::{
     BAKED_ALIGN, BAKED_HEADER_BYTES, BAKED_MAGIC, BAKED_VERSION, BakedError, BakedLayout,
 };

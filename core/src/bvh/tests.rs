@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::aabb::Aabb;
+use crate::mesh::TriangleMesh;
 use crate::prelude::*;
 use crate::query::walk::projection_pad;
 use crate::query::{Query, StackEntry, TraversalStats, Triangles};
