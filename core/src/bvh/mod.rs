@@ -5,7 +5,7 @@
 //!
 //! * Primitives come from a [`PrimitiveSource`] (`N` primitives by index and their bounds,
 //!   [`crate::mesh`]).
-//!   [`TriangleMesh`] is the main one; any slice of [`Primitive`]s (for example `[Aabb]` or
+//!   [`TriangleMesh`](crate::mesh::TriangleMesh) is the main one; any slice of [`Primitive`]s (for example `[Aabb]` or
 //!   `[[Vec3; 3]]`) is one too, so spheres, quadrics and instances can live in a BVH: the
 //!   intersection itself is supplied at query time as a closure.
 //! * [`Bvh::build`] writes into node storage and primitive-index storage that the caller
@@ -36,7 +36,7 @@
 //! zero-area triangles, points — build and traverse correctly.
 //!
 //! Primitives whose bounds are not finite (NaN or infinite vertices, out-of-range vertex
-//! indices in a [`TriangleMesh`]) are an error naming the primitive
+//! indices in a [`TriangleMesh`](crate::mesh::TriangleMesh)) are an error naming the primitive
 //! ([`BvhError::NonFinite`]) or, with [`BuildOptions::exclude_non_finite`], left out of
 //! the tree. Empty input gives a valid empty BVH that hits nothing.
 //!
