@@ -504,3 +504,31 @@ fn required_bytes_is_four_per_offset_and_reference() {
     assert_eq!(plan.required_bytes(), 4 * (o + r));
     assert!(build(&mesh, &GridOptions::default()).is_ok());
 }
+
+/// The resolution rule of the module docs depends on the scene's extents only: the soup of
+/// [`resolution_follows_the_cube_root_rule`] moved far from the origin gets the cells the
+/// formula gives for its extents, taken here from the vertices in `f64` (not from the plan).
+#[test]
+fn resolution_depends_on_extents_not_position() {
+    let (p, t) = soup(1, 1000, 10.0, 0.2);
+    let shift = Vec3::new(1000.0, -300.0, 40.0);
+    let p: Vec<Vec3> = p.iter().map(|&v| v + shift).collect();
+    let mesh = TriangleMesh::new(&p, &t);
+    let lo = p.iter().fold(DVec3::INFINITY, |m, v| m.min(v.as_dvec3()));
+    let hi = p.iter().fold(DVec3::NEG_INFINITY, |m, v| m.max(v.as_dvec3()));
+    let e = hi - lo;
+    let lambda = 4.0f32;
+    let plan = GridPlan::new(
+        &mesh,
+        &GridOptions {
+            lambda,
+            ..GridOptions::default()
+        },
+    )
+    .unwrap();
+    let k = libm::cbrt(f64::from(lambda) * 1000.0 / (e.x * e.y * e.z));
+    for a in 0..3 {
+        let want = ((e[a] * k).round() as u32).max(1);
+        assert_eq!(plan.resolution()[a], want, "axis {a}");
+    }
+}

@@ -711,3 +711,31 @@ fn depth_is_the_deepest_leaf_of_the_node_array() {
         }
     }
 }
+
+/// The module docs: a primitive with **empty** (inverted, though finite) or **non-finite**
+/// (infinite, though ordered) bounds is an error naming it, or left out on request. Each of
+/// the two conditions alone must refuse a box (the NaN test above fails both at once).
+#[test]
+fn empty_or_infinite_boxes_are_named_or_excluded() {
+    let unit = crate::aabb::Aabb::new(Vec3::ZERO, Vec3::ONE);
+    let inverted = crate::aabb::Aabb::new(Vec3::ONE, Vec3::ZERO);
+    let infinite = crate::aabb::Aabb::new(Vec3::splat(f32::NEG_INFINITY), Vec3::ONE);
+    let named = |index| {
+        Some(KdTreeError::NonFinite(crate::error::NonFiniteError {
+            element: crate::error::InputElement::Primitive,
+            index,
+        }))
+    };
+    for bad in [inverted, infinite] {
+        let boxes = [unit, bad, unit];
+        let err = vec_kd(&boxes[..], &KdBuildOptions::default()).err();
+        assert_eq!(err, named(1), "{bad:?}");
+        let opts = KdBuildOptions {
+            exclude_non_finite: true,
+            ..KdBuildOptions::default()
+        };
+        let kd = vec_kd(&boxes[..], &opts).unwrap();
+        assert_eq!(kd.primitive_count(), 2, "{bad:?}");
+        assert!(kd.references().iter().all(|&p| p != 1), "{bad:?}");
+    }
+}
