@@ -515,7 +515,9 @@ fn resolution_depends_on_extents_not_position() {
     let p: Vec<Vec3> = p.iter().map(|&v| v + shift).collect();
     let mesh = TriangleMesh::new(&p, &t);
     let lo = p.iter().fold(DVec3::INFINITY, |m, v| m.min(v.as_dvec3()));
-    let hi = p.iter().fold(DVec3::NEG_INFINITY, |m, v| m.max(v.as_dvec3()));
+    let hi = p
+        .iter()
+        .fold(DVec3::NEG_INFINITY, |m, v| m.max(v.as_dvec3()));
     let e = hi - lo;
     let lambda = 4.0f32;
     let plan = GridPlan::new(
