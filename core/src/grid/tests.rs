@@ -59,26 +59,32 @@ fn check_rays(mesh: &TriangleMesh<'_>, grid: &VecGrid, rays: &[Ray]) -> usize {
     hits
 }
 
+/// The plan of `mesh` with default options but `lambda` cells per triangle.
+fn plan_with_lambda(mesh: &TriangleMesh<'_>, lambda: f32) -> GridPlan {
+    let options = GridOptions {
+        lambda,
+        ..GridOptions::default()
+    };
+    GridPlan::new(mesh, &options).unwrap()
+}
+
+/// The module docs' resolution for `n` triangles with scene extents `e` (all non-zero and
+/// no axis below one cell), written out here: `round(e_a · (λn / (e_x e_y e_z))^(1/3))`, at
+/// least 1.
+fn cube_root_resolution(e: DVec3, lambda: f32, n: usize) -> [u32; 3] {
+    let k = libm::cbrt(f64::from(lambda) * n as f64 / (e.x * e.y * e.z));
+    [0, 1, 2].map(|a| ((e[a] * k).round() as u32).max(1))
+}
+
 #[test]
 fn resolution_follows_the_cube_root_rule() {
     let (p, t) = soup(1, 1000, 10.0, 0.2);
     let mesh = TriangleMesh::new(&p, &t);
     for lambda in [1.0f32, 4.0, 8.0] {
-        let plan = GridPlan::new(
-            &mesh,
-            &GridOptions {
-                lambda,
-                ..GridOptions::default()
-            },
-        )
-        .unwrap();
-        let b = plan.bounds();
-        let e = b.extent().as_dvec3();
-        let k = libm::cbrt(f64::from(lambda) * 1000.0 / (e.x * e.y * e.z));
-        for a in 0..3 {
-            let want = (e[a] * k).round() as u32;
-            assert_eq!(plan.resolution()[a], want.max(1), "λ {lambda} axis {a}");
-        }
+        let plan = plan_with_lambda(&mesh, lambda);
+        let e = plan.bounds().extent().as_dvec3();
+        let want = cube_root_resolution(e, lambda, 1000);
+        assert_eq!(plan.resolution(), want, "λ {lambda}");
         let cells = plan.cell_count() as f64;
         assert!(
             (cells / (f64::from(lambda) * 1000.0) - 1.0).abs() < 0.25,
@@ -519,18 +525,6 @@ fn resolution_depends_on_extents_not_position() {
         .iter()
         .fold(DVec3::NEG_INFINITY, |m, v| m.max(v.as_dvec3()));
     let e = hi - lo;
-    let lambda = 4.0f32;
-    let plan = GridPlan::new(
-        &mesh,
-        &GridOptions {
-            lambda,
-            ..GridOptions::default()
-        },
-    )
-    .unwrap();
-    let k = libm::cbrt(f64::from(lambda) * 1000.0 / (e.x * e.y * e.z));
-    for a in 0..3 {
-        let want = ((e[a] * k).round() as u32).max(1);
-        assert_eq!(plan.resolution()[a], want, "axis {a}");
-    }
+    let plan = plan_with_lambda(&mesh, 4.0);
+    assert_eq!(plan.resolution(), cube_root_resolution(e, 4.0, 1000));
 }
