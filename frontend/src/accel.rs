@@ -174,6 +174,9 @@ fn with_stack<R>(f: impl FnOnce(&mut QueryStack) -> R) -> R {
     r
 }
 
+/// One ray's closest hit: `(triangle index, hit)`.
+pub type Answer = Option<(u32, TriangleHit)>;
+
 /// The closest hit of `ray` in `bvh` over the triangles of `mesh` (the mesh the tree was
 /// built over) with `isect`, compiled for AVX2 + FMA when the CPU has them
 /// ([`crate::simd::x86_avx2_fma`]), for the baseline target otherwise, on this thread's kept
@@ -187,18 +190,16 @@ pub fn closest_simd<I: TriangleIntersector>(
     isect: &I,
     ray: &Ray,
     stats: Option<&mut TraversalStats>,
-) -> Option<(u32, TriangleHit)> {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(level) = crate::simd::avx2_fma() {
-        // SAFETY: the token exists, so the CPU supports AVX2 and FMA (checked at run time),
-        // the only requirement of calling a `#[target_feature(enable = "avx2,fma")]` fn.
-        return unsafe { x86::closest(level, bvh, mesh, isect, ray, stats) };
-    }
-    with_stack(|stack| closest_on(Portable, bvh, mesh, isect, ray, stats, stack))
+) -> Answer {
+    on_widest_level(
+        Closest(ray),
+        Scene {
+            bvh,
+            leaf: Triangles::new(mesh, isect),
+            stats,
+        },
+    )
 }
-
-/// One ray's closest hit: `(triangle index, hit)`.
-pub type Answer = Option<(u32, TriangleHit)>;
 
 /// The closest hits of `rays` into `out` (as many entries) by the batch query
 /// ([`RayQuery::closest_hits`]: coherent rays walked in packets), on the widest SIMD level and
@@ -214,30 +215,11 @@ pub fn closest_batch_simd<I: TriangleIntersector>(
     mesh: &TriangleMesh<'_>,
     isect: &I,
     rays: &[Ray],
-    out: &mut [Option<(u32, TriangleHit)>],
+    out: &mut [Answer],
     stats: Option<&mut TraversalStats>,
 ) -> std::result::Result<(), BvhError> {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(level) = crate::simd::avx2_fma() {
-        // SAFETY: as in `closest_simd`: AVX2 and FMA were detected at run time.
-        return unsafe { x86::closest_batch(level, bvh, mesh, isect, (rays, out), stats) };
-    }
-    with_stack(|stack| closest_batch_on(Portable, bvh, mesh, isect, (rays, out), stats, stack))
-}
-
-/// [`closest_batch_simd`] at SIMD `level`, on this thread's kept stack.
-#[inline(always)]
-fn closest_batch_on<L: SimdLevel, I: TriangleIntersector>(
-    level: L,
-    bvh: &VecBvh8,
-    mesh: &TriangleMesh<'_>,
-    isect: &I,
-    (rays, out): (&[Ray], &mut [Answer]),
-    stats: Option<&mut TraversalStats>,
-    stack: &mut QueryStack,
-) -> std::result::Result<(), BvhError> {
-    let ctx = &mut Query::new().on(level).stack(stack).stats(stats);
-    bvh.closest_hits(rays, &mut Triangles::new(mesh, isect), ctx, out)
+    let leaf = Triangles::new(mesh, isect);
+    on_widest_level(ClosestBatch(rays, out), Scene { bvh, leaf, stats })
 }
 
 /// Any hit of `ray`, on the widest SIMD level, as [`closest_simd`].
@@ -247,89 +229,90 @@ pub fn any_simd<I: TriangleIntersector>(
     mesh: &TriangleMesh<'_>,
     isect: &I,
     ray: &Ray,
-) -> Option<(u32, TriangleHit)> {
+) -> Answer {
+    let stats = None;
+    on_widest_level(
+        Any(ray),
+        Scene {
+            bvh,
+            leaf: Triangles::new(mesh, isect),
+            stats,
+        },
+    )
+}
+
+/// What every query of this module walks: the tree, its triangles' leaf test and the
+/// statistics to add to.
+struct Scene<'a, I> {
+    bvh: &'a VecBvh8,
+    leaf: Triangles<'a, I>,
+    stats: Option<&'a mut TraversalStats>,
+}
+
+/// One query of a [`Scene`] at SIMD level `level` on a caller's stack: [`Closest`], [`Any`],
+/// [`ClosestBatch`].
+trait Job<I> {
+    type Out;
+    fn run<L: SimdLevel>(self, level: L, scene: Scene<'_, I>, stack: &mut QueryStack) -> Self::Out;
+}
+
+/// [`closest_simd`]'s query.
+struct Closest<'r>(&'r Ray);
+/// [`any_simd`]'s query.
+struct Any<'r>(&'r Ray);
+/// [`closest_batch_simd`]'s query.
+struct ClosestBatch<'r>(&'r [Ray], &'r mut [Answer]);
+
+impl<I: TriangleIntersector> Job<I> for Closest<'_> {
+    type Out = Answer;
+    #[inline(always)]
+    fn run<L: SimdLevel>(self, level: L, mut s: Scene<'_, I>, stack: &mut QueryStack) -> Answer {
+        let ctx = &mut Query::new().on(level).stack(stack).stats(s.stats);
+        s.bvh.closest_hit(self.0, &mut s.leaf, ctx)
+    }
+}
+
+impl<I: TriangleIntersector> Job<I> for Any<'_> {
+    type Out = Answer;
+    #[inline(always)]
+    fn run<L: SimdLevel>(self, level: L, mut s: Scene<'_, I>, stack: &mut QueryStack) -> Answer {
+        let ctx = &mut Query::new().on(level).stack(stack).stats(s.stats);
+        s.bvh.any_hit(self.0, &mut s.leaf, ctx)
+    }
+}
+
+impl<I: TriangleIntersector> Job<I> for ClosestBatch<'_> {
+    type Out = std::result::Result<(), BvhError>;
+    #[inline(always)]
+    fn run<L: SimdLevel>(self, level: L, mut s: Scene<'_, I>, stack: &mut QueryStack) -> Self::Out {
+        let ctx = &mut Query::new().on(level).stack(stack).stats(s.stats);
+        s.bvh.closest_hits(self.0, &mut s.leaf, ctx, self.1)
+    }
+}
+
+/// Runs `job` on `scene` at the widest SIMD level the CPU has, on this thread's kept stack.
+#[inline(always)]
+fn on_widest_level<I, J: Job<I>>(job: J, scene: Scene<'_, I>) -> J::Out {
     #[cfg(target_arch = "x86_64")]
     if let Some(level) = crate::simd::avx2_fma() {
-        // SAFETY: as in `closest_simd`: AVX2 and FMA were detected at run time.
-        return unsafe { x86::any(level, bvh, mesh, isect, ray) };
+        // SAFETY: the token exists, so the CPU supports AVX2 and FMA (checked at run time),
+        // the only requirement of calling a `#[target_feature(enable = "avx2,fma")]` fn.
+        return unsafe { on_avx2_fma(level, job, scene) };
     }
-    with_stack(|stack| any_on(Portable, bvh, mesh, isect, ray, stack))
+    with_stack(|stack| job.run(Portable, scene, stack))
 }
 
-/// [`closest_simd`] at SIMD `level`, on this thread's kept stack.
-#[inline(always)]
-fn closest_on<L: SimdLevel, I: TriangleIntersector>(
-    level: L,
-    bvh: &VecBvh8,
-    mesh: &TriangleMesh<'_>,
-    isect: &I,
-    ray: &Ray,
-    stats: Option<&mut TraversalStats>,
-    stack: &mut QueryStack,
-) -> Option<(u32, TriangleHit)> {
-    let ctx = &mut Query::new().on(level).stack(stack).stats(stats);
-    bvh.closest_hit(ray, &mut Triangles::new(mesh, isect), ctx)
-}
-
-/// [`any_simd`] at SIMD `level`, on this thread's kept stack.
-#[inline(always)]
-fn any_on<L: SimdLevel, I: TriangleIntersector>(
-    level: L,
-    bvh: &VecBvh8,
-    mesh: &TriangleMesh<'_>,
-    isect: &I,
-    ray: &Ray,
-    stack: &mut QueryStack,
-) -> Option<(u32, TriangleHit)> {
-    let ctx = &mut Query::new().on(level).stack(stack);
-    bvh.any_hit(ray, &mut Triangles::new(mesh, isect), ctx)
-}
-
-/// The AVX2 + FMA entry points: the whole query, the thread's stack included, is one function
-/// compiled for those features. Each writes its `with_stack` closure itself: a closure takes
-/// the target features of the function it is written in, so one written in a `_on` helper
-/// would compile the walk for the baseline target, its SIMD kernels called out of line.
+/// [`on_widest_level`]'s AVX2 + FMA path: the whole query, the thread's stack included, is
+/// one function compiled for those features. The `with_stack` closure is written here because
+/// a closure takes the target features of the function it is written in: one written in a
+/// shared helper would compile the walk for the baseline target, its SIMD kernels called out
+/// of line. ([`Job::run`] is `#[inline(always)]`, so the walk is inlined into it.)
 #[cfg(target_arch = "x86_64")]
-mod x86 {
-    use super::{VecBvh8, any_on, closest_batch_on, closest_on, with_stack};
-    use halfray_core::Ray;
-    use halfray_core::mesh::TriangleMesh;
-    use halfray_core::query::TraversalStats;
-    use halfray_core::simd_level::Avx2Fma;
-    use halfray_core::triangle::{TriangleHit, TriangleIntersector};
-
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) fn closest<I: TriangleIntersector>(
-        level: Avx2Fma,
-        bvh: &VecBvh8,
-        mesh: &TriangleMesh<'_>,
-        isect: &I,
-        ray: &Ray,
-        stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, TriangleHit)> {
-        with_stack(|stack| closest_on(level, bvh, mesh, isect, ray, stats, stack))
-    }
-
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) fn closest_batch<I: TriangleIntersector>(
-        level: Avx2Fma,
-        bvh: &VecBvh8,
-        mesh: &TriangleMesh<'_>,
-        isect: &I,
-        batch: (&[Ray], &mut [super::Answer]),
-        stats: Option<&mut TraversalStats>,
-    ) -> Result<(), halfray_core::bvh::BvhError> {
-        with_stack(|stack| closest_batch_on(level, bvh, mesh, isect, batch, stats, stack))
-    }
-
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) fn any<I: TriangleIntersector>(
-        level: Avx2Fma,
-        bvh: &VecBvh8,
-        mesh: &TriangleMesh<'_>,
-        isect: &I,
-        ray: &Ray,
-    ) -> Option<(u32, TriangleHit)> {
-        with_stack(|stack| any_on(level, bvh, mesh, isect, ray, stack))
-    }
+#[target_feature(enable = "avx2,fma")]
+fn on_avx2_fma<I, J: Job<I>>(
+    level: halfray_core::simd_level::Avx2Fma,
+    job: J,
+    scene: Scene<'_, I>,
+) -> J::Out {
+    with_stack(|stack| job.run(level, scene, stack))
 }

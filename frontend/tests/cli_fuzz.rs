@@ -11,7 +11,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
 mod common;
-use common::{camera, plane, sphere};
+use common::{camera, material, plane, sphere};
 
 #[derive(Parser)]
 struct Cli {
@@ -197,6 +197,16 @@ fn valid_scene() -> String {
     let camera = camera("[0, 1, 5]", "[0, 0, 0]", "40", [16, 12]);
     let sphere = sphere("[0, 0, 0]", "1", "red");
     let plane = plane("[0, -1, 0]", "[0, 1, 0]", "red");
+    let red = material(
+        "red",
+        &[
+            ("diffuse", "[0.8, 0.1, 0.1]"),
+            ("specular", "[0.2, 0.2, 0.2]"),
+            ("shininess", "20"),
+            ("mirror", "0.2"),
+        ],
+    );
+    let glass = material("glass", &[("transparency", "0.9"), ("ior", "1.5")]);
     format!(
         r#"ambient = [0.1, 0.1, 0.1]
 max_depth = 4
@@ -207,16 +217,8 @@ type = "point"
 position = [2, 4, 3]
 color = [1, 1, 1]
 
-[material.red]
-diffuse = [0.8, 0.1, 0.1]
-specular = [0.2, 0.2, 0.2]
-shininess = 20
-mirror = 0.2
-
-[material.glass]
-transparency = 0.9
-ior = 1.5
-
+{red}
+{glass}
 [mesh.tet]
 file = "tet.obj"
 

@@ -8,7 +8,7 @@ use halfray::render::{Mode, RenderOptions, render};
 use halfray_core::{Ray, spawn_ray};
 
 mod common;
-use common::{parse_scene, plane, point_light, sphere};
+use common::{material, parse_scene, plane, point_light, sphere};
 
 fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
     (a - b).abs().max_element() <= tol * (1.0 + b.abs().max_element())
@@ -130,18 +130,20 @@ diffuse = [0.1, 0.1, 0.1]
 fn mirror_facing_coloured_plane_returns_colour_times_reflectance() {
     let mirror = plane("[0, 0, 0]", "[0, 0, 1]", "mirror");
     let paint = plane("[0, 0, 10]", "[0, 0, -1]", "paint");
+    let black = "[0, 0, 0]";
+    let silver = material(
+        "mirror",
+        &[("ambient", black), ("diffuse", black), ("mirror", "0.6")],
+    );
+    let colour = material(
+        "paint",
+        &[("ambient", "[0.2, 0.7, 0.4]"), ("diffuse", black)],
+    );
     let text = format!(
         r#"ambient = [1, 1, 1]
 {ORTHO}
-[material.mirror]
-ambient = [0, 0, 0]
-diffuse = [0, 0, 0]
-mirror = 0.6
-
-[material.paint]
-ambient = [0.2, 0.7, 0.4]
-diffuse = [0, 0, 0]
-
+{silver}
+{colour}
 {mirror}
 # Behind the camera, facing the mirror.
 {paint}"#

@@ -8,7 +8,9 @@ use halfray::scene::{Scene, load};
 use std::path::Path;
 
 mod common;
-use common::{camera, directional_light, parse_scene, plane, point_light, scenes_dir, sphere};
+use common::{
+    camera, directional_light, material, parse_scene, plane, point_light, scenes_dir, sphere,
+};
 
 /// A floor and a red sphere, lit by two lights that cast no shadows.
 fn matte() -> String {
@@ -318,26 +320,29 @@ fn pane_scene(pane: Option<f32>) -> Scene {
     let camera = camera("[0, 10, 0.001]", "[0, 0, 0]", "10", [9, 9]);
     let light = point_light("[0, 4, 0]", "16");
     let floor = plane("[0, 0, 0]", "[0, 1, 0]", "floor");
+    let black = "[0, 0, 0]";
+    let floor_paint = material("floor", &[("diffuse", "[1, 1, 1]"), ("specular", black)]);
+    let transparency = pane.unwrap_or(0.5).to_string();
+    let glass = material(
+        "glass",
+        &[
+            ("diffuse", black),
+            ("specular", black),
+            ("transparency", &transparency),
+            ("ior", "1.0"),
+        ],
+    );
     let mut text = format!(
         r#"
 ambient = [0, 0, 0]
 
 {camera}
 {light}
-[material.floor]
-diffuse = [1, 1, 1]
-specular = [0, 0, 0]
-
-[material.glass]
-diffuse = [0, 0, 0]
-specular = [0, 0, 0]
-transparency = 0.5
-ior = 1.0
-
+{floor_paint}
+{glass}
 {floor}"#,
     );
-    if let Some(t) = pane {
-        text = text.replace("transparency = 0.5", &format!("transparency = {t}"));
+    if pane.is_some() {
         text.push_str(
             r#"
 [[object]]

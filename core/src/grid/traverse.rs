@@ -4,60 +4,23 @@
 use super::Grid;
 use super::overlap::ray_pad;
 use crate::aabb::{Aabb, SlabRay};
-use crate::query::TraversalStats;
-use crate::query::forward::ClosureWalk;
-use crate::query::walk::{cull_bound, test_run};
+use crate::query::forward::{ClosureWalk, PrimTest, Search};
+use crate::query::walk::cull_bound;
 use crate::ray::Ray;
 use glam::Vec3;
-
-/// The running state of one query.
-struct Search<F, H> {
-    cur: Ray,
-    best: Option<(u32, H)>,
-    any: bool,
-    intersect: F,
-    stats: TraversalStats,
-}
-
-impl<F: FnMut(u32, &Ray) -> Option<(f32, H)>, H> Search<F, H> {
-    /// Tests every triangle of `cell`; `true` when an any-hit query is done.
-    #[inline(always)]
-    fn test(&mut self, cell: &[u32]) -> bool {
-        self.stats.nodes_visited += 1;
-        test_run(
-            cell,
-            &mut self.intersect,
-            &mut self.cur,
-            &mut self.best,
-            &mut self.stats.primitives_tested,
-            self.any,
-        )
-    }
-}
 
 impl<O, R> ClosureWalk for Grid<O, R>
 where
     O: AsRef<[u32]>,
     R: AsRef<[u32]>,
 {
-    fn traverse<H>(
-        &self,
-        ray: &Ray,
-        intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
-        stats: Option<&mut TraversalStats>,
-        any: bool,
-    ) -> Option<(u32, H)> {
-        let slab = SlabRay::new(ray)?;
-        if self.reference_count == 0 {
-            return None;
-        }
-        let mut s = Search {
-            cur: *ray,
-            best: None,
-            any,
-            intersect,
-            stats: TraversalStats::default(),
+    fn traverse<F: PrimTest<H>, H>(&self, ray: &Ray, s: &mut Search<F, H>) {
+        let Some(slab) = SlabRay::new(ray) else {
+            return;
         };
+        if self.reference_count == 0 {
+            return;
+        }
         let l = &self.layout;
         let o_mag = ray.origin.abs().max_element();
         let near = o_mag <= l.reach;
@@ -85,12 +48,8 @@ where
             s.test(self.references());
             s.stats.nodes_visited = self.cell_count() as u64;
         } else {
-            self.walk(&slab, ray, pad.max(l.pad), radius, &mut s);
+            self.walk(&slab, ray, pad.max(l.pad), radius, s);
         }
-        if let Some(out) = stats {
-            out.add(&s.stats);
-        }
-        s.best
     }
 }
 
@@ -101,7 +60,7 @@ where
 {
     /// The DDA from the entry into the grid's box grown by `clip`, testing the block of
     /// `radius` cells around each cell it visits, until the rule of the module docs ends it.
-    fn walk<F: FnMut(u32, &Ray) -> Option<(f32, H)>, H>(
+    fn walk<F: PrimTest<H>, H>(
         &self,
         slab: &SlabRay,
         ray: &Ray,
@@ -165,7 +124,7 @@ where
     }
 
     /// Tests every cell within `radius` of `cell` (clamped); `true` when the query is done.
-    fn visit_block<F: FnMut(u32, &Ray) -> Option<(f32, H)>, H>(
+    fn visit_block<F: PrimTest<H>, H>(
         &self,
         cell: [u32; 3],
         radius: [u32; 3],
@@ -177,6 +136,7 @@ where
         for k in lo[2]..=hi[2] {
             for j in lo[1]..=hi[1] {
                 for i in lo[0]..=hi[0] {
+                    s.stats.nodes_visited += 1;
                     if s.test(self.cell_by_id(self.layout.cell_id([i, j, k]))) {
                         return true;
                     }

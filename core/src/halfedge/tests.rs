@@ -111,14 +111,8 @@ fn icosa() -> (Vec<Vec3>, Vec<[u32; 3]>) {
 /// The fan: D = (4,2,0) surrounded by E, F, C, B, A counter-clockwise.
 /// Vertex indices: A0 B1 C2 D3 E4 F5.
 fn fan5() -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let p = vec![
-        vec3(2., 4., 0.),
-        vec3(5., 7., 0.),
-        vec3(7., 3., 0.),
-        vec3(4., 2., 0.),
-        vec3(5., 0., 0.),
-        vec3(6., 1., 0.),
-    ];
+    let plane = [(2., 4.), (5., 7.), (7., 3.), (4., 2.), (5., 0.), (6., 1.)];
+    let p = plane.iter().map(|&(x, y)| vec3(x, y, 0.)).collect();
     let t = vec![[3, 4, 5], [3, 5, 2], [3, 2, 1], [3, 1, 0], [3, 0, 4]];
     (p, t)
 }

@@ -3,9 +3,8 @@
 use super::node::{KdNode, KdNodeKind};
 use super::{KdTree, T_WIDEN_ABS, TRAVERSAL_STACK_SIZE};
 use crate::aabb::{Aabb, SLAB_FAR_SCALE, SLAB_FAR_SCALE_NEGATIVE, SlabRay, pad_far};
-use crate::query::TraversalStats;
-use crate::query::forward::ClosureWalk;
-use crate::query::walk::{cull_bound, projection_pad, test_run};
+use crate::query::forward::{ClosureWalk, PrimTest, Search};
+use crate::query::walk::{cull_bound, projection_pad};
 use crate::ray::Ray;
 
 /// One entry of the traversal stack (12 bytes): a node still to visit and the ray's interval
@@ -145,33 +144,28 @@ impl KdRay {
 
 /// The walk of the module docs of [`super`].
 impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> ClosureWalk for KdTree<N, R> {
-    fn traverse<H>(
-        &self,
-        ray: &Ray,
-        mut intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
-        stats: Option<&mut TraversalStats>,
-        any: bool,
-    ) -> Option<(u32, H)> {
-        let slab = SlabRay::new(ray)?;
+    fn traverse<F: PrimTest<H>, H>(&self, ray: &Ray, s: &mut Search<F, H>) {
+        let Some(slab) = SlabRay::new(ray) else {
+            return;
+        };
         let nodes = self.nodes();
         let refs = self.references();
         if nodes.is_empty() {
-            return None;
+            return;
         }
         let kray = KdRay::new(slab, projection_pad(slab.origin, self.extent));
-        let (t0, t1) = kray.clip_box(&self.bounds, ray.t_min, cull_bound(ray.t_max))?;
-        let mut local = TraversalStats::default();
-        let mut cur = *ray;
-        let mut best: Option<(u32, H)> = None;
+        let Some((t0, t1)) = kray.clip_box(&self.bounds, ray.t_min, cull_bound(ray.t_max)) else {
+            return;
+        };
         let mut stack = [KdStackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
         let mut sp = 0usize;
         let mut next = Some((0u32, t0, t1));
         'walk: while let Some((index, t0, t1)) = next.take() {
-            let t1 = t1.min(cull_bound(cur.t_max));
+            let t1 = t1.min(cull_bound(s.cur.t_max));
             if t0 <= t1
                 && let Some(node) = nodes.get(index as usize)
             {
-                local.nodes_visited += 1;
+                s.stats.nodes_visited += 1;
                 match node.kind() {
                     KdNodeKind::Inner {
                         axis,
@@ -203,8 +197,7 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> ClosureWalk for KdTree<N, R> {
                         let run = refs
                             .get(first..first.saturating_add(count as usize))
                             .unwrap_or(&[]);
-                        let tested = &mut local.primitives_tested;
-                        if test_run(run, &mut intersect, &mut cur, &mut best, tested, any) {
+                        if s.test(run) {
                             break 'walk;
                         }
                     }
@@ -215,9 +208,5 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> ClosureWalk for KdTree<N, R> {
                 next = stack.get(sp).map(|e| (e.node, e.t0, e.t1));
             }
         }
-        if let Some(s) = stats {
-            s.add(&local);
-        }
-        best
     }
 }

@@ -3,23 +3,57 @@
 //! [`ClosureWalk::leaf_query`] is that walk for the structures that call a closure per
 //! primitive.
 
+use super::walk::test_run;
 use super::{LeafTest, Query, Stack, TraversalStats};
 use crate::ray::Ray;
 use crate::simd_level::SimdLevel;
+
+/// A primitive test of a [`ClosureWalk`]: `intersect(prim, ray)` is the primitive's hit
+/// distance along `ray` and its hit, if any.
+pub(crate) trait PrimTest<H>: FnMut(u32, &Ray) -> Option<(f32, H)> {}
+
+impl<H, F: FnMut(u32, &Ray) -> Option<(f32, H)>> PrimTest<H> for F {}
+
+/// The state of one closest-hit (or any-hit) walk of a [`ClosureWalk`] structure: the ray
+/// shrunk to the closest hit so far, that hit, the primitive test and the walk's counters.
+pub(crate) struct Search<F, H> {
+    /// The query ray, `t_max` shrunk to the closest hit taken so far.
+    pub(crate) cur: Ray,
+    /// The closest hit so far under the tie rule: `(primitive, hit)`.
+    pub(crate) best: Option<(u32, H)>,
+    /// Any hit: the walk ends at the first hit taken.
+    any: bool,
+    /// `intersect(prim, cur)`: the primitive's hit distance and hit, if any.
+    intersect: F,
+    /// Nodes or cells visited (counted by the walk) and primitives tested (by [`Search::test`]).
+    pub(crate) stats: TraversalStats,
+}
+
+impl<F: PrimTest<H>, H> Search<F, H> {
+    /// Tests the primitives of `run` in order ([`test_run`]); `true` when an any-hit query is
+    /// done.
+    #[inline(always)]
+    pub(crate) fn test(&mut self, run: &[u32]) -> bool {
+        let tested = &mut self.stats.primitives_tested;
+        test_run(
+            run,
+            &mut self.intersect,
+            &mut self.cur,
+            &mut self.best,
+            tested,
+            self.any,
+        )
+    }
+}
 
 /// A structure whose walk calls a closure per primitive and keeps its traversal state in its
 /// own frame, ignoring the context's stack (the grid, the kd-tree): its two ray queries are
 /// [`ClosureWalk::leaf_query`].
 pub(crate) trait ClosureWalk {
-    /// Closest hit, or any hit when `any`, of `ray` by `intersect(prim, ray shrunk to the
-    /// closest hit so far)` under the tie rule; counters added to `stats`.
-    fn traverse<H>(
-        &self,
-        ray: &Ray,
-        intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
-        stats: Option<&mut TraversalStats>,
-        any: bool,
-    ) -> Option<(u32, H)>;
+    /// Walks `ray` (equal to `s.cur` on entry) through the structure, testing the primitives of
+    /// each node or cell it visits with [`Search::test`] until the walk's end rule or the
+    /// any-hit query stops it; counts the nodes or cells visited in `s.stats`.
+    fn traverse<F: PrimTest<H>, H>(&self, ray: &Ray, s: &mut Search<F, H>);
 
     /// Both ray queries: the leaf test prepared once per ray (a refused ray tests nothing),
     /// then [`ClosureWalk::traverse`] with the context's statistics.
@@ -34,13 +68,18 @@ pub(crate) trait ClosureWalk {
         let Some(pre) = leaf.prepare(ray) else {
             return S::answer(Ok(None));
         };
-        let stats = ctx.stats.as_deref_mut();
-        S::answer(Ok(self.traverse(
-            ray,
-            |p, r| leaf.intersect(&pre, p, r),
-            stats,
+        let mut s = Search {
+            cur: *ray,
+            best: None,
             any,
-        )))
+            intersect: |p, r: &Ray| leaf.intersect(&pre, p, r),
+            stats: TraversalStats::default(),
+        };
+        self.traverse(ray, &mut s);
+        if let Some(out) = ctx.stats.as_deref_mut() {
+            out.add(&s.stats);
+        }
+        S::answer(Ok(s.best))
     }
 }
 

@@ -101,6 +101,12 @@ pub fn plane(point: &str, normal: &str, material: &str) -> String {
     )
 }
 
+/// A `[material.<name>]` table of `fields`, each `(key, value)`.
+pub fn material(name: &str, fields: &[(&str, &str)]) -> String {
+    let rows: String = fields.iter().map(|(k, v)| format!("{k} = {v}\n")).collect();
+    format!("[material.{name}]\n{rows}")
+}
+
 /// The shipped example scenes, `<workspace>/scenes` (as `frontend/../scenes`).
 pub fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")

@@ -20,32 +20,53 @@ use halfray_core::solids::OCTAHEDRON_TRIANGLES;
 /// octahedron, and for some dozens of splits.
 pub type FuzzMesh = HalfedgeMesh<64, 192, 128>;
 
-/// Opcodes (the first byte of an operation, mod 10).
+/// Operations: the first byte of an operation, mod 10, is the index of its opcode in
+/// [`Op::ALL`] (the order written here).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[repr(u8)]
 pub enum Op {
     /// `flip_edge(edge: u8)`.
-    Flip = 0,
+    Flip,
     /// `split_edge(edge: u8)`.
-    Split = 1,
+    Split,
     /// `split_edge_at(edge: u8, raw: u8, point)`: quantized point if `raw` is even, else
     /// three raw `f32`s.
-    SplitAt = 2,
+    SplitAt,
     /// `collapse_edge(halfedge: u16, at: u8)`: `at` mod 4 = head, tail, midpoint, point
     /// (quantized).
-    Collapse = 3,
+    Collapse,
     /// `diffuse_vertex(vertex: u8, k: f32)`.
-    DiffuseVertex = 4,
+    DiffuseVertex,
     /// `diffuse(k: u8 / 16, boundary: u8, short scratch: u8)`.
-    Diffuse = 5,
+    Diffuse,
     /// `subdivide_loop(weights: u8)` into a fresh mesh, which replaces the mesh on success.
-    Loop = 6,
+    Loop,
     /// `compact`.
-    Compact = 7,
+    Compact,
     /// `set_position(vertex: u8, raw: u8, point)` (point as for `SplitAt`).
-    SetPosition = 8,
+    SetPosition,
     /// `export` (also into a too-small buffer), `build` from the export, re-export.
-    ExportRebuild = 9,
+    ExportRebuild,
+}
+
+impl Op {
+    /// Every operation, by opcode.
+    pub const ALL: [Op; 10] = [
+        Op::Flip,
+        Op::Split,
+        Op::SplitAt,
+        Op::Collapse,
+        Op::DiffuseVertex,
+        Op::Diffuse,
+        Op::Loop,
+        Op::Compact,
+        Op::SetPosition,
+        Op::ExportRebuild,
+    ];
+
+    /// The operation of an input byte (its opcode, the byte mod 10).
+    pub fn decode(byte: u8) -> Op {
+        Op::ALL[usize::from(byte) % Op::ALL.len()]
+    }
 }
 
 /// The mesh's triangle list (positions by vertex slot, triangles by vertex id).
@@ -162,10 +183,10 @@ pub fn halfedge_ops(data: &[u8]) {
         let edge = |i: &mut Input<'_>| EdgeId::new(u32::from(i.u8()) % (slots.edges as u32 + 2));
         let vertex =
             |i: &mut Input<'_>| VertexId::new(u32::from(i.u8()) % (slots.vertices as u32 + 2));
-        let op = i.u8() % 10;
+        let op = Op::decode(i.u8());
         // `Ok(keep_chi)` on success, `Err(())` when refused.
         let outcome: Result<bool, String> = match op {
-            0 => {
+            Op::Flip => {
                 let e = edge(&mut i);
                 let can = mesh.can_flip_edge(e);
                 let r = mesh.flip_edge(e);
@@ -173,13 +194,13 @@ pub fn halfedge_ops(data: &[u8]) {
                 assert_eq!(can, r, "can_flip_edge disagrees: {log:?}");
                 r.map(|()| true).map_err(|e| format!("{e:?}"))
             }
-            1 => {
+            Op::Split => {
                 let e = edge(&mut i);
                 let r = mesh.split_edge(e);
                 log.push(format!("split {e:?} -> {r:?}"));
                 r.map(|_| true).map_err(|e| format!("{e:?}"))
             }
-            2 => {
+            Op::SplitAt => {
                 let e = edge(&mut i);
                 let p = point(&mut i);
                 let r = mesh.split_edge_at(e, p);
@@ -189,7 +210,7 @@ pub fn halfedge_ops(data: &[u8]) {
                 }
                 r.map(|_| true).map_err(|e| format!("{e:?}"))
             }
-            3 => {
+            Op::Collapse => {
                 let h = HalfedgeId::new(u32::from(i.u16()) % (2 * slots.edges as u32 + 2));
                 let at = match i.u8() % 4 {
                     0 => CollapseAt::Head,
@@ -250,14 +271,14 @@ pub fn halfedge_ops(data: &[u8]) {
                 }
                 r.map(|_| true).map_err(|e| format!("{e:?}"))
             }
-            4 => {
+            Op::DiffuseVertex => {
                 let v = vertex(&mut i);
                 let k = i.f32();
                 let r = mesh.diffuse_vertex(v, k);
                 log.push(format!("diffuse_vertex {v:?} {k:e} -> {r:?}"));
                 r.map(|_| true).map_err(|e| format!("{e:?}"))
             }
-            5 => {
+            Op::Diffuse => {
                 let k = f32::from(i.u8()) / 16.0;
                 let boundary = if i.u8().is_multiple_of(2) {
                     DiffuseBoundary::Free
@@ -270,7 +291,7 @@ pub fn halfedge_ops(data: &[u8]) {
                 log.push(format!("diffuse {k} {boundary:?} short={short} -> {r:?}"));
                 r.map(|()| true).map_err(|e| format!("{e:?}"))
             }
-            6 => {
+            Op::Loop => {
                 let weights = if i.u8().is_multiple_of(2) {
                     LoopWeights::Warren
                 } else {
@@ -291,7 +312,7 @@ pub fn halfedge_ops(data: &[u8]) {
                     }
                 }
             }
-            7 => {
+            Op::Compact => {
                 let mut moves = 0usize;
                 mesh.compact(|_| moves += 1);
                 log.push(format!("compact ({moves} moves)"));
@@ -299,14 +320,14 @@ pub fn halfedge_ops(data: &[u8]) {
                 assert_eq!(mesh.len(), before.len(), "compact changed counts: {log:?}");
                 Ok(true)
             }
-            8 => {
+            Op::SetPosition => {
                 let v = vertex(&mut i);
                 let p = point(&mut i);
                 let r = mesh.set_position(v, p);
                 log.push(format!("set_position {v:?} {p:?} -> {r:?}"));
                 r.map(|()| true).map_err(|e| format!("{e:?}"))
             }
-            _ => {
+            Op::ExportRebuild => {
                 let (np, nt) = (slots.vertices, mesh.len().faces);
                 if np + nt > 0 {
                     let mut sp = vec![Vec3::splat(7.0); np.saturating_sub(1)];
