@@ -5,7 +5,11 @@
 //! the first ray's octant and within [`COHERENT_COS`] of its direction, whose origins lie
 //! within [`COHERENT_ORIGIN`] of its origin, with finite reciprocals and `t_min ≥ 0` (the
 //! common path of the single-ray node test) — when they are at least three quarters of the
-//! chunk. The other rays are walked alone by the single-ray query.
+//! chunk. The other rays are walked alone by the single-ray query. The ray three quarters
+//! into the chunk is looked at first: when it is not like the first, the whole chunk goes to
+//! the single-ray query before any per-ray work (an incoherent order costs the batch nothing).
+//! The packet's lanes are computed lane by lane over the chunk, in vector form, with the
+//! operations of the single-ray setup (`Lanes::gather`).
 //!
 //! * **Inner nodes** are tested once for the packet with interval arithmetic: over the
 //!   packet's ranges of padded origins and reciprocals, the smallest entry and the largest
@@ -30,8 +34,6 @@ use super::node::{ChildRef, LeafGroup, WideNode};
 use super::node_test::{far_reciprocal, fold_slab, slab_axis};
 use super::traverse::{RunLanes, STACK, leaf_groups, leaf_hits, prefetch_child, sorted_keys};
 use super::{WideBvh, add_stats};
-use crate::aabb::SlabRay;
-use crate::bvh::padded_ray::PaddedRay;
 use crate::query::walk::{cull_bound, projection_pad};
 use crate::query::{LeafTest, TraversalStats};
 use crate::ray::Ray;
@@ -53,7 +55,7 @@ pub(super) const COHERENT_COS: f32 = 0.999_05;
 pub(super) const COHERENT_ORIGIN: f32 = 1.0 / 256.0;
 
 /// The packet's rays side by side, lane `r` for ray `r`, as the node test wants them
-/// ([`PaddedRay`]); lanes not in the packet have `t_min = +∞` and `bound = −∞`, which no box
+/// ([`PaddedRay`](crate::bvh::padded_ray::PaddedRay)); lanes not in the packet have `t_min = +∞` and `bound = −∞`, which no box
 /// test admits.
 struct Lanes {
     origin_near: [[f32; PACKET]; 3],
@@ -66,34 +68,139 @@ struct Lanes {
     bound: [f32; PACKET],
 }
 
+/// Per lane, all ones where a condition holds and zero where not: the form of a lane mask
+/// that vector code selects with (`and`, `andnot`, `or`).
+type LaneMask = [u32; PACKET];
+
+/// All ones for `true`, zero for `false`.
+#[inline(always)]
+fn ones(c: bool) -> u32 {
+    0u32.wrapping_sub(u32::from(c))
+}
+
+/// `a` where `on` is all ones, `b` where it is zero (bit by bit).
+#[inline(always)]
+fn select(on: u32, a: f32, b: f32) -> f32 {
+    f32::from_bits(a.to_bits() & on | b.to_bits() & !on)
+}
+
+/// Bit `r` set where `m[r]` is set.
+#[inline(always)]
+fn lane_bits(m: &LaneMask) -> u32 {
+    m.iter().enumerate().fold(0, |b, (r, &x)| b | (x & 1) << r)
+}
+
+/// The smallest (`MIN`) or largest value of `v` over the lanes of `on` (`±∞` for none),
+/// folded in halves so that the lane loops vectorise.
+// Lane loops are indexed: the form the compiler turns into vector instructions.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn masked_extreme<const MIN: bool>(v: &[f32; PACKET], on: &LaneMask) -> f32 {
+    let none = if MIN {
+        f32::INFINITY
+    } else {
+        f32::NEG_INFINITY
+    };
+    let pick = |a: f32, b: f32| if (a < b) == MIN { a } else { b };
+    let mut x = [none; PACKET];
+    for r in 0..PACKET {
+        x[r] = select(on[r], v[r], none);
+    }
+    let mut half = PACKET / 2;
+    while half > 0 {
+        for r in 0..half {
+            x[r] = pick(x[r], x[r + half]);
+        }
+        half /= 2;
+    }
+    x[0]
+}
+
 impl Lanes {
-    const EMPTY: Self = Self {
+    /// Lanes to be written by [`Lanes::gather`].
+    const ZERO: Self = Self {
         origin_near: [[0.0; PACKET]; 3],
         origin_far: [[0.0; PACKET]; 3],
         inv: [[0.0; PACKET]; 3],
         inv_far: [[0.0; PACKET]; 3],
-        t_min: [f32::INFINITY; PACKET],
-        bound: [f32::NEG_INFINITY; PACKET],
+        t_min: [0.0; PACKET],
+        bound: [0.0; PACKET],
     };
 
-    /// Puts `ray` (padded: `w`) into lane `i` (nothing for `i ≥ PACKET`).
+    /// The lanes of `rays` (at most [`PACKET`]) in a tree of `extent`, computed lane by lane
+    /// with the operations of [`SlabRay::new`](crate::aabb::SlabRay::new) and [`PaddedRay::new`](crate::bvh::padded_ray::PaddedRay::new) (so each lane's values
+    /// are its ray's, bit for bit), and the mask of the rays that may join a packet of the
+    /// octant `near`: valid ([`Ray::is_valid`]) with `t_min ≥ 0` and every reciprocal finite
+    /// and normal (the common path of the single-ray node test), in the octant, and `alike`
+    /// the first ray (`true` in the lanes returned). Every lane is written; the lanes of the
+    /// rays that do not join (and past the rays) get `t_min = +∞` and `bound = −∞`.
+    // Lane loops are indexed: the form the compiler turns into vector instructions.
+    #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn set(&mut self, i: usize, w: &PaddedRay, ray: &Ray) {
-        if i >= PACKET {
-            return;
+    fn gather(
+        &mut self,
+        rays: &[Ray],
+        extent: f32,
+        near: [usize; 3],
+        alike: impl Fn(&Ray) -> bool,
+    ) -> LaneMask {
+        let rays = rays.get(..PACKET).unwrap_or(rays);
+        // Lanes past the rays: a valid ray, masked out below.
+        let ray = |r: usize| {
+            rays.get(r)
+                .copied()
+                .unwrap_or(Ray::new(glam::Vec3::ZERO, glam::Vec3::ONE))
+        };
+        let mut o = [[0.0f32; PACKET]; 3];
+        let mut d = [[0.0f32; PACKET]; 3];
+        let (mut t_min, mut t_max) = ([0.0f32; PACKET], [0.0f32; PACKET]);
+        for r in 0..PACKET {
+            let ray = ray(r);
+            for axis in 0..3 {
+                o[axis][r] = ray.origin[axis];
+                d[axis][r] = ray.direction[axis];
+            }
+            (t_min[r], t_max[r]) = (ray.t_min, ray.t_max);
         }
+        // `Ray::is_valid`, and the packet's conditions, lane by lane.
+        const EXP: u32 = 0x7F80_0000;
+        let out = self;
+        let mut ok: LaneMask = core::array::from_fn(|r| ones(r < rays.len() && alike(&ray(r))));
         for axis in 0..3 {
-            self.origin_near[axis][i] = w.origin_near[axis];
-            self.origin_far[axis][i] = w.origin_far[axis];
-            self.inv[axis][i] = w.inv_dir[axis];
-            self.inv_far[axis][i] = far_reciprocal(w.inv_dir[axis]);
+            let n = near[axis] == 1;
+            for r in 0..PACKET {
+                let (oa, da) = (o[axis][r], d[axis][r]);
+                let inv = 1.0 / da;
+                let normal = (inv.abs() >= f32::MIN_POSITIVE) & (inv.abs() < f32::INFINITY);
+                ok[r] &= ones(
+                    (oa.to_bits() & EXP != EXP)
+                        & (da.to_bits() & EXP != EXP)
+                        & normal
+                        & (da.is_sign_negative() == n),
+                );
+                out.inv[axis][r] = inv;
+                out.inv_far[axis][r] = far_reciprocal(inv);
+            }
         }
-        self.t_min[i] = ray.t_min;
-        self.bound[i] = cull_bound(ray.t_max).min(f32::MAX);
+        for r in 0..PACKET {
+            ok[r] &= ones((t_min[r] >= 0.0) & (t_min[r] < f32::INFINITY) & (t_min[r] <= t_max[r]));
+        }
+        for r in 0..PACKET {
+            let pad = projection_pad(glam::Vec3::new(o[0][r], o[1][r], o[2][r]), extent);
+            for axis in 0..3 {
+                let toward = pad.copysign(d[axis][r]);
+                out.origin_near[axis][r] = o[axis][r] + toward;
+                out.origin_far[axis][r] = o[axis][r] - toward;
+            }
+            let bound = cull_bound(t_max[r]).min(f32::MAX);
+            out.t_min[r] = select(ok[r], t_min[r], f32::INFINITY);
+            out.bound[r] = select(ok[r], bound, f32::NEG_INFINITY);
+        }
+        ok
     }
 
     /// The rays of `bits` that enter slot `slot` of `node` within their own intervals: the
-    /// single-ray node test of that box ([`PaddedRay::hit_children`]), ray by ray, `near` the
+    /// single-ray node test of that box ([`PaddedRay::hit_children`](crate::bvh::padded_ray::PaddedRay::hit_children)), ray by ray, `near` the
     /// packet's near corners.
     // Lane loops are indexed: the form the compiler turns into vector instructions.
     #[allow(clippy::needless_range_loop)]
@@ -118,29 +225,6 @@ impl Lanes {
             }
         }
         simd::mask_le(&t_enter, &t_exit)
-    }
-
-    /// Copies the first ray of `bits` (not empty) into every lane not in `bits`, whose
-    /// `t_min = +∞` and `bound = −∞` still admit no box: the packet's ranges are then plain
-    /// minima and maxima over all lanes.
-    #[inline(always)]
-    fn fill_idle(&mut self, bits: u32) {
-        let k = bits.trailing_zeros() as usize % PACKET;
-        for v in [
-            &mut self.origin_near,
-            &mut self.origin_far,
-            &mut self.inv,
-            &mut self.inv_far,
-        ] {
-            for axis in v.iter_mut() {
-                let x = axis[k];
-                for (i, lane) in axis.iter_mut().enumerate() {
-                    if bits >> i & 1 == 0 {
-                        *lane = x;
-                    }
-                }
-            }
-        }
     }
 
     /// The largest interval end of the packet (`−∞` when no ray is left).
@@ -169,35 +253,31 @@ struct Interval {
 }
 
 impl Interval {
-    /// The interval of the rays of `lanes` (its idle lanes filled, [`Lanes::fill_idle`]), all
-    /// with directions of the octant `near`.
+    /// The interval of the rays of `lanes` where `packet` holds (at least one), all with directions of the
+    /// octant `near`.
     #[inline(always)]
-    fn new(lanes: &Lanes, near: [usize; 3]) -> Self {
-        let range = |v: &[f32; PACKET]| {
-            v.iter().fold([f32::INFINITY, f32::NEG_INFINITY], |r, &x| {
-                [r[0].min(x), r[1].max(x)]
-            })
-        };
+    fn new(lanes: &Lanes, packet: &LaneMask, near: [usize; 3]) -> Self {
+        let lo = |v: &[f32; PACKET]| masked_extreme::<true>(v, packet);
+        let hi = |v: &[f32; PACKET]| masked_extreme::<false>(v, packet);
         let mut out = Self {
             near,
             origin_near: [0.0; 3],
             origin_far: [0.0; 3],
             inv: [[0.0; 2]; 3],
             inv_far: [[0.0; 2]; 3],
-            t_min: range(&lanes.t_min)[0],
+            t_min: lo(&lanes.t_min),
         };
         for (axis, &n) in near.iter().enumerate() {
             // `n` is 1 for a negative direction: the distances then fall as the difference
             // `plane − origin` grows.
-            let negative = n == 1;
-            let (on, of) = (
-                range(&lanes.origin_near[axis]),
-                range(&lanes.origin_far[axis]),
-            );
-            out.origin_near[axis] = if negative { on[0] } else { on[1] };
-            out.origin_far[axis] = if negative { of[1] } else { of[0] };
-            out.inv[axis] = range(&lanes.inv[axis]);
-            out.inv_far[axis] = range(&lanes.inv_far[axis]);
+            let (on, of) = (&lanes.origin_near[axis], &lanes.origin_far[axis]);
+            (out.origin_near[axis], out.origin_far[axis]) = if n == 1 {
+                (lo(on), hi(of))
+            } else {
+                (hi(on), lo(of))
+            };
+            out.inv[axis] = [lo(&lanes.inv[axis]), hi(&lanes.inv[axis])];
+            out.inv_far[axis] = [lo(&lanes.inv_far[axis]), hi(&lanes.inv_far[axis])];
         }
         out
     }
@@ -280,8 +360,8 @@ where
     T: AsRef<[LeafGroup]>,
 {
     /// Walks the coherent rays of `rays` (at most [`PACKET`]) as one packet, passing each
-    /// one's closest hit to `found(index, answer)` (invalid rays: `None` at once); returns the
-    /// rays left to the single-ray walk (bit `i` for `rays[i]`). `stack` is the walk's, reused
+    /// one's closest hit to `found(index, answer)`; returns the rays left to the single-ray
+    /// walk (bit `i` for `rays[i]`; invalid rays among them). `stack` is the walk's, reused
     /// from packet to packet.
     #[inline(always)]
     pub(super) fn packet_closest<LT: LeafTest, L: SimdLevel>(
@@ -302,37 +382,31 @@ where
         let near = [d0.x, d0.y, d0.z].map(|c| usize::from(c.is_sign_negative()));
         let cone = COHERENT_COS * COHERENT_COS * d0.length_squared();
         let near_origin = COHERENT_ORIGIN * self.extent;
-        let mut lanes = Lanes::EMPTY;
-        let (mut packet, mut alone) = (0u32, 0u32);
-        for (i, ray) in rays.iter().enumerate() {
-            let Some(slab) = SlabRay::new(ray).filter(|_| !nodes.is_empty()) else {
-                // An invalid ray, or an empty tree: no hit, as for the single-ray walk.
-                found(i, None);
-                continue;
-            };
+        // Direction within the cone and origin within reach of the first ray's: the
+        // direction's octant then is the first ray's unless a component is near zero.
+        let alike = |ray: &Ray| {
             let d = ray.direction;
             let dot = d.dot(d0);
-            let joins = !slab.divide
-                & (ray.t_min >= 0.0)
-                & slab.inv_dir.is_finite()
-                & (slab.negative.map(usize::from) == near)
-                & ((ray.origin - o0).abs().max_element() <= near_origin)
+            ((ray.origin - o0).abs().max_element() <= near_origin)
                 & (dot > 0.0)
-                & (dot * dot >= cone * d.length_squared());
-            if !joins {
-                alone |= 1 << i;
-                continue;
-            }
-            let w = PaddedRay::new(&slab, projection_pad(slab.origin, self.extent));
-            lanes.set(i, &w, ray);
-            packet |= 1 << i;
+                & (dot * dot >= cone * d.length_squared())
+        };
+        let all = u32::MAX >> (32 - rays.len() as u32);
+        // One ray first, the one three quarters in: rays in an order that is not coherent (a
+        // stride, random rays) leave at once, before any per-ray setup; of rays fanning out
+        // from the first (a scanline), fewer than three quarters would join when it does not.
+        let probe = (rays.len() * 3).div_ceil(4).saturating_sub(1);
+        if nodes.is_empty() || rays.len() < 2 || !rays.get(probe).is_some_and(alike) {
+            return all;
         }
+        let mut lanes = Lanes::ZERO;
+        let joined = lanes.gather(rays, self.extent, near, alike);
+        let packet = lane_bits(&joined);
         if packet.count_ones() * 4 < rays.len() as u32 * 3 || packet.count_ones() < 2 {
             // Too few alike: a packet would walk nodes for few rays.
-            return alone | packet;
+            return all;
         }
-        lanes.fill_idle(packet);
-        let interval = Interval::new(&lanes, near);
+        let interval = Interval::new(&lanes, &joined, near);
 
         let mut states: [RayState<LT::Prepared, LT::Hit>; PACKET] =
             core::array::from_fn(|i| RayState {
@@ -433,7 +507,7 @@ where
                 found(i, state.best.take());
             }
         }
-        alone
+        all & !packet
     }
 }
 

@@ -3,7 +3,8 @@
 //! ray's own node test.
 
 use super::*;
-use crate::aabb::Aabb;
+use crate::aabb::{Aabb, SlabRay};
+use crate::bvh::padded_ray::PaddedRay;
 use crate::bvh::wide::{Bvh4, Bvh8, binary_options, group_capacity};
 use crate::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
 use crate::mesh::TriangleMesh;
@@ -199,6 +200,7 @@ fn packets_keep_the_tie_rule_on_shared_edges() {
 /// ([`PaddedRay::hit_children`]) the oracle.
 #[test]
 fn the_packet_node_test_bounds_every_rays_own() {
+    const EXTENT: f32 = 30.0;
     let mut rng = Lcg(77);
     let mut admitted = 0;
     for round in 0..3000 {
@@ -210,7 +212,6 @@ fn the_packet_node_test_bounds_every_rays_own() {
         let base = (rng.v(2.0).abs() + Vec3::splat(0.05)) * octant;
         let eye = rng.v(20.0);
         let spread = [0.0, 0.01, 0.2][round % 3];
-        let mut lanes = Lanes::EMPTY;
         let mut rays = Vec::new();
         for i in 0..PACKET {
             let d = (base + rng.v(spread)).abs().max(Vec3::splat(1e-3)) * octant;
@@ -223,12 +224,31 @@ fn the_packet_node_test_bounds_every_rays_own() {
             ray.t_min = [0.0, rng.f()][i % 2];
             ray.t_max = [f32::INFINITY, 5.0 + 40.0 * rng.f()][(i / 2) % 2];
             let slab = SlabRay::new(&ray).unwrap();
-            let w = PaddedRay::new(&slab, 1e-3);
-            lanes.set(i, &w, &ray);
+            let w = PaddedRay::new(&slab, projection_pad(o, EXTENT));
             rays.push((ray, w));
         }
         let near = [octant.x, octant.y, octant.z].map(|s| usize::from(s < 0.0));
-        let interval = Interval::new(&lanes, near);
+        let mut lanes = Lanes::ZERO;
+        let only: Vec<Ray> = rays.iter().map(|(r, _)| *r).collect();
+        let joined = lanes.gather(&only, EXTENT, near, |_| true);
+        assert_eq!(lane_bits(&joined), 0xFFFF, "round {round}: every ray joins");
+        for (i, (_, w)) in rays.iter().enumerate() {
+            // Each lane holds its ray's own padded values, bit for bit.
+            for axis in 0..3 {
+                let lane = [
+                    lanes.origin_near[axis][i],
+                    lanes.origin_far[axis][i],
+                    lanes.inv[axis][i],
+                ];
+                let own = [w.origin_near[axis], w.origin_far[axis], w.inv_dir[axis]];
+                assert_eq!(
+                    lane.map(f32::to_bits),
+                    own.map(f32::to_bits),
+                    "round {round}"
+                );
+            }
+        }
+        let interval = Interval::new(&lanes, &joined, near);
         let mut node = WideNode::<8>::EMPTY;
         for slot in 0..7 {
             // Along the packet (most entered by some rays), or anywhere near it.
