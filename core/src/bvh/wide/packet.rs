@@ -54,6 +54,41 @@ pub(super) const COHERENT_COS: f32 = 0.999_05;
 /// none of its rays enters. Only speed depends on it, never an answer.
 pub(super) const COHERENT_ORIGIN: f32 = 1.0 / 256.0;
 
+/// The likeness of a packet's rays to its first ray (module docs): only speed depends on it.
+struct Coherence {
+    origin: [f32; 3],
+    direction: [f32; 3],
+    /// `COHERENT_COS² · |direction|²`.
+    cone: f32,
+    /// The largest distance of an origin from the first ray's, per axis.
+    reach: f32,
+}
+
+impl Coherence {
+    /// The likeness to `first` in a tree of `extent`.
+    #[inline(always)]
+    fn new(first: &Ray, extent: f32) -> Self {
+        Self {
+            origin: first.origin.to_array(),
+            direction: first.direction.to_array(),
+            cone: COHERENT_COS * COHERENT_COS * first.direction.length_squared(),
+            reach: COHERENT_ORIGIN * extent,
+        }
+    }
+
+    /// Whether a ray of origin `o` and direction `d` is like the first: its origin within
+    /// reach and its direction within the cone (then in the first ray's octant unless a
+    /// component is near zero). Written on plain `f32`s so that lane loops vectorise it.
+    #[inline(always)]
+    fn admits(&self, o: [f32; 3], d: [f32; 3]) -> bool {
+        let (a, b) = (self.origin, self.direction);
+        let far = |i: usize| (o[i] - a[i]).abs() <= self.reach;
+        let dot = d[0] * b[0] + d[1] * b[1] + d[2] * b[2];
+        let len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        far(0) & far(1) & far(2) & (dot > 0.0) & (dot * dot >= self.cone * len2)
+    }
+}
+
 /// The packet's rays side by side, lane `r` for ray `r`, as the node test wants them
 /// ([`PaddedRay`](crate::bvh::padded_ray::PaddedRay)); lanes not in the packet have `t_min = +∞` and `bound = −∞`, which no box
 /// test admits.
@@ -131,8 +166,8 @@ impl Lanes {
     /// with the operations of [`SlabRay::new`](crate::aabb::SlabRay::new) and [`PaddedRay::new`](crate::bvh::padded_ray::PaddedRay::new) (so each lane's values
     /// are its ray's, bit for bit), and the mask of the rays that may join a packet of the
     /// octant `near`: valid ([`Ray::is_valid`]) with `t_min ≥ 0` and every reciprocal finite
-    /// and normal (the common path of the single-ray node test), in the octant, and `alike`
-    /// the first ray (`true` in the lanes returned). Every lane is written; the lanes of the
+    /// and normal (the common path of the single-ray node test), in the octant, and admitted
+    /// by `coherence` (all ones in the lanes returned). Every lane is written; the lanes of the
     /// rays that do not join (and past the rays) get `t_min = +∞` and `bound = −∞`.
     // Lane loops are indexed: the form the compiler turns into vector instructions.
     #[allow(clippy::needless_range_loop)]
@@ -142,30 +177,31 @@ impl Lanes {
         rays: &[Ray],
         extent: f32,
         near: [usize; 3],
-        alike: impl Fn(&Ray) -> bool,
+        coherence: &Coherence,
     ) -> LaneMask {
         let rays = rays.get(..PACKET).unwrap_or(rays);
-        // Lanes past the rays: a valid ray, masked out below.
-        let ray = |r: usize| {
-            rays.get(r)
-                .copied()
-                .unwrap_or(Ray::new(glam::Vec3::ZERO, glam::Vec3::ONE))
-        };
+        // Lanes past the rays hold a valid ray's values, and are masked out.
         let mut o = [[0.0f32; PACKET]; 3];
-        let mut d = [[0.0f32; PACKET]; 3];
+        let mut d = [[1.0f32; PACKET]; 3];
         let (mut t_min, mut t_max) = ([0.0f32; PACKET], [0.0f32; PACKET]);
-        for r in 0..PACKET {
-            let ray = ray(r);
+        let mut ok: LaneMask = [0; PACKET];
+        for (r, ray) in rays.iter().enumerate() {
+            let r = r & (PACKET - 1);
+            let (p, v) = (ray.origin.to_array(), ray.direction.to_array());
             for axis in 0..3 {
-                o[axis][r] = ray.origin[axis];
-                d[axis][r] = ray.direction[axis];
+                o[axis][r] = p[axis];
+                d[axis][r] = v[axis];
             }
             (t_min[r], t_max[r]) = (ray.t_min, ray.t_max);
+            ok[r] = u32::MAX;
+        }
+        for r in 0..PACKET {
+            let at = |v: &[[f32; PACKET]; 3]| [v[0][r], v[1][r], v[2][r]];
+            ok[r] &= ones(coherence.admits(at(&o), at(&d)));
         }
         // `Ray::is_valid`, and the packet's conditions, lane by lane.
         const EXP: u32 = 0x7F80_0000;
         let out = self;
-        let mut ok: LaneMask = core::array::from_fn(|r| ones(r < rays.len() && alike(&ray(r))));
         for axis in 0..3 {
             let n = near[axis] == 1;
             for r in 0..PACKET {
@@ -346,14 +382,6 @@ impl PacketStack {
     }
 }
 
-/// One ray of a packet: its interval as the walk shrinks it, its best hit so far and its
-/// leaf test's setup (made at its first leaf; `Some(None)`: refused, it hits nothing).
-struct RayState<P, H> {
-    cur: Ray,
-    best: Option<(u32, H)>,
-    pre: Option<Option<P>>,
-}
-
 impl<const W: usize, N, T> WideBvh<W, N, T>
 where
     N: AsRef<[WideNode<W>]>,
@@ -378,19 +406,10 @@ where
             return 0;
         };
         // The packet is the rays like the first one (module docs); the others walk alone.
-        let (o0, d0) = (reference.origin, reference.direction);
+        let d0 = reference.direction;
         let near = [d0.x, d0.y, d0.z].map(|c| usize::from(c.is_sign_negative()));
-        let cone = COHERENT_COS * COHERENT_COS * d0.length_squared();
-        let near_origin = COHERENT_ORIGIN * self.extent;
-        // Direction within the cone and origin within reach of the first ray's: the
-        // direction's octant then is the first ray's unless a component is near zero.
-        let alike = |ray: &Ray| {
-            let d = ray.direction;
-            let dot = d.dot(d0);
-            ((ray.origin - o0).abs().max_element() <= near_origin)
-                & (dot > 0.0)
-                & (dot * dot >= cone * d.length_squared())
-        };
+        let coherence = Coherence::new(reference, self.extent);
+        let alike = |ray: &Ray| coherence.admits(ray.origin.to_array(), ray.direction.to_array());
         let all = u32::MAX >> (32 - rays.len() as u32);
         // One ray first, the one three quarters in: rays in an order that is not coherent (a
         // stride, random rays) leave at once, before any per-ray setup; of rays fanning out
@@ -400,7 +419,7 @@ where
             return all;
         }
         let mut lanes = Lanes::ZERO;
-        let joined = lanes.gather(rays, self.extent, near, alike);
+        let joined = lanes.gather(rays, self.extent, near, &coherence);
         let packet = lane_bits(&joined);
         if packet.count_ones() * 4 < rays.len() as u32 * 3 || packet.count_ones() < 2 {
             // Too few alike: a packet would walk nodes for few rays.
@@ -408,15 +427,12 @@ where
         }
         let interval = Interval::new(&lanes, &joined, near);
 
-        let mut states: [RayState<LT::Prepared, LT::Hit>; PACKET] =
-            core::array::from_fn(|i| RayState {
-                cur: rays
-                    .get(i)
-                    .copied()
-                    .unwrap_or(Ray::new(glam::Vec3::ZERO, glam::Vec3::X)),
-                best: None,
-                pre: None,
-            });
+        // Per ray: its `t_max` as the walk shrinks it, its best hit so far and its leaf test's
+        // setup (made at its first leaf; `Some(None)`: refused, it hits nothing).
+        let mut t_max: [f32; PACKET] =
+            core::array::from_fn(|r| rays.get(r).map_or(0.0, |x| x.t_max));
+        let mut best: [Option<(u32, LT::Hit)>; PACKET] = core::array::from_fn(|_| None);
+        let mut prepared: [Option<Option<LT::Prepared>>; PACKET] = core::array::from_fn(|_| None);
         let mut local = TraversalStats::default();
         let mut sp = 0usize;
         let mut next = Entry::ROOT;
@@ -459,11 +475,15 @@ where
                         while todo != 0 {
                             let r = todo.trailing_zeros() as usize;
                             todo &= todo - 1;
-                            let (Some(ray), Some(state)) = (rays.get(r), states.get_mut(r)) else {
+                            let (Some(ray), Some(pre), Some(best), Some(t_max)) = (
+                                rays.get(r),
+                                prepared.get_mut(r),
+                                best.get_mut(r),
+                                t_max.get_mut(r),
+                            ) else {
                                 break;
                             };
-                            let Some(pre) =
-                                state.pre.get_or_insert_with(|| leaf.prepare_valid(ray))
+                            let Some(pre) = pre.get_or_insert_with(|| leaf.prepare_valid(ray))
                             else {
                                 // Refused by the leaf test: no hit, as for the single-ray walk.
                                 lanes.t_min[r] = f32::INFINITY;
@@ -471,15 +491,20 @@ where
                                 continue;
                             };
                             local.primitives_tested += u64::from(count);
+                            let mut cur = Ray {
+                                t_max: *t_max,
+                                ..*ray
+                            };
                             if leaf_hits::<_, _, false>(
                                 level,
                                 leaf,
                                 pre,
                                 leaf_groups(groups, start, count),
                                 RunLanes::new(start, count),
-                                (&mut state.cur, &mut state.best),
+                                (&mut cur, best),
                             ) {
-                                lanes.bound[r] = cull_bound(state.cur.t_max).min(f32::MAX);
+                                *t_max = cur.t_max;
+                                lanes.bound[r] = cull_bound(cur.t_max).min(f32::MAX);
                             }
                         }
                         bound = lanes.max_bound();
@@ -502,9 +527,9 @@ where
             }
         }
         add_stats(stats, &local);
-        for (i, state) in states.iter_mut().enumerate() {
+        for (i, best) in best.iter_mut().enumerate() {
             if packet >> i & 1 == 1 {
-                found(i, state.best.take());
+                found(i, best.take());
             }
         }
         all & !packet

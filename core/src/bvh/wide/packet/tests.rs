@@ -230,7 +230,13 @@ fn the_packet_node_test_bounds_every_rays_own() {
         let near = [octant.x, octant.y, octant.z].map(|s| usize::from(s < 0.0));
         let mut lanes = Lanes::ZERO;
         let only: Vec<Ray> = rays.iter().map(|(r, _)| *r).collect();
-        let joined = lanes.gather(&only, EXTENT, near, |_| true);
+        // Likeness that admits every ray of the octant.
+        let any = Coherence {
+            cone: 0.0,
+            reach: f32::INFINITY,
+            ..Coherence::new(&only[0], EXTENT)
+        };
+        let joined = lanes.gather(&only, EXTENT, near, &any);
         assert_eq!(lane_bits(&joined), 0xFFFF, "round {round}: every ray joins");
         for (i, (_, w)) in rays.iter().enumerate() {
             // Each lane holds its ray's own padded values, bit for bit.
