@@ -4,7 +4,7 @@
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::simd_level::SimdLevel;
-use crate::triangle::{TriangleHit, TriangleIntersector, TriangleLanes, pair_mask};
+use crate::triangle::{TriangleHit, TriangleIntersector, TriangleLanes};
 use glam::Vec3;
 
 /// The test of one primitive against a ray, called by every structure's queries
@@ -66,30 +66,23 @@ pub trait LeafTest {
         self.intersect(pre, prim, ray)
     }
 
-    /// The lanes of stored triangles `lanes` that this test certainly misses (bit `i` for lane
-    /// `i`, see [`TriangleIntersector::certain_misses`]). The default culls none.
+    /// The lanes of one or two groups of stored triangles that this test certainly misses, at
+    /// SIMD `level` (the same bits at every level): bit `i` for lane `i` of `first`, bit
+    /// `4 + i` for lane `i` of `second` when given (see
+    /// [`TriangleIntersector::certain_misses`], [`TriangleIntersector::certain_misses2`]). A
+    /// lane reported is never tested; one not reported is tested with
+    /// [`LeafTest::intersect_triangle`]. The default culls none.
     #[inline(always)]
-    fn certain_misses(&self, pre: &Self::Prepared, ray: &Ray, lanes: &TriangleLanes) -> u32 {
-        let _ = (pre, ray, lanes);
-        0
-    }
-
-    /// [`LeafTest::certain_misses`] of two groups, `first` (bits 0–3) and `second` (bits
-    /// 4–7), at SIMD `level`. The default culls each group alone.
-    #[inline(always)]
-    fn certain_misses2<L: SimdLevel>(
+    fn certain_misses<L: SimdLevel>(
         &self,
         level: L,
         pre: &Self::Prepared,
         ray: &Ray,
         first: &TriangleLanes,
-        second: &TriangleLanes,
+        second: Option<&TriangleLanes>,
     ) -> u32 {
-        let _ = level;
-        pair_mask(
-            self.certain_misses(pre, ray, first),
-            self.certain_misses(pre, ray, second),
-        )
+        let _ = (level, pre, ray, first, second);
+        0
     }
 }
 
@@ -183,19 +176,17 @@ impl<I: TriangleIntersector> LeafTest for Triangles<'_, I> {
     }
 
     #[inline(always)]
-    fn certain_misses(&self, pre: &I::Prepared, ray: &Ray, lanes: &TriangleLanes) -> u32 {
-        self.isect.certain_misses(pre, ray, lanes)
-    }
-
-    #[inline(always)]
-    fn certain_misses2<L: SimdLevel>(
+    fn certain_misses<L: SimdLevel>(
         &self,
         level: L,
         pre: &I::Prepared,
         ray: &Ray,
         first: &TriangleLanes,
-        second: &TriangleLanes,
+        second: Option<&TriangleLanes>,
     ) -> u32 {
-        self.isect.certain_misses2(level, pre, ray, first, second)
+        match second {
+            Some(second) => self.isect.certain_misses2(level, pre, ray, first, second),
+            None => self.isect.certain_misses(pre, ray, first),
+        }
     }
 }

@@ -240,19 +240,14 @@ impl<T: LeafTest> LeafTest for HitDistance<'_, T> {
     }
 
     #[inline(always)]
-    fn certain_misses(&self, pre: &T::Prepared, ray: &Ray, lanes: &TriangleLanes) -> u32 {
-        self.0.certain_misses(pre, ray, lanes)
-    }
-
-    #[inline(always)]
-    fn certain_misses2<L: SimdLevel>(
+    fn certain_misses<L: SimdLevel>(
         &self,
         level: L,
         pre: &T::Prepared,
         ray: &Ray,
         first: &TriangleLanes,
-        second: &TriangleLanes,
+        second: Option<&TriangleLanes>,
     ) -> u32 {
-        self.0.certain_misses2(level, pre, ray, first, second)
+        self.0.certain_misses(level, pre, ray, first, second)
     }
 }

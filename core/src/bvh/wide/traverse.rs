@@ -79,12 +79,13 @@ pub(super) fn leaf_hits<LT: LeafTest, L: SimdLevel, const ANY: bool>(
             Some((second, after)) => {
                 run = after;
                 let run_lanes = pair_mask(lanes.next_group(), lanes.next_group());
-                let missed = leaf.certain_misses2(level, pre, cur, &first.lanes, &second.lanes);
+                let missed =
+                    leaf.certain_misses(level, pre, cur, &first.lanes, Some(&second.lanes));
                 ([first, second], run_lanes & !missed)
             }
             None => {
                 run = tail;
-                let missed = leaf.certain_misses(pre, cur, &first.lanes);
+                let missed = leaf.certain_misses(level, pre, cur, &first.lanes, None);
                 ([first, first], lanes.next_group() & !missed)
             }
         };
