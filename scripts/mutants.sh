@@ -33,7 +33,7 @@ TEST_PACKAGES=${TEST_PACKAGES:-halfray-core,halfray-tests}
 SHARD=${SHARD:-0}
 DEFAULT_FILES="core/src/aabb.rs core/src/triangle/watertight.rs core/src/bvh/traverse.rs
     core/src/halfedge/subdivide.rs core/src/halfedge/collapse.rs core/src/bvh/load.rs
-    core/src/collide core/src/volume core/src/grid core/src/kdtree core/src/bvh/wide
+    core/src/bvh/collide core/src/volume core/src/grid core/src/kdtree core/src/bvh/wide
     core/src/simd"
 SELECTED=${FILES:-$DEFAULT_FILES}
 FILES=()

@@ -467,3 +467,6 @@ where
         })
     }
 }
+
+#[cfg(test)]
+mod tests;
