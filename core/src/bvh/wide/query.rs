@@ -145,3 +145,6 @@ where
         core::mem::size_of_val(self.nodes()) + core::mem::size_of_val(self.groups())
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -26,7 +26,11 @@ fn node(side: f32, start: u32, count: u32) -> BvhNode {
 /// taking the later inner entry, D before C: `[A, D1, C, D2]`.)
 #[test]
 fn inner_entries_expand_before_leaf_runs_largest_first() {
-    assert_eq!((LEAF_MERGE, LEAF_OPEN_ABOVE), (16, 8), "the tree below assumes these");
+    assert_eq!(
+        (LEAF_MERGE, LEAF_OPEN_ABOVE),
+        (16, 8),
+        "the tree below assumes these"
+    );
     let nodes = [
         node(4.0, 1, 0),
         node(1.0, 3, 0),
@@ -44,6 +48,11 @@ fn inner_entries_expand_before_leaf_runs_largest_first() {
     let got: Vec<_> = list.iter().collect();
     assert_eq!(
         got,
-        [(1, Some(0..12)), (7, Some(12..22)), (6, None), (8, Some(22..32))]
+        [
+            (1, Some(0..12)),
+            (7, Some(12..22)),
+            (6, None),
+            (8, Some(22..32))
+        ]
     );
 }
