@@ -351,6 +351,61 @@ impl Interval {
     }
 }
 
+/// The most chunks of [`PACKET`] rays a batch leaves to single rays in a row while its
+/// packets do not share their leaves ([`Sharing`]), before it tries a packet again (1 024
+/// rays): at most one chunk in 65 pays for a packet that does not pay. Only speed depends on
+/// it.
+pub(super) const MAX_WAIT: u32 = 64;
+
+/// The bound of [`Sharing`]'s running sum of the packets' surpluses: a few packets' worth, so
+/// that the sum follows the rays' spacing as it changes along a batch. Only speed depends on
+/// it.
+pub(super) const SHARE_WINDOW: i32 = 64;
+
+/// Whether a batch's next chunk is walked as a packet: the surpluses of rays over leaves of
+/// its recent packets ([`WideBvh::packet_closest`]) summed within `±SHARE_WINDOW`; while
+/// the sum is below zero, the chunks after a packet go to single rays, 1, then 2, 4, … up to
+/// [`MAX_WAIT`] of them at each packet that keeps it below zero. Only speed depends on it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Sharing {
+    share: i32,
+    wait: u32,
+    next_wait: u32,
+}
+
+impl Sharing {
+    /// No packet walked yet.
+    pub(super) const NEW: Self = Self {
+        share: 0,
+        wait: 0,
+        next_wait: 1,
+    };
+
+    /// `true` when the next chunk is tried as a packet; `false` (one chunk of the wait
+    /// counted) when it goes to single rays.
+    #[inline(always)]
+    pub(super) fn try_packet(&mut self) -> bool {
+        let go = self.wait == 0;
+        self.wait = self.wait.saturating_sub(1);
+        go
+    }
+
+    /// Counts a packet's `surplus` (as [`WideBvh::packet_closest`] returns it).
+    #[inline(always)]
+    pub(super) fn record(&mut self, surplus: i32) {
+        self.share = self
+            .share
+            .saturating_add(surplus)
+            .clamp(-SHARE_WINDOW, SHARE_WINDOW);
+        if self.share >= 0 {
+            self.next_wait = 1;
+        } else {
+            self.wait = self.next_wait;
+            self.next_wait = (self.next_wait * 2).min(MAX_WAIT);
+        }
+    }
+}
+
 /// A stacked child: its reference, its parent node and slot (for a leaf's box) and the
 /// packet's entry bound.
 #[derive(Clone, Copy)]
@@ -389,8 +444,13 @@ where
 {
     /// Walks the coherent rays of `rays` (at most [`PACKET`]) as one packet, passing each
     /// one's closest hit to `found(index, answer)`; returns the rays left to the single-ray
-    /// walk (bit `i` for `rays[i]`; invalid rays among them). `stack` is the walk's, reused
-    /// from packet to packet.
+    /// walk (bit `i` for `rays[i]`; invalid rays among them) and how well the packet shared
+    /// its leaves: the rays that entered the leaves it reached, summed, less the number of
+    /// those leaves, when they are more than one for two rays (else 0, as when no packet was
+    /// walked: such a packet costs little). Below zero, fewer than one ray a leaf: its
+    /// rays are too far apart for the tree's leaves (fine triangles, rays many pixels apart),
+    /// each leaf's box test serves less than one ray, the packet's order is no ray's own, and
+    /// single rays are faster. `stack` is the walk's, reused from packet to packet.
     #[inline(always)]
     pub(super) fn packet_closest<LT: LeafTest, L: SimdLevel>(
         &self,
@@ -399,11 +459,11 @@ where
         leaf: &mut LT,
         (PacketStack(stack), stats): (&mut PacketStack, Option<&mut TraversalStats>),
         mut found: impl FnMut(usize, Option<(u32, LT::Hit)>),
-    ) -> u32 {
+    ) -> (u32, i32) {
         let rays = rays.get(..PACKET).unwrap_or(rays);
         let (nodes, groups) = (self.nodes(), self.groups());
         let Some(reference) = rays.first() else {
-            return 0;
+            return (0, 0);
         };
         // The packet is the rays like the first one (module docs); the others walk alone.
         let d0 = reference.direction;
@@ -416,14 +476,14 @@ where
         // from the first (a scanline), fewer than three quarters would join when it does not.
         let probe = (rays.len() * 3).div_ceil(4).saturating_sub(1);
         if nodes.is_empty() || rays.len() < 2 || !rays.get(probe).is_some_and(alike) {
-            return all;
+            return (all, 0);
         }
         let mut lanes = Lanes::ZERO;
         let joined = lanes.gather(rays, self.extent, near, &coherence);
         let packet = lane_bits(&joined);
         if packet.count_ones() * 4 < rays.len() as u32 * 3 || packet.count_ones() < 2 {
             // Too few alike: a packet would walk nodes for few rays.
-            return all;
+            return (all, 0);
         }
         let interval = Interval::new(&lanes, &joined, near);
 
@@ -434,6 +494,8 @@ where
         let mut best: [Option<(u32, LT::Hit)>; PACKET] = core::array::from_fn(|_| None);
         let mut prepared: [Option<Option<LT::Prepared>>; PACKET] = core::array::from_fn(|_| None);
         let mut local = TraversalStats::default();
+        // Leaves the packet reached, and rays that entered them, summed.
+        let (mut leaves, mut entered) = (0i32, 0i32);
         let mut sp = 0usize;
         let mut next = Entry::ROOT;
         let mut bound = lanes.max_bound();
@@ -472,6 +534,8 @@ where
                 ChildRef::Leaf { start, count } => {
                     if let Some(parent) = nodes.get(next.parent as usize) {
                         let mut todo = lanes.entering(parent, next.slot as usize, near) & packet;
+                        leaves += 1;
+                        entered += todo.count_ones() as i32;
                         while todo != 0 {
                             let r = todo.trailing_zeros() as usize;
                             todo &= todo - 1;
@@ -532,7 +596,9 @@ where
                 found(i, best.take());
             }
         }
-        all & !packet
+        // Up to one leaf for two rays, a packet costs little whatever it shares.
+        let many = leaves > PACKET as i32 / 2;
+        (all & !packet, if many { entered - leaves } else { 0 })
     }
 }
 

@@ -3,7 +3,7 @@
 
 use super::WideBvh;
 use super::node::{ChildRef, LeafGroup, WideNode};
-use super::packet::{PACKET, PacketStack};
+use super::packet::{PACKET, PacketStack, Sharing};
 use super::traverse::STACK;
 use crate::aabb::Aabb;
 use crate::bvh::BvhError;
@@ -94,7 +94,8 @@ where
     }
 
     /// Sixteen rays at a time, the coherent ones walked as a packet, the others alone: the
-    /// same answers. On a caller stack shorter than [`crate::query::QUERY_STACK_SIZE`], every
+    /// same answers. While the recent packets shared their leaves with less than one ray a
+    /// leaf, the next chunks go alone (`Sharing`): rays this far apart are faster alone. On a caller stack shorter than [`crate::query::QUERY_STACK_SIZE`], every
     /// ray alone (so that each gets the single-ray answer, an error included).
     #[inline(always)]
     fn closest_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
@@ -107,16 +108,20 @@ where
         same_length(rays.len(), out.len())?;
         let short = ctx.stack.entries().is_some_and(|e| e.len() < STACK);
         let mut stack = PacketStack::new();
+        let mut sharing = Sharing::NEW;
         for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-            let alone = if short {
+            let alone = if short || !sharing.try_packet() {
                 u32::MAX
             } else {
                 let stats = ctx.stats.as_deref_mut();
-                self.packet_closest(ctx.level, rays, leaf, (&mut stack, stats), |i, found| {
-                    if let Some(o) = out.get_mut(i) {
-                        *o = S::answer(Ok(found));
-                    }
-                })
+                let (alone, surplus) =
+                    self.packet_closest(ctx.level, rays, leaf, (&mut stack, stats), |i, found| {
+                        if let Some(o) = out.get_mut(i) {
+                            *o = S::answer(Ok(found));
+                        }
+                    });
+                sharing.record(surplus);
+                alone
             };
             for (i, (ray, o)) in rays.iter().zip(out.iter_mut()).enumerate() {
                 if alone >> i & 1 == 1 {

@@ -289,3 +289,35 @@ fn the_packet_node_test_bounds_every_rays_own() {
     }
     assert!(admitted > 5000, "{admitted} children entered");
 }
+
+/// The batch's packet policy: a packet that shares its leaves keeps packets on; one that
+/// does not sends the next 1, then 2, 4, … up to `MAX_WAIT` chunks to single rays; the sum is
+/// bounded, so a long stretch of sharing packets is undone by a few that do not.
+#[test]
+fn sharing_waits_longer_while_packets_do_not_share() {
+    let mut s = Sharing::NEW;
+    assert!(s.try_packet());
+    s.record(5);
+    assert!(s.try_packet() && s.try_packet());
+    // Below zero: one chunk alone, then a packet again.
+    s.record(-6);
+    assert!(!s.try_packet());
+    assert!(s.try_packet());
+    let mut waits = Vec::new();
+    for _ in 0..9 {
+        s.record(-3);
+        let mut n = 0;
+        while !s.try_packet() {
+            n += 1;
+        }
+        waits.push(n);
+    }
+    assert_eq!(waits, [2, 4, 8, 16, 32, 64, 64, 64, 64]);
+    // The sum is clamped at -SHARE_WINDOW: sharing packets worth SHARE_WINDOW bring it back.
+    s.record(SHARE_WINDOW);
+    assert!(s.try_packet() && s.try_packet());
+    s.record(SHARE_WINDOW * 10);
+    s.record(-SHARE_WINDOW - 1);
+    assert!(!s.try_packet());
+    assert!(s.try_packet(), "the wait starts again at one chunk");
+}
