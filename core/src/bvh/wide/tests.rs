@@ -466,23 +466,36 @@ fn binary_options_give_the_same_wide_tree_but_for_the_order_inside_leaves() {
 }
 
 /// Leaf runs straddle groups: a slot's lane and group follow from its index alone, and the
-/// lanes of a run in each group are exactly its slots there.
+/// lanes of a run in each group are exactly its slots there, taken group by group or two
+/// groups at a time (the leaf test's pairs), for every run a leaf can hold.
 #[test]
 fn run_lanes_cover_exactly_the_run() {
     for start in 0..12u32 {
-        for count in 1..=9u32 {
-            let mut covered = Vec::new();
-            let mut lanes = super::traverse::RunLanes::new(start, count);
-            for g in (start as usize / 4)..(start + count).div_ceil(4) as usize {
-                let m = lanes.next_group();
-                for lane in 0..4 {
-                    if m >> lane & 1 == 1 {
-                        covered.push((4 * g + lane) as u32);
-                    }
-                }
-            }
+        for count in 1..=MAX_LEAF_TRIANGLES as u32 {
             let expect: Vec<u32> = (start..start + count).collect();
+            let groups = (start as usize / 4)..(start + count).div_ceil(4) as usize;
+            let slots = |g: usize, m: u32, width: usize| {
+                (0..width)
+                    .filter(move |lane| m >> lane & 1 == 1)
+                    .map(move |lane| (4 * g + lane) as u32)
+            };
+            let mut lanes = super::traverse::RunLanes::new(start, count);
+            let covered: Vec<u32> = groups
+                .clone()
+                .flat_map(|g| slots(g, lanes.next_group(), 4))
+                .collect();
             assert_eq!(covered, expect, "start {start} count {count}");
+            assert_eq!(
+                lanes.next_group(),
+                0,
+                "start {start} count {count}: past the run"
+            );
+            let mut lanes = super::traverse::RunLanes::new(start, count);
+            let covered: Vec<u32> = groups
+                .step_by(2)
+                .flat_map(|g| slots(g, lanes.next_pair(), 8))
+                .collect();
+            assert_eq!(covered, expect, "start {start} count {count}, in pairs");
         }
     }
 }

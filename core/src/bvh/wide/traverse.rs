@@ -10,7 +10,7 @@ use crate::query::{LeafTest, Query, QueryStack, Stack, StackEntry, TraversalStat
 use crate::ray::Ray;
 use crate::simd;
 use crate::simd::level::{SimdLevel, order_key};
-use crate::triangle::{LANES, pair_mask};
+use crate::triangle::LANES;
 
 /// Stack entries of the traversal: [`super::stack_size`] of the widest supported tree
 /// (`W = 8`), which bounds every narrower one (module docs of [`super`]).
@@ -28,32 +28,34 @@ pub(super) fn leaf_groups(groups: &[LeafGroup], start: u32, count: u32) -> &[Lea
 
 /// The lanes that hold leaf slots `start .. start + count` in each group of their run
 /// ([`leaf_groups`]), group after group: the first group's from lane `start % LANES`, the
-/// last group's up to the run's end.
+/// last group's up to the run's end. One bit per lane of the run's groups, lane 0 of its
+/// first group in bit 0 (a run of at most [`super::MAX_LEAF_TRIANGLES`] slots spans at most
+/// 19 lanes; longer runs, which no leaf holds, are cut at 61), taken four or eight bits at a
+/// time: two instructions per group, not a mask rebuilt from the run's bounds.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct RunLanes {
-    /// Lanes of the next group from the run's start on (all after the first group).
-    from: u32,
-    /// Lanes from the next group's lane 0 to the run's end.
-    left: u32,
-}
+pub(super) struct RunLanes(u64);
 
 impl RunLanes {
     /// The run of `count` slots from slot `start`.
     #[inline(always)]
     pub(super) fn new(start: u32, count: u32) -> Self {
-        let lane = start % LANES as u32;
-        Self {
-            from: (0xF << lane) & 0xF,
-            left: lane.saturating_add(count),
-        }
+        Self(((1u64 << count.min(61)) - 1) << (start % LANES as u32))
     }
 
     /// The lanes of the run in the next group.
     #[inline(always)]
     pub(super) fn next_group(&mut self) -> u32 {
-        let lanes = self.from & ((1u32 << self.left.min(LANES as u32)) - 1);
-        self.from = 0xF;
-        self.left = self.left.saturating_sub(LANES as u32);
+        let lanes = (self.0 & 0xF) as u32;
+        self.0 >>= LANES;
+        lanes
+    }
+
+    /// The lanes of the run in the next two groups: the first's in bits 0–3, the second's in
+    /// bits 4–7 (as [`crate::triangle::pair_mask`] of two [`RunLanes::next_group`]s).
+    #[inline(always)]
+    pub(super) fn next_pair(&mut self) -> u32 {
+        let lanes = (self.0 & 0xFF) as u32;
+        self.0 >>= 2 * LANES;
         lanes
     }
 }
@@ -78,7 +80,7 @@ pub(super) fn leaf_hits<LT: LeafTest, L: SimdLevel, const ANY: bool>(
         let (pair, mut todo) = match tail.split_first() {
             Some((second, after)) => {
                 run = after;
-                let run_lanes = pair_mask(lanes.next_group(), lanes.next_group());
+                let run_lanes = lanes.next_pair();
                 let missed =
                     leaf.certain_misses(level, pre, cur, &first.lanes, Some(&second.lanes));
                 ([first, second], run_lanes & !missed)
