@@ -303,6 +303,33 @@ fn pca_recovers_a_rotated_box() {
     assert!(cap.radius() <= 1.0001 * Vec3::new(0.0, 1.0, 0.25).length());
 }
 
+/// Ritter's growth step, worked by hand: points `(−1, 0, 2)`, `(1, 0, 2)`, `(0, 3, 2)`. The
+/// extreme pairs along x, y, z have squared lengths 4, 10 and 0, so the initial ball is on
+/// `(−1, 0, 2)`–`(0, 3, 2)`: centre `(−½, 3/2, 2)`, radius `√10/2`. `(1, 0, 2)` lies outside at
+/// `d = 3/√2`: the ball grows to radius `(√10/2 + d)/2 = (√10 + 3√2)/4` and its centre moves
+/// toward the point by `(grown − r)/d = ½ − √5/6` of `(3/2, −3/2, 0)`, to
+/// `((1 − √5)/4, (3 + √5)/4, 2)`; `(0, 3, 2)` is then inside (distance² `(23 − 5√5)/4 ≈ 2.96`
+/// against the radius² `(7 + 3√5)/4 ≈ 3.43`). The centre is stored rounded to `f32` (within
+/// `10⁻⁷` here) and the radius measured again from it: the farthest point is `(1, 0, 2)`, at
+/// the grown radius; both checked to `10⁻⁶`.
+#[test]
+fn sphere_fit_grows_ritters_ball_as_worked_by_hand() {
+    let pts = [
+        Vec3::new(-1.0, 0.0, 2.0),
+        Vec3::new(1.0, 0.0, 2.0),
+        Vec3::new(0.0, 3.0, 2.0),
+    ];
+    let s = BoundingSphere::fit(&pts[..]).unwrap();
+    let r5 = 5f64.sqrt();
+    let want_c = DVec3::new((1.0 - r5) / 4.0, (3.0 + r5) / 4.0, 2.0);
+    let want_r = (10f64.sqrt() + 3.0 * 2f64.sqrt()) / 4.0;
+    assert!((s.center().as_dvec3() - want_c).length() < 1e-6, "{s:?}");
+    assert!(
+        (f64::from(s.radius()) - want_r).abs() < 1e-6,
+        "{s:?} against {want_r}"
+    );
+}
+
 fn sph(c: Vec3, r: f32) -> BoundingSphere {
     BoundingSphere::new(c, r).unwrap()
 }
