@@ -4,6 +4,7 @@
 use super::group_capacity;
 use super::node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
 use super::{LEAF_MERGE, LEAF_OPEN_ABOVE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh};
+use crate::aabb::Aabb;
 use crate::bvh::{Bvh, BvhError, BvhNode};
 use crate::error::{CapacityError, NonFiniteError, Storage};
 use crate::mesh::TriangleMesh;
@@ -456,7 +457,7 @@ where
                 }
             }
         }
-        Ok(Self {
+        let mut tree = Self {
             nodes,
             groups,
             node_count: next,
@@ -464,7 +465,10 @@ where
             slot_count: slots as u32,
             source_len: mesh.len(),
             extent: crate::query::walk::extent_of(&binary.bounds()),
-        })
+            root: Aabb::EMPTY,
+        };
+        tree.root = tree.bounds();
+        Ok(tree)
     }
 }
 

@@ -165,6 +165,9 @@ pub struct WideBvh<const W: usize, N, T> {
     /// Largest coordinate magnitude of the tree's bounds, for the box padding
     /// ([`crate::tolerance::BVH_PROJECTION_PAD`]).
     extent: f32,
+    /// The union of the root's child boxes ([`WideBvh::bounds`], kept): a closest-hit walk
+    /// tests it first, so that a ray missing the whole tree skips the node test's setup.
+    root: Aabb,
 }
 
 /// An 8-wide BVH (one AVX2 register per bound array).

@@ -102,6 +102,37 @@ impl PaddedRay {
         (t_enter, simd::mask_le(&t_enter, &t_exit))
     }
 
+    /// Whether the ray hits box `b` over `[t_min, t_max]`: the common path of
+    /// [`PaddedRay::hit_children`] (`GENERAL = false`) on one box, the same operations in the
+    /// same order ([`slab_axis`]). Each bound enters its distance monotonically (a near bound
+    /// lower along the ray gives a lower or equal entry, a far bound further gives a higher
+    /// or equal exit, `±∞` and NaN included: a NaN distance keeps the running value), so a box
+    /// containing every child box of a node is hit whenever one of them is: a miss here is a
+    /// miss of every child (tested).
+    #[inline(always)]
+    pub(in crate::bvh) fn hits_box(&self, b: &crate::aabb::Aabb, t_min: f32, t_max: f32) -> bool {
+        use glam::Vec3A;
+        let inv = Vec3A::from_array(self.inv_dir);
+        // The near corner per axis as `near` picks it: `inv` has the direction's sign (`±0`
+        // gives `±∞`), so `inv < 0` is `near == 1`. Selected by mask, not by index (no
+        // round trip through memory).
+        let negative = inv.cmplt(Vec3A::ZERO);
+        let (min, max) = (Vec3A::from(b.min), Vec3A::from(b.max));
+        let lo = Vec3A::select(negative, max, min);
+        let hi = Vec3A::select(negative, min, max);
+        let on = Vec3A::from_array(self.origin_near);
+        let of = Vec3A::from_array(self.origin_far);
+        let inv_far = Vec3A::from_array(self.inv_dir.map(far_reciprocal));
+        // The distances of `slab_axis`, then its folds axis by axis.
+        let t_near = ((lo - on) * inv).to_array();
+        let t_far = ((hi - of) * inv_far).to_array();
+        let (mut enter, mut exit) = (t_min, t_max.min(f32::MAX));
+        for axis in 0..3 {
+            (enter, exit) = fold_slab(t_near[axis], t_far[axis], (enter, exit));
+        }
+        enter <= exit
+    }
+
     /// [`PaddedRay::hit_children`] by `level`'s eight-lane kernel, for `W = 8` when the level has one
     /// (same operations, same result).
     #[inline(always)]
@@ -161,6 +192,79 @@ mod tests {
     use crate::simd::level::Portable;
     use crate::test_util::lcg;
     use glam::{DVec3, Vec3};
+
+    /// The root-box early-out of the closest-hit walk ([`PaddedRay::hits_box`] on the union of
+    /// a node's child boxes) against the node test itself ([`PaddedRay::hit_children`], the
+    /// path without it, at every level): whenever a child is hit, the union is. Rays with zero
+    /// direction components (infinite reciprocals), origins on the boxes' planes (NaN slab
+    /// distances), boxes touching the ray, empty slots, padding, and intervals from beyond to
+    /// before the boxes; both outcomes must occur often.
+    #[test]
+    fn a_box_around_the_children_is_hit_when_a_child_is() {
+        let mut s = 71u64;
+        let (mut hit, mut missed) = (0, 0);
+        for i in 0..20_000 {
+            let grid = |s: &mut u64| ((lcg(s) * 8.0).floor() - 4.0) * 0.5;
+            let v = |s: &mut u64| Vec3::new(grid(s), grid(s), grid(s));
+            let origin = v(&mut s) * 1.5;
+            let mut dir = Vec3::new(lcg(&mut s) - 0.5, lcg(&mut s) - 0.5, lcg(&mut s) - 0.5);
+            for a in 0..3 {
+                if lcg(&mut s) < 0.3 {
+                    dir[a] = if lcg(&mut s) < 0.5 { 0.0 } else { -0.0 };
+                }
+            }
+            if dir == Vec3::ZERO {
+                dir.x = 1.0;
+            }
+            let t_min = if i % 3 == 0 { lcg(&mut s) * 4.0 } else { 0.0 };
+            let t_max = if i % 2 == 0 {
+                f32::INFINITY
+            } else {
+                t_min + lcg(&mut s) * 6.0
+            };
+            let ray = Ray {
+                origin,
+                direction: dir,
+                t_min,
+                t_max,
+            };
+            let Some(slab) = SlabRay::new(&ray) else {
+                continue;
+            };
+            if slab.divide {
+                continue;
+            }
+            let mut node = WideNode::<8>::EMPTY;
+            let mut union = Aabb::EMPTY;
+            for k in 0..8 {
+                if lcg(&mut s) < 0.25 {
+                    continue;
+                }
+                let (a, b) = (v(&mut s), v(&mut s));
+                let b = Aabb::new(a.min(b), a.max(b));
+                node.set_child(k, &b, k as u32);
+                union = union.union(node.child_bounds(k));
+            }
+            let pad = if i % 4 == 0 { 0.0 } else { 1e-3 };
+            let wray = PaddedRay::new(&slab, pad);
+            let (_, mask) = wray.hit_children::<8, false, _>(Portable, &node, t_min, t_max);
+            let outer = wray.hits_box(&union, t_min, t_max);
+            assert!(mask == 0 || outer, "{ray:?} {node:?}");
+            #[cfg(target_arch = "x86_64")]
+            if let Some(level) = crate::test_util::avx2_or_skip(
+                "bvh::wide::node_test::tests::a_box_around_the_children_is_hit_when_a_child_is",
+            ) {
+                let (_, m8) = wray.hit_children::<8, false, _>(level, &node, t_min, t_max);
+                assert_eq!(m8, mask, "{ray:?} {node:?}");
+            }
+            if outer {
+                hit += 1;
+            } else {
+                missed += 1;
+            }
+        }
+        assert!(hit > 2000 && missed > 2000, "{hit} hit, {missed} missed");
+    }
 
     /// Boxes that the exact ray only touches: flat in one axis (`lo = hi = c`), the other two
     /// axes bracketing, one `f32` step each way, the exact point (`f64`) where the ray crosses

@@ -84,7 +84,8 @@ where
                 nodes[i].set_child(slot, &b, reference);
             }
         }
-        self.extent = crate::query::walk::extent_of(&self.bounds());
+        self.root = self.bounds();
+        self.extent = crate::query::walk::extent_of(&self.root);
         match bad {
             Some(index) => Err(NonFiniteError::primitive(index).into()),
             None => Ok(()),

@@ -401,6 +401,14 @@ where
         }
         let wray = PaddedRay::new(slab, projection_pad(slab.origin, self.extent));
         let mut local = TraversalStats::default();
+        // A closest-hit ray that misses the root's box misses all its children: it ends here,
+        // before the node test's eight-lane setup (the root's test counted as its visit).
+        // Not for any-hit rays, which mostly start on a surface inside the box.
+        if !ANY && !GENERAL && !wray.hits_box(&self.root, ray.t_min, cull_bound(ray.t_max)) {
+            local.nodes_visited += 1;
+            add_stats(stats, &local);
+            return None;
+        }
         let mut cur = *ray;
         let mut best: Option<(u32, LT::Hit)> = None;
         let mut sp = 0usize;
