@@ -528,3 +528,44 @@ fn resolution_depends_on_extents_not_position() {
     let plan = plan_with_lambda(&mesh, 4.0);
     assert_eq!(plan.resolution(), cube_root_resolution(e, 4.0, 1000));
 }
+
+/// "An empty or NaN query box reports nothing" (`RayQuery::query_box`): an inverted box
+/// (`min > max` by 0.4 on each axis) inside a soup, which the closed-box formula of
+/// `Aabb::overlaps` alone would find overlapping the triangles that span it (counted here by
+/// brute force: at least one), and a NaN box, report nothing; the valid box between the same
+/// corners reports exactly the brute-force set.
+#[test]
+fn an_empty_or_nan_query_box_reports_nothing() {
+    let (p, t) = soup(3, 300, 10.0, 2.0);
+    let mesh = TriangleMesh::new(&p, &t);
+    let grid = build_assigned(&mesh, CellAssignment::Bounds);
+    let bounds = |i: usize| {
+        let v = mesh.triangle(i).unwrap();
+        Aabb::new(v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]))
+    };
+    let (a, b) = (Vec3::splat(5.2), Vec3::splat(4.8));
+    let inverted = Aabb::new(a, b);
+    let straddling = (0..t.len())
+        .filter(|&i| bounds(i).overlaps(&inverted))
+        .count();
+    assert!(straddling > 0);
+    for q in [inverted, Aabb::new(Vec3::splat(f32::NAN), b)] {
+        let mut got = Vec::new();
+        let n = grid.query_box(&mesh, &q, |p| {
+            got.push(p);
+            true
+        });
+        assert_eq!((n, got), (0, vec![]), "{q:?}");
+    }
+    let valid = Aabb::new(b, a);
+    let mut got = Vec::new();
+    grid.query_box(&mesh, &valid, |p| {
+        got.push(p);
+        true
+    });
+    got.sort_unstable();
+    let want: Vec<u32> = (0..t.len() as u32)
+        .filter(|&i| bounds(i as usize).overlaps(&valid))
+        .collect();
+    assert_eq!(got, want);
+}
