@@ -142,6 +142,28 @@ impl MeshAccel {
         v.visit(Closest(self, ray))
     }
 
+    /// The closest hits of `rays` with a variant chosen at run time, by the batch query
+    /// ([`closest_batch_simd`]): entry `i` is [`MeshAccel::closest_variant`] of `rays[i]`, bit
+    /// for bit.
+    pub fn closest_variant_batch(&self, v: TriangleVariant, rays: &[Ray]) -> Vec<Answer> {
+        struct Batch<'a>(&'a MeshAccel, &'a [Ray]);
+        impl VariantVisitor for Batch<'_> {
+            type Output = Vec<Answer>;
+            fn visit<I: TriangleIntersector>(self, isect: &I) -> Vec<Answer> {
+                let (accel, rays) = (self.0, self.1);
+                let mut out = vec![None; rays.len()];
+                let mesh = accel.triangles();
+                // `out` has `rays.len()` entries, the batch query's only refusal; were it
+                // refused, the single-ray query gives the same answers.
+                if closest_batch_simd(&accel.wide, &mesh, isect, rays, &mut out, None).is_err() {
+                    return rays.iter().map(|r| accel.closest(isect, r, None)).collect();
+                }
+                out
+            }
+        }
+        v.visit(Batch(self, rays))
+    }
+
     /// Any hit with a variant chosen at run time.
     pub fn any_variant(&self, v: TriangleVariant, ray: &Ray) -> bool {
         struct Any<'a>(&'a MeshAccel, &'a Ray);

@@ -33,6 +33,12 @@ impl Sides<'_> {
         answer_of(self.accel.closest_variant(self.variant, r))
     }
 
+    /// [`Sides::halfray`] of every ray of `rays`, by the batch query (the same answers).
+    fn halfray_batch(&self, rays: &[Ray]) -> Vec<Option<Answer>> {
+        let hits = self.accel.closest_variant_batch(self.variant, rays);
+        hits.into_iter().map(answer_of).collect()
+    }
+
     fn reference(&self, r: &Ray) -> Option<Answer> {
         answer_of(self.accel.closest_variant(TriangleVariant::F64Reference, r))
     }
@@ -309,30 +315,33 @@ fn classify(
     out
 }
 
-/// One side's answer to a ray (halfray's or an Embree mode's).
-type AnswerOf<'a> = &'a dyn Fn(&Ray) -> Option<Answer>;
+/// One side's timed pass over the sampled rays: its answer to each, in order.
+type TimedPass<'a> = &'a dyn Fn() -> Vec<Option<Answer>>;
 
 /// One set's row: the single-thread timed passes over `timing_rays` rays spread evenly over
 /// the set (every `stride`-th ray, the same rays for every side, so that a camera's empty
 /// first rows do not stand for the whole image), then every ray classified on the worker
 /// threads. Each side is timed [`TIMED_PASSES`] times, the sides taking turns pass by pass,
 /// and its fastest pass is reported (as `bench bvh` does: on a shared machine a slow pass
-/// measures the neighbours, and turns give every side the same warm-up).
+/// measures the neighbours, and turns give every side the same warm-up). halfray traces the
+/// sampled rays as one batch ([`MeshAccel::closest_variant_batch`], the same answers as one by
+/// one), Embree one `rtcIntersect1` call a ray.
 fn compare_set(sides: &Sides<'_>, rays: &[(usize, SetRay)], timing_rays: usize) -> SetReport {
     let stride = rays.len().div_ceil(timing_rays.max(1)).max(1);
     let sample = || rays.iter().step_by(stride).map(|(_, r)| &r.ray);
+    let batch: Vec<Ray> = sample().copied().collect();
     // halfray, Embree robust, Embree default.
-    let answer: [AnswerOf<'_>; 3] = [
-        &|r| sides.halfray(r),
-        &|r| embree_answer(sides.robust, r),
-        &|r| embree_answer(sides.fast, r),
+    let passes: [TimedPass<'_>; 3] = [
+        &|| sides.halfray_batch(&batch),
+        &|| sample().map(|r| embree_answer(sides.robust, r)).collect(),
+        &|| sample().map(|r| embree_answer(sides.fast, r)).collect(),
     ];
     let mut secs = [f64::INFINITY; 3];
     let mut answers: [Vec<Option<Answer>>; 3] = Default::default();
     for _ in 0..TIMED_PASSES {
-        for ((side, out), best) in answer.iter().zip(&mut answers).zip(&mut secs) {
+        for ((pass, out), best) in passes.iter().zip(&mut answers).zip(&mut secs) {
             let s;
-            (*out, s) = timed(|| sample().map(side).collect::<Vec<_>>());
+            (*out, s) = timed(pass);
             *best = best.min(s);
         }
     }

@@ -153,7 +153,8 @@ pub struct SetReport {
     /// Rays in the single-thread timed passes (every k-th ray of the set, the same for every
     /// side).
     pub timed_rays: usize,
-    /// Seconds of halfray's timed closest-hit pass, one thread.
+    /// Seconds of halfray's timed closest-hit pass (the timed rays as one batch,
+    /// `RayQuery::closest_hits`), one thread.
     pub secs_halfray: f64,
     /// Seconds of Embree robust's timed closest-hit pass, one thread.
     pub secs_embree: f64,
