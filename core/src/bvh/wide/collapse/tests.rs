@@ -56,3 +56,12 @@ fn inner_entries_expand_before_leaf_runs_largest_first() {
         ]
     );
 }
+
+/// `group_capacity` is the documented `⌈7N/16⌉`, worked by hand: 0 → 0, 1 → 1, 16 → 7,
+/// 17 → ⌈119/16⌉ = 8, 1000 → ⌈7000/16⌉ = 438.
+#[test]
+fn group_capacity_is_seven_sixteenths_rounded_up() {
+    for (n, want) in [(0, 0), (1, 1), (16, 7), (17, 8), (1000, 438)] {
+        assert_eq!(crate::bvh::wide::group_capacity(n), want, "{n}");
+    }
+}
