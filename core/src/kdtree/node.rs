@@ -100,3 +100,38 @@ impl KdNode {
 pub const NODE_SIZE: usize = core::mem::size_of::<KdNode>();
 
 const _: () = assert!(NODE_SIZE == 8);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The two words of the documented layout, worked by hand: an inner node splitting z
+    /// (axis 2) at 1.5 with children 7 and 8 is `1.5`'s bits (`0x3FC0_0000`) and
+    /// `7 << 2 | 2 = 30`; a leaf of 5 references from offset 9 is `9` and `5 << 2 | 3 = 23`.
+    #[test]
+    fn nodes_are_the_documented_words() {
+        let inner = KdNode::inner(2, 1.5, 7);
+        assert_eq!((inner.word, inner.bits), (0x3FC0_0000, 30));
+        let want = KdNodeKind::Inner {
+            axis: 2,
+            position: 1.5,
+            first: 7,
+        };
+        assert_eq!(inner.kind(), want);
+        assert!(!inner.is_leaf());
+        let leaf = KdNode::leaf(9, 5);
+        assert_eq!((leaf.word, leaf.bits), (9, 23));
+        assert_eq!(leaf.kind(), KdNodeKind::Leaf { start: 9, count: 5 });
+        assert!(leaf.is_leaf());
+        let top = KdNode::inner(0, -0.0, MAX_FIELD);
+        assert_eq!(top.bits, 0xFFFF_FFFC);
+        assert!(matches!(
+            top.kind(),
+            KdNodeKind::Inner {
+                first: MAX_FIELD,
+                axis: 0,
+                ..
+            }
+        ));
+    }
+}
