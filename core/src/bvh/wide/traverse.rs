@@ -166,10 +166,11 @@ where
     ) -> Result<Option<(u32, LT::Hit)>, BvhError> {
         let level = ctx.level;
         let stats = ctx.stats.as_deref_mut();
+        let mut best = None;
         match ctx.stack.entries() {
             None => {
                 let stack = &mut QueryStack::new().entries;
-                Ok(self.traverse::<LT, ANY, L>(level, stack, ray, leaf, stats))
+                self.traverse::<LT, ANY, L>(level, stack, ray, leaf, stats, &mut best);
             }
             Some(entries) => {
                 let available = entries.len();
@@ -177,16 +178,21 @@ where
                     .get_mut(..STACK)
                     .and_then(|e| <&mut [StackEntry; STACK]>::try_from(e).ok())
                 {
-                    Some(stack) => Ok(self.traverse::<LT, ANY, L>(level, stack, ray, leaf, stats)),
-                    None => Err(BvhError::StackTooSmall { available }),
+                    Some(stack) => {
+                        self.traverse::<LT, ANY, L>(level, stack, ray, leaf, stats, &mut best);
+                    }
+                    None => return Err(BvhError::StackTooSmall { available }),
                 }
             }
         }
+        Ok(best)
     }
 
-    /// Checks `ray`, then walks the tree; the leaf test is prepared when the walk reaches its
-    /// first leaf (a refused ray then hits nothing), so that rays that reach no leaf never pay
-    /// for it.
+    /// Checks `ray`, then walks the tree, the answer left in `best` (`None` on entry; it stays
+    /// `None` for a refused ray); the leaf test is prepared when the walk reaches its first
+    /// leaf (a refused ray then hits nothing), so that rays that reach no leaf never pay for
+    /// it. One slot for the answer, written where the hit is taken: every exit of the walk
+    /// leaves it there, with no answer value merged and copied at each return.
     #[inline(always)]
     fn traverse<LT: LeafTest, const ANY: bool, L: SimdLevel>(
         &self,
@@ -195,12 +201,15 @@ where
         ray: &Ray,
         leaf: &mut LT,
         stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, LT::Hit)> {
-        let slab = SlabRay::new(ray)?;
+        best: &mut Option<(u32, LT::Hit)>,
+    ) {
+        let Some(slab) = SlabRay::new(ray) else {
+            return;
+        };
         if slab.divide || ray.t_min < 0.0 {
-            self.walk::<LT, ANY, true, L>(level, stack, ray, &slab, leaf, stats)
+            self.walk::<LT, ANY, true, L>(level, stack, ray, &slab, leaf, stats, best);
         } else {
-            self.walk::<LT, ANY, false, L>(level, stack, ray, &slab, leaf, stats)
+            self.walk::<LT, ANY, false, L>(level, stack, ray, &slab, leaf, stats, best);
         }
     }
 
@@ -384,6 +393,8 @@ where
         }
     }
 
+    /// The walk of [`WideBvh::traverse`] for a checked ray (`slab`), its answer left in `best`.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn walk<LT: LeafTest, const ANY: bool, const GENERAL: bool, L: SimdLevel>(
         &self,
@@ -393,11 +404,12 @@ where
         slab: &SlabRay,
         leaf: &mut LT,
         stats: Option<&mut TraversalStats>,
-    ) -> Option<(u32, LT::Hit)> {
+        best: &mut Option<(u32, LT::Hit)>,
+    ) {
         let tree = (self.nodes(), self.groups());
         let groups = tree.1;
         if tree.0.is_empty() {
-            return None;
+            return;
         }
         let wray = PaddedRay::new(slab, projection_pad(slab.origin, self.extent));
         let mut local = TraversalStats::default();
@@ -407,10 +419,9 @@ where
         if !ANY && !GENERAL && !wray.hits_box(&self.root, ray.t_min, cull_bound(ray.t_max)) {
             local.nodes_visited += 1;
             add_stats(stats, &local);
-            return None;
+            return;
         }
         let mut cur = *ray;
-        let mut best: Option<(u32, LT::Hit)> = None;
         let mut sp = 0usize;
         // The root is node 0 (its own box is the union of its children's: not tested).
         let mut next = 0u32;
@@ -431,13 +442,13 @@ where
                 Some(child) => next = child,
                 None => {
                     add_stats(stats, &local);
-                    return None;
+                    return;
                 }
             }
         }
         let Some(pre) = leaf.prepare_valid(ray) else {
             add_stats(stats, &local);
-            return None;
+            return;
         };
         'walk: loop {
             match ChildRef::decode(next) {
@@ -456,7 +467,7 @@ where
                     local.primitives_tested += u64::from(count);
                     let run = leaf_groups(groups, start, count);
                     let lanes = RunLanes::new(start, count);
-                    if leaf_hits::<LT, L, ANY>(level, leaf, &pre, run, lanes, (&mut cur, &mut best))
+                    if leaf_hits::<LT, L, ANY>(level, leaf, &pre, run, lanes, (&mut cur, best))
                     {
                         bound = cull_bound(cur.t_max);
                         if ANY {
@@ -473,6 +484,5 @@ where
             }
         }
         add_stats(stats, &local);
-        best
     }
 }
