@@ -467,8 +467,7 @@ where
                     local.primitives_tested += u64::from(count);
                     let run = leaf_groups(groups, start, count);
                     let lanes = RunLanes::new(start, count);
-                    if leaf_hits::<LT, L, ANY>(level, leaf, &pre, run, lanes, (&mut cur, best))
-                    {
+                    if leaf_hits::<LT, L, ANY>(level, leaf, &pre, run, lanes, (&mut cur, best)) {
                         bound = cull_bound(cur.t_max);
                         if ANY {
                             break 'walk;
