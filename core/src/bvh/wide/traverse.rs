@@ -17,13 +17,14 @@ use crate::triangle::LANES;
 pub(super) const STACK: usize = crate::query::QUERY_STACK_SIZE;
 
 /// The groups holding leaf slots `start .. start + count` (`count ≥ 1`); an empty slice for
-/// a run out of range.
+/// a run out of range. Counted from the first group (`⌈(start mod LANES + count) / LANES⌉`
+/// of them, the same groups as `⌊start / LANES⌋ .. ⌈(start + count) / LANES⌉`), so that the
+/// only check left is the run's end against the slice.
 #[inline(always)]
 pub(super) fn leaf_groups(groups: &[LeafGroup], start: u32, count: u32) -> &[LeafGroup] {
-    let (first, end) = (start as usize, start as usize + count as usize);
-    groups
-        .get(first / LANES..end.div_ceil(LANES))
-        .unwrap_or(&[])
+    let first = start as usize / LANES;
+    let n = (start as usize % LANES + count as usize).div_ceil(LANES);
+    groups.get(first..first + n).unwrap_or(&[])
 }
 
 /// The lanes that hold leaf slots `start .. start + count` in each group of their run
