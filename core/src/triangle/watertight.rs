@@ -209,7 +209,11 @@ impl WatertightRay {
 /// edge. `det`, `t` and the barycentrics are computed in `f64` and rounded once.
 ///
 /// Edges and vertices are **closed**: a point exactly on an edge is inside. Mixed signs or
-/// `det = 0` (ray in the triangle's plane, or a degenerate triangle) give no hit.
+/// `det = 0` (ray in the triangle's plane, or a degenerate triangle) give no hit; so does a
+/// triangle whose plane the line certainly crosses behind the origin while `t_min ≥ 0`
+/// (the exact signs of the origin's and the direction's orientation against the plane,
+/// decided with the plane form of `t`, whatever the rounded `t` would be: the triangle a
+/// spawned ray starts on, and the faces behind it).
 ///
 /// `t` is the sheared `Σ eᵢzᵢ / det` (consistent with the edge decisions, accurate relative to
 /// the vertices' depth span along the ray) unless the plane equation `((v0 − o)·n)/(d·n)` in
@@ -291,13 +295,17 @@ impl<F: Fn(&[Vec3; 3], &Ray) -> Option<PlaneForm>> PlaneKernel for F {}
 
 /// [`hit_t`]'s common case, or `None` for the others: the `v0`-based normal does not cancel,
 /// `d·n` clears its filter (`plane`: [`plane_crossing`] or a level's kernel with its bits),
-/// the plane crossing lies in the triangle's box, and the plane form is exact enough
-/// ([`plane_exact_enough`]). Each step is the one [`hit_t`] takes, so where this returns `t`,
-/// `hit_t` returns the same `t`.
+/// and either the crossing is certainly behind the origin ([`PlaneForm::behind`]; then `−∞`,
+/// outside the interval, where `hit_t` refuses the triangle) or it lies in the triangle's box
+/// and the plane form is exact enough ([`plane_exact_enough`]). Each step is the one [`hit_t`]
+/// takes, so where this returns `t`, `hit_t` returns the same `t` (or no hit for `−∞`).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn common_t(plane: impl PlaneKernel, c: Candidate<'_>, det: f64) -> Option<f64> {
     let plane = plane(c.v, c.ray)?;
+    if plane.behind {
+        return Some(f64::NEG_INFINITY);
+    }
     let z = c.sheared.2;
     let t_sheared = sheared_t(c.edges, z, det);
     (plane.in_box && plane_exact_enough(&plane, t_sheared, z)).then_some(plane.t)
@@ -315,7 +323,7 @@ fn plane_crossing(v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {
     if !(dn.abs() > ORIENT3D_FILTER_REL * d.abs().dot(normal.1)) {
         return None;
     }
-    Some(plane_form(ray, v, normal, d, dn))
+    Some(plane_form(ray, v, normal, d, dn, true))
 }
 
 /// The sheared form of `t`: `Σ eᵢzᵢ / det` in `f64` (see [`hit_t`]).
@@ -335,15 +343,59 @@ struct PlaneForm {
     /// The crossing `o + d·t` lies in the triangle's box, padded by `γ₈` of the coordinates'
     /// magnitude and [`TINY`].
     in_box: bool,
+    /// The line certainly crosses the plane behind the origin, `t < 0` exactly, and the ray's
+    /// `t_min ≥ 0`: no crossing in the interval ([`crossed_behind`]). Then the other fields
+    /// are those of [`PlaneForm::BEHIND`].
+    behind: bool,
+}
+
+impl PlaneForm {
+    /// The form of a crossing certainly behind the origin: no `t` to refine.
+    const BEHIND: Self = Self {
+        t: f64::NEG_INFINITY,
+        err: 0.0,
+        in_box: false,
+        behind: true,
+    };
+}
+
+/// `true` when the ray's line crosses the plane certainly behind its origin and `t_min ≥ 0`:
+/// `wn = (v0 − o)·n` clears the orientation filter against its permanent `w_nn = |v0 − o|·N`
+/// ([`ORIENT3D_FILTER_REL`]: the same determinant as [`crate::predicates::orient3d`]`(v0, v1, v2,
+/// o)`, evaluated along its third row, at most eight roundings a term), so its sign is exact,
+/// and opposes the sign of `dn = d·n`, exact because the caller's filter passed: `t = wn/dn <
+/// 0`. A ray leaving a surface ([`crate::hit::spawn_ray_to`]: its origin moved off the surface
+/// by the hit point's error bound) meets the triangle it starts on, and the faces behind it,
+/// only so; their rounded `t` would be of the order of its own error, and for a ray grazing
+/// the plane the sheared form's sign may be wrong (test
+/// `a_plane_crossed_behind_the_origin_is_no_hit`).
+#[inline(always)]
+fn crossed_behind(ray: &Ray, wn: f64, w_nn: f64, dn: f64) -> bool {
+    ray.t_min >= 0.0 && wn.abs() > ORIENT3D_FILTER_REL * w_nn && (wn < 0.0) != (dn < 0.0)
 }
 
 /// [`PlaneForm`] of the triangle `v` with normal `n` and its scale `nn`
-/// ([`super::normal_f64`]), for the ray direction `d` (in `f64`) with `dn = d·n ≠ 0`.
+/// ([`super::normal_f64`]), for the ray direction `d` (in `f64`) with `dn = d·n ≠ 0`;
+/// `dn_certain`: `dn` cleared its orientation filter (its sign is exact), which
+/// [`PlaneForm::behind`] needs.
 #[inline(always)]
-fn plane_form(ray: &Ray, v: &[Vec3; 3], (n, nn): (DVec3, DVec3), d: DVec3, dn: f64) -> PlaneForm {
+fn plane_form(
+    ray: &Ray,
+    v: &[Vec3; 3],
+    (n, nn): (DVec3, DVec3),
+    d: DVec3,
+    dn: f64,
+    dn_certain: bool,
+) -> PlaneForm {
     let w = v[0].as_dvec3() - ray.origin.as_dvec3();
-    let t = w.dot(n) / dn;
-    let err = gamma_f64(8) * (w.abs().dot(nn) + t.abs() * d.abs().dot(nn)) / dn.abs();
+    let (wn, w_nn) = (w.dot(n), w.abs().dot(nn));
+    let t = wn / dn;
+    // `crossed_behind` implies `t < 0` (the signs it certifies are the computed ones): the
+    // crossings in front skip it.
+    if t < 0.0 && dn_certain && crossed_behind(ray, wn, w_nn, dn) {
+        return PlaneForm::BEHIND;
+    }
+    let err = gamma_f64(8) * (w_nn + t.abs() * d.abs().dot(nn)) / dn.abs();
     // The plane crossing must lie in the triangle's box (up to rounding). If it does not, the
     // edge tests decided "inside" within the projection's rounding while the exact line
     // crosses the plane elsewhere (a grazing ray; found by the `bvh` fuzz target): then the
@@ -358,6 +410,7 @@ fn plane_form(ray: &Ray, v: &[Vec3; 3], (n, nn): (DVec3, DVec3), d: DVec3, dn: f
         t,
         err,
         in_box: p.cmpge(lo - slack).all() && p.cmple(hi + slack).all(),
+        behind: false,
     }
 }
 
@@ -385,7 +438,8 @@ fn plane_exact_enough(plane: &PlaneForm, t_sheared: f64, z: [f32; 3]) -> bool {
 ///   absolute values (the rounding of the `f64` differences, the cross and dot products).
 ///
 /// `None` for a degenerate triangle or a ray in its plane, decided exactly
-/// ([`super::degenerate_or_coplanar`]). When the `f64` plane form cannot be evaluated although
+/// ([`super::degenerate_or_coplanar`]), and for a crossing certainly behind the origin
+/// ([`PlaneForm::behind`]). When the `f64` plane form cannot be evaluated although
 /// the exact `d·n` is not zero (its `f64` normal cancelled: vertices spanning more than `2²⁹`),
 /// the sheared form is the answer.
 // Only hits get here, and on x86-64 only those whose `t` is not the common case
@@ -412,7 +466,8 @@ fn hit_t(c: Candidate<'_>, det: f64) -> Option<f64> {
     // `normal_f64` chose: a cyclic rotation, the same determinant), with the forward error
     // bound of the exact orientation predicate: beyond it its sign is exact and the triangle
     // is neither degenerate nor parallel to the ray; within it, the exact predicate decides.
-    if !(dn.abs() > ORIENT3D_FILTER_REL * d.abs().dot(nn)) {
+    let dn_certain = dn.abs() > ORIENT3D_FILTER_REL * d.abs().dot(nn);
+    if !dn_certain {
         if super::degenerate_or_coplanar(ray, v) {
             return None;
         }
@@ -420,7 +475,10 @@ fn hit_t(c: Candidate<'_>, det: f64) -> Option<f64> {
             return Some(t_sheared);
         }
     }
-    let plane = plane_form(ray, v, normal, d, dn);
+    let plane = plane_form(ray, v, normal, d, dn, dn_certain);
+    if plane.behind {
+        return None;
+    }
     if !plane.in_box {
         return Some(t_sheared);
     }

@@ -4,7 +4,7 @@
 //! bits ([`super::finish_exact`], [`super::plane_crossing`]). The one `unsafe` block enters
 //! the compiled-for-AVX2 function on the proof the [`Avx2Fma`] token carries.
 
-use super::{Candidate, PlaneForm, TINY, finish_exact_at};
+use super::{Candidate, PlaneForm, TINY, crossed_behind, finish_exact_at};
 use crate::ray::Ray;
 use crate::simd_level::Avx2Fma;
 use crate::triangle::{NORMAL_CANCEL_REL, TriangleHit};
@@ -98,8 +98,12 @@ fn plane_crossing_avx2(v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {
     }
     // `plane_form`.
     let w = _mm256_sub_pd(p0, o);
-    let t = dot(w, n) / dn;
-    let err = gamma_f64(8) * (dot(abs(w), nn) + t.abs() * d_nn) / dn.abs();
+    let (wn, w_nn) = (dot(w, n), dot(abs(w), nn));
+    let t = wn / dn;
+    if t < 0.0 && crossed_behind(ray, wn, w_nn, dn) {
+        return Some(PlaneForm::BEHIND);
+    }
+    let err = gamma_f64(8) * (w_nn + t.abs() * d_nn) / dn.abs();
     let p = _mm256_add_pd(o, _mm256_mul_pd(d, _mm256_set1_pd(t)));
     let lo = _mm256_cvtps_pd(_mm_min_ps(_mm_min_ps(f0, f1), f2));
     let hi = _mm256_cvtps_pd(_mm_max_ps(_mm_max_ps(f0, f1), f2));
@@ -115,6 +119,7 @@ fn plane_crossing_avx2(v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {
         t,
         err,
         in_box: _mm256_movemask_pd(inside) & 7 == 7,
+        behind: false,
     })
 }
 
@@ -135,8 +140,9 @@ mod tests {
     /// ([`super::super::plane_crossing`], scalar `glam` code), bit for bit (a NaN `t` or
     /// bound matches any NaN: only its comparisons are used), on triangles from `1e-3` to
     /// `1e3` at every distance, slivers, rays along the plane, and coordinates with NaN,
-    /// `±∞`, `±0` and subnormals mixed in. Every outcome must occur: a refused triangle
-    /// (cancelled normal or `d·n` within its filter), a crossing in the box and one outside.
+    /// `±∞`, `±0` and subnormals mixed in, some pointing away (crossing at `t = −1`). Every
+    /// outcome must occur: a refused triangle (cancelled normal or `d·n` within its filter), a
+    /// crossing behind the origin, one in the box and one outside.
     #[test]
     fn avx2_plane_crossing_equals_the_portable_one() {
         let Some(token) = crate::test_util::avx2_or_skip(
@@ -146,7 +152,7 @@ mod tests {
         };
         let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
         let mut s = 29u64;
-        let (mut refused, mut inside, mut outside) = (0, 0, 0);
+        let (mut refused, mut behind, mut inside, mut outside) = (0, 0, 0, 0);
         for i in 0..40_000 {
             let scale = 10f32.powf(lcg(&mut s) * 6.0 - 3.0);
             let c = |s: &mut u64| {
@@ -170,6 +176,9 @@ mod tests {
                 let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
                 direction -= n * n.dot(direction);
             }
+            if i % 13 == 0 {
+                direction = -direction;
+            }
             let ray = Ray::new(origin, direction);
             let want = super::super::plane_crossing(&v, &ray);
             let got = plane_crossing(token, &v, &ray);
@@ -181,7 +190,10 @@ mod tests {
                         "{v:?} {ray:?}: {w:?} {g:?}"
                     );
                     assert_eq!(w.in_box, g.in_box, "{v:?} {ray:?}");
-                    if w.in_box {
+                    assert_eq!(w.behind, g.behind, "{v:?} {ray:?}");
+                    if w.behind {
+                        behind += 1;
+                    } else if w.in_box {
                         inside += 1;
                     } else {
                         outside += 1;
@@ -191,8 +203,8 @@ mod tests {
             }
         }
         assert!(
-            refused > 100 && inside > 10_000 && outside > 100,
-            "{refused} refused, {inside} in the box, {outside} outside"
+            refused > 100 && behind > 1_000 && inside > 10_000 && outside > 100,
+            "{refused} refused, {behind} behind, {inside} in the box, {outside} outside"
         );
     }
 }
