@@ -19,8 +19,20 @@ use halfray_core::triangle::{TriangleHit, TriangleVariant, VariantVisitor};
 
 /// The wide BVH with owned storage.
 pub type VecBvh8 = Bvh8<PageArray<WideNode<8>>, PageArray<LeafGroup>>;
-/// The binary BVH with owned storage.
-pub type VecBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
+/// The binary BVH with owned storage (nodes on huge pages, [`PageArray`]).
+pub type VecBvh = Bvh<PageArray<BvhNode>, Vec<u32>>;
+
+/// The node storage and scratch of a build over `n` triangles, on huge pages where the OS
+/// gives them ([`PageArray`]): the node array is sized for the worst case (`2n − 1` nodes, 64
+/// bytes per triangle) and filled before the build, the scratch is 32 bytes per triangle;
+/// with 4 KiB pages each 4 KiB of them cost a page fault (6 % of a dragon build in `perf`:
+/// fault handling and unmapping), with 2 MiB pages one in 512 does.
+fn build_storage(n: usize) -> (PageArray<BvhNode>, PageArray<PrimRef>) {
+    (
+        PageArray::filled(BvhNode::EMPTY, node_capacity(n)),
+        PageArray::filled(PrimRef::EMPTY, scratch_capacity(n)),
+    )
+}
 
 /// Builds the binary BVH over `mesh` (binned SAH, `options`) with the scratch builder (a
 /// temporary array of 32 bytes per triangle, freed on return).
@@ -29,11 +41,12 @@ pub fn build_binary(
     options: &BuildOptions,
 ) -> std::result::Result<VecBvh, BvhError> {
     let n = mesh.len();
+    let (nodes, mut scratch) = build_storage(n);
     Bvh::build_with_scratch(
         mesh,
-        vec![BvhNode::EMPTY; node_capacity(n)],
+        nodes,
         vec![0u32; index_capacity(n)],
-        &mut vec![PrimRef::EMPTY; scratch_capacity(n)],
+        &mut scratch,
         options,
     )
 }
@@ -56,11 +69,12 @@ pub fn build_binary_parallel(
         return build_binary(mesh, options);
     }
     let mut jobs = vec![BuildJob::EMPTY; 16 * threads];
+    let (nodes, mut scratch) = build_storage(n);
     Bvh::build_in_jobs(
         mesh,
-        vec![BvhNode::EMPTY; node_capacity(n)],
+        nodes,
         vec![0u32; index_capacity(n)],
-        &mut vec![PrimRef::EMPTY; scratch_capacity(n)],
+        &mut scratch,
         &mut jobs,
         n / (4 * threads),
         options,
@@ -73,10 +87,11 @@ pub fn build_binary_parallel(
     )
 }
 
-/// Collapses `binary` (built over `mesh`) into an 8-wide BVH in exactly sized storage.
-pub fn build_wide(
+/// Collapses `binary` (built over `mesh`, in any storage) into an 8-wide BVH in exactly sized
+/// storage.
+pub fn build_wide<N: AsRef<[BvhNode]>, I: AsRef<[u32]>>(
     mesh: &TriangleMesh<'_>,
-    binary: &VecBvh,
+    binary: &Bvh<N, I>,
 ) -> std::result::Result<VecBvh8, BvhError> {
     Bvh8::from_binary_with(binary, mesh, |nodes, groups| {
         (

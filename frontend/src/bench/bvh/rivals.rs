@@ -17,8 +17,12 @@ pub(super) type BatchQuery<'a> = crate::timing::OwnedBatchSide<'a>;
 #[cfg(feature = "embree")]
 pub(super) struct Rivals {
     device: crate::embree::EmbreeDevice,
-    /// A device on every hardware thread (Embree's own default), for the all-threads build.
-    device_threads: crate::embree::EmbreeDevice,
+    /// A device on every hardware thread (Embree's own default), for the all-threads build:
+    /// alive only from the first all-threads pass to [`Rivals::end_threads`]. Embree runs every
+    /// device's builds on as many threads as the live device that asks for the most
+    /// (`Device::getMaxNumThreads`, one task scheduler per process): kept alive beside
+    /// `device`, it made the "one thread" builds use every hardware thread (seen in `perf`).
+    device_threads: Option<crate::embree::EmbreeDevice>,
     positions: Vec<[f32; 3]>,
     triangles: Vec<[u32; 3]>,
     /// `[default, robust]`, from the last pass.
@@ -32,7 +36,7 @@ impl Rivals {
     pub(super) fn new(obj: &crate::obj::ObjMesh) -> Result<Option<Self>> {
         Ok(Some(Self {
             device: crate::embree::EmbreeDevice::new()?,
-            device_threads: crate::embree::EmbreeDevice::with_config("verbose=0")?,
+            device_threads: None,
             positions: obj.positions.iter().map(|p| p.to_array()).collect(),
             triangles: obj.triangles.clone(),
             scenes: Vec::new(),
@@ -57,18 +61,23 @@ impl Rivals {
         Ok(())
     }
 
-    /// Builds the default scene once on every thread, keeping the best time.
+    /// Builds the default scene once on every thread, keeping the best time (the all-threads
+    /// device is created by the first call, untimed).
     pub(super) fn build_pass_threads(&mut self) -> Result<()> {
+        let device = match &mut self.device_threads {
+            Some(d) => d,
+            slot => slot.insert(crate::embree::EmbreeDevice::with_config("verbose=0")?),
+        };
         let t0 = std::time::Instant::now();
-        let s = crate::embree::EmbreeScene::new(
-            &self.device_threads,
-            &self.positions,
-            &self.triangles,
-            false,
-        )?;
+        let s = crate::embree::EmbreeScene::new(&*device, &self.positions, &self.triangles, false)?;
         self.build_ms[2] = self.build_ms[2].min(t0.elapsed().as_secs_f64() * 1e3);
         drop(s);
         Ok(())
+    }
+
+    /// Releases the all-threads device, so that Embree runs on one thread again.
+    pub(super) fn end_threads(&mut self) {
+        self.device_threads = None;
     }
 
     /// Best build times, ms: `[default, robust]` on one thread, default on all threads.
@@ -129,6 +138,7 @@ impl Rivals {
     pub(super) fn build_pass_threads(&mut self) -> Result<()> {
         Ok(())
     }
+    pub(super) fn end_threads(&mut self) {}
     pub(super) fn build_ms(&self) -> [f64; 3] {
         [f64::NAN; 3]
     }
