@@ -500,6 +500,30 @@ fn run_lanes_cover_exactly_the_run() {
     }
 }
 
+/// A leaf run's groups are the groups one of whose four slots lies in the run, and none when
+/// one of them is past the end of the groups (the oracle: each group's slot range against
+/// the run's, not the index arithmetic of `leaf_groups`).
+#[test]
+fn leaf_groups_are_the_groups_a_run_touches() {
+    let groups = [LeafGroup::EMPTY; 8];
+    for start in 0..40u32 {
+        for count in 1..=MAX_LEAF_TRIANGLES as u32 {
+            let (lo, hi) = (start as usize, (start + count) as usize);
+            let touched: Vec<usize> = (0..16).filter(|g| 4 * g < hi && 4 * g + 4 > lo).collect();
+            let got = super::traverse::leaf_groups(&groups, start, count);
+            if touched.iter().all(|&g| g < groups.len()) {
+                assert_eq!(got.len(), touched.len(), "start {start} count {count}");
+                assert!(
+                    core::ptr::eq(got.as_ptr(), &groups[touched[0]]),
+                    "start {start} count {count}"
+                );
+            } else {
+                assert!(got.is_empty(), "start {start} count {count}");
+            }
+        }
+    }
+}
+
 /// A tree of at most `LEAF_MERGE` triangles is one leaf run, which the root opens when it is
 /// longer than `LEAF_OPEN_ABOVE`: the root then has two or more leaf children, each within
 /// the bound, together every triangle once.
