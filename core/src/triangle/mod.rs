@@ -130,7 +130,10 @@ pub trait TriangleIntersector: Copy + Send + Sync {
     ) -> Option<TriangleHit>;
 
     /// [`TriangleIntersector::intersect_prepared`] at SIMD `level` (the same answer at every
-    /// level). The default ignores the level.
+    /// level), as a BVH leaf calls it for a triangle its cull
+    /// ([`TriangleIntersector::certain_misses`]) kept: an implementation may leave out the part
+    /// of its test that the cull repeats, but the answer must be `intersect_prepared`'s for
+    /// every triangle. The default ignores the level.
     #[inline(always)]
     fn intersect_prepared_on<L: crate::simd_level::SimdLevel>(
         &self,

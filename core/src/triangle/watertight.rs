@@ -650,8 +650,9 @@ pub trait ShearedTest: Copy + Send + Sync {
     /// [`TriangleIntersector::intersect_prepared`].
     fn hit_sheared(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit>;
 
-    /// [`ShearedTest::hit_sheared`] at SIMD `level` (the same answer at every level). The
-    /// default ignores the level.
+    /// [`ShearedTest::hit_sheared`] at SIMD `level`, for a triangle the family's cull kept
+    /// ([`TriangleIntersector::intersect_prepared_on`]: the same answer for every triangle, at
+    /// every level). The default ignores the level.
     #[inline(always)]
     fn hit_sheared_on<L: SimdLevel>(
         &self,
@@ -726,9 +727,19 @@ impl ShearedTest for Watertight {
 
     #[inline(always)]
     fn hit_sheared(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit> {
-        self.hit_sheared_on(Portable, pre, ray, v)
+        let sheared = pre.project_triangle(ray.origin, v);
+        // Most triangles are missed with two certain, opposite signs: decide those in f32
+        // (a certain sign is exact) and compute the exact f64 edges only for the rest.
+        if mixed_signs(&filter_edges(sheared.0, sheared.1)) {
+            return None;
+        }
+        exact_candidate(Portable, ray, pre, sheared, v)
     }
 
+    /// Without the `f32` filter, which the cull ([`WatertightRay::certain_misses`]) computes
+    /// with the same operations for the triangles a leaf tests: a triangle it would reject has
+    /// two certain, opposite `f32` signs, so its exact edge signs differ too and the exact path
+    /// refuses it first thing (`finish_exact_at`): `hit_sheared`'s answer for every triangle.
     #[inline(always)]
     fn hit_sheared_on<L: SimdLevel>(
         &self,
@@ -737,13 +748,7 @@ impl ShearedTest for Watertight {
         ray: &Ray,
         v: &[Vec3; 3],
     ) -> Option<TriangleHit> {
-        let sheared = pre.project_triangle(ray.origin, v);
-        // Most triangles are missed with two certain, opposite signs: decide those in f32
-        // (a certain sign is exact) and compute the exact f64 edges only for the rest.
-        if mixed_signs(&filter_edges(sheared.0, sheared.1)) {
-            return None;
-        }
-        exact_candidate(level, ray, pre, sheared, v)
+        exact_candidate(level, ray, pre, pre.project_triangle(ray.origin, v), v)
     }
 }
 

@@ -529,3 +529,58 @@ fn a_plane_crossed_behind_the_origin_is_no_hit() {
     }
     assert!(behind > 50_000, "{behind}");
 }
+
+/// `hit_sheared_on` (no `f32` filter: a leaf calls it for triangles the lane cull kept) gives
+/// `hit_sheared`'s answer for **every** triangle, those the filter rejects included, at the portable level and
+/// at AVX2 where the CPU has it: triangles near and far, rays through them, past their edges,
+/// pointing away and grazing. Every kind of answer occurs: a hit, a filter reject, a miss of
+/// the exact path.
+#[test]
+fn skipping_the_filter_the_cull_repeats_changes_no_answer() {
+    use crate::test_util::{Lcg, avx2_or_skip};
+    let avx2 = avx2_or_skip(
+        "triangle::watertight::tests::skipping_the_filter_the_cull_repeats_changes_no_answer",
+    );
+    let mut r = Lcg(7);
+    let (mut hits, mut rejected, mut exact_misses) = (0, 0, 0);
+    for i in 0..40_000 {
+        let size = [1e-2f32, 1.0, 1e2][i % 3];
+        let at = r.v(4.0 * size);
+        let v = [at + r.v(size), at + r.v(size), at + r.v(size)];
+        let target = v[0] + (v[1] - v[0]) * (r.f() * 1.2 - 0.1) + (v[2] - v[0]) * (r.f() * 0.6);
+        let mut d = target - (at + r.v(8.0 * size));
+        if i % 5 == 0 {
+            let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+            d -= n * n.dot(d) * 0.9999;
+        }
+        let ray = Ray::new(target - d, if i % 7 == 0 { -d } else { d });
+        let Some(pre) = WatertightRay::new(&ray) else {
+            continue;
+        };
+        let want = Watertight.hit_sheared(&pre, &ray, &v);
+        assert_eq!(
+            Watertight.hit_sheared_on(Portable, &pre, &ray, &v),
+            want,
+            "{v:?} {ray:?}"
+        );
+        if let Some(token) = avx2 {
+            assert_eq!(
+                Watertight.hit_sheared_on(token, &pre, &ray, &v),
+                want,
+                "{v:?} {ray:?}"
+            );
+        }
+        let sheared = pre.project_triangle(ray.origin, &v);
+        if want.is_some() {
+            hits += 1;
+        } else if mixed_signs(&filter_edges(sheared.0, sheared.1)) {
+            rejected += 1;
+        } else {
+            exact_misses += 1;
+        }
+    }
+    assert!(
+        hits > 5_000 && rejected > 5_000 && exact_misses > 100,
+        "{hits} hits, {rejected} rejected by the filter, {exact_misses} missed exactly"
+    );
+}
