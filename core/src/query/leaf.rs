@@ -84,6 +84,25 @@ pub trait LeafTest {
         let _ = (level, pre, ray, first, second);
         0
     }
+
+    /// The lanes among `keep` of two groups of stored triangles (bits as in
+    /// [`LeafTest::certain_misses`]; a single group passed twice) that this test misses
+    /// because the ray's line certainly crosses their plane behind its origin
+    /// ([`TriangleIntersector::behind_misses2`]), at SIMD `level` (the same bits at every
+    /// level). The any-hit walks call it on the lanes `certain_misses` kept. The default
+    /// refuses none.
+    #[inline(always)]
+    fn behind_misses<L: SimdLevel>(
+        &self,
+        level: L,
+        pre: &Self::Prepared,
+        ray: &Ray,
+        lanes: [&TriangleLanes; 2],
+        keep: u32,
+    ) -> u32 {
+        let _ = (level, pre, ray, lanes, keep);
+        0
+    }
 }
 
 impl<H, F: FnMut(u32, &Ray) -> Option<(f32, H)>> LeafTest for F {
@@ -188,5 +207,17 @@ impl<I: TriangleIntersector> LeafTest for Triangles<'_, I> {
             Some(second) => self.isect.certain_misses2(level, pre, ray, first, second),
             None => self.isect.certain_misses(pre, ray, first),
         }
+    }
+
+    #[inline(always)]
+    fn behind_misses<L: SimdLevel>(
+        &self,
+        level: L,
+        pre: &I::Prepared,
+        ray: &Ray,
+        lanes: [&TriangleLanes; 2],
+        keep: u32,
+    ) -> u32 {
+        self.isect.behind_misses2(level, pre, ray, lanes, keep)
     }
 }

@@ -29,6 +29,46 @@ pub trait SimdLevel: Copy + sealed::Sealed {
     /// have certain, opposite signs. `None` when this level has no kernel for it (the caller
     /// then culls each group alone, with the same result).
     fn certain_misses8(self, q: &Sheared8<'_>) -> Option<u32>;
+
+    /// The watertight test's "crossed behind the origin" cull of two groups at once
+    /// ([`Behind8`]; [`crate::triangle::WatertightRay::behind_misses2`]): bit `i` for lane
+    /// `i` of the first group, bit `4 + i` for lane `i` of the second, set when the lane
+    /// formula of [`Behind8`] refuses the lane. `None` when this level has no kernel for it
+    /// (the caller then evaluates the formula lane by lane, with the same bits).
+    fn behind_misses8(self, q: &Behind8<'_>) -> Option<u32>;
+}
+
+/// The inputs of [`SimdLevel::behind_misses8`]: two groups of four triangles and a ray in the
+/// watertight test's permuted axes (rows as in [`Sheared8`]).
+///
+/// Per lane, with the vertices `p0, p1, p2`, the origin `o` and the direction `d`, all `f32`
+/// and in plain `f32` operations (never fused; sums `(x + y) + z`; `|·|` clears the sign bit;
+/// `max(a, b) = a > b ? a : b`):
+/// - `a = p0 − o`, `e1 = p1 − p0`, `e2 = p2 − p0`;
+/// - the six products `yz = e1_y·e2_z`, `zy = e1_z·e2_y`, `zx = e1_z·e2_x`, `xz = e1_x·e2_z`,
+///   `xy = e1_x·e2_y`, `yx = e1_y·e2_x`; the normal `n = (yz − zy, zx − xz, xy − yx)` and its
+///   permanent `N = (|yz| + |zy|, |zx| + |xz|, |xy| + |yx|)`;
+/// - `wn = a·n`, `w_nn = |a|·N`, `dn = d·n`, `d_nn = |d|·N`;
+/// - `m = max(max(s_x, s_y), s_z)` with `s = |e1| + |e2|`, `margin = F·(m·m) + T` and
+///   `a1 = (|a_x| + |a_y|) + |a_z|`;
+/// - `bound_w = (R·w_nn + margin·a1) + T`, `bound_d = (R·d_nn + margin·dir_l1) + T`, with
+///   `R`, `F`, `T` the constants `BEHIND_REL`, `BEHIND_F64_MARGIN`, `BEHIND_TINY` of
+///   `triangle/watertight/behind.rs`;
+///
+/// and the lane's bit is set when `|wn| > bound_w`, `|dn| > bound_d` and `wn`, `dn` have
+/// opposite signs (a NaN anywhere leaves it clear).
+#[derive(Clone, Copy, Debug)]
+pub struct Behind8<'a> {
+    /// The first group's rows, vertex by vertex, in the permuted axis order (world units).
+    pub first: [[&'a [f32; 4]; 3]; 3],
+    /// The second group's rows, likewise.
+    pub second: [[&'a [f32; 4]; 3]; 3],
+    /// The ray origin in the permuted axis order (world units).
+    pub origin: [f32; 3],
+    /// The ray direction in the permuted axis order (world units per unit of `t`).
+    pub dir: [f32; 3],
+    /// `(|d_0| + |d_1|) + |d_2|` of `dir`, in that order (world units per unit of `t`).
+    pub dir_l1: f32,
 }
 
 /// The inputs of [`SimdLevel::certain_misses8`]: two groups of four triangles and a ray in the
@@ -138,6 +178,11 @@ impl SimdLevel for Portable {
     fn certain_misses8(self, _: &Sheared8<'_>) -> Option<u32> {
         None
     }
+
+    #[inline(always)]
+    fn behind_misses8(self, _: &Behind8<'_>) -> Option<u32> {
+        None
+    }
 }
 
 /// Proof that the CPU running the program has AVX2 and FMA: eight-lane node tests in one
@@ -194,6 +239,12 @@ impl SimdLevel for Avx2Fma {
     }
 
     #[inline(always)]
+    fn behind_misses8(self, q: &Behind8<'_>) -> Option<u32> {
+        // SAFETY: as in `slab8`: the token proves AVX2 and FMA.
+        Some(unsafe { behind_misses8_avx2(q) })
+    }
+
+    #[inline(always)]
     fn slab8(self, q: &Slab8<'_>) -> Option<([f32; 8], u32)> {
         // SAFETY: the token exists, so the CPU supports AVX2 and FMA (the contract of
         // `Avx2Fma::new_unchecked`), the only requirement of calling a function compiled for
@@ -225,20 +276,10 @@ fn certain_misses8_avx2(
     shear: [f32; 2],
 ) -> u32 {
     use core::arch::x86_64::{
-        __m256, _CMP_GT_OQ, _CMP_LT_OQ, _mm_loadu_ps, _mm256_castps128_ps256, _mm256_cmp_ps,
-        _mm256_insertf128_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_or_ps, _mm256_set1_ps,
-        _mm256_setzero_ps, _mm256_sub_ps,
+        __m256, _CMP_GT_OQ, _CMP_LT_OQ, _mm256_cmp_ps, _mm256_movemask_ps, _mm256_mul_ps,
+        _mm256_or_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_sub_ps,
     };
-    let row = |lo: &[f32; 4], hi: &[f32; 4]| -> __m256 {
-        // SAFETY: `lo` and `hi` are four `f32` each: each unaligned 16-byte load reads exactly
-        // them (AVX, which the function's target features enable).
-        unsafe {
-            _mm256_insertf128_ps::<1>(
-                _mm256_castps128_ps256(_mm_loadu_ps(lo.as_ptr())),
-                _mm_loadu_ps(hi.as_ptr()),
-            )
-        }
-    };
+    let row = |lo: &[f32; 4], hi: &[f32; 4]| -> __m256 { row8(lo, hi) };
     let o = [
         _mm256_set1_ps(origin[0]),
         _mm256_set1_ps(origin[1]),
@@ -275,6 +316,100 @@ fn certain_misses8_avx2(
         pos = _mm256_or_ps(pos, _mm256_cmp_ps::<_CMP_GT_OQ>(x, zero));
     }
     (_mm256_movemask_ps(neg) & _mm256_movemask_ps(pos)) as u32
+}
+
+/// Four lanes of one group (`lo`) and four of another (`hi`) in one 256-bit register.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+fn row8(lo: &[f32; 4], hi: &[f32; 4]) -> core::arch::x86_64::__m256 {
+    use core::arch::x86_64::{_mm_loadu_ps, _mm256_castps128_ps256, _mm256_insertf128_ps};
+    // SAFETY: `lo` and `hi` are four `f32` each: each unaligned 16-byte load reads exactly
+    // them (AVX, which the function's target features enable).
+    unsafe {
+        _mm256_insertf128_ps::<1>(
+            _mm256_castps128_ps256(_mm_loadu_ps(lo.as_ptr())),
+            _mm_loadu_ps(hi.as_ptr()),
+        )
+    }
+}
+
+/// [`SimdLevel::behind_misses8`] in 256-bit registers: the first group's lanes in the low
+/// half, the second's in the high half, the operations of [`Behind8`] lane by lane (`|·|` an
+/// `andnot` of the sign bit, `max` as `maxps`, the opposite signs as the sign bit of
+/// `wn ^ dn`, which equals the comparison of signs wherever both magnitudes cleared their
+/// bounds: then neither is zero or NaN).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+fn behind_misses8_avx2(q: &Behind8<'_>) -> u32 {
+    use crate::triangle::{BEHIND_F64_MARGIN, BEHIND_REL, BEHIND_TINY};
+    use core::arch::x86_64::{
+        __m256, _CMP_GT_OQ, _mm256_add_ps, _mm256_and_ps, _mm256_andnot_ps, _mm256_cmp_ps,
+        _mm256_max_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_sub_ps,
+        _mm256_xor_ps,
+    };
+    let sign = _mm256_set1_ps(-0.0);
+    let abs = |x: __m256| _mm256_andnot_ps(sign, x);
+    let add = |x: __m256, y: __m256| _mm256_add_ps(x, y);
+    let sub = |x: __m256, y: __m256| _mm256_sub_ps(x, y);
+    let mul = |x: __m256, y: __m256| _mm256_mul_ps(x, y);
+    // Written out (no `array::map`/`from_fn`, which are not always inlined).
+    let vertex = |v: usize| {
+        [
+            row8(q.first[v][0], q.second[v][0]),
+            row8(q.first[v][1], q.second[v][1]),
+            row8(q.first[v][2], q.second[v][2]),
+        ]
+    };
+    let (p0, p1, p2) = (vertex(0), vertex(1), vertex(2));
+    let splat3 = |x: [f32; 3]| {
+        [
+            _mm256_set1_ps(x[0]),
+            _mm256_set1_ps(x[1]),
+            _mm256_set1_ps(x[2]),
+        ]
+    };
+    let (o, d) = (splat3(q.origin), splat3(q.dir));
+    let diff3 =
+        |u: [__m256; 3], v: [__m256; 3]| [sub(u[0], v[0]), sub(u[1], v[1]), sub(u[2], v[2])];
+    let (a, e1, e2) = (diff3(p0, o), diff3(p1, p0), diff3(p2, p0));
+    let (yz, zy) = (mul(e1[1], e2[2]), mul(e1[2], e2[1]));
+    let (zx, xz) = (mul(e1[2], e2[0]), mul(e1[0], e2[2]));
+    let (xy, yx) = (mul(e1[0], e2[1]), mul(e1[1], e2[0]));
+    let n = [sub(yz, zy), sub(zx, xz), sub(xy, yx)];
+    let nn = [
+        add(abs(yz), abs(zy)),
+        add(abs(zx), abs(xz)),
+        add(abs(xy), abs(yx)),
+    ];
+    let dot = |u: [__m256; 3], v: [__m256; 3]| {
+        add(add(mul(u[0], v[0]), mul(u[1], v[1])), mul(u[2], v[2]))
+    };
+    let abs3 = |u: [__m256; 3]| [abs(u[0]), abs(u[1]), abs(u[2])];
+    let aa = abs3(a);
+    let (wn, w_nn) = (dot(a, n), dot(aa, nn));
+    let (dn, d_nn) = (dot(d, n), dot(abs3(d), nn));
+    let s = [
+        add(abs(e1[0]), abs(e2[0])),
+        add(abs(e1[1]), abs(e2[1])),
+        add(abs(e1[2]), abs(e2[2])),
+    ];
+    let m = _mm256_max_ps(_mm256_max_ps(s[0], s[1]), s[2]);
+    let tiny = _mm256_set1_ps(BEHIND_TINY);
+    let margin = add(mul(_mm256_set1_ps(BEHIND_F64_MARGIN), mul(m, m)), tiny);
+    let a1 = add(add(aa[0], aa[1]), aa[2]);
+    let rel = _mm256_set1_ps(BEHIND_REL);
+    let bound_w = add(add(mul(rel, w_nn), mul(margin, a1)), tiny);
+    let bound_d = add(
+        add(mul(rel, d_nn), mul(margin, _mm256_set1_ps(q.dir_l1))),
+        tiny,
+    );
+    let certain = _mm256_and_ps(
+        _mm256_cmp_ps::<_CMP_GT_OQ>(abs(wn), bound_w),
+        _mm256_cmp_ps::<_CMP_GT_OQ>(abs(dn), bound_d),
+    );
+    _mm256_movemask_ps(_mm256_and_ps(certain, _mm256_xor_ps(wn, dn))) as u32
 }
 
 /// [`SimdLevel::sort_keys8`] in one 256-bit register: the keys of [`order_key`] lane by lane,

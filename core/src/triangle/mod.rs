@@ -39,6 +39,9 @@ pub use cramer::Cramer;
 pub use lanes::{LANES, TriangleLanes, pair_mask};
 pub use moller_trumbore::MollerTrumbore;
 pub use reference::F64Reference;
+// The AVX2 kernel's constants (`simd::level`).
+#[cfg(target_arch = "x86_64")]
+pub(crate) use watertight::{BEHIND_F64_MARGIN, BEHIND_REL, BEHIND_TINY};
 pub use watertight::{ShearedTest, Watertight, WatertightF32, WatertightRay};
 pub use watertight_f32_exact::WatertightF32Exact;
 
@@ -176,6 +179,25 @@ pub trait TriangleIntersector: Copy + Send + Sync {
             self.certain_misses(pre, ray, first),
             self.certain_misses(pre, ray, second),
         )
+    }
+
+    /// The lanes among `keep` (bits 0–3: `lanes[0]`'s, 4–7: `lanes[1]`'s; the lanes
+    /// [`TriangleIntersector::certain_misses2`] kept) that this test misses because the ray's
+    /// line certainly crosses their plane behind its origin while `t_min ≥ 0`, at SIMD
+    /// `level` (the same bits at every level). Like `certain_misses`, a lane is reported only
+    /// when `intersect_prepared` returns `None` for it. Worth calling for rays that leave a
+    /// surface (any-hit queries: shadow, ambient occlusion). The default reports none.
+    #[inline(always)]
+    fn behind_misses2<L: crate::simd_level::SimdLevel>(
+        &self,
+        level: L,
+        pre: &Self::Prepared,
+        ray: &Ray,
+        lanes: [&TriangleLanes; 2],
+        keep: u32,
+    ) -> u32 {
+        let _ = (level, pre, ray, lanes, keep);
+        0
     }
 
     /// Convenience: [`TriangleIntersector::prepare`] then

@@ -11,6 +11,11 @@ use glam::{DVec3, Vec3};
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 mod avx2;
+mod behind;
+
+// The AVX2 kernel's constants (`simd::level`).
+#[cfg(target_arch = "x86_64")]
+pub(crate) use behind::{BEHIND_F64_MARGIN, BEHIND_REL, BEHIND_TINY};
 
 /// Per-ray data of the watertight test: the axis permutation that makes the largest direction
 /// component `z`, and the shear that maps the ray to the `+z` axis through the origin.
@@ -664,6 +669,22 @@ pub trait ShearedTest: Copy + Send + Sync {
         let _ = level;
         self.hit_sheared(pre, ray, v)
     }
+
+    /// [`TriangleIntersector::behind_misses2`]: the lanes among `keep` this test certainly
+    /// misses because the line crosses their plane behind the origin. The default refuses
+    /// none ([`Watertight`] refuses them with [`WatertightRay::behind_misses2`]).
+    #[inline(always)]
+    fn behind_misses2<L: SimdLevel>(
+        &self,
+        level: L,
+        pre: &WatertightRay,
+        ray: &Ray,
+        lanes: [&TriangleLanes; 2],
+        keep: u32,
+    ) -> u32 {
+        let _ = (level, pre, ray, lanes, keep);
+        0
+    }
 }
 
 impl<T: ShearedTest> TriangleIntersector for T {
@@ -720,6 +741,18 @@ impl<T: ShearedTest> TriangleIntersector for T {
     ) -> u32 {
         pre.certain_misses2(level, ray.origin, first, second)
     }
+
+    #[inline(always)]
+    fn behind_misses2<L: SimdLevel>(
+        &self,
+        level: L,
+        pre: &WatertightRay,
+        ray: &Ray,
+        lanes: [&TriangleLanes; 2],
+        keep: u32,
+    ) -> u32 {
+        T::behind_misses2(self, level, pre, ray, lanes, keep)
+    }
 }
 
 impl ShearedTest for Watertight {
@@ -749,6 +782,27 @@ impl ShearedTest for Watertight {
         v: &[Vec3; 3],
     ) -> Option<TriangleHit> {
         exact_candidate(level, ray, pre, pre.project_triangle(ray.origin, v), v)
+    }
+
+    /// On x86-64 [`WatertightRay::behind_misses2`] (the exact path refuses each lane it
+    /// reports by `crossed_behind`: the module `behind`); elsewhere none (the Cortex-M4F
+    /// image's size).
+    #[inline(always)]
+    fn behind_misses2<L: SimdLevel>(
+        &self,
+        level: L,
+        pre: &WatertightRay,
+        ray: &Ray,
+        [first, second]: [&TriangleLanes; 2],
+        keep: u32,
+    ) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        return pre.behind_misses2(level, ray, first, second, keep);
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = (level, pre, ray, first, second, keep);
+            0
+        }
     }
 }
 

@@ -92,6 +92,9 @@ pub(super) fn leaf_hits<LT: LeafTest, L: SimdLevel, const ANY: bool>(
                 ([first, first], lanes.next_group() & !missed)
             }
         };
+        if ANY && todo != 0 {
+            todo &= !leaf.behind_misses(level, pre, cur, [&pair[0].lanes, &pair[1].lanes], todo);
+        }
         while todo != 0 {
             let bit = todo.trailing_zeros() as usize;
             todo &= todo - 1;

@@ -1,0 +1,326 @@
+//! The eight-lane `f32` form of [`super::crossed_behind`]: a triangle whose plane the ray's
+//! line **certainly** crosses behind the origin, while `t_min ≥ 0`, is no hit of
+//! [`super::Watertight`]; this refuses such lanes before the exact path, so that the
+//! triangle a spawned ray starts on ([`crate::hit::spawn_ray_to`]) and the faces behind it
+//! cost a few vector instructions instead of the exact candidate path. It refuses a lane only
+//! when the exact path is certain to refuse it too, so the answers are the same, ray for ray.
+//!
+//! **The rule.** Per lane, in `f32` (the lane formula of [`crate::simd_level::Behind8`], in
+//! the watertight test's permuted axes): `a = p0 − o`, `e1 = p1 − p0`, `e2 = p2 − p0`,
+//! `n = e1 × e2`, `wn = a·n` (the orientation `det[a, e1, e2] = det[p0 − o, p1 − o, p2 − o]`)
+//! and `dn = d·n`, each with a bound. A lane is refused when `|wn|` and `|dn|` clear their
+//! bounds and have opposite signs (then `t = wn/dn < 0` exactly) and `t_min ≥ 0`.
+//!
+//! **Permuted axes.** A permutation `P` of the axes (the watertight swap of `k_x`, `k_y` for
+//! `d_kz < 0` is one more transposition) gives `(Pu) × (Pv) = det(P)·P(u × v)`, so `wn` and
+//! `dn` both change sign by `det(P) = ±1`: the sign of `t = wn/dn` is unchanged. The
+//! permanents, `max` and the 1-norms below are sums over the axes, also unchanged, and the
+//! bound derivation does not depend on the order of the axes.
+//!
+//! **The `f32` bound.** Standard model (`crate::float`), `u = 2⁻²⁴`. Each elementary term of
+//! `wn`, `a_i·e1_j·e2_k`, passes through at most 8 roundings: `a_i`, `e1_j`, `e2_k` (one
+//! difference each), their product, the difference in `n`, the product with `a_i`, and two
+//! of the sum `(x + y) + z`; so `|wn − wn_exact| ≤ γ₈·W` with `W = |a|·N` of the exact
+//! values. The computed permanent `w_nn` has the same roundings on positive terms, so
+//! `W ≤ w_nn/(1 − γ₈)`, and the error is at most `γ₈/(1 − γ₈)·w_nn < 9u·w_nn`. `dn` has one
+//! rounding less per term (the direction is an input): `< 8u·d_nn`. [`BEHIND_REL`] `= 16u` is
+//! twice the larger: `|value| > BEHIND_REL·perm` leaves the exact value beyond the error, of
+//! the same sign, with the same margin again.
+//!
+//! **Underflow and overflow.** A product below the normal range rounds absolutely (at most
+//! `2⁻¹⁵⁰`; sums and differences of `f32` are then exact): at most two such in each `n_i`,
+//! one more in each product with `a_i` or `d_i`, so an absolute error below
+//! `2⁻¹⁴⁷·(|a|₁ + 1)` (resp. `|d|₁`), which the terms with [`BEHIND_TINY`] `= 2⁻¹⁴⁰` cover
+//! (the bound's own underflowing products included). An overflow gives `±∞` or NaN in the
+//! permanent at least where it gives it in the value (each permanent term is the rounded
+//! magnitude of the value's term, rounding is monotone), so the bound is `∞` or NaN and the
+//! comparison fails: overflow and NaN never refuse (unused lanes hold NaN).
+//!
+//! **Why the exact path then refuses it.** [`super::crossed_behind`] needs `dn` and `wn` in
+//! `f64` to clear the orientation filter [`crate::predicates::ORIENT3D_FILTER_REL`] `= γ₁₂`
+//! (`f64`) against their permanents, with whichever normal the path uses: the `v0`-based one
+//! (`plane_crossing`, `normal_f64_from_v0`, tried first on x86-64, and first in
+//! `normal_f64`), or, when that one cancels, the one from the vertex opposite the longest edge
+//! (`hit_t`, `normal_f64`); `wn` is always `(v0 − o)·n`. Every base's two edges are among
+//! `±e1, ±e2, ±(e2 − e1)`, so each of their components is at most `s = |e1| + |e2|` in
+//! magnitude, and every permanent component at most `2m²` (`m = max s_i`): the `f64`
+//! permanents are at most `(1 + γ₆)·2m²·|d|₁` and `(1 + γ₆)·2m²·|a|₁` (`f64` differences
+//! of `f32` values round at most once). The `margin·|·|₁` term of the bound, with
+//! [`BEHIND_F64_MARGIN`] `= 2⁻⁴⁰`, keeps the exact value beyond `2⁻⁴⁰·(1 − γ₄)·m²·|·|₁`,
+//! more than `2¹⁰` times the `2·γ₁₂·(1 + γ₆)·2m²·|·|₁` that makes each `f64` filter pass
+//! (its value within `γ₁₂·perm` of the exact one, beyond `γ₁₂·perm`). With both filters
+//! passed the computed signs are the exact ones and opposite, so the computed `t` is negative
+//! (the `f64` quotient of values that did not underflow: at least `2⁻⁴⁹⁷` over at most
+//! `2³⁸⁸`), and `crossed_behind` refuses the triangle on every path: `common_t` (x86-64) and
+//! `hit_t` (every target), whatever the edges decide (mixed signs or a zero `det` refuse it
+//! too).
+
+use super::WatertightRay;
+use crate::ray::Ray;
+use crate::simd_level::{Behind8, SimdLevel};
+use crate::triangle::TriangleLanes;
+use glam::Vec3;
+
+/// Relative bound of the `f32` values `wn`, `dn` of the cull against their computed
+/// permanents: `2⁻²⁰ = 16u`, twice the error bound `γ₈/(1 − γ₈) < 9u` (module docs).
+/// Unitless.
+pub(crate) const BEHIND_REL: f32 = 1.0 / 1_048_576.0;
+
+/// The margin that makes the `f64` filters of the exact path pass for every base vertex it
+/// may choose: `2⁻⁴⁰` of `m²·|·|₁` (module docs; `2¹⁰` times what they need). Unitless (per
+/// square of world units).
+pub(crate) const BEHIND_F64_MARGIN: f32 = 1.0 / 1_099_511_627_776.0;
+
+/// Absolute floor of the cull's bounds: `2⁻¹⁴⁰` (an `f32` subnormal, `2⁹` times the
+/// smallest), above the absolute error of products that underflow (`2⁻¹⁴⁷·(|·|₁ + 1)`,
+/// module docs). World units cubed (`wn`) and that per unit of `t` (`dn`).
+pub(crate) const BEHIND_TINY: f32 = f32::from_bits(1 << 9);
+
+/// The lane formula of [`Behind8`] for one triangle `p` (vertices, permuted axes), origin
+/// `o`, direction `d` and `d_l1 = (|d_0| + |d_1|) + |d_2|`: `true` when the lane is refused.
+/// The portable definition every level's kernel reproduces bit for bit.
+#[inline(always)]
+#[must_use]
+pub(super) fn behind_lane(p: [[f32; 3]; 3], o: [f32; 3], d: [f32; 3], d_l1: f32) -> bool {
+    let [p0, p1, p2] = p;
+    let a: [f32; 3] = core::array::from_fn(|j| p0[j] - o[j]);
+    let e1: [f32; 3] = core::array::from_fn(|j| p1[j] - p0[j]);
+    let e2: [f32; 3] = core::array::from_fn(|j| p2[j] - p0[j]);
+    let (yz, zy) = (e1[1] * e2[2], e1[2] * e2[1]);
+    let (zx, xz) = (e1[2] * e2[0], e1[0] * e2[2]);
+    let (xy, yx) = (e1[0] * e2[1], e1[1] * e2[0]);
+    let n = [yz - zy, zx - xz, xy - yx];
+    let nn = [
+        yz.abs() + zy.abs(),
+        zx.abs() + xz.abs(),
+        xy.abs() + yx.abs(),
+    ];
+    let dot = |u: [f32; 3], v: [f32; 3]| (u[0] * v[0] + u[1] * v[1]) + u[2] * v[2];
+    let aa = a.map(f32::abs);
+    let (wn, w_nn) = (dot(a, n), dot(aa, nn));
+    let (dn, d_nn) = (dot(d, n), dot(d.map(f32::abs), nn));
+    let max = |x: f32, y: f32| if x > y { x } else { y };
+    let s: [f32; 3] = core::array::from_fn(|j| e1[j].abs() + e2[j].abs());
+    let m = max(max(s[0], s[1]), s[2]);
+    let margin = BEHIND_F64_MARGIN * (m * m) + BEHIND_TINY;
+    let a1 = (aa[0] + aa[1]) + aa[2];
+    let bound_w = (BEHIND_REL * w_nn + margin * a1) + BEHIND_TINY;
+    let bound_d = (BEHIND_REL * d_nn + margin * d_l1) + BEHIND_TINY;
+    wn.abs() > bound_w && dn.abs() > bound_d && (wn < 0.0) != (dn < 0.0)
+}
+
+impl WatertightRay {
+    /// The lanes among `keep` (bits 0–3: `first`'s lanes, 4–7: `second`'s) whose plane the
+    /// line of `ray` certainly crosses behind its origin while `ray.t_min ≥ 0` (module docs):
+    /// [`super::Watertight`] misses each of them. `0` when `t_min < 0` (or NaN). The same bits
+    /// at every level: `level`'s eight-lane kernel when it has one, else the lane formula
+    /// for the kept lanes only.
+    #[inline(always)]
+    #[must_use]
+    pub fn behind_misses2<L: SimdLevel>(
+        &self,
+        level: L,
+        ray: &Ray,
+        first: &TriangleLanes,
+        second: &TriangleLanes,
+        keep: u32,
+    ) -> u32 {
+        if !(ray.t_min >= 0.0) {
+            return 0;
+        }
+        let k = self.axes();
+        let permute = |p: Vec3| {
+            let p = p.to_array();
+            [p[k[0]], p[k[1]], p[k[2]]]
+        };
+        let (origin, dir) = (permute(ray.origin), permute(ray.direction));
+        let dir_l1 = (dir[0].abs() + dir[1].abs()) + dir[2].abs();
+        let q = Behind8 {
+            first: super::permuted_rows(first, k),
+            second: super::permuted_rows(second, k),
+            origin,
+            dir,
+            dir_l1,
+        };
+        if let Some(mask) = level.behind_misses8(&q) {
+            return mask & keep;
+        }
+        let mut out = 0;
+        let mut todo = keep & 0xFF;
+        while todo != 0 {
+            let bit = todo.trailing_zeros() as usize;
+            todo &= todo - 1;
+            let rows = if bit < 4 { &q.first } else { &q.second };
+            let l = bit & 3;
+            let p = rows.map(|v| [v[0][l], v[1][l], v[2][l]]);
+            out |= u32::from(behind_lane(p, origin, dir, dir_l1)) << bit;
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::predicates::{orient_direction, orient3d_exact};
+    use crate::simd_level::Portable;
+    use crate::test_util::{Lcg, special_f32, unit_vec};
+    use crate::triangle::{TriangleIntersector, Watertight};
+    use crate::{Ray, spawn_ray_to};
+
+    /// Eight triangles around a surface triangle `tri` (lane `at`), with coordinates of
+    /// other triangles drawn near and far, a few replaced by NaN, `±∞`, huge or tiny values.
+    fn lanes_around(r: &mut Lcg, tri: [Vec3; 3], at: usize) -> [TriangleLanes; 2] {
+        let size = (tri[1] - tri[0]).length().max(1e-30);
+        let mut lanes = [TriangleLanes::EMPTY; 2];
+        for lane in 0..8 {
+            let v = if lane == at {
+                tri
+            } else {
+                let c = tri[0] + r.v(8.0 * size);
+                let mut v = [c + r.v(size), c + r.v(size), c + r.v(size)];
+                if lane % 3 == 0 {
+                    // A neighbour sharing the edge v1 v2, folded by a random angle.
+                    v = [tri[2], tri[1], tri[1] + r.v(2.0 * size)];
+                }
+                if r.f() < 0.1 {
+                    let special = special_f32(&mut r.0);
+                    v[lane % 3][(lane / 3) % 3] = match lane % 4 {
+                        0 => special,
+                        1 => 1e30,
+                        2 => 1e-40,
+                        _ => f32::INFINITY,
+                    };
+                }
+                v
+            };
+            let tri: [[f32; 3]; 3] = v.map(|p| p.to_array());
+            lanes[lane / 4].set(lane % 4, &tri);
+        }
+        lanes
+    }
+
+    /// The exact oracle, sharing no code with the cull: the line crosses the plane of `v`
+    /// behind the origin (the exact signs of the origin's and the direction's orientation
+    /// against the plane, [`crate::predicates`]' expansions, are equal and non-zero).
+    fn exactly_behind(ray: &Ray, v: &[Vec3; 3]) -> bool {
+        let side = orient3d_exact(v[0], v[1], v[2], ray.origin);
+        side != 0 && side == orient_direction(v[0], v[1], v[2], ray.direction)
+    }
+
+    /// Every lane the cull refuses, at the portable level and at AVX2 (where the CPU has it,
+    /// the same bits for all eight lanes, each kept or not), is refused by the exact path
+    /// (`Watertight`'s answer for it is `None`, with and without the lane filter, at every
+    /// level) and lies exactly behind the origin. Rays spawned off triangles of sizes
+    /// `1e-3`–`1e3` towards a light (`spawn_ray_to`), short AO rays, rays grazing the surface,
+    /// origins exactly on the plane, `t_min < 0`; triangle coordinates with NaN, `±∞`,
+    /// `1e30` and `1e-40` mixed in. The triangle a spawned ray starts on must be refused
+    /// for most rays (else the test would prove nothing).
+    #[test]
+    fn refused_lanes_are_exact_misses_behind_the_origin() {
+        let avx2 = crate::test_util::avx2_or_skip(
+            "triangle::watertight::behind::tests::refused_lanes_are_exact_misses_behind_the_origin",
+        );
+        let mut r = Lcg(42);
+        let (mut refused, mut start_refused, mut starts, mut kept_behind) = (0, 0, 0, 0);
+        for i in 0..60_000 {
+            let size = [1e-3f32, 1.0, 1e3, 1e-20][i % 4];
+            let base = r.v(64.0 * size);
+            let tri = [base + r.v(size), base + r.v(size), base + r.v(size)];
+            let eye = base + r.v(16.0 * size);
+            let (b1, b2) = (r.f() * 0.5, r.f() * 0.5);
+            let aim = tri[0] + (tri[1] - tri[0]) * b1 + (tri[2] - tri[0]) * b2;
+            let Some(h) = Watertight.intersect(&Ray::new(eye, aim - eye), &tri) else {
+                continue;
+            };
+            let hit = h.to_hit(&tri);
+            let n = hit.normal;
+            let ray = match i % 5 {
+                // Towards a light, and a short AO ray.
+                0 | 1 => spawn_ray_to(&hit, base + r.v(32.0 * size)),
+                2 => {
+                    let w = unit_vec(&mut r.0);
+                    let w = if w.dot(n) < 0.0 { -w } else { w };
+                    let mut ray = spawn_ray_to(&hit, hit.spawn_origin(w) + w * size);
+                    ray.t_max *= r.f();
+                    ray
+                }
+                // Grazing: the direction within 1e-7 of the plane.
+                3 => {
+                    let w = unit_vec(&mut r.0);
+                    let w = w - n * w.dot(n) + n * (r.f() - 0.5) * 1e-7;
+                    Ray::new(hit.spawn_origin(w), w)
+                }
+                // The origin on the plane (a vertex), or t_min < 0.
+                _ => {
+                    let w = unit_vec(&mut r.0);
+                    let mut ray = Ray::new(tri[(i / 5) % 3], w);
+                    if i % 2 == 0 {
+                        ray = Ray::new(hit.spawn_origin(w), w);
+                        ray.t_min = -1.0;
+                    }
+                    ray
+                }
+            };
+            let Some(pre) = WatertightRay::new(&ray) else {
+                continue;
+            };
+            let at = (i / 3) % 8;
+            let lanes = lanes_around(&mut r, tri, at);
+            let portable = pre.behind_misses2(Portable, &ray, &lanes[0], &lanes[1], 0xFF);
+            if let Some(level) = avx2 {
+                let got = pre.behind_misses2(level, &ray, &lanes[0], &lanes[1], 0xFF);
+                assert_eq!(got, portable, "{ray:?} {lanes:?}");
+                // Only the kept lanes.
+                let keep = (i as u32).wrapping_mul(2_654_435_761) >> 24;
+                let got = pre.behind_misses2(level, &ray, &lanes[0], &lanes[1], keep);
+                assert_eq!(got, portable & keep);
+                assert_eq!(
+                    pre.behind_misses2(Portable, &ray, &lanes[0], &lanes[1], keep),
+                    portable & keep
+                );
+            }
+            if ray.t_min < 0.0 {
+                assert_eq!(portable, 0);
+            }
+            for lane in 0..8 {
+                let Some(t) = lanes[lane / 4].get(lane % 4) else {
+                    continue;
+                };
+                let v = t.map(Vec3::from_array);
+                let is_refused = portable >> lane & 1 == 1;
+                if is_refused {
+                    refused += 1;
+                    assert!(exactly_behind(&ray, &v), "{ray:?} {v:?}");
+                    assert_eq!(Watertight.intersect(&ray, &v), None, "{ray:?} {v:?}");
+                    assert_eq!(
+                        Watertight.intersect_prepared_on(Portable, &pre, &ray, &v),
+                        None
+                    );
+                    if let Some(level) = avx2 {
+                        assert_eq!(
+                            Watertight.intersect_prepared_on(level, &pre, &ray, &v),
+                            None
+                        );
+                    }
+                } else if v.iter().all(|p| p.is_finite()) && exactly_behind(&ray, &v) {
+                    kept_behind += 1;
+                }
+                // Not at the subnormal scale (`1e-20`: the products underflow).
+                if lane == at && i % 5 < 3 && i % 4 != 3 {
+                    starts += 1;
+                    start_refused += usize::from(is_refused);
+                }
+            }
+        }
+        assert!(refused > 50_000, "{refused} lanes refused");
+        assert!(
+            kept_behind > 1_000,
+            "{kept_behind} lanes behind kept (grazing, on the plane)"
+        );
+        assert!(
+            start_refused * 10 > starts * 9,
+            "start triangles refused: {start_refused} of {starts}"
+        );
+    }
+}
