@@ -6,8 +6,10 @@
 //! cargo run --release -p halfray-core --example build_bench -- ../shared/meshes/dragon.obj
 //! ```
 //! Prints per mesh: triangles, the wide tree's bytes per triangle (nodes and triangle groups),
-//! the binary tree's SAH cost (relative to the root's area: the split quality),
-//! and each phase's best wall-clock and CPU time (ms).
+//! the binary tree's SAH cost (relative to the root's area: the split quality), a fingerprint
+//! of the binary tree (FNV-1a over every node's raw fields and the index array: two builds
+//! print the same one when they built the same tree), and each phase's best wall-clock and CPU
+//! time (ms).
 
 #[path = "common/obj.rs"]
 mod obj;
@@ -55,6 +57,24 @@ impl Best {
     }
 }
 
+/// FNV-1a (64-bit) over the binary tree's nodes (box bits, start, count) and index array.
+fn fingerprint(bvh: &Bvh<Vec<BvhNode>, Vec<u32>>) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let mut eat = |w: u32| {
+        for b in w.to_le_bytes() {
+            h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for n in bvh.nodes() {
+        let (bounds, start, count) = n.to_raw();
+        bounds.iter().flatten().for_each(|v| eat(v.to_bits()));
+        eat(start);
+        eat(count);
+    }
+    bvh.indices().iter().for_each(|&i| eat(i));
+    h
+}
+
 fn main() {
     let options = binary_options(BuildOptions::default());
     for path in std::env::args().skip(1) {
@@ -64,6 +84,7 @@ fn main() {
         let (mut binary_t, mut wide_t) = (Best::NONE, Best::NONE);
         let mut bytes = 0.0;
         let mut sah = 0.0;
+        let mut print = 0;
         for _ in 0..PASSES {
             let binary = binary_t.time(|| {
                 Bvh::build_with_scratch(
@@ -76,6 +97,7 @@ fn main() {
                 .expect("build")
             });
             sah = binary.stats().sah_cost;
+            print = fingerprint(&binary);
             let wide: Bvh8<Vec<WideNode<8>>, Vec<LeafGroup>> = wide_t.time(|| {
                 Bvh8::from_binary_with(&binary, &mesh, |nodes, groups| {
                     (vec![WideNode::EMPTY; nodes], vec![LeafGroup::EMPTY; groups])
@@ -86,7 +108,7 @@ fn main() {
                 (size_of_val(wide.nodes()) + size_of_val(wide.groups())) as f64 / n.max(1) as f64;
         }
         println!(
-            "{path}: {n} triangles, {bytes:.1} B/tri, binary SAH cost {sah:.3}; wall ms: binary {:.1}, collapse {:.1}, total {:.1}; CPU ms: binary {:.1}, collapse {:.1}, total {:.1}",
+            "{path}: {n} triangles, {bytes:.1} B/tri, binary SAH cost {sah:.3}, tree {print:016x}; wall ms: binary {:.1}, collapse {:.1}, total {:.1}; CPU ms: binary {:.1}, collapse {:.1}, total {:.1}",
             binary_t.wall * 1e3,
             wide_t.wall * 1e3,
             (binary_t.wall + wide_t.wall) * 1e3,

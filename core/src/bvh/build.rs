@@ -8,11 +8,11 @@
 //! give the same tree. The split itself (binning, the SAH, partitioning) is [`super::sah`].
 
 use super::node::BvhNode;
-use super::sah::{BIN_SETS, BinSets, UNUSED_BIN, best_sah_split, partition, range_bounds};
+use super::sah::{BIN_SETS, BinSets, UNUSED_SET, best_sah_split, partition, range_bounds};
 use super::scratch::{Indexed, PrimRef, Refs, Scratch, scratch_capacity};
 use super::{
-    BIN_COUNT, BvhError, DEFAULT_MAX_LEAF_SIZE, INTERSECTION_COST, MAX_DEPTH, MAX_PRIMITIVES,
-    index_capacity, node_capacity,
+    BvhError, DEFAULT_MAX_LEAF_SIZE, INTERSECTION_COST, MAX_DEPTH, MAX_PRIMITIVES, index_capacity,
+    node_capacity,
 };
 use crate::aabb::Aabb;
 use crate::error::{CapacityError, NonFiniteError, Storage};
@@ -117,7 +117,7 @@ impl BuildWorkspace {
         };
         Self {
             tasks: [UNUSED_TASK; MAX_DEPTH + 1],
-            bins: [[[UNUSED_BIN; BIN_COUNT]; 3]; BIN_SETS],
+            bins: [UNUSED_SET; BIN_SETS],
         }
     }
 }

@@ -26,8 +26,77 @@ const fn bin_count(n: usize) -> usize {
     if k > BIN_COUNT { BIN_COUNT } else { k }
 }
 
+/// One set of bins along the three axes: per axis and bin the lower and upper corner of the
+/// bin's box and the bin's primitive count. Boxes and counts are kept apart so that a box is
+/// 32 bytes on x86-64 (its address a shift of the bin index) and a count one `u32` increment.
+#[derive(Clone, Copy)]
+pub(super) struct BinSet {
+    boxes: [[[Corner; 2]; BIN_COUNT]; 3],
+    counts: [[u32; BIN_COUNT]; 3],
+}
+
 /// The bins of one node, kept by the split loop across nodes (cleared per node as far as used).
-pub(super) type BinSets = [[[Bin; BIN_COUNT]; 3]; BIN_SETS];
+pub(super) type BinSets = [BinSet; BIN_SETS];
+
+/// A set of bins before its first use: all bits zero (so that a fresh
+/// [`super::BuildWorkspace`] is zeroed memory, not a copy of a constant); every bin in use is
+/// emptied first ([`BinSet::clear`]).
+pub(super) const UNUSED_SET: BinSet = BinSet {
+    boxes: [[[Corner::ZERO; 2]; BIN_COUNT]; 3],
+    counts: [[0; BIN_COUNT]; 3],
+};
+
+impl BinSet {
+    /// Empties the first `count` bins of every axis.
+    #[inline(always)]
+    fn clear(&mut self, count: usize) {
+        for (boxes, counts) in self.boxes.iter_mut().zip(&mut self.counts) {
+            for (b, n) in boxes.iter_mut().zip(counts.iter_mut()).take(count) {
+                *b = [Corner::INFINITY, Corner::NEG_INFINITY];
+                *n = 0;
+            }
+        }
+    }
+
+    /// Adds the box `lo, hi` to bin `bins[axis]` of each axis. The builder only sees finite
+    /// coordinates (validated), so `min`/`max` are one vector instruction each.
+    #[inline(always)]
+    fn add(&mut self, bins: [usize; 3], lo: Corner, hi: Corner) {
+        for ((boxes, counts), b) in self.boxes.iter_mut().zip(&mut self.counts).zip(bins) {
+            // `b < BIN_COUNT`, a power of two: the mask changes nothing but proves the index
+            // in range.
+            let b = b & (BIN_COUNT - 1);
+            let corners = &mut boxes[b];
+            corners[0] = corners[0].min(lo);
+            corners[1] = corners[1].max(hi);
+            counts[b] += 1;
+        }
+    }
+
+    /// Adds the first `count` bins of `other` into this set's.
+    fn merge(&mut self, other: &Self, count: usize) {
+        for axis in 0..3 {
+            for k in 0..count.min(BIN_COUNT) {
+                let [lo, hi] = other.boxes[axis][k];
+                let corners = &mut self.boxes[axis][k];
+                corners[0] = corners[0].min(lo);
+                corners[1] = corners[1].max(hi);
+                self.counts[axis][k] += other.counts[axis][k];
+            }
+        }
+    }
+
+    /// Bin `k` of `axis` as a box with its count.
+    #[inline(always)]
+    fn bin(&self, axis: usize, k: usize) -> Bin {
+        let [lo, hi] = self.boxes[axis][k & (BIN_COUNT - 1)];
+        Bin {
+            lo,
+            hi,
+            count: self.counts[axis][k & (BIN_COUNT - 1)],
+        }
+    }
+}
 
 /// Maps a centre to its bin along each axis at once. Shared by binning and partitioning so
 /// both agree bit for bit. Per axis: `(c − lo)·scale` clamped to `[0, last]` in `f32` (NaN
@@ -69,6 +138,27 @@ impl Binner {
         })
     }
 
+    /// The split "the bin along `axis` is below `split`" as lane limits for [`Self::goes_left`]:
+    /// `split` in lane `axis`, NaN in the others (every comparison with NaN is false).
+    fn limit(&self, axis: usize, split: usize) -> Corner {
+        let mut limit = Corner::NAN;
+        if let Some(lane) = limit.as_mut().get_mut(axis) {
+            *lane = split as f32;
+        }
+        limit
+    }
+
+    /// Whether centre `c` goes left of the split that `limit` ([`Self::limit`]) stands for:
+    /// exactly when [`Self::bins`] of `c` along the split's axis is below the split, computed
+    /// without the bin index. With `x = (c − lo)·scale` (the same operations, so the same bits
+    /// as in [`Self::bins`]), an integer split `1 ≤ s ≤ last` and `y = min(max(x, 0), last)`
+    /// the clamped value truncated there: a NaN or negative `x` gives bin 0 < s and `x ≥ s` is
+    /// false; otherwise `trunc(y) < s ⟺ y < s` (as `y ≥ 0`) `⟺ x < s` (as `s ≤ last`).
+    #[inline(always)]
+    fn goes_left(&self, c: Corner, limit: Corner) -> bool {
+        !((c - self.lo) * self.scale).cmpge(limit).any()
+    }
+
     /// The bin of centre `c` along each axis.
     #[inline(always)]
     fn bins(&self, c: Corner) -> [usize; 3] {
@@ -84,31 +174,22 @@ impl Binner {
     }
 }
 
+/// A box with the number of primitives in it: the sweep's running sums over bins.
 #[derive(Clone, Copy)]
-pub(super) struct Bin {
+struct Bin {
     lo: Corner,
     hi: Corner,
     count: u32,
 }
 
-pub(super) const EMPTY_BIN: Bin = Bin {
+const EMPTY_BIN: Bin = Bin {
     lo: Corner::INFINITY,
     hi: Corner::NEG_INFINITY,
     count: 0,
 };
 
-/// A bin's value before its first use: all bits zero (so that a fresh
-/// [`super::BuildWorkspace`] is zeroed memory, not a copy of a constant); every bin in use is
-/// set to [`EMPTY_BIN`] first.
-pub(super) const UNUSED_BIN: Bin = Bin {
-    lo: Corner::ZERO,
-    hi: Corner::ZERO,
-    count: 0,
-};
-
 impl Bin {
-    /// Adds a box (`lo`, `hi`) holding `count` primitives. The builder only sees finite
-    /// coordinates (validated), so `min`/`max` are one vector instruction each.
+    /// Adds a box (`lo`, `hi`) holding `count` primitives (finite coordinates).
     #[inline(always)]
     fn add(&mut self, lo: Corner, hi: Corner, count: u32) {
         self.lo = self.lo.min(lo);
@@ -137,6 +218,8 @@ pub(super) struct Split {
     axis: usize,
     binner: Binner,
     split: usize,
+    /// [`Binner::limit`] of the split.
+    limit: Corner,
     /// The SAH numerator of the split (see [`best_sah_split`]).
     pub(super) cost: f32,
     /// Box of the left side.
@@ -146,18 +229,33 @@ pub(super) struct Split {
 }
 
 impl Split {
+    /// The split of `binner`'s bins along `axis` below bin `split`.
+    fn new(binner: Binner, axis: usize, split: usize) -> Self {
+        Self {
+            axis,
+            binner,
+            split,
+            limit: binner.limit(axis, split),
+            cost: 0.0,
+            left: Aabb::EMPTY,
+            right: Aabb::EMPTY,
+        }
+    }
+
     /// Whether element `k` of `refs` goes left, and its centre.
     #[inline(always)]
-    fn classify<R: Refs>(&self, refs: &R, k: usize) -> (bool, Corner) {
+    fn classify<R: Refs + ?Sized>(&self, refs: &R, k: usize) -> (bool, Corner) {
         let (lo, hi) = refs.get(k);
         let c = centre(lo, hi);
-        let bin = self.binner.bins(c).get(self.axis).copied().unwrap_or(0);
-        (bin < self.split, c)
+        (self.binner.goes_left(c, self.limit), c)
     }
 }
 
 /// Box and centroid box of a run of primitives.
-pub(super) fn range_bounds<R: Refs>(refs: &R, range: core::ops::Range<usize>) -> (Aabb, Aabb) {
+pub(super) fn range_bounds<R: Refs + ?Sized>(
+    refs: &R,
+    range: core::ops::Range<usize>,
+) -> (Aabb, Aabb) {
     let (mut lo, mut hi) = (Corner::INFINITY, Corner::NEG_INFINITY);
     let (mut clo, mut chi) = (Corner::INFINITY, Corner::NEG_INFINITY);
     refs.for_each(range, |plo, phi| {
@@ -176,7 +274,7 @@ pub(super) fn range_bounds<R: Refs>(refs: &R, range: core::ops::Range<usize>) ->
 /// cheapest split with both sides non-empty. The cost is the SAH numerator (not divided by the
 /// parent's area, so that zero-area parents need no special case):
 /// `TRAVERSAL_COST·A + primitive_cost·(A_L·N_L + A_R·N_R)`.
-pub(super) fn best_sah_split<R: Refs>(
+pub(super) fn best_sah_split<R: Refs + ?Sized>(
     refs: &R,
     sets: &mut BinSets,
     range: core::ops::Range<usize>,
@@ -185,74 +283,63 @@ pub(super) fn best_sah_split<R: Refs>(
     primitive_cost: f32,
 ) -> Option<Split> {
     let bin_count = bin_count(range.len());
+    let range_len = range.len();
     // An axis without extent bins everything into bin 0 and is skipped below.
     let binner = Binner::new(centroids, bin_count)?;
     // Consecutive primitives of a large node go to alternate sets of bins, merged after the
     // loop, so that two primitives in one bin do not wait for each other's update; a small
     // node uses one set (clearing and merging a second would cost more than it saves). Only
     // the bins in use are cleared (most nodes are small).
-    let set_count = if range.len() >= ALTERNATE_SETS_FROM {
-        BIN_SETS
-    } else {
-        1
-    };
-    for axis_bins in sets.iter_mut().take(set_count).flatten() {
-        for bin in axis_bins.iter_mut().take(bin_count) {
-            *bin = EMPTY_BIN;
+    let [first, rest @ ..] = sets;
+    let second = rest
+        .first_mut()
+        .filter(|_| range.len() >= ALTERNATE_SETS_FROM);
+    first.clear(bin_count);
+    match second {
+        Some(second) => {
+            second.clear(bin_count);
+            refs.for_each_pair(range, |(alo, ahi), b| {
+                first.add(binner.bins(centre(alo, ahi)), alo, ahi);
+                if let Some((blo, bhi)) = b {
+                    second.add(binner.bins(centre(blo, bhi)), blo, bhi);
+                }
+            });
+            first.merge(second, bin_count);
         }
+        None => refs.for_each(range, |lo, hi| {
+            first.add(binner.bins(centre(lo, hi)), lo, hi)
+        }),
     }
-    let mut n = 0usize;
-    let set_mask = set_count - 1;
-    refs.for_each(range, |lo, hi| {
-        let c = centre(lo, hi);
-        let set = &mut sets[n & set_mask & (BIN_SETS - 1)];
-        n += 1;
-        for (axis_bins, b) in set.iter_mut().zip(binner.bins(c)) {
-            // `b < bin_count ≤ BIN_COUNT`, a power of two: the mask changes nothing but
-            // proves the index in range.
-            axis_bins[b & (BIN_COUNT - 1)].add(lo, hi, 1);
-        }
-    });
-    let (bins, rest) = sets.split_at_mut(1);
-    let bins = &mut bins[0];
-    for set in rest.iter().take(set_count - 1) {
-        for (axis_bins, other) in bins.iter_mut().zip(set) {
-            for (bin, o) in axis_bins.iter_mut().zip(other).take(bin_count) {
-                bin.add(o.lo, o.hi, o.count);
-            }
-        }
-    }
+    let bins = &*first;
     let mut best: Option<Split> = None;
     for axis in 0..3 {
         if !binner.active[axis] {
             continue;
         }
-        let bins = &bins[axis];
         // Right-to-left sweep: area·count of bins[k..].
         let mut right_cost = [0.0f32; BIN_COUNT];
         let mut acc = EMPTY_BIN;
         for k in (1..bin_count).rev() {
-            acc.add(bins[k].lo, bins[k].hi, bins[k].count);
+            let bin = bins.bin(axis, k);
+            acc.add(bin.lo, bin.hi, bin.count);
             right_cost[k] = acc.area() * acc.count as f32;
         }
         let mut left = EMPTY_BIN;
-        let total: u32 = bins.iter().take(bin_count).map(|b| b.count).sum();
-        for k in 1..bin_count {
-            left.add(bins[k - 1].lo, bins[k - 1].hi, bins[k - 1].count);
+        let total = range_len as u32;
+        for (k, &right_cost) in right_cost.iter().enumerate().take(bin_count).skip(1) {
+            let bin = bins.bin(axis, k - 1);
+            left.add(bin.lo, bin.hi, bin.count);
             if left.count == 0 || left.count == total {
                 continue;
             }
             let cost = TRAVERSAL_COST * parent_area
-                + primitive_cost * (left.area() * left.count as f32 + right_cost[k]);
+                + primitive_cost * (left.area() * left.count as f32 + right_cost);
             // Strict `<`: ties keep the first (lowest axis, lowest bin) split, deterministic.
             if best.as_ref().is_none_or(|b| cost < b.cost) {
                 best = Some(Split {
-                    axis,
-                    binner,
-                    split: k,
                     cost,
                     left: left.aabb(),
-                    right: Aabb::EMPTY,
+                    ..Split::new(binner, axis, k)
                 });
             }
         }
@@ -260,7 +347,8 @@ pub(super) fn best_sah_split<R: Refs>(
     // The right box of the chosen split, from its bins (not kept per candidate: stack).
     if let Some(b) = best.as_mut() {
         let mut right = EMPTY_BIN;
-        for bin in bins[b.axis].get(b.split..bin_count).unwrap_or(&[]) {
+        for k in b.split..bin_count {
+            let bin = bins.bin(b.axis, k);
             right.add(bin.lo, bin.hi, bin.count);
         }
         b.right = right.aabb();
@@ -272,6 +360,23 @@ pub(super) fn best_sah_split<R: Refs>(
 /// side is not specified but deterministic); returns the left count and both centroid boxes.
 /// Each primitive is classified once; only misplaced pairs are swapped.
 pub(super) fn partition<R: Refs>(
+    refs: &mut R,
+    range: core::ops::Range<usize>,
+    split: &Split,
+) -> (u32, Aabb, Aabb) {
+    // A run of scratch records is partitioned as a slice: no offset per element.
+    match refs.records_mut(range.clone()) {
+        Some(run) => {
+            let len = run.len();
+            partition_in(run, 0..len, split)
+        }
+        None => partition_in(refs, range, split),
+    }
+}
+
+/// [`partition`] on one view.
+#[inline(always)]
+fn partition_in<R: Refs + ?Sized>(
     refs: &mut R,
     range: core::ops::Range<usize>,
     split: &Split,
@@ -335,14 +440,7 @@ mod tests {
         }
         let centroids = Aabb::new(Vec3::ZERO, Vec3::new(39.0, 0.0, 0.0));
         let binner = Binner::new(&centroids, 16).unwrap();
-        let split = Split {
-            axis: 0,
-            binner,
-            split: 5,
-            cost: 0.0,
-            left: Aabb::EMPTY,
-            right: Aabb::EMPTY,
-        };
+        let split = Split::new(binner, 0, 5);
         let mut view = Scratch {
             refs: &mut refs_store,
             offset: 0,
@@ -359,5 +457,80 @@ mod tests {
         assert!(seen.iter().all(|&s| s), "a permutation");
         assert_eq!((lc.min.x, lc.max.x), (0.0, 12.0));
         assert_eq!((rc.min.x, rc.max.x), (13.0, 39.0));
+    }
+
+    /// The bin index along each axis, written from [`Binner`]'s contract (clamped to
+    /// `[0, last]`, NaN to 0, truncated) in scalar `f32`, not with its code.
+    fn bin_of(binner: &Binner, c: Vec3, axis: usize) -> usize {
+        let x = (c[axis] - binner.lo[axis]) * binner.scale[axis];
+        let x = if x.is_nan() || x < 0.0 { 0.0 } else { x };
+        x.min(binner.last[axis]) as usize
+    }
+
+    #[test]
+    fn goes_left_is_bin_below_split_for_every_centre() {
+        // Centroid boxes with ordinary, huge, tiny (subnormal extent: the scale overflows to
+        // infinity) and flat extents; centres inside, on and outside them, and at the extremes.
+        let boxes = [
+            Aabb::new(Vec3::new(-1.0, 0.0, 2.0), Vec3::new(3.0, 0.5, 2.0)),
+            Aabb::new(Vec3::splat(-3.0e38), Vec3::splat(3.0e38)),
+            Aabb::new(Vec3::ZERO, Vec3::new(1.0e-45, 3.0e-39, 1.0e-30)),
+            Aabb::new(Vec3::splat(1.0e30), Vec3::new(1.0e30, 2.0e30, 1.0e30)),
+        ];
+        let mut seed = 0x2545_f491_u32;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        let mut checked = 0;
+        for b in &boxes {
+            for count in [2, 5, 9, BIN_COUNT] {
+                let Some(binner) = Binner::new(b, count) else {
+                    continue;
+                };
+                let mut centres = [
+                    b.min,
+                    b.max,
+                    b.center(),
+                    Vec3::splat(f32::MAX),
+                    Vec3::splat(-f32::MAX),
+                    Vec3::ZERO,
+                    Vec3::splat(-0.0),
+                    Vec3::splat(f32::MIN_POSITIVE),
+                ]
+                .to_vec();
+                for _ in 0..200 {
+                    // A point of the box at a random fraction, or a random finite float.
+                    let t =
+                        Vec3::new(next() as f32, next() as f32, next() as f32) / u32::MAX as f32;
+                    centres.push(b.min + (b.max - b.min) * t);
+                    let mut bits = || loop {
+                        let f = f32::from_bits(next());
+                        if f.is_finite() {
+                            break f;
+                        }
+                    };
+                    centres.push(Vec3::new(bits(), bits(), bits()));
+                }
+                for axis in (0..3).filter(|&a| binner.active[a]) {
+                    for split in 1..count {
+                        let limit = binner.limit(axis, split);
+                        for &c in &centres {
+                            let want = bin_of(&binner, c, axis) < split;
+                            assert_eq!(binner.bins(corner(c))[axis], bin_of(&binner, c, axis));
+                            assert_eq!(
+                                binner.goes_left(corner(c), limit),
+                                want,
+                                "{c:?} axis {axis} split {split} of {count} over {b:?}"
+                            );
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 100_000, "{checked}");
     }
 }

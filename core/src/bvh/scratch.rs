@@ -140,6 +140,89 @@ pub(super) trait Refs {
             f(lo, hi);
         }
     }
+
+    /// `f(a, Some(b))` on the boxes of elements `2k, 2k + 1` of `range` (counted from its
+    /// start), in order, then `f(last, None)` when `range` has an odd length.
+    #[inline(always)]
+    fn for_each_pair(&self, range: core::ops::Range<usize>, f: impl FnMut(Box2, Option<Box2>)) {
+        pairs_by_get(self, range, f);
+    }
+
+    /// The elements of `range` as a run of records, when this view keeps them as such.
+    #[inline(always)]
+    fn records_mut(&mut self, range: core::ops::Range<usize>) -> Option<&mut [PrimRef]> {
+        let _ = range;
+        None
+    }
+}
+
+/// A box as [`Refs`] hands it out: its lower and upper corner.
+pub(super) type Box2 = (Corner, Corner);
+
+/// [`Refs::for_each_pair`] element by element through [`Refs::get`].
+#[inline(always)]
+fn pairs_by_get<R: Refs + ?Sized>(
+    refs: &R,
+    range: core::ops::Range<usize>,
+    mut f: impl FnMut(Box2, Option<Box2>),
+) {
+    let mut k = range.start;
+    while k < range.end {
+        let b = (k + 1 < range.end).then(|| refs.get(k + 1));
+        f(refs.get(k), b);
+        k += 2;
+    }
+}
+
+/// A run of records, renumbered from 0 (element `k` outside it: `NaN` corners).
+impl Refs for [PrimRef] {
+    #[inline(always)]
+    fn get(&self, k: usize) -> (Corner, Corner) {
+        self.get(k)
+            .map_or((Corner::NAN, Corner::NAN), PrimRef::corners)
+    }
+
+    #[inline(always)]
+    fn swap(&mut self, i: usize, j: usize) {
+        if i < self.len() && j < self.len() {
+            <[PrimRef]>::swap(self, i, j);
+        }
+    }
+
+    #[inline(always)]
+    fn for_each(&self, range: core::ops::Range<usize>, mut f: impl FnMut(Corner, Corner)) {
+        match self.get(range.clone()) {
+            Some(run) => run.iter().for_each(|r| {
+                let (lo, hi) = r.corners();
+                f(lo, hi);
+            }),
+            None => range.for_each(|k| {
+                let (lo, hi) = Refs::get(self, k);
+                f(lo, hi);
+            }),
+        }
+    }
+
+    #[inline(always)]
+    fn for_each_pair(&self, range: core::ops::Range<usize>, mut f: impl FnMut(Box2, Option<Box2>)) {
+        let Some(run) = self.get(range.clone()) else {
+            return pairs_by_get(self, range, f);
+        };
+        let mut pairs = run.chunks_exact(2);
+        for pair in &mut pairs {
+            if let [a, b] = pair {
+                f(a.corners(), Some(b.corners()));
+            }
+        }
+        if let [last] = pairs.remainder() {
+            f(last.corners(), None);
+        }
+    }
+
+    #[inline(always)]
+    fn records_mut(&mut self, range: core::ops::Range<usize>) -> Option<&mut [PrimRef]> {
+        self.get_mut(range)
+    }
 }
 
 /// The source read through the index array (no scratch).
@@ -171,32 +254,38 @@ pub(super) struct Scratch<'a> {
     pub(super) offset: usize,
 }
 
+impl Scratch<'_> {
+    /// `range` in the records' numbering. A bound before the records maps past them, so such a
+    /// range visits no element (the builder never asks for one: a job's ranges lie in its run).
+    #[inline(always)]
+    fn local(&self, range: core::ops::Range<usize>) -> core::ops::Range<usize> {
+        let past = self.refs.len().saturating_add(1);
+        let shift = |k: usize| k.checked_sub(self.offset).unwrap_or(past);
+        shift(range.start)..shift(range.end)
+    }
+}
+
 impl Refs for Scratch<'_> {
     #[inline(always)]
     fn get(&self, k: usize) -> (Corner, Corner) {
-        k.checked_sub(self.offset)
-            .and_then(|k| self.refs.get(k))
-            .map_or((Corner::NAN, Corner::NAN), PrimRef::corners)
+        let k = k.checked_sub(self.offset).unwrap_or(usize::MAX);
+        Refs::get(&*self.refs, k)
     }
 
-    /// The records of `range` as one slice (an element outside the records: `NaN` corners, as
-    /// [`Refs::get`]).
     #[inline(always)]
-    fn for_each(&self, range: core::ops::Range<usize>, mut f: impl FnMut(Corner, Corner)) {
-        let (start, end) = (
-            range.start.wrapping_sub(self.offset),
-            range.end.wrapping_sub(self.offset),
-        );
-        match self.refs.get(start..end) {
-            Some(run) => run.iter().for_each(|r| {
-                let (lo, hi) = r.corners();
-                f(lo, hi);
-            }),
-            None => range.for_each(|k| {
-                let (lo, hi) = self.get(k);
-                f(lo, hi);
-            }),
-        }
+    fn for_each(&self, range: core::ops::Range<usize>, f: impl FnMut(Corner, Corner)) {
+        self.refs.for_each(self.local(range), f);
+    }
+
+    #[inline(always)]
+    fn for_each_pair(&self, range: core::ops::Range<usize>, f: impl FnMut(Box2, Option<Box2>)) {
+        self.refs.for_each_pair(self.local(range), f);
+    }
+
+    #[inline(always)]
+    fn records_mut(&mut self, range: core::ops::Range<usize>) -> Option<&mut [PrimRef]> {
+        let range = self.local(range);
+        self.refs.get_mut(range)
     }
 
     #[inline(always)]
@@ -204,9 +293,7 @@ impl Refs for Scratch<'_> {
         let (Some(i), Some(j)) = (i.checked_sub(self.offset), j.checked_sub(self.offset)) else {
             return;
         };
-        if i < self.refs.len() && j < self.refs.len() {
-            self.refs.swap(i, j);
-        }
+        Refs::swap(&mut *self.refs, i, j);
     }
 }
 

@@ -617,6 +617,62 @@ fn scratch_build_gives_the_same_tree() {
     }
 }
 
+/// Builds at the ends of the finite range (coordinates up to `3·10³⁸`, near `f32::MAX`, and
+/// down to `10⁻³⁸`, where boxes' extents and the binning scale are subnormal or overflow) and
+/// of all-equal centroids give a valid tree: every primitive in exactly one leaf, every box
+/// containing its children's boxes and its leaves' triangles (the oracle: the triangles' own
+/// vertices), leaves within the size limit.
+#[test]
+fn huge_tiny_and_coincident_inputs_build_valid_trees() {
+    let mut cases = Vec::new();
+    for scale in [3.0e37f32, 1.0e-38, 1.0e-44] {
+        let (pos, tris) = lcg_soup(400, 9, 10.0, 1.0);
+        cases.push((pos.iter().map(|p| *p * scale).collect::<Vec<_>>(), tris));
+    }
+    let (pos, _) = soup(1, 10);
+    cases.push((pos, vec![[0, 1, 2]; 70]));
+    for (k, (pos, tris)) in cases.iter().enumerate() {
+        let mesh = TriangleMesh::new(pos, tris);
+        let opts = BuildOptions {
+            exclude_non_finite: true,
+            ..BuildOptions::default()
+        };
+        let mut scratch = vec![PrimRef::EMPTY; scratch_capacity(mesh.len())];
+        let bvh = build_scratch(&mesh, &mut scratch, &opts).unwrap();
+        let mut seen = vec![0u32; mesh.len()];
+        for (node, range) in preorder(&bvh) {
+            let Some(range) = range else { continue };
+            assert!(range.len() <= DEFAULT_MAX_LEAF_SIZE as usize, "case {k}");
+            for &p in &bvh.indices()[range] {
+                seen[p as usize] += 1;
+                for &v in &tris[p as usize] {
+                    assert!(
+                        node.contains_point(pos[v as usize]),
+                        "case {k}: {p} outside"
+                    );
+                }
+            }
+        }
+        let usable = (0..mesh.len())
+            .filter(|&i| {
+                let b = mesh.primitive_bounds(i);
+                crate::mesh::is_usable(&b) && b.center().is_finite()
+            })
+            .count();
+        assert_eq!(seen.iter().filter(|&&c| c == 1).count(), usable, "case {k}");
+        assert!(seen.iter().all(|&c| c <= 1), "case {k}");
+        for n in bvh.nodes() {
+            if let Some((l, r)) = n.children() {
+                let b = n.bounds();
+                for c in [l, r] {
+                    let c = bvh.nodes()[c as usize].bounds();
+                    assert_eq!(b.union(c), b, "case {k}: child outside its parent");
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn too_small_scratch_is_refused_before_writing() {
     let (pos, tris) = soup(20, 7);
