@@ -9,14 +9,16 @@
 
 use super::node::BvhNode;
 use super::sah::{BIN_SETS, BinSets, UNUSED_SET, best_sah_split, partition, range_bounds};
-use super::scratch::{Indexed, PrimRef, Refs, Scratch, scratch_capacity};
+use super::scratch::{
+    Corner, Indexed, PrimRef, Refs, Scratch, centre, corner, extend, point, scratch_capacity,
+};
 use super::{
     BvhError, DEFAULT_MAX_LEAF_SIZE, INTERSECTION_COST, MAX_DEPTH, MAX_PRIMITIVES, index_capacity,
     node_capacity,
 };
 use crate::aabb::Aabb;
 use crate::error::{CapacityError, NonFiniteError, Storage};
-use crate::mesh::{PrimitiveSource, is_usable};
+use crate::mesh::PrimitiveSource;
 use glam::Vec3;
 
 /// Depth from which nodes are split by count rather than by SAH: `MAX_DEPTH − 32`, so that the
@@ -184,6 +186,15 @@ pub(super) struct Usable {
     pub(super) centroids: Aabb,
 }
 
+/// The corners and centre of `b` when it can go into a tree (`is_usable(&b)` and a finite
+/// centre: finite, `min ≤ max` on every axis; the spare lane is 0 in all three), else `None`.
+#[inline(always)]
+fn usable_corners(b: &Aabb) -> Option<(Corner, Corner, Corner)> {
+    let (lo, hi) = (corner(b.min), corner(b.max));
+    let c = centre(lo, hi);
+    (lo.is_finite() && hi.is_finite() && lo.cmple(hi).all() && c.is_finite()).then_some((lo, hi, c))
+}
+
 /// Checks the storage and every primitive (nothing written but what `usable` writes); calls
 /// `usable(k, i, bounds, centroid)` for the `k`-th usable primitive `i`; returns what it
 /// found of the usable primitives.
@@ -200,16 +211,18 @@ fn validate<S: PrimitiveSource + ?Sized>(
     }
     CapacityError::check(Storage::BvhNodes, node_capacity(n), nodes.len())?;
     CapacityError::check(Storage::BvhIndices, index_capacity(n), indices.len())?;
-    let mut root_bounds = Aabb::EMPTY;
-    let mut root_centroids = Aabb::EMPTY;
+    // The root's box and centroid box in the builder's vector corners: the same values as
+    // `Aabb::union` / `grow` and `Aabb::center` lane by lane (finite coordinates only).
+    let (mut lo, mut hi) = (Corner::INFINITY, Corner::NEG_INFINITY);
+    let (mut clo, mut chi) = (Corner::INFINITY, Corner::NEG_INFINITY);
     let mut count = 0u32;
     for i in 0..n {
         let b = source.primitive_bounds(i);
-        let c = b.center();
-        if is_usable(&b) && c.is_finite() {
-            root_bounds = root_bounds.union(b);
-            root_centroids = root_centroids.grow(c);
-            usable(count as usize, i, b, c);
+        if let Some((blo, bhi, c)) = usable_corners(&b) {
+            lo = lo.min(blo);
+            hi = hi.max(bhi);
+            extend(&mut clo, &mut chi, c);
+            usable(count as usize, i, b, point(c));
             count += 1;
         } else if !options.exclude_non_finite {
             return Err(NonFiniteError::primitive(i).into());
@@ -217,8 +230,8 @@ fn validate<S: PrimitiveSource + ?Sized>(
     }
     Ok(Usable {
         count,
-        bounds: root_bounds,
-        centroids: root_centroids,
+        bounds: Aabb::new(point(lo), point(hi)),
+        centroids: Aabb::new(point(clo), point(chi)),
     })
 }
 
@@ -236,8 +249,7 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
     }
     let mut k = 0usize;
     for i in 0..source.primitive_count() {
-        let b = source.primitive_bounds(i);
-        if !(is_usable(&b) && b.center().is_finite()) {
+        if usable_corners(&source.primitive_bounds(i)).is_none() {
             continue;
         }
         if let Some(slot) = indices.get_mut(k) {

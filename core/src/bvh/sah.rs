@@ -4,7 +4,7 @@
 use super::scratch::{Corner, Refs, centre, corner, extend, point};
 use super::{BIN_COUNT, TRAVERSAL_COST};
 use crate::aabb::Aabb;
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 /// Sets of bins filled alternately by the binning loop ([`best_sah_split`]): two on x86-64,
 /// one elsewhere (a microcontroller's stack is small and its loads do not overlap anyway).
@@ -32,7 +32,9 @@ const fn bin_count(n: usize) -> usize {
 #[derive(Clone, Copy)]
 pub(super) struct BinSet {
     boxes: [[[Corner; 2]; BIN_COUNT]; 3],
-    counts: [[u32; BIN_COUNT]; 3],
+    /// Counts below 2³¹ (at most [`super::MAX_PRIMITIVES`]): `i32` converts to `f32` in one
+    /// instruction.
+    counts: [[i32; BIN_COUNT]; 3],
 }
 
 /// The bins of one node, kept by the split loop across nodes (cleared per node as far as used).
@@ -86,15 +88,19 @@ impl BinSet {
         }
     }
 
-    /// Bin `k` of `axis` as a box with its count.
-    #[inline(always)]
-    fn bin(&self, axis: usize, k: usize) -> Bin {
-        let [lo, hi] = self.boxes[axis][k & (BIN_COUNT - 1)];
-        Bin {
-            lo,
-            hi,
-            count: self.counts[axis][k & (BIN_COUNT - 1)],
+    /// The union of bins `range` of `axis`.
+    fn union(&self, axis: usize, range: core::ops::Range<usize>) -> Aabb {
+        let (mut lo, mut hi) = (Corner::INFINITY, Corner::NEG_INFINITY);
+        for [blo, bhi] in self
+            .boxes
+            .get(axis)
+            .and_then(|b| b.get(range))
+            .unwrap_or(&[])
+        {
+            lo = lo.min(*blo);
+            hi = hi.max(*bhi);
         }
+        Aabb::new(point(lo), point(hi))
     }
 }
 
@@ -174,50 +180,63 @@ impl Binner {
     }
 }
 
-/// A box with the number of primitives in it: the sweep's running sums over bins.
+/// Running sums over bins along the three axes at once: per axis the union of the bins'
+/// boxes and their primitive count, the counts also as `f32` lanes x, y, z.
 #[derive(Clone, Copy)]
-struct Bin {
-    lo: Corner,
-    hi: Corner,
-    count: u32,
+struct Sums {
+    boxes: [[Corner; 2]; 3],
+    counts: [i32; 3],
+    /// `counts` as `f32` (each converted from the exact sum).
+    lanes: Vec4,
 }
 
-const EMPTY_BIN: Bin = Bin {
-    lo: Corner::INFINITY,
-    hi: Corner::NEG_INFINITY,
-    count: 0,
-};
+impl Sums {
+    const EMPTY: Self = Self {
+        boxes: [[Corner::INFINITY, Corner::NEG_INFINITY]; 3],
+        counts: [0; 3],
+        lanes: Vec4::ZERO,
+    };
 
-impl Bin {
-    /// Adds a box (`lo`, `hi`) holding `count` primitives (finite coordinates).
+    /// Adds bin `k` of every axis.
     #[inline(always)]
-    fn add(&mut self, lo: Corner, hi: Corner, count: u32) {
-        self.lo = self.lo.min(lo);
-        self.hi = self.hi.max(hi);
-        self.count += count;
-    }
-
-    /// Surface area of the box, 0 when empty.
-    #[inline(always)]
-    fn area(&self) -> f32 {
-        if self.count == 0 {
-            return 0.0;
+    fn add(&mut self, bins: &BinSet, k: usize) {
+        let k = k & (BIN_COUNT - 1);
+        for (sum, axis_bins) in self.boxes.iter_mut().zip(&bins.boxes) {
+            let [lo, hi] = axis_bins[k];
+            sum[0] = sum[0].min(lo);
+            sum[1] = sum[1].max(hi);
         }
-        let e = self.hi - self.lo;
-        2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+        for (sum, axis_counts) in self.counts.iter_mut().zip(&bins.counts) {
+            *sum += axis_counts[k];
+        }
+        let [n0, n1, n2] = self.counts;
+        self.lanes = Vec4::new(n0 as f32, n1 as f32, n2 as f32, 0.0);
     }
 
-    fn aabb(&self) -> Aabb {
-        Aabb::new(point(self.lo), point(self.hi))
+    /// The axes (bits 0, 1, 2) with a non-zero count (an integer converts to `0.0` only
+    /// from 0).
+    #[inline(always)]
+    fn non_empty(&self) -> u32 {
+        self.lanes.cmpne(Vec4::ZERO).bitmask()
+    }
+
+    /// Area·count of each axis's box (lanes x, y, z): the area `2·(eₓe_y + e_ye_z + e_zeₓ)`
+    /// of the extents `e`, 0 for an empty box.
+    #[inline(always)]
+    fn cost(&self) -> Vec4 {
+        let [e0, e1, e2] = self.boxes.map(|[lo, hi]| hi - lo);
+        let ex = Vec4::new(e0.x, e1.x, e2.x, 0.0);
+        let ey = Vec4::new(e0.y, e1.y, e2.y, 0.0);
+        let ez = Vec4::new(e0.z, e1.z, e2.z, 0.0);
+        let area = 2.0 * (ex * ey + ey * ez + ez * ex);
+        Vec4::select(self.lanes.cmpeq(Vec4::ZERO), Vec4::ZERO, area) * self.lanes
     }
 }
 
 /// The chosen SAH split: `bin(centroid[axis]) < split` goes left.
 #[derive(Clone, Copy)]
 pub(super) struct Split {
-    axis: usize,
     binner: Binner,
-    split: usize,
     /// [`Binner::limit`] of the split.
     limit: Corner,
     /// The SAH numerator of the split (see [`best_sah_split`]).
@@ -232,9 +251,7 @@ impl Split {
     /// The split of `binner`'s bins along `axis` below bin `split`.
     fn new(binner: Binner, axis: usize, split: usize) -> Self {
         Self {
-            axis,
             binner,
-            split,
             limit: binner.limit(axis, split),
             cost: 0.0,
             left: Aabb::EMPTY,
@@ -283,7 +300,6 @@ pub(super) fn best_sah_split<R: Refs + ?Sized>(
     primitive_cost: f32,
 ) -> Option<Split> {
     let bin_count = bin_count(range.len());
-    let range_len = range.len();
     // An axis without extent bins everything into bin 0 and is skipped below.
     let binner = Binner::new(centroids, bin_count)?;
     // Consecutive primitives of a large node go to alternate sets of bins, merged after the
@@ -311,49 +327,54 @@ pub(super) fn best_sah_split<R: Refs + ?Sized>(
         }),
     }
     let bins = &*first;
-    let mut best: Option<Split> = None;
+    // The SAH cost of every candidate plane `k` (below bin `k`) along the three axes at once
+    // (lanes x, y, z): a right-to-left sweep keeps area·count of the bins `k..`, a left-to-right
+    // one adds area·count of the bins `..k`. Every lane computes what a sweep of its axis
+    // alone would, operation for operation.
+    // (`k < bin_count ≤ BIN_COUNT`, a power of two: the masks below change no index but prove
+    // it in range.)
+    const K: usize = BIN_COUNT - 1;
+    let mut right_cost = [Vec4::ZERO; BIN_COUNT];
+    let mut right_non_empty = [0u32; BIN_COUNT];
+    let mut right = Sums::EMPTY;
+    for k in (1..bin_count).rev() {
+        right.add(bins, k);
+        right_cost[k & K] = right.cost();
+        right_non_empty[k & K] = right.non_empty();
+    }
+    let base = Vec4::splat(TRAVERSAL_COST * parent_area);
+    let factor = Vec4::splat(primitive_cost);
+    let active =
+        binner.active[0] as u32 | (binner.active[1] as u32) << 1 | (binner.active[2] as u32) << 2;
+    let mut cost = [Vec4::ZERO; BIN_COUNT];
+    let mut candidate = [0u32; BIN_COUNT];
+    let mut left = Sums::EMPTY;
+    for k in 1..bin_count {
+        left.add(bins, k - 1);
+        cost[k & K] = base + factor * (left.cost() + right_cost[k & K]);
+        // Both sides non-empty, on an axis with extent.
+        candidate[k & K] = left.non_empty() & right_non_empty[k & K] & active;
+    }
+    // The cheapest candidate in axis-major order. Strict `<`: ties keep the first (lowest
+    // axis, lowest bin) split, deterministic.
+    let mut best: Option<(usize, usize, f32)> = None;
     for axis in 0..3 {
-        if !binner.active[axis] {
-            continue;
-        }
-        // Right-to-left sweep: area·count of bins[k..].
-        let mut right_cost = [0.0f32; BIN_COUNT];
-        let mut acc = EMPTY_BIN;
-        for k in (1..bin_count).rev() {
-            let bin = bins.bin(axis, k);
-            acc.add(bin.lo, bin.hi, bin.count);
-            right_cost[k] = acc.area() * acc.count as f32;
-        }
-        let mut left = EMPTY_BIN;
-        let total = range_len as u32;
-        for (k, &right_cost) in right_cost.iter().enumerate().take(bin_count).skip(1) {
-            let bin = bins.bin(axis, k - 1);
-            left.add(bin.lo, bin.hi, bin.count);
-            if left.count == 0 || left.count == total {
+        for k in 1..bin_count {
+            if candidate[k & K] & (1 << axis) == 0 {
                 continue;
             }
-            let cost = TRAVERSAL_COST * parent_area
-                + primitive_cost * (left.area() * left.count as f32 + right_cost);
-            // Strict `<`: ties keep the first (lowest axis, lowest bin) split, deterministic.
-            if best.as_ref().is_none_or(|b| cost < b.cost) {
-                best = Some(Split {
-                    cost,
-                    left: left.aabb(),
-                    ..Split::new(binner, axis, k)
-                });
+            let c = cost[k & K][axis];
+            if best.is_none_or(|(_, _, b)| c < b) {
+                best = Some((axis, k, c));
             }
         }
     }
-    // The right box of the chosen split, from its bins (not kept per candidate: stack).
-    if let Some(b) = best.as_mut() {
-        let mut right = EMPTY_BIN;
-        for k in b.split..bin_count {
-            let bin = bins.bin(b.axis, k);
-            right.add(bin.lo, bin.hi, bin.count);
-        }
-        b.right = right.aabb();
-    }
-    best
+    best.map(|(axis, k, c)| Split {
+        cost: c,
+        left: bins.union(axis, 0..k),
+        right: bins.union(axis, k..bin_count),
+        ..Split::new(binner, axis, k)
+    })
 }
 
 /// Partitions `range` of `refs` in place by the split (left side first; the order within a
