@@ -358,9 +358,9 @@ pub(super) fn best_sah_split<R: Refs + ?Sized>(
     // The cheapest candidate in axis-major order. Strict `<`: ties keep the first (lowest
     // axis, lowest bin) split, deterministic.
     let mut best: Option<(usize, usize, f32)> = None;
-    for axis in 0..3 {
+    for (axis, bit) in [1u32, 2, 4].into_iter().enumerate() {
         for k in 1..bin_count {
-            if candidate[k & K] & (1 << axis) == 0 {
+            if candidate[k & K] & bit == 0 {
                 continue;
             }
             let c = cost[k & K][axis];
