@@ -165,18 +165,40 @@ impl MeshAccel {
         impl VariantVisitor for Batch<'_> {
             type Output = Vec<Answer>;
             fn visit<I: TriangleIntersector>(self, isect: &I) -> Vec<Answer> {
-                let (accel, rays) = (self.0, self.1);
-                let mut out = vec![None; rays.len()];
-                let mesh = accel.triangles();
-                // `out` has `rays.len()` entries, the batch query's only refusal; were it
-                // refused, the single-ray query gives the same answers.
-                if closest_batch_simd(&accel.wide, &mesh, isect, rays, &mut out, None).is_err() {
-                    return rays.iter().map(|r| accel.closest(isect, r, None)).collect();
-                }
-                out
+                self.0.closest_batch(isect, self.1, None)
             }
         }
         v.visit(Batch(self, rays))
+    }
+
+    /// The closest hits of `rays` with `isect`, by the batch query ([`closest_batch_simd`]:
+    /// coherent rays walked in packets): entry `i` is [`MeshAccel::closest`] of `rays[i]`, bit
+    /// for bit. `stats`, when given, is added to (a packet's node tests counted once).
+    pub fn closest_batch<I: TriangleIntersector>(
+        &self,
+        isect: &I,
+        rays: &[Ray],
+        mut stats: Option<&mut TraversalStats>,
+    ) -> Vec<Answer> {
+        let mut out = vec![None; rays.len()];
+        let mesh = self.triangles();
+        // `out` has `rays.len()` entries, the batch query's only refusal; were it refused,
+        // the single-ray query gives the same answers.
+        let batch = closest_batch_simd(
+            &self.wide,
+            &mesh,
+            isect,
+            rays,
+            &mut out,
+            stats.as_deref_mut(),
+        );
+        if batch.is_err() {
+            return rays
+                .iter()
+                .map(|r| self.closest(isect, r, stats.as_deref_mut()))
+                .collect();
+        }
+        out
     }
 
     /// Any hit with a variant chosen at run time.

@@ -1,7 +1,10 @@
 //! The scene's top-level BVH (`scene::top`) against the plain loop over every object it
 //! replaced: the same closest object (ties: the object declared last), the same `t`, the same
-//! occlusion, on every example scene and on 10 000 spheres with duplicates.
+//! occlusion, on every example scene and on 10 000 spheres with duplicates. Its batch query
+//! (a mesh walking its rays in packets) against its single-ray query, hit for hit, and the
+//! renderer's batched rows against single rays, pixel for pixel.
 
+use halfray::render::{Mode, RenderOptions, render};
 use halfray::scene::geom::QueryCtx;
 use halfray::scene::{Scene, load, parse};
 use halfray_core::{Ray, Vec3};
@@ -26,6 +29,7 @@ fn closest_by_loop(s: &Scene, ray: &Ray, ctx: &mut QueryCtx) -> Option<(u32, f32
 fn check(s: &Scene, what: &str, lo: Vec3, hi: Vec3, rays: usize) -> usize {
     let mut seed = 0x70_u64;
     let mut hits = 0;
+    let mut all = Vec::with_capacity(rays);
     for k in 0..rays {
         let o = lo + (hi - lo) * Vec3::new(lcg(&mut seed), lcg(&mut seed), lcg(&mut seed));
         let d = Vec3::new(lcg(&mut seed), lcg(&mut seed), lcg(&mut seed)) - 0.5;
@@ -47,6 +51,24 @@ fn check(s: &Scene, what: &str, lo: Vec3, hi: Vec3, rays: usize) -> usize {
             "{what}: {ray:?}"
         );
         hits += usize::from(want.is_some());
+        all.push(ray);
+    }
+    for force_intervals in [false, true] {
+        let mut ctx = QueryCtx {
+            force_intervals,
+            ..QueryCtx::default()
+        };
+        let batch = s.top.closest_batch(&s.objects, &all, &mut ctx);
+        assert_eq!(batch.len(), all.len());
+        for (ray, got) in all.iter().zip(&batch) {
+            let want = s.top.closest(&s.objects, ray, &mut ctx);
+            // Debug prints every field, `-0.0` apart from `0.0`: bit for bit.
+            assert_eq!(
+                format!("{got:?}"),
+                format!("{want:?}"),
+                "{what}, batch (intervals {force_intervals}): {ray:?}"
+            );
+        }
     }
     hits
 }
@@ -103,4 +125,73 @@ fn top_level_equals_the_object_loop_on_ten_thousand_spheres_with_ties() {
     assert!(s.objects.len() > 10_000);
     let hits = check(&s, "spheres", Vec3::splat(-14.0), Vec3::splat(14.0), 3000);
     assert!(hits > 1000, "{hits}");
+}
+
+/// Two instances of one mesh in the same place (the later declared must win every equal `t`)
+/// and a third moved by a transform, behind a plane: the batch query equals the single one.
+#[test]
+fn batch_equals_single_rays_on_coincident_mesh_instances() {
+    let dir = scenes_dir();
+    let text = format!(
+        "[camera]\neye = [0, 0, 6]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\nheight = 8\n\n\
+         [material.a]\ndiffuse = [1, 0, 0]\n\n[material.b]\ndiffuse = [0, 1, 0]\n\n\
+         [mesh.spot]\nfile = \"{}\"\n\n\
+         [[object]]\ntype = \"plane\"\npoint = [0, -1, 0]\nnormal = [0, 1, 0]\nmaterial = \"a\"\n\n\
+         [[object]]\ntype = \"mesh\"\nmesh = \"spot\"\nmaterial = \"a\"\n\n\
+         [[object]]\ntype = \"mesh\"\nmesh = \"spot\"\nmaterial = \"b\"\n\n\
+         [[object]]\ntype = \"mesh\"\nmesh = \"spot\"\nmaterial = \"b\"\n\
+         transform = [{{ rotate = {{ axis = [0, 1, 0], degrees = 30 }} }}, {{ translate = [0.3, 0, 0] }}]\n",
+        dir.join("meshes/spot.obj").display()
+    );
+    let s = parse(&text, &dir.join("coincident.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let hits = check(&s, "coincident", Vec3::splat(-2.0), Vec3::splat(2.0), 4000);
+    assert!(hits > 1000, "{hits}");
+}
+
+/// Rows traced as batches give the image of single rays, bit for bit, in every mode that
+/// batches, on every example scene (small, so that the test stays quick).
+#[test]
+fn batched_rows_render_the_single_ray_image() {
+    let mut n = 0;
+    for e in std::fs::read_dir(scenes_dir()).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_none_or(|x| x != "toml") || p.ends_with("bunny.toml") {
+            continue;
+        }
+        let mut s = load(&p).unwrap_or_else(|e| panic!("{e}"));
+        (s.camera.width, s.camera.height) = (48, 36);
+        for mode in [Mode::Color, Mode::Normal, Mode::Depth, Mode::Barycentric] {
+            let opts = RenderOptions {
+                mode,
+                ..RenderOptions::default()
+            };
+            let batched = render(&s, &opts);
+            let single = render(
+                &s,
+                &RenderOptions {
+                    single_rays: true,
+                    ..opts
+                },
+            );
+            let bits = |r: &halfray::render::Rendered| {
+                r.pixels
+                    .iter()
+                    .flat_map(|p| p.to_array().map(f32::to_bits))
+                    .collect::<Vec<u32>>()
+            };
+            assert!(
+                bits(&batched) == bits(&single),
+                "{} ({mode:?})",
+                p.display()
+            );
+            assert_eq!(
+                format!("{:?}", batched.counts),
+                format!("{:?}", single.counts),
+                "{} ({mode:?})",
+                p.display()
+            );
+        }
+        n += 1;
+    }
+    assert!(n >= 7);
 }

@@ -17,6 +17,7 @@ use crate::console::print_out;
 use crate::error::{Error, Result};
 use crate::limits::check_memory;
 use crate::outputs::{Named, refuse_inputs, reserve_outputs, write_together};
+use crate::scene::geom::SurfaceHit;
 use crate::scene::{self, Scene};
 use bound::PathBound;
 use glam::{Vec3, Vec4};
@@ -103,6 +104,10 @@ pub struct RenderArgs {
     /// No progress bar and no settings line (the summary line is still printed).
     #[arg(short, long)]
     pub quiet: bool,
+    /// Trace each primary ray alone instead of each row's as one batch (the same image; for
+    /// comparing their speed).
+    #[arg(long)]
+    pub single_rays: bool,
 }
 
 /// Render settings of the library entry point.
@@ -119,6 +124,9 @@ pub struct RenderOptions {
     /// Most samples per pixel (colour mode; 0 and 1 mean one): adaptive anti-aliasing, see
     /// [`antialias`].
     pub samples: u32,
+    /// Trace each primary ray alone instead of a row's as one batch (the same image; the heat
+    /// map and depth of field always do).
+    pub single_rays: bool,
 }
 
 /// A finished render.
@@ -131,7 +139,8 @@ pub struct Rendered {
     /// Per pixel, row-major from the top: linear RGB radiance (colour mode) or the debug
     /// value in `[0, 1]`, and coverage alpha (1 hit, 0 miss).
     pub pixels: Vec<Vec4>,
-    /// BVH nodes visited per pixel by the primary ray.
+    /// BVH nodes visited per pixel by the primary ray; counted where each ray is traced alone
+    /// (the heat map, depth of field, [`RenderOptions::single_rays`]), 0 in a batched row.
     pub nodes: Vec<u64>,
     /// Rays cast per kind.
     pub counts: RayCounts,
@@ -210,15 +219,23 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Rendered {
     } else {
         ProgressBar::hidden()
     };
+    // A row's primary rays as one batch, unless each pixel needs its own count of nodes (the
+    // heat map) or several rays (depth of field).
+    let through_lens = scene.camera.lens.is_some() && opts.mode == Mode::Color;
+    let batched = !opts.single_rays && opts.mode != Mode::Heatmap && !through_lens;
     let start = Instant::now();
     let rows: Vec<(Vec<PixelOut>, RayCounts)> = (0..h)
         .into_par_iter()
         .progress_with(bar.clone())
         .map(|j| {
             let mut counts = RayCounts::default();
-            let row = (0..w)
-                .map(|i| pixel(&tracer, opts, i, j, &mut counts))
-                .collect();
+            let row = if batched {
+                row_batched(&tracer, opts, j, &mut counts)
+            } else {
+                (0..w)
+                    .map(|i| pixel(&tracer, opts, i, j, &mut counts))
+                    .collect()
+            };
             (row, counts)
         })
         .collect();
@@ -298,6 +315,31 @@ fn pixel(
     }
 }
 
+/// Row `j`'s pixels, one primary ray through each centre, traced as one batch
+/// ([`Tracer::closest_batch`]): the pixels [`pixel`] gives without a lens, but no nodes counted.
+// Out of line: one call a row, and a symbol for profilers (`--toggle-collect`).
+#[inline(never)]
+fn row_batched(
+    tracer: &Tracer<'_>,
+    opts: &RenderOptions,
+    j: u32,
+    counts: &mut RayCounts,
+) -> Vec<PixelOut> {
+    let camera = &tracer.scene.camera;
+    let y = j as f32;
+    let rays: Vec<halfray_core::Ray> = (0..camera.width)
+        .map(|i| camera.ray_at(i as f32 + 0.5, y + 0.5))
+        .collect();
+    let hits = tracer.closest_batch(&rays, &mut tracer.ctx());
+    rays.iter()
+        .zip(hits)
+        .map(|(ray, hit)| {
+            counts.primary += 1;
+            shade_primary(tracer, opts, ray, hit, 0, counts)
+        })
+        .collect()
+}
+
 /// One primary ray.
 fn sample(
     tracer: &Tracer<'_>,
@@ -305,11 +347,23 @@ fn sample(
     ray: halfray_core::Ray,
     counts: &mut RayCounts,
 ) -> PixelOut {
-    let mode = opts.mode;
     counts.primary += 1;
     let mut ctx = tracer.ctx();
     let hit = tracer.closest(&ray, &mut ctx);
-    let nodes = ctx.stats.nodes_visited;
+    shade_primary(tracer, opts, &ray, hit, ctx.stats.nodes_visited, counts)
+}
+
+/// The pixel of the primary ray `ray` whose closest hit is `hit`, after `nodes` node visits.
+fn shade_primary(
+    tracer: &Tracer<'_>,
+    opts: &RenderOptions,
+    ray: &halfray_core::Ray,
+    hit: Option<SurfaceHit>,
+    nodes: u64,
+    counts: &mut RayCounts,
+) -> PixelOut {
+    let mode = opts.mode;
+    let mut ctx = tracer.ctx();
     let Some(sh) = hit else {
         return PixelOut {
             value: if mode == Mode::Color {
@@ -322,7 +376,7 @@ fn sample(
         };
     };
     let value = match mode {
-        Mode::Color => tracer.shade_bounded(&ray, &sh, 0, opts.bound, &mut ctx, counts),
+        Mode::Color => tracer.shade_bounded(ray, &sh, 0, opts.bound, &mut ctx, counts),
         Mode::Normal => sh.hit.normal * 0.5 + 0.5,
         Mode::Barycentric => sh.bary.unwrap_or(Vec3::splat(0.5)),
         Mode::Depth | Mode::Heatmap => Vec3::ZERO,
@@ -430,6 +484,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         force_all: args.force_all_effects,
         progress: !args.quiet,
         bound: PathBound::RENDER,
+        single_rays: args.single_rays,
     };
     let plan = EffectPlan::derive(&scene, opts.force_all);
     let estimate = budget::Estimate::of(&scene, &plan, opts.samples, opts.mode == Mode::Color);

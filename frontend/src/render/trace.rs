@@ -138,6 +138,14 @@ impl Tracer<'_> {
         self.scene.top.closest(objects, ray, ctx).map(|(_, h)| h)
     }
 
+    /// [`Tracer::closest`] of each of `rays`: the same answers, ray for ray, each mesh
+    /// walking the rays that reach it in packets ([`crate::scene::top::TopLevel::closest_batch`]).
+    pub fn closest_batch(&self, rays: &[Ray], ctx: &mut QueryCtx) -> Vec<Option<SurfaceHit>> {
+        let objects = &self.scene.objects;
+        let hits = self.scene.top.closest_batch(objects, rays, ctx);
+        hits.into_iter().map(|h| h.map(|(_, h)| h)).collect()
+    }
+
     /// Whether anything blocks `ray` in its interval.
     pub fn occluded(&self, ray: &Ray, ctx: &mut QueryCtx) -> bool {
         self.scene.top.occluded(&self.scene.objects, ray, ctx)

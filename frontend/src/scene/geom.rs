@@ -162,6 +162,10 @@ pub enum Geometry {
     Csg(CsgOp, Box<Node>, Box<Node>),
 }
 
+/// Fewest rays [`Node::closest_batch`] traces through a mesh as one batch; fewer go one by one
+/// (the batch's gathering costs more than its packets save). Two packets of eight rays.
+const MESH_BATCH_MIN_RAYS: usize = 16;
+
 /// A shape with its material and optional transform.
 #[derive(Clone, Debug)]
 pub struct Node {
@@ -293,6 +297,66 @@ impl Node {
         }
     }
 
+    /// A hit in this node's own space moved to its parent's.
+    fn in_parent(&self, h: SurfaceHit) -> SurfaceHit {
+        match &self.transform {
+            Some(t) => to_world(t, h),
+            None => h,
+        }
+    }
+
+    /// Whether this node's closest hit comes from the crossings of its whole line (CSG, and
+    /// every solid with `--force-all-effects`).
+    fn via_intervals(&self, ctx: &QueryCtx) -> bool {
+        matches!(self.shape, Geometry::Csg(..)) || (ctx.force_intervals && self.shape.is_solid())
+    }
+
+    /// The surface hit of a mesh hit `(hit, barycentrics, shading normal)` of this node.
+    fn mesh_surface(&self, (h, b, shading): (Hit, Vec3, Option<Vec3>)) -> SurfaceHit {
+        SurfaceHit {
+            shading,
+            ..self.surf(h, Some(b))
+        }
+    }
+
+    /// [`Node::closest`] of each of `rays`, into `out` (as many entries; the others are left
+    /// alone): the same answers. A mesh instance traces the rays its bounds may meet as one
+    /// batch, in its own space ([`crate::accel::MeshAccel::closest_batch`]: coherent rays
+    /// walked in packets); other shapes take them one by one.
+    pub fn closest_batch(&self, rays: &[Ray], ctx: &mut QueryCtx, out: &mut [Option<SurfaceHit>]) {
+        let mesh = match &self.shape {
+            Geometry::Mesh(m) if rays.len() >= MESH_BATCH_MIN_RAYS && !self.via_intervals(ctx) => m,
+            _ => {
+                for (o, ray) in out.iter_mut().zip(rays) {
+                    *o = self.closest(ray, ctx);
+                }
+                return;
+            }
+        };
+        let (slots, local): (Vec<&mut Option<SurfaceHit>>, Vec<Ray>) = out
+            .iter_mut()
+            .zip(rays)
+            .map(|(o, ray)| {
+                *o = None;
+                (o, ray)
+            })
+            .filter(|(_, ray)| self.may_hit(ray))
+            .map(|(o, ray)| {
+                let local = match &self.transform {
+                    Some(t) => t.ray_to_object(ray),
+                    None => *ray,
+                };
+                (o, local)
+            })
+            .unzip();
+        for (o, h) in slots
+            .into_iter()
+            .zip(mesh.closest_batch(&local, &mut ctx.stats))
+        {
+            *o = h.map(|h| self.in_parent(self.mesh_surface(h)));
+        }
+    }
+
     /// Whether anything is hit in `(t_min, t_max]` (shadow rays).
     pub fn occludes(&self, ray: &Ray, ctx: &mut QueryCtx) -> bool {
         if !self.may_hit(ray) {
@@ -318,9 +382,7 @@ impl Node {
     }
 
     fn closest_local(&self, ray: &Ray, ctx: &mut QueryCtx) -> Option<SurfaceHit> {
-        let via_intervals = matches!(self.shape, Geometry::Csg(..))
-            || (ctx.force_intervals && self.shape.is_solid());
-        if via_intervals {
+        if self.via_intervals(ctx) {
             let mut events = Vec::new();
             let line =
                 Ray::with_interval(ray.origin, ray.direction, f32::NEG_INFINITY, f32::INFINITY);
@@ -335,13 +397,7 @@ impl Node {
             return Some(self.surf(h, self.shape.barycentrics(&h)));
         }
         match &self.shape {
-            Geometry::Mesh(m) => {
-                let (h, b, shading) = m.closest(ray, &mut ctx.stats)?;
-                Some(SurfaceHit {
-                    shading,
-                    ..self.surf(h, Some(b))
-                })
-            }
+            Geometry::Mesh(m) => Some(self.mesh_surface(m.closest(ray, &mut ctx.stats)?)),
             _ => None,
         }
     }

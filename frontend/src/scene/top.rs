@@ -14,6 +14,17 @@ use halfray_core::prelude::*;
 use halfray_core::query::Query;
 use halfray_core::{Aabb, Ray};
 
+/// Rays of a batch whose walks [`TopLevel::closest_batch`] always lists: after them, when
+/// more than half of the rays so far met several objects, the rest take the single-ray query.
+/// A count of rays, enough for a stable share and small beside a row of pixels.
+const PROBED_RAYS: usize = 32;
+
+/// Most bounded objects for which [`TopLevel::closest_batch`] lists each ray's objects and
+/// batches them; over it (a crowd of instances, each reached by a few rays of a row) every
+/// ray takes the single-ray query. A count of objects: on the example scenes, batches pay
+/// with one large mesh and cost up to 9 % with 10 000 instances (`docs/performance.md`).
+const BATCHED_OBJECTS_MAX: usize = 64;
+
 /// The scene's objects arranged for queries.
 #[derive(Debug, Default)]
 pub struct TopLevel {
@@ -82,14 +93,7 @@ impl TopLevel {
         ray: &Ray,
         ctx: &mut QueryCtx,
     ) -> Option<(u32, SurfaceHit)> {
-        let mut listed: Option<(u32, SurfaceHit)> = None;
-        let mut r = *ray;
-        for &i in &self.unbounded {
-            if let Some(h) = objects[i as usize].closest(&r, ctx) {
-                r.t_max = h.hit.t;
-                listed = Some((i, h));
-            }
-        }
+        let (listed, r) = self.closest_listed(objects, ray, ctx);
         let Some(bvh) = &self.bvh else {
             return listed;
         };
@@ -105,15 +109,102 @@ impl TopLevel {
             )
             .map(|(_, x)| x);
         match (listed, boxed) {
-            (Some(a), Some(b)) => Some(
-                if b.1.hit.t < a.1.hit.t || (b.1.hit.t == a.1.hit.t && b.0 > a.0) {
-                    b
-                } else {
-                    a
-                },
-            ),
+            (Some(a), Some(b)) => Some(closer_or_later(a, b)),
             (a, b) => a.or(b),
         }
+    }
+
+    /// [`TopLevel::closest`] of each of `rays`: the same answers, ray for ray. A ray whose
+    /// interval meets the box of one bounded object only goes to that object, which takes all
+    /// its rays at once ([`Node::closest_batch`]: a mesh walks them in packets); a ray that
+    /// meets several takes the single-ray query, whose walk skips the objects behind its
+    /// closest hit.
+    pub fn closest_batch(
+        &self,
+        objects: &[Node],
+        rays: &[Ray],
+        ctx: &mut QueryCtx,
+    ) -> Vec<Option<(u32, SurfaceHit)>> {
+        let bvh = match &self.bvh {
+            Some(bvh) if self.bounded.len() <= BATCHED_OBJECTS_MAX => bvh,
+            _ => return rays.iter().map(|r| self.closest(objects, r, ctx)).collect(),
+        };
+        let (mut best, shrunk): (Vec<_>, Vec<Ray>) = rays
+            .iter()
+            .map(|ray| self.closest_listed(objects, ray, ctx))
+            .unzip();
+        // (primitive, ray) for each ray that reaches one bounded object's leaf. The walk is an
+        // any-hit query whose leaf test records the first primitive and reports a hit at the
+        // second, so a ray meeting several stops there; one that does not has seen every leaf
+        // its interval meets (the interval never shrank), so its one object is all
+        // `closest` could test.
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        let mut several_seen = 0usize;
+        for (i, r) in (0u32..).zip(&shrunk) {
+            // Where most rays meet several objects (a crowd of instances), the walk that lists
+            // them is spent for nothing: the rest take the single-ray query at once.
+            if i as usize >= PROBED_RAYS && 2 * several_seen > i as usize {
+                best[i as usize] = self.closest(objects, &rays[i as usize], ctx);
+                continue;
+            }
+            let mut first = None;
+            let mut list = |k: u32, r: &Ray| -> Option<(f32, ())> {
+                if first.is_none() {
+                    first = Some(k);
+                    return None;
+                }
+                // Any `t` of the interval stops the walk (nothing is accepted at `+∞`).
+                Some((r.t_max.min(f32::MAX), ()))
+            };
+            let several = bvh.any_hit(r, &mut list, &mut Query::new()).is_some();
+            several_seen += usize::from(several);
+            match first {
+                _ if several => best[i as usize] = self.closest(objects, &rays[i as usize], ctx),
+                Some(k) => pairs.push((k, i)),
+                None => {}
+            }
+        }
+        pairs.sort_unstable();
+        let (mut batch, mut hits) = (Vec::new(), Vec::new());
+        for group in pairs.chunk_by(|a, b| a.0 == b.0) {
+            let Some(&object) = self.bounded.get(group[0].0 as usize) else {
+                continue;
+            };
+            batch.clear();
+            batch.extend(group.iter().map(|&(_, i)| shrunk[i as usize]));
+            hits.clear();
+            hits.resize(batch.len(), None);
+            objects[object as usize].closest_batch(&batch, ctx, &mut hits);
+            for (&(_, i), h) in group.iter().zip(hits.drain(..)) {
+                if let Some(h) = h {
+                    let slot = &mut best[i as usize];
+                    *slot = Some(match slot.take() {
+                        Some(a) => closer_or_later(a, (object, h)),
+                        None => (object, h),
+                    });
+                }
+            }
+        }
+        best
+    }
+
+    /// The closest hit among the unbounded objects (declaration order, a later one winning an
+    /// equal `t`), and `ray` with its interval ending there.
+    fn closest_listed(
+        &self,
+        objects: &[Node],
+        ray: &Ray,
+        ctx: &mut QueryCtx,
+    ) -> (Option<(u32, SurfaceHit)>, Ray) {
+        let mut listed: Option<(u32, SurfaceHit)> = None;
+        let mut r = *ray;
+        for &i in &self.unbounded {
+            if let Some(h) = objects[i as usize].closest(&r, ctx) {
+                r.t_max = h.hit.t;
+                listed = Some((i, h));
+            }
+        }
+        (listed, r)
     }
 
     /// Whether any object blocks `ray` in its interval.
@@ -139,5 +230,15 @@ impl TopLevel {
             &mut Query::new(),
         )
         .is_some()
+    }
+}
+
+/// Of two objects' hits `(object index, hit)`, the closer one; of equal `t`, the object
+/// declared later (the larger index).
+fn closer_or_later(a: (u32, SurfaceHit), b: (u32, SurfaceHit)) -> (u32, SurfaceHit) {
+    if b.1.hit.t < a.1.hit.t || (b.1.hit.t == a.1.hit.t && b.0 > a.0) {
+        b
+    } else {
+        a
     }
 }

@@ -5,7 +5,7 @@ use super::*;
 use glam::Vec3;
 use halfray_core::prelude::*;
 use halfray_core::query::{Query, TraversalStats};
-use halfray_core::triangle::{TriangleIntersector, Watertight};
+use halfray_core::triangle::{TriangleHit, TriangleIntersector, Watertight};
 use halfray_core::{Hit, Ray};
 
 impl MeshShape {
@@ -15,10 +15,29 @@ impl MeshShape {
         stats: &mut TraversalStats,
     ) -> Option<(Hit, Vec3, Option<Vec3>)> {
         let (i, th) = self.accel.closest(&Watertight, ray, stats)?;
+        Some(self.surface(i, &th))
+    }
+
+    /// [`MeshShape::closest`] of each of `rays` (the same answers), traced as one batch
+    /// ([`crate::accel::MeshAccel::closest_batch`]).
+    pub(super) fn closest_batch(
+        &self,
+        rays: &[Ray],
+        stats: &mut TraversalStats,
+    ) -> Vec<Option<(Hit, Vec3, Option<Vec3>)>> {
+        let answers = self.accel.closest_batch(&Watertight, rays, Some(stats));
+        answers
+            .into_iter()
+            .map(|a| a.map(|(i, th)| self.surface(i, &th)))
+            .collect()
+    }
+
+    /// The hit record, barycentrics and shading normal of triangle `i`'s hit `th`.
+    fn surface(&self, i: u32, th: &TriangleHit) -> (Hit, Vec3, Option<Vec3>) {
         let v = self.accel.mesh.triangle(i as usize);
         let bary = Vec3::new(th.b0(), th.b1, th.b2);
         let hit = th.to_hit(&v);
-        Some((hit, bary, self.shading_normal(i as usize, bary, hit.normal)))
+        (hit, bary, self.shading_normal(i as usize, bary, hit.normal))
     }
 
     /// The interpolated vertex normal of triangle `tri` at barycentrics `bary`, turned to the
