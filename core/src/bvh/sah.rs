@@ -1,7 +1,7 @@
 //! The binned surface-area heuristic: binning a node's primitives by the centres of their
 //! boxes ([`best_sah_split`]) and partitioning them by the chosen split ([`partition`]).
 
-use super::scratch::{Corner, Refs, centre, corner, extend, point};
+use super::scratch::{Box2, Corner, Refs, RunVisitor, centre, corner, extend, point};
 use super::{BIN_COUNT, TRAVERSAL_COST};
 use crate::aabb::Aabb;
 use glam::{Vec3, Vec4};
@@ -259,10 +259,9 @@ impl Split {
         }
     }
 
-    /// Whether element `k` of `refs` goes left, and its centre.
+    /// Whether the primitive with box `lo, hi` goes left, and its centre.
     #[inline(always)]
-    fn classify<R: Refs + ?Sized>(&self, refs: &R, k: usize) -> (bool, Corner) {
-        let (lo, hi) = refs.get(k);
+    fn classify(&self, (lo, hi): Box2) -> (bool, Corner) {
         let c = centre(lo, hi);
         (self.binner.goes_left(c, self.limit), c)
     }
@@ -385,63 +384,64 @@ pub(super) fn partition<R: Refs>(
     range: core::ops::Range<usize>,
     split: &Split,
 ) -> (u32, Aabb, Aabb) {
-    // A run of scratch records is partitioned as a slice: no offset per element.
-    match refs.records_mut(range.clone()) {
-        Some(run) => {
-            let len = run.len();
-            partition_in(run, 0..len, split)
-        }
-        None => partition_in(refs, range, split),
-    }
+    refs.visit_run(range, PartitionBy(split))
 }
 
-/// [`partition`] on one view.
-#[inline(always)]
-fn partition_in<R: Refs + ?Sized>(
-    refs: &mut R,
-    range: core::ops::Range<usize>,
-    split: &Split,
-) -> (u32, Aabb, Aabb) {
-    let (mut llo, mut lhi) = (Corner::INFINITY, Corner::NEG_INFINITY);
-    let (mut rlo, mut rhi) = (Corner::INFINITY, Corner::NEG_INFINITY);
-    let (mut i, mut j) = (range.start, range.end);
-    'outer: while i < j {
-        // The first element from the left that belongs right…
-        let right_c = loop {
-            let (left, c) = split.classify(refs, i);
-            if !left {
-                break c;
-            }
-            extend(&mut llo, &mut lhi, c);
-            i += 1;
-            if i == j {
-                break 'outer;
-            }
-        };
-        // …and the first from the right that belongs left; `i` itself belongs right, so this
-        // stops above it.
-        let left_c = loop {
-            j -= 1;
-            if j == i {
-                extend(&mut rlo, &mut rhi, right_c);
-                break 'outer;
-            }
-            let (left, c) = split.classify(refs, j);
-            if left {
-                break c;
-            }
-            extend(&mut rlo, &mut rhi, c);
-        };
-        refs.swap(i, j);
-        extend(&mut llo, &mut lhi, left_c);
-        extend(&mut rlo, &mut rhi, right_c);
-        i += 1;
+/// [`partition`] on one run of elements.
+struct PartitionBy<'a>(&'a Split);
+
+impl RunVisitor for PartitionBy<'_> {
+    type Out = (u32, Aabb, Aabb);
+
+    /// Hoare's scheme on shrinking subslices (no index arithmetic or range checks per element):
+    /// `rest` holds the elements not yet placed.
+    #[inline(always)]
+    fn visit<E>(self, run: &mut [E], bounds: impl Fn(&E) -> Box2) -> Self::Out {
+        let classify = |e: &E| self.0.classify(bounds(e));
+        let (mut llo, mut lhi) = (Corner::INFINITY, Corner::NEG_INFINITY);
+        let (mut rlo, mut rhi) = (Corner::INFINITY, Corner::NEG_INFINITY);
+        let mut left = 0u32;
+        let mut rest = run;
+        'outer: loop {
+            // The first element from the left that belongs right…
+            let (first, right_c, mut tail) = loop {
+                let Some((first, tail)) = core::mem::take(&mut rest).split_first_mut() else {
+                    break 'outer;
+                };
+                let (goes_left, c) = classify(first);
+                if !goes_left {
+                    break (first, c, tail);
+                }
+                extend(&mut llo, &mut lhi, c);
+                left += 1;
+                rest = tail;
+            };
+            // …and the first from the right that belongs left; `first` itself belongs right,
+            // so this stops above it.
+            let (last, left_c) = loop {
+                let Some((last, init)) = core::mem::take(&mut tail).split_last_mut() else {
+                    extend(&mut rlo, &mut rhi, right_c);
+                    break 'outer;
+                };
+                let (goes_left, c) = classify(last);
+                if goes_left {
+                    rest = init;
+                    break (last, c);
+                }
+                extend(&mut rlo, &mut rhi, c);
+                tail = init;
+            };
+            core::mem::swap(first, last);
+            extend(&mut llo, &mut lhi, left_c);
+            extend(&mut rlo, &mut rhi, right_c);
+            left += 1;
+        }
+        (
+            left,
+            Aabb::new(point(llo), point(lhi)),
+            Aabb::new(point(rlo), point(rhi)),
+        )
     }
-    (
-        (i - range.start) as u32,
-        Aabb::new(point(llo), point(lhi)),
-        Aabb::new(point(rlo), point(rhi)),
-    )
 }
 
 #[cfg(test)]

@@ -126,11 +126,20 @@ pub const fn scratch_capacity(prim_count: usize) -> usize {
     prim_count
 }
 
+/// What [`Refs::visit_run`] hands a run of elements to: the run as a slice of the view's own
+/// elements with the function giving an element's box, whatever the element type.
+pub(super) trait RunVisitor {
+    type Out;
+    fn visit<E>(self, run: &mut [E], bounds: impl Fn(&E) -> Box2) -> Self::Out;
+}
+
 /// The primitives being partitioned: the box of element `k` of the current order (its spare
-/// lanes mean nothing), and swapping two elements.
+/// lanes mean nothing), and the elements of a range as a slice to reorder.
 pub(super) trait Refs {
     fn get(&self, k: usize) -> (Corner, Corner);
-    fn swap(&mut self, i: usize, j: usize);
+
+    /// `v` on the elements of `range` (an empty run when `range` lies outside the view).
+    fn visit_run<V: RunVisitor>(&mut self, range: core::ops::Range<usize>, v: V) -> V::Out;
 
     /// `f(lo, hi)` on the box of every element of `range`, in order.
     #[inline(always)]
@@ -146,13 +155,6 @@ pub(super) trait Refs {
     #[inline(always)]
     fn for_each_pair(&self, range: core::ops::Range<usize>, f: impl FnMut(Box2, Option<Box2>)) {
         pairs_by_get(self, range, f);
-    }
-
-    /// The elements of `range` as a run of records, when this view keeps them as such.
-    #[inline(always)]
-    fn records_mut(&mut self, range: core::ops::Range<usize>) -> Option<&mut [PrimRef]> {
-        let _ = range;
-        None
     }
 }
 
@@ -183,10 +185,8 @@ impl Refs for [PrimRef] {
     }
 
     #[inline(always)]
-    fn swap(&mut self, i: usize, j: usize) {
-        if i < self.len() && j < self.len() {
-            <[PrimRef]>::swap(self, i, j);
-        }
+    fn visit_run<V: RunVisitor>(&mut self, range: core::ops::Range<usize>, v: V) -> V::Out {
+        v.visit(self.get_mut(range).unwrap_or_default(), PrimRef::corners)
     }
 
     #[inline(always)]
@@ -218,11 +218,6 @@ impl Refs for [PrimRef] {
             f(last.corners(), None);
         }
     }
-
-    #[inline(always)]
-    fn records_mut(&mut self, range: core::ops::Range<usize>) -> Option<&mut [PrimRef]> {
-        self.get_mut(range)
-    }
 }
 
 /// The source read through the index array (no scratch).
@@ -240,10 +235,12 @@ impl<S: PrimitiveSource + ?Sized> Refs for Indexed<'_, S> {
     }
 
     #[inline(always)]
-    fn swap(&mut self, i: usize, j: usize) {
-        if i < self.indices.len() && j < self.indices.len() {
-            self.indices.swap(i, j);
-        }
+    fn visit_run<V: RunVisitor>(&mut self, range: core::ops::Range<usize>, v: V) -> V::Out {
+        let source = self.source;
+        v.visit(self.indices.get_mut(range).unwrap_or_default(), |&i| {
+            let b = source.primitive_bounds(i as usize);
+            (corner(b.min), corner(b.max))
+        })
     }
 }
 
@@ -283,17 +280,9 @@ impl Refs for Scratch<'_> {
     }
 
     #[inline(always)]
-    fn records_mut(&mut self, range: core::ops::Range<usize>) -> Option<&mut [PrimRef]> {
+    fn visit_run<V: RunVisitor>(&mut self, range: core::ops::Range<usize>, v: V) -> V::Out {
         let range = self.local(range);
-        self.refs.get_mut(range)
-    }
-
-    #[inline(always)]
-    fn swap(&mut self, i: usize, j: usize) {
-        let (Some(i), Some(j)) = (i.checked_sub(self.offset), j.checked_sub(self.offset)) else {
-            return;
-        };
-        Refs::swap(&mut *self.refs, i, j);
+        self.refs.visit_run(range, v)
     }
 }
 
