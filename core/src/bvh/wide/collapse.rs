@@ -62,27 +62,18 @@ fn opens(nodes: &[BvhNode], b: u32, run: &core::ops::Range<usize>) -> bool {
 /// and, while fewer than `W`, replace one entry by its two children: the inner one with the
 /// largest surface area (ties: the first) while there is one, then the leaf run that
 /// [`opens`] with the largest surface area. Each entry carries its leaf run when it becomes a
-/// leaf ([`as_leaf`], computed once per entry). A `b` that is itself a leaf run that does not
-/// open (only the root can be one: every other `b` was a non-leaf entry of its parent's
-/// list) gives itself, alone.
-fn child_list<const W: usize>(nodes: &[BvhNode], b: u32, is_root: bool) -> ChildList<W> {
+/// leaf ([`as_leaf`], computed once per entry). `b` is an inner node that is not a leaf run
+/// (a tree that is one leaf run has no node: [`root_leaf`]); a binary leaf `b` gives itself,
+/// alone.
+fn child_list<const W: usize>(nodes: &[BvhNode], b: u32) -> ChildList<W> {
     let mut out = ChildList {
         node: [0u32; W],
         leaf: [const { None }; W],
         len: 0,
     };
-    let root_leaf = if is_root {
-        as_leaf(nodes, b).filter(|run| !opens(nodes, b, run))
-    } else {
-        None
-    };
-    let Some((l, r)) = nodes
-        .get(b as usize)
-        .and_then(BvhNode::children)
-        .filter(|_| root_leaf.is_none())
-    else {
+    let Some((l, r)) = nodes.get(b as usize).and_then(BvhNode::children) else {
         out.node[0] = b;
-        out.leaf[0] = root_leaf.or_else(|| as_leaf(nodes, b));
+        out.leaf[0] = as_leaf(nodes, b);
         out.len = 1;
         return out;
     };
@@ -131,6 +122,47 @@ struct ChildList<const W: usize> {
 }
 
 impl<const W: usize> ChildList<W> {
+    /// Places the leaf runs of the list after slot `slots` (the slots in use so far, moved to
+    /// the end of the last run), each by [`place_leaf`], best fit first: of the runs left, one
+    /// that starts right at the end of the previous one (no lane skipped) before one that does
+    /// not; of those, one that ends its last group exactly, then the one that fills the
+    /// current group furthest, then the longest, then the first. Returns each entry's first
+    /// slot (`usize::MAX` for an inner entry). A node's runs stay side by side and each
+    /// touches the fewest groups its length allows, as in list order, with fewer lanes
+    /// skipped between them: a cube's runs of 2, 8 and 2 take 3 groups where list order took
+    /// 4. (A run of `4q + m` lanes, `m` in `1..=4`, fits at lane `r` of a group without a
+    /// skip exactly when `r + m ≤ 4`: the order is a bin packing of the `m`s into groups.)
+    fn place_runs(&self, slots: &mut usize) -> [usize; W] {
+        let mut start = [usize::MAX; W];
+        let len = |i: usize| self.leaf[i].as_ref().map_or(0, core::ops::Range::len);
+        let mut left: u32 = (0..self.len.min(W))
+            .filter(|&i| self.leaf[i].is_some())
+            .fold(0, |m, i| m | 1 << i);
+        while left != 0 {
+            let mut pick = left.trailing_zeros() as usize;
+            let key = |i: usize| {
+                let (end, c) = (*slots, len(i));
+                let fits = place_leaf(end, c) == end;
+                // The lanes the run's last group ends at, past the current group's start.
+                let fill = end % LANES + (c + LANES - 1) % LANES + 1;
+                (fits, fits && fill == LANES, if fits { fill } else { 0 }, c)
+            };
+            let mut rest = left & (left - 1);
+            while rest != 0 {
+                let i = rest.trailing_zeros() as usize;
+                rest &= rest - 1;
+                if key(i) > key(pick) {
+                    pick = i;
+                }
+            }
+            left &= !(1 << pick);
+            let first = place_leaf(*slots, len(pick));
+            start[pick] = first;
+            *slots = first + len(pick);
+        }
+        start
+    }
+
     fn iter(&self) -> impl Iterator<Item = (u32, Option<core::ops::Range<usize>>)> + '_ {
         self.node
             .iter()
@@ -187,8 +219,8 @@ pub(super) const fn place_leaf(end: usize, count: usize) -> usize {
     }
 }
 
-/// What the collapse needs: wide nodes, and triangle slots (leaf runs placed by
-/// [`place_leaf`], in the order the collapse writes them).
+/// What the collapse needs: wide nodes, and triangle slots (each node's leaf runs placed by
+/// [`ChildList::place_runs`], node after node in the order the collapse writes them).
 #[derive(Clone, Copy, Debug)]
 struct Plan {
     nodes: usize,
@@ -201,11 +233,35 @@ impl Plan {
     }
 }
 
+/// The leaf run that is the whole tree, when the binary root is one ([`as_leaf`]: a binary
+/// leaf, or a subtree of at most [`LEAF_MERGE`] triangles) that does not [`open`](opens): the
+/// wide tree then has no node, its root is that leaf. A root node would hold that one leaf
+/// alone, and cost 224 bytes and every ray its node test for nothing. A run that opens (more
+/// than [`LEAF_OPEN_ABOVE`] triangles in a binary subtree) gets its root node: its children's
+/// boxes spare a ray the culls of the halves it misses (a cube's two faces on `±x`, flat
+/// boxes, and the eight triangles between: a root leaf of 12 cost its camera and random rays
+/// 9 % more instructions, its shadow and ambient-occlusion rays 15 %; `docs/performance.md`).
+fn root_leaf(nodes: &[BvhNode]) -> Option<core::ops::Range<usize>> {
+    as_leaf(nodes, 0).filter(|run| !opens(nodes, 0, run))
+}
+
 /// Walks the collapse without writing: what it needs ([`Plan`]), or the first reason it
 /// cannot be built (a leaf too large, a broken binary tree).
 fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<Plan, BvhError> {
     if nodes.is_empty() {
         return Ok(Plan { nodes: 0, slots: 0 });
+    }
+    if let Some(run) = root_leaf(nodes) {
+        if run.len() > MAX_LEAF_TRIANGLES {
+            return Err(BvhError::LeafTooLarge {
+                count: run.len(),
+                max: MAX_LEAF_TRIANGLES,
+            });
+        }
+        return Ok(Plan {
+            nodes: 0,
+            slots: run.len(),
+        });
     }
     const { assert!(W >= 2 && W <= 8) };
     let mut pending = Pending::new();
@@ -218,7 +274,8 @@ fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<Plan, BvhError> {
         });
     }
     while let Some((b, _)) = pending.pop() {
-        for (c, leaf) in child_list::<W>(nodes, b, b == 0).iter() {
+        let list = child_list::<W>(nodes, b);
+        for (c, leaf) in list.iter() {
             if let Some(range) = leaf {
                 if range.len() > MAX_LEAF_TRIANGLES {
                     return Err(BvhError::LeafTooLarge {
@@ -226,7 +283,6 @@ fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<Plan, BvhError> {
                         max: MAX_LEAF_TRIANGLES,
                     });
                 }
-                slots = place_leaf(slots, range.len()) + range.len();
             } else {
                 count += 1;
                 if !pending.push((c, 0)) {
@@ -237,6 +293,7 @@ fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<Plan, BvhError> {
                 }
             }
         }
+        list.place_runs(&mut slots);
     }
     Ok(Plan {
         nodes: count,
@@ -404,15 +461,14 @@ where
             groups.as_ref().len(),
         )?;
 
-        // Leaf runs in the order the walk meets them, each placed by `place_leaf` (as `plan`).
+        // Each node's leaf runs as the walk meets the node, placed by `place_runs` (as `plan`).
         let out = groups.as_mut();
         for group in out.iter_mut().take(needed_groups) {
             *group = LeafGroup::EMPTY;
         }
         let mut slots = 0usize;
-        let mut copy_leaf = |range: core::ops::Range<usize>| -> usize {
-            let start = place_leaf(slots, range.len());
-            for (slot, &p) in (start..).zip(indices.get(range.clone()).unwrap_or(&[])) {
+        let mut copy_leaf = |start: usize, range: core::ops::Range<usize>| -> usize {
+            for (slot, &p) in (start..).zip(indices.get(range).unwrap_or(&[])) {
                 if let (Some(group), Some(v)) =
                     (out.get_mut(slot / LANES), mesh.triangle(p as usize))
                 {
@@ -420,27 +476,39 @@ where
                     group.set(slot % LANES, &LeafTriangle { v, prim: p });
                 }
             }
-            slots = start + range.len();
             start
         };
 
         let wide = nodes.as_mut();
         let mut next = 0u32;
-        if needed > 0 {
+        let mut root = ChildRef::EMPTY;
+        if needed == 0
+            && let Some(range) = root_leaf(bnodes)
+        {
+            // Checked by `plan`: count ≤ MAX_LEAF_TRIANGLES.
+            let len = range.len() as u32;
+            slots = range.len();
+            root = ChildRef::leaf(copy_leaf(0, range) as u32, len).unwrap_or(ChildRef::EMPTY);
+        } else if needed > 0 {
+            root = 0;
             wide[0] = WideNode::EMPTY;
             next = 1;
             let mut pending = Pending::new();
             pending.push((0, 0));
             while let Some((b, slot)) = pending.pop() {
                 let mut node = WideNode::<W>::EMPTY;
-                for (i, (c, leaf)) in child_list::<W>(bnodes, b, b == 0).iter().enumerate() {
+                let list = child_list::<W>(bnodes, b);
+                let starts = list.place_runs(&mut slots);
+                for (i, (c, leaf)) in list.iter().enumerate() {
                     let Some(bn) = bnodes.get(c as usize) else {
                         continue;
                     };
                     let reference = if let Some(range) = leaf {
                         // Checked by `plan`: count ≤ MAX_LEAF_TRIANGLES, slots ≤ MAX_TRIANGLES.
                         let len = range.len() as u32;
-                        ChildRef::leaf(copy_leaf(range) as u32, len).unwrap_or(ChildRef::EMPTY)
+                        let start = starts.get(i).copied().unwrap_or(slots);
+                        ChildRef::leaf(copy_leaf(start, range) as u32, len)
+                            .unwrap_or(ChildRef::EMPTY)
                     } else {
                         let child = next;
                         next += 1;
@@ -465,9 +533,10 @@ where
             slot_count: slots as u32,
             source_len: mesh.len(),
             extent: crate::query::walk::extent_of(&binary.bounds()),
-            root: Aabb::EMPTY,
+            root,
+            root_box: Aabb::EMPTY,
         };
-        tree.root = tree.bounds();
+        tree.root_box = tree.computed_bounds();
         Ok(tree)
     }
 }

@@ -12,7 +12,11 @@
 //! surface area by that child's two children (ties: the first). A binary subtree of at most
 //! [`LEAF_MERGE`] triangles becomes one leaf slot (its triangles in a row), and slots still
 //! free then go to opening the leaf runs of more than [`LEAF_OPEN_ABOVE`] triangles into
-//! their two subtrees, largest surface area first. The caller passes node storage of at
+//! their two subtrees, largest surface area first. A tree that is one leaf run that does not
+//! open (a binary root that is a leaf, or a binary subtree of at most [`LEAF_OPEN_ABOVE`]
+//! triangles: the tetrahedron, the octahedron) has **no node**: its root
+//! ([`WideBvh::root`]) is that leaf, and a ray tests its triangles without a node test. The
+//! caller passes node storage of at
 //! least [`WideBvh::node_count_for`]`(binary)` nodes (exact; [`node_capacity`] is a bound
 //! that needs no binary tree) and triangle storage of at least
 //! [`WideBvh::group_count_for`]`(binary)` groups (exact; [`group_capacity`]`(N)` always
@@ -28,11 +32,13 @@
 //! [`MAX_LEAF_TRIANGLES`] triangle slots), or empty (an empty box, never hit). The triangles
 //! (three vertices and the index in the mesh) are copied in leaf order into [`LeafGroup`]s of
 //! four, stored side by side so that a leaf is tested four triangles at a time, 40 bytes per
-//! triangle slot. A run starts where the previous one ended unless it would then touch more
+//! triangle slot. A node's leaf runs are placed side by side, best fit first (of the runs
+//! left, one that starts without a skip and fills the current group furthest), each
+//! where the previous one ended unless it would then touch more
 //! groups than the `⌈count/4⌉` it needs; it then starts at the next group (the skipped lanes
 //! stay empty: a few more groups in the tree, fewer groups read per leaf).
 //! Everything the structure adds, copied triangles included, is `224·nodes + 160·groups`
-//! bytes ([`RayQuery::bytes_per_triangle`](crate::query::RayQuery::bytes_per_triangle)); the caller's mesh is not needed by queries.
+//! bytes (40 per triangle for a tree with no node) ([`RayQuery::bytes_per_triangle`](crate::query::RayQuery::bytes_per_triangle)); the caller's mesh is not needed by queries.
 //!
 //! # Traversal
 //!
@@ -132,7 +138,8 @@ pub const fn stack_size(width: usize) -> usize {
 }
 
 /// Wide nodes that always suffice for `triangles` triangles, whatever the binary tree: one per
-/// binary inner node at most, `N − 1`, and at least 1 (the root). Prefer the exact
+/// binary inner node at most, `N − 1`, and at least 1 (a tree that is one leaf needs none:
+/// module docs). Prefer the exact
 /// [`WideBvh::node_count_for`] when the binary tree is at hand: trees of scanned meshes use
 /// about `N / 12` nodes.
 #[must_use]
@@ -165,9 +172,12 @@ pub struct WideBvh<const W: usize, N, T> {
     /// Largest coordinate magnitude of the tree's bounds, for the box padding
     /// ([`crate::tolerance::BVH_PROJECTION_PAD`]).
     extent: f32,
-    /// The union of the root's child boxes ([`WideBvh::bounds`], kept): a closest-hit walk
+    /// The root ([`WideBvh::root`]) as a child slot encodes it: node 0, a leaf run (a tree
+    /// with no node), or [`ChildRef::EMPTY`] (an empty tree).
+    root: u32,
+    /// The box of everything in the tree ([`WideBvh::bounds`], kept): a closest-hit walk
     /// tests it first, so that a ray missing the whole tree skips the node test's setup.
-    root: Aabb,
+    root_box: Aabb,
 }
 
 /// An 8-wide BVH (one AVX2 register per bound array).
@@ -180,7 +190,7 @@ pub type Bvh4<N, T> = WideBvh<4, N, T>;
 pub struct WideStats {
     /// Nodes in use.
     pub nodes: usize,
-    /// Leaf slots.
+    /// Leaves (leaf slots, and a root leaf).
     pub leaves: usize,
     /// Child slots in use (inner and leaf) over all nodes: `children / nodes` is the fill.
     pub children: usize,
@@ -195,7 +205,8 @@ where
     N: AsRef<[WideNode<W>]>,
     T: AsRef<[LeafGroup]>,
 {
-    /// The used nodes; node 0 is the root (empty slice for an empty tree).
+    /// The used nodes; node 0 is the root (empty slice for an empty tree and for a tree whose
+    /// root is a leaf: [`WideBvh::root`]).
     #[inline]
     #[must_use]
     pub fn nodes(&self) -> &[WideNode<W>] {
@@ -251,19 +262,42 @@ where
         self.triangle_count == 0
     }
 
-    /// Bounds of everything in the tree ([`Aabb::EMPTY`] when empty).
+    /// The root: [`ChildRef::Inner`]`(0)` (node 0), a [`ChildRef::Leaf`] holding every
+    /// triangle of a tree with no node (module docs), or [`ChildRef::Empty`] for an empty
+    /// tree.
+    #[inline]
+    #[must_use]
+    pub fn root(&self) -> ChildRef {
+        ChildRef::decode(self.root)
+    }
+
+    /// Bounds of everything in the tree ([`Aabb::EMPTY`] when empty): the union of the root
+    /// node's child boxes, or of a root leaf's triangles.
+    #[inline]
     #[must_use]
     pub fn bounds(&self) -> Aabb {
-        self.nodes().first().map_or(Aabb::EMPTY, |n| {
-            (0..W).fold(Aabb::EMPTY, |b, i| b.union(n.child_bounds(i)))
-        })
+        self.root_box
+    }
+
+    /// The box of the root computed from the stored nodes or triangles (what
+    /// [`WideBvh::bounds`] keeps).
+    fn computed_bounds(&self) -> Aabb {
+        match self.root() {
+            ChildRef::Inner(i) => self.nodes().get(i as usize).map_or(Aabb::EMPTY, |n| {
+                (0..W).fold(Aabb::EMPTY, |b, k| b.union(n.child_bounds(k)))
+            }),
+            ChildRef::Leaf { start, count } => run_bounds(self.groups(), start, count),
+            ChildRef::Empty => Aabb::EMPTY,
+        }
     }
 
     /// Shape and size.
     #[must_use]
     pub fn stats(&self) -> WideStats {
         let nodes = self.nodes();
-        let (mut leaves, mut children) = (0, 0);
+        // A root leaf is a leaf in no node's slot.
+        let (mut leaves, mut children) =
+            (usize::from(matches!(self.root(), ChildRef::Leaf { .. })), 0);
         for n in nodes {
             for &c in &n.child {
                 match ChildRef::decode(c) {
@@ -292,6 +326,17 @@ where
     pub fn into_storage(self) -> (N, T) {
         (self.nodes, self.groups)
     }
+}
+
+/// The box of the triangles in slots `start .. start + count` of `groups` (slot `s` is lane
+/// `s % 4` of group `s / 4`) with finite vertices: a leaf's box (a triangle the refit had to
+/// disable, and a slot past the groups, are left out).
+fn run_bounds(groups: &[LeafGroup], start: u32, count: u32) -> Aabb {
+    let lanes = crate::triangle::LANES;
+    (start as usize..start as usize + count as usize)
+        .filter_map(|s| groups.get(s / lanes)?.triangle(s % lanes))
+        .filter(LeafTriangle::is_finite)
+        .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()))
 }
 
 /// Adds `local` to the caller's counters, if any.

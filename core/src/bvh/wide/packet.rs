@@ -475,6 +475,7 @@ where
         // stride, random rays) leave at once, before any per-ray setup; of rays fanning out
         // from the first (a scanline), fewer than three quarters would join when it does not.
         let probe = (rays.len() * 3).div_ceil(4).saturating_sub(1);
+        // A tree whose root is a leaf (no node) has nothing to share: every ray goes alone.
         if nodes.is_empty() || rays.len() < 2 || !rays.get(probe).is_some_and(alike) {
             return (all, 0);
         }

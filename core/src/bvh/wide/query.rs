@@ -29,10 +29,11 @@ where
     ) -> usize {
         let nodes = self.nodes();
         let mut reported = 0usize;
-        if !query.is_valid() || nodes.is_empty() {
+        if !query.is_valid() || self.root == ChildRef::EMPTY {
             return 0;
         }
-        let mut stack = [0u32; QUERY_STACK];
+        // The root (node 0, or a leaf) first.
+        let mut stack = [self.root; QUERY_STACK];
         let mut sp = 1usize;
         while sp > 0 {
             sp -= 1;

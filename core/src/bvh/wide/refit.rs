@@ -1,7 +1,7 @@
 //! Refitting a wide tree after the mesh's vertices moved.
 
-use super::WideBvh;
-use super::node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
+use super::node::{ChildRef, LeafGroup, WideNode};
+use super::{WideBvh, run_bounds};
 use crate::aabb::Aabb;
 use crate::bvh::BvhError;
 use crate::error::NonFiniteError;
@@ -15,7 +15,8 @@ where
 {
     /// Copies the moved vertices of `mesh` (the same triangles, moved) into the triangle
     /// groups and recomputes every child box bottom-up, in one reverse pass over the nodes
-    /// (children are stored after their parent), with no stack and no rebuild.
+    /// (children are stored after their parent), with no stack and no rebuild; a root leaf's
+    /// box (a tree with no node) from its triangles.
     ///
     /// # Errors
     ///
@@ -54,11 +55,6 @@ where
             group.set(lane, &rec);
         }
         let groups: &[LeafGroup] = groups;
-        let triangle = |slot: usize| {
-            groups
-                .get(slot / LANES)
-                .and_then(|g| g.triangle(slot % LANES))
-        };
         let count = self.node_count as usize;
         let nodes = self.nodes.as_mut();
         let nodes = match nodes.get_mut(..count) {
@@ -69,10 +65,7 @@ where
             for slot in 0..W {
                 let b = match ChildRef::decode(nodes[i].child[slot]) {
                     ChildRef::Empty => continue,
-                    ChildRef::Leaf { start, count } => (start..start + count)
-                        .filter_map(|s| triangle(s as usize))
-                        .filter(LeafTriangle::is_finite)
-                        .fold(Aabb::EMPTY, |b, t| b.union(t.bounds())),
+                    ChildRef::Leaf { start, count } => run_bounds(groups, start, count),
                     ChildRef::Inner(c) => nodes
                         .get(c as usize)
                         .filter(|_| c as usize > i)
@@ -84,8 +77,8 @@ where
                 nodes[i].set_child(slot, &b, reference);
             }
         }
-        self.root = self.bounds();
-        self.extent = crate::query::walk::extent_of(&self.root);
+        self.root_box = self.computed_bounds();
+        self.extent = crate::query::walk::extent_of(&self.root_box);
         match bad {
             Some(index) => Err(NonFiniteError::primitive(index).into()),
             None => Ok(()),

@@ -524,33 +524,358 @@ fn leaf_groups_are_the_groups_a_run_touches() {
     }
 }
 
-/// A tree of at most `LEAF_MERGE` triangles is one leaf run, which the root opens when it is
-/// longer than `LEAF_OPEN_ABOVE`: the root then has two or more leaf children, each within
-/// the bound, together every triangle once.
+/// The box of every vertex of `mesh` (the oracle of a tree's bounds).
+fn vertex_box(mesh: &TriangleMesh<'_>) -> Aabb {
+    (0..mesh.len())
+        .filter_map(|i| mesh.triangle(i))
+        .flatten()
+        .fold(Aabb::EMPTY, |b, v| b.union(Aabb::new(v, v)))
+}
+
+/// A cube of side 2 around the origin, two triangles a face: shared edges and vertices, where
+/// the tie rule decides.
+fn cube() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let pos = (0..8u8)
+        .map(|i| {
+            Vec3::new(
+                f32::from(i & 1),
+                f32::from(i >> 1 & 1),
+                f32::from(i >> 2 & 1),
+            ) * 2.0
+                - 1.0
+        })
+        .collect();
+    let tris = vec![
+        [0, 2, 1],
+        [1, 2, 3],
+        [4, 5, 6],
+        [5, 7, 6],
+        [0, 1, 4],
+        [1, 5, 4],
+        [2, 6, 3],
+        [3, 6, 7],
+        [0, 4, 2],
+        [2, 4, 6],
+        [1, 3, 5],
+        [3, 7, 5],
+    ];
+    (pos, tris)
+}
+
+/// Rays at `mesh` for the root-leaf tests: `rays` (some with `t_min < 0` or a short `t_max`),
+/// rays at every vertex, at every edge's midpoint and at every triangle's centre from 12
+/// directions, and a scanline of camera rays (coherent, so that a batch tries packets).
+fn rays_at(mesh: &TriangleMesh<'_>, seed: u64) -> Vec<Ray> {
+    let mut out = rays(600, seed);
+    let mut s = seed ^ 0x5EED;
+    let dirs: Vec<Vec3> = (0..12).map(|_| unit_vec(&mut s)).collect();
+    for i in 0..mesh.len() {
+        let v = mesh.triangle(i).unwrap();
+        let targets = [
+            v[0],
+            v[1],
+            v[2],
+            (v[0] + v[1]) * 0.5,
+            (v[1] + v[2]) * 0.5,
+            (v[0] + v[1] + v[2]) / 3.0,
+        ];
+        for (k, t) in targets.iter().enumerate() {
+            let d = dirs[(i + k) % dirs.len()];
+            out.push(Ray::new(*t - d * 5.0, d));
+        }
+    }
+    for k in 0..64 {
+        let d = Vec3::new((k as f32 / 64.0 - 0.5) * 0.3, 0.02, 1.0);
+        out.push(Ray::new(Vec3::new(0.1, 0.05, -9.0), d));
+    }
+    out
+}
+
+/// Every query of `w` (built over `mesh`) against brute force and, for the batch, against the
+/// single-ray query bit for bit, at the portable level and at AVX2 where the CPU has it;
+/// returns the closest hits found.
+fn queries_equal_brute_force<const W: usize>(
+    w: &VecWide<W>,
+    mesh: &TriangleMesh<'_>,
+    rays: &[Ray],
+) -> usize {
+    let mut hits = 0;
+    for ray in rays {
+        let got = w.closest_hit(
+            ray,
+            &mut Triangles::new(mesh, &Watertight),
+            &mut Query::new(),
+        );
+        assert_eq!(
+            got.map(|(p, h)| (p, h.t)),
+            brute(mesh, &Watertight, ray),
+            "W={W} {ray:?}"
+        );
+        assert_eq!(
+            got,
+            crate::test_util::brute_watertight(mesh, ray),
+            "W={W} {ray:?}"
+        );
+        let any = w.any_hit(
+            ray,
+            &mut Triangles::new(mesh, &Watertight),
+            &mut Query::new(),
+        );
+        assert_eq!(any.is_some(), got.is_some(), "any-hit, W={W} {ray:?}");
+        if let Some((p, h)) = any {
+            let v = mesh.triangle(p as usize).unwrap();
+            assert_eq!(Watertight.intersect(ray, &v).map(|x| x.t), Some(h.t));
+        }
+        // The closure query sees every lane of the leaf it tests: each call is counted.
+        let (mut calls, mut st) = (0u64, TraversalStats::default());
+        let by_closure = w.closest_hit(
+            ray,
+            &mut |p, r: &Ray| {
+                calls += 1;
+                Watertight
+                    .intersect(r, &mesh.triangle(p as usize)?)
+                    .map(|h| (h.t, h.t))
+            },
+            &mut Query::new().stats(&mut st),
+        );
+        assert_eq!(by_closure, got.map(|(p, h)| (p, h.t)));
+        assert_eq!(st.primitives_tested, calls);
+        same_at_every_level(w, mesh, ray);
+        hits += usize::from(got.is_some());
+    }
+    let mut batch = vec![None; rays.len()];
+    let mut stack = QueryStack::new();
+    w.closest_hits(
+        rays,
+        &mut Triangles::new(mesh, &Watertight),
+        &mut Query::new().on(Portable).stack(&mut stack),
+        &mut batch,
+    )
+    .unwrap();
+    for (ray, b) in rays.iter().zip(&batch) {
+        let single = w.closest_hit(
+            ray,
+            &mut Triangles::new(mesh, &Watertight),
+            &mut Query::new(),
+        );
+        let bits = |a: &Option<(u32, crate::triangle::TriangleHit)>| {
+            a.map(|(p, h)| (p, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()))
+        };
+        assert_eq!(bits(b), bits(&single), "batch, W={W} {ray:?}");
+    }
+    hits
+}
+
+/// A tree that is one leaf run that does not open (a binary leaf, or a binary subtree of at
+/// most `LEAF_OPEN_ABOVE` triangles) has no node: its root is that leaf, in slots `0..n` of
+/// `⌈n/4⌉` groups. A run that opens (a split subtree of more) gets a root node with two or
+/// more leaf children, each within the bound; more than `LEAF_MERGE` triangles, a node. Every
+/// query answers as brute force in every case.
 #[test]
-fn a_small_tree_is_one_leaf_or_opened_at_the_root() {
-    for n in 1..=LEAF_MERGE {
+fn a_tree_that_is_one_unopened_leaf_run_has_no_node() {
+    for n in 1..=LEAF_MERGE + 1 {
         let (pos, tris) = soup(n, 40 + n as u64);
         let mesh = TriangleMesh::new(&pos, &tris);
-        let w = wide::<8>(&mesh, 1);
-        assert_eq!(w.node_count(), 1, "n = {n}");
-        let runs: Vec<u32> = (0..8)
-            .filter_map(|k| match w.nodes()[0].child(k) {
-                ChildRef::Leaf { count, .. } => Some(count),
-                ChildRef::Inner(_) => panic!("n = {n}: an inner child"),
-                ChildRef::Empty => None,
-            })
-            .collect();
-        assert_eq!(runs.iter().sum::<u32>() as usize, n, "n = {n}");
-        if n > LEAF_OPEN_ABOVE {
-            assert!(runs.len() >= 2, "n = {n}: {runs:?}");
-            assert!(
-                runs.iter().all(|&c| c as usize <= LEAF_OPEN_ABOVE),
-                "{runs:?}"
+        for max_leaf in [1, 4, 16] {
+            let w = wide::<8>(&mesh, max_leaf);
+            let w4 = wide::<4>(&mesh, max_leaf);
+            let st = w.stats();
+            assert_eq!(w.bounds(), vertex_box(&mesh), "n = {n}");
+            assert_eq!(w4.bounds(), vertex_box(&mesh), "n = {n}");
+            let binary_leaf = binary(&mesh, max_leaf).nodes()[0].children().is_none();
+            if binary_leaf || n <= LEAF_OPEN_ABOVE {
+                for (root, nodes) in [(w.root(), w.node_count()), (w4.root(), w4.node_count())] {
+                    assert_eq!(nodes, 0, "n = {n}, leaf {max_leaf}");
+                    assert_eq!(
+                        root,
+                        ChildRef::Leaf {
+                            start: 0,
+                            count: n as u32
+                        }
+                    );
+                }
+                assert!(w.nodes().is_empty());
+                assert_eq!(w.groups().len(), n.div_ceil(4));
+                assert_eq!(
+                    st,
+                    WideStats {
+                        nodes: 0,
+                        leaves: 1,
+                        children: 0,
+                        triangles: n,
+                        bytes: 160 * n.div_ceil(4)
+                    }
+                );
+                assert_eq!(w.bytes_used(), 160 * n.div_ceil(4));
+                let mut prims: Vec<u32> = w.triangles().map(|t| t.prim).collect();
+                prims.sort_unstable();
+                assert_eq!(prims, (0..n as u32).collect::<Vec<_>>());
+            } else {
+                assert_eq!(w.root(), ChildRef::Inner(0), "n = {n}");
+                assert!(st.leaves >= 2, "{st:?}");
+                if n <= LEAF_MERGE {
+                    assert_eq!(w.node_count(), 1, "n = {n}");
+                    let runs: Vec<u32> = (0..8)
+                        .filter_map(|k| match w.nodes()[0].child(k) {
+                            ChildRef::Leaf { count, .. } => Some(count),
+                            ChildRef::Inner(_) => panic!("n = {n}: an inner child"),
+                            ChildRef::Empty => None,
+                        })
+                        .collect();
+                    assert_eq!(runs.iter().sum::<u32>() as usize, n, "n = {n}");
+                    assert!(
+                        runs.iter().all(|&c| c as usize <= LEAF_OPEN_ABOVE),
+                        "{runs:?}"
+                    );
+                }
+            }
+            let rays = rays_at(&mesh, n as u64);
+            let hits = queries_equal_brute_force(&w, &mesh, &rays);
+            assert!(hits > 0, "n = {n}: the rays must hit");
+            queries_equal_brute_force(&w4, &mesh, &rays);
+            // The box query: every triangle whose box meets the query box.
+            let mut s = 7u64 + n as u64;
+            for _ in 0..50 {
+                let c = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 12.0 - 6.0;
+                let q = Aabb::new(c, c + Vec3::splat(lcg(&mut s) * 4.0));
+                let mut got = Vec::new();
+                w.query_box(&mesh, &q, |p| {
+                    got.push(p);
+                    true
+                });
+                got.sort_unstable();
+                let expect: Vec<u32> = (0..n as u32)
+                    .filter(|&i| {
+                        let v = mesh.triangle(i as usize).unwrap();
+                        Aabb::new(v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2])).overlaps(&q)
+                    })
+                    .collect();
+                assert_eq!(got, expect, "n = {n}");
+            }
+        }
+    }
+}
+
+/// Tiny closed shapes with shared edges (a tetrahedron, an octahedron, a cube), built as the
+/// frontend builds them (`binary_options`): the tetrahedron (4) and the octahedron (8) are one
+/// root leaf of 1 and 2 groups, the cube (12, split by the binary build) a root node over
+/// leaves in 3 groups; every query answers as brute force and as the binary tree, rays
+/// through edges and vertices included.
+#[test]
+fn tiny_closed_meshes_answer_as_brute_force() {
+    let (cube_pos, cube_tris) = cube();
+    let tetra_pos = vec![
+        Vec3::new(1.0, 1.0, 1.0),
+        Vec3::new(1.0, -1.0, -1.0),
+        Vec3::new(-1.0, 1.0, -1.0),
+        Vec3::new(-1.0, -1.0, 1.0),
+    ];
+    let tetra = vec![[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]];
+    let octa_pos = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+    let octa = vec![
+        [0, 2, 4],
+        [2, 1, 4],
+        [1, 3, 4],
+        [3, 0, 4],
+        [2, 0, 5],
+        [1, 2, 5],
+        [3, 1, 5],
+        [0, 3, 5],
+    ];
+    for (pos, tris) in [(tetra_pos, tetra), (octa_pos, octa), (cube_pos, cube_tris)] {
+        let mesh = TriangleMesh::new(&pos, &tris);
+        let n = mesh.len();
+        let b = Bvh::build(
+            &mesh,
+            vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
+            vec![0u32; index_capacity(n)],
+            &binary_options(BuildOptions::default()),
+        )
+        .unwrap();
+        let mut asked = (0, 0);
+        let w = VecWide::<8>::from_binary_with(&b, &mesh, |nodes, groups| {
+            asked = (nodes, groups);
+            (vec![WideNode::EMPTY; nodes], vec![LeafGroup::EMPTY; groups])
+        })
+        .unwrap();
+        if n <= LEAF_OPEN_ABOVE {
+            assert_eq!(asked, (0, n.div_ceil(4)), "exact sizes asked for");
+            assert_eq!(
+                w.root(),
+                ChildRef::Leaf {
+                    start: 0,
+                    count: n as u32
+                }
             );
         } else {
-            assert_eq!(runs, [n as u32], "n = {n}");
+            assert_eq!(asked, (1, 3), "n = {n}: one node, the runs in 3 groups");
+            assert_eq!(w.root(), ChildRef::Inner(0));
         }
+        assert_eq!(w.stats().bytes, 224 * asked.0 + 160 * asked.1);
+        let rays = rays_at(&mesh, 3);
+        // At least the rays at the triangles' centres hit.
+        assert!(queries_equal_brute_force(&w, &mesh, &rays) >= n);
+        for ray in &rays {
+            let want = b.closest_hit(
+                ray,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new(),
+            );
+            let got = w.closest_hit(
+                ray,
+                &mut Triangles::new(&mesh, &Watertight),
+                &mut Query::new(),
+            );
+            assert_eq!(got, want, "against the binary tree: {ray:?}");
+        }
+    }
+}
+
+/// A root leaf's refit: the box follows the moved vertices, a non-finite triangle is named,
+/// left out of the box and never reported.
+#[test]
+fn a_root_leaf_refits() {
+    let (mut pos, tris) = soup(LEAF_OPEN_ABOVE, 77);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let mut w = wide::<8>(&mesh, 4);
+    assert_eq!(w.node_count(), 0);
+    assert_eq!(w.refit(&mesh), Ok(()));
+    assert_eq!(w.bounds(), vertex_box(&mesh));
+    for p in &mut pos {
+        *p = *p * 1.5 + Vec3::new(0.5, -2.0, 0.25);
+    }
+    let moved = TriangleMesh::new(&pos, &tris);
+    assert_eq!(w.refit(&moved), Ok(()));
+    assert_eq!(w.bounds(), vertex_box(&moved));
+    queries_equal_brute_force(&w, &moved, &rays_at(&moved, 9));
+    let moved_rays = rays_at(&moved, 10);
+    pos[3 * 4 + 2] = Vec3::new(f32::NAN, 0.0, 0.0);
+    let broken = TriangleMesh::new(&pos, &tris);
+    assert_eq!(
+        w.refit(&broken),
+        Err(BvhError::NonFinite(crate::error::NonFiniteError {
+            element: crate::error::InputElement::Primitive,
+            index: 4
+        }))
+    );
+    let others: Vec<[u32; 3]> = tris
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| i != 4)
+        .map(|(_, t)| *t)
+        .collect();
+    assert_eq!(w.bounds(), vertex_box(&TriangleMesh::new(&pos, &others)));
+    for ray in moved_rays {
+        let got = w.closest_hit(
+            &ray,
+            &mut Triangles::new(&broken, &Watertight),
+            &mut Query::new(),
+        );
+        assert_eq!(
+            got.map(|(p, h)| (p, h.t)),
+            brute(&broken, &Watertight, &ray),
+            "{ray:?}"
+        );
     }
 }
 

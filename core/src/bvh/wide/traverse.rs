@@ -412,7 +412,7 @@ where
     ) {
         let tree = (self.nodes(), self.groups());
         let groups = tree.1;
-        if tree.0.is_empty() {
+        if self.root == ChildRef::EMPTY {
             return;
         }
         let wray = PaddedRay::new(slab, projection_pad(slab.origin, self.extent));
@@ -420,15 +420,16 @@ where
         // A closest-hit ray that misses the root's box misses all its children: it ends here,
         // before the node test's eight-lane setup (the root's test counted as its visit).
         // Not for any-hit rays, which mostly start on a surface inside the box.
-        if !ANY && !GENERAL && !wray.hits_box(&self.root, ray.t_min, cull_bound(ray.t_max)) {
+        if !ANY && !GENERAL && !wray.hits_box(&self.root_box, ray.t_min, cull_bound(ray.t_max)) {
             local.nodes_visited += 1;
             add_stats(stats, &local);
             return;
         }
         let mut cur = *ray;
         let mut sp = 0usize;
-        // The root is node 0 (its own box is the union of its children's: not tested).
-        let mut next = 0u32;
+        // The root: node 0 (its own box is the union of its children's: not tested), or a
+        // leaf (the tree has no node), which the first loop leaves at once.
+        let mut next = self.root;
         // Down to the first leaf, nodes only (the interval cannot shrink before a leaf).
         let mut bound = cull_bound(cur.t_max);
         loop {

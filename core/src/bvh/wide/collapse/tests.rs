@@ -44,7 +44,7 @@ fn inner_entries_expand_before_leaf_runs_largest_first() {
         node(2.0, 32, 10),
         node(2.0, 42, 10),
     ];
-    let list = child_list::<4>(&nodes, 0, true);
+    let list = child_list::<4>(&nodes, 0);
     let got: Vec<_> = list.iter().collect();
     assert_eq!(
         got,
