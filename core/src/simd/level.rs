@@ -38,8 +38,9 @@ pub trait SimdLevel: Copy + sealed::Sealed {
     fn behind_misses8(self, q: &Behind8<'_>) -> Option<u32>;
 }
 
-/// The inputs of [`SimdLevel::behind_misses8`]: two groups of four triangles and a ray in the
-/// watertight test's permuted axes (rows as in [`Sheared8`]).
+/// The inputs of [`SimdLevel::behind_misses8`]: two groups of four triangles and a ray, in
+/// world axes (the groups as stored: no permutation, which would change the signs of both
+/// determinants below alike).
 ///
 /// Per lane, with the vertices `p0, p1, p2`, the origin `o` and the direction `d`, all `f32`
 /// and in plain `f32` operations (never fused; sums `(x + y) + z`; `|·|` clears the sign bit;
@@ -59,13 +60,13 @@ pub trait SimdLevel: Copy + sealed::Sealed {
 /// opposite signs (a NaN anywhere leaves it clear).
 #[derive(Clone, Copy, Debug)]
 pub struct Behind8<'a> {
-    /// The first group's rows, vertex by vertex, in the permuted axis order (world units).
-    pub first: [[&'a [f32; 4]; 3]; 3],
-    /// The second group's rows, likewise.
-    pub second: [[&'a [f32; 4]; 3]; 3],
-    /// The ray origin in the permuted axis order (world units).
+    /// The first group (bits 0–3; world units).
+    pub first: &'a crate::triangle::TriangleLanes,
+    /// The second group (bits 4–7).
+    pub second: &'a crate::triangle::TriangleLanes,
+    /// The ray origin (world units).
     pub origin: [f32; 3],
-    /// The ray direction in the permuted axis order (world units per unit of `t`).
+    /// The ray direction (world units per unit of `t`).
     pub dir: [f32; 3],
     /// `(|d_0| + |d_1|) + |d_2|` of `dir`, in that order (world units per unit of `t`).
     pub dir_l1: f32,
@@ -357,9 +358,9 @@ fn behind_misses8_avx2(q: &Behind8<'_>) -> u32 {
     // Written out (no `array::map`/`from_fn`, which are not always inlined).
     let vertex = |v: usize| {
         [
-            row8(q.first[v][0], q.second[v][0]),
-            row8(q.first[v][1], q.second[v][1]),
-            row8(q.first[v][2], q.second[v][2]),
+            row8(&q.first.v[v][0], &q.second.v[v][0]),
+            row8(&q.first.v[v][1], &q.second.v[v][1]),
+            row8(&q.first.v[v][2], &q.second.v[v][2]),
         ]
     };
     let (p0, p1, p2) = (vertex(0), vertex(1), vertex(2));

@@ -6,16 +6,20 @@
 //! when the exact path is certain to refuse it too, so the answers are the same, ray for ray.
 //!
 //! **The rule.** Per lane, in `f32` (the lane formula of [`crate::simd_level::Behind8`], in
-//! the watertight test's permuted axes): `a = p0 − o`, `e1 = p1 − p0`, `e2 = p2 − p0`,
+//! world axes): `a = p0 − o`, `e1 = p1 − p0`, `e2 = p2 − p0`,
 //! `n = e1 × e2`, `wn = a·n` (the orientation `det[a, e1, e2] = det[p0 − o, p1 − o, p2 − o]`)
 //! and `dn = d·n`, each with a bound. A lane is refused when `|wn|` and `|dn|` clear their
 //! bounds and have opposite signs (then `t = wn/dn < 0` exactly) and `t_min ≥ 0`.
 //!
-//! **Permuted axes.** A permutation `P` of the axes (the watertight swap of `k_x`, `k_y` for
-//! `d_kz < 0` is one more transposition) gives `(Pu) × (Pv) = det(P)·P(u × v)`, so `wn` and
-//! `dn` both change sign by `det(P) = ±1`: the sign of `t = wn/dn` is unchanged. The
-//! permanents, `max` and the 1-norms below are sums over the axes, also unchanged, and the
-//! bound derivation does not depend on the order of the axes.
+//! **Axes.** The cull works in world axes, straight from the stored groups, while the exact
+//! path's edges use the watertight test's permuted axes; its `f64` plane kernel and `hit_t`
+//! use world axes too. A permutation `P` of the axes (the watertight swap of `k_x`, `k_y` for
+//! `d_kz < 0` is one more transposition) would give `(Pu) × (Pv) = det(P)·P(u × v)`, so `wn`
+//! and `dn` would both change sign by `det(P) = ±1`: the sign of `t = wn/dn` is the same in
+//! any axis order, and the permanents, `max` and the 1-norms below are sums over the axes,
+//! so the bound derivation does not depend on the order either. (An earlier form took the
+//! permuted rows of the edge cull: the same bits, about 40 more instructions a call to
+//! gather them.)
 //!
 //! **The `f32` bound.** Standard model (`crate::float`), `u = 2⁻²⁴`. Each elementary term of
 //! `wn`, `a_i·e1_j·e2_k`, passes through at most 8 roundings: `a_i`, `e1_j`, `e2_k` (one
@@ -59,7 +63,6 @@ use super::WatertightRay;
 use crate::ray::Ray;
 use crate::simd_level::{Behind8, SimdLevel};
 use crate::triangle::TriangleLanes;
-use glam::Vec3;
 
 /// Relative bound of the `f32` values `wn`, `dn` of the cull against their computed
 /// permanents: `2⁻²⁰ = 16u`, twice the error bound `γ₈/(1 − γ₈) < 9u` (module docs).
@@ -114,7 +117,8 @@ impl WatertightRay {
     /// line of `ray` certainly crosses behind its origin while `ray.t_min ≥ 0` (module docs):
     /// [`super::Watertight`] misses each of them. `0` when `t_min < 0` (or NaN). The same bits
     /// at every level: `level`'s eight-lane kernel when it has one, else the lane formula
-    /// for the kept lanes only.
+    /// for the kept lanes only. A method of the prepared ray, like the edge cull, although
+    /// it reads only `ray` (it works in world axes).
     #[inline(always)]
     #[must_use]
     pub fn behind_misses2<L: SimdLevel>(
@@ -128,16 +132,13 @@ impl WatertightRay {
         if !(ray.t_min >= 0.0) {
             return 0;
         }
-        let k = self.axes();
-        let permute = |p: Vec3| {
-            let p = p.to_array();
-            [p[k[0]], p[k[1]], p[k[2]]]
-        };
-        let (origin, dir) = (permute(ray.origin), permute(ray.direction));
+        // World axes: the permutation and shear of `self` are not needed (module docs).
+        let _ = self;
+        let (origin, dir) = (ray.origin.to_array(), ray.direction.to_array());
         let dir_l1 = (dir[0].abs() + dir[1].abs()) + dir[2].abs();
         let q = Behind8 {
-            first: super::permuted_rows(first, k),
-            second: super::permuted_rows(second, k),
+            first,
+            second,
             origin,
             dir,
             dir_l1,
@@ -150,10 +151,10 @@ impl WatertightRay {
         while todo != 0 {
             let bit = todo.trailing_zeros() as usize;
             todo &= todo - 1;
-            let rows = if bit < 4 { &q.first } else { &q.second };
-            let l = bit & 3;
-            let p = rows.map(|v| [v[0][l], v[1][l], v[2][l]]);
-            out |= u32::from(behind_lane(p, origin, dir, dir_l1)) << bit;
+            let group = if bit < 4 { first } else { second };
+            if let Some(p) = group.get(bit & 3) {
+                out |= u32::from(behind_lane(p, origin, dir, dir_l1)) << bit;
+            }
         }
         out
     }
@@ -167,6 +168,7 @@ mod tests {
     use crate::test_util::{Lcg, special_f32, unit_vec};
     use crate::triangle::{TriangleIntersector, Watertight};
     use crate::{Ray, spawn_ray_to};
+    use glam::Vec3;
 
     /// Eight triangles around a surface triangle `tri` (lane `at`), with coordinates of
     /// other triangles drawn near and far, a few replaced by NaN, `±∞`, huge or tiny values.
