@@ -109,3 +109,20 @@ pub const SHADOW_SEGMENT_END_SLACK: f32 = 16.0 * crate::float::F32_UNIT_ROUNDOFF
 /// bound, which also covers the rounding of the padded corners themselves. Cost: a box grows
 /// by ~2e-6 of the scene's extent from the origin, a few extra leaf visits on a grazing ray.
 pub const BVH_PROJECTION_PAD: f32 = gamma(16);
+
+/// Relative bound of the `f32` values `wn`, `dn` of the watertight test's eight-lane "crossed
+/// behind the origin" cull ([`crate::triangle::WatertightRay::behind_misses2`]) against their computed
+/// permanents: `2⁻²⁰ = 16u`, twice the error bound `γ₈/(1 − γ₈) < 9u` (the derivation: `core/src/triangle/watertight/behind.rs`).
+/// Unitless.
+pub const BEHIND_REL: f32 = 1.0 / 1_048_576.0;
+
+/// The margin that makes the `f64` filters of the exact path pass for every base vertex it
+/// may choose: `2⁻⁴⁰` of `m²·|·|₁` (the derivation: `core/src/triangle/watertight/behind.rs`; `2¹⁰` times what they need). Unitless (per
+/// square of world units).
+pub const BEHIND_F64_MARGIN: f32 = 1.0 / 1_099_511_627_776.0;
+
+/// Absolute floor of the cull's bounds: `2⁻¹⁴⁰` (an `f32` subnormal, `2⁹` times the
+/// smallest), above the absolute error of products that underflow (`2⁻¹⁴⁷·(|·|₁ + 1)`,
+/// derived in `core/src/triangle/watertight/behind.rs`). World units cubed (`wn`) and that
+/// per unit of `t` (`dn`).
+pub const BEHIND_TINY: f32 = f32::from_bits(1 << 9);

@@ -54,7 +54,7 @@ pub trait SimdLevel: Copy + sealed::Sealed {
 ///   `a1 = (|a_x| + |a_y|) + |a_z|`;
 /// - `bound_w = (R·w_nn + margin·a1) + T`, `bound_d = (R·d_nn + margin·dir_l1) + T`, with
 ///   `R`, `F`, `T` the constants `BEHIND_REL`, `BEHIND_F64_MARGIN`, `BEHIND_TINY` of
-///   `triangle/watertight/behind.rs`;
+///   `crate::tolerance`, derived in `triangle/watertight/behind.rs`;
 ///
 /// and the lane's bit is set when `|wn| > bound_w`, `|dn| > bound_d` and `wn`, `dn` have
 /// opposite signs (a NaN anywhere leaves it clear).
@@ -344,7 +344,7 @@ fn row8(lo: &[f32; 4], hi: &[f32; 4]) -> core::arch::x86_64::__m256 {
 #[target_feature(enable = "avx2,fma")]
 #[inline]
 fn behind_misses8_avx2(q: &Behind8<'_>) -> u32 {
-    use crate::triangle::{BEHIND_F64_MARGIN, BEHIND_REL, BEHIND_TINY};
+    use crate::tolerance::{BEHIND_F64_MARGIN, BEHIND_REL, BEHIND_TINY};
     use core::arch::x86_64::{
         __m256, _CMP_GT_OQ, _mm256_add_ps, _mm256_and_ps, _mm256_andnot_ps, _mm256_cmp_ps,
         _mm256_max_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_sub_ps,

@@ -39,9 +39,6 @@ pub use cramer::Cramer;
 pub use lanes::{LANES, TriangleLanes, pair_mask};
 pub use moller_trumbore::MollerTrumbore;
 pub use reference::F64Reference;
-// The AVX2 kernel's constants (`simd::level`).
-#[cfg(target_arch = "x86_64")]
-pub(crate) use watertight::{BEHIND_F64_MARGIN, BEHIND_REL, BEHIND_TINY};
 pub use watertight::{ShearedTest, Watertight, WatertightF32, WatertightRay};
 pub use watertight_f32_exact::WatertightF32Exact;
 

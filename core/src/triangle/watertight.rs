@@ -13,10 +13,6 @@ use glam::{DVec3, Vec3};
 mod avx2;
 mod behind;
 
-// The AVX2 kernel's constants (`simd::level`).
-#[cfg(target_arch = "x86_64")]
-pub(crate) use behind::{BEHIND_F64_MARGIN, BEHIND_REL, BEHIND_TINY};
-
 /// Per-ray data of the watertight test: the axis permutation that makes the largest direction
 /// component `z`, and the shear that maps the ray to the `+z` axis through the origin.
 #[derive(Clone, Copy, Debug, PartialEq)]

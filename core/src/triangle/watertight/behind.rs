@@ -27,14 +27,14 @@
 //! of the sum `(x + y) + z`; so `|wn − wn_exact| ≤ γ₈·W` with `W = |a|·N` of the exact
 //! values. The computed permanent `w_nn` has the same roundings on positive terms, so
 //! `W ≤ w_nn/(1 − γ₈)`, and the error is at most `γ₈/(1 − γ₈)·w_nn < 9u·w_nn`. `dn` has one
-//! rounding less per term (the direction is an input): `< 8u·d_nn`. [`BEHIND_REL`] `= 16u` is
+//! rounding less per term (the direction is an input): `< 8u·d_nn`. [`BEHIND_REL`](crate::tolerance::BEHIND_REL) `= 16u` is
 //! twice the larger: `|value| > BEHIND_REL·perm` leaves the exact value beyond the error, of
 //! the same sign, with the same margin again.
 //!
 //! **Underflow and overflow.** A product below the normal range rounds absolutely (at most
 //! `2⁻¹⁵⁰`; sums and differences of `f32` are then exact): at most two such in each `n_i`,
 //! one more in each product with `a_i` or `d_i`, so an absolute error below
-//! `2⁻¹⁴⁷·(|a|₁ + 1)` (resp. `|d|₁`), which the terms with [`BEHIND_TINY`] `= 2⁻¹⁴⁰` cover
+//! `2⁻¹⁴⁷·(|a|₁ + 1)` (resp. `|d|₁`), which the terms with [`BEHIND_TINY`](crate::tolerance::BEHIND_TINY) `= 2⁻¹⁴⁰` cover
 //! (the bound's own underflowing products included). An overflow gives `±∞` or NaN in the
 //! permanent at least where it gives it in the value (each permanent term is the rounded
 //! magnitude of the value's term, rounding is monotone), so the bound is `∞` or NaN and the
@@ -50,7 +50,7 @@
 //! magnitude, and every permanent component at most `2m²` (`m = max s_i`): the `f64`
 //! permanents are at most `(1 + γ₆)·2m²·|d|₁` and `(1 + γ₆)·2m²·|a|₁` (`f64` differences
 //! of `f32` values round at most once). The `margin·|·|₁` term of the bound, with
-//! [`BEHIND_F64_MARGIN`] `= 2⁻⁴⁰`, keeps the exact value beyond `2⁻⁴⁰·(1 − γ₄)·m²·|·|₁`,
+//! [`BEHIND_F64_MARGIN`](crate::tolerance::BEHIND_F64_MARGIN) `= 2⁻⁴⁰`, keeps the exact value beyond `2⁻⁴⁰·(1 − γ₄)·m²·|·|₁`,
 //! more than `2¹⁰` times the `2·γ₁₂·(1 + γ₆)·2m²·|·|₁` that makes each `f64` filter pass
 //! (its value within `γ₁₂·perm` of the exact one, beyond `γ₁₂·perm`). With both filters
 //! passed the computed signs are the exact ones and opposite, so the computed `t` is negative
@@ -62,22 +62,8 @@
 use super::WatertightRay;
 use crate::ray::Ray;
 use crate::simd_level::{Behind8, SimdLevel};
+use crate::tolerance::{BEHIND_F64_MARGIN, BEHIND_REL, BEHIND_TINY};
 use crate::triangle::TriangleLanes;
-
-/// Relative bound of the `f32` values `wn`, `dn` of the cull against their computed
-/// permanents: `2⁻²⁰ = 16u`, twice the error bound `γ₈/(1 − γ₈) < 9u` (module docs).
-/// Unitless.
-pub(crate) const BEHIND_REL: f32 = 1.0 / 1_048_576.0;
-
-/// The margin that makes the `f64` filters of the exact path pass for every base vertex it
-/// may choose: `2⁻⁴⁰` of `m²·|·|₁` (module docs; `2¹⁰` times what they need). Unitless (per
-/// square of world units).
-pub(crate) const BEHIND_F64_MARGIN: f32 = 1.0 / 1_099_511_627_776.0;
-
-/// Absolute floor of the cull's bounds: `2⁻¹⁴⁰` (an `f32` subnormal, `2⁹` times the
-/// smallest), above the absolute error of products that underflow (`2⁻¹⁴⁷·(|·|₁ + 1)`,
-/// module docs). World units cubed (`wn`) and that per unit of `t` (`dn`).
-pub(crate) const BEHIND_TINY: f32 = f32::from_bits(1 << 9);
 
 /// The lane formula of [`Behind8`] for one triangle `p` (vertices, permuted axes), origin
 /// `o`, direction `d` and `d_l1 = (|d_0| + |d_1|) + |d_2|`: `true` when the lane is refused.
