@@ -735,23 +735,7 @@ fn a_tree_that_is_one_unopened_leaf_run_has_no_node() {
             queries_equal_brute_force(&w4, &mesh, &rays);
             // The box query: every triangle whose box meets the query box.
             let mut s = 7u64 + n as u64;
-            for _ in 0..50 {
-                let c = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 12.0 - 6.0;
-                let q = Aabb::new(c, c + Vec3::splat(lcg(&mut s) * 4.0));
-                let mut got = Vec::new();
-                w.query_box(&mesh, &q, |p| {
-                    got.push(p);
-                    true
-                });
-                got.sort_unstable();
-                let expect: Vec<u32> = (0..n as u32)
-                    .filter(|&i| {
-                        let v = mesh.triangle(i as usize).unwrap();
-                        Aabb::new(v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2])).overlaps(&q)
-                    })
-                    .collect();
-                assert_eq!(got, expect, "n = {n}");
-            }
+            box_queries_equal_brute_force(&w, &mesh, &mut s, 50, 4.0);
         }
     }
 }
@@ -771,17 +755,8 @@ fn tiny_closed_meshes_answer_as_brute_force() {
         Vec3::new(-1.0, -1.0, 1.0),
     ];
     let tetra = vec![[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]];
-    let octa_pos = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
-    let octa = vec![
-        [0, 2, 4],
-        [2, 1, 4],
-        [1, 3, 4],
-        [3, 0, 4],
-        [2, 0, 5],
-        [1, 2, 5],
-        [3, 1, 5],
-        [0, 3, 5],
-    ];
+    let octa_pos = crate::solids::OCTAHEDRON_VERTICES.to_vec();
+    let octa = crate::solids::OCTAHEDRON_TRIANGLES.to_vec();
     for (pos, tris) in [(tetra_pos, tetra), (octa_pos, octa), (cube_pos, cube_tris)] {
         let mesh = TriangleMesh::new(&pos, &tris);
         let n = mesh.len();
@@ -956,6 +931,35 @@ fn deep_unbalanced_input_stays_within_the_stack_and_finds_everything() {
     }
 }
 
+/// `count` box queries of `w` over `mesh` (random boxes of side up to `side` in `[−6, 6]³`,
+/// drawn from `seed`) against brute force: every triangle whose box meets the query box, each
+/// once.
+fn box_queries_equal_brute_force<const W: usize>(
+    w: &VecWide<W>,
+    mesh: &TriangleMesh<'_>,
+    seed: &mut u64,
+    count: usize,
+    side: f32,
+) {
+    for _ in 0..count {
+        let c = Vec3::new(lcg(seed), lcg(seed), lcg(seed)) * 12.0 - 6.0;
+        let q = Aabb::new(c, c + Vec3::splat(lcg(seed) * side));
+        let mut got = Vec::new();
+        w.query_box(mesh, &q, |p| {
+            got.push(p);
+            true
+        });
+        got.sort_unstable();
+        let expect: Vec<u32> = (0..mesh.len() as u32)
+            .filter(|&i| {
+                let v = mesh.triangle(i as usize).unwrap();
+                Aabb::new(v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2])).overlaps(&q)
+            })
+            .collect();
+        assert_eq!(got, expect, "{} triangles, {q:?}", mesh.len());
+    }
+}
+
 #[test]
 fn box_query_and_clearance_equal_brute_force_and_the_binary_tree() {
     let (pos, tris) = soup(800, 21);
@@ -963,23 +967,7 @@ fn box_query_and_clearance_equal_brute_force_and_the_binary_tree() {
     let w = wide::<8>(&mesh, 4);
     let b = binary(&mesh, 4);
     let mut s = 99u64;
-    for _ in 0..200 {
-        let c = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 12.0 - 6.0;
-        let q = Aabb::new(c, c + Vec3::splat(lcg(&mut s) * 2.0));
-        let mut got = Vec::new();
-        w.query_box(&mesh, &q, |p| {
-            got.push(p);
-            true
-        });
-        got.sort_unstable();
-        let expect: Vec<u32> = (0..800u32)
-            .filter(|&i| {
-                let v = mesh.triangle(i as usize).unwrap();
-                Aabb::new(v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2])).overlaps(&q)
-            })
-            .collect();
-        assert_eq!(got, expect);
-    }
+    box_queries_equal_brute_force(&w, &mesh, &mut s, 200, 2.0);
     let points: Vec<Vec3> = (0..100).map(|_| unit_vec(&mut s) * 9.0).collect();
     let normals: Vec<Vec3> = points.iter().map(|p| -*p * 0.5).collect();
     let mut a = vec![0.0; 100];
