@@ -94,6 +94,18 @@ impl TopLevel {
         ctx: &mut QueryCtx,
     ) -> Option<(u32, SurfaceHit)> {
         let (listed, r) = self.closest_listed(objects, ray, ctx);
+        self.closest_boxed(objects, (listed, r), ctx)
+    }
+
+    /// [`TopLevel::closest`] given `ray`'s [`TopLevel::closest_listed`], `(listed, r)`: the
+    /// bounded objects' closest hit in `r`'s interval, or `listed` where it is closer or
+    /// later.
+    fn closest_boxed(
+        &self,
+        objects: &[Node],
+        (listed, r): (Option<(u32, SurfaceHit)>, Ray),
+        ctx: &mut QueryCtx,
+    ) -> Option<(u32, SurfaceHit)> {
         let Some(bvh) = &self.bvh else {
             return listed;
         };
@@ -143,8 +155,13 @@ impl TopLevel {
         for (i, r) in (0u32..).zip(&shrunk) {
             // Where most rays meet several objects (a crowd of instances), the walk that lists
             // them is spent for nothing: the rest take the single-ray query at once.
+            // The ray's unbounded objects were tested above: `(best, r)` is its
+            // `closest_listed`, which the single-ray query goes on from.
+            let alone = |best: &mut Option<_>, ctx: &mut QueryCtx| {
+                *best = self.closest_boxed(objects, (best.take(), *r), ctx);
+            };
             if i as usize >= PROBED_RAYS && 2 * several_seen > i as usize {
-                best[i as usize] = self.closest(objects, &rays[i as usize], ctx);
+                alone(&mut best[i as usize], ctx);
                 continue;
             }
             let mut first = None;
@@ -159,7 +176,7 @@ impl TopLevel {
             let several = bvh.any_hit(r, &mut list, &mut Query::new()).is_some();
             several_seen += usize::from(several);
             match first {
-                _ if several => best[i as usize] = self.closest(objects, &rays[i as usize], ctx),
+                _ if several => alone(&mut best[i as usize], ctx),
                 Some(k) => pairs.push((k, i)),
                 None => {}
             }
