@@ -12,7 +12,8 @@
 //! table of the ratios per mesh and, per set, their geometric mean and the worst mesh.
 //!
 //! Each camera set is also traced by the batch path ([`closest_batch_simd`]: coherent rays in
-//! packets; its answers checked equal to the single-ray query's), reported as the set
+//! packets; its answers checked equal to the single-ray query's; timed in calls of
+//! [`BATCH_BLOCK`] rays answered into one kept buffer), reported as the set
 //! `<set>+batch`: against Embree's `rtcIntersect1` as above, and against Embree's packet API,
 //! `rtcIntersect8` and `rtcIntersect16`, on the same rays in the same round-robin passes.
 //!
@@ -403,6 +404,10 @@ fn bench<T: TriangleIntersector>(
     })
 }
 
+/// Rays per call of the timed batch side ([`batch_figures`]): a few rows of a camera, a
+/// multiple of the packet size (16), its answers (20 bytes each) kept in the L2 cache.
+const BATCH_BLOCK: usize = 4096;
+
 /// The batch path's figures on the camera set `set` (`rays`, `hits` of them hit): halfray's
 /// [`closest_batch_simd`] (checked equal to the single-ray query, bit for bit) against Embree's
 /// `rtcIntersect1` (`single`: default, robust) and its packet API (`packets`: default by 8 and
@@ -431,11 +436,19 @@ fn batch_figures<T: TriangleIntersector>(
             None,
         ));
     }
-    let out = std::cell::RefCell::new(out);
+    // Timed block by block into one kept buffer, as a renderer answers a row: the other sides
+    // store no answer, and a set-sized buffer (20 MB for a 1024² camera) written and read
+    // back would time the memory, not the walk.
+    let block = std::cell::RefCell::new(vec![None; BATCH_BLOCK.min(rays.len())]);
     let ours = |rays: &[Ray]| {
-        let mut out = out.borrow_mut();
-        let done = closest_batch_simd(wide, mesh, isect, rays, &mut out, None);
-        usize::from(done.is_ok()) * out.iter().filter(|h| h.is_some()).count()
+        let mut block = block.borrow_mut();
+        rays.chunks(BATCH_BLOCK)
+            .map(|rays| {
+                let out = &mut block[..rays.len()];
+                let done = closest_batch_simd(wide, mesh, isect, rays, out, None);
+                usize::from(done.is_ok()) * out.iter().filter(|h| h.is_some()).count()
+            })
+            .sum()
     };
     let each: Vec<rivals::BatchQuery<'_>> = single
         .iter()
