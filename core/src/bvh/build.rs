@@ -85,6 +85,9 @@ pub(super) struct Task {
     pub(super) end: u32,
     pub(super) depth: u32,
     pub(super) centroids: Aabb,
+    /// Surface area of the whole tree's box (the root's), the scale of
+    /// [`split_spares_tests`].
+    pub(super) root_area: f32,
 }
 
 pub(super) const EMPTY_TASK: Task = Task {
@@ -93,6 +96,7 @@ pub(super) const EMPTY_TASK: Task = Task {
     end: 0,
     depth: 0,
     centroids: Aabb::EMPTY,
+    root_area: 0.0,
 };
 
 /// The builder's working memory: the SAH bins of the three axes
@@ -344,6 +348,7 @@ pub(super) fn build_top<R: Refs>(
         end: root.count,
         depth: 0,
         centroids: root.centroids,
+        root_area: root.bounds.surface_area(),
     };
     let mut view = NodeView {
         nodes,
@@ -425,9 +430,31 @@ fn make_leaf(view: &mut NodeView<'_>, task: &Task) {
     }
 }
 
+/// Primitive tests per ray that splitting a node of at most
+/// [`BuildOptions::leaf_threshold`] primitives must spare for the split to be made anyway
+/// (and the wide tree's collapse to open such a leaf run): a ray that enters the root's box
+/// meets a node of surface area `A` with probability about `A / A_root` (uniformly spread
+/// rays), so a leaf of `n` primitives costs it `n·A / A_root` tests on average and its two
+/// halves `(n_L·A_L + n_R·A_R) / A_root`. Unitless (tests per ray). A small node of an ordinary
+/// mesh is thousands of times smaller than the root and spares far less; this catches the
+/// few huge primitives at the top of a tree (a room's walls, each 10⁴ times the object in
+/// it: one leaf of three walls, the whole room's box, cost every ray six tests;
+/// `docs/performance.md`).
+pub const LARGE_NODE_SAVING: f32 = 0.5;
+
+/// `true` when splitting a node of `count` primitives and surface area `area` into halves
+/// whose `count·area` sum to `halves` spares a ray entering the root's box (surface area
+/// `root_area`) at least [`LARGE_NODE_SAVING`] primitive tests on average. `false` for a root
+/// without area or any non-finite input.
+#[must_use]
+pub(crate) fn split_spares_tests(count: usize, area: f32, halves: f32, root_area: f32) -> bool {
+    root_area > 0.0 && count as f32 * area - halves >= LARGE_NODE_SAVING * root_area
+}
+
 /// Splits `task`'s node in two, writing the parent and both children's boxes, or makes it a
 /// leaf (returns `None`). `(max_leaf, threshold, cost)`: larger nodes are always split, nodes
-/// of at most `threshold` never; `cost` is the SAH's primitive cost.
+/// of at most `threshold` only when the split [spares enough tests](split_spares_tests);
+/// `cost` is the SAH's primitive cost.
 fn split_node<R: Refs>(
     refs: &mut R,
     nodes: &mut NodeView<'_>,
@@ -438,26 +465,35 @@ fn split_node<R: Refs>(
 ) -> Option<(Task, Task)> {
     let count = task.end - task.start;
     let parent_bounds = nodes.bounds(task.node)?;
-    if count <= threshold || task.depth as usize >= MAX_DEPTH || !nodes.has_pair(*node_count) {
+    let area = parent_bounds.surface_area();
+    // A node of at most `threshold` is a leaf unless it is large enough that a split could
+    // spare LARGE_NODE_SAVING tests (`halves` = 0 bounds every split's saving).
+    let small = count <= threshold;
+    if (small && !(count >= 2 && split_spares_tests(count as usize, area, 0.0, task.root_area)))
+        || task.depth as usize >= MAX_DEPTH
+        || !nodes.has_pair(*node_count)
+    {
         make_leaf(nodes, task);
         return None;
     }
     let range = task.start as usize..task.end as usize;
-    let split = best_sah_split(
-        refs,
-        bins,
-        range.clone(),
-        &task.centroids,
-        parent_bounds.surface_area(),
-        cost,
-    );
-    let leaf_cost = cost * count as f32 * parent_bounds.surface_area();
+    let split = best_sah_split(refs, bins, range.clone(), &task.centroids, area, cost);
+    let leaf_cost = cost * count as f32 * area;
     // Deep in the tree, split by count: from MEDIAN_DEPTH on every split halves the node, so
     // no node reaches MAX_DEPTH with more than `max_leaf` primitives (N < 2³¹ halves to one in
     // 31 levels) and leaves never exceed the requested size.
     let split = split.filter(|_| task.depth < MEDIAN_DEPTH);
+    // The split's `n_L·A_L + n_R·A_R` (its SAH numerator without the traversal term).
+    let pays = |s: &super::sah::Split| {
+        if small {
+            let halves = (s.cost - super::TRAVERSAL_COST * area) / cost;
+            split_spares_tests(count as usize, area, halves, task.root_area)
+        } else {
+            s.cost < leaf_cost || count > max_leaf
+        }
+    };
     let (mid, left_b, right_b, left_c, right_c) = match split {
-        Some(s) if s.cost < leaf_cost || count > max_leaf => {
+        Some(s) if pays(&s) => {
             let (mid, lc, rc) = partition(refs, range, &s);
             (task.start + mid, s.left, s.right, lc, rc)
         }
@@ -492,6 +528,7 @@ fn split_node<R: Refs>(
             end: mid,
             depth,
             centroids: left_c,
+            root_area: task.root_area,
         },
         Task {
             node: first + 1,
@@ -499,6 +536,7 @@ fn split_node<R: Refs>(
             end: task.end,
             depth,
             centroids: right_c,
+            root_area: task.root_area,
         },
     ))
 }

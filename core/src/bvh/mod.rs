@@ -93,7 +93,7 @@ mod tests;
 pub use baked::{
     BAKED_ALIGN, BAKED_HEADER_BYTES, BAKED_MAGIC, BAKED_VERSION, BakedError, BakedLayout,
 };
-pub use build::{BuildOptions, BuildWorkspace};
+pub use build::{BuildOptions, BuildWorkspace, LARGE_NODE_SAVING};
 pub use error::BvhError;
 pub use jobs::{BuildJob, JobPart, JobParts};
 pub use load::{LoadError, load_scratch_len};

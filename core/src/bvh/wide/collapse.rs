@@ -5,6 +5,7 @@ use super::group_capacity;
 use super::node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
 use super::{LEAF_MERGE, LEAF_OPEN_ABOVE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh};
 use crate::aabb::Aabb;
+use crate::bvh::build::split_spares_tests;
 use crate::bvh::{Bvh, BvhError, BvhNode};
 use crate::error::{CapacityError, NonFiniteError, Storage};
 use crate::mesh::TriangleMesh;
@@ -58,11 +59,44 @@ fn opens(nodes: &[BvhNode], b: u32, run: &core::ops::Range<usize>) -> bool {
             .is_some_and(|n| n.children().is_some())
 }
 
+/// `true` when the leaf run `run` of binary node `b` is worth opening for its size: `b` is an
+/// inner node whose split [spares a ray entering the root's box enough triangle
+/// tests](crate::bvh::LARGE_NODE_SAVING) (the binary build splits a node of at most
+/// [`LEAF_OPEN_ABOVE`] triangles only then), in a tree of more than [`LEAF_MERGE`] triangles
+/// (a smaller one is at most two eight-lane culls, which more leaves would not make fewer).
+/// Such a subtree is an inner entry of [`child_list`], not a leaf run: expanded into the
+/// node's spare slots, or a node of its own. A room's walls then each have their own flat
+/// box, where one run of three walls had the whole room's.
+fn opens_for_size(nodes: &[BvhNode], b: u32, run: &core::ops::Range<usize>) -> bool {
+    let root_area = nodes.first().map_or(0.0, |n| n.bounds().surface_area());
+    let side = |c: u32| {
+        Some(as_leaf(nodes, c)?.len() as f32 * nodes.get(c as usize)?.bounds().surface_area())
+    };
+    let Some(node) = nodes.get(b as usize) else {
+        return false;
+    };
+    let area = node.bounds().surface_area();
+    // Cheap test first: no split spares more than the whole run's `n·A`.
+    if !split_spares_tests(run.len(), area, 0.0, root_area) {
+        return false;
+    }
+    let Some((l, r)) = node.children() else {
+        return false;
+    };
+    match (side(l), side(r)) {
+        (Some(a), Some(c)) => {
+            split_spares_tests(run.len(), area, a + c, root_area) && as_leaf(nodes, 0).is_none()
+        }
+        _ => false,
+    }
+}
+
 /// The children of the wide node made from binary node `b`: start with `b`'s two children
 /// and, while fewer than `W`, replace one entry by its two children: the inner one with the
 /// largest surface area (ties: the first) while there is one, then the leaf run that
 /// [`opens`] with the largest surface area. Each entry carries its leaf run when it becomes a
-/// leaf ([`as_leaf`], computed once per entry). `b` is an inner node that is not a leaf run
+/// leaf ([`as_leaf`], unless it [`opens_for_size`]: then it is an inner entry; computed once
+/// per entry). `b` is an inner node that is not a leaf run
 /// (a tree that is one leaf run has no node: [`root_leaf`]); a binary leaf `b` gives itself,
 /// alone.
 fn child_list<const W: usize>(nodes: &[BvhNode], b: u32) -> ChildList<W> {
@@ -82,7 +116,7 @@ fn child_list<const W: usize>(nodes: &[BvhNode], b: u32) -> ChildList<W> {
     let mut claim: [Option<(bool, f32)>; W] = [None; W];
     let put = |out: &mut ChildList<W>, claim: &mut [Option<(bool, f32)>; W], i: usize, c: u32| {
         out.node[i] = c;
-        out.leaf[i] = as_leaf(nodes, c);
+        out.leaf[i] = as_leaf(nodes, c).filter(|run| !opens_for_size(nodes, c, run));
         let area = || nodes.get(c as usize).map(|n| n.bounds().surface_area());
         claim[i] = match &out.leaf[i] {
             None => area().map(|a| (true, a)),

@@ -806,6 +806,114 @@ fn tiny_closed_meshes_answer_as_brute_force() {
     }
 }
 
+/// A room: the floor and three walls of a cube of side 40 (triangles 0..8, two per wall,
+/// listed first so that the binary build's first split is not by index), around a soup of
+/// `n` small triangles (size ~0.1 in a cube of side 4 at the centre).
+fn room(n: usize) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let h = 20.0;
+    let c = |x: f32, y: f32, z: f32| Vec3::new(x * h, y * h, z * h);
+    let quads = [
+        [
+            c(-1., -1., -1.),
+            c(-1., -1., 1.),
+            c(1., -1., 1.),
+            c(1., -1., -1.),
+        ],
+        [
+            c(-1., -1., -1.),
+            c(1., -1., -1.),
+            c(1., 1., -1.),
+            c(-1., 1., -1.),
+        ],
+        [
+            c(-1., -1., -1.),
+            c(-1., 1., -1.),
+            c(-1., 1., 1.),
+            c(-1., -1., 1.),
+        ],
+        [
+            c(1., -1., -1.),
+            c(1., -1., 1.),
+            c(1., 1., 1.),
+            c(1., 1., -1.),
+        ],
+    ];
+    let mut pos: Vec<Vec3> = quads.iter().flatten().copied().collect();
+    let mut tris: Vec<[u32; 3]> = (0..4u32)
+        .flat_map(|q| [[4 * q, 4 * q + 1, 4 * q + 2], [4 * q, 4 * q + 2, 4 * q + 3]])
+        .collect();
+    let (spos, stris) = soup(n, 77);
+    let base = pos.len() as u32;
+    pos.extend(spos.iter().map(|p| *p * 0.4));
+    tris.extend(stris.iter().map(|t| t.map(|i| i + base)));
+    (pos, tris)
+}
+
+/// Huge triangles at the top of a tree get leaves of their own: in a room (four walls of
+/// side 40 around a soup of 300 small triangles), the frontend's build (`binary_options`,
+/// which otherwise never splits a node of 8 or fewer) splits the walls' node because each
+/// split spares a ray entering the room more than `LARGE_NODE_SAVING` tests, and the collapse
+/// opens it before the soup's nodes: every leaf holding a wall triangle holds that wall's two
+/// triangles and nothing else (one leaf of walls had the whole room's box). Every query
+/// answers as brute force, from the scratch build and the plain one alike.
+#[test]
+fn huge_triangles_at_the_top_get_leaves_of_their_own() {
+    let (pos, tris) = room(300);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let n = mesh.len();
+    let options = binary_options(BuildOptions::default());
+    let plain = Bvh::build(
+        &mesh,
+        vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        &options,
+    )
+    .unwrap();
+    let scratch = Bvh::build_with_scratch(
+        &mesh,
+        vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        &mut vec![crate::bvh::PrimRef::EMPTY; crate::bvh::scratch_capacity(n)],
+        &options,
+    )
+    .unwrap();
+    for b in [&plain, &scratch] {
+        let w = VecWide::<8>::from_binary_with(b, &mesh, |nodes, groups| {
+            (vec![WideNode::EMPTY; nodes], vec![LeafGroup::EMPTY; groups])
+        })
+        .unwrap();
+        let mut wall_leaves = 0;
+        for node in w.nodes() {
+            for i in 0..8 {
+                if let ChildRef::Leaf { start, count } = node.child(i) {
+                    let prims: Vec<u32> = (start..start + count)
+                        .map(|s| w.triangle(s as usize).unwrap().prim)
+                        .collect();
+                    if let Some(&wall) = prims.iter().find(|&&p| p < 8) {
+                        wall_leaves += 1;
+                        let mut got = prims.clone();
+                        got.sort_unstable();
+                        let first = wall & !1;
+                        assert_eq!(got, [first, first + 1], "a wall's leaf: {prims:?}");
+                    }
+                }
+            }
+        }
+        assert_eq!(wall_leaves, 4);
+        let mut rays = rays_at(&mesh, 9);
+        // From inside the room towards every wall, and from outside through it.
+        let mut s = 0x800Du64;
+        for _ in 0..400 {
+            let o = unit_vec(&mut s) * 3.0;
+            rays.push(Ray::new(o, unit_vec(&mut s)));
+            let far = unit_vec(&mut s) * 50.0;
+            let target = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 40.0 - 20.0;
+            rays.push(Ray::new(far, target - far));
+        }
+        assert!(queries_equal_brute_force(&w, &mesh, &rays) > rays.len() / 2);
+    }
+}
+
 /// A root leaf's refit: the box follows the moved vertices, a non-finite triangle is named,
 /// left out of the box and never reported.
 #[test]
