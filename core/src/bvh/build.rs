@@ -37,8 +37,9 @@ pub struct BuildOptions {
     /// (no query ever reports them).
     pub exclude_non_finite: bool,
     /// Nodes of at most this many primitives become leaves without trying a split (capped
-    /// at `max_leaf_size`; values below 1 count as 1). Default 1: the SAH decides for every
-    /// node of two or more. A tree that will be collapsed into a wide one is built with
+    /// at `max_leaf_size`; values below 1 count as 1), unless the node is so large against the
+    /// root that a split spares [`LARGE_NODE_SAVING`] tests per ray. Default 1: the SAH
+    /// decides for every node of two or more. A tree that will be collapsed into a wide one is built with
     /// [`LEAF_OPEN_ABOVE`](super::wide::LEAF_OPEN_ABOVE) here and as `max_leaf_size`
     /// ([`super::wide::binary_options`]): the collapse neither splits nor opens a subtree that
     /// small, so splitting it is wasted work.

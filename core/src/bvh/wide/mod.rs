@@ -111,7 +111,8 @@ pub const WIDE_INTERSECTION_COST: f32 = 0.3;
 /// [`BuildOptions::max_leaf_size`](crate::bvh::BuildOptions::max_leaf_size) at
 /// [`LEAF_OPEN_ABOVE`] (every node of more triangles is split, so that a merged leaf run of
 /// more can be opened; splitting smaller ones is wasted work, as the collapse makes every
-/// subtree of at most [`LEAF_MERGE`] triangles one leaf run and opens only larger runs), and
+/// subtree of at most [`LEAF_MERGE`] triangles one leaf run and opens only larger runs, or
+/// one whose split spares [`LARGE_NODE_SAVING`](crate::bvh::LARGE_NODE_SAVING) tests), and
 /// the SAH's primitive cost at [`WIDE_INTERSECTION_COST`]. Splits are made where the SAH puts
 /// them (their position does not depend on the leaf sizes), so the collapse gives the same
 /// wide tree as from a binary tree split down to single triangles, but for the order of the
