@@ -65,3 +65,43 @@ fn group_capacity_is_seven_sixteenths_rounded_up() {
         assert_eq!(crate::bvh::wide::group_capacity(n), want, "{n}");
     }
 }
+
+/// A run whose split spares a ray entering the root's box at least `LARGE_NODE_SAVING` tests
+/// is an inner entry, expanded before smaller inner ones; in a tree of at most `LEAF_MERGE`
+/// triangles it stays one run. The tree (24 primitives; boxes are cubes, area `6·side²`):
+///
+/// ```text
+/// 0 root (side 10) ── 1 A (side 10) ── 3 A1: leaf 0..2 (side 1), 4 A2: leaf 2..4 (side 1)
+///                  └─ 2 B (side 1)  ── 5 B1: leaf 4..14, 6 B2: leaf 14..24 (side 1)
+/// ```
+///
+/// A is a run of 4 (≤ `LEAF_OPEN_ABOVE`, so [`opens`] says no), but splitting it spares
+/// `4·600 − (2·6 + 2·6) = 2376 ≥ 0.5·600` (the root's area): `[A, B]` → A, the larger:
+/// `[A1, B, A2]` → B: `[A1, B1, A2, B2]`. With B's leaves of 2 (8 primitives in all) the
+/// whole tree is at most `LEAF_MERGE`: `[A, B]` stay runs.
+#[test]
+fn a_run_that_spares_enough_tests_is_an_inner_entry() {
+    let mut nodes = [
+        node(10.0, 1, 0),
+        node(10.0, 3, 0),
+        node(1.0, 5, 0),
+        node(1.0, 0, 2),
+        node(1.0, 2, 2),
+        node(1.0, 4, 10),
+        node(1.0, 14, 10),
+    ];
+    let got: Vec<_> = child_list::<4>(&nodes, 0).iter().collect();
+    assert_eq!(
+        got,
+        [
+            (3, Some(0..2)),
+            (5, Some(4..14)),
+            (4, Some(2..4)),
+            (6, Some(14..24))
+        ]
+    );
+    nodes[5] = node(1.0, 4, 2);
+    nodes[6] = node(1.0, 6, 2);
+    let got: Vec<_> = child_list::<4>(&nodes, 0).iter().collect();
+    assert_eq!(got, [(1, Some(0..4)), (2, Some(4..8))]);
+}
