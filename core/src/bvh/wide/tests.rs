@@ -18,15 +18,23 @@ type VecBinary = Bvh<Vec<BvhNode>, Vec<u32>>;
 type VecWide<const W: usize> = WideBvh<W, Vec<WideNode<W>>, Vec<LeafGroup>>;
 
 fn binary(mesh: &TriangleMesh<'_>, max_leaf: u32) -> VecBinary {
+    built(
+        mesh,
+        &BuildOptions {
+            max_leaf_size: max_leaf,
+            ..BuildOptions::default()
+        },
+    )
+}
+
+/// The binary tree over `mesh` with `options`, in storage of the exact capacity.
+fn built(mesh: &TriangleMesh<'_>, options: &BuildOptions) -> VecBinary {
     let n = mesh.len();
     Bvh::build(
         mesh,
         vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
         vec![0u32; index_capacity(n)],
-        &BuildOptions {
-            max_leaf_size: max_leaf,
-            ..BuildOptions::default()
-        },
+        options,
     )
     .unwrap()
 }
@@ -424,13 +432,7 @@ fn binary_options_give_the_same_wide_tree_but_for_the_order_inside_leaves() {
         let (pos, tris) = soup(n, seed);
         let mesh = TriangleMesh::new(&pos, &tris);
         let full = wide::<8>(&mesh, 4);
-        let b = Bvh::build(
-            &mesh,
-            vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
-            vec![0u32; index_capacity(n)],
-            &binary_options(BuildOptions::default()),
-        )
-        .unwrap();
+        let b = built(&mesh, &binary_options(BuildOptions::default()));
         let full_binary = binary(&mesh, 4);
         assert!(
             b.node_count() < full_binary.node_count() || n < 8,
@@ -530,36 +532,6 @@ fn vertex_box(mesh: &TriangleMesh<'_>) -> Aabb {
         .filter_map(|i| mesh.triangle(i))
         .flatten()
         .fold(Aabb::EMPTY, |b, v| b.union(Aabb::new(v, v)))
-}
-
-/// A cube of side 2 around the origin, two triangles a face: shared edges and vertices, where
-/// the tie rule decides.
-fn cube() -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let pos = (0..8u8)
-        .map(|i| {
-            Vec3::new(
-                f32::from(i & 1),
-                f32::from(i >> 1 & 1),
-                f32::from(i >> 2 & 1),
-            ) * 2.0
-                - 1.0
-        })
-        .collect();
-    let tris = vec![
-        [0, 2, 1],
-        [1, 2, 3],
-        [4, 5, 6],
-        [5, 7, 6],
-        [0, 1, 4],
-        [1, 5, 4],
-        [2, 6, 3],
-        [3, 6, 7],
-        [0, 4, 2],
-        [2, 4, 6],
-        [1, 3, 5],
-        [3, 7, 5],
-    ];
-    (pos, tris)
 }
 
 /// Rays at `mesh` for the root-leaf tests: `rays` (some with `t_min < 0` or a short `t_max`),
@@ -747,7 +719,10 @@ fn a_tree_that_is_one_unopened_leaf_run_has_no_node() {
 /// through edges and vertices included.
 #[test]
 fn tiny_closed_meshes_answer_as_brute_force() {
-    let (cube_pos, cube_tris) = cube();
+    let (cube_pos, cube_tris) = (
+        crate::solids::CUBE_VERTICES.to_vec(),
+        crate::solids::CUBE_TRIANGLES.to_vec(),
+    );
     let tetra_pos = vec![
         Vec3::new(1.0, 1.0, 1.0),
         Vec3::new(1.0, -1.0, -1.0),
@@ -760,13 +735,7 @@ fn tiny_closed_meshes_answer_as_brute_force() {
     for (pos, tris) in [(tetra_pos, tetra), (octa_pos, octa), (cube_pos, cube_tris)] {
         let mesh = TriangleMesh::new(&pos, &tris);
         let n = mesh.len();
-        let b = Bvh::build(
-            &mesh,
-            vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
-            vec![0u32; index_capacity(n)],
-            &binary_options(BuildOptions::default()),
-        )
-        .unwrap();
+        let b = built(&mesh, &binary_options(BuildOptions::default()));
         let mut asked = (0, 0);
         let w = VecWide::<8>::from_binary_with(&b, &mesh, |nodes, groups| {
             asked = (nodes, groups);
@@ -862,13 +831,7 @@ fn huge_triangles_at_the_top_get_leaves_of_their_own() {
     let mesh = TriangleMesh::new(&pos, &tris);
     let n = mesh.len();
     let options = binary_options(BuildOptions::default());
-    let plain = Bvh::build(
-        &mesh,
-        vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
-        vec![0u32; index_capacity(n)],
-        &options,
-    )
-    .unwrap();
+    let plain = built(&mesh, &options);
     let scratch = Bvh::build_with_scratch(
         &mesh,
         vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
@@ -1202,17 +1165,14 @@ fn collapse_checks_the_tree_triangles_not_the_whole_mesh() {
     pos[21] = Vec3::INFINITY;
     let mesh = TriangleMesh::new(&pos, &tris);
     let n = mesh.len();
-    let b = Bvh::build(
+    let b = built(
         &mesh,
-        vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
-        vec![0u32; index_capacity(n)],
         &BuildOptions {
             max_leaf_size: 4,
             exclude_non_finite: true,
             ..BuildOptions::default()
         },
-    )
-    .unwrap();
+    );
     assert_eq!(b.primitive_count(), n - 1);
     let count = VecWide::<8>::node_count_for(&b).unwrap();
     let w = VecWide::<8>::from_binary(
