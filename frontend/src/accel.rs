@@ -23,14 +23,16 @@ pub type VecBvh8 = Bvh8<PageArray<WideNode<8>>, PageArray<LeafGroup>>;
 pub type VecBvh = Bvh<PageArray<BvhNode>, Vec<u32>>;
 
 /// The node storage and scratch of a build over `n` triangles, on huge pages where the OS
-/// gives them ([`PageArray`]): the node array is sized for the worst case (`2n − 1` nodes, 64
-/// bytes per triangle) and filled before the build, the scratch is 32 bytes per triangle;
-/// with 4 KiB pages each 4 KiB of them cost a page fault (6 % of a dragon build in `perf`:
-/// fault handling and unmapping), with 2 MiB pages one in 512 does.
+/// gives them ([`PageArray`]), untouched until the build writes them
+/// ([`PageArray::zeroed`]): the node array is sized for the worst case (`2n − 1` nodes, 64
+/// bytes per triangle) of which the build writes the nodes it makes (a tree for the collapse
+/// stops at small leaves and writes about a sixth), the scratch is 32 bytes per triangle, each
+/// written once. The builder reads no node or record it has not written (nodes past its
+/// node count are not part of the tree).
 fn build_storage(n: usize) -> (PageArray<BvhNode>, PageArray<PrimRef>) {
     (
-        PageArray::filled(BvhNode::EMPTY, node_capacity(n)),
-        PageArray::filled(PrimRef::EMPTY, scratch_capacity(n)),
+        PageArray::zeroed(node_capacity(n)),
+        PageArray::zeroed(scratch_capacity(n)),
     )
 }
 
@@ -88,15 +90,16 @@ pub fn build_binary_parallel(
 }
 
 /// Collapses `binary` (built over `mesh`, in any storage) into an 8-wide BVH in exactly sized
-/// storage.
+/// storage, untouched until the collapse writes it ([`PageArray::zeroed`]: the collapse
+/// writes every node and every group it is given, unused lanes as [`LeafGroup::EMPTY`]'s).
 pub fn build_wide<N: AsRef<[BvhNode]>, I: AsRef<[u32]>>(
     mesh: &TriangleMesh<'_>,
     binary: &Bvh<N, I>,
 ) -> std::result::Result<VecBvh8, BvhError> {
     Bvh8::from_binary_with(binary, mesh, |nodes, groups| {
         (
-            PageArray::filled(WideNode::EMPTY, nodes),
-            PageArray::filled(LeafGroup::EMPTY, groups),
+            PageArray::zeroed(nodes),
+            PageArray::zeroed(groups),
         )
     })
 }
