@@ -97,10 +97,7 @@ pub fn build_wide<N: AsRef<[BvhNode]>, I: AsRef<[u32]>>(
     binary: &Bvh<N, I>,
 ) -> std::result::Result<VecBvh8, BvhError> {
     Bvh8::from_binary_with(binary, mesh, |nodes, groups| {
-        (
-            PageArray::zeroed(nodes),
-            PageArray::zeroed(groups),
-        )
+        (PageArray::zeroed(nodes), PageArray::zeroed(groups))
     })
 }
 

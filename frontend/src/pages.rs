@@ -314,8 +314,9 @@ mod tests {
             assert_eq!(a.len(), n);
             // SAFETY: `BvhNode` has no padding (32 bytes of `f32`/`u32` fields); the bytes of
             // an initialised slice of it may be read as `u8`.
-            let bytes =
-                unsafe { std::slice::from_raw_parts(a.as_ptr().cast::<u8>(), n * size_of::<BvhNode>()) };
+            let bytes = unsafe {
+                std::slice::from_raw_parts(a.as_ptr().cast::<u8>(), n * size_of::<BvhNode>())
+            };
             assert!(bytes.iter().all(|&b| b == 0), "{n}");
             a[n / 2] = BvhNode::EMPTY;
             a[n - 1] = BvhNode::EMPTY;
