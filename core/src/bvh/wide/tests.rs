@@ -775,6 +775,69 @@ fn tiny_closed_meshes_answer_as_brute_force() {
     }
 }
 
+/// A tree whose root is a leaf is walked without a box test (`root_leaf`): every interval
+/// answers as brute force, at every level, for both widths, closest and any hit: rays at each
+/// triangle's centre whose interval ends before the tree's box, starts beyond it, ends or
+/// starts exactly at the hit, or starts behind the origin; rays that miss the box; invalid
+/// rays (NaN, zero direction, empty interval), which hit nothing and call no closure.
+#[test]
+fn a_root_leaf_answers_every_interval_as_brute_force() {
+    let pos = crate::solids::OCTAHEDRON_VERTICES.to_vec();
+    let tris = crate::solids::OCTAHEDRON_TRIANGLES.to_vec();
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let (w8, w4) = (wide::<8>(&mesh, 16), wide::<4>(&mesh, 16));
+    assert!(matches!(w8.root(), ChildRef::Leaf { .. }) && w8.node_count() == 0);
+    assert!(matches!(w4.root(), ChildRef::Leaf { .. }) && w4.node_count() == 0);
+    let mut rays = Vec::new();
+    for i in 0..mesh.len() {
+        let v = mesh.triangle(i).unwrap();
+        let centre = (v[0] + v[1] + v[2]) / 3.0;
+        let o = centre * 4.0 + Vec3::new(0.01, 0.02, 0.03);
+        let ray = Ray::new(o, centre - o);
+        let t = Watertight.intersect(&ray, &v).map_or(0.75, |h| h.t);
+        for (t_min, t_max) in [
+            (0.0, f32::INFINITY),
+            (0.0, 0.25),
+            (0.0, t),
+            (t, f32::INFINITY),
+            (2.0, f32::INFINITY),
+            (-3.0, 0.5),
+            (-3.0, f32::INFINITY),
+        ] {
+            rays.push(Ray {
+                t_min,
+                t_max,
+                ..ray
+            });
+        }
+        // Away from the tree: misses the box.
+        rays.push(Ray::new(o, o));
+    }
+    let good = Ray::new(Vec3::new(3.0, 0.1, 0.2), Vec3::new(-1.0, 0.0, 0.0));
+    let invalid = [
+        Ray::new(Vec3::new(f32::NAN, 0.1, 0.2), Vec3::new(-1.0, 0.0, 0.0)),
+        Ray::new(Vec3::new(3.0, 0.1, 0.2), Vec3::ZERO),
+        Ray {
+            t_min: 2.0,
+            t_max: 1.0,
+            ..good
+        },
+    ];
+    assert!(queries_equal_brute_force(&w8, &mesh, &rays) >= mesh.len());
+    assert!(queries_equal_brute_force(&w4, &mesh, &rays) >= mesh.len());
+    for ray in &invalid {
+        let mut calls = 0u32;
+        let mut count = |_: u32, _: &Ray| -> Option<(f32, ())> {
+            calls += 1;
+            None
+        };
+        assert_eq!(w8.closest_hit(ray, &mut count, &mut Query::new()), None);
+        assert_eq!(w8.any_hit(ray, &mut count, &mut Query::new()), None);
+        assert_eq!(calls, 0, "{ray:?}");
+    }
+    assert_eq!(queries_equal_brute_force(&w8, &mesh, &invalid), 0);
+}
+
 /// A room: the floor and three walls of a cube of side 40 (triangles 0..8, two per wall,
 /// listed first so that the binary build's first split is not by index), around a soup of
 /// `n` small triangles (size ~0.1 in a cube of side 4 at the centre).

@@ -207,6 +207,10 @@ where
         stats: Option<&mut TraversalStats>,
         best: &mut Option<(u32, LT::Hit)>,
     ) {
+        if ANY && let ChildRef::Leaf { start, count } = ChildRef::decode(self.root) {
+            self.root_leaf::<LT, ANY, L>(level, (start, count), ray, leaf, stats, best);
+            return;
+        }
         let Some(slab) = SlabRay::new(ray) else {
             return;
         };
@@ -215,6 +219,44 @@ where
         } else {
             self.walk::<LT, ANY, false, L>(level, stack, ray, &slab, leaf, stats, best);
         }
+    }
+
+    /// The any-hit walk of a tree whose root is the leaf run `(start, count)` (a tree with no
+    /// node): checks `ray`, prepares the leaf test and tests the run, the answer left in
+    /// `best`, before any node-test setup (reciprocals, padding: ~50 instructions per ray
+    /// saved on the tetrahedron's shadow rays). No box is tested: a box test only culls rays
+    /// that hit none of the run's triangles in their interval, which the leaf test rejects as
+    /// well. Closest-hit rays take the node walk, which leaves a root leaf at once: this path
+    /// for them too (−225 instructions per ray on the tetrahedron) moved the AVX2 node test
+    /// of the closest-hit walk out of line and cost +53 per ray on the bunny
+    /// (docs/performance.md).
+    #[inline(always)]
+    fn root_leaf<LT: LeafTest, const ANY: bool, L: SimdLevel>(
+        &self,
+        level: L,
+        (start, count): (u32, u32),
+        ray: &Ray,
+        leaf: &mut LT,
+        stats: Option<&mut TraversalStats>,
+        best: &mut Option<(u32, LT::Hit)>,
+    ) {
+        if !ray.is_valid() {
+            return;
+        }
+        let Some(pre) = leaf.prepare_valid(ray) else {
+            return;
+        };
+        let (run, lanes) = (
+            leaf_groups(self.groups(), start, count),
+            RunLanes::new(start, count),
+        );
+        let mut cur = *ray;
+        leaf_hits::<LT, L, ANY>(level, leaf, &pre, run, lanes, (&mut cur, best));
+        let local = TraversalStats {
+            primitives_tested: u64::from(count),
+            ..TraversalStats::default()
+        };
+        add_stats(stats, &local);
     }
 
     /// Orders the children hit by a node (`first` and the lanes of `rest`, a non-empty lane
@@ -426,28 +468,10 @@ where
             return;
         }
         let mut cur = *ray;
-        if ANY && tree.0.is_empty() {
-            // An any-hit ray in a tree whose root is a leaf (no node): the leaf test over the
-            // run, without the node walk's loops. Closest-hit rays take the loops below (which
-            // leave a root leaf at once): a branch of their own here moved the code of the
-            // closest-hit walk of every tree (teapot +0.9 %; docs/performance.md).
-            // Answers are the same either way (no box is tested here: a box test only culls).
-            if let (ChildRef::Leaf { start, count }, Some(pre)) =
-                (ChildRef::decode(self.root), leaf.prepare_valid(ray))
-            {
-                local.primitives_tested += u64::from(count);
-                let (run, lanes) = (
-                    leaf_groups(groups, start, count),
-                    RunLanes::new(start, count),
-                );
-                leaf_hits::<LT, L, ANY>(level, leaf, &pre, run, lanes, (&mut cur, best));
-            }
-            add_stats(stats, &local);
-            return;
-        }
         let mut sp = 0usize;
         // The root: node 0 (its own box is the union of its children's: not tested), or a
-        // leaf (the tree has no node), which the first loop leaves at once.
+        // leaf (the tree has no node), which the first loop leaves at once (any-hit rays took
+        // `root_leaf`).
         let mut next = self.root;
         // Down to the first leaf, nodes only (the interval cannot shrink before a leaf).
         let mut bound = cull_bound(cur.t_max);
