@@ -6,7 +6,7 @@ use crate::error::{Error, Result};
 use crate::obj::ObjMesh;
 use crate::pages::PageArray;
 use halfray_core::Ray;
-use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, binary_options};
+use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, binary_options, group_capacity};
 use halfray_core::bvh::{
     BuildJob, BuildOptions, Bvh, BvhError, BvhNode, JobPart, PrimRef, index_capacity,
     node_capacity, scratch_capacity,
@@ -89,16 +89,21 @@ pub fn build_binary_parallel(
     )
 }
 
-/// Collapses `binary` (built over `mesh`, in any storage) into an 8-wide BVH in exactly sized
-/// storage, untouched until the collapse writes it ([`PageArray::zeroed`]: the collapse
-/// writes every node and every group it is given, unused lanes as [`LeafGroup::EMPTY`]'s).
+/// Collapses `binary` (built over `mesh`, in any storage) into an 8-wide BVH in one walk
+/// ([`Bvh8::from_binary_in`]) into storage of the bounds it needs, untouched until the
+/// collapse writes it ([`PageArray::zeroed`]): the collapse writes every node and group the
+/// tree uses (unused lanes as [`LeafGroup::EMPTY`]'s); the pages past them are never touched,
+/// so they cost neither time nor resident memory.
 pub fn build_wide<N: AsRef<[BvhNode]>, I: AsRef<[u32]>>(
     mesh: &TriangleMesh<'_>,
     binary: &Bvh<N, I>,
 ) -> std::result::Result<VecBvh8, BvhError> {
-    Bvh8::from_binary_with(binary, mesh, |nodes, groups| {
-        (PageArray::zeroed(nodes), PageArray::zeroed(groups))
-    })
+    Bvh8::from_binary_in(
+        binary,
+        mesh,
+        PageArray::zeroed(VecBvh8::node_bound_for(binary)),
+        PageArray::zeroed(group_capacity(binary.indices().len())),
+    )
 }
 
 /// A mesh ready for ray queries.

@@ -1,6 +1,5 @@
 //! Collapsing a binary tree into a wide one (see the module docs of [`super`]).
 
-#[cfg(doc)]
 use super::group_capacity;
 use super::node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
 use super::{LEAF_MERGE, LEAF_OPEN_ABOVE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh};
@@ -346,6 +345,25 @@ where
     BN: AsRef<[BvhNode]>,
     BI: AsRef<[u32]>,
 {
+    check_counts(binary, mesh)?;
+    let needed = plan::<W>(binary.nodes())?;
+    if needed.slots > MAX_TRIANGLES {
+        return Err(BvhError::TooManyTriangles {
+            count: needed.slots,
+            max: MAX_TRIANGLES,
+        });
+    }
+    check_finite(binary, mesh)?;
+    Ok(needed)
+}
+
+/// The checks of [`check`] that need no plan: the mesh is the tree's source (by count) and
+/// the tree has at most [`MAX_TRIANGLES`] triangles.
+fn check_counts<BN, BI>(binary: &Bvh<BN, BI>, mesh: &TriangleMesh<'_>) -> Result<(), BvhError>
+where
+    BN: AsRef<[BvhNode]>,
+    BI: AsRef<[u32]>,
+{
     if mesh.len() != binary.source_len() {
         return Err(BvhError::SourceLengthMismatch {
             expected: binary.source_len(),
@@ -359,13 +377,16 @@ where
             max: MAX_TRIANGLES,
         });
     }
-    let needed = plan::<W>(binary.nodes())?;
-    if needed.slots > MAX_TRIANGLES {
-        return Err(BvhError::TooManyTriangles {
-            count: needed.slots,
-            max: MAX_TRIANGLES,
-        });
-    }
+    Ok(())
+}
+
+/// Every triangle of the tree has finite vertices.
+fn check_finite<BN, BI>(binary: &Bvh<BN, BI>, mesh: &TriangleMesh<'_>) -> Result<(), BvhError>
+where
+    BN: AsRef<[BvhNode]>,
+    BI: AsRef<[u32]>,
+{
+    let indices = binary.indices();
     // Every triangle of the tree must have finite vertices. When every position is finite
     // and every vertex index in range (two sequential passes), all of them do; only
     // otherwise are the tree's triangles checked one by one (a random-access pass).
@@ -385,7 +406,7 @@ where
             }
         }
     }
-    Ok(needed)
+    Ok(())
 }
 
 impl<const W: usize, N, T> WideBvh<W, N, T>
@@ -444,7 +465,7 @@ where
         BI: AsRef<[u32]>,
     {
         let needed = check::<W, _, _>(binary, mesh)?;
-        Self::write(binary, mesh, needed, nodes, groups)
+        Self::write(binary, mesh, Some(needed), nodes, groups)
     }
 
     /// [`WideBvh::from_binary`] with storage the caller makes once the sizes are known:
@@ -468,15 +489,65 @@ where
     {
         let needed = check::<W, _, _>(binary, mesh)?;
         let (nodes, groups) = storage(needed.nodes, needed.groups());
-        Self::write(binary, mesh, needed, nodes, groups)
+        Self::write(binary, mesh, Some(needed), nodes, groups)
     }
 
-    /// The storage checks and the collapse itself, for a tree that passed [`check`] and
-    /// needs `plan`.
+    /// Wide nodes that always suffice for collapsing `binary`, whatever its shape:
+    /// `⌈M / 2⌉` for its `M` nodes. Each wide node stands for a distinct inner node of the
+    /// binary tree (the root's, or an inner child it does not open), and a binary tree of `M`
+    /// nodes has at most `(M − 1) / 2` inner ones (a pad node counted in `M` only lowers
+    /// that). Prefer the exact [`WideBvh::node_count_for`] where storage must be tight.
+    pub fn node_bound_for<BN, BI>(binary: &Bvh<BN, BI>) -> usize
+    where
+        BN: AsRef<[BvhNode]>,
+        BI: AsRef<[u32]>,
+    {
+        binary.nodes().len().div_ceil(2)
+    }
+
+    /// [`WideBvh::from_binary`] in one walk of the tree where `from_binary` and
+    /// [`WideBvh::from_binary_with`] make two (the first to count what the storage needs;
+    /// 5–7 % of a build): `nodes` and `groups` must hold the bounds
+    /// [`WideBvh::node_bound_for`] and [`group_capacity`] of the triangle count, of which the tree uses [`WideBvh::nodes`] and [`WideBvh::groups`] (memory never
+    /// written can stay unmapped: the frontend's storage is). Same tree as `from_binary`.
+    ///
+    /// # Errors
+    ///
+    /// As [`WideBvh::from_binary`], with [`BvhError::Capacity`] for storage below those bounds.
+    /// A leaf too large ([`BvhError::LeafTooLarge`]), [`BvhError::TooManyTriangles`] from
+    /// the padding, or a tree of shared subtrees that outgrows the node bound
+    /// ([`BvhError::Capacity`]) are found during the walk: the storage has been partly
+    /// written then.
+    pub fn from_binary_in<BN, BI>(
+        binary: &Bvh<BN, BI>,
+        mesh: &TriangleMesh<'_>,
+        nodes: N,
+        groups: T,
+    ) -> Result<Self, BvhError>
+    where
+        BN: AsRef<[BvhNode]>,
+        BI: AsRef<[u32]>,
+    {
+        check_counts(binary, mesh)?;
+        let node_bound = Self::node_bound_for(binary);
+        CapacityError::check(Storage::BvhNodes, node_bound, nodes.as_ref().len())?;
+        let group_bound = group_capacity(binary.indices().len());
+        CapacityError::check(
+            Storage::WideTriangleGroups,
+            group_bound,
+            groups.as_ref().len(),
+        )?;
+        check_finite(binary, mesh)?;
+        Self::write(binary, mesh, None, nodes, groups)
+    }
+
+    /// The collapse itself, for a tree that passed [`check_counts`] and [`check_finite`]:
+    /// with its `plan` ([`check`] passed) into storage checked here first, or without one
+    /// (each leaf, the slot count and the storage checked as the walk goes).
     fn write<BN, BI>(
         binary: &Bvh<BN, BI>,
         mesh: &TriangleMesh<'_>,
-        plan: Plan,
+        plan: Option<Plan>,
         mut nodes: N,
         mut groups: T,
     ) -> Result<Self, BvhError>
@@ -486,22 +557,45 @@ where
     {
         let indices = binary.indices();
         let bnodes = binary.nodes();
-        let needed = plan.nodes;
-        CapacityError::check(Storage::BvhNodes, needed, nodes.as_ref().len())?;
-        let needed_groups = plan.groups();
-        CapacityError::check(
-            Storage::WideTriangleGroups,
-            needed_groups,
-            groups.as_ref().len(),
-        )?;
-
-        // Each node's leaf runs as the walk meets the node, placed by `place_runs` (as `plan`).
-        let out = groups.as_mut();
-        for group in out.iter_mut().take(needed_groups) {
-            *group = LeafGroup::EMPTY;
+        if let Some(plan) = plan {
+            CapacityError::check(Storage::BvhNodes, plan.nodes, nodes.as_ref().len())?;
+            CapacityError::check(
+                Storage::WideTriangleGroups,
+                plan.groups(),
+                groups.as_ref().len(),
+            )?;
         }
+        let leaf_fits = |range: &core::ops::Range<usize>| {
+            if range.len() > MAX_LEAF_TRIANGLES {
+                return Err(BvhError::LeafTooLarge {
+                    count: range.len(),
+                    max: MAX_LEAF_TRIANGLES,
+                });
+            }
+            Ok(())
+        };
+        let stack_full = BvhError::LeafTooLarge {
+            count: 0,
+            max: MAX_LEAF_TRIANGLES,
+        };
+
+        // Each node's leaf runs as the walk meets the node, placed by `place_runs` (as `plan`),
+        // each slot after the runs placed before. A group is emptied when the first run
+        // reaching it is copied (`emptied` groups so far: every group a run touches is emptied
+        // before the run's lanes are written, never after); the groups no run reaches, at
+        // the end.
+        let out = groups.as_mut();
+        let group_count = out.len();
+        let mut emptied = 0usize;
+        let mut empty_to = |out: &mut [LeafGroup], end: usize| {
+            for group in out.iter_mut().take(end).skip(emptied) {
+                *group = LeafGroup::EMPTY;
+            }
+            emptied = emptied.max(end);
+        };
         let mut slots = 0usize;
         let mut copy_leaf = |start: usize, range: core::ops::Range<usize>| -> usize {
+            empty_to(out, (start + range.len()).div_ceil(LANES));
             for (slot, &p) in (start..).zip(indices.get(range).unwrap_or(&[])) {
                 if let (Some(group), Some(v)) =
                     (out.get_mut(slot / LANES), mesh.triangle(p as usize))
@@ -512,18 +606,33 @@ where
             }
             start
         };
+        let slots_fit = |slots: usize| {
+            if slots > MAX_TRIANGLES {
+                return Err(BvhError::TooManyTriangles {
+                    count: slots,
+                    max: MAX_TRIANGLES,
+                });
+            }
+            CapacityError::check(
+                Storage::WideTriangleGroups,
+                slots.div_ceil(LANES),
+                group_count,
+            )?;
+            Ok(())
+        };
 
         let wide = nodes.as_mut();
+        let node_count = wide.len();
         let mut next = 0u32;
         let mut root = ChildRef::EMPTY;
-        if needed == 0
-            && let Some(range) = root_leaf(bnodes)
-        {
-            // Checked by `plan`: count ≤ MAX_LEAF_TRIANGLES.
+        if let Some(range) = root_leaf(bnodes) {
+            leaf_fits(&range)?;
             let len = range.len() as u32;
             slots = range.len();
+            slots_fit(slots)?;
             root = ChildRef::leaf(copy_leaf(0, range) as u32, len).unwrap_or(ChildRef::EMPTY);
-        } else if needed > 0 {
+        } else if !bnodes.is_empty() {
+            CapacityError::check(Storage::BvhNodes, 1, node_count)?;
             root = 0;
             wide[0] = WideNode::EMPTY;
             next = 1;
@@ -532,13 +641,19 @@ where
             while let Some((b, slot)) = pending.pop() {
                 let mut node = WideNode::<W>::EMPTY;
                 let list = child_list::<W>(bnodes, b);
+                for (_, leaf) in list.iter() {
+                    if let Some(range) = leaf {
+                        leaf_fits(&range)?;
+                    }
+                }
                 let starts = list.place_runs(&mut slots);
+                slots_fit(slots)?;
                 for (i, (c, leaf)) in list.iter().enumerate() {
                     let Some(bn) = bnodes.get(c as usize) else {
                         continue;
                     };
                     let reference = if let Some(range) = leaf {
-                        // Checked by `plan`: count ≤ MAX_LEAF_TRIANGLES, slots ≤ MAX_TRIANGLES.
+                        // Checked above: count ≤ MAX_LEAF_TRIANGLES, slots ≤ MAX_TRIANGLES.
                         let len = range.len() as u32;
                         let start = starts.get(i).copied().unwrap_or(slots);
                         ChildRef::leaf(copy_leaf(start, range) as u32, len)
@@ -546,10 +661,13 @@ where
                     } else {
                         let child = next;
                         next += 1;
+                        CapacityError::check(Storage::BvhNodes, next as usize, node_count)?;
                         if let Some(n) = wide.get_mut(child as usize) {
                             *n = WideNode::EMPTY;
                         }
-                        pending.push((c, child));
+                        if !pending.push((c, child)) {
+                            return Err(stack_full);
+                        }
                         child
                     };
                     node.set_child(i, &bn.bounds(), reference);
@@ -559,6 +677,7 @@ where
                 }
             }
         }
+        empty_to(out, slots.div_ceil(LANES));
         let mut tree = Self {
             nodes,
             groups,

@@ -105,3 +105,204 @@ fn a_run_that_spares_enough_tests_is_an_inner_entry() {
     let got: Vec<_> = child_list::<4>(&nodes, 0).iter().collect();
     assert_eq!(got, [(1, Some(0..4)), (2, Some(4..8))]);
 }
+
+/// Random triangles of size about 1 in a cube of side 10 (xorshift, `seed`).
+fn soup(count: usize, seed: u32) -> (Vec<glam::Vec3>, Vec<[u32; 3]>) {
+    let mut s = seed | 1;
+    let mut next = move || {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        s as f32 / u32::MAX as f32
+    };
+    let mut pos = Vec::new();
+    let mut tris = Vec::new();
+    for t in 0..count as u32 {
+        let c = glam::Vec3::new(next(), next(), next()) * 10.0;
+        for _ in 0..3 {
+            pos.push(c + glam::Vec3::new(next(), next(), next()));
+        }
+        tris.push([3 * t, 3 * t + 1, 3 * t + 2]);
+    }
+    (pos, tris)
+}
+
+type Vec8 = WideBvh<8, Vec<WideNode<8>>, Vec<LeafGroup>>;
+
+/// A node and group whose every field is garbage that a collapse must overwrite (`7.0`
+/// coordinates, reference and index 7): storage that the one-walk collapse is given.
+fn garbage() -> (WideNode<8>, LeafGroup) {
+    let mut node = WideNode::<8>::EMPTY;
+    let mut group = LeafGroup::EMPTY;
+    let t = LeafTriangle {
+        v: [[7.0; 3]; 3],
+        prim: 7,
+    };
+    for i in 0..8 {
+        node.set_child(
+            i,
+            &Aabb::new(glam::Vec3::splat(7.0), glam::Vec3::splat(7.0)),
+            7,
+        );
+        group.set(i % LANES, &t);
+    }
+    (node, group)
+}
+
+/// [`WideBvh::from_binary_in`], one walk into garbage-filled storage of the documented
+/// bounds, gives the tree of [`WideBvh::from_binary`] (planned, exact storage): the same nodes,
+/// slot count and triangles slot by slot; every unused lane of a used group is empty (NaN
+/// vertices, index `u32::MAX`), every used lane holds its triangle's vertices from the mesh;
+/// the nodes need at most the bound. Leaf sizes from 1 to 16 (the collapse's own binary
+/// options among them), several meshes.
+#[test]
+fn one_walk_gives_the_planned_tree_in_bounded_storage() {
+    let mut checked = 0;
+    for (count, seed) in [(1, 3), (9, 5), (300, 7), (2000, 11)] {
+        let (pos, tris) = soup(count, seed);
+        let mesh = TriangleMesh::new(&pos, &tris);
+        for options in [
+            crate::bvh::BuildOptions::default(),
+            super::super::binary_options(crate::bvh::BuildOptions::default()),
+            crate::bvh::BuildOptions {
+                max_leaf_size: 16,
+                ..crate::bvh::BuildOptions::default()
+            },
+        ] {
+            let n = mesh.len();
+            let b = Bvh::build(
+                &mesh,
+                std::vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
+                std::vec![0u32; crate::bvh::index_capacity(n)],
+                &options,
+            )
+            .unwrap();
+            let planned = Vec8::from_binary_with(&b, &mesh, |nodes, groups| {
+                (
+                    std::vec![WideNode::EMPTY; nodes],
+                    std::vec![LeafGroup::EMPTY; groups],
+                )
+            })
+            .unwrap();
+            let (gn, gg) = garbage();
+            let bound = Vec8::node_bound_for(&b);
+            let one = Vec8::from_binary_in(
+                &b,
+                &mesh,
+                std::vec![gn; bound],
+                std::vec![gg; group_capacity(n)],
+            )
+            .unwrap();
+            assert!(planned.node_count() <= bound);
+            assert_eq!(one.nodes(), planned.nodes(), "{count} {options:?}");
+            assert_eq!(one.root(), planned.root());
+            assert_eq!(one.groups().len(), planned.groups().len());
+            assert!(one.triangles().eq(planned.triangles()));
+            for (g, group) in one.groups().iter().enumerate() {
+                for lane in 0..LANES {
+                    let t = group.triangle(lane).unwrap();
+                    if t.prim == u32::MAX {
+                        assert!(t.v.iter().flatten().all(|x| x.is_nan()), "{g} {lane}");
+                    } else {
+                        let v = mesh.triangle(t.prim as usize).unwrap();
+                        assert_eq!(t.v, v.map(|p| p.to_array()), "{g} {lane}");
+                    }
+                }
+            }
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 12);
+}
+
+/// Storage below the bounds is refused before anything is written; a leaf larger than
+/// [`MAX_LEAF_TRIANGLES`] is refused as by `from_binary`.
+#[test]
+fn one_walk_refuses_small_storage_and_large_leaves() {
+    let (pos, tris) = soup(300, 13);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let build = |max_leaf_size| {
+        Bvh::build(
+            &mesh,
+            std::vec![BvhNode::EMPTY; crate::bvh::node_capacity(300)],
+            std::vec![0u32; crate::bvh::index_capacity(300)],
+            &crate::bvh::BuildOptions {
+                max_leaf_size,
+                leaf_threshold: max_leaf_size,
+                ..crate::bvh::BuildOptions::default()
+            },
+        )
+        .unwrap()
+    };
+    let b = build(4);
+    let bound = Vec8::node_bound_for(&b);
+    let (gn, gg) = garbage();
+    let mut nodes = std::vec![gn; bound - 1];
+    let mut groups = std::vec![gg; group_capacity(300)];
+    type Borrowed<'a> = WideBvh<8, &'a mut [WideNode<8>], &'a mut [LeafGroup]>;
+    let r = Borrowed::from_binary_in(&b, &mesh, &mut nodes[..], &mut groups[..]);
+    assert!(matches!(
+        r.err(),
+        Some(BvhError::Capacity(CapacityError {
+            storage: Storage::BvhNodes,
+            ..
+        }))
+    ));
+    let mut nodes = std::vec![gn; bound];
+    let mut few = std::vec![gg; group_capacity(300) - 1];
+    let r = Borrowed::from_binary_in(&b, &mesh, &mut nodes[..], &mut few[..]);
+    assert!(matches!(
+        r.err(),
+        Some(BvhError::Capacity(CapacityError {
+            storage: Storage::WideTriangleGroups,
+            ..
+        }))
+    ));
+    assert!(nodes.iter().all(|n| *n == gn), "nothing written");
+    // Two clusters of 40 triangles whose boxes share their centre, far apart: no split
+    // separates a cluster, so it is one leaf of 40 (a root leaf for one cluster).
+    let mut cpos = Vec::new();
+    for c in [glam::Vec3::ZERO, glam::Vec3::new(100.0, 0.0, 0.0)] {
+        for k in 1..=40 {
+            let d = glam::Vec3::splat(k as f32 * 0.01);
+            cpos.extend([c - d, c + d, c]);
+        }
+    }
+    let ctris: Vec<[u32; 3]> = (0..80u32).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+    for clusters in [1, 2] {
+        let cmesh = TriangleMesh::new(&cpos, &ctris[..40 * clusters]);
+        let n = cmesh.len();
+        let big = Bvh::build(
+            &cmesh,
+            std::vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
+            std::vec![0u32; crate::bvh::index_capacity(n)],
+            &crate::bvh::BuildOptions {
+                max_leaf_size: 40,
+                ..crate::bvh::BuildOptions::default()
+            },
+        )
+        .unwrap();
+        let r = Vec8::from_binary_in(
+            &big,
+            &cmesh,
+            std::vec![gn; Vec8::node_bound_for(&big)],
+            std::vec![gg; group_capacity(n)],
+        );
+        let e = r.err();
+        assert!(
+            matches!(
+                e,
+                Some(BvhError::LeafTooLarge {
+                    count: 40,
+                    max: MAX_LEAF_TRIANGLES
+                })
+            ),
+            "{clusters}: {e:?}"
+        );
+        assert_eq!(
+            Vec8::node_count_for(&big).err(),
+            e,
+            "refused by the plan too"
+        );
+    }
+}
