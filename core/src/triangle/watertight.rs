@@ -556,9 +556,14 @@ fn hit_t(c: Candidate<'_>, det: f64) -> Option<f64> {
 fn finish_exact_at(plane: impl PlaneKernel, c: Candidate<'_>) -> Option<TriangleHit> {
     let Candidate { ray, v, edges, .. } = c;
     let [e0, e1, e2] = edges;
-    let has_neg = e0 < 0.0 || e1 < 0.0 || e2 < 0.0;
-    let has_pos = e0 > 0.0 || e1 > 0.0 || e2 > 0.0;
-    if has_neg && has_pos {
+    // Mixed signs (a negative and a positive edge function) as one comparison, `lo·hi < 0`
+    // with `lo`, `hi` the smallest and largest: a branch on either sign alone would be
+    // mispredicted half the time (front and back faces are equally common). Exact: the edge
+    // functions are finite and each is zero or at least `2⁻²⁹⁸` in magnitude (a difference of
+    // products of `f32` values), so the product neither overflows nor underflows to zero.
+    let min = |a: f64, b: f64| if a < b { a } else { b };
+    let max = |a: f64, b: f64| if a > b { a } else { b };
+    if min(min(e0, e1), e2) * max(max(e0, e1), e2) < 0.0 {
         return None;
     }
     let det = e0 + e1 + e2;
