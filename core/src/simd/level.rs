@@ -459,11 +459,21 @@ fn sort_keys8_avx2(dist: &[f32; 8], mask: u32) -> [u32; 8] {
 
 /// [`SimdLevel::slab8`] in 256-bit registers, on the fields of a [`Slab8`], passed one by one
 /// so that they arrive in registers rather than through a reference to the record.
+///
+/// Not a `#[target_feature]` function but `#[inline(always)]`: it is inlined wherever it is
+/// called, so its intrinsics are compiled with the features of the caller it lands in (the
+/// frontend's `#[target_feature(enable = "avx2,fma")]` query functions). A
+/// `#[target_feature]` function can only be `#[inline]`, a hint the compiler dropped when the
+/// walk around it grew (a second leaf path moved it out of line: ~60 instructions more per
+/// node test, `docs/performance.md`).
+///
+/// # Safety
+///
+/// The CPU must support AVX2 and FMA (the [`Avx2Fma`] token proves it).
 #[cfg(target_arch = "x86_64")]
 #[allow(clippy::too_many_arguments)]
-#[target_feature(enable = "avx2,fma")]
-#[inline]
-fn slab8_avx2(
+#[inline(always)]
+unsafe fn slab8_avx2(
     lo: [&[f32; 8]; 3],
     hi: [&[f32; 8]; 3],
     origin_near: [f32; 3],
@@ -477,33 +487,32 @@ fn slab8_avx2(
         _CMP_LE_OQ, _mm256_cmp_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps,
         _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_storeu_ps, _mm256_sub_ps,
     };
-    let mut t_enter = _mm256_set1_ps(t_min);
-    let mut t_exit = _mm256_set1_ps(t_max);
-    for axis in 0..3 {
-        // SAFETY: `lo[axis]` and `hi[axis]` are arrays of eight `f32`: each unaligned 32-byte
-        // load reads exactly their elements.
-        let (l, h) = unsafe {
-            (
-                _mm256_loadu_ps(lo[axis].as_ptr()),
-                _mm256_loadu_ps(hi[axis].as_ptr()),
-            )
-        };
-        let inv = _mm256_set1_ps(inv_dir[axis]);
-        let t_near = _mm256_mul_ps(_mm256_sub_ps(l, _mm256_set1_ps(origin_near[axis])), inv);
-        let t_far = _mm256_mul_ps(
-            _mm256_sub_ps(h, _mm256_set1_ps(origin_far[axis])),
-            _mm256_set1_ps(inv_far[axis]),
-        );
-        // `maxps(a, b)` is `a > b ? a : b` and `minps(a, b)` is `a < b ? a : b`: the
-        // portable loop's selects, NaN handling included.
-        t_enter = _mm256_max_ps(t_near, t_enter);
-        t_exit = _mm256_min_ps(t_far, t_exit);
+    // SAFETY: the caller's CPU supports AVX2 and FMA (this function's contract), the only
+    // requirement of the arithmetic intrinsics; `lo[axis]` and `hi[axis]` are arrays of eight
+    // `f32`, so each unaligned 32-byte load reads exactly their elements, and `out` is eight
+    // `f32`, so the unaligned 32-byte store writes exactly them.
+    unsafe {
+        let mut t_enter = _mm256_set1_ps(t_min);
+        let mut t_exit = _mm256_set1_ps(t_max);
+        for axis in 0..3 {
+            let l = _mm256_loadu_ps(lo[axis].as_ptr());
+            let h = _mm256_loadu_ps(hi[axis].as_ptr());
+            let inv = _mm256_set1_ps(inv_dir[axis]);
+            let t_near = _mm256_mul_ps(_mm256_sub_ps(l, _mm256_set1_ps(origin_near[axis])), inv);
+            let t_far = _mm256_mul_ps(
+                _mm256_sub_ps(h, _mm256_set1_ps(origin_far[axis])),
+                _mm256_set1_ps(inv_far[axis]),
+            );
+            // `maxps(a, b)` is `a > b ? a : b` and `minps(a, b)` is `a < b ? a : b`: the
+            // portable loop's selects, NaN handling included.
+            t_enter = _mm256_max_ps(t_near, t_enter);
+            t_exit = _mm256_min_ps(t_far, t_exit);
+        }
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t_enter, t_exit)) as u32;
+        let mut out = [0.0f32; 8];
+        _mm256_storeu_ps(out.as_mut_ptr(), t_enter);
+        (out, mask)
     }
-    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t_enter, t_exit)) as u32;
-    let mut out = [0.0f32; 8];
-    // SAFETY: `out` is eight `f32`: the unaligned 32-byte store writes exactly them.
-    unsafe { _mm256_storeu_ps(out.as_mut_ptr(), t_enter) };
-    (out, mask)
 }
 
 #[cfg(all(test, target_arch = "x86_64"))]

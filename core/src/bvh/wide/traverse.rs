@@ -207,7 +207,7 @@ where
         stats: Option<&mut TraversalStats>,
         best: &mut Option<(u32, LT::Hit)>,
     ) {
-        if ANY && let ChildRef::Leaf { start, count } = ChildRef::decode(self.root) {
+        if let ChildRef::Leaf { start, count } = ChildRef::decode(self.root) {
             self.root_leaf::<LT, ANY, L>(level, (start, count), ray, leaf, stats, best);
             return;
         }
@@ -221,15 +221,12 @@ where
         }
     }
 
-    /// The any-hit walk of a tree whose root is the leaf run `(start, count)` (a tree with no
-    /// node): checks `ray`, prepares the leaf test and tests the run, the answer left in
-    /// `best`, before any node-test setup (reciprocals, padding: ~50 instructions per ray
-    /// saved on the tetrahedron's shadow rays). No box is tested: a box test only culls rays
-    /// that hit none of the run's triangles in their interval, which the leaf test rejects as
-    /// well. Closest-hit rays take the node walk, which leaves a root leaf at once: this path
-    /// for them too (−225 instructions per ray on the tetrahedron) moved the AVX2 node test
-    /// of the closest-hit walk out of line and cost +53 per ray on the bunny
-    /// (docs/performance.md).
+    /// The walk of a tree whose root is the leaf run `(start, count)` (a tree with no node):
+    /// checks `ray`, prepares the leaf test and tests the run, the answer left in `best`,
+    /// before any node-test setup (reciprocals, padding, the eight-lane broadcasts: about 225
+    /// instructions per closest-hit ray and 50 per any-hit ray on the tetrahedron). No box is
+    /// tested: a box test only culls rays that hit none of the run's triangles in their
+    /// interval, which the leaf test rejects as well.
     #[inline(always)]
     fn root_leaf<LT: LeafTest, const ANY: bool, L: SimdLevel>(
         &self,
@@ -469,9 +466,9 @@ where
         }
         let mut cur = *ray;
         let mut sp = 0usize;
-        // The root: node 0 (its own box is the union of its children's: not tested), or a
-        // leaf (the tree has no node), which the first loop leaves at once (any-hit rays took
-        // `root_leaf`).
+        // The root: node 0 (its own box is the union of its children's: not tested). A tree
+        // whose root is a leaf took `root_leaf`; were it to get here, the first loop leaves
+        // at once.
         let mut next = self.root;
         // Down to the first leaf, nodes only (the interval cannot shrink before a leaf).
         let mut bound = cull_bound(cur.t_max);
