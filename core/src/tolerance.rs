@@ -116,12 +116,6 @@ pub const BVH_PROJECTION_PAD: f32 = gamma(16);
 /// Unitless.
 pub const BEHIND_REL: f32 = 1.0 / 1_048_576.0;
 
-/// [`BEHIND_REL`] of the cull's `f64` second look at a doubtful lane
-/// (`triangle::watertight::behind::behind_lane_f64`): `2⁻⁴⁹ = 16u` with `u = 2⁻⁵³`, twice the
-/// same `γ₈/(1 − γ₈) < 9u` bound in `f64` (the derivation: `core/src/triangle/watertight/behind.rs`).
-/// Unitless.
-pub const BEHIND_REL_F64: f64 = 1.0 / 562_949_953_421_312.0;
-
 /// The margin that makes the `f64` filters of the exact path pass for every base vertex it
 /// may choose: `2⁻⁴⁰` of `m²·|·|₁` (the derivation: `core/src/triangle/watertight/behind.rs`; `2¹⁰` times what they need). Unitless (per
 /// square of world units).

@@ -89,9 +89,8 @@ pub trait LeafTest {
     /// [`LeafTest::certain_misses`]; a single group passed twice) that this test misses
     /// because the ray's line certainly crosses their plane behind its origin
     /// ([`TriangleIntersector::behind_misses2`]), at SIMD `level` (the same bits at every
-    /// level); bits 8–15, asked for with `doubtful`: kept lanes it found doubtful, which the
-    /// walk tests after the others, each first given [`LeafTest::behind_certain`]. The any-hit walks call it on the lanes
-    /// `certain_misses` kept. The default refuses none.
+    /// level). The any-hit walks call it on the lanes `certain_misses` kept. The default
+    /// refuses none.
     #[inline(always)]
     fn behind_misses<L: SimdLevel>(
         &self,
@@ -100,20 +99,9 @@ pub trait LeafTest {
         ray: &Ray,
         lanes: [&TriangleLanes; 2],
         keep: u32,
-        doubtful: bool,
     ) -> u32 {
-        let _ = (level, pre, ray, lanes, keep, doubtful);
+        let _ = (level, pre, ray, lanes, keep);
         0
-    }
-
-    /// `true` only when [`LeafTest::intersect_triangle`] misses the stored triangle `v`
-    /// because the ray's line certainly crosses its plane behind the origin
-    /// ([`TriangleIntersector::behind_certain`]): for the lanes `behind_misses` found
-    /// doubtful. The default refuses none.
-    #[inline(always)]
-    fn behind_certain(&self, pre: &Self::Prepared, ray: &Ray, v: &[Vec3; 3]) -> bool {
-        let _ = (pre, ray, v);
-        false
     }
 }
 
@@ -229,14 +217,7 @@ impl<I: TriangleIntersector> LeafTest for Triangles<'_, I> {
         ray: &Ray,
         lanes: [&TriangleLanes; 2],
         keep: u32,
-        doubtful: bool,
     ) -> u32 {
-        self.isect
-            .behind_misses2(level, pre, ray, lanes, keep, doubtful)
-    }
-
-    #[inline(always)]
-    fn behind_certain(&self, pre: &I::Prepared, ray: &Ray, v: &[Vec3; 3]) -> bool {
-        self.isect.behind_certain(pre, ray, v)
+        self.isect.behind_misses2(level, pre, ray, lanes, keep)
     }
 }

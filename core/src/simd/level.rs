@@ -33,9 +33,8 @@ pub trait SimdLevel: Copy + sealed::Sealed {
     /// The watertight test's "crossed behind the origin" cull of two groups at once
     /// ([`Behind8`]; [`crate::triangle::WatertightRay::behind_misses2`]): bit `i` for lane
     /// `i` of the first group, bit `4 + i` for lane `i` of the second, set when the lane
-    /// formula of [`Behind8`] refuses the lane; bits `8 + i` and `12 + i` likewise, set when
-    /// it finds the lane doubtful. `None` when this level has no kernel for it (the caller
-    /// then evaluates the formula lane by lane, with the same bits).
+    /// formula of [`Behind8`] refuses the lane. `None` when this level has no kernel for it
+    /// (the caller then evaluates the formula lane by lane, with the same bits).
     fn behind_misses8(self, q: &Behind8<'_>) -> Option<u32>;
 }
 
@@ -58,8 +57,7 @@ pub trait SimdLevel: Copy + sealed::Sealed {
 ///   `crate::tolerance`, derived in `triangle/watertight/behind.rs`;
 ///
 /// and the lane's bit is set when `|wn| > bound_w`, `|dn| > bound_d` and `wn`, `dn` have
-/// opposite signs (a NaN anywhere leaves it clear): the lane is refused. It is doubtful (the
-/// `f64` form may refuse it) when instead `0 < |wn| ≤ bound_w`, with the rest as before.
+/// opposite signs (a NaN anywhere leaves it clear).
 #[derive(Clone, Copy, Debug)]
 pub struct Behind8<'a> {
     /// The first group (bits 0–3; world units).
@@ -340,8 +338,8 @@ fn row8(lo: &[f32; 4], hi: &[f32; 4]) -> core::arch::x86_64::__m256 {
 /// [`SimdLevel::behind_misses8`] in 256-bit registers: the first group's lanes in the low
 /// half, the second's in the high half, the operations of [`Behind8`] lane by lane (`|·|` an
 /// `andnot` of the sign bit, `max` as `maxps`, the opposite signs as the sign bit of
-/// `wn ^ dn`, which equals the comparison of signs wherever `|dn|` cleared its bound and
-/// `|wn| > 0`: then neither is zero or NaN).
+/// `wn ^ dn`, which equals the comparison of signs wherever both magnitudes cleared their
+/// bounds: then neither is zero or NaN).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 #[inline]
@@ -349,8 +347,8 @@ fn behind_misses8_avx2(q: &Behind8<'_>) -> u32 {
     use crate::tolerance::{BEHIND_F64_MARGIN, BEHIND_REL, BEHIND_TINY};
     use core::arch::x86_64::{
         __m256, _CMP_GT_OQ, _mm256_add_ps, _mm256_and_ps, _mm256_andnot_ps, _mm256_cmp_ps,
-        _mm256_max_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setzero_ps,
-        _mm256_sub_ps, _mm256_xor_ps,
+        _mm256_max_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_sub_ps,
+        _mm256_xor_ps,
     };
     let sign = _mm256_set1_ps(-0.0);
     let abs = |x: __m256| _mm256_andnot_ps(sign, x);
@@ -408,20 +406,11 @@ fn behind_misses8_avx2(q: &Behind8<'_>) -> u32 {
         add(mul(rel, d_nn), mul(margin, _mm256_set1_ps(q.dir_l1))),
         tiny,
     );
-    let certain_w = _mm256_cmp_ps::<_CMP_GT_OQ>(abs(wn), bound_w);
-    // The sign bit of `wn ^ dn` where `dn` cleared its bound (neither zero nor NaN).
-    let opposite_d = _mm256_and_ps(
+    let certain = _mm256_and_ps(
+        _mm256_cmp_ps::<_CMP_GT_OQ>(abs(wn), bound_w),
         _mm256_cmp_ps::<_CMP_GT_OQ>(abs(dn), bound_d),
-        _mm256_xor_ps(wn, dn),
     );
-    let refused = _mm256_movemask_ps(_mm256_and_ps(certain_w, opposite_d)) as u32;
-    // Doubtful: `0 < |wn| ≤ bound_w` (not NaN, not zero: the sign bit is its sign).
-    let nonzero = _mm256_cmp_ps::<_CMP_GT_OQ>(abs(wn), _mm256_setzero_ps());
-    let doubtful = _mm256_movemask_ps(_mm256_andnot_ps(
-        certain_w,
-        _mm256_and_ps(nonzero, opposite_d),
-    )) as u32;
-    refused | doubtful << 8
+    _mm256_movemask_ps(_mm256_and_ps(certain, _mm256_xor_ps(wn, dn))) as u32
 }
 
 /// [`SimdLevel::sort_keys8`] in one 256-bit register: the keys of [`order_key`] lane by lane,

@@ -182,10 +182,8 @@ pub trait TriangleIntersector: Copy + Send + Sync {
     /// [`TriangleIntersector::certain_misses2`] kept) that this test misses because the ray's
     /// line certainly crosses their plane behind its origin while `t_min ≥ 0`, at SIMD
     /// `level` (the same bits at every level). Like `certain_misses`, a lane is reported only
-    /// when `intersect_prepared` returns `None` for it. Bits 8–15 (lane `i` at `8 + i`), asked
-    /// for with `doubtful`: kept lanes this cull could not decide but
-    /// [`TriangleIntersector::behind_certain`] may, worth testing last. Worth calling for rays that leave a surface (any-hit queries: shadow,
-    /// ambient occlusion). The default reports none.
+    /// when `intersect_prepared` returns `None` for it. Worth calling for rays that leave a
+    /// surface (any-hit queries: shadow, ambient occlusion). The default reports none.
     #[inline(always)]
     fn behind_misses2<L: crate::simd_level::SimdLevel>(
         &self,
@@ -194,20 +192,9 @@ pub trait TriangleIntersector: Copy + Send + Sync {
         ray: &Ray,
         lanes: [&TriangleLanes; 2],
         keep: u32,
-        doubtful: bool,
     ) -> u32 {
-        let _ = (level, pre, ray, lanes, keep, doubtful);
+        let _ = (level, pre, ray, lanes, keep);
         0
-    }
-
-    /// `true` only when `intersect_prepared(pre, ray, v)` returns `None` because the ray's
-    /// line certainly crosses the plane of `v` behind its origin: a cheaper refusal than the
-    /// test, for the lanes [`TriangleIntersector::behind_misses2`] reports doubtful. The
-    /// default refuses none.
-    #[inline(always)]
-    fn behind_certain(&self, pre: &Self::Prepared, ray: &Ray, v: &[Vec3; 3]) -> bool {
-        let _ = (pre, ray, v);
-        false
     }
 
     /// Convenience: [`TriangleIntersector::prepare`] then

@@ -682,17 +682,9 @@ pub trait ShearedTest: Copy + Send + Sync {
         ray: &Ray,
         lanes: [&TriangleLanes; 2],
         keep: u32,
-        doubtful: bool,
     ) -> u32 {
-        let _ = (level, pre, ray, lanes, keep, doubtful);
+        let _ = (level, pre, ray, lanes, keep);
         0
-    }
-
-    /// [`TriangleIntersector::behind_certain`]. The default refuses none.
-    #[inline(always)]
-    fn behind_certain(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> bool {
-        let _ = (pre, ray, v);
-        false
     }
 }
 
@@ -759,14 +751,8 @@ impl<T: ShearedTest> TriangleIntersector for T {
         ray: &Ray,
         lanes: [&TriangleLanes; 2],
         keep: u32,
-        doubtful: bool,
     ) -> u32 {
-        T::behind_misses2(self, level, pre, ray, lanes, keep, doubtful)
-    }
-
-    #[inline(always)]
-    fn behind_certain(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> bool {
-        T::behind_certain(self, pre, ray, v)
+        T::behind_misses2(self, level, pre, ray, lanes, keep)
     }
 }
 
@@ -810,26 +796,13 @@ impl ShearedTest for Watertight {
         ray: &Ray,
         [first, second]: [&TriangleLanes; 2],
         keep: u32,
-        doubtful: bool,
     ) -> u32 {
         #[cfg(target_arch = "x86_64")]
-        return pre.behind_misses2(level, ray, first, second, keep, doubtful);
+        return pre.behind_misses2(level, ray, first, second, keep);
         #[cfg(not(target_arch = "x86_64"))]
         {
-            let _ = (level, pre, ray, first, second, keep, doubtful);
+            let _ = (level, pre, ray, first, second, keep);
             0
-        }
-    }
-
-    /// On x86-64 [`WatertightRay::behind_certain`]; elsewhere none (as `behind_misses2`).
-    #[inline(always)]
-    fn behind_certain(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        return pre.behind_certain(ray, v);
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            let _ = (pre, ray, v);
-            false
         }
     }
 }

@@ -560,7 +560,7 @@ where
                                 t_max: *t_max,
                                 ..*ray
                             };
-                            if leaf_hits::<_, _, false, false>(
+                            if leaf_hits::<_, _, false>(
                                 level,
                                 leaf,
                                 pre,

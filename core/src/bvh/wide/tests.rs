@@ -778,8 +778,7 @@ fn tiny_closed_meshes_answer_as_brute_force() {
 /// A tree whose root is a leaf is walked without a box test (`root_leaf`): every interval
 /// answers as brute force, at every level, for both widths, closest and any hit: rays at each
 /// triangle's centre whose interval ends before the tree's box, starts beyond it, ends or
-/// starts exactly at the hit, or starts behind the origin; rays that miss the box; shadow and
-/// ambient-occlusion rays spawned off each face (the `f64` look of the behind cull); invalid
+/// starts exactly at the hit, or starts behind the origin; rays that miss the box; invalid
 /// rays (NaN, zero direction, empty interval), which hit nothing and call no closure.
 #[test]
 fn a_root_leaf_answers_every_interval_as_brute_force() {
@@ -813,18 +812,6 @@ fn a_root_leaf_answers_every_interval_as_brute_force() {
         }
         // Away from the tree: misses the box.
         rays.push(Ray::new(o, o));
-        // Shadow and ambient-occlusion rays leaving the face at its hit: the face is as large
-        // as its coordinates, so the any-hit walk refuses it only in the `f64` second look.
-        if let Some(h) = Watertight.intersect(&ray, &v) {
-            let hit = h.to_hit(&v);
-            for light in [o, -o, Vec3::new(0.3, 0.2, 0.1), Vec3::new(5.0, -4.0, 3.0)] {
-                rays.push(crate::spawn_ray_to(&hit, light));
-            }
-            let w = hit.normal;
-            let mut ao = Ray::new(hit.spawn_origin(w), w);
-            ao.t_max = 0.1;
-            rays.push(ao);
-        }
     }
     let good = Ray::new(Vec3::new(3.0, 0.1, 0.2), Vec3::new(-1.0, 0.0, 0.0));
     let invalid = [

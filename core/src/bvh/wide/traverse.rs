@@ -66,13 +66,9 @@ impl RunLanes {
 /// certainly misses skipped, the others tested one by one in leaf order, each hit offered to
 /// the search ([`take_if_better`], which shrinks `cur.t_max`). The cull does not depend on the
 /// interval, so a hit in the first group leaves the second's cull valid. Returns `true` when a
-/// hit was taken (with `ANY`, at the first one, the rest untested). With `ANY`, the lanes the
-/// ray's line crosses behind its origin are refused ([`LeafTest::behind_misses`]); with
-/// `LOOK` too, the lanes that cull finds doubtful are tested last, each first given
-/// [`LeafTest::behind_certain`] (the root-leaf walk only: the tiny meshes' large faces; on the
-/// walks of trees with nodes the doubtful mask cost about 1 % and found none).
+/// hit was taken (with `ANY`, at the first one, the rest untested).
 #[inline(always)]
-pub(super) fn leaf_hits<LT: LeafTest, L: SimdLevel, const ANY: bool, const LOOK: bool>(
+pub(super) fn leaf_hits<LT: LeafTest, L: SimdLevel, const ANY: bool>(
     level: L,
     leaf: &mut LT,
     pre: &LT::Prepared,
@@ -96,18 +92,8 @@ pub(super) fn leaf_hits<LT: LeafTest, L: SimdLevel, const ANY: bool, const LOOK:
                 ([first, first], lanes.next_group() & !missed)
             }
         };
-        // Any-hit: the lanes crossed behind the origin refused; with `LOOK`, the doubtful ones
-        // moved to bits 8–15, so that they are tested last (an earlier hit often ends the walk
-        // before them), each after `behind_certain`. `(bit / LANES) & 1` and
-        // `bit & (LANES − 1)` name the same lane from either half.
         if ANY && todo != 0 {
-            let lanes = [&pair[0].lanes, &pair[1].lanes];
-            let behind = leaf.behind_misses(level, pre, cur, lanes, todo, LOOK);
-            todo &= !behind;
-            if LOOK {
-                let doubtful = (behind >> 8) & todo;
-                todo = (todo & !doubtful) | doubtful << 8;
-            }
+            todo &= !leaf.behind_misses(level, pre, cur, [&pair[0].lanes, &pair[1].lanes], todo);
         }
         while todo != 0 {
             let bit = todo.trailing_zeros() as usize;
@@ -116,9 +102,6 @@ pub(super) fn leaf_hits<LT: LeafTest, L: SimdLevel, const ANY: bool, const LOOK:
             let Some(tri) = group.triangle(bit & (LANES - 1)) else {
                 break;
             };
-            if ANY && LOOK && bit >= 8 && leaf.behind_certain(pre, cur, &tri.vertices()) {
-                continue;
-            }
             let prim = tri.prim;
             if let Some((t, h)) = leaf.intersect_triangle(level, pre, prim, &tri.vertices(), cur)
                 && take_if_better(cur, best, prim, t, h)
@@ -265,7 +248,7 @@ where
             RunLanes::new(start, count),
         );
         let mut cur = *ray;
-        leaf_hits::<LT, L, ANY, true>(level, leaf, &pre, run, lanes, (&mut cur, best));
+        leaf_hits::<LT, L, ANY>(level, leaf, &pre, run, lanes, (&mut cur, best));
         let local = TraversalStats {
             primitives_tested: u64::from(count),
             ..TraversalStats::default()
@@ -529,14 +512,7 @@ where
                     local.primitives_tested += u64::from(count);
                     let run = leaf_groups(groups, start, count);
                     let lanes = RunLanes::new(start, count);
-                    if leaf_hits::<LT, L, ANY, false>(
-                        level,
-                        leaf,
-                        &pre,
-                        run,
-                        lanes,
-                        (&mut cur, best),
-                    ) {
+                    if leaf_hits::<LT, L, ANY>(level, leaf, &pre, run, lanes, (&mut cur, best)) {
                         bound = cull_bound(cur.t_max);
                         if ANY {
                             break 'walk;

@@ -58,42 +58,19 @@
 //! `2³⁸⁸`), and `crossed_behind` refuses the triangle on every path: `common_t` (x86-64) and
 //! `hit_t` (every target), whatever the edges decide (mixed signs or a zero `det` refuse it
 //! too).
-//!
-//! **The `f64` second look.** For a triangle as large as its coordinates (the octahedron's
-//! faces, a room's walls) the `f32` bound `2⁻²⁰·|p0 − o|·N` exceeds the `wn` of a spawned
-//! ray's offset (a few `f32` ulps of the hit point), so its starting triangle would reach the
-//! exact path. The formula therefore also marks a lane **doubtful**: `|dn|` cleared its bound,
-//! `0 < |wn| ≤ bound_w`, and the signs are opposite. A leaf that asks for them (the wide
-//! tree's root leaf, the tiny meshes) tests its doubtful lanes after the others (an any-hit
-//! ray often ends before them), each first given [`behind_lane_f64`], the
-//! same quantities in `f64` from the same `f32` inputs
-//! ([`WatertightRay::behind_certain`]). A difference of two `f32` values rounds at most once
-//! in `f64`, and every term of `wn` again passes through at most 8 roundings (of `dn`, 7), so
-//! with `u = 2⁻⁵³` the errors are below `9u` times the permanents and
-//! [`BEHIND_REL_F64`](crate::tolerance::BEHIND_REL_F64) `= 16u` is twice that. No `f64` value
-//! here underflows or overflows: a non-zero difference of `f32` values is at least `2⁻¹⁴⁹`
-//! and at most `2¹²⁹`, so every product of three lies in `[2⁻⁴⁴⁷, 2³⁹⁰]`, and no absolute
-//! floor is needed; NaN and `±∞` inputs never refuse (the permanent is `∞` or NaN wherever
-//! the value is). The `margin·|·|₁` term is the `f32` formula's, now computed in `f64`, so
-//! the argument above for the exact path's filters holds as it stands: a lane the second
-//! look refuses is refused by the exact path on every path. Both looks are level-independent
-//! (the kernel's doubtful bits are the formula's; the second look is scalar), so the same
-//! lanes are refused at every level.
 
 use super::WatertightRay;
 use crate::ray::Ray;
 use crate::simd_level::{Behind8, SimdLevel};
-use crate::tolerance::{BEHIND_F64_MARGIN, BEHIND_REL, BEHIND_REL_F64, BEHIND_TINY};
+use crate::tolerance::{BEHIND_F64_MARGIN, BEHIND_REL, BEHIND_TINY};
 use crate::triangle::TriangleLanes;
-use glam::Vec3;
 
-/// The lane formula of [`Behind8`] for one triangle `p` (vertices, world axes), origin `o`,
-/// direction `d` and `d_l1 = (|d_0| + |d_1|) + |d_2|`: bit 0 set when the lane is refused,
-/// bit 1 when it is doubtful (worth [`behind_lane_f64`]). The portable definition every
-/// level's kernel reproduces bit for bit.
+/// The lane formula of [`Behind8`] for one triangle `p` (vertices, permuted axes), origin
+/// `o`, direction `d` and `d_l1 = (|d_0| + |d_1|) + |d_2|`: `true` when the lane is refused.
+/// The portable definition every level's kernel reproduces bit for bit.
 #[inline(always)]
 #[must_use]
-pub(super) fn behind_lane(p: [[f32; 3]; 3], o: [f32; 3], d: [f32; 3], d_l1: f32) -> u32 {
+pub(super) fn behind_lane(p: [[f32; 3]; 3], o: [f32; 3], d: [f32; 3], d_l1: f32) -> bool {
     let [p0, p1, p2] = p;
     let a: [f32; 3] = core::array::from_fn(|j| p0[j] - o[j]);
     let e1: [f32; 3] = core::array::from_fn(|j| p1[j] - p0[j]);
@@ -118,61 +95,16 @@ pub(super) fn behind_lane(p: [[f32; 3]; 3], o: [f32; 3], d: [f32; 3], d_l1: f32)
     let a1 = (aa[0] + aa[1]) + aa[2];
     let bound_w = (BEHIND_REL * w_nn + margin * a1) + BEHIND_TINY;
     let bound_d = (BEHIND_REL * d_nn + margin * d_l1) + BEHIND_TINY;
-    let opposite = (wn < 0.0) != (dn < 0.0);
-    let (certain_w, certain_d) = (wn.abs() > bound_w, dn.abs() > bound_d);
-    let refused = certain_w && certain_d && opposite;
-    let doubtful = !certain_w && wn.abs() > 0.0 && certain_d && opposite;
-    u32::from(refused) | u32::from(doubtful) << 1
-}
-
-/// The second look at a doubtful lane ([`behind_lane`]'s bit 1): the same rule in `f64`,
-/// `true` when the line certainly crosses the plane of `p` behind the origin `o` (world axes,
-/// direction `d`). The `f32` formula's quantities, each computed in `f64` from the same `f32`
-/// inputs, against `R = `[`BEHIND_REL_F64`] `= 2⁻⁴⁹` in place of `2⁻²⁰` and with the same
-/// [`BEHIND_F64_MARGIN`] terms (module docs: no `f64` value here underflows or overflows, so
-/// no absolute floor is needed). This is what refuses the triangle a spawned ray starts on
-/// when the triangle is as large as its coordinates, where the `f32` bound `2⁻²⁰·|p0 − o|·N`
-/// exceeds the spawn offset's `wn`. Scalar and portable: the same bits at every level.
-#[inline(always)]
-#[must_use]
-pub(super) fn behind_lane_f64(p: [[f32; 3]; 3], o: [f32; 3], d: [f32; 3]) -> bool {
-    let w = |v: [f32; 3]| v.map(f64::from);
-    let ([p0, p1, p2], o, d) = (p.map(w), w(o), w(d));
-    let a: [f64; 3] = core::array::from_fn(|j| p0[j] - o[j]);
-    let e1: [f64; 3] = core::array::from_fn(|j| p1[j] - p0[j]);
-    let e2: [f64; 3] = core::array::from_fn(|j| p2[j] - p0[j]);
-    let (yz, zy) = (e1[1] * e2[2], e1[2] * e2[1]);
-    let (zx, xz) = (e1[2] * e2[0], e1[0] * e2[2]);
-    let (xy, yx) = (e1[0] * e2[1], e1[1] * e2[0]);
-    let n = [yz - zy, zx - xz, xy - yx];
-    let nn = [
-        yz.abs() + zy.abs(),
-        zx.abs() + xz.abs(),
-        xy.abs() + yx.abs(),
-    ];
-    let dot = |u: [f64; 3], v: [f64; 3]| (u[0] * v[0] + u[1] * v[1]) + u[2] * v[2];
-    let (aa, da) = (a.map(f64::abs), d.map(f64::abs));
-    let (wn, w_nn) = (dot(a, n), dot(aa, nn));
-    let (dn, d_nn) = (dot(d, n), dot(da, nn));
-    let max = |x: f64, y: f64| if x > y { x } else { y };
-    let s: [f64; 3] = core::array::from_fn(|j| e1[j].abs() + e2[j].abs());
-    let m = max(max(s[0], s[1]), s[2]);
-    let margin = f64::from(BEHIND_F64_MARGIN) * (m * m);
-    let (a1, d1) = ((aa[0] + aa[1]) + aa[2], (da[0] + da[1]) + da[2]);
-    let bound_w = BEHIND_REL_F64 * w_nn + margin * a1;
-    let bound_d = BEHIND_REL_F64 * d_nn + margin * d1;
     wn.abs() > bound_w && dn.abs() > bound_d && (wn < 0.0) != (dn < 0.0)
 }
 
 impl WatertightRay {
     /// The lanes among `keep` (bits 0–3: `first`'s lanes, 4–7: `second`'s) whose plane the
     /// line of `ray` certainly crosses behind its origin while `ray.t_min ≥ 0` (module docs):
-    /// [`super::Watertight`] misses each of them. Bits 8–15, when `doubtful` is set: the kept
-    /// lanes not refused that are doubtful, for which [`WatertightRay::behind_certain`] may
-    /// still refuse. `0` when
-    /// `t_min < 0` (or NaN). The same bits at every level: `level`'s eight-lane kernel when it
-    /// has one, else the lane formula for the kept lanes only. A method of the prepared ray,
-    /// like the edge cull, although it reads only `ray` (it works in world axes).
+    /// [`super::Watertight`] misses each of them. `0` when `t_min < 0` (or NaN). The same bits
+    /// at every level: `level`'s eight-lane kernel when it has one, else the lane formula
+    /// for the kept lanes only. A method of the prepared ray, like the edge cull, although
+    /// it reads only `ray` (it works in world axes).
     #[inline(always)]
     #[must_use]
     pub fn behind_misses2<L: SimdLevel>(
@@ -182,7 +114,6 @@ impl WatertightRay {
         first: &TriangleLanes,
         second: &TriangleLanes,
         keep: u32,
-        doubtful: bool,
     ) -> u32 {
         if !(ray.t_min >= 0.0) {
             return 0;
@@ -198,39 +129,20 @@ impl WatertightRay {
             dir,
             dir_l1,
         };
-        let keep = keep & 0xFF;
-        let wanted = if doubtful { keep | keep << 8 } else { keep };
         if let Some(mask) = level.behind_misses8(&q) {
-            return mask & wanted;
+            return mask & keep;
         }
         let mut out = 0;
-        let mut todo = keep;
+        let mut todo = keep & 0xFF;
         while todo != 0 {
             let bit = todo.trailing_zeros() as usize;
             todo &= todo - 1;
             let group = if bit < 4 { first } else { second };
             if let Some(p) = group.get(bit & 3) {
-                let b = behind_lane(p, origin, dir, dir_l1);
-                out |= (b & 1) << bit | (b >> 1 & 1) << (8 + bit);
+                out |= u32::from(behind_lane(p, origin, dir, dir_l1)) << bit;
             }
         }
-        out & wanted
-    }
-
-    /// `true` when the line of `ray` certainly crosses the plane of the triangle `v` behind
-    /// the origin while `ray.t_min ≥ 0`, decided in `f64` ([`behind_lane_f64`]): then
-    /// [`super::Watertight`] misses it. For the lanes [`WatertightRay::behind_misses2`]
-    /// reports doubtful; sound for any triangle. Out of line: few candidates are doubtful.
-    #[inline(never)]
-    #[must_use]
-    pub fn behind_certain(&self, ray: &Ray, v: &[Vec3; 3]) -> bool {
-        let _ = self;
-        ray.t_min >= 0.0
-            && behind_lane_f64(
-                v.map(|p| p.to_array()),
-                ray.origin.to_array(),
-                ray.direction.to_array(),
-            )
+        out
     }
 }
 
@@ -343,17 +255,17 @@ mod tests {
             };
             let at = (i / 3) % 8;
             let lanes = lanes_around(&mut r, tri, at);
-            let portable = pre.behind_misses2(Portable, &ray, &lanes[0], &lanes[1], 0xFF, true);
+            let portable = pre.behind_misses2(Portable, &ray, &lanes[0], &lanes[1], 0xFF);
             if let Some(level) = avx2 {
-                let got = pre.behind_misses2(level, &ray, &lanes[0], &lanes[1], 0xFF, true);
+                let got = pre.behind_misses2(level, &ray, &lanes[0], &lanes[1], 0xFF);
                 assert_eq!(got, portable, "{ray:?} {lanes:?}");
                 // Only the kept lanes.
                 let keep = (i as u32).wrapping_mul(2_654_435_761) >> 24;
-                let got = pre.behind_misses2(level, &ray, &lanes[0], &lanes[1], keep, true);
-                assert_eq!(got, portable & (keep | keep << 8));
+                let got = pre.behind_misses2(level, &ray, &lanes[0], &lanes[1], keep);
+                assert_eq!(got, portable & keep);
                 assert_eq!(
-                    pre.behind_misses2(Portable, &ray, &lanes[0], &lanes[1], keep, true),
-                    portable & (keep | keep << 8)
+                    pre.behind_misses2(Portable, &ray, &lanes[0], &lanes[1], keep),
+                    portable & keep
                 );
             }
             if ray.t_min < 0.0 {
@@ -364,9 +276,7 @@ mod tests {
                     continue;
                 };
                 let v = t.map(Vec3::from_array);
-                // Refused by the `f32` formula, or doubtful and refused by the `f64` look.
-                let is_refused = portable >> lane & 1 == 1
-                    || (portable >> (8 + lane) & 1 == 1 && pre.behind_certain(&ray, &v));
+                let is_refused = portable >> lane & 1 == 1;
                 if is_refused {
                     refused += 1;
                     assert!(exactly_behind(&ray, &v), "{ray:?} {v:?}");
@@ -400,135 +310,5 @@ mod tests {
             start_refused * 10 > starts * 9,
             "start triangles refused: {start_refused} of {starts}"
         );
-    }
-
-    /// The kernel of each level returns the lane formula's bits, refused and doubtful
-    /// (`behind_lane`, evaluated here lane by lane on the raw lanes, unused NaN lanes
-    /// included), on the lanes of the test above, triangles at and away from their own
-    /// scale, origins near and off their planes, rays in every direction.
-    #[test]
-    fn kernel_bits_equal_the_lane_formula() {
-        let Some(level) = crate::test_util::avx2_or_skip(
-            "triangle::watertight::behind::tests::kernel_bits_equal_the_lane_formula",
-        ) else {
-            return;
-        };
-        let mut r = Lcg(7);
-        let (mut refused, mut doubtful) = (0, 0);
-        for i in 0..20_000 {
-            let size = [1e-3f32, 1.0, 1e3][i % 3];
-            let base = if i % 2 == 0 {
-                r.v(64.0 * size)
-            } else {
-                Vec3::ZERO
-            };
-            let tri = [base + r.v(size), base + r.v(size), base + r.v(size)];
-            let lanes = lanes_around(&mut r, tri, i % 8);
-            // Half the origins off the triangle's plane by up to `1e-6` of its size, where
-            // `wn` is within its `f32` bound (doubtful or kept).
-            let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
-            let (b1, b2) = (r.f() * 0.5, r.f() * 0.5);
-            let on = tri[0] + (tri[1] - tri[0]) * b1 + (tri[2] - tri[0]) * b2;
-            let o = if i % 4 < 2 {
-                on + n * (size * 1e-6 * (r.f() - 0.5))
-            } else {
-                base + r.v(2.0 * size)
-            };
-            let d = unit_vec(&mut r.0);
-            let (origin, dir) = (o.to_array(), d.to_array());
-            let dir_l1 = (dir[0].abs() + dir[1].abs()) + dir[2].abs();
-            let q = Behind8 {
-                first: &lanes[0],
-                second: &lanes[1],
-                origin,
-                dir,
-                dir_l1,
-            };
-            let mut want = 0;
-            for lane in 0..8 {
-                let v = &lanes[lane / 4].v;
-                let p = [0, 1, 2].map(|k| [0, 1, 2].map(|j| v[k][j][lane % 4]));
-                let b = behind_lane(p, origin, dir, dir_l1);
-                want |= (b & 1) << lane | (b >> 1 & 1) << (8 + lane);
-            }
-            assert_eq!(
-                level.behind_misses8(&q),
-                Some(want),
-                "{o:?} {d:?} {lanes:?}"
-            );
-            refused += (want & 0xFF).count_ones();
-            doubtful += (want >> 8).count_ones();
-        }
-        assert!(refused > 10_000 && doubtful > 1_000, "{refused} {doubtful}");
-    }
-
-    /// The triangle a spawned ray starts on, as large as its coordinates (an octahedron's
-    /// face, a room's wall): beyond the `f32` bound, so the formula alone refuses few of them,
-    /// but doubtful, and the `f64` second look refuses nearly all. Every refused lane, at
-    /// every level (the same bits), is an exact miss behind the origin (the oracle of the test
-    /// above, sharing no code with the cull) and `Watertight`'s answer for it is `None`.
-    #[test]
-    fn large_start_triangles_are_refused_by_the_f64_look() {
-        let avx2 = crate::test_util::avx2_or_skip(
-            "triangle::watertight::behind::tests::large_start_triangles_are_refused_by_the_f64_look",
-        );
-        let mut r = Lcg(11);
-        let (mut starts, mut by_f32, mut by_both, mut refused) = (0, 0, 0, 0);
-        for i in 0..20_000 {
-            let size = [1e-3f32, 1.0, 1e3][i % 3];
-            let tri = [r.v(size), r.v(size), r.v(size)];
-            let eye = r.v(16.0 * size);
-            let (b1, b2) = (r.f() * 0.5, r.f() * 0.5);
-            let aim = tri[0] + (tri[1] - tri[0]) * b1 + (tri[2] - tri[0]) * b2;
-            let Some(h) = Watertight.intersect(&Ray::new(eye, aim - eye), &tri) else {
-                continue;
-            };
-            let hit = h.to_hit(&tri);
-            let ray = spawn_ray_to(&hit, r.v(8.0 * size));
-            let Some(pre) = WatertightRay::new(&ray) else {
-                continue;
-            };
-            let at = i % 8;
-            let lanes = lanes_around(&mut r, tri, at);
-            let bits = pre.behind_misses2(Portable, &ray, &lanes[0], &lanes[1], 0xFF, true);
-            if let Some(level) = avx2 {
-                assert_eq!(
-                    pre.behind_misses2(level, &ray, &lanes[0], &lanes[1], 0xFF, true),
-                    bits,
-                    "{ray:?} {lanes:?}"
-                );
-            }
-            let refused_lane = |lane: usize, v: &[Vec3; 3]| {
-                bits >> lane & 1 == 1
-                    || (bits >> (8 + lane) & 1 == 1 && pre.behind_certain(&ray, v))
-            };
-            starts += 1;
-            by_f32 += usize::from(bits >> at & 1 == 1);
-            by_both += usize::from(refused_lane(at, &tri));
-            for lane in 0..8 {
-                let Some(t) = lanes[lane / 4].get(lane % 4) else {
-                    continue;
-                };
-                let v = t.map(Vec3::from_array);
-                if refused_lane(lane, &v) {
-                    refused += 1;
-                    assert!(exactly_behind(&ray, &v), "{ray:?} {v:?}");
-                    assert_eq!(Watertight.intersect(&ray, &v), None, "{ray:?} {v:?}");
-                    if let Some(level) = avx2 {
-                        assert_eq!(
-                            Watertight.intersect_prepared_on(level, &pre, &ray, &v),
-                            None
-                        );
-                    }
-                }
-            }
-        }
-        assert!(starts > 5_000, "{starts} start triangles");
-        assert!(
-            by_f32 * 2 < starts,
-            "the f32 formula alone refused {by_f32} of {starts}"
-        );
-        assert!(by_both * 10 > starts * 9, "refused {by_both} of {starts}");
-        assert!(refused >= by_both);
     }
 }
