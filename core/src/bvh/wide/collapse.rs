@@ -278,6 +278,35 @@ fn root_leaf(nodes: &[BvhNode]) -> Option<core::ops::Range<usize>> {
     as_leaf(nodes, 0).filter(|run| !opens(nodes, 0, run))
 }
 
+/// [`BvhError::LeafTooLarge`] for a leaf run of more than [`MAX_LEAF_TRIANGLES`].
+fn leaf_fits(range: &core::ops::Range<usize>) -> Result<(), BvhError> {
+    if range.len() > MAX_LEAF_TRIANGLES {
+        return Err(BvhError::LeafTooLarge {
+            count: range.len(),
+            max: MAX_LEAF_TRIANGLES,
+        });
+    }
+    Ok(())
+}
+
+/// [`BvhError::TooManyTriangles`] for more than [`MAX_TRIANGLES`] triangles or slots.
+fn slots_fit(slots: usize) -> Result<(), BvhError> {
+    if slots > MAX_TRIANGLES {
+        return Err(BvhError::TooManyTriangles {
+            count: slots,
+            max: MAX_TRIANGLES,
+        });
+    }
+    Ok(())
+}
+
+/// The error of a walk whose pending nodes outgrow [`Pending`] (a broken binary tree deeper
+/// than `MAX_DEPTH`), reported as a leaf that cannot be placed.
+const PENDING_FULL: BvhError = BvhError::LeafTooLarge {
+    count: 0,
+    max: MAX_LEAF_TRIANGLES,
+};
+
 /// Walks the collapse without writing: what it needs ([`Plan`]), or the first reason it
 /// cannot be built (a leaf too large, a broken binary tree).
 fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<Plan, BvhError> {
@@ -285,12 +314,7 @@ fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<Plan, BvhError> {
         return Ok(Plan { nodes: 0, slots: 0 });
     }
     if let Some(run) = root_leaf(nodes) {
-        if run.len() > MAX_LEAF_TRIANGLES {
-            return Err(BvhError::LeafTooLarge {
-                count: run.len(),
-                max: MAX_LEAF_TRIANGLES,
-            });
-        }
+        leaf_fits(&run)?;
         return Ok(Plan {
             nodes: 0,
             slots: run.len(),
@@ -301,28 +325,17 @@ fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<Plan, BvhError> {
     let mut count = 1usize;
     let mut slots = 0usize;
     if !pending.push((0, 0)) {
-        return Err(BvhError::LeafTooLarge {
-            count: 0,
-            max: MAX_LEAF_TRIANGLES,
-        });
+        return Err(PENDING_FULL);
     }
     while let Some((b, _)) = pending.pop() {
         let list = child_list::<W>(nodes, b);
         for (c, leaf) in list.iter() {
             if let Some(range) = leaf {
-                if range.len() > MAX_LEAF_TRIANGLES {
-                    return Err(BvhError::LeafTooLarge {
-                        count: range.len(),
-                        max: MAX_LEAF_TRIANGLES,
-                    });
-                }
+                leaf_fits(&range)?;
             } else {
                 count += 1;
                 if !pending.push((c, 0)) {
-                    return Err(BvhError::LeafTooLarge {
-                        count: 0,
-                        max: MAX_LEAF_TRIANGLES,
-                    });
+                    return Err(PENDING_FULL);
                 }
             }
         }
@@ -347,12 +360,7 @@ where
 {
     check_counts(binary, mesh)?;
     let needed = plan::<W>(binary.nodes())?;
-    if needed.slots > MAX_TRIANGLES {
-        return Err(BvhError::TooManyTriangles {
-            count: needed.slots,
-            max: MAX_TRIANGLES,
-        });
-    }
+    slots_fit(needed.slots)?;
     check_finite(binary, mesh)?;
     Ok(needed)
 }
@@ -370,14 +378,7 @@ where
             found: mesh.len(),
         });
     }
-    let indices = binary.indices();
-    if indices.len() > MAX_TRIANGLES {
-        return Err(BvhError::TooManyTriangles {
-            count: indices.len(),
-            max: MAX_TRIANGLES,
-        });
-    }
-    Ok(())
+    slots_fit(binary.indices().len())
 }
 
 /// Every triangle of the tree has finite vertices.
@@ -565,19 +566,6 @@ where
                 groups.as_ref().len(),
             )?;
         }
-        let leaf_fits = |range: &core::ops::Range<usize>| {
-            if range.len() > MAX_LEAF_TRIANGLES {
-                return Err(BvhError::LeafTooLarge {
-                    count: range.len(),
-                    max: MAX_LEAF_TRIANGLES,
-                });
-            }
-            Ok(())
-        };
-        let stack_full = BvhError::LeafTooLarge {
-            count: 0,
-            max: MAX_LEAF_TRIANGLES,
-        };
 
         // Each node's leaf runs as the walk meets the node, placed by `place_runs` (as `plan`),
         // each slot after the runs placed before. A group is emptied when the first run
@@ -606,13 +594,8 @@ where
             }
             start
         };
-        let slots_fit = |slots: usize| {
-            if slots > MAX_TRIANGLES {
-                return Err(BvhError::TooManyTriangles {
-                    count: slots,
-                    max: MAX_TRIANGLES,
-                });
-            }
+        let slots_stored = |slots: usize| -> Result<(), BvhError> {
+            slots_fit(slots)?;
             CapacityError::check(
                 Storage::WideTriangleGroups,
                 slots.div_ceil(LANES),
@@ -629,7 +612,7 @@ where
             leaf_fits(&range)?;
             let len = range.len() as u32;
             slots = range.len();
-            slots_fit(slots)?;
+            slots_stored(slots)?;
             root = ChildRef::leaf(copy_leaf(0, range) as u32, len).unwrap_or(ChildRef::EMPTY);
         } else if !bnodes.is_empty() {
             CapacityError::check(Storage::BvhNodes, 1, node_count)?;
@@ -647,7 +630,7 @@ where
                     }
                 }
                 let starts = list.place_runs(&mut slots);
-                slots_fit(slots)?;
+                slots_stored(slots)?;
                 for (i, (c, leaf)) in list.iter().enumerate() {
                     let Some(bn) = bnodes.get(c as usize) else {
                         continue;
@@ -666,7 +649,7 @@ where
                             *n = WideNode::EMPTY;
                         }
                         if !pending.push((c, child)) {
-                            return Err(stack_full);
+                            return Err(PENDING_FULL);
                         }
                         child
                     };
