@@ -405,7 +405,7 @@ fn bench<T: TriangleIntersector>(
 }
 
 /// Rays per call of the timed batch side ([`batch_figures`]): a few rows of a camera, a
-/// multiple of the packet size (16), its answers (20 bytes each) kept in the L2 cache.
+/// multiple of the packet size (16), its answers (32 bytes each, 128 KB) kept in the L2 cache.
 const BATCH_BLOCK: usize = 4096;
 
 /// The batch path's figures on the camera set `set` (`rays`, `hits` of them hit): halfray's
