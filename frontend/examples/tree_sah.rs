@@ -19,13 +19,10 @@ use halfray_core::bvh::BuildOptions;
 use halfray_core::bvh::wide::{ChildRef, binary_options};
 use halfray_core::mesh::TriangleMesh;
 
-/// Half the surface area of `b`, in `f64` (0 for an empty box).
-fn half_area(b: &Aabb) -> f64 {
-    let d = (b.max - b.min).as_dvec3();
-    if d.min_element() < 0.0 {
-        return 0.0;
-    }
-    d.x * d.y + d.y * d.z + d.z * d.x
+/// The surface area of `b` ([`Aabb::surface_area`], 0 for an empty box), in `f64` for the
+/// sums: only its ratio to the root's is reported, so half areas and whole ones agree.
+fn area(b: &Aabb) -> f64 {
+    f64::from(b.surface_area())
 }
 
 /// Sums over one tree.
@@ -46,19 +43,19 @@ fn main() {
         let tris = TriangleMesh::new(&obj.positions, &obj.triangles);
         let binary = build_binary(&tris, &binary_options(BuildOptions::default())).expect("build");
         let wide = build_wide(&tris, &binary).expect("collapse");
-        let root = half_area(&wide.bounds());
+        let root = area(&wide.bounds());
         let mut s = Shape::default();
         let mut todo = vec![(wide.root(), root)];
-        while let Some((child, area)) = todo.pop() {
+        while let Some((child, a)) = todo.pop() {
             match child {
                 ChildRef::Inner(i) => {
                     let node = &wide.nodes()[i as usize];
                     s.inner += 1;
-                    s.node_sah += area;
+                    s.node_sah += a;
                     for k in 0..8 {
                         if node.child(k) != ChildRef::Empty {
                             s.children += 1;
-                            todo.push((node.child(k), half_area(&node.child_bounds(k))));
+                            todo.push((node.child(k), area(&node.child_bounds(k))));
                         }
                     }
                 }
@@ -66,8 +63,8 @@ fn main() {
                     let groups = ((start % 4 + count) as usize).div_ceil(4);
                     s.leaves += 1;
                     s.groups += groups;
-                    s.group_sah += area * groups as f64;
-                    s.call_sah += area * groups.div_ceil(2) as f64;
+                    s.group_sah += a * groups as f64;
+                    s.call_sah += a * groups.div_ceil(2) as f64;
                 }
                 ChildRef::Empty => {}
             }
