@@ -18,6 +18,7 @@ use halfray_core::aabb::Aabb;
 use halfray_core::bvh::BuildOptions;
 use halfray_core::bvh::wide::{ChildRef, binary_options};
 use halfray_core::mesh::TriangleMesh;
+use halfray_core::triangle::LANES;
 
 /// The surface area of `b` ([`Aabb::surface_area`], 0 for an empty box), in `f64` for the
 /// sums: only its ratio to the root's is reported, so half areas and whole ones agree.
@@ -25,12 +26,9 @@ fn area(b: &Aabb) -> f64 {
     f64::from(b.surface_area())
 }
 
-/// Sums over one tree.
+/// The area sums over one tree (its counts of nodes, slots and leaves are `WideBvh::stats`').
 #[derive(Default)]
-struct Shape {
-    inner: usize,
-    children: usize,
-    leaves: usize,
+struct Sums {
     groups: usize,
     node_sah: f64,
     group_sah: f64,
@@ -44,24 +42,22 @@ fn main() {
         let binary = build_binary(&tris, &binary_options(BuildOptions::default())).expect("build");
         let wide = build_wide(&tris, &binary).expect("collapse");
         let root = area(&wide.bounds());
-        let mut s = Shape::default();
+        let mut s = Sums::default();
         let mut todo = vec![(wide.root(), root)];
         while let Some((child, a)) = todo.pop() {
             match child {
                 ChildRef::Inner(i) => {
                     let node = &wide.nodes()[i as usize];
-                    s.inner += 1;
                     s.node_sah += a;
                     for k in 0..8 {
                         if node.child(k) != ChildRef::Empty {
-                            s.children += 1;
                             todo.push((node.child(k), area(&node.child_bounds(k))));
                         }
                     }
                 }
                 ChildRef::Leaf { start, count } => {
-                    let groups = ((start % 4 + count) as usize).div_ceil(4);
-                    s.leaves += 1;
+                    // The groups of the run, counted as the leaf test takes them.
+                    let groups = (start as usize % LANES + count as usize).div_ceil(LANES);
                     s.groups += groups;
                     s.group_sah += a * groups as f64;
                     s.call_sah += a * groups.div_ceil(2) as f64;
@@ -70,6 +66,7 @@ fn main() {
             }
         }
         let n = obj.triangles.len();
+        let shape = wide.stats();
         println!(
             "{mesh}: {n} triangles; SAH {:.3} = inner nodes {:.3} + leaves {:.3} \
              (per eight-lane call {:.3}); {} inner nodes, {:.1} % of slots used; \
@@ -78,12 +75,12 @@ fn main() {
             s.node_sah / root,
             s.group_sah / root,
             s.call_sah / root,
-            s.inner,
-            100.0 * s.children as f64 / (8 * s.inner.max(1)) as f64,
-            s.leaves,
-            n as f64 / s.leaves.max(1) as f64,
+            shape.nodes,
+            100.0 * shape.children as f64 / (8 * shape.nodes.max(1)) as f64,
+            shape.leaves,
+            n as f64 / shape.leaves.max(1) as f64,
             s.groups,
-            100.0 * n as f64 / (4 * s.groups.max(1)) as f64,
+            100.0 * n as f64 / (LANES * s.groups.max(1)) as f64,
         );
     }
 }
