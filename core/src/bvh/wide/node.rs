@@ -107,8 +107,9 @@ impl ChildRef {
         }
     }
 
-    /// Encodes a leaf; `None` when `start` needs more than 27 bits or `count` is not in
-    /// `1..=MAX_LEAF_TRIANGLES`.
+    /// Encodes a leaf; `None` when `start` needs more than 27 bits, `count` is not in
+    /// `1..=MAX_LEAF_TRIANGLES`, or the run is the one whose encoding is [`ChildRef::EMPTY`]'s
+    /// (`start = 2²⁷ − 1` with 16 triangles).
     #[must_use]
     pub fn leaf(start: u32, count: u32) -> Option<u32> {
         let ok = start <= START_MASK

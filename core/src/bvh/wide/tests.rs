@@ -1318,3 +1318,35 @@ fn binary_options_are_the_documented_ones() {
     });
     assert!(!got.exclude_non_finite);
 }
+
+/// A leaf reference: bit 31 set, the count less one in bits 27–30, the first record in bits
+/// 0–26, worked by hand; refused for a count of 0 or above 16, a start beyond 27 bits, and
+/// the one run whose encoding would be `ChildRef::EMPTY` (`u32::MAX`: start `2²⁷ − 1`, 16
+/// triangles).
+#[test]
+fn a_leaf_reference_encodes_its_run_and_refuses_what_does_not_fit() {
+    let last = (1u32 << 27) - 1;
+    for (start, count, code) in [
+        (0, 1, 0x8000_0000),
+        (5, 3, 0x9000_0005),
+        (0, 16, 0xF800_0000),
+        (last, 15, 0xF7FF_FFFF),
+        (last, 1, 0x87FF_FFFF),
+    ] {
+        assert_eq!(ChildRef::leaf(start, count), Some(code), "{start} {count}");
+        assert_eq!(ChildRef::decode(code), ChildRef::Leaf { start, count });
+    }
+    for (start, count) in [
+        (0, 0),
+        (0, 17),
+        (7, 0),
+        (7, 17),
+        (last + 1, 1),
+        (u32::MAX, 4),
+    ] {
+        assert_eq!(ChildRef::leaf(start, count), None, "{start} {count}");
+    }
+    assert_eq!(ChildRef::leaf(last, 16), None);
+    assert_eq!(ChildRef::decode(ChildRef::EMPTY), ChildRef::Empty);
+    assert_eq!(ChildRef::decode(42), ChildRef::Inner(42));
+}

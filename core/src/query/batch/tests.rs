@@ -217,3 +217,36 @@ fn morton_codes_interleave_x_lowest() {
     assert_eq!(morton3([8, 0, 1]), 1 << 9 | 1 << 2);
     assert_eq!(cells(Vec3::new(f32::NAN, f32::INFINITY, -3.0)), [0, 15, 0]);
 }
+
+/// The sort keys of a chunk, worked by hand from the documented form
+/// `(octant << 24 | origin cell << 12 | direction cell) << 32 | index`: origins scaled to 16
+/// cells per axis over the chunk's origin bounds (here `[0, 1]³`, the top clamped to cell 15),
+/// directions divided by their largest component, shifted to `[0, 2]` and scaled by 8, each
+/// cell triple interleaved x lowest.
+#[test]
+fn a_chunk_s_keys_are_the_documented_cells() {
+    let rays = [
+        // Origin cells (8, 4, 15): 2⁹ + 2⁷ + 2² + 2⁵ + 2⁸ + 2¹¹ = 2980. Direction
+        // (2, 1.5, 0.75)·8 → cells (15, 12, 6): 2⁰ + 2³ + 2⁶ + 2⁹ + 2⁷ + 2¹⁰ + 2⁵ + 2⁸ = 2025.
+        // Octant: z < 0, 4.
+        Ray::new(Vec3::new(0.5, 0.25, 1.0), Vec3::new(1.0, 0.5, -0.25)),
+        // Origin cells (0, 0, 0): 0. Direction (1, 1, 2)·8 → (8, 8, 15):
+        // 2⁹ + 2¹⁰ + 2² + 2⁵ + 2⁸ + 2¹¹ = 3876. Octant 0.
+        Ray::new(Vec3::ZERO, Vec3::Z),
+        // Origin cells (15, 15, 15): 4095. Direction (0, 1.5, 1)·8 → (0, 12, 8):
+        // 2⁷ + 2¹⁰ + 2¹¹ = 3200. Octant: x < 0, 1.
+        Ray::new(Vec3::ONE, Vec3::new(-2.0, 1.0, 0.0)),
+    ];
+    let key = |octant: u64, origin: u64, direction: u64, index: u64| {
+        (octant << 24 | origin << 12 | direction) << 32 | index
+    };
+    let mut keys = [0u64; BATCH_CHUNK];
+    assert_eq!(
+        chunk_order(&rays, &mut keys),
+        [
+            key(0, 0, 3876, 1),
+            key(1, 4095, 3200, 2),
+            key(4, 2980, 2025, 0)
+        ]
+    );
+}

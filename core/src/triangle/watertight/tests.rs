@@ -584,3 +584,52 @@ fn skipping_the_filter_the_cull_repeats_changes_no_answer() {
         "{hits} hits, {rejected} rejected by the filter, {exact_misses} missed exactly"
     );
 }
+
+/// A ray through each of the six regions outside a triangle (beyond one edge's line, or
+/// beyond two at a vertex; the target point given by barycentric coordinates, one or two of
+/// them negative) misses, for both windings and for rays along `−z`, `+z` and a tilted
+/// direction, in every member of the family tested alone (`intersect`, no cull in front); a
+/// ray through an interior point hits there. The oracle is the point's construction: every
+/// coordinate is a dyadic fraction, so the points and origins are exact in `f32`.
+#[test]
+fn every_region_outside_a_triangle_is_a_miss_for_either_facing() {
+    let tri = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let outside = [
+        [-0.25, 0.5, 0.75],
+        [0.5, -0.25, 0.75],
+        [0.5, 0.75, -0.25],
+        [-0.5, -0.5, 2.0],
+        [-0.5, 2.0, -0.5],
+        [2.0, -0.5, -0.5],
+    ];
+    let inside = [0.25, 0.25, 0.5];
+    let dirs = [
+        Vec3::new(0.0, 0.0, -1.0),
+        Vec3::Z,
+        Vec3::new(0.125, -0.0625, -1.0),
+    ];
+    let tests: [(&str, &dyn Fn(&Ray, &[Vec3; 3]) -> Option<TriangleHit>); 3] = [
+        ("watertight", &|r, v| Watertight.intersect(r, v)),
+        ("watertight-f32", &|r, v| WatertightF32.intersect(r, v)),
+        ("watertight-f32-exact", &|r, v| {
+            crate::triangle::WatertightF32Exact.intersect(r, v)
+        }),
+    ];
+    for v in [tri, [tri[0], tri[2], tri[1]]] {
+        let at = |w: [f32; 3]| v[0] * w[0] + v[1] * w[1] + v[2] * w[2];
+        for d in dirs {
+            for (name, test) in tests {
+                for w in outside {
+                    let ray = Ray::new(at(w) - d * 2.0, d);
+                    assert!(test(&ray, &v).is_none(), "{name}: {w:?} {v:?} {ray:?}");
+                }
+                let ray = Ray::new(at(inside) - d * 2.0, d);
+                let h = test(&ray, &v).unwrap_or_else(|| panic!("{name}: {v:?} {ray:?}"));
+                assert_eq!(h.t, 2.0, "{name}");
+                assert!((h.b1 - inside[1]).abs() < 1e-6, "{name}: {h:?}");
+                assert!((h.b2 - inside[2]).abs() < 1e-6, "{name}: {h:?}");
+                assert_eq!(h.front_face, v[1].cross(v[2]).dot(d) < 0.0, "{name}: {h:?}");
+            }
+        }
+    }
+}
