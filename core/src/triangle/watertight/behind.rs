@@ -311,4 +311,75 @@ mod tests {
             "start triangles refused: {start_refused} of {starts}"
         );
     }
+
+    /// Needles (width `10⁻⁸`–`10⁻⁵` of their length, half of them along a coordinate axis)
+    /// met by rays at grazing angles (`10⁻⁹`–`10⁻⁵` rad, through a point of the needle) from
+    /// origins on its plane and off it by up to its width or `10⁻²` of its length: there the
+    /// normal's permanent is far below `m²` and the `f64` margin (`BEHIND_F64_MARGIN·m²` of
+    /// the 1-norms) decides the bound. Every refused lane lies exactly behind the origin and
+    /// is missed by the exact path at every level.
+    #[test]
+    fn grazed_needles_are_refused_only_behind() {
+        let avx2 = crate::test_util::avx2_or_skip(
+            "triangle::watertight::behind::tests::grazed_needles_are_refused_only_behind",
+        );
+        let mut r = Lcg(7);
+        let (mut refused, mut behind) = (0, 0);
+        for i in 0..40_000 {
+            let length = [1e-3f32, 1.0, 1e3][i % 3];
+            let width = length * [1e-8f32, 1e-7, 1e-6, 1e-5][(i / 3) % 4];
+            // Along a coordinate axis half the time: then the normal's permanent is of the
+            // order of width × length, far below `m²`, and the margins decide.
+            let axis = if i % 2 == 0 {
+                unit_vec(&mut r.0)
+            } else {
+                [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X][(i / 2) % 4]
+            };
+            let base = r.v(4.0 * length);
+            let tri = [
+                base,
+                base + axis * length + r.v(width),
+                base + axis * (length * r.f()) + r.v(width),
+            ];
+            let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
+            if n == Vec3::ZERO {
+                continue;
+            }
+            let aim =
+                tri[0] + (tri[1] - tri[0]) * (0.5 * r.f()) + (tri[2] - tri[0]) * (0.5 * r.f());
+            let along = (axis + r.v(1.0) - n * axis.dot(n)).normalize_or_zero();
+            let tilt = [1e-9f32, 1e-7, 1e-5][(i / 12) % 3] * (r.f() - 0.5);
+            let dir = along + n * tilt;
+            let off = [0.0, 1e-3 * width, width, 1e-4 * length, 1e-2 * length][(i / 36) % 5];
+            let lift = n * (off * (r.f() - 0.5));
+            let origin = aim - dir * (length * (r.f() - 0.25)) + lift;
+            let ray = Ray::new(origin, dir);
+            let Some(pre) = WatertightRay::new(&ray) else {
+                continue;
+            };
+            let mut lanes = [TriangleLanes::EMPTY; 2];
+            lanes[0].set(0, &tri.map(|p| p.to_array()));
+            let portable = pre.behind_misses2(Portable, &ray, &lanes[0], &lanes[1], 0xFF);
+            if let Some(level) = avx2 {
+                let got = pre.behind_misses2(level, &ray, &lanes[0], &lanes[1], 0xFF);
+                assert_eq!(got, portable, "{ray:?} {tri:?}");
+            }
+            behind += usize::from(exactly_behind(&ray, &tri));
+            if portable & 1 == 1 {
+                refused += 1;
+                assert!(exactly_behind(&ray, &tri), "{ray:?} {tri:?}");
+                assert_eq!(Watertight.intersect(&ray, &tri), None, "{ray:?} {tri:?}");
+                if let Some(level) = avx2 {
+                    assert_eq!(
+                        Watertight.intersect_prepared_on(level, &pre, &ray, &tri),
+                        None
+                    );
+                }
+            }
+        }
+        assert!(
+            refused > 1_000 && behind > refused,
+            "{refused} refused, {behind} behind"
+        );
+    }
 }
