@@ -608,7 +608,8 @@ fn every_region_outside_a_triangle_is_a_miss_for_either_facing() {
         Vec3::Z,
         Vec3::new(0.125, -0.0625, -1.0),
     ];
-    let tests: [(&str, &dyn Fn(&Ray, &[Vec3; 3]) -> Option<TriangleHit>); 3] = [
+    type Test<'a> = &'a dyn Fn(&Ray, &[Vec3; 3]) -> Option<TriangleHit>;
+    let tests: [(&str, Test<'_>); 3] = [
         ("watertight", &|r, v| Watertight.intersect(r, v)),
         ("watertight-f32", &|r, v| WatertightF32.intersect(r, v)),
         ("watertight-f32-exact", &|r, v| {
