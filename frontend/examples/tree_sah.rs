@@ -56,8 +56,7 @@ fn main() {
                     }
                 }
                 ChildRef::Leaf { start, count } => {
-                    // The groups of the run, counted as the leaf test takes them.
-                    let groups = (start as usize % LANES + count as usize).div_ceil(LANES);
+                    let groups = wide.leaf_groups(start, count).len();
                     s.groups += groups;
                     s.group_sah += a * groups as f64;
                     s.call_sah += a * groups.div_ceil(2) as f64;

@@ -224,6 +224,14 @@ where
         )
     }
 
+    /// The triangle groups the leaf run of `count` slots from slot `start` spans
+    /// ([`ChildRef::Leaf`]), the ones the leaf test reads; empty for a run out of range.
+    #[inline]
+    #[must_use]
+    pub fn leaf_groups(&self, start: u32, count: u32) -> &[LeafGroup] {
+        traverse::leaf_groups(self.groups(), start, count)
+    }
+
     /// The triangle in slot `slot` (leaf order); `None` past the last slot and for a lane
     /// skipped before a leaf run (module docs).
     #[inline]
