@@ -4,7 +4,7 @@
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::simd_level::SimdLevel;
-use crate::triangle::{TriangleHit, TriangleIntersector, TriangleLanes};
+use crate::triangle::{RAY_LANES, ShearedRays, TriangleHit, TriangleIntersector, TriangleLanes};
 use glam::Vec3;
 
 /// The test of one primitive against a ray, called by every structure's queries
@@ -102,6 +102,16 @@ pub trait LeafTest {
     ) -> u32 {
         let _ = (level, pre, ray, lanes, keep);
         0
+    }
+
+    /// `rays` side by side for a cull across rays ([`TriangleIntersector::sheared_rays`]):
+    /// when `Some`, lane `i` of its [`ShearedRays::certain_misses`] is this test's
+    /// [`LeafTest::certain_misses`] of `rays[i]` for every valid ray, and
+    /// [`LeafTest::prepare_valid`] never refuses a valid ray. The default has none.
+    #[inline(always)]
+    fn sheared_rays(&self, rays: &[Ray; RAY_LANES]) -> Option<ShearedRays> {
+        let _ = rays;
+        None
     }
 }
 
@@ -219,5 +229,10 @@ impl<I: TriangleIntersector> LeafTest for Triangles<'_, I> {
         keep: u32,
     ) -> u32 {
         self.isect.behind_misses2(level, pre, ray, lanes, keep)
+    }
+
+    #[inline(always)]
+    fn sheared_rays(&self, rays: &[Ray; RAY_LANES]) -> Option<ShearedRays> {
+        self.isect.sheared_rays(rays)
     }
 }

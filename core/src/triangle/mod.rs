@@ -39,7 +39,9 @@ pub use cramer::Cramer;
 pub use lanes::{LANES, TriangleLanes, pair_mask};
 pub use moller_trumbore::MollerTrumbore;
 pub use reference::F64Reference;
-pub use watertight::{ShearedTest, Watertight, WatertightF32, WatertightRay};
+pub use watertight::{
+    RAY_LANES, ShearedRays, ShearedTest, Watertight, WatertightF32, WatertightRay,
+};
 pub use watertight_f32_exact::WatertightF32Exact;
 
 use crate::float::gamma;
@@ -195,6 +197,17 @@ pub trait TriangleIntersector: Copy + Send + Sync {
     ) -> u32 {
         let _ = (level, pre, ray, lanes, keep);
         0
+    }
+
+    /// `rays` side by side for this test's cull across rays, when it has one: the watertight
+    /// family's ([`ShearedRays`]; lane `i` of [`ShearedRays::certain_misses`] is then
+    /// [`TriangleIntersector::certain_misses`] of `rays[i]`, bit for bit, for every valid ray,
+    /// and [`TriangleIntersector::prepare_valid`] never refuses a valid ray). `None`, the
+    /// default, for the others.
+    #[inline(always)]
+    fn sheared_rays(&self, rays: &[Ray; RAY_LANES]) -> Option<ShearedRays> {
+        let _ = rays;
+        None
     }
 
     /// Convenience: [`TriangleIntersector::prepare`] then

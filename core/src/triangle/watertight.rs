@@ -12,6 +12,9 @@ use glam::{DVec3, Vec3};
 #[allow(unsafe_code)]
 mod avx2;
 mod behind;
+mod rays;
+
+pub use rays::{RAY_LANES, ShearedRays};
 
 /// Per-ray data of the watertight test: the axis permutation that makes the largest direction
 /// component `z`, and the shear that maps the ray to the `+z` axis through the origin.
@@ -753,6 +756,11 @@ impl<T: ShearedTest> TriangleIntersector for T {
         keep: u32,
     ) -> u32 {
         T::behind_misses2(self, level, pre, ray, lanes, keep)
+    }
+
+    #[inline(always)]
+    fn sheared_rays(&self, rays: &[Ray; RAY_LANES]) -> Option<ShearedRays> {
+        Some(ShearedRays::new(rays))
     }
 }
 

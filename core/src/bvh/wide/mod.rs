@@ -67,6 +67,7 @@ mod node_test;
 mod packet;
 mod query;
 mod refit;
+mod root_batch;
 mod traverse;
 
 #[cfg(test)]

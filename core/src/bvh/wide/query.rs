@@ -96,8 +96,11 @@ where
 
     /// Sixteen rays at a time, the coherent ones walked as a packet, the others alone: the
     /// same answers. While the recent packets shared their leaves with less than one ray a
-    /// leaf, the next chunks go alone (`Sharing`): rays this far apart are faster alone. On a caller stack shorter than [`crate::query::QUERY_STACK_SIZE`], every
-    /// ray alone (so that each gets the single-ray answer, an error included).
+    /// leaf, the next chunks go alone (`Sharing`): rays this far apart are faster alone. A
+    /// tree whose root is a leaf takes its rays eight at a time through the leaf test's cull
+    /// across rays when it has one (`WideBvh::root_leaf_hits`). On a caller stack shorter
+    /// than [`crate::query::QUERY_STACK_SIZE`], every ray alone (so that each gets the
+    /// single-ray answer, an error included).
     #[inline(always)]
     fn closest_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
         &self,
@@ -108,6 +111,12 @@ where
     ) -> Result<(), BvhError> {
         same_length(rays.len(), out.len())?;
         let short = ctx.stack.entries().is_some_and(|e| e.len() < STACK);
+        if !short
+            && let ChildRef::Leaf { start, count } = ChildRef::decode(self.root)
+            && self.root_leaf_hits((start, count), rays, leaf, ctx, out)
+        {
+            return Ok(());
+        }
         let mut stack = PacketStack::new();
         let mut sharing = Sharing::NEW;
         for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {

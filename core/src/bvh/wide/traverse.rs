@@ -95,22 +95,46 @@ pub(super) fn leaf_hits<LT: LeafTest, L: SimdLevel, const ANY: bool>(
         if ANY && todo != 0 {
             todo &= !leaf.behind_misses(level, pre, cur, [&pair[0].lanes, &pair[1].lanes], todo);
         }
-        while todo != 0 {
-            let bit = todo.trailing_zeros() as usize;
-            todo &= todo - 1;
-            let group = pair[(bit / LANES) & 1];
-            let Some(tri) = group.triangle(bit & (LANES - 1)) else {
-                break;
-            };
-            let prim = tri.prim;
-            if let Some((t, h)) = leaf.intersect_triangle(level, pre, prim, &tri.vertices(), cur)
-                && take_if_better(cur, best, prim, t, h)
-            {
-                if ANY {
-                    return true;
-                }
-                taken = true;
+        if kept_hits::<LT, L, ANY>(level, leaf, pre, pair, todo, (&mut *cur, &mut *best)) {
+            if ANY {
+                return true;
             }
+            taken = true;
+        }
+    }
+    taken
+}
+
+/// The exact test of the lanes `todo` of two groups (`pair`; bit `i < 4` for lane `i` of the
+/// first, bit `4 + i` for lane `i` of the second), the lanes the culls kept, one by one in
+/// lane order, each hit offered to the search ([`take_if_better`], which shrinks
+/// `cur.t_max`). Returns `true` when a hit was taken (with `ANY`, at the first one, the rest
+/// untested).
+#[inline(always)]
+pub(super) fn kept_hits<LT: LeafTest, L: SimdLevel, const ANY: bool>(
+    level: L,
+    leaf: &mut LT,
+    pre: &LT::Prepared,
+    pair: [&LeafGroup; 2],
+    mut todo: u32,
+    (cur, best): (&mut Ray, &mut Option<(u32, LT::Hit)>),
+) -> bool {
+    let mut taken = false;
+    while todo != 0 {
+        let bit = todo.trailing_zeros() as usize;
+        todo &= todo - 1;
+        let group = pair[(bit / LANES) & 1];
+        let Some(tri) = group.triangle(bit & (LANES - 1)) else {
+            break;
+        };
+        let prim = tri.prim;
+        if let Some((t, h)) = leaf.intersect_triangle(level, pre, prim, &tri.vertices(), cur)
+            && take_if_better(cur, best, prim, t, h)
+        {
+            if ANY {
+                return true;
+            }
+            taken = true;
         }
     }
     taken

@@ -1,0 +1,113 @@
+//! The closest-hit batch of a tree whose root is a leaf (a mesh of a few triangles): eight
+//! rays at a time against the run's triangles with the leaf test's cull across rays
+//! ([`LeafTest::sheared_rays`]), then each ray's exact test of the lanes its cull kept. A
+//! ray whose cull keeps nothing (most of a camera's rays) never gets its own preparation.
+
+use super::WideBvh;
+use super::node::{LeafGroup, WideNode};
+use super::traverse::{RunLanes, kept_hits, leaf_groups};
+use crate::query::{LeafTest, Query, Stack, TraversalStats};
+use crate::ray::Ray;
+use crate::simd::level::SimdLevel;
+use crate::triangle::{LANES, RAY_LANES};
+
+/// Groups a run may span for [`WideBvh::root_leaf_hits`]: each ray's kept lanes are one `u32`,
+/// [`LANES`] bits a group.
+const MAX_GROUPS: usize = 32 / LANES;
+
+impl<const W: usize, N, T> WideBvh<W, N, T>
+where
+    N: AsRef<[WideNode<W>]>,
+    T: AsRef<[LeafGroup]>,
+{
+    /// [`crate::query::RayQuery::closest_hits`] of a tree whose root is the leaf run
+    /// `(start, count)`, when the leaf test culls across rays: `out[i]` is the single-ray
+    /// query's answer for `rays[i]`, bit for bit, and the statistics are the single-ray
+    /// queries' (the same cull bits, the same lanes tested in the same order). Returns `false`,
+    /// with nothing written, when the leaf test has no cull across rays or the run spans more
+    /// than [`MAX_GROUPS`] groups; the caller then answers the rays another way. The caller
+    /// has checked the lengths and that the context's stack is long enough (a single-ray query
+    /// would not refuse it).
+    #[inline(always)]
+    pub(super) fn root_leaf_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        (start, count): (u32, u32),
+        rays: &[Ray],
+        leaf: &mut LT,
+        ctx: &mut Query<'_, L, S>,
+        out: &mut [S::Out<(u32, LT::Hit)>],
+    ) -> bool {
+        let run = leaf_groups(self.groups(), start, count);
+        if run.len() > MAX_GROUPS {
+            return false;
+        }
+        let level = ctx.level;
+        let mut local = TraversalStats::default();
+        for (chunk, out) in rays.chunks(RAY_LANES).zip(out.chunks_mut(RAY_LANES)) {
+            let Some(first) = chunk.first() else {
+                continue;
+            };
+            // A short last chunk repeats its first ray in the lanes it does not fill.
+            let lanes: [Ray; RAY_LANES] = core::array::from_fn(|i| *chunk.get(i).unwrap_or(first));
+            let Some(sheared) = leaf.sheared_rays(&lanes) else {
+                // The same for every chunk (the leaf test has no such cull): only the first
+                // gets here, before anything is written.
+                return false;
+            };
+            let mut kept = [0u32; RAY_LANES];
+            let mut run_lanes = RunLanes::new(start, count);
+            for (g, group) in run.iter().enumerate() {
+                let mine = run_lanes.next_group();
+                for (k, missed) in kept.iter_mut().zip(sheared.certain_misses(&group.lanes)) {
+                    *k |= (mine & !missed) << (LANES * (g & (MAX_GROUPS - 1)));
+                }
+            }
+            for ((ray, o), &kept) in chunk.iter().zip(out.iter_mut()).zip(&kept) {
+                let best = Self::root_leaf_kept(level, ray, leaf, run, kept, &mut local, count);
+                *o = S::answer(Ok(best));
+            }
+        }
+        if let Some(stats) = ctx.stats.as_deref_mut() {
+            stats.add(&local);
+        }
+        true
+    }
+
+    /// One ray of [`WideBvh::root_leaf_hits`]: the answer of the single-ray walk of a root leaf
+    /// (`WideBvh::root_leaf`) given the lanes `kept` its cull keeps (the run's groups `run`,
+    /// [`LANES`] bits a group), its statistics (`count` triangles for a valid ray) added to
+    /// `local`.
+    #[inline(always)]
+    fn root_leaf_kept<LT: LeafTest, L: SimdLevel>(
+        level: L,
+        ray: &Ray,
+        leaf: &mut LT,
+        run: &[LeafGroup],
+        kept: u32,
+        local: &mut TraversalStats,
+        count: u32,
+    ) -> Option<(u32, LT::Hit)> {
+        if !ray.is_valid() {
+            return None;
+        }
+        let mut best = None;
+        if kept != 0 {
+            // Never refused for a valid ray (the contract of `sheared_rays`).
+            let pre = leaf.prepare_valid(ray)?;
+            let mut cur = *ray;
+            for (p, pair) in run.chunks(2).enumerate() {
+                let Some((first, second)) = pair.split_first() else {
+                    continue;
+                };
+                let lanes = (kept >> (2 * LANES * (p & 3))) & 0xFF;
+                let pair = [first, second.first().unwrap_or(first)];
+                kept_hits::<LT, L, false>(level, leaf, &pre, pair, lanes, (&mut cur, &mut best));
+            }
+        }
+        local.primitives_tested += u64::from(count);
+        best
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,215 @@
+//! The batch of a tree whose root is a leaf against single rays (bit for bit, statistics
+//! included, at every SIMD level the CPU has) and against a brute-force loop.
+
+use crate::bvh::wide::{Bvh8, binary_options, group_capacity};
+use crate::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
+use crate::mesh::TriangleMesh;
+use crate::query::{Query, QueryStack, RayQuery, TraversalStats, Triangles};
+use crate::ray::Ray;
+use crate::simd::level::{Portable, SimdLevel};
+use crate::test_util::{Lcg, brute_watertight, lcg_soup};
+use crate::triangle::{
+    MollerTrumbore, TriangleHit, TriangleIntersector, Watertight, WatertightF32, WatertightF32Exact,
+};
+use glam::Vec3;
+use std::vec;
+use std::vec::Vec;
+
+type Answer = Option<(u32, TriangleHit)>;
+type VecBvh8 = Bvh8<Vec<crate::bvh::wide::WideNode<8>>, Vec<crate::bvh::wide::LeafGroup>>;
+
+fn bvh8(mesh: &TriangleMesh<'_>) -> VecBvh8 {
+    let n = mesh.len();
+    let binary = Bvh::build(
+        mesh,
+        vec![BvhNode::EMPTY; node_capacity(n)],
+        vec![0u32; index_capacity(n)],
+        &binary_options(BuildOptions::default()),
+    )
+    .unwrap();
+    let nodes = vec![crate::bvh::wide::WideNode::EMPTY; crate::bvh::wide::node_capacity(n)];
+    let groups = vec![crate::bvh::wide::LeafGroup::EMPTY; group_capacity(n)];
+    crate::bvh::wide::WideBvh::from_binary(&binary, mesh, nodes, groups).unwrap()
+}
+
+/// The bits of an answer: equal bits, not only equal values.
+fn bits(a: Answer) -> Option<(u32, [u32; 6], bool)> {
+    a.map(|(p, h)| {
+        let n = h.ng.to_array();
+        let f = [h.t, h.b1, h.b2, n[0], n[1], n[2]].map(f32::to_bits);
+        (p, f, h.front_face)
+    })
+}
+
+/// Rays at `mesh` (`n`, not a multiple of eight, so the last chunk is short): from a sphere
+/// around it toward points inside its box, toward its vertices and edge midpoints (where the
+/// edge rules decide between neighbours), from inside it, along the axes, and every seventh
+/// one of an odd kind: invalid (NaN origin, zero direction, `t_min > t_max`), `t_min < 0`, a
+/// short `t_max`.
+fn rays_at(mesh: &TriangleMesh<'_>, positions: &[Vec3], n: usize, seed: u64) -> Vec<Ray> {
+    let mut r = Lcg(seed);
+    let (lo, hi) = positions
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), &p| {
+            (a.min(p), b.max(p))
+        });
+    let (centre, radius) = ((lo + hi) * 0.5, (hi - lo).length().max(1.0));
+    let mut tri = 0usize;
+    (0..n)
+        .map(|k| {
+            let origin = centre + r.v(4.0 * radius);
+            let target = match k % 4 {
+                0 => lo + (hi - lo) * Vec3::new(r.f(), r.f(), r.f()),
+                1 => positions[k % positions.len()],
+                2 => {
+                    tri += 1;
+                    let v = mesh.triangle(tri % mesh.len()).unwrap();
+                    (v[k % 3] + v[(k + 1) % 3]) * 0.5
+                }
+                _ => centre + r.v(0.2 * radius),
+            };
+            let mut ray = match k % 11 {
+                5 => Ray::new(centre, r.v(2.0)),
+                9 => Ray::new(centre - Vec3::Z * 3.0 * radius, Vec3::Z),
+                _ => Ray::new(origin, target - origin),
+            };
+            if k % 7 == 3 {
+                ray = match (k / 7) % 6 {
+                    0 => Ray::new(Vec3::splat(f32::NAN), Vec3::X),
+                    1 => Ray::new(origin, Vec3::ZERO),
+                    2 => Ray {
+                        t_min: 5.0,
+                        t_max: 1.0,
+                        ..ray
+                    },
+                    3 => Ray { t_min: -1e3, ..ray },
+                    4 => Ray { t_max: 0.5, ..ray },
+                    _ => Ray::new(ray.origin, ray.direction * 1e-3),
+                };
+            }
+            ray
+        })
+        .collect()
+}
+
+/// The batch of `bvh` with intersector `isect` at `level` against each ray's single query at
+/// that level: the same answer bits and the same statistics. Returns the hits.
+fn batch_equals_single<I: TriangleIntersector, L: SimdLevel>(
+    level: L,
+    (bvh, mesh): (&VecBvh8, &TriangleMesh<'_>),
+    isect: &I,
+    rays: &[Ray],
+    name: &str,
+) -> usize {
+    let mut tris = Triangles::new(mesh, isect);
+    let mut stack = QueryStack::new();
+    let mut batch: Vec<Answer> = vec![None; rays.len()];
+    let (mut together, mut alone) = (TraversalStats::default(), TraversalStats::default());
+    let mut ctx = Query::new()
+        .on(level)
+        .stack(&mut stack)
+        .stats(&mut together);
+    bvh.closest_hits(rays, &mut tris, &mut ctx, &mut batch)
+        .unwrap();
+    let mut hits = 0;
+    for (i, ray) in rays.iter().enumerate() {
+        let single = bvh.closest_hit(
+            ray,
+            &mut tris,
+            &mut Query::new().on(level).stats(&mut alone),
+        );
+        assert_eq!(bits(batch[i]), bits(single), "{name}: ray {i} {ray:?}");
+        hits += usize::from(single.is_some());
+    }
+    assert_eq!(together, alone, "{name}");
+    hits
+}
+
+/// Closed and open meshes of one to eight triangles (one to three groups: the tree is one
+/// leaf, no node), each with every watertight intersector (the cull across rays) and
+/// Möller–Trumbore (none: the rays go alone), at every level: the batch answers each ray as
+/// its single query does, and the watertight answers are the brute-force loop's.
+#[test]
+fn a_root_leaf_batch_answers_each_ray_as_alone() {
+    let tetra = (
+        vec![
+            Vec3::new(1.0, 1.0, 1.0),
+            Vec3::new(1.0, -1.0, -1.0),
+            Vec3::new(-1.0, 1.0, -1.0),
+            Vec3::new(-1.0, -1.0, 1.0),
+        ],
+        vec![[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]],
+    );
+    let octa = (
+        vec![
+            Vec3::X,
+            -Vec3::X,
+            Vec3::Y,
+            -Vec3::Y,
+            Vec3::Z * 2.0,
+            -Vec3::Z * 2.0,
+        ],
+        vec![
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ],
+    );
+    let mut meshes = vec![tetra, octa];
+    meshes.extend((1..=8).map(|n| lcg_soup(n, 40 + n as u64, 1.5, 1.0)));
+    for (m, (pos, tri)) in meshes.iter().enumerate() {
+        let mesh = TriangleMesh::new(pos, tri);
+        let bvh = bvh8(&mesh);
+        assert_eq!(bvh.node_count(), 0, "mesh {m}: the root is a leaf");
+        let rays = rays_at(&mesh, pos, 8 * 125 + 5, 7 + m as u64);
+        for (i, ray) in rays.iter().enumerate() {
+            let want = brute_watertight(&mesh, ray);
+            let mut tris = Triangles::new(&mesh, &Watertight);
+            let mut stack = QueryStack::new();
+            let mut out = [None];
+            bvh.closest_hits(
+                core::slice::from_ref(ray),
+                &mut tris,
+                &mut Query::new().stack(&mut stack),
+                &mut out,
+            )
+            .unwrap();
+            assert_eq!(bits(out[0]), bits(want), "mesh {m}, ray {i}: brute force");
+        }
+        let hits = batch_equals_single(Portable, (&bvh, &mesh), &Watertight, &rays, "watertight");
+        assert!(hits > rays.len() / 5, "mesh {m}: only {hits} hits");
+        batch_equals_single(Portable, (&bvh, &mesh), &WatertightF32, &rays, "f32");
+        batch_equals_single(
+            Portable,
+            (&bvh, &mesh),
+            &WatertightF32Exact,
+            &rays,
+            "f32 exact",
+        );
+        batch_equals_single(
+            Portable,
+            (&bvh, &mesh),
+            &MollerTrumbore::default(),
+            &rays,
+            "mt",
+        );
+        #[cfg(target_arch = "x86_64")]
+        if let Some(level) = crate::test_util::avx2_or_skip(
+            "bvh::wide::root_batch::tests::a_root_leaf_batch_answers_each_ray_as_alone",
+        ) {
+            batch_equals_single(level, (&bvh, &mesh), &Watertight, &rays, "avx2");
+            batch_equals_single(
+                level,
+                (&bvh, &mesh),
+                &WatertightF32Exact,
+                &rays,
+                "avx2 exact",
+            );
+        }
+    }
+}
