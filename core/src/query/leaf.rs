@@ -4,7 +4,7 @@
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::simd_level::SimdLevel;
-use crate::triangle::{RAY_LANES, ShearedRays, TriangleHit, TriangleIntersector, TriangleLanes};
+use crate::triangle::{ShearedRays, TriangleHit, TriangleIntersector, TriangleLanes};
 use glam::Vec3;
 
 /// The test of one primitive against a ray, called by every structure's queries
@@ -104,12 +104,13 @@ pub trait LeafTest {
         0
     }
 
-    /// `rays` side by side for a cull across rays ([`TriangleIntersector::sheared_rays`]):
+    /// The first [`crate::triangle::RAY_LANES`] rays of `rays` side by side for a cull across rays
+    /// ([`TriangleIntersector::sheared_rays`]):
     /// when `Some`, lane `i` of its [`ShearedRays::certain_misses`] is this test's
     /// [`LeafTest::certain_misses`] of `rays[i]` for every valid ray, and
     /// [`LeafTest::prepare_valid`] never refuses a valid ray. The default has none.
     #[inline(always)]
-    fn sheared_rays(&self, rays: &[Ray; RAY_LANES]) -> Option<ShearedRays> {
+    fn sheared_rays(&self, rays: &[Ray]) -> Option<ShearedRays> {
         let _ = rays;
         None
     }
@@ -232,7 +233,7 @@ impl<I: TriangleIntersector> LeafTest for Triangles<'_, I> {
     }
 
     #[inline(always)]
-    fn sheared_rays(&self, rays: &[Ray; RAY_LANES]) -> Option<ShearedRays> {
+    fn sheared_rays(&self, rays: &[Ray]) -> Option<ShearedRays> {
         self.isect.sheared_rays(rays)
     }
 }

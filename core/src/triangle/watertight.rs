@@ -759,7 +759,7 @@ impl<T: ShearedTest> TriangleIntersector for T {
     }
 
     #[inline(always)]
-    fn sheared_rays(&self, rays: &[Ray; RAY_LANES]) -> Option<ShearedRays> {
+    fn sheared_rays(&self, rays: &[Ray]) -> Option<ShearedRays> {
         Some(ShearedRays::new(rays))
     }
 }

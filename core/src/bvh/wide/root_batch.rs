@@ -44,12 +44,7 @@ where
         let level = ctx.level;
         let mut local = TraversalStats::default();
         for (chunk, out) in rays.chunks(RAY_LANES).zip(out.chunks_mut(RAY_LANES)) {
-            let Some(first) = chunk.first() else {
-                continue;
-            };
-            // A short last chunk repeats its first ray in the lanes it does not fill.
-            let lanes: [Ray; RAY_LANES] = core::array::from_fn(|i| *chunk.get(i).unwrap_or(first));
-            let Some(sheared) = leaf.sheared_rays(&lanes) else {
+            let Some(sheared) = leaf.sheared_rays(chunk) else {
                 // The same for every chunk (the leaf test has no such cull): only the first
                 // gets here, before anything is written.
                 return false;
@@ -63,6 +58,12 @@ where
                 }
             }
             for ((ray, o), &kept) in chunk.iter().zip(out.iter_mut()).zip(&kept) {
+                if kept == 0 {
+                    // Nothing to test: no hit (a valid ray counts its triangles as tested).
+                    local.primitives_tested += u64::from(count) * u64::from(ray.is_valid());
+                    *o = S::answer(Ok(None));
+                    continue;
+                }
                 let best = Self::root_leaf_kept(level, ray, leaf, run, kept, &mut local, count);
                 *o = S::answer(Ok(best));
             }

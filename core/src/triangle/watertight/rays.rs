@@ -40,22 +40,32 @@ fn pick(k: u32, c: [f32; 3]) -> f32 {
 }
 
 impl ShearedRays {
-    /// Prepares `rays`, lane `i` from `rays[i]`: the axes of
+    /// Prepares the first [`RAY_LANES`] rays of `rays`, lane `i` from `rays[i]` (the lanes of
+    /// a shorter slice beyond its end are meaningless): the axes of
     /// [`crate::triangle::projection_axes`] (the dominant direction component `kz`, ties to
     /// the lower axis; `kx`, `ky` the next two cyclically, swapped when `d_kz < 0`) and the
     /// shear `(d_kx/d_kz, d_ky/d_kz)` of [`super::WatertightRay::of_valid`], the same comparisons
     /// and the same divisions, lane by lane.
     #[inline(always)]
     #[must_use]
-    pub fn new(rays: &[Ray; RAY_LANES]) -> Self {
+    pub fn new(rays: &[Ray]) -> Self {
+        // The rays' components side by side first, then every step lane by lane.
+        let (mut d, mut o) = ([[0.0f32; RAY_LANES]; 3], [[0.0f32; RAY_LANES]; 3]);
+        for (i, ray) in rays.iter().enumerate().take(RAY_LANES) {
+            let l = i & (RAY_LANES - 1);
+            for axis in 0..3 {
+                d[axis][l] = ray.direction[axis];
+                o[axis][l] = ray.origin[axis];
+            }
+        }
         let mut s = Self {
             k: [[0; RAY_LANES]; 3],
             origin: [[0.0; RAY_LANES]; 3],
             shear: [[0.0; RAY_LANES]; 2],
         };
-        for (i, ray) in rays.iter().enumerate().take(RAY_LANES) {
-            let (d, o) = (ray.direction.to_array(), ray.origin.to_array());
-            let a = [d[0].abs(), d[1].abs(), d[2].abs()];
+        for l in 0..RAY_LANES {
+            let (dl, ol) = ([d[0][l], d[1][l], d[2][l]], [o[0][l], o[1][l], o[2][l]]);
+            let a = [dl[0].abs(), dl[1].abs(), dl[2].abs()];
             let larger = if a[1] > a[0] { a[1] } else { a[0] };
             let kz = if a[2] > larger {
                 2
@@ -66,17 +76,16 @@ impl ShearedRays {
                 if kz == 2 { 0 } else { kz + 1 },
                 if kz == 0 { 2 } else { kz - 1 },
             );
-            let dz = pick(kz, d);
+            let dz = pick(kz, dl);
             let (kx, ky) = if dz < 0.0 { (ky, kx) } else { (kx, ky) };
-            let l = i & (RAY_LANES - 1);
             s.k[0][l] = kx;
             s.k[1][l] = ky;
             s.k[2][l] = kz;
-            s.origin[0][l] = pick(kx, o);
-            s.origin[1][l] = pick(ky, o);
-            s.origin[2][l] = pick(kz, o);
-            s.shear[0][l] = pick(kx, d) / dz;
-            s.shear[1][l] = pick(ky, d) / dz;
+            s.origin[0][l] = pick(kx, ol);
+            s.origin[1][l] = pick(ky, ol);
+            s.origin[2][l] = pick(kz, ol);
+            s.shear[0][l] = pick(kx, dl) / dz;
+            s.shear[1][l] = pick(ky, dl) / dz;
         }
         s
     }
