@@ -26,8 +26,8 @@ fn direction(r: &mut Lcg, s: &mut u64) -> Vec3 {
 /// its ray (prepared by [`WatertightRay::of_valid`]), bit for bit, on valid rays in every
 /// octant and axis order against groups of triangles that the rays cross, pass near and
 /// miss: slivers, zero-area and NaN lanes, vertices at the origin, coordinates with
-/// infinities, zeros and subnormals mixed in. Both verdicts must occur often, so the
-/// comparison is not of empty masks.
+/// infinities, zeros and subnormals mixed in; half the cases a camera's rays, half rays from
+/// anywhere. Both verdicts must occur often, so the comparison is not of empty masks.
 #[test]
 fn the_cull_across_rays_is_each_ray_s_own() {
     let mut r = Lcg(17);
@@ -35,8 +35,15 @@ fn the_cull_across_rays_is_each_ray_s_own() {
     let (mut missed, mut kept) = (0usize, 0usize);
     for case in 0..6_000 {
         let centre = r.v(8.0);
+        // Odd cases: a camera's rays (one origin, nearby directions: mostly one axis order
+        // in every lane); even ones: rays from anywhere (mixed axis orders).
+        let eye = centre + r.v(20.0);
         let rays: [Ray; RAY_LANES] = core::array::from_fn(|_| {
-            let origin = centre + r.v(20.0);
+            let origin = if case % 2 == 1 {
+                eye
+            } else {
+                centre + r.v(20.0)
+            };
             let aim = centre + r.v(2.0);
             let d = if case % 3 == 0 {
                 direction(&mut r, &mut s)
