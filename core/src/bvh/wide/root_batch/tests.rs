@@ -141,24 +141,8 @@ fn a_root_leaf_batch_answers_each_ray_as_alone() {
         vec![[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]],
     );
     let octa = (
-        vec![
-            Vec3::X,
-            -Vec3::X,
-            Vec3::Y,
-            -Vec3::Y,
-            Vec3::Z * 2.0,
-            -Vec3::Z * 2.0,
-        ],
-        vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ],
+        crate::solids::OCTAHEDRON_VERTICES.to_vec(),
+        crate::solids::OCTAHEDRON_TRIANGLES.to_vec(),
     );
     let mut meshes = vec![tetra, octa];
     meshes.extend((1..=8).map(|n| lcg_soup(n, 40 + n as u64, 1.5, 1.0)));
