@@ -45,8 +45,9 @@ where
         let mut local = TraversalStats::default();
         for (chunk, out) in rays.chunks(RAY_LANES).zip(out.chunks_mut(RAY_LANES)) {
             let Some(sheared) = leaf.sheared_rays(chunk) else {
-                // The same for every chunk (the leaf test has no such cull): only the first
-                // gets here, before anything is written.
+                // A leaf test without the cull refuses the first chunk, before anything is
+                // written. Were a later one refused, the caller would answer every ray again
+                // (this call's statistics are not added): the answers stay the single-ray ones.
                 return false;
             };
             let mut kept = [0u32; RAY_LANES];
