@@ -104,11 +104,11 @@ pub trait LeafTest {
         0
     }
 
-    /// The first [`crate::triangle::RAY_LANES`] rays of `rays` side by side for a cull across rays
-    /// ([`TriangleIntersector::sheared_rays`]):
-    /// when `Some`, lane `i` of its [`ShearedRays::certain_misses`] is this test's
-    /// [`LeafTest::certain_misses`] of `rays[i]` for every valid ray, and
-    /// [`LeafTest::prepare_valid`] never refuses a valid ray. The default has none.
+    /// The first [`crate::triangle::RAY_LANES`] rays of `rays` side by side for a cull across
+    /// rays ([`TriangleIntersector::sheared_rays`]): when `Some`, lane `i` of its
+    /// [`ShearedRays::certain_misses`] is this test's [`LeafTest::certain_misses`] of `rays[i]`
+    /// for every valid ray, and [`LeafTest::prepare_valid`] never refuses a valid ray. The
+    /// default has none.
     #[inline(always)]
     fn sheared_rays(&self, rays: &[Ray]) -> Option<ShearedRays> {
         let _ = rays;

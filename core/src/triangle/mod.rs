@@ -199,12 +199,12 @@ pub trait TriangleIntersector: Copy + Send + Sync {
         0
     }
 
-    /// The first [`RAY_LANES`] rays of `rays` side by side for this test's cull across rays, when
-    /// it has one: the watertight
-    /// family's ([`ShearedRays`]; lane `i` of [`ShearedRays::certain_misses`] is then
-    /// [`TriangleIntersector::certain_misses`] of `rays[i]`, bit for bit, for every valid ray,
-    /// and [`TriangleIntersector::prepare_valid`] never refuses a valid ray). `None`, the
-    /// default, for the others.
+    /// The first [`RAY_LANES`] rays of `rays` side by side for this test's cull across rays,
+    /// when it has one: the watertight family's ([`ShearedRays`]; lane `i` of
+    /// [`ShearedRays::certain_misses`] is then [`TriangleIntersector::certain_misses`] of
+    /// `rays[i]`, bit for bit, for every valid ray, and
+    /// [`TriangleIntersector::prepare_valid`] never refuses a valid ray). `None`, the default,
+    /// for the others.
     #[inline(always)]
     fn sheared_rays(&self, rays: &[Ray]) -> Option<ShearedRays> {
         let _ = rays;

@@ -75,10 +75,10 @@ where
         true
     }
 
-    /// One ray of [`WideBvh::root_leaf_hits`]: the answer of the single-ray walk of a root leaf
-    /// (`WideBvh::root_leaf`) given the lanes `kept` its cull keeps (the run's groups `run`,
-    /// [`LANES`] bits a group), its statistics (`count` triangles for a valid ray) added to
-    /// `local`.
+    /// One ray of [`WideBvh::root_leaf_hits`] whose cull kept the lanes `kept` (not none; the
+    /// run's groups `run`, [`LANES`] bits a group): the answer of the single-ray walk of a
+    /// root leaf (`WideBvh::root_leaf`), its statistics (`count` triangles for a valid ray)
+    /// added to `local`.
     #[inline(always)]
     fn root_leaf_kept<LT: LeafTest, L: SimdLevel>(
         level: L,
@@ -92,19 +92,16 @@ where
         if !ray.is_valid() {
             return None;
         }
-        let mut best = None;
-        if kept != 0 {
-            // Never refused for a valid ray (the contract of `sheared_rays`).
-            let pre = leaf.prepare_valid(ray)?;
-            let mut cur = *ray;
-            for (p, pair) in run.chunks(2).enumerate() {
-                let Some((first, second)) = pair.split_first() else {
-                    continue;
-                };
-                let lanes = (kept >> (2 * LANES * (p & 3))) & 0xFF;
-                let pair = [first, second.first().unwrap_or(first)];
-                kept_hits::<LT, L, false>(level, leaf, &pre, pair, lanes, (&mut cur, &mut best));
-            }
+        // Never refused for a valid ray (the contract of `sheared_rays`).
+        let pre = leaf.prepare_valid(ray)?;
+        let (mut cur, mut best) = (*ray, None);
+        for (p, pair) in run.chunks(2).enumerate() {
+            let Some((first, second)) = pair.split_first() else {
+                continue;
+            };
+            let lanes = (kept >> (2 * LANES * (p & 3))) & 0xFF;
+            let pair = [first, second.first().unwrap_or(first)];
+            kept_hits::<LT, L, false>(level, leaf, &pre, pair, lanes, (&mut cur, &mut best));
         }
         local.primitives_tested += u64::from(count);
         best

@@ -45,7 +45,9 @@ impl ShearedRays {
     /// [`crate::triangle::projection_axes`] (the dominant direction component `kz`, ties to
     /// the lower axis; `kx`, `ky` the next two cyclically, swapped when `d_kz < 0`) and the
     /// shear `(d_kx/d_kz, d_ky/d_kz)` of [`super::WatertightRay::of_valid`], the same comparisons
-    /// and the same divisions, lane by lane.
+    /// and the same divisions, lane by lane. (Written out over the lanes rather than calling
+    /// `of_valid` per ray, which the compiler does not vectorise: +16 % instructions for a
+    /// root leaf's batch of camera rays, callgrind.)
     #[inline(always)]
     #[must_use]
     pub fn new(rays: &[Ray]) -> Self {
