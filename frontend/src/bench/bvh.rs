@@ -283,9 +283,6 @@ fn bench<T: TriangleIntersector>(
             ));
         }
     }
-    if let Some(r) = rivals.as_mut() {
-        r.end_threads();
-    }
     let stats = bvh.stats();
     let wstats = wide.stats();
     let bounds = obj.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));

@@ -18,10 +18,17 @@ pub(super) type BatchQuery<'a> = crate::timing::OwnedBatchSide<'a>;
 pub(super) struct Rivals {
     device: crate::embree::EmbreeDevice,
     /// A device on every hardware thread (Embree's own default), for the all-threads build:
-    /// alive only from the first all-threads pass to [`Rivals::end_threads`]. Embree runs every
-    /// device's builds on as many threads as the live device that asks for the most
-    /// (`Device::getMaxNumThreads`, one task scheduler per process): kept alive beside
-    /// `device`, it made the "one thread" builds use every hardware thread (seen in `perf`).
+    /// alive from the first all-threads pass, which follows every one-thread build, until the
+    /// mesh's rivals are dropped. Embree runs every device's builds on as many threads as the
+    /// live device that asks for the most (`Device::getMaxNumThreads`, one task scheduler per
+    /// process): alive during the one-thread builds, it made them use every hardware thread
+    /// (seen in `perf`). Not dropped before the timed queries: Embree then caps its TBB
+    /// scheduler at `device`'s one thread (`tbb::global_control`), and the workers the
+    /// all-threads build started spin in `sched_yield` while the cap lasts (oneTBB issue
+    /// #1417): a second busy thread through every timed query of both sides (`perf stat`:
+    /// 1.99 CPUs used by a one-mesh `bench bvh`, 0.97 with the device kept). Dropped with the
+    /// mesh's rivals, it leaves that spin to the next mesh's one-thread builds (both sides'
+    /// alike, timed in turns), until the next all-threads pass lifts the cap.
     device_threads: Option<crate::embree::EmbreeDevice>,
     positions: Vec<[f32; 3]>,
     triangles: Vec<[u32; 3]>,
@@ -73,11 +80,6 @@ impl Rivals {
         self.build_ms[2] = self.build_ms[2].min(t0.elapsed().as_secs_f64() * 1e3);
         drop(s);
         Ok(())
-    }
-
-    /// Releases the all-threads device, so that Embree runs on one thread again.
-    pub(super) fn end_threads(&mut self) {
-        self.device_threads = None;
     }
 
     /// Best build times, ms: `[default, robust]` on one thread, default on all threads.
@@ -138,7 +140,6 @@ impl Rivals {
     pub(super) fn build_pass_threads(&mut self) -> Result<()> {
         Ok(())
     }
-    pub(super) fn end_threads(&mut self) {}
     pub(super) fn build_ms(&self) -> [f64; 3] {
         [f64::NAN; 3]
     }
