@@ -96,19 +96,44 @@ pub const POLYGON_MIN_AREA_REL: f32 = gamma(8);
 /// not seen.
 pub const SHADOW_SEGMENT_END_SLACK: f32 = 16.0 * crate::float::F32_UNIT_ROUNDOFF;
 
-/// Outward padding of every box a BVH traversal tests, relative to
-/// `max|ray origin| + max|scene coordinate|`: the box test then never culls a triangle that
-/// the watertight test hits, so a BVH query equals a brute-force loop with the same test.
+/// Outward padding of every box a BVH traversal tests, relative to how far the structure
+/// reaches from the ray's origin: the box test then never culls a triangle that the
+/// watertight test hits, so a BVH query equals a brute-force loop with the same test.
 ///
-/// Unit: relative (the padding is `BVH_PROJECTION_PAD · (max|o| + max|scene|)` world units).
+/// Unit: relative. The padding is `BVH_PROJECTION_PAD·R + `[`PAD_ORIGIN_SHIFT_REL`]`·max|o|`
+/// world units (`PadFrame::pad` in `query::walk`), `R` an upper bound of
+/// `max_i |p_i − o_i|` over every point `p` of the structure (its root box).
+///
 /// Why: the watertight test decides exactly on the **rounded** sheared coordinates
-/// `x' = (p_kx − o_kx) − s_x·(p_kz − o_kz)`, each within about `γ₈·(|p| + |o|)` of the exact
-/// one (a subtraction, a product and a subtraction, with `|s_x| ≤ 1`, on coordinates up to
-/// `|p| + |o|`). A hit therefore means the exact ray passes within that distance of the
-/// triangle along the two sheared axes, possibly just outside its box. `γ₁₆` doubles the
-/// bound, which also covers the rounding of the padded corners themselves. Cost: a box grows
-/// by ~2e-6 of the scene's extent from the origin, a few extra leaf visits on a grazing ray.
+/// `x' = (p_kx − o_kx) − s_x·(p_kz − o_kz)`: a subtraction, a product and a subtraction,
+/// with `|s_x| ≤ 1`, on the differences `p − o`, so each is within about
+/// `γ₈·max_i |p_i − o_i| ≤ γ₈·R` of the exact one (the rounding is relative to the vertex's
+/// distance from the origin, not to the coordinates' magnitude). A hit therefore means the
+/// exact ray passes within that distance of the triangle along the two sheared axes, possibly
+/// just outside its box. The boxes are padded by shifting the ray's origin (`o ± pad`, see
+/// `PaddedRay`), whose rounding takes up to `u·(|o_i| + pad)` off the shift, and the slab's
+/// subtraction rounds by up to `u·(R + pad)`: the padding must exceed `γ₈·R` by both.
+/// `γ₁₆·R` doubles the first and covers the second; the [`PAD_ORIGIN_SHIFT_REL`] term
+/// covers the shift's rounding, which no bound on `R` can: an origin far from the
+/// coordinate origin has an ulp larger than a pad of `γ₁₆·R`, and `o ± pad` would round
+/// back to `o`. A looser `R`, `max|o| + max|scene|` (the binary [`crate::bvh::Bvh`]'s, one
+/// subtraction fewer on the microcontroller image), meets the requirement with
+/// `γ₁₆·(max|o| + max|scene|)` alone: its `γ₁₆·max|o|` exceeds the shift's rounding.
+///
+/// Cost: a box grows by ~1e-6 of the distance from the ray's origin to the far side of the
+/// structure, plus two `f32` ulps of the origin's coordinates, a few extra leaf visits on a
+/// grazing ray. With `max|o| + max|scene|` instead, a small mesh far from the coordinate
+/// origin had every box padded by sixteen times that: the bunny moved to
+/// `(10⁴, −3·10³, 2·10⁴)` (coordinates near `2·10⁴`, so 0.04 against its size of 0.15)
+/// tested 7 600 triangles per camera ray instead of 29 (`docs/performance.md`).
 pub const BVH_PROJECTION_PAD: f32 = gamma(16);
+
+/// The part of the box padding that covers the rounding of the shifted ray origins `o ± pad`
+/// ([`BVH_PROJECTION_PAD`]): `2u`, relative to `max|o|` (unitless). The rounding of
+/// `o_i ± pad` is at most `u·(|o_i| + pad)`; `2u·max|o|` exceeds its `u·|o_i|` part, and
+/// [`BVH_PROJECTION_PAD`]'s doubling the `u·pad` part. It is two `f32` ulps of the origin's
+/// largest coordinate at most: the resolution of the origin itself.
+pub const PAD_ORIGIN_SHIFT_REL: f32 = 2.0 * crate::float::F32_UNIT_ROUNDOFF;
 
 /// Relative bound of the `f32` values `wn`, `dn` of the watertight test's eight-lane "crossed
 /// behind the origin" cull ([`crate::triangle::WatertightRay::behind_misses2`]) against their computed

@@ -168,7 +168,7 @@ pub struct Bvh<N, I> {
     prim_count: u32,
     source_len: usize,
     /// [`extent_of`] the root's box (0 for an empty tree): the scale of the box padding
-    /// ([`projection_pad`]), kept so that a query does not recompute it.
+    /// ([`crate::query::walk::projection_pad_loose`]), kept so that a query does not recompute it.
     extent: f32,
 }
 

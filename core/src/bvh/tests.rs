@@ -5,7 +5,7 @@ use super::*;
 use crate::aabb::Aabb;
 use crate::mesh::TriangleMesh;
 use crate::prelude::*;
-use crate::query::walk::projection_pad;
+use crate::query::walk::projection_pad_loose;
 use crate::query::{Query, StackEntry, TraversalStats, Triangles};
 use crate::ray::Ray;
 use crate::test_util::{
@@ -201,7 +201,7 @@ fn node_test_far_padding_does_not_bridge_a_gap() {
     let test = |y0: f32| {
         let ray = Ray::new(Vec3::new(-1.0, y0, 0.5), Vec3::new(1.0, -1.0, 0.0));
         let slab = crate::aabb::SlabRay::new(&ray).unwrap();
-        let padded = padded_ray::PaddedRay::new(&slab, projection_pad(slab.origin, 1.0));
+        let padded = padded_ray::PaddedRay::new(&slab, projection_pad_loose(slab.origin, 1.0));
         padded.hit_node(false, &root, 0.0, f32::INFINITY)
     };
     let hit = test(2.5).expect("the slabs overlap on [1.5, 2]");
@@ -987,7 +987,7 @@ fn general_node_test_hits_the_corners_and_misses_beside() {
     let test = |x: f32, y: f32| {
         let ray = Ray::with_interval(Vec3::new(x, y, 2.0), -Vec3::Z, -5.0, f32::INFINITY);
         let slab = crate::aabb::SlabRay::new(&ray).unwrap();
-        let padded = padded_ray::PaddedRay::new(&slab, projection_pad(slab.origin, 2.0));
+        let padded = padded_ray::PaddedRay::new(&slab, projection_pad_loose(slab.origin, 2.0));
         padded.hit_node(true, &node, ray.t_min, ray.t_max)
     };
     for (x, y) in [(1.0, 1.0), (2.0, 1.0), (1.0, 2.0), (2.0, 2.0), (1.5, 1.5)] {

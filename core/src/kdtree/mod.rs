@@ -54,14 +54,15 @@
 //! child's `[max(t₀, t_entry), t₁]`; the near child is visited first, the far one pushed with
 //! its interval. A ray parallel to the plane (direction component `±0`) visits the side(s) its
 //! origin lies on, with the whole interval. Cell faces are treated as **padded slabs**: the
-//! plane is moved outward by the BVH's [`crate::tolerance::BVH_PROJECTION_PAD`] scale
-//! (`γ₁₆·(max|o| + scene extent)` world units) for each side, and plane distances are widened
+//! plane is moved outward by the BVH's box padding ([`crate::tolerance::BVH_PROJECTION_PAD`]:
+//! `γ₁₆` of how far the tree reaches from the origin, plus two ulps of the origin) for each
+//! side, and plane distances are widened
 //! outward by [`T_WIDEN_REL`] and [`T_WIDEN_ABS`] (their rounding). Hence every leaf whose
 //! padded cell the exact ray passes through within the interval is visited.
 //!
 //! Why that gives brute force's answer: the watertight test hits a triangle only when the
 //! exact ray passes within that padding of it (its sheared coordinates are exact up to
-//! `γ₈·(|p| + |o|)`; see [`crate::tolerance::BVH_PROJECTION_PAD`]), i.e. through the padded
+//! `γ₈·max|p − o|`; see [`crate::tolerance::BVH_PROJECTION_PAD`]), i.e. through the padded
 //! box of the triangle; every point of the triangle's box lies in the closed cell of a leaf
 //! referencing the triangle (the partition rule of the builder, by induction), so the ray
 //! passes through the padded cell of such a leaf, near the hit. Leaves are culled only when
@@ -257,8 +258,9 @@ pub struct KdTree<N, R> {
     prim_count: u32,
     source_len: usize,
     bounds: Aabb,
-    /// [`crate::query::walk::extent_of`] the root cell: the scale of the plane padding.
-    extent: f32,
+    /// Where the tree lies, for the plane padding ([`crate::tolerance::BVH_PROJECTION_PAD`]):
+    /// of `bounds`, kept so that a query does not recompute it.
+    pad_frame: crate::query::walk::PadFrame,
     depth: u32,
     exhausted: bool,
 }
@@ -297,7 +299,7 @@ where
             prim_count: built.prim_count,
             source_len: source.primitive_count(),
             bounds,
-            extent: crate::query::walk::extent_of(&bounds),
+            pad_frame: crate::query::walk::PadFrame::of(&bounds),
             depth: built.depth,
             exhausted: built.exhausted,
         })

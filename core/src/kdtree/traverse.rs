@@ -4,7 +4,7 @@ use super::node::{KdNode, KdNodeKind};
 use super::{KdTree, T_WIDEN_ABS, TRAVERSAL_STACK_SIZE};
 use crate::aabb::{Aabb, SLAB_FAR_SCALE, SLAB_FAR_SCALE_NEGATIVE, SlabRay, pad_far};
 use crate::query::forward::{ClosureWalk, PrimTest, Search};
-use crate::query::walk::{cull_bound, projection_pad};
+use crate::query::walk::cull_bound;
 use crate::ray::Ray;
 
 /// One entry of the traversal stack (12 bytes): a node still to visit and the ray's interval
@@ -153,7 +153,7 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> ClosureWalk for KdTree<N, R> {
         if nodes.is_empty() {
             return;
         }
-        let kray = KdRay::new(slab, projection_pad(slab.origin, self.extent));
+        let kray = KdRay::new(slab, self.pad_frame.pad(slab.origin));
         let Some((t0, t1)) = kray.clip_box(&self.bounds, ray.t_min, cull_bound(ray.t_max)) else {
             return;
         };

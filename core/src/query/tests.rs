@@ -10,7 +10,7 @@ use crate::kdtree::KdBuildOptions;
 use crate::mesh::TriangleMesh;
 use crate::solids::{CUBE_TRIANGLES, CUBE_VERTICES, grid_triangles};
 use crate::test_util::{
-    Lcg, brute_watertight, closest_watertight, lcg_soup, vec_bvh, vec_grid, vec_kd, vec_wide,
+    Lcg, brute_watertight, closest_watertight, lcg, lcg_soup, vec_bvh, vec_grid, vec_kd, vec_wide,
 };
 use crate::triangle::{TriangleIntersector, Watertight};
 use std::vec;
@@ -306,4 +306,60 @@ fn every_structure_equals_brute_force_at_both_ends_of_the_watertight_domain() {
         }
         assert!(hits > 30, "scale {scale:e}: {hits} hits");
     }
+}
+
+/// The box padding ([`walk::PadFrame::pad`]) against its requirement, evaluated in `f64`
+/// (`crate::tolerance::BVH_PROJECTION_PAD`): each shifted origin `o_i ± pad`, rounded to
+/// `f32` as the node test forms it, still lies at least `γ₈·R + u·(R + pad)` beyond `o_i`,
+/// `R` the exact largest `|p_i − o_i|` over the root box. Boxes from `10⁻³` to `10³` in size
+/// at up to `10⁷` from the coordinate origin, origins inside, beside and far from them. And
+/// the padding follows the box's reach from the origin, not the coordinates: within four
+/// times `γ₁₆·R + 2u·max|o|`, where `γ₁₆·(max|o| + max|scene|)` (the binary tree's
+/// [`walk::projection_pad_loose`]) is about sixteen times more for a small box far away (then
+/// the origin's two ulps are the padding: the resolution of the input).
+#[test]
+fn the_box_padding_covers_the_watertight_rounding_wherever_the_box_lies() {
+    let u = f64::from(crate::float::F32_UNIT_ROUNDOFF);
+    let gamma = |n: f64| n * u / (1.0 - n * u);
+    let mut s = 0x9AD_u64;
+    let mut far_and_small = 0;
+    for i in 0..20_000 {
+        let scale = 10f32.powf(lcg(&mut s) * 6.0 - 3.0);
+        let at = 10f32.powf(lcg(&mut s) * 7.0) * [0.0, 1.0][usize::from(i % 4 != 0)];
+        let centre = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 2.0 * at - at;
+        let half = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * scale;
+        let root = Aabb::new(centre - half, centre + half);
+        let reach = [0.5, 2.0, 100.0][i % 3] * scale;
+        let origin =
+            centre + (Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 2.0 - 1.0) * reach;
+        let pad = walk::PadFrame::of(&root).pad(origin);
+        let (o, lo, hi) = (origin.as_dvec3(), root.min.as_dvec3(), root.max.as_dvec3());
+        let r = (lo - o).abs().max((hi - o).abs()).max_element();
+        let need = gamma(8.0) * r + u * (r + f64::from(pad));
+        for axis in 0..3 {
+            let oi = origin[axis];
+            let (up, down) = (
+                f64::from(oi + pad) - f64::from(oi),
+                f64::from(oi) - f64::from(oi - pad),
+            );
+            assert!(
+                up >= need && down >= need,
+                "{root:?} {origin:?}: pad {pad}, need {need}"
+            );
+        }
+        let tight = gamma(16.0) * r + 2.0 * u * f64::from(origin.abs().max_element());
+        assert!(
+            f64::from(pad) <= 4.0 * tight,
+            "{root:?} {origin:?}: pad {pad} against {tight}"
+        );
+        let loose = walk::projection_pad_loose(origin, crate::query::walk::extent_of(&root));
+        if at > 1e5 && scale < 1.0 && reach < 10.0 * scale {
+            far_and_small += 1;
+            assert!(
+                loose > 8.0 * pad,
+                "{root:?} {origin:?}: {loose} against {pad}"
+            );
+        }
+    }
+    assert!(far_and_small > 100, "{far_and_small} small boxes far away");
 }

@@ -1,8 +1,8 @@
 //! The rules every structure's walk shares, so that all of them give the same answer: the
 //! tie rule of the closest hit ([`improves`], [`take_if_better`]), the bound up to which a
 //! box or cell is still visited ([`cull_bound`], [`CULL_REL_SLACK`]), the outward padding of
-//! the boxes a ray is tested against ([`projection_pad`], [`extent_of`]), and the loop over a
-//! run of primitives of the closure-based walks ([`test_run`]).
+//! the boxes a ray is tested against ([`PadFrame`], [`projection_pad_loose`], [`extent_of`]),
+//! and the loop over a run of primitives of the closure-based walks ([`test_run`]).
 
 use crate::aabb::Aabb;
 use crate::ray::Ray;
@@ -17,13 +17,81 @@ use glam::Vec3;
 /// costs a handful of extra box tests per ray. Unitless.
 pub const CULL_REL_SLACK: f32 = crate::tolerance::T_REL_TOLERANCE_WELL_CONDITIONED;
 
-/// The outward padding, in world units, of every box tested for a ray from `origin` in a tree
-/// whose coordinates are at most `extent` in magnitude: [`BVH_PROJECTION_PAD`]`·(max|o| +
-/// extent)` (see there). `+∞` when that overflows (every box is then hit: slower, still exact).
+/// Where a structure's points lie, as its box padding needs it ([`PadFrame::pad`]): a centre
+/// `c` of its root box and the per-structure part of the padding.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PadFrame {
+    centre: Vec3,
+    /// [`BVH_PROJECTION_PAD`]`·h + `[`PAD_ORIGIN_SHIFT_REL`]`·max|c|` (`h` below), or `+∞`
+    /// for a root box that is not finite and ordered.
+    ///
+    /// [`BVH_PROJECTION_PAD`]: crate::tolerance::BVH_PROJECTION_PAD
+    /// [`PAD_ORIGIN_SHIFT_REL`]: crate::tolerance::PAD_ORIGIN_SHIFT_REL
+    offset: f32,
+}
+
+impl PadFrame {
+    /// The frame of a structure whose points all lie in `root`: `c` its rounded centre, `h`
+    /// at least `max_i max(|lo_i − c_i|, |hi_i − c_i|)` (the largest `f32` difference times
+    /// `1 + 4u`, which covers its rounding and the product's). A root that is not finite and
+    /// ordered (an empty tree's) pads every box by `+∞`.
+    pub(crate) fn of(root: &Aabb) -> Self {
+        use crate::float::F32_UNIT_ROUNDOFF as U;
+        use crate::tolerance::{BVH_PROJECTION_PAD, PAD_ORIGIN_SHIFT_REL};
+        let (lo, hi) = (root.min, root.max);
+        if !(lo.is_finite() && hi.is_finite() && lo.cmple(hi).all()) {
+            return Self {
+                centre: Vec3::ZERO,
+                offset: f32::INFINITY,
+            };
+        }
+        let centre = lo * 0.5 + hi * 0.5;
+        let h = (centre - lo).max(hi - centre).max_element() * (1.0 + 4.0 * U);
+        let offset = BVH_PROJECTION_PAD * h + PAD_ORIGIN_SHIFT_REL * centre.abs().max_element();
+        Self {
+            centre,
+            offset: if offset <= f32::MAX {
+                offset
+            } else {
+                f32::INFINITY
+            },
+        }
+    }
+
+    /// The outward padding, in world units, of every box tested for a ray from `origin`:
+    /// `(`[`BVH_PROJECTION_PAD`]` + 2·`[`PAD_ORIGIN_SHIFT_REL`]`)·m + offset`, `m =
+    /// max_i |o_i − c_i|` (rounded). It meets [`BVH_PROJECTION_PAD`]'s requirement with
+    /// `R ≤ m/(1 − u) + h` (every point lies within `h` of `c` per axis) and
+    /// `max|o| ≤ m/(1 − u) + max|c|`; the margins of `γ₁₆` over `γ₈` absorb the roundings.
+    /// One subtraction per axis more than `γ₁₆·(max|o| + extent)`, and independent of where
+    /// the structure lies: a small mesh far from the coordinate origin is padded by its own
+    /// reach and its origin's resolution. `+∞` when it overflows (every box is then hit:
+    /// slower, still exact).
+    ///
+    /// [`BVH_PROJECTION_PAD`]: crate::tolerance::BVH_PROJECTION_PAD
+    /// [`PAD_ORIGIN_SHIFT_REL`]: crate::tolerance::PAD_ORIGIN_SHIFT_REL
+    #[inline(always)]
+    pub(crate) fn pad(&self, origin: Vec3) -> f32 {
+        use crate::tolerance::{BVH_PROJECTION_PAD, PAD_ORIGIN_SHIFT_REL};
+        let d = (origin - self.centre).abs().to_array();
+        // Plain comparisons: `d` is finite (a valid ray's origin, a finite centre).
+        let m01 = if d[0] > d[1] { d[0] } else { d[1] };
+        let m = if m01 > d[2] { m01 } else { d[2] };
+        (BVH_PROJECTION_PAD + 2.0 * PAD_ORIGIN_SHIFT_REL) * m + self.offset
+    }
+}
+
+/// The box padding of the binary [`crate::bvh::Bvh`] (the microcontroller image's tree), for a
+/// ray from `origin` in a tree whose coordinates are at most `extent` in magnitude:
+/// [`BVH_PROJECTION_PAD`]`·(max|o| + extent)`, which meets the requirement of
+/// [`BVH_PROJECTION_PAD`] with `R ≤ max|o| + extent` (its `γ₁₆·max|o|` also covers the
+/// shifted origins' rounding) at one operation per axis fewer than [`PadFrame::pad`], but
+/// grows with the distance from the coordinate origin; `+∞` when that overflows (every box
+/// is then hit: slower, still exact).
 ///
 /// [`BVH_PROJECTION_PAD`]: crate::tolerance::BVH_PROJECTION_PAD
 #[inline(always)]
-pub(crate) fn projection_pad(origin: Vec3, extent: f32) -> f32 {
+pub(crate) fn projection_pad_loose(origin: Vec3, extent: f32) -> f32 {
     crate::tolerance::BVH_PROJECTION_PAD * (origin.abs().max_element() + extent)
 }
 

@@ -8,6 +8,7 @@ use crate::bvh::build::split_spares_tests;
 use crate::bvh::{Bvh, BvhError, BvhNode};
 use crate::error::{CapacityError, NonFiniteError, Storage};
 use crate::mesh::TriangleMesh;
+use crate::query::walk::PadFrame;
 use crate::triangle::LANES;
 
 /// The leaf run binary node `b` becomes, if it becomes one: a binary leaf, or an inner node
@@ -671,8 +672,10 @@ where
             extent: crate::query::walk::extent_of(&binary.bounds()),
             root,
             root_box: Aabb::EMPTY,
+            pad_frame: PadFrame::of(&Aabb::EMPTY),
         };
         tree.root_box = tree.computed_bounds();
+        tree.pad_frame = PadFrame::of(&tree.root_box);
         Ok(tree)
     }
 }

@@ -171,8 +171,8 @@ pub struct WideBvh<const W: usize, N, T> {
     /// Triangle slots in use, the lanes skipped before leaf runs included.
     slot_count: u32,
     source_len: usize,
-    /// Largest coordinate magnitude of the tree's bounds, for the box padding
-    /// ([`crate::tolerance::BVH_PROJECTION_PAD`]).
+    /// Largest coordinate magnitude of the tree's bounds: the scale of a packet's origins
+    /// (`packet::COHERENT_ORIGIN`).
     extent: f32,
     /// The root ([`WideBvh::root`]) as a child slot encodes it: node 0, a leaf run (a tree
     /// with no node), or [`ChildRef::EMPTY`] (an empty tree).
@@ -180,6 +180,9 @@ pub struct WideBvh<const W: usize, N, T> {
     /// The box of everything in the tree ([`WideBvh::bounds`], kept): a closest-hit walk
     /// tests it first, so that a ray missing the whole tree skips the node test's setup.
     root_box: Aabb,
+    /// Where the tree lies, for the box padding ([`crate::tolerance::BVH_PROJECTION_PAD`]):
+    /// of `root_box`, kept so that a query does not recompute it.
+    pad_frame: crate::query::walk::PadFrame,
 }
 
 /// An 8-wide BVH (one AVX2 register per bound array).

@@ -34,7 +34,7 @@ use super::node::{ChildRef, LeafGroup, WideNode};
 use super::node_test::{far_reciprocal, fold_slab, slab_axis};
 use super::traverse::{RunLanes, STACK, leaf_groups, leaf_hits, prefetch_child, sorted_keys};
 use super::{WideBvh, add_stats};
-use crate::query::walk::{cull_bound, projection_pad};
+use crate::query::walk::{PadFrame, cull_bound};
 use crate::query::{LeafTest, TraversalStats};
 use crate::ray::Ray;
 use crate::simd;
@@ -49,7 +49,7 @@ pub(super) const PACKET: usize = 16;
 pub(super) const COHERENT_COS: f32 = 0.999_05;
 
 /// A ray joins its packet when its origin lies within this share of the tree's extent
-/// ([`crate::tolerance::BVH_PROJECTION_PAD`]'s `extent`) of the first ray's, per axis (a
+/// (the largest coordinate magnitude of its bounds) of the first ray's, per axis (a
 /// camera's rays share one origin): beyond, the packet's interval of origins admits nodes
 /// none of its rays enters. Only speed depends on it, never an answer.
 pub(super) const COHERENT_ORIGIN: f32 = 1.0 / 256.0;
@@ -162,7 +162,7 @@ impl Lanes {
         bound: [0.0; PACKET],
     };
 
-    /// The lanes of `rays` (at most [`PACKET`]) in a tree of `extent`, computed lane by lane
+    /// The lanes of `rays` (at most [`PACKET`]) in a tree of padding frame `frame`, computed lane by lane
     /// with the operations of [`SlabRay::new`](crate::aabb::SlabRay::new) and [`PaddedRay::new`](crate::bvh::padded_ray::PaddedRay::new) (so each lane's values
     /// are its ray's, bit for bit), and the mask of the rays that may join a packet of the
     /// octant `near`: valid ([`Ray::is_valid`]) with `t_min ≥ 0` and every reciprocal finite
@@ -175,7 +175,7 @@ impl Lanes {
     fn gather(
         &mut self,
         rays: &[Ray],
-        extent: f32,
+        frame: &PadFrame,
         near: [usize; 3],
         coherence: &Coherence,
     ) -> LaneMask {
@@ -222,7 +222,7 @@ impl Lanes {
             ok[r] &= ones((t_min[r] >= 0.0) & (t_min[r] < f32::INFINITY) & (t_min[r] <= t_max[r]));
         }
         for r in 0..PACKET {
-            let pad = projection_pad(glam::Vec3::new(o[0][r], o[1][r], o[2][r]), extent);
+            let pad = frame.pad(glam::Vec3::new(o[0][r], o[1][r], o[2][r]));
             for axis in 0..3 {
                 let toward = pad.copysign(d[axis][r]);
                 out.origin_near[axis][r] = o[axis][r] + toward;
@@ -480,7 +480,7 @@ where
             return (all, 0);
         }
         let mut lanes = Lanes::ZERO;
-        let joined = lanes.gather(rays, self.extent, near, &coherence);
+        let joined = lanes.gather(rays, &self.pad_frame, near, &coherence);
         let packet = lane_bits(&joined);
         if packet.count_ones() * 4 < rays.len() as u32 * 3 || packet.count_ones() < 2 {
             // Too few alike: a packet would walk nodes for few rays.

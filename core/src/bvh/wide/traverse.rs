@@ -5,7 +5,7 @@ use super::{WideBvh, add_stats};
 use crate::aabb::SlabRay;
 use crate::bvh::BvhError;
 use crate::bvh::padded_ray::PaddedRay;
-use crate::query::walk::{cull_bound, projection_pad, take_if_better};
+use crate::query::walk::{cull_bound, take_if_better};
 use crate::query::{LeafTest, Query, QueryStack, Stack, StackEntry, TraversalStats};
 use crate::ray::Ray;
 use crate::simd;
@@ -478,7 +478,7 @@ where
         if self.root == ChildRef::EMPTY {
             return;
         }
-        let wray = PaddedRay::new(slab, projection_pad(slab.origin, self.extent));
+        let wray = PaddedRay::new(slab, self.pad_frame.pad(slab.origin));
         let mut local = TraversalStats::default();
         // A closest-hit ray that misses the root's box misses all its children: it ends here,
         // before the node test's eight-lane setup (the root's test counted as its visit).

@@ -201,6 +201,8 @@ fn packets_keep_the_tie_rule_on_shared_edges() {
 #[test]
 fn the_packet_node_test_bounds_every_rays_own() {
     const EXTENT: f32 = 30.0;
+    let frame =
+        crate::query::walk::PadFrame::of(&Aabb::new(Vec3::splat(-EXTENT), Vec3::splat(EXTENT)));
     let mut rng = Lcg(77);
     let mut admitted = 0;
     for round in 0..3000 {
@@ -224,7 +226,7 @@ fn the_packet_node_test_bounds_every_rays_own() {
             ray.t_min = [0.0, rng.f()][i % 2];
             ray.t_max = [f32::INFINITY, 5.0 + 40.0 * rng.f()][(i / 2) % 2];
             let slab = SlabRay::new(&ray).unwrap();
-            let w = PaddedRay::new(&slab, projection_pad(o, EXTENT));
+            let w = PaddedRay::new(&slab, frame.pad(o));
             rays.push((ray, w));
         }
         let near = [octant.x, octant.y, octant.z].map(|s| usize::from(s < 0.0));
@@ -236,7 +238,7 @@ fn the_packet_node_test_bounds_every_rays_own() {
             reach: f32::INFINITY,
             ..Coherence::new(&only[0], EXTENT)
         };
-        let joined = lanes.gather(&only, EXTENT, near, &any);
+        let joined = lanes.gather(&only, &frame, near, &any);
         assert_eq!(lane_bits(&joined), 0xFFFF, "round {round}: every ray joins");
         for (i, (_, w)) in rays.iter().enumerate() {
             // Each lane holds its ray's own padded values, bit for bit.
