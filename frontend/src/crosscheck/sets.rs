@@ -219,8 +219,14 @@ fn aimed(
 /// neighbourhood of the target, so the ray must cross one of them) — judged in `f64` — and
 /// every projected triangle is thick enough that moving its vertices by the `f32` rounding of
 /// the ray-space coordinates cannot flip its orientation: its ray-space boundary margin
-/// ([`crate::crosscheck::judge::ray_space_barycentrics`]) is below [`ROBUST_MARGIN`]. Only such
-/// crossings are decidable in `f32`, and only they count towards leaks.
+/// ([`crate::crosscheck::judge::ray_space_barycentrics`]) is below [`ROBUST_MARGIN`]; and the
+/// ray passes through one of them or within its margin
+/// ([`crate::crosscheck::judge::inside_or_near`]). The last holds by construction unless the
+/// target itself was rounded off its edge by more than the triangles' size: an edge's midpoint
+/// rounded to `f32` far from the coordinate origin, on a mesh whose triangles are a few ulps
+/// of its coordinates (the bunny moved to `2·10⁴`); such a ray is aimed at no edge, and may
+/// cross no triangle at all. Only such crossings are decidable in `f32`, and only they count
+/// towards leaks.
 pub fn crosses_transversally(mesh: &ObjMesh, ray: &Ray, faces: &[u32], target: Vec3) -> bool {
     let d = ray.direction.as_dvec3().normalize();
     let u = d.any_orthonormal_vector();
@@ -248,6 +254,9 @@ pub fn crosses_transversally(mesh: &ObjMesh, ray: &Ray, faces: &[u32], target: V
         }
     }
     sign != 0.0
+        && faces
+            .iter()
+            .any(|&f| super::judge::inside_or_near(ray, &mesh.triangle(f as usize)))
 }
 
 fn grazing(mesh: &ObjMesh, rng: &mut Rng, radius: f64, count: usize) -> Vec<SetRay> {
@@ -308,4 +317,68 @@ fn surface(mesh: &ObjMesh, rng: &mut Rng, count: usize) -> Vec<SetRay> {
         });
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use halfray_core::predicates::orient_direction;
+
+    /// Whether the line of `ray` meets the closed triangle `v`, exactly (`orient_direction`'s
+    /// signs of the line against the three edges: none of two opposite signs, not all zero).
+    fn line_meets(ray: &Ray, v: &[Vec3; 3]) -> bool {
+        let s = [(0, 1), (1, 2), (2, 0)]
+            .map(|(i, j)| orient_direction(v[i], v[j], ray.origin, ray.direction));
+        (s.iter().all(|&x| x >= 0) || s.iter().all(|&x| x <= 0)) && s.iter().any(|&x| x != 0)
+    }
+
+    /// An edge ray counts as a transversal crossing only when its line does meet one of the
+    /// edge's two triangles, exactly. Two triangles sharing an edge, their vertices a few
+    /// `f32` ulps apart (as on a mesh moved far from the coordinate origin: the bunny at
+    /// `2·10⁴`), aimed at the edge's rounded midpoint from random origins as the `edges` set
+    /// aims: many midpoints round off the edge by as much as the triangles are wide, and
+    /// their rays miss both. Triangles a thousand ulps wide: every ray meets the edge.
+    #[test]
+    fn an_edge_ray_counts_only_where_its_line_meets_the_edge() {
+        let mut rng = Rng::new(7);
+        for (ulps, want_all) in [(3.0f32, false), (3000.0, true)] {
+            let (mut counted, mut met) = (0, 0);
+            for _ in 0..4_000 {
+                let a = Vec3::new(2.0e4, -3.0e3, 1.0e4) + rng.unit_vector().as_vec3() * 100.0;
+                let ulp = a
+                    .abs()
+                    .to_array()
+                    .map(|x| f32::from_bits(x.to_bits() + 1) - x);
+                let mut off = || {
+                    let r = rng.unit_vector().as_vec3() * ulps;
+                    a + Vec3::new(
+                        r.x.round() * ulp[0],
+                        r.y.round() * ulp[1],
+                        r.z.round() * ulp[2],
+                    )
+                };
+                let (b, c, d) = (off(), off(), off());
+                let mesh = ObjMesh {
+                    positions: vec![a, b, c, d],
+                    triangles: vec![[0, 1, 2], [1, 0, 3]],
+                };
+                let target = (a + b) * 0.5;
+                let o = random_origin(&mut rng, target.as_dvec3(), f64::from(ulps) * 0.02);
+                let ray = Ray::new(o, target - o);
+                let meets = (0..2).any(|f| line_meets(&ray, &mesh.triangle(f)));
+                if crosses_transversally(&mesh, &ray, &[0, 1], target) {
+                    counted += 1;
+                    met += usize::from(meets);
+                    assert!(
+                        meets,
+                        "counted, but the line meets neither triangle: {ray:?}"
+                    );
+                }
+            }
+            assert!(counted > 100, "{counted} counted at {ulps} ulps");
+            if want_all {
+                assert_eq!(met, counted);
+            }
+        }
+    }
 }
