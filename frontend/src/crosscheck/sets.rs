@@ -154,7 +154,18 @@ pub fn generate(
             .map(|_| {
                 let (a, b, faces) = adj.shared_edges[rng.below(adj.shared_edges.len())];
                 let target = (mesh.positions[a as usize] + mesh.positions[b as usize]) * 0.5;
-                aimed(mesh, &mut rng, center, radius, target, &faces)
+                let mut ray = aimed(mesh, &mut rng, center, radius, target, &faces);
+                // An edge a few ulps long can have its midpoint round onto a vertex (an end,
+                // or the far corner of a sliver): that ray is aimed at the vertex, whose whole
+                // fan (not the edge's two triangles) decides whether it crosses transversally.
+                // Not counted (the `vertices` set has such rays).
+                let on_a_corner = faces
+                    .iter()
+                    .any(|&f| mesh.triangle(f as usize).contains(&target));
+                if on_a_corner {
+                    ray.target = None;
+                }
+                ray
             })
             .collect(),
         "vertices" if !adj.closed_fan_vertices.is_empty() => (0..count)
@@ -330,6 +341,39 @@ mod tests {
         let s = [(0, 1), (1, 2), (2, 0)]
             .map(|(i, j)| orient_direction(v[i], v[j], ray.origin, ray.direction));
         (s.iter().all(|&x| x >= 0) || s.iter().all(|&x| x <= 0)) && s.iter().any(|&x| x != 0)
+    }
+
+    /// An `edges` ray whose target, the edge's midpoint rounded to `f32`, lands on a corner of
+    /// the edge's triangles is aimed at that vertex, not the edge, and is not counted: an edge
+    /// one ulp long on each axis (its midpoint rounds onto an end) gives no counted ray; the
+    /// same triangles a thousand ulps wide give counted ones.
+    #[test]
+    fn an_edge_whose_midpoint_rounds_onto_a_corner_gives_no_counted_ray() {
+        for (ulps, want_counted) in [(1.0f32, false), (1000.0, true)] {
+            let a = Vec3::new(2.0e4, -3.0e3, 1.0e4);
+            let ulp = a
+                .abs()
+                .to_array()
+                .map(|x| f32::from_bits(x.to_bits() + 1) - x);
+            let step = |k: [f32; 3]| a + Vec3::from(k) * Vec3::from(ulp) * ulps;
+            let mesh = ObjMesh {
+                positions: vec![
+                    a,
+                    step([1.0, 1.0, 1.0]),
+                    step([0.0, 3.0, 1.0]),
+                    step([3.0, 0.0, -1.0]),
+                ],
+                triangles: vec![[0, 1, 2], [1, 0, 3]],
+            };
+            let rays = generate("edges", &mesh, &Adjacency::new(&mesh), 200, 3, &|_| None).unwrap();
+            let counted = rays.iter().filter(|r| r.target.is_some()).count();
+            assert_eq!(rays.len(), 200);
+            assert_eq!(
+                counted > 0,
+                want_counted,
+                "{counted} counted at {ulps} ulps"
+            );
+        }
     }
 
     /// An edge ray counts as a transversal crossing only when its line does meet one of the
