@@ -352,7 +352,7 @@ fn the_box_padding_covers_the_watertight_rounding_wherever_the_box_lies() {
             f64::from(pad) <= 4.0 * tight,
             "{root:?} {origin:?}: pad {pad} against {tight}"
         );
-        let loose = walk::projection_pad_loose(origin, crate::query::walk::extent_of(&root));
+        let loose = walk::projection_pad_loose(origin, walk::extent_of(&root));
         if at > 1e5 && scale < 1.0 && reach < 10.0 * scale {
             far_and_small += 1;
             assert!(

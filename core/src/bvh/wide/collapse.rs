@@ -669,7 +669,6 @@ where
             triangle_count: indices.len() as u32,
             slot_count: slots as u32,
             source_len: mesh.len(),
-            extent: crate::query::walk::extent_of(&binary.bounds()),
             root,
             root_box: Aabb::EMPTY,
             pad_frame: PadFrame::of(&Aabb::EMPTY),

@@ -171,9 +171,6 @@ pub struct WideBvh<const W: usize, N, T> {
     /// Triangle slots in use, the lanes skipped before leaf runs included.
     slot_count: u32,
     source_len: usize,
-    /// Largest coordinate magnitude of the tree's bounds: the scale of a packet's origins
-    /// (`packet::COHERENT_ORIGIN`).
-    extent: f32,
     /// The root ([`WideBvh::root`]) as a child slot encodes it: node 0, a leaf run (a tree
     /// with no node), or [`ChildRef::EMPTY`] (an empty tree).
     root: u32,

@@ -34,7 +34,7 @@ use super::node::{ChildRef, LeafGroup, WideNode};
 use super::node_test::{far_reciprocal, fold_slab, slab_axis};
 use super::traverse::{RunLanes, STACK, leaf_groups, leaf_hits, prefetch_child, sorted_keys};
 use super::{WideBvh, add_stats};
-use crate::query::walk::{PadFrame, cull_bound};
+use crate::query::walk::{PadFrame, cull_bound, extent_of};
 use crate::query::{LeafTest, TraversalStats};
 use crate::ray::Ray;
 use crate::simd;
@@ -468,7 +468,7 @@ where
         // The packet is the rays like the first one (module docs); the others walk alone.
         let d0 = reference.direction;
         let near = [d0.x, d0.y, d0.z].map(|c| usize::from(c.is_sign_negative()));
-        let coherence = Coherence::new(reference, self.extent);
+        let coherence = Coherence::new(reference, extent_of(&self.root_box));
         let alike = |ray: &Ray| coherence.admits(ray.origin.to_array(), ray.direction.to_array());
         let all = u32::MAX >> (32 - rays.len() as u32);
         // One ray first, the one three quarters in: rays in an order that is not coherent (a

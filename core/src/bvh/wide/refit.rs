@@ -78,7 +78,6 @@ where
             }
         }
         self.root_box = self.computed_bounds();
-        self.extent = crate::query::walk::extent_of(&self.root_box);
         self.pad_frame = crate::query::walk::PadFrame::of(&self.root_box);
         match bad {
             Some(index) => Err(NonFiniteError::primitive(index).into()),
