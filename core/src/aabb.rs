@@ -141,6 +141,31 @@ impl Aabb {
         self.min * 0.5 + self.max * 0.5
     }
 
+    /// The box of `p − origin` over the points `p` of `self`, rounded outward: each finite
+    /// bound is the `f32` difference stepped one ulp outward (the difference is within half
+    /// an ulp of the exact one), so the result contains every exact `p − origin`. Infinite
+    /// bounds stay as they are (an empty box stays empty); a difference that overflows
+    /// becomes infinite on its own side. A wide tree stores its node boxes this way, relative
+    /// to its centre, so that their bounds and a ray's origin in that frame are small numbers
+    /// whatever the coordinates' magnitude.
+    #[inline]
+    #[must_use]
+    pub fn relative_to(&self, origin: Vec3) -> Self {
+        let step = |x: f32, down: bool| match (x.is_finite(), down) {
+            (false, _) => x,
+            (true, true) => x.next_down(),
+            (true, false) => x.next_up(),
+        };
+        let (lo, hi) = (
+            (self.min - origin).to_array(),
+            (self.max - origin).to_array(),
+        );
+        Self {
+            min: Vec3::from_array(lo.map(|x| step(x, true))),
+            max: Vec3::from_array(hi.map(|x| step(x, false))),
+        }
+    }
+
     /// Surface area (0 for an empty box), used by the SAH.
     #[inline]
     #[must_use]

@@ -363,3 +363,68 @@ fn the_box_padding_covers_the_watertight_rounding_wherever_the_box_lies() {
     }
     assert!(far_and_small > 100, "{far_and_small} small boxes far away");
 }
+
+/// The padding of boxes stored relative to the frame's centre ([`walk::PadFrame::local`])
+/// against its requirement, evaluated in `f64`: each shifted origin `o'_i ± pad` (`o'` the
+/// rounded `o − c`), rounded to `f32` as the node test forms it, still lies at least
+/// `γ₈·R + u·(R + pad)` beyond the **exact** `o_i − c_i`, `R` the exact largest
+/// `|p_i − o_i|` over the root box; and the box stored relative to `c` contains every exact
+/// `p − c` ([`Aabb::relative_to`]). Boxes from `10⁻³` to `10³` in size at up to `10⁷` from
+/// the coordinate origin. The padding then no longer depends on where the box lies: within
+/// four times `γ₁₆·R + 4u·max|o'|`, and for a small box far away a small fraction of the
+/// origin's own two ulps, which the world-coordinate frame ([`walk::PadFrame::of`]) cannot
+/// go below.
+#[test]
+fn the_padding_of_boxes_relative_to_the_tree_centre_covers_the_rounding_anywhere() {
+    let u = f64::from(crate::float::F32_UNIT_ROUNDOFF);
+    let gamma = |n: f64| n * u / (1.0 - n * u);
+    let mut s = 0xF4A_u64;
+    let mut far_and_small = 0;
+    for i in 0..20_000 {
+        let scale = 10f32.powf(lcg(&mut s) * 6.0 - 3.0);
+        let at = 10f32.powf(lcg(&mut s) * 7.0) * [0.0, 1.0][usize::from(i % 4 != 0)];
+        let centre = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 2.0 * at - at;
+        let half = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * scale;
+        let root = Aabb::new(centre - half, centre + half);
+        let reach = [0.5, 2.0, 100.0][i % 3] * scale;
+        let origin =
+            centre + (Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 2.0 - 1.0) * reach;
+        let frame = walk::PadFrame::relative(&root);
+        let c = frame.centre().as_dvec3();
+        let (local, pad) = frame.local(origin);
+        let (o, lo, hi) = (origin.as_dvec3(), root.min.as_dvec3(), root.max.as_dvec3());
+        let r = (lo - o).abs().max((hi - o).abs()).max_element();
+        let need = gamma(8.0) * r + u * (r + f64::from(pad));
+        let stored = root.relative_to(frame.centre());
+        for axis in 0..3 {
+            let exact = o[axis] - c[axis];
+            let li = local[axis];
+            let (up, down) = (f64::from(li + pad) - exact, exact - f64::from(li - pad));
+            assert!(
+                up >= need && down >= need,
+                "{root:?} {origin:?}: pad {pad}, need {need}"
+            );
+            assert!(
+                f64::from(stored.min[axis]) <= lo[axis] - c[axis]
+                    && f64::from(stored.max[axis]) >= hi[axis] - c[axis],
+                "{root:?}: stored {stored:?}"
+            );
+        }
+        let m = f64::from(local.abs().max_element());
+        let tight = gamma(16.0) * r + 4.0 * u * m;
+        assert!(
+            f64::from(pad) <= 4.0 * tight,
+            "{root:?} {origin:?}: pad {pad} against {tight}"
+        );
+        let shift = 2.0 * u * f64::from(origin.abs().max_element());
+        if at > 1e5 && scale < 1.0 && reach < 10.0 * scale {
+            far_and_small += 1;
+            assert!(
+                f64::from(pad) < 0.01 * shift,
+                "{root:?} {origin:?}: {pad} against two ulps {shift}"
+            );
+            assert!(f64::from(walk::PadFrame::of(&root).pad(origin)) >= shift);
+        }
+    }
+    assert!(far_and_small > 100, "{far_and_small} small boxes far away");
+}

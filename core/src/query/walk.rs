@@ -18,12 +18,13 @@ use glam::Vec3;
 pub const CULL_REL_SLACK: f32 = crate::tolerance::T_REL_TOLERANCE_WELL_CONDITIONED;
 
 /// Where a structure's points lie, as its box padding needs it ([`PadFrame::pad`]): a centre
-/// `c` of its root box and the per-structure part of the padding.
+/// `c` of its root box, whether its boxes are stored in world coordinates or relative to `c`
+/// ([`Aabb::relative_to`]), and the per-structure part of the padding.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct PadFrame {
     centre: Vec3,
-    /// [`BVH_PROJECTION_PAD`]`·h + `[`PAD_ORIGIN_SHIFT_REL`]`·max|c|` (`h` below), or `+∞`
-    /// for a root box that is not finite and ordered.
+    /// [`BVH_PROJECTION_PAD`]`·h`, plus [`PAD_ORIGIN_SHIFT_REL`]`·max|c|` for boxes in world
+    /// coordinates (`h` below), or `+∞` for a root box that is not finite and ordered.
     ///
     /// [`BVH_PROJECTION_PAD`]: crate::tolerance::BVH_PROJECTION_PAD
     /// [`PAD_ORIGIN_SHIFT_REL`]: crate::tolerance::PAD_ORIGIN_SHIFT_REL
@@ -31,11 +32,23 @@ pub(crate) struct PadFrame {
 }
 
 impl PadFrame {
-    /// The frame of a structure whose points all lie in `root`: `c` its rounded centre, `h`
-    /// at least `max_i max(|lo_i − c_i|, |hi_i − c_i|)` (the largest `f32` difference times
-    /// `1 + 4u`, which covers its rounding and the product's). A root that is not finite and
-    /// ordered (an empty tree's) pads every box by `+∞`.
+    /// The frame of a structure whose points all lie in `root` and whose boxes are in world
+    /// coordinates (the kd-tree's split planes): `c` its rounded centre, `h` at least
+    /// `max_i max(|lo_i − c_i|, |hi_i − c_i|)` (the largest `f32` difference times `1 + 4u`,
+    /// which covers its rounding and the product's). A root that is not finite and ordered
+    /// (an empty tree's) pads every box by `+∞`.
     pub(crate) fn of(root: &Aabb) -> Self {
+        Self::around(root, true)
+    }
+
+    /// [`PadFrame::of`] for a structure whose boxes are stored relative to the frame's centre
+    /// ([`PadFrame::centre`], [`Aabb::relative_to`]) and tested from the ray's origin in that
+    /// frame ([`PadFrame::local`]): no term grows with the coordinates' magnitude.
+    pub(crate) fn relative(root: &Aabb) -> Self {
+        Self::around(root, false)
+    }
+
+    fn around(root: &Aabb, world: bool) -> Self {
         use crate::float::F32_UNIT_ROUNDOFF as U;
         use crate::tolerance::{BVH_PROJECTION_PAD, PAD_ORIGIN_SHIFT_REL};
         let (lo, hi) = (root.min, root.max);
@@ -47,7 +60,12 @@ impl PadFrame {
         }
         let centre = lo * 0.5 + hi * 0.5;
         let h = (centre - lo).max(hi - centre).max_element() * (1.0 + 4.0 * U);
-        let offset = BVH_PROJECTION_PAD * h + PAD_ORIGIN_SHIFT_REL * centre.abs().max_element();
+        let shift = if world {
+            PAD_ORIGIN_SHIFT_REL * centre.abs().max_element()
+        } else {
+            0.0
+        };
+        let offset = BVH_PROJECTION_PAD * h + shift;
         Self {
             centre,
             offset: if offset <= f32::MAX {
@@ -58,26 +76,51 @@ impl PadFrame {
         }
     }
 
+    /// The centre `c` the frame measures from (the origin of a structure's relative boxes).
+    #[inline]
+    pub(crate) fn centre(&self) -> Vec3 {
+        self.centre
+    }
+
     /// The outward padding, in world units, of every box tested for a ray from `origin`:
     /// `(`[`BVH_PROJECTION_PAD`]` + 2·`[`PAD_ORIGIN_SHIFT_REL`]`)·m + offset`, `m =
-    /// max_i |o_i − c_i|` (rounded). It meets [`BVH_PROJECTION_PAD`]'s requirement with
-    /// `R ≤ m/(1 − u) + h` (every point lies within `h` of `c` per axis) and
-    /// `max|o| ≤ m/(1 − u) + max|c|`; the margins of `γ₁₆` over `γ₈` absorb the roundings.
-    /// One subtraction per axis more than `γ₁₆·(max|o| + extent)`, and independent of where
-    /// the structure lies: a small mesh far from the coordinate origin is padded by its own
-    /// reach and its origin's resolution. `+∞` when it overflows (every box is then hit:
+    /// max_i |o_i − c_i|` (rounded). For boxes in world coordinates it meets
+    /// [`BVH_PROJECTION_PAD`]'s requirement with `R ≤ m/(1 − u) + h` (every point lies within
+    /// `h` of `c` per axis) and `max|o| ≤ m/(1 − u) + max|c|`; the margins of `γ₁₆` over `γ₈`
+    /// absorb the roundings. For relative boxes see [`PadFrame::local`]. One subtraction per
+    /// axis more than `γ₁₆·(max|o| + extent)`. `+∞` when it overflows (every box is then hit:
     /// slower, still exact).
     ///
     /// [`BVH_PROJECTION_PAD`]: crate::tolerance::BVH_PROJECTION_PAD
     /// [`PAD_ORIGIN_SHIFT_REL`]: crate::tolerance::PAD_ORIGIN_SHIFT_REL
     #[inline(always)]
     pub(crate) fn pad(&self, origin: Vec3) -> f32 {
+        self.local(origin).1
+    }
+
+    /// The ray's origin in the frame, `o' = o − c` rounded to `f32`, and the padding
+    /// [`PadFrame::pad`] (`m = max|o'|`). For boxes stored relative to `c`, tested from `o'`,
+    /// the padding meets [`BVH_PROJECTION_PAD`]'s requirement in the frame: the exact ray
+    /// from `o − c` passes within `γ₈·R` of a triangle the watertight test hits; `o'` moves it
+    /// by at most `u·m` per axis, and the shifted origins `o' ± pad` round by at most
+    /// `u·(m + pad)`: `3u·m` in all, under the `4u·m` of `2·`[`PAD_ORIGIN_SHIFT_REL`]`·m`,
+    /// and no term grows with `max|c|`. A small mesh far from the coordinate origin is
+    /// therefore padded by its own reach from the ray's origin alone.
+    ///
+    /// [`BVH_PROJECTION_PAD`]: crate::tolerance::BVH_PROJECTION_PAD
+    /// [`PAD_ORIGIN_SHIFT_REL`]: crate::tolerance::PAD_ORIGIN_SHIFT_REL
+    #[inline(always)]
+    pub(crate) fn local(&self, origin: Vec3) -> (Vec3, f32) {
         use crate::tolerance::{BVH_PROJECTION_PAD, PAD_ORIGIN_SHIFT_REL};
-        let d = (origin - self.centre).abs().to_array();
+        let o = origin - self.centre;
+        let d = o.abs().to_array();
         // Plain comparisons: `d` is finite (a valid ray's origin, a finite centre).
         let m01 = if d[0] > d[1] { d[0] } else { d[1] };
         let m = if m01 > d[2] { m01 } else { d[2] };
-        (BVH_PROJECTION_PAD + 2.0 * PAD_ORIGIN_SHIFT_REL) * m + self.offset
+        (
+            o,
+            (BVH_PROJECTION_PAD + 2.0 * PAD_ORIGIN_SHIFT_REL) * m + self.offset,
+        )
     }
 }
 

@@ -671,10 +671,10 @@ where
             source_len: mesh.len(),
             root,
             root_box: Aabb::EMPTY,
-            pad_frame: PadFrame::of(&Aabb::EMPTY),
+            root_local: Aabb::EMPTY,
+            pad_frame: PadFrame::relative(&Aabb::EMPTY),
         };
-        tree.root_box = tree.computed_bounds();
-        tree.pad_frame = PadFrame::of(&tree.root_box);
+        tree.set_frame();
         Ok(tree)
     }
 }

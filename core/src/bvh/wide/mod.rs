@@ -78,6 +78,7 @@ pub use node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
 use crate::aabb::Aabb;
 use crate::getters::{count_getters, getters};
 use crate::query::TraversalStats;
+use glam::Vec3;
 
 /// Most triangles one wide leaf slot can hold (the binary tree's leaves must not be larger).
 pub const MAX_LEAF_TRIANGLES: usize = 16;
@@ -174,11 +175,13 @@ pub struct WideBvh<const W: usize, N, T> {
     /// The root ([`WideBvh::root`]) as a child slot encodes it: node 0, a leaf run (a tree
     /// with no node), or [`ChildRef::EMPTY`] (an empty tree).
     root: u32,
-    /// The box of everything in the tree ([`WideBvh::bounds`], kept): a closest-hit walk
-    /// tests it first, so that a ray missing the whole tree skips the node test's setup.
+    /// The box of everything in the tree ([`WideBvh::bounds`], kept), in world coordinates.
     root_box: Aabb,
+    /// `root_box` relative to the frame's centre, as the node boxes are stored: a closest-hit
+    /// walk tests it first, so that a ray missing the whole tree skips the node test's setup.
+    root_local: Aabb,
     /// Where the tree lies, for the box padding ([`crate::tolerance::BVH_PROJECTION_PAD`]):
-    /// of `root_box`, kept so that a query does not recompute it.
+    /// of `root_box`, its centre the origin of the node boxes ([`WideBvh::box_origin`]).
     pad_frame: crate::query::walk::PadFrame,
 }
 
@@ -289,8 +292,19 @@ where
         self.root_box
     }
 
-    /// The box of the root computed from the stored nodes or triangles (what
-    /// [`WideBvh::bounds`] keeps).
+    /// The point the node boxes are measured from: [`WideNode::child_bounds`] is the box of
+    /// `p − box_origin()` over the child's points `p`, rounded outward ([`Aabb::relative_to`]).
+    /// The centre of [`WideBvh::bounds`]; the origin for an empty tree. Stored so, the boxes
+    /// and a ray's origin in their frame are small numbers wherever the mesh lies, and so is
+    /// the padding each box is tested with ([`crate::tolerance::BVH_PROJECTION_PAD`]).
+    #[inline]
+    #[must_use]
+    pub fn box_origin(&self) -> Vec3 {
+        self.pad_frame.centre()
+    }
+
+    /// The box of the root computed from the stored triangles, or from the nodes while their
+    /// boxes are still in world coordinates (what [`WideBvh::bounds`] keeps).
     fn computed_bounds(&self) -> Aabb {
         match self.root() {
             ChildRef::Inner(i) => self.nodes().get(i as usize).map_or(Aabb::EMPTY, |n| {
@@ -335,6 +349,32 @@ where
     #[must_use]
     pub fn into_storage(self) -> (N, T) {
         (self.nodes, self.groups)
+    }
+}
+
+impl<const W: usize, N, T> WideBvh<W, N, T>
+where
+    N: AsRef<[WideNode<W>]> + AsMut<[WideNode<W>]>,
+    T: AsRef<[LeafGroup]>,
+{
+    /// Sets the tree's frame from node boxes just written in world coordinates (by the
+    /// collapse, by [`WideBvh::refit`]): the root box from them, the padding frame centred on
+    /// it ([`crate::query::walk::PadFrame::relative`]), then every node's boxes made relative
+    /// to that centre ([`WideBvh::box_origin`]), rounded outward, in one pass.
+    fn set_frame(&mut self) {
+        self.root_box = self.computed_bounds();
+        self.pad_frame = crate::query::walk::PadFrame::relative(&self.root_box);
+        let centre = self.pad_frame.centre();
+        self.root_local = self.root_box.relative_to(centre);
+        let count = self.node_count as usize;
+        let nodes = self.nodes.as_mut();
+        for node in nodes.iter_mut().take(count) {
+            for slot in 0..W {
+                let b = node.child_bounds(slot).relative_to(centre);
+                let reference = node.child[slot];
+                node.set_child(slot, &b, reference);
+            }
+        }
     }
 }
 

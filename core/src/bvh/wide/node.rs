@@ -6,7 +6,8 @@ use glam::Vec3;
 
 /// A node of a `W`-wide BVH: the boxes of its `W` children, stored as arrays of lanes
 /// (`bounds[0]` the lower corners, `bounds[1]` the upper ones, then the axis, then the child),
-/// and `W` child references ([`ChildRef`]). Unused slots have an empty box (`+∞` lower,
+/// relative to the tree's [`super::WideBvh::box_origin`], and `W` child references
+/// ([`ChildRef`]). Unused slots have an empty box (`+∞` lower,
 /// `−∞` upper bounds), which no ray hits, and the reference [`ChildRef::EMPTY`].
 ///
 /// Nodes are only created by [`super::WideBvh::from_binary`]: fields are private so that the
@@ -26,7 +27,8 @@ impl<const W: usize> WideNode<W> {
         child: [ChildRef::EMPTY; W],
     };
 
-    /// The box of slot `i` (empty for an unused slot or `i ≥ W`).
+    /// The box of slot `i` relative to the tree's [`super::WideBvh::box_origin`] (add it
+    /// back for world coordinates), empty for an unused slot or `i ≥ W`.
     #[must_use]
     pub fn child_bounds(&self, i: usize) -> Aabb {
         if i >= W {

@@ -162,7 +162,8 @@ impl Lanes {
         bound: [0.0; PACKET],
     };
 
-    /// The lanes of `rays` (at most [`PACKET`]) in a tree of padding frame `frame`, computed lane by lane
+    /// The lanes of `rays` (at most [`PACKET`]) in a tree of padding frame `frame` (origins
+    /// relative to its centre, as the node boxes), computed lane by lane
     /// with the operations of [`SlabRay::new`](crate::aabb::SlabRay::new) and [`PaddedRay::new`](crate::bvh::padded_ray::PaddedRay::new) (so each lane's values
     /// are its ray's, bit for bit), and the mask of the rays that may join a packet of the
     /// octant `near`: valid ([`Ray::is_valid`]) with `t_min ≥ 0` and every reciprocal finite
@@ -222,11 +223,12 @@ impl Lanes {
             ok[r] &= ones((t_min[r] >= 0.0) & (t_min[r] < f32::INFINITY) & (t_min[r] <= t_max[r]));
         }
         for r in 0..PACKET {
-            let pad = frame.pad(glam::Vec3::new(o[0][r], o[1][r], o[2][r]));
+            // In the frame of the node boxes, as the single-ray walk (`PadFrame::local`).
+            let (local, pad) = frame.local(glam::Vec3::new(o[0][r], o[1][r], o[2][r]));
             for axis in 0..3 {
                 let toward = pad.copysign(d[axis][r]);
-                out.origin_near[axis][r] = o[axis][r] + toward;
-                out.origin_far[axis][r] = o[axis][r] - toward;
+                out.origin_near[axis][r] = local[axis] + toward;
+                out.origin_far[axis][r] = local[axis] - toward;
             }
             let bound = cull_bound(t_max[r]).min(f32::MAX);
             out.t_min[r] = select(ok[r], t_min[r], f32::INFINITY);

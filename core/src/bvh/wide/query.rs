@@ -32,6 +32,9 @@ where
         if !query.is_valid() || self.root == ChildRef::EMPTY {
             return 0;
         }
+        // The node boxes are relative to the frame's centre, rounded outward: so is the
+        // query box (a child overlapping the query still does; its triangles decide).
+        let local = query.relative_to(self.box_origin());
         // The root (node 0, or a leaf) first.
         let mut stack = [self.root; QUERY_STACK];
         let mut sp = 1usize;
@@ -44,7 +47,7 @@ where
                     };
                     for k in 0..W {
                         if node.child[k] != ChildRef::EMPTY
-                            && node.child_bounds(k).overlaps(query)
+                            && node.child_bounds(k).overlaps(&local)
                             && let Some(slot) = stack.get_mut(sp)
                         {
                             *slot = node.child[k];

@@ -16,7 +16,8 @@ where
     /// Copies the moved vertices of `mesh` (the same triangles, moved) into the triangle
     /// groups and recomputes every child box bottom-up, in one reverse pass over the nodes
     /// (children are stored after their parent), with no stack and no rebuild; a root leaf's
-    /// box (a tree with no node) from its triangles.
+    /// box (a tree with no node) from its triangles. The boxes are then made relative to the
+    /// new root box's centre ([`WideBvh::box_origin`]), as a build stores them.
     ///
     /// # Errors
     ///
@@ -77,8 +78,7 @@ where
                 nodes[i].set_child(slot, &b, reference);
             }
         }
-        self.root_box = self.computed_bounds();
-        self.pad_frame = crate::query::walk::PadFrame::of(&self.root_box);
+        self.set_frame();
         match bad {
             Some(index) => Err(NonFiniteError::primitive(index).into()),
             None => Ok(()),

@@ -478,12 +478,15 @@ where
         if self.root == ChildRef::EMPTY {
             return;
         }
-        let wray = PaddedRay::new(slab, self.pad_frame.pad(slab.origin));
+        // The node boxes are relative to the frame's centre: so is the origin they are
+        // tested from (`PadFrame::local`).
+        let (origin, pad) = self.pad_frame.local(slab.origin);
+        let wray = PaddedRay::new(&SlabRay { origin, ..*slab }, pad);
         let mut local = TraversalStats::default();
         // A closest-hit ray that misses the root's box misses all its children: it ends here,
         // before the node test's eight-lane setup (the root's test counted as its visit).
         // Not for any-hit rays, which mostly start on a surface inside the box.
-        if !ANY && !GENERAL && !wray.hits_box(&self.root_box, ray.t_min, cull_bound(ray.t_max)) {
+        if !ANY && !GENERAL && !wray.hits_box(&self.root_local, ray.t_min, cull_bound(ray.t_max)) {
             local.nodes_visited += 1;
             add_stats(stats, &local);
             return;

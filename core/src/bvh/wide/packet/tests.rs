@@ -201,8 +201,12 @@ fn packets_keep_the_tie_rule_on_shared_edges() {
 #[test]
 fn the_packet_node_test_bounds_every_rays_own() {
     const EXTENT: f32 = 30.0;
-    let frame =
-        crate::query::walk::PadFrame::of(&Aabb::new(Vec3::splat(-EXTENT), Vec3::splat(EXTENT)));
+    // A tree centred away from the coordinate origin: the lanes hold origins in its frame.
+    let centre = Vec3::new(1000.0, -20.0, 5.0);
+    let frame = crate::query::walk::PadFrame::relative(&Aabb::new(
+        centre - Vec3::splat(EXTENT),
+        centre + Vec3::splat(EXTENT),
+    ));
     let mut rng = Lcg(77);
     let mut admitted = 0;
     for round in 0..3000 {
@@ -212,7 +216,7 @@ fn the_packet_node_test_bounds_every_rays_own() {
             if round & 4 == 0 { 1.0 } else { -1.0 },
         );
         let base = (rng.v(2.0).abs() + Vec3::splat(0.05)) * octant;
-        let eye = rng.v(20.0);
+        let eye = centre + rng.v(20.0);
         let spread = [0.0, 0.01, 0.2][round % 3];
         let mut rays = Vec::new();
         for i in 0..PACKET {
@@ -226,7 +230,8 @@ fn the_packet_node_test_bounds_every_rays_own() {
             ray.t_min = [0.0, rng.f()][i % 2];
             ray.t_max = [f32::INFINITY, 5.0 + 40.0 * rng.f()][(i / 2) % 2];
             let slab = SlabRay::new(&ray).unwrap();
-            let w = PaddedRay::new(&slab, frame.pad(o));
+            let (origin, pad) = frame.local(o);
+            let w = PaddedRay::new(&SlabRay { origin, ..slab }, pad);
             rays.push((ray, w));
         }
         let near = [octant.x, octant.y, octant.z].map(|s| usize::from(s < 0.0));
@@ -259,8 +264,10 @@ fn the_packet_node_test_bounds_every_rays_own() {
         let interval = Interval::new(&lanes, &joined, near);
         let mut node = WideNode::<8>::EMPTY;
         for slot in 0..7 {
-            // Along the packet (most entered by some rays), or anywhere near it.
-            let c = eye + base * (rng.f() * 20.0) + rng.v(if slot < 5 { 3.0 } else { 40.0 });
+            // Along the packet (most entered by some rays), or anywhere near it; in the
+            // frame's coordinates, as a tree stores its boxes.
+            let c =
+                (eye - centre) + base * (rng.f() * 20.0) + rng.v(if slot < 5 { 3.0 } else { 40.0 });
             let h = rng.v(3.0).abs();
             node.set_child(slot, &Aabb::new(c - h, c + h), slot as u32);
         }
