@@ -116,23 +116,30 @@ pub const SHADOW_SEGMENT_END_SLACK: f32 = 16.0 * crate::float::F32_UNIT_ROUNDOFF
 /// `γ₁₆·R` doubles the first and covers the second; the [`PAD_ORIGIN_SHIFT_REL`] term
 /// covers the shift's rounding, which no bound on `R` can: an origin far from the
 /// coordinate origin has an ulp larger than a pad of `γ₁₆·R`, and `o ± pad` would round
-/// back to `o`. A looser `R`, `max|o| + max|scene|` (the binary [`crate::bvh::Bvh`]'s, one
-/// subtraction fewer on the microcontroller image), meets the requirement with
-/// `γ₁₆·(max|o| + max|scene|)` alone: its `γ₁₆·max|o|` exceeds the shift's rounding.
+/// back to `o`. The wide tree therefore stores its boxes relative to its centre `c` and
+/// tests them from `o − c` (`PadFrame::local`): the origin, its shift and its term are then
+/// measured in that frame, and small wherever the mesh lies. A looser `R`,
+/// `max|o| + max|scene|` (the binary [`crate::bvh::Bvh`]'s, one subtraction fewer on the
+/// microcontroller image), meets the requirement with `γ₁₆·(max|o| + max|scene|)` alone: its
+/// `γ₁₆·max|o|` exceeds the shift's rounding.
 ///
 /// Cost: a box grows by ~1e-6 of the distance from the ray's origin to the far side of the
-/// structure, plus two `f32` ulps of the origin's coordinates, a few extra leaf visits on a
-/// grazing ray. With `max|o| + max|scene|` instead, a small mesh far from the coordinate
-/// origin had every box padded by sixteen times that: the bunny moved to
-/// `(10⁴, −3·10³, 2·10⁴)` (coordinates near `2·10⁴`, so 0.04 against its size of 0.15)
-/// tested 7 600 triangles per camera ray instead of 29 (`docs/performance.md`).
+/// structure, plus two `f32` ulps of the origin's coordinates in the structure's frame, a
+/// few extra leaf visits on a grazing ray. With `max|o| + max|scene|` instead, a small mesh
+/// far from the coordinate origin had every box padded by sixteen times that: the bunny
+/// moved to `(10⁴, −3·10³, 2·10⁴)` (coordinates near `2·10⁴`, so 0.04 against its size of
+/// 0.15) tested 7 600 triangles per camera ray; with world-coordinate boxes and the two ulps
+/// of `2·10⁴`, 29; with boxes relative to the tree's centre, 3.1, as at the coordinate
+/// origin (`docs/performance.md`).
 pub const BVH_PROJECTION_PAD: f32 = gamma(16);
 
 /// The part of the box padding that covers the rounding of the shifted ray origins `o ± pad`
 /// ([`BVH_PROJECTION_PAD`]): `2u`, relative to `max|o|` (unitless). The rounding of
 /// `o_i ± pad` is at most `u·(|o_i| + pad)`; `2u·max|o|` exceeds its `u·|o_i|` part, and
 /// [`BVH_PROJECTION_PAD`]'s doubling the `u·pad` part. It is two `f32` ulps of the origin's
-/// largest coordinate at most: the resolution of the origin itself.
+/// largest coordinate at most: the resolution of the origin itself, in the coordinates the
+/// boxes are stored in (world coordinates for the kd-tree, the tree's centre for the wide
+/// BVH, where `2·PAD_ORIGIN_SHIFT_REL` also covers the rounding of `o − c`).
 pub const PAD_ORIGIN_SHIFT_REL: f32 = 2.0 * crate::float::F32_UNIT_ROUNDOFF;
 
 /// Relative bound of the `f32` values `wn`, `dn` of the watertight test's eight-lane "crossed
