@@ -13,6 +13,6 @@ cd "$root"
 cargo build --release -p halfray "$@"
 bin=target/release/halfray
 mkdir -p target/corpus
-for kind in sphere terrain beams room scatter; do
+for kind in sphere terrain beams room scatter far; do
     "$bin" mesh generate "$kind" --seed 1 -o "target/corpus/$kind.obj"
 done

@@ -9,6 +9,7 @@
 //! | `beams` | `n` long thin boxes, each spanning the whole `[0, 100]³` scene along a random axis, cross-section 0.05–0.3 units: long, thin, overlapping triangles | `n = 10 000`: 120 000 |
 //! | `room` | an open room `10⁴` units wide (floor, three walls; no ceiling, no front wall, so the camera sees in) with a detailed displaced sphere of diameter 1 on the floor at its centre: `10⁴ : 1` size variance | object `n = 64`: 49 152 + 8 |
 //! | `scatter` | `n` disjoint small objects: randomly rotated icosahedra of radius 0.05–0.2, one per cell of a jittered grid over `[0, 100]³` | `n = 10 000`: 200 000 |
+//! | `far` | the `sphere` of radius 1 centred at [`FAR_CENTRE`], far from the coordinate origin as a georeferenced scan is stored: `f32` coordinates with an ulp of `0.002`, triangles about `0.015` across | `n = 128`: 196 608 |
 //!
 //! Vertices shared by faces of one object are welded (same `f32` position, one index), so the
 //! closed objects are watertight, as a scanned mesh is. All arithmetic is `f64`, rounded once.
@@ -29,6 +30,9 @@ pub const SPHERE_RELIEF: f64 = 0.05;
 pub const TERRAIN_RELIEF: f64 = 40.0;
 /// Side of the `room`, units (its object has diameter 1).
 pub const ROOM_SIZE: f64 = 1.0e4;
+/// Centre of the `far` sphere, units: about `2.5·10⁴` from the coordinate origin, `10⁴` times
+/// its radius (an ulp of `2⁻⁹ ≈ 0.002` in its largest coordinate).
+pub const FAR_CENTRE: [f64; 3] = [2.0e4, -5.0e3, 1.5e4];
 
 /// The kinds of generated mesh (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -43,6 +47,8 @@ pub enum Kind {
     Room,
     /// Many disjoint small objects.
     Scatter,
+    /// A detailed object far from the coordinate origin.
+    Far,
 }
 
 /// Arguments of `halfray mesh generate`.
@@ -119,6 +125,7 @@ pub fn generate(kind: Kind, seed: u64, n: Option<usize>) -> Result<Generated> {
         Kind::Terrain => 256,
         Kind::Beams | Kind::Scatter => 10_000,
         Kind::Room => 64,
+        Kind::Far => 128,
     });
     let limit = match kind {
         Kind::Beams | Kind::Scatter => MAX_SIZE * 1000,
@@ -152,6 +159,10 @@ pub fn generate(kind: Kind, seed: u64, n: Option<usize>) -> Result<Generated> {
             );
         }
         Kind::Scatter => scatter(&mut b, n, &mut rng),
+        Kind::Far => {
+            let waves = Waves::new(&mut rng);
+            cube_sphere(&mut b, n, DVec3::from_array(FAR_CENTRE), 1.0, &waves);
+        }
     }
     Ok(b.mesh)
 }
@@ -544,6 +555,42 @@ mod tests {
         let size = (ohi - olo).max_element();
         assert!(size > 0.85 && size <= 1.0, "{size}");
         assert!(olo.y >= lo.y, "on the floor");
+    }
+
+    /// The `far` sphere at its default size: closed and outward after its coordinates are
+    /// rounded to a grid of `0.002` (no two vertices welded into one), within its relief of
+    /// [`FAR_CENTRE`].
+    #[test]
+    fn far_sphere_is_closed_around_its_far_centre() {
+        let m = generate(Kind::Far, 1, None).unwrap();
+        assert_eq!(m.triangles.len(), 196_608);
+        assert_eq!(
+            m.positions.len() as i64 - m.triangles.len() as i64 / 2,
+            2,
+            "V − E + F = 2, nothing welded"
+        );
+        assert!(closed_and_oriented(&m));
+        let c = DVec3::from_array(FAR_CENTRE);
+        for p in &m.positions {
+            let r = (p.as_dvec3() - c).length();
+            assert!(
+                (1.0 - SPHERE_RELIEF - 0.01..=1.0 + SPHERE_RELIEF + 0.01).contains(&r),
+                "{r}"
+            );
+        }
+        // Outward: the signed volume about the centre.
+        let vol: f64 = m
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, d] = t.map(|i| m.positions[i as usize].as_dvec3() - c);
+                a.dot(b.cross(d)) / 6.0
+            })
+            .sum();
+        assert!(
+            vol > 0.8 * 4.0 / 3.0 * std::f64::consts::PI * 0.95f64.powi(3),
+            "{vol}"
+        );
     }
 
     #[test]

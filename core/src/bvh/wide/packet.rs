@@ -34,7 +34,7 @@ use super::node::{ChildRef, LeafGroup, WideNode};
 use super::node_test::{far_reciprocal, fold_slab, slab_axis};
 use super::traverse::{RunLanes, STACK, leaf_groups, leaf_hits, prefetch_child, sorted_keys};
 use super::{WideBvh, add_stats};
-use crate::query::walk::{PadFrame, cull_bound, extent_of};
+use crate::query::walk::{PadFrame, cull_bound};
 use crate::query::{LeafTest, TraversalStats};
 use crate::ray::Ray;
 use crate::simd;
@@ -49,7 +49,7 @@ pub(super) const PACKET: usize = 16;
 pub(super) const COHERENT_COS: f32 = 0.999_05;
 
 /// A ray joins its packet when its origin lies within this share of the tree's extent
-/// (the largest coordinate magnitude of its bounds) of the first ray's, per axis (a
+/// (half the longest side of its root box) of the first ray's, per axis (a
 /// camera's rays share one origin): beyond, the packet's interval of origins admits nodes
 /// none of its rays enters. Only speed depends on it, never an answer.
 pub(super) const COHERENT_ORIGIN: f32 = 1.0 / 256.0;
@@ -470,7 +470,14 @@ where
         // The packet is the rays like the first one (module docs); the others walk alone.
         let d0 = reference.direction;
         let near = [d0.x, d0.y, d0.z].map(|c| usize::from(c.is_sign_negative()));
-        let coherence = Coherence::new(reference, extent_of(&self.root_box));
+        // The tree's size, wherever it lies: half its root box's longest side.
+        let side = self.root_box.extent().max_element();
+        let half = if side > 0.0 && side.is_finite() {
+            0.5 * side
+        } else {
+            0.0
+        };
+        let coherence = Coherence::new(reference, half);
         let alike = |ray: &Ray| coherence.admits(ray.origin.to_array(), ray.direction.to_array());
         let all = u32::MAX >> (32 - rays.len() as u32);
         // One ray first, the one three quarters in: rays in an order that is not coherent (a
