@@ -24,7 +24,8 @@
 #               task fails the merge naming its shard); the fuzz array + merge reports a planted
 #               crash (needs the embree stage; SKIP_CLUSTER=1 skips it)
 #   bench       halfray bench accuracy --quick (runs; watertight must show zero leaks); the corpus
-#               (scripts/corpus.sh) through bench bvh with few rays; the three charts from the JSON
+#               (scripts/corpus.sh) through bench bvh with few rays; the three charts from the JSON;
+#               crosscheck of the corpus's `far` mesh (zero genuine mismatches, zero leaks)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 ROOT=$PWD
@@ -136,6 +137,13 @@ bash scripts/corpus.sh $features
 cargo run --release -p halfray $features -- bench bvh --mesh-list scenes/corpus/corpus.txt \
     --width 64 --rays 10000 --json target/ci/bench-bvh.json > target/ci/bench-bvh.txt
 tail -n 12 target/ci/bench-bvh.txt
+if [ "${SKIP_EMBREE:-0}" != 1 ]; then
+    # The corpus's mesh far from the coordinate origin (its node boxes, padding and edge rays
+    # are what such a mesh tests): zero genuine mismatches and zero leaks, or a non-zero exit.
+    target/release/halfray crosscheck target/corpus/far.obj --rays "${CROSSCHECK_RAYS:-100000}" \
+        --json target/ci/crosscheck-far.json > target/ci/crosscheck-far.txt
+    grep '^crosscheck far.obj' target/ci/crosscheck-far.txt
+fi
 target/release/halfray chart accuracy target/ci/accuracy.json -o target/ci/accuracy.svg
 if [ "${SKIP_EMBREE:-0}" != 1 ]; then
     target/release/halfray chart corpus target/ci/bench-bvh.json -o target/ci/corpus.svg
