@@ -308,6 +308,35 @@ fn every_structure_equals_brute_force_at_both_ends_of_the_watertight_domain() {
     }
 }
 
+/// One case of the padding tests: a root box of size `scale` (`10⁻³` to `10³`) centred up to
+/// `at` (`0` for every fourth case, else up to `10⁷`) from the coordinate origin, and a ray
+/// origin within `reach` (`0.5`, `2` or `100` sizes) of its centre.
+struct PadCase {
+    root: Aabb,
+    origin: Vec3,
+    scale: f32,
+    at: f32,
+    reach: f32,
+}
+
+impl PadCase {
+    fn random(s: &mut u64, i: usize) -> Self {
+        let scale = 10f32.powf(lcg(s) * 6.0 - 3.0);
+        let at = 10f32.powf(lcg(s) * 7.0) * [0.0, 1.0][usize::from(i % 4 != 0)];
+        let centre = Vec3::new(lcg(s), lcg(s), lcg(s)) * 2.0 * at - at;
+        let half = Vec3::new(lcg(s), lcg(s), lcg(s)) * scale;
+        let reach = [0.5, 2.0, 100.0][i % 3] * scale;
+        let origin = centre + (Vec3::new(lcg(s), lcg(s), lcg(s)) * 2.0 - 1.0) * reach;
+        Self {
+            root: Aabb::new(centre - half, centre + half),
+            origin,
+            scale,
+            at,
+            reach,
+        }
+    }
+}
+
 /// The box padding ([`walk::PadFrame::pad`]) against its requirement, evaluated in `f64`
 /// (`crate::tolerance::BVH_PROJECTION_PAD`): each shifted origin `o_i ± pad`, rounded to
 /// `f32` as the node test forms it, still lies at least `γ₈·R + u·(R + pad)` beyond `o_i`,
@@ -324,14 +353,13 @@ fn the_box_padding_covers_the_watertight_rounding_wherever_the_box_lies() {
     let mut s = 0x9AD_u64;
     let mut far_and_small = 0;
     for i in 0..20_000 {
-        let scale = 10f32.powf(lcg(&mut s) * 6.0 - 3.0);
-        let at = 10f32.powf(lcg(&mut s) * 7.0) * [0.0, 1.0][usize::from(i % 4 != 0)];
-        let centre = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 2.0 * at - at;
-        let half = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * scale;
-        let root = Aabb::new(centre - half, centre + half);
-        let reach = [0.5, 2.0, 100.0][i % 3] * scale;
-        let origin =
-            centre + (Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 2.0 - 1.0) * reach;
+        let PadCase {
+            root,
+            origin,
+            scale,
+            at,
+            reach,
+        } = PadCase::random(&mut s, i);
         let pad = walk::PadFrame::of(&root).pad(origin);
         let (o, lo, hi) = (origin.as_dvec3(), root.min.as_dvec3(), root.max.as_dvec3());
         let r = (lo - o).abs().max((hi - o).abs()).max_element();
@@ -381,14 +409,13 @@ fn the_padding_of_boxes_relative_to_the_tree_centre_covers_the_rounding_anywhere
     let mut s = 0xF4A_u64;
     let mut far_and_small = 0;
     for i in 0..20_000 {
-        let scale = 10f32.powf(lcg(&mut s) * 6.0 - 3.0);
-        let at = 10f32.powf(lcg(&mut s) * 7.0) * [0.0, 1.0][usize::from(i % 4 != 0)];
-        let centre = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 2.0 * at - at;
-        let half = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * scale;
-        let root = Aabb::new(centre - half, centre + half);
-        let reach = [0.5, 2.0, 100.0][i % 3] * scale;
-        let origin =
-            centre + (Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 2.0 - 1.0) * reach;
+        let PadCase {
+            root,
+            origin,
+            scale,
+            at,
+            reach,
+        } = PadCase::random(&mut s, i);
         let frame = walk::PadFrame::relative(&root);
         let c = frame.centre().as_dvec3();
         let (local, pad) = frame.local(origin);
