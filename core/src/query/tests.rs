@@ -319,10 +319,16 @@ struct PadCase {
     reach: f32,
 }
 
+/// 20 000 [`PadCase`]s from `seed`.
+fn pad_cases(seed: u64) -> impl Iterator<Item = PadCase> {
+    let mut s = seed;
+    (0..20_000).map(move |i| PadCase::random(&mut s, i))
+}
+
 impl PadCase {
     fn random(s: &mut u64, i: usize) -> Self {
         let scale = 10f32.powf(lcg(s) * 6.0 - 3.0);
-        let at = 10f32.powf(lcg(s) * 7.0) * [0.0, 1.0][usize::from(i % 4 != 0)];
+        let at = 10f32.powf(lcg(s) * 7.0) * [0.0, 1.0][usize::from(!i.is_multiple_of(4))];
         let centre = Vec3::new(lcg(s), lcg(s), lcg(s)) * 2.0 * at - at;
         let half = Vec3::new(lcg(s), lcg(s), lcg(s)) * scale;
         let reach = [0.5, 2.0, 100.0][i % 3] * scale;
@@ -350,16 +356,9 @@ impl PadCase {
 fn the_box_padding_covers_the_watertight_rounding_wherever_the_box_lies() {
     let u = f64::from(crate::float::F32_UNIT_ROUNDOFF);
     let gamma = |n: f64| n * u / (1.0 - n * u);
-    let mut s = 0x9AD_u64;
     let mut far_and_small = 0;
-    for i in 0..20_000 {
-        let PadCase {
-            root,
-            origin,
-            scale,
-            at,
-            reach,
-        } = PadCase::random(&mut s, i);
+    for case in pad_cases(0x9AD_u64) {
+        let (root, origin) = (case.root, case.origin);
         let pad = walk::PadFrame::of(&root).pad(origin);
         let (o, lo, hi) = (origin.as_dvec3(), root.min.as_dvec3(), root.max.as_dvec3());
         let r = (lo - o).abs().max((hi - o).abs()).max_element();
@@ -381,7 +380,7 @@ fn the_box_padding_covers_the_watertight_rounding_wherever_the_box_lies() {
             "{root:?} {origin:?}: pad {pad} against {tight}"
         );
         let loose = walk::projection_pad_loose(origin, walk::extent_of(&root));
-        if at > 1e5 && scale < 1.0 && reach < 10.0 * scale {
+        if case.at > 1e5 && case.scale < 1.0 && case.reach < 10.0 * case.scale {
             far_and_small += 1;
             assert!(
                 loose > 8.0 * pad,
@@ -406,16 +405,9 @@ fn the_box_padding_covers_the_watertight_rounding_wherever_the_box_lies() {
 fn the_padding_of_boxes_relative_to_the_tree_centre_covers_the_rounding_anywhere() {
     let u = f64::from(crate::float::F32_UNIT_ROUNDOFF);
     let gamma = |n: f64| n * u / (1.0 - n * u);
-    let mut s = 0xF4A_u64;
     let mut far_and_small = 0;
-    for i in 0..20_000 {
-        let PadCase {
-            root,
-            origin,
-            scale,
-            at,
-            reach,
-        } = PadCase::random(&mut s, i);
+    for case in pad_cases(0xF4A_u64) {
+        let (root, origin) = (case.root, case.origin);
         let frame = walk::PadFrame::relative(&root);
         let c = frame.centre().as_dvec3();
         let (local, pad) = frame.local(origin);
@@ -444,7 +436,7 @@ fn the_padding_of_boxes_relative_to_the_tree_centre_covers_the_rounding_anywhere
             "{root:?} {origin:?}: pad {pad} against {tight}"
         );
         let shift = 2.0 * u * f64::from(origin.abs().max_element());
-        if at > 1e5 && scale < 1.0 && reach < 10.0 * scale {
+        if case.at > 1e5 && case.scale < 1.0 && case.reach < 10.0 * case.scale {
             far_and_small += 1;
             assert!(
                 f64::from(pad) < 0.01 * shift,
