@@ -707,7 +707,7 @@ fn a_tree_that_is_one_unopened_leaf_run_has_no_node() {
             queries_equal_brute_force(&w4, &mesh, &rays);
             // The box query: every triangle whose box meets the query box.
             let mut s = 7u64 + n as u64;
-            box_queries_equal_brute_force(&w, &mesh, &mut s, 50, 4.0);
+            box_queries_equal_brute_force(&w, &mesh, &mut s, (50, 4.0, Vec3::ZERO));
         }
     }
 }
@@ -986,6 +986,8 @@ fn a_mesh_far_from_the_coordinate_origin_is_padded_by_its_own_reach() {
         "{moved} triangles tested far away, {at_origin} at the origin"
     );
     assert!(queries_equal_brute_force(&w, &far, &far_rays) > far_rays.len() / 4);
+    // Box queries take their box into the tree's frame.
+    box_queries_equal_brute_force(&w, &far, &mut 5, (100, 2.0, shift));
     // A tree built at the origin and refitted far away takes the new frame.
     let mut refitted = wide::<8>(&near, 4);
     assert_eq!(refitted.box_origin(), refitted.bounds().center());
@@ -1133,18 +1135,17 @@ fn deep_unbalanced_input_stays_within_the_stack_and_finds_everything() {
     }
 }
 
-/// `count` box queries of `w` over `mesh` (random boxes of side up to `side` in `[−6, 6]³`,
-/// drawn from `seed`) against brute force: every triangle whose box meets the query box, each
-/// once.
+/// `count` box queries of `w` over `mesh` (random boxes of side up to `side` in `[−6, 6]³`
+/// moved by `at`, drawn from `seed`) against brute force: every triangle whose box meets the
+/// query box, each once.
 fn box_queries_equal_brute_force<const W: usize>(
     w: &VecWide<W>,
     mesh: &TriangleMesh<'_>,
     seed: &mut u64,
-    count: usize,
-    side: f32,
+    (count, side, at): (usize, f32, Vec3),
 ) {
     for _ in 0..count {
-        let c = Vec3::new(lcg(seed), lcg(seed), lcg(seed)) * 12.0 - 6.0;
+        let c = at + Vec3::new(lcg(seed), lcg(seed), lcg(seed)) * 12.0 - 6.0;
         let q = Aabb::new(c, c + Vec3::splat(lcg(seed) * side));
         let mut got = Vec::new();
         w.query_box(mesh, &q, |p| {
@@ -1169,7 +1170,7 @@ fn box_query_and_clearance_equal_brute_force_and_the_binary_tree() {
     let w = wide::<8>(&mesh, 4);
     let b = binary(&mesh, 4);
     let mut s = 99u64;
-    box_queries_equal_brute_force(&w, &mesh, &mut s, 200, 2.0);
+    box_queries_equal_brute_force(&w, &mesh, &mut s, (200, 2.0, Vec3::ZERO));
     let points: Vec<Vec3> = (0..100).map(|_| unit_vec(&mut s) * 9.0).collect();
     let normals: Vec<Vec3> = points.iter().map(|p| -*p * 0.5).collect();
     let mut a = vec![0.0; 100];
