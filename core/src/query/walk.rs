@@ -51,15 +51,14 @@ impl PadFrame {
     fn around(root: &Aabb, world: bool) -> Self {
         use crate::float::F32_UNIT_ROUNDOFF as U;
         use crate::tolerance::{BVH_PROJECTION_PAD, PAD_ORIGIN_SHIFT_REL};
-        let (lo, hi) = (root.min, root.max);
-        if !(lo.is_finite() && hi.is_finite() && lo.cmple(hi).all()) {
+        if !(root.is_finite() && root.is_valid()) {
             return Self {
                 centre: Vec3::ZERO,
                 offset: f32::INFINITY,
             };
         }
-        let centre = lo * 0.5 + hi * 0.5;
-        let h = (centre - lo).max(hi - centre).max_element() * (1.0 + 4.0 * U);
+        let centre = root.center();
+        let h = (centre - root.min).max(root.max - centre).max_element() * (1.0 + 4.0 * U);
         let shift = if world {
             PAD_ORIGIN_SHIFT_REL * centre.abs().max_element()
         } else {
