@@ -40,6 +40,14 @@
 //!
 //! # Traversal and the rule that ends it
 //!
+//! The walk runs in the grid's frame, relative to the centre `c` of its box: the ray's
+//! origin `o − c` (one `f32` subtraction), the box, the cell planes and the padding, so that
+//! every bound below is measured by the scene's size and the origin's distance from it,
+//! wherever the scene lies (a mesh moved `10⁴` of its sizes from the coordinate origin gets
+//! the cells and the padding it has at the origin). Below, `o` is `o − c` and `extent` the
+//! largest coordinate magnitude of the box in that frame (about half its longest side).
+//! The triangles are tested on the caller's ray.
+//!
 //! The ray is clipped to the grid's box (grown by the padding) with the conservative slab
 //! test, and the DDA starts in the cell of the entry point (clamped). Each step computes the
 //! distance to the next cell plane on every axis directly, `t = (min + m·size − o)/d`
@@ -55,9 +63,11 @@
 //! (the same `t` never replaces itself). **Why this equals brute force:** a hit of the
 //! watertight test at `t` means the exact ray point `o + t·d` lies within
 //! `γ₁₆·(max|o| + extent)` of the triangle (the argument of
-//! [`crate::tolerance::BVH_PROJECTION_PAD`]), and the DDA's cell at parameter `t` lies within
-//! `γ₁₂·(max|o| + extent)` of that point on each axis (the planes and the entry point carry
-//! a few roundings each). Triangles are padded by [`GRID_RAY_PAD`] `·(reach + extent)` ≥
+//! [`crate::tolerance::BVH_PROJECTION_PAD`]: the test's rounding is relative to the distance
+//! `max|p − o|` from the origin to the triangle's points, at most `max|o| + extent` in any
+//! frame), and the DDA's cell at parameter `t` lies within `γ₁₃·(max|o| + extent)` of that
+//! point on each axis (the planes and the entry point carry a few roundings each, and `o − c`
+//! one). Triangles are padded by [`GRID_RAY_PAD`] `·(reach + extent)` ≥
 //! twice their sum, so a triangle hit at `t` is referenced in the cell the DDA visits at `t`:
 //! a triangle not yet tested cannot hit before the current cell's exit.
 //!
@@ -80,8 +90,9 @@
 //!
 //! An empty mesh (or one whose triangles were all excluded) gives a one-cell grid that hits
 //! nothing. Zero-area triangles are assigned like any other (the intersectors never hit
-//! them). Coordinates up to `f32::MAX` build (pads are capped at `f32::MAX`); scenes far from
-//! the origin relative to their size get a padding that spans many cells (correct, slow).
+//! them). Coordinates up to `f32::MAX` build (pads are capped at `f32::MAX`). A scene far from
+//! the coordinate origin gets the cells and padding it would get at the origin (the grid's
+//! frame).
 //!
 //! [`Ray::validate`]: crate::ray::Ray::validate
 //! [`TriangleIntersector`]: crate::triangle::TriangleIntersector
@@ -118,14 +129,16 @@ pub const MAX_CELLS_PER_AXIS: u32 = 1024;
 /// Largest number of triangles a grid can reference (indices are `u32`).
 pub const MAX_TRIANGLES: usize = u32::MAX as usize;
 
-/// Padding of the triangles relative to `max|ray origin| + extent` (extent: the largest
-/// coordinate magnitude of the grid's box). Unit: relative; the padding is
-/// `GRID_RAY_PAD·(|o| + extent)` world units. Why: the watertight test's hit point is within
-/// `γ₁₆·(|o| + extent)` of the triangle ([`crate::tolerance::BVH_PROJECTION_PAD`]) and the
-/// DDA's cell planes (`min + m·size`, a product and a sum, then the distance: a subtraction
-/// and a division) and its entry cell (`o + t·d`, then a subtraction and a division) are each
-/// within `γ₁₂·(|o| + extent)` of exact along each axis; `γ₆₄` is more than twice their sum,
-/// which also covers the rounding of the padding itself.
+/// Padding of the triangles relative to `max|o − c| + extent` in the grid's frame (`c` the
+/// centre of the grid's box, `extent` the largest coordinate magnitude of the box relative to
+/// it, about half its longest side; module docs). Unit: relative; the padding is
+/// `GRID_RAY_PAD·(|o − c| + extent)` world units. Why: the watertight test's hit point is
+/// within `γ₁₆·(|o − c| + extent)` of the triangle ([`crate::tolerance::BVH_PROJECTION_PAD`]:
+/// its rounding is relative to `max|p − o|`) and the DDA's cell planes (`min + m·size`, a
+/// product and a sum, then the distance: a subtraction and a division) and its entry cell
+/// (`o + t·d`, then a subtraction and a division) are each within `γ₁₂·(|o − c| + extent)` of
+/// exact along each axis, and `o − c` within `u·|o − c|`; `γ₆₄` is more than twice their
+/// sum, which also covers the rounding of the padding itself.
 pub const GRID_RAY_PAD: f32 = gamma(64);
 
 /// Absolute floor added to every padding, world units: the smallest normal `f32`. Below the
@@ -133,10 +146,11 @@ pub const GRID_RAY_PAD: f32 = gamma(64);
 /// miss; a few dozen operations stay far below this floor.
 pub const GRID_ABS_PAD: f32 = f32::MIN_POSITIVE;
 
-/// How far ray origins may be from the world origin, in multiples of the grid's longest side
+/// How far ray origins may be from the grid's centre, in multiples of the grid's longest side
 /// beyond its extent, and still be covered by the padding applied at build time (unitless).
 /// 16 covers cameras framing the scene from a few diameters; it costs a padding of
-/// `GRID_RAY_PAD·(2·extent + 16·side) ≈ 10⁻⁴·side` on each triangle, a fraction of a cell.
+/// `GRID_RAY_PAD·(2·extent + 16·side) ≈ 7·10⁻⁵·side` on each triangle, a fraction of a cell
+/// (at most `1/1024` of the side: [`MAX_CELLS_PER_AXIS`]).
 pub const ORIGIN_REACH: f32 = 16.0;
 
 /// Relative slack of the `f64` assignment (separating-axis projections and cell ranges):

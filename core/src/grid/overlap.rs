@@ -1,12 +1,16 @@
 //! The cell layout, the triangles' padding and the conservative triangle-to-cell assignment (box
 //! or separating-axis).
 //!
-//! Cell `(i, j, k)` is the box `[min + i·size, min + (i+1)·size]` per axis in **real**
-//! arithmetic on the stored `f32` `min` and `size`, except that the first and last cell of
-//! each axis extend to `−∞` and `+∞`: the cells partition all of space, so a point outside
-//! the grid's box maps to the nearest border cell on each axis (by clamping) both when
-//! assigning and when traversing. Assignment is computed in `f64` with a relative slack
-//! ([`SAT_SLACK_REL`]), so it never misses a cell the padded triangle touches.
+//! Cells are laid out in the grid's **frame**: coordinates relative to the centre `c` of its
+//! box ([`Layout::centre`]), so that the cell planes, a ray's origin and every rounding
+//! the padding covers are measured by the scene's size, not by how far it lies from the
+//! coordinate origin. Cell `(i, j, k)` is the box `c + [min + i·size, min + (i+1)·size]` per
+//! axis in **real** arithmetic on the stored `f32` `c`, `min` and `size`, except that the
+//! first and last cell of each axis extend to `−∞` and `+∞`: the cells partition all of
+//! space, so a point outside the grid's box maps to the nearest border cell on each axis (by
+//! clamping) both when assigning and when traversing. Assignment is computed in `f64` on
+//! `p − c` with a relative slack ([`SAT_SLACK_REL`]), so it never misses a cell the padded
+//! triangle touches.
 
 use super::{GRID_ABS_PAD, GRID_RAY_PAD, MAX_CELLS_PER_AXIS, ORIGIN_REACH, SAT_SLACK_REL};
 use crate::aabb::Aabb;
@@ -24,16 +28,16 @@ pub enum CellAssignment {
     Exact,
 }
 
-/// Padding of every triangle at build time, world units (module docs, "Robustness"):
+/// Padding of every triangle at build time, world units (module docs of [`super`]):
 /// [`GRID_RAY_PAD`]`·(reach + extent) + `[`GRID_ABS_PAD`], which covers every ray whose origin
-/// has `max|o_i| ≤ reach`.
+/// has `max|o_i − c_i| ≤ reach` in the grid's frame.
 #[inline]
 pub(super) fn ray_pad(origin_mag: f32, extent: f32) -> f32 {
     GRID_RAY_PAD * (origin_mag + extent) + GRID_ABS_PAD
 }
 
-/// The origin magnitude up to which rays need no more padding than the build's:
-/// `extent + ORIGIN_REACH·(longest side)`.
+/// The origin magnitude in the grid's frame up to which rays need no more padding than the
+/// build's: `extent + ORIGIN_REACH·(longest side)`.
 #[inline]
 pub(super) fn origin_reach(bounds: &Aabb, extent: f32) -> f32 {
     let side = bounds.extent().max_element();
@@ -75,17 +79,24 @@ pub(super) use layout_accessors;
 /// Geometry of the cells and the padding of the build.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Layout {
-    /// Union of the usable triangles' boxes ([`Aabb::EMPTY`] for none).
+    /// Union of the usable triangles' boxes ([`Aabb::EMPTY`] for none), world coordinates.
     pub(super) bounds: Aabb,
     /// Cells per axis.
     pub(super) n: [u32; 3],
-    /// Lower corner of cell `(0, 0, 0)` (zero for an empty grid).
+    /// The frame's origin: the centre of `bounds` (zero for an empty grid). Every other
+    /// field but `bounds` is relative to it.
+    pub(super) centre: Vec3,
+    /// `bounds` relative to `centre`, rounded outward ([`Aabb::relative_to`]; empty for an
+    /// empty grid): it holds every exact `p − centre`.
+    pub(super) local: Aabb,
+    /// Lower corner of cell `(0, 0, 0)`, relative to `centre` (zero for an empty grid).
     pub(super) min: Vec3,
     /// Cell side per axis (0 on axes of one cell, where it is never used).
     pub(super) size: Vec3,
-    /// Largest coordinate magnitude of `bounds` (0 when empty).
+    /// Largest coordinate magnitude of `local` (0 when empty): about half the longest side.
     pub(super) extent: f32,
-    /// Origin magnitude up to which a ray needs no more padding than `pad`.
+    /// Origin magnitude, relative to `centre`, up to which a ray needs no more padding than
+    /// `pad`.
     pub(super) reach: f32,
     /// Padding of every triangle, world units ([`ray_pad`]`(reach, extent)`).
     pub(super) pad: f32,
@@ -100,36 +111,53 @@ impl Layout {
         len.is_finite() && len >= f32::MIN_POSITIVE * MAX_CELLS_PER_AXIS as f32
     }
 
-    /// The layout of `n` cells over `bounds`.
+    /// The layout of `n` cells over `bounds`, in the frame of its centre.
     pub(super) fn new(bounds: &Aabb, n: [u32; 3]) -> Self {
         let usable = bounds.is_finite() && bounds.is_valid();
+        let centre = if usable { bounds.center() } else { Vec3::ZERO };
+        // A finite box relative to its own centre: each bound at most its side in magnitude
+        // (an overflowing side, beyond `f32::MAX`, gives an infinite bound: not splittable).
+        let local = if usable {
+            bounds.relative_to(centre)
+        } else {
+            Aabb::EMPTY
+        };
         let extent = if usable {
-            crate::query::walk::extent_of(bounds)
+            crate::query::walk::extent_of(&local)
         } else {
             0.0
         };
         let mut n = n;
         let mut size = Vec3::ZERO;
         for a in 0..3 {
-            if !usable || !Self::can_split(bounds, a) {
+            if !usable || !Self::can_split(&local, a) {
                 n[a] = 1;
             }
             if n[a] > 1 {
-                size[a] = (bounds.max[a] - bounds.min[a]) / n[a] as f32;
+                size[a] = (local.max[a] - local.min[a]) / n[a] as f32;
             }
         }
         // Both finite (`f32::MAX` at most), so that the `f64` assignment never meets `∞ − ∞`.
         let finite = |x: f32| if x.is_finite() { x } else { f32::MAX };
-        let reach = finite(origin_reach(bounds, extent));
+        let reach = finite(origin_reach(&local, extent));
         Self {
             bounds: *bounds,
             n,
-            min: if usable { bounds.min } else { Vec3::ZERO },
+            centre,
+            local,
+            min: if usable { local.min } else { Vec3::ZERO },
             size,
             extent,
             reach,
             pad: finite(ray_pad(reach, extent)),
         }
+    }
+
+    /// `p − centre` in `f32`: a point (a ray's origin) in the grid's frame, rounded once
+    /// relative to its own magnitude.
+    #[inline(always)]
+    pub(super) fn to_local(&self, p: Vec3) -> Vec3 {
+        p - self.centre
     }
 
     /// Number of cells (at most `MAX_CELLS_PER_AXIS³ = 2³⁰`).
@@ -209,9 +237,11 @@ impl Layout {
     }
 }
 
-/// Calls `found(cell)` for every cell that triangle `v` (finite), padded by the layout's
-/// `pad` on every axis, touches: by its box ([`CellAssignment::Bounds`]) or by the triangle
-/// itself ([`CellAssignment::Exact`]). Cells are visited in increasing linear index.
+/// Calls `found(cell)` for every cell that triangle `v` (finite, world coordinates), padded
+/// by the layout's `pad` on every axis, touches: by its box ([`CellAssignment::Bounds`]) or
+/// by the triangle itself ([`CellAssignment::Exact`]). Cells are visited in increasing linear
+/// index. The vertices are taken into the grid's frame in `f64` (`p − c`: one rounding
+/// relative to the difference, within the assignment's slack).
 pub(super) fn for_each_cell(
     layout: &Layout,
     v: &[Vec3; 3],
@@ -219,7 +249,8 @@ pub(super) fn for_each_cell(
     mut found: impl FnMut(usize),
 ) {
     let pad = f64::from(layout.pad);
-    let w = v.map(|p| p.as_dvec3());
+    let c = layout.centre.as_dvec3();
+    let w = v.map(|p| p.as_dvec3() - c);
     let lo = w[0].min(w[1]).min(w[2]) - DVec3::splat(pad);
     let hi = w[0].max(w[1]).max(w[2]) + DVec3::splat(pad);
     let r = [0, 1, 2].map(|a| layout.range(a, lo[a], hi[a]));

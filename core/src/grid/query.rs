@@ -28,7 +28,7 @@ where
         if !query.is_valid() || self.reference_count == 0 {
             return 0;
         }
-        let (lo, hi) = self.cells_touching(query);
+        let (lo, hi) = self.cells_touching(&query.relative_to(self.layout.centre));
         let mut reported = 0;
         for k in lo[2]..=hi[2] {
             for j in lo[1]..=hi[1] {
@@ -65,7 +65,8 @@ where
     R: AsRef<[u32]>,
 {
     /// The cells (lowest and highest per axis, clamped) that the closed box `b` touches, one
-    /// more on each side.
+    /// more on each side; `b` in the grid's frame (a world box taken there by
+    /// [`Aabb::relative_to`], outward: it still holds every point of the box).
     fn cells_touching(&self, b: &Aabb) -> ([u32; 3], [u32; 3]) {
         let l = &self.layout;
         let lo = [0, 1, 2].map(|a| l.cell_of(a, b.min[a]).saturating_sub(1));
@@ -74,10 +75,12 @@ where
     }
 
     /// The first cell, in the box query's scan order over the cells `(lo, hi)`, that
-    /// references triangle `p` (bounds `b`): only the cells its padded box touches can.
+    /// references triangle `p` (bounds `b`, world coordinates): only the cells its padded box
+    /// touches can.
     /// `[u32::MAX; 3]` for none.
     fn first_holder(&self, p: u32, b: &Aabb, (lo, hi): ([u32; 3], [u32; 3])) -> [u32; 3] {
         let pad = self.layout.pad;
+        let b = b.relative_to(self.layout.centre);
         let (plo, phi) = self.cells_touching(&Aabb::new(b.min - pad, b.max + pad));
         let lo = [0, 1, 2].map(|a| lo[a].max(plo[a]));
         let hi = [0, 1, 2].map(|a| hi[a].min(phi[a]));

@@ -475,9 +475,11 @@ fn far_origins_use_neighbour_blocks() {
 
 /// `Grid::padding` is the documented `GRID_RAY_PAD·(reach + extent) + GRID_ABS_PAD` with
 /// `reach = extent + ORIGIN_REACH·(longest side)`, worked by hand for the box
-/// `[−1, 3] × [0, 2] × [0, 1]` of two triangles: extent 3 (the largest coordinate
-/// magnitude), longest side 4, so `reach = 67` and the padding `70·γ₆₄ + 2⁻¹²⁶` with
-/// `γ₆₄ = 64u/(1 − 64u)`, `u = 2⁻²⁴` (evaluated here in `f64`).
+/// `[−1, 3] × [0, 2] × [0, 1]` of two triangles: in the grid's frame (centre `(1, 1, ½)`)
+/// the box is `[−2, 2] × [−1, 1] × [−½, ½]`, so extent 2 (the largest coordinate magnitude
+/// there), longest side 4, `reach = 66` and the padding `68·γ₆₄ + 2⁻¹²⁶` with
+/// `γ₆₄ = 64u/(1 − 64u)`, `u = 2⁻²⁴` (evaluated here in `f64`; the frame's outward ulps are
+/// far inside the comparison's `10⁻⁶`).
 #[test]
 fn padding_is_the_documented_formula_worked_by_hand() {
     let pos = [
@@ -490,7 +492,7 @@ fn padding_is_the_documented_formula_worked_by_hand() {
     let mesh = TriangleMesh::new(&pos, &tris);
     let g = build(&mesh, &GridOptions::default()).unwrap();
     let u = 2f64.powi(-24);
-    let want = 70.0 * (64.0 * u / (1.0 - 64.0 * u)) + 2f64.powi(-126);
+    let want = 68.0 * (64.0 * u / (1.0 - 64.0 * u)) + 2f64.powi(-126);
     let got = f64::from(g.padding());
     assert!(
         (got - want).abs() <= 1e-6 * want,
@@ -527,6 +529,64 @@ fn resolution_depends_on_extents_not_position() {
     let e = hi - lo;
     let plan = plan_with_lambda(&mesh, 4.0);
     assert_eq!(plan.resolution(), cube_root_resolution(e, 4.0, 1000));
+}
+
+/// A scene far from the coordinate origin is laid out in the grid's frame: the soup of
+/// [`far_origins_use_neighbour_blocks`] (side 1, triangles 0.02) moved by
+/// `(2·10³, −5·10², 1.5·10³)`, where an `f32` ulp is `2⁻¹³` and a padding by the world
+/// coordinates' magnitude (`γ₆₄·(|o| + extent)`, about 0.015) would span a third of a cell,
+/// gets the padding of the unmoved soup (within 1 %, computed here from the documented
+/// formula on the soup's own box) and its references within 2 %; its rays, from a few sizes
+/// away and from inside, equal brute force, and box queries report brute force's set.
+#[test]
+fn a_far_scene_gets_the_cells_and_padding_of_the_unmoved_one() {
+    let (p, t) = soup(13, 3000, 1.0, 0.02);
+    let shift = Vec3::new(2.0e3, -5.0e2, 1.5e3);
+    let moved: Vec<Vec3> = p.iter().map(|&v| v + shift).collect();
+    let (near_mesh, far_mesh) = (TriangleMesh::new(&p, &t), TriangleMesh::new(&moved, &t));
+    let (near, far) = (
+        build(&near_mesh, &GridOptions::default()).unwrap(),
+        build(&far_mesh, &GridOptions::default()).unwrap(),
+    );
+    assert_eq!(near.resolution(), far.resolution());
+    // The documented padding from the far box's extents in `f64`.
+    let b = far.bounds();
+    let side = (0..3)
+        .map(|a| f64::from(b.max[a]) - f64::from(b.min[a]))
+        .fold(0.0, f64::max);
+    let u = 2f64.powi(-24);
+    let want = (64.0 * u / (1.0 - 64.0 * u)) * (side / 2.0 * 2.0 + 16.0 * side);
+    let got = f64::from(far.padding());
+    assert!((got - want).abs() <= 0.01 * want, "{got:e} against {want:e}");
+    let (rn, rf) = (near.reference_count() as f64, far.reference_count() as f64);
+    assert!((rf - rn).abs() <= 0.02 * rn, "{rf} references against {rn}");
+    let mut s = 31u64;
+    let mut rays = Vec::new();
+    for k in 0..600 {
+        let target = moved[(k * 11) % moved.len()];
+        let from = if k % 2 == 0 { 3.0 } else { 0.3 };
+        let o = target + unit_vec(&mut s) * from;
+        rays.push(Ray::new(o, target - o));
+    }
+    assert!(check_rays(&far_mesh, &far, &rays) > 300);
+    for k in 0..40 {
+        let c = moved[(k * 37) % moved.len()];
+        let q = Aabb::new(c - Vec3::splat(0.05), c + Vec3::splat(0.05));
+        let mut got = Vec::new();
+        far.query_box(&far_mesh, &q, |i| {
+            got.push(i);
+            true
+        });
+        got.sort_unstable();
+        let want: Vec<u32> = (0..t.len() as u32)
+            .filter(|&i| {
+                let v = far_mesh.triangle(i as usize).unwrap();
+                Aabb::new(v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2])).overlaps(&q)
+            })
+            .collect();
+        assert!(!want.is_empty());
+        assert_eq!(got, want, "box {k}");
+    }
 }
 
 /// "An empty or NaN query box reports nothing" (`RayQuery::query_box`): an inverted box

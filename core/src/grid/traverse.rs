@@ -15,14 +15,20 @@ where
     R: AsRef<[u32]>,
 {
     fn traverse<F: PrimTest<H>, H>(&self, ray: &Ray, s: &mut Search<F, H>) {
-        let Some(slab) = SlabRay::new(ray) else {
-            return;
-        };
         if self.reference_count == 0 {
             return;
         }
         let l = &self.layout;
-        let o_mag = ray.origin.abs().max_element();
+        // The walk runs in the grid's frame (module docs of `overlap`); the triangles are
+        // tested on the caller's ray.
+        let local = Ray {
+            origin: l.to_local(ray.origin),
+            ..*ray
+        };
+        let Some(slab) = SlabRay::new(&local) else {
+            return;
+        };
+        let o_mag = local.origin.abs().max_element();
         let near = o_mag <= l.reach;
         let pad = if near {
             l.pad
@@ -48,7 +54,7 @@ where
             s.test(self.references());
             s.stats.nodes_visited = self.cell_count() as u64;
         } else {
-            self.walk(&slab, ray, pad.max(l.pad), radius, s);
+            self.walk(&slab, &local, pad.max(l.pad), radius, s);
         }
     }
 }
@@ -58,8 +64,9 @@ where
     O: AsRef<[u32]>,
     R: AsRef<[u32]>,
 {
-    /// The DDA from the entry into the grid's box grown by `clip`, testing the block of
-    /// `radius` cells around each cell it visits, until the rule of the module docs ends it.
+    /// The DDA of `ray` (in the grid's frame; `slab` its slab form) from the entry into the
+    /// grid's box grown by `clip`, testing the block of `radius` cells around each cell it
+    /// visits, until the rule of the module docs ends it.
     fn walk<F: PrimTest<H>, H>(
         &self,
         slab: &SlabRay,
@@ -69,7 +76,7 @@ where
         s: &mut Search<F, H>,
     ) {
         let l = &self.layout;
-        let grown = Aabb::new(l.bounds.min - clip, l.bounds.max + clip);
+        let grown = Aabb::new(l.local.min - clip, l.local.max + clip);
         let Some((t0, t_end)) = grown.intersect_slab(slab, ray.t_min, ray.t_max) else {
             return;
         };
