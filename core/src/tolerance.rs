@@ -118,10 +118,11 @@ pub const SHADOW_SEGMENT_END_SLACK: f32 = 16.0 * crate::float::F32_UNIT_ROUNDOFF
 /// coordinate origin has an ulp larger than a pad of `γ₁₆·R`, and `o ± pad` would round
 /// back to `o`. The wide tree therefore stores its boxes relative to its centre `c` and
 /// tests them from `o − c` (`PadFrame::local`): the origin, its shift and its term are then
-/// measured in that frame, and small wherever the mesh lies. A looser `R`,
-/// `max|o| + max|scene|` (the binary [`crate::bvh::Bvh`]'s, one subtraction fewer on the
-/// microcontroller image), meets the requirement with `γ₁₆·(max|o| + max|scene|)` alone: its
-/// `γ₁₆·max|o|` exceeds the shift's rounding.
+/// measured in that frame, and small wherever the mesh lies. The binary [`crate::bvh::Bvh`]
+/// and the kd-tree keep world boxes (`PadFrame::of`): `R` from the origin's distance to the
+/// root box's centre plus the box's reach, and the shift term of the origin's own
+/// coordinates, two ulps of them (a looser `R = max|o| + max|scene|` once padded the binary
+/// tree by `γ₁₆·2·10⁴` on a mesh at `2·10⁴`, more than the bunny's size there).
 ///
 /// Cost: a box grows by ~1e-6 of the distance from the ray's origin to the far side of the
 /// structure, plus two `f32` ulps of the origin's coordinates in the structure's frame, a

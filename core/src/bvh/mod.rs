@@ -104,7 +104,6 @@ pub use stats::BvhStats;
 use crate::aabb::Aabb;
 use crate::getters::{count_getters, getters};
 use crate::mesh::PrimitiveSource;
-use crate::query::walk::extent_of;
 
 /// Number of centroid bins per axis of the binned SAH, for nodes of 96 primitives or more (a
 /// node of `N` fewer uses `4 + N/8`). 16 is within a fraction of a percent of a full sweep's
@@ -167,30 +166,20 @@ pub struct Bvh<N, I> {
     node_count: u32,
     prim_count: u32,
     source_len: usize,
-    /// [`extent_of`] the root's box (0 for an empty tree): the scale of the box padding
-    /// ([`crate::query::walk::projection_pad_loose`]), kept so that a query does not recompute it.
-    extent: f32,
 }
 
 impl<N: AsRef<[BvhNode]>, I> Bvh<N, I> {
     /// The tree made of storage that holds a built (or checked) tree of `node_count` nodes
     /// over `prim_count` of `source_len` primitives.
     fn assemble(nodes: N, indices: I, node_count: u32, prim_count: u32, source_len: usize) -> Self {
-        let extent = root_extent(nodes.as_ref());
         Self {
             nodes,
             indices,
             node_count,
             prim_count,
             source_len,
-            extent,
         }
     }
-}
-
-/// [`extent_of`] the box of `nodes`' root; 0 for no nodes.
-fn root_extent(nodes: &[BvhNode]) -> f32 {
-    nodes.first().map_or(0.0, |root| extent_of(&root.bounds()))
 }
 
 impl<N, I> Bvh<N, I>

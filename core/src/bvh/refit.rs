@@ -66,7 +66,6 @@ where
             };
             nodes[i].set_bounds(&b);
         }
-        self.extent = super::root_extent(self.nodes.as_ref());
         match bad {
             Some(index) => Err(NonFiniteError::primitive(index).into()),
             None => Ok(()),

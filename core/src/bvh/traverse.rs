@@ -6,7 +6,7 @@ use super::{Bvh, BvhError, TRAVERSAL_STACK_SIZE};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
 use crate::query::TraversalStats;
 use crate::query::forward::ray_queries;
-use crate::query::walk::{cull_bound, improves, projection_pad_loose};
+use crate::query::walk::{cull_bound, improves, pad_to_root};
 use crate::query::{LeafTest, Query, RayQuery, Stack, StackEntry};
 use crate::ray::Ray;
 use crate::simd_level::SimdLevel;
@@ -134,7 +134,7 @@ where
         let mut best: Option<(u32, H)> = None;
         let mut sp = 0usize;
 
-        let nray = PaddedRay::new(&slab, projection_pad_loose(slab.origin, self.extent));
+        let nray = PaddedRay::new(&slab, pad_to_root(&root.bounds(), slab.origin));
         // The root's box is not tested: it is the union of its children's, which are (and a
         // root leaf's primitives are tested exactly).
         let mut node = Some(root);

@@ -156,7 +156,7 @@ impl Layout {
     /// `p − centre` in `f32`: a point (a ray's origin) in the grid's frame, rounded once
     /// relative to its own magnitude.
     #[inline(always)]
-    pub(super) fn to_local(&self, p: Vec3) -> Vec3 {
+    pub(super) fn local_point(&self, p: Vec3) -> Vec3 {
         p - self.centre
     }
 

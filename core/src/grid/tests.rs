@@ -557,7 +557,10 @@ fn a_far_scene_gets_the_cells_and_padding_of_the_unmoved_one() {
     let u = 2f64.powi(-24);
     let want = (64.0 * u / (1.0 - 64.0 * u)) * (side / 2.0 * 2.0 + 16.0 * side);
     let got = f64::from(far.padding());
-    assert!((got - want).abs() <= 0.01 * want, "{got:e} against {want:e}");
+    assert!(
+        (got - want).abs() <= 0.01 * want,
+        "{got:e} against {want:e}"
+    );
     let (rn, rf) = (near.reference_count() as f64, far.reference_count() as f64);
     assert!((rf - rn).abs() <= 0.02 * rn, "{rf} references against {rn}");
     let mut s = 31u64;

@@ -22,7 +22,7 @@ where
         // The walk runs in the grid's frame (module docs of `overlap`); the triangles are
         // tested on the caller's ray.
         let local = Ray {
-            origin: l.to_local(ray.origin),
+            origin: l.local_point(ray.origin),
             ..*ray
         };
         let Some(slab) = SlabRay::new(&local) else {

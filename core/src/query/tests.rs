@@ -343,15 +343,16 @@ impl PadCase {
     }
 }
 
-/// The box padding ([`walk::PadFrame::pad`]) against its requirement, evaluated in `f64`
+/// The box paddings ([`walk::PadFrame::pad`] in world coordinates, and the binary tree's
+/// [`walk::pad_to_root`]) against their requirement, evaluated in `f64`
 /// (`crate::tolerance::BVH_PROJECTION_PAD`): each shifted origin `o_i ± pad`, rounded to
 /// `f32` as the node test forms it, still lies at least `γ₈·R + u·(R + pad)` beyond `o_i`,
 /// `R` the exact largest `|p_i − o_i|` over the root box. Boxes from `10⁻³` to `10³` in size
 /// at up to `10⁷` from the coordinate origin, origins inside, beside and far from them. And
 /// the padding follows the box's reach from the origin, not the coordinates: within four
-/// times `γ₁₆·R + 2u·max|o|`, where `γ₁₆·(max|o| + max|scene|)` (the binary tree's
-/// [`walk::projection_pad_loose`]) is about sixteen times more for a small box far away (then
-/// the origin's two ulps are the padding: the resolution of the input).
+/// times `γ₁₆·R + 2u·max|o|`, where `γ₁₆·(max|o| + max|scene|)` (a padding by the
+/// coordinates' magnitude) is about sixteen times more for a small box far away (then the
+/// origin's two ulps are the padding: the resolution of the input).
 #[test]
 fn the_box_padding_covers_the_watertight_rounding_wherever_the_box_lies() {
     let u = f64::from(crate::float::F32_UNIT_ROUNDOFF);
@@ -359,31 +360,40 @@ fn the_box_padding_covers_the_watertight_rounding_wherever_the_box_lies() {
     let mut far_and_small = 0;
     for case in pad_cases(0x9AD_u64) {
         let (root, origin) = (case.root, case.origin);
-        let pad = walk::PadFrame::of(&root).pad(origin);
         let (o, lo, hi) = (origin.as_dvec3(), root.min.as_dvec3(), root.max.as_dvec3());
         let r = (lo - o).abs().max((hi - o).abs()).max_element();
-        let need = gamma(8.0) * r + u * (r + f64::from(pad));
-        for axis in 0..3 {
-            let oi = origin[axis];
-            let (up, down) = (
-                f64::from(oi + pad) - f64::from(oi),
-                f64::from(oi) - f64::from(oi - pad),
-            );
+        let tight = gamma(16.0) * r + 2.0 * u * f64::from(origin.abs().max_element());
+        // The frame's (kd-tree) and the frameless one's (binary tree).
+        let pads = [
+            walk::PadFrame::of(&root).pad(origin),
+            walk::pad_to_root(&root, origin),
+        ];
+        for pad in pads {
+            let need = gamma(8.0) * r + u * (r + f64::from(pad));
+            for axis in 0..3 {
+                let oi = origin[axis];
+                let (up, down) = (
+                    f64::from(oi + pad) - f64::from(oi),
+                    f64::from(oi) - f64::from(oi - pad),
+                );
+                assert!(
+                    up >= need && down >= need,
+                    "{root:?} {origin:?}: pad {pad}, need {need}"
+                );
+            }
             assert!(
-                up >= need && down >= need,
-                "{root:?} {origin:?}: pad {pad}, need {need}"
+                f64::from(pad) <= 4.0 * tight,
+                "{root:?} {origin:?}: pad {pad} against {tight}"
             );
         }
-        let tight = gamma(16.0) * r + 2.0 * u * f64::from(origin.abs().max_element());
-        assert!(
-            f64::from(pad) <= 4.0 * tight,
-            "{root:?} {origin:?}: pad {pad} against {tight}"
-        );
-        let loose = walk::projection_pad_loose(origin, walk::extent_of(&root));
+        let pad = pads[0].max(pads[1]);
+        // The padding by the coordinates' magnitude, `γ₁₆·(max|o| + max|scene|)`.
+        let extent = lo.abs().max(hi.abs()).max_element();
+        let loose = gamma(16.0) * (o.abs().max_element() + extent);
         if case.at > 1e5 && case.scale < 1.0 && case.reach < 10.0 * case.scale {
             far_and_small += 1;
             assert!(
-                loose > 8.0 * pad,
+                loose > 8.0 * f64::from(pad),
                 "{root:?} {origin:?}: {loose} against {pad}"
             );
         }

@@ -1,7 +1,7 @@
 //! The rules every structure's walk shares, so that all of them give the same answer: the
 //! tie rule of the closest hit ([`improves`], [`take_if_better`]), the bound up to which a
 //! box or cell is still visited ([`cull_bound`], [`CULL_REL_SLACK`]), the outward padding of
-//! the boxes a ray is tested against ([`PadFrame`], [`projection_pad_loose`], [`extent_of`]),
+//! the boxes a ray is tested against ([`PadFrame`], [`pad_to_root`], [`extent_of`]),
 //! and the loop over a run of primitives of the closure-based walks ([`test_run`]).
 
 use crate::aabb::Aabb;
@@ -123,18 +123,34 @@ impl PadFrame {
     }
 }
 
-/// The box padding of the binary [`crate::bvh::Bvh`] (the microcontroller image's tree), for a
-/// ray from `origin` in a tree whose coordinates are at most `extent` in magnitude:
-/// [`BVH_PROJECTION_PAD`]`·(max|o| + extent)`, which meets the requirement of
-/// [`BVH_PROJECTION_PAD`] with `R ≤ max|o| + extent` (its `γ₁₆·max|o|` also covers the
-/// shifted origins' rounding) at one operation per axis fewer than [`PadFrame::pad`], but
-/// grows with the distance from the coordinate origin; `+∞` when that overflows (every box
-/// is then hit: slower, still exact).
+/// The box padding of a structure that keeps no frame (the binary [`crate::bvh::Bvh`], whose
+/// microcontroller image has no room for one), for a ray from `origin` in a structure whose
+/// points all lie in `root`: [`BVH_PROJECTION_PAD`]`·r + `[`PAD_ORIGIN_SHIFT_REL`]`·max|o|`,
+/// `r` the largest of `|lo_i − o_i|`, `|hi_i − o_i|` over the axes, each rounded once.
+///
+/// It meets [`BVH_PROJECTION_PAD`]'s requirement: every point's `R = max_i |p_i − o_i|` is at
+/// most `r/(1 − u)`; `γ₁₆·r` exceeds the `γ₈·R` of the watertight rounding and the slab's
+/// `u·(R + pad)` by `6u·R`, and `2u·max|o|` the shifted origins' `u·(|o_i| + pad)` (the
+/// `u·pad` part, of order `u²`, within the `6u·R`). Like [`PadFrame::pad`] in world
+/// coordinates, nothing grows with the coordinates' magnitude but the origin's own two ulps:
+/// a small mesh far from the coordinate origin is padded by its reach from the ray's origin.
+/// One pass over the six bounds with plain comparisons (compact on small targets); `+∞` when
+/// it overflows (every box is then hit: slower, still exact).
 ///
 /// [`BVH_PROJECTION_PAD`]: crate::tolerance::BVH_PROJECTION_PAD
+/// [`PAD_ORIGIN_SHIFT_REL`]: crate::tolerance::PAD_ORIGIN_SHIFT_REL
 #[inline(always)]
-pub(crate) fn projection_pad_loose(origin: Vec3, extent: f32) -> f32 {
-    crate::tolerance::BVH_PROJECTION_PAD * (origin.abs().max_element() + extent)
+pub(crate) fn pad_to_root(root: &Aabb, origin: Vec3) -> f32 {
+    use crate::tolerance::{BVH_PROJECTION_PAD, PAD_ORIGIN_SHIFT_REL};
+    let (lo, hi, o) = (root.min.to_array(), root.max.to_array(), origin.to_array());
+    let (mut r, mut o_max) = (0.0f32, 0.0f32);
+    for ((l, h), o) in lo.into_iter().zip(hi).zip(o) {
+        let (below, above) = ((l - o).abs(), (h - o).abs());
+        let far = if below > above { below } else { above };
+        r = if far > r { far } else { r };
+        o_max = if o.abs() > o_max { o.abs() } else { o_max };
+    }
+    BVH_PROJECTION_PAD * r + PAD_ORIGIN_SHIFT_REL * o_max
 }
 
 /// The largest coordinate magnitude of `b` (0 for an empty or non-finite box, whose
