@@ -575,20 +575,9 @@ fn a_far_scene_gets_the_cells_and_padding_of_the_unmoved_one() {
     for k in 0..40 {
         let c = moved[(k * 37) % moved.len()];
         let q = Aabb::new(c - Vec3::splat(0.05), c + Vec3::splat(0.05));
-        let mut got = Vec::new();
-        far.query_box(&far_mesh, &q, |i| {
-            got.push(i);
-            true
-        });
-        got.sort_unstable();
-        let want: Vec<u32> = (0..t.len() as u32)
-            .filter(|&i| {
-                let v = far_mesh.triangle(i as usize).unwrap();
-                Aabb::new(v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2])).overlaps(&q)
-            })
-            .collect();
+        let want = boxes_overlapping(&far_mesh, &q);
         assert!(!want.is_empty());
-        assert_eq!(got, want, "box {k}");
+        assert_eq!(reported(&far, &far_mesh, &q), want, "box {k}");
     }
 }
 
@@ -621,14 +610,29 @@ fn an_empty_or_nan_query_box_reports_nothing() {
         assert_eq!((n, got), (0, vec![]), "{q:?}");
     }
     let valid = Aabb::new(b, a);
+    assert_eq!(
+        reported(&grid, &mesh, &valid),
+        boxes_overlapping(&mesh, &valid)
+    );
+}
+
+/// The triangles of `mesh` whose boxes overlap `q`, by brute force, in increasing index.
+fn boxes_overlapping(mesh: &TriangleMesh<'_>, q: &Aabb) -> Vec<u32> {
+    (0..mesh.len() as u32)
+        .filter(|&i| {
+            let v = mesh.triangle(i as usize).unwrap();
+            Aabb::new(v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2])).overlaps(q)
+        })
+        .collect()
+}
+
+/// What `grid`'s box query reports for `q`, sorted.
+fn reported(grid: &VecGrid, mesh: &TriangleMesh<'_>, q: &Aabb) -> Vec<u32> {
     let mut got = Vec::new();
-    grid.query_box(&mesh, &valid, |p| {
+    grid.query_box(mesh, q, |p| {
         got.push(p);
         true
     });
     got.sort_unstable();
-    let want: Vec<u32> = (0..t.len() as u32)
-        .filter(|&i| bounds(i as usize).overlaps(&valid))
-        .collect();
-    assert_eq!(got, want);
+    got
 }
