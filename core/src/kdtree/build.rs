@@ -48,10 +48,7 @@ pub(super) struct Built {
     pub(super) node_count: u32,
     pub(super) ref_count: u32,
     pub(super) prim_count: u32,
-    /// The box of every primitive, world coordinates.
     pub(super) bounds: Option<Aabb>,
-    /// `bounds` relative to its centre, rounded outward: the root cell.
-    pub(super) local: Option<Aabb>,
     pub(super) depth: u32,
     pub(super) exhausted: bool,
 }
@@ -121,17 +118,12 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
     if count == 0 {
         return Ok(Built::default());
     }
-    // The tree's frame: every box relative to the root box's centre, rounded outward (module
-    // docs of `super`, "Traversal and exactness"), so the planes are too.
-    let centre = bounds.center();
-    let local = bounds.relative_to(centre);
     let mut k = 0usize;
     for i in 0..source.primitive_count() {
         let b = source.primitive_bounds(i);
         if !usable(&b) {
             continue;
         }
-        let b = b.relative_to(centre);
         if let Some(slot) = scratch.get_mut(k) {
             *slot = KdRef {
                 min: b.min.to_array(),
@@ -162,14 +154,13 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
         start: 0,
         end: count,
         depth: 0,
-        cell: local,
+        cell: bounds,
     });
     Ok(Built {
         node_count: b.next,
         ref_count: b.written,
         prim_count: count,
         bounds: Some(bounds),
-        local: Some(local),
         depth: b.deepest,
         exhausted: b.exhausted,
     })

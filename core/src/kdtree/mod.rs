@@ -49,13 +49,6 @@
 //!
 //! # Traversal and exactness
 //!
-//! The tree lies in the frame of its root box's centre `c` ([`KdTree::plane_origin`]): the
-//! builder takes every primitive box relative to `c`, rounded outward
-//! ([`Aabb::relative_to`]), so the split positions are relative to `c`, and a ray is walked
-//! from `o − c` (`PadFrame::local`). The planes, the origin and the padding are then measured
-//! by the tree's size, wherever it lies: a mesh far from the coordinate origin gets the tree and
-//! the speed it has at the origin. The triangles are tested on the caller's ray.
-//!
 //! The ray's interval is clipped to the root cell, then each inner node splits the current
 //! interval `[t₀, t₁]` at the plane into the near child's `[t₀, min(t₁, t_exit)]` and the far
 //! child's `[max(t₀, t_entry), t₁]`; the near child is visited first, the far one pushed with
@@ -106,7 +99,6 @@ pub use node::{KdNode, KdNodeKind, NODE_SIZE};
 
 use crate::aabb::Aabb;
 use crate::float::gamma;
-use crate::query::walk::PadFrame;
 use sah::Costs;
 
 /// Bins per axis of the binned SAH. 32 boundaries per axis find most of the empty-space cuts a
@@ -266,13 +258,9 @@ pub struct KdTree<N, R> {
     prim_count: u32,
     source_len: usize,
     bounds: Aabb,
-    /// `bounds` relative to the frame's centre, rounded outward: the root cell the walk clips
-    /// to.
-    local: Aabb,
     /// Where the tree lies, for the plane padding ([`crate::tolerance::BVH_PROJECTION_PAD`]):
-    /// the frame of `bounds` ([`PadFrame::relative`]), kept so that a query does not recompute
-    /// it.
-    pad_frame: PadFrame,
+    /// of `bounds`, kept so that a query does not recompute it.
+    pad_frame: crate::query::walk::PadFrame,
     depth: u32,
     exhausted: bool,
 }
@@ -303,7 +291,6 @@ where
     ) -> Result<Self, KdTreeError> {
         let built = build::build(source, nodes.as_mut(), refs.as_mut(), scratch, options)?;
         let bounds = built.bounds.unwrap_or(Aabb::EMPTY);
-        let pad_frame = PadFrame::relative(&bounds);
         Ok(Self {
             nodes,
             refs,
@@ -312,8 +299,7 @@ where
             prim_count: built.prim_count,
             source_len: source.primitive_count(),
             bounds,
-            local: built.local.unwrap_or(Aabb::EMPTY),
-            pad_frame,
+            pad_frame: crate::query::walk::PadFrame::of(&bounds),
             depth: built.depth,
             exhausted: built.exhausted,
         })
@@ -363,20 +349,10 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> KdTree<N, R> {
         self.node_count == 0
     }
 
-    /// The root cell: the box of every primitive in the tree ([`Aabb::EMPTY`] when empty),
-    /// world coordinates.
+    /// The root cell: the box of every primitive in the tree ([`Aabb::EMPTY`] when empty).
     #[must_use]
     pub fn bounds(&self) -> Aabb {
         self.bounds
-    }
-
-    /// The point the split positions are measured from: the centre of [`KdTree::bounds`]
-    /// (module docs, "Traversal and exactness"). A split at `position` on `axis` is the world
-    /// plane `plane_origin()[axis] + position` (in real arithmetic; the cells hold every
-    /// primitive box taken relative to this point with [`Aabb::relative_to`]).
-    #[must_use]
-    pub fn plane_origin(&self) -> glam::Vec3 {
-        self.pad_frame.centre()
     }
 
     /// Depth of the deepest leaf (root: 0); at most [`MAX_DEPTH`].

@@ -27,17 +27,14 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> RayQuery for KdTree<N, R> {
             return 0;
         }
         let mut reported = 0;
-        // The cells are relative to the frame's centre (rounded outward: a primitive box's
-        // points stay in its cells, a query box's in the cells it touches).
-        let centre = self.plane_origin();
-        self.leaves_touching(&query.relative_to(centre), |node, run| {
+        self.leaves_touching(query, |node, run| {
             for &p in run {
                 let b = source.primitive_bounds(p as usize);
                 if !b.overlaps(query) {
                     continue;
                 }
                 let within = Aabb::new(b.min.max(query.min), b.max.min(query.max));
-                if self.first_holder(p, &within.relative_to(centre)) != node {
+                if self.first_holder(p, &within) != node {
                     continue;
                 }
                 reported += 1;
@@ -63,7 +60,7 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> RayQuery for KdTree<N, R> {
 
 impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> KdTree<N, R> {
     /// Calls `visit(leaf node index, its references)` for every leaf whose (closed) cell may
-    /// touch the closed box `b` (in the tree's frame), depth first, the child below a plane before the one above;
+    /// touch the closed box `b`, depth first, the child below a plane before the one above;
     /// `visit` returns `false` to stop.
     fn leaves_touching(&self, b: &Aabb, mut visit: impl FnMut(u32, &[u32]) -> bool) {
         let (nodes, refs) = (self.nodes(), self.references());
@@ -105,8 +102,7 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> KdTree<N, R> {
         }
     }
 
-    /// The first leaf, in [`KdTree::leaves_touching`]'s order over `region` (in the tree's
-    /// frame), that references
+    /// The first leaf, in [`KdTree::leaves_touching`]'s order over `region`, that references
     /// `p`; `u32::MAX` for none.
     fn first_holder(&self, p: u32, region: &Aabb) -> u32 {
         let mut holder = u32::MAX;

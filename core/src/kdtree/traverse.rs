@@ -153,11 +153,8 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> ClosureWalk for KdTree<N, R> {
         if nodes.is_empty() {
             return;
         }
-        // The planes are relative to the frame's centre: so is the origin they are tested
-        // from (`PadFrame::local`).
-        let (origin, pad) = self.pad_frame.local(slab.origin);
-        let kray = KdRay::new(SlabRay { origin, ..slab }, pad);
-        let Some((t0, t1)) = kray.clip_box(&self.local, ray.t_min, cull_bound(ray.t_max)) else {
+        let kray = KdRay::new(slab, self.pad_frame.pad(slab.origin));
+        let Some((t0, t1)) = kray.clip_box(&self.bounds, ray.t_min, cull_bound(ray.t_max)) else {
             return;
         };
         let mut stack = [KdStackEntry::EMPTY; TRAVERSAL_STACK_SIZE];

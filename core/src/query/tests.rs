@@ -343,8 +343,8 @@ impl PadCase {
     }
 }
 
-/// The box padding of world-coordinate boxes (the binary tree's [`walk::pad_to_root`])
-/// against its requirement, evaluated in `f64`
+/// The box paddings ([`walk::PadFrame::pad`] in world coordinates, and the binary tree's
+/// [`walk::pad_to_root`]) against their requirement, evaluated in `f64`
 /// (`crate::tolerance::BVH_PROJECTION_PAD`): each shifted origin `o_i ± pad`, rounded to
 /// `f32` as the node test forms it, still lies at least `γ₈·R + u·(R + pad)` beyond `o_i`,
 /// `R` the exact largest `|p_i − o_i|` over the root box. Boxes from `10⁻³` to `10³` in size
@@ -363,23 +363,30 @@ fn the_box_padding_covers_the_watertight_rounding_wherever_the_box_lies() {
         let (o, lo, hi) = (origin.as_dvec3(), root.min.as_dvec3(), root.max.as_dvec3());
         let r = (lo - o).abs().max((hi - o).abs()).max_element();
         let tight = gamma(16.0) * r + 2.0 * u * f64::from(origin.abs().max_element());
-        let pad = walk::pad_to_root(&root, origin);
-        let need = gamma(8.0) * r + u * (r + f64::from(pad));
-        for axis in 0..3 {
-            let oi = origin[axis];
-            let (up, down) = (
-                f64::from(oi + pad) - f64::from(oi),
-                f64::from(oi) - f64::from(oi - pad),
-            );
+        // The frame's (kd-tree) and the frameless one's (binary tree).
+        let pads = [
+            walk::PadFrame::of(&root).pad(origin),
+            walk::pad_to_root(&root, origin),
+        ];
+        for pad in pads {
+            let need = gamma(8.0) * r + u * (r + f64::from(pad));
+            for axis in 0..3 {
+                let oi = origin[axis];
+                let (up, down) = (
+                    f64::from(oi + pad) - f64::from(oi),
+                    f64::from(oi) - f64::from(oi - pad),
+                );
+                assert!(
+                    up >= need && down >= need,
+                    "{root:?} {origin:?}: pad {pad}, need {need}"
+                );
+            }
             assert!(
-                up >= need && down >= need,
-                "{root:?} {origin:?}: pad {pad}, need {need}"
+                f64::from(pad) <= 4.0 * tight,
+                "{root:?} {origin:?}: pad {pad} against {tight}"
             );
         }
-        assert!(
-            f64::from(pad) <= 4.0 * tight,
-            "{root:?} {origin:?}: pad {pad} against {tight}"
-        );
+        let pad = pads[0].max(pads[1]);
         // The padding by the coordinates' magnitude, `γ₁₆·(max|o| + max|scene|)`.
         let extent = lo.abs().max(hi.abs()).max_element();
         let loose = gamma(16.0) * (o.abs().max_element() + extent);
@@ -402,8 +409,8 @@ fn the_box_padding_covers_the_watertight_rounding_wherever_the_box_lies() {
 /// `p − c` ([`Aabb::relative_to`]). Boxes from `10⁻³` to `10³` in size at up to `10⁷` from
 /// the coordinate origin. The padding then no longer depends on where the box lies: within
 /// four times `γ₁₆·R + 4u·max|o'|`, and for a small box far away a small fraction of the
-/// origin's own two ulps, which a padding of world-coordinate boxes ([`walk::pad_to_root`])
-/// cannot go below.
+/// origin's own two ulps, which the world-coordinate frame ([`walk::PadFrame::of`]) cannot
+/// go below.
 #[test]
 fn the_padding_of_boxes_relative_to_the_tree_centre_covers_the_rounding_anywhere() {
     let u = f64::from(crate::float::F32_UNIT_ROUNDOFF);
@@ -445,7 +452,7 @@ fn the_padding_of_boxes_relative_to_the_tree_centre_covers_the_rounding_anywhere
                 f64::from(pad) < 0.01 * shift,
                 "{root:?} {origin:?}: {pad} against two ulps {shift}"
             );
-            assert!(f64::from(walk::pad_to_root(&root, origin)) >= shift);
+            assert!(f64::from(walk::PadFrame::of(&root).pad(origin)) >= shift);
         }
     }
     assert!(far_and_small > 100, "{far_and_small} small boxes far away");

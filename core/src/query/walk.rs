@@ -17,30 +17,40 @@ use glam::Vec3;
 /// costs a handful of extra box tests per ray. Unitless.
 pub const CULL_REL_SLACK: f32 = crate::tolerance::T_REL_TOLERANCE_WELL_CONDITIONED;
 
-/// Where a structure's points lie, as its box padding needs it ([`PadFrame::local`]): a
-/// centre `c` of its root box, which its boxes (or planes, or cells) are stored relative to
+/// Where a structure's points lie, as its box padding needs it ([`PadFrame::pad`]): a centre
+/// `c` of its root box, whether its boxes are stored in world coordinates or relative to `c`
 /// ([`Aabb::relative_to`]), and the per-structure part of the padding.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct PadFrame {
     centre: Vec3,
-    /// [`BVH_PROJECTION_PAD`]`·h` (`h` below), or `+∞` for a root box that is not finite and
-    /// ordered.
+    /// [`BVH_PROJECTION_PAD`]`·h`, plus [`PAD_ORIGIN_SHIFT_REL`]`·max|c|` for boxes in world
+    /// coordinates (`h` below), or `+∞` for a root box that is not finite and ordered.
     ///
     /// [`BVH_PROJECTION_PAD`]: crate::tolerance::BVH_PROJECTION_PAD
+    /// [`PAD_ORIGIN_SHIFT_REL`]: crate::tolerance::PAD_ORIGIN_SHIFT_REL
     offset: f32,
 }
 
 impl PadFrame {
-    /// The frame of a structure whose points all lie in `root`, whose boxes are stored
-    /// relative to the frame's centre ([`PadFrame::centre`], [`Aabb::relative_to`]) and
-    /// tested from the ray's origin in that frame ([`PadFrame::local`]): `c` the rounded
-    /// centre of `root`, `h` at least `max_i max(|lo_i − c_i|, |hi_i − c_i|)` (the largest
-    /// `f32` difference times `1 + 4u`, which covers its rounding and the product's). No term
-    /// grows with the coordinates' magnitude. A root that is not finite and ordered (an empty
-    /// tree's) pads every box by `+∞`.
+    /// The frame of a structure whose points all lie in `root` and whose boxes are in world
+    /// coordinates (the kd-tree's split planes): `c` its rounded centre, `h` at least
+    /// `max_i max(|lo_i − c_i|, |hi_i − c_i|)` (the largest `f32` difference times `1 + 4u`,
+    /// which covers its rounding and the product's). A root that is not finite and ordered
+    /// (an empty tree's) pads every box by `+∞`.
+    pub(crate) fn of(root: &Aabb) -> Self {
+        Self::around(root, true)
+    }
+
+    /// [`PadFrame::of`] for a structure whose boxes are stored relative to the frame's centre
+    /// ([`PadFrame::centre`], [`Aabb::relative_to`]) and tested from the ray's origin in that
+    /// frame ([`PadFrame::local`]): no term grows with the coordinates' magnitude.
     pub(crate) fn relative(root: &Aabb) -> Self {
+        Self::around(root, false)
+    }
+
+    fn around(root: &Aabb, world: bool) -> Self {
         use crate::float::F32_UNIT_ROUNDOFF as U;
-        use crate::tolerance::BVH_PROJECTION_PAD;
+        use crate::tolerance::{BVH_PROJECTION_PAD, PAD_ORIGIN_SHIFT_REL};
         if !(root.is_finite() && root.is_valid()) {
             return Self {
                 centre: Vec3::ZERO,
@@ -49,7 +59,12 @@ impl PadFrame {
         }
         let centre = root.center();
         let h = (centre - root.min).max(root.max - centre).max_element() * (1.0 + 4.0 * U);
-        let offset = BVH_PROJECTION_PAD * h;
+        let shift = if world {
+            PAD_ORIGIN_SHIFT_REL * centre.abs().max_element()
+        } else {
+            0.0
+        };
+        let offset = BVH_PROJECTION_PAD * h + shift;
         Self {
             centre,
             offset: if offset <= f32::MAX {
@@ -66,13 +81,25 @@ impl PadFrame {
         self.centre
     }
 
-    /// The ray's origin in the frame, `o' = o − c` rounded to `f32`, and the outward padding,
-    /// in world units, of every box tested for it: `(`[`BVH_PROJECTION_PAD`]` +
-    /// 2·`[`PAD_ORIGIN_SHIFT_REL`]`)·m + offset`, `m = max|o'|`, `+∞` when it overflows (every
-    /// box is then hit: slower, still exact). For boxes stored relative to `c`, tested from
-    /// `o'`, it meets [`BVH_PROJECTION_PAD`]'s requirement in the frame (`R ≤ m/(1 − u) + h`:
-    /// every point lies within `h` of `c` per axis; the margins of `γ₁₆` over `γ₈` absorb the
-    /// roundings): the exact ray
+    /// The outward padding, in world units, of every box tested for a ray from `origin`:
+    /// `(`[`BVH_PROJECTION_PAD`]` + 2·`[`PAD_ORIGIN_SHIFT_REL`]`)·m + offset`, `m =
+    /// max_i |o_i − c_i|` (rounded). For boxes in world coordinates it meets
+    /// [`BVH_PROJECTION_PAD`]'s requirement with `R ≤ m/(1 − u) + h` (every point lies within
+    /// `h` of `c` per axis) and `max|o| ≤ m/(1 − u) + max|c|`; the margins of `γ₁₆` over `γ₈`
+    /// absorb the roundings. For relative boxes see [`PadFrame::local`]. One subtraction per
+    /// axis more than `γ₁₆·(max|o| + extent)`. `+∞` when it overflows (every box is then hit:
+    /// slower, still exact).
+    ///
+    /// [`BVH_PROJECTION_PAD`]: crate::tolerance::BVH_PROJECTION_PAD
+    /// [`PAD_ORIGIN_SHIFT_REL`]: crate::tolerance::PAD_ORIGIN_SHIFT_REL
+    #[inline(always)]
+    pub(crate) fn pad(&self, origin: Vec3) -> f32 {
+        self.local(origin).1
+    }
+
+    /// The ray's origin in the frame, `o' = o − c` rounded to `f32`, and the padding
+    /// [`PadFrame::pad`] (`m = max|o'|`). For boxes stored relative to `c`, tested from `o'`,
+    /// the padding meets [`BVH_PROJECTION_PAD`]'s requirement in the frame: the exact ray
     /// from `o − c` passes within `γ₈·R` of a triangle the watertight test hits; `o'` moves it
     /// by at most `u·m` per axis, and the shifted origins `o' ± pad` round by at most
     /// `u·(m + pad)`: `3u·m` in all, under the `4u·m` of `2·`[`PAD_ORIGIN_SHIFT_REL`]`·m`,
@@ -104,8 +131,8 @@ impl PadFrame {
 /// It meets [`BVH_PROJECTION_PAD`]'s requirement: every point's `R = max_i |p_i − o_i|` is at
 /// most `r/(1 − u)`; `γ₁₆·r` exceeds the `γ₈·R` of the watertight rounding and the slab's
 /// `u·(R + pad)` by `6u·R`, and `2u·max|o|` the shifted origins' `u·(|o_i| + pad)` (the
-/// `u·pad` part, of order `u²`, within the `6u·R`). Unlike a padding by `max|o| + max|scene|`,
-/// nothing grows with the coordinates' magnitude but the origin's own two ulps:
+/// `u·pad` part, of order `u²`, within the `6u·R`). Like [`PadFrame::pad`] in world
+/// coordinates, nothing grows with the coordinates' magnitude but the origin's own two ulps:
 /// a small mesh far from the coordinate origin is padded by its reach from the ray's origin.
 /// One pass over the six bounds with plain comparisons (compact on small targets); `+∞` when
 /// it overflows (every box is then hit: slower, still exact).
