@@ -413,6 +413,35 @@ fn huge_and_tiny_scenes() {
     }
 }
 
+/// A ray whose origin lies so far on the other side of the grid that its origin in the
+/// grid's frame, `o − c`, overflows `f32`, while its differences to the nearer triangles do
+/// not (a soup spanning `x ∈ [−3·10³⁸, −10³⁸]`, origins at `x = 2·10³⁸`), still gets brute
+/// force's answer, hits included.
+#[test]
+fn an_origin_beyond_f32_in_the_grids_frame_still_finds_the_hits() {
+    let (p, t) = soup(5, 400, 8.0, 0.6);
+    let far = Vec3::new(-3.0e38, 0.0, 0.0);
+    let ps: Vec<Vec3> = p.iter().map(|&v| v * 2.5e37 + far).collect();
+    let mesh = TriangleMesh::new(&ps, &t);
+    let g = build(&mesh, &GridOptions::default()).unwrap();
+    // Along −x through the centroid (in `f64`, rounded) of each triangle on the near side.
+    let rays: Vec<Ray> = t
+        .iter()
+        .map(|tri| {
+            tri.iter()
+                .fold(DVec3::ZERO, |m, &i| m + ps[i as usize].as_dvec3())
+                / 3.0
+        })
+        .filter(|c| c.x > -1.5e38)
+        .map(|c| Ray::new(Vec3::new(2.0e38, c.y as f32, c.z as f32), -Vec3::X))
+        .collect();
+    assert!(
+        rays.iter()
+            .all(|r| !(r.origin - g.bounds().center()).is_finite())
+    );
+    assert!(check_rays(&mesh, &g, &rays) > 20);
+}
+
 /// The walk visits at most `nx + ny + nz − 2` cells (the step bound), here on the diagonal.
 #[test]
 fn nodes_visited_are_bounded_by_the_resolution() {

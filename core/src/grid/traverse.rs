@@ -26,6 +26,12 @@ where
             ..*ray
         };
         let Some(slab) = SlabRay::new(&local) else {
+            // A valid ray whose `o − c` overflows (an origin near `f32::MAX` on the far side
+            // of the grid): beyond every reach, so every reference once, as below.
+            if ray.is_valid() {
+                s.test(self.references());
+                s.stats.nodes_visited = self.cell_count() as u64;
+            }
             return;
         };
         let o_mag = local.origin.abs().max_element();
