@@ -74,7 +74,8 @@
 //! `reach` is `extent + `[`ORIGIN_REACH`]` × (longest side)`: rays starting farther out
 //! need more padding than the build applied, and test the block of `r` neighbouring cells
 //! around each DDA cell instead, with `r` covering the missing padding per axis; when that
-//! block would cover the grid, they test every reference once (brute force in effect).
+//! block would cover the grid, they test every reference once (brute force in effect), as
+//! does a valid ray whose `o − c` overflows `f32`.
 //!
 //! **Step bound:** each step moves one axis one cell toward its end, so a ray visits at most
 //! `nx + ny + nz − 2` cells; the loop is bounded by that count. There is no stack.
