@@ -87,10 +87,9 @@ pub(super) struct Layout {
     /// field but `bounds` is relative to it.
     pub(super) centre: Vec3,
     /// `bounds` relative to `centre`, rounded outward ([`Aabb::relative_to`]; empty for an
-    /// empty grid): it holds every exact `p − centre`.
+    /// empty grid): it holds every exact `p − centre`. Its lower corner is that of cell
+    /// `(0, 0, 0)` (read only on axes of more than one cell).
     pub(super) local: Aabb,
-    /// Lower corner of cell `(0, 0, 0)`, relative to `centre` (zero for an empty grid).
-    pub(super) min: Vec3,
     /// Cell side per axis (0 on axes of one cell, where it is never used).
     pub(super) size: Vec3,
     /// Largest coordinate magnitude of `local` (0 when empty): about half the longest side.
@@ -145,7 +144,6 @@ impl Layout {
             n,
             centre,
             local,
-            min: if usable { local.min } else { Vec3::ZERO },
             size,
             extent,
             reach,
@@ -178,7 +176,7 @@ impl Layout {
         if last == 0 {
             return 0;
         }
-        let q = (x - self.min[a]) / self.size[a];
+        let q = (x - self.local.min[a]) / self.size[a];
         // `!(q > 0)` catches NaN (not reachable for finite x); `as` floors non-negative values.
         if !(q > 0.0) {
             0
@@ -192,7 +190,7 @@ impl Layout {
     /// The plane `min + m·size` on axis `a`, in `f32` (traversal).
     #[inline(always)]
     pub(super) fn plane(&self, a: usize, m: u32) -> f32 {
-        self.min[a] + m as f32 * self.size[a]
+        self.local.min[a] + m as f32 * self.size[a]
     }
 
     /// The cells on axis `a` that the closed interval `[lo, hi]` (`f64`) touches, clamped:
@@ -203,7 +201,7 @@ impl Layout {
         if last == 0 {
             return (0, 0);
         }
-        let (m, s) = (f64::from(self.min[a]), f64::from(self.size[a]));
+        let (m, s) = (f64::from(self.local.min[a]), f64::from(self.size[a]));
         let clamp = |q: f64| {
             if !(q > 0.0) {
                 0
@@ -222,7 +220,7 @@ impl Layout {
 
     /// Lower and upper bound of cell `i` on axis `a` in `f64`, infinite at the border.
     fn cell_bounds(&self, a: usize, i: u32) -> (f64, f64) {
-        let (m, s) = (f64::from(self.min[a]), f64::from(self.size[a]));
+        let (m, s) = (f64::from(self.local.min[a]), f64::from(self.size[a]));
         let lo = if i == 0 {
             f64::NEG_INFINITY
         } else {

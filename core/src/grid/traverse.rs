@@ -15,24 +15,16 @@ where
     R: AsRef<[u32]>,
 {
     fn traverse<F: PrimTest<H>, H>(&self, ray: &Ray, s: &mut Search<F, H>) {
-        if self.reference_count == 0 {
+        if self.reference_count == 0 || !ray.is_valid() {
             return;
         }
         let l = &self.layout;
         // The walk runs in the grid's frame (module docs of `overlap`); the triangles are
-        // tested on the caller's ray.
+        // tested on the caller's ray. An `o − c` that overflows gives `o_mag = ∞`: beyond
+        // every reach, every reference once (below).
         let local = Ray {
             origin: l.local_point(ray.origin),
             ..*ray
-        };
-        let Some(slab) = SlabRay::new(&local) else {
-            // A valid ray whose `o − c` overflows (an origin near `f32::MAX` on the far side
-            // of the grid): beyond every reach, so every reference once, as below.
-            if ray.is_valid() {
-                s.test(self.references());
-                s.stats.nodes_visited = self.cell_count() as u64;
-            }
-            return;
         };
         let o_mag = local.origin.abs().max_element();
         let near = o_mag <= l.reach;
@@ -59,7 +51,7 @@ where
             // The block would hold every cell: test every reference once.
             s.test(self.references());
             s.stats.nodes_visited = self.cell_count() as u64;
-        } else {
+        } else if let Some(slab) = SlabRay::new(&local) {
             self.walk(&slab, &local, pad.max(l.pad), radius, s);
         }
     }
