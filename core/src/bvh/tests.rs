@@ -1050,6 +1050,77 @@ fn general_node_test_hits_the_corners_and_misses_beside() {
     }
 }
 
+/// Rays with `t_min < 0` take the general node test, which pads a negative far distance
+/// outward. A wall of 64 thin triangles about `10³` from the coordinate origin, each with an
+/// edge in the wall's face nearest that origin (so in the face of its own box and of every
+/// ancestor's) and seen almost edge-on from there (tilted by 0.002–0.02 rad). Rays from near
+/// the coordinate origin point away from the wall along lines through points on or a few
+/// `u·10³` beside such an edge, and hit it behind the origin. At so shallow an angle the plane
+/// crossing whose `t` `Watertight` reports can lie a little beyond that face: within the
+/// `γ₁₆` of `pad_to_root` plus the `2γ₃` the outward padding adds, but beyond the pad less the
+/// `2γ₃` that the factor for `t_min ≥ 0` ([`crate::aabb::SLAB_FAR_SCALE`]) takes off a
+/// negative distance. An interval that starts one ulp before such a hit then keeps the box
+/// only with the outward padding (with that factor, 421 of the 9 164 rays miss). Closest and
+/// any hit equal brute force, for the whole line and from one ulp before the hit.
+#[test]
+fn hits_just_beyond_a_box_behind_the_origin_equal_brute_force() {
+    let u = f32::EPSILON / 2.0;
+    let wall = Vec3::new(-1000.0, -700.0, -500.0);
+    // The line of sight to the wall, perpendicular to the edges (along y), and the normal.
+    let sight = wall.reject_from(Vec3::Y).normalize();
+    let normal = Vec3::Y.cross(sight);
+    let mut r = Lcg(1109);
+    let (mut pos, mut tris) = (Vec::new(), Vec::new());
+    for cell in 0..64u32 {
+        // `a`, `b` on the face x = wall.x, the third vertex behind it along the line of sight.
+        let a = wall + Vec3::new(0.0, (cell % 8) as f32 * 3.0, (cell / 8) as f32 * 3.0);
+        let b = a + Vec3::new(0.0, 0.2 + r.f(), 0.0);
+        let tilt = (0.002 + 0.018 * r.f()) * if r.f() < 0.5 { -1.0 } else { 1.0 };
+        let depth = 0.2 + r.f();
+        let c = a + (sight * tilt.cos() + normal * tilt.sin()) * depth + Vec3::Y * (r.f() - 0.5);
+        pos.extend([a, b, c]);
+        tris.push([3 * cell, 3 * cell + 1, 3 * cell + 2]);
+    }
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+    let rays = 10_000;
+    let (mut behind, mut wrong) = (0, Vec::new());
+    for _ in 0..rays {
+        let [a, b, c] = mesh.triangle((r.f() * 64.0) as usize % 64).unwrap();
+        // Through the edge a–b, or beside it (outward in the triangle's plane) or inside.
+        let out = -(c - a).reject_from(b - a).normalize();
+        let beside = (-3.0 + 8.0 * r.f()) * u * wall.length();
+        let target = a + (b - a) * (0.1 + 0.8 * r.f()) + out * beside;
+        let o = r.v(2.0);
+        let line = Ray::with_interval(o, o - target, -f32::MAX, f32::INFINITY);
+        let Some(own) = Watertight.intersect(&line, &[a, b, c]) else {
+            continue;
+        };
+        assert!(own.t < 0.0, "{line:?}");
+        behind += 1;
+        let from_hit = Ray::with_interval(o, line.direction, own.t.next_down(), f32::INFINITY);
+        for ray in [line, from_hit] {
+            let want = brute(&mesh, &ray);
+            let got = closest_watertight(&bvh, &mesh, &ray).map(|(i, h)| (i, h.t));
+            let any = any_watertight(&bvh, &mesh, &ray).is_some();
+            if got != want || any != want.is_some() {
+                wrong.push((ray, got, want));
+                break;
+            }
+        }
+    }
+    assert!(
+        behind > rays * 4 / 5,
+        "{behind} of {rays} rays hit behind the origin"
+    );
+    assert!(
+        wrong.is_empty(),
+        "{} of {behind} rays answer unlike brute force, first {:?}",
+        wrong.len(),
+        wrong[0]
+    );
+}
+
 /// The closest hit of `ray` in `bvh` with `isect`, through the query trait.
 fn closest<I: TriangleIntersector>(
     bvh: &VecBvh,
