@@ -125,7 +125,7 @@ impl PrimitiveSource for TriangleMesh<'_> {
         self.triangles.len()
     }
 
-    #[inline]
+    #[inline(always)]
     fn primitive_bounds(&self, index: usize) -> Aabb {
         self.triangle(index)
             .map_or(INVALID_BOUNDS, |v| Primitive::bounds(&v))

@@ -204,6 +204,7 @@ fn usable_corners(b: &Aabb) -> Option<(Corner, Corner, Corner)> {
 /// Checks the storage and every primitive (nothing written but what `usable` writes); calls
 /// `usable(k, i, bounds, centroid)` for the `k`-th usable primitive `i`; returns what it
 /// found of the usable primitives.
+#[inline(always)]
 fn validate<S: PrimitiveSource + ?Sized>(
     source: &S,
     nodes: &[BvhNode],
@@ -271,6 +272,7 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
 /// [`build`] on a scratch array of [`PrimRef`]s (at least [`scratch_capacity`] entries, else
 /// [`BvhError::Capacity`] before anything is written). The scratch's contents after the
 /// call mean nothing.
+#[inline(always)]
 pub(super) fn build_with_scratch<S: PrimitiveSource + ?Sized>(
     source: &S,
     nodes: &mut [BvhNode],
@@ -293,6 +295,7 @@ pub(super) fn build_with_scratch<S: PrimitiveSource + ?Sized>(
 }
 
 /// `indices[k]` = the source index of record `k` (the final leaf order).
+#[inline(always)]
 pub(super) fn fill_indices(indices: &mut [u32], refs: &[PrimRef]) {
     for (slot, r) in indices.iter_mut().zip(refs) {
         *slot = r.index();
@@ -302,6 +305,7 @@ pub(super) fn fill_indices(indices: &mut [u32], refs: &[PrimRef]) {
 /// Validates `source` and the storage, fills `scratch`: the first pass of
 /// [`build_with_scratch`], for the split build. Returns what it found of the usable
 /// primitives.
+#[inline(always)]
 pub(super) fn prepare_scratch<S: PrimitiveSource + ?Sized>(
     source: &S,
     nodes: &[BvhNode],
@@ -321,6 +325,7 @@ pub(super) fn prepare_scratch<S: PrimitiveSource + ?Sized>(
 /// The top of every build: the root, the optional cache-line pad, then [`grow`] from the
 /// root (leaving subtrees to `jobs` when given) over the `root` primitives of `refs`.
 /// Returns the next free node index.
+#[inline(always)]
 pub(super) fn build_top<R: Refs>(
     refs: &mut R,
     nodes: &mut [BvhNode],
@@ -363,6 +368,7 @@ pub(super) fn build_top<R: Refs>(
 /// The split loop shared by all builders: splits `task`'s node and its descendants, allocating
 /// node pairs from `*next` on (global indices of `view`). A child task that `jobs` takes is
 /// left for later (its node holds its box).
+#[inline(always)]
 pub(super) fn grow<R: Refs>(
     refs: &mut R,
     view: &mut NodeView<'_>,
@@ -456,6 +462,7 @@ pub(crate) fn split_spares_tests(count: usize, area: f32, halves: f32, root_area
 /// leaf (returns `None`). `(max_leaf, threshold, cost)`: larger nodes are always split, nodes
 /// of at most `threshold` only when the split [spares enough tests](split_spares_tests);
 /// `cost` is the SAH's primitive cost.
+#[inline(always)]
 fn split_node<R: Refs>(
     refs: &mut R,
     nodes: &mut NodeView<'_>,

@@ -241,6 +241,7 @@ where
     ///
     /// As [`Bvh::build`], plus [`BvhError::Capacity`] (fewer than
     /// [`scratch_capacity`]`(N)` records), all before `nodes` or `indices` are written.
+    #[inline(always)]
     pub fn build_with_scratch<S: PrimitiveSource + ?Sized>(
         source: &S,
         nodes: N,
@@ -248,13 +249,23 @@ where
         scratch: &mut [PrimRef],
         options: &BuildOptions,
     ) -> Result<Self, BvhError> {
-        Self::build_with(source, nodes, indices, |n, i| {
-            build::build_with_scratch(source, n, i, scratch, options)
-        })
+        // Called directly, not through `build_with`'s closure: the builder then inlines into
+        // the caller (a frontend compiles it for AVX2 that way).
+        let (mut nodes, mut indices) = (nodes, indices);
+        let (node_count, prim_count) =
+            build::build_with_scratch(source, nodes.as_mut(), indices.as_mut(), scratch, options)?;
+        Ok(Self::assemble(
+            nodes,
+            indices,
+            node_count,
+            prim_count,
+            source.primitive_count(),
+        ))
     }
 
     /// The tree `build` writes into the storage's slices over `source`: `build` returns
     /// `(node count, primitive count)` or refuses before writing.
+    #[inline(always)]
     fn build_with<S: PrimitiveSource + ?Sized>(
         source: &S,
         mut nodes: N,

@@ -268,6 +268,7 @@ impl Split {
 }
 
 /// Box and centroid box of a run of primitives.
+#[inline(always)]
 pub(super) fn range_bounds<R: Refs + ?Sized>(
     refs: &R,
     range: core::ops::Range<usize>,
@@ -290,6 +291,7 @@ pub(super) fn range_bounds<R: Refs + ?Sized>(
 /// cheapest split with both sides non-empty. The cost is the SAH numerator (not divided by the
 /// parent's area, so that zero-area parents need no special case):
 /// `TRAVERSAL_COST·A + primitive_cost·(A_L·N_L + A_R·N_R)`.
+#[inline(always)]
 pub(super) fn best_sah_split<R: Refs + ?Sized>(
     refs: &R,
     sets: &mut BinSets,
@@ -313,17 +315,23 @@ pub(super) fn best_sah_split<R: Refs + ?Sized>(
     match second {
         Some(second) => {
             second.clear(bin_count);
-            refs.for_each_pair(range, |(alo, ahi), b| {
-                first.add(binner.bins(centre(alo, ahi)), alo, ahi);
-                if let Some((blo, bhi)) = b {
-                    second.add(binner.bins(centre(blo, bhi)), blo, bhi);
-                }
-            });
+            refs.for_each_pair(
+                range,
+                #[inline(always)]
+                |(alo, ahi), b| {
+                    first.add(binner.bins(centre(alo, ahi)), alo, ahi);
+                    if let Some((blo, bhi)) = b {
+                        second.add(binner.bins(centre(blo, bhi)), blo, bhi);
+                    }
+                },
+            );
             first.merge(second, bin_count);
         }
-        None => refs.for_each(range, |lo, hi| {
-            first.add(binner.bins(centre(lo, hi)), lo, hi)
-        }),
+        None => refs.for_each(
+            range,
+            #[inline(always)]
+            |lo, hi| first.add(binner.bins(centre(lo, hi)), lo, hi),
+        ),
     }
     let bins = &*first;
     // The SAH cost of every candidate plane `k` (below bin `k`) along the three axes at once
@@ -379,6 +387,7 @@ pub(super) fn best_sah_split<R: Refs + ?Sized>(
 /// Partitions `range` of `refs` in place by the split (left side first; the order within a
 /// side is not specified but deterministic); returns the left count and both centroid boxes.
 /// Each primitive is classified once; only misplaced pairs are swapped.
+#[inline(always)]
 pub(super) fn partition<R: Refs>(
     refs: &mut R,
     range: core::ops::Range<usize>,
