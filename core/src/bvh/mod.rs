@@ -249,18 +249,15 @@ where
         scratch: &mut [PrimRef],
         options: &BuildOptions,
     ) -> Result<Self, BvhError> {
-        // Called directly, not through `build_with`'s closure: the builder then inlines into
-        // the caller (a frontend compiles it for AVX2 that way).
-        let (mut nodes, mut indices) = (nodes, indices);
-        let (node_count, prim_count) =
-            build::build_with_scratch(source, nodes.as_mut(), indices.as_mut(), scratch, options)?;
-        Ok(Self::assemble(
+        // Inlined to the builder's loops, so that a caller compiles them with its target
+        // features (the frontend's AVX2 build).
+        Self::build_with(
+            source,
             nodes,
             indices,
-            node_count,
-            prim_count,
-            source.primitive_count(),
-        ))
+            #[inline(always)]
+            |n, i| build::build_with_scratch(source, n, i, scratch, options),
+        )
     }
 
     /// The tree `build` writes into the storage's slices over `source`: `build` returns
