@@ -420,8 +420,8 @@ mod tests {
     /// corpus kind (small sizes) with the default and the wide tree's options, and the wide trees
     /// collapsed from both are equal. Compared through `Debug`, which prints each `f32` as its
     /// shortest round-trip form (`-0.0` and `0.0` apart), so equal text is equal bits. On a CPU
-    /// without AVX2 and FMA the comparison cannot run: the skip is printed (and with
-    /// `HALFRAY_REQUIRE_AVX2` set, fails).
+    /// without AVX2 and FMA the comparison cannot run: the skip is recorded
+    /// ([`crate::skips::record_skip`]; with `HALFRAY_REQUIRE_AVX2` set, it fails).
     #[test]
     fn the_avx2_build_writes_the_baseline_tree() {
         if !crate::simd::x86_avx2_fma() {
@@ -429,7 +429,9 @@ mod tests {
                 std::env::var_os("HALFRAY_REQUIRE_AVX2").is_none(),
                 "HALFRAY_REQUIRE_AVX2 is set but the CPU reports no AVX2+FMA"
             );
-            eprintln!("SKIPPED halfray accel::tests: no AVX2+FMA on this CPU");
+            crate::skips::record_skip(
+                "SKIPPED halfray accel::tests::the_avx2_build_writes_the_baseline_tree: no AVX2+FMA on this CPU",
+            );
             return;
         }
         let kinds = [

@@ -27,6 +27,7 @@ pub mod raysets;
 pub mod render;
 pub mod scene;
 pub mod simd;
+pub mod skips;
 pub mod text;
 pub mod timing;
 pub mod workers;

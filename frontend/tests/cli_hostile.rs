@@ -756,16 +756,9 @@ fn a_failed_image_write_leaves_no_stats_json() {
         if cfg!(target_os = "linux") {
             panic!("Linux without /dev/full");
         }
-        let line = "SKIPPED halfray a_failed_image_write_leaves_no_stats_json: no /dev/full";
-        eprintln!("{line}");
-        if let Some(log) = std::env::var_os("HALFRAY_SKIP_LOG") {
-            use std::io::Write;
-            let f = std::fs::OpenOptions::new()
-                .create(true)
-                .append(true)
-                .open(log);
-            writeln!(f.unwrap(), "{line}").unwrap();
-        }
+        halfray::skips::record_skip(
+            "SKIPPED halfray a_failed_image_write_leaves_no_stats_json: no /dev/full",
+        );
         return;
     }
     let dir = tempfile::tempdir().unwrap();

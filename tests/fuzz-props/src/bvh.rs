@@ -388,18 +388,10 @@ fn avx2_or_skip() -> Option<halfray_core::simd_level::Avx2Fma> {
                 std::env::var_os("HALFRAY_REQUIRE_AVX2").is_none(),
                 "HALFRAY_REQUIRE_AVX2 is set but the CPU reports no AVX2+FMA"
             );
-            let line = "SKIPPED halfray-fuzz-props bvh::check_wide: the AVX2 level's answers \
-                        (no AVX2+FMA on this CPU)";
-            eprintln!("{line}");
-            if let Some(path) = std::env::var_os("HALFRAY_SKIP_LOG")
-                && let Ok(mut f) = std::fs::OpenOptions::new()
-                    .create(true)
-                    .append(true)
-                    .open(path)
-            {
-                use std::io::Write;
-                let _ = writeln!(f, "{line}");
-            }
+            halfray::skips::record_skip(
+                "SKIPPED halfray-fuzz-props bvh::check_wide: the AVX2 level's answers \
+                 (no AVX2+FMA on this CPU)",
+            );
         });
     }
     level
