@@ -448,11 +448,13 @@ where
     /// one's closest hit to `found(index, answer)`; returns the rays left to the single-ray
     /// walk (bit `i` for `rays[i]`; invalid rays among them) and how well the packet shared
     /// its leaves: the rays that entered the leaves it reached, summed, less the number of
-    /// those leaves, when they are more than one for two rays (else 0, as when no packet was
-    /// walked: such a packet costs little). Below zero, fewer than one ray a leaf: its
-    /// rays are too far apart for the tree's leaves (fine triangles, rays many pixels apart),
-    /// each leaf's box test serves less than one ray, the packet's order is no ray's own, and
-    /// single rays are faster. `stack` is the walk's, reused from packet to packet.
+    /// those leaves, when they are more than one for two rays; else 1 (such a packet costs
+    /// little and shares its node tests: rays that mostly pass between small objects, as over
+    /// the corpus's scatter mesh), and 0 when no packet was walked. Below zero, fewer than one
+    /// ray a leaf: its rays are too far apart for the tree's leaves (fine triangles, rays many
+    /// pixels apart), each leaf's box test serves less than one ray, the packet's order is no
+    /// ray's own, and single rays are faster. `stack` is the walk's, reused from packet to
+    /// packet.
     #[inline(always)]
     pub(super) fn packet_closest<LT: LeafTest, L: SimdLevel>(
         &self,
@@ -606,9 +608,11 @@ where
                 found(i, best.take());
             }
         }
-        // Up to one leaf for two rays, a packet costs little whatever it shares.
+        // Up to one leaf for two rays, a packet costs little whatever it shares: it counts
+        // as a packet that paid, so that one packet of many unshared leaves does not keep
+        // the batch's share below zero (and its chunks alone) for the rest of the batch.
         let many = leaves > PACKET as i32 / 2;
-        (all & !packet, if many { entered - leaves } else { 0 })
+        (all & !packet, if many { entered - leaves } else { 1 })
     }
 }
 

@@ -330,3 +330,74 @@ fn sharing_waits_longer_while_packets_do_not_share() {
     assert!(!s.try_packet());
     assert!(s.try_packet(), "the wait starts again at one chunk");
 }
+
+/// A packet's share ([`WideBvh::packet_closest`]'s second value): a packet that reaches at
+/// most one leaf for two rays counts +1 whatever its rays enter (here: none, the rays pass
+/// beside the mesh after the root's node test, as rays between the small objects of a
+/// scattered scene do), so that it brings a share left below zero back up; one that reaches
+/// many leaves counts the rays that entered them less their number; a chunk not walked as a
+/// packet (its probe ray unlike the first) counts 0. And a share of `-k` is back at zero
+/// after `k` packets of few leaves.
+#[test]
+fn a_packet_of_few_leaves_counts_as_paid() {
+    let (pos, tri) = lcg_soup(1500, 21, 4.0, 1.0);
+    let mesh = TriangleMesh::new(&pos, &tri);
+    let bvh8: Bvh8<_, _> = wide::<8>(&mesh, 4);
+    let mut tris = Triangles::new(&mesh, &Watertight);
+    let mut stack = PacketStack::new();
+    let mut share = |rays: &[Ray]| {
+        let mut stats = TraversalStats::default();
+        let (alone, surplus) = bvh8.packet_closest(
+            Portable,
+            rays,
+            &mut tris,
+            (&mut stack, Some(&mut stats)),
+            |_, _| {},
+        );
+        (alone, surplus, stats)
+    };
+    // No zero direction component: packets take the node test's common path only.
+    let d = Vec3::new(0.01, 0.02, 1.0);
+    let grid = |x: f32, y: f32| -> Vec<Ray> {
+        (0..16)
+            .map(|k| {
+                let o = Vec3::new(x + (k % 4) as f32 * 1e-3, y + (k / 4) as f32 * 1e-3, -10.0);
+                Ray::new(o, d)
+            })
+            .collect()
+    };
+    // Beside the soup (it lies within about 5 of the origin): the root's test, no leaf.
+    let (alone, surplus, stats) = share(&grid(20.0, 0.0));
+    assert_eq!((alone, surplus), (0, 1), "{stats:?}");
+    assert!(
+        stats.nodes_visited >= 1 && stats.primitives_tested == 0,
+        "{stats:?}"
+    );
+    // Through the soup: many leaves, each entered by several rays.
+    let into = grid(0.1, 0.2);
+    let (alone, surplus, stats) = share(&into);
+    assert_eq!(alone, 0);
+    assert!(
+        surplus > 1 && stats.primitives_tested > 0,
+        "{surplus} {stats:?}"
+    );
+    // The probe ray (the 12th) unlike the first: no packet, every ray alone.
+    let mut unlike = into.clone();
+    unlike[11] = Ray::new(Vec3::new(0.1, 0.2, 10.0), -d);
+    let (alone, surplus, stats) = share(&unlike);
+    assert_eq!(
+        (alone, surplus, stats.nodes_visited),
+        (u32::MAX >> 16, 0, 0)
+    );
+    // Back from below zero: a share of -5 needs five packets of few leaves.
+    let mut s = Sharing::NEW;
+    s.record(-5);
+    for _ in 0..5 {
+        while !s.try_packet() {}
+        s.record(1);
+    }
+    assert!(
+        s.try_packet() && s.try_packet(),
+        "the share is back at zero"
+    );
+}
