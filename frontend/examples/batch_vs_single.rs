@@ -14,7 +14,10 @@
 //! batch: `closest_batch_simd` over the block into a kept buffer (as the benchmark's batch
 //! side). `stats` prints nodes and triangles per ray of both.
 
-use halfray::accel::{Answer, VecBvh8, build_binary, build_wide, closest_batch_simd, closest_simd};
+use halfray::accel::{
+    Answer, VecBvh8, any_batch_simd, any_simd, build_binary, build_wide, closest_batch_simd,
+    closest_simd,
+};
 use halfray::obj::read_obj;
 use halfray::raysets::named::{RaySet, watertight_hits};
 use halfray_core::Ray;
@@ -29,16 +32,33 @@ use std::time::Instant;
 const BLOCK: usize = 4096;
 
 #[inline(never)]
-fn run_single(w: &VecBvh8, m: &TriangleMesh<'_>, rays: &[Ray]) -> usize {
+fn run_single(w: &VecBvh8, m: &TriangleMesh<'_>, rays: &[Ray], any: bool) -> usize {
     rays.iter()
-        .filter(|r| closest_simd(w, m, &Watertight, std::hint::black_box(r), None).is_some())
+        .filter(|r| {
+            let r = std::hint::black_box(r);
+            if any {
+                any_simd(w, m, &Watertight, r).is_some()
+            } else {
+                closest_simd(w, m, &Watertight, r, None).is_some()
+            }
+        })
         .count()
 }
 
 #[inline(never)]
-fn run_batch(w: &VecBvh8, m: &TriangleMesh<'_>, rays: &[Ray], out: &mut [Answer]) -> usize {
+fn run_batch(
+    w: &VecBvh8,
+    m: &TriangleMesh<'_>,
+    rays: &[Ray],
+    out: &mut [Answer],
+    any: bool,
+) -> usize {
     let out = &mut out[..rays.len()];
-    closest_batch_simd(w, m, &Watertight, rays, out, None).expect("lengths match");
+    if any {
+        any_batch_simd(w, m, &Watertight, rays, out).expect("lengths match");
+    } else {
+        closest_batch_simd(w, m, &Watertight, rays, out, None).expect("lengths match");
+    }
     out.iter().filter(|h| h.is_some()).count()
 }
 
@@ -58,9 +78,11 @@ fn main() {
     let hits = watertight_hits(&w, &obj);
     let rays = set.generate(lo, hi, width * width, 0x5eed, &hits);
     let mut out = vec![None; rays.len()];
+    // The any-hit sets (shadow, ao) time the any-hit queries.
+    let any = matches!(set, RaySet::Shadow | RaySet::Ao);
     match side.as_str() {
-        "single" => println!("{} hits", run_single(&w, &tris, &rays)),
-        "batch" => println!("{} hits", run_batch(&w, &tris, &rays, &mut out)),
+        "single" => println!("{} hits", run_single(&w, &tris, &rays, any)),
+        "batch" => println!("{} hits", run_batch(&w, &tris, &rays, &mut out, any)),
         "stats" => {
             let (mut single, mut batch) = (TraversalStats::default(), TraversalStats::default());
             for r in &rays {
@@ -84,10 +106,10 @@ fn main() {
                     let (mut s, mut b) = (f64::INFINITY, f64::INFINITY);
                     for _ in 0..5 {
                         let t = Instant::now();
-                        std::hint::black_box(run_single(&w, &tris, block));
+                        std::hint::black_box(run_single(&w, &tris, block, any));
                         s = s.min(t.elapsed().as_secs_f64());
                         let t = Instant::now();
-                        std::hint::black_box(run_batch(&w, &tris, block, &mut out));
+                        std::hint::black_box(run_batch(&w, &tris, block, &mut out, any));
                         b = b.min(t.elapsed().as_secs_f64());
                     }
                     (single, batch) = (single + s, batch + b);

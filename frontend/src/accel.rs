@@ -315,6 +315,28 @@ pub fn closest_batch_simd<I: TriangleIntersector>(
     on_widest_level(ClosestBatch(rays, out), Scene { bvh, leaf, stats })
 }
 
+/// Any hits of `rays` into `out` (as many entries) by the batch query
+/// ([`RayQuery::any_hits`]: coherent rays, as shadow rays towards one light, walked in
+/// packets), on the widest SIMD level and this thread's kept stack: `out[i]` is a hit exactly
+/// when [`any_simd`] of `rays[i]` is, and a hit of `rays[i]` (in a packet, perhaps another
+/// triangle than [`any_simd`]'s).
+///
+/// # Errors
+///
+/// [`BvhError::LengthMismatch`] when `out` has not `rays.len()` entries (nothing written).
+#[inline]
+pub fn any_batch_simd<I: TriangleIntersector>(
+    bvh: &VecBvh8,
+    mesh: &TriangleMesh<'_>,
+    isect: &I,
+    rays: &[Ray],
+    out: &mut [Answer],
+) -> std::result::Result<(), BvhError> {
+    let leaf = Triangles::new(mesh, isect);
+    let stats = None;
+    on_widest_level(AnyBatch(rays, out), Scene { bvh, leaf, stats })
+}
+
 /// Any hit of `ray`, on the widest SIMD level, as [`closest_simd`].
 #[inline]
 pub fn any_simd<I: TriangleIntersector>(
@@ -343,7 +365,7 @@ struct Scene<'a, I> {
 }
 
 /// One query of a [`Scene`] at SIMD level `level` on a caller's stack: [`Closest`], [`Any`],
-/// [`ClosestBatch`].
+/// [`ClosestBatch`], [`AnyBatch`].
 trait Job<I> {
     type Out;
     fn run<L: SimdLevel>(self, level: L, scene: Scene<'_, I>, stack: &mut QueryStack) -> Self::Out;
@@ -355,6 +377,8 @@ struct Closest<'r>(&'r Ray);
 struct Any<'r>(&'r Ray);
 /// [`closest_batch_simd`]'s query.
 struct ClosestBatch<'r>(&'r [Ray], &'r mut [Answer]);
+/// [`any_batch_simd`]'s query.
+struct AnyBatch<'r>(&'r [Ray], &'r mut [Answer]);
 
 impl<I: TriangleIntersector> Job<I> for Closest<'_> {
     type Out = Answer;
@@ -380,6 +404,15 @@ impl<I: TriangleIntersector> Job<I> for ClosestBatch<'_> {
     fn run<L: SimdLevel>(self, level: L, mut s: Scene<'_, I>, stack: &mut QueryStack) -> Self::Out {
         let ctx = &mut Query::new().on(level).stack(stack).stats(s.stats);
         s.bvh.closest_hits(self.0, &mut s.leaf, ctx, self.1)
+    }
+}
+
+impl<I: TriangleIntersector> Job<I> for AnyBatch<'_> {
+    type Out = std::result::Result<(), BvhError>;
+    #[inline(always)]
+    fn run<L: SimdLevel>(self, level: L, mut s: Scene<'_, I>, stack: &mut QueryStack) -> Self::Out {
+        let ctx = &mut Query::new().on(level).stack(stack).stats(s.stats);
+        s.bvh.any_hits(self.0, &mut s.leaf, ctx, self.1)
     }
 }
 

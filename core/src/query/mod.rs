@@ -115,8 +115,12 @@ pub trait RayQuery {
         batch::in_coherent_order(rays, out, |ray| self.closest_hit(ray, leaf, ctx))
     }
 
-    /// Writes [`RayQuery::any_hit`] of `rays[i]` into `out[i]`, for every `i` (as
-    /// [`RayQuery::closest_hits`]); each answer is the one the single-ray walk finds.
+    /// Writes an any hit of `rays[i]` into `out[i]`, for every `i` (as
+    /// [`RayQuery::closest_hits`]): hit or miss is [`RayQuery::any_hit`]'s, and a hit is a
+    /// primitive the leaf test reports in the ray's interval, with that report's payload.
+    /// Which primitive is the single-ray walk's, except where a structure walks rays together:
+    /// the wide trees' any-hit packets (shadow rays towards one light) report the first one
+    /// the packet reaches.
     ///
     /// # Errors
     ///

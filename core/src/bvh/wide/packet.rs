@@ -1,9 +1,10 @@
-//! Packet traversal of a wide tree: the closest hits of up to [`PACKET`] coherent rays walked
-//! down the tree together, one node test per node for the whole packet.
+//! Packet traversal of a wide tree: the closest hits, or any hits, of up to [`PACKET`]
+//! coherent rays walked down the tree together, one node test per node for the whole packet.
 //!
 //! A packet is the rays, of [`PACKET`] consecutive rays of a batch, whose directions lie in
 //! the first ray's octant and within [`COHERENT_COS`] of its direction, whose origins lie
-//! within [`COHERENT_ORIGIN`] of its origin, with finite reciprocals and `t_min ≥ 0` (the
+//! within [`COHERENT_ORIGIN`] of its origin ([`COHERENT_ORIGIN_ANY`] for any-hit rays), with
+//! finite reciprocals and `t_min ≥ 0` (the
 //! common path of the single-ray node test) — when they are at least three quarters of the
 //! chunk. The other rays are walked alone by the single-ray query. The ray three quarters
 //! into the chunk is looked at first: when it is not like the first, the whole chunk goes to
@@ -21,10 +22,12 @@
 //!   operations as the single-ray walk) picks the rays that test its triangles, with the
 //!   single-ray leaf test (lane culls, then each triangle).
 //!
-//! Each ray's answer equals its single-ray answer bit for bit: a ray tests every leaf its
+//! Each ray's closest hit equals its single-ray answer bit for bit: a ray tests every leaf its
 //! single walk would need to find its closest hit (its leaf-box test and every packet test
 //! above it admit it), and the closest hit with the tie rule does not depend on the order
-//! the leaves are tested in (module docs of [`crate::query`]). The statistics count a packet's
+//! the leaves are tested in (module docs of [`crate::query`]). An any-hit ray tests every
+//! leaf its box test admits until its first hit, so it finds one exactly when its single walk
+//! does; which primitive depends on the order, and the packet's is not the ray's own. The statistics count a packet's
 //! node tests once and each ray's triangle tests.
 //!
 //! Allocation-free: the packet's rays, answers and stack live in the call's frame
@@ -48,11 +51,16 @@ pub(super) const PACKET: usize = 16;
 /// many nodes that single rays are faster. Only speed depends on it, never an answer.
 pub(super) const COHERENT_COS: f32 = 0.999_05;
 
-/// A ray joins its packet when its origin lies within this share of the tree's extent
-/// (half the longest side of its root box) of the first ray's, per axis (a
+/// A ray joins its closest-hit packet when its origin lies within this share of the tree's
+/// extent (half the longest side of its root box) of the first ray's, per axis (a
 /// camera's rays share one origin): beyond, the packet's interval of origins admits nodes
 /// none of its rays enters. Only speed depends on it, never an answer.
 pub(super) const COHERENT_ORIGIN: f32 = 1.0 / 256.0;
+
+/// [`COHERENT_ORIGIN`] of an any-hit packet: shadow rays towards one light leave a surface
+/// from origins many pixels apart, yet their boxes are shared from the surface to the light;
+/// a packet whose ray finds an occluder drops it. Only speed depends on it, never an answer.
+pub(super) const COHERENT_ORIGIN_ANY: f32 = 1.0 / 16.0;
 
 /// The likeness of a packet's rays to its first ray (module docs): only speed depends on it.
 struct Coherence {
@@ -65,14 +73,14 @@ struct Coherence {
 }
 
 impl Coherence {
-    /// The likeness to `first` in a tree of `extent`.
+    /// The likeness to `first` with origins within `reach` of its origin, per axis.
     #[inline(always)]
-    fn new(first: &Ray, extent: f32) -> Self {
+    fn new(first: &Ray, reach: f32) -> Self {
         Self {
             origin: first.origin.to_array(),
             direction: first.direction.to_array(),
             cone: COHERENT_COS * COHERENT_COS * first.direction.length_squared(),
-            reach: COHERENT_ORIGIN * extent,
+            reach,
         }
     }
 
@@ -365,7 +373,7 @@ pub(super) const MAX_WAIT: u32 = 64;
 pub(super) const SHARE_WINDOW: i32 = 64;
 
 /// Whether a batch's next chunk is walked as a packet: the surpluses of rays over leaves of
-/// its recent packets ([`WideBvh::packet_closest`]) summed within `±SHARE_WINDOW`; while
+/// its recent packets ([`WideBvh::packet_hits`]) summed within `±SHARE_WINDOW`; while
 /// the sum is below zero, the chunks after a packet go to single rays, 1, then 2, 4, … up to
 /// [`MAX_WAIT`] of them at each packet that keeps it below zero. Only speed depends on it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -392,7 +400,7 @@ impl Sharing {
         go
     }
 
-    /// Counts a packet's `surplus` (as [`WideBvh::packet_closest`] returns it).
+    /// Counts a packet's `surplus` (as [`WideBvh::packet_hits`] returns it).
     #[inline(always)]
     pub(super) fn record(&mut self, surplus: i32) {
         self.share = self
@@ -445,7 +453,9 @@ where
     T: AsRef<[LeafGroup]>,
 {
     /// Walks the coherent rays of `rays` (at most [`PACKET`]) as one packet, passing each
-    /// one's closest hit to `found(index, answer)`; returns the rays left to the single-ray
+    /// one's closest hit (with `ANY`, an any hit: the first primitive its leaf test reports in
+    /// its interval, in the packet's order; a ray that has one leaves the packet) to
+    /// `found(index, answer)`; returns the rays left to the single-ray
     /// walk (bit `i` for `rays[i]`; invalid rays among them) and how well the packet shared
     /// its leaves: the rays that entered the leaves it reached, summed, less the number of
     /// those leaves, when they are more than one for two rays; else 1 (such a packet costs
@@ -456,7 +466,7 @@ where
     /// ray's own, and single rays are faster. `stack` is the walk's, reused from packet to
     /// packet.
     #[inline(always)]
-    pub(super) fn packet_closest<LT: LeafTest, L: SimdLevel>(
+    pub(super) fn packet_hits<LT: LeafTest, L: SimdLevel, const ANY: bool>(
         &self,
         level: L,
         rays: &[Ray],
@@ -479,7 +489,12 @@ where
         } else {
             0.0
         };
-        let coherence = Coherence::new(reference, half);
+        let share = if ANY {
+            COHERENT_ORIGIN_ANY
+        } else {
+            COHERENT_ORIGIN
+        };
+        let coherence = Coherence::new(reference, share * half);
         let alike = |ray: &Ray| coherence.admits(ray.origin.to_array(), ray.direction.to_array());
         let all = u32::MAX >> (32 - rays.len() as u32);
         // One ray first, the one three quarters in: rays in an order that is not coherent (a
@@ -530,15 +545,34 @@ where
                         if mask != 0 {
                             let keys = sorted_keys(level, &dist, mask);
                             let count = mask.count_ones() as usize;
-                            for &k in keys.get(1..count).unwrap_or(&[]).iter().rev() {
+                            // Nearest first; any-hit rays farthest first (see
+                            // `WideBvh::push_hits_any`: rays leaving a surface).
+                            let (visit, rest) = if ANY {
+                                (count - 1, keys.get(..count - 1).unwrap_or(&[]))
+                            } else {
+                                (0, keys.get(1..count).unwrap_or(&[]))
+                            };
+                            let push = |k: &u32| {
                                 let e = entry((k & 7) as usize);
-                                if let Some(s) = stack.get_mut(sp) {
-                                    *s = e;
-                                    sp += 1;
-                                }
                                 prefetch_child(nodes, groups, e.child);
+                                e
+                            };
+                            if ANY {
+                                for e in rest.iter().map(push) {
+                                    if let Some(s) = stack.get_mut(sp) {
+                                        *s = e;
+                                        sp += 1;
+                                    }
+                                }
+                            } else {
+                                for e in rest.iter().rev().map(push) {
+                                    if let Some(s) = stack.get_mut(sp) {
+                                        *s = e;
+                                        sp += 1;
+                                    }
+                                }
                             }
-                            next = entry((keys[0] & 7) as usize);
+                            next = entry((keys[visit & (W - 1)] & 7) as usize);
                             continue 'walk;
                         }
                     }
@@ -571,7 +605,7 @@ where
                                 t_max: *t_max,
                                 ..*ray
                             };
-                            if leaf_hits::<_, _, false>(
+                            if leaf_hits::<_, _, ANY>(
                                 level,
                                 leaf,
                                 pre,
@@ -579,11 +613,21 @@ where
                                 RunLanes::new(start, count),
                                 (&mut cur, best),
                             ) {
-                                *t_max = cur.t_max;
-                                lanes.bound[r] = cull_bound(cur.t_max).min(f32::MAX);
+                                if ANY {
+                                    // Answered: no box admits the ray any more.
+                                    lanes.t_min[r] = f32::INFINITY;
+                                    lanes.bound[r] = f32::NEG_INFINITY;
+                                } else {
+                                    *t_max = cur.t_max;
+                                    lanes.bound[r] = cull_bound(cur.t_max).min(f32::MAX);
+                                }
                             }
                         }
                         bound = lanes.max_bound();
+                        if ANY && bound == f32::NEG_INFINITY {
+                            // Every ray answered or refused.
+                            break 'walk;
+                        }
                     }
                 }
                 ChildRef::Empty => {}

@@ -70,6 +70,48 @@ where
         }
         reported
     }
+
+    /// The batch walk of `rays` into `out` (as long): sixteen rays at a time, the coherent
+    /// ones as a packet ([`WideBvh::packet_hits`]) while they share their leaves
+    /// ([`Sharing`]), the others alone; every ray alone when `alone` (a short caller stack).
+    /// Closest hits, or any hits with `ANY`.
+    #[inline(always)]
+    fn in_packets<LT: LeafTest, L: SimdLevel, S: Stack, const ANY: bool>(
+        &self,
+        rays: &[Ray],
+        leaf: &mut LT,
+        ctx: &mut Query<'_, L, S>,
+        out: &mut [S::Out<(u32, LT::Hit)>],
+        alone: bool,
+    ) {
+        let mut stack = PacketStack::new();
+        let mut sharing = Sharing::NEW;
+        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+            let single = if alone || !sharing.try_packet() {
+                u32::MAX
+            } else {
+                let stats = ctx.stats.as_deref_mut();
+                let walk = (&mut stack, stats);
+                let (single, surplus) =
+                    self.packet_hits::<LT, L, ANY>(ctx.level, rays, leaf, walk, |i, found| {
+                        if let Some(o) = out.get_mut(i) {
+                            *o = S::answer(Ok(found));
+                        }
+                    });
+                sharing.record(surplus);
+                single
+            };
+            for (i, (ray, o)) in rays.iter().zip(out.iter_mut()).enumerate() {
+                if single >> i & 1 == 1 {
+                    *o = if ANY {
+                        self.any_hit(ray, leaf, ctx)
+                    } else {
+                        self.closest_hit(ray, leaf, ctx)
+                    };
+                }
+            }
+        }
+    }
 }
 
 impl<const W: usize, N, T> RayQuery for WideBvh<W, N, T>
@@ -120,28 +162,26 @@ where
         {
             return Ok(());
         }
-        let mut stack = PacketStack::new();
-        let mut sharing = Sharing::NEW;
-        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-            let alone = if short || !sharing.try_packet() {
-                u32::MAX
-            } else {
-                let stats = ctx.stats.as_deref_mut();
-                let (alone, surplus) =
-                    self.packet_closest(ctx.level, rays, leaf, (&mut stack, stats), |i, found| {
-                        if let Some(o) = out.get_mut(i) {
-                            *o = S::answer(Ok(found));
-                        }
-                    });
-                sharing.record(surplus);
-                alone
-            };
-            for (i, (ray, o)) in rays.iter().zip(out.iter_mut()).enumerate() {
-                if alone >> i & 1 == 1 {
-                    *o = self.closest_hit(ray, leaf, ctx);
-                }
-            }
-        }
+        self.in_packets::<LT, L, S, false>(rays, leaf, ctx, out, short);
+        Ok(())
+    }
+
+    /// As [`WideBvh::closest_hits`]'s packets: coherent rays (shadow rays towards one light,
+    /// whose origins may lie further apart than a closest-hit packet's) walked as a packet of
+    /// any-hit rays, each leaving the packet at its first hit; the others alone. Hit or miss
+    /// is each ray's single-ray answer; the primitive of a ray walked in a packet is the first
+    /// the packet's order reaches, which may not be the single-ray walk's.
+    #[inline(always)]
+    fn any_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        rays: &[Ray],
+        leaf: &mut LT,
+        ctx: &mut Query<'_, L, S>,
+        out: &mut [S::Out<(u32, LT::Hit)>],
+    ) -> Result<(), BvhError> {
+        same_length(rays.len(), out.len())?;
+        let short = ctx.stack.entries().is_some_and(|e| e.len() < STACK);
+        self.in_packets::<LT, L, S, true>(rays, leaf, ctx, out, short);
         Ok(())
     }
 

@@ -12,12 +12,14 @@ use crate::query::{
     QUERY_STACK_SIZE, Query, QueryStack, RayQuery, StackEntry, TraversalStats, Triangles,
 };
 use crate::test_util::{Lcg, brute_watertight, lcg_soup, vec_bvh, vec_grid, vec_kd, vec_wide};
-use crate::triangle::{TriangleHit, Watertight};
+use crate::triangle::{TriangleHit, TriangleIntersector, Watertight};
 use std::vec;
 use std::vec::Vec;
 
 /// Rays in random order through the mesh's box (origins spread around it), then a camera's
-/// rays in scanline order (one origin, a 40×30 image), with invalid rays scattered among them.
+/// rays in scanline order (one origin, a 40×30 image), then shadow rays from a grid of
+/// points in the box towards one light (the rays of an any-hit packet), with invalid rays
+/// scattered among them.
 fn rays(seed: u64) -> Vec<Ray> {
     let mut rng = Lcg(seed);
     let mut out: Vec<Ray> = (0..600)
@@ -31,6 +33,17 @@ fn rays(seed: u64) -> Vec<Ray> {
         for x in 0..40 {
             let d = Vec3::new(x as f32 / 40.0 - 0.5, y as f32 / 30.0 - 0.5, 1.0) * 12.0;
             out.push(Ray::new(eye, d));
+        }
+    }
+    let light = Vec3::new(3.0, 20.0, -6.0);
+    for y in 0..20 {
+        for x in 0..30 {
+            let p = Vec3::new(
+                x as f32 * 0.03 - 2.0,
+                -4.0 + 0.01 * y as f32,
+                y as f32 * 0.03,
+            );
+            out.push(Ray::with_interval(p, light - p, 0.0, 1.0));
         }
     }
     for k in (0..out.len()).step_by(97) {
@@ -66,8 +79,15 @@ fn batch_equals_single<Q: RayQuery>(
     q.closest_hits(rays, &mut tris, &mut ctx, &mut closest)
         .unwrap();
     let mut any = vec![None; rays.len()];
-    q.any_hits(rays, &mut tris, &mut Query::new(), &mut any)
-        .unwrap();
+    let (mut any_stats, mut single_any_stats) =
+        (TraversalStats::default(), TraversalStats::default());
+    q.any_hits(
+        rays,
+        &mut tris,
+        &mut Query::new().stats(&mut any_stats),
+        &mut any,
+    )
+    .unwrap();
 
     let mut hits = 0;
     for (i, ray) in rays.iter().enumerate() {
@@ -75,8 +95,25 @@ fn batch_equals_single<Q: RayQuery>(
         assert_eq!(bits(closest[i]), bits(single), "{name}: closest, ray {i}");
         let brute = brute_watertight(mesh, ray);
         assert_eq!(closest[i], brute, "{name}: brute force, ray {i} {ray:?}");
-        let single_any = q.any_hit(ray, &mut tris, &mut Query::new());
-        assert_eq!(bits(any[i]), bits(single_any), "{name}: any, ray {i}");
+        let single_any = q.any_hit(
+            ray,
+            &mut tris,
+            &mut Query::new().stats(&mut single_any_stats),
+        );
+        if walked_alone {
+            assert_eq!(bits(any[i]), bits(single_any), "{name}: any, ray {i}");
+        }
+        // A batch's any hit is a hit of the ray: that triangle alone reports it, bit for bit.
+        if let Some((p, h)) = any[i] {
+            let alone = mesh
+                .triangle(p as usize)
+                .and_then(|v| Watertight.intersect(ray, &v));
+            assert_eq!(
+                bits(Some((p, h))),
+                bits(alone.map(|a| (p, a))),
+                "{name}: any, ray {i}"
+            );
+        }
         assert_eq!(
             any[i].is_some(),
             brute.is_some(),
@@ -87,8 +124,14 @@ fn batch_equals_single<Q: RayQuery>(
     // Every ray walked exactly once: the counters sum to the single rays'.
     if walked_alone {
         assert_eq!(batch_stats, single_stats, "{name}: statistics");
+        assert_eq!(any_stats, single_any_stats, "{name}: any-hit statistics");
     } else {
+        // Packets count their node tests once: fewer than the single rays'.
         assert!(batch_stats.nodes_visited > 0, "{name}: statistics added to");
+        assert!(
+            any_stats.nodes_visited < single_any_stats.nodes_visited,
+            "{name}: any-hit packets {any_stats:?} against single rays {single_any_stats:?}"
+        );
     }
     assert!(hits > rays.len() / 5, "{name}: only {hits} hits");
 }

@@ -7,11 +7,12 @@ use crate::aabb::{Aabb, SlabRay};
 use crate::bvh::padded_ray::PaddedRay;
 use crate::bvh::wide::{Bvh4, Bvh8, binary_options, group_capacity};
 use crate::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
+use crate::hit::spawn_ray_to;
 use crate::mesh::TriangleMesh;
 use crate::query::{Query, QueryStack, RayQuery, TraversalStats, Triangles};
 use crate::simd::level::Portable;
 use crate::test_util::{Lcg, brute_watertight, lcg_soup};
-use crate::triangle::{TriangleHit, Watertight};
+use crate::triangle::{TriangleHit, TriangleIntersector, Watertight};
 use glam::Vec3;
 use std::vec;
 use std::vec::Vec;
@@ -331,7 +332,7 @@ fn sharing_waits_longer_while_packets_do_not_share() {
     assert!(s.try_packet(), "the wait starts again at one chunk");
 }
 
-/// A packet's share ([`WideBvh::packet_closest`]'s second value): a packet that reaches at
+/// A packet's share ([`WideBvh::packet_hits`]'s second value): a packet that reaches at
 /// most one leaf for two rays counts +1 whatever its rays enter (here: none, the rays pass
 /// beside the mesh after the root's node test, as rays between the small objects of a
 /// scattered scene do), so that it brings a share left below zero back up; one that reaches
@@ -347,7 +348,7 @@ fn a_packet_of_few_leaves_counts_as_paid() {
     let mut stack = PacketStack::new();
     let mut share = |rays: &[Ray]| {
         let mut stats = TraversalStats::default();
-        let (alone, surplus) = bvh8.packet_closest(
+        let (alone, surplus) = bvh8.packet_hits::<_, _, false>(
             Portable,
             rays,
             &mut tris,
@@ -400,4 +401,88 @@ fn a_packet_of_few_leaves_counts_as_paid() {
         s.try_packet() && s.try_packet(),
         "the share is back at zero"
     );
+}
+
+/// The triangle `p` of `mesh`.
+fn vertices(mesh: &TriangleMesh<'_>, p: u32) -> [Vec3; 3] {
+    mesh.triangle(p as usize).unwrap()
+}
+
+/// The any-hit batch of `q` at `level` on `rays`: each answer a hit exactly when the
+/// brute-force loop finds one, and a hit of its ray (that triangle alone reports it, bit for
+/// bit); walked in packets (fewer than half the single rays' node tests). Returns the hits.
+fn any_batch_hits_as_brute_force<L: SimdLevel, Q: RayQuery>(
+    level: L,
+    name: &str,
+    q: &Q,
+    mesh: &TriangleMesh<'_>,
+    rays: &[Ray],
+) -> usize {
+    let mut tris = Triangles::new(mesh, &Watertight);
+    let mut batch: Vec<Answer> = vec![None; rays.len()];
+    let (mut packed, mut alone) = (TraversalStats::default(), TraversalStats::default());
+    let ctx = &mut Query::new().on(level).stats(&mut packed);
+    q.any_hits(rays, &mut tris, ctx, &mut batch).unwrap();
+    let mut hits = 0;
+    for (i, ray) in rays.iter().enumerate() {
+        let brute = brute_watertight(mesh, ray);
+        assert_eq!(
+            batch[i].is_some(),
+            brute.is_some(),
+            "{name}: ray {i} {ray:?}"
+        );
+        if let Some((p, h)) = batch[i] {
+            let own = Watertight.intersect(ray, &vertices(mesh, p));
+            assert_eq!(
+                bits(Some((p, h))),
+                bits(own.map(|o| (p, o))),
+                "{name}: ray {i}"
+            );
+        }
+        hits += usize::from(brute.is_some());
+        q.any_hit(
+            ray,
+            &mut tris,
+            &mut Query::new().on(level).stats(&mut alone),
+        );
+    }
+    assert!(
+        packed.nodes_visited * 2 < alone.nodes_visited,
+        "{name}: {packed:?} in packets, {alone:?} alone"
+    );
+    hits
+}
+
+/// Shadow rays from a camera's hits towards one light (`spawn_ray_to`: origins on the
+/// surface, many pixels apart), the rays of any-hit packets: hit or miss as brute force, each
+/// hit one of its ray's, at every SIMD level the CPU has.
+#[test]
+fn any_hit_packets_hit_exactly_when_single_rays_do() {
+    let (pos, tri) = lcg_soup(1500, 21, 4.0, 1.0);
+    let mesh = TriangleMesh::new(&pos, &tri);
+    let light = Vec3::new(2.0, 9.0, -6.0);
+    let shadow: Vec<Ray> = camera_rays(Vec3::new(0.5, 0.2, -8.0), (160, 40), 0.05)
+        .iter()
+        .take(160 * 40)
+        .filter_map(|r| brute_watertight(&mesh, r))
+        .map(|(p, h)| spawn_ray_to(&h.to_hit(&vertices(&mesh, p)), light))
+        .collect();
+    assert!(shadow.len() > 1000, "{} shadow rays", shadow.len());
+    for leaf in [1, 4] {
+        let bvh8: Bvh8<_, _> = wide::<8>(&mesh, leaf);
+        let bvh4: Bvh4<_, _> = wide::<4>(&mesh, leaf);
+        let hits = any_batch_hits_as_brute_force(Portable, "bvh8", &bvh8, &mesh, &shadow);
+        assert!(
+            hits > shadow.len() / 10 && hits < shadow.len(),
+            "{hits} hits"
+        );
+        any_batch_hits_as_brute_force(Portable, "bvh4", &bvh4, &mesh, &shadow);
+        #[cfg(target_arch = "x86_64")]
+        if let Some(level) = crate::test_util::avx2_or_skip(
+            "bvh::wide::packet::tests::any_hit_packets_hit_exactly_when_single_rays_do",
+        ) {
+            any_batch_hits_as_brute_force(level, "bvh8 avx2", &bvh8, &mesh, &shadow);
+            any_batch_hits_as_brute_force(level, "bvh4 avx2", &bvh4, &mesh, &shadow);
+        }
+    }
 }
