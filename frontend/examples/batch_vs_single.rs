@@ -55,7 +55,7 @@ fn run_batch(
 ) -> usize {
     let out = &mut out[..rays.len()];
     if any {
-        any_batch_simd(w, m, &Watertight, rays, out).expect("lengths match");
+        any_batch_simd(w, m, &Watertight, rays, out, None).expect("lengths match");
     } else {
         closest_batch_simd(w, m, &Watertight, rays, out, None).expect("lengths match");
     }

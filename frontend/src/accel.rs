@@ -319,7 +319,8 @@ pub fn closest_batch_simd<I: TriangleIntersector>(
 /// ([`RayQuery::any_hits`]: coherent rays, as shadow rays towards one light, walked in
 /// packets), on the widest SIMD level and this thread's kept stack: `out[i]` is a hit exactly
 /// when [`any_simd`] of `rays[i]` is, and a hit of `rays[i]` (in a packet, perhaps another
-/// triangle than [`any_simd`]'s).
+/// triangle than [`any_simd`]'s). `stats`, when given, is added to (a packet's node tests
+/// counted once).
 ///
 /// # Errors
 ///
@@ -331,9 +332,9 @@ pub fn any_batch_simd<I: TriangleIntersector>(
     isect: &I,
     rays: &[Ray],
     out: &mut [Answer],
+    stats: Option<&mut TraversalStats>,
 ) -> std::result::Result<(), BvhError> {
     let leaf = Triangles::new(mesh, isect);
-    let stats = None;
     on_widest_level(AnyBatch(rays, out), Scene { bvh, leaf, stats })
 }
 

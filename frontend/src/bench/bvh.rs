@@ -11,11 +11,13 @@
 //! the shared machine falls on all three; builds are timed the same way. The run closes with a
 //! table of the ratios per mesh and, per set, their geometric mean and the worst mesh.
 //!
-//! Each camera set is also traced by the batch path ([`closest_batch_simd`]: coherent rays in
-//! packets; its answers checked equal to the single-ray query's; timed in calls of
+//! Each camera set, and the shadow set, is also traced by the batch path
+//! ([`closest_batch_simd`], [`any_batch_simd`]: coherent rays in packets; its answers checked
+//! equal to the single-ray query's, hit or miss for the shadow rays; timed in calls of
 //! [`BATCH_BLOCK`] rays answered into one kept buffer), reported as the set
-//! `<set>+batch`: against Embree's `rtcIntersect1` as above, and against Embree's packet API,
-//! `rtcIntersect8` and `rtcIntersect16`, on the same rays in the same round-robin passes.
+//! `<set>+batch`: against Embree's `rtcIntersect1` (`rtcOccluded1`) as above, and against
+//! Embree's packet API, `rtcIntersect8` and `rtcIntersect16` (`rtcOccluded8` and
+//! `rtcOccluded16`), on the same rays in the same round-robin passes.
 //!
 //! Brute force (every triangle for every ray) runs on a sample of the incoherent rays sized to
 //! about [`BRUTE_FORCE_TESTS`] triangle tests, as a baseline; the BVH's answers on that sample
@@ -25,7 +27,8 @@ mod rivals;
 pub mod summary;
 
 use crate::accel::{
-    any_simd, build_binary, build_binary_parallel, build_wide, closest_batch_simd, closest_simd,
+    any_batch_simd, any_simd, build_binary, build_binary_parallel, build_wide, closest_batch_simd,
+    closest_simd,
 };
 use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
@@ -152,12 +155,12 @@ pub struct SetFigures {
     pub embree_mrays: Option<f64>,
     /// Embree 4 robust mode, Mrays/s.
     pub embree_robust_mrays: Option<f64>,
-    /// Batch sets (`<camera set>+batch`: halfray's batch path, Embree's `rtcIntersect1` in the
-    /// two fields above): Embree's `rtcIntersect8` on the same rays, `[default, robust]`,
-    /// Mrays/s.
+    /// Batch sets (`<set>+batch`: halfray's batch path, Embree's `rtcIntersect1` or
+    /// `rtcOccluded1` in the two fields above): Embree's `rtcIntersect8` (`rtcOccluded8` for
+    /// the any-hit query) on the same rays, `[default, robust]`, Mrays/s.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub embree_packet8_mrays: Option<[f64; 2]>,
-    /// Batch sets: Embree's `rtcIntersect16`, `[default, robust]`, Mrays/s.
+    /// Batch sets: Embree's `rtcIntersect16` (`rtcOccluded16`), `[default, robust]`, Mrays/s.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub embree_packet16_mrays: Option<[f64; 2]>,
 }
@@ -334,12 +337,12 @@ fn bench<T: TriangleIntersector>(
         });
         if matches!(
             set,
-            RaySet::Primary | RaySet::PrimaryTiles | RaySet::PrimaryStride
+            RaySet::Primary | RaySet::PrimaryTiles | RaySet::PrimaryStride | RaySet::Shadow
         ) {
             let theirs = rivals.as_ref().map_or_else(Vec::new, |r| r.queries(query));
             let packets = rivals
                 .as_ref()
-                .map_or_else(Vec::new, |r| r.packet_queries());
+                .map_or_else(Vec::new, |r| r.packet_queries(query));
             figures.push(batch_figures(
                 (&wide, &mesh, isect),
                 (set, &rays, hit_count),
@@ -405,10 +408,12 @@ fn bench<T: TriangleIntersector>(
 /// multiple of the packet size (16), its answers (32 bytes each, 128 KB) kept in the L2 cache.
 const BATCH_BLOCK: usize = 4096;
 
-/// The batch path's figures on the camera set `set` (`rays`, `hits` of them hit): halfray's
-/// [`closest_batch_simd`] (checked equal to the single-ray query, bit for bit) against Embree's
-/// `rtcIntersect1` (`single`: default, robust) and its packet API (`packets`: default by 8 and
-/// 16 rays, robust by 8 and 16), timed round-robin on the whole set.
+/// The batch path's figures on the camera or shadow set `set` (`rays`, `hits` of them hit):
+/// halfray's [`closest_batch_simd`] (checked equal to the single-ray query, bit for bit) or,
+/// on an any-hit set, [`any_batch_simd`] (checked to hit exactly where the single-ray query
+/// does) against Embree's `rtcIntersect1`/`rtcOccluded1` (`single`: default, robust) and its
+/// packet API (`packets`: default by 8 and 16 rays, robust by 8 and 16), timed round-robin on
+/// the whole set.
 fn batch_figures<T: TriangleIntersector>(
     (wide, mesh, isect): (&crate::accel::VecBvh8, &TriangleMesh<'_>, &T),
     (set, rays, hits): (RaySet, &[Ray], usize),
@@ -416,16 +421,26 @@ fn batch_figures<T: TriangleIntersector>(
     packets: &[rivals::BatchQuery<'_>],
 ) -> Result<SetFigures> {
     let internal = |e: halfray_core::bvh::BvhError| Error::internal(e.to_string(), None);
+    let query = set.query();
+    let batch = |rays: &[Ray], out: &mut [crate::accel::Answer], st| match query {
+        Query::Closest => closest_batch_simd(wide, mesh, isect, rays, out, st),
+        Query::Any => any_batch_simd(wide, mesh, isect, rays, out, st),
+    };
     let mut out = vec![None; rays.len()];
     let mut st = TraversalStats::default();
-    closest_batch_simd(wide, mesh, isect, rays, &mut out, Some(&mut st)).map_err(internal)?;
-    let bits = |a: &Option<(u32, halfray_core::triangle::TriangleHit)>| {
-        a.map(|(p, h)| (p, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()))
+    batch(rays, &mut out, Some(&mut st)).map_err(internal)?;
+    let bits = |a: &Option<(u32, halfray_core::triangle::TriangleHit)>| match query {
+        Query::Closest => a.map(|(p, h)| (p, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits())),
+        Query::Any => a.map(|_| (0, 0, 0, 0)),
+    };
+    let one = |r: &Ray| match query {
+        Query::Closest => closest_simd(wide, mesh, isect, r, None),
+        Query::Any => any_simd(wide, mesh, isect, r),
     };
     let mismatches = rays
         .iter()
         .zip(&out)
-        .filter(|(r, b)| bits(&closest_simd(wide, mesh, isect, r, None)) != bits(b))
+        .filter(|(r, b)| bits(&one(r)) != bits(b))
         .count();
     if mismatches > 0 {
         return Err(Error::internal(
@@ -442,7 +457,7 @@ fn batch_figures<T: TriangleIntersector>(
         rays.chunks(BATCH_BLOCK)
             .map(|rays| {
                 let out = &mut block[..rays.len()];
-                let done = closest_batch_simd(wide, mesh, isect, rays, out, None);
+                let done = batch(rays, out, None);
                 usize::from(done.is_ok()) * out.iter().filter(|h| h.is_some()).count()
             })
             .sum()
@@ -461,7 +476,7 @@ fn batch_figures<T: TriangleIntersector>(
     let pair = |a: usize, b: usize| Some([*m.get(a)?, *m.get(b)?]);
     Ok(SetFigures {
         name: format!("{}+batch", set.name()),
-        query: Query::Closest.name().into(),
+        query: query.name().into(),
         rays: rays.len(),
         hit_rate: hits as f64 / k,
         mrays: m[0],
@@ -546,8 +561,9 @@ fn print_report(r: &BvhReport) {
     }
     for s in &r.sets {
         if let (Some(p8), Some(p16)) = (s.embree_packet8_mrays, s.embree_packet16_mrays) {
+            let api = summary::packet_api(&s.query);
             println!(
-                "  {:<15} Embree packets: rtcIntersect8 {:.2} / {:.2}, rtcIntersect16 {:.2} / {:.2} Mrays/s (default / robust); batch over them: x8 {:.2} / {:.2}, x16 {:.2} / {:.2}",
+                "  {:<15} Embree packets: {api}8 {:.2} / {:.2}, {api}16 {:.2} / {:.2} Mrays/s (default / robust); batch over them: x8 {:.2} / {:.2}, x16 {:.2} / {:.2}",
                 s.name,
                 p8[0],
                 p8[1],

@@ -60,6 +60,36 @@ pub(crate) unsafe fn rtc_intersect16(valid: *const i32, scene: RTCScene, rayhit:
     unsafe { rtc_intersect16_raw(valid, scene, rayhit, std::ptr::null_mut()) }
 }
 
+// SAFETY (of the declarations): these match the Embree 4.4 C prototypes
+// `void rtcOccluded8(const int* valid, RTCScene, struct RTCRay8*, struct
+// RTCOccludedArguments*)` and its 16-ray twin, C calling convention; the packet is passed as an
+// address (`RTCRayN` is the prefix of `packet::RayHitN`) and the arguments as null.
+unsafe extern "C" {
+    #[link_name = "rtcOccluded8"]
+    fn rtc_occluded8_raw(valid: *const i32, scene: RTCScene, ray: *mut c_void, args: *mut c_void);
+    #[link_name = "rtcOccluded16"]
+    fn rtc_occluded16_raw(valid: *const i32, scene: RTCScene, ray: *mut c_void, args: *mut c_void);
+}
+
+/// `rtcOccluded8(valid, scene, ray, NULL)`: an occluded lane's `tfar` becomes `−∞`.
+///
+/// # Safety
+/// `scene` is a live committed scene; `valid` points to 8 ints and `ray` to an `RTCRay8` of
+/// the 4.4 layout, both 32-byte aligned and initialised.
+pub(crate) unsafe fn rtc_occluded8(valid: *const i32, scene: RTCScene, ray: *mut c_void) {
+    // SAFETY: the caller's guarantees are the function's preconditions.
+    unsafe { rtc_occluded8_raw(valid, scene, ray, std::ptr::null_mut()) }
+}
+
+/// `rtcOccluded16(valid, scene, ray, NULL)`.
+///
+/// # Safety
+/// As [`rtc_occluded8`], for 16 rays and 64-byte alignment.
+pub(crate) unsafe fn rtc_occluded16(valid: *const i32, scene: RTCScene, ray: *mut c_void) {
+    // SAFETY: the caller's guarantees are the function's preconditions.
+    unsafe { rtc_occluded16_raw(valid, scene, ray, std::ptr::null_mut()) }
+}
+
 /// Human-readable name of an `RTCError` code.
 pub(crate) fn error_name(code: u32) -> &'static str {
     match code {

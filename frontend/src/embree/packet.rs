@@ -1,5 +1,6 @@
 //! Embree's packet API: `rtcIntersect8` and `rtcIntersect16`, closest hits of 8 or 16 rays per
-//! call, for timing Embree's own ray batches beside `rtcIntersect1`.
+//! call, and `rtcOccluded8` and `rtcOccluded16`, occlusion, for timing Embree's own ray batches
+//! beside `rtcIntersect1` and `rtcOccluded1`.
 //!
 //! The packets have the Embree 4.4 layout of `RTCRayHit8` / `RTCRayHit16` (structure of
 //! arrays: the `RTCRayN` fields, then the `RTCHitN` fields, `instPrimID` included, see
@@ -158,6 +159,47 @@ impl EmbreeScene {
     }
 }
 
+impl EmbreeScene {
+    /// Occlusion of `rays` by Embree's packet API, `N` (8: `rtcOccluded8`, 16:
+    /// `rtcOccluded16`) consecutive rays per call: `found(i, occluded)` for every `rays[i]`, in
+    /// order. Rays Embree cannot handle ([`ray_is_valid`]) are not traced and give `false`.
+    ///
+    /// # Panics
+    ///
+    /// At compile time for another `N`.
+    pub fn occluded_packets<const N: usize>(
+        &self,
+        rays: &[Ray],
+        mut found: impl FnMut(usize, bool),
+    ) {
+        const { assert!(N == 8 || N == 16, "Embree packets are of 8 or 16 rays") };
+        let (mut packet, mut valid) = RayHitN::<N>::new(&[]);
+        for (k, chunk) in rays.chunks(N).enumerate() {
+            packet.fill(chunk, &mut valid);
+            let ray = (&raw mut *packet).cast::<std::ffi::c_void>();
+            // SAFETY: `self.raw` is a live committed scene. `valid` holds `N` ints and `packet`
+            // begins with an `RTCRayN` of the 4.4 layout (the ray arrays of `RTCRayHitN`,
+            // checked at compile time above), both fully initialised and 64-byte aligned: the
+            // library reads the valid lanes' rays and writes only their `tfar`.
+            unsafe {
+                if N == 8 {
+                    super::ffi::rtc_occluded8(valid.0.as_ptr(), self.raw, ray);
+                } else {
+                    super::ffi::rtc_occluded16(valid.0.as_ptr(), self.raw, ray);
+                }
+            }
+            debug_assert!(
+                packet.guard.iter().all(|&w| w == SENTINEL),
+                "rtcOccluded{N} wrote past the 4.4 RTCRayHit{N}"
+            );
+            for (i, &v) in valid.0.iter().enumerate().take(chunk.len()) {
+                // Embree sets an occluded lane's `tfar` to −∞.
+                found(k * N + i, v != 0 && packet.tfar[i] == f32::NEG_INFINITY);
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::EmbreeDevice;
@@ -216,6 +258,17 @@ mod tests {
                     if let (Some(g), Some(s)) = (g, s) {
                         assert!((g.t - s.t).abs() <= T_AGREEMENT * s.t, "{n}: ray {i}");
                     }
+                }
+                // Occlusion by packets is `rtcOccluded1`'s, ray for ray.
+                let mut occluded: Vec<Option<bool>> = vec![None; rays.len()];
+                let mut store = |i: usize, o: bool| occluded[i] = Some(o);
+                if n == 8 {
+                    scene.occluded_packets::<8>(&rays, &mut store);
+                } else {
+                    scene.occluded_packets::<16>(&rays, &mut store);
+                }
+                for (i, (o, r)) in occluded.iter().zip(&rays).enumerate() {
+                    assert_eq!(*o, Some(scene.occluded_ray(r)), "{n}: occluded, ray {i}");
                 }
             }
         }

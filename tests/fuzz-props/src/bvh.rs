@@ -313,10 +313,11 @@ pub fn check(s: &Soup) {
     check_batches(&wide, &MollerTrumbore::CLASSIC, &s.rays, &ctx);
 }
 
-/// The batch query of the 8-wide tree ([`RayQuery::closest_hits`]) on the soup's rays, each
-/// followed by a fan of 7 rays from its origin within about 0.1° of its direction (coherent:
-/// walked as packets, whatever the soup): every answer equals the single-ray query's, bit for
-/// bit, at the portable level and, where the CPU has it, the AVX2 level.
+/// The batch queries of the 8-wide tree ([`RayQuery::closest_hits`], `any_hits`) on the soup's
+/// rays, each followed by a fan of 7 rays from its origin within about 0.1° of its direction
+/// (coherent: walked as packets, whatever the soup): every closest hit equals the single-ray
+/// query's, bit for bit, and every any hit is a hit exactly where the single ray's is, at the
+/// portable level and, where the CPU has it, the AVX2 level.
 ///
 /// [`RayQuery::closest_hits`]: halfray_core::query::RayQuery::closest_hits
 fn check_batches<T: TriangleIntersector>(
@@ -361,6 +362,9 @@ fn batch_matches<L: halfray_core::simd_level::SimdLevel, T: TriangleIntersector>
     let mut out = vec![None; batch.len()];
     wide.closest_hits(batch, &mut tris, &mut Query::new().on(level), &mut out)
         .expect("as many answers as rays");
+    let mut any = vec![None; batch.len()];
+    wide.any_hits(batch, &mut tris, &mut Query::new().on(level), &mut any)
+        .expect("as many answers as rays");
     for (i, r) in batch.iter().enumerate() {
         let one = RayQuery::closest_hit(wide, r, &mut tris, &mut Query::new().on(level));
         assert_eq!(
@@ -370,6 +374,24 @@ fn batch_matches<L: halfray_core::simd_level::SimdLevel, T: TriangleIntersector>
             isect.name(),
             ctx()
         );
+        // Any hits: hit or miss as the single ray; a hit within the interval, not nearer than
+        // the closest one.
+        let single_any = RayQuery::any_hit(wide, r, &mut tris, &mut Query::new().on(level));
+        assert_eq!(
+            any[i].is_some(),
+            single_any.is_some(),
+            "{}: batch any hit of ray {i} {r:?} differs from the single ray's\n{}",
+            isect.name(),
+            ctx()
+        );
+        if let (Some((_, a)), Some((_, c))) = (any[i], one) {
+            assert!(
+                a.t > r.t_min && a.t <= r.t_max && a.t >= c.t,
+                "{}: batch any hit {a:?} of ray {i} {r:?} (closest {c:?})\n{}",
+                isect.name(),
+                ctx()
+            );
+        }
     }
 }
 

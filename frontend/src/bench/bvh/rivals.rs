@@ -1,7 +1,7 @@
 //! Embree as the rival of `bench bvh`: its default and robust scenes over the same mesh, built
 //! pass by pass beside halfray's tree and queried with `rtcIntersect1` (closest hit) or
-//! `rtcOccluded1` (any hit) on the same rays, and with `rtcIntersect8`/`16` (the packet API)
-//! beside halfray's batch path.
+//! `rtcOccluded1` (any hit) on the same rays, and with `rtcIntersect8`/`16` or
+//! `rtcOccluded8`/`16` (the packet API) beside halfray's batch path.
 
 use crate::error::Result;
 use crate::raysets::named::Query;
@@ -100,17 +100,21 @@ impl Rivals {
             .collect()
     }
 
-    /// Closest hits by Embree's packet API, `[default by rtcIntersect8, default by
-    /// rtcIntersect16, robust by rtcIntersect8, robust by rtcIntersect16]`.
-    pub(super) fn packet_queries(&self) -> Vec<BatchQuery<'_>> {
-        let count = |s: &crate::embree::EmbreeScene, rays: &[Ray], wide: bool| {
+    /// Queries of kind `query` by Embree's packet API (closest hits: `rtcIntersect8/16`; any
+    /// hit: `rtcOccluded8/16`), `[default by 8, default by 16, robust by 8, robust by 16]`.
+    pub(super) fn packet_queries(&self, query: Query) -> Vec<BatchQuery<'_>> {
+        let count = move |s: &crate::embree::EmbreeScene, rays: &[Ray], wide: bool| {
             let mut hits = 0;
-            let found =
-                |_: usize, h: Option<crate::embree::EmbreeHit>| hits += usize::from(h.is_some());
-            if wide {
-                s.intersect_packets::<16>(rays, found);
-            } else {
-                s.intersect_packets::<8>(rays, found);
+            let mut hit = |_: usize, h: bool| hits += usize::from(h);
+            match (query, wide) {
+                (Query::Closest, true) => {
+                    s.intersect_packets::<16>(rays, |i, h| hit(i, h.is_some()))
+                }
+                (Query::Closest, false) => {
+                    s.intersect_packets::<8>(rays, |i, h| hit(i, h.is_some()))
+                }
+                (Query::Any, true) => s.occluded_packets::<16>(rays, hit),
+                (Query::Any, false) => s.occluded_packets::<8>(rays, hit),
             }
             hits
         };
@@ -146,7 +150,7 @@ impl Rivals {
     pub(super) fn queries(&self, _query: Query) -> Vec<HitQuery<'_>> {
         Vec::new()
     }
-    pub(super) fn packet_queries(&self) -> Vec<BatchQuery<'_>> {
+    pub(super) fn packet_queries(&self, _query: Query) -> Vec<BatchQuery<'_>> {
         Vec::new()
     }
 }

@@ -165,17 +165,29 @@ pub fn markdown(reports: &[BvhReport]) -> String {
     s
 }
 
+/// The name of Embree's packet call for a set timed with `query` (`SetFigures::query`):
+/// `rtcOccluded` for any hit, `rtcIntersect` for closest hits (then `8` or `16`).
+pub(super) fn packet_api(query: &str) -> &'static str {
+    if query == crate::raysets::named::Query::Any.name() {
+        "rtcOccluded"
+    } else {
+        "rtcIntersect"
+    }
+}
+
 /// Per batch set (those with Embree packet figures), the geometric mean over the meshes of
-/// halfray's batch path over Embree's `rtcIntersect8` and `rtcIntersect16`, default and robust;
-/// one line each, empty without such sets.
+/// halfray's batch path over Embree's packet API (`rtcIntersect8`/`16`, or `rtcOccluded8`/`16`
+/// for an any-hit set), default and robust; one line each, empty without such sets.
 fn packet_lines(reports: &[BvhReport]) -> String {
     let mut s = String::new();
     for name in set_names(reports) {
+        let mut api = "";
         let ratios: Vec<[f64; 4]> = reports
             .iter()
             .filter_map(|r| {
                 let x = r.sets.iter().find(|x| x.name == name)?;
                 let (p8, p16) = (x.embree_packet8_mrays?, x.embree_packet16_mrays?);
+                api = packet_api(&x.query);
                 Some([p8[0], p16[0], p8[1], p16[1]].map(|e| x.mrays / e))
             })
             .collect();
@@ -185,7 +197,7 @@ fn packet_lines(reports: &[BvhReport]) -> String {
         let k = ratios.len() as f64;
         let g = [0, 1, 2, 3].map(|i| (ratios.iter().map(|q| q[i].ln()).sum::<f64>() / k).exp());
         s.push_str(&format!(
-            "{name}: {} meshes, geometric mean over Embree's packet API: {:.2}× rtcIntersect8, {:.2}× rtcIntersect16 (default); {:.2}×, {:.2}× (robust)\n",
+            "{name}: {} meshes, geometric mean over Embree's packet API: {:.2}× {api}8, {:.2}× {api}16 (default); {:.2}×, {:.2}× (robust)\n",
             ratios.len(),
             g[0],
             g[1],
