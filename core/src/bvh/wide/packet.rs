@@ -4,11 +4,11 @@
 //! A packet is the rays, of [`PACKET`] consecutive rays of a batch, whose directions lie in
 //! the first ray's octant and within [`COHERENT_COS`] of its direction, whose origins lie
 //! within [`COHERENT_ORIGIN`] of its origin ([`COHERENT_ORIGIN_ANY`] for any-hit rays), with
-//! finite reciprocals and `t_min ≥ 0` (the
-//! common path of the single-ray node test) — when they are at least three quarters of the
-//! chunk. The other rays are walked alone by the single-ray query. The ray three quarters
-//! into the chunk is looked at first: when it is not like the first, the whole chunk goes to
-//! the single-ray query before any per-ray work (an incoherent order costs the batch nothing).
+//! finite reciprocals and `t_min ≥ 0` (the common path of the single-ray node test) — when
+//! they are at least three quarters of the chunk. The other rays are walked alone by the
+//! single-ray query. The ray three quarters into the chunk is looked at first: when it is not
+//! like the first, the whole chunk goes to the single-ray query before any per-ray work (an
+//! incoherent order costs the batch nothing).
 //! The packet's lanes are computed lane by lane over the chunk, in vector form, with the
 //! operations of the single-ray setup (`Lanes::gather`).
 //!
@@ -27,8 +27,8 @@
 //! above it admit it), and the closest hit with the tie rule does not depend on the order
 //! the leaves are tested in (module docs of [`crate::query`]). An any-hit ray tests every
 //! leaf its box test admits until its first hit, so it finds one exactly when its single walk
-//! does; which primitive depends on the order, and the packet's is not the ray's own. The statistics count a packet's
-//! node tests once and each ray's triangle tests.
+//! does; which primitive depends on the order, and the packet's is not the ray's own. The
+//! statistics count a packet's node tests once and each ray's triangle tests.
 //!
 //! Allocation-free: the packet's rays, answers and stack live in the call's frame
 //! ([`STACK`] entries of 16 bytes).
@@ -552,25 +552,18 @@ where
                             } else {
                                 (0, keys.get(1..count).unwrap_or(&[]))
                             };
-                            let push = |k: &u32| {
+                            // The one visited after `next` is pushed last.
+                            let n = rest.len();
+                            for j in 0..n {
+                                let Some(&k) = rest.get(if ANY { j } else { n - 1 - j }) else {
+                                    break;
+                                };
                                 let e = entry((k & 7) as usize);
+                                if let Some(s) = stack.get_mut(sp) {
+                                    *s = e;
+                                    sp += 1;
+                                }
                                 prefetch_child(nodes, groups, e.child);
-                                e
-                            };
-                            if ANY {
-                                for e in rest.iter().map(push) {
-                                    if let Some(s) = stack.get_mut(sp) {
-                                        *s = e;
-                                        sp += 1;
-                                    }
-                                }
-                            } else {
-                                for e in rest.iter().rev().map(push) {
-                                    if let Some(s) = stack.get_mut(sp) {
-                                        *s = e;
-                                        sp += 1;
-                                    }
-                                }
                             }
                             next = entry((keys[visit & (W - 1)] & 7) as usize);
                             continue 'walk;
