@@ -71,10 +71,13 @@ where
         reported
     }
 
-    /// The batch walk of `rays` into `out` (as long): sixteen rays at a time, the coherent
-    /// ones as a packet ([`WideBvh::packet_hits`]) while they share their leaves
-    /// ([`Sharing`]), the others alone; every ray alone when `alone` (a short caller stack).
-    /// Closest hits, or any hits with `ANY`.
+    /// The batch walk of `rays` into `out` ([`BvhError::LengthMismatch`], nothing written,
+    /// unless as long): sixteen rays at a time, the coherent ones as a packet
+    /// ([`WideBvh::packet_hits`]) while they share their leaves ([`Sharing`]), the others
+    /// alone; every ray alone on a caller stack shorter than
+    /// [`crate::query::QUERY_STACK_SIZE`] (so that each gets the single-ray answer, an error
+    /// included). Closest hits (a tree whose root is a leaf: [`WideBvh::root_leaf_hits`]), or
+    /// any hits with `ANY`.
     #[inline(always)]
     fn in_packets<LT: LeafTest, L: SimdLevel, S: Stack, const ANY: bool>(
         &self,
@@ -82,8 +85,16 @@ where
         leaf: &mut LT,
         ctx: &mut Query<'_, L, S>,
         out: &mut [S::Out<(u32, LT::Hit)>],
-        alone: bool,
-    ) {
+    ) -> Result<(), BvhError> {
+        same_length(rays.len(), out.len())?;
+        let alone = ctx.stack.entries().is_some_and(|e| e.len() < STACK);
+        if !ANY
+            && !alone
+            && let ChildRef::Leaf { start, count } = ChildRef::decode(self.root)
+            && self.root_leaf_hits((start, count), rays, leaf, ctx, out)
+        {
+            return Ok(());
+        }
         let mut stack = PacketStack::new();
         let mut sharing = Sharing::NEW;
         for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
@@ -111,6 +122,7 @@ where
                 }
             }
         }
+        Ok(())
     }
 }
 
@@ -154,16 +166,7 @@ where
         ctx: &mut Query<'_, L, S>,
         out: &mut [S::Out<(u32, LT::Hit)>],
     ) -> Result<(), BvhError> {
-        same_length(rays.len(), out.len())?;
-        let short = ctx.stack.entries().is_some_and(|e| e.len() < STACK);
-        if !short
-            && let ChildRef::Leaf { start, count } = ChildRef::decode(self.root)
-            && self.root_leaf_hits((start, count), rays, leaf, ctx, out)
-        {
-            return Ok(());
-        }
-        self.in_packets::<LT, L, S, false>(rays, leaf, ctx, out, short);
-        Ok(())
+        self.in_packets::<LT, L, S, false>(rays, leaf, ctx, out)
     }
 
     /// As [`WideBvh::closest_hits`]'s packets: coherent rays (shadow rays towards one light,
@@ -179,10 +182,7 @@ where
         ctx: &mut Query<'_, L, S>,
         out: &mut [S::Out<(u32, LT::Hit)>],
     ) -> Result<(), BvhError> {
-        same_length(rays.len(), out.len())?;
-        let short = ctx.stack.entries().is_some_and(|e| e.len() < STACK);
-        self.in_packets::<LT, L, S, true>(rays, leaf, ctx, out, short);
-        Ok(())
+        self.in_packets::<LT, L, S, true>(rays, leaf, ctx, out)
     }
 
     fn query_box<P: crate::mesh::PrimitiveSource + ?Sized>(
