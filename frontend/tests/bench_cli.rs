@@ -31,8 +31,8 @@ fn several_meshes_give_one_report_each_and_a_summary_table() {
     for (r, m) in reports.iter().zip(&meshes) {
         assert_eq!(r["mesh"], m.as_str());
         assert_eq!(r["brute_force_mismatches"], 0, "{m}");
-        // Every named set, in order, with its query and ray count; each camera set followed by
-        // its batch path (`+batch`, the same rays).
+        // Every named set, in order, with its query and ray count; each camera set and the
+        // shadow set followed by its batch path (`+batch`, the same rays).
         let sets = r["sets"].as_array().expect("sets[]");
         let names: Vec<&str> = sets.iter().map(|s| s["name"].as_str().unwrap()).collect();
         assert_eq!(
@@ -46,12 +46,13 @@ fn several_meshes_give_one_report_each_and_a_summary_table() {
                 "primary-stride+batch",
                 "random",
                 "shadow",
+                "shadow+batch",
                 "ao"
             ]
         );
         for s in sets {
             let name = s["name"].as_str().unwrap();
-            let any = matches!(name, "shadow" | "ao");
+            let any = matches!(name, "shadow" | "shadow+batch" | "ao");
             assert_eq!(
                 s["query"],
                 if any { "any" } else { "closest" },
@@ -62,7 +63,7 @@ fn several_meshes_give_one_report_each_and_a_summary_table() {
             match name {
                 "random" => assert_eq!(rays, 500),
                 // One shadow or AO ray per camera ray that hits.
-                "shadow" | "ao" => {
+                "shadow" | "shadow+batch" | "ao" => {
                     let hit = sets[0]["hit_rate"].as_f64().unwrap() * 576.0;
                     assert_eq!(rays as f64, hit.round(), "{m} {name}");
                 }
