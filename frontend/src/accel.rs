@@ -235,6 +235,25 @@ impl MeshAccel {
         out
     }
 
+    /// Whether anything is hit in each of `rays`' intervals, by the batch query
+    /// ([`any_batch_simd`]: coherent rays, as shadow rays towards one light, walked in
+    /// packets): entry `i` is [`MeshAccel::any`] of `rays[i]`. `stats`, when given, is added
+    /// to (a packet's node tests counted once).
+    pub fn any_batch<I: TriangleIntersector>(
+        &self,
+        isect: &I,
+        rays: &[Ray],
+        stats: Option<&mut TraversalStats>,
+    ) -> Vec<bool> {
+        let mut out = vec![None; rays.len()];
+        // `out` has `rays.len()` entries, the batch query's only refusal; were it refused,
+        // the single-ray query gives the same answers.
+        match any_batch_simd(&self.wide, &self.triangles(), isect, rays, &mut out, stats) {
+            Ok(()) => out.iter().map(Option::is_some).collect(),
+            Err(_) => rays.iter().map(|r| self.any(isect, r)).collect(),
+        }
+    }
+
     /// Any hit with a variant chosen at run time.
     pub fn any_variant(&self, v: TriangleVariant, ray: &Ray) -> bool {
         struct Any<'a>(&'a MeshAccel, &'a Ray);

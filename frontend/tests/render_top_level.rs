@@ -1,8 +1,9 @@
 //! The scene's top-level BVH (`scene::top`) against the plain loop over every object it
 //! replaced: the same closest object (ties: the object declared last), the same `t`, the same
-//! occlusion, on every example scene and on 10 000 spheres with duplicates. Its batch query
-//! (a mesh walking its rays in packets) against its single-ray query, hit for hit, and the
-//! renderer's batched rows against single rays, pixel for pixel.
+//! occlusion, on every example scene and on 10 000 spheres with duplicates. Its batch queries
+//! (a mesh walking its rays in packets) against the single-ray query, hit for hit, and
+//! against the object loop's occlusion, ray for ray; the renderer's batched rows (primary and
+//! shadow rays) against single rays, pixel for pixel.
 
 use halfray::render::{Mode, RenderOptions, render};
 use halfray::scene::geom::QueryCtx;
@@ -58,6 +59,15 @@ fn check(s: &Scene, what: &str, lo: Vec3, hi: Vec3, rays: usize) -> usize {
             force_intervals,
             ..QueryCtx::default()
         };
+        let blocked = s.top.occluded_batch(&s.objects, &all, &mut ctx);
+        assert_eq!(blocked.len(), all.len());
+        for (ray, &got) in all.iter().zip(&blocked) {
+            let want = s.objects.iter().any(|o| o.occludes(ray, &mut ctx));
+            assert_eq!(
+                got, want,
+                "{what}, occluded batch (intervals {force_intervals}): {ray:?}"
+            );
+        }
         let batch = s.top.closest_batch(&s.objects, &all, &mut ctx);
         assert_eq!(batch.len(), all.len());
         for (ray, got) in all.iter().zip(&batch) {
@@ -194,4 +204,69 @@ fn batched_rows_render_the_single_ray_image() {
         n += 1;
     }
     assert!(n >= 7);
+}
+
+/// A row's shadow rays towards a point light, as the renderer batches them
+/// (`Tracer::plain_shadow_ray`, `Tracer::occluded_batch`): blocked exactly where the single
+/// ray is and where the object loop says so, and walked in packets (fewer node tests than
+/// the single rays take).
+#[test]
+fn a_row_s_shadow_rays_batched_answer_as_single_rays() {
+    use halfray::render::plan::EffectPlan;
+    use halfray::render::trace::Tracer;
+    let dir = scenes_dir();
+    let text = format!(
+        "[camera]\neye = [0.4, 0.9, 2.2]\nlook_at = [0, 0.1, 0]\nfov = 40\nwidth = 768\nheight = 576\n\n\
+         [material.a]\ndiffuse = [1, 0, 0]\n\n[mesh.spot]\nfile = \"{}\"\n\n\
+         [[light]]\ntype = \"point\"\nposition = [1.5, 3.0, 1.0]\nintensity = 10\n\n\
+         [[object]]\ntype = \"plane\"\npoint = [0, -0.75, 0]\nnormal = [0, 1, 0]\nmaterial = \"a\"\n\n\
+         [[object]]\ntype = \"mesh\"\nmesh = \"spot\"\nmaterial = \"a\"\n",
+        dir.join("meshes/spot.obj").display()
+    );
+    let s = parse(&text, &dir.join("shadow-rows.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let plan = EffectPlan::derive(&s, false);
+    let tracer = Tracer {
+        scene: &s,
+        plan: &plan,
+    };
+    let (mut batch_nodes, mut single_nodes, mut rays_seen, mut blocked_seen) = (0, 0, 0, 0);
+    for j in (0..s.camera.height).step_by(24) {
+        let primary: Vec<Ray> = (0..s.camera.width)
+            .map(|i| s.camera.ray_at(i as f32 + 0.5, j as f32 + 0.5))
+            .collect();
+        let hits = tracer.closest_batch(&primary, &mut tracer.ctx());
+        let rays: Vec<Ray> = hits
+            .iter()
+            .flatten()
+            .filter_map(|sh| tracer.plain_shadow_ray(0, sh))
+            .collect();
+        let mut ctx = tracer.ctx();
+        let got = tracer.occluded_batch(&rays, &mut ctx);
+        batch_nodes += ctx.stats.nodes_visited;
+        assert_eq!(got.len(), rays.len());
+        let mut shuffled = rays.clone();
+        let mut seed = u64::from(j) + 1;
+        for k in (1..shuffled.len()).rev() {
+            shuffled.swap(k, (lcg(&mut seed) * (k + 1) as f32) as usize % (k + 1));
+        }
+        let mut ctx = tracer.ctx();
+        let _ = tracer.occluded_batch(&shuffled, &mut ctx);
+        single_nodes += ctx.stats.nodes_visited;
+        for (ray, &got) in rays.iter().zip(&got) {
+            let mut ctx = tracer.ctx();
+            let want = tracer.occluded(ray, &mut ctx);
+            let by_loop = s.objects.iter().any(|o| o.occludes(ray, &mut ctx));
+            assert_eq!((got, got), (want, by_loop), "row {j}: {ray:?}");
+            blocked_seen += usize::from(got);
+        }
+        rays_seen += rays.len();
+    }
+    assert!(
+        rays_seen > 2000 && blocked_seen > 200,
+        "{rays_seen} rays, {blocked_seen} blocked"
+    );
+    assert!(
+        2 * batch_nodes < single_nodes,
+        "packets: {batch_nodes} node tests against {single_nodes} shuffled"
+    );
 }

@@ -17,7 +17,7 @@ use crate::console::print_out;
 use crate::error::{Error, Result};
 use crate::limits::check_memory;
 use crate::outputs::{Named, refuse_inputs, reserve_outputs, write_together};
-use crate::scene::geom::SurfaceHit;
+use crate::scene::geom::{QueryCtx, SurfaceHit};
 use crate::scene::{self, Scene};
 use bound::PathBound;
 use glam::{Vec3, Vec4};
@@ -330,14 +330,51 @@ fn row_batched(
     let rays: Vec<halfray_core::Ray> = (0..camera.width)
         .map(|i| camera.ray_at(i as f32 + 0.5, y + 0.5))
         .collect();
-    let hits = tracer.closest_batch(&rays, &mut tracer.ctx());
+    let mut ctx = tracer.ctx();
+    let hits = tracer.closest_batch(&rays, &mut ctx);
+    let known = if opts.mode == Mode::Color {
+        shadows_batched(tracer, &hits, &mut ctx)
+    } else {
+        Vec::new()
+    };
+    let lights = tracer.scene.lights.len();
     rays.iter()
         .zip(hits)
-        .map(|(ray, hit)| {
+        .enumerate()
+        .map(|(i, (ray, hit))| {
             counts.primary += 1;
-            shade_primary(tracer, opts, ray, hit, 0, counts)
+            let known = known.get(i * lights..(i + 1) * lights).unwrap_or(&[]);
+            shade_primary(tracer, opts, ray, hit, 0, known, counts)
         })
         .collect()
+}
+
+/// The answers of the plain shadow rays ([`Tracer::plain_shadow_ray`]) from a row's primary
+/// `hits`, traced as one batch per light ([`Tracer::occluded_batch`]: shadow rays towards a
+/// point light walked in packets): entry `i · L + li` (`L` lights) is pixel `i`'s answer
+/// towards light `li`, `None` where that pixel casts no plain shadow ray towards it.
+fn shadows_batched(
+    tracer: &Tracer<'_>,
+    hits: &[Option<SurfaceHit>],
+    ctx: &mut QueryCtx,
+) -> Vec<Option<bool>> {
+    let lights = tracer.scene.lights.len();
+    let mut known = vec![None; hits.len() * lights];
+    let (mut rays, mut pixels) = (Vec::new(), Vec::new());
+    for li in 0..lights {
+        rays.clear();
+        pixels.clear();
+        for (i, sh) in hits.iter().enumerate() {
+            if let Some(ray) = sh.as_ref().and_then(|sh| tracer.plain_shadow_ray(li, sh)) {
+                rays.push(ray);
+                pixels.push(i);
+            }
+        }
+        for (&i, blocked) in pixels.iter().zip(tracer.occluded_batch(&rays, ctx)) {
+            known[i * lights + li] = Some(blocked);
+        }
+    }
+    known
 }
 
 /// One primary ray.
@@ -350,16 +387,26 @@ fn sample(
     counts.primary += 1;
     let mut ctx = tracer.ctx();
     let hit = tracer.closest(&ray, &mut ctx);
-    shade_primary(tracer, opts, &ray, hit, ctx.stats.nodes_visited, counts)
+    shade_primary(
+        tracer,
+        opts,
+        &ray,
+        hit,
+        ctx.stats.nodes_visited,
+        &[],
+        counts,
+    )
 }
 
-/// The pixel of the primary ray `ray` whose closest hit is `hit`, after `nodes` node visits.
+/// The pixel of the primary ray `ray` whose closest hit is `hit`, after `nodes` node visits;
+/// `known`: its plain shadow rays' answers where traced already ([`Tracer::shade_known`]).
 fn shade_primary(
     tracer: &Tracer<'_>,
     opts: &RenderOptions,
     ray: &halfray_core::Ray,
     hit: Option<SurfaceHit>,
     nodes: u64,
+    known: &[Option<bool>],
     counts: &mut RayCounts,
 ) -> PixelOut {
     let mode = opts.mode;
@@ -376,7 +423,7 @@ fn shade_primary(
         };
     };
     let value = match mode {
-        Mode::Color => tracer.shade_bounded(ray, &sh, 0, opts.bound, &mut ctx, counts),
+        Mode::Color => tracer.shade_known(ray, &sh, opts.bound, known, &mut ctx, counts),
         Mode::Normal => sh.hit.normal * 0.5 + 0.5,
         Mode::Barycentric => sh.bary.unwrap_or(Vec3::splat(0.5)),
         Mode::Depth | Mode::Heatmap => Vec3::ZERO,

@@ -44,6 +44,16 @@ struct PathState {
 }
 
 impl PathState {
+    /// A path starting at recursion `depth` with weight 1 under `bound`.
+    fn new(depth: u32, bound: PathBound) -> Self {
+        Self {
+            depth,
+            weight: 1.0,
+            bound,
+            rays_left: bound.max_secondary_rays,
+        }
+    }
+
     /// Whether this node may cast secondary rays at all (forced leaves may not).
     fn expands(&self, max_depth: u32) -> bool {
         self.depth < max_depth && self.weight > 0.0 && self.weight >= self.bound.min_weight
@@ -151,6 +161,34 @@ impl Tracer<'_> {
         self.scene.top.occluded(&self.scene.objects, ray, ctx)
     }
 
+    /// [`Tracer::occluded`] of each of `rays`, the same answers, ray for ray (each mesh walking
+    /// the rays that reach it in packets, [`crate::scene::top::TopLevel::occluded_batch`]).
+    pub fn occluded_batch(&self, rays: &[Ray], ctx: &mut QueryCtx) -> Vec<bool> {
+        self.scene
+            .top
+            .occluded_batch(&self.scene.objects, rays, ctx)
+    }
+
+    /// The shadow ray that [`Tracer::shade`] casts from `sh` towards light `li` as a plain
+    /// occlusion query (a point or directional light whose shadows the plan casts from this
+    /// hit, not an area light, without transmission), or `None` where it casts none or
+    /// follows another path: the rays a renderer may trace as one batch per light and hand
+    /// to [`Tracer::shade_known`].
+    pub fn plain_shadow_ray(&self, li: usize, sh: &SurfaceHit) -> Option<Ray> {
+        let light = self.scene.lights.get(li)?;
+        let (l, _, ray) = toward(light, &sh.hit);
+        let plain = self.casts_shadow(li, sh.shading_normal().dot(l))
+            && area_centre(light).is_none()
+            && !self.plan.shadow_transmission;
+        plain.then_some(ray)
+    }
+
+    /// Whether the plan casts a shadow ray towards light `li` from a hit whose shading normal
+    /// makes `ndotl` with the direction to the light.
+    fn casts_shadow(&self, li: usize, ndotl: f32) -> bool {
+        self.plan.shadow_rays[li] && (ndotl > 0.0 || self.plan.forced)
+    }
+
     /// The fraction of light that reaches the end of the shadow ray `ray` (towards `light`):
     /// 0 at the first opaque surface, else the product of the `transparency` of every surface
     /// crossed (a glass sphere is crossed twice). Each segment is one shadow ray, added to
@@ -222,7 +260,7 @@ impl Tracer<'_> {
         n: &mut RayCounts,
     ) -> Vec3 {
         match self.closest(ray, ctx) {
-            Some(h) => self.shade_path(ray, &h, path, ctx, n),
+            Some(h) => self.shade_path(ray, &h, path, &[], ctx, n),
             None => self.scene.background,
         }
     }
@@ -240,6 +278,23 @@ impl Tracer<'_> {
         self.shade_bounded(ray, sh, depth, PathBound::RENDER, ctx, n)
     }
 
+    /// [`Tracer::shade_bounded`] at depth 0 with the plain shadow rays' answers known:
+    /// `known[li]`, where given, is [`Tracer::occluded`] of [`Tracer::plain_shadow_ray`]
+    /// `(li, sh)` (traced in a batch by the caller); the image is [`Tracer::shade_bounded`]'s,
+    /// bit for bit, and so are the ray counts.
+    pub fn shade_known(
+        &self,
+        ray: &Ray,
+        sh: &SurfaceHit,
+        bound: PathBound,
+        known: &[Option<bool>],
+        ctx: &mut QueryCtx,
+        n: &mut RayCounts,
+    ) -> Vec3 {
+        let mut path = PathState::new(0, bound);
+        self.shade_path(ray, sh, &mut path, known, ctx, n)
+    }
+
     /// [`Tracer::shade`] under `bound`.
     pub fn shade_bounded(
         &self,
@@ -250,21 +305,18 @@ impl Tracer<'_> {
         ctx: &mut QueryCtx,
         n: &mut RayCounts,
     ) -> Vec3 {
-        let mut path = PathState {
-            depth,
-            weight: 1.0,
-            bound,
-            rays_left: bound.max_secondary_rays,
-        };
-        self.shade_path(ray, sh, &mut path, ctx, n)
+        let mut path = PathState::new(depth, bound);
+        self.shade_path(ray, sh, &mut path, &[], ctx, n)
     }
 
-    /// Local illumination plus the recursive terms at a hit.
+    /// Local illumination plus the recursive terms at a hit; `known[li]`, where given, is the
+    /// answer of the plain shadow ray towards light `li` ([`Tracer::shade_known`]).
     fn shade_path(
         &self,
         ray: &Ray,
         sh: &SurfaceHit,
         path: &mut PathState,
+        known: &[Option<bool>],
         ctx: &mut QueryCtx,
         n: &mut RayCounts,
     ) -> Vec3 {
@@ -278,29 +330,11 @@ impl Tracer<'_> {
         let mut color = m.ambient * scene.ambient;
         let specular = self.plan.specular[mi];
         for (li, light) in scene.lights.iter().enumerate() {
-            let (l, e, shadow_ray) = match light.kind {
-                LightKind::Point { position } => {
-                    let to = position - hit.point;
-                    let r2 = to.length_squared();
-                    (
-                        to.normalize_or_zero(),
-                        light.intensity / r2,
-                        spawn_ray_to(hit, position),
-                    )
-                }
-                LightKind::Directional { direction } => {
-                    (-direction, light.intensity, spawn_ray(hit, -direction))
-                }
-            };
+            let (l, mut e, shadow_ray) = toward(light, hit);
             let ndotl = nrm.dot(l);
-            let cast = self.plan.shadow_rays[li] && (ndotl > 0.0 || self.plan.forced);
+            let cast = self.casts_shadow(li, ndotl);
             let mut blocked = false;
-            let mut e = e;
-            let area = match light.kind {
-                LightKind::Point { position } if light.radius > 0.0 => Some(position),
-                _ => None,
-            };
-            if let (true, Some(centre)) = (cast, area) {
+            if let (true, Some(centre)) = (cast, area_centre(light)) {
                 let seen = self.area_visibility(hit, centre, light, ctx, n);
                 if light.cast_shadows {
                     blocked = !(seen > 0.0);
@@ -314,7 +348,11 @@ impl Tracer<'_> {
                 }
             } else if cast {
                 n.shadow += 1;
-                blocked = self.occluded(&shadow_ray, ctx) && light.cast_shadows;
+                let occluded = match known.get(li) {
+                    Some(&Some(occluded)) => occluded,
+                    _ => self.occluded(&shadow_ray, ctx),
+                };
+                blocked = occluded && light.cast_shadows;
             }
             if !(ndotl > 0.0) || blocked || !e.is_finite() {
                 continue;
@@ -390,6 +428,34 @@ impl Tracer<'_> {
             return Cast::Leaf;
         }
         Cast::Skipped
+    }
+}
+
+/// Towards `light` from `hit`: the unit direction to the light, the irradiance `E` (`I/r²`
+/// for a point light, `I` for a directional one) and the shadow ray (the core's robust
+/// spawn: to the light's position, or along the direction to it).
+fn toward(light: &Light, hit: &halfray_core::Hit) -> (Vec3, Vec3, Ray) {
+    match light.kind {
+        LightKind::Point { position } => {
+            let to = position - hit.point;
+            let r2 = to.length_squared();
+            (
+                to.normalize_or_zero(),
+                light.intensity / r2,
+                spawn_ray_to(hit, position),
+            )
+        }
+        LightKind::Directional { direction } => {
+            (-direction, light.intensity, spawn_ray(hit, -direction))
+        }
+    }
+}
+
+/// The centre of an area light (a point light with a disk of `radius > 0`), else `None`.
+fn area_centre(light: &Light) -> Option<Vec3> {
+    match light.kind {
+        LightKind::Point { position } if light.radius > 0.0 => Some(position),
+        _ => None,
     }
 }
 

@@ -333,27 +333,65 @@ impl Node {
                 return;
             }
         };
-        let (slots, local): (Vec<&mut Option<SurfaceHit>>, Vec<Ray>) = out
-            .iter_mut()
-            .zip(rays)
-            .map(|(o, ray)| {
-                *o = None;
-                (o, ray)
-            })
-            .filter(|(_, ray)| self.may_hit(ray))
-            .map(|(o, ray)| {
-                let local = match &self.transform {
-                    Some(t) => t.ray_to_object(ray),
-                    None => *ray,
-                };
-                (o, local)
-            })
-            .unzip();
+        let (slots, local) = self.local_rays(rays, out, None);
         for (o, h) in slots
             .into_iter()
             .zip(mesh.closest_batch(&local, &mut ctx.stats))
         {
             *o = h.map(|h| self.in_parent(self.mesh_surface(h)));
+        }
+    }
+
+    /// [`Node::occludes`] of each of `rays`, into `out` (as many entries; the others are left
+    /// alone): the same answers. A mesh instance traces the rays its bounds may meet as one
+    /// batch, in its own space ([`crate::accel::MeshAccel::any_batch`]: shadow rays towards
+    /// one light walked in packets); other shapes take them one by one.
+    pub fn occludes_batch(&self, rays: &[Ray], ctx: &mut QueryCtx, out: &mut [bool]) {
+        let mesh = match &self.shape {
+            Geometry::Mesh(m) if rays.len() >= MESH_BATCH_MIN_RAYS => m,
+            _ => {
+                for (o, ray) in out.iter_mut().zip(rays) {
+                    *o = self.occludes(ray, ctx);
+                }
+                return;
+            }
+        };
+        let (slots, local) = self.local_rays(rays, out, false);
+        let stats = Some(&mut ctx.stats);
+        for (o, h) in slots
+            .into_iter()
+            .zip(mesh.accel.any_batch(&Watertight, &local, stats))
+        {
+            *o = h;
+        }
+    }
+
+    /// Of `rays` and their answer slots `out`, the slots of the rays this node's bounds may
+    /// meet ([`Node::may_hit`]) and those rays in the node's own space; every slot of
+    /// `out` paired with a ray is set to `none` first (the answer of a ray that misses the
+    /// bounds).
+    fn local_rays<'o, T: Copy>(
+        &self,
+        rays: &[Ray],
+        out: &'o mut [T],
+        none: T,
+    ) -> (Vec<&'o mut T>, Vec<Ray>) {
+        out.iter_mut()
+            .zip(rays)
+            .map(|(o, ray)| {
+                *o = none;
+                (o, ray)
+            })
+            .filter(|(_, ray)| self.may_hit(ray))
+            .map(|(o, ray)| (o, self.to_local(ray)))
+            .unzip()
+    }
+
+    /// `ray` (in the parent's space) in this node's own space.
+    fn to_local(&self, ray: &Ray) -> Ray {
+        match &self.transform {
+            Some(t) => t.ray_to_object(ray),
+            None => *ray,
         }
     }
 
@@ -363,11 +401,7 @@ impl Node {
             return false;
         }
         if let Geometry::Mesh(m) = &self.shape {
-            let local = match &self.transform {
-                Some(t) => t.ray_to_object(ray),
-                None => *ray,
-            };
-            return m.accel.any(&Watertight, &local);
+            return m.accel.any(&Watertight, &self.to_local(ray));
         }
         self.closest(ray, ctx).is_some()
     }

@@ -145,48 +145,14 @@ impl TopLevel {
             .iter()
             .map(|ray| self.closest_listed(objects, ray, ctx))
             .unzip();
-        // (primitive, ray) for each ray that reaches one bounded object's leaf. The walk is an
-        // any-hit query whose leaf test records the first primitive and reports a hit at the
-        // second, so a ray meeting several stops there; one that does not has seen every leaf
-        // its interval meets (the interval never shrank), so its one object is all
-        // `closest` could test.
-        let mut pairs: Vec<(u32, u32)> = Vec::new();
-        let mut several_seen = 0usize;
-        for (i, r) in (0u32..).zip(&shrunk) {
-            // Where most rays meet several objects (a crowd of instances), the walk that lists
-            // them is spent for nothing: the rest take the single-ray query at once.
-            // The ray's unbounded objects were tested above: `(best, r)` is its
-            // `closest_listed`, which the single-ray query goes on from.
-            let alone = |best: &mut Option<_>, ctx: &mut QueryCtx| {
-                *best = self.closest_boxed(objects, (best.take(), *r), ctx);
-            };
-            if i as usize >= PROBED_RAYS && 2 * several_seen > i as usize {
-                alone(&mut best[i as usize], ctx);
-                continue;
-            }
-            let mut first = None;
-            let mut list = |k: u32, r: &Ray| -> Option<(f32, ())> {
-                if first.is_none() {
-                    first = Some(k);
-                    return None;
-                }
-                // Any `t` of the interval stops the walk (nothing is accepted at `+∞`).
-                Some((r.t_max.min(f32::MAX), ()))
-            };
-            let several = bvh.any_hit(r, &mut list, &mut Query::new()).is_some();
-            several_seen += usize::from(several);
-            match first {
-                _ if several => alone(&mut best[i as usize], ctx),
-                Some(k) => pairs.push((k, i)),
-                None => {}
-            }
-        }
-        pairs.sort_unstable();
+        // The ray's unbounded objects were tested above: `(best, r)` is its
+        // `closest_listed`, which the single-ray query goes on from.
+        let pairs = self.one_object_rays(bvh, (0u32..).zip(&shrunk), |i| {
+            let slot = &mut best[i as usize];
+            *slot = self.closest_boxed(objects, (slot.take(), shrunk[i as usize]), ctx);
+        });
         let (mut batch, mut hits) = (Vec::new(), Vec::new());
-        for group in pairs.chunk_by(|a, b| a.0 == b.0) {
-            let Some(&object) = self.bounded.get(group[0].0 as usize) else {
-                continue;
-            };
+        for (object, group) in self.by_object(&pairs) {
             batch.clear();
             batch.extend(group.iter().map(|&(_, i)| shrunk[i as usize]));
             hits.clear();
@@ -203,6 +169,102 @@ impl TopLevel {
             }
         }
         best
+    }
+
+    /// [`TopLevel::occluded`] of each of `rays`: the same answers, ray for ray. As
+    /// [`TopLevel::closest_batch`], a ray whose interval meets the box of one bounded object
+    /// only goes to that object, which takes all its rays at once ([`Node::occludes_batch`]:
+    /// a mesh walks shadow rays in packets); a ray that meets several takes the single-ray
+    /// query.
+    pub fn occluded_batch(&self, objects: &[Node], rays: &[Ray], ctx: &mut QueryCtx) -> Vec<bool> {
+        let bvh = match &self.bvh {
+            Some(bvh) if self.bounded.len() <= BATCHED_OBJECTS_MAX => bvh,
+            _ => {
+                return rays
+                    .iter()
+                    .map(|r| self.occluded(objects, r, ctx))
+                    .collect();
+            }
+        };
+        let mut blocked: Vec<bool> = rays
+            .iter()
+            .map(|r| self.occluded_listed(objects, r, ctx))
+            .collect();
+        let open: Vec<(u32, &Ray)> = (0u32..)
+            .zip(rays)
+            .filter(|&(i, _)| !blocked[i as usize])
+            .collect();
+        let pairs = self.one_object_rays(bvh, open.into_iter(), |i| {
+            blocked[i as usize] = self.occluded_boxed(objects, &rays[i as usize], ctx);
+        });
+        let (mut batch, mut flags) = (Vec::new(), Vec::new());
+        for (object, group) in self.by_object(&pairs) {
+            batch.clear();
+            batch.extend(group.iter().map(|&(_, i)| rays[i as usize]));
+            flags.clear();
+            flags.resize(batch.len(), false);
+            objects[object as usize].occludes_batch(&batch, ctx, &mut flags);
+            for (&(_, i), &f) in group.iter().zip(&flags) {
+                blocked[i as usize] |= f;
+            }
+        }
+        blocked
+    }
+
+    /// Of `rays` (each with its index in the batch), the pairs `(bounded object, ray index)`
+    /// of the rays whose interval meets the box of one bounded object only, sorted by object;
+    /// `alone(i)` is called for each ray that meets several (it takes the single-ray query),
+    /// and for every ray after [`PROBED_RAYS`] once more than half of those before met
+    /// several. A ray that meets none appears nowhere.
+    fn one_object_rays<'r>(
+        &self,
+        bvh: &Bvh<Vec<BvhNode>, Vec<u32>>,
+        rays: impl Iterator<Item = (u32, &'r Ray)>,
+        mut alone: impl FnMut(u32),
+    ) -> Vec<(u32, u32)> {
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        let mut several_seen = 0usize;
+        for (seen, (i, r)) in rays.enumerate() {
+            // Where most rays meet several objects (a crowd of instances), the walk that lists
+            // them is spent for nothing: the rest take the single-ray query at once.
+            if seen >= PROBED_RAYS && 2 * several_seen > seen {
+                alone(i);
+                continue;
+            }
+            // The walk is an any-hit query whose leaf test records the first primitive and
+            // reports a hit at the second, so a ray meeting several stops there; one that
+            // does not has seen every leaf its interval meets (the interval never shrank), so
+            // its one object is all the single-ray query could test.
+            let mut first = None;
+            let mut list = |k: u32, r: &Ray| -> Option<(f32, ())> {
+                if first.is_none() {
+                    first = Some(k);
+                    return None;
+                }
+                // Any `t` of the interval stops the walk (nothing is accepted at `+∞`).
+                Some((r.t_max.min(f32::MAX), ()))
+            };
+            let several = bvh.any_hit(r, &mut list, &mut Query::new()).is_some();
+            several_seen += usize::from(several);
+            match first {
+                _ if several => alone(i),
+                Some(k) => pairs.push((k, i)),
+                None => {}
+            }
+        }
+        pairs.sort_unstable();
+        pairs
+    }
+
+    /// The runs of `pairs` (sorted `(bounded object, ray index)`, [`TopLevel::one_object_rays`])
+    /// that share an object, each with the object's index in the scene.
+    fn by_object<'p>(
+        &'p self,
+        pairs: &'p [(u32, u32)],
+    ) -> impl Iterator<Item = (u32, &'p [(u32, u32)])> + 'p {
+        pairs
+            .chunk_by(|a, b| a.0 == b.0)
+            .filter_map(|group| Some((*self.bounded.get(group[0].0 as usize)?, group)))
     }
 
     /// The closest hit among the unbounded objects (declaration order, a later one winning an
@@ -226,13 +288,18 @@ impl TopLevel {
 
     /// Whether any object blocks `ray` in its interval.
     pub fn occluded(&self, objects: &[Node], ray: &Ray, ctx: &mut QueryCtx) -> bool {
-        if self
-            .unbounded
+        self.occluded_listed(objects, ray, ctx) || self.occluded_boxed(objects, ray, ctx)
+    }
+
+    /// Whether an unbounded object blocks `ray` in its interval.
+    fn occluded_listed(&self, objects: &[Node], ray: &Ray, ctx: &mut QueryCtx) -> bool {
+        self.unbounded
             .iter()
             .any(|&i| objects[i as usize].occludes(ray, ctx))
-        {
-            return true;
-        }
+    }
+
+    /// Whether a bounded object blocks `ray` in its interval.
+    fn occluded_boxed(&self, objects: &[Node], ray: &Ray, ctx: &mut QueryCtx) -> bool {
         let Some(bvh) = &self.bvh else {
             return false;
         };
