@@ -206,7 +206,8 @@ fn batched_rows_render_the_single_ray_image() {
     assert!(n >= 7);
 }
 
-/// A row's shadow rays towards a point light, as the renderer batches them
+/// A scene of one mesh and a plane; a row's shadow rays towards a point light, as the
+/// renderer batches them
 /// (`Tracer::plain_shadow_ray`, `Tracer::occluded_batch`): blocked exactly where the single
 /// ray is and where the object loop says so, and walked in packets (fewer node tests than
 /// the single rays take).
@@ -224,6 +225,10 @@ fn a_row_s_shadow_rays_batched_answer_as_single_rays() {
         dir.join("meshes/spot.obj").display()
     );
     let s = parse(&text, &dir.join("shadow-rows.toml")).unwrap_or_else(|e| panic!("{e}"));
+    // One bounded object (the batches send it every ray without a walk): the batch queries
+    // against the object loop and the single-ray query.
+    let hits = check(&s, "one mesh", Vec3::splat(-1.5), Vec3::splat(1.5), 3000);
+    assert!(hits > 1000, "{hits}");
     let plan = EffectPlan::derive(&s, false);
     let tracer = Tracer {
         scene: &s,

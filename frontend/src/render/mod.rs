@@ -332,7 +332,9 @@ fn row_batched(
         .collect();
     let mut ctx = tracer.ctx();
     let hits = tracer.closest_batch(&rays, &mut ctx);
-    let known = if opts.mode == Mode::Color {
+    let scene = tracer.scene;
+    let batched = scene.top.occlusion_batched(&scene.objects).is_some();
+    let known = if opts.mode == Mode::Color && batched {
         shadows_batched(tracer, &hits, &mut ctx)
     } else {
         Vec::new()

@@ -176,11 +176,10 @@ impl Tracer<'_> {
     /// to [`Tracer::shade_known`].
     pub fn plain_shadow_ray(&self, li: usize, sh: &SurfaceHit) -> Option<Ray> {
         let light = self.scene.lights.get(li)?;
-        let (l, _, ray) = toward(light, &sh.hit);
-        let plain = self.casts_shadow(li, sh.shading_normal().dot(l))
-            && area_centre(light).is_none()
-            && !self.plan.shadow_transmission;
-        plain.then_some(ray)
+        let plain = area_centre(light).is_none()
+            && !self.plan.shadow_transmission
+            && self.casts_shadow(li, sh.shading_normal().dot(toward(light, &sh.hit).0));
+        plain.then(|| shadow_ray(light, &sh.hit))
     }
 
     /// Whether the plan casts a shadow ray towards light `li` from a hit whose shading normal
@@ -330,7 +329,7 @@ impl Tracer<'_> {
         let mut color = m.ambient * scene.ambient;
         let specular = self.plan.specular[mi];
         for (li, light) in scene.lights.iter().enumerate() {
-            let (l, mut e, shadow_ray) = toward(light, hit);
+            let (l, mut e) = toward(light, hit);
             let ndotl = nrm.dot(l);
             let cast = self.casts_shadow(li, ndotl);
             let mut blocked = false;
@@ -341,7 +340,7 @@ impl Tracer<'_> {
                     e *= seen;
                 }
             } else if cast && self.plan.shadow_transmission {
-                let through = self.transmission(&shadow_ray, &light.kind, ctx, n);
+                let through = self.transmission(&shadow_ray(light, hit), &light.kind, ctx, n);
                 if light.cast_shadows {
                     blocked = !(through > 0.0);
                     e *= through;
@@ -350,7 +349,7 @@ impl Tracer<'_> {
                 n.shadow += 1;
                 let occluded = match known.get(li) {
                     Some(&Some(occluded)) => occluded,
-                    _ => self.occluded(&shadow_ray, ctx),
+                    _ => self.occluded(&shadow_ray(light, hit), ctx),
                 };
                 blocked = occluded && light.cast_shadows;
             }
@@ -431,23 +430,27 @@ impl Tracer<'_> {
     }
 }
 
-/// Towards `light` from `hit`: the unit direction to the light, the irradiance `E` (`I/r²`
-/// for a point light, `I` for a directional one) and the shadow ray (the core's robust
-/// spawn: to the light's position, or along the direction to it).
-fn toward(light: &Light, hit: &halfray_core::Hit) -> (Vec3, Vec3, Ray) {
+/// Towards `light` from `hit`: the unit direction to the light and the irradiance `E`
+/// (`I/r²` for a point light, `I` for a directional one).
+fn toward(light: &Light, hit: &halfray_core::Hit) -> (Vec3, Vec3) {
     match light.kind {
         LightKind::Point { position } => {
             let to = position - hit.point;
-            let r2 = to.length_squared();
             (
                 to.normalize_or_zero(),
-                light.intensity / r2,
-                spawn_ray_to(hit, position),
+                light.intensity / to.length_squared(),
             )
         }
-        LightKind::Directional { direction } => {
-            (-direction, light.intensity, spawn_ray(hit, -direction))
-        }
+        LightKind::Directional { direction } => (-direction, light.intensity),
+    }
+}
+
+/// The shadow ray from `hit` towards `light`, by the core's robust spawn: to the light's
+/// position, or along the direction to it.
+fn shadow_ray(light: &Light, hit: &halfray_core::Hit) -> Ray {
+    match light.kind {
+        LightKind::Point { position } => spawn_ray_to(hit, position),
+        LightKind::Directional { direction } => spawn_ray(hit, -direction),
     }
 }
 

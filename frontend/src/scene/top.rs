@@ -7,7 +7,7 @@
 //! declaration order, so its own tie rule (smaller primitive index) picks the later object,
 //! and an equal `t` between the BVH and the list goes to the later object too.
 
-use crate::scene::geom::{Node, QueryCtx, SurfaceHit};
+use crate::scene::geom::{Geometry, Node, QueryCtx, SurfaceHit};
 use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
 use halfray_core::mesh::PrimitiveSource;
 use halfray_core::prelude::*;
@@ -83,6 +83,20 @@ impl TopLevel {
             bounded,
             unbounded,
         }
+    }
+
+    /// The scene's one bounded object where it is a mesh, whose shadow rays
+    /// [`TopLevel::occluded_batch`] batches: it takes them all without a walk of the top
+    /// level. With several, the walk that lists a shadow ray's objects (a long ray, from a
+    /// surface to a light) costs about what its single-ray query does (`instancing.toml`:
+    /// ~800 instructions against ~950, `docs/performance.md`), so the batch takes the
+    /// single-ray query ray by ray, and a caller gains nothing by gathering its rays.
+    pub fn occlusion_batched(&self, objects: &[Node]) -> Option<u32> {
+        let [one] = self.bounded[..] else {
+            return None;
+        };
+        let mesh = matches!(objects.get(one as usize)?.shape, Geometry::Mesh(_));
+        (mesh && self.bvh.is_some()).then_some(one)
     }
 
     /// The closest hit over `objects` (those this was built from) in `ray`'s interval, and
@@ -171,42 +185,31 @@ impl TopLevel {
         best
     }
 
-    /// [`TopLevel::occluded`] of each of `rays`: the same answers, ray for ray. As
-    /// [`TopLevel::closest_batch`], a ray whose interval meets the box of one bounded object
-    /// only goes to that object, which takes all its rays at once ([`Node::occludes_batch`]:
-    /// a mesh walks shadow rays in packets); a ray that meets several takes the single-ray
-    /// query.
+    /// [`TopLevel::occluded`] of each of `rays`: the same answers, ray for ray. Where the
+    /// scene's one bounded object is a mesh ([`TopLevel::occlusion_batched`]), the rays that
+    /// no unbounded object blocks go to it at once ([`Node::occludes_batch`]: shadow rays
+    /// walked in packets; a ray that misses its box is answered by the object's own box
+    /// test, as the single-ray query's walk answers it); otherwise each ray takes the
+    /// single-ray query.
     pub fn occluded_batch(&self, objects: &[Node], rays: &[Ray], ctx: &mut QueryCtx) -> Vec<bool> {
-        let bvh = match &self.bvh {
-            Some(bvh) if self.bounded.len() <= BATCHED_OBJECTS_MAX => bvh,
-            _ => {
-                return rays
-                    .iter()
-                    .map(|r| self.occluded(objects, r, ctx))
-                    .collect();
-            }
+        let Some(object) = self.occlusion_batched(objects) else {
+            return rays
+                .iter()
+                .map(|r| self.occluded(objects, r, ctx))
+                .collect();
         };
         let mut blocked: Vec<bool> = rays
             .iter()
             .map(|r| self.occluded_listed(objects, r, ctx))
             .collect();
-        let open: Vec<(u32, &Ray)> = (0u32..)
-            .zip(rays)
-            .filter(|&(i, _)| !blocked[i as usize])
-            .collect();
-        let pairs = self.one_object_rays(bvh, open.into_iter(), |i| {
-            blocked[i as usize] = self.occluded_boxed(objects, &rays[i as usize], ctx);
-        });
-        let (mut batch, mut flags) = (Vec::new(), Vec::new());
-        for (object, group) in self.by_object(&pairs) {
-            batch.clear();
-            batch.extend(group.iter().map(|&(_, i)| rays[i as usize]));
-            flags.clear();
-            flags.resize(batch.len(), false);
-            objects[object as usize].occludes_batch(&batch, ctx, &mut flags);
-            for (&(_, i), &f) in group.iter().zip(&flags) {
-                blocked[i as usize] |= f;
-            }
+        let (open, batch): (Vec<usize>, Vec<Ray>) = (0..rays.len())
+            .filter(|&i| !blocked[i])
+            .map(|i| (i, rays[i]))
+            .unzip();
+        let mut flags = vec![false; batch.len()];
+        objects[object as usize].occludes_batch(&batch, ctx, &mut flags);
+        for (i, f) in open.into_iter().zip(flags) {
+            blocked[i] = f;
         }
         blocked
     }
@@ -222,6 +225,12 @@ impl TopLevel {
         rays: impl Iterator<Item = (u32, &'r Ray)>,
         mut alone: impl FnMut(u32),
     ) -> Vec<(u32, u32)> {
+        // One bounded object: every ray goes to it, no walk (one that misses its box is
+        // answered there, by the object's own box test, as the single-ray query's walk
+        // answers it).
+        if self.bounded.len() == 1 {
+            return rays.map(|(i, _)| (0, i)).collect();
+        }
         let mut pairs: Vec<(u32, u32)> = Vec::new();
         let mut several_seen = 0usize;
         for (seen, (i, r)) in rays.enumerate() {
