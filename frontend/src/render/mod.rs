@@ -104,8 +104,8 @@ pub struct RenderArgs {
     /// No progress bar and no settings line (the summary line is still printed).
     #[arg(short, long)]
     pub quiet: bool,
-    /// Trace each primary ray alone instead of each row's as one batch (the same image; for
-    /// comparing their speed).
+    /// Trace each primary and shadow ray alone instead of each row's as one batch (the same
+    /// image; for comparing their speed).
     #[arg(long)]
     pub single_rays: bool,
 }
@@ -124,8 +124,8 @@ pub struct RenderOptions {
     /// Most samples per pixel (colour mode; 0 and 1 mean one): adaptive anti-aliasing, see
     /// [`antialias`].
     pub samples: u32,
-    /// Trace each primary ray alone instead of a row's as one batch (the same image; the heat
-    /// map and depth of field always do).
+    /// Trace each primary and shadow ray alone instead of a row's as one batch (the same
+    /// image; the heat map and depth of field always do).
     pub single_rays: bool,
 }
 
