@@ -161,7 +161,7 @@ impl TopLevel {
             .unzip();
         // The ray's unbounded objects were tested above: `(best, r)` is its
         // `closest_listed`, which the single-ray query goes on from.
-        let pairs = self.one_object_rays(bvh, (0u32..).zip(&shrunk), |i| {
+        let pairs = self.one_object_rays(bvh, &shrunk, |i| {
             let slot = &mut best[i as usize];
             *slot = self.closest_boxed(objects, (slot.take(), shrunk[i as usize]), ctx);
         });
@@ -214,29 +214,29 @@ impl TopLevel {
         blocked
     }
 
-    /// Of `rays` (each with its index in the batch), the pairs `(bounded object, ray index)`
-    /// of the rays whose interval meets the box of one bounded object only, sorted by object;
+    /// Of `rays`, the pairs `(bounded object, ray index)` of the rays whose interval meets the
+    /// box of one bounded object only, sorted by object;
     /// `alone(i)` is called for each ray that meets several (it takes the single-ray query),
     /// and for every ray after [`PROBED_RAYS`] once more than half of those before met
     /// several. A ray that meets none appears nowhere.
-    fn one_object_rays<'r>(
+    fn one_object_rays(
         &self,
         bvh: &Bvh<Vec<BvhNode>, Vec<u32>>,
-        rays: impl Iterator<Item = (u32, &'r Ray)>,
+        rays: &[Ray],
         mut alone: impl FnMut(u32),
     ) -> Vec<(u32, u32)> {
         // One bounded object: every ray goes to it, no walk (one that misses its box is
         // answered there, by the object's own box test, as the single-ray query's walk
         // answers it).
         if self.bounded.len() == 1 {
-            return rays.map(|(i, _)| (0, i)).collect();
+            return (0u32..).zip(rays).map(|(i, _)| (0, i)).collect();
         }
         let mut pairs: Vec<(u32, u32)> = Vec::new();
         let mut several_seen = 0usize;
-        for (seen, (i, r)) in rays.enumerate() {
+        for (i, r) in (0u32..).zip(rays) {
             // Where most rays meet several objects (a crowd of instances), the walk that lists
             // them is spent for nothing: the rest take the single-ray query at once.
-            if seen >= PROBED_RAYS && 2 * several_seen > seen {
+            if i as usize >= PROBED_RAYS && 2 * several_seen > i as usize {
                 alone(i);
                 continue;
             }
