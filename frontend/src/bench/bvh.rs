@@ -14,7 +14,7 @@
 //! Each camera set, and the shadow set, is also traced by the batch path
 //! ([`closest_batch_simd`], [`any_batch_simd`]: coherent rays in packets; its answers checked
 //! equal to the single-ray query's, hit or miss for the shadow rays; timed in calls of
-//! [`BATCH_BLOCK`] rays answered into one kept buffer), reported as the set
+//! `BATCH_BLOCK` rays answered into one kept buffer), reported as the set
 //! `<set>+batch`: against Embree's `rtcIntersect1` (`rtcOccluded1`) as above, and against
 //! Embree's packet API, `rtcIntersect8` and `rtcIntersect16` (`rtcOccluded8` and
 //! `rtcOccluded16`), on the same rays in the same round-robin passes.
