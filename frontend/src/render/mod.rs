@@ -332,6 +332,8 @@ fn row_batched(
         .collect();
     let mut ctx = tracer.ctx();
     let hits = tracer.closest_batch(&rays, &mut ctx);
+    // The row's plain shadow rays as one batch per light, where the top level batches them
+    // (the scene's one bounded object is a mesh); elsewhere the shading traces them alone.
     let scene = tracer.scene;
     let batched = scene.top.occlusion_batched(&scene.objects).is_some();
     let known = if opts.mode == Mode::Color && batched {
@@ -339,7 +341,7 @@ fn row_batched(
     } else {
         Vec::new()
     };
-    let lights = tracer.scene.lights.len();
+    let lights = scene.lights.len();
     rays.iter()
         .zip(hits)
         .enumerate()
