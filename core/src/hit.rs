@@ -51,6 +51,24 @@ impl Hit {
     pub fn spawn_origin(&self, w: Vec3) -> Vec3 {
         offset_ray_origin(self.point, self.point_error, self.normal, w)
     }
+
+    /// The two origins rays leave this hit from, `[front, back]`: [`Hit::spawn_origin`]`(w)`
+    /// is `spawn_origins()[`[`Hit::side`]`(w)]` for every `w`, as the offset depends on the
+    /// direction only through the side of the surface it points to. For many rays from one
+    /// hit (an area light's shadow rays): two offsets, not one a ray.
+    #[inline]
+    #[must_use]
+    pub fn spawn_origins(&self) -> [Vec3; 2] {
+        [false, true].map(|back| offset_to_side(self.point, self.point_error, self.normal, back))
+    }
+
+    /// Which of [`Hit::spawn_origins`] a ray leaving in direction `w` starts from: 1 when `w`
+    /// points against the normal (`w · normal < 0`), else 0 (also for NaN).
+    #[inline]
+    #[must_use]
+    pub fn side(&self, w: Vec3) -> usize {
+        usize::from(w.dot(self.normal) < 0.0)
+    }
 }
 
 /// Moves `p` off the surface with normal `n` to the side `w` points to, by the distance
@@ -63,9 +81,15 @@ impl Hit {
 /// one-ulp push.
 #[must_use]
 pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
+    offset_to_side(p, p_error, n, w.dot(n) < 0.0)
+}
+
+/// [`offset_ray_origin`] to the side of the plane `w` points to: against `n` when `back`.
+#[inline]
+fn offset_to_side(p: Vec3, p_error: Vec3, n: Vec3, back: bool) -> Vec3 {
     let d = n.abs().dot(p_error);
     let mut offset = n * d;
-    if w.dot(n) < 0.0 {
+    if back {
         offset = -offset;
     }
     let mut po = p + offset;
@@ -94,7 +118,16 @@ pub fn spawn_ray(hit: &Hit, w: Vec3) -> Ray {
 /// itself a surface point use [`spawn_ray_between`], which offsets it off its own surface.
 #[must_use]
 pub fn spawn_ray_to(hit: &Hit, target: Vec3) -> Ray {
-    let origin = hit.spawn_origin(target - hit.point);
+    shadow_segment(hit.spawn_origin(target - hit.point), target)
+}
+
+/// [`spawn_ray_to`] from an origin already off the surface: direction `target − origin` over
+/// `(0, 1 − SHADOW_SEGMENT_END_SLACK]`. `spawn_ray_to(hit, target)` is
+/// `shadow_segment(hit.spawn_origins()[hit.side(target − hit.point)], target)`, bit for bit:
+/// the form for many targets from one hit (an area light's points).
+#[inline]
+#[must_use]
+pub fn shadow_segment(origin: Vec3, target: Vec3) -> Ray {
     Ray::with_interval(origin, target - origin, 0.0, 1.0 - SHADOW_SEGMENT_END_SLACK)
 }
 

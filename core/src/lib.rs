@@ -83,7 +83,7 @@ pub mod volume;
 pub use aabb::Aabb;
 pub use error::{GeometryError, RayError};
 pub use glam::{Mat3, Mat4, Vec2, Vec3};
-pub use hit::{Hit, spawn_ray, spawn_ray_between, spawn_ray_to};
+pub use hit::{Hit, shadow_segment, spawn_ray, spawn_ray_between, spawn_ray_to};
 pub use ray::Ray;
 /// The SIMD level of the wide-BVH node test, chosen by the caller at run time.
 pub use simd::level as simd_level;

@@ -10,8 +10,10 @@
 
 use super::gamma::linear_to_srgb;
 use super::{PixelOut, RayCounts};
+use crate::scene::MAX_LIGHT_SAMPLES;
 use glam::Vec3;
 use rayon::prelude::*;
+use std::sync::LazyLock;
 
 /// Largest difference between a pixel and a 4-neighbour that leaves it with one sample: in
 /// sRGB-encoded units of `[0, 1]` per colour channel, and in alpha. 8/255: the steps of a
@@ -62,6 +64,24 @@ pub fn concentric_disk(u: f32, v: f32) -> (f32, f32) {
         )
     };
     (r * phi.cos(), r * phi.sin())
+}
+
+/// The points of an area light's disk its `samples` shadow rays aim at, in the disk's unit
+/// frame: [`concentric_disk`] of [`lens_offset`]`(k)` for `k < samples`. The first
+/// [`MAX_LIGHT_SAMPLES`] (as many as a scene may ask for) are computed once per process, not
+/// per shading point; the values are a pure function of `k`, so each hit reads the very
+/// values it would compute.
+pub fn disk_points(samples: u32) -> impl Iterator<Item = (f32, f32)> {
+    static POINTS: LazyLock<Vec<(f32, f32)>> =
+        LazyLock::new(|| (0..MAX_LIGHT_SAMPLES).map(disk_point).collect());
+    let table: &[(f32, f32)] = &POINTS;
+    (0..samples).map(move |k| table.get(k as usize).copied().unwrap_or_else(|| disk_point(k)))
+}
+
+/// [`concentric_disk`] of [`lens_offset`]`(k)`.
+fn disk_point(k: u32) -> (f32, f32) {
+    let (u, v) = lens_offset(k);
+    concentric_disk(u, v)
 }
 
 /// The box-filtered mean of samples (the first one the reference, used alone when no sample

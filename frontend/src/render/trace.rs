@@ -28,7 +28,7 @@ use super::plan::EffectPlan;
 use crate::scene::geom::{QueryCtx, SurfaceHit};
 use crate::scene::{Light, LightKind, Scene, SpecularModel};
 use glam::Vec3;
-use halfray_core::{Ray, spawn_ray, spawn_ray_to};
+use halfray_core::{Ray, shadow_segment, spawn_ray, spawn_ray_to};
 
 /// Surfaces a shadow ray follows through transparent materials before it counts the light as
 /// blocked: 16 crossings (8 panes of glass) transmit at most `transparency¹⁶`, below an 8-bit
@@ -234,12 +234,12 @@ impl Tracer<'_> {
         let axis = (centre - hit.point).normalize_or_zero();
         let t1 = axis.any_orthonormal_vector();
         let t2 = axis.cross(t1);
+        let origins = hit.spawn_origins();
         let mut seen = 0.0;
-        for k in 0..light.samples {
-            let (lu, lv) = super::antialias::lens_offset(k);
-            let (du, dv) = super::antialias::concentric_disk(lu, lv);
+        for (du, dv) in super::antialias::disk_points(light.samples) {
             let p = centre + (t1 * du + t2 * dv) * light.radius;
-            let ray = spawn_ray_to(hit, p);
+            // `spawn_ray_to(hit, p)`, bit for bit, with the hit's two origins offset once.
+            let ray = shadow_segment(origins[hit.side(p - hit.point)], p);
             seen += if self.plan.shadow_transmission {
                 self.transmission(&ray, &LightKind::Point { position: p }, ctx, n)
             } else {
