@@ -157,6 +157,100 @@ mod tests {
         assert_eq!(up.z, p.z);
     }
 
+    /// pbrt-v4's `OffsetRayOrigin` restated here, the oracle of the origins' tests: the error
+    /// box's extent along `n`, to `w`'s side, then one ulp further per moved component.
+    fn pbrt_offset(p: Vec3, err: Vec3, n: Vec3, w: Vec3) -> [f32; 3] {
+        let d = n.x.abs() * err.x + n.y.abs() * err.y + n.z.abs() * err.z;
+        let flip = if w.x * n.x + w.y * n.y + w.z * n.z < 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
+        core::array::from_fn(|i| {
+            let off = n[i] * d * flip;
+            let q = p[i] + off;
+            if off > 0.0 {
+                q.next_up()
+            } else if off < 0.0 {
+                q.next_down()
+            } else {
+                q
+            }
+        })
+    }
+
+    #[test]
+    fn a_hit_s_two_origins_are_the_spawn_origin_of_every_direction() {
+        // Hits of unit, tiny, huge, zero and NaN normals; directions on both sides, along and
+        // against the normal, in the surface, zero, NaN and infinite.
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        let mut checked = 0;
+        for case in 0..400 {
+            let v = Vec3::new(next(), next(), next());
+            let normal = match case % 8 {
+                0 => Vec3::ZERO,
+                1 => Vec3::NAN,
+                2 => v * 1e-25,
+                3 => v * 1e30,
+                _ => v.normalize_or(Vec3::Z),
+            };
+            let hit = Hit {
+                t: 1.0,
+                point: Vec3::new(next(), next(), next()) * [1.0, 1e3, 1e6][case % 3],
+                point_error: Vec3::new(next(), next(), next()).abs() * 1e-4,
+                normal,
+                uv: Vec2::ZERO,
+                front_face: true,
+            };
+            let origins = hit.spawn_origins();
+            let r = Vec3::new(next(), next(), next());
+            for w in [
+                r,
+                -r,
+                normal,
+                -normal,
+                r.cross(normal),
+                Vec3::ZERO,
+                Vec3::NAN,
+                Vec3::INFINITY,
+            ] {
+                let want = pbrt_offset(hit.point, hit.point_error, normal, w);
+                let bits = |a: Vec3| a.to_array().map(f32::to_bits);
+                assert_eq!(
+                    bits(hit.spawn_origin(w)),
+                    want.map(f32::to_bits),
+                    "{hit:?} {w:?}"
+                );
+                assert_eq!(
+                    bits(origins[hit.side(w)]),
+                    want.map(f32::to_bits),
+                    "{hit:?} {w:?}"
+                );
+                // The segment towards a target from the kept origin is `spawn_ray_to`'s.
+                let target = hit.point + w;
+                let side = hit.side(target - hit.point);
+                let (a, b) = (
+                    spawn_ray_to(&hit, target),
+                    shadow_segment(origins[side], target),
+                );
+                assert_eq!(bits(a.origin), bits(b.origin));
+                assert_eq!(bits(a.direction), bits(b.direction));
+                assert_eq!(
+                    (a.t_min.to_bits(), a.t_max.to_bits()),
+                    (b.t_min.to_bits(), b.t_max.to_bits())
+                );
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 3200);
+    }
+
     #[test]
     fn spawn_ray_to_ends_just_short_of_the_target() {
         let hit = Hit {

@@ -75,7 +75,12 @@ pub fn disk_points(samples: u32) -> impl Iterator<Item = (f32, f32)> {
     static POINTS: LazyLock<Vec<(f32, f32)>> =
         LazyLock::new(|| (0..MAX_LIGHT_SAMPLES).map(disk_point).collect());
     let table: &[(f32, f32)] = &POINTS;
-    (0..samples).map(move |k| table.get(k as usize).copied().unwrap_or_else(|| disk_point(k)))
+    (0..samples).map(move |k| {
+        table
+            .get(k as usize)
+            .copied()
+            .unwrap_or_else(|| disk_point(k))
+    })
 }
 
 /// [`concentric_disk`] of [`lens_offset`]`(k)`.
@@ -175,6 +180,38 @@ mod tests {
             value: Vec3::splat(value),
             alpha,
             ..PixelOut::default()
+        }
+    }
+
+    #[test]
+    fn disk_points_are_the_halton_points_mapped_to_the_disk() {
+        // Within the table, past it (a light built without the scene's limit), and none.
+        for samples in [0, 1, 16, MAX_LIGHT_SAMPLES, MAX_LIGHT_SAMPLES + 44] {
+            let got: Vec<(f32, f32)> = disk_points(samples).collect();
+            assert_eq!(got.len(), samples as usize);
+            for (k, &(x, y)) in (0u32..).zip(&got) {
+                // The definition, spelled out: Halton bases 2 and 3 from k + 1, then Shirley
+                // and Chiu's concentric map.
+                let halton = |base: u32| {
+                    let (mut n, mut f, mut x) = (k + 1, 1.0f64, 0.0f64);
+                    while n > 0 {
+                        f /= f64::from(base);
+                        x += f * f64::from(n % base);
+                        n /= base;
+                    }
+                    x as f32
+                };
+                let (want_x, want_y) = concentric_disk(halton(2), halton(3));
+                assert_eq!(
+                    (x.to_bits(), y.to_bits()),
+                    (want_x.to_bits(), want_y.to_bits()),
+                    "k {k}"
+                );
+                assert!(
+                    x * x + y * y <= 1.0 + 1e-6,
+                    "k {k}: ({x}, {y}) off the disk"
+                );
+            }
         }
     }
 
