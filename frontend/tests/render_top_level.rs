@@ -275,3 +275,82 @@ fn a_row_s_shadow_rays_batched_answer_as_single_rays() {
         "packets: {batch_nodes} node tests against {single_nodes} shuffled"
     );
 }
+
+/// Shadow rays from one point towards the points of a disk (an area light's), and segments
+/// ending exactly on the objects' box corners and faces (where a ray's own box test is
+/// decided by its padding): the objects looked up once for the bundle's box
+/// (`TopLevel::bounded_in`) block each ray exactly where the object loop says it is blocked.
+#[test]
+fn an_area_light_s_bundle_answers_as_the_object_loop() {
+    let mut seed = 0xA7EA_u64;
+    let mut bundles = 0;
+    let mut looked_up = 0;
+    for e in std::fs::read_dir(scenes_dir()).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_none_or(|x| x != "toml") || p.ends_with("bunny.toml") {
+            continue;
+        }
+        let s = load(&p).unwrap_or_else(|e| panic!("{e}"));
+        let corners: Vec<Vec3> = s
+            .objects
+            .iter()
+            .filter_map(|o| o.bounds)
+            .filter(|b| b.is_finite())
+            .flat_map(|b| {
+                (0..8).map(move |k| {
+                    let pick = |bit: i32, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
+                    Vec3::new(
+                        pick(1, b.min.x, b.max.x),
+                        pick(2, b.min.y, b.max.y),
+                        pick(4, b.min.z, b.max.z),
+                    )
+                })
+            })
+            .collect();
+        let mut r = || lcg(&mut seed);
+        for bundle in 0..300 {
+            let origin = Vec3::new(r(), r(), r()) * 12.0 - 6.0;
+            let targets: Vec<Vec3> = if bundle % 3 == 0 && !corners.is_empty() {
+                // Box corners and points on box faces, as targets.
+                (0..16)
+                    .map(|_| {
+                        let c = corners[(r() * corners.len() as f32) as usize % corners.len()];
+                        if r() < 0.5 {
+                            c
+                        } else {
+                            c + Vec3::new(r() - 0.5, 0.0, 0.0) * 1e-3
+                        }
+                    })
+                    .collect()
+            } else {
+                let centre = Vec3::new(r(), r(), r()) * 12.0 - 6.0;
+                let radius = [0.0, 0.05, 0.9, 3.0][bundle % 4];
+                (0..16)
+                    .map(|_| centre + (Vec3::new(r(), r(), r()) - 0.5) * (2.0 * radius))
+                    .collect()
+            };
+            let hull = targets
+                .iter()
+                .fold(halfray_core::Aabb::new(origin, origin), |b, &t| b.grow(t));
+            for max in [usize::MAX, 4] {
+                let Some(near) = s.top.bounded_in(&s.objects, &hull, max) else {
+                    assert_eq!(max, 4, "unlimited lookups always answer");
+                    continue;
+                };
+                looked_up += 1;
+                for &t in &targets {
+                    let ray = halfray_core::shadow_segment(origin, t);
+                    let mut ctx = QueryCtx::default();
+                    let want = s.objects.iter().any(|o| o.occludes(&ray, &mut ctx));
+                    let got = s.top.occluded_among(&s.objects, &near, &ray, &mut ctx);
+                    assert_eq!(got, want, "{}: {ray:?} near {near:?}", p.display());
+                }
+            }
+            bundles += 1;
+        }
+    }
+    assert!(
+        bundles >= 2100 && looked_up > bundles,
+        "{bundles} bundles, {looked_up} lookups"
+    );
+}

@@ -28,12 +28,17 @@ use super::plan::EffectPlan;
 use crate::scene::geom::{QueryCtx, SurfaceHit};
 use crate::scene::{Light, LightKind, Scene, SpecularModel};
 use glam::Vec3;
-use halfray_core::{Ray, shadow_segment, spawn_ray, spawn_ray_to};
+use halfray_core::{Aabb, Ray, shadow_segment, spawn_ray, spawn_ray_to};
 
 /// Surfaces a shadow ray follows through transparent materials before it counts the light as
 /// blocked: 16 crossings (8 panes of glass) transmit at most `transparency¹⁶`, below an 8-bit
 /// step for any transparency up to 0.7; the bound keeps the walk finite for any scene.
 pub const MAX_SHADOW_CROSSINGS: u32 = 16;
+
+/// Most bounded objects an area light's shadow rays from one hit are tested against directly
+/// ([`crate::scene::top::TopLevel::bounded_in`]); more, and each ray walks the top level. A
+/// count of objects: a direct test costs about what a walk's visit of that object does.
+pub const HULL_OBJECTS_MAX: usize = 4;
 
 /// Where a path is: recursion depth, weight, and the pixel's remaining secondary rays.
 struct PathState {
@@ -235,16 +240,34 @@ impl Tracer<'_> {
         let t1 = axis.any_orthonormal_vector();
         let t2 = axis.cross(t1);
         let origins = hit.spawn_origins();
+        let points = || {
+            super::antialias::disk_points(light.samples)
+                .map(move |(du, dv)| centre + (t1 * du + t2 * dv) * light.radius)
+        };
+        // The objects the rays may meet, looked up once: the rays lie in the box of their
+        // origins and targets.
+        let scene = self.scene;
+        let near = (!self.plan.shadow_transmission)
+            .then(|| {
+                let hull = points().fold(Aabb::new(origins[0], origins[0]), Aabb::grow);
+                scene
+                    .top
+                    .bounded_in(&scene.objects, &hull.grow(origins[1]), HULL_OBJECTS_MAX)
+            })
+            .flatten();
         let mut seen = 0.0;
-        for (du, dv) in super::antialias::disk_points(light.samples) {
-            let p = centre + (t1 * du + t2 * dv) * light.radius;
+        for p in points() {
             // `spawn_ray_to(hit, p)`, bit for bit, with the hit's two origins offset once.
             let ray = shadow_segment(origins[hit.side(p - hit.point)], p);
             seen += if self.plan.shadow_transmission {
                 self.transmission(&ray, &LightKind::Point { position: p }, ctx, n)
             } else {
                 n.shadow += 1;
-                if self.occluded(&ray, ctx) { 0.0 } else { 1.0 }
+                let occluded = match &near {
+                    Some(near) => scene.top.occluded_among(&scene.objects, near, &ray, ctx),
+                    None => self.occluded(&ray, ctx),
+                };
+                if occluded { 0.0 } else { 1.0 }
             };
         }
         seen / light.samples.max(1) as f32

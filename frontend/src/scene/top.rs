@@ -12,7 +12,7 @@ use halfray_core::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacit
 use halfray_core::mesh::PrimitiveSource;
 use halfray_core::prelude::*;
 use halfray_core::query::Query;
-use halfray_core::{Aabb, Ray};
+use halfray_core::{Aabb, Ray, Vec3};
 
 /// Rays of a batch whose walks [`TopLevel::closest_batch`] always lists: after them, when
 /// more than half of the rays so far met several objects, the rest take the single-ray query.
@@ -24,6 +24,28 @@ const PROBED_RAYS: usize = 32;
 /// ray takes the single-ray query. A count of objects: on the example scenes, batches pay
 /// with one large mesh and cost up to 9 % with 10 000 instances (`docs/performance.md`).
 const BATCHED_OBJECTS_MAX: usize = 64;
+
+/// How far [`TopLevel::bounded_in`] grows its box on every side, as a share of the box's
+/// size (its largest coordinate's magnitude plus its longest side; unitless). A box test
+/// (`Aabb::intersect_slab`, whose exit distance is padded by `2·γ₃`) admits a segment that
+/// misses the box by at most a few `f32` ulps of those magnitudes (≤ 2⁻²⁰ of them); `2⁻¹⁶`
+/// covers that sixteen times over, so no object a ray's own box test admits is left out.
+pub const HULL_PAD: f32 = 1.0 / 65_536.0;
+
+/// The bounded objects' boxes as [`TopLevel::bounded_in`]'s box query reads them: primitive
+/// `k` is object `bounded[k]`.
+struct BoundedBoxes<'a>(&'a [Node], &'a [u32]);
+
+impl PrimitiveSource for BoundedBoxes<'_> {
+    fn primitive_count(&self) -> usize {
+        self.1.len()
+    }
+
+    fn primitive_bounds(&self, index: usize) -> Aabb {
+        let object = self.1.get(index).and_then(|&i| self.0.get(i as usize));
+        object.and_then(|o| o.bounds).unwrap_or(Aabb::EMPTY)
+    }
+}
 
 /// The scene's objects arranged for queries.
 #[derive(Debug, Default)]
@@ -293,6 +315,49 @@ impl TopLevel {
             }
         }
         (listed, r)
+    }
+
+    /// The bounded objects that rays lying in `hull` may meet, for [`TopLevel::occluded_among`]:
+    /// those whose box overlaps `hull` grown by [`HULL_PAD`], at most `max` of them; `None`
+    /// when more do (then each ray's walk is the cheaper query). Shadow rays from one hit
+    /// towards an area light lie in the box of their origins and targets: one box query for
+    /// all of them instead of a walk of the top level each.
+    pub fn bounded_in(&self, objects: &[Node], hull: &Aabb, max: usize) -> Option<Vec<u32>> {
+        let Some(bvh) = &self.bvh else {
+            return Some(Vec::new());
+        };
+        let (lo, hi) = (hull.min, hull.max);
+        let size = lo.abs().max(hi.abs()).max_element() + (hi - lo).max_element();
+        let pad = Vec3::splat(HULL_PAD * size);
+        let grown = Aabb::new(lo - pad, hi + pad);
+        let source = BoundedBoxes(objects, &self.bounded);
+        let mut near = Vec::new();
+        let mut over = false;
+        bvh.query_box(&source, &grown, |k| {
+            match self.bounded.get(k as usize) {
+                Some(&i) if near.len() < max => near.push(i),
+                Some(_) => over = true,
+                None => {}
+            }
+            !over
+        });
+        (!over).then_some(near)
+    }
+
+    /// [`TopLevel::occluded`] of a ray lying in the box `near` came from
+    /// ([`TopLevel::bounded_in`]), the same answer: the unbounded objects, then the bounded
+    /// ones of `near`. A bounded object blocks a ray only where the ray's interval touches
+    /// its box (`Node::occludes` tests that first, as the walk does), and the boxes that
+    /// interval can touch overlap the grown hull.
+    pub fn occluded_among(
+        &self,
+        objects: &[Node],
+        near: &[u32],
+        ray: &Ray,
+        ctx: &mut QueryCtx,
+    ) -> bool {
+        self.occluded_listed(objects, ray, ctx)
+            || near.iter().any(|&i| objects[i as usize].occludes(ray, ctx))
     }
 
     /// Whether any object blocks `ray` in its interval.
