@@ -14,6 +14,21 @@ use std::path::Path;
 mod common;
 use common::{lcg, scenes_dir};
 
+/// Every example scene but `bunny.toml` (its 69 451-triangle mesh makes these suites slow),
+/// with its path.
+fn example_scenes() -> impl Iterator<Item = (std::path::PathBuf, Scene)> {
+    let mut paths: Vec<_> = std::fs::read_dir(scenes_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml") && !p.ends_with("bunny.toml"))
+        .collect();
+    paths.sort();
+    paths.into_iter().map(|p| {
+        let s = load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        (p, s)
+    })
+}
+
 /// The reference: every object in declaration order, a later one winning an equal `t`.
 fn closest_by_loop(s: &Scene, ray: &Ray, ctx: &mut QueryCtx) -> Option<(u32, f32)> {
     let mut r = *ray;
@@ -86,12 +101,7 @@ fn check(s: &Scene, what: &str, lo: Vec3, hi: Vec3, rays: usize) -> usize {
 #[test]
 fn top_level_equals_the_object_loop_on_every_example_scene() {
     let mut n = 0;
-    for e in std::fs::read_dir(scenes_dir()).unwrap() {
-        let p = e.unwrap().path();
-        if p.extension().is_none_or(|x| x != "toml") || p.ends_with("bunny.toml") {
-            continue;
-        }
-        let s = load(&p).unwrap_or_else(|e| panic!("{e}"));
+    for (p, s) in example_scenes() {
         let hits = check(
             &s,
             &p.display().to_string(),
@@ -163,12 +173,7 @@ fn batch_equals_single_rays_on_coincident_mesh_instances() {
 #[test]
 fn batched_rows_render_the_single_ray_image() {
     let mut n = 0;
-    for e in std::fs::read_dir(scenes_dir()).unwrap() {
-        let p = e.unwrap().path();
-        if p.extension().is_none_or(|x| x != "toml") || p.ends_with("bunny.toml") {
-            continue;
-        }
-        let mut s = load(&p).unwrap_or_else(|e| panic!("{e}"));
+    for (p, mut s) in example_scenes() {
         (s.camera.width, s.camera.height) = (48, 36);
         for mode in [Mode::Color, Mode::Normal, Mode::Depth, Mode::Barycentric] {
             let opts = RenderOptions {
@@ -285,12 +290,7 @@ fn an_area_light_s_bundle_answers_as_the_object_loop() {
     let mut seed = 0xA7EA_u64;
     let mut bundles = 0;
     let mut looked_up = 0;
-    for e in std::fs::read_dir(scenes_dir()).unwrap() {
-        let p = e.unwrap().path();
-        if p.extension().is_none_or(|x| x != "toml") || p.ends_with("bunny.toml") {
-            continue;
-        }
-        let s = load(&p).unwrap_or_else(|e| panic!("{e}"));
+    for (p, s) in example_scenes() {
         let corners: Vec<Vec3> = s
             .objects
             .iter()
