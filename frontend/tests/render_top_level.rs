@@ -333,7 +333,7 @@ fn an_area_light_s_bundle_answers_as_the_object_loop() {
                 .iter()
                 .fold(halfray_core::Aabb::new(origin, origin), |b, &t| b.grow(t));
             for max in [usize::MAX, 4] {
-                let Some(near) = s.top.bounded_in(&s.objects, &hull, max) else {
+                let Some(near) = s.top.bounded_in(&hull, max) else {
                     assert_eq!(max, 4, "unlimited lookups always answer");
                     continue;
                 };

@@ -252,7 +252,7 @@ impl Tracer<'_> {
                 let hull = points().fold(Aabb::new(origins[0], origins[0]), Aabb::grow);
                 scene
                     .top
-                    .bounded_in(&scene.objects, &hull.grow(origins[1]), HULL_OBJECTS_MAX)
+                    .bounded_in(&hull.grow(origins[1]), HULL_OBJECTS_MAX)
             })
             .flatten();
         let mut seen = 0.0;

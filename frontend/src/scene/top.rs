@@ -32,21 +32,6 @@ const BATCHED_OBJECTS_MAX: usize = 64;
 /// covers that sixteen times over, so no object a ray's own box test admits is left out.
 pub const HULL_PAD: f32 = 1.0 / 65_536.0;
 
-/// The bounded objects' boxes as [`TopLevel::bounded_in`]'s box query reads them: primitive
-/// `k` is object `bounded[k]`.
-struct BoundedBoxes<'a>(&'a [Node], &'a [u32]);
-
-impl PrimitiveSource for BoundedBoxes<'_> {
-    fn primitive_count(&self) -> usize {
-        self.1.len()
-    }
-
-    fn primitive_bounds(&self, index: usize) -> Aabb {
-        let object = self.1.get(index).and_then(|&i| self.0.get(i as usize));
-        object.and_then(|o| o.bounds).unwrap_or(Aabb::EMPTY)
-    }
-}
-
 /// The scene's objects arranged for queries.
 #[derive(Debug, Default)]
 pub struct TopLevel {
@@ -54,11 +39,13 @@ pub struct TopLevel {
     bvh: Option<Bvh<Vec<BvhNode>, Vec<u32>>>,
     /// Indices of objects with a finite box, in reverse declaration order.
     bounded: Vec<u32>,
+    /// Their boxes, `boxes[k]` of object `bounded[k]` (the BVH's primitives).
+    boxes: Vec<Aabb>,
     /// Indices of the other objects, in declaration order.
     unbounded: Vec<u32>,
 }
 
-/// The objects' boxes as the BVH builder reads them.
+/// The objects' boxes as the BVH builder and the box query read them.
 struct Boxes<'a>(&'a [Aabb]);
 
 impl PrimitiveSource for Boxes<'_> {
@@ -103,6 +90,7 @@ impl TopLevel {
         Self {
             bvh,
             bounded,
+            boxes,
             unbounded,
         }
     }
@@ -322,7 +310,7 @@ impl TopLevel {
     /// when more do (then each ray's walk is the cheaper query). Shadow rays from one hit
     /// towards an area light lie in the box of their origins and targets: one box query for
     /// all of them instead of a walk of the top level each.
-    pub fn bounded_in(&self, objects: &[Node], hull: &Aabb, max: usize) -> Option<Vec<u32>> {
+    pub fn bounded_in(&self, hull: &Aabb, max: usize) -> Option<Vec<u32>> {
         let Some(bvh) = &self.bvh else {
             return Some(Vec::new());
         };
@@ -330,10 +318,9 @@ impl TopLevel {
         let size = lo.abs().max(hi.abs()).max_element() + (hi - lo).max_element();
         let pad = Vec3::splat(HULL_PAD * size);
         let grown = Aabb::new(lo - pad, hi + pad);
-        let source = BoundedBoxes(objects, &self.bounded);
         let mut near = Vec::new();
         let mut over = false;
-        bvh.query_box(&source, &grown, |k| {
+        bvh.query_box(&Boxes(&self.boxes), &grown, |k| {
             match self.bounded.get(k as usize) {
                 Some(&i) if near.len() < max => near.push(i),
                 Some(_) => over = true,
