@@ -10,7 +10,7 @@
 use super::node::BvhNode;
 use super::sah::{BIN_SETS, BinSets, UNUSED_SET, best_sah_split, partition, range_bounds};
 use super::scratch::{
-    Corner, Indexed, PrimRef, Refs, Scratch, centre, corner, extend, point, scratch_capacity,
+    Corner, Indexed, PrimRef, Refs, Scratch, centre2, corner, extend, point, scratch_capacity,
 };
 use super::{
     BvhError, DEFAULT_MAX_LEAF_SIZE, INTERSECTION_COST, MAX_DEPTH, MAX_PRIMITIVES, index_capacity,
@@ -77,8 +77,9 @@ impl Default for BuildOptions {
     }
 }
 
-/// A node waiting to be split: its index range, depth and centroid bounds (its own box is
-/// already written into the node).
+/// A node waiting to be split: its index range, depth and centroid bounds (the box of its
+/// primitives' [`centre2`] points, twice their centres; its own box is already written into
+/// the node).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Task {
     pub(super) node: u32,
@@ -188,21 +189,21 @@ pub(super) struct Usable {
     pub(super) count: u32,
     /// The union of their boxes ([`Aabb::EMPTY`] for none).
     pub(super) bounds: Aabb,
-    /// The box of their boxes' centres.
+    /// The box of their [`centre2`] points (twice their boxes' centres).
     pub(super) centroids: Aabb,
 }
 
-/// The corners and centre of `b` when it can go into a tree (`is_usable(&b)` and a finite
-/// centre: finite, `min ≤ max` on every axis; the spare lane is 0 in all three), else `None`.
+/// The corners of `b` and the point it is binned by ([`centre2`]: twice its centre, infinite
+/// beyond `±2¹²⁷`) when it can go into a tree (finite corners, `min ≤ max` on every axis;
+/// the spare lane is 0 in all three), else `None`.
 #[inline(always)]
 fn usable_corners(b: &Aabb) -> Option<(Corner, Corner, Corner)> {
     let (lo, hi) = (corner(b.min), corner(b.max));
-    let c = centre(lo, hi);
-    (lo.is_finite() && hi.is_finite() && lo.cmple(hi).all() && c.is_finite()).then_some((lo, hi, c))
+    (lo.is_finite() && hi.is_finite() && lo.cmple(hi).all()).then(|| (lo, hi, centre2(lo, hi)))
 }
 
 /// Checks the storage and every primitive (nothing written but what `usable` writes); calls
-/// `usable(k, i, bounds, centroid)` for the `k`-th usable primitive `i`; returns what it
+/// `usable(k, i, bounds)` for the `k`-th usable primitive `i`; returns what it
 /// found of the usable primitives.
 #[inline(always)]
 fn validate<S: PrimitiveSource + ?Sized>(
@@ -210,7 +211,7 @@ fn validate<S: PrimitiveSource + ?Sized>(
     nodes: &[BvhNode],
     indices: &[u32],
     options: &BuildOptions,
-    mut usable: impl FnMut(usize, usize, Aabb, Vec3),
+    mut usable: impl FnMut(usize, usize, Aabb),
 ) -> Result<Usable, BvhError> {
     let n = source.primitive_count();
     if n > MAX_PRIMITIVES {
@@ -219,7 +220,7 @@ fn validate<S: PrimitiveSource + ?Sized>(
     CapacityError::check(Storage::BvhNodes, node_capacity(n), nodes.len())?;
     CapacityError::check(Storage::BvhIndices, index_capacity(n), indices.len())?;
     // The root's box and centroid box in the builder's vector corners: the same values as
-    // `Aabb::union` / `grow` and `Aabb::center` lane by lane (finite coordinates only).
+    // `Aabb::union` / `grow` lane by lane, and the box of the `centre2` points.
     let (mut lo, mut hi) = (Corner::INFINITY, Corner::NEG_INFINITY);
     let (mut clo, mut chi) = (Corner::INFINITY, Corner::NEG_INFINITY);
     let mut count = 0u32;
@@ -229,7 +230,7 @@ fn validate<S: PrimitiveSource + ?Sized>(
             lo = lo.min(blo);
             hi = hi.max(bhi);
             extend(&mut clo, &mut chi, c);
-            usable(count as usize, i, b, point(c));
+            usable(count as usize, i, b);
             count += 1;
         } else if !options.exclude_non_finite {
             return Err(NonFiniteError::primitive(i).into());
@@ -250,7 +251,7 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
     options: &BuildOptions,
     work: &mut BuildWorkspace,
 ) -> Result<(u32, u32), BvhError> {
-    let root = validate(source, nodes, indices, options, |_, _, _, _| {})?;
+    let root = validate(source, nodes, indices, options, |_, _, _| {})?;
     if root.count == 0 {
         return Ok((0, 0));
     }
@@ -315,7 +316,7 @@ pub(super) fn prepare_scratch<S: PrimitiveSource + ?Sized>(
 ) -> Result<Usable, BvhError> {
     let n = source.primitive_count();
     CapacityError::check(Storage::BvhScratch, scratch_capacity(n), scratch.len())?;
-    validate(source, nodes, indices, options, |k, i, bounds, _| {
+    validate(source, nodes, indices, options, |k, i, bounds| {
         if let Some(slot) = scratch.get_mut(k) {
             *slot = PrimRef::new(&bounds, i as u32);
         }

@@ -1,7 +1,7 @@
 //! The binned surface-area heuristic: binning a node's primitives by the centres of their
 //! boxes ([`best_sah_split`]) and partitioning them by the chosen split ([`partition`]).
 
-use super::scratch::{Box2, Corner, Refs, RunVisitor, centre, corner, extend, point};
+use super::scratch::{Box2, Corner, Refs, RunVisitor, centre2, corner, extend, point};
 use super::{BIN_COUNT, TRAVERSAL_COST};
 use crate::aabb::Aabb;
 use glam::{Vec3, Vec4};
@@ -262,12 +262,12 @@ impl Split {
     /// Whether the primitive with box `lo, hi` goes left, and its centre.
     #[inline(always)]
     fn classify(&self, (lo, hi): Box2) -> (bool, Corner) {
-        let c = centre(lo, hi);
+        let c = centre2(lo, hi);
         (self.binner.goes_left(c, self.limit), c)
     }
 }
 
-/// Box and centroid box of a run of primitives.
+/// Box and centroid box (of the [`centre2`] points) of a run of primitives.
 #[inline(always)]
 pub(super) fn range_bounds<R: Refs + ?Sized>(
     refs: &R,
@@ -278,7 +278,7 @@ pub(super) fn range_bounds<R: Refs + ?Sized>(
     refs.for_each(range, |plo, phi| {
         lo = lo.min(plo);
         hi = hi.max(phi);
-        extend(&mut clo, &mut chi, centre(plo, phi));
+        extend(&mut clo, &mut chi, centre2(plo, phi));
     });
     (
         Aabb::new(point(lo), point(hi)),
@@ -319,9 +319,9 @@ pub(super) fn best_sah_split<R: Refs + ?Sized>(
                 range,
                 #[inline(always)]
                 |(alo, ahi), b| {
-                    first.add(binner.bins(centre(alo, ahi)), alo, ahi);
+                    first.add(binner.bins(centre2(alo, ahi)), alo, ahi);
                     if let Some((blo, bhi)) = b {
-                        second.add(binner.bins(centre(blo, bhi)), blo, bhi);
+                        second.add(binner.bins(centre2(blo, bhi)), blo, bhi);
                     }
                 },
             );
@@ -330,7 +330,7 @@ pub(super) fn best_sah_split<R: Refs + ?Sized>(
         None => refs.for_each(
             range,
             #[inline(always)]
-            |lo, hi| first.add(binner.bins(centre(lo, hi)), lo, hi),
+            |lo, hi| first.add(binner.bins(centre2(lo, hi)), lo, hi),
         ),
     }
     let bins = &*first;
@@ -461,14 +461,15 @@ mod tests {
     #[test]
     fn partition_splits_by_bin_and_reports_both_centroid_boxes() {
         // 40 unit boxes with centres at x = 0..40 in a scrambled order; split at bin 5 of
-        // 16 over [0, 39]: centres below 39·5/16 = 12.1875 go left.
+        // 16 over [0, 39]: centres below 39·5/16 = 12.1875 go left. The builder's points and
+        // centroid boxes are twice the centres (`centre2`).
         let mut refs_store = [PrimRef::EMPTY; 40];
         for (k, slot) in refs_store.iter_mut().enumerate() {
             let x = ((k * 17) % 40) as f32;
             let b = Aabb::new(Vec3::new(x - 0.5, 0.0, 0.0), Vec3::new(x + 0.5, 1.0, 1.0));
             *slot = PrimRef::new(&b, k as u32);
         }
-        let centroids = Aabb::new(Vec3::ZERO, Vec3::new(39.0, 0.0, 0.0));
+        let centroids = Aabb::new(Vec3::ZERO, Vec3::new(78.0, 0.0, 0.0));
         let binner = Binner::new(&centroids, 16).unwrap();
         let split = Split::new(binner, 0, 5);
         let mut view = Scratch {
@@ -485,8 +486,8 @@ mod tests {
             seen[r.index() as usize] = true;
         }
         assert!(seen.iter().all(|&s| s), "a permutation");
-        assert_eq!((lc.min.x, lc.max.x), (0.0, 12.0));
-        assert_eq!((rc.min.x, rc.max.x), (13.0, 39.0));
+        assert_eq!((lc.min.x, lc.max.x), (0.0, 24.0));
+        assert_eq!((rc.min.x, rc.max.x), (26.0, 78.0));
     }
 
     /// The bin index along each axis, written from [`Binner`]'s contract (clamped to

@@ -33,11 +33,20 @@ pub(super) fn point(c: Corner) -> Vec3 {
     return c;
 }
 
-/// The point a primitive is binned by: the centre of its box `lo, hi`, computed as
-/// [`Aabb::center`] does (`lo/2 + hi/2`, which cannot overflow), lane by lane.
+/// The point a primitive is binned by: **twice** the centre of its box `lo, hi`, `lo + hi`,
+/// lane by lane (one addition where the centre itself takes two products and a sum).
+///
+/// Only the builder's own comparisons see it: the centroid boxes it grows, the bins it maps
+/// to ([`super::sah`]) and the partition, all of which are unchanged by a common factor of
+/// two. Where neither `lo + hi` nor [`Aabb::center`]'s `lo/2 + hi/2` leaves the normal range,
+/// the sum is exactly twice that centre (scaling by two is exact in binary floating point),
+/// so every bin, split and tree is the one the centre gives. Elsewhere the tree may differ
+/// and is still valid: a sum past `±f32::MAX` (coordinates beyond `2¹²⁷`) is infinite, and
+/// a half of a subnormal coordinate rounds where the sum does not. Binning and partitioning
+/// still agree there: both compute the same value from it ([`super::sah`]).
 #[inline(always)]
-pub(super) fn centre(lo: Corner, hi: Corner) -> Corner {
-    lo * 0.5 + hi * 0.5
+pub(super) fn centre2(lo: Corner, hi: Corner) -> Corner {
+    lo + hi
 }
 
 /// Growing `[lo, hi]` by `p` (finite corners: one vector `min` and `max`).
@@ -48,7 +57,7 @@ pub(super) fn extend(lo: &mut Corner, hi: &mut Corner, p: Corner) {
 }
 
 /// A primitive as the scratch builder keeps it: its box and its index in the source (the
-/// centre it is binned by is computed from the box when needed). On x86-64 the corners are
+/// point it is binned by, [`centre2`], is computed from the box when needed). On x86-64 the corners are
 /// 16-byte vectors, so binning is one `min` and one `max` per bin, and the index lives in the
 /// lower corner's spare lane: 32 bytes. Elsewhere 28 bytes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -308,8 +317,9 @@ mod tests {
             assert_eq!(copy[0].index(), index);
             let (lo, hi) = copy[0].corners();
             assert_eq!(Aabb::new(point(lo), point(hi)), b);
-            // The spare lanes are zero: no subnormal or NaN reaches the arithmetic.
-            assert_eq!(centre(lo, hi), corner(b.center()));
+            // The spare lanes are zero: no subnormal or NaN reaches the arithmetic. Twice the
+            // centre, exactly (coordinates well inside the normal range).
+            assert_eq!(centre2(lo, hi), corner(b.center() * 2.0));
         }
     }
 }

@@ -181,12 +181,14 @@ impl<const W: usize> ChildList<W> {
                 let fill = end % LANES + (c + LANES - 1) % LANES + 1;
                 (fits, fits && fill == LANES, if fits { fill } else { 0 }, c)
             };
+            let mut best = key(pick);
             let mut rest = left & (left - 1);
             while rest != 0 {
                 let i = rest.trailing_zeros() as usize;
                 rest &= rest - 1;
-                if key(i) > key(pick) {
-                    pick = i;
+                let k = key(i);
+                if k > best {
+                    (pick, best) = (i, k);
                 }
             }
             left &= !(1 << pick);
