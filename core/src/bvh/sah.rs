@@ -4,7 +4,7 @@
 use super::scratch::{Box2, Corner, Refs, RunVisitor, centre2, corner, extend, point};
 use super::{BIN_COUNT, TRAVERSAL_COST};
 use crate::aabb::Aabb;
-use glam::{Vec3, Vec4};
+use glam::{BVec4A, Vec3, Vec4};
 
 /// Sets of bins filled alternately by the binning loop ([`best_sah_split`]): two on x86-64,
 /// one elsewhere (a microcontroller's stack is small and its loads do not overlap anyway).
@@ -213,11 +213,11 @@ impl Sums {
         self.lanes = Vec4::new(n0 as f32, n1 as f32, n2 as f32, 0.0);
     }
 
-    /// The axes (bits 0, 1, 2) with a non-zero count (an integer converts to `0.0` only
+    /// The axes (lanes x, y, z) with a non-zero count (an integer converts to `0.0` only
     /// from 0).
     #[inline(always)]
-    fn non_empty(&self) -> u32 {
-        self.lanes.cmpne(Vec4::ZERO).bitmask()
+    fn non_empty(&self) -> BVec4A {
+        self.lanes.cmpne(Vec4::ZERO)
     }
 
     /// Area·count of each axis's box (lanes x, y, z): the area `2·(eₓe_y + e_ye_z + e_zeₓ)`
@@ -342,7 +342,7 @@ pub(super) fn best_sah_split<R: Refs + ?Sized>(
     // it in range.)
     const K: usize = BIN_COUNT - 1;
     let mut right_cost = [Vec4::ZERO; BIN_COUNT];
-    let mut right_non_empty = [0u32; BIN_COUNT];
+    let mut right_non_empty = [BVec4A::FALSE; BIN_COUNT];
     let mut right = Sums::EMPTY;
     for k in (1..bin_count).rev() {
         right.add(bins, k);
@@ -351,37 +351,70 @@ pub(super) fn best_sah_split<R: Refs + ?Sized>(
     }
     let base = Vec4::splat(TRAVERSAL_COST * parent_area);
     let factor = Vec4::splat(primitive_cost);
-    let active =
-        binner.active[0] as u32 | (binner.active[1] as u32) << 1 | (binner.active[2] as u32) << 2;
+    let [ax, ay, az] = binner.active;
+    let active = BVec4A::new(ax, ay, az, false);
     let mut cost = [Vec4::ZERO; BIN_COUNT];
-    let mut candidate = [0u32; BIN_COUNT];
+    // Bit `4k + axis`: plane `k` of `axis` is a candidate (both sides non-empty, on an axis
+    // with extent).
+    let mut candidates = 0u64;
+    // Per lane, the smallest cost of the candidates (`+∞` for none). A NaN cost is passed
+    // over: `min` returns the running value (on x86-64 its right operand whenever a comparison
+    // is false, elsewhere the operand that is not NaN), which is never NaN.
+    let mut least = Vec4::INFINITY;
     let mut left = Sums::EMPTY;
     for k in 1..bin_count {
         left.add(bins, k - 1);
-        cost[k & K] = base + factor * (left.cost() + right_cost[k & K]);
-        // Both sides non-empty, on an axis with extent.
-        candidate[k & K] = left.non_empty() & right_non_empty[k & K] & active;
+        let c = base + factor * (left.cost() + right_cost[k & K]);
+        cost[k & K] = c;
+        let on = left.non_empty() & right_non_empty[k & K] & active;
+        candidates |= u64::from(on.bitmask()) << (4 * (k & K));
+        least = Vec4::select(on, c, Vec4::INFINITY).min(least);
     }
-    // The cheapest candidate in axis-major order. Strict `<`: ties keep the first (lowest
-    // axis, lowest bin) split, deterministic.
-    let mut best: Option<(usize, usize, f32)> = None;
-    for (axis, bit) in [1u32, 2, 4].into_iter().enumerate() {
-        for k in 1..bin_count {
-            if candidate[k & K] & bit == 0 {
-                continue;
-            }
-            let c = cost[k & K][axis];
-            if best.is_none_or(|(_, _, b)| c < b) {
-                best = Some((axis, k, c));
-            }
-        }
-    }
+    let best = cheapest(&cost, candidates, least);
     best.map(|(axis, k, c)| Split {
         cost: c,
         left: bins.union(axis, 0..k),
         right: bins.union(axis, k..bin_count),
         ..Split::new(binner, axis, k)
     })
+}
+
+/// The split that a scan of the candidates (bit `4k + axis` of `candidates`) in axis-major
+/// order, then by `k`, keeping the first and replacing it only by a strictly smaller
+/// `cost[k][axis]`, ends with: `(axis, k, cost)`, `None` without a candidate. `least` holds
+/// per lane the smallest cost of that axis's candidates whose cost is not NaN (`+∞` for none).
+/// Without the scan: when the first candidate's cost is NaN nothing is smaller, so it stays;
+/// otherwise the scan ends at the first candidate whose cost equals the smallest of all
+/// (NaN costs are never smaller), which lies on the first axis whose `least` equals it.
+#[inline(always)]
+fn cheapest(cost: &[Vec4; BIN_COUNT], candidates: u64, least: Vec4) -> Option<(usize, usize, f32)> {
+    const AXIS: u64 = 0x1111_1111_1111_1111;
+    let on_axis = |axis: usize| candidates & (AXIS << axis);
+    let at = |axis: usize, bits: u64| {
+        let k = (bits.trailing_zeros() / 4) as usize & (BIN_COUNT - 1);
+        (axis, k, cost[k][axis])
+    };
+    let first = (0..3)
+        .find(|&axis| on_axis(axis) != 0)
+        .map(|axis| at(axis, on_axis(axis)))?;
+    if first.2.is_nan() {
+        return Some(first);
+    }
+    let smallest = least.x.min(least.y).min(least.z);
+    for axis in 0..3 {
+        if least[axis] != smallest {
+            continue;
+        }
+        let mut bits = on_axis(axis);
+        while bits != 0 {
+            let found = at(axis, bits);
+            if found.2 == smallest {
+                return Some(found);
+            }
+            bits &= bits - 1;
+        }
+    }
+    Some(first)
 }
 
 /// Partitions `range` of `refs` in place by the split (left side first; the order within a
@@ -488,6 +521,67 @@ mod tests {
         assert!(seen.iter().all(|&s| s), "a permutation");
         assert_eq!((lc.min.x, lc.max.x), (0.0, 24.0));
         assert_eq!((rc.min.x, rc.max.x), (26.0, 78.0));
+    }
+
+    /// [`cheapest`] against the scan it stands for, written out here: candidates in axis-major
+    /// order, then by plane, the first kept and replaced only by a strictly smaller cost. Costs
+    /// drawn from a few values so that ties are common, with `±0`, `+∞` and NaN among them;
+    /// random candidate sets, the empty one included.
+    #[test]
+    // The scan written with indices, as its rule is stated.
+    #[allow(clippy::needless_range_loop)]
+    fn cheapest_is_the_axis_major_scan() {
+        let values = [0.0, -0.0, 1.0, 2.0, 2.0, 3.5, f32::INFINITY, f32::NAN];
+        let mut seed = 0x9e37_79b9_u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        let mut nan_first = 0;
+        for case in 0..20_000 {
+            let mut cost = [Vec4::ZERO; BIN_COUNT];
+            for c in &mut cost {
+                *c = Vec4::from_array(core::array::from_fn(|_| values[next() as usize % 8]));
+            }
+            // Fewer candidates in some cases, so that single and absent ones occur.
+            let density = next() % 4;
+            let mut candidates = 0u64;
+            for k in 1..BIN_COUNT {
+                for axis in 0..3 {
+                    if next() % 4 < density {
+                        candidates |= 1 << (4 * k + axis);
+                    }
+                }
+            }
+            let mut least = Vec4::INFINITY;
+            for (k, c) in cost.iter().enumerate() {
+                for axis in 0..3 {
+                    if candidates >> (4 * k + axis) & 1 == 1 && !c[axis].is_nan() {
+                        least[axis] = least[axis].min(c[axis]);
+                    }
+                }
+            }
+            let mut scan: Option<(usize, usize, f32)> = None;
+            for axis in 0..3 {
+                for k in 1..BIN_COUNT {
+                    if candidates >> (4 * k + axis) & 1 == 0 {
+                        continue;
+                    }
+                    let c = cost[k][axis];
+                    match scan {
+                        Some((_, _, b)) if !(c < b) => {}
+                        _ => scan = Some((axis, k, c)),
+                    }
+                }
+            }
+            let got = cheapest(&cost, candidates, least);
+            let key = |r: Option<(usize, usize, f32)>| r.map(|(a, k, c)| (a, k, c.to_bits()));
+            assert_eq!(key(got), key(scan), "case {case}");
+            nan_first += usize::from(scan.is_some_and(|(_, _, c)| c.is_nan()));
+        }
+        assert!(nan_first > 100, "a NaN first candidate occurs: {nan_first}");
     }
 
     /// The bin index along each axis, written from [`Binner`]'s contract (clamped to
