@@ -57,9 +57,9 @@ pub(super) fn extend(lo: &mut Corner, hi: &mut Corner, p: Corner) {
 }
 
 /// A primitive as the scratch builder keeps it: its box and its index in the source (the
-/// point it is binned by, [`centre2`], is computed from the box when needed). On x86-64 the corners are
-/// 16-byte vectors, so binning is one `min` and one `max` per bin, and the index lives in the
-/// lower corner's spare lane: 32 bytes. Elsewhere 28 bytes.
+/// point it is binned by, twice its centre, is computed from the box when needed). On x86-64
+/// the corners are 16-byte vectors, so binning is one `min` and one `max` per bin, and the
+/// index lives in the lower corner's spare lane: 32 bytes. Elsewhere 28 bytes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PrimRef {
     lo: Corner,
