@@ -13,8 +13,9 @@
 //! so that the pages the build never reaches cost nothing and the others are written once
 //! after the kernel zeroes them, instead of being filled with a constant first.
 //!
-//! The advice is a hint: where the OS declines it, or on another OS, the array is an
-//! ordinary heap array with the same contents.
+//! The advice is a hint: where the OS declines it, or on another OS, the array is a heap
+//! block with the same contents. Every array, mapped or not, starts on a cache line
+//! ([`CACHE_LINE`]), as the trees' 32-byte rows need.
 
 use std::ops::{Deref, DerefMut};
 
@@ -29,6 +30,12 @@ pub const HUGE_PAGE: usize = 2 << 20;
 /// Embree's one-thread build time with this threshold, 1.08–1.10× with 512 KiB;
 /// `docs/performance.md`). Bytes.
 pub const ADVISE_MIN_BYTES: usize = HUGE_PAGE;
+
+/// Every array starts on a boundary of this many bytes, a cache line of x86-64 and of most
+/// aarch64 cores. A wide node (224 bytes) and a triangle group (160 bytes) are read in 32-byte
+/// rows; from a cache-line boundary no row spans two lines, where from the 16 bytes the
+/// allocator promises half of them would (a split load, slower on Intel cores). Bytes.
+pub const CACHE_LINE: usize = 64;
 
 /// Types whose all-zero bit pattern is a valid value: [`PageArray::zeroed`] hands out fresh
 /// memory that the OS zeroed as such values, without writing it.
@@ -49,34 +56,24 @@ unsafe impl ZeroValid for halfray_core::bvh::PrimRef {}
 unsafe impl<const W: usize> ZeroValid for halfray_core::bvh::wide::WideNode<W> {}
 unsafe impl ZeroValid for halfray_core::bvh::wide::LeafGroup {}
 
-/// `len` values in one buffer. Arrays of at least [`ADVISE_MIN_BYTES`] are (on Linux) a
-/// private anonymous mapping of their own that starts on a [`HUGE_PAGE`] boundary and is
-/// advised for huge pages before anything touches it; smaller ones (and all on other
-/// systems, or when the mapping is refused) are an ordinary heap array. Dereferences to `[T]`.
+/// `len` values in one buffer that starts on a cache line ([`CACHE_LINE`]). Arrays of at
+/// least [`ADVISE_MIN_BYTES`] are (on Linux) a private anonymous mapping of their own that
+/// starts on a [`HUGE_PAGE`] boundary and is advised for huge pages before anything touches
+/// it; smaller ones (and all on other systems, or when the mapping is refused) are a heap
+/// block. Dereferences to `[T]`.
 pub struct PageArray<T> {
-    buf: Buf<T>,
-}
-
-enum Buf<T> {
-    Heap(Vec<T>),
-    #[cfg(target_os = "linux")]
-    Mapped(mapping::Mapping<T>),
+    block: block::Block<T>,
 }
 
 impl<T: Copy> PageArray<T> {
     /// `len` copies of `value`, each written once.
     #[must_use]
     pub fn filled(value: T, len: usize) -> Self {
-        #[cfg(target_os = "linux")]
-        if let Some(mut m) = mapping::Mapping::new(len) {
-            m.spare().fill(std::mem::MaybeUninit::new(value));
-            // SAFETY: every element was just written.
-            return Self {
-                buf: Buf::Mapped(unsafe { m.assume_init() }),
-            };
-        }
+        let mut b = block::Block::new(len);
+        b.spare().fill(std::mem::MaybeUninit::new(value));
+        // SAFETY: every element was just written.
         Self {
-            buf: Buf::Heap(vec![value; len]),
+            block: unsafe { b.assume_init() },
         }
     }
 }
@@ -87,37 +84,23 @@ impl<T: ZeroValid> PageArray<T> {
     /// fault nor zeroing (storage sized for a worst case that the build does not reach).
     #[must_use]
     pub fn zeroed(len: usize) -> Self {
-        #[cfg(target_os = "linux")]
-        if let Some(m) = mapping::Mapping::new(len) {
-            // SAFETY: a fresh private anonymous mapping reads as zero bytes (mmap(2): its
-            // contents are initialised to zero), and all-zero bytes are a valid `T`
-            // (`T: ZeroValid`).
-            return Self {
-                buf: Buf::Mapped(unsafe { m.assume_init() }),
-            };
-        }
-        // SAFETY: all-zero bytes are a valid `T` (`T: ZeroValid`).
-        let zero = unsafe { std::mem::zeroed::<T>() };
+        // SAFETY: the block reads as zero bytes (`Block::zeroed`), and all-zero bytes are a
+        // valid `T` (`T: ZeroValid`).
         Self {
-            buf: Buf::Heap(vec![zero; len]),
+            block: unsafe { block::Block::zeroed(len).assume_init() },
         }
     }
 }
 
 impl<T: Copy> Clone for PageArray<T> {
     fn clone(&self) -> Self {
-        #[cfg(target_os = "linux")]
-        if let Some(mut m) = mapping::Mapping::new(self.len()) {
-            for (slot, v) in m.spare().iter_mut().zip(self.iter()) {
-                slot.write(*v);
-            }
-            // SAFETY: the mapping has `self.len()` elements, each just written from `self`.
-            return Self {
-                buf: Buf::Mapped(unsafe { m.assume_init() }),
-            };
+        let mut b = block::Block::new(self.len());
+        for (slot, v) in b.spare().iter_mut().zip(self.iter()) {
+            slot.write(*v);
         }
+        // SAFETY: the block has `self.len()` elements, each just written from `self`.
         Self {
-            buf: Buf::Heap(self.to_vec()),
+            block: unsafe { b.assume_init() },
         }
     }
 }
@@ -126,21 +109,13 @@ impl<T> Deref for PageArray<T> {
     type Target = [T];
 
     fn deref(&self) -> &[T] {
-        match &self.buf {
-            Buf::Heap(v) => v,
-            #[cfg(target_os = "linux")]
-            Buf::Mapped(m) => m.as_slice(),
-        }
+        self.block.as_slice()
     }
 }
 
 impl<T> DerefMut for PageArray<T> {
     fn deref_mut(&mut self) -> &mut [T] {
-        match &mut self.buf {
-            Buf::Heap(v) => v,
-            #[cfg(target_os = "linux")]
-            Buf::Mapped(m) => m.as_mut_slice(),
-        }
+        self.block.as_mut_slice()
     }
 }
 
@@ -162,52 +137,118 @@ impl<T: std::fmt::Debug> std::fmt::Debug for PageArray<T> {
     }
 }
 
-/// The mapping behind a large [`PageArray`] (Linux).
-#[cfg(target_os = "linux")]
-mod mapping {
+/// The memory behind a [`PageArray`]: a heap block aligned to a cache line, or (Linux, large
+/// arrays) a mapping of its own.
+mod block {
+    use super::CACHE_LINE;
+    #[cfg(target_os = "linux")]
     use super::{ADVISE_MIN_BYTES, HUGE_PAGE};
+    use std::alloc::Layout;
     use std::marker::PhantomData;
     use std::mem::MaybeUninit;
     use std::ptr::NonNull;
 
-    /// `len` elements of `T` at `data`, a [`HUGE_PAGE`] boundary inside a private anonymous
-    /// mapping of `map_bytes` bytes at `base`, owned (unmapped on drop). Its elements are
-    /// initialised once the value is returned by [`Mapping::assume_init`].
-    pub(super) struct Mapping<T> {
-        base: NonNull<libc::c_void>,
-        map_bytes: usize,
+    /// How a [`Block`]'s memory is given back.
+    enum Release {
+        /// Nothing was allocated (no bytes: an empty array or a zero-sized `T`).
+        Nothing,
+        /// A heap block of this layout, at `data`.
+        Heap(Layout),
+        /// A private anonymous mapping of `bytes` bytes at `base` (`data` lies inside it).
+        #[cfg(target_os = "linux")]
+        Mapped {
+            base: NonNull<libc::c_void>,
+            bytes: usize,
+        },
+    }
+
+    /// `len` elements of `T` at `data`, aligned to [`CACHE_LINE`] (and to `T`), owned: given
+    /// back as `release` says on drop. Its elements are initialised once the value is
+    /// returned by [`Block::assume_init`].
+    pub(super) struct Block<T> {
         data: NonNull<T>,
         len: usize,
+        release: Release,
         _owns: PhantomData<T>,
     }
 
-    // SAFETY: a `Mapping<T>` owns its memory alone (no other handle to it exists), as a
-    // `Vec<T>` does: sending it or sharing `&` to it is as safe as for the `T`s it holds.
-    unsafe impl<T: Send> Send for Mapping<T> {}
-    // SAFETY: as above; `&Mapping` only gives `&[T]`.
-    unsafe impl<T: Sync> Sync for Mapping<T> {}
+    // SAFETY: a `Block<T>` owns its memory alone (no other handle to it exists), as a `Vec<T>`
+    // does: sending it or sharing `&` to it is as safe as for the `T`s it holds.
+    unsafe impl<T: Send> Send for Block<T> {}
+    // SAFETY: as above; `&Block` only gives `&[T]`.
+    unsafe impl<T: Sync> Sync for Block<T> {}
 
-    /// `len` elements' bytes, with `align_of::<T>() ≤ HUGE_PAGE`, when they reach
-    /// [`ADVISE_MIN_BYTES`].
-    fn data_bytes<T>(len: usize) -> Option<usize> {
-        let bytes = len.checked_mul(size_of::<T>())?;
-        (bytes >= ADVISE_MIN_BYTES && align_of::<T>() <= HUGE_PAGE).then_some(bytes)
-    }
+    impl<T> Block<T> {
+        /// Room for `len` elements, not yet initialised.
+        pub(super) fn new(len: usize) -> Self {
+            Self::allocate(len, false)
+        }
 
-    impl<T> Mapping<T> {
-        /// Room for `len` elements, not yet initialised (the OS zeroes each page on first
-        /// touch), advised for huge pages over whole huge pages from the first element past
-        /// the last; `None` for arrays under [`ADVISE_MIN_BYTES`] or when the OS refuses.
-        pub(super) fn new(len: usize) -> Option<Self> {
-            let span = data_bytes::<T>(len)?.checked_next_multiple_of(HUGE_PAGE)?;
+        /// Room for `len` elements that reads as zero bytes: a fresh mapping (zeroed by the
+        /// OS on first touch) or a zeroed heap block.
+        pub(super) fn zeroed(len: usize) -> Self {
+            Self::allocate(len, true)
+        }
+
+        /// The mapping when the array is large enough and the OS gives it, else a heap block
+        /// (zeroed when `zero`).
+        ///
+        /// # Panics
+        ///
+        /// As `Vec` does: when `len` elements exceed `isize::MAX` bytes; the allocation
+        /// error handler runs when the heap refuses.
+        fn allocate(len: usize, zero: bool) -> Self {
+            let layout = Layout::array::<T>(len)
+                .and_then(|l| l.align_to(CACHE_LINE))
+                .expect("capacity overflow");
+            #[cfg(target_os = "linux")]
+            if let Some(b) = Self::mapped(len, layout) {
+                return b;
+            }
+            if layout.size() == 0 {
+                return Self {
+                    data: NonNull::dangling(),
+                    len,
+                    release: Release::Nothing,
+                    _owns: PhantomData,
+                };
+            }
+            // SAFETY: `layout` has a non-zero size (checked above).
+            let p = unsafe {
+                if zero {
+                    std::alloc::alloc_zeroed(layout)
+                } else {
+                    std::alloc::alloc(layout)
+                }
+            };
+            let Some(data) = NonNull::new(p.cast::<T>()) else {
+                std::alloc::handle_alloc_error(layout)
+            };
+            Self {
+                data,
+                len,
+                release: Release::Heap(layout),
+                _owns: PhantomData,
+            }
+        }
+
+        /// A mapping for `layout`'s bytes, advised for huge pages over whole huge pages from
+        /// the first element past the last; `None` for arrays under [`ADVISE_MIN_BYTES`],
+        /// for alignments above [`HUGE_PAGE`], or when the OS refuses.
+        #[cfg(target_os = "linux")]
+        fn mapped(len: usize, layout: Layout) -> Option<Self> {
+            if layout.size() < ADVISE_MIN_BYTES || layout.align() > HUGE_PAGE {
+                return None;
+            }
+            let span = layout.size().checked_next_multiple_of(HUGE_PAGE)?;
             // One huge page more, to start on a boundary wherever the mapping lands.
-            let map_bytes = span.checked_add(HUGE_PAGE)?;
+            let bytes = span.checked_add(HUGE_PAGE)?;
             // SAFETY: a new anonymous private mapping at an address of the kernel's choice
             // (no existing memory is affected); the result is checked for MAP_FAILED.
             let p = unsafe {
                 libc::mmap(
                     std::ptr::null_mut(),
-                    map_bytes,
+                    bytes,
                     libc::PROT_READ | libc::PROT_WRITE,
                     libc::MAP_PRIVATE | libc::MAP_ANONYMOUS,
                     -1,
@@ -229,35 +270,35 @@ mod mapping {
                 libc::madvise(data.as_ptr(), span, libc::MADV_HUGEPAGE);
             }
             Some(Self {
-                base,
-                map_bytes,
                 data: data.cast(),
                 len,
+                release: Release::Mapped { base, bytes },
                 _owns: PhantomData,
             })
         }
 
         /// The elements as uninitialised slots, to be written before [`Self::assume_init`].
         pub(super) fn spare(&mut self) -> &mut [MaybeUninit<T>] {
-            // SAFETY: `data` is aligned for `T` (a `HUGE_PAGE` boundary, `align_of::<T>() ≤
-            // HUGE_PAGE`) and `len` elements fit in the mapping (`new`), which `self` owns
-            // alone for the borrow's lifetime; `MaybeUninit` needs no initialisation.
+            // SAFETY: `data` is aligned for `T` (to `layout.align()` ≥ `align_of::<T>()`, a
+            // huge page boundary, or `dangling` for no bytes) and `len` elements fit in the
+            // block (`allocate`), which `self` owns alone for the borrow's lifetime;
+            // `MaybeUninit` needs no initialisation.
             unsafe { std::slice::from_raw_parts_mut(self.data.as_ptr().cast(), self.len) }
         }
 
-        /// The mapping as an array of initialised elements.
+        /// The block as an array of initialised elements.
         ///
         /// # Safety
         ///
         /// Each of the `len` elements holds a valid `T`: written through [`Self::spare`], or
-        /// untouched when all-zero bytes are a valid `T`.
+        /// untouched in a [`Self::zeroed`] block when all-zero bytes are a valid `T`.
         pub(super) unsafe fn assume_init(self) -> Self {
             self
         }
 
         pub(super) fn as_slice(&self) -> &[T] {
-            // SAFETY: aligned, in the mapping, owned (see `spare`); the elements are valid `T`s
-            // (`assume_init`'s contract: only such mappings are kept in a `PageArray`).
+            // SAFETY: aligned, in the block, owned (see `spare`); the elements are valid `T`s
+            // (`assume_init`'s contract: only such blocks are kept in a `PageArray`).
             unsafe { std::slice::from_raw_parts(self.data.as_ptr(), self.len) }
         }
 
@@ -267,12 +308,22 @@ mod mapping {
         }
     }
 
-    impl<T> Drop for Mapping<T> {
+    impl<T> Drop for Block<T> {
         fn drop(&mut self) {
-            // SAFETY: unmaps exactly the mapping `new` made, which no borrow outlives (`self`
-            // is being dropped); `T: Copy` in every `PageArray`, so no element needs a drop.
-            unsafe {
-                libc::munmap(self.base.as_ptr(), self.map_bytes);
+            match self.release {
+                Release::Nothing => {}
+                // SAFETY: frees exactly the block `allocate` took with this layout, which no
+                // borrow outlives (`self` is being dropped); `T: Copy` in every `PageArray`,
+                // so no element needs a drop.
+                Release::Heap(layout) => unsafe {
+                    std::alloc::dealloc(self.data.as_ptr().cast(), layout);
+                },
+                // SAFETY: unmaps exactly the mapping `mapped` made, which no borrow outlives;
+                // no element needs a drop (as above).
+                #[cfg(target_os = "linux")]
+                Release::Mapped { base, bytes } => unsafe {
+                    libc::munmap(base.as_ptr(), bytes);
+                },
             }
         }
     }
@@ -292,13 +343,14 @@ mod tests {
         3 * HUGE_PAGE / 224 + 17,
     ];
 
-    /// A large array starts on a huge page boundary (Linux), every array holds the value,
-    /// and a clone is equal and independent.
+    /// A large array starts on a huge page boundary (Linux), every array on a cache line,
+    /// every array holds the value, and a clone is equal and independent.
     #[test]
     fn filled_arrays_hold_the_value_and_large_ones_start_on_a_huge_page() {
         for n in SIZES {
             let a = PageArray::filled([7u32; 56], n);
             assert_eq!(a.len(), n);
+            assert!((a.as_ptr() as usize).is_multiple_of(CACHE_LINE), "{n}");
             assert!(a.iter().all(|x| *x == [7u32; 56]));
             if cfg!(target_os = "linux") && n * 224 >= ADVISE_MIN_BYTES {
                 assert!((a.as_ptr() as usize).is_multiple_of(HUGE_PAGE), "{n}");
@@ -326,8 +378,34 @@ mod tests {
             a[n / 2] = BvhNode::EMPTY;
             a[n - 1] = BvhNode::EMPTY;
             let b = a.clone();
+            for p in [a.as_ptr(), b.as_ptr()] {
+                assert!((p as usize).is_multiple_of(CACHE_LINE), "{n}");
+            }
             assert_eq!(b[n / 2], BvhNode::EMPTY);
             assert_eq!(b[0], BvhNode::from_raw([[0.0; 3]; 2], 0, 0));
+        }
+    }
+
+    /// The trees' own element types, in the sizes a small mesh's tree has (heap blocks), start
+    /// on a cache line however the allocator's other blocks fall: `Vec`'s 16-byte alignment
+    /// put them 16 or 48 bytes past one.
+    #[test]
+    fn small_tree_arrays_start_on_a_cache_line() {
+        use halfray_core::bvh::wide::{LeafGroup, WideNode};
+        let mut keep = Vec::new();
+        for n in 1..200 {
+            // Heap blocks of other sizes in between, so that the arrays land at many offsets.
+            keep.push(vec![0u8; n * 24 + 8]);
+            let nodes = PageArray::<WideNode<8>>::zeroed(n);
+            let groups = PageArray::<LeafGroup>::zeroed(2 * n + 1);
+            let copy = nodes.clone();
+            for p in [
+                nodes.as_ptr() as usize,
+                groups.as_ptr() as usize,
+                copy.as_ptr() as usize,
+            ] {
+                assert!(p.is_multiple_of(CACHE_LINE), "{n}: {p:#x}");
+            }
         }
     }
 
