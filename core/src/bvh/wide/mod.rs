@@ -27,7 +27,8 @@
 //! # Layout and size
 //!
 //! A [`WideNode`] holds, per axis, the `W` lower and the `W` upper bounds (`[[[f32; W]; 3]; 2]`,
-//! structure of arrays) and `W` child references: 224 bytes for `W = 8`, 112 for `W = 4`.
+//! structure of arrays) and `W` child references: 224 bytes for `W = 8`, 128 for `W = 4`
+//! (aligned to 32 bytes).
 //! A child reference is an inner node's index, a leaf (a run of at most
 //! [`MAX_LEAF_TRIANGLES`] triangle slots), or empty (an empty box, never hit). The triangles
 //! (three vertices and the index in the mesh) are copied in leaf order into [`LeafGroup`]s of

@@ -13,8 +13,13 @@ use glam::Vec3;
 /// Nodes are only created by [`super::WideBvh::from_binary`]: fields are private so that the
 /// invariants traversal relies on (children stored after their parent, leaf runs in range)
 /// cannot be broken.
+///
+/// Aligned to 32 bytes: the node test reads each bound array as one row (32 bytes for
+/// `W = 8`, 16 for `W = 4`), and from a 32-byte boundary no row spans two cache lines, in any
+/// storage (`Vec`'s too). The 8-wide node stays 224 bytes (seven rows); the 4-wide one is
+/// padded from 112 to 128 (two lines).
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(16))]
+#[repr(C, align(32))]
 pub struct WideNode<const W: usize> {
     pub(super) bounds: [[[f32; W]; 3]; 2],
     pub(super) child: [u32; W],
@@ -213,5 +218,8 @@ impl Default for LeafGroup {
 }
 
 const _: () = assert!(core::mem::size_of::<WideNode<8>>() == 224);
-const _: () = assert!(core::mem::size_of::<WideNode<4>>() == 112);
+const _: () = assert!(core::mem::size_of::<WideNode<4>>() == 128);
+const _: () = assert!(
+    core::mem::align_of::<WideNode<8>>() == 32 && core::mem::align_of::<WideNode<4>>() == 32
+);
 const _: () = assert!(core::mem::size_of::<LeafGroup>() == 160);
