@@ -152,8 +152,8 @@ mod block {
     enum Release {
         /// Nothing was allocated (no bytes: an empty array or a zero-sized `T`).
         Nothing,
-        /// A heap block of this layout, at `data`.
-        Heap(Layout),
+        /// A heap block of this layout at `base` (`data` lies inside it).
+        Heap { base: NonNull<u8>, layout: Layout },
         /// A private anonymous mapping of `bytes` bytes at `base` (`data` lies inside it).
         #[cfg(target_os = "linux")]
         Mapped {
@@ -198,6 +198,7 @@ mod block {
         /// As `Vec` does: when `len` elements exceed `isize::MAX` bytes; the allocation
         /// error handler runs when the heap refuses.
         fn allocate(len: usize, zero: bool) -> Self {
+            const { assert!(align_of::<T>() <= CACHE_LINE) };
             let layout = Layout::array::<T>(len)
                 .and_then(|l| l.align_to(CACHE_LINE))
                 .expect("capacity overflow");
@@ -213,21 +214,34 @@ mod block {
                     _owns: PhantomData,
                 };
             }
-            // SAFETY: `layout` has a non-zero size (checked above).
+            // A cache line more than the elements need, at byte alignment, used from its first
+            // cache-line boundary: asked for an alignment above the C allocator's own
+            // (16 bytes), `alloc_zeroed` would write every byte itself, where this way it gets
+            // `calloc`'s zeroed memory, fresh pages untouched (as the mapping's).
+            let heap = layout
+                .size()
+                .checked_add(CACHE_LINE)
+                .and_then(|bytes| Layout::from_size_align(bytes, 1).ok())
+                .expect("capacity overflow");
+            // SAFETY: `heap` has a non-zero size (`layout`'s, checked above, plus a line).
             let p = unsafe {
                 if zero {
-                    std::alloc::alloc_zeroed(layout)
+                    std::alloc::alloc_zeroed(heap)
                 } else {
-                    std::alloc::alloc(layout)
+                    std::alloc::alloc(heap)
                 }
             };
-            let Some(data) = NonNull::new(p.cast::<T>()) else {
-                std::alloc::handle_alloc_error(layout)
+            let Some(base) = NonNull::new(p) else {
+                std::alloc::handle_alloc_error(heap)
             };
+            let offset = (p as usize).next_multiple_of(CACHE_LINE) - p as usize;
+            // SAFETY: `offset < CACHE_LINE`, so `[base + offset, base + offset + layout.size())`
+            // lies inside the `layout.size() + CACHE_LINE` bytes allocated at `base`.
+            let data = unsafe { base.byte_add(offset) };
             Self {
-                data,
+                data: data.cast(),
                 len,
-                release: Release::Heap(layout),
+                release: Release::Heap { base, layout: heap },
                 _owns: PhantomData,
             }
         }
@@ -279,9 +293,9 @@ mod block {
 
         /// The elements as uninitialised slots, to be written before [`Self::assume_init`].
         pub(super) fn spare(&mut self) -> &mut [MaybeUninit<T>] {
-            // SAFETY: `data` is aligned for `T` (to `layout.align()` ≥ `align_of::<T>()`, a
-            // huge page boundary, or `dangling` for no bytes) and `len` elements fit in the
-            // block (`allocate`), which `self` owns alone for the borrow's lifetime;
+            // SAFETY: `data` is aligned for `T` (a cache-line or huge page boundary, and
+            // `align_of::<T>() ≤ CACHE_LINE`; `dangling` for no bytes) and `len` elements fit
+            // in the block (`allocate`), which `self` owns alone for the borrow's lifetime;
             // `MaybeUninit` needs no initialisation.
             unsafe { std::slice::from_raw_parts_mut(self.data.as_ptr().cast(), self.len) }
         }
@@ -312,11 +326,11 @@ mod block {
         fn drop(&mut self) {
             match self.release {
                 Release::Nothing => {}
-                // SAFETY: frees exactly the block `allocate` took with this layout, which no
-                // borrow outlives (`self` is being dropped); `T: Copy` in every `PageArray`,
-                // so no element needs a drop.
-                Release::Heap(layout) => unsafe {
-                    std::alloc::dealloc(self.data.as_ptr().cast(), layout);
+                // SAFETY: frees exactly the block `allocate` took at `base` with this layout,
+                // which no borrow outlives (`self` is being dropped); `T: Copy` in every
+                // `PageArray`, so no element needs a drop.
+                Release::Heap { base, layout } => unsafe {
+                    std::alloc::dealloc(base.as_ptr(), layout);
                 },
                 // SAFETY: unmaps exactly the mapping `mapped` made, which no borrow outlives;
                 // no element needs a drop (as above).
