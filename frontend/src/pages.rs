@@ -32,9 +32,9 @@ pub const HUGE_PAGE: usize = 2 << 20;
 pub const ADVISE_MIN_BYTES: usize = HUGE_PAGE;
 
 /// Every array starts on a boundary of this many bytes, a cache line of x86-64 and of most
-/// aarch64 cores. A wide node (224 bytes) and a triangle group (160 bytes) are read in 32-byte
-/// rows; from a cache-line boundary no row spans two lines, where from the 16 bytes the
-/// allocator promises half of them would (a split load, slower on Intel cores). Bytes.
+/// aarch64 cores. A wide node (224 bytes) is read in 32-byte rows; from a cache-line boundary
+/// no row spans two lines, where from the 16 bytes the allocator promises half of them would
+/// (a split load, slower on Intel cores). Bytes.
 pub const CACHE_LINE: usize = 64;
 
 /// Types whose all-zero bit pattern is a valid value: [`PageArray::zeroed`] hands out fresh
