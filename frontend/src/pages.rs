@@ -199,14 +199,13 @@ mod block {
         /// error handler runs when the heap refuses.
         fn allocate(len: usize, zero: bool) -> Self {
             const { assert!(align_of::<T>() <= CACHE_LINE) };
-            let layout = Layout::array::<T>(len)
-                .and_then(|l| l.align_to(CACHE_LINE))
-                .expect("capacity overflow");
+            // The elements' bytes, at most `isize::MAX` (`Layout`'s rule, as `Vec`'s).
+            let size = Layout::array::<T>(len).expect("capacity overflow").size();
             #[cfg(target_os = "linux")]
-            if let Some(b) = Self::mapped(len, layout) {
+            if let Some(b) = Self::mapped(len, size) {
                 return b;
             }
-            if layout.size() == 0 {
+            if size == 0 {
                 return Self {
                     data: NonNull::dangling(),
                     len,
@@ -218,12 +217,11 @@ mod block {
             // cache-line boundary: asked for an alignment above the C allocator's own
             // (16 bytes), `alloc_zeroed` would write every byte itself, where this way it gets
             // `calloc`'s zeroed memory, fresh pages untouched (as the mapping's).
-            let heap = layout
-                .size()
+            let heap = size
                 .checked_add(CACHE_LINE)
                 .and_then(|bytes| Layout::from_size_align(bytes, 1).ok())
                 .expect("capacity overflow");
-            // SAFETY: `heap` has a non-zero size (`layout`'s, checked above, plus a line).
+            // SAFETY: `heap` has a non-zero size (`size`, checked above, plus a line).
             let p = unsafe {
                 if zero {
                     std::alloc::alloc_zeroed(heap)
@@ -235,8 +233,8 @@ mod block {
                 std::alloc::handle_alloc_error(heap)
             };
             let offset = (p as usize).next_multiple_of(CACHE_LINE) - p as usize;
-            // SAFETY: `offset < CACHE_LINE`, so `[base + offset, base + offset + layout.size())`
-            // lies inside the `layout.size() + CACHE_LINE` bytes allocated at `base`.
+            // SAFETY: `offset < CACHE_LINE`, so `[base + offset, base + offset + size)` lies
+            // inside the `size + CACHE_LINE` bytes allocated at `base`.
             let data = unsafe { base.byte_add(offset) };
             Self {
                 data: data.cast(),
@@ -246,15 +244,15 @@ mod block {
             }
         }
 
-        /// A mapping for `layout`'s bytes, advised for huge pages over whole huge pages from
-        /// the first element past the last; `None` for arrays under [`ADVISE_MIN_BYTES`],
-        /// for alignments above [`HUGE_PAGE`], or when the OS refuses.
+        /// A mapping for `len` elements of `size` bytes in all, advised for huge pages over
+        /// whole huge pages from the first element past the last; `None` for arrays under
+        /// [`ADVISE_MIN_BYTES`] or when the OS refuses.
         #[cfg(target_os = "linux")]
-        fn mapped(len: usize, layout: Layout) -> Option<Self> {
-            if layout.size() < ADVISE_MIN_BYTES || layout.align() > HUGE_PAGE {
+        fn mapped(len: usize, size: usize) -> Option<Self> {
+            if size < ADVISE_MIN_BYTES {
                 return None;
             }
-            let span = layout.size().checked_next_multiple_of(HUGE_PAGE)?;
+            let span = size.checked_next_multiple_of(HUGE_PAGE)?;
             // One huge page more, to start on a boundary wherever the mapping lands.
             let bytes = span.checked_add(HUGE_PAGE)?;
             // SAFETY: a new anonymous private mapping at an address of the kernel's choice
