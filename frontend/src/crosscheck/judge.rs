@@ -155,6 +155,20 @@ pub fn answer_is_valid(mesh: &ObjMesh, ray: &Ray, a: &Answer) -> bool {
     inside_or_near(ray, &tri) && (t - a.t as f64).abs() <= t_tolerance(ray, t, cos)
 }
 
+/// `true` when the hit `r` lies within the `t` tolerance ([`t_tolerance`], on its own
+/// triangle's plane) of an end of `ray`'s interval `(t_min, t_max]`: whether it is inside is
+/// then not decided by the reference's rounded `t` either (a ray spawned from a point exactly
+/// on its face's plane crosses that face at `t = t_min = 0`, which the interval excludes, and
+/// the `f64` reference computes `±10⁻¹⁷`), so a side may report it or pass it.
+pub fn at_interval_end(mesh: &ObjMesh, ray: &Ray, r: &Answer) -> bool {
+    let tri = mesh.triangle(r.prim as usize);
+    let cos = plane_barycentrics(ray, &tri).map_or(COS_FLOOR, |p| p.2);
+    let tol = t_tolerance(ray, r.t as f64, cos);
+    let t = r.t as f64;
+    (t - ray.t_min as f64).abs() <= tol
+        || (ray.t_max.is_finite() && (t - ray.t_max as f64).abs() <= tol)
+}
+
 /// Classifies one ray. `reference` is the `f64` reference's closest hit (watertight, closed
 /// edges), used only when the two sides disagree.
 pub fn judge(
@@ -181,11 +195,16 @@ pub fn judge(
         _ => {}
     }
     // They disagree on hit/miss or on t: is each side consistent with the reference?
-    let on_boundary = |r: &Answer| near_boundary(ray, &mesh.triangle(r.prim as usize));
+    // Where the reference's own hit is undecided: within the margin of an edge of its
+    // triangle, or within the `t` tolerance of an end of the interval.
+    let on_boundary = |r: &Answer| {
+        near_boundary(ray, &mesh.triangle(r.prim as usize)) || at_interval_end(mesh, ray, r)
+    };
     let ok = |x: &Option<Answer>| match (x, &reference) {
         (None, None) => true,
         // A miss where the reference hits: excusable only if the reference's hit is itself on
-        // a boundary (within the margin of an edge of its triangle).
+        // a boundary (within the margin of an edge of its triangle, or of an end of the
+        // interval).
         (None, Some(r)) => on_boundary(r),
         // A hit the reference does not report, or one closer than the reference's: valid when
         // its own triangle is hit within the boundary margin at that `t` (the reference rounded
@@ -268,5 +287,48 @@ mod tests {
         assert!(is_leak(&diag, None, 1.0));
         assert!(!is_leak(&diag, Some(&ans(1, 1.0)), 1.0));
         assert!(is_leak(&diag, Some(&ans(1, 1.5)), 1.0));
+    }
+
+    /// A ray that starts exactly on a face's plane (spawned from a point whose coordinates
+    /// make its error bound zero: a face in the plane `z = 0`) crosses that face at `t = 0`,
+    /// which the interval `(0, ∞]` excludes, while the `f64` reference rounds it to `10⁻¹⁷`
+    /// (`TriangleVariant::F64Reference` on such a ray). Passing it is no genuine mismatch, and
+    /// neither is reporting it (Embree's `t ≥ t_near`); a reference hit well inside the
+    /// interval still is, unless it lies at a finite `t_max`.
+    #[test]
+    fn a_reference_hit_at_an_end_of_the_interval_is_undecided() {
+        let mut m = quad();
+        // A second square at z = 0.5, above the first.
+        m.positions
+            .extend([0.0, 1.0].map(|x| Vec3::new(x, 0.0, 0.5)));
+        m.positions
+            .extend([1.0, 0.0].map(|x| Vec3::new(x, 1.0, 0.5)));
+        m.triangles.push([4, 5, 6]);
+        let up = Ray::new(Vec3::new(0.7, 0.2, 0.0), Vec3::new(0.0, 0.0, 1.0));
+        let start = Some(ans(0, 1.0e-17));
+        let above = Some(ans(2, 0.5));
+        // Passing the start face, with or without the face above.
+        assert_eq!(judge(&m, &up, None, start, start), Verdict::WithinTolerance);
+        assert_eq!(
+            judge(&m, &up, above, start, start),
+            Verdict::WithinTolerance
+        );
+        // Reporting it at t = 0 (Embree's convention) against a reference that passes it.
+        assert_eq!(
+            judge(&m, &up, above, Some(ans(0, 0.0)), above),
+            Verdict::WithinTolerance
+        );
+        // The face above is no boundary case: missing it stays genuine.
+        assert_eq!(judge(&m, &up, None, above, above), Verdict::Genuine);
+        // A finite `t_max` at the face above makes that hit undecided; below it, not.
+        let short = Ray::with_interval(up.origin, up.direction, 0.0, 0.5);
+        assert_eq!(
+            judge(&m, &short, None, above, above),
+            Verdict::WithinTolerance
+        );
+        let shorter = Ray::with_interval(up.origin, up.direction, 0.0, 0.49);
+        assert!(at_interval_end(&m, &shorter, &ans(0, 1.0e-17)));
+        assert!(!at_interval_end(&m, &shorter, &ans(2, 0.5)));
+        assert!(!at_interval_end(&m, &up, &ans(2, 0.5)));
     }
 }

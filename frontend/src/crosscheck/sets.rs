@@ -226,8 +226,10 @@ fn aimed(
 }
 
 /// `true` when the projections of the incident triangles along the ray all have the same
-/// orientation and are non-degenerate (the fan, or the two triangles of an edge, then cover a
-/// neighbourhood of the target, so the ray must cross one of them) — judged in `f64` — and
+/// orientation, each taken in the winding that agrees with its neighbours across their shared
+/// edges ([`fan_windings`]: the mesh's own winding need not be consistent), and are
+/// non-degenerate (the fan, or the two triangles of an edge, then cover a neighbourhood of the
+/// target, so the ray must cross one of them) — judged in `f64` — and
 /// every projected triangle is thick enough that moving its vertices by the `f32` rounding of
 /// the ray-space coordinates cannot flip its orientation: its ray-space boundary margin
 /// ([`crate::crosscheck::judge::ray_space_barycentrics`]) is below [`ROBUST_MARGIN`]; and the
@@ -247,10 +249,13 @@ pub fn crosses_transversally(mesh: &ObjMesh, ray: &Ray, faces: &[u32], target: V
         let q = p.as_dvec3() - target.as_dvec3();
         DVec2::new(q.dot(u), q.dot(w))
     };
+    let Some(flips) = fan_windings(mesh, faces) else {
+        return false;
+    };
     let mut sign = 0.0;
-    for &f in faces {
+    for (&f, flip) in faces.iter().zip(flips) {
         let [a, b, c] = mesh.triangle(f as usize).map(proj);
-        let area = (b - a).perp_dot(c - a);
+        let area = if flip { -1.0 } else { 1.0 } * (b - a).perp_dot(c - a);
         let scale = (b - a).length() * (c - a).length();
         if area.is_nan() || area.abs() <= EDGE_ON_SIN * scale {
             return false;
@@ -269,6 +274,56 @@ pub fn crosses_transversally(mesh: &ObjMesh, ray: &Ray, faces: &[u32], target: V
         && faces
             .iter()
             .any(|&f| line_meets(ray, &mesh.triangle(f as usize)))
+}
+
+/// For each of `faces` (the triangles around an edge or a vertex), whether to take it in the
+/// reverse of its stored winding so that every two of them that share an edge traverse it in
+/// opposite directions (the windings of a consistently oriented surface), starting from the
+/// first face as stored; all `false` on a consistently oriented mesh. `None` when the faces
+/// are not connected through shared edges (a vertex where two fans touch) or admit no such
+/// windings (a shared edge traversed three times): such a neighbourhood is not counted.
+fn fan_windings(mesh: &ObjMesh, faces: &[u32]) -> Option<Vec<bool>> {
+    // The direction in which stored face `f` traverses the undirected edge `{u, w}`: `+1` for
+    // `u → w`, `−1` for `w → u`, `0` when it is not one of its edges.
+    let direction = |f: u32, u: u32, w: u32| {
+        let t = mesh.triangles[f as usize];
+        (0..3).fold(0i32, |acc, k| {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            acc + i32::from(a == u && b == w) - i32::from(a == w && b == u)
+        })
+    };
+    let mut flip: Vec<Option<bool>> = vec![None; faces.len()];
+    let mut stack = Vec::with_capacity(faces.len());
+    if !faces.is_empty() {
+        flip[0] = Some(false);
+        stack.push(0);
+    }
+    while let Some(i) = stack.pop() {
+        let fi = faces[i];
+        let ti = mesh.triangles[fi as usize];
+        let si = if flip[i] == Some(true) { -1 } else { 1 };
+        for k in 0..3 {
+            let (u, w) = (ti[k], ti[(k + 1) % 3]);
+            let di = direction(fi, u, w) * si;
+            for (j, &fj) in faces.iter().enumerate() {
+                let dj = direction(fj, u, w);
+                if j == i || dj == 0 {
+                    continue;
+                }
+                // Consistent: `dj·sj = −di`.
+                let want = dj == di;
+                match flip[j] {
+                    None => {
+                        flip[j] = Some(want);
+                        stack.push(j);
+                    }
+                    Some(f) if f != want => return None,
+                    Some(_) => {}
+                }
+            }
+        }
+    }
+    flip.into_iter().collect()
 }
 
 /// Whether the line of `ray` meets the closed triangle `v`, exactly: the signs of the line
@@ -362,6 +417,74 @@ mod tests {
             }
         });
         s.contains(&1.0) && s.contains(&-1.0)
+    }
+
+    /// The edge and vertex rays counted as transversal do not depend on the winding of the
+    /// faces. A tetrahedron wound consistently and the same one with two faces reversed (as
+    /// OBJ files from scanners and CAD exports often are) get the same rays and the same
+    /// verdicts, ray for ray; and every counted ray crosses the solid there, by an oracle that
+    /// ignores the faces: of the two points of its line just before and just after the target,
+    /// exactly one lies inside the tetrahedron (its four planes, with normals pointing away
+    /// from the opposite vertex, in `f64`). Judged by the stored winding, the reversed faces
+    /// made silhouette edges look crossed, and the watertight test's misses there counted as
+    /// leaks.
+    #[test]
+    fn counted_edge_and_vertex_rays_do_not_depend_on_the_winding() {
+        let positions = vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(0.0, 0.0, 1.0),
+        ];
+        let consistent = ObjMesh {
+            positions: positions.clone(),
+            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        };
+        let mixed = ObjMesh {
+            positions,
+            triangles: vec![[0, 1, 2], [0, 1, 3], [0, 3, 2], [1, 3, 2]],
+        };
+        let inside = |p: glam::DVec3| {
+            (0..4).all(|skip| {
+                let [a, b, c] = [0, 1, 2, 3]
+                    .into_iter()
+                    .filter(|&i| i != skip)
+                    .map(|i| consistent.positions[i].as_dvec3())
+                    .collect::<Vec<_>>()[..]
+                else {
+                    unreachable!()
+                };
+                let n = (b - a).cross(c - a);
+                let away = -n.dot(consistent.positions[skip].as_dvec3() - a).signum();
+                away * n.dot(p - a) < 0.0
+            })
+        };
+        for name in ["edges", "vertices"] {
+            let sets = [&consistent, &mixed]
+                .map(|m| generate(name, m, &Adjacency::new(m), 3_000, 11, &|_| None).unwrap());
+            let (mut counted, mut silhouettes) = (0, 0);
+            for (a, b) in sets[0].iter().zip(&sets[1]) {
+                assert_eq!(a.ray, b.ray, "{name}");
+                assert_eq!(
+                    a.target.is_some(),
+                    b.target.is_some(),
+                    "{name}: {:?}",
+                    a.ray
+                );
+                let (o, d) = (a.ray.origin.as_dvec3(), a.ray.direction.as_dvec3());
+                let crosses = inside(o + d * (1.0 - 1e-3)) != inside(o + d * (1.0 + 1e-3));
+                if a.target.is_some() {
+                    counted += 1;
+                    assert!(crosses, "{name}: counted, but does not cross: {:?}", a.ray);
+                }
+                silhouettes += usize::from(!crosses);
+            }
+            assert_eq!(sets[0].len(), 3_000, "{name}");
+            assert!(
+                counted > 200 && silhouettes > 200,
+                "{name}: {counted}, {silhouettes}"
+            );
+        }
     }
 
     /// An `edges` ray whose target, the edge's midpoint rounded to `f32`, lands on a corner of
