@@ -14,6 +14,11 @@ const BIN: &str = env!("CARGO_BIN_EXE_halfray");
 /// A tetrahedron with three faces in the planes `x = 0`, `y = 0`, `z = 0`.
 const TETRAHEDRON: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n";
 
+/// A floor in the plane `y = 0` and a tetrahedron floating above it: ambient-occlusion rays
+/// from the floor start exactly on its plane and reach the tetrahedron.
+const FLOOR: &str = "v -3 0 -3\nv 3 0 -3\nv 3 0 3\nv -3 0 3\nv 0 0.2 0\nv 1 0.2 0\nv 0 1.2 0\nv 0 0.2 1\n\
+f 1 3 2\nf 1 4 3\nf 5 7 6\nf 5 6 8\nf 5 8 7\nf 6 7 8\n";
+
 /// A box from `(0, 0, 0)` to `(2, 1, 3)` in quads (its bottom, in `z = 0`, wound against the
 /// other five), negative indices on one, texture and normal indices, CRLF line ends.
 const BOX: &str = "o box\r\nv 0 0 0\r\nv 2 0 0\r\nv 2 1 0\r\nv 0 1 0\r\nv 0 0 3\r\nv 2 0 3\r\nv 2 1 3\r\nv 0 1 3\r\nvt 0 0\r\nvn 0 0 1\r\n\
@@ -40,6 +45,7 @@ fn faces_in_coordinate_planes_and_mixed_windings_pass() {
             &format!("{TETRAHEDRON}f 1 2 3\nf 1 2 4\nf 1 4 3\nf 2 4 3\n"),
         ),
         write(dir.path(), "box.obj", BOX),
+        write(dir.path(), "floor.obj", FLOOR),
     ];
     let json = dir.path().join("report.json");
     let o = Command::new(BIN)
@@ -57,7 +63,7 @@ fn faces_in_coordinate_planes_and_mixed_windings_pass() {
     assert!(o.status.success(), "{text}");
     let report: Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     let rows = report["sets"].as_array().unwrap();
-    assert_eq!(rows.len(), 30, "{text}");
+    assert_eq!(rows.len(), 40, "{text}");
     for row in rows {
         let at = format!("{} {}", row["mesh"], row["name"]);
         assert_eq!(row["genuine_mismatches"], 0, "{at}: {text}");
