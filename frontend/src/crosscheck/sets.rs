@@ -227,7 +227,7 @@ fn aimed(
 
 /// `true` when the projections of the incident triangles along the ray all have the same
 /// orientation, each taken in the winding that agrees with its neighbours across their shared
-/// edges ([`fan_windings`]: the mesh's own winding need not be consistent), and are
+/// edges (`fan_windings`: the mesh's own winding need not be consistent), and are
 /// non-degenerate (the fan, or the two triangles of an edge, then cover a neighbourhood of the
 /// target, so the ray must cross one of them) — judged in `f64` — and
 /// every projected triangle is thick enough that moving its vertices by the `f32` rounding of
