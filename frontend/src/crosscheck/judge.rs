@@ -155,15 +155,22 @@ pub fn answer_is_valid(mesh: &ObjMesh, ray: &Ray, a: &Answer) -> bool {
     inside_or_near(ray, &tri) && (t - a.t as f64).abs() <= t_tolerance(ray, t, cos)
 }
 
+/// The [`t_tolerance`] of the hit `a` on its own triangle: at `a.t`, with the cosine between
+/// `ray` and that triangle's plane ([`COS_FLOOR`] when the ray runs in the plane). `a.prim`
+/// must index `mesh`'s triangles.
+fn hit_t_tolerance(mesh: &ObjMesh, ray: &Ray, a: &Answer) -> f64 {
+    let tri = mesh.triangle(a.prim as usize);
+    let cos = plane_barycentrics(ray, &tri).map_or(COS_FLOOR, |p| p.2);
+    t_tolerance(ray, a.t as f64, cos)
+}
+
 /// `true` when the hit `r` lies within the `t` tolerance ([`t_tolerance`], on its own
 /// triangle's plane) of an end of `ray`'s interval `(t_min, t_max]`: whether it is inside is
 /// then not decided by the reference's rounded `t` either (a ray spawned from a point exactly
 /// on its face's plane crosses that face at `t = t_min = 0`, which the interval excludes, and
 /// the `f64` reference computes `±10⁻¹⁷`), so a side may report it or pass it.
 pub fn at_interval_end(mesh: &ObjMesh, ray: &Ray, r: &Answer) -> bool {
-    let tri = mesh.triangle(r.prim as usize);
-    let cos = plane_barycentrics(ray, &tri).map_or(COS_FLOOR, |p| p.2);
-    let tol = t_tolerance(ray, r.t as f64, cos);
+    let tol = hit_t_tolerance(mesh, ray, r);
     let t = r.t as f64;
     (t - ray.t_min as f64).abs() <= tol
         || (ray.t_max.is_finite() && (t - ray.t_max as f64).abs() <= tol)
@@ -178,11 +185,8 @@ pub fn judge(
     embree: Option<Answer>,
     reference: Option<Answer>,
 ) -> Verdict {
-    let tol_between = |x: &Answer, y: &Answer| {
-        let tri = mesh.triangle(x.prim as usize);
-        let cos = plane_barycentrics(ray, &tri).map_or(COS_FLOOR, |p| p.2);
-        (x.t as f64 - y.t as f64).abs() <= t_tolerance(ray, x.t as f64, cos)
-    };
+    let tol_between =
+        |x: &Answer, y: &Answer| (x.t as f64 - y.t as f64).abs() <= hit_t_tolerance(mesh, ray, x);
     match (&ours, &embree) {
         (None, None) => return Verdict::Agree,
         (Some(h), Some(e)) if tol_between(h, e) => {
