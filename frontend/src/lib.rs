@@ -5,7 +5,6 @@
 //! benchmarks ([`bench`](mod@bench)) and the Embree cross-check ([`crosscheck`]).
 
 pub mod accel;
-pub mod atomic;
 pub mod bake;
 pub mod bench;
 pub mod charts;

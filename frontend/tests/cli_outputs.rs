@@ -154,6 +154,66 @@ fn output_locations_are_checked_before_the_work() {
     assert!(o.stdout.is_empty(), "nothing checked, nothing printed");
 }
 
+/// `bench bvh` and `bench accel` reserve `--json` before they measure: a report never
+/// replaces one of the meshes or the mesh list it ran on, and a report that cannot be written
+/// fails the run before minutes of work.
+#[test]
+fn a_benchmark_report_is_reserved_first_and_is_never_an_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = dir.path().join("cube.obj");
+    std::fs::copy(Path::new(MESHES).join("cube.obj"), &cube).unwrap();
+    // Writable, as a user's own mesh (the shared copies are read-only).
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&cube, std::fs::Permissions::from_mode(0o644)).unwrap();
+    let list = dir.path().join("list.txt");
+    std::fs::write(&list, format!("{}\n", cube.display())).unwrap();
+    let before = (std::fs::read(&cube).unwrap(), std::fs::read(&list).unwrap());
+    let sizes = ["--width", "4", "--rays", "4"];
+    let cases: [(&[&str], &Path, &Path); 3] = [
+        (&["bench", "bvh", "--sets", "primary"], &cube, &cube),
+        (
+            &["bench", "bvh", "--sets", "primary", "--mesh-list"],
+            &list,
+            &list,
+        ),
+        (&["bench", "accel"], &cube, &cube),
+    ];
+    for (command, input, json) in cases {
+        let mut a: Vec<&std::ffi::OsStr> = command.iter().map(std::ffi::OsStr::new).collect();
+        a.push(input.as_os_str());
+        a.extend(sizes.iter().map(std::ffi::OsStr::new));
+        a.extend([std::ffi::OsStr::new("--json"), json.as_os_str()]);
+        let o = run(&a);
+        assert_eq!(o.status.code(), Some(2), "{a:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("refusing to overwrite an input"),
+            "{}",
+            stderr(&o)
+        );
+        assert!(o.stdout.is_empty(), "nothing measured, nothing printed");
+    }
+    assert_eq!(
+        (std::fs::read(&cube).unwrap(), std::fs::read(&list).unwrap()),
+        before
+    );
+    // A report into a missing folder, of a run that would take minutes: refused at once.
+    let started = Instant::now();
+    let o = run(os![
+        "bench",
+        "bvh",
+        &cube,
+        "--width",
+        "2048",
+        "--json",
+        &dir.path().join("nodir/report.json")
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("does not exist"), "{}", stderr(&o));
+    assert!(o.stdout.is_empty(), "nothing measured, nothing printed");
+    assert!(started.elapsed() < Duration::from_secs(20));
+    assert_eq!(files(dir.path()), ["cube.obj", "list.txt"]);
+}
+
 #[test]
 fn sigterm_during_a_render_leaves_no_temporary_file() {
     let dir = tempfile::tempdir().unwrap();

@@ -90,11 +90,12 @@ struct Built {
 /// Runs the benchmark.
 pub fn run(args: &AccelArgs) -> Result<()> {
     args.run.check_inputs(&args.meshes)?;
+    let json = args.run.reserve_json(&args.meshes, None)?;
     let mut reports = Vec::with_capacity(args.meshes.len());
     for mesh in &args.meshes {
         reports.push(bench(args, mesh)?);
     }
-    super::write_json_reports(args.run.json.as_deref(), &reports)?;
+    super::write_json_reports(json, &reports)?;
     for r in &reports {
         print_report(r);
     }

@@ -200,6 +200,7 @@ pub fn run(args: &BvhArgs) -> Result<()> {
     };
     // One set is held in memory at a time: estimated, and every mesh opened, before any work.
     args.run.check_inputs(&meshes)?;
+    let json = args.run.reserve_json(&meshes, args.mesh_list.as_deref())?;
     let mut reports = Vec::with_capacity(meshes.len());
     for mesh in &meshes {
         struct Bench<'a>(&'a BvhArgs, &'a Path, &'a [RaySet]);
@@ -211,7 +212,7 @@ pub fn run(args: &BvhArgs) -> Result<()> {
         }
         reports.push(variant.visit(Bench(args, mesh, &sets))?);
     }
-    super::write_json_reports(args.run.json.as_deref(), &reports)?;
+    super::write_json_reports(json, &reports)?;
     for r in &reports {
         print_report(r);
     }

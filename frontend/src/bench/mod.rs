@@ -4,9 +4,9 @@ pub mod accel;
 pub mod accuracy;
 pub mod bvh;
 
-use crate::atomic::write_bytes_atomic;
 use crate::error::{Error, Result};
 use crate::obj::ObjMesh;
+use crate::outputs::{Named, OutputFile, reserve_outputs};
 use crate::raysets::{Camera, random_rays};
 use halfray_core::{Ray, Vec3};
 use std::path::{Path, PathBuf};
@@ -64,6 +64,26 @@ impl RunArgs {
         Ok(())
     }
 
+    /// Reserves `--json` before any work ([`reserve_outputs`]): its folder must exist, and it
+    /// may not be one of `meshes` or the file `list` that named some of them (a usage error,
+    /// so that a run never replaces its own input with its report). `None` without `--json`.
+    ///
+    /// # Errors
+    ///
+    /// As [`reserve_outputs`].
+    pub fn reserve_json(
+        &self,
+        meshes: &[PathBuf],
+        list: Option<&Path>,
+    ) -> Result<Option<OutputFile>> {
+        let Some(json) = &self.json else {
+            return Ok(None);
+        };
+        let mut inputs: Vec<Named<'_>> = meshes.iter().map(|p| Named::new("mesh", p)).collect();
+        inputs.extend(list.map(|p| Named::new("--mesh-list", p)));
+        Ok(reserve_outputs(&[Named::new("--json", json)], &inputs, false)?.pop())
+    }
+
     /// The two ray sets over `mesh`'s box (the unit cube `[0, 1]³` for a mesh without
     /// vertices): the primary rays of a `width × width` camera framing it
     /// ([`Camera::framing`]), then `rays` incoherent rays ([`random_rays`], seed
@@ -85,20 +105,21 @@ pub fn run(cmd: &BenchCommand) -> Result<()> {
     }
 }
 
-/// Writes `reports` as pretty JSON to `path` (atomically) when one is given: the report
-/// object itself for one mesh, an array of them for several. Nothing happens without a path.
+/// Writes `reports` as pretty JSON to the reserved output `out` ([`RunArgs::reserve_json`]),
+/// atomically, when there is one: the report object itself for one mesh, an array of them for
+/// several.
 ///
 /// # Errors
 ///
 /// Encoding or writing the file.
-fn write_json_reports<T: serde::Serialize>(path: Option<&Path>, reports: &[T]) -> Result<()> {
-    if let Some(path) = path {
+fn write_json_reports<T: serde::Serialize>(out: Option<OutputFile>, reports: &[T]) -> Result<()> {
+    if let Some(out) = out {
         let text = match reports {
             [one] => serde_json::to_string_pretty(one),
             all => serde_json::to_string_pretty(all),
         }
         .map_err(|e| Error::encode("the JSON report", e))?;
-        write_bytes_atomic(path, text.as_bytes())?;
+        out.write(|w| w.write_all(text.as_bytes()))?;
     }
     Ok(())
 }
