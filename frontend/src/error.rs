@@ -59,6 +59,19 @@ impl Location {
         self
     }
 
+    /// Adds where `serde_json` reported `e`: its line (counted from the line already set,
+    /// the first line of the JSON text in the file, if any) and column. Nothing is added
+    /// where `e` has no position (line 0: an error of the data's shape found after the whole
+    /// value was read, such as no variant of an untagged enum matching).
+    #[must_use]
+    pub fn json_position(self, e: &serde_json::Error) -> Self {
+        if e.line() == 0 {
+            return self;
+        }
+        let line = self.line.map_or(e.line(), |first| first + e.line() - 1);
+        self.line(line).column(e.column())
+    }
+
     /// Adds a field name.
     #[must_use]
     pub fn field(mut self, field: impl Into<String>) -> Self {
@@ -282,6 +295,36 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A JSON syntax error is located where the parser stopped, in the file's lines; an error
+    /// of the data's shape that names no position gets the file alone (never `:0:0`).
+    #[test]
+    fn json_errors_are_located_where_serde_knows_the_position() {
+        let syntax = serde_json::from_str::<Vec<u32>>("[1,\n 2,\n x]").unwrap_err();
+        let at = |l: Location| l.to_string();
+        assert_eq!(
+            at(Location::file("r.json").json_position(&syntax)),
+            "r.json:3:2"
+        );
+        assert_eq!(
+            at(Location::file("r.jsonl").line(7).json_position(&syntax)),
+            "r.jsonl:9:2"
+        );
+        #[derive(serde::Deserialize, Debug)]
+        #[serde(untagged)]
+        #[allow(dead_code)]
+        enum Either {
+            A { a: u32 },
+            B { b: u32 },
+        }
+        let shape = serde_json::from_str::<Either>("{\"c\": 1}").unwrap_err();
+        assert_eq!(shape.line(), 0, "{shape}");
+        assert_eq!(at(Location::file("r.json").json_position(&shape)), "r.json");
+        assert_eq!(
+            at(Location::file("r.jsonl").line(7).json_position(&shape)),
+            "r.jsonl:7"
+        );
+    }
 
     #[test]
     fn typed_errors_name_what_failed_and_keep_their_source() {

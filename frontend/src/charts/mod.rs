@@ -226,7 +226,7 @@ pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path, what: &str) -> Res
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     serde_json::from_slice(&bytes).map_err(|e| {
         Error::input(
-            Location::file(path).line(e.line()).column(e.column()),
+            Location::file(path).json_position(&e),
             format!("not the JSON of {what}: {e}"),
         )
     })

@@ -41,7 +41,7 @@ pub fn parse_log(path: &Path, text: &str) -> Result<Vec<MeshResult>> {
         }
         let result: MeshResult = serde_json::from_str(line).map_err(|e| {
             Error::input(
-                Location::file(path).line(i + 1).column(e.column()),
+                Location::file(path).line(i + 1).json_position(&e),
                 format!("not a cross-check result line: {e}"),
             )
         })?;

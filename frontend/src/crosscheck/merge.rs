@@ -62,7 +62,7 @@ pub fn read_part(path: &Path) -> Result<Part> {
             threads: report.threads,
         }),
         Err(e) => Err(Error::input(
-            Location::file(path).line(e.line()).column(e.column()),
+            Location::file(path).json_position(&e),
             format!("not a cross-check report: {e}"),
         )),
     }
