@@ -240,12 +240,13 @@ impl fmt::Display for Error {
                     failed.len()
                 )?;
                 for (path, error) in failed {
-                    write!(
-                        f,
-                        "\n  {}: {}",
-                        crate::text::escaped(path),
-                        crate::text::escaped(error)
-                    )?;
+                    // An error that already starts with its file is printed as it is.
+                    let (path, error) = (crate::text::escaped(path), crate::text::escaped(error));
+                    if error.starts_with(&format!("{path}:")) {
+                        write!(f, "\n  {error}")?;
+                    } else {
+                        write!(f, "\n  {path}: {error}")?;
+                    }
                 }
                 Ok(())
             }
@@ -358,6 +359,22 @@ mod tests {
         assert_eq!(
             e.to_string(),
             "2 of 5 meshes could not be checked:\n  a.obj: bad\n  b.obj: worse"
+        );
+        // An error naming its file already is not prefixed with it a second time.
+        let e = Error::MeshesFailed {
+            failed: vec![
+                (
+                    "a.obj".into(),
+                    "a.obj:3: field `y`: `nan` is not finite".into(),
+                ),
+                ("b.obj".into(), "b.obj.bak: unrelated".into()),
+            ],
+            total: 2,
+        };
+        assert_eq!(
+            e.to_string(),
+            "2 of 2 meshes could not be checked:\n  a.obj:3: field `y`: `nan` is not finite\n  \
+             b.obj: b.obj.bak: unrelated"
         );
         let e = Error::internal("counts disagree", None);
         assert_eq!(

@@ -15,8 +15,14 @@ fn refuse(path: &Path, kind: io::ErrorKind, message: String) -> Error {
     Error::io(path, io::Error::new(kind, message))
 }
 
-/// The bytes of `path` (see the module docs).
-pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+/// `path` opened for reading: a directory or a character or block device is refused before it
+/// is opened, and so is a regular file of more than [`MAX_INPUT_BYTES`] (see the module docs).
+/// Every error names `path`.
+///
+/// # Errors
+///
+/// [`Error::Io`] as listed, or the operating system's error opening `path`.
+pub fn open(path: &Path) -> Result<std::fs::File> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     let ft = meta.file_type();
     if ft.is_dir() {
@@ -33,26 +39,32 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
             format!("is a {kind}, not a regular file"),
         ));
     }
-    let too_big = || {
-        refuse(
-            path,
-            io::ErrorKind::FileTooLarge,
-            format!(
-                "holds more than {} MiB, the input limit (limits::MAX_INPUT_BYTES)",
-                MAX_INPUT_BYTES >> 20
-            ),
-        )
-    };
     if ft.is_file() && meta.len() > MAX_INPUT_BYTES {
-        return Err(too_big());
+        return Err(too_big(path));
     }
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    std::fs::File::open(path).map_err(|e| Error::io(path, e))
+}
+
+fn too_big(path: &Path) -> Error {
+    refuse(
+        path,
+        io::ErrorKind::FileTooLarge,
+        format!(
+            "holds more than {} MiB, the input limit (limits::MAX_INPUT_BYTES)",
+            MAX_INPUT_BYTES >> 20
+        ),
+    )
+}
+
+/// The bytes of `path` (see the module docs), opened by [`open`].
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    let file = open(path)?;
     let mut bytes = Vec::new();
     file.take(MAX_INPUT_BYTES + 1)
         .read_to_end(&mut bytes)
         .map_err(|e| Error::io(path, e))?;
     if bytes.len() as u64 > MAX_INPUT_BYTES {
-        return Err(too_big());
+        return Err(too_big(path));
     }
     Ok(bytes)
 }

@@ -4,6 +4,7 @@
 //! to benchmarks, not tests.
 
 use std::process::Command;
+use std::time::{Duration, Instant};
 
 const BIN: &str = env!("CARGO_BIN_EXE_halfray");
 const SCENE_MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/meshes");
@@ -151,28 +152,64 @@ fn a_mesh_list_follows_the_positional_meshes() {
     assert_eq!(names, ["ao", "primary-tiles", "primary-tiles+batch"]);
 }
 
+/// A missing mesh, or a directory named as one (a directory opens on Unix, so this was found
+/// only when its turn came), is refused before the first mesh is measured.
 #[test]
-fn a_missing_mesh_is_refused_before_any_measurement() {
+fn a_missing_mesh_or_a_folder_is_refused_before_any_measurement() {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("bench.json");
     let good = format!("{SCENE_MESHES}/torus.obj");
     let missing = dir.path().join("missing.obj");
-    let o = Command::new(BIN)
-        .args(["bench", "bvh", &good])
-        .arg(&missing)
-        .args(["--width", "8", "--rays", "50", "--json"])
-        .arg(&json)
-        .output()
-        .unwrap();
-    assert!(!o.status.success());
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("missing.obj"), "{err}");
-    assert!(
-        o.stdout.is_empty(),
-        "nothing measured: {}",
-        String::from_utf8_lossy(&o.stdout)
-    );
-    assert!(!json.exists());
+    let folder = dir.path().join("meshes");
+    std::fs::create_dir(&folder).unwrap();
+    for (bad, want) in [(&missing, "No such file"), (&folder, "is a directory")] {
+        // 2048² camera rays take the good mesh tens of seconds to measure (44 s with the
+        // folder found only at its turn); refused first, the run ends at once.
+        let started = Instant::now();
+        let o = Command::new(BIN)
+            .args(["bench", "bvh", &good])
+            .arg(bad)
+            .args(["--width", "2048", "--rays", "50", "--json"])
+            .arg(&json)
+            .output()
+            .unwrap();
+        assert!(started.elapsed() < Duration::from_secs(10));
+        assert_eq!(o.status.code(), Some(1));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(&format!("{}: ", bad.display())), "{err}");
+        assert!(err.contains(want), "{err}");
+        assert!(
+            o.stdout.is_empty(),
+            "nothing measured: {}",
+            String::from_utf8_lossy(&o.stdout)
+        );
+        assert!(!json.exists());
+    }
+}
+
+/// A run of no rays would print a throughput of `NaN`: `--width 0` and `--rays 0` are usage
+/// errors, for both benchmarks.
+#[test]
+fn no_rays_is_a_usage_error() {
+    let tetrahedron = format!("{SCENE_MESHES}/tetrahedron.obj");
+    for (bench, option) in [("bvh", "--width"), ("bvh", "--rays"), ("accel", "--rays")] {
+        let other = if option == "--width" {
+            "--rays"
+        } else {
+            "--width"
+        };
+        let o = Command::new(BIN)
+            .args(["bench", bench, &tetrahedron, other, "4", option, "0"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{bench} {option}: {err}");
+        assert!(
+            err.contains(&format!("{option} must be at least 1")),
+            "{err}"
+        );
+        assert!(o.stdout.is_empty());
+    }
 }
 
 /// `bench accel`: one row per structure, in order, each equal to brute force on the sample.

@@ -38,10 +38,11 @@ pub struct RunArgs {
 }
 
 impl RunArgs {
-    /// The checks `bench bvh` and `bench accel` make before any work: `--width` at least 1
-    /// ([`Error::Usage`] otherwise); the `width × width` primary and `rays` incoherent rays,
+    /// The checks `bench bvh` and `bench accel` make before any work: `--width` and `--rays`
+    /// at least 1 ([`Error::Usage`] otherwise); the `width × width` primary and `rays` incoherent rays,
     /// held in memory together, within [`crate::limits::check_memory`]'s budget; and every
-    /// one of `meshes` openable ([`Error::Io`] naming the first that is not), so that minutes
+    /// one of `meshes` a file that opens ([`crate::input::open`]: not a directory or a
+    /// device; [`Error::Io`] naming the first that is not), so that minutes
     /// of work are not spent on a run that then fails on a misspelt last path.
     ///
     /// # Errors
@@ -49,8 +50,11 @@ impl RunArgs {
     /// As listed, in that order.
     pub fn check_inputs(&self, meshes: &[PathBuf]) -> Result<()> {
         let (width, rays) = (self.width, self.rays);
-        if width == 0 {
-            return Err(Error::Usage("--width must be at least 1".into()));
+        if width == 0 || rays == 0 {
+            let name = if width == 0 { "--width" } else { "--rays" };
+            return Err(Error::Usage(format!(
+                "{name} must be at least 1 (a throughput of no rays is no figure)"
+            )));
         }
         let ray_bytes = std::mem::size_of::<Ray>() as u64;
         let bytes = (width as u64)
@@ -59,7 +63,7 @@ impl RunArgs {
             .and_then(|n| n.checked_mul(ray_bytes));
         crate::limits::check_memory(&format!("--width {width} --rays {rays}"), bytes)?;
         for mesh in meshes {
-            std::fs::File::open(mesh).map_err(|e| Error::io(mesh, e))?;
+            crate::input::open(mesh)?;
         }
         Ok(())
     }
