@@ -83,8 +83,7 @@ impl RunArgs {
         let Some(json) = &self.json else {
             return Ok(None);
         };
-        let mut inputs: Vec<Named<'_>> = meshes.iter().map(|p| Named::new("mesh", p)).collect();
-        inputs.extend(list.map(|p| Named::new("--mesh-list", p)));
+        let inputs = crate::crosscheck::corpus::run_inputs(meshes, list);
         Ok(reserve_outputs(&[Named::new("--json", json)], &inputs, false)?.pop())
     }
 

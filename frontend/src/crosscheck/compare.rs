@@ -2,7 +2,7 @@
 //! rays through both sides, the single-thread timed passes, then every ray classified on all
 //! worker threads.
 
-use super::corpus::{ResultLog, read_mesh_list};
+use super::corpus::{ResultLog, read_mesh_list, run_inputs};
 use super::judge::{self, Answer, Verdict};
 use super::report::{DetailKind, Disagreement, MeshResult, Report, RunConfig, SetReport};
 use super::sets::{self, Adjacency, SET_NAMES, SetRay};
@@ -89,8 +89,7 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
         shard: args.shard,
     };
     // Outputs are checked before any work, and none may be an input.
-    let mut inputs: Vec<Named<'_>> = meshes.iter().map(|p| Named::new("mesh", p)).collect();
-    inputs.extend(args.mesh_list.iter().map(|p| Named::new("--mesh-list", p)));
+    let inputs = run_inputs(&meshes, args.mesh_list.as_deref());
     let mut outputs = Vec::new();
     outputs.extend(args.json.iter().map(|p| Named::new("--json", p)));
     outputs.extend(

@@ -10,6 +10,7 @@
 use super::report::{MeshResult, RunConfig};
 use super::shard::Shard;
 use crate::error::{Error, Location, Result};
+use crate::outputs::Named;
 use std::collections::HashMap;
 use std::fs::{File, OpenOptions};
 use std::io::{Read, Seek, SeekFrom, Write};
@@ -26,6 +27,14 @@ pub fn read_mesh_list(list: &Path) -> Result<Vec<PathBuf>> {
         .filter(|l| !l.is_empty() && !l.starts_with('#'))
         .map(PathBuf::from)
         .collect())
+}
+
+/// The inputs of a run over `meshes`, some of them named by the file `list`, as the messages
+/// name them (`mesh`, `--mesh-list`): what no output of the run may be.
+pub fn run_inputs<'a>(meshes: &'a [PathBuf], list: Option<&'a Path>) -> Vec<Named<'a>> {
+    let mut inputs: Vec<Named<'a>> = meshes.iter().map(|p| Named::new("mesh", p)).collect();
+    inputs.extend(list.map(|p| Named::new("--mesh-list", p)));
+    inputs
 }
 
 /// Parses the complete lines of a results log (`text` ends at a newline or is empty).
