@@ -13,7 +13,7 @@ use crate::error::{Error, Location, Result};
 use crate::outputs::Named;
 use std::collections::HashMap;
 use std::fs::{File, OpenOptions};
-use std::io::{Read, Seek, SeekFrom, Write};
+use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 /// The mesh paths of a list file: one per line, surrounding whitespace trimmed, blank lines and
@@ -73,40 +73,69 @@ pub struct ResultLog {
     done: HashMap<String, MeshResult>,
 }
 
+/// How every line of a results log starts (`MeshResult` serialises its path first): a torn
+/// last line is dropped only when it is a beginning of such a line.
+const LINE_START: &str = "{\"path\":";
+
 impl ResultLog {
-    /// Opens `path` for this run. Without `resume`, an existing non-empty file is refused (its
-    /// results would be lost); with it, the file is read back (see the module docs) and every
-    /// line must belong to `config`'s run.
+    /// Opens `path` for this run. It must be a regular file (or not exist yet), writable and
+    /// with one name (a hard link would change under its other names too); a stream (`-`,
+    /// `/dev/stdout`), a device or a FIFO is a usage error, since `--resume` reads the log back.
+    /// Without `resume`, an existing non-empty file is refused (its results would be lost);
+    /// with it, the file is read back (see the module docs) and every line must belong to
+    /// `config`'s run. Nothing is written to the file until all of that has been checked: a
+    /// file that is not such a log, or the log of another run, is left as it was.
     pub fn open(path: &Path, resume: bool, config: &RunConfig) -> Result<Self> {
-        let mut file = OpenOptions::new()
-            .read(true)
-            .append(true)
-            .create(true)
-            .open(path)
-            .map_err(|e| Error::io(path, e))?;
-        let mut bytes = Vec::new();
-        file.read_to_end(&mut bytes)
-            .map_err(|e| Error::io(path, e))?;
+        use crate::outputs::target::{Target, resolve};
+        let usage = |why: &str| Error::Usage(format!("--jsonl `{}` {why}", path.display()));
+        let bytes = match resolve(path).map_err(|e| Error::io(path, e))? {
+            Target::Missing { .. } => Vec::new(),
+            Target::Stream { .. } => {
+                return Err(usage(
+                    "names a stream: the results log must be a file, since --resume reads it back",
+                ));
+            }
+            Target::Special { .. } | Target::Directory { .. } => {
+                return Err(usage(
+                    "is not a regular file: the results log is appended to and read back by --resume",
+                ));
+            }
+            Target::Regular { permissions, .. } if permissions.readonly() => {
+                return Err(usage("is read-only"));
+            }
+            Target::Regular { links, .. } if links > 1 => {
+                return Err(usage(
+                    "has more than one hard link: appending would change the file under its other names too",
+                ));
+            }
+            Target::Regular { .. } => crate::input::read_bytes(path)?,
+        };
         if !resume && !bytes.is_empty() {
             return Err(Error::Usage(format!(
                 "--jsonl `{}` already holds results: pass --resume to continue that run, or choose another file",
                 path.display()
             )));
         }
-        // A torn last line (no newline) is dropped: its mesh is checked again.
-        let complete = bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
-        if complete < bytes.len() {
-            eprintln!(
-                "crosscheck: {}: dropping a torn last line ({} bytes); its mesh is checked again",
-                path.display(),
-                bytes.len() - complete
-            );
-            file.set_len(complete as u64)
-                .and_then(|()| file.seek(SeekFrom::End(0)).map(|_| ()))
-                .map_err(|e| Error::io(path, e))?;
+        let mut complete = bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        // A last line without its newline that is a whole result is kept (the newline is
+        // added); one that is the beginning of a result is torn (a write cut off mid-line)
+        // and dropped, so its mesh is checked again; anything else is not a results log.
+        let tail = &bytes[complete..];
+        let whole_tail = !tail.is_empty() && serde_json::from_slice::<MeshResult>(tail).is_ok();
+        if whole_tail {
+            complete = bytes.len();
         }
         let text = std::str::from_utf8(&bytes[..complete])
             .map_err(|_| Error::input(Location::file(path), "is not UTF-8 text (a results log)"))?;
+        let torn = &bytes[complete..];
+        let begins_a_line =
+            torn.starts_with(LINE_START.as_bytes()) || LINE_START.as_bytes().starts_with(torn);
+        if !begins_a_line {
+            return Err(Error::input(
+                Location::file(path).line(1 + text.lines().count()),
+                "is not a results log: its last line is neither a result nor the beginning of one",
+            ));
+        }
         let mut done = HashMap::new();
         for result in parse_log(path, text)? {
             if let Some(diff) = result.config.difference(config) {
@@ -127,6 +156,24 @@ impl ResultLog {
             if result.error.is_none() {
                 done.insert(result.path.clone(), result);
             }
+        }
+        // Checked: from here on the file is this run's log.
+        let mut file = OpenOptions::new()
+            .append(true)
+            .create(true)
+            .open(path)
+            .map_err(|e| Error::io(path, e))?;
+        if whole_tail {
+            file.write_all(b"\n").map_err(|e| Error::io(path, e))?;
+        } else if !torn.is_empty() {
+            eprintln!(
+                "crosscheck: {}: dropping a torn last line ({} bytes); its mesh is checked again",
+                path.display(),
+                torn.len()
+            );
+            file.set_len(complete as u64)
+                .and_then(|()| file.seek(SeekFrom::End(0)).map(|_| ()))
+                .map_err(|e| Error::io(path, e))?;
         }
         Ok(Self {
             path: path.to_path_buf(),
@@ -248,5 +295,100 @@ mod tests {
         std::fs::write(&path, "{\"path\": 3}\n").unwrap();
         let e = ResultLog::open(&path, true, &config()).err().unwrap();
         assert!(e.to_string().contains("out.jsonl:1:"), "{e}");
+    }
+
+    /// `--resume` changes the file only once it is known to be this run's log: a file of
+    /// another kind, or another run's log with a torn last line, is left byte for byte.
+    #[test]
+    fn resume_leaves_a_file_that_is_not_this_runs_log_untouched() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.jsonl");
+        let mut other = config();
+        other.rays = 11;
+        let mut log = ResultLog::open(&path, false, &other).unwrap();
+        for mesh in ["a.obj", "b.obj"] {
+            let mut result = ok(mesh);
+            result.config = other.clone();
+            log.append(&result).unwrap();
+        }
+        drop(log);
+        let whole = std::fs::read(&path).unwrap();
+        let torn = &whole[..whole.len() - 10]; // the last line cut off mid-line
+        let unended = &whole[..whole.len() - 1]; // the last line without its newline
+        let cases: [(&str, &[u8], &str); 5] = [
+            ("another run's log, torn", torn, "rays 11 vs 10"),
+            ("another run's log, unended", unended, "rays 11 vs 10"),
+            ("notes", b"my notes", "is not a results log"),
+            (
+                "an image",
+                b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR\xff\xfe",
+                "is not UTF-8",
+            ),
+            (
+                "text, then a torn line",
+                b"{\"path\":\"a.obj\"\n",
+                "out.jsonl:1:",
+            ),
+        ];
+        for (what, bytes, want) in cases {
+            std::fs::write(&path, bytes).unwrap();
+            let e = ResultLog::open(&path, true, &config())
+                .err()
+                .unwrap()
+                .to_string();
+            assert!(e.contains(want), "{what}: {e}");
+            assert_eq!(std::fs::read(&path).unwrap(), bytes, "{what}: file changed");
+        }
+    }
+
+    #[test]
+    fn a_results_log_is_a_writable_regular_file_with_one_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let line = format!("{}\n", serde_json::to_string(&ok("a.obj")).unwrap());
+        let path = dir.path().join("out.jsonl");
+        std::fs::write(&path, &line).unwrap();
+        let link = dir.path().join("link.jsonl");
+        std::fs::hard_link(&path, &link).unwrap();
+        let e = ResultLog::open(&link, true, &config())
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("hard link"), "{e}");
+        std::fs::remove_file(&link).unwrap();
+        let mut perms = std::fs::metadata(&path).unwrap().permissions();
+        perms.set_readonly(true);
+        std::fs::set_permissions(&path, perms).unwrap();
+        let e = ResultLog::open(&path, true, &config())
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("is read-only"), "{e}");
+        for stream in ["-", "/dev/stdout", "/dev/fd/1"] {
+            let e = ResultLog::open(Path::new(stream), false, &config())
+                .err()
+                .unwrap();
+            assert!(matches!(e, Error::Usage(_)), "{stream}: {e}");
+            assert!(e.to_string().contains("names a stream"), "{stream}: {e}");
+        }
+        for special in ["/dev/null", "/tmp"] {
+            let e = ResultLog::open(Path::new(special), false, &config())
+                .err()
+                .unwrap();
+            assert!(
+                e.to_string().contains("not a regular file"),
+                "{special}: {e}"
+            );
+        }
+        assert!(!Path::new("-").exists(), "no file named `-` was created");
+        // A whole result without its newline is kept, the newline added.
+        let mut perms = std::fs::metadata(&path).unwrap().permissions();
+        #[allow(clippy::permissions_set_readonly_false)]
+        perms.set_readonly(false);
+        std::fs::set_permissions(&path, perms).unwrap();
+        std::fs::write(&path, line.trim_end()).unwrap();
+        let log = ResultLog::open(&path, true, &config()).unwrap();
+        assert_eq!(log.done("a.obj"), Some(&ok("a.obj")));
+        drop(log);
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), line);
     }
 }

@@ -52,7 +52,8 @@ pub struct CrosscheckArgs {
     /// K mod N. The N shards together are the unsharded run, ray for ray.
     #[arg(long, value_name = "K/N", default_value = "0/1")]
     pub shard: shard::Shard,
-    /// Append each mesh's result to this JSON-lines file as soon as it is done.
+    /// Append each mesh's result to this JSON-lines file as soon as it is done (a regular
+    /// file: `--resume` reads it back).
     #[arg(long)]
     pub jsonl: Option<PathBuf>,
     /// Continue the run in `--jsonl`: skip the meshes it already holds (failed ones are tried
