@@ -4,9 +4,57 @@
 //!
 //! Code that still prints with `print!`/`println!` (which panic on a write error) is covered by
 //! [`install_print_panic_guard`], which turns exactly those panics into the same outcomes.
+//!
+//! A command's summaries (tables, totals, "wrote …" lines) go to stdout, unless one of its
+//! outputs is stdout (`-o -`, `--json /dev/stdout`): then they go to stderr, so that the
+//! output's bytes are all that stdout carries ([`print_out`], [`say!`](crate::say)).
 
 use crate::error::{EXIT_BROKEN_PIPE, EXIT_ERROR, Error, Result};
 use std::io::{self, Write};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Set once an output of this process is stdout ([`stdout_carries_output`]).
+static STDOUT_CARRIES_OUTPUT: AtomicBool = AtomicBool::new(false);
+
+/// Records that one of the command's outputs is stdout: every summary printed from now on goes
+/// to stderr. Called when such an output is reserved, before any work.
+pub fn stdout_carries_output() {
+    STDOUT_CARRIES_OUTPUT.store(true, Ordering::Relaxed);
+}
+
+fn summaries_to_stderr() -> bool {
+    STDOUT_CARRIES_OUTPUT.load(Ordering::Relaxed)
+}
+
+/// Prints a summary (`format!` arguments) where [`print_out`] would: stdout, or stderr once an
+/// output is stdout. A failed write ends the process as a failed `print!` does
+/// ([`install_print_panic_guard`]).
+#[macro_export]
+macro_rules! say {
+    ($($arg:tt)*) => {
+        $crate::console::say_args(format_args!($($arg)*))
+    };
+}
+
+/// [`say!`](crate::say) with a newline, as `println!`.
+#[macro_export]
+macro_rules! sayln {
+    () => {
+        $crate::console::say_args(format_args!("\n"))
+    };
+    ($($arg:tt)*) => {
+        $crate::console::say_args(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
+/// The function behind [`say!`](crate::say).
+pub fn say_args(args: std::fmt::Arguments<'_>) {
+    if summaries_to_stderr() {
+        eprint!("{args}");
+    } else {
+        print!("{args}");
+    }
+}
 
 /// The name stdout has in error messages.
 pub const STDOUT_NAME: &str = "<stdout>";
@@ -20,8 +68,16 @@ pub fn stdout_error(e: io::Error) -> Error {
     }
 }
 
-/// Writes `text` to stdout and flushes it.
+/// Writes the summary `text` to stdout (to stderr once an output is stdout, see the module
+/// docs) and flushes it.
 pub fn print_out(text: &str) -> Result<()> {
+    if summaries_to_stderr() {
+        let mut err = io::stderr().lock();
+        return err
+            .write_all(text.as_bytes())
+            .and_then(|()| err.flush())
+            .map_err(|e| Error::io("<stderr>", e));
+    }
     let mut out = io::stdout().lock();
     out.write_all(text.as_bytes())
         .and_then(|()| out.flush())

@@ -315,3 +315,74 @@ fn closed_pipe_exits_quietly_and_full_device_is_a_clean_error() {
     assert_eq!(v["faces"], 12);
     assert_eq!(files(dir.path()), ["check.json"], "no temporary files");
 }
+
+/// An output named `-` is all that stdout carries: the command's summary ("baked …", the
+/// mesh tools' counts, a render's ray totals, the benchmark's tables) goes to stderr then, so
+/// `halfray bake m.obj -o - > m.rs` is the same file as `-o m.rs`.
+#[test]
+fn an_output_on_stdout_is_all_that_stdout_carries() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = format!("{MESHES}/cube.obj");
+    let file = dir.path().join("out");
+    let mirror = scene("mirror.toml");
+    let commands: [&[&str]; 3] = [
+        &["bake", &cube],
+        &["mesh", "subdivide", &cube, "--levels", "1"],
+        &[
+            "render",
+            mirror.to_str().unwrap(),
+            "--width",
+            "8",
+            "--height",
+            "6",
+        ],
+    ];
+    for args in commands {
+        let to_file = Command::new(BIN)
+            .args(args)
+            .arg("-o")
+            .arg(&file)
+            .output()
+            .unwrap();
+        assert!(to_file.status.success(), "{args:?}: {}", stderr(&to_file));
+        assert!(!to_file.stdout.is_empty(), "{args:?}: a summary on stdout");
+        let to_stdout = Command::new(BIN)
+            .args(args)
+            .args(["-o", "-"])
+            .output()
+            .unwrap();
+        assert!(
+            to_stdout.status.success(),
+            "{args:?}: {}",
+            stderr(&to_stdout)
+        );
+        assert!(
+            to_stdout.stdout == std::fs::read(&file).unwrap(),
+            "{args:?}: stdout is not the output's bytes alone"
+        );
+        // The summary's first line, up to its timings, on stderr instead.
+        let summary = String::from_utf8_lossy(&to_file.stdout)
+            .lines()
+            .next()
+            .and_then(|l| l.split(" in ").next())
+            .unwrap()
+            .replace(&file.display().to_string(), "-");
+        assert!(
+            stderr(&to_stdout).contains(&summary),
+            "{args:?}: `{summary}` not on stderr: {}",
+            stderr(&to_stdout)
+        );
+    }
+    let o = Command::new(BIN)
+        .args([
+            "bench", "bvh", &cube, "--width", "4", "--rays", "4", "--sets", "primary",
+        ])
+        .args(["--json", "/dev/stdout"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value =
+        serde_json::from_slice(&o.stdout).expect("stdout is the JSON alone");
+    assert_eq!(report["triangles"], 12);
+    assert!(stderr(&o).contains("bench bvh: "), "{}", stderr(&o));
+}

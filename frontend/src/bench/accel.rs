@@ -231,16 +231,24 @@ fn bench(args: &AccelArgs, path: &Path) -> Result<AccelReport> {
 }
 
 fn print_report(r: &AccelReport) {
-    println!(
+    crate::sayln!(
         "bench accel: {} ({} triangles, {}, one thread; brute-force sample {} rays)",
-        r.mesh, r.triangles, r.intersector, r.brute_force_rays
+        r.mesh,
+        r.triangles,
+        r.intersector,
+        r.brute_force_rays
     );
-    println!(
+    crate::sayln!(
         "  {:<8} {:>10} {:>8} {:>16} {:>19} {:>11}",
-        "", "build ms", "B/tri", "closest primary", "closest incoherent", "mismatches"
+        "",
+        "build ms",
+        "B/tri",
+        "closest primary",
+        "closest incoherent",
+        "mismatches"
     );
     for s in &r.structures {
-        println!(
+        crate::sayln!(
             "  {:<8} {:>10.1} {:>8.1} {:>16.2} {:>19.2} {:>11}",
             s.name,
             s.build_ms,

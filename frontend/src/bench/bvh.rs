@@ -216,7 +216,7 @@ pub fn run(args: &BvhArgs) -> Result<()> {
     for r in &reports {
         print_report(r);
     }
-    print!("\n{}", summary::markdown(&reports));
+    crate::say!("\n{}", summary::markdown(&reports));
     Ok(())
 }
 
@@ -513,11 +513,15 @@ pub(super) fn brute_force<T: TriangleIntersector>(
 
 fn print_report(r: &BvhReport) {
     let opt = |x: Option<f64>, p: usize| x.map_or("-".to_string(), |x| format!("{x:.p$}"));
-    println!(
+    crate::sayln!(
         "bench bvh: {} ({} triangles, {}, {} on {})",
-        r.mesh, r.triangles, r.intersector, r.structure, r.simd
+        r.mesh,
+        r.triangles,
+        r.intersector,
+        r.structure,
+        r.simd
     );
-    println!(
+    crate::sayln!(
         "  build, 1 thread: bvh8 {:.1} ms ({:.1} ms on {} threads, the same tree), {:.1} B/tri; binary {:.1} ms, {:.1} B/tri; Embree default {} ms ({} ms on all threads), robust {} ms",
         r.build_ms,
         r.build_ms_threads,
@@ -529,7 +533,7 @@ fn print_report(r: &BvhReport) {
         opt(r.embree_build_ms_threads, 1),
         opt(r.embree_robust_build_ms, 1),
     );
-    println!(
+    crate::sayln!(
         "  {:<15} {:<7} {:>8} {:>6} {:>8} {:>8} {:>8} {:>7} {:>7} {:>6} {:>6}",
         "set",
         "query",
@@ -545,7 +549,7 @@ fn print_report(r: &BvhReport) {
     );
     for s in &r.sets {
         let [d, rb] = s.ratios().map_or([None; 2], |[d, rb]| [Some(d), Some(rb)]);
-        println!(
+        crate::sayln!(
             "  {:<15} {:<7} {:>8} {:>6.1} {:>8.2} {:>8} {:>8} {:>7} {:>7} {:>6.1} {:>6.1}",
             s.name,
             s.query,
@@ -563,7 +567,7 @@ fn print_report(r: &BvhReport) {
     for s in &r.sets {
         if let (Some(p8), Some(p16)) = (s.embree_packet8_mrays, s.embree_packet16_mrays) {
             let api = summary::packet_api(&s.query);
-            println!(
+            crate::sayln!(
                 "  {:<15} Embree packets: {api}8 {:.2} / {:.2}, {api}16 {:.2} / {:.2} Mrays/s (default / robust); batch over them: x8 {:.2} / {:.2}, x16 {:.2} / {:.2}",
                 s.name,
                 p8[0],
@@ -577,7 +581,7 @@ fn print_report(r: &BvhReport) {
             );
         }
     }
-    println!(
+    crate::sayln!(
         "  brute force {:.1} rays/s on {} incoherent rays; mismatches {}",
         r.mrays_brute_force * 1e6,
         r.brute_force_rays,

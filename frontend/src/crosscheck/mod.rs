@@ -159,14 +159,14 @@ pub fn finish(
             serde_json::to_vec_pretty(report).map_err(|e| Error::encode("the JSON report", e))?;
         out.write(|w| w.write_all(&bytes))?;
     }
-    print!("{}", markdown(&report.sets));
+    crate::say!("{}", markdown(&report.sets));
     if let Some(ratio) = report.throughput_ratio() {
-        println!(
+        crate::sayln!(
             "\nthroughput ratio halfray / Embree robust (time-weighted over all sets): {ratio:.2}"
         );
     }
     let rays = report.rays();
-    println!(
+    crate::sayln!(
         "{rays} rays on {} meshes ({} failed) in {:.1} s wall, {:.0} rays/s, {} threads{}",
         report.meshes,
         report.failed.len(),

@@ -94,7 +94,12 @@ impl OutputFile {
                     "is a directory, not a file".into(),
                 ));
             }
-            Target::Stream { fd, .. } => Route::Stream { fd },
+            Target::Stream { fd, .. } => {
+                if fd == 1 {
+                    crate::console::stdout_carries_output();
+                }
+                Route::Stream { fd }
+            }
             Target::Special { path, .. } => Route::InPlace { target: path },
             Target::Missing { path } => {
                 let dir = folder_of(&path);
