@@ -263,3 +263,53 @@ fn resume_skips_exactly_the_meshes_already_done() {
     assert!(o.status.success(), "{}", text(&o));
     assert_eq!(counts(&read(&fresh)), counts(&report));
 }
+
+/// Sizes a run cannot hold are usage errors before any work (they aborted on a failed
+/// allocation, or panicked: `--rays 2^64−1` a capacity overflow, `--depth-size 0` a remainder
+/// by zero); the sizes of the documented corpus runs pass.
+#[test]
+fn sizes_beyond_memory_are_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let depth = dir.path().join("depth.png");
+    let tetrahedron = mesh("tetrahedron.obj");
+    for (args, want) in [
+        (&["--rays", "4294967296"][..], "GiB limit"),
+        (
+            &["--rays", "18446744073709551615"][..],
+            "does not fit in 64 bits",
+        ),
+        (
+            &["--depth-size", "0"][..],
+            "--depth-size must be at least 1",
+        ),
+        (&["--depth-size", "65536"][..], "GiB limit"),
+        (
+            &["--depth-size", "4294967296"][..],
+            "does not fit in 64 bits",
+        ),
+    ] {
+        let o = run(
+            args,
+            &[Path::new(&tetrahedron), Path::new("--depth-image"), &depth],
+        );
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o));
+        assert!(text(&o).contains(want), "{args:?}: {}", text(&o));
+        assert!(o.stdout.is_empty() && !depth.exists(), "{args:?}");
+    }
+    // 1 666 667 rays a set, the 10⁸-ray run of docs/accuracy.md, still passes the check.
+    let o = run(
+        &[
+            "--rays",
+            "1666667",
+            "--timing-rays",
+            "2",
+            "--sets",
+            "primary",
+            "--depth-size",
+            "1",
+        ],
+        &[Path::new(&tetrahedron), Path::new("--depth-image"), &depth],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(depth.exists());
+}

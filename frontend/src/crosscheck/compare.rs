@@ -74,8 +74,45 @@ fn mesh_paths(args: &CrosscheckArgs) -> Result<Vec<PathBuf>> {
     Ok(meshes)
 }
 
+/// Bytes one ray of a set holds at the set's peak: the generated ray, its shard's copy and
+/// its outcome, and, when timed, its ray in the batch and the three sides' answers. Counts
+/// inline sizes only: a ray's disagreement details exist only for the few rays that differ.
+const BYTES_PER_SET_RAY: u64 = (size_of::<SetRay>()
+    + size_of::<(usize, SetRay)>()
+    + size_of::<Outcome>()
+    + size_of::<Ray>()
+    + 3 * size_of::<Option<Answer>>()) as u64;
+
+/// Bytes one pixel of the depth image holds: its camera ray, both sides' depths, three RGB
+/// pixels of the side-by-side image and, at most, as many again in the encoded PNG.
+const BYTES_PER_DEPTH_PIXEL: u64 = (size_of::<Ray>() + 2 * size_of::<Option<f32>>() + 2 * 9) as u64;
+
+/// The size options, checked before any work: `--rays` rays of one set and the
+/// `--depth-size`² image each within [`crate::limits::check_memory`]'s budget, and a depth
+/// image at least one pixel wide.
+fn check_sizes(args: &CrosscheckArgs) -> Result<()> {
+    let rays = args.rays as u64;
+    crate::limits::check_memory(
+        &format!("--rays {rays} (one set's rays held at once)"),
+        rays.checked_mul(BYTES_PER_SET_RAY),
+    )?;
+    if args.depth_image.is_some() {
+        let size = args.depth_size as u64;
+        if size == 0 {
+            return Err(Error::Usage("--depth-size must be at least 1".into()));
+        }
+        crate::limits::check_memory(
+            &format!("--depth-size {size}"),
+            size.checked_mul(size)
+                .and_then(|p| p.checked_mul(BYTES_PER_DEPTH_PIXEL)),
+        )?;
+    }
+    Ok(())
+}
+
 /// Runs every requested set on every mesh (see [`finish`] for the exit status).
 pub fn run(args: &CrosscheckArgs) -> Result<()> {
+    check_sizes(args)?;
     let meshes = mesh_paths(args)?;
     let config = RunConfig {
         intersector: args.intersector.0.name().into(),
