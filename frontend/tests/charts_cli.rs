@@ -156,6 +156,22 @@ fn a_bad_extension_or_a_bad_file_is_refused_and_nothing_written() {
         .map(|e| e.unwrap().file_name())
         .collect();
     assert_eq!(names, ["run.json"], "nothing written");
+    // A device is refused before a byte is read (`/dev/zero` was read until memory ran out),
+    // and JSON of another run's shape is said so plainly (no serde type names).
+    let o = chart("corpus", std::path::Path::new("/dev/zero"), &svg);
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("/dev/zero: is a character device"), "{e}");
+    std::fs::write(&json, "{\"rays\": 3}").unwrap();
+    let o = chart("corpus", &json, &svg);
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("run.json: not the JSON of `bench bvh --json`"),
+        "{e}"
+    );
+    assert!(!e.contains("untagged"), "{e}");
+    assert!(!svg.exists());
 }
 
 /// A real corpus run (two small meshes, few rays) charted: every mesh on the axis.

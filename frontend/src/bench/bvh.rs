@@ -167,13 +167,15 @@ pub struct SetFigures {
 
 impl SetFigures {
     /// halfray's throughput over Embree default's and over Embree robust's (`None` without
-    /// Embree).
+    /// Embree, and where a ratio is not a finite number: a report edited by hand, with no
+    /// Embree throughput or none of halfray's, has no ratio, never an infinite one).
     #[must_use]
     pub fn ratios(&self) -> Option<[f64; 2]> {
-        Some([
+        let ratios = [
             self.mrays / self.embree_mrays?,
             self.mrays / self.embree_robust_mrays?,
-        ])
+        ];
+        ratios.iter().all(|r| r.is_finite()).then_some(ratios)
     }
 }
 

@@ -189,6 +189,19 @@ mod tests {
         assert_eq!(CorpusChart::from_file(&json).unwrap().meshes, ["bunny.obj"]);
     }
 
+    /// A hand-edited report with an Embree throughput of 0 gave an infinite ratio, and the
+    /// chart's axis never finished (the process spun); such a set has no ratio.
+    #[test]
+    fn a_zero_throughput_is_no_ratio_and_the_chart_is_drawn() {
+        let mut bad = report("bunny.obj", &[("primary", 3.0, 4.0, 3.0)]);
+        bad.sets[0].embree_robust_mrays = Some(0.0);
+        let good = report("sphere.obj", &[("primary", 6.0, 5.0, 4.0)]);
+        let chart = CorpusChart::new(&[bad, good]).unwrap();
+        assert_eq!(chart.sets[0].1[0], None);
+        let texts = svg_texts(&render(&chart, Format::Svg).unwrap(), chart.size());
+        assert!(texts.iter().any(|t| t == "sphere.obj"), "{texts:?}");
+    }
+
     #[test]
     fn a_run_without_embree_is_refused() {
         let mut r = report("bunny.obj", &[("primary", 3.0, 4.0, 3.0)]);

@@ -220,15 +220,20 @@ pub fn write(chart: &impl Chart, out: OutputFile) -> Result<()> {
 ///
 /// # Errors
 ///
-/// [`Error::Io`] reading it; an input error naming the file, line and column where it is not
-/// JSON of that shape.
+/// [`Error::Io`] reading it ([`crate::input::read_bytes`]: not a folder or a device, at most
+/// [`crate::limits::MAX_INPUT_BYTES`]); an input error naming the file, line and column where
+/// it is not JSON of that shape.
 pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path, what: &str) -> Result<T> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::input::read_bytes(path)?;
     serde_json::from_slice(&bytes).map_err(|e| {
-        Error::input(
-            Location::file(path).json_position(&e),
-            format!("not the JSON of {what}: {e}"),
-        )
+        // serde's words for JSON of none of the shapes name a type of ours; say it plainly.
+        let shape = e.to_string().starts_with("data did not match any variant");
+        let message = if shape {
+            format!("not the JSON of {what}")
+        } else {
+            format!("not the JSON of {what}: {e}")
+        };
+        Error::input(Location::file(path).json_position(&e), message)
     })
 }
 
