@@ -313,3 +313,56 @@ fn sizes_beyond_memory_are_refused_before_any_work() {
     assert!(o.status.success(), "{}", text(&o));
     assert!(depth.exists());
 }
+
+/// `--json` and `--depth-image` are written together at the end, both or neither: a report
+/// that cannot be written leaves an existing depth image as it was (it was replaced first),
+/// and a depth image that cannot be written is the run's error, not a failed mesh.
+#[test]
+fn the_report_and_the_depth_image_are_written_both_or_neither() {
+    let dir = tempfile::tempdir().unwrap();
+    let depth = dir.path().join("depth.png");
+    let json = dir.path().join("out.json");
+    std::fs::write(&depth, b"an earlier image").unwrap();
+    let tetrahedron = mesh("tetrahedron.obj");
+    let args = ["--rays", "50", "--sets", "primary", "--depth-size", "8"];
+    let o = run(
+        &args,
+        &[
+            Path::new(&tetrahedron),
+            Path::new("--depth-image"),
+            &depth,
+            Path::new("--json"),
+            Path::new("/dev/full"),
+        ],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("/dev/full"), "{}", text(&o));
+    assert_eq!(std::fs::read(&depth).unwrap(), b"an earlier image");
+    let o = run(
+        &args,
+        &[
+            Path::new(&tetrahedron),
+            Path::new("--depth-image"),
+            Path::new("/dev/full"),
+            Path::new("--json"),
+            &json,
+        ],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(!text(&o).contains("could not be checked"), "{}", text(&o));
+    assert!(text(&o).contains("/dev/full: "), "{}", text(&o));
+    assert!(!json.exists());
+    let o = run(
+        &args,
+        &[
+            Path::new(&tetrahedron),
+            Path::new("--depth-image"),
+            &depth,
+            Path::new("--json"),
+            &json,
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(std::fs::read(&depth).unwrap().starts_with(b"\x89PNG"));
+    assert_eq!(read(&json)["meshes"], 1);
+}

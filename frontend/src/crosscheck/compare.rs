@@ -11,7 +11,7 @@ use crate::accel::MeshAccel;
 use crate::embree::{EmbreeDevice, EmbreeScene, ray_is_valid};
 use crate::error::{Error, Result};
 use crate::obj::read_obj;
-use crate::outputs::{Named, OutputFile, file_id, reserve_outputs};
+use crate::outputs::{Named, file_id, reserve_outputs};
 use crate::raysets::named::watertight_hits;
 use crate::timing::TIMED_PASSES;
 use halfray_core::Ray;
@@ -136,7 +136,9 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     );
     let mut reserved = reserve_outputs(&outputs, &inputs, false)?.into_iter();
     let json_out = args.json.as_ref().and_then(|_| reserved.next());
-    let mut depth_out = args.depth_image.as_ref().and_then(|_| reserved.next());
+    let depth_out = args.depth_image.as_ref().and_then(|_| reserved.next());
+    // The depth image of the first mesh checked, written with the report at the end.
+    let mut depth_png: Option<Vec<u8>> = None;
     if let Some(log) = &args.jsonl {
         refuse_log_clash(log, &inputs, &outputs)?;
     }
@@ -160,7 +162,12 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
             results.push(done.clone());
             continue;
         }
-        let checked = pool.install(|| check_mesh(&device, path, &config, args, &mut depth_out));
+        let want_depth = depth_out.is_some() && depth_png.is_none();
+        let checked = pool.install(|| check_mesh(&device, path, &config, args, want_depth));
+        let checked = checked.map(|(rows, png)| {
+            depth_png = depth_png.take().or(png);
+            rows
+        });
         let result = MeshResult {
             path: shown.clone(),
             config: config.clone(),
@@ -175,12 +182,17 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
         }
         results.push(result);
     }
-    if depth_out.is_some() {
-        eprintln!("crosscheck: no mesh was checked in this run, so no depth image was written");
-    }
+    let depth = match (depth_out, depth_png) {
+        (Some(out), Some(png)) => Some((out, png)),
+        (Some(_), None) => {
+            eprintln!("crosscheck: no mesh was checked in this run, so no depth image was written");
+            None
+        }
+        (None, _) => None,
+    };
     let wall = start.elapsed().as_secs_f64();
     let report = Report::new(config, pool.current_num_threads(), wall, &results);
-    finish(&report, json_out, args.max_mismatch)
+    finish(&report, json_out, depth, args.max_mismatch)
 }
 
 /// Refuses a results log that is an input or another output (by file identity).
@@ -201,14 +213,14 @@ fn refuse_log_clash(log: &Path, inputs: &[Named<'_>], outputs: &[Named<'_>]) -> 
     Ok(())
 }
 
-/// One mesh's rows; writes the depth image (once, for the first mesh checked) when asked.
+/// One mesh's rows, and its depth image (PNG bytes) when `want_depth`.
 fn check_mesh(
     device: &EmbreeDevice,
     path: &Path,
     config: &RunConfig,
     args: &CrosscheckArgs,
-    depth_out: &mut Option<OutputFile>,
-) -> Result<Vec<SetReport>> {
+    want_depth: bool,
+) -> Result<(Vec<SetReport>, Option<Vec<u8>>)> {
     let mesh = read_obj(path)?;
     let name = path.file_name().map_or_else(
         || path.display().to_string(),
@@ -260,12 +272,10 @@ fn check_mesh(
         );
         rows.push(row);
     }
-    if let Some(out) = depth_out.take() {
-        let png =
-            super::depth::depth_diff_png(&accel, &robust, args.intersector.0, args.depth_size)?;
-        out.write(|w| w.write_all(&png))?;
-    }
-    Ok(rows)
+    let png = want_depth
+        .then(|| super::depth::depth_diff_png(&accel, &robust, args.intersector.0, args.depth_size))
+        .transpose()?;
+    Ok((rows, png))
 }
 
 /// Times `pass` once on the calling thread: its result and seconds.

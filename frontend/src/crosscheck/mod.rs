@@ -142,23 +142,32 @@ fn run_merge(args: &MergeArgs) -> Result<()> {
         .map(|p| merge::read_part(p))
         .collect::<Result<Vec<_>>>()?;
     let report = merge::merge(&parts)?;
-    finish(&report, reserved.into_iter().next(), args.max_mismatch)
+    finish(
+        &report,
+        reserved.into_iter().next(),
+        None,
+        args.max_mismatch,
+    )
 }
 
-/// Writes `report` to `json`, prints its table and totals, and turns it into the exit status:
-/// [`Error::Mismatch`] past `max_mismatch` genuine mismatches or on any leak through a
-/// watertight intersector, an error naming every mesh that could not be checked.
+/// Writes `report` to `json` together with `also` (the depth image: both or neither,
+/// [`crate::outputs::write_together`]), prints its table and totals, and turns it into the
+/// exit status: [`Error::Mismatch`] past `max_mismatch` genuine mismatches or on any leak
+/// through a watertight intersector, an error naming every mesh that could not be checked.
 pub fn finish(
     report: &report::Report,
     json: Option<crate::outputs::OutputFile>,
+    also: Option<(crate::outputs::OutputFile, Vec<u8>)>,
     max_mismatch: usize,
 ) -> Result<()> {
-    // The JSON first: an output that cannot be written fails before anything is printed.
+    // The outputs first: one that cannot be written fails before anything is printed.
+    let mut outputs: Vec<_> = also.into_iter().collect();
     if let Some(out) = json {
         let bytes =
             serde_json::to_vec_pretty(report).map_err(|e| Error::encode("the JSON report", e))?;
-        out.write(|w| w.write_all(&bytes))?;
+        outputs.insert(0, (out, bytes));
     }
+    crate::outputs::write_together(outputs)?;
     crate::say!("{}", markdown(&report.sets));
     if let Some(ratio) = report.throughput_ratio() {
         crate::sayln!(
