@@ -84,6 +84,25 @@ pub fn print_out(text: &str) -> Result<()> {
         .map_err(stdout_error)
 }
 
+/// Ends a command line that did not parse: help and version text go to stdout through
+/// [`print_out`] (so `--help > /dev/full` is an error, exit 1, not a silent 0); usage errors
+/// to stderr, exit 2, as clap does.
+#[must_use]
+pub fn clap_exit(e: &clap::Error) -> std::process::ExitCode {
+    if e.use_stderr() {
+        let _ = e.print();
+        return std::process::ExitCode::from(crate::error::EXIT_USAGE);
+    }
+    match print_out(&e.render().to_string()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(Error::BrokenPipe) => std::process::ExitCode::from(EXIT_BROKEN_PIPE),
+        Err(err) => {
+            eprintln!("error: {err}");
+            std::process::ExitCode::from(EXIT_ERROR)
+        }
+    }
+}
+
 /// The prefix of the standard library's panic message when `print!` fails.
 const PRINT_PANIC_PREFIX: &str = "failed printing to stdout: ";
 

@@ -46,7 +46,10 @@ fn main() -> ExitCode {
     if let Err(e) = halfray::outputs::temp::install_signal_cleanup() {
         eprintln!("warning: no signal handler (temporary files may stay after Ctrl-C): {e}");
     }
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return halfray::console::clap_exit(&e),
+    };
     let result = halfray::workers::install_global_pool().and_then(|()| match cli.command {
         Command::Render(args) => render::run(&args),
         Command::Mesh(cmd) => mesh_tools::run(&cmd),

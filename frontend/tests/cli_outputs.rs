@@ -280,8 +280,12 @@ fn closed_pipe_exits_quietly_and_full_device_is_a_clean_error() {
     let json = dir.path().join("check.json");
     let png = dir.path().join("r.png");
     let mirror = scene("mirror.toml");
-    let cases: [&[&std::ffi::OsStr]; 3] = [
+    let cases: [&[&std::ffi::OsStr]; 6] = [
         os!["mesh", "check", &cube, "--json", &json],
+        // Help and version text too (clap's own printing ignored the error: exit 0).
+        os!["--help"],
+        os!["--version"],
+        os!["bench", "bvh", "--help"],
         os![
             "render",
             &mirror,
@@ -294,7 +298,7 @@ fn closed_pipe_exits_quietly_and_full_device_is_a_clean_error() {
             "12",
             "--quiet"
         ],
-        // `bench bvh` prints with `println!`: the panic guard covers it.
+        // `bench bvh` prints with `say!` (`print!`): the panic guard covers it.
         os!["bench", "bvh", &cube, "--width", "16", "--rays", "100"],
     ];
     for args in cases {
