@@ -507,6 +507,42 @@ fn smooth_reduces_roughness_of_a_noisy_grid() {
     assert!(rms_z(&out.positions) < 0.5 * rms_z(&grid.positions));
 }
 
+/// A step that throws vertices beyond the coordinate domain (or to infinity) is refused with
+/// nothing written: the file would not read back (`--step=1e38` wrote it, exit 0).
+#[test]
+fn smoothing_beyond_the_coordinate_domain_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.obj");
+    let cube = mesh("cube.obj");
+    for step in ["--step=1e38", "--step=3e38", "--step=-1e38"] {
+        let (code, _, err) = run_bin(&[
+            "mesh",
+            "smooth",
+            cube.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            step,
+        ]);
+        assert_eq!(code, 2, "{step}: {err}");
+        assert!(
+            err.contains("outside the coordinate domain") && err.contains("nothing written"),
+            "{err}"
+        );
+        assert!(!out.exists(), "{step}");
+    }
+    // A large step that stays inside the domain is written and reads back.
+    let (code, _, err) = run_bin(&[
+        "mesh",
+        "smooth",
+        cube.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--step=1e3",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    read_obj(&out).unwrap();
+}
+
 // ----- collapse -----
 
 fn edge_lengths(obj: &ObjMesh) -> Vec<f32> {

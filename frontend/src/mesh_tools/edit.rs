@@ -7,7 +7,7 @@ use super::{
 };
 use crate::error::{Error, Location, Result};
 use crate::limits::check_memory;
-use crate::obj::{NotCarried, read_obj_noting, write_obj_to};
+use crate::obj::{MAX_COORDINATE, NotCarried, read_obj_noting, write_obj_to};
 use glam::Vec3;
 use halfray_core::halfedge::{
     CollapseAt, CollapseError, Counts, DiffuseBoundary, EdgeId, EdgeRec, FaceRec, LoopWeights,
@@ -192,10 +192,32 @@ fn edit_file(
         ..EditReport::default()
     };
     let (p, t) = edit(mesh, &mut report)?;
+    refuse_outside_domain(command, output, &p)?;
     let t2 = Instant::now();
     write_obj_to(out, &p, &t)?;
     report.write_ms += ms_since(t2);
     Ok(report)
+}
+
+/// Refuses an edit whose result has a vertex the OBJ reader would refuse (non-finite, or
+/// beyond [`MAX_COORDINATE`]: `mesh smooth` with a huge `--step` moves vertices that far),
+/// so that no command writes a mesh that halfray cannot read back.
+fn refuse_outside_domain(command: &str, output: &Path, positions: &[Vec3]) -> Result<()> {
+    let outside = |p: &&Vec3| !(p.abs().max_element() <= MAX_COORDINATE);
+    match positions.iter().position(|p| outside(&p)) {
+        None => Ok(()),
+        Some(i) => {
+            let p = positions[i];
+            Err(Error::Usage(format!(
+                "mesh {command}: the result's vertex {} ({:e}, {:e}, {:e}) is outside the coordinate domain ±{MAX_COORDINATE:e} (obj::MAX_COORDINATE), so `{}` would not read back; nothing written",
+                i + 1,
+                p.x,
+                p.y,
+                p.z,
+                crate::text::path(output)
+            )))
+        }
+    }
 }
 
 /// Ends an in-place edit begun at `t1`: records its time and the counts after it, and exports
