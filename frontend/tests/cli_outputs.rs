@@ -390,3 +390,44 @@ fn an_output_on_stdout_is_all_that_stdout_carries() {
     assert_eq!(report["triangles"], 12);
     assert!(stderr(&o).contains("bench bvh: "), "{}", stderr(&o));
 }
+
+/// Every command that refuses a read-only output with "pass --force" takes `--force` (the
+/// benchmarks, `gamma --chart` and `crosscheck` suggested a flag they did not have).
+#[test]
+fn every_command_that_suggests_force_takes_it() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let cube = format!("{MESHES}/cube.obj");
+    let out = dir.path().join("out");
+    let commands: [&[&str]; 3] = [
+        &["gamma", "--chart"],
+        &[
+            "bench", "bvh", &cube, "--width", "4", "--rays", "4", "--sets", "primary", "--json",
+        ],
+        &[
+            "bench", "accel", &cube, "--width", "4", "--rays", "4", "--json",
+        ],
+    ];
+    for args in commands {
+        std::fs::write(&out, b"kept").unwrap();
+        std::fs::set_permissions(&out, std::fs::Permissions::from_mode(0o444)).unwrap();
+        let o = Command::new(BIN).args(args).arg(&out).output().unwrap();
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("pass --force"),
+            "{args:?}: {}",
+            stderr(&o)
+        );
+        assert_eq!(std::fs::read(&out).unwrap(), b"kept");
+        let o = Command::new(BIN)
+            .args(args)
+            .arg(&out)
+            .arg("--force")
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{args:?} --force: {}", stderr(&o));
+        assert_ne!(std::fs::read(&out).unwrap(), b"kept");
+        let mode = std::fs::metadata(&out).unwrap().permissions().mode();
+        assert_eq!(mode & 0o777, 0o444, "{args:?}: the mode is kept");
+    }
+}

@@ -35,6 +35,9 @@ pub struct RunArgs {
     /// Number of incoherent random rays.
     #[arg(long, default_value_t = 1_000_000)]
     pub rays: usize,
+    /// Replace an output that is read-only or hard-linked (keeping its mode).
+    #[arg(long)]
+    pub force: bool,
 }
 
 impl RunArgs {
@@ -84,7 +87,7 @@ impl RunArgs {
             return Ok(None);
         };
         let inputs = crate::crosscheck::corpus::run_inputs(meshes, list);
-        Ok(reserve_outputs(&[Named::new("--json", json)], &inputs, false)?.pop())
+        Ok(reserve_outputs(&[Named::new("--json", json)], &inputs, self.force)?.pop())
     }
 
     /// The two ray sets over `mesh`'s box (the unit cube `[0, 1]³` for a mesh without

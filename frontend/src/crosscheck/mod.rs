@@ -86,6 +86,9 @@ pub struct CrosscheckArgs {
     /// Width and height of the depth image.
     #[arg(long, default_value_t = 256)]
     pub depth_size: usize,
+    /// Replace an output that is read-only or hard-linked (keeping its mode).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Subcommands of `halfray crosscheck`.
@@ -108,6 +111,9 @@ pub struct MergeArgs {
     /// Exit with code 3 when genuine mismatches exceed this.
     #[arg(long, default_value_t = 0)]
     pub max_mismatch: usize,
+    /// Replace an output that is read-only or hard-linked (keeping its mode).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Runs `halfray crosscheck` (or `crosscheck merge`).
@@ -135,7 +141,7 @@ fn run_merge(args: &MergeArgs) -> Result<()> {
     use crate::outputs::{Named, reserve_outputs};
     let inputs: Vec<Named<'_>> = args.parts.iter().map(|p| Named::new("part", p)).collect();
     let outputs: Vec<Named<'_>> = args.json.iter().map(|p| Named::new("--json", p)).collect();
-    let reserved = reserve_outputs(&outputs, &inputs, false)?;
+    let reserved = reserve_outputs(&outputs, &inputs, args.force)?;
     let parts = args
         .parts
         .iter()

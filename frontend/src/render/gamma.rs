@@ -142,13 +142,16 @@ pub struct GammaArgs {
     /// `γ = ln 0.5 / ln a`.
     #[arg(long = "match", value_name = "A", group = "what")]
     pub matched: Option<f64>,
+    /// Replace an output that is read-only or hard-linked (keeping its mode).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Runs `halfray gamma`.
 pub fn run(args: &GammaArgs) -> Result<()> {
     let mut text = String::new();
     if let Some(path) = &args.chart {
-        let out = crate::outputs::OutputFile::reserve(path, false)?;
+        let out = crate::outputs::OutputFile::reserve(path, args.force)?;
         let (img, greys) = chart();
         crate::png::write_png(out, img.width(), img.height(), img.as_raw())?;
         text.push_str(&format!("wrote {}: tiles left to right\n", path.display()));

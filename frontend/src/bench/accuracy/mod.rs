@@ -41,6 +41,9 @@ pub struct AccuracyArgs {
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Replace an output that is read-only or hard-linked (keeping its mode).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// One variant's row of the report.
@@ -322,7 +325,7 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         outputs.push(Named::new("--chart", p));
     }
     let inputs: Vec<Named<'_>> = args.meshes.iter().map(|p| Named::new("mesh", p)).collect();
-    let mut reserved = reserve_outputs(&outputs, &inputs, false)?.into_iter();
+    let mut reserved = reserve_outputs(&outputs, &inputs, args.force)?.into_iter();
     let report = measure(args)?;
     if args.json.is_some() {
         let json =
