@@ -100,8 +100,70 @@ fn check_sums(parts: &[Part]) -> Result<()> {
     Ok(())
 }
 
+/// Refuses a part whose results no run can have written (a file edited by hand, or of
+/// another version): a checked mesh has exactly the run's sets, in order, and in each set the
+/// rays' verdicts (agree, ties, within tolerance, Embree wrong, genuine), every leak count,
+/// the any-hit disagreements and the timed rays are each at most its rays (each counts rays,
+/// once each).
+fn check_consistent(part: &Part) -> Result<()> {
+    for result in part.results.iter().filter(|r| r.error.is_none()) {
+        let names: Vec<&str> = result.sets.iter().map(|s| s.name.as_str()).collect();
+        if names != result.config.ray_sets {
+            return Err(Error::input(
+                Location::file(&part.path),
+                format!(
+                    "mesh `{}` has sets {names:?}, its run {:?}",
+                    crate::text::escaped(&result.path),
+                    result.config.ray_sets
+                ),
+            ));
+        }
+        for set in &result.sets {
+            let verdicts = [
+                set.agree,
+                set.ties,
+                set.within_tolerance,
+                set.embree_wrong,
+                set.genuine_mismatches,
+            ]
+            .iter()
+            .try_fold(0usize, |a, &b| a.checked_add(b));
+            let each = [
+                (
+                    "verdicts (agree + ties + within_tolerance + embree_wrong + genuine_mismatches)",
+                    verdicts,
+                ),
+                ("leaks_halfray", Some(set.leaks_halfray)),
+                ("leaks_embree", Some(set.leaks_embree)),
+                ("leaks_embree_default", Some(set.leaks_embree_default)),
+                ("leak_rays", Some(set.leak_rays)),
+                ("any_hit_disagreements", Some(set.any_hit_disagreements)),
+                ("timed_rays", Some(set.timed_rays)),
+            ];
+            for (name, count) in each {
+                if count.is_none_or(|c| c > set.rays) {
+                    return Err(Error::input(
+                        Location::file(&part.path),
+                        format!(
+                            "mesh `{}` set `{}`: {name} = {} is more than its {} rays",
+                            crate::text::escaped(&result.path),
+                            crate::text::escaped(&set.name),
+                            count.map_or("more than 2^64".into(), |c| c.to_string()),
+                            set.rays
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Merges the parts (see the module docs).
 pub fn merge(parts: &[Part]) -> Result<Report> {
+    for part in parts {
+        check_consistent(part)?;
+    }
     check_sums(parts)?;
     let mut first: Option<(&Path, &RunConfig)> = None;
     // Per mesh path (in order of first appearance): shard index -> (file, result).
@@ -320,6 +382,44 @@ mod tests {
             // Wall seconds add (1 s per part); threads: the largest.
             assert_eq!((merged.wall_seconds, merged.threads), (n as f64, 2));
         }
+    }
+
+    /// Parts no run can have written are refused, naming the part, mesh and set (they were
+    /// merged, exit 0: a set's count above its rays, a checked mesh without its sets).
+    #[test]
+    fn counts_no_run_can_write_are_refused() {
+        type Edit = fn(&mut MeshResult);
+        let edits: [(Edit, &str); 4] = [
+            (|r| r.sets[0].agree = 999, "verdicts (agree"),
+            (
+                |r| r.sets[1].genuine_mismatches = usize::MAX,
+                "more than 2^64",
+            ),
+            (
+                |r| r.sets[0].leaks_halfray = r.sets[0].rays + 1,
+                "leaks_halfray",
+            ),
+            (
+                |r| r.sets.clear(),
+                "has sets [], its run [\"primary\", \"edges\"]",
+            ),
+        ];
+        for (edit, want) in edits {
+            let mut result = shard_result("a.obj", 0, 1);
+            edit(&mut result);
+            let e = merge(&[part("p.json", vec![result])])
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.starts_with("p.json: mesh `a.obj`") && e.contains(want),
+                "{e}"
+            );
+        }
+        // The same edits on a failed mesh's line are its error's business, not the counts'.
+        let mut failed = shard_result("a.obj", 0, 1);
+        failed.error = Some("a.obj:1: bad".into());
+        failed.sets.clear();
+        assert!(merge(&[part("p.json", vec![failed])]).is_ok());
     }
 
     #[test]
