@@ -202,10 +202,18 @@ pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<(ObjMesh, NotCarried
                             format!("`{}` is not a number", crate::text::excerpt(tok)),
                         )
                     })?;
-                    if !v.is_finite() {
+                    // A finite number beyond `f32` reads as infinity: for a coordinate that
+                    // is the domain's error below, for a `w` or colour a range error.
+                    let beyond_f32 = !v.is_finite() && tok.parse::<f64>().is_ok_and(f64::is_finite);
+                    if !v.is_finite() && !(beyond_f32 && count < 3) {
+                        let why = if beyond_f32 {
+                            "is beyond the largest `f32` (3.4e38)"
+                        } else {
+                            "is not finite"
+                        };
                         return Err(Error::input(
                             at(col, name),
-                            format!("`{}` is not finite", crate::text::excerpt(tok)),
+                            format!("`{}` {why}", crate::text::excerpt(tok)),
                         ));
                     }
                     if count < 3 && v.abs() > MAX_COORDINATE {
@@ -372,6 +380,22 @@ mod tests {
     fn errors_name_file_line_column() {
         let e = parse_obj("v 0 0 0\nv 1 nan 0\n", Path::new("a.obj")).unwrap_err();
         assert_eq!(e.to_string(), "a.obj:2:5: field `y`: `nan` is not finite");
+        // A finite number beyond `f32` is outside the domain (a coordinate) or out of range,
+        // not "not finite".
+        let e = parse_obj("v 0 0 1e39\n", Path::new("a.obj")).unwrap_err();
+        assert!(
+            e.to_string().starts_with(
+                "a.obj:1:7: field `z`: vertex 1: `1e39` is outside the coordinate domain"
+            ),
+            "{e}"
+        );
+        let e = parse_obj("v 0 0 0 1e39\n", Path::new("a.obj")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "a.obj:1:9: field `w|r`: `1e39` is beyond the largest `f32` (3.4e38)"
+        );
+        let e = parse_obj("v 0 0 inf\n", Path::new("a.obj")).unwrap_err();
+        assert!(e.to_string().ends_with("`inf` is not finite"), "{e}");
         let e = parse_obj("v 0 0 0\nf 1 2 3\n", Path::new("b.obj")).unwrap_err();
         assert!(
             e.to_string()

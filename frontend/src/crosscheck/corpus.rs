@@ -17,11 +17,14 @@ use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 /// The mesh paths of a list file: one per line, surrounding whitespace trimmed, blank lines and
-/// lines starting with `#` skipped. Relative paths are relative to the current directory (as
+/// lines starting with `#` skipped, a leading UTF-8 byte-order mark ignored. Relative paths are relative to the current directory (as
 /// `find … > list` writes them), not to the list file.
 pub fn read_mesh_list(list: &Path) -> Result<Vec<PathBuf>> {
     let text = crate::input::read_text(list, "text (one mesh path per line)")?;
+    // A byte-order mark is no part of the first path.
     Ok(text
+        .strip_prefix('\u{feff}')
+        .unwrap_or(&text)
         .lines()
         .map(str::trim)
         .filter(|l| !l.is_empty() && !l.starts_with('#'))
@@ -238,6 +241,12 @@ mod tests {
         assert_eq!(
             read_mesh_list(&list).unwrap(),
             ["a.obj", "b/c.obj", "d.obj"].map(PathBuf::from)
+        );
+        std::fs::write(&list, "\u{feff}a.obj\r\nb.obj\n").unwrap();
+        assert_eq!(
+            read_mesh_list(&list).unwrap(),
+            ["a.obj", "b.obj"].map(PathBuf::from),
+            "a byte-order mark is skipped"
         );
         std::fs::write(&list, b"a.obj\n\xff.obj\n").unwrap();
         let e = read_mesh_list(&list).unwrap_err().to_string();
