@@ -205,7 +205,8 @@ pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<(ObjMesh, NotCarried
                     // A finite number beyond `f32` reads as infinity: for a coordinate that
                     // is the domain's error below, for a `w` or colour a range error.
                     let beyond_f32 = !v.is_finite() && tok.parse::<f64>().is_ok_and(f64::is_finite);
-                    if !v.is_finite() && !(beyond_f32 && count < 3) {
+                    let outside_domain = beyond_f32 && count < 3;
+                    if !(v.is_finite() || outside_domain) {
                         let why = if beyond_f32 {
                             "is beyond the largest `f32` (3.4e38)"
                         } else {
