@@ -252,7 +252,7 @@ pub fn merge(parts: &[Part]) -> Result<Report> {
             sets: if errors.is_empty() { rows } else { Vec::new() },
         });
     }
-    let wall: f64 = parts.iter().map(|p| p.wall_seconds).sum();
+    let wall: f64 = parts.iter().fold(0.0, |a, p| a + p.wall_seconds);
     let threads = parts.iter().map(|p| p.threads).max().unwrap_or(0);
     let mut report = Report::new(
         RunConfig {
@@ -464,6 +464,14 @@ mod tests {
         assert_eq!(merged.failed[0].path, "b.obj");
         assert!(merged.failed[0].error.contains("shard 1/2: b.obj:4:7"));
         assert!(merged.sets.iter().all(|s| s.path == "a.obj"));
+        // Every mesh failed: no rays, a throughput of +0 (an empty `f64` sum is −0, which
+        // printed as "-0 rays/s").
+        let mut only = shard_result("b.obj", 0, 1);
+        only.error = Some("b.obj: bad".into());
+        only.sets.clear();
+        let merged = merge(&[part("p", vec![only])]).unwrap();
+        assert!(merged.rays_per_second == 0.0 && merged.rays_per_second.is_sign_positive());
+        assert_eq!(format!("{:.0}", merged.rays_per_second), "0");
     }
 
     #[test]

@@ -181,13 +181,17 @@ pub fn finish(
         );
     }
     let rays = report.rays();
+    // Results logs do not record their threads: a merge of logs alone does not know them.
+    let threads = match report.threads {
+        0 => String::new(),
+        n => format!(", {n} threads"),
+    };
     crate::sayln!(
-        "{rays} rays on {} meshes ({} failed) in {:.1} s wall, {:.0} rays/s, {} threads{}",
+        "{rays} rays on {} meshes ({} failed) in {:.1} s wall, {:.0} rays/s{threads}{}",
         report.meshes,
         report.failed.len(),
         report.wall_seconds,
         report.rays_per_second,
-        report.threads,
         report
             .merged_shards
             .map_or(String::new(), |n| format!(" (sums over {n} shards)"))

@@ -330,8 +330,9 @@ impl Report {
                 None => sets.extend(r.sets.iter().cloned()),
             }
         }
-        // Throughput only: an `f64` sum cannot overflow.
-        let rays: f64 = sets.iter().map(|s| s.rays as f64).sum();
+        // Throughput only: an `f64` sum cannot overflow. Folded from +0 (an empty `sum()` is
+        // −0, printed "-0 rays/s" when every mesh failed).
+        let rays: f64 = sets.iter().fold(0.0, |a, s| a + s.rays as f64);
         Self {
             config,
             merged_shards: None,
