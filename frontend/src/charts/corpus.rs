@@ -202,6 +202,22 @@ mod tests {
         assert!(texts.iter().any(|t| t == "sphere.obj"), "{texts:?}");
     }
 
+    /// A mesh name from the JSON with control characters (a terminal escape) is drawn with
+    /// U+FFFD in their place: the SVG stays well-formed XML (it did not parse before).
+    #[test]
+    fn control_characters_in_a_name_keep_the_svg_well_formed() {
+        let chart = CorpusChart::new(&[report(
+            "a\u{1b}[31m\u{7}.obj",
+            &[("primary", 3.0, 4.0, 3.0)],
+        )])
+        .unwrap();
+        let texts = svg_texts(&render(&chart, Format::Svg).unwrap(), chart.size());
+        assert!(
+            texts.iter().any(|t| t == "a\u{fffd}[31m\u{fffd}.obj"),
+            "{texts:?}"
+        );
+    }
+
     #[test]
     fn a_run_without_embree_is_refused() {
         let mut r = report("bunny.obj", &[("primary", 3.0, 4.0, 3.0)]);

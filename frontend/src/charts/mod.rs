@@ -170,6 +170,21 @@ where
         .draw()
 }
 
+/// `svg` with every character XML 1.0 does not allow (controls other than tab, line feed and
+/// carriage return) replaced by U+FFFD: a mesh name read from a run's JSON may hold any
+/// character, and one such character makes the whole file unreadable.
+fn xml_chars(svg: &str) -> String {
+    svg.chars()
+        .map(|c| {
+            if c < ' ' && !matches!(c, '\t' | '\n' | '\r') {
+                char::REPLACEMENT_CHARACTER
+            } else {
+                c
+            }
+        })
+        .collect()
+}
+
 /// `chart` as the bytes of a `format` file.
 ///
 /// # Errors
@@ -188,7 +203,7 @@ pub fn render(chart: &impl Chart, format: Format) -> Result<Vec<u8>> {
                 chart.draw(&root).map_err(|e| drawing(&e))?;
                 root.present().map_err(|e| drawing(&e))?;
             }
-            Ok(svg.into_bytes())
+            Ok(xml_chars(&svg).into_bytes())
         }
         Format::Png => {
             let mut rgb = vec![255u8; w as usize * h as usize * 3];
