@@ -188,12 +188,13 @@ fn temporary_files_exist_only_while_writing_and_stale_ones_are_removed() {
     assert_eq!(names(dir.path()), ["out.png", "s.toml"]);
 }
 
-/// One `--jsonl` line: mesh `mesh`, shard `index`/`count`, one set `primary` with
-/// `genuine` genuine mismatches on one ray (a made-up count).
+/// One `--jsonl` line: mesh `mesh`, shard `index`/`count`, one set `primary` of `genuine`
+/// rays (at least one), each a genuine mismatch (made-up counts, consistent as a run's are:
+/// the merge refuses a set with more verdicts than rays before it sums).
 fn result_line(mesh: &str, index: u64, count: u64, genuine: u64) -> String {
     let set = serde_json::json!({
         "mesh": mesh, "path": mesh, "name": "primary",
-        "rays": 1, "agree": 0, "genuine_mismatches": genuine, "ties": 0,
+        "rays": genuine.max(1), "agree": 0, "genuine_mismatches": genuine, "ties": 0,
         "within_tolerance": 0, "embree_wrong": 0, "leaks_halfray": 0, "leaks_embree": 0,
         "leaks_embree_default": 0, "leak_rays": 0, "any_hit_disagreements": 0,
         "any_vs_closest_inconsistent": 0, "timed_rays": 0, "secs_halfray": 0.0,
@@ -236,8 +237,9 @@ fn merge_sums_that_overflow_are_errors_naming_the_file() {
     );
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     let e = stderr(&o);
+    // The first count summed is the rays'.
     assert!(
-        e.contains("p1.jsonl") && e.contains("genuine_mismatches") && e.contains("overflow"),
+        e.contains("p1.jsonl") && e.contains("field `sets.rays`") && e.contains("overflow"),
         "{e}"
     );
     // Two meshes of 2^63 in one part: the total over sets overflows.

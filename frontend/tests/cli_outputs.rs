@@ -431,3 +431,33 @@ fn every_command_that_suggests_force_takes_it() {
         assert_eq!(mode & 0o777, 0o444, "{args:?}: the mode is kept");
     }
 }
+
+/// A hard link to an input named as the output is that input (exit 2), with or without
+/// `--force`: it was refused first for its two links (exit 1), which hid the reason.
+#[test]
+fn a_hard_link_to_an_input_is_the_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("cube.obj");
+    std::fs::copy(format!("{MESHES}/cube.obj"), &input).unwrap();
+    let link = dir.path().join("link.obj");
+    std::fs::hard_link(&input, &link).unwrap();
+    let before = std::fs::read(&input).unwrap();
+    for force in [false, true] {
+        let mut cmd = Command::new(BIN);
+        cmd.args(["mesh", "subdivide"])
+            .arg(&input)
+            .arg("-o")
+            .arg(&link);
+        if force {
+            cmd.arg("--force");
+        }
+        let o = cmd.output().unwrap();
+        assert_eq!(o.status.code(), Some(2), "--force {force}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("refusing to overwrite an input"),
+            "{}",
+            stderr(&o)
+        );
+        assert_eq!(std::fs::read(&input).unwrap(), before);
+    }
+}

@@ -45,6 +45,10 @@ pub fn reserve_outputs(
 ) -> Result<Vec<OutputFile>> {
     let mut reserved: Vec<OutputFile> = Vec::with_capacity(outputs.len());
     for (k, out) in outputs.iter().enumerate() {
+        // An input first: a hard-linked input is "the input", not "has 2 hard links".
+        if let Ok(id) = file_id(out.path) {
+            refuse_input(out, &id, inputs)?;
+        }
         let file = OutputFile::reserve(out.path, force)?;
         if let Some(id) = file.id() {
             for (j, earlier) in reserved.iter().enumerate() {
@@ -74,21 +78,26 @@ pub fn refuse_inputs(
     names: &[Named<'_>],
     inputs: &[Named<'_>],
 ) -> Result<()> {
+    for (out, name) in reserved.iter().zip(names) {
+        if let Some(id) = out.id() {
+            refuse_input(name, id, inputs)?;
+        }
+    }
+    Ok(())
+}
+
+/// Refuses the output `name`, of file identity `id`, when it is one of `inputs`.
+fn refuse_input(name: &Named<'_>, id: &FileId, inputs: &[Named<'_>]) -> Result<()> {
     for input in inputs {
         // An input that cannot be identified cannot be opened either: reading it reports that.
-        let Ok(id) = file_id(input.path) else {
-            continue;
-        };
-        for (out, name) in reserved.iter().zip(names) {
-            if out.id() == Some(&id) {
-                return Err(Error::Usage(format!(
-                    "{} `{}` is the {} `{}`: refusing to overwrite an input",
-                    name.name,
-                    name.path.display(),
-                    input.name,
-                    input.path.display()
-                )));
-            }
+        if file_id(input.path).is_ok_and(|i| &i == id) {
+            return Err(Error::Usage(format!(
+                "{} `{}` is the {} `{}`: refusing to overwrite an input",
+                name.name,
+                name.path.display(),
+                input.name,
+                input.path.display()
+            )));
         }
     }
     Ok(())
