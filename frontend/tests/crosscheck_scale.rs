@@ -325,43 +325,20 @@ fn the_report_and_the_depth_image_are_written_both_or_neither() {
     std::fs::write(&depth, b"an earlier image").unwrap();
     let tetrahedron = mesh("tetrahedron.obj");
     let args = ["--rays", "50", "--sets", "primary", "--depth-size", "8"];
-    let o = run(
-        &args,
-        &[
-            Path::new(&tetrahedron),
-            Path::new("--depth-image"),
-            &depth,
-            Path::new("--json"),
-            Path::new("/dev/full"),
-        ],
-    );
+    let check = |depth: &Path, json: &Path| {
+        let flags = [Path::new("--depth-image"), depth, Path::new("--json"), json];
+        run(&args, &[&[Path::new(&tetrahedron)][..], &flags].concat())
+    };
+    let o = check(&depth, Path::new("/dev/full"));
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     assert!(text(&o).contains("/dev/full"), "{}", text(&o));
     assert_eq!(std::fs::read(&depth).unwrap(), b"an earlier image");
-    let o = run(
-        &args,
-        &[
-            Path::new(&tetrahedron),
-            Path::new("--depth-image"),
-            Path::new("/dev/full"),
-            Path::new("--json"),
-            &json,
-        ],
-    );
+    let o = check(Path::new("/dev/full"), &json);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     assert!(!text(&o).contains("could not be checked"), "{}", text(&o));
     assert!(text(&o).contains("/dev/full: "), "{}", text(&o));
     assert!(!json.exists());
-    let o = run(
-        &args,
-        &[
-            Path::new(&tetrahedron),
-            Path::new("--depth-image"),
-            &depth,
-            Path::new("--json"),
-            &json,
-        ],
-    );
+    let o = check(&depth, &json);
     assert!(o.status.success(), "{}", text(&o));
     assert!(std::fs::read(&depth).unwrap().starts_with(b"\x89PNG"));
     assert_eq!(read(&json)["meshes"], 1);

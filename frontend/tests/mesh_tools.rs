@@ -514,15 +514,10 @@ fn smoothing_beyond_the_coordinate_domain_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("s.obj");
     let cube = mesh("cube.obj");
+    let (cube, out_arg) = (cube.to_str().unwrap(), out.to_str().unwrap());
+    let smooth = |step| run_bin(&["mesh", "smooth", cube, "-o", out_arg, step]);
     for step in ["--step=1e38", "--step=3e38", "--step=-1e38"] {
-        let (code, _, err) = run_bin(&[
-            "mesh",
-            "smooth",
-            cube.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-            step,
-        ]);
+        let (code, _, err) = smooth(step);
         assert_eq!(code, 2, "{step}: {err}");
         assert!(
             err.contains("outside the coordinate domain") && err.contains("nothing written"),
@@ -531,14 +526,7 @@ fn smoothing_beyond_the_coordinate_domain_writes_nothing() {
         assert!(!out.exists(), "{step}");
     }
     // A large step that stays inside the domain is written and reads back.
-    let (code, _, err) = run_bin(&[
-        "mesh",
-        "smooth",
-        cube.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--step=1e3",
-    ]);
+    let (code, _, err) = smooth("--step=1e3");
     assert_eq!(code, 0, "{err}");
     read_obj(&out).unwrap();
 }
