@@ -141,7 +141,15 @@ fn non_finite_numbers() {
         &sphere_with("center = [0, nan, 0]\nradius = 1\nmaterial = \"m\""),
         "13:10",
         "object[0].center",
-        "non-finite",
+        "has a component that is not a finite `f32`",
+    );
+    // A finite number beyond `f32` is named as written, not as the `inf` it reads as.
+    check(
+        "big.toml",
+        &sphere_with("center = [0, 0, 0]\nradius = 1e300\nmaterial = \"m\""),
+        "14:10",
+        "object[0].radius",
+        "1e300 is beyond the largest `f32` (±3.4e38)",
     );
     check(
         "inf.toml",

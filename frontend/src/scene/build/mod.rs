@@ -43,7 +43,19 @@ impl Ctx<'_> {
     fn f(&self, v: &S<f32>, field: &str) -> Result<f32> {
         let x = *v.get_ref();
         if !x.is_finite() {
-            return Err(self.err(&v.span(), field, format!("{x} is not a finite number")));
+            // A finite number beyond `f32` reads as infinity: say what was written.
+            let written = self
+                .src
+                .text
+                .get(v.span())
+                .map(str::trim)
+                .unwrap_or_default();
+            let msg = if written.parse::<f64>().is_ok_and(f64::is_finite) {
+                format!("{written} is beyond the largest `f32` (±3.4e38)")
+            } else {
+                format!("{x} is not a finite number")
+            };
+            return Err(self.err(&v.span(), field, msg));
         }
         Ok(x)
     }
@@ -70,7 +82,7 @@ impl Ctx<'_> {
             return Err(self.err(
                 &v.span(),
                 field,
-                format!("{a:?} has a non-finite component"),
+                format!("{a:?} has a component that is not a finite `f32` (NaN, infinite, or beyond ±3.4e38)"),
             ));
         }
         Ok(Vec3::from_array(a))
