@@ -343,3 +343,21 @@ fn the_report_and_the_depth_image_are_written_both_or_neither() {
     assert!(std::fs::read(&depth).unwrap().starts_with(b"\x89PNG"));
     assert_eq!(read(&json)["meshes"], 1);
 }
+
+/// One mesh file named twice in a run (another spelling) is a usage error before any work:
+/// its counts would be in the report twice.
+#[test]
+fn a_mesh_named_twice_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = dir.path().join("cube.obj");
+    std::fs::copy(mesh("cube.obj"), &cube).unwrap();
+    let again = dir.path().join(".").join("cube.obj");
+    let o = run(&["--rays", "10"], &[&cube, &again]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("(the same file): each mesh is checked once"),
+        "{}",
+        text(&o)
+    );
+    assert!(o.stdout.is_empty());
+}

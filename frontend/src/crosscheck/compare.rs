@@ -11,12 +11,13 @@ use crate::accel::MeshAccel;
 use crate::embree::{EmbreeDevice, EmbreeScene, ray_is_valid};
 use crate::error::{Error, Result};
 use crate::obj::read_obj;
-use crate::outputs::{Named, file_id, reserve_outputs};
+use crate::outputs::{FileId, Named, file_id, reserve_outputs};
 use crate::raysets::named::watertight_hits;
 use crate::timing::TIMED_PASSES;
 use halfray_core::Ray;
 use halfray_core::triangle::TriangleVariant;
 use rayon::prelude::*;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -110,10 +111,30 @@ fn check_sizes(args: &CrosscheckArgs) -> Result<()> {
     Ok(())
 }
 
+/// Refuses a run that names one mesh file twice (two spellings, a symlink): its counts would
+/// be in the report twice.
+fn refuse_repeated(meshes: &[PathBuf]) -> Result<()> {
+    let mut seen: HashMap<FileId, &Path> = HashMap::new();
+    for mesh in meshes {
+        let Ok(id) = file_id(mesh) else {
+            continue; // reported as a failed mesh when its turn comes
+        };
+        if let Some(first) = seen.insert(id, mesh) {
+            return Err(Error::Usage(format!(
+                "mesh `{}` is mesh `{}` again (the same file): each mesh is checked once",
+                mesh.display(),
+                first.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Runs every requested set on every mesh (see [`finish`] for the exit status).
 pub fn run(args: &CrosscheckArgs) -> Result<()> {
     check_sizes(args)?;
     let meshes = mesh_paths(args)?;
+    refuse_repeated(&meshes)?;
     let config = RunConfig {
         intersector: args.intersector.0.name().into(),
         seed: args.seed,
@@ -157,7 +178,7 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     let mut results = Vec::with_capacity(meshes.len());
     for path in &meshes {
         let shown = path.display().to_string();
-        if let Some(done) = log.as_ref().and_then(|l| l.done(&shown)) {
+        if let Some(done) = log.as_ref().and_then(|l| l.done(path)) {
             eprintln!("crosscheck {shown}: already in the results log, skipped (--resume)");
             results.push(done.clone());
             continue;

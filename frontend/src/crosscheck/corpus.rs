@@ -10,7 +10,7 @@
 use super::report::{MeshResult, RunConfig};
 use super::shard::Shard;
 use crate::error::{Error, Location, Result};
-use crate::outputs::Named;
+use crate::outputs::{FileId, Named, file_id};
 use std::collections::HashMap;
 use std::fs::{File, OpenOptions};
 use std::io::{Seek, SeekFrom, Write};
@@ -74,6 +74,8 @@ pub struct ResultLog {
     path: PathBuf,
     file: File,
     done: HashMap<String, MeshResult>,
+    /// The file identities of `done`'s paths, for a mesh spelt otherwise in this run.
+    ids: HashMap<FileId, String>,
 }
 
 /// How every line of a results log starts (`MeshResult` serialises its path first): a torn
@@ -178,16 +180,25 @@ impl ResultLog {
                 .and_then(|()| file.seek(SeekFrom::End(0)).map(|_| ()))
                 .map_err(|e| Error::io(path, e))?;
         }
+        let ids = done
+            .keys()
+            .filter_map(|k| Some((file_id(Path::new(k)).ok()?, k.clone())))
+            .collect();
         Ok(Self {
             path: path.to_path_buf(),
             file,
             done,
+            ids,
         })
     }
 
-    /// The result already in the log for `mesh` (checked successfully), if any.
-    pub fn done(&self, mesh: &str) -> Option<&MeshResult> {
-        self.done.get(mesh)
+    /// The result already in the log for `mesh` (checked successfully), if any: logged under
+    /// the same spelling, or under another path of the same file (`./a.obj`, a symlink).
+    pub fn done(&self, mesh: &Path) -> Option<&MeshResult> {
+        self.done.get(&mesh.display().to_string()).or_else(|| {
+            let key = self.ids.get(&file_id(mesh).ok()?)?;
+            self.done.get(key)
+        })
     }
 
     /// Appends `result` as one line and flushes it to disk.
@@ -271,10 +282,16 @@ mod tests {
         drop(f);
 
         let log = ResultLog::open(&path, true, &config()).unwrap();
-        assert_eq!(log.done("a.obj"), Some(&ok("a.obj")));
-        assert_eq!(log.done("c.obj"), Some(&ok("c.obj")));
-        assert!(log.done("b.obj").is_none(), "a failed mesh is tried again");
-        assert!(log.done("d.obj").is_none(), "a torn line is not a result");
+        assert_eq!(log.done(Path::new("a.obj")), Some(&ok("a.obj")));
+        assert_eq!(log.done(Path::new("c.obj")), Some(&ok("c.obj")));
+        assert!(
+            log.done(Path::new("b.obj")).is_none(),
+            "a failed mesh is tried again"
+        );
+        assert!(
+            log.done(Path::new("d.obj")).is_none(),
+            "a torn line is not a result"
+        );
         let text = std::fs::read_to_string(&path).unwrap();
         assert!(
             text.ends_with('\n') && !text.contains("d.obj"),
@@ -396,8 +413,28 @@ mod tests {
         std::fs::set_permissions(&path, perms).unwrap();
         std::fs::write(&path, line.trim_end()).unwrap();
         let log = ResultLog::open(&path, true, &config()).unwrap();
-        assert_eq!(log.done("a.obj"), Some(&ok("a.obj")));
+        assert_eq!(log.done(Path::new("a.obj")), Some(&ok("a.obj")));
         drop(log);
         assert_eq!(std::fs::read_to_string(&path).unwrap(), line);
+    }
+
+    /// A mesh logged under one spelling is done under any other path of the same file.
+    #[test]
+    fn a_mesh_is_done_whatever_its_spelling() {
+        let dir = tempfile::tempdir().unwrap();
+        let mesh = dir.path().join("a.obj");
+        std::fs::write(&mesh, "v 0 0 0\n").unwrap();
+        let link = dir.path().join("link.obj");
+        std::os::unix::fs::symlink(&mesh, &link).unwrap();
+        let path = dir.path().join("out.jsonl");
+        let mut log = ResultLog::open(&path, false, &config()).unwrap();
+        log.append(&ok(&mesh.display().to_string())).unwrap();
+        drop(log);
+        let log = ResultLog::open(&path, true, &config()).unwrap();
+        let other = dir.path().join(".").join("a.obj");
+        for spelling in [&mesh, &other, &link] {
+            assert!(log.done(spelling).is_some(), "{}", spelling.display());
+        }
+        assert!(log.done(&dir.path().join("b.obj")).is_none());
     }
 }
