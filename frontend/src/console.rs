@@ -71,17 +71,15 @@ pub fn stdout_error(e: io::Error) -> Error {
 /// Writes the summary `text` to stdout (to stderr once an output is stdout, see the module
 /// docs) and flushes it.
 pub fn print_out(text: &str) -> Result<()> {
-    if summaries_to_stderr() {
-        let mut err = io::stderr().lock();
-        return err
-            .write_all(text.as_bytes())
-            .and_then(|()| err.flush())
-            .map_err(|e| Error::io("<stderr>", e));
-    }
-    let mut out = io::stdout().lock();
-    out.write_all(text.as_bytes())
-        .and_then(|()| out.flush())
-        .map_err(stdout_error)
+    let (mut stream, failed): (Box<dyn Write>, fn(io::Error) -> Error) = if summaries_to_stderr() {
+        (Box::new(io::stderr().lock()), |e| Error::io("<stderr>", e))
+    } else {
+        (Box::new(io::stdout().lock()), stdout_error)
+    };
+    stream
+        .write_all(text.as_bytes())
+        .and_then(|()| stream.flush())
+        .map_err(failed)
 }
 
 /// Ends a command line that did not parse: help and version text go to stdout through

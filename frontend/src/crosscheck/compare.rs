@@ -11,13 +11,12 @@ use crate::accel::MeshAccel;
 use crate::embree::{EmbreeDevice, EmbreeScene, ray_is_valid};
 use crate::error::{Error, Result};
 use crate::obj::read_obj;
-use crate::outputs::{FileId, Named, file_id, reserve_outputs};
+use crate::outputs::{FileId, Named, file_id, first_repeat, reserve_outputs};
 use crate::raysets::named::watertight_hits;
 use crate::timing::TIMED_PASSES;
 use halfray_core::Ray;
 use halfray_core::triangle::TriangleVariant;
 use rayon::prelude::*;
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -114,20 +113,16 @@ fn check_sizes(args: &CrosscheckArgs) -> Result<()> {
 /// Refuses a run that names one mesh file twice (two spellings, a symlink): its counts would
 /// be in the report twice.
 fn refuse_repeated(meshes: &[PathBuf]) -> Result<()> {
-    let mut seen: HashMap<FileId, &Path> = HashMap::new();
-    for mesh in meshes {
-        let Ok(id) = file_id(mesh) else {
-            continue; // reported as a failed mesh when its turn comes
-        };
-        if let Some(first) = seen.insert(id, mesh) {
-            return Err(Error::Usage(format!(
-                "mesh `{}` is mesh `{}` again (the same file): each mesh is checked once",
-                mesh.display(),
-                first.display()
-            )));
-        }
+    // A mesh that cannot be identified is reported as a failed mesh when its turn comes.
+    let ids: Vec<Option<FileId>> = meshes.iter().map(|m| file_id(m).ok()).collect();
+    match first_repeat(ids.iter().map(Option::as_ref)) {
+        Some((j, k)) => Err(Error::Usage(format!(
+            "mesh `{}` is mesh `{}` again (the same file): each mesh is checked once",
+            meshes[k].display(),
+            meshes[j].display()
+        ))),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Runs every requested set on every mesh (see [`finish`] for the exit status).

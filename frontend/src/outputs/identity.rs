@@ -2,6 +2,7 @@
 //! `dir/../a`, a symlink, a hard link).
 
 use super::target::{Target, resolve};
+use std::collections::HashMap;
 use std::ffi::OsString;
 use std::io;
 use std::path::{Path, PathBuf};
@@ -53,6 +54,22 @@ pub fn file_id(path: &Path) -> io::Result<FileId> {
     }
 }
 
+/// The first two positions (earlier, later) whose identities are equal; `None` identities
+/// (files that could not be identified) match nothing.
+pub fn first_repeat<'a>(
+    ids: impl IntoIterator<Item = Option<&'a FileId>>,
+) -> Option<(usize, usize)> {
+    let mut seen: HashMap<&FileId, usize> = HashMap::new();
+    for (k, id) in ids.into_iter().enumerate() {
+        let Some(id) = id else { continue };
+        if let Some(&j) = seen.get(id) {
+            return Some((j, k));
+        }
+        seen.insert(id, k);
+    }
+    None
+}
+
 #[cfg(unix)]
 fn existing_id(path: &Path) -> io::Result<FileId> {
     use std::os::unix::fs::MetadataExt;
@@ -71,6 +88,25 @@ fn existing_id(path: &Path) -> io::Result<FileId> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_first_repeat_is_the_earliest_later_position_and_none_matches_nothing() {
+        let id = |n: &str| FileId::New {
+            dir: PathBuf::from("/d"),
+            name: n.into(),
+        };
+        let (a, b, c) = (id("a"), id("b"), id("c"));
+        assert_eq!(first_repeat([Some(&a), Some(&b), Some(&c)]), None);
+        assert_eq!(first_repeat([None, Some(&a), None, Some(&b)]), None);
+        assert_eq!(
+            first_repeat([Some(&a), Some(&b), Some(&b), Some(&a)]),
+            Some((1, 2))
+        );
+        assert_eq!(
+            first_repeat([Some(&c), None, Some(&a), Some(&c)]),
+            Some((0, 3))
+        );
+    }
 
     #[cfg(unix)]
     #[test]

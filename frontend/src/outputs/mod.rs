@@ -13,7 +13,7 @@ pub mod target;
 pub mod temp;
 
 pub use file::{OutputFile, write_together};
-pub use identity::{FileId, file_id};
+pub use identity::{FileId, file_id, first_repeat};
 
 use crate::error::{Error, Result};
 use std::path::Path;
@@ -44,28 +44,23 @@ pub fn reserve_outputs(
     force: bool,
 ) -> Result<Vec<OutputFile>> {
     let mut reserved: Vec<OutputFile> = Vec::with_capacity(outputs.len());
-    for (k, out) in outputs.iter().enumerate() {
+    for out in outputs {
         // An input first: a hard-linked input is "the input", not "has 2 hard links".
         if let Ok(id) = file_id(out.path) {
             refuse_input(out, &id, inputs)?;
         }
-        let file = OutputFile::reserve(out.path, force)?;
-        if let Some(id) = file.id() {
-            for (j, earlier) in reserved.iter().enumerate() {
-                if earlier.id() == Some(id) {
-                    let e = outputs[j];
-                    return Err(Error::Usage(format!(
-                        "{} `{}` and {} `{}` are the same file",
-                        e.name,
-                        e.path.display(),
-                        out.name,
-                        out.path.display()
-                    )));
-                }
-            }
-        }
-        debug_assert_eq!(reserved.len(), k);
-        reserved.push(file);
+        reserved.push(OutputFile::reserve(out.path, force)?);
+    }
+    // Temporary files reserved so far are removed when `reserved` drops on refusal.
+    if let Some((j, k)) = first_repeat(reserved.iter().map(OutputFile::id)) {
+        let (e, out) = (outputs[j], outputs[k]);
+        return Err(Error::Usage(format!(
+            "{} `{}` and {} `{}` are the same file",
+            e.name,
+            e.path.display(),
+            out.name,
+            out.path.display()
+        )));
     }
     refuse_inputs(&reserved, outputs, inputs)?;
     Ok(reserved)
