@@ -507,3 +507,49 @@ fn obj_error_in_a_referenced_mesh_names_its_line_and_column() {
     assert!(msg.contains("bad.obj:4:7: field `f`"), "{msg}");
     assert!(msg.contains("vertex index 9 out of range"), "{msg}");
 }
+
+/// A mesh the half-edge core rejects (smoothing, subdivision, smooth shading) is named as
+/// `mesh check` names it: the OBJ's line, and triangles and vertices numbered from 1.
+#[test]
+fn a_mesh_the_half_edge_core_rejects_is_numbered_as_mesh_check_numbers_it() {
+    let dir = tempfile::tempdir().unwrap();
+    // The second `f` (line 6) uses vertex 1 twice.
+    let obj = dir.path().join("twice.obj");
+    std::fs::write(
+        &obj,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 2 2\nf 1 2 3\nf 1 2 1\n",
+    )
+    .unwrap();
+    let check = Command::new(env!("CARGO_BIN_EXE_halfray"))
+        .args(["mesh", "check"])
+        .arg(&obj)
+        .output()
+        .unwrap();
+    let checked = String::from_utf8_lossy(&check.stdout).into_owned();
+    assert!(
+        checked.contains("triangle 2 uses vertex 1 twice"),
+        "{checked}"
+    );
+    for treatment in [
+        "subdivide = 1",
+        "smooth = { step = 0.5, iterations = 1 }",
+        "shading = \"smooth\"",
+    ] {
+        let path = dir.path().join("reject.toml");
+        std::fs::write(
+            &path,
+            format!("{BASE}\n[mesh.b]\nfile = \"twice.obj\"\n{treatment}\n\n[[object]]\ntype = \"mesh\"\nmesh = \"b\"\nmaterial = \"m\"\n"),
+        )
+        .unwrap();
+        let Err(e) = load(&path) else {
+            panic!("{treatment}: a mesh the core rejects is refused");
+        };
+        let msg = e.to_string();
+        assert!(msg.contains("twice.obj:6: "), "{treatment}: {msg}");
+        assert!(
+            msg.contains("triangle 2 uses vertex 1 twice"),
+            "{treatment}: {msg}"
+        );
+        assert_eq!(e.exit_code(), 1);
+    }
+}

@@ -3,11 +3,11 @@
 
 use crate::accel::MeshAccel;
 use crate::error::{Error, Location, Result};
-use crate::mesh_tools::{MeshBuffers, export};
+use crate::mesh_tools::{MeshBuffers, build_mesh, export};
 use crate::obj::{ObjMesh, read_obj};
 use crate::scene::geom::MeshShape;
 use glam::Vec3;
-use halfray_core::halfedge::{DiffuseBoundary, LoopWeights, SliceMesh, build_scratch_len};
+use halfray_core::halfedge::{DiffuseBoundary, LoopWeights, SliceMesh};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -31,18 +31,21 @@ pub fn boundary_edge_count(triangles: &[[u32; 3]]) -> usize {
 }
 
 /// Builds `mesh` (read from `path`) into a half-edge mesh over `buffers` (sized by
-/// [`MeshBuffers::for_obj`]); the core's rejection is an input error on `path`, `what: reason`.
+/// [`MeshBuffers::for_obj`]) with [`build_mesh`]: the core's rejection is an input error on
+/// `path` and the offending OBJ line, `what: reason`, numbered from 1 as `mesh check` does.
 fn build_half_edge<'b>(
     path: &Path,
     mesh: &ObjMesh,
     buffers: &'b mut MeshBuffers,
     what: &str,
 ) -> Result<SliceMesh<'b>> {
-    let mut m = buffers.mesh();
-    let mut scratch = vec![0u32; build_scratch_len(mesh.triangles.len())];
-    m.build(&mesh.positions, &mesh.triangles, &mut scratch)
-        .map_err(|e| he_error(path, what, e))?;
-    Ok(m)
+    build_mesh(mesh, path, buffers).map_err(|e| match e {
+        Error::Input { at, message } => Error::Input {
+            at,
+            message: format!("{what}: {message}"),
+        },
+        e => e,
+    })
 }
 
 /// Area-weighted unit vertex normals, one per position, from the half-edge core
