@@ -553,3 +553,25 @@ fn a_mesh_the_half_edge_core_rejects_is_numbered_as_mesh_check_numbers_it() {
         assert_eq!(e.exit_code(), 1);
     }
 }
+
+/// An `eye` and `look_at` whose distance overflows `f32` are named as such, not as equal.
+#[test]
+fn a_camera_whose_distance_overflows_is_named_so() {
+    let camera = |eye: &str, look_at: &str| {
+        format!("[camera]\neye = {eye}\nlook_at = {look_at}\nfov = 40\nwidth = 8\nheight = 6\n")
+    };
+    check(
+        "far.toml",
+        &camera("[3e38, 0, 0]", "[-3e38, 0, 0]"),
+        "3:11",
+        "camera.look_at",
+        "too far from `eye`",
+    );
+    check(
+        "same.toml",
+        &camera("[1, 2, 3]", "[1, 2, 3]"),
+        "3:11",
+        "camera.look_at",
+        "must differ from `eye`",
+    );
+}

@@ -60,6 +60,14 @@ pub(super) fn camera(ctx: &Ctx<'_>, c: &S<def::CameraDef>) -> Result<Camera> {
         Some(u) => ctx.dir(u, "camera.up")?,
         None => Vec3::Y,
     };
+    // The view direction and the default focus distance are `look_at − eye` and its length.
+    if !(look_at - eye).length().is_finite() {
+        return Err(ctx.err(
+            &c.look_at.span(),
+            "camera.look_at",
+            "is too far from `eye`: the distance between them is beyond the largest `f32`",
+        ));
+    }
     let mut camera = Camera::new(
         eye,
         look_at,
