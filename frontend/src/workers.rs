@@ -10,16 +10,20 @@ use crate::error::{Error, Result};
 /// creation starts failing (the kernel's `threads-max`, per-user limits).
 pub const MAX_WORKER_THREADS: usize = 1024;
 
-/// The thread count `RAYON_NUM_THREADS` asks for: `None` when unset, empty, `0` or not a
-/// number (rayon's own default then: one per hardware thread); an error above
-/// [`MAX_WORKER_THREADS`].
+/// The thread count `RAYON_NUM_THREADS` asks for: `None` when unset, empty or `0` (rayon's
+/// own default then: one per hardware thread); a usage error when it is not a whole number
+/// (rayon would ignore it silently) or above [`MAX_WORKER_THREADS`]. Surrounding spaces are
+/// ignored.
 pub fn requested_threads(value: Option<&str>) -> Result<Option<usize>> {
-    let Some(digits) = value
-        .map(str::trim)
-        .filter(|v| !v.is_empty() && v.bytes().all(|b| b.is_ascii_digit()))
-    else {
+    let Some(digits) = value.map(str::trim).filter(|v| !v.is_empty()) else {
         return Ok(None);
     };
+    if !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return Err(Error::Usage(format!(
+            "RAYON_NUM_THREADS={}: not a whole number of worker threads (unset it, or 0, for one per hardware thread)",
+            crate::text::escaped(digits)
+        )));
+    }
     let n = digits.parse::<u128>().unwrap_or(u128::MAX);
     if n > MAX_WORKER_THREADS as u128 {
         return Err(Error::Usage(format!(
@@ -49,7 +53,7 @@ mod tests {
     fn thread_counts_are_bounded() {
         assert_eq!(requested_threads(None).unwrap(), None);
         assert_eq!(requested_threads(Some("0")).unwrap(), None);
-        assert_eq!(requested_threads(Some("x")).unwrap(), None);
+        assert_eq!(requested_threads(Some("  ")).unwrap(), None);
         assert_eq!(requested_threads(Some(" 8 ")).unwrap(), Some(8));
         assert_eq!(
             requested_threads(Some("1024")).unwrap(),
@@ -63,6 +67,11 @@ mod tests {
             let e = requested_threads(Some(big)).unwrap_err();
             assert_eq!(e.exit_code(), crate::error::EXIT_USAGE);
             assert!(e.to_string().contains("at most 1024"), "{e}");
+        }
+        for junk in ["x", "abc", "-1", "8 threads", "4.0"] {
+            let e = requested_threads(Some(junk)).unwrap_err();
+            assert_eq!(e.exit_code(), crate::error::EXIT_USAGE);
+            assert!(e.to_string().contains("not a whole number"), "{e}");
         }
     }
 }

@@ -456,6 +456,11 @@ fn a_huge_rayon_num_threads_is_refused_without_panicking() {
             stderr(&o)
         );
     }
+    for junk in ["abc", "-2"] {
+        let o = render(junk, &[]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains("not a whole number"), "{}", stderr(&o));
+    }
     let o = render("3", &["-q"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }

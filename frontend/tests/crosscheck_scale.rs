@@ -287,6 +287,8 @@ fn sizes_beyond_memory_are_refused_before_any_work() {
             &["--depth-size", "4294967296"][..],
             "does not fit in 64 bits",
         ),
+        // workers::MAX_WORKER_THREADS, as for RAYON_NUM_THREADS.
+        (&["--threads", "1025"][..], "1..=1024"),
     ] {
         let o = run(
             args,

@@ -39,9 +39,10 @@ pub struct CrosscheckArgs {
     /// Rays per set (before sharding).
     #[arg(long, default_value_t = 100_000)]
     pub rays: usize,
-    /// Worker threads for the checks [default: every core]. The throughput figures stay
-    /// single-thread passes over `--timing-rays` rays of each set.
-    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    /// Worker threads for the checks, at most 1024 (`workers::MAX_WORKER_THREADS`) [default:
+    /// every core]. The throughput figures stay single-thread passes over `--timing-rays`
+    /// rays of each set.
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=crate::workers::MAX_WORKER_THREADS as i64))]
     pub threads: Option<u16>,
     /// Rays of each set (of this shard) in the single-thread timed passes, spread evenly over
     /// the set (every k-th ray); the same rays for halfray and both Embree modes, which take
