@@ -135,6 +135,7 @@ pub fn composite_rgba8(op: Operator, a: &[u8], b: &[u8]) -> Vec<u8> {
 
 /// Runs `halfray composite`.
 pub fn run(args: &CompositeArgs) -> Result<()> {
+    crate::png::check_png_name(Named::new("-o", &args.output))?;
     let out = {
         let mut r = reserve_outputs(
             &[Named::new("-o", &args.output)],

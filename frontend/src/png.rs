@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Location, Result};
 use crate::limits::MEMORY_LIMIT_BYTES;
-use crate::outputs::OutputFile;
+use crate::outputs::{Named, OutputFile};
 use image::{ImageEncoder, codecs::png::PngEncoder};
 use std::path::Path;
 
@@ -17,6 +17,20 @@ pub fn to_u8(x: f32) -> u8 {
 /// Writes 8-bit RGBA as PNG to a reserved output (atomically, see [`OutputFile`]).
 pub fn write_png(out: OutputFile, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
     out.write(|w| encode_png(w, width, height, rgba))
+}
+
+/// Refuses a PNG output whose name says another format (`-o x.svg`, `x.jpg`): the bytes would
+/// be PNG under that name. A `.png` name (any case), a name without an extension and `-`
+/// (stdout) pass. A usage error naming the option.
+pub fn check_png_name(out: Named<'_>) -> Result<()> {
+    match out.path.extension() {
+        Some(e) if !e.eq_ignore_ascii_case("png") => Err(Error::Usage(format!(
+            "{} `{}`: this output is a PNG image; name it `.png` (or `-` for stdout)",
+            out.name,
+            crate::text::path(out.path)
+        ))),
+        _ => Ok(()),
+    }
 }
 
 /// 8-bit RGBA as PNG bytes.

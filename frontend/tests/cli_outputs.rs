@@ -461,3 +461,46 @@ fn a_hard_link_to_an_input_is_the_input() {
         assert_eq!(std::fs::read(&input).unwrap(), before);
     }
 }
+
+/// An output written as PNG whose name says another format is refused before any work, with
+/// nothing written; a chart, which may be SVG, goes to stdout as SVG with `-o -`.
+#[test]
+fn an_output_is_named_for_the_format_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let mirror = scene("mirror.toml");
+    let render = |out: &Path| {
+        run(os![
+            "render", &mirror, "-o", out, "--width", "8", "--height", "6", "--quiet"
+        ])
+    };
+    let svg = dir.path().join("x.svg");
+    let jpg = dir.path().join("x.jpg");
+    for (o, out) in [
+        (render(&svg), &svg),
+        (run(os!["gamma", "--chart", &jpg]), &jpg),
+        (run(os!["composite", "a.png", "b.png", "-o", &svg]), &svg),
+    ] {
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains("is a PNG image"), "{}", stderr(&o));
+        assert!(!out.exists(), "{}", out.display());
+    }
+    let png = dir.path().join("upper.PNG");
+    let o = render(&png);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
+
+    let json = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../docs/bench-accuracy-quick.json"
+    );
+    let o = run(os!["chart", "accuracy", json, "-o", &svg]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = run(os!["chart", "accuracy", json, "-o", "-"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(o.stdout.starts_with(b"<svg"));
+    assert_eq!(
+        o.stdout,
+        std::fs::read(&svg).unwrap(),
+        "stdout is the SVG alone"
+    );
+}

@@ -6,7 +6,7 @@
 //! | `halfray chart corpus RUN.json -o OUT` | halfray over Embree default and robust per mesh and ray set (`bench bvh --json`; [`corpus`]) |
 //! | `halfray chart disagreements RUN.json -o OUT` | the cross-check's disagreement classes per mesh (`crosscheck --json`; [`disagreements`]) |
 //!
-//! The format follows `OUT`'s extension (`.svg` or `.png`). Text is laid out with the Go font
+//! The format follows `OUT`'s extension (`.svg` or `.png`); `-o -` writes SVG to stdout. Text is laid out with the Go font
 //! embedded in the binary ([`FONT`], registered with `plotters`' `ab_glyph` backend), so no
 //! system font is looked up; SVG text names the `sans-serif` family and is drawn by the viewer.
 //! PNGs are encoded with the `image` crate the renderer uses.
@@ -61,7 +61,7 @@ pub struct ChartArgs {
     pub kind: ChartKind,
     /// The JSON a run wrote (`--json`).
     pub input: PathBuf,
-    /// Output image, `.svg` or `.png` (written atomically; never the input).
+    /// Output image, `.svg` or `.png` (written atomically; never the input); `-`: SVG to stdout.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Replace an output that is read-only or hard-linked (keeping its mode).
@@ -79,12 +79,15 @@ pub enum Format {
 }
 
 impl Format {
-    /// The format of `path`'s extension (case-insensitive).
+    /// The format of `path`'s extension (case-insensitive); SVG for `-` (stdout).
     ///
     /// # Errors
     ///
     /// [`Error::Usage`] for any other extension.
     pub fn of(path: &Path) -> Result<Self> {
+        if path == Path::new("-") {
+            return Ok(Format::Svg);
+        }
         match path
             .extension()
             .and_then(|e| e.to_str())
@@ -317,6 +320,7 @@ pub(crate) mod tests {
             Err(Error::Usage(_))
         ));
         assert!(matches!(Format::of(Path::new("b")), Err(Error::Usage(_))));
+        assert_eq!(Format::of(Path::new("-")).unwrap(), Format::Svg);
     }
 
     #[test]

@@ -151,6 +151,7 @@ pub struct GammaArgs {
 pub fn run(args: &GammaArgs) -> Result<()> {
     let mut text = String::new();
     if let Some(path) = &args.chart {
+        crate::png::check_png_name(crate::outputs::Named::new("--chart", path))?;
         let out = crate::outputs::OutputFile::reserve(path, args.force)?;
         let (img, greys) = chart();
         crate::png::write_png(out, img.width(), img.height(), img.as_raw())?;

@@ -498,6 +498,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             )));
         }
     }
+    crate::png::check_png_name(Named::new("-o", &args.output))?;
     let mut outputs = vec![Named::new("-o", &args.output)];
     if let Some(p) = &args.stats_json {
         outputs.push(Named::new("--stats-json", p));
