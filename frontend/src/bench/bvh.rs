@@ -179,22 +179,14 @@ impl SetFigures {
     }
 }
 
-/// The meshes of a run: the arguments, then the list's.
-fn mesh_paths(args: &BvhArgs) -> Result<Vec<PathBuf>> {
-    let mut meshes = args.meshes.clone();
-    if let Some(list) = &args.mesh_list {
-        meshes.extend(crate::crosscheck::corpus::read_mesh_list(list)?);
-    }
-    if meshes.is_empty() {
-        return Err(Error::Usage("no meshes to benchmark".into()));
-    }
-    Ok(meshes)
-}
-
 /// Runs the BVH benchmark.
 pub fn run(args: &BvhArgs) -> Result<()> {
     let variant = args.intersector.0;
-    let meshes = mesh_paths(args)?;
+    let meshes = crate::crosscheck::corpus::mesh_paths(
+        &args.meshes,
+        args.mesh_list.as_deref(),
+        "benchmark",
+    )?;
     let sets = if args.sets.is_empty() {
         RaySet::ALL.to_vec()
     } else {

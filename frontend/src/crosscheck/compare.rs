@@ -2,7 +2,7 @@
 //! rays through both sides, the single-thread timed passes, then every ray classified on all
 //! worker threads.
 
-use super::corpus::{ResultLog, read_mesh_list, run_inputs};
+use super::corpus::{ResultLog, mesh_paths, run_inputs};
 use super::judge::{self, Answer, Verdict};
 use super::report::{DetailKind, Disagreement, MeshResult, Report, RunConfig, SetReport};
 use super::sets::{self, Adjacency, SET_NAMES, SetRay};
@@ -62,18 +62,6 @@ fn embree_answer(scene: &EmbreeScene, r: &Ray) -> Option<Answer> {
     })
 }
 
-/// The meshes of the run: the arguments, then the list's.
-fn mesh_paths(args: &CrosscheckArgs) -> Result<Vec<PathBuf>> {
-    let mut meshes = args.meshes.clone();
-    if let Some(list) = &args.mesh_list {
-        meshes.extend(read_mesh_list(list)?);
-    }
-    if meshes.is_empty() {
-        return Err(Error::Usage("no meshes to cross-check".into()));
-    }
-    Ok(meshes)
-}
-
 /// Bytes one ray of a set holds at the set's peak: the generated ray, its shard's copy and
 /// its outcome, and, when timed, its ray in the batch and the three sides' answers. Counts
 /// inline sizes only: a ray's disagreement details exist only for the few rays that differ.
@@ -128,7 +116,7 @@ fn refuse_repeated(meshes: &[PathBuf]) -> Result<()> {
 /// Runs every requested set on every mesh (see [`finish`] for the exit status).
 pub fn run(args: &CrosscheckArgs) -> Result<()> {
     check_sizes(args)?;
-    let meshes = mesh_paths(args)?;
+    let meshes = mesh_paths(&args.meshes, args.mesh_list.as_deref(), "cross-check")?;
     refuse_repeated(&meshes)?;
     let config = RunConfig {
         intersector: args.intersector.0.name().into(),

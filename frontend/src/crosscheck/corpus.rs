@@ -32,6 +32,19 @@ pub fn read_mesh_list(list: &Path) -> Result<Vec<PathBuf>> {
         .collect())
 }
 
+/// The meshes of a run: those named as arguments, then `list`'s ([`read_mesh_list`]); a usage
+/// error naming `what` the run does when there are none ("no meshes to benchmark").
+pub fn mesh_paths(meshes: &[PathBuf], list: Option<&Path>, what: &str) -> Result<Vec<PathBuf>> {
+    let mut all = meshes.to_vec();
+    if let Some(list) = list {
+        all.extend(read_mesh_list(list)?);
+    }
+    if all.is_empty() {
+        return Err(Error::Usage(format!("no meshes to {what}")));
+    }
+    Ok(all)
+}
+
 /// The inputs of a run over `meshes`, some of them named by the file `list`, as the messages
 /// name them (`mesh`, `--mesh-list`): what no output of the run may be.
 pub fn run_inputs<'a>(meshes: &'a [PathBuf], list: Option<&'a Path>) -> Vec<Named<'a>> {
