@@ -185,6 +185,24 @@ fn a_missing_mesh_or_a_folder_is_refused_before_any_measurement() {
         );
         assert!(!json.exists());
     }
+    // Named by a list: the list's file and line lead the message (after a comment, a blank
+    // line and the good mesh, the missing one is on line 4).
+    let list = dir.path().join("list.txt");
+    std::fs::write(
+        &list,
+        format!("# corpus\n\n{good}\n{}\n", missing.display()),
+    )
+    .unwrap();
+    let o = Command::new(BIN)
+        .args(["bench", "bvh", &good, "--mesh-list"])
+        .arg(&list)
+        .args(["--width", "2048", "--rays", "50"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let want = format!("{}:4: {}: No such file", list.display(), missing.display());
+    assert!(err.contains(&want), "want `{want}` in: {err}");
 }
 
 /// A run of no rays would print a throughput of `NaN`: `--width 0` and `--rays 0` are usage

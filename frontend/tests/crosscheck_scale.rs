@@ -165,6 +165,11 @@ fn a_bad_mesh_in_a_list_is_reported_and_the_run_goes_on() {
     assert!(all.contains("2 of 4 meshes could not be checked"), "{all}");
     assert!(all.contains(&format!("{}:3", nan.display())), "{all}");
     assert!(all.contains(&missing.display().to_string()), "{all}");
+    // The list's lines of the two failed meshes (its first line is a comment).
+    for line in [3, 4] {
+        let at = format!("(named at {}:{line})", list.display());
+        assert!(all.contains(&at), "`{at}` in: {all}");
+    }
     let lines: Vec<Value> = std::fs::read_to_string(&log)
         .unwrap()
         .lines()

@@ -193,7 +193,9 @@ pub fn run(args: &BvhArgs) -> Result<()> {
         args.sets.clone()
     };
     // One set is held in memory at a time: estimated, and every mesh opened, before any work.
-    args.run.check_inputs(&meshes)?;
+    args.run.check_inputs(&meshes, |k| {
+        crate::crosscheck::corpus::listed_at(args.meshes.len(), args.mesh_list.as_deref(), k)
+    })?;
     let json = args.run.reserve_json(&meshes, args.mesh_list.as_deref())?;
     let mut reports = Vec::with_capacity(meshes.len());
     for mesh in &meshes {

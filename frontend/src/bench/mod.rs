@@ -45,13 +45,18 @@ impl RunArgs {
     /// at least 1 ([`Error::Usage`] otherwise); the `width × width` primary and `rays` incoherent rays,
     /// held in memory together, within [`crate::limits::check_memory`]'s budget; and every
     /// one of `meshes` a file that opens ([`crate::input::open`]: not a directory or a
-    /// device; [`Error::Io`] naming the first that is not), so that minutes
-    /// of work are not spent on a run that then fails on a misspelt last path.
+    /// device; [`Error::Io`] naming the first that is not, or [`Error::Input`] at
+    /// `listed_at(k)`, the mesh list's file and line, for a mesh `k` a list named), so that
+    /// minutes of work are not spent on a run that then fails on a misspelt last path.
     ///
     /// # Errors
     ///
     /// As listed, in that order.
-    pub fn check_inputs(&self, meshes: &[PathBuf]) -> Result<()> {
+    pub fn check_inputs(
+        &self,
+        meshes: &[PathBuf],
+        listed_at: impl Fn(usize) -> Option<crate::error::Location>,
+    ) -> Result<()> {
         let (width, rays) = (self.width, self.rays);
         if width == 0 || rays == 0 {
             let name = if width == 0 { "--width" } else { "--rays" };
@@ -65,8 +70,11 @@ impl RunArgs {
             .and_then(|p| p.checked_add(rays as u64))
             .and_then(|n| n.checked_mul(ray_bytes));
         crate::limits::check_memory(&format!("--width {width} --rays {rays}"), bytes)?;
-        for mesh in meshes {
-            crate::input::open(mesh)?;
+        for (k, mesh) in meshes.iter().enumerate() {
+            crate::input::open(mesh).map_err(|e| match listed_at(k) {
+                Some(at) => Error::input(at, e.to_string()),
+                None => e,
+            })?;
         }
         Ok(())
     }

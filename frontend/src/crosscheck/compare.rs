@@ -2,7 +2,7 @@
 //! rays through both sides, the single-thread timed passes, then every ray classified on all
 //! worker threads.
 
-use super::corpus::{ResultLog, mesh_paths, run_inputs};
+use super::corpus::{ResultLog, listed_at, mesh_paths, run_inputs};
 use super::judge::{self, Answer, Verdict};
 use super::report::{DetailKind, Disagreement, MeshResult, Report, RunConfig, SetReport};
 use super::sets::{self, Adjacency, SET_NAMES, SetRay};
@@ -162,7 +162,7 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     let device = EmbreeDevice::new()?;
     let start = Instant::now();
     let mut results = Vec::with_capacity(meshes.len());
-    for path in &meshes {
+    for (k, path) in meshes.iter().enumerate() {
         let shown = path.display().to_string();
         if let Some(done) = log.as_ref().and_then(|l| l.done(path)) {
             eprintln!("crosscheck {shown}: already in the results log, skipped (--resume)");
@@ -175,14 +175,21 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
             depth_png = depth_png.take().or(png);
             rows
         });
+        // A failed mesh a list named is reported with the list's line.
+        let error = checked.as_ref().err().map(|e| {
+            match listed_at(args.meshes.len(), args.mesh_list.as_deref(), k) {
+                Some(at) => format!("{e} (named at {at})"),
+                None => e.to_string(),
+            }
+        });
+        if let Some(e) = &error {
+            eprintln!("crosscheck {shown}: {e} (counted as failed; the run goes on)");
+        }
         let result = MeshResult {
             path: shown.clone(),
             config: config.clone(),
-            error: checked.as_ref().err().map(|e| e.to_string()),
-            sets: checked.unwrap_or_else(|e| {
-                eprintln!("crosscheck {shown}: {e} (counted as failed; the run goes on)");
-                Vec::new()
-            }),
+            error,
+            sets: checked.unwrap_or_default(),
         };
         if let Some(log) = &mut log {
             log.append(&result)?;

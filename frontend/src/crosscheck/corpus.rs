@@ -21,15 +21,28 @@ use std::path::{Path, PathBuf};
 /// `find … > list` writes them), not to the list file.
 pub fn read_mesh_list(list: &Path) -> Result<Vec<PathBuf>> {
     let text = crate::input::read_text(list, "text (one mesh path per line)")?;
+    Ok(list_entries(&text).map(|(_, p)| PathBuf::from(p)).collect())
+}
+
+/// A mesh list's entries with their 1-based line numbers (see [`read_mesh_list`]).
+fn list_entries(text: &str) -> impl Iterator<Item = (usize, &str)> {
     // A byte-order mark is no part of the first path.
-    Ok(text
-        .strip_prefix('\u{feff}')
-        .unwrap_or(&text)
+    text.strip_prefix('\u{feff}')
+        .unwrap_or(text)
         .lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty() && !l.starts_with('#'))
-        .map(PathBuf::from)
-        .collect())
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
+}
+
+/// Where mesh `k` of a run's meshes ([`mesh_paths`]: `named` from the arguments, then the
+/// entries of `list`) is named in `list`: the list's file and line, for messages about that
+/// mesh. `None` for a mesh named as an argument, or when the list cannot be read again.
+pub fn listed_at(named: usize, list: Option<&Path>, k: usize) -> Option<Location> {
+    let list = list?;
+    let text = crate::input::read_text(list, "text (one mesh path per line)").ok()?;
+    let (line, _) = list_entries(&text).nth(k.checked_sub(named)?)?;
+    Some(Location::file(list).line(line))
 }
 
 /// The meshes of a run: those named as arguments, then `list`'s ([`read_mesh_list`]); a usage
