@@ -484,25 +484,28 @@ fn toml_syntax_error_names_line_and_column() {
     assert!(msg.contains("expected `,`"), "{msg}");
 }
 
+/// Writes `obj` as `name` in `dir` and a scene drawing it as mesh `b` (with the mesh fields
+/// `fields`), and loads the scene: the error it must give.
+fn mesh_scene_err(dir: &Path, name: &str, obj: &str, fields: &str) -> halfray::error::Error {
+    std::fs::write(dir.join(name), obj).unwrap();
+    let path = dir.join("mesh.toml");
+    std::fs::write(
+        &path,
+        format!("{BASE}\n[mesh.b]\nfile = \"{name}\"\n{fields}\n\n[[object]]\ntype = \"mesh\"\nmesh = \"b\"\nmaterial = \"m\"\n"),
+    )
+    .unwrap();
+    match load(&path) {
+        Ok(_) => panic!("{name} with `{fields}` loaded but should not"),
+        Err(e) => e,
+    }
+}
+
 /// An OBJ error inside a mesh the scene references names the OBJ file, its line and column.
 #[test]
 fn obj_error_in_a_referenced_mesh_names_its_line_and_column() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(
-        dir.path().join("bad.obj"),
-        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
-    )
-    .unwrap();
-    let path = dir.path().join("objerr.toml");
-    std::fs::write(
-        &path,
-        format!("{BASE}\n[mesh.b]\nfile = \"bad.obj\"\n\n[[object]]\ntype = \"mesh\"\nmesh = \"b\"\nmaterial = \"m\"\n"),
-    )
-    .unwrap();
-    let Err(e) = load(&path) else {
-        panic!("a bad OBJ is refused");
-    };
-    let msg = e.to_string();
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n";
+    let msg = mesh_scene_err(dir.path(), "bad.obj", obj, "").to_string();
     // Line 4, column 7: the `9` of `f 1 2 9`.
     assert!(msg.contains("bad.obj:4:7: field `f`"), "{msg}");
     assert!(msg.contains("vertex index 9 out of range"), "{msg}");
@@ -514,15 +517,12 @@ fn obj_error_in_a_referenced_mesh_names_its_line_and_column() {
 fn a_mesh_the_half_edge_core_rejects_is_numbered_as_mesh_check_numbers_it() {
     let dir = tempfile::tempdir().unwrap();
     // The second `f` (line 6) uses vertex 1 twice.
-    let obj = dir.path().join("twice.obj");
-    std::fs::write(
-        &obj,
-        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 2 2\nf 1 2 3\nf 1 2 1\n",
-    )
-    .unwrap();
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 2 2\nf 1 2 3\nf 1 2 1\n";
+    let path = dir.path().join("twice.obj");
+    std::fs::write(&path, obj).unwrap();
     let check = Command::new(env!("CARGO_BIN_EXE_halfray"))
         .args(["mesh", "check"])
-        .arg(&obj)
+        .arg(&path)
         .output()
         .unwrap();
     let checked = String::from_utf8_lossy(&check.stdout).into_owned();
@@ -535,15 +535,7 @@ fn a_mesh_the_half_edge_core_rejects_is_numbered_as_mesh_check_numbers_it() {
         "smooth = { step = 0.5, iterations = 1 }",
         "shading = \"smooth\"",
     ] {
-        let path = dir.path().join("reject.toml");
-        std::fs::write(
-            &path,
-            format!("{BASE}\n[mesh.b]\nfile = \"twice.obj\"\n{treatment}\n\n[[object]]\ntype = \"mesh\"\nmesh = \"b\"\nmaterial = \"m\"\n"),
-        )
-        .unwrap();
-        let Err(e) = load(&path) else {
-            panic!("{treatment}: a mesh the core rejects is refused");
-        };
+        let e = mesh_scene_err(dir.path(), "twice.obj", obj, treatment);
         let msg = e.to_string();
         assert!(msg.contains("twice.obj:6: "), "{treatment}: {msg}");
         assert!(
