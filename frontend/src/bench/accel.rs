@@ -89,7 +89,7 @@ struct Built {
 
 /// Runs the benchmark.
 pub fn run(args: &AccelArgs) -> Result<()> {
-    args.run.check_inputs(&args.meshes, |_| None)?;
+    args.run.check_inputs(&args.meshes, &[])?;
     let json = args.run.reserve_json(&args.meshes, None)?;
     let mut reports = Vec::with_capacity(args.meshes.len());
     for mesh in &args.meshes {

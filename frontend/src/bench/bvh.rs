@@ -182,7 +182,10 @@ impl SetFigures {
 /// Runs the BVH benchmark.
 pub fn run(args: &BvhArgs) -> Result<()> {
     let variant = args.intersector.0;
-    let meshes = crate::crosscheck::corpus::mesh_paths(
+    let crate::crosscheck::corpus::RunMeshes {
+        paths: meshes,
+        named_at,
+    } = crate::crosscheck::corpus::RunMeshes::read(
         &args.meshes,
         args.mesh_list.as_deref(),
         "benchmark",
@@ -193,9 +196,7 @@ pub fn run(args: &BvhArgs) -> Result<()> {
         args.sets.clone()
     };
     // One set is held in memory at a time: estimated, and every mesh opened, before any work.
-    args.run.check_inputs(&meshes, |k| {
-        crate::crosscheck::corpus::listed_at(args.meshes.len(), args.mesh_list.as_deref(), k)
-    })?;
+    args.run.check_inputs(&meshes, &named_at)?;
     let json = args.run.reserve_json(&meshes, args.mesh_list.as_deref())?;
     let mut reports = Vec::with_capacity(meshes.len());
     for mesh in &meshes {

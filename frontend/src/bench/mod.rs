@@ -46,7 +46,7 @@ impl RunArgs {
     /// held in memory together, within [`crate::limits::check_memory`]'s budget; and every
     /// one of `meshes` a file that opens ([`crate::input::open`]: not a directory or a
     /// device; [`Error::Io`] naming the first that is not, or [`Error::Input`] at
-    /// `listed_at(k)`, the mesh list's file and line, for a mesh `k` a list named), so that
+    /// `named_at[k]`, the mesh list's file and line, for a mesh `k` a list named), so that
     /// minutes of work are not spent on a run that then fails on a misspelt last path.
     ///
     /// # Errors
@@ -55,7 +55,7 @@ impl RunArgs {
     pub fn check_inputs(
         &self,
         meshes: &[PathBuf],
-        listed_at: impl Fn(usize) -> Option<crate::error::Location>,
+        named_at: &[Option<crate::error::Location>],
     ) -> Result<()> {
         let (width, rays) = (self.width, self.rays);
         if width == 0 || rays == 0 {
@@ -71,9 +71,9 @@ impl RunArgs {
             .and_then(|n| n.checked_mul(ray_bytes));
         crate::limits::check_memory(&format!("--width {width} --rays {rays}"), bytes)?;
         for (k, mesh) in meshes.iter().enumerate() {
-            crate::input::open(mesh).map_err(|e| match listed_at(k) {
-                Some(at) => Error::input(at, e.to_string()),
-                None => e,
+            crate::input::open(mesh).map_err(|e| match named_at.get(k) {
+                Some(Some(at)) => Error::input(at.clone(), e.to_string()),
+                _ => e,
             })?;
         }
         Ok(())

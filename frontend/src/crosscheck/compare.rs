@@ -2,7 +2,7 @@
 //! rays through both sides, the single-thread timed passes, then every ray classified on all
 //! worker threads.
 
-use super::corpus::{ResultLog, listed_at, mesh_paths, run_inputs};
+use super::corpus::{ResultLog, RunMeshes, run_inputs};
 use super::judge::{self, Answer, Verdict};
 use super::report::{DetailKind, Disagreement, MeshResult, Report, RunConfig, SetReport};
 use super::sets::{self, Adjacency, SET_NAMES, SetRay};
@@ -116,7 +116,10 @@ fn refuse_repeated(meshes: &[PathBuf]) -> Result<()> {
 /// Runs every requested set on every mesh (see [`finish`] for the exit status).
 pub fn run(args: &CrosscheckArgs) -> Result<()> {
     check_sizes(args)?;
-    let meshes = mesh_paths(&args.meshes, args.mesh_list.as_deref(), "cross-check")?;
+    let RunMeshes {
+        paths: meshes,
+        named_at,
+    } = RunMeshes::read(&args.meshes, args.mesh_list.as_deref(), "cross-check")?;
     refuse_repeated(&meshes)?;
     let config = RunConfig {
         intersector: args.intersector.0.name().into(),
@@ -162,7 +165,7 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     let device = EmbreeDevice::new()?;
     let start = Instant::now();
     let mut results = Vec::with_capacity(meshes.len());
-    for (k, path) in meshes.iter().enumerate() {
+    for (path, named_at) in meshes.iter().zip(&named_at) {
         let shown = path.display().to_string();
         if let Some(done) = log.as_ref().and_then(|l| l.done(path)) {
             eprintln!("crosscheck {shown}: already in the results log, skipped (--resume)");
@@ -176,11 +179,9 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
             rows
         });
         // A failed mesh a list named is reported with the list's line.
-        let error = checked.as_ref().err().map(|e| {
-            match listed_at(args.meshes.len(), args.mesh_list.as_deref(), k) {
-                Some(at) => format!("{e} (named at {at})"),
-                None => e.to_string(),
-            }
+        let error = checked.as_ref().err().map(|e| match named_at {
+            Some(at) => format!("{e} (named at {at})"),
+            None => e.to_string(),
         });
         if let Some(e) = &error {
             eprintln!("crosscheck {shown}: {e} (counted as failed; the run goes on)");

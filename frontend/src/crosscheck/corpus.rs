@@ -16,46 +16,51 @@ use std::fs::{File, OpenOptions};
 use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
-/// The mesh paths of a list file: one per line, surrounding whitespace trimmed, blank lines and
-/// lines starting with `#` skipped, a leading UTF-8 byte-order mark ignored. Relative paths are relative to the current directory (as
+/// The mesh paths of a list file, each with its 1-based line: one per line, surrounding
+/// whitespace trimmed, blank lines and lines starting with `#` skipped, a leading UTF-8
+/// byte-order mark ignored. Relative paths are relative to the current directory (as
 /// `find … > list` writes them), not to the list file.
-pub fn read_mesh_list(list: &Path) -> Result<Vec<PathBuf>> {
+pub fn read_mesh_list(list: &Path) -> Result<Vec<(PathBuf, usize)>> {
     let text = crate::input::read_text(list, "text (one mesh path per line)")?;
-    Ok(list_entries(&text).map(|(_, p)| PathBuf::from(p)).collect())
-}
-
-/// A mesh list's entries with their 1-based line numbers (see [`read_mesh_list`]).
-fn list_entries(text: &str) -> impl Iterator<Item = (usize, &str)> {
     // A byte-order mark is no part of the first path.
-    text.strip_prefix('\u{feff}')
-        .unwrap_or(text)
+    Ok(text
+        .strip_prefix('\u{feff}')
+        .unwrap_or(&text)
         .lines()
         .enumerate()
-        .map(|(i, l)| (i + 1, l.trim()))
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
+        .map(|(i, l)| (l.trim(), i + 1))
+        .filter(|(l, _)| !l.is_empty() && !l.starts_with('#'))
+        .map(|(l, line)| (PathBuf::from(l), line))
+        .collect())
 }
 
-/// Where mesh `k` of a run's meshes ([`mesh_paths`]: `named` from the arguments, then the
-/// entries of `list`) is named in `list`: the list's file and line, for messages about that
-/// mesh. `None` for a mesh named as an argument, or when the list cannot be read again.
-pub fn listed_at(named: usize, list: Option<&Path>, k: usize) -> Option<Location> {
-    let list = list?;
-    let text = crate::input::read_text(list, "text (one mesh path per line)").ok()?;
-    let (line, _) = list_entries(&text).nth(k.checked_sub(named)?)?;
-    Some(Location::file(list).line(line))
+/// The meshes of a run: those named as arguments, then `list`'s ([`read_mesh_list`]).
+pub struct RunMeshes {
+    /// Every mesh, in run order.
+    pub paths: Vec<PathBuf>,
+    /// Where each was named: `None` for an argument, the list's file and line for an entry.
+    pub named_at: Vec<Option<Location>>,
 }
 
-/// The meshes of a run: those named as arguments, then `list`'s ([`read_mesh_list`]); a usage
-/// error naming `what` the run does when there are none ("no meshes to benchmark").
-pub fn mesh_paths(meshes: &[PathBuf], list: Option<&Path>, what: &str) -> Result<Vec<PathBuf>> {
-    let mut all = meshes.to_vec();
-    if let Some(list) = list {
-        all.extend(read_mesh_list(list)?);
+impl RunMeshes {
+    /// Reads `list` (when given) after the `meshes` named as arguments; a usage error naming
+    /// `what` the run does when there are none ("no meshes to benchmark").
+    pub fn read(meshes: &[PathBuf], list: Option<&Path>, what: &str) -> Result<Self> {
+        let mut run = Self {
+            paths: meshes.to_vec(),
+            named_at: vec![None; meshes.len()],
+        };
+        if let Some(list) = list {
+            for (path, line) in read_mesh_list(list)? {
+                run.paths.push(path);
+                run.named_at.push(Some(Location::file(list).line(line)));
+            }
+        }
+        if run.paths.is_empty() {
+            return Err(Error::Usage(format!("no meshes to {what}")));
+        }
+        Ok(run)
     }
-    if all.is_empty() {
-        return Err(Error::Usage(format!("no meshes to {what}")));
-    }
-    Ok(all)
 }
 
 /// The inputs of a run over `meshes`, some of them named by the file `list`, as the messages
@@ -277,12 +282,12 @@ mod tests {
         std::fs::write(&list, "a.obj\n\n# comment\n  b/c.obj  \r\nd.obj").unwrap();
         assert_eq!(
             read_mesh_list(&list).unwrap(),
-            ["a.obj", "b/c.obj", "d.obj"].map(PathBuf::from)
+            [("a.obj", 1), ("b/c.obj", 4), ("d.obj", 5)].map(|(p, l)| (PathBuf::from(p), l))
         );
         std::fs::write(&list, "\u{feff}a.obj\r\nb.obj\n").unwrap();
         assert_eq!(
             read_mesh_list(&list).unwrap(),
-            ["a.obj", "b.obj"].map(PathBuf::from),
+            [("a.obj", 1), ("b.obj", 2)].map(|(p, l)| (PathBuf::from(p), l)),
             "a byte-order mark is skipped"
         );
         std::fs::write(&list, b"a.obj\n\xff.obj\n").unwrap();
