@@ -135,7 +135,6 @@ pub fn composite_rgba8(op: Operator, a: &[u8], b: &[u8]) -> Vec<u8> {
 
 /// Runs `halfray composite`.
 pub fn run(args: &CompositeArgs) -> Result<()> {
-    crate::png::check_png_name(Named::new("-o", &args.output))?;
     let out = {
         let mut r = reserve_outputs(
             &[Named::new("-o", &args.output)],
@@ -147,6 +146,8 @@ pub fn run(args: &CompositeArgs) -> Result<()> {
         )?;
         r.remove(0)
     };
+    // After the input check: an output that is an input is "the input".
+    crate::png::check_png_name(Named::new("-o", &args.output))?;
     let (a, b) = (read_rgba8(&args.source)?, read_rgba8(&args.destination)?);
     if a.dimensions() != b.dimensions() {
         return Err(Error::input(

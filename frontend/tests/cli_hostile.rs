@@ -78,13 +78,11 @@ fn run_appending(args: &[&dyn AsRef<OsStr>], log: &Path) -> Output {
 #[test]
 fn a_declared_but_unused_mesh_file_is_never_an_output() {
     let dir = tempfile::tempdir().unwrap();
-    // An OBJ named `.png`, so that `-o` naming it passes the output's format check and what
-    // refuses it is its being an input.
-    let cube = dir.path().join("cube.png");
+    let cube = dir.path().join("cube.obj");
     std::fs::write(&cube, tetrahedron("1")).unwrap();
-    let scene = small_scene(dir.path(), "s.toml", "[mesh.unused]\nfile = \"cube.png\"\n");
+    let scene = small_scene(dir.path(), "s.toml", "[mesh.unused]\nfile = \"cube.obj\"\n");
     let before = std::fs::read(&cube).unwrap();
-    for out in [cube.clone(), dir.path().join("./cube.png")] {
+    for out in [cube.clone(), dir.path().join("./cube.obj")] {
         let o = run(&[&"render", &scene, &"-o", &out, &"-q"]);
         assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
         assert!(
@@ -97,7 +95,7 @@ fn a_declared_but_unused_mesh_file_is_never_an_output() {
     let o = run(&render_with_stats(&scene, &dir.path().join("x.png"), &cube));
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert_eq!(std::fs::read(&cube).unwrap(), before);
-    assert_eq!(names(dir.path()), ["cube.png", "s.toml"]);
+    assert_eq!(names(dir.path()), ["cube.obj", "s.toml"]);
 }
 
 /// Item 2: `/dev/stdout`, `/dev/fd/1`, `/proc/self/fd/1` and `-` are written through the

@@ -141,10 +141,10 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
             .iter()
             .map(|p| Named::new("--depth-image", p)),
     );
+    let mut reserved = reserve_outputs(&outputs, &inputs, args.force)?.into_iter();
     if let Some(p) = &args.depth_image {
         crate::png::check_png_name(Named::new("--depth-image", p))?;
     }
-    let mut reserved = reserve_outputs(&outputs, &inputs, args.force)?.into_iter();
     let json_out = args.json.as_ref().and_then(|_| reserved.next());
     let depth_out = args.depth_image.as_ref().and_then(|_| reserved.next());
     // The depth image of the first mesh checked, written with the report at the end.

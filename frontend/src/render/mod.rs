@@ -498,7 +498,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             )));
         }
     }
-    crate::png::check_png_name(Named::new("-o", &args.output))?;
     let mut outputs = vec![Named::new("-o", &args.output)];
     if let Some(p) = &args.stats_json {
         outputs.push(Named::new("--stats-json", p));
@@ -515,6 +514,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .map(|p| Named::new("mesh file", p))
         .collect();
     refuse_inputs(&reserved, &outputs, &mesh_inputs)?;
+    // After the input checks: an output that is an input is reported as such.
+    crate::png::check_png_name(Named::new("-o", &args.output))?;
     if let Some(x) = args.width {
         scene.camera.width = x;
     }
