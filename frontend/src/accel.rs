@@ -89,7 +89,8 @@ pub const PARALLEL_BUILD_MIN: usize = 20_000;
 /// [`build_binary`] on rayon's threads: the core builds the top of the tree and hands out
 /// subtrees of at most `n / (4·threads)` triangles ([`Bvh::build_in_jobs`]), which the pool
 /// builds largest first; the same tree as [`build_binary`]. One thread, or fewer than
-/// [`PARALLEL_BUILD_MIN`] triangles: [`build_binary`] itself.
+/// [`PARALLEL_BUILD_MIN`] triangles: [`build_binary`] itself. With AVX2 and FMA the top and
+/// every subtree run compiled for them, as [`build_binary`] does.
 pub fn build_binary_parallel(
     mesh: &TriangleMesh<'_>,
     options: &BuildOptions,
@@ -99,6 +100,36 @@ pub fn build_binary_parallel(
     if threads <= 1 || n < PARALLEL_BUILD_MIN {
         return build_binary(mesh, options);
     }
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::x86_avx2_fma() {
+        // SAFETY: the CPU supports AVX2 and FMA (checked at run time), the only requirement of
+        // calling a `#[target_feature(enable = "avx2,fma")]` fn.
+        return unsafe { build_binary_parallel_avx2_fma(mesh, options, threads) };
+    }
+    build_binary_parallel_here(mesh, options, threads)
+}
+
+/// [`build_binary_parallel`]'s AVX2 + FMA path (the top of the tree; the subtrees through
+/// [`build_part`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn build_binary_parallel_avx2_fma(
+    mesh: &TriangleMesh<'_>,
+    options: &BuildOptions,
+    threads: usize,
+) -> std::result::Result<VecBvh, BvhError> {
+    build_binary_parallel_here(mesh, options, threads)
+}
+
+/// [`build_binary_parallel`] on `threads` threads, compiled with the target features of the
+/// function it is inlined into.
+#[inline(always)]
+fn build_binary_parallel_here(
+    mesh: &TriangleMesh<'_>,
+    options: &BuildOptions,
+    threads: usize,
+) -> std::result::Result<VecBvh, BvhError> {
+    let n = mesh.len();
     let mut jobs = vec![BuildJob::EMPTY; 16 * threads];
     let (nodes, mut scratch) = build_storage(n);
     Bvh::build_in_jobs(
@@ -113,9 +144,28 @@ pub fn build_binary_parallel(
             use rayon::prelude::*;
             let mut parts: Vec<JobPart<'_>> = parts.collect();
             parts.sort_by_key(|p| std::cmp::Reverse(p.primitives()));
-            parts.into_par_iter().for_each(JobPart::build);
+            parts.into_par_iter().for_each(build_part);
         },
     )
+}
+
+/// Builds one subtree of [`build_binary_parallel`] on the calling thread, compiled for AVX2
+/// and FMA where the CPU has them (a closure cannot carry target features).
+fn build_part(part: JobPart<'_>) {
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::x86_avx2_fma() {
+        // SAFETY: the CPU supports AVX2 and FMA (checked at run time), the only requirement of
+        // calling a `#[target_feature(enable = "avx2,fma")]` fn.
+        return unsafe { build_part_avx2_fma(part) };
+    }
+    part.build();
+}
+
+/// [`build_part`]'s AVX2 + FMA path: [`JobPart::build`] is inlined down to its loops.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn build_part_avx2_fma(part: JobPart<'_>) {
+    part.build();
 }
 
 /// Collapses `binary` (built over `mesh`, in any storage) into an 8-wide BVH in one walk
@@ -512,6 +562,19 @@ mod tests {
                 );
                 assert_eq!(text(&wa.nodes()), text(&wb.nodes()), "{kind:?}");
                 assert_eq!(text(&wa.groups()), text(&wb.groups()), "{kind:?}");
+                // The build in jobs (two threads' job size), baseline and AVX2: the one-thread
+                // tree with another node numbering, so the same collapsed tree.
+                let jobs_base = build_binary_parallel_here(&mesh, &options, 2).unwrap();
+                // SAFETY: the CPU supports AVX2 and FMA (checked at the top).
+                let jobs_avx2 =
+                    unsafe { build_binary_parallel_avx2_fma(&mesh, &options, 2) }.unwrap();
+                assert_eq!(jobs_base.indices(), avx2.indices(), "{kind:?}");
+                assert_eq!(jobs_avx2.indices(), avx2.indices(), "{kind:?}");
+                for jobs in [jobs_base, jobs_avx2] {
+                    let wj = build_wide(&mesh, &jobs).unwrap();
+                    assert_eq!(text(&wj.nodes()), text(&wb.nodes()), "{kind:?}");
+                    assert_eq!(text(&wj.groups()), text(&wb.groups()), "{kind:?}");
+                }
             }
         }
     }

@@ -107,12 +107,16 @@ impl JobPart<'_> {
         self.job.primitives()
     }
 
-    /// Builds the subtree (the same splits [`Bvh::build_with_scratch`] makes there).
+    /// Builds the subtree (the same splits [`Bvh::build_with_scratch`] makes there). Inlined
+    /// down to the per-primitive loops, like [`Bvh::build_with_scratch`], so that a caller's
+    /// `#[target_feature]` function compiles them with its features.
+    #[inline(always)]
     pub fn build(self) {
         build_job(self.job, self.nodes, self.refs, &self.options);
     }
 }
 
+#[inline(always)]
 fn build_job(
     job: &mut BuildJob,
     nodes: &mut [BvhNode],
@@ -223,6 +227,7 @@ where
     /// `indices` are written.
     // The storage of `build_with_scratch`, the job slots and their size, and the runner.
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     pub fn build_in_jobs<S: PrimitiveSource + ?Sized>(
         source: &S,
         mut nodes: N,
