@@ -4,7 +4,7 @@
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
 use crate::simd_level::SimdLevel;
-use crate::triangle::{ShearedRays, TriangleHit, TriangleIntersector, TriangleLanes};
+use crate::triangle::{BehindPlane, ShearedRays, TriangleHit, TriangleIntersector, TriangleLanes};
 use glam::Vec3;
 
 /// The test of one primitive against a ray, called by every structure's queries
@@ -102,6 +102,15 @@ pub trait LeafTest {
     ) -> u32 {
         let _ = (level, pre, ray, lanes, keep);
         0
+    }
+
+    /// The [`BehindPlane`] of a stored triangle `v` ([`TriangleIntersector::behind_plane`]):
+    /// a ray it [`BehindPlane::refuses`] gets `None` from [`LeafTest::intersect_triangle`].
+    /// The default has none.
+    #[inline(always)]
+    fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
+        let _ = v;
+        None
     }
 
     /// The first [`crate::triangle::RAY_LANES`] rays of `rays` side by side for a cull across
@@ -230,6 +239,11 @@ impl<I: TriangleIntersector> LeafTest for Triangles<'_, I> {
         keep: u32,
     ) -> u32 {
         self.isect.behind_misses2(level, pre, ray, lanes, keep)
+    }
+
+    #[inline(always)]
+    fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
+        self.isect.behind_plane(v)
     }
 
     #[inline(always)]

@@ -40,7 +40,7 @@ pub use lanes::{LANES, TriangleLanes, pair_mask};
 pub use moller_trumbore::MollerTrumbore;
 pub use reference::F64Reference;
 pub use watertight::{
-    RAY_LANES, ShearedRays, ShearedTest, Watertight, WatertightF32, WatertightRay,
+    BehindPlane, RAY_LANES, ShearedRays, ShearedTest, Watertight, WatertightF32, WatertightRay,
 };
 pub use watertight_f32_exact::WatertightF32Exact;
 
@@ -197,6 +197,16 @@ pub trait TriangleIntersector: Copy + Send + Sync {
     ) -> u32 {
         let _ = (level, pre, ray, lanes, keep);
         0
+    }
+
+    /// Triangle `v`'s [`BehindPlane`], when this test refuses every ray the plane
+    /// [`BehindPlane::refuses`] (`intersect_prepared` returns `None` for them): a batch of
+    /// rays leaving a surface computes it once per triangle. `None`, the default, refuses
+    /// nothing.
+    #[inline(always)]
+    fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
+        let _ = v;
+        None
     }
 
     /// The first [`RAY_LANES`] rays of `rays` side by side for this test's cull across rays,

@@ -12,8 +12,10 @@ use glam::{DVec3, Vec3};
 #[allow(unsafe_code)]
 mod avx2;
 mod behind;
+mod plane;
 mod rays;
 
+pub use plane::BehindPlane;
 pub use rays::{RAY_LANES, ShearedRays};
 
 /// Per-ray data of the watertight test: the axis permutation that makes the largest direction
@@ -674,6 +676,14 @@ pub trait ShearedTest: Copy + Send + Sync {
         self.hit_sheared(pre, ray, v)
     }
 
+    /// [`TriangleIntersector::behind_plane`]. The default has none ([`Watertight`]'s is the
+    /// plane of its exact path's kernel, on x86-64).
+    #[inline(always)]
+    fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
+        let _ = v;
+        None
+    }
+
     /// [`TriangleIntersector::behind_misses2`]: the lanes among `keep` this test certainly
     /// misses because the line crosses their plane behind the origin. The default refuses
     /// none ([`Watertight`] refuses them with [`WatertightRay::behind_misses2`]).
@@ -692,6 +702,11 @@ pub trait ShearedTest: Copy + Send + Sync {
 }
 
 impl<T: ShearedTest> TriangleIntersector for T {
+    #[inline(always)]
+    fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
+        T::behind_plane(self, v)
+    }
+
     type Prepared = WatertightRay;
 
     fn name(&self) -> &'static str {
@@ -791,6 +806,20 @@ impl ShearedTest for Watertight {
         v: &[Vec3; 3],
     ) -> Option<TriangleHit> {
         exact_candidate(level, ray, pre, pre.project_triangle(ray.origin, v), v)
+    }
+
+    /// On x86-64 the plane of the exact path's kernel, whose "behind" form refuses the
+    /// triangle first thing ([`BehindPlane`]); elsewhere none (there the exact path takes its
+    /// normal from another vertex, `hit_t`).
+    #[inline(always)]
+    fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
+        #[cfg(target_arch = "x86_64")]
+        return BehindPlane::new(v);
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = v;
+            None
+        }
     }
 
     /// On x86-64 [`WatertightRay::behind_misses2`] (the exact path refuses each lane it

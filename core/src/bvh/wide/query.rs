@@ -76,8 +76,8 @@ where
     /// ([`WideBvh::packet_hits`]) while they share their leaves ([`Sharing`]), the others
     /// alone; every ray alone on a caller stack shorter than
     /// [`crate::query::QUERY_STACK_SIZE`] (so that each gets the single-ray answer, an error
-    /// included). Closest hits (a tree whose root is a leaf: [`WideBvh::root_leaf_hits`]), or
-    /// any hits with `ANY`.
+    /// included). Closest hits, or any hits with `ANY`; a tree whose root is a leaf takes its
+    /// rays eight at a time ([`WideBvh::root_leaf_hits`], [`WideBvh::root_leaf_any_hits`]).
     #[inline(always)]
     fn in_packets<LT: LeafTest, L: SimdLevel, S: Stack, const ANY: bool>(
         &self,
@@ -88,10 +88,13 @@ where
     ) -> Result<(), BvhError> {
         same_length(rays.len(), out.len())?;
         let alone = ctx.stack.entries().is_some_and(|e| e.len() < STACK);
-        if !ANY
-            && !alone
+        if !alone
             && let ChildRef::Leaf { start, count } = ChildRef::decode(self.root)
-            && self.root_leaf_hits((start, count), rays, leaf, ctx, out)
+            && if ANY {
+                self.root_leaf_any_hits((start, count), rays, leaf, ctx, out)
+            } else {
+                self.root_leaf_hits((start, count), rays, leaf, ctx, out)
+            }
         {
             return Ok(());
         }
@@ -173,7 +176,10 @@ where
     /// whose origins may lie further apart than a closest-hit packet's) walked as a packet of
     /// any-hit rays, each leaving the packet at its first hit; the others alone. Hit or miss
     /// is each ray's single-ray answer; the primitive of a ray walked in a packet is the first
-    /// the packet's order reaches, which may not be the single-ray walk's.
+    /// the packet's order reaches, which may not be the single-ray walk's. A tree whose root is
+    /// a leaf takes its rays eight at a time through the cull across rays, the triangles'
+    /// planes refusing the ones a ray starts on (`WideBvh::root_leaf_any_hits`): there each
+    /// answer is the single-ray one, bit for bit.
     #[inline(always)]
     fn any_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
         &self,

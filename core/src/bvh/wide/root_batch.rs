@@ -1,7 +1,10 @@
-//! The closest-hit batch of a tree whose root is a leaf (a mesh of a few triangles): eight
-//! rays at a time against the run's triangles with the leaf test's cull across rays
+//! The batches of a tree whose root is a leaf (a mesh of a few triangles): eight rays at a
+//! time against the run's triangles with the leaf test's cull across rays
 //! ([`LeafTest::sheared_rays`]), then each ray's exact test of the lanes its cull kept. A
 //! ray whose cull keeps nothing (most of a camera's rays) never gets its own preparation.
+//! Any-hit rays (shadow rays, which start on one of these triangles) first drop the kept
+//! lanes whose plane certainly crosses them behind their origin ([`LeafTest::behind_plane`],
+//! each triangle's plane computed once per batch).
 
 use super::WideBvh;
 use super::node::{LeafGroup, WideNode};
@@ -9,7 +12,7 @@ use super::traverse::{RunLanes, kept_hits, leaf_groups};
 use crate::query::{LeafTest, Query, Stack, TraversalStats};
 use crate::ray::Ray;
 use crate::simd::level::SimdLevel;
-use crate::triangle::{LANES, RAY_LANES};
+use crate::triangle::{BehindPlane, LANES, RAY_LANES};
 
 /// Groups a run may span for [`WideBvh::root_leaf_hits`]: each ray's kept lanes are one `u32`,
 /// [`LANES`] bits a group.
@@ -105,6 +108,99 @@ where
         }
         local.primitives_tested += u64::from(count);
         best
+    }
+}
+
+impl<const W: usize, N, T> WideBvh<W, N, T>
+where
+    N: AsRef<[WideNode<W>]>,
+    T: AsRef<[LeafGroup]>,
+{
+    /// [`crate::query::RayQuery::any_hits`] of a tree whose root is the leaf run `(start,
+    /// count)`, when the leaf test culls across rays: `out[i]` is the single-ray any hit of
+    /// `rays[i]`, bit for bit (the lanes tested in the same order; a lane is dropped only where
+    /// the single-ray test refuses it too: by its cull, or by the triangle's
+    /// [`BehindPlane`], whose refusals the exact test makes first thing), and the statistics
+    /// count `count` triangles for each valid ray. Returns `false`, with nothing written, as
+    /// [`WideBvh::root_leaf_hits`] does.
+    #[inline(always)]
+    pub(super) fn root_leaf_any_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        (start, count): (u32, u32),
+        rays: &[Ray],
+        leaf: &mut LT,
+        ctx: &mut Query<'_, L, S>,
+        out: &mut [S::Out<(u32, LT::Hit)>],
+    ) -> bool {
+        let run = leaf_groups(self.groups(), start, count);
+        if run.len() > MAX_GROUPS {
+            return false;
+        }
+        let level = ctx.level;
+        let mut local = TraversalStats::default();
+        // Each lane's plane, computed when a ray first keeps the lane (`known`).
+        let mut planes: [Option<BehindPlane>; MAX_GROUPS * LANES] = [None; MAX_GROUPS * LANES];
+        let mut known = 0u32;
+        for (chunk, out) in rays.chunks(RAY_LANES).zip(out.chunks_mut(RAY_LANES)) {
+            let Some(sheared) = leaf.sheared_rays(chunk) else {
+                return false;
+            };
+            let mut kept = [0u32; RAY_LANES];
+            let mut run_lanes = RunLanes::new(start, count);
+            for (g, group) in run.iter().enumerate() {
+                let mine = run_lanes.next_group();
+                for (k, missed) in kept.iter_mut().zip(sheared.certain_misses(&group.lanes)) {
+                    *k |= (mine & !missed) << (LANES * (g & (MAX_GROUPS - 1)));
+                }
+            }
+            for ((ray, o), &kept) in chunk.iter().zip(out.iter_mut()).zip(&kept) {
+                if kept == 0 || !ray.is_valid() {
+                    local.primitives_tested += u64::from(count) * u64::from(ray.is_valid());
+                    *o = S::answer(Ok(None));
+                    continue;
+                }
+                // Never refused for a valid ray (the contract of `sheared_rays`).
+                let Some(pre) = leaf.prepare_valid(ray) else {
+                    *o = S::answer(Ok(None));
+                    continue;
+                };
+                let (mut cur, mut best) = (*ray, None);
+                for (p, pair) in run.chunks(2).enumerate() {
+                    let Some((first, second)) = pair.split_first() else {
+                        continue;
+                    };
+                    let pair = [first, second.first().unwrap_or(first)];
+                    let shift = 2 * LANES * (p & 3);
+                    let mut lanes = (kept >> shift) & 0xFF;
+                    let mut each = lanes;
+                    while each != 0 {
+                        let bit = each.trailing_zeros() as usize;
+                        each &= each - 1;
+                        let slot = (shift + bit) & (MAX_GROUPS * LANES - 1);
+                        if known >> slot & 1 == 0 {
+                            known |= 1 << slot;
+                            let group = pair[(bit / LANES) & 1];
+                            planes[slot] = group
+                                .triangle(bit & (LANES - 1))
+                                .and_then(|t| leaf.behind_plane(&t.vertices()));
+                        }
+                        if planes[slot].is_some_and(|plane| plane.refuses(ray)) {
+                            lanes &= !(1 << bit);
+                        }
+                    }
+                    let walk = (&mut cur, &mut best);
+                    if kept_hits::<LT, L, true>(level, leaf, &pre, pair, lanes, walk) {
+                        break;
+                    }
+                }
+                local.primitives_tested += u64::from(count);
+                *o = S::answer(Ok(best));
+            }
+        }
+        if let Some(stats) = ctx.stats.as_deref_mut() {
+            stats.add(&local);
+        }
+        true
     }
 }
 

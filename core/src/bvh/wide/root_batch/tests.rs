@@ -93,13 +93,15 @@ fn rays_at(mesh: &TriangleMesh<'_>, positions: &[Vec3], n: usize, seed: u64) -> 
 }
 
 /// The batch of `bvh` with intersector `isect` at `level` against each ray's single query at
-/// that level: the same answer bits and the same statistics. Returns the hits.
+/// that level (any hits with `any`, else closest hits): the same answer bits and the same
+/// statistics. Returns the hits.
 fn batch_equals_single<I: TriangleIntersector, L: SimdLevel>(
     level: L,
     (bvh, mesh): (&VecBvh8, &TriangleMesh<'_>),
     isect: &I,
     rays: &[Ray],
     name: &str,
+    any: bool,
 ) -> usize {
     let mut tris = Triangles::new(mesh, isect);
     let mut stack = QueryStack::new();
@@ -109,15 +111,20 @@ fn batch_equals_single<I: TriangleIntersector, L: SimdLevel>(
         .on(level)
         .stack(&mut stack)
         .stats(&mut together);
-    bvh.closest_hits(rays, &mut tris, &mut ctx, &mut batch)
-        .unwrap();
+    if any {
+        bvh.any_hits(rays, &mut tris, &mut ctx, &mut batch).unwrap();
+    } else {
+        bvh.closest_hits(rays, &mut tris, &mut ctx, &mut batch)
+            .unwrap();
+    }
     let mut hits = 0;
     for (i, ray) in rays.iter().enumerate() {
-        let single = bvh.closest_hit(
-            ray,
-            &mut tris,
-            &mut Query::new().on(level).stats(&mut alone),
-        );
+        let mut ctx = Query::new().on(level).stats(&mut alone);
+        let single = if any {
+            bvh.any_hit(ray, &mut tris, &mut ctx)
+        } else {
+            bvh.closest_hit(ray, &mut tris, &mut ctx)
+        };
         assert_eq!(bits(batch[i]), bits(single), "{name}: ray {i} {ray:?}");
         hits += usize::from(single.is_some());
     }
@@ -125,10 +132,43 @@ fn batch_equals_single<I: TriangleIntersector, L: SimdLevel>(
     hits
 }
 
+/// [`batch_equals_single`] for closest and for any hits.
+fn both_equal_single<I: TriangleIntersector, L: SimdLevel>(
+    level: L,
+    tree: (&VecBvh8, &TriangleMesh<'_>),
+    isect: &I,
+    rays: &[Ray],
+    name: &str,
+) -> usize {
+    batch_equals_single(level, tree, isect, rays, name, true);
+    batch_equals_single(level, tree, isect, rays, name, false)
+}
+
+/// Shadow rays off `mesh`'s surface: each of `rays` that hits it spawned from its hit towards
+/// a point light outside the mesh, or back through the mesh ([`crate::hit::spawn_ray_to`]).
+fn shadow_rays(bvh: &VecBvh8, mesh: &TriangleMesh<'_>, rays: &[Ray], seed: u64) -> Vec<Ray> {
+    let mut r = Lcg(seed);
+    let mut tris = Triangles::new(mesh, &Watertight);
+    rays.iter()
+        .filter_map(|ray| {
+            let (prim, h) = bvh.closest_hit(ray, &mut tris, &mut Query::new())?;
+            let v = mesh.triangle(prim as usize)?;
+            let light = if r.f() < 0.7 {
+                r.v(10.0) + Vec3::splat(6.0)
+            } else {
+                ray.origin
+            };
+            Some(crate::hit::spawn_ray_to(&h.to_hit(&v), light))
+        })
+        .collect()
+}
+
 /// Closed and open meshes of one to eight triangles (one to three groups: the tree is one
 /// leaf, no node), each with every watertight intersector (the cull across rays) and
 /// Möller–Trumbore (none: the rays go alone), at every level: the batch answers each ray as
-/// its single query does, and the watertight answers are the brute-force loop's.
+/// its single query does, closest and any hits, shadow rays spawned off the surface included
+/// (the triangle a ray starts on refused by its plane), and the watertight answers are the
+/// brute-force loop's.
 #[test]
 fn a_root_leaf_batch_answers_each_ray_as_alone() {
     let tetra = (
@@ -165,35 +205,26 @@ fn a_root_leaf_batch_answers_each_ray_as_alone() {
             .unwrap();
             assert_eq!(bits(out[0]), bits(want), "mesh {m}, ray {i}: brute force");
         }
-        let hits = batch_equals_single(Portable, (&bvh, &mesh), &Watertight, &rays, "watertight");
+        let hits = both_equal_single(Portable, (&bvh, &mesh), &Watertight, &rays, "watertight");
         assert!(hits > rays.len() / 5, "mesh {m}: only {hits} hits");
-        batch_equals_single(Portable, (&bvh, &mesh), &WatertightF32, &rays, "f32");
-        batch_equals_single(
-            Portable,
-            (&bvh, &mesh),
-            &WatertightF32Exact,
-            &rays,
-            "f32 exact",
+        let shadow = shadow_rays(&bvh, &mesh, &rays, 3 + m as u64);
+        assert!(
+            shadow.len() > rays.len() / 5,
+            "mesh {m}: {} shadow rays",
+            shadow.len()
         );
-        batch_equals_single(
-            Portable,
-            (&bvh, &mesh),
-            &MollerTrumbore::default(),
-            &rays,
-            "mt",
-        );
+        let tree = (&bvh, &mesh);
+        batch_equals_single(Portable, tree, &Watertight, &shadow, "shadow", true);
+        both_equal_single(Portable, tree, &WatertightF32, &rays, "f32");
+        both_equal_single(Portable, tree, &WatertightF32Exact, &rays, "f32 exact");
+        both_equal_single(Portable, tree, &MollerTrumbore::default(), &rays, "mt");
         #[cfg(target_arch = "x86_64")]
         if let Some(level) = crate::test_util::avx2_or_skip(
             "bvh::wide::root_batch::tests::a_root_leaf_batch_answers_each_ray_as_alone",
         ) {
-            batch_equals_single(level, (&bvh, &mesh), &Watertight, &rays, "avx2");
-            batch_equals_single(
-                level,
-                (&bvh, &mesh),
-                &WatertightF32Exact,
-                &rays,
-                "avx2 exact",
-            );
+            both_equal_single(level, tree, &Watertight, &rays, "avx2");
+            batch_equals_single(level, tree, &Watertight, &shadow, "avx2 shadow", true);
+            both_equal_single(level, tree, &WatertightF32Exact, &rays, "avx2 exact");
         }
     }
 }
