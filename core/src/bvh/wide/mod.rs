@@ -66,6 +66,7 @@ mod collapse;
 mod node;
 mod node_test;
 mod packet;
+mod planes;
 mod query;
 mod refit;
 mod root_batch;

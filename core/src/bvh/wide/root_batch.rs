@@ -8,11 +8,12 @@
 
 use super::WideBvh;
 use super::node::{LeafGroup, WideNode};
+use super::planes::LeafPlanes;
 use super::traverse::{RunLanes, kept_hits, leaf_groups};
 use crate::query::{LeafTest, Query, Stack, TraversalStats};
 use crate::ray::Ray;
 use crate::simd::level::SimdLevel;
-use crate::triangle::{BehindPlane, LANES, RAY_LANES};
+use crate::triangle::{LANES, RAY_LANES};
 
 /// Groups a run may span for [`WideBvh::root_leaf_hits`]: each ray's kept lanes are one `u32`,
 /// [`LANES`] bits a group.
@@ -120,7 +121,7 @@ where
     /// count)`, when the leaf test culls across rays: `out[i]` is the single-ray any hit of
     /// `rays[i]`, bit for bit (the lanes tested in the same order; a lane is dropped only where
     /// the single-ray test refuses it too: by its cull, or by the triangle's
-    /// [`BehindPlane`], whose refusals the exact test makes first thing), and the statistics
+    /// [`crate::triangle::BehindPlane`], whose refusals the exact test makes first thing), and the statistics
     /// count `count` triangles for each valid ray. Returns `false`, with nothing written, as
     /// [`WideBvh::root_leaf_hits`] does.
     #[inline(always)]
@@ -138,9 +139,8 @@ where
         }
         let level = ctx.level;
         let mut local = TraversalStats::default();
-        // Each lane's plane, computed when a ray first keeps the lane (`known`).
-        let mut planes: [Option<BehindPlane>; MAX_GROUPS * LANES] = [None; MAX_GROUPS * LANES];
-        let mut known = 0u32;
+        // Each lane's plane, computed when a ray first keeps the lane.
+        let mut planes = LeafPlanes::NEW;
         for (chunk, out) in rays.chunks(RAY_LANES).zip(out.chunks_mut(RAY_LANES)) {
             let Some(sheared) = leaf.sheared_rays(chunk) else {
                 return false;
@@ -170,24 +170,8 @@ where
                         continue;
                     };
                     let pair = [first, second.first().unwrap_or(first)];
-                    let shift = 2 * LANES * (p & 3);
-                    let mut lanes = (kept >> shift) & 0xFF;
-                    let mut each = lanes;
-                    while each != 0 {
-                        let bit = each.trailing_zeros() as usize;
-                        each &= each - 1;
-                        let slot = (shift + bit) & (MAX_GROUPS * LANES - 1);
-                        if known >> slot & 1 == 0 {
-                            known |= 1 << slot;
-                            let group = pair[(bit / LANES) & 1];
-                            planes[slot] = group
-                                .triangle(bit & (LANES - 1))
-                                .and_then(|t| leaf.behind_plane(&t.vertices()));
-                        }
-                        if planes[slot].is_some_and(|plane| plane.refuses(ray)) {
-                            lanes &= !(1 << bit);
-                        }
-                    }
+                    let lanes = (kept >> (2 * LANES * (p & 3))) & 0xFF;
+                    let lanes = lanes & !planes.refused(leaf, pair, p, lanes, ray);
                     let walk = (&mut cur, &mut best);
                     if kept_hits::<LT, L, true>(level, leaf, &pre, pair, lanes, walk) {
                         break;
