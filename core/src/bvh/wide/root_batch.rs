@@ -7,7 +7,7 @@
 //! each triangle's plane computed once per batch).
 
 use super::WideBvh;
-use super::node::{LeafGroup, WideNode};
+use super::node::{ChildRef, LeafGroup, WideNode};
 use super::planes::LeafPlanes;
 use super::traverse::{RunLanes, kept_hits, leaf_groups};
 use crate::query::{LeafTest, Query, Stack, TraversalStats};
@@ -121,9 +121,9 @@ where
     /// count)`, when the leaf test culls across rays: `out[i]` is the single-ray any hit of
     /// `rays[i]`, bit for bit (the lanes tested in the same order; a lane is dropped only where
     /// the single-ray test refuses it too: by its cull, or by the triangle's
-    /// [`crate::triangle::BehindPlane`], whose refusals the exact test makes first thing), and the statistics
-    /// count `count` triangles for each valid ray. Returns `false`, with nothing written, as
-    /// [`WideBvh::root_leaf_hits`] does.
+    /// [`crate::triangle::BehindPlane`], whose refusals the exact test makes first thing), and
+    /// the statistics count `count` triangles for each valid ray. Returns `false`, with
+    /// nothing written, as [`WideBvh::root_leaf_hits`] does.
     #[inline(always)]
     pub(super) fn root_leaf_any_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
         &self,
@@ -134,6 +134,58 @@ where
         out: &mut [S::Out<(u32, LT::Hit)>],
     ) -> bool {
         let run = leaf_groups(self.groups(), start, count);
+        let slots = RunLanes::new(start, count).first_slots();
+        Self::flat_any_hits((run, slots, count), rays, leaf, ctx, out)
+    }
+
+    /// [`crate::query::RayQuery::any_hits`] of a tree with nodes whose triangles fill at most
+    /// [`MAX_GROUPS`] groups (a mesh of a few dozen triangles, such as a cube), when the leaf
+    /// test culls across rays: every triangle tested as one run, without the nodes, eight rays
+    /// at a time as [`WideBvh::root_leaf_any_hits`] does. Hit or miss is each ray's single-ray
+    /// answer (the walk's boxes never cull a triangle the leaf test hits: it finds a hit in
+    /// the interval exactly when some triangle has one), and a hit is a triangle the leaf test
+    /// reports there, perhaps another than the walk's first; the statistics count every
+    /// triangle for each valid ray. Returns `false`, with nothing written, for a larger tree
+    /// or a leaf test without the cull across rays.
+    #[inline(always)]
+    pub(super) fn small_tree_any_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
+        &self,
+        rays: &[Ray],
+        leaf: &mut LT,
+        ctx: &mut Query<'_, L, S>,
+        out: &mut [S::Out<(u32, LT::Hit)>],
+    ) -> bool {
+        let run = self.groups();
+        if run.len() > MAX_GROUPS {
+            return false;
+        }
+        // The slots of every leaf run (the groups may have skipped lanes between runs).
+        let mut slots = 0u64;
+        for node in self.nodes() {
+            for &child in &node.child {
+                if let ChildRef::Leaf { start, count } = ChildRef::decode(child) {
+                    slots |= ((1u64 << count.min(32)) - 1) << start.min(32);
+                }
+            }
+        }
+        let count = slots.count_ones() & 63;
+        Self::flat_any_hits((run, slots as u32, count), rays, leaf, ctx, out)
+    }
+
+    /// The any hits of `rays` over the triangles of `run` in the slots `slots` (bit `4g + i`
+    /// for lane `i` of group `g`), `count` of them: eight rays at a time through the cull
+    /// across rays, then each ray's kept lanes pair by pair in lane order, those its
+    /// triangle's plane refuses dropped ([`LeafPlanes`]), its first hit the answer. Returns
+    /// `false`, with nothing written, when the run spans more than [`MAX_GROUPS`] groups or
+    /// the leaf test has no cull across rays.
+    #[inline(always)]
+    fn flat_any_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
+        (run, slots, count): (&[LeafGroup], u32, u32),
+        rays: &[Ray],
+        leaf: &mut LT,
+        ctx: &mut Query<'_, L, S>,
+        out: &mut [S::Out<(u32, LT::Hit)>],
+    ) -> bool {
         if run.len() > MAX_GROUPS {
             return false;
         }
@@ -146,11 +198,11 @@ where
                 return false;
             };
             let mut kept = [0u32; RAY_LANES];
-            let mut run_lanes = RunLanes::new(start, count);
             for (g, group) in run.iter().enumerate() {
-                let mine = run_lanes.next_group();
+                let shift = LANES * (g & (MAX_GROUPS - 1));
+                let mine = (slots >> shift) & 0xF;
                 for (k, missed) in kept.iter_mut().zip(sheared.certain_misses(&group.lanes)) {
-                    *k |= (mine & !missed) << (LANES * (g & (MAX_GROUPS - 1)));
+                    *k |= (mine & !missed) << shift;
                 }
             }
             for ((ray, o), &kept) in chunk.iter().zip(out.iter_mut()).zip(&kept) {

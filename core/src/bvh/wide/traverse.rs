@@ -51,6 +51,13 @@ impl RunLanes {
         lanes
     }
 
+    /// The run's slots in its first eight groups, bit `4g + i` for lane `i` of group `g`
+    /// (the groups [`leaf_groups`] returns).
+    #[inline(always)]
+    pub(super) fn first_slots(&self) -> u32 {
+        self.0 as u32
+    }
+
     /// The lanes of the run in the next two groups: the first's in bits 0–3, the second's in
     /// bits 4–7 (as [`crate::triangle::pair_mask`] of two [`RunLanes::next_group`]s).
     #[inline(always)]

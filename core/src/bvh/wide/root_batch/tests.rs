@@ -228,3 +228,95 @@ fn a_root_leaf_batch_answers_each_ray_as_alone() {
         }
     }
 }
+
+/// Trees with nodes over a few dozen triangles (the cube, soups of 9 to 32), at every level:
+/// the any-hit batch, which tests every triangle as one run, hits exactly where each ray's
+/// single any hit does, camera-like and shadow rays, and each hit is its triangle's own
+/// watertight hit, bit for bit, inside the ray's interval.
+#[test]
+fn a_small_tree_any_hit_batch_hits_where_each_ray_alone_does() {
+    let cube = (
+        crate::solids::CUBE_VERTICES.to_vec(),
+        crate::solids::CUBE_TRIANGLES.to_vec(),
+    );
+    let mut meshes = vec![cube];
+    meshes.extend(
+        (9..=32)
+            .step_by(3)
+            .map(|n| lcg_soup(n, 90 + n as u64, 1.5, 1.0)),
+    );
+    let mut small = 0;
+    for (m, (pos, tri)) in meshes.iter().enumerate() {
+        let mesh = TriangleMesh::new(pos, tri);
+        let bvh = bvh8(&mesh);
+        if bvh.node_count() == 0 || bvh.groups().len() > 8 {
+            continue;
+        }
+        small += 1;
+        let rays = rays_at(&mesh, pos, 8 * 125 + 5, 11 + m as u64);
+        let shadow = shadow_rays(&bvh, &mesh, &rays, 5 + m as u64);
+        assert!(
+            shadow.len() > rays.len() / 10,
+            "mesh {m}: {} shadow rays",
+            shadow.len()
+        );
+        let check = |level: &dyn Fn(&[Ray], &mut [Answer]) -> Vec<Answer>, rays: &[Ray]| {
+            let mut batch: Vec<Answer> = vec![None; rays.len()];
+            let single = level(rays, &mut batch);
+            let mut hits = 0;
+            for (i, ray) in rays.iter().enumerate() {
+                assert_eq!(
+                    batch[i].is_some(),
+                    single[i].is_some(),
+                    "mesh {m}, ray {i} {ray:?}"
+                );
+                if let Some((prim, h)) = batch[i] {
+                    hits += 1;
+                    let v = mesh.triangle(prim as usize).unwrap();
+                    let own = Watertight.intersect(ray, &v);
+                    assert_eq!(
+                        bits(own.map(|o| (prim, o))),
+                        bits(batch[i]),
+                        "mesh {m}, ray {i}"
+                    );
+                    assert!(h.t > ray.t_min && h.t <= ray.t_max, "mesh {m}, ray {i}");
+                }
+            }
+            hits
+        };
+        let portable = |rays: &[Ray], out: &mut [Answer]| {
+            let mut tris = Triangles::new(&mesh, &Watertight);
+            let mut stack = QueryStack::new();
+            bvh.any_hits(rays, &mut tris, &mut Query::new().stack(&mut stack), out)
+                .unwrap();
+            rays.iter()
+                .map(|r| bvh.any_hit(r, &mut tris, &mut Query::new()))
+                .collect::<Vec<_>>()
+        };
+        let hits = check(&portable, &rays);
+        assert!(hits > rays.len() / 5, "mesh {m}: only {hits} hits");
+        check(&portable, &shadow);
+        #[cfg(target_arch = "x86_64")]
+        if let Some(level) = crate::test_util::avx2_or_skip(
+            "bvh::wide::root_batch::tests::a_small_tree_any_hit_batch_hits_where_each_ray_alone_does",
+        ) {
+            let avx2 = |rays: &[Ray], out: &mut [Answer]| {
+                let mut tris = Triangles::new(&mesh, &Watertight);
+                let mut stack = QueryStack::new();
+                bvh.any_hits(
+                    rays,
+                    &mut tris,
+                    &mut Query::new().on(level).stack(&mut stack),
+                    out,
+                )
+                .unwrap();
+                rays.iter()
+                    .map(|r| bvh.any_hit(r, &mut tris, &mut Query::new().on(level)))
+                    .collect::<Vec<_>>()
+            };
+            check(&avx2, &rays);
+            check(&avx2, &shadow);
+        }
+    }
+    assert!(small >= 3, "only {small} small trees with nodes");
+}
