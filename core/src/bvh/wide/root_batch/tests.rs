@@ -16,6 +16,8 @@ use std::vec;
 use std::vec::Vec;
 
 type Answer = Option<(u32, TriangleHit)>;
+/// A query level under test: fills the batch answers, returns the single-ray ones.
+type BatchAndSingle<'a> = &'a dyn Fn(&[Ray], &mut [Answer]) -> Vec<Answer>;
 type VecBvh8 = Bvh8<Vec<crate::bvh::wide::WideNode<8>>, Vec<crate::bvh::wide::LeafGroup>>;
 
 fn bvh8(mesh: &TriangleMesh<'_>) -> VecBvh8 {
@@ -260,7 +262,7 @@ fn a_small_tree_any_hit_batch_hits_where_each_ray_alone_does() {
             "mesh {m}: {} shadow rays",
             shadow.len()
         );
-        let check = |level: &dyn Fn(&[Ray], &mut [Answer]) -> Vec<Answer>, rays: &[Ray]| {
+        let check = |level: BatchAndSingle<'_>, rays: &[Ray]| {
             let mut batch: Vec<Answer> = vec![None; rays.len()];
             let single = level(rays, &mut batch);
             let mut hits = 0;
