@@ -1,6 +1,6 @@
 //! [`BehindPlane`]: the part of [`super::Watertight`]'s plane kernel that depends on the
 //! triangle only, computed once for many rays, and its refusal of a crossing certainly behind
-//! a ray's origin ([`super::crossed_behind`]).
+//! a ray's origin (`crossed_behind`).
 //!
 //! On x86-64 the exact path of a candidate starts with the plane kernel
 //! ([`super::plane_crossing`], or a level's kernel with its bits) and refuses the triangle where
@@ -17,7 +17,7 @@ use glam::{DVec3, Vec3};
 
 /// A triangle's `v0`-based `f64` plane: `v0`, the normal `n = (v1 − v0) × (v2 − v0)` and its
 /// rounding scale `N = |v1 − v0| × |v2 − v0|` (absolute values), world units. Only for a
-/// triangle whose normal does not cancel ([`crate::triangle::normal_f64_from_v0`]): for the
+/// triangle whose normal does not cancel (`normal_f64_from_v0`): for the
 /// others the plane kernel has no answer and the exact path decides.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BehindPlane {
@@ -42,7 +42,7 @@ impl BehindPlane {
 
     /// `true` exactly when the plane kernel of [`super::Watertight`]'s exact path returns its
     /// "behind" form for `ray`: `d·n` clears its orientation filter, `t = ((v0 − o)·n)/(d·n) <
-    /// 0` and [`super::crossed_behind`] (the crossing certainly behind the origin while `t_min
+    /// 0` and `crossed_behind` (the crossing certainly behind the origin while `t_min
     /// ≥ 0`). Then the triangle is no hit of `ray`. Any ray, valid or not (a NaN or infinite
     /// component fails a comparison: `false`).
     #[inline(always)]
