@@ -77,8 +77,8 @@ where
     /// alone; every ray alone on a caller stack shorter than
     /// [`crate::query::QUERY_STACK_SIZE`] (so that each gets the single-ray answer, an error
     /// included). Closest hits, or any hits with `ANY`; a tree whose root is a leaf takes its
-    /// rays eight at a time ([`WideBvh::root_leaf_hits`], [`WideBvh::root_leaf_any_hits`]), and
-    /// so do the any hits of a tree of at most eight groups ([`WideBvh::small_tree_any_hits`]).
+    /// rays eight at a time ([`WideBvh::root_leaf_hits`]), and so do the any hits of a root leaf
+    /// or a tree of at most eight groups ([`WideBvh::small_tree_any_hits`]).
     #[inline(always)]
     fn in_packets<LT: LeafTest, L: SimdLevel, S: Stack, const ANY: bool>(
         &self,
@@ -91,13 +91,10 @@ where
         let alone = ctx.stack.entries().is_some_and(|e| e.len() < STACK);
         if !alone {
             let done = match ChildRef::decode(self.root) {
-                ChildRef::Leaf { start, count } if ANY => {
-                    self.root_leaf_any_hits((start, count), rays, leaf, ctx, out)
-                }
+                _ if ANY => self.small_tree_any_hits(rays, leaf, ctx, out),
                 ChildRef::Leaf { start, count } => {
                     self.root_leaf_hits((start, count), rays, leaf, ctx, out)
                 }
-                _ if ANY => self.small_tree_any_hits(rays, leaf, ctx, out),
                 _ => false,
             };
             if done {
@@ -184,11 +181,10 @@ where
     /// is each ray's single-ray answer; the primitive of a ray walked in a packet is the first
     /// the packet's order reaches, which may not be the single-ray walk's. A tree whose root is
     /// a leaf takes its rays eight at a time through the cull across rays, the triangles'
-    /// planes refusing the ones a ray starts on (`WideBvh::root_leaf_any_hits`): there each
-    /// answer is the single-ray one, bit for bit. A tree of at most eight groups with nodes
-    /// (a few dozen triangles) tests all its triangles the same way, without the nodes
-    /// (`WideBvh::small_tree_any_hits`): hit or miss as the single ray, the primitive perhaps
-    /// another.
+    /// planes refusing the ones a ray starts on: there each answer is the single-ray one, bit
+    /// for bit. A tree of at most eight groups with nodes (a few dozen triangles) tests all
+    /// its triangles the same way, without the nodes: hit or miss as the single ray, the
+    /// primitive perhaps another (both `WideBvh::small_tree_any_hits`).
     #[inline(always)]
     fn any_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
         &self,

@@ -110,43 +110,23 @@ where
         local.primitives_tested += u64::from(count);
         best
     }
-}
 
-impl<const W: usize, N, T> WideBvh<W, N, T>
-where
-    N: AsRef<[WideNode<W>]>,
-    T: AsRef<[LeafGroup]>,
-{
-    /// [`crate::query::RayQuery::any_hits`] of a tree whose root is the leaf run `(start,
-    /// count)`, when the leaf test culls across rays: `out[i]` is the single-ray any hit of
-    /// `rays[i]`, bit for bit (the lanes tested in the same order; a lane is dropped only where
-    /// the single-ray test refuses it too: by its cull, or by the triangle's
-    /// [`crate::triangle::BehindPlane`], whose refusals the exact test makes first thing), and
-    /// the statistics count `count` triangles for each valid ray. Returns `false`, with
-    /// nothing written, as [`WideBvh::root_leaf_hits`] does.
-    #[inline(always)]
-    pub(super) fn root_leaf_any_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
-        &self,
-        (start, count): (u32, u32),
-        rays: &[Ray],
-        leaf: &mut LT,
-        ctx: &mut Query<'_, L, S>,
-        out: &mut [S::Out<(u32, LT::Hit)>],
-    ) -> bool {
-        let run = leaf_groups(self.groups(), start, count);
-        let slots = RunLanes::new(start, count).first_slots();
-        Self::flat_any_hits((run, slots, count), rays, leaf, ctx, out)
-    }
-
-    /// [`crate::query::RayQuery::any_hits`] of a tree with nodes whose triangles fill at most
-    /// [`MAX_GROUPS`] groups (a mesh of a few dozen triangles, such as a cube), when the leaf
-    /// test culls across rays: every triangle tested as one run, without the nodes, eight rays
-    /// at a time as [`WideBvh::root_leaf_any_hits`] does. Hit or miss is each ray's single-ray
-    /// answer (the walk's boxes never cull a triangle the leaf test hits: it finds a hit in
-    /// the interval exactly when some triangle has one), and a hit is a triangle the leaf test
-    /// reports there, perhaps another than the walk's first; the statistics count every
-    /// triangle for each valid ray. Returns `false`, with nothing written, for a larger tree
-    /// or a leaf test without the cull across rays.
+    /// [`crate::query::RayQuery::any_hits`] of a small tree, when the leaf test culls across
+    /// rays: every triangle tested as one run, without the nodes, eight rays at a time.
+    ///
+    /// - A tree whose root is a leaf: `out[i]` is the single-ray any hit of `rays[i]`, bit for
+    ///   bit (the lanes tested in the same order; a lane is dropped only where the single-ray
+    ///   test refuses it too: by its cull, or by the triangle's
+    ///   [`crate::triangle::BehindPlane`], whose refusals the exact test makes first thing).
+    /// - A tree with nodes whose triangles fill at most [`MAX_GROUPS`] groups (a mesh of a few
+    ///   dozen triangles, such as a cube): hit or miss is each ray's single-ray answer (the
+    ///   walk's boxes never cull a triangle the leaf test hits: it finds a hit in the interval
+    ///   exactly when some triangle has one), and a hit is a triangle the leaf test reports
+    ///   there, perhaps another than the walk's first.
+    ///
+    /// The statistics count every triangle for each valid ray. Returns `false`, with nothing
+    /// written, for a larger tree or a leaf test without the cull across rays, as
+    /// [`WideBvh::root_leaf_hits`] does.
     #[inline(always)]
     pub(super) fn small_tree_any_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
         &self,
@@ -155,6 +135,11 @@ where
         ctx: &mut Query<'_, L, S>,
         out: &mut [S::Out<(u32, LT::Hit)>],
     ) -> bool {
+        if let ChildRef::Leaf { start, count } = ChildRef::decode(self.root) {
+            let run = leaf_groups(self.groups(), start, count);
+            let slots = RunLanes::new(start, count).first_slots();
+            return Self::flat_any_hits((run, slots, count), rays, leaf, ctx, out);
+        }
         let run = self.groups();
         if run.len() > MAX_GROUPS {
             return false;
