@@ -100,11 +100,10 @@ where
         let pre = leaf.prepare_valid(ray)?;
         let (mut cur, mut best) = (*ray, None);
         for (p, pair) in run.chunks(2).enumerate() {
-            let Some((first, second)) = pair.split_first() else {
+            let Some(pair) = lane_pair(pair) else {
                 continue;
             };
             let lanes = (kept >> (2 * LANES * (p & 3))) & 0xFF;
-            let pair = [first, second.first().unwrap_or(first)];
             kept_hits::<LT, L, false>(level, leaf, &pre, pair, lanes, (&mut cur, &mut best));
         }
         local.primitives_tested += u64::from(count);
@@ -191,24 +190,31 @@ where
                 }
             }
             for ((ray, o), &kept) in chunk.iter().zip(out.iter_mut()).zip(&kept) {
-                if kept == 0 || !ray.is_valid() {
-                    local.primitives_tested += u64::from(count) * u64::from(ray.is_valid());
-                    *o = S::answer(Ok(None));
-                    continue;
+                // The lanes whose plane refuses the ray go first: a ray left with none (a
+                // shadow ray whose one kept lane is the triangle it starts on) is a miss
+                // without its preparation.
+                let mut kept = kept * u32::from(ray.is_valid());
+                for (p, pair) in run.chunks(2).enumerate() {
+                    let Some(pair) = lane_pair(pair) else {
+                        continue;
+                    };
+                    let shift = 2 * LANES * (p & 3);
+                    let lanes = (kept >> shift) & 0xFF;
+                    kept &= !(planes.refused(leaf, pair, p, lanes, ray) << shift);
                 }
                 // Never refused for a valid ray (the contract of `sheared_rays`).
-                let Some(pre) = leaf.prepare_valid(ray) else {
+                let pre = (kept != 0).then(|| leaf.prepare_valid(ray)).flatten();
+                let Some(pre) = pre else {
+                    local.primitives_tested += u64::from(count) * u64::from(ray.is_valid());
                     *o = S::answer(Ok(None));
                     continue;
                 };
                 let (mut cur, mut best) = (*ray, None);
                 for (p, pair) in run.chunks(2).enumerate() {
-                    let Some((first, second)) = pair.split_first() else {
+                    let Some(pair) = lane_pair(pair) else {
                         continue;
                     };
-                    let pair = [first, second.first().unwrap_or(first)];
                     let lanes = (kept >> (2 * LANES * (p & 3))) & 0xFF;
-                    let lanes = lanes & !planes.refused(leaf, pair, p, lanes, ray);
                     let walk = (&mut cur, &mut best);
                     if kept_hits::<LT, L, true>(level, leaf, &pre, pair, lanes, walk) {
                         break;
@@ -223,6 +229,14 @@ where
         }
         true
     }
+}
+
+/// The two groups of a chunk of at most two (the leaf loop's pair; a lone group stands for
+/// both, its second half's lanes never set), or `None` for an empty chunk.
+#[inline(always)]
+fn lane_pair(pair: &[LeafGroup]) -> Option<[&LeafGroup; 2]> {
+    let (first, second) = pair.split_first()?;
+    Some([first, second.first().unwrap_or(first)])
 }
 
 #[cfg(test)]
