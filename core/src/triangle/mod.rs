@@ -40,7 +40,8 @@ pub use lanes::{LANES, TriangleLanes, pair_mask};
 pub use moller_trumbore::MollerTrumbore;
 pub use reference::F64Reference;
 pub use watertight::{
-    BehindPlane, RAY_LANES, ShearedRays, ShearedTest, Watertight, WatertightF32, WatertightRay,
+    BehindPlane, PlaneRay, RAY_LANES, ShearedRays, ShearedTest, Watertight, WatertightF32,
+    WatertightRay,
 };
 pub use watertight_f32_exact::WatertightF32Exact;
 

@@ -15,7 +15,7 @@ mod behind;
 mod plane;
 mod rays;
 
-pub use plane::BehindPlane;
+pub use plane::{BehindPlane, PlaneRay};
 pub use rays::{RAY_LANES, ShearedRays};
 
 /// Per-ray data of the watertight test: the axis permutation that makes the largest direction

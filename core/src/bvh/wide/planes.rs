@@ -8,8 +8,7 @@
 
 use super::node::LeafGroup;
 use crate::query::LeafTest;
-use crate::ray::Ray;
-use crate::triangle::{BehindPlane, LANES};
+use crate::triangle::{BehindPlane, LANES, PlaneRay};
 
 /// Lane slots of [`LeafPlanes`]: a run of up to eight groups (a pair's lanes are bits
 /// `8p .. 8p + 8` for its pair `p`), one bit of a `u32` each.
@@ -30,7 +29,7 @@ impl LeafPlanes {
     };
 
     /// The lanes among `lanes` (bits of the run's pair `p`, groups `pair`) whose triangle's
-    /// plane refuses `ray` ([`LeafTest::behind_plane`], [`BehindPlane::refuses`]): lanes the
+    /// plane refuses the ray of `ray` ([`LeafTest::behind_plane`], [`BehindPlane::refuses`]): lanes the
     /// leaf test certainly misses. A lane whose slot is past [`PLANE_SLOTS`] is never refused.
     #[inline(always)]
     pub(super) fn refused<LT: LeafTest>(
@@ -39,7 +38,7 @@ impl LeafPlanes {
         pair: [&LeafGroup; 2],
         p: usize,
         lanes: u32,
-        ray: &Ray,
+        ray: &PlaneRay<'_>,
     ) -> u32 {
         let mut refused = 0;
         let mut each = lanes;

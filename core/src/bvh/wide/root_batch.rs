@@ -13,7 +13,7 @@ use super::traverse::{RunLanes, kept_hits, leaf_groups};
 use crate::query::{LeafTest, Query, Stack, TraversalStats};
 use crate::ray::Ray;
 use crate::simd::level::SimdLevel;
-use crate::triangle::{LANES, RAY_LANES};
+use crate::triangle::{LANES, PlaneRay, RAY_LANES};
 
 /// Groups a run may span for [`WideBvh::root_leaf_hits`]: each ray's kept lanes are one `u32`,
 /// [`LANES`] bits a group.
@@ -140,6 +140,7 @@ where
             return Self::flat_any_hits((run, slots, count), rays, leaf, ctx, out);
         }
         let run = self.groups();
+        // Checked before the nodes are read (`flat_any_hits` checks the root leaf's run).
         if run.len() > MAX_GROUPS {
             return false;
         }
@@ -194,13 +195,14 @@ where
                 // shadow ray whose one kept lane is the triangle it starts on) is a miss
                 // without its preparation.
                 let mut kept = kept * u32::from(ray.is_valid());
+                let plane_ray = PlaneRay::new(ray);
                 for (p, pair) in run.chunks(2).enumerate() {
                     let Some(pair) = lane_pair(pair) else {
                         continue;
                     };
                     let shift = 2 * LANES * (p & 3);
                     let lanes = (kept >> shift) & 0xFF;
-                    kept &= !(planes.refused(leaf, pair, p, lanes, ray) << shift);
+                    kept &= !(planes.refused(leaf, pair, p, lanes, &plane_ray) << shift);
                 }
                 // Never refused for a valid ray (the contract of `sheared_rays`).
                 let pre = (kept != 0).then(|| leaf.prepare_valid(ray)).flatten();

@@ -41,21 +41,46 @@ impl BehindPlane {
     }
 
     /// `true` exactly when the plane kernel of [`super::Watertight`]'s exact path returns its
-    /// "behind" form for `ray`: `d·n` clears its orientation filter, `t = ((v0 − o)·n)/(d·n) <
-    /// 0` and `crossed_behind` (the crossing certainly behind the origin while `t_min
-    /// ≥ 0`). Then the triangle is no hit of `ray`. Any ray, valid or not (a NaN or infinite
-    /// component fails a comparison: `false`).
+    /// "behind" form for the ray of `r`: `d·n` clears its orientation filter, `t = ((v0 −
+    /// o)·n)/(d·n) < 0` and `crossed_behind` (the crossing certainly behind the origin while
+    /// `t_min ≥ 0`). Then the triangle is no hit of the ray. Any ray, valid or not (a NaN or
+    /// infinite component fails a comparison: `false`).
     #[inline(always)]
     #[must_use]
-    pub fn refuses(&self, ray: &Ray) -> bool {
-        let d = ray.direction.as_dvec3();
-        let dn = d.dot(self.n);
-        if !(dn.abs() > ORIENT3D_FILTER_REL * d.abs().dot(self.nn)) {
+    pub fn refuses(&self, r: &PlaneRay<'_>) -> bool {
+        let dn = r.d.dot(self.n);
+        if !(dn.abs() > ORIENT3D_FILTER_REL * r.d_abs.dot(self.nn)) {
             return false;
         }
-        let w = self.v0 - ray.origin.as_dvec3();
+        let w = self.v0 - r.o;
         let (wn, w_nn) = (w.dot(self.n), w.abs().dot(self.nn));
-        wn / dn < 0.0 && crossed_behind(ray, wn, w_nn, dn)
+        wn / dn < 0.0 && crossed_behind(r.ray, wn, w_nn, dn)
+    }
+}
+
+/// A ray as [`BehindPlane::refuses`] reads it: its origin, direction and the direction's
+/// absolute values in `f64` (exact conversions), made once per ray and tested against many
+/// planes.
+#[derive(Clone, Copy, Debug)]
+pub struct PlaneRay<'a> {
+    ray: &'a Ray,
+    o: DVec3,
+    d: DVec3,
+    d_abs: DVec3,
+}
+
+impl<'a> PlaneRay<'a> {
+    /// `ray` in `f64`.
+    #[inline(always)]
+    #[must_use]
+    pub fn new(ray: &'a Ray) -> Self {
+        let d = ray.direction.as_dvec3();
+        Self {
+            ray,
+            o: ray.origin.as_dvec3(),
+            d,
+            d_abs: d.abs(),
+        }
     }
 }
 
@@ -110,7 +135,7 @@ mod tests {
                 }
             };
             let want = super::super::plane_crossing(&v, &ray).is_some_and(|p| p.behind);
-            let got = BehindPlane::new(&v).is_some_and(|p| p.refuses(&ray));
+            let got = BehindPlane::new(&v).is_some_and(|p| p.refuses(&PlaneRay::new(&ray)));
             assert_eq!(got, want, "{v:?} {ray:?}");
             if got {
                 refused += 1;
