@@ -29,8 +29,8 @@ impl LeafPlanes {
     };
 
     /// The lanes among `lanes` (bits of the run's pair `p`, groups `pair`) whose triangle's
-    /// plane refuses the ray of `ray` ([`LeafTest::behind_plane`], [`BehindPlane::refuses`]): lanes the
-    /// leaf test certainly misses. A lane whose slot is past [`PLANE_SLOTS`] is never refused.
+    /// plane refuses the ray of `ray` ([`LeafTest::behind_plane`], [`BehindPlane::refuses`]):
+    /// lanes the leaf test certainly misses. A lane whose slot is past [`PLANE_SLOTS`] is never refused.
     #[inline(always)]
     pub(super) fn refused<LT: LeafTest>(
         &mut self,
