@@ -1,5 +1,6 @@
-//! The batch of a tree whose root is a leaf against single rays (bit for bit, statistics
-//! included, at every SIMD level the CPU has) and against a brute-force loop.
+//! The batches of small trees against single rays (a root leaf: bit for bit, statistics
+//! included; a tree with nodes: closest hits bit for bit, any hits hit for hit; at every SIMD
+//! level the CPU has) and against a brute-force loop.
 
 use crate::bvh::wide::{Bvh8, binary_options, group_capacity};
 use crate::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, node_capacity};
@@ -146,6 +147,25 @@ fn both_equal_single<I: TriangleIntersector, L: SimdLevel>(
     batch_equals_single(level, tree, isect, rays, name, false)
 }
 
+/// Each of `rays` as a batch of one through `bvh`'s closest-hit batch, watertight, against
+/// the brute-force loop over `mesh`: the same answer bits (mesh `m` in the messages).
+fn batch_is_brute_force((bvh, mesh): (&VecBvh8, &TriangleMesh<'_>), rays: &[Ray], m: usize) {
+    for (i, ray) in rays.iter().enumerate() {
+        let mut tris = Triangles::new(mesh, &Watertight);
+        let mut stack = QueryStack::new();
+        let mut out = [None];
+        bvh.closest_hits(
+            core::slice::from_ref(ray),
+            &mut tris,
+            &mut Query::new().stack(&mut stack),
+            &mut out,
+        )
+        .unwrap();
+        let want = brute_watertight(mesh, ray);
+        assert_eq!(bits(out[0]), bits(want), "mesh {m}, ray {i}: brute force");
+    }
+}
+
 /// Shadow rays off `mesh`'s surface: each of `rays` that hits it spawned from its hit towards
 /// a point light outside the mesh, or back through the mesh ([`crate::hit::spawn_ray_to`]).
 fn shadow_rays(bvh: &VecBvh8, mesh: &TriangleMesh<'_>, rays: &[Ray], seed: u64) -> Vec<Ray> {
@@ -193,20 +213,7 @@ fn a_root_leaf_batch_answers_each_ray_as_alone() {
         let bvh = bvh8(&mesh);
         assert_eq!(bvh.node_count(), 0, "mesh {m}: the root is a leaf");
         let rays = rays_at(&mesh, pos, 8 * 125 + 5, 7 + m as u64);
-        for (i, ray) in rays.iter().enumerate() {
-            let want = brute_watertight(&mesh, ray);
-            let mut tris = Triangles::new(&mesh, &Watertight);
-            let mut stack = QueryStack::new();
-            let mut out = [None];
-            bvh.closest_hits(
-                core::slice::from_ref(ray),
-                &mut tris,
-                &mut Query::new().stack(&mut stack),
-                &mut out,
-            )
-            .unwrap();
-            assert_eq!(bits(out[0]), bits(want), "mesh {m}, ray {i}: brute force");
-        }
+        batch_is_brute_force((&bvh, &mesh), &rays, m);
         let hits = both_equal_single(Portable, (&bvh, &mesh), &Watertight, &rays, "watertight");
         assert!(hits > rays.len() / 5, "mesh {m}: only {hits} hits");
         let shadow = shadow_rays(&bvh, &mesh, &rays, 3 + m as u64);
@@ -231,12 +238,9 @@ fn a_root_leaf_batch_answers_each_ray_as_alone() {
     }
 }
 
-/// Trees with nodes over a few dozen triangles (the cube, soups of 9 to 32), at every level:
-/// the any-hit batch, which tests every triangle as one run, hits exactly where each ray's
-/// single any hit does, camera-like and shadow rays, and each hit is its triangle's own
-/// watertight hit, bit for bit, inside the ray's interval.
-#[test]
-fn a_small_tree_any_hit_batch_hits_where_each_ray_alone_does() {
+/// The cube and soups of 9 to 32 triangles (seeds `seed + n`): meshes whose trees mostly
+/// have nodes over at most eight groups (the tests skip the others).
+fn small_tree_meshes(seed: u64) -> Vec<(Vec<Vec3>, Vec<[u32; 3]>)> {
     let cube = (
         crate::solids::CUBE_VERTICES.to_vec(),
         crate::solids::CUBE_TRIANGLES.to_vec(),
@@ -245,16 +249,34 @@ fn a_small_tree_any_hit_batch_hits_where_each_ray_alone_does() {
     meshes.extend(
         (9..=32)
             .step_by(3)
-            .map(|n| lcg_soup(n, 90 + n as u64, 1.5, 1.0)),
+            .map(|n| lcg_soup(n, seed + n as u64, 1.5, 1.0)),
     );
+    meshes
+}
+
+/// Runs `check(m, positions, mesh, tree)` on each mesh `m` of [`small_tree_meshes`]`(seed)`
+/// whose tree has nodes over at most eight groups; at least three must.
+fn each_small_tree(seed: u64, mut check: impl FnMut(usize, &[Vec3], TriangleMesh<'_>, VecBvh8)) {
     let mut small = 0;
-    for (m, (pos, tri)) in meshes.iter().enumerate() {
+    for (m, (pos, tri)) in small_tree_meshes(seed).iter().enumerate() {
         let mesh = TriangleMesh::new(pos, tri);
         let bvh = bvh8(&mesh);
         if bvh.node_count() == 0 || bvh.groups().len() > 8 {
             continue;
         }
         small += 1;
+        check(m, pos, mesh, bvh);
+    }
+    assert!(small >= 3, "only {small} small trees with nodes");
+}
+
+/// Trees with nodes over a few dozen triangles (the cube, soups of 9 to 32), at every level:
+/// the any-hit batch, which tests every triangle as one run, hits exactly where each ray's
+/// single any hit does, camera-like and shadow rays, and each hit is its triangle's own
+/// watertight hit, bit for bit, inside the ray's interval.
+#[test]
+fn a_small_tree_any_hit_batch_hits_where_each_ray_alone_does() {
+    each_small_tree(90, |m, pos, mesh, bvh| {
         let rays = rays_at(&mesh, pos, 8 * 125 + 5, 11 + m as u64);
         let shadow = shadow_rays(&bvh, &mesh, &rays, 5 + m as u64);
         assert!(
@@ -319,6 +341,66 @@ fn a_small_tree_any_hit_batch_hits_where_each_ray_alone_does() {
             check(&avx2, &rays);
             check(&avx2, &shadow);
         }
-    }
-    assert!(small >= 3, "only {small} small trees with nodes");
+    });
+}
+
+/// Trees with nodes over a few dozen triangles (the cube, soups of 9 to 32), every
+/// intersector with the cull across rays, at every level: the closest-hit batch (its packets:
+/// such a tree's closest hits are not taken as one run) answers each ray as its single-ray
+/// walk does, bit for bit, camera-like and shadow rays (`t_min > 0` and short intervals among
+/// them), and the watertight answers are the brute-force loop's.
+#[test]
+fn a_small_tree_closest_hit_batch_answers_each_ray_as_alone() {
+    each_small_tree(70, |m, pos, mesh, bvh| {
+        let mut rays = rays_at(&mesh, pos, 8 * 125 + 5, 13 + m as u64);
+        let shadow = shadow_rays(&bvh, &mesh, &rays, 9 + m as u64);
+        assert!(
+            shadow.len() > rays.len() / 10,
+            "mesh {m}: {} shadow rays",
+            shadow.len()
+        );
+        rays.extend(shadow);
+        let check = |level: BatchAndSingle<'_>, name: &str| {
+            let mut batch: Vec<Answer> = vec![None; rays.len()];
+            let single = level(&rays, &mut batch);
+            for (i, ray) in rays.iter().enumerate() {
+                assert_eq!(
+                    bits(batch[i]),
+                    bits(single[i]),
+                    "{name}, mesh {m}, ray {i} {ray:?}"
+                );
+            }
+            batch.iter().filter(|a| a.is_some()).count()
+        };
+        macro_rules! at_level {
+            ($level:expr, $isect:expr) => {
+                |rays: &[Ray], out: &mut [Answer]| {
+                    let mut tris = Triangles::new(&mesh, $isect);
+                    let mut stack = QueryStack::new();
+                    bvh.closest_hits(
+                        rays,
+                        &mut tris,
+                        &mut Query::new().on($level).stack(&mut stack),
+                        out,
+                    )
+                    .unwrap();
+                    rays.iter()
+                        .map(|r| bvh.closest_hit(r, &mut tris, &mut Query::new().on($level)))
+                        .collect::<Vec<_>>()
+                }
+            };
+        }
+        let hits = check(&at_level!(Portable, &Watertight), "watertight");
+        assert!(hits > rays.len() / 5, "mesh {m}: only {hits} hits");
+        batch_is_brute_force((&bvh, &mesh), &rays, m);
+        check(&at_level!(Portable, &WatertightF32), "f32");
+        check(&at_level!(Portable, &WatertightF32Exact), "f32 exact");
+        #[cfg(target_arch = "x86_64")]
+        if let Some(level) = crate::test_util::avx2_or_skip(
+            "bvh::wide::root_batch::tests::a_small_tree_closest_hit_batch_answers_each_ray_as_alone",
+        ) {
+            check(&at_level!(level, &Watertight), "avx2");
+            check(&at_level!(level, &WatertightF32Exact), "avx2 exact");
+        }
+    });
 }
