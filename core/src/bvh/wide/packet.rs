@@ -602,8 +602,11 @@ where
                                 level,
                                 leaf,
                                 pre,
-                                leaf_groups(groups, start, count),
-                                RunLanes::new(start, count),
+                                (
+                                    leaf_groups(groups, start, count),
+                                    RunLanes::new(start, count),
+                                    true,
+                                ),
                                 (&mut cur, best),
                             ) {
                                 if ANY {

@@ -838,6 +838,53 @@ fn a_root_leaf_answers_every_interval_as_brute_force() {
     assert_eq!(queries_equal_brute_force(&w8, &mesh, &invalid), 0);
 }
 
+/// Triangles whose plane the ray's line crosses behind its origin, in boxes the ray enters
+/// after its origin (where the any-hit walk skips the crossed-behind cull and the exact test
+/// refuses them) and in a box around its origin (where the cull drops them): sixteen slanted
+/// triangles along +x in the plane `z = 0.1 (x + 1) + 0.2 y`, which the line `y = z = 0`
+/// crosses at `x = −1`, each box spanning that line, and a wall at `x = 20` behind them. Every
+/// ray hits the wall, in both queries, at every level, for both widths, as brute force.
+#[test]
+fn planes_crossed_behind_the_origin_are_refused_in_boxes_ahead_and_around_it() {
+    let plane = |x: f32, y: f32| Vec3::new(x, y, 0.1 * (x + 1.0) + 0.2 * y);
+    let mut pos = Vec::new();
+    let mut tris = Vec::new();
+    for k in 0..16u32 {
+        let x = k as f32 * 0.5;
+        pos.extend([plane(x, -5.0), plane(x, 5.0), plane(x + 0.4, 0.0)]);
+        tris.push([3 * k, 3 * k + 1, 3 * k + 2]);
+    }
+    let w = pos.len() as u32;
+    pos.extend([
+        Vec3::new(20.0, -1.0, -1.0),
+        Vec3::new(20.0, 1.0, -1.0),
+        Vec3::new(20.0, 1.0, 1.0),
+        Vec3::new(20.0, -1.0, 1.0),
+    ]);
+    tris.extend([[w, w + 1, w + 2], [w, w + 2, w + 3]]);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let (w8, w4) = (wide::<8>(&mesh, 4), wide::<4>(&mesh, 4));
+    assert!(w8.node_count() >= 1 && w4.node_count() >= 1);
+    let mut rays = Vec::new();
+    for origin_x in [-0.3, 2.2, 5.1] {
+        for k in 0..8 {
+            let (dy, dz) = ((k as f32 - 3.5) * 0.01, (k % 3) as f32 * 0.01);
+            let d = Vec3::new(1.0, dy * 0.01, -dz * 0.01);
+            rays.push(Ray::new(Vec3::new(origin_x, dy, dz), d));
+        }
+    }
+    assert_eq!(queries_equal_brute_force(&w8, &mesh, &rays), rays.len());
+    assert_eq!(queries_equal_brute_force(&w4, &mesh, &rays), rays.len());
+    for ray in &rays {
+        let got = w8.any_hit(
+            ray,
+            &mut Triangles::new(&mesh, &Watertight),
+            &mut Query::new(),
+        );
+        assert!(matches!(got, Some((p, _)) if p >= 16), "{ray:?}");
+    }
+}
+
 /// A room: the floor and three walls of a cube of side 40 (triangles 0..8, two per wall,
 /// listed first so that the binary build's first split is not by index), around a soup of
 /// `n` small triangles (size ~0.1 in a cube of side 4 at the centre).

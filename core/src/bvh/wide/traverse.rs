@@ -73,14 +73,17 @@ impl RunLanes {
 /// certainly misses skipped, the others tested one by one in leaf order, each hit offered to
 /// the search ([`take_if_better`], which shrinks `cur.t_max`). The cull does not depend on the
 /// interval, so a hit in the first group leaves the second's cull valid. Returns `true` when a
-/// hit was taken (with `ANY`, at the first one, the rest untested).
+/// hit was taken (with `ANY`, at the first one, the rest untested). With `ANY` and `behind`,
+/// the kept lanes whose plane the line certainly crosses behind the origin are dropped first
+/// ([`LeafTest::behind_misses`]); without `behind` the exact test refuses them (the caller
+/// passes `false` where no such lane is likely: a leaf whose box the ray enters after its
+/// origin). The answer is the same either way.
 #[inline(always)]
 pub(super) fn leaf_hits<LT: LeafTest, L: SimdLevel, const ANY: bool>(
     level: L,
     leaf: &mut LT,
     pre: &LT::Prepared,
-    mut run: &[LeafGroup],
-    mut lanes: RunLanes,
+    (mut run, mut lanes, behind): (&[LeafGroup], RunLanes, bool),
     (cur, best): (&mut Ray, &mut Option<(u32, LT::Hit)>),
 ) -> bool {
     let mut taken = false;
@@ -99,7 +102,7 @@ pub(super) fn leaf_hits<LT: LeafTest, L: SimdLevel, const ANY: bool>(
                 ([first, first], lanes.next_group() & !missed)
             }
         };
-        if ANY && todo != 0 {
+        if ANY && behind && todo != 0 {
             todo &= !leaf.behind_misses(level, pre, cur, [&pair[0].lanes, &pair[1].lanes], todo);
         }
         if kept_hits::<LT, L, ANY>(level, leaf, pre, pair, todo, (&mut *cur, &mut *best)) {
@@ -279,7 +282,7 @@ where
             RunLanes::new(start, count),
         );
         let mut cur = *ray;
-        leaf_hits::<LT, L, ANY>(level, leaf, &pre, run, lanes, (&mut cur, best));
+        leaf_hits::<LT, L, ANY>(level, leaf, &pre, (run, lanes, true), (&mut cur, best));
         let local = TraversalStats {
             primitives_tested: u64::from(count),
             ..TraversalStats::default()
@@ -348,7 +351,9 @@ where
     /// least two lanes; `dist` their entry distances) the farthest is returned (visited next)
     /// and the others pushed in slot order, without a sort. An any-hit walk stops at its first
     /// hit, so the order changes only the work, never whether a hit is found; its interval
-    /// never shrinks, so [`WideBvh::pop_any`] needs no distances. The farthest first: a ray
+    /// never shrinks, so [`WideBvh::pop_any`] drops no entry (the entry distances are kept,
+    /// the returned child's in `enter`, for the leaf's crossed-behind cull: see
+    /// [`leaf_hits`]). The farthest first: a ray
     /// leaving a surface (shadow, ambient occlusion) enters the boxes around its origin
     /// nearest, whose triangles rarely block it, and an occluder found first ends the walk
     /// before they are tested. Prefetches each child pushed. At most `W − 1` entries are
@@ -358,8 +363,7 @@ where
         node: &WideNode<W>,
         dist: &[f32; W],
         hits: u32,
-        stack: &mut [StackEntry; STACK],
-        sp: &mut usize,
+        (stack, sp, enter): (&mut [StackEntry; STACK], &mut usize, &mut f32),
         (nodes, groups): (&[WideNode<W>], &[LeafGroup]),
     ) -> u32 {
         let mut far = hits.trailing_zeros() as usize & (W - 1);
@@ -373,14 +377,19 @@ where
         }
         let mut rest = hits & !(1 << far);
         while rest != 0 {
-            let child = node.child[rest.trailing_zeros() as usize & (W - 1)];
+            let i = rest.trailing_zeros() as usize & (W - 1);
             rest &= rest - 1;
+            let child = node.child[i];
             if let Some(slot) = stack.get_mut(*sp) {
-                slot.node = child;
+                *slot = StackEntry {
+                    node: child,
+                    t_enter: dist[i],
+                };
                 *sp += 1;
             }
             prefetch_child(nodes, groups, child);
         }
+        *enter = dist[far];
         node.child[far]
     }
 
@@ -396,7 +405,12 @@ where
         (level, wray, (nodes, groups)): (L, &PaddedRay, (&[WideNode<W>], &[LeafGroup])),
         index: u32,
         (t_min, bound): (f32, f32),
-        (stack, sp, local): (&mut [StackEntry; STACK], &mut usize, &mut TraversalStats),
+        (stack, sp, local, enter): (
+            &mut [StackEntry; STACK],
+            &mut usize,
+            &mut TraversalStats,
+            &mut f32,
+        ),
     ) -> Option<u32> {
         let node = nodes.get(index as usize)?;
         local.nodes_visited += 1;
@@ -409,8 +423,7 @@ where
                 node,
                 &dist,
                 mask,
-                stack,
-                sp,
+                (stack, sp, enter),
                 (nodes, groups),
             ));
         }
@@ -452,16 +465,20 @@ where
         stack.get(*sp).map(|e| e.node)
     }
 
-    /// The next entry of the walk: [`WideBvh::pop_any`] for the any-hit walk, [`WideBvh::pop`]
-    /// otherwise.
+    /// The next entry of the walk: [`WideBvh::pop_any`] for the any-hit walk (its entry
+    /// distance left in `enter`), [`WideBvh::pop`] otherwise (`enter` untouched).
     #[inline(always)]
     fn next_entry<const ANY: bool>(
         stack: &[StackEntry; STACK],
         sp: &mut usize,
         bound: f32,
+        enter: &mut f32,
     ) -> Option<u32> {
         if ANY {
-            Self::pop_any(stack, sp)
+            let next = Self::pop_any(stack, sp)?;
+            // The entry popped stays in its slot.
+            *enter = stack.get(*sp).map_or(f32::NEG_INFINITY, |e| e.t_enter);
+            Some(next)
         } else {
             Self::pop(stack, sp, bound)
         }
@@ -504,6 +521,9 @@ where
         // whose root is a leaf took `root_leaf`; were it to get here, the first loop leaves
         // at once.
         let mut next = self.root;
+        // With `ANY`, the entry distance of `next`'s box (the root's is not tested: the
+        // interval's start), for the leaf's crossed-behind cull; the closest-hit walk leaves it.
+        let mut enter = cur.t_min;
         // Down to the first leaf, nodes only (the interval cannot shrink before a leaf).
         let mut bound = cull_bound(cur.t_max);
         loop {
@@ -512,12 +532,12 @@ where
                     (level, &wray, tree),
                     index,
                     (cur.t_min, bound),
-                    (stack, &mut sp, &mut local),
+                    (stack, &mut sp, &mut local, &mut enter),
                 ),
                 ChildRef::Leaf { .. } => break,
                 ChildRef::Empty => None,
             };
-            match down.or_else(|| Self::next_entry::<ANY>(stack, &mut sp, bound)) {
+            match down.or_else(|| Self::next_entry::<ANY>(stack, &mut sp, bound, &mut enter)) {
                 Some(child) => next = child,
                 None => {
                     add_stats(stats, &local);
@@ -536,7 +556,7 @@ where
                         (level, &wray, tree),
                         index,
                         (cur.t_min, bound),
-                        (stack, &mut sp, &mut local),
+                        (stack, &mut sp, &mut local, &mut enter),
                     ) {
                         next = child;
                         continue;
@@ -546,7 +566,13 @@ where
                     local.primitives_tested += u64::from(count);
                     let run = leaf_groups(groups, start, count);
                     let lanes = RunLanes::new(start, count);
-                    if leaf_hits::<LT, L, ANY>(level, leaf, &pre, run, lanes, (&mut cur, best)) {
+                    // A box the ray enters after its origin lies wholly ahead of it: a triangle
+                    // there whose plane the line crosses behind the origin is nearly parallel
+                    // to the ray (rare; the exact test refuses it), so the cull is paid only in
+                    // the boxes around the origin, where a surface ray's own neighbours are.
+                    let behind = enter <= cur.t_min;
+                    let run = (run, lanes, behind);
+                    if leaf_hits::<LT, L, ANY>(level, leaf, &pre, run, (&mut cur, best)) {
                         bound = cull_bound(cur.t_max);
                         if ANY {
                             break 'walk;
@@ -556,7 +582,7 @@ where
                 ChildRef::Empty => {}
             }
             // The next entry still within the (shrunk) interval.
-            match Self::next_entry::<ANY>(stack, &mut sp, bound) {
+            match Self::next_entry::<ANY>(stack, &mut sp, bound, &mut enter) {
                 Some(child) => next = child,
                 None => break,
             }
