@@ -353,11 +353,10 @@ where
     /// hit, so the order changes only the work, never whether a hit is found; its interval
     /// never shrinks, so [`WideBvh::pop_any`] drops no entry (the entry distances are kept,
     /// the returned child's in `enter`, for the leaf's crossed-behind cull: see
-    /// [`leaf_hits`]). The farthest first: a ray
-    /// leaving a surface (shadow, ambient occlusion) enters the boxes around its origin
-    /// nearest, whose triangles rarely block it, and an occluder found first ends the walk
-    /// before they are tested. Prefetches each child pushed. At most `W − 1` entries are
-    /// pushed, as by `order_hits`.
+    /// [`leaf_hits`]). The farthest first: a ray leaving a surface (shadow, ambient
+    /// occlusion) enters the boxes around its origin nearest, whose triangles rarely block
+    /// it, and an occluder found first ends the walk before they are tested. Prefetches each
+    /// child pushed. At most `W − 1` entries are pushed, as by `order_hits`.
     #[inline(always)]
     fn push_hits_any(
         node: &WideNode<W>,
