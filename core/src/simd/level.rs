@@ -33,8 +33,10 @@ pub trait SimdLevel: Copy + sealed::Sealed {
     /// The watertight test's "crossed behind the origin" cull of two groups at once
     /// ([`Behind8`]; [`crate::triangle::WatertightRay::behind_misses2`]): bit `i` for lane
     /// `i` of the first group, bit `4 + i` for lane `i` of the second, set when the lane
-    /// formula of [`Behind8`] refuses the lane. `None` when this level has no kernel for it
-    /// (the caller then evaluates the formula lane by lane, with the same bits).
+    /// formula of [`Behind8`] refuses the lane; bit `8 + i`, `12 + i` set when the lane is
+    /// *near* (its formula's `|wn|` does not clear `bound_w`: the origin within the `f32`
+    /// bound of the plane, or NaN). `None` when this level has no kernel for it (the caller
+    /// then evaluates the formula lane by lane, with the same bits).
     fn behind_misses8(self, q: &Behind8<'_>) -> Option<u32>;
 }
 
@@ -57,7 +59,8 @@ pub trait SimdLevel: Copy + sealed::Sealed {
 ///   `crate::tolerance`, derived in `triangle/watertight/behind.rs`;
 ///
 /// and the lane's bit is set when `|wn| > bound_w`, `|dn| > bound_d` and `wn`, `dn` have
-/// opposite signs (a NaN anywhere leaves it clear).
+/// opposite signs (a NaN anywhere leaves it clear); its *near* bit when `|wn| > bound_w`
+/// fails (NaN included).
 #[derive(Clone, Copy, Debug)]
 pub struct Behind8<'a> {
     /// The first group (bits 0–3; world units).
@@ -406,11 +409,11 @@ fn behind_misses8_avx2(q: &Behind8<'_>) -> u32 {
         add(mul(rel, d_nn), mul(margin, _mm256_set1_ps(q.dir_l1))),
         tiny,
     );
-    let certain = _mm256_and_ps(
-        _mm256_cmp_ps::<_CMP_GT_OQ>(abs(wn), bound_w),
-        _mm256_cmp_ps::<_CMP_GT_OQ>(abs(dn), bound_d),
-    );
-    _mm256_movemask_ps(_mm256_and_ps(certain, _mm256_xor_ps(wn, dn))) as u32
+    let side = _mm256_cmp_ps::<_CMP_GT_OQ>(abs(wn), bound_w);
+    let certain = _mm256_and_ps(side, _mm256_cmp_ps::<_CMP_GT_OQ>(abs(dn), bound_d));
+    let refused = _mm256_movemask_ps(_mm256_and_ps(certain, _mm256_xor_ps(wn, dn))) as u32;
+    let near = !(_mm256_movemask_ps(side) as u32) & 0xFF;
+    refused | near << 8
 }
 
 /// [`SimdLevel::sort_keys8`] in one 256-bit register: the keys of [`order_key`] lane by lane,

@@ -58,19 +58,31 @@
 //! `2³⁸⁸`), and `crossed_behind` refuses the triangle on every path: `common_t` (x86-64) and
 //! `hit_t` (every target), whatever the edges decide (mixed signs or a zero `det` refuse it
 //! too).
+//!
+//! **Near lanes: the `f64` plane.** Where `|wn|` does not clear its bound the origin lies
+//! within the `f32` formula's rounding of the plane: the triangle a spawned ray starts on
+//! when the triangle is about as large as its coordinates (the spawn offset, a few ulps of the
+//! coordinates, is then below `BEHIND_REL·w_nn`), as on meshes of a few large faces. Such a
+//! lane is checked once more with the triangle's `f64` plane ([`BehindPlane::refuses`], which
+//! returns `true` exactly where the exact path's plane kernel refuses the triangle as crossed
+//! behind, x86-64 only): a few dozen `f64` operations instead of the projection, the exact
+//! edges and the plane kernel of the exact path.
 
 use super::WatertightRay;
+#[cfg(target_arch = "x86_64")]
+use super::{BehindPlane, PlaneRay};
 use crate::ray::Ray;
 use crate::simd_level::{Behind8, SimdLevel};
 use crate::tolerance::{BEHIND_F64_MARGIN, BEHIND_REL, BEHIND_TINY};
 use crate::triangle::TriangleLanes;
 
-/// The lane formula of [`Behind8`] for one triangle `p` (vertices, permuted axes), origin
-/// `o`, direction `d` and `d_l1 = (|d_0| + |d_1|) + |d_2|`: `true` when the lane is refused.
-/// The portable definition every level's kernel reproduces bit for bit.
+/// The lane formula of [`Behind8`] for one triangle `p` (vertices, world axes), origin
+/// `o`, direction `d` and `d_l1 = (|d_0| + |d_1|) + |d_2|`: whether the lane is refused, and
+/// whether it is near (`|wn|` does not clear `bound_w`). The portable definition every
+/// level's kernel reproduces bit for bit.
 #[inline(always)]
 #[must_use]
-pub(super) fn behind_lane(p: [[f32; 3]; 3], o: [f32; 3], d: [f32; 3], d_l1: f32) -> bool {
+pub(super) fn behind_lane(p: [[f32; 3]; 3], o: [f32; 3], d: [f32; 3], d_l1: f32) -> (bool, bool) {
     let [p0, p1, p2] = p;
     let a: [f32; 3] = core::array::from_fn(|j| p0[j] - o[j]);
     let e1: [f32; 3] = core::array::from_fn(|j| p1[j] - p0[j]);
@@ -95,16 +107,22 @@ pub(super) fn behind_lane(p: [[f32; 3]; 3], o: [f32; 3], d: [f32; 3], d_l1: f32)
     let a1 = (aa[0] + aa[1]) + aa[2];
     let bound_w = (BEHIND_REL * w_nn + margin * a1) + BEHIND_TINY;
     let bound_d = (BEHIND_REL * d_nn + margin * d_l1) + BEHIND_TINY;
-    wn.abs() > bound_w && dn.abs() > bound_d && (wn < 0.0) != (dn < 0.0)
+    let side = wn.abs() > bound_w;
+    (
+        side && dn.abs() > bound_d && (wn < 0.0) != (dn < 0.0),
+        !side,
+    )
 }
 
 impl WatertightRay {
     /// The lanes among `keep` (bits 0–3: `first`'s lanes, 4–7: `second`'s) whose plane the
     /// line of `ray` certainly crosses behind its origin while `ray.t_min ≥ 0` (module docs):
-    /// [`super::Watertight`] misses each of them. `0` when `t_min < 0` (or NaN). The same bits
-    /// at every level: `level`'s eight-lane kernel when it has one, else the lane formula
-    /// for the kept lanes only. A method of the prepared ray, like the edge cull, although
-    /// it reads only `ray` (it works in world axes).
+    /// [`super::Watertight`] misses each of them. Refused by the `f32` lane formula, or, for a
+    /// near lane, by the triangle's `f64` plane on x86-64 (module docs). `0` when `t_min < 0`
+    /// (or NaN). The same bits at every level: `level`'s eight-lane kernel when it has one,
+    /// else the lane formula for the kept lanes only; the `f64` plane is the same at every
+    /// level. A method of the prepared ray, like the edge cull, although it reads only `ray`
+    /// (it works in world axes).
     #[inline(always)]
     #[must_use]
     pub fn behind_misses2<L: SimdLevel>(
@@ -129,17 +147,57 @@ impl WatertightRay {
             dir,
             dir_l1,
         };
-        if let Some(mask) = level.behind_misses8(&q) {
-            return mask & keep;
+        let keep = keep & 0xFF;
+        let (refused, near) = match level.behind_misses8(&q) {
+            Some(mask) => (mask & keep, (mask >> 8) & keep),
+            None => {
+                let (mut refused, mut near) = (0, 0);
+                let mut todo = keep;
+                while todo != 0 {
+                    let bit = todo.trailing_zeros() as usize;
+                    todo &= todo - 1;
+                    let group = if bit < 4 { first } else { second };
+                    if let Some(p) = group.get(bit & 3) {
+                        let (r, n) = behind_lane(p, origin, dir, dir_l1);
+                        refused |= u32::from(r) << bit;
+                        near |= u32::from(n) << bit;
+                    }
+                }
+                (refused, near)
+            }
+        };
+        if near == 0 {
+            return refused;
         }
+        refused | near_refused(ray, [first, second], near)
+    }
+}
+
+/// The lanes among `near` (bits as in [`WatertightRay::behind_misses2`]) whose triangle's
+/// `f64` plane refuses `ray` ([`BehindPlane::refuses`]: exactly where the exact path's plane
+/// kernel refuses it as crossed behind); x86-64 only, where the exact path starts with that
+/// kernel (elsewhere `0`).
+#[cfg_attr(target_arch = "x86_64", inline(never))]
+fn near_refused(ray: &Ray, groups: [&TriangleLanes; 2], near: u32) -> u32 {
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (ray, groups, near);
+        0
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        let plane_ray = PlaneRay::new(ray);
         let mut out = 0;
-        let mut todo = keep & 0xFF;
+        let mut todo = near;
         while todo != 0 {
             let bit = todo.trailing_zeros() as usize;
             todo &= todo - 1;
-            let group = if bit < 4 { first } else { second };
-            if let Some(p) = group.get(bit & 3) {
-                out |= u32::from(behind_lane(p, origin, dir, dir_l1)) << bit;
+            let Some(p) = groups[(bit >> 2) & 1].get(bit & 3) else {
+                continue;
+            };
+            let v = p.map(glam::Vec3::from_array);
+            if BehindPlane::new(&v).is_some_and(|plane| plane.refuses(&plane_ray)) {
+                out |= 1 << bit;
             }
         }
         out
@@ -380,6 +438,140 @@ mod tests {
         assert!(
             refused > 1_000 && behind > refused,
             "{refused} refused, {behind} behind"
+        );
+    }
+
+    /// Each level's eight-lane kernel returns the lane formula's two bits for every lane:
+    /// refused (bits 0–7) and near (bits 8–15), on the lanes of `lanes_around` (NaN, `±∞`,
+    /// huge and tiny coordinates among them) and rays from the origins of spawned rays.
+    #[test]
+    fn the_kernel_returns_the_lane_formula_refused_and_near() {
+        let Some(level) = crate::test_util::avx2_or_skip(
+            "triangle::watertight::behind::tests::the_kernel_returns_the_lane_formula_refused_and_near",
+        ) else {
+            return;
+        };
+        let mut r = Lcg(5);
+        let mut near_seen = 0;
+        for i in 0..20_000 {
+            let size = [1e-3f32, 1.0, 1e3][i % 3];
+            let base = r.v(4.0 * size);
+            let tri = [base + r.v(size), base + r.v(size), base + r.v(size)];
+            let lanes = lanes_around(&mut r, tri, i % 8);
+            // Origins on and near the surface triangle's plane, and anywhere.
+            let (b1, b2) = (r.f() * 0.5, r.f() * 0.5);
+            let on = tri[0] + (tri[1] - tri[0]) * b1 + (tri[2] - tri[0]) * b2;
+            let origin = if i % 2 == 0 { on } else { on + r.v(size) };
+            let dir = unit_vec(&mut r.0);
+            let (o, d) = (origin.to_array(), dir.to_array());
+            let d_l1 = (d[0].abs() + d[1].abs()) + d[2].abs();
+            let q = Behind8 {
+                first: &lanes[0],
+                second: &lanes[1],
+                origin: o,
+                dir: d,
+                dir_l1: d_l1,
+            };
+            let got = level
+                .behind_misses8(&q)
+                .expect("the AVX2 level has the kernel");
+            for lane in 0..8 {
+                let p: [[f32; 3]; 3] = core::array::from_fn(|v| {
+                    core::array::from_fn(|j| lanes[lane / 4].v[v][j][lane % 4])
+                });
+                let (refused, near) = behind_lane(p, o, d, d_l1);
+                assert_eq!(got >> lane & 1 == 1, refused, "{lane} {q:?}");
+                assert_eq!(got >> (8 + lane) & 1 == 1, near, "{lane} {q:?}");
+                near_seen += usize::from(near);
+            }
+            assert_eq!(got >> 16, 0);
+        }
+        assert!(near_seen > 1_000, "{near_seen} near lanes");
+    }
+
+    /// A closed mesh of a few large faces (a tetrahedron, its faces as large as its
+    /// coordinates): the triangle a shadow or AO ray starts on is too large for the `f32`
+    /// formula (near), and its `f64` plane refuses it. Every refused lane is an exact miss
+    /// behind the origin at every level, and nearly every start triangle is refused, most of
+    /// them only by the `f64` plane.
+    #[test]
+    fn a_large_start_triangle_is_refused_by_its_f64_plane() {
+        let avx2 = crate::test_util::avx2_or_skip(
+            "triangle::watertight::behind::tests::a_large_start_triangle_is_refused_by_its_f64_plane",
+        );
+        let mut r = Lcg(11);
+        let (mut starts, mut refused, mut by_f64) = (0, 0, 0);
+        for i in 0..20_000 {
+            let scale = [1e-3f32, 1.0, 1e3][i % 3];
+            let shift = [Vec3::ZERO, Vec3::splat(0.5 * scale), r.v(2.0 * scale)][(i / 3) % 3];
+            let corners = [
+                Vec3::new(1.0, 1.0, 1.0),
+                Vec3::new(1.0, -1.0, -1.0),
+                Vec3::new(-1.0, 1.0, -1.0),
+                Vec3::new(-1.0, -1.0, 1.0),
+            ]
+            .map(|c| c * scale + shift + r.v(0.1 * scale));
+            let faces = [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]].map(|f| f.map(|k| corners[k]));
+            let mut lanes = [TriangleLanes::EMPTY; 2];
+            for (lane, f) in faces.iter().enumerate() {
+                lanes[0].set(lane, &f.map(|p| p.to_array()));
+            }
+            let at = i % 4;
+            let tri = faces[at];
+            let (b1, b2) = (r.f() * 0.45 + 0.05, r.f() * 0.45 + 0.05);
+            let aim = tri[0] + (tri[1] - tri[0]) * b1 + (tri[2] - tri[0]) * b2;
+            let eye = aim
+                + (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize() * (3.0 * scale)
+                + r.v(0.5 * scale);
+            let Some(h) = Watertight.intersect(&Ray::new(eye, aim - eye), &tri) else {
+                continue;
+            };
+            let hit = h.to_hit(&tri);
+            let ray = if i % 2 == 0 {
+                spawn_ray_to(&hit, eye + r.v(4.0 * scale))
+            } else {
+                let w = unit_vec(&mut r.0);
+                let w = if w.dot(hit.normal) < 0.0 { -w } else { w };
+                let mut ray = spawn_ray_to(&hit, hit.spawn_origin(w) + w * scale);
+                ray.t_max *= 0.5;
+                ray
+            };
+            let Some(pre) = WatertightRay::new(&ray) else {
+                continue;
+            };
+            let portable = pre.behind_misses2(Portable, &ray, &lanes[0], &lanes[0], 0x0F);
+            if let Some(level) = avx2 {
+                assert_eq!(
+                    pre.behind_misses2(level, &ray, &lanes[0], &lanes[0], 0x0F),
+                    portable
+                );
+            }
+            assert_eq!(portable >> 4, 0);
+            for (lane, f) in faces.iter().enumerate() {
+                if portable >> lane & 1 == 1 {
+                    assert!(exactly_behind(&ray, f), "{ray:?} {f:?}");
+                    assert_eq!(Watertight.intersect(&ray, f), None, "{ray:?} {f:?}");
+                    if let Some(level) = avx2 {
+                        assert_eq!(Watertight.intersect_prepared_on(level, &pre, &ray, f), None);
+                    }
+                }
+            }
+            starts += 1;
+            if portable >> at & 1 == 1 {
+                refused += 1;
+                let (o, d) = (ray.origin.to_array(), ray.direction.to_array());
+                let d_l1 = (d[0].abs() + d[1].abs()) + d[2].abs();
+                let (f32_refused, _) = behind_lane(tri.map(|p| p.to_array()), o, d, d_l1);
+                by_f64 += usize::from(!f32_refused);
+            }
+        }
+        assert!(
+            refused * 100 > starts * 99,
+            "start triangles refused: {refused} of {starts}"
+        );
+        assert!(
+            by_f64 * 2 > refused,
+            "{by_f64} of {refused} only by the f64 plane"
         );
     }
 }
