@@ -1,13 +1,14 @@
 //! The AVX2 + FMA end of [`super::Watertight`]'s hit path: [`finish_exact`], the rest of the
 //! test for a candidate the `f32` filter kept, compiled for AVX2 and FMA, and its `f64` plane
 //! kernel ([`plane_crossing_avx2`]), which inlines into it. Both return the portable path's
-//! bits ([`super::finish_exact`], [`super::plane_crossing`]). The one `unsafe` block enters
-//! the compiled-for-AVX2 function on the proof the [`Avx2Fma`] token carries.
+//! bits ([`super::finish_exact`], [`super::plane_crossing`]); and the `f64` plane check of the
+//! crossed-behind cull's near lanes ([`near_refused`]). Each `unsafe` block enters a
+//! compiled-for-AVX2 function on the proof the [`Avx2Fma`] token carries.
 
 use super::{Candidate, PlaneForm, TINY, crossed_behind, finish_exact_at};
 use crate::ray::Ray;
 use crate::simd_level::Avx2Fma;
-use crate::triangle::{NORMAL_CANCEL_REL, TriangleHit};
+use crate::triangle::{NORMAL_CANCEL_REL, TriangleHit, TriangleLanes};
 use glam::Vec3;
 
 /// [`finish_exact_at`] with the AVX2 plane kernel, for a caller holding the token (out of
@@ -26,6 +27,28 @@ pub(super) fn finish_exact(token: Avx2Fma, c: Candidate<'_>) -> Option<TriangleH
 #[inline(never)]
 fn finish_exact_avx2(c: Candidate<'_>) -> Option<TriangleHit> {
     finish_exact_at(|v: &[Vec3; 3], ray: &Ray| plane_crossing_avx2(v, ray), c)
+}
+
+/// [`super::behind`]'s `f64` plane check of the near lanes compiled for AVX2 and FMA, for a
+/// caller holding the token (out of line: one call per cull with near lanes).
+#[inline(always)]
+pub(super) fn near_refused(
+    token: Avx2Fma,
+    ray: &Ray,
+    groups: [&TriangleLanes; 2],
+    near: u32,
+) -> u32 {
+    let _ = token;
+    // SAFETY: the token exists, so the CPU supports AVX2 and FMA (the contract of
+    // `Avx2Fma::new_unchecked`), the only requirement of calling a function compiled for them.
+    unsafe { near_refused_avx2(ray, groups, near) }
+}
+
+/// [`near_refused`]'s body, compiled for AVX2 and FMA.
+#[target_feature(enable = "avx2,fma")]
+#[inline(never)]
+fn near_refused_avx2(ray: &Ray, groups: [&TriangleLanes; 2], near: u32) -> u32 {
+    super::behind::near_refused_at(ray, groups, near)
 }
 
 /// [`super::plane_crossing`] in 256-bit registers: each 3-vector in the lanes `x, y, z` of

@@ -169,39 +169,57 @@ impl WatertightRay {
         if near == 0 {
             return refused;
         }
-        refused | near_refused(ray, [first, second], near)
+        refused | near_refused(level, ray, [first, second], near)
     }
 }
 
 /// The lanes among `near` (bits as in [`WatertightRay::behind_misses2`]) whose triangle's
 /// `f64` plane refuses `ray` ([`BehindPlane::refuses`]: exactly where the exact path's plane
 /// kernel refuses it as crossed behind); x86-64 only, where the exact path starts with that
-/// kernel (elsewhere `0`).
-#[cfg_attr(target_arch = "x86_64", inline(never))]
-fn near_refused(ray: &Ray, groups: [&TriangleLanes; 2], near: u32) -> u32 {
+/// kernel (elsewhere `0`). One out-of-line call per level, compiled for AVX2 and FMA at
+/// that level (the same `f64` operations: the same bits).
+#[inline(always)]
+fn near_refused<L: SimdLevel>(level: L, ray: &Ray, groups: [&TriangleLanes; 2], near: u32) -> u32 {
     #[cfg(not(target_arch = "x86_64"))]
     {
-        let _ = (ray, groups, near);
+        let _ = (level, ray, groups, near);
         0
     }
     #[cfg(target_arch = "x86_64")]
     {
-        let plane_ray = PlaneRay::new(ray);
-        let mut out = 0;
-        let mut todo = near;
-        while todo != 0 {
-            let bit = todo.trailing_zeros() as usize;
-            todo &= todo - 1;
-            let Some(p) = groups[(bit >> 2) & 1].get(bit & 3) else {
-                continue;
-            };
-            let v = p.map(glam::Vec3::from_array);
-            if BehindPlane::new(&v).is_some_and(|plane| plane.refuses(&plane_ray)) {
-                out |= 1 << bit;
-            }
+        if let Some(token) = level.avx2() {
+            return super::avx2::near_refused(token, ray, groups, near);
         }
-        out
+        near_refused_portable(ray, groups, near)
     }
+}
+
+/// [`near_refused_at`] for the levels without AVX2, out of line.
+#[cfg(target_arch = "x86_64")]
+#[inline(never)]
+fn near_refused_portable(ray: &Ray, groups: [&TriangleLanes; 2], near: u32) -> u32 {
+    near_refused_at(ray, groups, near)
+}
+
+/// The body of [`near_refused`], inlined into each level's function.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(super) fn near_refused_at(ray: &Ray, groups: [&TriangleLanes; 2], near: u32) -> u32 {
+    let plane_ray = PlaneRay::new(ray);
+    let mut out = 0;
+    let mut todo = near;
+    while todo != 0 {
+        let bit = todo.trailing_zeros() as usize;
+        todo &= todo - 1;
+        let Some(p) = groups[(bit >> 2) & 1].get(bit & 3) else {
+            continue;
+        };
+        let v = p.map(glam::Vec3::from_array);
+        if BehindPlane::new(&v).is_some_and(|plane| plane.refuses(&plane_ray)) {
+            out |= 1 << bit;
+        }
+    }
+    out
 }
 
 #[cfg(test)]
