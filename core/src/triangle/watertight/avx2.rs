@@ -2,7 +2,7 @@
 //! test for a candidate the `f32` filter kept, compiled for AVX2 and FMA, and its `f64` plane
 //! kernel ([`plane_crossing_avx2`]), which inlines into it. Both return the portable path's
 //! bits ([`super::finish_exact`], [`super::plane_crossing`]); and the `f64` plane check of the
-//! crossed-behind cull's near lanes ([`near_refused`]). Each `unsafe` block enters a
+//! crossed-behind cull's near lanes ([`near_refused`], the loop of `plane.rs`). Each `unsafe` block enters a
 //! compiled-for-AVX2 function on the proof the [`Avx2Fma`] token carries.
 
 use super::{Candidate, PlaneForm, TINY, crossed_behind, finish_exact_at};
@@ -29,7 +29,8 @@ fn finish_exact_avx2(c: Candidate<'_>) -> Option<TriangleHit> {
     finish_exact_at(|v: &[Vec3; 3], ray: &Ray| plane_crossing_avx2(v, ray), c)
 }
 
-/// [`super::behind`]'s `f64` plane check of the near lanes compiled for AVX2 and FMA, for a
+/// The crossed-behind cull's `f64` plane check of its near lanes
+/// ([`super::plane::lanes_refused`]) compiled for AVX2 and FMA, for a
 /// caller holding the token (out of line: one call per cull with near lanes).
 #[inline(always)]
 pub(super) fn near_refused(
@@ -48,7 +49,7 @@ pub(super) fn near_refused(
 #[target_feature(enable = "avx2,fma")]
 #[inline(never)]
 fn near_refused_avx2(ray: &Ray, groups: [&TriangleLanes; 2], near: u32) -> u32 {
-    super::behind::near_refused_at(ray, groups, near)
+    super::plane::lanes_refused(ray, groups, near)
 }
 
 /// [`super::plane_crossing`] in 256-bit registers: each 3-vector in the lanes `x, y, z` of

@@ -69,8 +69,6 @@
 //! edges and the plane kernel of the exact path.
 
 use super::WatertightRay;
-#[cfg(target_arch = "x86_64")]
-use super::{BehindPlane, PlaneRay};
 use crate::ray::Ray;
 use crate::simd_level::{Behind8, SimdLevel};
 use crate::tolerance::{BEHIND_F64_MARGIN, BEHIND_REL, BEHIND_TINY};
@@ -194,32 +192,11 @@ fn near_refused<L: SimdLevel>(level: L, ray: &Ray, groups: [&TriangleLanes; 2], 
     }
 }
 
-/// [`near_refused_at`] for the levels without AVX2, out of line.
+/// [`super::plane::lanes_refused`] for the levels without AVX2, out of line.
 #[cfg(target_arch = "x86_64")]
 #[inline(never)]
 fn near_refused_portable(ray: &Ray, groups: [&TriangleLanes; 2], near: u32) -> u32 {
-    near_refused_at(ray, groups, near)
-}
-
-/// The body of [`near_refused`], inlined into each level's function.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-pub(super) fn near_refused_at(ray: &Ray, groups: [&TriangleLanes; 2], near: u32) -> u32 {
-    let plane_ray = PlaneRay::new(ray);
-    let mut out = 0;
-    let mut todo = near;
-    while todo != 0 {
-        let bit = todo.trailing_zeros() as usize;
-        todo &= todo - 1;
-        let Some(p) = groups[(bit >> 2) & 1].get(bit & 3) else {
-            continue;
-        };
-        let v = p.map(glam::Vec3::from_array);
-        if BehindPlane::new(&v).is_some_and(|plane| plane.refuses(&plane_ray)) {
-            out |= 1 << bit;
-        }
-    }
-    out
+    super::plane::lanes_refused(ray, groups, near)
 }
 
 #[cfg(test)]

@@ -84,6 +84,34 @@ impl<'a> PlaneRay<'a> {
     }
 }
 
+/// The lanes among `lanes` (bit `i` for lane `i` of `groups[0]`, `4 + i` of `groups[1]`)
+/// whose stored triangle's plane refuses `ray` ([`BehindPlane::refuses`]); lanes without a
+/// triangle, or whose normal cancels, are kept. Inlined into each level's caller (the
+/// crossed-behind cull's near lanes, `behind.rs`; its AVX2 form in `avx2.rs`).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(super) fn lanes_refused(
+    ray: &Ray,
+    groups: [&crate::triangle::TriangleLanes; 2],
+    lanes: u32,
+) -> u32 {
+    let plane_ray = PlaneRay::new(ray);
+    let mut out = 0;
+    let mut todo = lanes;
+    while todo != 0 {
+        let bit = todo.trailing_zeros() as usize;
+        todo &= todo - 1;
+        let Some(p) = groups[(bit >> 2) & 1].get(bit & 3) else {
+            continue;
+        };
+        let v = p.map(Vec3::from_array);
+        if BehindPlane::new(&v).is_some_and(|plane| plane.refuses(&plane_ray)) {
+            out |= 1 << bit;
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
