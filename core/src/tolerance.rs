@@ -144,10 +144,13 @@ pub const BVH_PROJECTION_PAD: f32 = gamma(16);
 pub const PAD_ORIGIN_SHIFT_REL: f32 = 2.0 * crate::float::F32_UNIT_ROUNDOFF;
 
 /// Relative bound of the `f32` values `wn`, `dn` of the watertight test's eight-lane "crossed
-/// behind the origin" cull ([`crate::triangle::WatertightRay::behind_misses2`]) against their computed
-/// permanents: `2⁻²⁰ = 16u`, twice the error bound `γ₈/(1 − γ₈) < 9u` (the derivation: `core/src/triangle/watertight/behind.rs`).
-/// Unitless.
-pub const BEHIND_REL: f32 = 1.0 / 1_048_576.0;
+/// behind the origin" cull ([`crate::triangle::WatertightRay::behind_misses2`]) against their
+/// computed permanents: `9u = 9·2⁻²⁴`, above the error bound `γ₈/(1 − γ₈) = 8u/(1 − 16u)` of
+/// `wn` (and `dn`'s smaller one) once the bound's own three roundings are taken off:
+/// `(1 − u)³·9u > 8u/(1 − 16u)` (the derivation: `core/src/triangle/watertight/behind.rs`). The
+/// smallest such multiple of `u`: a looser bound leaves more lanes near the plane, to the
+/// `f64` check. Unitless.
+pub const BEHIND_REL: f32 = 9.0 / 16_777_216.0;
 
 /// The margin that makes the `f64` filters of the exact path pass for every base vertex it
 /// may choose: `2⁻⁴⁰` of `m²·|·|₁` (the derivation: `core/src/triangle/watertight/behind.rs`; `2¹⁰` times what they need). Unitless (per

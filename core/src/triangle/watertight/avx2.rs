@@ -2,8 +2,8 @@
 //! test for a candidate the `f32` filter kept, compiled for AVX2 and FMA, and its `f64` plane
 //! kernel ([`plane_crossing_avx2`]), which inlines into it. Both return the portable path's
 //! bits ([`super::finish_exact`], [`super::plane_crossing`]); and the `f64` plane check of the
-//! crossed-behind cull's near lanes ([`near_refused`], the loop of `plane.rs`). Each `unsafe` block enters a
-//! compiled-for-AVX2 function on the proof the [`Avx2Fma`] token carries.
+//! crossed-behind cull's near lanes ([`near_refused`], the loop of `plane.rs`). Each `unsafe`
+//! block enters a compiled-for-AVX2 function on the proof the [`Avx2Fma`] token carries.
 
 use super::{Candidate, PlaneForm, TINY, crossed_behind, finish_exact_at};
 use crate::ray::Ray;
@@ -54,9 +54,9 @@ fn near_refused_avx2(ray: &Ray, groups: [&TriangleLanes; 2], near: u32) -> u32 {
 
 /// [`super::plane_crossing`] in 256-bit registers: each 3-vector in the lanes `x, y, z` of
 /// one `f64` register (the fourth lane zero, never read back), the same IEEE operations in the
-/// same order as the portable definition — products, differences and dot products summed `(x + y) + z`, never fused; `min`, `max` as
-/// `a < b ? a : b`, `a > b ? a : b` (`minps`, `maxps`, `maxsd`), NaN handling included — so
-/// the same bits.
+/// same order as the portable definition — products, differences and dot products summed
+/// `(x + y) + z`, never fused; `min`, `max` as `a < b ? a : b`, `a > b ? a : b` (`minps`,
+/// `maxps`, `maxsd`), NaN handling included — so the same bits.
 #[target_feature(enable = "avx2,fma")]
 #[inline]
 fn plane_crossing_avx2(v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {

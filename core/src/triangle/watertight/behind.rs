@@ -26,10 +26,12 @@
 //! difference each), their product, the difference in `n`, the product with `a_i`, and two
 //! of the sum `(x + y) + z`; so `|wn − wn_exact| ≤ γ₈·W` with `W = |a|·N` of the exact
 //! values. The computed permanent `w_nn` has the same roundings on positive terms, so
-//! `W ≤ w_nn/(1 − γ₈)`, and the error is at most `γ₈/(1 − γ₈)·w_nn < 9u·w_nn`. `dn` has one
-//! rounding less per term (the direction is an input): `< 8u·d_nn`. [`BEHIND_REL`](crate::tolerance::BEHIND_REL) `= 16u` is
-//! twice the larger: `|value| > BEHIND_REL·perm` leaves the exact value beyond the error, of
-//! the same sign, with the same margin again.
+//! `W ≤ w_nn/(1 − γ₈)`, and the error is at most `γ₈/(1 − γ₈)·w_nn = 8u/(1 − 16u)·w_nn`.
+//! `dn` has one rounding less per term (the direction is an input): `< 8u·d_nn`.
+//! [`BEHIND_REL`](crate::tolerance::BEHIND_REL) `= 9u`: the computed bound, three roundings
+//! (the product, two sums) below its exact value, is at least `(1 − u)³·9u·perm > 8u/(1 −
+//! 16u)·perm` plus the margin terms, so `|value| >` bound leaves the exact value beyond the
+//! error, of the same sign, by at least the margin terms below.
 //!
 //! **Underflow and overflow.** A product below the normal range rounds absolutely (at most
 //! `2⁻¹⁵⁰`; sums and differences of `f32` are then exact): at most two such in each `n_i`,
@@ -438,7 +440,8 @@ mod tests {
 
     /// Each level's eight-lane kernel returns the lane formula's two bits for every lane:
     /// refused (bits 0–7) and near (bits 8–15), on the lanes of `lanes_around` (NaN, `±∞`,
-    /// huge and tiny coordinates among them) and rays from the origins of spawned rays.
+    /// huge and tiny coordinates among them) and rays from origins on the surface triangle's
+    /// plane, near it, and anywhere.
     #[test]
     fn the_kernel_returns_the_lane_formula_refused_and_near() {
         let Some(level) = crate::test_util::avx2_or_skip(
@@ -487,8 +490,8 @@ mod tests {
     /// A closed mesh of a few large faces (a tetrahedron, its faces as large as its
     /// coordinates): the triangle a shadow or AO ray starts on is too large for the `f32`
     /// formula (near), and its `f64` plane refuses it. Every refused lane is an exact miss
-    /// behind the origin at every level, and nearly every start triangle is refused, most of
-    /// them only by the `f64` plane.
+    /// behind the origin at every level, and nearly every start triangle is refused, a fifth
+    /// of them or more only by the `f64` plane (about a third with this seed).
     #[test]
     fn a_large_start_triangle_is_refused_by_its_f64_plane() {
         let avx2 = crate::test_util::avx2_or_skip(
@@ -565,7 +568,7 @@ mod tests {
             "start triangles refused: {refused} of {starts}"
         );
         assert!(
-            by_f64 * 2 > refused,
+            by_f64 * 5 > refused,
             "{by_f64} of {refused} only by the f64 plane"
         );
     }
