@@ -378,6 +378,16 @@ fn behind_misses8_avx2(q: &Behind8<'_>) -> u32 {
     let diff3 =
         |u: [__m256; 3], v: [__m256; 3]| [sub(u[0], v[0]), sub(u[1], v[1]), sub(u[2], v[2])];
     let (a, e1, e2) = (diff3(p0, o), diff3(p1, p0), diff3(p2, p0));
+    // The edges' own terms first (the margin, from `|e1| + |e2|`), so that the edges are dead
+    // once the normal's products are taken: fewer live registers, the same operations.
+    let s = [
+        add(abs(e1[0]), abs(e2[0])),
+        add(abs(e1[1]), abs(e2[1])),
+        add(abs(e1[2]), abs(e2[2])),
+    ];
+    let m = _mm256_max_ps(_mm256_max_ps(s[0], s[1]), s[2]);
+    let tiny = _mm256_set1_ps(BEHIND_TINY);
+    let margin = add(mul(_mm256_set1_ps(BEHIND_F64_MARGIN), mul(m, m)), tiny);
     let (yz, zy) = (mul(e1[1], e2[2]), mul(e1[2], e2[1]));
     let (zx, xz) = (mul(e1[2], e2[0]), mul(e1[0], e2[2]));
     let (xy, yx) = (mul(e1[0], e2[1]), mul(e1[1], e2[0]));
@@ -391,24 +401,19 @@ fn behind_misses8_avx2(q: &Behind8<'_>) -> u32 {
         add(add(mul(u[0], v[0]), mul(u[1], v[1])), mul(u[2], v[2]))
     };
     let abs3 = |u: [__m256; 3]| [abs(u[0]), abs(u[1]), abs(u[2])];
-    let aa = abs3(a);
-    let (wn, w_nn) = (dot(a, n), dot(aa, nn));
-    let (dn, d_nn) = (dot(d, n), dot(abs3(d), nn));
-    let s = [
-        add(abs(e1[0]), abs(e2[0])),
-        add(abs(e1[1]), abs(e2[1])),
-        add(abs(e1[2]), abs(e2[2])),
-    ];
-    let m = _mm256_max_ps(_mm256_max_ps(s[0], s[1]), s[2]);
-    let tiny = _mm256_set1_ps(BEHIND_TINY);
-    let margin = add(mul(_mm256_set1_ps(BEHIND_F64_MARGIN), mul(m, m)), tiny);
-    let a1 = add(add(aa[0], aa[1]), aa[2]);
     let rel = _mm256_set1_ps(BEHIND_REL);
-    let bound_w = add(add(mul(rel, w_nn), mul(margin, a1)), tiny);
     let bound_d = add(
-        add(mul(rel, d_nn), mul(margin, _mm256_set1_ps(q.dir_l1))),
+        add(
+            mul(rel, dot(abs3(d), nn)),
+            mul(margin, _mm256_set1_ps(q.dir_l1)),
+        ),
         tiny,
     );
+    let dn = dot(d, n);
+    let aa = abs3(a);
+    let a1 = add(add(aa[0], aa[1]), aa[2]);
+    let (wn, w_nn) = (dot(a, n), dot(aa, nn));
+    let bound_w = add(add(mul(rel, w_nn), mul(margin, a1)), tiny);
     let side = _mm256_cmp_ps::<_CMP_GT_OQ>(abs(wn), bound_w);
     let certain = _mm256_and_ps(side, _mm256_cmp_ps::<_CMP_GT_OQ>(abs(dn), bound_d));
     let refused = _mm256_movemask_ps(_mm256_and_ps(certain, _mm256_xor_ps(wn, dn))) as u32;
