@@ -332,21 +332,31 @@ fn common_t(plane: impl PlaneKernel, c: Candidate<'_>, t_sheared: f64) -> Option
 /// hit: every such `t` lies within `AGREE_REL·(|t_s| + max|zᵢ|)` of `t_s` up to the rounding
 /// [`ABOVE_REL`] adds (the plane form of the common case by [`plane_exact_enough`], the
 /// sheared form itself, or [`hit_t`]'s clamped plane form), so if `t_s` minus [`ABOVE_REL`] of
-/// `|t_s| + max|zᵢ|` is at least the `f32` after `t_max`, every rounding of `t` to `f32` is
-/// above `t_max`. A closed mesh's far face after the near one is found (in the same leaf,
-/// later in lane order) is refused so, before the plane kernel. `false` for an unbounded
-/// `t_max` and for a NaN anywhere.
+/// `|t_s| + max|zᵢ|` is at least `t_max + 2⁻²³·|t_max| + 2⁻¹⁴⁹` (exact in `f64`, and at least
+/// the `f32` after a finite `t_max`: the spacing there is at most `2⁻²³·|t_max|`, or `2⁻¹⁴⁹`
+/// among the subnormals), every rounding of `t` to `f32` is above `t_max`. A closed mesh's far
+/// face after the near one is found (in the same leaf, later in lane order) is refused so,
+/// before the plane kernel. `false` for an unbounded `t_max` and for a NaN anywhere (a NaN
+/// depth makes `t_s` NaN).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn certainly_above(ray: &Ray, t_sheared: f64, z: [f32; 3]) -> bool {
+    /// `2⁻²³` and `2⁻¹⁴⁹`: the largest `f32` spacing relative to a normal value, and the
+    /// subnormal spacing (ray parameter).
+    const ULP_REL: f64 = 1.0 / 8_388_608.0;
+    const SUBNORMAL: f64 = 1.401_298_464_324_817e-45;
+    let t_max = f64::from(ray.t_max);
     ray.t_max < f32::INFINITY
-        && t_sheared - ABOVE_REL * (t_sheared.abs() + max_abs(z)) >= f64::from(ray.t_max.next_up())
+        && t_sheared - ABOVE_REL * (t_sheared.abs() + max_abs(z))
+            >= t_max + t_max.abs() * ULP_REL + SUBNORMAL
 }
 
-/// `max|zᵢ|` in `f64` (exact).
+/// `max|zᵢ|` in `f64` (exact; for a NaN depth some other value, with which `t_s`, NaN then,
+/// decides nothing).
 #[inline(always)]
 fn max_abs(z: [f32; 3]) -> f64 {
-    f64::from(z[0].abs().max(z[1].abs()).max(z[2].abs()))
+    let max = |a: f32, b: f32| if a > b { a } else { b };
+    f64::from(max(max(z[0].abs(), z[1].abs()), z[2].abs()))
 }
 
 /// The bound within which the plane form must agree with the sheared form `t_sheared` to be
