@@ -226,10 +226,7 @@ impl WatertightRay {
 /// `f64` is the tighter of the two and agrees with it: its crossing lies in the triangle's box
 /// and within the sheared form's bound. That fixes the case where the `f32` depths swamp `t`
 /// (an origin near the plane, seen along a dominant axis the triangle extends in) without
-/// trusting the plane form for grazing rays whose edge decisions were within rounding. The
-/// plane form is held within `2⁻²⁰·(|t_s| + max|zᵢ|)` of the sheared form `t_s` (`zᵢ` the
-/// sheared depths), so that a candidate whose `t_s` lies beyond `t_max` by more is refused
-/// before the plane form is computed.
+/// trusting the plane form for grazing rays whose edge decisions were within rounding.
 ///
 /// This is the default intersector; it handles triangles from `1e-20` to `1e20` (`f64` has the
 /// range). Domain of the exact edge signs: the sheared coordinates carry only relative `f32`
@@ -283,15 +280,6 @@ const PLANE_EXACT_ENOUGH: f64 = 1.0 / 67_108_864.0;
 /// case and far below any disagreement that signals a grazing ray. Unitless.
 const AGREE_REL: f64 = 1.0 / 1_048_576.0;
 
-/// How far below the sheared form `t_s` any `t` of the exact path can lie, relative to
-/// `|t_s| + max|zᵢ|`: [`AGREE_REL`] (the plane form is only returned within it of `t_s`:
-/// [`plane_exact_enough`], and [`hit_t`]'s cold branch clamps to it) plus `2⁻⁴⁰` for the
-/// rounding of that bound and of this one in `f64` (each a few `2⁻⁵³` of `|t_s| + max|zᵢ|`).
-/// A candidate whose `t_s` lies more than this above `t_max` is refused before the plane
-/// kernel ([`certainly_above`]). Unitless.
-#[cfg(target_arch = "x86_64")]
-const ABOVE_REL: f64 = AGREE_REL + 1.0 / 1_099_511_627_776.0;
-
 /// A triangle the watertight test's `f32` filter did not reject, with all the rest of its hit
 /// path reads: the ray and its preparation, the triangle, its sheared vertices `(x', y', z')`
 /// ([`WatertightRay::project_triangle`]) and its exact edge functions ([`exact_edges`]).
@@ -319,51 +307,14 @@ impl<F: Fn(&[Vec3; 3], &Ray) -> Option<PlaneForm>> PlaneKernel for F {}
 /// takes, so where this returns `t`, `hit_t` returns the same `t` (or no hit for `−∞`).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn common_t(plane: impl PlaneKernel, c: Candidate<'_>, t_sheared: f64) -> Option<f64> {
+fn common_t(plane: impl PlaneKernel, c: Candidate<'_>, det: f64) -> Option<f64> {
     let plane = plane(c.v, c.ray)?;
     if plane.behind {
         return Some(f64::NEG_INFINITY);
     }
-    (plane.in_box && plane_exact_enough(&plane, t_sheared, c.sheared.2)).then_some(plane.t)
-}
-
-/// `true` when every `t` the exact path can return for a candidate with sheared form
-/// `t_sheared` and sheared depths `z` rounds to an `f32` above `ray.t_max`, so that it is no
-/// hit: every such `t` lies within `AGREE_REL·(|t_s| + max|zᵢ|)` of `t_s` up to the rounding
-/// [`ABOVE_REL`] adds (the plane form of the common case by [`plane_exact_enough`], the
-/// sheared form itself, or [`hit_t`]'s clamped plane form), so if `t_s` minus [`ABOVE_REL`] of
-/// `|t_s| + max|zᵢ|` is at least `t_max + 2⁻²³·|t_max| + 2⁻¹⁴⁹` (exact in `f64`, and at least
-/// the `f32` after a finite `t_max`: the spacing there is at most `2⁻²³·|t_max|`, or `2⁻¹⁴⁹`
-/// among the subnormals), every rounding of `t` to `f32` is above `t_max`. A closed mesh's far
-/// face after the near one is found (in the same leaf, later in lane order) is refused so,
-/// before the plane kernel. `false` for an unbounded `t_max` and for a NaN anywhere (a NaN
-/// depth makes `t_s` NaN).
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn certainly_above(ray: &Ray, t_sheared: f64, z: [f32; 3]) -> bool {
-    /// `2⁻²³` and `2⁻¹⁴⁹`: the largest `f32` spacing relative to a normal value, and the
-    /// subnormal spacing (ray parameter).
-    const ULP_REL: f64 = 1.0 / 8_388_608.0;
-    const SUBNORMAL: f64 = 1.401_298_464_324_817e-45;
-    let t_max = f64::from(ray.t_max);
-    ray.t_max < f32::INFINITY
-        && t_sheared - ABOVE_REL * (t_sheared.abs() + max_abs(z))
-            >= t_max + t_max.abs() * ULP_REL + SUBNORMAL
-}
-
-/// `max|zᵢ|` in `f64` (exact; for a NaN depth some other value, with which `t_s`, NaN then,
-/// decides nothing).
-#[inline(always)]
-fn max_abs(z: [f32; 3]) -> f64 {
-    let max = |a: f32, b: f32| if a > b { a } else { b };
-    f64::from(max(max(z[0].abs(), z[1].abs()), z[2].abs()))
-}
-
-/// The bound within which the plane form must agree with the sheared form `t_sheared` to be
-/// returned: [`AGREE_REL`] of `|t_sheared| + max|zᵢ|` (sheared depths `z`), ray parameter.
-#[inline(always)]
-fn agree_bound(t_sheared: f64, z: [f32; 3]) -> f64 {
-    AGREE_REL * (t_sheared.abs() + max_abs(z))
+    let z = c.sheared.2;
+    let t_sheared = sheared_t(c.edges, z, det);
+    (plane.in_box && plane_exact_enough(&plane, t_sheared, z)).then_some(plane.t)
 }
 
 /// The plane form of `t` for the ray `ray` and the triangle `v` when the `v0`-based normal
@@ -474,8 +425,9 @@ fn plane_form(
 /// ([`PLANE_EXACT_ENOUGH`]); nothing can beat it once rounded to `f32`.
 #[inline(always)]
 fn plane_exact_enough(plane: &PlaneForm, t_sheared: f64, z: [f32; 3]) -> bool {
+    let max_abs_z = f64::from(z[0].abs().max(z[1].abs()).max(z[2].abs()));
     plane.err <= PLANE_EXACT_ENOUGH * plane.t.abs()
-        && (plane.t - t_sheared).abs() <= agree_bound(t_sheared, z)
+        && (plane.t - t_sheared).abs() <= AGREE_REL * (t_sheared.abs() + max_abs_z)
 }
 
 /// `t` of a hit that passed the edge tests (see [`Watertight`]): the plane form when its
@@ -592,21 +544,9 @@ fn hit_t(c: Candidate<'_>, det: f64) -> Option<f64> {
     // The plane form only refines the sheared one: it must lie within the sheared form's
     // first-order bound (else the edge decisions were within rounding and the exact line
     // crosses the plane away from the reported barycentrics), and be the tighter of the two.
-    // Clamped to within `agree_bound` of the sheared form, as the common case is: every `t`
-    // then lies there (which `certainly_above` relies on); a clamped value lies between the two
-    // forms, so its error stays within the sheared form's bound.
     let consistent = (t_plane - t_sheared).abs() <= first_order + err_plane;
     Some(if consistent && err_plane <= err_sheared {
-        let b = agree_bound(t_sheared, z);
-        let (lo, hi) = (t_sheared - b, t_sheared + b);
-        // Not `f64::clamp`, which panics on a NaN bound (an infinite `t_sheared`).
-        if t_plane < lo {
-            lo
-        } else if t_plane > hi {
-            hi
-        } else {
-            t_plane
-        }
+        t_plane
     } else {
         t_sheared
     })
@@ -635,17 +575,10 @@ fn finish_exact_at(plane: impl PlaneKernel, c: Candidate<'_>) -> Option<Triangle
     if !(det != 0.0 && det.is_finite()) {
         return None;
     }
-    // On x86-64 a candidate certainly beyond `t_max` refused, then the common case of `t`
-    // first, alone (see `hit_t`); elsewhere `hit_t` only (the Cortex-M4F image's size; the
-    // answer is the same).
+    // On x86-64 the common case of `t` first, alone (see `hit_t`); elsewhere `hit_t` only
+    // (the Cortex-M4F image's size).
     #[cfg(target_arch = "x86_64")]
-    let common = {
-        let t_sheared = sheared_t(edges, c.sheared.2, det);
-        if certainly_above(ray, t_sheared, c.sheared.2) {
-            return None;
-        }
-        common_t(plane, c, t_sheared)
-    };
+    let common = common_t(plane, c, det);
     #[cfg(not(target_arch = "x86_64"))]
     let common = {
         let _ = plane;

@@ -413,49 +413,6 @@ fn prepare_valid_equals_prepare_on_valid_rays() {
     assert_eq!(Watertight.prepare(&invalid), None);
 }
 
-/// Case `i` of the exact path's generator: a triangle of size `1e-3` to `1e3` about a hundred
-/// times its size from the world origin (every seventh a sliver: the third vertex almost on
-/// the first edge) and a ray through a point of it (every third from near its plane: the
-/// direction almost along it), drawn from `s`.
-fn sampled_crossing(s: &mut u64, i: usize) -> ([Vec3; 3], Ray) {
-    use crate::test_util::lcg;
-    let v3 = |s: &mut u64, k: f32| Vec3::new(lcg(s) - 0.5, lcg(s) - 0.5, lcg(s) - 0.5) * k;
-    let scale = 10f32.powf(lcg(s) * 6.0 - 3.0);
-    let centre = v3(s, 100.0 * scale);
-    let mut v = [
-        centre + v3(s, scale),
-        centre + v3(s, scale),
-        centre + v3(s, scale),
-    ];
-    if i.is_multiple_of(7) {
-        v[2] = v[0] + (v[1] - v[0]) * lcg(s) + v3(s, scale * 1e-5);
-    }
-    let target = v[0] + (v[1] - v[0]) * (lcg(s) * 0.5) + (v[2] - v[0]) * (lcg(s) * 0.5);
-    let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
-    let origin = if i.is_multiple_of(3) {
-        target + v3(s, 10.0 * scale) - n * (n.dot(v3(s, 10.0 * scale)) * 0.999)
-    } else {
-        target + v3(s, 50.0 * scale)
-    };
-    (v, Ray::new(origin, target - origin))
-}
-
-/// The prepared ray, the sheared vertices, the exact edges and `det` of `ray` and `v`, as the
-/// exact path receives them; `None` where it is never reached (an invalid ray) or refuses at
-/// once (mixed edge signs, a zero or non-finite `det`).
-#[allow(clippy::type_complexity)]
-fn exact_inputs(
-    ray: &Ray,
-    v: &[Vec3; 3],
-) -> Option<(WatertightRay, ([f32; 3], [f32; 3], [f32; 3]), [f64; 3], f64)> {
-    let pre = WatertightRay::new(ray)?;
-    let sheared = pre.project_triangle(ray.origin, v);
-    let edges = exact_edges(sheared.0, sheared.1);
-    let mixed = edges.iter().any(|&e| e < 0.0) && edges.iter().any(|&e| e > 0.0);
-    let det = edges[0] + edges[1] + edges[2];
-    (!mixed && det != 0.0 && det.is_finite()).then_some((pre, sheared, edges, det))
-}
-
 /// On x86-64, `finish_exact` takes `common_t`'s answer whenever it has one: that must be the
 /// bits `hit_t` (the only path elsewhere) returns for the same inputs, at every SIMD level. Random triangles of
 /// every size from 1e-3 to 1e3 at every distance, ordinary rays and rays whose origin lies
@@ -464,13 +421,42 @@ fn exact_inputs(
 #[cfg(target_arch = "x86_64")]
 #[test]
 fn the_common_case_gives_the_general_paths_bits() {
+    use crate::test_util::lcg;
     let mut s = 11u64;
     let (mut common, mut general_only) = (0usize, 0usize);
     for i in 0..40_000 {
-        let (v, ray) = sampled_crossing(&mut s, i);
-        let Some((pre, sheared, edges, det)) = exact_inputs(&ray, &v) else {
+        let v3 = |s: &mut u64, k: f32| Vec3::new(lcg(s) - 0.5, lcg(s) - 0.5, lcg(s) - 0.5) * k;
+        let scale = 10f32.powf(lcg(&mut s) * 6.0 - 3.0);
+        let centre = v3(&mut s, 100.0 * scale);
+        let mut v = [
+            centre + v3(&mut s, scale),
+            centre + v3(&mut s, scale),
+            centre + v3(&mut s, scale),
+        ];
+        if i % 7 == 0 {
+            // A sliver: the third vertex almost on the first edge.
+            v[2] = v[0] + (v[1] - v[0]) * lcg(&mut s) + v3(&mut s, scale * 1e-5);
+        }
+        let target =
+            v[0] + (v[1] - v[0]) * (lcg(&mut s) * 0.5) + (v[2] - v[0]) * (lcg(&mut s) * 0.5);
+        let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+        let origin = if i % 3 == 0 {
+            // Near the plane: the direction runs almost along it.
+            target + v3(&mut s, 10.0 * scale) - n * (n.dot(v3(&mut s, 10.0 * scale)) * 0.999)
+        } else {
+            target + v3(&mut s, 50.0 * scale)
+        };
+        let ray = Ray::new(origin, target - origin);
+        let Some(pre) = WatertightRay::new(&ray) else {
             continue;
         };
+        let sheared = pre.project_triangle(ray.origin, &v);
+        let edges = exact_edges(sheared.0, sheared.1);
+        let mixed = edges.iter().any(|&e| e < 0.0) && edges.iter().any(|&e| e > 0.0);
+        let det = edges[0] + edges[1] + edges[2];
+        if mixed || det == 0.0 || !det.is_finite() {
+            continue;
+        }
         let c = Candidate {
             ray: &ray,
             pre: &pre,
@@ -479,15 +465,14 @@ fn the_common_case_gives_the_general_paths_bits() {
             edges,
         };
         let general = hit_t(c, det);
-        let t_sheared = sheared_t(edges, sheared.2, det);
-        let portable = common_t(plane_crossing, c, t_sheared);
+        let portable = common_t(plane_crossing, c, det);
         if let Some(token) = crate::test_util::avx2_or_skip(
             "triangle::watertight::tests::the_common_case_gives_the_general_paths_bits",
         ) {
             let avx2 = common_t(
                 |v: &[Vec3; 3], r: &Ray| avx2::plane_crossing(token, v, r),
                 c,
-                t_sheared,
+                det,
             );
             assert_eq!(avx2.map(f64::to_bits), portable.map(f64::to_bits));
         }
@@ -505,74 +490,6 @@ fn the_common_case_gives_the_general_paths_bits() {
     }
     assert!(common > 10_000, "{common} hits took the common case");
     assert!(general_only > 0, "no hit took the general path");
-}
-
-/// The refusal of a candidate beyond `t_max` (`certainly_above`) drops no hit of the
-/// interval. Two checks on the generator of `the_common_case_gives_the_general_paths_bits`
-/// (slivers, origins near the plane, rays grazing it):
-/// * every `t` of the general path (`hit_t`, whose cold branch clamps the plane form) lies
-///   within `agree_bound` of the sheared form, up to the rounding `ABOVE_REL` adds, as the
-///   common case's does by its own check;
-/// * with `t_max` at the `f32`s around a hit's `t` (1 to 400 below, equal, 1 to 40 above) the
-///   answer is the unbounded ray's hit where `t ≤ t_max` and none otherwise, bit for bit (the
-///   oracle: the same test with `t_max = ∞`, where nothing is refused).
-///
-/// On x86-64 the refusal must also have fired (below the hit by more than its bound).
-#[test]
-fn a_candidate_refused_beyond_t_max_is_no_hit_of_the_interval() {
-    let mut s = 23u64;
-    let (mut hits, mut general, mut refused) = (0usize, 0usize, 0usize);
-    for i in 0..40_000 {
-        let (v, ray) = sampled_crossing(&mut s, i);
-        let inputs = exact_inputs(&ray, &v);
-        if let Some((pre, sheared, edges, det)) = &inputs {
-            let (sheared, edges, det) = (*sheared, *edges, *det);
-            let c = Candidate {
-                ray: &ray,
-                pre,
-                v: &v,
-                sheared,
-                edges,
-            };
-            let t_sheared = sheared_t(edges, sheared.2, det);
-            if let Some(t) = hit_t(c, det).filter(|t| t.is_finite()) {
-                general += 1;
-                let m = f64::from(sheared.2.iter().fold(0f32, |m, z| m.max(z.abs())));
-                assert!(
-                    (t - t_sheared).abs() <= AGREE_REL * (t_sheared.abs() + m) * (1.0 + 1e-9),
-                    "{ray:?} {v:?}: t {t}, sheared {t_sheared}"
-                );
-            }
-        }
-        let Some(h) = Watertight.intersect(&ray, &v) else {
-            continue;
-        };
-        hits += 1;
-        for k in [-400i32, -40, -3, -1, 0, 1, 3, 40] {
-            let t_max = f32::from_bits(h.t.to_bits().wrapping_add_signed(k));
-            let bounded = Ray::with_interval(ray.origin, ray.direction, 0.0, t_max);
-            let want = (h.t <= t_max).then_some(h);
-            assert_eq!(
-                Watertight.intersect(&bounded, &v),
-                want,
-                "{bounded:?} {v:?}"
-            );
-            #[cfg(target_arch = "x86_64")]
-            if let Some((_, sheared, edges, det)) = &inputs
-                && k < 0
-            {
-                let t_sheared = sheared_t(*edges, sheared.2, *det);
-                refused += usize::from(certainly_above(&bounded, t_sheared, sheared.2));
-            }
-        }
-    }
-    assert!(
-        hits > 10_000 && general > 10_000,
-        "{hits} hits, {general} general"
-    );
-    #[cfg(target_arch = "x86_64")]
-    assert!(refused > 1_000, "{refused} refusals");
-    let _ = refused;
 }
 
 /// Rays that start within rounding of a triangle's plane (a point of the triangle computed in
