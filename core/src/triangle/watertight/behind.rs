@@ -438,6 +438,35 @@ mod tests {
         );
     }
 
+    /// The rule worked by hand where the direction's margin decides (module docs): a needle of
+    /// length 1 and width `h` in the plane `x = 0` (`n = (−h, 0, 0)`, `m = 1`), the origin
+    /// `(1, 0, 0.5)` (`wn = h`, its bound about `1.5·2⁻⁴⁰`), the direction `(2⁻¹⁰, 0, 1)`
+    /// leaving the plane nearly parallel to it (`dn = −2⁻¹⁰·h`, `|d|₁ = 1 + 2⁻¹⁰`). At
+    /// `h = 2⁻³⁵`, `|dn| = 2⁻⁴⁵` clears `BEHIND_REL·d_nn` by far but not
+    /// `BEHIND_F64_MARGIN·m²·|d|₁ ≈ 2⁻⁴⁰`: kept (and not near: `|wn|` clears its bound). At
+    /// `h = 2⁻²⁰`, `|dn| = 2⁻³⁰` clears it: refused. Both levels, through the cull's own `|d|₁`.
+    #[test]
+    fn the_direction_margin_keeps_a_needle_crossed_nearly_parallel() {
+        let avx2 = crate::test_util::avx2_or_skip(
+            "triangle::watertight::behind::tests::the_direction_margin_keeps_a_needle_crossed_nearly_parallel",
+        );
+        let ray = Ray::new(
+            Vec3::new(1.0, 0.0, 0.5),
+            Vec3::new(2f32.powi(-10), 0.0, 1.0),
+        );
+        let pre = WatertightRay::new(&ray).unwrap();
+        for (h, refused) in [(2f32.powi(-35), 0), (2f32.powi(-20), 1)] {
+            let mut lanes = [TriangleLanes::EMPTY; 2];
+            lanes[0].set(0, &[[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, h, 0.0]]);
+            let got = pre.behind_misses2(Portable, &ray, &lanes[0], &lanes[1], 0xFF);
+            assert_eq!(got, refused, "width {h}");
+            if let Some(level) = avx2 {
+                let got = pre.behind_misses2(level, &ray, &lanes[0], &lanes[1], 0xFF);
+                assert_eq!(got, refused, "width {h}, AVX2");
+            }
+        }
+    }
+
     /// Each level's eight-lane kernel returns the lane formula's two bits for every lane:
     /// refused (bits 0–7) and near (bits 8–15), on the lanes of `lanes_around` (NaN, `±∞`,
     /// huge and tiny coordinates among them) and rays from origins on the surface triangle's
