@@ -179,4 +179,24 @@ mod tests {
             "{spawned_refused} of {spawned}"
         );
     }
+
+    /// A ray parallel to the plane `x = 1` (`d·n = 0` and `|d|·N = 0` exactly: the filter's
+    /// tie) is not refused from either side, since the plane kernel's filter is strict and
+    /// returns no form for it; the same plane refuses a ray leaving it (`t = −1`).
+    #[test]
+    fn a_ray_parallel_to_the_plane_is_not_refused() {
+        let v = [
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(1.0, 0.0, 1.0),
+        ];
+        let plane = BehindPlane::new(&v).unwrap();
+        for x in [0.0f32, 2.0] {
+            let parallel = Ray::new(Vec3::new(x, 0.5, 0.5), Vec3::Z);
+            assert!(!plane.refuses(&PlaneRay::new(&parallel)), "origin x = {x}");
+            assert_eq!(super::super::plane_crossing(&v, &parallel), None);
+        }
+        let leaving = Ray::new(Vec3::new(2.0, 0.5, 0.5), Vec3::X);
+        assert!(plane.refuses(&PlaneRay::new(&leaving)));
+    }
 }
