@@ -54,7 +54,11 @@ impl BehindPlane {
         }
         let w = self.v0 - r.o;
         let (wn, w_nn) = (w.dot(self.n), w.abs().dot(self.nn));
-        wn / dn < 0.0 && crossed_behind(r.ray, wn, w_nn, dn)
+        // The kernel's `t = wn/dn < 0` without the quotient: `crossed_behind` asks for `wn` and
+        // `dn` of opposite signs, both non-zero (each clears its filter), and their quotient
+        // cannot underflow to `−0` (`f32` inputs: a `wn` that clears its filter is at least
+        // about `2⁻⁵⁵⁰`, `|dn|` at most `2³⁸⁸`).
+        crossed_behind(r.ray, wn, w_nn, dn)
     }
 }
 
