@@ -189,11 +189,7 @@ mod tests {
     /// returns no form for it; the same plane refuses a ray leaving it (`t = −1`).
     #[test]
     fn a_ray_parallel_to_the_plane_is_not_refused() {
-        let v = [
-            Vec3::new(1.0, 0.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-            Vec3::new(1.0, 0.0, 1.0),
-        ];
+        let v = [[1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [1.0, 0.0, 1.0]].map(Vec3::from_array);
         let plane = BehindPlane::new(&v).unwrap();
         for x in [0.0f32, 2.0] {
             let parallel = Ray::new(Vec3::new(x, 0.5, 0.5), Vec3::Z);
