@@ -5,7 +5,7 @@ use crate::aabb::Aabb;
 use crate::bvh::{BuildOptions, Bvh, BvhError, BvhNode, index_capacity};
 use crate::mesh::TriangleMesh;
 use crate::prelude::*;
-use crate::query::{Query, QueryStack, TraversalStats, Triangles};
+use crate::query::{Query, QueryStack, StackEntry, TraversalStats, Triangles};
 use crate::ray::Ray;
 use crate::simd::level::Portable;
 use crate::test_util::{lcg, unit_vec};
@@ -1465,4 +1465,56 @@ fn a_leaf_reference_encodes_its_run_and_refuses_what_does_not_fit() {
     assert_eq!(ChildRef::leaf(last, 16), None);
     assert_eq!(ChildRef::decode(ChildRef::EMPTY), ChildRef::Empty);
     assert_eq!(ChildRef::decode(42), ChildRef::Inner(42));
+}
+
+/// The closest-hit walk's child order, worked by hand from `order_hits`' contract: of the hit
+/// children the nearest is visited next (of equal entry distances the earlier slot) and the
+/// others are pushed farthest first, so that the second nearest is on top. Its answers do not
+/// depend on the order (the popped entries are checked against the shrunk interval): only this
+/// test sees it.
+#[test]
+fn the_nearest_hit_child_is_visited_first_and_the_rest_pushed_farthest_first() {
+    let (pos, tri) = soup(40, 3);
+    let mesh = TriangleMesh::new(&pos, &tri);
+    let w = wide::<8>(&mesh, 4);
+    let mut node = WideNode::<8>::EMPTY;
+    // Inner children 10, 11, …: plain node indices (no leaf bit).
+    node.child = core::array::from_fn(|i| 10 + i as u32);
+    let order = |dist: [f32; 8], hits: u32| {
+        let first = hits.trailing_zeros() as usize;
+        let mut stack = [StackEntry::EMPTY; super::traverse::STACK];
+        let mut sp = 0;
+        let entry = StackEntry {
+            node: node.child[first],
+            t_enter: dist[first],
+        };
+        let next = w.order_hits(
+            Portable,
+            &node,
+            &dist,
+            hits,
+            entry,
+            &mut stack,
+            &mut sp,
+            (w.nodes(), w.groups()),
+        );
+        let pushed: Vec<(u32, f32)> = stack[..sp].iter().map(|e| (e.node, e.t_enter)).collect();
+        (next, pushed)
+    };
+    let inf = f32::INFINITY;
+    // Two children, the later nearer: it is visited, the earlier pushed.
+    let d = [inf, 5.0, inf, 2.0, inf, inf, inf, inf];
+    assert_eq!(order(d, 0b1010), (13, vec![(11, 5.0)]));
+    // Two children, the earlier nearer.
+    let d = [inf, 2.0, inf, 5.0, inf, inf, inf, inf];
+    assert_eq!(order(d, 0b1010), (11, vec![(13, 5.0)]));
+    // A tie: the earlier slot first.
+    let d = [3.0, inf, inf, inf, inf, inf, 3.0, inf];
+    assert_eq!(order(d, 0b100_0001), (10, vec![(16, 3.0)]));
+    // Four children: the nearest visited, the farthest deepest, the second nearest on top.
+    let d = [7.0, inf, 1.0, 9.0, inf, 4.0, inf, inf];
+    assert_eq!(
+        order(d, 0b10_1101),
+        (12, vec![(13, 9.0), (10, 7.0), (15, 4.0)])
+    );
 }

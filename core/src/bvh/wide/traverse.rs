@@ -299,7 +299,7 @@ where
     /// pushed, counted in the bound of [`super::stack_size`].
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn order_hits<L: SimdLevel>(
+    pub(super) fn order_hits<L: SimdLevel>(
         &self,
         level: L,
         node: &WideNode<W>,

@@ -166,7 +166,8 @@ mod tests {
     /// `1e3` at every distance, slivers, rays along the plane, and coordinates with NaN,
     /// `±∞`, `±0` and subnormals mixed in, some pointing away (crossing at `t = −1`). Every
     /// outcome must occur: a refused triangle (cancelled normal or `d·n` within its filter), a
-    /// crossing behind the origin, one in the box and one outside.
+    /// crossing behind the origin, one in the box, one in the box's padding only (aimed just
+    /// past a vertex) and one outside.
     #[test]
     fn avx2_plane_crossing_equals_the_portable_one() {
         let Some(token) = crate::test_util::avx2_or_skip(
@@ -177,6 +178,8 @@ mod tests {
         let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
         let mut s = 29u64;
         let (mut refused, mut behind, mut inside, mut outside) = (0, 0, 0, 0);
+        // Crossings aimed outside the triangle's box, within its padding, and found there.
+        let mut padded = 0usize;
         for i in 0..40_000 {
             let scale = 10f32.powf(lcg(&mut s) * 6.0 - 3.0);
             let c = |s: &mut u64| {
@@ -193,6 +196,19 @@ mod tests {
             }
             let target =
                 v[0] + (v[1] - v[0]) * lcg(&mut s) * 0.5 + (v[2] - v[0]) * lcg(&mut s) * 0.5;
+            // Every third: just past `v0` along the edge from `v1`, by a quarter of the box
+            // padding's `γ₈` term: outside the triangle's box on an axis where `v0` is
+            // extreme, inside the padded box.
+            let past = v[0] - v[1];
+            let reach = v.iter().fold(0f32, |m, p| m.max(p.abs().max_element()));
+            let step = 0.25 * crate::float::gamma(8) * reach / past.abs().max_element();
+            let target = if i % 3 == 1 {
+                v[0] + past * step
+            } else {
+                target
+            };
+            let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
+            let off_box = target.cmplt(lo).any() || target.cmpgt(hi).any();
             let origin = target + Vec3::new(c(&mut s), c(&mut s), c(&mut s)) * 50.0;
             let mut direction = target - origin;
             if i % 11 == 0 {
@@ -219,6 +235,7 @@ mod tests {
                         behind += 1;
                     } else if w.in_box {
                         inside += 1;
+                        padded += usize::from(off_box && i % 3 == 1);
                     } else {
                         outside += 1;
                     }
@@ -227,8 +244,9 @@ mod tests {
             }
         }
         assert!(
-            refused > 100 && behind > 1_000 && inside > 10_000 && outside > 100,
-            "{refused} refused, {behind} behind, {inside} in the box, {outside} outside"
+            refused > 100 && behind > 1_000 && inside > 10_000 && outside > 100 && padded > 1_000,
+            "{refused} refused, {behind} behind, {inside} in the box ({padded} in its padding), \
+             {outside} outside"
         );
     }
 }

@@ -404,3 +404,62 @@ fn a_small_tree_closest_hit_batch_answers_each_ray_as_alone() {
         }
     });
 }
+
+/// A root leaf's batch runs on the cull across rays where the leaf test has one: taken for
+/// the watertight test (its `sheared_rays`), the answers written the single-ray ones;
+/// refused, with nothing written, for Möller–Trumbore (no such cull), whose rays the caller
+/// then walks alone.
+#[test]
+fn a_root_leaf_batch_takes_the_cull_across_rays_where_the_test_has_one() {
+    use crate::bvh::wide::ChildRef;
+    let (pos, tri) = lcg_soup(8, 48, 1.5, 1.0);
+    let mesh = TriangleMesh::new(&pos, &tri);
+    let bvh = bvh8(&mesh);
+    let ChildRef::Leaf { start, count } = bvh.root() else {
+        panic!("eight triangles: the root is a leaf");
+    };
+    let rays = rays_at(&mesh, &pos, 8 * 4 + 3, 5);
+    // A sentinel in every slot: what the batch writes replaces it.
+    let unwritten: Answer = Some((
+        u32::MAX,
+        TriangleHit {
+            t: -1.0,
+            b1: -1.0,
+            b2: -1.0,
+            ng: Vec3::ZERO,
+            front_face: false,
+        },
+    ));
+    // `root_leaf_hits` of every ray with `isect`: whether it took them, and what it wrote.
+    fn batch<I: TriangleIntersector>(
+        (bvh, mesh): (&VecBvh8, &TriangleMesh<'_>),
+        (start, count): (u32, u32),
+        isect: &I,
+        rays: &[Ray],
+        unwritten: Answer,
+    ) -> (bool, Vec<Answer>) {
+        let mut out = vec![unwritten; rays.len()];
+        let mut tris = Triangles::new(mesh, isect);
+        let taken =
+            bvh.root_leaf_hits((start, count), rays, &mut tris, &mut Query::new(), &mut out);
+        (taken, out)
+    }
+    let tree = (&bvh, &mesh);
+    let (taken, out) = batch(tree, (start, count), &Watertight, &rays, unwritten);
+    assert!(taken, "the watertight test culls across rays");
+    let mut tris = Triangles::new(&mesh, &Watertight);
+    let mut hits = 0;
+    for (i, ray) in rays.iter().enumerate() {
+        let single = bvh.closest_hit(ray, &mut tris, &mut Query::new());
+        assert_eq!(bits(out[i]), bits(single), "ray {i}");
+        hits += usize::from(single.is_some());
+    }
+    assert!(hits > rays.len() / 5, "only {hits} hits");
+    let mt = MollerTrumbore::default();
+    let (taken, out) = batch(tree, (start, count), &mt, &rays, unwritten);
+    assert!(!taken, "Möller–Trumbore has no cull across rays");
+    assert!(
+        out.iter().all(|&a| bits(a) == bits(unwritten)),
+        "nothing written when refused"
+    );
+}
