@@ -54,6 +54,7 @@ impl<const W: usize> WideNode<W> {
             .map_or(ChildRef::Empty, |&c| ChildRef::decode(c))
     }
 
+    /// Writes slot `i`: box `b` and the reference `child` (nothing for `i ≥ W`).
     #[inline]
     pub(super) fn set_child(&mut self, i: usize, b: &Aabb, child: u32) {
         if i < W {

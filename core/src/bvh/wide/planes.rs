@@ -62,3 +62,56 @@ impl LeafPlanes {
         refused
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::wide::LeafTriangle;
+    use crate::ray::Ray;
+    use core::cell::Cell;
+    use glam::Vec3;
+
+    /// A leaf test whose planes are [`BehindPlane::new`]'s, counting how often one is asked for.
+    struct Counted(Cell<usize>);
+
+    impl LeafTest for Counted {
+        type Hit = ();
+        type Prepared = ();
+        fn prepare(&self, _: &Ray) -> Option<()> {
+            Some(())
+        }
+        fn intersect(&mut self, _: &(), _: u32, _: &Ray) -> Option<(f32, ())> {
+            None
+        }
+        fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
+            self.0.set(self.0.get() + 1);
+            BehindPlane::new(v)
+        }
+    }
+
+    /// Two triangles of a pair, the plane `z = 0` in lane 0 of the first group (bit 0) and
+    /// `z = 5` in lane 1 of the second (bit 5); rays from `z = 10⁻³`, worked by hand: going
+    /// up, the first plane is crossed behind the origin (`t = −10⁻³`: refused) and the second
+    /// ahead (`t ≈ 5`: kept); going down, the reverse. Each plane is computed at its first
+    /// use only, then shared by the later rays.
+    #[test]
+    fn each_plane_is_computed_once_and_refuses_the_rays_leaving_it() {
+        let flat = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let (mut first, mut second) = (LeafGroup::EMPTY, LeafGroup::EMPTY);
+        first.set(0, &LeafTriangle { v: flat, prim: 0 });
+        let raised = flat.map(|[x, y, z]| [x, y, z + 5.0]);
+        second.set(1, &LeafTriangle { v: raised, prim: 1 });
+        let leaf = Counted(Cell::new(0));
+        let mut planes = LeafPlanes::NEW;
+        let start = Vec3::new(0.25, 0.25, 1e-3);
+        let (up, down) = (Ray::new(start, Vec3::Z), Ray::new(start, -Vec3::Z));
+        let pair = [&first, &second];
+        let refused = |planes: &mut LeafPlanes, ray: &Ray| {
+            planes.refused(&leaf, pair, 0, 0b10_0001, &PlaneRay::new(ray))
+        };
+        assert_eq!(refused(&mut planes, &up), 0b1);
+        assert_eq!(leaf.0.get(), 2, "both planes computed");
+        assert_eq!(refused(&mut planes, &down), 0b10_0000);
+        assert_eq!(leaf.0.get(), 2, "each plane computed once");
+    }
+}

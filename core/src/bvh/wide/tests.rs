@@ -1518,3 +1518,57 @@ fn the_nearest_hit_child_is_visited_first_and_the_rest_pushed_farthest_first() {
         (12, vec![(13, 9.0), (10, 7.0), (15, 4.0)])
     );
 }
+
+/// `WideNode::set_child` writes slot `i`'s bounds and reference and nothing else, and a slot
+/// past the node's width is ignored (no panic, the node unchanged).
+#[test]
+fn a_child_slot_is_written_alone_and_one_past_the_width_is_ignored() {
+    let b = Aabb::new(Vec3::new(-1.0, 2.0, -3.0), Vec3::new(4.0, 5.0, 6.0));
+    let mut node = WideNode::<4>::EMPTY;
+    node.set_child(2, &b, 7);
+    for i in 0..4 {
+        let want = if i == 2 {
+            (b, ChildRef::Inner(7))
+        } else {
+            (WideNode::<4>::EMPTY.child_bounds(i), ChildRef::Empty)
+        };
+        assert_eq!((node.child_bounds(i), node.child(i)), want, "slot {i}");
+    }
+    let before = node;
+    node.set_child(4, &b, 9);
+    assert_eq!(node, before, "slot 4 of a 4-wide node");
+}
+
+/// The box query's contract for a box that is not valid: an inverted box (`min > max` on an
+/// axis) or one with a NaN bound reports nothing, even where its corners lie among the
+/// tree's triangles (an inverted box between two corners of a triangle's box would otherwise
+/// pass a node's overlap test: `lo ≤ max` and `min ≤ hi` both hold there).
+#[test]
+fn an_inverted_or_nan_query_box_reports_nothing() {
+    let (pos, tri) = soup(60, 5);
+    let mesh = TriangleMesh::new(&pos, &tri);
+    let w = wide::<8>(&mesh, 4);
+    // The centre of triangle 0's box, and a step well inside that box.
+    let v = tri[0].map(|i| pos[i as usize]);
+    let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
+    let (c, d) = ((lo + hi) * 0.5, (hi - lo) * 0.25);
+    let mut seen = Vec::new();
+    w.query_box(&mesh, &Aabb::new(c - d, c + d), |p| {
+        seen.push(p);
+        true
+    });
+    assert!(seen.contains(&0), "the valid box meets triangle 0's box");
+    let nan = Vec3::new(f32::NAN, c.y, c.z);
+    for q in [
+        Aabb::new(c + d, c - d),
+        Aabb::new(
+            Vec3::new(c.x + d.x, c.y - d.y, c.z - d.z),
+            Vec3::new(c.x - d.x, c.y + d.y, c.z + d.z),
+        ),
+        Aabb::new(nan, c + d),
+        Aabb::new(c - d, nan),
+    ] {
+        let n = w.query_box(&mesh, &q, |p| panic!("{q:?} reported triangle {p}"));
+        assert_eq!(n, 0, "{q:?}");
+    }
+}
