@@ -1550,8 +1550,8 @@ fn an_inverted_or_nan_query_box_reports_nothing() {
     let w = wide::<8>(&mesh, 4);
     // The centre of triangle 0's box, and a step well inside that box.
     let v = tri[0].map(|i| pos[i as usize]);
-    let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
-    let (c, d) = ((lo + hi) * 0.5, (hi - lo) * 0.25);
+    let b = Aabb::from_points(&v);
+    let (c, d) = (b.center(), (b.max - b.min) * 0.25);
     let mut seen = Vec::new();
     w.query_box(&mesh, &Aabb::new(c - d, c + d), |p| {
         seen.push(p);

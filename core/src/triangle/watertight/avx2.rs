@@ -207,8 +207,8 @@ mod tests {
             } else {
                 target
             };
-            let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
-            let off_box = target.cmplt(lo).any() || target.cmpgt(hi).any();
+            let b = crate::aabb::Aabb::from_points(&v);
+            let off_box = target.cmplt(b.min).any() || target.cmpgt(b.max).any();
             let origin = target + Vec3::new(c(&mut s), c(&mut s), c(&mut s)) * 50.0;
             let mut direction = target - origin;
             if i % 11 == 0 {
