@@ -15,6 +15,7 @@
 #   PER_FILE=100 TEST_PACKAGES=halfray-core,halfray-tests bash scripts/mutants.sh   # the full run
 #   PER_FILE=4 TEST_PACKAGES=halfray-core bash scripts/mutants.sh                   # a quick sample
 #   FILES="core/src/kdtree/sah.rs core/src/collide" SHARD=1 bash scripts/mutants.sh # other shards
+#   FILES=frontend/src/outputs FIRST_PACKAGE=halfray TEST_PACKAGES=halfray bash scripts/mutants.sh
 #   bash scripts/mutants.sh --in-diff DIFF                                          # a branch's lines
 #
 # FILES: files or folders (every `.rs` under a folder except `tests.rs` and `tests/`); default
@@ -30,6 +31,9 @@ set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 PER_FILE=${PER_FILE:-100}
 TEST_PACKAGES=${TEST_PACKAGES:-halfray-core,halfray-tests}
+# The package whose tests run first on every sampled mutant (stage one below): the core's, or
+# the frontend's (`FIRST_PACKAGE=halfray`) for a sample of frontend files.
+FIRST_PACKAGE=${FIRST_PACKAGE:-halfray-core}
 SHARD=${SHARD:-0}
 DEFAULT_FILES="core/src/aabb.rs core/src/triangle/watertight.rs core/src/bvh/traverse.rs
     core/src/halfedge/subdivide.rs core/src/halfedge/collapse.rs core/src/bvh/load.rs
@@ -74,14 +78,14 @@ for f in "${FILES[@]}"; do
 done
 rm -f "$run/all.tmp"
 [ -s "$run/sample.txt" ] || { echo "no mutants sampled"; exit 0; }
-# Stage one: every sampled mutant against the core's own tests, in one cargo-mutants run (one
-# build of the dependencies); cargo-mutants exits non-zero when a mutant is missed: the table
-# says so.
-cargo mutants "${args[@]}" -F "^($(esc <"$run/sample.txt"))\$" --test-package halfray-core \
+# Stage one: every sampled mutant against FIRST_PACKAGE's own tests, in one cargo-mutants run
+# (one build of the dependencies); cargo-mutants exits non-zero when a mutant is missed: the
+# table says so.
+cargo mutants "${args[@]}" -F "^($(esc <"$run/sample.txt"))\$" --test-package "$FIRST_PACKAGE" \
     --profile mutants -j1 -o "$run/core" >"$run/core.log" 2>&1 || true
 m="$run/core/mutants.out"; w="$run/wide/mutants.out"
 survivors=$(cat "$m/missed.txt" "$m/timeout.txt" 2>/dev/null | esc)
-if [ "$TEST_PACKAGES" != halfray-core ] && [ -n "$survivors" ]; then
+if [ "$TEST_PACKAGES" != "$FIRST_PACKAGE" ] && [ -n "$survivors" ]; then
     # Stage two: the survivors, by name, against every test package. Every mutant relinks
     # every test binary here (~2 min): a generous test timeout, so that a slow machine is not
     # read as a mutant's endless loop. Its verdicts replace stage one's for the survivors.
