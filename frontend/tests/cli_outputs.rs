@@ -106,6 +106,45 @@ fn an_output_that_is_an_input_or_another_output_is_refused() {
     );
 }
 
+/// The same refusals when the outputs are bare file names in the working directory (the
+/// usual command line): a name without a folder is identified in `.`, so two outputs naming
+/// one new file, or an output naming the scene, are caught as with full paths.
+#[test]
+fn bare_names_in_the_working_directory_are_identified_too() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(scene("mirror.toml"), dir.path().join("s.toml")).unwrap();
+    let in_dir = |args: &[&str]| {
+        Command::new(BIN)
+            .args(args)
+            .current_dir(dir.path())
+            .output()
+            .unwrap()
+    };
+    let o = in_dir(&[
+        "render",
+        "s.toml",
+        "-o",
+        "x.png",
+        "--stats-json",
+        "x.png",
+        "--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("are the same file"), "{}", stderr(&o));
+    let o = in_dir(&["render", "s.toml", "-o", "s.toml", "--quiet", "--force"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("refusing to overwrite an input"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(
+        std::fs::read(dir.path().join("s.toml")).unwrap(),
+        std::fs::read(scene("mirror.toml")).unwrap()
+    );
+    assert_eq!(files(dir.path()), ["s.toml"], "nothing written");
+}
+
 #[test]
 fn output_locations_are_checked_before_the_work() {
     let dir = tempfile::tempdir().unwrap();
@@ -393,6 +432,37 @@ fn an_output_on_stdout_is_all_that_stdout_carries() {
 
 /// Every command that refuses a read-only output with "pass --force" takes `--force` (the
 /// benchmarks, `gamma --chart` and `crosscheck` suggested a flag they did not have).
+/// An output named `-` is written through the process's own stdout, whatever stdout is: a
+/// socket (a supervisor's log socket, one end of a `socketpair`) cannot be opened again
+/// through `/dev/fd/1`, so the bytes must not go that way. They arrive whole: the same as
+/// the output written to a file.
+#[test]
+fn an_output_on_stdout_reaches_a_socket() {
+    use std::io::Read;
+    use std::os::fd::OwnedFd;
+    use std::os::unix::net::UnixStream;
+    let dir = tempfile::tempdir().unwrap();
+    let cube = format!("{MESHES}/cube.obj");
+    let file = dir.path().join("cube.rs");
+    let o = run(os!["bake", &cube, "-o", &file]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (mut ours, theirs) = UnixStream::pair().unwrap();
+    let child = {
+        let mut cmd = Command::new(BIN);
+        cmd.args(["bake", &cube, "-o", "-"])
+            .stdout(Stdio::from(OwnedFd::from(theirs)))
+            .stderr(Stdio::piped());
+        cmd.spawn().unwrap()
+        // `cmd` and its copy of the socket's other end are dropped here: the child's end
+        // is the last, so the read below ends when the child exits.
+    };
+    let mut got = Vec::new();
+    ours.read_to_end(&mut got).unwrap();
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(got, std::fs::read(&file).unwrap());
+}
+
 #[test]
 fn every_command_that_suggests_force_takes_it() {
     use std::os::unix::fs::PermissionsExt;
