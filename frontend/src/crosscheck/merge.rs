@@ -379,9 +379,15 @@ mod tests {
                 assert!((m.mrays_embree - 1.0).abs() < 1e-9, "N = {n}");
             }
             assert_eq!(merged.genuine(), 2 * 2, "rays 1 and 5 of both sets");
+            // Time-weighted over both sets: (9 + 9) µs of Embree's over (36 + 36) of halfray's.
+            let ratio = merged.throughput_ratio().unwrap();
+            assert!((ratio - 0.25).abs() < 1e-12, "N = {n}: {ratio}");
             // Wall seconds add (1 s per part); threads: the largest.
             assert_eq!((merged.wall_seconds, merged.threads), (n as f64, 2));
         }
+        // No timed ray, no ratio.
+        let empty = Report::new(config(Shard::WHOLE), 1, 0.0, &[]);
+        assert_eq!(empty.throughput_ratio(), None);
     }
 
     /// Parts no run can have written are refused, naming the part, mesh and set (they were
