@@ -368,3 +368,38 @@ fn a_mesh_named_twice_is_refused() {
     );
     assert!(o.stdout.is_empty());
 }
+
+/// Each set's row carries its timed passes: some of its rays timed (at most all of them),
+/// every side's seconds positive, and the throughput those give (`timed_rays / secs`, in
+/// Mrays/s), as the README's figures and the run's "throughput ratio" line are read from it.
+#[test]
+fn every_set_reports_its_timed_rays_and_seconds() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("r.json");
+    let o = run(
+        &[&mesh("octahedron.obj"), "--rays", "600", "--json"],
+        &[&json],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let report = read(&json);
+    let rows = report["sets"].as_array().unwrap();
+    assert!(!rows.is_empty());
+    for row in rows {
+        let name = row["name"].as_str().unwrap();
+        let (rays, timed) = (
+            row["rays"].as_u64().unwrap(),
+            row["timed_rays"].as_u64().unwrap(),
+        );
+        assert!(timed > 0 && timed <= rays, "{name}: {timed} of {rays}");
+        for side in ["halfray", "embree", "embree_default"] {
+            let secs = row[format!("secs_{side}")].as_f64().unwrap();
+            let mrays = row[format!("mrays_{side}")].as_f64().unwrap();
+            assert!(secs > 0.0, "{name} {side}: {secs}");
+            let expected = timed as f64 / secs / 1e6;
+            assert!(
+                (mrays - expected).abs() <= 1e-9 * expected,
+                "{name} {side}: {mrays} vs {expected}"
+            );
+        }
+    }
+}
