@@ -430,8 +430,6 @@ fn an_output_on_stdout_is_all_that_stdout_carries() {
     assert!(stderr(&o).contains("bench bvh: "), "{}", stderr(&o));
 }
 
-/// Every command that refuses a read-only output with "pass --force" takes `--force` (the
-/// benchmarks, `gamma --chart` and `crosscheck` suggested a flag they did not have).
 /// An output named `-` is written through the process's own stdout, whatever stdout is: a
 /// socket (a supervisor's log socket, one end of a `socketpair`) cannot be opened again
 /// through `/dev/fd/1`, so the bytes must not go that way. They arrive whole: the same as
@@ -463,6 +461,8 @@ fn an_output_on_stdout_reaches_a_socket() {
     assert_eq!(got, std::fs::read(&file).unwrap());
 }
 
+/// Every command that refuses a read-only output with "pass --force" takes `--force` (the
+/// benchmarks, `gamma --chart` and `crosscheck` suggested a flag they did not have).
 #[test]
 fn every_command_that_suggests_force_takes_it() {
     use std::os::unix::fs::PermissionsExt;
