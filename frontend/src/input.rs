@@ -59,14 +59,18 @@ fn too_big(path: &Path) -> Error {
 /// The bytes of `path` (see the module docs), opened by [`open`].
 pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     let file = open(path)?;
+    read_at_most(file, MAX_INPUT_BYTES)
+        .map_err(|e| Error::io(path, e))?
+        .ok_or_else(|| too_big(path))
+}
+
+/// Everything `reader` yields when that is at most `limit` bytes; `None` when it yields more
+/// (then `limit + 1` bytes were read and the rest never: a stream that never ends stops
+/// there).
+fn read_at_most(reader: impl Read, limit: u64) -> io::Result<Option<Vec<u8>>> {
     let mut bytes = Vec::new();
-    file.take(MAX_INPUT_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| Error::io(path, e))?;
-    if bytes.len() as u64 > MAX_INPUT_BYTES {
-        return Err(too_big(path));
-    }
-    Ok(bytes)
+    reader.take(limit + 1).read_to_end(&mut bytes)?;
+    Ok((bytes.len() as u64 <= limit).then_some(bytes))
 }
 
 /// The text of `path` ([`read_bytes`]); bytes that are not UTF-8 are an input error at the
@@ -132,5 +136,41 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert_eq!(e, "s.toml:2:7: byte 0xff is not UTF-8: expected TOML");
+    }
+
+    /// The bound of a stream (a pipe, where no size is known before reading): a stream of
+    /// exactly `limit` bytes is read whole, one byte more is refused, and an endless one
+    /// (`io::repeat`) stops after `limit + 1` bytes.
+    #[test]
+    fn a_stream_is_read_up_to_the_limit_and_refused_beyond() {
+        let data: Vec<u8> = (0..=255).collect();
+        let limit = data.len() as u64;
+        assert_eq!(read_at_most(&data[..], limit).unwrap(), Some(data.clone()));
+        assert_eq!(read_at_most(&data[..], limit - 1).unwrap(), None);
+        assert_eq!(read_at_most(&data[..0], 0).unwrap(), Some(Vec::new()));
+        assert_eq!(read_at_most(io::repeat(7), 1000).unwrap(), None);
+    }
+
+    /// A regular file is judged by its size before it is read: one byte over
+    /// [`MAX_INPUT_BYTES`] is refused by [`open`] and [`read_bytes`] with a message naming the
+    /// file and the limit, exactly the limit opens. Sparse files: no byte is written or read.
+    #[test]
+    fn a_regular_file_over_the_limit_is_refused_before_reading() {
+        let dir = tempfile::tempdir().unwrap();
+        let sparse = |name: &str, len: u64| {
+            let path = dir.path().join(name);
+            std::fs::File::create(&path).unwrap().set_len(len).unwrap();
+            path
+        };
+        let at = sparse("at-limit.obj", MAX_INPUT_BYTES);
+        assert!(open(&at).is_ok());
+        let over = sparse("over-limit.obj", MAX_INPUT_BYTES + 1);
+        for e in [open(&over).unwrap_err(), read_bytes(&over).unwrap_err()] {
+            let text = e.to_string();
+            assert!(
+                text.contains("over-limit.obj") && text.contains("holds more than 1024 MiB"),
+                "{text}"
+            );
+        }
     }
 }

@@ -50,3 +50,38 @@ fn cr_only_files_are_read_as_lines_and_drops_are_reported() {
         "{e}"
     );
 }
+
+/// The note is about what was dropped, nothing else: a polygon split into triangles is noted
+/// even when it is the only loss, and a file of triangles and vertices only gets no note.
+#[test]
+fn a_split_polygon_alone_is_noted_and_a_clean_file_gets_no_note() {
+    let dir = tempfile::tempdir().unwrap();
+    let smooth = |name: &str, text: &str| {
+        let input = dir.path().join(name);
+        std::fs::write(&input, text).unwrap();
+        let o = Command::new(BIN)
+            .args(["mesh", "smooth"])
+            .arg(&input)
+            .arg("-o")
+            .arg(dir.path().join(format!("out-{name}")))
+            .args(["--iterations", "0"])
+            .output()
+            .unwrap();
+        let e = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{name}: {e}");
+        e
+    };
+    let quad = smooth(
+        "quad.obj",
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+    );
+    assert!(
+        quad.contains("not carried over") && quad.contains(": 1 polygon(s) split into triangles"),
+        "{quad}"
+    );
+    let clean = smooth(
+        "tris.obj",
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n",
+    );
+    assert!(!clean.contains("not carried"), "{clean}");
+}

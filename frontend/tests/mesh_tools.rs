@@ -406,6 +406,19 @@ fn subdivide_levels_multiply_and_weights_differ() {
         .unwrap();
         // Octahedron V 6 E 12 F 8 → V 18 E 48 F 32 → V 66 E 192 F 128.
         assert_eq!(r.levels.len(), 2);
+        // The report names the command and both files, and times the read.
+        assert_eq!(
+            (r.command, &r.input, &r.output),
+            ("subdivide", &mesh("octahedron.obj"), out)
+        );
+        let text = r.to_string();
+        let first = format!(
+            "mesh subdivide: {} -> {}",
+            mesh("octahedron.obj").display(),
+            out.display()
+        );
+        assert_eq!(text.lines().next(), Some(first.as_str()), "{text}");
+        assert!(r.read_ms > 0.0 && r.read_ms.is_finite(), "{}", r.read_ms);
         assert_eq!(
             (r.after.vertices, r.after.edges, r.after.faces),
             (66, 192, 128)

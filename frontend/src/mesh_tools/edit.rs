@@ -406,3 +406,52 @@ fn collapse_mesh(
     mesh.compact(|_| {});
     Ok(export_edited(mesh, report, t1))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use halfray_core::halfedge::{FaceId, VertexId};
+
+    /// Every rule the core names has its own name in the report: none falls through to the
+    /// catch-all kept for rules added later.
+    #[test]
+    fn every_collapse_refusal_has_its_own_name() {
+        let (v, f) = (VertexId::new(0), FaceId::new(0));
+        let rules = [
+            CollapseError::Dead,
+            CollapseError::LinkCondition(v),
+            CollapseError::WingsCoincide,
+            CollapseError::Ear(f),
+            CollapseError::InteriorEdgeJoinsBoundaries,
+            CollapseError::WingValence(v),
+            CollapseError::FoldOver(f),
+            CollapseError::NonFinitePosition,
+        ];
+        let names: std::collections::BTreeSet<_> = rules.iter().map(refusal_name).collect();
+        assert_eq!(names.len(), rules.len(), "{names:?}");
+        assert!(!names.contains("another rule"), "{names:?}");
+    }
+
+    /// A level's estimate is what it allocates: the half-edge buffers of its counts (measured
+    /// on the buffers themselves) plus its export, a position per vertex and three indices
+    /// per face.
+    #[test]
+    fn a_levels_estimate_is_its_buffers_and_its_export() {
+        let c = Counts {
+            vertices: 7,
+            edges: 11,
+            faces: 5,
+        };
+        let b = MeshBuffers::new(c);
+        let records = std::mem::size_of_val(&b.vertices[..])
+            + std::mem::size_of_val(&b.edges[..])
+            + std::mem::size_of_val(&b.faces[..]);
+        let export = 7 * std::mem::size_of::<Vec3>() + 5 * 3 * std::mem::size_of::<u32>();
+        assert_eq!(level_bytes(c), Some((records + export) as u64));
+        let huge = Counts {
+            vertices: usize::MAX,
+            ..c
+        };
+        assert_eq!(level_bytes(huge), None);
+    }
+}

@@ -387,3 +387,86 @@ fn closer_or_later(a: (u32, SurfaceHit), b: (u32, SurfaceHit)) -> (u32, SurfaceH
         a
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::geom::Geometry;
+
+    /// The two boxes `[0, 1]³` and `[0.5, 1.5]³` (box objects), and rays along `+x` at height
+    /// `y = z = 0.75` (through both) or `0.25` (through the first only), by `several`.
+    fn two_boxes_and_rays(several: &[bool]) -> (TopLevel, Vec<Ray>) {
+        let boxed = |lo: f32| {
+            let b = Aabb::new(Vec3::splat(lo), Vec3::splat(lo + 1.0));
+            Node {
+                shape: Geometry::Box(b),
+                material: 0,
+                transform: None,
+                bounds: Some(b),
+            }
+        };
+        let top = TopLevel::new(&[boxed(0.0), boxed(0.5)]);
+        let rays = several
+            .iter()
+            .map(|&s| {
+                let h = if s { 0.75 } else { 0.25 };
+                Ray::new(Vec3::new(-1.0, h, h), Vec3::X)
+            })
+            .collect();
+        (top, rays)
+    }
+
+    /// [`TopLevel::one_object_rays`]'s contract: a ray through one box is paired with it, a
+    /// ray through both goes `alone`, and after [`PROBED_RAYS`] rays every ray goes `alone` once
+    /// more than half of those before met several, and only then.
+    #[test]
+    fn rays_after_the_probe_go_alone_once_most_met_several() {
+        let run = |several: &[bool]| {
+            let (top, rays) = two_boxes_and_rays(several);
+            let bvh = top.bvh.as_ref().expect("two bounded objects: a tree");
+            let mut alone = Vec::new();
+            let pairs = top.one_object_rays(bvh, &rays, |i| alone.push(i));
+            (pairs, alone)
+        };
+        // Three rays in four through both boxes (75 % > half) among the probed rays, then
+        // rays through the first box only: from ray 32 on, every ray goes alone.
+        let n = PROBED_RAYS as u32 + 8;
+        let probed = |i: u32| i < PROBED_RAYS as u32;
+        let mostly: Vec<bool> = (0..n).map(|i| probed(i) && i % 4 != 3).collect();
+        let (pairs, alone) = run(&mostly);
+        assert_eq!(
+            alone,
+            (0..n)
+                .filter(|&i| !probed(i) || i % 4 != 3)
+                .collect::<Vec<_>>()
+        );
+        let (top, _) = two_boxes_and_rays(&[]);
+        let first_box = |k: u32| top.bounded[k as usize] == 0;
+        assert!(pairs.iter().all(|&(k, _)| first_box(k)), "{pairs:?}");
+        assert_eq!(
+            pairs.iter().map(|&(_, i)| i).collect::<Vec<_>>(),
+            (0..n)
+                .filter(|&i| probed(i) && i % 4 == 3)
+                .collect::<Vec<_>>()
+        );
+
+        // One ray in four through both (25 %): every ray is still walked, the others paired.
+        let few: Vec<bool> = (0..n).map(|i| i % 4 == 3).collect();
+        let (pairs, alone) = run(&few);
+        assert_eq!(alone, (0..n).filter(|i| i % 4 == 3).collect::<Vec<_>>());
+        assert!(pairs.iter().all(|&(k, _)| first_box(k)), "{pairs:?}");
+        assert_eq!(
+            pairs.iter().map(|&(_, i)| i).collect::<Vec<_>>(),
+            (0..n).filter(|i| i % 4 != 3).collect::<Vec<_>>()
+        );
+
+        // Every other ray through both (exactly half, not more): still walked.
+        let half: Vec<bool> = (0..n).map(|i| i % 2 == 1).collect();
+        let (pairs, alone) = run(&half);
+        assert_eq!(alone, (0..n).filter(|i| i % 2 == 1).collect::<Vec<_>>());
+        assert_eq!(
+            pairs.iter().map(|&(_, i)| i).collect::<Vec<_>>(),
+            (0..n).filter(|i| i % 2 == 0).collect::<Vec<_>>()
+        );
+    }
+}
