@@ -567,3 +567,49 @@ fn a_camera_whose_distance_overflows_is_named_so() {
         "must differ from `eye`",
     );
 }
+
+/// A referenced mesh file that holds no triangle is named at the scene's `file` field (the
+/// scene's line and column), with the OBJ's path and the reason.
+#[test]
+fn a_referenced_mesh_without_triangles_is_named_at_its_file_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let msg = mesh_scene_err(dir.path(), "points.obj", "v 0 0 0\nv 1 0 0\n", "").to_string();
+    let shown = msg.replace(&format!("{}/", dir.path().display()), "");
+    assert!(
+        shown.starts_with("mesh.toml:") && shown.contains("field `mesh.b.file`"),
+        "{shown}"
+    );
+    assert!(
+        shown.contains("points.obj: mesh has no triangles"),
+        "{shown}"
+    );
+}
+
+/// `smooth.iterations` is bounded by `MAX_SMOOTH_ITERATIONS` (10 000): exactly that many
+/// load, one more is refused at the field.
+#[test]
+fn smoothing_iterations_are_bounded_at_the_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    let e = mesh_scene_err(
+        dir.path(),
+        "tri.obj",
+        tri,
+        "smooth = { step = 0.1, iterations = 10001 }",
+    );
+    let msg = e.to_string();
+    assert!(
+        msg.contains("field `mesh.b.smooth.iterations`")
+            && msg.contains("at most 10000 iterations"),
+        "{msg}"
+    );
+    let path = dir.path().join("ok.toml");
+    std::fs::write(
+        &path,
+        format!("{BASE}\n[mesh.b]\nfile = \"tri.obj\"\nsmooth = {{ step = 0.1, iterations = 10000 }}\n\n[[object]]\ntype = \"mesh\"\nmesh = \"b\"\nmaterial = \"m\"\n"),
+    )
+    .unwrap();
+    if let Err(e) = load(&path) {
+        panic!("10 000 iterations refused: {e}");
+    }
+}

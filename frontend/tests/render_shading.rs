@@ -552,3 +552,15 @@ fn an_area_light_casts_soft_shadows() {
         "{err}"
     );
 }
+
+/// A lens without `focus_distance` focuses on `look_at`: the distance from the eye to it.
+#[test]
+fn a_lens_focuses_on_look_at_by_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("lens.toml");
+    let text = "[camera]\neye = [1, 2, 3]\nlook_at = [4, 6, 3]\nfov = 40\nwidth = 8\nheight = 6\naperture = 0.1\n";
+    std::fs::write(&path, text).unwrap();
+    let scene = halfray::scene::load(&path).unwrap();
+    let lens = scene.camera.lens.expect("an aperture: a lens");
+    assert_eq!(lens.focus_distance, 5.0);
+}

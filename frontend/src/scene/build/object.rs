@@ -372,3 +372,50 @@ pub(super) fn polygon(ctx: &Ctx<'_>, pts: Vec<Vec3>, span: &Span, field: &str) -
         ctx.err(span, field, msg)
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::scene::geom::Geometry;
+    use glam::DVec3;
+    use std::path::Path;
+
+    /// Relative agreement of the core's quadric evaluation with the polynomial, of
+    /// `F(p) + 1` (`F` = `Quadric::eval_abs`, the sum of the terms' magnitudes): the
+    /// evaluation's own bound is `γ₁₀·F ≈ 1.1e-15·F`, the centring of the form rounds the
+    /// coefficients by a few ulps more; `1e-12` leaves room for both, and a wrong coefficient
+    /// (a factor of 2 or 4 on a term) moves the value by far more at these points.
+    const EVAL_AGREEMENT: f64 = 1e-12;
+
+    /// A `quadric` object is the surface its coefficients write (`scenes/README.md`):
+    /// `xx·x² + yy·y² + zz·z² + xy·xy + xz·xz + yz·yz + x·x + y·y + z·z + c`, every
+    /// coefficient set, evaluated at a few points against that polynomial (the core's form
+    /// halves the cross and linear terms), within [`EVAL_AGREEMENT`].
+    #[test]
+    fn a_quadric_is_the_polynomial_its_coefficients_write() {
+        let text = "[camera]\neye = [0, 0, 9]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\nheight = 6\n\n\
+            [material.m]\ndiffuse = [1, 1, 1]\n\n[[object]]\ntype = \"quadric\"\nmaterial = \"m\"\n\
+            coefficients = { xx = 1, yy = 2, zz = 3, xy = 0.5, xz = -0.25, yz = 0.75, x = -4, y = 1, z = 2, c = -3 }\n";
+        let scene = crate::scene::parse(text, Path::new("q.toml")).unwrap();
+        let Some(Geometry::Quadric(q)) = scene.objects.first().map(|o| &o.shape) else {
+            panic!("one quadric object");
+        };
+        let poly = |p: DVec3| {
+            let (x, y, z) = (p.x, p.y, p.z);
+            x * x + 2.0 * y * y + 3.0 * z * z + 0.5 * x * y - 0.25 * x * z + 0.75 * y * z - 4.0 * x
+                + y
+                + 2.0 * z
+                - 3.0
+        };
+        for p in [
+            DVec3::ZERO,
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, -2.0, 0.5),
+            DVec3::new(3.0, 1.5, -1.0),
+            DVec3::new(-0.7, 0.2, 2.0),
+        ] {
+            let (got, want) = (q.quadric.eval(p), poly(p));
+            let tol = EVAL_AGREEMENT * (q.quadric.eval_abs(p) + 1.0);
+            assert!((got - want).abs() <= tol, "{p}: {got} against {want}");
+        }
+    }
+}
