@@ -8,6 +8,17 @@ use std::time::Instant;
 /// few milliseconds for 100 000 camera rays) does not spoil a figure on a shared machine.
 pub const TIMED_PASSES: usize = 5;
 
+/// Throughput in millions of rays per second: `rays / secs / 10⁶`; 0 when `secs` is not
+/// positive (nothing was timed). Every Mrays/s figure the tool prints is this.
+#[must_use]
+pub fn mrays_per_second(rays: u64, secs: f64) -> f64 {
+    if secs > 0.0 {
+        rays as f64 / secs / 1e6
+    } else {
+        0.0
+    }
+}
+
 /// A side timed on a whole set at once: answers the number of hits in the rays.
 pub type BatchSide<'a> = &'a dyn Fn(&[Ray]) -> usize;
 
@@ -44,7 +55,7 @@ pub fn interleaved_batches(rays: &[Ray], fs: &[BatchSide<'_>]) -> Vec<f64> {
         }
     }
     best.iter()
-        .map(|s| rays.len() as f64 / s.max(1e-9) / 1e6)
+        .map(|&s| mrays_per_second(rays.len() as u64, s))
         .collect()
 }
 
@@ -52,6 +63,14 @@ pub fn interleaved_batches(rays: &[Ray], fs: &[BatchSide<'_>]) -> Vec<f64> {
 mod tests {
     use super::*;
     use halfray_core::Vec3;
+
+    #[test]
+    fn mrays_per_second_is_rays_over_seconds_in_millions() {
+        assert_eq!(mrays_per_second(2_000_000, 0.5), 4.0);
+        assert_eq!(mrays_per_second(3, 1.5e-6), 2.0);
+        assert_eq!(mrays_per_second(0, 1.0), 0.0);
+        assert_eq!(mrays_per_second(5, 0.0), 0.0);
+    }
 
     #[test]
     fn every_side_is_called_once_per_ray_and_pass() {

@@ -118,3 +118,19 @@ fn bench_ray_sets_are_estimated_before_generating() {
         assert!(e.contains(what), "{width} {rays}: {e}");
     }
 }
+
+/// A worker count beyond the limit in `RAYON_NUM_THREADS` is refused by every command before
+/// any work, naming the variable (the pool is built from it, checked, in `main`).
+#[test]
+fn a_worker_count_beyond_the_limit_is_refused() {
+    let cube = Path::new(MESHES).join("cube.obj");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_halfray"))
+        .args(["mesh", "check"])
+        .arg(&cube)
+        .env("RAYON_NUM_THREADS", "99999999")
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_ne!(o.status.code(), Some(0), "{e}");
+    assert!(e.contains("RAYON_NUM_THREADS=99999999"), "{e}");
+}

@@ -444,3 +444,38 @@ fn background_is_opaque_unless_asked_for_transparency() {
         assert!(b.0[3] == 255 || b.0[3] == 0);
     }
 }
+
+/// The heat map counts the nodes of every primary ray, hit or miss: through the hole of a
+/// torus a ray misses the mesh yet walks its tree, and that pixel is not black.
+#[test]
+fn the_heat_map_counts_the_nodes_of_rays_that_miss() {
+    let text = r#"
+[camera]
+eye = [0, 3, 0.001]
+look_at = [0, 0, 0]
+fov = 60
+width = 24
+height = 24
+
+[material.m]
+diffuse = [1, 1, 1]
+
+[mesh.torus]
+file = "meshes/torus.obj"
+
+[[object]]
+type = "mesh"
+mesh = "torus"
+material = "m"
+"#;
+    let s = halfray::scene::parse(text, &scenes_dir().join("heat.toml")).unwrap();
+    let opts = halfray::render::RenderOptions {
+        mode: halfray::render::Mode::Heatmap,
+        ..Default::default()
+    };
+    let out = halfray::render::render(&s, &opts);
+    let centre = (12 * 24 + 12) as usize;
+    assert_eq!(out.pixels[centre].w, 0.0, "the hole: a miss");
+    assert!(out.nodes[centre] > 0, "{:?}", out.nodes[centre]);
+    assert!(out.coverage() > 0, "the ring is hit");
+}

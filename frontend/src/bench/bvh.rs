@@ -397,7 +397,7 @@ fn bench<T: TriangleIntersector>(
         embree_build_ms_threads: embree_build.map(|b| b[2]),
         sets: figures,
         brute_force_rays: sample_len,
-        mrays_brute_force: sample_len as f64 / brute_s.max(1e-9) / 1e6,
+        mrays_brute_force: crate::timing::mrays_per_second(sample_len as u64, brute_s),
         brute_force_mismatches: mismatches,
     })
 }

@@ -170,20 +170,15 @@ pub struct SetReport {
     pub disagreements: Vec<Disagreement>,
 }
 
-fn mrays(rays: usize, secs: f64) -> f64 {
-    if secs > 0.0 {
-        rays as f64 / secs / 1.0e6
-    } else {
-        0.0
-    }
-}
-
 impl SetReport {
     /// Recomputes the throughput fields from the timed rays and seconds.
     pub fn update_throughput(&mut self) {
-        self.mrays_halfray = mrays(self.timed_rays, self.secs_halfray);
-        self.mrays_embree = mrays(self.timed_rays, self.secs_embree);
-        self.mrays_embree_default = mrays(self.timed_rays, self.secs_embree_default);
+        self.mrays_halfray =
+            crate::timing::mrays_per_second(self.timed_rays as u64, self.secs_halfray);
+        self.mrays_embree =
+            crate::timing::mrays_per_second(self.timed_rays as u64, self.secs_embree);
+        self.mrays_embree_default =
+            crate::timing::mrays_per_second(self.timed_rays as u64, self.secs_embree_default);
     }
 
     /// Names of the counts, in the order of [`SetReport::counts`].

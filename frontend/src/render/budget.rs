@@ -173,5 +173,26 @@ mod tests {
         };
         assert_eq!(small.work(), 768e6);
         assert!(small.explain(2).contains("1000000 objects share one box"));
+        // Seconds: the work over the assumed rate of every thread.
+        assert_eq!(small.seconds(4), 768e6 / (ASSUMED_RAYS_PER_SECOND * 4.0));
+        assert_eq!(small.seconds(0), small.seconds(1));
+    }
+
+    /// A scene with a mirror counts the secondary rays it may cast; the same scene with its
+    /// reflections off (`max_depth = 0`) counts none.
+    #[test]
+    fn secondary_rays_are_counted_where_the_plan_traces_them() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/mirror.toml");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let estimate = |text: &str| {
+            let scene = crate::scene::parse(text, &path).unwrap();
+            let plan = EffectPlan::derive(&scene, false);
+            Estimate::of(&scene, &plan, 1, true)
+        };
+        let mirror = estimate(&text);
+        assert_eq!(mirror.secondary, f64::from(MAX_SECONDARY_RAYS_PER_PIXEL));
+        let flat = text.replace("max_depth = 4", "max_depth = 0");
+        assert_ne!(flat, text);
+        assert_eq!(estimate(&flat).secondary, 0.0);
     }
 }

@@ -474,11 +474,7 @@ struct StatsJson {
 pub fn summary(r: &Rendered) -> String {
     let c = &r.counts;
     let total = c.total();
-    let mrays = if r.seconds > 0.0 {
-        total as f64 / r.seconds / 1e6
-    } else {
-        0.0
-    };
+    let mrays = crate::timing::mrays_per_second(total, r.seconds);
     format!(
         "rays: primary {} shadow {} reflection {} refraction {} (total {total}) in {:.3} s, {mrays:.2} Mrays/s",
         c.primary, c.shadow, c.reflection, c.refraction, r.seconds

@@ -49,3 +49,34 @@ pub fn heat(n: u64) -> Vec3 {
     let i = (x.floor() as usize).min(STOPS.len() - 2);
     STOPS[i].lerp(STOPS[i + 1], x - i as f32)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Colour units (0–1): `t` and the stop position `5t` are rounded in `f32`, so a stop is
+    /// met within a few ulps of 1 (`5 · fl(0.2)` is `1 + 1.5e-8`).
+    const STOP_AGREEMENT: f32 = 1e-6;
+
+    /// The heat map's ramp: `t = log2(1 + n) / 10` through black, blue, cyan, green, yellow
+    /// and red at `t = 0, 0.2, 0.4, 0.6, 0.8, 1`, so 0 nodes are black, 3 blue, 15 cyan, 63
+    /// green, 255 yellow and 1023 (or more) red, within [`STOP_AGREEMENT`].
+    #[test]
+    fn the_heat_ramp_passes_its_stops() {
+        for (n, want) in [
+            (0, Vec3::ZERO),
+            (3, Vec3::Z),
+            (15, Vec3::new(0.0, 1.0, 1.0)),
+            (63, Vec3::Y),
+            (255, Vec3::new(1.0, 1.0, 0.0)),
+            (1023, Vec3::X),
+            (1 << 40, Vec3::X),
+        ] {
+            let got = heat(n);
+            assert!(
+                (got - want).abs().max_element() < STOP_AGREEMENT,
+                "{n}: {got}"
+            );
+        }
+    }
+}

@@ -118,16 +118,6 @@ impl EffectPlan {
         }
     }
 
-    /// Any reflection rays at all.
-    pub fn any_reflection(&self) -> bool {
-        self.max_depth > 0 && self.reflect.iter().any(|&b| b)
-    }
-
-    /// Any refraction rays at all.
-    pub fn any_refraction(&self) -> bool {
-        self.max_depth > 0 && self.refract.iter().any(|&b| b)
-    }
-
     /// The human-readable plan (`--explain`).
     pub fn explain(&self, scene: &Scene) -> String {
         let mut s = String::new();

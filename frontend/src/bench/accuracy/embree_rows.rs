@@ -45,7 +45,7 @@ fn mrays(s: &EmbreeScene, rays: &[Ray], reps: usize) -> f64 {
                 k += closest(s, black_box(r)).is_some() as u32;
             }
             black_box(k);
-            rays.len() as f64 / start.elapsed().as_secs_f64().max(1e-12) / 1.0e6
+            crate::timing::mrays_per_second(rays.len() as u64, start.elapsed().as_secs_f64())
         })
         .collect();
     v.sort_by(f64::total_cmp);

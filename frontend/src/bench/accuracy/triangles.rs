@@ -331,7 +331,10 @@ pub fn mrays_bvh<I: TriangleIntersector>(
             hits += accel.closest(isect, black_box(r), None).is_some() as u32;
         }
         black_box(hits);
-        samples.push(rays.len() as f64 / start.elapsed().as_secs_f64().max(1e-12) / 1.0e6);
+        samples.push(crate::timing::mrays_per_second(
+            rays.len() as u64,
+            start.elapsed().as_secs_f64(),
+        ));
     }
     samples.sort_by(f64::total_cmp);
     samples.get(samples.len() / 2).copied().unwrap_or(0.0)
