@@ -485,8 +485,13 @@ fn toml_syntax_error_names_line_and_column() {
 }
 
 /// Writes `obj` as `name` in `dir` and a scene drawing it as mesh `b` (with the mesh fields
-/// `fields`), and loads the scene: the error it must give.
-fn mesh_scene_err(dir: &Path, name: &str, obj: &str, fields: &str) -> halfray::error::Error {
+/// `fields`), and loads the scene.
+fn load_mesh_scene(
+    dir: &Path,
+    name: &str,
+    obj: &str,
+    fields: &str,
+) -> halfray::error::Result<halfray::scene::Scene> {
     std::fs::write(dir.join(name), obj).unwrap();
     let path = dir.join("mesh.toml");
     std::fs::write(
@@ -494,7 +499,12 @@ fn mesh_scene_err(dir: &Path, name: &str, obj: &str, fields: &str) -> halfray::e
         format!("{BASE}\n[mesh.b]\nfile = \"{name}\"\n{fields}\n\n[[object]]\ntype = \"mesh\"\nmesh = \"b\"\nmaterial = \"m\"\n"),
     )
     .unwrap();
-    match load(&path) {
+    load(&path)
+}
+
+/// [`load_mesh_scene`]'s error, which it must give.
+fn mesh_scene_err(dir: &Path, name: &str, obj: &str, fields: &str) -> halfray::error::Error {
+    match load_mesh_scene(dir, name, obj, fields) {
         Ok(_) => panic!("{name} with `{fields}` loaded but should not"),
         Err(e) => e,
     }
@@ -603,13 +613,8 @@ fn smoothing_iterations_are_bounded_at_the_limit() {
             && msg.contains("at most 10000 iterations"),
         "{msg}"
     );
-    let path = dir.path().join("ok.toml");
-    std::fs::write(
-        &path,
-        format!("{BASE}\n[mesh.b]\nfile = \"tri.obj\"\nsmooth = {{ step = 0.1, iterations = 10000 }}\n\n[[object]]\ntype = \"mesh\"\nmesh = \"b\"\nmaterial = \"m\"\n"),
-    )
-    .unwrap();
-    if let Err(e) = load(&path) {
+    let at_limit = "smooth = { step = 0.1, iterations = 10000 }";
+    if let Err(e) = load_mesh_scene(dir.path(), "tri.obj", tri, at_limit) {
         panic!("10 000 iterations refused: {e}");
     }
 }

@@ -173,12 +173,11 @@ pub struct SetReport {
 impl SetReport {
     /// Recomputes the throughput fields from the timed rays and seconds.
     pub fn update_throughput(&mut self) {
-        self.mrays_halfray =
-            crate::timing::mrays_per_second(self.timed_rays as u64, self.secs_halfray);
-        self.mrays_embree =
-            crate::timing::mrays_per_second(self.timed_rays as u64, self.secs_embree);
-        self.mrays_embree_default =
-            crate::timing::mrays_per_second(self.timed_rays as u64, self.secs_embree_default);
+        let rays = self.timed_rays as u64;
+        let mrays = |secs| crate::timing::mrays_per_second(rays, secs);
+        self.mrays_halfray = mrays(self.secs_halfray);
+        self.mrays_embree = mrays(self.secs_embree);
+        self.mrays_embree_default = mrays(self.secs_embree_default);
     }
 
     /// Names of the counts, in the order of [`SetReport::counts`].

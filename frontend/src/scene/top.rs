@@ -393,9 +393,8 @@ mod tests {
     use super::*;
     use crate::scene::geom::Geometry;
 
-    /// The two boxes `[0, 1]³` and `[0.5, 1.5]³` (box objects), and rays along `+x` at height
-    /// `y = z = 0.75` (through both) or `0.25` (through the first only), by `several`.
-    fn two_boxes_and_rays(several: &[bool]) -> (TopLevel, Vec<Ray>) {
+    /// The two boxes `[0, 1]³` and `[0.5, 1.5]³` (box objects).
+    fn two_boxes() -> TopLevel {
         let boxed = |lo: f32| {
             let b = Aabb::new(Vec3::splat(lo), Vec3::splat(lo + 1.0));
             Node {
@@ -405,15 +404,19 @@ mod tests {
                 bounds: Some(b),
             }
         };
-        let top = TopLevel::new(&[boxed(0.0), boxed(0.5)]);
-        let rays = several
+        TopLevel::new(&[boxed(0.0), boxed(0.5)])
+    }
+
+    /// Rays along `+x` at height `y = z = 0.75` (through both of [`two_boxes`]) or `0.25`
+    /// (through the first only), by `several`.
+    fn rays(several: &[bool]) -> Vec<Ray> {
+        several
             .iter()
             .map(|&s| {
                 let h = if s { 0.75 } else { 0.25 };
                 Ray::new(Vec3::new(-1.0, h, h), Vec3::X)
             })
-            .collect();
-        (top, rays)
+            .collect()
     }
 
     /// [`TopLevel::one_object_rays`]'s contract: a ray through one box is paired with it, a
@@ -421,11 +424,12 @@ mod tests {
     /// more than half of those before met several, and only then.
     #[test]
     fn rays_after_the_probe_go_alone_once_most_met_several() {
+        let top = two_boxes();
+        let bvh = top.bvh.as_ref().expect("two bounded objects: a tree");
+        let first_box = |k: u32| top.bounded[k as usize] == 0;
         let run = |several: &[bool]| {
-            let (top, rays) = two_boxes_and_rays(several);
-            let bvh = top.bvh.as_ref().expect("two bounded objects: a tree");
             let mut alone = Vec::new();
-            let pairs = top.one_object_rays(bvh, &rays, |i| alone.push(i));
+            let pairs = top.one_object_rays(bvh, &rays(several), |i| alone.push(i));
             (pairs, alone)
         };
         // Three rays in four through both boxes (75 % > half) among the probed rays, then
@@ -440,8 +444,6 @@ mod tests {
                 .filter(|&i| !probed(i) || i % 4 != 3)
                 .collect::<Vec<_>>()
         );
-        let (top, _) = two_boxes_and_rays(&[]);
-        let first_box = |k: u32| top.bounded[k as usize] == 0;
         assert!(pairs.iter().all(|&(k, _)| first_box(k)), "{pairs:?}");
         assert_eq!(
             pairs.iter().map(|&(_, i)| i).collect::<Vec<_>>(),
