@@ -42,6 +42,8 @@
 #![deny(missing_docs)]
 #![deny(clippy::missing_errors_doc)]
 
+// The host's unit tests only (their oracles and ray sets live in `Vec`s): the library itself
+// links neither `std` nor `alloc`, which the CI's builds for targets without them prove.
 #[cfg(test)]
 extern crate std;
 

@@ -181,7 +181,7 @@ mod tests {
 
     /// Half-width of the band around the star's boundary that the grid test skips (world
     /// units; the star's outer radius is 1). The test's own boundary radius is computed in
-    /// `f32` (a few `1e-7` off), so points closer to it than this are not judged.
+    /// `f32` (a few unit roundoffs off), so points closer to it than this are not judged.
     const STAR_BOUNDARY_BAND: f32 = 1e-3;
 
     type P = Polygon<16>;
@@ -220,12 +220,12 @@ mod tests {
             P::new(&[v(0.0, 0.0), v(1.0, 0.0), v(2.0, 0.0), v(1.0, 0.0)]).unwrap_err(),
             GeometryError::Degenerate
         );
-        // Non-planar: one vertex of a unit square lifted by 1e-3 (≫ PLANARITY_REL).
+        // Non-planar: one vertex of a unit square lifted by a hundred times the tolerance.
         assert_eq!(
             P::new(&[
                 v(0.0, 0.0),
                 v(1.0, 0.0),
-                Vec3::new(1.0, 1.0, 1.0e-3),
+                Vec3::new(1.0, 1.0, 100.0 * PLANARITY_REL),
                 v(0.0, 1.0)
             ])
             .unwrap_err(),
@@ -236,7 +236,7 @@ mod tests {
             P::new(&[
                 v(0.0, 0.0),
                 v(1.0, 0.0),
-                Vec3::new(1.0, 1.0, 1.0e-7),
+                Vec3::new(1.0, 1.0, 0.01 * PLANARITY_REL),
                 v(0.0, 1.0)
             ])
             .is_ok()

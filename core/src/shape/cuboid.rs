@@ -99,6 +99,7 @@ impl Shape for Aabb {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::float::F32_UNIT_ROUNDOFF;
 
     /// The unit box `[0, 1]³` crossed along `+x` at `y = z = 0.5` from `x = −2`: by hand,
     /// entry at `t = 2` on the `−x` face, exit at `t = 3` on the `+x` face, the points exactly
@@ -140,10 +141,11 @@ mod tests {
     /// Against an independent oracle: the `f32` slab test of [`Aabb::intersect_ray`] finds
     /// the same entry and exit within its own rounding, over random rays through random boxes.
     /// Relative gap, scaled by `1 + |t|`, allowed between the `f64` box test's crossings and
-    /// the `f32` slab test's: the slab test pads its planes by a few `f32` ulps (`~1e-7`
-    /// relative each) and these rays reach `|t|` of a few units, so `1e-4` leaves room for
-    /// both roundings without letting a wrong face (off by the box's size) pass.
-    const SLAB_AGREEMENT: f32 = 1e-4;
+    /// the `f32` slab test's: the slab test pads its planes by a few `f32` ulps (one
+    /// [`F32_UNIT_ROUNDOFF`] relative each) and these rays reach `|t|` of a few units, so
+    /// `2¹¹` unit roundoffs leave room for both roundings without letting a wrong face (off
+    /// by the box's size) pass.
+    const SLAB_AGREEMENT: f32 = 2048.0 * F32_UNIT_ROUNDOFF;
 
     #[test]
     fn box_agrees_with_the_slab_test() {
