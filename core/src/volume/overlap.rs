@@ -18,7 +18,8 @@
 //! `f32` allows for `m < 2⁻¹²⁷`). That is exact except for components pushed into the
 //! subnormal range, whose absolute error (`≤ 2⁻¹⁵⁰` each) [`UNDERFLOW_PAD_ABS`] covers, and
 //! it keeps every square and sum finite for all finite `f32` inputs. The absolute part of
-//! every false-positive band is then at most `2⁻⁶⁹·max(m, 1)` world units.
+//! every false-positive band is then at most [`BAND_ABS_PER_MAGNITUDE`]`·max(m, 1)` world
+//! units.
 //!
 //! **Domain of the bands.** The conservative contract ("overlap" for volumes that share a
 //! point) holds for every valid input. The false-positive bands are promised, and fuzzed
@@ -33,7 +34,9 @@ use crate::aabb::Aabb;
 use crate::float::{gamma, gamma_f64, sqrt_f64};
 use glam::{DVec3, Vec3};
 
-pub use super::rescale::{RESCALE_ABOVE, RESCALE_BELOW, UNDERFLOW_PAD_ABS, rescale_factor};
+pub use super::rescale::{
+    BAND_ABS_PER_MAGNITUDE, RESCALE_ABOVE, RESCALE_BELOW, UNDERFLOW_PAD_ABS, rescale_factor,
+};
 pub use super::sat::{OBB_ABS_R_EPSILON, OBB_OBB_BAND_REL, OBB_SAT_PAD_REL};
 
 /// Relative padding of the squared-distance comparisons of [`sphere_sphere`] and
@@ -48,10 +51,10 @@ pub use super::sat::{OBB_ABS_R_EPSILON, OBB_OBB_BAND_REL, OBB_SAT_PAD_REL};
 pub const SPHERE_PAD_REL: f32 = gamma(12);
 
 /// False-positive band of [`sphere_sphere`] and [`sphere_aabb`], unitless: volumes reported
-/// overlapping are at most `SPHERE_BAND_REL·(r₁ + r₂) + 2⁻⁶⁹·max(m, 1)` apart (distance
-/// between the sets; `m` the largest input magnitude, the absolute term from
-/// [`UNDERFLOW_PAD_ABS`] after rescaling). `gamma(16)` ≈ 9.5e-7: the square root of the
-/// `1 + γ₁₂` padding and the `γ₅`, `γ₃` roundings of both sides, with margin.
+/// overlapping are at most `SPHERE_BAND_REL·(r₁ + r₂) + BAND_ABS_PER_MAGNITUDE·max(m, 1)`
+/// apart (distance between the sets; `m` the largest input magnitude, the absolute term
+/// [`BAND_ABS_PER_MAGNITUDE`]). `gamma(16)` ≈ 9.5e-7: the square root of the `1 + γ₁₂`
+/// padding and the `γ₅`, `γ₃` roundings of both sides, with margin.
 pub const SPHERE_BAND_REL: f32 = gamma(16);
 
 /// Relative padding of the projections `|aₖ·(s − c)|` in [`sphere_obb`], relative to
@@ -74,9 +77,9 @@ pub const SPHERE_OBB_PROJ_PAD_REL: f32 = gamma(8);
 pub const SPHERE_OBB_PAD_REL: f32 = gamma(64);
 
 /// False-positive band of [`sphere_obb`], unitless: a sphere and a box reported overlapping
-/// are at most `SPHERE_OBB_BAND_REL·(r + Σ|sⱼ − cⱼ| + Σeₖ) + 2⁻⁶⁹·max(m, 1)` apart
-/// (`gamma(96)` ≈ 5.7e-6): twice the projection padding per axis (`√3·2γ₈`), the relative
-/// `γ₆₄` on the squared radius, and the frame's stretch `2τ`.
+/// are at most `SPHERE_OBB_BAND_REL·(r + Σ|sⱼ − cⱼ| + Σeₖ) + A·max(m, 1)` apart (`A =`
+/// [`BAND_ABS_PER_MAGNITUDE`]; `gamma(96)` ≈ 5.7e-6): twice the projection padding per axis
+/// (`√3·2γ₈`), the relative `γ₆₄` on the squared radius, and the frame's stretch `2τ`.
 pub const SPHERE_OBB_BAND_REL: f32 = gamma(96);
 
 /// Relative padding of the capsule tests' separation certificate (in `f64`), unitless:

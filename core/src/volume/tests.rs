@@ -572,6 +572,33 @@ fn bands_hold_at_both_ends_of_their_domain() {
     }
 }
 
+/// The absolute part of the bands, [`BAND_ABS_PER_MAGNITUDE`]: a point (a ball of radius 0,
+/// so the relative part is 0) just beyond it from a box or another point is "apart" at
+/// every scale, with and without rescaling. The fuzzed case that fixed the constant
+/// (`fuzz/regressions/overlap/crash-5cee…`): at `m = 2⁶⁸` a point `0.5000076` from the box
+/// rounds `fl(d²)` to exactly the `2⁻¹⁴⁰` padding and is reported overlapping, so the
+/// band cannot be `2⁻⁶⁹·m`; it is inside `2⁻⁶⁸·m`.
+#[test]
+fn absolute_band_holds_at_every_scale() {
+    assert_eq!(BAND_ABS_PER_MAGNITUDE, 2f32.powi(-68));
+    for e in [-90, -61, -60, -1, 0, 1, 59, 60, 61, 68, 89] {
+        let m = 2f32.powi(e);
+        let gap = BAND_ABS_PER_MAGNITUDE * m.max(1.0) * (1.0 + 1.0 / 64.0);
+        let b = Aabb::new(Vec3::new(-m, -gap, 0.0), Vec3::new(0.0, 0.0, 0.0));
+        let p = |y: f32| BoundingSphere::new(Vec3::new(0.0, y, 0.0), 0.0).unwrap();
+        assert!(sphere_aabb(&p(0.0), &b), "point on the box at 2^{e}");
+        assert!(!sphere_aabb(&p(gap), &b), "point beyond the band at 2^{e}");
+        let far = BoundingSphere::new(Vec3::new(-m, -gap, 0.0), 0.0).unwrap();
+        assert!(!sphere_sphere(&p(gap), &far), "points apart at 2^{e}");
+    }
+    let b = Aabb::new(Vec3::new(-2f32.powi(68), 0.0, 0.0), Vec3::ZERO);
+    let p = BoundingSphere::new(Vec3::new(0.0, 0.500_007_6, 0.0), 0.0).unwrap();
+    assert!(
+        sphere_aabb(&p, &b),
+        "the fuzzed false positive, within the band"
+    );
+}
+
 /// `contains_point`'s padding is `CONTAIN_PAD_REL` (about `10⁻¹⁵`) of the compared
 /// magnitudes, nothing more: at scales `10⁻³`, 1 and `10³`, a point on the boundary of a ball
 /// (radius 1 about the origin), a capsule (radius ½ about `[0, 2]` on `x`) and a box

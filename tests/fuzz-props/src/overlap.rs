@@ -287,7 +287,7 @@ pub fn obb_axes_gap(a: &Obb, b: &Obb) -> (f64, f64) {
 pub fn band(a: &Volume, b: &Volume) -> Option<f64> {
     use Volume::*;
     let m = a.magnitude().max(b.magnitude());
-    let abs = 2f64.powi(-69) * m.max(1.0);
+    let abs = f64::from(BAND_ABS_PER_MAGNITUDE) * m.max(1.0);
     let l1 = |v: Vec3| v.as_dvec3().abs().element_sum();
     Some(match (a, b) {
         (Aabb(_), Aabb(_)) => m * 1e-15,
@@ -366,7 +366,7 @@ pub fn check_pair(a: &Volume, b: &Volume) -> Option<Decided> {
         };
         if let Some((x, y)) = boxes {
             let (gap, s) = obb_axes_gap(&x, &y);
-            let abs = 2f64.powi(-69) * mag.max(1.0);
+            let abs = f64::from(BAND_ABS_PER_MAGNITUDE) * mag.max(1.0);
             if gap > f64::from(OBB_OBB_BAND_REL) * s + abs {
                 assert!(
                     !got,
