@@ -51,10 +51,10 @@ pub const OBB_SAT_PAD_REL: f32 = gamma(128);
 /// 3.1e-5): boxes reported overlapping have, along **each** of the 15 axes `L` (`aᵢ`, `bⱼ`,
 /// `aᵢ × bⱼ`, not normalised), a gap between their projections of at most
 /// `OBB_OBB_BAND_REL·S +` [`super::rescale::BAND_ABS_PER_MAGNITUDE`]`·max(m, 1)`:
-/// `OBB_SAT_PAD_REL`, twice `ε` per unit of `Σe`, the frame terms, and the sums' rounding. Measured along the unit axis that is
-/// `1/|L|` times more: a pair separated only across two nearly parallel edges (sin of their
-/// angle `≲ 1e-4`) may be reported overlapping at a visible distance, the usual price of the
-/// `ε`.
+/// `OBB_SAT_PAD_REL`, twice `ε` per unit of `Σe`, the frame terms, and the sums' rounding.
+/// Measured along the unit axis that is `1/|L|` times more: a pair separated only across two
+/// nearly parallel edges (sin of their angle `≲ 1e-4`) may be reported overlapping at a
+/// visible distance, the usual price of the `ε`.
 pub const OBB_OBB_BAND_REL: f32 = gamma(512);
 
 /// The bit patterns of a box's parameters: a total order that makes the test symmetric.

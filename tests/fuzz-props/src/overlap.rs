@@ -282,12 +282,18 @@ pub fn obb_axes_gap(a: &Obb, b: &Obb) -> (f64, f64) {
     (gap, s)
 }
 
+/// The absolute part of every band, [`BAND_ABS_PER_MAGNITUDE`]`·max(m, 1)`, for the largest
+/// input magnitude `m` (world units).
+fn band_abs(m: f64) -> f64 {
+    f64::from(BAND_ABS_PER_MAGNITUDE) * m.max(1.0)
+}
+
 /// The documented false-positive band of the pair's test as a distance, `None` where
 /// property 2 is not checked this way (OBB–OBB and box–OBB use [`obb_axes_gap`]).
 pub fn band(a: &Volume, b: &Volume) -> Option<f64> {
     use Volume::*;
     let m = a.magnitude().max(b.magnitude());
-    let abs = f64::from(BAND_ABS_PER_MAGNITUDE) * m.max(1.0);
+    let abs = band_abs(m);
     let l1 = |v: Vec3| v.as_dvec3().abs().element_sum();
     Some(match (a, b) {
         (Aabb(_), Aabb(_)) => m * 1e-15,
@@ -366,8 +372,7 @@ pub fn check_pair(a: &Volume, b: &Volume) -> Option<Decided> {
         };
         if let Some((x, y)) = boxes {
             let (gap, s) = obb_axes_gap(&x, &y);
-            let abs = f64::from(BAND_ABS_PER_MAGNITUDE) * mag.max(1.0);
-            if gap > f64::from(OBB_OBB_BAND_REL) * s + abs {
+            if gap > f64::from(OBB_OBB_BAND_REL) * s + band_abs(mag) {
                 assert!(
                     !got,
                     "gap {gap:e} beyond the OBB band, test says overlap\n{}",
