@@ -182,7 +182,7 @@ mod tests {
             1.0,
             -2.5,
             f32::MIN_POSITIVE,
-            1e-45,
+            f32::from_bits(1), // the smallest subnormal
             f32::MAX,
             f32::INFINITY,
             f32::NEG_INFINITY,

@@ -291,6 +291,47 @@ mod tests {
     use crate::test_util::{lcg, special_f32, unit_vec};
     use crate::triangle::{TriangleIntersector, Watertight};
 
+    /// `M·M⁻¹` against the identity, per entry (absolute; unitless in the linear block,
+    /// world units in the translation column): the inverse is computed in `f64` and rounded
+    /// once (module docs), so each entry of the `f32` product is a 4-term dot product of
+    /// once-rounded values, a few unit roundoffs (`6e-8`) of its terms (at most a few units in
+    /// the linear block); `1e-5` is well above that, yet a wrong inverse entry fails it. On
+    /// the test matrix the product is exactly the identity.
+    const INVERSE_ENTRY_ABS: f32 = 1.0e-5;
+
+    /// A point taken to the world and back, distance from where it started (world units):
+    /// the world point, near the translation `(1e3, −20, 5)`, is rounded to `f32` (half an
+    /// ulp there is `3.1e-5`) and the map back adds a rounding or two of that size; `1e-4` is
+    /// about three of them (measured: `4.6e-5`).
+    const ROUND_TRIP_ABS: f32 = 1.0e-4;
+
+    /// Distance allowed between two `f32` evaluations of the same world point (world
+    /// units): the tests' coordinates reach `|x| ≈ 1e3`, where one ulp is `6.1e-5`, and each
+    /// evaluation takes a few roundings there; `1e-3` is 16 of those ulps.
+    const WORLD_POINT_ABS: f32 = 1.0e-3;
+
+    /// Distance between the transformed `f32` normal and the analytic `f64` one (unit
+    /// vectors, so radians for small angles): `M⁻ᵀ` in `f32` (entries rounded once), a
+    /// dot product and a normalisation, amplified by the anisotropy of `L` (`κ ≈ 8`): a few
+    /// `1e-7`.
+    const NORMAL_ANGLE: f64 = 1.0e-6;
+
+    /// Barycentrics of one hit found in world and in object space (unitless): the world
+    /// vertices and the object-space ray are each rounded once at `|x| ≈ 100` (ulp
+    /// `7.6e-6`) on edges of ~2, so the two triangles differ by a few `1e-6` of their size;
+    /// checked only for rays not grazing the plane (`|cos| > 0.2`).
+    const BARYCENTRIC_AGREEMENT: f32 = 1.0e-4;
+
+    /// The geometric normals of one hit from the world triangle and from the object
+    /// triangle transformed (unit vectors): world vertices rounded at `|v| ≈ 100` (ulp
+    /// `7.6e-6`) on edges of ~2 turn the normal by a few `1e-6`.
+    const NORMAL_AGREEMENT: f32 = 2.0e-5;
+
+    /// `| |n| − 1 |` of a world normal for rays of arbitrary (special-value) parameters: a
+    /// normalisation in `f32` is good to a few unit roundoffs; this loose bound only tells
+    /// a normalised vector from an unnormalised or collapsed one.
+    const UNIT_LENGTH_ABS: f32 = 1.0e-3;
+
     /// Translate · shear · non-uniform scale.
     fn sheared_ellipsoid_transform() -> Transform {
         let scale = Transform::scale(Vec3::new(2.0, 0.5, 3.0)).unwrap();
@@ -317,7 +358,7 @@ mod tests {
         );
         assert!(
             Transform::scale(Vec3::new(1.0, 1.0, 1.0e-4)).is_ok(),
-            "a flattened sphere: axis ratio 1e-4"
+            "a flattened sphere: axis ratio 10⁻⁴"
         );
         assert!(
             Transform::scale(Vec3::splat(1.0e-20)).is_ok(),
@@ -349,9 +390,12 @@ mod tests {
         // The inverse is an inverse.
         let t = sheared_ellipsoid_transform();
         let prod = t.matrix() * t.inverse_matrix();
-        assert!(prod.abs_diff_eq(Mat4::IDENTITY, 1.0e-5), "{prod:?}");
+        assert!(
+            prod.abs_diff_eq(Mat4::IDENTITY, INVERSE_ENTRY_ABS),
+            "{prod:?}"
+        );
         let p = Vec3::new(0.3, -0.7, 0.2);
-        assert!((t.point_to_object(t.point_to_world(p)) - p).length() < 1.0e-4);
+        assert!((t.point_to_object(t.point_to_world(p)) - p).length() < ROUND_TRIP_ABS);
         assert_eq!(t.inverse().inverse(), t);
     }
 
@@ -369,7 +413,7 @@ mod tests {
         for s in [0.0f32, 0.5, 2.0, 7.5] {
             let w = t.point_to_world(r.at(s));
             assert!(
-                (w - ray.at(s)).length() <= 1.0e-3,
+                (w - ray.at(s)).length() <= WORLD_POINT_ABS,
                 "{s}: {w} vs {}",
                 ray.at(s)
             );
@@ -410,9 +454,7 @@ mod tests {
             let analytic = world.gradient(x_exact).normalize();
             let angle = (hw.normal.as_dvec3() - analytic).length();
             worst_angle = worst_angle.max(angle);
-            // M⁻ᵀ in f32 (entries rounded once), a dot product and a normalisation, amplified
-            // by the anisotropy of L (κ ≈ 8): a few 1e-7.
-            assert!(angle <= 1.0e-6, "normal off by {angle}");
+            assert!(angle <= NORMAL_ANGLE, "normal off by {angle}");
             // Same t in both spaces: the object-space root is the world-space root.
             let (t0, _) = world.roots(&ray).unwrap();
             // Compared as a distance along the normal (the well-conditioned quantity) in ulps
@@ -478,16 +520,17 @@ mod tests {
                 ho.t
             );
             if ray.direction.normalize().dot(nrm).abs() > 0.2 {
-                assert!((hw.b1 - ho.b1).abs() <= 1.0e-4 && (hw.b2 - ho.b2).abs() <= 1.0e-4);
+                assert!(
+                    (hw.b1 - ho.b1).abs() <= BARYCENTRIC_AGREEMENT
+                        && (hw.b2 - ho.b2).abs() <= BARYCENTRIC_AGREEMENT
+                );
             }
             assert_eq!(hw.front_face, ho.front_face);
             let pw = hw.to_hit(&world);
             let po = tf.hit_to_world(&ho.to_hit(&obj));
-            assert!((pw.point - po.point).length() <= 1.0e-3);
-            // World vertices are rounded at |v| ≈ 100 (ulp 7.6e-6) on edges of ~2: the two
-            // normals legitimately differ by a few 1e-6.
+            assert!((pw.point - po.point).length() <= WORLD_POINT_ABS);
             assert!(
-                (pw.normal - po.normal).length() <= 2.0e-5,
+                (pw.normal - po.normal).length() <= NORMAL_AGREEMENT,
                 "{} vs {}",
                 pw.normal,
                 po.normal
@@ -574,7 +617,7 @@ mod tests {
                 // side of the surface as the object-space normal says (`front_face` kept).
                 let w = tf.hit_to_world(&h);
                 assert!(w.normal.is_finite() && w.point.is_finite(), "{w:?}");
-                assert!((w.normal.length() - 1.0).abs() < 1e-3, "{w:?}");
+                assert!((w.normal.length() - 1.0).abs() < UNIT_LENGTH_ABS, "{w:?}");
                 assert_eq!(w.front_face, h.front_face);
             }
         }
