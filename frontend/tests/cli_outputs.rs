@@ -253,6 +253,42 @@ fn a_benchmark_report_is_reserved_first_and_is_never_an_input() {
     assert_eq!(files(dir.path()), ["cube.obj", "list.txt"]);
 }
 
+/// `bench accuracy` without meshes reads its default ones from `HALFRAY_MESHES`: those are its
+/// inputs too, and a report onto one of them is refused before anything is measured.
+#[test]
+fn a_default_mesh_of_bench_accuracy_is_an_input() {
+    let dir = tempfile::tempdir().unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    for name in [
+        "tetrahedron",
+        "cube",
+        "octahedron",
+        "spot",
+        "torus",
+        "bunny",
+    ] {
+        let copy = dir.path().join(format!("{name}.obj"));
+        std::fs::copy(Path::new(MESHES).join(format!("{name}.obj")), &copy).unwrap();
+        // Writable, as a user's own mesh (the shared copies are read-only).
+        std::fs::set_permissions(&copy, std::fs::Permissions::from_mode(0o644)).unwrap();
+    }
+    let bunny = dir.path().join("bunny.obj");
+    let before = std::fs::read(&bunny).unwrap();
+    let o = Command::new(BIN)
+        .env("HALFRAY_MESHES", dir.path())
+        .args(os!["bench", "accuracy", "--quick", "--json", &bunny])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("refusing to overwrite an input"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(o.stdout.is_empty(), "nothing measured, nothing printed");
+    assert_eq!(std::fs::read(&bunny).unwrap(), before);
+}
+
 #[test]
 fn sigterm_during_a_render_leaves_no_temporary_file() {
     let dir = tempfile::tempdir().unwrap();

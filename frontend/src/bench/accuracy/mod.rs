@@ -9,7 +9,7 @@ pub mod triangles;
 use crate::console::print_out;
 use crate::error::{Error, Result};
 use crate::obj::{ObjMesh, read_obj};
-use crate::outputs::{Named, reserve_outputs};
+use crate::outputs::{Named, reserve_outputs, write_together};
 use halfray_core::triangle::TriangleVariant;
 use std::path::{Path, PathBuf};
 use triangles::{Accuracy, Workload};
@@ -129,25 +129,31 @@ fn is_closed(m: &ObjMesh) -> bool {
     !edges.is_empty() && edges.values().all(|&n| n == 2)
 }
 
-/// Runs the benchmark and returns the report (printing nothing).
-pub fn measure(args: &AccuracyArgs) -> Result<Report> {
+/// The meshes `args` measures: those it names, or else the shared meshes
+/// ([`shared_meshes_dir`]) tetrahedron, cube, octahedron, spot, torus and bunny, and the dragon
+/// without `--quick`.
+fn mesh_paths(args: &AccuracyArgs) -> Vec<PathBuf> {
+    if !args.meshes.is_empty() {
+        return args.meshes.clone();
+    }
     let dir = shared_meshes_dir();
-    let paths: Vec<PathBuf> = if args.meshes.is_empty() {
-        let mut names = vec![
-            "tetrahedron",
-            "cube",
-            "octahedron",
-            "spot",
-            "torus",
-            "bunny",
-        ];
-        if !args.quick {
-            names.push("dragon");
-        }
-        names.iter().map(|n| dir.join(format!("{n}.obj"))).collect()
-    } else {
-        args.meshes.clone()
-    };
+    let mut names = vec![
+        "tetrahedron",
+        "cube",
+        "octahedron",
+        "spot",
+        "torus",
+        "bunny",
+    ];
+    if !args.quick {
+        names.push("dragon");
+    }
+    names.iter().map(|n| dir.join(format!("{n}.obj"))).collect()
+}
+
+/// Runs the benchmark on [`mesh_paths`] and returns the report (printing nothing).
+pub fn measure(args: &AccuracyArgs) -> Result<Report> {
+    let paths = mesh_paths(args);
     let meshes: Vec<(PathBuf, ObjMesh)> = paths
         .iter()
         .map(|p| read_obj(p).map(|m| (p.clone(), m)))
@@ -313,8 +319,9 @@ pub fn markdown(r: &Report) -> String {
     s
 }
 
-/// Runs `halfray bench accuracy`: reserves `--json` and `--chart` (never one of the meshes),
-/// measures, writes the files, then prints the table.
+/// Runs `halfray bench accuracy`: reserves `--json` and `--chart` (never one of the meshes
+/// it reads, the default ones included), measures, writes both files or neither
+/// ([`write_together`]), then prints the table.
 pub fn run(args: &AccuracyArgs) -> Result<()> {
     let mut outputs = Vec::new();
     if let Some(p) = &args.json {
@@ -324,23 +331,25 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         crate::charts::Format::of(p)?;
         outputs.push(Named::new("--chart", p));
     }
-    let inputs: Vec<Named<'_>> = args.meshes.iter().map(|p| Named::new("mesh", p)).collect();
+    let paths = mesh_paths(args);
+    let inputs: Vec<Named<'_>> = paths.iter().map(|p| Named::new("mesh", p)).collect();
     let mut reserved = reserve_outputs(&outputs, &inputs, args.force)?.into_iter();
     let report = measure(args)?;
+    let mut files = Vec::new();
     if args.json.is_some() {
         let json =
             serde_json::to_vec_pretty(&report).map_err(|e| Error::encode("the JSON report", e))?;
         let out = reserved.next().expect("--json is reserved first");
-        out.write(|w| w.write_all(&json))?;
+        files.push((out, json));
     }
     if args.chart.is_some() {
         let out = reserved.next().expect("--chart is reserved after --json");
         // Cost as ns per incoherent ray through each side's BVH (bunny), so that Embree, which
         // has no per-triangle entry point, sits on the same axis.
-        crate::charts::write(
-            &crate::charts::accuracy::AccuracyChart::from_report(&report)?,
-            out,
-        )?;
+        let chart = crate::charts::accuracy::AccuracyChart::from_report(&report)?;
+        let bytes = crate::charts::render(&chart, crate::charts::Format::of(out.path())?)?;
+        files.push((out, bytes));
     }
+    write_together(files)?;
     print_out(&markdown(&report))
 }
