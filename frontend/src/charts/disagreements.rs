@@ -41,9 +41,11 @@ pub struct DisagreementChart {
 }
 
 impl DisagreementChart {
-    /// The chart of `report`: its rows summed per mesh.
+    /// The chart of `report`: its rows summed per mesh; `None` when a count summed over the
+    /// rows of a mesh, or over the meshes (the caption's and the legend's totals), does not fit
+    /// in a `usize` (a file no run can have written).
     #[must_use]
-    pub fn new(report: &Report) -> Self {
+    pub fn new(report: &Report) -> Option<Self> {
         let mut chart = Self {
             meshes: Vec::new(),
             counts: Vec::new(),
@@ -61,21 +63,34 @@ impl DisagreementChart {
                 }
             };
             for (c, (_, count)) in chart.counts[i].iter_mut().zip(CLASSES) {
-                *c += count(row);
+                *c = c.checked_add(count(row))?;
             }
-            chart.rays[i] += row.rays;
+            chart.rays[i] = chart.rays[i].checked_add(row.rays)?;
         }
-        chart
+        checked_sum(chart.rays.iter().copied())?;
+        for c in 0..CLASSES.len() {
+            checked_sum(chart.counts.iter().map(|m| m[c]))?;
+        }
+        Some(chart)
     }
 
     /// The chart of a `crosscheck --json` (or `crosscheck merge --json`) file.
     ///
     /// # Errors
     ///
-    /// Reading or parsing the file; an input error when it has no rows.
+    /// Reading or parsing the file; an input error when it has no rows, or when its counts
+    /// summed overflow ([`DisagreementChart::new`]).
     pub fn from_file(path: &Path) -> Result<Self> {
         let report: Report = read_json(path, "`crosscheck --json`")?;
-        let chart = Self::new(&report);
+        let chart = Self::new(&report).ok_or_else(|| {
+            Error::input(
+                Location::file(path),
+                format!(
+                    "the rows' counts summed overflow {} bits: not a run's report",
+                    usize::BITS
+                ),
+            )
+        })?;
         if chart.meshes.is_empty() {
             return Err(Error::input(
                 Location::file(path),
@@ -86,6 +101,11 @@ impl DisagreementChart {
     }
 }
 
+/// The sum of `counts`, `None` where it overflows.
+fn checked_sum(mut counts: impl Iterator<Item = usize>) -> Option<usize> {
+    counts.try_fold(0usize, usize::checked_add)
+}
+
 impl Chart for DisagreementChart {
     fn draw<DB: DrawingBackend>(
         &self,
@@ -93,7 +113,7 @@ impl Chart for DisagreementChart {
     ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
         let n = self.meshes.len();
         let top = self.counts.iter().flatten().fold(10usize, |a, &b| a.max(b)) as f64 * 10.0;
-        let total: usize = self.rays.iter().sum();
+        let total = checked_sum(self.rays.iter().copied()).unwrap_or(usize::MAX);
         let mut chart = ChartBuilder::on(root)
             .caption(
                 format!(
@@ -124,7 +144,7 @@ impl Chart for DisagreementChart {
                     colour.filled(),
                 )
             });
-            let total: usize = self.counts.iter().map(|m| m[c]).sum();
+            let total = checked_sum(self.counts.iter().map(|m| m[c])).unwrap_or(usize::MAX);
             chart
                 .draw_series(bars)?
                 .label(format!("{name}: {total}"))
@@ -162,6 +182,33 @@ mod tests {
         r["genuine_mismatches"] = genuine.into();
         r["leaks_embree_default"] = leaks_default.into();
         r
+    }
+
+    /// A report whose counts summed do not fit in a `usize` (two rows of one mesh, or two
+    /// meshes, each `usize::MAX − 1` genuine mismatches) is refused, not drawn wrapped.
+    #[test]
+    fn counts_that_overflow_when_summed_are_an_input_error() {
+        let huge = usize::MAX - 1;
+        let dir = tempfile::tempdir().unwrap();
+        for (second_mesh, what) in [("bunny.obj", "one mesh"), ("dragon.obj", "two meshes")] {
+            let json = serde_json::json!({
+                "intersector": "watertight", "seed": 1, "rays": 1000,
+                "ray_sets": ["primary", "edges"], "shard": {"index": 0, "count": 1},
+                "threads": 2, "wall_seconds": 1.0, "rays_per_second": 1.0, "meshes": 2,
+                "failed": [],
+                "sets": [row("bunny.obj", "primary", 0, huge, 0),
+                         row(second_mesh, "edges", 0, huge, 0)]
+            });
+            let report: Report = serde_json::from_value(json).unwrap();
+            assert_eq!(DisagreementChart::new(&report), None, "{what}");
+            let path = dir.path().join("crosscheck.json");
+            std::fs::write(&path, serde_json::to_vec(&report).unwrap()).unwrap();
+            let e = DisagreementChart::from_file(&path).unwrap_err().to_string();
+            assert!(
+                e.contains("crosscheck.json") && e.contains("overflow"),
+                "{what}: {e}"
+            );
+        }
     }
 
     #[test]
