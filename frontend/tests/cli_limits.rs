@@ -70,6 +70,57 @@ fn image_and_subdivision_sizes_are_estimated_before_allocating() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
 
+/// `--levels` beyond `MAX_LEVELS` is refused by the parser, at once: on a mesh without faces
+/// (which no level changes, so no size estimate refuses it) it used to recurse once a level
+/// until the stack overflowed. `MAX_LEVELS` itself is taken there, and on one triangle it is
+/// already more than the half-edge core can hold, so the cap refuses no level a mesh could
+/// reach.
+#[test]
+fn subdivision_levels_are_capped_where_one_face_outgrows_the_core() {
+    use halfray::mesh_tools::MAX_LEVELS;
+    let dir = tempfile::tempdir().unwrap();
+    let empty = dir.path().join("empty.obj");
+    std::fs::write(&empty, "v 0 0 0\nv 1 0 0\n").unwrap();
+    let triangle = dir.path().join("triangle.obj");
+    std::fs::write(&triangle, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let out = dir.path().join("out.obj");
+    let subdivide = |input: &Path, levels: String| {
+        run(&[
+            "mesh",
+            "subdivide",
+            input.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--levels",
+            &levels,
+        ])
+    };
+    for levels in [u64::from(MAX_LEVELS) + 1, 100_000, u64::from(u32::MAX)] {
+        let (code, e) = subdivide(&empty, levels.to_string());
+        assert_eq!(code, Some(2), "--levels {levels}: {e}");
+        assert!(
+            e.contains("--levels") && e.contains(&format!("0..={MAX_LEVELS}")),
+            "{e}"
+        );
+        assert!(!out.exists());
+    }
+    let (code, e) = subdivide(&empty, MAX_LEVELS.to_string());
+    assert_eq!(code, Some(0), "{e}");
+    assert!(out.exists());
+    std::fs::remove_file(&out).unwrap();
+    let (code, e) = subdivide(&triangle, MAX_LEVELS.to_string());
+    assert_eq!(code, Some(2), "{e}");
+    assert!(e.contains("more than the half-edge core's"), "{e}");
+    let (code, e) = subdivide(&triangle, "2".into());
+    assert_eq!(code, Some(0), "{e}");
+    let faces = std::fs::read_to_string(&out)
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("f "))
+        .count();
+    assert_eq!(faces, 16, "4² faces of one triangle");
+}
+
 #[test]
 fn ray_generation_on_a_mesh_near_f32_max_gives_up_with_an_error() {
     let s = f32::MAX / 2.0;

@@ -95,13 +95,22 @@ pub struct SubdivideArgs {
     /// Replace an output that is read-only or hard-linked (keeping its mode).
     #[arg(long)]
     pub force: bool,
-    /// Number of subdivision levels (each multiplies the face count by 4).
-    #[arg(long, default_value_t = 1)]
+    /// Number of subdivision levels (each multiplies the face count by 4), at most
+    /// [`MAX_LEVELS`].
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_LEVELS)))]
     pub levels: u32,
     /// Vertex weights.
     #[arg(long, value_enum, default_value_t = Weights::Warren)]
     pub weights: Weights,
 }
+
+/// The most levels `mesh subdivide` takes: each level multiplies the face count by 4, so a
+/// mesh of one face passes the half-edge core's
+/// [`MAX_ELEMENTS`](halfray_core::halfedge::MAX_ELEMENTS) faces (`2³⁰ − 1`) at this level
+/// (`4^15 = 2³⁰`) and no mesh with a face can take more; one without faces is unchanged by any
+/// number.
+pub const MAX_LEVELS: u32 =
+    (usize::BITS - halfray_core::halfedge::MAX_ELEMENTS.leading_zeros()).div_ceil(2);
 
 /// `halfray mesh smooth`.
 #[derive(clap::Args, Debug, Clone)]
