@@ -259,14 +259,7 @@ fn a_benchmark_report_is_reserved_first_and_is_never_an_input() {
 fn a_default_mesh_of_bench_accuracy_is_an_input() {
     let dir = tempfile::tempdir().unwrap();
     use std::os::unix::fs::PermissionsExt;
-    for name in [
-        "tetrahedron",
-        "cube",
-        "octahedron",
-        "spot",
-        "torus",
-        "bunny",
-    ] {
+    for name in halfray::bench::accuracy::DEFAULT_MESHES {
         let copy = dir.path().join(format!("{name}.obj"));
         std::fs::copy(Path::new(MESHES).join(format!("{name}.obj")), &copy).unwrap();
         // Writable, as a user's own mesh (the shared copies are read-only).

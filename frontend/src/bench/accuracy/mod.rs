@@ -129,26 +129,31 @@ fn is_closed(m: &ObjMesh) -> bool {
     !edges.is_empty() && edges.values().all(|&n| n == 2)
 }
 
-/// The meshes `args` measures: those it names, or else the shared meshes
-/// ([`shared_meshes_dir`]) tetrahedron, cube, octahedron, spot, torus and bunny, and the dragon
-/// without `--quick`.
+/// The shared meshes ([`shared_meshes_dir`]) measured when none are named, by stem; the
+/// dragon too without `--quick`.
+pub const DEFAULT_MESHES: [&str; 6] = [
+    "tetrahedron",
+    "cube",
+    "octahedron",
+    "spot",
+    "torus",
+    "bunny",
+];
+
+/// The meshes `args` measures: those it names, or else [`DEFAULT_MESHES`] (and the dragon
+/// without `--quick`).
 fn mesh_paths(args: &AccuracyArgs) -> Vec<PathBuf> {
     if !args.meshes.is_empty() {
         return args.meshes.clone();
     }
+    let dragon = (!args.quick).then_some("dragon");
     let dir = shared_meshes_dir();
-    let mut names = vec![
-        "tetrahedron",
-        "cube",
-        "octahedron",
-        "spot",
-        "torus",
-        "bunny",
-    ];
-    if !args.quick {
-        names.push("dragon");
-    }
-    names.iter().map(|n| dir.join(format!("{n}.obj"))).collect()
+    DEFAULT_MESHES
+        .iter()
+        .copied()
+        .chain(dragon)
+        .map(|n| dir.join(format!("{n}.obj")))
+        .collect()
 }
 
 /// Runs the benchmark on [`mesh_paths`] and returns the report (printing nothing).
