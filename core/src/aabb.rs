@@ -330,16 +330,17 @@ impl SlabRay {
 
     /// `((near − o_axis)/d_axis, (far − o_axis)/d_axis)`, unpadded: by the reciprocal, or by
     /// division when [`SlabRay::divide`] is set. `±0` components give `±∞` (or NaN for an
-    /// origin on the plane) either way.
+    /// origin on the plane) either way; an `axis` other than 0, 1 or 2 gives `(NaN, NaN)`.
     #[inline(always)]
     #[must_use]
     pub fn slab_distances(&self, axis: usize, near: f32, far: f32) -> (f32, f32) {
-        let o = self.origin[axis];
+        let component = |v: Vec3| v.to_array().get(axis).copied().unwrap_or(f32::NAN);
+        let o = component(self.origin);
         if self.divide {
-            let d = self.direction[axis];
+            let d = component(self.direction);
             ((near - o) / d, (far - o) / d)
         } else {
-            let inv = self.inv_dir[axis];
+            let inv = component(self.inv_dir);
             ((near - o) * inv, (far - o) * inv)
         }
     }
@@ -350,6 +351,20 @@ mod tests {
     use super::*;
 
     const UNIT: Aabb = Aabb::new(Vec3::ZERO, Vec3::ONE);
+
+    /// An axis beyond `z` is `(NaN, NaN)`, not a panic; axes 0–2 are the slab's distances,
+    /// by the reciprocal and by division alike.
+    #[test]
+    fn slab_distances_of_an_axis_beyond_z_are_nan() {
+        for d in [Vec3::new(2.0, 4.0, -8.0), Vec3::new(1e-39, 4.0, -8.0)] {
+            let s = SlabRay::new(&Ray::new(Vec3::ONE, d)).unwrap();
+            for axis in [3, 4, usize::MAX] {
+                let (a, b) = s.slab_distances(axis, 0.0, 1.0);
+                assert!(a.is_nan() && b.is_nan(), "{d} axis {axis}");
+            }
+            assert_eq!(s.slab_distances(1, 0.0, 9.0), (-0.25, 2.0), "{d}");
+        }
+    }
 
     fn hits(b: &Aabb, o: Vec3, d: Vec3) -> bool {
         b.intersect_ray(&Ray::new(o, d)).is_some()

@@ -19,7 +19,10 @@ pub trait Primitive {
 /// `N` primitives by index `0..N`.
 ///
 /// Implementations must not panic for any index below [`PrimitiveSource::primitive_count`];
-/// invalid primitives report non-finite bounds.
+/// invalid primitives report non-finite bounds. Both methods are functions of the source and
+/// the index: a builder may read a primitive's bounds more than once. A source whose answers
+/// change between calls still gets a well-formed structure (no panic, no cycle, every
+/// primitive in one leaf), but its boxes may not contain its primitives.
 pub trait PrimitiveSource {
     /// Number of primitives `N`.
     fn primitive_count(&self) -> usize;

@@ -63,12 +63,13 @@ pub const CUBE_TRIANGLES: [[u32; 3]; 12] = [
 /// quad `(i, j)`, rows `j` in order and `i` in order within a row, is split on its diagonal
 /// from `(i, j)` to `(i + 1, j + 1)` into `[(i, j), (i + 1, j), (i + 1, j + 1)]` and
 /// `[(i, j), (i + 1, j + 1), (i, j + 1)]`. Indices are `u32`: the caller keeps
-/// `(nx + 1)·(ny + 1) ≤ 2³²`.
+/// `(nx + 1)·(ny + 1) ≤ 2³²`; beyond it they wrap modulo `2³²` (never a panic).
 pub fn grid_triangles(nx: u32, ny: u32) -> impl Iterator<Item = [u32; 3]> {
-    let at = move |i: u32, j: u32| j * (nx + 1) + i;
+    let at = move |i: u32, j: u32| j.wrapping_mul(nx.wrapping_add(1)).wrapping_add(i);
     (0..ny).flat_map(move |j| {
         (0..nx).flat_map(move |i| {
-            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            let (i1, j1) = (i.wrapping_add(1), j.wrapping_add(1));
+            let (a, b, c, d) = (at(i, j), at(i1, j), at(i1, j1), at(i, j1));
             [[a, b, c], [a, c, d]]
         })
     })
@@ -77,6 +78,14 @@ pub fn grid_triangles(nx: u32, ny: u32) -> impl Iterator<Item = [u32; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Beyond the documented `(nx + 1)·(ny + 1) ≤ 2³²` the indices wrap instead of
+    /// overflowing: the first quad of a `u32::MAX`-wide grid is still two triangles.
+    #[test]
+    fn grid_triangles_beyond_u32_indices_wrap_without_panic() {
+        let first: std::vec::Vec<_> = grid_triangles(u32::MAX, 1).take(2).collect();
+        assert_eq!(first, [[0, 1, 1], [0, 1, 0]]);
+    }
 
     /// Every quad's two triangles cover it once: over a 3 × 2 grid at integer positions, the
     /// signed areas (z of the cross product) are all `+1/2`, sum to the grid's area, and every

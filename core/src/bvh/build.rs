@@ -501,12 +501,20 @@ fn split_node<R: Refs>(
             s.cost < leaf_cost || count > max_leaf
         }
     };
-    let (mid, left_b, right_b, left_c, right_c) = match split {
+    let partitioned = match split {
         Some(s) if pays(&s) => {
-            let (mid, lc, rc) = partition(refs, range, &s);
-            (task.start + mid, s.left, s.right, lc, rc)
+            let (mid, lc, rc) = partition(refs, range.clone(), &s);
+            // A half is empty only when the source's bounds changed between the binning and
+            // the partition (a source that breaks `PrimitiveSource`'s contract): then as if no
+            // split were found, so that no leaf is empty (a leaf of 0 would read as an inner
+            // node) and the tree stays well formed.
+            (mid > 0 && mid < count).then_some((task.start + mid, s.left, s.right, lc, rc))
         }
-        _ if count > max_leaf => {
+        _ => None,
+    };
+    let (mid, left_b, right_b, left_c, right_c) = match partitioned {
+        Some(p) => p,
+        None if count > max_leaf => {
             // All centroids coincide, or the node is deep: split by count, in index order.
             let mid = count / 2;
             let cut = range.start + mid as usize;

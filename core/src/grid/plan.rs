@@ -107,15 +107,20 @@ impl GridPlan {
         if cells >= u32::MAX as usize {
             return Err(GridError::TooManyReferences { count: cells });
         }
-        let mut refs = 0usize;
+        // Counted in `u64`: on a 32-bit target a `usize` count would wrap before the check.
+        let mut refs = 0u64;
         for i in 0..n {
             if let Some(v) = usable_triangle(mesh, i) {
                 for_each_cell(&layout, &v, options.assignment, |_| refs += 1);
             }
         }
-        if refs > u32::MAX as usize {
-            return Err(GridError::TooManyReferences { count: refs });
-        }
+        let refs = match u32::try_from(refs) {
+            Ok(r) => r as usize,
+            Err(_) => {
+                let count = usize::try_from(refs).unwrap_or(usize::MAX);
+                return Err(GridError::TooManyReferences { count });
+            }
+        };
         Ok(Self {
             layout,
             assignment: options.assignment,
@@ -138,10 +143,13 @@ impl GridPlan {
         self.reference_count
     }
 
-    /// Bytes of caller storage the build needs: `4·(offsets + references)`.
+    /// Bytes of caller storage the build needs: `4·(offsets + references)`, or `usize::MAX`
+    /// where that does not fit in a `usize` (on a 32-bit target: storage no caller can have).
     #[must_use]
     pub fn required_bytes(&self) -> usize {
-        4 * (self.required_offsets() + self.reference_count)
+        self.required_offsets()
+            .saturating_add(self.reference_count)
+            .saturating_mul(4)
     }
 
     super::overlap::layout_accessors!();

@@ -104,7 +104,7 @@ impl fmt::Display for Numbered<'_> {
             BuildError::NonFinite(e) => write!(
                 f,
                 "vertex {} has a NaN or infinite coordinate",
-                e.index as u64 + self.1
+                (e.index as u64).saturating_add(self.1)
             ),
             BuildError::IndexOutOfRange { face, index } => write!(
                 f,

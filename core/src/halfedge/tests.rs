@@ -303,6 +303,15 @@ fn build_errors_name_the_element() {
         nan.numbered_from(1).to_string(),
         "vertex 3 has a NaN or infinite coordinate"
     );
+    // An index at the end of `usize`, numbered from 1: the sum saturates, no overflow.
+    let last = BuildError::NonFinite(crate::error::NonFiniteError::new(
+        crate::error::InputElement::Vertex,
+        usize::MAX,
+    ));
+    assert_eq!(
+        last.numbered_from(1).to_string(),
+        std::format!("vertex {} has a NaN or infinite coordinate", u64::MAX)
+    );
     // Capacity and scratch.
     let (p, t) = tetra();
     assert!(matches!(

@@ -559,6 +559,9 @@ where
         BN: AsRef<[BvhNode]>,
         BI: AsRef<[u32]>,
     {
+        // Every constructor comes here: a width outside 2–8 does not compile (the node test's
+        // keys hold a slot in three bits, and a node of one child cannot branch).
+        const { assert!(W >= 2 && W <= 8, "a wide BVH has 2 to 8 children a node") };
         let indices = binary.indices();
         let bnodes = binary.nodes();
         if let Some(plan) = plan {

@@ -136,10 +136,13 @@ pub const fn binary_options(options: crate::bvh::BuildOptions) -> crate::bvh::Bu
 pub const MAX_TRIANGLES: usize = 1 << 27;
 
 /// Entries of the fixed traversal stack of a `W`-wide tree: `(W − 1)·MAX_DEPTH + 1` (module
-/// docs).
+/// docs); 1 for a width of 0, and `usize::MAX` where the product does not fit.
 #[must_use]
 pub const fn stack_size(width: usize) -> usize {
-    (width - 1) * super::MAX_DEPTH + 1
+    width
+        .saturating_sub(1)
+        .saturating_mul(super::MAX_DEPTH)
+        .saturating_add(1)
 }
 
 /// Wide nodes that always suffice for `triangles` triangles, whatever the binary tree: one per

@@ -1572,3 +1572,14 @@ fn an_inverted_or_nan_query_box_reports_nothing() {
         assert_eq!(n, 0, "{q:?}");
     }
 }
+
+/// `stack_size` is `(W − 1)·MAX_DEPTH + 1` for the widths the trees use, and saturates instead
+/// of overflowing for a width of 0 or one too large to count.
+#[test]
+fn stack_size_is_defined_for_every_width() {
+    assert_eq!(stack_size(8), 7 * crate::bvh::MAX_DEPTH + 1);
+    assert_eq!(stack_size(2), crate::bvh::MAX_DEPTH + 1);
+    assert_eq!(stack_size(1), 1);
+    assert_eq!(stack_size(0), 1);
+    assert_eq!(stack_size(usize::MAX), usize::MAX);
+}
