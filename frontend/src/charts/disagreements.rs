@@ -41,11 +41,15 @@ pub struct DisagreementChart {
 }
 
 impl DisagreementChart {
-    /// The chart of `report`: its rows summed per mesh; `None` when a count summed over the
-    /// rows of a mesh, or over the meshes (the caption's and the legend's totals), does not fit
-    /// in a `usize` (a file no run can have written).
+    /// The chart of `report`: its rows summed per mesh; `None` when a count's total over the
+    /// report ([`Report::overflowing_total`]) does not fit in a `usize` (a file no run can have
+    /// written). Every sum the chart makes, per mesh or over the meshes, is at most that
+    /// total, so none overflows.
     #[must_use]
     pub fn new(report: &Report) -> Option<Self> {
+        if report.overflowing_total().is_some() {
+            return None;
+        }
         let mut chart = Self {
             meshes: Vec::new(),
             counts: Vec::new(),
@@ -63,13 +67,9 @@ impl DisagreementChart {
                 }
             };
             for (c, (_, count)) in chart.counts[i].iter_mut().zip(CLASSES) {
-                *c = c.checked_add(count(row))?;
+                *c += count(row);
             }
-            chart.rays[i] = chart.rays[i].checked_add(row.rays)?;
-        }
-        checked_sum(chart.rays.iter().copied())?;
-        for c in 0..CLASSES.len() {
-            checked_sum(chart.counts.iter().map(|m| m[c]))?;
+            chart.rays[i] += row.rays;
         }
         Some(chart)
     }
@@ -78,19 +78,20 @@ impl DisagreementChart {
     ///
     /// # Errors
     ///
-    /// Reading or parsing the file; an input error when it has no rows, or when its counts
-    /// summed overflow ([`DisagreementChart::new`]).
+    /// Reading or parsing the file; an input error when it has no rows, or naming the count
+    /// whose total overflows ([`DisagreementChart::new`]).
     pub fn from_file(path: &Path) -> Result<Self> {
         let report: Report = read_json(path, "`crosscheck --json`")?;
-        let chart = Self::new(&report).ok_or_else(|| {
-            Error::input(
-                Location::file(path),
+        let Some(chart) = Self::new(&report) else {
+            let name = report.overflowing_total().unwrap_or("rays");
+            return Err(Error::input(
+                Location::file(path).field(format!("sets.{name}")),
                 format!(
-                    "the rows' counts summed overflow {} bits: not a run's report",
+                    "the sets' total overflows {} bits: not a run's report",
                     usize::BITS
                 ),
-            )
-        })?;
+            ));
+        };
         if chart.meshes.is_empty() {
             return Err(Error::input(
                 Location::file(path),
@@ -101,11 +102,6 @@ impl DisagreementChart {
     }
 }
 
-/// The sum of `counts`, `None` where it overflows.
-fn checked_sum(mut counts: impl Iterator<Item = usize>) -> Option<usize> {
-    counts.try_fold(0usize, usize::checked_add)
-}
-
 impl Chart for DisagreementChart {
     fn draw<DB: DrawingBackend>(
         &self,
@@ -113,7 +109,7 @@ impl Chart for DisagreementChart {
     ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
         let n = self.meshes.len();
         let top = self.counts.iter().flatten().fold(10usize, |a, &b| a.max(b)) as f64 * 10.0;
-        let total = checked_sum(self.rays.iter().copied()).unwrap_or(usize::MAX);
+        let total: usize = self.rays.iter().sum();
         let mut chart = ChartBuilder::on(root)
             .caption(
                 format!(
@@ -144,7 +140,7 @@ impl Chart for DisagreementChart {
                     colour.filled(),
                 )
             });
-            let total = checked_sum(self.counts.iter().map(|m| m[c])).unwrap_or(usize::MAX);
+            let total: usize = self.counts.iter().map(|m| m[c]).sum();
             chart
                 .draw_series(bars)?
                 .label(format!("{name}: {total}"))

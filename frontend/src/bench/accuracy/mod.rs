@@ -156,9 +156,9 @@ fn mesh_paths(args: &AccuracyArgs) -> Vec<PathBuf> {
         .collect()
 }
 
-/// Runs the benchmark on [`mesh_paths`] and returns the report (printing nothing).
-pub fn measure(args: &AccuracyArgs) -> Result<Report> {
-    let paths = mesh_paths(args);
+/// Runs the benchmark on `paths` (the meshes of `args`: [`mesh_paths`]) and returns the
+/// report (printing nothing).
+pub fn measure(args: &AccuracyArgs, paths: &[PathBuf]) -> Result<Report> {
     let meshes: Vec<(PathBuf, ObjMesh)> = paths
         .iter()
         .map(|p| read_obj(p).map(|m| (p.clone(), m)))
@@ -339,7 +339,7 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     let paths = mesh_paths(args);
     let inputs: Vec<Named<'_>> = paths.iter().map(|p| Named::new("mesh", p)).collect();
     let mut reserved = reserve_outputs(&outputs, &inputs, args.force)?.into_iter();
-    let report = measure(args)?;
+    let report = measure(args, &paths)?;
     let mut files = Vec::new();
     if args.json.is_some() {
         let json =
