@@ -53,7 +53,15 @@ pub const COS_FLOOR: f64 = 1.0e-4;
 /// few more; 64 ulps covers both with margin.
 pub const BOUNDARY_ULPS: f64 = 64.0;
 
+/// One `f32` ulp of `1` (`2⁻²³`): the unit of [`BOUNDARY_ULPS`] and [`T_TOLERANCE_ULPS`].
 const EPS: f64 = f32::EPSILON as f64;
+
+/// The `|cos θ|` a leak's `t` tolerance ([`is_leak`]) takes for the faces around the targeted
+/// edge or vertex, unitless. The target names a point, not a face: the faces that meet there lie
+/// at any angle to the ray, so the tolerance is that of a face met `89.4°` from its normal,
+/// `10⁻²` (the square root of [`COS_FLOOR`]): 100 times the tolerance of a face met head on,
+/// a hundredth of a face met in its plane.
+pub const LEAK_COS: f64 = 1.0e-2;
 
 /// `t` of the intersection of the ray's line with the triangle's plane and `|cos θ|` of the
 /// angle between the ray and the plane's normal, `(t, cos)`, in `f64` from the `f32` inputs;
@@ -225,13 +233,12 @@ pub fn judge(
 }
 
 /// `true` when `answer` (or a miss) lets a ray aimed at an edge or vertex through: it misses,
-/// or its hit lies beyond the target (`t > target_t` by more than the tolerance).
+/// or its hit lies beyond the target (`t > target_t` by more than [`t_tolerance`] at
+/// [`LEAK_COS`]).
 pub fn is_leak(ray: &Ray, answer: Option<&Answer>, target_t: f32) -> bool {
     match answer {
         None => true,
-        Some(a) => {
-            (a.t as f64 - target_t as f64) > t_tolerance(ray, target_t as f64, COS_FLOOR.sqrt())
-        }
+        Some(a) => (a.t as f64 - target_t as f64) > t_tolerance(ray, target_t as f64, LEAK_COS),
     }
 }
 

@@ -145,9 +145,9 @@ impl EmbreeDevice {
         let hit = probe.hit;
         let ok = hit.is_some_and(|h| {
             h.prim_id == 0
-                && (h.t - 1.0).abs() < 1e-5
-                && (h.u - 0.25).abs() < 1e-5
-                && (h.v - 0.25).abs() < 1e-5
+                && (h.t - 1.0).abs() < PROBE_AGREEMENT
+                && (h.u - 0.25).abs() < PROBE_AGREEMENT
+                && (h.v - 0.25).abs() < PROBE_AGREEMENT
                 && h.ng[2] > 0.0
         });
         if !ok {
@@ -180,3 +180,9 @@ impl fmt::Debug for EmbreeDevice {
 const PROBE_POSITIONS: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
 const PROBE_ORIGIN: [f32; 3] = [0.25, 0.25, 1.0];
 const PROBE_DIR: [f32; 3] = [0.0, 0.0, -1.0];
+
+/// How far the probe's `t`, `u` and `v` may lie from `1`, `0.25` and `0.25` (ray parameter and
+/// barycentrics, absolute): the probe only tells a right field layout from a wrong one, where a
+/// misplaced field reads as a different number altogether; Embree's `f32` test rounds the exact
+/// values (exactly representable here) by a few ulps at most, `1e-5` is about 84 ulps of `1`.
+const PROBE_AGREEMENT: f32 = 1e-5;

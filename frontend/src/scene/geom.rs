@@ -248,9 +248,18 @@ impl Geometry {
     }
 }
 
-/// Pads a box outward by a relative amount so curved primitives' rounding stays inside.
+/// Outward padding of a node's object-space box before it goes to world space, relative to the
+/// box's magnitude (its largest `|coordinate|` plus its extent), unitless. The node's box test
+/// runs on the world ray while the shape is hit by its rounded object-space copy
+/// (`Transform::ray_to_object`: each component a rounded affine map), and a CSG node's box is
+/// combined from its children's: twice the curved shapes' own pad
+/// ([`halfray_core::shape::CURVED_BOUNDS_PAD`], `γ₄`), a margin over those roundings so that
+/// the box test never refuses a ray the shape's own test would hit.
+const NODE_BOUNDS_PAD: f32 = gamma(8);
+
+/// `b` padded outward by [`NODE_BOUNDS_PAD`].
 fn pad(b: Aabb) -> Aabb {
-    let e = (b.min.abs().max(b.max.abs()) + b.extent()) * gamma(8);
+    let e = (b.min.abs().max(b.max.abs()) + b.extent()) * NODE_BOUNDS_PAD;
     Aabb::new(b.min - e, b.max + e)
 }
 

@@ -7,6 +7,7 @@ use glam::{DMat3, DVec3, Vec3};
 use halfray_core::plane::Plane;
 use halfray_core::quadric::{Ellipsoid, Quadric};
 use halfray_core::sphere::Sphere;
+use halfray_core::tolerance::PLANARITY_REL;
 use halfray_core::{Aabb, GeometryError};
 
 use super::mesh_ref::mesh;
@@ -362,10 +363,9 @@ pub(super) fn polygon(ctx: &Ctx<'_>, pts: Vec<Vec3>, span: &Span, field: &str) -
                 "a polygon needs 3 to {POLYGON_MAX_VERTICES} vertices, got {}",
                 pts.len()
             ),
-            GeometryError::NonPlanar => {
-                "polygon is not planar (a vertex is farther than 1e-5 × its size from the plane)"
-                    .to_string()
-            }
+            GeometryError::NonPlanar => format!(
+                "polygon is not planar (a vertex is farther than {PLANARITY_REL:e} × its size from the plane)"
+            ),
             GeometryError::Degenerate => "degenerate polygon (zero area)".to_string(),
             other => other.to_string(),
         };
