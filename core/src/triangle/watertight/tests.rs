@@ -394,21 +394,57 @@ fn two_certain_opposite_edges_are_a_miss_whatever_the_third() {
 }
 
 /// The preparation of a checked ray skips only the check: for valid rays it equals
-/// `prepare`, for every direction octant and dominant axis; an invalid ray is still refused
-/// by `prepare`.
+/// `prepare`, and both are the documented permutation and shear (written out here from
+/// `WatertightRay`'s field docs: `kz` the first axis of largest `|d|`, `kx, ky` the next ones
+/// cyclically, swapped when `d_kz < 0`; the shear the three `f32` quotients), for every
+/// direction octant and dominant axis; an invalid ray is still refused by `prepare`.
 #[test]
 fn prepare_valid_equals_prepare_on_valid_rays() {
     use crate::test_util::{lcg, unit_vec};
+    let documented = |d: Vec3| {
+        let a = d.abs().to_array();
+        let kz = if a[0] >= a[1] && a[0] >= a[2] {
+            0
+        } else if a[1] >= a[2] {
+            1
+        } else {
+            2
+        };
+        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        let c = d.to_array();
+        if c[kz] < 0.0 {
+            core::mem::swap(&mut kx, &mut ky);
+        }
+        let shear = Vec3::new(c[kx] / c[kz], c[ky] / c[kz], 1.0 / c[kz]);
+        WatertightRay {
+            k: [kx, ky, kz],
+            shear,
+        }
+    };
     let mut s = 41u64;
+    let mut octants_axes = [false; 24];
     for _ in 0..2000 {
         let o = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 100.0 - 50.0;
         let ray = Ray::new(o, unit_vec(&mut s) * (lcg(&mut s) * 10.0 + 1e-3));
         assert!(ray.is_valid());
         let want = Watertight.prepare(&ray);
-        assert!(want.is_some());
+        assert_eq!(want, Some(documented(ray.direction)), "{ray:?}");
         assert_eq!(Watertight.prepare_valid(&ray), want, "{ray:?}");
         assert_eq!(WatertightF32.prepare_valid(&ray), want, "{ray:?}");
+        let d = ray.direction;
+        let octant =
+            usize::from(d.x < 0.0) | usize::from(d.y < 0.0) << 1 | usize::from(d.z < 0.0) << 2;
+        octants_axes[octant * 3 + documented(d).k[2]] = true;
     }
+    assert!(octants_axes.iter().all(|&seen| seen), "{octants_axes:?}");
+    // Ties go to the lowest axis.
+    assert_eq!(documented(Vec3::new(-1.0, 1.0, 1.0)).k, [2, 1, 0]);
+    assert_eq!(
+        Watertight
+            .prepare(&Ray::new(Vec3::ZERO, Vec3::new(-1.0, 1.0, 1.0)))
+            .map(|p| p.k),
+        Some([2, 1, 0])
+    );
     let invalid = Ray::new(Vec3::ZERO, Vec3::ZERO);
     assert_eq!(Watertight.prepare(&invalid), None);
 }

@@ -409,7 +409,7 @@ fn vertices(mesh: &TriangleMesh<'_>, p: u32) -> [Vec3; 3] {
 }
 
 /// The any-hit batch of `q` at `level` on `rays`: each answer a hit exactly when the
-/// brute-force loop finds one, and a hit of its ray (that triangle alone reports it, bit for
+/// brute-force loop and the single-ray any hit find one, and a hit of its ray (that triangle alone reports it, bit for
 /// bit); walked in packets (fewer than half the single rays' node tests). Returns the hits.
 fn any_batch_hits_as_brute_force<L: SimdLevel, Q: RayQuery>(
     level: L,
@@ -440,10 +440,15 @@ fn any_batch_hits_as_brute_force<L: SimdLevel, Q: RayQuery>(
             );
         }
         hits += usize::from(brute.is_some());
-        q.any_hit(
+        let single = q.any_hit(
             ray,
             &mut tris,
             &mut Query::new().on(level).stats(&mut alone),
+        );
+        assert_eq!(
+            batch[i].is_some(),
+            single.is_some(),
+            "{name}: ray {i}, batch against the single-ray any hit"
         );
     }
     assert!(
