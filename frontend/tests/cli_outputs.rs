@@ -191,6 +191,29 @@ fn output_locations_are_checked_before_the_work() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("is a directory"), "{}", stderr(&o));
     assert!(o.stdout.is_empty(), "nothing checked, nothing printed");
+    // A second output whose name can only be a folder's (`stats.json/`): refused before the
+    // render, and the first output, which exists, keeps its bytes.
+    std::fs::write(&png, b"prior").unwrap();
+    for stats in ["stats.json/", "out.png/"] {
+        let o = run(os![
+            "render",
+            &scene("glass.toml"),
+            "-o",
+            &png,
+            "--stats-json",
+            &PathBuf::from(format!("{}/{stats}", dir.path().display())),
+            "--width",
+            "16000",
+            "--height",
+            "16000"
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        let e = stderr(&o);
+        assert!(e.contains(stats) && e.contains("names a folder"), "{e}");
+        assert!(!e.contains("rendering"), "failed before rendering: {e}");
+        assert_eq!(std::fs::read(&png).unwrap(), b"prior", "{stats}");
+        assert_eq!(files(dir.path()), ["out.png"], "{stats}: no temporary file");
+    }
 }
 
 /// `bench bvh` and `bench accel` reserve `--json` before they measure: a report never

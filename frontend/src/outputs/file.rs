@@ -61,6 +61,17 @@ fn refuse(dest: &Path, kind: io::ErrorKind, message: String) -> Error {
     Error::io(dest, io::Error::new(kind, message))
 }
 
+/// `true` when `path` can only name a folder: it ends in a separator, or its last component
+/// is `.` or `..` (which [`Path::components`] would fold away or climb).
+fn names_a_folder(path: &Path) -> bool {
+    let text = path.as_os_str().as_encoded_bytes();
+    let last = text
+        .rsplit(|&b| std::path::is_separator(char::from(b)))
+        .next()
+        .unwrap_or_default();
+    matches!(last, b"" | b"." | b"..")
+}
+
 fn folder_of(path: &Path) -> &Path {
     match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
@@ -102,6 +113,16 @@ impl OutputFile {
             }
             Target::Special { path, .. } => Route::InPlace { target: path },
             Target::Missing { path } => {
+                if names_a_folder(&path) {
+                    // `out.png/` or `new/.`: no file can be created under that name (the
+                    // rename at the end would fail, after the work and after other outputs).
+                    return Err(refuse(
+                        dest,
+                        io::ErrorKind::NotADirectory,
+                        "ends in a folder separator (or `.`, `..`): names a folder, not a file"
+                            .into(),
+                    ));
+                }
                 let dir = folder_of(&path);
                 match std::fs::metadata(dir) {
                     Ok(m) if m.is_dir() => {}
@@ -497,5 +518,35 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("is a directory"), "{e}");
+    }
+
+    /// A name that can only be a folder's (a trailing separator, a last `.` or `..`) is
+    /// refused at reserve, whether something by that name exists as a file or nothing does:
+    /// such a name passed the folder check (its parent is the folder) and failed only at the
+    /// rename, after the work and after the outputs written before it.
+    #[test]
+    fn a_name_that_can_only_be_a_folder_fails_at_reserve() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("out.png");
+        std::fs::write(&file, b"prior").unwrap();
+        for name in [
+            "out.png/",
+            "new.json/",
+            "new.json//",
+            "new/.",
+            "new/..",
+            "out.png/.",
+        ] {
+            let dest = PathBuf::from(format!("{}/{name}", dir.path().display()));
+            let e = OutputFile::reserve(&dest, true).unwrap_err().to_string();
+            assert!(e.contains("names a folder"), "{name}: {e}");
+        }
+        assert_eq!(std::fs::read(&file).unwrap(), b"prior");
+        assert_eq!(names(dir.path()), ["out.png"]);
+        // Names that end like these but are files' names are still taken.
+        for name in ["a.", "a..", ".a", "..a"] {
+            write(&dir.path().join(name), false, b"ok").unwrap();
+        }
+        assert_eq!(names(dir.path()).len(), 5);
     }
 }
