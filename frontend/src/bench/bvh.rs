@@ -167,15 +167,19 @@ pub struct SetFigures {
 
 impl SetFigures {
     /// halfray's throughput over Embree default's and over Embree robust's (`None` without
-    /// Embree, and where a ratio is not a finite number: a report edited by hand, with no
-    /// Embree throughput or none of halfray's, has no ratio, never an infinite one).
+    /// Embree, and where a ratio is not a finite positive number: a report edited by hand,
+    /// with no Embree throughput or none of halfray's, or a negative one, has no ratio, never
+    /// an infinite one or one whose geometric mean is NaN).
     #[must_use]
     pub fn ratios(&self) -> Option<[f64; 2]> {
         let ratios = [
             self.mrays / self.embree_mrays?,
             self.mrays / self.embree_robust_mrays?,
         ];
-        ratios.iter().all(|r| r.is_finite()).then_some(ratios)
+        ratios
+            .iter()
+            .all(|r| r.is_finite() && *r > 0.0)
+            .then_some(ratios)
     }
 }
 

@@ -51,41 +51,94 @@ impl AccuracyChart {
     ///
     /// # Errors
     ///
-    /// Reading or parsing the file; an input error when no variant has a BVH throughput.
+    /// Reading or parsing the file; an input error naming the field when a value the chart
+    /// reads is outside what a run writes ([`Refused`]), or when no variant has a BVH
+    /// throughput.
     pub fn from_file(path: &Path) -> Result<Self> {
         let report: ReportView = read_json(path, "`bench accuracy --json`")?;
-        Self::from_view(report).ok_or_else(|| Error::input(Location::file(path), NOTHING_TO_CHART))
+        Self::from_view(report).map_err(|r| match r {
+            Refused::Nothing => Error::input(Location::file(path), NOTHING_TO_CHART),
+            Refused::Field { field, message } => {
+                Error::input(Location::file(path).field(field), message)
+            }
+        })
     }
 
     /// The chart of a report in memory (`bench accuracy --chart`), read as its JSON is.
     ///
     /// # Errors
     ///
-    /// An internal error when `report` does not have the JSON's shape; an input error when no
-    /// variant has a BVH throughput.
+    /// An internal error when `report` does not have the JSON's shape or a value outside what
+    /// a run writes; an input error when no variant has a BVH throughput.
     pub fn from_report(report: &impl serde::Serialize) -> Result<Self> {
         let view = serde_json::to_value(report)
             .and_then(serde_json::from_value::<ReportView>)
             .map_err(|e| Error::internal("the accuracy report's JSON", Some(Box::new(e))))?;
-        Self::from_view(view).ok_or_else(|| Error::Usage(NOTHING_TO_CHART.into()))
+        Self::from_view(view).map_err(|r| match r {
+            Refused::Nothing => Error::Usage(NOTHING_TO_CHART.into()),
+            Refused::Field { field, message } => {
+                Error::internal(format!("the accuracy report's `{field}`: {message}"), None)
+            }
+        })
     }
 
-    fn from_view(report: ReportView) -> Option<Self> {
-        let points: Vec<Point> = report
-            .variants
-            .into_iter()
-            .filter_map(|v| {
-                let mrays = v.mrays_bvh_incoherent.filter(|m| *m > 0.0)?;
-                Some(Point {
-                    label: v.name,
-                    ns_per_ray: 1.0e3 / mrays,
-                    errors_per_million: v.leaks_per_million.unwrap_or(0.0)
-                        + v.false_hits_per_million.unwrap_or(0.0),
-                })
-            })
-            .collect();
-        (!points.is_empty()).then_some(Self { points })
+    fn from_view(report: ReportView) -> std::result::Result<Self, Refused> {
+        let mut points = Vec::new();
+        for (i, v) in report.variants.into_iter().enumerate() {
+            let field = |name: &str| format!("variants[{i}].{name}");
+            // 0: nothing was timed (`timing::mrays_per_second`), as good as absent.
+            let Some(mrays) = v.mrays_bvh_incoherent.filter(|&m| m != 0.0) else {
+                continue;
+            };
+            if !(MRAYS_RANGE.contains(&mrays)) {
+                return Err(Refused::Field {
+                    field: field("mrays_bvh_incoherent"),
+                    message: format!(
+                        "{mrays} Mrays/s is not a throughput a run measures ({:e} to {:e})",
+                        MRAYS_RANGE.start(),
+                        MRAYS_RANGE.end()
+                    ),
+                });
+            }
+            let mut errors = 0.0;
+            for (name, value) in [
+                ("leaks_per_million", v.leaks_per_million),
+                ("false_hits_per_million", v.false_hits_per_million),
+            ] {
+                let value = value.unwrap_or(0.0);
+                if !(0.0..=1.0e6).contains(&value) {
+                    return Err(Refused::Field {
+                        field: field(name),
+                        message: format!("{value} per million is not a share of rays (0 to 10⁶)"),
+                    });
+                }
+                errors += value;
+            }
+            points.push(Point {
+                label: v.name,
+                ns_per_ray: 1.0e3 / mrays,
+                errors_per_million: errors,
+            });
+        }
+        if points.is_empty() {
+            return Err(Refused::Nothing);
+        }
+        Ok(Self { points })
     }
+}
+
+/// The throughputs the chart draws, Mrays/s: from one ray an hour (`3·10⁻¹⁰`, far below any
+/// run) to `10⁹` (a nanosecond a ray times a thousand). Values outside, which no run writes
+/// (`1e-310`, a subnormal, made an axis of `10³¹³` ns whose tick search never ended), are an
+/// input error.
+pub const MRAYS_RANGE: std::ops::RangeInclusive<f64> = 3.0e-10..=1.0e9;
+
+/// Why a report's variants cannot be charted.
+enum Refused {
+    /// No variant has a BVH throughput.
+    Nothing,
+    /// A value outside what a run writes: the field's path and why.
+    Field { field: String, message: String },
 }
 
 /// Why a run without BVH throughput cannot be charted.
@@ -201,5 +254,42 @@ mod tests {
         std::fs::write(&json, "{\n\"variants\": 3}").unwrap();
         let e = AccuracyChart::from_file(&json).unwrap_err().to_string();
         assert!(e.contains("a.json") && e.contains(":2"), "{e}");
+    }
+
+    /// Values no run writes are input errors naming the field, not a chart (an error rate
+    /// of `1e308` or a throughput of `1e-310` made axes whose tick search never ended);
+    /// a throughput of 0 (nothing timed) is left out as an absent one is.
+    #[test]
+    fn values_no_run_writes_are_input_errors_naming_the_field() {
+        let dir = tempfile::tempdir().unwrap();
+        let json = dir.path().join("a.json");
+        let row = |m: &str, l: &str, f: &str| {
+            format!(
+                r#"{{"variants": [{{"name": "ok", "mrays_bvh_incoherent": 5.0, "leaks_per_million": 0.0, "false_hits_per_million": 0.0}},
+                {{"name": "bad", "mrays_bvh_incoherent": {m}, "leaks_per_million": {l}, "false_hits_per_million": {f}}}]}}"#
+            )
+        };
+        for (m, l, f, field) in [
+            ("1e-310", "0", "0", "variants[1].mrays_bvh_incoherent"),
+            ("-2", "0", "0", "variants[1].mrays_bvh_incoherent"),
+            ("1e300", "0", "0", "variants[1].mrays_bvh_incoherent"),
+            ("5", "1e308", "0", "variants[1].leaks_per_million"),
+            ("5", "-1", "0", "variants[1].leaks_per_million"),
+            ("5", "0", "1000001", "variants[1].false_hits_per_million"),
+        ] {
+            std::fs::write(&json, row(m, l, f)).unwrap();
+            let e = AccuracyChart::from_file(&json).unwrap_err().to_string();
+            assert!(
+                e.contains("a.json") && e.contains(field),
+                "{m} {l} {f}: {e}"
+            );
+        }
+        std::fs::write(&json, row("0", "1e6", "1e6")).unwrap();
+        let chart = AccuracyChart::from_file(&json).unwrap();
+        assert_eq!(chart.points.len(), 1);
+        std::fs::write(&json, row("1e9", "1e6", "1e6")).unwrap();
+        let chart = AccuracyChart::from_file(&json).unwrap();
+        assert_eq!(chart.points[1].errors_per_million, 2.0e6);
+        render(&chart, Format::Svg).unwrap();
     }
 }

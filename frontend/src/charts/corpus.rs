@@ -190,16 +190,24 @@ mod tests {
     }
 
     /// A hand-edited report with an Embree throughput of 0 gave an infinite ratio, and the
-    /// chart's axis never finished (the process spun); such a set has no ratio.
+    /// chart's axis never finished (the process spun); a negative one a geometric mean of NaN
+    /// on the chart; such a set has no ratio.
     #[test]
-    fn a_zero_throughput_is_no_ratio_and_the_chart_is_drawn() {
-        let mut bad = report("bunny.obj", &[("primary", 3.0, 4.0, 3.0)]);
-        bad.sets[0].embree_robust_mrays = Some(0.0);
-        let good = report("sphere.obj", &[("primary", 6.0, 5.0, 4.0)]);
-        let chart = CorpusChart::new(&[bad, good]).unwrap();
-        assert_eq!(chart.sets[0].1[0], None);
-        let texts = svg_texts(&render(&chart, Format::Svg).unwrap(), chart.size());
-        assert!(texts.iter().any(|t| t == "sphere.obj"), "{texts:?}");
+    fn a_zero_or_negative_throughput_is_no_ratio_and_the_chart_is_drawn() {
+        for (side, value) in [(0, 0.0), (1, 0.0), (0, -5.0), (2, -5.0), (2, 0.0)] {
+            let mut bad = report("bunny.obj", &[("primary", 3.0, 4.0, 3.0)]);
+            match side {
+                0 => bad.sets[0].embree_robust_mrays = Some(value),
+                1 => bad.sets[0].embree_mrays = Some(value),
+                _ => bad.sets[0].mrays = value,
+            }
+            let good = report("sphere.obj", &[("primary", 6.0, 5.0, 4.0)]);
+            let chart = CorpusChart::new(&[bad, good]).unwrap();
+            assert_eq!(chart.sets[0].1[0], None, "{side} {value}");
+            let texts = svg_texts(&render(&chart, Format::Svg).unwrap(), chart.size());
+            assert!(texts.iter().any(|t| t == "sphere.obj"), "{texts:?}");
+            assert!(!texts.iter().any(|t| t.contains("NaN")), "{texts:?}");
+        }
     }
 
     /// A mesh name from the JSON with control characters (a terminal escape) is drawn with
