@@ -4,8 +4,9 @@
 //! finishes, so a run that is killed loses at most the mesh in progress. `--resume` reads the
 //! log back, drops a torn last line (a write cut off mid-line), checks that every line belongs
 //! to the same run (intersector, seed, rays, sets, shard) and skips the meshes already checked;
-//! meshes that failed are tried again and their new line appended. The last line of a path
-//! wins when a log is read.
+//! meshes that failed are tried again and their new line appended. When a log is read, the
+//! last line of a failed mesh wins; a mesh checked without error comes once per shard
+//! ([`parse_log`]).
 
 use super::report::{MeshResult, RunConfig};
 use super::shard::Shard;
@@ -72,12 +73,15 @@ pub fn run_inputs<'a>(meshes: &'a [PathBuf], list: Option<&'a Path>) -> Vec<Name
 }
 
 /// Parses the complete lines of a results log (`text` ends at a newline or is empty).
-/// Every line must be a [`MeshResult`]; the last line of each path wins.
+/// Every line must be a [`MeshResult`]. A mesh that failed may come again in the same shard
+/// (a resumed run checks it again: the later line wins); a mesh checked without error comes
+/// once per shard, and a later line for it is an input error naming both lines (no run writes
+/// one, and keeping either would hide the other's counts).
 pub fn parse_log(path: &Path, text: &str) -> Result<Vec<MeshResult>> {
-    // Keyed by mesh and shard: a resumed log repeats a mesh of its own shard (the later line
-    // wins), a concatenation of shard logs holds each mesh once per shard (all kept).
+    // Keyed by mesh and shard: a concatenation of shard logs holds each mesh once per shard
+    // (all kept). The line number of each key's latest line.
     let mut order: Vec<(String, Shard)> = Vec::new();
-    let mut latest: HashMap<(String, Shard), MeshResult> = HashMap::new();
+    let mut latest: HashMap<(String, Shard), (usize, MeshResult)> = HashMap::new();
     for (i, line) in text.lines().enumerate() {
         if line.trim().is_empty() {
             continue;
@@ -89,14 +93,26 @@ pub fn parse_log(path: &Path, text: &str) -> Result<Vec<MeshResult>> {
             )
         })?;
         let key = (result.path.clone(), result.config.shard);
-        if !latest.contains_key(&key) {
-            order.push(key.clone());
+        match latest.get(&key) {
+            None => order.push(key.clone()),
+            Some((at, earlier)) if earlier.error.is_none() => {
+                return Err(Error::input(
+                    Location::file(path).line(i + 1),
+                    format!(
+                        "mesh `{}` (shard {}) was checked already at line {}: a results log holds a checked mesh once per shard",
+                        result.path,
+                        result.config.shard,
+                        at + 1
+                    ),
+                ));
+            }
+            Some(_) => {}
         }
-        latest.insert(key, result);
+        latest.insert(key, (i, result));
     }
     Ok(order
         .into_iter()
-        .filter_map(|p| latest.remove(&p))
+        .filter_map(|p| latest.remove(&p).map(|(_, r)| r))
         .collect())
 }
 
@@ -329,6 +345,41 @@ mod tests {
             "torn line dropped"
         );
         assert_eq!(parse_log(&path, &text).unwrap().len(), 3);
+    }
+
+    /// A failed mesh checked again by a resumed run: the later line wins. A mesh checked
+    /// without error and then again (a line no run writes; an edited or doubled log): refused,
+    /// naming both lines, whichever of the two holds more mismatches (a later line of 0
+    /// genuine mismatches would have hidden an earlier one of 5, exit 0 instead of 3).
+    #[test]
+    fn a_checked_mesh_comes_once_per_shard_in_a_log() {
+        let path = Path::new("log.jsonl");
+        let line = |r: &MeshResult| serde_json::to_string(r).unwrap() + "\n";
+        let mut failed = ok("b.obj");
+        failed.error = Some("b.obj:3:1: bad".into());
+        failed.sets.clear();
+        let text = line(&ok("a.obj")) + &line(&failed) + &line(&ok("b.obj"));
+        let parsed = parse_log(path, &text).unwrap();
+        assert_eq!(parsed, [ok("a.obj"), ok("b.obj")]);
+        let mut worse = ok("a.obj");
+        worse.sets[0].genuine_mismatches = 5;
+        for (text, want) in [
+            (
+                line(&worse) + &line(&ok("b.obj")) + &line(&ok("a.obj")),
+                "log.jsonl:3: mesh `a.obj` (shard 0/1) was checked already at line 1",
+            ),
+            (
+                line(&ok("a.obj")) + &line(&ok("b.obj")) + &line(&worse),
+                "log.jsonl:3: mesh `a.obj` (shard 0/1) was checked already at line 1",
+            ),
+            (
+                line(&failed) + &line(&ok("b.obj")) + &line(&failed),
+                "log.jsonl:3: mesh `b.obj` (shard 0/1) was checked already at line 2",
+            ),
+        ] {
+            let e = parse_log(path, &text).unwrap_err().to_string();
+            assert!(e.contains(want), "{e}");
+        }
     }
 
     #[test]
