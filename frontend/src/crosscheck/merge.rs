@@ -40,11 +40,17 @@ pub fn read_part(path: &Path) -> Result<Part> {
     // A report is one JSON object written over several lines (a log holds one object per
     // line), or on one line with a report's `threads` key: a one-line log is a JSON document
     // too, so parsing alone does not decide (a bad log line must be reported as such).
+    // A document that does not parse is a report when its first line is not a JSON value of
+    // its own (a report's `{` alone), so that its error names the report's line.
     let is_report = match serde_json::from_str::<serde_json::Value>(&text) {
         Ok(serde_json::Value::Object(m)) => {
             m.contains_key("threads") || text.lines().filter(|l| !l.trim().is_empty()).count() > 1
         }
-        _ => false,
+        Ok(_) => false,
+        Err(_) => text
+            .lines()
+            .find(|l| !l.trim().is_empty())
+            .is_some_and(|first| serde_json::from_str::<serde_json::Value>(first).is_err()),
     };
     if !is_report {
         return Ok(Part {
@@ -503,6 +509,27 @@ mod tests {
         let e = read_part(&json).unwrap_err().to_string();
         assert!(
             e.contains("r.json:2:") && e.contains("not a cross-check report"),
+            "{e}"
+        );
+        // A report cut off, or with a bad value far down: its own line, read as a report.
+        let whole = serde_json::to_string_pretty(
+            &merge(&[super::tests::part("a", vec![shard_result("a.obj", 0, 1)])]).unwrap(),
+        )
+        .unwrap();
+        let lines: Vec<&str> = whole.lines().collect();
+        assert!(lines.len() > 20, "{}", lines.len());
+        std::fs::write(&json, lines[..20].join("\n")).unwrap();
+        let e = read_part(&json).unwrap_err().to_string();
+        assert!(
+            e.contains("r.json:20:") && e.contains("not a cross-check report"),
+            "{e}"
+        );
+        let bad = whole.replacen(": 0,", ": -1x,", 1);
+        let at = 1 + bad.lines().position(|l| l.contains("-1x")).unwrap();
+        std::fs::write(&json, &bad).unwrap();
+        let e = read_part(&json).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("r.json:{at}:")) && e.contains("not a cross-check report"),
             "{e}"
         );
         // A BOM is skipped; shard logs concatenated keep every shard.
