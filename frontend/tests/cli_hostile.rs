@@ -579,6 +579,10 @@ fn work_is_estimated_and_a_scene_over_the_budget_needs_allow_long() {
     assert!(started.elapsed() < std::time::Duration::from_secs(30));
     let e = stderr(&o);
     assert!(e.contains("--allow-long") && e.contains("days"), "{e}");
+    assert!(
+        !e.contains("  "),
+        "no runs of spaces inside the message: {e}"
+    );
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(
         out.contains("worst case")

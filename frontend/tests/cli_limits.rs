@@ -50,6 +50,46 @@ fn image_and_subdivision_sizes_are_estimated_before_allocating() {
     assert!(!png.exists());
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 
+    // The same size from the scene file (each side within its range, the two together not):
+    // an input error at the file's `camera.width`, exit 1.
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let (mut w, mut h) = (false, false);
+    let big: String = text
+        .lines()
+        .map(|l| match l.split('=').next().map(str::trim) {
+            Some("width") if !w => {
+                w = true;
+                "width = 16384".to_string()
+            }
+            Some("height") if !h => {
+                h = true;
+                "height = 16384".to_string()
+            }
+            _ => l.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    assert!(w && h, "mirror.toml sets its size");
+    let width_line = 1 + big.lines().position(|l| l == "width = 16384").unwrap();
+    let big_scene = dir.path().join("big.toml");
+    std::fs::write(&big_scene, big).unwrap();
+    let (code, e) = run(&[
+        "render",
+        big_scene.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(1), "{e}");
+    assert!(
+        e.contains(&format!("big.toml:{width_line}:"))
+            && e.contains("camera.width")
+            && e.contains("16384×16384")
+            && e.contains("GiB"),
+        "{e}"
+    );
+    assert!(!png.exists());
+    std::fs::remove_file(&big_scene).unwrap();
+
     let out = dir.path().join("b.obj");
     let bunny = Path::new(MESHES).join("bunny.obj");
     let (code, e) = run(&[
@@ -184,4 +224,45 @@ fn a_worker_count_beyond_the_limit_is_refused() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert_ne!(o.status.code(), Some(0), "{e}");
     assert!(e.contains("RAYON_NUM_THREADS=99999999"), "{e}");
+}
+
+/// `mesh smooth --iterations` is capped as a scene's `smooth.iterations` is (10⁹ passes ran
+/// on for minutes), and `bench bvh --leaf-size` starts at 1 (0 was taken silently as 1): both
+/// refused by the parser, at once, with nothing written.
+#[test]
+fn smoothing_passes_and_leaf_sizes_are_checked_by_the_parser() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.obj");
+    let cube = Path::new(MESHES).join("cube.obj");
+    let cap = halfray::scene::MAX_SMOOTH_ITERATIONS;
+    for n in [cap + 1, 1_000_000_000] {
+        let (code, e) = run(&[
+            "mesh",
+            "smooth",
+            cube.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--iterations",
+            &n.to_string(),
+        ]);
+        assert_eq!(code, Some(2), "{e}");
+        assert!(
+            e.contains("--iterations") && e.contains(&cap.to_string()),
+            "{e}"
+        );
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    let (code, e) = run(&[
+        "mesh",
+        "smooth",
+        cube.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--iterations",
+        &cap.to_string(),
+    ]);
+    assert_eq!(code, Some(0), "{e}");
+    let (code, e) = run(&["bench", "bvh", cube.to_str().unwrap(), "--leaf-size", "0"]);
+    assert_eq!(code, Some(2), "{e}");
+    assert!(e.contains("--leaf-size"), "{e}");
 }

@@ -74,7 +74,7 @@ pub struct BvhArgs {
     pub intersector: crate::cli_values::Intersector,
     /// Maximum leaf size of the binary tree's build (the wide tree's binary tree is built with
     /// `wide::binary_options`, whose leaf sizes the collapse sets).
-    #[arg(long, default_value_t = DEFAULT_MAX_LEAF_SIZE)]
+    #[arg(long, default_value_t = DEFAULT_MAX_LEAF_SIZE, value_parser = clap::value_parser!(u32).range(1..))]
     pub leaf_size: u32,
 }
 

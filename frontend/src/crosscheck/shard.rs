@@ -91,11 +91,12 @@ impl FromStr for Shard {
                 .map_err(|_| format!("`{s}`: {what} `{x}` is not a non-negative integer"))
         };
         let (k, n) = (parse(k, "K")?, parse(n, "N")?);
-        Self::new(k, n).ok_or_else(|| {
-            format!(
+        Self::new(k, n).ok_or_else(|| match n {
+            0 => format!("`{s}`: N must be at least 1 (one shard: 0/1)"),
+            _ => format!(
                 "`{s}`: K must be in 0..N (shards are zero-based: 0/{n} .. {}/{n})",
-                n.max(1) - 1
-            )
+                n - 1
+            ),
         })
     }
 }
@@ -149,5 +150,14 @@ mod tests {
             assert!(e.contains(&format!("`{bad}`")), "{bad}: {e}");
         }
         assert_eq!(Shard::new(2, 5).unwrap().to_string(), "2/5");
+        // The message names the shards there are: none of `0/0 .. 0/0` for N = 0.
+        for (bad, want) in [
+            ("0/0", "N must be at least 1"),
+            ("1/0", "N must be at least 1"),
+            ("4/4", "0/4 .. 3/4"),
+        ] {
+            let e = bad.parse::<Shard>().unwrap_err();
+            assert!(e.contains(want), "{bad}: {e}");
+        }
     }
 }

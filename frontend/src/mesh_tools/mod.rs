@@ -48,7 +48,7 @@ pub enum MeshCommand {
     /// Collapse edges shorter than a length (into their midpoints) until none can be collapsed.
     Collapse(CollapseArgs),
     /// Generate a mesh of the benchmark corpus from a seed (displaced sphere, terrain, beams,
-    /// room, scatter).
+    /// room, scatter, far from the origin).
     Generate(generate::GenerateArgs),
 }
 
@@ -95,8 +95,8 @@ pub struct SubdivideArgs {
     /// Replace an output that is read-only or hard-linked (keeping its mode).
     #[arg(long)]
     pub force: bool,
-    /// Number of subdivision levels (each multiplies the face count by 4), at most
-    /// [`MAX_LEVELS`].
+    /// Number of subdivision levels (each multiplies the face count by 4), at most 15
+    /// (`MAX_LEVELS`: one triangle's level 15 already outgrows the core).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_LEVELS)))]
     pub levels: u32,
     /// Vertex weights.
@@ -127,8 +127,9 @@ pub struct SmoothArgs {
     /// neighbours' centroid; 0 < k ≤ 1 is stable).
     #[arg(long, default_value_t = 0.5)]
     pub step: f32,
-    /// Number of diffusion steps.
-    #[arg(long, default_value_t = 1)]
+    /// Number of diffusion steps, at most 10 000 (`scene::MAX_SMOOTH_ITERATIONS`, as in a
+    /// scene's `smooth`).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=i64::from(crate::scene::MAX_SMOOTH_ITERATIONS)))]
     pub iterations: u32,
     /// Keep boundary vertices in place (by default they move towards all their neighbours,
     /// which shrinks open rims).

@@ -519,10 +519,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         scene.camera.height = y;
     }
     let (w, h) = (scene.camera.width, scene.camera.height);
-    check_memory(
-        &format!("an image of {w}×{h} pixels (scene size or --width/--height)"),
-        render_bytes(w, h, args.background.is_some()),
-    )?;
+    let bytes = render_bytes(w, h, args.background.is_some());
+    if args.width.is_none() && args.height.is_none() {
+        // The size is the scene file's: an input error at its `camera.width`.
+        check_memory(&format!("an image of {w}×{h} pixels"), bytes)
+            .map_err(|e| Error::input(scene.size_at.clone(), e.to_string()))?;
+    } else {
+        check_memory(
+            &format!("an image of {w}×{h} pixels (--width/--height)"),
+            bytes,
+        )?;
+    }
     let background = match &args.background {
         Some(p) => Some(output::read_background(p, w, h, args.gamma)?),
         None => None,
@@ -543,7 +550,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     if estimate.over_budget() && !args.allow_long {
         return Err(Error::Usage(format!(
-            "{}: the worst case is {:.3e} rays × {} coincident objects, over the budget of {:.0e}              (render::budget::MAX_WORST_CASE_WORK; at most about {} on {} threads);              --explain shows where they come from, --allow-long renders anyway",
+            "{}: the worst case is {:.3e} rays × {} coincident objects, over the budget of {:.0e} \
+             (render::budget::MAX_WORST_CASE_WORK; at most about {} on {} threads); \
+             --explain shows where they come from, --allow-long renders anyway",
             crate::text::path(&args.scene),
             estimate.rays(),
             estimate.coincident.max(1),

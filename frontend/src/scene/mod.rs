@@ -268,6 +268,9 @@ pub struct Scene {
     pub path: PathBuf,
     /// Camera.
     pub camera: Camera,
+    /// Where the file sets the image size (`camera.width`), for a refusal of the size as a
+    /// whole (the image's memory) when the command line does not override it.
+    pub size_at: crate::error::Location,
     /// Ambient light `Ia`.
     pub ambient: Vec3,
     /// Colour of rays that leave the scene (and of uncovered pixels, with alpha 0).

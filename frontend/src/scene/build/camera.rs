@@ -65,7 +65,7 @@ pub(super) fn camera(ctx: &Ctx<'_>, c: &S<def::CameraDef>) -> Result<Camera> {
         return Err(ctx.err(
             &c.look_at.span(),
             "camera.look_at",
-            "is too far from `eye`: the distance between them is beyond the largest `f32`",
+            "is too far from `eye`: the square of the distance between them is beyond the largest `f32` (distances up to about 1.8e19 are taken)",
         ));
     }
     let mut camera = Camera::new(

@@ -163,6 +163,10 @@ pub(super) fn build(src: &Source<'_>, d: def::SceneDef) -> Result<Scene> {
         ));
     }
     let camera = camera(&ctx, &d.camera)?;
+    let size_at = ctx.src.at(
+        &d.camera.get_ref().width.span(),
+        "camera.width, camera.height",
+    );
 
     let mut lights = Vec::new();
     for (i, l) in d.light.iter().enumerate() {
@@ -221,6 +225,7 @@ pub(super) fn build(src: &Source<'_>, d: def::SceneDef) -> Result<Scene> {
     Ok(Scene {
         path: src.path.to_path_buf(),
         camera,
+        size_at,
         ambient,
         background,
         max_depth,
