@@ -14,7 +14,7 @@
 #
 #   PER_FILE=100 TEST_PACKAGES=halfray-core,halfray-tests bash scripts/mutants.sh   # the full run
 #   PER_FILE=4 TEST_PACKAGES=halfray-core bash scripts/mutants.sh                   # a quick sample
-#   FILES="core/src/kdtree/sah.rs core/src/collide" SHARD=1 bash scripts/mutants.sh # other shards
+#   FILES="core/src/kdtree/sah.rs core/src/bvh/collide" SHARD=1 bash scripts/mutants.sh # other shards
 #   FILES=frontend/src/outputs FIRST_PACKAGE=halfray TEST_PACKAGES=halfray bash scripts/mutants.sh
 #   bash scripts/mutants.sh --in-diff DIFF                                          # a branch's lines
 #
