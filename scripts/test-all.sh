@@ -93,18 +93,21 @@ report_skips() {
 }
 report_skips
 
-[ "${SKIP_EMBREE:-0}" = 1 ] && echo "SKIPPED stage embree (SKIP_EMBREE=1): Embree tests, crosscheck_scale.rs, crosscheck runs" | tee -a "$HALFRAY_SKIP_LOG"
+[ "${SKIP_EMBREE:-0}" = 1 ] && echo "SKIPPED stage embree (SKIP_EMBREE=1): Embree tests, crosscheck_scale.rs, crosscheck_meshes.rs, charts_cli.rs's Embree tests, crosscheck runs" | tee -a "$HALFRAY_SKIP_LOG"
 if [ "${SKIP_EMBREE:-0}" != 1 ]; then
     stage embree
     bash scripts/setup-embree.sh
     export EMBREE_DIR=$ROOT/.embree
     cargo clippy -p halfray --features embree --all-targets -- -D warnings
     cargo test -p halfray --features embree
-    # frontend/tests/crosscheck_scale.rs compiles to nothing without the feature: make sure
-    # this run had its tests, and name them.
-    scale=$(cargo test -q -p halfray --features embree --test crosscheck_scale -- --list 2>/dev/null | grep -c ': test$' || true)
-    [ "$scale" -ge 1 ] || { echo "crosscheck_scale.rs: no tests under --features embree"; exit 1; }
-    echo "crosscheck_scale.rs: $scale tests ran under --features embree"
+    # These test files compile (wholly or partly) to nothing without the feature: make sure
+    # this run had their Embree tests, and count them.
+    for t in crosscheck_scale crosscheck_meshes charts_cli; do
+        with=$(cargo test -q -p halfray --features embree --test "$t" -- --list 2>/dev/null | grep -c ': test$' || true)
+        without=$(cargo test -q -p halfray --test "$t" -- --list 2>/dev/null | grep -c ': test$' || true)
+        [ "$with" -gt "$without" ] || { echo "$t.rs: no Embree tests under --features embree ($with with, $without without)"; exit 1; }
+        echo "$t.rs: $with tests ran under --features embree ($((with - without)) of them need Embree)"
+    done
     # Every shared mesh, 100 000 rays per set: zero genuine mismatches and zero watertight
     # leaks, or a non-zero exit.
     mkdir -p target/ci

@@ -203,6 +203,11 @@ fn closest_and_any_hit_equal_brute_force_on_every_mesh() {
         let spheres = Spheres::new(&mesh);
         let (lo, hi) = obj.bounds().unwrap();
         let (n_random, side) = if name == "dragon.obj" && !slow_tests() {
+            halfray::skips::record_skip(&format!(
+                "bvh_vs_bruteforce: dragon.obj sampled ({DRAGON_RANDOM_RAYS} random rays and a \
+                 {DRAGON_CAMERA_SIDE}² camera, not {RANDOM_RAYS} and {CAMERA_SIDE}²; \
+                 HALFRAY_SLOW_TESTS=1 for all)"
+            ));
             (DRAGON_RANDOM_RAYS, DRAGON_CAMERA_SIDE)
         } else {
             (RANDOM_RAYS, CAMERA_SIDE)

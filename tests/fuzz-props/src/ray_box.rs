@@ -78,10 +78,11 @@ fn opt_bits(r: Option<(f32, f32)>) -> Option<(u32, u32)> {
 /// The properties of [`Aabb::intersect_ray`]:
 ///
 /// 1. **Defined answers:** an invalid ray (NaN or infinite origin/direction, zero direction,
-///    NaN or inverted interval) gives `None`; the result is deterministic; a hit has
+///    NaN or inverted interval) gives `None`; a hit has
 ///    `t_min ≤ t_enter ≤ t_exit ≤ t_max`; the plain (unpadded) slab test never hits where the
-///    padded one misses. NaN *box* coordinates are allowed and only need a deterministic
-///    answer (the BVH never builds such boxes).
+///    padded one misses. NaN *box* coordinates are allowed and only need an answer, no
+///    panic (the BVH never builds such boxes). (Determinism is not checked: the test is a pure
+///    function of its arguments in safe code, so two calls cannot differ.)
 /// 2. **±0:** flipping the sign of any zero direction component gives the bit-identical result
 ///    (module docs of [`halfray_core::aabb`]).
 /// 3. **Never a false miss:** for a finite box, when the exact (`f64`) interval overlap
@@ -102,12 +103,6 @@ pub fn check_ray_box(ray: &Ray, bx: &Aabb) {
             fmt_vec3(bx.max)
         )
     };
-    assert_eq!(
-        opt_bits(got),
-        opt_bits(bx.intersect_ray(ray)),
-        "not deterministic\n{}",
-        ctx()
-    );
     if !ray.is_valid() {
         assert!(got.is_none(), "invalid ray hits a box\n{}", ctx());
         return;
