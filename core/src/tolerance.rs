@@ -1,5 +1,8 @@
-//! Named tolerances. Every epsilon the core uses lives here (or is a field of a tolerance value
-//! such as [`crate::triangle::MollerTrumbore::det_epsilon`]), with its unit and its reason.
+//! Named tolerances. The core's user-facing epsilons and the bounds several modules share live
+//! here (or are fields of a tolerance value such as
+//! [`crate::triangle::MollerTrumbore::det_epsilon`]), with their units and reasons; a bound
+//! derived for one algorithm is a named constant beside it, derived the same way (`aabb`,
+//! `grid`, `volume`, `kdtree`, `query::walk`, `triangle::watertight`).
 //!
 //! The watertight triangle test, the slab test, the spheres and the spawn offsets use **no**
 //! tuned epsilon: they rely on exact predicates or on bounds derived from [`crate::float::gamma`].
@@ -14,7 +17,7 @@ use crate::float::gamma;
 /// is the 1997 paper's value, kept so that the accuracy benchmark can show what it costs.
 pub const MOLLER_TRUMBORE_DET_EPSILON: f32 = 1.0e-6;
 
-/// Relative tolerance on barycentric coordinates reported by the `f32` triangle tests, used by
+/// Tolerance on barycentric coordinates reported by the `f32` triangle tests, used by
 /// tests and fuzzers to check that a reported `(b0, b1, b2)` lies in `[0, 1]`.
 ///
 /// Unit: absolute on the barycentric (which is unitless). The watertight test decides
@@ -26,7 +29,7 @@ pub const BARYCENTRIC_SLACK: f32 = gamma(4);
 /// Maximum relative distance from the plane for a polygon to count as planar: each vertex's
 /// distance to the plane through the centroid must be `≤ PLANARITY_REL × diameter`.
 ///
-/// Unit: relative to the polygon's bounding-box diagonal. `1e-5` ≈ 168 ulps of `f32`: input
+/// Unit: relative to the polygon's bounding-box diagonal. `1e-5` ≈ 84 ulps of `f32` (`2⁻²³`): input
 /// written with 6–7 significant digits (typical scene files) is accepted, visibly bent input
 /// is refused.
 pub const PLANARITY_REL: f32 = 1.0e-5;
@@ -48,7 +51,8 @@ pub const T_REL_TOLERANCE_WELL_CONDITIONED: f32 = 64.0 * f32::EPSILON;
 /// `κ₂(L) = σ₁/σ₃ ≤ ‖L‖_F³ / |det L|`. The threshold `2⁻²⁰` guarantees `κ₂ ≤ 2²⁰`, i.e.
 /// `κ·u ≤ 2⁻⁴`: a point taken to object space and back still has ≥ 4 correct bits in its worst
 /// direction. A non-uniform scale with axis ratio `1e-4` (a flattened sphere) has ratio ≈ 3.5e-5 and is
-/// accepted; anything flatter than `~1e-6` is numerically singular in `f32` and refused.
+/// accepted; anything flatter than about `2.7e-6` (`2⁻²⁰·2√2`, for a scale `(1, 1, a)`) is
+/// numerically singular in `f32` and refused.
 pub const TRANSFORM_MIN_REL_DET: f64 = 1.0 / 1_048_576.0;
 
 /// Smallest scaled determinant `|det A| / ‖A‖_F³` (same measure and bound on `κ(A)` as
@@ -153,8 +157,8 @@ pub const PAD_ORIGIN_SHIFT_REL: f32 = 2.0 * crate::float::F32_UNIT_ROUNDOFF;
 pub const BEHIND_REL: f32 = 9.0 / 16_777_216.0;
 
 /// The margin that makes the `f64` filters of the exact path pass for every base vertex it
-/// may choose: `2⁻⁴⁰` of `m²·|·|₁` (the derivation: `core/src/triangle/watertight/behind.rs`; `2¹⁰` times what they need). Unitless (per
-/// square of world units).
+/// may choose: `2⁻⁴⁰` of `m²·|·|₁` (the derivation: `core/src/triangle/watertight/behind.rs`; `2¹⁰` times what they need).
+/// Unitless: a factor on `m²·|·|₁`, which carries the units.
 pub const BEHIND_F64_MARGIN: f32 = 1.0 / 1_099_511_627_776.0;
 
 /// Absolute floor of the cull's bounds: `2⁻¹⁴⁰` (an `f32` subnormal, `2⁹` times the

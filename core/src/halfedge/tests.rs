@@ -17,8 +17,8 @@ const TOL: f32 = 1e-5;
 /// Tolerance for β values (≤ 0.2) computed in f32 against f64: one f32 ulp at 0.2 is 1.5e-8,
 /// plus the f64 → f32 rounding of the cosine term.
 const BETA_TOL: f64 = 1e-7;
-/// Icosahedron edges have length 2; other vertex distances are ≥ 2.47. Half a unit of
-/// slack separates the two cleanly.
+/// Icosahedron edges have length 2; other vertex distances are ≥ 2.47. A quarter unit
+/// of slack separates the two cleanly.
 const ICOSA_EDGE_SLACK: f32 = 0.25;
 /// Minimum distance by which the Warren and Loop results must differ for the test to count
 /// as distinguishing them (the actual gaps are ≥ 0.03 on these unit-size meshes).

@@ -275,8 +275,23 @@ const TINY: f64 = 4.0 * 1.401_298_464_324_817e-45;
 /// whatever the other form could gain. Unitless.
 const PLANE_EXACT_ENOUGH: f64 = 1.0 / 67_108_864.0;
 
+/// The plane form's error bound on `t`, relative to `(|v0 − o|·N + |t|·|d|·N)/|d·n|` (`N` the
+/// normal's rounding scale, [`super::normal_f64`]), ray parameter: `γ₈`, a first-order bound.
+/// `v0 − o` rounds once; each normal component three times against its scale (two
+/// differences, the products' difference); the dot products add a product and two sums: `wn`
+/// within `γ₇·|v0 − o|·N`, `dn` within `γ₆·|d|·N` (`d` exact); the division rounds once more,
+/// `u·|t| ≤ u·|t|·|d|·N/|dn|`. The same constant in the portable and the AVX2 kernel.
+const PLANE_T_ERR: f64 = gamma_f64(8);
+
+/// The slack of the plane form's box test, relative to the largest magnitude of the triangle's
+/// box and of the crossing point (plus [`TINY`]), unitless: `γ₈`, as [`PLANE_T_ERR`], covering
+/// the crossing's own rounding (`o + d·t`, two roundings a coordinate, and `t`'s error within
+/// the box's scale). Which form of `t` is returned depends on it, so the portable and the AVX2
+/// kernel share it.
+const PLANE_BOX_SLACK: f32 = gamma(8);
+
 /// How closely the two forms must agree for the fast path, relative to `|t| + max|zᵢ|`:
-/// `2⁻²⁰` (16 `f32` ulps), far above the rounding of either form in a well-conditioned
+/// `2⁻²⁰` (8 `f32` ulps of `2⁻²³`), far above the rounding of either form in a well-conditioned
 /// case and far below any disagreement that signals a grazing ray. Unitless.
 const AGREE_REL: f64 = 1.0 / 1_048_576.0;
 
@@ -401,7 +416,7 @@ fn plane_form(
     if t < 0.0 && dn_certain && crossed_behind(ray, wn, w_nn, dn) {
         return PlaneForm::BEHIND;
     }
-    let err = gamma_f64(8) * (w_nn + t.abs() * d.abs().dot(nn)) / dn.abs();
+    let err = PLANE_T_ERR * (w_nn + t.abs() * d.abs().dot(nn)) / dn.abs();
     // The plane crossing must lie in the triangle's box (up to rounding). If it does not, the
     // edge tests decided "inside" within the projection's rounding while the exact line
     // crosses the plane elsewhere (a grazing ray; found by the `bvh` fuzz target): then the
@@ -410,8 +425,9 @@ fn plane_form(
     let p = ray.origin.as_dvec3() + d * t;
     let lo = v[0].min(v[1]).min(v[2]).as_dvec3();
     let hi = v[0].max(v[1]).max(v[2]).as_dvec3();
-    let slack =
-        f64::from(gamma(8)) * (lo.abs().max(hi.abs()).max_element() + p.abs().max_element()) + TINY;
+    let slack = f64::from(PLANE_BOX_SLACK)
+        * (lo.abs().max(hi.abs()).max_element() + p.abs().max_element())
+        + TINY;
     PlaneForm {
         t,
         err,

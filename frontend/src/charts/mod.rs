@@ -274,11 +274,16 @@ pub fn run(args: &ChartArgs) -> Result<()> {
     }
 }
 
-/// `names[i]` for a coordinate within 10⁻⁶ of the integer `i`, else nothing: category labels
-/// on a continuous axis whose key points are the integers.
+/// How close a category axis's key point must be to an integer to take that category's label,
+/// in axis units (one category apart): the key points are the integers as the plotting
+/// library computes them from the range, a few `f64` roundings off, far below `10⁻⁶`.
+const LABEL_SNAP: f64 = 1e-6;
+
+/// `names[i]` for a coordinate within [`LABEL_SNAP`] of the integer `i`, else nothing:
+/// category labels on a continuous axis whose key points are the integers.
 fn category_label(names: &[String], v: f64) -> String {
     let i = v.round();
-    if (v - i).abs() < 1e-6 && i >= 0.0 {
+    if (v - i).abs() < LABEL_SNAP && i >= 0.0 {
         names.get(i as usize).cloned().unwrap_or_default()
     } else {
         String::new()

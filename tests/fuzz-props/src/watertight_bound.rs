@@ -132,16 +132,17 @@ pub fn projection_underflows(ray: &Ray, v: &[Vec3; 3]) -> bool {
         })
 }
 
-/// The edge functions in the watertight test's order: `e0 = e(v2, v1)`, `e1 = e(v0, v2)`,
-/// `e2 = e(v1, v0)` with `e(p, q) = x_p·y_q − y_p·x_q`; `bᵢ = eᵢ / Σ e`.
 /// Smallest `|det|` (sum of the sheared edge functions) inside the `f32` variant's domain:
-/// 2^-100 rounded down, where its `f32` products stay clear of the subnormal range.
+/// 2^-100 (7.889e-31) rounded up, so within the domain, where its `f32` products stay clear
+/// of the subnormal range.
 pub const F32_DET_MIN: f64 = 7.9e-31;
 
 /// Largest `Σ|eᵢ·zᵢ|` (and `|t|`) inside the `f32` variant's domain: 2^120 ≈ 1.33e36 rounded
 /// down, so the scaled depth sum cannot overflow `f32` (max ≈ 2^128).
 pub const F32_DEPTH_SUM_MAX: f64 = 1.3e36;
 
+/// The edge functions in the watertight test's order: `e0 = e(v2, v1)`, `e1 = e(v0, v2)`,
+/// `e2 = e(v1, v0)` with `e(p, q) = x_p·y_q − y_p·x_q`; `bᵢ = eᵢ / Σ e`.
 const EDGE_PAIRS: [(usize, usize); 3] = [(2, 1), (0, 2), (1, 0)];
 
 impl WatertightBound {

@@ -5,7 +5,9 @@
 //! crossed-behind cull's near lanes ([`near_refused`], the loop of `plane.rs`). Each `unsafe`
 //! block enters a compiled-for-AVX2 function on the proof the [`Avx2Fma`] token carries.
 
-use super::{Candidate, PlaneForm, TINY, crossed_behind, finish_exact_at};
+use super::{
+    Candidate, PLANE_BOX_SLACK, PLANE_T_ERR, PlaneForm, TINY, crossed_behind, finish_exact_at,
+};
 use crate::ray::Ray;
 use crate::simd_level::Avx2Fma;
 use crate::triangle::{NORMAL_CANCEL_REL, TriangleHit, TriangleLanes};
@@ -60,7 +62,6 @@ fn near_refused_avx2(ray: &Ray, groups: [&TriangleLanes; 2], near: u32) -> u32 {
 #[target_feature(enable = "avx2,fma")]
 #[inline]
 fn plane_crossing_avx2(v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {
-    use crate::float::{gamma, gamma_f64};
     use crate::predicates::ORIENT3D_FILTER_REL;
     use core::arch::x86_64::{
         __m256d, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _mm_add_sd, _mm_cvtsd_f64, _mm_max_ps,
@@ -127,11 +128,11 @@ fn plane_crossing_avx2(v: &[Vec3; 3], ray: &Ray) -> Option<PlaneForm> {
     if t < 0.0 && crossed_behind(ray, wn, w_nn, dn) {
         return Some(PlaneForm::BEHIND);
     }
-    let err = gamma_f64(8) * (w_nn + t.abs() * d_nn) / dn.abs();
+    let err = PLANE_T_ERR * (w_nn + t.abs() * d_nn) / dn.abs();
     let p = _mm256_add_pd(o, _mm256_mul_pd(d, _mm256_set1_pd(t)));
     let lo = _mm256_cvtps_pd(_mm_min_ps(_mm_min_ps(f0, f1), f2));
     let hi = _mm256_cvtps_pd(_mm_max_ps(_mm_max_ps(f0, f1), f2));
-    let slack = f64::from(gamma(8))
+    let slack = f64::from(PLANE_BOX_SLACK)
         * (max_element(_mm256_max_pd(abs(lo), abs(hi))) + max_element(abs(p)))
         + TINY;
     let slack = _mm256_set1_pd(slack);
@@ -201,7 +202,7 @@ mod tests {
             // extreme, inside the padded box.
             let past = v[0] - v[1];
             let reach = v.iter().fold(0f32, |m, p| m.max(p.abs().max_element()));
-            let step = 0.25 * crate::float::gamma(8) * reach / past.abs().max_element();
+            let step = 0.25 * super::super::PLANE_BOX_SLACK * reach / past.abs().max_element();
             let target = if i % 3 == 1 {
                 v[0] + past * step
             } else {

@@ -189,15 +189,21 @@ impl Workload {
 /// geometry makes acceptance (near) impossible.
 pub const MAX_CANDIDATES_PER_RAY: usize = 1000;
 
+/// Smallest `|cos|` between a ray origin's direction from its target and the target's normal,
+/// unitless: `0.17`, rays at least `9.8°` off the plane (`asin 0.17`), so that the rays of
+/// the workload meet their targets well away from grazing the plane.
+pub const MIN_ORIGIN_COS: f64 = 0.17;
+
 /// Directions drawn for a ray origin before giving up: a uniform direction is accepted with
-/// probability `1 − 0.17 ≈ 0.83`, so 64 failures in a row happen with probability `0.17⁶⁴`.
+/// probability `1 − 0.17 ≈ 0.83` ([`MIN_ORIGIN_COS`]), so 64 failures in a row happen with
+/// probability `0.17⁶⁴`.
 pub const MAX_ORIGIN_TRIES: usize = 64;
 
 fn random_origin_for(rng: &mut Rng, target: DVec3, scale: f64, n: DVec3) -> Option<DVec3> {
-    // From the front or back side, at least 10° off the plane.
+    // From the front or back side, off the plane by MIN_ORIGIN_COS.
     (0..MAX_ORIGIN_TRIES).find_map(|_| {
         let d = rng.unit_vector();
-        (d.dot(n).abs() > 0.17).then(|| target + d * scale * (1.0 + 4.0 * rng.f64()))
+        (d.dot(n).abs() > MIN_ORIGIN_COS).then(|| target + d * scale * (1.0 + 4.0 * rng.f64()))
     })
 }
 
