@@ -290,6 +290,18 @@ impl std::error::Error for Error {
     }
 }
 
+/// `e`'s message without the ` at line L column C` that `serde_json` appends: the message of an
+/// error whose [`Location::json_position`] already says where (else the place was said twice).
+#[must_use]
+pub fn json_message(e: &serde_json::Error) -> String {
+    let text = e.to_string();
+    let suffix = format!(" at line {} column {}", e.line(), e.column());
+    match text.strip_suffix(&suffix) {
+        Some(message) if e.line() != 0 => message.to_string(),
+        _ => text,
+    }
+}
+
 /// Result alias of the frontend.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
@@ -325,6 +337,13 @@ mod tests {
             at(Location::file("r.jsonl").line(7).json_position(&shape)),
             "r.jsonl:7"
         );
+        // The message says the place once: in the location, not again in serde's words.
+        assert_eq!(json_message(&syntax), "expected value");
+        assert!(
+            syntax.to_string().ends_with("at line 3 column 2"),
+            "{syntax}"
+        );
+        assert_eq!(json_message(&shape), shape.to_string());
     }
 
     #[test]

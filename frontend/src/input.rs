@@ -73,11 +73,18 @@ fn read_at_most(reader: impl Read, limit: u64) -> io::Result<Option<Vec<u8>>> {
     Ok((bytes.len() as u64 <= limit).then_some(bytes))
 }
 
-/// The text of `path` ([`read_bytes`]); bytes that are not UTF-8 are an input error at the
-/// line and column (in characters) of the first bad byte. `what` says what the text should
-/// be, for that message (`"a scene (TOML)"`).
+/// The UTF-8 byte-order mark, skipped at the start of a text file.
+pub const BOM: &[u8] = b"\xEF\xBB\xBF";
+
+/// The text of `path` ([`read_bytes`]) after a leading [`BOM`], which some editors write; bytes
+/// that are not UTF-8 are an input error at the line and column (in characters) of the first
+/// bad byte. `what` says what the text should be, for that message (`"a scene (TOML)"`).
 pub fn read_text(path: &Path, what: &str) -> Result<String> {
-    utf8(path, read_bytes(path)?, what)
+    let mut bytes = read_bytes(path)?;
+    if bytes.starts_with(BOM) {
+        bytes.drain(..BOM.len());
+    }
+    utf8(path, bytes, what)
 }
 
 /// `bytes` as text, or the located error of [`read_text`].

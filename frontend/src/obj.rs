@@ -97,9 +97,7 @@ pub(crate) fn lines(bytes: &[u8]) -> impl Iterator<Item = &[u8]> {
     })
 }
 
-/// The UTF-8 byte-order mark, skipped at the start of a file.
-/// The UTF-8 byte-order mark, skipped at the start of a file.
-pub const BOM: &[u8] = b"\xEF\xBB\xBF";
+pub use crate::input::BOM;
 
 /// The statement part of a line (before `#`) and whether there was a comment.
 pub(crate) fn statement(line: &[u8]) -> (&[u8], bool) {

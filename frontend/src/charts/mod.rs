@@ -15,7 +15,7 @@ pub mod accuracy;
 pub mod corpus;
 pub mod disagreements;
 
-use crate::error::{Error, Location, Result};
+use crate::error::{Error, Location, Result, json_message};
 use crate::outputs::{Named, OutputFile, reserve_outputs};
 use image::ImageEncoder;
 use plotters::coord::Shift;
@@ -239,17 +239,18 @@ pub fn write(chart: &impl Chart, out: OutputFile) -> Result<()> {
 /// # Errors
 ///
 /// [`Error::Io`] reading it ([`crate::input::read_bytes`]: not a folder or a device, at most
-/// [`crate::limits::MAX_INPUT_BYTES`]); an input error naming the file, line and column where
-/// it is not JSON of that shape.
+/// [`crate::limits::MAX_INPUT_BYTES`]; a leading byte-order mark skipped, [`crate::input::read_text`]);
+/// an input error naming the file, line and column where it is not UTF-8, or not JSON of that
+/// shape.
 pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path, what: &str) -> Result<T> {
-    let bytes = crate::input::read_bytes(path)?;
-    serde_json::from_slice(&bytes).map_err(|e| {
+    let text = crate::input::read_text(path, &format!("the JSON of {what}"))?;
+    serde_json::from_str(&text).map_err(|e| {
         // serde's words for JSON of none of the shapes name a type of ours; say it plainly.
         let shape = e.to_string().starts_with("data did not match any variant");
         let message = if shape {
             format!("not the JSON of {what}")
         } else {
-            format!("not the JSON of {what}: {e}")
+            format!("not the JSON of {what}: {}", json_message(&e))
         };
         Error::input(Location::file(path).json_position(&e), message)
     })
@@ -335,5 +336,29 @@ pub(crate) mod tests {
         assert_eq!(category_label(&names, 0.5), "");
         assert_eq!(category_label(&names, 2.0), "");
         assert_eq!(category_label(&names, -1.0), "");
+    }
+
+    /// A report as an editor saves it (a byte-order mark first) is read; bytes that are not
+    /// UTF-8 are an error at their line and column, not serde's "key must be a string"; a
+    /// syntax error names its place once.
+    #[test]
+    fn a_bom_is_skipped_and_bad_bytes_or_syntax_are_located_once() {
+        #[derive(serde::Deserialize, Debug)]
+        struct V {
+            a: u32,
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let json = dir.path().join("r.json");
+        std::fs::write(&json, b"\xEF\xBB\xBF{\"a\": 7}").unwrap();
+        assert_eq!(read_json::<V>(&json, "x").unwrap().a, 7);
+        std::fs::write(&json, b"{\n\"a\xff\": 7}").unwrap();
+        let e = read_json::<V>(&json, "x").unwrap_err().to_string();
+        assert!(
+            e.contains("r.json:2:3") && e.contains("0xff is not UTF-8"),
+            "{e}"
+        );
+        std::fs::write(&json, b"{\n\"a\": 7,,}").unwrap();
+        let e = read_json::<V>(&json, "x").unwrap_err().to_string();
+        assert!(e.contains("r.json:2:") && !e.contains("at line"), "{e}");
     }
 }

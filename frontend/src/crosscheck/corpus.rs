@@ -10,7 +10,7 @@
 
 use super::report::{MeshResult, RunConfig};
 use super::shard::Shard;
-use crate::error::{Error, Location, Result};
+use crate::error::{Error, Location, Result, json_message};
 use crate::outputs::{FileId, Named, file_id};
 use std::collections::HashMap;
 use std::fs::{File, OpenOptions};
@@ -22,11 +22,9 @@ use std::path::{Path, PathBuf};
 /// byte-order mark ignored. Relative paths are relative to the current directory (as
 /// `find … > list` writes them), not to the list file.
 pub fn read_mesh_list(list: &Path) -> Result<Vec<(PathBuf, usize)>> {
+    // `read_text` drops a byte-order mark: it is no part of the first path.
     let text = crate::input::read_text(list, "text (one mesh path per line)")?;
-    // A byte-order mark is no part of the first path.
     Ok(text
-        .strip_prefix('\u{feff}')
-        .unwrap_or(&text)
         .lines()
         .enumerate()
         .map(|(i, l)| (l.trim(), i + 1))
@@ -89,7 +87,7 @@ pub fn parse_log(path: &Path, text: &str) -> Result<Vec<MeshResult>> {
         let result: MeshResult = serde_json::from_str(line).map_err(|e| {
             Error::input(
                 Location::file(path).line(i + 1).json_position(&e),
-                format!("not a cross-check result line: {e}"),
+                format!("not a cross-check result line: {}", json_message(&e)),
             )
         })?;
         let key = (result.path.clone(), result.config.shard);

@@ -10,7 +10,7 @@
 use super::corpus::parse_log;
 use super::report::{MeshResult, Report, RunConfig, SetReport};
 use super::shard::Shard;
-use crate::error::{Error, Location, Result};
+use crate::error::{Error, Location, Result, json_message};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -32,11 +32,7 @@ pub struct Part {
 /// A leading UTF-8 byte-order mark is skipped; the file is read bounded
 /// ([`crate::input::read_bytes`]).
 pub fn read_part(path: &Path) -> Result<Part> {
-    let mut bytes = crate::input::read_bytes(path)?;
-    if bytes.starts_with(crate::obj::BOM) {
-        bytes.drain(..crate::obj::BOM.len());
-    }
-    let text = crate::input::utf8(path, bytes, "a cross-check report or results log")?;
+    let text = crate::input::read_text(path, "a cross-check report or results log")?;
     // A report is one JSON object written over several lines (a log holds one object per
     // line), or on one line with a report's `threads` key: a one-line log is a JSON document
     // too, so parsing alone does not decide (a bad log line must be reported as such).
@@ -69,7 +65,7 @@ pub fn read_part(path: &Path) -> Result<Part> {
         }),
         Err(e) => Err(Error::input(
             Location::file(path).json_position(&e),
-            format!("not a cross-check report: {e}"),
+            format!("not a cross-check report: {}", json_message(&e)),
         )),
     }
 }

@@ -386,6 +386,43 @@ mod tests {
     /// (a factor of 2 or 4 on a term) moves the value by far more at these points.
     const EVAL_AGREEMENT: f64 = 1e-12;
 
+    /// CSG nests inline as deep as the TOML reader reads nested values:
+    /// [`crate::scene::MAX_CSG_NESTING`] levels, the object's own included
+    /// (`scenes/README.md`); one more is an input error at the file and line where the reader
+    /// stopped, not a crash.
+    #[test]
+    fn csg_nests_to_the_documented_depth() {
+        let scene = |levels: usize| {
+            let mut s = String::from("{ type = \"sphere\", center = [0, 0, 0], radius = 1 }");
+            for i in 0..levels {
+                s = format!(
+                    "{{ type = \"csg\", op = \"union\", operands = [{s}, {{ type = \"sphere\", center = [0, 0, {i}], radius = 1 }}] }}"
+                );
+            }
+            let inner = s
+                .strip_prefix("{ type = \"csg\", op = \"union\", operands = ")
+                .and_then(|r| r.strip_suffix(" }"))
+                .unwrap();
+            format!(
+                "[camera]\neye = [0, 0, 9]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\nheight = 6\n\n\
+                 [material.m]\ndiffuse = [1, 1, 1]\n\n[[object]]\ntype = \"csg\"\nop = \"union\"\n\
+                 material = \"m\"\noperands = {inner}\n"
+            )
+        };
+        use crate::scene::MAX_CSG_NESTING;
+        let deepest = crate::scene::parse(&scene(MAX_CSG_NESTING), Path::new("c.toml"));
+        assert!(deepest.is_ok(), "{:?}", deepest.err());
+        let deeper = scene(MAX_CSG_NESTING + 1);
+        let line = 1 + deeper
+            .lines()
+            .position(|l| l.starts_with("operands = "))
+            .unwrap();
+        let e = crate::scene::parse(&deeper, Path::new("c.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(&format!("c.toml:{line}:")), "{e}");
+    }
+
     /// A `quadric` object is the surface its coefficients write (`scenes/README.md`):
     /// `xx·x² + yy·y² + zz·z² + xy·xy + xz·xz + yz·yz + x·x + y·y + z·z + c`, every
     /// coefficient set, evaluated at a few points against that polynomial (the core's form
