@@ -102,7 +102,7 @@ impl Operator {
 /// Arguments of `halfray composite`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct CompositeArgs {
-    /// The source image A (PNG or any format the `image` crate reads; 8-bit RGBA after decoding).
+    /// The source image A (PNG; 8-bit RGBA after decoding).
     pub source: PathBuf,
     /// The destination image B, the same size.
     pub destination: PathBuf,
@@ -148,7 +148,18 @@ pub fn run(args: &CompositeArgs) -> Result<()> {
     };
     // After the input check: an output that is an input is "the input".
     crate::png::check_png_name(Named::new("-o", &args.output))?;
-    let (a, b) = (read_rgba8(&args.source)?, read_rgba8(&args.destination)?);
+    let a = read_rgba8(&args.source)?;
+    // The destination must be as large and the result is too: all three under the limit,
+    // checked before the second decode (each decode alone is limited by `read_rgba8`).
+    crate::limits::check_memory(
+        &format!(
+            "compositing two {}×{} images (source, destination and result)",
+            a.width(),
+            a.height()
+        ),
+        (a.as_raw().len() as u64).checked_mul(3),
+    )?;
+    let b = read_rgba8(&args.destination)?;
     if a.dimensions() != b.dimensions() {
         return Err(Error::input(
             Location::file(&args.destination),
