@@ -134,6 +134,31 @@ fn missing_obj_file() {
     );
 }
 
+/// A mesh path that is there but cannot be followed (a loop of symbolic links) says so, with
+/// the system's words, not "not found".
+#[cfg(unix)]
+#[test]
+fn a_mesh_path_in_a_symlink_loop_is_not_called_missing() {
+    let dir = tempfile::tempdir().unwrap();
+    std::os::unix::fs::symlink(dir.path().join("b.obj"), dir.path().join("a.obj")).unwrap();
+    std::os::unix::fs::symlink(dir.path().join("a.obj"), dir.path().join("b.obj")).unwrap();
+    let scene = dir.path().join("loop.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "{BASE}\n[mesh.bun]\nfile = \"a.obj\"\n\n[[object]]\ntype = \"mesh\"\nmesh = \"bun\"\nmaterial = \"m\"\n"
+        ),
+    )
+    .unwrap();
+    let e = load(&scene).err().expect("a loop is an error").to_string();
+    assert!(
+        e.contains("loop.toml:12:8: field `mesh.bun.file`")
+            && e.contains("cannot be read")
+            && !e.contains("not found"),
+        "{e}"
+    );
+}
+
 #[test]
 fn non_finite_numbers() {
     check(

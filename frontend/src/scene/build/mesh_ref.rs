@@ -32,10 +32,12 @@ pub(super) fn mesh_def(ctx: &Ctx<'_>, name: &str, def: &MeshDef) -> Result<MeshS
         ));
     }
     if !path.is_file() {
-        let why = if path.exists() {
-            "is not a regular file (a device, FIFO or socket)"
-        } else {
-            "not found"
+        // What the system says when the path cannot be followed (a loop of symbolic links, a
+        // folder without permission), "not found" only when it is not there.
+        let why = match std::fs::metadata(&path) {
+            Ok(_) => "is not a regular file (a device, FIFO or socket)".to_string(),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => "not found".to_string(),
+            Err(e) => format!("cannot be read: {e}"),
         };
         return Err(ctx.err(
             &def.file.span(),
