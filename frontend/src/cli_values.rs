@@ -42,9 +42,51 @@ impl std::fmt::Display for Intersector {
     }
 }
 
+/// A finite `f32` option value (clap `value_parser`): a number `f32` cannot hold (`1e39`) is
+/// refused as written, with `f32`'s range, rather than read as infinity and reported as `inf`;
+/// NaN and infinities are refused too.
+///
+/// # Errors
+///
+/// The message clap shows after the option's name.
+pub fn finite_f32(s: &str) -> Result<f32, String> {
+    let x: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number"))?;
+    let y = x as f32;
+    if !x.is_finite() {
+        return Err(format!("`{s}` is not a finite number"));
+    }
+    if !y.is_finite() {
+        return Err(format!("`{s}` is beyond the largest `f32` (±3.4e38)"));
+    }
+    Ok(y)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Finite `f32` values parse to themselves; a finite number beyond `f32` is refused as
+    /// written (not echoed as `inf`), as are NaN, infinities and text.
+    #[test]
+    fn finite_f32_takes_what_f32_holds() {
+        assert_eq!(finite_f32("0.5"), Ok(0.5));
+        assert_eq!(finite_f32(" -3e38 "), Ok(-3e38));
+        assert_eq!(finite_f32("1e-50"), Ok(0.0));
+        for (bad, why) in [
+            ("1e39", "`1e39` is beyond the largest `f32`"),
+            ("-4e38", "`-4e38` is beyond the largest `f32`"),
+            ("nan", "not a finite number"),
+            ("-inf", "not a finite number"),
+            ("1e999", "not a finite number"),
+            ("abc", "`abc` is not a number"),
+        ] {
+            let e = finite_f32(bad).unwrap_err();
+            assert!(e.contains(why), "{bad}: {e}");
+        }
+    }
 
     #[test]
     fn every_core_intersector_is_a_value_and_parses_back() {
