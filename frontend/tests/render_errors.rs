@@ -150,7 +150,10 @@ fn a_mesh_path_in_a_symlink_loop_is_not_called_missing() {
         ),
     )
     .unwrap();
-    let e = load(&scene).err().expect("a loop is an error").to_string();
+    let Err(e) = load(&scene) else {
+        panic!("a loop is an error")
+    };
+    let e = e.to_string();
     assert!(
         e.contains("loop.toml:12:8: field `mesh.bun.file`")
             && e.contains("cannot be read")
