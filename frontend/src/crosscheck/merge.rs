@@ -11,6 +11,7 @@ use super::corpus::parse_log;
 use super::report::{MeshResult, Report, RunConfig, SetReport};
 use super::shard::Shard;
 use crate::error::{Error, Location, Result, json_message};
+use halfray_core::triangle::TriangleVariant;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -106,8 +107,21 @@ fn check_sums(parts: &[Part]) -> Result<()> {
 /// another version): a checked mesh has exactly the run's sets, in order, and in each set the
 /// rays' verdicts (agree, ties, within tolerance, Embree wrong, genuine), every leak count,
 /// the any-hit disagreements and the timed rays are each at most its rays (each counts rays,
-/// once each).
+/// once each); its intersector is one the core has; its timings are finite and not negative.
 fn check_consistent(part: &Part) -> Result<()> {
+    for result in &part.results {
+        let name = &result.config.intersector;
+        if TriangleVariant::from_name(name).is_none() {
+            return Err(Error::input(
+                Location::file(&part.path).field("intersector"),
+                format!(
+                    "mesh `{}`: `{}` is no intersector of this build",
+                    crate::text::escaped(&result.path),
+                    crate::text::escaped(name)
+                ),
+            ));
+        }
+    }
     for result in part.results.iter().filter(|r| r.error.is_none()) {
         let names: Vec<&str> = result.sets.iter().map(|s| s.name.as_str()).collect();
         if names != result.config.ray_sets {
@@ -121,6 +135,25 @@ fn check_consistent(part: &Part) -> Result<()> {
             ));
         }
         for set in &result.sets {
+            for (field, value) in [
+                ("secs_halfray", set.secs_halfray),
+                ("secs_embree", set.secs_embree),
+                ("secs_embree_default", set.secs_embree_default),
+                ("mrays_halfray", set.mrays_halfray),
+                ("mrays_embree", set.mrays_embree),
+                ("mrays_embree_default", set.mrays_embree_default),
+            ] {
+                if !(value.is_finite() && value >= 0.0) {
+                    return Err(Error::input(
+                        Location::file(&part.path).field(format!("sets.{field}")),
+                        format!(
+                            "mesh `{}` set `{}`: {value} is not a time or a throughput a run measures",
+                            crate::text::escaped(&result.path),
+                            crate::text::escaped(&set.name),
+                        ),
+                    ));
+                }
+            }
             let verdicts = [
                 set.agree,
                 set.ties,
@@ -397,8 +430,18 @@ mod tests {
     #[test]
     fn counts_no_run_can_write_are_refused() {
         type Edit = fn(&mut MeshResult);
-        let edits: [(Edit, &str); 4] = [
+        let edits: [(Edit, &str); 8] = [
             (|r| r.sets[0].agree = 999, "verdicts (agree"),
+            (|r| r.sets[0].secs_halfray = -1.0, "sets.secs_halfray"),
+            (|r| r.sets[1].mrays_embree = f64::NAN, "sets.mrays_embree"),
+            (
+                |r| r.sets[1].mrays_embree_default = f64::INFINITY,
+                "sets.mrays_embree_default",
+            ),
+            (
+                |r| r.config.intersector = "moller".into(),
+                "`moller` is no intersector",
+            ),
             (
                 |r| r.sets[1].genuine_mismatches = usize::MAX,
                 "more than 2^64",
@@ -419,7 +462,7 @@ mod tests {
                 .unwrap_err()
                 .to_string();
             assert!(
-                e.starts_with("p.json: mesh `a.obj`") && e.contains(want),
+                e.starts_with("p.json:") && e.contains("mesh `a.obj`") && e.contains(want),
                 "{e}"
             );
         }
