@@ -121,6 +121,27 @@ fn unknown_material_and_mesh_names() {
     );
 }
 
+/// A table written with the wrong brackets (`[[camera]]` for the one camera, `[light]` for the
+/// list of lights) names the field and says which bracket is wanted; serde alone said
+/// "invalid type: map, expected a string" with no field.
+#[test]
+fn a_header_with_the_wrong_brackets_names_its_table() {
+    check(
+        "cams.toml",
+        &BASE.replace("[camera]", "[[camera]]"),
+        "1:1",
+        "camera",
+        "this one is a single `[camera]` table",
+    );
+    check(
+        "light.toml",
+        &format!("[light]\ntype = \"point\"\nposition = [0, 0, 0]\n\n{BASE}"),
+        "1:1",
+        "light",
+        "this one is a list: `[[light]]`",
+    );
+}
+
 #[test]
 fn missing_obj_file() {
     check(

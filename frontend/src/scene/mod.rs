@@ -375,7 +375,8 @@ impl Source<'_> {
     }
 
     /// A TOML/serde error with its location; the field is taken from the message
-    /// (`unknown field`/`missing field`) or from the key in front of the span.
+    /// (`unknown field`/`missing field`), from the key in front of the span, or from the
+    /// header the span starts on (`[[camera]]` where a `[camera]` table is wanted).
     fn toml_error(&self, e: &toml::de::Error) -> Error {
         let mut msg = e.message().trim().to_string();
         let span = e.span().unwrap_or(0..0);
@@ -392,6 +393,15 @@ impl Source<'_> {
         }
         let field = backticked_field(&msg)
             .or_else(|| self.key_before(span.start))
+            .or_else(|| {
+                self.header_at(span.start).map(|h| {
+                    h.rsplit('.')
+                        .next()
+                        .unwrap_or(&h)
+                        .trim_matches('"')
+                        .to_string()
+                })
+            })
             .map(|f| {
                 // An unknown table (`[[lights]]`): the span is its header and the key is the
                 // header's own last name, so the field's parent is the header's parent.
@@ -406,6 +416,22 @@ impl Source<'_> {
                     (None, Some(t)) => format!("{t}.{f}"),
                 }
             });
+        // A header of the wrong kind: serde says only "map" or "sequence"; say which bracket.
+        if let Some(h) = self.header_at(span.start) {
+            let line_start = self.text[..floor_boundary(self.text, span.start)]
+                .rfind('\n')
+                .map_or(0, |i| i + 1);
+            let double = self.text[line_start..].trim_start().starts_with("[[");
+            if double && msg.starts_with("invalid type: map") {
+                msg.push_str(&format!(
+                    " (`[[{h}]]` starts one of a list of tables; this one is a single `[{h}]` table)"
+                ));
+            } else if !double && msg.ends_with("expected a sequence") {
+                msg.push_str(&format!(
+                    " (`[{h}]` is a single table; this one is a list: `[[{h}]]`, once per entry)"
+                ));
+            }
+        }
         let mut at = Location::file(self.path);
         if e.span().is_some() {
             let (line, col) = self.line_col(span.start);
