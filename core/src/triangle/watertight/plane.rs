@@ -171,6 +171,15 @@ mod tests {
             assert_eq!(got, want, "{v:?} {ray:?}");
             if got {
                 refused += 1;
+                // Independently of the plane kernel: the exact predicates say the line meets
+                // the plane behind the origin (the origin on the side the direction points
+                // to, strictly), and the interval starts at 0 or later.
+                let side = crate::predicates::orient3d(v[0], v[1], v[2], ray.origin);
+                let way = crate::predicates::orient_direction(v[0], v[1], v[2], ray.direction);
+                assert!(
+                    side != 0 && side == way && ray.t_min >= 0.0,
+                    "{v:?} {ray:?}: side {side}, direction {way}"
+                );
                 assert_eq!(Watertight.intersect(&ray, &v), None, "{v:?} {ray:?}");
                 if i % 5 < 2 {
                     spawned_refused += 1;
