@@ -71,6 +71,9 @@ typedef enum HalfrayStatus {
   // The ray's path needed more traversal stack entries than given (never with
   // `halfray_stack_entries` of them); no answer is written.
   HALFRAY_STATUS_STACK_TOO_SMALL = 20,
+  // Two areas of one call overlap: the handle, the baked buffer, the load scratch, the
+  // traversal stack and the output must each be memory of its own. Nothing is written.
+  HALFRAY_STATUS_OVERLAP = 21,
 } HalfrayStatus;
 
 // What a baked buffer's header announces, and the sizes it needs.
@@ -89,7 +92,10 @@ typedef struct HalfrayBakedInfo {
 
 // A loaded baked BVH: opaque, filled by `halfray_load`, read by the queries. It refers to
 // the baked buffer, which must stay in place and unchanged while the handle is used. Any
-// storage of this type will do (static, stack); a zeroed one is "not loaded".
+// storage of this type will do (static, stack), zero-initialised (`= {0}`: "not loaded") or
+// filled by `halfray_load` before any other call reads it: a handle of other contents is
+// refused as `NOT_LOADED` only with high probability (its tag is a check of its buffer's
+// address), not with certainty.
 typedef struct HalfrayBvh {
   size_t opaque[HALFRAY_BVH_WORDS];
 } HalfrayBvh;
@@ -140,7 +146,7 @@ extern "C" {
 // is `halfray_load`'s work).
 //
 // Returns `HALFRAY_STATUS_OK`; `NULL` when `bytes` or `info` is NULL; `MISALIGNED` when
-// `bytes` is not `HALFRAY_BAKED_ALIGN`-aligned; `SHORT_BUFFER` when `len` is shorter than the
+// `bytes` is not `HALFRAY_BAKED_ALIGN`-aligned or `info` not aligned as its type; `SHORT_BUFFER` when `len` is shorter than the
 // header or than the arrays it announces; `NOT_BAKED` or `VERSION` for a foreign header.
 // `*info` is written only on success.
 //
@@ -165,7 +171,8 @@ enum HalfrayStatus halfray_baked_info(const uint8_t *bytes,
 // freshly built one would.
 //
 // Returns `HALFRAY_STATUS_OK`; `NULL` when `bvh` or `bytes` is NULL, or `scratch` is NULL
-// with a non-zero `scratch_words`; `MISALIGNED` for a misaligned `bytes`, `scratch` or `bvh`;
+// with a non-zero `scratch_words`; `MISALIGNED` for a misaligned `bytes`, `scratch` or `bvh`; `OVERLAP` when
+// the buffer, the scratch and the handle are not three separate areas;
 // `SHORT_BUFFER`, `NOT_BAKED`, `VERSION` as `halfray_baked_info`; `SCRATCH_TOO_SMALL`; or the
 // code of the first check that fails (`INDEX_COUNT` to `BAD_BVH`). On any error `*bvh` (when
 // not NULL) is left "not loaded": queries on it return `NOT_LOADED`.
@@ -174,7 +181,8 @@ enum HalfrayStatus halfray_baked_info(const uint8_t *bytes,
 //
 // `bytes`, unless NULL, points to `len` readable bytes that stay unchanged while `*bvh` is
 // used; `scratch`, unless NULL, to `scratch_words` writable words; `bvh`, unless NULL, to
-// a writable `HalfrayBvh` not used by another call meanwhile.
+// a writable `HalfrayBvh` not used by another call meanwhile. The three areas must not
+// overlap (checked: `OVERLAP`).
 enum HalfrayStatus halfray_load(const uint8_t *bytes,
                                 size_t len,
                                 uint32_t *scratch,
@@ -201,16 +209,18 @@ enum HalfrayStatus halfray_stack_entries(const struct HalfrayBvh *bvh, size_t *e
 //
 // Returns `HALFRAY_STATUS_OK` with `*hit` the hit, or `primitive` = `HALFRAY_NO_HIT` for a
 // miss; `NULL` when `bvh`, `ray` or `hit` is NULL, or `stack` is NULL with a non-zero
-// `stack_entries`; `MISALIGNED`; `NOT_LOADED`; `INVALID_RAY` (NaN or infinite origin or
-// direction, zero direction, NaN bounds, `t_min` > `t_max`); `STACK_TOO_SMALL` when this ray
-// needed more entries. `*hit` is written only on success.
+// `stack_entries`; `MISALIGNED`; `NOT_LOADED`; `OVERLAP` when the stack overlaps the handle
+// or its baked buffer; `INVALID_RAY` (NaN or infinite origin or
+// direction, zero direction, NaN bounds, `t_min` = +infinity, `t_min` > `t_max`);
+// `STACK_TOO_SMALL` when this ray needed more entries. `*hit` is written only on success.
 //
 // # Safety
 //
 // `bvh`, unless NULL, points to a `HalfrayBvh` whose buffer is still in place; `ray`, unless
 // NULL, to a readable `HalfrayRay`; `stack`, unless NULL, to `stack_entries` writable
 // entries; `hit`, unless NULL, to a writable `HalfrayHit`; none used by another call
-// meanwhile.
+// meanwhile. The stack must not overlap the handle or its buffer (checked: `OVERLAP`); `*hit`
+// is written last, and should not overlap them either (the answer would replace them).
 enum HalfrayStatus halfray_closest_hit(const struct HalfrayBvh *bvh,
                                        const struct HalfrayRay *ray,
                                        struct HalfrayStackEntry *stack,
@@ -223,7 +233,8 @@ enum HalfrayStatus halfray_closest_hit(const struct HalfrayBvh *bvh,
 //
 // Returns `HALFRAY_STATUS_OK` with `*occluded` set; `NULL` when `bvh`, `ray` or `occluded`
 // is NULL, or `stack` is NULL with a non-zero `stack_entries`; `MISALIGNED`; `NOT_LOADED`;
-// `INVALID_RAY`; `STACK_TOO_SMALL`. `*occluded` is written only on success.
+// `OVERLAP` (as `halfray_closest_hit`); `INVALID_RAY`; `STACK_TOO_SMALL`.
+// `*occluded` is written only on success.
 //
 // # Safety
 //

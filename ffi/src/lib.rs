@@ -80,6 +80,9 @@ pub enum HalfrayStatus {
     /// The ray's path needed more traversal stack entries than given (never with
     /// `halfray_stack_entries` of them); no answer is written.
     StackTooSmall = 20,
+    /// Two areas of one call overlap: the handle, the baked buffer, the load scratch, the
+    /// traversal stack and the output must each be memory of its own. Nothing is written.
+    Overlap = 21,
 }
 
 /// Alignment, in bytes, of a baked buffer's start (its nodes are read in place).
@@ -96,7 +99,10 @@ const _: () = assert!(HALFRAY_MAX_STACK_ENTRIES == TRAVERSAL_STACK_SIZE);
 
 /// A loaded baked BVH: opaque, filled by `halfray_load`, read by the queries. It refers to
 /// the baked buffer, which must stay in place and unchanged while the handle is used. Any
-/// storage of this type will do (static, stack); a zeroed one is "not loaded".
+/// storage of this type will do (static, stack), zero-initialised (`= {0}`: "not loaded") or
+/// filled by `halfray_load` before any other call reads it: a handle of other contents is
+/// refused as `NOT_LOADED` only with high probability (its tag is a check of its buffer's
+/// address), not with certainty.
 #[repr(C)]
 pub struct HalfrayBvh {
     opaque: [usize; HALFRAY_BVH_WORDS],
@@ -160,17 +166,39 @@ pub struct HalfrayHit {
     pub front_face: bool,
 }
 
-/// What a `HalfrayBvh` holds: a tag set only by a successful load, then the tree and mesh
-/// over the caller's buffer (`'static`: the caller keeps the buffer, as documented).
+/// What a `HalfrayBvh` holds: a tag set only by a successful load ([`tag_of`] the buffer's
+/// address, the next word; its length follows), then the tree and mesh over the caller's buffer
+/// (`'static`: the caller keeps the buffer, as documented). The first three words are plain
+/// integers, so that a handle is checked before anything in it is read as a reference.
 #[repr(C)]
 struct Loaded {
     tag: usize,
+    buffer: usize,
+    buffer_len: usize,
     bvh: Bvh<&'static [BvhNode], &'static [u32]>,
     mesh: TriangleMesh<'static>,
 }
 
-/// The tag of a loaded handle ("HRAY" in ASCII).
+/// The base of a loaded handle's tag ("HRAY" in ASCII).
 const LOADED: usize = 0x4852_4159;
+
+/// The tag of a handle loaded over the buffer at address `buffer`: odd (`LOADED` is odd and
+/// a buffer's address a multiple of `HALFRAY_BAKED_ALIGN`), so never 0 (a zeroed handle is
+/// "not loaded"), and for other contents a match only by chance: made-up contents would have
+/// to hold a buffer's address in the next word and this function of it in the first.
+fn tag_of(buffer: usize) -> usize {
+    LOADED ^ buffer
+}
+
+const _: () = assert!(!LOADED.is_multiple_of(2) && HALFRAY_BAKED_ALIGN.is_multiple_of(2));
+
+/// `true` when the `a_len` bytes at address `a` and the `b_len` bytes at `b` share no byte
+/// (an empty area shares none); ends past the address space count as its end. Out of line:
+/// one copy for every check (the microcontroller image's size).
+#[inline(never)]
+fn disjoint(a: usize, a_len: usize, b: usize, b_len: usize) -> bool {
+    a_len == 0 || b_len == 0 || a.saturating_add(a_len) <= b || b.saturating_add(b_len) <= a
+}
 
 const _: () = assert!(size_of::<Loaded>() <= size_of::<HalfrayBvh>());
 const _: () = assert!(align_of::<Loaded>() <= align_of::<HalfrayBvh>());
@@ -283,7 +311,7 @@ impl From<LoadError> for HalfrayStatus {
 /// is `halfray_load`'s work).
 ///
 /// Returns `HALFRAY_STATUS_OK`; `NULL` when `bytes` or `info` is NULL; `MISALIGNED` when
-/// `bytes` is not `HALFRAY_BAKED_ALIGN`-aligned; `SHORT_BUFFER` when `len` is shorter than the
+/// `bytes` is not `HALFRAY_BAKED_ALIGN`-aligned or `info` not aligned as its type; `SHORT_BUFFER` when `len` is shorter than the
 /// header or than the arrays it announces; `NOT_BAKED` or `VERSION` for a foreign header.
 /// `*info` is written only on success.
 ///
@@ -334,7 +362,8 @@ pub unsafe extern "C" fn halfray_baked_info(
 /// freshly built one would.
 ///
 /// Returns `HALFRAY_STATUS_OK`; `NULL` when `bvh` or `bytes` is NULL, or `scratch` is NULL
-/// with a non-zero `scratch_words`; `MISALIGNED` for a misaligned `bytes`, `scratch` or `bvh`;
+/// with a non-zero `scratch_words`; `MISALIGNED` for a misaligned `bytes`, `scratch` or `bvh`; `OVERLAP` when
+/// the buffer, the scratch and the handle are not three separate areas;
 /// `SHORT_BUFFER`, `NOT_BAKED`, `VERSION` as `halfray_baked_info`; `SCRATCH_TOO_SMALL`; or the
 /// code of the first check that fails (`INDEX_COUNT` to `BAD_BVH`). On any error `*bvh` (when
 /// not NULL) is left "not loaded": queries on it return `NOT_LOADED`.
@@ -343,7 +372,8 @@ pub unsafe extern "C" fn halfray_baked_info(
 ///
 /// `bytes`, unless NULL, points to `len` readable bytes that stay unchanged while `*bvh` is
 /// used; `scratch`, unless NULL, to `scratch_words` writable words; `bvh`, unless NULL, to
-/// a writable `HalfrayBvh` not used by another call meanwhile.
+/// a writable `HalfrayBvh` not used by another call meanwhile. The three areas must not
+/// overlap (checked: `OVERLAP`).
 #[no_mangle]
 pub unsafe extern "C" fn halfray_load(
     bytes: *const u8,
@@ -358,8 +388,11 @@ pub unsafe extern "C" fn halfray_load(
     if !aligned(bvh, align_of::<HalfrayBvh>()) {
         return HalfrayStatus::Misaligned;
     }
-    // SAFETY: non-NULL, aligned, writable (contract): the handle is "not loaded" from here
-    // until a load succeeds.
+    if load_areas_overlap(bytes, len, scratch, scratch_words, bvh) {
+        return HalfrayStatus::Overlap;
+    }
+    // SAFETY: non-NULL, aligned, writable (contract), and outside the buffer and the scratch
+    // (checked): the handle is "not loaded" from here until a load succeeds.
     unsafe { bvh.cast::<usize>().write(0) };
     // SAFETY: `len` readable bytes at `bytes`, unchanged while the handle is used (contract).
     let (b, l) = match unsafe { baked(bytes, len) } {
@@ -391,7 +424,9 @@ pub unsafe extern "C" fn halfray_load(
             // writable (contract).
             unsafe {
                 bvh.cast::<Loaded>().write(Loaded {
-                    tag: LOADED,
+                    tag: tag_of(bytes as usize),
+                    buffer: bytes as usize,
+                    buffer_len: len,
                     bvh: tree,
                     mesh,
                 });
@@ -400,6 +435,27 @@ pub unsafe extern "C" fn halfray_load(
         }
         Err(e) => e.into(),
     }
+}
+
+/// `true` when `halfray_load`'s buffer overlaps its handle or its scratch: the buffer is read
+/// while those are written. (The scratch is dead before the handle is filled, so those two
+/// may share memory.) Out of line, so that the load's own code stays small enough for its
+/// checks to be inlined (the microcontroller image's size).
+#[inline(never)]
+fn load_areas_overlap(
+    bytes: *const u8,
+    len: usize,
+    scratch: *mut u32,
+    scratch_words: usize,
+    bvh: *mut HalfrayBvh,
+) -> bool {
+    !(disjoint(bytes as usize, len, bvh as usize, size_of::<HalfrayBvh>())
+        && disjoint(
+            bytes as usize,
+            len,
+            scratch as usize,
+            scratch_words.saturating_mul(size_of::<u32>()),
+        ))
 }
 
 /// The tree in `*bvh`, when a load filled it.
@@ -414,14 +470,17 @@ unsafe fn loaded<'a>(bvh: *const HalfrayBvh) -> Result<&'a Loaded, HalfrayStatus
     if !aligned(bvh, align_of::<HalfrayBvh>()) {
         return Err(HalfrayStatus::Misaligned);
     }
-    // SAFETY: an aligned, readable handle (contract); the tag is set only by the write of a
-    // whole `Loaded` in `halfray_load` and cleared at the start of every load.
-    unsafe {
-        if bvh.cast::<usize>().read() != LOADED {
-            return Err(HalfrayStatus::NotLoaded);
-        }
-        Ok(&*bvh.cast::<Loaded>())
+    // SAFETY: an aligned, readable handle whose first two words are readable integers
+    // (contract: a zero-initialised or loaded `HalfrayBvh`).
+    let [tag, buffer] = unsafe { bvh.cast::<[usize; 2]>().read() };
+    if tag != tag_of(buffer) {
+        return Err(HalfrayStatus::NotLoaded);
     }
+    // SAFETY: a matching tag is written only with a whole `Loaded` by a successful
+    // `halfray_load` and cleared at the start of every load; a zeroed handle never matches
+    // (`tag_of` is odd). Contents a caller made up could match only by chance, which the
+    // contract excludes.
+    Ok(unsafe { &*bvh.cast::<Loaded>() })
 }
 
 /// Writes to `*entries` how many traversal stack entries queries on `*bvh` can need: the
@@ -456,7 +515,9 @@ pub unsafe extern "C" fn halfray_stack_entries(
     HalfrayStatus::Ok
 }
 
-/// The checked inputs of a query: the loaded tree, the ray and the traversal stack.
+/// The checked inputs of a query: the loaded tree, the ray and the traversal stack, which
+/// must overlap neither the handle nor its buffer (the query writes the stack while it reads
+/// them). The answer is written after the last read of all three.
 ///
 /// # Safety
 ///
@@ -469,6 +530,15 @@ unsafe fn query_inputs<'a>(
 ) -> Result<(&'a Loaded, Ray, &'a mut [StackEntry]), HalfrayStatus> {
     // SAFETY: a readable handle (contract).
     let l = unsafe { loaded(bvh) }?;
+    let (s, n) = (
+        stack as usize,
+        stack_entries.saturating_mul(size_of::<HalfrayStackEntry>()),
+    );
+    if !(disjoint(bvh as usize, size_of::<HalfrayBvh>(), s, n)
+        && disjoint(l.buffer, l.buffer_len, s, n))
+    {
+        return Err(HalfrayStatus::Overlap);
+    }
     if ray.is_null() {
         return Err(HalfrayStatus::Null);
     }
@@ -487,7 +557,8 @@ unsafe fn query_inputs<'a>(
         return Err(HalfrayStatus::InvalidRay);
     }
     // SAFETY: `stack_entries` writable entries of `StackEntry`'s size and alignment
-    // (asserted above) at `stack`, used by nothing else during the query (contract).
+    // (asserted above) at `stack`, used by nothing else during the query (contract), and
+    // outside the handle, the buffer and the output (checked above).
     let stack = unsafe { filled(stack.cast::<StackEntry>(), stack_entries, StackEntry::EMPTY) }?;
     Ok((l, ray, stack))
 }
@@ -499,16 +570,18 @@ unsafe fn query_inputs<'a>(
 ///
 /// Returns `HALFRAY_STATUS_OK` with `*hit` the hit, or `primitive` = `HALFRAY_NO_HIT` for a
 /// miss; `NULL` when `bvh`, `ray` or `hit` is NULL, or `stack` is NULL with a non-zero
-/// `stack_entries`; `MISALIGNED`; `NOT_LOADED`; `INVALID_RAY` (NaN or infinite origin or
-/// direction, zero direction, NaN bounds, `t_min` > `t_max`); `STACK_TOO_SMALL` when this ray
-/// needed more entries. `*hit` is written only on success.
+/// `stack_entries`; `MISALIGNED`; `NOT_LOADED`; `OVERLAP` when the stack overlaps the handle
+/// or its baked buffer; `INVALID_RAY` (NaN or infinite origin or
+/// direction, zero direction, NaN bounds, `t_min` = +infinity, `t_min` > `t_max`);
+/// `STACK_TOO_SMALL` when this ray needed more entries. `*hit` is written only on success.
 ///
 /// # Safety
 ///
 /// `bvh`, unless NULL, points to a `HalfrayBvh` whose buffer is still in place; `ray`, unless
 /// NULL, to a readable `HalfrayRay`; `stack`, unless NULL, to `stack_entries` writable
 /// entries; `hit`, unless NULL, to a writable `HalfrayHit`; none used by another call
-/// meanwhile.
+/// meanwhile. The stack must not overlap the handle or its buffer (checked: `OVERLAP`); `*hit`
+/// is written last, and should not overlap them either (the answer would replace them).
 #[no_mangle]
 pub unsafe extern "C" fn halfray_closest_hit(
     bvh: *const HalfrayBvh,
@@ -571,7 +644,8 @@ fn hit_record(primitive: u32, h: &TriangleHit) -> HalfrayHit {
 ///
 /// Returns `HALFRAY_STATUS_OK` with `*occluded` set; `NULL` when `bvh`, `ray` or `occluded`
 /// is NULL, or `stack` is NULL with a non-zero `stack_entries`; `MISALIGNED`; `NOT_LOADED`;
-/// `INVALID_RAY`; `STACK_TOO_SMALL`. `*occluded` is written only on success.
+/// `OVERLAP` (as `halfray_closest_hit`); `INVALID_RAY`; `STACK_TOO_SMALL`.
+/// `*occluded` is written only on success.
 ///
 /// # Safety
 ///

@@ -185,6 +185,29 @@ static void octahedron(Buffer b) {
     CHECK(halfray_closest_hit(&bvh, &down, stack, 64, &hit) == HALFRAY_STATUS_NOT_LOADED);
     CHECK(halfray_any_hit(&bvh, &down, stack, 64, &any) == HALFRAY_STATUS_NOT_LOADED);
     CHECK(halfray_stack_entries(&bvh, &entries) == HALFRAY_STATUS_NOT_LOADED && entries == 999);
+    /* A handle whose first word is the tag's old constant and the rest made up ("HRAY",
+     * then 0x41 bytes): not loaded (its tag does not check out), no read of the rest. */
+    HalfrayBvh made_up;
+    memset(&made_up, 0x41, sizeof made_up);
+    made_up.opaque[0] = 0x48524159u;
+    CHECK(halfray_closest_hit(&made_up, &down, stack, 64, &hit) == HALFRAY_STATUS_NOT_LOADED);
+    CHECK(halfray_stack_entries(&made_up, &entries) == HALFRAY_STATUS_NOT_LOADED);
+
+    /* Areas that overlap: refused before anything is written. The scratch inside the
+     * buffer (the buffer unchanged), the handle inside the buffer or the scratch. */
+    Buffer before = copy(b);
+    CHECK(halfray_load(b.bytes, b.len, (uint32_t *)(void *)(b.bytes + 64), 1, &bvh) ==
+          HALFRAY_STATUS_OVERLAP);
+    CHECK(halfray_load(b.bytes, b.len, scratch, 1, (HalfrayBvh *)(void *)(b.bytes + 32)) ==
+          HALFRAY_STATUS_OVERLAP);
+    CHECK(memcmp(before.bytes, b.bytes, b.len) == 0);
+    free(before.bytes);
+    /* The scratch is dead before the handle is filled: those two may share memory. */
+    _Alignas(HalfrayBvh) uint32_t wide_scratch[64];
+    HalfrayBvh *inside = (HalfrayBvh *)(void *)(wide_scratch + 8);
+    CHECK(halfray_load(b.bytes, b.len, wide_scratch, 64, inside) == HALFRAY_STATUS_OK);
+    size_t inside_entries = 0;
+    CHECK(halfray_stack_entries(inside, &inside_entries) == HALFRAY_STATUS_OK && inside_entries >= 1);
 
     /* A good load; the stack the tree needs. */
     CHECK(halfray_load(b.bytes, b.len, scratch, 1, &bvh) == HALFRAY_STATUS_OK);
@@ -192,6 +215,19 @@ static void octahedron(Buffer b) {
     CHECK(halfray_stack_entries(&bvh, NULL) == HALFRAY_STATUS_NULL);
     CHECK(halfray_stack_entries(&bvh, &entries) == HALFRAY_STATUS_OK);
     CHECK(entries >= 1 && entries <= HALFRAY_MAX_STACK_ENTRIES);
+
+    /* A query whose stack overlaps the handle or the buffer: refused, the handle still
+     * loaded and the answer untouched (the stack over the handle returned OK with a wrong
+     * miss and destroyed the handle before). */
+    hit = sentinel;
+    CHECK(halfray_closest_hit(&bvh, &down, (HalfrayStackEntry *)(void *)&bvh, 16, &hit) ==
+          HALFRAY_STATUS_OVERLAP);
+    CHECK(halfray_closest_hit(&bvh, &down, (HalfrayStackEntry *)(void *)(b.bytes + 32), 4,
+                              &hit) == HALFRAY_STATUS_OVERLAP);
+    CHECK(halfray_any_hit(&bvh, &down, (HalfrayStackEntry *)(void *)&bvh, 16, &any) ==
+          HALFRAY_STATUS_OVERLAP);
+    CHECK(memcmp(&hit, &sentinel, sizeof hit) == 0);
+    CHECK(halfray_stack_entries(&bvh, &entries) == HALFRAY_STATUS_OK);
 
     /* Closed-form answers. Straight down at (1/4, 1/4): the face x + y + z = 1 of
      * vertices +x, +y, +z (triangle 0) at z = 1/2, t = 4.5; b1 is y, b2 is z; Ng is

@@ -91,20 +91,17 @@ fn unit_scale(c: &[f32; 3]) -> f32 {
 }
 
 /// `(v1 − v0) × (v2 − v0)` in `f32`; when that is zero or not finite, the cross product of the
-/// edges each divided by its largest component: the edges themselves when they are finite
-/// (exact for subnormal vertices, whose halves would round away), else the halved edges
-/// (which cannot overflow); zero only for a triangle with a zero edge or collinear edges.
+/// edges each divided by its largest component: halved edges (which cannot overflow) when the
+/// product overflowed, the edges themselves when it underflowed (finite then, and exact for
+/// subnormal vertices, whose halves would round away); zero only for a triangle with a zero
+/// edge or collinear edges.
 fn normal_f32(v: &[Vec3; 3]) -> Vec3 {
-    let (d1, d2) = (v[1] - v[0], v[2] - v[0]);
-    let n = d1.cross(d2);
+    let n = (v[1] - v[0]).cross(v[2] - v[0]);
     if n.is_finite() && n != Vec3::ZERO {
         return n;
     }
-    let (e1, e2) = if d1.is_finite() && d2.is_finite() {
-        (d1, d2)
-    } else {
-        (v[1] * 0.5 - v[0] * 0.5, v[2] * 0.5 - v[0] * 0.5)
-    };
+    let k = if n.is_finite() { 1.0 } else { 0.5 };
+    let (e1, e2) = (v[1] * k - v[0] * k, v[2] * k - v[0] * k);
     let (s1, s2) = (e1.abs().max_element(), e2.abs().max_element());
     if !(s1 > 0.0 && s2 > 0.0) {
         return Vec3::ZERO;
@@ -272,9 +269,16 @@ mod tests {
         // zero; the edges themselves are exact, and the normal is the plane's, with the
         // orientation of the exact cross product (+z for this winding).
         let u = f32::from_bits(1);
-        let v = [Vec3::new(u, -u, 0.0), Vec3::new(0.0, u, 0.0), Vec3::new(-u, -u, 0.0)];
+        let v = [
+            Vec3::new(u, -u, 0.0),
+            Vec3::new(0.0, u, 0.0),
+            Vec3::new(-u, -u, 0.0),
+        ];
         let n = normal_f32(&v);
-        assert!(n.is_finite() && n.z > 0.0 && n.x == 0.0 && n.y == 0.0, "{n:?}");
+        assert!(
+            n.is_finite() && n.z > 0.0 && n.x == 0.0 && n.y == 0.0,
+            "{n:?}"
+        );
         let hit = WatertightF32Exact
             .intersect(&Ray::new(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z), &v)
             .expect("the ray through the triangle's inside hits");
