@@ -71,8 +71,8 @@ typedef enum HalfrayStatus {
   // The ray's path needed more traversal stack entries than given (never with
   // `halfray_stack_entries` of them); no answer is written.
   HALFRAY_STATUS_STACK_TOO_SMALL = 20,
-  // Two areas of one call overlap: the handle, the baked buffer, the load scratch, the
-  // traversal stack and the output must each be memory of its own. Nothing is written.
+  // Two areas of one call overlap: a load's handle or scratch lies in its baked buffer, or
+  // a query's traversal stack overlaps the handle or its buffer. Nothing is written.
   HALFRAY_STATUS_OVERLAP = 21,
 } HalfrayStatus;
 

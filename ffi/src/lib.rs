@@ -80,8 +80,8 @@ pub enum HalfrayStatus {
     /// The ray's path needed more traversal stack entries than given (never with
     /// `halfray_stack_entries` of them); no answer is written.
     StackTooSmall = 20,
-    /// Two areas of one call overlap: the handle, the baked buffer, the load scratch, the
-    /// traversal stack and the output must each be memory of its own. Nothing is written.
+    /// Two areas of one call overlap: a load's handle or scratch lies in its baked buffer, or
+    /// a query's traversal stack overlaps the handle or its buffer. Nothing is written.
     Overlap = 21,
 }
 
@@ -168,7 +168,7 @@ pub struct HalfrayHit {
 
 /// What a `HalfrayBvh` holds: a tag set only by a successful load ([`tag_of`] the buffer's
 /// address, the next word; its length follows), then the tree and mesh over the caller's buffer
-/// (`'static`: the caller keeps the buffer, as documented). The first three words are plain
+/// (`'static`: the caller keeps the buffer, as documented). The first words are plain
 /// integers, so that a handle is checked before anything in it is read as a reference.
 #[repr(C)]
 struct Loaded {
@@ -558,7 +558,7 @@ unsafe fn query_inputs<'a>(
     }
     // SAFETY: `stack_entries` writable entries of `StackEntry`'s size and alignment
     // (asserted above) at `stack`, used by nothing else during the query (contract), and
-    // outside the handle, the buffer and the output (checked above).
+    // outside the handle and the buffer (checked above).
     let stack = unsafe { filled(stack.cast::<StackEntry>(), stack_entries, StackEntry::EMPTY) }?;
     Ok((l, ray, stack))
 }

@@ -235,8 +235,8 @@ fn smoothing_passes_and_leaf_sizes_are_checked_by_the_parser() {
     let out = dir.path().join("s.obj");
     let cube = Path::new(MESHES).join("cube.obj");
     let cap = halfray::scene::MAX_SMOOTH_ITERATIONS;
-    for n in [cap + 1, 1_000_000_000] {
-        let (code, e) = run(&[
+    let smooth = |n: u32| {
+        run(&[
             "mesh",
             "smooth",
             cube.to_str().unwrap(),
@@ -244,7 +244,10 @@ fn smoothing_passes_and_leaf_sizes_are_checked_by_the_parser() {
             out.to_str().unwrap(),
             "--iterations",
             &n.to_string(),
-        ]);
+        ])
+    };
+    for n in [cap + 1, 1_000_000_000] {
+        let (code, e) = smooth(n);
         assert_eq!(code, Some(2), "{e}");
         assert!(
             e.contains("--iterations") && e.contains(&cap.to_string()),
@@ -252,15 +255,7 @@ fn smoothing_passes_and_leaf_sizes_are_checked_by_the_parser() {
         );
     }
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
-    let (code, e) = run(&[
-        "mesh",
-        "smooth",
-        cube.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--iterations",
-        &cap.to_string(),
-    ]);
+    let (code, e) = smooth(cap);
     assert_eq!(code, Some(0), "{e}");
     let (code, e) = run(&["bench", "bvh", cube.to_str().unwrap(), "--leaf-size", "0"]);
     assert_eq!(code, Some(2), "{e}");

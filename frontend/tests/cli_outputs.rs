@@ -151,18 +151,21 @@ fn output_locations_are_checked_before_the_work() {
     let png = dir.path().join("out.png");
     let started = Instant::now();
     // A big render that would take long: it must fail at once, before rendering.
-    let o = run(os![
-        "render",
-        &scene("glass.toml"),
-        "-o",
-        &png,
-        "--stats-json",
-        &dir.path().join("nodir/stats.json"),
-        "--width",
-        "16000",
-        "--height",
-        "16000"
-    ]);
+    let big_render = |stats: &Path| {
+        run(os![
+            "render",
+            &scene("glass.toml"),
+            "-o",
+            &png,
+            "--stats-json",
+            stats,
+            "--width",
+            "16000",
+            "--height",
+            "16000"
+        ])
+    };
+    let o = big_render(&dir.path().join("nodir/stats.json"));
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     let e = stderr(&o);
     assert!(
@@ -195,18 +198,7 @@ fn output_locations_are_checked_before_the_work() {
     // render, and the first output, which exists, keeps its bytes.
     std::fs::write(&png, b"prior").unwrap();
     for stats in ["stats.json/", "out.png/"] {
-        let o = run(os![
-            "render",
-            &scene("glass.toml"),
-            "-o",
-            &png,
-            "--stats-json",
-            &PathBuf::from(format!("{}/{stats}", dir.path().display())),
-            "--width",
-            "16000",
-            "--height",
-            "16000"
-        ]);
+        let o = big_render(&PathBuf::from(format!("{}/{stats}", dir.path().display())));
         assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
         let e = stderr(&o);
         assert!(e.contains(stats) && e.contains("names a folder"), "{e}");

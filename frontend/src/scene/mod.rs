@@ -391,13 +391,15 @@ impl Source<'_> {
                 msg = format!("duplicate key `{}`", crate::text::excerpt(key));
             }
         }
+        // The `[table]` or `[[array]]` header the span starts on, and whether it is an array's.
+        let header = self.header_at(span.start);
         let field = backticked_field(&msg)
             .or_else(|| self.key_before(span.start))
             .or_else(|| {
-                self.header_at(span.start).map(|h| {
+                header.as_ref().map(|(h, _)| {
                     h.rsplit('.')
                         .next()
-                        .unwrap_or(&h)
+                        .unwrap_or(h)
                         .trim_matches('"')
                         .to_string()
                 })
@@ -405,8 +407,7 @@ impl Source<'_> {
             .map(|f| {
                 // An unknown table (`[[lights]]`): the span is its header and the key is the
                 // header's own last name, so the field's parent is the header's parent.
-                let header = self.header_at(span.start);
-                let own = header.as_deref().and_then(|h| {
+                let own = header.as_ref().and_then(|(h, _)| {
                     let (parent, last) = h.rsplit_once('.').unwrap_or(("", h));
                     (last.trim_matches('"') == f).then_some(parent)
                 });
@@ -417,12 +418,8 @@ impl Source<'_> {
                 }
             });
         // A header of the wrong kind: serde says only "map" or "sequence"; say which bracket.
-        if let Some(h) = self.header_at(span.start) {
-            let line_start = self.text[..floor_boundary(self.text, span.start)]
-                .rfind('\n')
-                .map_or(0, |i| i + 1);
-            let double = self.text[line_start..].trim_start().starts_with("[[");
-            if double && msg.starts_with("invalid type: map") {
+        if let Some((h, double)) = &header {
+            if *double && msg.starts_with("invalid type: map") {
                 msg.push_str(&format!(
                     " (`[[{h}]]` starts one of a list of tables; this one is a single `[{h}]` table)"
                 ));
@@ -486,17 +483,15 @@ impl Source<'_> {
     }
 
     /// The dotted name of the `[table]` or `[[array]]` header on the line holding byte `at`,
-    /// if that line is one.
-    fn header_at(&self, at: usize) -> Option<String> {
+    /// if that line is one, and `true` for an `[[array]]` header.
+    fn header_at(&self, at: usize) -> Option<(String, bool)> {
         let at = floor_boundary(self.text, at);
         let start = self.text[..at].rfind('\n').map_or(0, |i| i + 1);
         let rest = self.text.get(start..)?;
         let line = rest.split('\n').next()?.split('#').next()?.trim();
-        let name = line
-            .strip_prefix("[[")
-            .and_then(|r| r.strip_suffix("]]"))
-            .or_else(|| line.strip_prefix('[').and_then(|r| r.strip_suffix(']')))?;
-        Some(name.trim().to_string())
+        let array = line.strip_prefix("[[").and_then(|r| r.strip_suffix("]]"));
+        let name = array.or_else(|| line.strip_prefix('[').and_then(|r| r.strip_suffix(']')))?;
+        Some((name.trim().to_string(), array.is_some()))
     }
 
     /// The key of a `key = value` line whose value starts at `at`, with the keys of the
