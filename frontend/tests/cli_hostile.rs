@@ -541,14 +541,14 @@ fn repeat_products_that_overflow_are_refused() {
             stderr(&o)
         );
     }
-    // The same field path when `repeat` is an inline table (it used to be `object[0].count`).
+    // The same field path, down to the element, when `repeat` is an inline table.
     let scene = small_scene(
         dir.path(),
         "r.toml",
         "repeat = { count = [1, 1, 4294967296], step = [1, 0, 0] }\n",
     );
     let o = run(&[&"render", &scene, &"-o", &dir.path().join("o.png"), &"-q"]);
-    assert_refused(&o, "field `object[0].repeat.count`");
+    assert_refused(&o, "field `object[0].repeat.count[2]`");
     assert_eq!(names(dir.path()), ["r.toml"]);
 }
 

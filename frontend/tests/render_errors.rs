@@ -272,6 +272,55 @@ fn csg_operand_not_closed() {
     );
 }
 
+/// A serde error inside nested inline tables and arrays names the whole path, every array
+/// index included: an operand of an operand, an element of a vector.
+#[test]
+fn errors_in_nested_csg_operands_name_every_index() {
+    let nested = |inner: &str| {
+        format!(
+            "{BASE}\n[[object]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n\n\
+             [[object]]\ntype = \"csg\"\nop = \"union\"\nmaterial = \"m\"\noperands = [\n  \
+             {{ type = \"sphere\", center = [0, 0, 0], radius = 1 }},\n  \
+             {{ type = \"csg\", op = \"union\", operands = [{{ type = \"sphere\", center = [0, 0, 1], radius = 1 }}, {inner}] }},\n]\n"
+        )
+    };
+    // Line 23 holds the inner operands; columns count from its start.
+    let line = "  { type = \"csg\", op = \"union\", operands = [{ type = \"sphere\", center = [0, 0, 1], radius = 1 }, ";
+    let col = |within: &str| format!("23:{}", line.chars().count() + within.chars().count() + 1);
+    let inner = "{ type = \"sphere\", center = [0, 0, 2], radius = \"x\" }";
+    check(
+        "type.toml",
+        &nested(inner),
+        &col("{ type = \"sphere\", center = [0, 0, 2], radius = "),
+        "object[1].operands[1].operands[1].radius",
+        "invalid type: string \"x\"",
+    );
+    let inner = "{ type = \"sphere\", center = [0, 0, 2], radius = 1, bogus = 3 }";
+    check(
+        "unknown.toml",
+        &nested(inner),
+        &col("{ type = \"sphere\", center = [0, 0, 2], radius = 1, "),
+        "object[1].operands[1].operands[1].bogus",
+        "unknown field `bogus`",
+    );
+    let inner = "{ type = \"sphere\", center = [0, 0, true], radius = 1 }";
+    check(
+        "element.toml",
+        &nested(inner),
+        &col("{ type = \"sphere\", center = [0, 0, "),
+        "object[1].operands[1].operands[1].center[2]",
+        "invalid type: boolean `true`",
+    );
+    let inner = "{ type = \"sphere\", center = [0, 0, 2] }";
+    check(
+        "missing.toml",
+        &nested(inner),
+        &col(""),
+        "object[1].operands[1].operands[1].radius",
+        "missing field `radius`",
+    );
+}
+
 #[test]
 fn singular_transform() {
     check(

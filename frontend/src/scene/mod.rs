@@ -393,33 +393,12 @@ impl Source<'_> {
         }
         // The `[table]` or `[[array]]` header the span starts on, and whether it is an array's.
         let header = self.header_at(span.start);
-        let field = backticked_field(&msg)
-            .or_else(|| self.key_before(span.start))
-            .or_else(|| {
-                header.as_ref().map(|(h, _)| {
-                    h.rsplit('.')
-                        .next()
-                        .unwrap_or(h)
-                        .trim_matches('"')
-                        .to_string()
-                })
-            })
-            .map(|f| {
-                // An unknown table (`[[lights]]`): the span is its header and the key is the
-                // header's own last name, so the field's parent is the header's parent.
-                let own = header.as_ref().and_then(|(h, _)| {
-                    let (parent, last) = h.rsplit_once('.').unwrap_or(("", h));
-                    (last.trim_matches('"') == f).then_some(parent)
-                });
-                match (own, self.table_path(span.start)) {
-                    (Some(""), _) | (None, None) => f,
-                    (Some(parent), _) => format!("{parent}.{f}"),
-                    (None, Some(t)) => format!("{t}.{f}"),
-                }
-            });
+        let mut field = self.field_at(span.start, backticked_field(&msg));
         // A header of the wrong kind: serde says only "map" or "sequence"; say which bracket.
         if let Some((h, double)) = &header {
             if *double && msg.starts_with("invalid type: map") {
+                // The list as a whole is wrong, not its first table (`camera`, not `camera[0]`).
+                field = Some(h.clone());
                 msg.push_str(&format!(
                     " (`[[{h}]]` starts one of a list of tables; this one is a single `[{h}]` table)"
                 ));
@@ -440,48 +419,6 @@ impl Source<'_> {
         Error::input(at, msg)
     }
 
-    /// The table holding byte offset `at`: the last `[table]` or `[[array]]` header at or
-    /// before it, with the element index for arrays of tables (`object[2]`, `material.red`).
-    fn table_path(&self, at: usize) -> Option<String> {
-        let at = floor_boundary(self.text, at);
-        let mut counts: std::collections::HashMap<String, usize> = Default::default();
-        let mut current = None;
-        let mut offset = 0usize;
-        for line in self.text.split_inclusive('\n') {
-            if offset > at {
-                break;
-            }
-            offset += line.len();
-            let t = line.split('#').next().unwrap_or("").trim();
-            let is_name = |n: &str| {
-                !n.is_empty()
-                    && n.chars()
-                        .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.' | '"'))
-            };
-            if let Some(name) = t.strip_prefix("[[").and_then(|r| r.strip_suffix("]]")) {
-                let name = name.trim();
-                if is_name(name) {
-                    let k = counts.entry(name.to_string()).or_insert(0);
-                    current = Some(format!("{name}[{k}]"));
-                    *k += 1;
-                }
-            } else if let Some(name) = t.strip_prefix('[').and_then(|r| r.strip_suffix(']')) {
-                let name = name.trim();
-                if is_name(name) {
-                    // `[object.repeat]` after `[[object]]` belongs to the last `object`.
-                    let parts: Vec<&str> = name.split('.').collect();
-                    let owner = (1..parts.len()).rev().find_map(|n| {
-                        let prefix = parts[..n].join(".");
-                        let k = *counts.get(&prefix)?;
-                        Some(format!("{prefix}[{}].{}", k - 1, parts[n..].join(".")))
-                    });
-                    current = Some(owner.unwrap_or_else(|| name.to_string()));
-                }
-            }
-        }
-        current
-    }
-
     /// The dotted name of the `[table]` or `[[array]]` header on the line holding byte `at`,
     /// if that line is one, and `true` for an `[[array]]` header.
     fn header_at(&self, at: usize) -> Option<(String, bool)> {
@@ -494,36 +431,73 @@ impl Source<'_> {
         Some((name.trim().to_string(), array.is_some()))
     }
 
-    /// The key of a `key = value` line whose value starts at `at`, with the keys of the
-    /// inline tables it is in (`repeat.count` for `repeat = { count = … }`).
-    fn key_before(&self, at: usize) -> Option<String> {
-        let at = floor_boundary(self.text, at);
-        let line_start = self.text[..at].rfind('\n').map_or(0, |i| i + 1);
-        let head = &self.text[line_start..at];
-        let key_of = |head: &str| -> Option<String> {
-            let eq = head.rfind('=')?;
-            let key = head[..eq].trim();
-            let key = key.rsplit([',', '{']).next().unwrap_or(key).trim();
-            (!key.is_empty() && !key.starts_with('[')).then(|| key.trim_matches('"').to_string())
-        };
-        let mut keys = vec![key_of(head)?];
-        // The inline tables still open at `at`, innermost first (quotes are not tracked:
-        // a brace inside a string on the same line only shortens the name).
-        let mut depth = 0i32;
-        for (i, c) in head.char_indices().rev() {
-            match c {
-                '}' => depth += 1,
-                '{' if depth > 0 => depth -= 1,
-                '{' => {
-                    if let Some(k) = key_of(&head[..i]) {
-                        keys.push(k);
-                    }
+    /// The field path of byte `at` (`object[0].operands[1].radius`), from the document's
+    /// keys and values: the innermost key or value whose span holds `at` (tables of
+    /// `[header]`s span their header). `named` is the field a message names (`unknown
+    /// field`/`missing field`): the path ends with it, appended to the table at `at` when that
+    /// is not already its last key. Read with the TOML parser's recovery, so a syntax error
+    /// gets the path of what parsed up to it; `None` only when nothing holds `at` and no field
+    /// is named.
+    fn field_at(&self, at: usize, named: Option<String>) -> Option<String> {
+        let (doc, _) = toml::de::DeTable::parse_recoverable(self.text);
+        let mut best: Option<(usize, String)> = None;
+        path_in(doc.get_ref(), "", at, &mut best);
+        let path = best.map(|(_, p)| p);
+        let Some(f) = named else { return path };
+        Some(match path {
+            Some(p) => {
+                // `lights[0]` at an unknown `[[lights]]` is the field `lights` itself.
+                let base = p.trim_end_matches(|c: char| c.is_ascii_digit() || c == '[' || c == ']');
+                if base.rsplit('.').next() == Some(f.as_str()) {
+                    base.to_string()
+                } else {
+                    format!("{p}.{f}")
                 }
-                _ => {}
             }
+            None => f,
+        })
+    }
+}
+
+/// Records in `best` the path of the innermost key or value of `table` (at path `prefix`)
+/// whose span holds byte `at`: the one of the shortest span.
+fn path_in(
+    table: &toml::de::DeTable<'_>,
+    prefix: &str,
+    at: usize,
+    best: &mut Option<(usize, String)>,
+) {
+    fn visit(
+        v: &toml::Spanned<toml::de::DeValue<'_>>,
+        path: String,
+        at: usize,
+        best: &mut Option<(usize, String)>,
+    ) {
+        let span = v.span();
+        if span.contains(&at) && best.as_ref().is_none_or(|(len, _)| span.len() <= *len) {
+            *best = Some((span.len(), path.clone()));
         }
-        keys.reverse();
-        Some(keys.join("."))
+        match v.get_ref() {
+            toml::de::DeValue::Table(t) => path_in(t, &path, at, best),
+            toml::de::DeValue::Array(a) => {
+                for (i, e) in a.iter().enumerate() {
+                    visit(e, format!("{path}[{i}]"), at, best);
+                }
+            }
+            _ => {}
+        }
+    }
+    for (k, v) in table.iter() {
+        let path = if prefix.is_empty() {
+            k.get_ref().to_string()
+        } else {
+            format!("{prefix}.{}", k.get_ref())
+        };
+        let span = k.span();
+        if span.contains(&at) && best.as_ref().is_none_or(|(len, _)| span.len() <= *len) {
+            *best = Some((span.len(), path.clone()));
+        }
+        visit(v, path, at, best);
     }
 }
 
