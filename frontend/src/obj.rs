@@ -138,27 +138,60 @@ impl ObjMesh {
     }
 }
 
-/// Reads and parses an OBJ file.
-pub fn read_obj(path: &Path) -> Result<ObjMesh> {
-    read_obj_noting(path).map(|(m, _)| m)
+/// Where each vertex and triangle of an [`ObjMesh`] was read: the 1-based line of its `v`
+/// statement, and of the `f` statement it was fan-triangulated from. For messages about them.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ObjLines {
+    vertex: Vec<usize>,
+    triangle: Vec<usize>,
 }
 
-/// Reads and parses an OBJ file, also saying what it held that the mesh does not keep.
-pub fn read_obj_noting(path: &Path) -> Result<(ObjMesh, NotCarried)> {
+impl ObjLines {
+    /// The line of vertex `i` (0-based, as in [`ObjMesh::positions`]); `None` beyond them.
+    pub fn vertex(&self, i: usize) -> Option<usize> {
+        self.vertex.get(i).copied()
+    }
+
+    /// The line of triangle `i` (0-based, as in [`ObjMesh::triangles`]); `None` beyond them.
+    pub fn triangle(&self, i: usize) -> Option<usize> {
+        self.triangle.get(i).copied()
+    }
+}
+
+/// A parsed OBJ file: the mesh, what the file held that the mesh does not keep, and the lines
+/// its vertices and triangles came from.
+#[derive(Debug)]
+pub struct ObjFile {
+    /// The triangle mesh.
+    pub mesh: ObjMesh,
+    /// The statements read but not kept.
+    pub not_carried: NotCarried,
+    /// The source line of each vertex and triangle.
+    pub lines: ObjLines,
+}
+
+/// Reads and parses an OBJ file.
+pub fn read_obj(path: &Path) -> Result<ObjMesh> {
+    read_obj_file(path).map(|f| f.mesh)
+}
+
+/// Reads and parses an OBJ file, keeping what [`ObjFile`] says of it.
+pub fn read_obj_file(path: &Path) -> Result<ObjFile> {
     let bytes = crate::input::read_bytes(path)?;
     parse_obj_bytes(&bytes, path)
 }
 
 /// Parses OBJ text; `path` is used only in error messages.
 pub fn parse_obj(text: &str, path: &Path) -> Result<ObjMesh> {
-    parse_obj_bytes(text.as_bytes(), path).map(|(m, _)| m)
+    parse_obj_bytes(text.as_bytes(), path).map(|f| f.mesh)
 }
 
 /// Parses OBJ bytes (see the module docs); `path` is used only in error messages.
-pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<(ObjMesh, NotCarried)> {
+pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<ObjFile> {
     let bytes = bytes.strip_prefix(BOM).unwrap_or(bytes);
     let mut mesh = ObjMesh::default();
     let mut dropped = NotCarried::default();
+    let mut source = ObjLines::default();
     let mut face: Vec<u32> = Vec::new();
     let (mut texcoords, mut normals) = (0usize, 0usize);
     for (line_no, raw) in lines(bytes).enumerate() {
@@ -244,6 +277,7 @@ pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<(ObjMesh, NotCarried
                 }
                 mesh.positions
                     .push(Vec3::new(values[0], values[1], values[2]));
+                source.vertex.push(line_no);
             }
             "f" => {
                 face.clear();
@@ -260,6 +294,7 @@ pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<(ObjMesh, NotCarried
                 }
                 for i in 1..face.len() - 1 {
                     mesh.triangles.push([face[0], face[i], face[i + 1]]);
+                    source.triangle.push(line_no);
                 }
             }
             "vt" | "vn" | "vp" | "o" | "g" | "s" | "usemtl" | "mtllib" | "l" | "p" => {
@@ -275,7 +310,11 @@ pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<(ObjMesh, NotCarried
             }
         }
     }
-    Ok((mesh, dropped))
+    Ok(ObjFile {
+        mesh,
+        not_carried: dropped,
+        lines: source,
+    })
 }
 
 /// The vertex of a face token `v`, `v/t`, `v//n` or `v/t/n` (0-based), given how many
@@ -410,7 +449,7 @@ mod tests {
     }
 
     fn parse_bytes(b: &[u8]) -> Result<(ObjMesh, NotCarried)> {
-        parse_obj_bytes(b, Path::new("d.obj"))
+        parse_obj_bytes(b, Path::new("d.obj")).map(|f| (f.mesh, f.not_carried))
     }
 
     #[test]

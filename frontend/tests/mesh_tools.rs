@@ -329,8 +329,8 @@ fn check_one_level(input: &Path, weights: Weights) -> ObjMesh {
     })
     .unwrap();
     let obj = read_obj(input).unwrap();
-    let mut buffers = MeshBuffers::for_obj(&obj);
-    let m = build_mesh(&obj, input, &mut buffers).unwrap();
+    let mut buffers = MeshBuffers::for_obj(&obj, input).unwrap();
+    let m = build_mesh(&obj, None, input, &mut buffers).unwrap();
     let (v, e, f) = (m.len().vertices, m.len().edges, m.len().faces);
     let sub = read_obj(&out).unwrap();
     assert_eq!(sub.positions.len(), v + e);
@@ -636,4 +636,108 @@ fn collapse_on_a_tetrahedron_refuses_everything_and_says_why() {
     ]);
     assert_eq!(code, 0);
     assert!(stdout.contains("refused (wing valence 3): 6"), "{stdout}");
+}
+
+// ----- rejections located in the bytes read -----
+
+/// Two triangles sharing only vertex 1: the half-edge core rejects the pinch at vertex 1.
+const BOWTIE: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv -1 0 0\nv 0 -1 0\nf 1 2 3\nf 1 4 5\n";
+
+/// A rejected mesh's line comes from the bytes read once: a byte-order mark does not shift
+/// it, and a named pipe (readable once) gets it as well, where a second open for the line
+/// would wait for another writer forever.
+#[test]
+fn a_rejected_mesh_is_located_from_the_bytes_read_once() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text, line) in [
+        ("plain.obj", BOWTIE.to_string(), 1),
+        ("bom.obj", format!("\u{feff}{BOWTIE}"), 1),
+        ("comment.obj", format!("# a comment\n{BOWTIE}"), 2),
+    ] {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        let (code, _, err) = run_bin(&["mesh", "check", p.to_str().unwrap()]);
+        assert_eq!(code, 1, "{err}");
+        assert!(
+            err.contains(&format!("{name}:{line}: non-manifold vertex 1 is a pinch")),
+            "{err}"
+        );
+    }
+    #[cfg(unix)]
+    for command in ["check", "subdivide"] {
+        use std::time::{Duration, Instant};
+        let fifo = dir.path().join("pipe.obj");
+        let _ = std::fs::remove_file(&fifo);
+        assert!(
+            Command::new("mkfifo")
+                .arg(&fifo)
+                .status()
+                .unwrap()
+                .success()
+        );
+        let writer = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || std::fs::write(&fifo, BOWTIE).unwrap())
+        };
+        let out = dir.path().join("out.obj");
+        let mut args = vec!["mesh", command, fifo.to_str().unwrap()];
+        if command == "subdivide" {
+            args.extend(["-o", out.to_str().unwrap()]);
+        }
+        let mut child = Command::new(BIN)
+            .args(&args)
+            .stderr(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let deadline = Instant::now() + Duration::from_secs(60);
+        while child.try_wait().unwrap().is_none() {
+            if Instant::now() > deadline {
+                child.kill().unwrap();
+                panic!("`mesh {command}` of a named pipe did not finish: it reopened the pipe");
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let output = child.wait_with_output().unwrap();
+        writer.join().unwrap();
+        let err = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(1), "{err}");
+        assert!(err.contains("pipe.obj:1: non-manifold vertex 1"), "{err}");
+        assert!(!out.exists());
+    }
+}
+
+/// Two triangles on the same three vertices (a "pillow", vertices 5–7, beside a tetrahedron):
+/// subdivision refuses them naming two of those vertices by their OBJ numbers.
+#[test]
+fn coincident_faces_are_named_by_their_obj_vertices() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("pillow.obj");
+    std::fs::write(
+        &input,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n\
+         v 3 3 3\nv 4 3 3\nv 3 4 3\nf 5 6 7\nf 5 7 6\n",
+    )
+    .unwrap();
+    let out = dir.path().join("o.obj");
+    let (code, _, err) = run_bin(&[
+        "mesh",
+        "subdivide",
+        input.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{err}");
+    let named: Vec<u32> = err
+        .split("the edge of vertices ")
+        .nth(1)
+        .and_then(|r| r.split(" have").next())
+        .map(|r| r.split(" and ").map(|n| n.parse().unwrap()).collect())
+        .unwrap_or_else(|| panic!("no vertices named: {err}"));
+    assert_eq!(named.len(), 2, "{err}");
+    assert!(
+        named[0] != named[1] && named.iter().all(|v| (5..=7).contains(v)),
+        "{err}"
+    );
+    assert!(!out.exists());
 }

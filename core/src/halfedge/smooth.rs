@@ -1,6 +1,6 @@
 //! Uniform Laplacian smoothing ("diffuse").
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use super::error::DiffuseError;
 use super::handles::{NONE, VertexId};
@@ -20,21 +20,24 @@ pub enum DiffuseBoundary {
 
 impl<S: MeshStorage> Mesh<S> {
     /// Uniform Laplacian `L(v) = (1/n)·Σ x_j − x_v` over the `n` neighbours of `v`, from the
-    /// current positions. `Some(0)` for an isolated vertex, `None` for a dead one.
+    /// current positions. `Some(0)` for an isolated vertex, `None` for a dead one. Summed and
+    /// divided in `f64`, rounded to `f32` once: the sum of many neighbours near the largest
+    /// `f32` coordinates does not overflow; the result (a centroid less a position) is finite
+    /// whenever every coordinate involved is at most `f32::MAX / 2` in magnitude.
     pub fn laplacian(&self, v: VertexId) -> Option<Vec3> {
         if !self.v_live(v.0) {
             return None;
         }
         let x = self.pos_raw(v.0);
-        let (mut sum, mut n) = (Vec3::ZERO, 0u32);
+        let (mut sum, mut n) = (DVec3::ZERO, 0u32);
         for w in self.vertex_neighbors(v) {
-            sum += self.pos_raw(w.0);
+            sum += self.pos_raw(w.0).as_dvec3();
             n += 1;
         }
         Some(if n == 0 {
             Vec3::ZERO
         } else {
-            sum / n as f32 - x
+            (sum / f64::from(n) - x.as_dvec3()).as_vec3()
         })
     }
 

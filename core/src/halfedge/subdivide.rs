@@ -1,6 +1,6 @@
 //! Loop subdivision, one level per call, into a second mesh.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use super::error::{CapacityError, ElementKind, SubdivideError};
 use super::handles::{NONE, VertexId};
@@ -63,13 +63,16 @@ impl<S: MeshStorage> Mesh<S> {
             let b1 = self.pos_raw(self.tail_raw(self.prev_raw(out)));
             return Some(0.75 * x + 0.125 * (b0 + b1));
         }
-        let (mut sum, mut n) = (Vec3::ZERO, 0usize);
+        // In `f64`, rounded to `f32` once: the sum of many neighbours near the largest `f32`
+        // coordinates does not overflow (the result, a convex combination for β ≤ 1/n, is as
+        // large as they are).
+        let (mut sum, mut n) = (DVec3::ZERO, 0usize);
         for w in self.vertex_neighbors(v) {
-            sum += self.pos_raw(w.0);
+            sum += self.pos_raw(w.0).as_dvec3();
             n += 1;
         }
-        let beta = loop_beta(n, weights);
-        Some((1.0 - n as f32 * beta) * x + beta * sum)
+        let beta = f64::from(loop_beta(n, weights));
+        Some(((1.0 - n as f64 * beta) * x.as_dvec3() + beta * sum).as_vec3())
     }
 
     /// Loop-subdivided position of the new vertex on edge `e` (the "odd" rule): interior

@@ -1290,3 +1290,55 @@ fn every_legal_collapse_of_a_grid_leaves_a_valid_mesh() {
     }
     assert!(legal > 200, "only {legal} legal collapses");
 }
+
+/// A closed fan of `n` triangles around vertex 0 at `centre`, its rim a circle of `radius` in
+/// the plane `x = centre.x` (interior vertex 0 of valence `n`).
+fn rim_fan(n: u32, centre: Vec3, radius: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut p = vec![centre];
+    for k in 0..n {
+        let a = 2.0 * core::f32::consts::PI * k as f32 / n as f32;
+        p.push(centre + vec3(0.0, radius * a.cos(), radius * a.sin()));
+    }
+    let t = (0..n).map(|k| [0, 1 + k, 1 + (k + 1) % n]).collect();
+    (p, t)
+}
+
+/// Ten neighbours at 4·10³⁷ (inside the frontend's coordinate domain, ±4.25·10³⁷) sum to
+/// 4·10³⁸, beyond the largest `f32`: the Laplacian, the smoothing step and the Loop vertex
+/// rule must still give the finite positions of their formulas (here evaluated in `f64`
+/// straight from the rim, without the mesh).
+#[test]
+fn smoothing_and_loop_near_the_largest_coordinates_do_not_overflow() {
+    // One f32 rounding at the result's magnitude (4·10³⁷): the f64 sums are exact enough.
+    const AT_4E37: f32 = 4e37 * f32::EPSILON;
+    let (n, centre) = (10u32, vec3(4e37, 0.0, 0.0));
+    let (p, t) = rim_fan(n, centre, 1e36);
+    let mut m: M = build(&p, &t).unwrap();
+    let rim: glam::DVec3 = p[1..].iter().map(|q| q.as_dvec3()).sum();
+    let want_l = rim / f64::from(n) - centre.as_dvec3();
+    let l = m.laplacian(VertexId(0)).unwrap();
+    assert!(
+        (l.as_dvec3() - want_l).abs().max_element() <= f64::from(AT_4E37),
+        "{l} vs {want_l}"
+    );
+    let beta = f64::from(loop_beta(n as usize, LoopWeights::Warren));
+    let want = (1.0 - f64::from(n) * beta) * centre.as_dvec3() + beta * rim;
+    let got = m
+        .loop_vertex_position(VertexId(0), LoopWeights::Warren)
+        .unwrap();
+    assert!(
+        (got.as_dvec3() - want).abs().max_element() <= f64::from(AT_4E37),
+        "{got} vs {want}"
+    );
+    let mut out = HalfedgeMesh::<64, 128, 64>::new();
+    m.subdivide_loop(&mut out, LoopWeights::Warren).unwrap();
+    let mut scratch = vec![Vec3::ZERO; m.slots().vertices];
+    m.diffuse(0.5, DiffuseBoundary::Fixed, &mut scratch)
+        .unwrap();
+    let moved = m.position(VertexId(0)).unwrap();
+    let want = centre.as_dvec3() + 0.5 * want_l;
+    assert!(
+        (moved.as_dvec3() - want).abs().max_element() <= f64::from(AT_4E37),
+        "{moved} vs {want}"
+    );
+}

@@ -22,7 +22,7 @@
 use super::{CheckArgs, MeshBuffers, build_mesh, ms_since};
 use crate::console::print_out;
 use crate::error::{Error, Location, Result};
-use crate::obj::{ObjMesh, read_obj};
+use crate::obj::{ObjMesh, read_obj_file};
 use crate::outputs::{Named, reserve_outputs};
 use halfray_core::halfedge::{FaceId, Mesh, MeshStorage};
 use std::fmt;
@@ -108,7 +108,8 @@ pub fn run(args: &CheckArgs) -> Result<()> {
 /// and the reason; `Err` is for unreadable or malformed files.
 pub fn check(path: &Path) -> Result<CheckReport> {
     let t0 = Instant::now();
-    let obj = read_obj(path)?;
+    let file = read_obj_file(path)?;
+    let obj = &file.mesh;
     let read_ms = ms_since(t0);
 
     let mut used = vec![false; obj.positions.len()];
@@ -116,7 +117,7 @@ pub fn check(path: &Path) -> Result<CheckReport> {
         used[i as usize] = true;
     }
     let referenced = used.iter().filter(|&&u| u).count();
-    let edges = count_edges(&obj);
+    let edges = count_edges(obj);
     let faces = obj.triangles.len();
     let chi = referenced as i64 - edges as i64 + faces as i64;
     let mut report = CheckReport {
@@ -143,8 +144,8 @@ pub fn check(path: &Path) -> Result<CheckReport> {
     };
 
     let t1 = Instant::now();
-    let mut buffers = MeshBuffers::for_obj(&obj);
-    let built = build_mesh(&obj, path, &mut buffers);
+    let mut buffers = MeshBuffers::for_obj(obj, path)?;
+    let built = build_mesh(obj, Some(&file.lines), path, &mut buffers);
     report.build_ms = ms_since(t1);
     let mesh = match built {
         Ok(m) => m,

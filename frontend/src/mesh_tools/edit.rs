@@ -7,11 +7,11 @@ use super::{
 };
 use crate::error::{Error, Location, Result};
 use crate::limits::check_memory;
-use crate::obj::{MAX_COORDINATE, NotCarried, read_obj_noting, write_obj_to};
+use crate::obj::{MAX_COORDINATE, NotCarried, read_obj_file, write_obj_to};
 use glam::Vec3;
 use halfray_core::halfedge::{
-    CollapseAt, CollapseError, Counts, DiffuseBoundary, EdgeId, EdgeRec, FaceRec, LoopWeights,
-    MAX_ELEMENTS, Mesh, MeshStorage, SliceMesh, SubdivideError, VertexRec,
+    CollapseAt, CollapseError, Counts, DiffuseBoundary, EdgeId, LoopWeights, MAX_ELEMENTS, Mesh,
+    MeshStorage, SliceMesh, SubdivideError,
 };
 use std::collections::BTreeMap;
 use std::fmt;
@@ -155,7 +155,23 @@ fn subdivide_mesh(
         &mut report.levels,
         &mut export_ms,
     )
-    .map_err(|e| core_error(&args.input, e))?;
+    .map_err(|e| match e {
+        // Named by the file's vertex numbers, not the core's edge index. Only the input mesh
+        // can have coincident faces (every face of a subdivided one has a vertex of its own),
+        // so the edge is the input's.
+        SubdivideError::CoincidentFaces(edge) => match mesh.edge_vertices(edge) {
+            Some([a, b]) => core_error(
+                &args.input,
+                format!(
+                    "Loop subdivision refused: the two faces on the edge of vertices {} and {} have the same three vertices",
+                    a.index() + 1,
+                    b.index() + 1
+                ),
+            ),
+            None => core_error(&args.input, e),
+        },
+        e => core_error(&args.input, e),
+    })?;
     report.edit_ms = ms_since(t1) - export_ms;
     report.after = report.levels.last().map_or(report.before, |l| l.0);
     report.write_ms = export_ms;
@@ -179,10 +195,10 @@ fn edit_file(
 ) -> Result<EditReport> {
     let out = reserve_output(input, output, force)?;
     let t0 = Instant::now();
-    let (obj, dropped) = read_obj_noting(input)?;
-    warn_not_carried(input, output, &dropped);
-    let mut buffers = MeshBuffers::for_obj(&obj);
-    let mesh = build_mesh(&obj, input, &mut buffers)?;
+    let file = read_obj_file(input)?;
+    warn_not_carried(input, output, &file.not_carried);
+    let mut buffers = MeshBuffers::for_obj(&file.mesh, input)?;
+    let mesh = build_mesh(&file.mesh, Some(&file.lines), input, &mut buffers)?;
     let mut report = EditReport {
         command,
         input: input.to_path_buf(),
@@ -235,10 +251,9 @@ fn export_edited<S: MeshStorage>(mesh: &Mesh<S>, report: &mut EditReport, t1: In
 /// triangles), `None` on overflow.
 fn level_bytes(c: Counts) -> Option<u64> {
     use std::mem::size_of;
-    let v = (c.vertices as u64).checked_mul((size_of::<VertexRec>() + size_of::<Vec3>()) as u64)?;
-    let e = (c.edges as u64).checked_mul(size_of::<EdgeRec>() as u64)?;
-    let f = (c.faces as u64).checked_mul((size_of::<FaceRec>() + size_of::<[u32; 3]>()) as u64)?;
-    v.checked_add(e)?.checked_add(f)
+    let v = (c.vertices as u64).checked_mul(size_of::<Vec3>() as u64)?;
+    let f = (c.faces as u64).checked_mul(size_of::<[u32; 3]>() as u64)?;
+    MeshBuffers::bytes(c)?.checked_add(v)?.checked_add(f)
 }
 
 /// Subdivides `levels` times (each level in fresh buffers of exactly the needed size) and
@@ -271,7 +286,8 @@ fn roughness<S: MeshStorage>(m: &Mesh<S>) -> f64 {
         if m.is_isolated(v) {
             continue;
         }
-        sum += f64::from(m.laplacian(v).unwrap_or(Vec3::ZERO).length());
+        // The length in `f64`: an `f32` one overflows for components beyond 1.8e19.
+        sum += m.laplacian(v).unwrap_or(Vec3::ZERO).as_dvec3().length();
         n += 1;
     }
     if n == 0 { 0.0 } else { sum / n as f64 }

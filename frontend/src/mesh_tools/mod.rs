@@ -23,7 +23,7 @@ pub mod generate;
 
 use crate::console::print_out;
 use crate::error::{Error, Location, Result};
-use crate::obj::ObjMesh;
+use crate::obj::{ObjLines, ObjMesh};
 use crate::outputs::{Named, OutputFile, reserve_outputs};
 use halfray_core::halfedge::{
     BuildError, Counts, Culprit, EdgeRec, FaceRec, MAX_ELEMENTS, MeshStorage, SliceMesh, VertexRec,
@@ -193,15 +193,36 @@ impl MeshBuffers {
         }
     }
 
-    /// Buffers large enough to build `obj`: its vertices, faces, and 3 edges per face (an
-    /// upper bound; a closed mesh uses 1.5).
-    pub fn for_obj(obj: &ObjMesh) -> Self {
+    /// Buffers large enough to build `obj` read from `path`: its vertices, faces, and 3 edges
+    /// per face (an upper bound; a closed mesh uses 1.5). Refused before anything is allocated
+    /// when they and the build's scratch exceed the memory limit
+    /// ([`crate::limits::MEMORY_LIMIT_BYTES`]), an input error naming `path`.
+    pub fn for_obj(obj: &ObjMesh, path: &Path) -> Result<Self> {
         let f = obj.triangles.len();
-        Self::new(Counts {
+        let capacity = Counts {
             vertices: obj.positions.len(),
             edges: f.saturating_mul(3),
             faces: f,
-        })
+        };
+        let scratch = (build_scratch_len(f) as u64).checked_mul(size_of::<u32>() as u64);
+        let bytes = Self::bytes(capacity).and_then(|b| b.checked_add(scratch?));
+        crate::limits::check_memory(
+            &format!(
+                "the half-edge mesh of {} vertices and {f} triangles",
+                obj.positions.len()
+            ),
+            bytes,
+        )
+        .map_err(|e| Error::input(Location::file(path), e.to_string()))?;
+        Ok(Self::new(capacity))
+    }
+
+    /// Bytes of the records for `capacity`, `None` on overflow.
+    pub fn bytes(capacity: Counts) -> Option<u64> {
+        let v = (capacity.vertices as u64).checked_mul(size_of::<VertexRec>() as u64)?;
+        let e = (capacity.edges as u64).checked_mul(size_of::<EdgeRec>() as u64)?;
+        let f = (capacity.faces as u64).checked_mul(size_of::<FaceRec>() as u64)?;
+        v.checked_add(e)?.checked_add(f)
     }
 
     /// An empty mesh over these buffers.
@@ -239,10 +260,12 @@ impl std::fmt::Display for Vef {
 
 /// Builds `obj` (read from `path`) into a half-edge mesh over `buffers` (sized by
 /// [`MeshBuffers::for_obj`]). The core's rejection becomes an [`Error::Input`] naming `path`,
-/// the line of the offending statement and the offending vertices by 1-based OBJ numbers; see
-/// [`describe_build_error`].
+/// the line of the offending statement (from `lines`, the file's [`ObjLines`]; `None` for a
+/// mesh that is no longer the file's, and then no line) and the offending vertices by 1-based
+/// OBJ numbers; see [`describe_build_error`].
 pub fn build_mesh<'b>(
     obj: &ObjMesh,
+    lines: Option<&ObjLines>,
     path: &Path,
     buffers: &'b mut MeshBuffers,
 ) -> Result<SliceMesh<'b>> {
@@ -261,53 +284,24 @@ pub fn build_mesh<'b>(
     match mesh.build(&obj.positions, &obj.triangles, &mut scratch) {
         Ok(()) => Ok(mesh),
         Err(e) => {
-            let (at, message) = describe_build_error(&e, path);
+            let (at, message) = describe_build_error(&e, lines, path);
             Err(Error::input(at, message))
         }
     }
 }
 
-/// Line numbers of the `v` and `f` statements of an OBJ file, by vertex and by (fan-
-/// triangulated) triangle, read again from the file for error messages only.
-struct ObjLines {
-    vertex: Vec<usize>,
-    triangle: Vec<usize>,
-}
-
-impl ObjLines {
-    fn read(path: &Path) -> Option<Self> {
-        let bytes = std::fs::read(path).ok()?;
-        let mut lines = Self {
-            vertex: Vec::new(),
-            triangle: Vec::new(),
-        };
-        // The reader's own line splitting, so numbers agree for CR and CRLF files.
-        for (i, line) in crate::obj::lines(&bytes).enumerate() {
-            let content = String::from_utf8_lossy(crate::obj::statement(line).0);
-            let mut tokens = content.split_ascii_whitespace();
-            match tokens.next() {
-                Some("v") => lines.vertex.push(i + 1),
-                Some("f") => {
-                    let n = tokens.count();
-                    lines
-                        .triangle
-                        .extend(std::iter::repeat_n(i + 1, n.saturating_sub(2)));
-                }
-                _ => {}
-            }
-        }
-        Some(lines)
-    }
-}
-
-/// The location and message for a build error: the file and the line of the offending `v` or
-/// `f` statement ([`BuildError::culprit`]), and the core's sentence with vertices and
-/// triangles numbered from 1 as in the file (triangles counted after fan triangulation, which
-/// for all-triangle files is the `f` line order).
-pub fn describe_build_error(e: &BuildError, path: &Path) -> (Location, String) {
-    let line = ObjLines::read(path).and_then(|l| match e.culprit()? {
-        Culprit::Vertex(v) => l.vertex.get(v.index()).copied(),
-        Culprit::Face(f) => l.triangle.get(f.index()).copied(),
+/// The location and message for a build error: the file and, given the file's `lines`, the
+/// line of the offending `v` or `f` statement ([`BuildError::culprit`]), and the core's
+/// sentence with vertices and triangles numbered from 1 as in the file (triangles counted
+/// after fan triangulation, which for all-triangle files is the `f` line order).
+pub fn describe_build_error(
+    e: &BuildError,
+    lines: Option<&ObjLines>,
+    path: &Path,
+) -> (Location, String) {
+    let line = lines.and_then(|l| match e.culprit()? {
+        Culprit::Vertex(v) => l.vertex(v.index()),
+        Culprit::Face(f) => l.triangle(f.index()),
     });
     let at = Location::file(path);
     let at = match line {

@@ -4,7 +4,7 @@
 use crate::accel::MeshAccel;
 use crate::error::{Error, Location, Result};
 use crate::mesh_tools::{MeshBuffers, build_mesh, export};
-use crate::obj::{ObjMesh, read_obj};
+use crate::obj::{ObjFile, ObjLines, ObjMesh, read_obj_file};
 use crate::scene::geom::MeshShape;
 use glam::Vec3;
 use halfray_core::halfedge::{DiffuseBoundary, LoopWeights, SliceMesh};
@@ -30,16 +30,18 @@ pub fn boundary_edge_count(triangles: &[[u32; 3]]) -> usize {
         .sum()
 }
 
-/// Builds `mesh` (read from `path`) into a half-edge mesh over `buffers` (sized by
-/// [`MeshBuffers::for_obj`]) with [`build_mesh`]: the core's rejection is an input error on
-/// `path` and the offending OBJ line, `what: reason`, numbered from 1 as `mesh check` does.
+/// Builds `mesh` (read from `path`; `lines` its statements' lines while it is still the
+/// file's mesh) into a half-edge mesh over `buffers` (sized by [`MeshBuffers::for_obj`]) with
+/// [`build_mesh`]: the core's rejection is an input error on `path` and the offending OBJ
+/// line, `what: reason`, numbered from 1 as `mesh check` does.
 fn build_half_edge<'b>(
     path: &Path,
     mesh: &ObjMesh,
+    lines: Option<&ObjLines>,
     buffers: &'b mut MeshBuffers,
     what: &str,
 ) -> Result<SliceMesh<'b>> {
-    build_mesh(mesh, path, buffers).map_err(|e| match e {
+    build_mesh(mesh, lines, path, buffers).map_err(|e| match e {
         Error::Input { at, message } => Error::Input {
             at,
             message: format!("{what}: {message}"),
@@ -51,11 +53,12 @@ fn build_half_edge<'b>(
 /// Area-weighted unit vertex normals, one per position, from the half-edge core
 /// (`Mesh::vertex_normals`); a vertex without one (isolated, or whose faces cancel) gets
 /// `Vec3::ZERO`, and shading falls back to the face normal there.
-fn vertex_normals(path: &Path, mesh: &ObjMesh) -> Result<Vec<Vec3>> {
-    let mut buffers = MeshBuffers::for_obj(mesh);
+fn vertex_normals(path: &Path, mesh: &ObjMesh, lines: Option<&ObjLines>) -> Result<Vec<Vec3>> {
+    let mut buffers = MeshBuffers::for_obj(mesh, path)?;
     let m = build_half_edge(
         path,
         mesh,
+        lines,
         &mut buffers,
         "smooth shading needs a manifold mesh; the half-edge core rejects this one",
     )?;
@@ -74,9 +77,15 @@ fn he_error(path: &Path, what: &str, e: impl std::fmt::Display) -> Error {
 const REJECTED: &str = "the half-edge core rejects this mesh";
 
 /// One smoothing pass set: `iterations` Jacobi steps `x += step·L(x)`, boundary fixed.
-fn smooth(path: &Path, mesh: &mut ObjMesh, step: f32, iterations: u32) -> Result<()> {
-    let mut buffers = MeshBuffers::for_obj(mesh);
-    let mut m = build_half_edge(path, mesh, &mut buffers, REJECTED)?;
+fn smooth(
+    path: &Path,
+    mesh: &mut ObjMesh,
+    lines: Option<&ObjLines>,
+    step: f32,
+    iterations: u32,
+) -> Result<()> {
+    let mut buffers = MeshBuffers::for_obj(mesh, path)?;
+    let mut m = build_half_edge(path, mesh, lines, &mut buffers, REJECTED)?;
     let mut tmp = vec![Vec3::ZERO; m.slots().vertices];
     for _ in 0..iterations {
         m.diffuse(step, DiffuseBoundary::Fixed, &mut tmp)
@@ -87,9 +96,9 @@ fn smooth(path: &Path, mesh: &mut ObjMesh, step: f32, iterations: u32) -> Result
 }
 
 /// One level of Loop subdivision (Warren weights).
-fn subdivide(path: &Path, mesh: &ObjMesh) -> Result<ObjMesh> {
-    let mut buffers = MeshBuffers::for_obj(mesh);
-    let m = build_half_edge(path, mesh, &mut buffers, REJECTED)?;
+fn subdivide(path: &Path, mesh: &ObjMesh, lines: Option<&ObjLines>) -> Result<ObjMesh> {
+    let mut buffers = MeshBuffers::for_obj(mesh, path)?;
+    let m = build_half_edge(path, mesh, lines, &mut buffers, REJECTED)?;
     let mut out_buffers = MeshBuffers::new(m.len().after_loop());
     let mut out = out_buffers.mesh();
     m.subdivide_loop(&mut out, LoopWeights::Warren)
@@ -118,7 +127,12 @@ pub fn load_mesh(
     levels: u32,
     smooth_shading: bool,
 ) -> Result<MeshShape> {
-    let mut mesh = read_obj(path)?;
+    let ObjFile {
+        mut mesh, lines, ..
+    } = read_obj_file(path)?;
+    // The file's lines name a rejected statement while the mesh is still the file's: through
+    // smoothing (positions move, the triangles stay), not after a subdivision.
+    let mut lines = Some(&lines);
     if mesh.triangles.is_empty() {
         return Err(Error::input(Location::file(path), "mesh has no triangles"));
     }
@@ -136,14 +150,15 @@ pub fn load_mesh(
         .map_err(|e| Error::input(Location::file(path), e.to_string()))?;
     }
     if let Some((step, iterations)) = smoothing {
-        smooth(path, &mut mesh, step, iterations)?;
+        smooth(path, &mut mesh, lines, step, iterations)?;
     }
     for _ in 0..levels {
-        mesh = subdivide(path, &mesh)?;
+        mesh = subdivide(path, &mesh, lines)?;
+        lines = None;
     }
     let boundary_edges = boundary_edge_count(&mesh.triangles);
     let normals = if smooth_shading {
-        Some(vertex_normals(path, &mesh)?)
+        Some(vertex_normals(path, &mesh, lines)?)
     } else {
         None
     };
