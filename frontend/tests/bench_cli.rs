@@ -186,11 +186,12 @@ fn a_missing_mesh_or_a_folder_is_refused_before_any_measurement() {
         assert!(!json.exists());
     }
     // Named by a list: the list's file and line lead the message (after a comment, a blank
-    // line and the good mesh, the missing one is on line 4).
+    // line and another good mesh, the missing one is on line 4).
     let list = dir.path().join("list.txt");
+    let other = format!("{SCENE_MESHES}/tetrahedron.obj");
     std::fs::write(
         &list,
-        format!("# corpus\n\n{good}\n{}\n", missing.display()),
+        format!("# corpus\n\n{other}\n{}\n", missing.display()),
     )
     .unwrap();
     let o = Command::new(BIN)
@@ -203,6 +204,52 @@ fn a_missing_mesh_or_a_folder_is_refused_before_any_measurement() {
     let err = String::from_utf8_lossy(&o.stderr);
     let want = format!("{}:4: {}: No such file", list.display(), missing.display());
     assert!(err.contains(&want), "want `{want}` in: {err}");
+}
+
+/// One mesh file named twice (the same path again, `./x` for `x`, or a list entry for a
+/// positional mesh) would count twice in the summary's geometric means: a usage error before
+/// any work, naming both, as `crosscheck` refuses it.
+#[test]
+fn a_mesh_named_twice_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let torus = dir.path().join("torus.obj");
+    std::fs::copy(format!("{SCENE_MESHES}/torus.obj"), &torus).unwrap();
+    let dotted = dir.path().join(".").join("torus.obj");
+    let list = dir.path().join("list.txt");
+    std::fs::write(&list, format!("# corpus\n{}\n", dotted.display())).unwrap();
+    let bench = |meshes: &[&std::path::Path], list: Option<&std::path::Path>| {
+        let mut c = Command::new(BIN);
+        c.args(["bench", "bvh"]).args(meshes);
+        if let Some(l) = list {
+            c.arg("--mesh-list").arg(l);
+        }
+        c.args(["--width", "2", "--rays", "10", "--sets", "primary"]);
+        c.output().unwrap()
+    };
+    let again = |later: &std::path::Path, at: &str| {
+        format!(
+            "mesh `{}`{at} is mesh `{}` again (the same file): each mesh is benchmarked once",
+            later.display(),
+            torus.display()
+        )
+    };
+    for (o, want) in [
+        (bench(&[&torus, &torus], None), again(&torus, "")),
+        (bench(&[&torus, &dotted], None), again(&dotted, "")),
+        (
+            bench(&[&torus], Some(&list)),
+            again(&dotted, &format!(" (named at {}:2)", list.display())),
+        ),
+    ] {
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(&want), "want `{want}` in: {err}");
+        assert!(
+            o.stdout.is_empty(),
+            "{}",
+            String::from_utf8_lossy(&o.stdout)
+        );
+    }
 }
 
 /// A run of no rays would print a throughput of `NaN`: `--width 0` and `--rays 0` are usage

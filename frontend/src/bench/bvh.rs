@@ -30,6 +30,7 @@ use crate::accel::{
     any_batch_simd, any_simd, build_binary, build_binary_parallel, build_wide, closest_batch_simd,
     closest_simd,
 };
+use crate::crosscheck::corpus::RunMeshes;
 use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
 use crate::raysets::named::{Query, RaySet, watertight_hits};
@@ -186,14 +187,12 @@ impl SetFigures {
 /// Runs the BVH benchmark.
 pub fn run(args: &BvhArgs) -> Result<()> {
     let variant = args.intersector.0;
-    let crate::crosscheck::corpus::RunMeshes {
+    let run = RunMeshes::read(&args.meshes, args.mesh_list.as_deref(), "benchmark")?;
+    run.refuse_repeated("benchmarked")?;
+    let RunMeshes {
         paths: meshes,
         named_at,
-    } = crate::crosscheck::corpus::RunMeshes::read(
-        &args.meshes,
-        args.mesh_list.as_deref(),
-        "benchmark",
-    )?;
+    } = run;
     let sets = if args.sets.is_empty() {
         RaySet::ALL.to_vec()
     } else {

@@ -11,13 +11,13 @@ use crate::accel::MeshAccel;
 use crate::embree::{EmbreeDevice, EmbreeScene, ray_is_valid};
 use crate::error::{Error, Result};
 use crate::obj::read_obj;
-use crate::outputs::{FileId, Named, file_id, first_repeat, reserve_outputs};
+use crate::outputs::{Named, file_id, reserve_outputs};
 use crate::raysets::named::watertight_hits;
 use crate::timing::TIMED_PASSES;
 use halfray_core::Ray;
 use halfray_core::triangle::TriangleVariant;
 use rayon::prelude::*;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 /// The two sides of one mesh: halfray's BVH and Embree's robust and default scenes.
@@ -98,29 +98,15 @@ fn check_sizes(args: &CrosscheckArgs) -> Result<()> {
     Ok(())
 }
 
-/// Refuses a run that names one mesh file twice (two spellings, a symlink): its counts would
-/// be in the report twice.
-fn refuse_repeated(meshes: &[PathBuf]) -> Result<()> {
-    // A mesh that cannot be identified is reported as a failed mesh when its turn comes.
-    let ids: Vec<Option<FileId>> = meshes.iter().map(|m| file_id(m).ok()).collect();
-    match first_repeat(ids.iter().map(Option::as_ref)) {
-        Some((j, k)) => Err(Error::Usage(format!(
-            "mesh `{}` is mesh `{}` again (the same file): each mesh is checked once",
-            meshes[k].display(),
-            meshes[j].display()
-        ))),
-        None => Ok(()),
-    }
-}
-
 /// Runs every requested set on every mesh (see [`finish`] for the exit status).
 pub fn run(args: &CrosscheckArgs) -> Result<()> {
     check_sizes(args)?;
+    let run = RunMeshes::read(&args.meshes, args.mesh_list.as_deref(), "cross-check")?;
+    run.refuse_repeated("checked")?;
     let RunMeshes {
         paths: meshes,
         named_at,
-    } = RunMeshes::read(&args.meshes, args.mesh_list.as_deref(), "cross-check")?;
-    refuse_repeated(&meshes)?;
+    } = run;
     let config = RunConfig {
         intersector: args.intersector.0.name().into(),
         seed: args.seed,

@@ -11,7 +11,7 @@
 use super::report::{MeshResult, RunConfig};
 use super::shard::Shard;
 use crate::error::{Error, Location, Result, json_message};
-use crate::outputs::{FileId, Named, file_id};
+use crate::outputs::{FileId, Named, file_id, first_repeat};
 use std::collections::HashMap;
 use std::fs::{File, OpenOptions};
 use std::io::{Seek, SeekFrom, Write};
@@ -59,6 +59,29 @@ impl RunMeshes {
             return Err(Error::Usage(format!("no meshes to {what}")));
         }
         Ok(run)
+    }
+
+    /// Refuses a run that names one mesh file twice (the same path again, another spelling,
+    /// a symlink): its figures would count twice. The usage error names the later path and
+    /// the earlier one (each with its list line) and says each mesh is `done` once
+    /// ("checked"). A path that cannot be identified (a missing file) is not compared: it
+    /// fails when its turn comes.
+    pub fn refuse_repeated(&self, done: &str) -> Result<()> {
+        let ids: Vec<Option<FileId>> = self.paths.iter().map(|m| file_id(m).ok()).collect();
+        let Some((j, k)) = first_repeat(ids.iter().map(Option::as_ref)) else {
+            return Ok(());
+        };
+        let at = |i: usize| match &self.named_at[i] {
+            Some(at) => format!(" (named at {at})"),
+            None => String::new(),
+        };
+        Err(Error::Usage(format!(
+            "mesh `{}`{} is mesh `{}`{} again (the same file): each mesh is {done} once",
+            crate::text::path(&self.paths[k]),
+            at(k),
+            crate::text::path(&self.paths[j]),
+            at(j),
+        )))
     }
 }
 
