@@ -168,20 +168,33 @@ pub struct SetFigures {
 
 impl SetFigures {
     /// halfray's throughput over Embree default's and over Embree robust's (`None` without
-    /// Embree, and where a ratio is not a finite positive number: a report edited by hand,
-    /// with no Embree throughput or none of halfray's, or a negative one, has no ratio, never
-    /// an infinite one or one whose geometric mean is NaN).
+    /// Embree, and where either is not a [`positive_ratio`]).
     #[must_use]
     pub fn ratios(&self) -> Option<[f64; 2]> {
-        let ratios = [
-            self.mrays / self.embree_mrays?,
-            self.mrays / self.embree_robust_mrays?,
-        ];
-        ratios
-            .iter()
-            .all(|r| r.is_finite() && *r > 0.0)
-            .then_some(ratios)
+        Some([
+            positive_ratio(self.mrays, self.embree_mrays?)?,
+            positive_ratio(self.mrays, self.embree_robust_mrays?)?,
+        ])
     }
+
+    /// Batch sets: halfray's throughput over Embree's packet calls, `[8 default, 16 default,
+    /// 8 robust, 16 robust]` (`None` without packet figures, and where any is not a
+    /// [`positive_ratio`]: a set of no rays has none).
+    #[must_use]
+    pub fn packet_ratios(&self) -> Option<[f64; 4]> {
+        let (p8, p16) = (self.embree_packet8_mrays?, self.embree_packet16_mrays?);
+        let r = |e: f64| positive_ratio(self.mrays, e);
+        Some([r(p8[0])?, r(p16[0])?, r(p8[1])?, r(p16[1])?])
+    }
+}
+
+/// `a / b` when it is a finite positive number, else `None`: a throughput of a set of no rays
+/// (0 over 0), a zero or negative one, or a report edited by hand gives no ratio, never an
+/// infinite one or one that makes a geometric mean NaN.
+#[must_use]
+pub fn positive_ratio(a: f64, b: f64) -> Option<f64> {
+    let r = a / b;
+    (r.is_finite() && r > 0.0).then_some(r)
 }
 
 /// Runs the BVH benchmark.
@@ -567,17 +580,19 @@ fn print_report(r: &BvhReport) {
     for s in &r.sets {
         if let (Some(p8), Some(p16)) = (s.embree_packet8_mrays, s.embree_packet16_mrays) {
             let api = summary::packet_api(&s.query);
+            let over = s.packet_ratios().map_or("-".into(), |q| {
+                format!(
+                    "x8 {:.2} / {:.2}, x16 {:.2} / {:.2}",
+                    q[0], q[2], q[1], q[3]
+                )
+            });
             crate::sayln!(
-                "  {:<15} Embree packets: {api}8 {:.2} / {:.2}, {api}16 {:.2} / {:.2} Mrays/s (default / robust); batch over them: x8 {:.2} / {:.2}, x16 {:.2} / {:.2}",
+                "  {:<15} Embree packets: {api}8 {:.2} / {:.2}, {api}16 {:.2} / {:.2} Mrays/s (default / robust); batch over them: {over}",
                 s.name,
                 p8[0],
                 p8[1],
                 p16[0],
                 p16[1],
-                s.mrays / p8[0],
-                s.mrays / p8[1],
-                s.mrays / p16[0],
-                s.mrays / p16[1],
             );
         }
     }

@@ -2,7 +2,18 @@
 //! robust's and default's; per set, the geometric mean over the meshes and the worst mesh; per
 //! mesh, the build times and bytes per triangle.
 
-use super::BvhReport;
+use super::{BvhReport, positive_ratio};
+
+/// The geometric mean of `values` (the exponential of their logarithms' mean); `None` for no
+/// values. The values are meant to be finite and positive ([`positive_ratio`]): a zero one
+/// makes the mean 0, a negative one NaN.
+#[must_use]
+pub fn geometric_mean(values: impl IntoIterator<Item = f64>) -> Option<f64> {
+    let (sum, count) = values
+        .into_iter()
+        .fold((0.0, 0usize), |(sum, count), v| (sum + v.ln(), count + 1));
+    (count > 0).then(|| (sum / count as f64).exp())
+}
 
 /// One ray set's ratios over the corpus, `[over Embree default, over Embree robust]`.
 #[derive(Debug, Clone, PartialEq)]
@@ -51,12 +62,8 @@ pub fn summarize(reports: &[BvhReport]) -> Vec<SetSummary> {
                     Some((s.ratios()?, mesh_name(r)))
                 })
                 .collect();
-            if ratios.is_empty() {
-                return None;
-            }
-            let k = ratios.len() as f64;
-            let geomean =
-                [0, 1].map(|m| (ratios.iter().map(|(q, _)| q[m].ln()).sum::<f64>() / k).exp());
+            let geomean = [0, 1].map(|m| geometric_mean(ratios.iter().map(|(q, _)| q[m])));
+            let geomean = [geomean[0]?, geomean[1]?];
             let worst = [0, 1].map(|m| {
                 ratios
                     .iter()
@@ -106,13 +113,12 @@ pub fn markdown(reports: &[BvhReport]) -> String {
             };
             s.push_str(&format!(" {cell} |"));
         }
-        let (embree, ratio) = match r.embree_build_ms {
-            Some(e) => {
-                build_ratios.push(r.build_ms / e);
-                (format!("{e:.0}"), format!("{:.2}", r.build_ms / e))
-            }
-            None => ("-".into(), "-".into()),
-        };
+        let embree = r.embree_build_ms.map_or("-".into(), |e| format!("{e:.0}"));
+        let build_ratio = r
+            .embree_build_ms
+            .and_then(|e| positive_ratio(r.build_ms, e));
+        build_ratios.extend(build_ratio);
+        let ratio = build_ratio.map_or("-".into(), |q| format!("{q:.2}"));
         let threads = r
             .embree_build_ms_threads
             .map_or("-".into(), |e| format!("{e:.0}"));
@@ -129,15 +135,8 @@ pub fn markdown(reports: &[BvhReport]) -> String {
                 .find(|x| &x.name == n)
                 .map_or(String::new(), f)
         };
-        let geo_build = if build_ratios.is_empty() {
-            String::new()
-        } else {
-            let k = build_ratios.len() as f64;
-            format!(
-                "{:.2}",
-                (build_ratios.iter().map(|q| q.ln()).sum::<f64>() / k).exp()
-            )
-        };
+        let geo_build = geometric_mean(build_ratios.iter().copied())
+            .map_or(String::new(), |g| format!("{g:.2}"));
         let max_bytes = reports
             .iter()
             .map(|r| r.bytes_per_triangle)
@@ -152,8 +151,12 @@ pub fn markdown(reports: &[BvhReport]) -> String {
             let c = cell(&|x| format!("{:.2} / {:.2}", x.worst[1].0, x.worst[0].0), n);
             s.push_str(&format!(" {c} |"));
         }
-        let worst_build = build_ratios.iter().copied().fold(f64::NAN, f64::max);
-        s.push_str(&format!(" | {worst_build:.2} | | {max_bytes:.1} |\n\n"));
+        let worst_build = build_ratios
+            .iter()
+            .copied()
+            .reduce(f64::max)
+            .map_or(String::new(), |w| format!("{w:.2}"));
+        s.push_str(&format!(" | {worst_build} | | {max_bytes:.1} |\n\n"));
         s.push_str(&packet_lines(reports));
         for x in &summary {
             s.push_str(&format!(
@@ -175,9 +178,10 @@ pub(super) fn packet_api(query: &str) -> &'static str {
     }
 }
 
-/// Per batch set (those with Embree packet figures), the geometric mean over the meshes of
-/// halfray's batch path over Embree's packet API (`rtcIntersect8`/`16`, or `rtcOccluded8`/`16`
-/// for an any-hit set), default and robust; one line each, empty without such sets.
+/// Per batch set, the geometric mean over the meshes with packet ratios
+/// ([`SetFigures::packet_ratios`](super::SetFigures::packet_ratios)) of halfray's batch path
+/// over Embree's packet API (`rtcIntersect8`/`16`, or `rtcOccluded8`/`16` for an any-hit set),
+/// default and robust; one line each, none for a set without such meshes.
 fn packet_lines(reports: &[BvhReport]) -> String {
     let mut s = String::new();
     for name in set_names(reports) {
@@ -186,16 +190,15 @@ fn packet_lines(reports: &[BvhReport]) -> String {
             .iter()
             .filter_map(|r| {
                 let x = r.sets.iter().find(|x| x.name == name)?;
-                let (p8, p16) = (x.embree_packet8_mrays?, x.embree_packet16_mrays?);
                 api = packet_api(&x.query);
-                Some([p8[0], p16[0], p8[1], p16[1]].map(|e| x.mrays / e))
+                x.packet_ratios()
             })
             .collect();
-        if ratios.is_empty() {
+        let g = [0, 1, 2, 3].map(|i| geometric_mean(ratios.iter().map(|q| q[i])));
+        let [Some(g0), Some(g1), Some(g2), Some(g3)] = g else {
             continue;
-        }
-        let k = ratios.len() as f64;
-        let g = [0, 1, 2, 3].map(|i| (ratios.iter().map(|q| q[i].ln()).sum::<f64>() / k).exp());
+        };
+        let g = [g0, g1, g2, g3];
         s.push_str(&format!(
             "{name}: {} meshes, geometric mean over Embree's packet API: {:.2}× {api}8, {:.2}× {api}16 (default); {:.2}×, {:.2}× (robust)\n",
             ratios.len(),
@@ -286,5 +289,36 @@ pub(crate) mod tests {
             "{md}"
         );
         assert!(md.contains("primary: 2 meshes, geometric mean 2.00× Embree robust, 1.00× default; worst 1.00× robust (a.obj), 0.50× default (a.obj)"), "{md}");
+    }
+
+    /// A mesh whose batch set has no rays (its throughputs 0, its ratios 0 over 0) is left
+    /// out of the packet line's geometric mean, which is the other mesh's ratios, not NaN.
+    #[test]
+    fn a_set_of_no_rays_is_left_out_of_the_packet_means() {
+        let with_packets = |mesh: &str, ours: f64, p8: [f64; 2], p16: [f64; 2]| {
+            let mut r = report(mesh, &[("shadow+batch", ours, ours, ours)]);
+            r.sets[0].query = "any".into();
+            r.sets[0].embree_packet8_mrays = Some(p8);
+            r.sets[0].embree_packet16_mrays = Some(p16);
+            r
+        };
+        let reports = [
+            with_packets("empty.obj", 0.0, [0.0; 2], [0.0; 2]),
+            with_packets("b.obj", 4.0, [2.0, 1.0], [8.0, 4.0]),
+        ];
+        assert_eq!(reports[0].sets[0].packet_ratios(), None);
+        let md = markdown(&reports);
+        assert!(!md.contains("NaN"), "{md}");
+        assert!(
+            md.contains("shadow+batch: 1 meshes, geometric mean over Embree's packet API: 2.00× rtcOccluded8, 0.50× rtcOccluded16 (default); 4.00×, 1.00× (robust)"),
+            "{md}"
+        );
+    }
+
+    #[test]
+    fn geometric_mean_of_no_values_is_none() {
+        assert_eq!(geometric_mean([]), None);
+        let g = geometric_mean([2.0, 8.0]).unwrap();
+        assert!((g - 4.0).abs() < 1e-12, "{g}");
     }
 }
