@@ -1,6 +1,9 @@
-//! The named ray sets of `halfray bench bvh` and `halfray crosscheck`: the same names, the same
-//! rays, in both. Each is a pure function of the mesh's bounding box, a ray count, a seed and
-//! (for the sets that start on the surface) the closest hits of the `primary` rays.
+//! The named ray sets of `halfray bench bvh` and `halfray crosscheck`: the same names and
+//! generators in both. Each set is a pure function of the mesh's bounding box, a ray count, a
+//! seed and (for the sets that start on the surface) the closest hits of the `primary` rays;
+//! the two commands pass different counts and seeds, so their rays differ (`bench bvh`: a
+//! `--width`² count for the camera sets and a fixed seed; `crosscheck`: `--rays` for every set,
+//! seeded per mesh and set; docs/benchmarks.md, "The ray sets").
 //!
 //! | set | rays | query timed |
 //! |---|---|---|
