@@ -5,7 +5,9 @@
 //! to one run (same intersector, seed, rays and sets, same shard count `N`), and every mesh must
 //! come with each shard `0..N` exactly once: a missing or repeated shard is an error naming the
 //! mesh and the files, never a silently partial sum. Counts, timed rays and timed seconds add;
-//! every disagreement is kept. A mesh that failed on any shard is failed in the merge.
+//! every disagreement is kept. A mesh that failed on any shard is failed in the merge, with the
+//! sums (counts and disagreements) of the shards on which it was checked: their genuine
+//! mismatches and leaks decide the exit status as any others do.
 
 use super::corpus::parse_log;
 use super::report::{MeshResult, Report, RunConfig, SetReport};
@@ -104,10 +106,11 @@ fn check_sums(parts: &[Part]) -> Result<()> {
 }
 
 /// Refuses a part whose results no run can have written (a file edited by hand, or of
-/// another version): a checked mesh has exactly the run's sets, in order, and in each set the
-/// rays' verdicts (agree, ties, within tolerance, Embree wrong, genuine), every leak count,
-/// the any-hit disagreements and the timed rays are each at most its rays (each counts rays,
-/// once each); its intersector is one the core has; its timings are finite and not negative.
+/// another version): a checked mesh has exactly the run's sets, in order (a failed one none,
+/// or those of a merge's checked shards), and in each set the rays' verdicts (agree, ties,
+/// within tolerance, Embree wrong, genuine), every leak count, the any-hit disagreements and
+/// the timed rays are each at most its rays (each counts rays, once each); its intersector is
+/// one the core has; its timings are finite and not negative.
 fn check_consistent(part: &Part) -> Result<()> {
     for result in &part.results {
         let name = &result.config.intersector;
@@ -122,7 +125,11 @@ fn check_consistent(part: &Part) -> Result<()> {
             ));
         }
     }
-    for result in part.results.iter().filter(|r| r.error.is_none()) {
+    for result in part
+        .results
+        .iter()
+        .filter(|r| r.error.is_none() || !r.sets.is_empty())
+    {
         let names: Vec<&str> = result.sets.iter().map(|s| s.name.as_str()).collect();
         if names != result.config.ray_sets {
             return Err(Error::input(
@@ -251,14 +258,19 @@ pub fn merge(parts: &[Part]) -> Result<Report> {
         for k in 0..n {
             let Some((_, result)) = shards.get(&k) else {
                 return Err(Error::Usage(format!(
-                    "mesh `{path}`: shard {k}/{n} is missing from the parts"
+                    "mesh `{}`: shard {k}/{n} is missing from the parts",
+                    crate::text::escaped(path)
                 )));
             };
+            // A failed shard has no rows, unless it is a merge's failed mesh (its checked
+            // shards' sums): those are kept too.
             if let Some(e) = &result.error {
                 errors.push(format!("shard {k}/{n}: {e}"));
+            }
+            if result.sets.is_empty() {
                 continue;
             }
-            if k == 0 || rows.is_empty() {
+            if rows.is_empty() {
                 rows = result.sets.clone();
                 continue;
             }
@@ -266,7 +278,8 @@ pub fn merge(parts: &[Part]) -> Result<Report> {
                 |sets: &[SetReport]| sets.iter().map(|s| s.name.clone()).collect::<Vec<_>>();
             if names(&rows) != names(&result.sets) {
                 return Err(Error::Usage(format!(
-                    "mesh `{path}`: shard {k}/{n} has sets {:?}, shard 0 {:?}",
+                    "mesh `{}`: shard {k}/{n} has sets {:?}, the shards before it {:?}",
+                    crate::text::escaped(path),
                     names(&result.sets),
                     names(&rows)
                 )));
@@ -284,7 +297,9 @@ pub fn merge(parts: &[Part]) -> Result<Report> {
                 ..config.clone()
             },
             error: (!errors.is_empty()).then(|| errors.join("; ")),
-            sets: if errors.is_empty() { rows } else { Vec::new() },
+            // A failed mesh keeps the sums of its checked shards: a mismatch or leak in one
+            // of them still counts in the verdict.
+            sets: rows,
         });
     }
     let wall: f64 = parts.iter().fold(0.0, |a, p| a + p.wall_seconds);
@@ -514,7 +529,12 @@ mod tests {
         assert_eq!(merged.failed.len(), 1);
         assert_eq!(merged.failed[0].path, "b.obj");
         assert!(merged.failed[0].error.contains("shard 1/2: b.obj:4:7"));
-        assert!(merged.sets.iter().all(|s| s.path == "a.obj"));
+        // b.obj's rows are those of its checked shard, 0.
+        let b: Vec<&SetReport> = merged.sets.iter().filter(|s| s.path == "b.obj").collect();
+        assert_eq!(b.len(), 2);
+        for (row, shard0) in b.iter().zip(&shard_result("b.obj", 0, 2).sets) {
+            assert_eq!(*row, shard0);
+        }
         // Every mesh failed: no rays, a throughput of +0 (an empty `f64` sum is −0, which
         // printed as "-0 rays/s").
         let mut only = shard_result("b.obj", 0, 1);
@@ -580,5 +600,63 @@ mod tests {
         std::fs::write(&log, both).unwrap();
         let merged = merge(&[read_part(&log).unwrap()]).unwrap();
         assert_eq!(merged.merged_shards, Some(2));
+    }
+
+    /// Shard logs of a mesh checked on shard 1 (rays 1 and 5 genuine mismatches in both sets,
+    /// or instead one leak through the watertight intersector) and failed on shard 0: the
+    /// merge keeps shard 1's counts and disagreements beside the failure and exits 3 (a
+    /// mismatch), naming the failure too; a merge of that merged report keeps them again.
+    #[test]
+    fn a_mismatch_on_a_checked_shard_survives_a_failed_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let leaky = |r: &mut MeshResult| {
+            for row in &mut r.sets {
+                row.agree += row.genuine_mismatches;
+                row.genuine_mismatches = 0;
+                row.disagreements.clear();
+            }
+            r.sets[0].leaks_halfray = 1;
+            r.sets[0].leak_rays = 1;
+        };
+        for (edit, want) in [
+            (
+                None,
+                "4 genuine mismatches (allowed: 0); 1 of 1 meshes could not be checked:",
+            ),
+            (
+                Some(leaky),
+                "1 leaks through the watertight intersector; 1 of 1 meshes",
+            ),
+        ] {
+            let mut checked = shard_result("a.obj", 1, 2);
+            if let Some(edit) = edit {
+                edit(&mut checked);
+            }
+            let mut failed = shard_result("a.obj", 0, 2);
+            failed.error = Some("a.obj:3: field `y`: `nan` is not finite".into());
+            failed.sets.clear();
+            let logs = [("s1.jsonl", &checked), ("s0.jsonl", &failed)].map(|(name, r)| {
+                let path = dir.path().join(name);
+                std::fs::write(&path, serde_json::to_string(r).unwrap() + "\n").unwrap();
+                read_part(&path).unwrap()
+            });
+            let merged = merge(&logs).unwrap();
+            assert_eq!(merged.failed.len(), 1);
+            assert!(merged.failed[0].error.starts_with("shard 0/2: a.obj:3:"));
+            assert_eq!(merged.sets, checked.sets);
+            // Written and merged again (a merged report is a part of one shard).
+            let json = dir.path().join("merged.json");
+            std::fs::write(&json, serde_json::to_vec_pretty(&merged).unwrap()).unwrap();
+            let again = merge(&[read_part(&json).unwrap()]).unwrap();
+            assert_eq!(
+                (again.sets.clone(), again.failed.len()),
+                (checked.sets.clone(), 1)
+            );
+            for report in [&merged, &again] {
+                let e = crate::crosscheck::finish(report, None, None, 0).unwrap_err();
+                assert_eq!(e.exit_code(), crate::error::EXIT_MISMATCH, "{e}");
+                assert!(e.to_string().contains(want), "{e}");
+            }
+        }
     }
 }

@@ -160,7 +160,9 @@ fn run_merge(args: &MergeArgs) -> Result<()> {
 /// Writes `report` to `json` together with `also` (the depth image: both or neither,
 /// [`crate::outputs::write_together`]), prints its table and totals, and turns it into the
 /// exit status: [`Error::Mismatch`] past `max_mismatch` genuine mismatches or on any leak
-/// through a watertight intersector, an error naming every mesh that could not be checked.
+/// through a watertight intersector (the rows of a failed mesh's checked shards count; the
+/// message names the failed meshes too), else an error naming every mesh that could not be
+/// checked.
 pub fn finish(
     report: &report::Report,
     json: Option<crate::outputs::OutputFile>,
@@ -200,25 +202,25 @@ pub fn finish(
     let (genuine, leaks) = (report.genuine(), report.leaks());
     let watertight = halfray_core::triangle::TriangleVariant::from_name(&report.config.intersector)
         .is_some_and(|v| v.is_watertight());
+    let failed = (!report.failed.is_empty()).then(|| Error::MeshesFailed {
+        failed: report
+            .failed
+            .iter()
+            .map(|f| (f.path.clone(), f.error.clone()))
+            .collect(),
+        total: report.meshes,
+    });
+    // A mismatch decides the status; the failures are named with it, not dropped.
+    let and_failed = failed.as_ref().map_or(String::new(), |e| format!("; {e}"));
     if genuine > max_mismatch {
         return Err(Error::Mismatch(format!(
-            "{genuine} genuine mismatches (allowed: {max_mismatch})"
+            "{genuine} genuine mismatches (allowed: {max_mismatch}){and_failed}"
         )));
     }
     if watertight && leaks > 0 {
         return Err(Error::Mismatch(format!(
-            "{leaks} leaks through the watertight intersector"
+            "{leaks} leaks through the watertight intersector{and_failed}"
         )));
     }
-    if !report.failed.is_empty() {
-        return Err(Error::MeshesFailed {
-            failed: report
-                .failed
-                .iter()
-                .map(|f| (f.path.clone(), f.error.clone()))
-                .collect(),
-            total: report.meshes,
-        });
-    }
-    Ok(())
+    failed.map_or(Ok(()), Err)
 }

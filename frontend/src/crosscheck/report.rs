@@ -265,7 +265,8 @@ pub struct MeshResult {
     /// The run it belongs to.
     #[serde(flatten)]
     pub config: RunConfig,
-    /// Why the mesh could not be checked (unreadable, non-finite, …); then `sets` is empty.
+    /// Why the mesh could not be checked (unreadable, non-finite, …). Then `sets` is empty,
+    /// except in a merge of shards of which some were checked: it holds their sums.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
     /// One row per ray set.
@@ -301,7 +302,8 @@ pub struct Report {
     pub meshes: usize,
     /// Meshes that could not be checked.
     pub failed: Vec<Failure>,
-    /// One row per mesh and set.
+    /// One row per mesh and set, those of a failed mesh included (a merge's sums over the
+    /// shards on which it was checked).
     pub sets: Vec<SetReport>,
 }
 
@@ -316,13 +318,13 @@ impl Report {
         let mut failed = Vec::new();
         let mut sets = Vec::new();
         for r in results {
-            match &r.error {
-                Some(error) => failed.push(Failure {
+            if let Some(error) = &r.error {
+                failed.push(Failure {
                     path: r.path.clone(),
                     error: error.clone(),
-                }),
-                None => sets.extend(r.sets.iter().cloned()),
+                });
             }
+            sets.extend(r.sets.iter().cloned());
         }
         // Throughput only: an `f64` sum cannot overflow. Folded from +0 (an empty `sum()` is
         // −0, printed "-0 rays/s" when every mesh failed).
@@ -383,7 +385,7 @@ impl Report {
     }
 
     /// The results per mesh (inverse of [`Report::new`]): rows grouped by path in order of
-    /// first appearance, then the failures.
+    /// first appearance, a failure's error on its mesh's rows; then the failures without rows.
     pub fn mesh_results(&self) -> Vec<MeshResult> {
         let mut out: Vec<MeshResult> = Vec::new();
         for row in &self.sets {
@@ -397,12 +399,17 @@ impl Report {
                 }),
             }
         }
-        out.extend(self.failed.iter().map(|f| MeshResult {
-            path: f.path.clone(),
-            config: self.config.clone(),
-            error: Some(f.error.clone()),
-            sets: Vec::new(),
-        }));
+        for f in &self.failed {
+            match out.iter_mut().find(|m| m.path == f.path) {
+                Some(m) => m.error = Some(f.error.clone()),
+                None => out.push(MeshResult {
+                    path: f.path.clone(),
+                    config: self.config.clone(),
+                    error: Some(f.error.clone()),
+                    sets: Vec::new(),
+                }),
+            }
+        }
         out
     }
 }
