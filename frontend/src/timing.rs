@@ -1,5 +1,6 @@
-//! Timing shared by `bench bvh` and `crosscheck`: how many passes a throughput figure is the
-//! best of, and the round-robin passes that compare several sides on the same rays.
+//! Timing shared by `bench bvh`, `bench accuracy` and `crosscheck`: how many passes a
+//! throughput figure is the best of, the round-robin passes that compare several sides on the
+//! same rays, the median of timed passes, and rates per second and per million.
 
 use halfray_core::Ray;
 use std::time::Instant;
@@ -16,6 +17,30 @@ pub fn mrays_per_second(rays: u64, secs: f64) -> f64 {
         rays as f64 / secs / 1e6
     } else {
         0.0
+    }
+}
+
+/// The upper median of `values`: the one at index `len / 2` once sorted by
+/// [`f64::total_cmp`] (the larger of the two middle ones for an even count); 0 for no values.
+#[must_use]
+pub fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// The [`median`] of `reps` values of `pass`, called one after the other (each call one timed
+/// pass, answering its figure); 0 when `reps` is 0.
+pub fn median_of(reps: usize, mut pass: impl FnMut() -> f64) -> f64 {
+    median((0..reps).map(|_| pass()).collect())
+}
+
+/// `count` per million of `of`: `count · 10⁶ / of`; 0 when `of` is 0 (nothing was tried).
+#[must_use]
+pub fn per_million(count: usize, of: usize) -> f64 {
+    if of == 0 {
+        0.0
+    } else {
+        count as f64 * 1.0e6 / of as f64
     }
 }
 
@@ -70,6 +95,18 @@ mod tests {
         assert_eq!(mrays_per_second(3, 1.5e-6), 2.0);
         assert_eq!(mrays_per_second(0, 1.0), 0.0);
         assert_eq!(mrays_per_second(5, 0.0), 0.0);
+    }
+
+    #[test]
+    fn the_median_is_the_upper_middle_value_and_0_for_none() {
+        assert_eq!(median(vec![]), 0.0);
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 3.0, 2.0]), 3.0);
+        let mut next = [5.0, 9.0, 7.0].into_iter();
+        assert_eq!(median_of(3, || next.next().unwrap()), 7.0);
+        assert_eq!(median_of(0, || unreachable!()), 0.0);
+        assert_eq!(per_million(3, 4), 750_000.0);
+        assert_eq!(per_million(3, 0), 0.0);
     }
 
     #[test]

@@ -2,6 +2,7 @@
 //! ray offsets (fixed epsilon vs error-bound spawn) and the sphere quadratic (naive vs stable).
 
 use crate::crosscheck::sets::Rng;
+use crate::timing::{median_of, per_million};
 use glam::{DVec3, Vec3};
 use halfray_core::aabb::SlabRay;
 use halfray_core::triangle::{TriangleIntersector, Watertight};
@@ -26,11 +27,6 @@ pub struct ChoiceRow {
     pub error: f64,
     /// Median ns per operation.
     pub ns: f64,
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
 /// Rays that touch a box exactly along one of its edges, at distances `1 … 1e7` from the
@@ -83,37 +79,25 @@ pub fn slab_rows(n: usize, seed: u64, reps: usize) -> Vec<ChoiceRow> {
                 }
             };
             let failures = cases.iter().filter(|(r, b)| test(r, b).is_none()).count();
-            let ns = median(
-                (0..reps)
-                    .map(|_| {
-                        let start = Instant::now();
-                        let mut k = 0u32;
-                        for (r, b) in &cases {
-                            k += test(black_box(r), black_box(b)).is_some() as u32;
-                        }
-                        black_box(k);
-                        start.elapsed().as_secs_f64() * 1.0e9 / cases.len().max(1) as f64
-                    })
-                    .collect(),
-            );
+            let ns = median_of(reps, || {
+                let start = Instant::now();
+                let mut k = 0u32;
+                for (r, b) in &cases {
+                    k += test(black_box(r), black_box(b)).is_some() as u32;
+                }
+                black_box(k);
+                start.elapsed().as_secs_f64() * 1.0e9 / cases.len().max(1) as f64
+            });
             rows.push(ChoiceRow {
                 name: format!("{label} @ {dist:e}"),
                 trials: cases.len(),
-                failures_per_million: cases_per_million(failures, cases.len()),
+                failures_per_million: per_million(failures, cases.len()),
                 error: 0.0,
                 ns,
             });
         }
     }
     rows
-}
-
-fn cases_per_million(k: usize, n: usize) -> f64 {
-    if n == 0 {
-        0.0
-    } else {
-        k as f64 * 1.0e6 / n as f64
-    }
 }
 
 /// Secondary rays leaving triangle hits at `|p| ∈ {1, 1e3, 1e5, 1e7}`, re-tested against their
@@ -169,24 +153,20 @@ pub fn offset_rows(n: usize, seed: u64, reps: usize) -> Vec<ChoiceRow> {
                 let start_dist = plane_dist(tri, r.at(r.t_min.max(0.0)));
                 gap += start_dist / mag;
             }
-            let ns = median(
-                (0..reps)
-                    .map(|_| {
-                        let start = Instant::now();
-                        let mut k = 0u32;
-                        for (tri, hit, w) in &cases {
-                            let r = spawn(black_box(hit), *w);
-                            k += Watertight.intersect(&r, black_box(tri)).is_some() as u32;
-                        }
-                        black_box(k);
-                        start.elapsed().as_secs_f64() * 1.0e9 / cases.len().max(1) as f64
-                    })
-                    .collect(),
-            );
+            let ns = median_of(reps, || {
+                let start = Instant::now();
+                let mut k = 0u32;
+                for (tri, hit, w) in &cases {
+                    let r = spawn(black_box(hit), *w);
+                    k += Watertight.intersect(&r, black_box(tri)).is_some() as u32;
+                }
+                black_box(k);
+                start.elapsed().as_secs_f64() * 1.0e9 / cases.len().max(1) as f64
+            });
             rows.push(ChoiceRow {
                 name: format!("{label} @ |p|={mag:e}"),
                 trials: cases.len(),
-                failures_per_million: cases_per_million(fails, cases.len()),
+                failures_per_million: per_million(fails, cases.len()),
                 error: gap / cases.len().max(1) as f64,
                 ns,
             });
@@ -261,23 +241,19 @@ pub fn sphere_rows(n: usize, seed: u64, reps: usize) -> Vec<ChoiceRow> {
                     Some(h) => max_err = max_err.max(((h.t as f64 - t_ref) / t_ref).abs()),
                 }
             }
-            let ns = median(
-                (0..reps)
-                    .map(|_| {
-                        let start = Instant::now();
-                        let mut k = 0u32;
-                        for (ray, s, _) in &cases {
-                            k += hit(black_box(ray), black_box(s)).is_some() as u32;
-                        }
-                        black_box(k);
-                        start.elapsed().as_secs_f64() * 1.0e9 / cases.len().max(1) as f64
-                    })
-                    .collect(),
-            );
+            let ns = median_of(reps, || {
+                let start = Instant::now();
+                let mut k = 0u32;
+                for (ray, s, _) in &cases {
+                    k += hit(black_box(ray), black_box(s)).is_some() as u32;
+                }
+                black_box(k);
+                start.elapsed().as_secs_f64() * 1.0e9 / cases.len().max(1) as f64
+            });
             rows.push(ChoiceRow {
                 name: format!("{label} @ D/r={ratio:e}"),
                 trials: cases.len(),
-                failures_per_million: cases_per_million(misses, cases.len()),
+                failures_per_million: per_million(misses, cases.len()),
                 error: max_err,
                 ns,
             });

@@ -37,19 +37,15 @@ fn closest(s: &EmbreeScene, r: &Ray) -> Option<(u32, f32)> {
 
 /// Median Mrays/s of Embree closest-hit queries over `rays`.
 fn mrays(s: &EmbreeScene, rays: &[Ray], reps: usize) -> f64 {
-    let mut v: Vec<f64> = (0..reps)
-        .map(|_| {
-            let start = Instant::now();
-            let mut k = 0u32;
-            for r in rays {
-                k += closest(s, black_box(r)).is_some() as u32;
-            }
-            black_box(k);
-            crate::timing::mrays_per_second(rays.len() as u64, start.elapsed().as_secs_f64())
-        })
-        .collect();
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(0.0)
+    crate::timing::median_of(reps, || {
+        let start = Instant::now();
+        let mut k = 0u32;
+        for r in rays {
+            k += closest(s, black_box(r)).is_some() as u32;
+        }
+        black_box(k);
+        crate::timing::mrays_per_second(rays.len() as u64, start.elapsed().as_secs_f64())
+    })
 }
 
 /// The two Embree rows. `throughput_sets` are the ray sets and meshes of the BVH columns, in

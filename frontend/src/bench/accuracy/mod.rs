@@ -212,9 +212,8 @@ pub fn measure(args: &AccuracyArgs, paths: &[PathBuf]) -> Result<Report> {
                 samples[k].push(triangles::mrays_bvh_variant(v, &accel, rays, 1));
             }
         }
-        for (row, mut s) in variants.iter_mut().zip(samples) {
-            s.sort_by(f64::total_cmp);
-            let m = s.get(s.len() / 2).copied();
+        for (row, s) in variants.iter_mut().zip(samples) {
+            let m = Some(crate::timing::median(s));
             match c {
                 0 => row.mrays_bvh_primary = m,
                 1 => row.mrays_bvh_incoherent = m,

@@ -4,6 +4,7 @@ use crate::crosscheck::judge::{near_boundary, ray_space_barycentrics};
 use crate::crosscheck::sets::{self, Adjacency, Rng};
 use crate::obj::ObjMesh;
 use crate::raysets::named::no_hits;
+use crate::timing::{median_of, per_million};
 use glam::{DVec3, Vec3};
 use halfray_core::Ray;
 use halfray_core::triangle::{F64Reference, TriangleIntersector, TriangleVariant, VariantVisitor};
@@ -65,14 +66,6 @@ impl Accuracy {
     /// Hit/miss disagreements with the reference per million rays.
     pub fn disagreements_per_million(&self) -> f64 {
         per_million(self.hit_miss_disagreements, self.hit_miss_rays)
-    }
-}
-
-fn per_million(n: usize, of: usize) -> f64 {
-    if of == 0 {
-        0.0
-    } else {
-        n as f64 * 1.0e6 / of as f64
     }
 }
 
@@ -288,8 +281,7 @@ pub fn accuracy<I: TriangleIntersector>(isect: &I, w: &Workload) -> Accuracy {
 /// Median ns per ray–triangle test over `reps` repetitions of every cost ray against every
 /// cost triangle (mostly misses, as inside a BVH leaf).
 pub fn ns_per_test<I: TriangleIntersector>(isect: &I, w: &Workload, reps: usize) -> f64 {
-    let mut samples = Vec::with_capacity(reps);
-    for _ in 0..reps {
+    median_of(reps, || {
         let start = Instant::now();
         let mut hits = 0u32;
         for ray in &w.cost_rays {
@@ -304,10 +296,8 @@ pub fn ns_per_test<I: TriangleIntersector>(isect: &I, w: &Workload, reps: usize)
         }
         black_box(hits);
         let tests = (w.cost_rays.len() * w.cost_tris.len()).max(1);
-        samples.push(start.elapsed().as_secs_f64() * 1.0e9 / tests as f64);
-    }
-    samples.sort_by(f64::total_cmp);
-    samples.get(samples.len() / 2).copied().unwrap_or(0.0)
+        start.elapsed().as_secs_f64() * 1.0e9 / tests as f64
+    })
 }
 
 /// Accuracy and per-test cost of `variant` on `w`.
@@ -329,21 +319,15 @@ pub fn mrays_bvh<I: TriangleIntersector>(
     rays: &[Ray],
     reps: usize,
 ) -> f64 {
-    let mut samples = Vec::with_capacity(reps);
-    for _ in 0..reps {
+    median_of(reps, || {
         let start = Instant::now();
         let mut hits = 0u32;
         for r in rays {
             hits += accel.closest(isect, black_box(r), None).is_some() as u32;
         }
         black_box(hits);
-        samples.push(crate::timing::mrays_per_second(
-            rays.len() as u64,
-            start.elapsed().as_secs_f64(),
-        ));
-    }
-    samples.sort_by(f64::total_cmp);
-    samples.get(samples.len() / 2).copied().unwrap_or(0.0)
+        crate::timing::mrays_per_second(rays.len() as u64, start.elapsed().as_secs_f64())
+    })
 }
 
 /// [`mrays_bvh`] for a variant chosen at run time.
