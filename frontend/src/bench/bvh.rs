@@ -322,7 +322,7 @@ fn bench<T: TriangleIntersector>(
             return Err(Error::internal(
                 format!(
                     "{}: any-hit disagrees with closest-hit on hit/miss in set {set}: {hit_count} vs {any_count}",
-                    mesh_path.display()
+                    crate::text::path(mesh_path)
                 ),
                 None,
             ));

@@ -205,9 +205,9 @@ fn refuse_log_clash(log: &Path, inputs: &[Named<'_>], outputs: &[Named<'_>]) -> 
         if file_id(other.path).is_ok_and(|o| o == id) {
             return Err(Error::Usage(format!(
                 "--jsonl `{}` is the {} `{}`",
-                log.display(),
+                crate::text::path(log),
                 other.name,
-                other.path.display()
+                crate::text::path(other.path)
             )));
         }
     }

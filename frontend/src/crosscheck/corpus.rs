@@ -160,7 +160,8 @@ impl ResultLog {
     /// file that is not such a log, or the log of another run, is left as it was.
     pub fn open(path: &Path, resume: bool, config: &RunConfig) -> Result<Self> {
         use crate::outputs::target::{Target, resolve};
-        let usage = |why: &str| Error::Usage(format!("--jsonl `{}` {why}", path.display()));
+        let usage =
+            |why: &str| Error::Usage(format!("--jsonl `{}` {why}", crate::text::path(path)));
         let bytes = match resolve(path).map_err(|e| Error::io(path, e))? {
             Target::Missing { .. } => Vec::new(),
             Target::Stream { .. } => {
@@ -186,7 +187,7 @@ impl ResultLog {
         if !resume && !bytes.is_empty() {
             return Err(Error::Usage(format!(
                 "--jsonl `{}` already holds results: pass --resume to continue that run, or choose another file",
-                path.display()
+                crate::text::path(path)
             )));
         }
         let mut complete = bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
@@ -214,14 +215,14 @@ impl ResultLog {
             if let Some(diff) = result.config.difference(config) {
                 return Err(Error::Usage(format!(
                     "--resume: `{}` holds results of another run (log vs this run: {diff}; mesh `{}`)",
-                    path.display(),
-                    result.path
+                    crate::text::path(path),
+                    crate::text::escaped(&result.path)
                 )));
             }
             if result.config.shard != config.shard {
                 return Err(Error::Usage(format!(
                     "--resume: `{}` holds shard {} results, this run is shard {}",
-                    path.display(),
+                    crate::text::path(path),
                     result.config.shard,
                     config.shard
                 )));
@@ -241,7 +242,7 @@ impl ResultLog {
         } else if !torn.is_empty() {
             eprintln!(
                 "crosscheck: {}: dropping a torn last line ({} bytes); its mesh is checked again",
-                path.display(),
+                crate::text::path(path),
                 torn.len()
             );
             file.set_len(complete as u64)

@@ -225,8 +225,8 @@ pub fn merge(parts: &[Part]) -> Result<Report> {
                     if let Some(diff) = diff {
                         return Err(Error::Usage(format!(
                             "`{}` and `{}` are not parts of one run ({diff})",
-                            p0.display(),
-                            part.path.display()
+                            crate::text::path(p0),
+                            crate::text::path(&part.path)
                         )));
                     }
                 }
@@ -238,10 +238,10 @@ pub fn merge(parts: &[Part]) -> Result<Report> {
             if let Some((other, _)) = shards.insert(config.shard.index, (&part.path, result)) {
                 return Err(Error::Usage(format!(
                     "mesh `{}`: shard {} is in both `{}` and `{}`",
-                    result.path,
+                    crate::text::escaped(&result.path),
                     config.shard,
-                    other.display(),
-                    part.path.display()
+                    crate::text::path(other),
+                    crate::text::path(&part.path)
                 )));
             }
         }
@@ -486,6 +486,38 @@ mod tests {
         failed.error = Some("a.obj:1: bad".into());
         failed.sets.clear();
         assert!(merge(&[part("p.json", vec![failed])]).is_ok());
+    }
+
+    /// A part's file name and a mesh path from a part are printed escaped in messages: a
+    /// control character in them cannot reach the terminal.
+    #[test]
+    fn paths_in_messages_are_escaped() {
+        let mut other = shard_result("a\u{1b}[2J.obj", 1, 2);
+        other.config.seed = 8;
+        let e = merge(&[
+            part("p\u{1b}[31m0", vec![shard_result("a\u{1b}[2J.obj", 0, 2)]),
+            part("p\u{7}1", vec![other]),
+        ])
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("`p\\u{1b}[31m0` and `p\\u{7}1`") && !e.contains('\u{1b}'),
+            "{e}"
+        );
+        let e = merge(&[part("p\u{1b}0", vec![shard_result("a\u{1b}.obj", 0, 2)])])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("mesh `a\\u{1b}.obj`: shard 1/2 is missing") && !e.contains('\u{1b}'),
+            "{e}"
+        );
+        let e = merge(&[
+            part("p\u{1b}0", vec![shard_result("a.obj", 0, 2)]),
+            part("q\u{1b}0", vec![shard_result("a.obj", 0, 2)]),
+        ])
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("`p\\u{1b}0` and `q\\u{1b}0`"), "{e}");
     }
 
     #[test]
