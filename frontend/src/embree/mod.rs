@@ -42,7 +42,7 @@ mod tests;
 
 pub use device::{DeviceInfo, EmbreeDevice};
 pub use error::EmbreeError;
-pub use scene::{BuildQuality, EmbreeHit, EmbreeScene};
+pub use scene::{BuildQuality, EmbreeHit, EmbreeMesh, EmbreeScene};
 
 use layout::{GUARD_WORDS, INVALID_ID, RayHitSlot, RaySlot, SENTINEL, make_ray};
 

@@ -2,6 +2,7 @@
 
 use std::fmt;
 use std::ptr;
+use std::sync::Arc;
 
 use embree4_sys as sys;
 
@@ -32,13 +33,67 @@ pub struct EmbreeHit {
     pub ng: [f32; 3],
 }
 
+/// A triangle mesh checked and laid out for Embree once: every index in range, the vertices
+/// and indices in buffers Embree reads in place (`rtcSetSharedGeometryBuffer`). Building a
+/// scene of it ([`EmbreeScene::from_mesh`]) is then Embree's own work only. Cloning shares the
+/// buffers.
+#[derive(Clone, Debug)]
+pub struct EmbreeMesh(Arc<MeshBuffers>);
+
+#[derive(Debug)]
+struct MeshBuffers {
+    /// `x y z` per vertex, then one more `f32` (0): Embree reads the last vertex with a
+    /// 16-byte load, so a shared `FLOAT3` buffer must have 4 readable bytes past its end.
+    vertices: Box<[f32]>,
+    /// Three vertex indices per triangle, each below the vertex count.
+    indices: Box<[[u32; 3]]>,
+}
+
+impl EmbreeMesh {
+    /// The mesh of `positions` and `triangles` (triangle `i` becomes `prim_id == i`). Fails if
+    /// an index is out of range (Embree reads vertices through the indices unchecked).
+    pub fn new(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Result<Self, EmbreeError> {
+        if let Some((i, tri)) = triangles
+            .iter()
+            .enumerate()
+            .find(|(_, t)| t.iter().any(|&v| v as usize >= positions.len()))
+        {
+            return Err(EmbreeError::InvalidMesh(format!(
+                "triangle {i} has index {tri:?}, but there are {} vertices",
+                positions.len()
+            )));
+        }
+        let mut vertices = Vec::with_capacity(3 * positions.len() + 1);
+        vertices.extend(positions.iter().flatten());
+        vertices.push(0.0);
+        Ok(Self(Arc::new(MeshBuffers {
+            vertices: vertices.into_boxed_slice(),
+            indices: triangles.into(),
+        })))
+    }
+
+    /// Number of vertices.
+    pub fn vertex_count(&self) -> usize {
+        (self.0.vertices.len() - 1) / 3
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.0.indices.len()
+    }
+}
+
 /// A committed Embree scene holding one triangle mesh (owns one reference to an `RTCScene` and
-/// one to its `RTCDevice`, so it may outlive the [`EmbreeDevice`] it was made from).
+/// one to its `RTCDevice`, so it may outlive the [`EmbreeDevice`] it was made from, and one to
+/// the [`EmbreeMesh`] buffers Embree reads in place, released after the scene).
 pub struct EmbreeScene {
     pub(super) raw: sys::RTCScene,
     device: sys::RTCDevice,
     robust: bool,
     triangles: usize,
+    /// The buffers the scene's geometry points into: dropped after `Drop::drop` has released
+    /// the scene (fields drop after it), so they outlive every use Embree makes of them.
+    mesh: EmbreeMesh,
 }
 
 // SAFETY: the scene is committed in `new` and never modified afterwards (no `&mut` API); Embree
@@ -51,14 +106,25 @@ unsafe impl Sync for EmbreeScene {}
 impl EmbreeScene {
     /// Builds a scene of one triangle mesh with Embree's default build quality. `robust` sets
     /// `RTC_SCENE_FLAG_ROBUST` (the fair reference: the default mode leaks at shared edges).
-    /// Triangle `i` gets `prim_id == i`. Fails if an index is out of range.
+    /// Triangle `i` gets `prim_id == i`. Fails if an index is out of range. Checks and copies
+    /// the mesh first ([`EmbreeMesh::new`]); [`EmbreeScene::from_mesh`] does not.
     pub fn new(
         device: &EmbreeDevice,
         positions: &[[f32; 3]],
         triangles: &[[u32; 3]],
         robust: bool,
     ) -> Result<Self, EmbreeError> {
-        Self::build(device, positions, triangles, robust, None)
+        Self::from_mesh(device, &EmbreeMesh::new(positions, triangles)?, robust)
+    }
+
+    /// A scene of `mesh` (shared, not copied), with Embree's default build quality: the
+    /// scene, its flags, the geometry over `mesh`'s buffers, and the commit (Embree's build).
+    pub fn from_mesh(
+        device: &EmbreeDevice,
+        mesh: &EmbreeMesh,
+        robust: bool,
+    ) -> Result<Self, EmbreeError> {
+        Self::build(device, mesh, robust, None)
     }
 
     /// As [`EmbreeScene::new`], with an explicit build quality.
@@ -69,27 +135,16 @@ impl EmbreeScene {
         robust: bool,
         quality: BuildQuality,
     ) -> Result<Self, EmbreeError> {
-        Self::build(device, positions, triangles, robust, Some(quality))
+        let mesh = EmbreeMesh::new(positions, triangles)?;
+        Self::build(device, &mesh, robust, Some(quality))
     }
 
     fn build(
         device: &EmbreeDevice,
-        positions: &[[f32; 3]],
-        triangles: &[[u32; 3]],
+        mesh: &EmbreeMesh,
         robust: bool,
         quality: Option<BuildQuality>,
     ) -> Result<Self, EmbreeError> {
-        // Embree reads vertices through the indices without bounds checks: validate them here.
-        if let Some((i, tri)) = triangles
-            .iter()
-            .enumerate()
-            .find(|(_, t)| t.iter().any(|&v| v as usize >= positions.len()))
-        {
-            return Err(EmbreeError::InvalidMesh(format!(
-                "triangle {i} has index {tri:?}, but there are {} vertices",
-                positions.len()
-            )));
-        }
         // SAFETY: `device.raw` is live; a null scene is handled below.
         let raw = unsafe { sys::rtcNewScene(device.raw) };
         if raw.is_null() {
@@ -107,7 +162,8 @@ impl EmbreeScene {
             raw,
             device: device.raw,
             robust,
-            triangles: triangles.len(),
+            triangles: mesh.triangle_count(),
+            mesh: mesh.clone(),
         };
         device.check("rtcNewScene")?;
 
@@ -129,8 +185,8 @@ impl EmbreeScene {
             unsafe { sys::rtcSetSceneBuildQuality(scene.raw, q) };
             device.check("rtcSetSceneBuildQuality")?;
         }
-        if !triangles.is_empty() {
-            scene.attach_mesh(device, positions, triangles)?;
+        if mesh.triangle_count() > 0 {
+            scene.attach_mesh(device)?;
         }
         // SAFETY: `scene.raw` is live; after commit the scene is never modified again.
         unsafe { sys::rtcCommitScene(scene.raw) };
@@ -138,14 +194,10 @@ impl EmbreeScene {
         Ok(scene)
     }
 
-    /// Creates the triangle geometry, copies the buffers into Embree-allocated (padded) memory,
-    /// and attaches it as geometry 0. `triangles` is non-empty and every index is in range.
-    fn attach_mesh(
-        &self,
-        device: &EmbreeDevice,
-        positions: &[[f32; 3]],
-        triangles: &[[u32; 3]],
-    ) -> Result<(), EmbreeError> {
+    /// Creates the triangle geometry over the scene's own mesh buffers (shared, not copied)
+    /// and attaches it as geometry 0. The mesh has a triangle.
+    fn attach_mesh(&self, device: &EmbreeDevice) -> Result<(), EmbreeError> {
+        let MeshBuffers { vertices, indices } = &*self.mesh.0;
         // SAFETY: `device.raw` is live; TRIANGLE is a valid geometry type. Null is handled below.
         let geom = unsafe { sys::rtcNewGeometry(device.raw, sys::RTCGeometryType::TRIANGLE) };
         if geom.is_null() {
@@ -158,54 +210,40 @@ impl EmbreeScene {
         }
         let result = (|| {
             device.check("rtcNewGeometry")?;
-            // SAFETY: `geom` is a live triangle geometry. Embree allocates `positions.len()` items
-            // of 12 bytes (plus the padding it needs for 16-byte loads) and returns a pointer
-            // aligned to at least 16 bytes, or null on failure (checked before use).
-            let vbuf = unsafe {
-                sys::rtcSetNewGeometryBuffer(
+            // SAFETY: `geom` is a live triangle geometry. `vertices` holds `vertex_count()`
+            // items of 12 bytes (`FLOAT3`) at stride 12 from offset 0, plus one `f32`, so the
+            // 16-byte load Embree makes of the last item stays inside it; it is 4-byte aligned
+            // (`f32`), as Embree requires. Embree only reads it, and it lives (unmoved: a boxed
+            // slice behind an `Arc`) until after the scene is released: the scene holds the
+            // `Arc` (`mesh`) and drops it after `rtcReleaseScene`.
+            unsafe {
+                sys::rtcSetSharedGeometryBuffer(
                     geom,
                     sys::RTCBufferType::VERTEX,
                     0,
                     sys::RTCFormat::FLOAT3,
+                    vertices.as_ptr().cast(),
+                    0,
                     12,
-                    positions.len(),
+                    self.mesh.vertex_count(),
                 )
             };
-            device.check("rtcSetNewGeometryBuffer(VERTEX)")?;
-            // SAFETY: as above, with `triangles.len()` items of 3 × u32.
-            let ibuf = unsafe {
-                sys::rtcSetNewGeometryBuffer(
+            device.check("rtcSetSharedGeometryBuffer(VERTEX)")?;
+            // SAFETY: as above, `indices.len()` items of `UINT3` (`[u32; 3]`, 12 bytes, no
+            // padding), 4-byte aligned, every index below the vertex count (`EmbreeMesh::new`).
+            unsafe {
+                sys::rtcSetSharedGeometryBuffer(
                     geom,
                     sys::RTCBufferType::INDEX,
                     0,
                     sys::RTCFormat::UINT3,
+                    indices.as_ptr().cast(),
+                    0,
                     12,
-                    triangles.len(),
+                    indices.len(),
                 )
             };
-            device.check("rtcSetNewGeometryBuffer(INDEX)")?;
-            if vbuf.is_null() || ibuf.is_null() {
-                return Err(EmbreeError::Api {
-                    call: "rtcSetNewGeometryBuffer",
-                    code: 4,
-                    message: "null buffer".into(),
-                });
-            }
-            // SAFETY: `vbuf` holds at least `positions.len()` × 12 bytes, is aligned for f32 and
-            // does not overlap `positions` (Embree-owned memory); `[f32; 3]` is 12 bytes with no
-            // padding. Likewise `ibuf` for `triangles` (`[u32; 3]`, 12 bytes).
-            unsafe {
-                ptr::copy_nonoverlapping(
-                    positions.as_ptr(),
-                    vbuf.cast::<[f32; 3]>(),
-                    positions.len(),
-                );
-                ptr::copy_nonoverlapping(
-                    triangles.as_ptr(),
-                    ibuf.cast::<[u32; 3]>(),
-                    triangles.len(),
-                );
-            }
+            device.check("rtcSetSharedGeometryBuffer(INDEX)")?;
             // SAFETY: `geom` is live with both buffers set; `self.raw` is live and uncommitted.
             // The scene takes its own reference to the geometry.
             let geom_id = unsafe {

@@ -332,6 +332,43 @@ fn embree_occluded_agrees_with_intersect_on_random_rays() {
     }
 }
 
+/// A scene of an [`EmbreeMesh`] reads the mesh's buffers in place: the mesh is checked once
+/// (an index out of range is refused by `EmbreeMesh::new`), two scenes share it, and each keeps
+/// the buffers alive after the last other handle to them is dropped. The hits are the ones
+/// worked out by hand for two triangles in the planes z = 0 and z = −1 (a ray down the z axis
+/// at (0.25, 0.25) meets triangle 0 at t = 1 with u = v = 0.25; past it, triangle 1 at t = 2).
+#[test]
+fn scenes_of_a_shared_mesh_outlive_its_handle() {
+    let d = device();
+    let lower = TRI.map(|[x, y, _]| [x, y, -1.0]);
+    let positions = [TRI, lower].concat();
+    let triangles = [[0, 1, 2], [3, 4, 5]];
+    let err = EmbreeMesh::new(&positions, &[[0, 1, 6]]).unwrap_err();
+    assert!(matches!(err, EmbreeError::InvalidMesh(_)), "{err}");
+    let mesh = EmbreeMesh::new(&positions, &triangles).unwrap();
+    assert_eq!((mesh.vertex_count(), mesh.triangle_count()), (6, 2));
+    let scenes = [false, true].map(|robust| EmbreeScene::from_mesh(&d, &mesh, robust).unwrap());
+    drop(mesh);
+    for scene in &scenes {
+        let down = [0.0, 0.0, -1.0];
+        let near = scene
+            .intersect([0.25, 0.25, 1.0], down, 0.0, f32::INFINITY)
+            .unwrap();
+        let close = |a: f32, b: f32| (a - b).abs() <= 1e-6;
+        assert_eq!(near.prim_id, 0);
+        assert!(
+            close(near.t, 1.0) && close(near.u, 0.25) && close(near.v, 0.25),
+            "{near:?}"
+        );
+        let far = scene
+            .intersect([0.25, 0.25, 1.0], down, 1.5, f32::INFINITY)
+            .unwrap();
+        assert!(far.prim_id == 1 && close(far.t, 2.0), "{far:?}");
+        assert!(scene.occluded([0.25, 0.25, 1.0], down, 0.0, 1.5));
+        assert!(!scene.occluded([0.75, 0.75, 1.0], down, 0.0, f32::INFINITY));
+    }
+}
+
 #[test]
 fn embree_rejects_bad_input() {
     let d = device();

@@ -30,8 +30,9 @@ pub(super) struct Rivals {
     /// mesh's rivals, it leaves that spin to the next mesh's one-thread builds (both sides'
     /// alike, timed in turns), until the next all-threads pass lifts the cap.
     device_threads: Option<crate::embree::EmbreeDevice>,
-    positions: Vec<[f32; 3]>,
-    triangles: Vec<[u32; 3]>,
+    /// The mesh checked and laid out for Embree before any timed build, so that a timed
+    /// build is Embree's own work (scene, geometry over these shared buffers, commit).
+    mesh: crate::embree::EmbreeMesh,
     /// `[default, robust]`, from the last pass.
     scenes: Vec<crate::embree::EmbreeScene>,
     /// `[default, robust, default on all threads]`.
@@ -40,28 +41,32 @@ pub(super) struct Rivals {
 
 #[cfg(feature = "embree")]
 impl Rivals {
+    /// Embree's side for `obj`: the one-thread device, and the mesh checked and laid out for
+    /// Embree (untimed). Fails on an index out of range.
     pub(super) fn new(obj: &crate::obj::ObjMesh) -> Result<Option<Self>> {
         Ok(Some(Self {
             device: crate::embree::EmbreeDevice::new()?,
             device_threads: None,
-            positions: obj.positions.iter().map(|p| p.to_array()).collect(),
-            triangles: obj.triangles.clone(),
+            mesh: crate::embree::EmbreeMesh::new(
+                &obj.positions
+                    .iter()
+                    .map(|p| p.to_array())
+                    .collect::<Vec<_>>(),
+                &obj.triangles,
+            )?,
             scenes: Vec::new(),
             build_ms: [f64::INFINITY; 3],
         }))
     }
 
-    /// Builds both scenes once, keeping the best times and the new scenes.
+    /// Builds both scenes once, keeping the best times and the new scenes. A time is of
+    /// [`EmbreeScene::from_mesh`](crate::embree::EmbreeScene::from_mesh) alone: the mesh was
+    /// checked and laid out in [`Rivals::new`].
     pub(super) fn build_pass(&mut self) -> Result<()> {
         self.scenes.clear();
         for (k, robust) in [false, true].into_iter().enumerate() {
             let t0 = std::time::Instant::now();
-            let s = crate::embree::EmbreeScene::new(
-                &self.device,
-                &self.positions,
-                &self.triangles,
-                robust,
-            )?;
+            let s = crate::embree::EmbreeScene::from_mesh(&self.device, &self.mesh, robust)?;
             self.build_ms[k] = self.build_ms[k].min(t0.elapsed().as_secs_f64() * 1e3);
             self.scenes.push(s);
         }
@@ -76,7 +81,7 @@ impl Rivals {
             slot => slot.insert(crate::embree::EmbreeDevice::with_config("verbose=0")?),
         };
         let t0 = std::time::Instant::now();
-        let s = crate::embree::EmbreeScene::new(&*device, &self.positions, &self.triangles, false)?;
+        let s = crate::embree::EmbreeScene::from_mesh(&*device, &self.mesh, false)?;
         self.build_ms[2] = self.build_ms[2].min(t0.elapsed().as_secs_f64() * 1e3);
         drop(s);
         Ok(())
