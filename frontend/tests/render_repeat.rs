@@ -174,3 +174,73 @@ fn bad_repeats_name_their_field() {
         "{e}"
     );
 }
+
+/// `repeat.materials` on a CSG object reaches every operand that inherits the object's
+/// material (here a nested CSG object without one, and its spheres), while an operand with
+/// its own material keeps it: each copy shows its material from the list, and red where the
+/// red operand shows.
+#[test]
+fn repeated_csg_copies_take_their_material_down_to_the_inheriting_operands() {
+    // A vertical field of view of 40° at distance 6 and a 3:1 image: the copies at x = −2, 0,
+    // 2 lie in the columns below 41, 41 to 55 and above 55 (x = ±1 at column 48 ± 7.3).
+    let camera = camera("[0, 0, 6]", "[0, 0, 0]", "40", [96, 32]);
+    let scene = format!(
+        r#"
+{camera}
+[[light]]
+type = "directional"
+direction = [0, 0, -1]
+cast_shadows = false
+
+[material.red]
+diffuse = [1, 0, 0]
+[material.green]
+diffuse = [0, 1, 0]
+[material.blue]
+diffuse = [0, 0, 1]
+
+[[object]]
+type = "csg"
+op = "union"
+material = "red"
+operands = [
+  {{ type = "csg", op = "union", operands = [
+    {{ type = "sphere", center = [-2, 0, 0], radius = 0.7 }},
+    {{ type = "sphere", center = [-2, -0.5, 0.4], radius = 0.3 }},
+  ] }},
+  {{ type = "sphere", center = [-2, 0.5, 0.5], radius = 0.3, material = "red" }},
+]
+repeat = {{ count = [3, 1, 1], step = [2, 0, 0], materials = ["green", "blue"] }}
+"#
+    );
+    let image = render(&parse_scene(&scene), &RenderOptions::default());
+    // Per copy, the covered pixels whose red, green or blue channel is over twice the others.
+    let mut dominant = [[0usize; 3]; 3];
+    for j in 0..image.height {
+        for i in 0..image.width {
+            let p = image.pixel(i, j);
+            let copy = match i {
+                0..41 => 0,
+                41..55 => 1,
+                _ => 2,
+            };
+            for c in 0..3 {
+                let (a, b) = (p[(c + 1) % 3], p[(c + 2) % 3]);
+                if p.w > 0.0 && p[c] > 2.0 * a.max(b) {
+                    dominant[copy][c] += 1;
+                }
+            }
+        }
+    }
+    // Copies 0, 1, 2 take green, blue, green (channels 1, 2, 1); the other list colour never
+    // shows on a copy, and the red operand shows on each.
+    for (copy, (own, other)) in [(1, 2), (2, 1), (1, 2)].into_iter().enumerate() {
+        let d = dominant[copy];
+        assert!(d[own] > 40, "copy {copy}: {d:?}");
+        assert_eq!(d[other], 0, "copy {copy}: {d:?}");
+        assert!(
+            d[0] > 3,
+            "copy {copy}: the red operand keeps its material: {d:?}"
+        );
+    }
+}

@@ -173,6 +173,9 @@ pub struct Node {
     pub shape: Geometry,
     /// Material index (CSG operands without one inherit the parent's).
     pub material: u32,
+    /// `true` when `material` is the enclosing CSG object's (a CSG operand that names none):
+    /// [`Node::with_material`] replaces it along with the parent's.
+    pub inherits_material: bool,
     /// Object → world (parent) transform.
     pub transform: Option<Transform>,
     /// Bounds in the parent's space (`None`: unbounded).
@@ -276,8 +279,35 @@ impl Node {
         Self {
             shape,
             material,
+            inherits_material: false,
             transform,
             bounds,
+        }
+    }
+
+    /// This node with material `material`, and so every CSG operand at any depth that
+    /// inherits it (through operands that inherit it too); an operand with its own material
+    /// keeps it, and so do the operands that inherit from that one.
+    pub fn with_material(&self, material: u32) -> Self {
+        let shape = match &self.shape {
+            Geometry::Csg(op, a, b) => {
+                let pass = |n: &Node| {
+                    Box::new(if n.inherits_material {
+                        n.with_material(material)
+                    } else {
+                        n.clone()
+                    })
+                };
+                Geometry::Csg(*op, pass(a), pass(b))
+            }
+            other => other.clone(),
+        };
+        Self {
+            shape,
+            material,
+            inherits_material: self.inherits_material,
+            transform: self.transform,
+            bounds: self.bounds,
         }
     }
 

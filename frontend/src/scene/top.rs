@@ -400,6 +400,7 @@ mod tests {
             Node {
                 shape: Geometry::Box(b),
                 material: 0,
+                inherits_material: false,
                 transform: None,
                 bounds: Some(b),
             }

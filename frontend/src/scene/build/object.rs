@@ -141,7 +141,9 @@ pub(super) fn object(
         }
         Kind::Csg => csg(ctx, o, &at, material)?,
     };
-    Ok(Node::new(shape, material, transform))
+    let mut node = Node::new(shape, material, transform);
+    node.inherits_material = o.material.is_none();
+    Ok(node)
 }
 
 /// Where an object's fields are reported: its span, field path and type name.

@@ -15,7 +15,8 @@ pub const MAX_OBJECTS: usize = 1_000_000;
 
 /// The copies `repeat` makes of `node` (object `p`): copy `(i, j, k)`, numbered
 /// `i + nx·(j + ny·k)`, is `node` moved by `(i·dx, j·dy, k·dz)` after its own transform, with
-/// material `materials[number mod len]` when given. `before` objects exist already (for
+/// material `materials[number mod len]` when given (on the copy and on every CSG operand that
+/// inherits it, [`Node::with_material`]). `before` objects exist already (for
 /// [`MAX_OBJECTS`]).
 pub(super) fn repeat(
     ctx: &Ctx<'_>,
@@ -87,7 +88,8 @@ pub(super) fn repeat(
                     })
                     .map_err(|e| ctx.err(&rd.step.span(), &f("step"), e.to_string()))?;
                 let material = materials[out.len() % materials.len()];
-                out.push(Node::new(node.shape.clone(), material, Some(moved)));
+                let copy = node.with_material(material);
+                out.push(Node::new(copy.shape, material, Some(moved)));
             }
         }
     }
