@@ -126,6 +126,41 @@ fn unused_materials_turn_no_effect_on() {
     assert!(plan.max_depth > 0 && plan.reflect.iter().any(|&b| b));
 }
 
+/// A CSG object's own material shows only through operands that inherit it: a mirror CSG
+/// object whose operands both name a matte material casts no reflection ray and counts none in
+/// the worst case, like the same object in matte; with an operand that inherits it, it does.
+#[test]
+fn a_csg_material_no_operand_inherits_turns_no_effect_on() {
+    let csg = |second: &str| {
+        format!(
+            "{}{}\n[[object]]\ntype = \"csg\"\nop = \"union\"\nmaterial = \"mirror\"\noperands = [\n  {{ type = \"sphere\", center = [1, 0.7, 0], radius = 0.7, material = \"matte\" }},\n  {{ type = \"sphere\", center = [1.5, 0.7, 0], radius = 0.5{second} }},\n]\n",
+            matte(),
+            "\n[material.mirror]\ndiffuse = [0.1, 0.1, 0.1]\nmirror = 0.8\n"
+        )
+    };
+    let s = parse_scene(&csg(", material = \"red\""));
+    let plan = EffectPlan::derive(&s, false);
+    assert_eq!(plan.max_depth, 0);
+    assert!(plan.reflect.iter().chain(&plan.refract).all(|&b| !b));
+    let explain = plan.explain(&s);
+    assert!(explain.contains("unused materials mirror"), "{explain}");
+    let estimate = halfray::render::budget::Estimate::of(&s, &plan, 1, true);
+    assert_eq!(estimate.secondary, 0.0);
+    let out = render(&s, &RenderOptions::default());
+    assert_eq!(out.counts.total(), 64 * 48);
+    assert_same_picture(&s, "mirror CSG over matte operands");
+    // Control: the second operand inherits the mirror, which is then simulated.
+    let inherits = parse_scene(&csg(""));
+    let plan = EffectPlan::derive(&inherits, false);
+    assert!(plan.max_depth > 0 && plan.reflect.iter().any(|&b| b));
+    assert!(
+        render(&inherits, &RenderOptions::default())
+            .counts
+            .reflection
+            > 0
+    );
+}
+
 /// A light of zero intensity (or colour) contributes nothing: no shadow rays are cast towards
 /// it, `--explain` says why, and the picture equals the forced one (which does cast them).
 #[test]

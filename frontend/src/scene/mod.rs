@@ -303,17 +303,19 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Per material: whether some object (or CSG operand, at any depth) uses it.
+    /// Per material: whether some surface shows it, i.e. some object or CSG operand (at any
+    /// depth) that is not itself a CSG object uses it. A CSG object's own material shows only
+    /// through the operands that inherit it, and a hit takes the material of the operand hit.
     pub fn used_materials(&self) -> Vec<bool> {
+        use crate::scene::geom::Geometry;
         let mut used = vec![false; self.materials.len()];
         let mut stack: Vec<&crate::scene::geom::Node> = self.objects.iter().collect();
         while let Some(n) = stack.pop() {
-            if let Some(u) = used.get_mut(n.material as usize) {
-                *u = true;
-            }
-            if let crate::scene::geom::Geometry::Csg(_, a, b) = &n.shape {
+            if let Geometry::Csg(_, a, b) = &n.shape {
                 stack.push(a);
                 stack.push(b);
+            } else if let Some(u) = used.get_mut(n.material as usize) {
+                *u = true;
             }
         }
         used
