@@ -40,12 +40,7 @@ fn mesh_node(name: &str) -> (Arc<MeshShape>, Vec<Vec3>, Vec<[u32; 2]>) {
         }
     }
     let positions = obj.positions.clone();
-    let shape = MeshShape {
-        name: name.to_string(),
-        accel: MeshAccel::new(obj).unwrap(),
-        boundary_edges: 0,
-        normals: None,
-    };
+    let shape = MeshShape::new(name, MeshAccel::new(obj).unwrap(), None);
     (Arc::new(shape), positions, edges.into_iter().collect())
 }
 

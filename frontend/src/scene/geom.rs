@@ -32,7 +32,7 @@ use halfray_core::sphere::Sphere;
 use halfray_core::transform::Transform;
 use halfray_core::triangle::Watertight;
 use halfray_core::{Aabb, Hit, Ray};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// A hit with what shading needs besides the geometry.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -97,20 +97,43 @@ pub struct MeshShape {
     pub name: String,
     /// Triangles and BVH.
     pub accel: MeshAccel,
-    /// Boundary (unpaired) directed edges; 0 for a closed, consistently oriented mesh.
-    pub boundary_edges: usize,
     /// Unit vertex normals (area-weighted) for smooth shading, one per position.
     pub normals: Option<Vec<Vec3>>,
+    /// [`MeshShape::boundary_edges`], set by its first call (only a CSG operand needs it);
+    /// empty until then.
+    pub closedness: OnceLock<usize>,
+}
+
+impl MeshShape {
+    /// The mesh `name` over `accel`, with smooth-shading `normals` if any; its closedness is
+    /// computed when first asked for.
+    pub fn new(name: &str, accel: MeshAccel, normals: Option<Vec<Vec3>>) -> Self {
+        Self {
+            name: name.to_string(),
+            accel,
+            normals,
+            closedness: OnceLock::new(),
+        }
+    }
+
+    /// Boundary (unpaired) directed edges plus directed edges used more than once
+    /// ([`crate::scene::boundary_edge_count`] of the triangles); 0 for a closed, consistently
+    /// oriented mesh. Counted on the first call, kept for the others.
+    pub fn boundary_edges(&self) -> usize {
+        *self
+            .closedness
+            .get_or_init(|| crate::scene::boundary_edge_count(&self.accel.mesh.triangles))
+    }
 }
 
 impl std::fmt::Debug for MeshShape {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "MeshShape({:?}, {} triangles, {} boundary edges)",
+            "MeshShape({:?}, {} triangles, boundary edges {:?})",
             self.name,
             self.accel.mesh.triangles.len(),
-            self.boundary_edges
+            self.closedness.get()
         )
     }
 }
@@ -199,7 +222,7 @@ impl Geometry {
             Self::Sphere(_) | Self::Ellipsoid(_) | Self::Box(_) | Self::Plane(_) => true,
             Self::Csg(..) => true,
             Self::Quadric(q) => q.clip.is_none(),
-            Self::Mesh(m) => m.boundary_edges == 0,
+            Self::Mesh(m) => m.boundary_edges() == 0,
             Self::Triangle(_) | Self::Polygon(_) => false,
         }
     }

@@ -1,5 +1,6 @@
 //! Mesh objects: OBJ loading, optional Laplacian smoothing and Loop subdivision through the
-//! half-edge core, the BVH, and the closedness check CSG needs.
+//! half-edge core, the BVH, and the closedness check CSG needs (made by
+//! [`MeshShape::boundary_edges`] when a mesh is a CSG operand).
 
 use crate::accel::MeshAccel;
 use crate::error::{Error, Location, Result};
@@ -156,19 +157,12 @@ pub fn load_mesh(
         mesh = subdivide(path, &mesh, lines)?;
         lines = None;
     }
-    let boundary_edges = boundary_edge_count(&mesh.triangles);
     let normals = if smooth_shading {
         Some(vertex_normals(path, &mesh, lines)?)
     } else {
         None
     };
-    let accel = MeshAccel::new(mesh)?;
-    Ok(MeshShape {
-        name: name.to_string(),
-        accel,
-        boundary_edges,
-        normals,
-    })
+    Ok(MeshShape::new(name, MeshAccel::new(mesh)?, normals))
 }
 
 #[cfg(test)]
@@ -183,5 +177,69 @@ mod tests {
         // One face flipped: its three directed edges now repeat their neighbours'.
         let bad = [[0, 1, 2], [0, 1, 3], [1, 2, 3], [2, 0, 3]];
         assert!(boundary_edge_count(&bad) > 0);
+    }
+
+    /// A mesh shape of `triangles` over the unit cube's corners (`i` at `(i & 1, i >> 1 & 1,
+    /// i >> 2)`).
+    fn shape(triangles: &[[u32; 3]]) -> MeshShape {
+        let positions = (0..8u32)
+            .map(|i| Vec3::new((i & 1) as f32, (i >> 1 & 1) as f32, (i >> 2) as f32))
+            .collect();
+        let mesh = ObjMesh {
+            positions,
+            triangles: triangles.to_vec(),
+        };
+        MeshShape::new("m", crate::accel::MeshAccel::new(mesh).unwrap(), None)
+    }
+
+    /// The closedness is computed on the first call only, and is the count made by hand: a
+    /// square (two triangles) has its 4 sides open, the cube without its top face the 4 edges
+    /// of the hole, the closed cube and tetrahedron none.
+    #[test]
+    fn boundary_edges_are_counted_on_first_use() {
+        // The cube's faces, outward, two triangles each: −z, +z, −y, +y, −x, +x.
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let cube: Vec<[u32; 3]> = quads
+            .iter()
+            .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
+            .collect();
+        let lidless: Vec<[u32; 3]> = cube[..2].iter().chain(&cube[4..]).copied().collect();
+        let tetrahedron = [[0, 2, 1], [0, 1, 4], [1, 2, 4], [2, 0, 4]];
+        for (triangles, open) in [
+            (&cube[..2], 4),
+            (&lidless[..], 4),
+            (&cube[..], 0),
+            (&tetrahedron[..], 0),
+        ] {
+            let m = shape(triangles);
+            assert_eq!(m.closedness.get(), None);
+            assert_eq!(m.boundary_edges(), open, "{triangles:?}");
+            assert_eq!(m.closedness.get(), Some(&open));
+        }
+    }
+
+    /// A scene's mesh is checked for closedness only where it is a CSG operand.
+    #[test]
+    fn only_csg_operands_count_boundary_edges() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/x.toml");
+        let head = "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\nheight = 6\n\n\
+                    [material.m]\ndiffuse = [1, 0, 0]\n\n[mesh.cube]\nfile = \"meshes/cube.obj\"\n\n";
+        let plain =
+            format!("{head}[[object]]\ntype = \"mesh\"\nmesh = \"cube\"\nmaterial = \"m\"\n");
+        let scene = crate::scene::parse(&plain, &dir).unwrap();
+        assert_eq!(scene.meshes[0].closedness.get(), None);
+        let csg = format!(
+            "{head}[[object]]\ntype = \"csg\"\nop = \"union\"\nmaterial = \"m\"\noperands = [\n  \
+             {{ type = \"mesh\", mesh = \"cube\" }},\n  {{ type = \"sphere\", center = [0, 0, 0], radius = 1 }},\n]\n"
+        );
+        let scene = crate::scene::parse(&csg, &dir).unwrap();
+        assert_eq!(scene.meshes[0].closedness.get(), Some(&0));
     }
 }

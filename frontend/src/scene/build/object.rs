@@ -321,7 +321,8 @@ fn csg(ctx: &mut Ctx<'_>, o: &ObjectDef, at: &At<'_>, material: u32) -> Result<G
             let why = match &n.shape {
                 Geometry::Mesh(m) => format!(
                     "mesh `{}` is not closed ({} boundary or unpaired edges): a CSG operand must bound a solid",
-                    m.name, m.boundary_edges
+                    m.name,
+                    m.boundary_edges()
                 ),
                 Geometry::Quadric(_) => {
                     "a clipped quadric is not closed: a CSG operand must bound a solid".to_string()
