@@ -716,3 +716,56 @@ fn smoothing_iterations_are_bounded_at_the_limit() {
         panic!("10 000 iterations refused: {e}");
     }
 }
+
+/// The fields of an effect the scene does not have are refused at their value, like
+/// `focus_distance` without `aperture`: `lens_samples` without a lens, and light `samples` on
+/// a directional light or on a point light without `radius > 0` (no area light).
+#[test]
+fn samples_of_an_effect_that_is_off_are_refused() {
+    let camera = |field: &str| BASE.replace("height = 6\n", &format!("height = 6\n{field}\n"));
+    check(
+        "focus.toml",
+        &camera("focus_distance = 4"),
+        "7:18",
+        "camera.focus_distance",
+        "only with `aperture`",
+    );
+    check(
+        "lens.toml",
+        &camera("lens_samples = 64"),
+        "7:16",
+        "camera.lens_samples",
+        "only with `aperture`",
+    );
+    let light = |fields: &str| format!("{BASE}\n[[light]]\n{fields}\nsamples = 8\n");
+    let area = "only for point lights with `radius` > 0";
+    check(
+        "directional.toml",
+        &light("type = \"directional\"\ndirection = [0, -1, 0]"),
+        "14:11",
+        "light[0].samples",
+        area,
+    );
+    check(
+        "point.toml",
+        &light("type = \"point\"\nposition = [0, 4, 0]"),
+        "14:11",
+        "light[0].samples",
+        area,
+    );
+    check(
+        "radius0.toml",
+        &light("type = \"point\"\nposition = [0, 4, 0]\nradius = 0"),
+        "15:11",
+        "light[0].samples",
+        area,
+    );
+    // Control: with the effect on, the same fields load.
+    let on = [
+        camera("aperture = 0.1\nlens_samples = 64"),
+        light("type = \"point\"\nposition = [0, 4, 0]\nradius = 0.5"),
+    ];
+    for text in on {
+        halfray::scene::parse(&text, Path::new("on.toml")).unwrap_or_else(|e| panic!("{e}"));
+    }
+}

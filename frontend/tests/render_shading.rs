@@ -490,8 +490,10 @@ fn lens_rays_meet_on_the_plane_in_focus() {
     assert!((pin.direction.normalize() - c.direction.normalize()).length() < 1e-6);
 }
 
-/// A sphere over a plane lit from above by a point light of `radius`.
+/// A sphere over a plane lit from above by a point light of `radius` (32 shadow rays per
+/// shading point when `radius > 0`).
 fn shadow_scene(radius: f32) -> String {
+    let samples = if radius > 0.0 { "samples = 32" } else { "" };
     let camera = camera("[0, 6, 6]", "[0, 0, 0]", "40", [80, 60]);
     let light = point_light("[0, 5, 0]", "30");
     let sphere = sphere("[0, 1.2, 0]", "1", "m");
@@ -505,7 +507,7 @@ diffuse = [0.8, 0.8, 0.8]
 ambient = [0, 0, 0]
 
 {light}radius = {radius}
-samples = 32
+{samples}
 
 {sphere}
 {plane}"#

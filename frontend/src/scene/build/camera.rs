@@ -117,8 +117,10 @@ pub(super) fn camera(ctx: &Ctx<'_>, c: &S<def::CameraDef>) -> Result<Camera> {
                 samples,
             });
         }
-    } else if let Some(f) = c.focus_distance.as_ref().or(None) {
+    } else if let Some(f) = &c.focus_distance {
         return Err(ctx.err(&f.span(), "camera.focus_distance", "only with `aperture`"));
+    } else if let Some(n) = &c.lens_samples {
+        return Err(ctx.err(&n.span(), "camera.lens_samples", "only with `aperture`"));
     }
     Ok(camera)
 }

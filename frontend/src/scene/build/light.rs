@@ -80,6 +80,14 @@ pub(super) fn light(ctx: &Ctx<'_>, i: usize, l: &S<def::LightDef>) -> Result<Lig
     };
     let samples = match &l.samples {
         None => 16,
+        // Only an area light casts more than one shadow ray per shading point.
+        Some(n) if !(radius > 0.0) => {
+            return Err(ctx.err(
+                &n.span(),
+                &format!("{p}.samples"),
+                "only for point lights with `radius` > 0 (area lights)",
+            ));
+        }
         Some(n) if *n.get_ref() == 0 || *n.get_ref() > crate::scene::MAX_LIGHT_SAMPLES => {
             return Err(ctx.err(
                 &n.span(),
