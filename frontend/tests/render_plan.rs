@@ -457,3 +457,78 @@ fn shadow_rays_are_counted_exactly_per_casting_light() {
     let out = render(&parse_scene(&all), &RenderOptions::default());
     assert_eq!(out.counts.shadow, 3 * 81, "{:?}", out.counts);
 }
+
+/// A material whose direct term is 0 whatever the light (`diffuse` 0, no specular: a pure
+/// mirror) casts no shadow ray: a floor of it that fills the view under a shadow-casting light
+/// costs one primary and one reflection ray (to the empty sky) per pixel and no shadow ray; the
+/// same floor in grey casts one shadow ray per pixel. The picture is the forced one.
+#[test]
+fn surfaces_without_a_direct_term_cast_no_shadow_rays() {
+    let camera = camera("[0, 10, 0.001]", "[0, 0, 0]", "10", [9, 9]);
+    let floor = plane("[0, 0, 0]", "[0, 1, 0]", "floor");
+    let light = point_light("[1, 4, 0]", "16");
+    let text = |diffuse: &str| {
+        format!(
+            "ambient = [0, 0, 0]\n\n{camera}\n{light}\n[material.floor]\ndiffuse = {diffuse}\nmirror = 0.5\n\n{floor}"
+        )
+    };
+    let black = parse_scene(&text("[0, 0, 0]"));
+    let out = render(&black, &RenderOptions::default());
+    assert_eq!(out.counts.primary, 81, "{:?}", out.counts);
+    assert_eq!(out.counts.reflection, 81, "{:?}", out.counts);
+    assert_eq!(out.counts.shadow, 0, "{:?}", out.counts);
+    assert_same_picture(&black, "black mirror floor");
+    let grey = render(
+        &parse_scene(&text("[0.5, 0.5, 0.5]")),
+        &RenderOptions::default(),
+    );
+    assert_eq!(grey.counts.shadow, 81, "{:?}", grey.counts);
+}
+
+/// `--stats-json`'s plan says `true` only for effects that run: none of the shading effects
+/// outside colour mode, no reflection with `max_depth = 0`; the ray counts agree.
+#[test]
+fn stats_json_plan_flags_effects_that_cannot_run_as_off() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |text: &str, extra: &[&str]| -> serde_json::Value {
+        let scene = dir.path().join("scene.toml");
+        std::fs::write(&scene, text).unwrap();
+        let json = dir.path().join("stats.json");
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_halfray"))
+            .arg("render")
+            .arg(&scene)
+            .arg("-o")
+            .arg(dir.path().join("out.png"))
+            .args(["--width", "24", "--height", "16", "-q", "--stats-json"])
+            .arg(&json)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap()
+    };
+    let mirror = std::fs::read_to_string(scenes_dir().join("mirror.toml")).unwrap();
+    // Control: in colour, the mirror scene's shadows, reflections and specular run.
+    let v = run(&mirror, &[]);
+    for effect in ["shadow", "reflection", "specular"] {
+        assert_eq!(v["plan"][effect], true, "{effect}: {v}");
+    }
+    let flat = mirror.replace("max_depth = 4", "max_depth = 0");
+    assert_ne!(flat, mirror);
+    let v = run(&flat, &[]);
+    assert_eq!(v["plan"]["reflection"], false, "{v}");
+    assert_eq!(v["reflection"], 0, "{v}");
+    assert_eq!(v["plan"]["shadow"], true, "{v}");
+    let lens = mirror.replace("height = 480\n", "height = 480\naperture = 0.1\n");
+    for (text, mode) in [(&mirror, "depth"), (&mirror, "normal"), (&lens, "depth")] {
+        let v = run(text, &["--mode", mode, "--samples", "4"]);
+        let flags = v["plan"].as_object().unwrap();
+        assert!(flags.len() >= 9, "{v}");
+        for (effect, on) in flags {
+            assert_eq!(on, false, "{effect} in --mode {mode}: {v}");
+        }
+        for rays in ["shadow", "reflection", "refraction"] {
+            assert_eq!(v[rays], 0, "{rays}: {v}");
+        }
+    }
+}

@@ -58,13 +58,14 @@ impl Estimate {
             (None, true) => samples,
             _ => 1,
         };
-        let secondary =
-            if plan.max_depth > 0 && (plan.flags().reflection || plan.flags().refraction) {
-                MAX_SECONDARY_RAYS_PER_PIXEL
-            } else {
-                0
-            };
-        let shadow: f64 = scene
+        let recursive = plan.reflect.iter().chain(&plan.refract).any(|&b| b);
+        let secondary = if plan.max_depth > 0 && recursive {
+            MAX_SECONDARY_RAYS_PER_PIXEL
+        } else {
+            0
+        };
+        // Summed from +0: `Iterator::sum` of no `f64` is −0, printed as "-0".
+        let shadow = scene
             .lights
             .iter()
             .zip(&plan.shadow_rays)

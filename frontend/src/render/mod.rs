@@ -586,21 +586,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             reflection: c.reflection,
             refraction: c.refraction,
             seconds: out.seconds,
-            plan: plan::PlanFlags {
-                area_lights: {
-                    let p = EffectPlan::derive(&scene, opts.force_all);
-                    scene
-                        .lights
-                        .iter()
-                        .zip(&p.shadow_rays)
-                        .any(|(l, &on)| on && l.radius > 0.0)
-                },
-                antialias: opts.samples > 1
-                    && opts.mode == Mode::Color
-                    && scene.camera.lens.is_none(),
-                depth_of_field: scene.camera.lens.is_some() && opts.mode == Mode::Color,
-                ..EffectPlan::derive(&scene, opts.force_all).flags()
-            },
+            plan: plan.flags(&scene, opts.mode, opts.samples),
         })
         .map_err(|e| Error::encode("the stats JSON", e))?;
         files.push((stats, format!("{json}\n").into_bytes()));

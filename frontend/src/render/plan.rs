@@ -3,6 +3,7 @@
 //! effects the scene does not use are computed and then weighted by zero, so the picture is the
 //! same; only the work differs).
 
+use super::Mode;
 use super::bound::{MAX_SECONDARY_RAYS_PER_PIXEL, MIN_PATH_WEIGHT};
 use crate::scene::{LightKind, Scene};
 use std::fmt::Write as _;
@@ -15,6 +16,10 @@ pub struct EffectPlan {
     pub shadow_rays: Vec<bool>,
     /// Per material: evaluate the Blinn–Phong specular term.
     pub specular: Vec<bool>,
+    /// Per material: evaluate the lights' direct term (diffuse and specular) and cast shadow
+    /// rays from its surfaces: its `diffuse` is not 0 or its specular term is evaluated (else
+    /// the term is 0, lit or not).
+    pub direct: Vec<bool>,
     /// Per material: cast reflection rays (mirror > 0, or transparent: total internal
     /// reflection).
     pub reflect: Vec<bool>,
@@ -35,43 +40,58 @@ pub struct EffectPlan {
 }
 
 /// The plan as `--stats-json` reports it: one boolean per effect, `true` when the renderer
-/// simulates it for some light, material or object.
+/// simulates it for some light, material or object in the render's mode ([`EffectPlan::flags`]):
+/// outside colour mode only `csg_intervals` can be `true` (the geometry every mode hits).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct PlanFlags {
-    /// Shadow rays towards at least one light.
+    /// Shadow rays towards at least one light, from at least one material.
     pub shadow: bool,
-    /// Reflection rays for at least one material.
+    /// Reflection rays for at least one material (never with `max_depth = 0`).
     pub reflection: bool,
-    /// Refraction rays for at least one material.
+    /// Refraction rays for at least one material (never with `max_depth = 0`).
     pub refraction: bool,
     /// The specular term for at least one material.
     pub specular: bool,
     /// Shadow rays through transparent surfaces ([`EffectPlan::shadow_transmission`]).
     pub shadow_transmission: bool,
-    /// More than one sample per pixel where the image needs it (`--samples N > 1`, colour
-    /// mode; set by the renderer, not derived from the scene).
+    /// More than one sample per pixel where the image needs it (`samples > 1` without a
+    /// lens).
     pub antialias: bool,
     /// CSG interval evaluation (CSG objects, or every solid when forced).
     pub csg_intervals: bool,
     /// Soft shadows: shadow rays over the disk of at least one point light with `radius > 0`.
     pub area_lights: bool,
-    /// A thin-lens camera (`aperture > 0`): every pixel through `lens_samples` lens positions
-    /// (colour mode; set by the renderer from the camera).
+    /// A thin-lens camera (`aperture > 0`): every pixel through `lens_samples` lens positions.
     pub depth_of_field: bool,
 }
 
 impl EffectPlan {
-    /// One flag per effect, for `--stats-json`.
-    pub fn flags(&self) -> PlanFlags {
+    /// One flag per effect of a render of `scene` (this plan's) in `mode` with at most
+    /// `samples` samples per pixel, for `--stats-json`: `true` only for an effect that runs.
+    /// Shading (shadows, specular, reflection, refraction, area lights) and the extra camera
+    /// rays (anti-aliasing, depth of field) run in colour mode only; reflection and refraction
+    /// need a recursion depth above 0; shadow rays a light that casts them and a material with
+    /// a direct term ([`EffectPlan::direct`]).
+    pub fn flags(&self, scene: &Scene, mode: Mode, samples: u32) -> PlanFlags {
+        let color = mode == Mode::Color;
+        let any = |v: &[bool]| v.iter().any(|&b| b);
+        let recursive = color && self.max_depth > 0;
+        let shadow = color && any(&self.shadow_rays) && any(&self.direct);
+        let lens = scene.camera.lens.is_some();
         PlanFlags {
-            shadow: self.shadow_rays.iter().any(|&b| b),
-            reflection: self.reflect.iter().any(|&b| b),
-            refraction: self.refract.iter().any(|&b| b),
-            specular: self.specular.iter().any(|&b| b),
-            shadow_transmission: self.shadow_transmission,
-            antialias: false,
-            area_lights: false,
-            depth_of_field: false,
+            shadow,
+            reflection: recursive && any(&self.reflect),
+            refraction: recursive && any(&self.refract),
+            specular: color && any(&self.specular),
+            shadow_transmission: shadow && self.shadow_transmission,
+            antialias: color && samples > 1 && !lens,
+            area_lights: shadow
+                && scene
+                    .lights
+                    .iter()
+                    .zip(&self.shadow_rays)
+                    .any(|(l, &on)| on && l.radius > 0.0),
+            depth_of_field: color && lens,
             csg_intervals: self.intervals_everywhere || !self.csg_objects.is_empty(),
         }
     }
@@ -101,14 +121,22 @@ impl EffectPlan {
             .iter()
             .zip(&used)
             .any(|(m, &u)| u && m.transparency > 0.0);
+        let specular: Vec<bool> = mats
+            .iter()
+            .zip(&used)
+            .map(|(m, &u)| force_all || (u && m.has_specular()))
+            .collect();
+        let direct = mats
+            .iter()
+            .zip(&used)
+            .zip(&specular)
+            .map(|((m, &u), &s)| force_all || (u && (m.diffuse != glam::Vec3::ZERO || s)))
+            .collect();
         Self {
             shadow_transmission: force_all || (transparent_used && shadow_rays.iter().any(|&b| b)),
             shadow_rays,
-            specular: mats
-                .iter()
-                .zip(&used)
-                .map(|(m, &u)| force_all || (u && m.has_specular()))
-                .collect(),
+            specular,
+            direct,
             reflect,
             refract,
             max_depth: if recursive { scene.max_depth } else { 0 },
@@ -175,6 +203,18 @@ impl EffectPlan {
                 format!("; skipped for {}", off.join(", "))
             }
         );
+        let unlit: Vec<String> = names(
+            &|i| !self.direct[i] && scene.used_materials()[i],
+            scene.materials.len(),
+            &|i| scene.materials[i].name.clone(),
+        );
+        if !on.is_empty() && !unlit.is_empty() {
+            let _ = writeln!(
+                s,
+                "  direct lighting  skipped on {} (diffuse 0, no specular: no shadow rays from them)",
+                unlit.join(", ")
+            );
+        }
         let _ = writeln!(
             s,
             "  shadow transmission {}",

@@ -4,7 +4,8 @@
 //! with `E = I/r²` for point lights and `E = I` for directional ones, `n` the normal facing the
 //! incoming ray, `h = normalize(l + v)`. A light contributes nothing where `n·l ≤ 0` (the
 //! surface faces away from it) or where a shadow ray finds an occluder (lights with
-//! `cast_shadows`). Shadow rays are any-hit queries started with the core's robust spawn
+//! `cast_shadows`); no shadow ray is cast from a material whose direct term is 0 whatever the
+//! light (`diffuse` 0 and no specular: [`EffectPlan::direct`]). Shadow rays are any-hit queries started with the core's robust spawn
 //! ([`spawn_ray_to`] / [`spawn_ray`]), never with a scene epsilon.
 //!
 //! # What bounds the ray tree
@@ -183,14 +184,19 @@ impl Tracer<'_> {
         let light = self.scene.lights.get(li)?;
         let plain = area_centre(light).is_none()
             && !self.plan.shadow_transmission
-            && self.casts_shadow(li, sh.shading_normal().dot(toward(light, &sh.hit).0));
+            && self.casts_shadow(
+                li,
+                sh.material as usize,
+                sh.shading_normal().dot(toward(light, &sh.hit).0),
+            );
         plain.then(|| shadow_ray(light, &sh.hit))
     }
 
-    /// Whether the plan casts a shadow ray towards light `li` from a hit whose shading normal
-    /// makes `ndotl` with the direction to the light.
-    fn casts_shadow(&self, li: usize, ndotl: f32) -> bool {
-        self.plan.shadow_rays[li] && (ndotl > 0.0 || self.plan.forced)
+    /// Whether the plan casts a shadow ray towards light `li` from a hit on material `mi`
+    /// whose shading normal makes `ndotl` with the direction to the light: the plan casts
+    /// towards that light and evaluates the material's direct term ([`EffectPlan::direct`]).
+    fn casts_shadow(&self, li: usize, mi: usize, ndotl: f32) -> bool {
+        self.plan.shadow_rays[li] && self.plan.direct[mi] && (ndotl > 0.0 || self.plan.forced)
     }
 
     /// The fraction of light that reaches the end of the shadow ray `ray` (towards `light`):
@@ -354,7 +360,7 @@ impl Tracer<'_> {
         for (li, light) in scene.lights.iter().enumerate() {
             let (l, mut e) = toward(light, hit);
             let ndotl = nrm.dot(l);
-            let cast = self.casts_shadow(li, ndotl);
+            let cast = self.casts_shadow(li, mi, ndotl);
             let mut blocked = false;
             if let (true, Some(centre)) = (cast, area_centre(light)) {
                 let seen = self.area_visibility(hit, centre, light, ctx, n);
