@@ -74,7 +74,7 @@ impl Estimate {
                 LightKind::Point { .. } if l.radius > 0.0 => f64::from(l.samples),
                 _ => 1.0,
             })
-            .sum();
+            .fold(0.0, |sum, n| sum + n);
         let mut boxes: HashMap<[u32; 6], usize> = HashMap::new();
         for o in &scene.objects {
             if let Some(b) = o.bounds {
@@ -195,5 +195,22 @@ mod tests {
         let flat = text.replace("max_depth = 4", "max_depth = 0");
         assert_ne!(flat, text);
         assert_eq!(estimate(&flat).secondary, 0.0);
+    }
+
+    /// Without a light that casts shadows the estimate's shadow rays per hit print as `0`.
+    #[test]
+    fn no_shadow_rays_print_as_zero() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/mirror.toml");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let dark = text.replace("[[light]]", "[[light]]\ncast_shadows = false");
+        assert_ne!(dark, text);
+        let scene = crate::scene::parse(&dark, &path).unwrap();
+        let plan = EffectPlan::derive(&scene, false);
+        assert!(plan.shadow_rays.iter().all(|&on| !on));
+        let explain = Estimate::of(&scene, &plan, 1, true).explain(1);
+        assert!(
+            explain.contains("× (1 + 0 shadow rays per hit)"),
+            "{explain}"
+        );
     }
 }
