@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds every cargo-fuzz target and runs each for FUZZ_SECONDS (default 30), seeded with the
-# checked-in corpus and the float dictionary; any crash, timeout or out-of-memory fails the run.
+# checked-in corpus and its dictionary (scripts/fuzz-dict.sh); any crash, timeout or out-of-memory fails the run.
 # Installs what it needs when missing (nightly toolchain, cargo-fuzz). Called by test-all.sh.
 #
 #   FUZZ_SECONDS=30 bash scripts/fuzz-ci.sh            # every target
@@ -11,6 +11,7 @@
 SECONDS_EACH=${FUZZ_SECONDS:-30}
 
 source "$(dirname "${BASH_SOURCE[0]}")/fuzz-tools.sh" "$@"
+source scripts/fuzz-dict.sh
 
 out=target/fuzz-ci
 for t in "${targets[@]}"; do
@@ -18,7 +19,7 @@ for t in "${targets[@]}"; do
     echo "-- fuzz $t for ${SECONDS_EACH} s"
     if ! cargo +nightly fuzz run "$t" "$out/corpus/$t" "fuzz/corpus/$t" -- \
         -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 \
-        -dict=fuzz/dict/floats.dict -artifact_prefix="$out/artifacts/$t/" \
+        -dict="$(fuzz_dict "$t")" -artifact_prefix="$out/artifacts/$t/" \
         -print_final_stats=1 >"$out/$t.log" 2>&1; then
         tail -n 60 "$out/$t.log"
         echo "fuzz target $t failed; the input is in $out/artifacts/$t/ (reproduce with"

@@ -8,6 +8,7 @@
 SECONDS_EACH=${FUZZ_SECONDS:-120}
 
 source "$(dirname "${BASH_SOURCE[0]}")/fuzz-tools.sh" "$@"
+source scripts/fuzz-dict.sh
 
 work=target/fuzz-cmin
 for t in "${targets[@]}"; do
@@ -15,7 +16,7 @@ for t in "${targets[@]}"; do
     cp fuzz/corpus/"$t"/* "$work/$t/"
     echo "-- grow $t for ${SECONDS_EACH} s"
     cargo +nightly fuzz run "$t" "$work/$t" -- -max_total_time="$SECONDS_EACH" -timeout=10 \
-        -rss_limit_mb=2048 -dict=fuzz/dict/floats.dict -artifact_prefix="$work/artifacts/$t/" \
+        -rss_limit_mb=2048 -dict="$(fuzz_dict "$t")" -artifact_prefix="$work/artifacts/$t/" \
         >"$work/$t.log" 2>&1 || { tail -n 40 "$work/$t.log"; echo "fuzz-cmin: $t crashed"; exit 1; }
     cargo +nightly fuzz cmin "$t" "$work/$t" >"$work/$t.cmin.log" 2>&1
     rm -f fuzz/corpus/"$t"/min-*

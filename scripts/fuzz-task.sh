@@ -8,7 +8,8 @@
 # Fuzzes the K-th (0-based) name of FUZZ_TARGETS (binaries and seeds: scripts/fuzz-paths.sh) for
 # FUZZ_SECONDS (default 1200) with FUZZ_FORKS parallel fuzzing processes (default 1; fork mode,
 # `-ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1`, so a crash is saved and fuzzing goes
-# on), seeded with the target's seed folder (never written) and the float dictionary. Writes
+# on), seeded with the target's seed folder (never written) and its dictionary
+# (scripts/fuzz-dict.sh). Writes
 #   OUT_DIR/corpus/TARGET/     new inputs (a task that is restarted continues from them)
 #   OUT_DIR/artifacts/TARGET/  crashes, timeouts, OOMs: the findings
 #   OUT_DIR/logs/TARGET.log    libFuzzer's output (appended to)
@@ -18,6 +19,7 @@ set -euo pipefail
 [ $# -eq 2 ] || { echo "usage: FUZZ_TARGETS=\"T0 T1 ...\" $0 K OUT_DIR" >&2; exit 2; }
 k=$1 out=$2
 source "$(dirname "${BASH_SOURCE[0]}")/fuzz-paths.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/fuzz-dict.sh"
 t=${fuzz_targets[k]:-}
 [ -n "$t" ] || { echo "fuzz-task: no target $k in FUZZ_TARGETS ($FUZZ_TARGETS)" >&2; exit 2; }
 bin=$(fuzz_bin "$t")
@@ -33,7 +35,7 @@ echo "fuzz-task $t: ${seconds} s, ${forks} fork(s), on $(hostname), $(date -u +%
 rc=0
 "$bin" "$out/corpus/$t" "${seeds[@]}" -fork="$forks" \
     -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1 -max_total_time="$seconds" \
-    -timeout=10 -rss_limit_mb=2048 -dict="$fuzz_root/fuzz/dict/floats.dict" \
+    -timeout=10 -rss_limit_mb=2048 -dict="$(fuzz_dict "$t")" \
     -artifact_prefix="$out/artifacts/$t/" >>"$log" 2>&1 || rc=$?
 found=$(find "$out/artifacts/$t" -type f | wc -l)
 echo "fuzz-task $t: exit $rc, $(find "$out/corpus/$t" -type f | wc -l) inputs in the corpus, $found finding(s)" >&2
