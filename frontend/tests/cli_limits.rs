@@ -8,8 +8,9 @@ use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-const BIN: &str = env!("CARGO_BIN_EXE_halfray");
-const MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes");
+mod common;
+use common::{BIN, shared_mesh, shared_mesh_str};
+
 /// A refusal must come before the work: well under the time the work would take.
 const REFUSAL_TIME: Duration = Duration::from_secs(20);
 
@@ -91,7 +92,7 @@ fn image_and_subdivision_sizes_are_estimated_before_allocating() {
     std::fs::remove_file(&big_scene).unwrap();
 
     let out = dir.path().join("b.obj");
-    let bunny = Path::new(MESHES).join("bunny.obj");
+    let bunny = shared_mesh("bunny.obj");
     let (code, e) = run(&[
         "mesh",
         "subdivide",
@@ -190,7 +191,7 @@ fn ray_generation_on_a_mesh_near_f32_max_gives_up_with_an_error() {
 
 #[test]
 fn bench_ray_sets_are_estimated_before_generating() {
-    let cube = format!("{MESHES}/cube.obj");
+    let cube = shared_mesh_str("cube.obj");
     for (width, rays, what) in [
         ("100000", "10", "--width 100000 --rays 10 needs about"),
         (
@@ -214,8 +215,8 @@ fn bench_ray_sets_are_estimated_before_generating() {
 /// any work, naming the variable (the pool is built from it, checked, in `main`).
 #[test]
 fn a_worker_count_beyond_the_limit_is_refused() {
-    let cube = Path::new(MESHES).join("cube.obj");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_halfray"))
+    let cube = shared_mesh("cube.obj");
+    let o = std::process::Command::new(BIN)
         .args(["mesh", "check"])
         .arg(&cube)
         .env("RAYON_NUM_THREADS", "99999999")
@@ -233,7 +234,7 @@ fn a_worker_count_beyond_the_limit_is_refused() {
 fn smoothing_passes_and_leaf_sizes_are_checked_by_the_parser() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("s.obj");
-    let cube = Path::new(MESHES).join("cube.obj");
+    let cube = shared_mesh("cube.obj");
     let cap = halfray::scene::MAX_SMOOTH_ITERATIONS;
     let smooth = |n: u32| {
         run(&[

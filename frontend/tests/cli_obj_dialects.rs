@@ -3,13 +3,13 @@
 
 use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_halfray");
-const CUBE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes/cube.obj");
+mod common;
+use common::{BIN, shared_mesh};
 
 #[test]
 fn cr_only_files_are_read_as_lines_and_drops_are_reported() {
     let dir = tempfile::tempdir().unwrap();
-    let lf = std::fs::read(CUBE).unwrap();
+    let lf = std::fs::read(shared_mesh("cube.obj")).unwrap();
     assert!(lf.contains(&b'\n') && !lf.contains(&b'\r'));
     let cr: Vec<u8> = lf
         .iter()

@@ -7,9 +7,10 @@ use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{BIN, file_names as files, scenes_dir, start_long_render, stderr};
+use common::{
+    BIN, file_names as files, scenes_dir, shared_mesh, shared_mesh_str, start_long_render, stderr,
+};
 
-const MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes");
 /// How long the SIGTERM test waits for the killed render to exit.
 const EXIT_WAIT: Duration = Duration::from_secs(30);
 
@@ -64,7 +65,7 @@ fn an_output_that_is_an_input_or_another_output_is_refused() {
     assert!(stderr(&o).contains("are the same file"), "{}", stderr(&o));
     // A mesh tool writing over its input, through a hard link.
     let cube = dir.path().join("cube.obj");
-    std::fs::copy(Path::new(MESHES).join("cube.obj"), &cube).unwrap();
+    std::fs::copy(shared_mesh("cube.obj"), &cube).unwrap();
     let hard = dir.path().join("hard.obj");
     std::fs::hard_link(&cube, &hard).unwrap();
     let before = std::fs::read(&cube).unwrap();
@@ -178,7 +179,7 @@ fn output_locations_are_checked_before_the_work() {
     let o = run(os![
         "mesh",
         "subdivide",
-        &Path::new(MESHES).join("cube.obj"),
+        &shared_mesh("cube.obj"),
         "-o",
         &dir.path().join("nodir/x.obj")
     ]);
@@ -187,7 +188,7 @@ fn output_locations_are_checked_before_the_work() {
     let o = run(os![
         "mesh",
         "check",
-        &Path::new(MESHES).join("cube.obj"),
+        &shared_mesh("cube.obj"),
         "--json",
         dir.path()
     ]);
@@ -215,7 +216,7 @@ fn output_locations_are_checked_before_the_work() {
 fn a_benchmark_report_is_reserved_first_and_is_never_an_input() {
     let dir = tempfile::tempdir().unwrap();
     let cube = dir.path().join("cube.obj");
-    std::fs::copy(Path::new(MESHES).join("cube.obj"), &cube).unwrap();
+    std::fs::copy(shared_mesh("cube.obj"), &cube).unwrap();
     // Writable, as a user's own mesh (the shared copies are read-only).
     use std::os::unix::fs::PermissionsExt;
     std::fs::set_permissions(&cube, std::fs::Permissions::from_mode(0o644)).unwrap();
@@ -276,7 +277,7 @@ fn a_default_mesh_of_bench_accuracy_is_an_input() {
     use std::os::unix::fs::PermissionsExt;
     for name in halfray::bench::accuracy::DEFAULT_MESHES {
         let copy = dir.path().join(format!("{name}.obj"));
-        std::fs::copy(Path::new(MESHES).join(format!("{name}.obj")), &copy).unwrap();
+        std::fs::copy(shared_mesh(&format!("{name}.obj")), &copy).unwrap();
         // Writable, as a user's own mesh (the shared copies are read-only).
         std::fs::set_permissions(&copy, std::fs::Permissions::from_mode(0o644)).unwrap();
     }
@@ -359,7 +360,7 @@ fn run_into_dev_full(args: &[&std::ffi::OsStr]) -> Output {
 #[test]
 fn closed_pipe_exits_quietly_and_full_device_is_a_clean_error() {
     let dir = tempfile::tempdir().unwrap();
-    let cube = Path::new(MESHES).join("cube.obj");
+    let cube = shared_mesh("cube.obj");
     let json = dir.path().join("check.json");
     let png = dir.path().join("r.png");
     let mirror = scene("mirror.toml");
@@ -409,7 +410,7 @@ fn closed_pipe_exits_quietly_and_full_device_is_a_clean_error() {
 #[test]
 fn an_output_on_stdout_is_all_that_stdout_carries() {
     let dir = tempfile::tempdir().unwrap();
-    let cube = format!("{MESHES}/cube.obj");
+    let cube = shared_mesh_str("cube.obj");
     let file = dir.path().join("out");
     let mirror = scene("mirror.toml");
     let commands: [&[&str]; 3] = [
@@ -484,7 +485,7 @@ fn an_output_on_stdout_reaches_a_socket() {
     use std::os::fd::OwnedFd;
     use std::os::unix::net::UnixStream;
     let dir = tempfile::tempdir().unwrap();
-    let cube = format!("{MESHES}/cube.obj");
+    let cube = shared_mesh_str("cube.obj");
     let file = dir.path().join("cube.rs");
     let o = run(os!["bake", &cube, "-o", &file]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -511,7 +512,7 @@ fn an_output_on_stdout_reaches_a_socket() {
 fn every_command_that_suggests_force_takes_it() {
     use std::os::unix::fs::PermissionsExt;
     let dir = tempfile::tempdir().unwrap();
-    let cube = format!("{MESHES}/cube.obj");
+    let cube = shared_mesh_str("cube.obj");
     let out = dir.path().join("out");
     let commands: [&[&str]; 3] = [
         &["gamma", "--chart"],
@@ -552,7 +553,7 @@ fn every_command_that_suggests_force_takes_it() {
 fn a_hard_link_to_an_input_is_the_input() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("cube.obj");
-    std::fs::copy(format!("{MESHES}/cube.obj"), &input).unwrap();
+    std::fs::copy(shared_mesh("cube.obj"), &input).unwrap();
     let link = dir.path().join("link.obj");
     std::fs::hard_link(&input, &link).unwrap();
     let before = std::fs::read(&input).unwrap();

@@ -7,15 +7,11 @@ use halfray::mesh_tools::{
 };
 use halfray::obj::{ObjMesh, read_obj, write_obj};
 use halfray_core::halfedge::{EdgeId, LoopWeights, VertexId};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-const MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes");
-const BIN: &str = env!("CARGO_BIN_EXE_halfray");
-
-fn mesh(name: &str) -> PathBuf {
-    Path::new(MESHES).join(name)
-}
+mod common;
+use common::{BIN, shared_mesh as mesh};
 
 fn run_bin(args: &[&str]) -> (i32, String, String) {
     let out = Command::new(BIN).args(args).output().unwrap();

@@ -25,12 +25,11 @@ use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
 use halfray_core::query::{TraversalStats, Triangles};
 use halfray_core::triangle::{TriangleIntersector, TriangleVariant, Watertight};
-use halfray_tests::{any_by, closest_by, par_map, vertex_and_eighth_edge_points};
+use halfray_tests::{any_by, closest_by, meshes_dir, par_map, vertex_and_eighth_edge_points};
 use proptest::prelude::*;
 use std::collections::HashMap;
 use std::path::PathBuf;
 
-const MESH_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes");
 const RANDOM_RAYS: usize = 100_000;
 const CAMERA_SIDE: usize = 256;
 /// Incoherent rays on the dragon in a plain run: the reference loop's cull still touches all
@@ -51,7 +50,7 @@ fn slow_tests() -> bool {
 }
 
 fn mesh_paths() -> Vec<PathBuf> {
-    let mut paths: Vec<PathBuf> = std::fs::read_dir(MESH_DIR)
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(meshes_dir())
         .expect("shared meshes folder")
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "obj"))
@@ -63,7 +62,7 @@ fn mesh_paths() -> Vec<PathBuf> {
 }
 
 fn load(name: &str) -> ObjMesh {
-    read_obj(&PathBuf::from(MESH_DIR).join(name)).unwrap()
+    read_obj(&meshes_dir().join(name)).unwrap()
 }
 
 fn build(mesh: &TriangleMesh<'_>, leaf: u32) -> VecBvh {

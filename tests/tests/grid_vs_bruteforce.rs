@@ -21,10 +21,9 @@ use halfray_core::prelude::*;
 use halfray_core::query::TraversalStats;
 use halfray_core::solids::{CUBE_TRIANGLES, CUBE_VERTICES, grid_triangles};
 use halfray_core::triangle::Watertight;
-use halfray_tests::{any_by, brute_triangles, closest_by, par_map};
+use halfray_tests::{any_by, brute_triangles, closest_by, meshes_dir, par_map};
 use std::path::{Path, PathBuf};
 
-const MESH_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes");
 const FUZZ_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../fuzz");
 
 type VecGrid = Grid<Vec<u32>, Vec<u32>>;
@@ -217,7 +216,7 @@ fn rays_along_grid_planes_through_a_closed_box() {
 }
 
 fn load_bunny() -> halfray::obj::ObjMesh {
-    let path = PathBuf::from(MESH_DIR).join("bunny.obj");
+    let path = meshes_dir().join("bunny.obj");
     assert!(path.is_file(), "missing shared mesh {}", path.display());
     read_obj(&path).unwrap()
 }

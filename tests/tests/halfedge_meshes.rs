@@ -4,35 +4,22 @@
 //! Large meshes live in `Vec`-backed [`SliceMesh`]es so nothing big is on the stack.
 
 use std::collections::HashMap;
-use std::path::PathBuf;
 
 use glam::{DVec3, Vec3};
 use halfray_core::halfedge::{
     BuildError, CollapseAt, Counts, EdgeId, EdgeRec, FaceRec, HalfedgeMesh, LoopWeights, Mesh,
     MeshStorage, SliceMesh, VertexId, VertexRec, build_scratch_len, loop_beta,
 };
+use halfray_tests::meshes_dir;
 use proptest::prelude::*;
 
 /// Relative tolerance for comparing the mesh's f32 Loop positions with the f64 reference:
 /// a few f32 ulps (2⁻²³ ≈ 1.2e-7) of the coordinate magnitude, times the ~10 terms summed.
 const LOOP_REL_TOL: f64 = 4e-6;
 
-fn mesh_dir() -> PathBuf {
-    let here = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    for cand in [
-        here.join("../../shared/meshes"),
-        PathBuf::from("/work/shared/meshes"),
-    ] {
-        if cand.exists() {
-            return cand;
-        }
-    }
-    panic!("shared meshes not found");
-}
-
 /// Parses the `v`/`f` lines of a shared OBJ (1-based indices).
 fn load(name: &str) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let text = std::fs::read_to_string(mesh_dir().join(name)).unwrap();
+    let text = std::fs::read_to_string(meshes_dir().join(name)).unwrap();
     let (mut p, mut t) = (Vec::new(), Vec::new());
     for line in text.lines() {
         let mut it = line.split_whitespace();

@@ -23,12 +23,10 @@ use halfray_core::prelude::*;
 use halfray_core::solids::grid_triangles;
 use halfray_core::triangle::{MollerTrumbore, TriangleIntersector, Watertight, WatertightF32};
 use halfray_tests::{
-    any_by, brute_triangles as brute, closest_by, par_map, vertex_and_eighth_edge_points,
+    any_by, brute_triangles as brute, closest_by, meshes_dir, par_map,
+    vertex_and_eighth_edge_points,
 };
 use proptest::prelude::*;
-use std::path::PathBuf;
-
-const MESH_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes");
 
 /// Incoherent rays on the bunny (each tested against all 69 451 triangles by the oracle).
 const BUNNY_RANDOM_RAYS: usize = 1500;
@@ -109,7 +107,7 @@ fn split_plane_rays(kd: &VecKd, pick: &mut impl FnMut() -> Vec3) -> Vec<Ray> {
 }
 
 fn load(name: &str) -> halfray::obj::ObjMesh {
-    let path = PathBuf::from(MESH_DIR).join(name);
+    let path = meshes_dir().join(name);
     read_obj(&path).unwrap_or_else(|e| panic!("{name} is required by this test: {e}"))
 }
 

@@ -20,9 +20,7 @@ use halfray_core::bvh::collide::{
 };
 use halfray_core::mesh::TriangleMesh;
 use halfray_core::transform::Transform;
-use std::path::PathBuf;
-
-const MESH_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes");
+use halfray_tests::meshes_dir;
 
 /// Grid step of the oracle's coordinates: `2⁻¹²`. With `|x| ≤ 8` the scaled integers are
 /// below `2¹⁵` and the oracle's largest product (a dot product with the normal of a
@@ -354,7 +352,7 @@ impl Sweep {
 
 #[test]
 fn bunny_against_moved_copies_equals_sweep_brute_force() {
-    let path = PathBuf::from(MESH_DIR).join("bunny.obj");
+    let path = meshes_dir().join("bunny.obj");
     let obj = read_obj(&path).unwrap_or_else(|e| panic!("{path:?} is required: {e}"));
     let mesh = TriangleMesh::new(&obj.positions, &obj.triangles);
     let bvh = tree(&mesh);

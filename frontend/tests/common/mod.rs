@@ -4,6 +4,7 @@
 
 pub mod svg;
 
+use halfray::bench::accuracy::shared_meshes_dir;
 use halfray::scene::{Scene, parse};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
@@ -110,6 +111,20 @@ pub fn material(name: &str, fields: &[(&str, &str)]) -> String {
 /// The shipped example scenes, `<workspace>/scenes` (as `frontend/../scenes`).
 pub fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
+}
+
+/// The shared test mesh `name` (e.g. `"cube.obj"`) in halfray's [`shared_meshes_dir`]:
+/// `$HALFRAY_MESHES` if set, else `../shared/meshes` beside the repository.
+pub fn shared_mesh(name: &str) -> PathBuf {
+    shared_meshes_dir().join(name)
+}
+
+/// [`shared_mesh`] as text, for argument lists of strings; panics if the path is not UTF-8.
+pub fn shared_mesh_str(name: &str) -> String {
+    let path = shared_mesh(name);
+    path.to_str()
+        .unwrap_or_else(|| panic!("{} is not UTF-8", path.display()))
+        .to_owned()
 }
 
 /// Parses a test scene's `text` (as if read from `test.toml`); panics with the error.
