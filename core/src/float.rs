@@ -6,6 +6,9 @@
 //!
 //! Nothing here is a tuned tolerance: each value is a property of binary32 arithmetic.
 
+use crate::error::GeometryError;
+use glam::{DVec3, Vec3};
+
 /// Unit roundoff of `f32`: `u = 2⁻²⁴` (half of [`f32::EPSILON`]), unitless (relative).
 pub const F32_UNIT_ROUNDOFF: f32 = 1.0 / 16_777_216.0;
 
@@ -41,6 +44,28 @@ pub fn sqrt(x: f32) -> f32 {
 #[must_use]
 pub fn sqrt_f64(x: f64) -> f64 {
     libm::sqrt(x)
+}
+
+/// The direction `dir` (any non-zero length) as a unit vector in `f64`: `dir / |dir|` with
+/// both the length and the quotient computed in `f64`, for the caller to keep or round to
+/// `f32`. Rounded to `f32`, each component is within one `f32` rounding of the exact unit
+/// vector.
+///
+/// # Errors
+///
+/// [`GeometryError::NonFinite`] for a non-finite `dir`, [`GeometryError::Degenerate`] for a
+/// zero one (the `f64` length of a finite non-zero `f32` vector never underflows).
+#[inline]
+pub(crate) fn unit_direction_f64(dir: Vec3) -> Result<DVec3, GeometryError> {
+    if !dir.is_finite() {
+        return Err(GeometryError::NonFinite);
+    }
+    let d = dir.as_dvec3();
+    let len = d.length();
+    if !(len > 0.0) {
+        return Err(GeometryError::Degenerate);
+    }
+    Ok(d / len)
 }
 
 /// `a·b − c·d` evaluated with one rounding of exact `f64` products of `f32` inputs: the sign of

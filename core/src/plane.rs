@@ -23,7 +23,7 @@
 //!   `N = +z` it is `(x − x₀, y − y₀)`.
 
 use crate::error::GeometryError;
-use crate::float::gamma;
+use crate::float::{gamma, unit_direction_f64};
 use crate::hit::Hit;
 use crate::ray::Ray;
 use glam::{DVec3, Vec2, Vec3};
@@ -50,12 +50,7 @@ impl Plane {
         if !point.is_finite() || !normal.is_finite() {
             return Err(GeometryError::NonFinite);
         }
-        let n = normal.as_dvec3();
-        let len = n.length();
-        if !(len > 0.0) {
-            return Err(GeometryError::Degenerate);
-        }
-        let mut unit = (n / len).as_vec3();
+        let mut unit = unit_direction_f64(normal)?.as_vec3();
         if let Some(k) = axis_of(normal) {
             unit = Vec3::ZERO;
             unit[k] = if normal[k] > 0.0 { 1.0 } else { -1.0 };

@@ -36,7 +36,7 @@
 
 use crate::aabb::Aabb;
 use crate::error::GeometryError;
-use crate::float::{gamma, gamma_f64};
+use crate::float::{gamma, gamma_f64, unit_direction_f64};
 use crate::getters::getters;
 use crate::hit::Hit;
 use crate::ray::Ray;
@@ -166,12 +166,10 @@ impl Quadric {
         if !axis_point.is_finite() || !axis_dir.is_finite() || !radius.is_finite() {
             return Err(GeometryError::NonFinite);
         }
-        let axis = axis_dir.as_dvec3();
-        let len = axis.length();
-        if !(len > 0.0) || !(radius > 0.0) {
+        let u = unit_direction_f64(axis_dir)?;
+        if !(radius > 0.0) {
             return Err(GeometryError::Degenerate);
         }
-        let u = axis / len;
         let r = radius as f64;
         Self::from_center_form(DMat3::IDENTITY - outer(u), axis_point.as_dvec3(), -(r * r))
     }
@@ -188,12 +186,10 @@ impl Quadric {
         if !apex.is_finite() || !axis_dir.is_finite() || !tan_half_angle.is_finite() {
             return Err(GeometryError::NonFinite);
         }
-        let axis = axis_dir.as_dvec3();
-        let len = axis.length();
-        if !(len > 0.0) || !(tan_half_angle > 0.0) {
+        let u = unit_direction_f64(axis_dir)?;
+        if !(tan_half_angle > 0.0) {
             return Err(GeometryError::Degenerate);
         }
-        let u = axis / len;
         let tau = tan_half_angle as f64;
         Self::from_center_form(
             DMat3::IDENTITY - outer(u) * (1.0 + tau * tau),

@@ -27,7 +27,7 @@
 //! every intersector treats as hitting nothing.
 
 use crate::error::GeometryError;
-use crate::float::gamma;
+use crate::float::{gamma, unit_direction_f64};
 use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::tolerance::TRANSFORM_MIN_REL_DET;
@@ -145,12 +145,8 @@ impl Transform {
         if !axis.is_finite() || !angle.is_finite() {
             return Err(GeometryError::NonFinite);
         }
-        let a = axis.as_dvec3();
-        let len = a.length();
-        if !(len > 0.0) {
-            return Err(GeometryError::Degenerate);
-        }
-        Self::new(Mat4::from_axis_angle((a / len).as_vec3(), angle))
+        let unit = unit_direction_f64(axis)?.as_vec3();
+        Self::new(Mat4::from_axis_angle(unit, angle))
     }
 
     /// `self` followed by `next` (matrix `next.M · self.M`, inverse recomputed in `f64`).
