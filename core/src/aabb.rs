@@ -9,7 +9,7 @@
 //! returns the non-NaN operand, so such a slab does not constrain the interval. The result is
 //! the same for `+0.0` and `−0.0` and for every axis. An entry at `t = +∞` or an exit at
 //! `t = −∞` is no hit (a ray parallel to a slab and outside it gets `[+∞, +∞]` or `[−∞, −∞]`
-//! from that slab, depending on the zero's sign; found by the `ray_box` fuzz target).
+//! from that slab, depending on the zero's sign).
 //!
 //! A direction component below `1/f32::MAX ≈ 2.9e-39` in magnitude (subnormal, not zero) has
 //! no finite reciprocal, and one above `2¹²⁶ ≈ 8.5e37` a subnormal one (fewer than 24 bits:
@@ -40,8 +40,8 @@ pub const SLAB_FAR_SCALE: f32 = 1.0 + 2.0 * gamma(3);
 
 /// The factor for a *negative* far distance (an interval with `t_min < 0`): `1 − 2·gamma(3)`,
 /// which moves it away from the near distance just as [`SLAB_FAR_SCALE`] does for a positive
-/// one. (Scaling a negative far distance by `SLAB_FAR_SCALE` would shrink the slab instead;
-/// found by the `bvh` fuzz target with `t_min = −3e36`.) Unitless.
+/// one. (Scaling a negative far distance by `SLAB_FAR_SCALE` would shrink the slab instead.)
+/// Unitless.
 pub const SLAB_FAR_SCALE_NEGATIVE: f32 = 1.0 - 2.0 * gamma(3);
 
 /// A far slab distance padded outward: `t·(1 ± 2·gamma(3))`, the sign chosen so the result is
@@ -132,9 +132,8 @@ impl Aabb {
         self.max - self.min
     }
 
-    /// Centre of the box, `min/2 + max/2`: finite for every finite box (`(min + max)/2`
-    /// overflows when both corners are beyond `f32::MAX/2`, which made the BVH builder treat
-    /// such a primitive as non-finite; found by the `bvh` fuzz target).
+    /// Centre of the box, `min/2 + max/2`: finite for every finite box (unlike
+    /// `(min + max)/2`, which overflows when both corners are beyond `f32::MAX/2`).
     #[inline]
     #[must_use]
     pub fn center(&self) -> Vec3 {
@@ -471,6 +470,8 @@ mod tests {
         assert!(!SlabRay::new(&Ray::new(o, Vec3::Z)).unwrap().divide);
     }
 
+    /// Found by the `bvh` fuzz target: `(min + max)/2` overflowed for a box beyond
+    /// `f32::MAX/2`, and the BVH builder took such a primitive for a non-finite one.
     #[test]
     fn center_of_far_boxes_is_finite() {
         let b = Aabb::new(Vec3::splat(-1.741e38), Vec3::new(-1.741e38, 3.0e38, 3.4e38));
@@ -480,7 +481,8 @@ mod tests {
         assert!(b.contains_point(c));
     }
 
-    /// Negative intervals: a hit at `t = −1` on a flat box's corner, with `t_min = −3e36`.
+    /// Negative intervals: a hit at `t = −1` on a flat box's corner, with `t_min = −3e36`
+    /// (found by the `bvh` fuzz target: the far distance, negative, was padded inward).
     #[test]
     fn negative_interval_flat_box_corner() {
         let flat = Aabb::new(Vec3::ZERO, Vec3::new(4.0, 4.0, 0.0));
@@ -492,6 +494,8 @@ mod tests {
         assert!(pad_far(-1.0) > -1.0 && pad_far(1.0) > 1.0 && pad_far(0.0) == 0.0);
     }
 
+    /// A ray parallel to a slab and outside it, with either sign of zero, misses: its entry
+    /// is `+∞` or its exit `−∞` (found by the `ray_box` fuzz target).
     #[test]
     fn parallel_outside_with_negative_zero_misses() {
         let b = Aabb::new(Vec3::new(0.0, -0.0, 0.0), Vec3::new(1.0, 2.278e-41, 1.0));

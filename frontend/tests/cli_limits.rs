@@ -111,11 +111,11 @@ fn image_and_subdivision_sizes_are_estimated_before_allocating() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
 
-/// `--levels` beyond `MAX_LEVELS` is refused by the parser, at once: on a mesh without faces
-/// (which no level changes, so no size estimate refuses it) it used to recurse once a level
-/// until the stack overflowed. `MAX_LEVELS` itself is taken there, and on one triangle it is
-/// already more than the half-edge core can hold, so the cap refuses no level a mesh could
-/// reach.
+/// `--levels` beyond `MAX_LEVELS` is refused by the parser, at once, also on a mesh without
+/// faces (which no level changes, so no size estimate refuses it, while each level would
+/// recurse once more, up to a stack overflow). `MAX_LEVELS` itself is taken there, and on one
+/// triangle it is already more than the half-edge core can hold, so the cap refuses no level
+/// a mesh could reach.
 #[test]
 fn subdivision_levels_are_capped_where_one_face_outgrows_the_core() {
     use halfray::mesh_tools::MAX_LEVELS;

@@ -528,9 +528,6 @@ mod tests {
     use super::*;
     use crate::test_util::{lcg, mixed_f32};
 
-    /// The AVX2 kernel against the documented lane formula, bit for bit, on values with NaN,
-    /// `±∞`, `±0` and subnormals mixed in. Runs where the CPU has AVX2 and FMA (every CI
-    /// machine here); elsewhere there is no AVX2 code to run and the test says so.
     /// The AVX2 sort against the keys sorted in scalar code, on every hit mask and on
     /// distances with ties, `±0`, negatives, infinities and values that differ only in the
     /// bits the key drops.
@@ -649,6 +646,9 @@ mod tests {
         assert_eq!(Portable.certain_misses8(&q), None);
     }
 
+    /// The AVX2 slab kernel against the documented lane formula, bit for bit, on values with
+    /// NaN, `±∞`, `±0` and subnormals mixed in. Runs where the CPU has AVX2 and FMA (every CI
+    /// machine here); elsewhere there is no AVX2 code to run and the test says so.
     #[test]
     fn avx2_slab_equals_the_lane_formula() {
         let Some(level) =

@@ -374,7 +374,7 @@ pub(crate) fn degenerate_or_coplanar(ray: &Ray, v: &[Vec3; 3]) -> bool {
 /// opposite the longest edge (a cyclic rotation, so the orientation is the same): the two edges
 /// it spans are the shorter ones, so their `f64` differences keep the short edge's digits.
 /// From `v0` of a sliver whose other two vertices are tiny against it, both differences round
-/// to `−v0` and the cross product is exactly zero (found by the `ray_triangle` fuzz target).
+/// to `−v0` and the cross product is exactly zero.
 /// Also returns `|e1| × |e2|` taken with absolute values (the scale of `n`'s rounding).
 /// Always inlined on x86-64, into each level's out-of-line end of the hit path
 /// (`watertight::finish_exact_at`).
@@ -405,7 +405,7 @@ pub(crate) fn normal_f64(v: &[Vec3; 3]) -> (glam::DVec3, glam::DVec3) {
 /// cancels (well below its own rounding scale times 2²⁰, or zero while its scale is not;
 /// [`NORMAL_CANCEL_REL`]): per component, `d·n` along an axis sees only that component, and a
 /// sliver spanning 2⁶⁰ can cancel one component of the v0-based normal entirely while the
-/// others stay large (found by the `ray_triangle` fuzz target).
+/// others stay large.
 #[inline(always)]
 pub(crate) fn normal_f64_from_v0(v: &[Vec3; 3]) -> Option<(glam::DVec3, glam::DVec3)> {
     let p0 = v[0].as_dvec3();
@@ -432,8 +432,9 @@ fn cross_with_scale(e1: glam::DVec3, e2: glam::DVec3) -> (glam::DVec3, glam::DVe
 }
 
 /// [`TriangleHit::ng`]: `ng32` (the `f32` cross product) when it is finite and non-zero,
-/// otherwise the `f64` normal scaled by its largest component (found by the `bvh` fuzz target:
-/// an overflowing `f32` cross product gave a NaN normal).
+/// otherwise the `f64` normal scaled by its largest component (an overflowing `f32` cross
+/// product is NaN, an underflowing one zero), so the result points along `(v1 − v0) × (v2 − v0)`;
+/// `Vec3::ZERO` only when that `f64` normal is zero.
 #[inline(always)]
 pub(crate) fn geometric_normal(v: &[Vec3; 3], ng32: Vec3) -> Vec3 {
     if ng32.is_finite() && ng32 != Vec3::ZERO {
@@ -529,12 +530,10 @@ mod tests {
         ]
     }
 
-    /// Huge and tiny triangles: the f32 cross product overflows (NaN from ∞ − ∞) or underflows
-    /// to zero; `ng` falls back to the scaled f64 normal, same direction.
     /// A sliver spanning 2⁶⁰ (vertices near 1e18, 1 and 0) whose `v0`-based `f64` normal loses
     /// its `x` component entirely while `y` and `z` stay large: a ray along `x` was taken to lie
-    /// in the plane and missed. Expected `t` from the `ray_triangle` fuzz target's independent
-    /// `f64` reference (its own error bound there is 5 %).
+    /// in the plane and missed (found by the `ray_triangle` fuzz target). Expected `t` from
+    /// that target's independent `f64` reference (its own error bound there is 5 %).
     #[test]
     fn normal_component_cancelled_from_v0_is_recomputed() {
         let b = f32::from_bits;
@@ -558,6 +557,9 @@ mod tests {
         assert!(!degenerate_or_coplanar(&ray, &v));
     }
 
+    /// Huge and tiny triangles: the f32 cross product overflows (NaN from ∞ − ∞) or underflows
+    /// to zero; `ng` falls back to the scaled f64 normal, same direction (the overflow found by
+    /// the `bvh` fuzz target: a NaN normal).
     #[test]
     fn geometric_normal_of_huge_and_tiny_triangles() {
         for s in [1e25f32, 1e-30] {

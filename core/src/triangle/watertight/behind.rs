@@ -17,9 +17,8 @@
 //! `d_kz < 0` is one more transposition) would give `(Pu) × (Pv) = det(P)·P(u × v)`, so `wn`
 //! and `dn` would both change sign by `det(P) = ±1`: the sign of `t = wn/dn` is the same in
 //! any axis order, and the permanents, `max` and the 1-norms below are sums over the axes,
-//! so the bound derivation does not depend on the order either. (An earlier form took the
-//! permuted rows of the edge cull: the same bits, about 40 more instructions a call to
-//! gather them.)
+//! so the bound derivation does not depend on the order either. Taking the edge cull's
+//! permuted rows instead would give the same bits for about 40 more instructions a call.
 //!
 //! **The `f32` bound.** Standard model (`crate::float`), `u = 2⁻²⁴`. Each elementary term of
 //! `wn`, `a_i·e1_j·e2_k`, passes through at most 8 roundings: `a_i`, `e1_j`, `e2_k` (one
