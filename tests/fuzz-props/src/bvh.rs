@@ -282,12 +282,12 @@ pub fn check(s: &Soup) {
 
     // 4, 5. Rays.
     Oracle::each_ray(&mesh, &in_tree, &ctx, &s.rays, |oracle, ray| {
-        check_ray(&bvh, oracle, &Watertight, ray, true);
+        oracle.check_queries(&bvh, "BVH", &Watertight, ray, true);
         check_wide(&wide, oracle, &Watertight, ray, true);
         // Möller–Trumbore's inexact edge tests can report a hit slightly outside the
         // triangle, hence outside its box: only the weak form holds for it.
         check_wide(&wide, oracle, &MollerTrumbore::CLASSIC, ray, false);
-        check_ray(&bvh, oracle, &MollerTrumbore::CLASSIC, ray, false);
+        oracle.check_queries(&bvh, "BVH", &MollerTrumbore::CLASSIC, ray, false);
         let q = Aabb::new(ray.origin, ray.origin).grow(ray.origin + ray.direction);
         let mut found = Vec::new();
         let reported = bvh.query_box(&mesh, &q, |p| {
@@ -395,8 +395,6 @@ fn batch_matches<L: halfray_core::simd_level::SimdLevel, T: TriangleIntersector>
     }
 }
 
-/// [`check_ray`]'s properties for the 8-wide tree: closest hit equal to brute force in the
-/// same domain, a genuine hit no nearer than brute force's elsewhere; any-hit agreement.
 /// The AVX2+FMA level, when the CPU has it; otherwise `None`, and the skip is recorded once
 /// per process, as the core's tests do (`scripts/test-all.sh` prints `HALFRAY_SKIP_LOG`;
 /// with `HALFRAY_REQUIRE_AVX2` set, a missing level is a failure).
@@ -419,9 +417,10 @@ fn avx2_or_skip() -> Option<halfray_core::simd_level::Avx2Fma> {
     level
 }
 
-/// Where the CPU has AVX2 and FMA, the queries at that SIMD level (the frontend's: node test,
-/// child sort, lane cull and the hit's `f64` plane kernel) must return the portable answers,
-/// bit for bit.
+/// The 8-wide tree's closest and any hit on `ray` checked as every tree's
+/// ([`Oracle::check_queries`]); where the CPU has AVX2 and FMA, the queries at that SIMD level
+/// (the frontend's: node test, child sort, lane cull and the hit's `f64` plane kernel) must
+/// also return the portable answers, bit for bit.
 fn check_wide<T: TriangleIntersector>(
     wide: &Bvh8<Vec<WideNode<8>>, Vec<LeafGroup>>,
     oracle: &Oracle<'_, '_>,
@@ -429,16 +428,7 @@ fn check_wide<T: TriangleIntersector>(
     ray: &Ray,
     exact: bool,
 ) {
-    let got = wide.closest_hit(
-        ray,
-        &mut Triangles::new(oracle.mesh, isect),
-        &mut Query::new(),
-    );
-    let any = wide.any_hit(
-        ray,
-        &mut Triangles::new(oracle.mesh, isect),
-        &mut Query::new(),
-    );
+    let (got, any) = oracle.check_queries(wide, "wide BVH", isect, ray, exact);
     #[cfg(target_arch = "x86_64")]
     if let Some(level) = avx2_or_skip() {
         let mut stack = halfray_core::query::QueryStack::new();
@@ -470,50 +460,6 @@ fn check_wide<T: TriangleIntersector>(
             any.is_some(),
             "AVX2 level's any hit: {ray:?}"
         );
-    }
-    oracle.assert_answers(isect, ray, exact, "wide BVH", got, any);
-}
-
-/// A BVH's closest and any hit on `ray` against the `oracle`'s brute force (exactly, within
-/// the documented domain of an `exact` intersector; elsewhere a genuine hit no nearer than
-/// brute force's).
-pub fn check_ray<N: AsRef<[BvhNode]>, I: AsRef<[u32]>, T: TriangleIntersector>(
-    bvh: &Bvh<N, I>,
-    oracle: &Oracle<'_, '_>,
-    isect: &T,
-    ray: &Ray,
-    exact: bool,
-) {
-    let want = oracle.closest(isect, ray);
-    let got = bvh.closest_hit(
-        ray,
-        &mut Triangles::new(oracle.mesh, isect),
-        &mut Query::new(),
-    );
-    if !oracle.exact_on(ray, exact) {
-        // Outside the documented domain of exact agreement: the BVH's answer must still be a
-        // genuine hit of the intersector, no nearer than brute force's, and find a clear one.
-        if let Some(hit) = got {
-            oracle.assert_genuine(isect, ray, hit, "hit record");
-        }
-        oracle.assert_no_nearer(got, want, "BVH");
-        let any = bvh.any_hit(
-            ray,
-            &mut Triangles::new(oracle.mesh, isect),
-            &mut Query::new(),
-        );
-        oracle.assert_finds_clear_hit(ray, got, any, want, "BVH");
-        return;
-    }
-    let any = bvh.any_hit(
-        ray,
-        &mut Triangles::new(oracle.mesh, isect),
-        &mut Query::new(),
-    );
-    oracle.assert_agrees((isect.name(), "BVH"), got, any, want);
-    if let Some(hit) = any {
-        oracle.assert_genuine(isect, ray, hit, "any-hit record");
-        assert!(ray.contains(hit.1.t));
     }
 }
 

@@ -9,7 +9,7 @@
 //! swapped (`at`, `value`).
 
 use super::Input;
-use super::bvh::{Oracle, Soup, check_ray, decode};
+use super::bvh::{Oracle, Soup, decode};
 use super::*;
 use halfray_core::bvh::{Bvh, BvhNode, load_scratch_len};
 use halfray_core::mesh::TriangleMesh;
@@ -104,7 +104,7 @@ pub fn check(s: &Soup, mutations: &[(u8, u16, u32)]) {
         ctx: &ctx,
     };
     for ray in &s.rays {
-        check_ray(&bvh, &oracle, &Watertight, ray, true);
+        oracle.check_queries(&bvh, "BVH", &Watertight, ray, true);
     }
 }
 

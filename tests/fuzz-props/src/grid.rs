@@ -15,10 +15,7 @@ use super::{Enc, Seed};
 use glam::Vec3;
 use halfray_core::grid::{CellAssignment, DEFAULT_LAMBDA, Grid, GridError, GridOptions, GridPlan};
 use halfray_core::mesh::TriangleMesh;
-use halfray_core::prelude::*;
-use halfray_core::query::{Query, Triangles};
-use halfray_core::ray::Ray;
-use halfray_core::triangle::{MollerTrumbore, TriangleIntersector, Watertight};
+use halfray_core::triangle::{MollerTrumbore, Watertight};
 
 /// The grid options the flag byte selects (module docs).
 pub fn options(flags: u8) -> GridOptions {
@@ -147,8 +144,8 @@ pub fn check(s: &Soup, opts: &GridOptions) {
     }
     // 4. Rays.
     Oracle::each_ray(&mesh, &live, &ctx, &s.rays, |oracle, ray| {
-        check_ray(&grid, oracle, &Watertight, ray, true);
-        check_ray(&grid, oracle, &MollerTrumbore::CLASSIC, ray, false);
+        oracle.check_queries(&grid, "grid", &Watertight, ray, true);
+        oracle.check_queries(&grid, "grid", &MollerTrumbore::CLASSIC, ray, false);
     });
 }
 
@@ -177,29 +174,6 @@ fn check_layout(grid: &VecGrid, live: &[bool], ctx: &dyn Fn() -> String) {
         }
     }
     assert_eq!(seen, live, "every usable triangle in some cell\n{}", ctx());
-}
-
-/// One ray, one intersector: closest and any hit against brute force
-/// ([`Oracle::assert_answers`]; exact agreement only for an `exact` intersector inside its
-/// documented domain).
-fn check_ray<T: TriangleIntersector>(
-    grid: &VecGrid,
-    oracle: &Oracle<'_, '_>,
-    isect: &T,
-    ray: &Ray,
-    exact: bool,
-) {
-    let got = grid.closest_hit(
-        ray,
-        &mut Triangles::new(oracle.mesh, isect),
-        &mut Query::new(),
-    );
-    let any = grid.any_hit(
-        ray,
-        &mut Triangles::new(oracle.mesh, isect),
-        &mut Query::new(),
-    );
-    oracle.assert_answers(isect, ray, exact, "grid", got, any);
 }
 
 pub(crate) fn seeds(s: &mut Vec<Seed>) {

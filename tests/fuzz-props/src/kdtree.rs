@@ -18,10 +18,7 @@ use halfray_core::kdtree::{
     reference_capacity,
 };
 use halfray_core::mesh::{PrimitiveSource, TriangleMesh};
-use halfray_core::prelude::*;
-use halfray_core::query::{Query, Triangles};
-use halfray_core::ray::Ray;
-use halfray_core::triangle::{MollerTrumbore, TriangleIntersector, Watertight};
+use halfray_core::triangle::{MollerTrumbore, Watertight};
 
 type VecKd = KdTree<Vec<KdNode>, Vec<u32>>;
 
@@ -121,8 +118,8 @@ pub fn check(s: &Soup, tight: bool, shallow: bool) {
 
     // 3. Rays.
     Oracle::each_ray(&mesh, &in_tree, &ctx, &s.rays, |oracle, ray| {
-        check_ray(&kd, oracle, &Watertight, ray, true);
-        check_ray(&kd, oracle, &MollerTrumbore::CLASSIC, ray, false);
+        oracle.check_queries(&kd, "kd-tree", &Watertight, ray, true);
+        oracle.check_queries(&kd, "kd-tree", &MollerTrumbore::CLASSIC, ray, false);
     });
 }
 
@@ -158,29 +155,6 @@ fn check_structure(
     assert_eq!(in_tree, expected, "referenced primitives\n{}", ctx());
     assert_eq!(kd.primitive_count(), valid.iter().filter(|&&v| v).count());
     in_tree
-}
-
-/// One ray, one intersector: closest and any hit against brute force
-/// ([`Oracle::assert_answers`]; exact agreement only for an `exact` intersector inside its
-/// documented domain).
-fn check_ray<T: TriangleIntersector>(
-    kd: &VecKd,
-    oracle: &Oracle<'_, '_>,
-    isect: &T,
-    ray: &Ray,
-    exact: bool,
-) {
-    let got = kd.closest_hit(
-        ray,
-        &mut Triangles::new(oracle.mesh, isect),
-        &mut Query::new(),
-    );
-    let any = kd.any_hit(
-        ray,
-        &mut Triangles::new(oracle.mesh, isect),
-        &mut Query::new(),
-    );
-    oracle.assert_answers(isect, ray, exact, "kd-tree", got, any);
 }
 
 pub(crate) fn seeds(s: &mut Vec<Seed>) {

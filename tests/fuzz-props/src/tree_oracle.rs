@@ -6,6 +6,7 @@ use super::bvh::{projection_underflows, within_domain};
 use super::fmt_ray;
 use core::fmt::Debug;
 use halfray_core::mesh::{PrimitiveSource, TriangleMesh};
+use halfray_core::query::{Query, RayQuery, Triangles};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{F64Reference, TriangleHit, TriangleIntersector};
 
@@ -82,6 +83,9 @@ pub(crate) fn checked_build<T, E: Debug>(
         ),
     }
 }
+
+/// A tree's answer to a closest- or any-hit query: `(primitive index, hit)`, or `None`.
+pub(crate) type TreeAnswer = Option<(u32, TriangleHit)>;
 
 /// What a tree's answers on one ray are checked against: brute force over the primitives
 /// `in_tree` of `mesh`.
@@ -235,8 +239,33 @@ impl<'m> Oracle<'_, 'm> {
         );
     }
 
+    /// Queries `structure` for the closest and the any hit of `ray` through `isect` (portable
+    /// level, default stack), checks both with [`Oracle::assert_answers`] and returns them
+    /// (closest, any). `tree` names the structure in failure messages.
+    pub(crate) fn check_queries<Q: RayQuery, T: TriangleIntersector>(
+        &self,
+        structure: &Q,
+        tree: &str,
+        isect: &T,
+        ray: &Ray,
+        exact: bool,
+    ) -> (TreeAnswer, TreeAnswer) {
+        let got = structure.closest_hit(
+            ray,
+            &mut Triangles::new(self.mesh, isect),
+            &mut Query::new(),
+        );
+        let any = structure.any_hit(
+            ray,
+            &mut Triangles::new(self.mesh, isect),
+            &mut Query::new(),
+        );
+        self.assert_answers(isect, ray, exact, tree, got, any);
+        (got, any)
+    }
+
     /// The checks a structure's closest hit `got` and any hit `any` of `ray` (with
-    /// `isect`) get in the `grid` and `kdtree` targets and for the 8-wide BVH: each is a
+    /// `isect`) get in every tree target: each is a
     /// genuine hit of a primitive in the tree with `t` in the ray's interval; then
     /// [`Oracle::assert_agrees`] where [`Oracle::exact_on`]`(ray, exact)`, else
     /// [`Oracle::assert_no_nearer`] and [`Oracle::assert_finds_clear_hit`]. `tree` names the
