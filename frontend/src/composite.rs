@@ -11,8 +11,9 @@
 
 use crate::error::{Error, Location, Result};
 use crate::outputs::{Named, reserve_outputs};
+use crate::png::read_rgba8;
 use glam::Vec4;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// A Porter–Duff operator (`--op`).
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -115,12 +116,6 @@ pub struct CompositeArgs {
     /// Replace an output that is read-only or hard-linked (keeping its mode).
     #[arg(long)]
     pub force: bool,
-}
-
-/// Reads an image as 8-bit straight RGBA, within the memory limit (see
-/// [`crate::png::read_rgba8`]).
-pub fn read_rgba8(path: &Path) -> Result<image::RgbaImage> {
-    crate::png::read_rgba8(path)
 }
 
 /// `a OP b` pixel by pixel on 8-bit straight RGBA (values scaled to `[0, 1]`, results rounded

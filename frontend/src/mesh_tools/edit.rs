@@ -8,6 +8,7 @@ use super::{
 use crate::error::{Error, Location, Result};
 use crate::limits::check_memory;
 use crate::obj::{MAX_COORDINATE, NotCarried, read_obj_file, write_obj_to};
+use crate::text;
 use glam::Vec3;
 use halfray_core::halfedge::{
     CollapseAt, CollapseError, Counts, DiffuseBoundary, EdgeId, LoopWeights, MAX_ELEMENTS, Mesh,
@@ -101,8 +102,8 @@ fn warn_not_carried(input: &Path, output: &Path, dropped: &NotCarried) {
     if !dropped.is_empty() {
         eprintln!(
             "note: {} -> {}: not carried over (the output holds vertices and triangles only): {dropped}",
-            input.display(),
-            output.display()
+            text::path(input),
+            text::path(output)
         );
     }
 }
@@ -230,7 +231,7 @@ fn refuse_outside_domain(command: &str, output: &Path, positions: &[Vec3]) -> Re
                 p.x,
                 p.y,
                 p.z,
-                crate::text::path(output)
+                text::path(output)
             )))
         }
     }

@@ -16,6 +16,7 @@ pub use file::{OutputFile, write_together};
 pub use identity::{FileId, file_id, first_repeat};
 
 use crate::error::{Error, Result};
+use crate::text;
 use std::path::Path;
 
 /// A path a command reads or writes, with the option (or role) that named it, for messages
@@ -57,9 +58,9 @@ pub fn reserve_outputs(
         return Err(Error::Usage(format!(
             "{} `{}` and {} `{}` are the same file",
             e.name,
-            e.path.display(),
+            text::path(e.path),
             out.name,
-            out.path.display()
+            text::path(out.path)
         )));
     }
     refuse_inputs(&reserved, outputs, inputs)?;
@@ -89,9 +90,9 @@ fn refuse_input(name: &Named<'_>, id: &FileId, inputs: &[Named<'_>]) -> Result<(
             return Err(Error::Usage(format!(
                 "{} `{}` is the {} `{}`: refusing to overwrite an input",
                 name.name,
-                name.path.display(),
+                text::path(name.path),
                 input.name,
-                input.path.display()
+                text::path(input.path)
             )));
         }
     }
