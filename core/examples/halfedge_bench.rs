@@ -1,7 +1,7 @@
 //! Half-edge bench: build time, Loop subdivision time per level, bytes per element.
 //!
 //! ```sh
-//! cargo run --release -p halfray-core --example halfedge_bench -- /work/shared/meshes/bunny.obj [levels]
+//! cargo run --release -p halfray-core --example halfedge_bench -- ../shared/meshes/bunny.obj [levels]
 //! ```
 //! Storage is heap `Vec`s lent to [`SliceMesh`]es, so nothing large sits on the stack.
 
@@ -42,7 +42,7 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let path = args
         .next()
-        .unwrap_or_else(|| "/work/shared/meshes/bunny.obj".into());
+        .unwrap_or_else(|| "../shared/meshes/bunny.obj".into());
     let levels: usize = args.next().map_or(2, |s| s.parse().expect("levels"));
     let (p, t) = load(&path);
     println!("mesh {path}: {} vertices, {} triangles", p.len(), t.len());

@@ -4,7 +4,7 @@
 //! set's Mrays/s and the ratio batch/single; every answer is checked equal.
 //!
 //! ```sh
-//! cargo run --release -p halfray-core --example ray_batches -- /work/shared/meshes/bunny.obj /work/shared/meshes/dragon.obj
+//! cargo run --release -p halfray-core --example ray_batches -- ../shared/meshes/bunny.obj ../shared/meshes/dragon.obj
 //! ```
 //! Sets (`width²` = 102 400 rays each, camera framing the mesh's box from -z): camera rays in
 //! scanline order, in 8×8 tiles, every 7th scanline ray (stride), and uniform random rays

@@ -12,14 +12,9 @@ fn device() -> EmbreeDevice {
     EmbreeDevice::new().unwrap_or_else(|e| panic!("Embree device: {e}"))
 }
 
-/// The shared test meshes folder (`HALFRAY_MESHES`, default `<repo>/../shared/meshes`).
+/// A shared test mesh ([`crate::bench::accuracy::shared_meshes_dir`]).
 fn mesh_path(name: &str) -> std::path::PathBuf {
-    let dir = std::env::var_os("HALFRAY_MESHES")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| {
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/meshes")
-        });
-    dir.join(name)
+    crate::bench::accuracy::shared_meshes_dir().join(name)
 }
 
 /// Minimal OBJ reader for the shared meshes (only `v x y z` and `f a b c`, 1-based).
