@@ -262,27 +262,31 @@ fn plan_never_changes_the_picture_on_example_scenes() {
     );
 }
 
+/// The `--stats-json` of rendering `scene` at 24×16 with `extra` options (image and stats
+/// written in `dir`); the render must succeed.
+fn stats_of(dir: &Path, scene: &Path, extra: &[&str]) -> serde_json::Value {
+    let json = dir.join("stats.json");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_halfray"))
+        .arg("render")
+        .arg(scene)
+        .arg("-o")
+        .arg(dir.join("out.png"))
+        .args(["--width", "24", "--height", "16", "-q", "--stats-json"])
+        .arg(&json)
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap()
+}
+
 /// `--stats-json` reports the plan, one boolean per effect, beside the ray counts it explains.
 #[test]
 fn stats_json_reports_the_plan_next_to_the_ray_counts() {
     let dir = tempfile::tempdir().unwrap();
     let scene_path = dir.path().join("matte.toml");
     std::fs::write(&scene_path, matte()).unwrap();
-    let run = |scene: &Path, extra: &[&str]| -> serde_json::Value {
-        let json = dir.path().join("stats.json");
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_halfray"))
-            .arg("render")
-            .arg(scene)
-            .arg("-o")
-            .arg(dir.path().join("out.png"))
-            .args(["--width", "24", "--height", "16", "-q", "--stats-json"])
-            .arg(&json)
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap()
-    };
+    let run = |scene: &Path, extra: &[&str]| stats_of(dir.path(), scene, extra);
     // Matte, no shadow-casting light: every effect off, and no ray of any of them.
     let v = run(&scene_path, &[]);
     let plan = &v["plan"];
@@ -493,19 +497,7 @@ fn stats_json_plan_flags_effects_that_cannot_run_as_off() {
     let run = |text: &str, extra: &[&str]| -> serde_json::Value {
         let scene = dir.path().join("scene.toml");
         std::fs::write(&scene, text).unwrap();
-        let json = dir.path().join("stats.json");
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_halfray"))
-            .arg("render")
-            .arg(&scene)
-            .arg("-o")
-            .arg(dir.path().join("out.png"))
-            .args(["--width", "24", "--height", "16", "-q", "--stats-json"])
-            .arg(&json)
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap()
+        stats_of(dir.path(), &scene, extra)
     };
     let mirror = std::fs::read_to_string(scenes_dir().join("mirror.toml")).unwrap();
     // Control: in colour, the mirror scene's shadows, reflections and specular run.
