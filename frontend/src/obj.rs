@@ -142,19 +142,21 @@ impl ObjMesh {
 /// statement, and of the `f` statement it was fan-triangulated from. For messages about them.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct ObjLines {
-    vertex: Vec<usize>,
-    triangle: Vec<usize>,
+    // `u32`: a file read holds at most `limits::MAX_INPUT_BYTES` (2³⁰) bytes, so fewer lines
+    // (a longer text saturates at `u32::MAX`).
+    vertex: Vec<u32>,
+    triangle: Vec<u32>,
 }
 
 impl ObjLines {
     /// The line of vertex `i` (0-based, as in [`ObjMesh::positions`]); `None` beyond them.
     pub fn vertex(&self, i: usize) -> Option<usize> {
-        self.vertex.get(i).copied()
+        self.vertex.get(i).map(|&l| l as usize)
     }
 
     /// The line of triangle `i` (0-based, as in [`ObjMesh::triangles`]); `None` beyond them.
     pub fn triangle(&self, i: usize) -> Option<usize> {
-        self.triangle.get(i).copied()
+        self.triangle.get(i).map(|&l| l as usize)
     }
 }
 
@@ -196,6 +198,7 @@ pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<ObjFile> {
     let (mut texcoords, mut normals) = (0usize, 0usize);
     for (line_no, raw) in lines(bytes).enumerate() {
         let line_no = line_no + 1;
+        let line32 = u32::try_from(line_no).unwrap_or(u32::MAX);
         let at =
             |col: usize, field: &str| Location::file(path).line(line_no).column(col).field(field);
         let (content, comment) = statement(raw);
@@ -277,7 +280,7 @@ pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<ObjFile> {
                 }
                 mesh.positions
                     .push(Vec3::new(values[0], values[1], values[2]));
-                source.vertex.push(line_no);
+                source.vertex.push(line32);
             }
             "f" => {
                 face.clear();
@@ -294,7 +297,7 @@ pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<ObjFile> {
                 }
                 for i in 1..face.len() - 1 {
                     mesh.triangles.push([face[0], face[i], face[i + 1]]);
-                    source.triangle.push(line_no);
+                    source.triangle.push(line32);
                 }
             }
             "vt" | "vn" | "vp" | "o" | "g" | "s" | "usemtl" | "mtllib" | "l" | "p" => {

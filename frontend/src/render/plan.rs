@@ -149,6 +149,7 @@ impl EffectPlan {
     /// The human-readable plan (`--explain`).
     pub fn explain(&self, scene: &Scene) -> String {
         let mut s = String::new();
+        let used = scene.used_materials();
         let cam = &scene.camera;
         let _ = writeln!(
             s,
@@ -204,7 +205,7 @@ impl EffectPlan {
             }
         );
         let unlit: Vec<String> = names(
-            &|i| !self.direct[i] && scene.used_materials()[i],
+            &|i| !self.direct[i] && used[i],
             scene.materials.len(),
             &|i| scene.materials[i].name.clone(),
         );
@@ -287,8 +288,7 @@ impl EffectPlan {
                 list(names(&|i| self.refract[i], nm, &refract_label))
             }
         );
-        let unused: Vec<String> = scene
-            .used_materials()
+        let unused: Vec<String> = used
             .iter()
             .enumerate()
             .filter(|&(_, &u)| !u)

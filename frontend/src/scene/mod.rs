@@ -449,7 +449,10 @@ impl Source<'_> {
         Some(match path {
             Some(p) => {
                 // `lights[0]` at an unknown `[[lights]]` is the field `lights` itself.
-                let base = p.trim_end_matches(|c: char| c.is_ascii_digit() || c == '[' || c == ']');
+                let mut base = p.as_str();
+                while let Some(b) = base.strip_suffix(']').and_then(|b| b.rsplit_once('[')) {
+                    base = b.0;
+                }
                 if base.rsplit('.').next() == Some(f.as_str()) {
                     base.to_string()
                 } else {
