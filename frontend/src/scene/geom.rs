@@ -117,13 +117,33 @@ impl MeshShape {
     }
 
     /// Boundary (unpaired) directed edges plus directed edges used more than once
-    /// ([`crate::scene::boundary_edge_count`] of the triangles); 0 for a closed, consistently
+    /// ([`boundary_edge_count`] of the triangles); 0 for a closed, consistently
     /// oriented mesh. Counted on the first call, kept for the others.
     pub fn boundary_edges(&self) -> usize {
         *self
             .closedness
-            .get_or_init(|| crate::scene::boundary_edge_count(&self.accel.mesh.triangles))
+            .get_or_init(|| boundary_edge_count(&self.accel.mesh.triangles))
     }
+}
+
+/// Number of directed edges without an opposite partner, plus directed edges used more than
+/// once. 0 means every edge is shared by exactly two consistently oriented triangles: the mesh
+/// bounds a solid.
+pub fn boundary_edge_count(triangles: &[[u32; 3]]) -> usize {
+    let mut directed: std::collections::HashMap<(u32, u32), u32> =
+        std::collections::HashMap::with_capacity(triangles.len() * 3);
+    for t in triangles {
+        for k in 0..3 {
+            *directed.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
+        }
+    }
+    directed
+        .iter()
+        .map(|(&(a, b), &n)| {
+            let back = directed.get(&(b, a)).copied().unwrap_or(0);
+            usize::from(n != 1 || back != 1)
+        })
+        .sum()
 }
 
 impl std::fmt::Debug for MeshShape {

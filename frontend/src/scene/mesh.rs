@@ -9,27 +9,7 @@ use crate::obj::{ObjFile, ObjLines, ObjMesh, read_obj_file};
 use crate::scene::geom::MeshShape;
 use glam::Vec3;
 use halfray_core::halfedge::{DiffuseBoundary, LoopWeights, SliceMesh};
-use std::collections::HashMap;
 use std::path::Path;
-
-/// Number of directed edges without an opposite partner, plus directed edges used more than
-/// once. 0 means every edge is shared by exactly two consistently oriented triangles: the mesh
-/// bounds a solid.
-pub fn boundary_edge_count(triangles: &[[u32; 3]]) -> usize {
-    let mut directed: HashMap<(u32, u32), u32> = HashMap::with_capacity(triangles.len() * 3);
-    for t in triangles {
-        for k in 0..3 {
-            *directed.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
-        }
-    }
-    directed
-        .iter()
-        .map(|(&(a, b), &n)| {
-            let back = directed.get(&(b, a)).copied().unwrap_or(0);
-            usize::from(n != 1 || back != 1)
-        })
-        .sum()
-}
 
 /// Builds `mesh` (read from `path`; `lines` its statements' lines while it is still the
 /// file's mesh) into a half-edge mesh over `buffers` (sized by [`MeshBuffers::for_obj`]) with
@@ -168,6 +148,7 @@ pub fn load_mesh(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::boundary_edge_count;
 
     #[test]
     fn boundary_edges_of_open_and_closed_meshes() {

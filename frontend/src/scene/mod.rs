@@ -19,7 +19,8 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-pub use mesh::{boundary_edge_count, load_mesh};
+pub use geom::boundary_edge_count;
+pub use mesh::load_mesh;
 
 /// Most samples per pixel a scene's `samples` or `--samples` may ask for.
 pub const MAX_SAMPLES: u32 = 64;
