@@ -22,7 +22,8 @@ const PROBED_RAYS: usize = 32;
 /// Most bounded objects for which [`TopLevel::closest_batch`] lists each ray's objects and
 /// batches them; over it (a crowd of instances, each reached by a few rays of a row) every
 /// ray takes the single-ray query. A count of objects: on the example scenes, batches pay
-/// with one large mesh and cost up to 9 % with 10 000 instances (`docs/performance.md`).
+/// with one large mesh and a few objects, and a scene of 10 000 instances, over the limit,
+/// runs as fast as single rays (`docs/performance.md`, "The renderer's primary rays").
 const BATCHED_OBJECTS_MAX: usize = 64;
 
 /// How far [`TopLevel::bounded_in`] grows its box on every side, as a share of the box's
