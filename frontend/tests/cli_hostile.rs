@@ -552,17 +552,13 @@ fn repeat_products_that_overflow_are_refused() {
     assert_eq!(names(dir.path()), ["r.toml"]);
 }
 
-/// Item 9: `--explain` states the worst-case rays, coincident objects and a time estimate;
-/// a scene over the work budget is refused at once unless `--allow-long`.
-#[test]
-fn work_is_estimated_and_a_scene_over_the_budget_needs_allow_long() {
-    let dir = tempfile::tempdir().unwrap();
-    // The issue's scene: 640×480, 256 lens samples, 64 area lights × 256 samples, a mirror,
-    // max_depth 64: about 10 days.
+/// A scene whose colour render is expensive, written to `dir/long.toml`: `size` pixels, 256
+/// lens samples, 64 area lights × 256 samples, a mirror, max_depth 64.
+fn expensive_scene(dir: &Path, size: [u32; 2]) -> PathBuf {
     let mut text = format!(
         "max_depth = 64\n{}aperture = 0.1\nfocus_distance = 5\nlens_samples = 256\n\
          [material.m]\ndiffuse = [1, 1, 1]\nmirror = 0.9\n{}",
-        camera("[0, 0, 5]", "[0, 0, 0]", "40", [640, 480]),
+        camera("[0, 0, 5]", "[0, 0, 0]", "40", size),
         sphere("[0, 0, 0]", "1", "m"),
     );
     for k in 0..64 {
@@ -570,8 +566,18 @@ fn work_is_estimated_and_a_scene_over_the_budget_needs_allow_long() {
             "[[light]]\ntype = \"point\"\nposition = [{k}, 4, 3]\nradius = 0.5\nsamples = 256\n"
         ));
     }
-    let scene = dir.path().join("long.toml");
+    let scene = dir.join("long.toml");
     std::fs::write(&scene, text).unwrap();
+    scene
+}
+
+/// Item 9: `--explain` states the worst-case rays, coincident objects and a time estimate;
+/// a scene over the work budget is refused at once unless `--allow-long`.
+#[test]
+fn work_is_estimated_and_a_scene_over_the_budget_needs_allow_long() {
+    let dir = tempfile::tempdir().unwrap();
+    // The issue's scene at 640×480: about 10 days.
+    let scene = expensive_scene(dir.path(), [640, 480]);
     let png = dir.path().join("o.png");
     let started = std::time::Instant::now();
     let o = run(&[&"render", &scene, &"-o", &png, &"--explain"]);
@@ -619,6 +625,45 @@ fn work_is_estimated_and_a_scene_over_the_budget_needs_allow_long() {
         "{}",
         String::from_utf8_lossy(&o.stdout)
     );
+}
+
+/// The worst case counts the rays of the render's mode only: a scene far over the budget in
+/// colour (the lens, the mirror and the area lights of [`expensive_scene`], 64×48 pixels) is
+/// refused there, and renders in every other mode, which casts one ray per pixel: the worst
+/// case `--explain` prints is the number of rays the render counts.
+#[test]
+fn the_work_budget_counts_only_the_rays_of_the_render_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = expensive_scene(dir.path(), [64, 48]);
+    let png = dir.path().join("o.png");
+    let o = run(&[&"render", &scene, &"-o", &png, &"-q"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--allow-long"), "{}", stderr(&o));
+    for mode in ["depth", "normal", "barycentric", "heatmap"] {
+        let stats = dir.path().join("stats.json");
+        let mut args = render_with_stats(&scene, &png, &stats).to_vec();
+        args.extend([&"--mode" as &dyn AsRef<OsStr>, &mode, &"--explain"]);
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(0), "{mode}: {}", stderr(&o));
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+        let cast: u64 = ["primary", "shadow", "reflection", "refraction"]
+            .iter()
+            .map(|k| json[k].as_u64().unwrap())
+            .sum();
+        assert_eq!(cast, 64 * 48, "{mode}: one ray per pixel");
+        let out = String::from_utf8_lossy(&o.stdout);
+        let line = out
+            .lines()
+            .find(|l| l.trim_start().starts_with("worst case"))
+            .unwrap_or_else(|| panic!("{mode}: no worst case in {out}"));
+        let worst: f64 = line.split_whitespace().nth(2).unwrap().parse().unwrap();
+        assert_eq!(worst, cast as f64, "{mode}: {line}");
+        assert!(
+            line.ends_with("× 1 camera rays × (1 + 0 secondary) × (1 + 0 shadow rays per hit)"),
+            "{mode}: {line}"
+        );
+    }
 }
 
 /// Item 13 and 12: errors name the actual problem, and untrusted strings reach the terminal

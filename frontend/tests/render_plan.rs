@@ -144,7 +144,7 @@ fn a_csg_material_no_operand_inherits_turns_no_effect_on() {
     assert!(plan.reflect.iter().chain(&plan.refract).all(|&b| !b));
     let explain = plan.explain(&s);
     assert!(explain.contains("unused materials mirror"), "{explain}");
-    let estimate = halfray::render::budget::Estimate::of(&s, &plan, 1, true);
+    let estimate = halfray::render::budget::Estimate::of(&s, &plan, Mode::Color, 1);
     assert_eq!(estimate.secondary, 0.0);
     let out = render(&s, &RenderOptions::default());
     assert_eq!(out.counts.total(), 64 * 48);

@@ -1,15 +1,18 @@
 //! The work a render may do, estimated before it starts: the worst-case ray count from the
-//! scene's settings, the largest group of coincident objects, and a rough time. `--explain`
-//! prints it; `render` refuses a scene whose worst case is over [`MAX_WORST_CASE_WORK`]
-//! unless `--allow-long`.
+//! scene's settings in the render's mode, the largest group of coincident objects, and a rough
+//! time. `--explain` prints it; `render` refuses a scene whose worst case is over
+//! [`MAX_WORST_CASE_WORK`] unless `--allow-long`.
 //!
-//! The worst case per pixel is `S × (1 + R) × (1 + L)`: `S` camera rays (the lens samples
-//! with a thin lens, else the anti-aliasing samples in colour mode, else 1), each with at most
-//! `R` secondary rays ([`MAX_SECONDARY_RAYS_PER_PIXEL`] when the plan casts reflection or
-//! refraction rays, 0 otherwise) and at every one of those shading points `L` shadow rays
-//! (one per point light the plan shades with shadows, `samples` per area light). Real renders
-//! cast far fewer (adaptive anti-aliasing, path weights that fall below the bound), so the
-//! estimate is an upper bound, not a prediction.
+//! The worst case per pixel is `S × (1 + R) × (1 + L)`, each factor read from the effects the
+//! render runs in its mode ([`EffectPlan::flags`], the flags `--stats-json` reports): `S` camera
+//! rays (`lens_samples` with depth of field, else the anti-aliasing samples with
+//! anti-aliasing, else 1), each with at most `R` secondary rays
+//! ([`MAX_SECONDARY_RAYS_PER_PIXEL`] with reflection or refraction rays, else 0) and at every
+//! one of those shading points `L` shadow rays (with shadow rays: one per point or directional
+//! light the plan casts them towards, `samples` per area light; else 0). Outside colour mode
+//! none of these effects runs, so the worst case there is one ray per pixel. Real renders cast
+//! far fewer (adaptive anti-aliasing, path weights that fall below the bound), so the estimate
+//! is an upper bound, not a prediction.
 //!
 //! Coincident objects (copies with the same world box, as `repeat` with a zero `step` makes)
 //! cannot be told apart by the top-level BVH: a box test cannot skip one copy without skipping
@@ -17,6 +20,7 @@
 //! intersecting each. So every ray that reaches such a group tests all of its objects; the
 //! estimate multiplies the rays by the size of the largest group.
 
+use super::Mode;
 use super::bound::MAX_SECONDARY_RAYS_PER_PIXEL;
 use super::plan::EffectPlan;
 use crate::scene::{LightKind, Scene};
@@ -49,17 +53,18 @@ pub struct Estimate {
 }
 
 impl Estimate {
-    /// The estimate of `scene` rendered with `plan`, `samples` anti-aliasing samples, in colour
-    /// mode or not.
-    pub fn of(scene: &Scene, plan: &EffectPlan, samples: u32, color: bool) -> Self {
+    /// The estimate of `scene` rendered with `plan` in `mode` with at most `samples`
+    /// anti-aliasing samples per pixel: the factors of the effects that render runs
+    /// ([`EffectPlan::flags`]), see the module docs.
+    pub fn of(scene: &Scene, plan: &EffectPlan, mode: Mode, samples: u32) -> Self {
         let cam = &scene.camera;
-        let camera_rays = match (&cam.lens, color) {
-            (Some(lens), true) => lens.samples,
-            (None, true) => samples,
+        let runs = plan.flags(scene, mode, samples);
+        let camera_rays = match &cam.lens {
+            Some(lens) if runs.depth_of_field => lens.samples,
+            _ if runs.antialias => samples,
             _ => 1,
         };
-        let recursive = plan.reflect.iter().chain(&plan.refract).any(|&b| b);
-        let secondary = if plan.max_depth > 0 && recursive {
+        let secondary = if runs.reflection || runs.refraction {
             MAX_SECONDARY_RAYS_PER_PIXEL
         } else {
             0
@@ -69,7 +74,7 @@ impl Estimate {
             .lights
             .iter()
             .zip(&plan.shadow_rays)
-            .filter(|(_, on)| **on)
+            .filter(|(_, on)| runs.shadow && **on)
             .map(|(l, _)| match l.kind {
                 LightKind::Point { .. } if l.radius > 0.0 => f64::from(l.samples),
                 _ => 1.0,
@@ -188,7 +193,7 @@ mod tests {
         let estimate = |text: &str| {
             let scene = crate::scene::parse(text, &path).unwrap();
             let plan = EffectPlan::derive(&scene, false);
-            Estimate::of(&scene, &plan, 1, true)
+            Estimate::of(&scene, &plan, Mode::Color, 1)
         };
         let mirror = estimate(&text);
         assert_eq!(mirror.secondary, f64::from(MAX_SECONDARY_RAYS_PER_PIXEL));
@@ -207,7 +212,7 @@ mod tests {
         let scene = crate::scene::parse(&dark, &path).unwrap();
         let plan = EffectPlan::derive(&scene, false);
         assert!(plan.shadow_rays.iter().all(|&on| !on));
-        let explain = Estimate::of(&scene, &plan, 1, true).explain(1);
+        let explain = Estimate::of(&scene, &plan, Mode::Color, 1).explain(1);
         assert!(
             explain.contains("× (1 + 0 shadow rays per hit)"),
             "{explain}"

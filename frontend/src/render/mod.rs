@@ -543,7 +543,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         single_rays: args.single_rays,
     };
     let plan = EffectPlan::derive(&scene, opts.force_all);
-    let estimate = budget::Estimate::of(&scene, &plan, opts.samples, opts.mode == Mode::Color);
+    let estimate = budget::Estimate::of(&scene, &plan, opts.mode, opts.samples);
     if args.explain {
         let threads = rayon::current_num_threads();
         print_out(&(plan.explain(&scene) + &estimate.explain(threads)))?;
