@@ -717,25 +717,41 @@ fn smoothing_iterations_are_bounded_at_the_limit() {
     }
 }
 
-/// The fields of an effect the scene does not have are refused at their value, like
-/// `focus_distance` without `aperture`: `lens_samples` without a lens, and light `samples` on
-/// a directional light or on a point light without `radius > 0` (no area light).
+/// The fields of an effect the scene does not have are refused at their value: the lens's
+/// `focus_distance` and `lens_samples` without a lens (no `aperture`, or `aperture = 0`: a
+/// pinhole), and light `samples` on a directional light or on a point light without
+/// `radius > 0` (no area light).
 #[test]
 fn samples_of_an_effect_that_is_off_are_refused() {
     let camera = |field: &str| BASE.replace("height = 6\n", &format!("height = 6\n{field}\n"));
+    let lens = "only with `aperture` > 0";
     check(
         "focus.toml",
         &camera("focus_distance = 4"),
         "7:18",
         "camera.focus_distance",
-        "only with `aperture`",
+        lens,
     );
     check(
         "lens.toml",
         &camera("lens_samples = 64"),
         "7:16",
         "camera.lens_samples",
-        "only with `aperture`",
+        lens,
+    );
+    check(
+        "focus0.toml",
+        &camera("aperture = 0\nfocus_distance = 4"),
+        "8:18",
+        "camera.focus_distance",
+        lens,
+    );
+    check(
+        "lens0.toml",
+        &camera("aperture = 0\nlens_samples = 64"),
+        "8:16",
+        "camera.lens_samples",
+        lens,
     );
     let light = |fields: &str| format!("{BASE}\n[[light]]\n{fields}\nsamples = 8\n");
     let area = "only for point lights with `radius` > 0";
@@ -760,9 +776,11 @@ fn samples_of_an_effect_that_is_off_are_refused() {
         "light[0].samples",
         area,
     );
-    // Control: with the effect on, the same fields load.
+    // Control: with the effect on, the same fields load; a pinhole written as `aperture = 0`
+    // too.
     let on = [
-        camera("aperture = 0.1\nlens_samples = 64"),
+        camera("aperture = 0.1\nfocus_distance = 4\nlens_samples = 64"),
+        camera("aperture = 0"),
         light("type = \"point\"\nposition = [0, 4, 0]\nradius = 0.5"),
     ];
     for text in on {

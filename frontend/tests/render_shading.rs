@@ -372,17 +372,21 @@ fn antialiasing_samples_only_where_neighbours_differ() {
 }
 
 /// Two spheres of the same size at 4 and 9 units, seen against an empty background; the
-/// camera's lens focuses at `focus`.
+/// camera's lens (`aperture > 0`, 24 samples) focuses at `focus`, `aperture = 0` is a pinhole
+/// (without the lens's other fields, which it refuses).
 fn dof_scene(aperture: f32, focus: f32) -> String {
     let camera = camera("[0, 0, 0]", "[0, 0, -1]", "50", [96, 64]);
+    let lens = if aperture > 0.0 {
+        format!("aperture = {aperture}\nfocus_distance = {focus}\nlens_samples = 24")
+    } else {
+        format!("aperture = {aperture}")
+    };
     let light = directional_light("[0, 0, -1]");
     let near = sphere("[-1.2, 0, -4]", "0.8", "m");
     let far = sphere("[2.7, 0, -9]", "1.8", "m");
     format!(
         r#"background = [0, 0, 0]
-{camera}aperture = {aperture}
-focus_distance = {focus}
-lens_samples = 24
+{camera}{lens}
 
 [material.m]
 diffuse = [0.9, 0.9, 0.9]

@@ -83,44 +83,53 @@ pub(super) fn camera(ctx: &Ctx<'_>, c: &S<def::CameraDef>) -> Result<Camera> {
             "must differ from `eye`, and the view direction must not be parallel to `up`",
         )
     })?;
-    if let Some(a) = &c.aperture {
-        if kind != "perspective" {
-            return Err(ctx.err(
-                &a.span(),
-                "camera.aperture",
-                "only for `type = \"perspective\"`",
-            ));
-        }
-        let aperture = ctx.f(a, "camera.aperture")?;
-        if !(aperture >= 0.0) {
-            return Err(ctx.err(&a.span(), "camera.aperture", "must be ≥ 0"));
-        }
-        let focus_distance = match &c.focus_distance {
-            Some(f) => ctx.positive(f, "camera.focus_distance")?,
-            None => (look_at - eye).length(),
-        };
-        let samples = match &c.lens_samples {
-            Some(n) if *n.get_ref() == 0 || *n.get_ref() > crate::scene::MAX_LENS_SAMPLES => {
+    let aperture = match &c.aperture {
+        Some(a) => {
+            if kind != "perspective" {
                 return Err(ctx.err(
-                    &n.span(),
-                    "camera.lens_samples",
-                    format!("must be in 1..={}", crate::scene::MAX_LENS_SAMPLES),
+                    &a.span(),
+                    "camera.aperture",
+                    "only for `type = \"perspective\"`",
                 ));
             }
-            Some(n) => *n.get_ref(),
-            None => 16,
-        };
-        if aperture > 0.0 {
-            camera.lens = Some(crate::scene::Lens {
-                aperture,
-                focus_distance,
-                samples,
-            });
+            let aperture = ctx.f(a, "camera.aperture")?;
+            if !(aperture >= 0.0) {
+                return Err(ctx.err(&a.span(), "camera.aperture", "must be ≥ 0"));
+            }
+            aperture
         }
-    } else if let Some(f) = &c.focus_distance {
-        return Err(ctx.err(&f.span(), "camera.focus_distance", "only with `aperture`"));
-    } else if let Some(n) = &c.lens_samples {
-        return Err(ctx.err(&n.span(), "camera.lens_samples", "only with `aperture`"));
+        None => 0.0,
+    };
+    if aperture == 0.0 {
+        // A pinhole: the lens's fields would have no effect.
+        let lens_only = "only with `aperture` > 0";
+        if let Some(f) = &c.focus_distance {
+            return Err(ctx.err(&f.span(), "camera.focus_distance", lens_only));
+        }
+        if let Some(n) = &c.lens_samples {
+            return Err(ctx.err(&n.span(), "camera.lens_samples", lens_only));
+        }
+        return Ok(camera);
     }
+    let focus_distance = match &c.focus_distance {
+        Some(f) => ctx.positive(f, "camera.focus_distance")?,
+        None => (look_at - eye).length(),
+    };
+    let samples = match &c.lens_samples {
+        Some(n) if *n.get_ref() == 0 || *n.get_ref() > crate::scene::MAX_LENS_SAMPLES => {
+            return Err(ctx.err(
+                &n.span(),
+                "camera.lens_samples",
+                format!("must be in 1..={}", crate::scene::MAX_LENS_SAMPLES),
+            ));
+        }
+        Some(n) => *n.get_ref(),
+        None => 16,
+    };
+    camera.lens = Some(crate::scene::Lens {
+        aperture,
+        focus_distance,
+        samples,
+    });
     Ok(camera)
 }
