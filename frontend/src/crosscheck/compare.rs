@@ -8,7 +8,7 @@ use super::report::{DetailKind, Disagreement, MeshResult, Report, RunConfig, Set
 use super::sets::{self, Adjacency, SET_NAMES, SetRay};
 use super::{CrosscheckArgs, finish};
 use crate::accel::MeshAccel;
-use crate::embree::{EmbreeDevice, EmbreeScene, ray_is_valid};
+use crate::embree::{EmbreeDevice, EmbreeMesh, EmbreeScene, ray_is_valid};
 use crate::error::{Error, Result};
 use crate::obj::read_obj;
 use crate::outputs::{Named, file_id, reserve_outputs};
@@ -232,10 +232,13 @@ fn check_mesh(
         path: path.to_path_buf(),
         source: Box::new(e),
     };
-    let robust = EmbreeScene::new(device, &positions, &mesh.triangles, true)
-        .map_err(|e| in_file(e.into()))?;
-    let fast = EmbreeScene::new(device, &positions, &mesh.triangles, false)
-        .map_err(|e| in_file(e.into()))?;
+    // Checked and laid out once; each scene keeps its own share of the buffers.
+    let embree_mesh =
+        EmbreeMesh::new(&positions, &mesh.triangles).map_err(|e| in_file(e.into()))?;
+    let robust =
+        EmbreeScene::from_mesh(device, &embree_mesh, true).map_err(|e| in_file(e.into()))?;
+    let fast =
+        EmbreeScene::from_mesh(device, &embree_mesh, false).map_err(|e| in_file(e.into()))?;
     let adj = Adjacency::new(&mesh);
     let accel = MeshAccel::new(mesh).map_err(in_file)?;
     let sides = Sides {
