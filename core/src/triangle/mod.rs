@@ -377,7 +377,7 @@ pub(crate) fn degenerate_or_coplanar(ray: &Ray, v: &[Vec3; 3]) -> bool {
 /// to `−v0` and the cross product is exactly zero.
 /// Also returns `|e1| × |e2|` taken with absolute values (the scale of `n`'s rounding).
 /// Always inlined on x86-64, into each level's out-of-line end of the hit path
-/// (`watertight::finish_exact_at`).
+/// (`watertight::exact::finish_exact_at`).
 #[cfg_attr(target_arch = "x86_64", inline(always))]
 #[cfg_attr(not(target_arch = "x86_64"), inline)]
 pub(crate) fn normal_f64(v: &[Vec3; 3]) -> (glam::DVec3, glam::DVec3) {

@@ -1,11 +1,12 @@
 //! The AVX2 + FMA end of [`super::Watertight`]'s hit path: [`finish_exact`], the rest of the
 //! test for a candidate the `f32` filter kept, compiled for AVX2 and FMA, and its `f64` plane
 //! kernel ([`plane_crossing_avx2`]), which inlines into it. Both return the portable path's
-//! bits ([`super::finish_exact`], [`super::plane_crossing`]); and the `f64` plane check of the
-//! crossed-behind cull's near lanes ([`near_refused`], the loop of `plane.rs`). Each `unsafe`
-//! block enters a compiled-for-AVX2 function on the proof the [`Avx2Fma`] token carries.
+//! bits ([`super::exact::finish_exact`], [`super::exact::plane_crossing`]); and the `f64`
+//! plane check of the crossed-behind cull's near lanes ([`near_refused`], the loop of
+//! `plane.rs`). Each `unsafe` block enters a compiled-for-AVX2 function on the proof the
+//! [`Avx2Fma`] token carries.
 
-use super::{
+use super::exact::{
     Candidate, PLANE_BOX_SLACK, PLANE_T_ERR, PlaneForm, TINY, crossed_behind, finish_exact_at,
 };
 use crate::ray::Ray;
@@ -54,7 +55,7 @@ fn near_refused_avx2(ray: &Ray, groups: [&TriangleLanes; 2], near: u32) -> u32 {
     super::plane::lanes_refused(ray, groups, near)
 }
 
-/// [`super::plane_crossing`] in 256-bit registers: each 3-vector in the lanes `x, y, z` of
+/// [`super::exact::plane_crossing`] in 256-bit registers: each 3-vector in the lanes `x, y, z` of
 /// one `f64` register (the fourth lane zero, never read back), the same IEEE operations in the
 /// same order as the portable definition — products, differences and dot products summed
 /// `(x + y) + z`, never fused; `min`, `max` as `a < b ? a : b`, `a > b ? a : b` (`minps`,
@@ -162,7 +163,7 @@ mod tests {
     use crate::test_util::{lcg, mixed_f32};
 
     /// The AVX2 plane kernel against the portable definition
-    /// ([`super::super::plane_crossing`], scalar `glam` code), bit for bit (a NaN `t` or
+    /// ([`super::super::exact::plane_crossing`], scalar `glam` code), bit for bit (a NaN `t` or
     /// bound matches any NaN: only its comparisons are used), on triangles from `1e-3` to
     /// `1e3` at every distance, slivers, rays along the plane, and coordinates with NaN,
     /// `±∞`, `±0` and subnormals mixed in, some pointing away (crossing at `t = −1`). Every
@@ -202,7 +203,8 @@ mod tests {
             // extreme, inside the padded box.
             let past = v[0] - v[1];
             let reach = v.iter().fold(0f32, |m, p| m.max(p.abs().max_element()));
-            let step = 0.25 * super::super::PLANE_BOX_SLACK * reach / past.abs().max_element();
+            let step =
+                0.25 * super::super::exact::PLANE_BOX_SLACK * reach / past.abs().max_element();
             let target = if i % 3 == 1 {
                 v[0] + past * step
             } else {
@@ -221,7 +223,7 @@ mod tests {
                 direction = -direction;
             }
             let ray = Ray::new(origin, direction);
-            let want = super::super::plane_crossing(&v, &ray);
+            let want = super::super::exact::plane_crossing(&v, &ray);
             let got = plane_crossing(token, &v, &ray);
             match (want, got) {
                 (None, None) => refused += 1,

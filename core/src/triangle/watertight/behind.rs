@@ -1,4 +1,4 @@
-//! The eight-lane `f32` form of [`super::crossed_behind`]: a triangle whose plane the ray's
+//! The eight-lane `f32` form of [`super::exact::crossed_behind`]: a triangle whose plane the ray's
 //! line **certainly** crosses behind the origin, while `t_min ≥ 0`, is no hit of
 //! [`super::Watertight`]; this refuses such lanes before the exact path, so that the
 //! triangle a spawned ray starts on ([`crate::hit::spawn_ray_to`]) and the faces behind it
@@ -41,7 +41,7 @@
 //! magnitude of the value's term, rounding is monotone), so the bound is `∞` or NaN and the
 //! comparison fails: overflow and NaN never refuse (unused lanes hold NaN).
 //!
-//! **Why the exact path then refuses it.** [`super::crossed_behind`] needs `dn` and `wn` in
+//! **Why the exact path then refuses it.** [`super::exact::crossed_behind`] needs `dn` and `wn` in
 //! `f64` to clear the orientation filter [`crate::predicates::ORIENT3D_FILTER_REL`] `= γ₁₂`
 //! (`f64`) against their permanents, with whichever normal the path uses: the `v0`-based one
 //! (`plane_crossing`, `normal_f64_from_v0`, tried first on x86-64, and first in

@@ -3,15 +3,16 @@
 //! a ray's origin (`crossed_behind`).
 //!
 //! On x86-64 the exact path of a candidate starts with the plane kernel
-//! ([`super::plane_crossing`], or a level's kernel with its bits) and refuses the triangle where
-//! it returns its "behind" form; [`BehindPlane::refuses`] returns `true` exactly there, with the
-//! same `f64` operations in the same order, so a refused triangle is one the exact path refuses
-//! (test: `a_behind_plane_refuses_exactly_where_the_plane_kernel_does`). A batch of rays
-//! leaving a surface (shadow rays off a small mesh whose triangles are too large for the
-//! eight-lane `f32` cull of `behind.rs`) then pays the triangle's `f64` normal once, not per
-//! ray, and each refused ray a few products instead of the exact candidate path.
+//! ([`super::exact::plane_crossing`], or a level's kernel with its bits) and refuses the
+//! triangle where it returns its "behind" form; [`BehindPlane::refuses`] returns `true` exactly
+//! there, with the same `f64` operations in the same order, so a refused triangle is one the
+//! exact path refuses (test: `a_behind_plane_refuses_exactly_where_the_plane_kernel_does`). A
+//! batch of rays leaving a surface (shadow rays off a small mesh whose triangles are too large
+//! for the eight-lane `f32` cull of `behind.rs`) then pays the triangle's `f64` normal once,
+//! not per ray, and each refused ray a few products instead of the exact candidate path.
 
-use super::{ORIENT3D_FILTER_REL, crossed_behind};
+use super::exact::crossed_behind;
+use crate::predicates::ORIENT3D_FILTER_REL;
 use crate::ray::Ray;
 use glam::{DVec3, Vec3};
 
@@ -166,7 +167,7 @@ mod tests {
                     Ray::new(target, d)
                 }
             };
-            let want = super::super::plane_crossing(&v, &ray).is_some_and(|p| p.behind);
+            let want = super::super::exact::plane_crossing(&v, &ray).is_some_and(|p| p.behind);
             let got = BehindPlane::new(&v).is_some_and(|p| p.refuses(&PlaneRay::new(&ray)));
             assert_eq!(got, want, "{v:?} {ray:?}");
             if got {
@@ -203,7 +204,7 @@ mod tests {
         for x in [0.0f32, 2.0] {
             let parallel = Ray::new(Vec3::new(x, 0.5, 0.5), Vec3::Z);
             assert!(!plane.refuses(&PlaneRay::new(&parallel)), "origin x = {x}");
-            assert_eq!(super::super::plane_crossing(&v, &parallel), None);
+            assert_eq!(super::super::exact::plane_crossing(&v, &parallel), None);
         }
         let leaving = Ray::new(Vec3::new(2.0, 0.5, 0.5), Vec3::X);
         assert!(plane.refuses(&PlaneRay::new(&leaving)));

@@ -457,6 +457,7 @@ fn prepare_valid_equals_prepare_on_valid_rays() {
 #[cfg(target_arch = "x86_64")]
 #[test]
 fn the_common_case_gives_the_general_paths_bits() {
+    use super::exact::{common_t, hit_t, plane_crossing};
     use crate::test_util::lcg;
     let mut s = 11u64;
     let (mut common, mut general_only) = (0usize, 0usize);
