@@ -232,7 +232,7 @@ pub(super) fn hit_t(c: Candidate<'_>, det: f64) -> Option<f64> {
         sheared: (x, y, z),
         edges,
     } = c;
-    let (shear, d_kz) = (pre.shear, ray.direction[pre.k[2]]);
+    let (shear, d_kz) = (pre.shear, ray.direction[pre.axes()[2]]);
     let t_sheared = sheared_t(edges, z, det);
     let normal = crate::triangle::normal_f64(v);
     let (n, nn) = normal;

@@ -51,7 +51,7 @@ impl WatertightRay {
     /// `k` as indices the compiler knows are below 3: `min(2)` keeps every index in range
     /// without a bounds check (each is 0, 1 or 2 already).
     #[inline(always)]
-    fn axes(&self) -> [usize; 3] {
+    pub(super) fn axes(&self) -> [usize; 3] {
         let [kx, ky, kz] = self.k;
         [kx.min(2), ky.min(2), kz.min(2)]
     }

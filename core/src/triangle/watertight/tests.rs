@@ -671,3 +671,25 @@ fn every_region_outside_a_triangle_is_a_miss_for_either_facing() {
         }
     }
 }
+
+/// `WatertightRay`'s fields are public, so a caller can build one whose axes are out of
+/// range. Its answers are then meaningless (the contract of `of_valid`), but every
+/// intersector must still return instead of indexing out of bounds, at every SIMD level.
+#[test]
+fn a_hand_built_ray_with_axes_out_of_range_never_panics() {
+    use crate::triangle::TriangleIntersector;
+    let ray = Ray::new(Vec3::new(0.1, 0.2, 0.0), Vec3::Z);
+    let tri = [
+        Vec3::new(-1.0, -1.0, 2.0),
+        Vec3::new(1.0, -1.0, 2.0),
+        Vec3::new(0.0, 1.0, 2.0),
+    ];
+    for kz in [2, 3, 7, usize::MAX] {
+        for k in [[0, 1, kz], [kz, 0, 1], [1, kz, 0]] {
+            let pre = WatertightRay { k, shear: Vec3::Z };
+            // Any answer is allowed; reaching the end without a panic is the property.
+            let _ = Watertight.intersect_prepared(&pre, &ray, &tri);
+            let _ = WatertightF32.intersect_prepared(&pre, &ray, &tri);
+        }
+    }
+}
