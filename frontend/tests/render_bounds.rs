@@ -134,7 +134,7 @@ fn forced_effects_stay_bit_identical_when_radiance_overflows() {
 #[test]
 fn explain_states_the_bound() {
     let s = glass(64);
-    let text = EffectPlan::derive(&s, false).explain(&s);
+    let text = EffectPlan::derive(&s, false).explain(&s, Mode::Color, 1);
     assert!(
         text.contains("ray tree bound") && text.contains("1/8192") && text.contains("4096"),
         "{text}"

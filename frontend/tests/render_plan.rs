@@ -56,7 +56,7 @@ fn matte_scene_without_shadow_lights_casts_one_ray_per_pixel() {
     let out = render(&s, &RenderOptions::default());
     assert_eq!(out.counts.total(), 64 * 48);
     assert_eq!(out.counts.primary, 64 * 48);
-    let explain = plan.explain(&s);
+    let explain = plan.explain(&s, Mode::Color, 1);
     assert!(explain.contains("shadow rays      none"), "{explain}");
     assert!(explain.contains("recursion depth  0"), "{explain}");
 }
@@ -108,7 +108,7 @@ fn unused_materials_turn_no_effect_on() {
             .chain(&plan.specular)
             .all(|&b| !b)
     );
-    let explain = plan.explain(&s);
+    let explain = plan.explain(&s, Mode::Color, 1);
     assert!(
         explain.contains("unused materials unused_glass, unused_mirror"),
         "{explain}"
@@ -142,7 +142,7 @@ fn a_csg_material_no_operand_inherits_turns_no_effect_on() {
     let plan = EffectPlan::derive(&s, false);
     assert_eq!(plan.max_depth, 0);
     assert!(plan.reflect.iter().chain(&plan.refract).all(|&b| !b));
-    let explain = plan.explain(&s);
+    let explain = plan.explain(&s, Mode::Color, 1);
     assert!(explain.contains("unused materials mirror"), "{explain}");
     let estimate = halfray::render::budget::Estimate::of(&s, &plan, Mode::Color, 1);
     assert_eq!(estimate.secondary, 0.0);
@@ -170,7 +170,7 @@ fn dark_lights_cast_no_shadow_rays() {
     let s = parse_scene(&dark);
     let plan = EffectPlan::derive(&s, false);
     assert_eq!(plan.shadow_rays, vec![false, true]);
-    let explain = plan.explain(&s);
+    let explain = plan.explain(&s, Mode::Color, 1);
     assert!(explain.contains("zero intensity"), "{explain}");
     let out = render(&s, &RenderOptions::default());
     // Control: the same scene with the light lit casts shadow rays towards both.
@@ -265,6 +265,12 @@ fn plan_never_changes_the_picture_on_example_scenes() {
 /// The `--stats-json` of rendering `scene` at 24×16 with `extra` options (image and stats
 /// written in `dir`); the render must succeed.
 fn stats_of(dir: &Path, scene: &Path, extra: &[&str]) -> serde_json::Value {
+    render_cli(dir, scene, extra).1
+}
+
+/// The standard output and the `--stats-json` of rendering `scene` at 24×16 with `extra`
+/// options (image and stats written in `dir`); the render must succeed.
+fn render_cli(dir: &Path, scene: &Path, extra: &[&str]) -> (String, serde_json::Value) {
     let json = dir.join("stats.json");
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_halfray"))
         .arg("render")
@@ -277,7 +283,8 @@ fn stats_of(dir: &Path, scene: &Path, extra: &[&str]) -> serde_json::Value {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap()
+    let stats = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    (String::from_utf8_lossy(&o.stdout).into_owned(), stats)
 }
 
 /// `--stats-json` reports the plan, one boolean per effect, beside the ray counts it explains.
@@ -482,11 +489,21 @@ fn surfaces_without_a_direct_term_cast_no_shadow_rays() {
     assert_eq!(out.counts.reflection, 81, "{:?}", out.counts);
     assert_eq!(out.counts.shadow, 0, "{:?}", out.counts);
     assert_same_picture(&black, "black mirror floor");
-    let grey = render(
-        &parse_scene(&text("[0.5, 0.5, 0.5]")),
-        &RenderOptions::default(),
+    // `--explain` says so: no shadow rays, though the light casts them.
+    let shadow_line = |s: &Scene| {
+        let text = EffectPlan::derive(s, false).explain(s, Mode::Color, 1);
+        let line = text.lines().find(|l| l.contains("shadow rays")).unwrap();
+        line.trim_start()["shadow rays".len()..].trim().to_string()
+    };
+    assert!(
+        shadow_line(&black).starts_with("none "),
+        "{}",
+        shadow_line(&black)
     );
+    let grey_scene = parse_scene(&text("[0.5, 0.5, 0.5]"));
+    let grey = render(&grey_scene, &RenderOptions::default());
     assert_eq!(grey.counts.shadow, 81, "{:?}", grey.counts);
+    assert!(shadow_line(&grey_scene).starts_with("towards "));
 }
 
 /// `--stats-json`'s plan says `true` only for effects that run: none of the shading effects
@@ -507,10 +524,18 @@ fn stats_json_plan_flags_effects_that_cannot_run_as_off() {
     }
     let flat = mirror.replace("max_depth = 4", "max_depth = 0");
     assert_ne!(flat, mirror);
-    let v = run(&flat, &[]);
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(&scene, &flat).unwrap();
+    let (out, v) = render_cli(dir.path(), &scene, &["--explain"]);
     assert_eq!(v["plan"]["reflection"], false, "{v}");
     assert_eq!(v["reflection"], 0, "{v}");
     assert_eq!(v["plan"]["shadow"], true, "{v}");
+    // `--explain` gives the depth as the reason, not a missing mirror.
+    assert!(
+        out.contains("reflection rays  none\n")
+            && out.contains("recursion depth  0 (scene max_depth 0)\n"),
+        "{out}"
+    );
     let lens = mirror.replace("height = 480\n", "height = 480\naperture = 0.1\n");
     for (text, mode) in [(&mirror, "depth"), (&mirror, "normal"), (&lens, "depth")] {
         let v = run(text, &["--mode", mode, "--samples", "4"]);
@@ -521,6 +546,74 @@ fn stats_json_plan_flags_effects_that_cannot_run_as_off() {
         }
         for rays in ["shadow", "reflection", "refraction"] {
             assert_eq!(v[rays], 0, "{rays}: {v}");
+        }
+    }
+}
+
+/// `--explain` states what the render in its mode simulates: outside colour mode (one ray per
+/// pixel) the mirror scene, with a shadow-casting light, mirrors and a specular material, lists
+/// no shadow, reflection or refraction rays and no specular term, each `none` with the mode as
+/// the reason, as the ray counts and the plan of `--stats-json` have it; in colour it lists
+/// them, and the render casts them.
+#[test]
+fn explain_lists_only_the_effects_of_the_render_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    let mirror = scenes_dir().join("mirror.toml");
+    // The text after the label of `--explain`'s line `label`.
+    let line = |out: &str, label: &str| -> String {
+        let l = out
+            .lines()
+            .find(|l| l.trim_start().starts_with(label))
+            .unwrap_or_else(|| panic!("no {label} line in {out}"));
+        l.trim_start()[label.len()..].trim().to_string()
+    };
+    // Line label, `--stats-json` plan flag and ray count (if the effect has rays of its own).
+    let effects = [
+        ("shadow rays", "shadow", Some("shadow")),
+        ("reflection rays", "reflection", Some("reflection")),
+        ("refraction rays", "refraction", Some("refraction")),
+        ("specular term", "specular", None),
+    ];
+    for mode in ["depth", "normal", "barycentric", "heatmap"] {
+        let (out, v) = render_cli(dir.path(), &mirror, &["--explain", "--mode", mode]);
+        let why = format!("none (mode {mode}: one ray per pixel)");
+        for (label, flag, rays) in effects {
+            assert_eq!(line(&out, label), why, "{label}, --mode {mode}: {out}");
+            assert_eq!(v["plan"][flag], false, "{flag}, --mode {mode}: {v}");
+            if let Some(k) = rays {
+                assert_eq!(v[k], 0, "{k}, --mode {mode}: {v}");
+            }
+        }
+        assert_eq!(
+            line(&out, "shadow transmission"),
+            format!("off (mode {mode}: one ray per pixel)"),
+            "{out}"
+        );
+        assert!(
+            line(&out, "recursion depth").starts_with("0 (mode"),
+            "{out}"
+        );
+        assert!(!out.contains("ray tree bound"), "--mode {mode}: {out}");
+        assert!(!out.contains("direct lighting"), "--mode {mode}: {out}");
+        assert_eq!(v["primary"], 24 * 16, "{v}");
+    }
+    // Colour: shadows towards the light, the mirror's reflections and the red material's
+    // specular term are listed and run; refraction (no transparent material) does neither.
+    let (out, v) = render_cli(dir.path(), &mirror, &["--explain"]);
+    assert!(line(&out, "shadow rays").starts_with("towards "), "{out}");
+    assert_eq!(
+        line(&out, "reflection rays"),
+        "mirror (mirror 0.9)",
+        "{out}"
+    );
+    assert!(line(&out, "specular term").starts_with("red "), "{out}");
+    assert_eq!(line(&out, "refraction rays"), "none", "{out}");
+    assert!(out.contains("ray tree bound"), "{out}");
+    for (label, flag, rays) in effects {
+        let listed = !line(&out, label).starts_with("none");
+        assert_eq!(v["plan"][flag], listed, "{flag}: {out}\n{v}");
+        if let Some(k) = rays {
+            assert_eq!(v[k].as_u64().unwrap() > 0, listed, "{k}: {out}\n{v}");
         }
     }
 }

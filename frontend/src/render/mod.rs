@@ -57,7 +57,8 @@ pub struct RenderArgs {
     /// What to render.
     #[arg(long, value_enum, default_value_t = Mode::Color)]
     pub mode: Mode,
-    /// Print the effect plan before rendering.
+    /// Print the effect plan before rendering: what the render simulates in its `--mode`
+    /// (outside colour, one ray per pixel), and the worst-case work.
     #[arg(long)]
     pub explain: bool,
     /// Write ray counts per kind, the time and the effect plan as JSON (keys primary, shadow,
@@ -546,7 +547,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let estimate = budget::Estimate::of(&scene, &plan, opts.mode, opts.samples);
     if args.explain {
         let threads = rayon::current_num_threads();
-        print_out(&(plan.explain(&scene) + &estimate.explain(threads)))?;
+        let text = plan.explain(&scene, opts.mode, opts.samples);
+        print_out(&(text + &estimate.explain(threads)))?;
     }
     if estimate.over_budget() && !args.allow_long {
         return Err(Error::Usage(format!(

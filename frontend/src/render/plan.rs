@@ -146,11 +146,22 @@ impl EffectPlan {
         }
     }
 
-    /// The human-readable plan (`--explain`).
-    pub fn explain(&self, scene: &Scene) -> String {
+    /// The human-readable plan (`--explain`) of a render of `scene` in `mode` with at most
+    /// `samples` samples per pixel: what that render simulates, decided by the same flags as
+    /// `--stats-json` and the work estimate ([`EffectPlan::flags`]). An effect that does not
+    /// run prints as `none` (or `off`) with the reason: outside colour mode, the mode's one ray
+    /// per pixel; in colour, the lights, materials or depth that leave nothing to simulate.
+    pub fn explain(&self, scene: &Scene, mode: Mode, samples: u32) -> String {
         let mut s = String::new();
         let used = scene.used_materials();
         let cam = &scene.camera;
+        let runs = self.flags(scene, mode, samples);
+        // Outside colour mode: why no shading effect runs.
+        let one_ray = (mode != Mode::Color).then(|| {
+            let name = clap::ValueEnum::to_possible_value(&mode)
+                .map_or_else(|| format!("{mode:?}"), |v| v.get_name().to_string());
+            format!("mode {name}: one ray per pixel")
+        });
         let _ = writeln!(
             s,
             "effect plan for {}{}:",
@@ -190,26 +201,27 @@ impl EffectPlan {
             format!("{} ({why})", light_label(i))
         };
         let off = names(&|i| !self.shadow_rays[i], nl, &off_label);
-        let _ = writeln!(
-            s,
-            "  shadow rays      {}{}",
-            if on.is_empty() {
-                "none".to_string()
-            } else {
-                format!("towards {}", on.join(", "))
-            },
-            if off.is_empty() {
-                String::new()
-            } else {
-                format!("; skipped for {}", off.join(", "))
-            }
-        );
+        let skipped = if off.is_empty() {
+            String::new()
+        } else {
+            format!("; skipped for {}", off.join(", "))
+        };
+        let shadow_line = match &one_ray {
+            Some(why) => format!("none ({why})"),
+            None if runs.shadow => format!("towards {}{skipped}", on.join(", ")),
+            None if on.is_empty() => format!("none{skipped}"),
+            None => format!(
+                "none (no used material has a direct term, so none towards {}){skipped}",
+                on.join(", ")
+            ),
+        };
+        let _ = writeln!(s, "  shadow rays      {shadow_line}");
         let unlit: Vec<String> = names(
             &|i| !self.direct[i] && used[i],
             scene.materials.len(),
             &|i| scene.materials[i].name.clone(),
         );
-        if !on.is_empty() && !unlit.is_empty() {
+        if one_ray.is_none() && !on.is_empty() && !unlit.is_empty() {
             let _ = writeln!(
                 s,
                 "  direct lighting  skipped on {} (diffuse 0, no specular: no shadow rays from them)",
@@ -219,12 +231,11 @@ impl EffectPlan {
         let _ = writeln!(
             s,
             "  shadow transmission {}",
-            if self.shadow_transmission {
-                "on: shadow rays continue through transparent surfaces, light × transparency per crossing"
-            } else if on.is_empty() {
-                "off: no shadow rays"
-            } else {
-                "off: no object uses a transparent material (shadow rays stop at the first hit)"
+            match &one_ray {
+                Some(why) => format!("off ({why})"),
+                None if runs.shadow_transmission => "on: shadow rays continue through transparent surfaces, light × transparency per crossing".to_string(),
+                None if !runs.shadow => "off: no shadow rays".to_string(),
+                None => "off: no object uses a transparent material (shadow rays stop at the first hit)".to_string(),
             }
         );
         let nm = scene.materials.len();
@@ -236,19 +247,16 @@ impl EffectPlan {
                 v.join(", ")
             }
         };
-        let _ = writeln!(
-            s,
-            "  specular term    {}",
-            list(names(&|i| self.specular[i], nm, &mat))
-                + &if self.forced {
-                    String::new()
-                } else {
-                    format!(
-                        " (skipped where ks = 0: {})",
-                        list(names(&|i| !self.specular[i], nm, &mat))
-                    )
-                }
-        );
+        let specular_line = match &one_ray {
+            Some(why) => format!("none ({why})"),
+            None if self.forced => list(names(&|i| self.specular[i], nm, &mat)),
+            None => format!(
+                "{} (skipped where ks = 0: {})",
+                list(names(&|i| self.specular[i], nm, &mat)),
+                list(names(&|i| !self.specular[i], nm, &mat))
+            ),
+        };
+        let _ = writeln!(s, "  specular term    {specular_line}");
         let reflect_label = |i: usize| {
             let m = &scene.materials[i];
             if m.mirror > 0.0 {
@@ -270,23 +278,22 @@ impl EffectPlan {
                 format!("{} (forced, weight 0)", m.name)
             }
         };
+        // Each material that casts them, where they run (`runs`); else `none` and, outside
+        // colour mode, why.
+        let secondary = |on: bool, pick: &[bool], label: &dyn Fn(usize) -> String| match &one_ray {
+            Some(why) => format!("none ({why})"),
+            None if on => list(names(&|i| pick[i], nm, label)),
+            None => "none".to_string(),
+        };
         let _ = writeln!(
             s,
             "  reflection rays  {}",
-            if self.max_depth == 0 {
-                "none".to_string()
-            } else {
-                list(names(&|i| self.reflect[i], nm, &reflect_label))
-            }
+            secondary(runs.reflection, &self.reflect, &reflect_label)
         );
         let _ = writeln!(
             s,
             "  refraction rays  {}",
-            if self.max_depth == 0 {
-                "none".to_string()
-            } else {
-                list(names(&|i| self.refract[i], nm, &refract_label))
-            }
+            secondary(runs.refraction, &self.refract, &refract_label)
         );
         let unused: Vec<String> = used
             .iter()
@@ -301,19 +308,21 @@ impl EffectPlan {
                 unused.join(", ")
             );
         }
+        let recursive = runs.reflection || runs.refraction;
         let _ = writeln!(
             s,
             "  recursion depth  {}",
-            if self.max_depth == 0 {
-                format!(
+            match &one_ray {
+                Some(why) => format!("0 ({why}; scene max_depth {})", scene.max_depth),
+                None if recursive => format!("{} (scene max_depth)", self.max_depth),
+                None if scene.max_depth == 0 => "0 (scene max_depth 0)".to_string(),
+                None => format!(
                     "0 (no mirror or transparent material; scene max_depth {})",
                     scene.max_depth
-                )
-            } else {
-                format!("{} (scene max_depth)", self.max_depth)
+                ),
             }
         );
-        if self.max_depth > 0 {
+        if recursive {
             let _ = writeln!(
                 s,
                 "  ray tree bound   a secondary ray is cast only while its path weight (product of mirror/transparency factors) is ≥ 1/{} (below, it cannot move an 8-bit sRGB value of display-range radiance), and at most {} reflection + refraction rays per pixel",

@@ -7,6 +7,7 @@
 
 use super::*;
 use halfray::error::Error;
+use halfray::render::Mode;
 use halfray::render::plan::EffectPlan;
 use halfray::scene::geom::QueryCtx;
 use std::path::Path;
@@ -51,8 +52,8 @@ pub fn check(text: &str) {
             assert!(ray.is_valid(), "invalid centre ray {ray:?}\n{text}");
             let plan = EffectPlan::derive(&scene, false);
             // The explanation states the primary rays and names every light in its shadow
-            // line, "none" exactly when no light casts shadow rays.
-            let explain = plan.explain(&scene);
+            // line, "none" exactly when the colour render casts no shadow rays (its plan flag).
+            let explain = plan.explain(&scene, Mode::Color, 1);
             let (w, h) = (u64::from(cam.width), u64::from(cam.height));
             assert!(
                 explain.contains(&format!("{w} × {h} = {}", w * h)),
@@ -71,7 +72,7 @@ pub fn check(text: &str) {
             }
             assert_eq!(
                 shadow_line.contains("shadow rays      none"),
-                !plan.shadow_rays.contains(&true),
+                !plan.flags(&scene, Mode::Color, 1).shadow,
                 "explain: shadow line\n{explain}\n{text}"
             );
             let mut qc = QueryCtx::default();
