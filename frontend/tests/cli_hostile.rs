@@ -666,6 +666,67 @@ fn the_work_budget_counts_only_the_rays_of_the_render_mode() {
     }
 }
 
+/// With shadow transmission a shadow ray is traced as up to 16 segments (one per transparent
+/// surface crossed, `render::trace::MAX_SHADOW_CROSSINGS`), and the worst case counts them:
+/// from inside ten nested shells that reflect and transmit everything (`mirror = 1`,
+/// `transparency = 1`, so every pixel casts the full 4096 secondary rays) every shadow ray
+/// towards the light outside crosses up to ten shells. `--explain` prints the product
+/// `pixels × 1 × (1 + 4096) × (1 + 1 × 16)`, and the rays the render counts (`--stats-json`)
+/// are within it, though beyond the worst case without the segments, `pixels × 4097 × 2`.
+#[test]
+fn the_work_budget_counts_every_segment_of_a_transmitted_shadow_ray() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = format!(
+        "max_depth = 64\n{}[[light]]\ntype = \"point\"\nposition = [0, 50, 0]\n\
+         [material.glass]\ndiffuse = [0.5, 0.5, 0.5]\nmirror = 1\ntransparency = 1\nior = 1\n",
+        camera("[0, 0, 0]", "[0, 0, -1]", "40", [2, 2]),
+    );
+    for radius in 1..=10 {
+        text.push_str(&sphere("[0, 0, 0]", &radius.to_string(), "glass"));
+    }
+    let scene = dir.path().join("shells.toml");
+    std::fs::write(&scene, text).unwrap();
+    let (png, stats) = (dir.path().join("o.png"), dir.path().join("stats.json"));
+    let mut args = render_with_stats(&scene, &png, &stats).to_vec();
+    args.push(&"--explain");
+    let o = run(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let line = out
+        .lines()
+        .find(|l| l.trim_start().starts_with("worst case"))
+        .unwrap_or_else(|| panic!("no worst case in {out}"));
+    // Printed to four digits: 278 596 as 2.786e5.
+    let printed = line.split_whitespace().nth(2).unwrap();
+    let pixels = 2.0 * 2.0;
+    let worst = pixels * (1.0 + 4096.0) * (1.0 + 16.0);
+    assert_eq!(printed, format!("{worst:.3e}"), "{line}");
+    assert!(
+        line.ends_with("× (1 + 1 shadow rays per hit × 16 segments)"),
+        "{line}"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    assert_eq!(json["plan"]["shadow_transmission"], true, "{json}");
+    let secondary = json["reflection"].as_u64().unwrap() + json["refraction"].as_u64().unwrap();
+    assert_eq!(
+        secondary,
+        4 * 4096,
+        "every pixel casts the most secondary rays: {json}"
+    );
+    let cast: u64 = ["primary", "shadow", "reflection", "refraction"]
+        .iter()
+        .map(|k| json[k].as_u64().unwrap())
+        .sum();
+    assert!(
+        cast as f64 <= worst,
+        "{cast} rays over the worst case {worst}"
+    );
+    assert!(
+        cast as f64 > pixels * 4097.0 * 2.0,
+        "{cast} rays: within the worst case without segments ({json})"
+    );
+}
+
 /// Item 13 and 12: errors name the actual problem, and untrusted strings reach the terminal
 /// escaped.
 #[test]

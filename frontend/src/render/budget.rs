@@ -3,15 +3,18 @@
 //! time. `--explain` prints it; `render` refuses a scene whose worst case is over
 //! [`MAX_WORST_CASE_WORK`] unless `--allow-long`.
 //!
-//! The worst case per pixel is `S × (1 + R) × (1 + L)`, each factor read from the effects the
-//! render runs in its mode ([`EffectPlan::flags`], the flags `--stats-json` reports): `S` camera
-//! rays (`lens_samples` with depth of field, else the anti-aliasing samples with
+//! The worst case per pixel is `S × (1 + R) × (1 + L × T)`, each factor read from the effects
+//! the render runs in its mode ([`EffectPlan::flags`], the flags `--stats-json` reports): `S`
+//! camera rays (`lens_samples` with depth of field, else the anti-aliasing samples with
 //! anti-aliasing, else 1), each with at most `R` secondary rays
 //! ([`MAX_SECONDARY_RAYS_PER_PIXEL`] with reflection or refraction rays, else 0) and at every
 //! one of those shading points `L` shadow rays (with shadow rays: one per point or directional
-//! light the plan casts them towards, `samples` per area light; else 0). Outside colour mode
-//! none of these effects runs, so the worst case there is one ray per pixel. Real renders cast
-//! far fewer (adaptive anti-aliasing, path weights that fall below the bound), so the estimate
+//! light the plan casts them towards, `samples` per area light; else 0), each traced as at
+//! most `T` segments ([`MAX_SHADOW_CROSSINGS`] with shadow transmission, where a shadow ray
+//! continues past every transparent surface it crosses as a new segment, each counted as a
+//! shadow ray; else 1). Outside colour mode none of these effects runs, so the worst case there
+//! is one ray per pixel. Real renders cast far fewer (adaptive anti-aliasing, path weights
+//! that fall below the bound, shadow rays that meet no transparent surface), so the estimate
 //! is an upper bound, not a prediction.
 //!
 //! Coincident objects (copies with the same world box, as `repeat` with a zero `step` makes)
@@ -23,12 +26,15 @@
 use super::Mode;
 use super::bound::MAX_SECONDARY_RAYS_PER_PIXEL;
 use super::plan::EffectPlan;
+use super::trace::MAX_SHADOW_CROSSINGS;
 use crate::scene::{LightKind, Scene};
 use std::collections::HashMap;
 
 /// Largest worst-case work (rays × the largest coincident group) `render` starts without
 /// `--allow-long`: 10¹¹, about a day at [`ASSUMED_RAYS_PER_SECOND`] on one thread. The
-/// shipped scenes' worst cases are at most 2.5·10⁹ (the mirror and glass ones).
+/// shipped scenes' worst cases are at most 2.2·10¹⁰ (`glass.toml` and `showcase.toml`, whose
+/// shadow rays pass through glass: 16 segments each; `mirror.toml` 2.5·10⁹), so those two
+/// need `--allow-long` from `--samples 5` on.
 pub const MAX_WORST_CASE_WORK: f64 = 1e11;
 
 /// Rays per second per thread the time estimate assumes: 10⁶, the order the showcase renders
@@ -48,6 +54,9 @@ pub struct Estimate {
     pub secondary: f64,
     /// Shadow rays per shading point (`L`).
     pub shadow: f64,
+    /// Most segments each shadow ray is traced as (`T`): [`MAX_SHADOW_CROSSINGS`] with shadow
+    /// transmission, else 1.
+    pub segments: f64,
     /// Objects in the largest group sharing one world box.
     pub coincident: usize,
 }
@@ -80,6 +89,11 @@ impl Estimate {
                 _ => 1.0,
             })
             .fold(0.0, |sum, n| sum + n);
+        let segments = if runs.shadow_transmission {
+            MAX_SHADOW_CROSSINGS
+        } else {
+            1
+        };
         let mut boxes: HashMap<[u32; 6], usize> = HashMap::new();
         for o in &scene.objects {
             if let Some(b) = o.bounds {
@@ -92,13 +106,17 @@ impl Estimate {
             camera_rays: f64::from(camera_rays),
             secondary: f64::from(secondary),
             shadow,
+            segments: f64::from(segments),
             coincident: boxes.values().copied().max().unwrap_or(0),
         }
     }
 
-    /// Worst-case rays of the whole image.
+    /// Worst-case rays of the whole image: `pixels × S × (1 + R) × (1 + L × T)`.
     pub fn rays(&self) -> f64 {
-        self.pixels * self.camera_rays * (1.0 + self.secondary) * (1.0 + self.shadow)
+        self.pixels
+            * self.camera_rays
+            * (1.0 + self.secondary)
+            * (1.0 + self.shadow * self.segments)
     }
 
     /// Worst-case work: rays × the largest coincident group (at least 1).
@@ -118,8 +136,13 @@ impl Estimate {
 
     /// The `--explain` lines.
     pub fn explain(&self, threads: usize) -> String {
+        let segments = if self.segments > 1.0 {
+            format!(" × {} segments", self.segments)
+        } else {
+            String::new()
+        };
         let mut s = format!(
-            "  worst case       {:.3e} rays = {} pixels × {} camera rays × (1 + {} secondary) × (1 + {} shadow rays per hit)\n",
+            "  worst case       {:.3e} rays = {} pixels × {} camera rays × (1 + {} secondary) × (1 + {} shadow rays per hit{segments})\n",
             self.rays(),
             self.pixels,
             self.camera_rays,
@@ -163,6 +186,7 @@ mod tests {
             camera_rays: 256.0,
             secondary: 4096.0,
             shadow: 64.0 * 256.0,
+            segments: 1.0,
             coincident: 1,
         };
         // 256 × 4097 × 16385 rays per pixel: 17.2 G, far over the budget.
@@ -175,6 +199,7 @@ mod tests {
             camera_rays: 1.0,
             secondary: 0.0,
             shadow: 0.0,
+            segments: 1.0,
             coincident: 1_000_000,
         };
         assert_eq!(small.work(), 768e6);
