@@ -13,17 +13,27 @@ where
     O: AsRef<[u32]> + AsMut<[u32]>,
     R: AsRef<[u32]> + AsMut<[u32]>,
 {
-    /// Builds the grid `plan` describes over `mesh` (the mesh the plan was made for) into
-    /// `offsets` (at least [`GridPlan::required_offsets`]) and `references` (at least
+    /// Builds the grid `plan` describes over `mesh` into `offsets` (at least
+    /// [`GridPlan::required_offsets`]) and `references` (at least
     /// [`GridPlan::required_references`]).
+    ///
+    /// `mesh` is the mesh the plan was made for, or one whose vertices have moved since
+    /// (a plan reused across animation steps) provided that it has the same triangles, the
+    /// same number of them usable, every usable triangle's box inside the plan's box
+    /// ([`GridPlan::bounds`]), and the same reference count under the plan's cells. Such a
+    /// mesh gets a grid with every guarantee of one planned for it (the plan's resolution
+    /// and padding; triangles are assigned by their new vertices); any other is refused
+    /// below.
     ///
     /// # Errors
     ///
     /// Before anything is written: [`GridError::Capacity`] (offsets or references), and
-    /// [`GridError::PlanMismatch`] when `mesh`
-    /// has a different triangle count than the plan's. After the counting pass has written
-    /// the offsets (the references untouched): [`GridError::PlanMismatch`] when `mesh`'s
-    /// vertices give a different reference count than the plan's.
+    /// [`GridError::PlanMismatch`] when `mesh` has a different triangle count than the
+    /// plan's. After the counting pass has written the offsets (the references untouched):
+    /// [`GridError::TriangleOutsidePlan`] for the first usable triangle whose box is not
+    /// inside the plan's box, then [`GridError::PlanMismatch`] when `mesh` has a different
+    /// number of usable triangles than the plan counted ([`GridPlan::triangle_count`]) or
+    /// its vertices give a different reference count.
     pub fn build(
         mesh: &TriangleMesh<'_>,
         plan: &GridPlan,
@@ -57,7 +67,8 @@ where
 }
 
 /// The three passes into `off` (exactly `cells + 1` entries) and `dst` (exactly the plan's
-/// reference count). Counts fit `u32`: the plan checked the total.
+/// reference count), after checking in the first that `mesh` fits the plan (see
+/// [`Grid::build`]). Counts fit `u32`: the plan checked the total.
 fn fill(
     mesh: &TriangleMesh<'_>,
     plan: &GridPlan,
@@ -65,27 +76,30 @@ fn fill(
     dst: &mut [u32],
 ) -> Result<(), GridError> {
     let layout = &plan.layout;
-    let each = |f: &mut dyn FnMut(u32, usize)| {
-        for i in 0..mesh.len() {
-            if let Some(v) = usable_triangle(mesh, i) {
-                for_each_cell(layout, &v, plan.assignment, |c| f(i as u32, c));
-            }
-        }
-    };
-    // 1. Count cell `c`'s references into `off[c + 1]`.
+    // 1. Count cell `c`'s references into `off[c + 1]`, checking each triangle against the
+    //    plan's box: cells partition space, so a triangle outside it would still be counted
+    //    (in border cells), but rays are clipped to the box and would never reach it.
     off.fill(0);
-    let mut total = 0usize;
-    each(&mut |_, c| {
-        if let Some(slot) = off.get_mut(c + 1) {
-            *slot = slot.saturating_add(1);
-            total += 1;
+    let (mut total, mut usable) = (0usize, 0usize);
+    for i in 0..mesh.len() {
+        let Some((v, b)) = usable_triangle(mesh, i) else {
+            continue;
+        };
+        if !(layout.bounds.contains_point(b.min) && layout.bounds.contains_point(b.max)) {
+            return Err(GridError::TriangleOutsidePlan { triangle: i });
         }
-    });
-    if total != dst.len() {
-        return Err(GridError::PlanMismatch {
-            expected: dst.len(),
-            found: total,
+        usable += 1;
+        for_each_cell(layout, &v, plan.assignment, |c| {
+            if let Some(slot) = off.get_mut(c + 1) {
+                *slot = slot.saturating_add(1);
+                total += 1;
+            }
         });
+    }
+    for (expected, found) in [(plan.triangle_count, usable), (dst.len(), total)] {
+        if found != expected {
+            return Err(GridError::PlanMismatch { expected, found });
+        }
     }
     // 2. Prefix sum: `off[c]` = start of cell `c`.
     let mut sum = 0u32;
@@ -94,14 +108,18 @@ fn fill(
         *o = sum;
     }
     // 3. Scatter with `off[c]` as cell `c`'s cursor, which ends at the start of `c + 1`…
-    each(&mut |tri, c| {
-        if let Some(cursor) = off.get_mut(c) {
-            if let Some(slot) = dst.get_mut(*cursor as usize) {
-                *slot = tri;
-            }
-            *cursor = cursor.saturating_add(1);
+    for i in 0..mesh.len() {
+        if let Some((v, _)) = usable_triangle(mesh, i) {
+            for_each_cell(layout, &v, plan.assignment, |c| {
+                if let Some(cursor) = off.get_mut(c) {
+                    if let Some(slot) = dst.get_mut(*cursor as usize) {
+                        *slot = i as u32;
+                    }
+                    *cursor = cursor.saturating_add(1);
+                }
+            });
         }
-    });
+    }
     // …so shifting every entry up by one restores the starts.
     let n = off.len();
     off.copy_within(..n.saturating_sub(1), 1);

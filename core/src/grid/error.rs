@@ -4,7 +4,8 @@ use crate::error::{CapacityError, NonFiniteError, write_too_many};
 use core::fmt;
 
 /// Why a grid could not be planned or built. Every variant is returned before any caller
-/// storage is written, except [`GridError::PlanMismatch`] (see there).
+/// storage is written, except [`GridError::PlanMismatch`] and
+/// [`GridError::TriangleOutsidePlan`] (see there).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum GridError {
@@ -27,13 +28,22 @@ pub enum GridError {
         count: usize,
     },
     /// [`super::Grid::build`] was given a mesh that is not the one the plan was made for: a
-    /// different triangle count (nothing written), or different vertices that change the
-    /// reference count (found after the offsets were written; the references are untouched).
+    /// different triangle count (nothing written), or vertices that change the number of
+    /// usable (finite, in-range) triangles or the reference count (found after the offsets
+    /// were written; the references are untouched).
     PlanMismatch {
-        /// What the plan expected (triangles, or references).
+        /// What the plan expected (triangles, usable triangles, or references).
         expected: usize,
         /// What the mesh gave.
         found: usize,
+    },
+    /// [`super::Grid::build`] was given a mesh with a usable triangle whose box is not inside
+    /// the plan's box ([`super::GridPlan::bounds`]): its vertices moved out of it since the
+    /// plan was made. Rays are clipped to that box, so such a triangle could not be found.
+    /// Found after the offsets were written; the references are untouched.
+    TriangleOutsidePlan {
+        /// The first such triangle's index in the mesh.
+        triangle: usize,
     },
 }
 
@@ -53,6 +63,10 @@ impl fmt::Display for GridError {
             Self::PlanMismatch { expected, found } => write!(
                 f,
                 "the mesh does not match the grid plan: expected {expected}, found {found}"
+            ),
+            Self::TriangleOutsidePlan { triangle } => write!(
+                f,
+                "triangle {triangle} lies outside the box of the grid plan it was built with"
             ),
         }
     }

@@ -8,7 +8,9 @@
 //! * [`Grid::build`] fills the caller's storage (`AsRef<[u32]> + AsMut<[u32]>`: `Vec<u32>`,
 //!   `&mut [u32]`, `[u32; K]`); too-small storage is refused with a [`GridError`] before
 //!   anything is written. Cell `c` holds `references[offsets[c]..offsets[c + 1]]`, in
-//!   increasing triangle index.
+//!   increasing triangle index. A plan may be reused after the vertices move, as long as
+//!   every triangle stays inside the plan's box and the reference count is unchanged;
+//!   anything else is a [`GridError`] ([`Grid::build`] lists the conditions).
 //! * The queries of every structure ([`crate::query::RayQuery`]), with
 //!   [`crate::query::Triangles`] (any [`TriangleIntersector`], prepared once per ray) or a
 //!   closure, under the BVH's contract: `t` in `(t_min, t_max]`, of

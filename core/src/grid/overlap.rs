@@ -65,8 +65,9 @@ macro_rules! layout_accessors {
             self.layout.cell_count()
         }
 
-        /// The grid's box: the union of the usable triangles' boxes ([`Aabb::EMPTY`] for
-        /// none).
+        /// The grid's box: the union of the usable triangles' boxes of the mesh the plan
+        /// was made for ([`Aabb::EMPTY`] for none). A grid built from a reused plan keeps
+        /// it (it holds every usable triangle's box: [`Grid::build`](crate::grid::Grid::build)).
         #[must_use]
         pub fn bounds(&self) -> Aabb {
             self.layout.bounds

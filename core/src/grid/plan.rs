@@ -61,12 +61,12 @@ pub struct GridPlan {
     pub(super) reference_count: usize,
 }
 
-/// The vertices of triangle `i` when they are usable (in range and finite).
+/// The vertices of triangle `i` and their box when they are usable (in range and finite).
 #[inline]
-pub(super) fn usable_triangle(mesh: &TriangleMesh<'_>, i: usize) -> Option<[Vec3; 3]> {
+pub(super) fn usable_triangle(mesh: &TriangleMesh<'_>, i: usize) -> Option<([Vec3; 3], Aabb)> {
     let v = mesh.triangle(i)?;
     let b = Primitive::bounds(&v);
-    (b.is_finite() && b.is_valid()).then_some(v)
+    (b.is_finite() && b.is_valid()).then_some((v, b))
 }
 
 impl GridPlan {
@@ -88,8 +88,8 @@ impl GridPlan {
         let mut usable = 0usize;
         for i in 0..n {
             match usable_triangle(mesh, i) {
-                Some(v) => {
-                    bounds = bounds.union(Primitive::bounds(&v));
+                Some((_, b)) => {
+                    bounds = bounds.union(b);
                     usable += 1;
                 }
                 None if options.exclude_non_finite => {}
@@ -110,7 +110,7 @@ impl GridPlan {
         // Counted in `u64`: on a 32-bit target a `usize` count would wrap before the check.
         let mut refs = 0u64;
         for i in 0..n {
-            if let Some(v) = usable_triangle(mesh, i) {
+            if let Some((v, _)) = usable_triangle(mesh, i) {
                 for_each_cell(&layout, &v, options.assignment, |_| refs += 1);
             }
         }

@@ -212,6 +212,77 @@ fn non_finite_triangles_are_refused_or_excluded() {
     assert_eq!(closest_watertight(&grid, &mesh, &ray).map(|h| h.0), Some(0));
 }
 
+/// A 10 × 10 sheet of small triangles in `z = 0` (triangle `10j + i` at `(i, j)` plus a
+/// tenth), with triangle 0 moved by `shift`: the audit's reused-plan scene.
+fn sheet(shift: Vec3) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut p = Vec::new();
+    for j in 0..10 {
+        for i in 0..10 {
+            let mut o = Vec3::new(i as f32 + 0.1, j as f32 + 0.1, 0.0);
+            if i + j == 0 {
+                o += shift;
+            }
+            p.extend([
+                o,
+                o + Vec3::new(0.5, 0.0, 0.0),
+                o + Vec3::new(0.0, 0.5, 0.0),
+            ]);
+        }
+    }
+    let t = (0..100u32).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
+    (p, t)
+}
+
+/// A plan reused for a mesh whose vertices moved (an animation step): a triangle moved out of
+/// the plan's box is refused with [`GridError::TriangleOutsidePlan`] (it was accepted, and
+/// the grid then missed the hit brute force finds), a triangle that became unusable with
+/// [`GridError::PlanMismatch`] on the usable count, and a mesh whose triangles stay in the
+/// box (two triangles trading places) builds and answers as brute force does.
+#[test]
+fn a_reused_plan_refuses_triangles_that_left_its_box() {
+    let (a, t) = sheet(Vec3::ZERO);
+    let mesh_a = TriangleMesh::new(&a, &t);
+    let plan = GridPlan::new(&mesh_a, &GridOptions::default()).unwrap();
+    let storage = || {
+        (
+            vec![0u32; plan.required_offsets()],
+            vec![0u32; plan.required_references()],
+        )
+    };
+    // Triangle 0 moved 15 units along +x, beyond the plan's box (x ≤ 9.6).
+    let (b, _) = sheet(Vec3::new(15.0, 0.0, 0.0));
+    let mesh_b = TriangleMesh::new(&b, &t);
+    let (off, refs) = storage();
+    assert_eq!(
+        Grid::build(&mesh_b, &plan, off, refs).err(),
+        Some(GridError::TriangleOutsidePlan { triangle: 0 })
+    );
+    // A NaN vertex in triangle 7: 99 usable triangles where the plan counted 100.
+    let mut nan = a.clone();
+    nan[3 * 7 + 1] = Vec3::NAN;
+    let (off, refs) = storage();
+    assert_eq!(
+        Grid::build(&TriangleMesh::new(&nan, &t), &plan, off, refs).err(),
+        Some(GridError::PlanMismatch {
+            expected: 100,
+            found: 99
+        })
+    );
+    // Triangles 0 and 99 trade places: every triangle in the box, the same cells in all.
+    let mut swapped = a.clone();
+    for k in 0..3 {
+        swapped.swap(k, 3 * 99 + k);
+    }
+    let mesh_s = TriangleMesh::new(&swapped, &t);
+    let (off, refs) = storage();
+    let grid = Grid::build(&mesh_s, &plan, off, refs).unwrap();
+    let rays: Vec<Ray> = (0..10)
+        .flat_map(|j| (0..10).map(move |i| Vec3::new(i as f32 + 0.2, j as f32 + 0.2, -1.0)))
+        .map(|o| Ray::new(o, Vec3::Z))
+        .collect();
+    assert_eq!(check_rays(&mesh_s, &grid, &rays), 100);
+}
+
 /// Layout invariants and the oracle "each triangle is in the cell of each of its vertices",
 /// with the cell computed independently in `f64` from the documented layout.
 #[test]
