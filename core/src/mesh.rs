@@ -22,7 +22,12 @@ pub trait Primitive {
 /// invalid primitives report non-finite bounds. Both methods are functions of the source and
 /// the index: a builder may read a primitive's bounds more than once. A source whose answers
 /// change between calls still gets a well-formed structure (no panic, no cycle, every
-/// primitive in one leaf), but its boxes may not contain its primitives.
+/// primitive of a BVH in exactly one leaf), but its boxes may not contain its primitives, and
+/// a kd-tree leaves out a primitive whose bounds turn unusable after the build checked them.
+/// A build asks for no index at or beyond the count its first call of
+/// [`PrimitiveSource::primitive_count`] returned, and takes the primitives the structure
+/// holds, its root's box and the indices it stores from one pass over the source, so that
+/// they agree with each other.
 pub trait PrimitiveSource {
     /// Number of primitives `N`.
     fn primitive_count(&self) -> usize;

@@ -290,3 +290,81 @@ pub fn record_skip(test: &'static str, why: &str) {
         }
     }
 }
+
+/// A source whose answers change between calls, against [`PrimitiveSource`]'s rule that they
+/// are a function of the index (which the builders may not rely on for their safety): each
+/// of the first `steady` calls answers `boxes[i]`; after that, `change(i, call)` decides
+/// (`None`: still `boxes[i]`). An index at or beyond the count **panics** (plain slice
+/// indexing, as a caller's source may), so a builder that asks for one fails the test.
+pub struct Fickle<F: Fn(usize, u64) -> Option<crate::aabb::Aabb>> {
+    /// The steady answers.
+    pub boxes: Vec<crate::aabb::Aabb>,
+    /// Calls answered steadily.
+    pub steady: u64,
+    /// The answer after them.
+    pub change: F,
+    /// Calls so far.
+    pub calls: core::cell::Cell<u64>,
+}
+
+impl<F: Fn(usize, u64) -> Option<crate::aabb::Aabb>> PrimitiveSource for Fickle<F> {
+    fn primitive_count(&self) -> usize {
+        self.boxes.len()
+    }
+
+    fn primitive_bounds(&self, i: usize) -> crate::aabb::Aabb {
+        let call = self.calls.get();
+        self.calls.set(call + 1);
+        let steady = self.boxes[i];
+        if call < self.steady {
+            steady
+        } else {
+            (self.change)(i, call).unwrap_or(steady)
+        }
+    }
+}
+
+/// The audit's case: boxes `[k, k + ½]³` for `k` in `0..n`, primitive 0's answer all-NaN
+/// once every primitive has been asked once (a builder's second pass sees it unusable).
+pub fn fickle_first(n: usize) -> Fickle<impl Fn(usize, u64) -> Option<crate::aabb::Aabb>> {
+    Fickle {
+        boxes: (0..n)
+            .map(|k| crate::aabb::Aabb::new(Vec3::splat(k as f32), Vec3::splat(k as f32 + 0.5)))
+            .collect(),
+        steady: n as u64,
+        change: |i, _| (i == 0).then_some(crate::aabb::Aabb::new(Vec3::NAN, Vec3::NAN)),
+        calls: core::cell::Cell::new(0),
+    }
+}
+
+/// `n` random boxes whose answers, after the first `n` calls, are NaN, infinite, inverted or
+/// another box, drawn from `seed` and the call's number.
+pub fn fickle_random(
+    n: usize,
+    seed: u64,
+) -> Fickle<impl Fn(usize, u64) -> Option<crate::aabb::Aabb>> {
+    let mut r = Lcg(seed);
+    let boxes = (0..n)
+        .map(|_| {
+            let c = r.v(10.0);
+            crate::aabb::Aabb::new(c, c + Vec3::splat(r.f() + 0.1))
+        })
+        .collect();
+    Fickle {
+        boxes,
+        steady: n as u64,
+        change: move |i, call| {
+            let mut s = seed ^ (call << 20) ^ i as u64;
+            let pick = (lcg(&mut s) * 5.0) as u32;
+            let p = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 10.0;
+            match pick {
+                0 => Some(crate::aabb::Aabb::new(Vec3::NAN, Vec3::NAN)),
+                1 => Some(crate::aabb::Aabb::new(p, Vec3::INFINITY)),
+                2 => Some(crate::aabb::Aabb::new(p + Vec3::ONE, p)),
+                3 => Some(crate::aabb::Aabb::new(p, p + Vec3::ONE)),
+                _ => None,
+            }
+        },
+        calls: core::cell::Cell::new(0),
+    }
+}

@@ -202,23 +202,24 @@ fn usable_corners(b: &Aabb) -> Option<(Corner, Corner, Corner)> {
     (lo.is_finite() && hi.is_finite() && lo.cmple(hi).all()).then(|| (lo, hi, centre2(lo, hi)))
 }
 
-/// Checks the storage and every primitive (nothing written but what `usable` writes); calls
-/// `usable(k, i, bounds)` for the `k`-th usable primitive `i`; returns what it
-/// found of the usable primitives.
+/// Checks the storage (`nodes` and `indices` entries) for the source's `n` primitives (`n`
+/// read once by the caller, so that no index at or beyond it is ever asked for) and every
+/// primitive (nothing written but what `usable` writes); calls `usable(k, i, bounds)` for the
+/// `k`-th usable primitive `i`; returns what it found of the usable primitives, from the same
+/// answers that `usable` was given.
 #[inline(always)]
 fn validate<S: PrimitiveSource + ?Sized>(
     source: &S,
-    nodes: &[BvhNode],
-    indices: &[u32],
+    n: usize,
+    (nodes, indices): (usize, usize),
     options: &BuildOptions,
     mut usable: impl FnMut(usize, usize, Aabb),
 ) -> Result<Usable, BvhError> {
-    let n = source.primitive_count();
     if n > MAX_PRIMITIVES {
         return Err(BvhError::TooManyPrimitives { count: n });
     }
-    CapacityError::check(Storage::BvhNodes, node_capacity(n), nodes.len())?;
-    CapacityError::check(Storage::BvhIndices, index_capacity(n), indices.len())?;
+    CapacityError::check(Storage::BvhNodes, node_capacity(n), nodes)?;
+    CapacityError::check(Storage::BvhIndices, index_capacity(n), indices)?;
     // The root's box and centroid box in the builder's vector corners: the same values as
     // `Aabb::union` / `grow` lane by lane, and the box of the `centre2` points.
     let (mut lo, mut hi) = (Corner::INFINITY, Corner::NEG_INFINITY);
@@ -244,6 +245,12 @@ fn validate<S: PrimitiveSource + ?Sized>(
 }
 
 /// Builds into `nodes`/`indices`; returns `(node_count, prim_count)`.
+///
+/// One pass over the source decides the primitives, the root's boxes and the index array
+/// together, so they agree whatever a source answers on later calls ([`PrimitiveSource`]):
+/// with [`BuildOptions::exclude_non_finite`] the pass writes the indices of the primitives
+/// it finds usable as it goes (no error is possible then); without, it refuses before
+/// writing, and having found every primitive usable the indices are `0..n`.
 pub(super) fn build<S: PrimitiveSource + ?Sized>(
     source: &S,
     nodes: &mut [BvhNode],
@@ -251,19 +258,23 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
     options: &BuildOptions,
     work: &mut BuildWorkspace,
 ) -> Result<(u32, u32), BvhError> {
-    let root = validate(source, nodes, indices, options, |_, _, _| {})?;
+    let n = source.primitive_count();
+    let lens = (nodes.len(), indices.len());
+    let root = if options.exclude_non_finite {
+        validate(source, n, lens, options, |k, i, _| {
+            if let Some(slot) = indices.get_mut(k) {
+                *slot = i as u32;
+            }
+        })?
+    } else {
+        let root = validate(source, n, lens, options, |_, _, _| {})?;
+        for (k, slot) in indices.iter_mut().take(root.count as usize).enumerate() {
+            *slot = k as u32;
+        }
+        root
+    };
     if root.count == 0 {
         return Ok((0, 0));
-    }
-    let mut k = 0usize;
-    for i in 0..source.primitive_count() {
-        if usable_corners(&source.primitive_bounds(i)).is_none() {
-            continue;
-        }
-        if let Some(slot) = indices.get_mut(k) {
-            *slot = i as u32;
-        }
-        k += 1;
     }
     let mut refs = Indexed { source, indices };
     let node_count = build_top(&mut refs, nodes, &root, options, None, work);
@@ -316,11 +327,17 @@ pub(super) fn prepare_scratch<S: PrimitiveSource + ?Sized>(
 ) -> Result<Usable, BvhError> {
     let n = source.primitive_count();
     CapacityError::check(Storage::BvhScratch, scratch_capacity(n), scratch.len())?;
-    validate(source, nodes, indices, options, |k, i, bounds| {
-        if let Some(slot) = scratch.get_mut(k) {
-            *slot = PrimRef::new(&bounds, i as u32);
-        }
-    })
+    validate(
+        source,
+        n,
+        (nodes.len(), indices.len()),
+        options,
+        |k, i, bounds| {
+            if let Some(slot) = scratch.get_mut(k) {
+                *slot = PrimRef::new(&bounds, i as u32);
+            }
+        },
+    )
 }
 
 /// The top of every build: the root, the optional cache-line pad, then [`grow`] from the

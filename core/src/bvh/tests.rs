@@ -14,6 +14,7 @@ use crate::test_util::{
 };
 use crate::triangle::{TriangleIntersector, Watertight};
 use glam::Vec3;
+use std::format;
 use std::vec;
 use std::vec::Vec;
 
@@ -1289,6 +1290,88 @@ impl crate::mesh::PrimitiveSource for Flicker {
     }
 }
 
+/// Walks `b` from the root, checking that every inner node's children lie after it (no
+/// cycle), that every leaf holds at least one primitive and that the leaves cover every
+/// index slot once; returns the primitives they hold (sorted, checked distinct) and the
+/// number of leaves.
+fn leaves_of(b: &VecBvh, what: &str) -> (Vec<u32>, usize) {
+    let nodes = b.nodes();
+    let mut covered = vec![0u32; b.indices().len()];
+    let mut leaves = 0usize;
+    let mut stack = vec![0usize];
+    while let Some(i) = stack.pop().filter(|_| !nodes.is_empty()) {
+        let (_, start, count) = nodes[i].to_raw();
+        let start = start as usize;
+        if count == 0 {
+            assert!(
+                start > i && start + 1 < nodes.len(),
+                "{what}: node {i} → {start}"
+            );
+            stack.extend([start, start + 1]);
+        } else {
+            leaves += 1;
+            for slot in &mut covered[start..start + count as usize] {
+                *slot += 1;
+            }
+        }
+    }
+    assert!(covered.iter().all(|&c| c == 1), "{what}: {covered:?}");
+    let mut prims = b.indices().to_vec();
+    prims.sort_unstable();
+    assert!(prims.windows(2).all(|w| w[0] < w[1]), "{what}: {prims:?}");
+    (prims, leaves)
+}
+
+/// A source whose answers change between calls (`test_util::Fickle`: the audit's, whose
+/// primitive 0 turns NaN once each primitive has been asked once, and random ones whose later
+/// answers are NaN, infinite, inverted or elsewhere) never gets asked for an index at or
+/// beyond its count (it panics), whatever the index storage held before (0 or `u32::MAX`),
+/// and gets a well-formed tree holding every primitive once: the count, the root's boxes and
+/// the index array come from one pass, whose answers here are the steady ones. Before, a
+/// second pass wrote the indices of the primitives it found usable and left the rest of the
+/// storage as it was: `u32::MAX` reached the source.
+#[test]
+fn a_source_that_changes_between_passes_is_never_asked_for_a_bad_index() {
+    for exclude_non_finite in [false, true] {
+        let options = BuildOptions {
+            exclude_non_finite,
+            ..BuildOptions::default()
+        };
+        for fill in [0u32, u32::MAX] {
+            let what = format!("audit case, exclude {exclude_non_finite}, fill {fill:#x}");
+            let src = crate::test_util::fickle_first(3);
+            let b = Bvh::build(
+                &src,
+                vec![BvhNode::EMPTY; node_capacity(3)],
+                vec![fill; index_capacity(3)],
+                &options,
+            )
+            .unwrap();
+            assert_eq!(leaves_of(&b, &what).0, [0, 1, 2], "{what}");
+        }
+        let n = 40usize;
+        for seed in 0..100u64 {
+            for with_scratch in [false, true] {
+                let what = format!("seed {seed}, exclude {exclude_non_finite}, {with_scratch}");
+                let src = crate::test_util::fickle_random(n, seed);
+                let (nodes, idx) = (
+                    vec![BvhNode::EMPTY; node_capacity(n)],
+                    vec![u32::MAX; index_capacity(n)],
+                );
+                let b = if with_scratch {
+                    let mut scratch = vec![PrimRef::EMPTY; scratch_capacity(n)];
+                    Bvh::build_with_scratch(&src, nodes, idx, &mut scratch, &options)
+                } else {
+                    Bvh::build(&src, nodes, idx, &options)
+                }
+                .unwrap();
+                let (prims, _) = leaves_of(&b, &what);
+                assert!(prims.iter().copied().eq(0..n as u32), "{what}");
+            }
+        }
+    }
+}
+
 /// Whatever a source answers, the tree is well formed: walked from the root, every inner
 /// node's children lie after it (no cycle), every leaf holds at least one primitive, and the
 /// leaves cover every index slot once with a permutation of the primitives. Seed 1 made an
@@ -1309,29 +1392,7 @@ fn a_source_whose_bounds_change_still_gets_a_well_formed_tree() {
             &BuildOptions::default(),
         )
         .unwrap();
-        let nodes = b.nodes();
-        let mut covered = vec![0u32; n];
-        let mut leaves = 0usize;
-        let mut stack = vec![0usize];
-        while let Some(i) = stack.pop() {
-            let (_, start, count) = nodes[i].to_raw();
-            let start = start as usize;
-            if count == 0 {
-                assert!(
-                    start > i && start + 1 < nodes.len(),
-                    "seed {seed}: node {i} → {start}"
-                );
-                stack.extend([start, start + 1]);
-            } else {
-                leaves += 1;
-                for slot in &mut covered[start..start + count as usize] {
-                    *slot += 1;
-                }
-            }
-        }
-        assert!(covered.iter().all(|&c| c == 1), "seed {seed}: {covered:?}");
-        let mut prims = b.indices().to_vec();
-        prims.sort_unstable();
+        let (prims, leaves) = leaves_of(&b, &format!("seed {seed}"));
         assert!(prims.iter().copied().eq(0..n as u32), "seed {seed}");
         let stats = b.stats();
         assert_eq!((stats.leaves, stats.primitives), (leaves, n), "seed {seed}");

@@ -77,36 +77,61 @@ fn usable(b: &Aabb) -> bool {
     b.is_finite() && b.is_valid()
 }
 
-/// Checks storage and primitives (writing nothing); returns the usable count and their box.
+/// Checks storage for the source's `n` primitives (`n` read once by the caller: no later pass
+/// asks for an index at or beyond it) and, unless unusable primitives are excluded, every
+/// primitive (writing nothing).
 fn validate<S: PrimitiveSource + ?Sized>(
     source: &S,
+    n: usize,
     nodes: &[KdNode],
     refs: &[u32],
     scratch: &[KdRef],
     options: &KdBuildOptions,
-) -> Result<(u32, Aabb), KdTreeError> {
-    let n = source.primitive_count();
+) -> Result<(), KdTreeError> {
     if n > MAX_PRIMITIVES {
         return Err(KdTreeError::TooManyPrimitives { count: n });
     }
     CapacityError::check(Storage::KdNodes, usize::from(n > 0), nodes.len())?;
     CapacityError::check(Storage::KdReferences, n, refs.len())?;
     CapacityError::check(Storage::KdScratch, n, scratch.len())?;
+    if !options.exclude_non_finite
+        && let Some(i) = (0..n).find(|&i| !usable(&source.primitive_bounds(i)))
+    {
+        return Err(KdTreeError::NonFinite(NonFiniteError::primitive(i)));
+    }
+    Ok(())
+}
+
+/// Writes a scratch record for each usable primitive of `0..n` (at most `n ≤ scratch.len()`
+/// of them); returns their count and box, from the same answers as the records.
+fn gather<S: PrimitiveSource + ?Sized>(source: &S, n: usize, scratch: &mut [KdRef]) -> (u32, Aabb) {
     let mut bounds = Aabb::EMPTY;
     let mut count = 0u32;
     for i in 0..n {
         let b = source.primitive_bounds(i);
-        if usable(&b) {
-            bounds = bounds.union(b);
-            count += 1;
-        } else if !options.exclude_non_finite {
-            return Err(KdTreeError::NonFinite(NonFiniteError::primitive(i)));
+        let Some(slot) = scratch.get_mut(count as usize) else {
+            break;
+        };
+        if !usable(&b) {
+            continue;
         }
+        *slot = KdRef {
+            min: b.min.to_array(),
+            max: b.max.to_array(),
+            prim: i as u32,
+        };
+        bounds = bounds.union(b);
+        count += 1;
     }
-    Ok((count, bounds))
+    (count, bounds)
 }
 
 /// Builds into the storage; see the module docs.
+///
+/// The pass that writes the scratch records also decides which primitives the tree holds and
+/// the root's box, so the three agree whatever a source answers on later calls
+/// ([`PrimitiveSource`]): a primitive that [`validate`] found usable and whose bounds are
+/// unusable by then is left out, as if excluded.
 pub(super) fn build<S: PrimitiveSource + ?Sized>(
     source: &S,
     nodes: &mut [KdNode],
@@ -114,24 +139,11 @@ pub(super) fn build<S: PrimitiveSource + ?Sized>(
     scratch: &mut [KdRef],
     options: &KdBuildOptions,
 ) -> Result<Built, KdTreeError> {
-    let (count, bounds) = validate(source, nodes, refs, scratch, options)?;
+    let n = source.primitive_count();
+    validate(source, n, nodes, refs, scratch, options)?;
+    let (count, bounds) = gather(source, n, scratch);
     if count == 0 {
         return Ok(Built::default());
-    }
-    let mut k = 0usize;
-    for i in 0..source.primitive_count() {
-        let b = source.primitive_bounds(i);
-        if !usable(&b) {
-            continue;
-        }
-        if let Some(slot) = scratch.get_mut(k) {
-            *slot = KdRef {
-                min: b.min.to_array(),
-                max: b.max.to_array(),
-                prim: i as u32,
-            };
-        }
-        k += 1;
     }
     let ref_budget = refs.len().min(scratch.len()).min(u32::MAX as usize) as u32;
     let node_budget = nodes.len().min(MAX_FIELD as usize + 1) as u32;
