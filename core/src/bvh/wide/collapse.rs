@@ -2,7 +2,9 @@
 
 use super::group_capacity;
 use super::node::{ChildRef, LeafGroup, LeafTriangle, WideNode};
-use super::{LEAF_MERGE, LEAF_OPEN_ABOVE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh};
+use super::{
+    LEAF_MERGE, LEAF_OPEN_ABOVE, MAX_LEAF_TRIANGLES, MAX_TRIANGLES, WideBvh, assert_width,
+};
 use crate::aabb::Aabb;
 use crate::bvh::build::split_spares_tests;
 use crate::bvh::{Bvh, BvhError, BvhNode};
@@ -323,7 +325,7 @@ fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<Plan, BvhError> {
             slots: run.len(),
         });
     }
-    const { assert!(W >= 2 && W <= 8) };
+    const { assert_width(W) };
     let mut pending = Pending::new();
     let mut count = 1usize;
     let mut slots = 0usize;
@@ -559,9 +561,8 @@ where
         BN: AsRef<[BvhNode]>,
         BI: AsRef<[u32]>,
     {
-        // Every constructor comes here: a width outside 2–8 does not compile (the node test's
-        // keys hold a slot in three bits, and a node of one child cannot branch).
-        const { assert!(W >= 2 && W <= 8, "a wide BVH has 2 to 8 children a node") };
+        // Every constructor comes here: a width other than 2, 4 or 8 does not compile.
+        const { assert_width(W) };
         let indices = binary.indices();
         let bnodes = binary.nodes();
         if let Some(plan) = plan {

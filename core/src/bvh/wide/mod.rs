@@ -1,4 +1,4 @@
-//! A **wide** BVH over a triangle mesh: `W` children per node (4 or 8; [`Bvh8`], [`Bvh4`])
+//! A **wide** BVH over a triangle mesh: `W` children per node (2, 4 or 8; [`Bvh8`], [`Bvh4`])
 //! whose boxes are stored side by side so that one node test covers all of them, and the
 //! triangles copied into leaf order. Built by collapsing a binary [`Bvh`](super::Bvh), in
 //! **caller storage**, traversed with a **fixed-size stack**; no allocation, no recursion, no
@@ -167,7 +167,65 @@ pub const fn group_capacity(triangles: usize) -> usize {
         .div_ceil(4 * crate::triangle::LANES)
 }
 
+/// Refuses, at compile time, a width a wide tree does not support: `width` must be 2, 4 or
+/// 8. Traversal picks a child slot as `i & (W − 1)`, which keeps every slot of a node and
+/// nothing else only for a power of two, and the node test's sort keys hold a slot in three
+/// bits; a node of one child cannot branch. Every constructor ([`WideBvh::from_binary`] and
+/// its variants) and every size query ([`WideBvh::node_count_for`],
+/// [`WideBvh::group_count_for`]) evaluates it in a `const` block, so a tree of another width
+/// does not compile.
+const fn assert_width(width: usize) {
+    assert!(
+        width.is_power_of_two() && 2 <= width && width <= 8,
+        "a wide BVH has 2, 4 or 8 children a node"
+    );
+}
+
 /// A `W`-wide BVH over caller storage `N` (nodes) and `T` (triangle groups).
+///
+/// **`W` is 2, 4 or 8.** Any other width is refused at compile time (traversal picks a child
+/// slot as `i & (W − 1)`, right only for a power of two): building or sizing a tree of width
+/// 3 does not compile.
+///
+/// ```
+/// use halfray_core::bvh::wide::{LeafGroup, WideBvh, WideNode};
+/// use halfray_core::bvh::{BuildOptions, Bvh, BvhNode};
+/// use halfray_core::mesh::TriangleMesh;
+/// use halfray_core::Vec3;
+///
+/// let (pos, tri) = ([Vec3::ZERO, Vec3::X, Vec3::Y], [[0u32, 1, 2]]);
+/// let mesh = TriangleMesh::new(&pos, &tri);
+/// let binary = Bvh::build(&mesh, [BvhNode::EMPTY; 1], [0u32; 1], &BuildOptions::default())?;
+/// let wide = WideBvh::<4, _, _>::from_binary(
+///     &binary,
+///     &mesh,
+///     [WideNode::<4>::EMPTY; 1],
+///     [LeafGroup::EMPTY; 1],
+/// )?;
+/// assert_eq!(wide.triangle_count(), 1);
+/// # Ok::<(), halfray_core::bvh::BvhError>(())
+/// ```
+///
+/// The same with `W = 3` fails to compile:
+///
+/// ```compile_fail,E0080
+/// use halfray_core::bvh::wide::{LeafGroup, WideBvh, WideNode};
+/// use halfray_core::bvh::{BuildOptions, Bvh, BvhNode};
+/// use halfray_core::mesh::TriangleMesh;
+/// use halfray_core::Vec3;
+///
+/// let (pos, tri) = ([Vec3::ZERO, Vec3::X, Vec3::Y], [[0u32, 1, 2]]);
+/// let mesh = TriangleMesh::new(&pos, &tri);
+/// let binary = Bvh::build(&mesh, [BvhNode::EMPTY; 1], [0u32; 1], &BuildOptions::default())?;
+/// let wide = WideBvh::<3, _, _>::from_binary(
+///     &binary,
+///     &mesh,
+///     [WideNode::<3>::EMPTY; 1],
+///     [LeafGroup::EMPTY; 1],
+/// )?;
+/// assert_eq!(wide.triangle_count(), 1);
+/// # Ok::<(), halfray_core::bvh::BvhError>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct WideBvh<const W: usize, N, T> {
     nodes: N,

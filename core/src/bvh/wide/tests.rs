@@ -1583,3 +1583,57 @@ fn stack_size_is_defined_for_every_width() {
     assert_eq!(stack_size(0), 1);
     assert_eq!(stack_size(usize::MAX), usize::MAX);
 }
+
+/// Every supported width (2, 4 and 8: [`assert_width`]) answers as the binary tree it was
+/// collapsed from, on a grid of quads where a slot picked as `i & (W − 1)` for another width
+/// would answer wrong (the audit's 3-, 5-, 6- and 7-wide trees disagreed on most rays).
+fn agrees_with_the_binary_tree<const W: usize>(mesh: &TriangleMesh<'_>, bin: &VecBinary) {
+    let w = VecWide::<W>::from_binary(
+        bin,
+        mesh,
+        vec![WideNode::<W>::EMPTY; VecWide::<W>::node_bound_for(bin)],
+        vec![LeafGroup::EMPTY; group_capacity(mesh.len())],
+    )
+    .unwrap();
+    assert!(w.node_count() > 1, "W={W}: the tree must have inner nodes");
+    let mut hitting = 0;
+    for i in 0..40 {
+        for j in 0..40 {
+            let (x, y) = (-0.5 + i as f32 * 41.0 / 40.0, -0.5 + j as f32 * 41.0 / 40.0);
+            let ray = Ray::new(Vec3::new(x, y, -5.0), Vec3::Z);
+            let mut tris = Triangles::new(mesh, &Watertight);
+            let want = bin.closest_hit(&ray, &mut tris, &mut Query::new());
+            let got = w.closest_hit(&ray, &mut tris, &mut Query::new());
+            assert_eq!(got, want, "W={W} {ray:?}");
+            let any = w.any_hit(&ray, &mut tris, &mut Query::new());
+            assert_eq!(any.is_some(), want.is_some(), "W={W} any-hit {ray:?}");
+            hitting += usize::from(want.is_some());
+        }
+    }
+    assert!(
+        hitting > 1000,
+        "W={W}: the rays must hit the grid: {hitting} of 1600"
+    );
+}
+
+#[test]
+fn every_supported_width_answers_as_the_binary_tree() {
+    let n = 40u32;
+    let pos: Vec<Vec3> = (0..=n)
+        .flat_map(|j| (0..=n).map(move |i| Vec3::new(i as f32, j as f32, 0.0)))
+        .collect();
+    let tris: Vec<[u32; 3]> = (0..n)
+        .flat_map(|j| {
+            (0..n).flat_map(move |i| {
+                let a = j * (n + 1) + i;
+                let (b, c) = (a + 1, a + n + 1);
+                [[a, b, c + 1], [a, c + 1, c]]
+            })
+        })
+        .collect();
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let bin = built(&mesh, &binary_options(BuildOptions::default()));
+    agrees_with_the_binary_tree::<2>(&mesh, &bin);
+    agrees_with_the_binary_tree::<4>(&mesh, &bin);
+    agrees_with_the_binary_tree::<8>(&mesh, &bin);
+}
