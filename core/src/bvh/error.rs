@@ -4,7 +4,8 @@ use crate::error::{CapacityError, NonFiniteError, write_too_many};
 use core::fmt;
 
 /// Why a BVH operation was refused. Every variant is returned before any caller storage is
-/// written, except [`BvhError::NonFinite`] from [`super::Bvh::refit`] (see there).
+/// written, except [`BvhError::NonFinite`] from [`super::Bvh::refit`] and the errors
+/// [`super::wide::WideBvh::from_binary_in`] finds during its walk (see there).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum BvhError {
@@ -26,6 +27,13 @@ pub enum BvhError {
         expected: usize,
         /// Primitive count of the source passed now.
         found: usize,
+    },
+    /// A triangle of the mesh lies outside the box the tree gives it: the mesh is not the one
+    /// the binary tree was built (or last refit) over, though it has as many triangles
+    /// ([`super::wide::WideBvh::from_binary`]).
+    TriangleOutsideTree {
+        /// The triangle's index in the mesh.
+        triangle: usize,
     },
     /// A wide BVH was asked for more triangles than its leaf references can address
     /// ([`super::wide::MAX_TRIANGLES`]).
@@ -71,6 +79,10 @@ impl fmt::Display for BvhError {
             Self::SourceLengthMismatch { expected, found } => write!(
                 f,
                 "refit source has {found} primitives, the BVH was built over {expected}"
+            ),
+            Self::TriangleOutsideTree { triangle } => write!(
+                f,
+                "triangle {triangle} lies outside its BVH box: the mesh is not the tree's source"
             ),
             Self::TooManyTriangles { count, max } => {
                 write_too_many(f, "triangles", "a wide BVH", count, max)

@@ -2,7 +2,7 @@
 
 use crate::aabb::Aabb;
 use core::ops::Range;
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// A BVH node: a box and either two adjacent children or a run of primitive indices.
 ///
@@ -107,6 +107,38 @@ impl BvhNode {
     pub fn primitive_range(&self) -> Option<Range<usize>> {
         (self.count != 0)
             .then(|| self.start as usize..(self.start as usize).saturating_add(self.count as usize))
+    }
+
+    /// `true` when every vertex of `v` lies in the node's (closed) box; `false` for a NaN
+    /// coordinate. Exact compares: the builder and [`super::Bvh::refit`] make a leaf's box the
+    /// exact `f32` minimum and maximum of its triangles' vertices, and an inner node's the
+    /// union of its children's, so a tree holds every triangle of its source.
+    ///
+    /// Four-lane compares and one mask test, no branch per coordinate: the collapse makes
+    /// it once per triangle it copies.
+    #[inline]
+    pub(crate) fn holds(&self, v: &[Vec3; 3]) -> bool {
+        let (lo, hi) = (
+            Vec3A::from_array(self.bounds[0]),
+            Vec3A::from_array(self.bounds[1]),
+        );
+        let inside = |p: Vec3| {
+            let p = Vec3A::from(p);
+            lo.cmple(p) & p.cmple(hi)
+        };
+        (inside(v[0]) & inside(v[1]) & inside(v[2])).all()
+    }
+
+    /// `true` when the box `[lo, hi]` lies in the node's (closed) box; `false` for a NaN
+    /// coordinate. The box of several triangles is in it exactly when each triangle is
+    /// ([`BvhNode::holds`]).
+    #[inline]
+    pub(crate) fn holds_box(&self, lo: Vec3A, hi: Vec3A) -> bool {
+        let (min, max) = (
+            Vec3A::from_array(self.bounds[0]),
+            Vec3A::from_array(self.bounds[1]),
+        );
+        (min.cmple(lo) & hi.cmple(max)).all()
     }
 
     /// Raw `(start, count)` fields.

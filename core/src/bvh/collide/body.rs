@@ -31,10 +31,22 @@ pub struct Body<'a, N, I> {
 impl<'a, N: AsRef<[BvhNode]>, I: AsRef<[u32]>> Body<'a, N, I> {
     /// The body of `mesh` with its tree `bvh`.
     ///
+    /// Checks, once for every query made with the body (both are borrowed for its lifetime),
+    /// that `bvh` bounds `mesh`: every triangle of every leaf that `mesh` gives with finite
+    /// vertices lies in that leaf's box, as in a tree built or refit over `mesh` (a leaf's box
+    /// is then the exact minimum and maximum of its vertices). The broad phase's "never loses
+    /// a pair" rests on it. One pass over the tree's triangles: `O(N)`, about what one
+    /// [`Bvh::refit`] reads, where a query reads what its boxes overlap. A triangle the mesh
+    /// cannot give (a vertex index out of range) or gives with a non-finite vertex is left out,
+    /// as every query leaves it out (a refit with a non-finite vertex keeps the tree usable).
+    ///
     /// # Errors
     ///
     /// [`CollideError::MeshMismatch`] when the tree was built over a different number of
-    /// primitives than `mesh` has (a tree of another mesh).
+    /// primitives than `mesh` has (a tree of another mesh);
+    /// [`CollideError::TriangleOutsideTree`] for the first triangle (in node order) outside
+    /// its leaf's box (a tree of another mesh with as many triangles, or of this one before
+    /// its vertices moved without a refit).
     pub fn new(bvh: &'a Bvh<N, I>, mesh: TriangleMesh<'a>) -> Result<Self, CollideError> {
         if bvh.source_len() != mesh.len() {
             return Err(CollideError::MeshMismatch {
@@ -42,7 +54,18 @@ impl<'a, N: AsRef<[BvhNode]>, I: AsRef<[u32]>> Body<'a, N, I> {
                 mesh: mesh.len(),
             });
         }
-        Ok(Self { bvh, mesh })
+        let body = Self { bvh, mesh };
+        for node in body.nodes() {
+            if let Some((p, _)) = body
+                .leaf_triangles(node)
+                .find(|(_, v)| v.iter().all(|p| p.is_finite()) && !node.holds(v))
+            {
+                return Err(CollideError::TriangleOutsideTree {
+                    triangle: p as usize,
+                });
+            }
+        }
+        Ok(body)
     }
 
     /// The tree.

@@ -14,6 +14,13 @@ pub enum CollideError {
         /// Triangles in the mesh given with it.
         mesh: usize,
     },
+    /// A triangle of a [`super::Body`]'s mesh lies outside the box of the leaf holding it:
+    /// the BVH was built over another mesh with as many triangles, or over this one before
+    /// its vertices moved (refit it). Nothing was traversed.
+    TriangleOutsideTree {
+        /// The triangle's index in the mesh.
+        triangle: usize,
+    },
     /// The output slice of [`super::colliding_pairs`] is shorter than the number of colliding
     /// pairs. The traversal still ran to the end: `needed` is the exact total, and the slice
     /// holds the first `available` pairs found (traversal order).
@@ -38,6 +45,10 @@ impl fmt::Display for CollideError {
             Self::MeshMismatch { bvh, mesh } => write!(
                 f,
                 "BVH built over {bvh} primitives but the mesh has {mesh} triangles"
+            ),
+            Self::TriangleOutsideTree { triangle } => write!(
+                f,
+                "triangle {triangle} lies outside its BVH leaf's box: the BVH was built over another mesh"
             ),
             Self::OutputTooSmall { needed, available } => write!(
                 f,

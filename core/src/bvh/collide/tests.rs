@@ -636,3 +636,67 @@ fn min_distance_keeps_a_pair_whose_distance_rounds_below_its_box_distance() {
         );
     }
 }
+
+/// `Body::new` refuses a tree that does not bound its mesh
+/// ([`CollideError::TriangleOutsideTree`]): the audit's reproducer, a tree of triangle A given
+/// with A moved 50 away (accepted before, and `first_contact` then missed a probe crossing
+/// the moved triangle), and a vertex one ulp past its leaf's box (exact boxes, exact check).
+/// A tree that bounds its mesh is accepted: the moved mesh after a refit (which then finds
+/// the contact), and a mesh whose vertex went NaN since a refit (the refit keeps the tree
+/// usable, and every query leaves that triangle out).
+#[test]
+fn a_body_whose_tree_does_not_bound_its_mesh_is_refused() {
+    let one = [[0u32, 1, 2]];
+    let a = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let moved = a.map(|p| p + vec3(50.0, 0.0, 0.0));
+    let (ma, mb) = (TriangleMesh::new(&a, &one), TriangleMesh::new(&moved, &one));
+    let mut bvh = tree(&ma);
+    assert_eq!(
+        Body::new(&bvh, mb).unwrap_err(),
+        CollideError::TriangleOutsideTree { triangle: 0 }
+    );
+    let mut ulp = a;
+    ulp[1].x = ulp[1].x.next_up();
+    assert_eq!(
+        Body::new(&bvh, TriangleMesh::new(&ulp, &one)).unwrap_err(),
+        CollideError::TriangleOutsideTree { triangle: 0 }
+    );
+    Body::new(&bvh, ma).unwrap();
+    let p = [
+        vec3(50.2, 0.2, -1.0),
+        vec3(50.2, 0.2, 1.0),
+        vec3(50.3, 0.3, 1.0),
+    ];
+    assert!(triangles_intersect(&moved, &p));
+    let pm = TriangleMesh::new(&p, &one);
+    let probe_tree = tree(&pm);
+    let probe = Body::new(&probe_tree, pm).unwrap();
+    bvh.refit(&mb).unwrap();
+    let body = Body::new(&bvh, mb).unwrap();
+    assert_eq!(
+        first_contact(&body, &probe, &Transform::IDENTITY),
+        Ok(Some((0, 0)))
+    );
+    // In a tree of many leaves, the check reads every leaf: the last triangle moved.
+    let (pos, tris) = lcg_soup(200, 7, 4.0, 1.0);
+    let soup = TriangleMesh::new(&pos, &tris);
+    let mut big = tree(&soup);
+    assert!(big.node_count() > 50);
+    let mut far = pos.clone();
+    for v in &mut far[3 * 199..] {
+        *v += vec3(0.0, 0.0, 100.0);
+    }
+    let far_mesh = TriangleMesh::new(&far, &tris);
+    assert_eq!(
+        Body::new(&big, far_mesh).unwrap_err(),
+        CollideError::TriangleOutsideTree { triangle: 199 }
+    );
+    let mut nan = pos.clone();
+    nan[3 * 120] = Vec3::NAN;
+    let nan_mesh = TriangleMesh::new(&nan, &tris);
+    assert!(
+        big.refit(&nan_mesh).is_err(),
+        "refit names the NaN triangle"
+    );
+    Body::new(&big, nan_mesh).unwrap();
+}

@@ -12,6 +12,7 @@ use crate::error::{CapacityError, NonFiniteError, Storage};
 use crate::mesh::TriangleMesh;
 use crate::query::walk::PadFrame;
 use crate::triangle::LANES;
+use glam::Vec3A;
 
 /// The leaf run binary node `b` becomes, if it becomes one: a binary leaf, or an inner node
 /// whose subtree holds at most [`LEAF_MERGE`] primitives (one wide leaf tests them in a row,
@@ -263,6 +264,9 @@ pub(super) const fn place_leaf(end: usize, count: usize) -> usize {
 struct Plan {
     nodes: usize,
     slots: usize,
+    /// The first triangle (in walk order) outside the box of the binary node its leaf run is
+    /// made from ([`run_outside`]), when the walk was given the mesh.
+    outside: Option<u32>,
 }
 
 impl Plan {
@@ -312,23 +316,72 @@ const PENDING_FULL: BvhError = BvhError::LeafTooLarge {
     max: MAX_LEAF_TRIANGLES,
 };
 
-/// Walks the collapse without writing: what it needs ([`Plan`]), or the first reason it
-/// cannot be built (a leaf too large, a broken binary tree).
-fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<Plan, BvhError> {
-    if nodes.is_empty() {
-        return Ok(Plan { nodes: 0, slots: 0 });
+/// The first triangle of the leaf run `run` (of `indices`) that `mesh` gives outside the box
+/// of `node`, the binary node the run is made from, whose box the wide tree gives the run (a
+/// triangle the mesh cannot give counts as outside). `None` when the binary tree bounds every
+/// triangle of the run, as it does those of its source ([`BvhNode::holds`]). The box of the
+/// run's vertices is compared with `node`'s first, once (the vertices are finite:
+/// [`check_finite`] refuses the tree otherwise); only when it is not inside are the triangles
+/// tested one by one.
+fn run_outside(
+    node: &BvhNode,
+    indices: &[u32],
+    run: core::ops::Range<usize>,
+    mesh: &TriangleMesh<'_>,
+) -> Option<u32> {
+    let prims = indices.get(run)?;
+    let (mut lo, mut hi, mut missing) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, false);
+    for &p in prims {
+        let Some(v) = mesh.triangle(p as usize) else {
+            missing = true;
+            continue;
+        };
+        for q in v {
+            let q = Vec3A::from(q);
+            (lo, hi) = (lo.min(q), hi.max(q));
+        }
     }
+    if !missing && node.holds_box(lo, hi) {
+        return None;
+    }
+    prims
+        .iter()
+        .copied()
+        .find(|&p| !mesh.triangle(p as usize).is_some_and(|v| node.holds(&v)))
+}
+
+/// Walks the collapse without writing: what it needs ([`Plan`]), or the first reason it
+/// cannot be built (a leaf too large, a broken binary tree). With `source` (the tree's index
+/// array and the mesh), also reads every triangle of the tree and records the first outside
+/// its run's box ([`Plan::outside`]).
+fn plan<const W: usize>(
+    nodes: &[BvhNode],
+    source: Option<(&[u32], &TriangleMesh<'_>)>,
+) -> Result<Plan, BvhError> {
+    if nodes.is_empty() {
+        return Ok(Plan {
+            nodes: 0,
+            slots: 0,
+            outside: None,
+        });
+    }
+    let outside = |b: u32, run: &core::ops::Range<usize>| {
+        let node = nodes.get(b as usize)?;
+        source.and_then(|(indices, mesh)| run_outside(node, indices, run.clone(), mesh))
+    };
     if let Some(run) = root_leaf(nodes) {
         leaf_fits(&run)?;
         return Ok(Plan {
             nodes: 0,
             slots: run.len(),
+            outside: outside(0, &run),
         });
     }
     const { assert_width(W) };
     let mut pending = Pending::new();
     let mut count = 1usize;
     let mut slots = 0usize;
+    let mut first_outside = None;
     if !pending.push((0, 0)) {
         return Err(PENDING_FULL);
     }
@@ -337,6 +390,9 @@ fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<Plan, BvhError> {
         for (c, leaf) in list.iter() {
             if let Some(range) = leaf {
                 leaf_fits(&range)?;
+                if first_outside.is_none() {
+                    first_outside = outside(c, &range);
+                }
             } else {
                 count += 1;
                 if !pending.push((c, 0)) {
@@ -349,12 +405,15 @@ fn plan<const W: usize>(nodes: &[BvhNode]) -> Result<Plan, BvhError> {
     Ok(Plan {
         nodes: count,
         slots,
+        outside: first_outside,
     })
 }
 
-/// The checks of [`WideBvh::from_binary`] that need no storage: `mesh` is `binary`'s source,
-/// the triangle count fits, every leaf fits ([`plan`]) and every triangle of the tree has
-/// finite vertices. Returns what the `W`-wide tree needs.
+/// The checks of [`WideBvh::from_binary`] that need no storage: `mesh` has as many triangles
+/// as `binary`'s source, the triangle count fits, every leaf fits ([`plan`]), every triangle
+/// of the tree has finite vertices, and lies in the box the wide tree gives it (a mesh that
+/// is not the tree's source: [`BvhError::TriangleOutsideTree`]). Returns what the `W`-wide
+/// tree needs.
 fn check<const W: usize, BN, BI>(
     binary: &Bvh<BN, BI>,
     mesh: &TriangleMesh<'_>,
@@ -364,9 +423,14 @@ where
     BI: AsRef<[u32]>,
 {
     check_counts(binary, mesh)?;
-    let needed = plan::<W>(binary.nodes())?;
+    let needed = plan::<W>(binary.nodes(), Some((binary.indices(), mesh)))?;
     slots_fit(needed.slots)?;
     check_finite(binary, mesh)?;
+    if let Some(p) = needed.outside {
+        return Err(BvhError::TriangleOutsideTree {
+            triangle: p as usize,
+        });
+    }
     Ok(needed)
 }
 
@@ -431,7 +495,7 @@ where
         BN: AsRef<[BvhNode]>,
         BI: AsRef<[u32]>,
     {
-        plan::<W>(binary.nodes()).map(|p| p.nodes)
+        plan::<W>(binary.nodes(), None).map(|p| p.nodes)
     }
 
     /// Exact number of [`LeafGroup`]s [`WideBvh::from_binary`] needs for `binary` (at most
@@ -445,7 +509,7 @@ where
         BN: AsRef<[BvhNode]>,
         BI: AsRef<[u32]>,
     {
-        plan::<W>(binary.nodes()).map(|p| p.groups())
+        plan::<W>(binary.nodes(), None).map(|p| p.groups())
     }
 
     /// Collapses `binary`, built over `mesh`, into `nodes` and `groups` (see the module
@@ -459,7 +523,12 @@ where
     /// [`BvhError::Capacity`] (fewer than [`WideBvh::node_count_for`] nodes or
     /// [`WideBvh::group_count_for`] groups; [`group_capacity`] of the triangle count always
     /// suffices),
-    /// [`BvhError::NonFinite`] (a triangle of the tree no longer has finite vertices).
+    /// [`BvhError::NonFinite`] (a triangle of the tree no longer has finite vertices),
+    /// [`BvhError::TriangleOutsideTree`] (a triangle of `mesh` lies outside the box of the
+    /// binary subtree its wide leaf is made from: `mesh` is not `binary`'s source, or moved
+    /// since without a [`Bvh::refit`]). A mesh that passes is bounded by every box of the
+    /// wide tree, so its queries are exact for it. (The walk that sizes the tree reads every
+    /// triangle of the tree for this check.)
     pub fn from_binary<BN, BI>(
         binary: &Bvh<BN, BI>,
         mesh: &TriangleMesh<'_>,
@@ -471,7 +540,7 @@ where
         BI: AsRef<[u32]>,
     {
         let needed = check::<W, _, _>(binary, mesh)?;
-        Self::write(binary, mesh, Some(needed), nodes, groups)
+        Self::write::<BN, BI, false>(binary, mesh, Some(needed), nodes, groups)
     }
 
     /// [`WideBvh::from_binary`] with storage the caller makes once the sizes are known:
@@ -495,7 +564,7 @@ where
     {
         let needed = check::<W, _, _>(binary, mesh)?;
         let (nodes, groups) = storage(needed.nodes, needed.groups());
-        Self::write(binary, mesh, Some(needed), nodes, groups)
+        Self::write::<BN, BI, false>(binary, mesh, Some(needed), nodes, groups)
     }
 
     /// Wide nodes that always suffice for collapsing `binary`, whatever its shape:
@@ -521,9 +590,10 @@ where
     ///
     /// As [`WideBvh::from_binary`], with [`BvhError::Capacity`] for storage below those bounds.
     /// A leaf too large ([`BvhError::LeafTooLarge`]), [`BvhError::TooManyTriangles`] from
-    /// the padding, or a tree of shared subtrees that outgrows the node bound
-    /// ([`BvhError::Capacity`]) are found during the walk: the storage has been partly
-    /// written then.
+    /// the padding, a tree of shared subtrees that outgrows the node bound
+    /// ([`BvhError::Capacity`]), or a triangle outside its box
+    /// ([`BvhError::TriangleOutsideTree`]: checked as each triangle is copied, at no extra
+    /// pass) are found during the walk: the storage has been partly written then.
     pub fn from_binary_in<BN, BI>(
         binary: &Bvh<BN, BI>,
         mesh: &TriangleMesh<'_>,
@@ -544,13 +614,15 @@ where
             groups.as_ref().len(),
         )?;
         check_finite(binary, mesh)?;
-        Self::write(binary, mesh, None, nodes, groups)
+        Self::write::<BN, BI, true>(binary, mesh, None, nodes, groups)
     }
 
     /// The collapse itself, for a tree that passed [`check_counts`] and [`check_finite`]:
     /// with its `plan` ([`check`] passed) into storage checked here first, or without one
-    /// (each leaf, the slot count and the storage checked as the walk goes).
-    fn write<BN, BI>(
+    /// (each leaf, the slot count and the storage checked as the walk goes, and with
+    /// `CHECK_BOXES` every triangle's box as it is copied: `true` exactly without a plan, a
+    /// parameter so that the planned collapse's copy loop has no trace of the check).
+    fn write<BN, BI, const CHECK_BOXES: bool>(
         binary: &Bvh<BN, BI>,
         mesh: &TriangleMesh<'_>,
         plan: Option<Plan>,
@@ -589,17 +661,43 @@ where
             emptied = emptied.max(end);
         };
         let mut slots = 0usize;
-        let mut copy_leaf = |start: usize, range: core::ops::Range<usize>| -> usize {
+        // Without a plan (which checked it), the run's triangles are checked to lie in the
+        // box of its binary node `bn` as they are copied: the box of the vertices the copy
+        // reads anyway, against `bn`'s once per run (the vertices are finite: `check_finite`);
+        // when it is not inside, [`run_outside`] names the triangle.
+        let mut copy_leaf = |start: usize,
+                             range: core::ops::Range<usize>,
+                             bn: &BvhNode|
+         -> Result<usize, BvhError> {
             empty_to(out, (start + range.len()).div_ceil(LANES));
-            for (slot, &p) in (start..).zip(indices.get(range).unwrap_or(&[])) {
-                if let (Some(group), Some(v)) =
-                    (out.get_mut(slot / LANES), mesh.triangle(p as usize))
-                {
+            let (mut lo, mut hi, mut missing) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, false);
+            for (slot, &p) in (start..).zip(indices.get(range.clone()).unwrap_or(&[])) {
+                let v = mesh.triangle(p as usize);
+                if CHECK_BOXES {
+                    match v {
+                        Some(v) => {
+                            for q in v {
+                                let q = Vec3A::from(q);
+                                (lo, hi) = (lo.min(q), hi.max(q));
+                            }
+                        }
+                        None => missing = true,
+                    }
+                }
+                if let (Some(group), Some(v)) = (out.get_mut(slot / LANES), v) {
                     let v = [v[0].to_array(), v[1].to_array(), v[2].to_array()];
                     group.set(slot % LANES, &LeafTriangle { v, prim: p });
                 }
             }
-            start
+            if CHECK_BOXES
+                && (missing || !bn.holds_box(lo, hi))
+                && let Some(p) = run_outside(bn, indices, range, mesh)
+            {
+                return Err(BvhError::TriangleOutsideTree {
+                    triangle: p as usize,
+                });
+            }
+            Ok(start)
         };
         let slots_stored = |slots: usize| -> Result<(), BvhError> {
             slots_fit(slots)?;
@@ -620,7 +718,11 @@ where
             let len = range.len() as u32;
             slots = range.len();
             slots_stored(slots)?;
-            root = ChildRef::leaf(copy_leaf(0, range) as u32, len).unwrap_or(ChildRef::EMPTY);
+            let first = match bnodes.first() {
+                Some(bn) => copy_leaf(0, range, bn)?,
+                None => 0,
+            };
+            root = ChildRef::leaf(first as u32, len).unwrap_or(ChildRef::EMPTY);
         } else if !bnodes.is_empty() {
             CapacityError::check(Storage::BvhNodes, 1, node_count)?;
             root = 0;
@@ -646,7 +748,7 @@ where
                         // Checked above: count ≤ MAX_LEAF_TRIANGLES, slots ≤ MAX_TRIANGLES.
                         let len = range.len() as u32;
                         let start = starts.get(i).copied().unwrap_or(slots);
-                        ChildRef::leaf(copy_leaf(start, range) as u32, len)
+                        ChildRef::leaf(copy_leaf(start, range, bn)? as u32, len)
                             .unwrap_or(ChildRef::EMPTY)
                     } else {
                         let child = next;

@@ -22,7 +22,11 @@
 //! [`WideBvh::group_count_for`]`(binary)` groups (exact; [`group_capacity`]`(N)` always
 //! suffices). Too little storage, a binary leaf of more than [`MAX_LEAF_TRIANGLES`]
 //! primitives, more than [`MAX_TRIANGLES`] triangles, or a mesh that is not the binary
-//! tree's source is a typed error returned **before anything is written**.
+//! tree's source (another triangle count, or a triangle outside the box of the binary subtree
+//! its wide leaf is made from: [`BvhError::TriangleOutsideTree`](super::BvhError::TriangleOutsideTree))
+//! is a typed error returned **before anything is written** ([`WideBvh::from_binary_in`],
+//! which walks the tree once, finds the leaf and box errors during its walk). A mesh that
+//! passes lies in every box of the wide tree, so queries are exact for it.
 //!
 //! # Layout and size
 //!

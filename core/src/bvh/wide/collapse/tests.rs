@@ -306,3 +306,119 @@ fn one_walk_refuses_small_storage_and_large_leaves() {
         );
     }
 }
+
+/// The binary tree over `mesh` with the collapse's options.
+fn collapse_tree(mesh: &TriangleMesh<'_>) -> Bvh<Vec<BvhNode>, Vec<u32>> {
+    let n = mesh.len();
+    Bvh::build(
+        mesh,
+        std::vec![BvhNode::EMPTY; crate::bvh::node_capacity(n)],
+        std::vec![0u32; crate::bvh::index_capacity(n)],
+        &super::super::binary_options(crate::bvh::BuildOptions::default()),
+    )
+    .unwrap()
+}
+
+/// What each constructor says of `mesh` with `b`: `from_binary` (into garbage it must not
+/// write when it refuses), `from_binary_with` (whose storage must not be asked for then) and
+/// `from_binary_in`, which must agree.
+fn collapse_all_ways(
+    b: &Bvh<Vec<BvhNode>, Vec<u32>>,
+    mesh: &TriangleMesh<'_>,
+) -> Result<Vec8, BvhError> {
+    let (gn, gg) = garbage();
+    let n = mesh.len();
+    let (mut nodes, mut groups) = (
+        std::vec![gn; Vec8::node_bound_for(b)],
+        std::vec![gg; group_capacity(n)],
+    );
+    type Borrowed<'a> = WideBvh<8, &'a mut [WideNode<8>], &'a mut [LeafGroup]>;
+    let two = Borrowed::from_binary(b, mesh, &mut nodes[..], &mut groups[..]).map(|_| ());
+    if two.is_err() {
+        assert!(nodes.iter().all(|x| *x == gn), "nodes written: {two:?}");
+        let g = std::format!("{gg:?}");
+        assert!(
+            groups.iter().all(|x| std::format!("{x:?}") == g),
+            "groups written: {two:?}"
+        );
+    }
+    let mut asked = false;
+    let with = Vec8::from_binary_with(b, mesh, |nodes, groups| {
+        asked = true;
+        (
+            std::vec![WideNode::EMPTY; nodes],
+            std::vec![LeafGroup::EMPTY; groups],
+        )
+    });
+    assert_eq!(asked, with.is_ok(), "storage asked for iff accepted");
+    let one = Vec8::from_binary_in(
+        b,
+        mesh,
+        std::vec![gn; Vec8::node_bound_for(b)],
+        std::vec![gg; group_capacity(n)],
+    );
+    assert_eq!(two.err(), with.as_ref().err().copied());
+    assert_eq!(one.as_ref().err(), with.as_ref().err());
+    with
+}
+
+/// A mesh with the source's triangle count that the binary tree does not bound is refused by
+/// every constructor ([`BvhError::TriangleOutsideTree`], before anything is written by the
+/// planned ones): one triangle moved 100 away (the audit's reproducer: it was accepted and a
+/// ray through the moved triangle missed it), in a tree with nodes and in one that is a root
+/// leaf; a vertex one ulp past its leaf's box (the boxes are the vertices' exact
+/// minimum and maximum: the check is exact). A mesh the tree bounds is accepted: the source,
+/// the source with each triangle's vertices rotated, and the moved mesh after a refit.
+#[test]
+fn a_mesh_the_binary_tree_does_not_bound_is_refused() {
+    for count in [40u32, 5] {
+        let soup = |shift_first: f32| -> Vec<glam::Vec3> {
+            (0..count)
+                .flat_map(|t| {
+                    let x = t as f32 + if t == 0 { shift_first } else { 0.0 };
+                    let o = glam::Vec3::new(x, 0.0, 0.0);
+                    [
+                        o,
+                        o + glam::Vec3::new(0.5, 0.0, 0.0),
+                        o + glam::Vec3::new(0.0, 0.5, 0.0),
+                    ]
+                })
+                .collect()
+        };
+        let tris: Vec<[u32; 3]> = (0..count).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        let (a, moved) = (soup(0.0), soup(100.0));
+        let ma = TriangleMesh::new(&a, &tris);
+        let mut b = collapse_tree(&ma);
+        let w = collapse_all_ways(&b, &ma).unwrap();
+        assert_eq!(matches!(w.root(), ChildRef::Leaf { .. }), count == 5);
+        let mb = TriangleMesh::new(&moved, &tris);
+        assert_eq!(
+            collapse_all_ways(&b, &mb).err(),
+            Some(BvhError::TriangleOutsideTree { triangle: 0 }),
+            "{count}"
+        );
+        // The vertex of largest x (triangle count − 1's second) is its leaf box's maximum.
+        let mut ulp = a.clone();
+        let last = 3 * (count as usize - 1) + 1;
+        ulp[last].x = ulp[last].x.next_up();
+        assert_eq!(
+            collapse_all_ways(&b, &TriangleMesh::new(&ulp, &tris)).err(),
+            Some(BvhError::TriangleOutsideTree {
+                triangle: count as usize - 1
+            }),
+            "{count}"
+        );
+        let rotated: Vec<[u32; 3]> = tris.iter().map(|&[i, j, k]| [j, k, i]).collect();
+        collapse_all_ways(&b, &TriangleMesh::new(&a, &rotated)).unwrap();
+        b.refit(&mb).unwrap();
+        let w = collapse_all_ways(&b, &mb).unwrap();
+        let ray = crate::ray::Ray::new(glam::Vec3::new(100.1, 0.1, -1.0), glam::Vec3::Z);
+        let hit = crate::query::RayQuery::closest_hit(
+            &w,
+            &ray,
+            &mut crate::query::Triangles::new(&mb, &crate::triangle::Watertight),
+            &mut crate::query::Query::new(),
+        );
+        assert_eq!(hit.map(|h| h.0), Some(0), "{count}");
+    }
+}
