@@ -265,19 +265,38 @@ impl Aabb {
 /// A ray prepared for slab tests: reciprocal direction (true IEEE division, so `±0` gives `±∞`)
 /// and the octant from the direction's sign bits (`−0.0` counts as negative, matching
 /// `1/−0 = −∞`).
+///
+/// Only [`SlabRay::new`] makes one, from a valid ray ([`Ray::validate`]): its fields are
+/// private, so every `SlabRay` has a finite origin and a finite, non-zero direction whose
+/// reciprocal, octant and division flag agree with it. That is what the slab test's
+/// guarantees (module docs) rest on: it absorbs NaN slab distances, so a ray with a NaN
+/// origin, were one built by hand, would "hit" every box.
+///
+/// ```compile_fail,E0451
+/// use halfray_core::aabb::SlabRay;
+/// use halfray_core::Vec3;
+/// // Not possible: the fields are private.
+/// let nan = SlabRay {
+///     origin: Vec3::NAN,
+///     inv_dir: Vec3::ONE,
+///     negative: [false; 3],
+///     direction: Vec3::ONE,
+///     divide: false,
+/// };
+/// ```
 #[derive(Clone, Copy, Debug)]
 pub struct SlabRay {
     /// Ray origin.
-    pub origin: Vec3,
+    pub(crate) origin: Vec3,
     /// `1 / direction`, per component.
-    pub inv_dir: Vec3,
+    pub(crate) inv_dir: Vec3,
     /// Sign bit of each direction component.
-    pub negative: [bool; 3],
+    pub(crate) negative: [bool; 3],
     /// Ray direction (used instead of `inv_dir` when `divide` is set).
-    pub direction: Vec3,
+    pub(crate) direction: Vec3,
     /// `true` when a non-zero direction component has an infinite or subnormal reciprocal
     /// (module docs): slab distances are then computed by division.
-    pub divide: bool,
+    pub(crate) divide: bool,
 }
 
 impl SlabRay {
@@ -328,7 +347,8 @@ impl SlabRay {
     }
 
     /// `((near − o_axis)/d_axis, (far − o_axis)/d_axis)`, unpadded: by the reciprocal, or by
-    /// division when [`SlabRay::divide`] is set. `±0` components give `±∞` (or NaN for an
+    /// division when a non-zero direction component has an infinite or subnormal reciprocal
+    /// (module docs). `±0` components give `±∞` (or NaN for an
     /// origin on the plane) either way; an `axis` other than 0, 1 or 2 gives `(NaN, NaN)`.
     #[inline(always)]
     #[must_use]

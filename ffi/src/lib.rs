@@ -339,10 +339,10 @@ pub unsafe extern "C" fn halfray_baked_info(
     // SAFETY: non-NULL, aligned, writable (contract).
     unsafe {
         info.write(HalfrayBakedInfo {
-            vertices: l.vertices,
-            triangles: l.triangles,
-            nodes: l.nodes,
-            scratch_words: load_scratch_len(l.triangles as usize) as u32,
+            vertices: l.vertices(),
+            triangles: l.triangles(),
+            nodes: l.nodes(),
+            scratch_words: load_scratch_len(l.triangles() as usize) as u32,
             byte_len: l.byte_len(),
         });
     }

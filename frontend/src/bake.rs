@@ -114,7 +114,8 @@ pub fn run(args: &BakeArgs) -> Result<()> {
 ///
 /// # Errors
 ///
-/// An input error naming `input` when a count does not fit the format's `u32`.
+/// An input error naming `input` when a count does not fit the format's `u32`, or the buffer
+/// would be larger than this target can hold ([`BakedLayout::new`]).
 pub fn bytes(
     input: &Path,
     positions: &[glam::Vec3],
@@ -130,11 +131,12 @@ pub fn bytes(
             )
         })
     };
-    let layout = BakedLayout {
-        vertices: count(positions.len(), "vertices")?,
-        triangles: count(triangles.len(), "triangles")?,
-        nodes: count(nodes.len(), "BVH nodes")?,
-    };
+    let layout = BakedLayout::new(
+        count(positions.len(), "vertices")?,
+        count(triangles.len(), "triangles")?,
+        count(nodes.len(), "BVH nodes")?,
+    )
+    .map_err(|e| Error::input(Location::file(input), e.to_string()))?;
     let mut b = Vec::with_capacity(usize::try_from(layout.byte_len()).unwrap_or(0));
     b.extend_from_slice(&layout.header());
     let mut words = |ws: &[u32]| {

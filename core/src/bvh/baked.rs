@@ -56,6 +56,13 @@ pub enum BakedError {
         /// The version found.
         found: u32,
     },
+    /// The counts announce more bytes than a buffer can have on this target (`isize::MAX`,
+    /// the largest slice: 2 GiB on a 32-bit target), so their byte ranges would not fit a
+    /// `usize` ([`BakedLayout::new`]).
+    TooLarge {
+        /// Bytes of the header and arrays the counts announce.
+        needed: u64,
+    },
 }
 
 impl fmt::Display for BakedError {
@@ -70,6 +77,10 @@ impl fmt::Display for BakedError {
                 f,
                 "baked BVH format version {found}, this build reads {BAKED_VERSION}"
             ),
+            Self::TooLarge { needed } => write!(
+                f,
+                "baked BVH of {needed} bytes, more than a buffer on this target can hold"
+            ),
         }
     }
 }
@@ -77,14 +88,26 @@ impl fmt::Display for BakedError {
 impl core::error::Error for BakedError {}
 
 /// The counts of a baked buffer, and from them where each array lies.
+///
+/// Made by [`BakedLayout::read`] (from a buffer's header) or [`BakedLayout::new`] (from
+/// counts, for a writer), both checked: the buffer the counts announce, [`BakedLayout::byte_len`]
+/// bytes, is at most `isize::MAX` bytes, so every byte range (`node_bytes` and the others)
+/// is exact in `usize` on every target. The fields are private so that no layout skips that
+/// check (on a 32-bit target, a hand-made one could announce more than 4 GiB and its ranges
+/// would wrap):
+///
+/// ```compile_fail,E0451
+/// use halfray_core::bvh::BakedLayout;
+/// let unchecked = BakedLayout { vertices: u32::MAX, triangles: u32::MAX, nodes: u32::MAX };
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BakedLayout {
     /// Vertex positions.
-    pub vertices: u32,
+    vertices: u32,
     /// Triangles (and primitive indices).
-    pub triangles: u32,
+    triangles: u32,
     /// BVH nodes.
-    pub nodes: u32,
+    nodes: u32,
 }
 
 /// The little-endian `u32` at `bytes[at..at + 4]` (the caller has checked the length).
@@ -97,6 +120,56 @@ fn word(bytes: &[u8], at: usize) -> u32 {
 }
 
 impl BakedLayout {
+    /// The layout of `vertices` positions, `triangles` triangles (and as many primitive
+    /// indices) and `nodes` BVH nodes, for writing a buffer ([`BakedLayout::header`], then the
+    /// arrays at the byte ranges below).
+    ///
+    /// # Errors
+    ///
+    /// [`BakedError::TooLarge`] when the buffer, [`BakedLayout::byte_len`] bytes, would exceed
+    /// `isize::MAX` bytes (only possible on targets with pointers narrower than 64 bits).
+    pub const fn new(vertices: u32, triangles: u32, nodes: u32) -> Result<Self, BakedError> {
+        Self::within(vertices, triangles, nodes, isize::MAX as u64)
+    }
+
+    /// [`BakedLayout::new`] with the largest buffer `max_bytes` (this target's `isize::MAX`
+    /// there; tests pass a 32-bit target's).
+    const fn within(
+        vertices: u32,
+        triangles: u32,
+        nodes: u32,
+        max_bytes: u64,
+    ) -> Result<Self, BakedError> {
+        let layout = Self {
+            vertices,
+            triangles,
+            nodes,
+        };
+        let needed = layout.byte_len();
+        if needed > max_bytes {
+            return Err(BakedError::TooLarge { needed });
+        }
+        Ok(layout)
+    }
+
+    /// Vertex positions.
+    #[must_use]
+    pub const fn vertices(&self) -> u32 {
+        self.vertices
+    }
+
+    /// Triangles (and primitive indices).
+    #[must_use]
+    pub const fn triangles(&self) -> u32 {
+        self.triangles
+    }
+
+    /// BVH nodes.
+    #[must_use]
+    pub const fn nodes(&self) -> u32 {
+        self.nodes
+    }
+
     /// The header of `bytes`, checked: magic, version, reserved bytes, and a length that
     /// holds every array it announces (the arrays' contents are not read).
     ///
@@ -165,8 +238,9 @@ impl BakedLayout {
         self.triangles_at() + TRIANGLE_BYTES * self.triangles as u64
     }
 
-    /// `start..start + len` as `usize`s; only called on a layout [`BakedLayout::read`] accepted
-    /// (every range within the buffer's length, so within `usize`).
+    /// `start..start + len` as `usize`s. Exact: every layout was checked by
+    /// [`BakedLayout::read`] (every range within the buffer's length) or [`BakedLayout::new`]
+    /// (the whole layout at most `isize::MAX` bytes), so every range is within `usize`.
     fn range(start: u64, len: u64) -> Range<usize> {
         start as usize..(start + len) as usize
     }
@@ -205,10 +279,9 @@ mod tests {
 
     /// A buffer of the given counts: header, then zeros.
     /// One triangle over three vertices in a one-node tree.
-    const ONE_TRIANGLE: BakedLayout = BakedLayout {
-        vertices: 3,
-        triangles: 1,
-        nodes: 1,
+    const ONE_TRIANGLE: BakedLayout = match BakedLayout::new(3, 1, 1) {
+        Ok(l) => l,
+        Err(_) => panic!("a one-triangle layout fits"),
     };
 
     fn buffer(l: BakedLayout) -> [u8; 256] {
@@ -265,6 +338,36 @@ mod tests {
             BakedLayout::read(&bad),
             Err(BakedError::Version { found: 2 })
         );
+    }
+
+    /// `new` accepts the counts whose buffer a target can hold and refuses the others: with a
+    /// 32-bit target's limit (`2³¹ − 1` bytes), `2²⁶ − 1` nodes (with the header, 2 GiB) are
+    /// refused and one node fewer is taken, while a 64-bit host takes every `u32` count. The layouts it accepts read back from their
+    /// own header, and their ranges tile the buffer.
+    #[test]
+    fn new_refuses_layouts_beyond_the_targets_largest_buffer() {
+        let i32_max = i32::MAX as u64;
+        assert_eq!(
+            BakedLayout::within(0, 0, (1 << 26) - 1, i32_max),
+            Err(BakedError::TooLarge { needed: 1 << 31 })
+        );
+        let fits = BakedLayout::within(0, 0, (1 << 26) - 2, i32_max).unwrap();
+        assert_eq!(fits.byte_len(), (1 << 31) - 32);
+        assert!(BakedLayout::within(u32::MAX, 0, 0, i32_max).is_err());
+        let l = BakedLayout::new(3, 1, 1).unwrap();
+        assert_eq!((l.vertices(), l.triangles(), l.nodes()), (3, 1, 1));
+        assert_eq!(BakedLayout::read(&buffer(l)), Ok(l));
+        assert_eq!(l.node_bytes().end, l.position_bytes().start);
+        assert_eq!(l.position_bytes().end, l.triangle_bytes().start);
+        assert_eq!(l.triangle_bytes().end, l.index_bytes().start);
+        assert_eq!(l.index_bytes().end as u64, l.byte_len());
+        #[cfg(target_pointer_width = "64")]
+        {
+            let big = BakedLayout::new(u32::MAX, u32::MAX, u32::MAX).unwrap();
+            assert_eq!(big.index_bytes().end as u64, big.byte_len());
+        }
+        let e = std::format!("{}", BakedError::TooLarge { needed: 5 << 30 });
+        assert!(e.contains("5368709120 bytes"), "{e}");
     }
 
     #[test]

@@ -13,14 +13,25 @@ use glam::Vec3;
 
 /// Per-ray data of the watertight test: the axis permutation that makes the largest direction
 /// component `z`, and the shear that maps the ray to the `+z` axis through the origin.
+///
+/// Made only by [`WatertightRay::new`] and [`WatertightRay::of_valid`] (the fields are
+/// private): the permutation and the shear are always those of a ray, so a test answers
+/// about that ray. (A shear made up by hand would report hits off the ray.)
+///
+/// ```compile_fail,E0451
+/// use halfray_core::triangle::WatertightRay;
+/// use halfray_core::Vec3;
+/// // Not possible: the fields are private.
+/// let made_up = WatertightRay { k: [0, 1, 2], shear: Vec3::new(5.0, 0.0, 1.0) };
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WatertightRay {
     /// Permuted axes `(kx, ky, kz)`; `kz = argmax |d_i|` (ties: lowest index), `kx, ky` follow
     /// cyclically and are swapped when `d_kz < 0` so that the permutation and the scaling by
     /// `1/d_kz` together preserve orientation.
-    pub k: [usize; 3],
+    pub(crate) k: [usize; 3],
     /// Shear `(d_kx/d_kz, d_ky/d_kz, 1/d_kz)`.
-    pub shear: Vec3,
+    pub(crate) shear: Vec3,
 }
 
 impl WatertightRay {

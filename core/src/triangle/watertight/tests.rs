@@ -672,9 +672,10 @@ fn every_region_outside_a_triangle_is_a_miss_for_either_facing() {
     }
 }
 
-/// `WatertightRay`'s fields are public, so a caller can build one whose axes are out of
-/// range. Its answers are then meaningless (the contract of `of_valid`), but every
-/// intersector must still return instead of indexing out of bounds, at every SIMD level.
+/// `WatertightRay`'s fields are private to the crate (outside it only `new` and `of_valid`
+/// make one), but code inside it could still build one whose axes are out of range. Its
+/// answers are then meaningless (the contract of `of_valid`), but every intersector must
+/// still return instead of indexing out of bounds, at every SIMD level.
 #[test]
 fn a_hand_built_ray_with_axes_out_of_range_never_panics() {
     use crate::triangle::TriangleIntersector;
