@@ -24,6 +24,20 @@
 //! * [`halfedge`]: fixed-capacity half-edge mesh arenas and their editing operations.
 //! * [`solids`]: the octahedron and the cube as index lists, for examples and tests.
 //!
+//! **Traits: which to implement.** Meant to be implemented by other crates:
+//! [`mesh::Primitive`] and [`mesh::PrimitiveSource`] (what a structure is built over),
+//! [`query::LeafTest`] (a query's test of one primitive; closures implement it),
+//! [`triangle::TriangleIntersector`] (a ray–triangle test, for [`query::Triangles`]),
+//! [`triangle::VariantVisitor`] (code run with a run-time variant's intersector),
+//! [`shape::Shape`] (a surface a ray can hit), [`volume::PointSet`] (points a bounding volume
+//! is fitted to) and [`query::RayQuery`] (a structure answering the common queries; another
+//! crate's returns its answers through the context's stack kind, `Stack::answer`, and leaves
+//! the context's statistics alone, which only this crate's structures fill in). Sealed, so
+//! used but not implemented elsewhere, because the crate relies on what their implementations
+//! promise: [`query::Stack`] (what a query returns, `StackTooSmall` included),
+//! [`triangle::ShearedTest`] (the watertight family, whose shared cull assumes each member's
+//! test), [`halfedge::MeshStorage`] and [`simd_level::SimdLevel`].
+//!
 //! Nothing in this crate panics on any input, NaN and infinity included: intersectors are
 //! total functions that report "no hit" for invalid rays, and constructors that can reject
 //! input return a typed error ([`error`]).
@@ -69,6 +83,7 @@ pub mod prelude;
 pub mod quadric;
 pub mod query;
 pub mod ray;
+mod sealed;
 pub mod shape;
 #[allow(unsafe_code)]
 mod simd;

@@ -156,15 +156,11 @@ impl Counts {
     }
 }
 
-mod sealed {
-    pub trait Sealed {}
-}
-
 /// Backing storage of a [`super::Mesh`]: three growable-to-capacity arrays of records.
 ///
 /// Sealed: implemented by [`InlineStorage`] and [`SliceStorage`] only. The slices returned
 /// cover the used prefix (live and dead slots, up to the high-water mark).
-pub trait MeshStorage: sealed::Sealed {
+pub trait MeshStorage: crate::sealed::Sealed {
     /// Used vertex slots.
     fn vertices(&self) -> &[VertexRec];
     /// Used vertex slots, mutable.
@@ -215,7 +211,10 @@ impl<const V: usize, const E: usize, const F: usize> Default for InlineStorage<V
     }
 }
 
-impl<const V: usize, const E: usize, const F: usize> sealed::Sealed for InlineStorage<V, E, F> {}
+impl<const V: usize, const E: usize, const F: usize> crate::sealed::Sealed
+    for InlineStorage<V, E, F>
+{
+}
 
 impl<const V: usize, const E: usize, const F: usize> MeshStorage for InlineStorage<V, E, F> {
     fn vertices(&self) -> &[VertexRec] {
@@ -289,7 +288,7 @@ impl<'a> SliceStorage<'a> {
     }
 }
 
-impl sealed::Sealed for SliceStorage<'_> {}
+impl crate::sealed::Sealed for SliceStorage<'_> {}
 
 fn push_into<T>(buf: &mut [T], len: &mut usize, r: T) -> bool {
     match buf.get_mut(*len) {

@@ -68,7 +68,27 @@ impl Default for QueryStack {
 ///
 /// Structures whose walk needs no such stack (the grid) or has entries of its own (the
 /// kd-tree's 12-byte intervals, 64 of them in its frame) ignore it.
-pub trait Stack {
+///
+/// Sealed: implemented by the kinds above only. What a query returns, and that a stack too
+/// small is reported as [`BvhError::StackTooSmall`] rather than as a miss, is part of each
+/// kind's contract, so no other crate can add one:
+///
+/// ```compile_fail,E0277
+/// use halfray_core::bvh::BvhError;
+/// use halfray_core::query::{Stack, StackEntry};
+/// struct Quiet([StackEntry; 4]);
+/// // Not possible: `Stack` is sealed. (This one would turn `StackTooSmall` into a miss.)
+/// impl Stack for Quiet {
+///     type Out<Y> = Option<Y>;
+///     fn entries(&mut self) -> Option<&mut [StackEntry]> {
+///         Some(&mut self.0)
+///     }
+///     fn answer<Y>(found: Result<Option<Y>, BvhError>) -> Option<Y> {
+///         found.unwrap_or(None)
+///     }
+/// }
+/// ```
+pub trait Stack: crate::sealed::Sealed {
     /// What a query returns when its answer is `Option<Y>`.
     type Out<Y>;
 
@@ -82,6 +102,8 @@ pub trait Stack {
 /// The default [`Stack`]: every query makes its own, enough for any tree.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct OwnStack;
+
+impl crate::sealed::Sealed for OwnStack {}
 
 impl Stack for OwnStack {
     type Out<Y> = Option<Y>;
@@ -98,6 +120,8 @@ impl Stack for OwnStack {
     }
 }
 
+impl crate::sealed::Sealed for &mut QueryStack {}
+
 impl Stack for &mut QueryStack {
     type Out<Y> = Option<Y>;
 
@@ -112,6 +136,8 @@ impl Stack for &mut QueryStack {
         found.unwrap_or(None)
     }
 }
+
+impl crate::sealed::Sealed for &mut [StackEntry] {}
 
 impl Stack for &mut [StackEntry] {
     type Out<Y> = Result<Option<Y>, BvhError>;

@@ -102,7 +102,26 @@ pub struct WatertightF32;
 /// of [`WatertightRay::certain_misses`]) have certain, opposite signs. Each member supplies
 /// its name and its test; [`TriangleIntersector`] (preparation and the four-lane cull) comes
 /// with it.
-pub trait ShearedTest: Copy + Send + Sync {
+///
+/// Sealed: the family's cull rejects a triangle for every member on the strength of each
+/// member's test refusing it too, which only this crate's members promise. Another crate's
+/// intersector implements [`TriangleIntersector`] itself:
+///
+/// ```compile_fail,E0277
+/// use halfray_core::Ray;
+/// use halfray_core::Vec3;
+/// use halfray_core::triangle::{ShearedTest, TriangleHit, WatertightRay};
+/// #[derive(Clone, Copy)]
+/// struct Mine;
+/// // Not possible: `ShearedTest` is sealed.
+/// impl ShearedTest for Mine {
+///     const NAME: &'static str = "mine";
+///     fn hit_sheared(&self, _: &WatertightRay, _: &Ray, _: &[Vec3; 3]) -> Option<TriangleHit> {
+///         None
+///     }
+/// }
+/// ```
+pub trait ShearedTest: Copy + Send + Sync + crate::sealed::Sealed {
     /// The variant's name ([`TriangleIntersector::name`]).
     const NAME: &'static str;
 
@@ -227,6 +246,8 @@ impl<T: ShearedTest> TriangleIntersector for T {
     }
 }
 
+impl crate::sealed::Sealed for Watertight {}
+
 impl ShearedTest for Watertight {
     const NAME: &'static str = "watertight";
 
@@ -336,6 +357,8 @@ fn exact_candidate<L: SimdLevel>(
     let _ = level;
     finish_exact(c)
 }
+
+impl crate::sealed::Sealed for WatertightF32 {}
 
 /// All three `f32` edge functions non-zero and finite skip the exact recomputation, so mixed
 /// certain signs are a miss here too (the family's cull applies).

@@ -110,6 +110,8 @@ fn normal_f32(v: &[Vec3; 3]) -> Vec3 {
     if n.is_finite() { n } else { Vec3::ZERO }
 }
 
+impl crate::sealed::Sealed for WatertightF32Exact {}
+
 impl ShearedTest for WatertightF32Exact {
     const NAME: &'static str = "watertight-f32-exact";
 
