@@ -10,7 +10,7 @@
 use super::VariantRow;
 use super::triangles::{Accuracy, Workload};
 use crate::crosscheck::judge::{is_leak, near_boundary};
-use crate::embree::{EmbreeDevice, EmbreeScene, ray_is_valid};
+use crate::embree::{EmbreeDevice, EmbreeMesh, EmbreeScene, ray_is_valid};
 use crate::error::Result;
 use crate::obj::ObjMesh;
 use halfray_core::Ray;
@@ -18,9 +18,21 @@ use halfray_core::triangle::F64Reference;
 use std::hint::black_box;
 use std::time::Instant;
 
-fn scene(device: &EmbreeDevice, m: &ObjMesh, robust: bool) -> Result<EmbreeScene> {
+/// `m` checked and laid out for Embree, once per mesh: every scene of it shares the buffers.
+fn embree_mesh(m: &ObjMesh) -> Result<EmbreeMesh> {
     let pos: Vec<[f32; 3]> = m.positions.iter().map(|p| p.to_array()).collect();
-    Ok(EmbreeScene::new(device, &pos, &m.triangles, robust)?)
+    Ok(EmbreeMesh::new(&pos, &m.triangles)?)
+}
+
+/// The index of `m` in `distinct` (the same mesh or an equal one), pushed there if new.
+fn index_of<'a>(distinct: &mut Vec<&'a ObjMesh>, m: &'a ObjMesh) -> usize {
+    match distinct.iter().position(|&d| std::ptr::eq(d, m) || d == m) {
+        Some(i) => i,
+        None => {
+            distinct.push(m);
+            distinct.len() - 1
+        }
+    }
 }
 
 fn closest(s: &EmbreeScene, r: &Ray) -> Option<(u32, f32)> {
@@ -49,7 +61,9 @@ fn mrays(s: &EmbreeScene, rays: &[Ray], reps: usize) -> f64 {
 }
 
 /// The two Embree rows. `throughput_sets` are the ray sets and meshes of the BVH columns, in
-/// column order (`None` where a column is not measured).
+/// column order (`None` where a column is not measured). Each distinct mesh (of `meshes` and
+/// the columns, equal ones once) is laid out for Embree once, and each row builds one scene of
+/// it, which its accuracy figures and its throughput columns share.
 pub fn rows(
     meshes: &[ObjMesh],
     w: &Workload,
@@ -57,19 +71,30 @@ pub fn rows(
     reps: usize,
 ) -> Result<Vec<VariantRow>> {
     let device = EmbreeDevice::new()?;
+    let mut distinct = Vec::new();
+    let mesh_ix: Vec<usize> = meshes.iter().map(|m| index_of(&mut distinct, m)).collect();
+    let column_ix = throughput_sets
+        .each_ref()
+        .map(|e| e.as_ref().map(|(m, _)| index_of(&mut distinct, m)));
+    let laid_out: Vec<EmbreeMesh> = distinct
+        .iter()
+        .map(|m| embree_mesh(m))
+        .collect::<Result<_>>()?;
     let mut out = Vec::new();
     for (name, robust) in [("embree", false), ("embree-robust", true)] {
-        let scenes: Vec<EmbreeScene> = meshes
+        let built: Vec<EmbreeScene> = laid_out
             .iter()
-            .map(|m| scene(&device, m, robust))
+            .map(|m| Ok(EmbreeScene::from_mesh(&device, m, robust)?))
             .collect::<Result<_>>()?;
+        // The scene of `meshes[mi]`.
+        let scenes: Vec<&EmbreeScene> = mesh_ix.iter().map(|&i| &built[i]).collect();
         let mut acc = Accuracy {
             leak_rays: w.leak_rays.len(),
             outside_rays: w.outside_rays.len(),
             ..Accuracy::default()
         };
         for ((ray, _), &mi) in w.leak_rays.iter().zip(&w.leak_mesh) {
-            let hit = closest(&scenes[mi], ray).map(|(prim, t)| crate::crosscheck::judge::Answer {
+            let hit = closest(scenes[mi], ray).map(|(prim, t)| crate::crosscheck::judge::Answer {
                 prim,
                 t,
                 u: 0.0,
@@ -78,10 +103,10 @@ pub fn rows(
             acc.leaks += is_leak(ray, hit.as_ref(), 1.0) as usize;
         }
         for ((ray, _), &(mi, f)) in w.outside_rays.iter().zip(&w.outside_ids) {
-            acc.false_hits += closest(&scenes[mi], ray).is_some_and(|(p, _)| p == f) as usize;
+            acc.false_hits += closest(scenes[mi], ray).is_some_and(|(p, _)| p == f) as usize;
         }
         for ((ray, tri), &(mi, f)) in w.pair_rays.iter().zip(&w.pair_ids) {
-            let got = closest(&scenes[mi], ray);
+            let got = closest(scenes[mi], ray);
             let reference = F64Reference::solve(ray, tri).filter(|(t, _)| *t > 0.0);
             if !near_boundary(ray, tri) {
                 // Hit/miss of the aimed-at triangle, where it is not occluded by another one.
@@ -100,9 +125,9 @@ pub fn rows(
         }
         acc.rel_t_errors.sort_by(f64::total_cmp);
         let mut cols = [None; 4];
-        for (c, entry) in throughput_sets.iter().enumerate() {
-            if let Some((m, rays)) = entry {
-                cols[c] = Some(mrays(&scene(&device, m, robust)?, rays, reps));
+        for ((col, entry), ix) in cols.iter_mut().zip(throughput_sets).zip(column_ix) {
+            if let (Some((_, rays)), Some(i)) = (entry, ix) {
+                *col = Some(mrays(&built[i], rays, reps));
             }
         }
         out.push(VariantRow::new(name, None, cols, &acc));
