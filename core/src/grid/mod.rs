@@ -75,12 +75,22 @@
 //!
 //! `reach` is `extent + `[`ORIGIN_REACH`]` × (longest side)`: rays starting farther out
 //! need more padding than the build applied, and test the block of `r` neighbouring cells
-//! around each DDA cell instead, with `r` covering the missing padding per axis; when that
-//! block would cover the grid, they test every reference once (brute force in effect), as
-//! does a valid ray whose `o − c` overflows `f32`.
+//! around each DDA cell instead, with `r` covering the missing padding per axis. Each cell is
+//! tested once: the block around the entry cell, then at each step only the layer of cells
+//! the step adds to the block (the DDA moves one way along each axis, so a cell that leaves
+//! the block never re-enters it).
 //!
-//! **Step bound:** each step moves one axis one cell toward its end, so a ray visits at most
-//! `nx + ny + nz − 2` cells; the loop is bounded by that count. There is no stack.
+//! **Cost bound:** such a walk visits at most the first block plus one layer per step, with
+//! at most `nᵢ − 1` steps along each axis the ray moves on. When that count reaches the
+//! number of references (or of cells), the ray tests every reference once instead (brute
+//! force in effect), as does a valid ray whose `o − c` overflows `f32`. A ray therefore
+//! either makes that one pass or visits fewer cells than there are references and tests
+//! each reference at most once: its work (cells visited plus triangles tested) is at most
+//! twice a pass over every reference, however far its origin.
+//!
+//! **Step bound:** each step moves one axis one cell toward its end, so the DDA visits at
+//! most `nx + ny + nz − 2` cells (a ray within `reach` visits only those); the loop is
+//! bounded by that count. There is no stack.
 //!
 //! # Size
 //!

@@ -573,6 +573,86 @@ fn far_origins_use_neighbour_blocks() {
     );
 }
 
+/// How many times the references a pass over all of them tests (the brute force the grid
+/// falls back to) a walk may cost, counting cell visits and triangle tests alike (unitless):
+/// the walk visits each cell once and fewer cells than there are references, and tests each
+/// visited cell's references once, so at most the references themselves.
+const WALK_WORK_PER_REFERENCE: u64 = 2;
+
+/// The audit's far-ray scene: 16 384 triangles of side 10⁻³ scattered in the unit cube, a fine
+/// grid (`λ = 64`, 102³ cells), and rays along `±x` through a sparse height from
+/// `10 … 3·10⁵` away, plus rays from as far aimed at triangles along oblique directions. From
+/// `1.2·10⁵` away along `+x` the walk tested a block of 99³ cells around each of 102 cells
+/// (71 million visits, 600 times a pass over every reference); a walk now visits each cell
+/// once and gives way to that pass when it could visit more cells than there are
+/// references. Every ray: the work is within [`WALK_WORK_PER_REFERENCE`] times the
+/// references (or the ray fell back to testing each once), and the answer is brute force's.
+#[test]
+fn far_rays_cost_no_more_than_a_pass_over_every_reference() {
+    let mut s = 12345u64;
+    let mut r = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let mut p = Vec::new();
+    for _ in 0..16384 {
+        let o = Vec3::new(r(), r(), r());
+        p.extend([
+            o,
+            o + Vec3::new(0.001, 0.0, 0.0),
+            o + Vec3::new(0.0, 0.001, 0.0),
+        ]);
+    }
+    let t: Vec<[u32; 3]> = (0..16384u32)
+        .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+        .collect();
+    let mesh = TriangleMesh::new(&p, &t);
+    let options = GridOptions {
+        lambda: 64.0,
+        ..GridOptions::default()
+    };
+    let g = build(&mesh, &options).unwrap();
+    let (cells, refs) = (g.cell_count() as u64, g.reference_count() as u64);
+    assert_eq!(g.resolution(), [102; 3]);
+    let mut rays = Vec::new();
+    let mut fell_back = 0;
+    let mut s = 21u64;
+    for far in [10.0f32, 1e3, 3e3, 1e4, 3e4, 6e4, 1e5, 1.2e5, 1.4e5, 3e5] {
+        rays.push(Ray::new(Vec3::new(-far, 0.5003, 0.5007), Vec3::X));
+        rays.push(Ray::new(Vec3::new(1.0 + far, 0.5003, 0.5007), -Vec3::X));
+        for k in 0..20 {
+            // At the triangle's centroid, from `far` away along a random direction.
+            let v = mesh.triangle(k * 811).unwrap();
+            let target = (v[0] + v[1] + v[2]) / 3.0;
+            let o = target - unit_vec(&mut s) * far;
+            rays.push(Ray::new(o, target - o));
+        }
+    }
+    let mut hits = 0;
+    for ray in &rays {
+        let mut st = TraversalStats::default();
+        let got = closest_watertight_in(&g, &mesh, ray, &mut Query::new().stats(&mut st));
+        assert_eq!(got, brute(&mesh, ray), "{ray:?}");
+        hits += usize::from(got.is_some());
+        if st.nodes_visited == cells {
+            // The pass over every reference: each tested once.
+            assert_eq!(st.primitives_tested, refs, "{ray:?}");
+            fell_back += 1;
+        } else {
+            let work = st.nodes_visited + st.primitives_tested;
+            assert!(
+                work <= WALK_WORK_PER_REFERENCE * refs && st.nodes_visited < refs,
+                "{ray:?}: {st:?}, {refs} references"
+            );
+        }
+    }
+    // Both ways were taken, and the aimed rays hit.
+    assert!(fell_back > 0 && fell_back < rays.len(), "{fell_back}");
+    assert!(hits > 20, "{hits}");
+}
+
 /// `Grid::padding` is the documented `GRID_RAY_PAD·(reach + extent) + GRID_ABS_PAD` with
 /// `reach = extent + ORIGIN_REACH·(longest side)`, worked by hand for the box
 /// `[−1, 3] × [0, 2] × [0, 1]` of two triangles: in the grid's frame (centre `(1, 1, ½)`)

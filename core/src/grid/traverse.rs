@@ -47,10 +47,16 @@ where
         let block = radius
             .iter()
             .fold(1u64, |b, &r| b.saturating_mul(2 * u64::from(r) + 1));
-        if block >= self.cell_count() as u64 {
-            // The block would hold every cell: test every reference once.
+        let cells = self.cell_count() as u64;
+        // A far ray's walk visits each cell at most once, but up to `visits` of them: when
+        // that reaches the references a pass over all of them tests (or the cells), that
+        // pass costs no more (module docs, "Cost bound").
+        let visits = self.visits_bound(radius, local.direction);
+        let costly = !near && visits >= cells.min(self.reference_count as u64);
+        if block >= cells || costly {
+            // Every reference once (a block over the whole grid, or the cost bound).
             s.test(self.references());
-            s.stats.nodes_visited = self.cell_count() as u64;
+            s.stats.nodes_visited = cells;
         } else if let Some(slab) = SlabRay::new(&local) {
             self.walk(&slab, &local, pad.max(l.pad), radius, s);
         }
@@ -64,7 +70,10 @@ where
 {
     /// The DDA of `ray` (in the grid's frame; `slab` its slab form) from the entry into the
     /// grid's box grown by `clip`, testing the block of `radius` cells around each cell it
-    /// visits, until the rule of the module docs ends it.
+    /// visits, until the rule of the module docs ends it. Each cell is tested once: the
+    /// block around the entry cell, then at each step only the face that the step adds to
+    /// the block (the DDA's cell moves one way along each axis, so a cell that leaves the
+    /// block never re-enters it).
     fn walk<F: PrimTest<H>, H>(
         &self,
         slab: &SlabRay,
@@ -83,6 +92,7 @@ where
             let x = if d[a] == 0.0 { o[a] } else { o[a] + t0 * d[a] };
             l.cell_of(a, x)
         });
+        let mut fresh = self.block(cell, radius);
         // Each step moves one axis one cell toward its end: fewer steps than this.
         let steps = l.n.iter().map(|&k| k as usize).sum::<usize>();
         for _ in 0..steps {
@@ -95,20 +105,26 @@ where
                     axis = a;
                 }
             }
-            if self.visit_block(cell, radius, s) {
+            if self.visit_cells(fresh, s) {
                 return;
             }
             // The hit lies in this cell (or an earlier one), or the ray has left the box.
             if axis == 3 || !(t_exit <= t_end) || cull_bound(s.cur.t_max) < t_exit {
                 return;
             }
-            if let Some(c) = cell.get_mut(axis) {
-                *c = if d[axis] > 0.0 {
-                    c.saturating_add(1)
-                } else {
-                    c.saturating_sub(1)
-                };
-            }
+            let (n, r) = (l.n[axis], radius[axis]);
+            // Only the layer that the step adds to the block: `r` cells ahead of the new
+            // cell, when that is still in the grid.
+            let ahead = if d[axis] > 0.0 {
+                cell[axis] = cell[axis].saturating_add(1);
+                cell[axis].checked_add(r).filter(|&x| x < n)
+            } else {
+                cell[axis] = cell[axis].saturating_sub(1);
+                cell[axis].checked_sub(r)
+            };
+            fresh = self.block(cell, radius);
+            let (lo, hi) = (&mut fresh.0, &mut fresh.1);
+            (lo[axis], hi[axis]) = ahead.map_or((1, 0), |x| (x, x));
         }
     }
 
@@ -128,16 +144,36 @@ where
         (plane - o[a]) / da
     }
 
-    /// Tests every cell within `radius` of `cell` (clamped); `true` when the query is done.
-    fn visit_block<F: PrimTest<H>, H>(
-        &self,
-        cell: [u32; 3],
-        radius: [u32; 3],
-        s: &mut Search<F, H>,
-    ) -> bool {
+    /// The cells within `radius` of `cell` on every axis, clamped to the grid: the lowest and
+    /// the highest index per axis.
+    #[inline(always)]
+    fn block(&self, cell: [u32; 3], radius: [u32; 3]) -> ([u32; 3], [u32; 3]) {
         let n = self.layout.n;
         let lo = [0, 1, 2].map(|a| cell[a].saturating_sub(radius[a]));
         let hi = [0, 1, 2].map(|a| cell[a].saturating_add(radius[a]).min(n[a] - 1));
+        (lo, hi)
+    }
+
+    /// At most how many cells `walk` visits with blocks of `radius` along direction
+    /// `d`: the block around the entry cell, then one face of the block for each step, and
+    /// the ray steps at most `n − 1` times along each axis it moves on (saturating).
+    fn visits_bound(&self, radius: [u32; 3], d: Vec3) -> u64 {
+        let n = self.layout.n;
+        let side = |a: usize| (2 * u64::from(radius[a]) + 1).min(u64::from(n[a]));
+        let block = side(0).saturating_mul(side(1)).saturating_mul(side(2));
+        (0..3).filter(|&a| d[a] != 0.0).fold(block, |sum, a| {
+            let face = side((a + 1) % 3).saturating_mul(side((a + 2) % 3));
+            sum.saturating_add(u64::from(n[a] - 1).saturating_mul(face))
+        })
+    }
+
+    /// Tests every cell of the box `lo..=hi` (per axis; empty when `lo > hi` on an axis);
+    /// `true` when the query is done.
+    fn visit_cells<F: PrimTest<H>, H>(
+        &self,
+        (lo, hi): ([u32; 3], [u32; 3]),
+        s: &mut Search<F, H>,
+    ) -> bool {
         for k in lo[2]..=hi[2] {
             for j in lo[1]..=hi[1] {
                 for i in lo[0]..=hi[0] {
