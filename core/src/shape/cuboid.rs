@@ -9,8 +9,9 @@ use crate::ray::Ray;
 use glam::{Vec2, Vec3};
 
 /// Where the whole line of `ray` (its interval ignored) crosses the closed box `b`: the entry
-/// then the exit, `None` when it misses, when the box is empty or NaN, or when a crossing is
-/// at an infinite `t`.
+/// then the exit, `None` when it misses, when the box is empty or NaN, when a crossing is
+/// at an infinite `t`, or when the line is invalid (a non-finite origin or direction, or a
+/// zero direction: [`Ray::validate`] of the ray with its interval replaced by all reals).
 ///
 /// The slab distances are computed in `f64` from the `f32` inputs (a quotient of exact
 /// differences: one rounding each), so `t` is within `2⁻⁵³` relative of the exact slab
@@ -23,6 +24,9 @@ use glam::{Vec2, Vec3};
 /// sum and rounding to `f32`) and 0 along the face's axis. The normal is the face's outward
 /// axis vector, [`Hit::uv`] is zero.
 pub fn box_crossings(b: &Aabb, ray: &Ray) -> Option<[Hit; 2]> {
+    if !whole_line(ray).is_valid() || !b.is_valid() {
+        return None;
+    }
     let o = ray.origin.as_dvec3();
     let d = ray.direction.as_dvec3();
     let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
@@ -84,8 +88,11 @@ impl Shape for Aabb {
     }
 
     /// The entry of [`box_crossings`] if the ray's interval contains it, else the exit if it
-    /// does (a ray starting inside hits the far face from within).
+    /// does (a ray starting inside hits the far face from within); `None` for an invalid ray.
     fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        if !ray.is_valid() {
+            return None;
+        }
         let [entry, exit] = box_crossings(self, ray)?;
         [entry, exit].into_iter().find(|h| ray.contains(h.t))
     }
@@ -136,6 +143,52 @@ mod tests {
         };
         assert_eq!((p.t, q.t), (1.0, 1.0));
         assert_eq!(p.point, Vec3::ONE);
+    }
+
+    /// Invalid rays ([`Ray::validate`]) hit nothing, as with every other shape: the audit's
+    /// infinite direction (it hit at `t = −0`), NaN origin coordinate (`t = 3`) and NaN
+    /// direction component, an infinite origin, a zero direction, and bad intervals (NaN
+    /// `t_max`, `t_min = +∞`, `t_min > t_max`). The crossings of the ray's line ignore the
+    /// interval, so a ray bad only there still has them; the oracle of which rays have
+    /// crossings is the sphere inscribed in the box ([`Shape::line_crossings`] of
+    /// [`crate::sphere::Sphere`], which validates its rays itself), crossed by the same
+    /// line through the centre. An inverted box (`min > max`, empty) and a box with a NaN
+    /// bound are missed, as documented.
+    #[test]
+    fn invalid_rays_and_empty_or_nan_boxes_miss() {
+        let b = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        let sphere = crate::sphere::Sphere::new(Vec3::splat(0.5), 0.5).unwrap();
+        let (o, x) = (Vec3::new(-1.0, 0.5, 0.5), Vec3::X);
+        let inf = f32::INFINITY;
+        let bad = [
+            Ray::with_interval(Vec3::splat(0.5), Vec3::new(inf, 0.0, 0.0), -1.0, 1.0),
+            Ray::new(Vec3::new(-1.0, f32::NAN, 0.5), x),
+            Ray::new(o, Vec3::new(1.0, f32::NAN, 0.0)),
+            Ray::new(Vec3::new(-inf, 0.5, 0.5), x),
+            Ray::new(Vec3::splat(0.5), Vec3::ZERO),
+            Ray::with_interval(o, x, 0.0, f32::NAN),
+            Ray::with_interval(o, x, inf, inf),
+            Ray::with_interval(o, x, 2.5, 2.0),
+        ];
+        for ray in bad {
+            assert!(ray.validate().is_err(), "{ray:?}");
+            assert_eq!(b.closest_hit(&ray), None, "{ray:?}");
+            let crossed = b.line_crossings(&ray).map(|h| h.is_some());
+            let want = sphere.line_crossings(&ray).map(|h| h.is_some());
+            assert_eq!(crossed, want, "{ray:?}");
+            assert_eq!(box_crossings(&b, &ray).is_some(), want[0], "{ray:?}");
+        }
+        // Along x (a slab of another axis rejects it) and along the diagonal, where every
+        // slab's swapped planes alone would give a crossing at `t` in `[1, 2]`.
+        // A box with one NaN bound is missed too.
+        let inverted = Aabb::new(Vec3::ONE, Vec3::ZERO);
+        let nan = Aabb::new(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::ONE);
+        for ray in [Ray::new(o, x), Ray::new(-Vec3::ONE, Vec3::ONE)] {
+            for b in [inverted, nan] {
+                assert_eq!(box_crossings(&b, &ray), None, "{b:?} {ray:?}");
+                assert_eq!(b.closest_hit(&ray), None, "{b:?} {ray:?}");
+            }
+        }
     }
 
     /// Against an independent oracle: the `f32` slab test of [`Aabb::intersect_ray`] finds
