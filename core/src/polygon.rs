@@ -31,8 +31,10 @@
 //! about the centroid, in `f64`) above [`POLYGON_MIN_AREA_REL`]` × diag²` (else
 //! [`GeometryError::Degenerate`]); every vertex within [`PLANARITY_REL`]` × diag` of the plane
 //! through the centroid (else [`GeometryError::NonPlanar`]); `diag` is the bounding-box
-//! diagonal. Simplicity (no self-intersection) is *not* checked: a self-intersecting outline is
-//! classified by the even–odd rule.
+//! diagonal. Both tests are relative, and the plane takes the unit normal (normalised in
+//! `f64`), so a polygon is accepted or refused alike at every scale of finite `f32`
+//! coordinates. Simplicity (no self-intersection) is *not* checked: a self-intersecting outline
+//! is classified by the even–odd rule.
 
 use crate::error::GeometryError;
 use crate::hit::Hit;
@@ -95,7 +97,9 @@ impl<const N: usize> Polygon<N> {
             return Err(GeometryError::NonPlanar);
         }
         let axis = normal.abs().max_position();
-        let plane = Plane::new(centroid.as_vec3(), normal.as_vec3())?;
+        // The unit normal: the raw Newell normal scales as the square of the polygon's size
+        // and would overflow or underflow `f32` for valid polygons of extreme size.
+        let plane = Plane::new(centroid.as_vec3(), unit.as_vec3())?;
         let vertices =
             heapless::Vec::from_slice(vertices).map_err(|_| GeometryError::VertexCount)?;
         Ok(Self {
@@ -495,6 +499,67 @@ mod tests {
             }
         }
         assert!(inside > 1000, "{inside}");
+    }
+
+    /// Relative error allowed in `t` for the scaled squares' hits (unit: relative to `t`).
+    /// The plane's point (the centroid) and unit normal are each rounded once to `f32`, and
+    /// `t = ((p₀ − o)·N)/(d·N)` rounds about eight more times, every rounding relative to
+    /// magnitudes of at most `1.5·t` here; `γ₁₆` covers them with room and is still far below
+    /// anything a wrong plane (off by the square's size) would give.
+    const SCALED_HIT_T_REL: f32 = crate::float::gamma(16);
+
+    /// A unit square scaled by `s` from `10⁻³⁰` to `10³⁷`, in the plane `z = 0` and tilted
+    /// into `z = y`, is accepted (the audit: `Err(NonFinite)` from `10²⁰` on, its Newell
+    /// normal `s²` overflowing `f32`; `Err(Degenerate)` from `10⁻²³` down, underflowing), its
+    /// normal is the unit normal worked by hand, and a ray straight down through its centre
+    /// hits at `t` = the origin's height above the plane there, computed in `f64` from the
+    /// `f32` inputs.
+    #[test]
+    fn scaled_squares_are_accepted_and_hit_where_expected() {
+        let tilted = Vec3::new(0.0, -1.0, 1.0) / 2.0f32.sqrt();
+        for s in [1e-30f32, 1e-25, 1e-23, 1e-20, 1.0, 1e20, 1e30, 1e37] {
+            let h = s / 2.0;
+            for (quad, normal) in [
+                (
+                    [
+                        Vec3::ZERO,
+                        Vec3::new(s, 0.0, 0.0),
+                        Vec3::new(s, s, 0.0),
+                        Vec3::new(0.0, s, 0.0),
+                    ],
+                    Vec3::Z,
+                ),
+                (
+                    [
+                        Vec3::ZERO,
+                        Vec3::new(s, 0.0, 0.0),
+                        Vec3::new(s, s, s),
+                        Vec3::new(0.0, s, s),
+                    ],
+                    tilted,
+                ),
+            ] {
+                let poly = Polygon::<4>::new(&quad).unwrap_or_else(|e| panic!("{s:e}: {e:?}"));
+                let n = poly.normal();
+                assert!(
+                    (n - normal).abs().max_element() <= SCALED_HIT_T_REL,
+                    "{s:e}: {n:?}"
+                );
+                // The plane's height at (h, h): 0 flat, h tilted (z = y).
+                let below = if normal == Vec3::Z { 0.0 } else { h };
+                let ray = Ray::new(Vec3::new(h, h, below + s), -Vec3::Z);
+                let want = f64::from(ray.origin.z) - f64::from(below);
+                let hit = poly
+                    .intersect(&ray)
+                    .unwrap_or_else(|| panic!("{s:e}: {ray:?}"));
+                let err = (f64::from(hit.t) - want).abs();
+                assert!(
+                    err <= f64::from(SCALED_HIT_T_REL) * want,
+                    "{s:e}: t {} vs {want}",
+                    hit.t
+                );
+            }
+        }
     }
 
     #[test]
