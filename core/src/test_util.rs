@@ -324,6 +324,43 @@ impl<F: Fn(usize, u64) -> Option<crate::aabb::Aabb>> PrimitiveSource for Fickle<
     }
 }
 
+/// Storage whose `AsRef` gives `a` until `flip` is set and `b` after (an A/B flash region
+/// switched by a flag; safe code only): what a structure built over `a` sees once its
+/// storage changed under it. `AsMut` always gives `a` (the build writes there).
+pub struct Flip<T> {
+    /// What the build writes and the structure sees first.
+    pub a: Vec<T>,
+    /// What the structure sees once `flip` is set.
+    pub b: Vec<T>,
+    /// The switch.
+    pub flip: std::sync::Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl<T> Flip<T> {
+    /// `a`, switching to `b` when the returned flag is set.
+    pub fn new(a: Vec<T>, b: Vec<T>) -> (Self, std::sync::Arc<std::sync::atomic::AtomicBool>) {
+        let flip = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        (
+            Self {
+                a,
+                b,
+                flip: flip.clone(),
+            },
+            flip,
+        )
+    }
+}
+
+impl<T> AsRef<[T]> for Flip<T> {
+    fn as_ref(&self) -> &[T] {
+        if self.flip.load(std::sync::atomic::Ordering::Relaxed) {
+            &self.b
+        } else {
+            &self.a
+        }
+    }
+}
+
 /// The audit's case: boxes `[k, k + ½]³` for `k` in `0..n`, primitive 0's answer all-NaN
 /// once every primitive has been asked once (a builder's second pass sees it unusable).
 pub fn fickle_first(n: usize) -> Fickle<impl Fn(usize, u64) -> Option<crate::aabb::Aabb>> {
@@ -366,5 +403,25 @@ pub fn fickle_random(
             }
         },
         calls: core::cell::Cell::new(0),
+    }
+}
+
+impl<T> AsMut<[T]> for Flip<T> {
+    fn as_mut(&mut self) -> &mut [T] {
+        &mut self.a
+    }
+}
+
+/// `f()` on a thread of its own, which must return within ten seconds (the walks it makes
+/// take microseconds): a walk that hangs fails the test instead of hanging the run (its
+/// thread spins on until the test binary exits).
+pub fn returns<R: Send + 'static>(what: &str, f: impl FnOnce() -> R + Send + 'static) -> R {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(f());
+    });
+    match rx.recv_timeout(std::time::Duration::from_secs(10)) {
+        Ok(r) => r,
+        Err(e) => panic!("{what} did not return within 10 s ({e})"),
     }
 }

@@ -159,6 +159,13 @@ pub const MAX_PRIMITIVES: usize = (u32::MAX / 2) as usize;
 /// Typical storage: `Vec<BvhNode>` / `Vec<u32>` in a std program, `&mut [BvhNode]` /
 /// `&mut [u32]` or fixed arrays `[BvhNode; K]` / `[u32; M]` on a microcontroller. Only the first
 /// [`Bvh::node_count`] nodes and [`Bvh::primitive_count`] indices are used.
+///
+/// The storage's `AsRef` is expected to give the slices the tree was built in (or checked
+/// in, [`Bvh::from_parts`]) for as long as the tree is queried. Storage that gives others
+/// later (an A/B flash region switched by a flag, say) makes the answers meaningless but
+/// never a panic or a hang: a walk of a tree enters each node at most once, and every walk
+/// (queries, [`Bvh::stats`], [`Bvh::stack_depth`]) that would enter more nodes than that
+/// (inner nodes, for the ray queries) ends there, with what it found.
 #[derive(Clone, Debug)]
 pub struct Bvh<N, I> {
     nodes: N,

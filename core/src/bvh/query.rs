@@ -27,7 +27,14 @@ where
         let mut stack = [0u32; MAX_DEPTH + 1];
         let mut sp = 0usize;
         let mut node = nodes.first().filter(|r| r.bounds().overlaps(query));
+        // A walk of a tree enters each node at most once: nodes that make it enter more are
+        // no tree (storage whose `AsRef` changed since the build), and the walk ends there.
+        let mut entries = nodes.len();
         while let Some(n) = node {
+            let Some(rest) = entries.checked_sub(1) else {
+                break;
+            };
+            entries = rest;
             node = None;
             if let Some(range) = n.primitive_range() {
                 for &p in indices.get(range).unwrap_or(&[]) {

@@ -28,8 +28,8 @@ where
     N: AsRef<[BvhNode]>,
     I: AsRef<[u32]>,
 {
-    /// Walks the tree once (with the same fixed stack bound as traversal) and reports its
-    /// shape and size.
+    /// Walks the tree once (with the same fixed stack bound as traversal, reaching at most
+    /// as many nodes as it has) and reports its shape and size.
     #[must_use]
     pub fn stats(&self) -> BvhStats {
         let nodes = self.nodes();
@@ -46,12 +46,19 @@ where
         let mut stack = [(0u32, 0usize); MAX_DEPTH + 1];
         let mut sp = 1usize;
         let mut cost = 0.0f64;
+        // A walk of a tree reaches each node at most once: nodes that make it reach more are
+        // no tree (storage whose `AsRef` changed since the build), and the walk ends there.
+        let mut entries = nodes.len();
         while sp > 0 {
             sp -= 1;
             let (i, depth) = stack[sp];
             let Some(n) = nodes.get(i as usize) else {
                 continue;
             };
+            let Some(rest) = entries.checked_sub(1) else {
+                break;
+            };
+            entries = rest;
             let area = f64::from(n.bounds().surface_area());
             s.max_depth = s.max_depth.max(depth);
             if let Some(r) = n.primitive_range() {

@@ -1398,3 +1398,75 @@ fn a_source_whose_bounds_change_still_gets_a_well_formed_tree() {
         assert_eq!((stats.leaves, stats.primitives), (leaves, n), "seed {seed}");
     }
 }
+
+/// Every walk of a binary tree ends, and nothing panics, when the storage's `AsRef` changes
+/// after the build (the audit's `asref_hang` reproducer: closest hit and the box query looped
+/// for ever on node 0, an inner node whose first child is itself). Two changed node arrays:
+/// that self-loop, and shared subtrees whose children all come after their parents (node `i`
+/// has children `i + 1`, `i + 2` over 60 levels: a walk that only refused backward children
+/// would enter about 10¹² nodes, as the old code did). Each walk enters at most as many
+/// nodes as the tree has. Closest and any hit on the query's own stack and on a caller's,
+/// the box query, the statistics and the stack depth.
+#[test]
+fn every_walk_ends_when_the_storage_changes_under_the_tree() {
+    use crate::test_util::{Flip, returns};
+    type Flipped = Bvh<Flip<BvhNode>, Vec<u32>>;
+    let huge = [[-1.0e3f32; 3], [1.0e3; 3]];
+    let (pos, tris) = lcg_soup(100, 5, 4.0, 1.0);
+    let n = tris.len();
+    let count = build(&TriangleMesh::new(&pos, &tris), &BuildOptions::default())
+        .unwrap()
+        .node_count();
+    assert!(count > 62, "{count} nodes: too few for 60 shared levels");
+    let self_loop: Vec<BvhNode> = core::iter::once(BvhNode::from_raw(huge, 0, 0))
+        .chain(core::iter::repeat_n(BvhNode::EMPTY, count - 1))
+        .collect();
+    let shared: Vec<BvhNode> = (0..count as u32)
+        .map(|i| match i {
+            0..=58 => BvhNode::from_raw(huge, i + 1, 0),
+            _ => BvhNode::from_raw(huge, 0, 1),
+        })
+        .collect();
+    for (name, changed) in [("self-loop", self_loop), ("shared subtrees", shared)] {
+        let (nodes, flip) = Flip::new(vec![BvhNode::EMPTY; node_capacity(n)], changed);
+        let mesh = TriangleMesh::new(&pos, &tris);
+        let bvh = Bvh::build(&mesh, nodes, vec![0u32; n], &BuildOptions::default()).unwrap();
+        assert_eq!(bvh.node_count(), count);
+        flip.store(true, std::sync::atomic::Ordering::Relaxed);
+        let bvh = std::sync::Arc::new(bvh);
+        let (pos, tris) = (
+            std::sync::Arc::new(pos.clone()),
+            std::sync::Arc::new(tris.clone()),
+        );
+        let ray = Ray::new(Vec3::new(0.0, 0.0, -10.0), Vec3::Z);
+        let query = |what: &str, f: fn(&Flipped, &TriangleMesh<'_>, &Ray)| {
+            let (bvh, pos, tris) = (bvh.clone(), pos.clone(), tris.clone());
+            returns(&std::format!("{name}: {what}"), move || {
+                f(&bvh, &TriangleMesh::new(&pos, &tris), &ray);
+            });
+        };
+        query("closest hit", |b, m, r| {
+            let _ = closest_watertight(b, m, r);
+        });
+        query("closest hit on a caller's stack", |b, m, r| {
+            let mut stack = [StackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
+            let _ = b.closest_hit(
+                r,
+                &mut Triangles::new(m, &Watertight),
+                &mut Query::new().stack(&mut stack[..]),
+            );
+        });
+        query("any hit", |b, m, r| {
+            let _ = any_watertight(b, m, r);
+        });
+        query("box query", |b, m, _| {
+            let _ = b.query_box(m, &Aabb::new(Vec3::splat(-1.0), Vec3::ONE), |_| true);
+        });
+        query("statistics", |b, _, _| {
+            let _ = b.stats();
+        });
+        query("stack depth", |b, _, _| {
+            assert!(b.stack_depth() <= TRAVERSAL_STACK_SIZE);
+        });
+    }
+}

@@ -81,6 +81,9 @@ where
         let mut pending = [(0u32, 0u32); TRAVERSAL_STACK_SIZE + 1];
         let mut sp = usize::from(!nodes.is_empty());
         let mut deepest = 0u32;
+        // Each node of a tree is reached at most once: nodes that make the walk reach more
+        // are no tree (storage whose `AsRef` changed since the build), and it ends there.
+        let mut entries = nodes.len();
         while sp > 0 {
             sp -= 1;
             let Some(&(index, above)) = pending.get(sp) else {
@@ -89,6 +92,10 @@ where
             let Some(node) = nodes.get(index as usize) else {
                 continue;
             };
+            let Some(rest) = entries.checked_sub(1) else {
+                break;
+            };
+            entries = rest;
             let (start, count) = node.raw();
             if count != 0 {
                 deepest = deepest.max(above);
@@ -138,6 +145,13 @@ where
         // The root's box is not tested: it is the union of its children's, which are (and a
         // root leaf's primitives are tested exactly).
         let mut node = Some(root);
+        // Inner nodes the walk may still enter: a walk of a tree enters each of its fewer than
+        // `node_count` inner nodes at most once, and every other step (a leaf, a pop) follows
+        // one, so the walk ends however the nodes point. Reached only when the nodes are no
+        // tree (storage whose `AsRef` changed since the build, [`Bvh`]'s docs): the walk ends
+        // with what it found. (Counted down and tested as one: the cheapest form on the
+        // Cortex-M4F, whose C firmware has bytes to spare only in tens.)
+        let mut inner_left = self.node_count;
         'walk: while let Some(n) = node {
             let (start, count) = n.raw();
             if count != 0 {
@@ -159,6 +173,10 @@ where
                     }
                 }
             } else {
+                inner_left = inner_left.wrapping_sub(1);
+                if inner_left == 0 {
+                    break;
+                }
                 let bound = cull_bound(cur.t_max);
                 let left = nodes.get(start as usize);
                 let right = nodes.get(start as usize + 1);

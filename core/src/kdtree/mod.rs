@@ -249,6 +249,11 @@ impl KdBuildOptions {
 /// Typical storage: `Vec<KdNode>` / `Vec<u32>` in a std program, slices or fixed arrays on a
 /// microcontroller. Only the first [`KdTree::node_count`] nodes and
 /// [`KdTree::reference_count`] references are used.
+///
+/// The storage's `AsRef` is expected to give the slices the tree was built in for as long as
+/// the tree is queried. Storage that gives others later makes the answers meaningless but
+/// never a panic or a hang: a walk of a tree enters each node at most once, and every walk
+/// that would enter more nodes than the tree has ends there, with what it found.
 #[derive(Clone, Debug)]
 pub struct KdTree<N, R> {
     nodes: N,

@@ -16,11 +16,19 @@ pub(super) const MAX_FIELD: u32 = (1 << 30) - 1;
 /// Nodes are written only by the builder ([`super::KdTree::build`]); there is no way to
 /// assemble a tree from raw nodes, so every tree obeys the depth bound the traversal stack
 /// relies on.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(C)]
 pub struct KdNode {
     word: u32,
     bits: u32,
+}
+
+/// [`KdNode::EMPTY`], the empty leaf storage is filled with (all-zero words would be an inner
+/// node whose first child is itself).
+impl Default for KdNode {
+    fn default() -> Self {
+        Self::EMPTY
+    }
 }
 
 /// What a node is, decoded.

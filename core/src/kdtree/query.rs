@@ -67,12 +67,19 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> KdTree<N, R> {
         // One pending child per level: MAX_DEPTH + 1 entries suffice.
         let mut stack = [0u32; super::MAX_DEPTH + 1];
         let mut sp = usize::from(!nodes.is_empty());
+        // A walk of a tree reaches each node at most once: nodes that make it reach more are
+        // no tree (storage whose `AsRef` changed since the build), and the walk ends there.
+        let mut entries = nodes.len();
         while sp > 0 {
             sp -= 1;
             let index = stack[sp];
             let Some(node) = nodes.get(index as usize) else {
                 continue;
             };
+            let Some(rest) = entries.checked_sub(1) else {
+                return;
+            };
+            entries = rest;
             match node.kind() {
                 KdNodeKind::Leaf { start, count } => {
                     let first = start as usize;

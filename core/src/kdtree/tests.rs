@@ -807,3 +807,78 @@ fn a_source_that_changes_between_passes_is_never_asked_for_a_bad_index() {
         }
     }
 }
+
+/// `KdNode::default()` is the empty leaf storage is filled with ([`KdNode::EMPTY`]), not the
+/// all-zero inner node whose first child is itself (the derived `Default` the audit found).
+#[test]
+fn the_default_node_is_the_empty_leaf() {
+    assert_eq!(KdNode::default(), KdNode::EMPTY);
+    assert!(KdNode::default().is_leaf());
+    assert_eq!(
+        KdNode::default().kind(),
+        KdNodeKind::Leaf { start: 0, count: 0 }
+    );
+}
+
+/// Every walk of a kd-tree ends, and nothing panics, when the storage's `AsRef` changes after
+/// the build (the audit's `asref_hang` reproducer: closest hit looped for ever on node 0, an
+/// inner node whose first child is itself). Two changed node arrays: that self-loop, and
+/// shared subtrees whose children all come after their parents (node `i` splits `x = 0` with
+/// children `i + 1`, `i + 2` over 60 levels: a ray or box crossing the plane enters both
+/// children at every level, about 10¹² nodes for a walk that only refused backward children,
+/// as the old code did). Each walk enters at most as many nodes as the tree has.
+#[test]
+fn every_walk_ends_when_the_storage_changes_under_the_tree() {
+    use crate::test_util::{Flip, returns};
+    type Flipped = KdTree<Flip<KdNode>, Vec<u32>>;
+    let (pos, tris) = soup(300, 9, 4.0, 1.0);
+    let n = tris.len();
+    let count = build(&TriangleMesh::new(&pos, &tris)).node_count();
+    assert!(count > 62, "{count} nodes: too few for 60 shared levels");
+    let self_loop: Vec<KdNode> = core::iter::once(KdNode::inner(0, 0.0, 0))
+        .chain(core::iter::repeat_n(KdNode::EMPTY, count - 1))
+        .collect();
+    let shared: Vec<KdNode> = (0..count as u32)
+        .map(|i| match i {
+            0..=58 => KdNode::inner(0, 0.0, i + 1),
+            _ => KdNode::leaf(0, 1),
+        })
+        .collect();
+    for (name, changed) in [("self-loop", self_loop), ("shared subtrees", shared)] {
+        let refs = reference_capacity(n);
+        let (nodes, flip) = Flip::new(vec![KdNode::EMPTY; node_capacity(n)], changed);
+        let mesh = TriangleMesh::new(&pos, &tris);
+        let mut scratch = vec![KdRef::EMPTY; refs];
+        let kd = KdTree::build(
+            &mesh,
+            nodes,
+            vec![0u32; refs],
+            &mut scratch,
+            &KdBuildOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(kd.node_count(), count);
+        flip.store(true, std::sync::atomic::Ordering::Relaxed);
+        let kd = std::sync::Arc::new(kd);
+        let (pos, tris) = (
+            std::sync::Arc::new(pos.clone()),
+            std::sync::Arc::new(tris.clone()),
+        );
+        let ray = Ray::new(Vec3::new(-50.0, 0.1, 0.2), Vec3::X);
+        let query = |what: &str, f: fn(&Flipped, &TriangleMesh<'_>, &Ray)| {
+            let (kd, pos, tris) = (kd.clone(), pos.clone(), tris.clone());
+            returns(&std::format!("{name}: {what}"), move || {
+                f(&kd, &TriangleMesh::new(&pos, &tris), &ray);
+            });
+        };
+        query("closest hit", |k, m, r| {
+            let _ = closest_watertight(k, m, r);
+        });
+        query("any hit", |k, m, r| {
+            let _ = any_watertight(k, m, r);
+        });
+        query("box query", |k, m, _| {
+            let _ = k.query_box(m, &Aabb::new(Vec3::splat(-1.0), Vec3::ONE), |_| true);
+        });
+    }
+}

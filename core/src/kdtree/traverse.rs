@@ -160,7 +160,15 @@ impl<N: AsRef<[KdNode]>, R: AsRef<[u32]>> ClosureWalk for KdTree<N, R> {
         let mut stack = [KdStackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
         let mut sp = 0usize;
         let mut next = Some((0u32, t0, t1));
+        // A walk of a tree enters each node at most once: nodes that make it enter more are
+        // no tree (storage whose `AsRef` changed since the build, [`KdTree`]'s docs), and the
+        // walk ends there, with what it found.
+        let mut entries = nodes.len();
         'walk: while let Some((index, t0, t1)) = next.take() {
+            let Some(rest) = entries.checked_sub(1) else {
+                break;
+            };
+            entries = rest;
             let t1 = t1.min(cull_bound(s.cur.t_max));
             if t0 <= t1
                 && let Some(node) = nodes.get(index as usize)
