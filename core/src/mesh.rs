@@ -52,6 +52,19 @@ impl<P: Primitive> PrimitiveSource for [P] {
     }
 }
 
+/// The array as its slice: the same primitives, the same bounds.
+impl<P: Primitive, const N: usize> PrimitiveSource for [P; N] {
+    #[inline]
+    fn primitive_count(&self) -> usize {
+        N
+    }
+
+    #[inline]
+    fn primitive_bounds(&self, index: usize) -> Aabb {
+        self.as_slice().primitive_bounds(index)
+    }
+}
+
 impl Primitive for Aabb {
     #[inline]
     fn bounds(&self) -> Aabb {
@@ -144,4 +157,45 @@ impl PrimitiveSource for TriangleMesh<'_> {
 #[inline]
 pub(crate) fn is_usable(b: &Aabb) -> bool {
     b.is_finite() && b.is_valid()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::{BuildOptions, Bvh, BvhNode};
+
+    /// An array of primitives is a source as its slice is: the same count, the same bounds
+    /// (invalid past the end), and a BVH built over either has the same nodes and indices.
+    #[test]
+    fn an_array_of_primitives_is_its_slice() {
+        let boxes: [Aabb; 5] =
+            core::array::from_fn(|i| Aabb::new(Vec3::splat(i as f32), Vec3::splat(i as f32 + 0.5)));
+        let slice: &[Aabb] = &boxes;
+        assert_eq!(boxes.primitive_count(), slice.primitive_count());
+        for i in 0..7 {
+            let (a, s) = (boxes.primitive_bounds(i), slice.primitive_bounds(i));
+            assert!(
+                a == s || (i >= 5 && a.min.is_nan() && s.min.is_nan()),
+                "{i}"
+            );
+        }
+        let build = |source: &dyn Fn(&mut [BvhNode], &mut [u32]) -> u32| {
+            let (mut nodes, mut indices) = ([BvhNode::EMPTY; 9], [0u32; 5]);
+            let count = source(&mut nodes, &mut indices);
+            (nodes, indices, count)
+        };
+        let options = BuildOptions::default();
+        let by_array =
+            build(&|n, i| Bvh::build(&boxes, n, i, &options).map_or(0, |b| b.node_count() as u32));
+        let by_slice =
+            build(&|n, i| Bvh::build(slice, n, i, &options).map_or(0, |b| b.node_count() as u32));
+        assert!(by_array.2 > 0);
+        assert_eq!(by_array, by_slice);
+        let tris = [
+            [Vec3::ZERO, Vec3::X, Vec3::Y],
+            [Vec3::NAN, Vec3::X, Vec3::Y],
+        ];
+        assert!(tris.primitive_bounds(0).is_finite());
+        assert!(!tris.primitive_bounds(1).is_finite());
+    }
 }

@@ -226,7 +226,7 @@ fn primitives_sources_leaf_tests_and_a_ray_query_of_another_crate() {
             .map(|h| h.0);
         let theirs = brute_closest(&brute, &row, &ray);
         assert_eq!((ours, theirs), (want, want), "{ray:?}");
-        let mut ctx = Query::new().stack(&mut stack[..]);
+        let mut ctx = Query::new().stack(&mut stack);
         let on_stack = brute.any_hit(&ray, &mut leaf, &mut ctx).unwrap();
         assert_eq!(on_stack.is_some(), want.is_some(), "{ray:?}");
         assert!(leaf.tests > 0);

@@ -60,11 +60,12 @@ impl Default for QueryStack {
 ///   enough for any tree. Queries return `Option<(u32, hit)>`.
 /// * `&mut `[`QueryStack`]: the caller's stack, big enough for any tree, kept across rays
 ///   (saves writing it per query). Queries return `Option<(u32, hit)>`.
-/// * `&mut [`[`StackEntry`]`]`: the caller's stack of any length, for a firmware that sizes
-///   it for its trees ([`crate::bvh::Bvh::stack_depth`] entries suffice for a binary tree,
-///   [`QUERY_STACK_SIZE`] for a wide one). Queries return
+/// * `&mut [`[`StackEntry`]`]` or `&mut [StackEntry; N]`: the caller's stack of any length,
+///   for a firmware that sizes it for its trees ([`crate::bvh::Bvh::stack_depth`] entries
+///   suffice for a binary tree, [`QUERY_STACK_SIZE`] for a wide one). Queries return
 ///   `Result<Option<(u32, hit)>, BvhError>`: [`BvhError::StackTooSmall`] when the ray's
-///   path needed more entries than the stack has (no partial answer).
+///   path needed more entries than the stack has (no partial answer). An array is its
+///   slice: `Query::new().stack(&mut array)` answers as `.stack(&mut array[..])`.
 ///
 /// Structures whose walk needs no such stack (the grid) or has entries of its own (the
 /// kd-tree's 12-byte intervals, 64 of them in its frame) ignore it.
@@ -139,12 +140,29 @@ impl Stack for &mut QueryStack {
 
 impl crate::sealed::Sealed for &mut [StackEntry] {}
 
+impl<const N: usize> crate::sealed::Sealed for &mut [StackEntry; N] {}
+
 impl Stack for &mut [StackEntry] {
     type Out<Y> = Result<Option<Y>, BvhError>;
 
     #[inline(always)]
     fn entries(&mut self) -> Option<&mut [StackEntry]> {
         Some(self)
+    }
+
+    #[inline(always)]
+    fn answer<Y>(found: Result<Option<Y>, BvhError>) -> Result<Option<Y>, BvhError> {
+        found
+    }
+}
+
+/// The array as its slice (`&mut [StackEntry]`): the same answers, the same refusals.
+impl<const N: usize> Stack for &mut [StackEntry; N] {
+    type Out<Y> = Result<Option<Y>, BvhError>;
+
+    #[inline(always)]
+    fn entries(&mut self) -> Option<&mut [StackEntry]> {
+        Some(self.as_mut_slice())
     }
 
     #[inline(always)]

@@ -260,6 +260,50 @@ fn a_caller_stack_too_small_is_refused_not_cut_short() {
     );
 }
 
+/// A caller's stack given as an array (`.stack(&mut array)`) is its slice: every ray's
+/// answer, refusals included, equals the one on `&mut array[..]`, for a stack long enough
+/// and for one too short for some rays.
+#[test]
+fn a_caller_stack_array_answers_as_its_slice() {
+    fn same<const N: usize>(bvh: &impl RayQuery, mesh: &TriangleMesh<'_>) -> (usize, usize) {
+        let mut tris = Triangles::new(mesh, &Watertight);
+        let mut array = [StackEntry::EMPTY; N];
+        let (mut refused, mut hits) = (0, 0);
+        for ray in rays(mesh, 5) {
+            let by_array = bvh.closest_hit(&ray, &mut tris, &mut Query::new().stack(&mut array));
+            let by_slice =
+                bvh.closest_hit(&ray, &mut tris, &mut Query::new().stack(&mut array[..]));
+            assert_eq!(by_array, by_slice, "{ray:?}");
+            let any = bvh.any_hit(&ray, &mut tris, &mut Query::new().stack(&mut array));
+            assert_eq!(any.is_err(), by_array.is_err(), "{ray:?}");
+            match by_array {
+                Err(e) => {
+                    assert_eq!(e, BvhError::StackTooSmall { available: N });
+                    refused += 1;
+                }
+                Ok(found) => {
+                    assert_eq!(found, brute_watertight(mesh, &ray), "{ray:?}");
+                    hits += usize::from(found.is_some());
+                }
+            }
+        }
+        (refused, hits)
+    }
+    let (pos, tris) = lcg_soup(200, 3, 6.0, 1.0);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let single = BuildOptions {
+        max_leaf_size: 1,
+        ..BuildOptions::default()
+    };
+    let bvh = vec_bvh(&mesh, &single).unwrap();
+    assert!(bvh.stack_depth() <= 64 && bvh.stack_depth() > 6);
+    let (refused, hits) = same::<64>(&bvh, &mesh);
+    assert_eq!(refused, 0);
+    assert!(hits > 0);
+    let (refused, _) = same::<2>(&bvh, &mesh);
+    assert!(refused > 0, "no ray needed more than 2 entries");
+}
+
 /// `Watertight`'s *Domain of agreement* at its ends for every structure (the fuzz targets
 /// `grid`, `kdtree` and the wide trees of `bvh` narrow to it): a soup scaled by `2⁵⁵` (every
 /// `|p − o|` component below `2⁵⁹`, directions with dominant component 1) and by `2⁻⁵⁰`
