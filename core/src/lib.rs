@@ -24,6 +24,22 @@
 //! * [`halfedge`]: fixed-capacity half-edge mesh arenas and their editing operations.
 //! * [`solids`]: the octahedron and the cube as index lists, for examples and tests.
 //!
+//! **glam.** Points, vectors and matrices are [glam](https://docs.rs/glam/0.34)'s: `f32`
+//! [`Vec3`], [`Mat4`] and the others, and the `f64` `DVec3`, `DMat3` and `DMat4` of
+//! [`quadric::Quadric`]'s exact form. This crate re-exports the glam it is built with as
+//! [`glam`] (and `Vec2`, `Vec3`, `Mat3`, `Mat4` at the root): name its types through
+//! `halfray_core::glam`, or depend on the same glam minor version (0.34). Another 0.x
+//! release of glam is another crate, whose `Vec3` is not this crate's; so a move to another
+//! glam minor version is a breaking change of this crate.
+//!
+//! ```
+//! use halfray_core::glam::{DMat3, DVec3};
+//! use halfray_core::quadric::Quadric;
+//! // The unit sphere, x·x − 1 = 0, in the f64 form `Quadric::new` takes.
+//! let sphere = Quadric::new(DMat3::IDENTITY, DVec3::ZERO, -1.0).unwrap();
+//! assert_eq!(sphere.eval(DVec3::new(0.0, 2.0, 0.0)), 3.0);
+//! ```
+//!
 //! **Traits: which to implement.** Meant to be implemented by other crates:
 //! [`mesh::Primitive`] and [`mesh::PrimitiveSource`] (what a structure is built over),
 //! [`query::LeafTest`] (a query's test of one primitive; closures implement it),
@@ -99,6 +115,8 @@ pub mod volume;
 
 pub use aabb::Aabb;
 pub use error::{GeometryError, RayError};
+/// The glam this crate is built with (crate docs: use it, or the same minor version).
+pub use glam;
 pub use glam::{Mat3, Mat4, Vec2, Vec3};
 pub use hit::{Hit, shadow_segment, spawn_ray, spawn_ray_between, spawn_ray_to};
 pub use ray::Ray;
