@@ -93,7 +93,10 @@ impl Primitive for [Vec3; 3] {
 /// A triangle with a vertex index out of range, or a non-finite vertex, is an invalid
 /// primitive (never a panic): the builder rejects or excludes it and
 /// [`TriangleMesh::triangle`] returns `None` for it.
-#[derive(Clone, Copy, Debug)]
+///
+/// Two meshes are equal (`==`) when their positions and triangles are, element by element
+/// (`f32` equality: a NaN position is unequal to itself), wherever the slices live.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TriangleMesh<'a> {
     /// Vertex positions.
     pub positions: &'a [Vec3],
@@ -197,5 +200,23 @@ mod tests {
         ];
         assert!(tris.primitive_bounds(0).is_finite());
         assert!(!tris.primitive_bounds(1).is_finite());
+    }
+
+    /// Meshes compare by content, wherever their slices live; a NaN position makes a mesh
+    /// unequal to itself (`f32` equality).
+    #[test]
+    fn meshes_are_equal_by_content() {
+        let positions = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
+        let triangles = [[0u32, 1, 2], [0, 1, 3]];
+        let (p2, t2) = (positions, triangles);
+        let a = TriangleMesh::new(&positions, &triangles);
+        assert_eq!(a, TriangleMesh::new(&p2, &t2));
+        assert_ne!(a, TriangleMesh::new(&positions, &triangles[..1]));
+        assert_ne!(a, TriangleMesh::new(&positions, &[[0, 1, 2], [0, 2, 3]]));
+        let moved = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::NEG_Z];
+        assert_ne!(a, TriangleMesh::new(&moved, &triangles));
+        let nan = [Vec3::NAN, Vec3::X, Vec3::Y, Vec3::Z];
+        let b = TriangleMesh::new(&nan, &triangles);
+        assert_ne!(b, b);
     }
 }

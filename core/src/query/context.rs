@@ -24,6 +24,13 @@ impl StackEntry {
     };
 }
 
+/// [`StackEntry::EMPTY`].
+impl Default for StackEntry {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
 /// Entries of a [`QueryStack`]: the stack bound of the widest tree,
 /// [`crate::bvh::wide::stack_size`]`(8)` = `7·MAX_DEPTH + 1`, which bounds every structure's
 /// (the binary BVH needs at most [`crate::bvh::TRAVERSAL_STACK_SIZE`]).

@@ -260,6 +260,24 @@ fn a_caller_stack_too_small_is_refused_not_cut_short() {
     );
 }
 
+/// `StackEntry::default()` is `EMPTY`, so a stack of defaults is a caller's stack like any
+/// other (`[StackEntry::default(); N]`).
+#[test]
+fn default_stack_entries_are_empty() {
+    let (d, e) = (StackEntry::default(), StackEntry::EMPTY);
+    assert_eq!((d.node, d.t_enter.to_bits()), (e.node, e.t_enter.to_bits()));
+    let (pos, tris) = lcg_soup(50, 9, 4.0, 1.0);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let bvh = vec_bvh(&mesh, &BuildOptions::default()).unwrap();
+    assert!(bvh.stack_depth() <= 32);
+    let mut stack: [StackEntry; 32] = Default::default();
+    let mut leaf = Triangles::new(&mesh, &Watertight);
+    for ray in rays(&mesh, 2) {
+        let got = bvh.closest_hit(&ray, &mut leaf, &mut Query::new().stack(&mut stack));
+        assert_eq!(got, Ok(brute_watertight(&mesh, &ray)), "{ray:?}");
+    }
+}
+
 /// A caller's stack given as an array (`.stack(&mut array)`) is its slice: every ray's
 /// answer, refusals included, equals the one on `&mut array[..]`, for a stack long enough
 /// and for one too short for some rays.

@@ -69,6 +69,13 @@ impl TriangleLanes {
     }
 }
 
+/// [`TriangleLanes::EMPTY`]: every lane unused.
+impl Default for TriangleLanes {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -77,6 +84,25 @@ mod tests {
         MollerTrumbore, TriangleIntersector, Watertight, WatertightF32, WatertightRay,
     };
     use glam::Vec3;
+
+    /// `TriangleLanes::default()` is `EMPTY`: every coordinate of every lane NaN, so every
+    /// lane unused (never hit, never culled wrongly).
+    #[test]
+    fn default_lanes_are_empty() {
+        let d = TriangleLanes::default();
+        assert!(d.v.as_flattened().as_flattened().iter().all(|c| c.is_nan()));
+        for lane in 0..LANES {
+            assert!(
+                d.get(lane)
+                    .unwrap()
+                    .as_flattened()
+                    .iter()
+                    .all(|c| c.is_nan())
+            );
+        }
+        let bits = |l: &TriangleLanes| l.v.map(|a| a.map(|b| b.map(f32::to_bits)));
+        assert_eq!(bits(&d), bits(&TriangleLanes::EMPTY));
+    }
 
     /// The lane cull against the scalar tests (the oracle is each variant's own one-triangle
     /// `intersect`, which the cull must never contradict): rays aimed at vertices, at points
