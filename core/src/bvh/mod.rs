@@ -9,10 +9,13 @@
 //!   `[[Vec3; 3]]`) is one too, so spheres, quadrics and instances can live in a BVH: the
 //!   intersection itself is supplied at query time as a closure.
 //! * [`Bvh::build`] writes into node storage and primitive-index storage that the caller
-//!   passes in (`Vec`s, arrays, `&mut [T]`, `heapless::Vec` — anything `AsRef + AsMut` of a
-//!   slice; the slice's **length** is the capacity). Reserve [`node_capacity`]`(N)` nodes and
-//!   [`index_capacity`]`(N)` indices. Too little storage is a typed error returned **before
-//!   anything is written**.
+//!   passes in: anything `AsRef + AsMut` of a slice (arrays, `&mut [T]`, `Vec`s,
+//!   `heapless::Vec`s). The capacity is the slice's **length**, not a `Vec`'s capacity: fill
+//!   the storage first (`[BvhNode::EMPTY; K]`, `vec![BvhNode::EMPTY; n]`,
+//!   `heapless::Vec::from_array([BvhNode::EMPTY; K])`); an empty `Vec::with_capacity(n)` or
+//!   `heapless::Vec::new()` holds no slot and is refused ("0 available"). Reserve
+//!   [`node_capacity`]`(N)` nodes and [`index_capacity`]`(N)` indices. Too little storage is
+//!   a typed error returned **before anything is written**.
 //! * Queries: those of every structure ([`RayQuery`](crate::query::RayQuery): closest hit,
 //!   any hit, box query, clearance), with the primitive test supplied as a
 //!   [`LeafTest`](crate::query::LeafTest) (a closure, or
@@ -157,8 +160,10 @@ pub const MAX_PRIMITIVES: usize = (u32::MAX / 2) as usize;
 /// A BVH over caller storage `N` (nodes) and `I` (primitive indices).
 ///
 /// Typical storage: `Vec<BvhNode>` / `Vec<u32>` in a std program, `&mut [BvhNode]` /
-/// `&mut [u32]` or fixed arrays `[BvhNode; K]` / `[u32; M]` on a microcontroller. Only the first
-/// [`Bvh::node_count`] nodes and [`Bvh::primitive_count`] indices are used.
+/// `&mut [u32]` or fixed arrays `[BvhNode; K]` / `[u32; M]` on a microcontroller. The
+/// storage's slice **length** is its capacity (a `Vec`'s or `heapless::Vec`'s spare capacity
+/// does not count), so make it full-length first. Only the first [`Bvh::node_count`] nodes
+/// and [`Bvh::primitive_count`] indices are used.
 ///
 /// The storage's `AsRef` is expected to give the slices the tree was built in (or checked
 /// in, [`Bvh::from_parts`]) for as long as the tree is queried. Storage that gives others
@@ -166,6 +171,33 @@ pub const MAX_PRIMITIVES: usize = (u32::MAX / 2) as usize;
 /// never a panic or a hang: a walk of a tree enters each node at most once, and every walk
 /// (queries, [`Bvh::stats`], [`Bvh::stack_depth`]) that would enter more nodes than that
 /// (inner nodes, for the ray queries) ends there, with what it found.
+///
+/// ```
+/// use halfray_core::bvh::{BuildOptions, Bvh, BvhError, BvhNode, index_capacity, node_capacity};
+/// use halfray_core::mesh::TriangleMesh;
+/// use halfray_core::solids::{OCTAHEDRON_TRIANGLES, OCTAHEDRON_VERTICES};
+///
+/// let mesh = TriangleMesh::new(&OCTAHEDRON_VERTICES, &OCTAHEDRON_TRIANGLES);
+/// const K: usize = node_capacity(8);
+/// let (n, options) = (mesh.len(), BuildOptions::default());
+///
+/// // Storage whose length is the capacity: an array, a filled `Vec`, a filled `heapless::Vec`.
+/// let mut array = [BvhNode::EMPTY; K];
+/// assert!(Bvh::build(&mesh, &mut array, vec![0u32; n], &options).is_ok());
+/// let nodes = vec![BvhNode::EMPTY; node_capacity(n)];
+/// assert!(Bvh::build(&mesh, nodes, vec![0u32; index_capacity(n)], &options).is_ok());
+/// let nodes: heapless::Vec<BvhNode, K> = heapless::Vec::from_array([BvhNode::EMPTY; K]);
+/// let indices: heapless::Vec<u32, 8> = heapless::Vec::from_array([0; 8]);
+/// assert!(Bvh::build(&mesh, nodes, indices, &options).is_ok());
+///
+/// // Not these: reserved capacity is not length, so they hold no node ("0 available").
+/// let reserved: Vec<BvhNode> = Vec::with_capacity(node_capacity(n));
+/// let refused = Bvh::build(&mesh, reserved, vec![0u32; n], &options).unwrap_err();
+/// assert!(matches!(refused, BvhError::Capacity(_)));
+/// assert!(refused.to_string().contains("0 available"), "{refused}");
+/// let empty: heapless::Vec<BvhNode, K> = heapless::Vec::new();
+/// assert!(Bvh::build(&mesh, empty, vec![0u32; n], &options).is_err());
+/// ```
 #[derive(Clone, Debug)]
 pub struct Bvh<N, I> {
     nodes: N,
