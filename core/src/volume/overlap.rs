@@ -92,8 +92,8 @@ pub const SPHERE_OBB_BAND_REL: f32 = gamma(96);
 pub const CAPSULE_PAD_REL: f64 = gamma_f64(16);
 
 /// False-positive band of [`capsule_capsule`] and [`capsule_sphere`], unitless (`2⁻³⁰`):
-/// capsules reported overlapping are at most `CAPSULE_BAND_REL·(|a₁|₁ + |b₁|₁ + |a₂|₁ + |b₂|₁
-/// + r₁ + r₂)` apart. The certificate axis is the difference of the closest points of the
+/// capsules reported overlapping are at most
+/// `CAPSULE_BAND_REL·(|a₁|₁ + |b₁|₁ + |a₂|₁ + |b₂|₁ + r₁ + r₂)` apart. The certificate axis is the difference of the closest points of the
 /// two segments computed in `f64` (Ericson, *Real-Time Collision Detection* §5.1.9), and
 /// that axis made perpendicular to the segments: the closest points err by a few `f64`
 /// roundings of the coordinates, and once perpendicular to a segment the axis no longer

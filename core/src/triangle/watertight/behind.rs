@@ -27,7 +27,7 @@
 //! values. The computed permanent `w_nn` has the same roundings on positive terms, so
 //! `W ≤ w_nn/(1 − γ₈)`, and the error is at most `γ₈/(1 − γ₈)·w_nn = 8u/(1 − 16u)·w_nn`.
 //! `dn` has one rounding less per term (the direction is an input): `< 8u·d_nn`.
-//! [`BEHIND_REL`](crate::tolerance::BEHIND_REL) `= 9u`: the computed bound, three roundings
+//! [`BEHIND_REL`] `= 9u`: the computed bound, three roundings
 //! (the product, two sums) below its exact value, is at least `(1 − u)³·9u·perm > 8u/(1 −
 //! 16u)·perm` plus the margin terms, so `|value| >` bound leaves the exact value beyond the
 //! error, of the same sign, by at least the margin terms below.
@@ -35,7 +35,7 @@
 //! **Underflow and overflow.** A product below the normal range rounds absolutely (at most
 //! `2⁻¹⁵⁰`; sums and differences of `f32` are then exact): at most two such in each `n_i`,
 //! one more in each product with `a_i` or `d_i`, so an absolute error below
-//! `2⁻¹⁴⁷·(|a|₁ + 1)` (resp. `|d|₁`), which the terms with [`BEHIND_TINY`](crate::tolerance::BEHIND_TINY) `= 2⁻¹⁴⁰` cover
+//! `2⁻¹⁴⁷·(|a|₁ + 1)` (resp. `|d|₁`), which the terms with [`BEHIND_TINY`] `= 2⁻¹⁴⁰` cover
 //! (the bound's own underflowing products included). An overflow gives `±∞` or NaN in the
 //! permanent at least where it gives it in the value (each permanent term is the rounded
 //! magnitude of the value's term, rounding is monotone), so the bound is `∞` or NaN and the
@@ -51,7 +51,7 @@
 //! magnitude, and every permanent component at most `2m²` (`m = max s_i`): the `f64`
 //! permanents are at most `(1 + γ₆)·2m²·|d|₁` and `(1 + γ₆)·2m²·|a|₁` (`f64` differences
 //! of `f32` values round at most once). The `margin·|·|₁` term of the bound, with
-//! [`BEHIND_F64_MARGIN`](crate::tolerance::BEHIND_F64_MARGIN) `= 2⁻⁴⁰`, keeps the exact value beyond `2⁻⁴⁰·(1 − γ₄)·m²·|·|₁`,
+//! [`BEHIND_F64_MARGIN`] `= 2⁻⁴⁰`, keeps the exact value beyond `2⁻⁴⁰·(1 − γ₄)·m²·|·|₁`,
 //! more than `2¹⁰` times the `2·γ₁₂·(1 + γ₆)·2m²·|·|₁` that makes each `f64` filter pass
 //! (its value within `γ₁₂·perm` of the exact one, beyond `γ₁₂·perm`). With both filters
 //! passed the computed signs are the exact ones and opposite, so the computed `t` is negative
@@ -64,10 +64,10 @@
 //! within the `f32` formula's rounding of the plane: the triangle a spawned ray starts on
 //! when the triangle is about as large as its coordinates (the spawn offset, a few ulps of the
 //! coordinates, is then below `BEHIND_REL·w_nn`), as on meshes of a few large faces. Such a
-//! lane is checked once more with the triangle's `f64` plane ([`BehindPlane::refuses`], which
-//! returns `true` exactly where the exact path's plane kernel refuses the triangle as crossed
-//! behind, x86-64 only): a few dozen `f64` operations instead of the projection, the exact
-//! edges and the plane kernel of the exact path.
+//! lane is checked once more with the triangle's `f64` plane
+//! ([`super::BehindPlane::refuses`], which returns `true` exactly where the exact path's plane
+//! kernel refuses the triangle as crossed behind, x86-64 only): a few dozen `f64` operations
+//! instead of the projection, the exact edges and the plane kernel of the exact path.
 
 use super::WatertightRay;
 use crate::ray::Ray;
@@ -173,9 +173,9 @@ impl WatertightRay {
 }
 
 /// The lanes among `near` (bits as in [`WatertightRay::behind_misses2`]) whose triangle's
-/// `f64` plane refuses `ray` ([`BehindPlane::refuses`]: exactly where the exact path's plane
-/// kernel refuses it as crossed behind); x86-64 only, where the exact path starts with that
-/// kernel (elsewhere `0`). One out-of-line call per level, compiled for AVX2 and FMA at
+/// `f64` plane refuses `ray` ([`super::BehindPlane::refuses`]: exactly where the exact path's
+/// plane kernel refuses it as crossed behind); x86-64 only, where the exact path starts with
+/// that kernel (elsewhere `0`). One out-of-line call per level, compiled for AVX2 and FMA at
 /// that level (the same `f64` operations: the same bits).
 #[inline(always)]
 fn near_refused<L: SimdLevel>(level: L, ray: &Ray, groups: [&TriangleLanes; 2], near: u32) -> u32 {
