@@ -412,16 +412,45 @@ impl<T> AsMut<[T]> for Flip<T> {
     }
 }
 
-/// `f()` on a thread of its own, which must return within ten seconds (the walks it makes
-/// take microseconds): a walk that hangs fails the test instead of hanging the run (its
-/// thread spins on until the test binary exits).
-pub fn returns<R: Send + 'static>(what: &str, f: impl FnOnce() -> R + Send + 'static) -> R {
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let _ = tx.send(f());
-    });
-    match rx.recv_timeout(std::time::Duration::from_secs(10)) {
-        Ok(r) => r,
-        Err(e) => panic!("{what} did not return within 10 s ({e})"),
+/// A structure, the mesh it was built over and a ray, shared with the threads
+/// [`Walks::end`] runs walks on: a walk that hangs fails the test instead of hanging the run.
+pub struct Walks<A> {
+    name: std::string::String,
+    accel: std::sync::Arc<A>,
+    pos: std::sync::Arc<Vec<Vec3>>,
+    tris: std::sync::Arc<Vec<[u32; 3]>>,
+    ray: Ray,
+}
+
+impl<A: Send + Sync + 'static> Walks<A> {
+    /// `accel` over the mesh `(pos, tris)`, with `ray`; `name` labels the failures.
+    pub fn new(name: &str, accel: A, pos: &[Vec3], tris: &[[u32; 3]], ray: Ray) -> Self {
+        Self {
+            name: name.into(),
+            accel: std::sync::Arc::new(accel),
+            pos: std::sync::Arc::new(pos.to_vec()),
+            tris: std::sync::Arc::new(tris.to_vec()),
+            ray,
+        }
+    }
+
+    /// `walk(structure, mesh, ray)` on a thread of its own, which must return within ten
+    /// seconds (the walks take microseconds); a hung walk's thread spins on until the test
+    /// binary exits.
+    pub fn end(&self, what: &str, walk: fn(&A, &TriangleMesh<'_>, &Ray)) {
+        let (accel, pos, tris, ray) = (
+            self.accel.clone(),
+            self.pos.clone(),
+            self.tris.clone(),
+            self.ray,
+        );
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            walk(&accel, &TriangleMesh::new(&pos, &tris), &ray);
+            let _ = tx.send(());
+        });
+        if let Err(e) = rx.recv_timeout(std::time::Duration::from_secs(10)) {
+            panic!("{}: {what} did not return within 10 s ({e})", self.name);
+        }
     }
 }

@@ -1409,8 +1409,7 @@ fn a_source_whose_bounds_change_still_gets_a_well_formed_tree() {
 /// the box query, the statistics and the stack depth.
 #[test]
 fn every_walk_ends_when_the_storage_changes_under_the_tree() {
-    use crate::test_util::{Flip, returns};
-    type Flipped = Bvh<Flip<BvhNode>, Vec<u32>>;
+    use crate::test_util::{Flip, Walks};
     let huge = [[-1.0e3f32; 3], [1.0e3; 3]];
     let (pos, tris) = lcg_soup(100, 5, 4.0, 1.0);
     let n = tris.len();
@@ -1433,22 +1432,12 @@ fn every_walk_ends_when_the_storage_changes_under_the_tree() {
         let bvh = Bvh::build(&mesh, nodes, vec![0u32; n], &BuildOptions::default()).unwrap();
         assert_eq!(bvh.node_count(), count);
         flip.store(true, std::sync::atomic::Ordering::Relaxed);
-        let bvh = std::sync::Arc::new(bvh);
-        let (pos, tris) = (
-            std::sync::Arc::new(pos.clone()),
-            std::sync::Arc::new(tris.clone()),
-        );
         let ray = Ray::new(Vec3::new(0.0, 0.0, -10.0), Vec3::Z);
-        let query = |what: &str, f: fn(&Flipped, &TriangleMesh<'_>, &Ray)| {
-            let (bvh, pos, tris) = (bvh.clone(), pos.clone(), tris.clone());
-            returns(&std::format!("{name}: {what}"), move || {
-                f(&bvh, &TriangleMesh::new(&pos, &tris), &ray);
-            });
-        };
-        query("closest hit", |b, m, r| {
+        let walks = Walks::new(name, bvh, &pos, &tris, ray);
+        walks.end("closest hit", |b, m, r| {
             let _ = closest_watertight(b, m, r);
         });
-        query("closest hit on a caller's stack", |b, m, r| {
+        walks.end("closest hit on a caller's stack", |b, m, r| {
             let mut stack = [StackEntry::EMPTY; TRAVERSAL_STACK_SIZE];
             let _ = b.closest_hit(
                 r,
@@ -1456,16 +1445,16 @@ fn every_walk_ends_when_the_storage_changes_under_the_tree() {
                 &mut Query::new().stack(&mut stack[..]),
             );
         });
-        query("any hit", |b, m, r| {
+        walks.end("any hit", |b, m, r| {
             let _ = any_watertight(b, m, r);
         });
-        query("box query", |b, m, _| {
+        walks.end("box query", |b, m, _| {
             let _ = b.query_box(m, &Aabb::new(Vec3::splat(-1.0), Vec3::ONE), |_| true);
         });
-        query("statistics", |b, _, _| {
+        walks.end("statistics", |b, _, _| {
             let _ = b.stats();
         });
-        query("stack depth", |b, _, _| {
+        walks.end("stack depth", |b, _, _| {
             assert!(b.stack_depth() <= TRAVERSAL_STACK_SIZE);
         });
     }

@@ -829,8 +829,7 @@ fn the_default_node_is_the_empty_leaf() {
 /// as the old code did). Each walk enters at most as many nodes as the tree has.
 #[test]
 fn every_walk_ends_when_the_storage_changes_under_the_tree() {
-    use crate::test_util::{Flip, returns};
-    type Flipped = KdTree<Flip<KdNode>, Vec<u32>>;
+    use crate::test_util::{Flip, Walks};
     let (pos, tris) = soup(300, 9, 4.0, 1.0);
     let n = tris.len();
     let count = build(&TriangleMesh::new(&pos, &tris)).node_count();
@@ -859,25 +858,15 @@ fn every_walk_ends_when_the_storage_changes_under_the_tree() {
         .unwrap();
         assert_eq!(kd.node_count(), count);
         flip.store(true, std::sync::atomic::Ordering::Relaxed);
-        let kd = std::sync::Arc::new(kd);
-        let (pos, tris) = (
-            std::sync::Arc::new(pos.clone()),
-            std::sync::Arc::new(tris.clone()),
-        );
         let ray = Ray::new(Vec3::new(-50.0, 0.1, 0.2), Vec3::X);
-        let query = |what: &str, f: fn(&Flipped, &TriangleMesh<'_>, &Ray)| {
-            let (kd, pos, tris) = (kd.clone(), pos.clone(), tris.clone());
-            returns(&std::format!("{name}: {what}"), move || {
-                f(&kd, &TriangleMesh::new(&pos, &tris), &ray);
-            });
-        };
-        query("closest hit", |k, m, r| {
+        let walks = Walks::new(name, kd, &pos, &tris, ray);
+        walks.end("closest hit", |k, m, r| {
             let _ = closest_watertight(k, m, r);
         });
-        query("any hit", |k, m, r| {
+        walks.end("any hit", |k, m, r| {
             let _ = any_watertight(k, m, r);
         });
-        query("box query", |k, m, _| {
+        walks.end("box query", |k, m, _| {
             let _ = k.query_box(m, &Aabb::new(Vec3::splat(-1.0), Vec3::ONE), |_| true);
         });
     }
