@@ -252,7 +252,7 @@ fn brute_closest(brute: &Brute, row: &Row, ray: &Ray) -> Option<u32> {
 }
 
 /// Another crate's triangle intersector works in `Triangles` (through a BVH), and a
-/// `VariantVisitor` sees each variant's intersector.
+/// `VariantVisitor` runs a query with each variant's intersector.
 #[test]
 fn a_triangle_intersector_and_a_variant_visitor_of_another_crate() {
     let mesh = TriangleMesh::new(&solids::OCTAHEDRON_VERTICES, &solids::OCTAHEDRON_TRIANGLES);
@@ -274,15 +274,20 @@ fn a_triangle_intersector_and_a_variant_visitor_of_another_crate() {
     assert!(mine.is_some());
     assert_eq!(mine, wt);
 
-    struct Name;
-    impl VariantVisitor for Name {
-        type Output = &'static str;
-        fn visit<I: TriangleIntersector>(self, isect: &I) -> &'static str {
-            isect.name()
+    // A visitor that closest-hits the mesh through the BVH with each variant's intersector:
+    // every variant finds the watertight test's triangle on this plain ray.
+    struct Closest<'a, B>(&'a B, &'a TriangleMesh<'a>, Ray);
+    impl<B: RayQuery> VariantVisitor for Closest<'_, B> {
+        type Output = Option<u32>;
+        fn visit<I: TriangleIntersector>(self, isect: &I) -> Option<u32> {
+            let mut leaf = Triangles::new(self.1, isect);
+            let hit = self.0.closest_hit(&self.2, &mut leaf, &mut Query::new());
+            hit.map(|(prim, _)| prim)
         }
     }
     for v in TriangleVariant::ALL {
-        assert_eq!(v.visit(Name), v.name());
+        let prim = v.visit(Closest(&bvh, &mesh, ray));
+        assert_eq!(prim, wt.map(|h| h.0), "{}", v.name());
     }
 }
 

@@ -219,15 +219,26 @@ fn every_structure_equals_brute_force_through_the_trait() {
     }
 }
 
-#[test]
-fn a_caller_stack_too_small_is_refused_not_cut_short() {
-    let (pos, tris) = lcg_soup(200, 3, 6.0, 1.0);
-    let mesh = TriangleMesh::new(&pos, &tris);
+/// A random soup of 200 triangles (seed 3), for [`one_per_leaf`].
+fn deep_soup() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    lcg_soup(200, 3, 6.0, 1.0)
+}
+
+/// The BVH of `mesh` with one triangle a leaf: over [`deep_soup`], a deep tree whose walks
+/// need many stack entries.
+fn one_per_leaf(mesh: &TriangleMesh<'_>) -> crate::test_util::VecBvh {
     let single = BuildOptions {
         max_leaf_size: 1,
         ..BuildOptions::default()
     };
-    let bvh = vec_bvh(&mesh, &single).unwrap();
+    vec_bvh(mesh, &single).unwrap()
+}
+
+#[test]
+fn a_caller_stack_too_small_is_refused_not_cut_short() {
+    let (pos, tris) = deep_soup();
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let bvh = one_per_leaf(&mesh);
     let mut tris = Triangles::new(&mesh, &Watertight);
     let mut refused = 0;
     for ray in rays(&mesh, 3) {
@@ -307,13 +318,9 @@ fn a_caller_stack_array_answers_as_its_slice() {
         }
         (refused, hits)
     }
-    let (pos, tris) = lcg_soup(200, 3, 6.0, 1.0);
+    let (pos, tris) = deep_soup();
     let mesh = TriangleMesh::new(&pos, &tris);
-    let single = BuildOptions {
-        max_leaf_size: 1,
-        ..BuildOptions::default()
-    };
-    let bvh = vec_bvh(&mesh, &single).unwrap();
+    let bvh = one_per_leaf(&mesh);
     assert!(bvh.stack_depth() <= 64 && bvh.stack_depth() > 6);
     let (refused, hits) = same::<64>(&bvh, &mesh);
     assert_eq!(refused, 0);
