@@ -746,6 +746,34 @@ fn empty_or_infinite_boxes_are_named_or_excluded() {
     }
 }
 
+/// The kd-tree of `src` (`n` primitives) built over storage of `4n` entries and a scratch
+/// holding records of primitive 99 (as an earlier build over 100 boxes leaves them), and
+/// its distinct references, sorted.
+fn build_with_stale_scratch(
+    src: &impl PrimitiveSource,
+    n: usize,
+    options: &KdBuildOptions,
+) -> (KdTree<Vec<KdNode>, Vec<u32>>, Vec<u32>) {
+    let stale = KdRef {
+        min: [0.0; 3],
+        max: [1.0; 3],
+        prim: 99,
+    };
+    let mut scratch = vec![stale; 4 * n];
+    let kd = KdTree::build(
+        src,
+        vec![KdNode::EMPTY; 4 * n],
+        vec![0u32; 4 * n],
+        &mut scratch,
+        options,
+    )
+    .unwrap();
+    let mut refs = kd.references().to_vec();
+    refs.sort_unstable();
+    refs.dedup();
+    (kd, refs)
+}
+
 /// A source whose answers change between calls (`test_util::Fickle`) is never asked for an
 /// index at or beyond its count (it panics), whatever the scratch holds from before (here
 /// records of primitive 99, as an earlier build over 100 boxes leaves them): the tree's
@@ -757,47 +785,20 @@ fn empty_or_infinite_boxes_are_named_or_excluded() {
 /// inverted or moved answers) give trees whose references are the primitives they count.
 #[test]
 fn a_source_that_changes_between_passes_is_never_asked_for_a_bad_index() {
-    let stale = KdRef {
-        min: [0.0; 3],
-        max: [1.0; 3],
-        prim: 99,
-    };
     for (exclude_non_finite, held) in [(false, vec![1u32, 2]), (true, vec![0, 1, 2])] {
         let options = KdBuildOptions {
             exclude_non_finite,
             ..KdBuildOptions::default()
         };
         let src = crate::test_util::fickle_first(3);
-        let mut scratch = [stale; 3];
-        let kd = KdTree::build(
-            &src,
-            vec![KdNode::EMPTY; 12],
-            vec![0u32; 12],
-            &mut scratch,
-            &options,
-        )
-        .unwrap();
-        let mut refs = kd.references().to_vec();
-        refs.sort_unstable();
-        refs.dedup();
+        let (kd, refs) = build_with_stale_scratch(&src, 3, &options);
         assert_eq!((refs, kd.primitive_count()), (held.clone(), held.len()));
         let everything = Aabb::new(Vec3::splat(-10.0), Vec3::splat(10.0));
         assert!(kd.query_box(&src, &everything, |_| true) <= held.len());
         for seed in 0..100u64 {
             let n = 40;
             let src = crate::test_util::fickle_random(n, seed);
-            let mut scratch = vec![stale; 4 * n];
-            let kd = KdTree::build(
-                &src,
-                vec![KdNode::EMPTY; 4 * n],
-                vec![0u32; 4 * n],
-                &mut scratch,
-                &options,
-            )
-            .unwrap();
-            let mut refs = kd.references().to_vec();
-            refs.sort_unstable();
-            refs.dedup();
+            let (kd, refs) = build_with_stale_scratch(&src, n, &options);
             assert!(
                 refs.iter().all(|&p| (p as usize) < n),
                 "seed {seed}: {refs:?}"
