@@ -191,6 +191,13 @@ const fn assert_width(width: usize) {
 /// slot as `i & (W − 1)`, right only for a power of two): building or sizing a tree of width
 /// 3 does not compile.
 ///
+/// The storage's `AsRef` is expected to give the slices the tree was built in for as long as
+/// the tree is queried. Storage that gives others later (an A/B flash region switched by a
+/// flag, say) makes the answers meaningless but never a panic or a hang: a walk of a tree
+/// enters each node at most once, and every walk (single rays, packets, the box query) that
+/// would enter more nodes than the storage holds enters no further one and ends with what it
+/// found.
+///
 /// ```
 /// use halfray_core::bvh::wide::{LeafGroup, WideBvh, WideNode};
 /// use halfray_core::bvh::{BuildOptions, Bvh, BvhNode};

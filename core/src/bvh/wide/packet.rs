@@ -35,7 +35,9 @@
 
 use super::node::{ChildRef, LeafGroup, WideNode};
 use super::node_test::{far_reciprocal, fold_slab, slab_axis};
-use super::traverse::{RunLanes, STACK, leaf_groups, leaf_hits, prefetch_child, sorted_keys};
+use super::traverse::{
+    RunLanes, STACK, entered_all, leaf_groups, leaf_hits, prefetch_child, sorted_keys,
+};
 use super::{WideBvh, add_stats};
 use crate::query::walk::{PadFrame, cull_bound};
 use crate::query::{LeafTest, TraversalStats};
@@ -531,7 +533,11 @@ where
                 ChildRef::Inner(index) => {
                     if let Some(node) = nodes.get(index as usize) {
                         local.nodes_visited += 1;
-                        let (dist, mask) = interval.hit_children(node, bound);
+                        let (dist, mut mask) = interval.hit_children(node, bound);
+                        if entered_all(&local, nodes) {
+                            // No tree (`entered_all`): the walk enters no further node.
+                            mask = 0;
+                        }
                         let entry = |slot: usize| Entry {
                             child: node.child[slot & (W - 1)],
                             parent: index,

@@ -38,13 +38,18 @@ where
         // The root (node 0, or a leaf) first.
         let mut stack = [self.root; QUERY_STACK];
         let mut sp = 1usize;
+        // Nodes entered: each at most once in a tree; past `nodes.len()` the nodes are no
+        // tree (storage whose `AsRef` changed, [`WideBvh`]'s docs) and no further node is
+        // entered, so the walk ends however they point.
+        let mut entered = 0usize;
         while sp > 0 {
             sp -= 1;
             match ChildRef::decode(stack[sp]) {
                 ChildRef::Inner(i) => {
-                    let Some(node) = nodes.get(i as usize) else {
+                    let Some(node) = nodes.get(i as usize).filter(|_| entered < nodes.len()) else {
                         continue;
                     };
+                    entered += 1;
                     for k in 0..W {
                         if node.child[k] != ChildRef::EMPTY
                             && node.child_bounds(k).overlaps(&local)

@@ -1637,3 +1637,86 @@ fn every_supported_width_answers_as_the_binary_tree() {
     agrees_with_the_binary_tree::<4>(&mesh, &bin);
     agrees_with_the_binary_tree::<8>(&mesh, &bin);
 }
+
+/// A wide tree over storage whose `AsRef` gives other nodes after the build (safe code,
+/// [`crate::test_util::Flip`]): a node whose only child is itself, one whose eight children
+/// are, and shared subtrees whose children all come after their parents (node `i`'s first two
+/// slots `i + 1`, `i + 2` over 59 levels: about 10¹² paths). Every walk enters at most as many nodes as the storage
+/// holds, so each ends: closest and any hit on the query's stack and on a caller's, both
+/// batches (as packets: sixteen equal rays), the box query and the statistics.
+#[test]
+fn every_walk_ends_when_the_storage_changes_under_the_tree() {
+    use crate::test_util::{Flip, Walks};
+    let (pos, tris) = soup(300, 41);
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let b = binary(&mesh, 4);
+    let count = VecWide::<8>::node_count_for(&b).unwrap();
+    assert!(count > 1, "the root must be a node");
+    let node = |children: &[u32]| {
+        let mut n = WideNode::<8>::EMPTY;
+        let huge = Aabb::new(Vec3::splat(-1.0e3), Vec3::splat(1.0e3));
+        for (i, &c) in children.iter().enumerate() {
+            n.set_child(i, &huge, c);
+        }
+        n
+    };
+    let leaf = ChildRef::leaf(0, 1).unwrap();
+    let only_child = vec![node(&[0])];
+    let self_loop = vec![node(&[0; 8])];
+    let shared: Vec<WideNode<8>> = (0..64u32)
+        .map(|i| match i {
+            0..=58 => node(&[i + 1, i + 2]),
+            _ => node(&[leaf]),
+        })
+        .collect();
+    for (name, changed) in [
+        ("its own only child", only_child),
+        ("its own eight children", self_loop),
+        ("shared subtrees", shared),
+    ] {
+        let (nodes, flip) = Flip::new(vec![WideNode::EMPTY; count], changed);
+        let groups = vec![LeafGroup::EMPTY; group_capacity(mesh.len())];
+        let w = WideBvh::<8, _, _>::from_binary(&b, &mesh, nodes, groups).unwrap();
+        flip.store(true, std::sync::atomic::Ordering::Relaxed);
+        let ray = Ray::new(Vec3::new(0.1, 0.2, -10.0), Vec3::Z);
+        let walks = Walks::new(name, w, &pos, &tris, ray);
+        walks.end("closest hit", |w, m, r| {
+            let _ = w.closest_hit(r, &mut Triangles::new(m, &Watertight), &mut Query::new());
+        });
+        walks.end("closest hit on a caller's stack", |w, m, r| {
+            let mut stack = QueryStack::new();
+            let _ = w.closest_hit(
+                r,
+                &mut Triangles::new(m, &Watertight),
+                &mut Query::new().stack(&mut stack),
+            );
+        });
+        walks.end("any hit", |w, m, r| {
+            let _ = w.any_hit(r, &mut Triangles::new(m, &Watertight), &mut Query::new());
+        });
+        walks.end("closest hits (a packet)", |w, m, r| {
+            let mut out = [None; 16];
+            let _ = w.closest_hits(
+                &[*r; 16],
+                &mut Triangles::new(m, &Watertight),
+                &mut Query::new(),
+                &mut out,
+            );
+        });
+        walks.end("any hits (a packet)", |w, m, r| {
+            let mut out = [None; 16];
+            let _ = w.any_hits(
+                &[*r; 16],
+                &mut Triangles::new(m, &Watertight),
+                &mut Query::new(),
+                &mut out,
+            );
+        });
+        walks.end("box query", |w, m, _| {
+            let _ = w.query_box(m, &Aabb::new(Vec3::splat(-1.0), Vec3::ONE), |_| true);
+        });
+        walks.end("statistics", |w, _, _| {
+            let _ = w.stats();
+        });
+    }
+}

@@ -150,6 +150,22 @@ pub(super) fn kept_hits<LT: LeafTest, L: SimdLevel, const ANY: bool>(
     taken
 }
 
+/// Whether a walk that has entered `local.nodes_visited` inner nodes (the current one
+/// counted) has entered more than `nodes` holds. A walk of a tree enters each node at most
+/// once and finds every inner child stored after its parent, so neither check below fires
+/// unless the nodes are no tree (storage whose `AsRef` gave other nodes after the build,
+/// [`WideBvh`]'s docs). Then the walk still ends, however the nodes point (a child that is its
+/// own parent, shared subtrees of about 10¹² paths): a node with one hit child steps only to a
+/// later node (at most `nodes.len()` such steps in a row), and past this count a node with
+/// several hit children pushes nothing and is left as a miss, so that at most the
+/// [`STACK`] entries then on the stack are popped, each followed by at most `nodes.len()`
+/// steps: at most `(STACK + 2)·nodes.len()` node steps in all. The checks sit where the walk
+/// holds their values anyway (the single child's reference, the sort's path).
+#[inline(always)]
+pub(super) fn entered_all<const W: usize>(local: &TraversalStats, nodes: &[WideNode<W>]) -> bool {
+    local.nodes_visited > nodes.len() as u64
+}
+
 /// Hints that the memory of `child` (its node, or its leaf's first triangle group) is read
 /// soon. Only addresses are computed, without a bounds check or a decode: a hint never
 /// faults, so an address past the end is harmless.
@@ -397,7 +413,9 @@ where
     /// but the nearest ([`WideBvh::order_hits`]; for the any-hit walk, `ANY`, all but the
     /// farthest, the others in slot order: [`WideBvh::push_hits_any`]) and returns the one to
     /// visit next;
-    /// `None` when no child is hit (or `index` is out of range).
+    /// `None` when no child is hit or `index` is out of range, and where the nodes are no tree
+    /// ([`entered_all`]): a single hit child stored before its parent, or several hit
+    /// children once the walk has entered more nodes than `nodes` holds.
     #[inline(always)]
     fn descend<const ANY: bool, const GENERAL: bool, L: SimdLevel>(
         &self,
@@ -413,8 +431,23 @@ where
     ) -> Option<u32> {
         let node = nodes.get(index as usize)?;
         local.nodes_visited += 1;
-        let (dist, mut mask) = wray.hit_children::<W, GENERAL, L>(level, node, t_min, bound);
+        let (dist, mask) = wray.hit_children::<W, GENERAL, L>(level, node, t_min, bound);
         if mask == 0 {
+            return None;
+        }
+        // `W` is a power of two: `& (W − 1)` keeps every lane index in range without a check.
+        let first = mask.trailing_zeros() as usize & (W - 1);
+        if mask & (mask - 1) == 0 {
+            // One child hit (the common case): nothing to order or push. A tree stores an
+            // inner child after its parent (a leaf's or an empty slot's reference is larger
+            // than any node's index): one that is not is no tree's ([`entered_all`]).
+            if ANY {
+                *enter = dist[first];
+            }
+            let only = node.child[first];
+            return (only > index).then_some(only);
+        }
+        if entered_all(local, nodes) {
             return None;
         }
         if ANY {
@@ -426,20 +459,11 @@ where
                 (nodes, groups),
             ));
         }
-        // `W` is a power of two: `& (W − 1)` keeps every lane index in range without a check.
-        let hits = mask;
-        let first = mask.trailing_zeros() as usize & (W - 1);
-        mask &= mask - 1;
         let near = StackEntry {
             node: node.child[first],
             t_enter: dist[first],
         };
-        Some(if mask == 0 {
-            // One child hit (the common case): nothing to order or push.
-            near.node
-        } else {
-            self.order_hits(level, node, &dist, hits, near, stack, sp, (nodes, groups))
-        })
+        Some(self.order_hits(level, node, &dist, mask, near, stack, sp, (nodes, groups)))
     }
 
     /// Pops the next entry still within `bound` (entries beyond it are dropped); `None` when
