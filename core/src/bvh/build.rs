@@ -103,7 +103,7 @@ pub(super) const EMPTY_TASK: Task = Task {
 
 /// The builder's working memory: the SAH bins of the three axes
 /// ([`BIN_COUNT`](super::BIN_COUNT) each; two sets on x86-64, filled alternately) and the
-/// stack of pending nodes (`MAX_DEPTH + 1` entries, one per level). About 3.9 KiB on a 32-bit
+/// stack of pending nodes (`MAX_DEPTH + 1` entries, one per level). About 4.1 KiB on a 32-bit
 /// target. [`super::Bvh::build`] keeps one on its own
 /// stack; [`super::Bvh::build_in`] takes the caller's, so that a firmware can place it where
 /// it chooses (a `static`, a scratch buffer shared with other phases) instead of the stack.

@@ -251,7 +251,7 @@ where
     }
 
     /// [`Bvh::build`] with the builder's working memory (bins and pending nodes, about
-    /// 3.9 KiB on a 32-bit target) in `work`, which the caller places where it chooses,
+    /// 4.1 KiB on a 32-bit target) in `work`, which the caller places where it chooses,
     /// instead of on the build's stack. The same tree and the same errors.
     ///
     /// # Errors
