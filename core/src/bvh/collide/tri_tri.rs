@@ -1,7 +1,7 @@
 //! The exact triangle–triangle overlap test (Devillers & Guigue 2002, "Faster
 //! triangle-triangle intersection tests"), on **closed** triangles of `f32` vertices.
 //!
-//! Every decision is an orientation sign from [`super::predicates`], which is exact (a
+//! Every decision is an orientation sign from [`crate::predicates`], which is exact (a
 //! filtered `f64` evaluation with an exact expansion fallback), so the answer is the exact
 //! answer for the `f32` triangles as given: touching (a shared vertex, a vertex on a face, an
 //! edge on an edge, coplanar overlap, even by a single point) counts as intersecting, and
