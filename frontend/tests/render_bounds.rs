@@ -3,6 +3,7 @@
 //! exhaustive tree; `--force-all-effects` stays bit-identical when radiance overflows.
 
 use halfray::render::bound::{MAX_SECONDARY_RAYS_PER_PIXEL, PathBound};
+use halfray::render::budget::Estimate;
 use halfray::render::plan::EffectPlan;
 use halfray::render::{Mode, RenderOptions, render};
 use halfray::scene::{self, Scene};
@@ -10,7 +11,7 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{camera, plane, point_light, scenes_dir, sphere};
+use common::{camera, example_scene_paths, material, plane, point_light, scenes_dir, sphere};
 
 /// Largest difference, in 8-bit steps, between the bounded and the exhaustive tree: the
 /// weight cut is chosen to stay under half a step per skipped subtree (see `MIN_PATH_WEIGHT`);
@@ -63,29 +64,38 @@ fn deep_glass_finishes_and_matches_the_exhaustive_tree() {
     assert!(d <= MAX_STEP_DIFFERENCE, "bounded vs exhaustive: {d}/255");
 }
 
-/// A camera inside two nested spheres that reflect and transmit everything: weights never
-/// fall, both rays of every hit go on, the tree is 2^64 without the per-pixel cap.
-fn hall_of_mirrors() -> String {
+/// A camera inside two nested spheres that reflect everything, the inner one transmitting
+/// everything and the outer one `outer_transparency`; with `light`, a point light at the
+/// centre. Weights never fall: with an outer transparency of 1 both rays of every hit go on,
+/// the tree is 2^64 without the per-pixel cap.
+fn hall_of_mirrors(outer_transparency: &str, light: bool) -> String {
     let camera = camera("[0, 0, 0]", "[0, 0, -1]", "60", [4, 4]);
-    let light = point_light("[0, 0, 0]", "1.0");
-    let inner = sphere("[0, 0, 0]", "1.0", "both");
-    let outer = sphere("[0, 0, 0]", "2.0", "both");
+    let light = if light {
+        point_light("[0, 0, 0]", "1.0")
+    } else {
+        String::new()
+    };
+    let glass = |name: &str, transparency: &str| {
+        let fields = [
+            ("diffuse", "[0.1, 0.1, 0.1]"),
+            ("mirror", "1.0"),
+            ("transparency", transparency),
+            ("ior", "1.5"),
+        ];
+        material(name, &fields)
+    };
     format!(
-        r#"
-max_depth = 64
-background = [0.2, 0.3, 0.4]
-{camera}{light}[material.both]
-diffuse = [0.1, 0.1, 0.1]
-mirror = 1.0
-transparency = 1.0
-ior = 1.5
-{inner}{outer}"#
+        "\nmax_depth = 64\nbackground = [0.2, 0.3, 0.4]\n{camera}{light}{}{}{}{}",
+        glass("both", "1.0"),
+        glass("outer", outer_transparency),
+        sphere("[0, 0, 0]", "1.0", "both"),
+        sphere("[0, 0, 0]", "2.0", "outer"),
     )
 }
 
 #[test]
 fn weights_that_never_fall_stop_at_the_per_pixel_cap() {
-    let s = scene::parse(&hall_of_mirrors(), Path::new("hall.toml")).unwrap();
+    let s = scene::parse(&hall_of_mirrors("1.0", true), Path::new("hall.toml")).unwrap();
     let r = render(&s, &opts(PathBound::RENDER));
     let pixels = u64::from(r.width * r.height);
     let secondary = r.counts.reflection + r.counts.refraction;
@@ -139,4 +149,72 @@ fn explain_states_the_bound() {
         text.contains("ray tree bound") && text.contains("1/8192") && text.contains("4096"),
         "{text}"
     );
+}
+
+/// The rays the renderer counts (the counts `--stats-json` reports) rendering `s` in `mode`,
+/// forced or not, with at most `samples` samples per pixel; panics, naming `what`, unless
+/// they are within the work estimate of that render.
+fn counted_within_estimate(
+    s: &Scene,
+    mode: Mode,
+    force_all: bool,
+    samples: u32,
+    what: &str,
+) -> u64 {
+    let plan = EffectPlan::derive(s, force_all);
+    let worst = Estimate::of(s, &plan, mode, samples).rays();
+    let opts = RenderOptions {
+        mode,
+        force_all,
+        samples,
+        ..RenderOptions::default()
+    };
+    let counts = render(s, &opts).counts;
+    let cast = counts.total();
+    assert!(
+        cast as f64 <= worst,
+        "{what} ({mode:?}, forced {force_all}, {samples} samples): {cast} rays ({counts:?}) over the worst case {worst}"
+    );
+    cast
+}
+
+/// The work estimate is an upper bound of the rays every example scene casts (at 8×6, with
+/// its own samples and with 4) in every mode, with and without `--force-all-effects`.
+#[test]
+fn the_work_estimate_bounds_the_rays_of_every_example_scene() {
+    for path in example_scene_paths() {
+        let mut s = scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        s.camera.width = 8;
+        s.camera.height = 6;
+        for &mode in <Mode as clap::ValueEnum>::value_variants() {
+            for force_all in [false, true] {
+                for samples in [s.samples, 4] {
+                    counted_within_estimate(
+                        &s,
+                        mode,
+                        force_all,
+                        samples,
+                        &path.display().to_string(),
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Under `--force-all-effects` every node of the ray tree that expands also casts the ray of
+/// the effect its material does not have, as a leaf outside the per-pixel cap: from the
+/// hall of mirrors whose outer sphere transmits nothing, each outer hit casts a leaf
+/// refraction ray beside its traced reflection, so every pixel casts more secondary rays
+/// than the 4096 the cap allows traced. No light, so the estimate's 16 segments per shadow
+/// ray leave no slack to hide them in. The work estimate counts them.
+#[test]
+fn the_work_estimate_counts_forced_leaf_rays() {
+    let s = scene::parse(&hall_of_mirrors("0", false), Path::new("hall.toml")).unwrap();
+    let pixels = u64::from(s.camera.width * s.camera.height);
+    let traced = pixels * (1 + u64::from(MAX_SECONDARY_RAYS_PER_PIXEL));
+    let planned = counted_within_estimate(&s, Mode::Color, false, 1, "hall");
+    assert_eq!(planned, traced, "every pixel traces the full 4096 rays");
+    let forced = counted_within_estimate(&s, Mode::Color, true, 1, "hall, forced");
+    assert!(forced > traced, "leaf rays beyond the cap: {forced}");
 }

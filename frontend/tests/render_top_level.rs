@@ -12,18 +12,13 @@ use halfray_core::{Ray, Vec3};
 use std::path::Path;
 
 mod common;
-use common::{lcg, scenes_dir};
+use common::{example_scene_paths, lcg, scenes_dir};
 
 /// Every example scene but `bunny.toml` (its 69 451-triangle mesh makes these suites slow),
 /// with its path.
 fn example_scenes() -> impl Iterator<Item = (std::path::PathBuf, Scene)> {
-    let mut paths: Vec<_> = std::fs::read_dir(scenes_dir())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "toml") && !p.ends_with("bunny.toml"))
-        .collect();
-    paths.sort();
-    paths.into_iter().map(|p| {
+    let paths = example_scene_paths().into_iter();
+    paths.filter(|p| !p.ends_with("bunny.toml")).map(|p| {
         let s = load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
         (p, s)
     })

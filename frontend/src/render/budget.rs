@@ -6,16 +6,26 @@
 //! The worst case per pixel is `S × (1 + R) × (1 + L × T)`, each factor read from the effects
 //! the render runs in its mode ([`EffectPlan::flags`], the flags `--stats-json` reports): `S`
 //! camera rays (`lens_samples` with depth of field, else the anti-aliasing samples with
-//! anti-aliasing, else 1), each with at most `R` secondary rays
-//! ([`MAX_SECONDARY_RAYS_PER_PIXEL`] with reflection or refraction rays, else 0) and at every
-//! one of those shading points `L` shadow rays (with shadow rays: one per point or directional
-//! light the plan casts them towards, `samples` per area light; else 0), each traced as at
-//! most `T` segments ([`MAX_SHADOW_CROSSINGS`] with shadow transmission, where a shadow ray
-//! continues past every transparent surface it crosses as a new segment, each counted as a
-//! shadow ray; else 1). Outside colour mode none of these effects runs, so the worst case there
-//! is one ray per pixel. Real renders cast far fewer (adaptive anti-aliasing, path weights
-//! that fall below the bound, shadow rays that meet no transparent surface), so the estimate
-//! is an upper bound, not a prediction.
+//! anti-aliasing, else 1), each with at most `R` secondary rays (below) and at every one of
+//! those shading points `L` shadow rays (with shadow rays: one per point or directional light
+//! the plan casts them towards, `samples` per area light; else 0), each traced as at most `T`
+//! segments ([`MAX_SHADOW_CROSSINGS`] with shadow transmission, where a shadow ray continues
+//! past every transparent surface it crosses as a new segment, each counted as a shadow ray;
+//! else 1). Outside colour mode none of these effects runs, so the worst case there is one ray
+//! per pixel.
+//!
+//! `R` bounds the camera ray's tree ([`super::trace`]). Its traced rays number at most `N`:
+//! [`MAX_SECONDARY_RAYS_PER_PIXEL`] where the scene's own plan ([`EffectPlan::derive`] without
+//! force) casts reflection or refraction rays in the mode, else 0; a forced render traces the
+//! same tree. Without `--force-all-effects`, `R = N`. With it, where the forced plan casts
+//! reflection or refraction rays, every node that expands (the camera ray's hit and each traced
+//! ray's, at most `1 + N`) casts at most one reflection and one refraction ray, each traced or a
+//! leaf (an effect its material does not have), so `R = 2 × (1 + N)`; a leaf's hit is a
+//! shading point like any other.
+//!
+//! Real renders cast far fewer (adaptive anti-aliasing, path weights that fall below the
+//! bound, shadow rays that meet no transparent surface), so the estimate is an upper bound,
+//! not a prediction.
 //!
 //! Coincident objects (copies with the same world box, as `repeat` with a zero `step` makes)
 //! cannot be told apart by the top-level BVH: a box test cannot skip one copy without skipping
@@ -25,7 +35,7 @@
 
 use super::Mode;
 use super::bound::MAX_SECONDARY_RAYS_PER_PIXEL;
-use super::plan::EffectPlan;
+use super::plan::{EffectPlan, PlanFlags};
 use super::trace::MAX_SHADOW_CROSSINGS;
 use crate::scene::{LightKind, Scene};
 use std::collections::HashMap;
@@ -50,7 +60,7 @@ pub struct Estimate {
     pub pixels: f64,
     /// Camera rays per pixel (`S`).
     pub camera_rays: f64,
-    /// Most secondary rays per camera ray (`R`).
+    /// Most secondary rays per camera ray (`R`): traced and, forced, leaf rays.
     pub secondary: f64,
     /// Shadow rays per shading point (`L`).
     pub shadow: f64,
@@ -73,10 +83,21 @@ impl Estimate {
             _ if runs.antialias => samples,
             _ => 1,
         };
-        let secondary = if runs.reflection || runs.refraction {
+        let secondary_runs = |f: PlanFlags| f.reflection || f.refraction;
+        let own = if plan.forced {
+            EffectPlan::derive(scene, false).flags(scene, mode, samples)
+        } else {
+            runs
+        };
+        let traced = if secondary_runs(own) {
             MAX_SECONDARY_RAYS_PER_PIXEL
         } else {
             0
+        };
+        let secondary = if plan.forced && secondary_runs(runs) {
+            2 * (1 + traced)
+        } else {
+            traced
         };
         // Summed from +0: `Iterator::sum` of no `f64` is −0, printed as "-0".
         let shadow = scene
@@ -209,32 +230,58 @@ mod tests {
         assert_eq!(small.seconds(0), small.seconds(1));
     }
 
+    /// `mirror.toml` with each `(from, to)` of `edits` replaced.
+    fn mirror_scene(edits: &[(&str, &str)]) -> Scene {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/mirror.toml");
+        let mut text = std::fs::read_to_string(&path).unwrap();
+        for (from, to) in edits {
+            assert!(text.contains(from), "{from} in {}", path.display());
+            text = text.replace(from, to);
+        }
+        crate::scene::parse(&text, &path).unwrap()
+    }
+
+    /// The secondary rays per camera ray of a colour render of `scene`, forced or not.
+    fn secondary(scene: &Scene, force_all: bool) -> f64 {
+        let plan = EffectPlan::derive(scene, force_all);
+        Estimate::of(scene, &plan, Mode::Color, 1).secondary
+    }
+
     /// A scene with a mirror counts the secondary rays it may cast; the same scene with its
     /// reflections off (`max_depth = 0`) counts none.
     #[test]
     fn secondary_rays_are_counted_where_the_plan_traces_them() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/mirror.toml");
-        let text = std::fs::read_to_string(&path).unwrap();
-        let estimate = |text: &str| {
-            let scene = crate::scene::parse(text, &path).unwrap();
-            let plan = EffectPlan::derive(&scene, false);
-            Estimate::of(&scene, &plan, Mode::Color, 1)
-        };
-        let mirror = estimate(&text);
-        assert_eq!(mirror.secondary, f64::from(MAX_SECONDARY_RAYS_PER_PIXEL));
-        let flat = text.replace("max_depth = 4", "max_depth = 0");
-        assert_ne!(flat, text);
-        assert_eq!(estimate(&flat).secondary, 0.0);
+        let mirror = mirror_scene(&[]);
+        assert_eq!(
+            secondary(&mirror, false),
+            f64::from(MAX_SECONDARY_RAYS_PER_PIXEL)
+        );
+        let flat = mirror_scene(&[("max_depth = 4", "max_depth = 0")]);
+        assert_eq!(secondary(&flat, false), 0.0);
+    }
+
+    /// Forced, every node of the tree that expands casts a reflection and a refraction ray,
+    /// traced or a leaf: the mirror scene's camera ray's hit and each of its 4096 traced rays',
+    /// `2 × (1 + 4096)`; with the mirror matte, only the camera ray's hit, 2; with
+    /// `max_depth = 0`, none.
+    #[test]
+    fn forced_leaf_rays_are_counted_for_every_node_that_expands() {
+        let nodes = 1.0 + f64::from(MAX_SECONDARY_RAYS_PER_PIXEL);
+        assert_eq!(secondary(&mirror_scene(&[]), true), 2.0 * nodes);
+        assert_eq!(
+            secondary(&mirror_scene(&[("mirror = 0.9", "mirror = 0")]), true),
+            2.0
+        );
+        assert_eq!(
+            secondary(&mirror_scene(&[("max_depth = 4", "max_depth = 0")]), true),
+            0.0
+        );
     }
 
     /// Without a light that casts shadows the estimate's shadow rays per hit print as `0`.
     #[test]
     fn no_shadow_rays_print_as_zero() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/mirror.toml");
-        let text = std::fs::read_to_string(&path).unwrap();
-        let dark = text.replace("[[light]]", "[[light]]\ncast_shadows = false");
-        assert_ne!(dark, text);
-        let scene = crate::scene::parse(&dark, &path).unwrap();
+        let scene = mirror_scene(&[("[[light]]", "[[light]]\ncast_shadows = false")]);
         let plan = EffectPlan::derive(&scene, false);
         assert!(plan.shadow_rays.iter().all(|&on| !on));
         let explain = Estimate::of(&scene, &plan, Mode::Color, 1).explain(1);

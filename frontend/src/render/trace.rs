@@ -22,7 +22,8 @@
 //! Under `--force-all-effects`, the rays of effects a material does not have (weight 0) are
 //! cast from every node the plain plan expands, as leaves: they do the work, their result is
 //! discarded (not multiplied by zero: `0·∞` would be NaN), and they use none of the per-pixel
-//! budget, so the picture is the plan's, bit for bit.
+//! budget, so the picture is the plan's, bit for bit. The work estimate counts them
+//! ([`super::budget`]).
 
 use super::bound::PathBound;
 use super::plan::EffectPlan;

@@ -115,6 +115,17 @@ pub fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
 }
 
+/// The example scenes' files, every `*.toml` of [`scenes_dir`], sorted.
+pub fn example_scene_paths() -> Vec<PathBuf> {
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(scenes_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    paths.sort();
+    paths
+}
+
 /// The shared test mesh `name` (e.g. `"cube.obj"`) in halfray's [`shared_meshes_dir`]:
 /// `$HALFRAY_MESHES` if set, else `../shared/meshes` beside the repository.
 pub fn shared_mesh(name: &str) -> PathBuf {
