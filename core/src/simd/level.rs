@@ -1,7 +1,8 @@
 //! The SIMD level a query runs at, chosen by the caller at run time: [`Portable`] (the
 //! baseline of the target, every CPU) or, on x86-64, [`Avx2Fma`], a token that proves the CPU
-//! has AVX2 and FMA. A `no_std` core cannot ask the CPU (`is_x86_feature_detected!` is in
-//! `std`), so the caller asks and hands in the token; the kernels behind it are
+//! has AVX2 and FMA. The caller asks the CPU once and hands in the token
+//! ([`Avx2Fma::detect`] without `std`; with it, `is_x86_feature_detected!` and
+//! [`Avx2Fma::new_unchecked`]); the kernels behind it are
 //! `#[target_feature]` functions, which the compiler inlines into a caller compiled for the
 //! same features (the frontend's dispatched query functions) and calls otherwise.
 //!
@@ -190,7 +191,8 @@ impl SimdLevel for Portable {
 }
 
 /// Proof that the CPU running the program has AVX2 and FMA: eight-lane node tests in one
-/// 256-bit register per plane. Only [`Avx2Fma::new_unchecked`] makes one.
+/// 256-bit register per plane. Only [`Avx2Fma::detect`] (which asks the CPU) and
+/// [`Avx2Fma::new_unchecked`] make one.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Avx2Fma(());
@@ -209,15 +211,46 @@ impl Avx2Fma {
     }
 }
 
-#[cfg(all(test, target_arch = "x86_64"))]
+#[cfg(all(target_arch = "x86_64", not(target_env = "sgx")))]
 impl Avx2Fma {
-    /// The token when this CPU has AVX2 and FMA (tests run with `std`).
-    pub(crate) fn detect() -> Option<Self> {
-        let yes = std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("fma");
-        // SAFETY: made only after the run-time check above.
-        yes.then(|| unsafe { Self::new_unchecked() })
+    /// The token when the CPU running this code has AVX2 and FMA and the operating system
+    /// saves the 256-bit registers across context switches; `None` otherwise. Asked without
+    /// `std`: `cpuid` leaves 0, 1 and 7 and the `XCR0` register (`xgetbv`), the checks
+    /// `is_x86_feature_detected!("avx2")` and `("fma")` make. Every call executes `cpuid`,
+    /// which serialises the core and, in a virtual machine, traps to the hypervisor (about a
+    /// microsecond): ask once and keep the token (`std`'s macro caches its answer).
+    #[must_use]
+    pub fn detect() -> Option<Self> {
+        use core::arch::x86_64::{__cpuid, __cpuid_count};
+        /// `cpuid` leaf 1, `ecx`: FMA, XSAVE, OSXSAVE (the OS enabled `xsave`/`xgetbv`), AVX.
+        const LEAF1_ECX: u32 = (1 << 12) | (1 << 26) | (1 << 27) | (1 << 28);
+        /// `cpuid` leaf 7 sub-leaf 0, `ebx`: AVX2.
+        const LEAF7_EBX_AVX2: u32 = 1 << 5;
+        /// `XCR0`: the OS saves the SSE (bit 1) and AVX (bit 2) register state.
+        const XCR0_SSE_AVX: u64 = 0b110;
+        if __cpuid(0).eax < 7 || __cpuid(1).ecx & LEAF1_ECX != LEAF1_ECX {
+            return None;
+        }
+        // SAFETY: `cpuid` leaf 1 reported XSAVE and OSXSAVE just above: the CPU has `xgetbv`
+        // (the `xsave` feature `xcr0` is compiled for) and the OS has enabled it, so reading
+        // `XCR0` does not fault at any privilege level.
+        let xcr0 = unsafe { xcr0() };
+        if xcr0 & XCR0_SSE_AVX != XCR0_SSE_AVX || __cpuid_count(7, 0).ebx & LEAF7_EBX_AVX2 == 0 {
+            return None;
+        }
+        // SAFETY: the CPU has AVX2 and FMA and the OS saves their registers (checked above),
+        // the token's one requirement.
+        Some(unsafe { Self::new_unchecked() })
     }
+}
+
+/// `XCR0`, the register whose bits say which register state the OS saves.
+#[cfg(all(target_arch = "x86_64", not(target_env = "sgx")))]
+#[target_feature(enable = "xsave")]
+fn xcr0() -> u64 {
+    // SAFETY: `xgetbv` with `ecx = 0` reads `XCR0`; this function is compiled for (and only
+    // called on a CPU with) `xsave`, whose instruction it is.
+    unsafe { core::arch::x86_64::_xgetbv(0) }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -527,6 +560,15 @@ unsafe fn slab8_avx2(
 mod tests {
     use super::*;
     use crate::test_util::{lcg, mixed_f32};
+
+    /// The `no_std` detection answers as `std`'s (which also reads `cpuid` and `XCR0`, in
+    /// code of its own) on the CPU running the tests.
+    #[test]
+    fn detection_without_std_agrees_with_std() {
+        let std_says = std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("fma");
+        assert_eq!(Avx2Fma::detect().is_some(), std_says);
+    }
 
     /// The AVX2 sort against the keys sorted in scalar code, on every hit mask and on
     /// distances with ties, `±0`, negatives, infinities and values that differ only in the
