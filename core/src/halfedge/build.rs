@@ -10,6 +10,7 @@ use crate::error::{InputElement, NonFiniteError, Storage};
 
 /// `u32`s of scratch that [`Mesh::build`] needs for `faces` triangles: 6 per triangle
 /// (3 for the sorted triangle sides, 3 for the side → halfedge map).
+#[must_use]
 pub const fn build_scratch_len(faces: usize) -> usize {
     faces.saturating_mul(6)
 }

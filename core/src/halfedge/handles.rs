@@ -62,12 +62,14 @@ handle!(
 impl HalfedgeId {
     /// The oppositely oriented halfedge of the same edge (`h ^ 1`).
     #[inline]
+    #[must_use]
     pub const fn twin(self) -> Self {
         Self(self.0 ^ 1)
     }
 
     /// The edge this halfedge belongs to (`h >> 1`).
     #[inline]
+    #[must_use]
     pub const fn edge(self) -> EdgeId {
         EdgeId(self.0 >> 1)
     }
@@ -77,6 +79,7 @@ impl EdgeId {
     /// Halfedge `side` (0 or 1; any other value is taken modulo 2) of this edge: `2e + side`.
     /// Saturates instead of overflowing for edge indices ≥ 2³¹ (which no mesh can hold).
     #[inline]
+    #[must_use]
     pub const fn halfedge(self, side: u32) -> HalfedgeId {
         HalfedgeId(self.0.saturating_mul(2).saturating_add(side & 1))
     }

@@ -131,12 +131,14 @@ pub struct Counts {
 
 impl Counts {
     /// Halfedges: twice the edges (saturating).
+    #[must_use]
     pub const fn halfedges(&self) -> usize {
         self.edges.saturating_mul(2)
     }
 
     /// The counts after one level of Loop subdivision of a triangle mesh with these counts:
     /// V' = V + E, E' = 2E + 3F, F' = 4F (saturating). Exact, boundary or not.
+    #[must_use]
     pub const fn after_loop(&self) -> Counts {
         Counts {
             vertices: self.vertices.saturating_add(self.edges),
@@ -149,6 +151,7 @@ impl Counts {
     }
 
     /// `true` when every count is ≤ the matching count of `capacity`.
+    #[must_use]
     pub const fn fits_in(&self, capacity: &Counts) -> bool {
         self.vertices <= capacity.vertices
             && self.edges <= capacity.edges
@@ -196,6 +199,7 @@ pub struct InlineStorage<const V: usize, const E: usize, const F: usize> {
 
 impl<const V: usize, const E: usize, const F: usize> InlineStorage<V, E, F> {
     /// Empty storage (`const`, so it can initialise a `static`).
+    #[must_use]
     pub const fn new() -> Self {
         Self {
             v: heapless::Vec::new(),

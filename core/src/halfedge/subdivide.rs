@@ -21,6 +21,7 @@ pub enum LoopWeights {
 /// vertex is `(1 − n·β)·x + β·Σ neighbours`. The two weightings agree at n = 3 and n = 6
 /// only. Valences below 3 (possible only in degenerate closed meshes) use the n = 3 value;
 /// `n = 0` gives 0.
+#[must_use]
 pub fn loop_beta(n: usize, weights: LoopWeights) -> f32 {
     match (n, weights) {
         (0, _) => 0.0,

@@ -23,6 +23,7 @@ use glam::{Vec2, Vec3};
 /// the box; [`Hit::point_error`] is `gamma(3)·|p|` on the two other axes (the `f64` product,
 /// sum and rounding to `f32`) and 0 along the face's axis. The normal is the face's outward
 /// axis vector, [`Hit::uv`] is zero.
+#[must_use]
 pub fn box_crossings(b: &Aabb, ray: &Ray) -> Option<[Hit; 2]> {
     if !whole_line(ray).is_valid() || !b.is_valid() {
         return None;

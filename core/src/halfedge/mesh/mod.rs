@@ -77,6 +77,7 @@ pub enum Moved {
 
 impl<const V: usize, const E: usize, const F: usize> Mesh<InlineStorage<V, E, F>> {
     /// An empty mesh with inline storage (`const`: usable for a `static`).
+    #[must_use]
     pub const fn new() -> Self {
         Self {
             s: InlineStorage::new(),
