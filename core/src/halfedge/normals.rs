@@ -29,6 +29,7 @@ impl<S: MeshStorage> Mesh<S> {
     /// [module docs](self). Works at boundary vertices (only existing faces are summed).
     ///
     /// `None` for a dead or isolated vertex, or when the sum is zero or cannot be normalised.
+    #[must_use]
     pub fn vertex_normal(&self, v: VertexId) -> Option<Vec3> {
         let mut sum = Vec3::ZERO;
         for f in self.vertex_faces(v) {

@@ -24,6 +24,7 @@ impl<S: MeshStorage> Mesh<S> {
     /// divided in `f64`, rounded to `f32` once: the sum of many neighbours near the largest
     /// `f32` coordinates does not overflow; the result (a centroid less a position) is finite
     /// whenever every coordinate involved is at most `f32::MAX / 2` in magnitude.
+    #[must_use]
     pub fn laplacian(&self, v: VertexId) -> Option<Vec3> {
         if !self.v_live(v.0) {
             return None;

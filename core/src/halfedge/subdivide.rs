@@ -50,6 +50,7 @@ impl<S: MeshStorage> Mesh<S> {
     /// Loop-subdivided position of old vertex `v` (the "even" rule): interior vertex of
     /// valence n: `(1 − nβ)·x + β·Σ neighbours`; boundary vertex: `3/4·x + 1/8·(b₀ + b₁)`
     /// over its two neighbours along boundary edges; isolated vertex: unchanged.
+    #[must_use]
     pub fn loop_vertex_position(&self, v: VertexId, weights: LoopWeights) -> Option<Vec3> {
         if !self.v_live(v.0) {
             return None;
@@ -79,6 +80,7 @@ impl<S: MeshStorage> Mesh<S> {
     /// Loop-subdivided position of the new vertex on edge `e` (the "odd" rule): interior
     /// edge `a–b` with opposite vertices `c`, `d`: `3/8·(a + b) + 1/8·(c + d)`; boundary edge:
     /// the midpoint.
+    #[must_use]
     pub fn loop_edge_position(&self, e: super::EdgeId) -> Option<Vec3> {
         if !self.e_live(e.0) {
             return None;

@@ -80,6 +80,7 @@ impl<S: MeshStorage> Mesh<S> {
     }
 
     /// Outgoing halfedges of `v`, counter-clockwise (see [`Outgoing`]).
+    #[must_use]
     pub fn outgoing_halfedges(&self, v: VertexId) -> Outgoing<'_, S> {
         let start = if self.v_live(v.0) {
             self.out_raw(v.0)
@@ -116,11 +117,13 @@ impl<S: MeshStorage> Mesh<S> {
             .map(|h| EdgeId(self.next_raw(h.0) >> 1))
     }
     /// Number of edges incident to `v` (0 for isolated or dead vertices).
+    #[must_use]
     pub fn valence(&self, v: VertexId) -> usize {
         self.outgoing_halfedges(v).count()
     }
 
     /// The three halfedges of `f` (empty for a dead face).
+    #[must_use]
     pub fn face_halfedges(&self, f: FaceId) -> FaceHalfedges<'_, S> {
         let live = self.f_live(f.0);
         FaceHalfedges {
@@ -143,6 +146,7 @@ impl<S: MeshStorage> Mesh<S> {
     }
 
     /// The halfedge from `a` to `b`, if the edge exists.
+    #[must_use]
     pub fn find_halfedge(&self, a: VertexId, b: VertexId) -> Option<HalfedgeId> {
         self.outgoing_halfedges(a)
             .find(|h| self.head_raw(h.0) == b.0)

@@ -157,6 +157,7 @@ impl<S: MeshStorage> Mesh<S> {
     }
 
     /// Maximum number of each element (the storage capacity, clamped to [`MAX_ELEMENTS`]).
+    #[must_use]
     pub fn capacity(&self) -> Counts {
         let c = self.s.capacity();
         Counts {
@@ -167,16 +168,19 @@ impl<S: MeshStorage> Mesh<S> {
     }
 
     /// Live element counts.
+    #[must_use]
     pub fn len(&self) -> Counts {
         self.live
     }
 
     /// `true` when the mesh has no vertex (and therefore nothing else).
+    #[must_use]
     pub fn is_empty(&self) -> bool {
         self.live.vertices == 0 && self.live.edges == 0 && self.live.faces == 0
     }
 
     /// Slots in use (live plus tombstoned): the high-water marks. Handles index below these.
+    #[must_use]
     pub fn slots(&self) -> Counts {
         Counts {
             vertices: self.s.vertices().len(),
@@ -186,6 +190,7 @@ impl<S: MeshStorage> Mesh<S> {
     }
 
     /// Free slots of each kind (tombstones plus unused capacity).
+    #[must_use]
     pub fn available(&self) -> Counts {
         let c = self.capacity();
         Counts {
@@ -196,6 +201,7 @@ impl<S: MeshStorage> Mesh<S> {
     }
 
     /// `true` when no slot is tombstoned (handles are dense `0..len`).
+    #[must_use]
     pub fn is_compact(&self) -> bool {
         self.slots() == self.live
     }
