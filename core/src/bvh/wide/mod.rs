@@ -194,9 +194,10 @@ const fn assert_width(width: usize) {
 /// The storage's `AsRef` is expected to give the slices the tree was built in for as long as
 /// the tree is queried. Storage that gives others later (an A/B flash region switched by a
 /// flag, say) makes the answers meaningless but never a panic or a hang: a walk of a tree
-/// enters each node at most once, and every walk (single rays, packets, the box query) that
-/// would enter more nodes than the storage holds enters no further one and ends with what it
-/// found.
+/// enters each node at most once and finds every inner child stored after its parent, and
+/// every walk (single rays, packets, the box query) stops following nodes that break either,
+/// after at most a few dozen times as many node steps as the storage holds nodes, and ends
+/// with what it found.
 ///
 /// ```
 /// use halfray_core::bvh::wide::{LeafGroup, WideBvh, WideNode};
