@@ -196,8 +196,8 @@ const fn assert_width(width: usize) {
 /// flag, say) makes the answers meaningless but never a panic or a hang: a walk of a tree
 /// enters each node at most once and finds every inner child stored after its parent, and
 /// every walk (single rays, packets, the box query) stops following nodes that break either,
-/// after at most a few dozen times as many node steps as the storage holds nodes, and ends
-/// with what it found.
+/// after at most 451 node steps per node the storage holds (the stack's 449 entries + 2),
+/// and ends with what it found.
 ///
 /// ```
 /// use halfray_core::bvh::wide::{LeafGroup, WideBvh, WideNode};
