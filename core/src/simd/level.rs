@@ -221,27 +221,36 @@ impl Avx2Fma {
     /// microsecond): ask once and keep the token (`std`'s macro caches its answer).
     #[must_use]
     pub fn detect() -> Option<Self> {
-        use core::arch::x86_64::{__cpuid, __cpuid_count};
         /// `cpuid` leaf 1, `ecx`: FMA, XSAVE, OSXSAVE (the OS enabled `xsave`/`xgetbv`), AVX.
         const LEAF1_ECX: u32 = (1 << 12) | (1 << 26) | (1 << 27) | (1 << 28);
         /// `cpuid` leaf 7 sub-leaf 0, `ebx`: AVX2.
         const LEAF7_EBX_AVX2: u32 = 1 << 5;
         /// `XCR0`: the OS saves the SSE (bit 1) and AVX (bit 2) register state.
         const XCR0_SSE_AVX: u64 = 0b110;
-        if __cpuid(0).eax < 7 || __cpuid(1).ecx & LEAF1_ECX != LEAF1_ECX {
+        if cpuid(0).eax < 7 || cpuid(1).ecx & LEAF1_ECX != LEAF1_ECX {
             return None;
         }
         // SAFETY: `cpuid` leaf 1 reported XSAVE and OSXSAVE just above: the CPU has `xgetbv`
         // (the `xsave` feature `xcr0` is compiled for) and the OS has enabled it, so reading
         // `XCR0` does not fault at any privilege level.
         let xcr0 = unsafe { xcr0() };
-        if xcr0 & XCR0_SSE_AVX != XCR0_SSE_AVX || __cpuid_count(7, 0).ebx & LEAF7_EBX_AVX2 == 0 {
+        if xcr0 & XCR0_SSE_AVX != XCR0_SSE_AVX || cpuid(7).ebx & LEAF7_EBX_AVX2 == 0 {
             return None;
         }
         // SAFETY: the CPU has AVX2 and FMA and the OS saves their registers (checked above),
         // the token's one requirement.
         Some(unsafe { Self::new_unchecked() })
     }
+}
+
+/// `cpuid` leaf `leaf`, sub-leaf 0.
+#[cfg(all(target_arch = "x86_64", not(target_env = "sgx")))]
+// A safe intrinsic in newer Rust; `unsafe` in the MSRV's.
+#[allow(unused_unsafe)]
+fn cpuid(leaf: u32) -> core::arch::x86_64::CpuidResult {
+    // SAFETY: every x86-64 CPU has `cpuid` (it is in the baseline); it reads no memory, and a
+    // leaf above the CPU's highest (leaf 0's `eax`) answers with the highest leaf's values.
+    unsafe { core::arch::x86_64::__cpuid_count(leaf, 0) }
 }
 
 /// `XCR0`, the register whose bits say which register state the OS saves.
