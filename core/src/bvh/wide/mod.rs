@@ -195,9 +195,10 @@ const fn assert_width(width: usize) {
 /// the tree is queried. Storage that gives others later (an A/B flash region switched by a
 /// flag, say) makes the answers meaningless but never a panic or a hang: a walk of a tree
 /// enters each node at most once and finds every inner child stored after its parent, and
-/// every walk (single rays, packets, the box query) stops following nodes that break either,
-/// after at most 451 node steps per node the storage holds (the stack's 449 entries + 2),
-/// and ends with what it found.
+/// every walk ends with what it found after a bounded number of node steps: a single ray's
+/// follows a single hit child only forward and stops pushing once it has entered more nodes
+/// than the storage holds (at most 451 node steps per stored node: the stack's 449 entries
+/// + 2); a packet's and the box query's stop entering nodes there.
 ///
 /// ```
 /// use halfray_core::bvh::wide::{LeafGroup, WideBvh, WideNode};

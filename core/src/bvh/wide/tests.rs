@@ -1641,17 +1641,19 @@ fn every_supported_width_answers_as_the_binary_tree() {
 /// A wide tree over storage whose `AsRef` gives other nodes after the build (safe code,
 /// [`crate::test_util::Flip`]): a node whose only child is itself, one whose eight children
 /// are, and shared subtrees whose children all come after their parents (node `i`'s first two
-/// slots `i + 1`, `i + 2` over 59 levels: about 10¹² paths). Every walk enters at most as many nodes as the storage
-/// holds, so each ends: closest and any hit on the query's stack and on a caller's, both
-/// batches (as packets: sixteen equal rays), the box query and the statistics.
+/// slots `i + 1`, `i + 2` over every stored node: about 10¹² paths from 64 nodes up). Every
+/// walk enters a bounded number of nodes, so each ends: closest and any hit on the query's
+/// stack and on a caller's, both batches (as packets: sixteen equal rays, whose direction
+/// has no zero component so that they are walked as one), the box query and the statistics.
 #[test]
 fn every_walk_ends_when_the_storage_changes_under_the_tree() {
     use crate::test_util::{Flip, Walks};
-    let (pos, tris) = soup(300, 41);
+    let (pos, tris) = soup(3000, 41);
     let mesh = TriangleMesh::new(&pos, &tris);
     let b = binary(&mesh, 4);
     let count = VecWide::<8>::node_count_for(&b).unwrap();
-    assert!(count > 1, "the root must be a node");
+    // The walks see the first `count` nodes of the storage.
+    assert!(count >= 64, "{count} nodes: too few for ~10¹² shared paths");
     let node = |children: &[u32]| {
         let mut n = WideNode::<8>::EMPTY;
         let huge = Aabb::new(Vec3::splat(-1.0e3), Vec3::splat(1.0e3));
@@ -1663,10 +1665,13 @@ fn every_walk_ends_when_the_storage_changes_under_the_tree() {
     let leaf = ChildRef::leaf(0, 1).unwrap();
     let only_child = vec![node(&[0])];
     let self_loop = vec![node(&[0; 8])];
-    let shared: Vec<WideNode<8>> = (0..64u32)
-        .map(|i| match i {
-            0..=58 => node(&[i + 1, i + 2]),
-            _ => node(&[leaf]),
+    let shared: Vec<WideNode<8>> = (0..count as u32)
+        .map(|i| {
+            if (i + 2) < count as u32 {
+                node(&[i + 1, i + 2])
+            } else {
+                node(&[leaf])
+            }
         })
         .collect();
     for (name, changed) in [
@@ -1678,7 +1683,10 @@ fn every_walk_ends_when_the_storage_changes_under_the_tree() {
         let groups = vec![LeafGroup::EMPTY; group_capacity(mesh.len())];
         let w = WideBvh::<8, _, _>::from_binary(&b, &mesh, nodes, groups).unwrap();
         flip.store(true, std::sync::atomic::Ordering::Relaxed);
-        let ray = Ray::new(Vec3::new(0.1, 0.2, -10.0), Vec3::Z);
+        let ray = Ray::new(
+            Vec3::new(0.1, 0.2, -10.0),
+            Vec3::new(0.01, 0.02, 1.0).normalize(),
+        );
         let walks = Walks::new(name, w, &pos, &tris, ray);
         walks.end("closest hit", |w, m, r| {
             let _ = w.closest_hit(r, &mut Triangles::new(m, &Watertight), &mut Query::new());

@@ -414,7 +414,7 @@ where
     /// farthest, the others in slot order: [`WideBvh::push_hits_any`]) and returns the one to
     /// visit next;
     /// `None` when no child is hit or `index` is out of range, and where the nodes are no tree
-    /// ([`entered_all`]): a single hit child stored before its parent, or several hit
+    /// ([`entered_all`]): a single hit child not stored after its parent, or several hit
     /// children once the walk has entered more nodes than `nodes` holds.
     #[inline(always)]
     fn descend<const ANY: bool, const GENERAL: bool, L: SimdLevel>(
