@@ -13,7 +13,7 @@ use halfray_core::bvh::{
 };
 use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
-use halfray_core::query::{Query, QueryStack, TraversalStats, Triangles};
+use halfray_core::query::{Query, QueryError, QueryStack, TraversalStats, Triangles};
 use halfray_core::simd_level::{Portable, SimdLevel};
 use halfray_core::triangle::{TriangleHit, TriangleVariant, VariantVisitor};
 
@@ -370,7 +370,7 @@ pub fn closest_simd<I: TriangleIntersector>(
 ///
 /// # Errors
 ///
-/// [`BvhError::LengthMismatch`] when `out` has not `rays.len()` entries (nothing written).
+/// [`QueryError::LengthMismatch`] when `out` has not `rays.len()` entries (nothing written).
 #[inline]
 pub fn closest_batch_simd<I: TriangleIntersector>(
     bvh: &VecBvh8,
@@ -379,7 +379,7 @@ pub fn closest_batch_simd<I: TriangleIntersector>(
     rays: &[Ray],
     out: &mut [Answer],
     stats: Option<&mut TraversalStats>,
-) -> std::result::Result<(), BvhError> {
+) -> std::result::Result<(), QueryError> {
     let leaf = Triangles::new(mesh, isect);
     on_widest_level(ClosestBatch(rays, out), Scene { bvh, leaf, stats })
 }
@@ -393,7 +393,7 @@ pub fn closest_batch_simd<I: TriangleIntersector>(
 ///
 /// # Errors
 ///
-/// [`BvhError::LengthMismatch`] when `out` has not `rays.len()` entries (nothing written).
+/// [`QueryError::LengthMismatch`] when `out` has not `rays.len()` entries (nothing written).
 #[inline]
 pub fn any_batch_simd<I: TriangleIntersector>(
     bvh: &VecBvh8,
@@ -402,7 +402,7 @@ pub fn any_batch_simd<I: TriangleIntersector>(
     rays: &[Ray],
     out: &mut [Answer],
     stats: Option<&mut TraversalStats>,
-) -> std::result::Result<(), BvhError> {
+) -> std::result::Result<(), QueryError> {
     let leaf = Triangles::new(mesh, isect);
     on_widest_level(AnyBatch(rays, out), Scene { bvh, leaf, stats })
 }
@@ -469,7 +469,7 @@ impl<I: TriangleIntersector> Job<I> for Any<'_> {
 }
 
 impl<I: TriangleIntersector> Job<I> for ClosestBatch<'_> {
-    type Out = std::result::Result<(), BvhError>;
+    type Out = std::result::Result<(), QueryError>;
     #[inline(always)]
     fn run<L: SimdLevel>(self, level: L, mut s: Scene<'_, I>, stack: &mut QueryStack) -> Self::Out {
         let ctx = &mut Query::new().on(level).stack(stack).stats(s.stats);
@@ -478,7 +478,7 @@ impl<I: TriangleIntersector> Job<I> for ClosestBatch<'_> {
 }
 
 impl<I: TriangleIntersector> Job<I> for AnyBatch<'_> {
-    type Out = std::result::Result<(), BvhError>;
+    type Out = std::result::Result<(), QueryError>;
     #[inline(always)]
     fn run<L: SimdLevel>(self, level: L, mut s: Scene<'_, I>, stack: &mut QueryStack) -> Self::Out {
         let ctx = &mut Query::new().on(level).stack(stack).stats(s.stats);

@@ -1,4 +1,4 @@
-//! Errors of BVH construction, refitting and queries.
+//! Errors of BVH construction and refitting (a query's error is [`crate::query::QueryError`]).
 
 use crate::error::{CapacityError, NonFiniteError, write_too_many};
 use core::fmt;
@@ -52,20 +52,6 @@ pub enum BvhError {
         /// The most a wide leaf holds ([`super::wide::MAX_LEAF_TRIANGLES`]).
         max: usize,
     },
-    /// A query's traversal stack (the caller's, [`crate::query::Query::stack`]) is
-    /// too small for the path it had to keep: give it at least [`super::Bvh::stack_depth`]
-    /// entries.
-    StackTooSmall {
-        /// Entries the caller's stack has.
-        available: usize,
-    },
-    /// Slices that must have the same length do not (clearance: points, normals, output).
-    LengthMismatch {
-        /// Length of the first slice (points).
-        expected: usize,
-        /// Length of the mismatching slice.
-        found: usize,
-    },
 }
 
 impl fmt::Display for BvhError {
@@ -91,16 +77,6 @@ impl fmt::Display for BvhError {
                 f,
                 "a BVH leaf holds {count} primitives, a wide BVH leaf at most {max}"
             ),
-            Self::StackTooSmall { available } => write!(
-                f,
-                "traversal stack too small: {available} entries, fewer than the tree's depth needs"
-            ),
-            Self::LengthMismatch { expected, found } => {
-                write!(
-                    f,
-                    "slice length mismatch: expected {expected}, found {found}"
-                )
-            }
         }
     }
 }

@@ -6,7 +6,7 @@ use crate::aabb::Aabb;
 use crate::mesh::TriangleMesh;
 use crate::prelude::*;
 use crate::query::walk::pad_to_root;
-use crate::query::{Query, StackEntry, TraversalStats, Triangles};
+use crate::query::{Query, QueryError, StackEntry, TraversalStats, Triangles};
 use crate::ray::Ray;
 use crate::test_util::{
     Lcg, VecBvh, any_watertight, brute_watertight, closest_watertight, closest_watertight_in,
@@ -584,7 +584,7 @@ fn clearance_rejects_mismatched_lengths_and_reports_infinity_for_misses() {
             &nrm,
             &mut short
         ),
-        Err(BvhError::LengthMismatch { .. })
+        Err(QueryError::LengthMismatch { .. })
     ));
     let min = bvh
         .clearance(
@@ -932,7 +932,7 @@ fn caller_stacks_of_the_tree_depth_answer_as_the_full_stack_and_shorter_ones_ref
                 Err(e) => {
                     assert_eq!(
                         e,
-                        BvhError::StackTooSmall {
+                        QueryError::StackTooSmall {
                             available: depth - 1
                         }
                     );

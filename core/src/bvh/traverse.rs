@@ -2,8 +2,9 @@
 
 use super::node::BvhNode;
 use super::padded_ray::PaddedRay;
-use super::{Bvh, BvhError, TRAVERSAL_STACK_SIZE};
+use super::{Bvh, TRAVERSAL_STACK_SIZE};
 use crate::aabb::{SLAB_FAR_SCALE, SlabRay};
+use crate::query::QueryError;
 use crate::query::TraversalStats;
 use crate::query::forward::ray_queries;
 use crate::query::walk::{cull_bound, improves, pad_to_root};
@@ -126,7 +127,7 @@ where
         mut intersect: impl FnMut(u32, &Ray) -> Option<(f32, H)>,
         stats: Option<&mut TraversalStats>,
         any: bool,
-    ) -> Result<Option<(u32, H)>, BvhError> {
+    ) -> Result<Option<(u32, H)>, QueryError> {
         let Some(slab) = SlabRay::new(ray) else {
             return Ok(None);
         };
@@ -195,7 +196,7 @@ where
                             (left, start + 1, tr)
                         };
                         let Some(slot) = stack.get_mut(sp) else {
-                            return Err(BvhError::StackTooSmall {
+                            return Err(QueryError::StackTooSmall {
                                 available: stack.len(),
                             });
                         };

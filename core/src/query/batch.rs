@@ -32,7 +32,7 @@
 //! assert!(out[1].is_none());
 //! ```
 
-use crate::bvh::BvhError;
+use crate::query::QueryError;
 use crate::ray::Ray;
 use glam::Vec3;
 
@@ -43,13 +43,13 @@ pub const BATCH_CHUNK: usize = 256;
 /// Cells per axis of the origin and direction grids of the sort key (4 bits per axis).
 const CELLS: u32 = 16;
 
-/// `Ok` when a batch of `rays` rays has `out` answers, else [`BvhError::LengthMismatch`].
+/// `Ok` when a batch of `rays` rays has `out` answers, else [`QueryError::LengthMismatch`].
 #[inline(always)]
-pub(crate) fn same_length(rays: usize, out: usize) -> Result<(), BvhError> {
+pub(crate) fn same_length(rays: usize, out: usize) -> Result<(), QueryError> {
     if out == rays {
         Ok(())
     } else {
-        Err(BvhError::LengthMismatch {
+        Err(QueryError::LengthMismatch {
             expected: rays,
             found: out,
         })
@@ -57,13 +57,13 @@ pub(crate) fn same_length(rays: usize, out: usize) -> Result<(), BvhError> {
 }
 
 /// Calls `answer` on every ray, chunk by chunk in [`chunk_order`], writing `out[i]` for
-/// `rays[i]`. [`BvhError::LengthMismatch`] (nothing written) when the lengths differ.
+/// `rays[i]`. [`QueryError::LengthMismatch`] (nothing written) when the lengths differ.
 #[inline(always)]
 pub(super) fn in_coherent_order<O>(
     rays: &[Ray],
     out: &mut [O],
     mut answer: impl FnMut(&Ray) -> O,
-) -> Result<(), BvhError> {
+) -> Result<(), QueryError> {
     same_length(rays.len(), out.len())?;
     let mut keys = [0u64; BATCH_CHUNK];
     for (chunk, out) in rays.chunks(BATCH_CHUNK).zip(out.chunks_mut(BATCH_CHUNK)) {

@@ -2,7 +2,7 @@
 //! SIMD level, the statistics), carried by one value ([`Query`]).
 
 use super::TraversalStats;
-use crate::bvh::BvhError;
+use crate::query::QueryError;
 use crate::simd_level::{Portable, SimdLevel};
 
 /// One entry of a traversal stack (8 bytes): a node still to visit and the distance at which
@@ -70,7 +70,7 @@ impl Default for QueryStack {
 /// * `&mut [`[`StackEntry`]`]` or `&mut [StackEntry; N]`: the caller's stack of any length,
 ///   for a firmware that sizes it for its trees ([`crate::bvh::Bvh::stack_depth`] entries
 ///   suffice for a binary tree, [`QUERY_STACK_SIZE`] for a wide one). Queries return
-///   `Result<Option<(u32, hit)>, BvhError>`: [`BvhError::StackTooSmall`] when the ray's
+///   `Result<Option<(u32, hit)>, QueryError>`: [`QueryError::StackTooSmall`] when the ray's
 ///   path needed more entries than the stack has (no partial answer). An array is its
 ///   slice: `Query::new().stack(&mut array)` answers as `.stack(&mut array[..])`.
 ///
@@ -78,12 +78,11 @@ impl Default for QueryStack {
 /// kd-tree's 12-byte intervals, 64 of them in its frame) ignore it.
 ///
 /// Sealed: implemented by the kinds above only. What a query returns, and that a stack too
-/// small is reported as [`BvhError::StackTooSmall`] rather than as a miss, is part of each
+/// small is reported as [`QueryError::StackTooSmall`] rather than as a miss, is part of each
 /// kind's contract, so no other crate can add one:
 ///
 /// ```compile_fail,E0277
-/// use halfray_core::bvh::BvhError;
-/// use halfray_core::query::{Stack, StackEntry};
+/// use halfray_core::query::{QueryError, Stack, StackEntry};
 /// struct Quiet([StackEntry; 4]);
 /// // Not possible: `Stack` is sealed. (This one would turn `StackTooSmall` into a miss.)
 /// impl Stack for Quiet {
@@ -91,7 +90,7 @@ impl Default for QueryStack {
 ///     fn entries(&mut self) -> Option<&mut [StackEntry]> {
 ///         Some(&mut self.0)
 ///     }
-///     fn answer<Y>(found: Result<Option<Y>, BvhError>) -> Option<Y> {
+///     fn answer<Y>(found: Result<Option<Y>, QueryError>) -> Option<Y> {
 ///         found.unwrap_or(None)
 ///     }
 /// }
@@ -104,7 +103,7 @@ pub trait Stack: crate::sealed::Sealed {
     fn entries(&mut self) -> Option<&mut [StackEntry]>;
 
     /// The answer of a traversal as the query returns it.
-    fn answer<Y>(found: Result<Option<Y>, BvhError>) -> Self::Out<Y>;
+    fn answer<Y>(found: Result<Option<Y>, QueryError>) -> Self::Out<Y>;
 }
 
 /// The default [`Stack`]: every query makes its own, enough for any tree.
@@ -123,7 +122,7 @@ impl Stack for OwnStack {
 
     /// A stack of the query's own never overflows: the `Err` never happens.
     #[inline(always)]
-    fn answer<Y>(found: Result<Option<Y>, BvhError>) -> Option<Y> {
+    fn answer<Y>(found: Result<Option<Y>, QueryError>) -> Option<Y> {
         found.unwrap_or(None)
     }
 }
@@ -140,7 +139,7 @@ impl Stack for &mut QueryStack {
 
     /// A [`QueryStack`] suffices for every tree: the `Err` never happens.
     #[inline(always)]
-    fn answer<Y>(found: Result<Option<Y>, BvhError>) -> Option<Y> {
+    fn answer<Y>(found: Result<Option<Y>, QueryError>) -> Option<Y> {
         found.unwrap_or(None)
     }
 }
@@ -150,7 +149,7 @@ impl crate::sealed::Sealed for &mut [StackEntry] {}
 impl<const N: usize> crate::sealed::Sealed for &mut [StackEntry; N] {}
 
 impl Stack for &mut [StackEntry] {
-    type Out<Y> = Result<Option<Y>, BvhError>;
+    type Out<Y> = Result<Option<Y>, QueryError>;
 
     #[inline(always)]
     fn entries(&mut self) -> Option<&mut [StackEntry]> {
@@ -158,14 +157,14 @@ impl Stack for &mut [StackEntry] {
     }
 
     #[inline(always)]
-    fn answer<Y>(found: Result<Option<Y>, BvhError>) -> Result<Option<Y>, BvhError> {
+    fn answer<Y>(found: Result<Option<Y>, QueryError>) -> Result<Option<Y>, QueryError> {
         found
     }
 }
 
 /// The array as its slice (`&mut [StackEntry]`): the same answers, the same refusals.
 impl<const N: usize> Stack for &mut [StackEntry; N] {
-    type Out<Y> = Result<Option<Y>, BvhError>;
+    type Out<Y> = Result<Option<Y>, QueryError>;
 
     #[inline(always)]
     fn entries(&mut self) -> Option<&mut [StackEntry]> {
@@ -173,7 +172,7 @@ impl<const N: usize> Stack for &mut [StackEntry; N] {
     }
 
     #[inline(always)]
-    fn answer<Y>(found: Result<Option<Y>, BvhError>) -> Result<Option<Y>, BvhError> {
+    fn answer<Y>(found: Result<Option<Y>, QueryError>) -> Result<Option<Y>, QueryError> {
         found
     }
 }

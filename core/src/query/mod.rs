@@ -41,6 +41,7 @@
 mod batch;
 pub(crate) use batch::same_length;
 mod context;
+mod error;
 pub(crate) mod forward;
 mod leaf;
 mod stats;
@@ -51,12 +52,12 @@ mod tests;
 
 pub use batch::BATCH_CHUNK;
 pub use context::{OwnStack, QUERY_STACK_SIZE, Query, QueryStack, Stack, StackEntry};
+pub use error::QueryError;
 pub use leaf::{LeafTest, Triangles};
 pub use stats::TraversalStats;
 pub use walk::CULL_REL_SLACK;
 
 use crate::aabb::Aabb;
-use crate::bvh::BvhError;
 use crate::float::sqrt;
 use crate::mesh::PrimitiveSource;
 use crate::ray::Ray;
@@ -101,7 +102,7 @@ pub trait RayQuery {
     ///
     /// # Errors
     ///
-    /// Nothing written, no ray walked: [`BvhError::LengthMismatch`] when `out` does not have
+    /// Nothing written, no ray walked: [`QueryError::LengthMismatch`] when `out` does not have
     /// `rays.len()` entries. (A caller stack too small for one ray is that ray's answer,
     /// `Err(StackTooSmall)`, in `out`, as for the single-ray query.)
     #[inline(always)]
@@ -111,7 +112,7 @@ pub trait RayQuery {
         leaf: &mut T,
         ctx: &mut Query<'_, L, S>,
         out: &mut [S::Out<(u32, T::Hit)>],
-    ) -> Result<(), BvhError> {
+    ) -> Result<(), QueryError> {
         batch::in_coherent_order(rays, out, |ray| self.closest_hit(ray, leaf, ctx))
     }
 
@@ -124,7 +125,7 @@ pub trait RayQuery {
     ///
     /// # Errors
     ///
-    /// As [`RayQuery::closest_hits`]: [`BvhError::LengthMismatch`], nothing written.
+    /// As [`RayQuery::closest_hits`]: [`QueryError::LengthMismatch`], nothing written.
     #[inline(always)]
     fn any_hits<T: LeafTest, L: SimdLevel, S: Stack>(
         &self,
@@ -132,7 +133,7 @@ pub trait RayQuery {
         leaf: &mut T,
         ctx: &mut Query<'_, L, S>,
         out: &mut [S::Out<(u32, T::Hit)>],
-    ) -> Result<(), BvhError> {
+    ) -> Result<(), QueryError> {
         batch::in_coherent_order(rays, out, |ray| self.any_hit(ray, leaf, ctx))
     }
 
@@ -175,7 +176,7 @@ pub trait RayQuery {
     ///
     /// # Errors
     ///
-    /// Nothing written: [`BvhError::LengthMismatch`] when `normals` or `out` do not have
+    /// Nothing written: [`QueryError::LengthMismatch`] when `normals` or `out` do not have
     /// `points.len()` entries.
     fn clearance<T: LeafTest>(
         &self,
@@ -183,10 +184,10 @@ pub trait RayQuery {
         points: &[Vec3],
         normals: &[Vec3],
         out: &mut [f32],
-    ) -> Result<f32, BvhError> {
+    ) -> Result<f32, QueryError> {
         for len in [normals.len(), out.len()] {
             if len != points.len() {
-                return Err(BvhError::LengthMismatch {
+                return Err(QueryError::LengthMismatch {
                     expected: points.len(),
                     found: len,
                 });

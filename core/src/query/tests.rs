@@ -250,7 +250,7 @@ fn a_caller_stack_too_small_is_refused_not_cut_short() {
             Err(e) => {
                 assert_eq!(
                     e,
-                    BvhError::StackTooSmall {
+                    QueryError::StackTooSmall {
                         available: short.len()
                     }
                 );
@@ -266,7 +266,7 @@ fn a_caller_stack_too_small_is_refused_not_cut_short() {
     let mut less = vec![StackEntry::EMPTY; QUERY_STACK_SIZE - 1];
     let refused = wide.any_hit(&ray, &mut tris, &mut Query::new().stack(&mut less[..]));
     assert!(
-        matches!(refused, Err(BvhError::StackTooSmall { .. })),
+        matches!(refused, Err(QueryError::StackTooSmall { .. })),
         "{refused:?}"
     );
 }
@@ -307,7 +307,7 @@ fn a_caller_stack_array_answers_as_its_slice() {
             assert_eq!(any.is_err(), by_array.is_err(), "{ray:?}");
             match by_array {
                 Err(e) => {
-                    assert_eq!(e, BvhError::StackTooSmall { available: N });
+                    assert_eq!(e, QueryError::StackTooSmall { available: N });
                     refused += 1;
                 }
                 Ok(found) => {

@@ -434,7 +434,7 @@ fn batch_figures<T: TriangleIntersector>(
     single: &[HitQuery<'_>],
     packets: &[rivals::BatchQuery<'_>],
 ) -> Result<SetFigures> {
-    let internal = |e: halfray_core::bvh::BvhError| Error::internal(e.to_string(), None);
+    let internal = |e: halfray_core::query::QueryError| Error::internal(e.to_string(), None);
     let query = set.query();
     let batch = |rays: &[Ray], out: &mut [crate::accel::Answer], st| match query {
         Query::Closest => closest_batch_simd(wide, mesh, isect, rays, out, st),

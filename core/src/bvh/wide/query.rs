@@ -6,7 +6,7 @@ use super::node::{ChildRef, LeafGroup, WideNode};
 use super::packet::{PACKET, PacketStack, Sharing};
 use super::traverse::STACK;
 use crate::aabb::Aabb;
-use crate::bvh::BvhError;
+use crate::query::QueryError;
 use crate::query::{LeafTest, Query, RayQuery, Stack, same_length};
 use crate::ray::Ray;
 use crate::simd::level::SimdLevel;
@@ -76,7 +76,7 @@ where
         reported
     }
 
-    /// The batch walk of `rays` into `out` ([`BvhError::LengthMismatch`], nothing written,
+    /// The batch walk of `rays` into `out` ([`QueryError::LengthMismatch`], nothing written,
     /// unless as long): sixteen rays at a time, the coherent ones as a packet
     /// ([`WideBvh::packet_hits`]) while they share their leaves ([`Sharing`]), the others
     /// alone; every ray alone on a caller stack shorter than
@@ -91,7 +91,7 @@ where
         leaf: &mut LT,
         ctx: &mut Query<'_, L, S>,
         out: &mut [S::Out<(u32, LT::Hit)>],
-    ) -> Result<(), BvhError> {
+    ) -> Result<(), QueryError> {
         same_length(rays.len(), out.len())?;
         let alone = ctx.stack.entries().is_some_and(|e| e.len() < STACK);
         if !alone {
@@ -176,7 +176,7 @@ where
         leaf: &mut LT,
         ctx: &mut Query<'_, L, S>,
         out: &mut [S::Out<(u32, LT::Hit)>],
-    ) -> Result<(), BvhError> {
+    ) -> Result<(), QueryError> {
         self.in_packets::<LT, L, S, false>(rays, leaf, ctx, out)
     }
 
@@ -197,7 +197,7 @@ where
         leaf: &mut LT,
         ctx: &mut Query<'_, L, S>,
         out: &mut [S::Out<(u32, LT::Hit)>],
-    ) -> Result<(), BvhError> {
+    ) -> Result<(), QueryError> {
         self.in_packets::<LT, L, S, true>(rays, leaf, ctx, out)
     }
 

@@ -5,7 +5,7 @@ use crate::aabb::Aabb;
 use crate::bvh::{BuildOptions, Bvh, BvhError, BvhNode, index_capacity};
 use crate::mesh::TriangleMesh;
 use crate::prelude::*;
-use crate::query::{Query, QueryStack, StackEntry, TraversalStats, Triangles};
+use crate::query::{Query, QueryError, QueryStack, StackEntry, TraversalStats, Triangles};
 use crate::ray::Ray;
 use crate::simd::level::Portable;
 use crate::test_util::{lcg, unit_vec};
@@ -1263,7 +1263,7 @@ fn box_query_and_clearance_equal_brute_force_and_the_binary_tree() {
             &normals[..99],
             &mut a
         ),
-        Err(BvhError::LengthMismatch {
+        Err(QueryError::LengthMismatch {
             expected: 100,
             found: 99
         })

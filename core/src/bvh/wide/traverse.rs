@@ -3,8 +3,8 @@
 use super::node::{ChildRef, LEAF_BIT, LeafGroup, START_MASK, WideNode};
 use super::{WideBvh, add_stats};
 use crate::aabb::SlabRay;
-use crate::bvh::BvhError;
 use crate::bvh::padded_ray::PaddedRay;
+use crate::query::QueryError;
 use crate::query::walk::{cull_bound, take_if_better};
 use crate::query::{LeafTest, Query, QueryStack, Stack, StackEntry, TraversalStats};
 use crate::ray::Ray;
@@ -210,14 +210,14 @@ where
 {
     /// Both ray queries on the context's stack (a [`QueryStack`]'s worth of its entries, or a
     /// stack of this frame's own); a shorter caller stack is refused with
-    /// [`BvhError::StackTooSmall`].
+    /// [`QueryError::StackTooSmall`].
     #[inline(always)]
     pub(super) fn leaf_query<LT: LeafTest, const ANY: bool, L: SimdLevel, S: Stack>(
         &self,
         ray: &Ray,
         leaf: &mut LT,
         ctx: &mut Query<'_, L, S>,
-    ) -> Result<Option<(u32, LT::Hit)>, BvhError> {
+    ) -> Result<Option<(u32, LT::Hit)>, QueryError> {
         let level = ctx.level;
         let stats = ctx.stats.as_deref_mut();
         let mut best = None;
@@ -235,7 +235,7 @@ where
                     Some(stack) => {
                         self.traverse::<LT, ANY, L>(level, stack, ray, leaf, stats, &mut best);
                     }
-                    None => return Err(BvhError::StackTooSmall { available }),
+                    None => return Err(QueryError::StackTooSmall { available }),
                 }
             }
         }

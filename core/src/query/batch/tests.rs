@@ -187,7 +187,7 @@ fn empty_batches_and_length_mismatches() {
         .unwrap();
     for len in [0, rays.len() - 1, rays.len() + 1] {
         let mut out = vec![Some(hit); len];
-        let want = Err(BvhError::LengthMismatch {
+        let want = Err(QueryError::LengthMismatch {
             expected: rays.len(),
             found: len,
         });

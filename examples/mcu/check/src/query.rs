@@ -4,10 +4,10 @@
 
 use super::{Fnv, Rng, Summary, fold_answers};
 use halfray_core::Vec3;
-use halfray_core::bvh::{Bvh, BvhError, BvhNode};
+use halfray_core::bvh::{Bvh, BvhNode};
 use halfray_core::mesh::TriangleMesh;
 use halfray_core::prelude::*;
-use halfray_core::query::{Query, StackEntry, Triangles};
+use halfray_core::query::{Query, QueryError, StackEntry, Triangles};
 use halfray_core::ray::Ray;
 use halfray_core::triangle::{TriangleHit, TriangleIntersector};
 
@@ -70,7 +70,7 @@ where
 ///
 /// # Errors
 ///
-/// [`BvhError::StackTooSmall`] from [`RayQuery::closest_hit`] on the caller's stack.
+/// [`QueryError::StackTooSmall`] from [`RayQuery::closest_hit`] on the caller's stack.
 #[inline(never)]
 pub fn closest_in<T, N, I>(
     isect: &T,
@@ -78,7 +78,7 @@ pub fn closest_in<T, N, I>(
     mesh: &TriangleMesh<'_>,
     stack: &mut [StackEntry],
     ray: &Ray,
-) -> Result<Option<(u32, TriangleHit)>, BvhError>
+) -> Result<Option<(u32, TriangleHit)>, QueryError>
 where
     T: TriangleIntersector,
     N: AsRef<[BvhNode]>,
@@ -95,7 +95,7 @@ where
 ///
 /// # Errors
 ///
-/// [`BvhError::StackTooSmall`] from [`RayQuery::any_hit`] on the caller's stack.
+/// [`QueryError::StackTooSmall`] from [`RayQuery::any_hit`] on the caller's stack.
 #[inline(never)]
 pub fn any_in<T, N, I>(
     isect: &T,
@@ -103,7 +103,7 @@ pub fn any_in<T, N, I>(
     mesh: &TriangleMesh<'_>,
     stack: &mut [StackEntry],
     ray: &Ray,
-) -> Result<bool, BvhError>
+) -> Result<bool, QueryError>
 where
     T: TriangleIntersector,
     N: AsRef<[BvhNode]>,

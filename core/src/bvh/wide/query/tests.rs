@@ -220,7 +220,7 @@ fn a_batch_on_a_short_caller_stack_answers_each_ray_the_stack_error() {
         .unwrap();
         let single = wide.closest_hit(&TOWARD, &mut tris, &mut Query::new().stack(&mut stack[..]));
         if available < QUERY_STACK_SIZE {
-            assert_eq!(single, Err(BvhError::StackTooSmall { available }));
+            assert_eq!(single, Err(QueryError::StackTooSmall { available }));
         } else {
             assert!(matches!(single, Ok(Some(_))), "{single:?}");
         }
