@@ -619,3 +619,75 @@ fn an_output_is_named_for_the_format_written() {
         "stdout is the SVG alone"
     );
 }
+
+/// Outputs another user owns, as that other user (`nobody`, through `setpriv`; the test runs
+/// only as root, and says so on stderr elsewhere): a file the user may not write is refused
+/// until `--force`; another user's file in a sticky folder (`/tmp`'s mode) is refused even
+/// with `--force`, when the outputs are reserved, so a render that also writes a PNG writes
+/// nothing (it used to replace the PNG, then fail to rename the statistics into place).
+#[test]
+fn another_users_files_are_refused_before_the_work() {
+    use std::os::unix::fs::PermissionsExt;
+    let as_nobody = |args: &[&std::ffi::OsStr]| {
+        Command::new("setpriv")
+            .args(["--reuid=65534", "--regid=65534", "--clear-groups", BIN])
+            .args(args)
+            .output()
+    };
+    let root = running_as_root();
+    if !root || as_nobody(os!["--version"]).is_err() {
+        eprintln!(
+            "another_users_files_are_refused_before_the_work: not run (needs root and setpriv)"
+        );
+        return;
+    }
+    let mode = |p: &Path, m: u32| std::fs::set_permissions(p, std::fs::Permissions::from_mode(m));
+    let dir = tempfile::tempdir().unwrap();
+    mode(dir.path(), 0o777).unwrap();
+    let cube = shared_mesh("cube.obj");
+
+    let theirs = dir.path().join("theirs.obj");
+    std::fs::write(&theirs, b"kept").unwrap();
+    mode(&theirs, 0o644).unwrap();
+    let o = as_nobody(os!["mesh", "subdivide", &cube, "-o", &theirs]).unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("not writable by you; pass --force"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(std::fs::read(&theirs).unwrap(), b"kept");
+    let o = as_nobody(os!["mesh", "subdivide", &cube, "-o", &theirs, "--force"]).unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_ne!(std::fs::read(&theirs).unwrap(), b"kept");
+
+    let sticky = dir.path().join("sticky");
+    std::fs::create_dir(&sticky).unwrap();
+    mode(&sticky, 0o1777).unwrap();
+    let stats = sticky.join("stats.json");
+    std::fs::write(&stats, b"kept").unwrap();
+    mode(&stats, 0o666).unwrap();
+    let png = dir.path().join("out.png");
+    let o = as_nobody(os![
+        "render",
+        &scene("mirror.toml"),
+        "-o",
+        &png,
+        "--stats-json",
+        &stats,
+        "--quiet",
+        "--force"
+    ])
+    .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("sticky folder"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&stats).unwrap(), b"kept");
+    assert_eq!(files(dir.path()), ["sticky", "theirs.obj"], "no PNG");
+}
+
+/// Whether this test process runs as root: the owner of a file it creates.
+fn running_as_root() -> bool {
+    use std::os::unix::fs::MetadataExt;
+    let probe = tempfile::NamedTempFile::new().unwrap();
+    probe.as_file().metadata().unwrap().uid() == 0
+}

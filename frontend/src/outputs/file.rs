@@ -20,9 +20,11 @@
 //!   after what was printed before), other descriptors opened for appending. Never resolved
 //!   to the file behind them and replaced.
 //!
-//! A read-only file (no write bit set) or one with several hard links is refused unless
-//! `force`; with `force` it is replaced, keeping its mode (and, for a hard link, splitting it:
-//! only this name gets the new bytes).
+//! A read-only file (no write bit set), one this process's user may not write, or one with
+//! several hard links is refused unless `force`; with `force` it is replaced, keeping its mode
+//! (and, for a hard link, splitting it: only this name gets the new bytes). A file no rename
+//! can replace (immutable, or another user's in a sticky folder, [`super::replace`]) is
+//! refused. So is standard input (`/dev/stdin`) and a descriptor that is not open.
 //!
 //! Several outputs of one command are written all or nothing by [`write_together`].
 
@@ -94,7 +96,7 @@ fn mode_text(_: &Permissions) -> String {
 
 impl OutputFile {
     /// Checks that `dest` can be written (see the module docs). `force` allows replacing
-    /// read-only and hard-linked files.
+    /// read-only, other users' and hard-linked files.
     pub fn reserve(dest: &Path, force: bool) -> Result<Self> {
         let target = resolve(dest).map_err(|e| Error::io(dest, e))?;
         let route = match target {
@@ -106,6 +108,20 @@ impl OutputFile {
                 ));
             }
             Target::Stream { fd, .. } => {
+                if fd == 0 {
+                    return Err(refuse(
+                        dest,
+                        io::ErrorKind::InvalidInput,
+                        "is standard input, not an output".into(),
+                    ));
+                }
+                // Stdout and stderr exist (Rust's runtime opens `/dev/null` for a closed
+                // one); another descriptor must be open now, not found closed after the work.
+                if fd > 2 {
+                    std::fs::metadata(format!("/dev/fd/{fd}")).map_err(|e| {
+                        refuse(dest, e.kind(), format!("descriptor {fd} is not open ({e})"))
+                    })?;
+                }
                 if fd == 1 {
                     crate::console::stdout_carries_output();
                 }
@@ -174,6 +190,17 @@ impl OutputFile {
                     ));
                 }
                 let dir = folder_of(&path).to_path_buf();
+                let barrier = match (std::fs::metadata(&path), std::fs::metadata(&dir)) {
+                    (Ok(file), Ok(folder)) => super::replace::barrier(&path, &file, &folder),
+                    _ => None,
+                };
+                if let Some(b) = barrier.filter(|b| !(force && b.forced_past())) {
+                    return Err(refuse(
+                        dest,
+                        io::ErrorKind::PermissionDenied,
+                        b.message().into(),
+                    ));
+                }
                 drop(temp_in(dest, &dir)?);
                 Route::Replace {
                     dir,
@@ -224,13 +251,15 @@ impl OutputFile {
                 let mut temp = temp_in(&dest, &dir)?;
                 let result = (|| {
                     let file = temp.file()?;
+                    // Before the bytes: a private file's new contents are never readable
+                    // by others, not even in the temporary file.
+                    if let Some(p) = permissions {
+                        file.set_permissions(p)?;
+                    }
                     let mut w = io::BufWriter::new(&mut *file);
                     fill(&mut w)?;
                     w.flush()?;
                     drop(w);
-                    if let Some(p) = permissions {
-                        file.set_permissions(p)?;
-                    }
                     file.sync_all()
                 })();
                 result.map_err(|e| Error::io(&dest, e))?;
@@ -301,8 +330,10 @@ fn write_stream(fd: u32, fill: impl FnOnce(&mut dyn Write) -> io::Result<()>) ->
 /// of that succeeded are the temporary files renamed over their targets, in order. On an
 /// error before the renames no regular output changed and no temporary file is left; a
 /// device or descriptor written before the failing one keeps what it got. (A rename failing
-/// after others succeeded is the one partial outcome; renames within a folder do not fail
-/// short of the disk disappearing.)
+/// after others succeeded is the one partial outcome: each output was reserved only if a
+/// rename can replace it ([`super::replace::barrier`]: permission, the immutable attribute,
+/// a sticky folder), so it takes a change to the file system in between, or an append-only
+/// or mounted-over file.)
 pub fn write_together(outputs: Vec<(OutputFile, Vec<u8>)>) -> Result<()> {
     let (files, streams): (Vec<_>, Vec<_>) = outputs
         .into_iter()
@@ -457,6 +488,44 @@ mod tests {
         assert_eq!(reader.join().unwrap(), b"streamed");
         assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
         assert_eq!(names(dir.path()), ["fifo", "null"]);
+    }
+
+    /// A private file's replacement has the private mode from its first byte: the
+    /// temporary file, looked at while its bytes are written, is already `0600`.
+    #[test]
+    fn a_private_file_is_never_readable_by_others_while_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let private = dir.path().join("private.obj");
+        std::fs::write(&private, b"old").unwrap();
+        std::fs::set_permissions(&private, Permissions::from_mode(0o600)).unwrap();
+        let mut seen = Vec::new();
+        OutputFile::reserve(&private, false)
+            .unwrap()
+            .write(|w| {
+                w.write_all(b"new")?;
+                for name in names(dir.path()).iter().filter(|n| n.ends_with(".tmp")) {
+                    seen.push(mode(&dir.path().join(name)));
+                }
+                Ok(())
+            })
+            .unwrap();
+        assert_eq!(seen, [0o600]);
+        assert_eq!(std::fs::read(&private).unwrap(), b"new");
+    }
+
+    /// Standard input and a descriptor that is not open are refused when reserved (before
+    /// the work), not found wrong after it.
+    #[test]
+    fn standard_input_and_closed_descriptors_are_not_outputs() {
+        let e = OutputFile::reserve(Path::new("/dev/stdin"), true)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("standard input"), "{e}");
+        // A descriptor number far above any this test process opens.
+        let e = OutputFile::reserve(Path::new("/dev/fd/4093"), false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("descriptor 4093 is not open"), "{e}");
     }
 
     #[test]

@@ -9,6 +9,7 @@
 
 pub mod file;
 pub mod identity;
+pub mod replace;
 pub mod target;
 pub mod temp;
 
@@ -37,7 +38,7 @@ impl<'a> Named<'a> {
 }
 
 /// Reserves every output (see [`OutputFile::reserve`]) and refuses outputs that are inputs or
-/// each other; `force` allows replacing read-only and hard-linked files. The outputs come
+/// each other; `force` allows replacing read-only, other users' and hard-linked files. The outputs come
 /// back in the order given.
 pub fn reserve_outputs(
     outputs: &[Named<'_>],
