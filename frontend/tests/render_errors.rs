@@ -608,7 +608,8 @@ fn mesh_scene_err(dir: &Path, name: &str, obj: &str, fields: &str) -> halfray::e
     }
 }
 
-/// An OBJ error inside a mesh the scene references names the OBJ file, its line and column.
+/// An OBJ error inside a mesh the scene references names the OBJ file, its line and column,
+/// then where the scene names that file.
 #[test]
 fn obj_error_in_a_referenced_mesh_names_its_line_and_column() {
     let dir = tempfile::tempdir().unwrap();
@@ -617,6 +618,11 @@ fn obj_error_in_a_referenced_mesh_names_its_line_and_column() {
     // Line 4, column 7: the `9` of `f 1 2 9`.
     assert!(msg.contains("bad.obj:4:7: field `f`"), "{msg}");
     assert!(msg.contains("vertex index 9 out of range"), "{msg}");
+    let shown = msg.replace(&format!("{}/", dir.path().display()), "");
+    assert!(
+        shown.contains("(the mesh of mesh.toml:") && shown.contains(": field `mesh.b.file`)"),
+        "{shown}"
+    );
 }
 
 /// A mesh the half-edge core rejects (smoothing, subdivision, smooth shading) is named as

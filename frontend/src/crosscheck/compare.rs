@@ -138,17 +138,18 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     if let Some(log) = &args.jsonl {
         refuse_log_clash(log, &inputs, &outputs)?;
     }
-    let mut log = args
-        .jsonl
-        .as_ref()
-        .map(|p| ResultLog::open(p, args.resume, &config))
-        .transpose()?;
-
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.map_or(0, usize::from))
         .build()
         .map_err(Error::Threads)?;
     let device = EmbreeDevice::new()?;
+    // Opened (created) only once the run can start: a run refused for want of Embree or
+    // threads leaves no empty log behind.
+    let mut log = args
+        .jsonl
+        .as_ref()
+        .map(|p| ResultLog::open(p, args.resume, &config))
+        .transpose()?;
     let start = Instant::now();
     let mut results = Vec::with_capacity(meshes.len());
     for (path, named_at) in meshes.iter().zip(&named_at) {

@@ -163,7 +163,19 @@ impl ResultLog {
         let usage =
             |why: &str| Error::Usage(format!("--jsonl `{}` {why}", crate::text::path(path)));
         let bytes = match resolve(path).map_err(|e| Error::io(path, e))? {
-            Target::Missing { .. } => Vec::new(),
+            Target::Missing { path: target } => {
+                let folder = match target.parent() {
+                    Some(d) if !d.as_os_str().is_empty() => d,
+                    _ => Path::new("."),
+                };
+                if !folder.is_dir() {
+                    return Err(usage(&format!(
+                        "is in folder `{}`, which does not exist",
+                        crate::text::path(folder)
+                    )));
+                }
+                Vec::new()
+            }
             Target::Stream { .. } => {
                 return Err(usage(
                     "names a stream: the results log must be a file, since --resume reads it back",
@@ -331,6 +343,23 @@ mod tests {
         std::fs::write(&list, b"a.obj\n\xff.obj\n").unwrap();
         let e = read_mesh_list(&list).unwrap_err().to_string();
         assert!(e.contains("list.txt:2"), "{e}");
+    }
+
+    /// A log in a folder that does not exist is a usage error naming the folder, and nothing
+    /// is created.
+    #[test]
+    fn a_log_in_a_missing_folder_is_refused_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("missing/out.jsonl");
+        let e = ResultLog::open(&path, false, &config())
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("which does not exist") && e.contains("missing`"),
+            "{e}"
+        );
+        assert!(!dir.path().join("missing").exists());
     }
 
     #[test]

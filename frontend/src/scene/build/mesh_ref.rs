@@ -116,6 +116,11 @@ pub(super) fn mesh(ctx: &mut Ctx<'_>, name: &S<String>, field: &str) -> Result<A
             &format!("{p}.file"),
             format!("{}: {message}", at.file.display()),
         ),
+        // A line of the mesh file: named first, then where the scene names the file.
+        Error::Input { at, message } => {
+            let named_at = ctx.src.at(&def.file.span(), &format!("{p}.file"));
+            Error::input(at, format!("{message} (the mesh of {named_at})"))
+        }
         other => other,
     })?;
     let shape = Arc::new(shape);
