@@ -618,6 +618,16 @@ fn an_output_is_named_for_the_format_written() {
         std::fs::read(&svg).unwrap(),
         "stdout is the SVG alone"
     );
+    // The input named as the output is refused as the input, not for its `.json` name.
+    let input = dir.path().join("accuracy.json");
+    std::fs::copy(json, &input).unwrap();
+    let o = run(os!["chart", "accuracy", &input, "-o", &input]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("refusing to overwrite an input"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 /// Outputs another user owns, as that other user (`nobody`, through `setpriv`; the test runs

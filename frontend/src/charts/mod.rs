@@ -256,15 +256,16 @@ pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path, what: &str) -> Res
     })
 }
 
-/// Runs `halfray chart`: checks the output's format and reserves it before reading the input.
+/// Runs `halfray chart`: reserves the output (refused first if it is the input) and checks
+/// its format before reading the input.
 pub fn run(args: &ChartArgs) -> Result<()> {
-    Format::of(&args.output)?;
     let out = reserve_outputs(
         &[Named::new("-o", &args.output)],
         &[Named::new("input", &args.input)],
         args.force,
     )?
     .remove(0);
+    Format::of(&args.output)?;
     match args.kind {
         ChartKind::Accuracy => write(&accuracy::AccuracyChart::from_file(&args.input)?, out),
         ChartKind::Corpus => write(&corpus::CorpusChart::from_file(&args.input)?, out),
