@@ -39,7 +39,9 @@ typedef enum HalfrayStatus {
   HALFRAY_STATUS_VERSION = 5,
   // The load scratch holds fewer words than `HalfrayBakedInfo::scratch_words`.
   HALFRAY_STATUS_SCRATCH_TOO_SMALL = 6,
-  // Baked data refused: the index count is not the triangle count.
+  // Baked data refused: the index count is not the triangle count. (The baked layout
+  // stores as many indices as triangles, so through this API only a tree of more than
+  // 2^31 - 1 triangles, the core's `MAX_PRIMITIVES`, gets it.)
   HALFRAY_STATUS_INDEX_COUNT = 7,
   // Baked data refused: more nodes than a tree over the mesh can have, or none for a
   // non-empty mesh.
@@ -131,7 +133,9 @@ typedef struct HalfrayHit {
   float b1;
   // Barycentric weight of the triangle's third vertex.
   float b2;
-  // Unnormalised geometric normal (v1 - v0) x (v2 - v0) (Embree's Ng), finite and non-zero.
+  // Unnormalised geometric normal (v1 - v0) x (v2 - v0) (Embree's Ng), finite and non-zero:
+  // where that product overflows or underflows `f32`, the same direction rescaled (the
+  // core's `TriangleHit::ng`).
   float ng[3];
   // `true` when the ray arrives against `ng` (the counter-clockwise side).
   bool front_face;
@@ -171,18 +175,22 @@ enum HalfrayStatus halfray_baked_info(const uint8_t *bytes,
 // freshly built one would.
 //
 // Returns `HALFRAY_STATUS_OK`; `NULL` when `bvh` or `bytes` is NULL, or `scratch` is NULL
-// with a non-zero `scratch_words`; `MISALIGNED` for a misaligned `bytes`, `scratch` or `bvh`; `OVERLAP` when
-// the buffer, the scratch and the handle are not three separate areas;
+// with a non-zero `scratch_words`; `MISALIGNED` for a misaligned `bytes`, `scratch` or `bvh`;
+// `OVERLAP` when the handle or the scratch lies in the buffer (checked first: a NULL pointer
+// with a length that reaches the other area is reported as `OVERLAP`, not `NULL`);
 // `SHORT_BUFFER`, `NOT_BAKED`, `VERSION` as `halfray_baked_info`; `SCRATCH_TOO_SMALL`; or the
-// code of the first check that fails (`INDEX_COUNT` to `BAD_BVH`). On any error `*bvh` (when
-// not NULL) is left "not loaded": queries on it return `NOT_LOADED`.
+// code of the first check that fails (`INDEX_COUNT` to `BAD_BVH`). On any error but `NULL`,
+// `MISALIGNED` and `OVERLAP`, `*bvh` is left "not loaded": queries on it return
+// `NOT_LOADED`. Those three leave `*bvh` as it was (a handle in the buffer is never
+// written); zero it to unload an earlier tree.
 //
 // # Safety
 //
 // `bytes`, unless NULL, points to `len` readable bytes that stay unchanged while `*bvh` is
 // used; `scratch`, unless NULL, to `scratch_words` writable words; `bvh`, unless NULL, to
-// a writable `HalfrayBvh` not used by another call meanwhile. The three areas must not
-// overlap (checked: `OVERLAP`).
+// a writable `HalfrayBvh` not used by another call meanwhile. The handle and the scratch
+// must lie outside the buffer (checked: `OVERLAP`); they may share memory with each other
+// (the scratch is dead before the handle is filled).
 enum HalfrayStatus halfray_load(const uint8_t *bytes,
                                 size_t len,
                                 uint32_t *scratch,
@@ -218,8 +226,9 @@ enum HalfrayStatus halfray_stack_entries(const struct HalfrayBvh *bvh, size_t *e
 //
 // `bvh`, unless NULL, points to a `HalfrayBvh` whose buffer is still in place; `ray`, unless
 // NULL, to a readable `HalfrayRay`; `stack`, unless NULL, to `stack_entries` writable
-// entries; `hit`, unless NULL, to a writable `HalfrayHit`; none used by another call
-// meanwhile. The stack must not overlap the handle or its buffer (checked: `OVERLAP`); `*hit`
+// entries; `hit`, unless NULL, to a writable `HalfrayHit`; the stack and `*hit` used by no
+// other call meanwhile, the handle written by none (queries only read it: several may run
+// on one handle at once, each with its own stack). The stack must not overlap the handle or its buffer (checked: `OVERLAP`); `*hit`
 // is written last, and should not overlap them either (the answer would replace them).
 enum HalfrayStatus halfray_closest_hit(const struct HalfrayBvh *bvh,
                                        const struct HalfrayRay *ray,

@@ -48,7 +48,9 @@ pub enum HalfrayStatus {
     Version = 5,
     /// The load scratch holds fewer words than `HalfrayBakedInfo::scratch_words`.
     ScratchTooSmall = 6,
-    /// Baked data refused: the index count is not the triangle count.
+    /// Baked data refused: the index count is not the triangle count. (The baked layout
+    /// stores as many indices as triangles, so through this API only a tree of more than
+    /// 2^31 - 1 triangles, the core's `MAX_PRIMITIVES`, gets it.)
     IndexCount = 7,
     /// Baked data refused: more nodes than a tree over the mesh can have, or none for a
     /// non-empty mesh.
@@ -160,7 +162,9 @@ pub struct HalfrayHit {
     pub b1: f32,
     /// Barycentric weight of the triangle's third vertex.
     pub b2: f32,
-    /// Unnormalised geometric normal (v1 - v0) x (v2 - v0) (Embree's Ng), finite and non-zero.
+    /// Unnormalised geometric normal (v1 - v0) x (v2 - v0) (Embree's Ng), finite and non-zero:
+    /// where that product overflows or underflows `f32`, the same direction rescaled (the
+    /// core's `TriangleHit::ng`).
     pub ng: [f32; 3],
     /// `true` when the ray arrives against `ng` (the counter-clockwise side).
     pub front_face: bool,
@@ -362,18 +366,22 @@ pub unsafe extern "C" fn halfray_baked_info(
 /// freshly built one would.
 ///
 /// Returns `HALFRAY_STATUS_OK`; `NULL` when `bvh` or `bytes` is NULL, or `scratch` is NULL
-/// with a non-zero `scratch_words`; `MISALIGNED` for a misaligned `bytes`, `scratch` or `bvh`; `OVERLAP` when
-/// the buffer, the scratch and the handle are not three separate areas;
+/// with a non-zero `scratch_words`; `MISALIGNED` for a misaligned `bytes`, `scratch` or `bvh`;
+/// `OVERLAP` when the handle or the scratch lies in the buffer (checked first: a NULL pointer
+/// with a length that reaches the other area is reported as `OVERLAP`, not `NULL`);
 /// `SHORT_BUFFER`, `NOT_BAKED`, `VERSION` as `halfray_baked_info`; `SCRATCH_TOO_SMALL`; or the
-/// code of the first check that fails (`INDEX_COUNT` to `BAD_BVH`). On any error `*bvh` (when
-/// not NULL) is left "not loaded": queries on it return `NOT_LOADED`.
+/// code of the first check that fails (`INDEX_COUNT` to `BAD_BVH`). On any error but `NULL`,
+/// `MISALIGNED` and `OVERLAP`, `*bvh` is left "not loaded": queries on it return
+/// `NOT_LOADED`. Those three leave `*bvh` as it was (a handle in the buffer is never
+/// written); zero it to unload an earlier tree.
 ///
 /// # Safety
 ///
 /// `bytes`, unless NULL, points to `len` readable bytes that stay unchanged while `*bvh` is
 /// used; `scratch`, unless NULL, to `scratch_words` writable words; `bvh`, unless NULL, to
-/// a writable `HalfrayBvh` not used by another call meanwhile. The three areas must not
-/// overlap (checked: `OVERLAP`).
+/// a writable `HalfrayBvh` not used by another call meanwhile. The handle and the scratch
+/// must lie outside the buffer (checked: `OVERLAP`); they may share memory with each other
+/// (the scratch is dead before the handle is filled).
 #[no_mangle]
 pub unsafe extern "C" fn halfray_load(
     bytes: *const u8,
@@ -391,8 +399,9 @@ pub unsafe extern "C" fn halfray_load(
     if load_areas_overlap(bytes, len, scratch, scratch_words, bvh) {
         return HalfrayStatus::Overlap;
     }
-    // SAFETY: non-NULL, aligned, writable (contract), and outside the buffer and the scratch
-    // (checked): the handle is "not loaded" from here until a load succeeds.
+    // SAFETY: non-NULL, aligned, writable (contract), and outside the buffer (checked): the
+    // handle is "not loaded" from here until a load succeeds. (It may share the scratch's
+    // memory: the failing arm below clears it again.)
     unsafe { bvh.cast::<usize>().write(0) };
     // SAFETY: `len` readable bytes at `bytes`, unchanged while the handle is used (contract).
     let (b, l) = match unsafe { baked(bytes, len) } {
@@ -433,7 +442,14 @@ pub unsafe extern "C" fn halfray_load(
             }
             HalfrayStatus::Ok
         }
-        Err(e) => e.into(),
+        Err(e) => {
+            // SAFETY: as the write above. The check wrote one bit per listed triangle into
+            // the scratch, which may share the handle's memory: the buffer chose those
+            // bits, so they could spell a tag that matches; cleared, the handle is "not
+            // loaded" whatever the scratch holds.
+            unsafe { bvh.cast::<usize>().write(0) };
+            e.into()
+        }
     }
 }
 
@@ -477,7 +493,9 @@ unsafe fn loaded<'a>(bvh: *const HalfrayBvh) -> Result<&'a Loaded, HalfrayStatus
         return Err(HalfrayStatus::NotLoaded);
     }
     // SAFETY: a matching tag is written only with a whole `Loaded` by a successful
-    // `halfray_load` and cleared at the start of every load; a zeroed handle never matches
+    // `halfray_load`, cleared at the start of every load that gets past its pointer checks
+    // and again when it fails (its scratch, which may share the handle, can spell any
+    // bits); a zeroed handle never matches
     // (`tag_of` is odd). Contents a caller made up could match only by chance, which the
     // contract excludes.
     Ok(unsafe { &*bvh.cast::<Loaded>() })
@@ -579,8 +597,9 @@ unsafe fn query_inputs<'a>(
 ///
 /// `bvh`, unless NULL, points to a `HalfrayBvh` whose buffer is still in place; `ray`, unless
 /// NULL, to a readable `HalfrayRay`; `stack`, unless NULL, to `stack_entries` writable
-/// entries; `hit`, unless NULL, to a writable `HalfrayHit`; none used by another call
-/// meanwhile. The stack must not overlap the handle or its buffer (checked: `OVERLAP`); `*hit`
+/// entries; `hit`, unless NULL, to a writable `HalfrayHit`; the stack and `*hit` used by no
+/// other call meanwhile, the handle written by none (queries only read it: several may run
+/// on one handle at once, each with its own stack). The stack must not overlap the handle or its buffer (checked: `OVERLAP`); `*hit`
 /// is written last, and should not overlap them either (the answer would replace them).
 #[no_mangle]
 pub unsafe extern "C" fn halfray_closest_hit(

@@ -128,6 +128,52 @@ static void index_repeated(Buffer b) {
 }
 static void index_out_of_range(Buffer b) { put_u32(b.bytes + indices_at(b), 8); }
 
+/* A failed load whose scratch shares the handle's memory leaves the handle "not loaded",
+ * whatever the scratch's bits: the load check marks one bit per listed triangle, and a
+ * crafted buffer lists the triangles whose bits spell a loaded handle's first words (the tag
+ * 0x48524159 ^ buffer address, with the address word 0), then repeats an index (BAD_INDEX).
+ * The handle used to pass the "loaded" check, and a query answered OK from it. */
+static void forged_tag_in_shared_scratch(void) {
+    enum { WORDS = 9, T = 32 * WORDS, V = 3 };
+    const uint32_t tag = 0x48524159u;
+    size_t len = 32 + 32 + 12 * V + 12 * (size_t)T + 4 * (size_t)T;
+    uint8_t *b = aligned_bytes(len);
+    memset(b, 0, len);
+    memcpy(b, "halfray\0", 8);
+    put_u32(b + 8, 1);
+    put_u32(b + 12, V);
+    put_u32(b + 16, T);
+    put_u32(b + 20, 1);
+    const float one = 1.0f;
+    for (int k = 0; k < 3; k++) memcpy(b + 44 + 4 * k, &one, 4); /* root box [0, 1]^3 */
+    put_u32(b + 60, T);                                             /* a leaf of T triangles */
+    memcpy(b + 64 + 12, &one, 4);                                   /* (0,0,0) (1,0,0) (0,1,0) */
+    memcpy(b + 64 + 28, &one, 4);
+    size_t tri = 64 + 12 * V, idx = tri + 12 * (size_t)T, at = 0;
+    for (uint32_t t = 0; t < T; t++) {
+        put_u32(b + tri + 12 * t + 4, 1);
+        put_u32(b + tri + 12 * t + 8, 2);
+    }
+    /* Scratch word 8 is the handle's first word: the bits of `tag`, as triangles 256... */
+    uint32_t first = 0;
+    for (int bit = 0; bit < 32; bit++)
+        if (tag >> bit & 1) {
+            if (!at) first = 32 * 8 + bit;
+            put_u32(b + idx + 4 * at++, 32 * 8 + bit);
+        }
+    put_u32(b + idx + 4 * at, first); /* ...then one of them again */
+    _Alignas(HalfrayBvh) uint32_t scratch[64];
+    memset(scratch, 0, sizeof scratch);
+    HalfrayBvh *h = (HalfrayBvh *)(void *)(scratch + 8);
+    CHECK(halfray_load(b, len, scratch, 64, h) == HALFRAY_STATUS_BAD_INDEX);
+    HalfrayRay r = ray(0.25f, 0.25f, 5.0f, 0.0f, 0.0f, -1.0f);
+    HalfrayStackEntry stack[HALFRAY_MAX_STACK_ENTRIES];
+    HalfrayHit hit;
+    CHECK(halfray_closest_hit(h, &r, stack, HALFRAY_MAX_STACK_ENTRIES, &hit) ==
+          HALFRAY_STATUS_NOT_LOADED);
+    free(b);
+}
+
 static void octahedron(Buffer b) {
     HalfrayBakedInfo info;
     memset(&info, 0xAB, sizeof info);
@@ -345,6 +391,7 @@ int main(int argc, char **argv) {
     }
     Buffer oct = read_file(argv[1]), tor = read_file(argv[2]), rays = read_file(argv[3]);
     octahedron(oct);
+    forged_tag_in_shared_scratch();
     torus(tor, rays, argv[4]);
     free(oct.bytes);
     free(tor.bytes);

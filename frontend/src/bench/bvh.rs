@@ -202,20 +202,17 @@ pub fn run(args: &BvhArgs) -> Result<()> {
     let variant = args.intersector.0;
     let run = RunMeshes::read(&args.meshes, args.mesh_list.as_deref(), "benchmark")?;
     run.refuse_repeated("benchmarked")?;
-    let RunMeshes {
-        paths: meshes,
-        named_at,
-    } = run;
     let sets = if args.sets.is_empty() {
         RaySet::ALL.to_vec()
     } else {
         args.sets.clone()
     };
     // One set is held in memory at a time: estimated, and every mesh opened, before any work.
-    args.run.check_inputs(&meshes, &named_at)?;
-    let json = args.run.reserve_json(&meshes, args.mesh_list.as_deref())?;
+    let meshes = &run.paths;
+    args.run.check_inputs(meshes, &run.named_at)?;
+    let json = args.run.reserve_json(meshes, args.mesh_list.as_deref())?;
     let mut reports = Vec::with_capacity(meshes.len());
-    for mesh in &meshes {
+    for (k, mesh) in meshes.iter().enumerate() {
         struct Bench<'a>(&'a BvhArgs, &'a Path, &'a [RaySet]);
         impl VariantVisitor for Bench<'_> {
             type Output = Result<BvhReport>;
@@ -223,7 +220,8 @@ pub fn run(args: &BvhArgs) -> Result<()> {
                 bench(self.0, self.1, self.2, isect)
             }
         }
-        reports.push(variant.visit(Bench(args, mesh, &sets))?);
+        let report = variant.visit(Bench(args, mesh, &sets));
+        reports.push(report.map_err(|e| run.noting_list(k, e))?);
     }
     super::write_json_reports(json, &reports)?;
     for r in &reports {

@@ -61,6 +61,18 @@ impl RunMeshes {
         Ok(run)
     }
 
+    /// `e`, an error of mesh `k`'s run, with the list line that named the mesh when an
+    /// input error names another place (the mesh file's own line): `bunny.obj:7:3: … (named
+    /// at list.txt:2)`. Other errors, and meshes named as arguments, unchanged.
+    pub fn noting_list(&self, k: usize, e: Error) -> Error {
+        match (e, self.named_at.get(k)) {
+            (Error::Input { at, message }, Some(Some(listed))) if at != *listed => {
+                Error::input(at, format!("{message} (named at {listed})"))
+            }
+            (e, _) => e,
+        }
+    }
+
     /// Refuses a run that names one mesh file twice (the same path again, another spelling,
     /// a symlink): its figures would count twice. The usage error names the later path and
     /// the earlier one (each with its list line) and says each mesh is `done` once
