@@ -204,6 +204,24 @@ fn a_missing_mesh_or_a_folder_is_refused_before_any_measurement() {
     let err = String::from_utf8_lossy(&o.stderr);
     let want = format!("{}:4: {}: No such file", list.display(), missing.display());
     assert!(err.contains(&want), "want `{want}` in: {err}");
+    // A mesh that opens but does not parse: its own file, line and field, then the list line.
+    let broken = dir.path().join("broken.obj");
+    std::fs::write(&broken, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n").unwrap();
+    std::fs::write(&list, format!("{other}\n{}\n", broken.display())).unwrap();
+    let o = Command::new(BIN)
+        .args(["bench", "bvh", "--mesh-list"])
+        .arg(&list)
+        .args(["--width", "2", "--rays", "2", "--sets", "primary"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let want = format!("{}:4:7: field `f`", broken.display());
+    let listed = format!("(named at {}:2)", list.display());
+    assert!(
+        err.contains(&want) && err.contains(&listed),
+        "want `{want}` and `{listed}` in: {err}"
+    );
 }
 
 /// One mesh file named twice (the same path again, `./x` for `x`, or a list entry for a
