@@ -174,6 +174,81 @@ static void forged_tag_in_shared_scratch(void) {
     free(b);
 }
 
+/* A baked node as the format lays it out: box, then (first child, 0) for an inner node or
+ * (first index, count) for a leaf. */
+typedef struct Node {
+    float lo[3], hi[3];
+    uint32_t start, count;
+} Node;
+
+/* `halfray_load` of a buffer of `k` hand-written nodes over `t` triangles, all of them the
+ * triangle (0,0,0) (1,0,0) (0,1,0), listed by `indices`. */
+static HalfrayStatus load_nodes(uint32_t t, uint32_t k, const Node *nodes, const uint32_t *indices) {
+    const uint32_t v = 3;
+    size_t len = 32 + 32 * (size_t)k + 12 * v + 16 * (size_t)t;
+    uint8_t *b = aligned_bytes(len);
+    memcpy(b, "halfray\0", 8);
+    put_u32(b + 8, 1);
+    put_u32(b + 12, v);
+    put_u32(b + 16, t);
+    put_u32(b + 20, k);
+    memcpy(b + 32, nodes, 32 * (size_t)k);
+    size_t pos = 32 + 32 * (size_t)k, tri = pos + 12 * v;
+    const float one = 1.0f;
+    memcpy(b + pos + 12, &one, 4);
+    memcpy(b + pos + 28, &one, 4);
+    for (uint32_t i = 0; i < t; i++) {
+        put_u32(b + tri + 12 * i + 4, 1);
+        put_u32(b + tri + 12 * i + 8, 2);
+    }
+    memcpy(b + tri + 12 * (size_t)t, indices, 4 * (size_t)t);
+    uint32_t scratch[8];
+    HalfrayBvh bvh;
+    memset(&bvh, 0, sizeof bvh);
+    HalfrayStatus status = halfray_load(b, len, scratch, 8, &bvh);
+    free(b);
+    return status;
+}
+
+/* The checks of a baked tree that no corruption of a built one reaches, each on a tree
+ * written by hand to fail it alone: its own code. */
+#define UNIT_BOX {0, 0, 0}, {1, 1, 1}
+static void hand_built_trees_get_their_codes(void) {
+    uint32_t indices[66];
+    for (uint32_t i = 0; i < 66; i++) indices[i] = i;
+    /* Two triangles cannot need five nodes (at most 2t - 1 = 3). */
+    Node five[5] = {{UNIT_BOX, 0, 2}, {UNIT_BOX, 0, 1}, {UNIT_BOX, 0, 1}, {UNIT_BOX, 0, 1},
+                    {UNIT_BOX, 0, 1}};
+    CHECK(load_nodes(2, 5, five, indices) == HALFRAY_STATUS_NODE_COUNT);
+    /* Node 0's children are 1 and 2, node 1's are 2 and 3: node 2 has two parents. */
+    Node shared[4] = {{UNIT_BOX, 1, 0}, {UNIT_BOX, 2, 0}, {UNIT_BOX, 0, 1}, {UNIT_BOX, 1, 1}};
+    CHECK(load_nodes(2, 4, shared, indices) == HALFRAY_STATUS_SHARED_NODE);
+    /* A leaf of indices [1, 3) of a list of two runs past it; a leaf of [0, 1) leaves
+     * triangle 1 unlisted. */
+    Node past[1] = {{UNIT_BOX, 1, 2}};
+    CHECK(load_nodes(2, 1, past, indices) == HALFRAY_STATUS_LEAF_RANGE);
+    Node half[1] = {{UNIT_BOX, 0, 1}};
+    CHECK(load_nodes(2, 1, half, indices) == HALFRAY_STATUS_UNCOVERED);
+    /* A chain of 65 inner nodes, each with a leaf and the next inner node as children:
+     * deeper than any tree the core builds. */
+    static Node chain[131];
+    uint32_t leaf = 0;
+    for (int i = 0; i < 131; i++) {
+        Node n = {UNIT_BOX, 0, 0};
+        if (i % 2 == 0 && i < 130) {
+            n.start = (uint32_t)i + 1;
+        } else {
+            n.start = leaf++;
+            n.count = 1;
+        }
+        chain[i] = n;
+    }
+    CHECK(load_nodes(66, 131, chain, indices) == HALFRAY_STATUS_TOO_DEEP);
+    /* And a correct one-leaf tree over both: loaded. */
+    Node whole[1] = {{UNIT_BOX, 0, 2}};
+    CHECK(load_nodes(2, 1, whole, indices) == HALFRAY_STATUS_OK);
+}
+
 static void octahedron(Buffer b) {
     HalfrayBakedInfo info;
     memset(&info, 0xAB, sizeof info);
@@ -392,6 +467,7 @@ int main(int argc, char **argv) {
     Buffer oct = read_file(argv[1]), tor = read_file(argv[2]), rays = read_file(argv[3]);
     octahedron(oct);
     forged_tag_in_shared_scratch();
+    hand_built_trees_get_their_codes();
     torus(tor, rays, argv[4]);
     free(oct.bytes);
     free(tor.bytes);
