@@ -120,6 +120,40 @@ pub fn brute_watertight(mesh: &TriangleMesh<'_>, ray: &Ray) -> Option<(u32, Tria
     best
 }
 
+/// The box queries' oracle, written from their contract and sharing no code with
+/// [`Aabb`](crate::aabb::Aabb) or the trees: whether triangle `v` overlaps the closed box
+/// `[lo, hi]`. A triangle with a non-finite coordinate overlaps nothing (its bounds are
+/// unusable, so no tree holds it); otherwise it overlaps exactly when, on every axis, the
+/// closed interval from the smallest to the largest of its three vertex coordinates meets
+/// `[lo, hi]` — compared in `f64`, so a NaN bound meets nothing.
+pub fn triangle_meets_box(v: &[Vec3; 3], lo: Vec3, hi: Vec3) -> bool {
+    let coords = v.map(|p| [f64::from(p.x), f64::from(p.y), f64::from(p.z)]);
+    if !coords.iter().flatten().all(|c| c.is_finite()) {
+        return false;
+    }
+    let (lo, hi) = (lo.to_array(), hi.to_array());
+    (0..3).all(|axis| {
+        let [a, b, c] = coords.map(|p| p[axis]);
+        let least = if a < b { a } else { b };
+        let least = if least < c { least } else { c };
+        let most = if a > b { a } else { b };
+        let most = if most > c { most } else { c };
+        least <= f64::from(hi[axis]) && f64::from(lo[axis]) <= most
+    })
+}
+
+/// Brute force for the box queries: every triangle of `mesh` (in index order; missing
+/// vertices skipped) that [`triangle_meets_box`] the box `[lo, hi]`.
+pub fn brute_box(mesh: &TriangleMesh<'_>, lo: Vec3, hi: Vec3) -> Vec<u32> {
+    (0..mesh.len())
+        .filter(|&i| {
+            mesh.triangle(i)
+                .is_some_and(|v| triangle_meets_box(&v, lo, hi))
+        })
+        .map(|i| i as u32)
+        .collect()
+}
+
 /// A binary BVH in vectors.
 pub type VecBvh = Bvh<Vec<BvhNode>, Vec<u32>>;
 

@@ -9,8 +9,8 @@ use crate::query::walk::pad_to_root;
 use crate::query::{Query, QueryError, StackEntry, TraversalStats, Triangles};
 use crate::ray::Ray;
 use crate::test_util::{
-    Lcg, VecBvh, any_watertight, brute_watertight, closest_watertight, closest_watertight_in,
-    lcg_soup, vec_bvh as build,
+    Lcg, VecBvh, any_watertight, brute_box, brute_watertight, closest_watertight,
+    closest_watertight_in, lcg_soup, vec_bvh as build,
 };
 use crate::triangle::{TriangleIntersector, Watertight};
 use glam::Vec3;
@@ -507,17 +507,119 @@ fn refit_follows_moved_vertices() {
         bvh.refit(&short),
         Err(BvhError::SourceLengthMismatch { .. })
     ));
-    // A NaN vertex: named, tree stays usable.
-    pos[4] = Vec3::NAN;
-    let mesh = TriangleMesh::new(&pos, &tris);
+    refit_with_non_finite_triangles(&mut bvh, pos, &tris);
+}
+
+/// [`Bvh::refit`]'s non-finite contract on `bvh` (built over `pos`, `tris`, an
+/// [`lcg_soup`]): the vertices move again and three triangles get a non-finite vertex, in one
+/// refit. The error names the smallest of the three indices; the refit still completes
+/// (the root box is the moved vertices' box without the three triangles); and closest hits
+/// and box queries equal brute force over the moved mesh without them.
+///
+/// The three are taken from leaves in the refit's order (its reverse pass over the nodes):
+/// one from the first leaf, one from the last, and the one with the smallest index of the
+/// leaves between, so that the smallest index is neither the first nor the last one the pass
+/// meets (naming either instead of the smallest fails).
+fn refit_with_non_finite_triangles(bvh: &mut VecBvh, mut pos: Vec<Vec3>, tris: &[[u32; 3]]) {
+    let leaves: Vec<&[u32]> = bvh
+        .nodes()
+        .iter()
+        .rev()
+        .filter_map(BvhNode::primitive_range)
+        .map(|r| &bvh.indices()[r])
+        .collect();
+    assert!(leaves.len() >= 3, "{} leaves", leaves.len());
+    let (first, last) = (leaves[0][0], leaves[leaves.len() - 1][0]);
+    let smallest = leaves[1..leaves.len() - 1]
+        .iter()
+        .flat_map(|l| l.iter().copied())
+        .min()
+        .unwrap();
+    assert!(
+        smallest < first && smallest < last,
+        "{smallest} {first} {last}"
+    );
+    for p in &mut pos {
+        *p = *p * 0.75 + Vec3::new(-1.0, 4.0, 2.0);
+    }
+    let bad = [first, smallest, last];
+    pos[tris[first as usize][0] as usize].x = f32::NAN;
+    pos[tris[smallest as usize][1] as usize].y = f32::INFINITY;
+    pos[tris[last as usize][2] as usize].z = f32::NEG_INFINITY;
+    let broken = TriangleMesh::new(&pos, tris);
+    // The error is checked last: the boxes and queries first show that the refit completed.
+    let refitted = bvh.refit(&broken);
+    let kept: Vec<u32> = (0..tris.len() as u32)
+        .filter(|i| !bad.contains(i))
+        .collect();
+    let kept_tris: Vec<[u32; 3]> = kept.iter().map(|&i| tris[i as usize]).collect();
+    let (lo, hi) = kept_tris
+        .iter()
+        .flatten()
+        .map(|&v| pos[v as usize])
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p), hi.max(p))
+        });
+    let root = bvh.bounds();
     assert_eq!(
-        bvh.refit(&mesh),
+        (root.min, root.max),
+        (lo, hi),
+        "the root box after the refit"
+    );
+    let others = TriangleMesh::new(&pos, &kept_tris);
+    // Rays from random origins at the centre of every triangle, the three included (at their
+    // finite vertices' midpoint), and at random points of the mesh's box.
+    let mut r = Lcg(12);
+    let mut targets: Vec<Vec3> = tris
+        .iter()
+        .map(|t| t.map(|v| pos[v as usize]))
+        .map(|[a, b, c]| {
+            if a.is_finite() && b.is_finite() && c.is_finite() {
+                (a + b + c) / 3.0
+            } else {
+                let finite: Vec<Vec3> = [a, b, c].into_iter().filter(|p| p.is_finite()).collect();
+                (finite[0] + finite[1]) * 0.5
+            }
+        })
+        .collect();
+    targets.extend((0..300).map(|_| lo + (r.v(1.0) + Vec3::splat(0.5)) * (hi - lo)));
+    let mut hits = 0;
+    for target in targets {
+        let o = (lo + hi) * 0.5 + r.v(40.0);
+        let ray = Ray::new(o, target - o);
+        let got = closest_watertight(&*bvh, &broken, &ray).map(|(p, h)| (p, h.t));
+        let want = brute(&others, &ray).map(|(i, t)| (kept[i as usize], t));
+        assert_eq!(got, want, "{ray:?}");
+        hits += usize::from(want.is_some());
+    }
+    assert!(hits >= tris.len(), "only {hits} rays hit");
+    for k in 0..50 {
+        let c = lo + (r.v(1.0) + Vec3::splat(0.5)) * (hi - lo);
+        let q = if k == 0 {
+            Aabb::new(lo, hi)
+        } else {
+            Aabb::new(c, c + (r.v(1.0) + Vec3::splat(0.5)) * 3.0)
+        };
+        let mut got = Vec::new();
+        bvh.query_box(&broken, &q, |p| {
+            got.push(p);
+            true
+        });
+        got.sort_unstable();
+        let want = brute_box(&broken, q.min, q.max);
+        assert_eq!(got, want, "box {q:?}");
+        if k == 0 {
+            assert_eq!(want, kept, "the mesh's box holds every finite triangle");
+        }
+    }
+    assert_eq!(
+        refitted,
         Err(BvhError::NonFinite(crate::error::NonFiniteError {
             element: crate::error::InputElement::Primitive,
-            index: 1
-        }))
+            index: smallest as usize
+        })),
+        "names the smallest index of the three"
     );
-    assert!(bvh.bounds().is_finite());
 }
 
 #[test]
@@ -535,9 +637,7 @@ fn box_query_finds_exactly_the_overlapping_primitives() {
             true
         });
         got.sort_unstable();
-        let want: Vec<u32> = (0..400u32)
-            .filter(|&i| mesh.primitive_bounds(i as usize).overlaps(&q))
-            .collect();
+        let want = brute_box(&mesh, q.min, q.max);
         assert_eq!(got, want);
         assert_eq!(n, want.len());
     }

@@ -10,7 +10,8 @@ use crate::kdtree::KdBuildOptions;
 use crate::mesh::TriangleMesh;
 use crate::solids::{CUBE_TRIANGLES, CUBE_VERTICES, grid_triangles};
 use crate::test_util::{
-    Lcg, brute_watertight, closest_watertight, lcg, lcg_soup, vec_bvh, vec_grid, vec_kd, vec_wide,
+    Lcg, brute_box, brute_watertight, closest_watertight, lcg, lcg_soup, vec_bvh, vec_grid, vec_kd,
+    vec_wide,
 };
 use crate::triangle::{TriangleIntersector, Watertight};
 use std::vec;
@@ -146,9 +147,7 @@ fn conforms<Q: RayQuery>(name: &str, q: &Q, mesh: &TriangleMesh<'_>) {
             true
         });
         got.sort_unstable();
-        let want: Vec<u32> = (0..mesh.len() as u32)
-            .filter(|&p| mesh.primitive_bounds(p as usize).overlaps(&query))
-            .collect();
+        let want = brute_box(mesh, query.min, query.max);
         assert_eq!((n, &got), (want.len(), &want), "{name}: box {i} {query:?}");
         if want.len() > 1 {
             let mut calls = 0;

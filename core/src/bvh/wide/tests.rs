@@ -8,7 +8,7 @@ use crate::prelude::*;
 use crate::query::{Query, QueryError, QueryStack, StackEntry, TraversalStats, Triangles};
 use crate::ray::Ray;
 use crate::simd::level::Portable;
-use crate::test_util::{lcg, unit_vec};
+use crate::test_util::{brute_box, lcg, unit_vec};
 use crate::triangle::{MollerTrumbore, TriangleIntersector, Watertight};
 use glam::Vec3;
 use std::vec;
@@ -1200,12 +1200,7 @@ fn box_queries_equal_brute_force<const W: usize>(
             true
         });
         got.sort_unstable();
-        let expect: Vec<u32> = (0..mesh.len() as u32)
-            .filter(|&i| {
-                let v = mesh.triangle(i as usize).unwrap();
-                Aabb::new(v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2])).overlaps(&q)
-            })
-            .collect();
+        let expect = brute_box(mesh, q.min, q.max);
         assert_eq!(got, expect, "{} triangles, {q:?}", mesh.len());
     }
 }

@@ -5,6 +5,7 @@ use crate::bvh::wide::{group_capacity, node_capacity};
 use crate::bvh::{BuildOptions, Bvh, BvhNode, index_capacity, load_scratch_len};
 use crate::mesh::TriangleMesh;
 use crate::query::{QUERY_STACK_SIZE, QueryStack, StackEntry, TraversalStats, Triangles};
+use crate::test_util::triangle_meets_box;
 use crate::triangle::Watertight;
 use glam::Vec3;
 use std::vec;
@@ -118,10 +119,7 @@ fn box_query_keeps_every_pending_child_of_a_deep_lopsided_tree() {
         });
         got.sort_unstable();
         let want: Vec<u32> = (0..tris.len() as u32)
-            .filter(|&i| {
-                let [a, b, c] = tris[i as usize];
-                Aabb::new(a.min(b).min(c), a.max(b).max(c)).overlaps(&q)
-            })
+            .filter(|&i| triangle_meets_box(&tris[i as usize], q.min, q.max))
             .collect();
         assert!(want.len() > 30, "{}", want.len());
         assert_eq!(got, want);
