@@ -523,6 +523,57 @@ mod tests {
         assert_eq!((rc.min.x, rc.max.x), (26.0, 78.0));
     }
 
+    /// [`best_sah_split`] against its documented cost, worked by hand: four boxes
+    /// `[x₀, x₁] × [0, 1] × [0, 1]`, of surface area `2·(w + 1 + w) = 4w + 2` for width
+    /// `w = x₁ − x₀`:
+    ///
+    /// | primitive | x        | centre | bin of 4 over the centres' `[0, 4]` |
+    /// |-----------|----------|--------|--------------------------------------|
+    /// | 0         | [−0.5, 0.5] | 0   | 0                                    |
+    /// | 1         | [1, 2]   | 1.5    | 1                                    |
+    /// | 2         | [2, 3]   | 2.5    | 2                                    |
+    /// | 3         | [1, 7]   | 4      | 3 (the upper end, clamped)           |
+    ///
+    /// Only x has a centroid extent (every y and z centre is 0.5), and 4 primitives get
+    /// `4 + 4/8 = 4` bins: planes `k = 1, 2, 3`, primitives `..k` left. With
+    /// `primitive_cost = 2`, `cost = TRAVERSAL_COST·A + 2·(A_L·N_L + A_R·N_R)`:
+    ///
+    /// * `k = 1`: L `[−0.5, 0.5]` (w 1, A 6, N 1), R `[1, 7]` (w 6, A 26, N 3):
+    ///   `6·1 + 26·3 = 84`;
+    /// * `k = 2`: L `[−0.5, 2]` (w 2.5, A 12, N 2), R `[1, 7]` (A 26, N 2): `24 + 52 = 76`;
+    /// * `k = 3`: L `[−0.5, 3]` (w 3.5, A 16, N 3), R `[1, 7]` (A 26, N 1): `48 + 26 = 74`.
+    ///
+    /// So `k = 3` wins, at `1·A + 2·74` with the parent `[−0.5, 7]` (w 7.5, `A = 32`):
+    /// `32 + 148 = 180`. Without the counts `k = 1` would win (`6 + 26 = 32` against 38 and
+    /// 42), and with them swapped (`A_L·N_R + A_R·N_L`) too (44 against 76 and 94). Every
+    /// value is a small integer, exact in `f32`: compared exactly.
+    #[test]
+    fn best_split_costs_as_the_documented_sah() {
+        let xs = [(-0.5, 0.5), (1.0, 2.0), (2.0, 3.0), (1.0, 7.0)];
+        let refs: [PrimRef; 4] = core::array::from_fn(|i| {
+            let (lo, hi) = xs[i];
+            let b = Aabb::new(Vec3::new(lo, 0.0, 0.0), Vec3::new(hi, 1.0, 1.0));
+            PrimRef::new(&b, i as u32)
+        });
+        // The builder's centroid box is of the doubled centres (`centre2`): x 0..8, y = z = 1.
+        let centroids = Aabb::new(Vec3::new(0.0, 1.0, 1.0), Vec3::new(8.0, 1.0, 1.0));
+        let mut sets = [UNUSED_SET; BIN_SETS];
+        let split = best_sah_split(&refs[..], &mut sets, 0..4, &centroids, 32.0, 2.0).unwrap();
+        let limit: [f32; 3] = core::array::from_fn(|a| split.limit[a]);
+        assert_eq!(limit[0], 3.0, "below bin 3 of x");
+        assert!(limit[1].is_nan() && limit[2].is_nan(), "{limit:?}");
+        assert_eq!(split.cost, 180.0);
+        let (l, r) = (split.left, split.right);
+        assert_eq!(
+            (l.min, l.max),
+            (Vec3::new(-0.5, 0.0, 0.0), Vec3::new(3.0, 1.0, 1.0))
+        );
+        assert_eq!(
+            (r.min, r.max),
+            (Vec3::new(1.0, 0.0, 0.0), Vec3::new(7.0, 1.0, 1.0))
+        );
+    }
+
     /// [`cheapest`] against the scan it stands for, written out here: candidates in axis-major
     /// order, then by plane, the first kept and replaced only by a strictly smaller cost. Costs
     /// drawn from a few values so that ties are common, with `±0`, `+∞` and NaN among them;
