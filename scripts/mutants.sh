@@ -19,13 +19,14 @@
 #   bash scripts/mutants.sh --in-diff DIFF                                          # a branch's lines
 #
 # FILES: files or folders (every `.rs` under a folder except `tests.rs` and `tests/`); default
-# the five older critical files and the newer modules. SHARD: which of the n shards to sample
+# the five older critical files, the newer modules and the binary BVH's builder (sah.rs,
+# build.rs). SHARD: which of the n shards to sample
 # (default 0; a held-out check samples another, e.g. `SHARD=3`). Samples drawn before
 # 2026-11-29 used `--shard SHARD/n` per file, which in cargo-mutants 27 is a *slice* (n
 # consecutive mutants), not every n-th.
 #
 # A mutant costs ~5–20 s to build and test here (2 cores, unloaded; ~40 s with eight builds
-# sharing them), and the default files hold 3 580 mutants (~2 400 sampled at PER_FILE=100):
+# sharing them), and the default files held 3 580 mutants before sah.rs and build.rs joined them (not recounted) (~2 400 sampled at PER_FILE=100):
 # the full run is a job of hours, not a CI stage. Run it per file or shard, in the background.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -38,7 +39,7 @@ SHARD=${SHARD:-0}
 DEFAULT_FILES="core/src/aabb.rs core/src/triangle/watertight.rs core/src/bvh/traverse.rs
     core/src/halfedge/subdivide.rs core/src/halfedge/collapse.rs core/src/bvh/load.rs
     core/src/bvh/collide core/src/volume core/src/grid core/src/kdtree core/src/bvh/wide
-    core/src/simd"
+    core/src/simd core/src/bvh/sah.rs core/src/bvh/build.rs"
 SELECTED=${FILES:-$DEFAULT_FILES}
 FILES=()
 for f in $SELECTED; do
