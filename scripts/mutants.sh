@@ -26,8 +26,9 @@
 # consecutive mutants), not every n-th.
 #
 # A mutant costs ~5–20 s to build and test here (2 cores, unloaded; ~40 s with eight builds
-# sharing them), and the default files held 3 580 mutants before sah.rs and build.rs joined them (not recounted) (~2 400 sampled at PER_FILE=100):
-# the full run is a job of hours, not a CI stage. Run it per file or shard, in the background.
+# sharing them), and the default files held 3 580 mutants (~2 400 sampled at PER_FILE=100)
+# before bvh/sah.rs and bvh/build.rs joined them (not recounted since): the full run is a job
+# of hours, not a CI stage. Run it per file or shard, in the background.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 PER_FILE=${PER_FILE:-100}
