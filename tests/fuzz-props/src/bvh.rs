@@ -12,8 +12,8 @@
 use super::*;
 use super::{Enc, Input, fmt_vec3};
 pub use crate::tree_oracle::Oracle;
-use crate::tree_oracle::checked_build;
 pub(crate) use crate::tree_oracle::usable_primitives;
+use crate::tree_oracle::{checked_build, triangle_meets_box};
 use glam::Vec3;
 use halfray_core::aabb::Aabb;
 use halfray_core::bvh::wide::{Bvh8, LeafGroup, WideNode, group_capacity};
@@ -165,12 +165,16 @@ pub fn projection_underflows(mesh: &TriangleMesh<'_>, ray: &Ray, in_tree: &[bool
 ///    `exclude_non_finite` is off: then the error is `NonFinite` naming the first.
 /// 2. One node or one index too few gives `Capacity` (`BvhNodes` / `BvhIndices`)
 ///    with the right counts, and the storage is left untouched.
-/// 3. Refitting over the same source leaves every node bit-for-bit unchanged.
+/// 3. Refitting over the same source leaves every node bit-for-bit unchanged. Refitting a
+///    copy over the soup moved ([`moved`]) names the first primitive of the tree whose moved
+///    bounds are unusable (or succeeds), and the copy's closest hits, any hits and box
+///    queries (as in 4 and 5) equal brute force over the tree's primitives usable after the
+///    move.
 /// 4. For every ray and for `watertight` and `moller-trumbore`: the closest hit equals the
 ///    brute-force loop (same primitive, same hit record); any-hit agrees on hit/miss and its
 ///    primitive really is hit in the interval.
 /// 5. A box query (the box spanned by each ray's origin and origin + direction) reports
-///    exactly the primitives whose bounds overlap it.
+///    exactly the primitives in the tree that overlap it ([`triangle_meets_box`]).
 /// 6. The 8-wide tree gives the binary tree's answers (portable and AVX2 levels).
 /// 7. The 8-wide tree's batch query gives its single-ray answers, bit for bit
 ///    ([`check_batches`]).
@@ -268,6 +272,44 @@ pub fn check(s: &Soup) {
         ctx()
     );
 
+    // 3. Refit over the moved soup.
+    let moved_positions = moved(&s.positions);
+    let moved_mesh = TriangleMesh::new(&moved_positions, &s.triangles);
+    let moved_valid = usable_primitives(&moved_mesh);
+    let moved_in_tree: Vec<bool> = (0..n).map(|i| in_tree[i] && moved_valid[i]).collect();
+    let moved_ctx = || {
+        format!(
+            "refitted over the moved positions
+{}",
+            ctx()
+        )
+    };
+    let mut refitted = bvh.clone();
+    let want_refit = match (0..n).find(|&i| in_tree[i] && !moved_valid[i]) {
+        Some(index) => Err(BvhError::NonFinite(halfray_core::error::NonFiniteError {
+            element: halfray_core::error::InputElement::Primitive,
+            index,
+        })),
+        None => Ok(()),
+    };
+    assert_eq!(
+        refitted.refit(&moved_mesh),
+        want_refit,
+        "refit over the moved soup
+{}",
+        moved_ctx()
+    );
+    Oracle::each_ray(
+        &moved_mesh,
+        &moved_in_tree,
+        &moved_ctx,
+        &s.rays,
+        |oracle, ray| {
+            oracle.check_queries(&refitted, "refitted BVH", &Watertight, ray, true);
+            check_box_query(&refitted, oracle, ray);
+        },
+    );
+
     // 6. The 8-wide tree collapsed from it: exactly sized storage builds, and every ray
     // below gives the binary tree's answers.
     let wide_nodes = Bvh8::<Vec<WideNode<8>>, Vec<LeafGroup>>::node_count_for(&bvh)
@@ -288,29 +330,52 @@ pub fn check(s: &Soup) {
         // triangle, hence outside its box: only the weak form holds for it.
         check_wide(&wide, oracle, &MollerTrumbore::CLASSIC, ray, false);
         oracle.check_queries(&bvh, "BVH", &MollerTrumbore::CLASSIC, ray, false);
-        let q = Aabb::new(ray.origin, ray.origin).grow(ray.origin + ray.direction);
-        let mut found = Vec::new();
-        let reported = bvh.query_box(&mesh, &q, |p| {
-            found.push(p);
-            true
-        });
-        found.sort_unstable();
-        let expect: Vec<u32> = (0..n)
-            .filter(|&i| in_tree[i] && mesh.primitive_bounds(i).overlaps(&q))
-            .map(|i| i as u32)
-            .collect();
-        assert_eq!(reported, found.len());
-        assert_eq!(
-            found,
-            expect,
-            "query_box({q:?}) differs from brute force\n{}",
-            (oracle.ctx)()
-        );
+        check_box_query(&bvh, oracle, ray);
     });
 
     // 7. Ray batches: the same answers as single rays.
     check_batches(&wide, &Watertight, &s.rays, &ctx);
     check_batches(&wide, &MollerTrumbore::CLASSIC, &s.rays, &ctx);
+}
+
+/// The soup's positions moved, by an amount the input decides: each vertex to the midpoint
+/// of itself and the next one (the last with the first), `p_i·0.5 + p_(i+1)·0.5` (no
+/// overflow). A non-finite vertex makes both its own and its predecessor's midpoints
+/// non-finite, so a primitive usable at build time can become unusable.
+pub fn moved(positions: &[Vec3]) -> Vec<Vec3> {
+    (0..positions.len())
+        .map(|i| positions[i] * 0.5 + positions[(i + 1) % positions.len()] * 0.5)
+        .collect()
+}
+
+/// The box query of `bvh` over `oracle.mesh` with the box spanned by `ray`'s origin and
+/// origin + direction: exactly the primitives `oracle.in_tree` that [`triangle_meets_box`],
+/// each once, and its count is the number reported.
+fn check_box_query(bvh: &Bvh<Vec<BvhNode>, Vec<u32>>, oracle: &Oracle<'_, '_>, ray: &Ray) {
+    let q = Aabb::new(ray.origin, ray.origin).grow(ray.origin + ray.direction);
+    let mut found = Vec::new();
+    let reported = bvh.query_box(oracle.mesh, &q, |p| {
+        found.push(p);
+        true
+    });
+    found.sort_unstable();
+    let expect: Vec<u32> = (0..oracle.in_tree.len())
+        .filter(|&i| {
+            oracle.in_tree[i]
+                && oracle
+                    .mesh
+                    .triangle(i)
+                    .is_some_and(|v| triangle_meets_box(&v, q.min, q.max))
+        })
+        .map(|i| i as u32)
+        .collect();
+    assert_eq!(reported, found.len());
+    assert_eq!(
+        found,
+        expect,
+        "query_box({q:?}) differs from brute force\n{}",
+        (oracle.ctx)()
+    );
 }
 
 /// The batch queries of the 8-wide tree ([`RayQuery::closest_hits`], `any_hits`) on the soup's

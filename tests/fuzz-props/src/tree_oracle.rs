@@ -5,6 +5,7 @@
 use super::bvh::{projection_underflows, within_domain};
 use super::fmt_ray;
 use core::fmt::Debug;
+use glam::Vec3;
 use halfray_core::mesh::{PrimitiveSource, TriangleMesh};
 use halfray_core::query::{Query, RayQuery, Triangles};
 use halfray_core::ray::Ray;
@@ -27,6 +28,33 @@ pub(crate) fn usable_primitives(mesh: &TriangleMesh<'_>) -> Vec<bool> {
             b.is_finite() && b.is_valid()
         })
         .collect()
+}
+
+/// The box queries' oracle, written from their contract and sharing no code with `Aabb` or
+/// the trees: whether triangle `v` overlaps the closed box `[lo, hi]`. A triangle with a
+/// non-finite coordinate overlaps nothing (its bounds are unusable, so no tree holds it);
+/// otherwise it overlaps exactly when, on every axis, the closed interval from the smallest
+/// to the largest of its three vertex coordinates meets `[lo, hi]` — compared in `f64`, so a
+/// NaN bound meets nothing.
+///
+/// The core's unit tests have the same oracle in their `test_util` module, which only the
+/// core's own `cargo test` compiles; this crate cannot use the `halfray-tests` support crate
+/// either (that crate dev-depends on this one, and the cargo-fuzz targets build this one
+/// alone). Hence one copy on each side of that boundary.
+pub(crate) fn triangle_meets_box(v: &[Vec3; 3], lo: Vec3, hi: Vec3) -> bool {
+    let coords = v.map(|p| [f64::from(p.x), f64::from(p.y), f64::from(p.z)]);
+    if !coords.iter().flatten().all(|c| c.is_finite()) {
+        return false;
+    }
+    let (lo, hi) = (lo.to_array(), hi.to_array());
+    (0..3).all(|axis| {
+        let [a, b, c] = coords.map(|p| p[axis]);
+        let least = if a < b { a } else { b };
+        let least = if least < c { least } else { c };
+        let most = if a > b { a } else { b };
+        let most = if most > c { most } else { c };
+        least <= f64::from(hi[axis]) && f64::from(lo[axis]) <= most
+    })
 }
 
 /// Brute force with the BVH's rule: the smallest `t` in the ray's interval, ties to the
