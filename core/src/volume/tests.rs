@@ -515,6 +515,58 @@ fn aabb_wrappers() {
     );
 }
 
+/// How far a face of [`Obb::from_aabb`]'s box may lie outside the box's face, relative to
+/// `M = max(|min|, |max|)` on that axis, unitless: `2⁻²¹` (8 units of roundoff `u = 2⁻²⁴`).
+///
+/// Derivation: the centre is `fl(min/2 + max/2)`, within `u·M` of the exact midpoint (plus
+/// the absolute term below); the half-extent is the larger distance from it to a face, at
+/// most the exact half-size plus that `u·M`, padded by `FIT_PAD_REL` (`~2⁻⁵⁰`) and rounded
+/// up to `f32` (at most one ulp, `≤ 2u·M`). A face of the converted box thus lies at most
+/// `2u·M + 2u·M` (plus the padding) outside the box's: 4u, doubled for margin.
+const FROM_AABB_SLACK_REL: f64 = 1.0 / 2_097_152.0;
+
+/// Absolute part of that slack, world units: `2⁻¹⁴⁵` (16 of the smallest subnormal, with
+/// margin), for the halvings and the sum of the centre when they are subnormal (`≤ 2⁻¹⁵⁰`
+/// each) and the half-extent's rounding up (one subnormal step, `2⁻¹⁴⁹`).
+const FROM_AABB_SLACK_ABS: f64 = 16.0 * f32::from_bits(1) as f64;
+
+/// [`Obb::from_aabb`] is tight: each face of the converted box lies outside the box's face
+/// by at most [`FROM_AABB_SLACK_REL`]`·M +` [`FROM_AABB_SLACK_ABS`], never inside it (checked
+/// in `f64` on the stored centre and half-extents), and the axes are the world axes exactly.
+#[test]
+fn from_aabb_is_tight() {
+    let mut s = 0x0b0c_u64;
+    let mut boxes = vec![
+        Aabb::new(Vec3::ZERO, Vec3::ONE),
+        Aabb::new(Vec3::splat(-1.0), Vec3::ONE),
+        Aabb::new(Vec3::new(1e6, 0.0, 0.0), Vec3::new(1e6 + 0.0625, 1.0, 1.0)),
+        Aabb::new(Vec3::splat(-3.4e38), Vec3::new(3.4e38, 1.0, 1e-45)),
+        Aabb::new(Vec3::new(1e-45, -1e-40, 2.0), Vec3::new(3e-45, 1e-40, 2.0)),
+        Aabb::new(Vec3::splat(5.0), Vec3::splat(5.0)),
+    ];
+    for scale in [1e-38f32, 1e-3, 1.0, 1e5, 1e30] {
+        for _ in 0..200 {
+            let a = unit_vec(&mut s) * scale * (1.0 + 10.0 * lcg(&mut s));
+            let b = a + unit_vec(&mut s) * scale * lcg(&mut s);
+            boxes.push(Aabb::new(a.min(b), a.max(b)));
+        }
+    }
+    for bx in boxes {
+        let o = Obb::from_aabb(&bx).unwrap();
+        assert_eq!(o.axes(), [Vec3::X, Vec3::Y, Vec3::Z], "{bx:?}");
+        for k in 0..3 {
+            let (lo, hi) = (f64::from(bx.min[k]), f64::from(bx.max[k]));
+            let (c, e) = (f64::from(o.center()[k]), f64::from(o.half_extents()[k]));
+            let slack = FROM_AABB_SLACK_REL * lo.abs().max(hi.abs()) + FROM_AABB_SLACK_ABS;
+            let (below, above) = (lo - (c - e), (c + e) - hi);
+            assert!(
+                (0.0..=slack).contains(&below) && (0.0..=slack).contains(&above),
+                "axis {k}: faces {below:e} below and {above:e} above the box's (slack {slack:e})\n{bx:?}\n{o:?}"
+            );
+        }
+    }
+}
+
 #[test]
 fn rescale_factor_is_a_power_of_two_bringing_m_near_one() {
     assert_eq!(rescale_factor(0.0), 1.0);
