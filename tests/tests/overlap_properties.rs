@@ -239,3 +239,34 @@ fn sphere_fit_far_from_origin_is_contained_and_bounded() {
     let half = f64::from(pts[1].x - pts[0].x) * 0.5;
     assert!(f64::from(s.radius()) > 2.0 * half, "{s:?}");
 }
+
+/// Box–OBB pairs apart beyond the band that the oracle must decide "apart" on the box's own
+/// corners (regressions: the oracle used to convert the box with `Obb::from_aabb`, the
+/// conversion `aabb_obb` itself uses, so a conversion grown past the band went unseen and
+/// the pair silently stayed undecided).
+#[test]
+fn box_obb_apart_beyond_the_band_is_decided_on_the_box_itself() {
+    let id = [0.0, 0.0, 0.0, 1.0];
+    let cases = [
+        // Unit box and a cube `3e-4` away along x: `S ≈ 4`, band `≈ 1.2e-4`.
+        (
+            "unit box, 3e-4 apart",
+            Aabb::new(Vec3::ZERO, Vec3::ONE),
+            Vec3::new(1.5003, 0.5, 0.5),
+        ),
+        // A box one `f32` ulp (`2⁻⁴`) thick at `x = 10⁶`, whose rounded centre sits on its
+        // lower face, and a cube one ulp below it: `S ≈ 3.6`, band `≈ 1.1e-4`, gap `2⁻⁴`.
+        (
+            "thin box far from the origin, one ulp apart",
+            Aabb::new(Vec3::new(1e6, 0.0, 0.0), Vec3::new(1e6 + 0.0625, 1.0, 1.0)),
+            Vec3::new(1e6 - 0.5625, 0.5, 0.5),
+        ),
+    ];
+    for (name, bx, c) in cases {
+        let o = build(2, c, Vec3::ZERO, Vec3::splat(0.5), id).unwrap();
+        for (a, b) in [(Volume::Aabb(bx), o), (o, Volume::Aabb(bx))] {
+            let d = check_pair(&a, &b).unwrap();
+            assert!(d.apart && !d.overlap, "{name}: {d:?}");
+        }
+    }
+}

@@ -185,17 +185,26 @@ pub fn obb_obb(a: &Obb, b: &Obb) -> bool {
     sat::obb_obb(a, b)
 }
 
-/// Box–OBB: [`obb_obb`] with the box converted by [`Obb::from_aabb`] (which contains it
-/// exactly); an empty or non-finite box overlaps nothing, and a box too large for that
-/// conversion (half-extent beyond `f32::MAX`) is reported overlapping (conservative).
+/// Box–OBB: [`obb_obb`] in the frame of the OBB's centre: the box moved by `−c` with its
+/// bounds rounded outward ([`Aabb::relative_to`]) and converted by [`Obb::from_aabb`] (both
+/// contain the exact box, so overlap is never lost), against the OBB centred at the origin
+/// (an exact move). Working relative to `c` keeps the conversion's roundings inside the
+/// band [`OBB_OBB_BAND_REL`]: the move and the conversion push each face of the box out by
+/// at most `8u·(|Δcₖ| + eₖ)` (`u = 2⁻²⁴`; `Δc`, `e` the box's centre offset and half-size),
+/// at most `8u·S` along any of the 15 axes, far inside the band's margin. In world
+/// coordinates they would be ulps of the box's distance from the origin, which a small box
+/// far away does not cover (a box one ulp thick at `x = 10⁶` grew by `2⁻⁴`). An empty or non-finite box overlaps nothing, and a box whose
+/// move or conversion leaves `f32` (only beyond the bands' domain) is reported overlapping
+/// (conservative).
 #[must_use]
 pub fn aabb_obb(a: &Aabb, b: &Obb) -> bool {
     if !a.is_valid() || !a.is_finite() {
         return false;
     }
-    match Obb::from_aabb(a) {
-        Ok(a) => sat::obb_obb(&a, b),
-        Err(_) => true,
+    let moved = Obb::new(Vec3::ZERO, b.axes(), b.half_extents());
+    match (Obb::from_aabb(&a.relative_to(b.center())), moved) {
+        (Ok(a), Ok(b)) => sat::obb_obb(&a, &b),
+        _ => true,
     }
 }
 

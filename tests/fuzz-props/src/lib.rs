@@ -298,7 +298,7 @@ pub fn regressions() -> Vec<Seed> {
     let (lo, hi) = (Vec3::ZERO, Vec3::ONE);
     let df = flags::DEFAULT_INTERVAL;
     let dflt = (0.0, f32::INFINITY);
-    vec![
+    let mut v = vec![
         // +0 direction component with the origin below the slab, and a subnormal component
         // whose reciprocal overflows: was Some((inf, inf)) for +0, None for -0 (the ray
         // misses); fixed by the division path and the "no entry at +∞" rule of the slab test.
@@ -324,7 +324,9 @@ pub fn regressions() -> Vec<Seed> {
                 hi,
             ),
         ),
-    ]
+    ];
+    overlap::regressions(&mut v);
+    v
 }
 
 /// The hard-case seed corpus, checked in as `fuzz/corpus/<target>/seed-<name>` (the replay test

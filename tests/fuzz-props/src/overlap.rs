@@ -22,8 +22,8 @@
 //!    SAT axes), the exact `f64` projections of the two volumes (from their corners,
 //!    endpoints and radii) are farther apart than the test's documented band. Narrowed to
 //!    `2⁻⁹⁰ ≤ M ≤ 2⁹⁰` (outside it the bands' absolute terms are stated only loosely). For
-//!    box–OBB the boxes compared are the OBB and the box's `Obb::from_aabb` conversion
-//!    (which the test uses; it is the box grown by at most one `f32` ulp).
+//!    box–OBB the box's side is the box itself (its exact corners, the world axes), never
+//!    its `Obb::from_aabb` conversion, which the test under check uses.
 //! 3. Symmetry: the same answer with the arguments swapped (where both orders exist).
 
 use crate::{Enc, Input, Seed};
@@ -257,29 +257,55 @@ pub fn separation(a: &Volume, b: &Volume) -> f64 {
 /// The largest gap between the two boxes' projections over the 15 SAT axes (not
 /// normalised), and the scale `S = Σ|Δc| + Σe_a + Σe_b` the OBB band is relative to.
 pub fn obb_axes_gap(a: &Obb, b: &Obb) -> (f64, f64) {
-    let (va, vb) = (Volume::Obb(*a), Volume::Obb(*b));
     let aa = a.axes().map(|x| x.as_dvec3());
     let ba = b.axes().map(|x| x.as_dvec3());
-    let mut axes: Vec<DVec3> = aa.iter().chain(ba.iter()).copied().collect();
-    for x in aa {
-        for y in ba {
-            axes.push(x.cross(y));
-        }
-    }
-    let gap = axes
-        .iter()
-        .map(|&l| {
-            let (alo, ahi) = va.support(l);
-            let (blo, bhi) = vb.support(l);
-            (alo - bhi).max(blo - ahi)
-        })
-        .fold(f64::NEG_INFINITY, f64::max);
+    let gap = sat_gap(&Volume::Obb(*a), aa, &Volume::Obb(*b), ba);
     let s = (b.center().as_dvec3() - a.center().as_dvec3())
         .abs()
         .element_sum()
         + a.half_extents().as_dvec3().element_sum()
         + b.half_extents().as_dvec3().element_sum();
     (gap, s)
+}
+
+/// [`obb_axes_gap`] for an axis-aligned box and an OBB: the box's side of every projection
+/// is its own exact `f64` support (from its corners), its axes the world axes, and its
+/// centre and half-extents in `S` the exact `(min + max)/2` and `(max − min)/2`. Nothing of
+/// the code under test (in particular not [`Obb::from_aabb`], which [`aabb_obb`] uses).
+pub fn box_obb_axes_gap(a: &Aabb, b: &Obb) -> (f64, f64) {
+    let ba = b.axes().map(|x| x.as_dvec3());
+    let gap = sat_gap(
+        &Volume::Aabb(*a),
+        [DVec3::X, DVec3::Y, DVec3::Z],
+        &Volume::Obb(*b),
+        ba,
+    );
+    let (lo, hi) = (a.min.as_dvec3(), a.max.as_dvec3());
+    let s = (b.center().as_dvec3() - (lo + hi) * 0.5)
+        .abs()
+        .element_sum()
+        + ((hi - lo) * 0.5).element_sum()
+        + b.half_extents().as_dvec3().element_sum();
+    (gap, s)
+}
+
+/// The largest gap between the exact projections of `va` and `vb` over the 15 SAT axes of
+/// two boxes with axes `aa` and `ba`: the 6 face normals and the 9 cross products `aᵢ × bⱼ`
+/// (not normalised).
+fn sat_gap(va: &Volume, aa: [DVec3; 3], vb: &Volume, ba: [DVec3; 3]) -> f64 {
+    let mut axes: Vec<DVec3> = aa.iter().chain(ba.iter()).copied().collect();
+    for x in aa {
+        for y in ba {
+            axes.push(x.cross(y));
+        }
+    }
+    axes.iter()
+        .map(|&l| {
+            let (alo, ahi) = va.support(l);
+            let (blo, bhi) = vb.support(l);
+            (alo - bhi).max(blo - ahi)
+        })
+        .fold(f64::NEG_INFINITY, f64::max)
 }
 
 /// The absolute part of every band, [`BAND_ABS_PER_MAGNITUDE`]`·max(m, 1)`, for the largest
@@ -363,15 +389,14 @@ pub fn check_pair(a: &Volume, b: &Volume) -> Option<Decided> {
     }
     let in_domain = (2f64.powi(-90)..=2f64.powi(90)).contains(&mag);
     if !decided.overlap && in_domain {
-        let boxes = match (a, b) {
-            (Volume::Obb(x), Volume::Obb(y)) => Some((*x, *y)),
+        let sat = match (a, b) {
+            (Volume::Obb(x), Volume::Obb(y)) => Some(obb_axes_gap(x, y)),
             (Volume::Aabb(x), Volume::Obb(y)) | (Volume::Obb(y), Volume::Aabb(x)) => {
-                Obb::from_aabb(x).ok().map(|x| (x, *y))
+                Some(box_obb_axes_gap(x, y))
             }
             _ => None,
         };
-        if let Some((x, y)) = boxes {
-            let (gap, s) = obb_axes_gap(&x, &y);
+        if let Some((gap, s)) = sat {
             if gap > f64::from(OBB_OBB_BAND_REL) * s + band_abs(mag) {
                 assert!(
                     !got,
@@ -599,5 +624,37 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
         let e = encode_volume(Enc::new(), x.0, x.1, x.2, x.3, x.4);
         let e = encode_volume(e, y.0, y.1, y.2, y.3, y.4);
         s.push(t(name, e.done()));
+    }
+}
+
+/// Regression inputs (`fuzz/regressions/overlap/`): box–OBB pairs apart beyond the band.
+/// The first went undecided while the oracle converted the box with `Obb::from_aabb` (the
+/// conversion the test uses); the second, a box one ulp thick at `x = 10⁶`, was reported
+/// overlapping `2⁻⁴` away (`aabb_obb` converted the box in world coordinates).
+pub(crate) fn regressions(s: &mut Vec<Seed>) {
+    let id = Quat::IDENTITY;
+    let cube = |c: Vec3| (2, c, Vec3::ZERO, Vec3::splat(0.5), id);
+    let pairs = [
+        (
+            "box-obb-apart-3e-4",
+            (1, Vec3::ZERO, Vec3::ONE, Vec3::ZERO, id),
+            cube(Vec3::new(1.5003, 0.5, 0.5)),
+        ),
+        (
+            "box-obb-thin-box-far-from-origin",
+            (
+                1,
+                Vec3::new(1e6, 0.0, 0.0),
+                Vec3::new(1e6 + 0.0625, 1.0, 1.0),
+                Vec3::ZERO,
+                id,
+            ),
+            cube(Vec3::new(1e6 - 0.5625, 0.5, 0.5)),
+        ),
+    ];
+    for (name, x, y) in pairs {
+        let e = encode_volume(Enc::new(), x.0, x.1, x.2, x.3, x.4);
+        let e = encode_volume(e, y.0, y.1, y.2, y.3, y.4);
+        s.push(("overlap", name.to_string(), e.done()));
     }
 }
