@@ -15,7 +15,8 @@ pub fn obj_file(data: &[u8]) {
 /// Properties of `halfray::obj::parse_obj` on any text: never a panic; `Ok` has every
 /// position finite and every triangle index in range, and writing it back in the canonical
 /// form (`v x y z` with Rust's shortest round-trip floats, `f a b c` 1-based) and parsing
-/// again gives the same mesh bit for bit; `Err`'s message starts with the path.
+/// again gives the same mesh bit for bit; `Err`'s message starts with `path:line:column:`,
+/// the line one of the input's holding a statement, the column within its statement part.
 pub fn check_obj(text: &str) {
     let path = Path::new(OBJ_PATH);
     match halfray::obj::parse_obj(text, path) {
@@ -57,12 +58,48 @@ pub fn check_obj(text: &str) {
         }
         Err(e) => {
             let msg = e.to_string();
+            let lines = obj_lines(text);
+            let named = error_position(&msg).and_then(|(line, col)| {
+                let content = lines.get(line.checked_sub(1)?)?.split('#').next()?;
+                let statement = content.split_ascii_whitespace().next().is_some();
+                (statement && (1..=content.len() + 1).contains(&col)).then_some(())
+            });
             assert!(
-                msg.starts_with(OBJ_PATH) && msg.len() > OBJ_PATH.len() + 2,
-                "error message does not start with the path: {msg:?}\n{text:?}"
+                named.is_some(),
+                "error message does not start with `{OBJ_PATH}:<line>:<column>:` naming a \
+                 statement of the input's {} lines and a column in it: {msg:?}\n{text:?}",
+                lines.len()
             );
         }
     }
+}
+
+/// The `(line, column)` of an error message `<OBJ_PATH>:<line>:<column>: ...` (the
+/// frontend's `Location` display), `None` when it does not start that way. Every error of
+/// the OBJ parser is about one statement, so every one names its line and column (none
+/// names only the file).
+fn error_position(msg: &str) -> Option<(usize, usize)> {
+    let rest = msg.strip_prefix(OBJ_PATH)?.strip_prefix(':')?;
+    let mut parts = rest.splitn(3, ':');
+    let line = parts.next()?.parse().ok()?;
+    let col = parts.next()?.parse().ok()?;
+    parts.next()?;
+    Some((line, col))
+}
+
+/// The lines of `text` as the OBJ module docs define them: a leading byte-order mark
+/// dropped; LF, CRLF and a lone CR each end a line, and the text after the last one
+/// (possibly empty) is a line. Columns count bytes from 1.
+fn obj_lines(text: &str) -> Vec<&str> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut out = Vec::new();
+    let mut rest = text;
+    while let Some(i) = rest.find(['\n', '\r']) {
+        out.push(&rest[..i]);
+        rest = rest[i..].strip_prefix("\r\n").unwrap_or(&rest[i + 1..]);
+    }
+    out.push(rest);
+    out
 }
 
 /// The seed inputs, by name.
