@@ -81,8 +81,8 @@ fn opt_bits(r: Option<(f32, f32)>) -> Option<(u32, u32)> {
 ///    NaN or inverted interval) gives `None`; a hit has
 ///    `t_min ≤ t_enter ≤ t_exit ≤ t_max`; the plain (unpadded) slab test never hits where the
 ///    padded one misses. NaN *box* coordinates are allowed and only need an answer, no
-///    panic (the BVH never builds such boxes). (Determinism is not checked: the test is a pure
-///    function of its arguments in safe code, so two calls cannot differ.)
+///    panic (the BVH never builds such boxes). **Deterministic:** a second call on copies of
+///    the same ray and box gives the bit-identical answer.
 /// 2. **±0:** flipping the sign of any zero direction component gives the bit-identical result
 ///    (module docs of [`halfray_core::aabb`]).
 /// 3. **Never a false miss:** for a finite box, when the exact (`f64`) interval overlap
@@ -95,6 +95,8 @@ fn opt_bits(r: Option<(f32, f32)>) -> Option<(u32, u32)> {
 ///    than [`SLAB_FALSE_HIT_REL`] of the distances, the test misses.
 pub fn check_ray_box(ray: &Ray, bx: &Aabb) {
     let got = bx.intersect_ray(ray);
+    let (ray_again, bx_again) = (*ray, *bx);
+    let again = bx_again.intersect_ray(&ray_again);
     let ctx = || {
         format!(
             "got {got:?}\n{}\n  box min {}\n  box max {}",
@@ -103,6 +105,12 @@ pub fn check_ray_box(ray: &Ray, bx: &Aabb) {
             fmt_vec3(bx.max)
         )
     };
+    assert_eq!(
+        opt_bits(got),
+        opt_bits(again),
+        "a second call on the same input gives {again:?}\n{}",
+        ctx()
+    );
     if !ray.is_valid() {
         assert!(got.is_none(), "invalid ray hits a box\n{}", ctx());
         return;
