@@ -4,7 +4,10 @@
 //! regression of any crash the fuzzers ever found, without nightly or libFuzzer.
 //!
 //! A regression file whose name starts with `open-` is a reported, unfixed bug: it must still
-//! fail (strict expected failure); once it passes the test asks for the prefix to be dropped.
+//! fail, and with the reported failure: its panic message must contain the text of the
+//! sibling file `<name>.expected` (required; not replayed as an input), so a different
+//! failure of the same input is not taken for the known one. Once it passes the test asks for
+//! the prefix to be dropped.
 //!
 //! `HALFRAY_WRITE_SEEDS=1 cargo test -p halfray-tests --test fuzz_replay` rewrites the seed
 //! and code-defined regression files from `props::seeds()` and `props::regressions()`.
@@ -35,7 +38,7 @@ fn inputs(kind: &str) -> Vec<(String, PathBuf)> {
             props::TARGETS
         );
         for f in std::fs::read_dir(dir.path()).unwrap().flatten() {
-            if f.path().is_file() {
+            if f.path().is_file() && f.path().extension().is_none_or(|e| e != "expected") {
                 out.push((target.clone(), f.path()));
             }
         }
@@ -53,26 +56,43 @@ fn replay(kind: &str) -> usize {
         let open = path
             .file_name()
             .is_some_and(|n| n.to_string_lossy().starts_with("open-"));
+        let panic_message = |e: &Box<dyn std::any::Any + Send>| {
+            e.downcast_ref::<String>()
+                .cloned()
+                .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default()
+        };
         if open {
-            if matches!(r, Ok(true)) {
+            let expected_path = PathBuf::from(format!("{}.expected", path.display()));
+            let Ok(expected) = std::fs::read_to_string(&expected_path) else {
                 failures.push(format!(
+                    "{}: an `open-` file needs {} holding (part of) its panic message",
+                    path.display(),
+                    expected_path.display()
+                ));
+                continue;
+            };
+            let expected = expected.trim();
+            match &r {
+                Ok(true) => failures.push(format!(
                     "{}: passes now: drop the `open-` prefix (the bug it reports is fixed)",
                     path.display()
-                ));
+                )),
+                Ok(false) => failures.push(format!("{}: unknown target", path.display())),
+                Err(e) if expected.is_empty() || !panic_message(e).contains(expected) => failures
+                    .push(format!(
+                        "{}: fails, but not with the expected {expected:?}:\n{}",
+                        path.display(),
+                        panic_message(e)
+                    )),
+                Err(_) => {}
             }
             continue;
         }
         match r {
             Ok(true) => {}
             Ok(false) => failures.push(format!("{}: unknown target", path.display())),
-            Err(e) => {
-                let msg = e
-                    .downcast_ref::<String>()
-                    .cloned()
-                    .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
-                    .unwrap_or_default();
-                failures.push(format!("{}:\n{msg}", path.display()));
-            }
+            Err(e) => failures.push(format!("{}:\n{}", path.display(), panic_message(&e))),
         }
     }
     assert!(
