@@ -192,10 +192,10 @@ pub fn obb_obb(a: &Obb, b: &Obb) -> bool {
 /// band [`OBB_OBB_BAND_REL`]: the move and the conversion push each face of the box out by
 /// at most `8u·(|Δcₖ| + eₖ)` (`u = 2⁻²⁴`; `Δc`, `e` the box's centre offset and half-size),
 /// at most `8u·S` along any of the 15 axes, far inside the band's margin. In world
-/// coordinates they would be ulps of the box's distance from the origin, which a small box
-/// far away does not cover (a box one ulp thick at `x = 10⁶` grew by `2⁻⁴`). An empty or non-finite box overlaps nothing, and a box whose
-/// move or conversion leaves `f32` (only beyond the bands' domain) is reported overlapping
-/// (conservative).
+/// coordinates they would be ulps of the box's distance from the origin, which the band of
+/// a small box far away does not cover (a box one ulp thick at `x = 10⁶` grew by `2⁻⁴`). An
+/// empty or non-finite box overlaps nothing, and a box whose move or conversion leaves `f32`
+/// (only beyond the bands' domain) is reported overlapping (conservative).
 #[must_use]
 pub fn aabb_obb(a: &Aabb, b: &Obb) -> bool {
     if !a.is_valid() || !a.is_finite() {
