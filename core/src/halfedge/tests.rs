@@ -1112,12 +1112,80 @@ fn compact_reports_moves_and_reuses_slots() {
     assert_eq!(face_set(&m), faces);
 }
 
+/// The variant's index in the declaration order of [`InvariantError`]. The match is
+/// exhaustive (the enum's `#[non_exhaustive]` does not apply inside this crate), so a new
+/// variant does not compile until it is given an index here, and
+/// `validate_names_the_broken_invariant` then fails until a case breaks it.
+fn invariant_index(e: InvariantError) -> usize {
+    use super::error::InvariantError as IE;
+    match e {
+        IE::FreeList(_) => 0,
+        IE::HalfedgePair(_) => 1,
+        IE::DanglingLink(_) => 2,
+        IE::NextPrev(_) => 3,
+        IE::SelfLoop(_) => 4,
+        IE::HeadTail(_) => 5,
+        IE::FaceHalfedge(_) => 6,
+        IE::FaceCycle(_) => 7,
+        IE::IsolatedEdge(_) => 8,
+        IE::BoundaryCycle(_) => 9,
+        IE::VertexHalfedge(_) => 10,
+        IE::VertexFan(_) => 11,
+        IE::BoundaryVertexConvention(_) => 12,
+        IE::NonManifoldVertex(_) => 13,
+        IE::DuplicateEdge(_) => 14,
+        IE::NonFinitePosition(_) => 15,
+    }
+}
+
+/// Number of [`InvariantError`] variants ([`invariant_index`] numbers them `0..`).
+const INVARIANT_VARIANTS: usize = 16;
+
+/// A valid mesh whose vertex `from` is then merged into vertex `into` by hand: every
+/// halfedge ending at `from` is made to end at `into`, and `from` is freed. Nothing else is
+/// relinked, so `into` ends up with the fans of both.
+fn merged(p: &[Vec3], t: &[[u32; 3]], from: u32, into: u32) -> M {
+    let mut m: M = build(p, t).unwrap();
+    m.validate().unwrap();
+    for h in 0..2 * m.slots().edges as u32 {
+        if m.head_raw(h) == from {
+            m.set_head(h, into);
+        }
+    }
+    m.free_vertex(from);
+    m
+}
+
+/// Two triangles (0, 1, 2) and (3, 4, 5) apart, then vertex 3 merged into vertex 0: a bowtie
+/// whose two boundary loops each pass through vertex 0 once.
+fn bowtie() -> M {
+    let p = [
+        vec3(0., 0., 0.),
+        vec3(1., 0., 0.),
+        vec3(0., 1., 0.),
+        vec3(0., 0., 0.),
+        vec3(-1., 0., 0.),
+        vec3(0., -1., 0.),
+    ];
+    merged(&p, &[[0, 1, 2], [3, 4, 5]], 3, 0)
+}
+
+/// Each case corrupts the records of a valid mesh by hand so that the named invariant is the
+/// first one broken in `validate`'s documented order, and expects exactly that variant with
+/// its element. Every variant has a case (checked at the end through [`invariant_index`]).
 #[test]
 fn validate_names_the_broken_invariant() {
     use super::error::InvariantError as IE;
     let (p, t) = fan5();
     let good: M = build(&p, &t).unwrap();
     good.validate().unwrap();
+    // fan5: 6 vertices, 10 edges (5 spokes from the interior vertex 3, 5 rim edges), 5 faces.
+    assert_eq!(good.slots(), counts(6, 10, 5));
+    let mut seen = [false; INVARIANT_VARIANTS];
+    let mut expect = |m: &M, want: IE| {
+        assert_eq!(m.validate(), Err(want));
+        seen[invariant_index(want)] = true;
+    };
 
     let mut m = good.clone();
     let h = m.find_halfedge(VertexId(3), VertexId(1)).unwrap().0;
@@ -1126,15 +1194,14 @@ fn validate_names_the_broken_invariant() {
     if let Some(r) = m.hr_mut(h) {
         r.next = pv;
     }
-    assert!(
-        matches!(m.validate(), Err(IE::NextPrev(_))),
-        "{:?} {n}",
-        m.validate()
-    );
+    // `h` and its old `next` now fail the next/prev check; the old `prev`, whose face is now
+    // a 2-cycle, fails only the later face check, and is numbered after one of them.
+    assert!(pv > h.min(n), "{h} {n} {pv}");
+    expect(&m, IE::NextPrev(HalfedgeId(h.min(n))));
 
     let mut m = good.clone();
     m.set_pos(2, Vec3::NAN);
-    assert_eq!(m.validate(), Err(IE::NonFinitePosition(VertexId(2))));
+    expect(&m, IE::NonFinitePosition(VertexId(2)));
 
     // Boundary vertex A storing an interior halfedge breaks the boundary convention.
     let mut m = good.clone();
@@ -1143,28 +1210,124 @@ fn validate_names_the_broken_invariant() {
         .find(|&g| m.face(g).is_some())
         .unwrap();
     m.set_out(0, a_int.0);
-    assert_eq!(m.validate(), Err(IE::BoundaryVertexConvention(VertexId(0))));
+    expect(&m, IE::BoundaryVertexConvention(VertexId(0)));
 
     // A vertex whose halfedge starts elsewhere.
     let mut m = good.clone();
     m.set_out(3, h ^ 1);
-    assert_eq!(m.validate(), Err(IE::VertexHalfedge(VertexId(3))));
+    expect(&m, IE::VertexHalfedge(VertexId(3)));
 
     // A face pointing at a halfedge of another face.
     let mut m = good.clone();
     let other = m.fh(1);
     m.set_fh(0, other);
-    assert_eq!(m.validate(), Err(IE::FaceCycle(FaceId(0))));
+    expect(&m, IE::FaceCycle(FaceId(0)));
 
     // A halfedge whose face is a dead slot (halfedge 0 is checked first).
     let mut m = good.clone();
     m.set_face(0, 77);
-    assert_eq!(m.validate(), Err(IE::DanglingLink(HalfedgeId(0))));
+    expect(&m, IE::DanglingLink(HalfedgeId(0)));
 
     // A wrong live count.
     let mut m = good.clone();
     m.live.faces += 1;
-    assert_eq!(m.validate(), Err(IE::FreeList(ElementKind::Face)));
+    expect(&m, IE::FreeList(ElementKind::Face));
+
+    // Edge 3's second halfedge dead, its first live (liveness, and so the free lists, go by
+    // the first): the pair check runs before any halfedge check.
+    let mut m = good.clone();
+    m.set_head(7, handles::NONE);
+    expect(&m, IE::HalfedgePair(EdgeId(3)));
+
+    // Halfedge 0 made to end at its own tail. Its twin becomes a self-loop too and the
+    // halfedge before the twin no longer ends where the twin starts, but halfedge 0 is
+    // checked first.
+    let mut m = good.clone();
+    let tail0 = m.tail_raw(0);
+    m.set_head(0, tail0);
+    expect(&m, IE::SelfLoop(HalfedgeId(0)));
+
+    // Halfedge 0 made to end at a third vertex, neither its tail nor where its next starts.
+    let mut m = good.clone();
+    let (tail0, head0) = (m.tail_raw(0), m.head_raw(0));
+    let w = (0..6).find(|&w| w != tail0 && w != head0).unwrap();
+    m.set_head(0, w);
+    expect(&m, IE::HeadTail(HalfedgeId(0)));
+
+    // A sixth live face whose stored halfedge belongs to face 0: no halfedge names face 5,
+    // so every halfedge check passes and only the face's own check sees it.
+    let mut m = good.clone();
+    let f = m.alloc_face();
+    assert_eq!(f, 5);
+    let h0 = m.fh(0);
+    m.set_fh(f, h0);
+    expect(&m, IE::FaceHalfedge(FaceId(5)));
+
+    // A new edge 10 between two new vertices, linked into a 2-cycle with no face on either
+    // side (all its links are consistent; the vertices are left isolated).
+    let mut m = good.clone();
+    let a = m.alloc_vertex(vec3(9., 9., 0.));
+    let b = m.alloc_vertex(vec3(9., 10., 0.));
+    let e = m.alloc_edge();
+    assert_eq!((a, b, e), (6, 7, 10));
+    m.link(20, 21);
+    m.link(21, 20);
+    m.set_head(20, b);
+    m.set_head(21, a);
+    expect(&m, IE::IsolatedEdge(EdgeId(10)));
+
+    // An interior halfedge `g` loses its face. Its face's two other halfedges then fail the
+    // face-cycle check, so `g` is chosen as the lowest-numbered halfedge of its face: it is
+    // checked first and finds its `next` inside a face.
+    let mut m = good.clone();
+    let g = (0..5)
+        .map(|f| {
+            let h = m.fh(f);
+            let (n, nn) = (m.next_raw(h), m.prev_raw(h));
+            h.min(n).min(nn)
+        })
+        .find(|&g| m.face_raw(g ^ 1) != handles::NONE)
+        .expect("some face's lowest halfedge is interior");
+    m.set_face(g, handles::NONE);
+    expect(&m, IE::BoundaryCycle(HalfedgeId(g)));
+
+    // Bowtie: vertex 0's stored halfedge walks one triangle's fan only; the other
+    // triangle's two halfedges out of vertex 0 are in no vertex's fan.
+    let m = bowtie();
+    expect(&m, IE::VertexFan(VertexId(0)));
+
+    // The same bowtie with its two boundary loops joined into one figure-eight through
+    // vertex 0 (1→0 continues with 0→5, 4→0 with 0→2): every link is consistent and vertex
+    // 0's fan is one cycle through all four of its halfedges, two of them boundary.
+    let mut m = bowtie();
+    let he = |m: &M, a, b| m.find_halfedge(VertexId(a), VertexId(b)).unwrap().0;
+    let (h10, h40) = (he(&m, 1, 0), he(&m, 4, 0));
+    let (h02, h05) = (m.next_raw(h10), m.next_raw(h40));
+    assert_eq!([m.head_raw(h02), m.head_raw(h05)], [2, 5]);
+    assert!(
+        [h10, h40, h02, h05]
+            .iter()
+            .all(|&h| m.face_raw(h) == handles::NONE)
+    );
+    m.link(h10, h05);
+    m.link(h40, h02);
+    expect(&m, IE::NonManifoldVertex(VertexId(0)));
+
+    // An open fan of three triangles around vertex 0 (rim 1, 2, 3, 4) with rim vertex 4
+    // merged into rim vertex 1: vertex 0 has two edges to vertex 1 (its first and its last
+    // spoke) and is checked first.
+    let p = [
+        vec3(0., 0., 0.),
+        vec3(1., 0., 0.),
+        vec3(1., 1., 0.),
+        vec3(0., 1., 0.),
+        vec3(-1., 1., 0.),
+    ];
+    let m = merged(&p, &[[0, 1, 2], [0, 2, 3], [0, 3, 4]], 4, 1);
+    expect(&m, IE::DuplicateEdge(VertexId(0)));
+
+    let missing: Vec<usize> = (0..INVARIANT_VARIANTS).filter(|&k| !seen[k]).collect();
+    assert!(missing.is_empty(), "variants without a case: {missing:?}");
 }
 
 /// Two triangles glued along all three edges (a "pillow"): splitting any edge would join the
