@@ -1330,6 +1330,38 @@ fn validate_names_the_broken_invariant() {
     assert!(missing.is_empty(), "variants without a case: {missing:?}");
 }
 
+/// `set_position` moves exactly the named vertex to exactly the given point (read back by
+/// `position` and by `export`), leaves every other position and the connectivity as they
+/// were, and a second call replaces the first.
+#[test]
+fn set_position_moves_only_that_vertex() {
+    let (p, t) = tetra();
+    let mut m: M = build(&p, &t).unwrap();
+    let before = m.clone();
+    let q = vec3(0.1, -2.5e7, 3.0e-30);
+    assert_eq!(m.set_position(VertexId(2), q), Ok(()));
+    m.validate().unwrap();
+    let mut want = p.clone();
+    want[2] = q;
+    let got: Vec<Option<Vec3>> = (0..4).map(|v| m.position(VertexId(v))).collect();
+    assert_eq!(got, want.iter().copied().map(Some).collect::<Vec<_>>());
+    let mut positions = vec![Vec3::ZERO; 4];
+    let mut tris = vec![[0u32; 3]; 4];
+    assert_eq!(m.export(&mut positions, &mut tris), Ok((4, 4)));
+    assert_eq!(positions, want);
+    assert_eq!(tris, t);
+    // Only the position changed: putting the old one back restores the mesh bit for bit.
+    let r = vec3(-0.0, 7.0, -1.0);
+    m.set_position(VertexId(2), r).unwrap();
+    assert_eq!(m.position(VertexId(2)), Some(r));
+    assert_eq!(
+        m.position(VertexId(2)).unwrap().x.to_bits(),
+        (-0.0f32).to_bits()
+    );
+    m.set_position(VertexId(2), p[2]).unwrap();
+    assert_eq!(m, before);
+}
+
 /// Two triangles glued along all three edges (a "pillow"): splitting any edge would join the
 /// new vertex to the shared opposite vertex twice. Refused, mesh unchanged (found by the
 /// `halfedge_ops` fuzz target).
