@@ -3,19 +3,14 @@
 //!
 //! Large meshes live in `Vec`-backed [`SliceMesh`]es so nothing big is on the stack.
 
-use std::collections::HashMap;
-
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use halfray_core::halfedge::{
     BuildError, CollapseAt, Counts, EdgeId, EdgeRec, FaceRec, HalfedgeMesh, LoopWeights, Mesh,
     MeshStorage, SliceMesh, VertexId, VertexRec, build_scratch_len, loop_beta,
 };
+use halfray_fuzz_props::loop_oracle::{LoopPoint, loop_close, loop_reference, reference_beta};
 use halfray_tests::meshes_dir;
 use proptest::prelude::*;
-
-/// Relative tolerance for comparing the mesh's f32 Loop positions with the f64 reference:
-/// a few f32 ulps (2⁻²³ ≈ 1.2e-7) of the coordinate magnitude, times the ~10 terms summed.
-const LOOP_REL_TOL: f64 = 4e-6;
 
 /// Parses the `v`/`f` lines of a shared OBJ (1-based indices).
 fn load(name: &str) -> (Vec<Vec3>, Vec<[u32; 3]>) {
@@ -164,82 +159,8 @@ fn non_manifold_meshes_are_rejected_by_name() {
     }
 }
 
-/// Independent Loop reference straight from the triangle list (f64, hash maps).
-fn loop_reference(
-    p: &[Vec3],
-    t: &[[u32; 3]],
-    beta: impl Fn(usize) -> f64,
-) -> (Vec<DVec3>, HashMap<(u32, u32), DVec3>) {
-    let key = |a: u32, b: u32| (a.min(b), a.max(b));
-    let mut opp: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
-    for tri in t {
-        for k in 0..3 {
-            opp.entry(key(tri[k], tri[(k + 1) % 3]))
-                .or_default()
-                .push(tri[(k + 2) % 3]);
-        }
-    }
-    let mut nbrs: Vec<Vec<u32>> = vec![Vec::new(); p.len()];
-    let mut bnbrs: Vec<Vec<u32>> = vec![Vec::new(); p.len()];
-    for (&(a, b), o) in &opp {
-        nbrs[a as usize].push(b);
-        nbrs[b as usize].push(a);
-        if o.len() == 1 {
-            bnbrs[a as usize].push(b);
-            bnbrs[b as usize].push(a);
-        }
-    }
-    let d = |i: u32| p[i as usize].as_dvec3();
-    let even = (0..p.len())
-        .map(|v| {
-            let x = d(v as u32);
-            if !bnbrs[v].is_empty() {
-                0.75 * x + 0.125 * (d(bnbrs[v][0]) + d(bnbrs[v][1]))
-            } else if nbrs[v].is_empty() {
-                x
-            } else {
-                let n = nbrs[v].len();
-                let s: DVec3 = nbrs[v].iter().map(|&w| d(w)).sum();
-                (1.0 - n as f64 * beta(n)) * x + beta(n) * s
-            }
-        })
-        .collect();
-    let odd = opp
-        .iter()
-        .map(|(&(a, b), o)| {
-            let q = if o.len() == 1 {
-                0.5 * (d(a) + d(b))
-            } else {
-                0.375 * (d(a) + d(b)) + 0.125 * (d(o[0]) + d(o[1]))
-            };
-            ((a, b), q)
-        })
-        .collect();
-    (even, odd)
-}
-
-fn assert_close(got: Vec3, want: DVec3, what: &str) {
-    let scale = want.abs().max_element().max(1.0);
-    let err = (got.as_dvec3() - want).abs().max_element();
-    assert!(
-        err <= LOOP_REL_TOL * scale,
-        "{what}: {got} vs {want} (err {err:e})"
-    );
-}
-
-/// β of an interior vertex of valence `n`, from the published formulas in `f64` (not the
-/// core's `loop_beta`): Loop (1987) `(5/8 − (3/8 + cos(2π/n)/4)²)/n`; Warren (1995) `3/16`
-/// for `n = 3`, else `3/(8n)`.
-fn reference_beta(n: usize, weights: LoopWeights) -> f64 {
-    let nf = n as f64;
-    match weights {
-        LoopWeights::Loop => {
-            let c = 0.375 + 0.25 * (2.0 * std::f64::consts::PI / nf).cos();
-            (0.625 - c * c) / nf
-        }
-        LoopWeights::Warren if n == 3 => 3.0 / 16.0,
-        LoopWeights::Warren => 3.0 / (8.0 * nf),
-    }
+fn assert_close(got: Vec3, want: &LoopPoint, what: &str) {
+    assert!(loop_close(got, want), "{what}: {got} vs {want:?}");
 }
 
 #[test]
@@ -284,7 +205,7 @@ fn check_loop(name: &str, weights: LoopWeights) {
     for v in 0..p.len() as u32 {
         assert_close(
             out.position(VertexId::new(v)).unwrap(),
-            even[v as usize],
+            &even[v as usize],
             name,
         );
     }
@@ -294,7 +215,7 @@ fn check_loop(name: &str, weights: LoopWeights) {
         let key = (a.raw().min(b.raw()), a.raw().max(b.raw()));
         assert_close(
             out.position(VertexId::new(nv + e.raw())).unwrap(),
-            odd[&key],
+            &odd[&key],
             name,
         );
     }

@@ -281,6 +281,7 @@ pub mod bvh_load;
 
 pub mod collapse_oracle;
 pub mod halfedge;
+pub mod loop_oracle;
 
 // ---------------------------------------------------------------------------------------------
 // Seeds
