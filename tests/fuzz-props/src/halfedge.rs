@@ -8,6 +8,7 @@
 
 use super::Input;
 use super::collapse_oracle::{Faces, canonical};
+use super::loop_oracle::{loop_close, loop_reference, reference_beta};
 use super::*;
 use glam::Vec3;
 use halfray_core::halfedge::{
@@ -139,8 +140,12 @@ fn point(i: &mut Input<'_>) -> Vec3 {
 /// rules evaluated independently on the exported triangle list accept it
 /// ([`super::collapse_oracle`]; a fold-over sign within rounding is not judged), and leaves
 /// exactly the triangles that oracle predicts; Loop subdivision produces the
-/// documented counts and leaves its output untouched when it refuses; a refused export
-/// writes nothing; build(export(mesh)) validates and re-exports identically.
+/// documented counts, puts every old and new vertex where the Loop rules evaluated in `f64` on
+/// the exported triangle list put it ([`super::loop_oracle`], within
+/// [`super::loop_oracle::LOOP_TOL_ROUNDINGS`]), and leaves its output untouched when it
+/// refuses; a successful `set_position` leaves exactly the given point at the vertex and every
+/// other position as it was; a refused export writes nothing; build(export(mesh)) validates
+/// and re-exports identically.
 pub fn halfedge_ops(data: &[u8]) {
     let mut i = Input::new(data);
     let start = i.u8() % 6;
@@ -303,6 +308,29 @@ pub fn halfedge_ops(data: &[u8]) {
                 match r {
                     Ok(()) => {
                         assert_eq!(out.len(), mesh.len().after_loop(), "Loop counts: {log:?}");
+                        // Positions against the f64 rules on the triangle list (the mesh is
+                        // compact: vertex slots are vertex ids).
+                        let (ps, ts) = exported(&mesh);
+                        let (even, odd) = loop_reference(&ps, &ts, |n| reference_beta(n, weights));
+                        for (v, want) in even.iter().enumerate() {
+                            let got = out.position(VertexId::new(v as u32));
+                            assert!(
+                                got.is_some_and(|g| loop_close(g, want)),
+                                "Loop vertex {v}: {got:?} vs {want:?}: {log:?}"
+                            );
+                        }
+                        let nv = ps.len() as u32;
+                        for e in mesh.edges() {
+                            let Some([a, b]) = mesh.edge_vertices(e) else {
+                                panic!("edges() gave {e:?}, which has no vertices: {log:?}");
+                            };
+                            let want = &odd[&(a.raw().min(b.raw()), a.raw().max(b.raw()))];
+                            let got = out.position(VertexId::new(nv + e.raw()));
+                            assert!(
+                                got.is_some_and(|g| loop_close(g, want)),
+                                "Loop vertex on {e:?}: {got:?} vs {want:?}: {log:?}"
+                            );
+                        }
                         mesh = out;
                         Ok(true)
                     }
@@ -325,6 +353,21 @@ pub fn halfedge_ops(data: &[u8]) {
                 let p = point(&mut i);
                 let r = mesh.set_position(v, p);
                 log.push(format!("set_position {v:?} {p:?} -> {r:?}"));
+                if r.is_ok() {
+                    // Exactly `p` at `v` (bit for bit: -0.0 stays -0.0), every other slot
+                    // as it was.
+                    let bits = |q: Option<Vec3>| q.map(|q| q.to_array().map(f32::to_bits));
+                    assert_eq!(bits(mesh.position(v)), bits(Some(p)), "set: {log:?}");
+                    for w in (0..slots.vertices as u32).map(VertexId::new) {
+                        if w != v {
+                            assert_eq!(
+                                bits(mesh.position(w)),
+                                bits(before.position(w)),
+                                "set_position moved {w:?}: {log:?}"
+                            );
+                        }
+                    }
+                }
                 r.map(|()| true).map_err(|e| format!("{e:?}"))
             }
             Op::ExportRebuild => {
