@@ -133,12 +133,9 @@ pub fn triangle_meets_box(v: &[Vec3; 3], lo: Vec3, hi: Vec3) -> bool {
     }
     let (lo, hi) = (lo.to_array(), hi.to_array());
     (0..3).all(|axis| {
+        // Finite coordinates (checked above): `min`/`max` are the plain order.
         let [a, b, c] = coords.map(|p| p[axis]);
-        let least = if a < b { a } else { b };
-        let least = if least < c { least } else { c };
-        let most = if a > b { a } else { b };
-        let most = if most > c { most } else { c };
-        least <= f64::from(hi[axis]) && f64::from(lo[axis]) <= most
+        a.min(b).min(c) <= f64::from(hi[axis]) && f64::from(lo[axis]) <= a.max(b).max(c)
     })
 }
 

@@ -176,10 +176,7 @@ impl ResultLog {
             |why: &str| Error::Usage(format!("--jsonl `{}` {why}", crate::text::path(path)));
         let bytes = match resolve(path).map_err(|e| Error::io(path, e))? {
             Target::Missing { path: target } => {
-                let folder = match target.parent() {
-                    Some(d) if !d.as_os_str().is_empty() => d,
-                    _ => Path::new("."),
-                };
+                let folder = crate::outputs::file::folder_of(&target);
                 if !folder.is_dir() {
                     return Err(usage(&format!(
                         "is in folder `{}`, which does not exist",

@@ -74,7 +74,8 @@ fn names_a_folder(path: &Path) -> bool {
     matches!(last, b"" | b"." | b"..")
 }
 
-fn folder_of(path: &Path) -> &Path {
+/// The folder holding `path` (`.` for a bare name).
+pub(crate) fn folder_of(path: &Path) -> &Path {
     match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
