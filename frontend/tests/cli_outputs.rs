@@ -701,3 +701,62 @@ fn running_as_root() -> bool {
     let probe = tempfile::NamedTempFile::new().unwrap();
     probe.as_file().metadata().unwrap().uid() == 0
 }
+
+/// Outputs written together whose second target cannot be replaced, whoever runs the
+/// program: an append-only statistics file (`chattr +a`), or one with a file bind-mounted on
+/// it. The render is refused when its outputs are reserved, so no PNG is written beside a
+/// statistics file that keeps its old bytes. Needs root (`chattr`, `mount`) and a file system
+/// with the attribute; elsewhere the test says so on stderr.
+#[test]
+fn append_only_and_mounted_outputs_are_refused_before_the_work() {
+    let command = |program: &str, args: &[&std::ffi::OsStr]| {
+        Command::new(program)
+            .args(args)
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (stats, source) = (dir.path().join("stats.json"), dir.path().join("source"));
+    std::fs::write(&stats, b"kept").unwrap();
+    std::fs::write(&source, b"over").unwrap();
+    let png = dir.path().join("out.png");
+    let render = || {
+        run(os![
+            "render",
+            &scene("mirror.toml"),
+            "-o",
+            &png,
+            "--stats-json",
+            &stats,
+            "--quiet",
+            "--force"
+        ])
+    };
+    let cases: [(&str, &[&std::ffi::OsStr], &str); 2] = [
+        ("chattr", os!["+a", &stats], "append-only (chattr +a)"),
+        (
+            "mount",
+            os!["--bind", &source, &stats],
+            "mounted on it (mount --bind)",
+        ),
+    ];
+    for (program, set, message) in cases {
+        if !command(program, set) {
+            eprintln!(
+                "append_only_and_mounted_outputs_are_refused_before_the_work: {program} refused here (not root?)"
+            );
+            continue;
+        }
+        let o = render();
+        let undone = if program == "chattr" {
+            command("chattr", os!["-a", &stats])
+        } else {
+            command("umount", os![&stats])
+        };
+        assert!(undone, "{program} undone");
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(stderr(&o).contains(message), "{}", stderr(&o));
+        assert_eq!(std::fs::read(&stats).unwrap(), b"kept");
+        assert!(!png.exists(), "no PNG");
+    }
+}

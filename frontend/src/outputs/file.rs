@@ -332,9 +332,9 @@ fn write_stream(fd: u32, fill: impl FnOnce(&mut dyn Write) -> io::Result<()>) ->
 /// error before the renames no regular output changed and no temporary file is left; a
 /// device or descriptor written before the failing one keeps what it got. (A rename failing
 /// after others succeeded is the one partial outcome: each output was reserved only if a
-/// rename can replace it ([`super::replace::barrier`]: permission, the immutable attribute,
-/// a sticky folder), so it takes a change to the file system in between, or an append-only
-/// or mounted-over file.)
+/// rename can replace it ([`super::replace::barrier`]: permission, the immutable and
+/// append-only attributes, a mount point, a sticky folder), so it takes a change to the file
+/// system in between.)
 pub fn write_together(outputs: Vec<(OutputFile, Vec<u8>)>) -> Result<()> {
     let (files, streams): (Vec<_>, Vec<_>) = outputs
         .into_iter()

@@ -15,6 +15,12 @@ pub enum Barrier {
     /// The kernel refuses to change the file whatever the user (the immutable attribute,
     /// `chattr +i`): no rename replaces it.
     Unchangeable,
+    /// The file may only be appended to (`chattr +a`): the kernel refuses a rename over it
+    /// (`EPERM`) whatever the user, though it lets anyone with write permission open it.
+    AppendOnly,
+    /// Another file system is mounted on the path (`mount --bind FILE PATH`): a rename over
+    /// a mount point fails (`EBUSY`).
+    MountPoint,
     /// The folder is sticky (`chmod +t`, as `/tmp`) and neither the file nor the folder
     /// belongs to this process's user (who is not root): the kernel refuses the rename.
     StickyFolder,
@@ -31,6 +37,8 @@ impl Barrier {
         match self {
             Self::NotYours => "is not writable by you; pass --force to replace it",
             Self::Unchangeable => "is immutable (chattr +i): it cannot be replaced",
+            Self::AppendOnly => "is append-only (chattr +a): it cannot be replaced",
+            Self::MountPoint => "has a file mounted on it (mount --bind): it cannot be replaced",
             Self::StickyFolder => {
                 "is another user's file in a sticky folder (chmod +t): it cannot be replaced"
             }
@@ -39,8 +47,9 @@ impl Barrier {
 }
 
 /// The barrier to replacing the regular file `path` (`file` its metadata, symlinks followed)
-/// in the folder whose metadata is `folder`, if any. Not caught: the append-only attribute
-/// (`chattr +a`, which only an ioctl reports) and a file mounted over (`EBUSY`).
+/// in the folder whose metadata is `folder`, if any. The append-only attribute and a mount
+/// point are seen on Linux with glibc (`statx`); elsewhere only the permission, the immutable
+/// attribute and the sticky rule are.
 #[cfg(unix)]
 pub fn barrier(path: &Path, file: &Metadata, folder: &Metadata) -> Option<Barrier> {
     use std::os::unix::ffi::OsStrExt;
@@ -51,6 +60,9 @@ pub fn barrier(path: &Path, file: &Metadata, folder: &Metadata) -> Option<Barrie
         return Some(Barrier::StickyFolder);
     }
     let c_path = std::ffi::CString::new(path.as_os_str().as_bytes()).ok()?;
+    if let Some(b) = attribute_barrier(&c_path) {
+        return Some(b);
+    }
     // SAFETY: `c_path` is a NUL-terminated string that lives across the call, which only
     // reads it; `AT_FDCWD` resolves it as `std::fs` does. `AT_EACCESS` checks the effective
     // user, the one the rename and the write run as.
@@ -72,6 +84,51 @@ pub fn barrier(path: &Path, file: &Metadata, folder: &Metadata) -> Option<Barrie
         // the temporary file's creation already failed.
         _ => None,
     }
+}
+
+/// The barrier the file's attributes (`statx`, symlinks followed as `path`'s metadata is)
+/// put before a rename over it: append-only, immutable (also seen by `faccessat`, as
+/// [`Barrier::Unchangeable`]) or a mount point. `None` where the call fails or the file system
+/// does not report the attribute (its bit clear in `stx_attributes_mask`).
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn attribute_barrier(c_path: &std::ffi::CStr) -> Option<Barrier> {
+    let mut st = std::mem::MaybeUninit::<libc::statx>::zeroed();
+    // SAFETY: `c_path` is NUL-terminated and lives across the call, which only reads it;
+    // `st` points to a `statx` the call may fill (all-zero bytes are a valid `statx`, a
+    // struct of integers). `AT_FDCWD` resolves the path as `std::fs` does.
+    let status = unsafe {
+        libc::statx(
+            libc::AT_FDCWD,
+            c_path.as_ptr(),
+            0,
+            libc::STATX_BASIC_STATS,
+            st.as_mut_ptr(),
+        )
+    };
+    if status != 0 {
+        return None;
+    }
+    // SAFETY: zero-initialised above and filled by the successful call.
+    let st = unsafe { st.assume_init() };
+    let set = |flag: libc::c_int| {
+        let flag = u64::from(flag.unsigned_abs());
+        st.stx_attributes_mask & flag != 0 && st.stx_attributes & flag != 0
+    };
+    if set(libc::STATX_ATTR_IMMUTABLE) {
+        Some(Barrier::Unchangeable)
+    } else if set(libc::STATX_ATTR_APPEND) {
+        Some(Barrier::AppendOnly)
+    } else if set(libc::STATX_ATTR_MOUNT_ROOT) {
+        Some(Barrier::MountPoint)
+    } else {
+        None
+    }
+}
+
+/// Without `statx` the attributes are not looked at ([`barrier`]).
+#[cfg(all(unix, not(all(target_os = "linux", target_env = "gnu"))))]
+fn attribute_barrier(_: &std::ffi::CStr) -> Option<Barrier> {
+    None
 }
 
 /// No barrier is known off Unix.
@@ -107,30 +164,98 @@ mod tests {
         assert!(!sticky_refuses(0o0777, root, other, me), "not sticky");
     }
 
-    /// A file made immutable (`chattr +i`) is refused whatever the user; the same file
-    /// without the attribute is not. Needs root and a file system with the attribute (ext4,
-    /// xfs, btrfs): elsewhere the test says so on stderr and checks only the plain file.
+    /// Runs `chattr FLAG path`; whether it succeeded.
+    fn chattr(flag: &str, path: &Path) -> bool {
+        std::process::Command::new("chattr")
+            .arg(flag)
+            .arg(path)
+            .output()
+            .is_ok_and(|o| o.status.success())
+    }
+
+    fn barrier_of(path: &Path) -> Option<Barrier> {
+        let meta = |p: &Path| std::fs::metadata(p).unwrap();
+        barrier(
+            path,
+            &meta(path),
+            &meta(super::super::file::folder_of(path)),
+        )
+    }
+
+    /// A file with the attribute `chattr FLAG` gets barrier `want`, and so would the rename:
+    /// it is refused with the errno `errno` (checked, so the barrier names the kernel's rule).
+    /// The same file without the attribute has no barrier. Needs root and a file system with
+    /// the attributes (ext4, xfs, btrfs): elsewhere the test says so on stderr and checks
+    /// only the plain file.
+    #[cfg(unix)]
+    fn attribute_refuses(test: &str, flag: char, want: Barrier, errno: i32) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("kept.obj");
+        std::fs::write(&path, b"v 0 0 0\n").unwrap();
+        assert_eq!(barrier_of(&path), None);
+        if !chattr(&format!("+{flag}"), &path) {
+            eprintln!("{test}: chattr +{flag} refused here (not root?)");
+            return;
+        }
+        let got = barrier_of(&path);
+        let other = dir.path().join("new.obj");
+        std::fs::write(&other, b"").unwrap();
+        let renamed = std::fs::rename(&other, &path);
+        assert!(chattr(&format!("-{flag}"), &path), "chattr -{flag}");
+        assert_eq!(got, Some(want));
+        assert_eq!(renamed.unwrap_err().raw_os_error(), Some(errno));
+    }
+
+    /// A file made immutable (`chattr +i`) is refused whatever the user.
     #[cfg(unix)]
     #[test]
     fn an_immutable_file_cannot_be_replaced() {
+        attribute_refuses(
+            "an_immutable_file_cannot_be_replaced",
+            'i',
+            Barrier::Unchangeable,
+            libc::EPERM,
+        );
+    }
+
+    /// An append-only file (`chattr +a`) is refused whatever the user: it is writable, so
+    /// `faccessat` does not see it, but a rename over it fails.
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    #[test]
+    fn an_append_only_file_cannot_be_replaced() {
+        attribute_refuses(
+            "an_append_only_file_cannot_be_replaced",
+            'a',
+            Barrier::AppendOnly,
+            libc::EPERM,
+        );
+    }
+
+    /// A path with a file bind-mounted on it is refused: a rename over a mount point fails
+    /// with `EBUSY`. Needs root and a mount namespace that allows `mount --bind`: elsewhere
+    /// the test says so on stderr and checks only the plain file.
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    #[test]
+    fn a_mount_point_cannot_be_replaced() {
         let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("frozen.obj");
-        std::fs::write(&path, b"v 0 0 0\n").unwrap();
-        let meta = |p: &Path| std::fs::metadata(p).unwrap();
-        assert_eq!(barrier(&path, &meta(&path), &meta(dir.path())), None);
-        let chattr = |flag: &str| {
-            std::process::Command::new("chattr")
-                .arg(flag)
-                .arg(&path)
-                .output()
-                .is_ok_and(|o| o.status.success())
-        };
-        if !chattr("+i") {
-            eprintln!("an_immutable_file_cannot_be_replaced: chattr +i refused here (not root?)");
+        let (path, source) = (dir.path().join("out.png"), dir.path().join("source"));
+        std::fs::write(&path, b"under").unwrap();
+        std::fs::write(&source, b"over").unwrap();
+        assert_eq!(barrier_of(&path), None);
+        let mount = std::process::Command::new("mount")
+            .arg("--bind")
+            .args([&source, &path])
+            .output();
+        if !mount.is_ok_and(|o| o.status.success()) {
+            eprintln!("a_mount_point_cannot_be_replaced: mount --bind refused here (not root?)");
             return;
         }
-        let got = barrier(&path, &meta(&path), &meta(dir.path()));
-        assert!(chattr("-i"), "chattr -i");
-        assert_eq!(got, Some(Barrier::Unchangeable));
+        let got = barrier_of(&path);
+        let renamed = std::fs::rename(&source, &path);
+        let unmounted = std::process::Command::new("umount").arg(&path).status();
+        assert!(unmounted.is_ok_and(|s| s.success()), "umount");
+        assert_eq!(got, Some(Barrier::MountPoint));
+        assert_eq!(renamed.unwrap_err().raw_os_error(), Some(libc::EBUSY));
+        assert_eq!(barrier_of(&path), None, "the path once unmounted");
     }
 }
