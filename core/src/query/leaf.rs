@@ -3,6 +3,7 @@
 
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
+use crate::sealed::Inside;
 use crate::simd_level::SimdLevel;
 use crate::triangle::{BehindPlane, ShearedRays, TriangleHit, TriangleIntersector, TriangleLanes};
 use glam::Vec3;
@@ -210,7 +211,9 @@ impl<I: TriangleIntersector> LeafTest for Triangles<'_, I> {
         v: &[Vec3; 3],
         ray: &Ray,
     ) -> Option<(f32, TriangleHit)> {
-        let hit = self.isect.intersect_prepared_on(level, pre, ray, v)?;
+        let hit = self
+            .isect
+            .intersect_prepared_on(Inside(()), level, pre, ray, v)?;
         Some((hit.t, hit))
     }
 
@@ -224,8 +227,10 @@ impl<I: TriangleIntersector> LeafTest for Triangles<'_, I> {
         second: Option<&TriangleLanes>,
     ) -> u32 {
         match second {
-            Some(second) => self.isect.certain_misses2(level, pre, ray, first, second),
-            None => self.isect.certain_misses(pre, ray, first),
+            Some(second) => self
+                .isect
+                .certain_misses2(Inside(()), level, pre, ray, first, second),
+            None => self.isect.certain_misses(Inside(()), pre, ray, first),
         }
     }
 
@@ -238,16 +243,17 @@ impl<I: TriangleIntersector> LeafTest for Triangles<'_, I> {
         lanes: [&TriangleLanes; 2],
         keep: u32,
     ) -> u32 {
-        self.isect.behind_misses2(level, pre, ray, lanes, keep)
+        self.isect
+            .behind_misses2(Inside(()), level, pre, ray, lanes, keep)
     }
 
     #[inline(always)]
     fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
-        self.isect.behind_plane(v)
+        self.isect.behind_plane(Inside(()), v)
     }
 
     #[inline(always)]
     fn sheared_rays(&self, rays: &[Ray]) -> Option<ShearedRays> {
-        self.isect.sheared_rays(rays)
+        self.isect.sheared_rays(Inside(()), rays)
     }
 }

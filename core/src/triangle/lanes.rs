@@ -80,6 +80,7 @@ impl Default for TriangleLanes {
 mod tests {
     use super::*;
     use crate::ray::Ray;
+    use crate::sealed::Inside;
     use crate::triangle::{
         MollerTrumbore, TriangleIntersector, Watertight, WatertightF32, WatertightRay,
     };
@@ -147,19 +148,19 @@ mod tests {
             two_group_cull_equals_two_culls(&wt, &ray, &lanes, &records);
             let variants = [
                 (
-                    Watertight.certain_misses(&wt, &ray, &lanes),
+                    Watertight.certain_misses(Inside(()), &wt, &ray, &lanes),
                     tris.map(|t| Watertight.intersect(&ray, &t).is_some()),
                 ),
                 (
-                    WatertightF32.certain_misses(&wt, &ray, &lanes),
+                    WatertightF32.certain_misses(Inside(()), &wt, &ray, &lanes),
                     tris.map(|t| WatertightF32.intersect(&ray, &t).is_some()),
                 ),
                 (
-                    MollerTrumbore::CLASSIC.certain_misses(&(), &ray, &lanes),
+                    MollerTrumbore::CLASSIC.certain_misses(Inside(()), &(), &ray, &lanes),
                     tris.map(|t| MollerTrumbore::CLASSIC.intersect(&ray, &t).is_some()),
                 ),
                 (
-                    MollerTrumbore::NO_EPSILON.certain_misses(&(), &ray, &lanes),
+                    MollerTrumbore::NO_EPSILON.certain_misses(Inside(()), &(), &ray, &lanes),
                     tris.map(|t| MollerTrumbore::NO_EPSILON.intersect(&ray, &t).is_some()),
                 ),
             ];
@@ -202,17 +203,20 @@ mod tests {
             first: &TriangleLanes,
             second: &TriangleLanes,
         ) {
-            let want = Watertight.certain_misses(wt, ray, first)
-                | Watertight.certain_misses(wt, ray, second) << LANES;
+            let want = Watertight.certain_misses(Inside(()), wt, ray, first)
+                | Watertight.certain_misses(Inside(()), wt, ray, second) << LANES;
             assert_eq!(
-                Watertight.certain_misses2(level, wt, ray, first, second),
+                Watertight.certain_misses2(Inside(()), level, wt, ray, first, second),
                 want,
                 "{level:?} {ray:?}"
             );
             let mt = MollerTrumbore::NO_EPSILON;
-            let want =
-                mt.certain_misses(&(), ray, first) | mt.certain_misses(&(), ray, second) << 4;
-            assert_eq!(mt.certain_misses2(level, &(), ray, first, second), want);
+            let want = mt.certain_misses(Inside(()), &(), ray, first)
+                | mt.certain_misses(Inside(()), &(), ray, second) << 4;
+            assert_eq!(
+                mt.certain_misses2(Inside(()), level, &(), ray, first, second),
+                want
+            );
         }
         check(Portable, wt, ray, first, &second);
         #[cfg(target_arch = "x86_64")]

@@ -48,6 +48,7 @@ pub use watertight_f32_exact::WatertightF32Exact;
 use crate::float::gamma;
 use crate::hit::Hit;
 use crate::ray::Ray;
+use crate::sealed::Inside;
 use glam::{Vec2, Vec3};
 
 /// The result of a ray–triangle test.
@@ -106,6 +107,93 @@ impl TriangleHit {
 /// `prepare` does the per-ray work once (for example the watertight test's axis permutation and
 /// shear); `intersect_prepared` is then called per triangle, with the current interval taken
 /// from `ray` (BVH traversal shrinks `ray.t_max` as it finds closer hits).
+///
+/// **Implementing it.** Another crate implements the required methods
+/// ([`TriangleIntersector::name`], [`TriangleIntersector::prepare`],
+/// [`TriangleIntersector::intersect_prepared`]) and may override
+/// [`TriangleIntersector::prepare_valid`] (a ray the query has already checked) and
+/// [`TriangleIntersector::intersect`]. The other provided methods are this crate's internal
+/// hooks, hidden from these docs: the lane culls the wide trees run on four or eight stored
+/// triangles at once, their behind-the-origin refusals, the cull across rays and the hit path
+/// at a SIMD level. Their first argument is of a type no other crate can name or make
+/// (`sealed::Inside`, in a private module), so they can be neither overridden nor called
+/// outside this crate: another crate's intersector keeps their defaults (no cull: every
+/// stored triangle goes to `intersect_prepared`). A cull must never change an answer, and
+/// only this crate's intersectors, whose tests it repeats, can promise that of theirs.
+/// [`TriangleIntersector::prepare_valid`] stays open: skipping a check is the
+/// implementation's own business, and the one place the queries rely on more (a valid ray
+/// never refused) is a batch cull that only this crate's watertight family enables.
+///
+/// ```
+/// use halfray_core::triangle::{TriangleHit, TriangleIntersector, Watertight, WatertightRay};
+/// use halfray_core::{Ray, Vec3};
+///
+/// /// The watertight test under another name.
+/// #[derive(Clone, Copy)]
+/// struct Renamed;
+///
+/// impl TriangleIntersector for Renamed {
+///     type Prepared = WatertightRay;
+///     fn name(&self) -> &'static str {
+///         "renamed"
+///     }
+///     fn prepare(&self, ray: &Ray) -> Option<WatertightRay> {
+///         Watertight.prepare(ray)
+///     }
+///     fn intersect_prepared(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3])
+///         -> Option<TriangleHit> {
+///         Watertight.intersect_prepared(pre, ray, v)
+///     }
+/// }
+///
+/// let v = [Vec3::ZERO, Vec3::X, Vec3::Y];
+/// let ray = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
+/// assert_eq!(Renamed.intersect(&ray, &v), Watertight.intersect(&ray, &v));
+/// ```
+///
+/// Another crate cannot override a hook (here the four-lane cull, `certain_misses`): its
+/// signature names a type of a private module.
+///
+/// ```compile_fail,E0603
+/// use halfray_core::triangle::{TriangleHit, TriangleIntersector, TriangleLanes};
+/// use halfray_core::{Ray, Vec3};
+/// #[derive(Clone, Copy)]
+/// struct Mine;
+/// impl TriangleIntersector for Mine {
+///     type Prepared = ();
+///     fn name(&self) -> &'static str {
+///         "mine"
+///     }
+///     fn prepare(&self, _: &Ray) -> Option<()> {
+///         Some(())
+///     }
+///     fn intersect_prepared(&self, _: &(), _: &Ray, _: &[Vec3; 3]) -> Option<TriangleHit> {
+///         None
+///     }
+///     // Not possible: `sealed` is private (and without its `Inside` the signature is not
+///     // the trait's).
+///     fn certain_misses(
+///         &self,
+///         _: halfray_core::sealed::Inside,
+///         _: &(),
+///         _: &Ray,
+///         _: &TriangleLanes,
+///     ) -> u32 {
+///         0b1111
+///     }
+/// }
+/// ```
+///
+/// Nor call one: it has no value to pass as the first argument.
+///
+/// ```compile_fail,E0061
+/// use halfray_core::triangle::{TriangleIntersector, TriangleLanes, Watertight};
+/// use halfray_core::{Ray, Vec3};
+/// let ray = Ray::new(Vec3::ZERO, Vec3::Z);
+/// let pre = Watertight.prepare(&ray).unwrap();
+/// // Not possible: the hook's first argument is missing.
+/// let missed = Watertight.certain_misses(&pre, &ray, &TriangleLanes::default());
+/// ```
 pub trait TriangleIntersector: Copy + Send + Sync {
     /// Per-ray precomputed data.
     type Prepared: Copy;
@@ -132,14 +220,16 @@ pub trait TriangleIntersector: Copy + Send + Sync {
         v: &[Vec3; 3],
     ) -> Option<TriangleHit>;
 
-    /// [`TriangleIntersector::intersect_prepared`] at SIMD `level` (the same answer at every
-    /// level), as a BVH leaf calls it for a triangle its cull
-    /// ([`TriangleIntersector::certain_misses`]) kept: an implementation may leave out the part
-    /// of its test that the cull repeats, but the answer must be `intersect_prepared`'s for
-    /// every triangle. The default ignores the level.
+    /// Internal hook (sealed: trait docs). [`TriangleIntersector::intersect_prepared`] at SIMD
+    /// `level` (the same answer at every level), as a BVH leaf calls it for a triangle its
+    /// cull (`certain_misses`) kept: an implementation may leave out the part of its test
+    /// that the cull repeats, but the answer must be `intersect_prepared`'s for every
+    /// triangle. The default ignores the level.
+    #[doc(hidden)]
     #[inline(always)]
     fn intersect_prepared_on<L: crate::simd_level::SimdLevel>(
         &self,
+        _: Inside,
         level: L,
         pre: &Self::Prepared,
         ray: &Ray,
@@ -149,25 +239,34 @@ pub trait TriangleIntersector: Copy + Send + Sync {
         self.intersect_prepared(pre, ray, v)
     }
 
-    /// The lanes of `lanes` that this test certainly misses (bit `i` for lane `i`), decided
-    /// for all of them at once with vector instructions, so that a BVH leaf calls
-    /// [`TriangleIntersector::intersect_prepared`] only for the others. An implementation
-    /// reports a lane only when `intersect_prepared(pre, ray, triangle)` returns `None` for
-    /// that lane's triangle, whatever `ray`'s interval: results never change, only the work
-    /// does. Bits of unused (NaN) lanes mean nothing: callers mask them. The default reports
-    /// none.
+    /// Internal hook (sealed: trait docs). The lanes of `lanes` that this test certainly
+    /// misses (bit `i` for lane `i`), decided for all of them at once with vector
+    /// instructions, so that a BVH leaf calls [`TriangleIntersector::intersect_prepared`]
+    /// only for the others. An implementation reports a lane only when
+    /// `intersect_prepared(pre, ray, triangle)` returns `None` for that lane's triangle,
+    /// whatever `ray`'s interval: results never change, only the work does. Bits of unused
+    /// (NaN) lanes mean nothing: callers mask them. The default reports none.
+    #[doc(hidden)]
     #[inline(always)]
-    fn certain_misses(&self, pre: &Self::Prepared, ray: &Ray, lanes: &TriangleLanes) -> u32 {
+    fn certain_misses(
+        &self,
+        _: Inside,
+        pre: &Self::Prepared,
+        ray: &Ray,
+        lanes: &TriangleLanes,
+    ) -> u32 {
         let _ = (pre, ray, lanes);
         0
     }
 
-    /// [`TriangleIntersector::certain_misses`] of two groups, `first` (bits 0–3) and
-    /// `second` (bits 4–7), at SIMD `level` (the same bits at every level). The default culls
-    /// each group alone.
+    /// Internal hook (sealed: trait docs). `certain_misses` of two groups, `first` (bits 0–3)
+    /// and `second` (bits 4–7), at SIMD `level` (the same bits at every level). The default
+    /// culls each group alone.
+    #[doc(hidden)]
     #[inline(always)]
     fn certain_misses2<L: crate::simd_level::SimdLevel>(
         &self,
+        inside: Inside,
         level: L,
         pre: &Self::Prepared,
         ray: &Ray,
@@ -176,20 +275,22 @@ pub trait TriangleIntersector: Copy + Send + Sync {
     ) -> u32 {
         let _ = level;
         pair_mask(
-            self.certain_misses(pre, ray, first),
-            self.certain_misses(pre, ray, second),
+            self.certain_misses(inside, pre, ray, first),
+            self.certain_misses(inside, pre, ray, second),
         )
     }
 
-    /// The lanes among `keep` (bits 0–3: `lanes[0]`'s, 4–7: `lanes[1]`'s; the lanes
-    /// [`TriangleIntersector::certain_misses2`] kept) that this test misses because the ray's
-    /// line certainly crosses their plane behind its origin while `t_min ≥ 0`, at SIMD
+    /// Internal hook (sealed: trait docs). The lanes among `keep` (bits 0–3: `lanes[0]`'s,
+    /// 4–7: `lanes[1]`'s; the lanes `certain_misses2` kept) that this test misses because the
+    /// ray's line certainly crosses their plane behind its origin while `t_min ≥ 0`, at SIMD
     /// `level` (the same bits at every level). Like `certain_misses`, a lane is reported only
     /// when `intersect_prepared` returns `None` for it. Worth calling for rays that leave a
     /// surface (any-hit queries: shadow, ambient occlusion). The default reports none.
+    #[doc(hidden)]
     #[inline(always)]
     fn behind_misses2<L: crate::simd_level::SimdLevel>(
         &self,
+        _: Inside,
         level: L,
         pre: &Self::Prepared,
         ray: &Ray,
@@ -200,24 +301,26 @@ pub trait TriangleIntersector: Copy + Send + Sync {
         0
     }
 
-    /// Triangle `v`'s [`BehindPlane`], when this test refuses every ray the plane
-    /// [`BehindPlane::refuses`] (`intersect_prepared` returns `None` for them): a batch of
-    /// rays leaving a surface computes it once per triangle. `None`, the default, refuses
-    /// nothing.
+    /// Internal hook (sealed: trait docs). Triangle `v`'s [`BehindPlane`], when this test
+    /// refuses every ray the plane [`BehindPlane::refuses`] (`intersect_prepared` returns
+    /// `None` for them): a batch of rays leaving a surface computes it once per triangle.
+    /// `None`, the default, refuses nothing.
+    #[doc(hidden)]
     #[inline(always)]
-    fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
+    fn behind_plane(&self, _: Inside, v: &[Vec3; 3]) -> Option<BehindPlane> {
         let _ = v;
         None
     }
 
-    /// The first [`RAY_LANES`] rays of `rays` side by side for this test's cull across rays,
-    /// when it has one: the watertight family's ([`ShearedRays`]; lane `i` of
-    /// [`ShearedRays::certain_misses`] is then [`TriangleIntersector::certain_misses`] of
-    /// `rays[i]`, bit for bit, for every valid ray, and
-    /// [`TriangleIntersector::prepare_valid`] never refuses a valid ray). `None`, the default,
-    /// for the others.
+    /// Internal hook (sealed: trait docs). The first [`RAY_LANES`] rays of `rays` side by
+    /// side for this test's cull across rays, when it has one: the watertight family's
+    /// ([`ShearedRays`]; lane `i` of [`ShearedRays::certain_misses`] is then
+    /// `certain_misses` of `rays[i]`, bit for bit, for every valid ray, and
+    /// [`TriangleIntersector::prepare_valid`] never refuses a valid ray). `None`, the
+    /// default, for the others.
+    #[doc(hidden)]
     #[inline(always)]
-    fn sheared_rays(&self, rays: &[Ray]) -> Option<ShearedRays> {
+    fn sheared_rays(&self, _: Inside, rays: &[Ray]) -> Option<ShearedRays> {
         let _ = rays;
         None
     }

@@ -2,6 +2,7 @@
 
 use super::{TriangleHit, TriangleIntersector, TriangleLanes, finish};
 use crate::ray::Ray;
+use crate::sealed::Inside;
 use crate::simd::{F32x4, V3x4};
 use crate::tolerance::MOLLER_TRUMBORE_DET_EPSILON;
 use glam::Vec3;
@@ -89,7 +90,7 @@ impl TriangleIntersector for MollerTrumbore {
     /// the same operations in the same order (glam's `dot`/`cross` formulas, never fused), so
     /// a lane is reported exactly when the scalar test returns `None` before its `t` check.
     #[inline(always)]
-    fn certain_misses(&self, _: &(), ray: &Ray, lanes: &TriangleLanes) -> u32 {
+    fn certain_misses(&self, _: Inside, _: &(), ray: &Ray, lanes: &TriangleLanes) -> u32 {
         let [p0, p1, p2] = &lanes.v;
         let (v0, v1, v2) = (V3x4::load(p0), V3x4::load(p1), V3x4::load(p2));
         let (e1, e2) = (v1.sub(v0), v2.sub(v0));

@@ -20,6 +20,7 @@
 
 use super::{TriangleHit, TriangleIntersector, TriangleLanes};
 use crate::ray::Ray;
+use crate::sealed::Inside;
 use crate::simd::level::{Portable, SimdLevel};
 use edges::exact_edges;
 use exact::{Candidate, finish_exact};
@@ -101,7 +102,8 @@ pub struct WatertightF32;
 /// triangle that rejects every triangle two of whose three `f32` edge functions (the filter
 /// of [`WatertightRay::certain_misses`]) have certain, opposite signs. Each member supplies
 /// its name and its test; [`TriangleIntersector`] (preparation and the four-lane cull) comes
-/// with it.
+/// with it. Its other provided methods are internal hooks like [`TriangleIntersector`]'s
+/// (hidden, sealed by their first argument: neither callable nor overridable elsewhere).
 ///
 /// Sealed: the family's cull rejects a triangle for every member on the strength of each
 /// member's test refusing it too, which only this crate's members promise. Another crate's
@@ -128,12 +130,15 @@ pub trait ShearedTest: Copy + Send + Sync + crate::sealed::Sealed {
     /// [`TriangleIntersector::intersect_prepared`].
     fn hit_sheared(&self, pre: &WatertightRay, ray: &Ray, v: &[Vec3; 3]) -> Option<TriangleHit>;
 
-    /// [`ShearedTest::hit_sheared`] at SIMD `level`, for a triangle the family's cull kept
-    /// ([`TriangleIntersector::intersect_prepared_on`]: the same answer for every triangle, at
-    /// every level). The default ignores the level.
+    /// Internal hook (sealed: [`TriangleIntersector`]'s docs). [`ShearedTest::hit_sheared`]
+    /// at SIMD `level`, for a triangle the family's cull kept
+    /// ([`TriangleIntersector`]'s `intersect_prepared_on`: the same answer for every
+    /// triangle, at every level). The default ignores the level.
+    #[doc(hidden)]
     #[inline(always)]
     fn hit_sheared_on<L: SimdLevel>(
         &self,
+        _: Inside,
         level: L,
         pre: &WatertightRay,
         ray: &Ray,
@@ -143,20 +148,25 @@ pub trait ShearedTest: Copy + Send + Sync + crate::sealed::Sealed {
         self.hit_sheared(pre, ray, v)
     }
 
-    /// [`TriangleIntersector::behind_plane`]. The default has none ([`Watertight`]'s is the
-    /// plane of its exact path's kernel, on x86-64).
+    /// Internal hook (sealed: [`TriangleIntersector`]'s docs). [`TriangleIntersector`]'s
+    /// `behind_plane`. The default has none ([`Watertight`]'s is the plane of its exact
+    /// path's kernel, on x86-64).
+    #[doc(hidden)]
     #[inline(always)]
-    fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
+    fn behind_plane(&self, _: Inside, v: &[Vec3; 3]) -> Option<BehindPlane> {
         let _ = v;
         None
     }
 
-    /// [`TriangleIntersector::behind_misses2`]: the lanes among `keep` this test certainly
-    /// misses because the line crosses their plane behind the origin. The default refuses
-    /// none ([`Watertight`] refuses them with [`WatertightRay::behind_misses2`]).
+    /// Internal hook (sealed: [`TriangleIntersector`]'s docs). [`TriangleIntersector`]'s
+    /// `behind_misses2`: the lanes among `keep` this test certainly misses because the line
+    /// crosses their plane behind the origin. The default refuses none ([`Watertight`]
+    /// refuses them with [`WatertightRay::behind_misses2`]).
+    #[doc(hidden)]
     #[inline(always)]
     fn behind_misses2<L: SimdLevel>(
         &self,
+        _: Inside,
         level: L,
         pre: &WatertightRay,
         ray: &Ray,
@@ -168,10 +178,13 @@ pub trait ShearedTest: Copy + Send + Sync + crate::sealed::Sealed {
     }
 }
 
+// The hooks' overrides are `doc(hidden)` as the hooks are (`TriangleIntersector`'s docs):
+// rustdoc lists a blanket impl's items on every type it covers, hidden trait items included.
 impl<T: ShearedTest> TriangleIntersector for T {
+    #[doc(hidden)]
     #[inline(always)]
-    fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
-        T::behind_plane(self, v)
+    fn behind_plane(&self, inside: Inside, v: &[Vec3; 3]) -> Option<BehindPlane> {
+        T::behind_plane(self, inside, v)
     }
 
     type Prepared = WatertightRay;
@@ -200,25 +213,36 @@ impl<T: ShearedTest> TriangleIntersector for T {
         self.hit_sheared(pre, ray, v)
     }
 
+    #[doc(hidden)]
     #[inline(always)]
     fn intersect_prepared_on<L: SimdLevel>(
         &self,
+        inside: Inside,
         level: L,
         pre: &WatertightRay,
         ray: &Ray,
         v: &[Vec3; 3],
     ) -> Option<TriangleHit> {
-        self.hit_sheared_on(level, pre, ray, v)
+        self.hit_sheared_on(inside, level, pre, ray, v)
     }
 
+    #[doc(hidden)]
     #[inline(always)]
-    fn certain_misses(&self, pre: &WatertightRay, ray: &Ray, lanes: &TriangleLanes) -> u32 {
+    fn certain_misses(
+        &self,
+        _: Inside,
+        pre: &WatertightRay,
+        ray: &Ray,
+        lanes: &TriangleLanes,
+    ) -> u32 {
         pre.certain_misses(ray.origin, lanes)
     }
 
+    #[doc(hidden)]
     #[inline(always)]
     fn certain_misses2<L: SimdLevel>(
         &self,
+        _: Inside,
         level: L,
         pre: &WatertightRay,
         ray: &Ray,
@@ -228,20 +252,23 @@ impl<T: ShearedTest> TriangleIntersector for T {
         pre.certain_misses2(level, ray.origin, first, second)
     }
 
+    #[doc(hidden)]
     #[inline(always)]
     fn behind_misses2<L: SimdLevel>(
         &self,
+        inside: Inside,
         level: L,
         pre: &WatertightRay,
         ray: &Ray,
         lanes: [&TriangleLanes; 2],
         keep: u32,
     ) -> u32 {
-        T::behind_misses2(self, level, pre, ray, lanes, keep)
+        T::behind_misses2(self, inside, level, pre, ray, lanes, keep)
     }
 
+    #[doc(hidden)]
     #[inline(always)]
-    fn sheared_rays(&self, rays: &[Ray]) -> Option<ShearedRays> {
+    fn sheared_rays(&self, _: Inside, rays: &[Ray]) -> Option<ShearedRays> {
         Some(ShearedRays::new(rays))
     }
 }
@@ -269,6 +296,7 @@ impl ShearedTest for Watertight {
     #[inline(always)]
     fn hit_sheared_on<L: SimdLevel>(
         &self,
+        _: Inside,
         level: L,
         pre: &WatertightRay,
         ray: &Ray,
@@ -281,7 +309,7 @@ impl ShearedTest for Watertight {
     /// triangle first thing ([`BehindPlane`]); elsewhere none (there the exact path takes its
     /// normal from another vertex, `hit_t`).
     #[inline(always)]
-    fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
+    fn behind_plane(&self, _: Inside, v: &[Vec3; 3]) -> Option<BehindPlane> {
         #[cfg(target_arch = "x86_64")]
         return BehindPlane::new(v);
         #[cfg(not(target_arch = "x86_64"))]
@@ -297,6 +325,7 @@ impl ShearedTest for Watertight {
     #[inline(always)]
     fn behind_misses2<L: SimdLevel>(
         &self,
+        _: Inside,
         level: L,
         pre: &WatertightRay,
         ray: &Ray,

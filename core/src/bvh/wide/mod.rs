@@ -49,7 +49,7 @@
 //!
 //! As in the binary tree: the robust, conservative, NaN-absorbing slab test on every child box
 //! at once, over `[t_min, t_max·(1 + CULL_REL_SLACK)]`; in a leaf, the intersector's
-//! four-lane cull ([`crate::triangle::TriangleIntersector::certain_misses`]) skips the
+//! four-lane cull (an internal hook of [`crate::triangle::TriangleIntersector`]) skips the
 //! triangles it certainly misses and the rest are tested one by one, in leaf order; children
 //! hit are visited nearest first
 //! (the others pushed with their entry distance, re-checked when popped); the **tie rule** (of

@@ -166,8 +166,8 @@ impl LeafTriangle {
 }
 
 /// Four consecutive triangle slots of the leaves, stored side by side so that a leaf's
-/// triangles are tested four at a time ([`crate::triangle::TriangleIntersector::certain_misses`])
-/// straight from memory: slot `s` of the tree is lane `s % 4` of group `s / 4`. Leaves are
+/// triangles are tested four at a time (the intersector's lane cull, an internal hook of
+/// [`crate::triangle::TriangleIntersector`]) straight from memory: slot `s` of the tree is lane `s % 4` of group `s / 4`. Leaves are
 /// runs of slots in leaf order, each touching the fewest groups its length allows (module
 /// docs of [`super`]): 40 bytes per slot, 160 per group. Unused lanes hold NaN vertices
 /// (never hit) and index `u32::MAX`.

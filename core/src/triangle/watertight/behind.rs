@@ -204,6 +204,7 @@ fn near_refused_portable(ray: &Ray, groups: [&TriangleLanes; 2], near: u32) -> u
 mod tests {
     use super::*;
     use crate::predicates::{orient_direction, orient3d_exact};
+    use crate::sealed::Inside;
     use crate::simd_level::Portable;
     use crate::test_util::{Lcg, special_f32, unit_vec};
     use crate::triangle::{TriangleIntersector, Watertight};
@@ -336,12 +337,12 @@ mod tests {
                     assert!(exactly_behind(&ray, &v), "{ray:?} {v:?}");
                     assert_eq!(Watertight.intersect(&ray, &v), None, "{ray:?} {v:?}");
                     assert_eq!(
-                        Watertight.intersect_prepared_on(Portable, &pre, &ray, &v),
+                        Watertight.intersect_prepared_on(Inside(()), Portable, &pre, &ray, &v),
                         None
                     );
                     if let Some(level) = avx2 {
                         assert_eq!(
-                            Watertight.intersect_prepared_on(level, &pre, &ray, &v),
+                            Watertight.intersect_prepared_on(Inside(()), level, &pre, &ray, &v),
                             None
                         );
                     }
@@ -425,7 +426,7 @@ mod tests {
                 assert_eq!(Watertight.intersect(&ray, &tri), None, "{ray:?} {tri:?}");
                 if let Some(level) = avx2 {
                     assert_eq!(
-                        Watertight.intersect_prepared_on(level, &pre, &ray, &tri),
+                        Watertight.intersect_prepared_on(Inside(()), level, &pre, &ray, &tri),
                         None
                     );
                 }
@@ -578,7 +579,10 @@ mod tests {
                     assert!(exactly_behind(&ray, f), "{ray:?} {f:?}");
                     assert_eq!(Watertight.intersect(&ray, f), None, "{ray:?} {f:?}");
                     if let Some(level) = avx2 {
-                        assert_eq!(Watertight.intersect_prepared_on(level, &pre, &ray, f), None);
+                        assert_eq!(
+                            Watertight.intersect_prepared_on(Inside(()), level, &pre, &ray, f),
+                            None
+                        );
                     }
                 }
             }

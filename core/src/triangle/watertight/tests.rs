@@ -596,13 +596,13 @@ fn skipping_the_filter_the_cull_repeats_changes_no_answer() {
         };
         let want = Watertight.hit_sheared(&pre, &ray, &v);
         assert_eq!(
-            Watertight.hit_sheared_on(Portable, &pre, &ray, &v),
+            Watertight.hit_sheared_on(Inside(()), Portable, &pre, &ray, &v),
             want,
             "{v:?} {ray:?}"
         );
         if let Some(token) = avx2 {
             assert_eq!(
-                Watertight.hit_sheared_on(token, &pre, &ray, &v),
+                Watertight.hit_sheared_on(Inside(()), token, &pre, &ray, &v),
                 want,
                 "{v:?} {ray:?}"
             );
