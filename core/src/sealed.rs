@@ -6,8 +6,8 @@
 //!   it may appear in their bounds, but no other crate can name it, and so none can implement
 //!   those traits (they can still use them: call their methods, write bounds on them).
 //! * **Sealed methods.** The provided methods of an open trait that are the crate's own
-//!   hooks (the lane culls and SIMD kernels of [`crate::triangle::TriangleIntersector`] and
-//!   [`crate::triangle::ShearedTest`]) take an [`Inside`] as
+//!   hooks (the lane culls and SIMD kernels of [`crate::triangle::TriangleIntersector`],
+//!   [`crate::query::LeafTest`] and [`crate::triangle::ShearedTest`]) take an [`Inside`] as
 //!   their first argument. Another crate can neither write a signature with that type (so it
 //!   cannot override the method) nor make a value of it (so it cannot call the method); this
 //!   crate's own implementations override them as usual. `Inside` is a zero-sized type: the

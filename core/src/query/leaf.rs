@@ -12,8 +12,47 @@ use glam::Vec3;
 /// ([`super::RayQuery`]).
 ///
 /// One required test ([`LeafTest::intersect`]) and a per-ray setup ([`LeafTest::prepare`]);
-/// the rest is provided and only worth overriding for triangles, which the wide trees store
-/// with their vertices and cull four (eight) at a time.
+/// another crate may also override [`LeafTest::prepare_valid`] (a ray the query has already
+/// checked) and [`LeafTest::with_prepared`] (the test as one closure).
+///
+/// The other provided methods are this crate's internal hooks, hidden from these docs: the
+/// test of a triangle whose vertices a wide tree stores, with the lane culls that tree runs
+/// on four (eight) of them at once, their behind-the-origin refusals and the cull across
+/// rays. [`Triangles`] forwards them to its [`TriangleIntersector`]'s. As there (see its
+/// docs), their first argument is of a type no other crate can name or make, so another
+/// crate can neither override nor call them: its leaf test keeps the defaults (no cull:
+/// every primitive goes to [`LeafTest::intersect`]).
+///
+/// ```compile_fail,E0603
+/// use halfray_core::Ray;
+/// use halfray_core::query::LeafTest;
+/// use halfray_core::simd_level::SimdLevel;
+/// use halfray_core::triangle::TriangleLanes;
+/// struct Nothing;
+/// impl LeafTest for Nothing {
+///     type Hit = ();
+///     type Prepared = ();
+///     fn prepare(&self, _: &Ray) -> Option<()> {
+///         Some(())
+///     }
+///     fn intersect(&mut self, _: &(), _: u32, _: &Ray) -> Option<(f32, ())> {
+///         None
+///     }
+///     // Not possible: `sealed` is private (and without its `Inside` the signature is not
+///     // the trait's).
+///     fn certain_misses<L: SimdLevel>(
+///         &self,
+///         _: halfray_core::sealed::Inside,
+///         _: L,
+///         _: &(),
+///         _: &Ray,
+///         _: &TriangleLanes,
+///         _: Option<&TriangleLanes>,
+///     ) -> u32 {
+///         0xFF
+///     }
+/// }
+/// ```
 ///
 /// Implemented by every closure `FnMut(prim: u32, ray: &Ray) -> Option<(t, payload)>` (no
 /// setup) and by [`Triangles`].
@@ -51,12 +90,15 @@ pub trait LeafTest {
         move |prim, ray| self.intersect(pre, prim, ray)
     }
 
-    /// [`LeafTest::intersect`] of triangle `prim` whose vertices `v` the structure stores (the
-    /// wide trees), with the kernels of SIMD `level` where the test has them: the same answer
-    /// as `intersect`. The default ignores `v` and `level`.
+    /// Internal hook (sealed: trait docs). [`LeafTest::intersect`] of triangle `prim` whose
+    /// vertices `v` the structure stores (the wide trees), with the kernels of SIMD `level`
+    /// where the test has them: the same answer as `intersect`. The default ignores `v` and
+    /// `level`.
+    #[doc(hidden)]
     #[inline(always)]
     fn intersect_triangle<L: SimdLevel>(
         &mut self,
+        _: Inside,
         level: L,
         pre: &Self::Prepared,
         prim: u32,
@@ -67,15 +109,17 @@ pub trait LeafTest {
         self.intersect(pre, prim, ray)
     }
 
-    /// The lanes of one or two groups of stored triangles that this test certainly misses, at
-    /// SIMD `level` (the same bits at every level): bit `i` for lane `i` of `first`, bit
-    /// `4 + i` for lane `i` of `second` when given (see
-    /// [`TriangleIntersector::certain_misses`], [`TriangleIntersector::certain_misses2`]). A
-    /// lane reported is never tested; one not reported is tested with
-    /// [`LeafTest::intersect_triangle`]. The default culls none.
+    /// Internal hook (sealed: trait docs). The lanes of one or two groups of stored triangles
+    /// that this test certainly misses, at SIMD `level` (the same bits at every level): bit
+    /// `i` for lane `i` of `first`, bit `4 + i` for lane `i` of `second` when given (see
+    /// [`TriangleIntersector`]'s `certain_misses` and `certain_misses2`). A lane reported is
+    /// never tested; one not reported is tested with `intersect_triangle`. The default culls
+    /// none.
+    #[doc(hidden)]
     #[inline(always)]
     fn certain_misses<L: SimdLevel>(
         &self,
+        _: Inside,
         level: L,
         pre: &Self::Prepared,
         ray: &Ray,
@@ -86,15 +130,17 @@ pub trait LeafTest {
         0
     }
 
-    /// The lanes among `keep` of two groups of stored triangles (bits as in
-    /// [`LeafTest::certain_misses`]; a single group passed twice) that this test misses
-    /// because the ray's line certainly crosses their plane behind its origin
-    /// ([`TriangleIntersector::behind_misses2`]), at SIMD `level` (the same bits at every
+    /// Internal hook (sealed: trait docs). The lanes among `keep` of two groups of stored
+    /// triangles (bits as in `certain_misses`; a single group passed twice) that this test
+    /// misses because the ray's line certainly crosses their plane behind its origin
+    /// ([`TriangleIntersector`]'s `behind_misses2`), at SIMD `level` (the same bits at every
     /// level). The any-hit walks call it on the lanes `certain_misses` kept. The default
     /// refuses none.
+    #[doc(hidden)]
     #[inline(always)]
     fn behind_misses<L: SimdLevel>(
         &self,
+        _: Inside,
         level: L,
         pre: &Self::Prepared,
         ray: &Ray,
@@ -105,22 +151,24 @@ pub trait LeafTest {
         0
     }
 
-    /// The [`BehindPlane`] of a stored triangle `v` ([`TriangleIntersector::behind_plane`]):
-    /// a ray it [`BehindPlane::refuses`] gets `None` from [`LeafTest::intersect_triangle`].
-    /// The default has none.
+    /// Internal hook (sealed: trait docs). The [`BehindPlane`] of a stored triangle `v`
+    /// ([`TriangleIntersector`]'s `behind_plane`): a ray it [`BehindPlane::refuses`] gets
+    /// `None` from `intersect_triangle`. The default has none.
+    #[doc(hidden)]
     #[inline(always)]
-    fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
+    fn behind_plane(&self, _: Inside, v: &[Vec3; 3]) -> Option<BehindPlane> {
         let _ = v;
         None
     }
 
-    /// The first [`crate::triangle::RAY_LANES`] rays of `rays` side by side for a cull across
-    /// rays ([`TriangleIntersector::sheared_rays`]): when `Some`, lane `i` of its
-    /// [`ShearedRays::certain_misses`] is this test's [`LeafTest::certain_misses`] of `rays[i]`
-    /// for every valid ray, and [`LeafTest::prepare_valid`] never refuses a valid ray. The
-    /// default has none.
+    /// Internal hook (sealed: trait docs). The first [`crate::triangle::RAY_LANES`] rays of
+    /// `rays` side by side for a cull across rays ([`TriangleIntersector`]'s
+    /// `sheared_rays`): when `Some`, lane `i` of its [`ShearedRays::certain_misses`] is this
+    /// test's `certain_misses` of `rays[i]` for every valid ray, and
+    /// [`LeafTest::prepare_valid`] never refuses a valid ray. The default has none.
+    #[doc(hidden)]
     #[inline(always)]
-    fn sheared_rays(&self, rays: &[Ray]) -> Option<ShearedRays> {
+    fn sheared_rays(&self, _: Inside, rays: &[Ray]) -> Option<ShearedRays> {
         let _ = rays;
         None
     }
@@ -205,6 +253,7 @@ impl<I: TriangleIntersector> LeafTest for Triangles<'_, I> {
     #[inline(always)]
     fn intersect_triangle<L: SimdLevel>(
         &mut self,
+        inside: Inside,
         level: L,
         pre: &I::Prepared,
         _: u32,
@@ -213,13 +262,14 @@ impl<I: TriangleIntersector> LeafTest for Triangles<'_, I> {
     ) -> Option<(f32, TriangleHit)> {
         let hit = self
             .isect
-            .intersect_prepared_on(Inside(()), level, pre, ray, v)?;
+            .intersect_prepared_on(inside, level, pre, ray, v)?;
         Some((hit.t, hit))
     }
 
     #[inline(always)]
     fn certain_misses<L: SimdLevel>(
         &self,
+        inside: Inside,
         level: L,
         pre: &I::Prepared,
         ray: &Ray,
@@ -229,14 +279,15 @@ impl<I: TriangleIntersector> LeafTest for Triangles<'_, I> {
         match second {
             Some(second) => self
                 .isect
-                .certain_misses2(Inside(()), level, pre, ray, first, second),
-            None => self.isect.certain_misses(Inside(()), pre, ray, first),
+                .certain_misses2(inside, level, pre, ray, first, second),
+            None => self.isect.certain_misses(inside, pre, ray, first),
         }
     }
 
     #[inline(always)]
     fn behind_misses<L: SimdLevel>(
         &self,
+        inside: Inside,
         level: L,
         pre: &I::Prepared,
         ray: &Ray,
@@ -244,16 +295,16 @@ impl<I: TriangleIntersector> LeafTest for Triangles<'_, I> {
         keep: u32,
     ) -> u32 {
         self.isect
-            .behind_misses2(Inside(()), level, pre, ray, lanes, keep)
+            .behind_misses2(inside, level, pre, ray, lanes, keep)
     }
 
     #[inline(always)]
-    fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
-        self.isect.behind_plane(Inside(()), v)
+    fn behind_plane(&self, inside: Inside, v: &[Vec3; 3]) -> Option<BehindPlane> {
+        self.isect.behind_plane(inside, v)
     }
 
     #[inline(always)]
-    fn sheared_rays(&self, rays: &[Ray]) -> Option<ShearedRays> {
-        self.isect.sheared_rays(Inside(()), rays)
+    fn sheared_rays(&self, inside: Inside, rays: &[Ray]) -> Option<ShearedRays> {
+        self.isect.sheared_rays(inside, rays)
     }
 }

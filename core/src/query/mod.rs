@@ -61,6 +61,7 @@ use crate::aabb::Aabb;
 use crate::float::sqrt;
 use crate::mesh::PrimitiveSource;
 use crate::ray::Ray;
+use crate::sealed::Inside;
 use crate::simd_level::SimdLevel;
 use crate::triangle::TriangleLanes;
 use glam::Vec3;
@@ -233,6 +234,7 @@ impl<T: LeafTest> LeafTest for HitDistance<'_, T> {
     #[inline(always)]
     fn intersect_triangle<L: SimdLevel>(
         &mut self,
+        inside: Inside,
         level: L,
         pre: &T::Prepared,
         prim: u32,
@@ -240,19 +242,21 @@ impl<T: LeafTest> LeafTest for HitDistance<'_, T> {
         ray: &Ray,
     ) -> Option<(f32, f32)> {
         self.0
-            .intersect_triangle(level, pre, prim, v, ray)
+            .intersect_triangle(inside, level, pre, prim, v, ray)
             .map(|(t, _)| (t, t))
     }
 
     #[inline(always)]
     fn certain_misses<L: SimdLevel>(
         &self,
+        inside: Inside,
         level: L,
         pre: &T::Prepared,
         ray: &Ray,
         first: &TriangleLanes,
         second: Option<&TriangleLanes>,
     ) -> u32 {
-        self.0.certain_misses(level, pre, ray, first, second)
+        self.0
+            .certain_misses(inside, level, pre, ray, first, second)
     }
 }

@@ -8,6 +8,7 @@
 
 use super::node::LeafGroup;
 use crate::query::LeafTest;
+use crate::sealed::Inside;
 use crate::triangle::{BehindPlane, LANES, PlaneRay};
 
 /// Lane slots of [`LeafPlanes`]: a run of up to eight groups (a pair's lanes are bits
@@ -53,7 +54,7 @@ impl LeafPlanes {
                 self.known |= 1 << slot;
                 *plane = pair[(bit / LANES) & 1]
                     .triangle(bit & (LANES - 1))
-                    .and_then(|t| leaf.behind_plane(&t.vertices()));
+                    .and_then(|t| leaf.behind_plane(Inside(()), &t.vertices()));
             }
             if plane.is_some_and(|plane| plane.refuses(ray)) {
                 refused |= 1 << bit;
@@ -83,7 +84,7 @@ mod tests {
         fn intersect(&mut self, _: &(), _: u32, _: &Ray) -> Option<(f32, ())> {
             None
         }
-        fn behind_plane(&self, v: &[Vec3; 3]) -> Option<BehindPlane> {
+        fn behind_plane(&self, _: Inside, v: &[Vec3; 3]) -> Option<BehindPlane> {
             self.0.set(self.0.get() + 1);
             BehindPlane::new(v)
         }

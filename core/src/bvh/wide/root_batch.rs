@@ -12,6 +12,7 @@ use super::planes::LeafPlanes;
 use super::traverse::{RunLanes, kept_hits, leaf_groups};
 use crate::query::{LeafTest, Query, Stack, TraversalStats};
 use crate::ray::Ray;
+use crate::sealed::Inside;
 use crate::simd::level::SimdLevel;
 use crate::triangle::{LANES, PlaneRay, RAY_LANES};
 
@@ -48,7 +49,7 @@ where
         let level = ctx.level;
         let mut local = TraversalStats::default();
         for (chunk, out) in rays.chunks(RAY_LANES).zip(out.chunks_mut(RAY_LANES)) {
-            let Some(sheared) = leaf.sheared_rays(chunk) else {
+            let Some(sheared) = leaf.sheared_rays(Inside(()), chunk) else {
                 // A leaf test without the cull refuses the first chunk, before anything is
                 // written. Were a later one refused, the caller would answer every ray again
                 // (this call's statistics are not added): the answers stay the single-ray ones.
@@ -179,7 +180,7 @@ where
         // Each lane's plane, computed when a ray first keeps the lane.
         let mut planes = LeafPlanes::NEW;
         for (chunk, out) in rays.chunks(RAY_LANES).zip(out.chunks_mut(RAY_LANES)) {
-            let Some(sheared) = leaf.sheared_rays(chunk) else {
+            let Some(sheared) = leaf.sheared_rays(Inside(()), chunk) else {
                 return false;
             };
             let mut kept = [0u32; RAY_LANES];

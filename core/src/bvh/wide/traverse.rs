@@ -8,6 +8,7 @@ use crate::query::QueryError;
 use crate::query::walk::{cull_bound, take_if_better};
 use crate::query::{LeafTest, Query, QueryStack, Stack, StackEntry, TraversalStats};
 use crate::ray::Ray;
+use crate::sealed::Inside;
 use crate::simd;
 use crate::simd::level::{SimdLevel, order_key};
 use crate::triangle::LANES;
@@ -92,18 +93,31 @@ pub(super) fn leaf_hits<LT: LeafTest, L: SimdLevel, const ANY: bool>(
             Some((second, after)) => {
                 run = after;
                 let run_lanes = lanes.next_pair();
-                let missed =
-                    leaf.certain_misses(level, pre, cur, &first.lanes, Some(&second.lanes));
+                let missed = leaf.certain_misses(
+                    Inside(()),
+                    level,
+                    pre,
+                    cur,
+                    &first.lanes,
+                    Some(&second.lanes),
+                );
                 ([first, second], run_lanes & !missed)
             }
             None => {
                 run = tail;
-                let missed = leaf.certain_misses(level, pre, cur, &first.lanes, None);
+                let missed = leaf.certain_misses(Inside(()), level, pre, cur, &first.lanes, None);
                 ([first, first], lanes.next_group() & !missed)
             }
         };
         if ANY && behind && todo != 0 {
-            todo &= !leaf.behind_misses(level, pre, cur, [&pair[0].lanes, &pair[1].lanes], todo);
+            todo &= !leaf.behind_misses(
+                Inside(()),
+                level,
+                pre,
+                cur,
+                [&pair[0].lanes, &pair[1].lanes],
+                todo,
+            );
         }
         if kept_hits::<LT, L, ANY>(level, leaf, pre, pair, todo, (&mut *cur, &mut *best)) {
             if ANY {
@@ -138,7 +152,8 @@ pub(super) fn kept_hits<LT: LeafTest, L: SimdLevel, const ANY: bool>(
             break;
         };
         let prim = tri.prim;
-        if let Some((t, h)) = leaf.intersect_triangle(level, pre, prim, &tri.vertices(), cur)
+        if let Some((t, h)) =
+            leaf.intersect_triangle(Inside(()), level, pre, prim, &tri.vertices(), cur)
             && take_if_better(cur, best, prim, t, h)
         {
             if ANY {
