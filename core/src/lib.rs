@@ -52,7 +52,10 @@
 //! used but not implemented elsewhere, because the crate relies on what their implementations
 //! promise: [`query::Stack`] (what a query returns, `StackTooSmall` included),
 //! [`triangle::ShearedTest`] (the watertight family, whose shared cull assumes each member's
-//! test), [`halfedge::MeshStorage`] and [`simd_level::SimdLevel`].
+//! test), [`halfedge::MeshStorage`] and [`simd_level::SimdLevel`]. The open
+//! `TriangleIntersector` and `LeafTest` also have sealed methods, hidden from these docs:
+//! the lane culls and SIMD kernels the wide trees run, internal hooks that other crates can
+//! neither override nor call (see those traits' docs).
 //!
 //! Nothing in this crate panics on any input, NaN and infinity included: intersectors are
 //! total functions that report "no hit" for invalid rays, and constructors that can reject

@@ -2,8 +2,9 @@
 //! "Traits: which to implement") can be implemented here, outside the core, through its
 //! public interface alone, and each implementation is used the way the core uses its own:
 //! `Primitive`, `PrimitiveSource`, `LeafTest`, `TriangleIntersector`, `VariantVisitor`,
-//! `Shape`, `PointSet`, `RayQuery`. (The sealed ones, `Stack` and `ShearedTest`, have
-//! `compile_fail` doctests in the core.)
+//! `Shape`, `PointSet`, `RayQuery`; `LeafTest` and `TriangleIntersector` with only the
+//! methods another crate can write (their internal hooks are sealed). (The sealed traits,
+//! `Stack` and `ShearedTest`, and those hooks have `compile_fail` doctests in the core.)
 
 use glam::Vec3;
 use halfray_core::aabb::Aabb;
