@@ -5,9 +5,11 @@
 
 use glam::Vec3;
 use halfray_core::halfedge::{
-    BuildError, CollapseAt, Counts, EdgeId, EdgeRec, FaceRec, HalfedgeMesh, LoopWeights, Mesh,
-    MeshStorage, SliceMesh, VertexId, VertexRec, build_scratch_len, loop_beta,
+    BuildError, CollapseAt, Counts, DiffuseBoundary, DiffuseError, EdgeId, EdgeRec, FaceRec,
+    HalfedgeMesh, LoopWeights, Mesh, MeshStorage, SliceMesh, VertexId, VertexRec,
+    build_scratch_len, loop_beta,
 };
+use halfray_fuzz_props::diffuse_oracle::{F32Fit, diffuse_close, diffuse_reference};
 use halfray_fuzz_props::loop_oracle::{LoopPoint, loop_close, loop_reference, reference_beta};
 use halfray_tests::meshes_dir;
 use proptest::prelude::*;
@@ -252,6 +254,127 @@ fn loop_two_levels_on_spot() {
     assert_eq!(m2.len().faces, 16 * t.len());
     assert_eq!(euler(&m2), 2);
     assert_eq!(m2.boundary_loops().count(), 0);
+}
+
+/// Every position's bits (`-0.0` and `0.0` differ), by vertex slot.
+fn position_bits<S: MeshStorage>(m: &Mesh<S>) -> Vec<Option<[u32; 3]>> {
+    (0..m.slots().vertices as u32)
+        .map(|v| {
+            m.position(VertexId::new(v))
+                .map(|p| p.to_array().map(f32::to_bits))
+        })
+        .collect()
+}
+
+/// One diffuse step worked by hand on an open square pyramid: apex 0 over the rim 1–4 (four
+/// triangles, every rim edge on the boundary), rim vertex 1 lifted so that no two rim vertices
+/// see the same neighbours, and an unreferenced vertex 5. Every value is a small dyadic
+/// rational, so the `f64` oracle and the core's `f32` step must both give them exactly.
+#[test]
+fn diffuse_on_a_pyramid_by_hand() {
+    let p = [
+        Vec3::new(0.0, 0.0, 6.0),
+        Vec3::new(6.0, 0.0, 3.0),
+        Vec3::new(0.0, 6.0, 0.0),
+        Vec3::new(-6.0, 0.0, 0.0),
+        Vec3::new(0.0, -6.0, 0.0),
+        Vec3::new(5.0, 5.0, 5.0),
+    ];
+    let t = [[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 1]];
+    // Free, k = 1/2: x' = x + (m − x)/2, m the mean of the neighbours.
+    // 0: neighbours 1–4, m = (0, 0, 3)/4 = (0, 0, 0.75), x' = (0, 0, 3.375).
+    // 1: neighbours 0, 2, 4, m = (0, 0, 6)/3 = (0, 0, 2), x' = (3, 0, 2.5).
+    // 2: neighbours 0, 1, 3, m = (0, 0, 9)/3 = (0, 0, 3), x' = (0, 3, 1.5).
+    // 3: neighbours 0, 2, 4, m = (0, 0, 2), x' = (−3, 0, 1).
+    // 4: neighbours 0, 1, 3, m = (0, 0, 3), x' = (0, −3, 1.5).
+    // 5: no neighbour, stays.
+    let free = [
+        Vec3::new(0.0, 0.0, 3.375),
+        Vec3::new(3.0, 0.0, 2.5),
+        Vec3::new(0.0, 3.0, 1.5),
+        Vec3::new(-3.0, 0.0, 1.0),
+        Vec3::new(0.0, -3.0, 1.5),
+        p[5],
+    ];
+    // Fixed, k = 1: the rim stays, the apex moves to its neighbours' mean (0, 0, 0.75).
+    let mut fixed = p;
+    fixed[0] = Vec3::new(0.0, 0.0, 0.75);
+    for (k, boundary, hand) in [
+        (0.5, DiffuseBoundary::Free, free),
+        (1.0, DiffuseBoundary::Fixed, fixed),
+    ] {
+        let want = diffuse_reference(&p, &t, k, boundary);
+        let mut buf = Buffers::new(caps(&p, &t));
+        let mut m = build_into(&mut buf, &p, &t).unwrap();
+        let mut scratch = vec![Vec3::ZERO; p.len()];
+        m.diffuse(k as f32, boundary, &mut scratch).unwrap();
+        for v in 0..p.len() {
+            let got = m.position(VertexId::new(v as u32)).unwrap();
+            assert_eq!(
+                want[v].at,
+                hand[v].as_dvec3(),
+                "{boundary:?}: oracle at {v}"
+            );
+            assert_eq!(got, hand[v], "{boundary:?}: core at {v}");
+            assert!(diffuse_close(got, &want[v]), "{boundary:?} {v}");
+        }
+        m.validate().unwrap();
+    }
+
+    // Refusals keep every position bit for bit: a short scratch, and a step whose result is
+    // beyond `f32` (rim vertex 1 at x = 3·10³⁸, k = 4: x' = −3·x, which the oracle also
+    // classes as an overflow).
+    let mut buf = Buffers::new(caps(&p, &t));
+    let mut m = build_into(&mut buf, &p, &t).unwrap();
+    let kept = position_bits(&m);
+    let mut scratch = vec![Vec3::ZERO; p.len()];
+    assert_eq!(
+        m.diffuse(0.5, DiffuseBoundary::Free, &mut scratch[..p.len() - 1]),
+        Err(DiffuseError::ScratchTooSmall { needed: p.len() })
+    );
+    assert_eq!(position_bits(&m), kept);
+    let mut huge = p;
+    huge[1].x = 3e38;
+    m.set_position(VertexId::new(1), huge[1]).unwrap();
+    let kept = position_bits(&m);
+    let want = diffuse_reference(&huge, &t, 4.0, DiffuseBoundary::Free);
+    assert_eq!(want[1].f32_fit(), F32Fit::Overflows);
+    assert_eq!(
+        m.diffuse(4.0, DiffuseBoundary::Free, &mut scratch),
+        Err(DiffuseError::NonFinite)
+    );
+    assert_eq!(position_bits(&m), kept);
+}
+
+/// One step with each boundary rule on shared meshes, closed (spot) and open (demosthenes;
+/// bunny, with unreferenced vertices), against the `f64` oracle at every vertex. `Fixed`
+/// must keep some vertices and `Free` move them, so neither comparison is vacuous.
+#[test]
+fn diffuse_matches_reference_on_shared_meshes() {
+    for name in ["spot.obj", "demosthenes.obj", "bunny.obj"] {
+        let (p, t) = load(name);
+        for boundary in [DiffuseBoundary::Free, DiffuseBoundary::Fixed] {
+            let want = diffuse_reference(&p, &t, 0.5, boundary);
+            let mut buf = Buffers::new(caps(&p, &t));
+            let mut m = build_into(&mut buf, &p, &t).unwrap();
+            let mut scratch = vec![Vec3::ZERO; m.slots().vertices];
+            m.diffuse(0.5, boundary, &mut scratch).unwrap();
+            m.validate().unwrap();
+            let mut unmoved = 0;
+            for (v, want) in want.iter().enumerate() {
+                let got = m.position(VertexId::new(v as u32)).unwrap();
+                assert!(
+                    diffuse_close(got, want),
+                    "{name} {boundary:?} vertex {v}: {got} vs {want:?}"
+                );
+                unmoved += usize::from(got == p[v]);
+            }
+            assert!(unmoved < p.len() / 2, "{name} {boundary:?}: {unmoved} kept");
+            if boundary == DiffuseBoundary::Fixed && name != "spot.obj" {
+                assert!(unmoved > 0, "{name}: no boundary vertex kept");
+            }
+        }
+    }
 }
 
 #[test]

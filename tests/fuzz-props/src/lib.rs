@@ -280,6 +280,7 @@ pub mod tree_oracle;
 pub mod bvh_load;
 
 pub mod collapse_oracle;
+pub mod diffuse_oracle;
 pub mod halfedge;
 pub mod loop_oracle;
 
