@@ -43,11 +43,12 @@ impl<S: MeshStorage> Mesh<S> {
     }
 
     /// Moves one vertex: `x' = x + k·L(v)` (units of `k`: dimensionless; `k = 1` moves the
-    /// vertex to its neighbours' centroid). Returns the new position.
+    /// vertex to its neighbours' centroid). Returns the new position. Evaluated as written,
+    /// `k·L` and then the sum in `f32`, with `L` rounded to `f32` once ([`Self::laplacian`]).
     ///
     /// # Errors
     /// `Dead` for a dead vertex; `NonFinite` (mesh unchanged) if `k` or the result is not
-    /// finite.
+    /// finite, including when `L` or `k·L` exceeds `f32::MAX` though `x + k·L` would not.
     pub fn diffuse_vertex(&mut self, v: VertexId, k: f32) -> Result<Vec3, DiffuseError> {
         let l = self.laplacian(v).ok_or(DiffuseError::Dead)?;
         let p = self.pos_raw(v.0) + k * l;
@@ -59,8 +60,9 @@ impl<S: MeshStorage> Mesh<S> {
     }
 
     /// One Jacobi smoothing step over the whole mesh: every vertex moves by `k·L(v)`, all
-    /// computed from the old positions. `scratch` needs `slots().vertices` entries (contents
-    /// ignored). Isolated vertices stay put; boundary vertices per `boundary`.
+    /// computed from the old positions, each as [`Self::diffuse_vertex`] computes it.
+    /// `scratch` needs `slots().vertices` entries (contents ignored). Isolated vertices stay
+    /// put; boundary vertices per `boundary`.
     ///
     /// # Errors
     /// `ScratchTooSmall`, or `NonFinite` if `k` or any new position is not finite; the mesh is

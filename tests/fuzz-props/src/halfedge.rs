@@ -8,12 +8,13 @@
 
 use super::Input;
 use super::collapse_oracle::{Faces, canonical};
+use super::diffuse_oracle::{F32Fit, diffuse_close, diffuse_reference};
 use super::loop_oracle::{loop_close, loop_reference, reference_beta};
 use super::*;
 use glam::Vec3;
 use halfray_core::halfedge::{
-    CollapseAt, Counts, DiffuseBoundary, EdgeId, ExportError, HalfedgeId, HalfedgeMesh,
-    LoopWeights, VertexId, build_scratch_len,
+    CollapseAt, Counts, DiffuseBoundary, DiffuseError, EdgeId, ExportError, HalfedgeId,
+    HalfedgeMesh, LoopWeights, VertexId, build_scratch_len,
 };
 use halfray_core::solids::OCTAHEDRON_TRIANGLES;
 
@@ -77,6 +78,34 @@ fn exported(mesh: &FuzzMesh) -> (Vec<Vec3>, Vec<[u32; 3]>) {
     let written = mesh.export(&mut p, &mut t);
     assert!(written.is_ok(), "export into exact buffers: {written:?}");
     (p, t)
+}
+
+fn vid(v: usize) -> VertexId {
+    VertexId::new(v as u32)
+}
+
+/// A position's bits (`-0.0` and `0.0` differ), `None` for a dead or missing vertex.
+fn bits(q: Option<Vec3>) -> Option<[u32; 3]> {
+    q.map(|q| q.to_array().map(f32::to_bits))
+}
+
+/// Asserts that every vertex slot of `mesh` but `except` holds `before`'s position bit for
+/// bit (or is dead in both).
+fn assert_positions_kept(
+    mesh: &FuzzMesh,
+    before: &FuzzMesh,
+    except: Option<VertexId>,
+    log: &[String],
+) {
+    for w in (0..before.slots().vertices).map(vid) {
+        if Some(w) != except {
+            assert_eq!(
+                bits(mesh.position(w)),
+                bits(before.position(w)),
+                "{w:?} moved: {log:?}"
+            );
+        }
+    }
 }
 
 fn euler(c: Counts) -> i64 {
@@ -143,9 +172,16 @@ fn point(i: &mut Input<'_>) -> Vec3 {
 /// documented counts, puts every old and new vertex where the Loop rules evaluated in `f64` on
 /// the exported triangle list put it ([`super::loop_oracle`], within
 /// [`super::loop_oracle::LOOP_TOL_ROUNDINGS`]), and leaves its output untouched when it
-/// refuses; a successful `set_position` leaves exactly the given point at the vertex and every
-/// other position as it was; a refused export writes nothing; build(export(mesh)) validates
-/// and re-exports identically.
+/// refuses; a successful `diffuse` (`Free` or `Fixed` boundary) puts every live vertex where
+/// the uniform Laplacian rule evaluated in `f64` on the exported triangle list puts it
+/// ([`super::diffuse_oracle`], within [`super::diffuse_oracle::DIFFUSE_TOL_ROUNDINGS`]), a
+/// short scratch is refused as `ScratchTooSmall`, a step the oracle finds clearly finite
+/// succeeds and one it finds clearly beyond `f32` is refused as `NonFinite`, and a refusal
+/// leaves every position bit for bit; `diffuse_vertex` likewise for its one vertex (`Dead`
+/// for a dead one, `NonFinite` for a non-finite `k`), every other position kept bit for bit;
+/// a successful `set_position` leaves exactly the given point at the vertex and every other
+/// position as it was; a refused export writes nothing; build(export(mesh)) validates and
+/// re-exports identically.
 pub fn halfedge_ops(data: &[u8]) {
     let mut i = Input::new(data);
     let start = i.u8() % 6;
@@ -279,8 +315,38 @@ pub fn halfedge_ops(data: &[u8]) {
             Op::DiffuseVertex => {
                 let v = vertex(&mut i);
                 let k = i.f32();
+                // The independent oracle: the rule on the triangle list before the step (a
+                // single vertex moves whether on the boundary or not).
+                let (ps, ts) = exported(&mesh);
+                let want = diffuse_reference(&ps, &ts, f64::from(k), DiffuseBoundary::Free);
                 let r = mesh.diffuse_vertex(v, k);
                 log.push(format!("diffuse_vertex {v:?} {k:e} -> {r:?}"));
+                if before.position(v).is_none() {
+                    assert_eq!(r, Err(DiffuseError::Dead), "dead vertex: {log:?}");
+                } else if !k.is_finite() {
+                    assert_eq!(r, Err(DiffuseError::NonFinite), "k: {log:?}");
+                } else {
+                    // Judged only where the f64 values are clear of f32::MAX by their rounding
+                    // bounds: the docs evaluate L, k·L and x + k·L in f32 and refuse when any
+                    // overflows (a narrowing listed in fuzz/README.md).
+                    let want = &want[v.index()];
+                    match want.f32_fit() {
+                        F32Fit::Finite => assert!(r.is_ok(), "refused, {want:?}: {log:?}"),
+                        F32Fit::Overflows => {
+                            assert_eq!(r, Err(DiffuseError::NonFinite), "{want:?}: {log:?}");
+                        }
+                        F32Fit::Unclear => {}
+                    }
+                }
+                if let Ok(p) = r {
+                    assert_eq!(mesh.position(v), Some(p), "returned position: {log:?}");
+                    assert!(
+                        diffuse_close(p, &want[v.index()]),
+                        "diffuse_vertex {v:?}: {p:?} vs {:?}: {log:?}",
+                        want[v.index()]
+                    );
+                    assert_positions_kept(&mesh, &before, Some(v), &log);
+                }
                 r.map(|_| true).map_err(|e| format!("{e:?}"))
             }
             Op::Diffuse => {
@@ -292,8 +358,36 @@ pub fn halfedge_ops(data: &[u8]) {
                 };
                 let short = usize::from(i.u8() % 2 == 1 && slots.vertices > 0);
                 let mut sc = vec![Vec3::ZERO; slots.vertices - short];
+                // The independent oracle: the rule on the triangle list before the step.
+                let (ps, ts) = exported(&mesh);
+                let want = diffuse_reference(&ps, &ts, f64::from(k), boundary);
                 let r = mesh.diffuse(k, boundary, &mut sc);
                 log.push(format!("diffuse {k} {boundary:?} short={short} -> {r:?}"));
+                let live = || (0..slots.vertices).filter(|&v| before.position(vid(v)).is_some());
+                // Success or `NonFinite` judged only where clear (as for `DiffuseVertex`).
+                let fits: Vec<F32Fit> = live().map(|v| want[v].f32_fit()).collect();
+                if short == 1 {
+                    let needed = slots.vertices;
+                    let e = Err(DiffuseError::ScratchTooSmall { needed });
+                    assert_eq!(r, e, "short scratch: {log:?}");
+                } else if fits.contains(&F32Fit::Overflows) {
+                    assert_eq!(r, Err(DiffuseError::NonFinite), "overflow: {log:?}");
+                } else if fits.iter().all(|&f| f == F32Fit::Finite) {
+                    assert_eq!(r, Ok(()), "a finite step refused: {log:?}");
+                }
+                match r {
+                    Ok(()) => {
+                        for v in live() {
+                            let got = mesh.position(vid(v));
+                            assert!(
+                                got.is_some_and(|g| diffuse_close(g, &want[v])),
+                                "diffuse vertex {v}: {got:?} vs {:?}: {log:?}",
+                                want[v]
+                            );
+                        }
+                    }
+                    Err(_) => assert_positions_kept(&mesh, &before, None, &log),
+                }
                 r.map(|()| true).map_err(|e| format!("{e:?}"))
             }
             Op::Loop => {
@@ -356,17 +450,8 @@ pub fn halfedge_ops(data: &[u8]) {
                 if r.is_ok() {
                     // Exactly `p` at `v` (bit for bit: -0.0 stays -0.0), every other slot
                     // as it was.
-                    let bits = |q: Option<Vec3>| q.map(|q| q.to_array().map(f32::to_bits));
                     assert_eq!(bits(mesh.position(v)), bits(Some(p)), "set: {log:?}");
-                    for w in (0..slots.vertices as u32).map(VertexId::new) {
-                        if w != v {
-                            assert_eq!(
-                                bits(mesh.position(w)),
-                                bits(before.position(w)),
-                                "set_position moved {w:?}: {log:?}"
-                            );
-                        }
-                    }
+                    assert_positions_kept(&mesh, &before, Some(v), &log);
                 }
                 r.map(|()| true).map_err(|e| format!("{e:?}"))
             }
