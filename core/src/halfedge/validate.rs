@@ -17,8 +17,8 @@ impl<S: MeshStorage> Mesh<S> {
     /// boundary vertex stores its boundary halfedge, no two of its edges share the other
     /// endpoint; and the vertex fans together cover every live halfedge exactly once.
     ///
-    /// Cost O(H + Σ valence²). Every walk is bounded by the slot count, so corrupt data
-    /// cannot hang it.
+    /// Cost O(H + Σ valence²). Every walk is bounded by the slot count (the walks around
+    /// vertices by the halfedge checks run before them), so corrupt data cannot hang it.
     ///
     /// # Errors
     ///
@@ -51,14 +51,18 @@ impl<S: MeshStorage> Mesh<S> {
                 covered += self.check_vertex(v)?;
             }
         }
+        // The fans are disjoint cycles of live halfedges (disjoint: each keeps its vertex as
+        // tail; see `check_vertex`), so they cover every live halfedge exactly once if and
+        // only if every live halfedge is in its tail's fan. Their sizes adding up to the live
+        // count shows it at once; otherwise some halfedge is missing and the search names
+        // its tail. (It always finds one: a count without a missing halfedge cannot happen,
+        // so no other error follows it.)
         if covered != self.live.halfedges() {
-            // Name a vertex whose fan misses one of its outgoing halfedges.
             for h in 0..ne * 2 {
                 if self.h_live(h) && !self.fan_contains(self.tail_raw(h), h) {
                     return Err(IE::VertexFan(VertexId(self.tail_raw(h))));
                 }
             }
-            return Err(IE::FreeList(ElementKind::Edge));
         }
         Ok(())
     }
@@ -173,11 +177,16 @@ impl<S: MeshStorage> Mesh<S> {
             return Err(IE::VertexHalfedge(id));
         }
         let bound = self.walk_bound();
+        // No check inside the walk: once the halfedge checks (all run before any vertex
+        // check) have passed, it is a cycle of live halfedges out of `v`, at most `bound`
+        // long. Those checks make `next` and `prev` inverse permutations of the live
+        // halfedges (every link live, `prev(next(h)) = h = next(prev(h))`), so `rot_ccw`
+        // (the twin of `prev`, live with its edge) permutes them too: its orbit from the live
+        // `start` returns to `start` within the live halfedge count, at most `bound`. It
+        // keeps the tail: `head(prev(h)) = tail(next(prev(h))) = tail(h)` (the head–tail
+        // check).
         let (mut h, mut n, mut boundary) = (start, 0usize, 0usize);
         loop {
-            if !self.h_live(h) || self.tail_raw(h) != v || n >= bound {
-                return Err(IE::VertexFan(id));
-            }
             n += 1;
             if self.face_raw(h) == NONE {
                 boundary += 1;
