@@ -5,7 +5,7 @@
 #
 #   bash scripts/slurm-local.sh COMMAND [ARGS...]
 #   e.g. bash scripts/slurm-local.sh sinfo
-#        bash scripts/slurm-local.sh bash scripts/slurm-ci.sh ../shared/meshes
+#        bash scripts/slurm-local.sh bash scripts/slurm-ci-crosscheck.sh target/cluster ../shared/meshes/*.obj
 #
 # Writes a slurm.conf for one node with this machine's CPUs and memory (as `slurmd -C` reports
 # them), `select/cons_tres` with CPUs and memory consumable, one default partition `local`, and

@@ -18,14 +18,14 @@
 #   test        cargo test --workspace (unit, integration, numerical-stability, fuzz-corpus replay)
 #   embree      Embree 4.4.0 from the pinned PyPI wheel; Embree tests; crosscheck on every shared mesh;
 #               the same as 4 local shards merged equals it unsharded
+#   bench       halfray bench accuracy --quick (runs; watertight must show zero leaks); the corpus
+#               (scripts/corpus.sh) through bench bvh with few rays; the three charts from the JSON;
+#               crosscheck of the corpus's `far` mesh (zero genuine mismatches, zero leaks)
 #   fuzz        nightly + cargo-fuzz; every fuzz target for FUZZ_SECONDS (default 30) each
 #   cluster     a real one-node Slurm cluster (Debian slurmctld/slurmd/munge, scripts/slurm-local.sh):
 #               the crosscheck array + merge (requeued task resumes, merged = unsharded, cancelled
 #               task fails the merge naming its shard); the fuzz array + merge reports a planted
 #               crash (needs the embree stage; SKIP_CLUSTER=1 skips it)
-#   bench       halfray bench accuracy --quick (runs; watertight must show zero leaks); the corpus
-#               (scripts/corpus.sh) through bench bvh with few rays; the three charts from the JSON;
-#               crosscheck of the corpus's `far` mesh (zero genuine mismatches, zero leaks)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 ROOT=$PWD

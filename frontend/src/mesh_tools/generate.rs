@@ -1,5 +1,5 @@
 //! `halfray mesh generate KIND --seed N -o OUT.obj`: the generated meshes of the benchmark
-//! corpus (`scenes/corpus.txt`), each a pure function of its kind, seed and size, so that a
+//! corpus (`scenes/corpus/corpus.txt`), each a pure function of its kind, seed and size, so that a
 //! corpus is regenerated bit for bit on any machine instead of being stored.
 //!
 //! | kind | what | default size |
