@@ -8,6 +8,7 @@
 //! move itself. The offset scales with the magnitude of the coordinates, so it is correct at
 //! `|p| = 1` and at `|p| = 1e7` alike.
 
+use crate::float::unit_direction_f64;
 use crate::ray::Ray;
 use crate::tolerance::SHADOW_SEGMENT_END_SLACK;
 use glam::{Vec2, Vec3};
@@ -45,11 +46,12 @@ impl Hit {
         }
     }
 
-    /// The origin for a ray leaving this hit in direction `w`: see [`offset_ray_origin`].
+    /// The origin for a ray leaving this hit in direction `w`: [`offset_ray_origin`] with the
+    /// hit's normal taken as unit length, as its contract says (not normalised again).
     #[inline]
     #[must_use]
     pub fn spawn_origin(&self, w: Vec3) -> Vec3 {
-        offset_ray_origin(self.point, self.point_error, self.normal, w)
+        offset_to_side(self.point, self.point_error, self.normal, self.side(w) == 1)
     }
 
     /// The two origins rays leave this hit from, `[front, back]`: [`Hit::spawn_origin`]`(w)`
@@ -77,11 +79,18 @@ impl Hit {
 ///
 /// Contract: if the exact surface point lies in the box `p ± p_error` and the surface is locally
 /// the plane with normal `n`, the returned point lies strictly on `w`'s side of that plane.
-/// `n` need not be unit length; a zero or non-finite `n` leaves `p` unchanged except for the
-/// one-ulp push.
+/// `n` need not be unit length: it is normalised first (in `f64`, so a normal of any finite
+/// non-zero length, `1e-30` or `1e30`, gives the offset of its direction). A zero or
+/// non-finite `n` has no side: `p` is returned unchanged.
 #[must_use]
 pub fn offset_ray_origin(p: Vec3, p_error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
-    offset_to_side(p, p_error, n, w.dot(n) < 0.0)
+    match unit_direction_f64(n) {
+        Ok(unit) => {
+            let n = unit.as_vec3();
+            offset_to_side(p, p_error, n, w.dot(n) < 0.0)
+        }
+        Err(_) => p,
+    }
 }
 
 /// [`offset_ray_origin`] to the side of the plane `w` points to: against `n` when `back`.
@@ -155,6 +164,37 @@ mod tests {
         assert!(down.y < p.y - err.y, "{down:?}");
         assert_eq!(up.x, p.x);
         assert_eq!(up.z, p.z);
+    }
+
+    /// The contract for a normal of any length: the exact point may lie anywhere in
+    /// `p ± p_error`, so the plane `x = c` may pass through any `c ∈ [−1, 1]`; the origin must
+    /// lie beyond `x = 1` to `w`'s side (and below `−1` against it) whether `n` is `2⁻¹⁰⁰`,
+    /// `10⁻³`, `0.5`, `1` or `2⁶⁰` times the unit normal (the offset scaled with `|n|²`
+    /// before). A zero or non-finite `n` has no side and leaves `p` as it is.
+    #[test]
+    fn offset_follows_the_normal_s_direction_not_its_length() {
+        let (p, err) = (Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0));
+        for k in [2f32.powi(-100), 1.0e-3, 0.5, 1.0, 2f32.powi(60)] {
+            let n = Vec3::X * k;
+            let out = offset_ray_origin(p, err, n, Vec3::new(1.0, 0.5, 0.0));
+            let back = offset_ray_origin(p, err, n, Vec3::new(-1.0, 0.5, 0.0));
+            assert!(out.x > 1.0 && back.x < -1.0, "|n| = {k}: {out:?} {back:?}");
+            assert_eq!((out.y, out.z, back.y, back.z), (0.0, 0.0, 0.0, 0.0));
+        }
+        let p = Vec3::new(1.0, 2.0, 3.0);
+        for n in [
+            Vec3::ZERO,
+            Vec3::new(f32::NAN, 0.0, 0.0),
+            Vec3::new(f32::INFINITY, 0.0, 0.0),
+            Vec3::new(1.0, f32::NEG_INFINITY, 0.0),
+        ] {
+            let got = offset_ray_origin(p, Vec3::splat(1.0e-3), n, Vec3::X);
+            assert_eq!(
+                got.to_array().map(f32::to_bits),
+                p.to_array().map(f32::to_bits),
+                "{n:?}"
+            );
+        }
     }
 
     /// pbrt-v4's `OffsetRayOrigin` restated here, the oracle of the origins' tests: the error

@@ -700,6 +700,42 @@ fn clearance_rejects_mismatched_lengths_and_reports_infinity_for_misses() {
     assert_eq!(min, 5.0);
 }
 
+/// The clearance is a world distance whatever the normal's length: a plane 5 units away along
+/// normals from `2⁻⁸⁰` to `2⁸⁰` long (their squares leave `f32`'s range) is 5 units away, to
+/// within the ray test's and the product's rounding (a few ulps of 5, `T_ULPS`).
+#[test]
+fn clearance_is_the_distance_for_normals_of_any_length() {
+    /// Rounding allowed on the distance, in ulps of the answer: the intersector's `t`
+    /// (watertight, a few roundings) times the normal's exact power-of-two length.
+    const T_ULPS: f32 = 8.0;
+    let pos = [
+        Vec3::new(-1.0, -1.0, 5.0),
+        Vec3::new(3.0, -1.0, 5.0),
+        Vec3::new(-1.0, 3.0, 5.0),
+    ];
+    let tris = [[0u32, 1, 2]];
+    let mesh = TriangleMesh::new(&pos, &tris);
+    let bvh = build(&mesh, &BuildOptions::default()).unwrap();
+    for e in [-80, -40, -20, 0, 20, 40, 80] {
+        let k = 2f32.powi(e);
+        let mut out = [0.0f32; 1];
+        let min = bvh
+            .clearance(
+                &mut Triangles::new(&mesh, &Watertight),
+                &[Vec3::ZERO],
+                &[Vec3::Z * k],
+                &mut out,
+            )
+            .unwrap();
+        assert!(
+            (out[0] - 5.0).abs() <= T_ULPS * 5.0 * f32::EPSILON,
+            "normal of length 2^{e}: clearance {}",
+            out[0]
+        );
+        assert_eq!(min, out[0]);
+    }
+}
+
 /// Every node's box and leaf range, in depth-first order (left first).
 fn preorder(b: &VecBvh) -> Vec<(Aabb, Option<core::ops::Range<usize>>)> {
     let mut out = Vec::new();

@@ -58,7 +58,7 @@ pub use stats::TraversalStats;
 pub use walk::CULL_REL_SLACK;
 
 use crate::aabb::Aabb;
-use crate::float::sqrt;
+use crate::float::sqrt_f64;
 use crate::mesh::PrimitiveSource;
 use crate::ray::Ray;
 use crate::sealed::Inside;
@@ -199,7 +199,9 @@ pub trait RayQuery {
         for ((&p, &n), o) in points.iter().zip(normals).zip(out.iter_mut()) {
             let ray = Ray::new(p, n);
             let dist = match self.closest_hit(&ray, &mut leaf, &mut Query::new()) {
-                Some((_, t)) => t * sqrt(n.length_squared()),
+                // In `f64`: the square of an `f32` length neither overflows nor underflows
+                // there, so a normal of length 1e-30 or 1e30 gives the distance, not 0 or ∞.
+                Some((_, t)) => (f64::from(t) * sqrt_f64(n.as_dvec3().length_squared())) as f32,
                 None => f32::INFINITY,
             };
             *o = dist;

@@ -24,10 +24,36 @@ pub struct TraversalStats {
 }
 
 impl TraversalStats {
-    /// Adds `other`'s counters to these.
+    /// Adds `other`'s counters to these, saturating at `u64::MAX` (never a panic, never a
+    /// wrap to a small count).
     #[inline]
     pub fn add(&mut self, other: &Self) {
-        self.nodes_visited += other.nodes_visited;
-        self.primitives_tested += other.primitives_tested;
+        self.nodes_visited = self.nodes_visited.saturating_add(other.nodes_visited);
+        self.primitives_tested = self
+            .primitives_tested
+            .saturating_add(other.primitives_tested);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::TraversalStats;
+
+    #[test]
+    fn adding_saturates_at_the_largest_count() {
+        let mut s = TraversalStats {
+            nodes_visited: u64::MAX - 1,
+            primitives_tested: 7,
+        };
+        s.add(&TraversalStats {
+            nodes_visited: 5,
+            primitives_tested: u64::MAX,
+        });
+        assert_eq!((s.nodes_visited, s.primitives_tested), (u64::MAX, u64::MAX));
+        s.add(&TraversalStats {
+            nodes_visited: 0,
+            primitives_tested: 0,
+        });
+        assert_eq!((s.nodes_visited, s.primitives_tested), (u64::MAX, u64::MAX));
     }
 }

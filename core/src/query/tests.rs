@@ -176,7 +176,7 @@ fn conforms<Q: RayQuery>(name: &str, q: &Q, mesh: &TriangleMesh<'_>) {
     let min = q.clearance(&mut tris, &points, &normals, &mut out).unwrap();
     for (k, (&p, &d)) in points.iter().zip(&normals).enumerate() {
         let want = brute_watertight(mesh, &Ray::new(p, d)).map_or(f32::INFINITY, |(_, h)| {
-            h.t * crate::float::sqrt(d.length_squared())
+            (f64::from(h.t) * d.as_dvec3().length()) as f32
         });
         assert_eq!(out[k], want, "{name}: clearance {k}");
     }
