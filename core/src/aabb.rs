@@ -144,24 +144,31 @@ impl Aabb {
     /// bound is the `f32` difference stepped one ulp outward (the difference is within half
     /// an ulp of the exact one), so the result contains every exact `p − origin`. Infinite
     /// bounds stay as they are (an empty box stays empty); a difference that overflows
-    /// becomes infinite on its own side. A wide tree stores its node boxes this way, relative
+    /// becomes infinite on its own side, and the bound on the other side of it the largest
+    /// finite value (`f32::MAX` for a lower bound that overflows upward), so that a box beyond
+    /// `f32`'s range is `[f32::MAX, +∞]`, not the empty `[+∞, +∞]`. A wide tree stores its node boxes this way, relative
     /// to its centre, so that their bounds and a ray's origin in that frame are small numbers
     /// whatever the coordinates' magnitude.
     #[inline]
     #[must_use]
     pub fn relative_to(&self, origin: Vec3) -> Self {
-        let step = |x: f32, down: bool| match (x.is_finite(), down) {
-            (false, _) => x,
-            (true, true) => x.next_down(),
-            (true, false) => x.next_up(),
+        // `b` a finite bound whose difference `x` overflowed: the exact difference is beyond
+        // `±f32::MAX` on `x`'s side, so a lower bound there is `f32::MAX` (an upper `−f32::MAX`).
+        let lower = |b: f32, x: f32| match (x.is_finite(), b.is_finite() && x == f32::INFINITY) {
+            (true, _) => x.next_down(),
+            (false, true) => f32::MAX,
+            (false, false) => x,
         };
-        let (lo, hi) = (
-            (self.min - origin).to_array(),
-            (self.max - origin).to_array(),
-        );
+        let upper = |b: f32, x: f32| match (x.is_finite(), b.is_finite() && x == f32::NEG_INFINITY)
+        {
+            (true, _) => x.next_up(),
+            (false, true) => f32::MIN,
+            (false, false) => x,
+        };
+        let (lo, hi) = (self.min - origin, self.max - origin);
         Self {
-            min: Vec3::from_array(lo.map(|x| step(x, true))),
-            max: Vec3::from_array(hi.map(|x| step(x, false))),
+            min: Vec3::from_array(core::array::from_fn(|i| lower(self.min[i], lo[i]))),
+            max: Vec3::from_array(core::array::from_fn(|i| upper(self.max[i], hi[i]))),
         }
     }
 
@@ -189,7 +196,9 @@ impl Aabb {
     #[inline]
     #[must_use]
     pub fn overlaps(&self, other: &Self) -> bool {
-        self.min.x <= other.max.x
+        self.is_valid()
+            && other.is_valid()
+            && self.min.x <= other.max.x
             && other.min.x <= self.max.x
             && self.min.y <= other.max.y
             && other.min.y <= self.max.y
@@ -370,6 +379,32 @@ mod tests {
     use super::*;
 
     const UNIT: Aabb = Aabb::new(Vec3::ZERO, Vec3::ONE);
+
+    /// An inverted box (`min > max` on one axis) is empty and overlaps nothing, even a box
+    /// that holds both its corners.
+    #[test]
+    fn an_inverted_box_overlaps_nothing() {
+        let inverted = Aabb::new(Vec3::new(5.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 1.0));
+        let big = Aabb::new(Vec3::splat(-10.0), Vec3::splat(10.0));
+        assert!(!inverted.overlaps(&big) && !big.overlaps(&inverted));
+        assert!(!inverted.overlaps(&inverted));
+        assert!(UNIT.overlaps(&big));
+    }
+
+    /// A box beyond `f32`'s range relative to the origin keeps every exact difference:
+    /// `[f32::MAX, f32::MAX] − (−1.99·10³⁸)` is about `5.4·10³⁸`, so the result is
+    /// `[f32::MAX, +∞]` (not the empty `[+∞, +∞]`); the mirror case `[−f32::MAX, −∞]`.
+    #[test]
+    fn a_difference_beyond_the_range_keeps_a_non_empty_box() {
+        let far = Aabb::new(Vec3::splat(f32::MAX), Vec3::splat(f32::MAX));
+        let r = far.relative_to(Vec3::new(-1.99e38, 0.0, 0.0));
+        assert_eq!((r.min.x, r.max.x), (f32::MAX, f32::INFINITY));
+        assert!(r.is_valid());
+        let near = Aabb::new(Vec3::splat(-f32::MAX), Vec3::splat(-f32::MAX));
+        let r = near.relative_to(Vec3::new(f32::MAX, 0.0, 0.0));
+        assert_eq!((r.min.x, r.max.x), (f32::NEG_INFINITY, f32::MIN));
+        assert!(r.is_valid());
+    }
 
     /// An axis beyond `z` is `(NaN, NaN)`, not a panic; axes 0–2 are the slab's distances,
     /// by the reciprocal and by division alike.

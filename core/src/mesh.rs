@@ -91,8 +91,9 @@ impl Primitive for [Vec3; 3] {
 /// `positions[triangles[i][k]]`.
 ///
 /// A triangle with a vertex index out of range, or a non-finite vertex, is an invalid
-/// primitive (never a panic): the builder rejects or excludes it and
-/// [`TriangleMesh::triangle`] returns `None` for it.
+/// primitive (never a panic): the builder rejects or excludes it. [`TriangleMesh::triangle`]
+/// returns `None` only for an index out of range: a triangle with a non-finite vertex comes
+/// back as it is.
 ///
 /// Two meshes are equal (`==`) when their positions and triangles are, element by element
 /// (`f32` equality: a NaN position is unequal to itself), wherever the slices live.

@@ -40,6 +40,7 @@ use crate::float::{gamma, gamma_f64, unit_direction_f64};
 use crate::getters::getters;
 use crate::hit::Hit;
 use crate::ray::Ray;
+use crate::sphere::seam_wrapped;
 use crate::tolerance::{QUADRIC_CENTER_MIN_REL_DET, QUADRIC_DISTANCE_SLACK};
 use core::f64::consts::{PI, TAU};
 use glam::{DMat3, DMat4, DVec3, Vec2, Vec3};
@@ -79,8 +80,11 @@ impl Quadric {
     ///
     /// # Errors
     ///
-    /// [`GeometryError::NonFinite`] for a non-finite entry,
-    /// [`GeometryError::Degenerate`] when `A = 0` and `b = 0` (`f` is constant).
+    /// [`GeometryError::NonFinite`] for a non-finite entry, or when the form centred at the
+    /// quadric's centre overflows `f64` (finite entries whose centre or constant `k` lies
+    /// beyond `f64`'s range, such as `A = I`, `b = (10²⁰⁰, 0, 0)`: `k = −10⁴⁰⁰`; every root
+    /// of such a quadric would overflow too); [`GeometryError::Degenerate`] when `A = 0` and
+    /// `b = 0` (`f` is constant).
     pub fn new(a: DMat3, b: DVec3, c: f64) -> Result<Self, GeometryError> {
         if !mat_is_finite(&a) || !b.is_finite() || !c.is_finite() {
             return Err(GeometryError::NonFinite);
@@ -452,7 +456,7 @@ impl Ellipsoid {
             phi += TAU;
         }
         let theta = libm::acos(y.z.clamp(-1.0, 1.0));
-        h.uv = Vec2::new((phi / TAU) as f32, (theta / PI) as f32);
+        h.uv = Vec2::new(seam_wrapped((phi / TAU) as f32), (theta / PI) as f32);
         Some(h)
     }
 }

@@ -67,6 +67,14 @@ fn normalize_scale(d: Vec3) -> (Vec3, i32) {
     )
 }
 
+/// `u = φ/2π` kept in `[0, 1)`: a `φ` just below `0` plus `2π`, or a `φ` just below `2π`
+/// divided by it, can round to exactly `1`, which is the seam at `0` (`φ` is periodic), so `1`
+/// (and NaN) maps to `0`.
+#[inline]
+pub(crate) fn seam_wrapped(u: f32) -> f32 {
+    if u < 1.0 { u } else { 0.0 }
+}
+
 impl Sphere {
     /// A sphere of `radius` around `center`.
     ///
@@ -229,7 +237,7 @@ impl Sphere {
             point,
             point_error,
             normal,
-            uv: Vec2::new(phi / TAU, theta / PI),
+            uv: Vec2::new(seam_wrapped(phi / TAU), theta / PI),
             front_face: ray.direction.dot(normal) < 0.0,
         })
     }
@@ -242,6 +250,21 @@ mod tests {
     use crate::test_util::{lcg, unit_vec};
     use glam::DVec3;
     use std::vec::Vec;
+
+    /// `u = φ/2π` stays below 1 at the seam: a hit at `φ = −10⁻⁹` (just below the `+x` axis),
+    /// where `φ + 2π` rounds to `2π`, has `u = 0`; the ellipsoid's `u` the same.
+    #[test]
+    fn u_stays_below_one_at_the_seam() {
+        let ray = Ray::new(Vec3::new(5.0, -1.0e-9, 0.0), -Vec3::X);
+        let h = Sphere::new(Vec3::ZERO, 1.0)
+            .unwrap()
+            .intersect(&ray)
+            .unwrap();
+        assert!((0.0..1.0).contains(&h.uv.x), "sphere u {}", h.uv.x);
+        let e = crate::quadric::Ellipsoid::new(Vec3::ZERO, Vec3::ONE).unwrap();
+        let h = e.intersect(&ray).unwrap();
+        assert!((0.0..1.0).contains(&h.uv.x), "ellipsoid u {}", h.uv.x);
+    }
 
     /// Reference roots of the exact `f32` inputs, in `f64` (stable form; the `f64` rounding is
     /// ~2⁻²⁹ of an `f32` ulp for these inputs).

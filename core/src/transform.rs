@@ -27,7 +27,7 @@
 //! every intersector treats as hitting nothing.
 
 use crate::error::GeometryError;
-use crate::float::{gamma, unit_direction_f64};
+use crate::float::{gamma, sqrt_f64, unit_direction_f64};
 use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::tolerance::TRANSFORM_MIN_REL_DET;
@@ -232,17 +232,25 @@ impl Transform {
         (out, err)
     }
 
-    /// `M⁻ᵀ·n`, normalised (zero if `n` is zero or the result is not finite).
+    /// `M⁻ᵀ·n`, normalised (zero if `n` is zero or not finite). Evaluated in `f64` and
+    /// rounded once: the product and its length stay in range for every `f32` matrix and
+    /// normal, so a transform that scales by `10⁻²⁰` or `10²³`, or a normal of length `10²⁰`,
+    /// gives a unit normal (within one `f32` rounding a component).
     #[must_use]
     pub fn normal_to_world(&self, n: Vec3) -> Vec3 {
         let li = &self.inv;
-        let w = Vec3::new(
-            li.x_axis.truncate().dot(n),
-            li.y_axis.truncate().dot(n),
-            li.z_axis.truncate().dot(n),
+        let n = n.as_dvec3();
+        let w = DVec3::new(
+            li.x_axis.truncate().as_dvec3().dot(n),
+            li.y_axis.truncate().as_dvec3().dot(n),
+            li.z_axis.truncate().as_dvec3().dot(n),
         );
-        let w = w.normalize_or_zero();
-        if w.is_finite() { w } else { Vec3::ZERO }
+        let len = sqrt_f64(w.length_squared());
+        if len > 0.0 && len.is_finite() {
+            (w / len).as_vec3()
+        } else {
+            Vec3::ZERO
+        }
     }
 
     /// An object-space hit in world space: point by `M` with the grown error bound, normal by
@@ -286,6 +294,32 @@ mod tests {
     use crate::sphere::Sphere;
     use crate::test_util::{lcg, special_f32, unit_vec};
     use crate::triangle::{TriangleIntersector, Watertight};
+
+    /// A unit normal whatever the scale: through `scale(10⁻²⁰)` and `scale(10²³)` (the
+    /// inverse's entries `10²⁰` and `10⁻²³`: their squares leave `f32`'s range) and for
+    /// normals of length `10²⁰` and `10⁻²⁵` under the identity.
+    #[test]
+    fn normals_are_unit_at_every_scale() {
+        for s in [1.0e-20f32, 1.0e23] {
+            let t = Transform::scale(Vec3::splat(s)).unwrap();
+            let n = t.normal_to_world(Vec3::new(0.0, 0.6, 0.8));
+            assert!(
+                (n.length() - 1.0).abs() < 4.0 * f32::EPSILON,
+                "scale {s}: {n:?}"
+            );
+            assert!((n - Vec3::new(0.0, 0.6, 0.8)).abs().max_element() < 4.0 * f32::EPSILON);
+        }
+        for k in [1.0e20f32, 1.0e-25] {
+            assert_eq!(
+                Transform::IDENTITY.normal_to_world(Vec3::X * k),
+                Vec3::X,
+                "{k}"
+            );
+        }
+        for n in [Vec3::ZERO, Vec3::NAN, Vec3::new(f32::INFINITY, 0.0, 0.0)] {
+            assert_eq!(Transform::IDENTITY.normal_to_world(n), Vec3::ZERO, "{n:?}");
+        }
+    }
 
     /// `M·M⁻¹` against the identity, per entry (absolute; unitless in the linear block,
     /// world units in the translation column): the inverse is computed in `f64` and rounded

@@ -5,6 +5,18 @@ use crate::hit::spawn_ray;
 use crate::test_util::unit_vec;
 use crate::tolerance::QUADRIC_ROOT_RESIDUAL_REL;
 
+/// Finite inputs whose centred form overflows `f64` are refused as `NonFinite`, as the
+/// documentation says: `x² + 2·10²⁰⁰·x = 0` (centre `−10²⁰⁰`, `k = −10⁴⁰⁰`); at `10¹⁰⁰` the
+/// same sphere is built.
+#[test]
+fn a_centred_form_beyond_the_f64_range_is_refused() {
+    assert_eq!(
+        Quadric::new(DMat3::IDENTITY, DVec3::new(1.0e200, 0.0, 0.0), 0.0).err(),
+        Some(GeometryError::NonFinite)
+    );
+    assert!(Quadric::new(DMat3::IDENTITY, DVec3::new(1.0e100, 0.0, 0.0), 0.0).is_ok());
+}
+
 /// `|f(o + t·d)| / (|∇f|·|t·d| + F)`: compared with `QUADRIC_ROOT_RESIDUAL_REL`.
 fn residual_ratio(q: &Quadric, ray: &Ray, t: f64) -> f64 {
     let d = ray.direction.as_dvec3();

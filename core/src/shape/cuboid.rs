@@ -10,7 +10,8 @@ use glam::{Vec2, Vec3};
 
 /// Where the whole line of `ray` (its interval ignored) crosses the closed box `b`: the entry
 /// then the exit, `None` when it misses, when the box is empty or NaN, when a crossing is
-/// at an infinite `t`, or when the line is invalid (a non-finite origin or direction, or a
+/// at an infinite `t` or one beyond `f32`'s range (a direction of `10⁻³⁸` towards a box
+/// `10³` away), or when the line is invalid (a non-finite origin or direction, or a
 /// zero direction: [`Ray::validate`] of the ray with its interval replaced by all reals).
 ///
 /// The slab distances are computed in `f64` from the `f32` inputs (a quotient of exact
@@ -53,7 +54,7 @@ pub fn box_crossings(b: &Aabb, ray: &Ray) -> Option<[Hit; 2]> {
             a1 = axis;
         }
     }
-    if !(t0 <= t1) || !t0.is_finite() || !t1.is_finite() {
+    if !(t0 <= t1) || !(t0 as f32).is_finite() || !(t1 as f32).is_finite() {
         return None;
     }
     let mk = |t: f64, axis: usize, enter: bool| {
@@ -108,6 +109,18 @@ impl Shape for Aabb {
 mod tests {
     use super::*;
     use crate::float::F32_UNIT_ROUNDOFF;
+
+    /// A crossing whose `t` is finite in `f64` but beyond `f32`'s range (a direction of
+    /// `10⁻³⁸` towards a box `10³` away: `t ≈ 10⁴¹`) is no crossing, as an infinite one.
+    #[test]
+    fn a_crossing_beyond_the_f32_range_is_none() {
+        let b = Aabb::new(Vec3::new(1.0e3, -1.0, -1.0), Vec3::new(2.0e3, 1.0, 1.0));
+        let ray = Ray::new(Vec3::ZERO, Vec3::new(1.0e-38, 0.0, 0.0));
+        assert!(box_crossings(&b, &ray).is_none());
+        let ray = Ray::new(Vec3::ZERO, Vec3::new(1.0e-30, 0.0, 0.0));
+        let [a, z] = box_crossings(&b, &ray).expect("t = 10³³ is in range");
+        assert!(a.t.is_finite() && z.t.is_finite());
+    }
 
     /// The unit box `[0, 1]³` crossed along `+x` at `y = z = 0.5` from `x = −2`: by hand,
     /// entry at `t = 2` on the `−x` face, exit at `t = 3` on the `+x` face, the points exactly
