@@ -78,7 +78,10 @@ impl Hit {
 /// ulp further away from `p`.
 ///
 /// Contract: if the exact surface point lies in the box `p ± p_error` and the surface is locally
-/// the plane with normal `n`, the returned point lies strictly on `w`'s side of that plane.
+/// the plane with normal `n`, the returned point lies strictly on `w`'s side of that plane. A
+/// curved surface is that plane only where the box is small against its radius of curvature:
+/// a quadric of radius near `10⁻⁷` of its distance from the origin, or a cone's apex, has
+/// error boxes as large as its curvature, and the point may land on the wrong side there.
 /// `n` need not be unit length: it is normalised first (in `f64`, so a normal of any finite
 /// non-zero length, `1e-30` or `1e30`, gives the offset of its direction). A zero or
 /// non-finite `n` has no side: `p` is returned unchanged.

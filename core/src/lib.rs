@@ -6,7 +6,9 @@
 //! * [`float`]: the floating-point error model (`gamma(n)`) every tolerance derives from.
 //! * [`tolerance`]: the named, documented tolerances of the intersectors that need one.
 //! * [`hit`]: the hit record shared by every primitive, with a conservative error bound on the
-//!   hit point, and [`hit::spawn_ray`] for self-intersection-free secondary rays.
+//!   hit point, and [`hit::spawn_ray`] for secondary rays that do not meet their own surface
+//!   again (with the watertight triangle test, whose `t` is exact enough; planes, polygons,
+//!   boxes, and quadrics where the error box is small against the curvature).
 //! * [`aabb`]: axis-aligned boxes and the robust (Ize 2013) slab test.
 //! * [`triangle`]: ray–triangle tests behind one trait, the watertight one by default.
 //! * [`plane`], [`sphere`], [`quadric`], [`polygon`], [`transform`]: the other primitives.

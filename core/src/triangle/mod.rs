@@ -84,7 +84,12 @@ impl TriangleHit {
     }
 
     /// The full [`Hit`] record: the point reconstructed by barycentric interpolation (not
-    /// `o + t·d`) with pbrt-v4's bound `gamma(7)·Σ|b_i·v_i|` per component, and the unit normal.
+    /// `o + t·d`) with pbrt-v4's bound `gamma(7)·Σ|b_i·v_i|` per component, and the unit normal
+    /// of `(v1 − v0) × (v2 − v0)`, computed from `v` in `f64` ([`normal_f64`]: no `f32`
+    /// product to overflow, underflow or cancel) and normalised there, then rounded once: unit
+    /// within an `f32` rounding a component for triangles of any size, and of the right
+    /// orientation on slivers whose `f32` cross product (`ng`) has lost it. `ng`'s direction,
+    /// normalised, only where the `f64` normal is zero (collinear vertices).
     #[must_use]
     pub fn to_hit(&self, v: &[Vec3; 3]) -> Hit {
         let b0 = self.b0();
@@ -95,7 +100,7 @@ impl TriangleHit {
             t: self.t,
             point,
             point_error,
-            normal: self.ng.normalize_or_zero(),
+            normal: unit_normal(v).unwrap_or_else(|| self.ng.normalize_or_zero()),
             uv: Vec2::new(self.b1, self.b2),
             front_face: self.front_face,
         }
@@ -527,6 +532,14 @@ pub(crate) fn normal_f64_from_v0(v: &[Vec3; 3]) -> Option<(glam::DVec3, glam::DV
     (!(cancels(0) || cancels(1) || cancels(2))).then_some((n, scale))
 }
 
+/// The unit normal of `(v1 − v0) × (v2 − v0)` ([`normal_f64`], normalised in `f64` and rounded
+/// to `f32`), `None` when that normal is zero.
+fn unit_normal(v: &[Vec3; 3]) -> Option<Vec3> {
+    let n = normal_f64(v).0;
+    let len = crate::float::sqrt_f64(n.length_squared());
+    (len > 0.0 && len.is_finite()).then(|| (n / len).as_vec3())
+}
+
 /// Relative size below which a component of the `v0`-based normal is taken as cancelled and
 /// the normal recomputed from the best base vertex: `2⁻²⁰` of that component's rounding scale
 /// (`|e1| × |e2|` with absolute values). Unitless.
@@ -587,6 +600,91 @@ fn finish(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `(v1 − v0) × (v2 − v0)` of the `f32` vertices, in `f64`, by components written out
+    /// here (the oracle of the hit normal's tests, not `normal_f64`).
+    fn cross_f64(v: &[Vec3; 3]) -> [f64; 3] {
+        let e = |i: usize, k: usize| f64::from(v[i][k]) - f64::from(v[0][k]);
+        [
+            e(1, 1) * e(2, 2) - e(1, 2) * e(2, 1),
+            e(1, 2) * e(2, 0) - e(1, 0) * e(2, 2),
+            e(1, 0) * e(2, 1) - e(1, 1) * e(2, 0),
+        ]
+    }
+
+    /// The hit's normal is the unit normal of the triangle at every size: a right triangle
+    /// scaled by `10⁻¹¹ … 10¹⁹` (where `ng`'s `f32` square overflows or underflows, and the
+    /// normal came out zero or `1.03` long) is within 4 `f32` ulps of the `f64` unit normal.
+    #[test]
+    fn the_hit_normal_is_unit_for_triangles_of_any_size() {
+        for s in [1.0e-11f32, 1.0e-10, 1.0, 5.0e9, 1.0e10, 1.0e19] {
+            let v = [
+                Vec3::ZERO,
+                Vec3::new(s, 0.0, 0.0),
+                Vec3::new(0.3 * s, s, 0.2 * s),
+            ];
+            let ray = Ray::new(Vec3::new(0.3 * s, 0.3 * s, s), Vec3::new(0.1, 0.2, -1.0));
+            let h = Watertight.intersect(&ray, &v).unwrap().to_hit(&v);
+            let n = cross_f64(&v);
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            for k in 0..3 {
+                let want = n[k] / len;
+                assert!(
+                    (f64::from(h.normal[k]) - want).abs() <= 4.0 * f64::from(f32::EPSILON),
+                    "scale {s}: normal {:?}, want {want} at {k}",
+                    h.normal
+                );
+            }
+        }
+    }
+
+    /// A sliver whose `f32` cross product points the wrong way (its normal was 0.28 rad off),
+    /// and a triangle of size `10⁻²¹` whose `f32` product underflowed to zero: the normal now
+    /// agrees in sign with the exact one against the direction `w`, so the ray spawned along
+    /// `w` leaves the triangle (it came back at `t = 4·10⁻⁵` and `8·10⁻³⁰`). Inputs from a
+    /// probe against exact rational arithmetic.
+    #[test]
+    fn rays_spawned_from_slivers_and_tiny_triangles_leave_them() {
+        let sliver = [
+            Vec3::new(-0.24955761, 0.39648676, -0.7938566),
+            Vec3::new(0.36239064, -0.0054495335, 0.25929797),
+            Vec3::new(0.12838624, 0.14824726, -0.14342152),
+        ];
+        let ray = Ray::new(
+            Vec3::new(-0.684557, 1.5901769, 2.3139224),
+            Vec3::new(0.76976144, -1.4135668, -2.5316586),
+        );
+        let w = Vec3::new(0.47302952, -0.31584138, 0.8224885);
+        let h = Watertight.intersect(&ray, &sliver).unwrap().to_hit(&sliver);
+        let n = cross_f64(&sliver);
+        let w_n = f64::from(w.x) * n[0] + f64::from(w.y) * n[1] + f64::from(w.z) * n[2];
+        assert_eq!(w.dot(h.normal) < 0.0, w_n < 0.0, "normal {:?}", h.normal);
+        assert!(
+            Watertight
+                .intersect(&crate::spawn_ray(&h, w), &sliver)
+                .is_none()
+        );
+
+        let tiny = [
+            Vec3::new(-5.8062344e-22, 2.522993e-21, -9.839929e-21),
+            Vec3::new(8.497675e-21, 2.7592314e-21, -8.35069e-21),
+            Vec3::new(2.4482916e-21, 2.6017276e-21, -9.343019e-21),
+        ];
+        let ray = Ray::new(
+            Vec3::new(1.1442721e-20, -5.2180017e-20, 6.448538e-20),
+            Vec3::new(-7.305328e-18, 5.4825736e-17, -7.355133e-17),
+        );
+        let h = Watertight.intersect(&ray, &tiny).unwrap().to_hit(&tiny);
+        assert!((h.normal.length() - 1.0).abs() < 1.0e-6, "{:?}", h.normal);
+        for w in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
+            assert!(
+                Watertight
+                    .intersect(&crate::spawn_ray(&h, w), &tiny)
+                    .is_none(),
+                "{w:?}"
+            );
+        }
+    }
 
     /// Worked cases of the permutation (ties, signs), and for every sign pattern and
     /// dominant axis: `kz` is dominant, the three indices are a permutation, and the
