@@ -53,8 +53,9 @@ pub(crate) fn tri_context(ray: &Ray, v: &[Vec3; 3]) -> String {
 ///    or a triangle with two equal vertices never hits; a hit has `t` finite and in
 ///    `(t_min, t_max]`, barycentrics `b0 = 1 − b1 − b2`, `b1`, `b2` finite and within
 ///    [`BARYCENTRIC_SLACK`] of `[0, 1]`, `front_face` agreeing with the sign of `d·ng` when
-///    that sign is clear (`|cos| > 10⁻³`), and [`TriangleHit::to_hit`]'s point within its own
-///    error bound of `Σ bᵢ·vᵢ` (when nothing overflows).
+///    that sign is clear (`|cos| > 10⁻³`), [`TriangleHit::to_hit`]'s point within its own
+///    error bound of `Σ bᵢ·vᵢ` (when nothing overflows), and its normal unit and along
+///    `(v1 − v0) × (v2 − v0)` (where that is not zero).
 /// 2. **Agreement with the f64 reference** (`watertight` and `watertight-f32`, in the domain
 ///    of [`WatertightBound`]): when every reference edge function is farther from zero than
 ///    its error bound (equivalently, every reference barycentric `|bᵢ|` exceeds
@@ -215,7 +216,30 @@ fn check_hit_contract(
             ctx()
         );
     }
+    // The hit's normal: unit within `NORMAL_LEN_ULPS` and along `(v1 − v0) × (v2 − v0)`
+    // (here in `f64` from the `f32` vertices, written out) wherever that product is not zero.
+    let e = |i: usize, k: usize| f64::from(v[i][k]) - f64::from(v[0][k]);
+    let n = DVec3::new(
+        e(1, 1) * e(2, 2) - e(1, 2) * e(2, 1),
+        e(1, 2) * e(2, 0) - e(1, 0) * e(2, 2),
+        e(1, 0) * e(2, 1) - e(1, 1) * e(2, 0),
+    );
+    if n != DVec3::ZERO && n.is_finite() {
+        let len = hit.normal.as_dvec3().length();
+        assert!(
+            (len - 1.0).abs() <= NORMAL_LEN_ULPS * f64::from(f32::EPSILON)
+                && hit.normal.as_dvec3().dot(n) > 0.0,
+            "Hit::normal {:?} (length {len}) is not the unit normal of {n:?}\n{}",
+            hit.normal,
+            ctx()
+        );
+    }
 }
+
+/// How far from 1 a hit's unit normal may be, in `f32` ulps of 1: the `f64` normal is
+/// normalised in `f64` and each component rounded once to `f32` (half an ulp each), so the
+/// length is within about `√3/2` ulps; 4 leaves a margin.
+const NORMAL_LEN_ULPS: f64 = 4.0;
 
 pub(crate) fn seeds(s: &mut Vec<Seed>) {
     let t = |name: &str, bytes: Vec<u8>| ("ray_triangle", format!("seed-{name}"), bytes);
