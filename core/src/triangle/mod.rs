@@ -627,8 +627,8 @@ mod tests {
             let h = Watertight.intersect(&ray, &v).unwrap().to_hit(&v);
             let n = cross_f64(&v);
             let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-            for k in 0..3 {
-                let want = n[k] / len;
+            for (k, nk) in n.into_iter().enumerate() {
+                let want = nk / len;
                 assert!(
                     (f64::from(h.normal[k]) - want).abs() <= 4.0 * f64::from(f32::EPSILON),
                     "scale {s}: normal {:?}, want {want} at {k}",
