@@ -85,11 +85,12 @@ impl TriangleHit {
 
     /// The full [`Hit`] record: the point reconstructed by barycentric interpolation (not
     /// `o + t·d`) with pbrt-v4's bound `gamma(7)·Σ|b_i·v_i|` per component, and the unit normal
-    /// of `(v1 − v0) × (v2 − v0)`, computed from `v` in `f64` ([`normal_f64`]: no `f32`
-    /// product to overflow, underflow or cancel) and normalised there, then rounded once: unit
-    /// within an `f32` rounding a component for triangles of any size, and of the right
-    /// orientation on slivers whose `f32` cross product (`ng`) has lost it. `ng`'s direction,
-    /// normalised, only where the `f64` normal is zero (collinear vertices).
+    /// of `(v1 − v0) × (v2 − v0)`, computed from `v` in `f64` (from the base vertex whose
+    /// product does not cancel: no `f32` product to overflow, underflow or cancel), normalised
+    /// there and rounded once: unit within an `f32` rounding a component for triangles of any
+    /// size, and of the right orientation on slivers whose `f32` cross product (`ng`) has lost
+    /// it. `ng`'s direction, normalised, only where the `f64` normal is zero (collinear
+    /// vertices).
     #[must_use]
     pub fn to_hit(&self, v: &[Vec3; 3]) -> Hit {
         let b0 = self.b0();
