@@ -20,6 +20,13 @@ use glam::{DVec3, Mat4, Vec3};
 /// same sum). `γ₄` (of `f32`) covers `γ₃` plus the `f64` evaluation with room to spare.
 pub const PLACED_BOX_PAD_REL: f64 = gamma(4) as f64;
 
+/// Absolute outward padding of a placed node box, added to [`PLACED_BOX_PAD_REL`]'s, world
+/// units: `4·2⁻¹⁴⁹`. Why: where a row's products fall below `f32`'s normal range (a placement
+/// that scales by `2⁻¹⁰⁰`) each rounds by up to half the subnormal spacing `2⁻¹⁴⁹`
+/// absolutely, not relatively: three products a row, `3·2⁻¹⁵⁰`, which the relative pad does
+/// not cover; 4 spacings leave a margin.
+pub const PLACED_BOX_PAD_ABS: f64 = 4.0 * 1.401_298_464_324_817e-45;
+
 /// A triangle mesh and a BVH built over it ([`Bvh::build`] or [`Bvh::from_parts`] with that
 /// mesh as the source): one side of a collision or distance query.
 #[derive(Clone, Copy, Debug)]
@@ -159,7 +166,8 @@ impl Placement {
     }
 
     /// A box containing the placed images of every point of `b` (padded by
-    /// [`PLACED_BOX_PAD_REL`]); `None` for an empty or non-finite box.
+    /// [`PLACED_BOX_PAD_REL`] and [`PLACED_BOX_PAD_ABS`]); `None` for an empty or non-finite
+    /// box.
     pub(super) fn place_box(&self, b: &Aabb) -> Option<DBox> {
         if !(b.is_finite() && b.is_valid()) {
             return None;
@@ -171,7 +179,7 @@ impl Placement {
         for (r, &(l, t)) in self.rows.iter().enumerate() {
             let centre = l.dot(c) + t;
             let half = l.abs().dot(h);
-            let pad = PLACED_BOX_PAD_REL * (l.abs().dot(mag) + t.abs());
+            let pad = PLACED_BOX_PAD_REL * (l.abs().dot(mag) + t.abs()) + PLACED_BOX_PAD_ABS;
             min[r] = centre - half - pad;
             max[r] = centre + half + pad;
         }

@@ -13,7 +13,7 @@
 //! `b_to_a` with [`Transform::point_to_world`] (the `f32` vertices a renderer would draw),
 //! and every answer is exact (collision) or within [`DISTANCE_ERR_REL`] (distance) for those
 //! vertices. Node boxes of the second tree are mapped as centre ± `|L|`·half-extents in `f64`
-//! and padded by [`PLACED_BOX_PAD_REL`], so they contain the mapped triangles: the broad phase
+//! and padded by [`PLACED_BOX_PAD_REL`] and [`PLACED_BOX_PAD_ABS`], so they contain the mapped triangles: the broad phase
 //! never loses a pair, and the results equal brute force over all pairs.
 //!
 //! **Stack bound.** A node pair `(a, b)` has pair depth `depth(a) + depth(b)`. Each step
@@ -46,7 +46,7 @@ mod tri_tri;
 mod tests;
 
 pub use crate::predicates::{ORIENT2D_FILTER_REL, ORIENT3D_FILTER_REL, orient2d, orient3d};
-pub use body::{Body, PLACED_BOX_PAD_REL};
+pub use body::{Body, PLACED_BOX_PAD_ABS, PLACED_BOX_PAD_REL};
 pub use distance::{DISTANCE_ERR_REL, triangle_distance};
 pub use error::CollideError;
 pub use nearest::{Closest, min_distance};

@@ -153,7 +153,7 @@ fn leaf_pairs(
 /// touching counts. The second body's triangles are tested as the `f32` vertices
 /// [`Transform::point_to_world`] gives; each test is exact for those (see
 /// [`super::triangles_intersect`]), and the broad phase is conservative (node boxes placed
-/// with |L|·half-extents and padded by [`super::PLACED_BOX_PAD_REL`]), so the result equals a
+/// with |L|·half-extents and padded by [`super::PLACED_BOX_PAD_REL`] and [`super::PLACED_BOX_PAD_ABS`]), so the result equals a
 /// brute-force loop over all pairs. Pass an empty slice to count only.
 ///
 /// # Errors

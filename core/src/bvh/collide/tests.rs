@@ -235,6 +235,41 @@ fn tree(mesh: &TriangleMesh<'_>) -> VecBvh {
     vec_bvh(mesh, &BuildOptions::default()).unwrap()
 }
 
+/// A placement that scales by `2⁻¹⁰⁰` puts the second mesh's vertices in `f32`'s subnormal
+/// range, where `point_to_world` rounds absolutely: `(1000.75)·2⁻⁴⁹ · 2⁻¹⁰⁰` rounds up to
+/// `1001·2⁻¹⁴⁹`, 3.5e-46 beyond its exact image, while the relative pad is 3.3e-49. The first
+/// mesh's triangle has its vertex exactly at that rounded point, so the two touch (the exact
+/// test says so): the query must find the pair (it returned none), and the distance 0.
+#[test]
+fn a_placement_into_the_subnormal_range_keeps_a_touching_pair() {
+    let s = 2f32.powi(-100);
+    let tf = Transform::scale(Vec3::splat(s)).unwrap();
+    let x = 1000.75 * 2f32.powi(-49);
+    let (l, e) = (2f32.powi(-40), 2f32.powi(-140));
+    let pb = [vec3(x, 0.0, 0.0), vec3(x - l, l, 0.0), vec3(x - l, 0.0, l)];
+    let xa = tf.point_to_world(pb[0]).x;
+    assert_eq!(xa, 1001.0 * 2f32.powi(-149), "the image rounds up");
+    let pa = [
+        vec3(xa, 0.0, 0.0),
+        vec3(xa + e, e, 0.0),
+        vec3(xa + e, 0.0, e),
+    ];
+    let t = [[0u32, 1, 2]];
+    let (ma, mb) = (TriangleMesh::new(&pa, &t), TriangleMesh::new(&pb, &t));
+    let (ta, tb) = (tree(&ma), tree(&mb));
+    let (a, b) = (Body::new(&ta, ma).unwrap(), Body::new(&tb, mb).unwrap());
+    let placed = pb.map(|v| tf.point_to_world(v));
+    assert!(triangles_intersect(&pa, &placed));
+    let mut out = [(0u32, 0u32); 2];
+    assert_eq!(colliding_pairs(&a, &b, &tf, &mut out).unwrap(), 1);
+    assert_eq!(out[0], (0, 0));
+    assert!(first_contact(&a, &b, &tf).unwrap().is_some());
+    assert_eq!(
+        min_distance(&a, &b, &tf, 0.0).unwrap().map(|m| m.distance),
+        Some(0.0)
+    );
+}
+
 #[test]
 fn traversal_equals_brute_force_on_small_soups() {
     let mut s = 3u64;
