@@ -48,10 +48,13 @@ impl<S: MeshStorage> Mesh<S> {
     /// halfedge). Edges are numbered in order of their sorted `(min, max)` vertex pair.
     ///
     /// # Errors
-    /// Checked in this order, each naming the first offending element: capacity, scratch
-    /// size, non-finite position, out-of-range or repeated index, an edge used by more than
-    /// two triangles, a directed edge used twice (inconsistent orientation), a non-manifold
-    /// (bowtie) vertex. On any error the mesh is left empty.
+    /// Checked in this order, each naming the first offending element: the vertex and face
+    /// capacity, the scratch size, a non-finite position, an out-of-range or repeated index;
+    /// then one pass over the edges in order of their sorted `(min, max)` vertex pair, which
+    /// stops at the first edge used by more than two triangles or used twice in one direction
+    /// (inconsistent orientation), whichever of the two that edge shows; then the edge
+    /// capacity (the edge count is known only after that pass); then a non-manifold (bowtie)
+    /// vertex. On any error the mesh is left empty.
     pub fn build(
         &mut self,
         positions: &[Vec3],

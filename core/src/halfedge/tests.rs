@@ -254,6 +254,33 @@ fn build_errors_name_the_element() {
             index: 9
         })
     );
+    // The edge pass stops at the first edge in `(min, max)` order: 0–1, used twice in one
+    // direction, before 5–6, used by three triangles.
+    assert_eq!(
+        e(&[[0, 1, 2], [0, 1, 3], [5, 6, 7], [6, 5, 4], [5, 6, 3]]),
+        Some(BuildError::InconsistentOrientation {
+            a: VertexId(0),
+            b: VertexId(1),
+            face: FaceId(1)
+        })
+    );
+    // The edge capacity is checked after that pass: a tetrahedron (6 edges) in 5 edge slots
+    // is refused for its edges, and with a NaN position for the position first.
+    let (tp, tt) = tetra();
+    assert!(matches!(
+        build::<4, 5, 4>(&tp, &tt).err(),
+        Some(BuildError::Capacity(CapacityError {
+            storage: Storage::MeshSlots(ElementKind::Edge),
+            needed: 6,
+            available: 5
+        }))
+    ));
+    let mut nan = tp.clone();
+    nan[2].y = f32::NAN;
+    assert!(matches!(
+        build::<4, 5, 4>(&nan, &tt).err(),
+        Some(BuildError::NonFinite(NonFiniteError { index: 2, .. }))
+    ));
     // Two tetrahedra sharing one vertex: closed fans, no boundary, still a bowtie.
     let (mut tp, tt) = tetra();
     tp.extend(tp.clone().iter().skip(1).map(|v| *v + vec3(5., 0., 0.)));
