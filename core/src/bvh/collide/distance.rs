@@ -21,7 +21,10 @@ use glam::{DVec3, Vec3};
 /// Relative rounding bound of [`triangle_distance`], unitless, applied to `d + M` (module
 /// docs). Why: a closest point `p + s·(q − p)` is within `γ₃·2M` per coordinate of a point of
 /// its segment (difference, product, sum), a plane distance `|(x − a)·n|/|n|` within `γ₁₀` of
-/// `|x − a| ≤ 2√3·M`, and the final norm adds `γ₅` relative; with both points, three
+/// `|x − a| ≤ 2√3·M` times `|e₁||e₂|/|n| = 1/sin θ` (the normal is taken at the triangle's
+/// largest angle `θ`, so this factor is at most 2 unless `θ > 150°`; for a flatter triangle
+/// the face candidate's error grows as `1/sin θ`, a limit of this bound), and the final norm
+/// adds `γ₅` relative; with both points, three
 /// coordinates and the square root that is under `γ₃₂·(d + M)`. `γ₆₄` doubles it, which also
 /// absorbs the rounding of the box distances the traversal compares against it.
 pub const DISTANCE_ERR_REL: f64 = gamma_f64(64);
@@ -59,9 +62,23 @@ pub fn triangle_distance(a: &[Vec3; 3], b: &[Vec3; 3]) -> f64 {
 }
 
 /// Distance from `x` to the plane of `t` when `x` projects inside the closed triangle `t`
-/// (`None` otherwise, or when `t` is degenerate).
+/// (`None` otherwise, or when `t` is degenerate). The normal is the cross product of the two
+/// edges at the vertex opposite the longest edge, the largest angle: on a needle (two long
+/// edges, one short) the product of the two long edges cancels, and the direction of its
+/// rounded value is off by `u·|e₁||e₂|/|n|` (`10⁻⁷` rad and more on a sliver `10⁴` long and
+/// `10⁻³` wide), while at the largest angle `|e₁||e₂|/|n| = 1/sin θ ≤ 2` unless `θ > 150°`.
 fn face_distance(x: DVec3, t: &[DVec3; 3]) -> Option<f64> {
-    let n = (t[1] - t[0]).cross(t[2] - t[0]);
+    let len2 = |k: usize| (t[(k + 2) % 3] - t[(k + 1) % 3]).length_squared();
+    let (l0, l1, l2) = (len2(0), len2(1), len2(2));
+    let base = if l0 >= l1 && l0 >= l2 {
+        0
+    } else if l1 >= l2 {
+        1
+    } else {
+        2
+    };
+    let (a, b, c) = (t[base], t[(base + 1) % 3], t[(base + 2) % 3]);
+    let n = (b - a).cross(c - a);
     let nn = n.length_squared();
     if !(nn > 0.0) {
         return None;
@@ -70,7 +87,7 @@ fn face_distance(x: DVec3, t: &[DVec3; 3]) -> Option<f64> {
         let (p, q) = (t[k], t[(k + 1) % 3]);
         (q - p).cross(x - p).dot(n) >= 0.0
     });
-    inside.then(|| (x - t[0]).dot(n).abs() / sqrt_f64(nn))
+    inside.then(|| (x - a).dot(n).abs() / sqrt_f64(nn))
 }
 
 /// Distance between the closed segments `p1q1` and `p2q2` (either may be a point), by the
