@@ -216,25 +216,38 @@ fn check_hit_contract(
             ctx()
         );
     }
-    // The hit's normal: unit within `NORMAL_LEN_ULPS` and along `(v1 − v0) × (v2 − v0)`
-    // (here in `f64` from the `f32` vertices, written out) wherever that product is not zero.
+    // The hit's normal: unit within `NORMAL_LEN_ULPS` and along `(v1 − v0) × (v2 − v0)` (here
+    // in `f64` from the `f32` vertices, written out) where that `f64` product's direction is
+    // certain: its rounding (each difference and product once, `γ₃` of the component's scale
+    // `|e₁ᵢ||e₂ⱼ| + |e₁ⱼ||e₂ᵢ|`) below `NORMAL_ORACLE_CLEAR` of its length (at `10³⁸` a
+    // difference `1 + 2¹²⁷` is not exact in `f64` and a component can cancel: regression
+    // `ci-crash-3dd9dcae-hit-normal`, where the crate's normal was the right one).
     let e = |i: usize, k: usize| f64::from(v[i][k]) - f64::from(v[0][k]);
-    let n = DVec3::new(
-        e(1, 1) * e(2, 2) - e(1, 2) * e(2, 1),
-        e(1, 2) * e(2, 0) - e(1, 0) * e(2, 2),
-        e(1, 0) * e(2, 1) - e(1, 1) * e(2, 0),
-    );
-    if n != DVec3::ZERO && n.is_finite() {
+    let comp = |a: usize, b: usize| {
+        let n = e(1, a) * e(2, b) - e(1, b) * e(2, a);
+        let scale = (e(1, a) * e(2, b)).abs() + (e(1, b) * e(2, a)).abs();
+        (n, scale)
+    };
+    let (x, y, z) = (comp(1, 2), comp(2, 0), comp(0, 1));
+    let n = DVec3::new(x.0, y.0, z.0);
+    let err = 3.0 * f64::EPSILON * (x.1 + y.1 + z.1);
+    if n.is_finite() && err.is_finite() && err < NORMAL_ORACLE_CLEAR * n.length() {
         let len = hit.normal.as_dvec3().length();
         assert!(
             (len - 1.0).abs() <= NORMAL_LEN_ULPS * f64::from(f32::EPSILON)
                 && hit.normal.as_dvec3().dot(n) > 0.0,
-            "Hit::normal {:?} (length {len}) is not the unit normal of {n:?}\n{}",
+            "Hit::normal {:?} (length {len}) is not the unit normal along {n:?}\n{}",
             hit.normal,
             ctx()
         );
     }
 }
+
+/// How small the `f64` oracle normal's rounding must be against its length for its direction
+/// to be checked: `10⁻³` (then the direction is certain to a milliradian, and a unit normal on
+/// the right side has a positive dot product with it whenever the crate's is within a right
+/// angle). Unitless.
+const NORMAL_ORACLE_CLEAR: f64 = 1.0e-3;
 
 /// How far from 1 a hit's unit normal may be, in `f32` ulps of 1: the `f64` normal is
 /// normalised in `f64` and each component rounded once to `f32` (half an ulp each), so the
