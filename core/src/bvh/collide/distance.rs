@@ -68,15 +68,7 @@ pub fn triangle_distance(a: &[Vec3; 3], b: &[Vec3; 3]) -> f64 {
 /// rounded value is off by `u·|e₁||e₂|/|n|` (`10⁻⁷` rad and more on a sliver `10⁴` long and
 /// `10⁻³` wide), while at the largest angle `|e₁||e₂|/|n| = 1/sin θ ≤ 2` unless `θ > 150°`.
 fn face_distance(x: DVec3, t: &[DVec3; 3]) -> Option<f64> {
-    let len2 = |k: usize| (t[(k + 2) % 3] - t[(k + 1) % 3]).length_squared();
-    let (l0, l1, l2) = (len2(0), len2(1), len2(2));
-    let base = if l0 >= l1 && l0 >= l2 {
-        0
-    } else if l1 >= l2 {
-        1
-    } else {
-        2
-    };
+    let base = crate::triangle::largest_angle_vertex(t);
     let (a, b, c) = (t[base], t[(base + 1) % 3], t[(base + 2) % 3]);
     let n = (b - a).cross(c - a);
     let nn = n.length_squared();
