@@ -17,7 +17,7 @@ use glam::Vec3;
 /// within rounding of) the triangle's plane.
 ///
 /// Differences from [`super::Watertight`], the price of staying in `f32`:
-/// * `t = Σ eᵢzᵢ / det` and the barycentrics `eᵢ / det` in `f32` (an edge whose rescaled
+/// * `t = Σ (eᵢ / det)·zᵢ` and the barycentrics `eᵢ / det` in `f32` (an edge whose rescaled
 ///   value rounded to the wrong side enters with the magnitude `f32::MIN_POSITIVE`: its true
 ///   value is below the `f32` rounding of the others). As for [`super::WatertightF32`], an
 ///   origin near the triangle's plane makes `t`'s relative rounding large.
@@ -25,8 +25,9 @@ use glam::Vec3;
 ///   exactly (all three edge signs zero). A ray within rounding of the plane may hit, at the
 ///   sheared `t`; the 3-D `f64` test of the other variants is not available.
 /// * Domain: the **edge signs** are exact for all finite sheared coordinates (the rescaling
-///   keeps the edge products in range from the subnormal scale to `f32::MAX`); a `t` that
-///   overflows is a miss, as for every variant. The **values** `t = Σ eᵢzᵢ / det` and
+///   keeps the edge products in range from the subnormal scale to `f32::MAX`); `t`, a convex
+///   combination of the sheared depths, overflows only when they reach `f32::MAX` (a `t` that
+///   overflows is a miss, as for every variant). The **values** `t` and
 ///   `eᵢ / det` are `f32` quotients: they carry [`super::WatertightF32`]'s error bound, and so
 ///   agree with [`super::F64Reference`] as [`super::Watertight`] does, only inside
 ///   [`super::WatertightF32`]'s domain (`|det| ≥ 2⁻¹⁰⁰`, `Σ|eᵢzᵢ| ≤ 2¹²⁰`, coordinates
@@ -135,9 +136,13 @@ impl ShearedTest for WatertightF32Exact {
                 return None;
             }
         }
+        // `t` as the barycentric combination of the depths, `Σ (eᵢ/det)·zᵢ`, not `(Σ eᵢzᵢ)/det`:
+        // the same operation count and rounding order of magnitude, but no intermediate of
+        // size `|det|·t`, which overflows for a finite `t` when the triangle is large
+        // (`|det| ≈ 10³⁶` at `10¹⁸` across makes `t = 100` overflow) or `t` is near `f32::MAX`.
         let inv = 1.0 / det;
-        let t = (e[0] * az + e[1] * bz + e[2] * cz) * inv;
-        let (b1, b2) = (e[1] * inv, e[2] * inv);
+        let (b0, b1, b2) = (e[0] * inv, e[1] * inv, e[2] * inv);
+        let t = b0 * az + b1 * bz + b2 * cz;
         (ray.contains(t) && b1.is_finite() && b2.is_finite()).then(|| TriangleHit {
             t,
             b1,
@@ -285,6 +290,30 @@ mod tests {
             .intersect(&Ray::new(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z), &v)
             .expect("the ray through the triangle's inside hits");
         assert!(hit.ng.z > 0.0, "{hit:?}");
+    }
+
+    /// A finite `t` is a hit however large `|det|·t` is: a triangle `2·10¹⁸` across hit at
+    /// `t = 100`, and a unit one at `t = 10³⁸` (`Σ eᵢzᵢ` overflowed `f32` in both, and the
+    /// hits were misses). Oracle: the ray meets the plane `z = 0` at `(0, 0, 0)`, inside the
+    /// triangle, at `t = D` exactly; the `f64` watertight test agrees.
+    #[test]
+    fn a_finite_t_is_a_hit_whatever_the_triangle_size() {
+        for (s, d) in [
+            (1.0e18f32, 100.0f32),
+            (1.0e12, 1.0e14),
+            (1.0e10, 1.0e18),
+            (1.0, 1.0e38),
+        ] {
+            let v = [
+                Vec3::new(-s, -s, 0.0),
+                Vec3::new(s, -s, 0.0),
+                Vec3::new(0.0, s, 0.0),
+            ];
+            let ray = Ray::new(Vec3::new(0.0, 0.0, d), -Vec3::Z);
+            let h = WatertightF32Exact.intersect(&ray, &v);
+            assert_eq!(h.map(|h| h.t), Some(d), "s = {s:e}, D = {d:e}: {h:?}");
+            assert_eq!(Watertight.intersect(&ray, &v).map(|h| h.t), Some(d));
+        }
     }
 
     #[test]
