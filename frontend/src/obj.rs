@@ -32,6 +32,15 @@ use std::path::Path;
 /// the camera leaked 630 of 768 rays), so the reader refuses such vertices.
 pub const MAX_COORDINATE: f32 = 4.253_529_6e37;
 
+/// The index of the first position outside the coordinate domain (non-finite, or beyond
+/// ±[`MAX_COORDINATE`]), which the reader refuses: what an edit that moves vertices (Laplacian
+/// smoothing with a large or negative step) must check before its result is used or written.
+pub fn first_outside_domain(positions: &[Vec3]) -> Option<usize> {
+    positions
+        .iter()
+        .position(|p| !(p.abs().max_element() <= MAX_COORDINATE))
+}
+
 /// What a file held that [`ObjMesh`] does not keep: statements by keyword (`vt`, `usemtl`,
 /// `#` for comments, `v w` / `v rgb` for vertex weights and colours) and polygons split into
 /// triangles.

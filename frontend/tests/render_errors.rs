@@ -514,6 +514,12 @@ fn scene_subdivision_beyond_the_memory_limit_is_refused_up_front() {
         msg.contains("`subdivide = 4` on 59858 triangles needs about") && msg.contains("GiB"),
         "{msg}"
     );
+    // Named at the setting that asks for it (line 13 of the scene, the value of `subdivide = 4`).
+    let shown = msg.replace(&format!("{}/", dir.path().display()), "");
+    assert!(
+        shown.starts_with("big.toml:13:13:") && shown.contains("field `mesh.g.subdivide`"),
+        "{shown}"
+    );
     assert!(t0.elapsed().as_secs() < 20, "refused before subdividing");
     // Control: one level fits and loads.
     std::fs::write(&path, scene.replace("subdivide = 4", "subdivide = 1")).unwrap();
@@ -697,6 +703,32 @@ fn a_referenced_mesh_without_triangles_is_named_at_its_file_field() {
         shown.contains("points.obj: mesh has no triangles"),
         "{shown}"
     );
+}
+
+/// Smoothing that moves a vertex outside the coordinate domain the OBJ reader enforces
+/// (`obj::MAX_COORDINATE`, 2¹²⁵) is refused at the scene's `smooth` field, as `mesh smooth`
+/// refuses it: a tetrahedron smoothed by `step = 2e38` (its vertices pulled to about
+/// ±2.7·10³⁸, where the intersection test overflows) let most camera rays from inside it
+/// through. A step that keeps it inside the domain (`3e37`) loads.
+#[test]
+fn smoothing_out_of_the_coordinate_domain_is_refused_at_its_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let tet = "v 1 1 1\nv -1 -1 1\nv -1 1 -1\nv 1 -1 -1\nf 1 2 3\nf 1 4 2\nf 1 3 4\nf 2 4 3\n";
+    for step in ["2e38", "-1e38"] {
+        let fields = format!("smooth = {{ step = {step}, iterations = 1 }}");
+        let msg = mesh_scene_err(dir.path(), "tet.obj", tet, &fields).to_string();
+        let shown = msg.replace(&format!("{}/", dir.path().display()), "");
+        assert!(
+            shown.starts_with("mesh.toml:")
+                && shown.contains("field `mesh.b.smooth`")
+                && shown.contains("outside the coordinate domain"),
+            "step {step}: {shown}"
+        );
+    }
+    let inside = "smooth = { step = 3e37, iterations = 1 }";
+    if let Err(e) = load_mesh_scene(dir.path(), "tet.obj", tet, inside) {
+        panic!("a smoothing inside the domain refused: {e}");
+    }
 }
 
 /// `smooth.iterations` is bounded by `MAX_SMOOTH_ITERATIONS` (10 000): exactly that many

@@ -7,7 +7,7 @@ use super::{
 };
 use crate::error::{Error, Location, Result};
 use crate::limits::check_memory;
-use crate::obj::{MAX_COORDINATE, NotCarried, read_obj_file, write_obj_to};
+use crate::obj::{MAX_COORDINATE, NotCarried, first_outside_domain, read_obj_file, write_obj_to};
 use crate::text;
 use glam::Vec3;
 use halfray_core::halfedge::{
@@ -220,8 +220,7 @@ fn edit_file(
 /// beyond [`MAX_COORDINATE`]: `mesh smooth` with a huge `--step` moves vertices that far),
 /// so that no command writes a mesh that halfray cannot read back.
 fn refuse_outside_domain(command: &str, output: &Path, positions: &[Vec3]) -> Result<()> {
-    let outside = |p: &&Vec3| !(p.abs().max_element() <= MAX_COORDINATE);
-    match positions.iter().position(|p| outside(&p)) {
+    match first_outside_domain(positions) {
         None => Ok(()),
         Some(i) => {
             let p = positions[i];

@@ -5,7 +5,7 @@
 use crate::accel::MeshAccel;
 use crate::error::{Error, Location, Result};
 use crate::mesh_tools::{MeshBuffers, build_mesh, export};
-use crate::obj::{ObjFile, ObjLines, ObjMesh, read_obj_file};
+use crate::obj::{MAX_COORDINATE, ObjFile, ObjLines, ObjMesh, first_outside_domain, read_obj_file};
 use crate::scene::geom::MeshShape;
 use glam::Vec3;
 use halfray_core::halfedge::{DiffuseBoundary, LoopWeights, SliceMesh};
@@ -97,25 +97,44 @@ fn subdivide(path: &Path, mesh: &ObjMesh, lines: Option<&ObjLines>) -> Result<Ob
 /// rounded up. Bytes per triangle.
 const SCENE_MESH_BYTES_PER_TRIANGLE: u64 = 320;
 
+/// The setting of a scene's `[mesh.NAME]` that an error of [`load_mesh`] belongs to (where the
+/// scene's message points).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshField {
+    /// `file`: reading the OBJ, or building the mesh's tree or normals.
+    File,
+    /// `smooth`: the smoothing failed, or moved a vertex outside the coordinate domain.
+    Smooth,
+    /// `subdivide`: the subdivision failed, or would exceed the memory limit.
+    Subdivide,
+}
+
 /// Loads an OBJ, applies smoothing (`(step, iterations)`) then `subdivide` Loop levels, and
-/// builds the BVH; with `smooth_shading`, also the area-weighted vertex normals. Subdivision is refused before it starts when the final mesh would exceed
-/// the memory limit ([`crate::limits::MEMORY_LIMIT_BYTES`]; each level multiplies the
-/// triangles by 4).
+/// builds the BVH; with `smooth_shading`, also the area-weighted vertex normals. Subdivision is
+/// refused before it starts when the final mesh would exceed the memory limit
+/// ([`crate::limits::MEMORY_LIMIT_BYTES`]; each level multiplies the triangles by 4); smoothing
+/// that moves a vertex outside the coordinate domain the OBJ reader enforces
+/// ([`crate::obj::MAX_COORDINATE`]: beyond it a closed mesh lets rays through) is refused after
+/// it. Each error comes with the setting it belongs to.
 pub fn load_mesh(
     name: &str,
     path: &Path,
     smoothing: Option<(f32, u32)>,
     levels: u32,
     smooth_shading: bool,
-) -> Result<MeshShape> {
+) -> std::result::Result<MeshShape, (MeshField, Error)> {
+    let file = |e| (MeshField::File, e);
     let ObjFile {
         mut mesh, lines, ..
-    } = read_obj_file(path)?;
+    } = read_obj_file(path).map_err(file)?;
     // The file's lines name a rejected statement while the mesh is still the file's: through
     // smoothing (positions move, the triangles stay), not after a subdivision.
     let mut lines = Some(&lines);
     if mesh.triangles.is_empty() {
-        return Err(Error::input(Location::file(path), "mesh has no triangles"));
+        return Err(file(Error::input(
+            Location::file(path),
+            "mesh has no triangles",
+        )));
     }
     if levels > 0 {
         let bytes = (mesh.triangles.len() as u64)
@@ -128,21 +147,44 @@ pub fn load_mesh(
             ),
             bytes,
         )
-        .map_err(|e| Error::input(Location::file(path), e.to_string()))?;
+        .map_err(|e| {
+            (
+                MeshField::Subdivide,
+                Error::input(Location::file(path), e.to_string()),
+            )
+        })?;
     }
     if let Some((step, iterations)) = smoothing {
-        smooth(path, &mut mesh, lines, step, iterations)?;
+        let smoothing = |e| (MeshField::Smooth, e);
+        smooth(path, &mut mesh, lines, step, iterations).map_err(smoothing)?;
+        if let Some(i) = first_outside_domain(&mesh.positions) {
+            let p = mesh.positions[i];
+            return Err(smoothing(Error::input(
+                Location::file(path),
+                format!(
+                    "smoothing moved vertex {} to ({:e}, {:e}, {:e}), outside the coordinate domain ±{MAX_COORDINATE:e} (obj::MAX_COORDINATE: beyond it a closed mesh lets rays through); use a smaller `step` or fewer `iterations`",
+                    i + 1,
+                    p.x,
+                    p.y,
+                    p.z
+                ),
+            )));
+        }
     }
     for _ in 0..levels {
-        mesh = subdivide(path, &mesh, lines)?;
+        mesh = subdivide(path, &mesh, lines).map_err(|e| (MeshField::Subdivide, e))?;
         lines = None;
     }
     let normals = if smooth_shading {
-        Some(vertex_normals(path, &mesh, lines)?)
+        Some(vertex_normals(path, &mesh, lines).map_err(file)?)
     } else {
         None
     };
-    Ok(MeshShape::new(name, MeshAccel::new(mesh)?, normals))
+    Ok(MeshShape::new(
+        name,
+        MeshAccel::new(mesh).map_err(file)?,
+        normals,
+    ))
 }
 
 #[cfg(test)]

@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 pub use geom::boundary_edge_count;
-pub use mesh::load_mesh;
+pub use mesh::{MeshField, load_mesh};
 
 /// Most samples per pixel a scene's `samples` or `--samples` may ask for.
 pub const MAX_SAMPLES: u32 = 64;

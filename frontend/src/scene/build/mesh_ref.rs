@@ -1,6 +1,7 @@
 //! `[mesh.NAME]` and the objects that name a mesh: read, smoothed, subdivided once, shared.
 
 use crate::error::{Error, Result};
+use crate::scene::MeshField;
 use crate::scene::def::{MeshDef, S};
 use crate::scene::geom::MeshShape;
 use std::sync::Arc;
@@ -110,18 +111,25 @@ pub(super) fn mesh(ctx: &mut Ctx<'_>, name: &S<String>, field: &str) -> Result<A
     let (path, smoothing, levels, smooth_shading) = mesh_def(ctx, name.get_ref(), def)?;
     let p = format!("mesh.{}", name.get_ref());
     let shape = crate::scene::load_mesh(name.get_ref(), &path, smoothing, levels, smooth_shading)
-        .map_err(|e| match e {
-        Error::Input { at, message } if at.line.is_none() => ctx.err(
-            &def.file.span(),
-            &format!("{p}.file"),
-            format!("{}: {message}", at.file.display()),
-        ),
-        // A line of the mesh file: named first, then where the scene names the file.
-        Error::Input { at, message } => {
-            let named_at = ctx.src.at(&def.file.span(), &format!("{p}.file"));
-            Error::input(at, format!("{message} (the mesh of {named_at})"))
+        .map_err(|(field, e)| {
+        // The setting the error belongs to, where the scene names it.
+        let (span, key) = match (field, &def.smooth, &def.subdivide) {
+            (MeshField::Smooth, Some(s), _) => (s.span(), "smooth"),
+            (MeshField::Subdivide, _, Some(s)) => (s.span(), "subdivide"),
+            _ => (def.file.span(), "file"),
+        };
+        let field = format!("{p}.{key}");
+        match e {
+            Error::Input { at, message } if at.line.is_none() => {
+                ctx.err(&span, &field, format!("{}: {message}", at.file.display()))
+            }
+            // A line of the mesh file: named first, then where the scene names the file.
+            Error::Input { at, message } => {
+                let named_at = ctx.src.at(&def.file.span(), &format!("{p}.file"));
+                Error::input(at, format!("{message} (the mesh of {named_at})"))
+            }
+            other => other,
         }
-        other => other,
     })?;
     let shape = Arc::new(shape);
     ctx.loaded.push(shape.clone());
