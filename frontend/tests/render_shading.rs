@@ -170,6 +170,20 @@ fn the_calibration_helper_turns_the_matching_grey_into_gamma() {
     let img = image::open(&chart).unwrap().into_rgba8();
     assert_eq!((img.width(), img.height()), (7 * 96, 96));
     assert!(String::from_utf8_lossy(&o.stdout).contains("gamma is 2.2 if it matches"));
+    // A bad `--match` beside `--chart` is a usage error before anything is written: the file
+    // the chart would replace keeps its bytes (it was replaced, then the match refused).
+    let kept = dir.path().join("kept.png");
+    for bad in ["0", "300"] {
+        std::fs::write(&kept, b"keep").unwrap();
+        let o = Command::new(BIN)
+            .args(["gamma", "--chart"])
+            .arg(&kept)
+            .args(["--match", bad])
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "--match {bad}");
+        assert_eq!(std::fs::read(&kept).unwrap(), b"keep", "--match {bad}");
+    }
 }
 
 /// Smooth shading on the octahedron: its area-weighted vertex normals are the axis directions

@@ -149,6 +149,8 @@ pub struct GammaArgs {
 
 /// Runs `halfray gamma`.
 pub fn run(args: &GammaArgs) -> Result<()> {
+    // `--match` is checked before the chart is written: an error changes no output.
+    let matched = args.matched.map(match_report).transpose()?;
     let mut text = String::new();
     if let Some(path) = &args.chart {
         crate::png::check_png_name(crate::outputs::Named::new("--chart", path))?;
@@ -162,28 +164,31 @@ pub fn run(args: &GammaArgs) -> Result<()> {
             ));
         }
     }
-    if let Some(a) = args.matched {
-        let frac = if a >= 1.0 { a / 255.0 } else { a };
-        let g = gamma_from_match(frac).ok_or_else(|| {
-            Error::Usage(format!(
-                "--match {a}: the matching grey must lie strictly between black and white (0 < A < 255)"
-            ))
-        })?;
-        let (lo, hi) = GAMMA_RANGE;
-        if (f64::from(lo)..=f64::from(hi)).contains(&g) {
-            text.push_str(&format!(
-                "gamma = ln 0.5 / ln {frac:.4} = {g:.3}; render with --gamma {g:.2}\n"
-            ));
-        } else {
-            // `render --gamma` accepts only GAMMA_RANGE: recommend its nearest end, and say so.
-            text.push_str(&format!(
-                "gamma = ln 0.5 / ln {frac:.4} = {g:.3}, outside the accepted {lo}..={hi} \
-                 (no display has it: check the match); clamped: render with --gamma {}\n",
-                if g < f64::from(lo) { lo } else { hi }
-            ));
-        }
-    }
+    text.push_str(matched.as_deref().unwrap_or(""));
     crate::console::print_out(&text)
+}
+
+/// The report of `--match A` (a grey `0 < A < 255`, or a fraction `0 < A < 1`): the gamma
+/// `ln 0.5 / ln a` and the `--gamma` to render with (the nearest end of [`GAMMA_RANGE`] when
+/// it lies outside); a usage error for a grey that is not strictly between black and white.
+fn match_report(a: f64) -> Result<String> {
+    let frac = if a >= 1.0 { a / 255.0 } else { a };
+    let g = gamma_from_match(frac).ok_or_else(|| {
+        Error::Usage(format!(
+            "--match {a}: the matching grey must lie strictly between black and white (0 < A < 255)"
+        ))
+    })?;
+    let (lo, hi) = GAMMA_RANGE;
+    Ok(if (f64::from(lo)..=f64::from(hi)).contains(&g) {
+        format!("gamma = ln 0.5 / ln {frac:.4} = {g:.3}; render with --gamma {g:.2}\n")
+    } else {
+        // `render --gamma` accepts only GAMMA_RANGE: recommend its nearest end, and say so.
+        format!(
+            "gamma = ln 0.5 / ln {frac:.4} = {g:.3}, outside the accepted {lo}..={hi} \
+             (no display has it: check the match); clamped: render with --gamma {}\n",
+            if g < f64::from(lo) { lo } else { hi }
+        )
+    })
 }
 
 #[cfg(test)]
