@@ -33,16 +33,45 @@ pub fn check_png_name(out: Named<'_>) -> Result<()> {
     }
 }
 
-/// 8-bit RGBA as PNG bytes.
+/// 8-bit RGBA as PNG bytes. A write error is returned as the writer gave it (its kind kept: a
+/// closed stdout is a broken pipe, which ends the program quietly).
 pub fn encode_png(
     w: &mut dyn std::io::Write,
     width: u32,
     height: u32,
     rgba: &[u8],
 ) -> std::io::Result<()> {
-    PngEncoder::new(w)
-        .write_image(rgba, width, height, image::ExtendedColorType::Rgba8)
-        .map_err(std::io::Error::other)
+    // The encoder wraps a write error in its own (kind `Other`): the first one is kept here.
+    struct Keep<'a> {
+        w: &'a mut dyn std::io::Write,
+        error: Option<std::io::Error>,
+    }
+    impl std::io::Write for Keep<'_> {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            self.w.write(buf).inspect_err(|e| {
+                self.error
+                    .get_or_insert_with(|| std::io::Error::new(e.kind(), e.to_string()));
+            })
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            self.w.flush().inspect_err(|e| {
+                self.error
+                    .get_or_insert_with(|| std::io::Error::new(e.kind(), e.to_string()));
+            })
+        }
+    }
+    let mut keep = Keep { w, error: None };
+    let encoded = PngEncoder::new(&mut keep).write_image(
+        rgba,
+        width,
+        height,
+        image::ExtendedColorType::Rgba8,
+    );
+    match (encoded, keep.error) {
+        (Ok(()), _) => Ok(()),
+        (Err(_), Some(e)) => Err(e),
+        (Err(e), None) => Err(std::io::Error::other(e)),
+    }
 }
 
 /// Reads an image (format guessed from its bytes) as 8-bit straight RGBA, within

@@ -397,6 +397,34 @@ fn closed_pipe_exits_quietly_and_full_device_is_a_clean_error() {
             "{args:?}: {e}"
         );
     }
+    // A PNG written to stdout (`-`): the encoder's write error keeps its kind.
+    let images = tempfile::tempdir().unwrap();
+    let a = images.path().join("a.png");
+    let o = Command::new(BIN)
+        .args(["gamma", "--chart"])
+        .arg(&a)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let png_to_stdout: [&[&std::ffi::OsStr]; 3] = [
+        os!["gamma", "--chart", "-"],
+        os!["composite", &a, &a, "-o", "-"],
+        os![
+            "render", &mirror, "-o", "-", "--width", "16", "--height", "12", "--quiet"
+        ],
+    ];
+    for args in png_to_stdout {
+        let o = run_into_closed_pipe(args);
+        assert_eq!(o.status.code(), Some(141), "{args:?}: {}", stderr(&o));
+        assert!(o.stderr.is_empty(), "{args:?}: quiet, got {}", stderr(&o));
+        let o = run_into_dev_full(args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("No space left on device"),
+            "{args:?}: {}",
+            stderr(&o)
+        );
+    }
     // `--json` is written before the report is printed: it survives the closed stdout.
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
