@@ -210,18 +210,21 @@ mod tests {
         }
     }
 
-    /// A mesh name from the JSON with control characters (a terminal escape) is drawn with
-    /// U+FFFD in their place: the SVG stays well-formed XML (it did not parse before).
+    /// A mesh name from the JSON with characters XML 1.0 forbids (a terminal escape, the
+    /// noncharacters U+FFFE and U+FFFF) is drawn with U+FFFD in their place: the SVG stays
+    /// well-formed XML (it did not parse before). U+FFFD itself and tab pass.
     #[test]
     fn control_characters_in_a_name_keep_the_svg_well_formed() {
         let chart = CorpusChart::new(&[report(
-            "a\u{1b}[31m\u{7}.obj",
+            "a\u{1b}[31m\u{7}\u{fffe}\u{ffff}\u{fffd}\u{10000}.obj",
             &[("primary", 3.0, 4.0, 3.0)],
         )])
         .unwrap();
         let texts = svg_texts(&render(&chart, Format::Svg).unwrap(), chart.size());
         assert!(
-            texts.iter().any(|t| t == "a\u{fffd}[31m\u{fffd}.obj"),
+            texts
+                .iter()
+                .any(|t| t == "a\u{fffd}[31m\u{fffd}\u{fffd}\u{fffd}\u{fffd}\u{10000}.obj"),
             "{texts:?}"
         );
     }

@@ -173,13 +173,15 @@ where
         .draw()
 }
 
-/// `svg` with every character XML 1.0 does not allow (controls other than tab, line feed and
-/// carriage return) replaced by U+FFFD: a mesh name read from a run's JSON may hold any
-/// character, and one such character makes the whole file unreadable.
+/// `svg` with every character XML 1.0 does not allow (its production `Char`: controls other
+/// than tab, line feed and carriage return, and the noncharacters U+FFFE and U+FFFF; a Rust
+/// `char` is never a surrogate) replaced by U+FFFD: a mesh name read from a run's JSON may hold
+/// any character, and one such character makes the whole file unreadable.
 fn xml_chars(svg: &str) -> String {
     svg.chars()
         .map(|c| {
-            if c < ' ' && !matches!(c, '\t' | '\n' | '\r') {
+            if (c < ' ' && !matches!(c, '\t' | '\n' | '\r')) || matches!(c, '\u{fffe}' | '\u{ffff}')
+            {
                 char::REPLACEMENT_CHARACTER
             } else {
                 c
