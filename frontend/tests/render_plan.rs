@@ -604,3 +604,103 @@ fn explain_lists_only_the_effects_of_the_render_mode() {
         }
     }
 }
+
+/// `--explain`'s primary-ray line is the render's: the thin-lens scene casts `lens_samples`
+/// rays a pixel (as many as `--stats-json` counts, its `depth_of_field` on), its area light is
+/// named with its disk's shadow rays (`area_lights` on); `--samples 8` on the mirror scene is
+/// adaptive anti-aliasing (`antialias` on), at most 8 a pixel, at least one (the counts).
+#[test]
+fn explain_names_the_camera_rays_and_area_lights_of_the_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let primary = |out: &str| -> String {
+        out.lines()
+            .find_map(|l| l.trim_start().strip_prefix("primary rays"))
+            .unwrap_or_else(|| panic!("no primary rays line in {out}"))
+            .trim()
+            .to_string()
+    };
+    let (out, v) = render_cli(dir.path(), &scenes_dir().join("soft.toml"), &["--explain"]);
+    assert_eq!(v["plan"]["depth_of_field"], true, "{v}");
+    assert_eq!(v["plan"]["area_lights"], true, "{v}");
+    let line = primary(&out);
+    let count = 24 * 16 * 16u64;
+    assert!(
+        line.starts_with(&format!("24 × 16 × 16 = {count} (depth of field")),
+        "{out}"
+    );
+    assert_eq!(v["primary"].as_u64(), Some(count), "{v}");
+    assert!(
+        out.contains("softbox (point, area: radius 0.9, 16 shadow rays over its disk)"),
+        "{out}"
+    );
+    let mirror = scenes_dir().join("mirror.toml");
+    let (out, v) = render_cli(dir.path(), &mirror, &["--explain", "--samples", "8"]);
+    assert_eq!(v["plan"]["antialias"], true, "{v}");
+    let line = primary(&out);
+    assert!(
+        line.starts_with("24 × 16 = 384 through the pixel centres, then up to 7 more")
+            && line.contains("at most 8 a pixel"),
+        "{out}"
+    );
+    let rays = v["primary"].as_u64().unwrap();
+    assert!((384..=384 * 8).contains(&rays), "{v}");
+}
+
+/// Names from the scene reach `--explain` escaped: a light and a material whose names hold a
+/// terminal escape, a bell and a line break print as `\u{1b}`, `\u{7}`, `\n`, so no line of the
+/// plan starts with a forged `error:`, and no control character but the line breaks is printed.
+#[test]
+fn explain_escapes_names_from_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let camera = camera("[0, 2, 6]", "[0, 0.5, 0]", "50", [64, 48]);
+    let light = point_light("[2, 5, 3]", "30");
+    let floor = plane("[0, 0, 0]", "[0, 1, 0]", "m\\u001b[31mRED");
+    let scene = format!(
+        "{camera}\n{light}name = \"L\\u001b]0;T\\u0007\\nerror: forged\"\n\n[material.\"m\\u001b[31mRED\"]\ndiffuse = [0.5, 0.5, 0.5]\nspecular = [0.5, 0.5, 0.5]\n\n{floor}"
+    );
+    let path = dir.path().join("esc.toml");
+    std::fs::write(&path, scene).unwrap();
+    let (out, _) = render_cli(dir.path(), &path, &["--explain"]);
+    assert!(!out.chars().any(|c| c.is_control() && c != '\n'), "{out:?}");
+    assert!(!out.lines().any(|l| l.starts_with("error:")), "{out}");
+    assert!(
+        out.contains("L\\u{1b}]0;T\\u{7}\\nerror: forged (point)"),
+        "{out}"
+    );
+    assert!(out.contains("m\\u{1b}[31mRED"), "{out}");
+}
+
+/// The specular term is evaluated per light: a scene without lights, whose material has a
+/// specular colour, evaluates none, so `--stats-json`'s `plan.specular` is `false` and
+/// `--explain` says why; one light turns it on.
+#[test]
+fn no_lights_no_specular_term() {
+    let dir = tempfile::tempdir().unwrap();
+    let camera = camera("[0, 2, 6]", "[0, 0.5, 0]", "50", [64, 48]);
+    let shiny = material(
+        "shiny",
+        &[
+            ("diffuse", "[0.5, 0.5, 0.5]"),
+            ("specular", "[0.5, 0.5, 0.5]"),
+        ],
+    );
+    let ball = sphere("[0, 0.5, 0]", "0.5", "shiny");
+    let path = dir.path().join("dark.toml");
+    std::fs::write(
+        &path,
+        format!("ambient = [0.2, 0.2, 0.2]\n\n{camera}\n{shiny}\n{ball}"),
+    )
+    .unwrap();
+    let (out, v) = render_cli(dir.path(), &path, &["--explain"]);
+    assert_eq!(v["plan"]["specular"], false, "{v}");
+    assert!(out.contains("specular term    none (no lights)"), "{out}");
+    let light = point_light("[2, 5, 3]", "30");
+    std::fs::write(
+        &path,
+        format!("ambient = [0.2, 0.2, 0.2]\n\n{camera}\n{light}\n{shiny}\n{ball}"),
+    )
+    .unwrap();
+    let (out, v) = render_cli(dir.path(), &path, &["--explain"]);
+    assert_eq!(v["plan"]["specular"], true, "{v}");
+    assert!(out.contains("specular term    shiny"), "{out}");
+}

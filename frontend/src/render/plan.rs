@@ -50,7 +50,8 @@ pub struct PlanFlags {
     pub reflection: bool,
     /// Refraction rays for at least one material (never with `max_depth = 0`).
     pub refraction: bool,
-    /// The specular term for at least one material.
+    /// The specular term for at least one material (and at least one light: the term is
+    /// evaluated per light).
     pub specular: bool,
     /// Shadow rays through transparent surfaces ([`EffectPlan::shadow_transmission`]).
     pub shadow_transmission: bool,
@@ -82,7 +83,8 @@ impl EffectPlan {
             shadow,
             reflection: recursive && any(&self.reflect),
             refraction: recursive && any(&self.refract),
-            specular: color && any(&self.specular),
+            // Evaluated per light (`Tracer`'s light loop): none without a light.
+            specular: color && any(&self.specular) && !scene.lights.is_empty(),
             shadow_transmission: shadow && self.shadow_transmission,
             antialias: color && samples > 1 && !lens,
             area_lights: shadow
@@ -162,33 +164,57 @@ impl EffectPlan {
                 .map_or_else(|| format!("{mode:?}"), |v| v.get_name().to_string());
             format!("mode {name}: one ray per pixel")
         });
+        // Names and paths from the scene are escaped (`crate::text::escaped`): no control
+        // character of theirs reaches the terminal or starts a line of its own.
+        let esc = crate::text::escaped;
         let _ = writeln!(
             s,
             "effect plan for {}{}:",
-            scene.path.display(),
+            crate::text::path(&scene.path),
             if self.forced {
                 " (--force-all-effects: every effect on)"
             } else {
                 ""
             }
         );
-        let _ = writeln!(
-            s,
-            "  primary rays     {} × {} = {} (one per pixel, through its centre)",
-            cam.width,
-            cam.height,
-            u64::from(cam.width) * u64::from(cam.height)
-        );
+        let pixels = u64::from(cam.width) * u64::from(cam.height);
+        let primary = match (&cam.lens, runs.depth_of_field, runs.antialias) {
+            (Some(lens), true, _) => format!(
+                "{} × {} × {} = {} (depth of field: {} a pixel, each through its own lens and sub-pixel position; aperture {}, focused at {})",
+                cam.width,
+                cam.height,
+                lens.samples,
+                pixels * u64::from(lens.samples),
+                lens.samples,
+                lens.aperture,
+                lens.focus_distance
+            ),
+            (_, _, true) => format!(
+                "{} × {} = {pixels} through the pixel centres, then up to {} more in each pixel that differs from a neighbour (adaptive anti-aliasing, at most {samples} a pixel)",
+                cam.width,
+                cam.height,
+                samples - 1
+            ),
+            _ => format!(
+                "{} × {} = {pixels} (one per pixel, through its centre)",
+                cam.width, cam.height
+            ),
+        };
+        let _ = writeln!(s, "  primary rays     {primary}");
         let names = |pick: &dyn Fn(usize) -> bool, n: usize, label: &dyn Fn(usize) -> String| {
             (0..n).filter(|&i| pick(i)).map(label).collect::<Vec<_>>()
         };
         let light_label = |i: usize| {
             let l = &scene.lights[i];
             let kind = match l.kind {
-                LightKind::Point { .. } => "point",
-                LightKind::Directional { .. } => "directional",
+                LightKind::Point { .. } if l.radius > 0.0 => format!(
+                    "point, area: radius {}, {} shadow rays over its disk",
+                    l.radius, l.samples
+                ),
+                LightKind::Point { .. } => "point".to_string(),
+                LightKind::Directional { .. } => "directional".to_string(),
             };
-            format!("{} ({kind})", l.name)
+            format!("{} ({kind})", esc(&l.name))
         };
         let nl = scene.lights.len();
         let on = names(&|i| self.shadow_rays[i], nl, &light_label);
@@ -219,7 +245,7 @@ impl EffectPlan {
         let unlit: Vec<String> = names(
             &|i| !self.direct[i] && used[i],
             scene.materials.len(),
-            &|i| scene.materials[i].name.clone(),
+            &|i| esc(&scene.materials[i].name),
         );
         if one_ray.is_none() && !on.is_empty() && !unlit.is_empty() {
             let _ = writeln!(
@@ -239,7 +265,7 @@ impl EffectPlan {
             }
         );
         let nm = scene.materials.len();
-        let mat = |i: usize| scene.materials[i].name.clone();
+        let mat = |i: usize| esc(&scene.materials[i].name);
         let list = |v: Vec<String>| {
             if v.is_empty() {
                 "none".to_string()
@@ -249,6 +275,7 @@ impl EffectPlan {
         };
         let specular_line = match &one_ray {
             Some(why) => format!("none ({why})"),
+            None if scene.lights.is_empty() => "none (no lights)".to_string(),
             None if self.forced => list(names(&|i| self.specular[i], nm, &mat)),
             None => format!(
                 "{} (skipped where ks = 0: {})",
@@ -259,23 +286,22 @@ impl EffectPlan {
         let _ = writeln!(s, "  specular term    {specular_line}");
         let reflect_label = |i: usize| {
             let m = &scene.materials[i];
+            let name = esc(&m.name);
             if m.mirror > 0.0 {
-                format!("{} (mirror {})", m.name, m.mirror)
+                format!("{name} (mirror {})", m.mirror)
             } else if m.transparency > 0.0 {
-                format!("{} (total internal reflection only)", m.name)
+                format!("{name} (total internal reflection only)")
             } else {
-                format!("{} (forced, weight 0)", m.name)
+                format!("{name} (forced, weight 0)")
             }
         };
         let refract_label = |i: usize| {
             let m = &scene.materials[i];
+            let name = esc(&m.name);
             if m.transparency > 0.0 {
-                format!(
-                    "{} (transparency {}, ior {})",
-                    m.name, m.transparency, m.ior
-                )
+                format!("{name} (transparency {}, ior {})", m.transparency, m.ior)
             } else {
-                format!("{} (forced, weight 0)", m.name)
+                format!("{name} (forced, weight 0)")
             }
         };
         // Each material that casts them, where they run (`runs`); else `none` and, outside
@@ -338,7 +364,8 @@ impl EffectPlan {
             } else if self.csg_objects.is_empty() {
                 "none (no CSG objects)".to_string()
             } else {
-                self.csg_objects.join(", ")
+                let labels: Vec<String> = self.csg_objects.iter().map(|l| esc(l)).collect();
+                labels.join(", ")
             }
         );
         s
