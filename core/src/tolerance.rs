@@ -41,22 +41,22 @@ pub const PLANARITY_REL: f32 = 1.0e-5;
 /// few ulps of `t` as well; the slack covers the `1/cos θ` growth up to 60°.
 pub const T_REL_TOLERANCE_WELL_CONDITIONED: f32 = 64.0 * f32::EPSILON;
 
-/// Smallest accepted scaled determinant `|det L| / ‖L‖_F³` of the linear part `L` of a
-/// [`crate::transform::Transform`]; below it [`crate::transform::Transform::new`] returns
+/// Largest accepted condition number `κ_F(L) = ‖L‖_F·‖L⁻¹‖_F` of the linear part `L` of a
+/// [`crate::transform::Transform`]; above it [`crate::transform::Transform::new`] returns
 /// [`crate::error::GeometryError::SingularTransform`].
 ///
-/// Unit: relative (scale-invariant: the ratio does not change when `L` is multiplied by a
-/// scalar, and it is 3^(−3/2) ≈ 0.19 for a rotation). Why this measure: with singular values
-/// `σ₁ ≥ σ₂ ≥ σ₃`, `|det L| = σ₁σ₂σ₃ ≤ σ₁²σ₃` and `σ₁ ≤ ‖L‖_F`, so the condition number obeys
-/// `κ₂(L) = σ₁/σ₃ ≤ ‖L‖_F³ / |det L|`. The threshold `2⁻²⁰` guarantees `κ₂ ≤ 2²⁰`, i.e.
-/// `κ·u ≤ 2⁻⁴`: a point taken to object space and back still has ≥ 4 correct bits in its worst
-/// direction. A non-uniform scale with axis ratio `1e-4` (a flattened sphere) has ratio ≈ 3.5e-5 and is
-/// accepted; anything flatter than about `2.7e-6` (`2⁻²⁰·2√2`, for a scale `(1, 1, a)`) is
-/// numerically singular in `f32` and refused.
-pub const TRANSFORM_MIN_REL_DET: f64 = 1.0 / 1_048_576.0;
+/// Unit: relative (scale-invariant; `3` for a rotation). Why this measure: for a 3×3 matrix
+/// `‖A‖₂ ≤ ‖A‖_F ≤ √3·‖A‖₂`, so `κ₂(L) ≤ κ_F(L) ≤ 3·κ₂(L)`: the threshold `2²⁰` guarantees
+/// `κ₂ ≤ 2²⁰`, i.e. `κ·u ≤ 2⁻⁴` (a point taken to object space and back keeps ≥ 4 correct bits
+/// in its worst direction), and refuses no matrix with `κ₂ ≤ 2²⁰/3 ≈ 3.5·10⁵`. A scale
+/// `(1, a, a)` (a rod) has `κ_F ≈ √(1 + 2/a²)`, accepted down to `a ≈ 1.35·10⁻⁶`; a flattened
+/// sphere `(1, 1, a)` has `κ_F ≈ √2/a`, accepted down to `a ≈ 1.35·10⁻⁶`. (A scaled
+/// determinant `|det L| / ‖L‖_F³` bounds `κ₂` too but counts every small axis: it refused a
+/// rod `(1, 5·10⁻⁴, 5·10⁻⁴)`, `κ₂ = 2 000`.)
+pub const TRANSFORM_MAX_CONDITION: f64 = 1_048_576.0;
 
-/// Smallest scaled determinant `|det A| / ‖A‖_F³` (same measure and bound on `κ(A)` as
-/// [`TRANSFORM_MIN_REL_DET`]) for which [`crate::quadric::Quadric::new`] uses the quadric's
+/// Smallest scaled determinant `|det A| / ‖A‖_F³` (with singular values `σ₁ ≥ σ₂ ≥ σ₃`,
+/// `|det A| ≤ σ₁²σ₃` and `σ₁ ≤ ‖A‖_F`, so `κ₂(A) ≤ ‖A‖_F³ / |det A| ≤ 2²⁰`) for which [`crate::quadric::Quadric::new`] uses the quadric's
 /// centre `−A⁻¹b` as the reference point of its centred form. Below it (cylinders, cones with a
 /// tiny angle, paraboloids, planes) the centre is absent or far away and the world origin is
 /// used instead; the representation is exact either way (see the quadric module), only the

@@ -30,7 +30,7 @@ use crate::error::GeometryError;
 use crate::float::{gamma, sqrt_f64, unit_direction_f64};
 use crate::hit::Hit;
 use crate::ray::Ray;
-use crate::tolerance::TRANSFORM_MIN_REL_DET;
+use crate::tolerance::TRANSFORM_MAX_CONDITION;
 use glam::{DMat3, DVec3, Mat4, Vec3, Vec4};
 
 /// An invertible affine transform and its inverse.
@@ -82,10 +82,10 @@ impl Transform {
     /// [`GeometryError::NonFinite`] for a non-finite entry;
     /// [`GeometryError::Degenerate`] for a non-affine matrix (last row not exactly
     /// `(0, 0, 0, 1)`: a projective map does not preserve `t`);
-    /// [`GeometryError::SingularTransform`] when the linear part `L` has
-    /// `|det L| < TRANSFORM_MIN_REL_DET · ‖L‖_F³` (see
-    /// [`crate::tolerance::TRANSFORM_MIN_REL_DET`]: condition number above 2²⁰) or when the
-    /// inverse overflows `f32`.
+    /// [`GeometryError::SingularTransform`] when the linear part `L` is singular or its
+    /// condition number `‖L‖_F·‖L⁻¹‖_F` (in `f64`) exceeds
+    /// [`crate::tolerance::TRANSFORM_MAX_CONDITION`] (`2²⁰`), or when the inverse overflows
+    /// `f32` (a linear part whose entries are all below about `10⁻³⁸`).
     pub fn new(m: Mat4) -> Result<Self, GeometryError> {
         if !m.is_finite() {
             return Err(GeometryError::NonFinite);
@@ -94,14 +94,19 @@ impl Transform {
             return Err(GeometryError::Degenerate);
         }
         let l = linear_f64(&m);
-        let fro = libm::sqrt(
-            l.x_axis.length_squared() + l.y_axis.length_squared() + l.z_axis.length_squared(),
-        );
-        let det = l.determinant();
-        if !(det.abs() >= TRANSFORM_MIN_REL_DET * fro * fro * fro) {
+        let frobenius = |a: &DMat3| {
+            libm::sqrt(
+                a.x_axis.length_squared() + a.y_axis.length_squared() + a.z_axis.length_squared(),
+            )
+        };
+        if l.determinant() == 0.0 {
             return Err(GeometryError::SingularTransform);
         }
         let li = l.inverse();
+        // NaN (an inverse that overflowed `f64`) is refused too.
+        if !(frobenius(&l) * frobenius(&li) <= TRANSFORM_MAX_CONDITION) {
+            return Err(GeometryError::SingularTransform);
+        }
         let ti: DVec3 = -(li * m.w_axis.truncate().as_dvec3());
         let inv = Mat4::from_cols(
             li.x_axis.as_vec3().extend(0.0),
@@ -389,6 +394,16 @@ mod tests {
         assert!(
             Transform::scale(Vec3::new(1.0, 1.0, 1.0e-4)).is_ok(),
             "a flattened sphere: axis ratio 10⁻⁴"
+        );
+        // A rod: condition number 2 000 (two small axes; refused by a scaled determinant).
+        assert!(Transform::scale(Vec3::new(1.0, 5.0e-4, 5.0e-4)).is_ok());
+        // The bound by hand: a scale (1, 1, a) has ‖L‖_F = √(2 + a²), ‖L⁻¹‖_F = √(2 + 1/a²),
+        // so κ_F = 2²⁰ at a ≈ 1.3487e-6 (from κ_F² = (2 + a²)(2 + a⁻²) = 2⁴⁰). Just above and
+        // below that axis ratio (1 % each way).
+        assert!(Transform::scale(Vec3::new(1.0, 1.0, 1.3621e-6)).is_ok());
+        assert_eq!(
+            Transform::scale(Vec3::new(1.0, 1.0, 1.3352e-6)),
+            Err(GeometryError::SingularTransform)
         );
         assert!(
             Transform::scale(Vec3::splat(1.0e-20)).is_ok(),

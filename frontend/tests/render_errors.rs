@@ -341,6 +341,25 @@ fn singular_transform() {
         "object[0].transform[0].matrix",
         "singular",
     );
+    // Ill-conditioned is not singular: a rod of condition number 2 000, as a scale and as a
+    // matrix, loads (a scaled-determinant test refused both).
+    for rod in [
+        "{ scale = [1, 5e-4, 5e-4] }",
+        "{ matrix = [[1, 0, 0, 0], [0, 5e-4, 0, 0], [0, 0, 5e-4, 0], [0, 0, 0, 1]] }",
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("rod.toml");
+        std::fs::write(
+            &path,
+            sphere_with(&format!(
+                "center = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = [{rod}]"
+            )),
+        )
+        .unwrap();
+        if let Err(e) = load(&path) {
+            panic!("{rod} refused: {e}");
+        }
+    }
 }
 
 #[test]
