@@ -370,10 +370,10 @@ pub unsafe extern "C" fn halfray_baked_info(
 /// `OVERLAP` when the handle or the scratch lies in the buffer (checked first: a NULL pointer
 /// with a length that reaches the other area is reported as `OVERLAP`, not `NULL`);
 /// `SHORT_BUFFER`, `NOT_BAKED`, `VERSION` as `halfray_baked_info`; `SCRATCH_TOO_SMALL`; or the
-/// code of the first check that fails (`INDEX_COUNT` to `BAD_BVH`). On any error but `NULL`,
-/// `MISALIGNED` and `OVERLAP`, `*bvh` is left "not loaded": queries on it return
-/// `NOT_LOADED`. Those three leave `*bvh` as it was (a handle in the buffer is never
-/// written); zero it to unload an earlier tree.
+/// code of the first check that fails (`INDEX_COUNT` to `BAD_BVH`). A NULL or misaligned `bvh`
+/// and `OVERLAP` leave `*bvh` as it was (a handle in the buffer is never written; zero it to
+/// unload an earlier tree); on every other error, a NULL or misaligned `bytes` or `scratch`
+/// included, `*bvh` is left "not loaded": queries on it return `NOT_LOADED`.
 ///
 /// # Safety
 ///
@@ -589,7 +589,8 @@ unsafe fn query_inputs<'a>(
 /// Returns `HALFRAY_STATUS_OK` with `*hit` the hit, or `primitive` = `HALFRAY_NO_HIT` for a
 /// miss; `NULL` when `bvh`, `ray` or `hit` is NULL, or `stack` is NULL with a non-zero
 /// `stack_entries`; `MISALIGNED`; `NOT_LOADED`; `OVERLAP` when the stack overlaps the handle
-/// or its baked buffer; `INVALID_RAY` (NaN or infinite origin or
+/// or its baked buffer (checked first: a NULL `stack` whose `stack_entries` reach the handle's
+/// or the buffer's address is reported as `OVERLAP`, not `NULL`); `INVALID_RAY` (NaN or infinite origin or
 /// direction, zero direction, NaN bounds, `t_min` = +infinity, `t_min` > `t_max`);
 /// `STACK_TOO_SMALL` when this ray needed more entries. `*hit` is written only on success.
 ///

@@ -349,6 +349,24 @@ static void octahedron(Buffer b) {
           HALFRAY_STATUS_OVERLAP);
     CHECK(memcmp(&hit, &sentinel, sizeof hit) == 0);
     CHECK(halfray_stack_entries(&bvh, &entries) == HALFRAY_STATUS_OK);
+    /* A NULL stack whose count reaches the handle's address: OVERLAP (checked first), as
+     * documented; with a count that reaches nothing, NULL. */
+    CHECK(halfray_closest_hit(&bvh, &down, NULL, SIZE_MAX, &hit) == HALFRAY_STATUS_OVERLAP);
+    CHECK(halfray_closest_hit(&bvh, &down, NULL, 1, &hit) == HALFRAY_STATUS_NULL);
+
+    /* What a failed load leaves in a loaded handle: a NULL handle or an overlap, the tree
+     * as it was; a NULL or misaligned buffer or scratch, "not loaded". */
+    CHECK(halfray_load(b.bytes, b.len, (uint32_t *)(void *)(b.bytes + 64), 1, &bvh) ==
+          HALFRAY_STATUS_OVERLAP);
+    CHECK(halfray_stack_entries(&bvh, &entries) == HALFRAY_STATUS_OK);
+    CHECK(halfray_load(NULL, 0, scratch, 1, &bvh) == HALFRAY_STATUS_NULL);
+    CHECK(halfray_stack_entries(&bvh, &entries) == HALFRAY_STATUS_NOT_LOADED);
+    CHECK(halfray_load(b.bytes, b.len, scratch, 1, &bvh) == HALFRAY_STATUS_OK);
+    CHECK(halfray_load(b.bytes, b.len, (uint32_t *)(void *)((char *)scratch + 2), 1, &bvh) ==
+          HALFRAY_STATUS_MISALIGNED);
+    CHECK(halfray_stack_entries(&bvh, &entries) == HALFRAY_STATUS_NOT_LOADED);
+    CHECK(halfray_load(b.bytes, b.len, scratch, 1, &bvh) == HALFRAY_STATUS_OK);
+    CHECK(halfray_stack_entries(&bvh, &entries) == HALFRAY_STATUS_OK);
 
     /* Closed-form answers. Straight down at (1/4, 1/4): the face x + y + z = 1 of
      * vertices +x, +y, +z (triangle 0) at z = 1/2, t = 4.5; b1 is y, b2 is z; Ng is
