@@ -10,8 +10,10 @@
 //! default), linear radiance for `halfray render --background IMG --op OP`.
 
 use crate::error::{Error, Location, Result};
+use crate::limits::MEMORY_LIMIT_BYTES;
 use crate::outputs::{Named, reserve_outputs};
-use crate::png::read_rgba8;
+use crate::png::{image_dimensions, read_rgba8};
+use crate::text;
 use glam::Vec4;
 use std::path::PathBuf;
 
@@ -143,29 +145,44 @@ pub fn run(args: &CompositeArgs) -> Result<()> {
     };
     // After the input check: an output that is an input is "the input".
     crate::png::check_png_name(Named::new("-o", &args.output))?;
-    let a = read_rgba8(&args.source)?;
-    // The destination must be as large and the result is too: all three under the limit,
-    // checked before the second decode (each decode alone is limited by `read_rgba8`).
-    crate::limits::check_memory(
-        &format!(
-            "compositing two {}×{} images (source, destination and result)",
-            a.width(),
-            a.height()
-        ),
-        (a.as_raw().len() as u64).checked_mul(3),
-    )?;
-    let b = read_rgba8(&args.destination)?;
-    if a.dimensions() != b.dimensions() {
+    // Both headers before any decode: the sizes must agree, and the source, the destination
+    // and the result must fit the memory limit together (each decode alone is limited by
+    // `read_rgba8`).
+    let (w, h) = image_dimensions(&args.source)?;
+    let (bw, bh) = image_dimensions(&args.destination)?;
+    if (w, h) != (bw, bh) {
         return Err(Error::input(
             Location::file(&args.destination),
             format!(
-                "is {}×{} but the source `{}` is {}×{}",
-                b.width(),
-                b.height(),
-                args.source.display(),
-                a.width(),
-                a.height()
+                "is {bw}×{bh} but the source `{}` is {w}×{h}",
+                text::path(&args.source)
             ),
+        ));
+    }
+    let bytes = u64::from(w)
+        .checked_mul(u64::from(h))
+        .and_then(|n| n.checked_mul(4 * 3));
+    if bytes.is_none_or(|b| b > MEMORY_LIMIT_BYTES) {
+        return Err(Error::input(
+            Location::file(&args.source),
+            format!(
+                "compositing it with `{}`, both {w}×{h}, needs {} for the source, the destination and the result, more than the {} GiB limit",
+                text::path(&args.destination),
+                bytes.map_or("more memory".to_string(), |b| format!(
+                    "about {:.1} GiB",
+                    b as f64 / f64::from(1u32 << 30)
+                )),
+                MEMORY_LIMIT_BYTES >> 30
+            ),
+        ));
+    }
+    let a = read_rgba8(&args.source)?;
+    let b = read_rgba8(&args.destination)?;
+    if a.dimensions() != b.dimensions() {
+        // The files changed between the header and the decode.
+        return Err(Error::input(
+            Location::file(&args.destination),
+            format!("changed size while it was read ({w}×{h} in its header)"),
         ));
     }
     let pixels = composite_rgba8(args.op, a.as_raw(), b.as_raw());

@@ -79,20 +79,7 @@ pub fn encode_png(
 /// would exceed the limit is refused with its size before anything is decoded; the decoder
 /// itself is given the same limit (not the `image` crate's smaller default), so the two agree.
 pub fn read_rgba8(path: &Path) -> Result<image::RgbaImage> {
-    let open = || -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>> {
-        let mut r = image::ImageReader::open(path)
-            .map_err(|e| Error::io(path, e))?
-            .with_guessed_format()
-            .map_err(|e| Error::io(path, e))?;
-        let mut limits = image::Limits::default();
-        limits.max_alloc = Some(MEMORY_LIMIT_BYTES);
-        r.limits(limits);
-        Ok(r)
-    };
-    let cannot = |e: image::ImageError| {
-        Error::input(Location::file(path), format!("cannot decode image: {e}"))
-    };
-    let (w, h) = open()?.into_dimensions().map_err(cannot)?;
+    let (w, h) = image_dimensions(path)?;
     let too_big = |bytes: Option<u64>| {
         let size = match bytes {
             Some(b) => format!("about {:.1} GiB", b as f64 / f64::from(1u32 << 30)),
@@ -112,11 +99,37 @@ pub fn read_rgba8(path: &Path) -> Result<image::RgbaImage> {
     if rgba_bytes.is_none_or(|b| b > MEMORY_LIMIT_BYTES) {
         return Err(too_big(rgba_bytes));
     }
-    match open()?.decode() {
+    match reader(path)?.decode() {
         Ok(img) => Ok(img.into_rgba8()),
         // The decoder's own buffer (e.g. 16 bits a channel) can exceed the limit where the
         // 8-bit copy does not: still give the size and the limit.
         Err(image::ImageError::Limits(_)) => Err(too_big(None)),
-        Err(e) => Err(cannot(e)),
+        Err(e) => Err(cannot_decode(path, e)),
     }
+}
+
+/// The width and height an image file's header gives (format guessed from its bytes), read
+/// without decoding the pixels: what a command checks before it decodes several images.
+pub fn image_dimensions(path: &Path) -> Result<(u32, u32)> {
+    reader(path)?
+        .into_dimensions()
+        .map_err(|e| cannot_decode(path, e))
+}
+
+/// A reader of `path` with its format guessed and the decoder limited to
+/// [`MEMORY_LIMIT_BYTES`].
+fn reader(path: &Path) -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>> {
+    let mut r = image::ImageReader::open(path)
+        .map_err(|e| Error::io(path, e))?
+        .with_guessed_format()
+        .map_err(|e| Error::io(path, e))?;
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(MEMORY_LIMIT_BYTES);
+    r.limits(limits);
+    Ok(r)
+}
+
+/// The input error of an image `path` that cannot be decoded.
+fn cannot_decode(path: &Path, e: image::ImageError) -> Error {
+    Error::input(Location::file(path), format!("cannot decode image: {e}"))
 }
