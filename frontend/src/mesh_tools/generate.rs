@@ -86,7 +86,8 @@ pub struct GenerateArgs {
     pub force: bool,
 }
 
-/// Size parameters above this are refused (the `sphere` at this `n` has 24 M triangles).
+/// Size parameters above this are refused (the `sphere` at this `n` has 48 M triangles and
+/// 24 M vertices).
 pub const MAX_SIZE: usize = 2_000;
 
 /// A generated mesh: positions and triangles.
@@ -133,7 +134,10 @@ impl Builder {
 ///
 /// # Errors
 ///
-/// [`Error::Usage`] for a size of 0 or above [`MAX_SIZE`] (or 0 objects).
+/// [`Error::Usage`] for a size of 0 or above [`MAX_SIZE`] (or 0 objects), or a sphere whose
+/// grid points at that size are closer than `f32`'s spacing at its coordinates (the `far`
+/// sphere from `n ≈ 650`, the `room`'s object at large sizes): welded, they would make
+/// degenerate triangles.
 pub fn generate(kind: Kind, seed: u64, n: Option<usize>) -> Result<Generated> {
     let n = n.unwrap_or(kind.default_size());
     let limit = match kind {
@@ -150,7 +154,7 @@ pub fn generate(kind: Kind, seed: u64, n: Option<usize>) -> Result<Generated> {
     match kind {
         Kind::Sphere => {
             let waves = Waves::new(&mut rng);
-            cube_sphere(&mut b, n, DVec3::ZERO, 1.0, &waves);
+            cube_sphere(&mut b, n, DVec3::ZERO, 1.0, &waves)?;
         }
         Kind::Terrain => terrain(&mut b, n, &mut rng),
         Kind::Beams => beams(&mut b, n, &mut rng),
@@ -165,12 +169,12 @@ pub fn generate(kind: Kind, seed: u64, n: Option<usize>) -> Result<Generated> {
                 DVec3::new(0.0, floor + 0.5, 0.0),
                 0.5 / (1.0 + SPHERE_RELIEF),
                 &waves,
-            );
+            )?;
         }
         Kind::Scatter => scatter(&mut b, n, &mut rng),
         Kind::Far => {
             let waves = Waves::new(&mut rng);
-            cube_sphere(&mut b, n, DVec3::from_array(FAR_CENTRE), 1.0, &waves);
+            cube_sphere(&mut b, n, DVec3::from_array(FAR_CENTRE), 1.0, &waves)?;
         }
     }
     Ok(b.mesh)
@@ -232,7 +236,8 @@ impl Waves {
 }
 
 /// A cube-sphere of `6·2·n²` triangles around `center`, radius `radius · waves.radius(d)`.
-fn cube_sphere(b: &mut Builder, n: usize, center: DVec3, radius: f64, waves: &Waves) {
+fn cube_sphere(b: &mut Builder, n: usize, center: DVec3, radius: f64, waves: &Waves) -> Result<()> {
+    let before = b.mesh.positions.len();
     let grid = |i: usize| -1.0 + 2.0 * i as f64 / n as f64;
     for axis in 0..3 {
         for sign in [1.0, -1.0] {
@@ -261,6 +266,18 @@ fn cube_sphere(b: &mut Builder, n: usize, center: DVec3, radius: f64, waves: &Wa
             }
         }
     }
+    // The six grids share their edges and corners: 6n² + 2 distinct vertices. Fewer means
+    // grid points closer than `f32`'s spacing at these coordinates were welded into one (the
+    // `far` sphere from `n ≈ 650`): a degenerate, non-manifold mesh, refused.
+    let expected = 6 * n * n + 2;
+    let got = b.mesh.positions.len() - before;
+    if got != expected {
+        return Err(Error::Usage(format!(
+            "--size {n}: the sphere's grid points are closer than f32's spacing at its coordinates, so {} of its {expected} vertices would be welded into others (degenerate triangles); use a smaller --size",
+            expected - got.min(expected)
+        )));
+    }
+    Ok(())
 }
 
 /// A heightfield of `2·n²` triangles over `[0, 1000]²` (`y` up), heights from seeded waves.
@@ -566,6 +583,23 @@ mod tests {
         let size = (ohi - olo).max_element();
         assert!(size > 0.85 && size <= 1.0, "{size}");
         assert!(olo.y >= lo.y, "on the floor");
+    }
+
+    /// A sphere whose grid points round together in `f32` is refused, not welded into a
+    /// degenerate mesh: centred at `(10⁷, 10⁷, 10⁷)` (`f32` spacing 1) a unit sphere of `n = 4`
+    /// collapses; at the origin it keeps its `6n² + 2` vertices.
+    #[test]
+    fn a_sphere_finer_than_f32_at_its_coordinates_is_refused() {
+        let waves = Waves::new(&mut Rng::new(1));
+        let mut b = Builder::default();
+        let e = cube_sphere(&mut b, 4, DVec3::splat(1.0e7), 1.0, &waves).unwrap_err();
+        assert!(
+            matches!(&e, Error::Usage(m) if m.contains("--size 4")),
+            "{e}"
+        );
+        let mut b = Builder::default();
+        cube_sphere(&mut b, 4, DVec3::ZERO, 1.0, &waves).unwrap();
+        assert_eq!(b.mesh.positions.len(), 6 * 16 + 2);
     }
 
     /// The `far` sphere at its default size: closed and outward after its coordinates are
