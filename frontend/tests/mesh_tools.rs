@@ -534,6 +534,24 @@ fn smoothing_beyond_the_coordinate_domain_writes_nothing() {
         );
         assert!(!out.exists(), "{step}");
     }
+    // A step that overflows only on a later iteration is the same usage error (it was exit 1,
+    // blaming the input file).
+    let (code, _, err) = run_bin(&[
+        "mesh",
+        "smooth",
+        cube,
+        "-o",
+        out_arg,
+        "--step=1e30",
+        "--iterations=2",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("smoothing step 2 with --step 1000000000000000000000000000000")
+            && err.contains("nothing written"),
+        "{err}"
+    );
+    assert!(!out.exists());
     // A large step that stays inside the domain is written and reads back.
     let (code, _, err) = smooth("--step=1e3");
     assert_eq!(code, 0, "{err}");

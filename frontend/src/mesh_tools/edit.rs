@@ -11,8 +11,8 @@ use crate::obj::{MAX_COORDINATE, NotCarried, first_outside_domain, read_obj_file
 use crate::text;
 use glam::Vec3;
 use halfray_core::halfedge::{
-    CollapseAt, CollapseError, Counts, DiffuseBoundary, EdgeId, LoopWeights, MAX_ELEMENTS, Mesh,
-    MeshStorage, SliceMesh, SubdivideError,
+    CollapseAt, CollapseError, Counts, DiffuseBoundary, DiffuseError, EdgeId, LoopWeights,
+    MAX_ELEMENTS, Mesh, MeshStorage, SliceMesh, SubdivideError,
 };
 use std::collections::BTreeMap;
 use std::fmt;
@@ -329,7 +329,17 @@ fn smooth_mesh(
     let mut scratch = vec![Vec3::ZERO; mesh.slots().vertices];
     for i in 0..args.iterations {
         mesh.diffuse(args.step, boundary, &mut scratch)
-            .map_err(|e| core_error(&args.input, format!("smoothing step {}: {e}", i + 1)))?;
+            .map_err(|e| match e {
+                // The input's vertices are finite and within the coordinate domain (the reader
+                // checks), so a position that overflows is the step's doing: a usage error,
+                // as `refuse_outside_domain`'s.
+                DiffuseError::NonFinite => Error::Usage(format!(
+                    "mesh smooth: smoothing step {} with --step {} moves a vertex beyond f32's range; use a smaller --step or fewer --iterations; nothing written",
+                    i + 1,
+                    args.step
+                )),
+                e => core_error(&args.input, format!("smoothing step {}: {e}", i + 1)),
+            })?;
     }
     report.roughness = Some((before, roughness(mesh)));
     Ok(export_edited(mesh, report, t1))
