@@ -69,7 +69,9 @@ impl Location {
             return self;
         }
         let line = self.line.map_or(e.line(), |first| first + e.line() - 1);
-        self.line(line).column(e.column())
+        // serde_json counts the characters consumed on the line: 0 when it stopped before the
+        // line's first (the end of the text after a line break), which is column 1 here.
+        self.line(line).column(e.column().max(1))
     }
 
     /// Adds a field name.
@@ -336,6 +338,13 @@ mod tests {
         assert_eq!(
             at(Location::file("r.jsonl").line(7).json_position(&shape)),
             "r.jsonl:7"
+        );
+        // Stopped at a line's start (serde's column 0): column 1, columns being 1-based.
+        let at_start = serde_json::from_str::<Vec<u32>>("[1,\n").unwrap_err();
+        assert_eq!((at_start.line(), at_start.column()), (2, 0), "{at_start}");
+        assert_eq!(
+            at(Location::file("r.json").json_position(&at_start)),
+            "r.json:2:1"
         );
         // The message says the place once: in the location, not again in serde's words.
         assert_eq!(json_message(&syntax), "expected value");
