@@ -844,3 +844,53 @@ fn samples_of_an_effect_that_is_off_are_refused() {
         halfray::scene::parse(&text, Path::new("on.toml")).unwrap_or_else(|e| panic!("{e}"));
     }
 }
+
+/// A quadric clipped by only one corner is named at the corner it has, with the missing one
+/// said: `max` alone is `max` (it was reported as `min`, at `max`'s place), `min` alone `min`.
+#[test]
+fn a_half_clip_box_is_named_at_the_corner_given() {
+    let quadric = |corner: &str| {
+        format!(
+            "{BASE}\n[[object]]\ntype = \"quadric\"\ncoefficients = {{ xx = 1, yy = 1, zz = 1, c = -1 }}\nmaterial = \"m\"\n{corner} = [1, 1, 1]\n"
+        )
+    };
+    check(
+        "max.toml",
+        &quadric("max"),
+        "15:7",
+        "object[0].max",
+        "`min` is missing",
+    );
+    check(
+        "min.toml",
+        &quadric("min"),
+        "15:7",
+        "object[0].min",
+        "`max` is missing",
+    );
+}
+
+/// A positive radius too small for `f32` is refused with what was written, not a `0` the
+/// scene never says; zero itself with its value.
+#[test]
+fn a_positive_number_below_f32_is_named_as_written() {
+    let sphere = |r: &str| {
+        sphere_with(&format!(
+            "center = [0, 0, 0]\nradius = {r}\nmaterial = \"m\""
+        ))
+    };
+    check(
+        "tiny.toml",
+        &sphere("1e-400"),
+        "14:10",
+        "object[0].radius",
+        "1e-400 is below the smallest positive `f32`",
+    );
+    check(
+        "zero.toml",
+        &sphere("0"),
+        "14:10",
+        "object[0].radius",
+        "must be > 0 (got 0)",
+    );
+}

@@ -63,7 +63,29 @@ impl Ctx<'_> {
     fn positive(&self, v: &S<f32>, field: &str) -> Result<f32> {
         let x = self.f(v, field)?;
         if !(x > 0.0) {
-            return Err(self.err(&v.span(), field, format!("must be > 0 (got {x})")));
+            // A positive number below `f32`'s smallest reads as 0: say what was written.
+            let written = self
+                .src
+                .text
+                .get(v.span())
+                .map(str::trim)
+                .unwrap_or_default();
+            // Positive as written: above 0 in `f64`, or below even `f64`'s range (`1e-400`
+            // parses as 0) with a non-zero digit before its exponent and no sign.
+            let mantissa = written.split(['e', 'E']).next().unwrap_or_default();
+            let underflows =
+                !written.starts_with('-') && mantissa.bytes().any(|b| (b'1'..=b'9').contains(&b));
+            let msg = if written
+                .parse::<f64>()
+                .is_ok_and(|w| w > 0.0 || (w == 0.0 && underflows))
+            {
+                format!(
+                    "must be > 0 ({written} is below the smallest positive `f32`, 1.4e-45, and reads as 0)"
+                )
+            } else {
+                format!("must be > 0 (got {x})")
+            };
+            return Err(self.err(&v.span(), field, msg));
         }
         Ok(x)
     }

@@ -217,11 +217,19 @@ fn quadric(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Geometry> {
     let clip = match (&o.min, &o.max) {
         (Some(lo), Some(hi)) => Some(box_of(ctx, lo, hi, p)?),
         (None, None) => None,
-        (Some(s), None) | (None, Some(s)) => {
+        // Named at the one given, which the message says the other is missing from.
+        (Some(s), None) => {
             return Err(ctx.err(
                 &s.span(),
                 &f("min"),
-                "a clip box needs both `min` and `max`",
+                "a clip box needs both `min` and `max`: `max` is missing",
+            ));
+        }
+        (None, Some(s)) => {
+            return Err(ctx.err(
+                &s.span(),
+                &f("max"),
+                "a clip box needs both `min` and `max`: `min` is missing",
             ));
         }
     };
