@@ -121,7 +121,9 @@ pub struct CompositeArgs {
 }
 
 /// `a OP b` pixel by pixel on 8-bit straight RGBA (values scaled to `[0, 1]`, results rounded
-/// to the nearest 8-bit value). The images must have the same size (checked by the caller).
+/// to the nearest 8-bit value). Evaluated in `f32`, as the renderer's compositing: a result
+/// within about `10⁻⁴` of an 8-bit step's midpoint (`130.49998`) may round to either side.
+/// The images must have the same size (checked by the caller).
 pub fn composite_rgba8(op: Operator, a: &[u8], b: &[u8]) -> Vec<u8> {
     let px = |p: &[u8]| Vec4::from_array([p[0], p[1], p[2], p[3]].map(|c| f32::from(c) / 255.0));
     a.chunks_exact(4)
