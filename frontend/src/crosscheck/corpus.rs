@@ -223,8 +223,12 @@ impl ResultLog {
         let text = std::str::from_utf8(&bytes[..complete])
             .map_err(|_| Error::input(Location::file(path), "is not UTF-8 text (a results log)"))?;
         let torn = &bytes[complete..];
-        let begins_a_line =
-            torn.starts_with(LINE_START.as_bytes()) || LINE_START.as_bytes().starts_with(torn);
+        // A write cut off mid-line is never a whole JSON value: one that is (`{"path":"x"}`,
+        // a hand-written note) is not a torn result, and is not dropped.
+        let whole_value =
+            !torn.is_empty() && serde_json::from_slice::<serde::de::IgnoredAny>(torn).is_ok();
+        let begins_a_line = !whole_value
+            && (torn.starts_with(LINE_START.as_bytes()) || LINE_START.as_bytes().starts_with(torn));
         if !begins_a_line {
             return Err(Error::input(
                 Location::file(path).line(1 + text.lines().count()),
@@ -483,7 +487,7 @@ mod tests {
         let whole = std::fs::read(&path).unwrap();
         let torn = &whole[..whole.len() - 10]; // the last line cut off mid-line
         let unended = &whole[..whole.len() - 1]; // the last line without its newline
-        let cases: [(&str, &[u8], &str); 5] = [
+        let cases: [(&str, &[u8], &str); 6] = [
             ("another run's log, torn", torn, "rays 11 vs 10"),
             ("another run's log, unended", unended, "rays 11 vs 10"),
             ("notes", b"my notes", "is not a results log"),
@@ -496,6 +500,11 @@ mod tests {
                 "text, then a torn line",
                 b"{\"path\":\"a.obj\"\n",
                 "out.jsonl:1:",
+            ),
+            (
+                "a whole JSON object that is not a result, unended",
+                b"{\"path\":\"cube.obj\",\"note\":\"keep me\"}",
+                "is not a results log",
             ),
         ];
         for (what, bytes, want) in cases {
