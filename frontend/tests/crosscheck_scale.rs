@@ -267,6 +267,25 @@ fn resume_skips_exactly_the_meshes_already_done() {
     );
     assert!(o.status.success(), "{}", text(&o));
     assert_eq!(counts(&read(&fresh)), counts(&report));
+    // Resumed once more with every mesh in the log: this process checks no ray, so its
+    // throughput is 0 (the log's rays over this run's wall time made it millions of rays/s).
+    let again = dir.path().join("again.json");
+    let o = run(
+        &args,
+        &[
+            Path::new("--mesh-list"),
+            &list,
+            Path::new("--jsonl"),
+            &log,
+            Path::new("--resume"),
+            Path::new("--json"),
+            &again,
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let again = read(&again);
+    assert_eq!(counts(&again), counts(&report));
+    assert_eq!(again["rays_per_second"], 0.0, "{again}");
 }
 
 /// Sizes a run cannot hold are usage errors before any work (they aborted on a failed

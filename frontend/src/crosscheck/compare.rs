@@ -152,6 +152,9 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
         .transpose()?;
     let start = Instant::now();
     let mut results = Vec::with_capacity(meshes.len());
+    // Rays this process checked (not those of meshes a resumed log already holds): the
+    // throughput's numerator.
+    let mut checked_rays = 0.0f64;
     for (path, named_at) in meshes.iter().zip(&named_at) {
         let shown = path.display().to_string();
         if let Some(done) = log.as_ref().and_then(|l| l.done(path)) {
@@ -163,6 +166,7 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
         let checked = pool.install(|| check_mesh(&device, path, &config, args, want_depth));
         let checked = checked.map(|(rows, png)| {
             depth_png = depth_png.take().or(png);
+            checked_rays += rows.iter().map(|r| r.rays as f64).sum::<f64>();
             rows
         });
         // A failed mesh a list named is reported with the list's line.
@@ -193,7 +197,8 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
         (None, _) => None,
     };
     let wall = start.elapsed().as_secs_f64();
-    let report = Report::new(config, pool.current_num_threads(), wall, &results);
+    let mut report = Report::new(config, pool.current_num_threads(), wall, &results);
+    report.rays_per_second = if wall > 0.0 { checked_rays / wall } else { 0.0 };
     finish(&report, json_out, depth, args.max_mismatch)
 }
 

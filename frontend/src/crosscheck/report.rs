@@ -296,7 +296,9 @@ pub struct Report {
     pub threads: usize,
     /// Wall-clock seconds of the whole run (summed over merged parts).
     pub wall_seconds: f64,
-    /// Rays checked per wall-clock second (every ray of every set, all threads).
+    /// Rays checked per wall-clock second (every ray of every set, all threads) by the run's
+    /// process: a `--resume`d run counts only the meshes it checked itself, not those its log
+    /// already held.
     pub rays_per_second: f64,
     /// Meshes checked or attempted.
     pub meshes: usize,
