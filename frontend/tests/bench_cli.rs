@@ -295,6 +295,27 @@ fn no_rays_is_a_usage_error() {
     }
 }
 
+/// A set named twice in `--sets` is a usage error before any work (it was timed and reported
+/// twice); the same sets once each run.
+#[test]
+fn a_set_named_twice_is_a_usage_error() {
+    let tetrahedron = format!("{SCENE_MESHES}/tetrahedron.obj");
+    let bench = |sets: &str| {
+        Command::new(BIN)
+            .args(["bench", "bvh", &tetrahedron, "--width", "4", "--rays", "16"])
+            .args(["--sets", sets])
+            .output()
+            .unwrap()
+    };
+    let o = bench("primary,random,primary");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--sets names `primary` twice"), "{err}");
+    assert!(o.stdout.is_empty());
+    let o = bench("primary,random");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
 /// `bench accel`: one row per structure, in order, each equal to brute force on the sample.
 #[test]
 fn accel_reports_every_structure_equal_to_brute_force() {

@@ -313,6 +313,11 @@ fn sizes_beyond_memory_are_refused_before_any_work() {
         ),
         // workers::MAX_WORKER_THREADS, as for RAYON_NUM_THREADS.
         (&["--threads", "1025"][..], "1..=1024"),
+        // A set named twice would be checked and counted twice.
+        (
+            &["--sets", "edges,primary,edges"][..],
+            "--sets names `edges` twice",
+        ),
     ] {
         let o = run(
             args,

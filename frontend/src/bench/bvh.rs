@@ -202,6 +202,7 @@ pub fn run(args: &BvhArgs) -> Result<()> {
     let variant = args.intersector.0;
     let run = RunMeshes::read(&args.meshes, args.mesh_list.as_deref(), "benchmark")?;
     run.refuse_repeated("benchmarked")?;
+    crate::cli_values::refuse_repeated_sets(&args.sets)?;
     let sets = if args.sets.is_empty() {
         RaySet::ALL.to_vec()
     } else {

@@ -103,6 +103,7 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     check_sizes(args)?;
     let run = RunMeshes::read(&args.meshes, args.mesh_list.as_deref(), "cross-check")?;
     run.refuse_repeated("checked")?;
+    crate::cli_values::refuse_repeated_sets(&args.sets)?;
     let RunMeshes {
         paths: meshes,
         named_at,
