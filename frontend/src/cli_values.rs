@@ -64,6 +64,22 @@ pub fn finite_f32(s: &str) -> Result<f32, String> {
     Ok(y)
 }
 
+/// Refuses a `--sets` list that names a set twice: it would be traced, counted and reported
+/// twice (and a cross-check's mismatches summed twice against `--max-mismatch`). A usage error
+/// naming the first set repeated.
+pub fn refuse_repeated_sets<T: PartialEq + std::fmt::Display>(sets: &[T]) -> crate::Result<()> {
+    match sets
+        .iter()
+        .enumerate()
+        .find(|&(i, s)| sets[..i].contains(s))
+    {
+        Some((_, s)) => Err(crate::Error::Usage(format!(
+            "--sets names `{s}` twice: each set is traced once"
+        ))),
+        None => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -98,21 +114,5 @@ mod tests {
             assert_eq!(Intersector::from_str(v.name(), false), Ok(Intersector(v)));
         }
         assert!(Intersector::from_str("mollertrumbore", false).is_err());
-    }
-}
-
-/// Refuses a `--sets` list that names a set twice: it would be traced, counted and reported
-/// twice (and a cross-check's mismatches summed twice against `--max-mismatch`). A usage error
-/// naming the first set repeated.
-pub fn refuse_repeated_sets<T: PartialEq + std::fmt::Display>(sets: &[T]) -> crate::Result<()> {
-    match sets
-        .iter()
-        .enumerate()
-        .find(|&(i, s)| sets[..i].contains(s))
-    {
-        Some((_, s)) => Err(crate::Error::Usage(format!(
-            "--sets names `{s}` twice: each set is traced once"
-        ))),
-        None => Ok(()),
     }
 }

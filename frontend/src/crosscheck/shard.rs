@@ -86,9 +86,12 @@ impl FromStr for Shard {
             .split_once('/')
             .ok_or_else(|| format!("`{s}` is not K/N (for example 0/4)"))?;
         let parse = |x: &str, what: &str| {
-            x.trim()
-                .parse::<usize>()
-                .map_err(|_| format!("`{s}`: {what} `{x}` is not a non-negative integer"))
+            x.trim().parse::<usize>().map_err(|e| match e.kind() {
+                std::num::IntErrorKind::PosOverflow => {
+                    format!("`{s}`: {what} `{x}` is too large (at most {})", usize::MAX)
+                }
+                _ => format!("`{s}`: {what} `{x}` is not a non-negative integer"),
+            })
         };
         let (k, n) = (parse(k, "K")?, parse(n, "N")?);
         Self::new(k, n).ok_or_else(|| match n {
@@ -155,6 +158,12 @@ mod tests {
             ("0/0", "N must be at least 1"),
             ("1/0", "N must be at least 1"),
             ("4/4", "0/4 .. 3/4"),
+            // A number, but beyond 64 bits: said so, not "not a non-negative integer".
+            (
+                "0/18446744073709551616",
+                "N `18446744073709551616` is too large (at most 18446744073709551615)",
+            ),
+            ("-1/4", "K `-1` is not a non-negative integer"),
         ] {
             let e = bad.parse::<Shard>().unwrap_err();
             assert!(e.contains(want), "{bad}: {e}");
