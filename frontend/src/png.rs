@@ -80,40 +80,46 @@ pub fn encode_png(
 /// itself is given the same limit (not the `image` crate's smaller default), so the two agree.
 pub fn read_rgba8(path: &Path) -> Result<image::RgbaImage> {
     let (w, h) = image_dimensions(path)?;
-    let too_big = |bytes: Option<u64>| {
-        let size = match bytes {
-            Some(b) => format!("about {:.1} GiB", b as f64 / f64::from(1u32 << 30)),
-            None => "more memory".to_string(),
-        };
-        Error::input(
-            Location::file(path),
-            format!(
-                "image is {w}×{h}: decoding it needs {size}, more than the {} GiB limit",
-                MEMORY_LIMIT_BYTES >> 30
-            ),
-        )
-    };
-    let rgba_bytes = u64::from(w)
-        .checked_mul(u64::from(h))
-        .and_then(|n| n.checked_mul(4));
-    if rgba_bytes.is_none_or(|b| b > MEMORY_LIMIT_BYTES) {
-        return Err(too_big(rgba_bytes));
-    }
     match reader(path)?.decode() {
         Ok(img) => Ok(img.into_rgba8()),
         // The decoder's own buffer (e.g. 16 bits a channel) can exceed the limit where the
         // 8-bit copy does not: still give the size and the limit.
-        Err(image::ImageError::Limits(_)) => Err(too_big(None)),
+        Err(image::ImageError::Limits(_)) => Err(too_big(path, (w, h), None)),
         Err(e) => Err(cannot_decode(path, e)),
     }
 }
 
 /// The width and height an image file's header gives (format guessed from its bytes), read
-/// without decoding the pixels: what a command checks before it decodes several images.
+/// without decoding the pixels, refused (as [`read_rgba8`] refuses it) when its 8-bit RGBA
+/// copy alone would exceed [`MEMORY_LIMIT_BYTES`]: what a command checks before it decodes
+/// several images.
 pub fn image_dimensions(path: &Path) -> Result<(u32, u32)> {
-    reader(path)?
+    let (w, h) = reader(path)?
         .into_dimensions()
-        .map_err(|e| cannot_decode(path, e))
+        .map_err(|e| cannot_decode(path, e))?;
+    let rgba_bytes = u64::from(w)
+        .checked_mul(u64::from(h))
+        .and_then(|n| n.checked_mul(4));
+    if rgba_bytes.is_none_or(|b| b > MEMORY_LIMIT_BYTES) {
+        return Err(too_big(path, (w, h), rgba_bytes));
+    }
+    Ok((w, h))
+}
+
+/// The input error of an image `path` of `w`×`h` whose decoding needs `bytes` (unknown:
+/// `None`), more than [`MEMORY_LIMIT_BYTES`].
+fn too_big(path: &Path, (w, h): (u32, u32), bytes: Option<u64>) -> Error {
+    let size = match bytes {
+        Some(b) => format!("about {:.1} GiB", b as f64 / f64::from(1u32 << 30)),
+        None => "more memory".to_string(),
+    };
+    Error::input(
+        Location::file(path),
+        format!(
+            "image is {w}×{h}: decoding it needs {size}, more than the {} GiB limit",
+            MEMORY_LIMIT_BYTES >> 30
+        ),
+    )
 }
 
 /// A reader of `path` with its format guessed and the decoder limited to
