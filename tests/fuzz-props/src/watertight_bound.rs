@@ -273,8 +273,11 @@ impl WatertightBound {
         };
         dt += t_eval * ez / det.abs();
         if eval == EdgeEval::F32 {
-            // The f32 products eᵢ·zᵢ round absolutely (2⁻¹⁴⁹) when they are subnormal.
+            // The f32 products eᵢ·zᵢ round absolutely (2⁻¹⁴⁹) when they are subnormal; and
+            // `watertight-f32-exact` forms t as Σ (eᵢ/det)·zᵢ, where a barycentric below the
+            // normal range rounds absolutely (2⁻¹⁵⁰), times its depth.
             dt += 3.0 * f64::from(f32::from_bits(1)) / det.abs();
+            dt += f64::from(f32::from_bits(1)) / 2.0 * self.z.iter().map(|z| z.abs()).sum::<f64>();
         }
         dt += f64::from(F32_UNIT_ROUNDOFF) * t_ref.abs() + 1.5e-45;
         dt *= BOUND_SAFETY;
