@@ -67,6 +67,8 @@ bash scripts/test-ffi.sh
 
 stage crate
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p halfray-core
+# The frontend library's docs too: no broken or private links.
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p halfray
 cargo publish --dry-run --allow-dirty -p halfray-core
 msrv=$(sed -n 's/^rust-version = "\(.*\)"/\1/p' Cargo.toml)
 rustup toolchain install "$msrv" --profile minimal

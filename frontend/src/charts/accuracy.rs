@@ -52,7 +52,7 @@ impl AccuracyChart {
     /// # Errors
     ///
     /// Reading or parsing the file; an input error naming the field when a value the chart
-    /// reads is outside what a run writes ([`Refused`]), or when no variant has a BVH
+    /// reads is outside what a run writes (`Refused`), or when no variant has a BVH
     /// throughput.
     pub fn from_file(path: &Path) -> Result<Self> {
         let report: ReportView = read_json(path, "`bench accuracy --json`")?;

@@ -106,7 +106,7 @@ pub struct SubdivideArgs {
 
 /// The most levels `mesh subdivide` takes: each level multiplies the face count by 4, so a
 /// mesh of one face passes the half-edge core's
-/// [`MAX_ELEMENTS`](halfray_core::halfedge::MAX_ELEMENTS) faces (`2³⁰ − 1`) at this level
+/// [`MAX_ELEMENTS`] faces (`2³⁰ − 1`) at this level
 /// (`4^15 = 2³⁰`) and no mesh with a face can take more; one without faces is unchanged by any
 /// number.
 pub const MAX_LEVELS: u32 =

@@ -156,7 +156,7 @@ fn mesh_paths(args: &AccuracyArgs) -> Vec<PathBuf> {
         .collect()
 }
 
-/// Runs the benchmark on `paths` (the meshes of `args`: [`mesh_paths`]) and returns the
+/// Runs the benchmark on `paths` (the meshes of `args`, as `mesh_paths` lists them) and returns the
 /// report (printing nothing).
 pub fn measure(args: &AccuracyArgs, paths: &[PathBuf]) -> Result<Report> {
     let meshes: Vec<(PathBuf, ObjMesh)> = paths
