@@ -46,18 +46,22 @@ pub fn encode_png(
         w: &'a mut dyn std::io::Write,
         error: Option<std::io::Error>,
     }
-    impl std::io::Write for Keep<'_> {
-        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-            self.w.write(buf).inspect_err(|e| {
+    impl Keep<'_> {
+        fn kept<T>(&mut self, r: std::io::Result<T>) -> std::io::Result<T> {
+            r.inspect_err(|e| {
                 self.error
                     .get_or_insert_with(|| std::io::Error::new(e.kind(), e.to_string()));
             })
         }
+    }
+    impl std::io::Write for Keep<'_> {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            let r = self.w.write(buf);
+            self.kept(r)
+        }
         fn flush(&mut self) -> std::io::Result<()> {
-            self.w.flush().inspect_err(|e| {
-                self.error
-                    .get_or_insert_with(|| std::io::Error::new(e.kind(), e.to_string()));
-            })
+            let r = self.w.flush();
+            self.kept(r)
         }
     }
     let mut keep = Keep { w, error: None };

@@ -40,16 +40,21 @@ impl Ctx<'_> {
         self.src.err(span, field, msg)
     }
 
+    /// The number as the scene file writes it (trimmed), for a message about a value that
+    /// `f32` cannot hold as written.
+    fn written(&self, v: &S<f32>) -> &str {
+        self.src
+            .text
+            .get(v.span())
+            .map(str::trim)
+            .unwrap_or_default()
+    }
+
     fn f(&self, v: &S<f32>, field: &str) -> Result<f32> {
         let x = *v.get_ref();
         if !x.is_finite() {
             // A finite number beyond `f32` reads as infinity: say what was written.
-            let written = self
-                .src
-                .text
-                .get(v.span())
-                .map(str::trim)
-                .unwrap_or_default();
+            let written = self.written(v);
             let msg = if written.parse::<f64>().is_ok_and(f64::is_finite) {
                 format!("{written} is beyond the largest `f32` (±3.4e38)")
             } else {
@@ -64,12 +69,7 @@ impl Ctx<'_> {
         let x = self.f(v, field)?;
         if !(x > 0.0) {
             // A positive number below `f32`'s smallest reads as 0: say what was written.
-            let written = self
-                .src
-                .text
-                .get(v.span())
-                .map(str::trim)
-                .unwrap_or_default();
+            let written = self.written(v);
             // Positive as written: above 0 in `f64`, or below even `f64`'s range (`1e-400`
             // parses as 0) with a non-zero digit before its exponent and no sign.
             let mantissa = written.split(['e', 'E']).next().unwrap_or_default();
