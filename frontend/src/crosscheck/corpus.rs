@@ -164,43 +164,53 @@ const LINE_START: &str = "{\"path\":";
 
 impl ResultLog {
     /// Opens `path` for this run. It must be a regular file (or not exist yet), writable and
-    /// with one name (a hard link would change under its other names too); a stream (`-`,
-    /// `/dev/stdout`), a device or a FIFO is a usage error, since `--resume` reads the log back.
+    /// with one name (a hard link would change under its other names too). A stream (`-`,
+    /// `/dev/stdout`) is a usage error, since `--resume` reads the log back; a missing folder,
+    /// a folder, device or FIFO, a read-only or hard-linked file is an I/O error naming the
+    /// path, as for every other output (exit 1).
     /// Without `resume`, an existing non-empty file is refused (its results would be lost);
     /// with it, the file is read back (see the module docs) and every line must belong to
     /// `config`'s run. Nothing is written to the file until all of that has been checked: a
     /// file that is not such a log, or the log of another run, is left as it was.
     pub fn open(path: &Path, resume: bool, config: &RunConfig) -> Result<Self> {
         use crate::outputs::target::{Target, resolve};
-        let usage =
-            |why: &str| Error::Usage(format!("--jsonl `{}` {why}", crate::text::path(path)));
+        let refuse =
+            |kind: std::io::ErrorKind, why: String| Error::io(path, std::io::Error::new(kind, why));
         let bytes = match resolve(path).map_err(|e| Error::io(path, e))? {
             Target::Missing { path: target } => {
                 let folder = crate::outputs::file::folder_of(&target);
                 if !folder.is_dir() {
-                    return Err(usage(&format!(
-                        "is in folder `{}`, which does not exist",
-                        crate::text::path(folder)
-                    )));
+                    return Err(refuse(
+                        std::io::ErrorKind::NotFound,
+                        format!("folder `{}` does not exist", crate::text::path(folder)),
+                    ));
                 }
                 Vec::new()
             }
             Target::Stream { .. } => {
-                return Err(usage(
-                    "names a stream: the results log must be a file, since --resume reads it back",
-                ));
+                return Err(Error::Usage(format!(
+                    "--jsonl `{}` names a stream: the results log must be a file, since --resume reads it back",
+                    crate::text::path(path)
+                )));
             }
             Target::Special { .. } | Target::Directory { .. } => {
-                return Err(usage(
-                    "is not a regular file: the results log is appended to and read back by --resume",
+                return Err(refuse(
+                    std::io::ErrorKind::InvalidInput,
+                    "is not a regular file: the results log is appended to and read back by --resume"
+                        .into(),
                 ));
             }
             Target::Regular { permissions, .. } if permissions.readonly() => {
-                return Err(usage("is read-only"));
+                return Err(refuse(
+                    std::io::ErrorKind::PermissionDenied,
+                    "is read-only".into(),
+                ));
             }
             Target::Regular { links, .. } if links > 1 => {
-                return Err(usage(
-                    "has more than one hard link: appending would change the file under its other names too",
+                return Err(refuse(
+                    std::io::ErrorKind::InvalidInput,
+                    "has more than one hard link: appending would change the file under its other names too"
+                        .into(),
                 ));
             }
             Target::Regular { .. } => crate::input::read_bytes(path)?,
@@ -358,18 +368,17 @@ mod tests {
         assert!(e.contains("list.txt:2"), "{e}");
     }
 
-    /// A log in a folder that does not exist is a usage error naming the folder, and nothing
-    /// is created.
+    /// A log in a folder that does not exist is an I/O error (exit 1, as for every other
+    /// output) naming the folder, and nothing is created.
     #[test]
     fn a_log_in_a_missing_folder_is_refused_by_name() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("missing/out.jsonl");
-        let e = ResultLog::open(&path, false, &config())
-            .err()
-            .unwrap()
-            .to_string();
+        let e = ResultLog::open(&path, false, &config()).err().unwrap();
+        assert_eq!(e.exit_code(), 1, "{e}");
+        let e = e.to_string();
         assert!(
-            e.contains("which does not exist") && e.contains("missing`"),
+            e.contains("does not exist") && e.contains("missing`"),
             "{e}"
         );
         assert!(!dir.path().join("missing").exists());
@@ -526,20 +535,16 @@ mod tests {
         std::fs::write(&path, &line).unwrap();
         let link = dir.path().join("link.jsonl");
         std::fs::hard_link(&path, &link).unwrap();
-        let e = ResultLog::open(&link, true, &config())
-            .err()
-            .unwrap()
-            .to_string();
-        assert!(e.contains("hard link"), "{e}");
+        let e = ResultLog::open(&link, true, &config()).err().unwrap();
+        assert_eq!(e.exit_code(), 1, "{e}");
+        assert!(e.to_string().contains("hard link"), "{e}");
         std::fs::remove_file(&link).unwrap();
         let mut perms = std::fs::metadata(&path).unwrap().permissions();
         perms.set_readonly(true);
         std::fs::set_permissions(&path, perms).unwrap();
-        let e = ResultLog::open(&path, true, &config())
-            .err()
-            .unwrap()
-            .to_string();
-        assert!(e.contains("is read-only"), "{e}");
+        let e = ResultLog::open(&path, true, &config()).err().unwrap();
+        assert_eq!(e.exit_code(), 1, "{e}");
+        assert!(e.to_string().contains("is read-only"), "{e}");
         for stream in ["-", "/dev/stdout", "/dev/fd/1"] {
             let e = ResultLog::open(Path::new(stream), false, &config())
                 .err()
@@ -551,6 +556,7 @@ mod tests {
             let e = ResultLog::open(Path::new(special), false, &config())
                 .err()
                 .unwrap();
+            assert_eq!(e.exit_code(), 1, "{special}: {e}");
             assert!(
                 e.to_string().contains("not a regular file"),
                 "{special}: {e}"
