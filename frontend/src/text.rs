@@ -36,6 +36,12 @@ pub fn escaped(s: &str) -> String {
     bounded_lines(s, usize::MAX, false)
 }
 
+/// A string as a markdown table cell: [`escaped`], and `|` as `\\|` (a bare one would end
+/// the cell).
+pub fn table_cell(s: &str) -> String {
+    escaped(s).replace('|', "\\|")
+}
+
 /// A path for a message: [`escaped`] (lossy UTF-8), so a file name cannot move the cursor,
 /// set the terminal title or start a line of its own.
 pub fn path(p: &std::path::Path) -> String {

@@ -35,6 +35,9 @@ struct VariantView {
 #[derive(serde::Deserialize)]
 struct ReportView {
     variants: Vec<VariantView>,
+    /// The mesh of the throughput (absent from reports written before it was recorded).
+    #[serde(default)]
+    bvh_mesh: Option<String>,
 }
 
 /// The chart: one point per variant with a BVH throughput.
@@ -42,6 +45,9 @@ struct ReportView {
 pub struct AccuracyChart {
     /// The points, in the report's order.
     pub points: Vec<Point>,
+    /// The mesh the throughput was measured on (the report's `bvh_mesh`), named on the cost
+    /// axis; `None` for a report that does not say.
+    pub mesh: Option<String>,
 }
 
 impl AccuracyChart {
@@ -123,7 +129,10 @@ impl AccuracyChart {
         if points.is_empty() {
             return Err(Refused::Nothing);
         }
-        Ok(Self { points })
+        Ok(Self {
+            points,
+            mesh: report.bvh_mesh,
+        })
     }
 }
 
@@ -168,7 +177,13 @@ impl Chart for AccuracyChart {
             .build_cartesian_2d(0.0..x_max, (ERROR_FLOOR..y_max).log_scale())?;
         chart
             .configure_mesh()
-            .x_desc("ns per incoherent ray through the BVH (bunny), one thread")
+            .x_desc(match &self.mesh {
+                Some(m) => format!(
+                    "ns per incoherent ray through the BVH ({}), one thread",
+                    crate::text::excerpt(m)
+                ),
+                None => "ns per incoherent ray through the BVH, one thread".into(),
+            })
             .y_desc("leaks + false hits per million rays (none: on the bottom line)")
             .label_style((FAMILY, 14))
             .axis_desc_style((FAMILY, 15))

@@ -416,11 +416,6 @@ impl Report {
     }
 }
 
-/// A string from a report as a table cell: control characters escaped, `|` as `\|`.
-fn cell(s: &str) -> String {
-    crate::text::escaped(s).replace('|', "\\|")
-}
-
 /// The per-set table as markdown.
 pub fn markdown(rows: &[SetReport]) -> String {
     let mut s = String::from(
@@ -435,8 +430,8 @@ pub fn markdown(rows: &[SetReport]) -> String {
         };
         s.push_str(&format!(
             "| {} | {} | {} | {} | {} | {} | {} | {} | {}/{} | {}/{} | {}/{} | {} | {:.2} | {:.2} | {:.2} |\n",
-            cell(&r.mesh),
-            cell(&r.name),
+            crate::text::table_cell(&r.mesh),
+            crate::text::table_cell(&r.name),
             r.rays,
             r.agree,
             r.ties,

@@ -53,13 +53,13 @@ pub struct VariantRow {
     pub name: String,
     /// Median ns per ray–triangle test (hot loop, mostly misses).
     pub ns_per_test: Option<f64>,
-    /// Single-threaded Mrays/s through the BVH, primary rays (bunny).
+    /// Single-threaded Mrays/s through the BVH, primary rays, on [`Report::bvh_mesh`].
     pub mrays_bvh_primary: Option<f64>,
-    /// Single-threaded Mrays/s through the BVH, incoherent rays (bunny).
+    /// Single-threaded Mrays/s through the BVH, incoherent rays, on [`Report::bvh_mesh`].
     pub mrays_bvh_incoherent: Option<f64>,
-    /// Single-threaded Mrays/s through the BVH, primary rays, largest mesh.
+    /// Single-threaded Mrays/s through the BVH, primary rays, on [`Report::largest_mesh`].
     pub mrays_bvh_primary_largest: Option<f64>,
-    /// Single-threaded Mrays/s through the BVH, incoherent rays, largest mesh.
+    /// Single-threaded Mrays/s through the BVH, incoherent rays, on [`Report::largest_mesh`].
     pub mrays_bvh_incoherent_largest: Option<f64>,
     /// Edge and vertex rays that hit none of the incident triangles, per million.
     pub leaks_per_million: f64,
@@ -77,7 +77,7 @@ pub struct VariantRow {
 
 impl VariantRow {
     /// The row of variant `name`: `ns_per_test`, the BVH throughputs `mrays` in the columns'
-    /// order (bunny primary, bunny incoherent, largest mesh primary, largest mesh incoherent;
+    /// order (`bvh_mesh` primary and incoherent, `largest_mesh` primary and incoherent;
     /// `None` where not measured), and the accuracy figures of `acc`.
     pub fn new(
         name: &str,
@@ -114,6 +114,13 @@ pub struct Report {
     pub offsets: Vec<choices::ChoiceRow>,
     /// Sphere quadratic: naive vs stable.
     pub sphere: Vec<choices::ChoiceRow>,
+    /// The file stem of the mesh the `mrays_bvh_primary` and `mrays_bvh_incoherent` columns
+    /// measure: the mesh named `bunny`, else the first given with triangles; `None` (columns
+    /// empty) when none has any.
+    pub bvh_mesh: Option<String>,
+    /// The file stem of the mesh of the `…_largest` columns: the mesh with the most triangles,
+    /// when it is not [`Report::bvh_mesh`] (`None` otherwise: those columns stay empty).
+    pub largest_mesh: Option<String>,
     /// Whether `--quick` was used.
     pub quick: bool,
 }
@@ -185,16 +192,17 @@ pub fn measure(args: &AccuracyArgs, paths: &[PathBuf]) -> Result<Report> {
         let (acc, ns) = triangles::measure(v, &workload, reps);
         variants.push(VariantRow::new(v.name(), Some(ns), [None; 4], &acc));
     }
-    // Throughput through the BVH: the bunny and the largest mesh given (the dragon by default).
-    let by_name = |stem: &str| {
-        meshes
-            .iter()
-            .find(|(p, _)| p.file_stem().is_some_and(|s| s == stem))
-    };
-    let bunny = by_name("bunny").or_else(|| meshes.first());
-    let largest = meshes.iter().max_by_key(|(_, m)| m.triangles.len());
+    let (bunny, other) = throughput_meshes(&meshes);
     let bvh_rays = if args.quick { 20_000 } else { 200_000 };
-    let other = largest.filter(|l| !bunny.is_some_and(|b| std::ptr::eq(*l, b)));
+    let stem = |entry: Option<&(PathBuf, ObjMesh)>| {
+        entry.map(|(p, _)| {
+            p.file_stem()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned()
+        })
+    };
+    let (bvh_mesh, largest_mesh) = (stem(bunny), stem(other));
     let sets = [
         ray_set(bunny, true, bvh_rays, args.seed),
         ray_set(bunny, false, bvh_rays, args.seed),
@@ -230,8 +238,30 @@ pub fn measure(args: &AccuracyArgs, paths: &[PathBuf]) -> Result<Report> {
         slab: choices::slab_rows(choice_n, args.seed, reps),
         offsets: choices::offset_rows(choice_n, args.seed, reps),
         sphere: choices::sphere_rows(choice_n, args.seed, reps),
+        bvh_mesh,
+        largest_mesh,
         quick: args.quick,
     })
+}
+
+/// The meshes of the BVH throughput columns: the one whose file stem is `bunny`, else the
+/// first with triangles ([`Report::bvh_mesh`]); and the one with the most triangles (the
+/// first of equals) unless it is that one ([`Report::largest_mesh`]). A mesh without
+/// triangles is never chosen.
+fn throughput_meshes(
+    meshes: &[(PathBuf, ObjMesh)],
+) -> (Option<&(PathBuf, ObjMesh)>, Option<&(PathBuf, ObjMesh)>) {
+    let with_triangles = || meshes.iter().filter(|(_, m)| !m.triangles.is_empty());
+    let bunny = with_triangles()
+        .find(|(p, _)| p.file_stem().is_some_and(|s| s == "bunny"))
+        .or_else(|| with_triangles().next());
+    let largest = with_triangles()
+        .rev()
+        .max_by_key(|(_, m)| m.triangles.len());
+    (
+        bunny,
+        largest.filter(|l| !bunny.is_some_and(|b| std::ptr::eq(*l, b))),
+    )
 }
 
 /// Interleaved rounds of the BVH throughput columns (median taken).
@@ -266,15 +296,21 @@ fn opt(x: Option<f64>, digits: usize) -> String {
     x.map_or_else(|| "–".into(), |v| format!("{v:.digits$}"))
 }
 
-/// The report as markdown tables.
+/// The report as markdown tables: the BVH throughput columns headed by the meshes they
+/// measure ([`Report::bvh_mesh`], [`Report::largest_mesh`]); names and headings as table cells
+/// ([`crate::text::table_cell`]).
 pub fn markdown(r: &Report) -> String {
-    let mut s = String::new();
-    s.push_str("| variant | ns/test | Mrays/s BVH primary (bunny) | Mrays/s BVH incoherent (bunny) | Mrays/s primary (largest) | Mrays/s incoherent (largest) | leaks / M edge+vertex rays | false hits / M | max rel t err | median rel t err | hit/miss ≠ f64 ref / M |\n");
+    use crate::text::table_cell as cell;
+    let named = |m: &Option<String>| m.as_deref().map_or_else(|| "–".into(), cell);
+    let (bvh, largest) = (named(&r.bvh_mesh), named(&r.largest_mesh));
+    let mut s = format!(
+        "| variant | ns/test | Mrays/s BVH primary ({bvh}) | Mrays/s BVH incoherent ({bvh}) | Mrays/s primary ({largest}) | Mrays/s incoherent ({largest}) | leaks / M edge+vertex rays | false hits / M | max rel t err | median rel t err | hit/miss ≠ f64 ref / M |\n"
+    );
     s.push_str("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for v in &r.variants {
         s.push_str(&format!(
             "| {} | {} | {} | {} | {} | {} | {:.1} | {:.1} | {:.2e} | {:.2e} | {:.1} |\n",
-            v.name,
+            cell(&v.name),
             opt(v.ns_per_test, 2),
             opt(v.mrays_bvh_primary, 2),
             opt(v.mrays_bvh_incoherent, 2),
@@ -311,12 +347,18 @@ pub fn markdown(r: &Report) -> String {
             continue;
         }
         s.push_str(&format!(
-            "\n{title}\n\n| choice | trials | {what} | {err} | ns |\n|---|---:|---:|---:|---:|\n"
+            "\n{title}\n\n| choice | trials | {} | {} | ns |\n|---|---:|---:|---:|---:|\n",
+            cell(what),
+            cell(err)
         ));
         for c in rows {
             s.push_str(&format!(
                 "| {} | {} | {:.1} | {:.2e} | {:.2} |\n",
-                c.name, c.trials, c.failures_per_million, c.error, c.ns
+                cell(&c.name),
+                c.trials,
+                c.failures_per_million,
+                c.error,
+                c.ns
             ));
         }
     }
@@ -348,7 +390,7 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     }
     if args.chart.is_some() {
         let out = reserved.next().expect("--chart is reserved after --json");
-        // Cost as ns per incoherent ray through each side's BVH (bunny), so that Embree, which
+        // Cost as ns per incoherent ray through each side's BVH (`bvh_mesh`), so that Embree, which
         // has no per-triangle entry point, sits on the same axis.
         let chart = crate::charts::accuracy::AccuracyChart::from_report(&report)?;
         let bytes = crate::charts::render(&chart, crate::charts::Format::of(out.path())?)?;
@@ -356,4 +398,100 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     }
     write_together(files)?;
     print_out(&markdown(&report))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    fn mesh(name: &str, triangles: usize) -> (PathBuf, ObjMesh) {
+        let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y];
+        let m = ObjMesh {
+            positions,
+            triangles: vec![[0, 1, 2]; triangles],
+        };
+        (PathBuf::from(format!("dir/{name}.obj")), m)
+    }
+
+    /// A mesh without triangles is never the throughput's mesh: the first with triangles is,
+    /// when none is named `bunny`; the largest is a second mesh only when it is another.
+    #[test]
+    fn the_throughput_meshes_have_triangles() {
+        let stems = |ms: &[(PathBuf, ObjMesh)]| {
+            let (a, b) = throughput_meshes(ms);
+            let stem = |e: Option<&(PathBuf, ObjMesh)>| {
+                e.map(|(p, _)| p.file_stem().unwrap().to_str().unwrap().to_owned())
+            };
+            (stem(a), stem(b))
+        };
+        let s = |x: &str| Some(x.to_owned());
+        assert_eq!(
+            stems(&[mesh("empty", 0), mesh("cube", 12)]),
+            (s("cube"), None)
+        );
+        assert_eq!(
+            stems(&[mesh("cube", 12), mesh("bunny", 5), mesh("dragon", 40)]),
+            (s("bunny"), s("dragon"))
+        );
+        assert_eq!(
+            stems(&[mesh("a", 3), mesh("b", 7), mesh("c", 7)]),
+            (s("a"), s("b"))
+        );
+        assert_eq!(stems(&[mesh("empty", 0)]), (None, None));
+    }
+
+    /// Every line of every table has as many cells as its header's separator line, counted
+    /// by splitting at the `|` not preceded by `\\`, whatever the names hold; the throughput
+    /// columns name their mesh.
+    #[test]
+    fn the_markdown_tables_have_one_cell_per_column() {
+        let row = |name: &str| choices::ChoiceRow {
+            name: name.into(),
+            trials: 1,
+            failures_per_million: 0.0,
+            error: 0.0,
+            ns: 1.0,
+        };
+        let report = Report {
+            variants: Vec::new(),
+            slab: vec![row("a | b")],
+            offsets: vec![row("offset @ |p|=1e0")],
+            sphere: vec![row("plain")],
+            bvh_mesh: Some("my|mesh".into()),
+            largest_mesh: None,
+            quick: true,
+        };
+        let md = markdown(&report);
+        let cells = |line: &str| {
+            let b = line.as_bytes();
+            (0..b.len())
+                .filter(|&i| b[i] == b'|' && (i == 0 || b[i - 1] != b'\\'))
+                .count()
+        };
+        let mut tables: Vec<Vec<&str>> = Vec::new();
+        let mut in_table = false;
+        for line in md.lines() {
+            let row = line.starts_with('|');
+            if row && !in_table {
+                tables.push(Vec::new());
+            }
+            if row {
+                tables.last_mut().unwrap().push(line);
+            }
+            in_table = row;
+        }
+        assert_eq!(tables.len(), 4, "{md}");
+        for table in &tables {
+            assert!(table[1].starts_with("|---"), "{md}");
+            let n = cells(table[1]);
+            for line in table {
+                assert_eq!(cells(line), n, "{line}\n{md}");
+            }
+        }
+        let header = md.lines().next().unwrap();
+        assert!(header.contains("primary (my\\|mesh)"), "{header}");
+        assert!(header.contains("primary (–)"), "{header}");
+        assert!(md.contains("| mean gap / \\|p\\| |"), "{md}");
+    }
 }
