@@ -14,7 +14,8 @@ pub enum CollapseAt {
     Head,
     /// At the tail (the removed vertex's position).
     Tail,
-    /// At the midpoint of the edge.
+    /// At the midpoint of the edge: `(p₀ + p₁)/2` in `f64`, rounded to `f32`, so that each
+    /// coordinate lies between the endpoints' (subnormal ones too).
     Midpoint,
     /// At an arbitrary finite point.
     Point(Vec3),
@@ -55,7 +56,7 @@ impl<S: MeshStorage> Mesh<S> {
         let target = match at {
             CollapseAt::Head => p1,
             CollapseAt::Tail => p0,
-            CollapseAt::Midpoint => p0 * 0.5 + p1 * 0.5,
+            CollapseAt::Midpoint => ((p0.as_dvec3() + p1.as_dvec3()) * 0.5).as_vec3(),
             CollapseAt::Point(p) => p,
         };
         if !target.is_finite() {

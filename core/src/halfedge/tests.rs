@@ -1461,6 +1461,25 @@ fn collapse_targets_are_the_named_points() {
     }
 }
 
+/// The midpoint of two equal subnormal coordinates is that coordinate (`2⁻¹⁴⁹`, the smallest
+/// `f32` above zero), and of `2⁻¹⁴⁹` and `3·2⁻¹⁴⁹` it is `2·2⁻¹⁴⁹`: exact by hand. The `f32`
+/// form `p₀/2 + p₁/2` gave `0` for the first (each half `2⁻¹⁵⁰` rounded to even, `0`).
+#[test]
+fn a_midpoint_of_subnormal_coordinates_lies_between_them() {
+    // Vertices 0 (+x), 2 (+y) and 4 (+z): z is 0 on the edge 0–2, y on the edge 0–4.
+    let (mut p, t) = octa();
+    let sub = f32::from_bits;
+    (p[0].z, p[2].z) = (sub(1), sub(1));
+    (p[0].y, p[4].y) = (sub(1), sub(3));
+    let m: M = build(&p, &t).unwrap();
+    let mid = |a: u32, b: u32| {
+        let h = m.find_halfedge(VertexId(a), VertexId(b)).unwrap();
+        m.can_collapse_edge(h, CollapseAt::Midpoint).unwrap()
+    };
+    assert_eq!(mid(0, 2).z.to_bits(), 1);
+    assert_eq!(mid(0, 4).y.to_bits(), 2);
+}
+
 /// The documented numbering of Loop subdivision's split edges: old edge `e` from `a` to `b`
 /// (its halfedge `2e`) becomes edge `2e` from `a` to the new vertex `V + e` and edge `2e + 1`
 /// from there to `b`.

@@ -271,7 +271,7 @@ pub fn halfedge_ops(data: &[u8]) {
                     let target = match at {
                         CollapseAt::Head => pb,
                         CollapseAt::Tail => pa,
-                        CollapseAt::Midpoint => pa * 0.5 + pb * 0.5,
+                        CollapseAt::Midpoint => ((pa.as_dvec3() + pb.as_dvec3()) * 0.5).as_vec3(),
                         CollapseAt::Point(p) => p,
                     };
                     let (a, b) = (a.index() as u32, b.index() as u32);
