@@ -44,7 +44,8 @@ impl std::fmt::Display for Intersector {
 
 /// A finite `f32` option value (clap `value_parser`): a number `f32` cannot hold (`1e39`) is
 /// refused as written, with `f32`'s range, rather than read as infinity and reported as `inf`;
-/// NaN and infinities are refused too.
+/// so is a non-zero number that rounds to zero (`1e-46`), rather than read and reported as
+/// `0`; NaN and infinities are refused too.
 ///
 /// # Errors
 ///
@@ -60,6 +61,11 @@ pub fn finite_f32(s: &str) -> Result<f32, String> {
     }
     if !y.is_finite() {
         return Err(format!("`{s}` is beyond the largest `f32` (±3.4e38)"));
+    }
+    if y == 0.0 && x != 0.0 {
+        return Err(format!(
+            "`{s}` is nearer zero than the smallest `f32` (±1.4e-45) and would be read as 0"
+        ));
     }
     Ok(y)
 }
@@ -90,8 +96,11 @@ mod tests {
     fn finite_f32_takes_what_f32_holds() {
         assert_eq!(finite_f32("0.5"), Ok(0.5));
         assert_eq!(finite_f32(" -3e38 "), Ok(-3e38));
-        assert_eq!(finite_f32("1e-50"), Ok(0.0));
+        assert_eq!(finite_f32("1.4e-45"), Ok(f32::from_bits(1)));
+        assert_eq!(finite_f32("-0"), Ok(-0.0));
         for (bad, why) in [
+            ("1e-50", "`1e-50` is nearer zero than the smallest `f32`"),
+            ("-1e-46", "`-1e-46` is nearer zero"),
             ("1e39", "`1e39` is beyond the largest `f32`"),
             ("-4e38", "`-4e38` is beyond the largest `f32`"),
             ("nan", "not a finite number"),

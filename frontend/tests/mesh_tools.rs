@@ -560,7 +560,8 @@ fn smoothing_beyond_the_coordinate_domain_writes_nothing() {
 
 // ----- collapse -----
 
-fn edge_lengths(obj: &ObjMesh) -> Vec<f32> {
+/// Every edge's length, in `f64` from the `f32` positions.
+fn edge_lengths(obj: &ObjMesh) -> Vec<f64> {
     let mut keys: Vec<(u32, u32)> = obj
         .triangles
         .iter()
@@ -570,12 +571,15 @@ fn edge_lengths(obj: &ObjMesh) -> Vec<f32> {
     keys.sort_unstable();
     keys.dedup();
     keys.iter()
-        .map(|&(a, b)| obj.positions[a as usize].distance(obj.positions[b as usize]))
+        .map(|&(a, b)| {
+            let d = obj.positions[a as usize].as_dvec3() - obj.positions[b as usize].as_dvec3();
+            (d.x * d.x + d.y * d.y + d.z * d.z).sqrt()
+        })
         .collect()
 }
 
-fn median(mut v: Vec<f32>) -> f32 {
-    v.sort_by(f32::total_cmp);
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }
 
@@ -584,7 +588,8 @@ fn collapse_removes_short_edges_and_keeps_the_topology() {
     for (name, genus) in [("spot.obj", 0), ("torus.obj", 1), ("bunny.obj", 0)] {
         let input = mesh(name);
         let obj = read_obj(&input).unwrap();
-        let limit = median(edge_lengths(&obj));
+        // An `f32` limit, as the option reads it.
+        let limit = median(edge_lengths(&obj)) as f32;
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("c.obj");
         let r = mesh_tools::collapse(&CollapseArgs {
@@ -618,10 +623,51 @@ fn collapse_removes_short_edges_and_keeps_the_topology() {
         // Every edge still shorter than the limit is one the core refused, as reported.
         let short = edge_lengths(&read_obj(&out).unwrap())
             .into_iter()
-            .filter(|&l| l < limit)
+            .filter(|&l| l < f64::from(limit))
             .count();
         assert_eq!(short, r.remaining_short(), "{name}: {:?}", r.refusals);
         assert!(short * 20 < after.edges, "{name}: {short} short edges left");
+    }
+}
+
+/// A fan of six triangles around vertex 1; vertex 2 is `spoke`, the others far out.
+fn fan(spoke: &str) -> String {
+    format!(
+        "v 0 0 0\nv {spoke}\nv -6.612 10.014 0.0\nv -11.978 -0.719 0.0\nv -5.367 -10.733 0.0\n\
+         v 6.612 -10.014 0.0\nv 11.978 0.719 0.0\n\
+         f 1 2 3\nf 1 3 4\nf 1 4 5\nf 1 5 6\nf 1 6 7\nf 1 7 2\n"
+    )
+}
+
+/// "Strictly shorter" decided on the lengths, not on their `f32` roundings (found by a
+/// review; lengths by exact rational arithmetic on the `f32` inputs):
+/// - the spoke `(1, 2, 0)` is `√5 = 2.2360679…` long, shorter than `2.236068` (its `f32`
+///   `2.2360680103`): it collapses (the `f32` length was `2.2360680103` too, not shorter);
+/// - the spoke `(1.9568901, 1.1568258, 1.757585)` is longer than the `f32` limit
+///   `2.8734595775604248046875` (its square `3.4·10⁻⁸` above the limit's): it stays (the `f32`
+///   length `2.8734593` was shorter).
+#[test]
+fn collapse_compares_the_lengths_not_their_f32_roundings() {
+    let dir = tempfile::tempdir().unwrap();
+    for (spoke, limit, collapsed) in [
+        ("1.0 2.0 0.0", "2.236068", 1),
+        (
+            "1.9568901 1.1568258 1.757585",
+            "2.8734595775604248046875",
+            0,
+        ),
+    ] {
+        let input = dir.path().join("fan.obj");
+        std::fs::write(&input, fan(spoke)).unwrap();
+        let r = mesh_tools::collapse(&CollapseArgs {
+            input,
+            output: dir.path().join("out.obj"),
+            force: true,
+            shorter_than: limit.parse().unwrap(),
+        })
+        .unwrap();
+        assert_eq!(r.collapsed, collapsed, "{spoke}: {:?}", r.refusals);
+        assert_eq!(r.remaining_short(), 0, "{spoke}: {:?}", r.refusals);
     }
 }
 

@@ -361,12 +361,17 @@ pub fn refusal_name(e: &CollapseError) -> &'static str {
     }
 }
 
-fn edge_length<S: MeshStorage>(m: &Mesh<S>, e: EdgeId) -> Option<f32> {
+/// The squared length of edge `e`, in `f64` from its `f32` end points: each difference is
+/// exact unless the coordinates' magnitudes are more than `2²⁹` apart, and the sum of squares
+/// is within a relative `3·2⁻⁵³` of the exact square, so that only an edge that close to the
+/// limit can be judged either way (in `f32` one `√5` long was not shorter than `2.236068`).
+fn edge_length_squared<S: MeshStorage>(m: &Mesh<S>, e: EdgeId) -> Option<f64> {
     let [a, b] = m.edge_vertices(e)?;
-    Some(m.position(a)?.distance(m.position(b)?))
+    Some((m.position(a)?.as_dvec3() - m.position(b)?.as_dvec3()).length_squared())
 }
 
-/// `mesh collapse`: collapses every edge strictly shorter than `shorter_than` into its
+/// `mesh collapse`: collapses every edge strictly shorter than `shorter_than` (the length
+/// compared in `f64`, [`edge_length_squared`], with the limit as read, an `f32`) into its
 /// midpoint. Each pass visits the short edges shortest first (re-measured when visited, since
 /// earlier collapses move vertices) and collapses those the core allows; passes repeat until
 /// one collapses nothing. The edges still short after that pass were all refused; they are
@@ -394,13 +399,13 @@ fn collapse_mesh(
     mesh: &mut SliceMesh<'_>,
     report: &mut EditReport,
 ) -> Result<Exported> {
-    let limit = args.shorter_than;
+    let limit = f64::from(args.shorter_than).powi(2);
     let t1 = Instant::now();
     loop {
         report.passes += 1;
-        let mut short: Vec<(f32, EdgeId)> = mesh
+        let mut short: Vec<(f64, EdgeId)> = mesh
             .edges()
-            .filter_map(|e| edge_length(mesh, e).map(|l| (l, e)))
+            .filter_map(|e| edge_length_squared(mesh, e).map(|l| (l, e)))
             .filter(|&(l, _)| l < limit)
             .collect();
         short.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -408,7 +413,7 @@ fn collapse_mesh(
         let mut collapsed = 0;
         for (_, e) in short {
             // Earlier collapses in this pass may have removed or stretched the edge.
-            match edge_length(mesh, e) {
+            match edge_length_squared(mesh, e) {
                 Some(l) if l < limit => {}
                 _ => continue,
             }
