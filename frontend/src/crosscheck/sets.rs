@@ -233,7 +233,7 @@ fn aimed(
 /// every projected triangle is thick enough that moving its vertices by the `f32` rounding of
 /// the ray-space coordinates cannot flip its orientation: its ray-space boundary margin
 /// ([`crate::crosscheck::judge::ray_space_barycentrics`]) is below [`ROBUST_MARGIN`]; and the
-/// ray's line meets one of them, exactly (`line_meets`). The last holds by construction
+/// ray's line crosses their union inside it, exactly ([`line_crosses_fan`]). The last holds by construction
 /// unless the target's rounding to `f32` (or the direction's) moved the line off the edge by
 /// more than a triangle is wide along the ray: an edge's midpoint rounded far from the
 /// coordinate origin on a mesh whose triangles are a few ulps of its coordinates (the bunny
@@ -270,10 +270,45 @@ pub fn crosses_transversally(mesh: &ObjMesh, ray: &Ray, faces: &[u32], target: V
             return false;
         }
     }
-    sign != 0.0
-        && faces
-            .iter()
-            .any(|&f| line_meets(ray, &mesh.triangle(f as usize)))
+    sign != 0.0 && line_crosses_fan(mesh, ray, faces)
+}
+
+/// Whether the line of `ray` crosses the union of `faces` (the triangles around an edge or a
+/// vertex) inside it, exactly: it meets one of them ([`meets`]) in its interior, or on
+/// an edge that another of `faces` shares (an inner edge of the union, the target edge or a
+/// spoke of the target's fan), or at a vertex whose two edges are such edges. Meeting a face
+/// only on an outer edge of the union does not count: there the line may touch the surface
+/// at a fold (the union's faces then lie on one side of it) and a tracer may pass it; a mesh
+/// whose triangles are a few ulps of their coordinates (the octahedron moved to `1.5·10⁷`,
+/// where the `f32` spacing is `1`) folds where its vertices were snapped, and an edge ray
+/// whose rounded target moved its line off its edge can meet the fan only at such a fold.
+fn line_crosses_fan(mesh: &ObjMesh, ray: &Ray, faces: &[u32]) -> bool {
+    let shared = |f: u32, a: u32, b: u32| {
+        faces.iter().any(|&g| {
+            g != f && {
+                let t = mesh.triangles[g as usize];
+                t.contains(&a) && t.contains(&b)
+            }
+        })
+    };
+    faces.iter().any(|&f| {
+        let t = mesh.triangles[f as usize];
+        let signs = edge_signs(ray, &mesh.triangle(f as usize));
+        meets(signs) && (0..3).all(|k| signs[k] != 0 || shared(f, t[k], t[(k + 1) % 3]))
+    })
+}
+
+/// The signs of the line of `ray` against the edges `v₀v₁`, `v₁v₂`, `v₂v₀` of a triangle
+/// (`orient_direction`, the side of the line the edge passes), exactly.
+fn edge_signs(ray: &Ray, v: &[Vec3; 3]) -> [i32; 3] {
+    use halfray_core::predicates::orient_direction;
+    [(0, 1), (1, 2), (2, 0)].map(|(i, j)| orient_direction(v[i], v[j], ray.origin, ray.direction))
+}
+
+/// Whether edge signs ([`edge_signs`]) are those of a line that meets the closed triangle:
+/// not two opposite ones, and not all zero (a line in the triangle's plane).
+fn meets(s: [i32; 3]) -> bool {
+    (s.iter().all(|&x| x >= 0) || s.iter().all(|&x| x <= 0)) && s.iter().any(|&x| x != 0)
 }
 
 /// For each of `faces` (the triangles around an edge or a vertex), whether to take it in the
@@ -324,16 +359,6 @@ fn fan_windings(mesh: &ObjMesh, faces: &[u32]) -> Option<Vec<bool>> {
         }
     }
     flip.into_iter().collect()
-}
-
-/// Whether the line of `ray` meets the closed triangle `v`, exactly: the signs of the line
-/// against its three edges (`orient_direction`, the side of the line the edge passes) are
-/// not two opposite ones, and not all zero (a line in the triangle's plane).
-fn line_meets(ray: &Ray, v: &[Vec3; 3]) -> bool {
-    use halfray_core::predicates::orient_direction;
-    let s = [(0, 1), (1, 2), (2, 0)]
-        .map(|(i, j)| orient_direction(v[i], v[j], ray.origin, ray.direction));
-    (s.iter().all(|&x| x >= 0) || s.iter().all(|&x| x <= 0)) && s.iter().any(|&x| x != 0)
 }
 
 fn grazing(mesh: &ObjMesh, rng: &mut Rng, radius: f64, count: usize) -> Vec<SetRay> {
@@ -417,6 +442,49 @@ mod tests {
             }
         });
         s.contains(&1.0) && s.contains(&-1.0)
+    }
+
+    /// A cross-check finding (the octahedron rotated and moved to `1.5·10⁷`, where the `f32`
+    /// spacing is `1`: its vertices snap to a grid as coarse as the solid, and it folds; its
+    /// `edges` set, ray kept here). The ray is aimed at edge `0–3`'s midpoint, rounded half a
+    /// unit off it, so its line passes beside faces 2 and 3. In exact rational arithmetic
+    /// (Python `fractions` on these `f32` values) the line meets the mesh only on edge `0–4`
+    /// at `t = 1.2`, where faces 0 and 2, consistently wound, face opposite ways along the
+    /// ray (`n·d = 6.25` and `−1.25`): a fold it touches, which a tracer may pass. It met face
+    /// 2 there, on the fan's outer edge, and so counted, and the watertight test's miss was a
+    /// leak; it no longer counts.
+    #[test]
+    fn an_edge_ray_that_touches_its_fan_only_at_a_fold_does_not_count() {
+        let mesh = ObjMesh {
+            positions: vec![
+                Vec3::new(15000001.0, -3000000.75, 2000000.125),
+                Vec3::new(14999999.0, -2999999.25, 1999999.875),
+                Vec3::new(15000000.0, -3000000.0, 2000001.0),
+                Vec3::new(15000000.0, -3000000.0, 1999999.0),
+                Vec3::new(14999999.0, -3000000.75, 1999999.875),
+                Vec3::new(15000001.0, -2999999.25, 2000000.125),
+            ],
+            triangles: vec![
+                [0, 2, 4],
+                [0, 5, 2],
+                [0, 4, 3],
+                [0, 3, 5],
+                [1, 4, 2],
+                [1, 2, 5],
+                [1, 3, 4],
+                [1, 5, 3],
+            ],
+        };
+        let origin = Vec3::new(15000001.0, -2999999.25, 1999997.125);
+        let target = Vec3::new(15000000.0, -3000000.5, 1999999.5);
+        let ray = Ray::new(origin, target - origin);
+        assert_eq!(ray.direction, Vec3::new(-1.0, -1.25, 2.375));
+        assert!(!crosses_transversally(&mesh, &ray, &[2, 3], target));
+        // A line through vertex 0 meets face 2 on its edges `0–4` and `3–0`: inside the
+        // union of vertex 0's fan (faces 0–3 share them), on the outer edges of face 2 alone.
+        let through = Ray::new(origin, mesh.positions[0] - origin);
+        assert!(line_crosses_fan(&mesh, &through, &[0, 1, 2, 3]));
+        assert!(!line_crosses_fan(&mesh, &through, &[2]));
     }
 
     /// The edge and vertex rays counted as transversal do not depend on the winding of the
