@@ -6,7 +6,9 @@
 #   bash scripts/test-scripts.sh
 #
 # Covers crosscheck-same-run.py, crosscheck-verify-shards.sh, crosscheck-merge.sh,
-# crosscheck-local.sh and crosscheck-shard.sh (incomplete shards, reused OUT_DIR, --max-mismatch).
+# crosscheck-local.sh and crosscheck-shard.sh (incomplete shards, reused OUT_DIR, --max-mismatch),
+# fuzz-tools.sh (through fuzz-ci.sh: a failed or empty target list), fuzz-task.sh and
+# fuzz-merge.sh (failed tasks, missing binaries).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 tmp=$(mktemp -d)
@@ -92,6 +94,38 @@ check "local: the merge ran with --max-mismatch 7" \
     python3 -c 'import json,sys; sys.exit(json.load(open(sys.argv[1]))["merge_args"]["max_mismatch"] != "7")' "$tmp/mm/merged.json"
 rm "$o/part-0-of-3.args"
 expect 2 "shard: a results log with no recorded arguments is refused" bash "$s/crosscheck-shard.sh" 0 3 "$o" a.obj b.obj --rays 10
+
+# fuzz-tools.sh (through fuzz-ci.sh): the target list's status counts.
+mkdir -p "$tmp/cargo-bin"
+cp "$s/tests/fake-cargo.sh" "$tmp/cargo-bin/cargo"
+expect 1 "fuzz-ci: a failed \`cargo fuzz list\` fails" env PATH="$tmp/cargo-bin:$PATH" FAKE_LIST=fail bash "$s/fuzz-ci.sh"
+expect 1 "fuzz-ci: no fuzz target fails" env PATH="$tmp/cargo-bin:$PATH" FAKE_LIST=empty bash "$s/fuzz-ci.sh"
+
+# fuzz-task.sh / fuzz-merge.sh with stand-in targets `a` and `b`.
+mkdir -p "$tmp/fbin" "$tmp/seeds/a" "$tmp/seeds/b"
+cp "$s/tests/fake-fuzz-target.sh" "$tmp/fbin/a"
+cp "$s/tests/fake-fuzz-target.sh" "$tmp/fbin/b"
+export FUZZ_TARGETS="a b" FUZZ_BIN=$tmp/fbin FUZZ_SEEDS=$tmp/seeds FUZZ_SECONDS=1
+f=$tmp/fuzz
+expect 0 "fuzz-task: target a runs its time" bash "$s/fuzz-task.sh" 0 "$f"
+expect 0 "fuzz-task: target b runs its time" bash "$s/fuzz-task.sh" 1 "$f"
+expect 0 "fuzz-merge: two clean tasks" bash "$s/fuzz-merge.sh" "$f"
+expect 137 "fuzz-task: a killed fuzzer is the task's failure" env FAKE_MODE=killed bash "$s/fuzz-task.sh" 0 "$f"
+expect 2 "fuzz-merge: a task whose last attempt was killed fails the merge" bash "$s/fuzz-merge.sh" "$f"
+check "fuzz-merge: ... naming it" grep -q "target a: its task's last attempt did not finish (exit 137" "$tmp/last.out"
+# shellcheck disable=SC2016 # a literal backquote
+check "fuzz-merge: ... and still merges the other target" grep -q '^| `b` | 3 | 100 |' "$f/summary.md"
+expect 1 "fuzz-task: a start-up error is the task's failure" env FAKE_MODE=err bash "$s/fuzz-task.sh" 0 "$f"
+expect 2 "fuzz-merge: a task that failed at start-up fails the merge" bash "$s/fuzz-merge.sh" "$f"
+expect 0 "fuzz-task: target a again" bash "$s/fuzz-task.sh" 0 "$f"
+expect 0 "fuzz-merge: clean again" bash "$s/fuzz-merge.sh" "$f"
+rm "$tmp/fbin/a"
+expect 2 "fuzz-merge: a missing binary fails the merge (exit 2, not 1: no finding)" bash "$s/fuzz-merge.sh" "$f"
+check "fuzz-merge: ... naming it, with the whole summary" \
+    grep -q 'target a: its binary is missing' "$tmp/last.out"
+# shellcheck disable=SC2016 # a literal backquote
+check "fuzz-merge: ... the summary has every target" grep -q '^| `b` |' "$f/summary.md"
+unset FUZZ_TARGETS FUZZ_BIN FUZZ_SEEDS FUZZ_SECONDS
 
 echo
 if [ "$failures" -ne 0 ]; then echo "test-scripts: $failures check(s) failed"; exit 1; fi
