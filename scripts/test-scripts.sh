@@ -8,7 +8,8 @@
 # Covers crosscheck-same-run.py, crosscheck-verify-shards.sh, crosscheck-merge.sh,
 # crosscheck-local.sh and crosscheck-shard.sh (incomplete shards, reused OUT_DIR, --max-mismatch),
 # fuzz-tools.sh (through fuzz-ci.sh: a failed or empty target list), fuzz-task.sh and
-# fuzz-merge.sh (failed tasks, missing binaries).
+# fuzz-merge.sh (failed tasks, missing binaries), mutants.sh (a failed stage, stage one's
+# verdicts kept).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 tmp=$(mktemp -d)
@@ -126,6 +127,22 @@ check "fuzz-merge: ... naming it, with the whole summary" \
 # shellcheck disable=SC2016 # a literal backquote
 check "fuzz-merge: ... the summary has every target" grep -q '^| `b` |' "$f/summary.md"
 unset FUZZ_TARGETS FUZZ_BIN FUZZ_SEEDS FUZZ_SECONDS
+
+# mutants.sh in a copy of its layout, with a stand-in cargo-mutants.
+mr=$tmp/mrepo
+mkdir -p "$mr/scripts" "$mr/core/src" "$tmp/mutants-bin"
+cp "$s/mutants.sh" "$mr/scripts/"
+: >"$mr/core/src/aabb.rs"
+cp "$s/tests/fake-cargo-mutants.sh" "$tmp/mutants-bin/cargo"
+mutants() { env PATH="$tmp/mutants-bin:$PATH" FILES=core/src/aabb.rs TEST_PACKAGES=halfray-core,halfray-tests "$@" bash "$mr/scripts/mutants.sh"; }
+missed() { grep -c . "$mr/target/mutation/sample.s0.p100/missed.txt" || true; }
+expect 1 "mutants: a failed stage-two baseline fails the run" mutants FAKE_WIDE=fail
+check "mutants: ... naming the stage" grep -q 'stage two failed: cargo-mutants exit 4' "$tmp/last.out"
+expect 0 "mutants: stage two judges every survivor" mutants FAKE_WIDE=all
+check "mutants: ... f4 missed" test "$(missed)" = 1
+expect 0 "mutants: stage two judges one survivor of two" mutants FAKE_WIDE=partial
+check "mutants: ... the other keeps stage one's verdict (missed)" \
+    grep -qx 'core/src/aabb.rs:4:5: replace f4 -> bool with true' "$mr/target/mutation/sample.s0.p100/missed.txt"
 
 echo
 if [ "$failures" -ne 0 ]; then echo "test-scripts: $failures check(s) failed"; exit 1; fi
