@@ -5,13 +5,15 @@
 #
 # Usage (from anywhere):
 #   bash scripts/corpus.sh [cargo build flags, e.g. --features embree]
-# Then, from the repository root:
+# The binary is taken from where cargo builds it ($CARGO_TARGET_DIR when set, else target/); the
+# meshes always go to target/corpus/ (scenes/corpus/corpus.txt names them there). Then, from the
+# repository root:
 #   halfray bench bvh --mesh-list scenes/corpus/corpus.txt --json target/corpus/bench.json
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
 cargo build --release -p halfray "$@"
-bin=target/release/halfray
+bin=${CARGO_TARGET_DIR:-target}/release/halfray   # where cargo built it
 mkdir -p target/corpus
 for kind in sphere terrain beams room scatter far; do
     "$bin" mesh generate "$kind" --seed 1 -o "target/corpus/$kind.obj"

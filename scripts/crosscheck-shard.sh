@@ -3,17 +3,29 @@
 # scripts/crosscheck-local.sh runs N of with xargs -P.
 #
 #   bash scripts/crosscheck-shard.sh K N OUT_DIR [crosscheck arguments...]
+#   bash scripts/crosscheck-shard.sh --check K N OUT_DIR [crosscheck arguments...]
 #
 # Runs `halfray crosscheck ARGS --shard K/N --jsonl OUT_DIR/part-K-of-N.jsonl --resume
 # --json OUT_DIR/part-K-of-N.json`: a task that is killed and started again continues where its
-# results log stops. Findings are not task failures: when the shard ran to the end (its report
-# is written) but found mismatches, leaks or unreadable meshes (exit 3 or 1), this script exits
-# 0 and leaves the verdict to the merge (scripts/crosscheck-merge.sh), so a scheduler does not
-# retry a shard that worked. Any other failure keeps its exit code.
+# results log stops. OUT_DIR/part-K-of-N.json is the shard's completion marker: deleted when the
+# task starts, written by the run only when it ends, so the merge (scripts/crosscheck-merge.sh)
+# refuses a shard that did not complete. Findings are not task failures: when the shard ran to
+# the end (its report is written) but found mismatches, leaks or unreadable meshes (exit 3 or
+# 1), this script exits 0 and leaves the verdict to the merge, so a scheduler does not retry a
+# shard that worked. Any other failure keeps its exit code.
+#
+# The run's arguments (all but --threads and --max-mismatch, which do not change the results;
+# with the content of a --mesh-list file) are recorded in OUT_DIR/part-K-of-N.args. A results
+# log left by a run with other arguments (other meshes, rays, sets...), or by one that recorded
+# none, is refused (exit 2) before anything is deleted: use a new OUT_DIR, or delete the old
+# one's files, to start another run. `--check` only makes that check (exit 0 or 2; writes
+# nothing), so scripts/crosscheck-local.sh can refuse before any shard starts.
 #
 # The binary is $HALFRAY, else this repository's target/release/halfray (built with
 # `--features embree`), else `halfray` on PATH.
 set -euo pipefail
+check_only=0
+if [ "${1:-}" = --check ]; then check_only=1; shift; fi
 [ $# -ge 3 ] || { echo "usage: $0 K N OUT_DIR [crosscheck arguments...]" >&2; exit 2; }
 k=$1 n=$2 out=$3
 shift 3
@@ -22,8 +34,45 @@ bin=${HALFRAY:-}
 if [ -z "$bin" ]; then
     if [ -x "$root/target/release/halfray" ]; then bin=$root/target/release/halfray; else bin=halfray; fi
 fi
-mkdir -p "$out"
+[ "$check_only" = 1 ] || mkdir -p "$out"
 part=$out/part-$k-of-$n
+# The run's identity: its arguments, one a line, and each mesh list's content.
+identity() {
+    local skip=0 list=0 a
+    echo "shard $k/$n"
+    for a in "$@"; do
+        if [ "$skip" = 1 ]; then skip=0; continue; fi
+        if [ "$list" = 1 ]; then
+            list=0
+            echo "arg $a"
+            if [ -f "$a" ]; then echo "mesh-list sha256 $(sha256sum <"$a" | cut -c1-64)"; fi
+            continue
+        fi
+        case $a in
+            --threads | --max-mismatch) skip=1 ;;
+            --threads=* | --max-mismatch=*) ;;
+            --mesh-list) list=1; echo "arg $a" ;;
+            --mesh-list=*)
+                echo "arg $a"
+                if [ -f "${a#*=}" ]; then echo "mesh-list sha256 $(sha256sum <"${a#*=}" | cut -c1-64)"; fi ;;
+            *) echo "arg $a" ;;
+        esac
+    done
+}
+this=$(identity "$@")
+if [ -e "$part.jsonl" ]; then
+    if [ ! -e "$part.args" ]; then
+        echo "crosscheck-shard $k/$n: $part.jsonl records no arguments ($part.args is missing): refusing to resume or overwrite it; use a new OUT_DIR or delete the old run's files" >&2
+        exit 2
+    fi
+    if [ "$(cat "$part.args")" != "$this" ]; then
+        echo "crosscheck-shard $k/$n: $part.jsonl belongs to a run with other arguments; refusing to mix them (use a new OUT_DIR or delete the old run's files):" >&2
+        diff <(cat "$part.args") <(echo "$this") | sed 's/^/  /' >&2 || true
+        exit 2
+    fi
+fi
+[ "$check_only" = 0 ] || exit 0
+[ -e "$part.jsonl" ] || printf '%s\n' "$this" >"$part.args"
 rm -f "$part.json"
 rc=0
 "$bin" crosscheck "$@" --shard "$k/$n" --jsonl "$part.jsonl" --resume --json "$part.json" \

@@ -1,20 +1,41 @@
 #!/usr/bin/env bash
 # CI check of the sharded cross-check (issue 16): the same run unsharded and as 4 shards through
 # the local runner (xargs -P) must merge to the same counts and the same recorded disagreements,
-# row for row. (The Slurm array itself runs on a real cluster in CI's `cluster` stage,
-# scripts/slurm-ci-crosscheck.sh.)
+# row for row (scripts/crosscheck-same-run.py). (The Slurm array itself runs on a real cluster in
+# CI's `cluster` stage, scripts/slurm-ci-crosscheck.sh.)
 #
 #   bash scripts/crosscheck-verify-shards.sh OUT_DIR [crosscheck arguments...]
+#
+# Exit status: 0 when the merged report equals the unsharded run, 1 when it differs (the first
+# difference is named) or a run failed, 2 on a usage error. OUT_DIR is this script's own: it is
+# emptied first, and refused (exit 2, nothing deleted) when it holds anything but a previous
+# run's files (whole.json, stderr.log, local/).
 set -euo pipefail
 [ $# -ge 1 ] || { echo "usage: $0 OUT_DIR [crosscheck arguments...]" >&2; exit 2; }
 out=$1
 shift
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 bin=${HALFRAY:-$root/target/release/halfray}
+if [ -d "$out" ]; then
+    for f in "$out"/* "$out"/.[!.]* "$out"/..?*; do
+        [ -e "$f" ] || [ -L "$f" ] || continue
+        case ${f##*/} in
+            whole.json | stderr.log | local) ;;
+            *) echo "crosscheck-verify-shards: $out holds $f, not this script's output; refusing to empty it" >&2
+               exit 2 ;;
+        esac
+    done
+fi
 rm -rf "$out" && mkdir -p "$out/local"
 # The runs' progress goes to a log, shown when a step fails.
 exec 3>&2 2>"$out/stderr.log"
 trap 'echo "crosscheck-verify-shards: failed; last lines of $out/stderr.log:" >&3; tail -20 "$out/stderr.log" >&3' ERR
 "$bin" crosscheck "$@" --json "$out/whole.json" >/dev/null
 bash "$root/scripts/crosscheck-local.sh" 4 "$out/local" "$@" >/dev/null
-echo "crosscheck shards: $(python3 "$root/scripts/crosscheck-same-run.py" "$out/whole.json" "$out/local/merged.json:4")"
+trap - ERR
+if ! same=$(python3 "$root/scripts/crosscheck-same-run.py" "$out/whole.json" "$out/local/merged.json:4" 2>&3); then
+    echo "crosscheck-verify-shards: the merged report of 4 shards differs from the unsharded run (above)" >&2
+    echo "crosscheck-verify-shards: the merged report of 4 shards differs from the unsharded run (above)" >&3
+    exit 1
+fi
+echo "crosscheck shards: $same"

@@ -14,7 +14,9 @@
 # and seeds minimised by `-merge=1`), artifacts/<target>/ (crashes, timeouts, OOMs), and
 # summary.md (executions, coverage, corpus and findings per target, the table fuzz/README.md
 # records). Every finding is printed with its target; check each in under
-# fuzz/regressions/<target>/ once it is understood. Exit status: the merge's (1 on findings).
+# fuzz/regressions/<target>/ once it is understood. Exit status: the merge's (1 on findings, 2
+# when a target's task failed or could not be merged, named); a task that failed (its status is
+# printed as it ends) makes it 2 even if the merge passed.
 export FUZZ_SECONDS=${FUZZ_SECONDS:-1200}
 JOBS=${JOBS:-2}
 
@@ -28,15 +30,27 @@ for t in "${targets[@]}"; do
 done
 export FUZZ_TARGETS="${targets[*]}" FUZZ_BIN=$PWD/$out/bin
 
-running=0
+declare -A task=()   # pid -> target
+failed=0
+# Waits for one task to end and reports its status.
+reap() {
+    local pid rc=0
+    wait -n -p pid || rc=$?
+    echo "$(date +%H:%M:%S) end ${task[$pid]} (exit $rc)"
+    [ "$rc" -eq 0 ] || failed=$((failed + 1))
+    unset "task[$pid]"
+}
 for k in "${!targets[@]}"; do
     echo "$(date +%H:%M:%S) start ${targets[k]} (${FUZZ_SECONDS} s)"
     bash scripts/fuzz-task.sh "$k" "$out" &
-    running=$((running + 1))
-    if [ "$running" -ge "$JOBS" ]; then
-        wait -n || true # the task's log and the merge's summary show a failure
-        running=$((running - 1))
-    fi
+    task[$!]=${targets[k]}
+    if [ "${#task[@]}" -ge "$JOBS" ]; then reap; fi
 done
-wait
-bash scripts/fuzz-merge.sh "$out"
+while [ "${#task[@]}" -gt 0 ]; do reap; done
+rc=0
+bash scripts/fuzz-merge.sh "$out" || rc=$?
+if [ "$failed" -ne 0 ] && [ "$rc" -eq 0 ]; then
+    echo "fuzz-campaign: $failed task(s) failed (above)" >&2
+    rc=2
+fi
+exit "$rc"

@@ -13,10 +13,13 @@
 #     crashes, timeouts, OOMs) and each input that crashed the merge (libFuzzer's merge survives
 #     them; its control file tells which), replayed alone to show what it does. One line each:
 #       finding: target TARGET: FILE (how it was found): REPLAYED OUTCOME
-# and writes OUT_DIR/summary.md (per target, from the task's last fork-mode status line: fuzzing
-# time, executions, coverage, features, corpus, OOMs/timeouts/crashes; then the inputs after the
-# merge and the findings). Exit status: 0 no findings, 1 findings, 2 a target whose task
-# left no log (named: it never ran, or OUT_DIR is not shared), or a merge that failed.
+# and writes OUT_DIR/summary.md (per target, from the last fork-mode status line of the task's
+# last attempt: fuzzing time, executions, coverage, features, corpus, OOMs/timeouts/crashes; then
+# the inputs after the merge and the findings). Exit status: 0 no findings, 1 findings, 2 a
+# target whose task left no log (named: it never ran, or OUT_DIR is not shared), whose task's
+# last attempt did not end with exit 0 (OUT_DIR/logs/TARGET.status, written by
+# scripts/fuzz-task.sh: killed, failed at start-up), whose binary is missing, or whose merge
+# failed — each named; the other targets are still merged and the summary is whole.
 set -euo pipefail
 [ $# -eq 1 ] || { echo "usage: FUZZ_TARGETS=\"T0 T1 ...\" $0 OUT_DIR" >&2; exit 2; }
 out=$1
@@ -53,6 +56,12 @@ replay() {
 
 findings=0
 missing=0
+# fail_target TARGET WHAT: a target that could not be judged; named, summary row, exit 2.
+fail_target() {
+    echo "fuzz-merge: target $1: $2" >&2
+    echo "| \`$1\` | failed: $2 | | | | | | | |" >>"$summary"
+    missing=1
+}
 summary=$out/summary.md
 {
     echo "| target | seconds | executions | coverage (edges) | features | corpus | OOMs / timeouts / crashes | merged | findings |"
@@ -66,7 +75,15 @@ for t in "${fuzz_targets[@]}"; do
         missing=1
         continue
     fi
-    bin=$(fuzz_bin "$t")
+    state=$(cat "$out/logs/$t.status" 2>/dev/null || echo "no status file")
+    if [ "$state" != "exit 0" ]; then
+        fail_target "$t" "its task's last attempt did not finish ($state; $out/logs/$t.status, log $log)"
+        continue
+    fi
+    if ! bin=$(fuzz_bin "$t"); then
+        fail_target "$t" "its binary is missing"
+        continue
+    fi
     inputs=("$out/corpus/$t")
     if s=$(fuzz_seeds "$t"); then inputs+=("$s"); fi
     mkdir -p "$out/merged/$t" "$out/corpus/$t" "$out/artifacts/$t"
@@ -74,8 +91,8 @@ for t in "${fuzz_targets[@]}"; do
     if ! "$bin" -merge=1 -merge_control_file="$control" -timeout=10 -rss_limit_mb=2048 \
         -artifact_prefix="$scratch/" "$out/merged/$t" "${inputs[@]}" >"$out/logs/$t.merge.log" 2>&1; then
         tail -n 20 "$out/logs/$t.merge.log" >&2
-        echo "fuzz-merge: merging $t failed (log: $out/logs/$t.merge.log)" >&2
-        exit 2
+        fail_target "$t" "merging its corpus failed (log: $out/logs/$t.merge.log)"
+        continue
     fi
     # Each finding once, by content (the task may have saved an input that also crashed the
     # merge): the first file names it, the others are listed after it.
@@ -101,9 +118,11 @@ for t in "${fuzz_targets[@]}"; do
     n=${#order[@]}
     unset first also
     findings=$((findings + n))
-    # The task's last fork-mode status line:
+    # The last fork-mode status line of the task's last attempt (after its last
+    # `fuzz-task TARGET: N s, ...` header line):
     # `#EXECS: cov: C ft: F corp: N exec/s: E oom/timeout/crash: a/b/c time: Ts ...`.
-    last=$(grep -E '^#[0-9]+: cov:' "$log" | tail -n 1 || true)
+    last=$(awk -v h="fuzz-task $t: " 'index($0, h) == 1 && / s, .* fork\(s\), on / { line = "" }
+        /^#[0-9]+: cov:/ { line = $0 } END { print line }' "$log")
     execs=$(sed -n 's/^#\([0-9]*\):.*/\1/p' <<<"$last")
     cov=$(sed -n 's/.* cov: \([0-9]*\).*/\1/p' <<<"$last")
     ft=$(sed -n 's/.* ft: \([0-9]*\).*/\1/p' <<<"$last")

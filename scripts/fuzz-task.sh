@@ -12,7 +12,11 @@
 # (scripts/fuzz-dict.sh). Writes
 #   OUT_DIR/corpus/TARGET/     new inputs (a task that is restarted continues from them)
 #   OUT_DIR/artifacts/TARGET/  crashes, timeouts, OOMs: the findings
-#   OUT_DIR/logs/TARGET.log    libFuzzer's output (appended to)
+#   OUT_DIR/logs/TARGET.log    libFuzzer's output (appended to; each attempt starts with a
+#                              `fuzz-task TARGET: ...` line and ends with `fuzz-task TARGET: exit N`)
+#   OUT_DIR/logs/TARGET.status `started` while an attempt runs, `exit N` when it ends: the
+#                              merge fails a target whose last attempt did not end with `exit 0`
+#                              (killed, failed at start-up)
 # Findings are not task failures, so a scheduler does not retry a task that worked: the exit
 # status is 0 once the fuzzer has run its time, else the fuzzer's.
 set -euo pipefail
@@ -22,13 +26,18 @@ source "$(dirname "${BASH_SOURCE[0]}")/fuzz-paths.sh"
 source "$(dirname "${BASH_SOURCE[0]}")/fuzz-dict.sh"
 t=${fuzz_targets[k]:-}
 [ -n "$t" ] || { echo "fuzz-task: no target $k in FUZZ_TARGETS ($FUZZ_TARGETS)" >&2; exit 2; }
+mkdir -p "$out/logs"
+log=$out/logs/$t.log
+status=$out/logs/$t.status
+# This attempt's end, whatever ends it (a signal that kills the shell outright leaves `started`).
+echo started >"$status"
+trap 'rc=$?; echo "exit $rc" >"$status"; echo "fuzz-task $t: exit $rc" >>"$log"' EXIT
 bin=$(fuzz_bin "$t")
 seconds=${FUZZ_SECONDS:-1200}
 forks=${FUZZ_FORKS:-1}
 seeds=()
 if s=$(fuzz_seeds "$t"); then seeds+=("$s"); fi
-mkdir -p "$out/corpus/$t" "$out/artifacts/$t" "$out/logs"
-log=$out/logs/$t.log
+mkdir -p "$out/corpus/$t" "$out/artifacts/$t"
 touch "$log"
 before=$(wc -l <"$log")
 echo "fuzz-task $t: ${seconds} s, ${forks} fork(s), on $(hostname), $(date -u +%FT%TZ)" | tee -a "$log" >&2

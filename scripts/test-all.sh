@@ -7,7 +7,8 @@
 #
 # Stages (each prints a `== stage` header; any failure stops the run with a non-zero exit):
 #   toolchain   rustup targets for the embedded builds (+ rustfmt/clippy components)
-#   lint        cargo fmt --check; cargo clippy --workspace --all-targets -D warnings
+#   lint        cargo fmt --check; cargo clippy --workspace --all-targets -D warnings; the cluster and
+#               campaign scripts' exit statuses and refusals (scripts/test-scripts.sh, stand-in binaries)
 #   no_std      halfray-core built for thumbv7em-none-eabihf, thumbv7m-none-eabi, thumbv6m-none-eabi and
 #               riscv32imac-unknown-none-elf; the thumb probe for thumbv7em-none-eabihf (no std, no alloc)
 #   mcu         the core under QEMU on a Cortex-M4F and a Cortex-M3, results bit-identical to the host
@@ -49,6 +50,7 @@ stage lint
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
 python3 scripts/import-graph.py --self-test && python3 scripts/import-graph.py  # 0 loops, 0 upward imports
+bash scripts/test-scripts.sh  # the cluster and campaign scripts' contracts, with stand-in binaries
 
 stage no_std
 # Cortex-M4F, Cortex-M3 (soft float), Cortex-M0+ (no FPU, no atomic CAS), RISC-V RV32IMAC.
