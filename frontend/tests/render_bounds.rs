@@ -206,7 +206,7 @@ fn the_work_estimate_bounds_the_rays_of_every_example_scene() {
 /// the effect its material does not have, as a leaf outside the per-pixel cap: from the
 /// hall of mirrors whose outer sphere transmits nothing, each outer hit casts a leaf
 /// refraction ray beside its traced reflection, so every pixel casts more secondary rays
-/// than the 4096 the cap allows traced. No light, so the estimate's 16 segments per shadow
+/// than the 4096 the cap allows traced. No light, so the estimate's 17 segments per shadow
 /// ray leave no slack to hide them in. The work estimate counts them.
 #[test]
 fn the_work_estimate_counts_forced_leaf_rays() {

@@ -32,9 +32,12 @@ use crate::scene::{Light, LightKind, Scene, SpecularModel};
 use glam::Vec3;
 use halfray_core::{Aabb, Ray, shadow_segment, spawn_ray, spawn_ray_to};
 
-/// Surfaces a shadow ray follows through transparent materials before it counts the light as
-/// blocked: 16 crossings (8 panes of glass) transmit at most `transparency¹⁶`, below an 8-bit
-/// step for any transparency up to 0.7; the bound keeps the walk finite for any scene.
+/// Transparent surfaces a shadow ray crosses before it counts the light as blocked: 16
+/// crossings (8 panes of glass) transmit `transparency¹⁶`, and a surface met after them (a 17th)
+/// blocks the light; `transparency¹⁶` is below an 8-bit step for any transparency up to 0.7, so
+/// the cut-off shows only behind nearly clear glass. The bound keeps the walk finite for any
+/// scene: a shadow ray is traced as at most `MAX_SHADOW_CROSSINGS + 1` segments (one to each
+/// surface crossed, and the last, towards the light).
 pub const MAX_SHADOW_CROSSINGS: u32 = 16;
 
 /// Most bounded objects an area light's shadow rays from one hit are tested against directly
@@ -203,8 +206,10 @@ impl Tracer<'_> {
     /// The fraction of light that reaches the end of the shadow ray `ray` (towards `light`):
     /// 0 at the first opaque surface, else the product of the `transparency` of every surface
     /// crossed (a glass sphere is crossed twice). Each segment is one shadow ray, added to
-    /// `n`; at most [`MAX_SHADOW_CROSSINGS`] crossings are followed (then 0: nothing that
-    /// many panes thick lets visible light through at 8 bits).
+    /// `n`: at most [`MAX_SHADOW_CROSSINGS`] crossings are followed, and the segment after
+    /// the last of them is still cast, so 16 crossings transmit and a surface met after them
+    /// gives 0 (nothing that many panes thick lets visible light through at 8 bits); at most
+    /// `MAX_SHADOW_CROSSINGS + 1` segments in all.
     fn transmission(
         &self,
         ray: &Ray,
@@ -214,11 +219,14 @@ impl Tracer<'_> {
     ) -> f32 {
         let mut r = *ray;
         let mut through = 1.0f32;
-        for _ in 0..MAX_SHADOW_CROSSINGS {
+        for crossed in 0..=MAX_SHADOW_CROSSINGS {
             n.shadow += 1;
             let Some(sh) = self.closest(&r, ctx) else {
                 return through;
             };
+            if crossed == MAX_SHADOW_CROSSINGS {
+                break;
+            }
             through *= self.scene.materials[sh.material as usize].transparency;
             if !(through > 0.0) {
                 return 0.0;
