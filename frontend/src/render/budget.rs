@@ -16,7 +16,7 @@
 //! per pixel.
 //!
 //! `R` bounds the camera ray's tree ([`super::trace`]). Its traced rays number at most `N`:
-//! [`MAX_SECONDARY_RAYS_PER_PIXEL`] where the scene's own plan ([`EffectPlan::derive`] without
+//! [`MAX_SECONDARY_RAYS_PER_CAMERA_RAY`] where the scene's own plan ([`EffectPlan::derive`] without
 //! force) casts reflection or refraction rays in the mode, else 0; a forced render traces the
 //! same tree. Without `--force-all-effects`, `R = N`. With it, where the forced plan casts
 //! reflection or refraction rays, every node that expands (the camera ray's hit and each traced
@@ -35,7 +35,7 @@
 //! estimate multiplies the rays by the size of the largest group.
 
 use super::Mode;
-use super::bound::MAX_SECONDARY_RAYS_PER_PIXEL;
+use super::bound::MAX_SECONDARY_RAYS_PER_CAMERA_RAY;
 use super::plan::{EffectPlan, PlanFlags};
 use super::trace::MAX_SHADOW_CROSSINGS;
 use crate::scene::{LightKind, Scene};
@@ -91,7 +91,7 @@ impl Estimate {
             runs
         };
         let traced = if secondary_runs(own) {
-            MAX_SECONDARY_RAYS_PER_PIXEL
+            MAX_SECONDARY_RAYS_PER_CAMERA_RAY
         } else {
             0
         };
@@ -255,7 +255,7 @@ mod tests {
         let mirror = mirror_scene(&[]);
         assert_eq!(
             secondary(&mirror, false),
-            f64::from(MAX_SECONDARY_RAYS_PER_PIXEL)
+            f64::from(MAX_SECONDARY_RAYS_PER_CAMERA_RAY)
         );
         let flat = mirror_scene(&[("max_depth = 4", "max_depth = 0")]);
         assert_eq!(secondary(&flat, false), 0.0);
@@ -267,7 +267,7 @@ mod tests {
     /// `max_depth = 0`, none.
     #[test]
     fn forced_leaf_rays_are_counted_for_every_node_that_expands() {
-        let nodes = 1.0 + f64::from(MAX_SECONDARY_RAYS_PER_PIXEL);
+        let nodes = 1.0 + f64::from(MAX_SECONDARY_RAYS_PER_CAMERA_RAY);
         assert_eq!(secondary(&mirror_scene(&[]), true), 2.0 * nodes);
         assert_eq!(
             secondary(&mirror_scene(&[("mirror = 0.9", "mirror = 0")]), true),

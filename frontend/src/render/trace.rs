@@ -13,16 +13,17 @@
 //! exponential in `max_depth`. A [`PathBound`] cuts it: a secondary ray is cast only while its
 //! path weight (the product of the `mirror`/`transparency` factors from the camera) is at least
 //! [`MIN_PATH_WEIGHT`](super::bound::MIN_PATH_WEIGHT), and at most
-//! [`MAX_SECONDARY_RAYS_PER_PIXEL`](super::bound::MAX_SECONDARY_RAYS_PER_PIXEL) reflection and
-//! refraction rays are cast per pixel (depth first; the rest count as zero). The weight test
-//! alone keeps the tree at most `max_depth / MIN_PATH_WEIGHT` rays when
-//! `mirror + transparency ≤ 1`; the
-//! per-pixel cap bounds the rest (both factors up to 1 are accepted).
+//! [`MAX_SECONDARY_RAYS_PER_CAMERA_RAY`](super::bound::MAX_SECONDARY_RAYS_PER_CAMERA_RAY)
+//! reflection and refraction rays are cast per camera ray (depth first; the rest count as
+//! zero), so a pixel of several camera rays (lens or anti-aliasing samples) casts up to that
+//! many for each. The weight test alone keeps the tree at most `max_depth / MIN_PATH_WEIGHT`
+//! rays when `mirror + transparency ≤ 1`; the cap per camera ray bounds the rest (both factors
+//! up to 1 are accepted).
 //!
 //! Under `--force-all-effects`, the rays of effects a material does not have (weight 0) are
 //! cast from every node the plain plan expands, as leaves: they do the work, their result is
-//! discarded (not multiplied by zero: `0·∞` would be NaN), and they use none of the per-pixel
-//! budget, so the picture is the plan's, bit for bit. The work estimate counts them
+//! discarded (not multiplied by zero: `0·∞` would be NaN), and they use none of the camera
+//! ray's budget, so the picture is the plan's, bit for bit. The work estimate counts them
 //! ([`super::budget`]).
 
 use super::bound::PathBound;
@@ -45,7 +46,7 @@ pub const MAX_SHADOW_CROSSINGS: u32 = 16;
 /// count of objects: a direct test costs about what a walk's visit of that object does.
 pub const HULL_OBJECTS_MAX: usize = 4;
 
-/// Where a path is: recursion depth, weight, and the pixel's remaining secondary rays.
+/// Where a path is: recursion depth, weight, and its camera ray's remaining secondary rays.
 struct PathState {
     depth: u32,
     weight: f32,
