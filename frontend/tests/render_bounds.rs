@@ -1,8 +1,8 @@
 //! What bounds the work of a render (issue 12): the Whitted ray tree of mirror + transparent
-//! materials is cut by path weight and a per-pixel cap ([`PathBound`]), checked against the
+//! materials is cut by path weight and a cap per camera ray ([`PathBound`]), checked against the
 //! exhaustive tree; `--force-all-effects` stays bit-identical when radiance overflows.
 
-use halfray::render::bound::{MAX_SECONDARY_RAYS_PER_PIXEL, PathBound};
+use halfray::render::bound::{MAX_SECONDARY_RAYS_PER_CAMERA_RAY, PathBound};
 use halfray::render::budget::Estimate;
 use halfray::render::plan::EffectPlan;
 use halfray::render::{Mode, RenderOptions, render};
@@ -11,7 +11,9 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{camera, example_scene_paths, material, plane, point_light, scenes_dir, sphere};
+use common::{
+    camera, example_scene_paths, halfray, material, plane, point_light, scenes_dir, sphere, stderr,
+};
 
 /// Largest difference, in 8-bit steps, between the bounded and the exhaustive tree: the
 /// weight cut is chosen to stay under half a step per skipped subtree (see `MIN_PATH_WEIGHT`);
@@ -49,7 +51,7 @@ fn deep_glass_finishes_and_matches_the_exhaustive_tree() {
     assert!(t0.elapsed() < DEEP_RENDER_LIMIT, "{:?}", t0.elapsed());
     let pixels = u64::from(deep.width * deep.height);
     let secondary = deep.counts.reflection + deep.counts.refraction;
-    assert!(secondary <= pixels * u64::from(MAX_SECONDARY_RAYS_PER_PIXEL));
+    assert!(secondary <= pixels * u64::from(MAX_SECONDARY_RAYS_PER_CAMERA_RAY));
     // The oracle: every ray of the tree down to depth 24, where (issue 12) deeper trees give
     // the same bytes.
     let exact = render(&glass(24), &opts(PathBound::EXHAUSTIVE));
@@ -67,7 +69,7 @@ fn deep_glass_finishes_and_matches_the_exhaustive_tree() {
 /// A camera inside two nested spheres that reflect everything, the inner one transmitting
 /// everything and the outer one `outer_transparency`; with `light`, a point light at the
 /// centre. Weights never fall: with an outer transparency of 1 both rays of every hit go on,
-/// the tree is 2^64 without the per-pixel cap.
+/// the tree is 2^64 without the cap per camera ray.
 fn hall_of_mirrors(outer_transparency: &str, light: bool) -> String {
     let camera = camera("[0, 0, 0]", "[0, 0, -1]", "60", [4, 4]);
     let light = if light {
@@ -94,16 +96,71 @@ fn hall_of_mirrors(outer_transparency: &str, light: bool) -> String {
 }
 
 #[test]
-fn weights_that_never_fall_stop_at_the_per_pixel_cap() {
+fn weights_that_never_fall_stop_at_the_cap_per_camera_ray() {
     let s = scene::parse(&hall_of_mirrors("1.0", true), Path::new("hall.toml")).unwrap();
     let r = render(&s, &opts(PathBound::RENDER));
     let pixels = u64::from(r.width * r.height);
     let secondary = r.counts.reflection + r.counts.refraction;
-    let cap = pixels * u64::from(MAX_SECONDARY_RAYS_PER_PIXEL);
+    let cap = pixels * u64::from(MAX_SECONDARY_RAYS_PER_CAMERA_RAY);
     assert!(secondary <= cap, "{secondary} > {cap}");
     assert!(
         secondary >= cap / 2,
         "the cap is what stopped it: {secondary}"
+    );
+}
+
+/// The cap on secondary rays is per camera ray, as `--explain` and `docs/bad-input.md` say,
+/// not per pixel: one pixel of 4 lens samples inside the hall of mirrors (both shells reflect
+/// and transmit everything, weights never fall) casts more than 4096 reflection + refraction
+/// rays (`--stats-json`), and at most 4 × 4096. `--explain` prints the cap per camera ray and
+/// the worst case as 4 camera rays × (1 + 4096 secondary).
+#[test]
+fn the_secondary_ray_cap_is_per_camera_ray() {
+    const LENS_SAMPLES: u64 = 4;
+    let dir = tempfile::tempdir().unwrap();
+    let text = hall_of_mirrors("1.0", false).replace(
+        "width = 4\nheight = 4\n",
+        &format!("width = 1\nheight = 1\naperture = 0.1\nlens_samples = {LENS_SAMPLES}\n"),
+    );
+    assert!(text.contains("lens_samples"), "{text}");
+    let scene = dir.path().join("hall.toml");
+    std::fs::write(&scene, text).unwrap();
+    let (png, stats) = (dir.path().join("o.png"), dir.path().join("stats.json"));
+    let o = halfray(&[
+        &"render",
+        &scene,
+        &"-o",
+        &png,
+        &"--stats-json",
+        &stats,
+        &"--explain",
+        &"--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    assert_eq!(json["primary"], LENS_SAMPLES, "{json}");
+    let secondary = json["reflection"].as_u64().unwrap() + json["refraction"].as_u64().unwrap();
+    let cap = 4096;
+    assert!(secondary > cap, "more than {cap} in one pixel: {json}");
+    assert!(secondary <= LENS_SAMPLES * cap, "{json}");
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("at most 4096 reflection + refraction rays per camera ray"),
+        "{out}"
+    );
+    assert!(
+        out.contains("× 4 camera rays × (1 + 4096 secondary)"),
+        "{out}"
+    );
+    let docs =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/bad-input.md"))
+            .unwrap();
+    assert!(
+        docs.split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ")
+            .contains("at most 4096 secondary rays per camera ray"),
+        "docs/bad-input.md states the cap per camera ray"
     );
 }
 
@@ -203,16 +260,16 @@ fn the_work_estimate_bounds_the_rays_of_every_example_scene() {
 }
 
 /// Under `--force-all-effects` every node of the ray tree that expands also casts the ray of
-/// the effect its material does not have, as a leaf outside the per-pixel cap: from the
+/// the effect its material does not have, as a leaf outside the cap: from the
 /// hall of mirrors whose outer sphere transmits nothing, each outer hit casts a leaf
 /// refraction ray beside its traced reflection, so every pixel casts more secondary rays
-/// than the 4096 the cap allows traced. No light, so the estimate's 16 segments per shadow
+/// than the 4096 the cap allows traced. No light, so the estimate's 17 segments per shadow
 /// ray leave no slack to hide them in. The work estimate counts them.
 #[test]
 fn the_work_estimate_counts_forced_leaf_rays() {
     let s = scene::parse(&hall_of_mirrors("0", false), Path::new("hall.toml")).unwrap();
     let pixels = u64::from(s.camera.width * s.camera.height);
-    let traced = pixels * (1 + u64::from(MAX_SECONDARY_RAYS_PER_PIXEL));
+    let traced = pixels * (1 + u64::from(MAX_SECONDARY_RAYS_PER_CAMERA_RAY));
     let planned = counted_within_estimate(&s, Mode::Color, false, 1, "hall");
     assert_eq!(planned, traced, "every pixel traces the full 4096 rays");
     let forced = counted_within_estimate(&s, Mode::Color, true, 1, "hall, forced");

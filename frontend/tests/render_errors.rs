@@ -341,6 +341,36 @@ fn singular_transform() {
         "object[0].transform[0].matrix",
         "singular",
     );
+    // Steps invertible alone whose product is not: the error names the step at which the
+    // running product first fails (its column: the step's value), not the whole `transform`.
+    // Two y scales of 10⁻³ make 10⁻⁶: condition number ‖L‖_F·‖L⁻¹‖_F = √(2 + 10⁻¹²)·√(2 + 10¹²)
+    // ≈ 1.4·10⁶ > 2²⁰; two uniform scales of 10⁻²⁰ make 10⁻⁴⁰, whose inverse (10⁴⁰) overflows
+    // f32; with a translation between the two y scales the product first fails at step 2.
+    for (steps, column, step) in [
+        (
+            "[{ scale = [1, 1e-3, 1] }, { scale = [1, 1e-3, 1] }]",
+            50,
+            1,
+        ),
+        ("[{ scale = 1e-20 }, { scale = 1e-20 }]", 43, 1),
+        (
+            "[{ scale = [1, 1e-3, 1] }, { translate = [0, 1, 0] }, { scale = [1, 1e-3, 1] }]",
+            77,
+            2,
+        ),
+    ] {
+        check(
+            "singp.toml",
+            &sphere_with(&format!(
+                "center = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = {steps}"
+            )),
+            &format!("16:{column}"),
+            &format!("object[0].transform[{step}].scale"),
+            &format!(
+                "steps 0 to {step} together: transform is singular (a zero or degenerate scale): it cannot be inverted"
+            ),
+        );
+    }
     // Ill-conditioned is not singular: a rod of condition number 2 000, as a scale and as a
     // matrix, loads (a scaled-determinant test refused both).
     for rod in [

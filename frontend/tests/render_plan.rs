@@ -423,6 +423,78 @@ fn shadows_through_glass_are_attenuated_by_the_transmission() {
     assert_eq!(opaque.pixel(4, 4).x, 0.0);
 }
 
+/// A floor under `panes` clear panes (`transparency = 1`, `ior = 1`, black), 0.2 apart, seen
+/// from straight above by a 2 × 2 orthographic camera and lit straight down by a directional
+/// light of intensity 0.5; no ambient term.
+fn stacked_panes(panes: u32) -> Scene {
+    parse_scene(&format!(
+        r#"
+max_depth = 64
+ambient = [0, 0, 0]
+
+[camera]
+type = "orthographic"
+eye = [0, 5, 0]
+look_at = [0, 0, 0]
+up = [0, 0, -1]
+view_size = 1
+width = 2
+height = 2
+
+{light}intensity = 0.5
+
+[material.floor]
+diffuse = [1, 1, 1]
+
+[material.pane]
+diffuse = [0, 0, 0]
+ambient = [0, 0, 0]
+transparency = 1.0
+ior = 1.0
+
+{floor}
+[[object]]
+type = "box"
+min = [-1, 0.5, -1]
+max = [1, 0.6, 1]
+material = "pane"
+repeat = {{ count = [1, {panes}, 1], step = [0, 0.2, 0] }}
+"#,
+        light = directional_light("[0, -1, 0]"),
+        floor = plane("[0, 0, 0]", "[0, 1, 0]", "floor"),
+    ))
+}
+
+/// A shadow ray crosses at most 16 transparent surfaces (`MAX_SHADOW_CROSSINGS`, 8 panes) and
+/// a 17th blocks the light. Hand-worked: every pixel sees the floor through the clear panes, lit
+/// through them by `kd · I · n·l · 1¹⁶ = 1 · 0.5 · 1 · 1 = 0.5` under 8 panes, and by 0 under 9;
+/// both cast 17 shadow segments per pixel (16 crossings and the one that reaches the light or
+/// meets the 17th surface), and the camera ray crosses every surface (2 per pane refraction
+/// rays). The batched and the one-ray-at-a-time renders agree.
+#[test]
+fn sixteen_crossings_transmit_and_a_seventeenth_blocks() {
+    for (panes, lit) in [(8u32, 0.5f32), (9, 0.0)] {
+        let scene = stacked_panes(panes);
+        for single_rays in [false, true] {
+            let opts = RenderOptions {
+                single_rays,
+                ..RenderOptions::default()
+            };
+            let out = render(&scene, &opts);
+            let what = format!("{panes} panes, single rays {single_rays}: {:?}", out.counts);
+            assert!(out.plan.shadow_transmission, "{what}");
+            for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let p = out.pixel(i, j);
+                assert_eq!([p.x, p.y, p.z], [lit; 3], "pixel ({i}, {j}), {what}");
+            }
+            assert_eq!(out.counts.primary, 4, "{what}");
+            assert_eq!(out.counts.shadow, 4 * 17, "{what}");
+            assert_eq!(out.counts.refraction, 4 * 2 * u64::from(panes), "{what}");
+            assert_eq!(out.counts.reflection, 0, "{what}");
+        }
+    }
+}
+
 /// Exact shadow-ray counts with mixed lights (issue 17): a floor seen from straight above fills
 /// all 9 × 9 pixels, so every pixel shades one floor point with normal `+y`. A shadow ray goes
 /// to each light that casts shadows, is not dark and lies on the lit side (`n·l > 0`): here the

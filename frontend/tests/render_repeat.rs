@@ -175,6 +175,40 @@ fn bad_repeats_name_their_field() {
     );
 }
 
+/// A copy whose translation overflows `f32` is refused at `repeat.step`, naming the copy and
+/// saying the translation overflows (not "singular": the object's own transform is
+/// invertible and a translation leaves it so). Hand-worked: the sphere scaled by
+/// `(0.25, 0.6, 0.4)` and turned 40° about z has the inverse translation
+/// `−S⁻¹R⁻¹(t + (i·10³⁸, 0, 0))`, whose x is about `−4 · cos 40° · i·10³⁸ ≈ −3.06·10³⁸ · i`:
+/// finite for copy 1, beyond `f32::MAX ≈ 3.40·10³⁸` for copy 2. Without a transform of its own,
+/// copy 4 is the first moved beyond it (4·10³⁸).
+#[test]
+fn a_repeat_whose_translation_overflows_says_so() {
+    let head = head();
+    let line = head.lines().count() + 7;
+    for (transform, copy) in [
+        (
+            "transform = [{ scale = [0.25, 0.6, 0.4] }, { rotate = { axis = [0, 0, 1], degrees = 40 } }, { translate = [-2, 0.7, -1] }]\n",
+            "copy (2, 0, 0)",
+        ),
+        ("", "copy (4, 0, 0)"),
+    ] {
+        let e = err(&format!(
+            "{head}\n[[object]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"a\"\n{transform}repeat = {{ count = [5, 1, 2], step = [1e38, 0, 1.2] }}\n"
+        ));
+        let line = line + usize::from(!transform.is_empty());
+        assert!(
+            e.starts_with(&format!("bad.toml:{line}:")) && e.contains("object[1].repeat.step"),
+            "{e}"
+        );
+        assert!(
+            e.contains(&format!("{copy}: the translation overflows")),
+            "{e}"
+        );
+        assert!(!e.contains("singular"), "{e}");
+    }
+}
+
 /// `repeat.materials` on a CSG object reaches every operand that inherits the object's
 /// material (here a nested CSG object without one, and its spheres), while an operand with
 /// its own material keeps it: each copy shows its material from the list, and red where the

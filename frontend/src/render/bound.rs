@@ -1,5 +1,7 @@
-//! How far the ray tree of one pixel is followed: the path-weight floor and the per-pixel cap
-//! on secondary rays (see [`super::trace`]'s module docs for why these bound the tree).
+//! How far the ray tree of one camera ray is followed: the path-weight floor and the cap on
+//! secondary rays per camera ray (see [`super::trace`]'s module docs for why these bound the
+//! tree). A pixel casts one camera ray, or one per lens or anti-aliasing sample, each with its
+//! own tree and its own cap.
 
 /// Smallest path weight a secondary ray is cast for, 2⁻¹³. A subtree whose radiance is at
 /// most 1 (the displayable range) then moves the pixel's linear value by less than 1/8192,
@@ -8,25 +10,27 @@
 /// chain) can lose more: the bound is for display-range radiance.
 pub const MIN_PATH_WEIGHT: f32 = 1.0 / 8192.0;
 
-/// Most reflection and refraction rays per pixel: the hard bound when `mirror` and
-/// `transparency` are both near 1 and weights barely fall (4096 per pixel keeps a 640×480
-/// image under 1.3·10⁹ secondary rays).
-pub const MAX_SECONDARY_RAYS_PER_PIXEL: u32 = 4096;
+/// Most reflection and refraction rays per camera ray: the hard bound when `mirror` and
+/// `transparency` are both near 1 and weights barely fall. Each camera ray of a pixel has its
+/// own, so a pixel of `S` camera rays (`lens_samples`, or the anti-aliasing samples) casts at
+/// most `S × 4096`; at one camera ray per pixel a 640×480 image stays under 1.3·10⁹ secondary
+/// rays.
+pub const MAX_SECONDARY_RAYS_PER_CAMERA_RAY: u32 = 4096;
 
 /// How far the ray tree of one pixel is followed (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathBound {
     /// Secondary rays are cast only for path weights `≥ min_weight` (and `> 0`).
     pub min_weight: f32,
-    /// Most secondary rays per pixel.
+    /// Most secondary rays per camera ray.
     pub max_secondary_rays: u32,
 }
 
 impl PathBound {
-    /// The renderer's bound: [`MIN_PATH_WEIGHT`], [`MAX_SECONDARY_RAYS_PER_PIXEL`].
+    /// The renderer's bound: [`MIN_PATH_WEIGHT`], [`MAX_SECONDARY_RAYS_PER_CAMERA_RAY`].
     pub const RENDER: Self = Self {
         min_weight: MIN_PATH_WEIGHT,
-        max_secondary_rays: MAX_SECONDARY_RAYS_PER_PIXEL,
+        max_secondary_rays: MAX_SECONDARY_RAYS_PER_CAMERA_RAY,
     };
     /// The whole tree down to `max_depth` (exponential: for tests on small images).
     pub const EXHAUSTIVE: Self = Self {

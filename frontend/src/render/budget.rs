@@ -9,13 +9,14 @@
 //! anti-aliasing, else 1), each with at most `R` secondary rays (below) and at every one of
 //! those shading points `L` shadow rays (with shadow rays: one per point or directional light
 //! the plan casts them towards, `samples` per area light; else 0), each traced as at most `T`
-//! segments ([`MAX_SHADOW_CROSSINGS`] with shadow transmission, where a shadow ray continues
-//! past every transparent surface it crosses as a new segment, each counted as a shadow ray;
-//! else 1). Outside colour mode none of these effects runs, so the worst case there is one ray
+//! segments (`MAX_SHADOW_CROSSINGS + 1` = 17 with shadow transmission, where a shadow ray
+//! continues past every transparent surface it crosses as a new segment, each counted as a
+//! shadow ray: one segment to each of at most [`MAX_SHADOW_CROSSINGS`] surfaces crossed and the
+//! last; else 1). Outside colour mode none of these effects runs, so the worst case there is one ray
 //! per pixel.
 //!
 //! `R` bounds the camera ray's tree ([`super::trace`]). Its traced rays number at most `N`:
-//! [`MAX_SECONDARY_RAYS_PER_PIXEL`] where the scene's own plan ([`EffectPlan::derive`] without
+//! [`MAX_SECONDARY_RAYS_PER_CAMERA_RAY`] where the scene's own plan ([`EffectPlan::derive`] without
 //! force) casts reflection or refraction rays in the mode, else 0; a forced render traces the
 //! same tree. Without `--force-all-effects`, `R = N`. With it, where the forced plan casts
 //! reflection or refraction rays, every node that expands (the camera ray's hit and each traced
@@ -34,7 +35,7 @@
 //! estimate multiplies the rays by the size of the largest group.
 
 use super::Mode;
-use super::bound::MAX_SECONDARY_RAYS_PER_PIXEL;
+use super::bound::MAX_SECONDARY_RAYS_PER_CAMERA_RAY;
 use super::plan::{EffectPlan, PlanFlags};
 use super::trace::MAX_SHADOW_CROSSINGS;
 use crate::scene::{LightKind, Scene};
@@ -42,8 +43,8 @@ use std::collections::HashMap;
 
 /// Largest worst-case work (rays × the largest coincident group) `render` starts without
 /// `--allow-long`: 10¹¹, about a day at [`ASSUMED_RAYS_PER_SECOND`] on one thread. The
-/// shipped scenes' worst cases are at most 2.2·10¹⁰ (`glass.toml` and `showcase.toml`, whose
-/// shadow rays pass through glass: 16 segments each; `mirror.toml` 2.5·10⁹), so those two
+/// shipped scenes' worst cases are at most 2.3·10¹⁰ (`glass.toml` and `showcase.toml`, whose
+/// shadow rays pass through glass: 17 segments each; `mirror.toml` 2.5·10⁹), so those two
 /// need `--allow-long` from `--samples 5` on.
 pub const MAX_WORST_CASE_WORK: f64 = 1e11;
 
@@ -64,8 +65,8 @@ pub struct Estimate {
     pub secondary: f64,
     /// Shadow rays per shading point (`L`).
     pub shadow: f64,
-    /// Most segments each shadow ray is traced as (`T`): [`MAX_SHADOW_CROSSINGS`] with shadow
-    /// transmission, else 1.
+    /// Most segments each shadow ray is traced as (`T`): `MAX_SHADOW_CROSSINGS + 1` with
+    /// shadow transmission (one per surface crossed, and the last), else 1.
     pub segments: f64,
     /// Objects in the largest group sharing one world box.
     pub coincident: usize,
@@ -90,7 +91,7 @@ impl Estimate {
             runs
         };
         let traced = if secondary_runs(own) {
-            MAX_SECONDARY_RAYS_PER_PIXEL
+            MAX_SECONDARY_RAYS_PER_CAMERA_RAY
         } else {
             0
         };
@@ -111,7 +112,7 @@ impl Estimate {
             })
             .fold(0.0, |sum, n| sum + n);
         let segments = if runs.shadow_transmission {
-            MAX_SHADOW_CROSSINGS
+            MAX_SHADOW_CROSSINGS + 1
         } else {
             1
         };
@@ -254,7 +255,7 @@ mod tests {
         let mirror = mirror_scene(&[]);
         assert_eq!(
             secondary(&mirror, false),
-            f64::from(MAX_SECONDARY_RAYS_PER_PIXEL)
+            f64::from(MAX_SECONDARY_RAYS_PER_CAMERA_RAY)
         );
         let flat = mirror_scene(&[("max_depth = 4", "max_depth = 0")]);
         assert_eq!(secondary(&flat, false), 0.0);
@@ -266,7 +267,7 @@ mod tests {
     /// `max_depth = 0`, none.
     #[test]
     fn forced_leaf_rays_are_counted_for_every_node_that_expands() {
-        let nodes = 1.0 + f64::from(MAX_SECONDARY_RAYS_PER_PIXEL);
+        let nodes = 1.0 + f64::from(MAX_SECONDARY_RAYS_PER_CAMERA_RAY);
         assert_eq!(secondary(&mirror_scene(&[]), true), 2.0 * nodes);
         assert_eq!(
             secondary(&mirror_scene(&[("mirror = 0.9", "mirror = 0")]), true),

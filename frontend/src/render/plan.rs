@@ -4,7 +4,7 @@
 //! same; only the work differs).
 
 use super::Mode;
-use super::bound::{MAX_SECONDARY_RAYS_PER_PIXEL, MIN_PATH_WEIGHT};
+use super::bound::{MAX_SECONDARY_RAYS_PER_CAMERA_RAY, MIN_PATH_WEIGHT};
 use crate::scene::{LightKind, Scene};
 use std::fmt::Write as _;
 
@@ -351,9 +351,9 @@ impl EffectPlan {
         if recursive {
             let _ = writeln!(
                 s,
-                "  ray tree bound   a secondary ray is cast only while its path weight (product of mirror/transparency factors) is ≥ 1/{} (below, it cannot move an 8-bit sRGB value of display-range radiance), and at most {} reflection + refraction rays per pixel",
+                "  ray tree bound   a secondary ray is cast only while its path weight (product of mirror/transparency factors) is ≥ 1/{} (below, it cannot move an 8-bit sRGB value of display-range radiance), and at most {} reflection + refraction rays per camera ray (for each of a pixel's camera rays)",
                 (1.0 / MIN_PATH_WEIGHT) as u32,
-                MAX_SECONDARY_RAYS_PER_PIXEL
+                MAX_SECONDARY_RAYS_PER_CAMERA_RAY
             );
         }
         let _ = writeln!(

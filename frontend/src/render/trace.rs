@@ -13,16 +13,17 @@
 //! exponential in `max_depth`. A [`PathBound`] cuts it: a secondary ray is cast only while its
 //! path weight (the product of the `mirror`/`transparency` factors from the camera) is at least
 //! [`MIN_PATH_WEIGHT`](super::bound::MIN_PATH_WEIGHT), and at most
-//! [`MAX_SECONDARY_RAYS_PER_PIXEL`](super::bound::MAX_SECONDARY_RAYS_PER_PIXEL) reflection and
-//! refraction rays are cast per pixel (depth first; the rest count as zero). The weight test
-//! alone keeps the tree at most `max_depth / MIN_PATH_WEIGHT` rays when
-//! `mirror + transparency ≤ 1`; the
-//! per-pixel cap bounds the rest (both factors up to 1 are accepted).
+//! [`MAX_SECONDARY_RAYS_PER_CAMERA_RAY`](super::bound::MAX_SECONDARY_RAYS_PER_CAMERA_RAY)
+//! reflection and refraction rays are cast per camera ray (depth first; the rest count as
+//! zero), so a pixel of several camera rays (lens or anti-aliasing samples) casts up to that
+//! many for each. The weight test alone keeps the tree at most `max_depth / MIN_PATH_WEIGHT`
+//! rays when `mirror + transparency ≤ 1`; the cap per camera ray bounds the rest (both factors
+//! up to 1 are accepted).
 //!
 //! Under `--force-all-effects`, the rays of effects a material does not have (weight 0) are
 //! cast from every node the plain plan expands, as leaves: they do the work, their result is
-//! discarded (not multiplied by zero: `0·∞` would be NaN), and they use none of the per-pixel
-//! budget, so the picture is the plan's, bit for bit. The work estimate counts them
+//! discarded (not multiplied by zero: `0·∞` would be NaN), and they use none of the camera
+//! ray's budget, so the picture is the plan's, bit for bit. The work estimate counts them
 //! ([`super::budget`]).
 
 use super::bound::PathBound;
@@ -32,9 +33,12 @@ use crate::scene::{Light, LightKind, Scene, SpecularModel};
 use glam::Vec3;
 use halfray_core::{Aabb, Ray, shadow_segment, spawn_ray, spawn_ray_to};
 
-/// Surfaces a shadow ray follows through transparent materials before it counts the light as
-/// blocked: 16 crossings (8 panes of glass) transmit at most `transparency¹⁶`, below an 8-bit
-/// step for any transparency up to 0.7; the bound keeps the walk finite for any scene.
+/// Transparent surfaces a shadow ray crosses before it counts the light as blocked: 16
+/// crossings (8 panes of glass) transmit `transparency¹⁶`, and a surface met after them (a 17th)
+/// blocks the light; `transparency¹⁶` is below an 8-bit step for any transparency up to 0.7, so
+/// the cut-off shows only behind nearly clear glass. The bound keeps the walk finite for any
+/// scene: a shadow ray is traced as at most `MAX_SHADOW_CROSSINGS + 1` segments (one to each
+/// surface crossed, and the last, towards the light).
 pub const MAX_SHADOW_CROSSINGS: u32 = 16;
 
 /// Most bounded objects an area light's shadow rays from one hit are tested against directly
@@ -42,7 +46,7 @@ pub const MAX_SHADOW_CROSSINGS: u32 = 16;
 /// count of objects: a direct test costs about what a walk's visit of that object does.
 pub const HULL_OBJECTS_MAX: usize = 4;
 
-/// Where a path is: recursion depth, weight, and the pixel's remaining secondary rays.
+/// Where a path is: recursion depth, weight, and its camera ray's remaining secondary rays.
 struct PathState {
     depth: u32,
     weight: f32,
@@ -203,8 +207,10 @@ impl Tracer<'_> {
     /// The fraction of light that reaches the end of the shadow ray `ray` (towards `light`):
     /// 0 at the first opaque surface, else the product of the `transparency` of every surface
     /// crossed (a glass sphere is crossed twice). Each segment is one shadow ray, added to
-    /// `n`; at most [`MAX_SHADOW_CROSSINGS`] crossings are followed (then 0: nothing that
-    /// many panes thick lets visible light through at 8 bits).
+    /// `n`: at most [`MAX_SHADOW_CROSSINGS`] crossings are followed, and the segment after
+    /// the last of them is still cast, so 16 crossings transmit and a surface met after them
+    /// gives 0 (nothing that many panes thick lets visible light through at 8 bits); at most
+    /// `MAX_SHADOW_CROSSINGS + 1` segments in all.
     fn transmission(
         &self,
         ray: &Ray,
@@ -214,11 +220,14 @@ impl Tracer<'_> {
     ) -> f32 {
         let mut r = *ray;
         let mut through = 1.0f32;
-        for _ in 0..MAX_SHADOW_CROSSINGS {
+        for crossed in 0..=MAX_SHADOW_CROSSINGS {
             n.shadow += 1;
             let Some(sh) = self.closest(&r, ctx) else {
                 return through;
             };
+            if crossed == MAX_SHADOW_CROSSINGS {
+                break;
+            }
             through *= self.scene.materials[sh.material as usize].transparency;
             if !(through > 0.0) {
                 return 0.0;

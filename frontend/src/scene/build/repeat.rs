@@ -18,6 +18,11 @@ pub const MAX_OBJECTS: usize = 1_000_000;
 /// material `materials[number mod len]` when given (on the copy and on every CSG operand that
 /// inherits it, [`Node::with_material`]). `before` objects exist already (for
 /// [`MAX_OBJECTS`]).
+///
+/// # Errors
+///
+/// A count of 0, more copies than [`MAX_OBJECTS`] allows, an unknown or empty `materials`,
+/// or a copy whose translation overflows `f32` (named by its grid position, at `step`).
 pub(super) fn repeat(
     ctx: &Ctx<'_>,
     node: &Node,
@@ -81,12 +86,24 @@ pub(super) fn repeat(
         for j in 0..ny {
             for i in 0..nx {
                 let offset = step * Vec3::new(i as f32, j as f32, k as f32);
+                // The object's own transform is invertible and a translation leaves its
+                // linear part alone, so a copy fails only where the translation (the copy's
+                // or its inverse's) leaves the finite range of `f32`.
                 let moved = Transform::translate(offset)
                     .and_then(|t| match &node.transform {
                         Some(own) => own.then(&t),
                         None => Ok(t),
                     })
-                    .map_err(|e| ctx.err(&rd.step.span(), &f("step"), e.to_string()))?;
+                    .map_err(|_| {
+                        ctx.err(
+                            &rd.step.span(),
+                            &f("step"),
+                            format!(
+                                "copy ({i}, {j}, {k}): the translation overflows: step × ({i}, {j}, {k}) after the object's own transform leaves f32's range (±{:.1e}) for the copy or its inverse",
+                                f32::MAX
+                            ),
+                        )
+                    })?;
                 let material = materials[out.len() % materials.len()];
                 let copy = node.with_material(material);
                 out.push(Node::new(copy.shape, material, Some(moved)));

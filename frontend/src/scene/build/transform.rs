@@ -4,16 +4,27 @@ use crate::error::Result;
 use crate::scene::def::{self, S};
 use crate::scene::xform;
 use glam::{Mat4, Vec3, Vec4};
+use halfray_core::GeometryError;
 use halfray_core::transform::Transform;
 
 use super::Ctx;
 
+/// The transform of the steps `t` (field `p`) applied in order, the first step first.
+///
+/// # Errors
+///
+/// An error at the first step that fails, naming it (`p[k].scale`, …) and its position: a step
+/// that is not one well-formed kind, a step that is not an invertible affine map by itself
+/// ([`Transform::new`], worded by [`xform::describe`]), or the step at which the running
+/// product of steps `0..=k` first stops being one (each step invertible alone, the product
+/// singular, too ill-conditioned or overflowing `f32`).
 pub(super) fn transform(
     ctx: &Ctx<'_>,
     t: &S<Vec<S<def::TransformDef>>>,
     p: &str,
 ) -> Result<Transform> {
     let mut m = Mat4::IDENTITY;
+    let mut combined = Transform::IDENTITY;
     for (k, step) in t.get_ref().iter().enumerate() {
         let f = format!("{p}[{k}]");
         let s = step.get_ref();
@@ -77,10 +88,22 @@ pub(super) fn transform(
                 ));
             }
         };
-        // Check each step, so the error points at the step that is singular.
-        Transform::new(step_m)
-            .map_err(|e| ctx.err(&span, &format!("{f}.{name}"), e.to_string()))?;
+        // Each step alone, then the running product, so the error names the step at which
+        // the transform stops being invertible.
+        let field = format!("{f}.{name}");
+        Transform::new(step_m).map_err(|e| ctx.err(&span, &field, xform::describe(e)))?;
         m = step_m * m;
+        combined = Transform::new(m).map_err(|e| {
+            let why = match e {
+                GeometryError::NonFinite => "overflow f32 (a non-finite entry)",
+                e => xform::describe(e),
+            };
+            ctx.err(
+                &span,
+                &field,
+                format!("steps 0 to {k} together: {why}; each step alone is invertible"),
+            )
+        })?;
     }
-    Transform::new(m).map_err(|e| ctx.err(&t.span(), p, e.to_string()))
+    Ok(combined)
 }
