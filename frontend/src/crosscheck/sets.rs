@@ -454,6 +454,9 @@ mod tests {
     /// 2 there, on the fan's outer edge, and so counted, and the watertight test's miss was a
     /// leak; it no longer counts.
     #[test]
+    // The coordinates are written exactly (the `f32` values the file's rounded to), not as
+    // the shortest decimals that round to them.
+    #[allow(clippy::excessive_precision)]
     fn an_edge_ray_that_touches_its_fan_only_at_a_fold_does_not_count() {
         let mesh = ObjMesh {
             positions: vec![

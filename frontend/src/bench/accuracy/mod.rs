@@ -244,13 +244,14 @@ pub fn measure(args: &AccuracyArgs, paths: &[PathBuf]) -> Result<Report> {
     })
 }
 
+/// A mesh read, with its path.
+type MeshRead = (PathBuf, ObjMesh);
+
 /// The meshes of the BVH throughput columns: the one whose file stem is `bunny`, else the
 /// first with triangles ([`Report::bvh_mesh`]); and the one with the most triangles (the
 /// first of equals) unless it is that one ([`Report::largest_mesh`]). A mesh without
 /// triangles is never chosen.
-fn throughput_meshes(
-    meshes: &[(PathBuf, ObjMesh)],
-) -> (Option<&(PathBuf, ObjMesh)>, Option<&(PathBuf, ObjMesh)>) {
+fn throughput_meshes(meshes: &[MeshRead]) -> (Option<&MeshRead>, Option<&MeshRead>) {
     let with_triangles = || meshes.iter().filter(|(_, m)| !m.triangles.is_empty());
     let bunny = with_triangles()
         .find(|(p, _)| p.file_stem().is_some_and(|s| s == "bunny"))
