@@ -233,7 +233,7 @@ fn aimed(
 /// every projected triangle is thick enough that moving its vertices by the `f32` rounding of
 /// the ray-space coordinates cannot flip its orientation: its ray-space boundary margin
 /// ([`crate::crosscheck::judge::ray_space_barycentrics`]) is below [`ROBUST_MARGIN`]; and the
-/// ray's line crosses their union inside it, exactly ([`line_crosses_fan`]). The last holds by construction
+/// ray's line crosses their union inside it, exactly (`line_crosses_fan`). The last holds by construction
 /// unless the target's rounding to `f32` (or the direction's) moved the line off the edge by
 /// more than a triangle is wide along the ray: an edge's midpoint rounded far from the
 /// coordinate origin on a mesh whose triangles are a few ulps of its coordinates (the bunny

@@ -371,7 +371,7 @@ fn edge_length_squared<S: MeshStorage>(m: &Mesh<S>, e: EdgeId) -> Option<f64> {
 }
 
 /// `mesh collapse`: collapses every edge strictly shorter than `shorter_than` (the length
-/// compared in `f64`, [`edge_length_squared`], with the limit as read, an `f32`) into its
+/// compared in `f64`, `edge_length_squared`, with the limit as read, an `f32`) into its
 /// midpoint. Each pass visits the short edges shortest first (re-measured when visited, since
 /// earlier collapses move vertices) and collapses those the core allows; passes repeat until
 /// one collapses nothing. The edges still short after that pass were all refused; they are
