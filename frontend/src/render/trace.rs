@@ -241,12 +241,16 @@ impl Tracer<'_> {
     }
 
     /// The fraction of an area light's disk (facing `hit`, radius `light.radius`, around
-    /// `centre`) that `hit` sees: `light.samples` shadow rays to fixed points of the disk
-    /// (Halton positions, concentric mapping), each 0 or 1, or the transmission through
-    /// transparent surfaces when the plan follows it.
+    /// `centre`) that `hit` sees on the side of its shading normal `nrm`: of `light.samples`
+    /// fixed points of the disk (Halton positions, concentric mapping), each above the
+    /// surface's tangent plane (`nrm·(p − hit) > 0`) gets a shadow ray, 0 or 1, or the
+    /// transmission through transparent surfaces when the plan follows it; a point on or below
+    /// that plane adds 0 with no ray cast (the surface itself hides it, as `n·l ≤ 0` hides a
+    /// point light).
     fn area_visibility(
         &self,
         hit: &halfray_core::Hit,
+        nrm: Vec3,
         centre: Vec3,
         light: &Light,
         ctx: &mut QueryCtx,
@@ -272,7 +276,7 @@ impl Tracer<'_> {
             })
             .flatten();
         let mut seen = 0.0;
-        for p in points() {
+        for p in points().filter(|&p| nrm.dot(p - hit.point) > 0.0) {
             // `spawn_ray_to(hit, p)`, bit for bit, with the hit's two origins offset once.
             let ray = shadow_segment(origins[hit.side(p - hit.point)], p);
             seen += if self.plan.shadow_transmission {
@@ -373,7 +377,7 @@ impl Tracer<'_> {
             let cast = self.casts_shadow(li, mi, ndotl);
             let mut blocked = false;
             if let (true, Some(centre)) = (cast, area_centre(light)) {
-                let seen = self.area_visibility(hit, centre, light, ctx, n);
+                let seen = self.area_visibility(hit, nrm, centre, light, ctx, n);
                 if light.cast_shadows {
                     blocked = !(seen > 0.0);
                     e *= seen;
