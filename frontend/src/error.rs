@@ -294,13 +294,31 @@ impl std::error::Error for Error {
 
 /// `e`'s message without the ` at line L column C` that `serde_json` appends: the message of an
 /// error whose [`Location::json_position`] already says where (else the place was said twice).
+/// serde's `expected struct Name` (`… with N elements`), which names a type of ours, reads
+/// `expected a JSON object`.
 #[must_use]
 pub fn json_message(e: &serde_json::Error) -> String {
     let text = e.to_string();
     let suffix = format!(" at line {} column {}", e.line(), e.column());
-    match text.strip_suffix(&suffix) {
-        Some(message) if e.line() != 0 => message.to_string(),
-        _ => text,
+    let message = match text.strip_suffix(&suffix) {
+        Some(message) if e.line() != 0 => message,
+        _ => &text,
+    };
+    match message.split_once("expected struct ") {
+        Some((head, tail)) => {
+            // The type's name, then serde's ` with N element(s)` for a sequence.
+            let rest = tail.split_once(' ').map_or("", |(_, rest)| rest);
+            let rest = match rest.strip_prefix("with ") {
+                Some(count) => count.split_once(' ').map_or("", |(_, r)| r),
+                None => rest,
+            };
+            let rest = rest
+                .strip_prefix("elements")
+                .or_else(|| rest.strip_prefix("element"))
+                .unwrap_or(rest);
+            format!("{head}expected a JSON object{rest}")
+        }
+        None => message.to_string(),
     }
 }
 
@@ -353,6 +371,30 @@ mod tests {
             "{syntax}"
         );
         assert_eq!(json_message(&shape), shape.to_string());
+    }
+
+    /// serde's words for a value that is not an object name the Rust type it was read into;
+    /// the message names the JSON's shape instead, and keeps the rest of serde's words.
+    #[test]
+    fn json_messages_name_no_type_of_ours() {
+        #[derive(serde::Deserialize, Debug)]
+        #[allow(dead_code)]
+        struct ReportView {
+            a: u32,
+            b: u32,
+        }
+        for (json, want) in [
+            (
+                "\"x\"",
+                "invalid type: string \"x\", expected a JSON object",
+            ),
+            ("[]", "invalid length 0, expected a JSON object"),
+            ("[1]", "invalid length 1, expected a JSON object"),
+            ("{\"a\": [1]}", "invalid type: sequence, expected u32"),
+        ] {
+            let e = serde_json::from_str::<ReportView>(json).unwrap_err();
+            assert_eq!(json_message(&e), want, "{json}: serde said {e}");
+        }
     }
 
     #[test]

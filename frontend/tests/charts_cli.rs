@@ -167,10 +167,28 @@ fn a_bad_extension_or_a_bad_file_is_refused_and_nothing_written() {
     assert_eq!(o.status.code(), Some(1));
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
-        e.contains("run.json: not the JSON of `bench bvh --json`"),
+        e.contains("run.json:1:11: not the JSON of `bench bvh --json`: missing field `mesh`"),
         "{e}"
     );
     assert!(!e.contains("untagged"), "{e}");
+    assert!(!svg.exists());
+    // A value of the wrong type deep in a corpus run is named by its line and column (the
+    // chart said only "not the JSON of" for an array of reports), in JSON's words.
+    std::fs::write(&json, "[{\"mesh\": \"a.obj\"},\n 7]").unwrap();
+    let o = chart("corpus", &json, &svg);
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("run.json:1:"), "{e}");
+    std::fs::write(&json, "[\"x\"]").unwrap();
+    let e = String::from_utf8_lossy(&chart("corpus", &json, &svg).stderr).into_owned();
+    assert!(
+        e.contains("run.json:1:") && e.contains("expected a JSON object") && !e.contains("struct"),
+        "{e}"
+    );
+    // An empty run is said to have no mesh, not to lack Embree.
+    std::fs::write(&json, "[]").unwrap();
+    let e = String::from_utf8_lossy(&chart("corpus", &json, &svg).stderr).into_owned();
+    assert!(e.contains("run.json: the run has no mesh"), "{e}");
     assert!(!svg.exists());
 }
 

@@ -2,7 +2,7 @@
 //! two modes), the cost of an incoherent ray through the BVH against the share of rays answered
 //! wrongly.
 
-use super::{Chart, FAMILY, PALETTE, read_json};
+use super::{Chart, FAMILY, Marker, PALETTE, draw_legend_below, legend_height, read_json};
 use crate::error::{Error, Location, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -155,13 +155,26 @@ const NOTHING_TO_CHART: &str = "no variant has `mrays_bvh_incoherent`: nothing t
 
 impl Chart for AccuracyChart {
     fn size(&self) -> (u32, u32) {
-        (960, 600)
+        (960, 600 + legend_height(self.points.len()))
     }
 
     fn draw<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        let legend: Vec<(String, RGBColor)> = self
+            .points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let label = format!(
+                    "{}: {:.1} ns, {:.0} per million",
+                    p.label, p.ns_per_ray, p.errors_per_million
+                );
+                (label, PALETTE[i % PALETTE.len()])
+            })
+            .collect();
+        let root = &draw_legend_below(root, &legend, Marker::Dot)?;
         let x_max = self.points.iter().map(|p| p.ns_per_ray).fold(0.0, f64::max) * 1.2;
         let y_max = self
             .points
@@ -191,20 +204,14 @@ impl Chart for AccuracyChart {
         for (i, p) in self.points.iter().enumerate() {
             let colour = PALETTE[i % PALETTE.len()];
             let at = (p.ns_per_ray, p.errors_per_million.max(ERROR_FLOOR));
-            chart
-                .draw_series(std::iter::once(Circle::new(at, 6, colour.filled())))?
-                .label(format!(
-                    "{}: {:.1} ns, {:.0} per million",
-                    p.label, p.ns_per_ray, p.errors_per_million
-                ))
-                .legend(move |(x, y)| Circle::new((x, y), 5, colour.filled()));
+            chart.draw_series(std::iter::once(Circle::new(at, 6, colour.filled())))?;
             chart.draw_series(std::iter::once(Text::new(
                 p.label.clone(),
                 at,
                 (FAMILY, 13).into_font().color(&colour),
             )))?;
         }
-        super::draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
+        Ok(())
     }
 }
 

@@ -2,7 +2,10 @@
 //! over Embree robust's (filled circle) and over Embree default's (hollow circle); the line at
 //! 1 is parity. The legend gives each set's geometric mean over the corpus.
 
-use super::{Chart, FAMILY, PALETTE, draw_category_axes, read_json};
+use super::{
+    Chart, FAMILY, Marker, PALETTE, draw_category_axes, draw_legend_below, legend_height,
+    parse_json,
+};
 use crate::bench::bvh::BvhReport;
 use crate::bench::bvh::summary::{SetSummary, mesh_name, set_names, summarize};
 use crate::error::{Error, Location, Result};
@@ -20,13 +23,11 @@ pub struct CorpusChart {
     pub sets: Vec<(SetSummary, Vec<Option<[f64; 2]>>)>,
 }
 
-/// A `bench bvh --json` file: one report, or an array of them.
-#[derive(serde::Deserialize)]
-#[serde(untagged)]
-enum Reports {
-    One(Box<BvhReport>),
-    Many(Vec<BvhReport>),
-}
+/// The ratios the chart draws: from a millionth of Embree's throughput to a million times it.
+/// A run measures nothing outside (a ray a millisecond against Embree's nanosecond is already
+/// far inside); a hand-edited report's `1e308` made the axis infinite and its tick search never
+/// ended, so values outside are an input error naming the field.
+pub const RATIO_RANGE: std::ops::RangeInclusive<f64> = 1.0e-6..=1.0e6;
 
 impl CorpusChart {
     /// The chart of `reports`.
@@ -60,13 +61,50 @@ impl CorpusChart {
     ///
     /// # Errors
     ///
-    /// Reading or parsing the file; an input error when the run has no Embree figures (it
-    /// was built without `--features embree`).
+    /// Reading or parsing the file (the line, column and field of a value of the wrong shape);
+    /// an input error when it has no mesh, when the run has no Embree figures (it was built
+    /// without `--features embree`), or naming the field of a ratio outside [`RATIO_RANGE`].
     pub fn from_file(path: &Path) -> Result<Self> {
-        let reports = match read_json::<Reports>(path, "`bench bvh --json`")? {
-            Reports::One(r) => vec![*r],
-            Reports::Many(v) => v,
+        const WHAT: &str = "`bench bvh --json`";
+        let text = crate::input::read_text(path, &format!("the JSON of {WHAT}"))?;
+        // One report is an object, several an array: parsed as the one its first character
+        // says, so that an error names its line, column and field.
+        let many = text.trim_start().starts_with('[');
+        let reports: Vec<BvhReport> = if many {
+            parse_json(path, &text, WHAT)?
+        } else {
+            vec![parse_json(path, &text, WHAT)?]
         };
+        if reports.is_empty() {
+            return Err(Error::input(
+                Location::file(path),
+                "the run has no mesh: nothing to chart",
+            ));
+        }
+        for (i, r) in reports.iter().enumerate() {
+            for (j, set) in r.sets.iter().enumerate() {
+                let Some(ratios) = set.ratios() else { continue };
+                let Some(&q) = ratios.iter().find(|q| !RATIO_RANGE.contains(q)) else {
+                    continue;
+                };
+                let at = if many {
+                    format!("[{i}].sets[{j}]")
+                } else {
+                    format!("sets[{j}]")
+                };
+                return Err(Error::input(
+                    Location::file(path).field(at),
+                    format!(
+                        "halfray's throughput over Embree's is {q:e} ({}, set {}): not a ratio \
+                         a run measures ({:e} to {:e})",
+                        mesh_name(r),
+                        set.name,
+                        RATIO_RANGE.start(),
+                        RATIO_RANGE.end()
+                    ),
+                ));
+            }
+        }
         Self::new(&reports).ok_or_else(|| {
             Error::input(
                 Location::file(path),
@@ -81,6 +119,23 @@ impl Chart for CorpusChart {
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        let legend: Vec<(String, RGBColor)> = self
+            .sets
+            .iter()
+            .enumerate()
+            .map(|(s, (summary, _))| {
+                let label = format!(
+                    "{}: geo. mean {:.2} ÷ robust, {:.2} ÷ default; worst {:.2} ({})",
+                    summary.name,
+                    summary.geomean[1],
+                    summary.geomean[0],
+                    summary.worst[1].0,
+                    summary.worst[1].1
+                );
+                (label, PALETTE[s % PALETTE.len()])
+            })
+            .collect();
+        let root = &draw_legend_below(root, &legend, Marker::Dot)?;
         let n = self.meshes.len();
         let y_max = self
             .sets
@@ -107,36 +162,30 @@ impl Chart for CorpusChart {
             BLACK.stroke_width(1),
         ))?;
         let k = self.sets.len() as f64;
-        for (s, (summary, per_mesh)) in self.sets.iter().enumerate() {
+        for (s, (_, per_mesh)) in self.sets.iter().enumerate() {
             let colour = PALETTE[s % PALETTE.len()];
             let offset = (s as f64 - (k - 1.0) / 2.0) * (0.7 / k.max(1.0));
             let at = |i: usize, m: usize| per_mesh[i].map(|r| (i as f64 + offset, r[m]));
-            chart
-                .draw_series(
-                    (0..n)
-                        .filter_map(|i| at(i, 1))
-                        .map(|p| Circle::new(p, 5, colour.filled())),
-                )?
-                .label(format!(
-                    "{}: geo. mean {:.2} ÷ robust, {:.2} ÷ default; worst {:.2} ({})",
-                    summary.name,
-                    summary.geomean[1],
-                    summary.geomean[0],
-                    summary.worst[1].0,
-                    summary.worst[1].1
-                ))
-                .legend(move |(x, y)| Circle::new((x, y), 5, colour.filled()));
+            chart.draw_series(
+                (0..n)
+                    .filter_map(|i| at(i, 1))
+                    .map(|p| Circle::new(p, 5, colour.filled())),
+            )?;
             chart.draw_series(
                 (0..n)
                     .filter_map(|i| at(i, 0))
                     .map(|p| Circle::new(p, 5, colour.stroke_width(2))),
             )?;
         }
-        super::draw_legend(&mut chart, SeriesLabelPosition::LowerRight)
+        Ok(())
     }
 
     fn size(&self) -> (u32, u32) {
-        ((160 + 90 * self.meshes.len() as u32).max(900), 640)
+        let n = u32::try_from(self.meshes.len()).unwrap_or(u32::MAX);
+        (
+            n.saturating_mul(90).saturating_add(160).max(900),
+            640 + legend_height(self.sets.len()),
+        )
     }
 }
 
@@ -208,6 +257,84 @@ mod tests {
             assert!(texts.iter().any(|t| t == "sphere.obj"), "{texts:?}");
             assert!(!texts.iter().any(|t| t.contains("NaN")), "{texts:?}");
         }
+    }
+
+    /// A ratio beyond `f64::MAX / 1.15` made the axis infinite and its tick search spun
+    /// forever (`1.7e308` Mrays/s over 1); ratios outside [`RATIO_RANGE`] are an input error
+    /// naming the report and set, the edges of the range are drawn.
+    #[test]
+    fn a_ratio_no_run_measures_is_refused_naming_its_field() {
+        let dir = tempfile::tempdir().unwrap();
+        let json = dir.path().join("bench.json");
+        for (mrays, ok) in [
+            (1.7e308, false),
+            (2.0e6, false),
+            (1.0e6, true),
+            (1.0e-6, true),
+        ] {
+            let good = report("bunny.obj", &[("primary", 3.0, 4.0, 3.0)]);
+            let odd = report(
+                "far.obj",
+                &[("primary", 3.0, 4.0, 3.0), ("ao", mrays, 1.0, 1.0)],
+            );
+            std::fs::write(&json, serde_json::to_vec(&[good, odd]).unwrap()).unwrap();
+            match CorpusChart::from_file(&json) {
+                Ok(chart) => {
+                    assert!(ok, "{mrays} drawn");
+                    let texts = svg_texts(&render(&chart, Format::Svg).unwrap(), chart.size());
+                    assert!(texts.iter().any(|t| t == "far.obj"), "{texts:?}");
+                }
+                Err(e) => {
+                    let e = e.to_string();
+                    assert!(!ok, "{mrays}: {e}");
+                    assert!(
+                        e.contains("bench.json: field `[1].sets[1]`") && e.contains("far.obj, set ao"),
+                        "{e}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// Every set of a `bench bvh` run has a colour of its own (ten sets shared eight colours:
+    /// `shadow+batch` was drawn as `primary`), and the legend, below the plot, covers no point
+    /// (it hid 73 of the corpus chart's 320).
+    #[test]
+    fn ten_sets_have_ten_colours_and_the_legend_hides_no_point() {
+        let sets: Vec<(String, f64)> = (0..10)
+            .map(|s| (format!("set{s}"), 0.3 + 0.2 * s as f64))
+            .collect();
+        let figures: Vec<(&str, f64, f64, f64)> = sets
+            .iter()
+            .map(|(n, q)| (n.as_str(), *q, 1.0, 1.0))
+            .collect();
+        let reports: Vec<_> = (0..12)
+            .map(|m| report(&format!("m{m}.obj"), &figures))
+            .collect();
+        let chart = CorpusChart::new(&reports).unwrap();
+        let png = render(&chart, Format::Png).unwrap();
+        for (s, colour) in PALETTE.iter().enumerate() {
+            assert!(png_pixels_of(&png, chart.size(), *colour) > 50, "set {s}");
+            assert!(!PALETTE[..s].contains(colour), "colour {s} repeated");
+        }
+        let svg = String::from_utf8(render(&chart, Format::Svg).unwrap()).unwrap();
+        let doc = roxmltree::Document::parse(&svg).unwrap();
+        let num = |n: &roxmltree::Node, a: &str| n.attribute(a).unwrap().parse::<f64>().unwrap();
+        let legend_top = doc
+            .descendants()
+            .filter(|n| n.has_tag_name("text"))
+            .filter(|n| n.text().is_some_and(|t| t.contains("geo. mean")))
+            .map(|n| num(&n, "y"))
+            .fold(f64::INFINITY, f64::min);
+        let circles: Vec<f64> = doc
+            .descendants()
+            .filter(|n| n.has_tag_name("circle"))
+            .map(|n| num(&n, "cy") + num(&n, "r"))
+            .collect();
+        // 12 meshes × 10 sets × 2 (filled, hollow) points, and 10 legend markers.
+        assert_eq!(circles.len(), 12 * 10 * 2 + 10);
+        let below = circles.iter().filter(|&&y| y > legend_top - 10.0).count();
+        assert_eq!(below, 10, "only the legend's own markers reach its rows");
     }
 
     /// A mesh name from the JSON with characters XML 1.0 forbids (a terminal escape, the

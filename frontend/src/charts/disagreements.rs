@@ -2,7 +2,9 @@
 //! disagreement with Embree (bars, log scale), summed over the run's ray sets. Agreement is
 //! left out (it is the rest of the rays; the caption gives the totals).
 
-use super::{Chart, FAMILY, PALETTE, draw_category_axes, read_json};
+use super::{
+    Chart, FAMILY, Marker, PALETTE, draw_category_axes, draw_legend_below, legend_height, read_json,
+};
 use crate::crosscheck::report::{Report, SetReport};
 use crate::error::{Error, Location, Result};
 use plotters::coord::Shift;
@@ -30,7 +32,8 @@ const COUNT_FLOOR: f64 = 0.5;
 /// The chart's figures, taken from a `crosscheck --json` run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DisagreementChart {
-    /// Mesh names, in report order (x).
+    /// Mesh names, in report order (x): the file name, or the path where two meshes of the
+    /// run share a file name.
     pub meshes: Vec<String>,
     /// Per mesh, the count of each of [`CLASSES`].
     pub counts: Vec<[usize; CLASSES.len()]>,
@@ -56,10 +59,15 @@ impl DisagreementChart {
             rays: Vec::new(),
             sets: report.config.ray_sets.clone(),
         };
+        // Rows are a mesh's by its path (`crosscheck` runs two files of one name as two
+        // meshes, as its report's per-mesh results do); labelled by file name where that is
+        // unambiguous.
+        let mut paths: Vec<&str> = Vec::new();
         for row in &report.sets {
-            let i = match chart.meshes.iter().position(|m| *m == row.mesh) {
+            let i = match paths.iter().position(|p| *p == row.path) {
                 Some(i) => i,
                 None => {
+                    paths.push(&row.path);
                     chart.meshes.push(row.mesh.clone());
                     chart.counts.push([0; CLASSES.len()]);
                     chart.rays.push(0);
@@ -70,6 +78,12 @@ impl DisagreementChart {
                 *c += count(row);
             }
             chart.rays[i] += row.rays;
+        }
+        let names = chart.meshes.clone();
+        for (name, path) in chart.meshes.iter_mut().zip(&paths) {
+            if names.iter().filter(|n| *n == name).count() > 1 {
+                *name = (*path).to_string();
+            }
         }
         Some(chart)
     }
@@ -107,6 +121,15 @@ impl Chart for DisagreementChart {
         &self,
         root: &DrawingArea<DB, Shift>,
     ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        let legend: Vec<(String, RGBColor)> = CLASSES
+            .iter()
+            .enumerate()
+            .map(|(c, (name, _))| {
+                let total: usize = self.counts.iter().map(|m| m[c]).sum();
+                (format!("{name}: {total}"), PALETTE[c % PALETTE.len()])
+            })
+            .collect();
+        let root = &draw_legend_below(root, &legend, Marker::Square)?;
         let n = self.meshes.len();
         let top = self.counts.iter().flatten().fold(10usize, |a, &b| a.max(b)) as f64 * 10.0;
         let total: usize = self.rays.iter().sum();
@@ -128,7 +151,7 @@ impl Chart for DisagreementChart {
             "rays (log scale; classes with none are not drawn)",
         )?;
         let width = 0.8 / CLASSES.len() as f64;
-        for (c, (name, _)) in CLASSES.iter().enumerate() {
+        for c in 0..CLASSES.len() {
             let colour = PALETTE[c % PALETTE.len()];
             let x0 = |i: usize| i as f64 - 0.4 + c as f64 * width;
             let bars = (0..n).filter(|&i| self.counts[i][c] > 0).map(|i| {
@@ -140,19 +163,17 @@ impl Chart for DisagreementChart {
                     colour.filled(),
                 )
             });
-            let total: usize = self.counts.iter().map(|m| m[c]).sum();
-            chart
-                .draw_series(bars)?
-                .label(format!("{name}: {total}"))
-                .legend(move |(x, y)| {
-                    Rectangle::new([(x - 5, y - 5), (x + 5, y + 5)], colour.filled())
-                });
+            chart.draw_series(bars)?;
         }
-        super::draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
+        Ok(())
     }
 
     fn size(&self) -> (u32, u32) {
-        ((160 + 110 * self.meshes.len() as u32).max(900), 640)
+        let n = u32::try_from(self.meshes.len()).unwrap_or(u32::MAX);
+        (
+            n.saturating_mul(110).saturating_add(160).max(900),
+            640 + legend_height(CLASSES.len()),
+        )
     }
 }
 
@@ -178,6 +199,32 @@ mod tests {
         r["genuine_mismatches"] = genuine.into();
         r["leaks_embree_default"] = leaks_default.into();
         r
+    }
+
+    /// Two meshes of one file name in different folders (which `crosscheck` runs as two) are
+    /// two categories labelled by their paths; they were summed into one bar.
+    #[test]
+    fn meshes_that_share_a_file_name_stay_apart() {
+        let mut other = row("bunny.obj", "primary", 5, 0, 0);
+        other["path"] = "other/bunny.obj".into();
+        let json = serde_json::json!({
+            "intersector": "watertight", "seed": 1, "rays": 1000,
+            "ray_sets": ["primary"], "shard": {"index": 0, "count": 1},
+            "threads": 2, "wall_seconds": 1.0, "rays_per_second": 1.0, "meshes": 3,
+            "failed": [],
+            "sets": [row("bunny.obj", "primary", 2, 0, 0), other,
+                     row("dragon.obj", "primary", 1, 0, 0)]
+        });
+        let report: Report = serde_json::from_value(json).unwrap();
+        let chart = DisagreementChart::new(&report).unwrap();
+        assert_eq!(
+            chart.meshes,
+            ["m/bunny.obj", "other/bunny.obj", "dragon.obj"]
+        );
+        assert_eq!(
+            chart.counts.iter().map(|c| c[0]).collect::<Vec<_>>(),
+            [2, 5, 1]
+        );
     }
 
     /// A report whose counts summed do not fit in a `usize` (two rows of one mesh, or two

@@ -22,6 +22,7 @@ use plotters::coord::Shift;
 use plotters::coord::ranged1d::{Ranged, ValueFormatter};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::{Path, PathBuf};
 
 /// The Go Regular font (BSD-3-Clause, `frontend/assets/fonts/LICENSE-Go-fonts.txt`), used for
@@ -30,8 +31,10 @@ pub const FONT: &[u8] = include_bytes!("../../assets/fonts/Go-Regular.ttf");
 /// The family name the charts' text uses; [`FONT`] is registered under it.
 pub const FAMILY: &str = "sans-serif";
 
-/// The colours of series, in order (a colour-blind-safe palette, Okabe and Ito 2008).
-pub const PALETTE: [RGBColor; 8] = [
+/// The colours of series, in order: a colour-blind-safe palette (Okabe and Ito 2008, grey in
+/// place of its yellow, which is unreadable on white), then brown and violet, so that the ten
+/// ray sets of `bench bvh` each have a colour of their own.
+pub const PALETTE: [RGBColor; 10] = [
     RGBColor(0, 114, 178),
     RGBColor(213, 94, 0),
     RGBColor(0, 158, 115),
@@ -40,7 +43,62 @@ pub const PALETTE: [RGBColor; 8] = [
     RGBColor(86, 180, 233),
     RGBColor(120, 120, 120),
     RGBColor(0, 0, 0),
+    RGBColor(140, 86, 75),
+    RGBColor(117, 84, 200),
 ];
+
+/// Height of one row of a chart's legend, pixels: 13-point text and its 10-pixel marker.
+const LEGEND_ROW: u32 = 20;
+/// Space above and below a legend's rows, pixels.
+const LEGEND_MARGIN: u32 = 12;
+/// How far a legend's markers stand from the chart's left edge, pixels (under the y labels).
+const LEGEND_INDENT: i32 = 80;
+
+/// Height of a legend of `rows` entries drawn below a chart ([`draw_legend_below`]), pixels.
+fn legend_height(rows: usize) -> u32 {
+    u32::try_from(rows)
+        .unwrap_or(u32::MAX)
+        .saturating_mul(LEGEND_ROW)
+        .saturating_add(2 * LEGEND_MARGIN)
+}
+
+/// A legend entry's marker: the shape its series is drawn with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Marker {
+    /// A filled circle (points).
+    Dot,
+    /// A filled square (bars).
+    Square,
+}
+
+/// Splits `root` into the plot and, below it, a legend of `entries` (label and colour), one a
+/// row in 13-point [`FAMILY`] text beside a `marker` of the colour, and draws the legend; the
+/// plot is returned to draw on. Below the plot, the legend hides no data, however many series
+/// there are (the chart's height includes [`legend_height`]).
+fn draw_legend_below<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    entries: &[(String, RGBColor)],
+    marker: Marker,
+) -> std::result::Result<DrawingArea<DB, Shift>, DrawingAreaErrorKind<DB::ErrorType>> {
+    let (_, h) = root.dim_in_pixel();
+    let (plot, legend) = root.split_vertically(h.saturating_sub(legend_height(entries.len())));
+    let font = TextStyle::from((FAMILY, 13).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+    let mut y = i32::try_from(LEGEND_MARGIN + LEGEND_ROW / 2).unwrap_or(i32::MAX);
+    let row = i32::try_from(LEGEND_ROW).unwrap_or(i32::MAX);
+    for (label, colour) in entries {
+        let x = LEGEND_INDENT;
+        match marker {
+            Marker::Dot => legend.draw(&Circle::new((x, y), 5, colour.filled()))?,
+            Marker::Square => legend.draw(&Rectangle::new(
+                [(x - 5, y - 5), (x + 5, y + 5)],
+                colour.filled(),
+            ))?,
+        }
+        legend.draw(&Text::new(label.clone(), (x + 14, y), font.clone()))?;
+        y = y.saturating_add(row);
+    }
+    Ok(plot)
+}
 
 /// Which chart (`halfray chart KIND`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -134,21 +192,6 @@ fn register_font() -> Result<()> {
     }
 }
 
-/// Draws `chart`'s series legend at `position`, the same on every chart: 13-point [`FAMILY`]
-/// text on a translucent white box with a black border.
-fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
-    chart: &mut ChartContext<'a, DB, CT>,
-    position: SeriesLabelPosition,
-) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    chart
-        .configure_series_labels()
-        .position(position)
-        .label_font((FAMILY, 13))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-}
-
 /// Draws the axes of a chart with one category per `names` entry along x (at the integers
 /// 0..n, labelled by [`category_label`], no vertical grid lines) and `y_desc` along y, in the
 /// same fonts on every chart.
@@ -211,6 +254,10 @@ pub fn render(chart: &impl Chart, format: Format) -> Result<Vec<u8>> {
             Ok(xml_chars(&svg).into_bytes())
         }
         Format::Png => {
+            let bytes = u64::from(w)
+                .checked_mul(u64::from(h))
+                .and_then(|p| p.checked_mul(3));
+            crate::limits::check_memory(&format!("a PNG chart of {w} × {h} pixels"), bytes)?;
             let mut rgb = vec![255u8; w as usize * h as usize * 3];
             {
                 let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
@@ -246,15 +293,21 @@ pub fn write(chart: &impl Chart, out: OutputFile) -> Result<()> {
 /// shape.
 pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path, what: &str) -> Result<T> {
     let text = crate::input::read_text(path, &format!("the JSON of {what}"))?;
-    serde_json::from_str(&text).map_err(|e| {
-        // serde's words for JSON of none of the shapes name a type of ours; say it plainly.
-        let shape = e.to_string().starts_with("data did not match any variant");
-        let message = if shape {
-            format!("not the JSON of {what}")
-        } else {
-            format!("not the JSON of {what}: {}", json_message(&e))
-        };
-        Error::input(Location::file(path).json_position(&e), message)
+    parse_json(path, &text, what)
+}
+
+/// Parses `text`, read from `path`, as `T`: [`read_json`]'s parse, for a caller that looks
+/// at the text first.
+///
+/// # Errors
+///
+/// An input error naming the file, line and column where it is not JSON of that shape.
+fn parse_json<T: serde::de::DeserializeOwned>(path: &Path, text: &str, what: &str) -> Result<T> {
+    serde_json::from_str(text).map_err(|e| {
+        Error::input(
+            Location::file(path).json_position(&e),
+            format!("not the JSON of {what}: {}", json_message(&e)),
+        )
     })
 }
 
@@ -330,6 +383,30 @@ pub(crate) mod tests {
         ));
         assert!(matches!(Format::of(Path::new("b")), Err(Error::Usage(_))));
         assert_eq!(Format::of(Path::new("-")).unwrap(), Format::Svg);
+    }
+
+    /// A PNG's pixels are counted before they are allocated: a chart of more pixels than the
+    /// memory limit allows is a usage error naming its size (a run of 500 000 meshes asked
+    /// for 86 GB and aborted the process).
+    #[test]
+    fn a_png_beyond_the_memory_limit_is_refused_before_allocating() {
+        struct Wide;
+        impl Chart for Wide {
+            fn size(&self) -> (u32, u32) {
+                (4_000_000, 640)
+            }
+            fn draw<DB: DrawingBackend>(
+                &self,
+                _: &DrawingArea<DB, Shift>,
+            ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+                unreachable!("refused before drawing")
+            }
+        }
+        let e = render(&Wide, Format::Png).unwrap_err().to_string();
+        assert!(
+            e.contains("a PNG chart of 4000000 × 640 pixels needs about 7.2 GiB"),
+            "{e}"
+        );
     }
 
     #[test]
