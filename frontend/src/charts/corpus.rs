@@ -288,7 +288,8 @@ mod tests {
                     let e = e.to_string();
                     assert!(!ok, "{mrays}: {e}");
                     assert!(
-                        e.contains("bench.json: field `[1].sets[1]`") && e.contains("far.obj, set ao"),
+                        e.contains("bench.json: field `[1].sets[1]`")
+                            && e.contains("far.obj, set ao"),
                         "{e}"
                     );
                 }

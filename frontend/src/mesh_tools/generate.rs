@@ -7,18 +7,20 @@
 //! | `sphere` | a unit cube-sphere, each face an `n × n` grid, radius displaced by [`WAVES`] seeded sine waves over the direction (amplitude [`SPHERE_RELIEF`]) | `n = 289`: 1 002 252 triangles |
 //! | `terrain` | a heightfield over `[0, 1000]²` on an `n × n` grid: large, nearly flat triangles (relief [`TERRAIN_RELIEF`] units) | `n = 256`: 131 072 |
 //! | `beams` | `n` long thin boxes, each spanning the whole `[0, 100]³` scene along a random axis, cross-section 0.05–0.3 units: long, thin, overlapping triangles | `n = 10 000`: 120 000 |
-//! | `room` | an open room `10⁴` units wide (floor, three walls; no ceiling, no front wall, so the camera sees in) with a detailed displaced sphere of diameter 1 on the floor at its centre: `10⁴ : 1` size variance | object `n = 64`: 49 152 + 8 |
-//! | `scatter` | `n` disjoint small objects: randomly rotated icosahedra of radius 0.05–0.2, one per cell of a jittered grid over `[0, 100]³` | `n = 10 000`: 200 000 |
+//! | `room` | an open room `10⁴` units wide (floor, three walls; no ceiling, no front wall, so the camera sees in) with a detailed displaced sphere at most 1 across just above the floor at its centre: `10⁴ : 1` size variance | object `n = 64`: 49 152 + 8 |
+//! | `scatter` | `n` disjoint small objects: randomly rotated icosahedra of radius 0.05–0.2, one in each of the first `n` cells (x fastest) of the smallest cubic grid over `[0, 100]³` with `n` cells, jittered inside its cell | `n = 10 000`: 200 000 |
 //! | `far` | the `sphere` of radius 1 centred at [`FAR_CENTRE`], far from the coordinate origin as a georeferenced scan is stored: `f32` coordinates with an ulp of `0.002`, triangles about `0.015` across | `n = 128`: 196 608 |
 //!
 //! Vertices shared by faces of one object are welded (same `f32` position, one index), so the
-//! closed objects are watertight, as a scanned mesh is. All arithmetic is `f64`, rounded once.
+//! closed objects are watertight, as a scanned mesh is. All arithmetic is `f64`, each coordinate
+//! rounded to `f32` once.
 
 use crate::error::{Error, Result};
 use crate::obj::write_obj_to;
 use crate::outputs::{Named, reserve_outputs};
 use crate::raysets::Rng;
 use glam::{DMat3, DVec3, Vec3};
+use halfray_core::predicates::orient3d;
 use std::collections::HashMap;
 use std::path::PathBuf;
 
@@ -28,10 +30,10 @@ pub const WAVES: usize = 8;
 pub const SPHERE_RELIEF: f64 = 0.05;
 /// Largest height of `terrain` above its base, units (over a 1000-unit square).
 pub const TERRAIN_RELIEF: f64 = 40.0;
-/// Side of the `room`, units (its object has diameter 1).
+/// Side of the `room`, units (its object is at most 1 across).
 pub const ROOM_SIZE: f64 = 1.0e4;
-/// Centre of the `far` sphere, units: about `2.5·10⁴` from the coordinate origin, `10⁴` times
-/// its radius (an ulp of `2⁻⁹ ≈ 0.002` in its largest coordinate).
+/// Centre of the `far` sphere, units: about `2.5·10⁴` from the coordinate origin, `2.5·10⁴`
+/// times its radius (an ulp of `2⁻⁹ ≈ 0.002` in its largest coordinate).
 pub const FAR_CENTRE: [f64; 3] = [2.0e4, -5.0e3, 1.5e4];
 
 /// The kinds of generated mesh (see the module docs).
@@ -86,8 +88,8 @@ pub struct GenerateArgs {
     pub force: bool,
 }
 
-/// Size parameters above this are refused (the `sphere` at this `n` has 48 M triangles and
-/// 24 M vertices).
+/// Size parameters above this are refused, and object counts (`beams`, `scatter`) above
+/// `1000 ·` this (the `sphere` at this `n` has 48 M triangles and 24 M vertices).
 pub const MAX_SIZE: usize = 2_000;
 
 /// A generated mesh: positions and triangles.
@@ -134,10 +136,11 @@ impl Builder {
 ///
 /// # Errors
 ///
-/// [`Error::Usage`] for a size of 0 or above [`MAX_SIZE`] (or 0 objects), or a sphere whose
-/// grid points at that size are closer than `f32`'s spacing at its coordinates (the `far`
-/// sphere from `n ≈ 650`, the `room`'s object at large sizes): welded, they would make
-/// degenerate triangles.
+/// [`Error::Usage`] for a size of 0 or above [`MAX_SIZE`] (above `1000 ·` [`MAX_SIZE`] for
+/// `beams` and `scatter`, whose size counts objects), or a sphere whose grid at that size is
+/// finer than `f32`'s spacing at its coordinates can hold: rounded, some of its triangles would
+/// be flat or turned inward, or its vertices welded (the `far` sphere from `n = 450`, the
+/// `room`'s object from `n ≈ 1400`).
 pub fn generate(kind: Kind, seed: u64, n: Option<usize>) -> Result<Generated> {
     let n = n.unwrap_or(kind.default_size());
     let limit = match kind {
@@ -238,6 +241,7 @@ impl Waves {
 /// A cube-sphere of `6·2·n²` triangles around `center`, radius `radius · waves.radius(d)`.
 fn cube_sphere(b: &mut Builder, n: usize, center: DVec3, radius: f64, waves: &Waves) -> Result<()> {
     let before = b.mesh.positions.len();
+    let first_triangle = b.mesh.triangles.len();
     let grid = |i: usize| -1.0 + 2.0 * i as f64 / n as f64;
     for axis in 0..3 {
         for sign in [1.0, -1.0] {
@@ -268,13 +272,32 @@ fn cube_sphere(b: &mut Builder, n: usize, center: DVec3, radius: f64, waves: &Wa
     }
     // The six grids share their edges and corners: 6n² + 2 distinct vertices. Fewer means
     // grid points closer than `f32`'s spacing at these coordinates were welded into one (the
-    // `far` sphere from `n ≈ 650`): a degenerate, non-manifold mesh, refused.
+    // `far` sphere from `n = 611`): a degenerate, non-manifold mesh, refused.
     let expected = 6 * n * n + 2;
     let got = b.mesh.positions.len() - before;
     if got != expected {
         return Err(Error::Usage(format!(
             "--size {n}: the sphere's grid points are closer than f32's spacing at its coordinates, so {} of its {expected} vertices would be welded into others (degenerate triangles); use a smaller --size",
             expected - got.min(expected)
+        )));
+    }
+    // Rounding folds triangles over well before it welds vertices (the `far` sphere from
+    // `n = 450`, flat ones from `n = 550`): every triangle must face away from the centre,
+    // decided exactly on the rounded coordinates (the centre is inside: the radius never drops
+    // below `1 − SPHERE_RELIEF` of the scale).
+    let c = center.as_vec3();
+    let mesh = &b.mesh;
+    let folded = mesh.triangles[first_triangle..]
+        .iter()
+        .filter(|t| {
+            let [p0, p1, p2] = t.map(|i| mesh.positions[i as usize]);
+            orient3d(p0, p1, p2, c) >= 0
+        })
+        .count();
+    if folded > 0 {
+        return Err(Error::Usage(format!(
+            "--size {n}: rounded to f32 at its coordinates, {folded} of the sphere's {} triangles are flat or face its centre; use a smaller --size",
+            mesh.triangles.len() - first_triangle
         )));
     }
     Ok(())
@@ -583,6 +606,19 @@ mod tests {
         let size = (ohi - olo).max_element();
         assert!(size > 0.85 && size <= 1.0, "{size}");
         assert!(olo.y >= lo.y, "on the floor");
+    }
+
+    /// The `far` sphere just below the size where its rounded vertices weld: none welded, but
+    /// 43 triangles turned inward by the rounding at `n = 450` (the mesh still closed, so the
+    /// weld check passed it); refused. At `n = 400` every triangle faces out.
+    #[test]
+    fn a_sphere_folded_by_rounding_is_refused() {
+        let e = generate(Kind::Far, 1, Some(450)).unwrap_err();
+        assert!(
+            matches!(&e, Error::Usage(m) if m.contains("--size 450") && m.contains("43 of the sphere's")),
+            "{e}"
+        );
+        generate(Kind::Far, 1, Some(400)).unwrap();
     }
 
     /// A sphere whose grid points round together in `f32` is refused, not welded into a
