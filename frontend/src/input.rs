@@ -59,16 +59,25 @@ fn too_big(path: &Path) -> Error {
 /// The bytes of `path` (see the module docs), opened by [`open`].
 pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     let file = open(path)?;
-    read_at_most(file, MAX_INPUT_BYTES)
+    // A regular file's length sizes the buffer: read through `take`, the file gives no size
+    // hint, and the buffer doubled past it (a 1 GiB file asked for 2 GiB).
+    let size = file
+        .metadata()
+        .ok()
+        .filter(std::fs::Metadata::is_file)
+        .map(|m| m.len());
+    read_at_most(file, MAX_INPUT_BYTES, size)
         .map_err(|e| Error::io(path, e))?
         .ok_or_else(|| too_big(path))
 }
 
 /// Everything `reader` yields when that is at most `limit` bytes; `None` when it yields more
 /// (then `limit + 1` bytes were read and the rest never: a stream that never ends stops
-/// there).
-fn read_at_most(reader: impl Read, limit: u64) -> io::Result<Option<Vec<u8>>> {
-    let mut bytes = Vec::new();
+/// there). `size`, when known, is the expected length: the buffer starts that large (plus
+/// the byte that shows the end), never above `limit + 1`.
+fn read_at_most(reader: impl Read, limit: u64, size: Option<u64>) -> io::Result<Option<Vec<u8>>> {
+    let capacity = size.map_or(0, |n| n.min(limit).saturating_add(1));
+    let mut bytes = Vec::with_capacity(usize::try_from(capacity).unwrap_or(0));
     reader.take(limit + 1).read_to_end(&mut bytes)?;
     Ok((bytes.len() as u64 <= limit).then_some(bytes))
 }
@@ -152,10 +161,31 @@ mod tests {
     fn a_stream_is_read_up_to_the_limit_and_refused_beyond() {
         let data: Vec<u8> = (0..=255).collect();
         let limit = data.len() as u64;
-        assert_eq!(read_at_most(&data[..], limit).unwrap(), Some(data.clone()));
-        assert_eq!(read_at_most(&data[..], limit - 1).unwrap(), None);
-        assert_eq!(read_at_most(&data[..0], 0).unwrap(), Some(Vec::new()));
-        assert_eq!(read_at_most(io::repeat(7), 1000).unwrap(), None);
+        assert_eq!(
+            read_at_most(&data[..], limit, None).unwrap(),
+            Some(data.clone())
+        );
+        assert_eq!(read_at_most(&data[..], limit - 1, None).unwrap(), None);
+        assert_eq!(read_at_most(&data[..0], 0, None).unwrap(), Some(Vec::new()));
+        assert_eq!(read_at_most(io::repeat(7), 1000, None).unwrap(), None);
+    }
+
+    /// A known size sizes the buffer once: the bytes read are the same, and the buffer holds
+    /// them with the one byte that shows the end to spare (read through `take`, a 1 GiB file
+    /// grew a 2 GiB buffer); a size that is wrong (the file grew) still reads only to the limit.
+    #[test]
+    fn a_known_size_reads_into_one_buffer_of_that_size() {
+        let data: Vec<u8> = (0..=255).cycle().take(100_000).collect();
+        let bytes = read_at_most(&data[..], 1 << 20, Some(100_000))
+            .unwrap()
+            .unwrap();
+        assert_eq!(bytes, data);
+        assert_eq!(bytes.capacity(), 100_001);
+        assert_eq!(read_at_most(&data[..], 1000, Some(10)).unwrap(), None);
+        assert_eq!(
+            read_at_most(io::repeat(7), 1000, Some(u64::MAX)).unwrap(),
+            None
+        );
     }
 
     /// A regular file is judged by its size before it is read: one byte over

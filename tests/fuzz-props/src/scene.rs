@@ -25,12 +25,13 @@ pub fn scene_file(data: &[u8]) {
 }
 
 /// `true` for a text that could name a file outside `fuzz/scene_dir/` (`..`, a string
-/// starting with `/`, or a `\u`/`\U` escape, which could spell either): such a path could
-/// name a device or a huge file, and the target reads only files it controls. [`check`]
-/// skips these texts (a narrowing listed in `fuzz/README.md`); the paths inside the folder
-/// stay fuzzed.
+/// starting with `/`, a `\u`/`\U` escape, which could spell either, or a multi-line string
+/// `"""`/`'''`, whose first line break and a line-ending backslash's white space TOML drops, so
+/// that `"""⏎/dev/zero"""` is `/dev/zero`): such a path could name a device or a huge file, and
+/// the target reads only files it controls. [`check`] skips these texts (a narrowing listed in
+/// `fuzz/README.md`); the paths inside the folder stay fuzzed.
 pub fn may_leave_scene_dir(text: &str) -> bool {
-    ["..", "\"/", "'/", "\\u", "\\U"]
+    ["..", "\"/", "'/", "\\u", "\\U", "\"\"\"", "'''"]
         .iter()
         .any(|p| text.contains(p))
 }
@@ -168,6 +169,11 @@ mod tests {
             "mesh = \"\"\"/dev/zero\"\"\"",
             "mesh = \"\\u002Fdev/zero\"",
             "mesh = \"\\U0000002Fdev/zero\"",
+            // TOML drops a multi-line string's first line break, and a line-ending
+            // backslash's white space: both spell `/dev/zero` (the guard let them through).
+            "mesh = \"\"\"\n/dev/zero\"\"\"",
+            "mesh = '''\n/dev/zero'''",
+            "mesh = \"\"\"\\\n  /dev/zero\"\"\"",
         ] {
             assert!(may_leave_scene_dir(text), "{text}");
         }
