@@ -3,8 +3,8 @@
 //! 1 is parity. The legend gives each set's geometric mean over the corpus.
 
 use super::{
-    Chart, FAMILY, Marker, PALETTE, draw_category_axes, draw_legend_below, legend_height,
-    parse_json,
+    Chart, FAMILY, Marker, PALETTE, category_chart_width, draw_category_axes, draw_legend_below,
+    legend_height, parse_json,
 };
 use crate::bench::bvh::BvhReport;
 use crate::bench::bvh::summary::{SetSummary, mesh_name, set_names, summarize};
@@ -181,9 +181,8 @@ impl Chart for CorpusChart {
     }
 
     fn size(&self) -> (u32, u32) {
-        let n = u32::try_from(self.meshes.len()).unwrap_or(u32::MAX);
         (
-            n.saturating_mul(90).saturating_add(160).max(900),
+            category_chart_width(self.meshes.len(), 90),
             640 + legend_height(self.sets.len()),
         )
     }

@@ -3,7 +3,8 @@
 //! left out (it is the rest of the rays; the caption gives the totals).
 
 use super::{
-    Chart, FAMILY, Marker, PALETTE, draw_category_axes, draw_legend_below, legend_height, read_json,
+    Chart, FAMILY, Marker, PALETTE, category_chart_width, draw_category_axes, draw_legend_below,
+    legend_height, read_json,
 };
 use crate::crosscheck::report::{Report, SetReport};
 use crate::error::{Error, Location, Result};
@@ -169,9 +170,8 @@ impl Chart for DisagreementChart {
     }
 
     fn size(&self) -> (u32, u32) {
-        let n = u32::try_from(self.meshes.len()).unwrap_or(u32::MAX);
         (
-            n.saturating_mul(110).saturating_add(160).max(900),
+            category_chart_width(self.meshes.len(), 110),
             640 + legend_height(CLASSES.len()),
         )
     }

@@ -54,6 +54,17 @@ const LEGEND_MARGIN: u32 = 12;
 /// How far a legend's markers stand from the chart's left edge, pixels (under the y labels).
 const LEGEND_INDENT: i32 = 80;
 
+/// Width of a chart of `categories` along x, `per_category` pixels each plus 160 for the
+/// y axis, at least 900, pixels (saturating: a run cannot hold `u32::MAX` categories, and a
+/// PNG that large is refused by [`render`]).
+fn category_chart_width(categories: usize, per_category: u32) -> u32 {
+    u32::try_from(categories)
+        .unwrap_or(u32::MAX)
+        .saturating_mul(per_category)
+        .saturating_add(160)
+        .max(900)
+}
+
 /// Height of a legend of `rows` entries drawn below a chart ([`draw_legend_below`]), pixels.
 fn legend_height(rows: usize) -> u32 {
     u32::try_from(rows)
@@ -83,8 +94,8 @@ fn draw_legend_below<DB: DrawingBackend>(
     let (_, h) = root.dim_in_pixel();
     let (plot, legend) = root.split_vertically(h.saturating_sub(legend_height(entries.len())));
     let font = TextStyle::from((FAMILY, 13).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
-    let mut y = i32::try_from(LEGEND_MARGIN + LEGEND_ROW / 2).unwrap_or(i32::MAX);
-    let row = i32::try_from(LEGEND_ROW).unwrap_or(i32::MAX);
+    // Small constants: the casts are exact.
+    let (mut y, row) = ((LEGEND_MARGIN + LEGEND_ROW / 2) as i32, LEGEND_ROW as i32);
     for (label, colour) in entries {
         let x = LEGEND_INDENT;
         match marker {
