@@ -2,7 +2,9 @@
 //! two modes), the cost of an incoherent ray through the BVH against the share of rays answered
 //! wrongly.
 
-use super::{Chart, FAMILY, Marker, PALETTE, draw_legend_below, legend_height, read_json};
+use super::{
+    Chart, FAMILY, Marker, PALETTE, chart_number, draw_legend_below, legend_height, read_json,
+};
 use crate::error::{Error, Location, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -168,8 +170,10 @@ impl Chart for AccuracyChart {
             .enumerate()
             .map(|(i, p)| {
                 let label = format!(
-                    "{}: {:.1} ns, {:.0} per million",
-                    p.label, p.ns_per_ray, p.errors_per_million
+                    "{}: {} ns, {:.0} per million",
+                    p.label,
+                    chart_number(p.ns_per_ray),
+                    p.errors_per_million
                 );
                 (label, PALETTE[i % PALETTE.len()])
             })
@@ -198,6 +202,8 @@ impl Chart for AccuracyChart {
                 None => "ns per incoherent ray through the BVH, one thread".into(),
             })
             .y_desc("leaks + false hits per million rays (none: on the bottom line)")
+            .x_label_formatter(&|v| chart_number(*v))
+            .y_label_formatter(&|v| chart_number(*v))
             .label_style((FAMILY, 14))
             .axis_desc_style((FAMILY, 15))
             .draw()?;
@@ -313,5 +319,42 @@ mod tests {
         let chart = AccuracyChart::from_file(&json).unwrap();
         assert_eq!(chart.points[1].errors_per_million, 2.0e6);
         render(&chart, Format::Svg).unwrap();
+    }
+
+    /// At both ends of [`MRAYS_RANGE`] every number the chart prints is short and the
+    /// legend's time reads back within 1 % (one decimal printed `10⁻⁶` ns as `0.0` on every
+    /// tick and in the legend, and `3.3·10¹²` ns as fifteen characters); at the fast end the
+    /// time axis's ticks are at least three distinct numbers above zero.
+    #[test]
+    fn the_time_axis_reads_at_both_ends_of_the_range() {
+        let dir = tempfile::tempdir().unwrap();
+        let json = dir.path().join("a.json");
+        for (mrays, ns) in [(1.0e9, 1.0e-6), (3.0e-10, 1.0e3 / 3.0e-10)] {
+            std::fs::write(
+                &json,
+                format!(
+                    r#"{{"variants": [{{"name": "v", "mrays_bvh_incoherent": {mrays:e}, "leaks_per_million": 0.0, "false_hits_per_million": 0.0}}]}}"#
+                ),
+            )
+            .unwrap();
+            let chart = AccuracyChart::from_file(&json).unwrap();
+            let texts = svg_texts(&render(&chart, Format::Svg).unwrap(), chart.size());
+            let legend = texts.iter().find(|t| t.starts_with("v: ")).unwrap();
+            let shown: f64 = legend[3..].split(" ns").next().unwrap().parse().unwrap();
+            assert!((shown / ns - 1.0).abs() < 1e-2, "{legend}: {ns}");
+            let numbers: Vec<f64> = texts.iter().filter_map(|t| t.parse().ok()).collect();
+            for t in texts.iter().filter(|t| t.parse::<f64>().is_ok()) {
+                assert!(t.len() <= 9, "{t} in {texts:?}");
+            }
+            if ns < 1.0 {
+                let mut ticks: Vec<f64> = numbers
+                    .into_iter()
+                    .filter(|&v| v > 0.0 && v <= 1.2 * ns)
+                    .collect();
+                ticks.sort_by(f64::total_cmp);
+                ticks.dedup();
+                assert!(ticks.len() >= 3, "{texts:?}");
+            }
+        }
     }
 }

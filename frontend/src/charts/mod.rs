@@ -358,6 +358,21 @@ fn category_label(names: &[String], v: f64) -> String {
     }
 }
 
+/// Magnitudes a chart prints with one decimal (`349.3`); zero too. Outside, one decimal
+/// printed `10⁻⁶` ns as `0.0` and `3·10¹²` as fourteen characters: three significant digits
+/// in scientific notation instead (`1.20e-6`). Unitless (the bounds of `|v|`).
+const PLAIN_NUMBERS: std::ops::Range<f64> = 0.1..1.0e7;
+
+/// A number as a chart's tick or legend prints it: one decimal where `|v|` lies in
+/// [`PLAIN_NUMBERS`] (or `v` is zero), else scientific notation with three significant digits.
+fn chart_number(v: f64) -> String {
+    if v == 0.0 || PLAIN_NUMBERS.contains(&v.abs()) {
+        format!("{v:.1}")
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
 /// The integration tests' SVG reader, shared with the unit tests below.
 #[cfg(test)]
 #[path = "../../tests/common/svg.rs"]
