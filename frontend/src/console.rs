@@ -3,7 +3,11 @@
 //! I/O error on `<stdout>` with a non-zero exit.
 //!
 //! Code that still prints with `print!`/`println!` (which panic on a write error) is covered by
-//! [`install_print_panic_guard`], which turns exactly those panics into the same outcomes.
+//! [`install_print_panic_guard`], which turns exactly those panics into the same outcomes. So
+//! is stderr (`eprint!`, a failed write to it a panic too): a closed pipe ends the program
+//! quietly, any other write error with [`EXIT_ERROR`] and no message (there is nowhere to
+//! print it); the final `error: …` line of a failed command is written with [`eprint_error`],
+//! which keeps the command's own exit status when stderr fails.
 //!
 //! A command's summaries (tables, totals, "wrote …" lines) go to stdout, unless one of its
 //! outputs is stdout (`-o -`, `--json /dev/stdout`): then they go to stderr, so that the
@@ -72,7 +76,10 @@ pub fn stdout_error(e: io::Error) -> Error {
 /// docs) and flushes it.
 pub fn print_out(text: &str) -> Result<()> {
     let (mut stream, failed): (Box<dyn Write>, fn(io::Error) -> Error) = if summaries_to_stderr() {
-        (Box::new(io::stderr().lock()), |e| Error::io("<stderr>", e))
+        (Box::new(io::stderr().lock()), |e| match e.kind() {
+            io::ErrorKind::BrokenPipe => Error::BrokenPipe,
+            _ => Error::io("<stderr>", e),
+        })
     } else {
         (Box::new(io::stdout().lock()), stdout_error)
     };
@@ -95,7 +102,7 @@ pub fn clap_exit(e: &clap::Error) -> std::process::ExitCode {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(Error::BrokenPipe) => std::process::ExitCode::from(EXIT_BROKEN_PIPE),
         Err(err) => {
-            eprintln!("error: {err}");
+            eprint_error(&err);
             std::process::ExitCode::from(EXIT_ERROR)
         }
     }
@@ -104,9 +111,21 @@ pub fn clap_exit(e: &clap::Error) -> std::process::ExitCode {
 /// The prefix of the standard library's panic message when `print!` fails.
 const PRINT_PANIC_PREFIX: &str = "failed printing to stdout: ";
 
-/// Makes a `print!` that fails end the process like [`print_out`] would: silently with
-/// [`EXIT_BROKEN_PIPE`] on a closed pipe, with `error: <stdout>: …` and [`EXIT_ERROR`]
-/// otherwise. Every other panic goes to the previous hook. Call once, from `main`.
+/// The prefix of the standard library's panic message when `eprint!` fails.
+const EPRINT_PANIC_PREFIX: &str = "failed printing to stderr: ";
+
+/// Writes a failed command's `error: {e}` line to stderr; a failed write is ignored, so
+/// that the command's exit status (the caller's) is what the process ends with even when
+/// stderr is full or closed.
+pub fn eprint_error(e: &dyn std::fmt::Display) {
+    let _ = writeln!(io::stderr().lock(), "error: {e}");
+}
+
+/// Makes a `print!` or `eprint!` that fails end the process like [`print_out`] would:
+/// silently with [`EXIT_BROKEN_PIPE`] on a closed pipe, otherwise with [`EXIT_ERROR`] (after
+/// `error: <stdout>: …` on stderr for stdout; nothing for stderr, which is what failed).
+/// Temporary output files are removed first, so nothing is half-written. Every other panic
+/// goes to the previous hook. Call once, from `main`.
 pub fn install_print_panic_guard() {
     let previous = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
@@ -115,17 +134,21 @@ pub fn install_print_panic_guard() {
             .downcast_ref::<String>()
             .map(String::as_str)
             .or_else(|| payload.downcast_ref::<&str>().copied());
-        match msg.and_then(|m| m.strip_prefix(PRINT_PANIC_PREFIX)) {
-            Some(cause) if cause.starts_with("Broken pipe") => {
-                crate::outputs::temp::remove_live_temp_files();
-                std::process::exit(i32::from(EXIT_BROKEN_PIPE));
-            }
-            Some(cause) => {
-                crate::outputs::temp::remove_live_temp_files();
-                eprintln!("error: {STDOUT_NAME}: {cause}");
-                std::process::exit(i32::from(EXIT_ERROR));
-            }
-            None => previous(info),
+        let failed = msg.and_then(|m| {
+            m.strip_prefix(PRINT_PANIC_PREFIX)
+                .map(|cause| (cause, true))
+                .or_else(|| m.strip_prefix(EPRINT_PANIC_PREFIX).map(|c| (c, false)))
+        });
+        let Some((cause, stdout)) = failed else {
+            return previous(info);
+        };
+        crate::outputs::temp::remove_live_temp_files();
+        if cause.starts_with("Broken pipe") {
+            std::process::exit(i32::from(EXIT_BROKEN_PIPE));
         }
+        if stdout {
+            let _ = writeln!(io::stderr().lock(), "error: {STDOUT_NAME}: {cause}");
+        }
+        std::process::exit(i32::from(EXIT_ERROR));
     }));
 }

@@ -64,7 +64,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(halfray::Error::BrokenPipe) => ExitCode::from(halfray::error::EXIT_BROKEN_PIPE),
         Err(e) => {
-            eprintln!("error: {e}");
+            halfray::console::eprint_error(&e);
             ExitCode::from(e.exit_code())
         }
     }

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
 mod common;
-use common::{BIN, camera, file_names as names, sphere, start_long_render, stderr};
+use common::{BIN, camera, file_names as names, result_line, sphere, start_long_render, stderr};
 
 /// `v`/`f` text of a closed tetrahedron with its vertices at `±s` (the origin inside).
 fn tetrahedron(s: &str) -> String {
@@ -186,26 +186,6 @@ fn temporary_files_exist_only_while_writing_and_stale_ones_are_removed() {
     let o = run(&[&"render", &scene, &"-o", &png, &"-q"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert_eq!(names(dir.path()), ["out.png", "s.toml"]);
-}
-
-/// One `--jsonl` line: mesh `mesh`, shard `index`/`count`, one set `primary` of `genuine`
-/// rays (at least one), each a genuine mismatch (made-up counts, consistent as a run's are:
-/// the merge refuses a set with more verdicts than rays before it sums).
-fn result_line(mesh: &str, index: u64, count: u64, genuine: u64) -> String {
-    let set = serde_json::json!({
-        "mesh": mesh, "path": mesh, "name": "primary",
-        "rays": genuine.max(1), "agree": 0, "genuine_mismatches": genuine, "ties": 0,
-        "within_tolerance": 0, "embree_wrong": 0, "leaks_halfray": 0, "leaks_embree": 0,
-        "leaks_embree_default": 0, "leak_rays": 0, "any_hit_disagreements": 0,
-        "any_vs_closest_inconsistent": 0, "timed_rays": 0, "secs_halfray": 0.0,
-        "secs_embree": 0.0, "secs_embree_default": 0.0, "mrays_halfray": 0.0,
-        "mrays_embree": 0.0, "mrays_embree_default": 0.0, "disagreements": []
-    });
-    serde_json::json!({
-        "path": mesh, "intersector": "watertight", "seed": 1, "rays": 10,
-        "ray_sets": ["primary"], "shard": {"index": index, "count": count}, "sets": [set]
-    })
-    .to_string()
 }
 
 fn merge(dir: &Path, parts: &[(&str, String)]) -> Output {

@@ -1,6 +1,7 @@
 //! The binary's outputs (issue 12): an output that is an input or another output is refused
 //! by file identity, output locations are checked before the work, temporary files go away
-//! on SIGTERM, and stdout that is a closed pipe or a full device ends the program cleanly.
+//! on SIGTERM, and stdout or stderr that is a closed pipe or a full device ends the program
+//! cleanly.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -8,7 +9,8 @@ use std::time::{Duration, Instant};
 
 mod common;
 use common::{
-    BIN, file_names as files, scenes_dir, shared_mesh, shared_mesh_str, start_long_render, stderr,
+    BIN, file_names as files, result_line, scenes_dir, shared_mesh, shared_mesh_str,
+    start_long_render, stderr,
 };
 
 /// How long the SIGTERM test waits for the killed render to exit.
@@ -329,7 +331,6 @@ fn sigterm_during_a_render_leaves_no_temporary_file() {
     assert_eq!(std::fs::read(&png).unwrap(), b"previous");
 }
 
-/// Runs with stdout connected to a pipe whose reader is already gone.
 /// Runs with stdout a pipe whose read end is closed before the child starts, so its very first
 /// write fails (a read end closed after the spawn lets a fast command print everything into
 /// the pipe's buffer first and exit 0).
@@ -430,6 +431,65 @@ fn closed_pipe_exits_quietly_and_full_device_is_a_clean_error() {
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(v["faces"], 12);
     assert_eq!(files(dir.path()), ["check.json"], "no temporary files");
+}
+
+/// Runs with stderr `sink` (stdout to a file in `dir`, `stdout.bin`).
+fn run_with_stderr(args: &[&std::ffi::OsStr], dir: &Path, sink: Stdio) -> Output {
+    let out = std::fs::File::create(dir.join("stdout.bin")).unwrap();
+    Command::new(BIN)
+        .args(args)
+        .stdout(out)
+        .stderr(sink)
+        .output()
+        .unwrap()
+}
+
+/// A failed write to stderr (a full device, a closed pipe) is never a panic (status 101): a
+/// failed command keeps its own status (1 bad input, 2 usage, 3 cross-check mismatches, which
+/// must not read as anything else), and a summary that goes to stderr (the output is stdout)
+/// ends the program as a failed stdout does: 141 on a closed pipe, 1 otherwise; no temporary
+/// file stays.
+#[test]
+fn a_failed_stderr_keeps_the_commands_status_and_never_panics() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("nan.obj");
+    std::fs::write(&bad, "v 0 0 0\nv 1 0 nan\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let part = dir.path().join("part.jsonl");
+    std::fs::write(&part, result_line("a.obj", 0, 1, 4) + "\n").unwrap();
+    let (missing, out_png) = (dir.path().join("missing.toml"), dir.path().join("x.png"));
+    let out_obj = dir.path().join("x.obj");
+    let cube = shared_mesh("cube.obj");
+    let mirror = scene("mirror.toml");
+    // (arguments, status with stderr full, status with stderr a closed pipe)
+    let cases: [(&[&std::ffi::OsStr], i32, i32); 5] = [
+        (os!["mesh", "subdivide", &bad, "-o", &out_obj], 1, 1),
+        (os!["render", &missing, "-o", &out_png], 1, 1),
+        (os!["render", &mirror, "--width", "0", "-o", &out_png], 2, 2),
+        (
+            os!["crosscheck", "merge", &part, "--max-mismatch", "0"],
+            3,
+            3,
+        ),
+        // The summary goes to stderr: the output is stdout.
+        (os!["mesh", "subdivide", &cube, "-o", "-"], 1, 141),
+    ];
+    for (args, on_full, on_closed) in cases {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let o = run_with_stderr(args, dir.path(), full.into());
+        assert_eq!(o.status.code(), Some(on_full), "{args:?} 2>/dev/full");
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let o = run_with_stderr(args, dir.path(), writer.into());
+        assert_eq!(o.status.code(), Some(on_closed), "{args:?} 2>closed pipe");
+        assert_eq!(
+            files(dir.path()),
+            ["nan.obj", "part.jsonl", "stdout.bin"],
+            "{args:?}: no output, no temporary file"
+        );
+    }
 }
 
 /// An output named `-` is all that stdout carries: the command's summary ("baked …", the

@@ -144,3 +144,23 @@ pub fn shared_mesh_str(name: &str) -> String {
 pub fn parse_scene(text: &str) -> Scene {
     parse(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
 }
+
+/// One `--jsonl` line: mesh `mesh`, shard `index`/`count`, one set `primary` of `genuine`
+/// rays (at least one), each a genuine mismatch (made-up counts, consistent as a run's are:
+/// the merge refuses a set with more verdicts than rays before it sums).
+pub fn result_line(mesh: &str, index: u64, count: u64, genuine: u64) -> String {
+    let set = serde_json::json!({
+        "mesh": mesh, "path": mesh, "name": "primary",
+        "rays": genuine.max(1), "agree": 0, "genuine_mismatches": genuine, "ties": 0,
+        "within_tolerance": 0, "embree_wrong": 0, "leaks_halfray": 0, "leaks_embree": 0,
+        "leaks_embree_default": 0, "leak_rays": 0, "any_hit_disagreements": 0,
+        "any_vs_closest_inconsistent": 0, "timed_rays": 0, "secs_halfray": 0.0,
+        "secs_embree": 0.0, "secs_embree_default": 0.0, "mrays_halfray": 0.0,
+        "mrays_embree": 0.0, "mrays_embree_default": 0.0, "disagreements": []
+    });
+    serde_json::json!({
+        "path": mesh, "intersector": "watertight", "seed": 1, "rays": 10,
+        "ray_sets": ["primary"], "shard": {"index": index, "count": count}, "sets": [set]
+    })
+    .to_string()
+}
