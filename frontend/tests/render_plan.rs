@@ -776,3 +776,70 @@ fn no_lights_no_specular_term() {
     assert_eq!(v["plan"]["specular"], true, "{v}");
     assert!(out.contains("specular term    shiny"), "{out}");
 }
+
+/// The README's render example (`render scenes/mirror.toml … --explain --stats-json …`) is
+/// what the command prints: each plan line it shows is a line of the command's output, in
+/// order, and its ray counts are the run's (`--stats-json`).
+#[test]
+fn the_readmes_render_example_is_what_the_command_prints() {
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"))
+            .unwrap();
+    let block: Vec<&str> = readme
+        .lines()
+        .skip_while(|l| !l.starts_with("effect plan for scenes/mirror.toml:"))
+        .take_while(|l| !l.starts_with("```"))
+        .collect();
+    let (plan, rays): (Vec<&str>, Vec<&str>) = block
+        .iter()
+        .filter(|l| l.trim() != "…")
+        .partition(|l| !l.starts_with("rays: "));
+    assert!(
+        plan.len() > 5 && rays.len() == 1,
+        "the README's block: {block:?}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let (png, json) = (
+        dir.path().join("mirror.png"),
+        dir.path().join("mirror.json"),
+    );
+    let o = common::halfray(&[
+        &"render",
+        &scenes_dir().join("mirror.toml"),
+        &"-o",
+        &png,
+        &"--explain",
+        &"--stats-json",
+        &json,
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let out = String::from_utf8(o.stdout).unwrap();
+    let printed: Vec<&str> = out.lines().collect();
+    let mut at = 0;
+    for want in &plan {
+        let want = want.replace(
+            "scenes/mirror.toml",
+            &scenes_dir().join("mirror.toml").display().to_string(),
+        );
+        let found = printed[at..].iter().position(|l| *l == want);
+        at += found.unwrap_or_else(|| panic!("README: `{want}` not printed in order:\n{out}")) + 1;
+    }
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let count = |k: &str| stats[k].as_u64().unwrap();
+    let (p, s, r, t) = (
+        count("primary"),
+        count("shadow"),
+        count("reflection"),
+        count("refraction"),
+    );
+    let want = format!(
+        "rays: primary {p} shadow {s} reflection {r} refraction {t} (total {})",
+        p + s + r + t
+    );
+    assert!(
+        rays[0].starts_with(&want),
+        "README: {}\nrun: {want}",
+        rays[0]
+    );
+}
