@@ -8,12 +8,45 @@
 //! * [`named`]: the named ray sets of `bench bvh` and `crosscheck` built from these.
 //!
 //! All are pure functions of their inputs (and seed): the same rays on every machine. The
-//! arithmetic is done in `f64` and rounded once to `f32`.
+//! arithmetic is done in `f64` and rounded once to `f32`; besides IEEE 754's correctly rounded
+//! operations (`+ − × ÷`, `sqrt`) it calls only the `libm` crate's functions (`sin`, `cos`,
+//! `tan`, `log`, `exp`: pure Rust, the same bits on every platform), never std's, which call the
+//! platform's C library and differ between them. The same holds for the generated meshes
+//! ([`crate::mesh_tools::generate`]) and the cross-check's aimed sets
+//! ([`crate::crosscheck::sets`]); `tests::no_platform_maths_in_the_generators` keeps std's out
+//! of these files, and golden fingerprints next to each hold its output to the bit.
 
 pub mod named;
 
 use glam::{DVec3, Vec3};
 use halfray_core::Ray;
+
+/// FNV-1a, 64 bits (Fowler, Noll, Vo): the cross-check's seed of a set or file name
+/// ([`crate::crosscheck::sets::mesh_seed`]) and the tests' fingerprints of generated data.
+#[must_use]
+pub fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
+    bytes.into_iter().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3)
+    })
+}
+
+/// The tests' fingerprint of generated data: [`fnv1a`] of `words`' little-endian bytes (an
+/// `f32` enters as its bits).
+#[cfg(test)]
+pub(crate) fn fingerprint(words: impl IntoIterator<Item = u32>) -> u64 {
+    fnv1a(words.into_iter().flat_map(u32::to_le_bytes))
+}
+
+/// The bits of `ray`'s origin, direction, `t_min` and `t_max`, for [`fingerprint`].
+#[cfg(test)]
+pub(crate) fn ray_bits(ray: &Ray) -> impl Iterator<Item = u32> {
+    ray.origin
+        .to_array()
+        .into_iter()
+        .chain(ray.direction.to_array())
+        .chain([ray.t_min, ray.t_max])
+        .map(f32::to_bits)
+}
 
 /// SplitMix64 (Steele, Lea, Flood 2014): small, fast, deterministic, no dependency.
 #[derive(Clone, Debug)]
@@ -47,7 +80,7 @@ impl Rng {
 
     /// Log-uniform in `[lo, hi)` (both positive).
     pub fn log_range(&mut self, lo: f64, hi: f64) -> f64 {
-        (lo.ln() + (hi.ln() - lo.ln()) * self.f64()).exp()
+        libm::exp(libm::log(lo) + (libm::log(hi) - libm::log(lo)) * self.f64())
     }
 
     /// `true` with probability `p`.
@@ -70,7 +103,7 @@ impl Rng {
         let z = 2.0 * self.f64() - 1.0;
         let phi = std::f64::consts::TAU * self.f64();
         let r = (1.0 - z * z).max(0.0).sqrt();
-        DVec3::new(r * phi.cos(), r * phi.sin(), z)
+        DVec3::new(r * libm::cos(phi), r * libm::sin(phi), z)
     }
 }
 
@@ -113,7 +146,7 @@ impl Camera {
             radius = 1.0;
         }
         let fov = CAMERA_FOV_DEG.to_radians();
-        let dist = radius / (fov * 0.5).sin();
+        let dist = radius / libm::sin(fov * 0.5);
         let eye = center + DVec3::from_array(CAMERA_VIEW_DIR).normalize() * dist;
         let forward = (center - eye).normalize();
         let right = forward.cross(DVec3::Y).normalize();
@@ -123,7 +156,7 @@ impl Camera {
             forward,
             right,
             up,
-            half_height: (fov * 0.5).tan(),
+            half_height: libm::tan(fov * 0.5),
             width: width.max(1),
             height: height.max(1),
         }
@@ -187,6 +220,39 @@ mod tests {
     fn the_generator_is_splitmix64() {
         let mut rng = Rng::new(0x9E37_79B9_7F4A_7C15);
         assert_eq!(rng.next_u64(), 0xE220_A839_7B1D_CDAF);
+    }
+
+    /// std's transcendental functions call the platform's C library, whose results differ
+    /// between glibc, musl, macOS and Windows; the generators call the `libm` crate's (the
+    /// module docs). None of std's in their sources: a golden fingerprint catches one only on a
+    /// platform whose C library rounds differently from `libm` on its arguments, this scan on
+    /// every one. (`sqrt` is IEEE 754's correctly rounded square root everywhere: allowed.)
+    #[test]
+    fn no_platform_maths_in_the_generators() {
+        let sources = [
+            ("raysets.rs", include_str!("raysets.rs")),
+            ("raysets/named.rs", include_str!("raysets/named.rs")),
+            (
+                "mesh_tools/generate.rs",
+                include_str!("mesh_tools/generate.rs"),
+            ),
+            ("crosscheck/sets.rs", include_str!("crosscheck/sets.rs")),
+        ];
+        let functions = [
+            "sin", "cos", "tan", "sin_cos", "asin", "acos", "atan", "atan2", "sinh", "cosh",
+            "tanh", "asinh", "acosh", "atanh", "exp", "exp2", "exp_m1", "ln", "ln_1p", "log",
+            "log2", "log10", "powf", "powi", "cbrt", "hypot",
+        ];
+        for (file, text) in sources {
+            for f in functions {
+                for call in [format!(".{f}("), format!("f64::{f}"), format!("f32::{f}")] {
+                    assert!(
+                        !text.contains(&call),
+                        "{file} calls std's `{call}`: take libm::{f} (or a product for powi)"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

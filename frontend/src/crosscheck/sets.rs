@@ -13,6 +13,7 @@
 
 use crate::obj::ObjMesh;
 pub use crate::raysets::Rng;
+use crate::raysets::fnv1a;
 use crate::raysets::named::RaySet;
 use glam::{DVec2, DVec3, Vec3};
 use halfray_core::triangle::TriangleHit;
@@ -138,11 +139,11 @@ pub fn generate(
     seed: u64,
     hits: &dyn Fn(&Ray) -> Option<Hit>,
 ) -> Option<Vec<SetRay>> {
-    let mut rng = Rng::new(seed ^ fxhash(name));
+    let mut rng = Rng::new(seed ^ fnv1a(name.bytes()));
     let (center, radius) = bounds(mesh);
     if let Some(set) = RaySet::from_name(name) {
         let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
-        let rays = set.generate(lo, hi, count, seed ^ fxhash(name), hits);
+        let rays = set.generate(lo, hi, count, seed ^ fnv1a(name.bytes()), hits);
         return Some(
             rays.into_iter()
                 .map(|ray| SetRay { ray, target: None })
@@ -194,13 +195,7 @@ pub fn generate(
 /// file name (not its folder or its place in a list), so that a mesh gets the same rays in a
 /// sharded, listed or resumed run.
 pub fn mesh_seed(run_seed: u64, file_name: &str) -> u64 {
-    run_seed.wrapping_add(fxhash(file_name))
-}
-
-fn fxhash(s: &str) -> u64 {
-    s.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
-        (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
-    })
+    run_seed.wrapping_add(fnv1a(file_name.bytes()))
 }
 
 /// A ray from a random outside origin through `target` (`t = 1` there), with the target's
@@ -381,7 +376,7 @@ fn grazing(mesh: &ObjMesh, rng: &mut Rng, radius: f64, count: usize) -> Vec<SetR
             continue;
         }
         let angle = GRAZING_MIN_RAD + (GRAZING_MAX_RAD - GRAZING_MIN_RAD) * rng.f64();
-        let d = in_plane * angle.cos() - n * angle.sin();
+        let d = in_plane * libm::cos(angle) - n * libm::sin(angle);
         let o = p - d * radius;
         out.push(SetRay {
             ray: Ray::new(o.as_vec3(), d.as_vec3()),
@@ -674,5 +669,57 @@ mod tests {
             );
         }
         assert!(counted > 50_000, "{counted} counted");
+    }
+
+    /// The cross-machine determinism check of the aimed sets: their fingerprints
+    /// ([`crate::raysets::fingerprint`] of every ray's bits, then its target's `t` and incident
+    /// triangles, `u32::MAX` for none) over the generated `sphere` of size 6, seed 1, 400 rays
+    /// each, seeded as `crosscheck --seed 1` seeds `sphere.obj`. `libm`'s functions, pure Rust:
+    /// the values on every platform (and std's on x86-64 glibc before the switch). The six
+    /// shared sets are held in `raysets::named`.
+    #[test]
+    fn the_aimed_sets_keep_their_fingerprints() {
+        let g = crate::mesh_tools::generate::generate(
+            crate::mesh_tools::generate::Kind::Sphere,
+            1,
+            Some(6),
+        )
+        .unwrap();
+        let mesh = ObjMesh {
+            positions: g.positions,
+            triangles: g.triangles,
+        };
+        let adj = Adjacency::new(&mesh);
+        let seed = mesh_seed(1, "sphere.obj");
+        let want = [
+            0x6551_dfd6_2815_1fa0,
+            0x359d_5532_f879_265c,
+            0x3d6e_7921_0190_730e,
+            0x9daf_96dd_7c12_0cd4,
+        ];
+        let got = ["edges", "vertices", "grazing", "surface"].map(|name| {
+            let rays = generate(
+                name,
+                &mesh,
+                &adj,
+                400,
+                seed,
+                &crate::raysets::named::no_hits,
+            )
+            .unwrap();
+            crate::raysets::fingerprint(rays.iter().flat_map(|r| {
+                let target = r.target.as_ref().map_or_else(
+                    || vec![u32::MAX],
+                    |t| {
+                        [t.t.to_bits()]
+                            .into_iter()
+                            .chain(t.incident.iter().copied())
+                            .collect()
+                    },
+                );
+                crate::raysets::ray_bits(&r.ray).chain(target)
+            }))
+        });
+        assert_eq!(got, want, "{:#018x?}", got);
     }
 }

@@ -1,6 +1,10 @@
 //! `halfray mesh generate KIND --seed N -o OUT.obj`: the generated meshes of the benchmark
 //! corpus (`scenes/corpus/corpus.txt`), each a pure function of its kind, seed and size, so that a
-//! corpus is regenerated bit for bit on any machine instead of being stored.
+//! corpus is regenerated bit for bit on any machine instead of being stored: its sines, cube
+//! roots and logarithms are the `libm` crate's (pure Rust, the same bits on every platform), not
+//! std's (the platform's C library, whose results can differ between glibc, musl, macOS and
+//! Windows), and `tests::generated_meshes_keep_their_fingerprints` holds one small mesh of each
+//! kind to the bit.
 //!
 //! | kind | what | default size |
 //! |---|---|---|
@@ -13,7 +17,8 @@
 //!
 //! Vertices shared by faces of one object are welded (same `f32` position, one index), so the
 //! closed objects are watertight, as a scanned mesh is. All arithmetic is `f64`, each coordinate
-//! rounded to `f32` once.
+//! rounded to `f32` once; besides IEEE 754's correctly rounded operations (`+ − × ÷`, `sqrt`)
+//! only `libm`'s functions are called (glam's rotation of `scatter` takes libm's too).
 
 use crate::error::{Error, Result};
 use crate::obj::write_obj_to;
@@ -233,7 +238,7 @@ impl Waves {
         1.0 + self
             .waves
             .iter()
-            .map(|(u, f, phase, a)| a * (f * d.dot(*u) + phase).sin())
+            .map(|(u, f, phase, a)| a * libm::sin(f * d.dot(*u) + phase))
             .sum::<f64>()
     }
 }
@@ -310,8 +315,8 @@ fn terrain(b: &mut Builder, n: usize, rng: &mut Rng) {
             let angle = rng.range(0.0, std::f64::consts::TAU);
             let k = rng.log_range(0.002, 0.03);
             (
-                k * angle.cos(),
-                k * angle.sin(),
+                k * libm::cos(angle),
+                k * libm::sin(angle),
                 rng.range(0.0, std::f64::consts::TAU),
                 1.0 / k,
             )
@@ -323,7 +328,7 @@ fn terrain(b: &mut Builder, n: usize, rng: &mut Rng) {
             * (1.0
                 + waves
                     .iter()
-                    .map(|(kx, kz, p, a)| a * (kx * x + kz * z + p).sin())
+                    .map(|(kx, kz, p, a)| a * libm::sin(kx * x + kz * z + p))
                     .sum::<f64>()
                     / total)
     };
@@ -453,7 +458,7 @@ fn icosahedron() -> ([DVec3; 12], [[usize; 3]; 20]) {
 /// `[0, 100]³`, each inside its cell (so disjoint), randomly rotated, radius 0.05–0.2.
 fn scatter(b: &mut Builder, n: usize, rng: &mut Rng) {
     let (v, f) = icosahedron();
-    let cells = (n as f64).cbrt().ceil() as usize;
+    let cells = libm::cbrt(n as f64).ceil() as usize;
     let cell = 100.0 / cells as f64;
     for k in 0..n {
         b.new_object();
@@ -513,7 +518,7 @@ mod tests {
         assert!(closed_and_oriented(&m));
         let vol = volume(&m);
         assert!(
-            vol > 0.8 * 4.0 / 3.0 * std::f64::consts::PI * 0.95f64.powi(3),
+            vol > 0.8 * 4.0 / 3.0 * std::f64::consts::PI * 0.95 * 0.95 * 0.95,
             "{vol}"
         );
         for p in &m.positions {
@@ -669,7 +674,7 @@ mod tests {
             })
             .sum();
         assert!(
-            vol > 0.8 * 4.0 / 3.0 * std::f64::consts::PI * 0.95f64.powi(3),
+            vol > 0.8 * 4.0 / 3.0 * std::f64::consts::PI * 0.95 * 0.95 * 0.95,
             "{vol}"
         );
     }
@@ -684,5 +689,42 @@ mod tests {
             generate(Kind::Terrain, 1, Some(MAX_SIZE + 1)),
             Err(Error::Usage(_))
         ));
+    }
+
+    /// The cross-machine determinism check: the fingerprint of one small mesh of each kind,
+    /// seed 1 ([`crate::raysets::fingerprint`] of every coordinate's bits, then every
+    /// triangle's indices). The generators call `libm`'s functions, pure Rust, so these are the
+    /// values on every platform; they are also what std's gave on x86-64 glibc before the
+    /// switch (the default-size corpus came out byte for byte the same). A change here changes
+    /// the corpus the stored benchmark figures were measured on; a `libm` upgrade (Cargo.lock
+    /// pins it) that rounds one of its functions differently shows here too.
+    #[test]
+    fn generated_meshes_keep_their_fingerprints() {
+        let sizes = [
+            (Kind::Sphere, 6),
+            (Kind::Terrain, 8),
+            (Kind::Beams, 16),
+            (Kind::Room, 4),
+            (Kind::Scatter, 27),
+            (Kind::Far, 6),
+        ];
+        let want = [
+            0x95bf_944d_e348_cf7d,
+            0x00f9_8c9e_d09c_de33,
+            0x8ec5_3792_2eca_2161,
+            0x80ea_a760_d7c6_4a30,
+            0x656c_9550_c354_f92c,
+            0x3641_80cf_c11b_8e95,
+        ];
+        let got = sizes.map(|(kind, n)| {
+            let m = generate(kind, 1, Some(n)).unwrap();
+            crate::raysets::fingerprint(
+                m.positions
+                    .iter()
+                    .flat_map(|p| p.to_array().map(f32::to_bits))
+                    .chain(m.triangles.iter().flatten().copied()),
+            )
+        });
+        assert_eq!(got, want, "{got:#018x?}");
     }
 }
