@@ -17,36 +17,42 @@ use crate::text;
 use glam::Vec4;
 use std::path::PathBuf;
 
-/// A Porter–Duff operator (`--op`).
+/// A Porter–Duff operator (`--op`): its name here, or Cairo's (`source`, `dest-over`, …) or
+/// ImageMagick's (`SrcOver`, `DstIn`, …; `--op` ignores case).
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Operator {
     /// Neither: transparent.
     Clear,
     /// A only.
-    #[value(alias = "copy")]
+    #[value(aliases = ["copy", "source"])]
     Src,
     /// B only.
+    #[value(alias = "dest")]
     Dst,
     /// A over B.
     #[default]
-    #[value(alias = "src-over")]
+    #[value(aliases = ["src-over", "srcover"])]
     Over,
     /// B over A.
+    #[value(aliases = ["dest-over", "dstover"])]
     DstOver,
     /// A where B is.
-    #[value(alias = "src-in")]
+    #[value(aliases = ["src-in", "srcin"])]
     In,
     /// B where A is.
+    #[value(aliases = ["dest-in", "dstin"])]
     DstIn,
     /// A where B is not.
-    #[value(alias = "src-out")]
+    #[value(aliases = ["src-out", "srcout"])]
     Out,
     /// B where A is not.
+    #[value(aliases = ["dest-out", "dstout"])]
     DstOut,
     /// A over B, inside B only.
-    #[value(alias = "src-atop")]
+    #[value(aliases = ["src-atop", "srcatop"])]
     Atop,
     /// B over A, inside A only.
+    #[value(aliases = ["dest-atop", "dstatop"])]
     DstAtop,
     /// A where B is not, and B where A is not.
     Xor,
@@ -110,7 +116,7 @@ pub struct CompositeArgs {
     /// The destination image B, the same size.
     pub destination: PathBuf,
     /// The operator.
-    #[arg(long, value_enum, default_value_t)]
+    #[arg(long, value_enum, default_value_t, ignore_case = true)]
     pub op: Operator,
     /// Output PNG (written atomically; never an input).
     #[arg(short, long)]

@@ -99,6 +99,60 @@ fn every_operator_gives_porter_and_duffs_pixels() {
     }
 }
 
+/// Cairo's operator names (`cairo_operator_t`: `CAIRO_OPERATOR_SOURCE` is `source`) and
+/// ImageMagick's (`-compose`, any case) give the image of the operator they name.
+#[test]
+fn cairo_and_imagemagick_names_are_the_same_operators() {
+    const NAMES: [(&str, &str); 24] = [
+        ("source", "src"),
+        ("dest", "dst"),
+        ("dest-over", "dst-over"),
+        ("dest-in", "dst-in"),
+        ("dest-out", "dst-out"),
+        ("dest-atop", "dst-atop"),
+        ("copy", "src"),
+        ("src-over", "over"),
+        ("src-in", "in"),
+        ("src-out", "out"),
+        ("src-atop", "atop"),
+        ("Clear", "clear"),
+        ("Src", "src"),
+        ("Dst", "dst"),
+        ("Over", "over"),
+        ("SrcOver", "over"),
+        ("DstOver", "dst-over"),
+        ("SrcIn", "in"),
+        ("DstIn", "dst-in"),
+        ("SrcOut", "out"),
+        ("DstOut", "dst-out"),
+        ("SrcAtop", "atop"),
+        ("DstAtop", "dst-atop"),
+        ("Xor", "xor"),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let (pa, pb) = (dir.path().join("a.png"), dir.path().join("b.png"));
+    save(&image([240, 30, 10], [255, 153, 40, 0]), &pa);
+    save(&image([20, 60, 200], [255, 128, 255, 77]), &pb);
+    let run = |op: &str| {
+        let out = dir.path().join("out.png");
+        let o = halfray(&[
+            &"composite",
+            &pa,
+            &pb,
+            &"--op",
+            &op,
+            &"-o",
+            &out,
+            &"--force",
+        ]);
+        assert!(o.status.success(), "{op}: {}", stderr(&o));
+        image::open(&out).unwrap().into_rgba8().into_raw()
+    };
+    for (name, ours) in NAMES {
+        assert_eq!(run(name), run(ours), "--op {name} is not {ours}");
+    }
+}
+
 #[test]
 fn mismatched_sizes_and_an_input_as_output_are_refused() {
     let dir = tempfile::tempdir().unwrap();

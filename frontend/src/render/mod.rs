@@ -80,7 +80,13 @@ pub struct RenderArgs {
     #[arg(long, default_value = "srgb", value_name = "srgb|GAMMA")]
     pub gamma: gamma::Transfer,
     /// The Porter–Duff operator for `--background`.
-    #[arg(long, value_enum, default_value_t, requires = "background")]
+    #[arg(
+        long,
+        value_enum,
+        default_value_t,
+        requires = "background",
+        ignore_case = true
+    )]
     pub op: crate::composite::Operator,
     /// Write the pixels where no object is hit with alpha 0 (colour mode; for compositing
     /// elsewhere). By default the scene's background colour is written opaque.
