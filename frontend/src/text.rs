@@ -1,6 +1,7 @@
 //! User text in messages: offending tokens and whole messages are escaped (control characters
-//! as `\u{1b}`, so no escape sequence reaches the terminal) and truncated, so a 10 MB token
-//! gives a short message.
+//! as `\u{1b}`, so no escape sequence reaches the terminal; line separators and bidirectional
+//! controls too, so no input starts a line of its own or reorders the text shown) and
+//! truncated, so a 10 MB token gives a short message.
 
 /// Most characters of an offending token quoted in a message.
 pub const MAX_EXCERPT_CHARS: usize = 40;
@@ -21,13 +22,31 @@ pub fn bounded_lines(s: &str, max: usize, keep_newlines: bool) -> String {
             out.push_str(&format!("… ({} bytes in all)", s.len()));
             return out;
         }
-        if c.is_control() && !(keep_newlines && c == '\n') {
+        if hidden_effect(c) && !(keep_newlines && c == '\n') {
             out.extend(c.escape_default());
         } else {
             out.push(c);
         }
     }
     out
+}
+
+/// Whether `c` acts on the terminal or the text's layout instead of showing as itself: a
+/// control character (Unicode's `Cc`: `\n`, ESC, NEL…), the line and paragraph separators
+/// (U+2028, U+2029) and the bidirectional formatting characters (U+061C, U+200E, U+200F,
+/// U+202A–U+202E, U+2066–U+2069: an override can show a message's text in another order).
+fn hidden_effect(c: char) -> bool {
+    c.is_control()
+        || matches!(
+            c,
+            '\u{2028}'
+                | '\u{2029}'
+                | '\u{061C}'
+                | '\u{200E}'
+                | '\u{200F}'
+                | '\u{202A}'..='\u{202E}'
+                | '\u{2066}'..='\u{2069}'
+        )
 }
 
 /// `s` with every control character escaped (line breaks too), whole: a name or string from
@@ -70,5 +89,11 @@ mod tests {
             path(std::path::Path::new("a\nerror: \u{1b}]0;x\u{7}")),
             "a\\nerror: \\u{1b}]0;x\\u{7}"
         );
+        // A line separator and a right-to-left override: escaped, never shown raw.
+        assert_eq!(
+            escaped("a\u{2028}error: b\u{202E}jbo.x\u{2069}\u{2029}"),
+            "a\\u{2028}error: b\\u{202e}jbo.x\\u{2069}\\u{2029}"
+        );
+        assert_eq!(escaped("née → ∞"), "née → ∞");
     }
 }
