@@ -13,10 +13,11 @@ use super::loop_oracle::{loop_close, loop_reference, reference_beta};
 use super::*;
 use glam::Vec3;
 use halfray_core::halfedge::{
-    CollapseAt, Counts, DiffuseBoundary, DiffuseError, EdgeId, ExportError, HalfedgeId,
-    HalfedgeMesh, LoopWeights, VertexId, build_scratch_len,
+    CollapseAt, Counts, DiffuseBoundary, DiffuseError, EdgeId, ExportError, FaceId, FlipError,
+    HalfedgeId, HalfedgeMesh, LoopWeights, SplitError, VertexId, build_scratch_len,
 };
 use halfray_core::solids::OCTAHEDRON_TRIANGLES;
+use std::collections::BTreeSet;
 
 /// The mesh type fuzzed: room for two Loop levels of a tetrahedron or one of an
 /// octahedron, and for some dozens of splits.
@@ -77,7 +78,252 @@ fn exported(mesh: &FuzzMesh) -> (Vec<Vec3>, Vec<[u32; 3]>) {
     let mut t = vec![[0u32; 3]; mesh.len().faces];
     let written = mesh.export(&mut p, &mut t);
     assert!(written.is_ok(), "export into exact buffers: {written:?}");
+    if let Ok((_, nt)) = written {
+        t.truncate(nt);
+    }
     (p, t)
+}
+
+/// The FuzzMesh's capacity as its type states it (`V`, `E`, `F` of [`FuzzMesh`]).
+const CAPACITY: [usize; 3] = [64, 192, 128];
+
+/// Oriented faces as canonical position triples ([`canonical`]).
+type FaceList = Vec<[[u32; 3]; 3]>;
+
+/// The undirected edges `(min, max)` of a triangle list.
+fn edge_set(ts: &[[u32; 3]]) -> BTreeSet<(u32, u32)> {
+    ts.iter()
+        .flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))))
+        .collect()
+}
+
+/// `[V, E, F]` counted from the mesh's state as read through its accessors, not its own
+/// counters (`len()`): the live vertex slots (those with a position), the distinct
+/// undirected edges of the exported triangles (`validate()` promises every edge has a
+/// face, so these are all of them), and the exported triangles.
+fn model_counts(mesh: &FuzzMesh) -> [usize; 3] {
+    let (_, ts) = exported(mesh);
+    let v = (0..mesh.slots().vertices)
+        .filter(|&v| mesh.position(vid(v)).is_some())
+        .count();
+    [v, edge_set(&ts).len(), ts.len()]
+}
+
+fn counts_of(c: Counts) -> [usize; 3] {
+    [c.vertices, c.edges, c.faces]
+}
+
+fn euler(c: [usize; 3]) -> i64 {
+    c[0] as i64 - c[1] as i64 + c[2] as i64
+}
+
+/// The triangles of `ts` on the undirected edge `a–b`: `(index, opposite vertex, true when
+/// the triangle runs a → b)`.
+fn wings(ts: &[[u32; 3]], a: u32, b: u32) -> Vec<(usize, u32, bool)> {
+    ts.iter()
+        .enumerate()
+        .filter_map(|(i, t)| {
+            (0..3).find_map(|k| {
+                let (x, y, z) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+                (x == a && y == b)
+                    .then_some((i, z, true))
+                    .or_else(|| (x == b && y == a).then_some((i, z, false)))
+            })
+        })
+        .collect()
+}
+
+/// Number of distinct neighbours of `v` in the edge set.
+fn valence(edges: &BTreeSet<(u32, u32)>, v: u32) -> usize {
+    edges.iter().filter(|&&(x, y)| x == v || y == v).count()
+}
+
+/// A triangle list as corner positions.
+fn as_points(ps: &[Vec3], ts: &[[u32; 3]]) -> Vec<[Vec3; 3]> {
+    ts.iter().map(|t| t.map(|v| ps[v as usize])).collect()
+}
+
+/// What `flip_edge` on edge `a–b` must do, from the documented rules (`can_flip_edge`,
+/// `flip_edge`) evaluated on the exported triangle list: `Ok(faces after)` (the wings
+/// `(a, b, c)` and `(b, a, d)` become `(c, a, d)` and `(d, b, c)`), or `Err(refusals)` (every
+/// documented refusal that applies: boundary, equal wings, wings already joined, an
+/// endpoint of valence below 4); `None` when the list does not show a manifold edge (two
+/// triangles of opposite directions, or one), which `validate()` rules out.
+fn flip_oracle(
+    ps: &[Vec3],
+    ts: &[[u32; 3]],
+    a: u32,
+    b: u32,
+) -> Option<Result<FaceList, Vec<FlipError>>> {
+    let w = wings(ts, a, b);
+    let (c, d, fc, fd) = match w.as_slice() {
+        [_] => return Some(Err(vec![FlipError::Boundary])),
+        [(i, c, true), (j, d, false)] | [(j, d, false), (i, c, true)] => (*c, *d, *i, *j),
+        _ => return None,
+    };
+    let edges = edge_set(ts);
+    let mut refusals = Vec::new();
+    if c == d {
+        refusals.push(FlipError::WingsCoincide);
+    }
+    if edges.contains(&(c.min(d), c.max(d))) {
+        refusals.push(FlipError::DuplicateEdge);
+    }
+    for v in [a, b] {
+        if valence(&edges, v) < 4 {
+            refusals.push(FlipError::DegreeTooLow(vid(v as usize)));
+        }
+    }
+    if !refusals.is_empty() {
+        return Some(Err(refusals));
+    }
+    let mut after: Vec<[u32; 3]> = ts
+        .iter()
+        .enumerate()
+        .filter(|&(k, _)| k != fc && k != fd)
+        .map(|(_, t)| *t)
+        .collect();
+    after.push([c, a, d]);
+    after.push([d, b, c]);
+    Some(Ok(canonical(as_points(ps, &after).into_iter())))
+}
+
+/// What `split_edge_at(e, p)` on edge `a–b` must do, from its documentation evaluated on the
+/// exported triangle list and the independent counts: `Ok(faces after)` with the new
+/// vertex at `pm` (each wing `(a, b, c)` becomes `(a, m, c)`, `(m, b, c)`; a wing `(b, a, d)`
+/// becomes `(b, m, d)`, `(m, a, d)`), or `Err(refusals)`: `NonFinitePosition` for a
+/// non-finite point, `WingsCoincide` for two wings with one opposite vertex, `Capacity` when
+/// the live counts plus `(1, 1 + sides, sides)` exceed [`CAPACITY`] (payload not
+/// compared); `None` for a list that does not show a manifold edge.
+fn split_oracle(
+    ps: &[Vec3],
+    ts: &[[u32; 3]],
+    counts: [usize; 3],
+    a: u32,
+    b: u32,
+    pm: Vec3,
+) -> Option<Result<FaceList, Vec<&'static str>>> {
+    let w = wings(ts, a, b);
+    if w.is_empty() || w.len() > 2 || (w.len() == 2 && w[0].2 == w[1].2) {
+        return None;
+    }
+    let mut refusals = Vec::new();
+    if !pm.is_finite() {
+        refusals.push("NonFinitePosition");
+    }
+    if w.len() == 2 && w[0].1 == w[1].1 {
+        refusals.push("WingsCoincide");
+    }
+    let sides = w.len();
+    let need = [1, 1 + sides, sides];
+    if (0..3).any(|k| counts[k] + need[k] > CAPACITY[k]) {
+        refusals.push("Capacity");
+    }
+    if !refusals.is_empty() {
+        return Some(Err(refusals));
+    }
+    let (pa, pb) = (ps[a as usize], ps[b as usize]);
+    let mut after: Vec<[Vec3; 3]> = ts
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| !w.iter().any(|x| x.0 == *k))
+        .map(|(_, t)| t.map(|v| ps[v as usize]))
+        .collect();
+    for &(_, z, forward) in &w {
+        let pz = ps[z as usize];
+        if forward {
+            after.push([pa, pm, pz]);
+            after.push([pm, pb, pz]);
+        } else {
+            after.push([pb, pm, pz]);
+            after.push([pm, pa, pz]);
+        }
+    }
+    Some(Ok(canonical(after.into_iter())))
+}
+
+/// The name of a split refusal, to compare with [`split_oracle`]'s.
+fn split_error_name(e: &SplitError) -> &'static str {
+    match e {
+        SplitError::Dead => "Dead",
+        SplitError::NonFinitePosition => "NonFinitePosition",
+        SplitError::WingsCoincide => "WingsCoincide",
+        SplitError::Capacity(_) => "Capacity",
+        _ => "other",
+    }
+}
+
+/// How far `split_edge`'s vertex may sit from the exact midpoint of its edge, per
+/// component, relative to the midpoint's magnitude: one `f32` rounding (`2⁻²⁴`). The docs
+/// say "at its midpoint"; an `f32` point holds it to one rounding. Unitless.
+pub const MIDPOINT_REL: f64 = 1.0 / 16_777_216.0;
+
+/// The absolute part of the midpoint's tolerance, world units: two `f32` subnormal steps
+/// (`2⁻¹⁴⁸`), for halving subnormal coordinates (each half rounds by up to one step).
+pub const MIDPOINT_ABS: f64 = 2.802_596_928_649_634e-45;
+
+/// The faces of the mesh as canonical position triples.
+fn faces_now(mesh: &FuzzMesh) -> Vec<[[u32; 3]; 3]> {
+    let (ps, ts) = exported(mesh);
+    canonical(as_points(&ps, &ts).into_iter())
+}
+
+/// Checks a split's outcome against [`split_oracle`] (edge `e`, requested point `p`, or the
+/// midpoint for `None`); `before` is the mesh before the split.
+fn check_split(
+    mesh: &FuzzMesh,
+    before: &FuzzMesh,
+    e: EdgeId,
+    p: Option<Vec3>,
+    r: &Result<VertexId, SplitError>,
+    log: &[String],
+) {
+    let Some([a, b]) = before.edge_vertices(e) else {
+        // (With a non-finite point too: the docs list both refusals, not their order.)
+        let finite = p.is_none_or(|p| p.is_finite());
+        assert!(
+            *r == Err(SplitError::Dead) || (!finite && *r == Err(SplitError::NonFinitePosition)),
+            "split of a dead edge: {r:?}: {log:?}"
+        );
+        return;
+    };
+    let (ps, ts) = exported(before);
+    let (a, b) = (a.index() as u32, b.index() as u32);
+    assert!(
+        edge_set(&ts).contains(&(a.min(b), a.max(b))),
+        "edge {e:?} = {a}–{b} is on no exported triangle: {log:?}"
+    );
+    let pm = match (p, r) {
+        (Some(p), _) => p,
+        (None, Ok(m)) => {
+            let got = mesh.position(*m).expect("the new vertex is live");
+            let mid = (ps[a as usize].as_dvec3() + ps[b as usize].as_dvec3()) * 0.5;
+            let err = (got.as_dvec3() - mid).abs();
+            let tol = mid.abs() * MIDPOINT_REL + MIDPOINT_ABS;
+            assert!(
+                err.cmple(tol).all(),
+                "split_edge put {got:?}, midpoint {mid:?}: {log:?}"
+            );
+            got
+        }
+        // A refused midpoint split: the midpoint of two finite points is finite.
+        (None, Err(_)) => ((ps[a as usize].as_dvec3() + ps[b as usize].as_dvec3()) * 0.5).as_vec3(),
+    };
+    let counts = model_counts(before);
+    let Some(want) = split_oracle(&ps, &ts, counts, a, b, pm) else {
+        return;
+    };
+    match (r, want) {
+        (Ok(_), Ok(faces)) => {
+            assert_eq!(faces_now(mesh), faces, "faces after the split: {log:?}");
+        }
+        (Err(e), Err(names)) => assert!(
+            names.contains(&split_error_name(e)),
+            "split refused as {e:?}, the rules name {names:?}: {log:?}"
+        ),
+        (Ok(_), Err(names)) => panic!("split accepted, the rules refuse ({names:?}): {log:?}"),
+        (Err(e), Ok(_)) => panic!("split refused as {e:?}, the rules accept: {log:?}"),
+    }
 }
 
 fn vid(v: usize) -> VertexId {
@@ -106,10 +352,6 @@ fn assert_positions_kept(
             );
         }
     }
-}
-
-fn euler(c: Counts) -> i64 {
-    c.vertices as i64 - c.edges as i64 + c.faces as i64
 }
 
 /// The start meshes (positions, triangles), indexed by the start byte mod 5.
@@ -161,15 +403,24 @@ fn point(i: &mut Input<'_>) -> Vec3 {
 /// Fuzz target `halfedge_ops`.
 ///
 /// Properties: no panic; a build either succeeds with `validate()` Ok or fails leaving the
-/// mesh empty; after every successful operation `validate()` is Ok and the Euler
-/// characteristic `V − E + F` is unchanged; an operation that refuses leaves the mesh
+/// mesh empty; after every successful operation `validate()` is Ok, `len()` equals the
+/// counts taken off the exported triangle list (live vertex slots, distinct edges,
+/// triangles: `model_counts`, not the mesh's own counters) and the Euler characteristic
+/// `V − E + F` of those counts is unchanged; a flip and a split are accepted or refused
+/// (with a documented kind) as their rules evaluated on the triangle list say
+/// (`flip_oracle`, `split_oracle`), leave exactly the faces those rules predict, and
+/// `split_edge` puts its vertex at the edge's midpoint within one `f32` rounding
+/// ([`MIDPOINT_REL`], [`MIDPOINT_ABS`]); compaction leaves every slot below the high-water
+/// marks live (checked slot by slot), the same counts and the same faces; an operation that refuses leaves the mesh
 /// bit-for-bit unchanged (`Mesh: PartialEq` compares every slot and the free lists);
 /// `can_flip_edge` / `can_collapse_edge` predict `flip_edge` / `collapse_edge` exactly and
 /// the collapse survivor sits at the predicted point; a collapse is accepted exactly when the
 /// rules evaluated independently on the exported triangle list accept it
 /// ([`super::collapse_oracle`]; a fold-over sign within rounding is not judged), and leaves
 /// exactly the triangles that oracle predicts; Loop subdivision produces the
-/// documented counts, puts every old and new vertex where the Loop rules evaluated in `f64` on
+/// documented counts `V + E, 2E + 3F, 4F` (evaluated on the independent counts, not
+/// `Counts::after_loop`), a new vertex for every edge of the triangle list, puts every old
+/// and new vertex where the Loop rules evaluated in `f64` on
 /// the exported triangle list put it ([`super::loop_oracle`], within
 /// [`super::loop_oracle::LOOP_TOL_ROUNDINGS`]), and leaves its output untouched when it
 /// refuses; a successful `diffuse` (`Free` or `Fixed` boundary) puts every live vertex where
@@ -220,7 +471,8 @@ pub fn halfedge_ops(data: &[u8]) {
         }
         let before = mesh.clone();
         let slots = mesh.slots();
-        let chi = euler(mesh.len());
+        let chi = euler(model_counts(&mesh));
+        let faces_before = faces_now(&mesh);
         let edge = |i: &mut Input<'_>| EdgeId::new(u32::from(i.u8()) % (slots.edges as u32 + 2));
         let vertex =
             |i: &mut Input<'_>| VertexId::new(u32::from(i.u8()) % (slots.vertices as u32 + 2));
@@ -230,15 +482,45 @@ pub fn halfedge_ops(data: &[u8]) {
             Op::Flip => {
                 let e = edge(&mut i);
                 let can = mesh.can_flip_edge(e);
+                // The independent oracle, from the triangle list before the flip (the edge's
+                // ends read through `edge_vertices`: which pair an edge id names is the
+                // mesh's to say; that the pair is an edge of the list is checked).
+                let want = before.edge_vertices(e).map(|[a, b]| {
+                    let (ps, ts) = exported(&before);
+                    let (a, b) = (a.index() as u32, b.index() as u32);
+                    assert!(
+                        edge_set(&ts).contains(&(a.min(b), a.max(b))),
+                        "edge {e:?} = {a}–{b} is on no exported triangle: {log:?}"
+                    );
+                    flip_oracle(&ps, &ts, a, b)
+                });
                 let r = mesh.flip_edge(e);
                 log.push(format!("flip {e:?} -> {r:?}"));
                 assert_eq!(can, r, "can_flip_edge disagrees: {log:?}");
+                match (want, &r) {
+                    (None, _) => assert_eq!(r, Err(FlipError::Dead), "dead edge: {log:?}"),
+                    (Some(None), _) => {}
+                    (Some(Some(Ok(faces))), Ok(())) => {
+                        assert_eq!(faces_now(&mesh), faces, "faces after the flip: {log:?}");
+                    }
+                    (Some(Some(Err(kinds))), Err(e)) => assert!(
+                        kinds.contains(e),
+                        "flip refused as {e:?}, the rules name {kinds:?}: {log:?}"
+                    ),
+                    (Some(Some(Ok(_))), Err(e)) => {
+                        panic!("flip refused as {e:?}, the rules accept: {log:?}")
+                    }
+                    (Some(Some(Err(kinds))), Ok(())) => {
+                        panic!("flip accepted, the rules refuse ({kinds:?}): {log:?}")
+                    }
+                }
                 r.map(|()| true).map_err(|e| format!("{e:?}"))
             }
             Op::Split => {
                 let e = edge(&mut i);
                 let r = mesh.split_edge(e);
                 log.push(format!("split {e:?} -> {r:?}"));
+                check_split(&mesh, &before, e, None, &r, &log);
                 r.map(|_| true).map_err(|e| format!("{e:?}"))
             }
             Op::SplitAt => {
@@ -249,6 +531,7 @@ pub fn halfedge_ops(data: &[u8]) {
                 if let Ok(m) = r {
                     assert_eq!(mesh.position(m), Some(p), "split point: {log:?}");
                 }
+                check_split(&mesh, &before, e, Some(p), &r, &log);
                 r.map(|_| true).map_err(|e| format!("{e:?}"))
             }
             Op::Collapse => {
@@ -401,7 +684,14 @@ pub fn halfedge_ops(data: &[u8]) {
                 log.push(format!("loop {weights:?} -> {r:?}"));
                 match r {
                     Ok(()) => {
-                        assert_eq!(out.len(), mesh.len().after_loop(), "Loop counts: {log:?}");
+                        // Counts against V' = V + E, E' = 2E + 3F, F' = 4F (the documented
+                        // rule, evaluated here on independent counts of both meshes).
+                        let [v, e, f] = model_counts(&mesh);
+                        assert_eq!(
+                            model_counts(&out),
+                            [v + e, 2 * e + 3 * f, 4 * f],
+                            "Loop counts: {log:?}"
+                        );
                         // Positions against the f64 rules on the triangle list (the mesh is
                         // compact: vertex slots are vertex ids).
                         let (ps, ts) = exported(&mesh);
@@ -414,6 +704,22 @@ pub fn halfedge_ops(data: &[u8]) {
                             );
                         }
                         let nv = ps.len() as u32;
+                        // Every edge of the list has its new vertex checked: the mesh's live
+                        // edges are exactly the list's.
+                        let live: BTreeSet<(u32, u32)> = mesh
+                            .edges()
+                            .filter_map(|e| mesh.edge_vertices(e))
+                            .map(|[a, b]| (a.raw().min(b.raw()), a.raw().max(b.raw())))
+                            .collect();
+                        assert_eq!(
+                            live.len(),
+                            mesh.edges().count(),
+                            "two live edges join one pair: {log:?}"
+                        );
+                        assert!(
+                            live == odd.keys().copied().collect::<BTreeSet<_>>(),
+                            "live edges differ from the triangle list's: {log:?}"
+                        );
                         for e in mesh.edges() {
                             let Some([a, b]) = mesh.edge_vertices(e) else {
                                 panic!("edges() gave {e:?}, which has no vertices: {log:?}");
@@ -438,8 +744,29 @@ pub fn halfedge_ops(data: &[u8]) {
                 let mut moves = 0usize;
                 mesh.compact(|_| moves += 1);
                 log.push(format!("compact ({moves} moves)"));
-                assert!(mesh.is_compact(), "not compact after compact: {log:?}");
-                assert_eq!(mesh.len(), before.len(), "compact changed counts: {log:?}");
+                // Dense handles, checked slot by slot (not through `is_compact`, the
+                // function's own summary, which must agree), and the same faces.
+                let dense = (0..mesh.slots().vertices).all(|v| mesh.position(vid(v)).is_some())
+                    && (0..mesh.slots().edges).all(|e| mesh.contains_edge(EdgeId::new(e as u32)))
+                    && (0..mesh.slots().faces).all(|f| mesh.contains_face(FaceId::new(f as u32)));
+                assert!(
+                    dense,
+                    "a dead slot below the high-water mark after compact: {log:?}"
+                );
+                assert!(
+                    mesh.is_compact(),
+                    "is_compact() false on dense slots: {log:?}"
+                );
+                assert_eq!(
+                    model_counts(&mesh),
+                    model_counts(&before),
+                    "compact changed counts: {log:?}"
+                );
+                assert_eq!(
+                    faces_now(&mesh),
+                    faces_before,
+                    "compact changed faces: {log:?}"
+                );
                 Ok(true)
             }
             Op::SetPosition => {
@@ -499,11 +826,21 @@ pub fn halfedge_ops(data: &[u8]) {
         };
         match outcome {
             Ok(keep_chi) => {
+                // `validate()` is the core's structural invariant check, a separate pass
+                // over the records that shares no code with the edits; it is kept as the
+                // judge of the half-edge links, which no triangle list shows. The counts
+                // and faces are judged independently (model_counts, the oracles above).
                 if let Err(e) = mesh.validate() {
                     panic!("validate() = {e:?} after a successful operation: {log:#?}");
                 }
+                let counts = model_counts(&mesh);
+                assert_eq!(
+                    counts_of(mesh.len()),
+                    counts,
+                    "len() differs from the counted elements: {log:#?}"
+                );
                 if keep_chi {
-                    assert_eq!(euler(mesh.len()), chi, "V − E + F changed: {log:#?}");
+                    assert_eq!(euler(counts), chi, "V − E + F changed: {log:#?}");
                 }
             }
             Err(_) => assert!(
@@ -604,5 +941,59 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
             e = e.bytes(tri);
         }
         s.push(t(name, e.bytes(&[1, 0, 0, 0, 7, 9]).done()));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The flip and split oracles on the octahedron (vertices `±X, ±Y, ±Z` as 0…5) and the
+    /// tetrahedron, against faces written out by hand from the docs' rules.
+    #[test]
+    fn flip_and_split_oracles_on_hand_cases() {
+        let (ps, ts) = start_mesh(1);
+        let pts = |t: &[[u32; 3]]| canonical(as_points(&ps, t).into_iter());
+        // Edge 0–2 (X–Y): wings (0, 2, 4) and (2, 0, 5) become (4, 0, 5) and (5, 2, 4).
+        let mut after: Vec<[u32; 3]> = ts[1..4].iter().chain(&ts[5..]).copied().collect();
+        after.extend([[4, 0, 5], [5, 2, 4]]);
+        assert_eq!(flip_oracle(&ps, &ts, 0, 2), Some(Ok(pts(&after))));
+        assert_eq!(flip_oracle(&ps, &ts, 2, 0), Some(Ok(pts(&after))));
+        // The same edge split at p: (0, m, 4), (m, 2, 4), (2, m, 5), (m, 0, 5).
+        let p = Vec3::new(0.5, 0.5, 0.0);
+        let mut want: Vec<[Vec3; 3]> = as_points(&ps, &after[..6]);
+        let [x, y, z, nz] = [ps[0], ps[2], ps[4], ps[5]];
+        want.extend([[x, p, z], [p, y, z], [y, p, nz], [p, x, nz]]);
+        let counts = [6, 12, 8];
+        assert_eq!(
+            split_oracle(&ps, &ts, counts, 0, 2, p),
+            Some(Ok(canonical(want.into_iter())))
+        );
+        assert_eq!(
+            split_oracle(&ps, &ts, counts, 0, 2, Vec3::NAN),
+            Some(Err(vec!["NonFinitePosition"]))
+        );
+        assert_eq!(
+            split_oracle(&ps, &ts, [64, 12, 8], 0, 2, p),
+            Some(Err(vec!["Capacity"]))
+        );
+        // Tetrahedron: the wings of 0–1 are joined and every valence is 3.
+        let (ps, ts) = start_mesh(0);
+        assert_eq!(
+            flip_oracle(&ps, &ts, 0, 1),
+            Some(Err(vec![
+                FlipError::DuplicateEdge,
+                FlipError::DegreeTooLow(vid(0)),
+                FlipError::DegreeTooLow(vid(1)),
+            ]))
+        );
+        // One triangle: every edge is a boundary edge.
+        let (ps, ts) = start_mesh(3);
+        assert_eq!(
+            flip_oracle(&ps, &ts, 1, 2),
+            Some(Err(vec![FlipError::Boundary]))
+        );
+        assert_eq!(edge_set(&ts).len(), 3);
+        assert_eq!(valence(&edge_set(&start_mesh(4).1), 0), 6);
     }
 }

@@ -11,6 +11,7 @@
 use super::*;
 use super::{Enc, Input, fmt_ray};
 use glam::{DMat3, DVec3, Vec3};
+use halfray_core::error::GeometryError;
 use halfray_core::float::F64_UNIT_ROUNDOFF;
 use halfray_core::quadric::{Ellipsoid, Quadric};
 use halfray_core::ray::Ray;
@@ -82,9 +83,163 @@ pub fn encode_shape(kind: u8, o: Vec3, d: Vec3, p: Vec3, q: Vec3, s: f32) -> Vec
     }
 }
 
+/// The constructor's parameters as decoded, for [`expected_refusal`] (`f64` for the general
+/// form: the decoder widens its `f32`s exactly).
+#[derive(Clone, Copy, Debug)]
+pub enum Params {
+    /// `Quadric::new(A, b, c)`: the 6 upper-triangle entries of `A`, then `b`, `c`.
+    General([f64; 10]),
+    /// `Ellipsoid::new(center, radii)`.
+    Ellipsoid(Vec3, Vec3),
+    /// `Quadric::cylinder(axis_point, axis_dir, radius)`.
+    Cylinder(Vec3, Vec3, f32),
+    /// `Quadric::cone(apex, axis_dir, tan_half_angle)`.
+    Cone(Vec3, Vec3, f32),
+}
+
+/// The constructor's parameters of a `ray_quadric` input (the same bytes [`decode`] reads).
+pub fn decode_params(data: &[u8]) -> Params {
+    let mut i = Input::new(data);
+    let fl = i.u8();
+    let q = fl & 4 != 0;
+    let _origin = if q { i.qvec3() } else { i.vec3() };
+    let _direction = i.vec3();
+    if fl & 8 == 0 {
+        let _interval = (i.f32(), i.f32());
+    }
+    let mut s = || if q { i.q() } else { i.f32() };
+    let mut v = || Vec3::new(s(), s(), s());
+    match fl & 3 {
+        0 => Params::General(core::array::from_fn(|_| f64::from(s()))),
+        1 => {
+            let (c, r) = (v(), v());
+            Params::Ellipsoid(c, r)
+        }
+        2 => {
+            let (p, a) = (v(), v());
+            Params::Cylinder(p, a, s())
+        }
+        _ => {
+            let (p, a) = (v(), v());
+            Params::Cone(p, a, s())
+        }
+    }
+}
+
+/// Largest magnitude the centred form of [`Quadric::new`] may reach, by the bound in
+/// [`expected_refusal`], for the oracle to insist on acceptance (unitless, the scale of `k`).
+/// The constructor documents a `NonFinite` refusal when the centred form "overflows `f64`"
+/// without saying at which rounding of the centre computation; below `10³⁰⁰` (a factor
+/// 1.8·10⁸ under `f64::MAX`, far more than the rounding of a 3×3 inverse with condition
+/// number ≤ 2²⁰ can add) no step can overflow for entries of `f32` range (the adjugate's
+/// products stay below 10⁷⁸), so a refusal there is a defect. Above it the contract leaves
+/// the outcome undecided: accepted or `NonFinite`, never `Degenerate`. For the `f32` inputs
+/// this target decodes the bound stays below 10¹³⁶ (`4·2⁴⁰·|b|²/‖A‖_F` with
+/// `|b| ≤ 5.9·10³⁸`, `‖A‖_F ≥ 1.4·10⁻⁴⁵`), so the band is never entered; it is stated so
+/// that the oracle says what it would not judge.
+pub const CENTRED_FORM_DECIDED_BELOW: f64 = 1e300;
+
+/// What the constructor must answer, from its documented contract alone (doc comments of
+/// `Quadric::new`, `Ellipsoid::new`, `Quadric::cylinder`, `Quadric::cone` and of
+/// [`halfray_core::tolerance::QUADRIC_CENTER_MIN_REL_DET`]): `Ok(())` when it must accept,
+/// `Err(kinds)` when it must refuse with one of `kinds` (several where the contract names
+/// more than one applicable error without ordering them), `None` where the contract leaves
+/// it undecided ([`CENTRED_FORM_DECIDED_BELOW`]).
+///
+/// * General: `NonFinite` for a non-finite entry; `Degenerate` when the symmetric `A` and
+///   `b` are all zero (`f` constant); otherwise accepted unless the centred form overflows.
+///   The centre is used only when `|det A| ≥ 2⁻²⁰‖A‖_F³` (the tolerance's docs), so with
+///   `|det A| = σ₁σ₂σ₃ ≤ ‖A‖_F²σ₃` the smallest singular value is `σ₃ ≥ 2⁻²⁰‖A‖_F`:
+///   `|x_c| ≤ |b|/σ₃`, `|b_c| ≤ ‖A‖_F|x_c| + |b|`,
+///   `|k| ≤ |x_c|(‖A‖_F|x_c| + 2|b|) + |c|`; otherwise the reference point is the origin
+///   (`b_c = b`, `k = c`, finite). The bound is evaluated in `f64` with a factor 4 for its
+///   own rounding and that of the inverse.
+/// * Ellipsoid: `NonFinite` for a non-finite centre or radius, `Degenerate` for a radius
+///   `≤ 0` (`−0.0` included); otherwise accepted (`1/r²` of an `f32` radius is finite in
+///   `f64`: between `10⁻⁷⁸` and `10⁹⁰`).
+/// * Cylinder, cone: `NonFinite` for a non-finite point, axis or scalar; `Degenerate` for a
+///   zero axis (any sign of zero; a subnormal `f32` axis is non-zero in `f64`) or a scalar
+///   `≤ 0`; otherwise accepted (`r²` and `1 + τ²` of an `f32` are finite in `f64`).
+pub fn expected_refusal(p: &Params) -> Option<Result<(), Vec<GeometryError>>> {
+    use GeometryError::{Degenerate, NonFinite};
+    let finite3 = |v: Vec3| v.x.is_finite() && v.y.is_finite() && v.z.is_finite();
+    let zero3 = |v: Vec3| v.x == 0.0 && v.y == 0.0 && v.z == 0.0;
+    let mut kinds = Vec::new();
+    match *p {
+        Params::General(e) => {
+            if e.iter().any(|x| !x.is_finite()) {
+                return Some(Err(vec![NonFinite]));
+            }
+            // `A = 0` and `b = 0`, whatever `c`.
+            if e[..9].iter().all(|&x| x == 0.0) {
+                return Some(Err(vec![Degenerate]));
+            }
+            // `A`'s entries: the diagonal once, the off-diagonal twice.
+            let fro = (e[0] * e[0]
+                + e[3] * e[3]
+                + e[5] * e[5]
+                + 2.0 * (e[1] * e[1] + e[2] * e[2] + e[4] * e[4]))
+                .sqrt();
+            let b = (e[6] * e[6] + e[7] * e[7] + e[8] * e[8]).sqrt();
+            let bound = if fro > 0.0 {
+                let sigma3 = fro / 1_048_576.0;
+                let xc = b / sigma3;
+                4.0 * (xc * (fro * xc + 2.0 * b) + e[9].abs() + fro * xc + b)
+            } else {
+                b + e[9].abs()
+            };
+            if !(bound < CENTRED_FORM_DECIDED_BELOW) {
+                return None;
+            }
+        }
+        Params::Ellipsoid(c, r) => {
+            if !finite3(c) || !finite3(r) {
+                kinds.push(NonFinite);
+            }
+            // A NaN radius is not `≤ 0` (only NonFinite); `−∞` is both.
+            if r.to_array().iter().any(|&x| x <= 0.0) {
+                kinds.push(Degenerate);
+            }
+        }
+        Params::Cylinder(pt, axis, s) | Params::Cone(pt, axis, s) => {
+            if !finite3(pt) || !finite3(axis) || !s.is_finite() {
+                kinds.push(NonFinite);
+            }
+            if zero3(axis) || s <= 0.0 {
+                kinds.push(Degenerate);
+            }
+        }
+    }
+    Some(if kinds.is_empty() { Ok(()) } else { Err(kinds) })
+}
+
 /// Fuzz target `ray_quadric`.
+///
+/// Besides [`check`] and [`check_against_exact`] on every surface built: the constructor's
+/// answer against [`expected_refusal`] (refusing a valid input, accepting an invalid one, or
+/// refusing with another kind than the contract names is a failure).
 pub fn ray_quadric(data: &[u8]) {
     let (surface, ray) = decode(data);
+    let params = decode_params(data);
+    if let Some(want) = expected_refusal(&params) {
+        match (&surface, &want) {
+            (Ok(_), Ok(())) => {}
+            (Err(e), Err(kinds)) => assert!(
+                kinds.contains(e),
+                "refused as {e:?}, the contract names {kinds:?}: {params:?}"
+            ),
+            (Ok(q), Err(kinds)) => {
+                panic!("accepted {q:?}, the contract refuses it ({kinds:?}): {params:?}")
+            }
+            (Err(e), Ok(())) => panic!("refused a valid input as {e:?}: {params:?}"),
+        }
+    } else {
+        assert!(
+            !matches!(surface, Err(GeometryError::Degenerate)),
+            "a centred form beyond {CENTRED_FORM_DECIDED_BELOW:e} refused as Degenerate: \
+             {params:?}"
+        );
+    }
     if let Ok(q) = surface {
         check(&q, &ray);
         check_against_exact(&q, &ray);
@@ -452,6 +607,79 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The refusal oracle on hand-picked inputs, each with the answer the constructor docs
+    /// give (written here, not computed), and the constructors agree.
+    #[test]
+    fn refusals_predicted_from_the_contract() {
+        use GeometryError::{Degenerate, NonFinite};
+        let v = Vec3::new;
+        let one = v(1.0, 1.0, 1.0);
+        let cases: [(Params, Result<(), Vec<GeometryError>>); 12] = [
+            (Params::Ellipsoid(Vec3::ZERO, one), Ok(())),
+            (
+                Params::Ellipsoid(Vec3::ZERO, v(1.0, -0.0, 1.0)),
+                Err(vec![Degenerate]),
+            ),
+            (
+                Params::Ellipsoid(Vec3::ZERO, v(1.0, f32::NAN, 1.0)),
+                Err(vec![NonFinite]),
+            ),
+            (
+                Params::Ellipsoid(Vec3::ZERO, v(1.0, f32::NEG_INFINITY, 1.0)),
+                Err(vec![NonFinite, Degenerate]),
+            ),
+            (Params::Ellipsoid(Vec3::ZERO, v(1e-45, 3e38, 1.0)), Ok(())),
+            (
+                Params::Cylinder(Vec3::ZERO, v(0.0, -0.0, 0.0), 1.0),
+                Err(vec![Degenerate]),
+            ),
+            (
+                Params::Cylinder(Vec3::ZERO, v(1e-45, 0.0, 0.0), 3e38),
+                Ok(()),
+            ),
+            (
+                Params::Cone(Vec3::ZERO, Vec3::Z, 0.0),
+                Err(vec![Degenerate]),
+            ),
+            (
+                Params::Cone(v(f32::INFINITY, 0.0, 0.0), Vec3::Z, 1.0),
+                Err(vec![NonFinite]),
+            ),
+            (Params::General([0.0; 10]), Err(vec![Degenerate])),
+            (
+                Params::General([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0]),
+                Err(vec![Degenerate]),
+            ),
+            (
+                Params::General([1.0, 0.0, 0.0, 1.0, 0.0, 1.0, 3e38, 3e38, 3e38, 3e38]),
+                Ok(()),
+            ),
+        ];
+        for (params, want) in cases {
+            assert_eq!(expected_refusal(&params), Some(want.clone()), "{params:?}");
+            let built = match params {
+                Params::General(e) => {
+                    let a = DMat3::from_cols_array(&[
+                        e[0], e[1], e[2], e[1], e[3], e[4], e[2], e[4], e[5],
+                    ]);
+                    Quadric::new(a, DVec3::new(e[6], e[7], e[8]), e[9]).map(|_| ())
+                }
+                Params::Ellipsoid(c, r) => Ellipsoid::new(c, r).map(|_| ()),
+                Params::Cylinder(p, a, r) => Quadric::cylinder(p, a, r).map(|_| ()),
+                Params::Cone(p, a, t) => Quadric::cone(p, a, t).map(|_| ()),
+            };
+            match (built, want) {
+                (Ok(()), Ok(())) => {}
+                (Err(e), Err(kinds)) => assert!(kinds.contains(&e), "{params:?}: {e:?}"),
+                (got, want) => panic!("{params:?}: {got:?}, contract {want:?}"),
+            }
+        }
+        // The general decoder and the parameter decoder read the same bytes.
+        let bytes = encode_general(Vec3::ZERO, Vec3::X, [0.0; 10]);
+        assert!(matches!(decode_params(&bytes), Params::General(e) if e == [0.0; 10]));
+        assert_eq!(decode(&bytes).0, Err(Degenerate));
+    }
 
     /// The oracle's polynomial for the specification's ellipsoid `x²/4 + y²/9 + z² = 1` and the
     /// ray `(−5, ¼, ½) + t·x`, written out by hand from the stored form (`A = diag(¼, fl(1/9),
