@@ -321,6 +321,36 @@ fn errors_in_nested_csg_operands_name_every_index() {
     );
 }
 
+/// A direction or axis `f32` cannot normalise (zero, too short, too long) is refused with the
+/// range that can be, not called zero: `[1e-30, 0, 0]` is no zero vector.
+#[test]
+fn directions_too_short_or_long_to_normalise() {
+    for axis in ["[0, 0, 0]", "[1e-30, 0, 0]", "[3e19, 3e19, 0]"] {
+        check(
+            "axis.toml",
+            &sphere_with(&format!(
+                "center = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = [{{ rotate = {{ axis = {axis}, degrees = 30 }} }}]"
+            )),
+            "16:34",
+            "object[0].transform[0].rotate.axis",
+            "whose length f32 can normalise (a largest component from about 1e-22 to 1e19)",
+        );
+    }
+    // Inside the range, both ends.
+    for axis in ["[1e-22, 0, 0]", "[1e19, 0, 0]"] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("ok.toml");
+        std::fs::write(
+            &path,
+            sphere_with(&format!(
+                "center = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = [{{ rotate = {{ axis = {axis}, degrees = 30 }} }}]"
+            )),
+        )
+        .unwrap();
+        load(&path).unwrap_or_else(|e| panic!("{axis}: {e}"));
+    }
+}
+
 #[test]
 fn singular_transform() {
     check(

@@ -22,6 +22,11 @@ use light::light;
 use material::material;
 use mesh_ref::mesh_def;
 use object::object;
+
+/// Why a direction or rotation axis is refused: `normalize` in `f32` needs its squared length
+/// between the smallest subnormal and the largest finite `f32`, so a largest component from
+/// about `4·10⁻²³` to `1.8·10¹⁹` (a zero vector, or `[1e-30, 0, 0]`, has no direction here).
+pub(super) const NOT_NORMALISABLE: &str = "must be a vector whose length f32 can normalise (a largest component from about 1e-22 to 1e19)";
 use repeat::{MAX_OBJECTS, repeat};
 
 type Span = Range<usize>;
@@ -121,7 +126,7 @@ impl Ctx<'_> {
     fn dir(&self, v: &V3, field: &str) -> Result<Vec3> {
         let d = self.v3(v, field)?.normalize_or_zero();
         if d == Vec3::ZERO {
-            return Err(self.err(&v.span(), field, "must be a non-zero vector"));
+            return Err(self.err(&v.span(), field, NOT_NORMALISABLE));
         }
         Ok(d)
     }

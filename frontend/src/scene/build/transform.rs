@@ -42,7 +42,7 @@ pub(super) fn transform(
                     ctx.err(
                         &rd.axis.span(),
                         &format!("{f}.rotate.axis"),
-                        "must be a non-zero vector",
+                        super::NOT_NORMALISABLE,
                     )
                 })?;
                 (rm, r.span(), "rotate")
