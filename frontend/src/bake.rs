@@ -99,13 +99,21 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         + std::mem::size_of_val(&mesh.triangles[..])
         + std::mem::size_of_val(bvh.nodes())
         + std::mem::size_of_val(bvh.indices());
+    // The binary form's file is the arrays after its header: say both.
+    let size = match args.format {
+        BakeFormat::Rust => format!("{flash} bytes of static data"),
+        BakeFormat::Bin => format!(
+            "{} bytes ({flash} of arrays after a {}-byte header)",
+            data.len(),
+            data.len() - flash
+        ),
+    };
     crate::console::print_out(&format!(
-        "baked {}: {} vertices, {} triangles, {} nodes, {} bytes of static data -> {}\n",
+        "baked {}: {} vertices, {} triangles, {} nodes, {size} -> {}\n",
         crate::text::path(&args.input),
         mesh.positions.len(),
         mesh.triangles.len(),
         bvh.nodes().len(),
-        flash,
         crate::text::path(&args.output)
     ))
 }

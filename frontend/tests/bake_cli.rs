@@ -188,6 +188,14 @@ fn the_baked_buffer_holds_what_the_baked_source_holds_at_the_documented_offsets(
     assert_eq!(&b[..8], b"halfray\0");
     assert_eq!(le_words(&b[8..32]), [1, v as u32, t as u32, k as u32, 0, 0]);
     assert_eq!(b.len(), 32 + 32 * k + 12 * v + 16 * t);
+    // The summary gives the file's size, the arrays' and the header's.
+    let said = String::from_utf8(o.stdout).unwrap();
+    let want = format!(
+        "{} bytes ({} of arrays after a 32-byte header)",
+        b.len(),
+        b.len() - 32
+    );
+    assert!(said.contains(&want), "{said}");
     let node_words = le_words(&b[32..32 + 32 * k]);
     for (n, w) in nodes.iter().zip(node_words.chunks(8)) {
         let (bounds, start, count) = n.to_raw();
