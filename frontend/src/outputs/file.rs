@@ -8,7 +8,8 @@
 //! writing starts. [`OutputFile::write`] then fills it:
 //!
 //! * a new or regular file gets a temporary file in its folder, synced, given the replaced
-//!   file's permissions, and renamed over it: readers see the old bytes or the new ones, never
+//!   file's permissions (and its owner and group where this process may, [`keep_owner`]),
+//!   and renamed over it: readers see the old bytes or the new ones, never
 //!   a mix, and a failure at any point leaves the old file untouched and no temporary file;
 //! * a symlink is followed (to the end of its chain) and its target replaced as above, in
 //!   the target's folder: the link stays a link;
@@ -44,6 +45,9 @@ enum Route {
         target: PathBuf,
         dir: PathBuf,
         permissions: Option<Permissions>,
+        /// The replaced file's owner and group (`uid`, `gid`), given to the replacement
+        /// where this process may ([`keep_owner`]).
+        owner: Option<(u32, u32)>,
     },
     /// Written in place (device, FIFO, socket).
     InPlace { target: PathBuf },
@@ -164,6 +168,7 @@ impl OutputFile {
                     dir: dir.to_path_buf(),
                     target: path,
                     permissions: None,
+                    owner: None,
                 }
             }
             Target::Regular {
@@ -191,8 +196,9 @@ impl OutputFile {
                     ));
                 }
                 let dir = folder_of(&path).to_path_buf();
-                let barrier = match (std::fs::metadata(&path), std::fs::metadata(&dir)) {
-                    (Ok(file), Ok(folder)) => super::replace::barrier(&path, &file, &folder),
+                let meta = std::fs::metadata(&path);
+                let barrier = match (&meta, std::fs::metadata(&dir)) {
+                    (Ok(file), Ok(folder)) => super::replace::barrier(&path, file, &folder),
                     _ => None,
                 };
                 if let Some(b) = barrier.filter(|b| !(force && b.forced_past())) {
@@ -207,6 +213,7 @@ impl OutputFile {
                     dir,
                     target: path,
                     permissions: Some(permissions),
+                    owner: meta.ok().as_ref().and_then(owner_of),
                 }
             }
         };
@@ -248,10 +255,16 @@ impl OutputFile {
                 target,
                 dir,
                 permissions,
+                owner,
             } => {
                 let mut temp = temp_in(&dest, &dir)?;
                 let result = (|| {
                     let file = temp.file()?;
+                    // The owner before the mode: a change of owner clears the set-user-ID
+                    // and set-group-ID bits the mode may then set.
+                    if let Some(owner) = owner {
+                        keep_owner(file, owner);
+                    }
                     // Before the bytes: a private file's new contents are never readable
                     // by others, not even in the temporary file.
                     if let Some(p) = permissions {
@@ -286,6 +299,37 @@ impl OutputFile {
         }
     }
 }
+
+/// The owner and group of a file's metadata (`None` where the platform has none).
+#[cfg(unix)]
+#[allow(clippy::unnecessary_wraps)]
+fn owner_of(m: &std::fs::Metadata) -> Option<(u32, u32)> {
+    use std::os::unix::fs::MetadataExt;
+    Some((m.uid(), m.gid()))
+}
+
+#[cfg(not(unix))]
+fn owner_of(_: &std::fs::Metadata) -> Option<(u32, u32)> {
+    None
+}
+
+/// Gives `file` (a replacement, not yet renamed) the owner and group `(uid, gid)` of the file
+/// it replaces, as far as this process may: root both (a root-run command replacing a user's
+/// file leaves it theirs), another user the group where it is one of theirs. Where the system
+/// refuses, the replacement keeps this process's user and group, as any save by rename does.
+#[cfg(unix)]
+fn keep_owner(file: &std::fs::File, (uid, gid): (u32, u32)) {
+    use std::os::unix::fs::{MetadataExt, fchown};
+    let Ok(m) = file.metadata() else {
+        return;
+    };
+    if (m.uid(), m.gid()) != (uid, gid) && fchown(file, Some(uid), Some(gid)).is_err() {
+        let _ = fchown(file, None, Some(gid));
+    }
+}
+
+#[cfg(not(unix))]
+fn keep_owner(_: &std::fs::File, _: (u32, u32)) {}
 
 /// An output half way: see [`OutputFile::stage`].
 enum Staged {
@@ -527,6 +571,36 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("descriptor 4093 is not open"), "{e}");
+    }
+
+    /// A replaced file keeps its owner and group where this process may set them: run as
+    /// root (as CI is), a file of another user (`nobody`, uid 65534), set-group-ID bit
+    /// included, stays theirs with its mode; the process's own file stays its own.
+    #[test]
+    fn owner_and_group_are_kept_where_the_process_may_set_them() {
+        use std::os::unix::fs::{MetadataExt, chown};
+        let dir = tempfile::tempdir().unwrap();
+        let own = dir.path().join("own.txt");
+        std::fs::write(&own, b"old").unwrap();
+        let me = std::fs::metadata(&own).unwrap();
+        write(&own, false, b"new").unwrap();
+        let after = std::fs::metadata(&own).unwrap();
+        assert_eq!((after.uid(), after.gid()), (me.uid(), me.gid()));
+        let theirs = dir.path().join("theirs.txt");
+        std::fs::write(&theirs, b"old").unwrap();
+        if chown(&theirs, Some(65_534), Some(65_534)).is_err() {
+            crate::skips::record_skip(
+                "SKIPPED halfray outputs::file::tests::owner_and_group_are_kept_where_the_process_may_set_them: not root (no chown to another user)",
+            );
+            return;
+        }
+        std::fs::set_permissions(&theirs, Permissions::from_mode(0o2664)).unwrap();
+        write(&theirs, false, b"new").unwrap();
+        let after = std::fs::metadata(&theirs).unwrap();
+        assert_eq!((after.uid(), after.gid()), (65_534, 65_534));
+        assert_eq!(mode(&theirs), 0o2664);
+        assert_eq!(std::fs::read(&theirs).unwrap(), b"new");
+        assert_eq!(names(dir.path()), ["own.txt", "theirs.txt"]);
     }
 
     #[test]
