@@ -80,17 +80,44 @@ pub fn encode_png(
 
 /// Reads an image (format guessed from its bytes) as 8-bit straight RGBA, within
 /// [`MEMORY_LIMIT_BYTES`]: the header's size is read first and an image whose RGBA buffer
-/// would exceed the limit is refused with its size before anything is decoded; the decoder
-/// itself is given the same limit (not the `image` crate's smaller default), so the two agree.
+/// would exceed the limit is refused with its size before anything is decoded; so is one whose
+/// decoded buffer (16 bits a channel: up to twice the 8-bit copy) and the 8-bit copy made from
+/// it (none for an image already 8-bit RGBA) together would. The decoder itself is given the
+/// same limit (not the `image` crate's smaller default).
 pub fn read_rgba8(path: &Path) -> Result<image::RgbaImage> {
+    use image::ImageDecoder;
     let (w, h) = image_dimensions(path)?;
-    match reader(path)?.decode() {
-        Ok(img) => Ok(img.into_rgba8()),
-        // The decoder's own buffer (e.g. 16 bits a channel) can exceed the limit where the
-        // 8-bit copy does not: still give the size and the limit.
-        Err(image::ImageError::Limits(_)) => Err(too_big(path, (w, h), None)),
-        Err(e) => Err(cannot_decode(path, e)),
+    let decoder = reader(path)?
+        .into_decoder()
+        .map_err(|e| decode_error(path, (w, h), e))?;
+    let copy = if decoder.color_type() == image::ColorType::Rgba8 {
+        Some(0)
+    } else {
+        rgba8_bytes(w, h)
+    };
+    let peak = copy.and_then(|c| c.checked_add(decoder.total_bytes()));
+    if peak.is_none_or(|b| b > MEMORY_LIMIT_BYTES) {
+        return Err(too_big(path, (w, h), peak));
     }
+    image::DynamicImage::from_decoder(decoder)
+        .map(image::DynamicImage::into_rgba8)
+        .map_err(|e| decode_error(path, (w, h), e))
+}
+
+/// The error of decoding image `path` of `w`×`h`: past the decoder's limit, the size and the
+/// limit ([`too_big`]); otherwise the decoder's message.
+fn decode_error(path: &Path, (w, h): (u32, u32), e: image::ImageError) -> Error {
+    match e {
+        image::ImageError::Limits(_) => too_big(path, (w, h), None),
+        e => cannot_decode(path, e),
+    }
+}
+
+/// The bytes of a `w`×`h` 8-bit RGBA buffer (`None` past `u64`).
+fn rgba8_bytes(w: u32, h: u32) -> Option<u64> {
+    u64::from(w)
+        .checked_mul(u64::from(h))
+        .and_then(|n| n.checked_mul(4))
 }
 
 /// The width and height an image file's header gives (format guessed from its bytes), read
@@ -101,9 +128,7 @@ pub fn image_dimensions(path: &Path) -> Result<(u32, u32)> {
     let (w, h) = reader(path)?
         .into_dimensions()
         .map_err(|e| cannot_decode(path, e))?;
-    let rgba_bytes = u64::from(w)
-        .checked_mul(u64::from(h))
-        .and_then(|n| n.checked_mul(4));
+    let rgba_bytes = rgba8_bytes(w, h);
     if rgba_bytes.is_none_or(|b| b > MEMORY_LIMIT_BYTES) {
         return Err(too_big(path, (w, h), rgba_bytes));
     }

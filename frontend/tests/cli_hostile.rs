@@ -798,33 +798,40 @@ fn crc32(bytes: &[u8]) -> u32 {
     !c
 }
 
-/// Item 13: an image whose header claims a size over the 4 GiB memory limit is refused
-/// before decoding, naming the file, its size and the limit.
-#[test]
-fn huge_images_are_refused_with_their_size_and_the_limit() {
-    let dir = tempfile::tempdir().unwrap();
-    // A PNG header claiming 40000×40000 RGBA8 (6.0 GiB as RGBA), with no pixel data.
+/// A PNG of `w`×`h` RGBA, `depth` bits a channel, by its header alone: no pixel data (the
+/// decoder reads the header up to the first IDAT: an empty one, then IEND).
+fn png_header(w: u32, h: u32, depth: u8) -> Vec<u8> {
     let mut ihdr = b"IHDR".to_vec();
-    ihdr.extend(40000u32.to_be_bytes());
-    ihdr.extend(40000u32.to_be_bytes());
-    ihdr.extend([8, 6, 0, 0, 0]);
+    ihdr.extend(w.to_be_bytes());
+    ihdr.extend(h.to_be_bytes());
+    ihdr.extend([depth, 6, 0, 0, 0]);
     let mut bytes = b"\x89PNG\r\n\x1a\n".to_vec();
     bytes.extend(13u32.to_be_bytes());
     bytes.extend(&ihdr);
     bytes.extend(crc32(&ihdr).to_be_bytes());
-    // The decoder reads the header up to the first IDAT: an empty one, then IEND.
     for chunk in [&b"IDAT"[..], &b"IEND"[..]] {
         bytes.extend(0u32.to_be_bytes());
         bytes.extend(chunk);
         bytes.extend(crc32(chunk).to_be_bytes());
     }
-    let huge = dir.path().join("huge.png");
-    std::fs::write(&huge, &bytes).unwrap();
-    let out = dir.path().join("o.png");
-    let scene = small_scene(dir.path(), "s.toml", "");
-    for o in [
-        run(&[&"composite", &huge, &huge, &"-o", &out]),
-        run(&[
+    bytes
+}
+
+/// Item 13: an image whose header claims a size over the 4 GiB memory limit is refused
+/// before decoding, naming the file, its size and the limit: 40000×40000 RGBA8 (6.0 GiB),
+/// and 20000×20000 RGBA16 as a render's background, whose 16-bit buffer (3.0 GiB) and 8-bit
+/// copy (1.5 GiB) each fit but not together (4.5 GiB; `composite` refuses two of them by
+/// their pair's size first).
+#[test]
+fn huge_images_are_refused_with_their_size_and_the_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    for (w, depth, size) in [(40000, 8, "6.0"), (20000, 16, "4.5")] {
+        let huge = dir.path().join("huge.png");
+        std::fs::write(&huge, png_header(w, w, depth)).unwrap();
+        let out = dir.path().join("o.png");
+        let scene = small_scene(dir.path(), "s.toml", "");
+        let composite = (depth == 8).then(|| run(&[&"composite", &huge, &huge, &"-o", &out]));
+        for o in composite.into_iter().chain([run(&[
             &"render",
             &scene,
             &"-o",
@@ -832,16 +839,15 @@ fn huge_images_are_refused_with_their_size_and_the_limit() {
             &"-q",
             &"--background",
             &huge,
-        ]),
-    ] {
-        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-        let e = stderr(&o);
-        assert!(
-            e.contains("huge.png")
-                && e.contains("image is 40000×40000: decoding it needs about 6.0 GiB, more than the 4 GiB limit"),
-            "{e}"
-        );
-        assert!(!out.exists());
+        ])]) {
+            assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+            let e = stderr(&o);
+            let want = format!(
+                "image is {w}×{w}: decoding it needs about {size} GiB, more than the 4 GiB limit"
+            );
+            assert!(e.contains("huge.png") && e.contains(&want), "{e}");
+            assert!(!out.exists());
+        }
     }
 }
 
