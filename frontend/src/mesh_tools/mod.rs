@@ -142,7 +142,9 @@ pub struct SmoothArgs {
 pub struct CollapseArgs {
     /// Input OBJ.
     pub input: PathBuf,
-    /// Output OBJ (written atomically; never the input), compacted.
+    /// Output OBJ (written atomically; never the input), compacted: the vertices, edges and
+    /// faces the collapses free are dropped (the input's own unreferenced vertices are kept, as
+    /// the other mesh tools keep them).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Replace an output that is read-only or hard-linked (keeping its mode).
