@@ -8,7 +8,7 @@
 //! writing starts. [`OutputFile::write`] then fills it:
 //!
 //! * a new or regular file gets a temporary file in its folder, synced, given the replaced
-//!   file's permissions (and its owner and group where this process may, [`keep_owner`]),
+//!   file's permissions (and its owner and group where this process may: `keep_owner`),
 //!   and renamed over it: readers see the old bytes or the new ones, never
 //!   a mix, and a failure at any point leaves the old file untouched and no temporary file;
 //! * a symlink is followed (to the end of its chain) and its target replaced as above, in
