@@ -12,7 +12,7 @@
 use crate::error::{Error, Location, Result};
 use crate::limits::MEMORY_LIMIT_BYTES;
 use crate::outputs::{Named, reserve_outputs};
-use crate::png::{image_dimensions, read_rgba8};
+use crate::png::{decode_peak, read_rgba8, rgba8_bytes};
 use crate::text;
 use glam::Vec4;
 use std::path::PathBuf;
@@ -153,11 +153,11 @@ pub fn run(args: &CompositeArgs) -> Result<()> {
     };
     // After the input check: an output that is an input is "the input".
     crate::png::check_png_name(Named::new("-o", &args.output))?;
-    // Both headers before any decode: the sizes must agree, and the source, the destination
-    // and the result must fit the memory limit together (each decode alone is limited by
-    // `read_rgba8`).
-    let (w, h) = image_dimensions(&args.source)?;
-    let (bw, bh) = image_dimensions(&args.destination)?;
+    // Both headers before any decode: the sizes must agree, and the memory held at the
+    // command's peak must fit the limit: the source decoded (its buffer and 8-bit copy), then
+    // the destination decoded beside the source's copy, then both copies and the result.
+    let ((w, h), peak_a) = decode_peak(&args.source)?;
+    let ((bw, bh), peak_b) = decode_peak(&args.destination)?;
     if (w, h) != (bw, bh) {
         return Err(Error::input(
             Location::file(&args.destination),
@@ -167,14 +167,16 @@ pub fn run(args: &CompositeArgs) -> Result<()> {
             ),
         ));
     }
-    let bytes = u64::from(w)
-        .checked_mul(u64::from(h))
-        .and_then(|n| n.checked_mul(4 * 3));
+    let rgba = rgba8_bytes(w, h);
+    let bytes = (|| {
+        let (rgba, a, b) = (rgba?, peak_a?, peak_b?);
+        Some(a.max(rgba.checked_add(b)?).max(rgba.checked_mul(3)?))
+    })();
     if bytes.is_none_or(|b| b > MEMORY_LIMIT_BYTES) {
         return Err(Error::input(
             Location::file(&args.source),
             format!(
-                "compositing it with `{}`, both {w}×{h}, needs {} for the source, the destination and the result, more than the {} GiB limit",
+                "compositing it with `{}`, both {w}×{h}, needs {} at once (the images decoded, their 8-bit copies and the result), more than the {} GiB limit",
                 text::path(&args.destination),
                 bytes.map_or("more memory".to_string(), |b| format!(
                     "about {:.1} GiB",

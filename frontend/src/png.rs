@@ -79,12 +79,26 @@ pub fn encode_png(
 }
 
 /// Reads an image (format guessed from its bytes) as 8-bit straight RGBA, within
-/// [`MEMORY_LIMIT_BYTES`]: the header's size is read first and an image whose RGBA buffer
-/// would exceed the limit is refused with its size before anything is decoded; so is one whose
-/// decoded buffer (16 bits a channel: up to twice the 8-bit copy) and the 8-bit copy made from
-/// it (none for an image already 8-bit RGBA) together would. The decoder itself is given the
-/// same limit (not the `image` crate's smaller default).
+/// [`MEMORY_LIMIT_BYTES`]: the header is read first and an image whose decoding would exceed
+/// the limit at its peak ([`decode_peak`]) is refused with its size before anything is
+/// decoded. The decoder itself is given the same limit (not the `image` crate's smaller
+/// default).
 pub fn read_rgba8(path: &Path) -> Result<image::RgbaImage> {
+    let ((w, h), peak) = decode_peak(path)?;
+    if peak.is_none_or(|b| b > MEMORY_LIMIT_BYTES) {
+        return Err(too_big(path, (w, h), peak));
+    }
+    reader(path)?
+        .decode()
+        .map(image::DynamicImage::into_rgba8)
+        .map_err(|e| decode_error(path, (w, h), e))
+}
+
+/// An image file's width and height ([`image_dimensions`], refused as it refuses) and the
+/// bytes [`read_rgba8`] holds at its peak (`None` past `u64`), both from the header alone: the
+/// decoded buffer (16 bits a channel: up to twice the 8-bit copy) and the 8-bit RGBA copy made
+/// from it (none for an image already 8-bit RGBA).
+pub fn decode_peak(path: &Path) -> Result<((u32, u32), Option<u64>)> {
     use image::ImageDecoder;
     let (w, h) = image_dimensions(path)?;
     let decoder = reader(path)?
@@ -95,13 +109,10 @@ pub fn read_rgba8(path: &Path) -> Result<image::RgbaImage> {
     } else {
         rgba8_bytes(w, h)
     };
-    let peak = copy.and_then(|c| c.checked_add(decoder.total_bytes()));
-    if peak.is_none_or(|b| b > MEMORY_LIMIT_BYTES) {
-        return Err(too_big(path, (w, h), peak));
-    }
-    image::DynamicImage::from_decoder(decoder)
-        .map(image::DynamicImage::into_rgba8)
-        .map_err(|e| decode_error(path, (w, h), e))
+    Ok((
+        (w, h),
+        copy.and_then(|c| c.checked_add(decoder.total_bytes())),
+    ))
 }
 
 /// The error of decoding image `path` of `w`×`h`: past the decoder's limit, the size and the
@@ -114,7 +125,7 @@ fn decode_error(path: &Path, (w, h): (u32, u32), e: image::ImageError) -> Error 
 }
 
 /// The bytes of a `w`×`h` 8-bit RGBA buffer (`None` past `u64`).
-fn rgba8_bytes(w: u32, h: u32) -> Option<u64> {
+pub fn rgba8_bytes(w: u32, h: u32) -> Option<u64> {
     u64::from(w)
         .checked_mul(u64::from(h))
         .and_then(|n| n.checked_mul(4))

@@ -11,7 +11,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
 mod common;
-use common::{BIN, camera, file_names as names, result_line, sphere, start_long_render, stderr};
+use common::{
+    BIN, camera, file_names as names, header_only_png, result_line, sphere, start_long_render,
+    stderr,
+};
 
 /// `v`/`f` text of a closed tetrahedron with its vertices at `±s` (the origin inside).
 fn tetrahedron(s: &str) -> String {
@@ -782,41 +785,6 @@ fn gamma_match_recommends_only_what_render_accepts() {
     }
 }
 
-/// CRC-32 (IEEE, bitwise), to build PNG chunks by hand.
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut c = !0u32;
-    for &b in bytes {
-        c ^= u32::from(b);
-        for _ in 0..8 {
-            c = if c & 1 == 1 {
-                (c >> 1) ^ 0xedb8_8320
-            } else {
-                c >> 1
-            };
-        }
-    }
-    !c
-}
-
-/// A PNG of `w`×`h` RGBA, `depth` bits a channel, by its header alone: no pixel data (the
-/// decoder reads the header up to the first IDAT: an empty one, then IEND).
-fn png_header(w: u32, h: u32, depth: u8) -> Vec<u8> {
-    let mut ihdr = b"IHDR".to_vec();
-    ihdr.extend(w.to_be_bytes());
-    ihdr.extend(h.to_be_bytes());
-    ihdr.extend([depth, 6, 0, 0, 0]);
-    let mut bytes = b"\x89PNG\r\n\x1a\n".to_vec();
-    bytes.extend(13u32.to_be_bytes());
-    bytes.extend(&ihdr);
-    bytes.extend(crc32(&ihdr).to_be_bytes());
-    for chunk in [&b"IDAT"[..], &b"IEND"[..]] {
-        bytes.extend(0u32.to_be_bytes());
-        bytes.extend(chunk);
-        bytes.extend(crc32(chunk).to_be_bytes());
-    }
-    bytes
-}
-
 /// Item 13: an image whose header claims a size over the 4 GiB memory limit is refused
 /// before decoding, naming the file, its size and the limit: 40000×40000 RGBA8 (6.0 GiB),
 /// and 20000×20000 RGBA16 as a render's background, whose 16-bit buffer (3.0 GiB) and 8-bit
@@ -827,7 +795,7 @@ fn huge_images_are_refused_with_their_size_and_the_limit() {
     let dir = tempfile::tempdir().unwrap();
     for (w, depth, size) in [(40000, 8, "6.0"), (20000, 16, "4.5")] {
         let huge = dir.path().join("huge.png");
-        std::fs::write(&huge, png_header(w, w, depth)).unwrap();
+        std::fs::write(&huge, header_only_png(w, w, depth)).unwrap();
         let out = dir.path().join("o.png");
         let scene = small_scene(dir.path(), "s.toml", "");
         let composite = (depth == 8).then(|| run(&[&"composite", &huge, &huge, &"-o", &out]));

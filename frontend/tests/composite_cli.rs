@@ -7,7 +7,7 @@ use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{halfray, stderr};
+use common::{halfray, header_only_png, stderr};
 
 /// Four pixels: opaque, half, a little and no coverage.
 fn image(rgb: [u8; 3], alphas: [u8; 4]) -> RgbaImage {
@@ -175,45 +175,6 @@ fn mismatched_sizes_and_an_input_as_output_are_refused() {
     assert!(stderr(&o).contains("dst-atop"), "lists the operators");
 }
 
-/// A PNG of `w`×`h` RGBA pixels that holds only its header (signature, `IHDR`, an `IDAT` of no
-/// pixel data, `IEND`): its size can be read, its pixels cannot be decoded. CRC-32 (IEEE, reflected) computed here.
-fn header_only_png(w: u32, h: u32) -> Vec<u8> {
-    fn crc32(bytes: &[u8]) -> u32 {
-        let mut c = 0xFFFF_FFFFu32;
-        for &b in bytes {
-            c ^= u32::from(b);
-            for _ in 0..8 {
-                c = if c & 1 != 0 {
-                    0xEDB8_8320 ^ (c >> 1)
-                } else {
-                    c >> 1
-                };
-            }
-        }
-        !c
-    }
-    let chunk = |kind: &[u8; 4], data: &[u8]| {
-        let mut out = (data.len() as u32).to_be_bytes().to_vec();
-        let mut body = kind.to_vec();
-        body.extend_from_slice(data);
-        out.extend_from_slice(&body);
-        out.extend_from_slice(&crc32(&body).to_be_bytes());
-        out
-    };
-    let mut ihdr = w.to_be_bytes().to_vec();
-    ihdr.extend_from_slice(&h.to_be_bytes());
-    ihdr.extend_from_slice(&[8, 6, 0, 0, 0]);
-    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
-    png.extend(chunk(b"IHDR", &ihdr));
-    // An empty zlib stream: the header reads, the pixels are missing.
-    png.extend(chunk(
-        b"IDAT",
-        &[0x78, 0x9c, 0x03, 0x00, 0x00, 0x00, 0x00, 0x01],
-    ));
-    png.extend(chunk(b"IEND", &[]));
-    png
-}
-
 /// Two images each within the memory limit whose composite is not (20 000 × 20 000: 1.5 GiB
 /// each, 4.5 GiB with the result) are refused from their headers, before any decode: exit 1
 /// (bad input) naming both files and the limit. The headers hold no pixels, so a decode would
@@ -222,8 +183,8 @@ fn header_only_png(w: u32, h: u32) -> Vec<u8> {
 fn a_composite_beyond_the_memory_limit_is_refused_before_decoding() {
     let dir = tempfile::tempdir().unwrap();
     let (pa, pb) = (dir.path().join("big-a.png"), dir.path().join("big-b.png"));
-    std::fs::write(&pa, header_only_png(20_000, 20_000)).unwrap();
-    std::fs::write(&pb, header_only_png(20_000, 20_000)).unwrap();
+    std::fs::write(&pa, header_only_png(20_000, 20_000, 8)).unwrap();
+    std::fs::write(&pb, header_only_png(20_000, 20_000, 8)).unwrap();
     let out = dir.path().join("out.png");
     let o = halfray(&[&"composite", &pa, &pb, &"-o", &out]);
     let err = stderr(&o);
@@ -236,7 +197,23 @@ fn a_composite_beyond_the_memory_limit_is_refused_before_decoding() {
         "{err}"
     );
     assert!(!out.exists());
-    std::fs::write(&pb, header_only_png(20_000, 19_999)).unwrap();
+    // 16-bit images of 16 500²: each decodes within the limit (2.0 GiB buffer, 1.0 GiB copy)
+    // and the three 8-bit copies fit (3.0 GiB), but the destination's decode beside the
+    // source's copy does not (4.1 GiB).
+    std::fs::write(&pa, header_only_png(16_500, 16_500, 16)).unwrap();
+    std::fs::write(&pb, header_only_png(16_500, 16_500, 16)).unwrap();
+    let o = halfray(&[&"composite", &pa, &pb, &"-o", &out]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("big-a.png")
+            && err.contains("big-b.png")
+            && err.contains("both 16500×16500, needs about 4.1 GiB at once"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    std::fs::write(&pa, header_only_png(20_000, 20_000, 8)).unwrap();
+    std::fs::write(&pb, header_only_png(20_000, 19_999, 8)).unwrap();
     let o = halfray(&[&"composite", &pa, &pb, &"-o", &out]);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
