@@ -84,35 +84,46 @@ pub fn encode_png(
 /// decoded. The decoder itself is given the same limit (not the `image` crate's smaller
 /// default).
 pub fn read_rgba8(path: &Path) -> Result<image::RgbaImage> {
-    let ((w, h), peak) = decode_peak(path)?;
+    let (decoder, (w, h), peak) = open(path)?;
     if peak.is_none_or(|b| b > MEMORY_LIMIT_BYTES) {
         return Err(too_big(path, (w, h), peak));
     }
-    reader(path)?
-        .decode()
+    image::DynamicImage::from_decoder(decoder)
         .map(image::DynamicImage::into_rgba8)
         .map_err(|e| decode_error(path, (w, h), e))
 }
 
-/// An image file's width and height ([`image_dimensions`], refused as it refuses) and the
-/// bytes [`read_rgba8`] holds at its peak (`None` past `u64`), both from the header alone: the
-/// decoded buffer (16 bits a channel: up to twice the 8-bit copy) and the 8-bit RGBA copy made
-/// from it (none for an image already 8-bit RGBA).
+/// An image file's width and height and the bytes [`read_rgba8`] holds at its peak (`None`
+/// past `u64`), both from the header alone (refused when its 8-bit RGBA copy alone would
+/// exceed [`MEMORY_LIMIT_BYTES`], as [`read_rgba8`] refuses it): the decoded
+/// buffer (16 bits a channel: up to twice the 8-bit copy) and the 8-bit RGBA copy made from it
+/// (none for an image already 8-bit RGBA). What a command checks before it decodes several
+/// images.
 pub fn decode_peak(path: &Path) -> Result<((u32, u32), Option<u64>)> {
+    let (_, size, peak) = open(path)?;
+    Ok((size, peak))
+}
+
+/// Image `path` read up to its pixels (format guessed from its bytes): its decoder, limited to
+/// [`MEMORY_LIMIT_BYTES`], its width and height, and its peak as [`decode_peak`] gives it;
+/// refused when its 8-bit RGBA copy alone would exceed the limit.
+fn open(path: &Path) -> Result<(impl image::ImageDecoder, (u32, u32), Option<u64>)> {
     use image::ImageDecoder;
-    let (w, h) = image_dimensions(path)?;
     let decoder = reader(path)?
         .into_decoder()
-        .map_err(|e| decode_error(path, (w, h), e))?;
+        .map_err(|e| cannot_decode(path, e))?;
+    let (w, h) = decoder.dimensions();
+    let rgba = rgba8_bytes(w, h);
+    if rgba.is_none_or(|b| b > MEMORY_LIMIT_BYTES) {
+        return Err(too_big(path, (w, h), rgba));
+    }
     let copy = if decoder.color_type() == image::ColorType::Rgba8 {
         Some(0)
     } else {
-        rgba8_bytes(w, h)
+        rgba
     };
-    Ok((
-        (w, h),
-        copy.and_then(|c| c.checked_add(decoder.total_bytes())),
-    ))
+    let peak = copy.and_then(|c| c.checked_add(decoder.total_bytes()));
+    Ok((decoder, (w, h), peak))
 }
 
 /// The error of decoding image `path` of `w`×`h`: past the decoder's limit, the size and the
@@ -129,21 +140,6 @@ pub fn rgba8_bytes(w: u32, h: u32) -> Option<u64> {
     u64::from(w)
         .checked_mul(u64::from(h))
         .and_then(|n| n.checked_mul(4))
-}
-
-/// The width and height an image file's header gives (format guessed from its bytes), read
-/// without decoding the pixels, refused (as [`read_rgba8`] refuses it) when its 8-bit RGBA
-/// copy alone would exceed [`MEMORY_LIMIT_BYTES`]: what a command checks before it decodes
-/// several images.
-pub fn image_dimensions(path: &Path) -> Result<(u32, u32)> {
-    let (w, h) = reader(path)?
-        .into_dimensions()
-        .map_err(|e| cannot_decode(path, e))?;
-    let rgba_bytes = rgba8_bytes(w, h);
-    if rgba_bytes.is_none_or(|b| b > MEMORY_LIMIT_BYTES) {
-        return Err(too_big(path, (w, h), rgba_bytes));
-    }
-    Ok((w, h))
 }
 
 /// The input error of an image `path` of `w`×`h` whose decoding needs `bytes` (unknown:

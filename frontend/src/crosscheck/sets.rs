@@ -679,16 +679,7 @@ mod tests {
     /// shared sets are held in `raysets::named`.
     #[test]
     fn the_aimed_sets_keep_their_fingerprints() {
-        let g = crate::mesh_tools::generate::generate(
-            crate::mesh_tools::generate::Kind::Sphere,
-            1,
-            Some(6),
-        )
-        .unwrap();
-        let mesh = ObjMesh {
-            positions: g.positions,
-            triangles: g.triangles,
-        };
+        let mesh = crate::mesh_tools::generate::fingerprint_sphere();
         let adj = Adjacency::new(&mesh);
         let seed = mesh_seed(1, "sphere.obj");
         let want = [

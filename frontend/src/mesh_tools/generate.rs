@@ -477,6 +477,17 @@ fn scatter(b: &mut Builder, n: usize, rng: &mut Rng) {
     }
 }
 
+/// The ray-set fingerprint tests' mesh (`raysets::named`, `crosscheck::sets`): the generated
+/// `sphere` of size 6, seed 1.
+#[cfg(test)]
+pub(crate) fn fingerprint_sphere() -> crate::obj::ObjMesh {
+    let g = generate(Kind::Sphere, 1, Some(6)).unwrap();
+    crate::obj::ObjMesh {
+        positions: g.positions,
+        triangles: g.triangles,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

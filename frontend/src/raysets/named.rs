@@ -391,16 +391,7 @@ mod tests {
     /// these are the values on every platform (and std's on x86-64 glibc before the switch).
     #[test]
     fn the_sets_keep_their_fingerprints() {
-        let g = crate::mesh_tools::generate::generate(
-            crate::mesh_tools::generate::Kind::Sphere,
-            1,
-            Some(6),
-        )
-        .unwrap();
-        let mesh = ObjMesh {
-            positions: g.positions,
-            triangles: g.triangles,
-        };
+        let mesh = crate::mesh_tools::generate::fingerprint_sphere();
         let accel = crate::accel::MeshAccel::new(mesh).unwrap();
         let hits = watertight_hits(accel.bvh(), &accel.mesh);
         let (lo, hi) = accel.mesh.bounds().unwrap();
