@@ -14,7 +14,7 @@ use super::*;
 use glam::Vec3;
 use halfray_core::halfedge::{
     CollapseAt, Counts, DiffuseBoundary, DiffuseError, EdgeId, ExportError, FaceId, FlipError,
-    HalfedgeId, HalfedgeMesh, LoopWeights, SplitError, VertexId, build_scratch_len,
+    HalfedgeId, HalfedgeMesh, LoopWeights, SplitError, SubdivideError, VertexId, build_scratch_len,
 };
 use halfray_core::solids::OCTAHEDRON_TRIANGLES;
 use std::collections::BTreeSet;
@@ -326,6 +326,132 @@ fn check_split(
     }
 }
 
+/// Every slot below the high-water marks is live, read slot by slot through the accessors
+/// (not `is_compact`, the mesh's own summary).
+fn dense(mesh: &FuzzMesh) -> bool {
+    (0..mesh.slots().vertices).all(|v| mesh.position(vid(v)).is_some())
+        && (0..mesh.slots().edges).all(|e| mesh.contains_edge(EdgeId::new(e as u32)))
+        && (0..mesh.slots().faces).all(|f| mesh.contains_face(FaceId::new(f as u32)))
+}
+
+/// What `subdivide_loop` into an empty [`FuzzMesh`] must answer, from its documented
+/// refusals evaluated on the exported triangle list and the independent counts: `required`
+/// holds every refusal that applies (`NotCompact` for a dead slot below the high-water marks,
+/// `Capacity` when `V + E`, `2E + 3F` or `4F` exceed [`CAPACITY`], `CoincidentFaces` for two
+/// triangles on one vertex set, `NonFinitePosition` when a rule's exact value
+/// ([`loop_reference`]) lies beyond `f32::MAX` by more than its evaluation's rounding
+/// ([`super::loop_oracle::LOOP_TOL_ROUNDINGS`]); the docs list them, not their order), and
+/// `may_overflow` is `false` when no sum of a rule's terms can leave `f32` (every coordinate
+/// times `valence + 2`, twice over, below `f32::MAX`), so that `NonFinitePosition` is
+/// excluded; between the two an intermediate sum may overflow, and either answer is right.
+struct LoopVerdict {
+    required: Vec<&'static str>,
+    may_overflow: bool,
+    /// The vertex sets of coincident triangle pairs.
+    coincident: Vec<[u32; 3]>,
+}
+
+fn loop_oracle(mesh: &FuzzMesh, weights: LoopWeights) -> LoopVerdict {
+    const U32: f64 = 1.0 / 16_777_216.0;
+    let (ps, ts) = exported(mesh);
+    let [v, e, f] = model_counts(mesh);
+    let mut required = Vec::new();
+    if !dense(mesh) {
+        required.push("NotCompact");
+    }
+    let need = [v + e, 2 * e + 3 * f, 4 * f];
+    if (0..3).any(|k| need[k] > CAPACITY[k]) {
+        required.push("Capacity");
+    }
+    let mut sets: Vec<[u32; 3]> = ts
+        .iter()
+        .map(|t| {
+            let mut s = *t;
+            s.sort_unstable();
+            s
+        })
+        .collect();
+    sets.sort_unstable();
+    let coincident: Vec<[u32; 3]> = sets
+        .windows(2)
+        .filter(|w| w[0] == w[1])
+        .map(|w| w[0])
+        .collect();
+    if !coincident.is_empty() {
+        required.push("CoincidentFaces");
+    }
+    let edges = edge_set(&ts);
+    let max_valence = (0..ps.len() as u32)
+        .map(|x| valence(&edges, x))
+        .max()
+        .unwrap_or(0);
+    let max_abs = ps
+        .iter()
+        .map(|p| f64::from(p.abs().max_element()))
+        .fold(0.0, f64::max);
+    let may_overflow = 2.0 * max_abs * (max_valence as f64 + 2.0) > f64::from(f32::MAX);
+    if may_overflow {
+        let (even, odd) = loop_reference(&ps, &ts, |n| reference_beta(n, weights));
+        let beyond = |q: &super::loop_oracle::LoopPoint| {
+            let slack = q.magnitude * (super::loop_oracle::LOOP_TOL_ROUNDINGS * U32);
+            (q.at.abs() - slack).max_element() > f64::from(f32::MAX)
+        };
+        if even.iter().chain(odd.values()).any(beyond) {
+            required.push("NonFinitePosition");
+        }
+    }
+    LoopVerdict {
+        required,
+        may_overflow,
+        coincident,
+    }
+}
+
+/// Checks a Loop subdivision's answer `r` on `mesh` against [`loop_oracle`].
+fn check_loop_verdict(
+    mesh: &FuzzMesh,
+    weights: LoopWeights,
+    r: &Result<(), SubdivideError>,
+    log: &[String],
+) {
+    let want = loop_oracle(mesh, weights);
+    match r {
+        Ok(()) => assert!(
+            want.required.is_empty(),
+            "Loop accepted, the rules refuse ({:?}): {log:?}",
+            want.required
+        ),
+        Err(err) => {
+            let name = match err {
+                SubdivideError::NotCompact => "NotCompact",
+                SubdivideError::Capacity(_) => "Capacity",
+                SubdivideError::CoincidentFaces(_) => "CoincidentFaces",
+                SubdivideError::NonFinitePosition => "NonFinitePosition",
+                _ => "other",
+            };
+            let allowed =
+                want.required.contains(&name) || (name == "NonFinitePosition" && want.may_overflow);
+            assert!(
+                allowed,
+                "Loop refused as {err:?}, the rules name {:?} (overflow possible: {}): {log:?}",
+                want.required, want.may_overflow
+            );
+            // The edge named joins two vertices of one coincident pair.
+            if let SubdivideError::CoincidentFaces(e) = err {
+                let ends = mesh.edge_vertices(*e).map(|[a, b]| [a.raw(), b.raw()]);
+                assert!(
+                    ends.is_some_and(|[a, b]| want
+                        .coincident
+                        .iter()
+                        .any(|s| s.contains(&a) && s.contains(&b))),
+                    "CoincidentFaces({e:?}) = {ends:?} joins no coincident pair {:?}: {log:?}",
+                    want.coincident
+                );
+            }
+        }
+    }
+}
+
 fn vid(v: usize) -> VertexId {
     VertexId::new(v as u32)
 }
@@ -417,7 +543,9 @@ fn point(i: &mut Input<'_>) -> Vec3 {
 /// the collapse survivor sits at the predicted point; a collapse is accepted exactly when the
 /// rules evaluated independently on the exported triangle list accept it
 /// ([`super::collapse_oracle`]; a fold-over sign within rounding is not judged), and leaves
-/// exactly the triangles that oracle predicts; Loop subdivision produces the
+/// exactly the triangles that oracle predicts; Loop subdivision is accepted or refused, with
+/// a documented kind, as its refusals evaluated on the triangle list say (`loop_oracle`:
+/// compactness, capacity, coincident faces, positions beyond `f32`), and produces the
 /// documented counts `V + E, 2E + 3F, 4F` (evaluated on the independent counts, not
 /// `Counts::after_loop`), a new vertex for every edge of the triangle list, puts every old
 /// and new vertex where the Loop rules evaluated in `f64` on
@@ -682,6 +810,7 @@ pub fn halfedge_ops(data: &[u8]) {
                 let mut out = FuzzMesh::new();
                 let r = mesh.subdivide_loop(&mut out, weights);
                 log.push(format!("loop {weights:?} -> {r:?}"));
+                check_loop_verdict(&mesh, weights, &r, &log);
                 match r {
                     Ok(()) => {
                         // Counts against V' = V + E, E' = 2E + 3F, F' = 4F (the documented
@@ -746,11 +875,8 @@ pub fn halfedge_ops(data: &[u8]) {
                 log.push(format!("compact ({moves} moves)"));
                 // Dense handles, checked slot by slot (not through `is_compact`, the
                 // function's own summary, which must agree), and the same faces.
-                let dense = (0..mesh.slots().vertices).all(|v| mesh.position(vid(v)).is_some())
-                    && (0..mesh.slots().edges).all(|e| mesh.contains_edge(EdgeId::new(e as u32)))
-                    && (0..mesh.slots().faces).all(|f| mesh.contains_face(FaceId::new(f as u32)));
                 assert!(
-                    dense,
+                    dense(&mesh),
                     "a dead slot below the high-water mark after compact: {log:?}"
                 );
                 assert!(
