@@ -68,10 +68,13 @@ impl Default for QueryStack {
 /// * `&mut `[`QueryStack`]: the caller's stack, big enough for any tree, kept across rays
 ///   (saves writing it per query). Queries return `Option<(u32, hit)>`.
 /// * `&mut [`[`StackEntry`]`]` or `&mut [StackEntry; N]`: the caller's stack of any length,
-///   for a firmware that sizes it for its trees ([`crate::bvh::Bvh::stack_depth`] entries
-///   suffice for a binary tree, [`QUERY_STACK_SIZE`] for a wide one). Queries return
-///   `Result<Option<(u32, hit)>, QueryError>`: [`QueryError::StackTooSmall`] when the ray's
-///   path needed more entries than the stack has (no partial answer). An array is its
+///   for a firmware that sizes it for its trees (`stack_depth` entries suffice:
+///   [`crate::bvh::Bvh::stack_depth`], the longest root-to-leaf path of a binary tree;
+///   [`crate::bvh::wide::WideBvh::stack_depth`], [`QUERY_STACK_SIZE`] for a wide tree with
+///   nodes, none for one without). Queries return `Result<Option<(u32, hit)>, QueryError>`:
+///   [`QueryError::StackTooSmall`] when the ray's path needed more entries than the stack has
+///   (a binary tree), or for every ray on a stack shorter than a wide tree's `stack_depth`
+///   (no partial answer). An array is its
 ///   slice: `Query::new().stack(&mut array)` answers as `.stack(&mut array[..])`.
 ///
 /// Structures whose walk needs no such stack (the grid) or has entries of its own (the

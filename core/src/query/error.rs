@@ -9,7 +9,7 @@ use core::fmt;
 pub enum QueryError {
     /// A query's traversal stack (the caller's, [`super::Query::stack`]) is too small for the
     /// path it had to keep: give it at least the structure's stack depth
-    /// ([`crate::bvh::Bvh::stack_depth`], [`crate::bvh::wide::stack_size`]; a
+    /// ([`crate::bvh::Bvh::stack_depth`], [`crate::bvh::wide::WideBvh::stack_depth`]; a
     /// [`super::QueryStack`] fits every structure) entries.
     StackTooSmall {
         /// Entries the caller's stack has.

@@ -79,8 +79,8 @@ where
     /// The batch walk of `rays` into `out` ([`QueryError::LengthMismatch`], nothing written,
     /// unless as long): sixteen rays at a time, the coherent ones as a packet
     /// ([`WideBvh::packet_hits`]) while they share their leaves ([`Sharing`]), the others
-    /// alone; every ray alone on a caller stack shorter than
-    /// [`crate::query::QUERY_STACK_SIZE`] (so that each gets the single-ray answer, an error
+    /// alone; every ray alone on a caller stack shorter than the tree's
+    /// [`WideBvh::stack_depth`] (so that each gets the single-ray answer, an error
     /// included). Closest hits, or any hits with `ANY`; a tree whose root is a leaf takes its
     /// rays eight at a time ([`WideBvh::root_leaf_hits`]), and so do the any hits of a root leaf
     /// or a tree of at most eight groups ([`WideBvh::small_tree_any_hits`]).
@@ -93,7 +93,10 @@ where
         out: &mut [S::Out<(u32, LT::Hit)>],
     ) -> Result<(), QueryError> {
         same_length(rays.len(), out.len())?;
-        let alone = ctx.stack.entries().is_some_and(|e| e.len() < STACK);
+        let alone = ctx
+            .stack
+            .entries()
+            .is_some_and(|e| e.len() < self.stack_depth());
         if !alone {
             let done = match ChildRef::decode(self.root) {
                 _ if ANY => self.small_tree_any_hits(rays, leaf, ctx, out),
@@ -167,8 +170,8 @@ where
     /// leaf, the next chunks go alone (`Sharing`): rays this far apart are faster alone. A
     /// tree whose root is a leaf takes its rays eight at a time through the leaf test's cull
     /// across rays when it has one (`WideBvh::root_leaf_hits`). On a caller stack shorter
-    /// than [`crate::query::QUERY_STACK_SIZE`], every ray alone (so that each gets the
-    /// single-ray answer, an error included).
+    /// than [`WideBvh::stack_depth`], every ray alone (so that each gets the single-ray
+    /// answer, an error included).
     #[inline(always)]
     fn closest_hits<LT: LeafTest, L: SimdLevel, S: Stack>(
         &self,

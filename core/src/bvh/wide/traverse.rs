@@ -223,9 +223,23 @@ where
     N: AsRef<[WideNode<W>]>,
     T: AsRef<[LeafGroup]>,
 {
+    /// Entries of a caller's traversal stack ([`crate::query::Query::stack`]) this tree's
+    /// queries need: none for a tree with no node (its root a leaf, or empty: the walk pushes
+    /// nothing), else [`crate::query::QUERY_STACK_SIZE`] whatever `W` and the tree (the walk
+    /// runs on a fixed array of that many entries, so that no push is checked). A shorter
+    /// caller stack refuses every query of a tree with nodes, whatever the ray, with
+    /// [`QueryError::StackTooSmall`]; one at least this long never makes a query fail.
+    #[must_use]
+    pub fn stack_depth(&self) -> usize {
+        match ChildRef::decode(self.root) {
+            ChildRef::Leaf { .. } | ChildRef::Empty => 0,
+            _ => STACK,
+        }
+    }
+
     /// Both ray queries on the context's stack (a [`QueryStack`]'s worth of its entries, or a
     /// stack of this frame's own); a shorter caller stack is refused with
-    /// [`QueryError::StackTooSmall`].
+    /// [`QueryError::StackTooSmall`] unless the tree has no node ([`WideBvh::stack_depth`]).
     #[inline(always)]
     pub(super) fn leaf_query<LT: LeafTest, const ANY: bool, L: SimdLevel, S: Stack>(
         &self,
@@ -250,7 +264,16 @@ where
                     Some(stack) => {
                         self.traverse::<LT, ANY, L>(level, stack, ray, leaf, stats, &mut best);
                     }
-                    None => return Err(QueryError::StackTooSmall { available }),
+                    // A tree with no node needs no entry: a root leaf's run is tested as
+                    // `traverse` tests it, an empty tree hits nothing.
+                    None => match ChildRef::decode(self.root) {
+                        ChildRef::Leaf { start, count } => {
+                            let run = (start, count);
+                            self.root_leaf::<LT, ANY, L>(level, run, ray, leaf, stats, &mut best);
+                        }
+                        ChildRef::Empty => {}
+                        _ => return Err(QueryError::StackTooSmall { available }),
+                    },
                 }
             }
         }

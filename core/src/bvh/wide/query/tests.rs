@@ -225,3 +225,84 @@ fn a_batch_on_a_short_caller_stack_answers_each_ray_the_stack_error() {
         assert!(out.iter().all(|o| *o == single), "{available}: {out:?}");
     }
 }
+
+/// A tree with no node (empty, or its root a leaf) needs no stack entry (`stack_depth` 0):
+/// on a caller stack of 0 or 1 entries every query answers, as brute force does, singly and
+/// in a batch; a tree with nodes, 8-wide or 4-wide, needs `QUERY_STACK_SIZE` entries and
+/// refuses one fewer for every ray, an invalid ray included (the refusal does not depend on
+/// the ray: `WideBvh::stack_depth`'s contract).
+#[test]
+fn a_tree_without_nodes_needs_no_stack_and_one_with_nodes_needs_the_whole_stack() {
+    use crate::test_util::{brute_watertight, lcg_soup, vec_bvh, vec_wide};
+    let (pos, tri) = lcg_soup(4, 3, 2.0, 1.0);
+    let small = TriangleMesh::new(&pos, &tri);
+    let none = TriangleMesh::new(&pos, &[]);
+    let binary_opts = crate::bvh::wide::binary_options(BuildOptions::default());
+    // Toward each triangle's centroid and beside it, from one origin.
+    let rays: Vec<Ray> = tri
+        .iter()
+        .flat_map(|t| {
+            let c = (pos[t[0] as usize] + pos[t[1] as usize] + pos[t[2] as usize]) / 3.0;
+            (0..16).map(move |k| {
+                let aim = c + Vec3::new(k as f32 * 0.05 - 0.4, (k % 3) as f32 * 0.1, 0.0);
+                let from = Vec3::new(0.0, 0.0, -20.0);
+                Ray::new(from, aim - from)
+            })
+        })
+        .collect();
+    for mesh in [&small, &none] {
+        let binary = vec_bvh(mesh, &binary_opts).unwrap();
+        let wide = vec_wide::<8>(&binary, mesh).unwrap();
+        assert_eq!(wide.stack_depth(), 0, "{} triangles", mesh.len());
+        let mut tris = Triangles::new(mesh, &Watertight);
+        let mut hits = 0;
+        for len in [0, 1] {
+            let mut stack = vec![StackEntry::EMPTY; len];
+            let mut out = vec![Ok(None); rays.len()];
+            let mut any = vec![Ok(None); rays.len()];
+            let ctx = &mut Query::new().stack(&mut stack[..]);
+            wide.closest_hits(&rays, &mut tris, ctx, &mut out).unwrap();
+            wide.any_hits(&rays, &mut tris, ctx, &mut any).unwrap();
+            for (i, ray) in rays.iter().enumerate() {
+                let want = brute_watertight(mesh, ray);
+                hits += usize::from(want.is_some());
+                assert_eq!(wide.closest_hit(ray, &mut tris, ctx), Ok(want), "{ray:?}");
+                assert_eq!(out[i], Ok(want), "batch {ray:?}");
+                let single_any = wide.any_hit(ray, &mut tris, ctx);
+                assert_eq!(
+                    single_any.map(|a| a.is_some()),
+                    Ok(want.is_some()),
+                    "{ray:?}"
+                );
+                assert_eq!(any[i].map(|a| a.is_some()), Ok(want.is_some()), "{ray:?}");
+            }
+        }
+        assert_eq!(hits > 0, mesh.len() > 0, "the rays must hit the small mesh");
+    }
+
+    let (pos, tri) = lcg_soup(400, 7, 4.0, 1.0);
+    let mesh = TriangleMesh::new(&pos, &tri);
+    let binary = vec_bvh(&mesh, &binary_opts).unwrap();
+    let (w8, w4) = (
+        vec_wide::<8>(&binary, &mesh).unwrap(),
+        vec_wide::<4>(&binary, &mesh).unwrap(),
+    );
+    assert_eq!(
+        (w8.stack_depth(), w4.stack_depth()),
+        (QUERY_STACK_SIZE, QUERY_STACK_SIZE)
+    );
+    let invalid = Ray::new(Vec3::NAN, Vec3::X);
+    let mut tris = Triangles::new(&mesh, &Watertight);
+    let mut less = vec![StackEntry::EMPTY; QUERY_STACK_SIZE - 1];
+    let available = less.len();
+    for ray in [TOWARD, AWAY, invalid] {
+        let ctx = &mut Query::new().stack(&mut less[..]);
+        let refused = Err(QueryError::StackTooSmall { available });
+        assert_eq!(w8.closest_hit(&ray, &mut tris, ctx), refused, "{ray:?}");
+        assert_eq!(w4.closest_hit(&ray, &mut tris, ctx), refused, "{ray:?}");
+        assert_eq!(
+            w4.any_hit(&ray, &mut tris, ctx).map(|_| ()),
+            Err(QueryError::StackTooSmall { available })
+        );
+    }
+}
