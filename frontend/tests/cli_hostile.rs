@@ -756,6 +756,78 @@ fn errors_name_the_actual_problem_and_escape_what_they_quote() {
     assert!(!stderr(&o).contains("threads"), "{}", stderr(&o));
 }
 
+/// A file name with terminal escapes, a line break and `|` reaches the terminal escaped from
+/// every command that prints one (summaries on stdout, messages on stderr): no ESC or BEL
+/// byte, no line of its own (a forged `error:`), no split markdown cell.
+#[test]
+fn every_command_prints_a_hostile_file_name_escaped() {
+    let dir = tempfile::tempdir().unwrap();
+    let evil = |ext: &str| {
+        dir.path()
+            .join(format!("x\u{1b}]0;T\u{7}|\nerror: forged\u{1b}[2J{ext}"))
+    };
+    let mesh = evil(".obj");
+    std::fs::copy(common::shared_mesh("cube.obj"), &mesh).unwrap();
+    let bench_json = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/bench-bvh.json");
+    let (generated, subdivided) = (evil("-generated.obj"), evil("-subdivided.obj"));
+    let small = ["--rays", "10", "--width", "4"];
+    let cases: [(&[&dyn AsRef<OsStr>], bool); 7] = [
+        (&[&"gamma", &"--chart", &evil(".png")], true),
+        (
+            &[&"chart", &"corpus", &bench_json, &"-o", &evil(".jpg")],
+            false,
+        ),
+        (
+            &[
+                &"bench", &"bvh", &mesh, &small[0], &small[1], &small[2], &small[3], &"--sets",
+                &"primary",
+            ],
+            true,
+        ),
+        (
+            &[
+                &"bench", &"accel", &mesh, &small[0], &small[1], &small[2], &small[3],
+            ],
+            true,
+        ),
+        (
+            &[
+                &"mesh",
+                &"generate",
+                &"terrain",
+                &"--size",
+                &"4",
+                &"-o",
+                &generated,
+            ],
+            true,
+        ),
+        (&[&"mesh", &"check", &mesh], true),
+        (&[&"mesh", &"subdivide", &mesh, &"-o", &subdivided], true),
+    ];
+    for (args, succeeds) in cases {
+        let o = run(args);
+        let what = format!("{:?}", args.iter().map(|a| a.as_ref()).collect::<Vec<_>>());
+        assert_eq!(o.status.success(), succeeds, "{what}: {}", stderr(&o));
+        let all = String::from_utf8_lossy(&o.stdout).into_owned() + &stderr(&o);
+        assert!(
+            !all.contains('\u{1b}') && !all.contains('\u{7}'),
+            "{what}: {all:?}"
+        );
+        assert!(
+            all.lines().all(|l| !l.starts_with("error: forged")),
+            "{what}: {all:?}"
+        );
+        // A markdown row keeps its cells: the name's `|` is escaped.
+        for row in all.lines().filter(|l| l.starts_with("| x")) {
+            assert!(
+                row.starts_with("| x\\u{1b}]0;T\\u{7}\\|\\nerror"),
+                "{what}: {row:?}"
+            );
+        }
+    }
+}
+
 /// Item 13: `gamma --match` never recommends a γ that `render --gamma` refuses; an extreme
 /// match is clamped to the accepted range (0.2..=5), and the message says so.
 #[test]

@@ -233,7 +233,7 @@ fn bench(args: &AccelArgs, path: &Path) -> Result<AccelReport> {
 fn print_report(r: &AccelReport) {
     crate::sayln!(
         "bench accel: {} ({} triangles, {}, one thread; brute-force sample {} rays)",
-        r.mesh,
+        crate::text::escaped(&r.mesh),
         r.triangles,
         r.intersector,
         r.brute_force_rays

@@ -527,7 +527,7 @@ fn print_report(r: &BvhReport) {
     let opt = |x: Option<f64>, p: usize| x.map_or("-".to_string(), |x| format!("{x:.p$}"));
     crate::sayln!(
         "bench bvh: {} ({} triangles, {}, {} on {})",
-        r.mesh,
+        crate::text::escaped(&r.mesh),
         r.triangles,
         r.intersector,
         r.structure,

@@ -167,7 +167,7 @@ impl Format {
             Some("png") => Ok(Format::Png),
             _ => Err(Error::Usage(format!(
                 "`{}`: a chart is written as .svg or .png",
-                path.display()
+                crate::text::path(path)
             ))),
         }
     }

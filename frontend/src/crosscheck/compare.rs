@@ -159,7 +159,10 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     for (path, named_at) in meshes.iter().zip(&named_at) {
         let shown = path.display().to_string();
         if let Some(done) = log.as_ref().and_then(|l| l.done(path)) {
-            eprintln!("crosscheck {shown}: already in the results log, skipped (--resume)");
+            eprintln!(
+                "crosscheck {}: already in the results log, skipped (--resume)",
+                crate::text::escaped(&shown)
+            );
             results.push(done.clone());
             continue;
         }
@@ -176,7 +179,11 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
             None => e.to_string(),
         });
         if let Some(e) = &error {
-            eprintln!("crosscheck {shown}: {e} (counted as failed; the run goes on)");
+            eprintln!(
+                "crosscheck {}: {} (counted as failed; the run goes on)",
+                crate::text::escaped(&shown),
+                crate::text::escaped(e)
+            );
         }
         let result = MeshResult {
             path: shown.clone(),
@@ -278,8 +285,12 @@ fn check_mesh(
         row.path = path.display().to_string();
         row.name = set.clone();
         eprintln!(
-            "crosscheck {name} {set}: {} rays, {} genuine, {} leaks halfray, {} leaks embree",
-            row.rays, row.genuine_mismatches, row.leaks_halfray, row.leaks_embree
+            "crosscheck {} {set}: {} rays, {} genuine, {} leaks halfray, {} leaks embree",
+            crate::text::escaped(&name),
+            row.rays,
+            row.genuine_mismatches,
+            row.leaks_halfray,
+            row.leaks_embree
         );
         rows.push(row);
     }

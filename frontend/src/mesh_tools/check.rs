@@ -163,7 +163,7 @@ pub fn check(path: &Path) -> Result<CheckReport> {
     let t2 = Instant::now();
     mesh.validate().map_err(|e| {
         Error::internal(
-            format!("{}: built mesh fails validation", path.display()),
+            format!("{}: built mesh fails validation", crate::text::path(path)),
             Some(Box::new(e)),
         )
     })?;
@@ -172,7 +172,7 @@ pub fn check(path: &Path) -> Result<CheckReport> {
         return Err(Error::internal(
             format!(
                 "{}: half-edge counts {c:?} disagree with the triangle list (E {edges}, F {faces})",
-                path.display()
+                crate::text::path(path)
             ),
             None,
         ));
@@ -256,7 +256,7 @@ fn yes_no(b: Option<bool>) -> &'static str {
 
 impl fmt::Display for CheckReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "{}", self.file)?;
+        writeln!(f, "{}", crate::text::escaped(&self.file))?;
         writeln!(
             f,
             "  vertices        {} ({} referenced, {} unreferenced)",

@@ -65,8 +65,8 @@ impl fmt::Display for EditReport {
             f,
             "mesh {}: {} -> {}",
             self.command,
-            self.input.display(),
-            self.output.display()
+            crate::text::path(&self.input),
+            crate::text::path(&self.output)
         )?;
         writeln!(f, "  before  {}", self.before)?;
         for (i, (c, ms)) in self.levels.iter().enumerate() {
@@ -430,7 +430,10 @@ fn collapse_mesh(
     }
     mesh.validate().map_err(|e| {
         Error::internal(
-            format!("{}: mesh invalid after collapsing", args.input.display()),
+            format!(
+                "{}: mesh invalid after collapsing",
+                crate::text::path(&args.input)
+            ),
             Some(Box::new(e)),
         )
     })?;

@@ -201,7 +201,7 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
         args.seed,
         mesh.positions.len(),
         mesh.triangles.len(),
-        args.output.display(),
+        crate::text::path(&args.output),
         t0.elapsed().as_secs_f64()
     ))
 }

@@ -157,7 +157,10 @@ pub fn run(args: &GammaArgs) -> Result<()> {
         let out = crate::outputs::OutputFile::reserve(path, args.force)?;
         let (img, greys) = chart();
         crate::png::write_png(out, img.width(), img.height(), img.as_raw())?;
-        text.push_str(&format!("wrote {}: tiles left to right\n", path.display()));
+        text.push_str(&format!(
+            "wrote {}: tiles left to right\n",
+            crate::text::path(path)
+        ));
         for (g, a) in CHART_GAMMAS.iter().zip(&greys) {
             text.push_str(&format!(
                 "  grey {a:3}: your display's gamma is {g} if it matches\n"

@@ -3,6 +3,7 @@
 //! mesh, the build times and bytes per triangle.
 
 use super::{BvhReport, positive_ratio};
+use crate::text;
 
 /// The geometric mean of `values` (the exponential of their logarithms' mean); `None` for no
 /// values. The values are meant to be finite and positive ([`positive_ratio`]): a zero one
@@ -93,7 +94,7 @@ pub fn markdown(reports: &[BvhReport]) -> String {
     );
     s.push_str("| mesh | triangles |");
     for n in &names {
-        s.push_str(&format!(" {n} |"));
+        s.push_str(&format!(" {} |", text::table_cell(n)));
     }
     s.push_str(
         " build ms: halfray / Embree | build ×Embree | all threads: halfray / Embree | B/tri |\n|---|---:|",
@@ -102,7 +103,11 @@ pub fn markdown(reports: &[BvhReport]) -> String {
     s.push('\n');
     let mut build_ratios = Vec::new();
     for r in reports {
-        s.push_str(&format!("| {} | {} |", mesh_name(r), r.triangles));
+        s.push_str(&format!(
+            "| {} | {} |",
+            text::table_cell(&mesh_name(r)),
+            r.triangles
+        ));
         for n in &names {
             let cell = match r.sets.iter().find(|x| &x.name == n) {
                 None => "".to_string(),
@@ -161,7 +166,14 @@ pub fn markdown(reports: &[BvhReport]) -> String {
         for x in &summary {
             s.push_str(&format!(
                 "{}: {} meshes, geometric mean {:.2}× Embree robust, {:.2}× default; worst {:.2}× robust ({}), {:.2}× default ({})\n",
-                x.name, x.meshes, x.geomean[1], x.geomean[0], x.worst[1].0, x.worst[1].1, x.worst[0].0, x.worst[0].1
+                text::escaped(&x.name),
+                x.meshes,
+                x.geomean[1],
+                x.geomean[0],
+                x.worst[1].0,
+                text::escaped(&x.worst[1].1),
+                x.worst[0].0,
+                text::escaped(&x.worst[0].1)
             ));
         }
     }
@@ -200,7 +212,8 @@ fn packet_lines(reports: &[BvhReport]) -> String {
         };
         let g = [g0, g1, g2, g3];
         s.push_str(&format!(
-            "{name}: {} meshes, geometric mean over Embree's packet API: {:.2}× {api}8, {:.2}× {api}16 (default); {:.2}×, {:.2}× (robust)\n",
+            "{}: {} meshes, geometric mean over Embree's packet API: {:.2}× {api}8, {:.2}× {api}16 (default); {:.2}×, {:.2}× (robust)\n",
+            text::escaped(&name),
             ratios.len(),
             g[0],
             g[1],

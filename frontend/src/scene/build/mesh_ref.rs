@@ -120,9 +120,11 @@ pub(super) fn mesh(ctx: &mut Ctx<'_>, name: &S<String>, field: &str) -> Result<A
         };
         let field = format!("{p}.{key}");
         match e {
-            Error::Input { at, message } if at.line.is_none() => {
-                ctx.err(&span, &field, format!("{}: {message}", at.file.display()))
-            }
+            Error::Input { at, message } if at.line.is_none() => ctx.err(
+                &span,
+                &field,
+                format!("{}: {message}", crate::text::path(&at.file)),
+            ),
             // A line of the mesh file: named first, then where the scene names the file.
             Error::Input { at, message } => {
                 let named_at = ctx.src.at(&def.file.span(), &format!("{p}.file"));
