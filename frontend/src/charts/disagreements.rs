@@ -10,6 +10,7 @@ use crate::crosscheck::report::{Report, SetReport};
 use crate::error::{Error, Location, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use std::collections::HashMap;
 use std::path::Path;
 
 /// How a set's row counts one class of disagreement.
@@ -64,10 +65,12 @@ impl DisagreementChart {
         // meshes, as its report's per-mesh results do); labelled by file name where that is
         // unambiguous.
         let mut paths: Vec<&str> = Vec::new();
+        let mut index: HashMap<&str, usize> = HashMap::new();
         for row in &report.sets {
-            let i = match paths.iter().position(|p| *p == row.path) {
-                Some(i) => i,
+            let i = match index.get(row.path.as_str()) {
+                Some(&i) => i,
                 None => {
+                    index.insert(&row.path, paths.len());
                     paths.push(&row.path);
                     chart.meshes.push(row.mesh.clone());
                     chart.counts.push([0; CLASSES.len()]);
@@ -80,9 +83,12 @@ impl DisagreementChart {
             }
             chart.rays[i] += row.rays;
         }
-        let names = chart.meshes.clone();
+        let mut uses: HashMap<String, usize> = HashMap::new();
+        for name in &chart.meshes {
+            *uses.entry(name.clone()).or_default() += 1;
+        }
         for (name, path) in chart.meshes.iter_mut().zip(&paths) {
-            if names.iter().filter(|n| *n == name).count() > 1 {
+            if uses[name.as_str()] > 1 {
                 *name = (*path).to_string();
             }
         }
@@ -225,6 +231,55 @@ mod tests {
             chart.counts.iter().map(|c| c[0]).collect::<Vec<_>>(),
             [2, 5, 1]
         );
+    }
+
+    /// Many meshes (each in two rows, the second pass in reverse order; every 1000th file
+    /// name shared by two folders) come out in order of first row, summed per path, and
+    /// labelled by path exactly where their file name is shared.
+    #[test]
+    fn many_meshes_are_summed_per_path_and_labelled_by_a_shared_name() {
+        const MESHES: usize = 20_000;
+        let folder = |i: usize| if i % 1000 == 1 { "other" } else { "m" };
+        let name = |i: usize| format!("n{}.obj", if i % 1000 == 1 { i - 1 } else { i });
+        let mut sets = Vec::new();
+        for (pass, order) in [
+            (0, (0..MESHES).collect::<Vec<_>>()),
+            (1, (0..MESHES).rev().collect()),
+        ] {
+            for i in order {
+                let mut r = row(
+                    &name(i),
+                    if pass == 0 { "primary" } else { "edges" },
+                    i + pass,
+                    0,
+                    0,
+                );
+                r["path"] = format!("{}/{}", folder(i), name(i)).into();
+                sets.push(r);
+            }
+        }
+        let json = serde_json::json!({
+            "intersector": "watertight", "seed": 1, "rays": 1000,
+            "ray_sets": ["primary", "edges"], "shard": {"index": 0, "count": 1},
+            "threads": 2, "wall_seconds": 1.0, "rays_per_second": 1.0, "meshes": MESHES,
+            "failed": [], "sets": sets
+        });
+        let report: Report = serde_json::from_value(json).unwrap();
+        let chart = DisagreementChart::new(&report).unwrap();
+        let shared = |i: usize| i % 1000 <= 1;
+        let want: Vec<String> = (0..MESHES)
+            .map(|i| {
+                if shared(i) {
+                    format!("{}/{}", folder(i), name(i))
+                } else {
+                    name(i)
+                }
+            })
+            .collect();
+        assert_eq!(chart.meshes, want);
+        let ties: Vec<usize> = chart.counts.iter().map(|c| c[0]).collect();
+        assert_eq!(ties, (0..MESHES).map(|i| 2 * i + 1).collect::<Vec<_>>());
+        assert_eq!(chart.rays, vec![2000; MESHES]);
     }
 
     /// A report whose counts summed do not fit in a `usize` (two rows of one mesh, or two

@@ -40,13 +40,13 @@ pub fn mesh_name(r: &BvhReport) -> String {
 /// The set names of `reports`, in order of first appearance.
 #[must_use]
 pub fn set_names(reports: &[BvhReport]) -> Vec<String> {
-    let mut names: Vec<String> = Vec::new();
-    for s in reports.iter().flat_map(|r| &r.sets) {
-        if !names.contains(&s.name) {
-            names.push(s.name.clone());
-        }
-    }
-    names
+    let mut seen = std::collections::HashSet::new();
+    reports
+        .iter()
+        .flat_map(|r| &r.sets)
+        .filter(|s| seen.insert(s.name.as_str()))
+        .map(|s| s.name.clone())
+        .collect()
 }
 
 /// Per set (in [`set_names`] order), the geometric mean and the worst of the ratios over the
