@@ -89,7 +89,8 @@ struct Built {
 
 /// Runs the benchmark.
 pub fn run(args: &AccelArgs) -> Result<()> {
-    args.run.check_inputs(&args.meshes, &[])?;
+    args.run
+        .check_inputs(super::RayMemory::BothSets, &args.meshes, &[])?;
     let json = args.run.reserve_json(&args.meshes, None)?;
     let mut reports = Vec::with_capacity(args.meshes.len());
     for mesh in &args.meshes {

@@ -210,7 +210,8 @@ pub fn run(args: &BvhArgs) -> Result<()> {
     };
     // One set is held in memory at a time: estimated, and every mesh opened, before any work.
     let meshes = &run.paths;
-    args.run.check_inputs(meshes, &run.named_at)?;
+    args.run
+        .check_inputs(super::RayMemory::OneSetAtATime, meshes, &run.named_at)?;
     let json = args.run.reserve_json(meshes, args.mesh_list.as_deref())?;
     let mut reports = Vec::with_capacity(meshes.len());
     for (k, mesh) in meshes.iter().enumerate() {

@@ -40,10 +40,57 @@ pub struct RunArgs {
     pub force: bool,
 }
 
+/// Bytes of the process beside its rays and mesh: the binary, its libraries, the thread
+/// pool's stacks and the report (6.8 MB resident for `bench bvh` on the 12-triangle cube at
+/// `--width 4`; rounded up to 16 MiB). Part of [`RayMemory::peak_bytes`], so that the
+/// estimate bounds the whole peak for a small mesh.
+pub const PROCESS_BASE_BYTES: u64 = 16 << 20;
+
+/// How a benchmark holds its rays, for its memory estimate ([`RayMemory::peak_bytes`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayMemory {
+    /// `bench accel`: the `width²` camera rays and the `rays` random ones, together for the
+    /// whole run (the brute-force sample is a slice of the random rays, its answers at most
+    /// 20 000).
+    BothSets,
+    /// `bench bvh`: one set at a time. A camera set's rays with their batch answers (the
+    /// batch check keeps one [`Answer`](crate::accel::Answer) per ray), or while a shadow or
+    /// AO set is generated, the camera rays it is derived from beside it: per camera ray
+    /// [`CAMERA_RAY_PEAK_BYTES`]. The random set's rays alone.
+    OneSetAtATime,
+}
+
+/// Bytes one camera ray of `bench bvh` holds at the peak of its set ([`RayMemory`]): the ray,
+/// and the larger of its batch answer and the ray derived from it.
+pub const CAMERA_RAY_PEAK_BYTES: u64 = {
+    let ray = std::mem::size_of::<Ray>() as u64;
+    let answer = std::mem::size_of::<crate::accel::Answer>() as u64;
+    ray + if answer > ray { answer } else { ray }
+};
+
+impl RayMemory {
+    /// An upper bound of the run's peak resident memory for `width × width` camera rays and
+    /// `rays` random ones on a small mesh: the rays and what is held per ray (see the
+    /// variants), plus [`PROCESS_BASE_BYTES`]. The mesh's own structures (its vertices, the
+    /// trees built over it, Embree's copy) grow with the mesh, not the rays, and are not
+    /// counted. `None` when the size does not fit in 64 bits.
+    #[must_use]
+    pub fn peak_bytes(self, width: usize, rays: usize) -> Option<u64> {
+        let ray = std::mem::size_of::<Ray>() as u64;
+        let camera = (width as u64).checked_mul(width as u64)?;
+        let random = (rays as u64).checked_mul(ray)?;
+        let held = match self {
+            Self::BothSets => camera.checked_mul(ray)?.checked_add(random)?,
+            Self::OneSetAtATime => camera.checked_mul(CAMERA_RAY_PEAK_BYTES)?.max(random),
+        };
+        held.checked_add(PROCESS_BASE_BYTES)
+    }
+}
+
 impl RunArgs {
     /// The checks `bench bvh` and `bench accel` make before any work: `--width` and `--rays`
-    /// at least 1 ([`Error::Usage`] otherwise); the `width × width` primary and `rays` incoherent rays,
-    /// held in memory together, within [`crate::limits::check_memory`]'s budget; and every
+    /// at least 1 ([`Error::Usage`] otherwise); the run's memory as `held` holds its rays
+    /// ([`RayMemory::peak_bytes`]) within [`crate::limits::check_memory`]'s budget; and every
     /// one of `meshes` a file that opens ([`crate::input::open`]: not a directory or a
     /// device; [`Error::Io`] naming the first that is not, or [`Error::Input`] at
     /// `named_at[k]`, the mesh list's file and line, for a mesh `k` a list named), so that
@@ -54,6 +101,7 @@ impl RunArgs {
     /// As listed, in that order.
     pub fn check_inputs(
         &self,
+        held: RayMemory,
         meshes: &[PathBuf],
         named_at: &[Option<crate::error::Location>],
     ) -> Result<()> {
@@ -64,12 +112,10 @@ impl RunArgs {
                 "{name} must be at least 1 (a throughput of no rays is no figure)"
             )));
         }
-        let ray_bytes = std::mem::size_of::<Ray>() as u64;
-        let bytes = (width as u64)
-            .checked_mul(width as u64)
-            .and_then(|p| p.checked_add(rays as u64))
-            .and_then(|n| n.checked_mul(ray_bytes));
-        crate::limits::check_memory(&format!("--width {width} --rays {rays}"), bytes)?;
+        crate::limits::check_memory(
+            &format!("--width {width} --rays {rays}"),
+            held.peak_bytes(width, rays),
+        )?;
         for (k, mesh) in meshes.iter().enumerate() {
             crate::input::open(mesh).map_err(|e| match named_at.get(k) {
                 Some(Some(at)) => Error::input(at.clone(), e.to_string()),
@@ -136,4 +182,62 @@ fn write_json_reports<T: serde::Serialize>(out: Option<OutputFile>, reports: &[T
         out.write(|w| w.write_all(text.as_bytes()))?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::mem::size_of;
+
+    /// The estimate is the sizes of what each run holds per ray at its peak, plus the process.
+    #[test]
+    fn the_memory_estimate_counts_what_each_run_holds_per_ray() {
+        let ray = size_of::<Ray>() as u64;
+        let answer = size_of::<crate::accel::Answer>() as u64;
+        let base = PROCESS_BASE_BYTES;
+        // `bench bvh`: a camera set's rays beside their answers (or the rays derived from
+        // them); the random set alone when it is the larger.
+        let camera = 1_000_000 * (ray + answer.max(ray));
+        assert_eq!(
+            RayMemory::OneSetAtATime.peak_bytes(1000, 10),
+            Some(camera + base)
+        );
+        assert_eq!(
+            RayMemory::OneSetAtATime.peak_bytes(10, 10_000_000),
+            Some(10_000_000 * ray + base)
+        );
+        // `bench accel`: both sets' rays together.
+        assert_eq!(
+            RayMemory::BothSets.peak_bytes(1000, 1_000_000),
+            Some(2_000_000 * ray + base)
+        );
+        for held in [RayMemory::BothSets, RayMemory::OneSetAtATime] {
+            assert_eq!(held.peak_bytes(usize::MAX, 1), None, "{held:?}");
+        }
+    }
+
+    /// A `bench bvh` camera whose rays fit in the limit but not beside their answers is
+    /// refused before any work (9000² rays are 2.4 GiB, with their answers 4.8 GiB).
+    #[test]
+    fn a_camera_set_is_refused_when_its_rays_and_answers_exceed_the_limit() {
+        let run = |width| RunArgs {
+            json: None,
+            width,
+            rays: 1,
+            force: false,
+        };
+        let e = run(9000)
+            .check_inputs(RayMemory::OneSetAtATime, &[], &[])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("--width 9000 --rays 1 needs about 4.8 GiB"),
+            "{e}"
+        );
+        assert!(
+            run(9000)
+                .check_inputs(RayMemory::BothSets, &[], &[])
+                .is_ok()
+        );
+    }
 }
