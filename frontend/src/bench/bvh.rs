@@ -60,8 +60,9 @@ pub struct BvhArgs {
     /// ratios to Embree closes the output.
     #[arg(required_unless_present = "mesh_list")]
     pub meshes: Vec<PathBuf>,
-    /// A file of mesh paths, one per line (blank lines and `#` comments skipped; relative
-    /// paths are relative to the current directory), benchmarked after the MESHES arguments.
+    /// A file of mesh paths, one per line (blank lines and lines starting with `#` skipped; a
+    /// `#` later in a line is part of the path; relative paths are relative to the current
+    /// directory), benchmarked after the MESHES arguments.
     #[arg(long)]
     pub mesh_list: Option<PathBuf>,
     /// The JSON output and the ray counts.

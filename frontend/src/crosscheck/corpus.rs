@@ -18,8 +18,8 @@ use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 /// The mesh paths of a list file, each with its 1-based line: one per line, surrounding
-/// whitespace trimmed, blank lines and lines starting with `#` skipped, a leading UTF-8
-/// byte-order mark ignored. Relative paths are relative to the current directory (as
+/// whitespace trimmed, blank lines and lines starting with `#` skipped (a `#` later in a line
+/// is part of the path: `a#1.obj` is a file name), a leading UTF-8 byte-order mark ignored. Relative paths are relative to the current directory (as
 /// `find … > list` writes them), not to the list file.
 pub fn read_mesh_list(list: &Path) -> Result<Vec<(PathBuf, usize)>> {
     // `read_text` drops a byte-order mark: it is no part of the first path.
@@ -362,6 +362,16 @@ mod tests {
             read_mesh_list(&list).unwrap(),
             [("a.obj", 1), ("b.obj", 2)].map(|(p, l)| (PathBuf::from(p), l)),
             "a byte-order mark is skipped"
+        );
+        // A `#` after the start is the path's: there are no trailing comments.
+        std::fs::write(
+            &list,
+            "  # indented comment\nx#1/a.obj\ntet.obj # trailing\n",
+        )
+        .unwrap();
+        assert_eq!(
+            read_mesh_list(&list).unwrap(),
+            [("x#1/a.obj", 2), ("tet.obj # trailing", 3)].map(|(p, l)| (PathBuf::from(p), l))
         );
         std::fs::write(&list, b"a.obj\n\xff.obj\n").unwrap();
         let e = read_mesh_list(&list).unwrap_err().to_string();

@@ -32,8 +32,9 @@ pub struct CrosscheckArgs {
     /// Meshes to cross-check (OBJ).
     #[arg(required_unless_present = "mesh_list")]
     pub meshes: Vec<PathBuf>,
-    /// A file of mesh paths, one per line (blank lines and `#` comments skipped; relative
-    /// paths are relative to the current directory); checked after the MESHES arguments.
+    /// A file of mesh paths, one per line (blank lines and lines starting with `#` skipped; a
+    /// `#` later in a line is part of the path; relative paths are relative to the current
+    /// directory); checked after the MESHES arguments.
     #[arg(long)]
     pub mesh_list: Option<PathBuf>,
     /// Rays per set (before sharding).
