@@ -63,6 +63,17 @@ pub fn say_args(args: std::fmt::Arguments<'_>) {
 /// The name stdout has in error messages.
 pub const STDOUT_NAME: &str = "<stdout>";
 
+/// An output path as named in error messages: [`STDOUT_NAME`] for `-` (stdout, which no file
+/// of that name stands for), the path itself otherwise (`/dev/stdout` names a file).
+#[must_use]
+pub fn output_name(path: &std::path::Path) -> &std::path::Path {
+    if path == std::path::Path::new("-") {
+        std::path::Path::new(STDOUT_NAME)
+    } else {
+        path
+    }
+}
+
 /// The error for a failed write to stdout.
 pub fn stdout_error(e: io::Error) -> Error {
     if e.kind() == io::ErrorKind::BrokenPipe {

@@ -398,7 +398,8 @@ fn closed_pipe_exits_quietly_and_full_device_is_a_clean_error() {
             "{args:?}: {e}"
         );
     }
-    // A PNG written to stdout (`-`): the encoder's write error keeps its kind.
+    // A PNG or a JSON written to stdout (`-`): the write error keeps its kind and names
+    // `<stdout>`, as a failed summary does.
     let images = tempfile::tempdir().unwrap();
     let a = images.path().join("a.png");
     let o = Command::new(BIN)
@@ -407,21 +408,22 @@ fn closed_pipe_exits_quietly_and_full_device_is_a_clean_error() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
-    let png_to_stdout: [&[&std::ffi::OsStr]; 3] = [
+    let to_stdout: [&[&std::ffi::OsStr]; 4] = [
         os!["gamma", "--chart", "-"],
+        os!["mesh", "check", &cube, "--json", "-"],
         os!["composite", &a, &a, "-o", "-"],
         os![
             "render", &mirror, "-o", "-", "--width", "16", "--height", "12", "--quiet"
         ],
     ];
-    for args in png_to_stdout {
+    for args in to_stdout {
         let o = run_into_closed_pipe(args);
         assert_eq!(o.status.code(), Some(141), "{args:?}: {}", stderr(&o));
         assert!(o.stderr.is_empty(), "{args:?}: quiet, got {}", stderr(&o));
         let o = run_into_dev_full(args);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
         assert!(
-            stderr(&o).contains("No space left on device"),
+            stderr(&o).starts_with("error: <stdout>: No space left on device"),
             "{args:?}: {}",
             stderr(&o)
         );

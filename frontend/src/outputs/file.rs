@@ -292,7 +292,7 @@ impl OutputFile {
             Route::Stream { fd } => {
                 write_stream(fd, fill).map_err(|e| match e.kind() {
                     io::ErrorKind::BrokenPipe => Error::BrokenPipe,
-                    _ => Error::io(&dest, e),
+                    _ => Error::io(crate::console::output_name(&dest), e),
                 })?;
                 Ok(Staged::Written)
             }
