@@ -16,12 +16,22 @@ pub const MAX_INPUT_BYTES: u64 = 1 << 30;
 /// Refuses `bytes` (`None`: the size computation overflowed) above [`MEMORY_LIMIT_BYTES`],
 /// as a usage error naming `what` (the options that set the size and their values).
 pub fn check_memory(what: &str, bytes: Option<u64>) -> Result<()> {
+    check_memory_within(what, bytes, MEMORY_LIMIT_BYTES)
+}
+
+/// [`check_memory`] against `limit` bytes (the memory limit, or a smaller one in tests).
+pub fn check_memory_within(what: &str, bytes: Option<u64>, limit: u64) -> Result<()> {
+    const GIB: u64 = 1 << 30;
     match bytes {
-        Some(b) if b <= MEMORY_LIMIT_BYTES => Ok(()),
-        Some(b) => Err(Error::Usage(format!(
+        Some(b) if b <= limit => Ok(()),
+        // A whole number of GiB (the memory limit) in GiB; another limit (a test's) in bytes.
+        Some(b) if limit % GIB == 0 => Err(Error::Usage(format!(
             "{what} needs about {:.1} GiB, more than the {} GiB limit",
-            b as f64 / f64::from(1u32 << 30),
-            MEMORY_LIMIT_BYTES >> 30
+            b as f64 / GIB as f64,
+            limit / GIB
+        ))),
+        Some(b) => Err(Error::Usage(format!(
+            "{what} needs {b} bytes, more than the {limit}-byte limit"
         ))),
         None => Err(Error::Usage(format!(
             "{what} is too large: its size does not fit in 64 bits"

@@ -16,7 +16,9 @@
 //! coordinates beyond ±[`MAX_COORDINATE`], a vertex with other than 3, 4 or 6 values, faces
 //! with fewer than three vertices, a face token of another shape (`1/x`, `1///`), a vertex,
 //! texture or normal index that is 0 or out of range (`1//0`, `1/5/7` before five `vt`),
-//! non-UTF-8 statements, unknown statements.
+//! non-UTF-8 statements, unknown statements, and a file that would not fit its [`ReadBudget`]
+//! (its bytes, its parse and what the caller will build from it over the memory limit), at the
+//! `v` or `f` statement where it would cross it.
 
 use crate::error::{Error, Location, Result};
 use crate::outputs::OutputFile;
@@ -181,35 +183,148 @@ pub struct ObjFile {
     pub lines: ObjLines,
 }
 
-/// Reads and parses an OBJ file.
+/// What an OBJ read may plan to hold: the file's bytes, the parsed vertices and triangles with
+/// their lines (the room reserved for them), and what the caller will allocate for a mesh of
+/// that many (`need`), together at most `limit` bytes. The reader checks it before it reserves
+/// room for another vertex or triangle, so a file is refused at the line where the total
+/// crosses the limit, before the memory is taken.
+#[derive(Clone, Copy, Debug)]
+pub struct ReadBudget<'a> {
+    /// Most bytes the total may reach.
+    pub limit: u64,
+    /// Bytes the caller will allocate for a mesh of `(vertices, triangles)`; `None` on
+    /// overflow (refused).
+    pub need: fn(usize, usize) -> Option<u64>,
+    /// What the total is, for the refusal ("reading the file into a half-edge mesh").
+    pub what: &'a str,
+}
+
+impl ReadBudget<'static> {
+    /// The parse alone, within [`crate::limits::MEMORY_LIMIT_BYTES`]: for callers whose own
+    /// allocations from the mesh are checked after reading.
+    pub const PARSE: Self = Self {
+        limit: crate::limits::MEMORY_LIMIT_BYTES,
+        need: |_, _| Some(0),
+        what: "reading the file",
+    };
+}
+
+/// Bytes the reader holds per vertex: its position and its line.
+const VERTEX_BYTES: u64 = (size_of::<Vec3>() + size_of::<u32>()) as u64;
+/// Bytes the reader holds per triangle: its indices and its line.
+const TRIANGLE_BYTES: u64 = (size_of::<[u32; 3]>() + size_of::<u32>()) as u64;
+/// Fewest vertices or triangles (a count) the reader reserves room for at once, when the limit
+/// leaves room for them: small files grow without a reallocation per line; above it room
+/// doubles, less near the limit.
+const MIN_RESERVE: usize = 1024;
+
+impl ReadBudget<'_> {
+    /// The planned total with room for `rooms` `[vertices, triangles]` holding `counts`, for a
+    /// file of `file` bytes; `None` on overflow.
+    fn planned(&self, file: usize, rooms: [usize; 2], counts: [usize; 2]) -> Option<u64> {
+        let held = (rooms[0] as u64)
+            .checked_mul(VERTEX_BYTES)?
+            .checked_add((rooms[1] as u64).checked_mul(TRIANGLE_BYTES)?)?
+            .checked_add(file as u64)?;
+        held.checked_add((self.need)(counts[0], counts[1])?)
+    }
+
+    /// Makes room for one more of kind `k` (0: vertices in `items` and their `lines`, 1:
+    /// triangles) when it is full, given the room and count of the other kind: at most
+    /// doubling, and only as much as fits with the caller's need for a mesh filling it, so
+    /// every element pushed into the room is within the limit. `Err` with the total one more
+    /// would plan (`None`: overflow) when it exceeds the limit.
+    fn room_for_one<T>(
+        &self,
+        file: usize,
+        k: usize,
+        items: &mut Vec<T>,
+        lines: &mut Vec<u32>,
+        other: (usize, usize),
+    ) -> std::result::Result<(), Option<u64>> {
+        let len = items.len();
+        if len < items.capacity() && len < lines.capacity() {
+            return Ok(());
+        }
+        let plan = |room: usize| {
+            let (mut rooms, mut counts) = ([other.0; 2], [other.1; 2]);
+            rooms[k] = room;
+            counts[k] = room;
+            self.planned(file, rooms, counts)
+        };
+        let fits = |room| plan(room).is_some_and(|b| b <= self.limit);
+        if !fits(len + 1) {
+            return Err(plan(len + 1));
+        }
+        let mut extra = len.max(MIN_RESERVE);
+        while !fits(len + extra) {
+            extra /= 2; // reaches 1, which fits
+        }
+        items.reserve_exact(extra);
+        lines.reserve_exact(extra);
+        Ok(())
+    }
+}
+
+/// Reads and parses an OBJ file within [`ReadBudget::PARSE`].
 pub fn read_obj(path: &Path) -> Result<ObjMesh> {
     read_obj_file(path).map(|f| f.mesh)
 }
 
-/// Reads and parses an OBJ file, keeping what [`ObjFile`] says of it.
+/// Reads and parses an OBJ file within [`ReadBudget::PARSE`], keeping what [`ObjFile`] says of
+/// it.
 pub fn read_obj_file(path: &Path) -> Result<ObjFile> {
-    let bytes = crate::input::read_bytes(path)?;
-    parse_obj_bytes(&bytes, path)
+    read_obj_file_within(path, ReadBudget::PARSE)
 }
 
-/// Parses OBJ text; `path` is used only in error messages.
+/// Reads and parses an OBJ file within `budget` (see [`parse_obj_bytes_within`]).
+pub fn read_obj_file_within(path: &Path, budget: ReadBudget<'_>) -> Result<ObjFile> {
+    let bytes = crate::input::read_bytes(path)?;
+    parse_obj_bytes_within(&bytes, path, budget)
+}
+
+/// Parses OBJ text within [`ReadBudget::PARSE`]; `path` is used only in error messages.
 pub fn parse_obj(text: &str, path: &Path) -> Result<ObjMesh> {
     parse_obj_bytes(text.as_bytes(), path).map(|f| f.mesh)
 }
 
-/// Parses OBJ bytes (see the module docs); `path` is used only in error messages.
+/// Parses OBJ bytes (see the module docs) within [`ReadBudget::PARSE`]; `path` is used only
+/// in error messages.
 pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<ObjFile> {
+    parse_obj_bytes_within(bytes, path, ReadBudget::PARSE)
+}
+
+/// Parses OBJ bytes (see the module docs); `path` is used only in error messages. A file whose
+/// bytes, parse and `budget.need` would exceed `budget.limit` is refused, as an input error at
+/// the `v` or `f` statement (line and column) where the total crosses it, before its memory is
+/// reserved (see [`ReadBudget`]).
+pub fn parse_obj_bytes_within(
+    bytes: &[u8],
+    path: &Path,
+    budget: ReadBudget<'_>,
+) -> Result<ObjFile> {
+    let file_len = bytes.len();
     let bytes = bytes.strip_prefix(BOM).unwrap_or(bytes);
     let mut mesh = ObjMesh::default();
     let mut dropped = NotCarried::default();
     let mut source = ObjLines::default();
-    let mut face: Vec<u32> = Vec::new();
     let (mut texcoords, mut normals) = (0usize, 0usize);
     for (line_no, raw) in lines(bytes).enumerate() {
         let line_no = line_no + 1;
         let line32 = u32::try_from(line_no).unwrap_or(u32::MAX);
         let at =
             |col: usize, field: &str| Location::file(path).line(line_no).column(col).field(field);
+        let over = |col: usize, field: &str, mesh: &ObjMesh, total: Option<u64>| {
+            let what = format!(
+                "at {} vertices and {} triangles, {}",
+                mesh.positions.len(),
+                mesh.triangles.len(),
+                budget.what
+            );
+            let e = crate::limits::check_memory_within(&what, total, budget.limit)
+                .expect_err("a total over the limit");
+            Error::input(at(col, field), e.to_string())
+        };
         let (content, comment) = statement(raw);
         if comment {
             dropped.note("#");
@@ -287,26 +402,52 @@ pub fn parse_obj_bytes(bytes: &[u8], path: &Path) -> Result<ObjFile> {
                         return Err(Error::input(at(content.len() + 1, name), msg));
                     }
                 }
+                let triangles = (mesh.triangles.capacity(), mesh.triangles.len());
+                budget
+                    .room_for_one(
+                        file_len,
+                        0,
+                        &mut mesh.positions,
+                        &mut source.vertex,
+                        triangles,
+                    )
+                    .map_err(|total| over(1, "v", &mesh, total))?;
                 mesh.positions
                     .push(Vec3::new(values[0], values[1], values[2]));
                 source.vertex.push(line32);
             }
             "f" => {
-                face.clear();
+                // Fan triangles (v0, vi, vi+1) are added as the tokens are read.
+                let (mut first, mut previous, mut count) = (0, 0, 0usize);
                 for (col, tok) in tokens {
                     let counts = [mesh.positions.len(), texcoords, normals];
                     let v = face_vertex(tok, counts).map_err(|m| Error::input(at(col, "f"), m))?;
-                    face.push(v);
+                    match count {
+                        0 => first = v,
+                        1 => {}
+                        _ => {
+                            let vertices = (mesh.positions.capacity(), mesh.positions.len());
+                            budget
+                                .room_for_one(
+                                    file_len,
+                                    1,
+                                    &mut mesh.triangles,
+                                    &mut source.triangle,
+                                    vertices,
+                                )
+                                .map_err(|total| over(col, "f", &mesh, total))?;
+                            mesh.triangles.push([first, previous, v]);
+                            source.triangle.push(line32);
+                        }
+                    }
+                    previous = v;
+                    count += 1;
                 }
-                if face.len() < 3 {
+                if count < 3 {
                     return Err(Error::input(at(1, "f"), "face needs at least 3 vertices"));
                 }
-                if face.len() > 3 {
+                if count > 3 {
                     dropped.polygons_split += 1;
-                }
-                for i in 1..face.len() - 1 {
-                    mesh.triangles.push([face[0], face[i], face[i + 1]]);
-                    source.triangle.push(line32);
                 }
             }
             "vt" | "vn" | "vp" | "o" | "g" | "s" | "usemtl" | "mtllib" | "l" | "p" => {
@@ -527,6 +668,69 @@ mod tests {
         let e = parse_bytes(&hostile).unwrap_err().to_string();
         assert!(e.len() < 200, "{} bytes", e.len());
         assert!(e.contains("\\u{1b}[2J") && !e.contains('\x1b'), "{e}");
+    }
+
+    /// A parse is refused at the statement where the file's bytes, what the reader holds (16
+    /// bytes a vertex: position and line; 16 a triangle: indices and line) and the caller's
+    /// need first exceed the limit, and accepted when they reach it exactly.
+    #[test]
+    fn the_parse_is_refused_where_its_budget_is_crossed() {
+        fn parse(text: &str, limit: u64, need: fn(usize, usize) -> Option<u64>) -> Result<ObjFile> {
+            let what = "the test";
+            let budget = ReadBudget { limit, need, what };
+            parse_obj_bytes_within(text.as_bytes(), Path::new("m.obj"), budget)
+        }
+        // Vertices alone, 56 bytes each with the caller's 40: the 1501st crosses.
+        let text = "v 0 0 0\n".repeat(2000);
+        let file = text.len() as u64;
+        let limit = file + 56 * 1500 + 10;
+        let e = parse(&text, limit, |v, _| Some(40 * v as u64)).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "m.obj:1501:1: field `v`: at 1500 vertices and 0 triangles, the test needs {} bytes, more than the {limit}-byte limit",
+                file + 56 * 1501
+            )
+        );
+        let exact = file + 56 * 2000;
+        assert_eq!(
+            parse(&text, exact, |v, _| Some(40 * v as u64))
+                .unwrap()
+                .mesh
+                .positions
+                .len(),
+            2000
+        );
+        let e = parse(&text, exact - 1, |v, _| Some(40 * v as u64)).unwrap_err();
+        assert!(e.to_string().starts_with("m.obj:2000:1: field `v`"), "{e}");
+
+        // Then triangles, 116 bytes each with the caller's 100, after 1024 vertices (whose room
+        // is exactly their count): triangle 2000 crosses, on its `f` line or at its token.
+        let vertices = "v 0 0 0\n".repeat(1024);
+        let need = |_, t: usize| Some(100 * t as u64);
+        let lines = format!("{vertices}{}", "f 1 2 3\n".repeat(3000));
+        let held = lines.len() as u64 + 1024 * 16;
+        let e = parse(&lines, held + 116 * 1999 + 50, need).unwrap_err();
+        assert!(
+            e.to_string().starts_with(
+                "m.obj:3024:7: field `f`: at 1024 vertices and 1999 triangles, the test needs"
+            ),
+            "{e}"
+        );
+        // One polygon: token i (from 0) at column 3 + 2i adds triangle i − 1 (from 1).
+        let polygon = format!("{vertices}f{}\n", " 1 2".repeat(1500));
+        let held = polygon.len() as u64 + 1024 * 16;
+        let e = parse(&polygon, held + 116 * 1999 + 50, need).unwrap_err();
+        assert!(
+            e.to_string().starts_with(&format!(
+                "m.obj:1025:{}: field `f`: at 1024 vertices and 1999 triangles",
+                3 + 2 * 2001
+            )),
+            "{e}"
+        );
+        let whole = parse(&polygon, held + 116 * 2998, need).unwrap();
+        assert_eq!(whole.mesh.triangles.len(), 2998);
+        assert_eq!(whole.mesh.triangles[..2], [[0, 1, 0], [0, 0, 1]]);
     }
 
     #[test]

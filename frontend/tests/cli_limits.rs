@@ -162,6 +162,50 @@ fn subdivision_levels_are_capped_where_one_face_outgrows_the_core() {
     assert_eq!(faces, 16, "4² faces of one triangle");
 }
 
+/// An OBJ whose parse and half-edge mesh would pass the memory limit is refused while it is
+/// read, at the line where they do: 3 vertices and 40 `f` lines of 10⁶ fan triangles each
+/// (2 bytes of file a triangle), which at 16 bytes a triangle parsed (indices and line) and
+/// 3 edges, a face and 6 scratch indices of the half-edge mesh pass 4 GiB on line 34, long
+/// before the end. Nothing is written.
+#[test]
+fn an_obj_too_large_for_the_half_edge_mesh_is_refused_at_its_line() {
+    use halfray_core::halfedge::{EdgeRec, FaceRec};
+    use std::mem::size_of;
+    const PER_LINE: u64 = 1_000_000;
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("big.obj");
+    let line = format!("f{}\n", " 1 2".repeat(PER_LINE as usize / 2 + 1));
+    let text = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\n{}", line.repeat(40));
+    std::fs::write(&input, &text).unwrap();
+    // The triangle that crosses 4 GiB with the file, the vertices' first room (1024 of 16
+    // bytes) and each triangle's share; its line.
+    let per_triangle = 16 + 3 * size_of::<EdgeRec>() + size_of::<FaceRec>() + 6 * 4;
+    let budget = (4u64 << 30) - text.len() as u64 - 1024 * 16;
+    let crossing = budget / per_triangle as u64 + 1;
+    let want_line = 3 + crossing.div_ceil(PER_LINE);
+    assert!(want_line < 43, "the file is large enough");
+    let out = dir.path().join("out.obj");
+    for args in [
+        &["mesh", "check", input.to_str().unwrap()][..],
+        &[
+            "mesh",
+            "subdivide",
+            input.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ],
+    ] {
+        let (code, e) = run(args);
+        assert_eq!(code, Some(1), "{e}");
+        assert!(
+            e.contains(&format!("big.obj:{want_line}:"))
+                && e.contains("triangles, reading the file into a half-edge mesh needs about 4.0 GiB, more than the 4 GiB limit"),
+            "{args:?}: {e}"
+        );
+        assert!(!out.exists());
+    }
+}
+
 #[test]
 fn ray_generation_on_a_mesh_near_f32_max_gives_up_with_an_error() {
     let s = f32::MAX / 2.0;

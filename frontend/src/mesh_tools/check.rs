@@ -22,7 +22,7 @@
 use super::{CheckArgs, MeshBuffers, build_mesh, ms_since};
 use crate::console::print_out;
 use crate::error::{Error, Location, Result};
-use crate::obj::{ObjMesh, read_obj_file};
+use crate::obj::{ObjMesh, read_obj_file_within};
 use crate::outputs::{Named, reserve_outputs};
 use halfray_core::halfedge::{FaceId, Mesh, MeshStorage};
 use std::fmt;
@@ -108,7 +108,7 @@ pub fn run(args: &CheckArgs) -> Result<()> {
 /// and the reason; `Err` is for unreadable or malformed files.
 pub fn check(path: &Path) -> Result<CheckReport> {
     let t0 = Instant::now();
-    let file = read_obj_file(path)?;
+    let file = read_obj_file_within(path, MeshBuffers::READ_BUDGET)?;
     let obj = &file.mesh;
     let read_ms = ms_since(t0);
 

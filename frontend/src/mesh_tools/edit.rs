@@ -7,7 +7,9 @@ use super::{
 };
 use crate::error::{Error, Location, Result};
 use crate::limits::check_memory;
-use crate::obj::{MAX_COORDINATE, NotCarried, first_outside_domain, read_obj_file, write_obj_to};
+use crate::obj::{
+    MAX_COORDINATE, NotCarried, first_outside_domain, read_obj_file_within, write_obj_to,
+};
 use crate::text;
 use glam::Vec3;
 use halfray_core::halfedge::{
@@ -196,7 +198,7 @@ fn edit_file(
 ) -> Result<EditReport> {
     let out = reserve_output(input, output, force)?;
     let t0 = Instant::now();
-    let file = read_obj_file(input)?;
+    let file = read_obj_file_within(input, MeshBuffers::READ_BUDGET)?;
     warn_not_carried(input, output, &file.not_carried);
     let mut buffers = MeshBuffers::for_obj(&file.mesh, input)?;
     let mesh = build_mesh(&file.mesh, Some(&file.lines), input, &mut buffers)?;

@@ -8,9 +8,11 @@
 //! | `mesh collapse IN.obj -o OUT.obj --shorter-than L` | short-edge collapse ([`edit::collapse`]) |
 //! | `mesh generate KIND --seed N -o OUT.obj [--size N]` | a generated mesh of the benchmark corpus ([`generate`](mod@generate)) |
 //!
-//! Input goes through the strict, order-preserving reader [`crate::obj::read_obj`] (vertex `i`
-//! of the file is vertex `i` of the mesh; unreferenced vertices are kept as isolated vertices)
-//! into a [`SliceMesh`] over `Vec`s sized from the input ([`MeshBuffers`]). A mesh the
+//! Input goes through the strict, order-preserving reader [`crate::obj::read_obj_file_within`]
+//! (vertex `i` of the file is vertex `i` of the mesh; unreferenced vertices are kept as
+//! isolated vertices) into a [`SliceMesh`] over `Vec`s sized from the input ([`MeshBuffers`]);
+//! a file whose parse and half-edge mesh would exceed the memory limit is refused while it is
+//! read, at the line where they do ([`MeshBuffers::READ_BUDGET`]). A mesh the
 //! half-edge core rejects (non-manifold edge or vertex, inconsistent orientation, a triangle
 //! repeating a vertex) is an input error naming the file, the line of the offending `v` or `f`
 //! statement, and the offending vertices by their **1-based OBJ vertex numbers**
@@ -23,7 +25,7 @@ pub mod generate;
 
 use crate::console::print_out;
 use crate::error::{Error, Location, Result};
-use crate::obj::{ObjLines, ObjMesh};
+use crate::obj::{ObjLines, ObjMesh, ReadBudget};
 use crate::outputs::{Named, OutputFile, reserve_outputs};
 use halfray_core::halfedge::{
     BuildError, Counts, Culprit, EdgeRec, FaceRec, MAX_ELEMENTS, MeshStorage, SliceMesh, VertexRec,
@@ -198,25 +200,43 @@ impl MeshBuffers {
     /// Buffers large enough to build `obj` read from `path`: its vertices, faces, and 3 edges
     /// per face (an upper bound; a closed mesh uses 1.5). Refused before anything is allocated
     /// when they and the build's scratch exceed the memory limit
-    /// ([`crate::limits::MEMORY_LIMIT_BYTES`]), an input error naming `path`.
+    /// ([`crate::limits::MEMORY_LIMIT_BYTES`]), an input error naming `path`. A file read
+    /// within [`MeshBuffers::READ_BUDGET`] has been refused while it was parsed already.
     pub fn for_obj(obj: &ObjMesh, path: &Path) -> Result<Self> {
         let f = obj.triangles.len();
-        let capacity = Counts {
-            vertices: obj.positions.len(),
-            edges: f.saturating_mul(3),
-            faces: f,
-        };
-        let scratch = (build_scratch_len(f) as u64).checked_mul(size_of::<u32>() as u64);
-        let bytes = Self::bytes(capacity).and_then(|b| b.checked_add(scratch?));
         crate::limits::check_memory(
             &format!(
                 "the half-edge mesh of {} vertices and {f} triangles",
                 obj.positions.len()
             ),
-            bytes,
+            Self::obj_bytes(obj.positions.len(), f),
         )
         .map_err(|e| Error::input(Location::file(path), e.to_string()))?;
-        Ok(Self::new(capacity))
+        Ok(Self::new(Self::obj_capacity(obj.positions.len(), f)))
+    }
+
+    /// How an OBJ is read for the half-edge mesh: the file, its parse and
+    /// [`MeshBuffers::obj_bytes`] of what has been read, within the memory limit.
+    pub const READ_BUDGET: ReadBudget<'static> = ReadBudget {
+        limit: crate::limits::MEMORY_LIMIT_BYTES,
+        need: Self::obj_bytes,
+        what: "reading the file into a half-edge mesh",
+    };
+
+    /// The capacity [`MeshBuffers::for_obj`] gives a mesh of `vertices` and `triangles`.
+    fn obj_capacity(vertices: usize, triangles: usize) -> Counts {
+        Counts {
+            vertices,
+            edges: triangles.saturating_mul(3),
+            faces: triangles,
+        }
+    }
+
+    /// Bytes [`MeshBuffers::for_obj`] and [`build_mesh`] allocate for a mesh of `vertices` and
+    /// `triangles`: the records and the build's scratch; `None` on overflow.
+    pub fn obj_bytes(vertices: usize, triangles: usize) -> Option<u64> {
+        let scratch = (build_scratch_len(triangles) as u64).checked_mul(size_of::<u32>() as u64)?;
+        Self::bytes(Self::obj_capacity(vertices, triangles))?.checked_add(scratch)
     }
 
     /// Bytes of the records for `capacity`, `None` on overflow.
