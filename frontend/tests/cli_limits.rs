@@ -162,6 +162,43 @@ fn subdivision_levels_are_capped_where_one_face_outgrows_the_core() {
     assert_eq!(faces, 16, "4² faces of one triangle");
 }
 
+/// A level past the core's limit names the counts that pass it and no other: on the
+/// tetrahedron (V 4, E 6, F 4), level 14 has 6·4¹⁴ edges and 4·4¹⁴ = 2³⁰ faces, over
+/// 2³⁰ − 1, and 4 + 2·(4¹⁴ − 1) vertices, under it.
+#[test]
+fn a_subdivision_past_the_core_names_the_counts_that_pass_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let tetrahedron = dir.path().join("tetrahedron.obj");
+    std::fs::write(
+        &tetrahedron,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out.obj");
+    let (code, e) = run(&[
+        "mesh",
+        "subdivide",
+        tetrahedron.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--levels",
+        "15",
+    ]);
+    assert_eq!(code, Some(2), "{e}");
+    let level14 = 4u64.pow(14);
+    assert!(
+        e.contains(&format!(
+            "--levels 15: level 14 would need {} edges and {} faces, more than the half-edge core's {} each",
+            6 * level14,
+            4 * level14,
+            (1u64 << 30) - 1
+        )),
+        "{e}"
+    );
+    assert!(!e.contains(&format!("{}", 4 + 2 * (level14 - 1))), "{e}");
+    assert!(!out.exists());
+}
+
 /// An OBJ whose parse and half-edge mesh would pass the memory limit is refused while it is
 /// read, at the line where they do: 3 vertices and 40 `f` lines of 10⁶ fan triangles each
 /// (2 bytes of file a triangle), which at 16 bytes a triangle parsed (indices and line) and

@@ -768,7 +768,8 @@ fn a_rejected_mesh_is_located_from_the_bytes_read_once() {
 }
 
 /// Two triangles on the same three vertices (a "pillow", vertices 5–7, beside a tetrahedron):
-/// subdivision refuses them naming two of those vertices by their OBJ numbers.
+/// subdivision refuses them naming two of those vertices by their OBJ numbers and the two
+/// faces by their `f` lines (12 and 13).
 #[test]
 fn coincident_faces_are_named_by_their_obj_vertices() {
     let dir = tempfile::tempdir().unwrap();
@@ -797,6 +798,10 @@ fn coincident_faces_are_named_by_their_obj_vertices() {
     assert_eq!(named.len(), 2, "{err}");
     assert!(
         named[0] != named[1] && named.iter().all(|v| (5..=7).contains(v)),
+        "{err}"
+    );
+    assert!(
+        err.contains("pillow.obj:12: Loop subdivision refused: the two faces (the `f` lines 12 and 13) on the edge"),
         "{err}"
     );
     assert!(!out.exists());

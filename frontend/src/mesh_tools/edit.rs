@@ -8,7 +8,7 @@ use super::{
 use crate::error::{Error, Location, Result};
 use crate::limits::check_memory;
 use crate::obj::{
-    MAX_COORDINATE, NotCarried, first_outside_domain, read_obj_file_within, write_obj_to,
+    MAX_COORDINATE, NotCarried, ObjLines, first_outside_domain, read_obj_file_within, write_obj_to,
 };
 use crate::text;
 use glam::Vec3;
@@ -124,14 +124,16 @@ pub fn subdivide(args: &SubdivideArgs) -> Result<EditReport> {
         &args.input,
         &args.output,
         args.force,
-        |mesh, report| subdivide_mesh(args, &mesh, report),
+        |mesh, lines, report| subdivide_mesh(args, &mesh, lines, report),
     )
 }
 
-/// The `mesh subdivide` edit of a built `mesh` (see [`subdivide`]): the exported result.
+/// The `mesh subdivide` edit of a built `mesh` (see [`subdivide`]): the exported result. A
+/// refusal names the input's vertices by OBJ number and its faces by `f` line (`lines`).
 fn subdivide_mesh(
     args: &SubdivideArgs,
     mesh: &SliceMesh<'_>,
+    lines: &ObjLines,
     report: &mut EditReport,
 ) -> Result<Exported> {
     // Refuse before allocating anything when a level would exceed what the core can index
@@ -140,10 +142,21 @@ fn subdivide_mesh(
     let mut bytes = Some(0u64);
     for level in 1..=args.levels {
         c = c.after_loop();
-        if c.vertices > MAX_ELEMENTS || c.edges > MAX_ELEMENTS || c.faces > MAX_ELEMENTS {
+        let over: Vec<String> = [
+            (c.vertices, "vertices"),
+            (c.edges, "edges"),
+            (c.faces, "faces"),
+        ]
+        .into_iter()
+        .filter(|&(n, _)| n > MAX_ELEMENTS)
+        .map(|(n, what)| format!("{n} {what}"))
+        .collect();
+        if !over.is_empty() {
+            let each = if over.len() > 1 { " each" } else { "" };
             return Err(Error::Usage(format!(
-                "--levels {}: level {level} would need {} vertices, {} edges and {} faces, more than the half-edge core's {MAX_ELEMENTS} each",
-                args.levels, c.vertices, c.edges, c.faces
+                "--levels {}: level {level} would need {}, more than the half-edge core's {MAX_ELEMENTS}{each}",
+                args.levels,
+                over.join(" and ")
             )));
         }
         bytes = bytes.and_then(|b| b.checked_add(level_bytes(c)?));
@@ -163,14 +176,28 @@ fn subdivide_mesh(
         // can have coincident faces (every face of a subdivided one has a vertex of its own),
         // so the edge is the input's.
         SubdivideError::CoincidentFaces(edge) => match mesh.edge_vertices(edge) {
-            Some([a, b]) => core_error(
-                &args.input,
-                format!(
-                    "Loop subdivision refused: the two faces on the edge of vertices {} and {} have the same three vertices",
-                    a.index() + 1,
-                    b.index() + 1
-                ),
-            ),
+            Some([a, b]) => {
+                // Faces are the file's triangles in order, so each has the line of its `f`.
+                let face_lines: Vec<usize> = (0..2)
+                    .filter_map(|side| mesh.face(edge.halfedge(side)))
+                    .filter_map(|f| lines.triangle(f.index()))
+                    .collect();
+                let (at, on_lines) = match face_lines[..] {
+                    [l0, l1] => (
+                        Location::file(&args.input).line(l0.min(l1)),
+                        format!(" (the `f` lines {} and {})", l0.min(l1), l0.max(l1)),
+                    ),
+                    _ => (Location::file(&args.input), String::new()),
+                };
+                Error::input(
+                    at,
+                    format!(
+                        "Loop subdivision refused: the two faces{on_lines} on the edge of vertices {} and {} have the same three vertices",
+                        a.index() + 1,
+                        b.index() + 1
+                    ),
+                )
+            }
             None => core_error(&args.input, e),
         },
         e => core_error(&args.input, e),
@@ -185,16 +212,18 @@ fn subdivide_mesh(
 type Exported = (Vec<Vec3>, Vec<[u32; 3]>);
 
 /// The frame of every editing command: reserves `output` (refusing an output that is the
-/// input, or exists without `force`), reads `input` (warning about what the output will not
-/// carry) and builds the half-edge mesh, then runs `edit` and writes the mesh it returns.
-/// The report it hands `edit` has the command, paths, `before` counts and `read_ms` filled in;
-/// `edit` fills in the rest, and the time of the write is added to `write_ms`.
+/// input, and one that is read-only or hard-linked without `force`), reads `input` (warning
+/// about what the output will not carry) and builds the half-edge mesh, then runs `edit` on it
+/// and the file's lines (face `i` of the mesh is triangle `i` of the file) and writes the mesh
+/// it returns. The report it hands `edit` has the command, paths, `before` counts and
+/// `read_ms` filled in; `edit` fills in the rest, and the time of the write is added to
+/// `write_ms`.
 fn edit_file(
     command: &'static str,
     input: &Path,
     output: &Path,
     force: bool,
-    edit: impl FnOnce(SliceMesh<'_>, &mut EditReport) -> Result<Exported>,
+    edit: impl FnOnce(SliceMesh<'_>, &ObjLines, &mut EditReport) -> Result<Exported>,
 ) -> Result<EditReport> {
     let out = reserve_output(input, output, force)?;
     let t0 = Instant::now();
@@ -210,7 +239,7 @@ fn edit_file(
         read_ms: ms_since(t0),
         ..EditReport::default()
     };
-    let (p, t) = edit(mesh, &mut report)?;
+    let (p, t) = edit(mesh, &file.lines, &mut report)?;
     refuse_outside_domain(command, output, &p)?;
     let t2 = Instant::now();
     write_obj_to(out, &p, &t)?;
@@ -311,7 +340,7 @@ pub fn smooth(args: &SmoothArgs) -> Result<EditReport> {
         &args.input,
         &args.output,
         args.force,
-        |mut mesh, report| smooth_mesh(args, &mut mesh, report),
+        |mut mesh, _, report| smooth_mesh(args, &mut mesh, report),
     )
 }
 
@@ -391,7 +420,7 @@ pub fn collapse(args: &CollapseArgs) -> Result<EditReport> {
         &args.input,
         &args.output,
         args.force,
-        |mut mesh, report| collapse_mesh(args, &mut mesh, report),
+        |mut mesh, _, report| collapse_mesh(args, &mut mesh, report),
     )
 }
 
