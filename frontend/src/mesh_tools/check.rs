@@ -1,6 +1,7 @@
 //! `halfray mesh check`: what the half-edge core thinks of a mesh.
 //!
-//! # Definitions (the same as `../shared/meshes/README.md`)
+//! # Definitions
+//! As in `../shared/meshes/README.md`, except the genus (below).
 //! * V = `v` statements (every vertex of the file); **referenced** vertices are those some
 //!   triangle uses; unreferenced ones become isolated vertices of the half-edge mesh.
 //! * E = distinct undirected vertex pairs used by a triangle side; F = triangles (after fan
@@ -10,10 +11,12 @@
 //! * **χ = V_referenced − E + F**: unreferenced vertices do not count (they are not part of the
 //!   surface; counting them would make the bunny's χ depend on 1113 stray points).
 //! * Components: faces connected through shared edges.
-//! * **Genus** g = (2·components − χ − boundary_loops)/2, from χ = Σ (2 − 2gᵢ − bᵢ) over the
-//!   components of an orientable manifold surface; it is the total genus of all components
-//!   (bunny: (2 − (−3) − 5)/2 = 0; torus: (2 − 0 − 0)/2 = 1). Reported only for meshes the core
-//!   accepts, which are manifold and consistently oriented by construction.
+//! * **Genus** g = (2·components − χ − boundary_loops)/2, the genus of an orientable surface
+//!   with boundary, from χ = Σ (2 − 2gᵢ − bᵢ) over its components; it is the total genus of
+//!   all components (bunny: (2 − (−3) − 5)/2 = 0; torus: (2 − 0 − 0)/2 = 1). Reported for every
+//!   mesh the core accepts (manifold and consistently oriented by construction), open or
+//!   closed. The shared README defines genus as (2·components − χ)/2 for closed meshes only;
+//!   on a closed mesh (no boundary loops) the two agree, on an open one only this one is given.
 //!
 //! A mesh the core rejects gets the counts that need no half-edge structure (V, referenced
 //! vertices, E, F, χ), `manifold` false (or unknown, for an orientation error), the reason, and

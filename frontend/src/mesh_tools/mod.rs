@@ -39,8 +39,10 @@ pub use edit::{EditReport, collapse, smooth, subdivide};
 /// `halfray mesh ...`.
 #[derive(clap::Subcommand, Debug, Clone)]
 pub enum MeshCommand {
-    /// Check manifoldness, boundary loops, Euler characteristic and genus. Exits with status 1
-    /// and the reason when the half-edge core rejects the mesh.
+    /// Check manifoldness, boundary loops, Euler characteristic χ = V − E + F (referenced
+    /// vertices) and genus g = (2·components − χ − boundary loops)/2, the genus of a surface
+    /// with boundary (given for open meshes too). Exits with status 1 and the reason when the
+    /// half-edge core rejects the mesh.
     Check(CheckArgs),
     /// Loop subdivision: original vertices keep their indices, one new vertex per edge is
     /// appended (V' = V + E per level).
