@@ -25,7 +25,7 @@ pub fn check_memory_within(what: &str, bytes: Option<u64>, limit: u64) -> Result
     match bytes {
         Some(b) if b <= limit => Ok(()),
         // A whole number of GiB (the memory limit) in GiB; another limit (a test's) in bytes.
-        Some(b) if limit % GIB == 0 => Err(Error::Usage(format!(
+        Some(b) if limit.is_multiple_of(GIB) => Err(Error::Usage(format!(
             "{what} needs about {:.1} GiB, more than the {} GiB limit",
             b as f64 / GIB as f64,
             limit / GIB

@@ -185,7 +185,7 @@ pub struct ObjFile {
 
 /// What an OBJ read may plan to hold: the file's bytes, the parsed vertices and triangles with
 /// their lines (the room reserved for them), and what the caller will allocate for a mesh of
-/// that many (`need`), together at most `limit` bytes. The reader checks it before it reserves
+/// as many as that room holds (`need`), together at most `limit` bytes. The reader checks it before it reserves
 /// room for another vertex or triangle, so a file is refused at the line where the total
 /// crosses the limit, before the memory is taken.
 #[derive(Clone, Copy, Debug)]
@@ -219,38 +219,38 @@ const TRIANGLE_BYTES: u64 = (size_of::<[u32; 3]>() + size_of::<u32>()) as u64;
 const MIN_RESERVE: usize = 1024;
 
 impl ReadBudget<'_> {
-    /// The planned total with room for `rooms` `[vertices, triangles]` holding `counts`, for a
-    /// file of `file` bytes; `None` on overflow.
-    fn planned(&self, file: usize, rooms: [usize; 2], counts: [usize; 2]) -> Option<u64> {
+    /// The planned total with room for `rooms` `[vertices, triangles]`, for a file of `file`
+    /// bytes: what the reader holds, and the caller's need for a mesh filling both rooms (so
+    /// that pushes into the room of one kind stay within the limit whatever the other kind
+    /// does later); `None` on overflow.
+    fn planned(&self, file: usize, rooms: [usize; 2]) -> Option<u64> {
         let held = (rooms[0] as u64)
             .checked_mul(VERTEX_BYTES)?
             .checked_add((rooms[1] as u64).checked_mul(TRIANGLE_BYTES)?)?
             .checked_add(file as u64)?;
-        held.checked_add((self.need)(counts[0], counts[1])?)
+        held.checked_add((self.need)(rooms[0], rooms[1])?)
     }
 
     /// Makes room for one more of kind `k` (0: vertices in `items` and their `lines`, 1:
-    /// triangles) when it is full, given the room and count of the other kind: at most
-    /// doubling, and only as much as fits with the caller's need for a mesh filling it, so
-    /// every element pushed into the room is within the limit. `Err` with the total one more
-    /// would plan (`None`: overflow) when it exceeds the limit.
+    /// triangles) when it is full, given the room of the other kind: at most doubling, and
+    /// only as much as [`ReadBudget::planned`] keeps within the limit. `Err` with the total
+    /// room for one more would plan (`None`: overflow) when it exceeds the limit.
     fn room_for_one<T>(
         &self,
         file: usize,
         k: usize,
         items: &mut Vec<T>,
         lines: &mut Vec<u32>,
-        other: (usize, usize),
+        other_room: usize,
     ) -> std::result::Result<(), Option<u64>> {
         let len = items.len();
         if len < items.capacity() && len < lines.capacity() {
             return Ok(());
         }
         let plan = |room: usize| {
-            let (mut rooms, mut counts) = ([other.0; 2], [other.1; 2]);
+            let mut rooms = [other_room; 2];
             rooms[k] = room;
-            counts[k] = room;
-            self.planned(file, rooms, counts)
+            self.planned(file, rooms)
         };
         let fits = |room| plan(room).is_some_and(|b| b <= self.limit);
         if !fits(len + 1) {
@@ -402,7 +402,7 @@ pub fn parse_obj_bytes_within(
                         return Err(Error::input(at(content.len() + 1, name), msg));
                     }
                 }
-                let triangles = (mesh.triangles.capacity(), mesh.triangles.len());
+                let triangles = mesh.triangles.capacity();
                 budget
                     .room_for_one(
                         file_len,
@@ -426,7 +426,7 @@ pub fn parse_obj_bytes_within(
                         0 => first = v,
                         1 => {}
                         _ => {
-                            let vertices = (mesh.positions.capacity(), mesh.positions.len());
+                            let vertices = mesh.positions.capacity();
                             budget
                                 .room_for_one(
                                     file_len,
