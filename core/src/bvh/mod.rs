@@ -50,7 +50,7 @@
 //! are adjacent. A leaf refers to a run of the index array. The whole structure takes
 //! `32·nodes + 4·N` bytes; with leaves of one primitive that is at most `32·(2N − 1) + 4N < 68`
 //! bytes per primitive; with the default SAH leaves (about two triangles each) it is about 39 bytes
-//! per triangle (bunny 38.5, dragon 39.2)
+//! per triangle (bunny 38.5, dragon 39.3)
 //! ([`RayQuery::bytes_per_triangle`](crate::query::RayQuery::bytes_per_triangle)). The vertex and triangle arrays are the caller's and are
 //! not counted.
 //!

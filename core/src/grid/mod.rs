@@ -37,7 +37,7 @@
 //! `f64`, conservative). The first and last cell of each axis extend to infinity, so cells
 //! partition space and a point just outside the grid's box belongs to a border cell. On the
 //! bunny (69 451 triangles, default `λ = 3`, 65×64×50 cells) the exact test cuts the
-//! references from 205 427 (2.96 per triangle) to 177 578 (2.56), printed by
+//! references from 205 116 (2.95 per triangle) to 177 315 (2.55), printed by
 //! `tests/tests/grid_vs_bruteforce.rs`; building exactly takes about 4× as long.
 //!
 //! # Traversal and the rule that ends it

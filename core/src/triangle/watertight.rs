@@ -46,7 +46,13 @@ pub use rays::{RAY_LANES, ShearedRays};
 /// the single rounding of the difference keeps the exact sign, and zero means exactly on the
 /// edge. `det`, `t` and the barycentrics are computed in `f64` and rounded once.
 ///
-/// Edges and vertices are **closed**: a point exactly on an edge is inside. Mixed signs or
+/// Edges and vertices are **closed**: a point exactly on an edge is inside. "Exactly" is in the
+/// sheared frame: the edge functions are exact for the sheared `f32` coordinates, which round
+/// the world's (the shear `d_i/d_kz` and `x' = p_kx − s_x·p_kz` each round unless exact, as
+/// for an axis-aligned ray). A ray through a shared edge in world coordinates may so fall just
+/// on one side of it, but on the same side for both triangles, which see the same sheared
+/// edge: one hit, never none. Only a ray that lands on the sheared edge hits both at equal
+/// `t`, where the smaller index wins (the BVH's tie rule). Mixed signs or
 /// `det = 0` (ray in the triangle's plane, or a degenerate triangle) give no hit; so does a
 /// triangle whose plane the line certainly crosses behind the origin while `t_min ≥ 0`
 /// (the exact signs of the origin's and the direction's orientation against the plane,
