@@ -4,7 +4,6 @@
 use super::WideBvh;
 use super::node::{ChildRef, LeafGroup, WideNode};
 use super::packet::{PACKET, PacketStack, Sharing};
-use super::traverse::STACK;
 use crate::aabb::Aabb;
 use crate::query::QueryError;
 use crate::query::{LeafTest, Query, RayQuery, Stack, same_length};
