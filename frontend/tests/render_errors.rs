@@ -103,6 +103,56 @@ fn missing_fields() {
     );
 }
 
+/// A missing `[camera]` has no place in the file: the message names the field `camera` alone
+/// (it was appended to the key at byte 0: `ambient.camera`).
+#[test]
+fn a_missing_camera_is_the_field_camera() {
+    for top in ["ambient = [0.1, 0.1, 0.1]\n", "max_depth = 3\n", ""] {
+        let text = format!("{top}[material.m]\ndiffuse = [1, 0, 0]\n");
+        let msg = load_err("nocam.toml", &text);
+        assert!(
+            msg.starts_with("nocam.toml: field `camera`: missing field `camera`"),
+            "{msg}"
+        );
+    }
+}
+
+/// A key nested past the TOML reader's limit (the reader gives no location) is found by its
+/// line, column and dotted path: a header, a dotted key at byte 0, a material's header; keys
+/// nested deep in other ways get the message alone, with no invented field.
+#[test]
+fn a_key_nested_too_deep_is_located() {
+    let deep = vec!["a"; 100].join(".");
+    // The path as a message quotes it: its first 40 characters and its length.
+    let quoted = |key: String| format!("{}… ({} bytes in all)", &key[..40], key.len());
+    check(
+        "hdr.toml",
+        &format!("ambient = [0.1, 0.1, 0.1]\n{BASE}\n[x.{deep}]\ny = 1\n"),
+        "12:2",
+        &quoted(format!("x.{deep}")),
+        "the key has 101 dotted parts; at most 80 are read",
+    );
+    check(
+        "dot.toml",
+        &format!("  x.{deep} = 1\n{BASE}"),
+        "1:3",
+        &quoted(format!("x.{deep}")),
+        "101 dotted parts",
+    );
+    check(
+        "mat.toml",
+        &format!("{BASE}\n[[ material.q.{deep} ]]\n"),
+        "11:4",
+        &quoted(format!("material.q.{deep}")),
+        "102 dotted parts",
+    );
+    let msg = load_err("inline.toml", &format!("{BASE}y = {{ {deep} = 1 }}\n"));
+    assert_eq!(
+        msg,
+        "inline.toml: the file's keys or values nest too deep for the TOML reader (recursion limit)"
+    );
+}
+
 #[test]
 fn unknown_material_and_mesh_names() {
     check(

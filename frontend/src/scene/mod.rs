@@ -379,10 +379,18 @@ impl Source<'_> {
 
     /// A TOML/serde error with its location; the field is taken from the message
     /// (`unknown field`/`missing field`), from the key in front of the span, or from the
-    /// header the span starts on (`[[camera]]` where a `[camera]` table is wanted).
+    /// header the span starts on (`[[camera]]` where a `[camera]` table is wanted). An error
+    /// without a place in the file is located by what it says, never by the key at byte 0: a
+    /// missing top-level field is named alone (`camera`), and a key nested past the parser's limit
+    /// ([`TOML_MAX_KEY_PARTS`]) by its line, column and dotted path
+    /// ([`Source::too_deep_key`]), or, found nowhere, with the message alone.
     fn toml_error(&self, e: &toml::de::Error) -> Error {
+        // An error of the document's own table (a missing top-level field) comes with the
+        // empty span at byte 0: no place in the file, as none at all.
+        let Some(span) = e.span().filter(|s| !(s.is_empty() && s.start == 0)) else {
+            return self.spanless_toml_error(e.message().trim());
+        };
         let mut msg = e.message().trim().to_string();
-        let span = e.span().unwrap_or(0..0);
         if msg == "duplicate key" {
             // The span covers the repeated key (or header name): quote it.
             if let Some(key) = self
@@ -411,15 +419,63 @@ impl Source<'_> {
                 ));
             }
         }
-        let mut at = Location::file(self.path);
-        if e.span().is_some() {
-            let (line, col) = self.line_col(span.start);
-            at = at.line(line).column(col);
-        }
+        let (line, col) = self.line_col(span.start);
+        let mut at = Location::file(self.path).line(line).column(col);
         if let Some(f) = field {
             at = at.field(f);
         }
         Error::input(at, msg)
+    }
+
+    /// [`Source::toml_error`] for a message `msg` that comes without a span.
+    fn spanless_toml_error(&self, msg: &str) -> Error {
+        if msg == "recursion limit" {
+            return match self.too_deep_key() {
+                Some((start, key)) => self.err(
+                    &(start..start),
+                    &crate::text::excerpt(&key),
+                    format!(
+                        "the key has {} dotted parts; at most {TOML_MAX_KEY_PARTS} are read",
+                        key_parts(&key).len()
+                    ),
+                ),
+                None => Error::input(
+                    Location::file(self.path),
+                    "the file's keys or values nest too deep for the TOML reader (recursion limit)",
+                ),
+            };
+        }
+        let at = Location::file(self.path);
+        let at = match backticked_field(msg) {
+            Some(f) => at.field(f),
+            None => at,
+        };
+        Error::input(at, msg)
+    }
+
+    /// The first `[header]`, `[[header]]` or line-leading `key =` whose dotted key has more
+    /// than [`TOML_MAX_KEY_PARTS`] parts: its byte offset and its text.
+    fn too_deep_key(&self) -> Option<(usize, String)> {
+        let mut offset = 0;
+        for line in self.text.split_inclusive('\n') {
+            let start = offset;
+            offset += line.len();
+            let body = line.trim_start();
+            let lead = line.len() - body.len();
+            let (skip, key) = if let Some(h) = body.strip_prefix("[[") {
+                (2, h.split("]]").next().unwrap_or(""))
+            } else if let Some(h) = body.strip_prefix('[') {
+                (1, h.split(']').next().unwrap_or(""))
+            } else {
+                (0, body.split('=').next().unwrap_or(""))
+            };
+            let key_lead = key.len() - key.trim_start().len();
+            let key = key.trim();
+            if key_parts(key).len() > TOML_MAX_KEY_PARTS {
+                return Some((start + lead + skip + key_lead, key.to_string()));
+            }
+        }
+        None
     }
 
     /// The dotted name of the `[table]` or `[[array]]` header on the line holding byte `at`,
@@ -507,6 +563,36 @@ fn path_in(
     }
 }
 
+/// Most parts of a dotted key (`a.b.c` has 3) that the TOML reader accepts: the `toml` crate
+/// (1.x) refuses a key whose path before its last part has 80 parts or more, with the message
+/// "recursion limit" and no span (a count of key parts; the crate does not export it, so a
+/// test checks it against the crate).
+pub(crate) const TOML_MAX_KEY_PARTS: usize = 80;
+
+/// The parts of the dotted key `key` (`a."b.c".d` has 3: dots inside quotes do not split).
+fn key_parts(key: &str) -> Vec<&str> {
+    let mut parts = Vec::new();
+    let (mut start, mut quote, mut escaped) = (0, None, false);
+    for (i, c) in key.char_indices() {
+        let was_escaped = std::mem::replace(&mut escaped, false);
+        match (quote, c) {
+            (None, '"' | '\'') => quote = Some(c),
+            (Some('"'), '\\') if !was_escaped => escaped = true,
+            (Some('"'), '"') if was_escaped => {}
+            (Some(q), _) if c == q => quote = None,
+            (None, '.') => {
+                parts.push(key[start..i].trim());
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    if !key.trim().is_empty() {
+        parts.push(key[start..].trim());
+    }
+    parts
+}
+
 /// `x` from messages like "unknown field `x`, expected ..." or "missing field `x`".
 fn backticked_field(msg: &str) -> Option<String> {
     for pat in ["unknown field `", "missing field `"] {
@@ -525,4 +611,33 @@ fn floor_boundary(s: &str, at: usize) -> usize {
         i -= 1;
     }
     i
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `a.a.…` with `n` parts.
+    fn dotted(n: usize) -> String {
+        vec!["a"; n].join(".")
+    }
+
+    /// [`TOML_MAX_KEY_PARTS`] is the `toml` crate's own limit, for a dotted key and a header.
+    #[test]
+    fn the_key_part_limit_is_the_toml_crates() {
+        for form in [|k: &str| format!("{k} = 1\n"), |k: &str| format!("[{k}]\n")] {
+            let ok = form(&dotted(TOML_MAX_KEY_PARTS));
+            assert!(toml::from_str::<toml::Table>(&ok).is_ok(), "{ok}");
+            let deep = form(&dotted(TOML_MAX_KEY_PARTS + 1));
+            let e = toml::from_str::<toml::Table>(&deep).unwrap_err();
+            assert_eq!((e.message(), e.span()), ("recursion limit", None));
+        }
+    }
+
+    #[test]
+    fn key_parts_split_on_dots_outside_quotes() {
+        assert_eq!(key_parts("a . \"b.c\".'d.e'"), ["a", "\"b.c\"", "'d.e'"]);
+        assert_eq!(key_parts("\"x\\\".y\".z"), ["\"x\\\".y\"", "z"]);
+        assert_eq!(key_parts(""), Vec::<&str>::new());
+    }
 }
