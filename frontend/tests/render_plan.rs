@@ -114,6 +114,12 @@ fn unused_materials_turn_no_effect_on() {
         explain.contains("unused materials unused_glass, unused_mirror"),
         "{explain}"
     );
+    // The specular line names the used materials only: `unused_mirror` (ks 1) is not
+    // "skipped where ks = 0".
+    assert!(
+        explain.contains("specular term    none (skipped where ks = 0: matte, red)\n"),
+        "{explain}"
+    );
     let out = render(&s, &RenderOptions::default());
     assert_eq!(out.counts.total(), 64 * 48);
     assert_same_picture(&s, "unused materials");
@@ -125,6 +131,56 @@ fn unused_materials_turn_no_effect_on() {
     );
     let plan = EffectPlan::derive(&parse_scene(&used), false);
     assert!(plan.max_depth > 0 && plan.reflect.iter().any(|&b| b));
+}
+
+/// The plan casts reflection and refraction rays only where the tracer can: a `mirror` or
+/// `transparency` below the path-weight floor 2⁻¹³ (1e-4 < 1/8192 ≈ 1.22e-4) plans none (no
+/// recursion depth, no secondary rays in the worst case) and the render casts none; 2e-4
+/// plans and casts them; glass at `ior = 1` refracts every ray (Snell's `k = cos²θ ≥ 0`), so it
+/// plans refraction and no reflection, and casts no reflection ray.
+#[test]
+fn factors_below_the_path_weight_floor_and_ior_1_plan_only_rays_that_run() {
+    use halfray::render::budget::Estimate;
+    let with = |fields: &str| {
+        let s = parse_scene(&format!(
+            "{}\n[material.m]\ndiffuse = [0.5, 0.5, 0.5]\n{fields}\n\n{}",
+            matte(),
+            sphere("[1.0, 0.7, 0.2]", "0.7", "m")
+        ));
+        let plan = EffectPlan::derive(&s, false);
+        let flags = plan.flags(&s, Mode::Color, 1);
+        let secondary = Estimate::of(&s, &plan, Mode::Color, 1).secondary;
+        let counts = render(&s, &RenderOptions::default()).counts;
+        (plan.explain(&s, Mode::Color, 1), flags, secondary, counts)
+    };
+    for fields in ["mirror = 1e-4", "transparency = 1e-4\nior = 1.5"] {
+        let (explain, flags, secondary, counts) = with(fields);
+        assert!(
+            explain.contains("recursion depth  0 ("),
+            "{fields}: {explain}"
+        );
+        assert!(
+            !flags.reflection && !flags.refraction,
+            "{fields}: {flags:?}"
+        );
+        assert_eq!(secondary, 0.0, "{fields}");
+        assert_eq!(counts.reflection + counts.refraction, 0, "{fields}");
+    }
+    // Control: just above the floor the rays are planned and cast.
+    let (_, flags, secondary, counts) = with("mirror = 2e-4");
+    assert!(flags.reflection && secondary > 0.0);
+    assert!(counts.reflection > 0, "{counts:?}");
+    let (_, flags, _, counts) = with("transparency = 2e-4\nior = 1.5");
+    assert!(flags.refraction && flags.reflection, "{flags:?}");
+    assert!(counts.refraction > 0, "{counts:?}");
+    // Glass at ior 1: refraction only.
+    let (explain, flags, _, counts) = with("transparency = 0.9\nior = 1");
+    assert!(flags.refraction && !flags.reflection, "{flags:?}");
+    assert!(
+        counts.refraction > 0 && counts.reflection == 0,
+        "{counts:?}"
+    );
+    assert!(explain.contains("reflection rays  none\n"), "{explain}");
 }
 
 /// A CSG object's own material shows only through operands that inherit it: a mirror CSG
@@ -190,8 +246,52 @@ fn dark_lights_cast_no_shadow_rays() {
     );
 }
 
+/// The modes whose picture `--force-all-effects` leaves the same (scenes/README.md, `render
+/// --help`): every mode but the heat map, which shows the work done.
+fn same_picture_modes() -> Vec<Mode> {
+    let all = <Mode as clap::ValueEnum>::value_variants();
+    all.iter()
+        .copied()
+        .filter(|&m| m != Mode::Heatmap)
+        .collect()
+}
+
+/// `render --help` and scenes/README.md say for which modes the forced picture is the same:
+/// each of [`same_picture_modes`] is named, and the heat map is said to differ.
+#[test]
+fn the_docs_name_the_modes_whose_forced_picture_is_the_same() {
+    let help = common::halfray(&[&"render", &"--help"]);
+    let help = String::from_utf8(help.stdout).unwrap();
+    // As one line: the help is wrapped to the terminal's width.
+    let help = help.split_whitespace().collect::<Vec<_>>().join(" ");
+    let readme = std::fs::read_to_string(scenes_dir().join("README.md")).unwrap();
+    let paragraph = readme
+        .split("\n\n")
+        .find(|p| p.starts_with("`--force-all-effects` turns everything on"))
+        .unwrap();
+    assert!(
+        help.contains(
+            "the picture is the same in every mode but `heatmap`, which shows the work done"
+        ),
+        "{help}"
+    );
+    for mode in same_picture_modes() {
+        let name = clap::ValueEnum::to_possible_value(&mode).unwrap();
+        assert!(
+            paragraph.contains(&format!("`{}`", name.get_name())),
+            "{paragraph}"
+        );
+    }
+    assert!(
+        paragraph.contains("`heatmap` is the exception"),
+        "{paragraph}"
+    );
+}
+
 fn assert_same_picture(s: &Scene, what: &str) {
-    for mode in [Mode::Color, Mode::Normal, Mode::Depth] {
+    let modes = same_picture_modes();
+    assert!(modes.contains(&Mode::Barycentric), "{modes:?}");
+    for mode in modes {
         let opts = RenderOptions {
             mode,
             ..RenderOptions::default()

@@ -27,6 +27,16 @@ pub struct PathBound {
 }
 
 impl PathBound {
+    /// Whether a node of path weight `weight` casts a secondary ray of factor `k` (its
+    /// material's `mirror` or `transparency`): `k > 0` and the ray's own weight `weight × k`
+    /// at least `min_weight`. The one rule: the tracer applies it at every node, and the
+    /// effect plan at the camera ray's hit (weight 1, the largest any node has: every factor
+    /// is at most 1), so that a material whose factor is below [`MIN_PATH_WEIGHT`] is not
+    /// planned as casting rays that never run.
+    pub fn casts(&self, weight: f32, k: f32) -> bool {
+        k > 0.0 && weight * k >= self.min_weight
+    }
+
     /// The renderer's bound: [`MIN_PATH_WEIGHT`], [`MAX_SECONDARY_RAYS_PER_CAMERA_RAY`].
     pub const RENDER: Self = Self {
         min_weight: MIN_PATH_WEIGHT,

@@ -92,7 +92,9 @@ pub struct RenderArgs {
     /// elsewhere). By default the scene's background colour is written opaque.
     #[arg(long, conflicts_with = "background")]
     pub transparent_background: bool,
-    /// Turn every effect on (for comparison with the plan; the picture is the same).
+    /// Turn every effect on (for comparison with the plan): the picture is the same in every
+    /// mode but `heatmap`, which shows the work done (forced, every solid is evaluated through
+    /// the CSG interval code and its BVH nodes counted).
     #[arg(long)]
     pub force_all_effects: bool,
     /// Override the scene's image width.

@@ -1,11 +1,11 @@
 //! The effect plan: which effects the scene calls for, derived before rendering, so that the
 //! renderer simulates only those. `--force-all-effects` switches everything on (the results of
-//! effects the scene does not use are computed and then weighted by zero, so the picture is the
-//! same; only the work differs).
+//! effects the scene does not use are computed and then discarded, so the picture is the same
+//! in every mode but the heat map, which shows the work done; only the work differs).
 
 use super::Mode;
-use super::bound::{MAX_SECONDARY_RAYS_PER_CAMERA_RAY, MIN_PATH_WEIGHT};
-use crate::scene::{LightKind, Scene};
+use super::bound::{MAX_SECONDARY_RAYS_PER_CAMERA_RAY, MIN_PATH_WEIGHT, PathBound};
+use crate::scene::{LightKind, Material, Scene};
 use std::fmt::Write as _;
 
 /// What the renderer will simulate.
@@ -20,10 +20,12 @@ pub struct EffectPlan {
     /// rays from its surfaces: its `diffuse` is not 0 or its specular term is evaluated (else
     /// the term is 0, lit or not).
     pub direct: Vec<bool>,
-    /// Per material: cast reflection rays (mirror > 0, or transparent: total internal
-    /// reflection).
+    /// Per material: cast reflection rays: its `mirror` casts them ([`mirror_casts`]), or
+    /// its `transparency` does and `ior ≠ 1` (total internal reflection; at `ior = 1` every
+    /// ray refracts).
     pub reflect: Vec<bool>,
-    /// Per material: cast refraction rays (transparency > 0).
+    /// Per material: cast refraction rays: its `transparency` casts them ([`mirror_casts`]'s
+    /// rule).
     pub refract: Vec<bool>,
     /// Largest recursion depth used (0 when no material reflects or refracts).
     pub max_depth: u32,
@@ -66,6 +68,26 @@ pub struct PlanFlags {
     pub depth_of_field: bool,
 }
 
+/// Whether the tracer can cast a reflection ray for `m`'s `mirror`: under the render's bound
+/// from the camera ray's hit ([`PathBound::casts`] at weight 1), so never for a `mirror`
+/// below [`MIN_PATH_WEIGHT`].
+pub fn mirror_casts(m: &Material) -> bool {
+    PathBound::RENDER.casts(1.0, m.mirror)
+}
+
+/// Whether the tracer can cast a refraction ray for `m`'s `transparency` ([`mirror_casts`]'s
+/// rule).
+pub fn transparency_casts(m: &Material) -> bool {
+    PathBound::RENDER.casts(1.0, m.transparency)
+}
+
+/// Whether `m`'s transmitted ray can be totally internally reflected: it is cast
+/// ([`transparency_casts`]) and `ior ≠ 1` (at `ior = 1` Snell's `k = 1 − (1 − cos²θ)` is
+/// never negative: every ray refracts, straight on).
+pub fn total_internal_reflects(m: &Material) -> bool {
+    transparency_casts(m) && m.ior != 1.0
+}
+
 impl EffectPlan {
     /// One flag per effect of a render of `scene` (this plan's) in `mode` with at most
     /// `samples` samples per pixel, for `--stats-json`: `true` only for an effect that runs.
@@ -106,12 +128,12 @@ impl EffectPlan {
         let reflect: Vec<bool> = mats
             .iter()
             .zip(&used)
-            .map(|(m, &u)| force_all || (u && (m.mirror > 0.0 || m.transparency > 0.0)))
+            .map(|(m, &u)| force_all || (u && (mirror_casts(m) || total_internal_reflects(m))))
             .collect();
         let refract: Vec<bool> = mats
             .iter()
             .zip(&used)
-            .map(|(m, &u)| force_all || (u && m.transparency > 0.0))
+            .map(|(m, &u)| force_all || (u && transparency_casts(m)))
             .collect();
         let recursive = reflect.iter().chain(&refract).any(|&b| b);
         let shadow_rays: Vec<bool> = scene
@@ -280,16 +302,16 @@ impl EffectPlan {
             None => format!(
                 "{} (skipped where ks = 0: {})",
                 list(names(&|i| self.specular[i], nm, &mat)),
-                list(names(&|i| !self.specular[i], nm, &mat))
+                list(names(&|i| used[i] && !self.specular[i], nm, &mat))
             ),
         };
         let _ = writeln!(s, "  specular term    {specular_line}");
         let reflect_label = |i: usize| {
             let m = &scene.materials[i];
             let name = esc(&m.name);
-            if m.mirror > 0.0 {
+            if mirror_casts(m) {
                 format!("{name} (mirror {})", m.mirror)
-            } else if m.transparency > 0.0 {
+            } else if total_internal_reflects(m) {
                 format!("{name} (total internal reflection only)")
             } else {
                 format!("{name} (forced, weight 0)")
@@ -298,7 +320,7 @@ impl EffectPlan {
         let refract_label = |i: usize| {
             let m = &scene.materials[i];
             let name = esc(&m.name);
-            if m.transparency > 0.0 {
+            if transparency_casts(m) {
                 format!("{name} (transparency {}, ior {})", m.transparency, m.ior)
             } else {
                 format!("{name} (forced, weight 0)")

@@ -449,7 +449,7 @@ impl Tracer<'_> {
         n: &mut RayCounts,
     ) -> Cast {
         let weight = path.weight * k;
-        if k > 0.0 && weight >= path.bound.min_weight && path.rays_left > 0 {
+        if path.bound.casts(path.weight, k) && path.rays_left > 0 {
             path.rays_left -= 1;
             let (depth, parent) = (path.depth, path.weight);
             path.depth += 1;
