@@ -589,21 +589,53 @@ fn a_lens_focuses_on_look_at_by_default() {
     assert_eq!(lens.focus_distance, 5.0);
 }
 
-/// An area light's points below a shaded point's tangent plane add no light and cast no ray:
-/// the surface hides them, as `n·l ≤ 0` hides a point light. One pixel, looking straight down
-/// at the floor `y = 0` at `P = (2, 0, 0)`; a light of radius 1 centred at `(0, 0.3, 0)`, half
-/// sunk into the floor. By hand: the disk facing `P` has axis `a = (−2, 0.3, 0)/|…|`, and the
-/// floor cuts it along a chord at distance `h = 0.3/√(1 − a_y²) = 0.3034` of its radius from
-/// its centre; the part above the floor is `1 − (acos h − h√(1 − h²))/π = 0.690` of it. The
-/// pixel with shadows over the pixel without them is that fraction, within the 256 samples'
-/// spread and 8-bit rounding (points below the floor were traced from its far side and counted
-/// as seen: 0.98).
-#[test]
-fn an_area_light_sunk_into_the_floor_lights_it_from_above_only() {
-    let dir = tempfile::tempdir().unwrap();
-    let text = |shadows: bool| {
-        format!(
-            r#"background = [0, 0, 0]
+/// An area light of radius 1 whose centre is at height `y` above the floor `y = 0` lights the
+/// floor point `P = (2, 0, 0)`, computed by hand from the documented rule (scenes/README.md): the
+/// mean over the disk facing `P` of `max(0, n·l)` for each of its points (`l` towards the point;
+/// a point on or below the floor adds nothing and casts no ray), integrated on a 1000×1000 grid
+/// over the disk. Returns that mean and the share of the disk above the floor.
+fn sunk_disk(y: f64) -> (f64, f64) {
+    let (p, c) = ([2.0f64, 0.0, 0.0], [0.0f64, y, 0.0]);
+    let d = [c[0] - p[0], c[1] - p[1], c[2] - p[2]];
+    let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    let a = d.map(|x| x / len);
+    // Two unit vectors across the axis: z, and a × z.
+    let t1 = [0.0, 0.0, 1.0];
+    let t2 = [a[1], -a[0], 0.0];
+    let (mut sum, mut above, mut all) = (0.0, 0.0, 0.0);
+    let n = 1000;
+    for i in 0..n {
+        for j in 0..n {
+            let (u, v) = (
+                (i as f64 + 0.5) / n as f64 * 2.0 - 1.0,
+                (j as f64 + 0.5) / n as f64 * 2.0 - 1.0,
+            );
+            if u * u + v * v > 1.0 {
+                continue;
+            }
+            all += 1.0;
+            let q: Vec<f64> = (0..3)
+                .map(|k| c[k] + u * t1[k] + v * t2[k] - p[k])
+                .collect();
+            if q[1] > 0.0 {
+                above += 1.0;
+                sum += q[1] / (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+            }
+        }
+    }
+    (sum / all, above / all)
+}
+
+/// One pixel looking straight down at the floor at `P = (2, 0, 0)`, lit by a light of radius 1
+/// and 256 samples centred at `(0, y, 0)`, at gamma 1: its value over 255 and the stats.
+fn sunk_light_pixel(
+    dir: &Path,
+    y: f64,
+    intensity: &str,
+    shadows: bool,
+) -> (f64, serde_json::Value) {
+    let text = format!(
+        r#"background = [0, 0, 0]
 ambient = [0, 0, 0]
 [camera]
 type = "orthographic"
@@ -620,25 +652,61 @@ ambient = [0, 0, 0]
 samples = 256
 cast_shadows = {shadows}
 {plane}"#,
-            light = point_light("[0, 0.3, 0]", "20"),
-            plane = plane("[0, 0, 0]", "[0, 1, 0]", "m"),
-        )
-    };
-    let (lit, _) = render_stats(dir.path(), "lit", &text(false), &["--gamma", "1"]);
-    let (seen, stats) = render_stats(dir.path(), "seen", &text(true), &["--gamma", "1"]);
-    let (a, b) = (
-        f64::from(lit.get_pixel(0, 0).0[0]),
-        f64::from(seen.get_pixel(0, 0).0[0]),
+        light = point_light(&format!("[0, {y}, 0]"), intensity),
+        plane = plane("[0, 0, 0]", "[0, 1, 0]", "m"),
     );
-    assert!((100.0..255.0).contains(&a), "unshadowed pixel {a}");
-    let a_y = 0.3 / (4.0f64 + 0.09).sqrt();
-    let h = 0.3 / (1.0 - a_y * a_y).sqrt();
-    let above = 1.0 - (h.acos() - h * (1.0 - h * h).sqrt()) / std::f64::consts::PI;
+    let name = format!("sunk{y}{shadows}");
+    let (img, stats) = render_stats(dir, &name, &text, &["--gamma", "1"]);
+    (f64::from(img.get_pixel(0, 0).0[0]) / 255.0, stats)
+}
+
+/// An area light's points below a shaded point's tangent plane add no light and cast no ray:
+/// the surface hides them, as `n·l ≤ 0` hides a point light ([`sunk_disk`] gives the light and
+/// the share of rays by hand). Half sunk (centre at `y = 0.3`): the pixel over the same light
+/// without shadows (a point light at the centre, `n·l` = 0.148) is the disk's mean `n·l` over
+/// that, within the 256 samples' spread and 8-bit rounding.
+#[test]
+fn an_area_light_sunk_into_the_floor_lights_it_from_above_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, _) = sunk_light_pixel(dir.path(), 0.3, "20", false);
+    let (b, stats) = sunk_light_pixel(dir.path(), 0.3, "20", true);
+    assert!((100.0 / 255.0..1.0).contains(&a), "unshadowed pixel {a}");
+    let cos_centre = 0.3 / (4.0f64 + 0.09).sqrt();
+    let (mean, above) = sunk_disk(0.3);
     assert!((above - 0.690).abs() < 1e-3, "{above}");
-    assert!((b / a - above).abs() < 0.03, "seen {} of the disk", b / a);
+    assert!(
+        (b / a - mean / cos_centre).abs() < 0.03,
+        "{b} / {a} vs {mean} / {cos_centre}"
+    );
     let shadow = stats["shadow"].as_u64().unwrap() as f64;
     assert!(
         (shadow / 256.0 - above).abs() < 0.03,
         "{shadow} shadow rays"
     );
+}
+
+/// The disk decides, not its centre: with the centre just below the floor (`y = −0.05`) 47 % of
+/// the disk facing `P` is above it, and lights `P` as [`sunk_disk`] gives by hand (`E = I/r²` at
+/// the centre, `I = 20`), with a shadow ray to each point above; so does the same light just
+/// above the floor (`y = 0.05`, 53 %). (Culled by its centre, the sunk light gave 0 and cast no
+/// ray.)
+#[test]
+fn an_area_light_whose_centre_is_below_the_plane_lights_it_with_the_disk_above() {
+    let dir = tempfile::tempdir().unwrap();
+    for y in [-0.05, 0.05] {
+        let (b, stats) = sunk_light_pixel(dir.path(), y, "20", true);
+        let (mean, above) = sunk_disk(y);
+        let e = 20.0 / (4.0 + y * y);
+        assert!((0.45..0.55).contains(&above), "{above}");
+        assert!(
+            (b - e * mean).abs() < 0.03 * e * mean + 1.0 / 255.0,
+            "y {y}: pixel {b}, by hand {}",
+            e * mean
+        );
+        let shadow = stats["shadow"].as_u64().unwrap() as f64;
+        assert!(
+            (shadow / 256.0 - above).abs() < 0.03,
+            "y {y}: {shadow} shadow rays, {above} of the disk above"
+        );
+    }
 }

@@ -2,11 +2,16 @@
 //!
 //! `L = ka·Ia + Σ_lights [kd·E·max(0, n·l) + ks·E·max(0, n·h)^p] + kr·L(reflected) + kt·L(refracted)`
 //! with `E = I/r²` for point lights and `E = I` for directional ones, `n` the normal facing the
-//! incoming ray, `h = normalize(l + v)`. A light contributes nothing where `n·l ≤ 0` (the
-//! surface faces away from it) or where a shadow ray finds an occluder (lights with
-//! `cast_shadows`); no shadow ray is cast from a material whose direct term is 0 whatever the
-//! light (`diffuse` 0 and no specular: [`EffectPlan::direct`]). Shadow rays are any-hit queries started with the core's robust spawn
-//! ([`spawn_ray_to`] / [`spawn_ray`]), never with a scene epsilon.
+//! incoming ray, `h = normalize(l + v)`. A point or directional light contributes nothing where
+//! `n·l ≤ 0` (the surface faces away from it) or where a shadow ray finds an occluder (lights
+//! with `cast_shadows`). An area light (a point light with `radius > 0` that casts shadows) is
+//! the mean over its disk's sample points of the same term, `l` the direction to each point,
+//! with `E` its centre's: a point on or below the surface's tangent plane, or behind an
+//! occluder, adds nothing ([`Tracer::area_light`]), so a disk whose centre is below the plane
+//! still lights the surface with the part above it. No shadow ray is cast from a material whose
+//! direct term is 0 whatever the light (`diffuse` 0 and no specular: [`EffectPlan::direct`]).
+//! Shadow rays are any-hit queries started with the core's robust spawn ([`spawn_ray_to`] /
+//! [`spawn_ray`]), never with a scene epsilon.
 //!
 //! # What bounds the ray tree
 //! A material with both `mirror` and `transparency` casts two rays per hit, so the tree is
@@ -192,16 +197,17 @@ impl Tracer<'_> {
             && self.casts_shadow(
                 li,
                 sh.material as usize,
-                sh.shading_normal().dot(toward(light, &sh.hit).0),
+                sh.shading_normal().dot(toward(light, &sh.hit).0) > 0.0,
             );
         plain.then(|| shadow_ray(light, &sh.hit))
     }
 
-    /// Whether the plan casts a shadow ray towards light `li` from a hit on material `mi`
-    /// whose shading normal makes `ndotl` with the direction to the light: the plan casts
-    /// towards that light and evaluates the material's direct term ([`EffectPlan::direct`]).
-    fn casts_shadow(&self, li: usize, mi: usize, ndotl: f32) -> bool {
-        self.plan.shadow_rays[li] && self.plan.direct[mi] && (ndotl > 0.0 || self.plan.forced)
+    /// Whether the plan casts shadow rays towards light `li` from a hit on material `mi` that
+    /// `faces` the light (`n·l > 0` for a point or directional light; an area light's disk
+    /// decides point by point, [`Tracer::area_light`]): the plan casts towards that light and
+    /// evaluates the material's direct term ([`EffectPlan::direct`]).
+    fn casts_shadow(&self, li: usize, mi: usize, faces: bool) -> bool {
+        self.plan.shadow_rays[li] && self.plan.direct[mi] && (faces || self.plan.forced)
     }
 
     /// The fraction of light that reaches the end of the shadow ray `ray` (towards `light`):
@@ -240,46 +246,55 @@ impl Tracer<'_> {
         0.0
     }
 
-    /// The fraction of an area light's disk (facing `hit`, radius `light.radius`, around
-    /// `centre`) that `hit` sees on the side of its shading normal `nrm`: of `light.samples`
-    /// fixed points of the disk (Halton positions, concentric mapping), each above the
-    /// surface's tangent plane (`nrm·(p − hit) > 0`) gets a shadow ray, 0 or 1, or the
-    /// transmission through transparent surfaces when the plan follows it; a point on or below
-    /// that plane adds 0 with no ray cast (the surface itself hides it, as `n·l ≤ 0` hides a
-    /// point light).
-    fn area_visibility(
+    /// The light an area light's disk (facing `hit`, radius `light.radius`, around `centre`)
+    /// sends `hit` on the side of its shading normal `nrm`, per unit irradiance `E`: of
+    /// `light.samples` fixed points of the disk (Halton positions, concentric mapping), each
+    /// above the surface's tangent plane (`nrm·(p − hit) > 0`) gets a shadow ray and adds
+    /// `seen × lobe(l)` (`l` the unit direction to the point; `seen` 0 or 1, or the
+    /// transmission through transparent surfaces when the plan follows it); a point on or
+    /// below that plane adds 0 with no ray cast (the surface itself hides it, as `n·l ≤ 0`
+    /// hides a point light). The sum is divided by `light.samples`. Whether any point is above
+    /// is the disk's to decide, not its centre's: a disk whose centre is below the plane can
+    /// still light the point.
+    #[allow(clippy::too_many_arguments)]
+    fn area_light(
         &self,
         hit: &halfray_core::Hit,
         nrm: Vec3,
         centre: Vec3,
         light: &Light,
+        lobe: &dyn Fn(Vec3) -> Vec3,
         ctx: &mut QueryCtx,
         n: &mut RayCounts,
-    ) -> f32 {
+    ) -> Vec3 {
         let axis = (centre - hit.point).normalize_or_zero();
         let t1 = axis.any_orthonormal_vector();
         let t2 = axis.cross(t1);
         let origins = hit.spawn_origins();
-        let points = || {
+        let above = || {
             super::antialias::disk_points(light.samples)
                 .map(move |(du, dv)| centre + (t1 * du + t2 * dv) * light.radius)
+                .filter(move |&p| nrm.dot(p - hit.point) > 0.0)
         };
+        if above().next().is_none() {
+            return Vec3::ZERO;
+        }
         // The objects the rays may meet, looked up once: the rays lie in the box of their
         // origins and targets.
         let scene = self.scene;
         let near = (!self.plan.shadow_transmission)
             .then(|| {
-                let hull = points().fold(Aabb::new(origins[0], origins[0]), Aabb::grow);
+                let hull = above().fold(Aabb::new(origins[0], origins[0]), Aabb::grow);
                 scene
                     .top
                     .bounded_in(&hull.grow(origins[1]), HULL_OBJECTS_MAX)
             })
             .flatten();
-        let mut seen = 0.0;
-        for p in points().filter(|&p| nrm.dot(p - hit.point) > 0.0) {
+        let mut lit = Vec3::ZERO;
+        for p in above() {
             // `spawn_ray_to(hit, p)`, bit for bit, with the hit's two origins offset once.
             let ray = shadow_segment(origins[hit.side(p - hit.point)], p);
-            seen += if self.plan.shadow_transmission {
+            let seen = if self.plan.shadow_transmission {
                 self.transmission(&ray, &LightKind::Point { position: p }, ctx, n)
             } else {
                 n.shadow += 1;
@@ -289,8 +304,11 @@ impl Tracer<'_> {
                 };
                 if occluded { 0.0 } else { 1.0 }
             };
+            if seen > 0.0 {
+                lit += seen * lobe((p - hit.point).normalize());
+            }
         }
-        seen / light.samples.max(1) as f32
+        lit / light.samples.max(1) as f32
     }
 
     /// Radiance along a ray (already counted by the caller).
@@ -371,16 +389,31 @@ impl Tracer<'_> {
         let nrm = sh.shading_normal();
         let mut color = m.ambient * scene.ambient;
         let specular = self.plan.specular[mi];
+        // The direct term of a light of unit irradiance from unit direction `l` (an area
+        // light's points).
+        let direct = |l: Vec3| {
+            let mut c = m.diffuse * nrm.dot(l);
+            if specular {
+                c += m.specular * specular_lobe(m.specular_model, nrm, l, v, m.shininess);
+            }
+            c
+        };
         for (li, light) in scene.lights.iter().enumerate() {
             let (l, mut e) = toward(light, hit);
             let ndotl = nrm.dot(l);
-            let cast = self.casts_shadow(li, mi, ndotl);
+            let area = area_centre(light);
+            let cast = self.casts_shadow(li, mi, area.is_some() || ndotl > 0.0);
             let mut blocked = false;
-            if let (true, Some(centre)) = (cast, area_centre(light)) {
-                let seen = self.area_visibility(hit, nrm, centre, light, ctx, n);
+            if let (true, Some(centre)) = (cast, area) {
+                let lit = self.area_light(hit, nrm, centre, light, &direct, ctx, n);
                 if light.cast_shadows {
-                    blocked = !(seen > 0.0);
-                    e *= seen;
+                    // The disk's points, each with its own direction (a light that casts no
+                    // shadows is lit as a point light at its centre, below).
+                    let add = e * lit;
+                    if add.is_finite() {
+                        color += add;
+                    }
+                    continue;
                 }
             } else if cast && self.plan.shadow_transmission {
                 let through = self.transmission(&shadow_ray(light, hit), &light.kind, ctx, n);
