@@ -117,42 +117,56 @@ fn differ(a: &PixelOut, b: &PixelOut) -> bool {
     (a.alpha - b.alpha).abs() > CONTRAST || ca.iter().zip(cb).any(|(x, y)| (x - y).abs() > CONTRAST)
 }
 
+/// Whether pixel `i` of a `w`-wide image differs from a 4-neighbour.
+fn is_edge(px: &[PixelOut], w: usize, i: usize) -> bool {
+    let (x, y) = (i % w, i / w);
+    let mut n = [None; 4];
+    if x > 0 {
+        n[0] = Some(i - 1);
+    }
+    if x + 1 < w {
+        n[1] = Some(i + 1);
+    }
+    if y > 0 {
+        n[2] = Some(i - w);
+    }
+    n[3] = Some(i + w).filter(|&j| j < px.len());
+    n.into_iter().flatten().any(|j| differ(&px[i], &px[j]))
+}
+
 /// Indices of the pixels of a `w`-wide image that differ from a 4-neighbour.
-pub(super) fn edges(px: &[PixelOut], w: u32) -> Vec<usize> {
-    let w = w as usize;
+#[cfg(test)]
+fn edges(px: &[PixelOut], w: u32) -> Vec<usize> {
     (0..px.len())
-        .filter(|&i| {
-            let (x, y) = (i % w, i / w);
-            let mut n = [None; 4];
-            if x > 0 {
-                n[0] = Some(i - 1);
-            }
-            if x + 1 < w {
-                n[1] = Some(i + 1);
-            }
-            if y > 0 {
-                n[2] = Some(i - w);
-            }
-            n[3] = Some(i + w).filter(|&j| j < px.len());
-            n.into_iter().flatten().any(|j| differ(&px[i], &px[j]))
-        })
+        .filter(|&i| is_edge(px, w as usize, i))
         .collect()
 }
 
-/// Refines the [`edges`] of `px` (one centre sample each) to `samples` samples with
-/// `sample(x, y, counts)` (image coordinates in pixels), in parallel; returns the rays the
-/// extra samples cast.
+/// Refines the pixels of `px` that differ from a 4-neighbour (one centre sample each) to
+/// `samples` samples with `sample(x, y, counts)` (image coordinates in pixels), in parallel and
+/// in place; returns the rays the extra samples cast. Beside `px` it holds one byte a pixel
+/// (which pixels to refine, decided on the unrefined image) and each thread's one pixel's
+/// samples ([`super::render_bytes`]).
 pub(super) fn refine(
     px: &mut [PixelOut],
     w: u32,
     samples: u32,
     sample: impl Fn(f32, f32, &mut RayCounts) -> PixelOut + Sync,
 ) -> RayCounts {
-    let todo = edges(px, w);
-    let refined: Vec<(usize, PixelOut, RayCounts)> = todo
-        .par_iter()
-        .map(|&i| {
-            let (x, y) = ((i % w as usize) as f32, (i / w as usize) as f32);
+    let w = w as usize;
+    let todo: Vec<bool> = {
+        let px = &*px;
+        (0..px.len())
+            .into_par_iter()
+            .map(|i| is_edge(px, w, i))
+            .collect()
+    };
+    px.par_iter_mut()
+        .zip(todo)
+        .enumerate()
+        .filter(|(_, (_, edge))| *edge)
+        .map(|(i, (p, _))| {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
             let mut counts = RayCounts::default();
             let extra: Vec<PixelOut> = (1..samples.min(crate::scene::MAX_SAMPLES))
                 .map(|k| {
@@ -160,15 +174,13 @@ pub(super) fn refine(
                     sample(x + dx, y + dy, &mut counts)
                 })
                 .collect();
-            (i, mean(std::iter::once(px[i]).chain(extra)), counts)
+            *p = mean(std::iter::once(*p).chain(extra));
+            counts
         })
-        .collect();
-    let mut total = RayCounts::default();
-    for (i, out, c) in refined {
-        px[i] = out;
-        total.add(&c);
-    }
-    total
+        .reduce(RayCounts::default, |mut a, b| {
+            a.add(&b);
+            a
+        })
 }
 
 #[cfg(test)]

@@ -170,7 +170,8 @@ impl Rendered {
         self.pixels.iter().filter(|p| p.w > 0.0).count()
     }
 
-    /// 8-bit RGBA: encoded by `transfer` in colour mode, the value as is in debug modes.
+    /// 8-bit RGBA: encoded by `transfer` in colour mode, the value as is in debug modes; the
+    /// buffer is allocated at its exact size, 4 bytes a pixel.
     pub fn to_rgba8(&self, mode: Mode, transfer: gamma::Transfer) -> Vec<u8> {
         let enc = |x: f32| {
             if mode == Mode::Color {
@@ -179,10 +180,11 @@ impl Rendered {
                 crate::png::to_u8(x)
             }
         };
-        self.pixels
-            .iter()
-            .flat_map(|p| [enc(p.x), enc(p.y), enc(p.z), crate::png::to_u8(p.w)])
-            .collect()
+        let mut rgba = Vec::with_capacity(4 * self.pixels.len());
+        for p in &self.pixels {
+            rgba.extend([enc(p.x), enc(p.y), enc(p.z), crate::png::to_u8(p.w)]);
+        }
+        rgba
     }
 
     /// Makes every pixel opaque: the render over the `background` colour (linear), so a pixel
@@ -233,31 +235,32 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Rendered {
     let through_lens = scene.camera.lens.is_some() && opts.mode == Mode::Color;
     let batched = !opts.single_rays && opts.mode != Mode::Heatmap && !through_lens;
     let start = Instant::now();
-    let rows: Vec<(Vec<PixelOut>, RayCounts)> = (0..h)
-        .into_par_iter()
+    // Each row is written into the one image buffer as it is finished (a row's own records
+    // live only while it is traced: [`render_bytes`]).
+    let mut px = vec![PixelOut::default(); w as usize * h as usize];
+    let mut counts = px
+        .par_chunks_mut(w as usize)
+        .enumerate()
         .progress_with(bar.clone())
-        .map(|j| {
+        .map(|(j, out)| {
+            let j = j as u32;
             let mut counts = RayCounts::default();
-            let row = if batched {
-                row_batched(&tracer, opts, j, &mut counts)
+            if batched {
+                out.copy_from_slice(&row_batched(&tracer, opts, j, &mut counts));
             } else {
-                (0..w)
-                    .map(|i| pixel(&tracer, opts, i, j, &mut counts))
-                    .collect()
-            };
-            (row, counts)
+                for (i, p) in (0..w).zip(out) {
+                    *p = pixel(&tracer, opts, i, j, &mut counts);
+                }
+            }
+            counts
         })
-        .collect();
-    let seconds = start.elapsed().as_secs_f64();
+        .reduce(RayCounts::default, |mut a, b| {
+            a.add(&b);
+            a
+        });
+    let mut seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
 
-    let mut counts = RayCounts::default();
-    let mut px = Vec::with_capacity((w * h) as usize);
-    for (row, c) in rows {
-        counts.add(&c);
-        px.extend(row);
-    }
-    let mut seconds = seconds;
     // Depth of field samples every pixel already.
     if opts.samples > 1 && opts.mode == Mode::Color && scene.camera.lens.is_none() {
         let start = Instant::now();
@@ -449,22 +452,48 @@ fn shade_primary(
     }
 }
 
-/// Memory a `w`×`h` render holds at its peak, in bytes (`None` on overflow): the per-row
-/// records, the final pixels, the node counts and the 8-bit image, plus the decoded
-/// background when there is one.
-pub fn render_bytes(w: u32, h: u32, background: bool) -> Option<u64> {
-    let per_pixel = std::mem::size_of::<PixelOut>()
-        + std::mem::size_of::<Vec4>()
-        + std::mem::size_of::<u64>()
-        + 4
-        + if background {
-            std::mem::size_of::<Vec4>()
-        } else {
-            0
-        };
-    u64::from(w)
-        .checked_mul(u64::from(h))?
-        .checked_mul(per_pixel as u64)
+/// Most bytes a thread's row holds while it is traced, per pixel of the row: its rays, hits,
+/// shadow answers and records (about 250 bytes a pixel, from the sizes of `Ray`, `SurfaceHit`
+/// and [`PixelOut`]), with a margin: a row is small beside the image, so the allowance is
+/// generous rather than exact.
+const ROW_SCRATCH_BYTES_PER_PIXEL: u64 = 1024;
+
+/// Most bytes of the PNG encoder's zlib stream per byte of filtered image data (4 bytes a pixel
+/// and a filter byte a row), ×64: deflate stores a block that does not compress as it is, with
+/// 5 bytes of header per block of at most 65 535 bytes (under 1/10 000), so 65/64 is a margin,
+/// not an estimate.
+const PNG_STREAM_BOUND: (u64, u64) = (65, 64);
+
+/// Memory a `w`×`h` render by `halfray render` holds at its peak, in bytes (`None` on
+/// overflow), on `threads` threads: an upper bound, the largest of its phases, each counted
+/// buffer by buffer. Tracing: the image's per-pixel records ([`PixelOut`]), the 1-byte mask of
+/// the pixels anti-aliasing refines, and each thread's row scratch
+/// ([`ROW_SCRATCH_BYTES_PER_PIXEL`]); mapping: the records, the final pixels (`Vec4`) and the
+/// node counts (`u64`); writing: the pixels and node counts, the 8-bit RGBA copy (4 bytes a
+/// pixel) and the PNG, counted as five times its zlib stream's bound ([`PNG_STREAM_BOUND`]):
+/// the encoder's stream and the file's bytes each grow by doubling, so each holds at most twice
+/// its length and a growing one three times for the moment of its copy. The decoded
+/// `background` (a `Vec4` a pixel) is held through tracing and mapping.
+pub fn render_bytes(w: u32, h: u32, background: bool, threads: usize) -> Option<u64> {
+    let size = |t: usize| t as u64;
+    let pixels = u64::from(w).checked_mul(u64::from(h))?;
+    let per = |bytes: u64| pixels.checked_mul(bytes);
+    let bg = if background {
+        size(std::mem::size_of::<Vec4>())
+    } else {
+        0
+    };
+    let record = size(std::mem::size_of::<PixelOut>());
+    let scratch = u64::from(w)
+        .checked_mul(ROW_SCRATCH_BYTES_PER_PIXEL)?
+        .checked_mul(threads.max(1) as u64)?;
+    let final_pixels = size(std::mem::size_of::<Vec4>()) + size(std::mem::size_of::<u64>());
+    let tracing = per(record + 1 + bg)?.checked_add(scratch)?;
+    let mapping = per(record + final_pixels + bg)?;
+    let filtered = per(4)?.checked_add(u64::from(h))?;
+    let stream = filtered.checked_mul(PNG_STREAM_BOUND.0)? / PNG_STREAM_BOUND.1 + 1024;
+    let writing = per(final_pixels + 4)?.checked_add(stream.checked_mul(5)?)?;
+    Some(tracing.max(mapping).max(writing))
 }
 
 /// The JSON written by `--stats-json`.
@@ -528,7 +557,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         scene.camera.height = y;
     }
     let (w, h) = (scene.camera.width, scene.camera.height);
-    let bytes = render_bytes(w, h, args.background.is_some());
+    let bytes = render_bytes(
+        w,
+        h,
+        args.background.is_some(),
+        rayon::current_num_threads(),
+    );
     if args.width.is_none() && args.height.is_none() {
         // The size is the scene file's: an input error at its `camera.width`.
         check_memory(&format!("an image of {w}×{h} pixels"), bytes)
@@ -539,7 +573,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             bytes,
         )?;
     }
-    let background = match &args.background {
+    let mut background = match &args.background {
         Some(p) => Some(output::read_background(p, w, h, args.gamma)?),
         None => None,
     };
@@ -580,8 +614,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         );
     }
     let mut out = render(&scene, &opts);
-    if let Some(bg) = &background {
-        out.composite(bg, args.op);
+    if let Some(bg) = background.take() {
+        // Freed before the image is written ([`render_bytes`]).
+        out.composite(&bg, args.op);
     } else if args.mode == Mode::Color && !args.transparent_background {
         out.make_opaque(scene.background);
     }
