@@ -466,11 +466,11 @@ const PNG_STREAM_BOUND: (u64, u64) = (65, 64);
 
 /// Memory a `w`×`h` render by `halfray render` holds at its peak, in bytes (`None` on
 /// overflow), on `threads` threads: an upper bound, the largest of its phases, each counted
-/// buffer by buffer. Tracing: the image's per-pixel records ([`PixelOut`]), the 1-byte mask of
+/// buffer by buffer. Tracing: the image's per-pixel records (`PixelOut`), the 1-byte mask of
 /// the pixels anti-aliasing refines, and each thread's row scratch
-/// ([`ROW_SCRATCH_BYTES_PER_PIXEL`]); mapping: the records, the final pixels (`Vec4`) and the
+/// (`ROW_SCRATCH_BYTES_PER_PIXEL`); mapping: the records, the final pixels (`Vec4`) and the
 /// node counts (`u64`); writing: the pixels and node counts, the 8-bit RGBA copy (4 bytes a
-/// pixel) and the PNG, counted as five times its zlib stream's bound ([`PNG_STREAM_BOUND`]):
+/// pixel) and the PNG, counted as five times its zlib stream's bound (`PNG_STREAM_BOUND`):
 /// the encoder's stream and the file's bytes each grow by doubling, so each holds at most twice
 /// its length and a growing one three times for the moment of its copy. The decoded
 /// `background` (a `Vec4` a pixel) is held through tracing and mapping.

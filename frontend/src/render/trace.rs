@@ -7,7 +7,7 @@
 //! with `cast_shadows`). An area light (a point light with `radius > 0` that casts shadows) is
 //! the mean over its disk's sample points of the same term, `l` the direction to each point,
 //! with `E` its centre's: a point on or below the surface's tangent plane, or behind an
-//! occluder, adds nothing ([`Tracer::area_light`]), so a disk whose centre is below the plane
+//! occluder, adds nothing (`Tracer::area_light`), so a disk whose centre is below the plane
 //! still lights the surface with the part above it. No shadow ray is cast from a material whose
 //! direct term is 0 whatever the light (`diffuse` 0 and no specular: [`EffectPlan::direct`]).
 //! Shadow rays are any-hit queries started with the core's robust spawn ([`spawn_ray_to`] /

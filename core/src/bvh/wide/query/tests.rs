@@ -277,7 +277,11 @@ fn a_tree_without_nodes_needs_no_stack_and_one_with_nodes_needs_the_whole_stack(
                 assert_eq!(any[i].map(|a| a.is_some()), Ok(want.is_some()), "{ray:?}");
             }
         }
-        assert_eq!(hits > 0, !mesh.is_empty(), "the rays must hit the small mesh");
+        assert_eq!(
+            hits > 0,
+            !mesh.is_empty(),
+            "the rays must hit the small mesh"
+        );
     }
 
     let (pos, tri) = lcg_soup(400, 7, 4.0, 1.0);
