@@ -92,7 +92,8 @@ impl fmt::Display for Location {
             }
         }
         if let Some(field) = &self.field {
-            write!(f, ": field `{field}`")?;
+            // A field may be the input's own text (a scene's key, a JSON path): escaped.
+            write!(f, ": field `{}`", crate::text::escaped(field))?;
         }
         Ok(())
     }
@@ -295,7 +296,8 @@ impl std::error::Error for Error {
 /// `e`'s message without the ` at line L column C` that `serde_json` appends: the message of an
 /// error whose [`Location::json_position`] already says where (else the place was said twice).
 /// serde's `expected struct Name` (`… with N elements`), which names a type of ours, reads
-/// `expected a JSON object`.
+/// `expected a JSON object`; the input's own text that serde quotes (an unknown variant) is
+/// escaped ([`crate::text::escaped`]).
 #[must_use]
 pub fn json_message(e: &serde_json::Error) -> String {
     let text = e.to_string();
@@ -304,6 +306,8 @@ pub fn json_message(e: &serde_json::Error) -> String {
         Some(message) if e.line() != 0 => message,
         _ => &text,
     };
+    // serde quotes the input's own text raw in some messages (an unknown variant or field).
+    let message = &crate::text::escaped(message);
     match message.split_once("expected struct ") {
         Some((head, tail)) => {
             // The type's name, then serde's ` with N element(s)` for a sequence.
@@ -395,6 +399,24 @@ mod tests {
             let e = serde_json::from_str::<ReportView>(json).unwrap_err();
             assert_eq!(json_message(&e), want, "{json}: serde said {e}");
         }
+    }
+
+    /// An unknown variant is quoted by serde as the input has it: the message escapes it, so
+    /// no JSON string puts a line break or a terminal escape into a message.
+    #[test]
+    fn json_messages_escape_the_text_they_quote() {
+        #[derive(serde::Deserialize, Debug)]
+        #[allow(dead_code)]
+        enum Kind {
+            A,
+        }
+        let e = serde_json::from_str::<Kind>("\"x\\u001b[2J\\nerror: forged\"").unwrap_err();
+        let m = json_message(&e);
+        assert!(
+            m.starts_with("unknown variant `x\\u{1b}[2J\\nerror: forged`"),
+            "{m:?}"
+        );
+        assert!(!m.contains('\u{1b}') && !m.contains('\n'), "{m:?}");
     }
 
     #[test]

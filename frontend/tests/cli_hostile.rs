@@ -922,3 +922,21 @@ fn a_failed_image_write_leaves_no_stats_json() {
     assert!(!stats.exists(), "{}", stderr(&o));
     assert_eq!(names(dir.path()), vec!["s.toml".to_string()]);
 }
+
+/// A scene key with terminal escapes and a line break, named as the field of the error, reaches
+/// the terminal escaped: no ESC byte, no forged `error:` line (the field is the file's text).
+#[test]
+fn a_hostile_scene_key_is_printed_escaped_as_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(&scene, "\"a\\u001b[31mRED\\nerror: forged\" = 1\n").unwrap();
+    let o = run(&[&"render", &scene, &"-o", &dir.path().join("x.png")]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("field `a"), "{err:?}");
+    assert!(!err.contains('\u{1b}'), "{err:?}");
+    assert!(
+        err.lines().all(|l| !l.starts_with("error: forged")),
+        "{err:?}"
+    );
+}

@@ -424,7 +424,8 @@ impl Source<'_> {
         if let Some(f) = field {
             at = at.field(f);
         }
-        Error::input(at, msg)
+        // The message may quote the file's own text (an unknown key): escaped whole.
+        Error::input(at, crate::text::escaped(&msg))
     }
 
     /// [`Source::toml_error`] for a message `msg` that comes without a span.
@@ -450,7 +451,7 @@ impl Source<'_> {
             Some(f) => at.field(f),
             None => at,
         };
-        Error::input(at, msg)
+        Error::input(at, crate::text::escaped(msg))
     }
 
     /// The first `[header]`, `[[header]]` or line-leading `key =` whose dotted key has more
