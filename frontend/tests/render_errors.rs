@@ -111,7 +111,7 @@ fn a_missing_camera_is_the_field_camera() {
         let text = format!("{top}[material.m]\ndiffuse = [1, 0, 0]\n");
         let msg = load_err("nocam.toml", &text);
         assert!(
-            msg.starts_with("nocam.toml: field `camera`: missing field `camera`"),
+            msg.starts_with("nocam.toml:1:1: field `camera`: missing field `camera`"),
             "{msg}"
         );
     }
@@ -149,7 +149,8 @@ fn a_key_nested_too_deep_is_located() {
     let msg = load_err("inline.toml", &format!("{BASE}y = {{ {deep} = 1 }}\n"));
     assert_eq!(
         msg,
-        "inline.toml: the file's keys or values nest too deep for the TOML reader (recursion limit)"
+        "inline.toml:1:1: somewhere in the file, keys or values nest too deep for the TOML \
+         reader (recursion limit)"
     );
 }
 

@@ -381,12 +381,12 @@ impl Source<'_> {
     /// (`unknown field`/`missing field`), from the key in front of the span, or from the
     /// header the span starts on (`[[camera]]` where a `[camera]` table is wanted). An error
     /// without a place in the file is located by what it says, never by the key at byte 0: a
-    /// missing top-level field is named alone (`camera`), and a key nested past the parser's limit
-    /// ([`TOML_MAX_KEY_PARTS`]) by its line, column and dotted path
-    /// ([`Source::too_deep_key`]), or, found nowhere, with the message alone.
+    /// missing top-level field is named alone (`camera`, at the document's start, 1:1), and a
+    /// key nested past the parser's limit ([`TOML_MAX_KEY_PARTS`]) by its line, column and
+    /// dotted path ([`Source::too_deep_key`]), or, found nowhere, at 1:1 with no field.
     fn toml_error(&self, e: &toml::de::Error) -> Error {
         // An error of the document's own table (a missing top-level field) comes with the
-        // empty span at byte 0: no place in the file, as none at all.
+        // empty span at byte 0: the document as a whole, as an error with no span.
         let Some(span) = e.span().filter(|s| !(s.is_empty() && s.start == 0)) else {
             return self.spanless_toml_error(e.message().trim());
         };
@@ -429,7 +429,11 @@ impl Source<'_> {
     }
 
     /// [`Source::toml_error`] for a message `msg` that comes without a span.
+    /// Such an error is of the document as a whole (a missing top-level field, or nesting too
+    /// deep that no line shows): it is located at line 1, column 1, where the document starts,
+    /// with the field the message names, never the key that happens to stand there.
     fn spanless_toml_error(&self, msg: &str) -> Error {
+        let document = Location::file(self.path).line(1).column(1);
         if msg == "recursion limit" {
             return match self.too_deep_key() {
                 Some((start, key)) => self.err(
@@ -441,12 +445,13 @@ impl Source<'_> {
                     ),
                 ),
                 None => Error::input(
-                    Location::file(self.path),
-                    "the file's keys or values nest too deep for the TOML reader (recursion limit)",
+                    document,
+                    "somewhere in the file, keys or values nest too deep for the TOML reader \
+                     (recursion limit)",
                 ),
             };
         }
-        let at = Location::file(self.path);
+        let at = document;
         let at = match backticked_field(msg) {
             Some(f) => at.field(f),
             None => at,
