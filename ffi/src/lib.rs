@@ -187,9 +187,10 @@ struct Loaded {
 const LOADED: usize = 0x4852_4159;
 
 /// The tag of a handle loaded over the buffer at address `buffer`: odd (`LOADED` is odd and
-/// a buffer's address a multiple of `HALFRAY_BAKED_ALIGN`), so never 0 (a zeroed handle is
-/// "not loaded"), and for other contents a match only by chance: made-up contents would have
-/// to hold a buffer's address in the next word and this function of it in the first.
+/// a buffer's address, which [`loaded`] requires to be a non-zero multiple of
+/// `HALFRAY_BAKED_ALIGN`, even), so never 0, and for other contents a match only by chance:
+/// made-up contents would have to hold a buffer's address in the next word and this function
+/// of it in the first.
 fn tag_of(buffer: usize) -> usize {
     LOADED ^ buffer
 }
@@ -401,8 +402,8 @@ pub unsafe extern "C" fn halfray_load(
     }
     // SAFETY: non-NULL, aligned, writable (contract), and outside the buffer (checked): the
     // handle is "not loaded" from here until a load succeeds. (It may share the scratch's
-    // memory: the failing arm below clears it again.)
-    unsafe { bvh.cast::<usize>().write(0) };
+    // memory: the failing arm below unloads it again once the check is over.)
+    unsafe { unload(bvh) };
     // SAFETY: `len` readable bytes at `bytes`, unchanged while the handle is used (contract).
     let (b, l) = match unsafe { baked(bytes, len) } {
         Ok(v) => v,
@@ -443,14 +444,27 @@ pub unsafe extern "C" fn halfray_load(
             HalfrayStatus::Ok
         }
         Err(e) => {
-            // SAFETY: as the write above. The check wrote one bit per listed triangle into
-            // the scratch, which may share the handle's memory: the buffer chose those
-            // bits, so they could spell a tag that matches; cleared, the handle is "not
-            // loaded" whatever the scratch holds.
-            unsafe { bvh.cast::<usize>().write(0) };
+            // SAFETY: as the unload above; the check is over, so the scratch is dead. It
+            // wrote one bit per listed triangle into the scratch, which may share the
+            // handle's memory: the buffer chose those bits, so they could spell a tag and an
+            // address that match; unloaded, the handle is "not loaded" whatever the scratch
+            // holds. (Every earlier return wrote at most zeros to the scratch.)
+            unsafe { unload(bvh) };
             e.into()
         }
     }
+}
+
+/// Leaves `*bvh` "not loaded": its tag and buffer words 0, which [`loaded`] refuses (no
+/// buffer is at address 0).
+///
+/// # Safety
+///
+/// `bvh` is non-NULL, aligned and writable, and nothing else accesses its first two words
+/// meanwhile.
+unsafe fn unload(bvh: *mut HalfrayBvh) {
+    // SAFETY: an aligned, writable handle of at least two words (contract, `HALFRAY_BVH_WORDS`).
+    unsafe { bvh.cast::<[usize; 2]>().write([0; 2]) };
 }
 
 /// `true` when `halfray_load`'s buffer overlaps its handle or its scratch: the buffer is read
@@ -489,15 +503,15 @@ unsafe fn loaded<'a>(bvh: *const HalfrayBvh) -> Result<&'a Loaded, HalfrayStatus
     // SAFETY: an aligned, readable handle whose first two words are readable integers
     // (contract: a zero-initialised or loaded `HalfrayBvh`).
     let [tag, buffer] = unsafe { bvh.cast::<[usize; 2]>().read() };
-    if tag != tag_of(buffer) {
+    if buffer == 0 || !aligned(buffer as *const u8, HALFRAY_BAKED_ALIGN) || tag != tag_of(buffer) {
         return Err(HalfrayStatus::NotLoaded);
     }
-    // SAFETY: a matching tag is written only with a whole `Loaded` by a successful
-    // `halfray_load`, cleared at the start of every load that gets past its pointer checks
-    // and again when it fails (its scratch, which may share the handle, can spell any
-    // bits); a zeroed handle never matches
-    // (`tag_of` is odd). Contents a caller made up could match only by chance, which the
-    // contract excludes.
+    // SAFETY: a non-zero, aligned buffer word with its matching tag is written only with a
+    // whole `Loaded` by a successful `halfray_load`; both words are zeroed at the start of
+    // every load that gets past its pointer checks and again when its check fails (its
+    // scratch, which may share the handle, can spell any bits); a zeroed handle never matches
+    // (buffer word 0; and `tag_of` of an aligned address is odd). Contents a caller made up
+    // could match only by chance, which the contract excludes.
     Ok(unsafe { &*bvh.cast::<Loaded>() })
 }
 

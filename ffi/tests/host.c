@@ -128,50 +128,87 @@ static void index_repeated(Buffer b) {
 }
 static void index_out_of_range(Buffer b) { put_u32(b.bytes + indices_at(b), 8); }
 
-/* A failed load whose scratch shares the handle's memory leaves the handle "not loaded",
- * whatever the scratch's bits: the load check marks one bit per listed triangle, and a
- * crafted buffer lists the triangles whose bits spell a loaded handle's first words (the tag
- * 0x48524159 ^ buffer address, with the address word 0), then repeats an index (BAD_INDEX).
- * The handle used to pass the "loaded" check, and a query answered OK from it. */
-static void forged_tag_in_shared_scratch(void) {
-    enum { WORDS = 9, T = 32 * WORDS, V = 3 };
-    const uint32_t tag = 0x48524159u;
-    size_t len = 32 + 32 + 12 * V + 12 * (size_t)T + 4 * (size_t)T;
-    uint8_t *b = aligned_bytes(len);
-    memset(b, 0, len);
-    memcpy(b, "halfray\0", 8);
-    put_u32(b + 8, 1);
-    put_u32(b + 12, V);
-    put_u32(b + 16, T);
-    put_u32(b + 20, 1);
+/* A baked buffer of `t` triangles (0,0,0) (1,0,0) (0,1,0) in one leaf whose indices list
+ * triangle 32 * `word` + j for each set bit j of `bits`, then the first of them again: the
+ * load check marks one scratch bit per listed triangle, so it sets exactly `bits` in scratch
+ * word `word`, then fails with BAD_INDEX. */
+static Buffer spelling(uint32_t word, uint32_t bits, uint32_t t) {
+    const uint32_t v = 3;
+    size_t len = 32 + 32 + 12 * v + 16 * (size_t)t;
+    Buffer b = {aligned_bytes(len), len};
+    memcpy(b.bytes, "halfray\0", 8);
+    put_u32(b.bytes + 8, 1);
+    put_u32(b.bytes + 12, v);
+    put_u32(b.bytes + 16, t);
+    put_u32(b.bytes + 20, 1);
     const float one = 1.0f;
-    for (int k = 0; k < 3; k++) memcpy(b + 44 + 4 * k, &one, 4); /* root box [0, 1]^3 */
-    put_u32(b + 60, T);                                             /* a leaf of T triangles */
-    memcpy(b + 64 + 12, &one, 4);                                   /* (0,0,0) (1,0,0) (0,1,0) */
-    memcpy(b + 64 + 28, &one, 4);
-    size_t tri = 64 + 12 * V, idx = tri + 12 * (size_t)T, at = 0;
-    for (uint32_t t = 0; t < T; t++) {
-        put_u32(b + tri + 12 * t + 4, 1);
-        put_u32(b + tri + 12 * t + 8, 2);
+    for (int k = 0; k < 3; k++) memcpy(b.bytes + 44 + 4 * k, &one, 4); /* root box [0, 1]^3 */
+    put_u32(b.bytes + 60, t);                                          /* a leaf of t triangles */
+    memcpy(b.bytes + 64 + 12, &one, 4);                                /* (0,0,0) (1,0,0) (0,1,0) */
+    memcpy(b.bytes + 64 + 28, &one, 4);
+    size_t tri = 64 + 12 * v, idx = tri + 12 * (size_t)t, at = 0;
+    for (uint32_t i = 0; i < t; i++) {
+        put_u32(b.bytes + tri + 12 * i + 4, 1);
+        put_u32(b.bytes + tri + 12 * i + 8, 2);
     }
-    /* Scratch word 8 is the handle's first word: the bits of `tag`, as triangles 256... */
     uint32_t first = 0;
-    for (int bit = 0; bit < 32; bit++)
-        if (tag >> bit & 1) {
-            if (!at) first = 32 * 8 + bit;
-            put_u32(b + idx + 4 * at++, 32 * 8 + bit);
+    for (uint32_t bit = 0; bit < 32; bit++)
+        if (bits >> bit & 1) {
+            if (!at) first = 32 * word + bit;
+            put_u32(b.bytes + idx + 4 * at++, 32 * word + bit);
         }
-    put_u32(b + idx + 4 * at, first); /* ...then one of them again */
+    put_u32(b.bytes + idx + 4 * at, first);
+    return b;
+}
+
+/* A failed load whose scratch shares the handle's memory leaves the handle "not loaded",
+ * whatever the scratch's bits: a crafted buffer lists the triangles whose bits spell a loaded
+ * handle's first words, the tag 0x48524159 ^ buffer address with the address word 0. The
+ * handle used to pass the "loaded" check, and a query answered OK from it. */
+static void forged_tag_in_shared_scratch(void) {
+    Buffer b = spelling(8, 0x48524159u, 32 * 9);
     _Alignas(HalfrayBvh) uint32_t scratch[64];
     memset(scratch, 0, sizeof scratch);
     HalfrayBvh *h = (HalfrayBvh *)(void *)(scratch + 8);
-    CHECK(halfray_load(b, len, scratch, 64, h) == HALFRAY_STATUS_BAD_INDEX);
+    CHECK(halfray_load(b.bytes, b.len, scratch, 64, h) == HALFRAY_STATUS_BAD_INDEX);
     HalfrayRay r = ray(0.25f, 0.25f, 5.0f, 0.0f, 0.0f, -1.0f);
     HalfrayStackEntry stack[HALFRAY_MAX_STACK_ENTRIES];
     HalfrayHit hit;
     CHECK(halfray_closest_hit(h, &r, stack, HALFRAY_MAX_STACK_ENTRIES, &hit) ==
           HALFRAY_STATUS_NOT_LOADED);
-    free(b);
+    free(b.bytes);
+}
+
+/* The same with 0x48524159 spelled in the handle's second word (the buffer's address), the
+ * tag word 0: 0 is 0x48524159 ^ 0x48524159. The handle held a loaded octahedron and the
+ * scratch covers only its first two words, so the rest of that tree stays behind: a failed
+ * load used to leave a handle the queries accepted, answering OK from the earlier tree. */
+static void forged_address_in_shared_scratch(Buffer oct) {
+    const uint32_t per = sizeof(size_t) / 4; /* scratch words per handle word */
+    const uint32_t address_word = 8 + per, words = 8 + 2 * per;
+    Buffer b = spelling(address_word, 0x48524159u, 32 * words);
+    Buffer earlier = copy(oct);
+    _Alignas(HalfrayBvh) uint32_t scratch[64];
+    memset(scratch, 0, sizeof scratch);
+    HalfrayBvh *h = (HalfrayBvh *)(void *)(scratch + 8);
+    uint32_t own[1];
+    CHECK(halfray_load(earlier.bytes, earlier.len, own, 1, h) == HALFRAY_STATUS_OK);
+    CHECK(halfray_load(b.bytes, b.len, scratch, words, h) == HALFRAY_STATUS_BAD_INDEX);
+    HalfrayRay r = ray(0.25f, 0.25f, 5.0f, 0.0f, 0.0f, -1.0f);
+    HalfrayStackEntry stack[HALFRAY_MAX_STACK_ENTRIES];
+    HalfrayHit hit, sentinel;
+    memset(&sentinel, 0x5A, sizeof sentinel);
+    hit = sentinel;
+    size_t entries = 999;
+    bool any = true;
+    CHECK(halfray_stack_entries(h, &entries) == HALFRAY_STATUS_NOT_LOADED && entries == 999);
+    CHECK(halfray_closest_hit(h, &r, stack, HALFRAY_MAX_STACK_ENTRIES, &hit) ==
+          HALFRAY_STATUS_NOT_LOADED);
+    CHECK(halfray_any_hit(h, &r, stack, HALFRAY_MAX_STACK_ENTRIES, &any) ==
+          HALFRAY_STATUS_NOT_LOADED);
+    CHECK(memcmp(&hit, &sentinel, sizeof hit) == 0 && any);
+    free(earlier.bytes);
+    free(b.bytes);
 }
 
 /* A baked node as the format lays it out: box, then (first child, 0) for an inner node or
@@ -485,6 +522,7 @@ int main(int argc, char **argv) {
     Buffer oct = read_file(argv[1]), tor = read_file(argv[2]), rays = read_file(argv[3]);
     octahedron(oct);
     forged_tag_in_shared_scratch();
+    forged_address_in_shared_scratch(oct);
     hand_built_trees_get_their_codes();
     torus(tor, rays, argv[4]);
     free(oct.bytes);
