@@ -168,11 +168,16 @@ enum HalfrayStatus halfray_baked_info(const uint8_t *bytes,
 // `*bvh` is used. `scratch` is `scratch_words` words of working memory (contents ignored,
 // overwritten; free again on return), at least `HalfrayBakedInfo::scratch_words` of them.
 //
-// The checks (linear time, fixed stack): header as `halfray_baked_info`; children after
-// their parent; depth at most `HALFRAY_MAX_STACK_ENTRIES`; a tree, not a graph; finite,
-// nested boxes that contain their triangles; leaves covering every index once; indices and
-// vertex indices in range; finite vertices. A tree that passes answers every query as a
-// freshly built one would.
+// The checks (linear time, fixed stack) cover the header and what a query can read: the
+// header as `halfray_baked_info`; walking the nodes from the root, children after their
+// parent and inside the node array, depth at most `HALFRAY_MAX_STACK_ENTRIES`, no node
+// reached twice, finite boxes (min <= max) that contain their children's boxes and their
+// triangles' vertices; leaves whose index ranges cover the index list once, in depth-first
+// order; each index a distinct triangle, so every triangle is listed; each triangle's
+// vertex indices in range and its three vertices finite. Not checked, since no query reads
+// them: nodes the walk does not reach (the baker's padding), vertices no triangle uses (a
+// NaN there loads), and bytes past `HalfrayBakedInfo::byte_len`. A tree that passes answers
+// every query as a freshly built one would.
 //
 // Returns `HALFRAY_STATUS_OK`; `NULL` when `bvh` or `bytes` is NULL, or `scratch` is NULL
 // with a non-zero `scratch_words`; `MISALIGNED` for a misaligned `bytes`, `scratch` or `bvh`;
