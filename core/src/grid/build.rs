@@ -2,7 +2,7 @@
 //! scatter pass into the references (triangles in index order, so every cell's list is
 //! sorted), without allocation or recursion.
 
-use super::overlap::for_each_cell;
+use super::overlap::{CellAssignment, for_each_cell};
 use super::plan::usable_triangle;
 use super::{Grid, GridError, GridPlan};
 use crate::error::{CapacityError, Storage};
@@ -54,7 +54,7 @@ where
         CapacityError::check(Storage::GridReferences, refs, ref_len)?;
         let off = offsets.as_mut().get_mut(..=cells).unwrap_or(&mut []);
         let dst = references.as_mut().get_mut(..refs).unwrap_or(&mut []);
-        fill(mesh, plan, off, dst)?;
+        let box_reach = fill(mesh, plan, off, dst)?;
         Ok(Self {
             offsets,
             references,
@@ -62,25 +62,30 @@ where
             triangle_count: plan.triangle_count,
             source_len: plan.source_len,
             reference_count: refs,
+            box_reach,
         })
     }
 }
 
 /// The three passes into `off` (exactly `cells + 1` entries) and `dst` (exactly the plan's
 /// reference count), after checking in the first that `mesh` fits the plan (see
-/// [`Grid::build`]). Counts fit `u32`: the plan checked the total.
+/// [`Grid::build`]). Counts fit `u32`: the plan checked the total. Returns the grid's
+/// `box_reach`: 0 per axis under [`CellAssignment::Bounds`], under
+/// [`CellAssignment::Exact`] the most cells beyond the first that a triangle's padded box
+/// spans on that axis.
 fn fill(
     mesh: &TriangleMesh<'_>,
     plan: &GridPlan,
     off: &mut [u32],
     dst: &mut [u32],
-) -> Result<(), GridError> {
+) -> Result<[u32; 3], GridError> {
     let layout = &plan.layout;
     // 1. Count cell `c`'s references into `off[c + 1]`, checking each triangle against the
     //    plan's box: cells partition space, so a triangle outside it would still be counted
     //    (in border cells), but rays are clipped to the box and would never reach it.
     off.fill(0);
     let (mut total, mut usable) = (0usize, 0usize);
+    let mut reach = [0u32; 3];
     for i in 0..mesh.len() {
         let Some((v, b)) = usable_triangle(mesh, i) else {
             continue;
@@ -89,12 +94,17 @@ fn fill(
             return Err(GridError::TriangleOutsidePlan { triangle: i });
         }
         usable += 1;
-        for_each_cell(layout, &v, plan.assignment, |c| {
+        let span = for_each_cell(layout, &v, plan.assignment, |c| {
             if let Some(slot) = off.get_mut(c + 1) {
                 *slot = slot.saturating_add(1);
                 total += 1;
             }
         });
+        if plan.assignment == CellAssignment::Exact {
+            for (r, (lo, hi)) in reach.iter_mut().zip(span) {
+                *r = (*r).max(hi.saturating_sub(lo));
+            }
+        }
     }
     for (expected, found) in [(plan.triangle_count, usable), (dst.len(), total)] {
         if found != expected {
@@ -126,5 +136,5 @@ fn fill(
     if let Some(first) = off.first_mut() {
         *first = 0;
     }
-    Ok(())
+    Ok(reach)
 }

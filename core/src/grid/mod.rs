@@ -40,6 +40,23 @@
 //! references from 205 116 (2.95 per triangle) to 177 315 (2.55), printed by
 //! `tests/tests/grid_vs_bruteforce.rs`; building exactly takes about 4× as long.
 //!
+//! # Box query
+//!
+//! [`RayQuery::query_box`](crate::query::RayQuery::query_box) reports every triangle whose
+//! bounds overlap the query box, once, as the BVH does. A triangle whose box overlaps the
+//! query shares a point with it, whose cell lies in the range of cells the triangle's
+//! padded box touches and among the cells the query box touches (scanned with one more on
+//! each side, for the rounding of the cell of a coordinate). Under
+//! [`CellAssignment::Bounds`] that cell references the triangle, so the scan of the query's
+//! cells finds it. Under [`CellAssignment::Exact`] the triangle may miss that cell (a query
+//! in the empty corner of a large triangle's box), but every cell that references it lies
+//! in its padded box's range, at most `sᵢ` cells from the shared point's cell on axis `i`,
+//! where `sᵢ` is the most cells beyond the first that any triangle's padded box spans on
+//! that axis (recorded at build time): the scan is widened by `sᵢ` on each side. A triangle
+//! is reported in the first cell, in scan order, that references it. The cost: a grid
+//! holding one triangle as wide as the scene scans every cell for every box query under
+//! `Exact`; `Bounds` scans only the query's cells.
+//!
 //! # Traversal and the rule that ends it
 //!
 //! The walk runs in the grid's frame, relative to the centre `c` of its box: the ray's
@@ -185,6 +202,10 @@ pub struct Grid<O, R> {
     triangle_count: usize,
     source_len: usize,
     reference_count: usize,
+    /// Cells a box query scans beyond the query's own on each side, per axis (module docs,
+    /// "Box query"): 0 under [`CellAssignment::Bounds`], under [`CellAssignment::Exact`] the
+    /// most cells beyond the first that a triangle's padded box spans on that axis.
+    box_reach: [u32; 3],
 }
 
 impl<O, R> Grid<O, R>

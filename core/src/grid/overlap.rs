@@ -240,13 +240,15 @@ impl Layout {
 /// by the layout's `pad` on every axis, touches: by its box ([`CellAssignment::Bounds`]) or
 /// by the triangle itself ([`CellAssignment::Exact`]). Cells are visited in increasing linear
 /// index. The vertices are taken into the grid's frame in `f64` (`p − c`: one rounding
-/// relative to the difference, within the assignment's slack).
+/// relative to the difference, within the assignment's slack). Returns the cells (lowest
+/// and highest, per axis) that the padded box touches: every cell found lies in that range,
+/// and under [`CellAssignment::Bounds`] every cell of it is found.
 pub(super) fn for_each_cell(
     layout: &Layout,
     v: &[Vec3; 3],
     assignment: CellAssignment,
     mut found: impl FnMut(usize),
-) {
+) -> [(u32, u32); 3] {
     let pad = f64::from(layout.pad);
     let c = layout.centre.as_dvec3();
     let w = v.map(|p| p.as_dvec3() - c);
@@ -281,6 +283,7 @@ pub(super) fn for_each_cell(
             }
         }
     }
+    r
 }
 
 /// Separating-axis test of a triangle against the closed box `[lo, hi]` (Akenine-Möller

@@ -17,8 +17,9 @@ where
     );
 
     /// Visits the cells the box touches (one more on each side, for the rounding of the cell
-    /// of a coordinate) and reports a triangle in the first of them, in scan order, that
-    /// references it.
+    /// of a coordinate), widened by the grid's box reach on each axis (module docs, "Box
+    /// query"), and reports a triangle whose bounds overlap `query` in the first of them, in
+    /// scan order, that references it.
     fn query_box<P: PrimitiveSource + ?Sized>(
         &self,
         source: &P,
@@ -29,6 +30,9 @@ where
             return 0;
         }
         let (lo, hi) = self.cells_touching(&query.relative_to(self.layout.centre));
+        let s = self.box_reach;
+        let lo = [0, 1, 2].map(|a| lo[a].saturating_sub(s[a]));
+        let hi = [0, 1, 2].map(|a| hi[a].saturating_add(s[a]).min(self.layout.n[a] - 1));
         let mut reported = 0;
         for k in lo[2]..=hi[2] {
             for j in lo[1]..=hi[1] {

@@ -817,3 +817,90 @@ fn reported(grid: &VecGrid, mesh: &TriangleMesh<'_>, q: &Aabb) -> Vec<u32> {
     got.sort_unstable();
     got
 }
+
+/// One large triangle `(0,0,0) (10,0,0) (0,10,0)` (index 0) and 100 small ones
+/// `o, o + (0.1,0,0), o + (0,0.1,0)` at `o = (i, j, 0)`, `i, j ∈ 0..10`, so the grid has many
+/// cells. The query box `(9.5,9.5,0)–(9.6,9.6,0)` lies in the empty corner of the large
+/// triangle's box `[0,10]²×{0}`, far from its hypotenuse `x + y = 10`, and beyond every
+/// small triangle's box (`[i, i+0.1]` on x and y, so none reaches 9.5): by hand, the
+/// triangles whose boxes overlap it are exactly `[0]`. Under `Exact` the corner cell does
+/// not reference triangle 0, which the box query must still report.
+#[test]
+fn a_box_in_the_empty_corner_of_a_large_triangles_box_reports_it() {
+    let mut p = vec![
+        Vec3::ZERO,
+        Vec3::new(10.0, 0.0, 0.0),
+        Vec3::new(0.0, 10.0, 0.0),
+    ];
+    let mut t = vec![[0u32, 1, 2]];
+    for i in 0..10 {
+        for j in 0..10 {
+            let o = Vec3::new(i as f32, j as f32, 0.0);
+            let b = p.len() as u32;
+            p.extend([
+                o,
+                o + Vec3::new(0.1, 0.0, 0.0),
+                o + Vec3::new(0.0, 0.1, 0.0),
+            ]);
+            t.push([b, b + 1, b + 2]);
+        }
+    }
+    let mesh = TriangleMesh::new(&p, &t);
+    let q = Aabb::new(Vec3::new(9.5, 9.5, 0.0), Vec3::new(9.6, 9.6, 0.0));
+    for assignment in [CellAssignment::Bounds, CellAssignment::Exact] {
+        let grid = build_assigned(&mesh, assignment);
+        let [nx, ny, _] = grid.resolution();
+        assert!(nx > 4 && ny > 4, "{assignment:?}: {:?}", grid.resolution());
+        if assignment == CellAssignment::Exact {
+            assert!(!grid.cell([nx - 1, ny - 1, 0]).contains(&0));
+        }
+        let mut got = Vec::new();
+        let n = grid.query_box(&mesh, &q, |p| {
+            got.push(p);
+            true
+        });
+        assert_eq!((n, got), (1, vec![0]), "{assignment:?}");
+    }
+}
+
+/// `query_box` reports every triangle whose box overlaps the query, each once, under both
+/// assignments: random soups of small triangles with a few large ones across the scene (some
+/// flat in `z = 0`), against the brute-force bounds-overlap loop, for query boxes from points
+/// to a quarter of the scene, inside it and around it.
+#[test]
+fn query_box_equals_brute_force_bounds_overlap_on_random_soups() {
+    let mut s = 0x5eed_0b0c_u64;
+    for case in 0..24u64 {
+        let (mut p, mut t) = soup(case, 150, 8.0, 0.3);
+        for _ in 0..1 + case % 4 {
+            let b = p.len() as u32;
+            p.extend((0..3).map(|_| Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 8.0));
+            t.push([b, b + 1, b + 2]);
+        }
+        if case % 3 == 0 {
+            p.iter_mut().for_each(|v| v.z = 0.0);
+        }
+        let mesh = TriangleMesh::new(&p, &t);
+        for assignment in [CellAssignment::Bounds, CellAssignment::Exact] {
+            let grid = build_assigned(&mesh, assignment);
+            for k in 0..100 {
+                let c = Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * 10.0 - Vec3::ONE;
+                let h =
+                    Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * [0.0, 0.05, 0.5, 2.0][k % 4];
+                let q = Aabb::new(c - h, c + h);
+                let mut got = Vec::new();
+                let n = grid.query_box(&mesh, &q, |p| {
+                    got.push(p);
+                    true
+                });
+                got.sort_unstable();
+                let want = boxes_overlapping(&mesh, &q);
+                assert_eq!(
+                    (n, got),
+                    (want.len(), want),
+                    "case {case} {assignment:?} {q:?}"
+                );
+            }
+        }
+    }
+}
