@@ -14,8 +14,11 @@ use glam::{Vec2, Vec3};
 /// `10³` away), or when the line is invalid (a non-finite origin or direction, or a
 /// zero direction: [`Ray::validate`] of the ray with its interval replaced by all reals).
 ///
-/// The slab distances are computed in `f64` from the `f32` inputs (a quotient of exact
-/// differences: one rounding each), so `t` is within `2⁻⁵³` relative of the exact slab
+/// The slab distances `(lo − o)/d` are computed in `f64` from the `f32` inputs. The
+/// difference is exact when the ulps of `lo` and `o` differ by a factor of at most `2²⁸`
+/// (the exact difference then fits in `f64`'s 53 bits) and rounds once otherwise (`lo =
+/// 10¹⁰`, `o = 10⁻¹⁰`); the quotient rounds once. So `t` is within
+/// [`gamma_f64`](crate::float::gamma_f64)`(2)` (about `2⁻⁵²`) relative of the exact slab
 /// distance before its rounding to `f32`. A line lying in a face's plane counts as inside
 /// that slab. A line through an edge or corner, or touching the box at one point, enters and
 /// leaves at the same `t` (both crossings are reported; a closed test, unlike a tangent
