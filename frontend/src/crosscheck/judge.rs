@@ -22,8 +22,9 @@ pub struct Answer {
 pub enum Verdict {
     /// Same hit/miss, same primitive, `t` within [`t_tolerance`].
     Agree,
-    /// Different primitives at the same `t` (a shared edge or vertex, or coplanar duplicates):
-    /// both answers are valid.
+    /// Different primitives at the same `t` (a shared edge or vertex, or coplanar duplicates),
+    /// both answers valid on their own triangles ([`answer_is_valid`]). Different primitives
+    /// at the same `t` of which one is not valid are judged against the reference instead.
     Tie,
     /// The difference is inside the reference's own uncertainty: the contested hit lies within
     /// the boundary margin ([`ray_space_barycentrics`]) of a triangle's edge, or `t` differs by less than the grazing-scaled
@@ -237,7 +238,9 @@ pub fn at_interval_end(mesh: &ObjMesh, ray: &Ray, r: &Answer) -> bool {
 }
 
 /// Classifies one ray. `reference` is the `f64` reference's closest hit (watertight, closed
-/// edges), used only when the two sides disagree.
+/// edges), used only when the two sides disagree: on hit/miss, on `t` beyond
+/// [`t_tolerance`], or on the primitive at the same `t` where either answer is not valid
+/// ([`answer_is_valid`]) on its own triangle.
 pub fn judge(
     mesh: &ObjMesh,
     ray: &Ray,
@@ -250,15 +253,17 @@ pub fn judge(
     match (&ours, &embree) {
         (None, None) => return Verdict::Agree,
         (Some(h), Some(e)) if tol_between(h, e) => {
-            return if h.prim == e.prim {
-                Verdict::Agree
-            } else {
-                Verdict::Tie
-            };
+            if h.prim == e.prim {
+                return Verdict::Agree;
+            }
+            if answer_is_valid(mesh, ray, h) && answer_is_valid(mesh, ray, e) {
+                return Verdict::Tie;
+            }
         }
         _ => {}
     }
-    // They disagree on hit/miss or on t: is each side consistent with the reference?
+    // They disagree on hit/miss, on t, or on the primitive at the same t with an answer its
+    // own triangle does not bear out: is each side consistent with the reference?
     // Where the reference's own hit is undecided: within the margin of an edge of its
     // triangle, or within the `t` tolerance of an end of the interval.
     let on_boundary = |r: &Answer| {
@@ -369,6 +374,21 @@ mod tests {
         // Wrong t far beyond tolerance: genuine.
         assert_eq!(judge(&m, &inner, Some(ans(0, 1.1)), r, r), Verdict::Genuine);
         assert!(is_leak(&diag, None, 1.0));
+        // halfray names triangle 1 at the right depth, but (0.7, 0.2) lies outside it (the
+        // triangle (0,0), (1,1), (0,1) holds only points with y ≥ x, 0.35 away here): the
+        // same `t` as Embree's triangle 0 is no tie, and the reference decides.
+        assert_eq!(judge(&m, &inner, Some(ans(1, 1.0)), r, r), Verdict::Genuine);
+        // Embree names the wrong one: Embree is wrong.
+        assert_eq!(
+            judge(&m, &inner, r, Some(ans(1, 1.0)), r),
+            Verdict::EmbreeWrong
+        );
+        // A true tie: the ray through the shared diagonal hits both triangles, whichever the
+        // reference names.
+        assert_eq!(
+            judge(&m, &diag, Some(ans(1, 1.0)), Some(ans(0, 1.0)), r),
+            Verdict::Tie
+        );
         assert!(!is_leak(&diag, Some(&ans(1, 1.0)), 1.0));
         assert!(is_leak(&diag, Some(&ans(1, 1.5)), 1.0));
     }
