@@ -51,6 +51,16 @@ fn counts(report: &Value) -> Vec<Value> {
         .collect()
 }
 
+/// Halfray leaks summed over a report's rows.
+fn leaks(report: &Value) -> u64 {
+    report["sets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|row| row["leaks_halfray"].as_u64().unwrap())
+        .sum()
+}
+
 /// The Möller–Trumbore test leaks on edge rays, so the runs have disagreements to keep.
 const RUN: [&str; 6] = [
     "--rays",
@@ -75,9 +85,10 @@ fn merged_shards_equal_the_unsharded_run_ray_for_ray() {
         .concat(),
         &[&whole],
     );
-    // Leaks through a non-watertight intersector do not fail the run; mismatches would.
-    assert!(o.status.success(), "{}", text(&o));
+    // A halfray leak fails the run (exit 3) whatever the intersector; the report is written.
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
     let whole = read(&whole);
+    assert!(leaks(&whole) > 0, "the Möller–Trumbore run should leak");
     let details: usize = whole["sets"]
         .as_array()
         .unwrap()
@@ -99,7 +110,9 @@ fn merged_shards_equal_the_unsharded_run_ray_for_ray() {
                 .concat(),
                 &[&part],
             );
-            assert!(o.status.success(), "shard {shard}: {}", text(&o));
+            let leaked = leaks(&read(&part)) > 0;
+            let want = if leaked { 3 } else { 0 };
+            assert_eq!(o.status.code(), Some(want), "shard {shard}: {}", text(&o));
             // Each shard holds about 1/n of each set.
             let part_rays = read(&part)["sets"][0]["rays"].as_u64().unwrap();
             let all_rays = whole["sets"][0]["rays"].as_u64().unwrap();
@@ -115,7 +128,7 @@ fn merged_shards_equal_the_unsharded_run_ray_for_ray() {
             .arg(&merged)
             .output()
             .unwrap();
-        assert!(o.status.success(), "merge of {n}: {}", text(&o));
+        assert_eq!(o.status.code(), Some(3), "merge of {n}: {}", text(&o));
         let merged = read(&merged);
         assert_eq!(merged["merged_shards"], n);
         assert_eq!(counts(&merged), counts(&whole), "N = {n}");

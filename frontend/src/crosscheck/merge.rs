@@ -657,7 +657,7 @@ mod tests {
             ),
             (
                 Some(leaky),
-                "1 leaks through the watertight intersector; 1 of 1 meshes",
+                "1 halfray leaks through the watertight intersector; 1 of 1 meshes",
             ),
         ] {
             let mut checked = shard_result("a.obj", 1, 2);

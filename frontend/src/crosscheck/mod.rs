@@ -79,6 +79,7 @@ pub struct CrosscheckArgs {
     #[arg(long)]
     pub json: Option<PathBuf>,
     /// Exit with code 3 when genuine mismatches (summed over meshes and sets) exceed this.
+    /// Any halfray leak exits with code 3 too, whatever this is and whatever the intersector.
     #[arg(long, default_value_t = 0)]
     pub max_mismatch: usize,
     /// Also render the depth of a camera framing the (first) mesh with both and write
@@ -110,7 +111,8 @@ pub struct MergeArgs {
     /// Write the merged report as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
-    /// Exit with code 3 when genuine mismatches exceed this.
+    /// Exit with code 3 when genuine mismatches exceed this. Any halfray leak exits with code 3
+    /// too, whatever this is and whatever the intersector.
     #[arg(long, default_value_t = 0)]
     pub max_mismatch: usize,
     /// Replace an output that is read-only or hard-linked (keeping its mode).
@@ -160,10 +162,10 @@ fn run_merge(args: &MergeArgs) -> Result<()> {
 
 /// Writes `report` to `json` together with `also` (the depth image: both or neither,
 /// [`crate::outputs::write_together`]), prints its table and totals, and turns it into the
-/// exit status: [`Error::Mismatch`] past `max_mismatch` genuine mismatches or on any leak
-/// through a watertight intersector (the rows of a failed mesh's checked shards count; the
-/// message names the failed meshes too), else an error naming every mesh that could not be
-/// checked.
+/// exit status: [`Error::Mismatch`] past `max_mismatch` genuine mismatches or on any halfray
+/// leak, whatever the intersector and `max_mismatch` (the rows of a failed mesh's checked
+/// shards count; the message names the failed meshes too), else an error naming every mesh
+/// that could not be checked.
 pub fn finish(
     report: &report::Report,
     json: Option<crate::outputs::OutputFile>,
@@ -201,8 +203,6 @@ pub fn finish(
             .map_or(String::new(), |n| format!(" (sums over {n} shards)"))
     );
     let (genuine, leaks) = (report.genuine(), report.leaks());
-    let watertight = halfray_core::triangle::TriangleVariant::from_name(&report.config.intersector)
-        .is_some_and(|v| v.is_watertight());
     let failed = (!report.failed.is_empty()).then(|| Error::MeshesFailed {
         failed: report
             .failed
@@ -218,10 +218,73 @@ pub fn finish(
             "{genuine} genuine mismatches (allowed: {max_mismatch}){and_failed}"
         )));
     }
-    if watertight && leaks > 0 {
+    if leaks > 0 {
         return Err(Error::Mismatch(format!(
-            "{leaks} leaks through the watertight intersector{and_failed}"
+            "{leaks} halfray leaks through the {} intersector{and_failed}",
+            report.config.intersector
         )));
     }
     failed.map_or(Ok(()), Err)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run of `intersector` whose one row has `leaks` halfray leaks and no genuine mismatch.
+    fn leaky_report(intersector: &str, leaks: usize) -> report::Report {
+        let config = report::RunConfig {
+            intersector: intersector.into(),
+            seed: 1,
+            rays: 10,
+            ray_sets: vec!["edges".into()],
+            shard: shard::Shard::WHOLE,
+        };
+        let row = SetReport {
+            mesh: "a.obj".into(),
+            path: "a.obj".into(),
+            name: "edges".into(),
+            rays: 10,
+            agree: 10,
+            leak_rays: 10,
+            leaks_halfray: leaks,
+            ..SetReport::default()
+        };
+        let result = report::MeshResult {
+            path: "a.obj".into(),
+            config: config.clone(),
+            error: None,
+            sets: vec![row],
+        };
+        report::Report::new(config, 1, 1.0, &[result])
+    }
+
+    /// A halfray leak fails the run (exit 3) through every intersector, the non-watertight
+    /// ones included, whatever `--max-mismatch` allows; a run without leaks or mismatches
+    /// passes.
+    #[test]
+    fn a_halfray_leak_is_exit_3_through_every_intersector() {
+        for name in [
+            "watertight",
+            "moller-trumbore",
+            "moller-trumbore-noeps",
+            "cramer",
+        ] {
+            assert!(
+                halfray_core::triangle::TriangleVariant::from_name(name).is_some(),
+                "{name}"
+            );
+            let e = finish(&leaky_report(name, 3), None, None, usize::MAX).unwrap_err();
+            assert_eq!(e.exit_code(), crate::error::EXIT_MISMATCH, "{name}: {e}");
+            assert!(
+                e.to_string()
+                    .contains(&format!("3 halfray leaks through the {name} intersector")),
+                "{e}"
+            );
+            assert!(
+                finish(&leaky_report(name, 0), None, None, 0).is_ok(),
+                "{name}"
+            );
+        }
+    }
 }
