@@ -55,7 +55,8 @@ pub struct CrosscheckArgs {
     #[arg(long, value_name = "K/N", default_value = "0/1")]
     pub shard: shard::Shard,
     /// Append each mesh's result to this JSON-lines file as soon as it is done (a regular
-    /// file: `--resume` reads it back).
+    /// file: `--resume` reads it back). A read-only or hard-linked log is refused even with
+    /// `--force`: the log is appended to, never replaced.
     #[arg(long)]
     pub jsonl: Option<PathBuf>,
     /// Continue the run in `--jsonl`: skip the meshes it already holds (failed ones are tried
@@ -89,7 +90,8 @@ pub struct CrosscheckArgs {
     /// Width and height of the depth image.
     #[arg(long, default_value_t = 256)]
     pub depth_size: usize,
-    /// Replace an output that is read-only or hard-linked (keeping its mode).
+    /// Replace an output (`--json`, `--depth-image`) that is read-only or hard-linked
+    /// (keeping its mode); not the `--jsonl` log, which is appended to.
     #[arg(long)]
     pub force: bool,
 }
