@@ -315,7 +315,8 @@ struct Outcome {
     leak_ray: bool,
     leaks: [bool; 3],
     any_hit: bool,
-    any_vs_closest: usize,
+    /// Either side's any-hit answer contradicts its own closest hit (the ray counts once).
+    any_vs_closest: bool,
     details: Vec<Disagreement>,
 }
 
@@ -372,11 +373,11 @@ fn classify(
     let any_h = sides.accel.any_variant(sides.variant, &r.ray);
     let any_e = sides.robust.occluded_ray(&r.ray);
     out.any_hit = matches!(verdict, Verdict::Agree | Verdict::Tie) && any_h != any_e;
-    out.any_vs_closest = (any_h != h.is_some()) as usize + (any_e != e.is_some()) as usize;
+    out.any_vs_closest = any_h != h.is_some() || any_e != e.is_some();
     if out.any_hit {
         record(&mut out, DetailKind::AnyHit);
     }
-    if out.any_vs_closest > 0 {
+    if out.any_vs_closest {
         record(&mut out, DetailKind::AnyVsClosest);
     }
     out.verdict = Some(verdict);
@@ -454,8 +455,53 @@ fn compare_set(sides: &Sides<'_>, rays: &[(usize, SetRay)], timing_rays: usize) 
             Some(Verdict::Genuine) => row.genuine_mismatches += 1,
         }
         row.any_hit_disagreements += o.any_hit as usize;
-        row.any_vs_closest_inconsistent += o.any_vs_closest;
+        row.any_vs_closest_inconsistent += o.any_vs_closest as usize;
         row.disagreements.extend(o.details);
     }
     row
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::obj::ObjMesh;
+    use glam::Vec3;
+
+    /// A ray straight down onto the interior of a unit quad hits it on every side; given
+    /// closest answers of "miss" for both halfray and Embree, both sides' any-hit answers
+    /// contradict their closest hits: one ray, counted once.
+    #[test]
+    fn a_ray_inconsistent_on_both_sides_counts_once() {
+        let mesh = ObjMesh {
+            positions: vec![
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+            ],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        };
+        let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
+        let device = EmbreeDevice::new().unwrap();
+        let robust = EmbreeScene::new(&device, &positions, &mesh.triangles, true).unwrap();
+        let fast = EmbreeScene::new(&device, &positions, &mesh.triangles, false).unwrap();
+        let accel = MeshAccel::new(mesh).unwrap();
+        let sides = Sides {
+            accel: &accel,
+            robust: &robust,
+            fast: &fast,
+            variant: TriangleVariant::Watertight,
+        };
+        let r = SetRay {
+            ray: Ray::new(Vec3::new(0.7, 0.2, 1.0), Vec3::new(0.0, 0.0, -1.0)),
+            target: None,
+        };
+        let hit = sides.halfray(&r.ray);
+        assert!(hit.is_some());
+        // Both sides inconsistent, one side inconsistent, neither.
+        for (h, e, want) in [(None, None, 1), (None, hit, 1), (hit, hit, 0)] {
+            let o = classify(&sides, 0, &r, h, e, e);
+            assert_eq!(o.any_vs_closest as usize, want, "{h:?} {e:?}");
+        }
+    }
 }
