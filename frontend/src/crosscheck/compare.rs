@@ -387,17 +387,27 @@ fn classify(
 /// One side's timed pass over the sampled rays: its answer to each, in order.
 type TimedPass<'a> = &'a dyn Fn() -> Vec<Option<Answer>>;
 
-/// One set's row: the single-thread timed passes over `timing_rays` rays spread evenly over
-/// the set (every `stride`-th ray, the same rays for every side, so that a camera's empty
-/// first rows do not stand for the whole image), then every ray classified on the worker
+/// The positions of `n` rays spread evenly over a set of `len`: `⌊i·len/n⌋` for
+/// `i < min(n, len)`, strictly increasing; every position when `n ≥ len`, none when `n` or
+/// `len` is 0.
+fn timed_positions(len: usize, n: usize) -> Vec<usize> {
+    let n = n.min(len);
+    (0..n)
+        .map(|i| (i as u128 * len as u128 / n as u128) as usize)
+        .collect()
+}
+
+/// One set's row: the single-thread timed passes over `timing_rays` (at least 1) rays spread
+/// evenly over the set ([`timed_positions`], the same rays for every side, so that a camera's
+/// empty first rows do not stand for the whole image), then every ray classified on the worker
 /// threads. Each side is timed [`TIMED_PASSES`] times, the sides taking turns pass by pass,
 /// and its fastest pass is reported (as `bench bvh` does: on a shared machine a slow pass
 /// measures the neighbours, and turns give every side the same warm-up). halfray traces the
 /// sampled rays as one batch ([`MeshAccel::closest_variant_batch`], the same answers as one by
 /// one), Embree one `rtcIntersect1` call a ray.
 fn compare_set(sides: &Sides<'_>, rays: &[(usize, SetRay)], timing_rays: usize) -> SetReport {
-    let stride = rays.len().div_ceil(timing_rays.max(1)).max(1);
-    let sample = || rays.iter().step_by(stride).map(|(_, r)| &r.ray);
+    let positions = timed_positions(rays.len(), timing_rays.max(1));
+    let sample = || positions.iter().map(|&j| &rays[j].1.ray);
     let batch: Vec<Ray> = sample().copied().collect();
     // halfray, Embree robust, Embree default.
     let passes: [TimedPass<'_>; 3] = [
@@ -420,8 +430,8 @@ fn compare_set(sides: &Sides<'_>, rays: &[(usize, SetRay)], timing_rays: usize) 
         .par_iter()
         .enumerate()
         .map(|(j, (index, r))| {
-            let (h, e, f) = if j % stride == 0 {
-                (ours[j / stride], emb[j / stride], emb_fast[j / stride])
+            let (h, e, f) = if let Ok(k) = positions.binary_search(&j) {
+                (ours[k], emb[k], emb_fast[k])
             } else {
                 (
                     sides.halfray(&r.ray),
@@ -466,6 +476,23 @@ mod tests {
     use super::*;
     use crate::obj::ObjMesh;
     use glam::Vec3;
+
+    /// Worked by hand: 4 of 10 rays are 0, 2, 5, 7 (`⌊10i/4⌋`); 1500 of 2000 are 1500
+    /// distinct positions, not every second ray (1000); a set no larger than `n` is timed
+    /// whole; nothing of an empty set.
+    #[test]
+    fn the_timed_rays_are_n_evenly_spaced_positions() {
+        assert_eq!(timed_positions(10, 4), [0, 2, 5, 7]);
+        assert_eq!(timed_positions(10, 1), [0]);
+        assert_eq!(timed_positions(3, 5), [0, 1, 2]);
+        assert_eq!(timed_positions(4, 4), [0, 1, 2, 3]);
+        assert!(timed_positions(0, 5).is_empty());
+        let p = timed_positions(2000, 1500);
+        assert_eq!(p.len(), 1500);
+        assert!(p.windows(2).all(|w| w[0] < w[1]) && p[1499] < 2000);
+        // ⌊4i/3⌋: 0, 1, 2, 4, 5, 6, 8, … (every position but 3, 7, 11, …).
+        assert_eq!(&p[..7], [0, 1, 2, 4, 5, 6, 8]);
+    }
 
     /// A ray straight down onto the interior of a unit quad hits it on every side; given
     /// closest answers of "miss" for both halfray and Embree, both sides' any-hit answers

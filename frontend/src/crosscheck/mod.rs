@@ -45,8 +45,9 @@ pub struct CrosscheckArgs {
     /// rays of each set.
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..=crate::workers::MAX_WORKER_THREADS as i64))]
     pub threads: Option<u16>,
-    /// Rays of each set (of this shard) in the single-thread timed passes, spread evenly over
-    /// the set (every k-th ray); the same rays for halfray and both Embree modes, which take
+    /// Rays of each set (of this shard) in the single-thread timed passes (at least 1; all of
+    /// them when the set has fewer), spread evenly over the set (of its L rays, ray ⌊i·L/N⌋ for
+    /// i < N); the same rays for halfray and both Embree modes, which take
     /// turns for five passes each (the fastest pass of each is reported).
     #[arg(long, default_value_t = 100_000)]
     pub timing_rays: usize,

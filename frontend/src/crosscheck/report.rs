@@ -150,8 +150,8 @@ pub struct SetReport {
     pub any_hit_disagreements: usize,
     /// Rays whose any-hit answer contradicts the same side's closest-hit answer (either side).
     pub any_vs_closest_inconsistent: usize,
-    /// Rays in the single-thread timed passes (every k-th ray of the set, the same for every
-    /// side).
+    /// Rays in the single-thread timed passes (spread evenly over the set, `--timing-rays` of
+    /// them or all, the same for every side).
     pub timed_rays: usize,
     /// Seconds of halfray's timed closest-hit pass (the timed rays as one batch,
     /// `RayQuery::closest_hits`), one thread.
