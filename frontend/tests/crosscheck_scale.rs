@@ -440,3 +440,39 @@ fn every_set_reports_its_timed_rays_and_seconds() {
         }
     }
 }
+
+/// A mesh whose camera rays all lie outside Embree's range: the triangle `(0,0,0), (10³⁰,0,0),
+/// (0,10³⁰,0)` (a camera framing it stands beyond `FLT_LARGE`).
+fn huge_mesh(dir: &Path) -> PathBuf {
+    let huge = dir.join("huge.obj");
+    std::fs::write(&huge, "v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nf 1 2 3\n").unwrap();
+    huge
+}
+
+/// A set whose every ray Embree cannot take is not silently a pass of 0 rays: its row counts
+/// the rays dropped, stderr warns that no ray was left, and the summary names them.
+#[test]
+fn rays_outside_embree_are_counted_and_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let huge = huge_mesh(dir.path());
+    let json = dir.path().join("r.json");
+    let o = run(
+        &["--rays", "40", "--sets", "primary"],
+        &[&huge, Path::new("--json"), &json],
+    );
+    let all = text(&o);
+    assert!(o.status.success(), "{all}");
+    let row = &read(&json)["sets"][0];
+    assert_eq!(
+        (row["rays"].as_u64(), row["rays_outside_embree"].as_u64()),
+        (Some(0), Some(40)),
+        "{all}"
+    );
+    let warning = "warning: crosscheck huge.obj primary: no ray left to check \
+                   (40 generated, 40 of them outside Embree's range)";
+    assert!(all.contains(warning), "{all}");
+    assert!(
+        all.contains("40 generated rays outside Embree's range"),
+        "{all}"
+    );
+}

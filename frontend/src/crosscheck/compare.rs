@@ -267,9 +267,9 @@ fn check_mesh(
     for set in &config.ray_sets {
         let rays =
             sets::generate(set, &accel.mesh, &adj, config.rays, seed, &hits).unwrap_or_default();
-        let rays: Vec<(usize, SetRay)> = config
-            .shard
-            .select(rays)
+        let generated = config.shard.select(rays);
+        let shard_rays = generated.len();
+        let rays: Vec<(usize, SetRay)> = generated
             .into_iter()
             .filter(|(_, r)| {
                 ray_is_valid(
@@ -284,14 +284,22 @@ fn check_mesh(
         row.mesh = name.clone();
         row.path = path.display().to_string();
         row.name = set.clone();
+        row.rays_outside_embree = shard_rays - rays.len();
+        let shown = crate::text::escaped(&name);
+        let dropped = match row.rays_outside_embree {
+            0 => String::new(),
+            n => format!(" ({n} more generated, not traced: outside Embree's range)"),
+        };
         eprintln!(
-            "crosscheck {} {set}: {} rays, {} genuine, {} leaks halfray, {} leaks embree",
-            crate::text::escaped(&name),
-            row.rays,
-            row.genuine_mismatches,
-            row.leaks_halfray,
-            row.leaks_embree
+            "crosscheck {shown} {set}: {} rays{dropped}, {} genuine, {} leaks halfray, {} leaks embree",
+            row.rays, row.genuine_mismatches, row.leaks_halfray, row.leaks_embree
         );
+        if row.rays == 0 {
+            eprintln!(
+                "warning: crosscheck {shown} {set}: no ray left to check ({} generated, {} of them outside Embree's range)",
+                shard_rays, row.rays_outside_embree
+            );
+        }
         rows.push(row);
     }
     let png = want_depth

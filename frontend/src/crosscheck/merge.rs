@@ -634,6 +634,32 @@ mod tests {
         assert_eq!(merged.merged_shards, Some(2));
     }
 
+    /// Rays dropped as outside Embree's range add over the shards like every count (shard `k`
+    /// of 3 drops `k + 1` in each set: 1 + 2 + 3 = 6); a part written before they were counted
+    /// (no `rays_outside_embree` key) reads as 0 dropped.
+    #[test]
+    fn rays_outside_embree_add_over_the_shards() {
+        let parts: Vec<Part> = (0..3)
+            .map(|k| {
+                let mut r = shard_result("a.obj", k, 3);
+                for row in &mut r.sets {
+                    row.rays_outside_embree = k + 1;
+                }
+                part(&format!("p{k}"), vec![r])
+            })
+            .collect();
+        let merged = merge(&parts).unwrap();
+        let dropped: Vec<usize> = merged.sets.iter().map(|s| s.rays_outside_embree).collect();
+        assert_eq!(dropped, [6, 6]);
+        assert_eq!(merged.rays_outside_embree(), 12);
+        let mut old = serde_json::to_value(shard_result("a.obj", 0, 1)).unwrap();
+        for row in old["sets"].as_array_mut().unwrap() {
+            row.as_object_mut().unwrap().remove("rays_outside_embree");
+        }
+        let old: MeshResult = serde_json::from_value(old).unwrap();
+        assert!(old.sets.iter().all(|s| s.rays_outside_embree == 0));
+    }
+
     /// Shard logs of a mesh checked on shard 1 (rays 1 and 5 genuine mismatches in both sets,
     /// or instead one leak through the watertight intersector) and failed on shard 0: the
     /// merge keeps shard 1's counts and disagreements beside the failure and exits 3 (a

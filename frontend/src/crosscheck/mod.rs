@@ -205,6 +205,12 @@ pub fn finish(
             .merged_shards
             .map_or(String::new(), |n| format!(" (sums over {n} shards)"))
     );
+    let outside = report.rays_outside_embree();
+    if outside > 0 {
+        crate::sayln!(
+            "{outside} generated rays outside Embree's range (embree::ray_is_valid) were not traced"
+        );
+    }
     let (genuine, leaks) = (report.genuine(), report.leaks());
     let failed = (!report.failed.is_empty()).then(|| Error::MeshesFailed {
         failed: report

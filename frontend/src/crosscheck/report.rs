@@ -124,8 +124,14 @@ pub struct SetReport {
     pub path: String,
     /// Set name.
     pub name: String,
-    /// Rays traced (invalid rays for Embree are dropped first).
+    /// Rays traced: the set's generated rays (of this shard) inside Embree's defined range
+    /// (`embree::ray_is_valid`).
     pub rays: usize,
+    /// The set's generated rays (of this shard) outside Embree's defined range
+    /// (`embree::ray_is_valid`: a coordinate beyond `FLT_LARGE`, …): not traced by either side,
+    /// not in `rays`. Absent (0) in reports written before it was counted.
+    #[serde(default)]
+    pub rays_outside_embree: usize,
     /// Same answer (hit/miss, primitive, `t` within tolerance).
     pub agree: usize,
     /// halfray contradicts the reference beyond its bound.
@@ -181,8 +187,9 @@ impl SetReport {
     }
 
     /// Names of the counts, in the order of [`SetReport::counts`].
-    pub const COUNT_NAMES: [&'static str; 13] = [
+    pub const COUNT_NAMES: [&'static str; 14] = [
         "rays",
+        "rays_outside_embree",
         "agree",
         "genuine_mismatches",
         "ties",
@@ -198,9 +205,10 @@ impl SetReport {
     ];
 
     /// The counts, in the order of [`SetReport::COUNT_NAMES`].
-    pub fn counts(&self) -> [usize; 13] {
+    pub fn counts(&self) -> [usize; 14] {
         [
             self.rays,
+            self.rays_outside_embree,
             self.agree,
             self.genuine_mismatches,
             self.ties,
@@ -216,9 +224,10 @@ impl SetReport {
         ]
     }
 
-    fn counts_mut(&mut self) -> [&mut usize; 13] {
+    fn counts_mut(&mut self) -> [&mut usize; 14] {
         [
             &mut self.rays,
+            &mut self.rays_outside_embree,
             &mut self.agree,
             &mut self.genuine_mismatches,
             &mut self.ties,
@@ -376,6 +385,12 @@ impl Report {
     /// Total rays; `usize::MAX` when the sum does not fit.
     pub fn rays(&self) -> usize {
         self.total(|r| r.rays).unwrap_or(usize::MAX)
+    }
+
+    /// Total generated rays outside Embree's range ([`SetReport::rays_outside_embree`]);
+    /// `usize::MAX` when the sum does not fit.
+    pub fn rays_outside_embree(&self) -> usize {
+        self.total(|r| r.rays_outside_embree).unwrap_or(usize::MAX)
     }
 
     /// halfray / Embree robust single-thread throughput, time-weighted over all sets (`None`
