@@ -476,3 +476,24 @@ fn rays_outside_embree_are_counted_and_warned_of() {
         "{all}"
     );
 }
+
+/// The depth image of that mesh traces none of its pixels on either side (it reported them
+/// as "only halfray hits"): they are counted apart and magenta in all three panels.
+#[test]
+fn depth_pixels_outside_embree_are_not_traced() {
+    let dir = tempfile::tempdir().unwrap();
+    let huge = huge_mesh(dir.path());
+    let depth = dir.path().join("d.png");
+    let o = run(
+        &["--rays", "1", "--sets", "primary", "--depth-size", "3"],
+        &[&huge, Path::new("--depth-image"), &depth],
+    );
+    let all = text(&o);
+    assert!(o.status.success(), "{all}");
+    let counts = "only halfray hits: 0, only Embree hits: 0, depth differs: 0, \
+                  not traced (outside Embree's range): 9";
+    assert!(all.contains(counts), "{all}");
+    let img = image::open(&depth).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (9, 3));
+    assert!(img.pixels().all(|p| p.0 == [255, 0, 255]), "{all}");
+}

@@ -2,15 +2,21 @@
 //! (robust), written side by side with a difference panel.
 
 use crate::accel::MeshAccel;
-use crate::embree::EmbreeScene;
+use crate::embree::{EmbreeScene, ray_is_valid};
 use crate::error::{Error, Result};
 use halfray_core::triangle::TriangleVariant;
 use image::{ImageEncoder, Rgb, RgbImage};
 
+/// Colour of a pixel whose camera ray lies outside Embree's defined range ([`ray_is_valid`]),
+/// in all three panels: neither side traces it, as the cross-check drops such rays.
+const NOT_TRACED: Rgb<u8> = Rgb([255, 0, 255]);
+
 /// The PNG of `halfray | Embree | difference` (`3·size × size` pixels). Depth panels map the nearest
 /// hit to white and the farthest to dark grey, misses black. The difference panel is black where
 /// both agree within the cross-check's `t` tolerance, red where only halfray hits, blue where
-/// only Embree hits, and yellow where both hit at different depths. Prints the pixel counts.
+/// only Embree hits, and yellow where both hit at different depths. A pixel whose camera ray
+/// Embree cannot take ([`ray_is_valid`]: a coordinate beyond `FLT_LARGE`, …) is traced by
+/// neither side and magenta in all three panels. Prints the pixel counts.
 pub fn depth_diff_png(
     accel: &MeshAccel,
     scene: &EmbreeScene,
@@ -19,13 +25,29 @@ pub fn depth_diff_png(
 ) -> Result<Vec<u8>> {
     let (lo, hi) = accel.mesh.bounds().unwrap_or_default();
     let rays = crate::raysets::Camera::framing(lo, hi, size, size).rays();
+    let traced: Vec<bool> = rays
+        .iter()
+        .map(|r| {
+            ray_is_valid(
+                r.origin.to_array(),
+                r.direction.to_array(),
+                r.t_min,
+                r.t_max,
+            )
+        })
+        .collect();
     let ours: Vec<Option<f32>> = rays
         .iter()
-        .map(|r| accel.closest_variant(variant, r).map(|h| h.1.t))
+        .zip(&traced)
+        .map(|(r, &ok)| {
+            ok.then(|| accel.closest_variant(variant, r).map(|h| h.1.t))
+                .flatten()
+        })
         .collect();
     let emb: Vec<Option<f32>> = rays
         .iter()
-        .map(|r| scene.intersect_ray(r).map(|h| h.t))
+        .zip(&traced)
+        .map(|(r, &ok)| ok.then(|| scene.intersect_ray(r).map(|h| h.t)).flatten())
         .collect();
     let ts = ours.iter().chain(&emb).flatten().copied();
     let (tmin, tmax) = ts.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), t| {
@@ -44,9 +66,16 @@ pub fn depth_diff_png(
         }
     };
     let mut img = RgbImage::new((3 * size) as u32, size as u32);
-    let mut counts = [0usize; 3];
+    let mut counts = [0usize; 4];
     for (i, r) in rays.iter().enumerate() {
         let (x, y) = ((i % size) as u32, (i / size) as u32);
+        if !traced[i] {
+            counts[3] += 1;
+            for panel in 0..3 {
+                img.put_pixel(x + panel * size as u32, y, NOT_TRACED);
+            }
+            continue;
+        }
         img.put_pixel(x, y, shade(ours[i]));
         img.put_pixel(x + size as u32, y, shade(emb[i]));
         let diff = match (ours[i], emb[i]) {
@@ -69,8 +98,9 @@ pub fn depth_diff_png(
         img.put_pixel(x + 2 * size as u32, y, diff);
     }
     eprintln!(
-        "depth image: {}x{} px; only halfray hits: {}, only Embree hits: {}, depth differs: {}",
-        size, size, counts[0], counts[1], counts[2]
+        "depth image: {}x{} px; only halfray hits: {}, only Embree hits: {}, depth differs: {}, \
+         not traced (outside Embree's range): {}",
+        size, size, counts[0], counts[1], counts[2], counts[3]
     );
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)

@@ -85,7 +85,9 @@ pub struct CrosscheckArgs {
     #[arg(long, default_value_t = 0)]
     pub max_mismatch: usize,
     /// Also render the depth of a camera framing the (first) mesh with both and write
-    /// `halfray | embree | difference` side by side to this PNG.
+    /// `halfray | embree | difference` side by side to this PNG (difference: red only halfray
+    /// hits, blue only Embree, yellow both at different depths; magenta in every panel: a
+    /// camera ray outside Embree's range, traced by neither).
     #[arg(long)]
     pub depth_image: Option<PathBuf>,
     /// Width and height of the depth image.
