@@ -187,10 +187,11 @@ struct Loaded {
 const LOADED: usize = 0x4852_4159;
 
 /// The tag of a handle loaded over the buffer at address `buffer`: odd (`LOADED` is odd and
-/// a buffer's address, which [`loaded`] requires to be a non-zero multiple of
-/// `HALFRAY_BAKED_ALIGN`, even), so never 0, and for other contents a match only by chance:
-/// made-up contents would have to hold a buffer's address in the next word and this function
-/// of it in the first.
+/// a buffer's address a multiple of `HALFRAY_BAKED_ALIGN`), so never 0: a zeroed handle is
+/// "not loaded", and a tag of 0 matches only the buffer word `LOADED`, which no load writes
+/// (a failed load clears both words: its scratch may have spelled it); for other contents a
+/// match only by chance: made-up contents would have to hold a buffer's address in the next
+/// word and this function of it in the first.
 fn tag_of(buffer: usize) -> usize {
     LOADED ^ buffer
 }
@@ -405,10 +406,11 @@ pub unsafe extern "C" fn halfray_load(
     if load_areas_overlap(bytes, len, scratch, scratch_words, bvh) {
         return HalfrayStatus::Overlap;
     }
-    // SAFETY: non-NULL, aligned, writable (contract), and outside the buffer (checked): the
-    // handle is "not loaded" from here until a load succeeds. (It may share the scratch's
-    // memory: the failing arm below unloads it again once the check is over.)
-    unsafe { unload(bvh) };
+    // SAFETY: non-NULL, aligned, writable (contract), and outside the buffer (checked): with
+    // its tag 0 the handle is "not loaded" from here until a load succeeds (its buffer word is
+    // 0 or an earlier buffer's aligned address, whose tag is not 0). It may share the
+    // scratch's memory: the failing arm below clears both words once the check is over.
+    unsafe { bvh.cast::<usize>().write(0) };
     // SAFETY: `len` readable bytes at `bytes`, unchanged while the handle is used (contract).
     let (b, l) = match unsafe { baked(bytes, len) } {
         Ok(v) => v,
@@ -449,27 +451,16 @@ pub unsafe extern "C" fn halfray_load(
             HalfrayStatus::Ok
         }
         Err(e) => {
-            // SAFETY: as the unload above; the check is over, so the scratch is dead. It
-            // wrote one bit per listed triangle into the scratch, which may share the
-            // handle's memory: the buffer chose those bits, so they could spell a tag and an
-            // address that match; unloaded, the handle is "not loaded" whatever the scratch
+            // SAFETY: as the write above, two words (`HALFRAY_BVH_WORDS` ≥ 2); the check is
+            // over, so the scratch is dead. It wrote one bit per listed triangle into the
+            // scratch, which may share the handle's memory: the buffer chose those bits, so
+            // they could spell a tag and a buffer word that match (tag 0 and buffer word
+            // `LOADED` among them); zeroed, the handle is "not loaded" whatever the scratch
             // holds. (Every earlier return wrote at most zeros to the scratch.)
-            unsafe { unload(bvh) };
+            unsafe { bvh.cast::<[usize; 2]>().write([0; 2]) };
             e.into()
         }
     }
-}
-
-/// Leaves `*bvh` "not loaded": its tag and buffer words 0, which [`loaded`] refuses (no
-/// buffer is at address 0).
-///
-/// # Safety
-///
-/// `bvh` is non-NULL, aligned and writable, and nothing else accesses its first two words
-/// meanwhile.
-unsafe fn unload(bvh: *mut HalfrayBvh) {
-    // SAFETY: an aligned, writable handle of at least two words (contract, `HALFRAY_BVH_WORDS`).
-    unsafe { bvh.cast::<[usize; 2]>().write([0; 2]) };
 }
 
 /// `true` when `halfray_load`'s buffer overlaps its handle or its scratch: the buffer is read
@@ -508,15 +499,14 @@ unsafe fn loaded<'a>(bvh: *const HalfrayBvh) -> Result<&'a Loaded, HalfrayStatus
     // SAFETY: an aligned, readable handle whose first two words are readable integers
     // (contract: a zero-initialised or loaded `HalfrayBvh`).
     let [tag, buffer] = unsafe { bvh.cast::<[usize; 2]>().read() };
-    if buffer == 0 || !aligned(buffer as *const u8, HALFRAY_BAKED_ALIGN) || tag != tag_of(buffer) {
+    if tag != tag_of(buffer) {
         return Err(HalfrayStatus::NotLoaded);
     }
-    // SAFETY: a non-zero, aligned buffer word with its matching tag is written only with a
-    // whole `Loaded` by a successful `halfray_load`; both words are zeroed at the start of
-    // every load that gets past its pointer checks and again when its check fails (its
-    // scratch, which may share the handle, can spell any bits); a zeroed handle never matches
-    // (buffer word 0; and `tag_of` of an aligned address is odd). Contents a caller made up
-    // could match only by chance, which the contract excludes.
+    // SAFETY: a matching tag is written only with a whole `Loaded` by a successful
+    // `halfray_load`; the tag is zeroed at the start of every load that gets past its pointer
+    // checks, and both words once its check has failed (its scratch, which may share the
+    // handle, can spell any bits); a zeroed handle never matches (`tag_of(0)` is `LOADED`).
+    // Contents a caller made up could match only by chance, which the contract excludes.
     Ok(unsafe { &*bvh.cast::<Loaded>() })
 }
 
