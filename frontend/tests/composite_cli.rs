@@ -320,3 +320,60 @@ fn render_composites_with_the_chosen_operator() {
     ]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// `render --background IMG --op dst` is the image, byte for byte, in every mode: the debug
+/// modes composite on the image's stored values (written without encoding, as the debug
+/// values are), colour mode in linear radiance (decoded, then encoded back). The image holds
+/// every 8-bit grey once, with alpha from 1 to 255.
+#[test]
+fn dst_gives_the_background_back_in_every_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("sphere.toml");
+    std::fs::write(
+        &scene,
+        r#"background = [0.2, 0.9, 0.3]
+[camera]
+type = "orthographic"
+eye = [0, 0, 5]
+look_at = [0, 0, 0]
+view_size = 4
+width = 16
+height = 16
+[material.m]
+diffuse = [0.5, 0.25, 0.1]
+[[object]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1.2
+material = "m"
+"#,
+    )
+    .unwrap();
+    let bg = dir.path().join("ramp.png");
+    let ramp = RgbaImage::from_fn(16, 16, |x, y| {
+        let g = (16 * y + x) as u8;
+        Rgba([g, 255 - g, g / 2, g.max(1)])
+    });
+    save(&ramp, &bg);
+    for mode in ["color", "depth", "normal", "barycentric", "heatmap"] {
+        let out = dir.path().join(format!("{mode}.png"));
+        let o = halfray(&[
+            &"render",
+            &scene,
+            &"--mode",
+            &mode,
+            &"--background",
+            &bg,
+            &"--op",
+            &"dst",
+            &"--quiet",
+            &"-o",
+            &out,
+        ]);
+        assert!(o.status.success(), "{mode}: {}", stderr(&o));
+        let got = image::open(&out).unwrap().into_rgba8();
+        for (i, (g, want)) in got.pixels().zip(ramp.pixels()).enumerate() {
+            assert_eq!(g.0, want.0, "--mode {mode}: pixel {i}");
+        }
+    }
+}

@@ -46,6 +46,15 @@ pub enum Mode {
     Heatmap,
 }
 
+impl Mode {
+    /// The transfer function between the pixel values and the stored 8-bit values: `transfer`
+    /// in colour mode (linear radiance), `None` in the debug modes (a value `v` in `[0, 1]` is
+    /// stored as `v · 255`, rounded).
+    pub fn transfer(self, transfer: gamma::Transfer) -> Option<gamma::Transfer> {
+        (self == Self::Color).then_some(transfer)
+    }
+}
+
 /// `halfray render SCENE.toml -o OUT.png`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct RenderArgs {
@@ -66,7 +75,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     pub stats_json: Option<PathBuf>,
     /// Composite the render (source) with this image (destination) by `--op` (same size as
-    /// the render; in linear radiance, the image decoded from sRGB).
+    /// the render). In colour mode in linear radiance, the image decoded by `--gamma`; in the
+    /// debug modes on the image's stored values (not decoded), as the debug values are written.
     #[arg(long, value_name = "IMG.png")]
     pub background: Option<PathBuf>,
     /// Most samples per pixel (colour mode): one ray through each pixel's centre, then up to
@@ -76,7 +86,7 @@ pub struct RenderArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=scene::MAX_SAMPLES as i64))]
     pub samples: Option<u32>,
     /// Output transfer function: `srgb`, or a display gamma `γ` (stored = linear^(1/γ); find
-    /// yours with `halfray gamma --chart`). Also decodes `--background`.
+    /// yours with `halfray gamma --chart`). Also decodes `--background` (colour mode).
     #[arg(long, default_value = "srgb", value_name = "srgb|GAMMA")]
     pub gamma: gamma::Transfer,
     /// The Porter–Duff operator for `--background`.
@@ -173,13 +183,8 @@ impl Rendered {
     /// 8-bit RGBA: encoded by `transfer` in colour mode, the value as is in debug modes; the
     /// buffer is allocated at its exact size, 4 bytes a pixel.
     pub fn to_rgba8(&self, mode: Mode, transfer: gamma::Transfer) -> Vec<u8> {
-        let enc = |x: f32| {
-            if mode == Mode::Color {
-                crate::png::to_u8(transfer.encode(x))
-            } else {
-                crate::png::to_u8(x)
-            }
-        };
+        let transfer = mode.transfer(transfer);
+        let enc = |x: f32| crate::png::to_u8(transfer.map_or(x, |t| t.encode(x)));
         let mut rgba = Vec::with_capacity(4 * self.pixels.len());
         for p in &self.pixels {
             rgba.extend([enc(p.x), enc(p.y), enc(p.z), crate::png::to_u8(p.w)]);
@@ -196,8 +201,8 @@ impl Rendered {
         }
     }
 
-    /// Composites the render (source) with a background (destination; linear straight
-    /// RGBA, same size) by `op`.
+    /// Composites the render (source) with a background (destination; straight RGBA in the
+    /// pixels' space, [`Mode::transfer`]: linear in colour mode; same size) by `op`.
     pub fn composite(&mut self, background: &[Vec4], op: crate::composite::Operator) {
         for (p, b) in self.pixels.iter_mut().zip(background) {
             *p = op.apply(*p, *b);
@@ -574,7 +579,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         )?;
     }
     let mut background = match &args.background {
-        Some(p) => Some(output::read_background(p, w, h, args.gamma)?),
+        Some(p) => Some(output::read_background(
+            p,
+            w,
+            h,
+            args.mode.transfer(args.gamma),
+        )?),
         None => None,
     };
     let opts = RenderOptions {

@@ -6,12 +6,14 @@ use crate::error::{Error, Location, Result};
 use glam::{Vec3, Vec4};
 use std::path::Path;
 
-/// Reads a background image as linear straight RGBA (decoded by `transfer`), checking its size.
+/// Reads a background image as straight RGBA in `[0, 1]`, checking its size: colour decoded
+/// to linear by `transfer`, or with `None` the stored 8-bit values / 255 (the space the debug
+/// modes are written in, [`super::Mode::transfer`]); alpha is always the stored value / 255.
 pub fn read_background(
     path: &Path,
     width: u32,
     height: u32,
-    transfer: Transfer,
+    transfer: Option<Transfer>,
 ) -> Result<Vec<Vec4>> {
     let img = crate::png::read_rgba8(path)?;
     if img.width() != width || img.height() != height {
@@ -27,7 +29,10 @@ pub fn read_background(
     Ok(img
         .pixels()
         .map(|p| {
-            let c = |k: usize| transfer.decode(f32::from(p.0[k]) / 255.0);
+            let c = |k: usize| {
+                let stored = f32::from(p.0[k]) / 255.0;
+                transfer.map_or(stored, |t| t.decode(stored))
+            };
             Vec4::new(c(0), c(1), c(2), f32::from(p.0[3]) / 255.0)
         })
         .collect())
