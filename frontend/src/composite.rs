@@ -106,6 +106,18 @@ impl Operator {
         let rgb = (src.truncate() * (a * fa) + dst.truncate() * (b * fb)) / alpha;
         rgb.extend(alpha.min(1.0))
     }
+
+    /// [`Operator::apply`] for a result written in 8 bits: a result whose alpha rounds to 0
+    /// there (below half a step, [`crate::png::to_u8`]) is `Vec4::ZERO`, so it is written
+    /// `0, 0, 0, 0` as every fully transparent result.
+    pub fn apply_8bit(self, src: Vec4, dst: Vec4) -> Vec4 {
+        let out = self.apply(src, dst);
+        if crate::png::to_u8(out.w) == 0 {
+            Vec4::ZERO
+        } else {
+            out
+        }
+    }
 }
 
 /// Arguments of `halfray composite`.
@@ -127,14 +139,18 @@ pub struct CompositeArgs {
 }
 
 /// `a OP b` pixel by pixel on 8-bit straight RGBA (values scaled to `[0, 1]`, results rounded
-/// to the nearest 8-bit value). Evaluated in `f32`, as the renderer's compositing: a result
+/// to the nearest 8-bit value; a result whose alpha rounds to 0 is `0, 0, 0, 0`). Evaluated in `f32`, as the renderer's compositing: a result
 /// within about `10⁻⁴` of an 8-bit step's midpoint (`130.49998`) may round to either side.
 /// The images must have the same size (checked by the caller).
 pub fn composite_rgba8(op: Operator, a: &[u8], b: &[u8]) -> Vec<u8> {
     let px = |p: &[u8]| Vec4::from_array([p[0], p[1], p[2], p[3]].map(|c| f32::from(c) / 255.0));
     a.chunks_exact(4)
         .zip(b.chunks_exact(4))
-        .flat_map(|(pa, pb)| op.apply(px(pa), px(pb)).to_array().map(crate::png::to_u8))
+        .flat_map(|(pa, pb)| {
+            op.apply_8bit(px(pa), px(pb))
+                .to_array()
+                .map(crate::png::to_u8)
+        })
         .collect()
 }
 
@@ -284,5 +300,13 @@ mod tests {
         let q = |x: f64| (x * 255.0).round() as u8;
         assert_eq!(out, vec![q(red), 0, q(blue), q(alpha)]);
         assert_eq!(out, vec![191, 0, 64, 204]);
+    }
+
+    /// `in` of two pixels at alpha 1/255: the result's alpha is (1/255)² = 1/65 025, 0.004 of
+    /// a step, so it is written 0, and the pixel is transparent black, not A's colour.
+    #[test]
+    fn a_result_whose_alpha_rounds_to_zero_is_transparent_black() {
+        let out = composite_rgba8(Operator::In, &[200, 100, 50, 1], &[10, 20, 30, 1]);
+        assert_eq!(out, vec![0, 0, 0, 0]);
     }
 }

@@ -321,17 +321,10 @@ fn render_composites_with_the_chosen_operator() {
     assert_eq!(o.status.code(), Some(2));
 }
 
-/// `render --background IMG --op dst` is the image, byte for byte, in every mode: the debug
-/// modes composite on the image's stored values (written without encoding, as the debug
-/// values are), colour mode in linear radiance (decoded, then encoded back). The image holds
-/// every 8-bit grey once, with alpha from 1 to 255.
-#[test]
-fn dst_gives_the_background_back_in_every_mode() {
-    let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("sphere.toml");
-    std::fs::write(
-        &scene,
-        r#"background = [0.2, 0.9, 0.3]
+/// The scene of the tests below: a 16×16 orthographic view of a sphere lit by ambient light
+/// alone (an orange one, `(0.5, 0.25, 0.1)` linear).
+const SPHERE: &str = r#"ambient = [1, 1, 1]
+background = [0.2, 0.9, 0.3]
 [camera]
 type = "orthographic"
 eye = [0, 0, 5]
@@ -340,15 +333,24 @@ view_size = 4
 width = 16
 height = 16
 [material.m]
-diffuse = [0.5, 0.25, 0.1]
+diffuse = [0, 0, 0]
+ambient = [0.5, 0.25, 0.1]
 [[object]]
 type = "sphere"
 center = [0, 0, 0]
 radius = 1.2
 material = "m"
-"#,
-    )
-    .unwrap();
+"#;
+
+/// `render --background IMG --op dst` is the image, byte for byte, in every mode: the debug
+/// modes composite on the image's stored values (written without encoding, as the debug
+/// values are), colour mode in linear radiance (decoded, then encoded back). The image holds
+/// every 8-bit grey once, with alpha from 1 to 255.
+#[test]
+fn dst_gives_the_background_back_in_every_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("sphere.toml");
+    std::fs::write(&scene, SPHERE).unwrap();
     let bg = dir.path().join("ramp.png");
     let ramp = RgbaImage::from_fn(16, 16, |x, y| {
         let g = (16 * y + x) as u8;
@@ -376,4 +378,42 @@ material = "m"
             assert_eq!(g.0, want.0, "--mode {mode}: pixel {i}");
         }
     }
+}
+
+/// `render --samples 8 --background IMG --op in` over an image of alpha 1/255: an edge pixel
+/// the sphere covers less than half (coverage alpha below 128 when rendered alone) composites
+/// to alpha `c / 255 < ½ / 255`, written 0, so it is `0, 0, 0, 0`, not the render's colour.
+#[test]
+fn a_composited_pixel_whose_alpha_rounds_to_zero_is_transparent_black() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("sphere.toml");
+    std::fs::write(&scene, SPHERE).unwrap();
+    let bg = dir.path().join("faint.png");
+    save(&RgbaImage::from_pixel(16, 16, Rgba([10, 20, 30, 1])), &bg);
+    let run = |name: &str, extra: &[&dyn AsRef<OsStr>]| {
+        let out = dir.path().join(name);
+        let mut args: Vec<&dyn AsRef<OsStr>> = vec![
+            &"render",
+            &scene,
+            &"--samples",
+            &"8",
+            &"--quiet",
+            &"-o",
+            &out,
+        ];
+        args.extend(extra);
+        let o = halfray(&args);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        image::open(&out).unwrap().into_rgba8()
+    };
+    let alone = run("alone.png", &[&"--transparent-background"]);
+    let inside = run("in.png", &[&"--background", &bg, &"--op", &"in"]);
+    let mut faint = 0;
+    for (i, (a, p)) in alone.pixels().zip(inside.pixels()).enumerate() {
+        if (1..128).contains(&a.0[3]) {
+            faint += 1;
+            assert_eq!(p.0, [0, 0, 0, 0], "pixel {i} (coverage {})", a.0[3]);
+        }
+    }
+    assert!(faint > 0, "no pixel is covered less than half");
 }

@@ -202,10 +202,12 @@ impl Rendered {
     }
 
     /// Composites the render (source) with a background (destination; straight RGBA in the
-    /// pixels' space, [`Mode::transfer`]: linear in colour mode; same size) by `op`.
+    /// pixels' space, [`Mode::transfer`]: linear in colour mode; same size) by `op`, for 8-bit
+    /// output ([`crate::composite::Operator::apply_8bit`]: a pixel whose alpha rounds to 0 is
+    /// `Vec4::ZERO`).
     pub fn composite(&mut self, background: &[Vec4], op: crate::composite::Operator) {
         for (p, b) in self.pixels.iter_mut().zip(background) {
-            *p = op.apply(*p, *b);
+            *p = op.apply_8bit(*p, *b);
         }
     }
 }
