@@ -1,5 +1,5 @@
 //! Porter–Duff compositing: the twelve operators of Porter and Duff, "Compositing Digital
-//! Images" (SIGGRAPH 1984), with Cairo's and ImageMagick's names, and
+//! Images" (SIGGRAPH 1984), with Cairo's (lower case, hyphens) and ImageMagick's names, and
 //! `halfray composite A.png B.png --op OP -o OUT.png` (A the source, B the destination).
 //!
 //! Every operator is `result = A·Fa + B·Fb` on **premultiplied** colour and alpha alike, with
@@ -17,8 +17,9 @@ use crate::text;
 use glam::Vec4;
 use std::path::PathBuf;
 
-/// A Porter–Duff operator (`--op`): its name here, or Cairo's (`source`, `dest-over`, …) or
-/// ImageMagick's (`SrcOver`, `DstIn`, …; `--op` ignores case).
+/// A Porter–Duff operator (`--op`): its name here, or Cairo's operator names in lower case
+/// with hyphens (`CAIRO_OPERATOR_DEST_OVER` is `dest-over`; `source`, …) or ImageMagick's
+/// (`SrcOver`, `DstIn`, …; `--op` ignores case).
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Operator {
     /// Neither: transparent.
