@@ -1,6 +1,6 @@
-//! `halfray bake MESH -o OUT.rs`: the BVH built on the host, written as a Rust source of
-//! `static` arrays that a `no_std` firmware includes and queries from flash, with no copy and
-//! no allocation.
+//! `halfray bake MESH -o OUT.rs` (or `--format bin`): the BVH built on the host, written as a
+//! Rust source of `static` arrays that a `no_std` firmware includes and queries from flash, with
+//! no copy and no allocation (or as a byte buffer, below).
 //!
 //! The file defines, with the `f32` values as exact bit patterns:
 //!
@@ -35,7 +35,8 @@ use std::path::{Path, PathBuf};
 pub struct BakeArgs {
     /// Input OBJ.
     pub input: PathBuf,
-    /// Output Rust source (written atomically; never the input).
+    /// Output file: the Rust source or the byte buffer, as `--format` says (written
+    /// atomically; never the input).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Replace an output that is read-only or hard-linked (keeping its mode).

@@ -33,7 +33,8 @@ enum Command {
     Chart(charts::ChartArgs),
     /// Compare halfray's hits with Embree 4, ray by ray.
     Crosscheck(crosscheck::CrosscheckArgs),
-    /// Build a mesh's BVH here and write it as Rust `static` arrays for a no_std firmware.
+    /// Build a mesh's BVH here and write it for firmware: Rust `static` arrays, or the byte
+    /// buffer C firmware loads (`--format`).
     Bake(bake::BakeArgs),
     /// Combine two images with a Porter–Duff operator (A the source, B the destination).
     Composite(composite::CompositeArgs),
