@@ -8,7 +8,7 @@ use super::report::{DetailKind, Disagreement, MeshResult, Report, RunConfig, Set
 use super::sets::{self, Adjacency, SET_NAMES, SetRay};
 use super::{CrosscheckArgs, finish};
 use crate::accel::MeshAccel;
-use crate::embree::{EmbreeDevice, EmbreeMesh, EmbreeScene, ray_is_valid};
+use crate::embree::{EmbreeDevice, EmbreeMesh, EmbreeScene, takes_ray};
 use crate::error::{Error, Result};
 use crate::obj::read_obj;
 use crate::outputs::{Named, file_id, reserve_outputs};
@@ -271,14 +271,7 @@ fn check_mesh(
         let shard_rays = generated.len();
         let rays: Vec<(usize, SetRay)> = generated
             .into_iter()
-            .filter(|(_, r)| {
-                ray_is_valid(
-                    r.ray.origin.to_array(),
-                    r.ray.direction.to_array(),
-                    r.ray.t_min,
-                    r.ray.t_max,
-                )
-            })
+            .filter(|(_, r)| takes_ray(&r.ray))
             .collect();
         let mut row = compare_set(&sides, &rays, args.timing_rays);
         row.mesh = name.clone();
@@ -482,7 +475,6 @@ fn compare_set(sides: &Sides<'_>, rays: &[(usize, SetRay)], timing_rays: usize) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::obj::ObjMesh;
     use glam::Vec3;
 
     /// Worked by hand: 4 of 10 rays are 0, 2, 5, 7 (`⌊10i/4⌋`); 1500 of 2000 are 1500
@@ -507,15 +499,7 @@ mod tests {
     /// contradict their closest hits: one ray, counted once.
     #[test]
     fn a_ray_inconsistent_on_both_sides_counts_once() {
-        let mesh = ObjMesh {
-            positions: vec![
-                Vec3::new(0.0, 0.0, 0.0),
-                Vec3::new(1.0, 0.0, 0.0),
-                Vec3::new(1.0, 1.0, 0.0),
-                Vec3::new(0.0, 1.0, 0.0),
-            ],
-            triangles: vec![[0, 1, 2], [0, 2, 3]],
-        };
+        let mesh = super::super::judge::tests::quad();
         let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
         let device = EmbreeDevice::new().unwrap();
         let robust = EmbreeScene::new(&device, &positions, &mesh.triangles, true).unwrap();

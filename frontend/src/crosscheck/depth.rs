@@ -2,12 +2,12 @@
 //! (robust), written side by side with a difference panel.
 
 use crate::accel::MeshAccel;
-use crate::embree::{EmbreeScene, ray_is_valid};
+use crate::embree::{EmbreeScene, takes_ray};
 use crate::error::{Error, Result};
 use halfray_core::triangle::TriangleVariant;
 use image::{ImageEncoder, Rgb, RgbImage};
 
-/// Colour of a pixel whose camera ray lies outside Embree's defined range ([`ray_is_valid`]),
+/// Colour of a pixel whose camera ray lies outside Embree's defined range ([`takes_ray`]),
 /// in all three panels: neither side traces it, as the cross-check drops such rays.
 const NOT_TRACED: Rgb<u8> = Rgb([255, 0, 255]);
 
@@ -15,7 +15,7 @@ const NOT_TRACED: Rgb<u8> = Rgb([255, 0, 255]);
 /// hit to white and the farthest to dark grey, misses black. The difference panel is black where
 /// both agree within the cross-check's `t` tolerance, red where only halfray hits, blue where
 /// only Embree hits, and yellow where both hit at different depths. A pixel whose camera ray
-/// Embree cannot take ([`ray_is_valid`]: a coordinate beyond `FLT_LARGE`, …) is traced by
+/// Embree cannot take ([`takes_ray`]: a coordinate beyond `FLT_LARGE`, …) is traced by
 /// neither side and magenta in all three panels. Prints the pixel counts.
 pub fn depth_diff_png(
     accel: &MeshAccel,
@@ -25,17 +25,7 @@ pub fn depth_diff_png(
 ) -> Result<Vec<u8>> {
     let (lo, hi) = accel.mesh.bounds().unwrap_or_default();
     let rays = crate::raysets::Camera::framing(lo, hi, size, size).rays();
-    let traced: Vec<bool> = rays
-        .iter()
-        .map(|r| {
-            ray_is_valid(
-                r.origin.to_array(),
-                r.direction.to_array(),
-                r.t_min,
-                r.t_max,
-            )
-        })
-        .collect();
+    let traced: Vec<bool> = rays.iter().map(takes_ray).collect();
     let ours: Vec<Option<f32>> = rays
         .iter()
         .zip(&traced)

@@ -305,7 +305,7 @@ pub fn is_leak(ray: &Ray, answer: Option<&Answer>, target_t: f32) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use glam::Vec3;
 
@@ -330,7 +330,9 @@ mod tests {
         assert_eq!(plane_crossing(&down, &flat), None);
     }
 
-    fn quad() -> ObjMesh {
+    /// The unit square in `z = 0` as triangles `0 = (0, 1, 2)` and `1 = (0, 2, 3)`, split along
+    /// its diagonal from `(0, 0)` to `(1, 1)`.
+    pub(in crate::crosscheck) fn quad() -> ObjMesh {
         ObjMesh {
             positions: vec![
                 Vec3::new(0.0, 0.0, 0.0),

@@ -68,3 +68,13 @@ pub fn ray_is_valid(origin: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32) -> b
         && tnear >= 0.0
         && !tfar.is_nan()
 }
+
+/// [`ray_is_valid`] of a halfray ray (what [`EmbreeScene::intersect_ray`] traces).
+pub fn takes_ray(r: &halfray_core::Ray) -> bool {
+    ray_is_valid(
+        r.origin.to_array(),
+        r.direction.to_array(),
+        r.t_min,
+        r.t_max,
+    )
+}
