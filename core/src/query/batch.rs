@@ -4,7 +4,7 @@
 //! bounds, then the Morton code of the direction's cell — and each answer is written at its
 //! ray's own index. Every ray is walked alone, by the structure's single-ray query with the
 //! caller's context, so each answer **is** the single-ray answer: closest hits bit for bit,
-//! any hits the same primitive and payload (the order changes which ray is walked when, never
+//! any hits the same primitive and payload, for these structures (the order changes which ray is walked when, never
 //! how). The reordering only changes which nodes and triangles are warm in the cache.
 //!
 //! Allocation-free: the order of a chunk is sorted in a fixed array of [`BATCH_CHUNK`] `u64`

@@ -120,9 +120,11 @@ pub trait RayQuery {
     /// Writes an any hit of `rays[i]` into `out[i]`, for every `i` (as
     /// [`RayQuery::closest_hits`]): hit or miss is [`RayQuery::any_hit`]'s, and a hit is a
     /// primitive the leaf test reports in the ray's interval, with that report's payload.
-    /// Which primitive is the single-ray walk's, except where a structure walks rays together:
+    /// Which primitive is the single-ray walk's, except where a structure tests rays together:
     /// the wide trees' any-hit packets (shadow rays towards one light) report the first one
-    /// the packet reaches.
+    /// the packet reaches, and a wide tree of at most eight groups with nodes tests all its
+    /// triangles without the nodes for every batch, even of one ray, so its primitive may be
+    /// another than the single-ray walk's.
     ///
     /// # Errors
     ///
