@@ -61,6 +61,17 @@ pub(super) fn light(ctx: &Ctx<'_>, i: usize, l: &S<def::LightDef>) -> Result<Lig
             if x < 0.0 {
                 return Err(ctx.err(&v.span(), &format!("{p}.intensity"), "must be ≥ 0"));
             }
+            if !(color * x).is_finite() {
+                // The light's radiance is the product: it must be a finite `f32` too.
+                return Err(ctx.err(
+                    &v.span(),
+                    &format!("{p}.intensity"),
+                    format!(
+                        "color × intensity exceeds the largest `f32` (±3.4e38): {:e} × {x}",
+                        color.max_element()
+                    ),
+                ));
+            }
             x
         }
         None => 1.0,
@@ -105,4 +116,40 @@ pub(super) fn light(ctx: &Ctx<'_>, i: usize, l: &S<def::LightDef>) -> Result<Lig
         radius,
         samples,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    /// A scene with one point light whose extra keys are `light`.
+    fn scene(light: &str) -> String {
+        format!(
+            "[camera]\neye = [0, 0, 9]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\nheight = 6\n\n\
+             [[light]]\ntype = \"point\"\nposition = [3, 3, 3]\n{light}\n"
+        )
+    }
+
+    /// `color × intensity` is the light's radiance: 3e38 × 10 is beyond `f32` (the largest
+    /// is about 3.4e38), refused at `intensity`; 3e38 × 1 is accepted as written.
+    #[test]
+    fn a_radiance_beyond_f32_is_refused_at_intensity() {
+        let text = scene("color = [3e38, 3e38, 3e38]\nintensity = 10");
+        let e = crate::scene::parse(&text, Path::new("l.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("l.toml:12:13: field `light[0].intensity`: color × intensity exceeds"),
+            "{e}"
+        );
+        let ok = crate::scene::parse(
+            &scene("color = [3e38, 1, 0]\nintensity = 1"),
+            Path::new("l.toml"),
+        );
+        assert_eq!(
+            ok.map(|s| s.lights[0].intensity.x).ok(),
+            Some(3e38),
+            "accepted with its radiance"
+        );
+    }
 }
