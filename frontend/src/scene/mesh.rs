@@ -41,7 +41,7 @@ fn vertex_normals(path: &Path, mesh: &ObjMesh, lines: Option<&ObjLines>) -> Resu
         mesh,
         lines,
         &mut buffers,
-        "smooth shading needs a manifold mesh; the half-edge core rejects this one",
+        &needs_manifold("smooth shading"),
     )?;
     let mut out = vec![Vec3::ZERO; m.slots().vertices];
     m.vertex_normals(&mut out)
@@ -54,8 +54,11 @@ fn he_error(path: &Path, what: &str, e: impl std::fmt::Display) -> Error {
     Error::input(Location::file(path), format!("{what}: {e}"))
 }
 
-/// What the half-edge core says when it rejects a scene mesh for smoothing or subdivision.
-const REJECTED: &str = "the half-edge core rejects this mesh";
+/// The start of the message when the half-edge core rejects a scene mesh for the treatment
+/// `what` (smoothing, subdivision, smooth shading): `what` needs a manifold mesh.
+fn needs_manifold(what: &str) -> String {
+    format!("{what} needs a manifold mesh; the half-edge core rejects this one")
+}
 
 /// One smoothing pass set: `iterations` Jacobi steps `x += step·L(x)`, boundary fixed.
 fn smooth(
@@ -66,7 +69,7 @@ fn smooth(
     iterations: u32,
 ) -> Result<()> {
     let mut buffers = MeshBuffers::for_obj(mesh, path)?;
-    let mut m = build_half_edge(path, mesh, lines, &mut buffers, REJECTED)?;
+    let mut m = build_half_edge(path, mesh, lines, &mut buffers, &needs_manifold("smooth"))?;
     let mut tmp = vec![Vec3::ZERO; m.slots().vertices];
     for _ in 0..iterations {
         m.diffuse(step, DiffuseBoundary::Fixed, &mut tmp)
@@ -79,7 +82,13 @@ fn smooth(
 /// One level of Loop subdivision (Warren weights).
 fn subdivide(path: &Path, mesh: &ObjMesh, lines: Option<&ObjLines>) -> Result<ObjMesh> {
     let mut buffers = MeshBuffers::for_obj(mesh, path)?;
-    let m = build_half_edge(path, mesh, lines, &mut buffers, REJECTED)?;
+    let m = build_half_edge(
+        path,
+        mesh,
+        lines,
+        &mut buffers,
+        &needs_manifold("subdivide"),
+    )?;
     let mut out_buffers = MeshBuffers::new(m.len().after_loop());
     let mut out = out_buffers.mesh();
     m.subdivide_loop(&mut out, LoopWeights::Warren)
@@ -101,12 +110,14 @@ const SCENE_MESH_BYTES_PER_TRIANGLE: u64 = 320;
 /// scene's message points).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MeshField {
-    /// `file`: reading the OBJ, or building the mesh's tree or normals.
+    /// `file`: reading the OBJ, or building the mesh's tree.
     File,
     /// `smooth`: the smoothing failed, or moved a vertex outside the coordinate domain.
     Smooth,
     /// `subdivide`: the subdivision failed, or would exceed the memory limit.
     Subdivide,
+    /// `shading`: the vertex normals of smooth shading could not be built.
+    Shading,
 }
 
 /// Loads an OBJ, applies smoothing (`(step, iterations)`) then `subdivide` Loop levels, and
@@ -176,7 +187,7 @@ pub fn load_mesh(
         lines = None;
     }
     let normals = if smooth_shading {
-        Some(vertex_normals(path, &mesh, lines).map_err(file)?)
+        Some(vertex_normals(path, &mesh, lines).map_err(|e| (MeshField::Shading, e))?)
     } else {
         None
     };
