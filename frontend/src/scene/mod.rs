@@ -333,7 +333,8 @@ impl Scene {
     }
 }
 
-/// Reads and checks a scene file. Mesh paths are relative to the file's folder.
+/// Reads and checks a scene file. Mesh paths are relative to the file's folder (to the
+/// current directory for a scene read from a stream, such as `/dev/stdin`).
 pub fn load(path: &Path) -> Result<Scene> {
     let text = crate::input::read_text(path, "a scene (TOML text)")?;
     parse(&text, path)

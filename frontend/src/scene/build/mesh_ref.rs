@@ -4,6 +4,7 @@ use crate::error::{Error, Result};
 use crate::scene::MeshField;
 use crate::scene::def::{MeshDef, S};
 use crate::scene::geom::MeshShape;
+use std::path::Path;
 use std::sync::Arc;
 
 use super::Ctx;
@@ -13,13 +14,28 @@ use super::list;
 /// the Loop levels and smooth shading.
 type MeshSettings = (std::path::PathBuf, Option<(f32, u32)>, u32, bool);
 
+/// The folder relative mesh `file`s of the scene read from `scene` are resolved against: the
+/// scene file's folder, or the current directory (the empty path) when the scene is a stream
+/// (a pipe such as `/dev/stdin` or a shell's `<(...)`), whose folder (`/dev`, `/dev/fd`) holds
+/// no meshes. A stream: a path under `/dev/` or `/proc/self/fd/`, or one that exists but is
+/// not a regular file (a FIFO, a device).
+fn mesh_base(scene: &Path) -> &Path {
+    let stream = scene.starts_with("/dev") && scene != Path::new("/dev")
+        || scene.starts_with("/proc/self/fd")
+        || std::fs::metadata(scene).is_ok_and(|m| !m.is_file());
+    match scene.parent() {
+        Some(folder) if !stream => folder,
+        _ => Path::new(""),
+    }
+}
+
 /// Checks `[mesh.NAME]` without reading the file: it exists and is a file, the smoothing and
 /// subdivision settings are in range. Returns the path, the smoothing `(step, iterations)` and
 /// the subdivision levels. Run for every mesh definition, used or not.
 pub(super) fn mesh_def(ctx: &Ctx<'_>, name: &str, def: &MeshDef) -> Result<MeshSettings> {
     let p = format!("mesh.{name}");
-    let file = std::path::Path::new(def.file.get_ref());
-    let base = ctx.src.path.parent().unwrap_or(std::path::Path::new(""));
+    let file = Path::new(def.file.get_ref());
+    let base = mesh_base(ctx.src.path);
     let path = base.join(file);
     if path.is_dir() {
         return Err(ctx.err(
@@ -37,6 +53,10 @@ pub(super) fn mesh_def(ctx: &Ctx<'_>, name: &str, def: &MeshDef) -> Result<MeshS
         // folder without permission), "not found" only when it is not there.
         let why = match std::fs::metadata(&path) {
             Ok(_) => "is not a regular file (a device, FIFO or socket)".to_string(),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound && base == Path::new("") => {
+                "not found (relative to the current directory: the scene is read from a stream)"
+                    .to_string()
+            }
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => "not found".to_string(),
             Err(e) => format!("cannot be read: {e}"),
         };
@@ -145,6 +165,40 @@ pub(super) fn mesh(ctx: &mut Ctx<'_>, name: &S<String>, field: &str) -> Result<A
 
 #[cfg(test)]
 mod tests {
+    use super::mesh_base;
+    use std::path::Path;
+
+    /// Mesh files are relative to the scene's folder, except for a scene read from a stream:
+    /// a device (`/dev/null`), a shell's `<(...)` (`/dev/fd/63`), `/proc/self/fd/0`, or an
+    /// existing path that is not a regular file (a folder here); those resolve against the
+    /// current directory, the empty path.
+    #[test]
+    fn a_streamed_scene_resolves_meshes_against_the_current_directory() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("s.toml");
+        std::fs::write(&file, "").unwrap();
+        assert_eq!(mesh_base(&file), dir.path());
+        assert_eq!(mesh_base(Path::new("scenes/x.toml")), Path::new("scenes"));
+        for stream in ["/dev/null", "/dev/stdin", "/dev/fd/63", "/proc/self/fd/0"] {
+            assert_eq!(mesh_base(Path::new(stream)), Path::new(""), "{stream}");
+        }
+        assert_eq!(mesh_base(&dir.path().join(".")), Path::new(""));
+    }
+
+    /// The not-found error of a streamed scene says where the relative path was looked for.
+    #[test]
+    fn a_streamed_scenes_missing_mesh_says_it_looked_in_the_current_directory() {
+        let text = "[camera]\neye = [0, 0, 9]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\nheight = 6\n\n\
+                    [mesh.b]\nfile = \"no-such-mesh.obj\"\n";
+        let e = crate::scene::parse(text, Path::new("/dev/null"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("not found (relative to the current directory: the scene is read from a stream) (looked for no-such-mesh.obj)"),
+            "{e}"
+        );
+    }
+
     /// A mesh the half-edge core rejects for a setting is blamed on that setting: the OBJ's
     /// line first, the message saying which setting needs a manifold mesh, then the setting's
     /// place in the scene (not the `file` key). The edge 1–2 of this OBJ has three triangles.
