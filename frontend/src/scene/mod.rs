@@ -30,9 +30,11 @@ pub const DEFAULT_MAX_DEPTH: u32 = 5;
 /// Largest accepted image side, in pixels.
 pub const MAX_IMAGE_SIDE: u32 = 16_384;
 
-/// Deepest CSG a scene can write, in levels of `csg` objects, the top-level object included:
-/// operands are inline tables inside arrays, and the TOML reader stops at its own limit of
-/// nested values there (an input error at that place). Not a limit of the renderer's.
+/// Deepest CSG a scene can write, in levels of `csg` objects, the top-level object included,
+/// whether operands are inline tables or `[[object.operands]]` table headers: a CSG operand
+/// deeper is an input error at its `type`. It is the TOML reader's own limit of nested inline
+/// values (which stops inline operands at this depth first), so both forms share it; not a
+/// limit of the renderer's.
 pub const MAX_CSG_NESTING: usize = 39;
 
 /// Most Laplacian smoothing steps a mesh may ask for: each is a pass over every vertex, and

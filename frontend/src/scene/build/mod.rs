@@ -216,7 +216,7 @@ pub(super) fn build(src: &Source<'_>, d: def::SceneDef) -> Result<Scene> {
     for (i, o) in d.object.iter().enumerate() {
         let field = format!("object[{i}]");
         let label = format!("{field} ({})", o.get_ref().kind.get_ref());
-        let node = object(&mut ctx, o, &field, None)?;
+        let node = object(&mut ctx, o, &field, None, 0)?;
         match &o.get_ref().repeat {
             None => {
                 labels.push(label);

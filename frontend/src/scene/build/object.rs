@@ -1,6 +1,7 @@
 //! `[[object]]`: the object types, their fields and CSG operands.
 
 use crate::error::Result;
+use crate::scene::MAX_CSG_NESTING;
 use crate::scene::def::{ObjectDef, S, V3};
 use crate::scene::geom::{ClippedQuadric, CsgOp, Geometry, Node, POLYGON_MAX_VERTICES, Polygon};
 use glam::{DMat3, DVec3, Vec3};
@@ -62,13 +63,16 @@ impl Kind {
     }
 }
 
-/// One object (`p` its field path, `inherited` the material of an enclosing CSG object):
-/// its type and fields checked, its shape built by the type's function.
+/// One object (`p` its field path, `inherited` the material of an enclosing CSG object,
+/// `depth` the number of CSG objects it is an operand in: 0 at the top level): its type and
+/// fields checked, its shape built by the type's function. A CSG object at level
+/// `depth + 1` beyond [`MAX_CSG_NESTING`] is an input error at its `type`.
 pub(super) fn object(
     ctx: &mut Ctx<'_>,
     o: &S<ObjectDef>,
     p: &str,
     inherited: Option<u32>,
+    depth: usize,
 ) -> Result<Node> {
     let span = o.span();
     let o = o.get_ref();
@@ -82,6 +86,15 @@ pub(super) fn object(
             ),
         ));
     };
+    if kind == Kind::Csg && depth >= MAX_CSG_NESTING {
+        return Err(ctx.err(
+            &o.kind.span(),
+            p,
+            format!(
+                "CSG nests deeper than {MAX_CSG_NESTING} levels (the top-level object included; scene::MAX_CSG_NESTING)"
+            ),
+        ));
+    }
     let ok = kind.fields();
     for (field, s) in o.present_fields() {
         if !ok.contains(&field) {
@@ -139,7 +152,7 @@ pub(super) fn object(
             let m = ctx.need(&o.mesh, &span, &at.f("mesh"), name)?;
             Geometry::Mesh(mesh(ctx, m, &at.f("mesh"))?)
         }
-        Kind::Csg => csg(ctx, o, &at, material)?,
+        Kind::Csg => csg(ctx, o, &at, material, depth)?,
     };
     let mut node = Node::new(shape, material, transform);
     node.inherits_material = o.material.is_none();
@@ -285,8 +298,15 @@ fn vertices(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>, triangle: bool) -> Result
     }
 }
 
-/// A CSG object: its operation and its two solid operands (which inherit `material`).
-fn csg(ctx: &mut Ctx<'_>, o: &ObjectDef, at: &At<'_>, material: u32) -> Result<Geometry> {
+/// A CSG object (inside `depth` others): its operation and its two solid operands (which
+/// inherit `material`).
+fn csg(
+    ctx: &mut Ctx<'_>,
+    o: &ObjectDef,
+    at: &At<'_>,
+    material: u32,
+    depth: usize,
+) -> Result<Geometry> {
     let (span, kind, p, f) = (at.span, at.kind, at.p, |n: &str| at.f(n));
     let op = ctx.need(&o.op, span, &f("op"), kind)?;
     let op_v = match op.get_ref().as_str() {
@@ -324,7 +344,7 @@ fn csg(ctx: &mut Ctx<'_>, o: &ObjectDef, at: &At<'_>, material: u32) -> Result<G
                 "`repeat` is for top-level objects, not CSG operands",
             ));
         }
-        let n = object(ctx, od, &fp, Some(material))?;
+        let n = object(ctx, od, &fp, Some(material), depth + 1)?;
         if !n.shape.is_solid() {
             let why = match &n.shape {
                 Geometry::Mesh(m) => format!(
@@ -432,6 +452,55 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains(&format!("c.toml:{line}:")), "{e}");
+    }
+
+    /// CSG written with table headers (`[[object.operands]]`, `[[object.operands.operands]]`,
+    /// …), which the TOML reader reads far deeper, nests to the same
+    /// [`crate::scene::MAX_CSG_NESTING`] levels: one more is an input error at the `type` of
+    /// the first CSG operand past the limit, naming its field and the limit.
+    #[test]
+    fn csg_in_table_headers_nests_to_the_same_depth() {
+        // `levels` CSG objects, each the first operand of the one before, with a sphere as
+        // each one's second operand and two spheres in the deepest.
+        let scene = |levels: usize| {
+            let mut s = String::from(
+                "[camera]\neye = [0, 0, 9]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\nheight = 6\n\n\
+                 [material.m]\ndiffuse = [1, 1, 1]\n\n[[object]]\ntype = \"csg\"\nop = \"union\"\n\
+                 material = \"m\"\n",
+            );
+            let sphere = "type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n";
+            let mut h = String::from("object");
+            let mut seconds = Vec::new();
+            for _ in 1..levels {
+                h.push_str(".operands");
+                s.push_str(&format!("[[{h}]]\ntype = \"csg\"\nop = \"union\"\n"));
+                seconds.push(h.clone());
+            }
+            h.push_str(".operands");
+            s.push_str(&format!("[[{h}]]\n{sphere}[[{h}]]\n{sphere}"));
+            // The second operands, innermost first: a header after a deeper one goes back up.
+            for h in seconds.iter().rev() {
+                s.push_str(&format!("[[{h}]]\n{sphere}"));
+            }
+            s
+        };
+        use crate::scene::MAX_CSG_NESTING;
+        let deepest = crate::scene::parse(&scene(MAX_CSG_NESTING), Path::new("c.toml"));
+        assert!(deepest.is_ok(), "{:?}", deepest.err());
+        let deeper = scene(MAX_CSG_NESTING + 1);
+        // The `type = "csg"` after the header of the 40th level (the 39th operands header).
+        let header = format!("[[object{}]]", ".operands".repeat(MAX_CSG_NESTING));
+        let line = 2 + deeper.lines().position(|l| l == header).unwrap();
+        let field = format!("object[0]{}", ".operands[0]".repeat(MAX_CSG_NESTING));
+        let e = crate::scene::parse(&deeper, Path::new("c.toml"))
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            format!(
+                "c.toml:{line}:8: field `{field}`: CSG nests deeper than 39 levels (the top-level object included; scene::MAX_CSG_NESTING)"
+            )
+        );
     }
 
     /// A `quadric` object is the surface its coefficients write (`scenes/README.md`):
