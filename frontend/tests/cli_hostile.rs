@@ -725,7 +725,10 @@ fn errors_name_the_actual_problem_and_escape_what_they_quote() {
     let dup = dir.path().join("dup.toml");
     std::fs::write(&dup, "max_depth = 2\nmax_depth = 3\n").unwrap();
     let o = run(&[&"render", &dup, &"-o", &png, &"-q"]);
-    assert_refused(&o, "dup.toml:2:1: duplicate key `max_depth`");
+    assert_refused(
+        &o,
+        "dup.toml:2:1: field `max_depth`: duplicate key `max_depth`",
+    );
     // A non-UTF-8 scene: the line and column of the bad byte.
     let bad = dir.path().join("bad.toml");
     std::fs::write(&bad, b"max_depth = 2\n# caf\xe9\n").unwrap();

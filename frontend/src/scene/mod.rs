@@ -407,7 +407,16 @@ impl Source<'_> {
         }
         // The `[table]` or `[[array]]` header the span starts on, and whether it is an array's.
         let header = self.header_at(span.start);
-        let mut field = self.field_at(span.start, backticked_field(&msg));
+        let missing = msg.starts_with("missing field `");
+        let mut field = self.field_at(span.start, backticked_field(&msg), missing);
+        if field.is_none() && msg.starts_with("duplicate key") {
+            // A key repeated inside a table: the table's path and the key.
+            let key = self.text.get(span.clone()).map_or("", str::trim);
+            field = Some(match self.enclosing_table(span.start) {
+                Some(table) => format!("{table}.{key}"),
+                None => key.to_string(),
+            });
+        }
         // A header of the wrong kind: serde says only "map" or "sequence"; say which bracket.
         if let Some((h, double)) = &header {
             if *double && msg.starts_with("invalid type: map") {
@@ -487,6 +496,25 @@ impl Source<'_> {
         None
     }
 
+    /// The field path of the table whose `[table]` or `[[array]]` header is the last one
+    /// before byte `at` (`camera`, `material.m`, `object[1]`); `None` before any header.
+    fn enclosing_table(&self, at: usize) -> Option<String> {
+        let at = floor_boundary(self.text, at);
+        let mut offset = 0;
+        let mut last = None;
+        for line in self.text[..at].split_inclusive('\n') {
+            // A header's name is a key (no `,`): a line `[0, 1, 2]` inside an array is not one.
+            if self
+                .header_at(offset)
+                .is_some_and(|(name, _)| !name.contains([',', '[', ']']))
+            {
+                last = Some(offset + line.len() - line.trim_start().len());
+            }
+            offset += line.len();
+        }
+        self.field_at(last?, None, false)
+    }
+
     /// The dotted name of the `[table]` or `[[array]]` header on the line holding byte `at`,
     /// if that line is one, and `true` for an `[[array]]` header.
     fn header_at(&self, at: usize) -> Option<(String, bool)> {
@@ -502,11 +530,12 @@ impl Source<'_> {
     /// The field path of byte `at` (`object[0].operands[1].radius`), from the document's
     /// keys and values: the innermost key or value whose span holds `at` (tables of
     /// `[header]`s span their header). `named` is the field a message names (`unknown
-    /// field`/`missing field`): the path ends with it, appended to the table at `at` when that
-    /// is not already its last key. Read with the TOML parser's recovery, so a syntax error
+    /// field`/`missing field`): the path ends with it, appended to the table at `at`; an
+    /// unknown field (not `missing`) is the key at `at` itself when that key already has its
+    /// name. Read with the TOML parser's recovery, so a syntax error
     /// gets the path of what parsed up to it; `None` only when nothing holds `at` and no field
     /// is named.
-    fn field_at(&self, at: usize, named: Option<String>) -> Option<String> {
+    fn field_at(&self, at: usize, named: Option<String>, missing: bool) -> Option<String> {
         let (doc, _) = toml::de::DeTable::parse_recoverable(self.text);
         let mut best: Option<(usize, String)> = None;
         path_in(doc.get_ref(), "", at, &mut best);
@@ -519,7 +548,7 @@ impl Source<'_> {
                 while let Some(b) = base.strip_suffix(']').and_then(|b| b.rsplit_once('[')) {
                     base = b.0;
                 }
-                if base.rsplit('.').next() == Some(f.as_str()) {
+                if !missing && base.rsplit('.').next() == Some(f.as_str()) {
                     base.to_string()
                 } else {
                     format!("{p}.{f}")
@@ -640,6 +669,57 @@ mod tests {
             let deep = form(&dotted(TOML_MAX_KEY_PARTS + 1));
             let e = toml::from_str::<toml::Table>(&deep).unwrap_err();
             assert_eq!((e.message(), e.span()), ("recursion limit", None));
+        }
+    }
+
+    /// The error of scene `text` (read as `d.toml`), shown.
+    fn error_of(text: &str) -> String {
+        parse(text, Path::new("d.toml")).unwrap_err().to_string()
+    }
+
+    /// A key repeated inside a table is named by the table's path and the key: the table's
+    /// own `[header]`, `[a.b]` or the `n`-th `[[array]]` entry (counted by hand here).
+    #[test]
+    fn a_duplicate_key_names_its_table_and_key() {
+        let camera =
+            "[camera]\neye = [0, 0, 9]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\nheight = 6\n";
+        let dup_fov = camera.replace("fov = 40\n", "fov = 40\nfov = 40\n");
+        assert_eq!(
+            error_of(&dup_fov),
+            "d.toml:5:1: field `camera.fov`: duplicate key `fov`"
+        );
+        let mat = format!("{camera}\n[material.m]\ndiffuse = [1, 1, 1]\ndiffuse = [1, 1, 1]\n");
+        assert_eq!(
+            error_of(&mat),
+            "d.toml:10:1: field `material.m.diffuse`: duplicate key `diffuse`"
+        );
+        let sphere = "[[object]]\ntype = \"sphere\"\ncenter = [\n  0,\n  0,\n  0,\n]\nradius = 1\n";
+        let objects = format!(
+            "{camera}\n{sphere}material = \"m\"\n{sphere}material = \"m\"\nmaterial = \"m\"\n"
+        );
+        assert_eq!(
+            error_of(&objects),
+            "d.toml:26:1: field `object[1].material`: duplicate key `material`"
+        );
+        assert_eq!(
+            error_of(&format!("samples = 1\nsamples = 2\n{camera}")),
+            "d.toml:2:1: field `samples`: duplicate key `samples`"
+        );
+    }
+
+    /// A table that lacks a field is named with that field appended, even when the table's
+    /// own name is the field's (`[mesh.file]` without `file` is `mesh.file.file`).
+    #[test]
+    fn a_missing_field_is_appended_to_its_tables_path() {
+        let camera =
+            "[camera]\neye = [0, 0, 9]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\nheight = 6\n";
+        for (name, field) in [("file", "mesh.file.file"), ("cube", "mesh.cube.file")] {
+            let e = error_of(&format!("{camera}\n[mesh.{name}]\nsubdivide = 1\n"));
+            assert_eq!(
+                e,
+                format!("d.toml:8:1: field `{field}`: missing field `file`"),
+                "{name}"
+            );
         }
     }
 
