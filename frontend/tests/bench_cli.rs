@@ -115,6 +115,81 @@ fn several_meshes_give_one_report_each_and_a_summary_table() {
     assert_eq!(v["triangles"], 4);
 }
 
+/// Embree returns at once on a ray with a coordinate beyond its `FLT_LARGE` (1.844e18), so
+/// timing it on such rays measured nothing: every side is timed on the rays Embree takes only.
+/// The tetrahedron scaled by 1e18 leaves rays out of its sets (counted per set, named in a
+/// warning; a set's rays and the ones left out are what its generator made, so all sides
+/// count the same); the unscaled one leaves none out.
+#[cfg(feature = "embree")]
+#[test]
+fn rays_embree_refuses_are_left_out_for_every_side_and_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let big = dir.path().join("bigtet.obj");
+    std::fs::write(
+        &big,
+        "v 1e18 1e18 1e18\nv 1e18 -1e18 -1e18\nv -1e18 1e18 -1e18\nv -1e18 -1e18 1e18\n\
+         f 2 4 3\nf 1 3 4\nf 1 4 2\nf 1 2 3\n",
+    )
+    .unwrap();
+    let small = format!("{SCENE_MESHES}/tetrahedron.obj");
+    let o = Command::new(BIN)
+        .args(["bench", "bvh"])
+        .arg(&big)
+        .arg(&small)
+        .args(["--width", "8", "--rays", "50", "--json"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let count = |s: &serde_json::Value, key: &str| {
+        s[key].as_u64().unwrap_or_else(|| panic!("{key} in {s}"))
+    };
+    let sets = v[0]["sets"].as_array().unwrap();
+    let mut left_out = 0;
+    for (k, s) in sets.iter().enumerate() {
+        let name = s["name"].as_str().unwrap();
+        let (rays, outside) = (count(s, "rays"), count(s, "rays_outside_embree"));
+        match name {
+            "random" => assert_eq!(rays + outside, 50, "{s}"),
+            "shadow" | "shadow+batch" | "ao" => {}
+            _ => assert_eq!(rays + outside, 64, "{s}"),
+        }
+        if name.ends_with("+batch") {
+            // The batch path and the single rays of its set: the same rays.
+            let single = &sets[k - 1];
+            assert_eq!(
+                (rays, outside),
+                (count(single, "rays"), count(single, "rays_outside_embree")),
+                "{s}"
+            );
+        }
+        if outside > 0 {
+            left_out += 1;
+            // One warning per set, for its single and batch rows.
+            let set = name.trim_end_matches("+batch");
+            let warning = format!(
+                "warning: bench bvh {} {set}: {outside} of {} rays outside Embree's range",
+                big.display(),
+                rays + outside
+            );
+            assert!(err.contains(&warning), "want `{warning}` in: {err}");
+        }
+        // A set left with no rays has no ratio: the summary's closing lines count only the
+        // tetrahedron for it.
+        let line = format!("\n{name}: {} meshes,", if rays == 0 { 1 } else { 2 });
+        let out = String::from_utf8_lossy(&o.stdout);
+        assert!(out.contains(&line), "want `{line}` in: {out}");
+    }
+    assert!(left_out > 0, "{sets:?}");
+    for s in v[1]["sets"].as_array().unwrap() {
+        assert_eq!(count(s, "rays_outside_embree"), 0, "{s}");
+    }
+    assert!(!err.contains(&format!("bench bvh {small}")), "{err}");
+}
+
 /// `--mesh-list` adds the list's meshes after the positional ones; `--sets` picks sets.
 #[test]
 fn a_mesh_list_follows_the_positional_meshes() {

@@ -37,8 +37,8 @@ fn bench_report(mesh: &str, primary: [f64; 3]) -> BvhReport {
         "embree_robust_build_ms": 3.0, "brute_force_rays": 16, "mrays_brute_force": 0.1,
         "brute_force_mismatches": 0,
         "sets": [SetFigures {
-            name: "primary".into(), query: "closest".into(), rays: 10, hit_rate: 0.5,
-            mrays: primary[0], nodes_per_ray: 1.0, triangles_per_ray: 1.0,
+            name: "primary".into(), query: "closest".into(), rays: 10, rays_outside_embree: 0,
+            hit_rate: 0.5, mrays: primary[0], nodes_per_ray: 1.0, triangles_per_ray: 1.0,
             embree_mrays: Some(primary[1]), embree_robust_mrays: Some(primary[2]),
             embree_packet8_mrays: None, embree_packet16_mrays: None,
         }]

@@ -19,6 +19,12 @@
 //! Embree's packet API, `rtcIntersect8` and `rtcIntersect16` (`rtcOccluded8` and
 //! `rtcOccluded16`), on the same rays in the same round-robin passes.
 //!
+//! With Embree compiled in, every side is timed on the rays Embree takes
+//! (`embree::takes_ray`; it returns at once on the others, as if it had traced them):
+//! the rest of a set's rays are left out for all sides alike, counted in
+//! [`SetFigures::rays_outside_embree`] and named in a warning on stderr; a set left with no
+//! rays has no ratio.
+//!
 //! Brute force (every triangle for every ray) runs on a sample of the incoherent rays sized to
 //! about [`BRUTE_FORCE_TESTS`] triangle tests, as a baseline; the BVH's answers on that sample
 //! are checked against it.
@@ -143,8 +149,13 @@ pub struct SetFigures {
     pub name: String,
     /// `closest` or `any`: the query timed on both sides.
     pub query: String,
-    /// Rays in the set.
+    /// Rays in the set: the rays every side was timed on.
     pub rays: usize,
+    /// Rays generated for the set but left out on every side because Embree would not trace
+    /// them (`embree::takes_ray`; 0 without Embree, and in reports that predate the
+    /// field).
+    #[serde(default)]
+    pub rays_outside_embree: usize,
     /// Share of the rays that hit.
     pub hit_rate: f64,
     /// halfray's default structure, Mrays/s.
@@ -169,9 +180,12 @@ pub struct SetFigures {
 
 impl SetFigures {
     /// halfray's throughput over Embree default's and over Embree robust's (`None` without
-    /// Embree, and where either is not a [`positive_ratio`]).
+    /// Embree, for a set of no rays, and where either is not a [`positive_ratio`]).
     #[must_use]
     pub fn ratios(&self) -> Option<[f64; 2]> {
+        if self.rays == 0 {
+            return None;
+        }
         Some([
             positive_ratio(self.mrays, self.embree_mrays?)?,
             positive_ratio(self.mrays, self.embree_robust_mrays?)?,
@@ -310,7 +324,21 @@ fn bench<T: TriangleIntersector>(
     let any = |r: &Ray| any_simd(&wide, &mesh, isect, r).is_some();
     let mut figures = Vec::with_capacity(sets.len());
     for &set in sets {
-        let rays = set_rays(args, set, bounds, &hits);
+        let mut rays = set_rays(args, set, bounds, &hits);
+        let generated = rays.len();
+        rays.retain(Rivals::take);
+        let outside = generated - rays.len();
+        if outside > 0 {
+            eprintln!(
+                "warning: bench bvh {} {set}: {outside} of {generated} rays outside Embree's range, left out on every side{}",
+                crate::text::path(mesh_path),
+                if rays.is_empty() {
+                    " (no ray left: no ratio)"
+                } else {
+                    ""
+                }
+            );
+        }
         let query = set.query();
         // Hit counts of both queries (they must agree) and the closest-hit query's work.
         let mut st = TraversalStats::default();
@@ -341,6 +369,7 @@ fn bench<T: TriangleIntersector>(
             name: set.name().into(),
             query: query.name().into(),
             rays: rays.len(),
+            rays_outside_embree: outside,
             hit_rate: hit_count as f64 / k,
             mrays: mrays[0],
             nodes_per_ray: st.nodes_visited as f64 / k,
@@ -360,7 +389,7 @@ fn bench<T: TriangleIntersector>(
                 .map_or_else(Vec::new, |r| r.packet_queries(query));
             figures.push(batch_figures(
                 (&wide, &mesh, isect),
-                (set, &rays, hit_count),
+                (set, &rays, hit_count, outside),
                 &theirs,
                 &packets,
             )?);
@@ -423,7 +452,8 @@ fn bench<T: TriangleIntersector>(
 /// multiple of the packet size (16), its answers (32 bytes each, 128 KB) kept in the L2 cache.
 const BATCH_BLOCK: usize = 4096;
 
-/// The batch path's figures on the camera or shadow set `set` (`rays`, `hits` of them hit):
+/// The batch path's figures on the camera or shadow set `set` (`rays`, `hits` of them hit,
+/// `outside` more left out as outside Embree's range):
 /// halfray's [`closest_batch_simd`] (checked equal to the single-ray query, bit for bit) or,
 /// on an any-hit set, [`any_batch_simd`] (checked to hit exactly where the single-ray query
 /// does) against Embree's `rtcIntersect1`/`rtcOccluded1` (`single`: default, robust) and its
@@ -431,7 +461,7 @@ const BATCH_BLOCK: usize = 4096;
 /// the whole set.
 fn batch_figures<T: TriangleIntersector>(
     (wide, mesh, isect): (&crate::accel::VecBvh8, &TriangleMesh<'_>, &T),
-    (set, rays, hits): (RaySet, &[Ray], usize),
+    (set, rays, hits, outside): (RaySet, &[Ray], usize, usize),
     single: &[HitQuery<'_>],
     packets: &[rivals::BatchQuery<'_>],
 ) -> Result<SetFigures> {
@@ -493,6 +523,7 @@ fn batch_figures<T: TriangleIntersector>(
         name: format!("{}+batch", set.name()),
         query: query.name().into(),
         rays: rays.len(),
+        rays_outside_embree: outside,
         hit_rate: hits as f64 / k,
         mrays: m[0],
         nodes_per_ray: st.nodes_visited as f64 / k,

@@ -92,6 +92,12 @@ impl Rivals {
         self.build_ms
     }
 
+    /// Whether Embree gives a defined answer for `ray` ([`crate::embree::takes_ray`]); every
+    /// side is timed on these rays only.
+    pub(super) fn take(ray: &Ray) -> bool {
+        crate::embree::takes_ray(ray)
+    }
+
     /// The two scenes' queries of kind `query` (hit or miss), `[default, robust]`.
     pub(super) fn queries(&self, query: Query) -> Vec<HitQuery<'_>> {
         self.scenes
@@ -151,6 +157,9 @@ impl Rivals {
     }
     pub(super) fn build_ms(&self) -> [f64; 3] {
         [f64::NAN; 3]
+    }
+    pub(super) fn take(_ray: &Ray) -> bool {
+        true
     }
     pub(super) fn queries(&self, _query: Query) -> Vec<HitQuery<'_>> {
         Vec::new()

@@ -257,6 +257,7 @@ pub(crate) mod tests {
                     name: name.into(),
                     query: "closest".into(),
                     rays: 1,
+                    rays_outside_embree: 0,
                     hit_rate: 1.0,
                     mrays: ours,
                     nodes_per_ray: 1.0,
