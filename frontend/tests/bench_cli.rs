@@ -227,8 +227,9 @@ fn a_mesh_list_follows_the_positional_meshes() {
     assert_eq!(names, ["ao", "primary-tiles", "primary-tiles+batch"]);
 }
 
-/// A missing mesh, or a directory named as one (a directory opens on Unix, so this was found
-/// only when its turn came), is refused before the first mesh is measured.
+/// A missing mesh, a directory named as one (a directory opens on Unix, so this was found
+/// only when its turn came), or a file that is not an OBJ (found when parsed at its turn) is
+/// refused before the first mesh is measured.
 #[test]
 fn a_missing_mesh_or_a_folder_is_refused_before_any_measurement() {
     let dir = tempfile::tempdir().unwrap();
@@ -237,7 +238,13 @@ fn a_missing_mesh_or_a_folder_is_refused_before_any_measurement() {
     let missing = dir.path().join("missing.obj");
     let folder = dir.path().join("meshes");
     std::fs::create_dir(&folder).unwrap();
-    for (bad, want) in [(&missing, "No such file"), (&folder, "is a directory")] {
+    let garbage = dir.path().join("garbage.obj");
+    std::fs::write(&garbage, "garbage\n").unwrap();
+    for (bad, at, want) in [
+        (&missing, "", "No such file"),
+        (&folder, "", "is a directory"),
+        (&garbage, ":1:1", "unknown OBJ statement `garbage`"),
+    ] {
         // 2048² camera rays take the good mesh tens of seconds to measure (44 s with the
         // folder found only at its turn); refused first, the run ends at once.
         let started = Instant::now();
@@ -251,7 +258,7 @@ fn a_missing_mesh_or_a_folder_is_refused_before_any_measurement() {
         assert!(started.elapsed() < Duration::from_secs(10));
         assert_eq!(o.status.code(), Some(1));
         let err = String::from_utf8_lossy(&o.stderr);
-        assert!(err.contains(&format!("{}: ", bad.display())), "{err}");
+        assert!(err.contains(&format!("{}{at}: ", bad.display())), "{err}");
         assert!(err.contains(want), "{err}");
         assert!(
             o.stdout.is_empty(),

@@ -91,10 +91,13 @@ impl RunArgs {
     /// The checks `bench bvh` and `bench accel` make before any work: `--width` and `--rays`
     /// at least 1 ([`Error::Usage`] otherwise); the run's memory as `held` holds its rays
     /// ([`RayMemory::peak_bytes`]) within [`crate::limits::check_memory`]'s budget; and every
-    /// one of `meshes` a file that opens ([`crate::input::open`]: not a directory or a
-    /// device; [`Error::Io`] naming the first that is not, or [`Error::Input`] at
-    /// `named_at[k]`, the mesh list's file and line, for a mesh `k` a list named), so that
-    /// minutes of work are not spent on a run that then fails on a misspelt last path.
+    /// one of `meshes`, in order, a file that opens ([`crate::input::open`]: not a directory
+    /// or a device; [`Error::Io`] naming the first that is not, or [`Error::Input`] at
+    /// `named_at[k]`, the mesh list's file and line, for a mesh `k` a list named) and parses
+    /// as the run will read it ([`crate::obj::read_obj`], the mesh dropped before the next is
+    /// read; its error at the file's own line, with the list line after it,
+    /// [`noting_list_line`](crate::crosscheck::corpus::noting_list_line)), so that minutes of
+    /// work are not spent on a run that then fails on a misspelt or broken last mesh.
     ///
     /// # Errors
     ///
@@ -117,10 +120,13 @@ impl RunArgs {
             held.peak_bytes(width, rays),
         )?;
         for (k, mesh) in meshes.iter().enumerate() {
-            crate::input::open(mesh).map_err(|e| match named_at.get(k) {
-                Some(Some(at)) => Error::input(at.clone(), e.to_string()),
-                _ => e,
+            let listed = named_at.get(k).and_then(Option::as_ref);
+            crate::input::open(mesh).map_err(|e| match listed {
+                Some(at) => Error::input(at.clone(), e.to_string()),
+                None => e,
             })?;
+            crate::obj::read_obj(mesh)
+                .map_err(|e| crate::crosscheck::corpus::noting_list_line(listed, e))?;
         }
         Ok(())
     }
@@ -214,6 +220,43 @@ mod tests {
         for held in [RayMemory::BothSets, RayMemory::OneSetAtATime] {
             assert_eq!(held.peak_bytes(usize::MAX, 1), None, "{held:?}");
         }
+    }
+
+    /// A mesh that opens but does not parse is refused by the checks before any work, after
+    /// a good mesh, with its own file, line and field (and the list line that named it).
+    #[test]
+    fn a_later_mesh_that_does_not_parse_is_refused_before_any_work() {
+        let dir = tempfile::tempdir().unwrap();
+        let good = dir.path().join("good.obj");
+        let bad = dir.path().join("bad.obj");
+        std::fs::write(&good, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        std::fs::write(&bad, "v 0 0 0\ngarbage\n").unwrap();
+        let run = RunArgs {
+            json: None,
+            width: 4,
+            rays: 4,
+            force: false,
+        };
+        let meshes = [good.clone(), bad.clone()];
+        for held in [RayMemory::OneSetAtATime, RayMemory::BothSets] {
+            let e = run
+                .check_inputs(held, &meshes, &[])
+                .unwrap_err()
+                .to_string();
+            let want = format!("{}:2:1: field `statement`", bad.display());
+            assert!(e.contains(&want), "want `{want}` in: {e}");
+        }
+        let list = crate::error::Location::file(dir.path().join("list.txt")).line(3);
+        let e = run
+            .check_inputs(RayMemory::OneSetAtATime, &meshes, &[None, Some(list)])
+            .unwrap_err()
+            .to_string();
+        let want = format!("(named at {}:3)", dir.path().join("list.txt").display());
+        assert!(e.contains(&want), "want `{want}` in: {e}");
+        assert!(
+            run.check_inputs(RayMemory::OneSetAtATime, &meshes[..1], &[])
+                .is_ok()
+        );
     }
 
     /// A `bench bvh` camera whose rays fit in the limit but not beside their answers is

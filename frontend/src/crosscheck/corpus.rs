@@ -65,12 +65,7 @@ impl RunMeshes {
     /// input error names another place (the mesh file's own line): `bunny.obj:7:3: … (named
     /// at list.txt:2)`. Other errors, and meshes named as arguments, unchanged.
     pub fn noting_list(&self, k: usize, e: Error) -> Error {
-        match (e, self.named_at.get(k)) {
-            (Error::Input { at, message }, Some(Some(listed))) if at != *listed => {
-                Error::input(at, format!("{message} (named at {listed})"))
-            }
-            (e, _) => e,
-        }
+        noting_list_line(self.named_at.get(k).and_then(Option::as_ref), e)
     }
 
     /// Refuses a run that names one mesh file twice (the same path again, another spelling,
@@ -94,6 +89,18 @@ impl RunMeshes {
             crate::text::path(&self.paths[j]),
             at(j),
         )))
+    }
+}
+
+/// `e`, an error of a mesh that the list line `listed` named (`None` for a mesh named as an
+/// argument), with that line when an input error names another place (the mesh file's own
+/// line): `bunny.obj:7:3: … (named at list.txt:2)`. Other errors, and `None`, unchanged.
+pub fn noting_list_line(listed: Option<&Location>, e: Error) -> Error {
+    match (e, listed) {
+        (Error::Input { at, message }, Some(listed)) if at != *listed => {
+            Error::input(at, format!("{message} (named at {listed})"))
+        }
+        (e, _) => e,
     }
 }
 
