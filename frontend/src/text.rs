@@ -67,6 +67,28 @@ pub fn path(p: &std::path::Path) -> String {
     escaped(&p.to_string_lossy())
 }
 
+/// Labels of items given as `(name, path)` pairs, in order: each item's name (a file name),
+/// or its path where two items share that name, so that no two items of different paths
+/// carry the same label (items of one path keep one label).
+pub fn unambiguous_names<'a>(items: impl IntoIterator<Item = (String, &'a str)>) -> Vec<String> {
+    let items: Vec<(String, &str)> = items.into_iter().collect();
+    let mut paths: std::collections::HashMap<&str, std::collections::HashSet<&str>> =
+        std::collections::HashMap::new();
+    for (name, path) in &items {
+        paths.entry(name.as_str()).or_default().insert(path);
+    }
+    items
+        .iter()
+        .map(|(name, path)| {
+            if paths[name.as_str()].len() > 1 {
+                (*path).to_string()
+            } else {
+                name.clone()
+            }
+        })
+        .collect()
+}
+
 /// An offending token for a message: [`bounded`] to [`MAX_EXCERPT_CHARS`].
 pub fn excerpt(s: &str) -> String {
     bounded(s, MAX_EXCERPT_CHARS)
@@ -75,6 +97,22 @@ pub fn excerpt(s: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A name two paths share becomes each one's path; a name of one path (even when that
+    /// path comes twice) stays.
+    #[test]
+    fn names_two_paths_share_become_the_paths() {
+        let items = [
+            ("m.obj", "a/m.obj"),
+            ("m.obj", "b/m.obj"),
+            ("n.obj", "c/n.obj"),
+            ("n.obj", "c/n.obj"),
+        ];
+        assert_eq!(
+            unambiguous_names(items.map(|(n, p)| (n.to_string(), p))),
+            ["a/m.obj", "b/m.obj", "n.obj", "n.obj"]
+        );
+    }
 
     #[test]
     fn escapes_control_characters_and_truncates() {

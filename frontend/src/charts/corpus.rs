@@ -7,7 +7,7 @@ use super::{
     legend_height, parse_json,
 };
 use crate::bench::bvh::BvhReport;
-use crate::bench::bvh::summary::{SetSummary, mesh_name, set_names, summarize};
+use crate::bench::bvh::summary::{SetSummary, mesh_labels, mesh_name, set_names, summarize};
 use crate::error::{Error, Location, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -16,7 +16,8 @@ use std::path::Path;
 /// The chart's figures, taken from a `bench bvh --json` run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CorpusChart {
-    /// Mesh file names, in run order (x).
+    /// Mesh labels, in run order (x): the file name, or the path where two meshes of the run
+    /// share a file name ([`mesh_labels`]).
     pub meshes: Vec<String>,
     /// Per set: its summary and, per mesh, `[over default, over robust]` (`None` where the
     /// mesh did not run the set).
@@ -52,7 +53,7 @@ impl CorpusChart {
             .collect();
         debug_assert!(!set_names(reports).is_empty());
         Some(Self {
-            meshes: reports.iter().map(mesh_name).collect(),
+            meshes: mesh_labels(reports),
             sets,
         })
     }
@@ -235,6 +236,18 @@ mod tests {
         // One report (a single-mesh run writes the object itself) is read too.
         std::fs::write(&json, serde_json::to_vec(&reports[0]).unwrap()).unwrap();
         assert_eq!(CorpusChart::from_file(&json).unwrap().meshes, ["bunny.obj"]);
+    }
+
+    /// Two meshes of one file name in different folders are two points labelled by path.
+    #[test]
+    fn meshes_sharing_a_file_name_are_labelled_by_path() {
+        let reports = [
+            report("a/m.obj", &[("primary", 3.0, 4.0, 3.0)]),
+            report("b/m.obj", &[("primary", 6.0, 5.0, 4.0)]),
+        ];
+        let chart = CorpusChart::new(&reports).unwrap();
+        assert_eq!(chart.meshes, ["dir/a/m.obj", "dir/b/m.obj"]);
+        assert_eq!(chart.sets[0].0.worst[1].1, "dir/a/m.obj");
     }
 
     /// A hand-edited report with an Embree throughput of 0 gave an infinite ratio, and the

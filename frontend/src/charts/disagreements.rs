@@ -83,15 +83,9 @@ impl DisagreementChart {
             }
             chart.rays[i] += row.rays;
         }
-        let mut uses: HashMap<String, usize> = HashMap::new();
-        for name in &chart.meshes {
-            *uses.entry(name.clone()).or_default() += 1;
-        }
-        for (name, path) in chart.meshes.iter_mut().zip(&paths) {
-            if uses[name.as_str()] > 1 {
-                *name = (*path).to_string();
-            }
-        }
+        chart.meshes = crate::text::unambiguous_names(
+            std::mem::take(&mut chart.meshes).into_iter().zip(paths),
+        );
         Some(chart)
     }
 

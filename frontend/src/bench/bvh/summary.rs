@@ -25,7 +25,7 @@ pub struct SetSummary {
     pub meshes: usize,
     /// Geometric mean of the per-mesh ratios.
     pub geomean: [f64; 2],
-    /// The smallest ratio and the file name of its mesh.
+    /// The smallest ratio and its mesh's label ([`mesh_labels`]).
     pub worst: [(f64, String); 2],
 }
 
@@ -35,6 +35,13 @@ pub fn mesh_name(r: &BvhReport) -> String {
     std::path::Path::new(&r.mesh)
         .file_name()
         .map_or(r.mesh.clone(), |n| n.to_string_lossy().into_owned())
+}
+
+/// The label of each report's mesh, in order: its [`mesh_name`], or its path where two meshes
+/// of the run share a file name ([`text::unambiguous_names`]).
+#[must_use]
+pub fn mesh_labels(reports: &[BvhReport]) -> Vec<String> {
+    text::unambiguous_names(reports.iter().map(|r| (mesh_name(r), r.mesh.as_str())))
 }
 
 /// The set names of `reports`, in order of first appearance.
@@ -53,14 +60,16 @@ pub fn set_names(reports: &[BvhReport]) -> Vec<String> {
 /// meshes that have Embree figures for it; sets without any are left out.
 #[must_use]
 pub fn summarize(reports: &[BvhReport]) -> Vec<SetSummary> {
+    let labels = mesh_labels(reports);
     set_names(reports)
         .into_iter()
         .filter_map(|name| {
             let ratios: Vec<([f64; 2], String)> = reports
                 .iter()
-                .filter_map(|r| {
+                .zip(&labels)
+                .filter_map(|(r, label)| {
                     let s = r.sets.iter().find(|s| s.name == name)?;
-                    Some((s.ratios()?, mesh_name(r)))
+                    Some((s.ratios()?, label.clone()))
                 })
                 .collect();
             let geomean = [0, 1].map(|m| geometric_mean(ratios.iter().map(|(q, _)| q[m])));
@@ -82,7 +91,7 @@ pub fn summarize(reports: &[BvhReport]) -> Vec<SetSummary> {
         .collect()
 }
 
-/// The closing Markdown: one row per mesh with, per set, `ratio over Embree robust / over
+/// The closing Markdown: one row per mesh ([`mesh_labels`]) with, per set, `ratio over Embree robust / over
 /// Embree default` (halfray's Mrays/s where Embree did not run), the build times and bytes per
 /// triangle; then the geometric-mean and worst rows, and the worst meshes by name.
 #[must_use]
@@ -102,10 +111,10 @@ pub fn markdown(reports: &[BvhReport]) -> String {
     s.push_str(&"---:|".repeat(names.len() + 4));
     s.push('\n');
     let mut build_ratios = Vec::new();
-    for r in reports {
+    for (r, label) in reports.iter().zip(mesh_labels(reports)) {
         s.push_str(&format!(
             "| {} | {} |",
-            text::table_cell(&mesh_name(r)),
+            text::table_cell(&label),
             r.triangles
         ));
         for n in &names {
@@ -325,6 +334,33 @@ pub(crate) mod tests {
         assert!(!md.contains("NaN"), "{md}");
         assert!(
             md.contains("shadow+batch: 1 meshes, geometric mean over Embree's packet API: 2.00× rtcOccluded8, 0.50× rtcOccluded16 (default); 4.00×, 1.00× (robust)"),
+            "{md}"
+        );
+    }
+
+    /// Two meshes of one file name in different folders are told apart by their paths in the
+    /// rows and the worst-mesh lines; a name only one mesh has stays a file name.
+    #[test]
+    fn meshes_sharing_a_file_name_are_labelled_by_path() {
+        let reports = [
+            report("a/m.obj", &[("primary", 1.0, 2.0, 1.0)]),
+            report("b/m.obj", &[("primary", 4.0, 2.0, 1.0)]),
+            report("c/n.obj", &[("primary", 4.0, 2.0, 1.0)]),
+        ];
+        assert_eq!(
+            mesh_labels(&reports),
+            ["dir/a/m.obj", "dir/b/m.obj", "n.obj"]
+        );
+        let md = markdown(&reports);
+        for row in [
+            "| dir/a/m.obj | 10 |",
+            "| dir/b/m.obj | 10 |",
+            "| n.obj | 10 |",
+        ] {
+            assert!(md.contains(row), "want `{row}` in: {md}");
+        }
+        assert!(
+            md.contains("worst 1.00× robust (dir/a/m.obj), 0.50× default (dir/a/m.obj)"),
             "{md}"
         );
     }
