@@ -91,16 +91,24 @@ pub fn summarize(reports: &[BvhReport]) -> Vec<SetSummary> {
         .collect()
 }
 
-/// The closing Markdown: one row per mesh ([`mesh_labels`]) with, per set, `ratio over Embree robust / over
-/// Embree default` (halfray's Mrays/s where Embree did not run), the build times and bytes per
-/// triangle; then the geometric-mean and worst rows, and the worst meshes by name.
+/// The closing Markdown, under a header naming the ratios (halfray's Mrays/s when no set has
+/// one): one row per mesh ([`mesh_labels`]) with, per set, `ratio over Embree robust / over
+/// Embree default` (halfray's Mrays/s where Embree did not run, `–` for a set of no rays), the
+/// build times and bytes per triangle; then the geometric-mean and worst rows, and the worst
+/// meshes by name.
 #[must_use]
 pub fn markdown(reports: &[BvhReport]) -> String {
     let names = set_names(reports);
     let mut s = String::new();
-    s.push_str(
-        "halfray's single-thread throughput over Embree 4's on the same rays, per set: ×robust / ×default\n\n",
-    );
+    let any_ratio = reports
+        .iter()
+        .flat_map(|r| &r.sets)
+        .any(|x| x.ratios().is_some());
+    s.push_str(if any_ratio {
+        "halfray's single-thread throughput over Embree 4's on the same rays, per set: ×robust / ×default\n\n"
+    } else {
+        "halfray's single-thread throughput, Mrays/s\n\n"
+    });
     s.push_str("| mesh | triangles |");
     for n in &names {
         s.push_str(&format!(" {} |", text::table_cell(n)));
@@ -122,6 +130,7 @@ pub fn markdown(reports: &[BvhReport]) -> String {
                 None => "".to_string(),
                 Some(x) => match x.ratios() {
                     Some([d, rb]) => format!("{rb:.2} / {d:.2}"),
+                    None if x.rays == 0 => "–".to_string(),
                     None => format!("{:.2} Mrays/s", x.mrays),
                 },
             };
@@ -362,6 +371,32 @@ pub(crate) mod tests {
         assert!(
             md.contains("worst 1.00× robust (dir/a/m.obj), 0.50× default (dir/a/m.obj)"),
             "{md}"
+        );
+    }
+
+    /// Without Embree figures the header names halfray's Mrays/s, not ratios; a set of no
+    /// rays is `–`, not a throughput of 0.
+    #[test]
+    fn without_ratios_the_header_says_mrays_and_a_set_of_no_rays_is_a_dash() {
+        let mut r = report(
+            "a.obj",
+            &[("primary", 2.5, 0.0, 0.0), ("shadow", 0.0, 0.0, 0.0)],
+        );
+        for x in &mut r.sets {
+            (x.embree_mrays, x.embree_robust_mrays) = (None, None);
+        }
+        r.sets[1].rays = 0;
+        let md = markdown(&[r]);
+        assert!(
+            md.starts_with("halfray's single-thread throughput, Mrays/s\n\n"),
+            "{md}"
+        );
+        assert!(!md.contains("×robust"), "{md}");
+        assert!(md.contains("| a.obj | 10 | 2.50 Mrays/s | – |"), "{md}");
+        let with = markdown(&[report("a.obj", &[("primary", 1.0, 2.0, 1.0)])]);
+        assert!(
+            with.starts_with("halfray's single-thread throughput over Embree 4's"),
+            "{with}"
         );
     }
 
