@@ -160,9 +160,12 @@ pub struct SetFigures {
     pub hit_rate: f64,
     /// halfray's default structure, Mrays/s.
     pub mrays: f64,
-    /// Mean nodes visited per ray (closest-hit query).
+    /// Mean nodes visited per ray by this row's own query: the closest-hit query on a
+    /// single-ray set (also on an any-hit one, whose hits it is checked against), the batch
+    /// call on a `+batch` row ([`closest_batch_simd`], or [`any_batch_simd`] for
+    /// `shadow+batch`).
     pub nodes_per_ray: f64,
-    /// Mean triangle tests per ray (closest-hit query).
+    /// Mean triangle tests per ray, by the same query as [`SetFigures::nodes_per_ray`].
     pub triangles_per_ray: f64,
     /// Embree 4 default mode, Mrays/s.
     pub embree_mrays: Option<f64>,
