@@ -1,4 +1,4 @@
-//! A small, safe wrapper over Intel Embree 4.4 for cross-checking halfray (issue 6).
+//! A small, safe wrapper over Intel Embree 4.4 for cross-checking halfray.
 //!
 //! Compiled only with `--features embree`. Set-up (library, link path, rpath): run
 //! `bash scripts/setup-embree.sh`, then `EMBREE_DIR=$PWD/.embree cargo test -p halfray --features
@@ -6,7 +6,7 @@
 //!
 //! # What this wraps, and why not `embree4-rs`
 //! `embree4-rs` 0.0.16 pins `embree4-sys` 0.0.10, generated from the Embree **4.2** headers, while
-//! the library we use is **4.4.0**, whose `RTCRayHit` is 16 bytes bigger (see [`layout`]):
+//! the library we use is **4.4.0**, whose `RTCRayHit` is 16 bytes bigger (see the `layout` module):
 //! `embree4_rs::CommittedScene::intersect_1` lets the library write past its stack struct. Its
 //! device and scene handles are private, it has no occlusion query, and its device config string
 //! is passed without a NUL terminator. So everything here goes through `embree4-sys` directly:
