@@ -1,6 +1,6 @@
 //! Random input through the command-line entry points, in process: random bytes as OBJ files
 //! (`mesh check`, `mesh smooth`, `mesh subdivide`), random mutations of a valid scene
-//! (`render`), and hostile command lines (issue 37): device paths as inputs and outputs,
+//! (`render`), and hostile command lines: device paths as inputs and outputs,
 //! `/dev/std*` outputs, `repeat` counts whose product overflows, file names with terminal
 //! escapes and line breaks, and `crosscheck merge` parts with extreme numbers. Every run must end with success or a clean error of exit code 1 or 2, never a
 //! panic; a failed run leaves no output file and a prior output file unchanged.

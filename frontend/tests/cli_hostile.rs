@@ -1,4 +1,4 @@
-//! The command line driven as a hostile user would (issue 37): one test per class of defect,
+//! The command line driven as a hostile user would: one test per class of defect,
 //! each on the binary. Data loss (a declared mesh overwritten, a file behind `/dev/stdout`
 //! replaced), wrapping counters and impossible shards in `crosscheck merge`, meshes outside
 //! the coordinate domain, overflowing `repeat` products, a huge `RAYON_NUM_THREADS`,

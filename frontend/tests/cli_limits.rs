@@ -1,4 +1,4 @@
-//! Work that could run away (issue 12): sizes from input are estimated before allocating and
+//! Work that could run away: sizes from input are estimated before allocating and
 //! refused with the option and the estimate; ray generation loops give up with an error.
 
 use glam::Vec3;

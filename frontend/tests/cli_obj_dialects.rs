@@ -1,4 +1,4 @@
-//! OBJ dialects through the binary (issue 12): CR-only files are read line by line, and a
+//! OBJ dialects through the binary: CR-only files are read line by line, and a
 //! mesh tool says on stderr what the output will not carry.
 
 use std::process::Command;

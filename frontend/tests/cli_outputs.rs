@@ -1,4 +1,4 @@
-//! The binary's outputs (issue 12): an output that is an input or another output is refused
+//! The binary's outputs: an output that is an input or another output is refused
 //! by file identity, output locations are checked before the work, temporary files go away
 //! on SIGTERM, and stdout or stderr that is a closed pipe or a full device ends the program
 //! cleanly.

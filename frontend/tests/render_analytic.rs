@@ -286,7 +286,7 @@ diffuse = [1, 1, 1]
     assert_eq!(out.pixel(0, 0), Vec4::ZERO);
 }
 
-/// The perspective camera against the pinhole model derived independently (issue 17): frame
+/// The perspective camera against the pinhole model derived independently: frame
 /// `forward = (look_at − eye)/|…|`, `right = forward × y/|…|`, `up = right × forward` (the
 /// scene format's world up is `+y`), vertical field of view `fov`, image `y` pointing down. A
 /// world point `P` with camera coordinates `(r, u, f)` then appears at pixel
@@ -362,7 +362,7 @@ fn spheres_appear_where_the_pinhole_model_projects_them() {
     }
 }
 
-/// No shadow acne on transformed objects (issue 17): a convex mesh (the octahedron) and a
+/// No shadow acne on transformed objects: a convex mesh (the octahedron) and a
 /// sphere, each under a non-uniform scale, a rotation and a translation far from the origin,
 /// alone in the scene under one point light. Nothing can shadow a convex object's own
 /// surface where it faces the light, so every pixel whose surface faces both the camera and

@@ -1,4 +1,4 @@
-//! What bounds the work of a render (issue 12): the Whitted ray tree of mirror + transparent
+//! What bounds the work of a render: the Whitted ray tree of mirror + transparent
 //! materials is cut by path weight and a cap per camera ray ([`PathBound`]), checked against the
 //! exhaustive tree; `--force-all-effects` stays bit-identical when radiance overflows.
 
@@ -52,7 +52,7 @@ fn deep_glass_finishes_and_matches_the_exhaustive_tree() {
     let pixels = u64::from(deep.width * deep.height);
     let secondary = deep.counts.reflection + deep.counts.refraction;
     assert!(secondary <= pixels * u64::from(MAX_SECONDARY_RAYS_PER_CAMERA_RAY));
-    // The oracle: every ray of the tree down to depth 24, where (issue 12) deeper trees give
+    // The oracle: every ray of the tree down to depth 24, where deeper trees give
     // the same bytes.
     let exact = render(&glass(24), &opts(PathBound::EXHAUSTIVE));
     assert!(

@@ -1,4 +1,4 @@
-//! CSG with mesh operands on lines aimed exactly at mesh edges and vertices (issue 13): a
+//! CSG with mesh operands on lines aimed exactly at mesh edges and vertices: a
 //! closed mesh is entered and left once per surface crossing, whatever edge or vertex the line
 //! passes through, so union, intersection and difference classify every point of the line as
 //! the same line moved off the edge does. Before the fix, both triangles of an edge reported
@@ -184,7 +184,7 @@ fn mesh_operands_are_crossed_once_through_edges_and_vertices() {
     assert!(compared > 2000, "{compared} crossings compared");
 }
 
-/// Light through a drilled hole (issue 17): a slab `[−3, 3]² × [−½, ½]` minus the closed cube
+/// Light through a drilled hole: a slab `[−3, 3]² × [−½, ½]` minus the closed cube
 /// mesh `[−1, 1]³` has a square hole. A shadow ray along `+z` is occluded exactly when its
 /// `(x, y)` lies in the slab and outside the hole (decided analytically, away from the hole's
 /// and the slab's sides). Among the rays, every one through the hole along `x = y` meets both of

@@ -595,7 +595,7 @@ fn sixteen_crossings_transmit_and_a_seventeenth_blocks() {
     }
 }
 
-/// Exact shadow-ray counts with mixed lights (issue 17): a floor seen from straight above fills
+/// Exact shadow-ray counts with mixed lights: a floor seen from straight above fills
 /// all 9 × 9 pixels, so every pixel shades one floor point with normal `+y`. A shadow ray goes
 /// to each light that casts shadows, is not dark and lies on the lit side (`n·l > 0`): here the
 /// point light above and the downward directional light, 2 × 81 rays. Not to the light above

@@ -1,4 +1,4 @@
-//! The BVH against brute force over every primitive (issue 3).
+//! The BVH against brute force over every primitive.
 //!
 //! * Every shared mesh: 100 000 incoherent rays and all primary rays of a 256×256 camera (the
 //!   871k-triangle dragon on a sample of [`DRAGON_RANDOM_RAYS`] and a [`DRAGON_CAMERA_SIDE`]²

@@ -1,4 +1,4 @@
-//! The uniform grid against brute force over every triangle (issue 15).
+//! The uniform grid against brute force over every triangle.
 //!
 //! * Random soups and degenerate scenes (coincident, duplicated and zero-area triangles,
 //!   axis-aligned flat meshes, rays along grid planes, rays through shared edges and

@@ -1,4 +1,4 @@
-//! The kd-tree against brute force over every triangle (issue 15).
+//! The kd-tree against brute force over every triangle.
 //!
 //! The oracle is a plain loop over all triangles with the same intersector and the tie rule
 //! (smallest `t`, then smallest index); it shares no code with the tree. The kd-tree's closest

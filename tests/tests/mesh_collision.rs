@@ -1,4 +1,4 @@
-//! Mesh-vs-mesh collision and distance (issue 15, item 4) against brute force.
+//! Mesh-vs-mesh collision and distance against brute force.
 //!
 //! * The triangle–triangle test against an **independent integer oracle**: coordinates on a
 //!   `2⁻¹²` grid, so every predicate of the oracle is exact in `i128`; it decides by a

@@ -1,4 +1,4 @@
-//! The bounding-volume overlap tests against an independent `f64` oracle (issue 15), and the
+//! The bounding-volume overlap tests against an independent `f64` oracle, and the
 //! containment of the fits.
 //!
 //! * Random pairs of every kind the crate has a test for (sphere, box, OBB, capsule; at

@@ -1,5 +1,5 @@
-//! Property tests (proptest) for the hard-case catalogue of `../shared/docs/robustness.md`
-//! (issue 7): random closed meshes hit at shared edges and vertices never leak through the
+//! Property tests (proptest) for the hard-case catalogue of `../shared/docs/robustness.md`:
+//! random closed meshes hit at shared edges and vertices never leak through the
 //! watertight test; `t` keeps its relative accuracy under translations up to 1e6 and scales
 //! from 1e-6 to 1e6; and rays spawned from a hit never re-hit the surface they leave.
 //!

@@ -1,5 +1,5 @@
 //! A uniform grid over a triangle mesh, built into caller storage and traversed with the
-//! Amanatides–Woo 3-D DDA (issue 15).
+//! Amanatides–Woo 3-D DDA.
 //!
 //! * [`GridPlan::new`] reads a [`TriangleMesh`] (the same input as [`crate::bvh::Bvh`]) and
 //!   decides the grid's box and resolution, and counts exactly the storage the build needs:

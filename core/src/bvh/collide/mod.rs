@@ -1,4 +1,4 @@
-//! Mesh-vs-mesh collision and minimum distance (issue 15, item 4): two [`Bvh`]s, the second
+//! Mesh-vs-mesh collision and minimum distance: two [`Bvh`]s, the second
 //! placed in the first one's frame by a [`Transform`], descended together on a fixed stack.
 //!
 //! * [`colliding_pairs`]: every intersecting triangle pair, into a caller slice, with the
