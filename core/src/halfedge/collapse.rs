@@ -56,7 +56,7 @@ impl<S: MeshStorage> Mesh<S> {
         let target = match at {
             CollapseAt::Head => p1,
             CollapseAt::Tail => p0,
-            CollapseAt::Midpoint => ((p0.as_dvec3() + p1.as_dvec3()) * 0.5).as_vec3(),
+            CollapseAt::Midpoint => super::split::midpoint(p0, p1),
             CollapseAt::Point(p) => p,
         };
         if !target.is_finite() {

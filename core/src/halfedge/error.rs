@@ -241,9 +241,6 @@ pub enum SubdivideError {
     NotCompact,
     /// The output mesh is too small.
     Capacity(CapacityError),
-    /// A subdivided position would not be finite (coordinates near `f32::MAX` overflow the
-    /// weighted sums).
-    NonFinitePosition,
     /// The two faces on this edge have the same three vertices (two triangles glued along all
     /// their edges): their middle triangles would share all three edges (duplicate edges).
     CoincidentFaces(super::EdgeId),
@@ -399,9 +396,6 @@ impl fmt::Display for SubdivideError {
         match *self {
             Self::NotCompact => f.write_str("the mesh has deleted slots (compact it first)"),
             Self::Capacity(c) => write!(f, "{c}"),
-            Self::NonFinitePosition => {
-                f.write_str("a new position would not be finite (coordinates too large)")
-            }
             Self::CoincidentFaces(e) => write!(
                 f,
                 "the two faces on edge {} have the same three vertices",
@@ -559,7 +553,6 @@ mod tests {
         for x in [
             SubdivideError::NotCompact,
             SubdivideError::Capacity(cap),
-            SubdivideError::NonFinitePosition,
             SubdivideError::CoincidentFaces(e),
         ] {
             push(format!("{x:?}"), format!("{x}"));

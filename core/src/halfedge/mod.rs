@@ -14,7 +14,8 @@
 //!
 //! Conventions (boundary halfedges, outgoing vertex halfedges, isolated vertices) are
 //! documented on [`Mesh`]. Every mutating operation checks legality and capacity first and
-//! leaves the mesh bit-for-bit unchanged when it refuses.
+//! leaves the mesh bit-for-bit unchanged when it refuses, except [`Mesh::build`], which
+//! replaces the whole mesh and leaves it empty on any error.
 //!
 //! ```
 //! use halfray_core::halfedge::{HalfedgeMesh, build_scratch_len};

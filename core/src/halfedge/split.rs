@@ -7,16 +7,23 @@ use super::handles::{EdgeId, NONE, VertexId};
 use super::mesh::Mesh;
 use super::storage::{Counts, MeshStorage};
 
+/// The midpoint `(p + q)/2`, in `f64` and rounded to `f32` once: each coordinate lies between
+/// `p`'s and `q`'s (subnormal ones too, where `p·0.5` in `f32` can round to 0), and it is
+/// finite for any finite `p`, `q` (their `f32` sum can overflow).
+pub(super) fn midpoint(p: Vec3, q: Vec3) -> Vec3 {
+    ((p.as_dvec3() + q.as_dvec3()) * 0.5).as_vec3()
+}
+
 impl<S: MeshStorage> Mesh<S> {
-    /// Splits `e` at its midpoint; see [`Mesh::split_edge_at`].
+    /// Splits `e` at its midpoint (each coordinate between the endpoints', subnormal ones
+    /// too); see [`Mesh::split_edge_at`].
     ///
     /// # Errors
     ///
     /// As [`Mesh::split_edge_at`]; the mesh is unchanged.
     pub fn split_edge(&mut self, e: EdgeId) -> Result<VertexId, SplitError> {
         let [a, b] = self.edge_vertices(e).ok_or(SplitError::Dead)?;
-        let mid = self.pos_raw(a.0) * 0.5 + self.pos_raw(b.0) * 0.5;
-        self.split_edge_at(e, mid)
+        self.split_edge_at(e, midpoint(self.pos_raw(a.0), self.pos_raw(b.0)))
     }
 
     /// Splits edge `e = a–b` (halfedge `2e` runs `a → b`) at point `p`, inserting a new

@@ -1405,21 +1405,70 @@ fn split_refuses_when_wings_coincide() {
     }
 }
 
-/// Loop subdivision of a mesh with a vertex near `−f32::MAX`: the weighted sums overflow, so it
-/// is refused and the output left as it was (found by the `halfedge_ops` fuzz target).
+/// Loop subdivision near `±f32::MAX`: every Loop rule is a convex combination, so each new
+/// coordinate lies within the old ones' range and is finite, even where the `f32` sums of
+/// two coordinates overflow. The inputs: a tetrahedron with two vertices at `−3e38` (found by
+/// the `halfedge_ops` fuzz target, once refused) and a lone triangle at `x = 2¹²⁷` (boundary
+/// rules, `2¹²⁷ + 2¹²⁷` overflows in `f32`).
 #[test]
-fn subdivide_refuses_overflowing_positions() {
+fn subdivide_near_f32_max_stays_finite_and_in_range() {
     let (mut p, t) = tetra();
     p[0] = Vec3::splat(-3.0e38);
     p[1] = Vec3::splat(-3.0e38);
-    let m = build::<4, 6, 4>(&p, &t).unwrap();
-    let mut out = HalfedgeMesh::<16, 48, 32>::new();
-    let before = out.clone();
-    assert_eq!(
-        m.subdivide_loop(&mut out, LoopWeights::Warren),
-        Err(SubdivideError::NonFinitePosition)
-    );
-    assert_eq!(out, before);
+    // 2¹²⁷ and 2¹²⁷ + 4 ulps (an ulp is 2¹⁰⁴ there); their `f32` sum is 2¹²⁸, beyond `f32::MAX`.
+    let (x0, x1) = (f32::from_bits(254 << 23), f32::from_bits((254 << 23) | 4));
+    let lone = [vec3(x0, 0.0, 0.0), vec3(x1, 0.0, 0.0), vec3(x0, 1.0, 0.0)];
+    let check = |pos: &[Vec3], out: &HalfedgeMesh<16, 48, 32>| {
+        let lo = pos.iter().fold(Vec3::INFINITY, |a, &b| a.min(b));
+        let hi = pos.iter().fold(Vec3::NEG_INFINITY, |a, &b| a.max(b));
+        for v in 0..out.len().vertices as u32 {
+            let q = out.position(VertexId(v)).unwrap();
+            assert!(
+                q.is_finite() && q.cmpge(lo).all() && q.cmple(hi).all(),
+                "{v}: {q}"
+            );
+        }
+    };
+    for w in [LoopWeights::Warren, LoopWeights::Loop] {
+        let m = build::<4, 6, 4>(&p, &t).unwrap();
+        let mut out = HalfedgeMesh::<16, 48, 32>::new();
+        assert_eq!(m.subdivide_loop(&mut out, w), Ok(()));
+        out.validate().unwrap();
+        check(&p, &out);
+        let m = build::<3, 3, 1>(&lone, &[[0, 1, 2]]).unwrap();
+        let mut out = HalfedgeMesh::<16, 48, 32>::new();
+        assert_eq!(m.subdivide_loop(&mut out, w), Ok(()));
+        check(&lone, &out);
+        // The boundary edge 0–1's midpoint, worked by hand: 2¹²⁷ + 2 ulps.
+        let mid = vec3(f32::from_bits((254 << 23) | 2), 0.0, 0.0);
+        let e01 = (0..3).map(EdgeId).find(|&e| {
+            let [a, b] = m.edge_vertices(e).unwrap();
+            a.0 + b.0 == 1
+        });
+        assert_eq!(m.loop_edge_position(e01.unwrap()), Some(mid));
+    }
+}
+
+/// `split_edge` at the midpoint of an edge whose endpoints share a subnormal coordinate: the
+/// new vertex keeps it (`f32` halves of the smallest subnormal round to 0).
+#[test]
+fn split_edge_midpoint_keeps_subnormal_coordinates() {
+    let tiny = f32::from_bits(1);
+    let p = [
+        vec3(tiny, 0.0, 0.0),
+        vec3(tiny, 1.0, 0.0),
+        vec3(0.0, 0.0, 1.0),
+    ];
+    let mut m = build::<8, 16, 8>(&p, &[[0, 1, 2]]).unwrap();
+    let e = (0..3)
+        .map(EdgeId)
+        .find(|&e| {
+            let [a, b] = m.edge_vertices(e).unwrap();
+            a.0 + b.0 == 1
+        })
+        .unwrap();
+    let v = m.split_edge(e).unwrap();
+    assert_eq!(m.position(v), Some(vec3(tiny, 0.5, 0.0)));
 }
 
 /// A pillow (two faces on the same three vertices) cannot be Loop-subdivided: the two middle

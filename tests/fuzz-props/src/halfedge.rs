@@ -338,22 +338,16 @@ fn dense(mesh: &FuzzMesh) -> bool {
 /// refusals evaluated on the exported triangle list and the independent counts: `required`
 /// holds every refusal that applies (`NotCompact` for a dead slot below the high-water marks,
 /// `Capacity` when `V + E`, `2E + 3F` or `4F` exceed [`CAPACITY`], `CoincidentFaces` for two
-/// triangles on one vertex set, `NonFinitePosition` when a rule's exact value
-/// ([`loop_reference`]) lies beyond `f32::MAX` by more than its evaluation's rounding
-/// ([`super::loop_oracle::LOOP_TOL_ROUNDINGS`]); the docs list them, not their order), and
-/// `may_overflow` is `false` when no sum of a rule's terms can leave `f32` (every coordinate
-/// times `valence + 2`, twice over, below `f32::MAX`), so that `NonFinitePosition` is
-/// excluded; between the two an intermediate sum may overflow, and either answer is right.
+/// triangles on one vertex set; the docs list them, not their order). No position refuses
+/// it: every Loop rule is a convex combination of finite positions, computed in `f64`.
 struct LoopVerdict {
     required: Vec<&'static str>,
-    may_overflow: bool,
     /// The vertex sets of coincident triangle pairs.
     coincident: Vec<[u32; 3]>,
 }
 
-fn loop_oracle(mesh: &FuzzMesh, weights: LoopWeights) -> LoopVerdict {
-    const U32: f64 = 1.0 / 16_777_216.0;
-    let (ps, ts) = exported(mesh);
+fn loop_oracle(mesh: &FuzzMesh) -> LoopVerdict {
+    let (_, ts) = exported(mesh);
     let [v, e, f] = model_counts(mesh);
     let mut required = Vec::new();
     if !dense(mesh) {
@@ -380,41 +374,15 @@ fn loop_oracle(mesh: &FuzzMesh, weights: LoopWeights) -> LoopVerdict {
     if !coincident.is_empty() {
         required.push("CoincidentFaces");
     }
-    let edges = edge_set(&ts);
-    let max_valence = (0..ps.len() as u32)
-        .map(|x| valence(&edges, x))
-        .max()
-        .unwrap_or(0);
-    let max_abs = ps
-        .iter()
-        .map(|p| f64::from(p.abs().max_element()))
-        .fold(0.0, f64::max);
-    let may_overflow = 2.0 * max_abs * (max_valence as f64 + 2.0) > f64::from(f32::MAX);
-    if may_overflow {
-        let (even, odd) = loop_reference(&ps, &ts, |n| reference_beta(n, weights));
-        let beyond = |q: &super::loop_oracle::LoopPoint| {
-            let slack = q.magnitude * (super::loop_oracle::LOOP_TOL_ROUNDINGS * U32);
-            (q.at.abs() - slack).max_element() > f64::from(f32::MAX)
-        };
-        if even.iter().chain(odd.values()).any(beyond) {
-            required.push("NonFinitePosition");
-        }
-    }
     LoopVerdict {
         required,
-        may_overflow,
         coincident,
     }
 }
 
 /// Checks a Loop subdivision's answer `r` on `mesh` against [`loop_oracle`].
-fn check_loop_verdict(
-    mesh: &FuzzMesh,
-    weights: LoopWeights,
-    r: &Result<(), SubdivideError>,
-    log: &[String],
-) {
-    let want = loop_oracle(mesh, weights);
+fn check_loop_verdict(mesh: &FuzzMesh, r: &Result<(), SubdivideError>, log: &[String]) {
+    let want = loop_oracle(mesh);
     match r {
         Ok(()) => assert!(
             want.required.is_empty(),
@@ -426,15 +394,12 @@ fn check_loop_verdict(
                 SubdivideError::NotCompact => "NotCompact",
                 SubdivideError::Capacity(_) => "Capacity",
                 SubdivideError::CoincidentFaces(_) => "CoincidentFaces",
-                SubdivideError::NonFinitePosition => "NonFinitePosition",
                 _ => "other",
             };
-            let allowed =
-                want.required.contains(&name) || (name == "NonFinitePosition" && want.may_overflow);
             assert!(
-                allowed,
-                "Loop refused as {err:?}, the rules name {:?} (overflow possible: {}): {log:?}",
-                want.required, want.may_overflow
+                want.required.contains(&name),
+                "Loop refused as {err:?}, the rules name {:?}: {log:?}",
+                want.required
             );
             // The edge named joins two vertices of one coincident pair.
             if let SubdivideError::CoincidentFaces(e) = err {
@@ -810,7 +775,7 @@ pub fn halfedge_ops(data: &[u8]) {
                 let mut out = FuzzMesh::new();
                 let r = mesh.subdivide_loop(&mut out, weights);
                 log.push(format!("loop {weights:?} -> {r:?}"));
-                check_loop_verdict(&mesh, weights, &r, &log);
+                check_loop_verdict(&mesh, &r, &log);
                 match r {
                     Ok(()) => {
                         // Counts against V' = V + E, E' = 2E + 3F, F' = 4F (the documented
