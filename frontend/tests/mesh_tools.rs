@@ -226,6 +226,29 @@ fn beetle_is_rejected_with_a_non_manifold_edge() {
     assert!(users > 2, "edge {}–{} has {users} triangles", a + 1, b + 1);
 }
 
+/// A tetrahedron missing one face plus a quad `f 3 1 4 2` (fan triangles 4 = (3 1 4) and
+/// 5 = (3 4 2)). The edge checked first, 2–3, is used by triangles 1, 3 and 5: the error names
+/// triangle 5 and the quad's line 8, not the valid triangle 1 on line 5.
+#[test]
+fn a_non_manifold_edge_names_its_third_triangle_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("tetq.obj");
+    std::fs::write(
+        &path,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4 2\n",
+    )
+    .unwrap();
+    let r = mesh_tools::check(&path).unwrap();
+    assert_eq!(
+        r.reason.as_deref(),
+        Some(
+            "non-manifold edge between vertices 2 and 3: used by more than two triangles; \
+             the third is triangle 5"
+        )
+    );
+    assert_eq!(r.reason_at.unwrap().line, Some(8));
+}
+
 #[test]
 fn missing_file_exits_1_and_names_the_path() {
     let dir = tempfile::tempdir().unwrap();

@@ -35,6 +35,26 @@ fn key(tris: &[[u32; 3]], s: usize) -> u64 {
     ((lo as u64) << 32) | hi as u64
 }
 
+/// The triangle that brings an edge's user count above two: the third-lowest triangle index
+/// among `sides` (the sides of one undirected edge, so of distinct triangles). With fewer
+/// than three sides, the highest triangle present; 0 for none.
+fn third_user(sides: &[u32]) -> u32 {
+    let mut low = [u32::MAX; 3];
+    for &s in sides {
+        let mut f = s / 3;
+        for l in &mut low {
+            if f < *l {
+                core::mem::swap(&mut f, l);
+            }
+        }
+    }
+    low.iter()
+        .rev()
+        .find(|&&l| l != u32::MAX)
+        .copied()
+        .unwrap_or(0)
+}
+
 impl<S: MeshStorage> Mesh<S> {
     /// Replaces the mesh with the triangles `triangles` over `positions`.
     ///
@@ -137,11 +157,10 @@ impl<S: MeshStorage> Mesh<S> {
             }
             let (lo, hi) = ((k >> 32) as u32, k as u32);
             if j - i > 2 {
-                let first = order.get(i..j).into_iter().flatten().map(|&s| s / 3).min();
                 return Err(BuildError::NonManifoldEdge {
                     a: VertexId(lo),
                     b: VertexId(hi),
-                    face: FaceId(first.unwrap_or(0)),
+                    face: FaceId(third_user(order.get(i..j).unwrap_or(&[]))),
                 });
             }
             if j - i == 2 {

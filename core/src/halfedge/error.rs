@@ -40,7 +40,8 @@ pub enum BuildError {
         a: VertexId,
         /// Larger endpoint.
         b: VertexId,
-        /// The lowest-numbered triangle using the edge.
+        /// The triangle that made the edge's count exceed two: the third-lowest-numbered
+        /// triangle using the edge (the third user in input order).
         face: FaceId,
     },
     /// The directed edge `a → b` is used by two triangles (neighbours disagree on the
@@ -120,7 +121,7 @@ impl fmt::Display for Numbered<'_> {
             ),
             BuildError::NonManifoldEdge { a, b, face } => write!(
                 f,
-                "non-manifold edge between vertices {} and {}: used by more than two triangles, the first of them triangle {}",
+                "non-manifold edge between vertices {} and {}: used by more than two triangles; the third is triangle {}",
                 n(a.0),
                 n(b.0),
                 n(face.0)

@@ -222,13 +222,30 @@ fn build_errors_name_the_element() {
             vertex: VertexId(0)
         })
     );
-    // Edge 0–1 used by three triangles.
+    // Edge 0–1 used by three triangles: the third (here the last) is named.
     assert_eq!(
         e(&[[0, 1, 2], [1, 0, 3], [0, 1, 4]]),
         Some(BuildError::NonManifoldEdge {
             a: VertexId(0),
             b: VertexId(1),
-            face: FaceId(0)
+            face: FaceId(2)
+        })
+    );
+    // Edge 0–1 used by triangles 1, 3, 4 and 5 (not by 0 or 2): the third user, 4, is named,
+    // not the first (1) nor the last (5).
+    assert_eq!(
+        e(&[
+            [3, 4, 5],
+            [1, 0, 3],
+            [6, 7, 3],
+            [0, 1, 2],
+            [0, 1, 4],
+            [1, 0, 5]
+        ]),
+        Some(BuildError::NonManifoldEdge {
+            a: VertexId(0),
+            b: VertexId(1),
+            face: FaceId(4)
         })
     );
     // Directed edge 0→1 twice.
@@ -304,10 +321,10 @@ fn build_errors_name_the_element() {
     );
     // Every refusal but capacity names an input element, numbered as the caller counts.
     let three = e(&[[0, 1, 2], [1, 0, 3], [0, 1, 4]]).unwrap();
-    assert_eq!(three.culprit(), Some(Culprit::Face(FaceId(0))));
+    assert_eq!(three.culprit(), Some(Culprit::Face(FaceId(2))));
     assert_eq!(
         three.numbered_from(1).to_string(),
-        "non-manifold edge between vertices 1 and 2: used by more than two triangles, the first of them triangle 1"
+        "non-manifold edge between vertices 1 and 2: used by more than two triangles; the third is triangle 3"
     );
     let twice = e(&[[0, 1, 2], [0, 1, 3]]).unwrap();
     assert_eq!(twice.culprit(), Some(Culprit::Face(FaceId(1))));
