@@ -360,9 +360,10 @@ pub fn parse_obj_bytes_within(
                             format!("`{}` is not a number", crate::text::excerpt(tok)),
                         )
                     })?;
-                    // A finite number beyond `f32` reads as infinity: for a coordinate that
-                    // is the domain's error below, for a `w` or colour a range error.
-                    let beyond_f32 = !v.is_finite() && tok.parse::<f64>().is_ok_and(f64::is_finite);
+                    // A number beyond `f32` (`1e39`, `1e400`) reads as infinity: for a
+                    // coordinate that is the domain's error below, for a `w` or colour a range
+                    // error. Only a spelled-out infinity or NaN is "not finite".
+                    let beyond_f32 = v.is_infinite() && !spells_non_finite(tok);
                     let outside_domain = beyond_f32 && count < 3;
                     if !(v.is_finite() || outside_domain) {
                         let why = if beyond_f32 {
@@ -520,6 +521,15 @@ fn face_vertex(tok: &str, [vertices, texcoords, normals]: [usize; 3]) -> Result<
     Ok(vertex)
 }
 
+/// Whether `tok` is one of the spellings `f32` parses as infinity or NaN (`inf`, `infinity`,
+/// `nan`, in any case, with an optional sign), rather than a number too large for `f32`.
+fn spells_non_finite(tok: &str) -> bool {
+    let word = tok.strip_prefix(['+', '-']).unwrap_or(tok);
+    ["inf", "infinity", "nan"]
+        .iter()
+        .any(|w| word.eq_ignore_ascii_case(w))
+}
+
 fn tokens_with_columns(s: &str) -> impl Iterator<Item = (usize, &str)> {
     s.split_ascii_whitespace().map(move |tok| {
         let col = tok.as_ptr() as usize - s.as_ptr() as usize + 1;
@@ -585,8 +595,28 @@ mod tests {
             e.to_string(),
             "a.obj:1:9: field `w|r`: `1e39` is beyond the largest `f32` (3.4e38)"
         );
-        let e = parse_obj("v 0 0 inf\n", Path::new("a.obj")).unwrap_err();
-        assert!(e.to_string().ends_with("`inf` is not finite"), "{e}");
+        // So is one beyond `f64` (`1e400`), while a spelled-out infinity is not finite.
+        for big in ["1e400", "-1E400", "+1e99999"] {
+            let e = parse_obj(&format!("v 0 0 {big}\n"), Path::new("a.obj")).unwrap_err();
+            assert!(
+                e.to_string().starts_with(&format!(
+                    "a.obj:1:7: field `z`: vertex 1: `{big}` is outside the coordinate domain"
+                )),
+                "{e}"
+            );
+        }
+        let e = parse_obj("v 0 0 0 1e400\n", Path::new("a.obj")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "a.obj:1:9: field `w|r`: `1e400` is beyond the largest `f32` (3.4e38)"
+        );
+        for spelled in ["inf", "-Infinity", "+INF", "NaN", "-nan"] {
+            let e = parse_obj(&format!("v 0 0 {spelled}\n"), Path::new("a.obj")).unwrap_err();
+            assert_eq!(
+                e.to_string(),
+                format!("a.obj:1:7: field `z`: `{spelled}` is not finite")
+            );
+        }
         let e = parse_obj("v 0 0 0\nf 1 2 3\n", Path::new("b.obj")).unwrap_err();
         assert!(
             e.to_string()

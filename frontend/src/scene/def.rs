@@ -164,8 +164,14 @@ pub struct RotateDef {
     pub degrees: S<f32>,
 }
 
-/// `scale = 2` or `scale = [sx, sy, sz]`.
-pub struct ScaleDef(pub [f32; 3]);
+/// `scale = 2` (one factor for every axis, spanned by the step's `scale`) or
+/// `scale = [sx, sy, sz]` (each factor spanned, so a bad one is reported at its place).
+pub enum ScaleDef {
+    /// One factor for all three axes.
+    Uniform(f32),
+    /// One factor per axis.
+    Axes([S<f32>; 3]),
+}
 
 impl<'de> Deserialize<'de> for ScaleDef {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
@@ -176,28 +182,27 @@ impl<'de> Deserialize<'de> for ScaleDef {
                 f.write_str("a number or an array of 3 numbers")
             }
             fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<ScaleDef, E> {
-                Ok(ScaleDef([v as f32; 3]))
+                Ok(ScaleDef::Uniform(v as f32))
             }
             fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<ScaleDef, E> {
-                Ok(ScaleDef([v as f32; 3]))
+                Ok(ScaleDef::Uniform(v as f32))
             }
             fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<ScaleDef, E> {
-                Ok(ScaleDef([v as f32; 3]))
+                Ok(ScaleDef::Uniform(v as f32))
             }
             fn visit_seq<A: serde::de::SeqAccess<'de>>(
                 self,
                 mut a: A,
             ) -> Result<ScaleDef, A::Error> {
-                let mut out = [0.0f32; 3];
-                for (k, slot) in out.iter_mut().enumerate() {
-                    *slot = a
-                        .next_element()?
-                        .ok_or_else(|| serde::de::Error::invalid_length(k, &self))?;
-                }
+                let mut axis = |k: usize| {
+                    a.next_element()?
+                        .ok_or_else(|| serde::de::Error::invalid_length(k, &self))
+                };
+                let out = [axis(0)?, axis(1)?, axis(2)?];
                 if a.next_element::<f32>()?.is_some() {
                     return Err(serde::de::Error::invalid_length(4, &self));
                 }
-                Ok(ScaleDef(out))
+                Ok(ScaleDef::Axes(out))
             }
         }
         d.deserialize_any(V)

@@ -48,10 +48,18 @@ pub(super) fn transform(
                 (rm, r.span(), "rotate")
             }
             (None, None, Some(sc), None) => {
-                let v = Vec3::from_array(sc.get_ref().0);
-                if !v.is_finite() {
-                    return Err(ctx.err(&sc.span(), &format!("{f}.scale"), "non-finite scale"));
-                }
+                let v = match sc.get_ref() {
+                    def::ScaleDef::Uniform(x) => {
+                        Vec3::splat(ctx.f(&S::new(sc.span(), *x), &format!("{f}.scale"))?)
+                    }
+                    def::ScaleDef::Axes(axes) => {
+                        let mut v = [0.0; 3];
+                        for (k, (x, slot)) in axes.iter().zip(&mut v).enumerate() {
+                            *slot = ctx.f(x, &format!("{f}.scale[{k}]"))?;
+                        }
+                        Vec3::from_array(v)
+                    }
+                };
                 (Mat4::from_scale(v), sc.span(), "scale")
             }
             (None, None, None, Some(mx)) => {
@@ -106,4 +114,56 @@ pub(super) fn transform(
         })?;
     }
     Ok(combined)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    /// A sphere scene with `transform = [{ scale = SCALE }]` on line 11.
+    fn scene(scale: &str) -> String {
+        format!(
+            "[camera]\neye = [0, 0, 9]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\nheight = 6\n\n\
+             [material.m]\n\n[[object]]\ntransform = [{{ scale = {scale} }}]\n\
+             type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n"
+        )
+    }
+
+    /// A scale `f32` cannot hold is refused as written, at the factor (`scale`, or
+    /// `scale[k]` in an array) and its column; NaN and infinities as not finite.
+    #[test]
+    fn a_scale_beyond_f32_is_named_as_written() {
+        let field = "field `object[0].transform[0].scale";
+        for (scale, want) in [
+            (
+                "1e39",
+                format!("s.toml:11:24: {field}`: 1e39 is beyond the largest `f32` (±3.4e38)"),
+            ),
+            (
+                "-4E38",
+                format!("s.toml:11:24: {field}`: -4E38 is beyond the largest `f32` (±3.4e38)"),
+            ),
+            (
+                "[1, 1, 1e39]",
+                format!("s.toml:11:31: {field}[2]`: 1e39 is beyond the largest `f32` (±3.4e38)"),
+            ),
+            (
+                "[nan, 1, 1]",
+                format!("s.toml:11:25: {field}[0]`: NaN is not a finite number"),
+            ),
+            (
+                "inf",
+                format!("s.toml:11:24: {field}`: inf is not a finite number"),
+            ),
+        ] {
+            let e = crate::scene::parse(&scene(scale), Path::new("s.toml"))
+                .err()
+                .map(|e| e.to_string());
+            assert_eq!(e.as_deref(), Some(want.as_str()), "scale = {scale}");
+        }
+        for scale in ["2", "3e38", "[1, 2, 3]"] {
+            let ok = crate::scene::parse(&scene(scale), Path::new("s.toml"));
+            assert!(ok.is_ok(), "scale = {scale}: {:?}", ok.err());
+        }
+    }
 }
