@@ -239,9 +239,9 @@ fn non_finite_numbers() {
     check(
         "nan.toml",
         &sphere_with("center = [0, nan, 0]\nradius = 1\nmaterial = \"m\""),
-        "13:10",
-        "object[0].center",
-        "has a component that is not a finite `f32`",
+        "13:14",
+        "object[0].center[1]",
+        "NaN is not a finite number",
     );
     // A finite number beyond `f32` is named as written, not as the `inf` it reads as.
     check(

@@ -7,8 +7,8 @@ use toml::Spanned;
 
 /// A spanned value.
 pub type S<T> = Spanned<T>;
-/// A spanned 3-vector.
-pub type V3 = S<Exact<f32, 3>>;
+/// A spanned 3-vector of spanned components (a bad component is reported at its place).
+pub type V3 = S<Exact<S<f32>, 3>>;
 
 /// A fixed-size array that refuses extra elements: serde's `[T; N]` reads the first `N` and
 /// ignores the rest (`center = [0, 0, 0, "junk"]` was accepted), this reports "invalid length".
@@ -28,12 +28,10 @@ impl<T, const N: usize> std::ops::Deref for Exact<T, N> {
     }
 }
 
-impl<'de, T: Deserialize<'de> + Copy + Default, const N: usize> Deserialize<'de> for Exact<T, N> {
+impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Exact<T, N> {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         struct V<T, const N: usize>(std::marker::PhantomData<T>);
-        impl<'de, T: Deserialize<'de> + Copy + Default, const N: usize> serde::de::Visitor<'de>
-            for V<T, N>
-        {
+        impl<'de, T: Deserialize<'de>, const N: usize> serde::de::Visitor<'de> for V<T, N> {
             type Value = Exact<T, N>;
             fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
                 write!(f, "an array of exactly {N} elements")
@@ -42,11 +40,12 @@ impl<'de, T: Deserialize<'de> + Copy + Default, const N: usize> Deserialize<'de>
                 self,
                 mut a: A,
             ) -> Result<Exact<T, N>, A::Error> {
-                let mut out = [T::default(); N];
-                for (k, slot) in out.iter_mut().enumerate() {
-                    *slot = a
-                        .next_element()?
-                        .ok_or_else(|| serde::de::Error::invalid_length(k, &self))?;
+                let mut out = Vec::with_capacity(N);
+                for k in 0..N {
+                    out.push(
+                        a.next_element()?
+                            .ok_or_else(|| serde::de::Error::invalid_length(k, &self))?,
+                    );
                 }
                 let mut extra = 0usize;
                 while a.next_element::<serde::de::IgnoredAny>()?.is_some() {
@@ -55,6 +54,9 @@ impl<'de, T: Deserialize<'de> + Copy + Default, const N: usize> Deserialize<'de>
                 if extra > 0 {
                     return Err(serde::de::Error::invalid_length(N + extra, &self));
                 }
+                let out = out
+                    .try_into()
+                    .map_err(|_| serde::de::Error::invalid_length(0, &self))?;
                 Ok(Exact(out))
             }
         }
@@ -231,7 +233,7 @@ pub struct ObjectDef {
     pub radii: Option<V3>,
     pub point: Option<V3>,
     pub normal: Option<V3>,
-    pub vertices: Option<S<Vec<Exact<f32, 3>>>>,
+    pub vertices: Option<S<Vec<V3>>>,
     pub min: Option<V3>,
     pub max: Option<V3>,
     pub coefficients: Option<S<QuadricDef>>,

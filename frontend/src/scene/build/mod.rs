@@ -103,14 +103,12 @@ impl Ctx<'_> {
         Ok(x)
     }
 
+    /// The vector `v`; a component that is not a finite `f32` is refused by [`Ctx::f`] at its
+    /// own place, as `field[k]`.
     fn v3(&self, v: &V3, field: &str) -> Result<Vec3> {
-        let a = **v.get_ref();
-        if a.iter().any(|x| !x.is_finite()) {
-            return Err(self.err(
-                &v.span(),
-                field,
-                format!("{a:?} has a component that is not a finite `f32` (NaN, infinite, or beyond ±3.4e38)"),
-            ));
+        let mut a = [0.0; 3];
+        for (k, (x, slot)) in v.get_ref().iter().zip(&mut a).enumerate() {
+            *slot = self.f(x, &format!("{field}[{k}]"))?;
         }
         Ok(Vec3::from_array(a))
     }

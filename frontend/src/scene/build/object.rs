@@ -264,14 +264,12 @@ fn plane(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>) -> Result<Geometry> {
 fn vertices(ctx: &Ctx<'_>, o: &ObjectDef, at: &At<'_>, triangle: bool) -> Result<Geometry> {
     let (span, kind, f) = (at.span, at.kind, |n: &str| at.f(n));
     let vs = ctx.need(&o.vertices, span, &f("vertices"), kind)?;
-    let pts: Vec<Vec3> = vs.get_ref().iter().map(|a| Vec3::from_array(**a)).collect();
-    if pts.iter().any(|v| !v.is_finite()) {
-        return Err(ctx.err(
-            &vs.span(),
-            &f("vertices"),
-            "a vertex has a non-finite coordinate",
-        ));
-    }
+    let pts = vs
+        .get_ref()
+        .iter()
+        .enumerate()
+        .map(|(i, v)| ctx.v3(v, &format!("{}[{i}]", f("vertices"))))
+        .collect::<Result<Vec<Vec3>>>()?;
     if triangle {
         let [a, b, c] = pts[..] else {
             return Err(ctx.err(
@@ -416,6 +414,35 @@ mod tests {
     /// coefficients by a few ulps more; `1e-12` leaves room for both, and a wrong coefficient
     /// (a factor of 2 or 4 on a term) moves the value by far more at these points.
     const EVAL_AGREEMENT: f64 = 1e-12;
+
+    /// A bad component of a vector written over several lines, and a bad vertex of a polygon,
+    /// are reported at their own line and column and named by index (`center[2]`,
+    /// `vertices[3][1]`), not at the array's start.
+    #[test]
+    fn a_bad_array_element_is_reported_at_its_place() {
+        let head = "[camera]\neye = [0, 0, 9]\nlook_at = [0, 0, 0]\nfov = 40\nwidth = 8\n\
+                    height = 6\n\n[material.m]\n\n[[object]]\nmaterial = \"m\"\n";
+        let err = |body: &str| {
+            crate::scene::parse(&format!("{head}{body}"), Path::new("s.toml"))
+                .err()
+                .map(|e| e.to_string())
+        };
+        assert_eq!(
+            err("type = \"sphere\"\nradius = 1\ncenter = [0,\n 0,\n 1e39]\n").as_deref(),
+            Some(
+                "s.toml:16:2: field `object[0].center[2]`: 1e39 is beyond the largest `f32` \
+                 (±3.4e38)"
+            )
+        );
+        assert_eq!(
+            err(
+                "type = \"polygon\"\nvertices = [\n [0, 0, 0],\n [1, 0, 0],\n [1, 1, 0],\n \
+                 [0, nan, 0],\n]\n"
+            )
+            .as_deref(),
+            Some("s.toml:17:6: field `object[0].vertices[3][1]`: NaN is not a finite number")
+        );
+    }
 
     /// CSG nests inline as deep as the TOML reader reads nested values:
     /// [`crate::scene::MAX_CSG_NESTING`] levels, the object's own included
