@@ -74,7 +74,9 @@ impl<S: MeshStorage> Mesh<S> {
     /// stops at the first edge used by more than two triangles or used twice in one direction
     /// (inconsistent orientation), whichever of the two that edge shows; then the edge
     /// capacity (the edge count is known only after that pass); then a non-manifold (bowtie)
-    /// vertex. On any error the mesh is left empty.
+    /// vertex: one pinched at the boundary first (the first met in halfedge order), then one
+    /// whose triangles close into more than one fan, so the vertex named is not always the
+    /// lowest-numbered offender. On any error the mesh is left empty.
     pub fn build(
         &mut self,
         positions: &[Vec3],
