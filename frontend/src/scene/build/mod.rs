@@ -106,8 +106,13 @@ impl Ctx<'_> {
     /// The vector `v`; a component that is not a finite `f32` is refused by [`Ctx::f`] at its
     /// own place, as `field[k]`.
     fn v3(&self, v: &V3, field: &str) -> Result<Vec3> {
+        self.components(v.get_ref(), field)
+    }
+
+    /// The vector of the spanned components `xs`, each checked by [`Ctx::f`] as `field[k]`.
+    fn components(&self, xs: &[S<f32>; 3], field: &str) -> Result<Vec3> {
         let mut a = [0.0; 3];
-        for (k, (x, slot)) in v.get_ref().iter().zip(&mut a).enumerate() {
+        for (k, (x, slot)) in xs.iter().zip(&mut a).enumerate() {
             *slot = self.f(x, &format!("{field}[{k}]"))?;
         }
         Ok(Vec3::from_array(a))

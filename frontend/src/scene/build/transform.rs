@@ -52,13 +52,7 @@ pub(super) fn transform(
                     def::ScaleDef::Uniform(x) => {
                         Vec3::splat(ctx.f(&S::new(sc.span(), *x), &format!("{f}.scale"))?)
                     }
-                    def::ScaleDef::Axes(axes) => {
-                        let mut v = [0.0; 3];
-                        for (k, (x, slot)) in axes.iter().zip(&mut v).enumerate() {
-                            *slot = ctx.f(x, &format!("{f}.scale[{k}]"))?;
-                        }
-                        Vec3::from_array(v)
-                    }
+                    def::ScaleDef::Axes(axes) => ctx.components(axes, &format!("{f}.scale"))?,
                 };
                 (Mat4::from_scale(v), sc.span(), "scale")
             }
