@@ -686,3 +686,34 @@ fn contains_point_pads_by_rounding_only() {
         }
     }
 }
+
+#[test]
+fn eigen_solves_matrices_whose_diagonal_difference_overflows() {
+    // [[a, b], [b, −a]] ⊕ [r] has the eigenvalues ±√(a² + b²) and r (closed form); for the
+    // huge ones a − (−a) overflows f64, so an unscaled Jacobi rotation is skipped.
+    for (a, b) in [
+        (1e308_f64, 1e307_f64),
+        (1.5e308, 1e300),
+        (-1e308, 1e308),
+        (1e-300, 3e-301),
+    ] {
+        let r = a.abs().max(b.abs());
+        let m = [[a, b, 0.0], [b, -a, 0.0], [0.0, 0.0, r]];
+        let (l, v) = symmetric_eigen(m);
+        let want = r * ((a / r) * (a / r) + (b / r) * (b / r)).sqrt();
+        let mut got = l;
+        got.sort_by(f64::total_cmp);
+        assert!((got[0] + want).abs() <= 1e-15 * want, "{a} {b}: {l:?}");
+        assert!((got[2] - want).abs() <= 1e-15 * want, "{a} {b}: {l:?}");
+        assert!(l.contains(&r), "{a} {b}: {l:?}");
+        for k in 0..3 {
+            for i in 0..3 {
+                let av: f64 = (0..3).map(|j| m[i][j] / r * v[j][k]).sum();
+                assert!(
+                    (av - l[k] / r * v[i][k]).abs() <= 1e-14,
+                    "{a} {b} column {k}"
+                );
+            }
+        }
+    }
+}
