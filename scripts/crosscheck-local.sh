@@ -8,7 +8,7 @@
 # JOBS shards run at once (default: every core / THREADS); each gets --threads THREADS
 # (default 1). `--max-mismatch M` among the arguments is passed to the merge too, so the
 # verdict is the unsharded run's. The exit status is the merge's (the run's verdict: 0; 3 on
-# genuine mismatches or leaks; 1 when a mesh could not be checked; 2 when a shard is missing).
+# genuine mismatches or leaks; 1 when a mesh could not be checked; 2 when a shard is missing or refused).
 # When a shard fails, is interrupted or is refused, nothing is merged: the shards that did not
 # complete are named, OUT_DIR/merged.json is deleted (never a partial or stale report) and the
 # exit status is 2; 2 also on a usage error or an OUT_DIR holding another run's files.

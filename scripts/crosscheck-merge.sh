@@ -9,7 +9,9 @@
 #
 # A shard is complete when its report OUT_DIR/part-K-of-N.json (the completion marker, written
 # only when the shard's run ends) exists; a shard without it (never started, cancelled,
-# interrupted, failed) is named and the merge refuses (exit 2). MAX_MISMATCH, when set, is
+# interrupted, failed) is named and the merge refuses (exit 2), as it does a shard whose last
+# start was refused (OUT_DIR/part-K-of-N.refused, written by the shard script: OUT_DIR holds
+# another run's files, which are not merged as this run's). MAX_MISMATCH, when set, is
 # passed as `--max-mismatch` (a scheduler's merge job takes it from the environment). Any
 # previous OUT_DIR/merged.json is deleted first, and the new report is written to a temporary
 # file and renamed: merged.json exists only after a merge that wrote its whole report (verdict
@@ -30,7 +32,14 @@ parts=()
 missing=0
 for ((k = 0; k < n; k++)); do
     part=$out/part-$k-of-$n.jsonl
-    if [ ! -e "$part" ]; then
+    refused=$out/part-$k-of-$n.refused
+    if [ -e "$refused" ]; then
+        # The shard's last start was refused (scripts/crosscheck-shard.sh): the files here are
+        # another run's, not the one this merge follows.
+        echo "crosscheck-merge: shard $k/$n was refused ($refused), so its files here belong to another run:" >&2
+        sed 's/^/  /' "$refused" >&2
+        missing=1
+    elif [ ! -e "$part" ]; then
         # The task never started (cancelled while pending, or OUT_DIR is not shared): say which.
         echo "crosscheck-merge: shard $k/$n is missing: no results log $part" >&2
         missing=1

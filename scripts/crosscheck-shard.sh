@@ -18,8 +18,11 @@
 # with the content of a --mesh-list file) are recorded in OUT_DIR/part-K-of-N.args. A results
 # log left by a run with other arguments (other meshes, rays, sets...), or by one that recorded
 # none, is refused (exit 2) before anything is deleted: use a new OUT_DIR, or delete the old
-# one's files, to start another run. `--check` only makes that check (exit 0 or 2; writes
-# nothing), so scripts/crosscheck-local.sh can refuse before any shard starts.
+# one's files, to start another run. A refused shard writes the reason to
+# OUT_DIR/part-K-of-N.refused (and touches none of the old run's files), so the merge refuses
+# the old run's reports rather than merging them as this run's; a shard that starts deletes it.
+# `--check` only makes that check (exit 0 or 2; writes nothing), so
+# scripts/crosscheck-local.sh can refuse before any shard starts.
 #
 # The binary is $HALFRAY, else this repository's target/release/halfray (built with
 # `--features embree`), else `halfray` on PATH.
@@ -60,20 +63,26 @@ identity() {
     done
 }
 this=$(identity "$@")
+# refuse REASON: exit 2 naming REASON; outside --check, REASON is also written to $part.refused
+# (the old run's own files are left as they are), so that the merge refuses this shard.
+refuse() {
+    echo "crosscheck-shard $k/$n: $1" >&2
+    [ "$check_only" = 1 ] || printf '%s\n' "$1" >"$part.refused" ||
+        echo "crosscheck-shard $k/$n: could not write $part.refused: a merge of OUT_DIR cannot tell that this shard was refused" >&2
+    exit 2
+}
 if [ -e "$part.jsonl" ]; then
     if [ ! -e "$part.args" ]; then
-        echo "crosscheck-shard $k/$n: $part.jsonl records no arguments ($part.args is missing): refusing to resume or overwrite it; use a new OUT_DIR or delete the old run's files" >&2
-        exit 2
+        refuse "$part.jsonl records no arguments ($part.args is missing): refusing to resume or overwrite it; use a new OUT_DIR or delete the old run's files"
     fi
     if [ "$(cat "$part.args")" != "$this" ]; then
-        echo "crosscheck-shard $k/$n: $part.jsonl belongs to a run with other arguments; refusing to mix them (use a new OUT_DIR or delete the old run's files):" >&2
-        diff <(cat "$part.args") <(echo "$this") | sed 's/^/  /' >&2 || true
-        exit 2
+        refuse "$part.jsonl belongs to a run with other arguments; refusing to mix them (use a new OUT_DIR or delete the old run's files):
+$(diff <(cat "$part.args") <(echo "$this") | sed 's/^/  /' || true)"
     fi
 fi
 [ "$check_only" = 0 ] || exit 0
 [ -e "$part.jsonl" ] || printf '%s\n' "$this" >"$part.args"
-rm -f "$part.json"
+rm -f "$part.json" "$part.refused"
 rc=0
 "$bin" crosscheck "$@" --shard "$k/$n" --jsonl "$part.jsonl" --resume --json "$part.json" \
     >"$part.txt" || rc=$?

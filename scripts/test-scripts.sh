@@ -6,7 +6,8 @@
 #   bash scripts/test-scripts.sh
 #
 # Covers crosscheck-same-run.py, crosscheck-verify-shards.sh, crosscheck-merge.sh,
-# crosscheck-local.sh and crosscheck-shard.sh (incomplete shards, reused OUT_DIR, --max-mismatch),
+# crosscheck-local.sh and crosscheck-shard.sh (incomplete and refused shards, reused OUT_DIR,
+# --max-mismatch),
 # fuzz-tools.sh (through fuzz-ci.sh: a failed or empty target list), fuzz-task.sh and
 # fuzz-merge.sh (failed tasks, missing binaries), mutants.sh (a failed stage, stage one's
 # verdicts kept).
@@ -95,6 +96,24 @@ check "local: the merge ran with --max-mismatch 7" \
     python3 -c 'import json,sys; sys.exit(json.load(open(sys.argv[1]))["merge_args"]["max_mismatch"] != "7")' "$tmp/mm/merged.json"
 rm "$o/part-0-of-3.args"
 expect 2 "shard: a results log with no recorded arguments is refused" bash "$s/crosscheck-shard.sh" 0 3 "$o" a.obj b.obj --rays 10
+# A scheduler's shards (no --check first) refused in a copy of a finished run, then the merge
+# that follows them with afterany: it must not merge the old run's reports as this run's.
+r=$tmp/rerun
+expect 0 "local: a finished run to run again" bash "$s/crosscheck-local.sh" 2 "$tmp/run-a" a.obj b.obj --rays 10
+cp -r "$tmp/run-a" "$r"
+for k in 0 1; do
+    expect 2 "shard: $k/2 with other rays is refused" bash "$s/crosscheck-shard.sh" "$k" 2 "$r" a.obj b.obj --rays 20
+done
+check "shard: ... leaving the old run's report as it was" cmp -s "$r/part-0-of-2.json" "$tmp/run-a/part-0-of-2.json"
+expect 2 "merge: shards refused at their last start are not merged" bash "$s/crosscheck-merge.sh" 2 "$r"
+check "merge: ... naming them" grep -q 'shard 1/2 was refused' "$tmp/last.out"
+check "merge: ... with the reason" grep -q 'belongs to a run with other arguments' "$tmp/last.out"
+check "merge: ... and no merged.json" test ! -e "$r/merged.json"
+expect 0 "shard: 0/2 with the old run's arguments starts" bash "$s/crosscheck-shard.sh" 0 2 "$r" a.obj b.obj --rays 10
+expect 2 "merge: shard 1/2 still refused" bash "$s/crosscheck-merge.sh" 2 "$r"
+check "merge: ... only shard 1/2 named" test "$(grep -c 'was refused' "$tmp/last.out")" = 1
+expect 0 "shard: 1/2 with the old run's arguments starts" bash "$s/crosscheck-shard.sh" 1 2 "$r" a.obj b.obj --rays 10
+expect 0 "merge: both shards started again: merged" bash "$s/crosscheck-merge.sh" 2 "$r"
 
 # fuzz-tools.sh (through fuzz-ci.sh): the target list's status counts.
 mkdir -p "$tmp/cargo-bin"
