@@ -8,24 +8,16 @@
 #
 # Exit status: 0 when the merged report equals the unsharded run, 1 when it differs (the first
 # difference is named) or a run failed, 2 on a usage error. OUT_DIR is this script's own: it is
-# emptied first, and refused (exit 2, nothing deleted) when it holds anything but a previous
-# run's files (whole.json, stderr.log, local/).
+# emptied first, and refused (exit 2, nothing deleted) when it is not a folder or holds anything
+# but a previous run's files (whole.json, stderr.log, local/; scripts/out-dir.sh).
 set -euo pipefail
 [ $# -ge 1 ] || { echo "usage: $0 OUT_DIR [crosscheck arguments...]" >&2; exit 2; }
 out=$1
 shift
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 bin=${HALFRAY:-$root/target/release/halfray}
-if [ -d "$out" ]; then
-    for f in "$out"/* "$out"/.[!.]* "$out"/..?*; do
-        [ -e "$f" ] || [ -L "$f" ] || continue
-        case ${f##*/} in
-            whole.json | stderr.log | local) ;;
-            *) echo "crosscheck-verify-shards: $out holds $f, not this script's output; refusing to empty it" >&2
-               exit 2 ;;
-        esac
-    done
-fi
+source "$root/scripts/out-dir.sh"
+own_out_dir crosscheck-verify-shards "$out" whole.json stderr.log local
 rm -rf "$out" && mkdir -p "$out/local"
 # The runs' progress goes to a log, shown when a step fails.
 exec 3>&2 2>"$out/stderr.log"

@@ -72,6 +72,9 @@ expect 1 "verify-shards: a difference fails" env FAKE_SKEW=1 bash "$s/crosscheck
 mkdir -p "$tmp/other" && touch "$tmp/other/keep"
 expect 2 "verify-shards: refuses an OUT_DIR it did not write" bash "$s/crosscheck-verify-shards.sh" "$tmp/other" a.obj --rays 10
 check "verify-shards: the refused OUT_DIR is untouched" test -e "$tmp/other/keep"
+echo data >"$tmp/a-file"
+expect 2 "verify-shards: refuses an OUT_DIR that is a file" bash "$s/crosscheck-verify-shards.sh" "$tmp/a-file" a.obj --rays 10
+check "verify-shards: ... and leaves it" grep -qx data "$tmp/a-file"
 
 # crosscheck-local.sh / crosscheck-merge.sh / crosscheck-shard.sh.
 o=$tmp/local
