@@ -13,11 +13,15 @@
 #   2. task 1 is cancelled (`scancel`) once it has checked its first mesh: the merge job must
 #      fail (exit 2) with a message naming shard 1/3.
 # Every wait is bounded (TIMEOUT seconds per submission, default 600); a failed check prints the
-# jobs as the scheduler reports them.
+# jobs as the scheduler reports them. OUT_DIR is this script's own: it is emptied first, and
+# refused (exit 2, nothing deleted) when it is not a folder or holds anything but what the
+# script writes there (meshes.txt, whole.json, whole.txt, requeue/, cancel/; scripts/out-dir.sh).
 set -euo pipefail
 [ $# -ge 2 ] || { echo "usage: $0 OUT_DIR MESH..." >&2; exit 2; }
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 source "$root/scripts/slurm-jobs.sh"
+source "$root/scripts/out-dir.sh"
+own_out_dir slurm-ci-crosscheck "$1" meshes.txt whole.json whole.txt requeue cancel
 out=$(mkdir -p "$1" && cd "$1" && pwd)
 shift
 rays=${RAYS:-10000}

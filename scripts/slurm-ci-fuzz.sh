@@ -12,10 +12,17 @@
 # completed, that the real targets' corpora were merged (`-merge=1`: some inputs, no more than
 # went in), and that the merge job failed (exit 1) reporting the planted input as a finding of
 # `planted` and nothing else. Every wait is bounded; a failed check prints the jobs as the scheduler
-# reports them.
+# reports them. OUT_DIR is this script's own: it is emptied first, and refused (exit 2, nothing
+# deleted, nothing built) when it is not a folder or holds anything but what the campaign writes
+# there (bin/, seeds/, corpus/, artifacts/, logs/, merged/, summary.md, fuzz-*.log;
+# scripts/out-dir.sh).
 set -euo pipefail
 [ $# -eq 1 ] || { echo "usage: $0 OUT_DIR" >&2; exit 2; }
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+source "$root/scripts/out-dir.sh"
+# What this script, the tasks (scripts/fuzz-task.sh), the merge (scripts/fuzz-merge.sh) and
+# their Slurm logs write in OUT_DIR.
+own_out_dir slurm-ci-fuzz "$1" bin seeds corpus artifacts logs merged summary.md 'fuzz-*.log'
 out=$(mkdir -p "$1" && cd "$1" && pwd)
 real=(ray_box obj_file)
 # Builds every target (a no-op after the fuzz stage) and leaves us in the repository root.

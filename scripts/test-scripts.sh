@@ -124,6 +124,23 @@ cp "$s/tests/fake-cargo.sh" "$tmp/cargo-bin/cargo"
 expect 1 "fuzz-ci: a failed \`cargo fuzz list\` fails" env PATH="$tmp/cargo-bin:$PATH" FAKE_LIST=fail bash "$s/fuzz-ci.sh"
 expect 1 "fuzz-ci: no fuzz target fails" env PATH="$tmp/cargo-bin:$PATH" FAKE_LIST=empty bash "$s/fuzz-ci.sh"
 
+# slurm-ci-*.sh empty their OUT_DIR: only one holding their own files (a stand-in sbatch fails
+# the first submission, after the emptying).
+mkdir -p "$tmp/user-data" "$tmp/slurm-bin"
+printf '#!/bin/sh\necho "fake sbatch: no cluster" >&2; exit 1\n' >"$tmp/slurm-bin/sbatch"
+chmod +x "$tmp/slurm-bin/sbatch"
+for script in slurm-ci-crosscheck slurm-ci-fuzz; do
+    args=(a.obj); [ "$script" = slurm-ci-crosscheck ] || args=()
+    echo data >"$tmp/user-data/keep"
+    expect 2 "$script: refuses an OUT_DIR holding other files" \
+        env PATH="$tmp/slurm-bin:$tmp/cargo-bin:$PATH" bash "$s/$script.sh" "$tmp/user-data" "${args[@]}"
+    check "$script: ... and leaves them" grep -qx data "$tmp/user-data/keep"
+done
+mkdir -p "$tmp/sc-out/requeue" && touch "$tmp/sc-out/whole.json" "$tmp/sc-out/requeue/part-0-of-3.jsonl"
+expect 1 "slurm-ci-crosscheck: takes an OUT_DIR of its own (up to the failed sbatch)" \
+    env PATH="$tmp/slurm-bin:$PATH" bash "$s/slurm-ci-crosscheck.sh" "$tmp/sc-out" a.obj
+check "slurm-ci-crosscheck: ... and empties it" test ! -e "$tmp/sc-out/requeue/part-0-of-3.jsonl"
+
 # fuzz-task.sh / fuzz-merge.sh with stand-in targets `a` and `b`.
 mkdir -p "$tmp/fbin" "$tmp/seeds/a" "$tmp/seeds/b"
 cp "$s/tests/fake-fuzz-target.sh" "$tmp/fbin/a"
