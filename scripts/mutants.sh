@@ -4,7 +4,10 @@
 # cargo-mutants' own `--list` order is SHARD mod n, n = ceil(count / PER_FILE): spread over the
 # whole file), tested by TEST_PACKAGES. Prints one table row per file: mutants in the file,
 # sampled, caught / missed / unviable / timeout; the sample and the verdicts are listed under
-# target/mutation/sample.s<SHARD>.p<PER_FILE>/ (sample.txt, caught.txt, missed.txt, ...).
+# target/mutation/sample.s<SHARD>.p<PER_FILE>.f<HASH>/ (sample.txt, caught.txt, missed.txt, ...;
+# HASH: the first 8 hex digits of the SHA-256 of the resolved file list, one path a line), so
+# runs of other FILES, shards or sizes write apart; a second run of the same sample while one is
+# under way is refused (exit 1; a lock on the folder's .lock).
 #
 # Two stages, one outcome: every sampled mutant is first tested by the core's own tests alone
 # (one cargo-mutants run for all files, one build of the dependencies); only the ones those
@@ -85,7 +88,11 @@ fi
 count() { if [ -f "$1" ]; then grep -c . "$1" || true; else echo 0; fi; }
 esc() { sed 's/[][\\.^$*+?(){}|]/\\&/g' | paste -sd'|' -; }
 # The sample: in each file, the mutants whose index in cargo-mutants' order is SHARD mod n.
-run="$out/sample.s$SHARD.p$PER_FILE"; mkdir -p "$run"; : >"$run/sample.txt"; : >"$run/files.txt"
+files_hash=$(printf '%s\n' "${FILES[@]}" | sha256sum | cut -c1-8)
+run="$out/sample.s$SHARD.p$PER_FILE.f$files_hash"; mkdir -p "$run"
+exec 9>"$run/.lock"
+flock -n 9 || { echo "mutants: another run of this sample is writing $run; wait for it or choose other FILES, SHARD or PER_FILE" >&2; exit 1; }
+: >"$run/sample.txt"; : >"$run/files.txt"
 args=()
 for f in "${FILES[@]}"; do
     cargo mutants --list -f "$f" 2>/dev/null >"$run/all.tmp" || true

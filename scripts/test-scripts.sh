@@ -174,14 +174,24 @@ cp "$s/mutants.sh" "$mr/scripts/"
 : >"$mr/core/src/aabb.rs"
 cp "$s/tests/fake-cargo-mutants.sh" "$tmp/mutants-bin/cargo"
 mutants() { env PATH="$tmp/mutants-bin:$PATH" FILES=core/src/aabb.rs TEST_PACKAGES=halfray-core,halfray-tests "$@" bash "$mr/scripts/mutants.sh"; }
-missed() { grep -c . "$mr/target/mutation/sample.s0.p100/missed.txt" || true; }
+# The last run's folder, as it names it.
+sample_dir() { echo "$mr/$(sed -n 's|^missed: \(.*\)/missed.txt;.*|\1|p' "$tmp/last.out")"; }
+missed() { grep -c . "$(sample_dir)/missed.txt" || true; }
 expect 1 "mutants: a failed stage-two baseline fails the run" mutants FAKE_WIDE=fail
 check "mutants: ... naming the stage" grep -q 'stage two failed: cargo-mutants exit 4' "$tmp/last.out"
 expect 0 "mutants: stage two judges every survivor" mutants FAKE_WIDE=all
 check "mutants: ... f4 missed" test "$(missed)" = 1
 expect 0 "mutants: stage two judges one survivor of two" mutants FAKE_WIDE=partial
 check "mutants: ... the other keeps stage one's verdict (missed)" \
-    grep -qx 'core/src/aabb.rs:4:5: replace f4 -> bool with true' "$mr/target/mutation/sample.s0.p100/missed.txt"
+    grep -qx 'core/src/aabb.rs:4:5: replace f4 -> bool with true' "$(sample_dir)/missed.txt"
+: >"$mr/core/src/other.rs"
+expect 0 "mutants: a run of other FILES" mutants FILES=core/src/other.rs
+other=$(sample_dir)
+expect 0 "mutants: ... and of the first FILES again" mutants
+check "mutants: ... write to two folders" test "$other" != "$(sample_dir)"
+check "mutants: ... the first keeps its own file list" grep -q '^core/src/other.rs ' "$other/files.txt"
+expect 1 "mutants: a second run of a sample under way is refused" \
+    flock "$other/.lock" env PATH="$tmp/mutants-bin:$PATH" FILES=core/src/other.rs bash "$mr/scripts/mutants.sh"
 
 echo
 if [ "$failures" -ne 0 ]; then echo "test-scripts: $failures check(s) failed"; exit 1; fi
