@@ -24,7 +24,9 @@
 #   FILES=frontend/src/outputs FIRST_PACKAGE=halfray TEST_PACKAGES=halfray bash scripts/mutants.sh
 #   bash scripts/mutants.sh --in-diff DIFF                                          # a branch's lines
 #
-# FILES: files or folders (every `.rs` under a folder except `tests.rs` and `tests/`); default
+# FILES: files or folders (every `.rs` under a folder except `tests.rs` and `tests/`; a path that
+# is neither, or a file whose `cargo mutants --list` fails, stops the script with exit 1 naming
+# it; a file with fewer than SHARD + 1 shards is skipped with a line saying so); default
 # the five older critical files, the newer modules and the binary BVH's builder (sah.rs,
 # build.rs). SHARD: which of the n shards to sample
 # (default 0; a held-out check samples another, e.g. `SHARD=3`). Samples drawn before
@@ -53,8 +55,11 @@ for f in $SELECTED; do
     if [ -d "$f" ]; then
         while IFS= read -r g; do FILES+=("$g"); done \
             < <(find "$f" -name '*.rs' ! -name tests.rs ! -path '*/tests/*' | sort)
-    else
+    elif [ -f "$f" ]; then
         FILES+=("$f")
+    else
+        echo "mutants: FILES names $f, which is neither a file nor a folder (paths are relative to the repository root)" >&2
+        exit 1
     fi
 done
 
@@ -95,16 +100,24 @@ flock -n 9 || { echo "mutants: another run of this sample is writing $run; wait 
 : >"$run/sample.txt"; : >"$run/files.txt"
 args=()
 for f in "${FILES[@]}"; do
-    cargo mutants --list -f "$f" 2>/dev/null >"$run/all.tmp" || true
+    rc=0
+    cargo mutants --list -f "$f" >"$run/all.tmp" 2>"$run/list.log" || rc=$?
+    if [ "$rc" -ne 0 ]; then
+        tail -n 20 "$run/list.log" >&2
+        echo "mutants: listing the mutants of $f failed: cargo-mutants exit $rc; log: $run/list.log" >&2
+        exit 1
+    fi
     total=$(count "$run/all.tmp")
-    [ "$total" -ge 1 ] || continue
     n=$(( (total + PER_FILE - 1) / PER_FILE ))
-    [ "$SHARD" -lt "$n" ] || continue
+    if [ "$SHARD" -ge "$n" ]; then
+        echo "mutants: $f: $total mutant(s) in $n shard(s); shard $SHARD is past them: none sampled" >&2
+        continue
+    fi
     awk -v n="$n" -v s="$SHARD" '(NR - 1) % n == s' "$run/all.tmp" >>"$run/sample.txt"
     echo "$f $total" >>"$run/files.txt"
     args+=(-f "$f")
 done
-rm -f "$run/all.tmp"
+rm -f "$run/all.tmp" "$run/list.log"
 [ -s "$run/sample.txt" ] || { echo "no mutants sampled"; exit 0; }
 # Stage one: every sampled mutant against FIRST_PACKAGE's own tests, in one cargo-mutants run
 # (one build of the dependencies); cargo-mutants exits non-zero when a mutant is missed: the

@@ -190,6 +190,12 @@ other=$(sample_dir)
 expect 0 "mutants: ... and of the first FILES again" mutants
 check "mutants: ... write to two folders" test "$other" != "$(sample_dir)"
 check "mutants: ... the first keeps its own file list" grep -q '^core/src/other.rs ' "$other/files.txt"
+expect 1 "mutants: a FILES entry that does not exist fails" mutants FILES="core/src/aabb.rs core/src/gone.rs"
+check "mutants: ... naming it" grep -q 'FILES names core/src/gone.rs' "$tmp/last.out"
+expect 1 "mutants: a failed listing fails" mutants FAKE_LIST=fail
+check "mutants: ... naming the file" grep -q 'listing the mutants of core/src/aabb.rs failed' "$tmp/last.out"
+expect 0 "mutants: a shard past a file's mutants" mutants SHARD=1
+check "mutants: ... is skipped with a line" grep -q 'core/src/aabb.rs: 4 mutant(s) in 1 shard(s); shard 1 is past them' "$tmp/last.out"
 expect 1 "mutants: a second run of a sample under way is refused" \
     flock "$other/.lock" env PATH="$tmp/mutants-bin:$PATH" FILES=core/src/other.rs bash "$mr/scripts/mutants.sh"
 

@@ -3,12 +3,15 @@
 # scripts/mutants.sh: four mutants in core/src/aabb.rs; stage one (--test-package halfray-core)
 # catches f1 and f2 and misses f3 and f4 (exit 2). Stage two, by FAKE_WIDE: `fail` (the baseline
 # fails, exit 4), `partial` (catches f3 and judges nothing else, exit 0), `all` (catches f3,
-# misses f4, exit 2).
+# misses f4, exit 2). FAKE_LIST=fail: `--list` fails (exit 1).
 [ "${1:-}" = mutants ] || { echo "fake cargo: unexpected: $*" >&2; exit 1; }
 shift
 case " $* " in *" --version "*) echo "cargo-mutants 27.0.0"; exit 0 ;; esac
 mutant() { echo "core/src/aabb.rs:$1:5: replace f$1 -> bool with true"; }
-case " $* " in *" --list "*) for i in 1 2 3 4; do mutant "$i"; done; exit 0 ;; esac
+case " $* " in *" --list "*)
+    [ "${FAKE_LIST:-}" != fail ] || { echo "error: failed to parse the package" >&2; exit 1; }
+    for i in 1 2 3 4; do mutant "$i"; done; exit 0 ;;
+esac
 o="" pk="" prev=""
 for a in "$@"; do
     [ "$prev" = -o ] && o=$a
