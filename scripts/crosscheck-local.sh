@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # A sharded cross-check on this machine, the way a cluster runs it: N shards
-# (scripts/crosscheck-shard.sh) through `xargs -P`, then the merge (scripts/crosscheck-merge.sh).
+# (scripts/crosscheck-shard.sh), JOBS at a time, then the merge (scripts/crosscheck-merge.sh).
 #
 #   bash scripts/crosscheck-local.sh N OUT_DIR [crosscheck arguments...]
 #   e.g. bash scripts/crosscheck-local.sh 4 target/shards ../shared/meshes/*.obj --rays 100000
@@ -43,15 +43,32 @@ for a in "$@"; do
     case $a in --max-mismatch=*) merge_args+=("$a") ;; esac
     prev=$a
 done
-rc=0
-seq 0 $((n - 1)) | xargs -P "$jobs" -I{} bash "$here/crosscheck-shard.sh" {} "$n" "$out" "$@" --threads "$threads" || rc=$?
-if [ "$rc" -ne 0 ]; then
+# The shards, JOBS at a time, each with the arguments exactly as given.
+declare -A shard=()   # pid -> shard index
+failed=0
+# Waits for one shard to end and counts it when it failed.
+reap() {
+    local pid rc=0
+    wait -n -p pid || rc=$?
+    if [ "$rc" -ne 0 ]; then
+        echo "crosscheck-local: shard ${shard[$pid]}/$n failed (exit $rc)" >&2
+        failed=$((failed + 1))
+    fi
+    unset "shard[$pid]"
+}
+for ((k = 0; k < n; k++)); do
+    bash "$here/crosscheck-shard.sh" "$k" "$n" "$out" "$@" --threads "$threads" &
+    shard[$!]=$k
+    if [ "${#shard[@]}" -ge "$jobs" ]; then reap; fi
+done
+while [ "${#shard[@]}" -gt 0 ]; do reap; done
+if [ "$failed" -ne 0 ]; then
     # No merge: a shard that stopped early left no report, or an old one that must not be merged.
     rm -f "$out/merged.json"
     for ((k = 0; k < n; k++)); do
         [ -e "$out/part-$k-of-$n.json" ] || echo "crosscheck-local: shard $k/$n did not complete (no report $out/part-$k-of-$n.json)" >&2
     done
-    echo "crosscheck-local: a shard failed, was interrupted or was refused (xargs exit $rc; its messages above): not merged, no $out/merged.json; run the same command again to resume" >&2
+    echo "crosscheck-local: $failed shard(s) failed, were interrupted or were refused (their messages above): not merged, no $out/merged.json; run the same command again to resume" >&2
     exit 2
 fi
 exec bash "$here/crosscheck-merge.sh" "$n" "$out" "${merge_args[@]}"

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # One shard of a cross-check run: the task a cluster scheduler runs (docs/cluster/), and what
-# scripts/crosscheck-local.sh runs N of with xargs -P.
+# scripts/crosscheck-local.sh runs N of.
 #
 #   bash scripts/crosscheck-shard.sh K N OUT_DIR [crosscheck arguments...]
 #   bash scripts/crosscheck-shard.sh --check K N OUT_DIR [crosscheck arguments...]

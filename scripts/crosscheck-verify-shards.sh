@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # CI check of the sharded cross-check (issue 16): the same run unsharded and as 4 shards through
-# the local runner (xargs -P) must merge to the same counts and the same recorded disagreements,
-# row for row (scripts/crosscheck-same-run.py). (The Slurm array itself runs on a real cluster in
-# CI's `cluster` stage, scripts/slurm-ci-crosscheck.sh.)
+# the local runner (scripts/crosscheck-local.sh) must merge to the same counts and the same
+# recorded disagreements, row for row (scripts/crosscheck-same-run.py). (The Slurm array itself
+# runs on a real cluster in CI's `cluster` stage, scripts/slurm-ci-crosscheck.sh.)
 #
 #   bash scripts/crosscheck-verify-shards.sh OUT_DIR [crosscheck arguments...]
 #

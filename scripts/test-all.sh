@@ -118,8 +118,8 @@ if [ "${SKIP_EMBREE:-0}" != 1 ]; then
     cargo run --release -p halfray --features embree -- crosscheck "$MESHES"/*.obj \
         --rays "${CROSSCHECK_RAYS:-100000}" --json target/ci/crosscheck.json \
         --depth-image target/ci/crosscheck-depth.png
-    # The same meshes as 4 shards through the local runner (xargs -P) merge to the unsharded
-    # run, count for count (the Slurm array: stage cluster).
+    # The same meshes as 4 shards through the local runner (crosscheck-local.sh) merge to the
+    # unsharded run, count for count (the Slurm array: stage cluster).
     bash scripts/crosscheck-verify-shards.sh target/ci/shards "$MESHES"/*.obj --rays 10000
 fi
 

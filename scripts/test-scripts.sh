@@ -97,6 +97,9 @@ expect 2 "local: an OUT_DIR of a run with another shard count is refused" bash "
 expect 0 "local: --max-mismatch reaches the merge" bash "$s/crosscheck-local.sh" 2 "$tmp/mm" a.obj --rays 10 --max-mismatch 7
 check "local: the merge ran with --max-mismatch 7" \
     python3 -c 'import json,sys; sys.exit(json.load(open(sys.argv[1]))["merge_args"]["max_mismatch"] != "7")' "$tmp/mm/merged.json"
+expect 0 "local: a mesh named with braces" bash "$s/crosscheck-local.sh" 2 "$tmp/braces" 'cube{}.obj' --rays 10
+check "local: ... reaches every shard as named" grep -q '"mesh": "cube{}.obj"' "$tmp/braces/merged.json"
+check "local: ... in every shard's log" grep -q 'cube{}.obj' "$tmp/braces/part-1-of-2.jsonl"
 rm "$o/part-0-of-3.args"
 expect 2 "shard: a results log with no recorded arguments is refused" bash "$s/crosscheck-shard.sh" 0 3 "$o" a.obj b.obj --rays 10
 # A scheduler's shards (no --check first) refused in a copy of a finished run, then the merge
