@@ -6,7 +6,7 @@
 #   e.g. bash scripts/crosscheck-local.sh 4 target/shards ../shared/meshes/*.obj --rays 100000
 #
 # JOBS shards run at once (default: every core / THREADS); each gets --threads THREADS
-# (default 1). `--max-mismatch M` among the arguments is passed to the merge too, so the
+# (default 1), so `--threads` among the arguments is a usage error (exit 2). `--max-mismatch M` among the arguments is passed to the merge too, so the
 # verdict is the unsharded run's. The exit status is the merge's (the run's verdict: 0; 3 on
 # genuine mismatches or leaks; 1 when a mesh could not be checked; 2 when a shard is missing or refused).
 # When a shard fails, is interrupted or is refused, nothing is merged: the shards that did not
@@ -21,6 +21,8 @@ set -euo pipefail
 n=$1 out=$2
 shift 2
 here=$(dirname "${BASH_SOURCE[0]}")
+source "$here/crosscheck-lib.sh"
+no_threads_arg crosscheck-local "$@"
 threads=${THREADS:-1}
 jobs=${JOBS:-$(( $(nproc) / threads > 0 ? $(nproc) / threads : 1 ))}
 # Shards of another shard count: another run.

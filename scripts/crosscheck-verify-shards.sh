@@ -7,7 +7,8 @@
 #   bash scripts/crosscheck-verify-shards.sh OUT_DIR [crosscheck arguments...]
 #
 # Exit status: 0 when the merged report equals the unsharded run, 1 when it differs (the first
-# difference is named) or a run failed, 2 on a usage error. OUT_DIR is this script's own: it is
+# difference is named) or a run failed, 2 on a usage error (`--threads` among the arguments is
+# one: the shards' threads are THREADS, as in scripts/crosscheck-local.sh). OUT_DIR is this script's own: it is
 # emptied first, and refused (exit 2, nothing deleted) when it is not a folder or holds anything
 # but a previous run's files (whole.json, stderr.log, local/; scripts/out-dir.sh).
 set -euo pipefail
@@ -17,6 +18,8 @@ shift
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 bin=${HALFRAY:-$root/target/release/halfray}
 source "$root/scripts/out-dir.sh"
+source "$root/scripts/crosscheck-lib.sh"
+no_threads_arg crosscheck-verify-shards "$@"
 own_out_dir crosscheck-verify-shards "$out" whole.json stderr.log local
 rm -rf "$out" && mkdir -p "$out/local"
 # The runs' progress goes to a log, shown when a step fails.

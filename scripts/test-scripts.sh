@@ -100,6 +100,11 @@ check "local: the merge ran with --max-mismatch 7" \
 expect 0 "local: a mesh named with braces" bash "$s/crosscheck-local.sh" 2 "$tmp/braces" 'cube{}.obj' --rays 10
 check "local: ... reaches every shard as named" grep -q '"mesh": "cube{}.obj"' "$tmp/braces/merged.json"
 check "local: ... in every shard's log" grep -q 'cube{}.obj' "$tmp/braces/part-1-of-2.jsonl"
+expect 2 "local: --threads among the arguments is a usage error" bash "$s/crosscheck-local.sh" 2 "$tmp/threads" a.obj --threads 2
+check "local: ... naming THREADS" grep -q 'THREADS=N' "$tmp/last.out"
+check "local: ... before any shard ran" test ! -e "$tmp/threads"
+expect 2 "verify-shards: --threads among the arguments is a usage error" bash "$s/crosscheck-verify-shards.sh" "$tmp/vs-threads" a.obj --threads=2
+check "verify-shards: ... before any run" test ! -e "$tmp/vs-threads"
 rm "$o/part-0-of-3.args"
 expect 2 "shard: a results log with no recorded arguments is refused" bash "$s/crosscheck-shard.sh" 0 3 "$o" a.obj b.obj --rays 10
 # A scheduler's shards (no --check first) refused in a copy of a finished run, then the merge

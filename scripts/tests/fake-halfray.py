@@ -7,7 +7,8 @@
 Each mesh gets one row (`primary`) whose `rays` are the shard's share of R (ray i belongs to
 shard i mod N); a merge sums the rows of the parts' results logs and records its own arguments
 in the report (`merge_args`). FAKE_STOP_SHARD=K: that shard writes its log, no report, exits
-130 (an interrupted task). FAKE_SKEW=1: the unsharded report gets one extra tie.
+130 (an interrupted task). FAKE_SKEW=1: the unsharded report gets one extra tie. `--threads`
+given twice is refused (exit 2), as the binary's argument parser does.
 """
 import json
 import os
@@ -62,6 +63,10 @@ def main(argv):
     shard = take(args, "--shard", "0/1")
     log = take(args, "--jsonl")
     out = take(args, "--json")
+    if sum(a == "--threads" or a.startswith("--threads=") for a in args) > 1:
+        print("error: the argument '--threads <THREADS>' cannot be used multiple times",
+              file=sys.stderr)
+        return 2
     take(args, "--threads")
     take(args, "--max-mismatch")
     meshes = [a for a in args if not a.startswith("--")]
