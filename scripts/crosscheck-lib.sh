@@ -15,3 +15,22 @@ no_threads_arg() {
         esac
     done
 }
+
+# positive_int WHO NAME VALUE: exits 2 (a usage error) unless VALUE is a positive integer.
+positive_int() {
+    [[ $3 =~ ^[1-9][0-9]*$ ]] || { echo "$1: $2 must be a positive integer, not '$3'" >&2; exit 2; }
+}
+
+# halfray_bin: the binary the scripts run: $HALFRAY, else this repository's
+# target/release/halfray (built with `--features embree`) when it exists, else `halfray` on PATH.
+halfray_bin() {
+    local root
+    root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+    if [ -n "${HALFRAY:-}" ]; then
+        echo "$HALFRAY"
+    elif [ -x "$root/target/release/halfray" ]; then
+        echo "$root/target/release/halfray"
+    else
+        echo halfray
+    fi
+}

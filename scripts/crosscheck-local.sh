@@ -6,12 +6,14 @@
 #   e.g. bash scripts/crosscheck-local.sh 4 target/shards ../shared/meshes/*.obj --rays 100000
 #
 # JOBS shards run at once (default: every core / THREADS); each gets --threads THREADS
-# (default 1), so `--threads` among the arguments is a usage error (exit 2). `--max-mismatch M` among the arguments is passed to the merge too, so the
-# verdict is the unsharded run's. The exit status is the merge's (the run's verdict: 0; 3 on
-# genuine mismatches or leaks; 1 when a mesh could not be checked; 2 when a shard is missing or refused).
-# When a shard fails, is interrupted or is refused, nothing is merged: the shards that did not
-# complete are named, OUT_DIR/merged.json is deleted (never a partial or stale report) and the
-# exit status is 2; 2 also on a usage error or an OUT_DIR holding another run's files.
+# (default 1), so `--threads` among the arguments is a usage error. `--max-mismatch M` among
+# the arguments is passed to the merge too, so the verdict is the unsharded run's. The exit
+# status is the merge's (the run's verdict: 0; 3 on genuine mismatches or leaks; 1 when a mesh
+# could not be checked; 2 when a shard is missing or refused). When a shard fails, is
+# interrupted or is refused, nothing is merged: the shards that did not complete are named,
+# OUT_DIR/merged.json is deleted (never a partial or stale report) and the exit status is 2;
+# 2 also on a usage error (N, THREADS or JOBS not a positive integer, `--threads` among the
+# arguments) or an OUT_DIR holding another run's files.
 #
 # Running it again with the same N, arguments and OUT_DIR resumes the run (each shard skips the
 # meshes its results log holds). An OUT_DIR holding another run's shards (another N, or other
@@ -21,10 +23,14 @@ set -euo pipefail
 n=$1 out=$2
 shift 2
 here=$(dirname "${BASH_SOURCE[0]}")
+# shellcheck source=scripts/crosscheck-lib.sh
 source "$here/crosscheck-lib.sh"
+positive_int crosscheck-local N "$n"
 no_threads_arg crosscheck-local "$@"
 threads=${THREADS:-1}
+positive_int crosscheck-local THREADS "$threads"
 jobs=${JOBS:-$(( $(nproc) / threads > 0 ? $(nproc) / threads : 1 ))}
+positive_int crosscheck-local JOBS "$jobs"
 # Shards of another shard count: another run.
 for f in "$out"/part-*-of-*.*; do
     [ -e "$f" ] || continue

@@ -15,16 +15,17 @@
 # passed as `--max-mismatch` (a scheduler's merge job takes it from the environment). Any
 # previous OUT_DIR/merged.json is deleted first, and the new report is written to a temporary
 # file and renamed: merged.json exists only after a merge that wrote its whole report (verdict
-# 0, 1 or 3), never a stale or partial one.
+# 0, 1 or 3), never a stale or partial one. The binary is found as scripts/crosscheck-shard.sh
+# finds it.
 set -euo pipefail
 [ $# -ge 2 ] || { echo "usage: $0 N OUT_DIR [merge arguments...]" >&2; exit 2; }
 n=$1 out=$2
 shift 2
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-bin=${HALFRAY:-}
-if [ -z "$bin" ]; then
-    if [ -x "$root/target/release/halfray" ]; then bin=$root/target/release/halfray; else bin=halfray; fi
-fi
+# shellcheck source=scripts/crosscheck-lib.sh
+source "$root/scripts/crosscheck-lib.sh"
+positive_int crosscheck-merge N "$n"
+bin=$(halfray_bin)
 merged=$out/merged.json
 tmp=$out/merged.json.partial
 rm -f "$merged" "$tmp"

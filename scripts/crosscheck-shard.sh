@@ -33,10 +33,9 @@ if [ "${1:-}" = --check ]; then check_only=1; shift; fi
 k=$1 n=$2 out=$3
 shift 3
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-bin=${HALFRAY:-}
-if [ -z "$bin" ]; then
-    if [ -x "$root/target/release/halfray" ]; then bin=$root/target/release/halfray; else bin=halfray; fi
-fi
+# shellcheck source=scripts/crosscheck-lib.sh
+source "$root/scripts/crosscheck-lib.sh"
+bin=$(halfray_bin)
 [ "$check_only" = 1 ] || mkdir -p "$out"
 part=$out/part-$k-of-$n
 # The run's identity: its arguments, one a line, and each mesh list's content.

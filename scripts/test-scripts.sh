@@ -5,12 +5,13 @@
 #
 #   bash scripts/test-scripts.sh
 #
-# Covers crosscheck-same-run.py, crosscheck-verify-shards.sh, crosscheck-merge.sh,
-# crosscheck-local.sh and crosscheck-shard.sh (incomplete and refused shards, reused OUT_DIR,
-# --max-mismatch),
-# fuzz-tools.sh (through fuzz-ci.sh: a failed or empty target list), fuzz-task.sh and
-# fuzz-merge.sh (failed tasks, missing binaries), mutants.sh (a failed stage, stage one's
-# verdicts kept).
+# Covers crosscheck-same-run.py, crosscheck-verify-shards.sh (verdicts, failed runs, its
+# OUT_DIR, the binary on PATH), crosscheck-merge.sh, crosscheck-local.sh and crosscheck-shard.sh
+# (incomplete and refused shards, reused OUT_DIR, --max-mismatch, --threads, N, arguments as
+# given), slurm-ci-crosscheck.sh and slurm-ci-fuzz.sh (their OUT_DIR only), fuzz-tools.sh
+# (through fuzz-ci.sh: a failed or empty target list), fuzz-task.sh and fuzz-merge.sh (failed
+# tasks, missing binaries), mutants.sh (a failed stage, stage one's verdicts kept, FILES that
+# fail, the run folder of each FILES).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 tmp=$(mktemp -d)
@@ -69,6 +70,15 @@ expect 1 "same-run: a row key on one side only" sr extra
 expect 0 "verify-shards: shards equal the unsharded run" bash "$s/crosscheck-verify-shards.sh" "$tmp/vs" a.obj b.obj --rays 10
 expect 0 "verify-shards: its own OUT_DIR is reused" bash "$s/crosscheck-verify-shards.sh" "$tmp/vs" a.obj b.obj --rays 10
 expect 1 "verify-shards: a difference fails" env FAKE_SKEW=1 bash "$s/crosscheck-verify-shards.sh" "$tmp/vs" a.obj b.obj --rays 10
+expect 1 "verify-shards: an unsharded run with mismatches (exit 3) is a failed run" env FAKE_WHOLE_EXIT=3 bash "$s/crosscheck-verify-shards.sh" "$tmp/vs" a.obj --rays 10
+check "verify-shards: ... named" grep -q 'the unsharded run failed (exit 3)' "$tmp/last.out"
+expect 1 "verify-shards: an interrupted shard (local exit 2) is a failed run" env FAKE_STOP_SHARD=1 bash "$s/crosscheck-verify-shards.sh" "$tmp/vs" a.obj --rays 10
+expect 1 "verify-shards: a missing binary (exit 127) is a failed run" env HALFRAY="$tmp/no-such-halfray" bash "$s/crosscheck-verify-shards.sh" "$tmp/vs" a.obj --rays 10
+# Without HALFRAY, in a checkout with no target/release/halfray: `halfray` on PATH.
+mkdir -p "$tmp/vrepo/scripts" "$tmp/hbin"
+cp "$s"/crosscheck-*.sh "$s"/crosscheck-same-run.py "$s/out-dir.sh" "$tmp/vrepo/scripts/"
+cp "$HALFRAY" "$tmp/hbin/halfray"
+expect 0 "verify-shards: halfray on PATH" env -u HALFRAY PATH="$tmp/hbin:$PATH" bash "$tmp/vrepo/scripts/crosscheck-verify-shards.sh" "$tmp/vs-path" a.obj --rays 10
 mkdir -p "$tmp/other" && touch "$tmp/other/keep"
 expect 2 "verify-shards: refuses an OUT_DIR it did not write" bash "$s/crosscheck-verify-shards.sh" "$tmp/other" a.obj --rays 10
 check "verify-shards: the refused OUT_DIR is untouched" test -e "$tmp/other/keep"
@@ -105,6 +115,10 @@ check "local: ... naming THREADS" grep -q 'THREADS=N' "$tmp/last.out"
 check "local: ... before any shard ran" test ! -e "$tmp/threads"
 expect 2 "verify-shards: --threads among the arguments is a usage error" bash "$s/crosscheck-verify-shards.sh" "$tmp/vs-threads" a.obj --threads=2
 check "verify-shards: ... before any run" test ! -e "$tmp/vs-threads"
+expect 2 "local: N not a number is a usage error" bash "$s/crosscheck-local.sh" abc "$tmp/n-abc" a.obj
+check "local: ... naming N" grep -q "N must be a positive integer, not 'abc'" "$tmp/last.out"
+expect 2 "local: N = 0 is a usage error" bash "$s/crosscheck-local.sh" 0 "$tmp/n-abc" a.obj
+expect 2 "merge: N not a number is a usage error" bash "$s/crosscheck-merge.sh" abc "$o"
 rm "$o/part-0-of-3.args"
 expect 2 "shard: a results log with no recorded arguments is refused" bash "$s/crosscheck-shard.sh" 0 3 "$o" a.obj b.obj --rays 10
 # A scheduler's shards (no --check first) refused in a copy of a finished run, then the merge
