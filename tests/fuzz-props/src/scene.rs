@@ -24,16 +24,51 @@ pub fn scene_file(data: &[u8]) {
     check(&String::from_utf8_lossy(data));
 }
 
-/// `true` for a text that could name a file outside `fuzz/scene_dir/` (`..`, a string
-/// starting with `/`, a `\u`/`\U` escape, which could spell either, or a multi-line string
-/// `"""`/`'''`, whose first line break and a line-ending backslash's white space TOML drops, so
-/// that `"""⏎/dev/zero"""` is `/dev/zero`): such a path could name a device or a huge file, and
-/// the target reads only files it controls. [`check`] skips these texts (a narrowing listed in
-/// `fuzz/README.md`); the paths inside the folder stay fuzzed.
+/// `true` for a text that could name a file outside `fuzz/scene_dir/`: such a path could name
+/// a device or a huge file, and the target reads only files it controls. [`check`] skips these
+/// texts (a narrowing listed in `fuzz/README.md`); the paths inside the folder stay fuzzed.
+///
+/// Two tests, either enough to skip. On the text: `..`, a string starting with `/` (`"/`,
+/// `'/`), an escape that could spell either (`\x`, `\u`, `\U`), or a multi-line string
+/// (`"""`, `'''`), whose first line break and a line-ending backslash's white space TOML drops,
+/// so that `"""⏎/dev/zero"""` is `/dev/zero`. On the values, whatever escapes the text spells:
+/// when the text is a TOML document (read by the `toml` crate the scene parser uses), a string
+/// value anywhere in it that is an absolute path or has a `..` component
+/// ([`leaves_the_folder`]). A text that is not a TOML document is refused by the scene parser
+/// before any mesh is read.
 pub fn may_leave_scene_dir(text: &str) -> bool {
-    ["..", "\"/", "'/", "\\u", "\\U", "\"\"\"", "'''"]
+    spelling_may_leave(text) || a_value_leaves(text)
+}
+
+/// The test on the text (see [`may_leave_scene_dir`]).
+fn spelling_may_leave(text: &str) -> bool {
+    ["..", "\"/", "'/", "\\x", "\\u", "\\U", "\"\"\"", "'''"]
         .iter()
         .any(|p| text.contains(p))
+}
+
+/// The test on the values (see [`may_leave_scene_dir`]).
+fn a_value_leaves(text: &str) -> bool {
+    toml::from_str::<toml::Table>(text).is_ok_and(|t| t.values().any(names_a_path_outside))
+}
+
+/// `true` when `v` is, or holds at any depth, a string that [`leaves_the_folder`].
+fn names_a_path_outside(v: &toml::Value) -> bool {
+    match v {
+        toml::Value::String(s) => leaves_the_folder(s),
+        toml::Value::Array(a) => a.iter().any(names_a_path_outside),
+        toml::Value::Table(t) => t.values().any(names_a_path_outside),
+        _ => false,
+    }
+}
+
+/// `true` when the path `s`, joined to a folder, can name a file outside it: `s` is absolute
+/// or has a `..` component.
+fn leaves_the_folder(s: &str) -> bool {
+    let p = Path::new(s);
+    p.is_absolute()
+        || p.components()
+            .any(|c| matches!(c, std::path::Component::ParentDir))
 }
 
 /// The properties (module documentation).
@@ -158,26 +193,46 @@ pub(crate) fn seeds(s: &mut Vec<Seed>) {
 
 #[cfg(test)]
 mod tests {
-    use super::may_leave_scene_dir;
+    use super::{a_value_leaves, may_leave_scene_dir};
 
     #[test]
     fn paths_that_may_leave_the_scene_dir_are_recognised() {
-        for text in [
+        let spelled = [
             "mesh = \"../x.obj\"",
             "mesh = \"/dev/zero\"",
             "mesh = '/dev/zero'",
             "mesh = \"\"\"/dev/zero\"\"\"",
+        ];
+        // Escapes and multi-line strings: caught by the decoded values alone, whatever the
+        // text test lists.
+        let decoded = [
             "mesh = \"\\u002Fdev/zero\"",
             "mesh = \"\\U0000002Fdev/zero\"",
+            // TOML 1.1's `\xHH`, which the toml crate decodes: `/tmp/x.obj`, `../x.obj` (the
+            // text test let these through).
+            "file = \"\\x2Ftmp\\x2Fx.obj\"",
+            "file = \"\\x2E\\x2E/x.obj\"",
+            "[mesh.a]\nfile = \"meshes/\\x2E\\x2E/\\x2E\\x2E/x.obj\"",
+            "objects = [{ file = \"\\x2fdev\\x2fzero\" }]",
             // TOML drops a multi-line string's first line break, and a line-ending
-            // backslash's white space: both spell `/dev/zero` (the guard let them through).
+            // backslash's white space: both spell `/dev/zero`.
             "mesh = \"\"\"\n/dev/zero\"\"\"",
             "mesh = '''\n/dev/zero'''",
             "mesh = \"\"\"\\\n  /dev/zero\"\"\"",
-        ] {
+        ];
+        for text in spelled.iter().chain(&decoded) {
             assert!(may_leave_scene_dir(text), "{text}");
         }
-        for text in ["mesh = \"meshes/cube.obj\"", "width = 1.5", ""] {
+        for text in decoded {
+            assert!(a_value_leaves(text), "{text}");
+        }
+        for text in [
+            "mesh = \"meshes/cube.obj\"",
+            "[mesh.a]\nfile = \"meshes/./cube.obj\"",
+            "name = \"a.b\"",
+            "width = 1.5",
+            "",
+        ] {
             assert!(!may_leave_scene_dir(text), "{text}");
         }
     }
