@@ -11,7 +11,7 @@
 use super::Input;
 use super::bvh::{Oracle, Soup, decode};
 use super::*;
-use halfray_core::bvh::{Bvh, BvhNode, load_scratch_len};
+use halfray_core::bvh::{Bvh, BvhError, BvhNode, load_scratch_len};
 use halfray_core::mesh::TriangleMesh;
 use halfray_core::triangle::Watertight;
 
@@ -27,7 +27,9 @@ pub fn bvh_load(data: &[u8]) {
 /// Properties:
 ///
 /// 1. Loading never panics; every refusal is a typed error.
-/// 2. A tree the builder made over a mesh with only usable triangles loads unchanged.
+/// 2. A tree the builder made over a mesh with only usable triangles loads unchanged (checked
+///    on every input, before the corruptions); the builder refuses only a mesh with a
+///    non-finite (or out-of-range) triangle.
 /// 3. Whatever loads answers every ray like brute force over all triangles (closest hit
 ///    exactly within the watertight test's documented domain, any-hit agreeing), so a
 ///    corruption is either refused or harmless.
@@ -39,21 +41,29 @@ pub fn check(s: &Soup, mutations: &[(u8, u16, u32)]) {
         exclude_non_finite: false,
         ..s.options
     };
-    let Ok(built) = Bvh::build(
+    let built = match Bvh::build(
         &mesh,
         vec![BvhNode::EMPTY; halfray_core::bvh::node_capacity(n)],
         vec![0u32; n],
         &options,
-    ) else {
-        return; // Unusable triangles: nothing to bake.
+    ) {
+        Ok(built) => built,
+        // The storage fits and a soup has at most 16 triangles, so of the refusals
+        // `Bvh::build` documents only a non-finite (or out-of-range) triangle's is possible:
+        // nothing to bake.
+        Err(e) => {
+            assert!(
+                matches!(e, BvhError::NonFinite(_)),
+                "the build refused a soup of {n} triangles with {e:?}"
+            );
+            return;
+        }
     };
     let mut nodes = built.nodes().to_vec();
     let mut indices = built.indices().to_vec();
     let mut scratch = vec![0u32; load_scratch_len(n)];
-    if mutations.is_empty() {
-        let loaded = Bvh::from_parts(&nodes[..], &indices[..], &mesh, &mut scratch);
-        assert!(loaded.is_ok(), "a built tree is refused: {loaded:?}");
-    }
+    let loaded = Bvh::from_parts(&nodes[..], &indices[..], &mesh, &mut scratch);
+    assert!(loaded.is_ok(), "a built tree is refused: {loaded:?}");
     for &(kind, at, value) in mutations {
         let at = usize::from(at);
         match kind % 8 {
@@ -89,6 +99,8 @@ pub fn check(s: &Soup, mutations: &[(u8, u16, u32)]) {
         }
     }
     let mesh = TriangleMesh::new(&positions, &s.triangles);
+    // A refusal is a typed error (property 1); the tree as built loaded above, so a refusal
+    // here is a corruption's.
     let Ok(bvh) = Bvh::from_parts(&nodes[..], &indices[..], &mesh, &mut scratch) else {
         return;
     };
