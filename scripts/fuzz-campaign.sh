@@ -13,7 +13,9 @@
 # inputs; seeded from fuzz/corpus/<target>/, which is never written), merged/<target>/ (corpus
 # and seeds minimised by `-merge=1`), artifacts/<target>/ (crashes, timeouts, OOMs), and
 # summary.md (executions, coverage, corpus and findings per target, the table fuzz/README.md
-# records). Every finding is printed with its target; check each in under
+# records). An earlier campaign's artifacts/ holding any file is first moved aside to
+# artifacts.<UTC time>/ (said so), so only this campaign's findings are reported; corpus/ is
+# kept and grown. Every finding is printed with its target; check each in under
 # fuzz/regressions/<target>/ once it is understood. Exit status: the merge's (1 on findings, 2
 # when a target's task failed or could not be merged, named); a task that failed (its status is
 # printed as it ends) makes it 2 even if the merge passed.
@@ -23,6 +25,15 @@ JOBS=${JOBS:-2}
 source "$(dirname "${BASH_SOURCE[0]}")/fuzz-tools.sh" "$@"
 
 out=target/fuzz-campaign
+# The merge reports every file under artifacts/: an earlier campaign's go aside, once for the
+# whole campaign (a task restarted within it keeps its own).
+if [ -n "$(find "$out/artifacts" -type f -print -quit 2>/dev/null)" ]; then
+    aside=$out/artifacts.$(date -u +%Y%m%dT%H%M%SZ)
+    while [ -e "$aside" ]; do aside+=+; done
+    mv "$out/artifacts" "$aside"
+    echo "fuzz-campaign: an earlier campaign's findings moved to $aside" >&2
+fi
+rm -rf "$out/artifacts"
 mkdir -p "$out/bin"
 triple=$(rustc -vV | sed -n 's/^host: //p')
 for t in "${targets[@]}"; do

@@ -220,6 +220,7 @@ expect 0 "mutants: a shard past a file's mutants" mutants SHARD=1
 check "mutants: ... is skipped with a line" grep -q 'core/src/aabb.rs: 4 mutant(s) in 1 shard(s); shard 1 is past them' "$tmp/last.out"
 expect 1 "mutants: a second run of a sample under way is refused" \
     flock "$other/.lock" env PATH="$tmp/mutants-bin:$PATH" FILES=core/src/other.rs bash "$mr/scripts/mutants.sh"
+source "$s/tests/fuzz-scripts.sh"
 
 echo
 if [ "$failures" -ne 0 ]; then echo "test-scripts: $failures check(s) failed"; exit 1; fi
