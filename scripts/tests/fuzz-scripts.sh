@@ -1,7 +1,7 @@
 # shellcheck shell=bash disable=SC2154 # s, tmp: set by scripts/test-scripts.sh, which sources this
-# Sourced by scripts/test-scripts.sh (its `expect`, `check`, `$s` and `$tmp`): fuzz-campaign.sh,
-# run in a copy of the repository's layout under $tmp with the stand-in cargo (fake-cargo.sh)
-# and targets `a` and `b` (fake-fuzz-target.sh).
+# Sourced by scripts/test-scripts.sh (its `expect`, `check`, `$s` and `$tmp`): fuzz-campaign.sh
+# and fuzz-cmin.sh, each run in a copy of the repository's layout under $tmp with the stand-in
+# cargo (fake-cargo.sh) and targets `a` and `b` (fake-fuzz-target.sh).
 
 # fuzz_repo DIR: a repository layout with the fuzz scripts and the stand-in targets built.
 fuzz_repo() {
@@ -38,3 +38,14 @@ expect 0 "fuzz-campaign: the next campaign" fuzz_env bash "$cr/scripts/fuzz-camp
 check "fuzz-campaign: ... keeps both earlier campaigns' findings apart" \
     test "$(find "$camp" -path '*/artifacts.*/a/*' -type f | wc -l)" = 2
 
+# fuzz-cmin.sh: a failed minimisation changes nothing.
+mr=$tmp/cmin
+fuzz_repo "$mr"
+echo seed >"$mr/fuzz/corpus/a/seed-one"
+echo kept >"$mr/fuzz/corpus/a/min-0000000000000000"
+expect 0 "fuzz-cmin: a minimising run" fuzz_env bash "$mr/scripts/fuzz-cmin.sh" a
+cp -r "$mr/fuzz/corpus/a" "$tmp/cmin-before"
+expect 1 "fuzz-cmin: cargo fuzz cmin's 'Failed to minimize corpus' (exit 0) stops the script" \
+    fuzz_env FAKE_CMIN=fail bash "$mr/scripts/fuzz-cmin.sh" a
+check "fuzz-cmin: ... naming it, with the log" grep -q "Failed to minimize corpus" "$tmp/last.out"
+check "fuzz-cmin: ... the checked-in corpus unchanged" diff -r "$tmp/cmin-before" "$mr/fuzz/corpus/a"
