@@ -38,12 +38,16 @@ expect 0 "fuzz-campaign: the next campaign" fuzz_env bash "$cr/scripts/fuzz-camp
 check "fuzz-campaign: ... keeps both earlier campaigns' findings apart" \
     test "$(find "$camp" -path '*/artifacts.*/a/*' -type f | wc -l)" = 2
 
-# fuzz-cmin.sh: a failed minimisation changes nothing.
+# fuzz-cmin.sh: the seeds are not added again, and a failed minimisation changes nothing.
 mr=$tmp/cmin
 fuzz_repo "$mr"
 echo seed >"$mr/fuzz/corpus/a/seed-one"
 echo kept >"$mr/fuzz/corpus/a/min-0000000000000000"
 expect 0 "fuzz-cmin: a minimising run" fuzz_env bash "$mr/scripts/fuzz-cmin.sh" a
+check "fuzz-cmin: ... a seed is not checked in again as min-*" \
+    test ! -e "$mr/fuzz/corpus/a/min-$(echo seed | sha1sum | cut -c1-16)"
+check "fuzz-cmin: ... the other inputs are (the seed, the old and the grown one)" \
+    test "$(find "$mr/fuzz/corpus/a" -type f | wc -l)" = 3
 cp -r "$mr/fuzz/corpus/a" "$tmp/cmin-before"
 expect 1 "fuzz-cmin: cargo fuzz cmin's 'Failed to minimize corpus' (exit 0) stops the script" \
     fuzz_env FAKE_CMIN=fail bash "$mr/scripts/fuzz-cmin.sh" a
