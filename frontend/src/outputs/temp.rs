@@ -7,8 +7,10 @@
 //!
 //! What no handler can catch (SIGKILL, the OOM killer, an abort, SIGQUIT) leaves the file
 //! behind; the name says which process made it, so the next temporary file created in that
-//! folder removes it ([`remove_stale`]): a `.halfray-<pid>-<n>.tmp` whose process is gone and
-//! which was last modified [`STALE_TEMP_AGE`] ago or more.
+//! folder removes it ([`remove_stale`]): a `.halfray-<pid>-<n>.tmp` whose process is gone (or
+//! that bears this process's pid but is none of its live temporary files: a run before it
+//! had the same pid, as every run in a container is pid 1) and which was last modified
+//! [`STALE_TEMP_AGE`] ago or more.
 
 use std::fs::File;
 use std::io;
@@ -23,10 +25,10 @@ pub const MAX_TEMP_NAME_LEN: usize = 9 + 10 + 1 + 20 + 4;
 /// Names tried before giving up when they already exist (left by another process).
 pub const MAX_TEMP_NAME_TRIES: u32 = 100;
 
-/// How old a dead process's temporary file must be before [`remove_stale`] removes it: one
-/// hour. A temporary file exists only while its output is being written (seconds); the age
-/// guards a file of a process on another machine sharing the folder (whose pid means nothing
-/// here) that is still being written.
+/// How old a dead process's (or a previous run's) temporary file must be before
+/// [`remove_stale`] removes it: one hour. A temporary file exists only while its output is
+/// being written (seconds); the age guards a file of a process on another machine sharing
+/// the folder (whose pid means nothing here) that is still being written.
 pub const STALE_TEMP_AGE: std::time::Duration = std::time::Duration::from_secs(3600);
 
 /// Temporary files that exist right now, removed by the signal handler.
@@ -125,8 +127,15 @@ fn process_gone(pid: u32) -> bool {
     Path::new("/proc/self").exists() && !Path::new(&format!("/proc/{pid}")).exists()
 }
 
-/// Removes from `dir` the temporary files of processes that are gone (see the module docs).
-/// Best effort: errors are ignored (another run may be removing the same file).
+/// Whether this process has a live temporary file named `name` (in any folder: the counter
+/// in the name is unique within the process).
+fn is_live(name: &std::ffi::OsStr) -> bool {
+    live().iter().any(|p| p.file_name() == Some(name))
+}
+
+/// Removes from `dir` the temporary files of processes that are gone, and those with this
+/// process's pid that are not its own (see the module docs). Best effort: errors are ignored
+/// (another run may be removing the same file).
 pub fn remove_stale(dir: &Path) {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return;
@@ -144,7 +153,12 @@ pub fn remove_stale(dir: &Path) {
             .and_then(|m| m.modified().ok())
             .and_then(|t| t.elapsed().ok())
             .is_some_and(|age| age >= STALE_TEMP_AGE);
-        if pid != me && old && process_gone(pid) {
+        let orphan = if pid == me {
+            !is_live(&name)
+        } else {
+            process_gone(pid)
+        };
+        if old && orphan {
             let _ = std::fs::remove_file(entry.path());
         }
     }
@@ -209,6 +223,9 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 
+    /// Removed: old files of a gone process, and an old file with this process's pid that is
+    /// not one of its live files (a previous run's under the same pid, as in a container).
+    /// Kept: recent ones, this process's own live file however old, other names.
     #[test]
     fn stale_temp_files_of_gone_processes_are_removed() {
         let dir = tempfile::tempdir().unwrap();
@@ -225,9 +242,21 @@ mod tests {
         };
         make(&format!(".halfray-{gone}-3.tmp"), true);
         make(&format!(".halfray-{gone}-4.tmp"), false);
-        make(&format!(".halfray-{}-5.tmp", std::process::id()), true);
+        let me = std::process::id();
+        // Far above this process's counter (files of a previous run under the same pid).
+        make(&format!(".halfray-{me}-{}.tmp", u64::MAX - 5), true);
+        make(&format!(".halfray-{me}-{}.tmp", u64::MAX - 6), false);
         make(".halfray-x-1.tmp", true);
         make("keep.png", true);
+        let mut mine = TempFile::create_in(dir.path()).unwrap();
+        mine.file().unwrap().set_modified(old).unwrap();
+        let mine_name = mine
+            .path()
+            .file_name()
+            .unwrap()
+            .to_str()
+            .unwrap()
+            .to_owned();
         drop(TempFile::create_in(dir.path()).unwrap());
         let mut names: Vec<String> = std::fs::read_dir(dir.path())
             .unwrap()
@@ -236,12 +265,14 @@ mod tests {
         names.sort();
         let mut want = vec![
             format!(".halfray-{gone}-4.tmp"),
-            format!(".halfray-{}-5.tmp", std::process::id()),
+            format!(".halfray-{me}-{}.tmp", u64::MAX - 6),
+            mine_name,
             ".halfray-x-1.tmp".to_string(),
             "keep.png".to_string(),
         ];
         want.sort();
-        assert_eq!(names, want, "only the old file of the gone process goes");
+        assert_eq!(names, want, "only the old orphans go");
+        drop(mine);
     }
 
     /// Two writes to one folder from one process at the same time never share a temporary
