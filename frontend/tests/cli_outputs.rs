@@ -721,7 +721,7 @@ fn an_output_is_named_for_the_format_written() {
 }
 
 /// Outputs another user owns, as that other user (`nobody`, through `setpriv`; the test runs
-/// only as root, and says so on stderr elsewhere): a file the user may not write is refused
+/// only as root, and records a skip elsewhere): a file the user may not write is refused
 /// until `--force`; another user's file in a sticky folder (`/tmp`'s mode) is refused even
 /// with `--force`, when the outputs are reserved, so a render that also writes a PNG writes
 /// nothing (it used to replace the PNG, then fail to rename the statistics into place).
@@ -736,8 +736,8 @@ fn another_users_files_are_refused_before_the_work() {
     };
     let root = running_as_root();
     if !root || as_nobody(os!["--version"]).is_err() {
-        eprintln!(
-            "another_users_files_are_refused_before_the_work: not run (needs root and setpriv)"
+        halfray::skips::record_skip(
+            "SKIPPED halfray another_users_files_are_refused_before_the_work: needs root and setpriv",
         );
         return;
     }
@@ -796,7 +796,7 @@ fn running_as_root() -> bool {
 /// program: an append-only statistics file (`chattr +a`), or one with a file bind-mounted on
 /// it. The render is refused when its outputs are reserved, so no PNG is written beside a
 /// statistics file that keeps its old bytes. Needs root (`chattr`, `mount`) and a file system
-/// with the attribute; elsewhere the test says so on stderr.
+/// with the attribute; elsewhere the test records a skip.
 #[test]
 fn append_only_and_mounted_outputs_are_refused_before_the_work() {
     let command = |program: &str, args: &[&std::ffi::OsStr]| {
@@ -832,9 +832,9 @@ fn append_only_and_mounted_outputs_are_refused_before_the_work() {
     ];
     for (program, set, message) in cases {
         if !command(program, set) {
-            eprintln!(
-                "append_only_and_mounted_outputs_are_refused_before_the_work: {program} refused here (not root?)"
-            );
+            halfray::skips::record_skip(&format!(
+                "SKIPPED halfray append_only_and_mounted_outputs_are_refused_before_the_work: {program} refused here (not root?)"
+            ));
             continue;
         }
         let o = render();
