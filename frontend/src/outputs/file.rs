@@ -30,7 +30,7 @@
 //! Several outputs of one command are written all or nothing by [`write_together`].
 
 use super::identity::{FileId, file_id};
-use super::target::{Target, resolve};
+use super::target::{CHARACTER_DEVICE, Target, resolve};
 use super::temp::TempFile;
 use crate::error::{Error, Result};
 use std::fs::Permissions;
@@ -49,8 +49,8 @@ enum Route {
         /// where this process may ([`keep_owner`]).
         owner: Option<(u32, u32)>,
     },
-    /// Written in place (device, FIFO, socket).
-    InPlace { target: PathBuf },
+    /// Written in place (device, FIFO, socket); `char_device` for a character device.
+    InPlace { target: PathBuf, char_device: bool },
     /// Written through this process's descriptor `fd`.
     Stream { fd: u32 },
 }
@@ -132,7 +132,10 @@ impl OutputFile {
                 }
                 Route::Stream { fd }
             }
-            Target::Special { path, .. } => Route::InPlace { target: path },
+            Target::Special { path, kind } => Route::InPlace {
+                target: path,
+                char_device: kind == CHARACTER_DEVICE,
+            },
             Target::Missing { path } => {
                 if names_a_folder(&path) {
                     // `out.png/` or `new/.`: no file can be created under that name (the
@@ -234,6 +237,19 @@ impl OutputFile {
         self.id.as_ref()
     }
 
+    /// The identity two outputs of one command must not share ([`super::reserve_outputs`]):
+    /// [`Self::id`], but `None` for a character device written in place (`/dev/null`, a
+    /// terminal), which takes each output's bytes in turn as the shell's `>/dev/null
+    /// 2>/dev/null` does: no rename replaces it, no descriptor is shared.
+    pub fn repeat_id(&self) -> Option<&FileId> {
+        match self.route {
+            Route::InPlace {
+                char_device: true, ..
+            } => None,
+            _ => self.id(),
+        }
+    }
+
     /// Writes the bytes `fill` produces (see the module docs). On error nothing at the
     /// destination changed (except for devices, FIFOs and descriptors, which get what was
     /// written) and no temporary file is left.
@@ -279,7 +295,7 @@ impl OutputFile {
                 result.map_err(|e| Error::io(&dest, e))?;
                 Ok(Staged::Temp { temp, target, dest })
             }
-            Route::InPlace { target } => {
+            Route::InPlace { target, .. } => {
                 let result = (|| {
                     let file = std::fs::OpenOptions::new().write(true).open(&target)?;
                     let mut w = io::BufWriter::new(file);

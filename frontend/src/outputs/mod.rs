@@ -6,6 +6,7 @@
 //! that is one of the inputs, or two outputs that are the same file, are refused as usage
 //! errors. "Same file" is file identity ([`identity`]: device and inode, symlinks followed;
 //! for a file not created yet, its canonical folder and name), not the spelling of the path.
+//! A character device (`/dev/null`) may be several outputs ([`OutputFile::repeat_id`]).
 
 pub mod file;
 pub mod identity;
@@ -38,8 +39,9 @@ impl<'a> Named<'a> {
 }
 
 /// Reserves every output (see [`OutputFile::reserve`]) and refuses outputs that are inputs or
-/// each other; `force` allows replacing read-only, other users' and hard-linked files. The outputs come
-/// back in the order given.
+/// each other (but for a character device, [`OutputFile::repeat_id`]); `force` allows
+/// replacing read-only, other users' and hard-linked files. The outputs come back in the
+/// order given.
 pub fn reserve_outputs(
     outputs: &[Named<'_>],
     inputs: &[Named<'_>],
@@ -54,7 +56,7 @@ pub fn reserve_outputs(
         reserved.push(OutputFile::reserve(out.path, force)?);
     }
     // Temporary files reserved so far are removed when `reserved` drops on refusal.
-    if let Some((j, k)) = first_repeat(reserved.iter().map(OutputFile::id)) {
+    if let Some((j, k)) = first_repeat(reserved.iter().map(OutputFile::repeat_id)) {
         let (e, out) = (outputs[j], outputs[k]);
         return Err(Error::Usage(format!(
             "{} `{}` and {} `{}` are the same file",
@@ -98,4 +100,36 @@ fn refuse_input(name: &Named<'_>, id: &FileId, inputs: &[Named<'_>]) -> Result<(
         }
     }
     Ok(())
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use super::*;
+
+    fn reserve(paths: &[&Path]) -> Result<Vec<OutputFile>> {
+        let named: Vec<Named<'_>> = paths.iter().map(|p| Named::new("-o", p)).collect();
+        reserve_outputs(&named, &[], false)
+    }
+
+    /// `/dev/null` (a character device written in place) may be several outputs; a FIFO, a
+    /// descriptor named twice and a regular file named twice are still "the same file".
+    #[test]
+    fn only_a_character_device_may_be_several_outputs() {
+        let null = Path::new("/dev/null");
+        assert_eq!(reserve(&[null, null]).unwrap().len(), 2);
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("fifo");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        assert!(made.expect("mkfifo (coreutils) runs").success());
+        let file = dir.path().join("out.json");
+        let spelt = dir.path().join("./out.json");
+        for pair in [
+            [fifo.as_path(), fifo.as_path()],
+            [Path::new("/dev/stderr"), Path::new("/dev/fd/2")],
+            [file.as_path(), spelt.as_path()],
+        ] {
+            let e = reserve(&pair).unwrap_err().to_string();
+            assert!(e.contains("are the same file"), "{pair:?}: {e}");
+        }
+    }
 }

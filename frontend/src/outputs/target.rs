@@ -4,6 +4,9 @@ use std::fs::Permissions;
 use std::io;
 use std::path::{Path, PathBuf};
 
+/// The [`Target::Special`] kind of a character device (`/dev/null`, a terminal).
+pub const CHARACTER_DEVICE: &str = "character device";
+
 /// Most symlinks followed from an output path to its target (Linux's own limit, `ELOOP`
 /// beyond it: `MAXSYMLINKS` is 40).
 pub const MAX_SYMLINK_HOPS: usize = 40;
@@ -155,7 +158,7 @@ fn link_count(_: &std::fs::Metadata) -> u64 {
 fn special_kind(ft: &std::fs::FileType) -> &'static str {
     use std::os::unix::fs::FileTypeExt;
     if ft.is_char_device() {
-        "character device"
+        CHARACTER_DEVICE
     } else if ft.is_block_device() {
         "block device"
     } else if ft.is_fifo() {
