@@ -3,15 +3,22 @@
 //! I/O error on `<stdout>` with a non-zero exit.
 //!
 //! Code that still prints with `print!`/`println!` (which panic on a write error) is covered by
-//! [`install_print_panic_guard`], which turns exactly those panics into the same outcomes. So
-//! is stderr (`eprint!`, a failed write to it a panic too): a closed pipe ends the program
-//! quietly, any other write error with [`EXIT_ERROR`] and no message (there is nowhere to
-//! print it); the final `error: …` line of a failed command is written with [`eprint_error`],
-//! which keeps the command's own exit status when stderr fails.
+//! [`install_print_panic_guard`], which turns exactly those panics into the same outcomes.
 //!
 //! A command's summaries (tables, totals, "wrote …" lines) go to stdout, unless one of its
 //! outputs is stdout (`-o -`, `--json /dev/stdout`): then they go to stderr, so that the
-//! output's bytes are all that stdout carries ([`print_out`], [`say!`](crate::say)).
+//! output's bytes are all that stdout carries ([`print_out`], [`say!`](crate::say)). A
+//! summary that cannot be written there ends the command as on stdout: a closed pipe
+//! quietly, any other write error with [`EXIT_ERROR`] and no message (there is nowhere to
+//! print it).
+//!
+//! Everything else on stderr is a diagnostic (progress, `warning:` and `note:` lines,
+//! [`note!`](crate::note)): one that cannot be written is lost and the command goes on, its
+//! outcome its own, as coreutils do; a command whose output is a file does not fail for a
+//! full or closed stderr. The final `error: …` line of a failed command is written with
+//! [`eprint_error`], which keeps the command's own exit status when stderr fails. Outside
+//! tests, `eprint!`/`eprintln!` are refused by clippy (`print_stderr`, in `lib.rs`): stderr
+//! is written only through these.
 
 use crate::error::{EXIT_BROKEN_PIPE, EXIT_ERROR, Error, Result};
 use std::io::{self, Write};
@@ -51,7 +58,23 @@ macro_rules! sayln {
     };
 }
 
+/// Writes a diagnostic line (`format!` arguments; a newline is added) to stderr; a failed
+/// write is ignored (see the module docs). For summaries, [`say!`](crate::say).
+#[macro_export]
+macro_rules! note {
+    ($($arg:tt)*) => {
+        $crate::console::note_args(format_args!($($arg)*))
+    };
+}
+
+/// The function behind [`note!`](crate::note).
+pub fn note_args(args: std::fmt::Arguments<'_>) {
+    let _ = writeln!(io::stderr().lock(), "{args}");
+}
+
 /// The function behind [`say!`](crate::say).
+// A summary on stderr fails as one on stdout does: `install_print_panic_guard`.
+#[allow(clippy::print_stderr)]
 pub fn say_args(args: std::fmt::Arguments<'_>) {
     if summaries_to_stderr() {
         eprint!("{args}");
@@ -129,12 +152,13 @@ const EPRINT_PANIC_PREFIX: &str = "failed printing to stderr: ";
 /// that the command's exit status (the caller's) is what the process ends with even when
 /// stderr is full or closed.
 pub fn eprint_error(e: &dyn std::fmt::Display) {
-    let _ = writeln!(io::stderr().lock(), "error: {e}");
+    crate::note!("error: {e}");
 }
 
-/// Makes a `print!` or `eprint!` that fails end the process like [`print_out`] would:
-/// silently with [`EXIT_BROKEN_PIPE`] on a closed pipe, otherwise with [`EXIT_ERROR`] (after
-/// `error: <stdout>: …` on stderr for stdout; nothing for stderr, which is what failed).
+/// Makes a `print!` or `eprint!` (a summary, [`say!`](crate::say)) that fails end the process
+/// like [`print_out`] would: silently with [`EXIT_BROKEN_PIPE`] on a closed pipe, otherwise
+/// with [`EXIT_ERROR`] (after `error: <stdout>: …` on stderr for stdout; nothing for stderr,
+/// which is what failed).
 /// Temporary output files are removed first, so nothing is half-written. Every other panic
 /// goes to the previous hook. Call once, from `main`.
 pub fn install_print_panic_guard() {

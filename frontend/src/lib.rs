@@ -4,6 +4,10 @@
 //! scene files ([`scene`]), the renderer ([`render`]), mesh tools ([`mesh_tools`]),
 //! benchmarks ([`bench`](mod@bench)) and the Embree cross-check ([`crosscheck`]).
 
+// Stderr is written through `console` (`note!`, `say!`, `eprint_error`), which decides what a
+// failed write there does.
+#![cfg_attr(not(test), deny(clippy::print_stderr))]
+
 pub mod accel;
 pub mod bake;
 pub mod bench;

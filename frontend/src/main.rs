@@ -45,7 +45,7 @@ enum Command {
 fn main() -> ExitCode {
     halfray::console::install_print_panic_guard();
     if let Err(e) = halfray::outputs::temp::install_signal_cleanup() {
-        eprintln!("warning: no signal handler (temporary files may stay after Ctrl-C): {e}");
+        halfray::note!("warning: no signal handler (temporary files may stay after Ctrl-C): {e}");
     }
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,

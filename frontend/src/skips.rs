@@ -7,6 +7,7 @@ use std::io::Write;
 /// `HALFRAY_SKIP_LOG` names, when set (`scripts/test-all.sh` prints that file after the tests,
 /// so CI names every skipped test and why). A log that cannot be opened or written loses the
 /// line there only; stderr still has it.
+#[allow(clippy::print_stderr)]
 pub fn record_skip(line: &str) {
     eprintln!("{line}");
     if let Some(path) = std::env::var_os("HALFRAY_SKIP_LOG")

@@ -494,6 +494,41 @@ fn a_failed_stderr_keeps_the_commands_status_and_never_panics() {
     }
 }
 
+/// A diagnostic on stderr that cannot be written (a full device, a closed pipe) is lost, not
+/// fatal: a render's `rendering …` and `wrote …` lines, a mesh tool's `note:` on what the
+/// output OBJ does not carry (a comment line). The command succeeds and writes its file.
+#[test]
+fn a_failed_stderr_does_not_stop_a_command_writing_a_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let commented = dir.path().join("commented.obj");
+    let cube = std::fs::read_to_string(shared_mesh("cube.obj")).unwrap();
+    std::fs::write(&commented, format!("# by hand\n{cube}")).unwrap();
+    let (png, obj) = (dir.path().join("rr.png"), dir.path().join("sub.obj"));
+    let mirror = scene("mirror.toml");
+    let cases: [(&[&std::ffi::OsStr], &Path); 2] = [
+        (os!["render", &mirror, "-o", &png], &png),
+        (os!["mesh", "subdivide", &commented, "-o", &obj], &obj),
+    ];
+    for (args, out) in cases {
+        for closed in [false, true] {
+            let sink: Stdio = if closed {
+                let (reader, writer) = std::io::pipe().unwrap();
+                drop(reader);
+                writer.into()
+            } else {
+                let full = std::fs::OpenOptions::new().write(true).open("/dev/full");
+                full.unwrap().into()
+            };
+            let o = run_with_stderr(args, dir.path(), sink);
+            let how = if closed { "a closed pipe" } else { "/dev/full" };
+            assert_eq!(o.status.code(), Some(0), "{args:?} 2> {how}");
+            assert!(out.is_file(), "{args:?} 2> {how}: no output");
+            std::fs::remove_file(out).unwrap();
+        }
+    }
+    assert_eq!(files(dir.path()), ["commented.obj", "stdout.bin"]);
+}
+
 /// An output named `-` is all that stdout carries: the command's summary ("baked …", the
 /// mesh tools' counts, a render's ray totals, the benchmark's tables) goes to stderr then, so
 /// `halfray bake m.obj -o - > m.rs` is the same file as `-o m.rs`.

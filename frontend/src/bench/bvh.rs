@@ -332,7 +332,7 @@ fn bench<T: TriangleIntersector>(
         rays.retain(Rivals::take);
         let outside = generated - rays.len();
         if outside > 0 {
-            eprintln!(
+            crate::note!(
                 "warning: bench bvh {} {set}: {outside} of {generated} rays outside Embree's range, left out on every side{}",
                 crate::text::path(mesh_path),
                 if rays.is_empty() {

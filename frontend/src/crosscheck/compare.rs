@@ -159,7 +159,7 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     for (path, named_at) in meshes.iter().zip(&named_at) {
         let shown = path.display().to_string();
         if let Some(done) = log.as_ref().and_then(|l| l.done(path)) {
-            eprintln!(
+            crate::note!(
                 "crosscheck {}: already in the results log, skipped (--resume)",
                 crate::text::escaped(&shown)
             );
@@ -179,7 +179,7 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
             None => e.to_string(),
         });
         if let Some(e) = &error {
-            eprintln!(
+            crate::note!(
                 "crosscheck {}: {} (counted as failed; the run goes on)",
                 crate::text::escaped(&shown),
                 crate::text::escaped(e)
@@ -199,7 +199,9 @@ pub fn run(args: &CrosscheckArgs) -> Result<()> {
     let depth = match (depth_out, depth_png) {
         (Some(out), Some(png)) => Some((out, png)),
         (Some(_), None) => {
-            eprintln!("crosscheck: no mesh was checked in this run, so no depth image was written");
+            crate::note!(
+                "crosscheck: no mesh was checked in this run, so no depth image was written"
+            );
             None
         }
         (None, _) => None,
@@ -283,14 +285,18 @@ fn check_mesh(
             0 => String::new(),
             n => format!(" ({n} more generated, not traced: outside Embree's range)"),
         };
-        eprintln!(
+        crate::note!(
             "crosscheck {shown} {set}: {} rays{dropped}, {} genuine, {} leaks halfray, {} leaks embree",
-            row.rays, row.genuine_mismatches, row.leaks_halfray, row.leaks_embree
+            row.rays,
+            row.genuine_mismatches,
+            row.leaks_halfray,
+            row.leaks_embree
         );
         if row.rays == 0 {
-            eprintln!(
+            crate::note!(
                 "warning: crosscheck {shown} {set}: no ray left to check ({} generated, {} of them outside Embree's range)",
-                shard_rays, row.rays_outside_embree
+                shard_rays,
+                row.rays_outside_embree
             );
         }
         rows.push(row);
@@ -343,9 +349,10 @@ fn classify(
         if lh {
             record(&mut out, DetailKind::LeakHalfray);
             if std::env::var_os("HALFRAY_CROSSCHECK_DEBUG").is_some() {
-                eprintln!(
+                crate::note!(
                     "halfray leak: ray {:?} incident {:?} ours {h:?} embree {e:?}",
-                    r.ray, target.incident
+                    r.ray,
+                    target.incident
                 );
             }
         }
@@ -362,7 +369,7 @@ fn classify(
     if std::env::var_os("HALFRAY_CROSSCHECK_DEBUG").is_some()
         && !matches!(verdict, Verdict::Agree | Verdict::Tie)
     {
-        eprintln!("{verdict:?}: ray {:?} ours {h:?} embree {e:?}", r.ray);
+        crate::note!("{verdict:?}: ray {:?} ours {h:?} embree {e:?}", r.ray);
     }
     match verdict {
         Verdict::Genuine => record(&mut out, DetailKind::Genuine),

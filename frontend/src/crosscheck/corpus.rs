@@ -282,7 +282,7 @@ impl ResultLog {
         if whole_tail {
             file.write_all(b"\n").map_err(|e| Error::io(path, e))?;
         } else if !torn.is_empty() {
-            eprintln!(
+            crate::note!(
                 "crosscheck: {}: dropping a torn last line ({} bytes); its mesh is checked again",
                 crate::text::path(path),
                 torn.len()

@@ -87,10 +87,15 @@ pub fn depth_diff_png(
         };
         img.put_pixel(x + 2 * size as u32, y, diff);
     }
-    eprintln!(
+    crate::note!(
         "depth image: {}x{} px; only halfray hits: {}, only Embree hits: {}, depth differs: {}, \
          not traced (outside Embree's range): {}",
-        size, size, counts[0], counts[1], counts[2], counts[3]
+        size,
+        size,
+        counts[0],
+        counts[1],
+        counts[2],
+        counts[3]
     );
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)

@@ -102,7 +102,7 @@ impl fmt::Display for EditReport {
 /// will not: never a silent loss.
 fn warn_not_carried(input: &Path, output: &Path, dropped: &NotCarried) {
     if !dropped.is_empty() {
-        eprintln!(
+        crate::note!(
             "note: {} -> {}: not carried over (the output holds vertices and triangles only): {dropped}",
             text::path(input),
             text::path(output)

@@ -618,7 +618,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         )));
     }
     if !args.quiet {
-        eprintln!(
+        crate::note!(
             "rendering {} ({w}×{h}, mode {:?}, {} threads)",
             crate::text::path(&args.scene),
             args.mode,
@@ -655,7 +655,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     // The image and its statistics: both or neither.
     write_together(files)?;
     if !args.quiet {
-        eprintln!("wrote {}", crate::text::path(&args.output));
+        crate::note!("wrote {}", crate::text::path(&args.output));
     }
     print_out(&format!("{}\n", summary(&out)))
 }
