@@ -8,9 +8,11 @@
 //! writing starts. [`OutputFile::write`] then fills it:
 //!
 //! * a new or regular file gets a temporary file in its folder, synced, given the replaced
-//!   file's permissions (and its owner and group where this process may: `keep_owner`),
-//!   and renamed over it: readers see the old bytes or the new ones, never
-//!   a mix, and a failure at any point leaves the old file untouched and no temporary file;
+//!   file's permissions, its extended attributes (its ACL, `user.*`, `security.*`:
+//!   [`super::xattr`]; one that cannot be copied is an error, when reserved) and its owner
+//!   and group where this process may (`keep_owner`), and renamed over it: readers see the
+//!   old bytes or the new ones, never a mix, and a failure at any point leaves the old file
+//!   untouched and no temporary file;
 //! * a symlink is followed (to the end of its chain) and its target replaced as above, in
 //!   the target's folder: the link stays a link;
 //! * a character or block device, FIFO or socket is opened and written in place: it stays
@@ -32,6 +34,7 @@
 use super::identity::{FileId, file_id};
 use super::target::{CHARACTER_DEVICE, Target, resolve};
 use super::temp::TempFile;
+use super::xattr::Attributes;
 use crate::error::{Error, Result};
 use std::fs::Permissions;
 use std::io::{self, Write};
@@ -48,6 +51,9 @@ enum Route {
         /// The replaced file's owner and group (`uid`, `gid`), given to the replacement
         /// where this process may ([`keep_owner`]).
         owner: Option<(u32, u32)>,
+        /// The replaced file's extended attributes, given to the replacement (`None` for a
+        /// new file, which keeps what its folder gives it: a default ACL).
+        attributes: Option<Attributes>,
     },
     /// Written in place (device, FIFO, socket); `char_device` for a character device.
     InPlace { target: PathBuf, char_device: bool },
@@ -172,6 +178,7 @@ impl OutputFile {
                     target: path,
                     permissions: None,
                     owner: None,
+                    attributes: None,
                 }
             }
             Target::Regular {
@@ -211,12 +218,28 @@ impl OutputFile {
                         b.message().into(),
                     ));
                 }
-                drop(temp_in(dest, &dir)?);
+                let attributes = Attributes::of(&path).map_err(|e| {
+                    refuse(
+                        dest,
+                        e.kind(),
+                        format!("cannot read its extended attributes: {e}"),
+                    )
+                })?;
+                // Tried on the temporary file made to check the folder: an attribute this
+                // process cannot copy (`security.capability` without the capability) is
+                // refused now, before the work.
+                let mut probe = temp_in(dest, &dir)?;
+                probe
+                    .file()
+                    .and_then(|file| attributes.copy_to(file))
+                    .map_err(|e| Error::io(dest, e))?;
+                drop(probe);
                 Route::Replace {
                     dir,
                     target: path,
                     permissions: Some(permissions),
                     owner: meta.ok().as_ref().and_then(owner_of),
+                    attributes: Some(attributes),
                 }
             }
         };
@@ -272,6 +295,7 @@ impl OutputFile {
                 dir,
                 permissions,
                 owner,
+                attributes,
             } => {
                 let mut temp = temp_in(&dest, &dir)?;
                 let result = (|| {
@@ -282,14 +306,23 @@ impl OutputFile {
                         keep_owner(file, owner);
                     }
                     // Before the bytes: a private file's new contents are never readable
-                    // by others, not even in the temporary file.
+                    // by others, not even in the temporary file. Then the attributes: an
+                    // ACL's mask is the mode's group bits, its other entries are not in
+                    // the mode.
                     if let Some(p) = permissions {
                         file.set_permissions(p)?;
+                    }
+                    if let Some(a) = &attributes {
+                        a.copy_to(file)?;
                     }
                     let mut w = io::BufWriter::new(&mut *file);
                     fill(&mut w)?;
                     w.flush()?;
                     drop(w);
+                    // Again: a write removes some attributes (`security.capability`).
+                    if let Some(a) = &attributes {
+                        a.copy_to(file)?;
+                    }
                     file.sync_all()
                 })();
                 result.map_err(|e| Error::io(&dest, e))?;
@@ -617,6 +650,105 @@ mod tests {
         assert_eq!(mode(&theirs), 0o2664);
         assert_eq!(std::fs::read(&theirs).unwrap(), b"new");
         assert_eq!(names(dir.path()), ["own.txt", "theirs.txt"]);
+    }
+
+    /// Sets extended attribute `name` of `path` to `value` (libc directly); whether it did.
+    #[cfg(target_os = "linux")]
+    fn set_xattr(path: &Path, name: &str, value: &[u8]) -> bool {
+        use std::os::unix::ffi::OsStrExt;
+        let p = std::ffi::CString::new(path.as_os_str().as_bytes()).unwrap();
+        let n = std::ffi::CString::new(name).unwrap();
+        // SAFETY: both strings are NUL-terminated and live across the call; `value` is
+        // readable for its length.
+        unsafe {
+            libc::setxattr(
+                p.as_ptr(),
+                n.as_ptr(),
+                value.as_ptr().cast(),
+                value.len(),
+                0,
+            ) == 0
+        }
+    }
+
+    /// The value of extended attribute `name` of `path` (libc directly), `None` when it has
+    /// none.
+    #[cfg(target_os = "linux")]
+    fn get_xattr(path: &Path, name: &str) -> Option<Vec<u8>> {
+        use std::os::unix::ffi::OsStrExt;
+        let p = std::ffi::CString::new(path.as_os_str().as_bytes()).unwrap();
+        let n = std::ffi::CString::new(name).unwrap();
+        let mut buf = vec![0u8; 4096];
+        // SAFETY: both strings are NUL-terminated and live across the call; `buf` is
+        // writable for its length.
+        let len =
+            unsafe { libc::getxattr(p.as_ptr(), n.as_ptr(), buf.as_mut_ptr().cast(), buf.len()) };
+        buf.truncate(usize::try_from(len).ok()?);
+        Some(buf)
+    }
+
+    /// A POSIX ACL as the kernel's `system.posix_acl_*` value: version 2, then `(tag, perm,
+    /// id)` entries (`acl_ea_entry` of `<linux/posix_acl_xattr.h>`).
+    #[cfg(target_os = "linux")]
+    fn acl(entries: &[(u16, u16, u32)]) -> Vec<u8> {
+        let mut v = 2u32.to_le_bytes().to_vec();
+        for &(tag, perm, id) in entries {
+            v.extend(tag.to_le_bytes());
+            v.extend(perm.to_le_bytes());
+            v.extend(id.to_le_bytes());
+        }
+        v
+    }
+
+    /// A replaced file keeps its extended attributes: a `user.*` attribute, and an ACL
+    /// (`user::rw-, user:65534:r--, group::r--, mask::rw-, other::---`) whose mask is the
+    /// mode's group bits: the owning group stays `r--` (not the mask's `rw-` as a plain mode)
+    /// and the named user keeps read access. A plain file in a folder whose default ACL
+    /// a new file inherits is replaced without an ACL.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn extended_attributes_and_the_acl_are_kept() {
+        const ACL: &str = "system.posix_acl_access";
+        const NONE: u32 = u32::MAX;
+        let dir = tempfile::tempdir().unwrap();
+        let plain = dir.path().join("plain.txt");
+        std::fs::write(&plain, b"old").unwrap();
+        let path = dir.path().join("shared.txt");
+        std::fs::write(&path, b"old").unwrap();
+        let access = acl(&[
+            (0x01, 6, NONE),
+            (0x02, 4, 65_534),
+            (0x04, 4, NONE),
+            (0x10, 6, NONE),
+            (0x20, 0, NONE),
+        ]);
+        if !set_xattr(&path, "user.origin", b"scan 7") || !set_xattr(&path, ACL, &access) {
+            crate::skips::record_skip(
+                "SKIPPED halfray outputs::file::tests::extended_attributes_and_the_acl_are_kept: the temporary folder's file system takes no user attribute or ACL",
+            );
+            return;
+        }
+        let before = get_xattr(&path, ACL).expect("the ACL was set");
+        assert_eq!(mode(&path) & 0o070, 0o060, "the mask as the group bits");
+        write(&path, false, b"new").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"new");
+        assert_eq!(
+            get_xattr(&path, "user.origin").as_deref(),
+            Some(&b"scan 7"[..])
+        );
+        assert_eq!(get_xattr(&path, ACL), Some(before));
+        assert_eq!(mode(&path) & 0o070, 0o060);
+        // New files in the folder now get an ACL; the replaced plain file does not.
+        assert!(set_xattr(dir.path(), "system.posix_acl_default", &access));
+        let inherited = dir.path().join("inherited.txt");
+        write(&inherited, false, b"new").unwrap();
+        assert!(get_xattr(&inherited, ACL).is_some(), "a new file inherits");
+        write(&plain, false, b"new").unwrap();
+        assert_eq!(get_xattr(&plain, ACL), None);
+        assert_eq!(
+            names(dir.path()),
+            ["inherited.txt", "plain.txt", "shared.txt"]
+        );
     }
 
     #[test]

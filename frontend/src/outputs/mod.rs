@@ -13,6 +13,7 @@ pub mod identity;
 pub mod replace;
 pub mod target;
 pub mod temp;
+pub mod xattr;
 
 pub use file::{OutputFile, write_together};
 pub use identity::{FileId, file_id, first_repeat};
