@@ -3,6 +3,11 @@
 //! run (the `halfray-fuzz-props` crate, `tests/fuzz-props`), so a plain `cargo test` catches a
 //! regression of any crash the fuzzers ever found, without nightly or libFuzzer.
 //!
+//! A seed (`seed-*`, built by `props::seeds()` to exercise its target's properties) must also
+//! reach a decisive check of its target ([`props::Outcome::Checked`]): a seed that every check
+//! lets pass unjudged tests nothing, unless it is one of `props::UNJUDGED_SEEDS` (boundary
+//! seeds, each with its reason). The minimised corpus (`min-*`) may hold such inputs.
+//!
 //! A regression file whose name starts with `open-` is a reported, unfixed bug: it must still
 //! fail, and with the reported failure: its panic message must contain the text of the
 //! sibling file `<name>.expected` (required; not replayed as an input), so a different
@@ -47,15 +52,24 @@ fn inputs(kind: &str) -> Vec<(String, PathBuf)> {
     out
 }
 
+/// `true` for a seed listed in `props::UNJUDGED_SEEDS`.
+fn unjudged_seed(target: &str, name: &str) -> bool {
+    props::UNJUDGED_SEEDS
+        .iter()
+        .any(|&(t, n, _)| t == target && n == name)
+}
+
 fn replay(kind: &str) -> usize {
     let files = inputs(kind);
     let mut failures = Vec::new();
     for (target, path) in &files {
         let data = std::fs::read(path).unwrap();
         let r = catch_unwind(AssertUnwindSafe(|| props::run(target, &data)));
-        let open = path
+        let name = path
             .file_name()
-            .is_some_and(|n| n.to_string_lossy().starts_with("open-"));
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let open = name.starts_with("open-");
         let panic_message = |e: &Box<dyn std::any::Any + Send>| {
             e.downcast_ref::<String>()
                 .cloned()
@@ -74,11 +88,11 @@ fn replay(kind: &str) -> usize {
             };
             let expected = expected.trim();
             match &r {
-                Ok(true) => failures.push(format!(
+                Ok(Some(_)) => failures.push(format!(
                     "{}: passes now: drop the `open-` prefix (the bug it reports is fixed)",
                     path.display()
                 )),
-                Ok(false) => failures.push(format!("{}: unknown target", path.display())),
+                Ok(None) => failures.push(format!("{}: unknown target", path.display())),
                 Err(e) if expected.is_empty() || !panic_message(e).contains(expected) => failures
                     .push(format!(
                         "{}: fails, but not with the expected {expected:?}:\n{}",
@@ -90,8 +104,16 @@ fn replay(kind: &str) -> usize {
             continue;
         }
         match r {
-            Ok(true) => {}
-            Ok(false) => failures.push(format!("{}: unknown target", path.display())),
+            Ok(Some(props::Outcome::Unjudged))
+                if name.starts_with("seed-") && !unjudged_seed(target, &name) =>
+            {
+                failures.push(format!(
+                    "{}: a seed that reaches no decisive check",
+                    path.display()
+                ))
+            }
+            Ok(Some(_)) => {}
+            Ok(None) => failures.push(format!("{}: unknown target", path.display())),
             Err(e) => failures.push(format!("{}:\n{}", path.display(), panic_message(&e))),
         }
     }
@@ -173,16 +195,45 @@ fn seed_files_match_their_definitions() {
     }
 }
 
-/// Every seed passes its own target (also covered by the corpus replay; this one works before
-/// the files are written).
+/// Every seed passes its own target and reaches a decisive check of it, except the listed
+/// boundary seeds, which must still pass unjudged (also covered by the corpus replay; this one
+/// works before the files are written).
 #[test]
 fn seeds_pass() {
     let mut failed = Vec::new();
-    for (target, name, bytes) in props::seeds() {
-        let r = catch_unwind(AssertUnwindSafe(|| props::run(target, &bytes)));
-        if !matches!(r, Ok(true)) {
-            failed.push(format!("{target}/{name}"));
+    let mut unjudged = Vec::new();
+    let mut judged_listed = Vec::new();
+    let seeds = props::seeds();
+    for (target, name, bytes) in &seeds {
+        let r = catch_unwind(AssertUnwindSafe(|| props::run(target, bytes)));
+        let listed = unjudged_seed(target, name);
+        match r {
+            Ok(Some(props::Outcome::Checked)) if listed => {
+                judged_listed.push(format!("{target}/{name}"))
+            }
+            Ok(Some(props::Outcome::Unjudged)) if !listed => {
+                unjudged.push(format!("{target}/{name}"))
+            }
+            Ok(Some(_)) => {}
+            _ => failed.push(format!("{target}/{name}")),
         }
     }
     assert!(failed.is_empty(), "seeds failing: {failed:#?}");
+    assert!(
+        unjudged.is_empty(),
+        "seeds that reach no decisive check (every check let them pass): {unjudged:#?}"
+    );
+    assert!(
+        judged_listed.is_empty(),
+        "seeds in UNJUDGED_SEEDS that are judged now (drop them from the list): \
+         {judged_listed:#?}"
+    );
+    let unknown: Vec<_> = props::UNJUDGED_SEEDS
+        .iter()
+        .filter(|&&(t, n, _)| !seeds.iter().any(|(st, sn, _)| st == &t && sn == n))
+        .collect();
+    assert!(
+        unknown.is_empty(),
+        "UNJUDGED_SEEDS names no seed: {unknown:?}"
+    );
 }

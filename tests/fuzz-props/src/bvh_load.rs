@@ -52,6 +52,7 @@ pub fn check(s: &Soup, mutations: &[(u8, u16, u32)]) {
         // `Bvh::build` documents only a non-finite (or out-of-range) triangle's is possible:
         // nothing to bake.
         Err(e) => {
+            reached();
             assert!(
                 matches!(e, BvhError::NonFinite(_)),
                 "the build refused a soup of {n} triangles with {e:?}"

@@ -11,7 +11,7 @@ use super::bvh::{
     Oracle, SEED_DUPLICATES, SEED_ORIGIN, SEED_POINTS, Soup, decode, encode_quantized,
     seed_nan_vertex, seed_pyramid,
 };
-use super::{Enc, Seed};
+use super::{Enc, Seed, reached};
 use glam::Vec3;
 use halfray_core::grid::{CellAssignment, DEFAULT_LAMBDA, Grid, GridError, GridOptions, GridPlan};
 use halfray_core::mesh::TriangleMesh;
@@ -75,6 +75,7 @@ pub fn check(s: &Soup, opts: &GridOptions) {
             })),
             Some(bad),
         ) if !opts.exclude_non_finite => {
+            reached();
             assert_eq!(index, bad, "wrong NonFinite triangle\n{}", ctx());
             return;
         }

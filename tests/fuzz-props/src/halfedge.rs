@@ -915,6 +915,9 @@ pub fn halfedge_ops(data: &[u8]) {
                 Ok(true)
             }
         };
+        // Every operation's outcome is judged: against its oracle above, and below against
+        // the counts (success) or the unchanged mesh (refusal).
+        reached();
         match outcome {
             Ok(keep_chi) => {
                 // `validate()` is the core's structural invariant check, a separate pass

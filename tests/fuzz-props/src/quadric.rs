@@ -224,10 +224,13 @@ pub fn ray_quadric(data: &[u8]) {
     if let Some(want) = expected_refusal(&params) {
         match (&surface, &want) {
             (Ok(_), Ok(())) => {}
-            (Err(e), Err(kinds)) => assert!(
-                kinds.contains(e),
-                "refused as {e:?}, the contract names {kinds:?}: {params:?}"
-            ),
+            (Err(e), Err(kinds)) => {
+                reached();
+                assert!(
+                    kinds.contains(e),
+                    "refused as {e:?}, the contract names {kinds:?}: {params:?}"
+                );
+            }
             (Ok(q), Err(kinds)) => {
                 panic!("accepted {q:?}, the contract refuses it ({kinds:?}): {params:?}")
             }
@@ -353,12 +356,14 @@ pub fn check_against_exact(q: &Quadric, ray: &Ray) {
     let band = BigRational::from_float(DISC_BAND_IN_U * u * s).expect("finite band");
     let roots = q.roots(ray);
     if disc > band {
+        reached();
         assert!(
             roots.is_some(),
             "a clearly positive discriminant, no roots\n{}",
             ctx()
         );
     } else if disc < -band {
+        reached();
         assert!(
             roots.is_none(),
             "a clearly negative discriminant, roots {roots:?}\n{}",
@@ -440,6 +445,7 @@ pub fn check(q: &Quadric, ray: &Ray) {
     let roots = q.roots(ray);
     let hit = q.intersect(ray);
     if !ray.is_valid() {
+        reached();
         assert!(roots.is_none() && hit.is_none(), "{}", ctx());
         return;
     }
@@ -474,6 +480,7 @@ pub fn check(q: &Quadric, ray: &Ray) {
                 + qa_abs * delta * delta
                 + 2.0 * (qb_abs + qa_abs * t.abs()) * delta;
             if bound.is_finite() && fx.is_finite() {
+                reached();
                 assert!(
                     fx.abs() <= bound + 1e-300,
                     "root t = {t:e}: f = {fx:e} > bound {bound:e}\n{}",

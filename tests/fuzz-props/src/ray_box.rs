@@ -112,6 +112,7 @@ pub fn check_ray_box(ray: &Ray, bx: &Aabb) {
         ctx()
     );
     if !ray.is_valid() {
+        reached();
         assert!(got.is_none(), "invalid ray hits a box\n{}", ctx());
         return;
     }
@@ -169,6 +170,7 @@ pub fn check_ray_box(ray: &Ray, bx: &Aabb) {
             || exit.is_infinite()
             || exit - enter > SLAB_ORACLE_REL * enter.abs().max(exit.abs()));
     if must_hit {
+        reached();
         assert!(
             got.is_some(),
             "missed a box the exact ray crosses: exact interval [{enter:e}, {exit:e}]\n{}",
@@ -198,6 +200,7 @@ pub fn check_ray_box(ray: &Ray, bx: &Aabb) {
             && exit.is_finite()
             && enter - exit > SLAB_FALSE_HIT_REL * enter.abs().max(exit.abs());
         if excluded_by_zero_axis || gap_exceeds {
+            reached();
             assert!(
                 got.is_none(),
                 "hit a box the exact ray misses: exact interval [{enter:e}, {exit:e}]\n{}",

@@ -76,6 +76,9 @@ pub fn check(text: &str) {
     if may_leave_scene_dir(text) {
         return;
     }
+    // Both outcomes below are judged (an accepted scene's camera and queries, an error's
+    // kind and position).
+    reached();
     let path = Path::new(SCENE_PATH);
     match halfray::scene::parse(text, path) {
         Ok(scene) => {

@@ -102,6 +102,7 @@ pub fn check(c: Vec3, r: f32, ray: &Ray) {
             s
         }
         Err(_) => {
+            reached();
             assert!(
                 !(c.is_finite() && r.is_finite() && r > 0.0),
                 "rejected a valid sphere\n{}",
@@ -129,6 +130,7 @@ pub fn check(c: Vec3, r: f32, ray: &Ray) {
         );
     }
     if !ray.is_valid() {
+        reached();
         assert!(
             roots.is_none() && hit.is_none() && naive.is_none(),
             "{}",
@@ -153,6 +155,7 @@ pub fn check(c: Vec3, r: f32, ray: &Ray) {
         assert!(t0 <= t1, "roots out of order\n{}", ctx());
         for t in [f64::from(t0), f64::from(t1)] {
             if domain && in_domain(t.abs() * dl) {
+                reached();
                 // Plus the f32 rounding of t itself (relative u, absolute 2⁻¹⁴⁹ below the
                 // normal range) times |F'| ≤ 2|d|·(|o − C| + r + |t·d|) between the
                 // computed and the exact root.
@@ -174,6 +177,7 @@ pub fn check(c: Vec3, r: f32, ray: &Ray) {
         let n = h.normal.as_dvec3();
         let p = h.point.as_dvec3();
         if domain && p.is_finite() {
+            reached();
             let dist = ((p - cc).length() - rr).abs();
             let e = h.point_error.as_dvec3().length();
             assert!(
@@ -206,6 +210,7 @@ pub fn check(c: Vec3, r: f32, ray: &Ray) {
     // leaves the constant's room (see [`K`]), nothing more.
     let margin = K * u * (fl + rr);
     if ll > rr + margin {
+        reached();
         assert!(
             hit.is_none(),
             "clear miss (|l| = {ll:e}) reported as a hit\n{}",
@@ -249,6 +254,9 @@ pub fn check(c: Vec3, r: f32, ray: &Ray) {
         (Some(false), Some(false)) => Some(None),
         _ => None,
     };
+    if expect.is_some() {
+        reached();
+    }
     match expect {
         Some(Some(t_ref)) => {
             let Some(h) = hit else {

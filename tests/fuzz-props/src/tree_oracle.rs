@@ -3,7 +3,7 @@
 //! closest and any hit on one ray against it.
 
 use super::bvh::{projection_underflows, within_domain};
-use super::fmt_ray;
+use super::{fmt_ray, reached};
 use core::fmt::Debug;
 use glam::Vec3;
 use halfray_core::mesh::{PrimitiveSource, TriangleMesh};
@@ -93,6 +93,7 @@ pub(crate) fn checked_build<T, E: Debug>(
         (Ok(t), None) => Some(t),
         (Ok(t), Some(_)) if exclude => Some(t),
         (Err(e), Some(bad)) if !exclude && non_finite(&e).is_some() => {
+            reached();
             assert_eq!(
                 non_finite(&e),
                 Some(bad),
@@ -227,6 +228,7 @@ impl<'m> Oracle<'_, 'm> {
         if !clear {
             return;
         }
+        reached();
         assert!(
             got.is_some_and(|(_, h)| h.t <= w.t),
             "{tree}: missed brute force's clear hit {want:?} (reference t = {t_ref:e}, \
@@ -250,6 +252,7 @@ impl<'m> Oracle<'_, 'm> {
         want: Option<(u32, TriangleHit)>,
     ) {
         let ctx = self.ctx;
+        reached();
         assert_eq!(
             got,
             want,

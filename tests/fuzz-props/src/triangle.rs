@@ -91,6 +91,11 @@ pub fn check_ray_triangle(ray: &Ray, v: &[Vec3; 3]) {
         let f32_domain = !projection_underflows(ray, v) && f32_products_in_range(ray, v);
         check_hit_contract(ray, v, &h, f32_domain, &ctx);
     }
+    // An input the contract excludes (invalid ray, non-finite or repeated vertex): that no
+    // variant hit it, judged above, is its property.
+    if !(valid && finite) || v[0] == v[1] || v[1] == v[2] || v[2] == v[0] {
+        reached();
+    }
     if !(valid && finite) {
         return;
     }
@@ -138,6 +143,8 @@ fn check_hit_contract(
     barycentric_domain: bool,
     ctx: &dyn Fn() -> String,
 ) {
+    // A hit judged against the contract.
+    reached();
     assert!(ray.is_valid(), "invalid ray hit\n{}", ctx());
     assert!(
         v.iter().all(|p| p.is_finite()),

@@ -238,6 +238,7 @@ impl WatertightBound {
             )
         };
         if !inside {
+            reached();
             assert!(
                 got.is_none(),
                 "hit although the reference is outside by more than the bound\n{}",
@@ -286,6 +287,7 @@ impl WatertightBound {
             return; // within the t bound of an interval end: either answer is right
         }
         let expect_hit = t_ref > t_min && t_ref <= t_max;
+        reached();
         match got {
             None => assert!(
                 !expect_hit,
