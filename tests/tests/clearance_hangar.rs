@@ -29,6 +29,27 @@ use halfray_tests::closest_by;
 /// and the final `t·|n|` product: well under 100 ulps, i.e. 1e-5 relative.
 const CLEARANCE_REL_TOL: f64 = 1e-5;
 
+/// How far a vertex normal of the axis-aligned octahedron drone may be from its axis, per
+/// component (unitless). The drone's coordinates are dyadic, so each face normal is exact and
+/// the four around a vertex cancel exactly across the axis (by symmetry); only the
+/// normalisation rounds the axis component: one square root and one division or reciprocal
+/// product, within 2 ulps of 1.
+const AXIS_NORMAL_TOL: f32 = 2.0 * f32::EPSILON;
+
+/// How far the `f32` transform's placement of a chopper vertex may be from the `f64`
+/// [`placed_f64`], per coordinate, in world units. The chopper's coordinates are at most 5
+/// from its centre and the placed ones below 32, where one `f32` ulp is `2⁻¹⁹`: the
+/// translation and the result round once each (half an ulp each), and the rotation (the `f32`
+/// sine and cosine of the rounded heading, a few `u` each, then three products and two sums)
+/// moves a point at distance 5 by about `5·8u ≈ 2⁻¹⁹`. Four ulps, `2⁻¹⁷ ≈ 7.6e-6`, covers the
+/// sum with margin.
+const PLACEMENT_ABS_TOL: f64 = 1.0 / 131_072.0;
+
+/// How far clear of contact (world units) the predicted gaps at the steps before and at the
+/// predicted contact must be, so that the contact step is decided by geometry and not by
+/// rounding: `10⁻³`, over a hundred times [`PLACEMENT_ABS_TOL`].
+const STEP_DECISION_MARGIN: f64 = 1e-3;
+
 /// The hangar: the room [0, 20] × [0, 8] × [0, 12].
 const ROOM_MIN: DVec3 = DVec3::new(0.0, 0.0, 0.0);
 const ROOM_MAX: DVec3 = DVec3::new(20.0, 8.0, 12.0);
@@ -225,7 +246,7 @@ fn octahedron_drone_clearance_moves_as_predicted() {
         .enumerate()
     {
         assert!(
-            (normals_check[i] - *axis).abs().max_element() <= 1e-6,
+            (normals_check[i] - *axis).abs().max_element() <= AXIS_NORMAL_TOL,
             "vertex {i}: normal {} is its axis {axis}",
             normals_check[i]
         );
@@ -431,7 +452,7 @@ fn chopper_flying_in_first_touches_the_far_wall_with_its_rotor() {
                         (w - tf.point_to_world(cp[i]).as_dvec3())
                             .abs()
                             .max_element()
-                            < 1e-5
+                            <= PLACEMENT_ABS_TOL
                     );
                     let (g, wall) = wall_gap(w);
                     (g, wall, i)
@@ -453,7 +474,10 @@ fn chopper_flying_in_first_touches_the_far_wall_with_its_rotor() {
     let hub = cp.len() - ROTOR_SIDES as usize - 1;
     assert!(vertex > hub, "a rotor tip, not vertex {vertex}");
     // Margins far above f32 rounding (~1e-6 at these coordinates): the step is robust.
-    assert!(pen < -1e-3 && before > 1e-3, "{pen} {before}");
+    assert!(
+        pen < -STEP_DECISION_MARGIN && before > STEP_DECISION_MARGIN,
+        "{pen} {before}"
+    );
 
     for k in 0..expected + 4 {
         let tf = placement(k);
@@ -461,10 +485,12 @@ fn chopper_flying_in_first_touches_the_far_wall_with_its_rotor() {
         assert_eq!(contact.is_some(), k >= expected, "step {k}");
         if k == expected - 1 {
             // One step before: the distance is the predicted gap, from a rotor triangle to
-            // the far wall.
+            // the far wall. The wall is exact and the distance is evaluated in f64 (relative
+            // error `DISTANCE_ERR_REL = gamma_f64(64)`, ~1e-14 here), so it differs from the
+            // prediction by the placement's rounding.
             let c = min_distance(&a, &b, &tf, f64::INFINITY).unwrap().unwrap();
             assert!(
-                (c.distance - before).abs() < 1e-5,
+                (c.distance - before).abs() <= PLACEMENT_ABS_TOL,
                 "{} vs {before}",
                 c.distance
             );

@@ -72,6 +72,18 @@ fn hits(positions: &[Vec3], tris: &[[u32; 3]], ray: &Ray) -> (bool, bool) {
     (brute, through_bvh)
 }
 
+/// How far past its target a ray of `shared_edges_and_vertices_never_leak` is probed, relative
+/// to the mesh's scale (unitless).
+const PROBE_PAST_TARGET_REL: f64 = 1e-2;
+
+/// How far inside every face plane the probe point must be, relative to the mesh's scale
+/// (unitless), for the ray to count as entering. Rounding the ray to `f32` moves the probe by
+/// less than that: the origin lies within `~10³` scales of the world origin (`u·10³ ≈ 6·10⁻⁵`
+/// scales of rounding) and the direction's rounding moves the probe by `~u·52` scales; so the
+/// rounded ray still passes through the solid's interior, and the exact answer is a crossing,
+/// not a touch.
+const ENTERING_MARGIN_REL: f64 = 1e-4;
+
 proptest! {
     #![proptest_config(ProptestConfig {
         cases: 256,
@@ -110,12 +122,13 @@ proptest! {
         // From outside: the mesh lies within 2·scale of its centre.
         let origin = center + d.normalize() * (2.0 + dist) * scale;
         let ray = Ray::new(origin.as_vec3(), (target - origin).as_vec3());
-        // Entering: a point 1e-2·scale past the target is inside every face plane by 1e-4·scale.
-        let past = target + (target - origin).normalize() * 1e-2 * scale;
+        // Entering: a point PROBE_PAST_TARGET_REL·scale past the target is inside every face
+        // plane by ENTERING_MARGIN_REL·scale.
+        let past = target + (target - origin).normalize() * PROBE_PAST_TARGET_REL * scale;
         let inside = tris.iter().all(|f| {
             let v = f.map(|i| positions[i as usize].as_dvec3());
             let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
-            (past - v[0]).dot(n) < -1e-4 * scale
+            (past - v[0]).dot(n) < -ENTERING_MARGIN_REL * scale
         });
         prop_assume!(inside);
         let (brute, bvh) = hits(&positions, &tris, &ray);

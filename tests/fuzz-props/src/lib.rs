@@ -414,8 +414,14 @@ pub fn seeds() -> Vec<Seed> {
     s
 }
 
+/// How far from 1 the length of a curved-surface hit's normal may be (unitless): one `f32`
+/// normalisation, `v / |v|` (the squared length carries `gamma(3)`, halved by the square root,
+/// which rounds once more, and each quotient rounds once: about `5u` in all), or an `f64`
+/// normal rounded to `f32` (`√3/2·2u`). Four ulps of 1 (`8u`).
+pub const HIT_NORMAL_LEN_TOL: f32 = 4.0 * f32::EPSILON;
+
 /// The contract every curved-surface hit shares: `t` in the ray's interval, a unit normal
-/// (within `1e-5`: one `f32` normalisation).
+/// (within [`HIT_NORMAL_LEN_TOL`]).
 fn check_hit_basics(ray: &Ray, h: &halfray_core::hit::Hit, ctx: &dyn Fn() -> String) {
     assert!(
         ray.contains(h.t),
@@ -424,7 +430,7 @@ fn check_hit_basics(ray: &Ray, h: &halfray_core::hit::Hit, ctx: &dyn Fn() -> Str
         ctx()
     );
     assert!(
-        (h.normal.length() - 1.0).abs() <= 1e-5,
+        (h.normal.length() - 1.0).abs() <= HIT_NORMAL_LEN_TOL,
         "normal not unit\n{}",
         ctx()
     );

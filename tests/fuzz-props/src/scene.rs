@@ -71,6 +71,15 @@ fn leaves_the_folder(s: &str) -> bool {
             .any(|c| matches!(c, std::path::Component::ParentDir))
 }
 
+/// How far from 1 the length of an accepted camera's `forward`, `right` and `up` may be
+/// (unitless). `forward` and `right` are normalised in `f32` (a few ulps); `up = right ×
+/// forward` is unit only as far as `right` is perpendicular to `forward`: `|up| = cos δ ≈
+/// 1 − δ²/2`, where `right`'s deviation `δ ≈ 2u / sin θ` grows as the view direction nears the
+/// scene's `up` (angle θ), which the camera accepts down to an exactly zero cross product.
+/// `10⁻³` holds for `sin θ ≳ 3·10⁻⁶`, so no practical camera fails it; a tighter bound would
+/// need θ.
+pub const CAMERA_FRAME_UNIT_TOL: f32 = 1e-3;
+
 /// The properties (module documentation).
 pub fn check(text: &str) {
     if may_leave_scene_dir(text) {
@@ -92,7 +101,7 @@ pub fn check(text: &str) {
             }
             for v in [cam.forward, cam.right, cam.up] {
                 assert!(
-                    (v.length() - 1.0).abs() < 1e-3,
+                    (v.length() - 1.0).abs() < CAMERA_FRAME_UNIT_TOL,
                     "camera frame not unit {cam:?}\n{text}"
                 );
             }

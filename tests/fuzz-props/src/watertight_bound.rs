@@ -22,6 +22,12 @@ pub const DEPTH_REL: f64 = gamma(3) as f64;
 /// roundings scale it by at most `1 + gamma(4)`).
 pub const UNDERFLOW_ABS: f64 = f32::MIN_POSITIVE as f64 / 1_048_576.0; // 2^-146
 
+/// Absolute error of one rounding to `f32` below the normal range: at most half the spacing
+/// `2⁻¹⁴⁹` of the subnormals; the whole spacing (the smallest positive `f32`) is allowed, so
+/// the rounding of the bound's own evaluation is covered. Unit: that of the rounded value
+/// (`t`, or a unitless barycentric).
+pub const F32_SUBNORMAL_ROUNDING_ABS: f64 = 1.401_298_464_324_817e-45; // 2^-149
+
 /// Relative allowance for the reference's own error (and this file's `f64` recomputation of
 /// the same edge functions): the `f64` shear, products and sums carry a few roundings of
 /// `2⁻⁵³ ≈ 1.1·10⁻¹⁶` each; `10⁻¹³` is a thousand times that.
@@ -211,6 +217,26 @@ impl WatertightBound {
         })
     }
 
+    /// How far the variant's barycentric `bᵢ` can be from the exact `b_ref` (the reference's
+    /// `eᵢ/det`), when every exact `|eᵢ|` exceeds its error bound (see the type's docs): the
+    /// edge functions' errors over `|det| − Σ errᵢ`, the evaluation's relative rounding and
+    /// one subnormal rounding ([`F32_SUBNORMAL_ROUNDING_ABS`]), times [`BOUND_SAFETY`].
+    /// Unitless (absolute, on the barycentric).
+    pub fn barycentric_error(&self, eval: EdgeEval, i: usize, b_ref: f64) -> f64 {
+        let e = self.edges();
+        let err = self.edge_errors(eval);
+        let sum_err: f64 = err.iter().sum();
+        let denom = e.iter().sum::<f64>().abs() - sum_err;
+        let b_eval = match eval {
+            EdgeEval::ExactF64 => F64_UNIT_ROUNDOFF,
+            EdgeEval::F32 => f64::from(gamma(3)),
+        };
+        BOUND_SAFETY
+            * ((err[i] + b_ref.abs() * sum_err) / denom
+                + b_eval * b_ref.abs()
+                + F32_SUBNORMAL_ROUNDING_ABS)
+    }
+
     /// Property 2 of [`check_ray_triangle`] for one variant's result `got`.
     pub fn check_agreement(
         &self,
@@ -268,9 +294,9 @@ impl WatertightBound {
             .sum::<f64>()
             + t_ref.abs() * sum_err)
             / denom;
-        let (t_eval, b_eval) = match eval {
-            EdgeEval::ExactF64 => (REF_REL, F64_UNIT_ROUNDOFF),
-            EdgeEval::F32 => (f64::from(gamma(6)), f64::from(gamma(3))),
+        let t_eval = match eval {
+            EdgeEval::ExactF64 => REF_REL,
+            EdgeEval::F32 => f64::from(gamma(6)),
         };
         dt += t_eval * ez / det.abs();
         if eval == EdgeEval::F32 {
@@ -280,7 +306,7 @@ impl WatertightBound {
             dt += 3.0 * f64::from(f32::from_bits(1)) / det.abs();
             dt += f64::from(f32::from_bits(1)) / 2.0 * self.z.iter().map(|z| z.abs()).sum::<f64>();
         }
-        dt += f64::from(F32_UNIT_ROUNDOFF) * t_ref.abs() + 1.5e-45;
+        dt += f64::from(F32_UNIT_ROUNDOFF) * t_ref.abs() + F32_SUBNORMAL_ROUNDING_ABS;
         dt *= BOUND_SAFETY;
         let (t_min, t_max) = (f64::from(ray.t_min), f64::from(ray.t_max));
         if !((t_ref - t_min).abs() > dt && (t_ref - t_max).abs() > dt) {
@@ -310,10 +336,7 @@ impl WatertightBound {
                     ctx()
                 );
                 for (i, b) in [(1, h.b1), (2, h.b2)] {
-                    let db = BOUND_SAFETY
-                        * ((err[i] + b_ref[i].abs() * sum_err) / denom
-                            + b_eval * b_ref[i].abs()
-                            + 1.5e-45);
+                    let db = self.barycentric_error(eval, i, b_ref[i]);
                     assert!(
                         (f64::from(b) - b_ref[i]).abs() <= db,
                         "b{i} = {b:e} differs from the reference {:e} by more than the bound \
