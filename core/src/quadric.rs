@@ -9,6 +9,25 @@
 //! ([`crate::tolerance::QUADRIC_CENTER_MIN_REL_DET`]) and uses the world origin otherwise;
 //! [`Quadric::recentered`] moves the reference point anywhere (e.g. a paraboloid's vertex).
 //!
+//! **Axial form** (cylinders and cones). `A = I − (1 + τ²)·ŵŵᵀ` (`τ = 0` for a cylinder) is
+//! singular along the axis, but a matrix built from a rounded unit vector `ŵ` is not: along an
+//! `f32` axis `w` that is not a coordinate axis its `dᵀAd` is near `±10⁻¹⁶·|d|²`, not `0`,
+//! which would give a ray along the axis two roots near `±10⁸` and a ray `10⁻⁷` rad off the
+//! axis a `t` off by `0.3 %`. [`Quadric::cylinder`] and [`Quadric::cone`] therefore keep the
+//! axis `w` exactly as given (its `f32` components, exact in `f64`) and the ray polynomial
+//! evaluates `uᵀAv = ((u × w)·(v × w) − τ²(u·w)(v·w)) / |w|²` (Lagrange's identity): for an `f32`
+//! direction `d` each component of `d × w` is a difference of two exact `f64` products,
+//! rounded once, so `qa = (|d × w|² − τ²(d·w)²)/|w|²` carries a few roundings *relative to
+//! itself* — at any angle between `d` and the axis — and is exactly `0` (with `qb`) for a
+//! cylinder and any `d` parallel to `w` (`d = λw`: both products of each component are the
+//! same real number). The surface these quadrics solve is therefore the one of the `f32` axis
+//! as given ([`Quadric::axial_form`]). [`Quadric::matrix`] is `A` rounded to `f64` (each entry
+//! within `12·2⁻⁵³·(δ_ij + (1 + τ²)|ŵ_i ŵ_j|)` of the exact one), and [`Quadric::eval`],
+//! [`Quadric::gradient`] and the hit's Newton step, normal and `point_error` use it: a hit's
+//! point is bounded against that matrix's surface, within `12·2⁻⁵³·(2 + τ²)·|y|²/|∇f|` (first
+//! order, `y` from the axis point or apex) of the axial one — a few `2⁻⁵³` of the radius for a
+//! hit as far from the axis point as the radius.
+//!
 //! **Solve** (the cancellation-free quadratic formula), all in `f64` from the `f32` ray: with `f₀ = o − x_c`,
 //! `qa = dᵀAd`, `qb = dᵀ(Af₀ + b_c)`, `qc = f(o)`, the ray gives `qa·t² + 2qb·t + qc = 0`.
 //! 1. The origin is shifted along the ray to `o' = o + t_c·d`, `t_c = −qb/qa` (the point of the
@@ -19,7 +38,11 @@
 //! 2. The stable root pair `q = −(qb + sign(qb)·√Δ)`, roots `qc/q` and `q/qa`.
 //! 3. `qa = 0` (a direction along which the quadric is flat: a cylinder's axis, a paraboloid's
 //!    axis, a cone's generator) leaves the linear equation: one root `−qc/(2qb)`, reported twice;
-//!    `qa = qb = 0` is a ray that never crosses the surface (or lies in it): no root.
+//!    `qa = qb = 0` is a ray that never crosses the surface (or lies in it): no root. `qa` is
+//!    compared with `0` exactly: it is `0` where the quadric is flat along `d` exactly (for
+//!    cylinders and cones, along the `f32` axis or generator as given: *axial form* above),
+//!    and a general quadric's `A` is taken as given (a matrix flat along `d` only up to its
+//!    own rounding is not flat, and its far root is the root of that matrix).
 //!
 //! **Hits.** The root nearest in `(t_min, t_max]` (comparing the `f32`-rounded roots with the
 //! interval). The point `o + t·d` is computed in `f64`, moved by one Newton step along the
@@ -52,6 +75,41 @@ pub struct Quadric {
     center: DVec3,
     bc: DVec3,
     k: f64,
+    /// The axis of a cylinder or cone, from which the ray polynomial's `uᵀAv` is evaluated
+    /// (module documentation, *axial form*); `None` for the general form.
+    axial: Option<Axial>,
+}
+
+/// `A = I − (1 + τ²)·wwᵀ/|w|²` kept as its axis (module documentation, *axial form*).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Axial {
+    /// The constructor's axis direction, any non-zero length (`f32`: exact in `f64`).
+    w: Vec3,
+    /// `τ²` (`0` for a cylinder), exact: the square of an `f32` in `f64`.
+    tau2: f64,
+}
+
+impl Axial {
+    /// `uᵀAv = ((u × w)·(v × w) − τ²(u·w)(v·w)) / |w|²`.
+    fn form(&self, u: DVec3, v: DVec3) -> f64 {
+        let w = self.w.as_dvec3();
+        (u.cross(w).dot(v.cross(w)) - self.tau2 * u.dot(w) * v.dot(w)) / w.length_squared()
+    }
+
+    /// [`Axial::form`] with every product replaced by its absolute value: the scale of its
+    /// rounding.
+    fn form_abs(&self, u: DVec3, v: DVec3) -> f64 {
+        let (u, v, w) = (u.abs(), v.abs(), self.w.as_dvec3().abs());
+        // |u × w| with absolute values: each component `|u_i w_j| + |u_j w_i|`.
+        let cross_abs = |a: DVec3| {
+            DVec3::new(
+                a.y * w.z + a.z * w.y,
+                a.z * w.x + a.x * w.z,
+                a.x * w.y + a.y * w.x,
+            )
+        };
+        (cross_abs(u).dot(cross_abs(v)) + self.tau2 * u.dot(w) * v.dot(w)) / w.length_squared()
+    }
 }
 
 fn mat_is_finite(m: &DMat3) -> bool {
@@ -107,7 +165,13 @@ impl Quadric {
         if !bc.is_finite() || !k.is_finite() {
             return Err(GeometryError::NonFinite);
         }
-        Ok(Self { a, center, bc, k })
+        Ok(Self {
+            a,
+            center,
+            bc,
+            k,
+            axial: None,
+        })
     }
 
     /// The quadric `x̄ᵀQx̄ = 0` with `x̄ = (x, 1)`: `A` is the upper-left 3×3 block, `b` the
@@ -145,6 +209,7 @@ impl Quadric {
             center,
             bc: DVec3::ZERO,
             k,
+            axial: None,
         })
     }
 
@@ -160,7 +225,8 @@ impl Quadric {
 
     /// The infinite circular cylinder of `radius` around the line through `axis_point` with
     /// direction `axis_dir` (any non-zero length): `|y|² − (y·â)² − r² = 0`, `y = x − axis_point`.
-    /// `f > 0` outside.
+    /// `f > 0` outside. Its roots are those of this exact `axis_dir` (module documentation,
+    /// *axial form*): a ray along it has none.
     ///
     /// # Errors
     ///
@@ -175,12 +241,15 @@ impl Quadric {
             return Err(GeometryError::Degenerate);
         }
         let r = radius as f64;
-        Self::from_center_form(DMat3::IDENTITY - outer(u), axis_point.as_dvec3(), -(r * r))
+        let q =
+            Self::from_center_form(DMat3::IDENTITY - outer(u), axis_point.as_dvec3(), -(r * r))?;
+        Ok(q.with_axis(axis_dir, 0.0))
     }
 
     /// The infinite double cone with apex `apex`, axis direction `axis_dir` (any non-zero
     /// length) and half-angle `atan(tan_half_angle)`: `|y|² − (1 + τ²)(y·â)² = 0`,
-    /// `y = x − apex` (both nappes). `f > 0` outside.
+    /// `y = x − apex` (both nappes). `f > 0` outside. Its roots are those of this exact
+    /// `axis_dir` (module documentation, *axial form*).
     ///
     /// # Errors
     ///
@@ -195,16 +264,35 @@ impl Quadric {
             return Err(GeometryError::Degenerate);
         }
         let tau = tan_half_angle as f64;
-        Self::from_center_form(
+        let q = Self::from_center_form(
             DMat3::IDENTITY - outer(u) * (1.0 + tau * tau),
             apex.as_dvec3(),
             0.0,
-        )
+        )?;
+        Ok(q.with_axis(axis_dir, tau * tau))
+    }
+
+    fn with_axis(self, w: Vec3, tau2: f64) -> Self {
+        Self {
+            axial: Some(Axial { w, tau2 }),
+            ..self
+        }
+    }
+
+    /// For a quadric built by [`Quadric::cylinder`] or [`Quadric::cone`]: the axis direction
+    /// as given and `τ²` (`0` for a cylinder), from which [`Quadric::roots`] evaluates the
+    /// ray polynomial (module documentation, *axial form*); `None` for the general form.
+    #[inline]
+    #[must_use]
+    pub fn axial_form(&self) -> Option<(Vec3, f64)> {
+        self.axial.map(|ax| (ax.w, ax.tau2))
     }
 
     /// The same quadric with reference point `p` (exact identity up to the rounding of the new
     /// `b_c = A(p − x_c) + b_c` and `k = f(p)`). Choose `p` near the surface's region of
-    /// interest when `A` is singular.
+    /// interest when `A` is singular. The result is in the general form, even for a cylinder
+    /// or cone: its ray polynomial comes from the rounded `A` ([`Quadric::axial_form`] is
+    /// `None`), so a ray along the axis may get the far roots of that matrix.
     ///
     /// # Errors
     ///
@@ -223,10 +311,12 @@ impl Quadric {
             center: p,
             bc,
             k,
+            axial: None,
         })
     }
 
-    /// The symmetric matrix `A`.
+    /// The symmetric matrix `A` (for a cylinder or cone, rounded from the axis: module
+    /// documentation, *axial form*).
     #[inline]
     #[must_use]
     pub fn matrix(&self) -> DMat3 {
@@ -277,20 +367,18 @@ impl Quadric {
     /// (`|q_a|` above `64·2⁻⁵³` of its scale) with scales in `[10⁻¹⁵⁰, 10¹⁵⁰]`, a root exists
     /// exactly when the exact discriminant is outside the band `|Δ| ≤ 256·2⁻⁵³·S`, and where
     /// `Δ > 2⁻³⁰·S` each root is within `10⁻⁶` of its scale plus its first-order rounding
-    /// bound of the exact one.
+    /// bound of the exact one. For a cylinder or cone, the polynomial, its scales and `F` are
+    /// those of the axial form (`|d × w|` with absolute values for `|q_a|`; module
+    /// documentation), whose exact roots are those of the `f32` axis as given.
     /// The fuzz property `ray_quadric` checks exactly these domains.
     #[must_use]
     pub fn roots(&self, ray: &Ray) -> Option<(f64, f64)> {
         if !ray.is_valid() {
             return None;
         }
-        let o = ray.origin.as_dvec3();
         let d = ray.direction.as_dvec3();
-        let f0 = o - self.center;
-        let g0 = self.a * f0 + self.bc;
-        let qa = d.dot(self.a * d);
-        let qb = d.dot(g0);
-        let qc = f0.dot(g0 + self.bc) + self.k;
+        let f0 = ray.origin.as_dvec3() - self.center;
+        let [qa, qb, qc] = self.ray_polynomial(ray);
         if !(qa.is_finite() && qb.is_finite() && qc.is_finite()) {
             return None;
         }
@@ -303,14 +391,12 @@ impl Quadric {
         } else {
             let tc = -qb / qa;
             let l = f0 + d * tc;
-            let shifted = -qa * (l.dot(self.a * l + self.bc * 2.0) + self.k);
+            let shifted = -qa * self.centred(l);
             // The shifted form cancels inside f(o') when o' is far from o (qa small against
             // qb: a direction nearly along the surface, e.g. a cone's generator); then the
             // plain form qb² − qa·qc is the accurate one. Take the form with the smaller
             // rounding bound (both as multiples of the same unit roundoff).
-            let la = l.abs();
-            let shifted_err =
-                qa.abs() * (la.dot(abs_mat(&self.a) * la + self.bc.abs() * 2.0) + self.k.abs());
+            let shifted_err = qa.abs() * self.centred_abs(l);
             let plain_err = qb * qb + (qa * qc).abs();
             let disc = if shifted_err <= plain_err {
                 shifted
@@ -333,6 +419,41 @@ impl Quadric {
             }
         };
         (t0.is_finite() && t1.is_finite()).then_some((t0, t1))
+    }
+
+    /// The coefficients `[qa, qb, qc]` of `f(o + t·d) = qa·t² + 2qb·t + qc` along `ray`, in
+    /// `f64` (module documentation: `uᵀAv` from the axis for a cylinder or cone).
+    pub(crate) fn ray_polynomial(&self, ray: &Ray) -> [f64; 3] {
+        let d = ray.direction.as_dvec3();
+        let f0 = ray.origin.as_dvec3() - self.center;
+        match self.axial {
+            None => {
+                let g0 = self.a * f0 + self.bc;
+                [d.dot(self.a * d), d.dot(g0), f0.dot(g0 + self.bc) + self.k]
+            }
+            Some(ax) => [
+                ax.form(d, d),
+                ax.form(d, f0) + d.dot(self.bc),
+                self.centred(f0),
+            ],
+        }
+    }
+
+    /// `f(x_c + y)`, with `yᵀAy` from the axis for a cylinder or cone.
+    fn centred(&self, y: DVec3) -> f64 {
+        match self.axial {
+            None => y.dot(self.a * y + self.bc * 2.0) + self.k,
+            Some(ax) => ax.form(y, y) + y.dot(self.bc * 2.0) + self.k,
+        }
+    }
+
+    /// [`Quadric::centred`] with every term replaced by its absolute value.
+    fn centred_abs(&self, y: DVec3) -> f64 {
+        let ya = y.abs();
+        match self.axial {
+            None => ya.dot(abs_mat(&self.a) * ya + self.bc.abs() * 2.0) + self.k.abs(),
+            Some(ax) => ax.form_abs(y, y) + ya.dot(self.bc.abs() * 2.0) + self.k.abs(),
+        }
     }
 
     /// The nearest hit in `(t_min, t_max]` (module documentation: point, error bound, normal).

@@ -193,20 +193,18 @@ impl Shape for Quadric {
         quadric_crossings(ray, |l| self.roots(l), |r| self.intersect(r))
     }
 
-    /// The solid is `f < 0`: the sign of the leading coefficient of `f(o + t·d)` (in `f64`),
-    /// `d·A·d`, then of the linear one `d·∇f(o)` (inside when it is positive: `f` falls as
-    /// `t → −∞`), then of `f(o)` for a line along which `f` is constant.
+    /// The solid is `f < 0`: the sign of the leading coefficient of `f(o + t·d)` (in `f64`,
+    /// the polynomial [`Quadric::roots`] solves), `d·A·d`, then of the linear one `d·∇f(o)/2`
+    /// (inside when it is positive: `f` falls as `t → −∞`), then of `f(o)` for a line along
+    /// which `f` is constant (a cylinder's axis).
     fn line_starts_inside(&self, ray: &Ray) -> bool {
-        let o = ray.origin.as_dvec3();
-        let d = ray.direction.as_dvec3();
-        let qa = d.dot(self.matrix() * d);
-        let qb = d.dot(self.gradient(o));
+        let [qa, qb, qc] = self.ray_polynomial(ray);
         if qa != 0.0 {
             qa < 0.0
         } else if qb != 0.0 {
             qb > 0.0
         } else {
-            self.eval(o) < 0.0
+            qc < 0.0
         }
     }
 }

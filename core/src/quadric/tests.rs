@@ -4,6 +4,7 @@ use super::*;
 use crate::hit::spawn_ray;
 use crate::test_util::unit_vec;
 use crate::tolerance::QUADRIC_ROOT_RESIDUAL_REL;
+use std::format;
 
 /// Finite inputs whose centred form overflows `f64` are refused as `NonFinite`, as the
 /// documentation says: `x² + 2·10²⁰⁰·x = 0` (centre `−10²⁰⁰`, `k = −10⁴⁰⁰`); at `10¹⁰⁰` the
@@ -345,4 +346,213 @@ fn residual_bound_holds_down_to_the_end_of_its_domain() {
     if let Some((t0, t1)) = quad.roots(&ray) {
         assert!(t0 <= t1, "({t0}, {t1})");
     }
+}
+
+/// The reviewer's case: a ray along the slanted axis `(1, 1, 0)`, inside the cylinder. The
+/// matrix `I − ââᵀ` of the rounded unit axis gave it two roots near `±4.1·10⁷` (a hit, and
+/// an entry and exit for CSG); the axial form gives none, and the line is inside throughout.
+#[test]
+fn a_ray_along_a_slanted_cylinder_axis_has_no_root() {
+    let cyl = Quadric::cylinder(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), 1.0).unwrap();
+    let ray = Ray::new(Vec3::new(0.0, 0.0, 0.5), Vec3::new(1.0, 1.0, 0.0));
+    assert_eq!(cyl.roots(&ray), None);
+    assert!(cyl.intersect(&ray).is_none());
+    assert!(crate::shape::Shape::line_crossings(&cyl, &ray) == [None, None]);
+    assert!(crate::shape::Shape::line_starts_inside(&cyl, &ray));
+}
+
+/// A random integer vector in `[−n, n]³` (exact in `f32`), from [`crate::test_util::lcg`].
+fn int_vec(st: &mut u64, n: f32) -> Vec3 {
+    crate::test_util::grid_point(st, n)
+}
+
+/// Rays along random `f32` axes (any components, scaled by powers of two) of random
+/// cylinders: `d = λ·w` with `λ ∈ {1, −1, 2, 1/4}` (exact, so `d` is exactly parallel to the
+/// axis as given) from an origin half a radius or three radii off the axis. The contract
+/// (module documentation, item 3 and *axial form*): `qa = qb = 0`, no root, no hit, no
+/// crossing, and the line is inside exactly when its origin is. Oracle: the construction
+/// (the origin's offset from the axis, 0.5 r or 3 r, far from r against the `f32` rounding
+/// of `p + offset`).
+#[test]
+fn rays_along_random_cylinder_axes_never_cross() {
+    use crate::shape::Shape;
+    use crate::test_util::lcg;
+    let mut st = 7u64;
+    let mut slanted = 0;
+    for i in 0..20_000 {
+        let scale = [1.0f32, 1.0e-3, 1.0e3, 1.0e-20, 1.0e20][i % 5];
+        let w = Vec3::new(lcg(&mut st) - 0.5, lcg(&mut st) - 0.5, lcg(&mut st) - 0.5) * scale;
+        if w.abs().max_element() == 0.0 {
+            continue;
+        }
+        if w.to_array().iter().filter(|&&c| c != 0.0).count() >= 2 {
+            slanted += 1;
+        }
+        let p = Vec3::new(lcg(&mut st) - 0.5, lcg(&mut st) - 0.5, lcg(&mut st) - 0.5) * 10.0;
+        let r = 0.5 + lcg(&mut st) * 4.0;
+        let cyl = Quadric::cylinder(p, w, r).unwrap();
+        let inside = i % 2 == 0;
+        let off = if inside { 0.5 * r } else { 3.0 * r };
+        // (In f64: |w|² overflows f32 at the largest scale.)
+        let perp = w.as_dvec3().normalize().any_orthonormal_vector().as_vec3();
+        let o = p + perp * off;
+        for lambda in [1.0f32, -1.0, 2.0, 0.25] {
+            let ray = Ray::new(o, w * lambda);
+            let ctx = || format!("axis {w:?}, point {p:?}, r {r}, ray {ray:?}");
+            assert_eq!(cyl.roots(&ray), None, "{}", ctx());
+            assert!(cyl.intersect(&ray).is_none(), "{}", ctx());
+            assert!(cyl.line_crossings(&ray) == [None, None], "{}", ctx());
+            assert_eq!(cyl.line_starts_inside(&ray), inside, "{}", ctx());
+        }
+    }
+    assert!(slanted > 15_000, "{slanted}");
+}
+
+/// How far a root of a near-axis ray may lie from the exact one, relative to the sum of the
+/// exact roots' magnitudes (unitless). In [`near_axis_rays_match_the_exact_roots`] every
+/// input is a small integer, so `d × w` and `f₀ × w` are exact and each coefficient carries
+/// one or two roundings (`u = 2⁻⁵³`); the judged discriminants are at least `S/1024`
+/// (`S = q_b² + |q_a q_c|`), so its rounding (tens of `u·S`, from the shifted origin's
+/// evaluation) moves `√Δ`, and each root, by at most about `2¹⁴·u` of the roots' scale.
+/// `2⁻³⁶` (`2¹⁷·u`, `1.5·10⁻¹¹`) leaves a factor 8; the matrix form was off by `3·10⁻³`
+/// at `10⁻⁷` rad.
+const NEAR_AXIS_ROOT_REL: f64 = 1.0 / 68_719_476_736.0;
+
+/// Discriminants judged by [`near_axis_rays_match_the_exact_roots`]: `|Δ| ≥ S/1024`
+/// (unitless fraction of `S`), far beyond the code's rounding of `Δ` (tens of `2⁻⁵³·S`).
+const NEAR_AXIS_DISC_FRACTION: f64 = 1.0 / 1024.0;
+
+/// Rays `10⁻¹` to `3·10⁻⁷` rad off random slanted integer axes `w` of cylinders, built so
+/// that the exact answer is known: `d = m·w + q` with `q = w × k ⊥ w` and `m = 2^j`
+/// (`j ∈ [4, 20]`; every component below `2²⁴`, so exact in `f32`), origin
+/// `o = p + s·q₂ + h·w` with `q₂ = w × k₂`. The part of `o + t·d − p` across the axis is
+/// `s·q₂ + t·q`, so the exact ray polynomial is `|q|²t² + 2s(q₂·q)t + s²|q₂|² − r²`, with
+/// integer coefficients (exact in `f64`): its sign of `Δ` decides existence exactly, and its
+/// stable `f64` roots are within a few `2⁻⁵³` of the exact ones. Oracle: that construction;
+/// tolerance [`NEAR_AXIS_ROOT_REL`]. Also: both crossings (the line is not parallel to the
+/// axis, so it starts outside).
+#[test]
+fn near_axis_rays_match_the_exact_roots() {
+    use crate::shape::Shape;
+    use crate::test_util::lcg;
+    let mut st = 11u64;
+    let (mut judged, mut tiny_angle) = (0, 0);
+    for _ in 0..20_000 {
+        let w = int_vec(&mut st, 8.0);
+        if w.to_array().iter().filter(|&&c| c != 0.0).count() < 2 {
+            continue;
+        }
+        let (q, q2) = (
+            w.cross(int_vec(&mut st, 4.0)),
+            w.cross(int_vec(&mut st, 4.0)),
+        );
+        if q == Vec3::ZERO {
+            continue;
+        }
+        let m = (1u32 << (4 + (lcg(&mut st) * 17.0) as u32)) as f32;
+        let s = (lcg(&mut st) * 5.0).floor() - 2.0;
+        let h = (lcg(&mut st) * 41.0).floor() - 20.0;
+        let p = int_vec(&mut st, 50.0);
+        let r = 1.0 + (lcg(&mut st) * 200.0).floor();
+        let d = w * m + q;
+        let o = p + q2 * s + w * h;
+        assert!(d.abs().max_element() < 16_777_216.0);
+        let (qd, q2d, rd) = (q.as_dvec3(), q2.as_dvec3(), r as f64);
+        let (a, b, c) = (
+            qd.length_squared(),
+            s as f64 * q2d.dot(qd),
+            (s as f64).powi(2) * q2d.length_squared() - rd * rd,
+        );
+        let disc = b * b - a * c;
+        let scale = b * b + (a * c).abs();
+        let cyl = Quadric::cylinder(p, w, r).unwrap();
+        let ray = Ray::new(o, d);
+        let got = cyl.roots(&ray);
+        let ctx = || format!("axis {w:?}, point {p:?}, r {r}, ray {ray:?}: {got:?}");
+        if disc.abs() < NEAR_AXIS_DISC_FRACTION * scale {
+            continue;
+        }
+        judged += 1;
+        if q.length() * 1.0e5 < d.length() {
+            tiny_angle += 1;
+        }
+        if disc < 0.0 {
+            assert_eq!(got, None, "{}", ctx());
+            continue;
+        }
+        let qq = -(b + disc.sqrt().copysign(b));
+        let (x, y) = (c / qq, qq / a);
+        let want = (x.min(y), x.max(y));
+        let (t0, t1) = got.unwrap_or_else(|| panic!("no roots: {}", ctx()));
+        let tol = NEAR_AXIS_ROOT_REL * (want.0.abs() + want.1.abs());
+        assert!(
+            (t0 - want.0).abs() <= tol && (t1 - want.1).abs() <= tol,
+            "exact {want:?}: {}",
+            ctx()
+        );
+        assert!(!cyl.line_starts_inside(&ray), "{}", ctx());
+        let [c0, c1] = cyl.line_crossings(&ray);
+        let (c0, c1) = (c0.unwrap(), c1.unwrap());
+        // Each crossing's t is its root rounded to f32.
+        for (h, t) in [(c0, want.0), (c1, want.1)] {
+            assert!(
+                (h.t as f64 - t).abs() <= tol + f64::from(crate::float::gamma(1)) * t.abs(),
+                "crossing {} against {t}: {}",
+                h.t,
+                ctx()
+            );
+        }
+    }
+    assert!(judged > 5_000 && tiny_angle > 500, "{judged} {tiny_angle}");
+}
+
+/// Rays along a generator of a 45° cone (`τ = 1`) with a slanted integer axis `w` and an
+/// integer `q ⊥ w` with `|q| = |w|`, so that `d = m·(w ± q)` is a generator exactly: `f` is
+/// linear along the line, whose one crossing is reported twice (module documentation,
+/// item 3), or it has none when the slope is zero too. Exact answer: with `f₀ = o − apex`
+/// (integers), `f(o + t·d) = 2B·t + C` where `B = m(±f₀·q − f₀·w)` and
+/// `C·|w|² = |f₀|²|w|² − 2(f₀·w)²`, so `t = −C/(2B)` is a quotient of exact integers, one
+/// rounding in `f64`. Tolerance: [`NEAR_AXIS_ROOT_REL`] of `|t|` (the code's `q_b` and `q_c`
+/// carry a rounding or two each here). The matrix form gave `q_a ≈ 10⁻¹⁶` and a second root
+/// near `10¹⁶`.
+#[test]
+fn rays_along_a_cone_generator_have_one_crossing() {
+    use crate::test_util::lcg;
+    let pairs = [
+        (Vec3::new(1.0, 2.0, 2.0), Vec3::new(2.0, 1.0, -2.0)),
+        (Vec3::new(2.0, 3.0, 6.0), Vec3::new(3.0, -6.0, 2.0)),
+        (Vec3::new(1.0, 4.0, 8.0), Vec3::new(8.0, -4.0, 1.0)),
+        (Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, -1.0, 0.0)),
+    ];
+    let mut st = 5u64;
+    let mut linear = 0;
+    for i in 0..4_000 {
+        let (w, q) = pairs[i % pairs.len()];
+        assert!(w.dot(q) == 0.0 && w.length_squared() == q.length_squared());
+        let sign = if lcg(&mut st) < 0.5 { 1.0 } else { -1.0 };
+        let m = (1u32 << (lcg(&mut st) * 8.0) as u32) as f32;
+        let apex = int_vec(&mut st, 50.0);
+        let f0 = int_vec(&mut st, 30.0);
+        let cone = Quadric::cone(apex, w, 1.0).unwrap();
+        let ray = Ray::new(apex + f0, (w + q * sign) * m);
+        let (f0d, wd, qd) = (f0.as_dvec3(), w.as_dvec3(), q.as_dvec3());
+        let b = m as f64 * (sign as f64 * f0d.dot(qd) - f0d.dot(wd));
+        let cw = f0d.length_squared() * wd.length_squared() - 2.0 * f0d.dot(wd).powi(2);
+        let got = cone.roots(&ray);
+        let ctx = || format!("axis {w:?}, apex {apex:?}, ray {ray:?}: {got:?}");
+        if b == 0.0 {
+            assert_eq!(got, None, "{}", ctx());
+            continue;
+        }
+        linear += 1;
+        let t = -cw / (2.0 * b * wd.length_squared());
+        let (t0, t1) = got.unwrap_or_else(|| panic!("no root: {}", ctx()));
+        assert_eq!(t0, t1, "{}", ctx());
+        assert!(
+            (t0 - t).abs() <= NEAR_AXIS_ROOT_REL * t.abs(),
+            "exact {t}: {}",
+            ctx()
+        );
+    }
+    assert!(linear > 3_000, "{linear}");
 }

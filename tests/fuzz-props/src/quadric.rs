@@ -279,10 +279,43 @@ fn root_rounding(r: f64, [qa_abs, qb_abs, qc_abs]: [f64; 3], disc: f64) -> f64 {
     K * F64_UNIT_ROUNDOFF * (qa_abs * r * r + 2.0 * qb_abs * r.abs() + qc_abs) / (2.0 * disc.sqrt())
 }
 
+/// `uᵀAv` for `q`'s quadratic part as [`Quadric::roots`] documents it, in `f64`, and the same
+/// with every product replaced by its absolute value (the scale of its rounding): for a
+/// cylinder or cone (`Quadric::axial_form` is `Some((w, τ²))`) the axial form
+/// `((u × w)·(v × w) − τ²(u·w)(v·w))/|w|²`, whose exact roots are those of the axis as given,
+/// else `uᵀ·matrix()·v`.
+fn form_f64(q: &Quadric, u: DVec3, v: DVec3) -> (f64, f64) {
+    let (ua, va) = (u.abs(), v.abs());
+    match q.axial_form() {
+        Some((w, tau2)) => {
+            let w = w.as_dvec3();
+            let wa = w.abs();
+            let cross_abs = |a: DVec3| {
+                DVec3::new(
+                    a.y * wa.z + a.z * wa.y,
+                    a.z * wa.x + a.x * wa.z,
+                    a.x * wa.y + a.y * wa.x,
+                )
+            };
+            let w2 = w.length_squared();
+            (
+                (u.cross(w).dot(v.cross(w)) - tau2 * u.dot(w) * v.dot(w)) / w2,
+                (cross_abs(ua).dot(cross_abs(va)) + tau2 * ua.dot(wa) * va.dot(wa)) / w2,
+            )
+        }
+        None => {
+            let am = q.matrix();
+            let aa = DMat3::from_cols(am.x_axis.abs(), am.y_axis.abs(), am.z_axis.abs());
+            (u.dot(am * v), ua.dot(aa * va))
+        }
+    }
+}
+
 /// The ray polynomial `p(t) = qa·t² + 2·qb·t + qc` of `q` along `ray`, in **exact rational
 /// arithmetic** from the stored centred form (centre, `A`, `b_c`, `k`: `f(x) = yᵀA y + 2b_cᵀy +
-/// k`, `y = x − c`) and the ray's `f32` origin and direction: an oracle that shares no
-/// arithmetic with [`Quadric::roots`]. `None` when a stored value is not finite.
+/// k`, `y = x − c`; for a cylinder or cone `yᵀAy` from its axis, as [`form_f64`]) and the
+/// ray's `f32` origin and direction: an oracle that shares no arithmetic with
+/// [`Quadric::roots`]. `None` when a stored value is not finite.
 fn exact_poly(q: &Quadric, ray: &Ray) -> Option<[BigRational; 3]> {
     let r = |x: f64| BigRational::from_float(x);
     let c = q.reference_point();
@@ -290,13 +323,28 @@ fn exact_poly(q: &Quadric, ray: &Ray) -> Option<[BigRational; 3]> {
     let bc = q.gradient(c) * 0.5;
     let k = r(q.eval(c))?;
     let v3 = |v: DVec3| -> Option<[BigRational; 3]> { Some([r(v.x)?, r(v.y)?, r(v.z)?]) };
-    let cols = [v3(am.x_axis)?, v3(am.y_axis)?, v3(am.z_axis)?];
+    let dot = |a: &[BigRational; 3], b: &[BigRational; 3]| -> BigRational {
+        (0..3).map(|i| &a[i] * &b[i]).sum()
+    };
+    let cols = match q.axial_form() {
+        // A·y = (w × (y × w) − τ²(y·w)·w)/|w|² = (|w|²·y − (1 + τ²)(y·w)·w)/|w|²: A's
+        // columns A·e_j, exactly.
+        Some((w, tau2)) => {
+            let (w, s) = (
+                v3(w.as_dvec3())?,
+                r(tau2)? + BigRational::from_integer(1.into()),
+            );
+            let w2 = dot(&w, &w);
+            let id = |i: usize, j: usize| BigRational::from_integer(i32::from(i == j).into());
+            [0, 1, 2].map(|j| -> [BigRational; 3] {
+                core::array::from_fn(|i| id(i, j) - &s * &w[i] * &w[j] / &w2)
+            })
+        }
+        None => [v3(am.x_axis)?, v3(am.y_axis)?, v3(am.z_axis)?],
+    };
     // (A·y)_i = Σ_j A_ij y_j, column j holding A_·j.
     let mul = |y: &[BigRational; 3]| -> [BigRational; 3] {
         core::array::from_fn(|i| (0..3).map(|j| &cols[j][i] * &y[j]).sum())
-    };
-    let dot = |a: &[BigRational; 3], b: &[BigRational; 3]| -> BigRational {
-        (0..3).map(|i| &a[i] * &b[i]).sum()
     };
     let (o, d, cc, b) = (
         v3(ray.origin.as_dvec3())?,
@@ -417,18 +465,22 @@ fn scale(q: &Quadric, x: DVec3) -> f64 {
 
 /// The ray polynomial's coefficient scales `[|qa|, |qb|, |qc|]` (absolute values, the scale of
 /// their rounding): `|qa| = |d|ᵀ|A||d|`, `|qb| = |d|ᵀ(|A||f₀| + |b_c|)`, `|qc| = |f|(o)` (the
-/// bound `eval_abs` documents), `f₀ = o − x_c`.
+/// bound `eval_abs` documents), `f₀ = o − x_c`; for a cylinder or cone, `|·|ᵀ|A||·|` of the
+/// axial form ([`form_f64`]).
 fn coefficient_scales(q: &Quadric, ray: &Ray) -> [f64; 3] {
     let o = ray.origin.as_dvec3();
     let d = ray.direction.as_dvec3();
-    let am = q.matrix();
-    let aa = DMat3::from_cols(am.x_axis.abs(), am.y_axis.abs(), am.z_axis.abs());
     let xc = q.reference_point();
+    let f0 = o - xc;
     let bc = q.gradient(xc) * 0.5;
+    let qc_abs = match q.axial_form() {
+        Some(_) => form_f64(q, f0, f0).1 + 2.0 * f0.abs().dot(bc.abs()) + q.eval(xc).abs(),
+        None => scale(q, o),
+    };
     [
-        d.abs().dot(aa * d.abs()),
-        d.abs().dot(aa * (o - xc).abs() + bc.abs()),
-        scale(q, o),
+        form_f64(q, d, d).1,
+        form_f64(q, d, f0).1 + d.abs().dot(bc.abs()),
+        qc_abs,
     ]
 }
 
@@ -453,7 +505,6 @@ pub fn check(q: &Quadric, ray: &Ray) {
     let o = ray.origin.as_dvec3();
     let d = ray.direction.as_dvec3();
     let am = q.matrix();
-    let aa = DMat3::from_cols(am.x_axis.abs(), am.y_axis.abs(), am.z_axis.abs());
     let xc = q.reference_point();
     let f0 = o - xc;
     let [qa_abs, qb_abs, qc_abs] = coefficient_scales(q, ray);
@@ -472,9 +523,9 @@ pub fn check(q: &Quadric, ray: &Ray) {
             // f in the quadric's centred coordinates, y = (o − x_c) + t·d: a world point
             // o + t·d would round away a displacement that a large curvature still sees.
             let y = f0 + d * t;
-            let fx = y.dot(am * y + bc * 2.0) + k;
-            let ya = y.abs();
-            let f_abs = ya.dot(aa * ya + bc.abs() * 2.0) + k.abs();
+            let (quad, quad_abs) = form_f64(q, y, y);
+            let fx = quad + y.dot(bc * 2.0) + k;
+            let f_abs = quad_abs + y.abs().dot(bc.abs() * 2.0) + k.abs();
             // Plus the rounding of y itself (≤ u·|y| per component).
             let bound = K * u * (qa_abs * t * t + 2.0 * qb_abs * t.abs() + qc_abs + f_abs)
                 + qa_abs * delta * delta
