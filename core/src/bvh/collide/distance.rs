@@ -10,9 +10,11 @@
 //! within rounding of) one triangle and one on the other, so the computed distance `d̃` obeys
 //! `d̃ ≥ d − DISTANCE_ERR_REL·(d + M)` where `d` is the exact distance and `M` the largest
 //! coordinate magnitude of the two triangles ([`DISTANCE_ERR_REL`]). Above, it may exceed the
-//! exact value by the same amount where a near-tie between candidate features is decided by
-//! rounding. Degenerate triangles (segments, points) need no special case: their vertex–face
-//! candidates are skipped (zero normal), their edges still count.
+//! exact value by the same amount: where a near-tie between candidate features is decided by
+//! rounding, and by the rounding of the closest points' parameters (the edge–edge parameter
+//! from `n = d₁ × d₂`, whose error is relative to `|d₁||d₂|`, not to its square; see
+//! [`DISTANCE_ERR_REL`]). Degenerate triangles (segments, points) need no special case: their
+//! vertex–face candidates are skipped (zero normal), their edges still count.
 
 use super::tri_tri::triangles_intersect;
 use crate::float::{gamma_f64, sqrt_f64};
@@ -27,6 +29,23 @@ use glam::{DVec3, Vec3};
 /// adds `γ₅` relative; with both points, three
 /// coordinates and the square root that is under `γ₃₂·(d + M)`. `γ₆₄` doubles it, which also
 /// absorbs the rounding of the box distances the traversal compares against it.
+///
+/// Those terms bound how far a candidate lies from a genuine distance (so `d̃ ≥ d − ε·(d + M)`);
+/// the excess above `d` also depends on how close the parameters are to the exact closest
+/// pair. For two edges at angle `θ`, `s = n·(d₂ × r)/|n|²` with `n = d₁ × d₂`: each component
+/// of `n` rounds by about `u·|d₁||d₂|`, so `s` is off by about `δs = u·r⊥/(|d₁| sin²θ)`, `r⊥`
+/// the distance of `p₁` from the other edge's line (`≤ d* + |d₁| sin θ`, `d*` the lines'
+/// distance). The squared distance along the edge is `d*² + (s − s*)²|d₁|² sin²θ`, stationary
+/// at `s*`, so the excess is at most `√(d*² + X²) − d*` with `X = |d₁| sin θ·δs ≤ u·d*/sin θ +
+/// u·|d₁|`, and at most the segment's own variation `(|d₁| sin θ)²/(2d*)`: for `X ≤ d*` the
+/// smaller of `u²d*/(2 sin²θ)` and `|d₁|² sin²θ/(2d*)` is at most `u·|d₁|/2`, and for `X > d*`
+/// (`sin θ < u`) the excess is at most `X ≤ 2u·|d₁|`: in all cases under `4√3·u·M`, inside the
+/// doubling. (The textbook denominator `|d₁|²|d₂|² − (d₁·d₂)²` rounds by `u·|d₁|²|d₂|²`,
+/// relative `u/sin²θ`: for `sin θ ≲ √u` its `s` is arbitrary and the excess reaches
+/// `|d₁|² sin²θ/(2d*)`, e.g. `5·10⁻¹⁰` on edges `10⁻⁷` apart at `10⁻⁸` rad.) The parameter
+/// `t`, the projection of the point at `s` onto the other edge, rounds by about `γ₃·(|d₁| + |r|)/|d₂|`
+/// of that edge, again a stationary point: its excess is second order, or first order
+/// `≤ γ₃·(|d₁| + |r|) ≤ γ₃·4√3·M` when `d*` is at that level.
 pub const DISTANCE_ERR_REL: f64 = gamma_f64(64);
 
 fn dv(v: Vec3) -> DVec3 {
@@ -83,7 +102,9 @@ fn face_distance(x: DVec3, t: &[DVec3; 3]) -> Option<f64> {
 }
 
 /// Distance between the closed segments `p1q1` and `p2q2` (either may be a point), by the
-/// clamped closest-point parameters (Ericson, Real-Time Collision Detection §5.1.9).
+/// clamped closest-point parameters (Ericson, Real-Time Collision Detection §5.1.9), with the
+/// lines' parameter `s` from `n = d₁ × d₂` (`|n|² = |d₁|²|d₂|² − (d₁·d₂)²` by Lagrange's
+/// identity, without its cancellation: [`DISTANCE_ERR_REL`]).
 pub(super) fn segment_distance(p1: DVec3, q1: DVec3, p2: DVec3, q2: DVec3) -> f64 {
     let (d1, d2, r) = (q1 - p1, q2 - p2, p1 - p2);
     let (a, e, f) = (d1.dot(d1), d2.dot(d2), d2.dot(r));
@@ -97,9 +118,11 @@ pub(super) fn segment_distance(p1: DVec3, q1: DVec3, p2: DVec3, q2: DVec3) -> f6
             ((-c / a).clamp(0.0, 1.0), 0.0)
         } else {
             let b = d1.dot(d2);
-            let denom = a * e - b * b;
+            // s = (b·f − c·e)/(a·e − b²), both by Binet–Cauchy as products of cross products.
+            let n = d1.cross(d2);
+            let denom = n.length_squared();
             let s = if denom > 0.0 {
-                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+                (n.dot(d2.cross(r)) / denom).clamp(0.0, 1.0)
             } else {
                 0.0
             };

@@ -808,3 +808,69 @@ fn a_body_whose_tree_does_not_bound_its_mesh_is_refused() {
     );
     Body::new(&big, nan_mesh).unwrap();
 }
+
+/// Nearly parallel edges whose closest pair joins their interiors. The reviewer's case:
+/// `A = [(−1, 0, 0), (1, 0, 0), (0, −1, 0)]` (`y ≤ 0`) and `B = [(−1, h, e), (1, h, −e),
+/// (0, 1, 0)]` (`y ≥ h`) with `h = 10⁻⁷`, `e = 10⁻⁸`: the slab `0 < y < h` separates them and
+/// B's edge crosses `z = 0` at `(0, h, 0)`, `h` from A's edge, so the distance is exactly `h`;
+/// the closest-point parameter from the Gram determinant `a·e − b²` (relative error
+/// `u/sin²θ`, here `θ = 10⁻⁸`) gave `1.005·10⁻⁷`, 70 000 times the bound. The sweep moves
+/// A's third vertex to `(0, −1, −1)` (A in the plane `y = z`) and B's to `(0, h + 1, −1/L)`
+/// (B's plane has normal `(e, 1, L)`), with B's edge `(∓L, h, ±e)`, `e < h`: still `y ≤ 0`
+/// against `y ≥ h` and the same closest pair, exactly `h` apart, but now no edge crosses the
+/// other triangle's plane at that pair (A's line meets B's plane at `x = h/e > 1`, and B's
+/// edge has `y − z = h ± e > 0`), so an oracle must find it as an edge–edge minimum — the
+/// oracle's own closed form had the same cancellation. Over `h`, `e/h`, `L`, axis
+/// permutations and mirrors (all exact), in both argument orders, against `h` for both the
+/// function and the oracle.
+#[test]
+fn nearly_parallel_edges_keep_their_interior_closest_pair() {
+    let check_case = |a: &[Vec3; 3], b: &[Vec3; 3], h: f32| {
+        let (h, m) = (f64::from(h), oracle::magnitude(a, b));
+        let bound = DISTANCE_ERR_REL * (h + m);
+        for (x, y) in [(a, b), (b, a)] {
+            let got = triangle_distance(x, y);
+            assert!(
+                (got - h).abs() <= bound,
+                "{got:e} against {h:e}: {x:?} {y:?}"
+            );
+        }
+        let (o, _) = oracle::distance(a, b);
+        assert!(
+            (o - h).abs() <= bound,
+            "oracle {o:e} against {h:e}: {a:?} {b:?}"
+        );
+    };
+    let a = tri([-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0]);
+    let b = tri([-1.0, 1e-7, 1e-8], [1.0, 1e-7, -1e-8], [0.0, 1.0, 0.0]);
+    for x in orders(a) {
+        for y in orders(b) {
+            check_case(&x, &y, 1e-7);
+        }
+    }
+    let mut s = 3u64;
+    let perms = [
+        [0, 1, 2],
+        [1, 2, 0],
+        [2, 0, 1],
+        [0, 2, 1],
+        [2, 1, 0],
+        [1, 0, 2],
+    ];
+    for k in 0..5_000 {
+        let h = 2f32.powi(-3 - (lcg(&mut s) * 27.0) as i32) * (1.0 + lcg(&mut s));
+        let e = h * 2f32.powi(-1 - (lcg(&mut s) * 40.0) as i32) * (1.0 + lcg(&mut s));
+        let l = [0.5, 1.0, 2.0, 4.0][k % 4];
+        let sign = vec3(1.0, -1.0, 1.0) * if k % 2 == 0 { 1.0 } else { -1.0 };
+        let perm = perms[k % 6];
+        let map = |v: Vec3| Vec3::from_array(perm.map(|i| v[i])) * sign;
+        let a = [
+            vec3(-1.0, 0.0, 0.0),
+            vec3(1.0, 0.0, 0.0),
+            vec3(0.0, -1.0, -1.0),
+        ]
+        .map(map);
+        let b = [vec3(-l, h, e), vec3(l, h, -e), vec3(0.0, h + 1.0, -1.0 / l)].map(map);
+        check_case(&a, &b, h);
+    }
+}

@@ -7,8 +7,12 @@
 //! * the point where the edge crosses the triangle's plane (`0` when it lies inside);
 //! * each endpoint against the triangle: the foot of the perpendicular when its barycentric
 //!   coordinates (a 2 × 2 Gram solve) are in `[0, 1]`, else the three point–edge distances;
-//! * the edge against each of the triangle's edges: the lines' unclamped closest pair when
-//!   both parameters lie in `[0, 1]`, else the four endpoint–segment distances.
+//! * the edge against each of the triangle's edges: the four endpoint–segment distances, and
+//!   the minimum over the first edge of the point–segment distance to the second, found by a
+//!   ternary search (the distance from a point moving along a line to a convex set is convex
+//!   in the parameter). No closed-form solve: the Gram determinant `a·e − b²` of the usual
+//!   formula cancels for nearly parallel edges (relative error `u/sin²θ`), the same
+//!   cancellation the code under test must avoid.
 //!
 //! Why this covers the minimum: two disjoint convex polygons have a closest pair with a point
 //! on an edge of one of them; if they intersect, an edge of one meets the other (or a vertex
@@ -77,23 +81,49 @@ fn point_triangle(x: DVec3, t: &[DVec3; 3]) -> (f64, Feature) {
     best
 }
 
-/// Distance between the closed segments `p1q1` and `p2q2`.
+/// Ternary-search steps of [`segment_segment`]: each keeps 2/3 of the parameter interval, and
+/// `(2/3)^100 ≈ 2.5·10⁻¹⁸` is below the `f64` resolution of a parameter in `[0, 1]`.
+const TERNARY_STEPS: usize = 100;
+
+/// A search result closer than this to an end of `[0, 1]` is that end (unitless): the final
+/// interval is `(2/3)^100 ≈ 2⁻⁵⁸` wide, so a minimum at an end leaves `s < 2⁻⁵⁸`, and an
+/// interior minimum this close to an end is a vertex–edge pair to within `2⁻⁵⁵` of the edge.
+const ENDPOINT_S: f64 = 1.0 / 36_028_797_018_963_968.0;
+
+/// Distance between the closed segments `p1q1` and `p2q2`: the endpoint–segment distances
+/// (vertex–edge), and the minimum over `s ∈ [0, 1]` of the distance from `p1 + s·(q1 − p1)` to
+/// the segment `p2q2` by ternary search (convex in `s`), an edge–edge pair when it is smaller
+/// than all four.
 fn segment_segment(p1: DVec3, q1: DVec3, p2: DVec3, q2: DVec3) -> (f64, Feature) {
     let mut best = (f64::INFINITY, Feature::VertexEdge);
-    let (u, v, w) = (q1 - p1, q2 - p2, p1 - p2);
-    // Minimise |w + s·u − t·v|²: a·s − b·t = −c, −b·s + e·t = f.
-    let (a, b, e, c, f) = (u.dot(u), u.dot(v), v.dot(v), u.dot(w), v.dot(w));
-    let det = a * e - b * b;
-    if det > 0.0 {
-        let s = (b * f - c * e) / det;
-        let t = (a * f - b * c) / det;
-        if (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t) {
-            keep(&mut best, (w + u * s - v * t).length(), Feature::EdgeEdge);
-        }
-    }
     for (x, p, q) in [(p1, p2, q2), (q1, p2, q2), (p2, p1, q1), (q2, p1, q1)] {
         keep(&mut best, point_segment(x, p, q), Feature::VertexEdge);
     }
+    let g = |s: f64| point_segment(p1 + (q1 - p1) * s, p2, q2);
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    for _ in 0..TERNARY_STEPS {
+        let (m1, m2) = (lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0);
+        let (g1, g2) = (g(m1), g(m2));
+        // A convex function equal at m1 and m2 has its minimum between them.
+        if g1 <= g2 {
+            hi = m2;
+        }
+        if g1 >= g2 {
+            lo = m1;
+        }
+    }
+    let s = 0.5 * (lo + hi);
+    // An edge–edge pair when the minimum is interior to both edges: `s` away from the ends
+    // by more than the search's resolution, and the foot on the second edge strictly inside.
+    let (d2, x) = (q2 - p2, p1 + (q1 - p1) * s);
+    let t = (x - p2).dot(d2) / d2.dot(d2);
+    let interior = (ENDPOINT_S..1.0 - ENDPOINT_S).contains(&s) && t > 0.0 && t < 1.0;
+    let kind = if interior {
+        Feature::EdgeEdge
+    } else {
+        Feature::VertexEdge
+    };
+    keep(&mut best, g(s), kind);
     best
 }
 
