@@ -34,7 +34,12 @@
 //! diagonal. Both tests are relative, and the plane takes the unit normal (normalised in
 //! `f64`), so a polygon is accepted or refused alike at every scale of finite `f32`
 //! coordinates. Simplicity (no self-intersection) is *not* checked: a self-intersecting outline
-//! is classified by the even–odd rule.
+//! is classified by the even–odd rule. The area test is on the **signed** (Newell) area, in
+//! which the lobes of a self-intersecting outline that wind in opposite directions cancel: a
+//! bow-tie with equal lobes has a zero normal and is refused as
+//! [`GeometryError::Degenerate`] (its plane is not determined by that normal), one with
+//! unequal lobes is accepted if the difference passes, with the normal of the lobe of larger
+//! area (so a ray hitting the other lobe's front side sees a back face).
 
 use crate::error::GeometryError;
 use crate::hit::Hit;
@@ -249,6 +254,29 @@ mod tests {
         assert_eq!(sq.normal(), Vec3::Z);
         assert_eq!(sq.dominant_axis(), 2);
         assert_eq!(sq.vertices().len(), 4);
+    }
+
+    /// Self-intersecting outlines (module documentation, *validation*): the equal-lobe bow-tie
+    /// `(0,0) (2,2) (2,0) (0,2)` has a zero signed area and is refused; the bow-tie
+    /// `(0,0) (4,4) (4,0) (0,1)`, edges crossing at `(0.8, 0.8)`, has lobes of areas `0.4`
+    /// (counter-clockwise) and `6.4` (clockwise): accepted with the larger lobe's normal `−z`,
+    /// and under the even–odd rule a point in either lobe is inside.
+    #[test]
+    fn self_intersecting_outlines_use_the_signed_area() {
+        assert_eq!(
+            P::new(&[v(0.0, 0.0), v(2.0, 2.0), v(2.0, 0.0), v(0.0, 2.0)]).err(),
+            Some(GeometryError::Degenerate)
+        );
+        let p = P::new(&[v(0.0, 0.0), v(4.0, 4.0), v(4.0, 0.0), v(0.0, 1.0)]).unwrap();
+        assert_eq!(p.normal(), -Vec3::Z);
+        for (x, y, inside) in [
+            (3.5, 1.0, true),
+            (0.2, 0.5, true),
+            (2.0, 3.0, false),
+            (0.5, 1.5, false),
+        ] {
+            assert_eq!(p.intersect(&down(x, y)).is_some(), inside, "({x}, {y})");
+        }
     }
 
     #[test]

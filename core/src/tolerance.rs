@@ -81,7 +81,8 @@ pub const QUADRIC_DISTANCE_SLACK: f64 = 2.0;
 pub const QUADRIC_ROOT_RESIDUAL_REL: f64 = 1.0 / 17_592_186_044_416.0;
 
 /// Smallest twice-area of a polygon relative to the square of its bounding-box diagonal,
-/// `|Σ (v_i − c) × (v_{i+1} − c)| / diag²` (Newell's normal, computed in `f64`); below it
+/// `|Σ (v_i − c) × (v_{i+1} − c)| / diag²` (Newell's normal, computed in `f64`: a signed
+/// area, in which oppositely wound lobes of a self-intersecting outline cancel); below it
 /// [`crate::polygon::Polygon::new`] returns [`crate::error::GeometryError::Degenerate`].
 ///
 /// Unit: relative. `gamma(8)` ≈ 4.8e-7: a polygon that thin is a sliver narrower than a few
