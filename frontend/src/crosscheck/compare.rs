@@ -20,9 +20,11 @@ use rayon::prelude::*;
 use std::path::Path;
 use std::time::Instant;
 
-/// The two sides of one mesh: halfray's BVH and Embree's robust and default scenes.
+/// The two sides of one mesh, halfray's BVH and Embree's robust and default scenes, and the
+/// `f64` reference that judges them (over the same mesh, without the BVH).
 struct Sides<'a> {
     accel: &'a MeshAccel,
+    reference: &'a judge::Reference<'a>,
     robust: &'a EmbreeScene,
     fast: &'a EmbreeScene,
     variant: TriangleVariant,
@@ -37,10 +39,6 @@ impl Sides<'_> {
     fn halfray_batch(&self, rays: &[Ray]) -> Vec<Option<Answer>> {
         let hits = self.accel.closest_variant_batch(self.variant, rays);
         hits.into_iter().map(answer_of).collect()
-    }
-
-    fn reference(&self, r: &Ray) -> Option<Answer> {
-        answer_of(self.accel.closest_variant(TriangleVariant::F64Reference, r))
     }
 }
 
@@ -257,8 +255,10 @@ fn check_mesh(
         EmbreeScene::from_mesh(device, &embree_mesh, false).map_err(|e| in_file(e.into()))?;
     let adj = Adjacency::new(&mesh);
     let accel = MeshAccel::new(mesh).map_err(in_file)?;
+    let reference = judge::Reference::new(&accel.mesh);
     let sides = Sides {
         accel: &accel,
+        reference: &reference,
         robust: &robust,
         fast: &fast,
         variant: args.intersector.0,
@@ -364,7 +364,9 @@ fn classify(
     let verdict = if h == e {
         Verdict::Agree
     } else {
-        judge::judge(&sides.accel.mesh, &r.ray, h, e, sides.reference(&r.ray))
+        judge::judge(&sides.accel.mesh, &r.ray, h, e, || {
+            sides.reference.closest(&r.ray)
+        })
     };
     if std::env::var_os("HALFRAY_CROSSCHECK_DEBUG").is_some()
         && !matches!(verdict, Verdict::Agree | Verdict::Tie)
@@ -512,8 +514,10 @@ mod tests {
         let robust = EmbreeScene::new(&device, &positions, &mesh.triangles, true).unwrap();
         let fast = EmbreeScene::new(&device, &positions, &mesh.triangles, false).unwrap();
         let accel = MeshAccel::new(mesh).unwrap();
+        let reference = judge::Reference::new(&accel.mesh);
         let sides = Sides {
             accel: &accel,
+            reference: &reference,
             robust: &robust,
             fast: &fast,
             variant: TriangleVariant::Watertight,
@@ -529,5 +533,57 @@ mod tests {
             let o = classify(&sides, 0, &r, h, e, e);
             assert_eq!(o.any_vs_closest as usize, want, "{h:?} {e:?}");
         }
+    }
+
+    /// A traversal that skips a triangle: halfray's BVH is built over a mesh whose triangle 2
+    /// lies 100 units along `x` (among 16 others there, so that the tree keeps it in another
+    /// leaf than the quad's), then the triangle is moved over the quad
+    /// ([`judge::tests::two_floors`]), where the tree's boxes do not reach. A ray straight down
+    /// meets it first in Embree, yet halfray hits the quad below: a genuine mismatch, which a
+    /// reference walking halfray's tree would have missed too and judged within tolerance.
+    #[test]
+    fn a_triangle_halfray_s_tree_skips_is_a_genuine_mismatch() {
+        let mut moved = super::super::judge::tests::two_floors();
+        // The far cluster: eight unit quads at x = 100, 102, …, 114.
+        for k in 0..8 {
+            let base = moved.positions.len() as u32;
+            let x = 100.0 + 2.0 * k as f32;
+            moved.positions.extend([
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + 1.0, 0.0, 0.0),
+                Vec3::new(x + 1.0, 1.0, 0.0),
+                Vec3::new(x, 1.0, 0.0),
+            ]);
+            moved.triangles.push([base, base + 1, base + 2]);
+            moved.triangles.push([base, base + 2, base + 3]);
+        }
+        let mut built = moved.clone();
+        for p in &mut built.positions[4..7] {
+            p.x += 100.0;
+        }
+        let mut accel = MeshAccel::new(built).unwrap();
+        accel.mesh = moved;
+        let positions: Vec<[f32; 3]> = accel.mesh.positions.iter().map(|p| p.to_array()).collect();
+        let device = EmbreeDevice::new().unwrap();
+        let robust = EmbreeScene::new(&device, &positions, &accel.mesh.triangles, true).unwrap();
+        let fast = EmbreeScene::new(&device, &positions, &accel.mesh.triangles, false).unwrap();
+        let reference = judge::Reference::new(&accel.mesh);
+        let sides = Sides {
+            accel: &accel,
+            reference: &reference,
+            robust: &robust,
+            fast: &fast,
+            variant: TriangleVariant::Watertight,
+        };
+        let r = SetRay {
+            ray: Ray::new(Vec3::new(0.7, 0.2, 1.0), Vec3::new(0.0, 0.0, -1.0)),
+            target: None,
+        };
+        let h = sides.halfray(&r.ray);
+        let e = embree_answer(&robust, &r.ray);
+        assert_eq!(h.map(|a| (a.prim, a.t)), Some((0, 1.0)));
+        assert_eq!(e.map(|a| (a.prim, a.t)), Some((2, 0.5)));
+        let o = classify(&sides, 0, &r, h, e, e);
+        assert_eq!(o.verdict, Some(Verdict::Genuine));
     }
 }

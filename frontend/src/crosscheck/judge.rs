@@ -1,8 +1,12 @@
 //! Judging a disagreement between halfray and Embree against an `f64` reference, never by
 //! trusting either side (two tracers that agree may share an error; the reference breaks ties).
+//! The reference ([`Reference`]) tests every triangle of the mesh: it shares halfray's
+//! triangle algebra (in `f64`) but none of its acceleration structure, so a triangle that
+//! halfray's tree fails to visit is still found.
 
 use crate::obj::ObjMesh;
 use halfray_core::Ray;
+use halfray_core::triangle::{F64Reference, TriangleIntersector};
 
 /// One side's closest-hit answer.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -237,8 +241,75 @@ pub fn at_interval_end(mesh: &ObjMesh, ray: &Ray, r: &Answer) -> bool {
         || (ray.t_max.is_finite() && (t - ray.t_max as f64).abs() <= tol)
 }
 
-/// Classifies one ray. `reference` is the `f64` reference's closest hit (watertight, closed
-/// edges), used only when the two sides disagree: on hit/miss, on `t` beyond
+/// Slack of [`Reference`]'s cull, relative to the distance from the ray's origin to the far
+/// side of a triangle's bounding sphere (unitless): a triangle is skipped only when the ray's
+/// line passes farther than `(1 + 10⁻⁹)` times its bounding radius plus `10⁻⁹` of that
+/// distance from its centroid. The reference's `f64` test, and the cull's own distance, each
+/// round by a few `2⁻⁵³` of that distance, so a triangle [`F64Reference`] could hit is never
+/// skipped (`10⁻⁹` is about `2²³` such roundings).
+pub const REFERENCE_CULL_REL: f64 = 1.0e-9;
+
+/// The `f64` reference of one mesh, which [`judge`] breaks ties against. Its closest hit
+/// ([`Reference::closest`]) is [`F64Reference`] (the watertight algorithm in `f64`, closed
+/// edges) on every triangle, in index order, keeping the smallest `t` in the ray's interval; of
+/// equal `t`, the smaller index (the tie rule of every halfray query). It uses no acceleration
+/// structure, so a triangle that halfray's BVH fails to visit is still found: only a bounding
+/// sphere per triangle, which skips the triangles whose sphere the ray's line passes clear of
+/// ([`REFERENCE_CULL_REL`]). One pass over the mesh per ray: meant for the few rays the two
+/// sides disagree on.
+pub struct Reference<'a> {
+    mesh: &'a ObjMesh,
+    /// Each triangle's centroid and bounding radius (around the centroid), in `f64`.
+    spheres: Vec<(glam::DVec3, f64)>,
+}
+
+impl<'a> Reference<'a> {
+    /// The bounding spheres of `mesh`'s triangles.
+    pub fn new(mesh: &'a ObjMesh) -> Self {
+        let spheres = (0..mesh.triangles.len())
+            .map(|i| {
+                let v = mesh.triangle(i).map(|p| p.as_dvec3());
+                let c = (v[0] + v[1] + v[2]) / 3.0;
+                let r = v.iter().map(|p| p.distance(c)).fold(0.0, f64::max);
+                (c, r)
+            })
+            .collect();
+        Self { mesh, spheres }
+    }
+
+    /// The reference's closest hit of `ray` (see [`Reference`]); `None` for a miss or an
+    /// invalid ray.
+    pub fn closest(&self, ray: &Ray) -> Option<Answer> {
+        let pre = F64Reference.prepare(ray)?;
+        let o = ray.origin.as_dvec3();
+        let d = ray.direction.as_dvec3();
+        let d2 = d.length_squared();
+        let mut best: Option<Answer> = None;
+        for (i, &(c, r)) in self.spheres.iter().enumerate() {
+            let p = c - o;
+            let reach = r * (1.0 + REFERENCE_CULL_REL) + REFERENCE_CULL_REL * (p.length() + r);
+            // `|p × d| / |d|` is the line's distance from the centroid. A NaN keeps the
+            // triangle.
+            if p.cross(d).length_squared() > reach * reach * d2 {
+                continue;
+            }
+            if let Some(h) = F64Reference.intersect_prepared(&pre, ray, &self.mesh.triangle(i))
+                && best.is_none_or(|b| h.t < b.t)
+            {
+                best = Some(Answer {
+                    prim: i as u32,
+                    t: h.t,
+                    u: h.b1,
+                    v: h.b2,
+                });
+            }
+        }
+        best
+    }
+}
+
+/// Classifies one ray. `reference` gives the `f64` reference's closest hit (normally
+/// [`Reference::closest`]); it is called only when the two sides disagree: on hit/miss, on `t` beyond
 /// [`t_tolerance`], or on the primitive at the same `t` where either answer is not valid
 /// ([`answer_is_valid`]) on its own triangle.
 pub fn judge(
@@ -246,7 +317,7 @@ pub fn judge(
     ray: &Ray,
     ours: Option<Answer>,
     embree: Option<Answer>,
-    reference: Option<Answer>,
+    reference: impl FnOnce() -> Option<Answer>,
 ) -> Verdict {
     let tol_between =
         |x: &Answer, y: &Answer| (x.t as f64 - y.t as f64).abs() <= hit_t_tolerance(mesh, ray, x);
@@ -264,6 +335,7 @@ pub fn judge(
     }
     // They disagree on hit/miss, on t, or on the primitive at the same t with an answer its
     // own triangle does not bear out: is each side consistent with the reference?
+    let reference = reference();
     // Where the reference's own hit is undecided: within the margin of an edge of its
     // triangle, or within the `t` tolerance of an end of the interval.
     let on_boundary = |r: &Answer| {
@@ -353,42 +425,65 @@ pub(super) mod tests {
         }
     }
 
+    /// A reference for the verdicts that must not need one (the two sides agree, or tie).
+    fn no_reference() -> Option<Answer> {
+        panic!("the reference was asked for")
+    }
+
     #[test]
     fn verdicts() {
         let m = quad();
         let diag = Ray::new(Vec3::new(0.5, 0.5, 1.0), Vec3::new(0.0, 0.0, -1.0));
         assert_eq!(
-            judge(&m, &diag, Some(ans(0, 1.0)), Some(ans(0, 1.0)), None),
+            judge(
+                &m,
+                &diag,
+                Some(ans(0, 1.0)),
+                Some(ans(0, 1.0)),
+                no_reference
+            ),
             Verdict::Agree
         );
         assert_eq!(
-            judge(&m, &diag, Some(ans(0, 1.0)), Some(ans(1, 1.0)), None),
+            judge(
+                &m,
+                &diag,
+                Some(ans(0, 1.0)),
+                Some(ans(1, 1.0)),
+                no_reference
+            ),
             Verdict::Tie
         );
         // Interior of triangle 0; Embree misses: Embree is wrong.
         let inner = Ray::new(Vec3::new(0.7, 0.2, 1.0), Vec3::new(0.0, 0.0, -1.0));
         let r = Some(ans(0, 1.0));
-        assert_eq!(judge(&m, &inner, r, None, r), Verdict::EmbreeWrong);
+        assert_eq!(judge(&m, &inner, r, None, || r), Verdict::EmbreeWrong);
         // halfray misses an interior hit: genuine.
-        assert_eq!(judge(&m, &inner, None, r, r), Verdict::Genuine);
+        assert_eq!(judge(&m, &inner, None, r, || r), Verdict::Genuine);
         // On the diagonal, a miss is excusable (boundary).
-        assert_eq!(judge(&m, &diag, None, r, r), Verdict::WithinTolerance);
+        assert_eq!(judge(&m, &diag, None, r, || r), Verdict::WithinTolerance);
         // Wrong t far beyond tolerance: genuine.
-        assert_eq!(judge(&m, &inner, Some(ans(0, 1.1)), r, r), Verdict::Genuine);
+        assert_eq!(
+            judge(&m, &inner, Some(ans(0, 1.1)), r, || r),
+            Verdict::Genuine
+        );
         assert!(is_leak(&diag, None, 1.0));
         // halfray names triangle 1 at the right depth, but (0.7, 0.2) lies outside it (the
         // triangle (0,0), (1,1), (0,1) holds only points with y ≥ x, 0.35 away here): the
         // same `t` as Embree's triangle 0 is no tie, and the reference decides.
-        assert_eq!(judge(&m, &inner, Some(ans(1, 1.0)), r, r), Verdict::Genuine);
+        assert_eq!(
+            judge(&m, &inner, Some(ans(1, 1.0)), r, || r),
+            Verdict::Genuine
+        );
         // Embree names the wrong one: Embree is wrong.
         assert_eq!(
-            judge(&m, &inner, r, Some(ans(1, 1.0)), r),
+            judge(&m, &inner, r, Some(ans(1, 1.0)), || r),
             Verdict::EmbreeWrong
         );
         // A true tie: the ray through the shared diagonal hits both triangles, whichever the
         // reference names.
         assert_eq!(
-            judge(&m, &diag, Some(ans(1, 1.0)), Some(ans(0, 1.0)), r),
+            judge(&m, &diag, Some(ans(1, 1.0)), Some(ans(0, 1.0)), || r),
             Verdict::Tie
         );
         assert!(!is_leak(&diag, Some(&ans(1, 1.0)), 1.0));
@@ -426,10 +521,13 @@ pub(super) mod tests {
             v: 0.0,
         };
         assert_eq!(
-            judge(&m, &ray, Some(at(0.99999994)), None, None),
+            judge(&m, &ray, Some(at(0.99999994)), None, || None),
             Verdict::WithinTolerance
         );
-        assert_eq!(judge(&m, &ray, Some(at(0.9)), None, None), Verdict::Genuine);
+        assert_eq!(
+            judge(&m, &ray, Some(at(0.9)), None, || None),
+            Verdict::Genuine
+        );
     }
 
     /// Worked by hand on the triangle `(0,0,0), (2,0,0), (0,2,0)`: a point above its
@@ -477,27 +575,168 @@ pub(super) mod tests {
         let start = Some(ans(0, 1.0e-17));
         let above = Some(ans(2, 0.5));
         // Passing the start face, with or without the face above.
-        assert_eq!(judge(&m, &up, None, start, start), Verdict::WithinTolerance);
         assert_eq!(
-            judge(&m, &up, above, start, start),
+            judge(&m, &up, None, start, || start),
+            Verdict::WithinTolerance
+        );
+        assert_eq!(
+            judge(&m, &up, above, start, || start),
             Verdict::WithinTolerance
         );
         // Reporting it at t = 0 (Embree's convention) against a reference that passes it.
         assert_eq!(
-            judge(&m, &up, above, Some(ans(0, 0.0)), above),
+            judge(&m, &up, above, Some(ans(0, 0.0)), || above),
             Verdict::WithinTolerance
         );
         // The face above is no boundary case: missing it stays genuine.
-        assert_eq!(judge(&m, &up, None, above, above), Verdict::Genuine);
+        assert_eq!(judge(&m, &up, None, above, || above), Verdict::Genuine);
         // A finite `t_max` at the face above makes that hit undecided; below it, not.
         let short = Ray::with_interval(up.origin, up.direction, 0.0, 0.5);
         assert_eq!(
-            judge(&m, &short, None, above, above),
+            judge(&m, &short, None, above, || above),
             Verdict::WithinTolerance
         );
         let shorter = Ray::with_interval(up.origin, up.direction, 0.0, 0.49);
         assert!(at_interval_end(&m, &shorter, &ans(0, 1.0e-17)));
         assert!(!at_interval_end(&m, &shorter, &ans(2, 0.5)));
         assert!(!at_interval_end(&m, &up, &ans(2, 0.5)));
+    }
+
+    /// [`quad`] and, above it at `z = 0.5`, a copy of its triangle 0 (triangle 2).
+    pub(in crate::crosscheck) fn two_floors() -> ObjMesh {
+        let mut m = quad();
+        m.positions
+            .extend([0.0, 1.0].map(|x| Vec3::new(x, 0.0, 0.5)));
+        m.positions
+            .extend([1.0, 0.0].map(|x| Vec3::new(x, 1.0, 0.5)));
+        m.triangles.push([4, 5, 6]);
+        m
+    }
+
+    /// A ray straight down through the interior of both floors of [`two_floors`] meets
+    /// triangle 2 first (`t = 0.5`). A halfray that passes it (missing everything, or hitting
+    /// triangle 0 at `t = 1`) is a genuine mismatch. A reference that walked halfray's tree would
+    /// pass it too and agree with halfray: the verdicts would be "within tolerance" (the second
+    /// pair of asserts), which is why [`Reference`] tests every triangle.
+    #[test]
+    fn a_triangle_halfray_skips_is_genuine_against_the_reference() {
+        let m = two_floors();
+        let down = Ray::new(Vec3::new(0.7, 0.2, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        let r = Reference::new(&m).closest(&down);
+        assert_eq!(r.map(|a| (a.prim, a.t)), Some((2, 0.5)));
+        let embree = Some(ans(2, 0.5));
+        let floor = Some(ans(0, 1.0));
+        assert_eq!(judge(&m, &down, None, embree, || r), Verdict::Genuine);
+        assert_eq!(judge(&m, &down, floor, embree, || r), Verdict::Genuine);
+        // What a reference sharing halfray's missed triangle would have said.
+        assert_eq!(
+            judge(&m, &down, None, embree, || None),
+            Verdict::WithinTolerance
+        );
+        assert_eq!(
+            judge(&m, &down, floor, embree, || floor),
+            Verdict::WithinTolerance
+        );
+    }
+
+    /// The brute-force oracle: [`F64Reference`] on every triangle in index order, no cull,
+    /// strict `<` (of equal `t`, the smaller index).
+    fn brute(mesh: &ObjMesh, ray: &Ray) -> Option<(u32, f32)> {
+        let mut best: Option<(u32, f32)> = None;
+        for i in 0..mesh.triangles.len() {
+            if let Some(h) = F64Reference.intersect(ray, &mesh.triangle(i))
+                && best.is_none_or(|(_, t)| h.t < t)
+            {
+                best = Some((i as u32, h.t));
+            }
+        }
+        best
+    }
+
+    /// An `n × n` grid of unit squares (two triangles each, shared edges and vertices) scaled
+    /// by `scale` and moved to `at`, then the same grid again, tilted and jittered, so that
+    /// rays meet coplanar-free overlapping layers.
+    fn grid_mesh(n: u32, scale: f32, at: Vec3, rng: &mut crate::raysets::Rng) -> ObjMesh {
+        let mut m = ObjMesh {
+            positions: Vec::new(),
+            triangles: Vec::new(),
+        };
+        for layer in 0..2u32 {
+            let base = m.positions.len() as u32;
+            for j in 0..=n {
+                for i in 0..=n {
+                    let jitter = if layer == 0 {
+                        0.0
+                    } else {
+                        rng.range(-0.3, 0.3) as f32
+                    };
+                    let p = Vec3::new(
+                        i as f32,
+                        j as f32,
+                        layer as f32 * (0.5 + 0.1 * i as f32) + jitter,
+                    );
+                    m.positions.push(at + p * scale);
+                }
+            }
+            let v = |i: u32, j: u32| base + j * (n + 1) + i;
+            for j in 0..n {
+                for i in 0..n {
+                    m.triangles.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+                    m.triangles.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+                }
+            }
+        }
+        m
+    }
+
+    /// [`Reference::closest`] equals the brute-force loop, and halfray's BVH with the same
+    /// triangle test (the tie rule of the queries), on rays aimed exactly at vertices (ties
+    /// among a fan), at edge midpoints, at random points and in random directions, from near
+    /// and from 10⁴ grid sizes away (a tiny bounding sphere at a large distance: the cull's
+    /// slack), on grids at 1, 10⁻²⁰, 10²⁰ and at 10⁵ from the origin.
+    #[test]
+    fn the_reference_is_brute_force() {
+        let mut rng = crate::raysets::Rng::new(7);
+        for (scale, at) in [
+            (1.0, Vec3::ZERO),
+            (1.0e-20, Vec3::ZERO),
+            (1.0e20, Vec3::ZERO),
+            (1.0, Vec3::new(1.0e5, -3.0e4, 2.0e5)),
+        ] {
+            let m = grid_mesh(6, scale, at, &mut rng);
+            let reference = Reference::new(&m);
+            let accel = crate::accel::MeshAccel::new(m.clone()).unwrap();
+            let center = (at + Vec3::splat(3.0 * scale)).as_dvec3();
+            let mut hits = 0;
+            for k in 0..4000 {
+                let tri = m.triangle(rng.below(m.triangles.len()));
+                let target = match k % 4 {
+                    0 => tri[rng.below(3)].as_dvec3(),
+                    1 => (tri[0].as_dvec3() + tri[1].as_dvec3()) / 2.0,
+                    2 => {
+                        let (a, b) = (rng.f64(), rng.f64());
+                        let (a, b) = if a + b > 1.0 {
+                            (1.0 - a, 1.0 - b)
+                        } else {
+                            (a, b)
+                        };
+                        let [p, q, r] = tri.map(|v| v.as_dvec3());
+                        p + (q - p) * a + (r - p) * b
+                    }
+                    _ => center + rng.unit_vector() * f64::from(scale) * 3.0,
+                };
+                let dist = f64::from(scale) * if rng.chance(0.5) { 10.0 } else { 6.0e4 };
+                let origin = (center + rng.unit_vector() * dist).as_vec3();
+                let ray = Ray::new(origin, (target - origin.as_dvec3()).as_vec3());
+                let got = reference.closest(&ray).map(|a| (a.prim, a.t));
+                let want = brute(&m, &ray);
+                assert_eq!(got, want, "{ray:?}");
+                let bvh = accel
+                    .closest_variant(halfray_core::triangle::TriangleVariant::F64Reference, &ray);
+                assert_eq!(got, bvh.map(|(i, h)| (i, h.t)), "{ray:?}");
+                hits += usize::from(want.is_some());
+            }
+            assert!(hits > 2500, "{scale} {at}: {hits} hits");
+        }
     }
 }

@@ -1,6 +1,7 @@
 //! `halfray crosscheck`: the same rays through halfray's BVH and through Embree 4
 //! (`rtcIntersect1` for closest hit, `rtcOccluded1` for any hit), every disagreement judged
-//! against an `f64` reference ([`judge`]).
+//! against an `f64` reference ([`judge`]): the `f64` triangle test on every triangle of the
+//! mesh ([`judge::Reference`]), without halfray's BVH.
 //!
 //! Embree runs in both its default and its `RTC_SCENE_FLAG_ROBUST` mode; the robust mode is
 //! the one halfray's answers are classified against (the default mode leaks by design, and its
