@@ -454,8 +454,16 @@ mod tests {
             error: 0.0,
             ns: 1.0,
         };
+        let acc = Accuracy {
+            leak_rays: 4,
+            leaks: 1,
+            ..Accuracy::default()
+        };
         let report = Report {
-            variants: Vec::new(),
+            variants: vec![
+                VariantRow::new("odd | name", Some(1.0), [Some(2.0), None, None, None], &acc),
+                VariantRow::new("plain", None, [None; 4], &acc),
+            ],
             slab: vec![row("a | b")],
             offsets: vec![row("offset @ |p|=1e0")],
             sphere: vec![row("plain")],
@@ -494,5 +502,6 @@ mod tests {
         assert!(header.contains("primary (my\\|mesh)"), "{header}");
         assert!(header.contains("primary (–)"), "{header}");
         assert!(md.contains("| mean gap / \\|p\\| |"), "{md}");
+        assert!(md.contains("\n| odd \\| name | 1.00 | 2.00 | – |"), "{md}");
     }
 }
