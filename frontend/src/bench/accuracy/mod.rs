@@ -298,7 +298,8 @@ fn opt(x: Option<f64>, digits: usize) -> String {
 }
 
 /// The report as markdown tables: the BVH throughput columns headed by the meshes they
-/// measure ([`Report::bvh_mesh`], [`Report::largest_mesh`]); names and headings as table cells
+/// measure ([`Report::bvh_mesh`], [`Report::largest_mesh`]), the number of edge and vertex rays
+/// the leak column counts under the variants' table; names and headings as table cells
 /// ([`crate::text::table_cell`]).
 pub fn markdown(r: &Report) -> String {
     use crate::text::table_cell as cell;
@@ -322,6 +323,16 @@ pub fn markdown(r: &Report) -> String {
             v.max_rel_t_error,
             v.median_rel_t_error,
             v.reference_disagreements_per_million,
+        ));
+    }
+    let mut leak_rays: Vec<usize> = r.variants.iter().map(|v| v.leak_rays).collect();
+    leak_rays.sort_unstable();
+    leak_rays.dedup();
+    if !leak_rays.is_empty() {
+        let counts: Vec<String> = leak_rays.iter().map(usize::to_string).collect();
+        s.push_str(&format!(
+            "\nLeaks per million of {} edge and vertex rays: those generated whose line crosses their edge's or vertex's triangles transversally.\n",
+            counts.join(" or ")
         ));
     }
     for (title, rows, what, err) in [
@@ -503,5 +514,9 @@ mod tests {
         assert!(header.contains("primary (–)"), "{header}");
         assert!(md.contains("| mean gap / \\|p\\| |"), "{md}");
         assert!(md.contains("\n| odd \\| name | 1.00 | 2.00 | – |"), "{md}");
+        assert!(
+            md.contains("\nLeaks per million of 4 edge and vertex rays: "),
+            "{md}"
+        );
     }
 }

@@ -91,7 +91,10 @@ pub struct Workload {
 
 impl Workload {
     /// Builds the workloads from `meshes` (`leak_meshes` are used for edge/vertex rays, normally
-    /// the closed ones), with `n` rays per kind in total. Fails when the meshes do not yield
+    /// the closed ones): `n` just-outside rays, `n` triangle-aimed rays, and `n` edge and vertex
+    /// rays generated (split evenly over `leak_meshes` and the `edges` and `vertices` sets) of
+    /// which only those with a target are kept (their line crosses their edge's or vertex's
+    /// triangles transversally: fewer than `n`, about 60 % on the shared meshes). Fails when the meshes do not yield
     /// `n` usable "just outside" rays within [`MAX_CANDIDATES_PER_RAY`] candidates per ray
     /// (coordinates near the `f32` range limit, where no offset ray survives rounding).
     pub fn new(
