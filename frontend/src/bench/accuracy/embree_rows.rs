@@ -14,7 +14,6 @@ use crate::embree::{EmbreeDevice, EmbreeMesh, EmbreeScene, ray_is_valid};
 use crate::error::Result;
 use crate::obj::ObjMesh;
 use halfray_core::Ray;
-use halfray_core::triangle::F64Reference;
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -107,7 +106,7 @@ pub fn rows(
         }
         for ((ray, tri), &(mi, f)) in w.pair_rays.iter().zip(&w.pair_ids) {
             let got = closest(scenes[mi], ray);
-            let reference = F64Reference::solve(ray, tri).filter(|(t, _)| *t > 0.0);
+            let reference = super::triangles::oracle_t(ray, tri);
             if !near_boundary(ray, tri) {
                 // Hit/miss of the aimed-at triangle, where it is not occluded by another one.
                 let hits_it = got.is_some_and(|(p, _)| p == f);
@@ -117,7 +116,7 @@ pub fn rows(
                     acc.hit_miss_disagreements += (hits_it != reference.is_some()) as usize;
                 }
             }
-            if let (Some((p, t)), Some((tr, _))) = (got, reference)
+            if let (Some((p, t)), Some(tr)) = (got, reference)
                 && p == f
             {
                 acc.rel_t_errors.push(((t as f64 - tr) / tr).abs());

@@ -65,11 +65,11 @@ pub struct VariantRow {
     pub leaks_per_million: f64,
     /// Rays aimed just outside a triangle that hit it, per million.
     pub false_hits_per_million: f64,
-    /// Largest relative error of `t` against the `f64` reference.
+    /// Largest relative error of `t` against the oracle ([`triangles::oracle_t`]).
     pub max_rel_t_error: f64,
-    /// Median relative error of `t` against the `f64` reference.
+    /// Median relative error of `t` against the oracle ([`triangles::oracle_t`]).
     pub median_rel_t_error: f64,
-    /// Hit/miss disagreements with the `f64` reference, per million rays.
+    /// Hit/miss disagreements with the oracle ([`triangles::oracle_t`]), per million rays.
     pub reference_disagreements_per_million: f64,
     /// Rays behind the leak figure.
     pub leak_rays: usize,
@@ -306,7 +306,7 @@ pub fn markdown(r: &Report) -> String {
     let named = |m: &Option<String>| m.as_deref().map_or_else(|| "–".into(), cell);
     let (bvh, largest) = (named(&r.bvh_mesh), named(&r.largest_mesh));
     let mut s = format!(
-        "| variant | ns/test | Mrays/s BVH primary ({bvh}) | Mrays/s BVH incoherent ({bvh}) | Mrays/s primary ({largest}) | Mrays/s incoherent ({largest}) | leaks / M edge+vertex rays | false hits / M | max rel t err | median rel t err | hit/miss ≠ f64 ref / M |\n"
+        "| variant | ns/test | Mrays/s BVH primary ({bvh}) | Mrays/s BVH incoherent ({bvh}) | Mrays/s primary ({largest}) | Mrays/s incoherent ({largest}) | leaks / M edge+vertex rays | false hits / M | max rel t err | median rel t err | hit/miss ≠ oracle / M |\n"
     );
     s.push_str("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for v in &r.variants {
