@@ -564,13 +564,8 @@ pub(super) mod tests {
     /// interval still is, unless it lies at a finite `t_max`.
     #[test]
     fn a_reference_hit_at_an_end_of_the_interval_is_undecided() {
-        let mut m = quad();
-        // A second square at z = 0.5, above the first.
-        m.positions
-            .extend([0.0, 1.0].map(|x| Vec3::new(x, 0.0, 0.5)));
-        m.positions
-            .extend([1.0, 0.0].map(|x| Vec3::new(x, 1.0, 0.5)));
-        m.triangles.push([4, 5, 6]);
+        // A triangle at z = 0.5, above the quad.
+        let m = two_floors();
         let up = Ray::new(Vec3::new(0.7, 0.2, 0.0), Vec3::new(0.0, 0.0, 1.0));
         let start = Some(ans(0, 1.0e-17));
         let above = Some(ans(2, 0.5));
