@@ -263,8 +263,10 @@ impl Transform {
     ///
     /// **Round trip.** A ray spawned from the world hit is intersected again *in object space*,
     /// through [`Transform::ray_to_object`], whose origin `M⁻¹·o` is rounded again (by up to
-    /// `e_back = gamma(3)·(|M⁻¹|·|o| + |M⁻¹ translation|)` per component, large when the
-    /// translation is large compared with the object). `point_error` therefore also includes
+    /// `gamma(3)·(|M⁻¹|·|o| + |M⁻¹ translation|)` per component: three roundings a term in the
+    /// pairwise sum; large when the translation is large compared with the object). The bound
+    /// is evaluated in `f32`, and its sum of magnitudes may itself round low by `γ₃`, so the
+    /// code takes `e_back = gamma(4)·(…)` (`γ₃/(1 − γ₃) ≤ γ₄`). `point_error` therefore also includes
     /// `|L|·e_back` (with `L` the linear part of `M`), which is exactly enough for the world
     /// offset along `M⁻ᵀn` to map to an object-space offset along `n` that clears `e_back`
     /// (`|n_w|ᵀ|L| ≥ |Lᵀn_w| = |n|/|M⁻ᵀn|`). It stays a valid (larger) bound on the point.
@@ -309,10 +311,10 @@ mod tests {
             let t = Transform::scale(Vec3::splat(s)).unwrap();
             let n = t.normal_to_world(Vec3::new(0.0, 0.6, 0.8));
             assert!(
-                (n.length() - 1.0).abs() < 4.0 * f32::EPSILON,
+                (n.length() - 1.0).abs() < UNIT_NORMAL_ABS,
                 "scale {s}: {n:?}"
             );
-            assert!((n - Vec3::new(0.0, 0.6, 0.8)).abs().max_element() < 4.0 * f32::EPSILON);
+            assert!((n - Vec3::new(0.0, 0.6, 0.8)).abs().max_element() < UNIT_NORMAL_ABS);
         }
         for k in [1.0e20f32, 1.0e-25] {
             assert_eq!(
@@ -366,6 +368,34 @@ mod tests {
     /// normalisation in `f32` is good to a few unit roundoffs; this loose bound only tells
     /// a normalised vector from an unnormalised or collapsed one.
     const UNIT_LENGTH_ABS: f32 = 1.0e-3;
+
+    /// An `f64` unit vector rounded to `f32` against the unit vector expected (per component,
+    /// and its length against 1; unitless): each component is rounded once, within half an
+    /// ulp of a value ≤ 1 (`2⁻²⁴`), so the length is within `3·2⁻²⁴`; `4ε = 2⁻²⁰` leaves a
+    /// margin and still fails a normal off by one `f32` rounding step of the inverse.
+    const UNIT_NORMAL_ABS: f32 = 4.0 * f32::EPSILON;
+
+    /// One hit's `t` found in world and in object space, compared as a distance along the
+    /// normal (the well-conditioned quantity), in ulps of the world coordinates (`ε·|x|`):
+    /// the `f32` ray and the world vertices are known only to a rounding or two of `|x|`,
+    /// the object-space ray adds three roundings a component (`apply`), and each side's
+    /// intersection its own few; 16 covers the sum with a margin.
+    const ALONG_NORMAL_ULPS: f64 = 16.0;
+
+    /// Smallest `t` of the far side for an inward ray spawned from an ellipsoid hit (ray
+    /// parameter; the direction is the unit world normal): a self-hit would lie within the
+    /// spawn offset (`point_error`, about `1e-4` at `|x| ≈ 1e3`), the far side a chord of
+    /// the ellipsoid away, of the order of its smallest semi-axis (`0.5` before the shear).
+    const FAR_SIDE_T_MIN: f32 = 0.1;
+
+    /// Rays of the ellipsoid test that must hit, of 5 000: each aims at a point inside it
+    /// (`0.95` of the unit sphere, transformed), so all hit unless the transform is wrong.
+    const ELLIPSOID_MIN_HITS: usize = 4_900;
+
+    /// Rays of the triangle test that must be checked, of 2 000: the barycentric filter keeps
+    /// the area `(0.96)²/2 ≈ 0.46` of the unit square, about 920 expected; 800 is a floor
+    /// that only a broken generator or a missed hit falls below.
+    const TRIANGLE_MIN_CHECKED: usize = 800;
 
     /// Translate · shear · non-uniform scale.
     fn sheared_ellipsoid_transform() -> Transform {
@@ -508,7 +538,7 @@ mod tests {
             let along_n = (h.t as f64 - t0).abs() * ray.direction.length() as f64 * cos;
             let ulps = along_n / (f32::EPSILON as f64 * x.abs().max_element());
             worst_t = worst_t.max(ulps);
-            assert!(ulps <= 16.0, "t {} vs {t0}: {ulps} ulps", h.t);
+            assert!(ulps <= ALONG_NORMAL_ULPS, "t {} vs {t0}: {ulps} ulps", h.t);
             // The world point is within its bound of the world surface.
             let dist = world.eval(x).abs() / world.gradient(x).length();
             let along = hw.point_error.as_dvec3().dot(hw.normal.abs().as_dvec3());
@@ -519,9 +549,9 @@ mod tests {
             assert!(sphere.intersect(&tf.ray_to_object(&out)).is_none());
             let inward = spawn_ray(&hw, -hw.normal);
             let far = sphere.intersect(&tf.ray_to_object(&inward)).unwrap();
-            assert!(far.t > 0.1, "{}", far.t);
+            assert!(far.t > FAR_SIDE_T_MIN, "{}", far.t);
         }
-        assert!(hits > 4000);
+        assert!(hits >= ELLIPSOID_MIN_HITS, "{hits}");
         std::eprintln!(
             "sheared ellipsoid: worst normal error {worst_angle:e}, worst t error along n {worst_t:.2} ulps of |x|"
         );
@@ -559,7 +589,7 @@ mod tests {
             let nrm = (world[1] - world[0]).cross(world[2] - world[0]).normalize();
             let along_n = (hw.t - ho.t).abs() * ray.direction.dot(nrm).abs();
             assert!(
-                along_n <= 16.0 * f32::EPSILON * 120.0,
+                f64::from(along_n) <= ALONG_NORMAL_ULPS * f64::from(f32::EPSILON) * 120.0,
                 "{} vs {}",
                 hw.t,
                 ho.t
@@ -582,7 +612,7 @@ mod tests {
             );
             assert_eq!(pw.front_face, po.front_face);
         }
-        assert!(n > 800, "{n}");
+        assert!(n >= TRIANGLE_MIN_CHECKED, "{n}");
     }
 
     #[test]
