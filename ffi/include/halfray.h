@@ -32,8 +32,8 @@ typedef enum HalfrayStatus {
   HALFRAY_STATUS_MISALIGNED = 2,
   // The baked buffer is shorter than its header, or than the arrays its header announces.
   HALFRAY_STATUS_SHORT_BUFFER = 3,
-  // The buffer does not start with the baked format's magic bytes (or its reserved header
-  // bytes are not zero): not a baked BVH.
+  // The buffer does not start with the baked format's magic bytes (or, in a header of this
+  // library's version, its reserved bytes are not zero): not a baked BVH.
   HALFRAY_STATUS_NOT_BAKED = 4,
   // A baked format version this library does not read.
   HALFRAY_STATUS_VERSION = 5,

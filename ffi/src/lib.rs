@@ -41,8 +41,8 @@ pub enum HalfrayStatus {
     Misaligned = 2,
     /// The baked buffer is shorter than its header, or than the arrays its header announces.
     ShortBuffer = 3,
-    /// The buffer does not start with the baked format's magic bytes (or its reserved header
-    /// bytes are not zero): not a baked BVH.
+    /// The buffer does not start with the baked format's magic bytes (or, in a header of this
+    /// library's version, its reserved bytes are not zero): not a baked BVH.
     NotBaked = 4,
     /// A baked format version this library does not read.
     Version = 5,

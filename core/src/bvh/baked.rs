@@ -29,6 +29,8 @@ use core::ops::Range;
 pub const BAKED_MAGIC: [u8; 8] = *b"halfray\0";
 /// The format version this code writes and reads.
 pub const BAKED_VERSION: u32 = 1;
+/// Bytes every format version starts with: the magic and the version.
+const VERSIONED_BYTES: usize = 12;
 /// Bytes of the header; the node array starts there.
 pub const BAKED_HEADER_BYTES: usize = 32;
 /// Alignment, in bytes, a baked buffer's start must have to be read in place: the node's.
@@ -49,7 +51,8 @@ pub enum BakedError {
         /// Bytes given.
         available: usize,
     },
-    /// The first 8 bytes are not [`BAKED_MAGIC`] or the reserved bytes are not zero.
+    /// The first 8 bytes are not [`BAKED_MAGIC`], or the reserved bytes of a version-1 header
+    /// are not zero.
     Magic,
     /// A format version this code does not read.
     Version {
@@ -178,18 +181,25 @@ impl BakedLayout {
     /// [`BakedError::Short`] for fewer than [`BAKED_HEADER_BYTES`] bytes or fewer than
     /// [`BakedLayout::byte_len`]; [`BakedError::Magic`]; [`BakedError::Version`].
     pub fn read(bytes: &[u8]) -> Result<Self, BakedError> {
+        // The magic and the version first, from the bytes every version shares: another
+        // version may use the reserved bytes, or a longer header, and is reported as itself.
+        if let Some(id) = bytes.get(..VERSIONED_BYTES) {
+            if id[..8] != BAKED_MAGIC {
+                return Err(BakedError::Magic);
+            }
+            let version = word(id, 8);
+            if version != BAKED_VERSION {
+                return Err(BakedError::Version { found: version });
+            }
+        }
         let Some(header) = bytes.get(..BAKED_HEADER_BYTES) else {
             return Err(BakedError::Short {
                 needed: BAKED_HEADER_BYTES as u64,
                 available: bytes.len(),
             });
         };
-        if header[..8] != BAKED_MAGIC || word(header, 24) != 0 || word(header, 28) != 0 {
+        if word(header, 24) != 0 || word(header, 28) != 0 {
             return Err(BakedError::Magic);
-        }
-        let version = word(header, 8);
-        if version != BAKED_VERSION {
-            return Err(BakedError::Version { found: version });
         }
         let layout = Self {
             vertices: word(header, 12),
@@ -337,6 +347,21 @@ mod tests {
         assert_eq!(
             BakedLayout::read(&bad),
             Err(BakedError::Version { found: 2 })
+        );
+        // Another version is reported as itself whatever it puts in the reserved bytes, and
+        // from its first 12 bytes (its header may be shorter or longer).
+        bad[24] = 1;
+        assert_eq!(
+            BakedLayout::read(&bad),
+            Err(BakedError::Version { found: 2 })
+        );
+        assert_eq!(
+            BakedLayout::read(&bad[..12]),
+            Err(BakedError::Version { found: 2 })
+        );
+        assert_eq!(
+            BakedLayout::read(&b"halfrax\0\x01\0\0\0"[..]),
+            Err(BakedError::Magic)
         );
     }
 
