@@ -271,6 +271,14 @@ fn fold_answers(
     hash.word(any as u32);
 }
 
+/// How far past its target (`t = 1`) an aimed ray's first hit may lie and not count as a leak
+/// (ray parameter): the target is on the surface, but the direction `target − o` is rounded
+/// to `f32`, so the line passes it, and crosses the surface, a few ulps of `t = 1` away
+/// (`2⁻²³` each); `10⁻⁵` (84 of them) covers that with margin. A ray that slips through the
+/// heightfield at its target has no other crossing near it: it misses, or meets the surface
+/// again far beyond.
+const AIMED_T_SLACK: f32 = 1.0e-5;
+
 /// Builds the heightfield's BVH in `storage` and makes `rays_per_set` queries of each kind on
 /// each of the four sets (see the crate docs), folding every answer into `hash`.
 pub fn ray_checks(
@@ -299,7 +307,7 @@ pub fn ray_checks(
     let mut query = |ray: &Ray, aimed: bool, summary: &mut Summary| {
         let t = query_both(&bvh, &mesh, ray, summary, hash);
         // Aimed rays reach their target at t = 1: a miss or a hit beyond it is a leak.
-        summary.leaks += (aimed && t.is_none_or(|t| t > 1.0 + 1.0e-5)) as u32;
+        summary.leaks += (aimed && t.is_none_or(|t| t > 1.0 + AIMED_T_SLACK)) as u32;
     };
     // Pinhole camera above the field.
     for (u, v) in pixel_grid(rays_per_set) {

@@ -69,15 +69,24 @@ fn queries(
     (summary, call_sp)
 }
 
-/// Runs `f` with the `PAINT_BYTES` below the stack pointer painted, and returns its result
-/// and the lowest address whose word no longer holds the paint (the deepest stack used).
+unsafe extern "C" {
+    /// cortex-m-rt's `link.x`: the lowest address the stack may reach, the first byte after
+    /// the statics (`.data`, `.bss`, `.uninit`), aligned to 4.
+    static _stack_end: u8;
+}
+
+/// Runs `f` with the `PAINT_BYTES` below the stack pointer painted (fewer where the statics
+/// end closer), and returns its result and the lowest address whose word no longer holds the
+/// paint (the deepest stack used).
 #[inline(never)]
 fn with_painted_stack<R>(f: impl FnOnce() -> R) -> (R, usize) {
     let top = cortex_m::register::msp::read() as usize;
-    let bottom = top - PAINT_BYTES;
-    // SAFETY: `[bottom, top)` is RAM below the stack pointer: unused stack (the machine's RAM
-    // is megabytes and the stack starts at its top), which nothing live occupies until `f`
-    // runs; volatile writes of aligned words (`top` is 8-byte aligned by the AAPCS).
+    let bottom = (top - PAINT_BYTES).max(&raw const _stack_end as usize);
+    // SAFETY: `[bottom, top)` is RAM between the end of the statics (`_stack_end`) and the
+    // stack pointer: unused stack, which nothing live occupies until `f` runs (on the 64 KiB
+    // `lm3s6965evb` too: `bottom` never goes below `_stack_end`; `top − PAINT_BYTES` does
+    // not wrap, RAM starting at `0x2000_0000`); volatile writes of aligned words (`top` is
+    // 8-byte aligned by the AAPCS, `_stack_end` 4-byte aligned by `link.x`).
     for a in (bottom..top).step_by(4) {
         unsafe { core::ptr::write_volatile(a as *mut u32, PAINT) };
     }
