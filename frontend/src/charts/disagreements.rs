@@ -1,6 +1,7 @@
 //! The disagreement chart of `crosscheck`: per mesh (x), the count of rays in each class of
 //! disagreement with Embree (bars, log scale), summed over the run's ray sets. Agreement is
-//! left out (it is the rest of the rays; the caption gives the totals).
+//! left out (it is the rest of the rays; the caption gives the totals). Meshes that could not
+//! be checked are named in a line under the caption.
 
 use super::{
     Chart, FAMILY, Marker, PALETTE, category_chart_width, draw_category_axes, draw_legend_below,
@@ -43,6 +44,27 @@ pub struct DisagreementChart {
     pub rays: Vec<usize>,
     /// The ray sets of the run.
     pub sets: Vec<String>,
+    /// The meshes that could not be checked (the report's `failed`), named as [`Self::meshes`]
+    /// are; a mesh of a merge that failed on some shards only is also in `meshes`, with the
+    /// sums of the others.
+    pub failed: Vec<String>,
+    /// Meshes checked or attempted (the report's `meshes`).
+    pub attempted: usize,
+}
+
+/// Most failed meshes the chart names; the rest are counted (`… and 12 more`), so that the
+/// line stays within the chart's width.
+pub const MAX_FAILED_NAMED: usize = 5;
+/// Height the line naming the failed meshes adds, pixels: 14-point text and 5 above and
+/// below (`DrawingArea::titled`).
+const FAILED_LINE: u32 = 24;
+
+/// The file name of a mesh `path`, as `crosscheck` names a mesh's rows (the path itself when
+/// it has none).
+fn file_name(path: &str) -> String {
+    let p = Path::new(path);
+    p.file_name()
+        .map_or_else(|| path.to_string(), |n| n.to_string_lossy().into())
 }
 
 impl DisagreementChart {
@@ -60,6 +82,8 @@ impl DisagreementChart {
             counts: Vec::new(),
             rays: Vec::new(),
             sets: report.config.ray_sets.clone(),
+            failed: Vec::new(),
+            attempted: report.meshes,
         };
         // Rows are a mesh's by its path (`crosscheck` runs two files of one name as two
         // meshes, as its report's per-mesh results do); labelled by file name where that is
@@ -83,9 +107,21 @@ impl DisagreementChart {
             }
             chart.rays[i] += row.rays;
         }
-        chart.meshes = crate::text::unambiguous_names(
-            std::mem::take(&mut chart.meshes).into_iter().zip(paths),
+        // Named together, so that a failed mesh and a checked one of one file name are told
+        // apart by their paths here too.
+        let checked = chart.meshes.len();
+        let failed = report
+            .failed
+            .iter()
+            .map(|f| (file_name(&f.path), f.path.as_str()));
+        let mut names = crate::text::unambiguous_names(
+            std::mem::take(&mut chart.meshes)
+                .into_iter()
+                .zip(paths)
+                .chain(failed),
         );
+        chart.failed = names.split_off(checked);
+        chart.meshes = names;
         Some(chart)
     }
 
@@ -108,12 +144,38 @@ impl DisagreementChart {
             ));
         };
         if chart.meshes.is_empty() {
-            return Err(Error::input(
-                Location::file(path),
-                "the run checked no mesh: nothing to chart",
-            ));
+            let message = match chart.failed_line() {
+                Some(failed) => format!("the run checked no mesh ({failed}): nothing to chart"),
+                None => "the run checked no mesh: nothing to chart".into(),
+            };
+            return Err(Error::input(Location::file(path), message));
         }
         Ok(chart)
+    }
+
+    /// "N of M meshes could not be checked: NAMES" (at most [`MAX_FAILED_NAMED`] names, each
+    /// an excerpt), or `None` when every mesh was checked.
+    #[must_use]
+    pub fn failed_line(&self) -> Option<String> {
+        if self.failed.is_empty() {
+            return None;
+        }
+        let n = self.failed.len();
+        let mut names: Vec<String> = self
+            .failed
+            .iter()
+            .take(MAX_FAILED_NAMED)
+            .map(|f| crate::text::excerpt(f))
+            .collect();
+        if n > MAX_FAILED_NAMED {
+            names.push(format!("… and {} more", n - MAX_FAILED_NAMED));
+        }
+        // A hand-edited report may count fewer meshes than it lists as failed.
+        let of = self.attempted.max(n);
+        Some(format!(
+            "{n} of {of} meshes could not be checked: {}",
+            names.join(", ")
+        ))
     }
 }
 
@@ -134,15 +196,17 @@ impl Chart for DisagreementChart {
         let n = self.meshes.len();
         let top = self.counts.iter().flatten().fold(10usize, |a, &b| a.max(b)) as f64 * 10.0;
         let total: usize = self.rays.iter().sum();
-        let mut chart = ChartBuilder::on(root)
-            .caption(
-                format!(
-                    "cross-check against Embree 4: disagreements per mesh ({total} rays; sets {})",
-                    self.sets.join(", ")
-                ),
-                (FAMILY, 18),
-            )
-            .margin(16)
+        let mut area = root.margin(16, 16, 16, 16).titled(
+            &format!(
+                "cross-check against Embree 4: disagreements per mesh ({total} rays; sets {})",
+                self.sets.join(", ")
+            ),
+            (FAMILY, 18),
+        )?;
+        if let Some(line) = self.failed_line() {
+            area = area.titled(&line, (FAMILY, 14).into_font().color(&PALETTE[1]))?;
+        }
+        let mut chart = ChartBuilder::on(&area)
             .x_label_area_size(40)
             .y_label_area_size(64)
             .build_cartesian_2d(-0.5..n as f64 - 0.5, (COUNT_FLOOR..top).log_scale())?;
@@ -172,7 +236,12 @@ impl Chart for DisagreementChart {
     fn size(&self) -> (u32, u32) {
         (
             category_chart_width(self.meshes.len(), 110),
-            640 + legend_height(CLASSES.len()),
+            640 + legend_height(CLASSES.len())
+                + if self.failed.is_empty() {
+                    0
+                } else {
+                    FAILED_LINE
+                },
         )
     }
 }
@@ -301,6 +370,92 @@ mod tests {
                 "{what}: {e}"
             );
         }
+    }
+
+    /// A report of the crosscheck's JSON shape with `sets` and `failed` (path and error).
+    fn report_with_failures(
+        meshes: usize,
+        sets: Vec<serde_json::Value>,
+        failed: &[&str],
+    ) -> Report {
+        let failed: Vec<serde_json::Value> = failed
+            .iter()
+            .map(|p| serde_json::json!({"path": p, "error": format!("{p}:3: bad face")}))
+            .collect();
+        let json = serde_json::json!({
+            "intersector": "watertight", "seed": 1, "rays": 1000,
+            "ray_sets": ["primary"], "shard": {"index": 0, "count": 1},
+            "threads": 2, "wall_seconds": 1.0, "rays_per_second": 1.0, "meshes": meshes,
+            "failed": failed, "sets": sets
+        });
+        serde_json::from_value(json).unwrap()
+    }
+
+    /// Meshes that failed (at load: no rows) are named under the caption, "N of M meshes
+    /// could not be checked", by file name, or by path where a checked mesh shares it; they
+    /// were left out without a word.
+    #[test]
+    fn failed_meshes_are_named_under_the_caption() {
+        let report = report_with_failures(
+            4,
+            vec![
+                row("bunny.obj", "primary", 2, 0, 0),
+                row("tri.obj", "primary", 0, 0, 0),
+            ],
+            &["meshes/broken.obj", "other/bunny.obj"],
+        );
+        let chart = DisagreementChart::new(&report).unwrap();
+        assert_eq!(chart.meshes, ["m/bunny.obj", "tri.obj"]);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c2.json");
+        std::fs::write(&path, serde_json::to_vec(&report).unwrap()).unwrap();
+        let chart = DisagreementChart::from_file(&path).unwrap();
+        let texts = svg_texts(&render(&chart, Format::Svg).unwrap(), chart.size());
+        let want = "2 of 4 meshes could not be checked: broken.obj, other/bunny.obj";
+        assert!(texts.iter().any(|t| t == want), "{want} not in {texts:?}");
+        assert!(
+            texts
+                .iter()
+                .any(|t| t.starts_with("cross-check against Embree 4")),
+            "{texts:?}"
+        );
+        let png = render(&chart, Format::Png).unwrap();
+        assert!(
+            png_pixels_of(&png, chart.size(), PALETTE[0]) > 50,
+            "tie bars"
+        );
+        // Without failures, no such line.
+        let clean = report_with_failures(1, vec![row("tri.obj", "primary", 1, 0, 0)], &[]);
+        let chart = DisagreementChart::new(&clean).unwrap();
+        let texts = svg_texts(&render(&chart, Format::Svg).unwrap(), chart.size());
+        assert!(
+            !texts.iter().any(|t| t.contains("could not be checked")),
+            "{texts:?}"
+        );
+    }
+
+    /// Past [`MAX_FAILED_NAMED`] failures the rest are counted; a run whose every mesh failed
+    /// is an input error that says how many failed.
+    #[test]
+    fn many_or_only_failures_are_counted() {
+        let names: Vec<String> = (0..8).map(|i| format!("f{i}.obj")).collect();
+        let failed: Vec<&str> = names.iter().map(String::as_str).collect();
+        let report = report_with_failures(9, vec![row("tri.obj", "primary", 0, 0, 0)], &failed);
+        let chart = DisagreementChart::new(&report).unwrap();
+        let texts = svg_texts(&render(&chart, Format::Svg).unwrap(), chart.size());
+        let want = "8 of 9 meshes could not be checked: f0.obj, f1.obj, f2.obj, f3.obj, f4.obj, … and 3 more";
+        assert!(texts.iter().any(|t| t == want), "{want} not in {texts:?}");
+        let report = report_with_failures(1, vec![], &["a/broken.obj"]);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c.json");
+        std::fs::write(&path, serde_json::to_vec(&report).unwrap()).unwrap();
+        let e = DisagreementChart::from_file(&path).unwrap_err().to_string();
+        assert!(
+            e.contains("c.json")
+                && e.contains("1 of 1 meshes could not be checked: broken.obj")
+                && e.contains("nothing to chart"),
+            "{e}"
+        );
     }
 
     #[test]

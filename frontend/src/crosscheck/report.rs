@@ -313,8 +313,8 @@ pub struct Report {
     pub meshes: usize,
     /// Meshes that could not be checked.
     pub failed: Vec<Failure>,
-    /// One row per mesh and set, those of a failed mesh included (a merge's sums over the
-    /// shards on which it was checked).
+    /// One row per checked mesh and set. A mesh in `failed` has none, except in a merge
+    /// where some of its shards were checked: its rows hold their sums.
     pub sets: Vec<SetReport>,
 }
 
