@@ -126,7 +126,7 @@ fn each_chart_is_written_from_its_runs_json_and_carries_its_figures() {
     assert_png(&out);
     let out = d.join("accuracy.svg");
     assert!(chart("accuracy", &accuracy, &out).status.success());
-    assert!(svg_texts(&out).contains(&"watertight: 250.0 ns, 0 per million".to_string()));
+    assert!(svg_texts(&out).contains(&"watertight: 250.0 ns, 0.0 per million".to_string()));
 }
 
 #[test]

@@ -10,8 +10,9 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
 
-/// Errors per million below this (none, in practice) are drawn on the bottom line of the log
-/// axis.
+/// The bottom of the log error axis, errors per million: a rate below it is drawn on the
+/// bottom line, none as a dot, a non-zero one (one leak in 20 million rays: 0.05) as a ring,
+/// its legend entry giving the rate and saying "below 0.1".
 pub const ERROR_FLOOR: f64 = 0.1;
 
 /// One variant's point.
@@ -23,6 +24,15 @@ pub struct Point {
     pub ns_per_ray: f64,
     /// Leaks plus false hits per million rays (y).
     pub errors_per_million: f64,
+}
+
+impl Point {
+    /// Whether the point has errors, fewer than [`ERROR_FLOOR`] per million: drawn on the
+    /// bottom line as a ring, told apart from none.
+    #[must_use]
+    pub fn below_floor(&self) -> bool {
+        self.errors_per_million > 0.0 && self.errors_per_million < ERROR_FLOOR
+    }
 }
 
 /// The fields of a `bench accuracy --json` variant row the chart reads.
@@ -170,10 +180,15 @@ impl Chart for AccuracyChart {
             .enumerate()
             .map(|(i, p)| {
                 let label = format!(
-                    "{}: {} ns, {:.0} per million",
+                    "{}: {} ns, {} per million{}",
                     p.label,
                     chart_number(p.ns_per_ray),
-                    p.errors_per_million
+                    chart_number(p.errors_per_million),
+                    if p.below_floor() {
+                        format!(" (below {ERROR_FLOOR}: a ring on the bottom line)")
+                    } else {
+                        String::new()
+                    }
                 );
                 (label, PALETTE[i % PALETTE.len()])
             })
@@ -201,7 +216,10 @@ impl Chart for AccuracyChart {
                 ),
                 None => "ns per incoherent ray through the BVH, one thread".into(),
             })
-            .y_desc("leaks + false hits per million rays (none: on the bottom line)")
+            .y_desc(format!(
+                "leaks + false hits per million rays (none: a dot on the bottom line; \
+                 below {ERROR_FLOOR}: a ring)"
+            ))
             .x_label_formatter(&|v| chart_number(*v))
             .y_label_formatter(&|v| chart_number(*v))
             .label_style((FAMILY, 14))
@@ -210,7 +228,12 @@ impl Chart for AccuracyChart {
         for (i, p) in self.points.iter().enumerate() {
             let colour = PALETTE[i % PALETTE.len()];
             let at = (p.ns_per_ray, p.errors_per_million.max(ERROR_FLOOR));
-            chart.draw_series(std::iter::once(Circle::new(at, 6, colour.filled())))?;
+            let style = if p.below_floor() {
+                colour.stroke_width(2)
+            } else {
+                colour.filled()
+            };
+            chart.draw_series(std::iter::once(Circle::new(at, 6, style)))?;
             chart.draw_series(std::iter::once(Text::new(
                 p.label.clone(),
                 at,
@@ -258,8 +281,8 @@ mod tests {
         );
         let texts = svg_texts(&render(&chart, Format::Svg).unwrap(), chart.size());
         for want in [
-            "watertight: 200.0 ns, 0 per million",
-            "moller-trumbore: 160.0 ns, 1234 per million",
+            "watertight: 200.0 ns, 0.0 per million",
+            "moller-trumbore: 160.0 ns, 1234.0 per million",
             "ray-triangle variants: cost against error",
         ] {
             assert!(texts.iter().any(|t| t == want), "{want} not in {texts:?}");
@@ -267,6 +290,77 @@ mod tests {
         let png = render(&chart, Format::Png).unwrap();
         assert!(png_pixels_of(&png, chart.size(), PALETTE[0]) > 50);
         assert!(png_pixels_of(&png, chart.size(), PALETTE[1]) > 50);
+    }
+
+    /// A rate below [`ERROR_FLOOR`] but not zero (one leak in 20 million rays) is printed as
+    /// itself and drawn as a ring on the bottom line, where none is a dot; it was printed
+    /// "0 per million" and drawn as none.
+    #[test]
+    fn a_rate_below_the_floor_is_told_apart_from_none() {
+        /// How far the printed rate may be from the true one, relative: three significant
+        /// digits are printed.
+        const PRINTED: f64 = 1e-2;
+        let dir = tempfile::tempdir().unwrap();
+        let json = dir.path().join("accuracy.json");
+        std::fs::write(
+            &json,
+            r#"{"variants": [
+                {"name": "none", "mrays_bvh_incoherent": 5.0, "leaks_per_million": 0.0, "false_hits_per_million": 0.0},
+                {"name": "rare", "mrays_bvh_incoherent": 5.0, "leaks_per_million": 0.03, "false_hits_per_million": 0.02},
+                {"name": "some", "mrays_bvh_incoherent": 5.0, "leaks_per_million": 0.5, "false_hits_per_million": 0.0}
+            ]}"#,
+        )
+        .unwrap();
+        let chart = AccuracyChart::from_file(&json).unwrap();
+        let svg = render(&chart, Format::Svg).unwrap();
+        let texts = svg_texts(&svg, chart.size());
+        let legend = |name: &str| {
+            texts
+                .iter()
+                .find(|t| t.starts_with(&format!("{name}: ")))
+                .unwrap_or_else(|| panic!("{name} not in {texts:?}"))
+                .clone()
+        };
+        let rate = |t: &str| -> f64 {
+            let rate = t.split(" ns, ").nth(1).unwrap().split(' ').next().unwrap();
+            rate.parse().unwrap()
+        };
+        let rare = legend("rare");
+        assert!((rate(&rare) / 0.05 - 1.0).abs() < PRINTED, "{rare}");
+        assert!(
+            rare.ends_with("(below 0.1: a ring on the bottom line)"),
+            "{rare}"
+        );
+        for name in ["none", "some"] {
+            assert!(!legend(name).contains("below"), "{}", legend(name));
+        }
+        assert_eq!(rate(&legend("none")), 0.0);
+        assert!((rate(&legend("some")) / 0.5 - 1.0).abs() < PRINTED);
+        // The plot's points (the legend's markers are filled dots too): none and rare on one
+        // line, rare alone hollow, some above them.
+        let svg = String::from_utf8(svg).unwrap();
+        let doc = roxmltree::Document::parse(&svg).unwrap();
+        let hex = |c: RGBColor| format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2);
+        let point = |c: RGBColor| {
+            let circles: Vec<_> = doc
+                .descendants()
+                .filter(|n| n.has_tag_name("circle"))
+                .filter(|n| {
+                    [n.attribute("fill"), n.attribute("stroke")]
+                        .iter()
+                        .any(|a| a.is_some_and(|a| a.eq_ignore_ascii_case(&hex(c))))
+                })
+                .collect();
+            assert_eq!(circles.len(), 2, "a marker and a point: {svg}");
+            // The plot's point is drawn after the legend's marker.
+            let p = circles[1];
+            let cy: f64 = p.attribute("cy").unwrap().parse().unwrap();
+            (cy, p.attribute("fill") == Some("none"))
+        };
+        let (none, rare, some) = (point(PALETTE[0]), point(PALETTE[1]), point(PALETTE[2]));
+        assert_eq!((none.1, rare.1, some.1), (false, true, false));
+        assert_eq!(none.0, rare.0);
+        assert!(some.0 < none.0 - 10.0, "{some:?} {none:?}");
     }
 
     #[test]
