@@ -860,6 +860,38 @@ fn gamma_match_recommends_only_what_render_accepts() {
     }
 }
 
+/// `gamma --match` reads `1` and `1.0` alike as grey level 1 of 255 (fractions are below 1),
+/// and its help says so; a negative grey reaches the range check (exit 2 naming the range),
+/// not clap's "unexpected argument '-1'".
+#[test]
+fn gamma_match_help_and_negative_greys() {
+    let o = run(&[&"gamma", &"--help"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let help = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        help.contains("1 and 1.0 mean grey level 1") && help.contains("fraction below 1"),
+        "{help}"
+    );
+    // ln 0.5 / ln(1/255) = 0.1251: the same for both spellings.
+    for m in ["1", "1.0"] {
+        let o = run(&[&"gamma", &"--match", &m]);
+        assert_eq!(o.status.code(), Some(0), "{m}: {}", stderr(&o));
+        let out = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(out.contains("ln 0.0039 = 0.125"), "{m}: {out}");
+    }
+    for m in ["-1", "-0.5", "-1e3"] {
+        let o = run(&[&"gamma", &"--match", &m]);
+        assert_eq!(o.status.code(), Some(2), "{m}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains(&format!("--match {}", m.parse::<f64>().unwrap()))
+                && e.contains("strictly between black and white (0 < A < 255)")
+                && !e.contains("unexpected argument"),
+            "{m}: {e}"
+        );
+    }
+}
+
 /// Item 13: an image whose header claims a size over the 4 GiB memory limit is refused
 /// before decoding, naming the file, its size and the limit: 40000×40000 RGBA8 (6.0 GiB),
 /// and 20000×20000 RGBA16 as a render's background, whose 16-bit buffer (3.0 GiB) and 8-bit

@@ -138,9 +138,14 @@ pub struct GammaArgs {
     /// Write the calibration chart to this PNG (view it at 100 %, from a distance).
     #[arg(long, group = "what")]
     pub chart: Option<PathBuf>,
-    /// The grey that matches the line pattern, as 0–255 or as a fraction in (0, 1): prints
-    /// `γ = ln 0.5 / ln a`.
-    #[arg(long = "match", value_name = "A", group = "what")]
+    /// The grey that matches the line pattern, as a level of 255 (1 and 1.0 mean grey level 1
+    /// of 255, not white) or as a fraction below 1 (0.5): prints `γ = ln 0.5 / ln a`.
+    #[arg(
+        long = "match",
+        value_name = "A",
+        group = "what",
+        allow_negative_numbers = true
+    )]
     pub matched: Option<f64>,
     /// Replace an output that is read-only or hard-linked (keeping its mode).
     #[arg(long)]
@@ -171,9 +176,10 @@ pub fn run(args: &GammaArgs) -> Result<()> {
     crate::console::print_out(&text)
 }
 
-/// The report of `--match A` (a grey `0 < A < 255`, or a fraction `0 < A < 1`): the gamma
-/// `ln 0.5 / ln a` and the `--gamma` to render with (the nearest end of [`GAMMA_RANGE`] when
-/// it lies outside); a usage error for a grey that is not strictly between black and white.
+/// The report of `--match A` (a grey level `1 ≤ A < 255` of 255, or a fraction `0 < A < 1`):
+/// the gamma `ln 0.5 / ln a` and the `--gamma` to render with (the nearest end of
+/// [`GAMMA_RANGE`] when it lies outside); a usage error for a grey that is not strictly
+/// between black and white.
 fn match_report(a: f64) -> Result<String> {
     let frac = if a >= 1.0 { a / 255.0 } else { a };
     let g = gamma_from_match(frac).ok_or_else(|| {
