@@ -31,11 +31,9 @@ pub struct CorpusChart {
 pub const RATIO_RANGE: std::ops::RangeInclusive<f64> = 1.0e-6..=1.0e6;
 
 impl CorpusChart {
-    /// The chart of `reports`.
-    ///
-    /// # Errors
-    ///
-    /// `None` when no set has Embree figures.
+    /// The chart of `reports`; `None` when no set of any mesh has a ratio
+    /// ([`crate::bench::bvh::SetFigures::ratios`]: no Embree figures, no rays, or a throughput
+    /// that is not positive).
     pub fn new(reports: &[BvhReport]) -> Option<Self> {
         let summaries = summarize(reports);
         if summaries.is_empty() {
@@ -64,7 +62,8 @@ impl CorpusChart {
     ///
     /// Reading or parsing the file (the line, column and field of a value of the wrong shape);
     /// an input error when it has no mesh, when the run has no Embree figures (it was built
-    /// without `--features embree`), or naming the field of a ratio outside [`RATIO_RANGE`].
+    /// without `--features embree`), when no set has a positive throughput on both sides, or
+    /// naming the field of a ratio outside [`RATIO_RANGE`].
     pub fn from_file(path: &Path) -> Result<Self> {
         const WHAT: &str = "`bench bvh --json`";
         let text = crate::input::read_text(path, &format!("the JSON of {WHAT}"))?;
@@ -107,9 +106,18 @@ impl CorpusChart {
             }
         }
         Self::new(&reports).ok_or_else(|| {
+            let embree = reports
+                .iter()
+                .flat_map(|r| &r.sets)
+                .any(|s| s.embree_mrays.is_some() || s.embree_robust_mrays.is_some());
             Error::input(
                 Location::file(path),
-                "the run has no Embree figures (run `bench bvh` built with `--features embree`)",
+                if embree {
+                    "no set has a positive throughput on both sides (halfray and Embree's two \
+                     modes, over at least one ray): nothing to chart"
+                } else {
+                    "the run has no Embree figures (run `bench bvh` built with `--features embree`)"
+                },
             )
         })
     }
@@ -374,6 +382,35 @@ mod tests {
         let mut r = report("bunny.obj", &[("primary", 3.0, 4.0, 3.0)]);
         r.sets[0].embree_mrays = None;
         r.sets[0].embree_robust_mrays = None;
-        assert_eq!(CorpusChart::new(&[r]), None);
+        assert_eq!(CorpusChart::new(std::slice::from_ref(&r)), None);
+        let dir = tempfile::tempdir().unwrap();
+        let json = dir.path().join("bench.json");
+        std::fs::write(&json, serde_json::to_vec(&[r]).unwrap()).unwrap();
+        let e = CorpusChart::from_file(&json).unwrap_err().to_string();
+        assert!(
+            e.contains("bench.json") && e.contains("no Embree figures"),
+            "{e}"
+        );
+    }
+
+    /// A run with Embree figures whose every throughput is 0 (or a set of no rays) has no
+    /// ratio: the error says so, not that Embree was missing from the build (as it did).
+    #[test]
+    fn a_run_without_a_positive_throughput_is_refused_as_such() {
+        let dir = tempfile::tempdir().unwrap();
+        let json = dir.path().join("bench.json");
+        let zero = report("bunny.obj", &[("primary", 0.0, 0.0, 0.0)]);
+        let mut empty = report("cube.obj", &[("ao", 3.0, 4.0, 3.0)]);
+        empty.sets[0].rays = 0;
+        for reports in [vec![zero.clone()], vec![zero, empty]] {
+            std::fs::write(&json, serde_json::to_vec(&reports).unwrap()).unwrap();
+            let e = CorpusChart::from_file(&json).unwrap_err().to_string();
+            assert!(
+                e.contains("bench.json")
+                    && e.contains("no set has a positive throughput on both sides")
+                    && !e.contains("features embree"),
+                "{e}"
+            );
+        }
     }
 }
