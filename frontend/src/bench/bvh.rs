@@ -245,7 +245,7 @@ pub fn run(args: &BvhArgs) -> Result<()> {
     }
     super::write_json_reports(json, &reports)?;
     for r in &reports {
-        print_report(r);
+        crate::say!("{}", report_text(r));
     }
     crate::say!("\n{}", summary::markdown(&reports));
     Ok(())
@@ -559,9 +559,22 @@ pub(super) fn brute_force<T: TriangleIntersector>(
     best
 }
 
-fn print_report(r: &BvhReport) {
+/// The plain-text report of one mesh: the build line, one row per set (the set column as wide
+/// as the longest set name), the packet lines of the batch sets and the brute-force line.
+fn report_text(r: &BvhReport) -> String {
+    use std::fmt::Write as _;
     let opt = |x: Option<f64>, p: usize| x.map_or("-".to_string(), |x| format!("{x:.p$}"));
-    crate::sayln!(
+    let mut out = String::new();
+    let w = r
+        .sets
+        .iter()
+        .map(|s| s.name.chars().count())
+        .chain(["set".len()])
+        .max()
+        .unwrap_or(0);
+    // Writing to a String cannot fail.
+    let _ = writeln!(
+        out,
         "bench bvh: {} ({} triangles, {}, {} on {})",
         crate::text::escaped(&r.mesh),
         r.triangles,
@@ -569,7 +582,8 @@ fn print_report(r: &BvhReport) {
         r.structure,
         r.simd
     );
-    crate::sayln!(
+    let _ = writeln!(
+        out,
         "  build, 1 thread: bvh8 {:.1} ms ({:.1} ms on {} threads, the same tree), {:.1} B/tri; binary {:.1} ms, {:.1} B/tri; Embree default {} ms ({} ms on all threads), robust {} ms",
         r.build_ms,
         r.build_ms_threads,
@@ -581,8 +595,9 @@ fn print_report(r: &BvhReport) {
         opt(r.embree_build_ms_threads, 1),
         opt(r.embree_robust_build_ms, 1),
     );
-    crate::sayln!(
-        "  {:<15} {:<7} {:>8} {:>6} {:>8} {:>8} {:>8} {:>7} {:>7} {:>6} {:>6}",
+    let _ = writeln!(
+        out,
+        "  {:<w$} {:<7} {:>8} {:>6} {:>8} {:>8} {:>8} {:>7} {:>7} {:>6} {:>6}",
         "set",
         "query",
         "rays",
@@ -597,8 +612,9 @@ fn print_report(r: &BvhReport) {
     );
     for s in &r.sets {
         let [d, rb] = s.ratios().map_or([None; 2], |[d, rb]| [Some(d), Some(rb)]);
-        crate::sayln!(
-            "  {:<15} {:<7} {:>8} {:>6.1} {:>8.2} {:>8} {:>8} {:>7} {:>7} {:>6.1} {:>6.1}",
+        let _ = writeln!(
+            out,
+            "  {:<w$} {:<7} {:>8} {:>6.1} {:>8.2} {:>8} {:>8} {:>7} {:>7} {:>6.1} {:>6.1}",
             s.name,
             s.query,
             s.rays,
@@ -621,20 +637,52 @@ fn print_report(r: &BvhReport) {
                     q[0], q[2], q[1], q[3]
                 )
             });
-            crate::sayln!(
-                "  {:<15} Embree packets: {api}8 {:.2} / {:.2}, {api}16 {:.2} / {:.2} Mrays/s (default / robust); batch over them: {over}",
-                s.name,
-                p8[0],
-                p8[1],
-                p16[0],
-                p16[1],
+            let _ = writeln!(
+                out,
+                "  {:<w$} Embree packets: {api}8 {:.2} / {:.2}, {api}16 {:.2} / {:.2} Mrays/s (default / robust); batch over them: {over}",
+                s.name, p8[0], p8[1], p16[0], p16[1],
             );
         }
     }
-    crate::sayln!(
+    let _ = writeln!(
+        out,
         "  brute force {:.1} rays/s on {} incoherent rays; mismatches {}",
         r.mrays_brute_force * 1e6,
         r.brute_force_rays,
         r.brute_force_mismatches
     );
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every row of the plain-text table has its query column at the same place, past the
+    /// longest set name (`primary-stride+batch`), and so do the header and the packet lines.
+    #[test]
+    fn the_set_column_is_as_wide_as_the_longest_set_name() {
+        let long = "primary-stride+batch";
+        let mut r =
+            summary::tests::report("m.obj", &[("ao", 1.0, 1.0, 1.0), (long, 1.0, 1.0, 1.0)]);
+        r.sets[1].embree_packet8_mrays = Some([1.0, 1.0]);
+        r.sets[1].embree_packet16_mrays = Some([1.0, 1.0]);
+        let text = report_text(&r);
+        let column = 2 + long.len() + 1;
+        let rows: Vec<&str> = text
+            .lines()
+            .filter(|l| {
+                l.starts_with("  ") && !l.starts_with("  build") && !l.starts_with("  brute")
+            })
+            .collect();
+        assert_eq!(rows.len(), 4, "{text}");
+        for row in rows {
+            let second = row[column..].split(' ').next().unwrap();
+            assert!(
+                ["query", "closest", "Embree"].contains(&second),
+                "want the second column at {column} in `{row}`:\n{text}"
+            );
+            assert_eq!(row.as_bytes()[column - 1], b' ', "{row}");
+        }
+    }
 }

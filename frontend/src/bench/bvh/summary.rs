@@ -94,8 +94,8 @@ pub fn summarize(reports: &[BvhReport]) -> Vec<SetSummary> {
 /// The closing Markdown, under a header naming the ratios (halfray's Mrays/s when no set has
 /// one): one row per mesh ([`mesh_labels`]) with, per set, `ratio over Embree robust / over
 /// Embree default` (halfray's Mrays/s where Embree did not run, `–` for a set of no rays), the
-/// build times and bytes per triangle; then the geometric-mean and worst rows, and the worst
-/// meshes by name.
+/// build times and bytes per triangle; then the geometric-mean and worst rows (`–`, not bold,
+/// for a set with a ratio on no mesh), and the worst meshes by name.
 #[must_use]
 pub fn markdown(reports: &[BvhReport]) -> String {
     let names = set_names(reports);
@@ -152,11 +152,12 @@ pub fn markdown(reports: &[BvhReport]) -> String {
     }
     let summary = summarize(reports);
     if !summary.is_empty() {
+        // A set with a ratio on no mesh has no summary: `–`.
         let cell = |f: &dyn Fn(&SetSummary) -> String, n: &String| {
             summary
                 .iter()
                 .find(|x| &x.name == n)
-                .map_or(String::new(), f)
+                .map_or("–".to_string(), f)
         };
         let geo_build = geometric_mean(build_ratios.iter().copied())
             .map_or(String::new(), |g| format!("{g:.2}"));
@@ -166,8 +167,11 @@ pub fn markdown(reports: &[BvhReport]) -> String {
             .fold(0.0, f64::max);
         s.push_str("| **geometric mean** | |");
         for n in &names {
-            let c = cell(&|x| format!("{:.2} / {:.2}", x.geomean[1], x.geomean[0]), n);
-            s.push_str(&format!(" **{c}** |"));
+            let c = cell(
+                &|x| format!("**{:.2} / {:.2}**", x.geomean[1], x.geomean[0]),
+                n,
+            );
+            s.push_str(&format!(" {c} |"));
         }
         s.push_str(&format!(" | {geo_build} | | |\n| **worst** | |"));
         for n in &names {
@@ -398,6 +402,24 @@ pub(crate) mod tests {
             with.starts_with("halfray's single-thread throughput over Embree 4's"),
             "{with}"
         );
+    }
+
+    /// A set with no rays on every mesh has no ratio: its geometric-mean and worst cells are
+    /// `–`, not an empty bold `****`, beside a set that has ratios.
+    #[test]
+    fn a_set_with_no_ratio_on_any_mesh_is_a_dash_in_the_summary_rows() {
+        let mut r = report(
+            "a.obj",
+            &[("primary", 1.0, 2.0, 1.0), ("shadow", 0.0, 0.0, 0.0)],
+        );
+        r.sets[1].rays = 0;
+        let md = markdown(&[r]);
+        assert!(!md.contains("****"), "{md}");
+        assert!(
+            md.contains("| **geometric mean** | | **1.00 / 0.50** | – | | "),
+            "{md}"
+        );
+        assert!(md.contains("| **worst** | | 1.00 / 0.50 | – | | "), "{md}");
     }
 
     #[test]
