@@ -50,12 +50,22 @@ pub type BatchSide<'a> = &'a dyn Fn(&[Ray]) -> usize;
 /// A [`BatchSide`] owned.
 pub type OwnedBatchSide<'a> = Box<dyn Fn(&[Ray]) -> usize + 'a>;
 
+/// One side's figures from [`interleaved`] or [`interleaved_batches`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Timed {
+    /// Best-of-[`TIMED_PASSES`] throughput, Mrays/s; 0 for no rays.
+    pub mrays: f64,
+    /// The side's hit count on each pass, in pass order: the same on every pass for a side
+    /// whose answers are deterministic, so that a caller can check the answers it timed.
+    pub hits: [usize; TIMED_PASSES],
+}
+
 /// Best-of-[`TIMED_PASSES`] throughputs (Mrays/s) of each of `fs` over `rays`, the passes taken
 /// round-robin (pass 1 of every function, then pass 2, …), so that a slow spell of a shared
-/// machine falls on every side rather than on whichever ran then. Each function answers hit or
-/// miss; the answers are kept alive with [`std::hint::black_box`] and otherwise unused. An empty
-/// `rays` gives 0 for every side.
-pub fn interleaved(rays: &[Ray], fs: &[&dyn Fn(&Ray) -> bool]) -> Vec<f64> {
+/// machine falls on every side rather than on whichever ran then, with each side's hit count
+/// on every pass ([`Timed`]). Each function answers hit or miss. An empty `rays` gives 0
+/// Mrays/s and 0 hits for every side.
+pub fn interleaved(rays: &[Ray], fs: &[&dyn Fn(&Ray) -> bool]) -> Vec<Timed> {
     let each: Vec<OwnedBatchSide<'_>> = fs
         .iter()
         .map(|f| {
@@ -68,19 +78,24 @@ pub fn interleaved(rays: &[Ray], fs: &[&dyn Fn(&Ray) -> bool]) -> Vec<f64> {
 }
 
 /// [`interleaved`] for sides that take the whole set at once (ray batches, Embree's packet
-/// API): each function answers the number of hits in `rays`.
-pub fn interleaved_batches(rays: &[Ray], fs: &[BatchSide<'_>]) -> Vec<f64> {
+/// API): each function answers the number of hits in `rays`, which is that side's count for
+/// the pass ([`Timed::hits`]).
+pub fn interleaved_batches(rays: &[Ray], fs: &[BatchSide<'_>]) -> Vec<Timed> {
     let mut best = vec![f64::INFINITY; fs.len()];
-    for _ in 0..TIMED_PASSES {
-        for (f, b) in fs.iter().zip(best.iter_mut()) {
+    let mut hits = vec![[0; TIMED_PASSES]; fs.len()];
+    for pass in 0..TIMED_PASSES {
+        for ((f, b), h) in fs.iter().zip(best.iter_mut()).zip(hits.iter_mut()) {
             let t0 = Instant::now();
-            let hits = f(std::hint::black_box(rays));
-            std::hint::black_box(hits);
+            h[pass] = f(std::hint::black_box(rays));
             *b = b.min(t0.elapsed().as_secs_f64());
         }
     }
     best.iter()
-        .map(|&s| mrays_per_second(rays.len() as u64, s))
+        .zip(hits)
+        .map(|(&s, hits)| Timed {
+            mrays: mrays_per_second(rays.len() as u64, s),
+            hits,
+        })
         .collect()
 }
 
@@ -123,8 +138,37 @@ mod tests {
         };
         let m = interleaved(&rays, &[&a, &b]);
         assert_eq!(m.len(), 2);
-        assert!(m.iter().all(|x| *x > 0.0));
+        assert!(m.iter().all(|x| x.mrays > 0.0));
         assert_eq!([calls[0].get(), calls[1].get()], [10 * TIMED_PASSES; 2]);
-        assert_eq!(interleaved(&[], &[&a]), vec![0.0]);
+        assert_eq!(
+            interleaved(&[], &[&a]),
+            vec![Timed {
+                mrays: 0.0,
+                hits: [0; TIMED_PASSES]
+            }]
+        );
+    }
+
+    /// Each side's count on each pass is what it answered on that pass, in pass order: a
+    /// side whose answers change between passes shows it.
+    #[test]
+    fn each_side_s_hit_count_is_kept_per_pass() {
+        let rays = vec![Ray::new(Vec3::ZERO, Vec3::X); 10];
+        let every_other = std::cell::Cell::new(false);
+        let a = |_: &Ray| {
+            every_other.set(!every_other.get());
+            every_other.get()
+        };
+        let none = |_: &Ray| false;
+        let m = interleaved(&rays, &[&a, &none]);
+        assert_eq!(m[0].hits, [5; TIMED_PASSES]);
+        assert_eq!(m[1].hits, [0; TIMED_PASSES]);
+        let pass = std::cell::Cell::new(0);
+        let growing = |rays: &[Ray]| {
+            pass.set(pass.get() + 1);
+            rays.len() + pass.get()
+        };
+        let m = interleaved_batches(&rays, &[&growing]);
+        assert_eq!(m[0].hits, std::array::from_fn(|k| 11 + k));
     }
 }

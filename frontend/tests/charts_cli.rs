@@ -38,7 +38,8 @@ fn bench_report(mesh: &str, primary: [f64; 3]) -> BvhReport {
         "brute_force_mismatches": 0,
         "sets": [SetFigures {
             name: "primary".into(), query: "closest".into(), rays: 10, rays_outside_embree: 0,
-            hit_rate: 0.5, mrays: primary[0], nodes_per_ray: 1.0, triangles_per_ray: 1.0,
+            hit_rate: 0.5, embree_hit_rate: Some(0.5), embree_robust_hit_rate: Some(0.5),
+            mrays: primary[0], nodes_per_ray: 1.0, triangles_per_ray: 1.0,
             embree_mrays: Some(primary[1]), embree_robust_mrays: Some(primary[2]),
             embree_packet8_mrays: None, embree_packet16_mrays: None,
         }]

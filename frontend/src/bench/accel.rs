@@ -211,8 +211,8 @@ fn bench(args: &AccelArgs, path: &Path) -> Result<AccelReport> {
             name: (*name).to_string(),
             build_ms: build_s[i] * 1e3,
             bytes_per_triangle: bytes[i],
-            mrays_closest_primary: mrays_primary[i],
-            mrays_closest_incoherent: mrays_incoherent[i],
+            mrays_closest_primary: mrays_primary[i].mrays,
+            mrays_closest_incoherent: mrays_incoherent[i].mrays,
             brute_force_mismatches: sample
                 .iter()
                 .zip(&brute)

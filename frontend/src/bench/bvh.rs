@@ -25,10 +25,17 @@
 //! [`SetFigures::rays_outside_embree`] and named in a warning on stderr; a set left with no
 //! rays has no ratio.
 //!
+//! Every side's hit count on every timed pass is checked against halfray's closest-hit count
+//! on the same rays ([`answers`]: exactly for halfray's sides, within
+//! [`answers::EMBREE_HIT_COUNT_TOLERANCE`] for Embree's), and Embree's hit rates are reported
+//! beside halfray's.
+//!
 //! Brute force (every triangle for every ray) runs on a sample of the incoherent rays sized to
 //! about [`BRUTE_FORCE_TESTS`] triangle tests, as a baseline; the BVH's answers on that sample
-//! are checked against it.
+//! are checked against it. A failed check of either kind fails the run ([`Error::Mismatch`],
+//! exit 3) once the JSON is written and the tables printed.
 
+pub mod answers;
 mod rivals;
 pub mod summary;
 
@@ -41,7 +48,8 @@ use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
 use crate::raysets::named::{Query, RaySet, watertight_hits};
 use crate::raysets::random_rays;
-use crate::timing::{TIMED_PASSES, interleaved, interleaved_batches};
+use crate::timing::{TIMED_PASSES, Timed, interleaved, interleaved_batches};
+use answers::{Side, count_failures, reported_hits};
 use glam::Vec3;
 use halfray_core::Ray;
 use halfray_core::bvh::wide::binary_options;
@@ -138,7 +146,7 @@ pub struct BvhReport {
     /// Brute-force closest hit, Mrays/s.
     pub mrays_brute_force: f64,
     /// Sample rays where the wide BVH, the binary BVH and brute force do not all agree (must
-    /// be 0).
+    /// be 0: a run with any fails, exit 3, once its outputs are written).
     pub brute_force_mismatches: usize,
 }
 
@@ -156,8 +164,17 @@ pub struct SetFigures {
     /// field).
     #[serde(default)]
     pub rays_outside_embree: usize,
-    /// Share of the rays that hit.
+    /// Share of the rays that hit, by halfray's closest-hit query (every timed side's count
+    /// is checked against it: [`answers`]).
     pub hit_rate: f64,
+    /// Share of the rays that hit by Embree 4 default's timed single-ray call
+    /// (`rtcIntersect1` or `rtcOccluded1`; of its pass farthest from `hit_rate`, see
+    /// [`answers::reported_hits`]).
+    #[serde(default)]
+    pub embree_hit_rate: Option<f64>,
+    /// The same for Embree 4 robust.
+    #[serde(default)]
+    pub embree_robust_hit_rate: Option<f64>,
     /// halfray's default structure, Mrays/s.
     pub mrays: f64,
     /// Mean nodes visited per ray by this row's own query: the closest-hit query on a
@@ -215,7 +232,15 @@ pub fn positive_ratio(a: f64, b: f64) -> Option<f64> {
     (r.is_finite() && r > 0.0).then_some(r)
 }
 
-/// Runs the BVH benchmark.
+/// Runs the BVH benchmark: every mesh measured, then the JSON report written and the tables
+/// printed.
+///
+/// # Errors
+///
+/// Bad arguments and inputs before any work; a mesh that cannot be measured; writing the
+/// outputs; then, once they are written, [`Error::Mismatch`] listing every failed check of the
+/// answers timed (a side's hit count off halfray's, [`answers::count_failures`]; brute-force
+/// mismatches).
 pub fn run(args: &BvhArgs) -> Result<()> {
     let variant = args.intersector.0;
     let run = RunMeshes::read(&args.meshes, args.mesh_list.as_deref(), "benchmark")?;
@@ -232,23 +257,27 @@ pub fn run(args: &BvhArgs) -> Result<()> {
         .check_inputs(super::RayMemory::OneSetAtATime, meshes, &run.named_at)?;
     let json = args.run.reserve_json(meshes, args.mesh_list.as_deref())?;
     let mut reports = Vec::with_capacity(meshes.len());
+    let mut failures = Vec::new();
     for (k, mesh) in meshes.iter().enumerate() {
         struct Bench<'a>(&'a BvhArgs, &'a Path, &'a [RaySet]);
         impl VariantVisitor for Bench<'_> {
-            type Output = Result<BvhReport>;
-            fn visit<I: TriangleIntersector>(self, isect: &I) -> Result<BvhReport> {
+            type Output = Result<(BvhReport, Vec<String>)>;
+            fn visit<I: TriangleIntersector>(self, isect: &I) -> Self::Output {
                 bench(self.0, self.1, self.2, isect)
             }
         }
-        let report = variant.visit(Bench(args, mesh, &sets));
-        reports.push(report.map_err(|e| run.noting_list(k, e))?);
+        let (report, mesh_failures) = variant
+            .visit(Bench(args, mesh, &sets))
+            .map_err(|e| run.noting_list(k, e))?;
+        reports.push(report);
+        failures.extend(mesh_failures);
     }
     super::write_json_reports(json, &reports)?;
     for r in &reports {
         crate::say!("{}", report_text(r));
     }
     crate::say!("\n{}", summary::markdown(&reports));
-    Ok(())
+    answers::verdict(&failures)
 }
 
 /// The rays of `set` for `args` over the box `[lo, hi]`: `width²` camera rays (and a shadow or
@@ -266,12 +295,14 @@ fn set_rays(
     set.generate(lo, hi, count, INCOHERENT_SEED, hits)
 }
 
+/// One mesh's report, with the failed checks of its answers ([`answers::count_failures`], and
+/// a non-zero [`BvhReport::brute_force_mismatches`]), each a message naming the mesh.
 fn bench<T: TriangleIntersector>(
     args: &BvhArgs,
     mesh_path: &Path,
     sets: &[RaySet],
     isect: &T,
-) -> Result<BvhReport> {
+) -> Result<(BvhReport, Vec<String>)> {
     let obj = read_obj(mesh_path)?;
     let mesh = TriangleMesh::new(&obj.positions, &obj.triangles);
     let n = mesh.len();
@@ -326,6 +357,8 @@ fn bench<T: TriangleIntersector>(
     let closest = |r: &Ray| closest_simd(&wide, &mesh, isect, r, None).is_some();
     let any = |r: &Ray| any_simd(&wide, &mesh, isect, r).is_some();
     let mut figures = Vec::with_capacity(sets.len());
+    let mut failures = Vec::new();
+    let mesh_name = crate::text::path(mesh_path);
     for &set in sets {
         let mut rays = set_rays(args, set, bounds, &hits);
         let generated = rays.len();
@@ -366,19 +399,30 @@ fn bench<T: TriangleIntersector>(
         let theirs: Vec<HitQuery<'_>> = rivals.as_ref().map_or_else(Vec::new, |r| r.queries(query));
         let mut sides: Vec<&dyn Fn(&Ray) -> bool> = vec![ours];
         sides.extend(theirs.iter().map(|f| f.as_ref()));
-        let mrays = interleaved(&rays, &sides);
+        let timed = interleaved(&rays, &sides);
+        let api = format!("{}1", summary::packet_api(query.name()));
+        failures.extend(count_failures(
+            &mesh_name,
+            set.name(),
+            rays.len(),
+            hit_count,
+            &single_sides(&timed, query, &api),
+        ));
         let k = rays.len().max(1) as f64;
+        let rate = |t: &Timed| reported_hits(t, hit_count) as f64 / k;
         figures.push(SetFigures {
             name: set.name().into(),
             query: query.name().into(),
             rays: rays.len(),
             rays_outside_embree: outside,
             hit_rate: hit_count as f64 / k,
-            mrays: mrays[0],
+            embree_hit_rate: timed.get(1).map(rate),
+            embree_robust_hit_rate: timed.get(2).map(rate),
+            mrays: timed[0].mrays,
             nodes_per_ray: st.nodes_visited as f64 / k,
             triangles_per_ray: st.primitives_tested as f64 / k,
-            embree_mrays: mrays.get(1).copied(),
-            embree_robust_mrays: mrays.get(2).copied(),
+            embree_mrays: timed.get(1).map(|t| t.mrays),
+            embree_robust_mrays: timed.get(2).map(|t| t.mrays),
             embree_packet8_mrays: None,
             embree_packet16_mrays: None,
         });
@@ -390,12 +434,14 @@ fn bench<T: TriangleIntersector>(
             let packets = rivals
                 .as_ref()
                 .map_or_else(Vec::new, |r| r.packet_queries(query));
-            figures.push(batch_figures(
+            let (batch, batch_failures) = batch_figures(
                 (&wide, &mesh, isect),
-                (set, &rays, hit_count, outside),
+                (&mesh_name, set, &rays, hit_count, outside),
                 &theirs,
                 &packets,
-            )?);
+            )?;
+            figures.push(batch);
+            failures.extend(batch_failures);
         }
     }
 
@@ -425,7 +471,7 @@ fn bench<T: TriangleIntersector>(
         })
         .count();
     let embree_build = rivals.as_ref().map(|r| r.build_ms());
-    Ok(BvhReport {
+    let report = BvhReport {
         mesh: mesh_path.display().to_string(),
         intersector: isect.name().to_string(),
         structure: "bvh8".into(),
@@ -448,15 +494,39 @@ fn bench<T: TriangleIntersector>(
         brute_force_rays: sample_len,
         mrays_brute_force: crate::timing::mrays_per_second(sample_len as u64, brute_s),
         brute_force_mismatches: mismatches,
-    })
+    };
+    failures.extend(answers::brute_force_failure(&report));
+    Ok((report, failures))
+}
+
+/// The timed sides of a set, named for messages: halfray's, then (with Embree) Embree default's
+/// and robust's single-ray call `api` (`rtcIntersect1`, `rtcOccluded1`).
+fn single_sides<'a>(timed: &'a [Timed], query: Query, api: &str) -> Vec<Side<'a>> {
+    let names = [
+        format!("halfray's {}-hit query", query.name()),
+        format!("Embree default {api}"),
+        format!("Embree robust {api}"),
+    ];
+    timed
+        .iter()
+        .zip(names)
+        .enumerate()
+        .map(|(k, (timed, name))| Side {
+            name,
+            timed,
+            embree: k > 0,
+        })
+        .collect()
 }
 
 /// Rays per call of the timed batch side ([`batch_figures`]): a few rows of a camera, a
 /// multiple of the packet size (16), its answers (32 bytes each, 128 KB) kept in the L2 cache.
 const BATCH_BLOCK: usize = 4096;
 
-/// The batch path's figures on the camera or shadow set `set` (`rays`, `hits` of them hit,
-/// `outside` more left out as outside Embree's range):
+/// The batch path's figures on the camera or shadow set `set` of the mesh `mesh_name` (`rays`,
+/// `hits` of them hit by the closest-hit query, `outside` more left out as outside Embree's
+/// range), with the failed checks of every timed side's hit count against `hits`
+/// ([`answers::count_failures`]):
 /// halfray's [`closest_batch_simd`] (checked equal to the single-ray query, bit for bit) or,
 /// on an any-hit set, [`any_batch_simd`] (checked to hit exactly where the single-ray query
 /// does) against Embree's `rtcIntersect1`/`rtcOccluded1` (`single`: default, robust) and its
@@ -464,10 +534,10 @@ const BATCH_BLOCK: usize = 4096;
 /// the whole set.
 fn batch_figures<T: TriangleIntersector>(
     (wide, mesh, isect): (&crate::accel::VecBvh8, &TriangleMesh<'_>, &T),
-    (set, rays, hits, outside): (RaySet, &[Ray], usize, usize),
+    (mesh_name, set, rays, hits, outside): (&str, RaySet, &[Ray], usize, usize),
     single: &[HitQuery<'_>],
     packets: &[rivals::BatchQuery<'_>],
-) -> Result<SetFigures> {
+) -> Result<(SetFigures, Vec<String>)> {
     let internal = |e: halfray_core::query::QueryError| Error::internal(e.to_string(), None);
     let query = set.query();
     let batch = |rays: &[Ray], out: &mut [crate::accel::Answer], st| match query {
@@ -520,22 +590,44 @@ fn batch_figures<T: TriangleIntersector>(
     let mut sides: Vec<crate::timing::BatchSide<'_>> = vec![&ours];
     sides.extend(each.iter().chain(packets).map(|f| f.as_ref()));
     let m = interleaved_batches(rays, &sides);
+    let name = format!("{}+batch", set.name());
+    let api = summary::packet_api(query.name());
+    let mut named = single_sides(&m[..m.len().min(3)], query, &format!("{api}1"));
+    named[0].name = "halfray's batch path".into();
+    let packet_names = ["default", "robust"]
+        .into_iter()
+        .flat_map(|mode| [8, 16].map(|w| format!("Embree {mode} {api}{w}")));
+    named.extend(
+        m.iter()
+            .skip(3)
+            .zip(packet_names)
+            .map(|(timed, name)| Side {
+                name,
+                timed,
+                embree: true,
+            }),
+    );
+    let failures = count_failures(mesh_name, &name, rays.len(), hits, &named);
     let k = rays.len().max(1) as f64;
-    let pair = |a: usize, b: usize| Some([*m.get(a)?, *m.get(b)?]);
-    Ok(SetFigures {
-        name: format!("{}+batch", set.name()),
+    let rate = |t: &Timed| reported_hits(t, hits) as f64 / k;
+    let pair = |a: usize, b: usize| Some([m.get(a)?.mrays, m.get(b)?.mrays]);
+    let figures = SetFigures {
+        name,
         query: query.name().into(),
         rays: rays.len(),
         rays_outside_embree: outside,
         hit_rate: hits as f64 / k,
-        mrays: m[0],
+        embree_hit_rate: m.get(1).map(rate),
+        embree_robust_hit_rate: m.get(2).map(rate),
+        mrays: m[0].mrays,
         nodes_per_ray: st.nodes_visited as f64 / k,
         triangles_per_ray: st.primitives_tested as f64 / k,
-        embree_mrays: m.get(1).copied(),
-        embree_robust_mrays: m.get(2).copied(),
+        embree_mrays: m.get(1).map(|t| t.mrays),
+        embree_robust_mrays: m.get(2).map(|t| t.mrays),
         embree_packet8_mrays: pair(3, 5),
         embree_packet16_mrays: pair(4, 6),
-    })
+    };
+    Ok((figures, failures))
 }
 
 /// Closest hit over every triangle, ties to the smaller index (the BVH's rule).

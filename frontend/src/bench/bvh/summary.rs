@@ -281,6 +281,8 @@ pub(crate) mod tests {
                     rays: 1,
                     rays_outside_embree: 0,
                     hit_rate: 1.0,
+                    embree_hit_rate: Some(1.0),
+                    embree_robust_hit_rate: Some(1.0),
                     mrays: ours,
                     nodes_per_ray: 1.0,
                     triangles_per_ray: 1.0,

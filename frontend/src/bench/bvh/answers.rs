@@ -1,0 +1,254 @@
+//! The answers `bench bvh` times, checked: every side's hit count on every timed pass
+//! ([`Timed::hits`]) against halfray's on the same rays, so that a side answering wrongly (an
+//! Embree call that returns at once, a batch call that fails) fails the run instead of being
+//! timed as fast.
+
+use super::BvhReport;
+use crate::error::{Error, Result};
+use crate::timing::Timed;
+
+/// Largest difference allowed between an Embree side's hit count and halfray's on one set, as
+/// a fraction of the set's rays (rounded down to whole rays: a set under 100 rays allows none).
+///
+/// Embree's default and robust modes are not watertight, and its default mode's traversal is
+/// not conservative, so either may answer a few rays otherwise than halfray's watertight query.
+/// The worst cases measured: on rays aimed exactly at shared edges and vertices (the
+/// cross-check's `edges` and `vertices` sets, docs/accuracy.md) Embree robust lets 0.37 % of
+/// the transversal ones through (Embree default 6.5 %, but no set `bench bvh` times is aimed
+/// there); on the sets it times, with this check at zero tolerance, Embree default's
+/// `rtcOccluded1` misses 0.21–0.30 % of the generated `far` sphere's shadow rays (coordinates
+/// about 2.5·10⁴; `--width` 64 to 1024, robust none), and every other difference on the ten
+/// shared meshes and the six generated ones (`--width 512 --rays 500000`, `--width 384 --rays
+/// 300000`) is at most 6 rays in 300 000. 1 % is over three times the largest, and small
+/// beside what a wrong side gives: a call that answers "miss" at once is off by the set's whole
+/// hit rate, which only a set hitting under 1 % of its rays (the cube's `ao`) would not show.
+///
+/// The counts are checked against halfray's query with the run's `--intersector`: one that
+/// loses hits fails the check too (`moller-trumbore`, whose ε loses small triangles).
+pub const EMBREE_HIT_COUNT_TOLERANCE: f64 = 0.01;
+
+/// How far a side's count may be from the expected one on a set of `rays` rays: 0 for
+/// halfray's own timed side (the same query as the count it is checked against), and
+/// [`EMBREE_HIT_COUNT_TOLERANCE`] of the rays, rounded down, for an Embree side.
+#[must_use]
+pub fn allowed_difference(rays: usize, embree: bool) -> usize {
+    if embree {
+        (rays as f64 * EMBREE_HIT_COUNT_TOLERANCE) as usize
+    } else {
+        0
+    }
+}
+
+/// One timed side of a set: its name in messages (`Embree robust rtcOccluded8`), its figures,
+/// and whether it is an Embree side ([`allowed_difference`]).
+pub struct Side<'a> {
+    /// Named in a failure's message.
+    pub name: String,
+    /// Its throughput and hit counts.
+    pub timed: &'a Timed,
+    /// An Embree side (allowed [`EMBREE_HIT_COUNT_TOLERANCE`]), not halfray's.
+    pub embree: bool,
+}
+
+/// A side's hit count to report: the pass's count farthest from `expected` (the first such
+/// pass), which is every pass's count for a side whose answers do not change between passes.
+#[must_use]
+pub fn reported_hits(timed: &Timed, expected: usize) -> usize {
+    timed
+        .hits
+        .iter()
+        .copied()
+        .reduce(|a, b| {
+            if b.abs_diff(expected) > a.abs_diff(expected) {
+                b
+            } else {
+                a
+            }
+        })
+        .unwrap_or(0)
+}
+
+/// The failures of `sides` on the set `set` of `mesh` (`rays` rays, of which halfray's
+/// closest-hit query hits `expected`): one message per side whose count on some pass differs
+/// from `expected` by more than [`allowed_difference`], naming the mesh, the set, the side,
+/// the pass and both counts. Empty when every side answers as it should.
+#[must_use]
+pub fn count_failures(
+    mesh: &str,
+    set: &str,
+    rays: usize,
+    expected: usize,
+    sides: &[Side<'_>],
+) -> Vec<String> {
+    let mut failures = Vec::new();
+    for side in sides {
+        let allowed = allowed_difference(rays, side.embree);
+        let bad = side
+            .timed
+            .hits
+            .iter()
+            .enumerate()
+            .find(|(_, h)| h.abs_diff(expected) > allowed);
+        if let Some((pass, &got)) = bad {
+            failures.push(format!(
+                "{mesh} set {set}: {} hit {got} of {rays} rays on timed pass {}, halfray's closest-hit query {expected} (allowed difference {allowed}{})",
+                side.name,
+                pass + 1,
+                if side.embree {
+                    format!(": {} % of the rays", 100.0 * EMBREE_HIT_COUNT_TOLERANCE)
+                } else {
+                    String::new()
+                }
+            ));
+        }
+    }
+    failures
+}
+
+/// The failure of `report`'s brute-force check, naming its mesh: any sample ray on which the
+/// wide BVH, the binary BVH and brute force do not all agree
+/// ([`BvhReport::brute_force_mismatches`], which must be 0).
+#[must_use]
+pub fn brute_force_failure(report: &BvhReport) -> Option<String> {
+    let m = report.brute_force_mismatches;
+    (m > 0).then(|| {
+        format!(
+            "{}: the wide BVH, the binary BVH and brute force disagree on {m} of {} sample rays (must be 0)",
+            crate::text::escaped(&report.mesh),
+            report.brute_force_rays
+        )
+    })
+}
+
+/// The run's status once its outputs are written: `Ok` when no check failed, else
+/// [`Error::Mismatch`] (exit 3) listing every failure, one a line.
+///
+/// # Errors
+///
+/// As said, when `failures` is not empty.
+pub fn verdict(failures: &[String]) -> Result<()> {
+    if failures.is_empty() {
+        return Ok(());
+    }
+    Err(Error::Mismatch(format!(
+        "the answers timed failed {} check{} (the outputs are written; their figures time wrong answers):\n  {}",
+        failures.len(),
+        if failures.len() == 1 { "" } else { "s" },
+        failures.join("\n  ")
+    )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::timing::TIMED_PASSES;
+
+    /// A brute-force mismatch is a failure naming the mesh; none is none; any failure makes
+    /// the run's status a mismatch (exit 3) listing every one.
+    #[test]
+    fn a_brute_force_mismatch_fails_the_run_with_exit_3() {
+        let mut r = super::super::summary::tests::report("m.obj", &[]);
+        assert_eq!(brute_force_failure(&r), None);
+        (r.brute_force_mismatches, r.brute_force_rays) = (2, 100);
+        let f = brute_force_failure(&r).unwrap();
+        assert_eq!(
+            f,
+            "dir/m.obj: the wide BVH, the binary BVH and brute force disagree on 2 of 100 sample rays (must be 0)"
+        );
+        assert!(verdict(&[]).is_ok());
+        let e = verdict(&[f.clone(), "x set s: y".into()]).unwrap_err();
+        assert_eq!(e.exit_code(), 3, "docs/bad-input.md: 3 mismatches");
+        let msg = e.to_string();
+        assert!(
+            msg.starts_with("the answers timed failed 2 checks"),
+            "{msg}"
+        );
+        assert!(msg.ends_with(&format!("\n  {f}\n  x set s: y")), "{msg}");
+    }
+
+    fn timed(hits: [usize; TIMED_PASSES]) -> Timed {
+        Timed { mrays: 1.0, hits }
+    }
+
+    /// An Embree side that answers "miss" at once (0 hits where halfray hits 400 of 1000) fails
+    /// with a message naming mesh, set and side; one within the tolerance passes; halfray's own
+    /// side may not differ at all.
+    #[test]
+    fn a_side_whose_count_differs_fails_naming_mesh_set_and_side() {
+        let right = timed([400; TIMED_PASSES]);
+        let wrong = timed([0; TIMED_PASSES]);
+        let ok = count_failures(
+            "m.obj",
+            "shadow",
+            1000,
+            400,
+            &[
+                Side {
+                    name: "halfray".into(),
+                    timed: &right,
+                    embree: false,
+                },
+                Side {
+                    name: "Embree default rtcOccluded1".into(),
+                    timed: &right,
+                    embree: true,
+                },
+            ],
+        );
+        assert!(ok.is_empty(), "{ok:?}");
+        let failures = count_failures(
+            "m.obj",
+            "shadow",
+            1000,
+            400,
+            &[Side {
+                name: "Embree default rtcOccluded1".into(),
+                timed: &wrong,
+                embree: true,
+            }],
+        );
+        assert_eq!(
+            failures,
+            [
+                "m.obj set shadow: Embree default rtcOccluded1 hit 0 of 1000 rays on timed pass 1, halfray's closest-hit query 400 (allowed difference 10: 1 % of the rays)"
+            ]
+        );
+        // 20 000 rays allow 200 rays' difference to Embree, none to halfray.
+        let failures_off_by = |d: usize, embree: bool| {
+            let t = timed([400 + d; TIMED_PASSES]);
+            let side = Side {
+                name: "side".into(),
+                timed: &t,
+                embree,
+            };
+            count_failures("m", "s", 20_000, 400, &[side]).len()
+        };
+        assert_eq!(failures_off_by(200, true), 0);
+        assert_eq!(failures_off_by(201, true), 1);
+        assert_eq!(failures_off_by(1, false), 1);
+    }
+
+    /// A count wrong on one pass only is found, on that pass, and is the count reported.
+    #[test]
+    fn a_count_wrong_on_one_pass_is_found() {
+        let mut hits = [7; TIMED_PASSES];
+        hits[TIMED_PASSES - 1] = 3;
+        let t = timed(hits);
+        assert_eq!(reported_hits(&t, 7), 3);
+        assert_eq!(reported_hits(&timed([7; TIMED_PASSES]), 7), 7);
+        let failures = count_failures(
+            "m",
+            "random",
+            10,
+            7,
+            &[Side {
+                name: "halfray".into(),
+                timed: &t,
+                embree: false,
+            }],
+        );
+        assert_eq!(failures.len(), 1);
+        let want = format!("on timed pass {TIMED_PASSES},");
+        assert!(failures[0].contains(&want), "{failures:?}");
+    }
+}
