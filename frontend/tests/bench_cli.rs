@@ -149,7 +149,7 @@ fn rays_embree_refuses_are_left_out_for_every_side_and_counted() {
     assert_eq!(o.status.code(), Some(3), "{err}");
     let failures: Vec<&str> = err.lines().filter(|l| l.contains(" set ")).collect();
     let want = format!(
-        "  {} set ao: Embree default rtcOccluded1 hit 16 of 16 rays on timed pass 1, halfray's closest-hit query 0",
+        "  {} set ao: Embree default rtcOccluded1 hit 16 of 16 rays on timed pass 1, the watertight test's closest-hit query 0",
         big.display()
     );
     assert!(
