@@ -10,13 +10,17 @@
 //! build is timed once per pass, best kept. `brute_force_mismatches` counts the rays of a
 //! sample of the incoherent set (about [`BRUTE_FORCE_TESTS`] triangle tests) where the
 //! structure's closest hit (triangle and `t`) differs from a loop over every triangle with
-//! the same intersector: every structure promises 0.
+//! the same intersector: every structure promises 0. The answers timed are checked: every
+//! structure's hit count on every timed pass must be the 8-wide BVH's on the same rays
+//! ([`answers::count_failures`]), and every `brute_force_mismatches` 0; otherwise the run
+//! fails with exit 3 once its JSON is written and its tables printed.
 
+use super::bvh::answers::{self, Expected, Side, count_failures};
 use super::bvh::{BRUTE_FORCE_TESTS, brute_force};
 use crate::accel::{VecBvh, VecBvh8, build_binary, build_wide, closest_simd};
 use crate::error::{Error, Location, Result};
 use crate::obj::read_obj;
-use crate::timing::{TIMED_PASSES, interleaved};
+use crate::timing::{TIMED_PASSES, Timed, interleaved};
 use halfray_core::Ray;
 use halfray_core::bvh::BuildOptions;
 use halfray_core::bvh::wide::binary_options;
@@ -93,14 +97,63 @@ pub fn run(args: &AccelArgs) -> Result<()> {
         .check_inputs(super::RayMemory::BothSets, &args.meshes, &[])?;
     let json = args.run.reserve_json(&args.meshes, None)?;
     let mut reports = Vec::with_capacity(args.meshes.len());
+    let mut failures = Vec::new();
     for mesh in &args.meshes {
-        reports.push(bench(args, mesh)?);
+        let (report, mesh_failures) = bench(args, mesh)?;
+        reports.push(report);
+        failures.extend(mesh_failures);
     }
     super::write_json_reports(json, &reports)?;
     for r in &reports {
         print_report(r);
     }
-    Ok(())
+    answers::verdict(&failures)
+}
+
+/// One timed set of a mesh, for [`answer_failures`]: its name, its ray count, the 8-wide BVH's
+/// hit count on it (untimed), and each structure's [`Timed`] in the rows' order.
+struct TimedSet<'a> {
+    name: &'a str,
+    rays: usize,
+    hits: usize,
+    timed: &'a [Timed],
+}
+
+/// The failed checks of one mesh's answers (`mesh` as messages name it), each a message: a
+/// structure whose hit count on some timed pass of a set is not the 8-wide BVH's (the
+/// structures promise the same answers), or whose closest hits differ from brute force on the
+/// sample ([`StructureRow::brute_force_mismatches`]).
+fn answer_failures(mesh: &str, sets: &[TimedSet<'_>], rows: &[StructureRow]) -> Vec<String> {
+    let mut failures = Vec::new();
+    for set in sets {
+        let sides: Vec<Side<'_>> = rows
+            .iter()
+            .zip(set.timed)
+            .map(|(row, timed)| Side {
+                name: row.name.clone(),
+                timed,
+                embree: false,
+            })
+            .collect();
+        failures.extend(count_failures(
+            mesh,
+            set.name,
+            set.rays,
+            Expected::same(set.hits),
+            &sides,
+        ));
+    }
+    failures.extend(
+        rows.iter()
+            .filter(|r| r.brute_force_mismatches > 0)
+            .map(|r| {
+                format!(
+                    "{mesh}: {} and brute force disagree on {} sample rays (must be 0)",
+                    r.name, r.brute_force_mismatches
+                )
+            }),
+    );
+    failures
 }
 
 /// Builds the four structures over `mesh`, each timed; `(structures, build seconds per
@@ -154,7 +207,7 @@ fn build_all(mesh: &TriangleMesh<'_>, path: &Path) -> Result<(Built, [f64; 4])> 
     Ok((built, best))
 }
 
-fn bench(args: &AccelArgs, path: &Path) -> Result<AccelReport> {
+fn bench(args: &AccelArgs, path: &Path) -> Result<(AccelReport, Vec<String>)> {
     let obj = read_obj(path)?;
     let mesh = TriangleMesh::new(&obj.positions, &obj.triangles);
     let n = mesh.len();
@@ -204,7 +257,7 @@ fn bench(args: &AccelArgs, path: &Path) -> Result<AccelReport> {
         s.bvh.bytes_per_triangle(),
         s.bvh8.bytes_per_triangle(),
     ];
-    let structures = ["grid", "kdtree", "bvh", "bvh8"]
+    let structures: Vec<StructureRow> = ["grid", "kdtree", "bvh", "bvh8"]
         .iter()
         .enumerate()
         .map(|(i, name)| StructureRow {
@@ -220,7 +273,26 @@ fn bench(args: &AccelArgs, path: &Path) -> Result<AccelReport> {
                 .count(),
         })
         .collect();
-    Ok(AccelReport {
+    let count = |rays: &[Ray]| rays.iter().filter(|r| closest[3](r).is_some()).count();
+    let failures = answer_failures(
+        &crate::text::path(path),
+        &[
+            TimedSet {
+                name: "primary",
+                rays: primary.len(),
+                hits: count(&primary),
+                timed: &mrays_primary,
+            },
+            TimedSet {
+                name: "incoherent",
+                rays: incoherent.len(),
+                hits: count(&incoherent),
+                timed: &mrays_incoherent,
+            },
+        ],
+        &structures,
+    );
+    let report = AccelReport {
         mesh: path.display().to_string(),
         triangles: n,
         intersector: "watertight".into(),
@@ -228,7 +300,8 @@ fn bench(args: &AccelArgs, path: &Path) -> Result<AccelReport> {
         incoherent_rays: incoherent.len(),
         brute_force_rays: sample_len,
         structures,
-    })
+    };
+    Ok((report, failures))
 }
 
 fn print_report(r: &AccelReport) {
@@ -257,6 +330,66 @@ fn print_report(r: &AccelReport) {
             s.mrays_closest_primary,
             s.mrays_closest_incoherent,
             s.brute_force_mismatches
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(name: &str, brute_force_mismatches: usize) -> StructureRow {
+        StructureRow {
+            name: name.into(),
+            build_ms: 1.0,
+            bytes_per_triangle: 1.0,
+            mrays_closest_primary: 1.0,
+            mrays_closest_incoherent: 1.0,
+            brute_force_mismatches,
+        }
+    }
+
+    /// A structure whose count on one timed pass differs from the 8-wide BVH's, and one that
+    /// disagrees with brute force, each fail naming mesh, set and structure; the same answers
+    /// everywhere pass.
+    #[test]
+    fn a_structure_answering_otherwise_fails_the_run() {
+        let right = Timed {
+            mrays: 1.0,
+            hits: [5; TIMED_PASSES],
+        };
+        let mut off = right.clone();
+        off.hits[1] = 4;
+        let rows = [
+            row("grid", 0),
+            row("kdtree", 0),
+            row("bvh", 0),
+            row("bvh8", 0),
+        ];
+        let set = |timed| TimedSet {
+            name: "primary",
+            rays: 9,
+            hits: 5,
+            timed,
+        };
+        let all_right = vec![right.clone(); 4];
+        assert!(answer_failures("m.obj", &[set(&all_right)], &rows).is_empty());
+        let one_off = [right.clone(), off, right.clone(), right];
+        assert_eq!(
+            answer_failures("m.obj", &[set(&one_off)], &rows),
+            [
+                "m.obj set primary: kdtree hit 4 of 9 rays on timed pass 2, halfray's closest-hit query 5 (allowed difference 0)"
+            ]
+        );
+        let rows = [
+            row("grid", 0),
+            row("kdtree", 0),
+            row("bvh", 2),
+            row("bvh8", 0),
+        ];
+        assert_eq!(
+            answer_failures("m.obj", &[set(&all_right)], &rows),
+            ["m.obj: bvh and brute force disagree on 2 sample rays (must be 0)"]
         );
     }
 }
