@@ -67,6 +67,13 @@ pub fn path(p: &std::path::Path) -> String {
     escaped(&p.to_string_lossy())
 }
 
+/// A mesh's name in reports: the file name of `p` (lossy UTF-8), or the whole path when it has
+/// none (`..`, `/`). Not escaped: the reports store it as given.
+pub fn file_name(p: &std::path::Path) -> String {
+    p.file_name()
+        .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into())
+}
+
 /// Labels of items given as `(name, path)` pairs, in order: each item's name (a file name),
 /// or its path where two items share that name, so that no two items of different paths
 /// carry the same label (items of one path keep one label).

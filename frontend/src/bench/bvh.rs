@@ -25,10 +25,10 @@
 //! [`SetFigures::rays_outside_embree`] and named in a warning on stderr; a set left with no
 //! rays has no ratio.
 //!
-//! Every side's hit count on every timed pass is checked against halfray's closest-hit count
-//! on the same rays ([`answers`]: exactly for halfray's sides, within
-//! [`answers::EMBREE_HIT_COUNT_TOLERANCE`] for Embree's), and Embree's hit rates are reported
-//! beside halfray's.
+//! Every side's hit count on every timed pass is checked ([`answers`]): halfray's sides
+//! exactly against halfray's closest-hit count on the same rays, Embree's within
+//! [`answers::EMBREE_HIT_COUNT_TOLERANCE`] against the watertight test's; Embree's hit rates
+//! are reported beside halfray's.
 //!
 //! Brute force (every triangle for every ray) runs on a sample of the incoherent rays sized to
 //! about [`BRUTE_FORCE_TESTS`] triangle tests, as a baseline; the BVH's answers on that sample
@@ -164,8 +164,8 @@ pub struct SetFigures {
     /// field).
     #[serde(default)]
     pub rays_outside_embree: usize,
-    /// Share of the rays that hit, by halfray's closest-hit query (every timed side's count
-    /// is checked against it: [`answers`]).
+    /// Share of the rays that hit, by halfray's closest-hit query (halfray's timed sides are
+    /// checked against it; Embree's against the watertight test's: [`answers::Expected`]).
     pub hit_rate: f64,
     /// Share of the rays that hit by Embree 4 default's timed single-ray call
     /// (`rtcIntersect1` or `rtcOccluded1`; of its pass farthest from `hit_rate`, see
@@ -535,9 +535,8 @@ fn single_sides<'a>(timed: &'a [Timed], query: Query, api: &str) -> Vec<Side<'a>
 const BATCH_BLOCK: usize = 4096;
 
 /// The batch path's figures on the camera or shadow set `set` of the mesh `mesh_name` (`rays`,
-/// `hits` of them hit by the closest-hit query, `outside` more left out as outside Embree's
-/// range), with the failed checks of every timed side's hit count against `hits`
-/// ([`answers::count_failures`]):
+/// with the hit counts `expected`, `outside` more left out as outside Embree's range), with
+/// the failed checks of every timed side's hit count ([`answers::count_failures`]):
 /// halfray's [`closest_batch_simd`] (checked equal to the single-ray query, bit for bit) or,
 /// on an any-hit set, [`any_batch_simd`] (checked to hit exactly where the single-ray query
 /// does) against Embree's `rtcIntersect1`/`rtcOccluded1` (`single`: default, robust) and its
@@ -618,7 +617,6 @@ fn batch_figures<T: TriangleIntersector>(
                 embree: true,
             }),
     );
-    let hits = expected.halfray;
     let failures = count_failures(mesh_name, &name, rays.len(), expected, &named);
     let k = rays.len().max(1) as f64;
     let rate = |t: &Timed| reported_hits(t, expected.embree) as f64 / k;
@@ -628,7 +626,7 @@ fn batch_figures<T: TriangleIntersector>(
         query: query.name().into(),
         rays: rays.len(),
         rays_outside_embree: outside,
-        hit_rate: hits as f64 / k,
+        hit_rate: expected.halfray as f64 / k,
         embree_hit_rate: m.get(1).map(rate),
         embree_robust_hit_rate: m.get(2).map(rate),
         mrays: m[0].mrays,

@@ -59,14 +59,6 @@ pub const MAX_FAILED_NAMED: usize = 5;
 /// below (`DrawingArea::titled`).
 const FAILED_LINE: u32 = 24;
 
-/// The file name of a mesh `path`, as `crosscheck` names a mesh's rows (the path itself when
-/// it has none).
-fn file_name(path: &str) -> String {
-    let p = Path::new(path);
-    p.file_name()
-        .map_or_else(|| path.to_string(), |n| n.to_string_lossy().into())
-}
-
 impl DisagreementChart {
     /// The chart of `report`: its rows summed per mesh; `None` when a count's total over the
     /// report ([`Report::overflowing_total`]) does not fit in a `usize` (a file no run can have
@@ -113,7 +105,7 @@ impl DisagreementChart {
         let failed = report
             .failed
             .iter()
-            .map(|f| (file_name(&f.path), f.path.as_str()));
+            .map(|f| (crate::text::file_name(Path::new(&f.path)), f.path.as_str()));
         let mut names = crate::text::unambiguous_names(
             std::mem::take(&mut chart.meshes)
                 .into_iter()

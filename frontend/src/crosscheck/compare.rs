@@ -237,10 +237,7 @@ fn check_mesh(
     want_depth: bool,
 ) -> Result<(Vec<SetReport>, Option<Vec<u8>>)> {
     let mesh = read_obj(path)?;
-    let name = path.file_name().map_or_else(
-        || path.display().to_string(),
-        |n| n.to_string_lossy().into(),
-    );
+    let name = crate::text::file_name(path);
     let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
     let in_file = |e: Error| Error::InFile {
         path: path.to_path_buf(),
