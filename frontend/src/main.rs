@@ -12,7 +12,7 @@ use std::process::ExitCode;
     name = "halfray",
     version,
     about = "Watertight ray/mesh geometry: render scenes, edit meshes, benchmark, cross-check against Embree",
-    after_help = "Exit codes: 0 success, 1 bad input or I/O error, 2 usage error, 3 mismatches (crosscheck, bench bvh), 141 stdout closed."
+    after_help = "Exit codes: 0 success, 1 bad input or I/O error, 2 usage error, 3 mismatches (crosscheck, bench bvh, bench accel), 141 stdout closed."
 )]
 struct Cli {
     #[command(subcommand)]

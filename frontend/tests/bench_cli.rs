@@ -121,9 +121,28 @@ fn several_meshes_give_one_report_each_and_a_summary_table() {
 /// warning; a set's rays and the ones left out are what its generator made, so all sides
 /// count the same); the unscaled one leaves none out. Its ambient-occlusion rays, which start
 /// on the surface within Embree's range and leave a convex solid, are all occluded by Embree
-/// default (its self-intersection at that scale; halfray and Embree robust count none): the
-/// run fails the check of the answers timed with exit 3 and that set named, once its outputs
-/// are written.
+/// default (its self-intersection at that scale; halfray and Embree robust count none): on an
+/// any-hit set more hits than the watertight test's are Embree's own
+/// (`answers::EMBREE_HIT_COUNT_TOLERANCE`), shown in the JSON's hit rates, and the run passes.
+/// A face in a coordinate plane (a floor at `z = 0`): its shadow and ambient-occlusion rays
+/// start a subnormal off it (`spawn_ray_to`'s offset of a zero coordinate), which Embree
+/// robust's products lose, so it reports them occluded by the face they leave. That is
+/// Embree's answer, not a broken side: the run passes (it failed with exit 3).
+#[cfg(feature = "embree")]
+#[test]
+fn embree_hitting_the_face_a_ray_leaves_is_not_a_failed_check() {
+    let dir = tempfile::tempdir().unwrap();
+    let floor = dir.path().join("floor.obj");
+    std::fs::write(&floor, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let o = Command::new(BIN)
+        .args(["bench", "bvh"])
+        .arg(&floor)
+        .args(["--width", "32", "--rays", "2000", "--sets", "shadow,ao"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
 #[cfg(feature = "embree")]
 #[test]
 fn rays_embree_refuses_are_left_out_for_every_side_and_counted() {
@@ -146,16 +165,7 @@ fn rays_embree_refuses_are_left_out_for_every_side_and_counted() {
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(3), "{err}");
-    let failures: Vec<&str> = err.lines().filter(|l| l.contains(" set ")).collect();
-    let want = format!(
-        "  {} set ao: Embree default rtcOccluded1 hit 16 of 16 rays on timed pass 1, the watertight test's closest-hit query 0",
-        big.display()
-    );
-    assert!(
-        failures.len() == 1 && failures[0].starts_with(&want),
-        "want only `{want}` in: {err}"
-    );
+    assert!(o.status.success(), "{err}");
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     let ao = v[0]["sets"]
         .as_array()

@@ -342,4 +342,30 @@ fn smoothing_passes_and_leaf_sizes_are_checked_by_the_parser() {
     let (code, e) = run(&["bench", "bvh", cube.to_str().unwrap(), "--leaf-size", "0"]);
     assert_eq!(code, Some(2), "{e}");
     assert!(e.contains("--leaf-size"), "{e}");
+    // A negative number is the option's value, as with `=` (it was cut to "unexpected
+    // argument '-0'"), and reaches the option's own parser.
+    let (cube, out) = (cube.to_str().unwrap(), out.to_str().unwrap());
+    for step in [["--step", "-0.5"], ["--step=-0.5", "--force"]] {
+        let (code, e) = run(&[&["mesh", "smooth", cube, "-o", out][..], &step[..]].concat());
+        assert_eq!(code, Some(0), "{step:?}: {e}");
+    }
+    let (code, e) = run(&[
+        "mesh", "smooth", cube, "-o", out, "--force", "--step", "-1e39",
+    ]);
+    assert_eq!(code, Some(2), "{e}");
+    assert!(
+        e.contains("--step") && !e.contains("unexpected argument"),
+        "{e}"
+    );
+    let (code, e) = run(&[
+        "mesh",
+        "collapse",
+        cube,
+        "-o",
+        out,
+        "--force",
+        "--shorter-than",
+        "-1",
+    ]);
+    assert!(!e.contains("unexpected argument"), "{code:?}: {e}");
 }

@@ -232,7 +232,27 @@ fn resume_skips_exactly_the_meshes_already_done() {
         &[Path::new("--mesh-list"), &list, Path::new("--jsonl"), &log],
     );
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("is not empty: pass --resume"),
+        "{}",
+        text(&o)
+    );
     assert_eq!(std::fs::read_to_string(&log).unwrap().lines().count(), 2);
+    // Nor is a file that holds no results, and it is not said to hold any.
+    let notes = dir.path().join("notes.txt");
+    std::fs::write(&notes, "my notes\n").unwrap();
+    let o = run(
+        &args,
+        &[
+            Path::new("--mesh-list"),
+            &list,
+            Path::new("--jsonl"),
+            &notes,
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(!text(&o).contains("holds results"), "{}", text(&o));
+    assert_eq!(std::fs::read_to_string(&notes).unwrap(), "my notes\n");
     // The missing mesh appears; a third is added to the list; the run is resumed.
     std::fs::copy(mesh("octahedron.obj"), &later).unwrap();
     std::fs::write(
@@ -318,6 +338,12 @@ fn sizes_beyond_memory_are_refused_before_any_work() {
         (
             &["--depth-size", "0"][..],
             "--depth-size must be at least 1",
+        ),
+        // A check of no ray passed (exit 0) before.
+        (&["--rays", "0"][..], "--rays must be at least 1"),
+        (
+            &["--timing-rays", "0"][..],
+            "--timing-rays must be at least 1",
         ),
         (&["--depth-size", "65536"][..], "GiB limit"),
         (
@@ -450,7 +476,9 @@ fn huge_mesh(dir: &Path) -> PathBuf {
 }
 
 /// A set whose every ray Embree cannot take is not silently a pass of 0 rays: its row counts
-/// the rays dropped, stderr warns that no ray was left, and the summary names them.
+/// the rays dropped, stderr warns that no ray was left, and the summary names them; a mesh
+/// with no compared ray at all was not checked, and the run exits 1 naming it (it exited 0),
+/// its report written.
 #[test]
 fn rays_outside_embree_are_counted_and_warned_of() {
     let dir = tempfile::tempdir().unwrap();
@@ -461,7 +489,12 @@ fn rays_outside_embree_are_counted_and_warned_of() {
         &[&huge, Path::new("--json"), &json],
     );
     let all = text(&o);
-    assert!(o.status.success(), "{all}");
+    assert_eq!(o.status.code(), Some(1), "{all}");
+    assert!(all.contains("1 of 1 meshes could not be checked"), "{all}");
+    assert!(
+        all.contains("none of its 40 generated rays is within Embree's range"),
+        "{all}"
+    );
     let row = &read(&json)["sets"][0];
     assert_eq!(
         (row["rays"].as_u64(), row["rays_outside_embree"].as_u64()),
@@ -489,7 +522,8 @@ fn depth_pixels_outside_embree_are_not_traced() {
         &[&huge, Path::new("--depth-image"), &depth],
     );
     let all = text(&o);
-    assert!(o.status.success(), "{all}");
+    // No ray compared: the mesh was not checked (exit 1), the image written all the same.
+    assert_eq!(o.status.code(), Some(1), "{all}");
     let counts = "only halfray hits: 0, only Embree hits: 0, depth differs: 0, \
                   not traced (outside Embree's range): 9";
     assert!(all.contains(counts), "{all}");

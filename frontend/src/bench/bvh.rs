@@ -415,7 +415,7 @@ fn bench<T: TriangleIntersector>(
         failures.extend(count_failures(
             &mesh_name,
             set.name(),
-            rays.len(),
+            (rays.len(), query == Query::Any),
             expected,
             &single_sides(&timed, query, &api),
         ));
@@ -617,7 +617,8 @@ fn batch_figures<T: TriangleIntersector>(
                 embree: true,
             }),
     );
-    let failures = count_failures(mesh_name, &name, rays.len(), expected, &named);
+    let sizes = (rays.len(), query == Query::Any);
+    let failures = count_failures(mesh_name, &name, sizes, expected, &named);
     let k = rays.len().max(1) as f64;
     let rate = |t: &Timed| reported_hits(t, expected.embree) as f64 / k;
     let pair = |a: usize, b: usize| Some([m.get(a)?.mrays, m.get(b)?.mrays]);

@@ -73,10 +73,18 @@ const BYTES_PER_SET_RAY: u64 = (size_of::<SetRay>()
 /// pixels of the side-by-side image and, at most, as many again in the encoded PNG.
 const BYTES_PER_DEPTH_PIXEL: u64 = (size_of::<Ray>() + 2 * size_of::<Option<f32>>() + 2 * 9) as u64;
 
-/// The size options, checked before any work: `--rays` rays of one set and the
-/// `--depth-size`² image each within [`crate::limits::check_memory`]'s budget, and a depth
-/// image at least one pixel wide.
+/// The size options, checked before any work: at least one ray a set and one timed ray (a
+/// check of no ray passes vacuously), `--rays` rays of one set and the `--depth-size`² image
+/// each within [`crate::limits::check_memory`]'s budget, and a depth image at least one pixel
+/// wide.
 fn check_sizes(args: &CrosscheckArgs) -> Result<()> {
+    for (name, n) in [("--rays", args.rays), ("--timing-rays", args.timing_rays)] {
+        if n == 0 {
+            return Err(Error::Usage(format!(
+                "{name} must be at least 1 (a check of no ray checks nothing)"
+            )));
+        }
+    }
     let rays = args.rays as u64;
     crate::limits::check_memory(
         &format!("--rays {rays} (one set's rays held at once)"),
@@ -404,7 +412,7 @@ fn timed_positions(len: usize, n: usize) -> Vec<usize> {
         .collect()
 }
 
-/// One set's row: the single-thread timed passes over `timing_rays` (at least 1) rays spread
+/// One set's row: the single-thread timed passes over `timing_rays` (at least 1, [`check_sizes`]) rays spread
 /// evenly over the set ([`timed_positions`], the same rays for every side, so that a camera's
 /// empty first rows do not stand for the whole image), then every ray classified on the worker
 /// threads. Each side is timed [`TIMED_PASSES`] times, the sides taking turns pass by pass,

@@ -224,7 +224,7 @@ impl ResultLog {
         };
         if !resume && !bytes.is_empty() {
             return Err(Error::Usage(format!(
-                "--jsonl `{}` already holds results: pass --resume to continue that run, or choose another file",
+                "--jsonl `{}` is not empty: pass --resume to continue the run it logs, or choose another file",
                 crate::text::path(path)
             )));
         }

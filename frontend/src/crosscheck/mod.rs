@@ -66,7 +66,7 @@ pub struct CrosscheckArgs {
     #[arg(long, requires = "jsonl")]
     pub resume: bool,
     /// Seed of the ray sets.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
     /// Comma-separated ray sets; all by default.
     #[arg(
@@ -243,24 +243,20 @@ pub fn finish(
 mod tests {
     use super::*;
 
-    /// A run of `intersector` whose one row has `leaks` halfray leaks and no genuine mismatch.
-    fn leaky_report(intersector: &str, leaks: usize) -> report::Report {
+    /// A run of `intersector` over one mesh, `a.obj`, whose one row is `row` (its mesh and
+    /// path set to `a.obj`).
+    fn report_of(intersector: &str, row: SetReport) -> report::Report {
         let config = report::RunConfig {
             intersector: intersector.into(),
             seed: 1,
             rays: 10,
-            ray_sets: vec!["edges".into()],
+            ray_sets: vec![row.name.clone()],
             shard: shard::Shard::WHOLE,
         };
         let row = SetReport {
             mesh: "a.obj".into(),
             path: "a.obj".into(),
-            name: "edges".into(),
-            rays: 10,
-            agree: 10,
-            leak_rays: 10,
-            leaks_halfray: leaks,
-            ..SetReport::default()
+            ..row
         };
         let result = report::MeshResult {
             path: "a.obj".into(),
@@ -269,6 +265,55 @@ mod tests {
             sets: vec![row],
         };
         report::Report::new(config, 1, 1.0, &[result])
+    }
+
+    /// A run of `intersector` whose one row has `leaks` halfray leaks and no genuine mismatch.
+    fn leaky_report(intersector: &str, leaks: usize) -> report::Report {
+        let row = SetReport {
+            name: "edges".into(),
+            rays: 10,
+            agree: 10,
+            leak_rays: 10,
+            leaks_halfray: leaks,
+            ..SetReport::default()
+        };
+        report_of(intersector, row)
+    }
+
+    /// A mesh none of whose generated rays Embree could take (all beyond its range) was not
+    /// checked: the run names it among the meshes that could not be checked and exits 1, not
+    /// 0. A mesh with one compared ray, or whose shard was given no ray, is not such a failure.
+    #[test]
+    fn a_mesh_with_no_compared_ray_fails_the_run() {
+        let row = |rays, outside| SetReport {
+            name: "primary".into(),
+            rays,
+            agree: rays,
+            rays_outside_embree: outside,
+            ..SetReport::default()
+        };
+        let unchecked = report_of("watertight", row(0, 8180));
+        assert_eq!(unchecked.failed.len(), 1, "{:?}", unchecked.failed);
+        let e = finish(&unchecked, None, None, 0).unwrap_err();
+        assert_eq!(e.exit_code(), crate::error::EXIT_ERROR, "{e}");
+        let message = e.to_string();
+        assert!(
+            message.contains("1 of 1 meshes could not be checked"),
+            "{message}"
+        );
+        assert!(
+            message.contains("a.obj: none of its 8180 generated rays"),
+            "{message}"
+        );
+        for (rays, outside) in [(1, 8179), (0, 0)] {
+            let report = report_of("watertight", row(rays, outside));
+            assert!(
+                report.failed.is_empty(),
+                "{rays} {outside}: {:?}",
+                report.failed
+            );
+            assert!(finish(&report, None, None, 0).is_ok(), "{rays} {outside}");
+        }
     }
 
     /// A halfray leak fails the run (exit 3) through every intersector, the non-watertight

@@ -292,6 +292,22 @@ pub struct Failure {
     pub error: String,
 }
 
+/// The failure of a mesh none of whose generated rays could be traced: every one outside
+/// Embree's range ([`SetReport::rays_outside_embree`], coordinates beyond `FLT_LARGE`), so
+/// nothing was compared and the mesh was not checked. `None` when a ray was compared, or when
+/// none was generated (a shard of more shards than a set has rays).
+fn nothing_compared(r: &MeshResult) -> Option<String> {
+    let sum = |count: fn(&SetReport) -> usize| {
+        r.sets.iter().map(count).fold(0usize, usize::saturating_add)
+    };
+    let outside = sum(|s| s.rays_outside_embree);
+    (sum(|s| s.rays) == 0 && outside > 0).then(|| {
+        format!(
+            "none of its {outside} generated rays is within Embree's range (embree::ray_is_valid): nothing was compared"
+        )
+    })
+}
+
 /// The whole run (`--json`), or the merge of its shards.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Report {
@@ -329,10 +345,10 @@ impl Report {
         let mut failed = Vec::new();
         let mut sets = Vec::new();
         for r in results {
-            if let Some(error) = &r.error {
+            if let Some(error) = r.error.clone().or_else(|| nothing_compared(r)) {
                 failed.push(Failure {
                     path: r.path.clone(),
-                    error: error.clone(),
+                    error,
                 });
             }
             sets.extend(r.sets.iter().cloned());

@@ -129,7 +129,7 @@ pub struct SmoothArgs {
     pub force: bool,
     /// Step k of x' = x + k·L(x), with L the uniform Laplacian (1 moves every vertex to its
     /// neighbours' centroid; 0 < k ≤ 1 is stable).
-    #[arg(long, default_value_t = 0.5, value_parser = crate::cli_values::finite_f32)]
+    #[arg(long, default_value_t = 0.5, value_parser = crate::cli_values::finite_f32, allow_negative_numbers = true)]
     pub step: f32,
     /// Number of diffusion steps, at most 10 000 (`scene::MAX_SMOOTH_ITERATIONS`, as in a
     /// scene's `smooth`).
@@ -155,7 +155,7 @@ pub struct CollapseArgs {
     #[arg(long)]
     pub force: bool,
     /// Collapse every edge strictly shorter than this length (in model units).
-    #[arg(long, value_name = "L", value_parser = crate::cli_values::finite_f32)]
+    #[arg(long, value_name = "L", value_parser = crate::cli_values::finite_f32, allow_negative_numbers = true)]
     pub shorter_than: f32,
 }
 

@@ -27,6 +27,13 @@ use crate::timing::Timed;
 /// ([`Expected::embree`]), whatever `--intersector` times: a variant that loses hits
 /// (`moller-trumbore`, whose ε loses small triangles) is measured, not taken for Embree's
 /// error.
+///
+/// On the any-hit sets (shadow and ambient-occlusion rays, which start on a surface) only
+/// fewer hits are held to it: more are Embree hitting the face a ray starts on, which its
+/// rounding cannot tell from the origin when the spawn offset is below it (a face in a
+/// coordinate plane: the offset of `spawn_ray_to` is then a subnormal, lost in Embree's
+/// products; a mesh at 10⁶: a few ulps of the coordinates; Embree's `tnear = 0` is inclusive).
+/// Such a ray ends at its first node; a side that answers "miss" at once is still caught.
 pub const EMBREE_HIT_COUNT_TOLERANCE: f64 = 0.01;
 
 /// The hit counts a set's sides are checked against.
@@ -93,14 +100,16 @@ pub fn reported_hits(timed: &Timed, expected: usize) -> usize {
 }
 
 /// The failures of `sides` on the set `set` of `mesh` (`rays` rays, of which the queries of
-/// [`Expected`] hit `expected`): one message per side whose count on some pass differs from
-/// its expected count by more than [`allowed_difference`], naming the mesh, the set, the
-/// side, the pass and both counts. Empty when every side answers as it should.
+/// [`Expected`] hit `expected`; `from_surfaces`: an any-hit set, whose rays start on a
+/// surface): one message per side whose count on some pass differs from its expected count by
+/// more than [`allowed_difference`] (an Embree side on an any-hit set: falls short of it by
+/// more, [`EMBREE_HIT_COUNT_TOLERANCE`]), naming the mesh, the set, the side, the pass and
+/// both counts. Empty when every side answers as it should.
 #[must_use]
 pub fn count_failures(
     mesh: &str,
     set: &str,
-    rays: usize,
+    (rays, from_surfaces): (usize, bool),
     expected: Expected,
     sides: &[Side<'_>],
 ) -> Vec<String> {
@@ -112,12 +121,19 @@ pub fn count_failures(
         } else {
             (expected.halfray, "halfray's closest-hit query")
         };
+        let off = |h: usize| {
+            if side.embree && from_surfaces {
+                expected.saturating_sub(h)
+            } else {
+                h.abs_diff(expected)
+            }
+        };
         let bad = side
             .timed
             .hits
             .iter()
             .enumerate()
-            .find(|(_, h)| h.abs_diff(expected) > allowed);
+            .find(|(_, h)| off(**h) > allowed);
         if let Some((pass, &got)) = bad {
             failures.push(format!(
                 "{mesh} set {set}: {} hit {got} of {rays} rays on timed pass {}, {whose} {expected} (allowed difference {allowed}{})",
@@ -136,11 +152,15 @@ pub fn count_failures(
 
 /// The failure of `report`'s brute-force check, naming its mesh: any sample ray on which the
 /// wide BVH, the binary BVH and brute force do not all agree
-/// ([`BvhReport::brute_force_mismatches`], which must be 0).
+/// ([`BvhReport::brute_force_mismatches`], which must be 0 for the watertight test). Only the
+/// watertight test promises a tree's answer equal to brute force's (`halfray_core::query`):
+/// another `--intersector`'s mismatches are reported, not failed (`watertight-f32`'s `t` on a
+/// grazing hit may lie beyond the tree's cull slack).
 #[must_use]
 pub fn brute_force_failure(report: &BvhReport) -> Option<String> {
     let m = report.brute_force_mismatches;
-    (m > 0).then(|| {
+    let promised = report.intersector == halfray_core::triangle::TriangleVariant::Watertight.name();
+    (m > 0 && promised).then(|| {
         format!(
             "{}: the wide BVH, the binary BVH and brute force disagree on {m} of {} sample rays (must be 0)",
             crate::text::escaped(&report.mesh),
@@ -184,6 +204,13 @@ mod tests {
             f,
             "dir/m.obj: the wide BVH, the binary BVH and brute force disagree on 2 of 100 sample rays (must be 0)"
         );
+        // Only the watertight test promises brute force's answers: another variant's
+        // mismatches are reported in the JSON, not failed.
+        let other = BvhReport {
+            intersector: "watertight-f32".into(),
+            ..r.clone()
+        };
+        assert_eq!(brute_force_failure(&other), None);
         assert!(verdict(&[]).is_ok());
         let e = verdict(&[f.clone(), "x set s: y".into()]).unwrap_err();
         assert_eq!(e.exit_code(), 3, "docs/bad-input.md: 3 mismatches");
@@ -209,7 +236,7 @@ mod tests {
         let ok = count_failures(
             "m.obj",
             "shadow",
-            1000,
+            (1000, true),
             Expected::same(400),
             &[
                 Side {
@@ -228,7 +255,7 @@ mod tests {
         let failures = count_failures(
             "m.obj",
             "shadow",
-            1000,
+            (1000, true),
             Expected::same(400),
             &[Side {
                 name: "Embree default rtcOccluded1".into(),
@@ -250,11 +277,36 @@ mod tests {
                 timed: &t,
                 embree,
             };
-            count_failures("m", "s", 20_000, Expected::same(400), &[side]).len()
+            count_failures("m", "s", (20_000, false), Expected::same(400), &[side]).len()
         };
         assert_eq!(failures_off_by(200, true), 0);
         assert_eq!(failures_off_by(201, true), 1);
         assert_eq!(failures_off_by(1, false), 1);
+    }
+
+    /// On an any-hit set (rays starting on a surface) an Embree side may count more hits than
+    /// the watertight test, any number (its rounding hits the face a ray starts on), but not
+    /// more than the tolerance fewer; halfray's own side is still held exactly; on a
+    /// closest-hit set more hits fail as fewer do.
+    #[test]
+    fn on_any_hit_sets_only_fewer_embree_hits_fail() {
+        let check = |hits: usize, embree: bool, from_surfaces: bool| {
+            let t = timed([hits; TIMED_PASSES]);
+            let side = Side {
+                name: "side".into(),
+                timed: &t,
+                embree,
+            };
+            let sizes = (1000, from_surfaces);
+            count_failures("m", "shadow", sizes, Expected::same(300), &[side]).len()
+        };
+        // Every ray occluded: a face in a coordinate plane, each ray hitting its start face.
+        assert_eq!(check(1000, true, true), 0);
+        assert_eq!(check(290, true, true), 0);
+        assert_eq!(check(289, true, true), 1);
+        assert_eq!(check(0, true, true), 1, "a side answering miss at once");
+        assert_eq!(check(301, false, true), 1);
+        assert_eq!(check(311, true, false), 1);
     }
 
     /// A count wrong on one pass only is found, on that pass, and is the count reported.
@@ -268,7 +320,7 @@ mod tests {
         let failures = count_failures(
             "m",
             "random",
-            10,
+            (10, false),
             Expected::same(7),
             &[Side {
                 name: "halfray".into(),
@@ -305,8 +357,14 @@ mod tests {
                 },
             ]
         };
-        assert!(count_failures("m", "s", 1000, expected, &sides("h", "e")).is_empty());
-        let failures = count_failures("m", "s", 1000, Expected::same(300), &sides("h", "e"));
+        assert!(count_failures("m", "s", (1000, false), expected, &sides("h", "e")).is_empty());
+        let failures = count_failures(
+            "m",
+            "s",
+            (1000, false),
+            Expected::same(300),
+            &sides("h", "e"),
+        );
         assert_eq!(failures.len(), 1, "{failures:?}");
         assert!(failures[0].contains(": e hit 400"), "{failures:?}");
     }
