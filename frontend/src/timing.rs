@@ -99,10 +99,39 @@ pub fn interleaved_batches(rays: &[Ray], fs: &[BatchSide<'_>]) -> Vec<Timed> {
         .collect()
 }
 
+/// The positions of `n` rays spread evenly over a set of `len`: `⌊i·len/n⌋` for
+/// `i < min(n, len)`, strictly increasing; every position when `n ≥ len`, none when `n` or
+/// `len` is 0. The rays a timed pass or an untimed check takes from a larger set, so that a
+/// camera's empty first rows do not stand for the whole image.
+#[must_use]
+pub fn spread_positions(len: usize, n: usize) -> Vec<usize> {
+    let n = n.min(len);
+    (0..n)
+        .map(|i| (i as u128 * len as u128 / n as u128) as usize)
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use halfray_core::Vec3;
+
+    /// Worked by hand: 4 of 10 rays are 0, 2, 5, 7 (`⌊10i/4⌋`); 1500 of 2000 are 1500
+    /// distinct positions, not every second ray (1000); a set no larger than `n` is timed
+    /// whole; nothing of an empty set.
+    #[test]
+    fn the_timed_rays_are_n_evenly_spaced_positions() {
+        assert_eq!(spread_positions(10, 4), [0, 2, 5, 7]);
+        assert_eq!(spread_positions(10, 1), [0]);
+        assert_eq!(spread_positions(3, 5), [0, 1, 2]);
+        assert_eq!(spread_positions(4, 4), [0, 1, 2, 3]);
+        assert!(spread_positions(0, 5).is_empty());
+        let p = spread_positions(2000, 1500);
+        assert_eq!(p.len(), 1500);
+        assert!(p.windows(2).all(|w| w[0] < w[1]) && p[1499] < 2000);
+        // ⌊4i/3⌋: 0, 1, 2, 4, 5, 6, 8, … (every position but 3, 7, 11, …).
+        assert_eq!(&p[..7], [0, 1, 2, 4, 5, 6, 8]);
+    }
 
     #[test]
     fn mrays_per_second_is_rays_over_seconds_in_millions() {

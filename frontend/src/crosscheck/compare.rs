@@ -13,7 +13,7 @@ use crate::error::{Error, Result};
 use crate::obj::read_obj;
 use crate::outputs::{Named, file_id, reserve_outputs};
 use crate::raysets::named::watertight_hits;
-use crate::timing::TIMED_PASSES;
+use crate::timing::{TIMED_PASSES, spread_positions};
 use halfray_core::Ray;
 use halfray_core::triangle::TriangleVariant;
 use rayon::prelude::*;
@@ -32,32 +32,14 @@ struct Sides<'a> {
 
 impl Sides<'_> {
     fn halfray(&self, r: &Ray) -> Option<Answer> {
-        answer_of(self.accel.closest_variant(self.variant, r))
+        Answer::of_hit(self.accel.closest_variant(self.variant, r))
     }
 
     /// [`Sides::halfray`] of every ray of `rays`, by the batch query (the same answers).
     fn halfray_batch(&self, rays: &[Ray]) -> Vec<Option<Answer>> {
         let hits = self.accel.closest_variant_batch(self.variant, rays);
-        hits.into_iter().map(answer_of).collect()
+        hits.into_iter().map(Answer::of_hit).collect()
     }
-}
-
-fn answer_of(hit: Option<(u32, halfray_core::triangle::TriangleHit)>) -> Option<Answer> {
-    hit.map(|(prim, h)| Answer {
-        prim,
-        t: h.t,
-        u: h.b1,
-        v: h.b2,
-    })
-}
-
-fn embree_answer(scene: &EmbreeScene, r: &Ray) -> Option<Answer> {
-    scene.intersect_ray(r).map(|h| Answer {
-        prim: h.prim_id,
-        t: h.t,
-        u: h.u,
-        v: h.v,
-    })
 }
 
 /// Bytes one ray of a set holds at the set's peak: the generated ray, its shard's copy and
@@ -402,18 +384,8 @@ fn classify(
 /// One side's timed pass over the sampled rays: its answer to each, in order.
 type TimedPass<'a> = &'a dyn Fn() -> Vec<Option<Answer>>;
 
-/// The positions of `n` rays spread evenly over a set of `len`: `⌊i·len/n⌋` for
-/// `i < min(n, len)`, strictly increasing; every position when `n ≥ len`, none when `n` or
-/// `len` is 0.
-fn timed_positions(len: usize, n: usize) -> Vec<usize> {
-    let n = n.min(len);
-    (0..n)
-        .map(|i| (i as u128 * len as u128 / n as u128) as usize)
-        .collect()
-}
-
 /// One set's row: the single-thread timed passes over `timing_rays` (at least 1, [`check_sizes`]) rays spread
-/// evenly over the set ([`timed_positions`], the same rays for every side, so that a camera's
+/// evenly over the set ([`spread_positions`], the same rays for every side, so that a camera's
 /// empty first rows do not stand for the whole image), then every ray classified on the worker
 /// threads. Each side is timed [`TIMED_PASSES`] times, the sides taking turns pass by pass,
 /// and its fastest pass is reported (as `bench bvh` does: on a shared machine a slow pass
@@ -421,14 +393,18 @@ fn timed_positions(len: usize, n: usize) -> Vec<usize> {
 /// sampled rays as one batch ([`MeshAccel::closest_variant_batch`], the same answers as one by
 /// one), Embree one `rtcIntersect1` call a ray.
 fn compare_set(sides: &Sides<'_>, rays: &[(usize, SetRay)], timing_rays: usize) -> SetReport {
-    let positions = timed_positions(rays.len(), timing_rays.max(1));
+    let positions = spread_positions(rays.len(), timing_rays.max(1));
     let sample = || positions.iter().map(|&j| &rays[j].1.ray);
     let batch: Vec<Ray> = sample().copied().collect();
     // halfray, Embree robust, Embree default.
     let passes: [TimedPass<'_>; 3] = [
         &|| sides.halfray_batch(&batch),
-        &|| sample().map(|r| embree_answer(sides.robust, r)).collect(),
-        &|| sample().map(|r| embree_answer(sides.fast, r)).collect(),
+        &|| {
+            sample()
+                .map(|r| Answer::of_embree(sides.robust, r))
+                .collect()
+        },
+        &|| sample().map(|r| Answer::of_embree(sides.fast, r)).collect(),
     ];
     let mut secs = [f64::INFINITY; 3];
     let mut answers: [Vec<Option<Answer>>; 3] = Default::default();
@@ -450,8 +426,8 @@ fn compare_set(sides: &Sides<'_>, rays: &[(usize, SetRay)], timing_rays: usize) 
             } else {
                 (
                     sides.halfray(&r.ray),
-                    embree_answer(sides.robust, &r.ray),
-                    embree_answer(sides.fast, &r.ray),
+                    Answer::of_embree(sides.robust, &r.ray),
+                    Answer::of_embree(sides.fast, &r.ray),
                 )
             };
             classify(sides, *index, r, h, e, f)
@@ -490,23 +466,6 @@ fn compare_set(sides: &Sides<'_>, rays: &[(usize, SetRay)], timing_rays: usize) 
 mod tests {
     use super::*;
     use glam::Vec3;
-
-    /// Worked by hand: 4 of 10 rays are 0, 2, 5, 7 (`⌊10i/4⌋`); 1500 of 2000 are 1500
-    /// distinct positions, not every second ray (1000); a set no larger than `n` is timed
-    /// whole; nothing of an empty set.
-    #[test]
-    fn the_timed_rays_are_n_evenly_spaced_positions() {
-        assert_eq!(timed_positions(10, 4), [0, 2, 5, 7]);
-        assert_eq!(timed_positions(10, 1), [0]);
-        assert_eq!(timed_positions(3, 5), [0, 1, 2]);
-        assert_eq!(timed_positions(4, 4), [0, 1, 2, 3]);
-        assert!(timed_positions(0, 5).is_empty());
-        let p = timed_positions(2000, 1500);
-        assert_eq!(p.len(), 1500);
-        assert!(p.windows(2).all(|w| w[0] < w[1]) && p[1499] < 2000);
-        // ⌊4i/3⌋: 0, 1, 2, 4, 5, 6, 8, … (every position but 3, 7, 11, …).
-        assert_eq!(&p[..7], [0, 1, 2, 4, 5, 6, 8]);
-    }
 
     /// How far Embree's `t` of an exact crossing may lie from it, in ulps of `t`: its kernels
     /// differ by ISA (the robust AVX2 kernel returns `0.5 − 2⁻²⁵` for the crossing `0.5` that
@@ -586,7 +545,7 @@ mod tests {
         };
         with_sides(&accel, |sides| {
             let h = sides.halfray(&r.ray);
-            let e = embree_answer(sides.robust, &r.ray);
+            let e = Answer::of_embree(sides.robust, &r.ray);
             assert_eq!(h.map(|a| (a.prim, a.t)), Some((0, 1.0)));
             // Embree's `t` of the plane z = 0.5 is 0.5 on its AVX-512 kernels and one ulp
             // below on its AVX2 ones (Zen 3): its kernels round differently.

@@ -21,6 +21,31 @@ pub struct Answer {
     pub v: f32,
 }
 
+impl Answer {
+    /// halfray's closest hit, `(triangle index, hit)`, as judged.
+    #[must_use]
+    pub fn of_hit(hit: Option<(u32, halfray_core::triangle::TriangleHit)>) -> Option<Self> {
+        hit.map(|(prim, h)| Self {
+            prim,
+            t: h.t,
+            u: h.b1,
+            v: h.b2,
+        })
+    }
+
+    /// Embree's closest hit (`rtcIntersect1`) of `ray` in `scene`, as judged.
+    #[cfg(feature = "embree")]
+    #[must_use]
+    pub fn of_embree(scene: &crate::embree::EmbreeScene, ray: &Ray) -> Option<Self> {
+        scene.intersect_ray(ray).map(|h| Self {
+            prim: h.prim_id,
+            t: h.t,
+            u: h.u,
+            v: h.v,
+        })
+    }
+}
+
 /// How one ray's two answers relate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Verdict {

@@ -111,6 +111,15 @@ impl Rivals {
             .collect()
     }
 
+    /// The two scenes' closest hits (`rtcIntersect1`, untimed), `[default, robust]`, as the
+    /// cross-check judges them.
+    pub(super) fn closest(&self, ray: &Ray) -> Vec<Option<crate::crosscheck::judge::Answer>> {
+        self.scenes
+            .iter()
+            .map(|s| crate::crosscheck::judge::Answer::of_embree(s, ray))
+            .collect()
+    }
+
     /// Queries of kind `query` by Embree's packet API (closest hits: `rtcIntersect8/16`; any
     /// hit: `rtcOccluded8/16`), `[default by 8, default by 16, robust by 8, robust by 16]`.
     pub(super) fn packet_queries(&self, query: Query) -> Vec<BatchQuery<'_>> {
@@ -162,6 +171,9 @@ impl Rivals {
         true
     }
     pub(super) fn queries(&self, _query: Query) -> Vec<HitQuery<'_>> {
+        Vec::new()
+    }
+    pub(super) fn closest(&self, _ray: &Ray) -> Vec<Option<crate::crosscheck::judge::Answer>> {
         Vec::new()
     }
     pub(super) fn packet_queries(&self, _query: Query) -> Vec<BatchQuery<'_>> {
