@@ -73,7 +73,10 @@ pub use rays::{RAY_LANES, ShearedRays};
 /// than `2^126` times smaller than the dominant one, or a configuration at the subnormal scale
 /// (`≲ 1e-38`), rounds absolutely instead: the test then sees a slightly displaced ray (still
 /// the same ray for every triangle, so still watertight, but a BVH's exact box test may cull a
-/// vertex or edge hit that a brute-force loop reports).
+/// vertex or edge hit that a brute-force loop reports). A direction whose dominant component
+/// is below `2⁻¹²⁸` (`1/d_kz` overflows `f32`) is outside the domain: the sheared depths are
+/// then infinite or NaN and the ray may pass through a closed mesh; scale such a direction by
+/// a power of two first (its `t` scales back exactly).
 ///
 /// **Domain of agreement with [`super::F64Reference`]** (hit/miss where the reference's edge
 /// functions and `t` are clear of their error bounds; then `t` and the barycentrics within

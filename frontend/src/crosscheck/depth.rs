@@ -57,7 +57,7 @@ pub fn depth_diff_png(
     };
     let mut img = RgbImage::new((3 * size) as u32, size as u32);
     let mut counts = [0usize; 4];
-    for (i, r) in rays.iter().enumerate() {
+    for i in 0..rays.len() {
         let (x, y) = ((i % size) as u32, (i / size) as u32);
         if !traced[i] {
             counts[3] += 1;
@@ -78,7 +78,7 @@ pub fn depth_diff_png(
                 Rgb([0, 96, 255])
             }
             (Some(a), Some(b))
-                if (a as f64 - b as f64).abs() > super::judge::t_tolerance(r, a as f64, 1.0) =>
+                if (a as f64 - b as f64).abs() > super::judge::t_tolerance(a as f64, 1.0) =>
             {
                 counts[2] += 1;
                 Rgb([255, 220, 0])

@@ -83,6 +83,16 @@ pub const COS_FLOOR: f64 = 1.0e-4;
 /// few more; 64 ulps covers both with margin.
 pub const BOUNDARY_ULPS: f64 = 64.0;
 
+/// How far, in ulps (`2⁻²³`) of its largest coordinate, the `f32` ray aimed at an edge's or a
+/// vertex's point may pass from that point: the point rounds once (an edge's midpoint
+/// `(a + b)/2`, half an ulp a coordinate) and the direction `target − origin` once more (half
+/// an ulp of `|d|`, at most the target's magnitude for an origin nearer the coordinate origin
+/// than twice the target); 2 is twice the sum. Only [`is_leak`] takes it: two answers are
+/// compared without it ([`t_tolerance`]). At `LEAK_COS` it spans `2·2⁻²³·|p|/(|d|·10⁻²)` of
+/// `t`: a hit beyond the target by less is not counted as a leak, 0.05 of `t` for a ray of
+/// length 5 aimed at `10⁴`, 0.5 at `10⁵`.
+pub const AIM_ROUNDING_ULPS: f64 = 2.0;
+
 /// One `f32` ulp of `1` (`2⁻²³`): the unit of [`BOUNDARY_ULPS`] and [`T_TOLERANCE_ULPS`].
 const EPS: f64 = f32::EPSILON as f64;
 
@@ -164,11 +174,27 @@ pub fn inside_or_near(ray: &Ray, tri: &[glam::Vec3; 3]) -> bool {
 }
 
 /// The `t` tolerance for a hit at `t` on a face at angle `cos` to the ray: see
-/// [`T_TOLERANCE_ULPS`], [`COS_FLOOR`]. Absolute, in ray-parameter units.
-pub fn t_tolerance(ray: &Ray, t: f64, cos: f64) -> f64 {
+/// [`T_TOLERANCE_ULPS`], [`COS_FLOOR`]. Absolute, in ray-parameter units. Relative to `t`
+/// alone, not to the origin's magnitude: every tracer judged here subtracts the origin from
+/// the vertices first, and `fl(vᵢ − oᵢ)` is within one rounding of `|vᵢ − oᵢ|` (exact when
+/// the two are within a factor 2, Sterbenz), so two answers far from the coordinate origin are
+/// compared as strictly as at it (a term `|o|/|d|` here made a box of side 1 at `10⁶` accept
+/// the back face for the front one, 10 units of `t` away). Where a ray's own construction
+/// rounds at the coordinates' magnitude, [`origin_t_tolerance`] and [`is_leak`] add it.
+pub fn t_tolerance(t: f64, cos: f64) -> f64 {
+    T_TOLERANCE_ULPS * EPS * t.abs() / cos.abs().max(COS_FLOOR)
+}
+
+/// The `t` by which a ray's origin, a point computed on a surface and rounded to `f32` (a
+/// spawned shadow or ambient-occlusion ray, the `surface` set), may lie off that surface,
+/// seen along the ray on a face at angle `cos` to it: [`T_TOLERANCE_ULPS`] ulps of the
+/// origin's largest coordinate over `|d|·cos` (ray-parameter units). Only the interval's ends
+/// take it ([`at_interval_end`]): whether the surface a ray starts on is crossed just after its
+/// start is decided by that rounding, not by either tracer.
+pub fn origin_t_tolerance(ray: &Ray, cos: f64) -> f64 {
     let d = ray.direction.as_dvec3().length().max(f64::MIN_POSITIVE);
     let o = ray.origin.as_dvec3().abs().max_element();
-    T_TOLERANCE_ULPS * EPS * (t.abs() + o / d) / cos.abs().max(COS_FLOOR)
+    T_TOLERANCE_ULPS * EPS * (o / d) / cos.abs().max(COS_FLOOR)
 }
 
 /// Whether `answer` is consistent with the exact geometry of its own triangle: the ray passes
@@ -191,16 +217,17 @@ pub fn answer_is_valid(mesh: &ObjMesh, ray: &Ray, a: &Answer) -> bool {
     let Some((t, cos)) = plane_crossing(ray, &tri) else {
         return false;
     };
-    (inside_or_near(ray, &tri) && (t - a.t as f64).abs() <= t_tolerance(ray, t, cos))
+    (inside_or_near(ray, &tri) && (t - a.t as f64).abs() <= t_tolerance(t, cos))
         || point_near_triangle(ray, &tri, a.t as f64)
 }
 
 /// `true` when the point of `ray` at `t` lies within the boundary distance of `tri`, in 3-D
-/// and `f64` from the `f32` inputs: [`BOUNDARY_ULPS`] ulps of the coordinates' magnitude (the
-/// largest coordinate of the origin, and of the vertices relative to it), the distance
-/// [`ray_space_barycentrics`]' margin stands for. Such a point is where the ray meets the
-/// triangle once each input moves by a few roundings, whatever the angle between them. A
-/// degenerate triangle is its three edges.
+/// and `f64` from the `f32` inputs: [`BOUNDARY_ULPS`] ulps of the magnitude the tests round
+/// (the largest coordinate of the vertices relative to the origin, as in
+/// [`ray_space_barycentrics`]: not the origin's own, which the subtraction `vᵢ − oᵢ` does not
+/// round by, see [`t_tolerance`]), the distance that margin stands for. Such a point is where
+/// the ray meets the triangle once each relative input moves by a few roundings, whatever the
+/// angle between them. A degenerate triangle is its three edges.
 pub fn point_near_triangle(ray: &Ray, tri: &[glam::Vec3; 3], t: f64) -> bool {
     let o = ray.origin.as_dvec3();
     let p = o + ray.direction.as_dvec3() * t;
@@ -208,7 +235,7 @@ pub fn point_near_triangle(ray: &Ray, tri: &[glam::Vec3; 3], t: f64) -> bool {
     let scale = v
         .iter()
         .map(|q| (*q - o).abs().max_element())
-        .fold(o.abs().max_element(), f64::max);
+        .fold(0.0, f64::max);
     let margin = BOUNDARY_ULPS * EPS * scale;
     distance_to_triangle(p, &v) <= margin
 }
@@ -249,9 +276,14 @@ fn distance_to_triangle(p: glam::DVec3, v: &[glam::DVec3; 3]) -> f64 {
 /// `ray` and that triangle's plane ([`COS_FLOOR`] when the ray runs in the plane). `a.prim`
 /// must index `mesh`'s triangles.
 fn hit_t_tolerance(mesh: &ObjMesh, ray: &Ray, a: &Answer) -> f64 {
+    t_tolerance(a.t as f64, hit_cos(mesh, ray, a))
+}
+
+/// The cosine between `ray` and the plane of the hit `a`'s triangle ([`COS_FLOOR`] when the
+/// ray runs in the plane). `a.prim` must index `mesh`'s triangles.
+fn hit_cos(mesh: &ObjMesh, ray: &Ray, a: &Answer) -> f64 {
     let tri = mesh.triangle(a.prim as usize);
-    let cos = plane_crossing(ray, &tri).map_or(COS_FLOOR, |(_, cos)| cos);
-    t_tolerance(ray, a.t as f64, cos)
+    plane_crossing(ray, &tri).map_or(COS_FLOOR, |(_, cos)| cos)
 }
 
 /// `true` when the hit `r` lies within the `t` tolerance ([`t_tolerance`], on its own
@@ -260,7 +292,7 @@ fn hit_t_tolerance(mesh: &ObjMesh, ray: &Ray, a: &Answer) -> f64 {
 /// on its face's plane crosses that face at `t = t_min = 0`, which the interval excludes, and
 /// the `f64` reference computes `±10⁻¹⁷`), so a side may report it or pass it.
 pub fn at_interval_end(mesh: &ObjMesh, ray: &Ray, r: &Answer) -> bool {
-    let tol = hit_t_tolerance(mesh, ray, r);
+    let tol = hit_t_tolerance(mesh, ray, r) + origin_t_tolerance(ray, hit_cos(mesh, ray, r));
     let t = r.t as f64;
     (t - ray.t_min as f64).abs() <= tol
         || (ray.t_max.is_finite() && (t - ray.t_max as f64).abs() <= tol)
@@ -393,11 +425,16 @@ pub fn judge(
 
 /// `true` when `answer` (or a miss) lets a ray aimed at an edge or vertex through: it misses,
 /// or its hit lies beyond the target (`t > target_t` by more than [`t_tolerance`] at
-/// [`LEAK_COS`]).
+/// [`LEAK_COS`], plus the target's own rounding: [`AIM_ROUNDING_ULPS`] ulps of its largest
+/// coordinate, seen along the ray on a face at [`LEAK_COS`]).
 pub fn is_leak(ray: &Ray, answer: Option<&Answer>, target_t: f32) -> bool {
+    let t = target_t as f64;
+    let d = ray.direction.as_dvec3();
+    let target = (ray.origin.as_dvec3() + d * t).abs().max_element();
+    let aim = AIM_ROUNDING_ULPS * EPS * target / d.length().max(f64::MIN_POSITIVE) / LEAK_COS;
     match answer {
         None => true,
-        Some(a) => (a.t as f64 - target_t as f64) > t_tolerance(ray, target_t as f64, LEAK_COS),
+        Some(a) => (a.t as f64 - t) > t_tolerance(t, LEAK_COS) + aim,
     }
 }
 
@@ -657,6 +694,73 @@ pub(super) mod tests {
             judge(&m, &down, floor, embree, || floor),
             Verdict::WithinTolerance
         );
+    }
+
+    /// The closed box `[o, o + s]³` of 12 triangles: `z = o` is triangles 8 and 9, `z = o + s`
+    /// 10 and 11.
+    fn box_at(o: f32, s: f32) -> ObjMesh {
+        let positions = (0..8)
+            .map(|i: u32| {
+                let bit = |k: u32| s * ((i >> k) & 1) as f32;
+                Vec3::new(o + bit(2), o + bit(1), o + bit(0))
+            })
+            .collect();
+        let quads = [
+            [0, 1, 3, 2],
+            [4, 6, 7, 5],
+            [0, 4, 5, 1],
+            [2, 3, 7, 6],
+            [0, 2, 6, 4],
+            [1, 5, 7, 3],
+        ];
+        let triangles = quads
+            .iter()
+            .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
+            .collect();
+        ObjMesh {
+            positions,
+            triangles,
+        }
+    }
+
+    /// A box far from the coordinate origin is judged as strictly as one at it: the back face
+    /// for the front one, 10 % of `t` away, is genuine (a tolerance growing with the origin's
+    /// magnitude called it a tie at 10⁶ and at 10⁴ for a 5 cm box); a hit invented beside the
+    /// box is genuine; a ray aimed at an edge that passes it and hits the back face leaks
+    /// (not counted at 10⁴ before; at 10⁵ the aim's own rounding spans it,
+    /// [`AIM_ROUNDING_ULPS`]). The probe's cases, by hand.
+    #[test]
+    fn answers_far_from_the_coordinate_origin_are_judged_as_at_it() {
+        for (o, s) in [(0.0, 1.0), (1.0e6, 1.0), (0.0, 0.05), (1.0e4, 0.05)] {
+            let m = box_at(o, s);
+            let reference = Reference::new(&m);
+            let down = Ray::new(
+                Vec3::new(o + 0.3 * s, o + 0.6 * s, o + 11.0 * s),
+                Vec3::new(0.0, 0.0, -1.0),
+            );
+            let front = reference.closest(&down).unwrap();
+            assert!(
+                front.prim >= 10 && (front.t - 10.0 * s).abs() <= 1e-3 * s,
+                "{front:?}"
+            );
+            let back = ans(if front.prim == 10 { 8 } else { 9 }, 11.0 * s);
+            let verdict = judge(&m, &down, Some(back), Some(front), || Some(front));
+            assert_eq!(verdict, Verdict::Genuine, "box {s} at {o}");
+            let beside = Ray::new(
+                Vec3::new(o + 6.0 * s, o + 0.5 * s, o + 10.0 * s),
+                Vec3::new(0.0, 0.0, -1.0),
+            );
+            let invented = Some(ans(8, 9.5 * s));
+            let verdict = judge(&m, &beside, invented, None, || reference.closest(&beside));
+            assert_eq!(verdict, Verdict::Genuine, "box {s} at {o}");
+        }
+        for o in [0.0, 1.0e4] {
+            let target = Vec3::new(o + 0.5, o + 1.0, o + 1.0);
+            let origin = Vec3::new(o + 0.5, o + 4.0, o + 5.0);
+            let edge = Ray::new(origin, target - origin);
+            assert!(is_leak(&edge, Some(&ans(8, 1.25)), 1.0), "at {o}");
+            assert!(!is_leak(&edge, Some(&ans(10, 1.0)), 1.0), "at {o}");
+        }
     }
 
     /// The brute-force oracle: [`F64Reference`] on every triangle in index order, no cull,
