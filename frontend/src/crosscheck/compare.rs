@@ -351,8 +351,8 @@ fn classify(
     let verdict = if h == e {
         Verdict::Agree
     } else {
-        judge::judge(&sides.accel.mesh, &r.ray, h, e, || {
-            sides.reference.closest(&r.ray)
+        judge::judge(&sides.accel.mesh, &r.ray, h, e, |ray| {
+            sides.reference.closest(ray)
         })
     };
     if std::env::var_os("HALFRAY_CROSSCHECK_DEBUG").is_some()

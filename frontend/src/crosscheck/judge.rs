@@ -298,6 +298,25 @@ pub fn at_interval_end(mesh: &ObjMesh, ray: &Ray, r: &Answer) -> bool {
         || (ray.t_max.is_finite() && (t - ray.t_max as f64).abs() <= tol)
 }
 
+/// `ray` from just past the hit `r` when `r` lies at its interval's start
+/// ([`at_interval_end`]'s tolerance of `t_min`): its `t_min` raised beyond that tolerance, so
+/// that the reference's closest hit of it is the next one, decided or not. `None` when `r` is
+/// not at the start, or the raised start is not below `t_max`.
+pub fn beyond_start(mesh: &ObjMesh, ray: &Ray, r: &Answer) -> Option<Ray> {
+    let tol = hit_t_tolerance(mesh, ray, r) + origin_t_tolerance(ray, hit_cos(mesh, ray, r));
+    let t = r.t as f64;
+    if (t - ray.t_min as f64).abs() > tol {
+        return None;
+    }
+    let start = (t + tol) as f32;
+    let start = if (start as f64) <= t + tol {
+        start.next_up()
+    } else {
+        start
+    };
+    (start < ray.t_max).then(|| Ray::with_interval(ray.origin, ray.direction, start, ray.t_max))
+}
+
 /// Slack of [`Reference`]'s cull, relative to the distance from the ray's origin to the far
 /// side of a triangle's bounding sphere (unitless): a triangle is skipped only when the ray's
 /// line passes farther than `(1 + 10⁻⁹)` times its bounding radius plus `10⁻⁹` of that
@@ -365,16 +384,19 @@ impl<'a> Reference<'a> {
     }
 }
 
-/// Classifies one ray. `reference` gives the `f64` reference's closest hit (normally
+/// Classifies one ray. `reference` gives the `f64` reference's closest hit of a ray (normally
 /// [`Reference::closest`]); it is called only when the two sides disagree: on hit/miss, on `t` beyond
 /// [`t_tolerance`], or on the primitive at the same `t` where either answer is not valid
-/// ([`answer_is_valid`]) on its own triangle.
+/// ([`answer_is_valid`]) on its own triangle. When the reference's hit is undecided because it
+/// lies at the interval's start ([`at_interval_end`]: a ray leaving the surface it was spawned
+/// on), it is called once more for the same ray from just past that hit ([`beyond_start`]):
+/// what lies beyond is decided, and a miss or a farther hit must agree with it too.
 pub fn judge(
     mesh: &ObjMesh,
     ray: &Ray,
     ours: Option<Answer>,
     embree: Option<Answer>,
-    reference: impl FnOnce() -> Option<Answer>,
+    mut reference: impl FnMut(&Ray) -> Option<Answer>,
 ) -> Verdict {
     let tol_between =
         |x: &Answer, y: &Answer| (x.t as f64 - y.t as f64).abs() <= hit_t_tolerance(mesh, ray, x);
@@ -392,18 +414,30 @@ pub fn judge(
     }
     // They disagree on hit/miss, on t, or on the primitive at the same t with an answer its
     // own triangle does not bear out: is each side consistent with the reference?
-    let reference = reference();
+    let first = reference(ray);
     // Where the reference's own hit is undecided: within the margin of an edge of its
     // triangle, or within the `t` tolerance of an end of the interval.
     let on_boundary = |r: &Answer| {
         near_boundary(ray, &mesh.triangle(r.prim as usize)) || at_interval_end(mesh, ray, r)
     };
-    let ok = |x: &Option<Answer>| match (x, &reference) {
+    // Beyond a hit undecided only by the interval's start: the reference's next hit, which a
+    // miss or a farther hit must also be consistent with (`None`: nothing decided beyond).
+    let beyond = first
+        .filter(|r| !near_boundary(ray, &mesh.triangle(r.prim as usize)))
+        .and_then(|r| beyond_start(mesh, ray, &r))
+        .and_then(|later| reference(&later).filter(|b| b.t > later.t_min));
+    let beyond_ok = |x: &Option<Answer>| match (x, &beyond) {
+        (_, None) => true,
+        (_, Some(b)) if on_boundary(b) => true,
+        (None, Some(_)) => false,
+        (Some(a), Some(b)) => a.t as f64 <= b.t as f64 || tol_between(a, b),
+    };
+    let ok = |x: &Option<Answer>| match (x, &first) {
         (None, None) => true,
         // A miss where the reference hits: excusable only if the reference's hit is itself on
         // a boundary (within the margin of an edge of its triangle, or of an end of the
-        // interval).
-        (None, Some(r)) => on_boundary(r),
+        // interval) and nothing decided lies beyond it.
+        (None, Some(r)) => on_boundary(r) && beyond_ok(x),
         // A hit the reference does not report, or one closer than the reference's: valid when
         // its own triangle is hit within the boundary margin at that `t` (the reference rounded
         // past an edge this side counted as inside).
@@ -412,8 +446,8 @@ pub fn judge(
             answer_is_valid(mesh, ray, a)
         }
         // Farther than the reference: it skipped the reference's hit, which must be on a
-        // boundary for that to be excusable.
-        (Some(a), Some(r)) => on_boundary(r) && answer_is_valid(mesh, ray, a),
+        // boundary for that to be excusable, and no decided hit beyond it.
+        (Some(a), Some(r)) => on_boundary(r) && answer_is_valid(mesh, ray, a) && beyond_ok(x),
     };
     let (ours_ok, embree_ok) = (ok(&ours), ok(&embree));
     match (ours_ok, embree_ok) {
@@ -488,7 +522,7 @@ pub(super) mod tests {
     }
 
     /// A reference for the verdicts that must not need one (the two sides agree, or tie).
-    fn no_reference() -> Option<Answer> {
+    fn no_reference(_: &Ray) -> Option<Answer> {
         panic!("the reference was asked for")
     }
 
@@ -519,14 +553,14 @@ pub(super) mod tests {
         // Interior of triangle 0; Embree misses: Embree is wrong.
         let inner = Ray::new(Vec3::new(0.7, 0.2, 1.0), Vec3::new(0.0, 0.0, -1.0));
         let r = Some(ans(0, 1.0));
-        assert_eq!(judge(&m, &inner, r, None, || r), Verdict::EmbreeWrong);
+        assert_eq!(judge(&m, &inner, r, None, |_| r), Verdict::EmbreeWrong);
         // halfray misses an interior hit: genuine.
-        assert_eq!(judge(&m, &inner, None, r, || r), Verdict::Genuine);
+        assert_eq!(judge(&m, &inner, None, r, |_| r), Verdict::Genuine);
         // On the diagonal, a miss is excusable (boundary).
-        assert_eq!(judge(&m, &diag, None, r, || r), Verdict::WithinTolerance);
+        assert_eq!(judge(&m, &diag, None, r, |_| r), Verdict::WithinTolerance);
         // Wrong t far beyond tolerance: genuine.
         assert_eq!(
-            judge(&m, &inner, Some(ans(0, 1.1)), r, || r),
+            judge(&m, &inner, Some(ans(0, 1.1)), r, |_| r),
             Verdict::Genuine
         );
         assert!(is_leak(&diag, None, 1.0));
@@ -534,18 +568,18 @@ pub(super) mod tests {
         // triangle (0,0), (1,1), (0,1) holds only points with y ≥ x, 0.35 away here): the
         // same `t` as Embree's triangle 0 is no tie, and the reference decides.
         assert_eq!(
-            judge(&m, &inner, Some(ans(1, 1.0)), r, || r),
+            judge(&m, &inner, Some(ans(1, 1.0)), r, |_| r),
             Verdict::Genuine
         );
         // Embree names the wrong one: Embree is wrong.
         assert_eq!(
-            judge(&m, &inner, r, Some(ans(1, 1.0)), || r),
+            judge(&m, &inner, r, Some(ans(1, 1.0)), |_| r),
             Verdict::EmbreeWrong
         );
         // A true tie: the ray through the shared diagonal hits both triangles, whichever the
         // reference names.
         assert_eq!(
-            judge(&m, &diag, Some(ans(1, 1.0)), Some(ans(0, 1.0)), || r),
+            judge(&m, &diag, Some(ans(1, 1.0)), Some(ans(0, 1.0)), |_| r),
             Verdict::Tie
         );
         assert!(!is_leak(&diag, Some(&ans(1, 1.0)), 1.0));
@@ -583,11 +617,11 @@ pub(super) mod tests {
             v: 0.0,
         };
         assert_eq!(
-            judge(&m, &ray, Some(at(0.99999994)), None, || None),
+            judge(&m, &ray, Some(at(0.99999994)), None, |_| None),
             Verdict::WithinTolerance
         );
         assert_eq!(
-            judge(&m, &ray, Some(at(0.9)), None, || None),
+            judge(&m, &ray, Some(at(0.9)), None, |_| None),
             Verdict::Genuine
         );
     }
@@ -633,30 +667,94 @@ pub(super) mod tests {
         let above = Some(ans(2, 0.5));
         // Passing the start face, with or without the face above.
         assert_eq!(
-            judge(&m, &up, None, start, || start),
+            judge(&m, &up, None, start, |_| start),
             Verdict::WithinTolerance
         );
         assert_eq!(
-            judge(&m, &up, above, start, || start),
+            judge(&m, &up, above, start, |_| start),
             Verdict::WithinTolerance
         );
         // Reporting it at t = 0 (Embree's convention) against a reference that passes it.
         assert_eq!(
-            judge(&m, &up, above, Some(ans(0, 0.0)), || above),
+            judge(&m, &up, above, Some(ans(0, 0.0)), |_| above),
             Verdict::WithinTolerance
         );
         // The face above is no boundary case: missing it stays genuine.
-        assert_eq!(judge(&m, &up, None, above, || above), Verdict::Genuine);
+        assert_eq!(judge(&m, &up, None, above, |_| above), Verdict::Genuine);
         // A finite `t_max` at the face above makes that hit undecided; below it, not.
         let short = Ray::with_interval(up.origin, up.direction, 0.0, 0.5);
         assert_eq!(
-            judge(&m, &short, None, above, || above),
+            judge(&m, &short, None, above, |_| above),
             Verdict::WithinTolerance
         );
         let shorter = Ray::with_interval(up.origin, up.direction, 0.0, 0.49);
         assert!(at_interval_end(&m, &shorter, &ans(0, 1.0e-17)));
         assert!(!at_interval_end(&m, &shorter, &ans(2, 0.5)));
         assert!(!at_interval_end(&m, &up, &ans(2, 0.5)));
+    }
+
+    /// Beyond an undecided start face the reference decides. A reference that rounds the start
+    /// face's crossing to `10⁻¹⁷` (as `F64Reference` does on slanted rays spawned on a
+    /// coordinate plane) and is otherwise the real one: missing the face above is genuine (it
+    /// passed as "within tolerance": any answer behind a start-face hit did), hitting it is
+    /// within tolerance, and with nothing decided beyond (`t_max` short of the face above, or
+    /// nothing there) a miss still passes.
+    #[test]
+    fn beyond_an_undecided_start_face_the_reference_decides() {
+        let m = two_floors();
+        let reference = Reference::new(&m);
+        let start = Some(ans(0, 1.0e-17));
+        let up = Ray::new(Vec3::new(0.7, 0.2, 0.0), Vec3::new(0.0, 0.0, 1.0));
+        let rounding = |r: &Ray| {
+            if r.t_min == 0.0 {
+                start
+            } else {
+                reference.closest(r)
+            }
+        };
+        let above = Some(ans(2, 0.5));
+        let next = reference.closest(&Ray { t_min: 1e-9, ..up });
+        assert_eq!(next.map(|a| (a.prim, a.t)), Some((2, 0.5)));
+        assert_eq!(judge(&m, &up, None, start, rounding), Verdict::Genuine);
+        assert_eq!(
+            judge(&m, &up, Some(ans(0, 1.0)), start, rounding),
+            Verdict::Genuine
+        );
+        assert_eq!(
+            judge(&m, &up, above, start, rounding),
+            Verdict::WithinTolerance
+        );
+        assert_eq!(
+            judge(&m, &up, start, above, rounding),
+            Verdict::WithinTolerance
+        );
+        let short = Ray::with_interval(up.origin, up.direction, 0.0, 0.25);
+        assert_eq!(
+            judge(&m, &short, None, start, rounding),
+            Verdict::WithinTolerance
+        );
+        // Over the quad's other triangle (1), which has no copy above.
+        let beside = Ray::new(Vec3::new(0.2, 0.7, 0.0), up.direction);
+        let start_1 = Some(ans(1, 1.0e-17));
+        let rounding_1 = |r: &Ray| {
+            if r.t_min == 0.0 {
+                start_1
+            } else {
+                reference.closest(r)
+            }
+        };
+        assert_eq!(
+            judge(&m, &beside, None, start_1, rounding_1),
+            Verdict::WithinTolerance
+        );
+        assert_eq!(beyond_start(&m, &up, &ans(2, 0.5)), None);
+        let later = beyond_start(&m, &up, &ans(0, 1.0e-17)).unwrap();
+        // Past the start's tolerance: 64 ulps of the origin's 0.7 (the face met head on).
+        let tol = origin_t_tolerance(&up, 1.0) + t_tolerance(1.0e-17, 1.0);
+        assert!(
+            later.t_min as f64 > tol && (later.t_min as f64) < 1.01 * tol,
+            "{later:?}"
+        );
     }
 
     /// [`quad`] and, above it at `z = 0.5`, a copy of its triangle 0 (triangle 2).
@@ -683,15 +781,15 @@ pub(super) mod tests {
         assert_eq!(r.map(|a| (a.prim, a.t)), Some((2, 0.5)));
         let embree = Some(ans(2, 0.5));
         let floor = Some(ans(0, 1.0));
-        assert_eq!(judge(&m, &down, None, embree, || r), Verdict::Genuine);
-        assert_eq!(judge(&m, &down, floor, embree, || r), Verdict::Genuine);
+        assert_eq!(judge(&m, &down, None, embree, |_| r), Verdict::Genuine);
+        assert_eq!(judge(&m, &down, floor, embree, |_| r), Verdict::Genuine);
         // What a reference sharing halfray's missed triangle would have said.
         assert_eq!(
-            judge(&m, &down, None, embree, || None),
+            judge(&m, &down, None, embree, |_| None),
             Verdict::WithinTolerance
         );
         assert_eq!(
-            judge(&m, &down, floor, embree, || floor),
+            judge(&m, &down, floor, embree, |_| floor),
             Verdict::WithinTolerance
         );
     }
@@ -744,14 +842,14 @@ pub(super) mod tests {
                 "{front:?}"
             );
             let back = ans(if front.prim == 10 { 8 } else { 9 }, 11.0 * s);
-            let verdict = judge(&m, &down, Some(back), Some(front), || Some(front));
+            let verdict = judge(&m, &down, Some(back), Some(front), |_| Some(front));
             assert_eq!(verdict, Verdict::Genuine, "box {s} at {o}");
             let beside = Ray::new(
                 Vec3::new(o + 6.0 * s, o + 0.5 * s, o + 10.0 * s),
                 Vec3::new(0.0, 0.0, -1.0),
             );
             let invented = Some(ans(8, 9.5 * s));
-            let verdict = judge(&m, &beside, invented, None, || reference.closest(&beside));
+            let verdict = judge(&m, &beside, invented, None, |r| reference.closest(r));
             assert_eq!(verdict, Verdict::Genuine, "box {s} at {o}");
         }
         for o in [0.0, 1.0e4] {

@@ -69,7 +69,7 @@ pub fn judged_failures(
                 .zip(watertight)
                 .zip(answers)
                 .filter(|((ray, w), e)| {
-                    judge::judge(mesh, ray, **w, **e, || reference.closest(ray))
+                    judge::judge(mesh, ray, **w, **e, |r| reference.closest(r))
                         == Verdict::EmbreeWrong
                 })
                 .count();
