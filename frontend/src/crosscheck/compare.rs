@@ -393,7 +393,7 @@ type TimedPass<'a> = &'a dyn Fn() -> Vec<Option<Answer>>;
 /// sampled rays as one batch ([`MeshAccel::closest_variant_batch`], the same answers as one by
 /// one), Embree one `rtcIntersect1` call a ray.
 fn compare_set(sides: &Sides<'_>, rays: &[(usize, SetRay)], timing_rays: usize) -> SetReport {
-    let positions = spread_positions(rays.len(), timing_rays.max(1));
+    let positions = spread_positions(rays.len(), timing_rays);
     let sample = || positions.iter().map(|&j| &rays[j].1.ray);
     let batch: Vec<Ray> = sample().copied().collect();
     // halfray, Embree robust, Embree default.

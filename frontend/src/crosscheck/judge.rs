@@ -292,28 +292,34 @@ fn hit_cos(mesh: &ObjMesh, ray: &Ray, a: &Answer) -> f64 {
 /// on its face's plane crosses that face at `t = t_min = 0`, which the interval excludes, and
 /// the `f64` reference computes `±10⁻¹⁷`), so a side may report it or pass it.
 pub fn at_interval_end(mesh: &ObjMesh, ray: &Ray, r: &Answer) -> bool {
-    let tol = hit_t_tolerance(mesh, ray, r) + origin_t_tolerance(ray, hit_cos(mesh, ray, r));
-    let t = r.t as f64;
-    (t - ray.t_min as f64).abs() <= tol
-        || (ray.t_max.is_finite() && (t - ray.t_max as f64).abs() <= tol)
+    let tol = end_tolerance(mesh, ray, r);
+    at_interval_start(mesh, ray, r)
+        || (ray.t_max.is_finite() && (r.t as f64 - ray.t_max as f64).abs() <= tol)
 }
 
-/// `ray` from just past the hit `r` when `r` lies at its interval's start
-/// ([`at_interval_end`]'s tolerance of `t_min`): its `t_min` raised beyond that tolerance, so
-/// that the reference's closest hit of it is the next one, decided or not. `None` when `r` is
-/// not at the start, or the raised start is not below `t_max`.
-pub fn beyond_start(mesh: &ObjMesh, ray: &Ray, r: &Answer) -> Option<Ray> {
-    let tol = hit_t_tolerance(mesh, ray, r) + origin_t_tolerance(ray, hit_cos(mesh, ray, r));
-    let t = r.t as f64;
-    if (t - ray.t_min as f64).abs() > tol {
-        return None;
-    }
-    let start = (t + tol) as f32;
-    let start = if (start as f64) <= t + tol {
-        start.next_up()
-    } else {
-        start
-    };
+/// The `t` tolerance of the hit `r` against an end of `ray`'s interval: its own
+/// ([`t_tolerance`]) and the origin's rounding off the surface it was spawned on
+/// ([`origin_t_tolerance`]), both on `r`'s triangle's plane.
+fn end_tolerance(mesh: &ObjMesh, ray: &Ray, r: &Answer) -> f64 {
+    hit_t_tolerance(mesh, ray, r) + origin_t_tolerance(ray, hit_cos(mesh, ray, r))
+}
+
+/// `true` when the hit `r` lies within [`end_tolerance`] of `ray`'s `t_min`
+/// ([`at_interval_end`]'s first end: a start-face hit).
+pub fn at_interval_start(mesh: &ObjMesh, ray: &Ray, r: &Answer) -> bool {
+    (r.t as f64 - ray.t_min as f64).abs() <= end_tolerance(mesh, ray, r)
+}
+
+/// How many hits at a ray's interval's start [`judge`] steps past, one after the other, to
+/// find what lies beyond them: a start face and a few coplanar copies of it (exported meshes
+/// duplicate faces). Past that many the rest counts as undecided.
+pub const BEYOND_START_ROUNDS: usize = 8;
+
+/// `ray` from just past `t` (its `t_min` the next `f32` above `t`, or `ray`'s own when that
+/// is larger), `None` when that start is not below `t_max`: the ray whose closest hit is the
+/// next one beyond a hit at `t`.
+pub fn ray_past(ray: &Ray, t: f32) -> Option<Ray> {
+    let start = t.next_up().max(ray.t_min);
     (start < ray.t_max).then(|| Ray::with_interval(ray.origin, ray.direction, start, ray.t_max))
 }
 
@@ -387,10 +393,11 @@ impl<'a> Reference<'a> {
 /// Classifies one ray. `reference` gives the `f64` reference's closest hit of a ray (normally
 /// [`Reference::closest`]); it is called only when the two sides disagree: on hit/miss, on `t` beyond
 /// [`t_tolerance`], or on the primitive at the same `t` where either answer is not valid
-/// ([`answer_is_valid`]) on its own triangle. When the reference's hit is undecided because it
-/// lies at the interval's start ([`at_interval_end`]: a ray leaving the surface it was spawned
-/// on), it is called once more for the same ray from just past that hit ([`beyond_start`]):
-/// what lies beyond is decided, and a miss or a farther hit must agree with it too.
+/// ([`answer_is_valid`]) on its own triangle. When the reference's hit lies at the interval's
+/// start ([`at_interval_start`]: a ray leaving the surface it was spawned on), it is called
+/// again for the same ray from just past it ([`ray_past`]), and past each further hit at the
+/// start (at most [`BEYOND_START_ROUNDS`]): the first hit beyond them is decided unless on a
+/// boundary itself, and a miss or a farther hit must agree with it too.
 pub fn judge(
     mesh: &ObjMesh,
     ray: &Ray,
@@ -422,10 +429,21 @@ pub fn judge(
     };
     // Beyond a hit undecided only by the interval's start: the reference's next hit, which a
     // miss or a farther hit must also be consistent with (`None`: nothing decided beyond).
-    let beyond = first
-        .filter(|r| !near_boundary(ray, &mesh.triangle(r.prim as usize)))
-        .and_then(|r| beyond_start(mesh, ray, &r))
-        .and_then(|later| reference(&later).filter(|b| b.t > later.t_min));
+    let mut beyond = None;
+    if let Some(mut from) = first.filter(|r| at_interval_start(mesh, ray, r)) {
+        for _ in 0..BEYOND_START_ROUNDS {
+            let Some(later) = ray_past(ray, from.t) else {
+                break;
+            };
+            match reference(&later).filter(|b| b.t > later.t_min) {
+                Some(b) if at_interval_start(mesh, ray, &b) => from = b,
+                found => {
+                    beyond = found;
+                    break;
+                }
+            }
+        }
+    }
     let beyond_ok = |x: &Option<Answer>| match (x, &beyond) {
         (_, None) => true,
         (_, Some(b)) if on_boundary(b) => true,
@@ -747,13 +765,63 @@ pub(super) mod tests {
             judge(&m, &beside, None, start_1, rounding_1),
             Verdict::WithinTolerance
         );
-        assert_eq!(beyond_start(&m, &up, &ans(2, 0.5)), None);
-        let later = beyond_start(&m, &up, &ans(0, 1.0e-17)).unwrap();
-        // Past the start's tolerance: 64 ulps of the origin's 0.7 (the face met head on).
-        let tol = origin_t_tolerance(&up, 1.0) + t_tolerance(1.0e-17, 1.0);
+        // 64 ulps of the origin's 0.7 (the face met head on), by hand: 5.34e-6.
+        assert!(at_interval_start(&m, &up, &ans(0, 5.3e-6)));
+        assert!(!at_interval_start(&m, &up, &ans(0, 5.4e-6)));
+        assert!(!at_interval_start(&m, &up, &ans(2, 0.5)));
+        assert_eq!(ray_past(&up, 0.5).map(|r| r.t_min), Some(0.5f32.next_up()));
+        assert_eq!(ray_past(&short, 0.25), None);
+        // A wall just ahead of a ray leaving the floor at a grazing angle is decided: it lies
+        // within the start's tolerance seen on the floor's plane, but not on its own.
+        let mut walled = quad();
+        for z in [-1.0, 1.0] {
+            walled
+                .positions
+                .extend([Vec3::new(0.705, -1.0, z), Vec3::new(0.705, 2.0, z)]);
+        }
+        walled.triangles.extend([[4, 5, 7], [4, 7, 6]]);
+        let graze = Ray::new(Vec3::new(0.7, 0.2, -1e-8), Vec3::new(1.0, 0.0, 1e-3));
+        let walls = Reference::new(&walled);
+        let first = walls.closest(&graze);
         assert!(
-            later.t_min as f64 > tol && (later.t_min as f64) < 1.01 * tol,
-            "{later:?}"
+            first.is_some_and(|f| f.prim <= 1 && at_interval_start(&walled, &graze, &f)),
+            "{first:?}"
+        );
+        let wall_hit = walls.closest(&Ray {
+            t_min: 1e-4,
+            ..graze
+        });
+        assert!(wall_hit.is_some_and(|w| w.prim >= 2), "{wall_hit:?}");
+        assert_eq!(
+            judge(&walled, &graze, None, wall_hit, |r| walls.closest(r)),
+            Verdict::Genuine
+        );
+        // A start on the floor's diagonal (near an edge of its triangle) still sees beyond: a
+        // canopy at z = 0.5 split along the other diagonal.
+        let mut canopy = quad();
+        canopy.positions.extend(
+            [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].map(|(x, y)| Vec3::new(x, y, 0.5)),
+        );
+        canopy.triangles.extend([[4, 5, 7], [5, 6, 7]]);
+        let tops = Reference::new(&canopy);
+        let diagonal = Ray::new(Vec3::new(0.6, 0.6, 0.0), up.direction);
+        let on_diagonal = Some(ans(0, 1.0e-17));
+        let rounding_d = |r: &Ray| {
+            if r.t_min == 0.0 {
+                on_diagonal
+            } else {
+                tops.closest(r)
+            }
+        };
+        assert!(near_boundary(&diagonal, &canopy.triangle(0)));
+        let top = tops.closest(&Ray {
+            t_min: 1e-9,
+            ..diagonal
+        });
+        assert!(top.is_some_and(|a| a.prim == 3), "{top:?}");
+        assert_eq!(
+            judge(&canopy, &diagonal, None, on_diagonal, rounding_d),
+            Verdict::Genuine
         );
     }
 

@@ -243,15 +243,15 @@ pub fn finish(
 mod tests {
     use super::*;
 
-    /// A run of `intersector` over one mesh, `a.obj`, whose one row is `row` (its mesh and
-    /// path set to `a.obj`).
-    fn report_of(intersector: &str, row: SetReport) -> report::Report {
+    /// A run (or shard `shard`) of `intersector` over one mesh, `a.obj`, whose one row is
+    /// `row` (its mesh and path set to `a.obj`).
+    fn report_of(intersector: &str, shard: shard::Shard, row: SetReport) -> report::Report {
         let config = report::RunConfig {
             intersector: intersector.into(),
             seed: 1,
             rays: 10,
             ray_sets: vec![row.name.clone()],
-            shard: shard::Shard::WHOLE,
+            shard,
         };
         let row = SetReport {
             mesh: "a.obj".into(),
@@ -277,12 +277,13 @@ mod tests {
             leaks_halfray: leaks,
             ..SetReport::default()
         };
-        report_of(intersector, row)
+        report_of(intersector, shard::Shard::WHOLE, row)
     }
 
-    /// A mesh none of whose generated rays Embree could take (all beyond its range) was not
-    /// checked: the run names it among the meshes that could not be checked and exits 1, not
-    /// 0. A mesh with one compared ray, or whose shard was given no ray, is not such a failure.
+    /// A mesh none of whose generated rays Embree could take (all beyond its range), or that
+    /// generated none in a whole run, was not checked: the run names it among the meshes that
+    /// could not be checked and exits 1, not 0. A mesh with one compared ray, or a shard that
+    /// was given no ray, is not such a failure.
     #[test]
     fn a_mesh_with_no_compared_ray_fails_the_run() {
         let row = |rays, outside| SetReport {
@@ -292,27 +293,31 @@ mod tests {
             rays_outside_embree: outside,
             ..SetReport::default()
         };
-        let unchecked = report_of("watertight", row(0, 8180));
-        assert_eq!(unchecked.failed.len(), 1, "{:?}", unchecked.failed);
-        let e = finish(&unchecked, None, None, 0).unwrap_err();
-        assert_eq!(e.exit_code(), crate::error::EXIT_ERROR, "{e}");
-        let message = e.to_string();
-        assert!(
-            message.contains("1 of 1 meshes could not be checked"),
-            "{message}"
-        );
-        assert!(
-            message.contains("a.obj: none of its 8180 generated rays"),
-            "{message}"
-        );
-        for (rays, outside) in [(1, 8179), (0, 0)] {
-            let report = report_of("watertight", row(rays, outside));
+        let whole = shard::Shard::WHOLE;
+        let fails = |report: &report::Report, want: &str| {
+            assert_eq!(report.failed.len(), 1, "{:?}", report.failed);
+            let e = finish(report, None, None, 0).unwrap_err();
+            assert_eq!(e.exit_code(), crate::error::EXIT_ERROR, "{e}");
+            let message = e.to_string();
             assert!(
-                report.failed.is_empty(),
-                "{rays} {outside}: {:?}",
-                report.failed
+                message.contains("1 of 1 meshes could not be checked"),
+                "{message}"
             );
-            assert!(finish(&report, None, None, 0).is_ok(), "{rays} {outside}");
+            assert!(message.contains(want), "{message}");
+        };
+        fails(
+            &report_of("watertight", whole, row(0, 8180)),
+            "a.obj: none of its 8180 generated rays",
+        );
+        fails(
+            &report_of("watertight", whole, row(0, 0)),
+            "a.obj: its sets generated no ray",
+        );
+        let second_of_two: shard::Shard = "1/2".parse().unwrap();
+        for (shard, rays) in [(whole, 1), (second_of_two, 0)] {
+            let report = report_of("watertight", shard, row(rays, 0));
+            assert!(report.failed.is_empty(), "{rays}: {:?}", report.failed);
+            assert!(finish(&report, None, None, 0).is_ok(), "{rays}");
         }
     }
 

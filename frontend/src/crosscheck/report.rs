@@ -292,20 +292,26 @@ pub struct Failure {
     pub error: String,
 }
 
-/// The failure of a mesh none of whose generated rays could be traced: every one outside
-/// Embree's range ([`SetReport::rays_outside_embree`], coordinates beyond `FLT_LARGE`), so
-/// nothing was compared and the mesh was not checked. `None` when a ray was compared, or when
-/// none was generated (a shard of more shards than a set has rays).
+/// The failure of a mesh on which no ray was compared: every generated one outside Embree's
+/// range ([`SetReport::rays_outside_embree`], coordinates beyond `FLT_LARGE`), or, in a run
+/// that is not one shard of several, none generated (the aimed sets of a mesh with no
+/// interior edge or vertex), so the mesh was not checked. `None` when a ray was compared, or
+/// when a shard of more shards than a set has rays was given none.
 fn nothing_compared(r: &MeshResult) -> Option<String> {
     let sum = |count: fn(&SetReport) -> usize| {
         r.sets.iter().map(count).fold(0usize, usize::saturating_add)
     };
     let outside = sum(|s| s.rays_outside_embree);
-    (sum(|s| s.rays) == 0 && outside > 0).then(|| {
-        format!(
+    if sum(|s| s.rays) > 0 {
+        return None;
+    }
+    if outside > 0 {
+        return Some(format!(
             "none of its {outside} generated rays is within Embree's range (embree::ray_is_valid): nothing was compared"
-        )
-    })
+        ));
+    }
+    (r.config.shard == super::shard::Shard::WHOLE)
+        .then(|| "its sets generated no ray: nothing was compared".to_string())
 }
 
 /// The whole run (`--json`), or the merge of its shards.
@@ -414,7 +420,9 @@ impl Report {
     pub fn throughput_ratio(&self) -> Option<f64> {
         let h: f64 = self.sets.iter().map(|r| r.secs_halfray).sum();
         let e: f64 = self.sets.iter().map(|r| r.secs_embree).sum();
-        (h > 0.0).then(|| e / h)
+        // Passes over no ray time only the loop around them.
+        let timed = self.sets.iter().any(|r| r.timed_rays > 0);
+        (timed && h > 0.0).then(|| e / h)
     }
 
     /// The results per mesh (inverse of [`Report::new`]): rows grouped by path in order of
