@@ -137,7 +137,7 @@ fn answer_failures(mesh: &str, sets: &[TimedSet<'_>], rows: &[StructureRow]) -> 
         failures.extend(count_failures(
             mesh,
             set.name,
-            (set.rays, false),
+            set.rays,
             Expected::same(set.timed.last().map_or(0, |t| t.hits[0])),
             &sides,
         ));

@@ -25,13 +25,12 @@
 //! [`SetFigures::rays_outside_embree`] and named in a warning on stderr; a set left with no
 //! rays has no ratio.
 //!
-//! Every side's hit count on every timed pass is checked ([`answers`]): halfray's sides
-//! exactly against halfray's closest-hit count on the same rays; on a closest-hit set Embree's
-//! single-ray answers are judged against an `f64` reference on a sample, untimed
-//! ([`answers::judged_failures`]), and its sides' counts held within
-//! [`answers::EMBREE_HIT_COUNT_TOLERANCE`] of Embree robust's; on an any-hit set its counts
-//! may not fall further below the watertight test's. Embree's hit rates are reported beside
-//! halfray's.
+//! Every side's answers are checked ([`answers`]): halfray's sides' hit counts on every
+//! timed pass exactly against halfray's closest-hit count on the same rays; Embree's answers
+//! on a sample of each set judged against an `f64` reference, untimed
+//! ([`answers::judged_failures`], [`answers::judged_any_failures`]), and each Embree call's
+//! counts held within [`answers::EMBREE_HIT_COUNT_TOLERANCE`] of its mode's single-ray call.
+//! Embree's hit rates are reported beside halfray's.
 //!
 //! Brute force (every triangle for every ray) runs on a sample of the incoherent rays sized to
 //! about [`BRUTE_FORCE_TESTS`] triangle tests, as a baseline; the BVH's answers on that sample
@@ -395,8 +394,8 @@ fn bench<T: TriangleIntersector>(
                 None,
             ));
         }
-        // Embree's sides are checked against the watertight test's count, or on a closest-hit
-        // set judged and held to Embree robust's (below; answers.rs).
+        // halfray's sides are held to its count; Embree's hit rates are reported beside the
+        // watertight test's count on the same tree and rays.
         let expected = Expected {
             halfray: hit_count,
             embree: if args.intersector.0 == TriangleVariant::Watertight {
@@ -406,7 +405,7 @@ fn bench<T: TriangleIntersector>(
                     .filter(|r| closest_simd(&wide, &mesh, &Watertight, r, None).is_some())
                     .count()
             },
-            embree_from: answers::WATERTIGHT_COUNT,
+            embree_from: "the watertight test's closest-hit query",
         };
         let ours: &dyn Fn(&Ray) -> bool = match query {
             Query::Closest => &closest,
@@ -417,32 +416,22 @@ fn bench<T: TriangleIntersector>(
         sides.extend(theirs.iter().map(|f| f.as_ref()));
         let timed = interleaved(&rays, &sides);
         let api = format!("{}1", summary::packet_api(query.name()));
-        // On a closest-hit set Embree's answers are judged (untimed), and its sides' counts
-        // held to Embree robust's `rtcIntersect1` on its first timed pass.
-        let expected = match (query, &rivals, timed.get(2)) {
-            (Query::Closest, Some(rivals), Some(robust)) => {
-                let watertight = |r: &Ray| closest_simd(&wide, &mesh, &Watertight, r, None);
-                failures.extend(judged_check(
-                    (&mesh_name, set.name()),
-                    &obj,
-                    &rays,
-                    rivals,
-                    watertight,
-                ));
-                Expected {
-                    embree: robust.hits[0],
-                    embree_from: "Embree robust rtcIntersect1 on its first timed pass",
-                    ..expected
-                }
-            }
-            _ => expected,
-        };
-        failures.extend(count_failures(
-            &mesh_name,
-            set.name(),
-            (rays.len(), query == Query::Any),
-            expected,
-            &single_sides(&timed, query, &api),
+        // Embree's answers judged on a sample (untimed), each Embree call's counts held to its
+        // mode's single-ray call on its first timed pass.
+        if let Some(rivals) = &rivals {
+            let watertight = |r: &Ray| closest_simd(&wide, &mesh, &Watertight, r, None);
+            let names = (mesh_name.as_str(), set.name());
+            failures.extend(judged_check(names, &obj, &rays, rivals, query, watertight));
+        }
+        let named = single_sides(&timed, query, &api);
+        let single: Vec<&Timed> = timed.iter().skip(1).collect();
+        let sizes = (rays.len(), expected.halfray);
+        failures.extend(count_checks(
+            (&mesh_name, set.name()),
+            sizes,
+            &named,
+            &single,
+            &[0, 1],
         ));
         let k = rays.len().max(1) as f64;
         let rate = |t: &Timed| reported_hits(t, expected.embree) as f64 / k;
@@ -535,14 +524,17 @@ fn bench<T: TriangleIntersector>(
     Ok((report, failures))
 }
 
-/// The judged check of Embree's closest-hit sides on the set `set` of `mesh`
-/// ([`answers::judged_failures`]): both scenes' `rtcIntersect1` against the watertight test
-/// (`watertight`) on [`answers::JUDGED_RAYS`] of `rays`, untimed.
+/// The judged check of Embree's sides on the set `set` of `mesh` (query `query`), untimed, on
+/// [`answers::JUDGED_RAYS`] of `rays` against the watertight test's closest hits
+/// (`watertight`): on a closest-hit set both scenes' `rtcIntersect1`
+/// ([`answers::judged_failures`]), on an any-hit set their `rtcOccluded1`, with their
+/// `rtcIntersect1` where it differs ([`answers::judged_any_failures`]).
 fn judged_check(
     names: (&str, &str),
     mesh: &crate::obj::ObjMesh,
     rays: &[Ray],
     rivals: &Rivals,
+    query: Query,
     watertight: impl Fn(&Ray) -> crate::accel::Answer,
 ) -> Vec<String> {
     use crate::crosscheck::judge::Answer;
@@ -554,15 +546,81 @@ fn judged_check(
         .iter()
         .map(|r| Answer::of_hit(watertight(r)))
         .collect();
-    let mut sides: Vec<(String, Vec<Option<Answer>>)> = ["default", "robust"]
-        .map(|mode| (format!("Embree {mode} rtcIntersect1"), Vec::new()))
-        .into();
-    for r in &judged {
-        for (side, answer) in sides.iter_mut().zip(rivals.closest(r)) {
-            side.1.push(answer);
+    let modes = ["default", "robust"];
+    let api = summary::packet_api(query.name());
+    match query {
+        Query::Closest => {
+            let mut sides: Vec<(String, Vec<Option<Answer>>)> = modes
+                .map(|mode| (format!("Embree {mode} {api}1"), Vec::new()))
+                .into();
+            for r in &judged {
+                for (side, answer) in sides.iter_mut().zip(rivals.closest(r)) {
+                    side.1.push(answer);
+                }
+            }
+            answers::judged_failures(names, mesh, (&judged, &reference), &sides)
+        }
+        Query::Any => {
+            let mut sides: Vec<(String, Vec<answers::Occlusion>)> = modes
+                .map(|mode| (format!("Embree {mode} {api}1"), Vec::new()))
+                .into();
+            for (r, w) in judged.iter().zip(&reference) {
+                let occluded = rivals.occluded(r);
+                // Both scenes' nearest hits, asked only where an occlusion differs.
+                let nearest = occluded
+                    .iter()
+                    .any(|&o| o != w.is_some())
+                    .then(|| rivals.closest(r));
+                for (k, (side, occluded)) in sides.iter_mut().zip(occluded).enumerate() {
+                    let nearest = nearest.as_ref().and_then(|n| n.get(k).copied().flatten());
+                    side.1.push(answers::Occlusion { occluded, nearest });
+                }
+            }
+            answers::judged_any_failures(names, mesh, (&judged, &reference), &sides)
         }
     }
-    answers::judged_failures(names, mesh, (&judged, &reference), &sides)
+}
+
+/// Where each Embree call's count is held to, by mode ([`count_checks`]).
+const MODE_COUNTS: [&str; 2] = [
+    "Embree default's single-ray call on its first timed pass",
+    "Embree robust's single-ray call on its first timed pass",
+];
+
+/// The count checks of the timed sides `named` (halfray's first, then Embree's) on the set
+/// `set` of `mesh` (`rays` rays): halfray's exactly against `halfray`, each Embree side within
+/// [`answers::EMBREE_HIT_COUNT_TOLERANCE`] of its mode's single-ray call on its first timed
+/// pass (`single[mode]`; `modes[k]` is the mode of `named[k + 1]`, 0 default, 1 robust).
+fn count_checks(
+    (mesh, set): (&str, &str),
+    (rays, halfray): (usize, usize),
+    named: &[Side<'_>],
+    single: &[&Timed],
+    modes: &[usize],
+) -> Vec<String> {
+    let own = Expected {
+        halfray,
+        embree: 0,
+        embree_from: "",
+    };
+    let mut failures = count_failures(mesh, set, rays, own, named.get(..1).unwrap_or(&[]));
+    for (side, &mode) in named.iter().skip(1).zip(modes) {
+        if let (Some(first), Some(from)) = (single.get(mode), MODE_COUNTS.get(mode)) {
+            let expected = Expected {
+                embree: first.hits[0],
+                embree_from: from,
+                ..own
+            };
+            failures.extend(count_failures(
+                mesh,
+                set,
+                rays,
+                expected,
+                std::slice::from_ref(side),
+            ));
+        }
+    }
+    failures
 }
 
 /// The timed sides of a set, named for messages: halfray's, then (with Embree) Embree default's
@@ -672,8 +730,15 @@ fn batch_figures<T: TriangleIntersector>(
                 embree: true,
             }),
     );
-    let sizes = (rays.len(), query == Query::Any);
-    let failures = count_failures(mesh_name, &name, sizes, expected, &named);
+    let single: Vec<&Timed> = m.iter().skip(1).take(2).collect();
+    let sizes = (rays.len(), expected.halfray);
+    let failures = count_checks(
+        (mesh_name, &name),
+        sizes,
+        &named,
+        &single,
+        &[0, 1, 0, 0, 1, 1],
+    );
     let k = rays.len().max(1) as f64;
     let rate = |t: &Timed| reported_hits(t, expected.embree) as f64 / k;
     let pair = |a: usize, b: usize| Some([m.get(a)?.mrays, m.get(b)?.mrays]);

@@ -1,7 +1,8 @@
 //! The answers `bench bvh` times, checked: every side's hit count on every timed pass
-//! ([`Timed::hits`]), and Embree's closest hits on a sample judged against an `f64` reference,
-//! so that a side answering wrongly (an Embree call that returns at once or answers any hit
-//! for the nearest, a batch call that fails) fails the run instead of being timed as fast.
+//! ([`Timed::hits`]), and Embree's answers on a sample judged (closest hits against an `f64`
+//! reference, occlusions against the watertight test), so that a side answering wrongly (an
+//! Embree call that returns at once, answers "occluded" at once or any hit for the nearest, a
+//! batch call that fails) fails the run instead of being timed as fast.
 
 use super::BvhReport;
 use crate::crosscheck::judge::{self, Verdict};
@@ -25,18 +26,14 @@ use halfray_core::Ray;
 /// beside what a wrong side gives: a call that answers "miss" at once is off by the set's whole
 /// hit rate, which only a set hitting under 1 % of its rays (the cube's `ao`) would not show.
 ///
-/// Embree's counts are checked against the watertight test's on the same tree and rays, or
-/// on a closest-hit set against Embree robust's whose answers are judged ([`Expected::embree`],
-/// [`judged_failures`], which allows the same share of rays contradicting the reference),
+/// Each Embree call's count on every timed pass is held to its mode's single-ray call on the
+/// first pass ([`Expected::embree`]), and what that call answers is judged on a sample
+/// ([`judged_failures`], [`judged_any_failures`], which allow the same share of wrong rays),
 /// whatever `--intersector` times: a variant that loses hits (`moller-trumbore`, whose ε loses
-/// small triangles) is measured, not taken for Embree's error.
-///
-/// On the any-hit sets (shadow and ambient-occlusion rays, which start on a surface) only
-/// fewer hits are held to it: more are Embree hitting the face a ray starts on, which its
-/// rounding cannot tell from the origin when the spawn offset is below it (a face in a
-/// coordinate plane: the offset of `spawn_ray_to` is then a subnormal, lost in Embree's
-/// products; a mesh at 10⁶: a few ulps of the coordinates; Embree's `tnear = 0` is inclusive).
-/// Such a ray ends at its first node; a side that answers "miss" at once is still caught.
+/// small triangles) is measured, not taken for Embree's error. A shadow or ambient-occlusion
+/// ray that Embree finds occluded by the face it leaves (its rounding cannot tell the origin
+/// from that face when the spawn offset is below it: a face in a coordinate plane, whose
+/// offset is a subnormal) is judged undecided, not wrong.
 pub const EMBREE_HIT_COUNT_TOLERANCE: f64 = 0.01;
 
 /// Rays of a closest-hit set whose answers are judged, untimed ([`judged_failures`]): spread
@@ -84,33 +81,82 @@ pub fn judged_failures(
         .collect()
 }
 
+/// An Embree side's any-hit answer to one judged ray: whether it occludes the ray and, where
+/// that differs from the watertight test's answer, its nearest hit (`rtcIntersect1`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Occlusion {
+    /// `rtcOccluded1`'s answer.
+    pub occluded: bool,
+    /// `rtcIntersect1`'s answer where `occluded` differs from the watertight test's, else
+    /// `None`.
+    pub nearest: Option<judge::Answer>,
+}
+
+/// The failures of the any-hit sides `sides` (each a name and its [`Occlusion`]s of the judged
+/// rays `rays`, [`JUDGED_RAYS`]) against the watertight test's closest hits `watertight` on
+/// the same rays: where a side's occlusion differs, its nearest hit is judged against the
+/// watertight test's as [`judged_failures`] judges them (the face a ray leaves, which its
+/// rounding cannot tell from the origin, is at the interval's start: undecided), and an
+/// occlusion without a nearest hit, or a nearest hit without an occlusion, is wrong. One
+/// message per side wrong on more of the rays than [`EMBREE_HIT_COUNT_TOLERANCE`] allows. A
+/// call answering "occluded" (or "not") at once fails here.
+#[must_use]
+pub fn judged_any_failures(
+    (mesh_name, set): (&str, &str),
+    mesh: &crate::obj::ObjMesh,
+    (rays, watertight): (&[Ray], &[Option<judge::Answer>]),
+    sides: &[(String, Vec<Occlusion>)],
+) -> Vec<String> {
+    let allowed = allowed_difference(rays.len(), true);
+    let reference = judge::Reference::new(mesh);
+    sides
+        .iter()
+        .filter_map(|(name, answers)| {
+            let wrong = rays
+                .iter()
+                .zip(watertight)
+                .zip(answers)
+                .filter(|((ray, w), e)| {
+                    e.occluded != w.is_some()
+                        && (e.occluded != e.nearest.is_some()
+                            || judge::judge(mesh, ray, **w, e.nearest, |r| reference.closest(r))
+                                == Verdict::EmbreeWrong)
+                })
+                .count();
+            (wrong > allowed || answers.len() != rays.len()).then(|| {
+                format!(
+                    "{mesh_name} set {set}: {name} answered {wrong} of {} judged rays wrongly against the f64 reference, where the watertight test did not (allowed {allowed}: {} % of the rays)",
+                    rays.len(),
+                    100.0 * EMBREE_HIT_COUNT_TOLERANCE
+                )
+            })
+        })
+        .collect()
+}
+
 /// The hit counts a set's sides are checked against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Expected {
-    /// halfray's closest-hit query with the run's `--intersector`: halfray's own timed sides
-    /// answer the same query, exactly.
+    /// halfray's sides' count: halfray's closest-hit query with the run's `--intersector`,
+    /// which they answer exactly.
     pub halfray: usize,
-    /// Embree's sides' count, within [`EMBREE_HIT_COUNT_TOLERANCE`]: the watertight test's
-    /// closest-hit query on the same tree and rays (the same count when it is the run's
-    /// intersector), or on a closest-hit set Embree robust's `rtcIntersect1` (whose answers
-    /// are judged, [`judged_failures`]; a mesh at the edge of `f32`'s resolution has more rays
-    /// within the reference's uncertainty than the tolerance).
+    /// Embree's sides' count, within [`EMBREE_HIT_COUNT_TOLERANCE`]: the same mode's
+    /// single-ray call on its first timed pass (its answers judged apart, [`judged_failures`],
+    /// [`judged_any_failures`]: a mesh at the edge of `f32`'s resolution has more rays within
+    /// the reference's uncertainty than the tolerance, so the watertight count is no bound).
     pub embree: usize,
     /// Where `embree` comes from, named in a failure's message.
     pub embree_from: &'static str,
 }
 
-/// [`Expected::embree_from`] of the watertight test's count.
-pub const WATERTIGHT_COUNT: &str = "the watertight test's closest-hit query";
-
 impl Expected {
-    /// Both counts `n`: a run of the watertight test.
+    /// Both counts `n` (unit tests).
     #[must_use]
     pub fn same(n: usize) -> Self {
         Self {
             halfray: n,
             embree: n,
-            embree_from: WATERTIGHT_COUNT,
+            embree_from: "the count",
         }
     }
 }
@@ -156,17 +202,15 @@ pub fn reported_hits(timed: &Timed, expected: usize) -> usize {
         .unwrap_or(0)
 }
 
-/// The failures of `sides` on the set `set` of `mesh` (`rays` rays, of which the queries of
-/// [`Expected`] hit `expected`; `from_surfaces`: an any-hit set, whose rays start on a
-/// surface): one message per side whose count on some pass differs from its expected count by
-/// more than [`allowed_difference`] (an Embree side on an any-hit set: falls short of it by
-/// more, [`EMBREE_HIT_COUNT_TOLERANCE`]), naming the mesh, the set, the side, the pass and
+/// The failures of `sides` on the set `set` of `mesh` (`rays` rays, of which the sides should
+/// hit `expected`): one message per side whose count on some pass differs from its expected
+/// count by more than [`allowed_difference`], naming the mesh, the set, the side, the pass and
 /// both counts. Empty when every side answers as it should.
 #[must_use]
 pub fn count_failures(
     mesh: &str,
     set: &str,
-    (rays, from_surfaces): (usize, bool),
+    rays: usize,
     expected: Expected,
     sides: &[Side<'_>],
 ) -> Vec<String> {
@@ -178,19 +222,12 @@ pub fn count_failures(
         } else {
             (expected.halfray, "halfray's closest-hit query")
         };
-        let off = |h: usize| {
-            if side.embree && from_surfaces {
-                expected.saturating_sub(h)
-            } else {
-                h.abs_diff(expected)
-            }
-        };
         let bad = side
             .timed
             .hits
             .iter()
             .enumerate()
-            .find(|(_, h)| off(**h) > allowed);
+            .find(|(_, h)| h.abs_diff(expected) > allowed);
         if let Some((pass, &got)) = bad {
             failures.push(format!(
                 "{mesh} set {set}: {} hit {got} of {rays} rays on timed pass {}, {whose} {expected} (allowed difference {allowed}{})",
@@ -293,7 +330,7 @@ mod tests {
         let ok = count_failures(
             "m.obj",
             "shadow",
-            (1000, true),
+            1000,
             Expected::same(400),
             &[
                 Side {
@@ -312,7 +349,7 @@ mod tests {
         let failures = count_failures(
             "m.obj",
             "shadow",
-            (1000, true),
+            1000,
             Expected::same(400),
             &[Side {
                 name: "Embree default rtcOccluded1".into(),
@@ -323,7 +360,7 @@ mod tests {
         assert_eq!(
             failures,
             [
-                "m.obj set shadow: Embree default rtcOccluded1 hit 0 of 1000 rays on timed pass 1, the watertight test's closest-hit query 400 (allowed difference 10: 1 % of the rays)"
+                "m.obj set shadow: Embree default rtcOccluded1 hit 0 of 1000 rays on timed pass 1, the count 400 (allowed difference 10: 1 % of the rays)"
             ]
         );
         // 20 000 rays allow 200 rays' difference to Embree, none to halfray.
@@ -334,36 +371,11 @@ mod tests {
                 timed: &t,
                 embree,
             };
-            count_failures("m", "s", (20_000, false), Expected::same(400), &[side]).len()
+            count_failures("m", "s", 20_000, Expected::same(400), &[side]).len()
         };
         assert_eq!(failures_off_by(200, true), 0);
         assert_eq!(failures_off_by(201, true), 1);
         assert_eq!(failures_off_by(1, false), 1);
-    }
-
-    /// On an any-hit set (rays starting on a surface) an Embree side may count more hits than
-    /// the watertight test, any number (its rounding hits the face a ray starts on), but not
-    /// more than the tolerance fewer; halfray's own side is still held exactly; on a
-    /// closest-hit set more hits fail as fewer do.
-    #[test]
-    fn on_any_hit_sets_only_fewer_embree_hits_fail() {
-        let check = |hits: usize, embree: bool, from_surfaces: bool| {
-            let t = timed([hits; TIMED_PASSES]);
-            let side = Side {
-                name: "side".into(),
-                timed: &t,
-                embree,
-            };
-            let sizes = (1000, from_surfaces);
-            count_failures("m", "shadow", sizes, Expected::same(300), &[side]).len()
-        };
-        // Every ray occluded: a face in a coordinate plane, each ray hitting its start face.
-        assert_eq!(check(1000, true, true), 0);
-        assert_eq!(check(290, true, true), 0);
-        assert_eq!(check(289, true, true), 1);
-        assert_eq!(check(0, true, true), 1, "a side answering miss at once");
-        assert_eq!(check(301, false, true), 1);
-        assert_eq!(check(311, true, false), 1);
     }
 
     /// A side answering another hit than the nearest (its hit count right), or a hit without
@@ -430,7 +442,7 @@ mod tests {
         let failures = count_failures(
             "m",
             "random",
-            (10, false),
+            10,
             Expected::same(7),
             &[Side {
                 name: "halfray".into(),
@@ -446,13 +458,13 @@ mod tests {
     /// With an intersector that loses hits, Embree is checked against the watertight count
     /// and halfray's side against its own: neither fails for the other's count.
     #[test]
-    fn embree_is_checked_against_the_watertight_count_whatever_the_intersector() {
+    fn halfray_and_embree_sides_are_held_to_their_own_counts() {
         let lossy = timed([300; TIMED_PASSES]);
         let embree = timed([400; TIMED_PASSES]);
         let expected = Expected {
             halfray: 300,
             embree: 400,
-            embree_from: WATERTIGHT_COUNT,
+            embree_from: "the watertight test's closest-hit query",
         };
         let sides = |h: &'static str, e: &'static str| {
             [
@@ -468,14 +480,8 @@ mod tests {
                 },
             ]
         };
-        assert!(count_failures("m", "s", (1000, false), expected, &sides("h", "e")).is_empty());
-        let failures = count_failures(
-            "m",
-            "s",
-            (1000, false),
-            Expected::same(300),
-            &sides("h", "e"),
-        );
+        assert!(count_failures("m", "s", 1000, expected, &sides("h", "e")).is_empty());
+        let failures = count_failures("m", "s", 1000, Expected::same(300), &sides("h", "e"));
         assert_eq!(failures.len(), 1, "{failures:?}");
         assert!(failures[0].contains(": e hit 400"), "{failures:?}");
     }

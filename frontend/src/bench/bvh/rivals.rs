@@ -120,6 +120,11 @@ impl Rivals {
             .collect()
     }
 
+    /// Whether the two scenes occlude `ray` (`rtcOccluded1`, untimed), `[default, robust]`.
+    pub(super) fn occluded(&self, ray: &Ray) -> Vec<bool> {
+        self.scenes.iter().map(|s| s.occluded_ray(ray)).collect()
+    }
+
     /// Queries of kind `query` by Embree's packet API (closest hits: `rtcIntersect8/16`; any
     /// hit: `rtcOccluded8/16`), `[default by 8, default by 16, robust by 8, robust by 16]`.
     pub(super) fn packet_queries(&self, query: Query) -> Vec<BatchQuery<'_>> {
@@ -174,6 +179,9 @@ impl Rivals {
         Vec::new()
     }
     pub(super) fn closest(&self, _ray: &Ray) -> Vec<Option<crate::crosscheck::judge::Answer>> {
+        Vec::new()
+    }
+    pub(super) fn occluded(&self, _ray: &Ray) -> Vec<bool> {
         Vec::new()
     }
     pub(super) fn packet_queries(&self, _query: Query) -> Vec<BatchQuery<'_>> {
