@@ -300,7 +300,7 @@ pub fn at_interval_end(mesh: &ObjMesh, ray: &Ray, r: &Answer) -> bool {
 /// The `t` tolerance of the hit `r` against an end of `ray`'s interval: its own
 /// ([`t_tolerance`]) and the origin's rounding off the surface it was spawned on
 /// ([`origin_t_tolerance`]), both on `r`'s triangle's plane.
-fn end_tolerance(mesh: &ObjMesh, ray: &Ray, r: &Answer) -> f64 {
+pub fn end_tolerance(mesh: &ObjMesh, ray: &Ray, r: &Answer) -> f64 {
     hit_t_tolerance(mesh, ray, r) + origin_t_tolerance(ray, hit_cos(mesh, ray, r))
 }
 

@@ -56,29 +56,15 @@ pub fn judged_failures(
     (rays, watertight): (&[Ray], &[Option<judge::Answer>]),
     sides: &[(String, Vec<Option<judge::Answer>>)],
 ) -> Vec<String> {
-    let allowed = allowed_difference(rays.len(), true);
     let reference = judge::Reference::new(mesh);
-    sides
-        .iter()
-        .filter_map(|(name, answers)| {
-            let wrong = rays
-                .iter()
-                .zip(watertight)
-                .zip(answers)
-                .filter(|((ray, w), e)| {
-                    judge::judge(mesh, ray, **w, **e, |r| reference.closest(r))
-                        == Verdict::EmbreeWrong
-                })
-                .count();
-            (wrong > allowed || answers.len() != rays.len()).then(|| {
-                format!(
-                    "{mesh_name} set {set}: {name} contradicted the f64 reference on {wrong} of {} judged rays, where the watertight test did not (allowed {allowed}: {} % of the rays)",
-                    rays.len(),
-                    100.0 * EMBREE_HIT_COUNT_TOLERANCE
-                )
-            })
-        })
-        .collect()
+    judged(
+        (mesh_name, set),
+        (rays, watertight),
+        sides,
+        |ray, w, e: &Option<judge::Answer>| {
+            judge::judge(mesh, ray, w, *e, |r| reference.closest(r)) == Verdict::EmbreeWrong
+        },
+    )
 }
 
 /// An Embree side's any-hit answer to one judged ray: whether it occludes the ray and, where
@@ -107,25 +93,43 @@ pub fn judged_any_failures(
     (rays, watertight): (&[Ray], &[Option<judge::Answer>]),
     sides: &[(String, Vec<Occlusion>)],
 ) -> Vec<String> {
-    let allowed = allowed_difference(rays.len(), true);
     let reference = judge::Reference::new(mesh);
+    judged(
+        (mesh_name, set),
+        (rays, watertight),
+        sides,
+        |ray, w, e: &Occlusion| {
+            e.occluded != w.is_some()
+                && (e.occluded != e.nearest.is_some()
+                    || judge::judge(mesh, ray, w, e.nearest, |r| reference.closest(r))
+                        == Verdict::EmbreeWrong)
+        },
+    )
+}
+
+/// The failures of the Embree sides `sides` (each a name and its answers to the judged rays
+/// `rays`; `watertight`: the watertight test's closest hits of them): one message per side
+/// answering `wrong` on more of the rays than [`EMBREE_HIT_COUNT_TOLERANCE`] allows (or not
+/// answering every ray), naming the mesh, the set, the side and the count.
+fn judged<A>(
+    (mesh_name, set): (&str, &str),
+    (rays, watertight): (&[Ray], &[Option<judge::Answer>]),
+    sides: &[(String, Vec<A>)],
+    wrong: impl Fn(&Ray, Option<judge::Answer>, &A) -> bool,
+) -> Vec<String> {
+    let allowed = allowed_difference(rays.len(), true);
     sides
         .iter()
         .filter_map(|(name, answers)| {
-            let wrong = rays
+            let n = rays
                 .iter()
                 .zip(watertight)
                 .zip(answers)
-                .filter(|((ray, w), e)| {
-                    e.occluded != w.is_some()
-                        && (e.occluded != e.nearest.is_some()
-                            || judge::judge(mesh, ray, **w, e.nearest, |r| reference.closest(r))
-                                == Verdict::EmbreeWrong)
-                })
+                .filter(|((ray, w), e)| wrong(ray, **w, e))
                 .count();
-            (wrong > allowed || answers.len() != rays.len()).then(|| {
+            (n > allowed || answers.len() != rays.len()).then(|| {
                 format!(
-                    "{mesh_name} set {set}: {name} answered {wrong} of {} judged rays wrongly against the f64 reference, where the watertight test did not (allowed {allowed}: {} % of the rays)",
+                    "{mesh_name} set {set}: {name} answered {n} of {} judged rays wrongly against the f64 reference, where the watertight test did not (allowed {allowed}: {} % of the rays)",
                     rays.len(),
                     100.0 * EMBREE_HIT_COUNT_TOLERANCE
                 )
@@ -424,7 +428,7 @@ mod tests {
         assert_eq!(
             check(&three_off),
             [
-                "m set random: Embree robust rtcIntersect1 contradicted the f64 reference on 3 of 200 judged rays, where the watertight test did not (allowed 2: 1 % of the rays)"
+                "m set random: Embree robust rtcIntersect1 answered 3 of 200 judged rays wrongly against the f64 reference, where the watertight test did not (allowed 2: 1 % of the rays)"
             ]
         );
         assert_eq!(check(&farther).len(), 1);
